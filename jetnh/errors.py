@@ -1,0 +1,32 @@
+"""The exceptions jetnh raises: one base class, one subclass per kind of mistake.
+
+Every message says what is wrong and how to fix it.
+"""
+
+
+class JetnhError(Exception):
+    """Base class of every error jetnh raises on purpose."""
+
+
+class JetSpaceError(JetnhError, ValueError):
+    """Bad coordinates, or an expression that does not live on the jet space."""
+
+
+class ConstraintError(JetnhError, ValueError):
+    """Constraints that are dependent, unsolvable for the split, or inconsistent."""
+
+
+class LagrangianError(JetnhError, ValueError):
+    """A Lagrangian that is singular where a principle needs it regular."""
+
+
+class PrincipleError(JetnhError, ValueError):
+    """An unknown principle, or a request a principle cannot answer."""
+
+
+class ModelFileError(JetnhError, ValueError):
+    """A model file that cannot be read as data."""
+
+
+class IntegrationError(JetnhError, RuntimeError):
+    """A numerical integration that cannot go on."""
