@@ -1,0 +1,349 @@
+"""A constrained system: a Lagrangian L(t, q, qdot) and constraints f^a(t, q, qdot) = 0.
+
+Implements the objects of Zhao et al. (2008), sections 2-4: the split into independent
+coordinates q^mu and dependent q^alpha, the explicit form qdot^alpha = phi^alpha(t, q, qdot^mu)
+(text above (16)), the affine form B^alpha_rho (33)-(34), the embedded Lagrangian L~,
+the momenta p_alpha, and T^alpha_mu (defined under (18)).  The Frobenius test decides
+integrability; the Chaplygin and regularity tests classify the system.
+
+Derived objects are computed on first access and cached; a System is an immutable value.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import sympy as sp
+
+from . import linalg
+from .errors import ConstraintError, JetSpaceError, LagrangianError
+from .jet import JetSpace
+
+PRINCIPLES = ("chetaev", "vakonomic", "holder", "suslov")
+
+
+@dataclass(frozen=True)
+class Classification:
+    """What kind of constrained system this is."""
+
+    affine: bool
+    integrable: bool
+    chaplygin: bool
+    regular: bool
+    rheonomic: bool
+
+    def __str__(self):
+        flags = [("affine" if self.affine else "nonlinear"),
+                 ("integrable" if self.integrable else "nonholonomic"),
+                 ("Chaplygin" if self.chaplygin else "not Chaplygin"),
+                 ("regular L" if self.regular else "singular L"),
+                 ("rheonomic" if self.rheonomic else "scleronomic")]
+        return ", ".join(flags)
+
+
+class System:
+    """``System(J, L, constraints, dependent)``: a Lagrangian with constraints f^a = 0.
+
+    ``constraints`` are expressions f^a(t, q, qdot) meaning f^a = 0, of any nonlinearity.
+    ``dependent`` is the split: the coordinates whose velocities the constraints
+    determine (one per constraint); chosen automatically when omitted.  ``branch``
+    selects a root when the constraints are nonlinear in the dependent velocities and
+    have several solutions for them.
+    """
+
+    def __init__(self, J: JetSpace, L, constraints=(), dependent=None, branch: int | None = None):
+        if not isinstance(J, JetSpace):
+            raise JetSpaceError(f"the first argument must be a JetSpace, got {type(J).__name__}")
+        self.J = J
+        self.L = self._first_order(L, "the Lagrangian")
+        self.constraints = tuple(self._first_order(f, f"constraint {i + 1}")
+                                 for i, f in enumerate(constraints))
+        self._branch = branch
+        self._check_velocities()
+        self.dependent = self._choose_split(dependent)
+        dep = set(self.dependent)
+        self.independent = tuple(s for s in J.q if s not in dep)
+        self._check_solvable()
+
+    # ------------------------------------------------------------------ validation
+    def _first_order(self, expr, what):
+        expr = self.J.check(expr)
+        if self.J.order(expr) > 1:
+            raise ConstraintError(
+                f"{what} contains accelerations or higher jets ({expr}); jetnh treats "
+                "first-order Lagrangians and constraints f(t, q, qdot)")
+        if any(self.J.split(s) and self.J.split(s)[0] in self.J.fields
+               for s in expr.free_symbols if isinstance(s, sp.Symbol)):
+            raise ConstraintError(f"{what} contains a field of the jet space; use coordinates only")
+        return expr
+
+    def _check_velocities(self):
+        J = self.J
+        for i, f in enumerate(self.constraints):
+            if not (f.free_symbols & set(J.qd)):
+                raise ConstraintError(
+                    f"constraint {i + 1}, {f} = 0, contains no velocity: it is holonomic. "
+                    f"Eliminate a coordinate, or pass its time derivative J.D(f) instead")
+        if self.k and linalg.numeric_rank(self.jacobian) < self.k:
+            raise ConstraintError(
+                "the constraints are dependent: their velocity Jacobian df/dqdot has rank "
+                f"< {self.k}; remove the redundant ones")
+        if self.k >= self.J.n:
+            raise ConstraintError(
+                f"{self.k} constraints on {self.J.n} coordinates leave no freedom; need fewer "
+                "constraints than coordinates")
+
+    def _choose_split(self, dependent):
+        J = self.J
+        if dependent is None:
+            return self._auto_split()
+        dep = []
+        for d in dependent:
+            name = d.name if isinstance(d, sp.Symbol) else str(d)
+            match = [s for s in J.q if s.name == name]
+            if not match:
+                raise ConstraintError(
+                    f"dependent coordinate {name!r} is not a coordinate of {J!r}")
+            dep.append(match[0])
+        if len(set(dep)) != len(dep):
+            raise ConstraintError(f"the dependent coordinates {dep} repeat a coordinate")
+        if len(dep) != self.k:
+            raise ConstraintError(
+                f"{len(dep)} dependent coordinates given for {self.k} constraints; give one "
+                "per constraint")
+        return tuple(dep)
+
+    def _auto_split(self) -> tuple[sp.Symbol, ...]:
+        """Prefer coordinates, last first (the paper's alpha = m+1..n), whose velocity enters
+        some constraint linearly with a constant coefficient; keep the block invertible."""
+        J, k = self.J, self.k
+        if k == 0:
+            return ()
+        A = self.jacobian
+        order = list(range(J.n - 1, -1, -1))
+
+        def score(j):
+            col = A[:, j]
+            const = any(e != 0 and e.is_number for e in col)
+            return (0 if const else 1, order.index(j))
+
+        chosen: list[int] = []
+        for j in sorted(range(J.n), key=score):
+            trial = chosen + [j]
+            if linalg.numeric_rank(A[:, trial]) == len(trial):
+                chosen = trial
+            if len(chosen) == k:
+                break
+        if len(chosen) < k:
+            raise ConstraintError("no split makes the constraints solvable for dependent velocities")
+        return tuple(J.q[j] for j in sorted(chosen))
+
+    def _check_solvable(self):
+        if self.k and linalg.numeric_rank(self.jacobian_dependent) < self.k:
+            names = ", ".join(s.name for s in self.dependent)
+            raise ConstraintError(
+                f"the constraints cannot be solved for the velocities of {names}: "
+                "df/dqdot^alpha is singular. Choose another split (dependent=...) or omit it")
+
+    # ------------------------------------------------------------------ basic data
+    @property
+    def k(self) -> int:
+        """The number of constraints."""
+        return len(self.constraints)
+
+    @cached_property
+    def dep_index(self) -> tuple[int, ...]:
+        return tuple(self.J.q.index(s) for s in self.dependent)
+
+    @cached_property
+    def ind_index(self) -> tuple[int, ...]:
+        return tuple(self.J.q.index(s) for s in self.independent)
+
+    @cached_property
+    def dependent_velocities(self) -> tuple[sp.Symbol, ...]:
+        return self.J.jets(1, self.dependent)
+
+    @cached_property
+    def independent_velocities(self) -> tuple[sp.Symbol, ...]:
+        return self.J.jets(1, self.independent)
+
+    @cached_property
+    def parameters(self) -> tuple[sp.Symbol, ...]:
+        """Symbols that are neither time nor jet coordinates, sorted by name."""
+        syms = set().union(self.L.free_symbols, *(f.free_symbols for f in self.constraints))
+        J = self.J
+        return tuple(sorted((s for s in syms if s != J.t and not J.split(s)),
+                            key=lambda s: s.name))
+
+    @cached_property
+    def jacobian(self) -> sp.Matrix:
+        """df^a/dqdot^s (k x n)."""
+        return sp.Matrix(self.k, self.J.n,
+                         lambda a, s: sp.diff(self.constraints[a], self.J.qd[s]))
+
+    @cached_property
+    def jacobian_dependent(self) -> sp.Matrix:
+        return self.jacobian[:, list(self.dep_index)] if self.k else sp.zeros(0, 0)
+
+    @cached_property
+    def is_affine(self) -> bool:
+        """Whether every constraint is affine in the velocities."""
+        qd = set(self.J.qd)
+        return all(sp.expand(sp.diff(e, v)) == 0
+                   for e in self.jacobian for v in e.free_symbols & qd)
+
+    # ------------------------------------------------------------------ explicit form
+    @cached_property
+    def phi(self) -> dict[sp.Symbol, sp.Expr]:
+        """The explicit form: dependent velocity qdot^alpha -> phi^alpha(t, q, qdot^mu)."""
+        vel = self.dependent_velocities
+        if not vel:
+            return {}
+        fs = sp.Matrix(self.constraints)
+        A = self.jacobian_dependent
+        if all(sp.diff(e, v) == 0 for e in A for v in vel):      # affine in qdot^alpha
+            rest = fs.xreplace({v: 0 for v in vel})
+            sol = linalg.solve(A, -rest)
+            return {v: sol[i] for i, v in enumerate(vel)}
+        return self._solve_nonlinear(vel)
+
+    def _solve_nonlinear(self, vel):
+        try:
+            sols = sp.solve(list(self.constraints), list(vel), dict=True)
+        except (NotImplementedError, ValueError) as exc:
+            sols = []
+            reason = f" ({exc})"
+        else:
+            reason = ""
+        sols = [s for s in sols if all(v in s for v in vel)]
+        if not sols:
+            raise ConstraintError(
+                "the dependent velocities cannot be isolated from the constraints" + reason +
+                "; write the constraints in explicit form qdot^alpha - phi^alpha(t, q, qdot^mu)")
+        if len(sols) > 1 and self._branch is None:
+            listing = "; ".join(f"[{i}] " + ", ".join(f"{v} = {s[v]}" for v in vel)
+                                for i, s in enumerate(sols))
+            raise ConstraintError(
+                f"the constraints have {len(sols)} solutions for the dependent velocities: "
+                f"{listing}. Choose one with System(..., branch=i)")
+        s = sols[self._branch or 0]
+        return {v: s[v] for v in vel}
+
+    @cached_property
+    def explicit_constraints(self) -> tuple[sp.Expr, ...]:
+        """f^alpha = qdot^alpha - phi^alpha, in the order of ``dependent``."""
+        return tuple(v - self.phi[v] for v in self.dependent_velocities)
+
+    def on_constraints(self, expr):
+        """``expr`` with the dependent velocities replaced by phi (restricted to the constraints)."""
+        return sp.sympify(expr).xreplace(self.phi) if self.phi else sp.sympify(expr)
+
+    @cached_property
+    def Phi(self) -> sp.Matrix:
+        """d phi^alpha / d qdot^mu (rows: dependent, cols: independent)."""
+        return sp.Matrix(self.k, len(self.independent),
+                         lambda a, m: sp.diff(self.phi[self.dependent_velocities[a]],
+                                              self.independent_velocities[m]))
+
+    @cached_property
+    def B(self) -> sp.Matrix:
+        """The affine form (33)-(34): B^alpha_rho with rho = 0 (time) then the independent mu."""
+        if not self.is_affine:
+            raise ConstraintError(
+                "the constraints are not affine in the velocities; B^alpha_rho exists only "
+                "for affine constraints (use phi / Phi for the general explicit form)")
+        vel = self.independent_velocities
+        cols = []
+        for v, phi in ((v, self.phi[v]) for v in self.dependent_velocities):
+            b0 = phi.xreplace({u: 0 for u in vel})
+            cols.append([b0] + [sp.diff(phi, u) for u in vel])
+        return sp.Matrix(cols)
+
+    # ------------------------------------------------------------------ L~, p, T
+    @cached_property
+    def L_tilde(self) -> sp.Expr:
+        """The embedded Lagrangian L~(t, q, qdot^mu) = L(t, q, qdot^mu, phi)."""
+        return self.on_constraints(self.L)
+
+    @cached_property
+    def p_dependent(self) -> tuple[sp.Expr, ...]:
+        """p_alpha = dL/dqdot^alpha (not restricted to the constraints)."""
+        return tuple(sp.diff(self.L, v) for v in self.dependent_velocities)
+
+    def T(self, on_constraints: bool = True) -> sp.Matrix:
+        """T^alpha_mu = -[phi^alpha]_mu - dphi^alpha/dq^beta dphi^beta/dqdot^mu (text under (18)).
+
+        Rows: dependent alpha; columns: independent mu.  With ``on_constraints`` the
+        dependent velocities are replaced by phi.
+        """
+        J = self.J
+        rows = []
+        for a, va in enumerate(self.dependent_velocities):
+            ph = self.phi[va]
+            eul = J.euler(ph, wrt=self.independent)
+            rows.append([-eul[m] - sum((sp.diff(ph, qb) * self.Phi[b, m]
+                                        for b, qb in enumerate(self.dependent)), sp.S.Zero)
+                         for m in range(len(self.independent))])
+        T = sp.Matrix(rows) if rows else sp.zeros(0, len(self.independent))
+        return T.applyfunc(self.on_constraints) if on_constraints else T
+
+    # ------------------------------------------------------------------ classification
+    def frobenius(self):
+        """The Frobenius test of the constraints (see ``jetnh.frobenius``)."""
+        from .frobenius import frobenius_from_constraints
+
+        return frobenius_from_constraints(self.J, self.constraints, self.dependent)
+
+    def is_integrable(self) -> bool:
+        """Whether the constraints are integrable (holonomic), by the Frobenius theorem."""
+        return bool(self.frobenius().integrable)
+
+    @cached_property
+    def mass_matrix(self) -> sp.Matrix:
+        """d^2 L / dqdot^r dqdot^s."""
+        qd = self.J.qd
+        return sp.Matrix(self.J.n, self.J.n, lambda r, s: sp.diff(self.L, qd[r], qd[s]))
+
+    def is_regular(self) -> bool:
+        """Whether the Hessian of L in the velocities is generically invertible."""
+        return linalg.numeric_rank(self.mass_matrix) == self.J.n
+
+    def require_regular(self):
+        if not self.is_regular():
+            raise LagrangianError(
+                "the Lagrangian is singular: d^2L/dqdot^2 is not invertible, so the "
+                "accelerations are not determined. Check the kinetic energy")
+
+    def is_chaplygin(self) -> bool:
+        """Chaplygin: affine, scleronomic, homogeneous constraints, and neither L nor the
+        B^alpha_mu depend on the dependent coordinates q^alpha."""
+        if not (self.k and self.is_affine):
+            return False
+        B = self.B
+        if any(e != 0 for e in B[:, 0]) or self.J.t in B.free_symbols:
+            return False
+        dep = set(self.dependent)
+        return not (B.free_symbols & dep) and not (self.L.free_symbols & dep)
+
+    def classify(self) -> Classification:
+        J = self.J
+        rheo = J.t in set().union(*(f.free_symbols for f in self.constraints)) if self.k else False
+        return Classification(affine=self.is_affine, integrable=self.is_integrable(),
+                              chaplygin=self.is_chaplygin(), regular=self.is_regular(),
+                              rheonomic=rheo)
+
+    def with_split(self, dependent) -> "System":
+        """The same system with another split."""
+        return System(self.J, self.L, self.constraints, dependent, self._branch)
+
+    # ------------------------------------------------------------------ equations
+    def equations(self, principle: str, form: str | None = None, convention: str = "paper"):
+        """The equations of motion under ``principle`` (see ``jetnh.equations``)."""
+        from .equations import derive
+
+        return derive(self, principle, form=form, convention=convention)
+
+    def __repr__(self):
+        return (f"System(L={self.L}, constraints={list(self.constraints)}, "
+                f"dependent={[s.name for s in self.dependent]})")

@@ -1,0 +1,371 @@
+"""Equations of motion from the composite action (12) under each variation, and Chetaev's.
+
+Zhao et al. (2008), section 3.  The variation of A = int (L + lambda_a f^a) dt under any
+variation delta (components eta^s, commutator c^s) is, after integration by parts, (13):
+
+    delta A = int { E_s eta^s - P_s c^s } dt + [P_s eta^s]_{t1}^{t2},
+    E_s = [L]_s + lambda_a [f^a]_s - lambda_a_t df^a/dqdot^s,   P_s = dF/dqdot^s.
+
+The equations are the coefficients of the independent eta's: with the paper's convention
+(``convention="paper"``) every eta^s counts as independent after the commutator has been
+used; with ``convention="imposed"`` the variation's Chetaev condition restricts eta to
+eta^alpha = Phi^alpha_mu eta^mu first.  The coefficients are taken with the Euler
+operator in the eta fields, so no printed formula is used.
+
+Principles and forms (paper equation numbers):
+
+- vakonomic: "multiplier" (15), "explicit" (17), "reduced" (18), "embedded" (20);
+  affine: (36), (37).  The imposed convention gives the same equations (normal extremals).
+- holder: the same as vakonomic in the paper's convention (22); imposed: the projection
+  P^T([L] + lambda [f]) = 0 with lambda left arbitrary.
+- suslov: "multiplier" (29), "reduced" (30), "embedded" (31); affine (38).  Imposed:
+  (30b) alone, without multipliers.
+- chetaev (Lagrange-d'Alembert): "maggi" P^T [L] = 0, "multiplier" [L]_s + nu_a df^a/dqdot^s
+  = 0 with reactions nu, "voronets" on L~.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import sympy as sp
+
+from . import linalg
+from .constraints import PRINCIPLES, System
+from .errors import PrincipleError
+from .variations import Variation, make
+
+FORMS = {
+    "vakonomic": ("multiplier", "explicit", "reduced", "embedded"),
+    "holder": ("multiplier", "explicit", "reduced", "embedded"),
+    "suslov": ("multiplier", "reduced", "embedded"),
+    "chetaev": ("maggi", "multiplier", "voronets"),
+}
+CONVENTIONS = ("paper", "imposed")
+_PAPER = {
+    ("vakonomic", "multiplier"): "(15)", ("vakonomic", "explicit"): "(17)",
+    ("vakonomic", "reduced"): "(18)", ("vakonomic", "embedded"): "(20)",
+    ("holder", "multiplier"): "(22)", ("holder", "explicit"): "(17)",
+    ("holder", "reduced"): "(18)", ("holder", "embedded"): "(20)",
+    ("suslov", "multiplier"): "(29)", ("suslov", "reduced"): "(30)",
+    ("suslov", "embedded"): "(31)",
+}
+_PAPER_AFFINE = {"reduced": {"vakonomic": "(36)", "holder": "(36)", "suslov": "(38)"},
+                 "embedded": {"vakonomic": "(37)", "holder": "(37)", "suslov": "(38)"}}
+
+
+def multiplier_symbols(system: System, prefix: str = "lambda") -> tuple[sp.Symbol, ...]:
+    """One multiplier per constraint, named after its dependent coordinate: lambda_x, ..."""
+    return tuple(sp.Symbol(f"{prefix}_{d.name}") for d in system.dependent)
+
+
+# ---------------------------------------------------------------------- (13)
+@dataclass(frozen=True)
+class ActionVariation:
+    """delta (L + lambda f) = integrand + D(boundary): eq. (13) before integrating over t."""
+
+    variation: Variation
+    lagrangian: sp.Expr          # F = L + lambda_a f^a
+    E: tuple                     # [L]_s + lambda [f]_s - lambda_t df/dqdot^s
+    P: tuple                     # dF/dqdot^s
+    integrand: sp.Expr           # E_s eta^s - P_s c^s
+    boundary: sp.Expr            # P_s eta^s: dropped by the end conditions (1)
+
+    def residual(self) -> sp.Expr:
+        """delta F - D(boundary) - integrand: zero (expand) when (13) holds."""
+        v = self.variation
+        return v.delta(self.lagrangian) - v.J.D(self.boundary) - self.integrand
+
+
+def action_variation(system: System, variation: Variation, multipliers=()) -> ActionVariation:
+    """The variation of the composite action (12) under ``variation``, as in (13)."""
+    J = variation.J
+    F = system.L + sp.Add(*[lam * f for lam, f in zip(multipliers, system.constraints)])
+    E = J.euler(F, wrt=J.q)
+    P = tuple(sp.diff(F, v) for v in J.qd)
+    eta, c = variation.eta, variation.c
+    integrand = sp.Add(*[E[s] * eta[s] - P[s] * c[s] for s in range(J.n)])
+    boundary = sp.Add(*[P[s] * eta[s] for s in range(J.n)])
+    return ActionVariation(variation, F, E, P, integrand, boundary)
+
+
+def stationarity(system: System, variation: Variation, multipliers=(), restrict=False):
+    """Coefficients of the independent eta's in the integrand of (13).
+
+    ``restrict``: impose the Chetaev condition first (eta^alpha = Phi^alpha_mu eta^mu with
+    Phi = -A_alpha^-1 A_mu from the constraint Jacobian); the result then has one
+    equation per independent coordinate.
+    """
+    av = action_variation(system, variation, multipliers)
+    J, eta = variation.J, variation.eta
+    integrand = av.integrand
+    wrt = eta
+    if restrict:
+        N = null_basis(system)
+        ind_eta = tuple(eta[i] for i in system.ind_index)
+        sub = {eta[s]: sp.Add(*[N[s, m] * ind_eta[m] for m in range(len(ind_eta))])
+               for s in system.dep_index}
+        integrand = integrand.xreplace(sub)
+        wrt = ind_eta
+    return J.euler(integrand, wrt=wrt)
+
+
+def null_basis(system: System) -> sp.Matrix:
+    """P (n x (n-k)): columns span ker df/dqdot; rows of independent coordinates are I."""
+    n, k = system.J.n, system.k
+    A = system.jacobian
+    Phi = -linalg.solve(system.jacobian_dependent, A[:, list(system.ind_index)]) if k else None
+    P = sp.zeros(n, n - k)
+    for m, i in enumerate(system.ind_index):
+        P[i, m] = 1
+    for a, i in enumerate(system.dep_index):
+        for m in range(n - k):
+            P[i, m] = Phi[a, m]
+    return P
+
+
+# ---------------------------------------------------------------------- results
+class Equations:
+    """The equations of motion of one principle in one form; each expression means = 0.
+
+    ``multipliers`` are the Lagrange multipliers that are states (vakonomic, Hoelder,
+    Suslov); ``reactions`` are the algebraic multipliers of Chetaev's multiplier form.
+    ``accelerations()`` solves the principle (not merely this form) for the
+    accelerations and multiplier rates.
+    """
+
+    def __init__(self, system, principle, form, convention, expressions, multipliers=(),
+                 reactions=(), arbitrary=(), J=None, paper="", constraints=None, solver=None):
+        self.system = system
+        self.principle = principle
+        self.form = form
+        self.convention = convention
+        self.expressions = tuple(expressions)
+        self.multipliers = tuple(multipliers)
+        self.reactions = tuple(reactions)
+        self.arbitrary = tuple(arbitrary)
+        self.J = J or system.J
+        self.paper = paper
+        self.constraints = tuple(system.constraints if constraints is None else constraints)
+        self._solver = solver
+
+    @cached_property
+    def multiplier_rates(self) -> tuple[sp.Symbol, ...]:
+        return tuple(self.J.jet(m, 1) for m in self.multipliers)
+
+    def accelerations(self) -> dict:
+        """Every J.qdd[s] and multiplier rate -> expression in t, q, qdot, multipliers, parameters.
+
+        Valid on the constraint manifold.  Linear solves only (no simplify), structured so
+        that the only denominators are det(df/dqdot^alpha) and the reduced mass matrix.
+        """
+        return dict(self._accelerations)
+
+    @cached_property
+    def _accelerations(self):
+        return self._solver()
+
+    def __iter__(self):
+        return iter(self.expressions)
+
+    def __len__(self):
+        return len(self.expressions)
+
+    def __repr__(self):
+        return (f"<Equations {self.principle} ({self.form}, {self.convention} convention)"
+                f" {self.paper}: {len(self.expressions)} equations>")
+
+    def __str__(self):
+        head = f"{self.principle} equations, {self.form} form {self.paper}".rstrip()
+        return "\n".join([head] + [f"  {e} = 0" for e in self.expressions])
+
+    def latex(self) -> str:
+        rows = [self.J.latex(e) + " = 0" for e in self.expressions]
+        return r"\begin{aligned}" + r" \\ ".join(rows) + r"\end{aligned}"
+
+    def _repr_latex_(self):
+        return f"$${self.latex()}$$"
+
+
+# ---------------------------------------------------------------------- derivation
+def derive(system: System, principle: str, form: str | None = None,
+           convention: str = "paper") -> Equations:
+    """The equations of ``principle`` in ``form`` (see the module docstring)."""
+    if principle not in PRINCIPLES:
+        raise PrincipleError(f"unknown principle {principle!r}; choose one of {PRINCIPLES}")
+    if convention not in CONVENTIONS:
+        raise PrincipleError(f"unknown convention {convention!r}; choose one of {CONVENTIONS}")
+    forms = FORMS[principle]
+    form = form or forms[0]
+    if form not in forms:
+        raise PrincipleError(f"{principle} has forms {forms}, not {form!r}")
+    if system.k == 0:
+        return _unconstrained(system, principle)
+    if principle == "chetaev":
+        return _chetaev(system, form, convention)
+    if principle in ("vakonomic", "holder"):
+        return _vakonomic(system, principle, form, convention)
+    return _suslov(system, form, convention)
+
+
+def _label(system, principle, form):
+    label = _PAPER.get((principle, form), "")
+    if system.is_affine and form in _PAPER_AFFINE and principle in _PAPER_AFFINE[form]:
+        label += " " + _PAPER_AFFINE[form][principle]
+    return label
+
+
+def _unconstrained(system, principle):
+    J = system.J
+    eqs = J.euler(system.L)
+    return Equations(system, principle, "euler-lagrange", "paper", eqs, paper="",
+                     solver=lambda: _solve(system, list(eqs), (), J))
+
+
+def _explicit(system: System) -> System:
+    """The same system with the constraints in explicit form qdot^alpha - phi^alpha."""
+    if system.constraints == system.explicit_constraints:
+        return system
+    return System(system.J, system.L, system.explicit_constraints, system.dependent)
+
+
+def _vakonomic(system, principle, form, convention):
+    base = system if form == "multiplier" else _explicit(system)
+    lams = multiplier_symbols(base)
+    var = make(base, principle, extra_fields=[m.name for m in lams])
+    J = var.J
+    if principle == "holder" and convention == "imposed":
+        rows = stationarity(base, var, lams, restrict=True)
+        return Equations(system, principle, form, convention, rows, arbitrary=lams, J=J,
+                         paper="", constraints=base.constraints,
+                         solver=lambda: _solve(base, list(rows), (), J))
+    E = stationarity(base, var, lams)
+    rates = tuple(J.jet(m, 1) for m in lams)
+    solver = lambda: _solve(base, list(E), rates, J)  # noqa: E731
+    exprs = E if form in ("multiplier", "explicit") else _reduced(base, E, J, lams, form)
+    return Equations(system, principle, form, convention, exprs, lams, J=J,
+                     paper=_label(system, principle, form), constraints=base.constraints,
+                     solver=solver)
+
+
+def _suslov(system, form, convention):
+    base = _explicit(system)
+    lams = multiplier_symbols(base)
+    var = make(base, "suslov", extra_fields=[m.name for m in lams])
+    J = var.J
+    if convention == "imposed":
+        rows = stationarity(base, var, lams, restrict=True)
+        return Equations(system, "suslov", form, convention, rows, J=J, paper="(30b)",
+                         constraints=base.constraints,
+                         solver=lambda: _solve(base, list(rows), (), J))
+    E = stationarity(base, var, lams)
+    rates = tuple(J.jet(m, 1) for m in lams)
+    exprs = E if form == "multiplier" else _reduced(base, E, J, lams, form, suslov=True)
+    return Equations(system, "suslov", form, convention, exprs, lams, J=J,
+                     paper=_label(system, "suslov", form), constraints=base.constraints,
+                     solver=lambda: _solve(base, list(E), rates, J))
+
+
+def _chetaev(system, form, convention):
+    var = make(system, "holder")
+    J = var.J
+    maggi = stationarity(system, var, (), restrict=True)
+    solver = lambda: _solve(system, list(maggi), (), J)  # noqa: E731
+    if form == "maggi":
+        return Equations(system, "chetaev", form, convention, maggi, J=J, solver=solver)
+    if form == "multiplier":
+        nus = multiplier_symbols(system, "nu")
+        A = system.jacobian
+        eqs = tuple(system.J.euler(system.L)[s] + sp.Add(*[nus[a] * A[a, s]
+                                                           for a in range(system.k)])
+                    for s in range(system.J.n))
+        return Equations(system, "chetaev", form, convention, eqs, reactions=nus, J=J,
+                         solver=solver)
+    ex = _explicit(system)
+    eqs = _voronets(ex, J, ())
+    return Equations(system, "chetaev", form, convention, eqs, J=J, constraints=ex.constraints,
+                     solver=solver)
+
+
+def _reduced(base, E, J, lams, form, suslov=False):
+    """(18)/(30): dependent rows as they are, independent rows projected by P^T;
+    (20)/(31): the projected rows rewritten on L~ through identity (19)."""
+    dep_rows = [E[i] for i in base.dep_index]
+    if form == "reduced":
+        P = null_basis(base)
+        proj = [sp.Add(*[P[s, m] * E[s] for s in range(J.n)]) for m in range(P.cols)]
+        return tuple(dep_rows + proj)
+    if suslov:
+        return tuple(dep_rows + list(_voronets(base, J, (), sign=-1)))
+    return tuple(dep_rows + list(_voronets(base, J, lams)))
+
+
+def _voronets(ex: System, J, lams, sign: int = 1):
+    """[L~]_mu + Phi^alpha_mu dL~/dq^alpha + (sign * p_alpha + lambda_alpha) T^alpha_mu.
+
+    sign = +1, no lambdas: Chetaev (Voronets); sign = +1 with lambdas: vakonomic (20b);
+    sign = -1 (which cancels (19)'s p T): Suslov (31b).
+    """
+    Lt = ex.L_tilde
+    T = ex.T(on_constraints=False)
+    Phi = ex.Phi
+    eul = J.euler(Lt, wrt=ex.independent)
+    p = ex.p_dependent
+    out = []
+    for m in range(len(ex.independent)):
+        e = eul[m] + sp.Add(*[Phi[a, m] * sp.diff(Lt, qa) for a, qa in enumerate(ex.dependent)])
+        if sign == 1:
+            e += sp.Add(*[(p[a] + (lams[a] if lams else 0)) * T[a, m] for a in range(ex.k)])
+        out.append(e)
+    return tuple(out)
+
+
+# ---------------------------------------------------------------------- solving
+def _solve(base: System, rows, rates, J) -> dict:
+    """Accelerations and multiplier rates from ``rows`` (n rows with rates, or n-k without)
+    together with the differentiated constraints D f^a = 0.
+
+    q'' = P u + w with u the independent accelerations (P from the constraint Jacobian);
+    the rates drop out of P^T rows because their coefficients are combinations of the
+    rows of df/dqdot (P^T A^T = 0); the reduced system is solved for u, then the dependent
+    rows give the rates.
+    """
+    base.require_regular()
+    n, k = J.n, base.k
+    qdd = J.qdd
+    zero_acc = {a: 0 for a in qdd}
+    Dc = sp.Matrix([J.D(f) for f in base.constraints]) if k else sp.zeros(0, 1)
+    A = Dc.jacobian(qdd) if k else sp.zeros(0, n)
+    b = Dc.xreplace(zero_acc)
+    ind, dep = list(base.ind_index), list(base.dep_index)
+    Adep_inv_rhs = linalg.solve(A[:, dep], (-A[:, ind]).row_join(-b)) if k else sp.zeros(0, n - k + 1)
+    Phi, w = Adep_inv_rhs[:, :n - k], Adep_inv_rhs[:, n - k]
+    u = [qdd[i] for i in ind]
+    qdd_expr = {qdd[i]: qdd[i] for i in ind}
+    for a, i in enumerate(dep):
+        qdd_expr[qdd[i]] = sp.Add(*[Phi[a, m] * u[m] for m in range(n - k)]) + w[a]
+    R = sp.Matrix(rows)
+    zero_rates = {r: 0 for r in rates}
+    if rates:
+        P = sp.zeros(n, n - k)
+        for m, i in enumerate(ind):
+            P[i, m] = 1
+        for a, i in enumerate(dep):
+            P[i, :] = Phi[a, :]
+        reduced = (P.T * R.xreplace(zero_rates)).xreplace(qdd_expr)
+    else:
+        reduced = R.xreplace(qdd_expr)
+    K = reduced.jacobian(u)
+    rhs = -reduced.xreplace({x: 0 for x in u})
+    sol_u = linalg.solve(K, rhs)
+    acc = {qdd[i]: sol_u[m] for m, i in enumerate(ind)}
+    for a, i in enumerate(dep):
+        acc[qdd[i]] = qdd_expr[qdd[i]].xreplace(acc)
+    if rates:
+        Rdep = R.extract(dep, [0])
+        C = Rdep.jacobian(rates)
+        rest = Rdep.xreplace(zero_rates).xreplace(acc)
+        sol_r = linalg.solve(C, -rest)
+        acc.update({r: sol_r[j] for j, r in enumerate(rates)})
+    return acc
