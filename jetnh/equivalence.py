@@ -1,0 +1,104 @@
+"""When do two principles share solutions?  Zhao et al. (2008), (11), (32), (39).
+
+- ``branch_32``: the multiplier values lambda_alpha = -p_alpha (32) on which the
+  vakonomic (20) and Suslov (31) equations coincide.
+- ``frobenius_T``: for affine constraints, T^alpha_mu = K^alpha_{rho mu} qdot^rho where
+  K^alpha_{rho sigma} = X_rho B^alpha_sigma - X_sigma B^alpha_rho are the Frobenius
+  obstructions of the distribution (X_rho = d_rho + B^beta_rho d_beta, qdot^0 = 1); so
+  T vanishes for all velocities exactly when the constraints are integrable, which is
+  the content of the affine condition (39).
+- ``compare``: decides for two principles whether their accelerations agree identically,
+  on the branch (32), or at given states.
+
+Agreement of expressions is decided by evaluation at random states on the constraint
+manifold (with random multipliers and parameters), a Schwartz-Zippel style test: a
+nonzero analytic difference vanishes at random points with probability zero.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import sympy as sp
+
+from .constraints import System
+from .testing import vanishes
+
+_POINTS = 4
+
+
+def branch_32(system: System, multipliers) -> dict:
+    """{lambda_alpha: -p_alpha} on the constraint manifold: the branch of (32)."""
+    return {lam: -system.on_constraints(p) for lam, p in zip(multipliers, system.p_dependent)}
+
+
+def obstructions(system: System) -> dict:
+    """K^alpha_{rho sigma} = X_rho B^alpha_sigma - X_sigma B^alpha_rho, rho < sigma over (t, q^mu)."""
+    J = system.J
+    B = system.B
+    coords = (J.t,) + system.independent
+
+    def X(rho, expr):
+        return sp.diff(expr, coords[rho]) + sp.Add(*[B[b, rho] * sp.diff(expr, qb)
+                                                      for b, qb in enumerate(system.dependent)])
+    out = {}
+    for a, qa in enumerate(system.dependent):
+        for r in range(len(coords)):
+            for s in range(r + 1, len(coords)):
+                out[(qa, coords[r], coords[s])] = X(r, B[a, s]) - X(s, B[a, r])
+    return out
+
+
+def frobenius_T(system: System) -> sp.Matrix:
+    """T^alpha_mu rebuilt from the Frobenius obstructions: sum_rho K^alpha_{rho mu} qdot^rho."""
+    J = system.J
+    K = obstructions(system)
+    coords = (J.t,) + system.independent
+    vel = (sp.S.One,) + system.independent_velocities
+
+    def k(qa, r, s):
+        if r == s:
+            return sp.S.Zero
+        return K[(qa, coords[r], coords[s])] if r < s else -K[(qa, coords[s], coords[r])]
+    return sp.Matrix(system.k, len(system.independent),
+                     lambda a, m: sp.Add(*[k(system.dependent[a], r, m + 1) * vel[r]
+                                           for r in range(len(coords))]))
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """The verdict of ``compare``: which coordinates' accelerations agree, and where."""
+
+    principles: tuple
+    identical: bool
+    on_branch_32: bool | None
+    defects: dict = field(default_factory=dict)   # q'' difference (symbolic, unsimplified)
+
+    def __str__(self):
+        a, b = self.principles
+        if self.identical:
+            return f"{a} and {b} have the same accelerations at every state"
+        if self.on_branch_32:
+            return f"{a} and {b} agree on the branch lambda_alpha = -p_alpha (32), not in general"
+        return f"{a} and {b} do not share solutions in general"
+
+
+def agrees(system: System, expr) -> bool:
+    """Whether ``expr`` vanishes at random states on the constraint manifold."""
+    return vanishes(expr, system, points=_POINTS)
+
+
+def compare(system: System, first: str, second: str, convention: str = "paper") -> Comparison:
+    """Do ``first`` and ``second`` give the same coordinate accelerations?"""
+    e1 = system.equations(first, convention=convention)
+    e2 = system.equations(second, convention=convention)
+    a1, a2 = e1.accelerations(), e2.accelerations()
+    qdd = system.J.qdd
+    defects = {q: a1[q] - a2[q] for q in qdd}
+    same = all(agrees(system, d) for d in defects.values())
+    on_branch = None
+    lams = e1.multipliers or e2.multipliers
+    if not same and lams:
+        sub = branch_32(system, lams)
+        on_branch = all(agrees(system, d.xreplace(sub)) for d in defects.values())
+    return Comparison((first, second), same, on_branch, defects)
