@@ -1,7 +1,18 @@
-"""jetnh: nonholonomic constrained mechanics on jet bundles."""
+"""jetnh: nonholonomic constrained mechanics on jet bundles.
 
+The public contract (DESIGN.md section 4): ``JetSpace``, ``System``, ``System.equations``,
+``Equations.accelerations``; ``compare`` decides when two principles share solutions.
+"""
+
+from .constraints import PRINCIPLES, System
+from .equations import Equations
+from .equivalence import compare
 from .errors import (ConstraintError, IntegrationError, JetnhError, JetSpaceError,
                      LagrangianError, ModelFileError, PrincipleError)
 from .jet import JetSpace
 
 __version__ = "0.1.0"
+
+__all__ = ["JetSpace", "System", "Equations", "PRINCIPLES", "compare", "JetnhError",
+           "JetSpaceError", "ConstraintError", "LagrangianError", "PrincipleError",
+           "ModelFileError", "IntegrationError"]

@@ -49,10 +49,13 @@ class System:
     ``dependent`` is the split: the coordinates whose velocities the constraints
     determine (one per constraint); chosen automatically when omitted.  ``branch``
     selects a root when the constraints are nonlinear in the dependent velocities and
-    have several solutions for them.
+    have several solutions for them.  ``defaults`` maps parameters (Symbols or names)
+    to default numeric values, and ``name`` labels the system; neither changes the
+    symbolic results.
     """
 
-    def __init__(self, J: JetSpace, L, constraints=(), dependent=None, branch: int | None = None):
+    def __init__(self, J: JetSpace, L, constraints=(), dependent=None, branch: int | None = None,
+                 defaults=None, name: str = ""):
         if not isinstance(J, JetSpace):
             raise JetSpaceError(f"the first argument must be a JetSpace, got {type(J).__name__}")
         self.J = J
@@ -65,6 +68,20 @@ class System:
         dep = set(self.dependent)
         self.independent = tuple(s for s in J.q if s not in dep)
         self._check_solvable()
+        self.name = name
+        self.defaults = self._defaults(defaults or {})
+
+    def _defaults(self, given) -> dict:
+        by_name = {p.name: p for p in self.parameters}
+        out = {}
+        for key, val in given.items():
+            name = key.name if isinstance(key, sp.Symbol) else str(key)
+            if name not in by_name:
+                raise ConstraintError(
+                    f"default given for {name!r}, which is not a parameter of the system "
+                    f"(parameters: {sorted(by_name)})")
+            out[by_name[name]] = float(val)
+        return out
 
     # ------------------------------------------------------------------ validation
     def _first_order(self, expr, what):
@@ -335,7 +352,8 @@ class System:
 
     def with_split(self, dependent) -> "System":
         """The same system with another split."""
-        return System(self.J, self.L, self.constraints, dependent, self._branch)
+        return System(self.J, self.L, self.constraints, dependent, self._branch,
+                      self.defaults, self.name)
 
     # ------------------------------------------------------------------ equations
     def equations(self, principle: str, form: str | None = None, convention: str = "paper"):

@@ -227,7 +227,8 @@ def _explicit(system: System) -> System:
     """The same system with the constraints in explicit form qdot^alpha - phi^alpha."""
     if system.constraints == system.explicit_constraints:
         return system
-    return System(system.J, system.L, system.explicit_constraints, system.dependent)
+    return System(system.J, system.L, system.explicit_constraints, system.dependent,
+                  defaults=system.defaults, name=system.name)
 
 
 def _vakonomic(system, principle, form, convention):
