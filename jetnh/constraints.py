@@ -252,9 +252,26 @@ class System:
         """f^alpha = qdot^alpha - phi^alpha, in the order of ``dependent``."""
         return tuple(v - self.phi[v] for v in self.dependent_velocities)
 
-    def on_constraints(self, expr):
-        """``expr`` with the dependent velocities replaced by phi (restricted to the constraints)."""
-        return sp.sympify(expr).xreplace(self.phi) if self.phi else sp.sympify(expr)
+    def on_constraints(self, expr, prolonged: bool = False):
+        """``expr`` restricted to the constraints: dependent velocities replaced by phi.
+
+        With ``prolonged`` the dependent accelerations are replaced too, by
+        D(phi^alpha) on the constraints (the first prolongation of the constraint set):
+        identities such as (19) hold there, not on J^2 at large.
+        """
+        expr = sp.sympify(expr)
+        if not self.phi:
+            return expr
+        if prolonged:
+            expr = expr.xreplace(self.dependent_accelerations)
+        return expr.xreplace(self.phi)
+
+    @cached_property
+    def dependent_accelerations(self) -> dict[sp.Symbol, sp.Expr]:
+        """qddot^alpha -> D(phi^alpha) restricted to the constraints."""
+        J = self.J
+        return {J.jet(a, 2): J.D(self.phi[v]).xreplace(self.phi)
+                for a, v in zip(self.dependent, self.dependent_velocities)}
 
     @cached_property
     def Phi(self) -> sp.Matrix:

@@ -67,12 +67,17 @@ def _lu_solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
 
 
 def numeric_rank(M: sp.Matrix, points: int = 3, seed: int = 0, tol: float = 1e-9) -> int:
-    """The generic rank of a symbolic matrix: the largest rank at a few random points."""
+    """The generic rank of a symbolic matrix: the largest rank at a few random points.
+
+    Matrices of abstract (undefined) functions cannot be evaluated; their rank is
+    decided symbolically, with zero meaning zero after ``expand``.
+    """
     import numpy as np
 
     syms = sorted(M.free_symbols, key=lambda s: s.name)
     rng = random.Random(seed)
     best = 0
+    evaluated = False
     for _ in range(points):
         vals = {s: sp.Float(rng.uniform(0.31, 1.37)) for s in syms}
         try:
@@ -83,6 +88,9 @@ def numeric_rank(M: sp.Matrix, points: int = 3, seed: int = 0, tol: float = 1e-9
             continue
         if arr.size == 0:
             return 0
+        evaluated = True
         s = np.linalg.svd(arr, compute_uv=False)
         best = max(best, int(np.sum(s > tol * max(1.0, s[0]))))
+    if not evaluated:        # abstract functions: no numbers to draw, decide symbolically
+        return M.rank(iszerofunc=lambda e: sp.expand(e) == 0, simplify=False)
     return best
