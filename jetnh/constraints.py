@@ -262,9 +262,12 @@ class System:
         expr = sp.sympify(expr)
         if not self.phi:
             return expr
+        # derivatives of undefined functions by a velocity need subs (it builds Subs objects)
+        replace = expr.subs if expr.has(sp.Derivative) else expr.xreplace
         if prolonged:
-            expr = expr.xreplace(self.dependent_accelerations)
-        return expr.xreplace(self.phi)
+            expr = replace(self.dependent_accelerations)
+            replace = expr.subs if expr.has(sp.Derivative) else expr.xreplace
+        return replace(self.phi)
 
     @cached_property
     def dependent_accelerations(self) -> dict[sp.Symbol, sp.Expr]:
