@@ -43,8 +43,10 @@ def canonical(expr) -> sp.Expr:
 
 
 def is_zero(expr) -> bool:
-    """Exact zero test for expressions in generic functions: canonical form, then expand."""
-    return sp.expand(canonical(expr)) == 0
+    """Exact zero test for expressions in generic functions: canonical form, then expand
+    (of the numerator over a common denominator when the expression has fractions)."""
+    e = sp.expand(canonical(expr))
+    return e == 0 or sp.expand(sp.numer(sp.together(e))) == 0
 
 
 @dataclass
@@ -63,6 +65,13 @@ class Proof:
         self.steps.append((text, ok))
         self.holds = self.holds and ok
         return ok
+
+    def refute(self, text: str, residuals) -> bool:
+        """Record that a (printed) statement is false: some residual is not zero."""
+        refuted = not all(is_zero(r) for r in residuals)
+        self.steps.append((text, refuted))
+        self.holds = self.holds and refuted
+        return refuted
 
     def as_dict(self) -> dict:
         return {"statement": self.statement, "n": self.n, "k": self.k, "holds": self.holds,

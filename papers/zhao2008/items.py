@@ -575,8 +575,8 @@ def _eq29(ctx):
                                       + p[a] * s.J.euler(phis[a], wrt=[s.J.q[i]])[0]
                                       for a in range(s.k)])
     ok = rows_equal(e.expressions, printed)
-    return Outcome(ERRATUM, "(29a) is verified; (29b) carries the index misprint [L]_k for "
-                   "[L]_mu. With mu jetnh's Suslov equations equal the printed ones (generic L, "
+    return Outcome(ERRATUM, "Index misprint [L]_k for [L]_mu in (29b); (29a) is verified. "
+                   "With mu jetnh's Suslov equations equal the printed ones (generic L, "
                    "phi, n=4, k=2).",
                    r"[L]_\beta - \dot\lambda_\beta + \frac{\partial L}{\partial\dot q^\alpha}"
                    r"\frac{\partial\varphi^\alpha}{\partial q^\beta} = 0,\quad [L]_\mu + "
@@ -726,8 +726,8 @@ def _eq36(ctx):
         ctx, "vakonomic", "reduced", "36",
         r"[L]_\beta - \lambda_\alpha B^\alpha_{\rho;\beta}\dot q^\rho - \dot\lambda_\beta = 0,\quad"
         r" [L]_\mu + B^\alpha_\mu [L]_\alpha + \lambda_\alpha " + _T_AFFINE + " = 0",
-        "(36a) holds. In (36b) the factor 2 multiplies B^beta_rho B^alpha_{mu;beta} too, and "
-        "the term -B^beta_mu B^alpha_{rho;beta} is missing: jetnh's T^alpha_mu for affine "
+        "In (36b) the factor 2 wrongly multiplies B^beta_rho B^alpha_{mu;beta} and the term "
+        "-B^beta_mu B^alpha_{rho;beta} is missing; (36a) holds. jetnh's T^alpha_mu for affine "
         "constraints is (2B_[mu;rho] + B^beta_rho B_{mu;beta} - B^beta_mu B_{rho;beta}) qdot^rho. "
         "The difference shows on the witness zdot = (y+z) xdot (dB/dz != 0).")
 
@@ -739,8 +739,9 @@ def _eq37(ctx):
         r"[L]_\beta - \lambda_\alpha B^\alpha_{\rho;\beta}\dot q^\rho - \dot\lambda_\beta = 0,\quad"
         r" [\tilde L]_\mu + B^\alpha_\mu \frac{\partial\tilde L}{\partial q^\alpha} + \Big("
         r"\frac{\partial L}{\partial\dot q^\alpha} + \lambda_\alpha\Big)" + _T_AFFINE + " = 0",
-        "(37a) holds. (37b) should read [L~]_mu + B^alpha_mu dL~/dq^alpha + (p_alpha + "
-        "lambda_alpha) T^alpha_mu (from (20b)): the printed form has [L]_mu for [L~]_mu, "
+        "(37b) has [L]_mu for [L~]_mu, dL~/dqdot^alpha for dL~/dq^alpha and a misindexed T; "
+        "(37a) holds. From (20b) it reads [L~]_mu + B^alpha_mu dL~/dq^alpha + (p_alpha + "
+        "lambda_alpha) T^alpha_mu: the printed form has [L]_mu for [L~]_mu, "
         "dL~/dqdot^alpha (which is zero: L~ has no qdot^alpha) for dL~/dq^alpha, and a "
         "misindexed T.")
 
@@ -752,7 +753,8 @@ def _eq38(ctx):
         r"[L]_\beta - \dot\lambda_\beta + \frac{\partial L}{\partial\dot q^\alpha}B^\alpha_{\rho;"
         r"\beta}\dot q^\rho = 0,\quad [\tilde L]_\mu + B^\alpha_\mu\frac{\partial\tilde L}"
         r"{\partial q^\alpha} = 0",
-        "(38a) holds. (38b) should be (31b) with phi = B qdot: [L~]_mu + B^alpha_mu "
+        "(38b) has [L]_mu + B dL~/dqdot^alpha (= [L]_mu) for [L~]_mu + B dL~/dq^alpha; (38a) "
+        "holds. (38b) should be (31b) with phi = B qdot: [L~]_mu + B^alpha_mu "
         "dL~/dq^alpha = 0; the printed [L]_mu + B^alpha_mu dL~/dqdot^alpha = [L]_mu is not "
         "equivalent (it drops the constraint forces).")
 
@@ -764,8 +766,9 @@ def _eq39(ctx):
     ok = all(is_zero(e) for e in diff)
     frob = not ctx.disk.is_integrable() and ctx.particle.frobenius().integrable is False
     return Outcome(ERRATUM,
-                   "As printed the index mu occurs three times in one term, so (39) is not a "
-                   "well-formed condition. jetnh derives T^alpha_mu = K^alpha_{rho mu} qdot^rho "
+                   "Ill-formed: the index mu occurs three times in one term; the integrability "
+                   "condition is the antisymmetrised B^alpha_{[mu;rho]} + B^beta_{[rho} "
+                   "B^alpha_{mu];beta} = 0. jetnh derives T^alpha_mu = K^alpha_{rho mu} qdot^rho "
                    "with K^alpha_{rho sigma} = X_rho B^alpha_sigma - X_sigma B^alpha_rho (X_rho = "
                    "d_rho + B^beta_rho d_beta) the Frobenius obstructions; so T = 0 for all "
                    "velocities iff K = 0 iff the affine constraints are integrable.",
@@ -829,7 +832,9 @@ def _eq42(ctx):
     lam_ok = all(sp.expand(e.expressions[a] + J.qdd[s.dep_index[a]]
                            + e.J.jet(e.multipliers[a], 1)) == 0 for a in range(2))
     return Outcome(ERRATUM if ok and not printed_ok else (VERIFIED if printed_ok else ERRATUM),
-                   "(42a) holds (lambda_dot = -xddot as for Suslov). Substituting lambda = -p + C "
+                   "(42b) has sin phi, cos phi where sin psi, cos psi belong, and the velocity "
+                   "factors and signs exchanged; (42a) holds (lambda_dot = -xddot as for "
+                   "Suslov). Substituting lambda = -p + C "
                    "in (37b) jetnh obtains (R^2+I1) phiddot + R psidot (C1 sin psi - C2 cos psi) "
                    "= 0 and I2 psiddot - R phidot (C1 sin psi - C2 cos psi) = 0: the printed "
                    "(42b) has the rolling angle phi where the heading psi belongs, the velocity "
@@ -885,7 +890,8 @@ def _eq44(ctx):
     ok_c = vanishes(s.on_constraints(e.expressions[0] + m * g + m * J.qdd[2]
                                      + e.J.jet(lam, 1)), s)
     return Outcome(ERRATUM if ok_derived and not ok_printed else VERIFIED,
-                   "(44c) holds. In (44a), (44b) the coupling term is (p_z + lambda_z) T^3_mu / "
+                   "The coupling terms of (44a), (44b) lack the factor -b/(a m); (44c) holds. "
+                   "In (44a), (44b) the coupling term is (p_z + lambda_z) T^3_mu / "
                    "(-m) with T^3_1 = (b/a) ydot (xddot ydot - xdot yddot)/(xdot^2+ydot^2)^(3/2) "
                    "(the paper's own T): the printed terms lack the factor -b/(a m). The "
                    "conclusion drawn from (44) is unaffected: the term vanishes where "
