@@ -67,7 +67,7 @@ class JetSpace:
             if name in seen:
                 raise JetSpaceError(f"the name {name!r} is given twice; names must be distinct")
             seen.add(name)
-        for name in coords + extra:
+        for name in (t_name,) + coords + extra:
             m = _JET_SUFFIX.match(name)
             if m:
                 raise JetSpaceError(
@@ -154,6 +154,13 @@ class JetSpace:
         except KeyError:
             pass
         name = sym.name
+        if name == self._t.name:
+            if sym != self._t:
+                raise JetSpaceError(
+                    f"the symbol {name!r} clashes with the time symbol of the jet space (it has "
+                    f"assumptions {sym.assumptions0}); use J.t")
+            self._split_cache[sym] = None
+            return None
         if name in self._base_by_name:
             base, k = self._base_by_name[name], 0
         else:
