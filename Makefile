@@ -1,5 +1,5 @@
 # Two commands do all the set-up on a fresh machine:
-#   make run    derive and compare the equations of the paper's vertical rolling disk
+#   make run    the machine-checked reproduction of the seed paper (papers/zhao2008)
 #   make test   run the whole test suite (hypothesis profile "ci"; HYPOTHESIS_PROFILE=dev for more)
 PYTHON ?= python3
 VENV   := .venv
@@ -17,7 +17,7 @@ $(STAMP): pyproject.toml
 venv: $(STAMP)
 
 run: $(STAMP)
-	$(BIN)/jetnh compare rolling_disk
+	$(BIN)/jetnh reproduce
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -n 2 -q

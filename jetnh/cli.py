@@ -82,6 +82,21 @@ def cmd_compare(args) -> int:
     return 0
 
 
+def cmd_reproduce(args) -> int:
+    import pathlib
+
+    root = pathlib.Path(__file__).resolve().parents[1]
+    if not (root / "papers" / "zhao2008" / "reproduce.py").exists():
+        raise JetnhError("the reproduction lives in the repository's papers/ directory; run "
+                         "`jetnh reproduce` from a checkout installed with `pip install -e .`")
+    if str(root) not in sys.path:
+        sys.path.insert(0, str(root))
+    from papers.zhao2008.reproduce import main as reproduce
+
+    argv = (["--fast"] if args.fast else []) + (["--no-figures"] if args.no_figures else [])
+    return reproduce(argv)
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="jetnh", description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="command", required=True)
@@ -95,6 +110,11 @@ def build_parser() -> argparse.ArgumentParser:
     c = sub.add_parser("compare", help="every principle side by side, with T and equivalences")
     c.add_argument("model", help="a catalogue name (e.g. rolling_disk)")
     c.set_defaults(func=cmd_compare)
+    r = sub.add_parser("reproduce", help="the machine-checked reproduction of the seed paper "
+                       "(writes papers/zhao2008/results.json and report.md)")
+    r.add_argument("--fast", action="store_true", help="proofs for n <= 3, short simulations")
+    r.add_argument("--no-figures", action="store_true", help="skip the simulations and figures")
+    r.set_defaults(func=cmd_reproduce)
     return p
 
 

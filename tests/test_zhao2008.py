@@ -1,0 +1,71 @@
+"""The reproduction of the seed paper runs (fast mode) and its results are consistent."""
+
+import json
+
+import pytest
+
+from papers.zhao2008 import printed
+from papers.zhao2008.reproduce import main
+
+
+@pytest.fixture(scope="module")
+def results(tmp_path_factory):
+    out = tmp_path_factory.mktemp("zhao2008")
+    assert main(["--fast", "--out", str(out)]) == 0
+    data = json.loads((out / "results.json").read_text())
+    data["_out"] = out
+    return data
+
+
+def test_every_numbered_equation_has_an_item(results):
+    labels = [i["label"] for i in results["items"] if i["kind"] == "equation"]
+    assert labels == [f"({n})" for n in range(1, 45)]
+    assert all(i["status"] in ("verified", "erratum", "not-checkable") for i in results["items"])
+    assert sum(1 for i in results["items"] if i["kind"] == "claim") >= 15
+
+
+def test_errata_have_both_forms_and_a_reason(results):
+    for it in results["items"]:
+        if it["status"] == "erratum":
+            assert it["printed"].strip() and it["derived"].strip(), it["label"]
+            assert it["note"].strip(), it["label"]
+
+
+def test_statuses_follow_the_derivations(results):
+    status = {i["label"]: i["status"] for i in results["items"]}
+    for label in ("(3)", "(36)", "(37)", "(38)", "(39)", "(42)", "(44)"):
+        assert status[label] == "erratum", label
+    for label in ("(6)", "(8)", "(10)", "(11)", "(13)", "(15)", "(17)", "(18)", "(19)",
+                  "(20)", "(25)", "(27)", "(30)", "(31)", "(32)", "(35)", "(41)", "(43)"):
+        assert status[label] == "verified", label
+    for label in ("(1)", "(2)", "(5)", "(7)", "(9)", "(12)", "(26)"):
+        assert status[label] == "not-checkable", label
+    # every verified item's evidence is all True
+    for it in results["items"]:
+        if it["status"] == "verified":
+            assert all("False" not in e for e in it["evidence"]), it["label"]
+
+
+def test_proofs_hold_and_simulations_pass(results):
+    assert results["proofs"] and all(p["holds"] for p in results["proofs"])
+    sizes = {(p["n"], p["k"]) for p in results["proofs"]}
+    assert sizes == {(2, 1), (3, 1), (3, 2)}
+    sims = results["simulations"]
+    assert set(sims) == {"rolling_disk", "appell_hamel"} and all(s["ok"] for s in sims.values())
+    for s in sims.values():
+        for fig in s["figures"]:
+            assert (results["_out"] / fig).stat().st_size > 1000
+
+
+def test_report_shows_table_errata_and_figures(results):
+    text = (results["_out"] / "report.md").read_text()
+    assert "| (3) | equation | **erratum** |" in text
+    assert "### (42)" in text and "Printed:" in text and "Derived by jetnh:" in text
+    assert "![disk_paths.png](disk_paths.png)" in text
+
+
+def test_printed_cache_matches_the_seed():
+    if not printed.SEED.exists():
+        pytest.skip("the seed paper is not beside the repository")
+    assert printed.extract(printed.SEED.read_text(encoding="utf-8")) == json.loads(
+        printed.CACHE.read_text(encoding="utf-8"))
