@@ -102,3 +102,31 @@ def compare(system: System, first: str, second: str, convention: str = "paper") 
         sub = branch_32(system, lams)
         on_branch = all(agrees(system, d.xreplace(sub)) for d in defects.values())
     return Comparison((first, second), same, on_branch, defects)
+
+
+def defect_along(system: System, first: str, second: str, samples, convention: str = "paper"):
+    """Largest |q''_first - q''_second| over given states: do the principles agree along a
+    trajectory?  ``samples`` maps names (or Symbols) to arrays of equal length, e.g.
+    ``traj.as_dict()`` of a jetnh Trajectory; multipliers missing from it count as zero."""
+    import numpy as np
+
+    e1 = system.equations(first, convention=convention)
+    e2 = system.equations(second, convention=convention)
+    a1, a2 = e1.accelerations(), e2.accelerations()
+    data = {(k.name if isinstance(k, sp.Symbol) else str(k)): np.asarray(v, dtype=float)
+            for k, v in dict(samples).items()}
+    worst = 0.0
+    for q in system.J.qdd:
+        d = system.on_constraints(a1[q] - a2[q])
+        syms = sorted(d.free_symbols, key=lambda s: s.name)
+        missing = [s.name for s in syms if s.name not in data
+                   and s not in (e1.multipliers + e2.multipliers)]
+        if missing:
+            from .errors import JetnhError
+            raise JetnhError(f"the samples lack values for {missing}; pass every coordinate, "
+                             "velocity and parameter (e.g. traj.as_dict() plus parameters)")
+        n = len(next(iter(data.values())))
+        args = [data.get(s.name, np.zeros(n)) for s in syms]
+        val = sp.lambdify(syms, d, "numpy")(*args)
+        worst = max(worst, float(np.max(np.abs(np.broadcast_to(val, (n,))))))
+    return worst
