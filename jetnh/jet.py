@@ -191,9 +191,10 @@ class JetSpace:
     def check(self, expr) -> sp.Expr:
         """``expr`` as a sympy expression on this jet space, or a JetSpaceError.
 
-        Refuses strings (parse model files with ``jetnh.modelfile``), symbols that clash
-        with jet names, and sympy.physics.mechanics dynamicsymbols such as ``x(t)``
-        (convert those with ``from_dynamic``).
+        Refuses strings, symbols that clash with jet names, and coordinates written as
+        sympy.physics.mechanics dynamicsymbols such as ``x(t)`` (convert those with
+        ``from_dynamic``).  Undefined functions of other names, such as a forcing ``u(t)``
+        or a generic ``f(t, x, x_t)``, are explicit functions and allowed.
         """
         if isinstance(expr, str):
             raise JetSpaceError(
@@ -209,7 +210,7 @@ class JetSpace:
             if isinstance(s, sp.Symbol):
                 self.split(s)
         for f in expr.atoms(AppliedUndef):
-            if f.args == (self._t,) or (f.func.__name__ in self._base_by_name):
+            if f.func.__name__ in self._base_by_name:
                 raise JetSpaceError(
                     f"{f} is a function of time in dynamicsymbols style; convert the "
                     "expression with J.from_dynamic(expr) first")
