@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 import sympy as sp
 
 from .constraints import System
+from .frobenius import bracket_components
 from .testing import vanishes
 
 _POINTS = 4
@@ -33,20 +34,9 @@ def branch_32(system: System, multipliers) -> dict:
 
 
 def obstructions(system: System) -> dict:
-    """K^alpha_{rho sigma} = X_rho B^alpha_sigma - X_sigma B^alpha_rho, rho < sigma over (t, q^mu)."""
-    J = system.J
-    B = system.B
-    coords = (J.t,) + system.independent
-
-    def X(rho, expr):
-        return sp.diff(expr, coords[rho]) + sp.Add(*[B[b, rho] * sp.diff(expr, qb)
-                                                      for b, qb in enumerate(system.dependent)])
-    out = {}
-    for a, qa in enumerate(system.dependent):
-        for r in range(len(coords)):
-            for s in range(r + 1, len(coords)):
-                out[(qa, coords[r], coords[s])] = X(r, B[a, s]) - X(s, B[a, r])
-    return out
+    """K^alpha_{rho sigma} = X_rho B^alpha_sigma - X_sigma B^alpha_rho, keyed
+    (x_rho, x_sigma, q_alpha) with rho < sigma over (t, q^mu); zeros included."""
+    return bracket_components(system.J, system.B, system.dependent, system.independent)
 
 
 def frobenius_T(system: System) -> sp.Matrix:
@@ -59,7 +49,7 @@ def frobenius_T(system: System) -> sp.Matrix:
     def k(qa, r, s):
         if r == s:
             return sp.S.Zero
-        return K[(qa, coords[r], coords[s])] if r < s else -K[(qa, coords[s], coords[r])]
+        return K[(coords[r], coords[s], qa)] if r < s else -K[(coords[s], coords[r], qa)]
     return sp.Matrix(system.k, len(system.independent),
                      lambda a, m: sp.Add(*[k(system.dependent[a], r, m + 1) * vel[r]
                                            for r in range(len(coords))]))

@@ -53,7 +53,8 @@ from .errors import ConstraintError
 from .forms import Form, _canon, _order, affine_coefficients, d, wedge, zero_residual
 from .jet import JetSpace
 
-__all__ = ["FrobeniusResult", "frobenius", "frobenius_from_constraints", "decide_zero"]
+__all__ = ["FrobeniusResult", "frobenius", "frobenius_from_constraints", "decide_zero",
+           "bracket_components"]
 
 _METHODS = ("brackets", "forms")
 
@@ -149,8 +150,10 @@ def frobenius(J: JetSpace, B, dependent: Sequence, independent: Sequence | None 
     return _forms(J, B, dep, ind, opts)
 
 
-def _brackets(J, B, dep, ind, opts) -> FrobeniusResult:
-    xs = (J.t,) + ind
+def bracket_components(J: JetSpace, B, dep, ind) -> dict:
+    """Every K^alpha_{rho sigma} = X_rho B^alpha_sigma - X_sigma B^alpha_rho, rho < sigma over
+    (t, independent), keyed (x_rho, x_sigma, q_alpha); not reduced, zeros included."""
+    xs = (J.t,) + tuple(ind)
     k = len(dep)
 
     def X(rho, f):
@@ -161,13 +164,16 @@ def _brackets(J, B, dep, ind, opts) -> FrobeniusResult:
                 out.append(c * sp.diff(f, dep[a]))
         return sp.Add(*out)
 
+    return {(xs[r], xs[s], dep[a]): X(r, B[a, s]) - X(s, B[a, r])
+            for r in range(len(xs)) for s in range(r + 1, len(xs)) for a in range(k)}
+
+
+def _brackets(J, B, dep, ind, opts) -> FrobeniusResult:
     obstructions = {}
-    for r in range(len(xs)):
-        for s in range(r + 1, len(xs)):
-            for a in range(k):
-                res = decide_zero(X(r, B[a, s]) - X(s, B[a, r]), **opts)
-                if res is not None:
-                    obstructions[(xs[r], xs[s], dep[a])] = res
+    for key, component in bracket_components(J, B, dep, ind).items():
+        res = decide_zero(component, **opts)
+        if res is not None:
+            obstructions[key] = res
     return FrobeniusResult(not obstructions, obstructions, "brackets")
 
 

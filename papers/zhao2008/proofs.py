@@ -152,11 +152,10 @@ def prove_39(n, k):
     p.step("T from its definition equals the contraction of K = X_rho B_sigma - X_sigma B_rho",
            list(s.T() - frobenius_T(s)))
     K = obstructions(s)
-    fr = frobenius(s.J, s.B, s.dependent, s.independent)
-    keys = {(r, t_, a): v for (a, r, t_), v in K.items()}
-    p.step("K equals the obstructions of jetnh.frobenius (brackets of X_rho)",
-           [keys[key] - val for key, val in fr.obstructions.items()]
-           + [v for key, v in keys.items() if key not in fr.obstructions])
+    fr = frobenius(s.J, s.B, s.dependent, s.independent, method="forms")
+    p.step("K equals the obstructions read off d omega ^ omega^1 ^ ... ^ omega^k (forms route)",
+           [K[key] - val for key, val in fr.obstructions.items()]
+           + [v for key, v in K.items() if key not in fr.obstructions])
     p.step("so T = 0 for all velocities iff the distribution is involutive (Frobenius)")
     return p
 
