@@ -1,7 +1,8 @@
 """jetnh: nonholonomic constrained mechanics on jet bundles.
 
 The public contract (DESIGN.md section 4): ``JetSpace``, ``System``, ``System.equations``,
-``Equations.accelerations``; ``compare`` decides when two principles share solutions.
+``Equations.accelerations``, ``Scene`` and its ``Trajectory``; ``compare`` decides when two
+principles share solutions.
 """
 
 from .constraints import PRINCIPLES, System
@@ -13,6 +14,16 @@ from .jet import JetSpace
 
 __version__ = "0.1.0"
 
-__all__ = ["JetSpace", "System", "Equations", "PRINCIPLES", "compare", "JetnhError",
+__all__ = ["JetSpace", "System", "Equations", "PRINCIPLES", "compare", "Scene", "Trajectory",
+           "Diagnostics", "JetnhError",
            "JetSpaceError", "ConstraintError", "LagrangianError", "PrincipleError",
            "ModelFileError", "IntegrationError"]
+
+
+def __getattr__(name):
+    """Scene, Trajectory and Diagnostics load numba and scipy: import them on first use."""
+    if name in ("Scene", "Trajectory", "Diagnostics"):
+        from . import numeric
+
+        return getattr(numeric, name)
+    raise AttributeError(f"module 'jetnh' has no attribute {name!r}")

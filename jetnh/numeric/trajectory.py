@@ -1,0 +1,176 @@
+"""Trajectories: the output of ``Scene.run``, indexed by Symbol or by name.
+
+``traj.t`` is the array of output times and ``traj[x]`` / ``traj["x"]`` the column of a
+coordinate, an independent velocity, a multiplier, a dependent velocity (computed from
+the constraints by the compiled ``aux`` kernel, on first access) or a user first
+integral.  ``traj.diagnostics`` reports the constraint residual, the energy and its
+drift, first integrals and their drift, steps, right-hand-side evaluations and why the
+integration stopped.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from functools import cached_property
+
+import numpy as np
+import sympy as sp
+
+from ..errors import JetnhError
+
+
+@dataclass
+class Diagnostics:
+    """What happened during one integration, and how well the invariants held."""
+
+    method: str
+    status: int
+    stop_reason: str
+    success: bool
+    steps: int | None
+    rejected: int | None
+    rhs_evaluations: int
+    wall_time: float
+    residual_max: float            # max |f^a| over the output rows
+    energy_initial: float
+    energy_drift: float            # max |E - E(t0)|
+    energy_drift_relative: float   # energy_drift / max(|E(t0)|, tiny)
+    integral_drift: dict = field(default_factory=dict)
+    projected: dict = field(default_factory=dict)
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+    def __str__(self):
+        lines = [f"{self.method}: {self.stop_reason} ({'success' if self.success else 'failure'})",
+                 f"  steps {self.steps} (rejected {self.rejected}), rhs evaluations "
+                 f"{self.rhs_evaluations}, {self.wall_time * 1e3:.3g} ms",
+                 f"  constraint residual max {self.residual_max:.3e}",
+                 f"  energy {self.energy_initial:.12g}, drift {self.energy_drift:.3e} "
+                 f"(relative {self.energy_drift_relative:.3e})"]
+        for k, v in self.integral_drift.items():
+            lines.append(f"  integral {k}: drift {v:.3e}")
+        return "\n".join(lines)
+
+
+class Trajectory:
+    """Output times ``t`` and states ``y`` (rows) of one run, with named access."""
+
+    def __init__(self, scene, t, y, p, *, method, status, stop_reason, steps, rejected,
+                 nfev, wall_time, kernels, projected=None, own=None):
+        self.scene = scene
+        self.t = np.ascontiguousarray(t, dtype=float)
+        self.y = np.ascontiguousarray(y, dtype=float)
+        self._p = p
+        self._kernels = kernels
+        self.layout = kernels.layout
+        self.method = method
+        self.status = status
+        self.stop_reason = stop_reason
+        self.success = status == 0
+        self._info = dict(steps=steps, rejected=rejected, nfev=nfev, wall_time=wall_time,
+                          projected=dict(projected or {}))
+        # methods that carry their own velocities, residuals and energy (the discrete
+        # Lagrange-d'Alembert integrator): {"velocities": {name: col}, "residual", "energy"}
+        self._own = own or {}
+        self._own_velocities = self._own.get("velocities")
+        lay = self.layout
+        self._state_index = {name: i for i, name in enumerate(lay.states)}
+        k = len(lay.dependent_velocities)
+        self._aux_index = {name: a for a, name in enumerate(lay.dependent_velocities)}
+        self._aux_index.update({name: 2 * k + 1 + i for i, name in enumerate(lay.integrals)})
+
+    # ------------------------------------------------------------------ access
+    @property
+    def names(self) -> tuple[str, ...]:
+        lay = self.layout
+        return lay.states + lay.dependent_velocities + lay.integrals
+
+    def _name(self, key) -> str:
+        if isinstance(key, sp.Symbol):
+            return key.name
+        if isinstance(key, str):
+            return key
+        raise JetnhError(f"index a trajectory by a Symbol or a name, not {type(key).__name__}")
+
+    def __getitem__(self, key) -> np.ndarray:
+        name = self._name(key)
+        if name in self._state_index:
+            return self.y[:, self._state_index[name]]
+        if self._own_velocities is not None and name in self._own_velocities:
+            return self._own_velocities[name]
+        if name in self._aux_index:
+            return self.aux[:, self._aux_index[name]]
+        raise JetnhError(
+            f"{name!r} is not in this trajectory; it has {', '.join(self.names)}")
+
+    def __contains__(self, key) -> bool:
+        return self._name(key) in self.names
+
+    def __len__(self):
+        return self.t.shape[0]
+
+    @property
+    def final(self) -> dict[str, float]:
+        """The last value of every coordinate, velocity, multiplier and integral."""
+        return {name: float(self[name][-1]) for name in self.names} if len(self) else {}
+
+    def as_dict(self) -> dict[str, np.ndarray]:
+        out = {"t": self.t}
+        out.update({name: self[name] for name in self.names})
+        return out
+
+    # ------------------------------------------------------------------ derived columns
+    @cached_property
+    def aux(self) -> np.ndarray:
+        """Rows of (dependent velocities, constraint residuals, energy, integrals)."""
+        if self._own:
+            raise JetnhError(f"{self.method} trajectories carry their own velocities, "
+                             "residuals and energy; first integrals are not evaluated")
+        out = np.empty((len(self), self.layout.n_aux))
+        if len(self):
+            self._kernels.aux_rows(self.t, self.y, self._p, out)
+        return out
+
+    @property
+    def energy(self) -> np.ndarray:
+        """E = qdot^s dF/dqdot^s - F, F = L + lambda_a f^a, on the constraints."""
+        if "energy" in self._own:
+            return self._own["energy"]
+        return self.aux[:, self.layout.energy_index]
+
+    @property
+    def residual(self) -> np.ndarray:
+        """The constraints f^a as written by the user, at every output row (columns: a)."""
+        if "residual" in self._own:
+            return self._own["residual"]
+        k = len(self.layout.dependent_velocities)
+        return self.aux[:, k:2 * k]
+
+    def integral(self, name) -> np.ndarray:
+        return self[name]
+
+    @cached_property
+    def diagnostics(self) -> Diagnostics:
+        res = self.residual
+        rmax = float(np.max(np.abs(res))) if res.size else 0.0
+        E = self.energy
+        e0 = float(E[0]) if E.size else float("nan")
+        drift = float(np.max(np.abs(E - e0))) if E.size else 0.0
+        idrift = {}
+        for name in self.layout.integrals:
+            col = self[name]
+            idrift[name] = float(np.max(np.abs(col - col[0]))) if col.size else 0.0
+        i = self._info
+        return Diagnostics(
+            method=self.method, status=self.status, stop_reason=self.stop_reason,
+            success=self.success, steps=i["steps"], rejected=i["rejected"],
+            rhs_evaluations=i["nfev"], wall_time=i["wall_time"], residual_max=rmax,
+            energy_initial=e0, energy_drift=drift,
+            energy_drift_relative=drift / max(abs(e0), 1e-300) if E.size else 0.0,
+            integral_drift=idrift, projected=i["projected"])
+
+    def __repr__(self):
+        span = f"t in [{self.t[0]:.6g}, {self.t[-1]:.6g}]" if len(self) else "empty"
+        return (f"<Trajectory {self.method}: {len(self)} rows, {span}, "
+                f"{self.stop_reason}>")
