@@ -233,3 +233,16 @@ def test_bad_arguments(disk_scene):
     with pytest.raises(JetnhError, match="t_span"):
         Scene(disk_scene.system, "chetaev", params=disk_scene.params, initial=DISK0,
               t_span=(0.0,))
+
+
+def test_parameters_default_to_the_system_defaults():
+    from jetnh.models import rolling_disk
+
+    s = rolling_disk()
+    x, y, phi, psi = s.J.q
+    scene = Scene(s, "chetaev", initial={x: 0, y: 0, phi: 0, psi: 0, "phi_t": 1.0,
+                                         "psi_t": 0.5}, t_span=(0.0, 1.0))
+    assert scene.params == {"R": 1.0, "I1": 0.5, "I2": 0.25}
+    scene2 = Scene(s, "chetaev", params={"R": 2.0}, initial=scene.initial, t_span=(0, 1),
+                   project=True)
+    assert scene2.params["R"] == 2.0 and scene2.params["I1"] == 0.5

@@ -60,6 +60,7 @@ def _float(value, what) -> float:
 class Scene:
     """``Scene(system, principle, params, initial, t_span)``: see the module docstring.
 
+    ``params`` default to ``system.defaults`` (the catalogue models carry them).
     Options: ``form``/``convention`` are passed to ``system.equations``; ``integrals``
     maps names to sympy expressions (first integrals to monitor); ``runtime_params``
     names parameters read at run time instead of compiled in; ``project`` replaces
@@ -116,7 +117,8 @@ class Scene:
         for expr in self.integrals.values():
             needed |= {s.name for s in expr.free_symbols if s.name not in known}
         out = {}
-        for k, v in params.items():
+        given = {**{s.name: v for s, v in self.system.defaults.items()}, **dict(params)}
+        for k, v in given.items():
             name = _name(k, "a parameter")
             if name not in needed:
                 raise JetnhError(
@@ -128,7 +130,7 @@ class Scene:
         missing = sorted(needed - set(out))
         if missing:
             raise JetnhError(f"missing parameter values: {', '.join(missing)}; give them in "
-                             "params={...}")
+                             "params={...} (or as the system's defaults)")
         return out
 
     def _initial(self, initial, project) -> dict[str, float]:
