@@ -51,7 +51,7 @@ def write(results: dict, path: pathlib.Path) -> pathlib.Path:
     ]
     for it in items:
         lines.append(f"| {_cell(it['label'])} | {it['kind']} | **{it['status']}** | "
-                     f"{_cell(it['note'].split('. ')[0])}. |")
+                     f"{_cell(it['note'].split('. ')[0].rstrip('.'))}. |")
     lines += ["", "## Errata: printed and derived", ""]
     for it in items:
         if it["status"] != "erratum":

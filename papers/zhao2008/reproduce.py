@@ -95,7 +95,7 @@ def main(argv=None) -> int:
     print("errata:")
     for it in items:
         if it["status"] == "erratum":
-            print(f"  {it['label']}: {it['note'].split('. ')[0]}.")
+            print(f"  {it['label']}: {it['note'].split('. ')[0].rstrip('.')}.")
     print(f"report: {report}")
     print(f"results: {out / 'results.json'}")
     ok = all(p["holds"] for p in proofs) and all(
