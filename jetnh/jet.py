@@ -12,6 +12,7 @@ the definitions under (13)): for a first-order F, ``euler(F)[s]`` is
 
 from __future__ import annotations
 
+import operator
 import re
 from functools import cached_property
 from typing import Iterable
@@ -42,6 +43,28 @@ def _names(spec) -> tuple[str, ...]:
                 f"coordinate {item!r} is a {type(item).__name__}; give names (str) or "
                 "sympy Symbols")
     return tuple(out)
+
+
+def _sym(expr) -> sp.Basic:
+    """A sympy object, never from a string (sympify would execute it)."""
+    if isinstance(expr, str):
+        raise JetSpaceError(
+            f"got the string {expr!r}; jetnh never parses strings here (that would execute "
+            "code). Build expressions from the Symbols of the jet space (J.q, J.qd, ...)")
+    try:
+        return sp.sympify(expr, strict=True)
+    except (sp.SympifyError, TypeError) as exc:
+        raise JetSpaceError(f"{expr!r} is not a sympy expression: {exc}") from None
+
+
+def _order_arg(k, what) -> int:
+    try:
+        k = operator.index(k)
+    except TypeError:
+        raise JetSpaceError(f"{what} must be an integer >= 0, got {k!r}") from None
+    if k < 0:
+        raise JetSpaceError(f"{what} must be an integer >= 0, got {k}")
+    return k
 
 
 class JetSpace:
@@ -135,8 +158,7 @@ class JetSpace:
         if name not in self._base_by_name:
             raise JetSpaceError(
                 f"{name!r} is not a coordinate or field of {self!r}; jets exist only of those")
-        if k < 0:
-            raise JetSpaceError(f"jet order must be >= 0, got {k}")
+        k = _order_arg(k, "jet order")
         return self._base_by_name[name] if k == 0 else sp.Symbol(f"{name}_{'t' * k}")
 
     def with_fields(self, fields) -> "JetSpace":
@@ -181,7 +203,7 @@ class JetSpace:
         """The highest jet order of the coordinates (or given bases) in ``expr``; -1 if none."""
         bases = set(self._coords if of is None else of)
         best = -1
-        for s in sp.sympify(expr).free_symbols:
+        for s in _sym(expr).free_symbols:
             info = self.split(s) if isinstance(s, sp.Symbol) else None
             if info and info[0] in bases:
                 best = max(best, info[1])
@@ -196,14 +218,7 @@ class JetSpace:
         ``from_dynamic``).  Undefined functions of other names, such as a forcing ``u(t)``
         or a generic ``f(t, x, x_t)``, are explicit functions and allowed.
         """
-        if isinstance(expr, str):
-            raise JetSpaceError(
-                f"got the string {expr!r}; jetnh does not parse strings here. Build the "
-                "expression from the Symbols of the jet space (J.q, J.qd, ...)")
-        try:
-            expr = sp.sympify(expr, strict=True)
-        except (sp.SympifyError, TypeError) as exc:
-            raise JetSpaceError(f"{expr!r} is not a sympy expression: {exc}") from None
+        expr = _sym(expr)
         if not isinstance(expr, sp.Basic):
             raise JetSpaceError(f"{expr!r} is not a sympy expression")
         for s in expr.free_symbols:
@@ -219,7 +234,7 @@ class JetSpace:
     # ------------------------------------------------------------------- calculus
     def D(self, expr) -> sp.Expr:
         """Total time derivative d/dt = d_t + sum_k q_(k+1) d/dq_(k), on coordinates and fields."""
-        expr = sp.sympify(expr)
+        expr = _sym(expr)
         terms = []
         for s in expr.free_symbols:
             if s == self._t:
@@ -232,6 +247,7 @@ class JetSpace:
 
     def Dk(self, expr, k: int) -> sp.Expr:
         """The k-th total derivative."""
+        k = _order_arg(k, "the order of a total derivative")
         for _ in range(k):
             expr = self.D(expr)
         return expr
@@ -241,9 +257,13 @@ class JetSpace:
 
         For first-order ``expr`` this is the paper's [expr]_s = d/dq^s - d/dt d/dqdot^s.
         """
-        expr = sp.sympify(expr)
+        expr = _sym(expr)
+        bases = self._coords if wrt is None else tuple(wrt)
+        for b in bases:
+            if not (isinstance(b, sp.Symbol) and self.split(b) and self.split(b)[1] == 0):
+                raise JetSpaceError(f"euler(..., wrt=...) takes coordinates or fields, not {b!r}")
         out = []
-        for b in (self._coords if wrt is None else tuple(wrt)):
+        for b in bases:
             top = self.order(expr, of=(b,))
             if top < 0:
                 out.append(sp.S.Zero)
@@ -259,7 +279,7 @@ class JetSpace:
         """Replace dynamicsymbols ``x(t)``, ``x(t).diff(t, k)`` by jet Symbols ``x``, ``x_t...``."""
         from sympy.physics.vector import dynamicsymbols
 
-        expr = sp.sympify(expr)
+        expr = _sym(expr)
         t_dyn = dynamicsymbols._t
         repl = {}
         for der in expr.atoms(sp.Derivative):
@@ -267,12 +287,12 @@ class JetSpace:
             if isinstance(f, AppliedUndef) and f.args == (t_dyn,) and all(
                     v == t_dyn for v, _ in der.variable_count):
                 repl[der] = self.jet(self._dyn_base(f), sum(c for _, c in der.variable_count))
-        expr = expr.xreplace(repl)
-        repl = {f: self._dyn_base(f) for f in expr.atoms(AppliedUndef) if f.args == (t_dyn,)}
-        expr = expr.xreplace(repl)
+        for f in expr.atoms(AppliedUndef):
+            if f.args == (t_dyn,):
+                repl[f] = self._dyn_base(f)
         if t_dyn != self._t:
-            expr = expr.xreplace({t_dyn: self._t})
-        return self.check(expr)
+            repl[t_dyn] = self._t
+        return self.check(expr.xreplace(repl))     # one pass: no replacement is re-replaced
 
     def _dyn_base(self, f) -> sp.Symbol:
         name = f.func.__name__
@@ -286,7 +306,7 @@ class JetSpace:
         """Replace jet Symbols by sympy.physics.mechanics dynamicsymbols and derivatives."""
         from sympy.physics.vector import dynamicsymbols
 
-        expr = sp.sympify(expr)
+        expr = _sym(expr)
         t_dyn = dynamicsymbols._t
         repl = {}
         for s in expr.free_symbols:
@@ -303,7 +323,7 @@ class JetSpace:
     def latex_names(self, expr) -> dict[sp.Symbol, str]:
         """``symbol_names`` for ``sympy.latex`` that print jets with dots (x_tt -> \\ddot{x})."""
         out = {}
-        for s in sp.sympify(expr).free_symbols:
+        for s in _sym(expr).free_symbols:
             info = self.split(s) if isinstance(s, sp.Symbol) else None
             if info and info[1] > 0:
                 base = sp.latex(info[0])

@@ -1,0 +1,167 @@
+"""The promises of jetnh.strategies: shapes, jet orders, definedness, regularity, solvability."""
+
+from __future__ import annotations
+
+import pytest
+import sympy as sp
+from hypothesis import given, strategies as st
+from hypothesis.errors import InvalidArgument
+
+import jetnh.strategies as jst
+from jetnh import JetSpace
+
+
+def _values(exprs, rnd, spread=3.0):
+    syms = set()
+    for e in exprs:
+        syms |= sp.sympify(e).free_symbols
+    return {s: sp.Float(rnd.uniform(-spread, spread), 30) for s in sorted(syms, key=str)}
+
+
+def _finite_real(expr, point):
+    v = sp.sympify(expr).xreplace(point).evalf(30)
+    return v.is_number and v.is_finite and v.is_real is not False and abs(sp.im(v)) < 1e-20
+
+
+def test_public_names():
+    assert set(jst.__all__) == {"jet_spaces", "jet_expressions", "polynomials", "lagrangians",
+                                "affine_constraints", "nonlinear_constraints",
+                                "constrained_systems"}
+    for name in jst.__all__:
+        assert getattr(jst, name).__doc__
+
+
+@given(jst.jet_spaces(2, 5))
+def test_jet_spaces(J):
+    assert isinstance(J, JetSpace)
+    assert 2 <= J.n <= 5
+    assert [s.name for s in J.q] == [f"q{i}" for i in range(1, J.n + 1)]
+    assert J.fields == ()
+
+
+@given(st.data(), st.randoms(use_true_random=False))
+def test_jet_expressions_are_small_defined_and_of_bounded_order(data, rnd):
+    J = data.draw(jst.jet_spaces(1, 3)).with_fields("lam")
+    order = data.draw(st.integers(0, 3))
+    with_time = data.draw(st.booleans())
+    of = data.draw(st.sampled_from([None, J.fields, J.q[:1] + J.fields]))
+    e = data.draw(jst.jet_expressions(J, order=order, with_time=with_time, of=of))
+    bases = J.q if of is None else of
+    allowed = {J.jet(b, k) for b in bases for k in range(order + 1)} | ({J.t} if with_time else set())
+    assert e.free_symbols <= allowed
+    assert J.order(e, of=bases) <= order
+    assert sp.count_ops(e) < 200
+    for _ in range(3):
+        assert _finite_real(e, _values([e], rnd))
+
+
+@given(st.data())
+def test_polynomials(data):
+    J = data.draw(jst.jet_spaces(1, 3))
+    deg = data.draw(st.integers(1, 3))
+    p = data.draw(jst.polynomials(J, order=2, max_degree=deg, max_terms=4))
+    variables = (J.t,) + J.q + J.qd + J.qdd
+    poly = sp.Poly(p, *variables)
+    assert poly.total_degree() <= deg
+    assert len(poly.terms()) <= 5
+
+
+@given(st.data(), st.randoms(use_true_random=False))
+def test_lagrangians_are_regular(data, rnd):
+    J = data.draw(jst.jet_spaces(1, 4))
+    gyro = data.draw(st.sampled_from([None, True, False]))
+    with_time = data.draw(st.booleans())
+    L = data.draw(jst.lagrangians(J, with_time=with_time, gyroscopic=gyro))
+    assert J.order(L) == 1
+    if not with_time:
+        assert J.t not in L.free_symbols
+    H = sp.hessian(L, J.qd)
+    for i in range(J.n):
+        for j in range(J.n):
+            assert (H[i, j] == 0) == (i != j)                 # diagonal
+            assert J.order(H[i, j]) <= 0                       # depends on (t, q) only
+    p = _values([H], rnd)
+    assert all(H[i, i].xreplace(p) > 0 for i in range(J.n))   # positive definite
+    flipped = L.xreplace({v: -v for v in J.qd})
+    if gyro is False:
+        assert sp.expand(flipped - L) == 0                      # even in the velocities
+    if gyro is True:
+        assert sp.expand(flipped - L) != 0
+
+
+def _check_explicit(J, constraints, dependent):
+    assert len(constraints) == len(dependent)
+    assert 1 <= len(dependent) < J.n
+    assert len(set(dependent)) == len(dependent) and set(dependent) <= set(J.q)
+    dep_v = [J.qd[J.q.index(a)] for a in dependent]
+    indep_v = [v for v in J.qd if v not in dep_v]
+    for f, a_v in zip(constraints, dep_v):
+        assert J.order(f) <= 1
+        # f = qd^a - phi(t, q, qd^mu): the Jacobian in dependent velocities is the identity
+        for b_v in dep_v:
+            assert sp.diff(f, b_v) == (1 if b_v == a_v else 0)
+        phi = a_v - f
+        assert not (set(dep_v) & phi.free_symbols)
+    return indep_v
+
+
+@given(st.data())
+def test_affine_constraints(data):
+    J = data.draw(jst.jet_spaces(2, 5))
+    m = data.draw(st.one_of(st.none(), st.integers(1, J.n - 1)))
+    constraints, dependent = data.draw(jst.affine_constraints(J, m=m))
+    if m is not None:
+        assert len(dependent) == m
+    indep_v = _check_explicit(J, constraints, dependent)
+    for f in constraints:
+        for u in indep_v:
+            assert J.order(sp.diff(f, u)) <= 0                 # affine in velocities
+
+
+@given(st.data())
+def test_nonlinear_constraints(data):
+    J = data.draw(jst.jet_spaces(2, 5))
+    k = data.draw(st.integers(1, J.n - 1))
+    dep = data.draw(st.permutations(J.q))[:k]
+    if data.draw(st.booleans()):
+        dep = [s.name for s in dep]                            # names work too
+    constraints, dependent = data.draw(jst.nonlinear_constraints(J, dependent=dep))
+    assert [s.name for s in dependent] == [str(d) for d in dep]
+    indep_v = _check_explicit(J, constraints, dependent)
+    for f in constraints:
+        assert any(sp.diff(f, u, v) != 0 for u in indep_v for v in indep_v)
+
+
+@given(jst.constrained_systems(2, 4))
+def test_constrained_systems(system):
+    J, L, constraints, dependent = system
+    assert 2 <= J.n <= 4
+    assert J.order(L) == 1
+    _check_explicit(J, constraints, dependent)
+
+
+@given(jst.constrained_systems(3, 3, affine=True))
+def test_constrained_systems_affine_flag(system):
+    J, L, constraints, dependent = system
+    assert J.n == 3
+    indep_v = _check_explicit(J, constraints, dependent)
+    assert all(sp.diff(f, u, v) == 0 for f in constraints for u in indep_v for v in indep_v)
+
+
+@pytest.mark.parametrize("make", [
+    lambda: jst.jet_spaces(0, 3),
+    lambda: jst.jet_spaces(4, 3),
+    lambda: jst.jet_expressions(JetSpace("x"), order=-1),
+    lambda: jst.jet_expressions(JetSpace("x"), of=(), with_time=False),
+    lambda: jst.affine_constraints(JetSpace("x")),
+    lambda: jst.affine_constraints(JetSpace("x y"), m=2),
+    lambda: jst.affine_constraints(JetSpace("x y"), dependent=["z"]),
+    lambda: jst.affine_constraints(JetSpace("x y z"), dependent=["x", "x"]),
+    lambda: jst.nonlinear_constraints(JetSpace("x y z"), m=1, dependent=["x", "y"]),
+    lambda: jst.nonlinear_constraints(JetSpace("x y"), dependent=["x", "y"]),
+    lambda: jst.constrained_systems(min_n=1),
+])
+def test_bad_arguments_raise_invalid_argument(make):
+    with pytest.raises(InvalidArgument):
+        make()
+
