@@ -20,7 +20,7 @@ run: $(STAMP)
 	$(BIN)/jetnh reproduce
 
 test: $(STAMP)
-	$(BIN)/python -m pytest -n 2 -q
+	$(BIN)/python -m pytest -n 2 --dist loadfile -q
 
 clean:
 	rm -rf $(VENV) .pytest_cache .hypothesis
