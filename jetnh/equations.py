@@ -284,7 +284,7 @@ def _chetaev(system, form, convention):
         return Equations(system, "chetaev", form, convention, eqs, reactions=nus, J=J,
                          solver=solver)
     ex = _explicit(system)
-    eqs = _voronets(ex, J, ())
+    eqs = _embedded(ex, J, ex.p_dependent)
     return Equations(system, "chetaev", form, convention, eqs, J=J, constraints=ex.constraints,
                      solver=solver)
 
@@ -298,26 +298,23 @@ def _reduced(base, E, J, lams, form, suslov=False):
         proj = [sp.Add(*[P[s, m] * E[s] for s in range(J.n)]) for m in range(P.cols)]
         return tuple(dep_rows + proj)
     if suslov:
-        return tuple(dep_rows + list(_voronets(base, J, (), sign=-1)))
-    return tuple(dep_rows + list(_voronets(base, J, lams)))
+        return tuple(dep_rows + list(_embedded(base, J)))
+    coef = [p + lam for p, lam in zip(base.p_dependent, lams)]
+    return tuple(dep_rows + list(_embedded(base, J, coef)))
 
 
-def _voronets(ex: System, J, lams, sign: int = 1):
-    """[L~]_mu + Phi^alpha_mu dL~/dq^alpha + (sign * p_alpha + lambda_alpha) T^alpha_mu.
-
-    sign = +1, no lambdas: Chetaev (Voronets); sign = +1 with lambdas: vakonomic (20b);
-    sign = -1 (which cancels (19)'s p T): Suslov (31b).
-    """
+def _embedded(ex: System, J, coefficients=None):
+    """[L~]_mu + Phi^alpha_mu dL~/dq^alpha + c_alpha T^alpha_mu, the projected rows rewritten
+    through (19): c = p (Chetaev, Voronets form), c = p + lambda (vakonomic (20b)),
+    no T term (Suslov (31b), whose p T cancels the one of (19))."""
     Lt = ex.L_tilde
     T = ex.T(on_constraints=False)
-    Phi = ex.Phi
     eul = J.euler(Lt, wrt=ex.independent)
-    p = ex.p_dependent
     out = []
     for m in range(len(ex.independent)):
-        e = eul[m] + sp.Add(*[Phi[a, m] * sp.diff(Lt, qa) for a, qa in enumerate(ex.dependent)])
-        if sign == 1:
-            e += sp.Add(*[(p[a] + (lams[a] if lams else 0)) * T[a, m] for a in range(ex.k)])
+        e = eul[m] + sp.Add(*[ex.Phi[a, m] * sp.diff(Lt, qa) for a, qa in enumerate(ex.dependent)])
+        if coefficients is not None:
+            e += sp.Add(*[coefficients[a] * T[a, m] for a in range(ex.k)])
         out.append(e)
     return tuple(out)
 
