@@ -15,14 +15,14 @@ from .jet import JetSpace
 __version__ = "0.1.0"
 
 __all__ = ["JetSpace", "System", "Equations", "PRINCIPLES", "compare", "Scene", "Trajectory",
-           "Diagnostics", "JetnhError",
+           "Diagnostics", "Event", "Ensemble", "JetnhError",
            "JetSpaceError", "ConstraintError", "LagrangianError", "PrincipleError",
            "ModelFileError", "IntegrationError"]
 
 
 def __getattr__(name):
-    """Scene, Trajectory and Diagnostics load numba and scipy: import them on first use."""
-    if name in ("Scene", "Trajectory", "Diagnostics"):
+    """The numeric names load numba and scipy: import them on first use."""
+    if name in ("Scene", "Trajectory", "Diagnostics", "Event", "Ensemble"):
         from . import numeric
 
         return getattr(numeric, name)

@@ -135,3 +135,16 @@ def test_dla_rejects_other_principles(oscillator):
                initial=dict(oscillator.initial, lambda_z=0.0), t_span=(0, 1), cache=False)
     with pytest.raises(PrincipleError, match="Chetaev"):
         sc.run(method="dla", n_steps=10)
+
+
+def test_integrator_cache_tracks_helper_modules():
+    """numba checks only a function's own file; the integrators' cache stamp also covers
+    the helpers they inline (_common.py, _events.py), so editing one recompiles."""
+    from jetnh.numeric.integrators import _common
+
+    d = dop853.solver()
+    loc = d._cache._impl.locator
+    assert type(loc).__name__ == "IntegratorCacheLocator"
+    own, helpers = loc.get_source_stamp()
+    assert isinstance(helpers, str) and len(helpers) == 64
+    assert type(_common.collect._cache._impl.locator).__name__ == "IntegratorCacheLocator"

@@ -1,12 +1,29 @@
-"""Numerical simulation: compiled scenes, integrators and trajectories.
+"""Numerical simulation: compiled scenes, integrators, events, ensembles, trajectories.
 
 ``Scene(system, principle, params, initial, t_span).run(...)`` derives the equations of
 one principle, generates numba kernels through ``sympy.cse`` (``codegen``), caches them
 on disk keyed by the symbolic input (``cache``), and integrates in compiled loops
-(``integrators``: dop853, dopri5, rk4) or with scipy's ``solve_ivp``.
+(``integrators``: dop853, dopri5, rk4, dla) or with scipy's ``solve_ivp``.
+
+- Singular configurations (``codegen.singular_indicators``): every run stops where the
+  dependent velocities cannot be solved for or the accelerations are undefined
+  (det df/dqdot^alpha, denominators and square-root arguments of phi and of the
+  accelerations crossing zero or falling below ``singular_tol`` of their initial size),
+  located on the dense output, with ``status`` SINGULAR and a ``stop_reason`` that names
+  the indicator, the time and the way out.
+- User events (``events``): ``run(events=[expr, callable, Event(...)])`` with scipy's
+  semantics (terminal, direction), roots on the dense output inside the compiled loop.
+- Ensembles (``ensemble``): ``scene.ensemble(initial=arrays, params=arrays, ...)`` runs
+  the same compiled loop for every row, on all cores, bit-for-bit the single runs.
 """
 
+from .ensemble import Ensemble, run_ensemble
+from .events import Event
+from .integrators._common import (EVENT, FINISHED, MAX_STEPS, NONFINITE, NOT_CONVERGED,
+                                  SINGULAR, STATUS_TEXT, TOO_SMALL_STEP)
 from .scene import Scene
 from .trajectory import Diagnostics, Trajectory
 
-__all__ = ["Scene", "Trajectory", "Diagnostics"]
+__all__ = ["Scene", "Trajectory", "Diagnostics", "Event", "Ensemble", "run_ensemble",
+           "STATUS_TEXT", "FINISHED", "MAX_STEPS", "TOO_SMALL_STEP", "NONFINITE",
+           "NOT_CONVERGED", "EVENT", "SINGULAR"]

@@ -5,7 +5,8 @@ the symbolic input, ``codegen.symbolic_key``)::
 
     $JETNH_CACHE/v<codegen version>/k<key>/
         __init__.py
-        kernels.py          rhs, aux, aux_rows (numba, cache=True)
+        kernels.py          rhs, aux, sing, aux_rows (numba, cache=True); or the
+                            user-event kernel ``events`` (its own key)
         layout.json         the state layout; written last, marks the entry complete
         __pycache__/        numba's machine code (*.nbi, *.nbc)
 
@@ -87,19 +88,26 @@ class CompiledKernels:
             sys.modules[self.package] = mod
             spec.loader.exec_module(mod)
         self.kernels = importlib.import_module(f"{self.package}.kernels")
-        for name in ("rhs", "rhs_c", "aux", "aux_rows", "step_residual", "momentum", "legendre",
-                     "nodal"):
+        for name in ("rhs", "rhs_c", "aux", "aux_rows", "sing", "sing_c", "events", "events_c",
+                     "step_residual", "momentum", "legendre", "nodal", "constraint_jac"):
             if hasattr(self.kernels, name):
                 setattr(self, name, getattr(self.kernels, name))
+        from .integrators._common import FunctionAddress
+
+        for name in ("rhs_c", "sing_c", "events_c"):
+            if hasattr(self, name):      # rhs_fp, ...: cheap to pass to compiled loops
+                setattr(self, name[:-2] + "_fp", FunctionAddress(getattr(self, name)))
         self._methods: dict[str, object] = {}
 
     def integrator(self, method: str):
-        """The compiled ``solve`` of ``method`` (shared by every scene)."""
+        """The compiled ``solve`` of ``method`` (shared by every scene), as its machine-code
+        entry point (no type dispatch per call: ``integrators._common.entry_point``)."""
         from .integrators import METHODS
+        from .integrators._common import entry_point
 
         if method not in self._methods:
             mod = importlib.import_module(f"jetnh.numeric.integrators.{METHODS[method]}")
-            self._methods[method] = mod.solver()
+            self._methods[method] = entry_point(mod.solver())
         return self._methods[method]
 
 

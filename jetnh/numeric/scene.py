@@ -6,7 +6,15 @@
     traj = scene.run(method="dopri5")                   # compiled Dormand-Prince 5(4)
     traj = scene.run(method="rk4", n_steps=1000)        # compiled fixed-step RK4
     traj = scene.run(method="dla", h=0.01)              # discrete Lagrange-d'Alembert
+    traj = scene.run(method="dla", h=0.01, projection=True)   # nodes on the constraints
+    traj = scene.run(method="dvi", h=0.01)              # discrete vakonomic (variational)
     traj = scene.run(method="scipy-DOP853")             # scipy's solve_ivp, same kernels
+    traj = scene.run(events=[y - 1, Event(x_t, terminal=True)])   # user events
+    ens = scene.ensemble(initial={"phi_t": array}, params={"R": array}, save="final")
+
+Every run stops at a singular configuration (``singular="stop"``, the default) with
+``status`` SINGULAR and a ``stop_reason`` naming the indicator and the time; see
+``run``.
 
 A scene does only what it needs: it derives the equations of its own principle, and only
 when its kernels are not in the disk cache; parameters are numbers substituted before
@@ -33,11 +41,13 @@ from ..errors import ConstraintError, IntegrationError, JetnhError, PrincipleErr
 from . import cache as _cache
 from . import codegen
 from .integrators import ADAPTIVE, METHODS, STATUS_TEXT
-from .integrators._common import AT_T_EVAL, ENDPOINTS, EVERY_STEP, NONFINITE, NOT_CONVERGED
+from .integrators._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, NONFINITE,
+                                  NOT_CONVERGED, SINGULAR)
 from .trajectory import Trajectory
 
 SCIPY_METHODS = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
 DLA_NAMES = ("dla", "lda", "nh-midpoint")
+DVI_NAMES = ("dvi", "vakonomic-midpoint")
 
 
 def _name(key, what) -> str:
@@ -219,6 +229,31 @@ class Scene:
             self.system, self.principle, compiled_params, self.runtime_params,
             self.integrals, self.form, self.convention, key=self.key), persistent=self.cache)
 
+    def replace(self, **changes) -> "Scene":
+        """A scene equal to this one except for ``changes`` (constructor arguments:
+        params, initial, t_span, runtime_params, integrals, ...).  The initial values
+        are the states' (dependent velocities follow from the constraints again)."""
+        args = dict(system=self.system, principle=self.principle, params=self.params,
+                    initial={n: self.initial[n] for n in self.state_names},
+                    t_span=self.t_span, form=self.form, convention=self.convention,
+                    integrals=self.integrals, runtime_params=self.runtime_params,
+                    consistency_tol=self.consistency_tol, cache=self.cache)
+        unknown = set(changes) - set(args) - {"project"}
+        if unknown:
+            raise JetnhError(f"Scene.replace: unknown arguments {sorted(unknown)}")
+        args.update(changes)
+        system = args.pop("system")
+        principle = args.pop("principle")
+        return Scene(system, principle, **args)
+
+    def ensemble(self, initial=None, params=None, **options):
+        """Many runs in one call: ``jetnh.numeric.ensemble.run_ensemble(self, initial,
+        params, **options)`` (arrays [n_runs, n_times, n_states] and per-run
+        diagnostics; parallel over the cores)."""
+        from .ensemble import run_ensemble
+
+        return run_ensemble(self, initial, params, **options)
+
     def compile(self) -> "Scene":
         """Build (or load) the kernels now rather than at the first run."""
         self.kernels
@@ -232,33 +267,63 @@ class Scene:
     def run(self, rtol=1e-9, atol=1e-12, t_eval=None, method="dop853", *, backend=None,
             save="steps", first_step=None, max_step=np.inf, max_steps=10_000_000,
             n_steps=None, h=None, t_span=None, y0=None, params=None, newton_tol=1e-13,
-            max_newton=50) -> Trajectory:
+            max_newton=50, events=None, singular="stop", singular_tol=1e-10,
+            projection=False) -> Trajectory:
         """Integrate and return a ``Trajectory``.
 
         ``method``: "dop853" (default), "dopri5" (alias "RK45"), "rk4" (fixed step: give
         ``n_steps`` or ``h``), "dla" (the structure-preserving discrete
         Lagrange-d'Alembert midpoint integrator, Chetaev only, fixed step, Newton tolerance
-        ``newton_tol``), or "scipy-<M>" for scipy's ``solve_ivp(method=M)`` on the
+        ``newton_tol``; ``projection=True`` projects every node velocity onto the
+        constraints), "dvi" (the discrete vakonomic midpoint variational integrator,
+        vakonomic dynamics, fixed step), or "scipy-<M>" for scipy's ``solve_ivp(method=M)`` on the
         same compiled right-hand side (also ``backend="scipy"``).  ``t_eval``: output
         times (dense output); else every accepted step, or the two ends with
         ``save="final"``.  ``atol`` may be a scalar or one value per state.
-        NaN or infinity stops with an ``IntegrationError`` naming the time and state.
+
+        ``events``: user events (sympy expressions, callables g(t, y) or ``Event``; see
+        ``jetnh.numeric.events``), located on the dense output with scipy's semantics;
+        the trajectory reports ``t_events``, ``y_events`` and ``events``.
+
+        ``singular="stop"`` (default) stops at a singular configuration: where a
+        singularity indicator of the scene (``kernels.layout.indicators``: the
+        determinant of df/dqdot^alpha, denominators and square-root arguments of phi and
+        of the accelerations) crosses zero or falls below ``singular_tol`` times its
+        initial size; the point is located on the dense output, ``status`` is
+        ``SINGULAR`` and ``stop_reason`` names the indicator, the time and the way out.
+        ``singular="ignore"`` skips the check.  NaN or infinity that no indicator
+        explains stops with an ``IntegrationError`` naming the time and the state.
         """
         t0, t1 = self._t_span(t_span) if t_span is not None else self.t_span
         y_init = self.y0 if y0 is None else np.ascontiguousarray(y0, dtype=float)
         p = self.p if params is None else np.ascontiguousarray(params, dtype=float)
+        if singular not in ("stop", "ignore"):
+            raise JetnhError(f"singular must be 'stop' or 'ignore', not {singular!r}")
+        singular_tol = _float(singular_tol, "singular_tol")
+        if not 0.0 <= singular_tol < 1.0:
+            raise JetnhError(f"singular_tol must be in [0, 1) (a fraction of each "
+                             f"indicator's initial size), not {singular_tol}")
         name = str(method)
         if backend == "scipy" or name.lower().startswith("scipy"):
             m = name.split("-", 1)[1] if "-" in name else name
             m = {"dop853": "DOP853", "dopri5": "RK45", "rk45": "RK45"}.get(m.lower(), m)
             return self._run_scipy(m, rtol, atol, t_eval, t0, t1, y_init, p, first_step,
-                                   max_step)
+                                   max_step, events, singular, singular_tol)
         if backend not in (None, "numba"):
             raise JetnhError(f"unknown backend {backend!r}; choose 'numba' or 'scipy'")
         key = name.lower()
-        if key in DLA_NAMES:
+        if key in DLA_NAMES or key in DVI_NAMES:
+            if events:
+                raise JetnhError(f"events need dense output, which the {key} integrator does "
+                                 "not have; use dop853, dopri5 or rk4")
+            if key in DVI_NAMES:
+                return self._run_dvi(t0, t1, y_init, y0 is None, p, n_steps, h, save,
+                                     newton_tol, max_newton)
             return self._run_dla(t0, t1, y_init, y0 is None, p, n_steps, h, save, newton_tol,
-                                 max_newton)
+                                 max_newton, bool(projection))
+        if projection:
+            raise JetnhError("projection= is an option of the dla integrator; the "
+                             "Runge-Kutta methods follow the constraints to their tolerance")
         if key not in METHODS:
             raise JetnhError(
                 f"unknown method {method!r}; choose one of {sorted(set(METHODS))} or "
@@ -269,6 +334,11 @@ class Scene:
         n = y_init.shape[0]
         if save not in ("steps", "final"):
             raise JetnhError(f"save must be 'steps' or 'final', not {save!r}")
+        ce = self.compile_events(events)
+        n_sing = len(kern.layout.indicators) if singular == "stop" else 0
+        uev = ce.uev if ce is not None else kern.sing_fp
+        ev_dir = ce.direction if ce is not None else np.zeros(0, dtype=np.int64)
+        ev_max = ce.max_events if ce is not None else np.zeros(0, dtype=np.int64)
         te = np.zeros(0)
         if method in ADAPTIVE:
             mode = EVERY_STEP if save == "steps" else ENDPOINTS
@@ -276,31 +346,210 @@ class Scene:
                 te = np.ascontiguousarray(t_eval, dtype=float)
                 self._check_t_eval(te, t0, t1)
                 mode = AT_T_EVAL
-            atol_v = np.ascontiguousarray(np.broadcast_to(np.asarray(atol, dtype=float), (n,)))
+            atol_v = self._atol(atol, n)
             tic = time.perf_counter()
-            status, ts, ys, n_out, stats, t_last, y_last = solve(
-                kern.rhs_c, t0, t1, y_init, p, float(rtol), atol_v,
-                float(first_step or 0.0), float(max_step), int(max_steps), te, mode)
+            out = solve(kern.rhs_fp, kern.sing_fp, uev, t0, t1, y_init, p, float(rtol), atol_v,
+                        float(first_step or 0.0), float(max_step), int(max_steps), te, mode,
+                        n_sing, singular_tol, ev_dir, ev_max)
             wall = time.perf_counter() - tic
         else:
             if t_eval is not None:
                 raise JetnhError("rk4 is a fixed-step method without dense output; pass "
                                  "n_steps or h and read every step, or use dop853 with t_eval")
-            if n_steps is None:
-                if h is None:
-                    raise JetnhError("rk4 needs n_steps= or h=")
-                n_steps = max(1, int(round(abs(t1 - t0) / float(h))))
+            n_steps = self._n_steps(n_steps, h, t0, t1, "rk4")
             mode = EVERY_STEP if save == "steps" else ENDPOINTS
             tic = time.perf_counter()
-            status, ts, ys, n_out, stats, t_last, y_last = solve(
-                kern.rhs_c, t0, t1, y_init, p, int(n_steps), mode)
+            out = solve(kern.rhs_fp, kern.sing_fp, uev, t0, t1, y_init, p, n_steps, mode,
+                        n_sing, singular_tol, ev_dir, ev_max)
             wall = time.perf_counter() - tic
+        return self._trajectory(method, out, wall, kern, ce, p, t0, y_init, singular_tol,
+                                singular == "stop")
+
+    # ------------------------------------------------------------------ run helpers
+    @staticmethod
+    def _atol(atol, n) -> np.ndarray:
+        a = np.asarray(atol, dtype=float)
+        if a.ndim > 1 or (a.ndim == 1 and a.shape[0] != n):
+            raise JetnhError(f"atol must be a number or one value per state ({n}), "
+                             f"got shape {a.shape}")
+        return np.ascontiguousarray(np.broadcast_to(a, (n,)))
+
+    @staticmethod
+    def _n_steps(n_steps, h, t0, t1, what) -> int:
+        if n_steps is None:
+            if h is None:
+                raise JetnhError(f"{what} is a fixed-step method: give n_steps= or h=")
+            n_steps = max(1, int(round(abs(t1 - t0) / float(h))))
+        if int(n_steps) < 1:
+            raise JetnhError(f"n_steps must be a positive integer, not {n_steps!r}")
+        return int(n_steps)
+
+    def compile_events(self, events):
+        """The compiled form of ``events`` (``events.CompiledEvents``), or None; kept per
+        scene so repeated runs with the same events compile nothing."""
+        from .events import as_events, compile_events
+
+        evs = as_events(events)
+        if not evs:
+            return None
+        memo = tuple((sp.srepr(e.fun) if e.is_expression else id(e.fun), e.direction,
+                      e.max_events, e.name) for e in evs)
+        store = self.__dict__.setdefault("_compiled_events", {})
+        if memo not in store:
+            store[memo] = compile_events(self, evs)
+        return store[memo]
+
+    def _trajectory(self, method, out, wall, kern, ce, p, t0, y_init, singular_tol, checked):
+        """A Trajectory from the result tuple of a compiled solve (or an error)."""
+        from .events import split_records
+
+        (status, ts, ys, n_out, stats, t_last, y_last, ev_t, ev_i, ev_y, n_ev,
+         sing_index) = out
+        status = int(status)
+        singularity = None
         if status == NONFINITE:
-            self._raise_nonfinite(method, t_last, y_last)
-        return Trajectory(self, ts[:n_out], ys[:n_out], p, method=method, status=int(status),
-                          stop_reason=STATUS_TEXT[int(status)], steps=int(stats[0]),
-                          rejected=int(stats[1]), nfev=int(stats[2]), wall_time=wall,
-                          kernels=kern, projected=self.projected)
+            sing_index = (self._explain_nonfinite(kern, t_last, y_last, p, t0, y_init,
+                                                  singular_tol) if checked else -1)
+            if sing_index < 0:
+                self._raise_nonfinite(method, t_last, y_last, kern, p, t0, y_init,
+                                      checked=checked)
+            status = SINGULAR
+            singularity = self._singularity(kern, int(sing_index), t_last, y_last, p, t0,
+                                            y_init, singular_tol, nonfinite=True)
+        elif status == SINGULAR:
+            singularity = self._singularity(kern, int(sing_index), t_last, y_last, p, t0,
+                                            y_init, singular_tol)
+        if singularity is not None:
+            reason = singularity["reason"]
+        elif status == EVENT:
+            k = int(ev_i[n_ev - 1])
+            reason = (f"terminal event {ce.names[k]!r} at t = {float(ev_t[n_ev - 1]):.17g}")
+        else:
+            reason = STATUS_TEXT[status]
+        kw = {}
+        if ce is not None:
+            t_events, y_events = split_records(len(ce), ev_t[:n_ev], ev_i[:n_ev], ev_y[:n_ev])
+            kw["events"] = (ce.names, t_events, y_events)
+        return Trajectory(self, ts[:n_out], ys[:n_out], p, method=method, status=status,
+                          stop_reason=reason, steps=int(stats[0]), rejected=int(stats[1]),
+                          nfev=int(stats[2]), wall_time=wall, kernels=kern,
+                          projected=self.projected, singularity=singularity, **kw)
+
+    # ------------------------------------------------------------------ singularities
+    def indicators(self, t, y, p=None) -> dict[str, float]:
+        """The singularity indicators at (t, y): expression -> value."""
+        kern = self.kernels
+        g = np.empty(len(kern.layout.indicators))
+        kern.sing(float(t), np.ascontiguousarray(y, dtype=float),
+                  self.p if p is None else np.ascontiguousarray(p, dtype=float), g)
+        return dict(zip(kern.layout.indicators, g.tolist()))
+
+    def _explain_nonfinite(self, kern, t, y, p, t0, y_init, tol) -> int:
+        """Index of an indicator that explains a NaN/inf in the step after (t, y): small
+        there (below max(tol, 1e-3) of its initial size), or violated along an Euler
+        probe of the step, else -1."""
+        lay = kern.layout
+        m = len(lay.indicators)
+        if not m:
+            return -1
+        g0 = np.empty(m)
+        g = np.empty(m)
+        kern.sing(t0, y_init, p, g0)
+        kern.sing(t, y, p, g)
+        with np.errstate(all="ignore"):
+            rel = np.abs(g) / np.abs(g0)
+            bad = ~np.isfinite(g) | (np.sign(g) != np.sign(g0)) | (rel < max(tol, 1e-3))
+        if bad.any():
+            return int(np.argmax(bad))
+        f = np.empty_like(y)
+        kern.rhs(t, y, p, f)
+        if not np.all(np.isfinite(f)):
+            return int(np.argmin(rel))
+        span = abs(self.t_span[1] - self.t_span[0]) or 1.0
+        for s in np.geomspace(1e-12, 1.0, 25):
+            for hh in (s * span, -s * span):
+                kern.sing(t + hh, y + hh * f, p, g)
+                with np.errstate(all="ignore"):
+                    viol = ~np.isfinite(g) | (np.sign(g) != np.sign(g0))
+                if viol.any():
+                    return int(np.argmax(viol))
+        return -1
+
+    def _singularity(self, kern, idx, t, y, p, t0, y_init, tol, nonfinite=False) -> dict:
+        """What the stop at a singular configuration was: indicator, kind, time, value,
+        and a reason with the way out."""
+        lay = kern.layout
+        expr, kind = lay.indicators[idx], lay.indicator_kinds[idx]
+        g0 = np.empty(len(lay.indicators))
+        g = np.empty(len(lay.indicators))
+        kern.sing(t0, y_init, p, g0)
+        kern.sing(float(t), np.ascontiguousarray(y), p, g)
+        value, initial = float(g[idx]), float(g0[idx])
+        if not np.isfinite(initial) or initial == 0.0:
+            where = (f"the initial state (t = {t:.17g}) is singular: {expr} = {initial:.6g}")
+        elif (np.sign(value) == np.sign(initial) and abs(value) > 4 * tol * abs(initial)
+              and abs(value) > 1e-12 * abs(initial) and not nonfinite):
+            where = (f"the fixed step after t = {t:.17g} jumps over a kink of the right-hand "
+                     f"side next to a zero of {expr} = {value:.6g} (initially {initial:.6g}); "
+                     "the run stops at the last regular point (an adaptive method such as "
+                     "dop853 locates the singular time)")
+        elif nonfinite:
+            where = (f"the right-hand side became NaN or infinite in the step after "
+                     f"t = {t:.17g}, where {expr} = {value:.6g} (initially {initial:.6g}) "
+                     "is about to vanish or change sign")
+        else:
+            where = (f"at t = {t:.17g}, {expr} fell to {value:.6g} (initially "
+                     f"{initial:.6g}; the threshold is singular_tol = {tol:g} of that)")
+        dep = [s.name for s in self.system.dependent]
+        if kind == "split":
+            alt = self._regular_split(t, y, p)
+            hint = (f"The determinant of df/dqdot^alpha vanishes: the constraints cannot be "
+                    f"solved for the velocities of the dependent coordinates {dep} here. The "
+                    "split is singular, not necessarily the motion: use another split"
+                    + (f" (here dependent={alt} is regular)" if alt else ""))
+        elif kind == "constraint":
+            hint = ("The explicit form of the constraints qdot^alpha = phi^alpha(t, q, "
+                    "qdot^mu) is singular or not differentiable here, so the dynamics "
+                    "have no unique continuation (e.g. the Appell-Hamel constraint at "
+                    "zero horizontal speed)")
+        else:
+            hint = ("A denominator (or a square-root argument) of the accelerations "
+                    "vanishes: the reduced mass matrix or the multiplier equations are "
+                    "singular here, so the accelerations are not determined")
+        reason = (f"singular configuration: {where}. {hint}. (If the singularity is removable "
+                  "-- a 0/0 that cancels -- run with singular='ignore'.)")
+        return {"indicator": expr, "kind": kind, "index": idx, "t": float(t),
+                "value": value, "initial": initial, "reason": reason}
+
+    def _regular_split(self, t, y, p):
+        """A choice of dependent coordinates for which df/dqdot is invertible at (t, y)."""
+        from itertools import combinations
+
+        sys_ = self.system
+        J = sys_.J
+        try:
+            aux = np.empty(self.kernels.layout.n_aux)
+            self.kernels.aux(float(t), np.ascontiguousarray(y), p, aux)
+            vals = {J.t: t}
+            vals.update(zip(J.q, y[:J.n]))
+            vals.update(zip(sys_.independent_velocities, y[J.n:J.n + J.n - sys_.k]))
+            vals.update(zip(sys_.dependent_velocities, aux[:sys_.k]))
+            vals.update({s: self.params[s.name] for s in sys_.parameters})
+            for i, nm in enumerate(self.runtime_params):
+                vals.update({s: p[i] for s in sys_.parameters if s.name == nm})
+            A = np.array(sys_.jacobian.xreplace({k: sp.Float(v) for k, v in vals.items()})
+                         .evalf(), dtype=float)
+        except (TypeError, ValueError):
+            return None
+        best, choice = 0.0, None
+        for cols in combinations(range(J.n), sys_.k):
+            d = abs(np.linalg.det(A[:, list(cols)]))
+            if d > best:
+                best, choice = d, [J.q[c].name for c in cols]
+        norm = max(np.prod(np.linalg.norm(A, axis=1)), 1e-300)
+        if choice is None or best < 1e-3 * norm or choice == [s.name for s in sys_.dependent]:
+            return None
+        return choice
 
     @property
     def dla_kernels(self):
@@ -313,36 +562,29 @@ class Scene:
             self.system, compiled_params, self.runtime_params, key=key),
             persistent=self.cache)
 
-    def _run_dla(self, t0, t1, y_init, default_y0, p, n_steps, h, save, tol, max_iter):
+    def _run_dla(self, t0, t1, y_init, default_y0, p, n_steps, h, save, tol, max_iter,
+                 projection=False):
         from .integrators import dla
 
         if self.principle != "chetaev":
             raise PrincipleError(
                 "the discrete Lagrange-d'Alembert integrator discretizes Chetaev "
-                f"(Lagrange-d'Alembert) dynamics, not {self.principle}; use dop853")
-        if n_steps is None:
-            if h is None:
-                raise JetnhError("dla is a fixed-step method: give n_steps= or h=")
-            n_steps = max(1, int(round(abs(t1 - t0) / float(h))))
+                f"(Lagrange-d'Alembert) dynamics, not {self.principle}; use dop853"
+                + (", or dvi (the discrete vakonomic integrator)"
+                   if self.principle in ("vakonomic", "holder") else ""))
+        n_steps = self._n_steps(n_steps, h, t0, t1, "dla")
         J = self.system.J
         n, k = J.n, self.system.k
         q0 = np.ascontiguousarray(y_init[:n])
-        if default_y0:
-            v0 = np.array([self.initial[v.name] for v in J.qd])
-        else:
-            aux = np.empty(self.kernels.layout.n_aux)
-            self.kernels.aux(t0, y_init, p, aux)
-            vals = dict(zip(self.velocities, y_init[n:]))
-            vals.update(zip(self.dependent_velocities, aux[:k]))
-            v0 = np.array([vals[v.name] for v in J.qd])
+        v0 = self._full_velocities(t0, y_init, p, default_y0)
         kern = self.dla_kernels
         solve = dla.solver()
         mode = EVERY_STEP if save == "steps" else ENDPOINTS
         tic = time.perf_counter()
         status, ts, rows, n_out, stats, t_last, y_last = solve(
-            kern.step_residual, kern.momentum, kern.legendre, kern.nodal, t0, t1, q0,
-            np.ascontiguousarray(v0, dtype=float), p, int(n_steps), k, float(tol),
-            int(max_iter), mode)
+            kern.step_residual, kern.momentum, kern.legendre, kern.nodal, kern.constraint_jac,
+            t0, t1, q0, np.ascontiguousarray(v0, dtype=float), p, int(n_steps), k, float(tol),
+            int(max_iter), mode, projection)
         wall = time.perf_counter() - tic
         if status == NONFINITE:
             self._raise_nonfinite("dla", t_last, y_last[:n])
@@ -356,10 +598,83 @@ class Scene:
         ys = np.ascontiguousarray(np.hstack([rows[:, :n], rows[:, [n + i for i in ind]]]))
         own = {"velocities": {v.name: rows[:, n + i] for i, v in enumerate(J.qd)},
                "residual": rows[:, 2 * n:2 * n + k], "energy": rows[:, 2 * n + k]}
-        return Trajectory(self, ts[:n_out], ys, p, method="dla", status=int(status),
+        return Trajectory(self, ts[:n_out], ys, p, method="dla" + ("+projection" if projection
+                                                                  else ""), status=int(status),
                           stop_reason=STATUS_TEXT[int(status)], steps=int(stats[0]),
                           rejected=0, nfev=int(stats[1]), wall_time=wall, kernels=kern,
                           projected=self.projected, own=own)
+
+    @property
+    def dvi_kernels(self):
+        """Kernels of the discrete vakonomic step (``codegen.generate_dla(kind=
+        "vakonomic")``)."""
+        compiled_params = {k: v for k, v in self.params.items()
+                           if k not in self.runtime_params}
+        key = codegen.symbolic_key(self.system, "vakonomic", compiled_params,
+                                   self.runtime_params, extra="dvi")
+        return _cache.load(key, lambda: codegen.generate_dla(
+            self.system, compiled_params, self.runtime_params, key=key, kind="vakonomic"),
+            persistent=self.cache)
+
+    def _run_dvi(self, t0, t1, y_init, default_y0, p, n_steps, h, save, tol, max_iter):
+        from .integrators import dvi
+
+        if not (self.principle == "vakonomic" or
+                (self.principle == "holder" and self.convention == "paper")):
+            raise PrincipleError(
+                "the discrete vakonomic integrator discretizes vakonomic dynamics (and "
+                "Hoelder's in the paper's convention, which has the same equations), not "
+                f"{self.principle}" + ("; use dla for Chetaev" if self.principle == "chetaev"
+                                       else "; use dop853"))
+        if self.form not in (None, "multiplier"):
+            raise PrincipleError(
+                f"dvi uses the multipliers of the constraints as written (the 'multiplier' "
+                f"form); the scene's form {self.form!r} scales them differently: omit form=")
+        n_steps = self._n_steps(n_steps, h, t0, t1, "dvi")
+        J = self.system.J
+        n, k = J.n, self.system.k
+        q0 = np.ascontiguousarray(y_init[:n])
+        lam0 = np.ascontiguousarray(y_init[n + n - k:])
+        v0 = self._full_velocities(t0, y_init, p, default_y0)
+        kern = self.dvi_kernels
+        solve = dvi.solver()
+        mode = EVERY_STEP if save == "steps" else ENDPOINTS
+        tic = time.perf_counter()
+        status, ts, rows, n_out, stats, t_last, y_last = solve(
+            kern.step_residual, kern.momentum, kern.legendre, kern.nodal, t0, t1, q0,
+            v0, lam0, p, int(n_steps), float(tol), int(max_iter), mode)
+        wall = time.perf_counter() - tic
+        if status == NONFINITE:
+            self._raise_nonfinite("dvi", t_last, y_last[:n])
+        if status == NOT_CONVERGED:
+            raise IntegrationError(
+                f"dvi: Newton's method did not converge in the step from t = {t_last:.17g} "
+                f"(h = {(t1 - t0) / n_steps:.3g}); take a smaller step, or the discrete "
+                "constraint has no nearby solution there")
+        rows = rows[:n_out]
+        ind = [J.q.index(s) for s in self.system.independent]
+        ys = np.ascontiguousarray(np.hstack([rows[:, :n], rows[:, [n + i for i in ind]],
+                                             rows[:, 2 * n:2 * n + k]]))
+        own = {"velocities": {v.name: rows[:, n + i] for i, v in enumerate(J.qd)},
+               "residual": rows[:, 2 * n + k:2 * n + 2 * k], "energy": rows[:, 2 * n + 2 * k]}
+        return Trajectory(self, ts[:n_out], ys, p, method="dvi", status=int(status),
+                          stop_reason=STATUS_TEXT[int(status)], steps=int(stats[0]),
+                          rejected=0, nfev=int(stats[1]), wall_time=wall, kernels=kern,
+                          projected=self.projected, own=own)
+
+    def _full_velocities(self, t0, y_init, p, default_y0) -> np.ndarray:
+        """Every velocity at the initial state (the dependent ones from the constraints)."""
+        J = self.system.J
+        n = J.n
+        if default_y0:
+            v0 = [self.initial[v.name] for v in J.qd]
+        else:
+            aux = np.empty(self.kernels.layout.n_aux)
+            self.kernels.aux(t0, np.ascontiguousarray(y_init), p, aux)
+            vals = dict(zip(self.velocities, y_init[n:]))
+            vals.update(zip(self.dependent_velocities, aux[:self.system.k]))
+            v0 = [vals[v.name] for v in J.qd]
+        return np.ascontiguousarray(v0, dtype=float)
 
     @staticmethod
     def _check_t_eval(te, t0, t1):
@@ -372,16 +687,31 @@ class Scene:
         if np.any(d < 0):
             raise JetnhError("t_eval must be sorted in the direction of integration")
 
-    def _raise_nonfinite(self, method, t, y):
+    def _raise_nonfinite(self, method, t, y, kern=None, p=None, t0=None, y_init=None,
+                         checked=True):
         state = ", ".join(f"{n} = {v:.17g}" for n, v in zip(self.state_names, y))
+        extra = ""
+        if kern is not None and kern.layout.indicators:
+            g = np.empty(len(kern.layout.indicators))
+            kern.sing(float(t), np.ascontiguousarray(y, dtype=float), p, g)
+            extra = ("; singularity indicators there: "
+                     + ", ".join(f"{e} = {v:.6g}" for e, v in zip(kern.layout.indicators, g)))
+        why = ("No singularity indicator explains it: the solution blows up, or an "
+               "expression leaves its domain; check the model and the initial values, or "
+               "integrate a shorter span" if kern is not None and checked else
+               "The singularity checks were off (singular='ignore'); run with "
+               "singular='stop' to stop at singular configurations" if kern is not None else
+               "The equations are singular there (a vanishing denominator of the dependent "
+               "velocities or of the reduced mass matrix), or the solution blows up")
         raise IntegrationError(
             f"{method}: the right-hand side or the state became NaN or infinite in the step "
-            f"from t = {t:.17g}; state there: {state}. The equations are singular there "
-            "(a vanishing denominator of the dependent velocities or of the reduced mass "
-            "matrix), or the solution blows up")
+            f"from t = {t:.17g}; state there: {state}{extra}. {why}")
 
     def _run_scipy(self, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step,
-                   max_step) -> Trajectory:
+                   max_step, events=None, singular="stop", singular_tol=1e-10) -> Trajectory:
+        """scipy's ``solve_ivp`` on the compiled right-hand side; user events and the
+        singularity indicators become scipy events (the indicators terminal, direction -1,
+        on ``s_i g_i - singular_tol |g_i(t0)|``)."""
         from scipy.integrate import solve_ivp
 
         if method not in SCIPY_METHODS:
@@ -395,22 +725,71 @@ class Scene:
             rhs(float(t), np.ascontiguousarray(y, dtype=float), p, out)
             return out
 
+        ce = self.compile_events(events)
+        scipy_events = []
+        if ce is not None:
+            for f, ev in zip(ce.python_funcs, ce.events):
+                def g(t, y, f=f):
+                    return f(t, y, p)
+                g.terminal = ev.max_events if ev.max_events > 0 else False
+                g.direction = ev.direction
+                scipy_events.append(g)
+        n_user = len(scipy_events)
+        m = len(kern.layout.indicators) if singular == "stop" else 0
+        if m:
+            g0 = np.empty(m)
+            kern.sing(t0, y_init, p, g0)
+            bad = ~np.isfinite(g0) | (g0 == 0.0)
+            if bad.any():
+                idx = int(np.argmax(bad))
+                info = self._singularity(kern, idx, t0, y_init, p, t0, y_init, singular_tol)
+                return Trajectory(self, [t0], [y_init], p, method=f"scipy-{method}",
+                                  status=SINGULAR, stop_reason=info["reason"], steps=0,
+                                  rejected=0, nfev=0, wall_time=0.0, kernels=kern,
+                                  projected=self.projected, singularity=info)
+            sig, thr = np.sign(g0), singular_tol * np.abs(g0)
+            work = np.empty(m)
+            for i in range(m):
+                def gs(t, y, i=i):
+                    kern.sing(float(t), np.ascontiguousarray(y, dtype=float), p, work)
+                    v = sig[i] * work[i] - thr[i]
+                    return v if np.isfinite(v) else -1.0
+                gs.terminal = True
+                gs.direction = -1
+                scipy_events.append(gs)
         kw = {}
         if first_step:
             kw["first_step"] = first_step
         tic = time.perf_counter()
         sol = solve_ivp(fun, (t0, t1), y_init, method=method, t_eval=t_eval, rtol=rtol,
-                        atol=atol, max_step=max_step, **kw)
+                        atol=atol, max_step=max_step, events=scipy_events or None, **kw)
         wall = time.perf_counter() - tic
         ys = np.ascontiguousarray(sol.y.T)
         if ys.size and not np.all(np.isfinite(ys)):
             bad = int(np.argmax(~np.all(np.isfinite(ys), axis=1)))
             i = max(bad - 1, 0)
-            self._raise_nonfinite(f"scipy-{method}", sol.t[i], ys[i])
-        return Trajectory(self, sol.t, ys, p, method=f"scipy-{method}",
-                          status=0 if sol.status == 0 else 2, stop_reason=sol.message,
-                          steps=None, rejected=None, nfev=int(sol.nfev), wall_time=wall,
-                          kernels=kern, projected=self.projected)
+            self._raise_nonfinite(f"scipy-{method}", sol.t[i], ys[i], kern, p, t0, y_init)
+        status, reason, singularity = (0 if sol.status == 0 else 2), sol.message, None
+        kw = {}
+        if sol.status == 1:
+            hit = [(sol.t_events[k][-1], k) for k in range(len(scipy_events))
+                   if len(sol.t_events[k]) and getattr(scipy_events[k], "terminal", False)]
+            t_hit, k = min(hit, key=lambda x: x[0] * (1 if t1 >= t0 else -1))
+            if k < n_user:
+                status, reason = EVENT, f"terminal event {ce.names[k]!r} at t = {t_hit:.17g}"
+            else:
+                status = SINGULAR
+                y_hit = sol.y_events[k][-1]
+                singularity = self._singularity(kern, k - n_user, t_hit, y_hit, p, t0,
+                                                y_init, singular_tol)
+                reason = singularity["reason"]
+        if ce is not None:
+            kw["events"] = (ce.names, [np.asarray(sol.t_events[k]) for k in range(n_user)],
+                            [np.asarray(sol.y_events[k]).reshape(-1, n) for k in range(n_user)])
+        return Trajectory(self, sol.t, ys, p, method=f"scipy-{method}", status=status,
+                          stop_reason=reason, steps=None, rejected=None, nfev=int(sol.nfev),
+                          wall_time=wall, kernels=kern, projected=self.projected,
+                          singularity=singularity, **kw)
 
     def __repr__(self):
         return (f"Scene({self.principle}, states={list(self.state_names)}, "

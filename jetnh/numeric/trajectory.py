@@ -37,6 +37,8 @@ class Diagnostics:
     energy_drift_relative: float   # energy_drift / max(|E(t0)|, tiny)
     integral_drift: dict = field(default_factory=dict)
     projected: dict = field(default_factory=dict)
+    events: dict = field(default_factory=dict)        # event name -> occurrences
+    singularity: dict | None = None                   # see Trajectory.singularity
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -50,6 +52,8 @@ class Diagnostics:
                  f"(relative {self.energy_drift_relative:.3e})"]
         for k, v in self.integral_drift.items():
             lines.append(f"  integral {k}: drift {v:.3e}")
+        for k, v in self.events.items():
+            lines.append(f"  event {k}: {v} occurrence(s)")
         return "\n".join(lines)
 
 
@@ -57,7 +61,8 @@ class Trajectory:
     """Output times ``t`` and states ``y`` (rows) of one run, with named access."""
 
     def __init__(self, scene, t, y, p, *, method, status, stop_reason, steps, rejected,
-                 nfev, wall_time, kernels, projected=None, own=None):
+                 nfev, wall_time, kernels, projected=None, own=None, events=None,
+                 singularity=None):
         self.scene = scene
         self.t = np.ascontiguousarray(t, dtype=float)
         self.y = np.ascontiguousarray(y, dtype=float)
@@ -67,7 +72,15 @@ class Trajectory:
         self.method = method
         self.status = status
         self.stop_reason = stop_reason
-        self.success = status == 0
+        # scipy's convention: a terminal event is a success; a singular stop is not
+        self.success = status in (0, 5)
+        #: the stop at a singular configuration: {"indicator", "kind", "index", "t",
+        #: "value", "initial", "reason"}, or None
+        self.singularity = singularity
+        names, t_ev, y_ev = events if events is not None else ((), [], [])
+        self.event_names = tuple(names)
+        self.t_events = list(t_ev)
+        self.y_events = list(y_ev)
         self._info = dict(steps=steps, rejected=rejected, nfev=nfev, wall_time=wall_time,
                           projected=dict(projected or {}))
         # methods that carry their own velocities, residuals and energy (the discrete
@@ -120,6 +133,17 @@ class Trajectory:
         out.update({name: self[name] for name in self.names})
         return out
 
+    @property
+    def events(self) -> dict[str, dict[str, np.ndarray]]:
+        """Event name -> {"t": times, state name: values} of its occurrences."""
+        out = {}
+        for name, te, ye in zip(self.event_names, self.t_events, self.y_events):
+            d = {"t": te}
+            ye = ye.reshape(-1, len(self.layout.states))
+            d.update({s: ye[:, i] for i, s in enumerate(self.layout.states)})
+            out[name] = d
+        return out
+
     # ------------------------------------------------------------------ derived columns
     @cached_property
     def aux(self) -> np.ndarray:
@@ -168,7 +192,9 @@ class Trajectory:
             rhs_evaluations=i["nfev"], wall_time=i["wall_time"], residual_max=rmax,
             energy_initial=e0, energy_drift=drift,
             energy_drift_relative=drift / max(abs(e0), 1e-300) if E.size else 0.0,
-            integral_drift=idrift, projected=i["projected"])
+            integral_drift=idrift, projected=i["projected"],
+            events={n: len(te) for n, te in zip(self.event_names, self.t_events)},
+            singularity=self.singularity)
 
     def __repr__(self):
         span = f"t in [{self.t[0]:.6g}, {self.t[-1]:.6g}]" if len(self) else "empty"

@@ -10,8 +10,15 @@ dopri5     5(4)   embedded 4th order                 Dormand & Prince (1980); HN
 dop853     8(5,3) 5th and 3rd order combination     Hairer's DOP853; HNW I, II.5 and II.10
 rk4        4      none (fixed step)                  Kutta (1901); HNW I, II.1
 dla        2      none (fixed step), symmetric       Cortes & Martinez (2001); McLachlan &
-                                                    Perlmutter (2006)
+                                                    Perlmutter (2006); optional projection
+dvi        2      none (fixed step), symmetric,     Benito & Martin de Diego (2005); Colombo
+                  variational (vakonomic)           et al. (2010, 2013); Marsden & West (2001)
 =========  =====  ================================  ==========================================
+
+Every method but dla also takes the singularity indicators and the user events of the
+scene as first-class functions and locates them on its dense output (``_events``);
+``ensemble_solver()`` of dop853, dopri5 and rk4 is a compiled driver running the same
+``solve`` over the rows of an array of initial states and parameters.
 """
 
 from ._common import STATUS_TEXT  # noqa: F401

@@ -5,15 +5,83 @@ Status codes returned by every ``solve``:
 ``FINISHED`` (0) reached the end of the interval; ``MAX_STEPS`` (1) stopped after the
 allowed number of steps; ``TOO_SMALL_STEP`` (2) the step size fell below ten units in
 the last place of t; ``NONFINITE`` (3) the right-hand side or the state became NaN or
-infinite; ``NOT_CONVERGED`` (4) an implicit stage equation did not converge.
+infinite; ``NOT_CONVERGED`` (4) an implicit stage equation did not converge; ``EVENT``
+(5) a terminal user event occurred; ``SINGULAR`` (6) a singularity indicator crossed zero
+or fell below its threshold (see ``_events``).
 """
 
+import hashlib
 import math
+import os
 
 import numba
 import numpy as np
 
-FINISHED, MAX_STEPS, TOO_SMALL_STEP, NONFINITE, NOT_CONVERGED = 0, 1, 2, 3, 4
+
+# ---------------------------------------------------------------------- disk cache freshness
+def _install_cache_locator():
+    """Make numba's disk cache of the integrator modules stale when a *helper* module they
+    inline (this file, ``_events.py``) changes.  numba checks only the decorated function's
+    own file, so without this an edit of a helper would leave the loops running the old
+    helper.  The locator wraps numba's usual one (same cache directory) and adds the
+    helpers' hash to the freshness stamp.  Uses numba's (private) locator list; if that
+    is not there, nothing changes."""
+    try:
+        from numba.core import caching
+        classes = caching.CacheImpl._locator_classes
+        base = caching._CacheLocator
+    except (ImportError, AttributeError):
+        return
+    here = os.path.dirname(os.path.abspath(__file__))
+    helpers = [os.path.join(here, f) for f in ("_common.py", "_events.py")]
+    if any(getattr(c, "_jetnh", False) for c in classes):
+        return
+    defaults = list(classes)
+
+    def helpers_hash():
+        h = hashlib.sha256()
+        for path in helpers:
+            try:
+                with open(path, "rb") as f:
+                    h.update(f.read())
+            except OSError:
+                pass
+        return h.hexdigest()
+
+    class IntegratorCacheLocator(base):
+        _jetnh = True
+
+        def __init__(self, inner):
+            self._inner = inner
+
+        @classmethod
+        def from_function(cls, py_func, py_file):
+            if os.path.dirname(os.path.abspath(py_file)) != here:
+                return None
+            for lc in defaults:
+                inner = lc.from_function(py_func, py_file)
+                if inner is not None:
+                    return cls(inner)
+            return None
+
+        def ensure_cache_path(self):
+            return self._inner.ensure_cache_path()
+
+        def get_cache_path(self):
+            return self._inner.get_cache_path()
+
+        def get_source_stamp(self):
+            return (self._inner.get_source_stamp(), helpers_hash())
+
+        def get_disambiguator(self):
+            return self._inner.get_disambiguator()
+
+    classes.insert(0, IntegratorCacheLocator)
+
+
+_install_cache_locator()
+
+FINISHED, MAX_STEPS, TOO_SMALL_STEP, NONFINITE, NOT_CONVERGED, EVENT, SINGULAR = range(7)
 
 STATUS_TEXT = {
     FINISHED: "reached the end of the interval",
@@ -21,6 +89,8 @@ STATUS_TEXT = {
     TOO_SMALL_STEP: "step size fell below the spacing of floating-point numbers",
     NONFINITE: "the state or the right-hand side became NaN or infinite",
     NOT_CONVERGED: "an implicit stage equation did not converge",
+    EVENT: "a terminal event occurred",
+    SINGULAR: "stopped at a singular configuration",
 }
 
 #: the step-size controller of Hairer-Norsett-Wanner II.4 with scipy's constants
@@ -133,17 +203,96 @@ RHS = numba.types.FunctionType(RHS_SIGNATURE)
 _COMPILED = {}
 
 
-def compiled(pyfunc, argtypes):
+def compiled(pyfunc, argtypes, parallel=False):
     """``pyfunc`` compiled for ``argtypes`` on first use (cached on disk by numba).
 
     The right-hand side is an argument of type ``RHS`` (a first-class function), so the
     compiled loop does not depend on which scene calls it: one compilation serves all.
+    (numba's disk cache does not key on ``parallel``: a function compiled both ways must
+    be two Python functions.)
     """
     key = (pyfunc.__module__, pyfunc.__qualname__)
     if key not in _COMPILED:
         _COMPILED[key] = numba.njit(argtypes, cache=True, error_model="numpy",
-                                    nogil=True)(pyfunc)
+                                    nogil=True, parallel=parallel)(pyfunc)
     return _COMPILED[key]
+
+
+class FunctionAddress:
+    """A compiled C callback (a numba ``cfunc``) as numba's *wrapper address protocol*
+    object: passed for a first-class-function argument, it unboxes to its cached address
+    without the signature comparison numba makes for a cfunc (~20 us a call).  It must
+    wrap a cfunc of the declared signature (``RHS_SIGNATURE``)."""
+
+    __slots__ = ("address", "cfunc")
+
+    def __init__(self, cfunc):
+        if isinstance(cfunc, FunctionAddress):
+            cfunc = cfunc.cfunc
+        if cfunc._sig != RHS_SIGNATURE:
+            raise TypeError(f"expected a cfunc of signature {RHS_SIGNATURE}, got {cfunc._sig}")
+        self.cfunc = cfunc          # keeps the machine code alive
+        self.address = cfunc.address
+
+    def __wrapper_address__(self):
+        return self.address
+
+
+def entry_point(dispatcher):
+    """The machine-code entry of a dispatcher compiled for one explicit signature: calling
+    it skips numba's type dispatch (``typeof`` of every argument, ~15 us for each
+    first-class function), which dominates the cost of a short run called from Python.
+    The caller must pass exactly the declared types."""
+    sigs = dispatcher.signatures
+    if len(sigs) != 1:
+        return dispatcher
+    return dispatcher.overloads[sigs[0]].entry_point
+
+
+@jit
+def collect(r, res, mode, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
+    """Store run r of an ensemble: its output rows (NaN after an early stop; with
+    ``mode == ENDPOINTS`` only the final row), ``INFO[r] = (status, steps, rejected, rhs
+    evaluations, rows, singular index)``, its last state, and per event the number of
+    occurrences and the first time."""
+    status, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev, sing_index = res
+    n = Y_LAST.shape[1]
+    n_times = OUT_T.shape[1]
+    if mode == ENDPOINTS:
+        filled = 1 if n_out > 0 else 0
+        first = n_out - 1
+    else:
+        filled = min(n_out, n_times)
+        first = 0
+    for k in range(filled):
+        OUT_T[r, k] = ts[first + k]
+        for j in range(n):
+            OUT_Y[r, k, j] = ys[first + k, j]
+    for k in range(filled, n_times):
+        OUT_T[r, k] = np.nan
+        for j in range(n):
+            OUT_Y[r, k, j] = np.nan
+    INFO[r, 0] = status
+    INFO[r, 1] = stats[0]
+    INFO[r, 2] = stats[1]
+    INFO[r, 3] = stats[2]
+    INFO[r, 4] = n_out
+    INFO[r, 5] = sing_index
+    T_LAST[r] = t
+    for j in range(n):
+        Y_LAST[r, j] = y[j]
+    for a in range(n_ev):
+        k = ev_i[a]
+        if EV_N[r, k] == 0:
+            EV_T[r, k] = ev_t[a]
+        EV_N[r, k] += 1
+
+
+#: argument types of the ensemble drivers after the solver's own arguments
+ENSEMBLE_OUT = (numba.types.float64[:, ::1], numba.types.float64[:, :, ::1],
+                numba.types.int64[:, ::1], numba.types.float64[::1],
+                numba.types.float64[:, ::1], numba.types.int64[:, ::1],
+                numba.types.float64[:, ::1])
 
 
 @jit

@@ -19,6 +19,11 @@ solved by Newton's method with the exact Jacobian (generated symbolically).
   at the nodes is O(h^2) and does not drift.
 - Works for any Lagrangian and any (also nonlinear) constraints; cost per step: a Newton
   solve in n + k unknowns.
+- Option ``project``: the node velocity of every step is projected onto the constraint
+  set (nearest point in the kinetic metric, Gauss-Newton) and the momentum recomputed
+  from it, so that the nodes satisfy the constraints to the Newton tolerance.  The
+  projection is not symmetric, so the method is no longer time-reversible; its order and
+  long-run behaviour are measured in tests/test_numeric_discrete.py.
 - Node velocities (for output and diagnostics) by the inverse Legendre transform
   p = dL/dqdot(q, v), also by Newton.
 
@@ -67,9 +72,58 @@ def _inverse_legendre(legendre, t, q, p_target, v, p, work, M, rhs, dv, tol, max
     return False
 
 
-def _solve(step_residual, momentum, legendre, nodal, t0, t_end, q0, v0, p, n_steps, k,
-           tol, max_iter, mode):
-    """``n_steps`` steps from (q0, v0).
+@numba.njit(cache=True, error_model="numpy", nogil=True)
+def project_velocity(constraint_jac, legendre, t, q, v, p, tol, max_iter, f, A, M, W, S,
+                     work, rhs, mu):
+    """Move v to the nearest point (in the metric of M = d^2F/dqdot^2) of the constraint
+    set f(t, q, v) = 0, by Gauss-Newton: v -= M^-1 A^T (A M^-1 A^T)^-1 f.  Returns False
+    if a linear solve fails or it does not converge."""
+    n = v.shape[0]
+    k = f.shape[0]
+    if k == 0:
+        return True
+    for it in range(max_iter):
+        constraint_jac(t, q, v, p, f, A)
+        size = 0.0
+        scale = 0.0
+        for a in range(k):
+            size = max(size, abs(f[a]))
+        for i in range(n):
+            scale = max(scale, abs(v[i]))
+        if size <= tol * (1.0 + scale):
+            return True
+        legendre(t, q, v, p, work, M)
+        for a in range(k):                       # W[:, a] = M^-1 A[a]
+            for i in range(n):
+                for j in range(n):
+                    S[i, j] = M[i, j]
+                rhs[i] = A[a, i]
+            if not solve_linear(S[:n, :n], rhs, mu):
+                return False
+            for i in range(n):
+                W[i, a] = mu[i]
+        for a in range(k):                       # S = A W
+            for b in range(k):
+                acc = 0.0
+                for i in range(n):
+                    acc += A[a, i] * W[i, b]
+                S[a, b] = acc
+            rhs[a] = f[a]
+        if not solve_linear(S[:k, :k], rhs[:k], mu[:k]):
+            return False
+        for i in range(n):
+            acc = 0.0
+            for a in range(k):
+                acc += W[i, a] * mu[a]
+            v[i] -= acc
+    return False
+
+
+def _solve(step_residual, momentum, legendre, nodal, constraint_jac, t0, t_end, q0, v0, p,
+           n_steps, k, tol, max_iter, mode, project):
+    """``n_steps`` steps from (q0, v0); with ``project`` the node velocity of every step
+    is projected onto the constraints (``project_velocity``) and the momentum recomputed
+    from it before the next step.
 
     Returns ``(status, ts, ys, n_out, stats, t, y)`` with rows
     ``ys = (q (n), v (n), f (k), E)`` and ``stats = [steps, Newton iterations, 0]``.
@@ -92,11 +146,17 @@ def _solve(step_residual, momentum, legendre, nodal, t0, t_end, q0, v0, p, n_ste
     dz = np.empty(m)
     row = np.empty(width)
     nod = np.empty(k + 1)
+    fk = np.empty(k)
+    Ak = np.empty((k, n))
+    W = np.empty((n, max(k, 1)))
+    S = np.empty((max(n, k), max(n, k)))
+    mu = np.empty(max(n, k))
+    rhs_p = np.empty(max(n, k))
     stats = np.zeros(3, dtype=np.int64)
     cap = 2 if mode == ENDPOINTS else n_steps + 1
     ts = np.empty(cap)
     ys = np.empty((cap, width))
-    n_out = 0
+    n_out = np.int64(0)
     legendre(t0, q, v, p, pk, M)
     t = t0
     nodal(t, q, v, p, nod)
@@ -146,6 +206,12 @@ def _solve(step_residual, momentum, legendre, nodal, t0, t_end, q0, v0, p, n_ste
         if not _inverse_legendre(legendre, t, q, pk, v, p, work, M, rhs_n, dv, tol, max_iter):
             status = NOT_CONVERGED
             break
+        if project:
+            if not project_velocity(constraint_jac, legendre, t, q, v, p, tol, max_iter, fk,
+                                    Ak, M, W, S, work, rhs_p, mu):
+                status = NOT_CONVERGED
+                break
+            legendre(t, q, v, p, pk, M)
         if not (all_finite(q) and all_finite(pk)):
             status = NONFINITE
             break
@@ -165,12 +231,12 @@ def _solve(step_residual, momentum, legendre, nodal, t0, t_end, q0, v0, p, n_ste
     return status, ts, ys, n_out, stats, t, y
 
 
-ARGS = (STEP, MOMENTUM, LEGENDRE, NODAL, f8, f8, f8[::1], f8[::1], f8[::1], i8, i8, f8, i8,
-        i8)
+ARGS = (STEP, MOMENTUM, LEGENDRE, NODAL, LEGENDRE, f8, f8, f8[::1], f8[::1], f8[::1], i8, i8,
+        f8, i8, i8, numba.types.boolean)
 _inverse_legendre = numba.njit(cache=True, error_model="numpy", nogil=True)(_inverse_legendre)
 
 
 def solver():
-    """The compiled ``solve(step_residual, momentum, legendre, nodal, t0, t_end, q0, v0, p,
-    n_steps, k, tol, max_iter, mode)``."""
+    """The compiled ``solve(step_residual, momentum, legendre, nodal, constraint_jac, t0,
+    t_end, q0, v0, p, n_steps, k, tol, max_iter, mode, project)``."""
     return compiled(_solve, ARGS)

@@ -8,7 +8,8 @@
 - Step control: ``h_new = h * min(10, max(0.2, 0.9 * err^(-1/8)))``, no increase right
   after a rejection; starting step by Hairer-Norsett-Wanner II.4.  These are the rules of
   scipy's ``DOP853``, so both take the same steps.
-- Dense output of order 7 (``contd8``), three extra evaluations in a step that needs it.
+- Dense output of order 7 (``contd8``), three extra evaluations in a step that needs it
+  (output at ``t_eval``, or locating an event or a singularity: ``_events``).
 
 References: E. Hairer, S. P. Norsett, G. Wanner, *Solving Ordinary Differential
 Equations I*, 2nd ed., Springer 1993, sections II.5 (the method), II.6 (dense output),
@@ -23,12 +24,16 @@ disk, and only the right-hand side is compiled per scene.
 
 import math
 
+import numba
 import numpy as np
 
 from ._common import (
     AT_T_EVAL, ENDPOINTS, EVERY_STEP, FINISHED, MAX_FACTOR, MAX_STEPS, MIN_FACTOR,
     NONFINITE, RHS, SAFETY, TOO_SMALL_STEP, all_finite, compiled, copy_into, f8, i8,
-    initial_step_h0, initial_step_h1, jit, min_step, store)
+    collect, initial_step_h0, initial_step_h1, jit, min_step, store)
+from ._common import ENSEMBLE_OUT
+from ._events import (SINGULAR, any_user_active, dense_eval, locate, sing_dip, sing_init,
+                      sing_violated, sing_watch)
 
 ORDER = 8
 ERROR_ORDER = 7
@@ -215,26 +220,20 @@ def _dense_coefficients(rhs, t, h, y, y_new, K, F, ytmp, p):
             F[3 + m, i] = h * acc
 
 
-@jit
-def _dense(theta, y, F, out):
-    th1 = 1.0 - theta
-    for i in range(y.shape[0]):
-        v = F[6, i]
-        v = v * theta + F[5, i]
-        v = v * th1 + F[4, i]
-        v = v * theta + F[3, i]
-        v = v * th1 + F[2, i]
-        v = v * theta + F[1, i]
-        v = v * th1 + F[0, i]
-        out[i] = y[i] + v * theta
-
-
-def _solve(rhs, t0, t_end, y0, p, rtol, atol, first_step, max_step, max_steps, t_eval, mode):
+def _solve(rhs, sing, uev, t0, t_end, y0, p, rtol, atol, first_step, max_step, max_steps,
+           t_eval, mode, n_sing, sing_tol, ev_dir, ev_max):
     """Integrate y' = rhs(t, y, p) from t0 to t_end.
 
-    Returns ``(status, ts, ys, n_out, stats, t, y)``: the output rows ``ts[:n_out]``,
-    ``ys[:n_out]`` (every accepted step, the points of ``t_eval``, or the two endpoints,
-    by ``mode``), ``stats = [accepted, rejected, rhs evaluations]`` and the last state.
+    ``sing`` computes ``n_sing`` singularity indicators (stop where one of them crosses
+    zero or falls below ``sing_tol`` times its initial size; ``n_sing = 0`` disables) and
+    ``uev`` the ``ev_dir.shape[0]`` user event functions (direction ``ev_dir``, terminal at
+    the ``ev_max``-th occurrence, 0 = never); see ``_events``.
+
+    Returns ``(status, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev, sing_index)``:
+    the output rows ``ts[:n_out]``, ``ys[:n_out]`` (every accepted step, the points of
+    ``t_eval``, or the two endpoints, by ``mode``), ``stats = [accepted, rejected, rhs
+    evaluations]``, the last state, the event records (time, event index, state) and the
+    index of the indicator that stopped the integration (-1 if none).
     """
     n = y0.shape[0]
     direction = 1.0 if t_end >= t0 else -1.0
@@ -244,18 +243,43 @@ def _solve(rhs, t0, t_end, y0, p, rtol, atol, first_step, max_step, max_steps, t
     y = y0.copy()
     y_new = np.empty(n)
     ytmp = np.empty(n)
+    y_stop = np.empty(n)
     scale = np.empty(n)
     stats = np.zeros(3, dtype=np.int64)
     cap = t_eval.shape[0] if mode == AT_T_EVAL else (2 if mode == ENDPOINTS else 64)
     ts = np.empty(max(cap, 1))
     ys = np.empty((max(cap, 1), n))
-    n_out = 0
-    j_eval = 0
+    n_out = np.int64(0)
+    j_eval = np.int64(0)
     t = t0
+    # events and singularity indicators
+    n_user = ev_dir.shape[0]
+    gs = np.empty(max(n_sing, 1))
+    gs_old = np.empty(max(n_sing, 1))
+    gref = np.empty(max(n_sing, 1))
+    sig = np.empty(max(n_sing, 1))
+    eps = np.empty(max(n_sing, 1))
+    gu_old = np.empty(max(n_user, 1))
+    gu_new = np.empty(max(n_user, 1))
+    gtmp = np.empty(max(n_user, 1))
+    counts = np.zeros(max(n_user, 1), dtype=np.int64)
+    roots = np.empty(max(n_user, 1))
+    which = np.empty(max(n_user, 1), dtype=np.int64)
+    ev_t = np.empty(0)
+    ev_i = np.empty(0, dtype=np.int64)
+    ev_y = np.empty((0, n))
+    n_ev = np.int64(0)
+    sing_index = sing_init(sing, n_sing, sing_tol, t, y, p, gs, sig, eps, gref)
+    copy_into(gs_old, gs)
+    if sing_index >= 0:
+        ts, ys, n_out = store(ts, ys, n_out, t, y)
+        return SINGULAR, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev, sing_index
+    if n_user > 0:
+        uev(t, y, p, gu_old)
     rhs(t, y, p, K[0])
     stats[2] += 1
     if not all_finite(K[0]):
-        return NONFINITE, ts, ys, n_out, stats, t, y
+        return NONFINITE, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev, sing_index
     if mode != AT_T_EVAL:
         ts, ys, n_out = store(ts, ys, n_out, t, y)
     if interval == 0.0:
@@ -263,7 +287,7 @@ def _solve(rhs, t0, t_end, y0, p, rtol, atol, first_step, max_step, max_steps, t
             while j_eval < t_eval.shape[0] and t_eval[j_eval] == t:
                 ts, ys, n_out = store(ts, ys, n_out, t, y)
                 j_eval += 1
-        return FINISHED, ts, ys, n_out, stats, t, y
+        return FINISHED, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev, sing_index
     if first_step > 0.0:
         h_abs = first_step
     else:
@@ -346,30 +370,110 @@ def _solve(rhs, t0, t_end, y0, p, rtol, atol, first_step, max_step, max_steps, t
         if status != FINISHED:
             break
         stats[0] += 1
-        if mode == AT_T_EVAL:
-            have_dense = False
-            while j_eval < t_eval.shape[0] and direction * (t_eval[j_eval] - t_new) <= 0.0:
+        have_dense = False
+        stop = 0
+        t_stop = t_new
+        if n_sing > 0 or n_user > 0:
+            si = -1
+            theta_hi = 1.0
+            active = False
+            if n_sing > 0:
+                si = sing_violated(sing, n_sing, t_new, y_new, p, gs, sig, eps)
+                if si < 0 and sing_watch(n_sing, gs_old, gs, sig, gref):
+                    if not have_dense:
+                        _dense_coefficients(rhs, t, h, y, y_new, K, F, ytmp, p)
+                        stats[2] += 3
+                        have_dense = True
+                    theta_hi = sing_dip(sing, n_sing, t, h, y, F, p, gs_old, sig, eps,
+                                        gref, ytmp)
+                    if theta_hi > 0.0:
+                        si = 0
+                    else:
+                        theta_hi = 1.0
+                copy_into(gs_old, gs)
+                active = si >= 0
+            if n_user > 0:
+                uev(t_new, y_new, p, gu_new)
+                if any_user_active(gu_old, gu_new, ev_dir):
+                    active = True
+            if active:
                 if not have_dense:
                     _dense_coefficients(rhs, t, h, y, y_new, K, F, ytmp, p)
                     stats[2] += 3
                     have_dense = True
-                _dense((t_eval[j_eval] - t) / h, y, F, ytmp)
+                stop, t_stop, sing_index, ev_t, ev_i, ev_y, n_ev = locate(
+                    sing, uev, n_sing, si, theta_hi, t, h, y, F, p, gs, sig, eps, gu_old,
+                    gu_new, ev_dir, ev_max, counts, ytmp, gtmp, roots, which, ev_t, ev_i, ev_y,
+                    n_ev, y_stop)
+            for i in range(n_user):
+                gu_old[i] = gu_new[i]
+        if mode == AT_T_EVAL:
+            while j_eval < t_eval.shape[0] and direction * (t_eval[j_eval] - t_stop) <= 0.0:
+                if not have_dense:
+                    _dense_coefficients(rhs, t, h, y, y_new, K, F, ytmp, p)
+                    stats[2] += 3
+                    have_dense = True
+                dense_eval((t_eval[j_eval] - t) / h, y, F, ytmp)
                 ts, ys, n_out = store(ts, ys, n_out, t_eval[j_eval], ytmp)
                 j_eval += 1
         elif mode == EVERY_STEP:
-            ts, ys, n_out = store(ts, ys, n_out, t_new, y_new)
+            if stop != 0:
+                ts, ys, n_out = store(ts, ys, n_out, t_stop, y_stop)
+            else:
+                ts, ys, n_out = store(ts, ys, n_out, t_new, y_new)
+        if stop != 0:
+            t = t_stop
+            copy_into(y, y_stop)
+            status = stop
+            break
         t = t_new
         copy_into(y, y_new)
         copy_into(K[0], K[12])
     if mode == ENDPOINTS:
         ts, ys, n_out = store(ts, ys, n_out, t, y)
-    return status, ts, ys, n_out, stats, t, y
+    return status, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev, sing_index
 
 
-ARGS = (RHS, f8, f8, f8[::1], f8[::1], f8, f8[::1], f8, f8, i8, f8[::1], i8)
+ARGS = (RHS, RHS, RHS, f8, f8, f8[::1], f8[::1], f8, f8[::1], f8, f8, i8, f8[::1], i8, i8, f8,
+        i8[::1], i8[::1])
 
 
 def solver():
-    """The compiled ``solve(rhs, t0, t_end, y0, p, rtol, atol, first_step, max_step,
-    max_steps, t_eval, mode)``."""
+    """The compiled ``solve(rhs, sing, uev, t0, t_end, y0, p, rtol, atol, first_step,
+    max_step, max_steps, t_eval, mode, n_sing, sing_tol, ev_dir, ev_max)``."""
     return compiled(_solve, ARGS)
+
+
+# ---------------------------------------------------------------------- ensembles
+# Two copies of one driver (numba's cache cannot hold a function compiled both with and
+# without ``parallel``): run r of the ensemble is ``_solve`` on Y0[r], P[r].
+def _ensemble_parallel(rhs, sing, uev, t0, t_end, Y0, P, rtol, atol, first_step, max_step,
+                       max_steps, t_eval, mode, n_sing, sing_tol, ev_dir, ev_max, OUT_T,
+                       OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
+    for r in numba.prange(Y0.shape[0]):
+        res = _SOLVE(rhs, sing, uev, t0, t_end, Y0[r], P[r], rtol, atol, first_step,
+                     max_step, max_steps, t_eval, mode, n_sing, sing_tol, ev_dir, ev_max)
+        collect(r, res, mode, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)
+
+
+def _ensemble_serial(rhs, sing, uev, t0, t_end, Y0, P, rtol, atol, first_step, max_step,
+                     max_steps, t_eval, mode, n_sing, sing_tol, ev_dir, ev_max, OUT_T, OUT_Y,
+                     INFO, T_LAST, Y_LAST, EV_N, EV_T):
+    for r in range(Y0.shape[0]):
+        res = _SOLVE(rhs, sing, uev, t0, t_end, Y0[r], P[r], rtol, atol, first_step,
+                     max_step, max_steps, t_eval, mode, n_sing, sing_tol, ev_dir, ev_max)
+        collect(r, res, mode, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)
+
+
+ENSEMBLE_ARGS = ARGS[:5] + (f8[:, ::1], f8[:, ::1]) + ARGS[7:] + ENSEMBLE_OUT
+_SOLVE = None
+
+
+def ensemble_solver(parallel=True):
+    """The compiled ensemble driver ``drive(rhs, sing, uev, t0, t_end, Y0, P, <solve's
+    other arguments>, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)``: numba threads
+    over the runs (``parallel``) or one loop (for a Python thread pool)."""
+    global _SOLVE
+    _SOLVE = solver()
+    return compiled(_ensemble_parallel if parallel else _ensemble_serial, ENSEMBLE_ARGS,
+                    parallel=parallel)

@@ -1,0 +1,425 @@
+"""Ensembles: many initial conditions or parameter sets in one call, on all cores.
+
+    ens = scene.ensemble(initial={"phi_t": np.linspace(0.1, 1, 100)},
+                         params={"R": np.full(100, 2.0)}, rtol=1e-10, atol=1e-12,
+                         t_eval=np.linspace(0, 10, 51))          # or save="final"
+    ens.y                      # [n_runs, n_times, n_states]
+    ens["x"], ens["x_t"]       # [n_runs, n_times] (dependent velocities, integrals too)
+    ens.final["x"]             # [n_runs]
+    ens.status, ens.steps, ens.nfev, ens.t_final, ens.residual_max, ens.energy_drift
+
+``run_ensemble(scene, initial, params, ...)`` is a plain function of the scene and
+arrays (``Scene.ensemble`` calls it), so a later ``jetnh.sweep`` can hand it chunks.
+
+- ``initial``: an array ``[n_runs, n_states]`` in ``scene.state_names`` order (or one
+  state ``[n_states]``), or a dict name/Symbol -> number or array ``[n_runs]`` that
+  overrides the scene's initial values.  Dependent velocities are not states: if given
+  they are checked against the constraints (``ConstraintError``, or ``project=True``).
+- ``params``: dict name/Symbol -> number or array ``[n_runs]``.  Parameters that vary
+  must be run-time inputs of the kernels: if the scene compiled them in, an equal scene
+  with them as ``runtime_params`` is built (compiled once, then cached on disk); a
+  number for a compiled-in parameter builds a scene with that number compiled in.
+- Every run is the scene's compiled single-trajectory loop, unchanged, so each
+  trajectory is bit-for-bit the one ``scene.run`` gives for the same input.
+- ``parallel``: "threads" (default: a Python thread pool of ``workers`` threads, each
+  running the compiled serial driver on chunks of runs with the GIL released), "prange"
+  (numba threads over the runs in one compiled driver, dynamic chunks), or "serial" (one
+  compiled loop).  ``workers`` defaults to the number of cores numba sees.  Measured in
+  ``benchmarks/numeric_ensemble.py``: both parallel modes give the same bits; the
+  thread pool was as fast as or faster than prange there and needs no extra compiled
+  driver, hence the default.  A Python loop of ``scene.run`` pays ~0.1 ms of dispatch
+  per run, which the drivers do not.
+- Output: ``t_eval`` points (runs that stop early are NaN after their stop), or
+  ``save="final"`` (one row per run, its final state).  Every accepted step is not
+  available (ragged); use ``scene.run`` for that.
+- Diagnostics per run: status and stop reason, steps, rejected steps, right-hand-side
+  evaluations, final time, max constraint residual and energy drift over the output
+  rows (and against the initial state), event counts and first times.
+- A run whose right-hand side becomes NaN/inf with no singularity to explain it raises
+  ``IntegrationError`` naming the run (``on_error="record"`` keeps it as status 3).
+"""
+
+from __future__ import annotations
+
+import time
+from concurrent.futures import ThreadPoolExecutor
+from functools import cached_property
+
+import numpy as np
+import sympy as sp
+
+from ..errors import ConstraintError, IntegrationError, JetnhError
+from .integrators import ADAPTIVE, METHODS, STATUS_TEXT
+from .integrators._common import (AT_T_EVAL, ENDPOINTS, EVENT, FINISHED, NONFINITE,
+                                  SINGULAR, entry_point)
+
+PARALLEL = ("prange", "threads", "serial")
+
+
+def _name(key) -> str:
+    if isinstance(key, sp.Symbol):
+        return key.name
+    if isinstance(key, str):
+        return key
+    raise JetnhError(f"ensemble inputs are keyed by Symbol or by name, not "
+                     f"{type(key).__name__} ({key!r})")
+
+
+def _column(value, what) -> np.ndarray:
+    a = np.asarray(value, dtype=float)
+    if a.ndim > 1:
+        raise JetnhError(f"{what} must be a number or a 1-d array (one value per run), "
+                         f"got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise JetnhError(f"{what} has non-finite values; give finite numbers")
+    return a
+
+
+def _n_runs(columns: dict, n_from_array: int | None) -> int:
+    sizes = {k: v.shape[0] for k, v in columns.items() if v.ndim == 1}
+    n = set(sizes.values())
+    if n_from_array is not None:
+        n.add(n_from_array)
+    if len(n) > 1:
+        listing = ", ".join(f"{k}: {v}" for k, v in sizes.items())
+        raise JetnhError(f"ensemble inputs have different numbers of runs ({listing}"
+                         + (f", initial array: {n_from_array}" if n_from_array else "")
+                         + "); give arrays of one length (or numbers, which are broadcast)")
+    return n.pop() if n else 1
+
+
+def resolve(scene, initial=None, params=None, project=False):
+    """The scene to run (with the varying parameters as run-time inputs), the initial
+    states Y0 [n_runs, n_states] and the run-time parameters P [n_runs, n_p]."""
+    params = {_name(k): _column(v, f"params[{_name(k)!r}]") for k, v in (params or {}).items()}
+    unknown = sorted(set(params) - set(scene.params))
+    if unknown:
+        raise JetnhError(f"params has {', '.join(map(repr, unknown))}, not parameters of this "
+                         f"system; its parameters are {sorted(scene.params) or 'none'}")
+    varying = [k for k, v in params.items() if v.ndim == 1 or k in scene.runtime_params]
+    fixed = {k: float(v) for k, v in params.items() if k not in varying}
+    need = [k for k in varying if k not in scene.runtime_params]
+    if need or fixed:
+        scene = scene.replace(params={**scene.params, **fixed},
+                              runtime_params=tuple(scene.runtime_params) + tuple(need))
+    columns, arr, n_arr = {}, None, None
+    if isinstance(initial, dict):
+        columns = {_name(k): _column(v, f"initial[{_name(k)!r}]") for k, v in initial.items()}
+        allowed = set(scene.state_names) | set(scene.dependent_velocities)
+        bad = sorted(set(columns) - allowed)
+        if bad:
+            raise JetnhError(f"initial has {', '.join(map(repr, bad))}, not states of this "
+                             f"{scene.principle} scene; the states are "
+                             f"{', '.join(scene.state_names)}")
+    elif initial is not None:
+        arr = np.asarray(initial, dtype=float)
+        if arr.ndim == 1:
+            arr = arr[None, :]
+        if arr.ndim != 2 or arr.shape[1] != len(scene.state_names):
+            raise JetnhError(f"initial as an array must have shape [n_runs, "
+                             f"{len(scene.state_names)}] (states {', '.join(scene.state_names)})"
+                             f", got {np.shape(initial)}")
+        if not np.all(np.isfinite(arr)):
+            raise JetnhError("initial has non-finite values; give finite numbers")
+        n_arr = arr.shape[0]
+    n_runs = _n_runs({**columns, **params}, n_arr)
+    Y0 = np.empty((n_runs, len(scene.state_names)))
+    Y0[:] = scene.y0 if arr is None else arr
+    for j, s in enumerate(scene.state_names):
+        if s in columns:
+            Y0[:, j] = columns[s]
+    P = np.empty((n_runs, len(scene.runtime_params)))
+    P[:] = scene.p
+    for j, s in enumerate(scene.runtime_params):
+        if s in params:
+            P[:, j] = params[s]
+    dep = {k: v for k, v in columns.items() if k in scene.dependent_velocities}
+    if dep:
+        _check_dependent(scene, Y0, P, dep, project)
+    return scene, np.ascontiguousarray(Y0), np.ascontiguousarray(P)
+
+
+def _check_dependent(scene, Y0, P, given, project):
+    kern = scene.kernels
+    aux = np.empty((Y0.shape[0], kern.layout.n_aux))
+    for r in range(Y0.shape[0]):
+        kern.aux(scene.t_span[0], Y0[r], P[r], aux[r])
+    for a, name in enumerate(scene.dependent_velocities):
+        if name not in given:
+            continue
+        req = aux[:, a]
+        g = np.broadcast_to(given[name], req.shape)
+        bad = np.nonzero(np.abs(g - req) > scene.consistency_tol * np.maximum(1.0, np.abs(req)))[0]
+        if bad.size and not project:
+            r = int(bad[0])
+            raise ConstraintError(
+                f"initial {name} inconsistent with the constraints in {bad.size} run(s), "
+                f"e.g. run {r}: {name} = {g[r]!r} but the constraints give {req[r]!r}. Omit "
+                "it (it follows from the constraints) or pass project=True")
+
+
+class Ensemble:
+    """The result of ``run_ensemble``: arrays over runs, with named access."""
+
+    def __init__(self, scene, method, t, y, info, t_last, y_last, ev_n, ev_t, Y0, P,
+                 event_names, wall_time, parallel, workers, save, singular_tol):
+        self.scene = scene
+        self.method = method
+        self.t = t                      # [n_runs, n_times]
+        self.y = y                      # [n_runs, n_times, n_states]
+        self.status = info[:, 0].copy()
+        self.steps = info[:, 1].copy()
+        self.rejected = info[:, 2].copy()
+        self.nfev = info[:, 3].copy()
+        self.rows = info[:, 4].copy()
+        self._sing_index = info[:, 5].copy()
+        self.t_final = t_last
+        self.y_final = y_last
+        self.event_names = tuple(event_names)
+        self.event_counts = ev_n        # [n_runs, n_events]
+        self.event_first = np.where(ev_n > 0, ev_t, np.nan)
+        self.initial = Y0
+        self.params = P                 # [n_runs, n_runtime_params]
+        self.param_names = scene.runtime_params
+        self.wall_time = wall_time
+        self.parallel = parallel
+        self.workers = workers
+        self.save = save
+        self._singular_tol = singular_tol
+        self.layout = scene.kernels.layout
+
+    # ------------------------------------------------------------------ shape and access
+    @property
+    def n_runs(self) -> int:
+        return self.y.shape[0]
+
+    def __len__(self):
+        return self.n_runs
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        return self.layout.states
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        lay = self.layout
+        return lay.states + lay.dependent_velocities + lay.integrals
+
+    @property
+    def success(self) -> np.ndarray:
+        return np.isin(self.status, (FINISHED, EVENT))
+
+    def __getitem__(self, key) -> np.ndarray:
+        """[n_runs, n_times] array of a state, dependent velocity or first integral."""
+        name = _name(key)
+        lay = self.layout
+        if name in lay.states:
+            return self.y[:, :, lay.states.index(name)]
+        k = len(lay.dependent_velocities)
+        if name in lay.dependent_velocities:
+            return self.aux[:, :, lay.dependent_velocities.index(name)]
+        if name in lay.integrals:
+            return self.aux[:, :, 2 * k + 1 + lay.integrals.index(name)]
+        raise JetnhError(f"{name!r} is not in this ensemble; it has {', '.join(self.names)}")
+
+    @cached_property
+    def aux(self) -> np.ndarray:
+        """[n_runs, n_times, n_aux]: dependent velocities, residuals, energy, integrals
+        (NaN where the run has no row)."""
+        kern = self.scene.kernels
+        n_runs, n_times, _ = self.y.shape
+        out = np.full((n_runs, n_times, self.layout.n_aux), np.nan)
+        for r in range(n_runs):
+            ok = np.isfinite(self.t[r])
+            if ok.any():
+                tmp = np.empty((int(ok.sum()), self.layout.n_aux))
+                kern.aux_rows(np.ascontiguousarray(self.t[r][ok]),
+                              np.ascontiguousarray(self.y[r][ok]), self.params[r], tmp)
+                out[r][ok] = tmp
+        return out
+
+    @cached_property
+    def aux_initial(self) -> np.ndarray:
+        kern = self.scene.kernels
+        out = np.empty((self.n_runs, self.layout.n_aux))
+        t0 = self.scene.t_span[0]
+        for r in range(self.n_runs):
+            kern.aux(t0, self.initial[r], self.params[r], out[r])
+        return out
+
+    @property
+    def final(self) -> dict[str, np.ndarray]:
+        """Name -> [n_runs] values at each run's last output row."""
+        last = np.maximum(np.sum(np.isfinite(self.t), axis=1) - 1, 0)
+        idx = np.arange(self.n_runs)
+        return {name: self[name][idx, last] for name in self.names}
+
+    # ------------------------------------------------------------------ diagnostics
+    @property
+    def residual_max(self) -> np.ndarray:
+        """Max |f^a| over each run's output rows."""
+        k = len(self.layout.dependent_velocities)
+        res = np.abs(self.aux[:, :, k:2 * k])
+        with np.errstate(all="ignore"):
+            return np.nanmax(res.reshape(self.n_runs, -1), axis=1) if k else np.zeros(self.n_runs)
+
+    @property
+    def energy_drift(self) -> np.ndarray:
+        """Max |E - E(t0)| over each run's output rows."""
+        e = self.aux[:, :, self.layout.energy_index]
+        e0 = self.aux_initial[:, self.layout.energy_index]
+        with np.errstate(all="ignore"):
+            return np.nanmax(np.abs(e - e0[:, None]), axis=1)
+
+    def stop_reason(self, r: int) -> str:
+        s = int(self.status[r])
+        if s == SINGULAR:
+            sc = self.scene
+            info = sc._singularity(sc.kernels, int(self._sing_index[r]), self.t_final[r],
+                                   self.y_final[r], self.params[r], sc.t_span[0],
+                                   self.initial[r], self._singular_tol)
+            return info["reason"]
+        if s == EVENT:
+            hit = [k for k in range(len(self.event_names)) if self.event_counts[r, k]]
+            return (f"terminal event at t = {self.t_final[r]:.17g} (events seen: "
+                    f"{', '.join(self.event_names[k] for k in hit)})")
+        return STATUS_TEXT[s]
+
+    @property
+    def stop_reasons(self) -> list[str]:
+        return [self.stop_reason(r) for r in range(self.n_runs)]
+
+    def diagnostics(self) -> dict[str, np.ndarray]:
+        """Per-run diagnostics as arrays (for tables)."""
+        out = dict(status=self.status, success=self.success, steps=self.steps,
+                   rejected=self.rejected, rhs_evaluations=self.nfev, t_final=self.t_final,
+                   residual_max=self.residual_max, energy_drift=self.energy_drift)
+        for k, name in enumerate(self.event_names):
+            out[f"events[{name}]"] = self.event_counts[:, k]
+            out[f"first[{name}]"] = self.event_first[:, k]
+        return out
+
+    def __repr__(self):
+        ok = int(self.success.sum())
+        return (f"<Ensemble {self.method}: {self.n_runs} runs x {self.y.shape[1]} rows, "
+                f"{ok} succeeded, {self.wall_time * 1e3:.3g} ms ({self.parallel}, "
+                f"{self.workers} workers)>")
+
+
+def run_ensemble(scene, initial=None, params=None, *, rtol=1e-9, atol=1e-12, t_eval=None,
+                 save="final", method="dop853", n_steps=None, h=None, first_step=None,
+                 max_step=np.inf, max_steps=10_000_000, events=None, singular="stop",
+                 singular_tol=1e-10, parallel="threads", workers=None, project=False,
+                 on_error="raise") -> Ensemble:
+    """Integrate ``scene`` from many initial states / parameter sets: see the module
+    docstring.  Options as ``Scene.run``."""
+    import numba
+
+    if parallel not in PARALLEL:
+        raise JetnhError(f"parallel must be one of {PARALLEL}, not {parallel!r}")
+    if on_error not in ("raise", "record"):
+        raise JetnhError(f"on_error must be 'raise' or 'record', not {on_error!r}")
+    if singular not in ("stop", "ignore"):
+        raise JetnhError(f"singular must be 'stop' or 'ignore', not {singular!r}")
+    key = str(method).lower()
+    if key not in METHODS:
+        raise JetnhError(f"ensembles run the compiled methods {sorted(set(METHODS))}, not "
+                         f"{method!r}")
+    method = METHODS[key]
+    scene, Y0, P = resolve(scene, initial, params, project)
+    n_runs, n = Y0.shape
+    t0, t1 = scene.t_span
+    if t_eval is not None:
+        te = np.ascontiguousarray(t_eval, dtype=float)
+        scene._check_t_eval(te, t0, t1)
+        if method not in ADAPTIVE:
+            raise JetnhError("t_eval needs dense output: use dop853 or dopri5 (rk4 gives "
+                             "save='final')")
+        mode, n_times = AT_T_EVAL, te.shape[0]
+    elif save == "final":
+        te, mode, n_times = np.zeros(0), ENDPOINTS, 1
+    else:
+        raise JetnhError("an ensemble stores t_eval points or save='final' (every step "
+                         "differs per run); pass t_eval=... or save='final'")
+    kern = scene.kernels
+    ce = scene.compile_events(events)
+    n_sing = len(kern.layout.indicators) if singular == "stop" else 0
+    uev = ce.uev if ce is not None else kern.sing_fp
+    ev_dir = ce.direction if ce is not None else np.zeros(0, dtype=np.int64)
+    ev_max = ce.max_events if ce is not None else np.zeros(0, dtype=np.int64)
+    n_ev = len(ev_dir)
+    OUT_T = np.empty((n_runs, n_times))
+    OUT_Y = np.empty((n_runs, n_times, n))
+    INFO = np.zeros((n_runs, 6), dtype=np.int64)
+    T_LAST = np.empty(n_runs)
+    Y_LAST = np.empty((n_runs, n))
+    EV_N = np.zeros((n_runs, max(n_ev, 1)), dtype=np.int64)
+    EV_T = np.full((n_runs, max(n_ev, 1)), np.nan)
+    mod = _integrator_module(method)
+    if method in ADAPTIVE:
+        settings = (float(rtol), scene._atol(atol, n), float(first_step or 0.0),
+                    float(max_step), int(max_steps), te, mode)
+    else:
+        settings = (scene._n_steps(n_steps, h, t0, t1, "rk4"), mode)
+    tail = (int(n_sing), float(singular_tol), ev_dir, ev_max)
+    workers = int(workers or numba.config.NUMBA_NUM_THREADS)
+
+    def block(drive, a, b):
+        drive(kern.rhs_fp, kern.sing_fp, uev, t0, t1, Y0[a:b], P[a:b], *settings, *tail,
+              OUT_T[a:b], OUT_Y[a:b], INFO[a:b], T_LAST[a:b], Y_LAST[a:b], EV_N[a:b],
+              EV_T[a:b])
+
+    tic = time.perf_counter()
+    if parallel == "prange":
+        drive = entry_point(mod.ensemble_solver(parallel=True))
+        old = numba.get_num_threads()
+        nt = min(workers, numba.config.NUMBA_NUM_THREADS)
+        numba.set_num_threads(nt)
+        try:
+            # dynamic scheduling in chunks: runs differ in cost (early stops, stiffness)
+            with numba.parallel_chunksize(max(1, n_runs // (8 * nt))):
+                block(drive, 0, n_runs)
+        finally:
+            numba.set_num_threads(old)
+    else:
+        drive = entry_point(mod.ensemble_solver(parallel=False))
+        if parallel == "serial" or workers == 1 or n_runs == 1:
+            block(drive, 0, n_runs)
+        else:
+            chunk = max(1, -(-n_runs // (4 * workers)))
+            bounds = [(a, min(a + chunk, n_runs)) for a in range(0, n_runs, chunk)]
+            with ThreadPoolExecutor(workers) as pool:
+                list(pool.map(lambda ab: block(drive, *ab), bounds))
+    wall = time.perf_counter() - tic
+    ens = Ensemble(scene, method, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N[:, :n_ev],
+                   EV_T[:, :n_ev], Y0, P, ce.names if ce is not None else (), wall,
+                   parallel, workers if parallel != "serial" else 1, save, singular_tol)
+    _explain(ens, kern, singular == "stop", singular_tol, on_error)
+    return ens
+
+
+def _integrator_module(method):
+    import importlib
+
+    return importlib.import_module(f"jetnh.numeric.integrators.{method}")
+
+
+def _explain(ens, kern, checked, tol, on_error):
+    """Runs that hit NaN/inf: a singular stop when an indicator explains it, else an
+    error (or status 3 with ``on_error="record"``)."""
+    sc = ens.scene
+    t0 = sc.t_span[0]
+    for r in np.nonzero(ens.status == NONFINITE)[0]:
+        idx = (sc._explain_nonfinite(kern, ens.t_final[r], ens.y_final[r], ens.params[r], t0,
+                                     ens.initial[r], tol) if checked else -1)
+        if idx >= 0:
+            ens.status[r] = SINGULAR
+            ens._sing_index[r] = idx
+        elif on_error == "raise":
+            try:
+                sc._raise_nonfinite(f"{ens.method} (ensemble run {r})", ens.t_final[r],
+                                    ens.y_final[r], kern, ens.params[r], checked=checked)
+            except IntegrationError as exc:
+                raise IntegrationError(
+                    f"{exc} [pass on_error='record' to keep the other runs; run {r} will "
+                    "have status 3]") from None

@@ -1,0 +1,393 @@
+"""Events and singularity stops inside the compiled integrators (no Python per step).
+
+Two kinds of zero-finding run on the dense output of an accepted step:
+
+*User events* follow ``scipy.integrate.solve_ivp`` exactly: an event function g(t, y)
+is active in a step when ``g_old <= 0 <= g_new`` (direction > 0), ``g_old >= 0 >= g_new``
+(direction < 0) or either (direction 0); its root is found by Brent's method
+(``brentq`` with ``xtol = rtol = 4 eps``, a port of scipy's ``brentq.c``) on
+``g(t, dense(t))``; ``terminal = m > 0`` stops at the m-th occurrence (counts of all
+active events are raised first, then the roots sorted in the direction of integration).
+
+*Singularity indicators* g_i (``codegen.singular_indicators``): with the sign s_i and the
+size |g_i| at the initial state, the integration stops at the first time where
+``s_i g_i <= singular_tol |g_i(t0)|`` or g_i is not finite (a crossing of zero or a fall
+below the threshold), located by bisection on the dense output to the resolution of t;
+the reported state is the last regular one (the left end of the final bracket).  The
+ends of every step are checked; an indicator that has fallen below ``WATCH`` (1 %) of its
+initial size is also searched *inside* each step (8 samples of the dense output, then a
+golden-section minimization), so that a zero it only touches -- xdot^2 + ydot^2 at a
+velocity reversal, which a fixed step jumps over -- is not missed.
+
+Dense output of every method in one form (``dense_eval``): with ``th1 = 1 - theta``,
+
+    y(theta) = y0 + theta (F0 + th1 (F1 + theta (F2 + th1 (F3 + ...))))
+
+which is Hairer's ``contd8`` (DOP853, 7 rows), ``contd5`` (DOPRI5, 4 rows) and, with 3
+rows, the cubic Hermite interpolant used for the fixed-step RK4.
+"""
+
+import math
+
+import numpy as np
+
+from ._common import EVENT, SINGULAR, jit  # noqa: F401
+
+EPS = np.finfo(np.float64).eps
+#: indicators below this fraction of their initial size are searched inside each step
+WATCH = 1e-2
+GOLD = 0.3819660112501051
+
+
+@jit
+def dense_eval(theta, y, F, out):
+    """y(theta) from the coefficient rows F (the form above)."""
+    th1 = 1.0 - theta
+    m = F.shape[0]
+    for i in range(y.shape[0]):
+        v = F[m - 1, i]
+        for j in range(m - 2, -1, -1):
+            if j % 2 == 0:
+                v = F[j, i] + th1 * v
+            else:
+                v = F[j, i] + theta * v
+        out[i] = y[i] + theta * v
+
+
+@jit
+def hermite_rows(h, y_old, y_new, f_old, f_new, F):
+    """Cubic Hermite interpolant of a step in the form of ``dense_eval`` (3 rows)."""
+    for i in range(y_old.shape[0]):
+        d = y_new[i] - y_old[i]
+        F[0, i] = d
+        F[1, i] = h * f_old[i] - d
+        F[2, i] = d - h * f_new[i] - F[1, i]
+
+
+@jit
+def sing_init(sing, n_sing, tol, t, y, p, g, sig, eps, gref):
+    """Signs, sizes and thresholds of the indicators at the initial state; returns the
+    index of an indicator already zero or not finite there, else -1."""
+    if n_sing == 0:
+        return -1
+    sing(t, y, p, g)
+    for i in range(n_sing):
+        if not math.isfinite(g[i]) or g[i] == 0.0:
+            return i
+        sig[i] = 1.0 if g[i] > 0.0 else -1.0
+        gref[i] = abs(g[i])
+        eps[i] = tol * gref[i]
+    return -1
+
+
+@jit
+def sing_watch(n_sing, g_old, g_new, sig, gref):
+    """Whether some indicator is below WATCH of its initial size at either end."""
+    for i in range(n_sing):
+        if sig[i] * g_old[i] < WATCH * gref[i] or sig[i] * g_new[i] < WATCH * gref[i]:
+            return True
+    return False
+
+
+@jit
+def _worst(sing, n_sing, t, y, p, g, sig, eps, gref):
+    """min_i (s_i g_i - eps_i) / |g_i(t0)| (-inf if one is not finite)."""
+    sing(t, y, p, g)
+    w = np.inf
+    for i in range(n_sing):
+        v = (sig[i] * g[i] - eps[i]) / gref[i]
+        if not math.isfinite(v):
+            return -np.inf
+        w = min(w, v)
+    return w
+
+
+@jit
+def sing_dip(sing, n_sing, t_old, h, y_old, F, p, g, sig, eps, gref, ytmp):
+    """Search inside a step whose ends are regular for a dip of an indicator below its
+    threshold; returns theta in (0, 1) where one is violated, or -1.0."""
+    best = np.inf
+    kbest = 0
+    for k in range(1, 8):
+        th = k / 8.0
+        dense_eval(th, y_old, F, ytmp)
+        w = _worst(sing, n_sing, t_old + th * h, ytmp, p, g, sig, eps, gref)
+        if not (w > 0.0):
+            return th
+        if w < best:
+            best = w
+            kbest = k
+    # golden section on the bracket around the smallest sample
+    a = (kbest - 1) / 8.0
+    b = (kbest + 1) / 8.0
+    x1 = a + GOLD * (b - a)
+    x2 = b - GOLD * (b - a)
+    dense_eval(x1, y_old, F, ytmp)
+    f1 = _worst(sing, n_sing, t_old + x1 * h, ytmp, p, g, sig, eps, gref)
+    dense_eval(x2, y_old, F, ytmp)
+    f2 = _worst(sing, n_sing, t_old + x2 * h, ytmp, p, g, sig, eps, gref)
+    for _ in range(80):
+        if not (f1 > 0.0):
+            return x1
+        if not (f2 > 0.0):
+            return x2
+        if b - a < 1e-15:
+            break
+        if f1 < f2:
+            b = x2
+            x2 = x1
+            f2 = f1
+            x1 = a + GOLD * (b - a)
+            dense_eval(x1, y_old, F, ytmp)
+            f1 = _worst(sing, n_sing, t_old + x1 * h, ytmp, p, g, sig, eps, gref)
+        else:
+            a = x1
+            x1 = x2
+            f1 = f2
+            x2 = b - GOLD * (b - a)
+            dense_eval(x2, y_old, F, ytmp)
+            f2 = _worst(sing, n_sing, t_old + x2 * h, ytmp, p, g, sig, eps, gref)
+    return -1.0
+
+
+@jit
+def sing_violated(sing, n_sing, t, y, p, g, sig, eps):
+    """Index of the first indicator with ``sig g <= eps`` or not finite, else -1."""
+    sing(t, y, p, g)
+    for i in range(n_sing):
+        v = sig[i] * g[i]
+        if not (v > eps[i]):          # also NaN
+            return i
+    return -1
+
+
+@jit
+def hermite_defect(rhs, t_old, h, y_old, F, p, ytmp, fmid):
+    """Relative defect of the cubic Hermite interpolant at the middle of a step:
+    |p'(1/2)/h - f(t + h/2, p(1/2))| / |f| (RMS norms).  O(h^3) where the solution is
+    smooth, O(1) where the step straddles a kink of the right-hand side."""
+    dense_eval(0.5, y_old, F, ytmp)
+    rhs(t_old + 0.5 * h, ytmp, p, fmid)
+    num = 0.0
+    den = 0.0
+    for i in range(y_old.shape[0]):
+        d = (F[0, i] + 0.25 * F[2, i]) / h
+        num += (d - fmid[i]) ** 2
+        den += fmid[i] ** 2 + d * d
+    if den == 0.0:
+        return 0.0
+    return math.sqrt(2.0 * num / den)
+
+
+@jit
+def most_watched(n_sing, g, sig, gref):
+    """Index of the indicator smallest relative to its initial size."""
+    best = np.inf
+    k = 0
+    for i in range(n_sing):
+        v = sig[i] * g[i] / gref[i]
+        if v < best:
+            best = v
+            k = i
+    return k
+
+
+@jit
+def user_active(g_old, g_new, direction, i):
+    up = g_old[i] <= 0.0 and g_new[i] >= 0.0
+    down = g_old[i] >= 0.0 and g_new[i] <= 0.0
+    if direction[i] > 0:
+        return up
+    if direction[i] < 0:
+        return down
+    return up or down
+
+
+@jit
+def any_user_active(g_old, g_new, direction):
+    for i in range(direction.shape[0]):
+        if user_active(g_old, g_new, direction, i):
+            return True
+    return False
+
+
+@jit
+def _event_value(uev, i, t, t_old, h, y_old, F, p, ytmp, g):
+    dense_eval((t - t_old) / h, y_old, F, ytmp)
+    uev(t, ytmp, p, g)
+    return g[i]
+
+
+@jit
+def brentq_event(uev, i, xa, xb, t_old, h, y_old, F, p, ytmp, g):
+    """Root of event i on [xa, xb] by scipy's brentq (xtol = rtol = 4 eps, 100 iterations).
+    If rounding of the dense output unbrackets the root, the end nearer to zero wins."""
+    xtol = 4.0 * EPS
+    rtol = 4.0 * EPS
+    xpre = xa
+    xcur = xb
+    xblk = 0.0
+    fblk = 0.0
+    spre = 0.0
+    scur = 0.0
+    fpre = _event_value(uev, i, xpre, t_old, h, y_old, F, p, ytmp, g)
+    fcur = _event_value(uev, i, xcur, t_old, h, y_old, F, p, ytmp, g)
+    if fpre == 0.0:
+        return xpre
+    if fcur == 0.0:
+        return xcur
+    if (fpre > 0.0) == (fcur > 0.0):
+        return xpre if abs(fpre) < abs(fcur) else xcur
+    for _ in range(100):
+        if fpre != 0.0 and fcur != 0.0 and ((fpre > 0.0) != (fcur > 0.0)):
+            xblk = xpre
+            fblk = fpre
+            spre = xcur - xpre
+            scur = spre
+        if abs(fblk) < abs(fcur):
+            xpre = xcur
+            xcur = xblk
+            xblk = xpre
+            fpre = fcur
+            fcur = fblk
+            fblk = fpre
+        delta = (xtol + rtol * abs(xcur)) / 2.0
+        sbis = (xblk - xcur) / 2.0
+        if fcur == 0.0 or abs(sbis) < delta:
+            return xcur
+        if abs(spre) > delta and abs(fcur) < abs(fpre):
+            if xpre == xblk:
+                stry = -fcur * (xcur - xpre) / (fcur - fpre)
+            else:
+                dpre = (fpre - fcur) / (xpre - xcur)
+                dblk = (fblk - fcur) / (xblk - xcur)
+                stry = -fcur * (fblk * dblk - fpre * dpre) / (dblk * dpre * (fblk - fpre))
+            if 2.0 * abs(stry) < min(abs(spre), 3.0 * abs(sbis) - delta):
+                spre = scur
+                scur = stry
+            else:
+                spre = sbis
+                scur = sbis
+        else:
+            spre = sbis
+            scur = sbis
+        xpre = xcur
+        fpre = fcur
+        if abs(scur) > delta:
+            xcur += scur
+        else:
+            xcur += delta if sbis > 0.0 else -delta
+        fcur = _event_value(uev, i, xcur, t_old, h, y_old, F, p, ytmp, g)
+    return xcur
+
+
+@jit
+def sing_locate(sing, n_sing, t_old, h, y_old, F, p, g, sig, eps, ytmp, theta_hi):
+    """Bisection for the first violation of an indicator in the step (it is regular at
+    theta = 0 and violated at theta_hi).  Returns (theta_regular, index violated)."""
+    lo = 0.0
+    hi = theta_hi
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        t_mid = t_old + mid * h
+        if t_mid == t_old + lo * h or t_mid == t_old + hi * h:
+            break
+        dense_eval(mid, y_old, F, ytmp)
+        if sing_violated(sing, n_sing, t_mid, ytmp, p, g, sig, eps) < 0:
+            lo = mid
+        else:
+            hi = mid
+    dense_eval(hi, y_old, F, ytmp)
+    idx = sing_violated(sing, n_sing, t_old + hi * h, ytmp, p, g, sig, eps)
+    return lo, idx
+
+
+@jit
+def store_event(ev_t, ev_i, ev_y, n_ev, t, i, y):
+    if n_ev >= ev_t.shape[0]:
+        cap = max(2 * ev_t.shape[0], 8)
+        t2 = np.empty(cap)
+        i2 = np.empty(cap, dtype=np.int64)
+        y2 = np.empty((cap, ev_y.shape[1]))
+        for r in range(n_ev):
+            t2[r] = ev_t[r]
+            i2[r] = ev_i[r]
+            for j in range(ev_y.shape[1]):
+                y2[r, j] = ev_y[r, j]
+        ev_t, ev_i, ev_y = t2, i2, y2
+    ev_t[n_ev] = t
+    ev_i[n_ev] = i
+    for j in range(y.shape[0]):
+        ev_y[n_ev, j] = y[j]
+    return ev_t, ev_i, ev_y, n_ev + 1
+
+
+@jit
+def locate(sing, uev, n_sing, si, theta_hi, t_old, h, y_old, F, p, gs, sig, eps, gu_old,
+           gu_new, ev_dir, ev_max, counts, ytmp, gtmp, roots, which, ev_t, ev_i, ev_y, n_ev,
+           y_stop):
+    """Everything that happened in the step from t_old to t_old + h (si: index of an
+    indicator violated at theta_hi, or -1).
+
+    Records the user events (up to a stop), and returns
+    ``(stop, t_stop, sing_index, ev_t, ev_i, ev_y, n_ev)``: stop is 0 (go on), EVENT or
+    SINGULAR, with the stop state in ``y_stop``.
+    """
+    direction = 1.0 if h > 0.0 else -1.0
+    t_new = t_old + h
+    sing_index = -1
+    t_sing = t_new
+    if si >= 0:
+        theta, sing_index = sing_locate(sing, n_sing, t_old, h, y_old, F, p, gs, sig, eps,
+                                        ytmp, theta_hi)
+        if sing_index < 0:       # rounding: take the end of the step
+            sing_index = si
+        t_sing = t_old + theta * h
+    n_act = 0
+    for i in range(ev_dir.shape[0]):
+        if user_active(gu_old, gu_new, ev_dir, i):
+            roots[n_act] = brentq_event(uev, i, t_old, t_new, t_old, h, y_old, F, p, ytmp,
+                                        gtmp)
+            which[n_act] = i
+            n_act += 1
+    for a in range(n_act):
+        counts[which[a]] += 1
+    terminate = False
+    for a in range(n_act):
+        if ev_max[which[a]] > 0 and counts[which[a]] >= ev_max[which[a]]:
+            terminate = True
+    n_keep = n_act
+    if terminate:
+        # stable insertion sort in the direction of integration
+        for a in range(1, n_act):
+            r = roots[a]
+            w = which[a]
+            b = a - 1
+            while b >= 0 and direction * (roots[b] - r) > 0.0:
+                roots[b + 1] = roots[b]
+                which[b + 1] = which[b]
+                b -= 1
+            roots[b + 1] = r
+            which[b + 1] = w
+        for a in range(n_act):
+            if ev_max[which[a]] > 0 and counts[which[a]] >= ev_max[which[a]]:
+                n_keep = a + 1
+                break
+    stop = 0
+    t_stop = t_new
+    if terminate:
+        stop = EVENT
+        t_stop = roots[n_keep - 1]
+    if sing_index >= 0 and (stop == 0 or direction * (t_stop - t_sing) > 0.0):
+        stop = SINGULAR
+        t_stop = t_sing
+    else:
+        sing_index = -1
+    for a in range(n_keep):
+        if stop == SINGULAR and direction * (roots[a] - t_stop) > 0.0:
+            continue
+        dense_eval((roots[a] - t_old) / h, y_old, F, ytmp)
+        ev_t, ev_i, ev_y, n_ev = store_event(ev_t, ev_i, ev_y, n_ev, roots[a], which[a], ytmp)
+    if stop != 0:
+        dense_eval((t_stop - t_old) / h, y_old, F, y_stop)
+    return stop, t_stop, sing_index, ev_t, ev_i, ev_y, n_ev
