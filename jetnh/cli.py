@@ -1,91 +1,494 @@
-"""The ``jetnh`` command: derive and compare equations of motion of a model.
+"""The ``jetnh`` command: derive, compare and simulate constrained systems; list the catalogue;
+run the benchmarks and the seed paper's reproduction.
 
-Exit codes: 0 ok, 2 usage, 1 model or numerical error.  User errors print a message on
-stderr, never a traceback.
+MODEL is a catalogue name (``jetnh models`` lists them; options as in ``n_trailer:N=4``)
+or the path of a model file (TOML; see ``jetnh.modelfile`` and examples/*.toml).
+
+Exit codes: 0 ok, 2 usage, 1 model or numerical error.  Errors print a message on
+stderr, never a traceback (``--debug`` shows one for errors that are jetnh's own bugs).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
+import re
 import sys
+import time
+from contextlib import contextmanager
+from dataclasses import dataclass, field
 from itertools import combinations
+from pathlib import Path
 
 import sympy as sp
 
 from .constraints import PRINCIPLES
-from .errors import JetnhError
+from .errors import JetnhError, ModelFileError
+
+EPILOG_MODEL = ("MODEL: a catalogue name (see `jetnh models`; scalable ones take options, "
+                "e.g. n_trailer:N=4) or a model file (TOML, e.g. examples/rolling_disk.toml).")
 
 
-def _load(model: str):
+class UsageError(Exception):
+    """Bad command-line syntax (exit code 2)."""
+
+
+# ---------------------------------------------------------------------- progress
+class Progress:
+    """Step-by-step progress on stderr: ``jetnh: deriving chetaev ... 0.31 s``."""
+
+    def __init__(self, quiet=False, stream=None):
+        self.quiet = quiet
+        self.stream = stream or sys.stderr
+        self.tty = hasattr(self.stream, "isatty") and self.stream.isatty()
+
+    @contextmanager
+    def step(self, what: str):
+        if self.quiet:
+            yield
+            return
+        t0 = time.perf_counter()
+        self.stream.write(f"jetnh: {what} ...")
+        self.stream.write(" " if self.tty else "\n")
+        self.stream.flush()
+        ok = False
+        try:
+            yield
+            ok = True
+        finally:
+            dt = time.perf_counter() - t0
+            if self.tty:
+                self.stream.write(f"{'done' if ok else 'failed'} ({dt:.2f} s)\n")
+            elif dt >= 0.5 or not ok:
+                self.stream.write(f"jetnh: {what}: {'done' if ok else 'failed'} ({dt:.2f} s)\n")
+            self.stream.flush()
+
+
+# ---------------------------------------------------------------------- models
+@dataclass
+class Loaded:
+    """A model from the catalogue or a file, with its defaults for simulation."""
+
+    system: object
+    label: str
+    initial: dict = field(default_factory=dict)
+    principle: str | None = None
+    convention: str | None = None
+    integrals: dict = field(default_factory=dict)
+    simulation: dict = field(default_factory=dict)
+
+
+_SPEC = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)(?::(.*))?$")
+
+
+def _catalogue_options(text: str, model: str) -> dict:
+    opts = {}
+    for item in filter(None, (s.strip() for s in text.split(","))):
+        k, sep, v = item.partition("=")
+        if not sep:
+            raise UsageError(f"model options are KEY=VALUE, got {item!r} in {model!r} "
+                             "(e.g. n_trailer:N=4)")
+        try:
+            opts[k.strip()] = int(v)
+        except ValueError:
+            raise UsageError(f"model option {k.strip()} must be an integer, got {v!r}") from None
+    return opts
+
+
+def load_model(spec: str) -> Loaded:
+    """A catalogue name (``name`` or ``name:K=V,...``) or a path to a model file."""
     from . import models
+    from .modelfile import load
 
-    return models.get(model)
+    path = Path(spec)
+    match = _SPEC.match(spec)
+    looks_like_file = spec.endswith(".toml") or os.sep in spec or "/" in spec
+    in_catalogue = bool(match) and match.group(1) in models.CATALOGUE
+    if looks_like_file or (not in_catalogue and path.exists()):
+        m = load(path)
+        return Loaded(m.system, m.name or path.stem, dict(m.initial), m.principle,
+                      m.convention, dict(m.integrals), dict(m.simulation))
+    if not in_catalogue:
+        raise ModelFileError(
+            f"no model named {spec!r} in the catalogue, and no model file of that name; "
+            f"the catalogue has {', '.join(models.CATALOGUE)} (see `jetnh models`)")
+    name, rest = match.group(1), match.group(2)
+    opts = _catalogue_options(rest or "", spec)
+    info = models.info(name)
+    system = info.system(**opts)
+    return Loaded(system, spec, info.initial(**opts), None, None, {},
+                  {"t_end": info.t_end})
+
+
+def _with_split(loaded: Loaded, split: str | None) -> Loaded:
+    if split:
+        names = [s.strip() for s in split.split(",") if s.strip()]
+        loaded.system = loaded.system.with_split(names)
+    return loaded
+
+
+class _Budget(Exception):
+    pass
+
+
+class Simplifier:
+    """trigsimp for display (never on a hot path), within a time budget: at most
+    ``per`` seconds per expression and ``total`` seconds per command (SIGALRM; where
+    that is unavailable, or with ``per = 0``, expressions are shown as derived)."""
+
+    def __init__(self, per: float = 0.5, total: float = 5.0):
+        import signal
+        import threading
+
+        self.per, self.left = per, total
+        self.ok = (per > 0 and hasattr(signal, "setitimer")
+                   and threading.current_thread() is threading.main_thread())
+
+    def __call__(self, expr):
+        if not self.ok or self.left <= 0:
+            return expr
+        import signal
+
+        def alarm(signum, frame):
+            raise _Budget
+        budget = min(self.per, self.left)
+        old = signal.signal(signal.SIGALRM, alarm)
+        t0 = time.perf_counter()
+        try:
+            signal.setitimer(signal.ITIMER_REAL, budget)
+            try:
+                return sp.trigsimp(expr)
+            finally:
+                signal.setitimer(signal.ITIMER_REAL, 0)
+        except _Budget:
+            return expr
+        finally:
+            signal.signal(signal.SIGALRM, old)
+            self.left -= time.perf_counter() - t0
+
+
+_SIMPLIFY = Simplifier(per=0.0)
 
 
 def _display(system, expr) -> str:
-    """A readable form for people (trigsimp here is display only, never on a hot path)."""
-    return str(sp.trigsimp(system.on_constraints(expr)))
+    """A readable form for people: on the constraints, trigsimp'd within the budget."""
+    return str(_SIMPLIFY(system.on_constraints(expr)))
 
 
-def cmd_derive(args) -> int:
-    system = _load(args.model)
-    eom = system.equations(args.principle, form=args.form, convention=args.convention)
+# ---------------------------------------------------------------------- derive
+def cmd_derive(args, progress) -> int:
+    loaded = _with_split(load_model(args.model), args.split)
+    system = loaded.system
+    principle = args.principle or loaded.principle or "chetaev"
+    convention = args.convention or loaded.convention or "paper"
+    with progress.step(f"deriving the {principle} equations"):
+        eom = system.equations(principle, form=args.form, convention=convention)
+    with progress.step("solving for the accelerations"):
+        acc = eom.accelerations()
     if args.format == "latex":
         print(eom.latex())
     elif args.format == "json":
-        acc = eom.accelerations()
         print(json.dumps({
-            "model": args.model, "principle": eom.principle, "form": eom.form,
-            "convention": eom.convention, "paper": eom.paper,
+            "model": loaded.label, "name": system.name, "principle": eom.principle,
+            "form": eom.form, "convention": eom.convention, "paper": eom.paper,
+            "coordinates": [q.name for q in system.J.q],
+            "dependent": [q.name for q in system.dependent],
+            "parameters": {s.name: v for s, v in system.defaults.items()},
             "expressions": [str(e) for e in eom.expressions],
             "multipliers": [str(m) for m in eom.multipliers],
             "accelerations": {str(k): str(v) for k, v in acc.items()},
         }, indent=2))
     else:
+        print(f"{system.name or loaded.label}: dependent "
+              f"{', '.join(q.name for q in system.dependent) or 'none'}")
         print(eom)
         print("accelerations (on the constraint manifold):")
-        for k, v in eom.accelerations().items():
-            print(f"  {k} = {_display(system, v)}")
+        with progress.step("simplifying for display"):
+            rows = [f"  {k} = {_display(system, v)}" for k, v in acc.items()]
+        print("\n".join(rows))
     return 0
 
 
-def cmd_compare(args) -> int:
+# ---------------------------------------------------------------------- compare
+def cmd_compare(args, progress) -> int:
     from .equivalence import compare
 
-    system = _load(args.model)
+    loaded = _with_split(load_model(args.model), args.split)
+    system = loaded.system
     J = system.J
-    print(f"{system.name or args.model}")
+    with progress.step("classifying"):
+        cls = system.classify()
+        T = system.T()
+    print(f"{system.name or loaded.label}")
     print(f"  coordinates: {' '.join(q.name for q in J.q)}; dependent: "
           f"{' '.join(q.name for q in system.dependent)}")
     print(f"  L = {system.L}")
     for f in system.constraints:
         print(f"  constraint: {f} = 0")
-    print(f"  classification: {system.classify()}")
+    print(f"  classification: {cls}")
     print(f"  L~ = {_display(system, system.L_tilde)}")
-    print(f"  T = {system.T().applyfunc(lambda e: sp.trigsimp(e)).tolist()}")
+    print(f"  T = {T.applyfunc(lambda e: sp.sympify(_display(system, e))).tolist()}")
     for principle in PRINCIPLES:
         form = {"chetaev": "voronets", "holder": "embedded"}.get(principle, "embedded")
-        eom = system.equations(principle, form=form)
+        with progress.step(f"deriving {principle}"):
+            eom = system.equations(principle, form=form)
+            acc = eom.accelerations()
+            rows = [f"  {_display(system, e)} = 0" for e in eom.expressions]
+            accs = [f"    {k} = {_display(system, v)}" for k, v in acc.items()]
         print()
         print(f"{principle} ({form} form {eom.paper})".replace(" )", ")"))
-        for e in eom.expressions:
-            print(f"  {_display(system, e)} = 0")
-        acc = eom.accelerations()
+        print("\n".join(rows))
         print("  accelerations:")
-        for k, v in acc.items():
-            print(f"    {k} = {_display(system, v)}")
+        print("\n".join(accs))
     print()
     print("equivalence:")
     for a, b in combinations(PRINCIPLES, 2):
-        print(f"  {compare(system, a, b)}")
+        with progress.step(f"comparing {a} and {b}"):
+            verdict = compare(system, a, b)
+        print(f"  {verdict}")
     return 0
 
 
-def cmd_reproduce(args) -> int:
-    import pathlib
+# ---------------------------------------------------------------------- simulate
+def _assignments(items, what) -> dict:
+    out = {}
+    for item in items or ():
+        for part in filter(None, (p.strip() for p in item.split(","))):
+            k, sep, v = part.partition("=")
+            if not sep or not k.strip():
+                raise UsageError(f"{what} takes NAME=VALUE, got {part!r}")
+            try:
+                out[k.strip()] = float(v)
+            except ValueError:
+                raise UsageError(f"{what} {k.strip()}: {v!r} is not a number") from None
+    return out
 
-    root = pathlib.Path(__file__).resolve().parents[1]
+
+def scene_names(system) -> set:
+    """Names an expression of a scene may use besides the states: time, dependent
+    velocities and parameters."""
+    return ({system.J.t.name} | {v.name for v in system.dependent_velocities}
+            | {p.name for p in system.parameters})
+
+
+def cmd_simulate(args, progress) -> int:
+    import numpy as np
+
+    from .numeric import Scene
+    from .numeric.codegen import multiplier_names
+
+    loaded = _with_split(load_model(args.model), args.split)
+    system = loaded.system
+    sim = loaded.simulation
+    principle = args.principle or loaded.principle or "chetaev"
+    convention = args.convention or loaded.convention or "paper"
+    params = _assignments(args.set, "--set")
+    init_override = _assignments(args.init, "--init")
+    t0 = args.t_start if args.t_start is not None else float(sim.get("t_start", 0.0))
+    t1 = args.t_end if args.t_end is not None else sim.get("t_end")
+    if t1 is None:
+        raise UsageError("give --t-end (the model file has no [simulation] t_end)")
+    method = args.method or sim.get("method", "dop853")
+    rtol = args.rtol if args.rtol is not None else float(sim.get("rtol", 1e-9))
+    atol = args.atol if args.atol is not None else float(sim.get("atol", 1e-12))
+    points = args.points if args.points is not None else int(sim.get("points", 201))
+
+    # the initial state: the model's, then --init; missing states start at 0
+    lams = multiplier_names(system, principle)
+    states = ([q.name for q in system.J.q] + [v.name for v in system.independent_velocities]
+              + list(lams))
+    # the model's values of dependent velocities are checked against the constraints,
+    # unless --split changed which velocities are dependent (then they follow from them)
+    dep_vel = {v.name for v in system.dependent_velocities}
+    initial = {k: v for k, v in loaded.initial.items()
+               if k in states or (k in dep_vel and not args.split)}
+    initial.update(init_override)
+    zeros = [s for s in states if s not in initial]
+    initial.update({s: 0.0 for s in zeros})
+    integrals = {}
+    for k, v in loaded.integrals.items():
+        if {s.name for s in v.free_symbols} - set(states) - set(scene_names(system)):
+            print(f"jetnh: the integral {k!r} uses multipliers, which the {principle} "
+                  "state does not have; skipped", file=sys.stderr)
+        else:
+            integrals[k] = v
+
+    for out in (args.csv, args.plot):
+        if out and not Path(out).resolve().parent.is_dir():
+            raise JetnhError(f"cannot write {out}: the directory "
+                             f"{Path(out).resolve().parent} does not exist")
+    try:
+        scene = Scene(system, principle, params=params, initial=initial,
+                      t_span=(t0, float(t1)), convention=convention, integrals=integrals,
+                      project=args.project)
+    except JetnhError as exc:
+        msg = str(exc).replace("pass project=True", "pass --project")
+        raise type(exc)(msg) from None
+    with progress.step(f"deriving and compiling the {principle} kernels "
+                       "(cached for later runs)"):
+        scene.compile()
+    kw = {}
+    fixed = method.lower() in ("rk4", "dla", "lda", "nh-midpoint")
+    if fixed:
+        kw["n_steps"] = args.steps
+    elif points >= 2:
+        kw["t_eval"] = np.linspace(t0, float(t1), points)
+    with progress.step(f"integrating with {method} over [{t0:g}, {float(t1):g}]"):
+        traj = scene.run(rtol=rtol, atol=atol, method=method, **kw)
+    d = traj.diagnostics
+    final = traj.final
+    if args.format == "json":
+        print(json.dumps({"model": loaded.label, "principle": principle,
+                          "params": scene.params, "initial": scene.initial,
+                          "final": final, "diagnostics": d.as_dict(),
+                          "zero_initial": zeros}, indent=2, default=float))
+    else:
+        print(f"{system.name or loaded.label}: {principle}, t in [{t0:g}, {float(t1):g}]")
+        if scene.params:
+            print("parameters: " + ", ".join(f"{k} = {v:g}" for k, v in scene.params.items()))
+        print("initial:    " + ", ".join(f"{k} = {v:.10g}" for k, v in scene.initial.items()))
+        if zeros:
+            print(f"            (not given, set to 0: {', '.join(zeros)})")
+        if scene.projected:
+            print("projected:  " + ", ".join(f"{k}: {g:g} -> {v:.10g}"
+                                             for k, (g, v) in scene.projected.items()))
+        print("final:      " + ", ".join(f"{k} = {v:.10g}" for k, v in final.items()))
+        print(d)
+    if args.csv:
+        _write_csv(traj, args.csv)
+        print(f"wrote {args.csv}", file=sys.stderr)
+    if args.plot:
+        with progress.step(f"plotting to {args.plot}"):
+            _plot(traj, system, args.plot, f"{system.name or loaded.label} ({principle})")
+    if not traj.success:
+        print(f"jetnh: error: the integration stopped early: {traj.stop_reason}",
+              file=sys.stderr)
+        return 1
+    return 0
+
+
+def _write_csv(traj, path):
+    import numpy as np
+
+    cols = traj.as_dict()
+    names = list(cols)
+    data = np.column_stack([cols[n] for n in names])
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write(",".join(names) + "\n")
+        for row in data:
+            fh.write(",".join(repr(float(x)) for x in row) + "\n")
+
+
+def _plot(traj, system, path, title):
+    import matplotlib
+    import numpy as np
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    coords = [q.name for q in system.J.q]
+    vels = [v.name for v in system.J.qd]
+    lams = [n for n in traj.names if n.startswith("lambda_")]
+    groups = [("coordinates", coords), ("velocities", vels)] + ([("multipliers", lams)]
+                                                                 if lams else [])
+    fig, axes = plt.subplots(len(groups) + 1, 1, figsize=(8, 2.6 * (len(groups) + 1)),
+                             sharex=True)
+    for ax, (label, names) in zip(axes, groups):
+        for n in names:
+            ax.plot(traj.t, traj[n], label=n)
+        ax.set_ylabel(label)
+        ax.legend(fontsize="small", ncol=min(len(names), 4))
+    ax = axes[-1]
+    floor = 1e-17                        # exact zeros would squash the log scale
+    res = traj.residual
+    if res.size:
+        ax.semilogy(traj.t, np.maximum(abs(res).max(axis=1), floor), label="max |f|")
+    E = traj.energy
+    ax.semilogy(traj.t, np.maximum(abs(E - E[0]), floor), label="|E - E(t0)|")
+    ax.set_ylabel(f"diagnostics (floor {floor:g})")
+    ax.legend(fontsize="small")
+    axes[-1].set_xlabel("t")
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+# ---------------------------------------------------------------------- models
+def cmd_models(args, progress) -> int:
+    from . import models
+    from .modelfile import dumps
+
+    if not args.name:
+        width = max(map(len, models.CATALOGUE))
+        for name in models.CATALOGUE:
+            info = models.info(name)
+            opts = "".join(f" [{k}={v}]" for k, v in info.options.items())
+            print(f"{name:<{width}}  {info.summary}{opts}")
+        print(f"\n{len(models.CATALOGUE)} models; `jetnh models NAME` shows one, "
+              "`jetnh models NAME --toml` prints it as a model file.")
+        return 0
+    loaded = load_model(args.name)
+    if args.toml:
+        print(dumps(loaded.system, loaded.initial,
+                    simulation={"t_end": loaded.simulation["t_end"]}
+                    if "t_end" in loaded.simulation else None), end="")
+        return 0
+    name = args.name.split(":")[0]
+    doc = models.CATALOGUE[name].__doc__ if name in models.CATALOGUE else ""
+    s = loaded.system
+    print(f"{name}: {s.name}")
+    print(f"  coordinates {', '.join(q.name for q in s.J.q)}; dependent "
+          f"{', '.join(q.name for q in s.dependent)}")
+    print(f"  parameters {', '.join(f'{k.name} = {v:g}' for k, v in s.defaults.items())}")
+    print(f"  initial {', '.join(f'{k} = {v:g}' for k, v in loaded.initial.items())}")
+    if doc:
+        import textwrap
+        print()
+        print(textwrap.dedent("    " + doc.strip()))
+    return 0
+
+
+# ---------------------------------------------------------------------- bench
+def _repo_root() -> Path:
+    return Path(__file__).resolve().parents[1]
+
+
+def cmd_bench(args, progress) -> int:
+    import ast
+    import subprocess
+
+    bench_dir = _repo_root() / "benchmarks"
+    scripts = sorted(bench_dir.glob("*.py")) if bench_dir.is_dir() else []
+    if not scripts:
+        raise JetnhError("no benchmarks found: they live in the repository's benchmarks/ "
+                         "directory; run `jetnh bench` from a checkout installed with "
+                         "`pip install -e .`")
+    by_name = {p.stem: p for p in scripts}
+    if not args.name:
+        print(f"benchmarks in {bench_dir}:")
+        for p in scripts:
+            try:
+                doc = ast.get_docstring(ast.parse(p.read_text(encoding="utf-8"))) or ""
+            except (SyntaxError, OSError, UnicodeDecodeError):
+                doc = ""
+            first = " ".join(doc.strip().split("\n\n")[0].split()) if doc else ""
+            print(f"  {p.stem}: {first[:150]}")
+        print("\nrun one with `jetnh bench NAME [ARGS...]` (ARGS go to the script, e.g. "
+              "--help); results are written under benchmarks/results/.")
+        return 0
+    if args.name not in by_name:
+        raise JetnhError(f"no benchmark named {args.name!r}; the benchmarks are "
+                         f"{', '.join(by_name)}")
+    cmd = [sys.executable, str(by_name[args.name]), *args.args]
+    print(f"jetnh: running {' '.join(cmd[1:])}", file=sys.stderr)
+    return subprocess.call(cmd, cwd=str(_repo_root()))
+
+
+# ---------------------------------------------------------------------- reproduce
+def cmd_reproduce(args, progress) -> int:
+    root = _repo_root()
     if not (root / "papers" / "zhao2008" / "reproduce.py").exists():
         raise JetnhError("the reproduction lives in the repository's papers/ directory; run "
                          "`jetnh reproduce` from a checkout installed with `pip install -e .`")
@@ -97,21 +500,143 @@ def cmd_reproduce(args) -> int:
     return reproduce(argv)
 
 
+# ---------------------------------------------------------------------- parser
+class _Formatter(argparse.RawDescriptionHelpFormatter):
+    pass
+
+
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="jetnh", description=__doc__.splitlines()[0])
-    sub = p.add_subparsers(dest="command", required=True)
-    d = sub.add_parser("derive", help="equations of motion of a model under one principle")
-    d.add_argument("model", help="a catalogue name (e.g. rolling_disk, appell_hamel)")
-    d.add_argument("--principle", "-p", choices=PRINCIPLES, default="chetaev")
-    d.add_argument("--form", default=None, help="form of the equations (default: the principle's first)")
-    d.add_argument("--convention", choices=("paper", "imposed"), default="paper")
+    from . import __version__
+
+    p = argparse.ArgumentParser(
+        prog="jetnh", formatter_class=_Formatter,
+        description=__doc__,
+        epilog="examples:\n"
+               "  jetnh models\n"
+               "  jetnh derive rolling_disk --principle suslov --format latex\n"
+               "  jetnh compare examples/rolling_disk.toml\n"
+               "  jetnh simulate knife_edge --t-end 5 --set alpha=0.5 --init phi_t=2 "
+               "--plot knife.png\n"
+               "  jetnh models chaplygin_sleigh --toml > sleigh.toml")
+    p.add_argument("--version", action="version", version=f"jetnh {__version__}")
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("-q", "--quiet", action="store_true",
+                        help="no progress messages on stderr")
+    common.add_argument("--debug", action="store_true",
+                        help="show a traceback for unexpected (internal) errors")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    def model_args(sp_, split=True):
+        sp_.add_argument("model", metavar="MODEL", help="catalogue name or model file")
+        if split:
+            sp_.add_argument("--split", metavar="Q1,Q2",
+                             help="dependent coordinates, comma-separated (overrides the "
+                                  "model's; e.g. --split x,y)")
+
+    d = sub.add_parser(
+        "derive", parents=[common], formatter_class=_Formatter,
+        help="equations of motion of a model under one principle",
+        description="Derive the equations of motion of MODEL under one principle, and the "
+                    "accelerations (and multiplier rates) on the constraint manifold.",
+        epilog=EPILOG_MODEL + "\n\nexample: jetnh derive appell_hamel --principle suslov "
+                              "--format json")
+    model_args(d)
+    d.add_argument("--principle", "-p", choices=PRINCIPLES, default=None,
+                   help="chetaev (Lagrange-d'Alembert), vakonomic, holder or suslov "
+                        "(default: the model file's, else chetaev)")
+    d.add_argument("--form", default=None,
+                   help="form of the equations: chetaev maggi|multiplier|voronets; "
+                        "vakonomic and holder multiplier|explicit|reduced|embedded; suslov "
+                        "multiplier|reduced|embedded (default: the first)")
+    d.add_argument("--convention", choices=("paper", "imposed"), default=None,
+                   help="paper: every variation is independent after the commutator (as "
+                        "the paper); imposed: the variation's own condition is imposed")
     d.add_argument("--format", choices=("text", "latex", "json"), default="text")
+    d.add_argument("--simplify", type=float, default=0.5, metavar="SECONDS",
+                   help="time allowed to trigsimp each displayed acceleration (default "
+                        "0.5, at most 5 s in all; 0: show them as derived)")
     d.set_defaults(func=cmd_derive)
-    c = sub.add_parser("compare", help="every principle side by side, with T and equivalences")
-    c.add_argument("model", help="a catalogue name (e.g. rolling_disk)")
+
+    c = sub.add_parser(
+        "compare", parents=[common], formatter_class=_Formatter,
+        help="every principle side by side, with integrability, T and the equivalences",
+        description="Classify MODEL (affine, integrable by Frobenius, Chaplygin, regular, "
+                    "rheonomic), print L~ and T^alpha_mu, the equations and accelerations "
+                    "under every principle, and which principles share solutions "
+                    "(identically, or on the branch lambda = -p of (32)).",
+        epilog=EPILOG_MODEL)
+    model_args(c)
+    c.add_argument("--simplify", type=float, default=0.5, metavar="SECONDS",
+                   help="time allowed to trigsimp each displayed expression (default 0.5, "
+                        "at most 5 s in all; 0: show them as derived)")
     c.set_defaults(func=cmd_compare)
-    r = sub.add_parser("reproduce", help="the machine-checked reproduction of the seed paper "
-                       "(writes papers/zhao2008/results.json and report.md)")
+
+    s = sub.add_parser(
+        "simulate", parents=[common], formatter_class=_Formatter,
+        help="integrate a model under one principle (compiled) and print diagnostics",
+        description="Simulate MODEL with a compiled jetnh Scene.  Parameters default to the "
+                    "model's values and the initial state to the model's [initial] (states "
+                    "not given start at 0; dependent velocities follow from the "
+                    "constraints; the multipliers of vakonomic, holder and suslov are "
+                    "named lambda_<dependent>).  Prints the final state and the "
+                    "diagnostics: constraint residual, energy drift, first integrals "
+                    "([integrals] of a model file), steps.",
+        epilog=EPILOG_MODEL + "\n\nexample: jetnh simulate examples/rolling_disk.toml "
+                              "--t-end 10 --init psi_t=0.3 --csv disk.csv --plot disk.png")
+    model_args(s)
+    s.add_argument("--principle", "-p", choices=PRINCIPLES, default=None,
+                   help="default: the model file's, else chetaev")
+    s.add_argument("--convention", choices=("paper", "imposed"), default=None)
+    s.add_argument("--set", action="append", metavar="NAME=VALUE",
+                   help="a parameter value (repeatable, or comma-separated)")
+    s.add_argument("--init", action="append", metavar="NAME=VALUE",
+                   help="an initial value of a coordinate, velocity (x_t) or multiplier "
+                        "(repeatable, or comma-separated)")
+    s.add_argument("--t-start", type=float, default=None, metavar="T0", help="default 0")
+    s.add_argument("--t-end", type=float, default=None, metavar="T",
+                   help="end time (default: the model's [simulation] t_end or the "
+                        "catalogue's)")
+    s.add_argument("--method", default=None,
+                   help="dop853 (default), dopri5, rk4, dla (discrete Lagrange-d'Alembert, "
+                        "chetaev only) or scipy-<RK45|DOP853|Radau|BDF|LSODA>")
+    s.add_argument("--rtol", type=float, default=None, help="default 1e-9")
+    s.add_argument("--atol", type=float, default=None, help="default 1e-12")
+    s.add_argument("--points", type=int, default=None,
+                   help="output points of the adaptive methods (default 201; 0: every step)")
+    s.add_argument("--steps", type=int, default=1000,
+                   help="steps of the fixed-step methods rk4 and dla (default 1000)")
+    s.add_argument("--project", action="store_true",
+                   help="replace initial dependent velocities that contradict the "
+                        "constraints by the values the constraints give")
+    s.add_argument("--csv", metavar="PATH", help="write t and every column to a CSV file")
+    s.add_argument("--plot", metavar="PATH", help="save a plot (png, pdf, svg) of the run")
+    s.add_argument("--format", choices=("text", "json"), default="text")
+    s.set_defaults(func=cmd_simulate)
+
+    m = sub.add_parser(
+        "models", parents=[common], formatter_class=_Formatter,
+        help="list the catalogue, show a model, or print it as a model file",
+        description="Without NAME: list the catalogue.  With NAME: its coordinates, "
+                    "parameters, default initial state and docstring (source, closed forms, "
+                    "first integrals); with --toml: the model as a model file to edit.")
+    m.add_argument("name", nargs="?", metavar="NAME")
+    m.add_argument("--toml", action="store_true", help="print NAME as a model file")
+    m.set_defaults(func=cmd_models)
+
+    b = sub.add_parser(
+        "bench", parents=[common], formatter_class=_Formatter,
+        help="list or run the benchmark scripts of benchmarks/",
+        description="Without NAME: list the scripts in the repository's benchmarks/ "
+                    "directory.  With NAME: run benchmarks/NAME.py with ARGS (for now a "
+                    "thin launcher; each script documents its own options, try --help).")
+    b.add_argument("name", nargs="?", metavar="NAME")
+    b.add_argument("args", nargs=argparse.REMAINDER, metavar="ARGS")
+    b.set_defaults(func=cmd_bench)
+
+    r = sub.add_parser(
+        "reproduce", parents=[common], formatter_class=_Formatter,
+        help="the machine-checked reproduction of the seed paper "
+             "(writes papers/zhao2008/results.json and report.md)")
     r.add_argument("--fast", action="store_true", help="proofs for n <= 3, short simulations")
     r.add_argument("--no-figures", action="store_true", help="skip the simulations and figures")
     r.set_defaults(func=cmd_reproduce)
@@ -119,11 +644,42 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    progress = Progress(quiet=getattr(args, "quiet", False))
+    global _SIMPLIFY
+    _SIMPLIFY = Simplifier(per=getattr(args, "simplify", 0.0) or 0.0)
     try:
-        return args.func(args)
+        return args.func(args, progress)
+    except UsageError as exc:
+        print(f"jetnh {args.command}: error: {exc}", file=sys.stderr)
+        return 2
     except JetnhError as exc:
         print(f"jetnh: error: {exc}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print("jetnh: interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:
+        try:
+            sys.stdout = open(os.devnull, "w")
+        except OSError:
+            pass
+        return 0
+    except OSError as exc:
+        where = f" {exc.filename}" if getattr(exc, "filename", None) else ""
+        print(f"jetnh: error:{where}: {exc.strerror or exc}", file=sys.stderr)
+        return 1
+    except (MemoryError, RecursionError) as exc:
+        print(f"jetnh: error: the model is too large for this computation "
+              f"({type(exc).__name__})", file=sys.stderr)
+        return 1
+    except Exception as exc:                                     # jetnh's own bugs
+        if getattr(args, "debug", False):
+            raise
+        print(f"jetnh: internal error: {type(exc).__name__}: {exc}\n"
+              "jetnh: this is a bug in jetnh; rerun with --debug for the traceback and "
+              "report it", file=sys.stderr)
         return 1
 
 

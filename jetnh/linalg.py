@@ -11,6 +11,7 @@ from __future__ import annotations
 import random
 
 import sympy as sp
+from sympy.matrices.utilities import dotprodsimp
 
 _ADJUGATE_MAX = 3
 
@@ -30,10 +31,13 @@ def solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
         return sp.zeros(0, rhs.cols)
     if k == 1:
         return rhs / M[0, 0]
-    if k <= _ADJUGATE_MAX:
-        det = M.det(method="berkowitz")
-        return (M.adjugate(method="berkowitz") * rhs) / det
-    return _lu_solve(M, rhs)
+    # sympy's matrix products otherwise run cancel() on every entry (dotprodsimp): that is
+    # a simplification on the hot path, minutes long on an N-trailer's reduced mass matrix
+    with dotprodsimp(False):
+        if k <= _ADJUGATE_MAX:
+            det = M.det(method="berkowitz")
+            return (M.adjugate(method="berkowitz") * rhs) / det
+        return _lu_solve(M, rhs)
 
 
 def inverse(M: sp.Matrix) -> sp.Matrix:

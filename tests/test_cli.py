@@ -33,3 +33,173 @@ def test_errors_exit_codes_and_no_traceback():
     assert r.returncode == 1 and "forms" in r.stderr and "Traceback" not in r.stderr
     r = run("frobnicate")
     assert r.returncode == 2 and "Traceback" not in r.stderr
+
+
+# ---------------------------------------------------------------------- issue 7
+import pathlib  # noqa: E402
+
+import pytest  # noqa: E402
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+DISK = str(ROOT / "examples" / "rolling_disk.toml")
+
+
+def clean(r, code=0):
+    assert r.returncode == code, (r.returncode, r.stdout[-2000:], r.stderr[-2000:])
+    assert "Traceback" not in r.stderr and "Traceback" not in r.stdout
+    return r
+
+
+def inproc(capsys, *args):
+    """The command in this process (fast); returns (exit code, stdout, stderr)."""
+    from jetnh.cli import main
+
+    try:
+        code = main(list(args))
+    except SystemExit as exc:                 # argparse: --help (0) and usage errors (2)
+        code = exc.code
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.mark.parametrize("cmd", ["derive", "compare", "simulate", "models", "bench",
+                                 "reproduce"])
+def test_help(cmd, capsys):
+    code, out, _ = inproc(capsys, cmd, "--help")
+    assert code == 0 and "usage: jetnh " + cmd in out
+
+
+def test_top_level_help_lists_commands():
+    r = clean(run("--help"))
+    for cmd in ("derive", "compare", "simulate", "models", "bench", "reproduce"):
+        assert cmd in r.stdout
+
+
+def test_derive_model_file_text_and_latex():
+    r = clean(run("derive", DISK, "--principle", "vakonomic"))
+    assert "vakonomic equations" in r.stdout and "lambda_x_t" in r.stdout
+    assert "jetnh: deriving" in r.stderr                    # progress on stderr
+    r = clean(run("derive", DISK, "-p", "chetaev", "--format", "latex", "-q"))
+    assert r.stdout.startswith(r"\begin{aligned}") and r.stderr == ""
+
+
+def test_derive_split_and_catalogue_options():
+    r = clean(run("derive", "knife_edge", "--split", "x", "--format", "json", "-q"))
+    assert json.loads(r.stdout)["dependent"] == ["x"]
+    r = clean(run("derive", "particle_chain:N=2", "--format", "json", "-q"))
+    data = json.loads(r.stdout)
+    assert data["dependent"] == ["z1", "z2"] and "x1_tt" in data["accelerations"]
+
+
+def test_compare_model_file():
+    r = clean(run("compare", str(ROOT / "examples" / "bead_on_parabola.toml"), "-q"))
+    assert "integrable" in r.stdout and "equivalence:" in r.stdout
+
+
+def test_simulate_catalogue_csv_plot_json(tmp_path):
+    csv, png = tmp_path / "k.csv", tmp_path / "k.png"
+    r = clean(run("simulate", "knife_edge", "--t-end", "0.5", "--set", "alpha=0.4",
+                  "--init", "phi_t=1.5", "--csv", str(csv), "--plot", str(png)))
+    assert "constraint residual max" in r.stdout and "alpha = 0.4" in r.stdout
+    assert "jetnh: integrating" in r.stderr
+    head = csv.read_text().splitlines()
+    assert head[0].split(",")[:4] == ["t", "x", "y", "phi"] and len(head) == 202
+    assert png.stat().st_size > 1000
+    r = clean(run("simulate", "nonholonomic_particle", "-p", "suslov", "--t-end", "0.3",
+                  "--points", "11", "--init", "lambda_z=0.1", "--format", "json", "-q"))
+    data = json.loads(r.stdout)
+    assert data["diagnostics"]["residual_max"] < 1e-9 and "lambda_z" in data["final"]
+
+
+def test_simulate_model_file_with_integrals_and_multipliers():
+    r = clean(run("simulate", str(ROOT / "examples" / "heisenberg_vakonomic.toml"),
+                  "--t-end", "1", "-q"))
+    assert "nonholonomic particle (vakonomic): vakonomic" in r.stdout
+    assert "lambda_z = 0.3" in r.stdout and "integral p_x: drift" in r.stdout
+
+
+def test_simulate_fixed_step():
+    r = clean(run("simulate", DISK, "--t-end", "1", "--method", "rk4", "--steps", "50", "-q"))
+    assert "steps 50" in r.stdout
+
+
+def test_models_listing_and_toml(tmp_path):
+    r = clean(run("models"))
+    assert "n_trailer" in r.stdout and "suslov_rigid_body" in r.stdout
+    r = clean(run("models", "chaplygin_sleigh"))
+    assert "Source" in r.stdout and "First integral" in r.stdout
+    r = clean(run("models", "chaplygin_sleigh", "--toml"))
+    path = tmp_path / "sleigh.toml"
+    path.write_text(r.stdout)
+    r = clean(run("simulate", str(path), "-q"))
+    assert "Chaplygin sleigh: chetaev" in r.stdout
+
+
+def test_bench_lists_the_benchmarks():
+    r = clean(run("bench"))
+    assert "numeric_speed" in r.stdout
+    clean(run("bench", "no_such_benchmark"), 1)
+
+
+@pytest.mark.parametrize("args, code, words", [
+    (("derive",), 2, "the following arguments are required"),
+    (("simulate", "knife_edge", "--set", "alpha"), 2, "--set takes NAME=VALUE"),
+    (("simulate", "knife_edge", "--set", "alpha=big"), 2, "is not a number"),
+    (("derive", "n_trailer:N=x"), 2, "must be an integer"),
+    (("derive", "--principle", "lagrange", "knife_edge"), 2, "invalid choice"),
+    (("simulate", "knife_edge", "--t-end", "1", "--set", "Q=1"), 1, "not a parameter"),
+    (("simulate", "knife_edge", "--t-end", "1", "--init", "nope=1"), 1, "not a state"),
+    (("simulate", DISK, "--t-end", "1", "--init", "x_t=3"), 1, "--project"),
+    (("simulate", DISK, "--t-end", "1", "--method", "nonsense"), 1, "unknown method"),
+    (("simulate", DISK, "--t-end", "1", "--csv", "/no/such/dir/x.csv"), 1, "does not exist"),
+    (("derive", "missing_model.toml"), 1, "no such file"),
+    (("derive", "n_trailer:M=3"), 1, "no option M"),
+    (("derive", "knife_edge", "--split", "x,y"), 1, "dependent coordinates"),
+])
+def test_error_exit_codes(args, code, words, capsys):
+    got, out, err = inproc(capsys, *args)
+    assert got == code and words in err, (got, err)
+
+
+@pytest.mark.parametrize("args, code, words", [
+    (("simulate", "knife_edge", "--set", "alpha"), 2, "--set takes NAME=VALUE"),
+    (("simulate", "knife_edge", "--t-end", "1", "--set", "Q=1"), 1, "not a parameter"),
+    (("derive", "missing_model.toml"), 1, "no such file"),
+])
+def test_error_exit_codes_in_a_subprocess(args, code, words):
+    r = clean(run(*args), code)
+    assert words in r.stderr, r.stderr
+
+
+def test_simulate_needs_an_end_time(tmp_path):
+    text = pathlib.Path(DISK).read_text().split("[simulation]")[0]
+    path = tmp_path / "disk.toml"
+    path.write_text(text)
+    r = clean(run("simulate", str(path)), 2)
+    assert "give --t-end" in r.stderr
+
+
+def test_numerical_error_exit_code():
+    """Suslov's equations of the isokinetic particle are singular everywhere."""
+    r = clean(run("simulate", "isokinetic_particle", "-p", "suslov", "--t-end", "0.5",
+                  "--init", "y_t=0.3", "-q"), 1)
+    assert "singular" in r.stderr
+
+
+def test_hostile_model_file_is_refused_and_not_executed(tmp_path):
+    canary = tmp_path / "pwned"
+    bad = tmp_path / "bad.toml"
+    bad.write_text(
+        'coordinates = ["x"]\n'
+        f'lagrangian = "x_t**2/2 + __import__(\'os\').system(\'touch {canary}\')"\n')
+    r = clean(run("derive", str(bad)), 1)
+    assert "attribute access is not allowed" in r.stderr and "line 1, column" in r.stderr
+    bad.write_text('coordinates = ["x"]\n'
+                   f'lagrangian = "x_t**2/2"\nconstraints = []\n[integrals]\n'
+                   f'E = "open(\'{canary}\', \'w\')"\n')
+    r = clean(run("simulate", str(bad), "--t-end", "1"), 1)
+    assert "not an allowed function" in r.stderr
+    bad.write_text('coordinates = ["x"]\nlagrangian = "9**9**9**9"\n')
+    r = clean(run("derive", str(bad)), 1)
+    assert "exponents" in r.stderr
+    assert not canary.exists()

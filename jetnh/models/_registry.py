@@ -1,0 +1,62 @@
+"""The catalogue's bookkeeping: each model's factory, options, default initial state and span.
+
+A factory returns a ``System`` (with its parameters' defaults); scalable families take
+keyword options (``n_trailer(N=2)``).  ``ModelInfo.initial(**options)`` is a state that
+the model's docstring discusses (a good default for ``jetnh simulate``), keyed by name;
+states not in it start at 0.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+
+@dataclass(frozen=True)
+class ModelInfo:
+    """One catalogue entry."""
+
+    name: str
+    factory: Callable
+    initial_state: Callable[..., dict]
+    t_end: float = 1.0
+    options: dict = field(default_factory=dict)     # keyword -> default (scalable families)
+    tags: tuple = ()
+
+    @property
+    def summary(self) -> str:
+        doc = (self.factory.__doc__ or "").strip()
+        return doc.splitlines()[0] if doc else self.name
+
+    def system(self, **options):
+        """The System, with ``options`` (e.g. N=3) overriding the defaults."""
+        from ..errors import ModelFileError
+
+        unknown = sorted(set(options) - set(self.options))
+        if unknown:
+            have = ", ".join(f"{k} (default {v})" for k, v in self.options.items()) or "none"
+            raise ModelFileError(f"model {self.name!r} has no option {', '.join(unknown)}; "
+                                 f"its options: {have}")
+        return self.factory(**options)
+
+    def initial(self, **options) -> dict:
+        """The default initial state (names -> floats) for these options."""
+        opts = {**self.options, **options}
+        return dict(self.initial_state(**opts)) if self.options else dict(self.initial_state())
+
+
+INFO: dict[str, ModelInfo] = {}
+
+
+def register(name, factory, initial, t_end=1.0, options=None, tags=()):
+    """Add a model; ``initial`` is a dict or a function of the options returning one."""
+    init = initial if callable(initial) else (lambda **_: initial)
+    INFO[name] = ModelInfo(name, factory, init, float(t_end), dict(options or {}), tuple(tags))
+    return factory
+
+
+def model(name, *, initial, t_end=1.0, options=None, tags=()):
+    """Decorator form of ``register``."""
+    def wrap(factory):
+        return register(name, factory, initial, t_end, options, tags)
+    return wrap
