@@ -17,7 +17,7 @@ from functools import cached_property
 import sympy as sp
 
 from . import linalg
-from .errors import ConstraintError, JetSpaceError, LagrangianError
+from .errors import ConstraintError, JetSpaceError
 from .jet import JetSpace
 
 PRINCIPLES = ("chetaev", "vakonomic", "holder", "suslov")
@@ -345,12 +345,6 @@ class System:
     def is_regular(self) -> bool:
         """Whether the Hessian of L in the velocities is generically invertible."""
         return linalg.numeric_rank(self.mass_matrix) == self.J.n
-
-    def require_regular(self):
-        if not self.is_regular():
-            raise LagrangianError(
-                "the Lagrangian is singular: d^2L/dqdot^2 is not invertible, so the "
-                "accelerations are not determined. Check the kinetic energy")
 
     def is_chaplygin(self) -> bool:
         """Chaplygin: affine, scleronomic, homogeneous constraints, and neither L nor the

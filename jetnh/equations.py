@@ -33,7 +33,7 @@ import sympy as sp
 
 from . import linalg
 from .constraints import PRINCIPLES, System
-from .errors import PrincipleError
+from .errors import LagrangianError, PrincipleError
 from .variations import Variation, make
 
 FORMS = {
@@ -329,7 +329,6 @@ def _solve(base: System, rows, rates, J) -> dict:
     rows of df/dqdot (P^T A^T = 0); the reduced system is solved for u, then the dependent
     rows give the rates.
     """
-    base.require_regular()
     n, k = J.n, base.k
     qdd = J.qdd
     zero_acc = {a: 0 for a in qdd}
@@ -355,6 +354,11 @@ def _solve(base: System, rows, rates, J) -> dict:
     else:
         reduced = R.xreplace(qdd_expr)
     K = reduced.jacobian(u)
+    if linalg.numeric_rank(K) < K.rows:
+        raise LagrangianError(
+            "the reduced Hessian P^T (d^2L/dqdot^2) P on the constraint distribution is "
+            "singular, so this principle does not determine the accelerations. Check the "
+            "kinetic energy (it must be positive on the admissible velocities)")
     rhs = -reduced.xreplace({x: 0 for x in u})
     sol_u = linalg.solve(K, rhs)
     acc = {qdd[i]: sol_u[m] for m, i in enumerate(ind)}

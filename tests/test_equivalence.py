@@ -1,7 +1,6 @@
 """Equivalence of principles: identically, on the branch (32), along states."""
 
 import numpy as np
-import sympy as sp
 from hypothesis import given, settings
 
 import jetnh.strategies as jst

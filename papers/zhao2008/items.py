@@ -18,7 +18,7 @@ import sympy as sp
 
 from jetnh import JetSpace, System
 from jetnh.equations import action_variation, derive, multiplier_symbols, null_basis
-from jetnh.equivalence import compare, frobenius_T
+from jetnh.equivalence import frobenius_T
 from jetnh.models import appell_hamel, rolling_disk
 from jetnh.proof import generic_system, is_zero
 from jetnh.testing import vanishes

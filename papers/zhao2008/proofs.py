@@ -15,7 +15,7 @@ import sympy as sp
 from jetnh.equations import action_variation, derive, multiplier_symbols, null_basis
 from jetnh.equivalence import frobenius_T, obstructions
 from jetnh.frobenius import frobenius
-from jetnh.proof import Proof, generic_system, is_zero
+from jetnh.proof import Proof, generic_system
 from jetnh.variations import (Variation, defect, identity_residual, make,
                               printed_identity_residual, reduced_identity_residual)
 
