@@ -38,8 +38,10 @@ to a generated identifier (``s3``, ``v0``, ``p1``, ``c12``).
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
+import pathlib
 from dataclasses import dataclass, field
 
 import sympy as sp
@@ -157,6 +159,20 @@ class KernelSource:
 
 
 # ---------------------------------------------------------------------- keys
+@functools.lru_cache(maxsize=1)
+def _derivation_source_hash() -> str:
+    """A hash of the source of the modules that derive the equations and generate code:
+    editing them invalidates cached kernels (the symbolic input alone would not)."""
+    root = pathlib.Path(__file__).resolve().parents[1]
+    h = hashlib.sha256()
+    for name in ("jet.py", "linalg.py", "constraints.py", "variations.py", "equations.py",
+                 "numeric/codegen.py", "numeric/events.py"):
+        path = root / name
+        if path.exists():
+            h.update(path.read_bytes())
+    return h.hexdigest()[:16]
+
+
 def symbolic_key(system, principle, params, runtime_params=(), integrals=None, form=None,
                  convention="paper", extra="") -> str:
     """A hash of everything the kernels depend on (the symbolic input, not the output), so a
@@ -166,7 +182,8 @@ def symbolic_key(system, principle, params, runtime_params=(), integrals=None, f
     J = system.J
     h = hashlib.sha256()
     parts = [
-        "jetnh-codegen", CODEGEN_VERSION, sp.__version__, numba.__version__,
+        "jetnh-codegen", CODEGEN_VERSION, _derivation_source_hash(), sp.__version__,
+        numba.__version__,
         repr(tuple(s.name for s in J.q)), J.t.name,
         sp.srepr(system.L),
         repr(tuple(sp.srepr(f) for f in system.constraints)),
