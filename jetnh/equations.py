@@ -30,6 +30,7 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import sympy as sp
+from sympy.matrices.utilities import dotprodsimp
 
 from . import linalg
 from .constraints import PRINCIPLES, System
@@ -329,6 +330,11 @@ def _solve(base: System, rows, rates, J) -> dict:
     rows of df/dqdot (P^T A^T = 0); the reduced system is solved for u, then the dependent
     rows give the rates.
     """
+    with dotprodsimp(False):            # no cancel() inside matrix products (hot path)
+        return _solve_structured(base, rows, rates, J)
+
+
+def _solve_structured(base: System, rows, rates, J) -> dict:
     n, k = J.n, base.k
     qdd = J.qdd
     zero_acc = {a: 0 for a in qdd}
