@@ -103,13 +103,18 @@ def stationarity(system: System, variation: Variation, multipliers=(), restrict=
     integrand = av.integrand
     wrt = eta
     if restrict:
-        N = null_basis(system)
-        ind_eta = tuple(eta[i] for i in system.ind_index)
-        sub = {eta[s]: sp.Add(*[N[s, m] * ind_eta[m] for m in range(len(ind_eta))])
-               for s in system.dep_index}
-        integrand = integrand.xreplace(sub)
-        wrt = ind_eta
+        admissible = chetaev_admissible(system, eta)
+        integrand = integrand.xreplace({eta[s]: admissible[s] for s in system.dep_index})
+        wrt = tuple(eta[i] for i in system.ind_index)
     return J.euler(integrand, wrt=wrt)
+
+
+def chetaev_admissible(system: System, eta) -> tuple:
+    """eta restricted to the Chetaev subspace ker(df/dqdot): P eta^mu, the independent
+    components kept, the dependent ones eta^alpha = Phi^alpha_mu eta^mu."""
+    N = null_basis(system)
+    ind = [eta[i] for i in system.ind_index]
+    return tuple(sp.Add(*[N[s, m] * ind[m] for m in range(len(ind))]) for s in range(system.J.n))
 
 
 def null_basis(system: System) -> sp.Matrix:

@@ -17,7 +17,7 @@ from functools import cached_property
 import sympy as sp
 
 from jetnh import JetSpace, System
-from jetnh.equations import action_variation, derive, multiplier_symbols, null_basis
+from jetnh.equations import action_variation, chetaev_admissible, derive, multiplier_symbols
 from jetnh.equivalence import frobenius_T
 from jetnh.models import appell_hamel, rolling_disk
 from jetnh.proof import generic_system, is_zero
@@ -257,10 +257,7 @@ def _eq10(ctx):
 @item("(11)")
 def _eq11(ctx):
     s = ctx.disk
-    N = null_basis(s)
-    h = make(s, "holder")
-    ind = [h.eta[i] for i in s.ind_index]
-    eta = [sp.Add(*[N[r, m] * ind[m] for m in range(len(ind))]) for r in range(s.J.n)]
+    eta = chetaev_admissible(s, make(s, "free").eta)
     h = make(s, "holder", eta=eta)
     su = make(s, "suslov", eta=eta)
     dfe = defect(s, eta, h.J)

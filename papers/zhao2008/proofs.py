@@ -12,7 +12,8 @@ import time
 
 import sympy as sp
 
-from jetnh.equations import action_variation, derive, multiplier_symbols, null_basis
+from jetnh.equations import (action_variation, chetaev_admissible, derive, multiplier_symbols,
+                             null_basis)
 from jetnh.equivalence import frobenius_T, obstructions
 from jetnh.frobenius import frobenius
 from jetnh.proof import Proof, generic_system
@@ -65,10 +66,7 @@ def prove_6_8_10(n, k):
 def prove_11(n, k):
     s = generic_system(n, k, "explicit")
     p = Proof("(11): on the Chetaev subspace the variations coincide iff [f]_s eta^s = 0", n, k)
-    N = null_basis(s)
-    base = make(s, "free")
-    ind = [base.eta[i] for i in s.ind_index]
-    eta = [sp.Add(*[N[r, m] * ind[m] for m in range(len(ind))]) for r in range(n)]
+    eta = chetaev_admissible(s, make(s, "free").eta)
     h = make(s, "holder", eta=eta)
     su = make(s, "suslov", eta=eta)
     dfe = defect(s, eta, h.J)
