@@ -30,12 +30,11 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import sympy as sp
-from sympy.matrices.utilities import dotprodsimp
 
-from . import linalg
+from . import accelerations, linalg
 from .constraints import PRINCIPLES, System
-from .errors import LagrangianError, PrincipleError
-from .variations import Variation, make
+from .errors import PrincipleError
+from .variations import Variation, jet_space, make
 
 FORMS = {
     "vakonomic": ("multiplier", "explicit", "reduced", "embedded"),
@@ -138,23 +137,34 @@ class Equations:
     ``multipliers`` are the Lagrange multipliers that are states (vakonomic, Hoelder,
     Suslov); ``reactions`` are the algebraic multipliers of Chetaev's multiplier form.
     ``accelerations()`` solves the principle (not merely this form) for the
-    accelerations and multiplier rates.
+    accelerations and multiplier rates (``jetnh.accelerations``).  Both the expressions
+    and the accelerations are computed on first use.
     """
 
     def __init__(self, system, principle, form, convention, expressions, multipliers=(),
-                 reactions=(), arbitrary=(), J=None, paper="", constraints=None, solver=None):
+                 reactions=(), arbitrary=(), J=None, paper="", explicit=False, solver=None):
         self.system = system
         self.principle = principle
         self.form = form
         self.convention = convention
-        self.expressions = tuple(expressions)
+        self._build = expressions if callable(expressions) else (lambda: expressions)
         self.multipliers = tuple(multipliers)
         self.reactions = tuple(reactions)
         self.arbitrary = tuple(arbitrary)
         self.J = J or system.J
         self.paper = paper
-        self.constraints = tuple(system.constraints if constraints is None else constraints)
+        self.explicit = explicit
         self._solver = solver
+
+    @cached_property
+    def expressions(self) -> tuple:
+        return tuple(self._build())
+
+    @cached_property
+    def constraints(self) -> tuple:
+        """The constraints the multipliers belong to (explicit ones for explicit forms)."""
+        s = self.system
+        return s.explicit_constraints if self.explicit else s.constraints
 
     @cached_property
     def multiplier_rates(self) -> tuple[sp.Symbol, ...]:
@@ -179,8 +189,7 @@ class Equations:
         return len(self.expressions)
 
     def __repr__(self):
-        return (f"<Equations {self.principle} ({self.form}, {self.convention} convention)"
-                f" {self.paper}: {len(self.expressions)} equations>")
+        return f"<Equations {self.principle} ({self.form}, {self.convention} convention) {self.paper}>"
 
     def __str__(self):
         head = f"{self.principle} equations, {self.form} form {self.paper}".rstrip()
@@ -197,7 +206,8 @@ class Equations:
 # ---------------------------------------------------------------------- derivation
 def derive(system: System, principle: str, form: str | None = None,
            convention: str = "paper") -> Equations:
-    """The equations of ``principle`` in ``form`` (see the module docstring)."""
+    """The equations of ``principle`` in ``form`` (see the module docstring); the
+    expressions and the accelerations are derived when first asked for."""
     if principle not in PRINCIPLES:
         raise PrincipleError(f"unknown principle {principle!r}; choose one of {PRINCIPLES}")
     if convention not in CONVENTIONS:
@@ -223,10 +233,9 @@ def _label(system, principle, form):
 
 
 def _unconstrained(system, principle):
-    J = system.J
-    eqs = J.euler(system.L)
-    return Equations(system, principle, "euler-lagrange", "paper", eqs, paper="",
-                     solver=lambda: _solve(system, list(eqs), (), J))
+    return Equations(system, principle, "euler-lagrange", "paper",
+                     lambda: system.J.euler(system.L), paper="",
+                     solver=lambda: accelerations.solve(system))
 
 
 def _explicit(system: System) -> System:
@@ -237,62 +246,78 @@ def _explicit(system: System) -> System:
                   defaults=system.defaults, name=system.name)
 
 
+def _variation(system, kind, explicit, lams=()):
+    """The base system (explicit constraints or as given) and its variation of ``kind``."""
+    base = _explicit(system) if explicit else system
+    return base, make(base, kind, extra_fields=[m.name for m in lams])
+
+
 def _vakonomic(system, principle, form, convention):
-    base = system if form == "multiplier" else _explicit(system)
-    lams = multiplier_symbols(base)
-    var = make(base, principle, extra_fields=[m.name for m in lams])
-    J = var.J
+    explicit = form != "multiplier"
+    lams = multiplier_symbols(system)
+    J = jet_space(system, lams)
     if principle == "holder" and convention == "imposed":
-        rows = stationarity(base, var, lams, restrict=True)
-        return Equations(system, principle, form, convention, rows, arbitrary=lams, J=J,
-                         paper="", constraints=base.constraints,
-                         solver=lambda: _solve(base, list(rows), (), J))
-    E = stationarity(base, var, lams)
+        return Equations(
+            system, principle, form, convention,
+            lambda: stationarity(*_variation(system, principle, explicit, lams), lams,
+                                 restrict=True),
+            arbitrary=lams, J=J, paper="", explicit=explicit,
+            solver=lambda: accelerations.solve(system, "multipliers", explicit, lams))
+
+    def expressions():
+        base, var = _variation(system, principle, explicit, lams)
+        E = stationarity(base, var, lams)
+        return E if form in ("multiplier", "explicit") else _reduced(base, E, J, lams, form)
+
     rates = tuple(J.jet(m, 1) for m in lams)
-    solver = lambda: _solve(base, list(E), rates, J)  # noqa: E731
-    exprs = E if form in ("multiplier", "explicit") else _reduced(base, E, J, lams, form)
-    return Equations(system, principle, form, convention, exprs, lams, J=J,
-                     paper=_label(system, principle, form), constraints=base.constraints,
-                     solver=solver)
+    return Equations(system, principle, form, convention, expressions, lams, J=J,
+                     paper=_label(system, principle, form), explicit=explicit,
+                     solver=lambda: accelerations.solve(system, "multipliers", explicit,
+                                                        lams, rates))
 
 
 def _suslov(system, form, convention):
-    base = _explicit(system)
-    lams = multiplier_symbols(base)
-    var = make(base, "suslov", extra_fields=[m.name for m in lams])
-    J = var.J
+    lams = multiplier_symbols(system)
+    J = jet_space(system, lams)
     if convention == "imposed":
-        rows = stationarity(base, var, lams, restrict=True)
-        return Equations(system, "suslov", form, convention, rows, J=J, paper="(30b)",
-                         constraints=base.constraints,
-                         solver=lambda: _solve(base, list(rows), (), J))
-    E = stationarity(base, var, lams)
+        return Equations(
+            system, "suslov", form, convention,
+            lambda: stationarity(*_variation(system, "suslov", True, lams), lams,
+                                 restrict=True),
+            J=J, paper="(30b)", explicit=True,
+            solver=lambda: accelerations.solve(system, "momenta", True))
+
+    def expressions():
+        base, var = _variation(system, "suslov", True, lams)
+        E = stationarity(base, var, lams)
+        return E if form == "multiplier" else _reduced(base, E, J, lams, form, suslov=True)
+
     rates = tuple(J.jet(m, 1) for m in lams)
-    exprs = E if form == "multiplier" else _reduced(base, E, J, lams, form, suslov=True)
-    return Equations(system, "suslov", form, convention, exprs, lams, J=J,
-                     paper=_label(system, "suslov", form), constraints=base.constraints,
-                     solver=lambda: _solve(base, list(E), rates, J))
+    return Equations(system, "suslov", form, convention, expressions, lams, J=J,
+                     paper=_label(system, "suslov", form), explicit=True,
+                     solver=lambda: accelerations.solve(system, "momenta", True, lams, rates))
 
 
 def _chetaev(system, form, convention):
-    var = make(system, "holder")
-    J = var.J
-    maggi = stationarity(system, var, (), restrict=True)
-    solver = lambda: _solve(system, list(maggi), (), J)  # noqa: E731
+    J = jet_space(system)
+    solver = lambda: accelerations.solve(system)  # noqa: E731
     if form == "maggi":
-        return Equations(system, "chetaev", form, convention, maggi, J=J, solver=solver)
+        return Equations(system, "chetaev", form, convention,
+                         lambda: stationarity(*_variation(system, "holder", False), (),
+                                              restrict=True), J=J, solver=solver)
     if form == "multiplier":
         nus = multiplier_symbols(system, "nu")
-        A = system.jacobian
-        eqs = tuple(system.J.euler(system.L)[s] + sp.Add(*[nus[a] * A[a, s]
-                                                           for a in range(system.k)])
-                    for s in range(system.J.n))
-        return Equations(system, "chetaev", form, convention, eqs, reactions=nus, J=J,
-                         solver=solver)
-    ex = _explicit(system)
-    eqs = _embedded(ex, J, ex.p_dependent)
-    return Equations(system, "chetaev", form, convention, eqs, J=J, constraints=ex.constraints,
-                     solver=solver)
+
+        def expressions():
+            A = system.jacobian
+            return tuple(system.J.euler(system.L)[s]
+                         + sp.Add(*[nus[a] * A[a, s] for a in range(system.k)])
+                         for s in range(system.J.n))
+        return Equations(system, "chetaev", form, convention, expressions, reactions=nus,
+                         J=J, solver=solver)
+    return Equations(system, "chetaev", form, convention,
+                     lambda: _embedded(_explicit(system), J, system.p_dependent), J=J,
+                     explicit=True, solver=solver)
 
 
 def _reduced(base, E, J, lams, form, suslov=False):
@@ -323,62 +348,3 @@ def _embedded(ex: System, J, coefficients=None):
             e += sp.Add(*[coefficients[a] * T[a, m] for a in range(ex.k)])
         out.append(e)
     return tuple(out)
-
-
-# ---------------------------------------------------------------------- solving
-def _solve(base: System, rows, rates, J) -> dict:
-    """Accelerations and multiplier rates from ``rows`` (n rows with rates, or n-k without)
-    together with the differentiated constraints D f^a = 0.
-
-    q'' = P u + w with u the independent accelerations (P from the constraint Jacobian);
-    the rates drop out of P^T rows because their coefficients are combinations of the
-    rows of df/dqdot (P^T A^T = 0); the reduced system is solved for u, then the dependent
-    rows give the rates.
-    """
-    with dotprodsimp(False):            # no cancel() inside matrix products (hot path)
-        return _solve_structured(base, rows, rates, J)
-
-
-def _solve_structured(base: System, rows, rates, J) -> dict:
-    n, k = J.n, base.k
-    qdd = J.qdd
-    zero_acc = {a: 0 for a in qdd}
-    Dc = sp.Matrix([J.D(f) for f in base.constraints]) if k else sp.zeros(0, 1)
-    A = Dc.jacobian(qdd) if k else sp.zeros(0, n)
-    b = Dc.xreplace(zero_acc)
-    ind, dep = list(base.ind_index), list(base.dep_index)
-    Adep_inv_rhs = linalg.solve(A[:, dep], (-A[:, ind]).row_join(-b)) if k else sp.zeros(0, n - k + 1)
-    Phi, w = Adep_inv_rhs[:, :n - k], Adep_inv_rhs[:, n - k]
-    u = [qdd[i] for i in ind]
-    qdd_expr = {qdd[i]: qdd[i] for i in ind}
-    for a, i in enumerate(dep):
-        qdd_expr[qdd[i]] = sp.Add(*[Phi[a, m] * u[m] for m in range(n - k)]) + w[a]
-    R = sp.Matrix(rows)
-    zero_rates = {r: 0 for r in rates}
-    if rates:
-        P = sp.zeros(n, n - k)
-        for m, i in enumerate(ind):
-            P[i, m] = 1
-        for a, i in enumerate(dep):
-            P[i, :] = Phi[a, :]
-        reduced = (P.T * R.xreplace(zero_rates)).xreplace(qdd_expr)
-    else:
-        reduced = R.xreplace(qdd_expr)
-    K = reduced.jacobian(u)
-    if linalg.numeric_rank(K) < K.rows:
-        raise LagrangianError(
-            "the reduced Hessian P^T (d^2L/dqdot^2) P on the constraint distribution is "
-            "singular, so this principle does not determine the accelerations. Check the "
-            "kinetic energy (it must be positive on the admissible velocities)")
-    rhs = -reduced.xreplace({x: 0 for x in u})
-    sol_u = linalg.solve(K, rhs)
-    acc = {qdd[i]: sol_u[m] for m, i in enumerate(ind)}
-    for a, i in enumerate(dep):
-        acc[qdd[i]] = qdd_expr[qdd[i]].xreplace(acc)
-    if rates:
-        Rdep = R.extract(dep, [0])
-        C = Rdep.jacobian(rates)
-        rest = Rdep.xreplace(zero_rates).xreplace(acc)
-        sol_r = linalg.solve(C, -rest)
-        acc.update({r: sol_r[j] for j, r in enumerate(rates)})
-    return acc

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import random
 
+import numpy as np
 import sympy as sp
 from sympy.matrices.utilities import dotprodsimp
 
@@ -21,7 +22,19 @@ def _pivot_cost(e) -> tuple[int, int]:
         return (2, 0)
     if e.is_number:
         return (0, 0)
-    return (1, sp.count_ops(e, visual=False))
+    return (1, _size(e))
+
+
+def _size(e, cap: int = 200) -> int:
+    """The number of distinct subexpressions of ``e``, counted up to ``cap``: linear in
+    the shared (DAG) size, where count_ops walks the tree (exponential for nested solves)."""
+    seen, stack = set(), [e]
+    while stack and len(seen) < cap:
+        x = stack.pop()
+        if id(x) not in seen:
+            seen.add(id(x))
+            stack.extend(x.args)
+    return len(seen)
 
 
 def solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
@@ -70,31 +83,68 @@ def _lu_solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
     return X
 
 
+def _numeric_samples(matrices, points: int, seed: int, complete=None, symbols=()):
+    """The matrices evaluated at up to ``points`` random points (values in [0.31, 1.37]),
+    skipping points where an entry is not a finite real number.  ``complete(values)``
+    may overwrite some of the values (e.g. put the point on a manifold); ``symbols`` are
+    drawn too (those ``complete`` needs)."""
+    syms = sorted(set(symbols).union(*(M.free_symbols for M in matrices)), key=lambda s: s.name)
+    rng = random.Random(seed)
+    for _ in range(points):
+        vals = {s: sp.Float(rng.uniform(0.31, 1.37)) for s in syms}
+        try:
+            if complete is not None:
+                vals = complete(vals)
+            arrs = [np.array(M.xreplace(vals).evalf(), dtype=float).reshape(M.shape)
+                    for M in matrices]
+        except (TypeError, ValueError, ZeroDivisionError, np.linalg.LinAlgError):
+            continue
+        if all(np.all(np.isfinite(a)) for a in arrs):
+            yield arrs
+
+
+def _rank(arr, tol) -> int:
+    if arr.size == 0:
+        return 0
+    s = np.linalg.svd(arr, compute_uv=False)
+    return int(np.sum(s > tol * max(1.0, s[0])))
+
+
 def numeric_rank(M: sp.Matrix, points: int = 3, seed: int = 0, tol: float = 1e-9) -> int:
     """The generic rank of a symbolic matrix: the largest rank at a few random points.
 
     Matrices of abstract (undefined) functions cannot be evaluated; their rank is
     decided symbolically, with zero meaning zero after ``expand``.
     """
-    import numpy as np
-
-    syms = sorted(M.free_symbols, key=lambda s: s.name)
-    rng = random.Random(seed)
-    best = 0
-    evaluated = False
-    for _ in range(points):
-        vals = {s: sp.Float(rng.uniform(0.31, 1.37)) for s in syms}
-        try:
-            arr = np.array(M.xreplace(vals).evalf(), dtype=float)
-        except (TypeError, ValueError):
-            continue
-        if not np.all(np.isfinite(arr)):
-            continue
-        if arr.size == 0:
-            return 0
-        evaluated = True
-        s = np.linalg.svd(arr, compute_uv=False)
-        best = max(best, int(np.sum(s > tol * max(1.0, s[0]))))
-    if not evaluated:        # abstract functions: no numbers to draw, decide symbolically
+    ranks = [_rank(a, tol) for (a,) in _numeric_samples([M], points, seed)]
+    if not ranks:            # abstract functions: no numbers to draw, decide symbolically
         return M.rank(iszerofunc=lambda e: sp.expand(e) == 0, simplify=False)
-    return best
+    return max(ranks)
+
+
+def reduced_rank(H: sp.Matrix, A: sp.Matrix, ind, dep, points: int = 3, seed: int = 0,
+                 tol: float = 1e-9, complete=None, symbols=()) -> int:
+    """The generic rank of P^T H P, P = [I; -A_dep^-1 A_ind] spanning ker A (rows of
+    the ``ind`` and ``dep`` coordinates): numerically from H and A, never from P
+    (``complete`` and ``symbols`` as in ``_numeric_samples``)."""
+    ind, dep = list(ind), list(dep)
+    ranks = []
+    for Hn, An in _numeric_samples([H, A], points, seed, complete, symbols):
+        P = np.zeros((H.rows, len(ind)))
+        P[ind, range(len(ind))] = 1.0
+        if dep:
+            try:
+                P[dep, :] = -np.linalg.solve(An[:, dep], An[:, ind])
+            except np.linalg.LinAlgError:
+                continue
+        ranks.append(_rank(P.T @ Hn @ P, tol))
+    if ranks:
+        return max(ranks)
+    with dotprodsimp(False):  # abstract functions: decide symbolically (small systems)
+        Phi = -solve(A[:, dep], A[:, ind]) if dep else sp.zeros(0, len(ind))
+        P = sp.zeros(H.rows, len(ind))
+        for m, i in enumerate(ind):
+            P[i, m] = 1
+        for a, i in enumerate(dep):
+            P[i, :] = Phi[a, :]
+        return numeric_rank(P.T * H * P, points, seed, tol)

@@ -73,9 +73,16 @@ class Variation:
         return {k: tuple(v) for k, v in self.conditions.items()}
 
 
+def jet_space(system: System, multipliers=()):
+    """The jet space of ``system``'s variations: its coordinates with the fields eta_<q>
+    and the ``multipliers`` (Symbols or names)."""
+    names = [s.name for s in eta_symbols(system.J)]
+    names += [m if isinstance(m, str) else m.name for m in multipliers]
+    return system.J.with_fields(tuple(names))
+
+
 def _space(system: System, extra=()):
-    etas = eta_symbols(system.J)
-    return system.J.with_fields(tuple(s.name for s in etas) + tuple(extra)), etas
+    return jet_space(system, extra), eta_symbols(system.J)
 
 
 def _chetaev(system, J, eta):

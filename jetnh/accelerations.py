@@ -1,0 +1,174 @@
+"""Accelerations: every principle's equations as one linear system in q'' and the
+multiplier rates, solved by blocks (what ``Equations.accelerations()`` returns).
+
+The rows ``jetnh.equations`` derives from (13) are affine in the accelerations and the
+multiplier rates.  With
+
+    [L]_s   = r_s - H_sr q''^r           H = d2L / dqdot^s dqdot^r
+    [f^a]_s = g^a_s - G^a_sr q''^r       G^a = d2f^a / dqdot^s dqdot^r
+    D f^a   = A_as q''^s + b^a            A = df / dqdot
+
+every principle's rows read
+
+    (r + kappa_a g^a)_s - (H + kappa_a G^a)_sr q''^r - A_as mu'_a = 0            (*)
+
+    chetaev            kappa = 0, rows projected on ker A (Maggi), no rates;
+    vakonomic, holder  kappa = lambda, mu' = lambda' (E_s of (13), i.e. (15));
+    suslov             kappa = -A_dep^-T p_dep: in (29) the commutator term P_alpha c^alpha
+                       with c = A_dep^-1 [f] eta, (10), cancels lambda_a [f^a]_s.
+
+The explicit forms ((17)-(20), (29)-(31)) use the constraints qdot^alpha - phi^alpha.
+When f is affine these are S f with S = A_dep^-1, and on f = 0
+
+    [S f]_s = S ([f]_s + (D A_dep) S A_s),
+
+so (*) holds with kappa = S^T lambda~ (vakonomic) or -S^T p_dep (suslov), and the rates
+of the explicit multipliers are mu' = (rows at lambda~' = 0)_dep + (D A_dep)^T kappa:
+the solved phi (nested for long chains) is never differentiated.
+
+The solve: D f = 0 gives q'' = P u + w (u the independent accelerations, P = [I; Phi],
+Phi = -A_dep^-1 A_ind, w = -A_dep^-1 b); P^T A^T = 0 removes the rates, so that
+(P^T H' P) u = P^T (r' - H' w); the dependent rows then give the rates.  Coefficients
+come from L and f alone; the solved expressions are only ever built (never
+differentiated, substituted into or simplified), so they share their subexpressions,
+ready for ``cse``.
+"""
+
+from __future__ import annotations
+
+import weakref
+
+import numpy as np
+import sympy as sp
+from sympy.matrices.utilities import dotprodsimp
+
+from . import linalg
+from .errors import LagrangianError
+
+KAPPA = ("none", "multipliers", "momenta")
+_PARTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def euler_parts(J, F, hessian: bool = True):
+    """(p, H, r) with [F]_s = r_s - H_sr q''^r for first-order F: p = dF/dqdot,
+    H = dp/dqdot (None when ``hessian`` is False), r = dF/dq - dp/dt - dp/dq qdot.
+    Only derivatives by symbols that occur are taken."""
+    n = J.n
+
+    def d(e, x, syms):
+        return sp.diff(e, x) if x in syms else sp.S.Zero
+
+    fs = F.free_symbols
+    p = [d(F, v, fs) for v in J.qd]
+    ps = [e.free_symbols for e in p]
+    H = None
+    if hessian:
+        H = sp.zeros(n, n)
+        for s in range(n):
+            for r in range(s, n):
+                H[s, r] = H[r, s] = d(p[s], J.qd[r], ps[s])
+    rem = [d(F, J.q[s], fs) - d(p[s], J.t, ps[s])
+           - sp.Add(*[d(p[s], q, ps[s]) * v for q, v in zip(J.q, J.qd)]) for s in range(n)]
+    return p, H, sp.Matrix(rem)
+
+
+def _lagrangian_parts(system):
+    if system not in _PARTS:
+        _PARTS[system] = euler_parts(system.J, system.L)
+    return _PARTS[system]
+
+
+def _on_constraints(system, values: dict) -> dict:
+    """``values`` with the dependent velocities set on the constraints (numerically)."""
+    vel = system.dependent_velocities
+    if not vel:
+        return values
+    free = {s: v for s, v in values.items() if s not in set(vel)}
+    if system.is_affine:      # A_dep qdot_dep = -f(qdot_dep = 0), never the nested phi
+        A = np.array(system.jacobian_dependent.xreplace(free).evalf(), dtype=float)
+        f0 = np.array([float(f.xreplace({**free, **{v: sp.S.Zero for v in vel}}).evalf())
+                       for f in system.constraints])
+        sol = np.linalg.solve(A, -f0)
+    else:
+        sol = [complex(system.phi[v].xreplace(free).evalf()) for v in vel]
+        if any(abs(z.imag) > 1e-12 * (1 + abs(z)) for z in sol):
+            raise ValueError("no real point on the constraints here")
+        sol = [z.real for z in sol]
+    return {**free, **{v: sp.Float(x) for v, x in zip(vel, sol)}}
+
+
+def solve(system, kappa: str = "none", explicit: bool = False, multipliers=(),
+          rates=()) -> dict:
+    """q''^s (and the ``rates`` of ``multipliers``) of the rows (*) on the constraints.
+
+    ``kappa``: "none" (Chetaev), "multipliers" (vakonomic, Hoelder) or "momenta"
+    (Suslov); ``explicit``: the multipliers belong to the explicit constraints;
+    ``rates``: the multiplier rates to solve for (none for Chetaev and the imposed
+    convention, whose rows are projected).
+    """
+    with dotprodsimp(False):            # no cancel() inside matrix products (hot path)
+        return _solve(system, kappa, explicit, tuple(multipliers), tuple(rates))
+
+
+def _solve(system, kappa, explicit, multipliers, rates):
+    J = system.J
+    n, k = J.n, system.k
+    qdd = J.qdd
+    ind, dep = list(system.ind_index), list(system.dep_index)
+    transform = explicit and system.is_affine
+    cons = system.explicit_constraints if explicit and not transform else system.constraints
+    p, H, r = _lagrangian_parts(system)
+    A = sp.Matrix(k, n, lambda a, s: sp.diff(cons[a], J.qd[s])) if k else sp.zeros(0, n)
+    b = sp.Matrix([sp.Add(*[sp.diff(f, q) * v for q, v in zip(J.q, J.qd)]) + sp.diff(f, J.t)
+                   for f in cons]) if k else sp.zeros(0, 1)
+    A_dep = A[:, dep]
+
+    if kappa == "none":
+        kap = [sp.S.Zero] * k
+    elif kappa == "multipliers":
+        kap = list(linalg.solve(A_dep.T, sp.Matrix(multipliers))) if transform else list(multipliers)
+    elif kappa == "momenta":
+        kap = list(-linalg.solve(A_dep.T, sp.Matrix([p[i] for i in dep])))
+    else:
+        raise ValueError(f"kappa must be one of {KAPPA}, not {kappa!r}")
+    H1, r1 = H, r
+    if any(c != 0 for c in kap):
+        for a, f in enumerate(cons):
+            _, G, g = euler_parts(J, f, hessian=not system.is_affine)
+            r1 = r1 + kap[a] * g
+            if G is not None:
+                H1 = H1 + kap[a] * G
+
+    rank = linalg.reduced_rank(H1, A, ind, dep, complete=lambda v: _on_constraints(system, v),
+                               symbols=set().union(*(f.free_symbols for f in system.constraints)))
+    if rank < n - k:
+        raise LagrangianError(
+            f"the reduced Hessian P^T H P on the constraint distribution (H = d^2L/dqdot^2, "
+            f"plus the constraint Hessians the principle's multipliers weigh) is singular: "
+            f"rank {rank} < {n - k} on the constraints, so this principle does not determine the "
+            "accelerations. Check the kinetic energy (it must be positive on the admissible "
+            "velocities), or use another principle")
+
+    X = linalg.solve(A_dep, -(A[:, ind].row_join(b))) if k else sp.zeros(0, n + 1)
+    Phi, w = X[:, :n - k], X[:, n - k]
+    HP = H1[:, ind] + H1[:, dep] * Phi
+    K = HP.extract(ind, list(range(n - k))) + Phi.T * HP.extract(dep, list(range(n - k)))
+    res = r1 - H1[:, dep] * w
+    rhs = res.extract(ind, [0]) + Phi.T * res.extract(dep, [0])
+    u = linalg.solve(K, rhs)
+    q2 = sp.zeros(n, 1)
+    for m, i in enumerate(ind):
+        q2[i] = u[m]
+    q2_dep = Phi * u + w
+    for a, i in enumerate(dep):
+        q2[i] = q2_dep[a]
+    acc = {qdd[s]: q2[s] for s in range(n)}
+    if rates:
+        R = (r1 - H1 * q2).extract(dep, [0])
+        if transform:
+            DA = A_dep.applyfunc(J.D)
+            mu = R + DA.T * sp.Matrix(kap)
+        else:
+            mu = linalg.solve(A_dep.T, R)
+        acc.update({rate: mu[a] for a, rate in enumerate(rates)})
+    return acc
