@@ -37,9 +37,12 @@ ready for ``cse``.
 from __future__ import annotations
 
 import weakref
+from typing import NamedTuple
 
 import numpy as np
+import symengine as se
 import sympy as sp
+from sympy.core.function import AppliedUndef
 from sympy.matrices.utilities import dotprodsimp
 
 from . import linalg
@@ -49,33 +52,73 @@ KAPPA = ("none", "multipliers", "momenta")
 _PARTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
-def euler_parts(J, F, hessian: bool = True):
-    """(p, H, r) with [F]_s = r_s - H_sr q''^r for first-order F: p = dF/dqdot,
-    H = dp/dqdot (None when ``hessian`` is False), r = dF/dq - dp/dt - dp/dq qdot.
-    Only derivatives by symbols that occur are taken."""
+class EulerParts(NamedTuple):
+    """[F]_s = r_s - H_sr q''^r and D F = p_s q''^s + v, for first-order F."""
+
+    p: list                      # dF/dqdot^s
+    H: sp.Matrix | None          # dp_s/dqdot^r (None when not asked for)
+    r: sp.Matrix                 # dF/dq^s - dp_s/dt - dp_s/dq^r qdot^r
+    v: sp.Expr                   # dF/dt + dF/dq^s qdot^s
+
+
+def euler_parts(J, F, hessian: bool = True) -> EulerParts:
+    """The parts of [F] and D F for first-order F (``EulerParts``).
+
+    The derivatives are taken by symengine (tens of times faster than sympy's diff on
+    a long chain's Lagrangian) and returned as sympy expressions in the original
+    symbols; expressions of undefined functions (``jetnh.proof``) stay with sympy.
+    """
     n = J.n
+    if F.has(AppliedUndef, sp.Derivative, sp.Subs):
+        parts = _parts(F, J.t, J.q, J.qd, hessian, sp.S.Zero, sp.Add)
+
+        def back(e):
+            return e
+    else:
+        syms = [se.Symbol(v.name) for v in (J.t, *J.q, *J.qd)]
+        parts = _parts(se.sympify(F), syms[0], syms[1:n + 1], syms[n + 1:], hessian,
+                       se.Integer(0), se.Add)
+        originals = {v.name: v for v in F.free_symbols | {J.t, *J.q, *J.qd}}
+        fix = {sp.Symbol(name): v for name, v in originals.items() if sp.Symbol(name) != v}
+
+        def back(e):
+            e = sp.sympify(e)
+            return e.xreplace(fix) if fix else e
+    p, H, r, v = parts
+    return EulerParts([back(e) for e in p],
+                      None if H is None else sp.Matrix(n, n, lambda a, b: back(H[a][b])),
+                      sp.Matrix([back(e) for e in r]), back(v))
+
+
+def _parts(F, t, q, qd, hessian, zero, add):
+    """``euler_parts`` on sympy or symengine expressions (``zero`` and ``add`` of the
+    library); only derivatives by symbols that occur are taken."""
+    n = len(q)
 
     def d(e, x, syms):
-        return sp.diff(e, x) if x in syms else sp.S.Zero
+        return e.diff(x) if x in syms else zero
 
     fs = F.free_symbols
-    p = [d(F, v, fs) for v in J.qd]
+    p = [d(F, x, fs) for x in qd]
     ps = [e.free_symbols for e in p]
     H = None
     if hessian:
-        H = sp.zeros(n, n)
+        H = [[zero] * n for _ in range(n)]
         for s in range(n):
             for r in range(s, n):
-                H[s, r] = H[r, s] = d(p[s], J.qd[r], ps[s])
-    rem = [d(F, J.q[s], fs) - d(p[s], J.t, ps[s])
-           - sp.Add(*[d(p[s], q, ps[s]) * v for q, v in zip(J.q, J.qd)]) for s in range(n)]
-    return p, H, sp.Matrix(rem)
+                H[s][r] = H[r][s] = d(p[s], qd[r], ps[s])
+    rem = [d(F, q[s], fs) - d(p[s], t, ps[s])
+           - add(*[d(p[s], x, ps[s]) * v for x, v in zip(q, qd)]) for s in range(n)]
+    v = d(F, t, fs) + add(*[d(F, x, fs) * xd for x, xd in zip(q, qd)])
+    return p, H, rem, v
 
 
-def _lagrangian_parts(system):
-    if system not in _PARTS:
-        _PARTS[system] = euler_parts(system.J, system.L)
-    return _PARTS[system]
+def _cached_parts(system, F, hessian=True) -> EulerParts:
+    """``euler_parts`` of the system's Lagrangian or constraints, once per system."""
+    cache = _PARTS.setdefault(system, {})
+    if (F, hessian) not in cache:
+        cache[F, hessian] = euler_parts(system.J, F, hessian)
+    return cache[F, hessian]
 
 
 def _on_constraints(system, values: dict) -> dict:
@@ -117,10 +160,10 @@ def _solve(system, kappa, explicit, multipliers, rates):
     ind, dep = list(system.ind_index), list(system.dep_index)
     transform = explicit and system.is_affine
     cons = system.explicit_constraints if explicit and not transform else system.constraints
-    p, H, r = _lagrangian_parts(system)
-    A = sp.Matrix(k, n, lambda a, s: sp.diff(cons[a], J.qd[s])) if k else sp.zeros(0, n)
-    b = sp.Matrix([sp.Add(*[sp.diff(f, q) * v for q, v in zip(J.q, J.qd)]) + sp.diff(f, J.t)
-                   for f in cons]) if k else sp.zeros(0, 1)
+    p, H, r, _ = _cached_parts(system, system.L)
+    cparts = [_cached_parts(system, f, hessian=not system.is_affine) for f in cons]
+    A = sp.Matrix([c.p for c in cparts]) if k else sp.zeros(0, n)
+    b = sp.Matrix([c.v for c in cparts]) if k else sp.zeros(0, 1)
     A_dep = A[:, dep]
 
     if kappa == "none":
@@ -133,11 +176,10 @@ def _solve(system, kappa, explicit, multipliers, rates):
         raise ValueError(f"kappa must be one of {KAPPA}, not {kappa!r}")
     H1, r1 = H, r
     if any(c != 0 for c in kap):
-        for a, f in enumerate(cons):
-            _, G, g = euler_parts(J, f, hessian=not system.is_affine)
-            r1 = r1 + kap[a] * g
-            if G is not None:
-                H1 = H1 + kap[a] * G
+        for a, c in enumerate(cparts):
+            r1 = r1 + kap[a] * c.r
+            if c.H is not None:
+                H1 = H1 + kap[a] * c.H
 
     rank = linalg.reduced_rank(H1, A, ind, dep, complete=lambda v: _on_constraints(system, v),
                                symbols=set().union(*(f.free_symbols for f in system.constraints)))
@@ -151,23 +193,22 @@ def _solve(system, kappa, explicit, multipliers, rates):
 
     X = linalg.solve(A_dep, -(A[:, ind].row_join(b))) if k else sp.zeros(0, n + 1)
     Phi, w = X[:, :n - k], X[:, n - k]
-    HP = H1[:, ind] + H1[:, dep] * Phi
-    K = HP.extract(ind, list(range(n - k))) + Phi.T * HP.extract(dep, list(range(n - k)))
-    res = r1 - H1[:, dep] * w
-    rhs = res.extract(ind, [0]) + Phi.T * res.extract(dep, [0])
-    u = linalg.solve(K, rhs)
-    q2 = sp.zeros(n, 1)
+    P = sp.zeros(n, n - k)            # q'' = P u + w_full
+    w_full = sp.zeros(n, 1)
     for m, i in enumerate(ind):
-        q2[i] = u[m]
-    q2_dep = Phi * u + w
+        P[i, m] = 1
     for a, i in enumerate(dep):
-        q2[i] = q2_dep[a]
+        P[i, :], w_full[i] = Phi[a, :], w[a]
+    HP = linalg.matmul(H1, P)
+    K = linalg.matmul(P.T, HP)
+    rhs = linalg.matmul(P.T, r1 - linalg.matmul(H1, w_full))
+    u = linalg.solve(K, rhs)
+    q2 = linalg.matmul(P, u) + w_full
     acc = {qdd[s]: q2[s] for s in range(n)}
     if rates:
-        R = (r1 - H1 * q2).extract(dep, [0])
+        R = (r1 - linalg.matmul(H1, q2)).extract(dep, [0])
         if transform:
-            DA = A_dep.applyfunc(J.D)
-            mu = R + DA.T * sp.Matrix(kap)
+            mu = R + linalg.matmul(A_dep.applyfunc(J.D).T, sp.Matrix(kap))
         else:
             mu = linalg.solve(A_dep.T, R)
         acc.update({rate: mu[a] for a, rate in enumerate(rates)})

@@ -53,6 +53,13 @@ def solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
         return _lu_solve(M, rhs)
 
 
+def matmul(A: sp.Matrix, B: sp.Matrix) -> sp.Matrix:
+    """A B with each entry one Add of its non-zero products (sympy's product adds term by
+    term, re-flattening the partial sums, and cancels unless dotprodsimp is off)."""
+    return sp.Matrix(A.rows, B.cols, lambda i, j: sp.Add(*[
+        A[i, m] * B[m, j] for m in range(A.cols) if A[i, m] != 0 and B[m, j] != 0]))
+
+
 def inverse(M: sp.Matrix) -> sp.Matrix:
     """M^-1 by ``solve`` (adjugate / det for small M)."""
     return solve(M, sp.eye(M.rows))
@@ -95,7 +102,7 @@ def _numeric_samples(matrices, points: int, seed: int, complete=None, symbols=()
         try:
             if complete is not None:
                 vals = complete(vals)
-            arrs = [np.array(M.xreplace(vals).evalf(), dtype=float).reshape(M.shape)
+            arrs = [np.array(M.xreplace(vals), dtype=float).reshape(M.shape)
                     for M in matrices]
         except (TypeError, ValueError, ZeroDivisionError, np.linalg.LinAlgError):
             continue

@@ -1,0 +1,86 @@
+"""Tests of jetnh.accelerations: the parts of [F] and D F taken by symengine against
+sympy's own Euler operator and total derivative, and the block solve on a long chain
+against sympy.physics.mechanics."""
+
+from __future__ import annotations
+
+import random
+
+import pytest
+import sympy as sp
+from hypothesis import given, strategies as st
+
+import jetnh.strategies as jst
+from jetnh import JetSpace, models
+from jetnh.accelerations import euler_parts
+from jetnh.linalg import _size
+from jetnh.testing import vanishes
+
+
+@st.composite
+def expressions(draw):
+    J = draw(jst.jet_spaces(min_n=1, max_n=4))
+    F = draw(st.one_of(jst.lagrangians(J), jst.jet_expressions(J, order=1)))
+    return J, F
+
+
+@given(expressions())
+def test_parts_reassemble_the_euler_operator_and_the_total_derivative(case):
+    J, F = case
+    parts = euler_parts(J, F)
+    qdd = sp.Matrix(J.qdd)
+    for s, e in enumerate(J.euler(F)):
+        assert vanishes(parts.r[s] - (parts.H * qdd)[s] - e), (F, s)
+    assert vanishes(parts.v + sp.Add(*[p * a for p, a in zip(parts.p, J.qdd)]) - J.D(F))
+    assert parts.H == parts.H.T
+
+
+def test_parts_keep_the_symbols_assumptions_and_undefined_functions():
+    J = JetSpace("x y")
+    x, y = J.q
+    xd, yd = J.qd
+    m = sp.Symbol("m", positive=True)
+    parts = euler_parts(J, m * (xd**2 + yd**2) / 2 - m * y)
+    assert parts.H == sp.Matrix([[m, 0], [0, m]]) and parts.r[1] == -m
+    g = sp.Function("g")
+    parts = euler_parts(J, g(x, xd))                 # jetnh.proof's generic functions
+    assert parts.p[0] == sp.diff(g(x, xd), xd)
+
+
+def test_chain_accelerations_match_lagranges_method_and_stay_shared():
+    """The car with 5 trailers: every principle's q'' through the block solve; Chetaev's
+    against LagrangesMethod at a random state on the constraints; the solved
+    expressions are a DAG of modest size (the tree would be exponential)."""
+    from sympy.physics.mechanics import LagrangesMethod
+
+    system = models.get("n_trailer", N=5)
+    J = system.J
+    acc = system.equations("chetaev").accelerations()
+    lm = LagrangesMethod(J.to_dynamic(system.L), [J.to_dynamic(q) for q in J.q],
+                         nonhol_coneqs=[J.to_dynamic(f) for f in system.constraints])
+    lm.form_lagranges_equations()
+    rnd = random.Random(3)
+    vals = {s: sp.Float(rnd.uniform(0.2, 1.2), 30)
+            for s in (J.t, *J.q, *system.independent_velocities, *system.parameters)}
+    A = system.jacobian_dependent.xreplace(vals)
+    rest = sp.Matrix(system.constraints).xreplace({**vals, **{v: 0 for v in system.dependent_velocities}})
+    vals.update(zip(system.dependent_velocities, A.LUsolve(-rest)))
+    mass, forcing = (J.from_dynamic(lm.mass_matrix_full), J.from_dynamic(lm.forcing_full))
+    ref = mass.xreplace(vals).LUsolve(forcing.xreplace(vals))
+    for s, a in enumerate(J.qdd):
+        assert abs(acc[a].xreplace(vals).evalf(30) - ref[J.n + s]) < 1e-20 * (1 + abs(ref[J.n + s]))
+    assert max(_size(e, cap=10**6) for e in acc.values()) < 5000
+    for principle in ("vakonomic", "holder", "suslov"):
+        out = system.equations(principle).accelerations()
+        assert set(J.qdd) <= set(out)
+
+
+@pytest.mark.parametrize("form", ["explicit", "reduced", "embedded"])
+def test_explicit_forms_rates_are_those_of_the_explicit_multipliers(form):
+    """Vakonomic explicit forms: (17)/(18)/(20) vanish on the accelerations and rates of
+    the explicit constraints' multipliers (the rates through (D A_dep)^T kappa)."""
+    system = models.get("n_trailer", N=1)
+    eom = system.equations("vakonomic", form)
+    acc = eom.accelerations()
+    for e in eom.expressions:
+        assert vanishes(system.on_constraints(e.xreplace(acc)), system), (form, e)
