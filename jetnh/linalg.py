@@ -14,6 +14,8 @@ import numpy as np
 import sympy as sp
 from sympy.matrices.utilities import dotprodsimp
 
+from . import dag
+
 _ADJUGATE_MAX = 3
 
 
@@ -22,19 +24,7 @@ def _pivot_cost(e) -> tuple[int, int]:
         return (2, 0)
     if e.is_number:
         return (0, 0)
-    return (1, _size(e))
-
-
-def _size(e, cap: int = 200) -> int:
-    """The number of distinct subexpressions of ``e``, counted up to ``cap``: linear in
-    the shared (DAG) size, where count_ops walks the tree (exponential for nested solves)."""
-    seen, stack = set(), [e]
-    while stack and len(seen) < cap:
-        x = stack.pop()
-        if id(x) not in seen:
-            seen.add(id(x))
-            stack.extend(x.args)
-    return len(seen)
+    return (1, dag.size(e, cap=200))   # count_ops walks the tree: exponential when nested
 
 
 def solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:

@@ -1,0 +1,41 @@
+"""Tests of jetnh.dag: graph walks agree with sympy's tree walks, and stay linear on
+expressions whose tree is exponential."""
+
+from __future__ import annotations
+
+import sympy as sp
+from hypothesis import given, strategies as st
+
+import jetnh.strategies as jst
+from jetnh import dag
+
+
+@st.composite
+def expressions(draw):
+    J = draw(jst.jet_spaces(min_n=1, max_n=3))
+    return J, draw(jst.jet_expressions(J, order=1))
+
+
+@given(expressions())
+def test_walks_agree_with_sympy(case):
+    J, e = case
+    assert dag.free_symbols(e) == e.free_symbols
+    assert dag.atoms(e, sp.Symbol) == e.atoms(sp.Symbol)
+    assert dag.atoms(e, sp.sin, sp.cos) == e.atoms(sp.sin, sp.cos)
+    rule = {s: sp.Integer(i + 2) for i, s in enumerate(sorted(e.free_symbols, key=str))}
+    assert dag.xreplace(e, rule) == e.xreplace(rule)
+    tree = list(sp.preorder_traversal(e))        # equal nodes may be distinct objects
+    assert len(set(tree)) <= dag.size(e) <= len(tree)
+
+
+def test_nested_expression_of_exponential_tree_size():
+    """x_k = cos(t) * x_(k-1) + sin(t) * x_(k-2): a tree of ~1.6^k nodes, a graph of ~6k."""
+    t, a, b = sp.symbols("t a b")
+    xs = [a, b]
+    for _ in range(60):
+        xs.append(sp.cos(t) * xs[-1] + sp.sin(t) * xs[-2])
+    e = xs[-1]
+    assert dag.size(e) < 500
+    assert dag.free_symbols(e) == {t, a, b}
+    v = dag.xreplace(e, {a: sp.Integer(0), b: sp.Integer(1), t: sp.Integer(0)})
+    assert v == 1                               # at t = 0 every x_k is x_(k-1), so b
