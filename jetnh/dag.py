@@ -1,5 +1,5 @@
-"""Expressions as shared graphs: size, free symbols, atoms and substitution in time
-linear in the number of *distinct* subexpressions.
+"""Expressions as shared graphs: size, free symbols, atoms, substitution and numeric
+evaluation in time linear in the number of *distinct* subexpressions.
 
 Solved equations share their subexpressions (the accelerations of a chain of k
 constraints nest k solves), so as trees they are exponentially larger than as graphs.
@@ -9,12 +9,15 @@ the graph once, remembering every node they have seen (by identity).
 
 from __future__ import annotations
 
+import mpmath
 import sympy as sp
 
 
 def nodes(expr, cap: int | None = None) -> list:
-    """The distinct subexpressions of ``expr``, children before parents (at most ``cap``)."""
-    order, seen, stack = [], set(), [(sp.sympify(expr), False)]
+    """The distinct subexpressions of ``expr`` (a Basic or a list of them), children
+    before parents (at most ``cap``)."""
+    roots = list(expr) if isinstance(expr, (list, tuple)) else [expr]
+    order, seen, stack = [], set(), [(sp.sympify(e), False) for e in reversed(roots)]
     while stack:
         e, expanded = stack.pop()
         if expanded:
@@ -46,7 +49,8 @@ def atoms(expr, *types) -> set:
 
 
 def xreplace(expr, rule: dict):
-    """``expr.xreplace(rule)``, rebuilding each distinct subexpression once."""
+    """``expr.xreplace(rule)``, rebuilding each distinct subexpression once; ``expr``
+    may be a list, whose shared parts are then rebuilt once for all (a list returned)."""
     done: dict = {}
     for e in nodes(expr):
         if e in rule:
@@ -57,4 +61,59 @@ def xreplace(expr, rule: dict):
                 a is not b for a, b in zip(args, e.args)) else e
         else:
             done[id(e)] = e
+    if isinstance(expr, (list, tuple)):
+        return [done[id(sp.sympify(e))] for e in expr]
     return done[id(sp.sympify(expr))]
+
+
+_SPECIAL = {"Abs": abs, "re": mpmath.re, "im": mpmath.im, "conjugate": mpmath.conj}
+
+
+def evaluate(expr, point: dict, dps: int = 30) -> list:
+    """The values (mpmath numbers, ``dps`` digits) of ``expr`` (a Basic or a list) at
+    ``point`` (Symbol -> number), each distinct subexpression computed once (functions
+    mpmath lacks by sympy's evalf).  Raises ValueError for a symbol without a value."""
+    roots = list(expr) if isinstance(expr, (list, tuple)) else [expr]
+    val: dict = {}
+    with mpmath.workdps(dps):
+        prec = mpmath.mp.prec
+        given = {s: mpmath.mpmathify(v) if not isinstance(v, sp.Basic)
+                 else _number(sp.sympify(v), prec) for s, v in point.items()}
+        for e in nodes(roots):
+            if e in given:
+                v = given[e]
+            elif e.is_Number or e.is_NumberSymbol or e is sp.I:
+                v = _number(e, prec)
+            elif e.is_Add:
+                v = mpmath.fsum(val[id(a)] for a in e.args)
+            elif e.is_Mul:
+                v = mpmath.fprod(val[id(a)] for a in e.args)
+            elif e.is_Pow:
+                v = mpmath.power(val[id(e.base)], val[id(e.exp)])
+            elif isinstance(e, sp.Function):
+                args = [val[id(a)] for a in e.args]
+                f = _SPECIAL.get(type(e).__name__) or getattr(mpmath, type(e).__name__, None)
+                v = f(*args) if f else _number(e.func(*map(to_sympy, args)).evalf(dps), prec)
+            else:
+                raise ValueError(f"cannot evaluate {e!r} numerically (no value given)")
+            val[id(e)] = v
+    out = [val[id(sp.sympify(e))] for e in roots]
+    return out if isinstance(expr, (list, tuple)) else out[0]
+
+
+def to_sympy(v) -> sp.Expr:
+    """An mpmath number as a sympy Float (or complex), keeping its precision."""
+    if isinstance(v, mpmath.mpc):
+        return sp.Float(v.real, mpmath.mp.dps) + sp.I * sp.Float(v.imag, mpmath.mp.dps)
+    return sp.Float(v, mpmath.mp.dps)
+
+
+def _number(e, prec: int):
+    if e is sp.I:
+        return mpmath.mpc(0, 1)
+    if e.is_Float or e.is_Rational or e.is_NumberSymbol:
+        return mpmath.mpf(e._as_mpf_val(prec))
+    if not e.is_number:
+        raise ValueError(f"cannot evaluate {e} numerically")
+    re, im = e.as_real_imag()
+    return mpmath.mpc(re._as_mpf_val(prec), im._as_mpf_val(prec))

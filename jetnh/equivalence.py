@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
+from . import dag, linalg
 from .constraints import System
 from .frobenius import bracket_components
 from .testing import vanishes
@@ -28,9 +29,15 @@ from .testing import vanishes
 _POINTS = 4
 
 
-def branch_32(system: System, multipliers) -> dict:
-    """{lambda_alpha: -p_alpha} on the constraint manifold: the branch of (32)."""
-    return {lam: -system.on_constraints(p) for lam, p in zip(multipliers, system.p_dependent)}
+def branch_32(system: System, multipliers, explicit: bool = True) -> dict:
+    """{lambda_alpha: -p_alpha} on the constraint manifold: the branch of (32), for the
+    multipliers of the explicit constraints qdot^alpha - phi^alpha.  For those of the
+    constraints as given (``explicit=False``; f = A_dep (qdot^alpha - phi^alpha) when
+    affine) the same branch is lambda = -A_dep^-T p."""
+    p = sp.Matrix([system.on_constraints(e) for e in system.p_dependent])
+    if not explicit:
+        p = linalg.solve(system.on_constraints(system.jacobian_dependent.T), p)
+    return {lam: -e for lam, e in zip(multipliers, p)}
 
 
 def obstructions(system: System) -> dict:
@@ -73,9 +80,10 @@ class Comparison:
         return f"{a} and {b} do not share solutions in general"
 
 
-def agrees(system: System, expr) -> bool:
-    """Whether ``expr`` vanishes at random states on the constraint manifold."""
-    return vanishes(expr, system, points=_POINTS)
+def agrees(system: System, expr, derived=None) -> bool:
+    """Whether ``expr`` vanishes at random states on the constraint manifold (with the
+    ``derived`` symbols set from the others, as in ``jetnh.testing.vanishes``)."""
+    return vanishes(expr, system, points=_POINTS, derived=derived)
 
 
 def compare(system: System, first: str, second: str, convention: str = "paper") -> Comparison:
@@ -87,10 +95,10 @@ def compare(system: System, first: str, second: str, convention: str = "paper") 
     defects = {q: a1[q] - a2[q] for q in qdd}
     same = all(agrees(system, d) for d in defects.values())
     on_branch = None
-    lams = e1.multipliers or e2.multipliers
-    if not same and lams:
-        sub = branch_32(system, lams)
-        on_branch = all(agrees(system, d.xreplace(sub)) for d in defects.values())
+    owner = e1 if e1.multipliers else e2
+    if not same and owner.multipliers:
+        sub = branch_32(system, owner.multipliers, owner.explicit)
+        on_branch = all(agrees(system, d, derived=sub) for d in defects.values())
     return Comparison((first, second), same, on_branch, defects)
 
 
@@ -107,8 +115,8 @@ def defect_along(system: System, first: str, second: str, samples, convention: s
             for k, v in dict(samples).items()}
     worst = 0.0
     for q in system.J.qdd:
-        d = system.on_constraints(a1[q] - a2[q])
-        syms = sorted(d.free_symbols, key=lambda s: s.name)
+        d = dag.xreplace(a1[q] - a2[q], system.phi)
+        syms = sorted(dag.free_symbols(d), key=lambda s: s.name)
         missing = [s.name for s in syms if s.name not in data
                    and s not in (e1.multipliers + e2.multipliers)]
         if missing:
@@ -117,6 +125,6 @@ def defect_along(system: System, first: str, second: str, samples, convention: s
                              "velocity and parameter (e.g. traj.as_dict() plus parameters)")
         n = len(next(iter(data.values())))
         args = [data.get(s.name, np.zeros(n)) for s in syms]
-        val = sp.lambdify(syms, d, "numpy")(*args)
+        val = sp.lambdify(syms, d, "numpy", cse=True)(*args)
         worst = max(worst, float(np.max(np.abs(np.broadcast_to(val, (n,))))))
     return worst

@@ -39,7 +39,7 @@ def solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
     with dotprodsimp(False):
         if k <= _ADJUGATE_MAX:
             det = M.det(method="berkowitz")
-            return (M.adjugate(method="berkowitz") * rhs) / det
+            return matmul(M.adjugate(method="berkowitz"), rhs) / det
         return _lu_solve(M, rhs)
 
 
@@ -71,11 +71,13 @@ def _lu_solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
         for r in range(col + 1, k):
             if A[r, col] != 0:
                 fac = A[r, col] / piv
-                A[r, :] = A[r, :] - fac * A[col, :]
-                B[r, :] = B[r, :] - fac * B[col, :]
+                for R, j0 in ((A, col), (B, 0)):        # zero entries stay untouched
+                    for j in range(j0, R.cols):
+                        if R[col, j] != 0:
+                            R[r, j] = R[r, j] - fac * R[col, j]
     X = sp.zeros(k, B.cols)
     for r in range(k - 1, -1, -1):
-        acc = B[r, :] - A[r, r + 1:] * X[r + 1:, :]
+        acc = B[r, :] - matmul(A[r, r + 1:], X[r + 1:, :])
         X[r, :] = acc / A[r, r]
     return X
 
@@ -92,7 +94,8 @@ def _numeric_samples(matrices, points: int, seed: int, complete=None, symbols=()
         try:
             if complete is not None:
                 vals = complete(vals)
-            arrs = [np.array(M.xreplace(vals), dtype=float).reshape(M.shape)
+            values = iter(dag.evaluate([e for M in matrices for e in M], vals, dps=17))
+            arrs = [np.array([float(next(values)) for _ in range(len(M))]).reshape(M.shape)
                     for M in matrices]
         except (TypeError, ValueError, ZeroDivisionError, np.linalg.LinAlgError):
             continue

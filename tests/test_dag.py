@@ -24,6 +24,9 @@ def test_walks_agree_with_sympy(case):
     assert dag.atoms(e, sp.sin, sp.cos) == e.atoms(sp.sin, sp.cos)
     rule = {s: sp.Integer(i + 2) for i, s in enumerate(sorted(e.free_symbols, key=str))}
     assert dag.xreplace(e, rule) == e.xreplace(rule)
+    point = {s: sp.Float(0.3 + 0.17 * i, 30) for i, s in enumerate(sorted(e.free_symbols, key=str))}
+    ref = complex(e.xreplace(point).evalf(30))
+    assert abs(complex(dag.evaluate(e, point)) - ref) <= 1e-25 * max(1.0, abs(ref))
     tree = list(sp.preorder_traversal(e))        # equal nodes may be distinct objects
     assert len(set(tree)) <= dag.size(e) <= len(tree)
 
@@ -39,3 +42,5 @@ def test_nested_expression_of_exponential_tree_size():
     assert dag.free_symbols(e) == {t, a, b}
     v = dag.xreplace(e, {a: sp.Integer(0), b: sp.Integer(1), t: sp.Integer(0)})
     assert v == 1                               # at t = 0 every x_k is x_(k-1), so b
+    at = {a: 0.5, b: 0.25, t: sp.Rational(1, 3)}
+    assert abs(dag.evaluate(xs[12], at) - xs[12].xreplace(at).evalf(30)) < 1e-25
