@@ -15,29 +15,25 @@ sums of products, so jetnh is also timed with ``.expand()`` on its result
 ("jetnh+expand"), the like-for-like comparison.  For n <= 3 every result of the two
 libraries is checked to agree component by component.
 
-Usage:  python benchmarks/forms_vs_galgebra.py [--ns 1 2 3 4 6] [--repeats 3]
-                                               [--out benchmarks/results/forms_vs_galgebra.json]
+    .venv/bin/python benchmarks/forms_vs_galgebra.py [--quick] [--ns 1 2 3 4 6]
+        [--repeats 3] [--out PATH]
+
+(default output: benchmarks/results/forms_vs_galgebra.json)
 """
 
 from __future__ import annotations
 
-import argparse
-import datetime as _dt
-import json
-import os
-import platform
 import random
 import statistics
-import sys
 import time
 
 import sympy as sp
 from sympy.core.cache import clear_cache
 
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
+from _common import parser, write
 
-from jetnh import JetSpace                                    # noqa: E402
-from jetnh.forms import Form, d, expr_is_zero                 # noqa: E402
+from jetnh import JetSpace
+from jetnh.forms import Form, d, expr_is_zero
 
 BUDGET_S = 120.0          # stop repeating an operation once one call took longer than this
 
@@ -131,34 +127,23 @@ def run(ns, repeats: int, seed: int = 2024):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--ns", type=int, nargs="+", default=[1, 2, 3, 4, 6])
-    ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--out", default=os.path.join(os.path.dirname(__file__), "results",
-                                                  "forms_vs_galgebra.json"))
+    ap = parser(__doc__, "forms_vs_galgebra")
+    ap.add_argument("--ns", type=int, nargs="+", default=None,
+                    help="values of n (default 1 2 3 4 6; --quick: 1 2)")
+    ap.add_argument("--repeats", type=int, default=None, help="default 3 (--quick: 1)")
     args = ap.parse_args(argv)
-    load = os.getloadavg() if hasattr(os, "getloadavg") else None
+    ns = args.ns or ([1, 2] if args.quick else [1, 2, 3, 4, 6])
     t0 = time.perf_counter()
-    rows, ga_version = run(args.ns, args.repeats)
-    out = {
-        "benchmark": "jetnh.forms vs galgebra exterior algebra on J^1 coordinates (2n+1 dims)",
-        "date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
-        "command": "python " + " ".join([os.path.relpath(__file__)] + (argv or sys.argv[1:])),
-        "machine": {"platform": platform.platform(), "processor": platform.processor(),
-                    "machine": platform.machine(), "cpu_count": os.cpu_count(),
-                    "python": platform.python_version(), "loadavg_at_start": load},
-        "versions": {"sympy": sp.__version__, "galgebra": ga_version},
+    rows, ga_version = run(ns, args.repeats or (1 if args.quick else 3))
+    write("forms_vs_galgebra", {
+        "title": "jetnh.forms vs galgebra exterior algebra on J^1 coordinates (2n+1 dims)",
+        "galgebra": ga_version,
         "method": ("median over `repeats` random instances of dense 1-forms; sympy cache "
                    "cleared before every timed call; jetnh result left unexpanded "
                    "(jetnh_s) and expanded (jetnh_expand_s); galgebra: Ga with Euclidean "
                    "metric on (t, q, qdot), outer product ^ and grad ^ for d"),
         "total_wall_s": time.perf_counter() - t0,
-        "results": rows,
-    }
-    os.makedirs(os.path.dirname(args.out), exist_ok=True)
-    with open(args.out, "w") as fh:
-        json.dump(out, fh, indent=1)
-    print("wrote", args.out)
+        "results": rows}, args.out, args.quick)
 
 
 if __name__ == "__main__":

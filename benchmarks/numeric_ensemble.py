@@ -7,21 +7,17 @@ ensemble run is bit-for-bit the single run.
     .venv/bin/python benchmarks/numeric_ensemble.py [--quick] [--out PATH]
 
 (default output: benchmarks/results/numeric_ensemble.json).  Best of several
-interleaved repetitions; machine, date, load average and command in the JSON.
+interleaved repetitions; machine, date, load average, commit and command in the JSON
+(``_common.write``).
 """
 
-import argparse
-import datetime
-import json
-import os
-import platform
-import sys
 import time
 
 import numba
 import numpy as np
-import scipy
 import sympy as sp
+
+from _common import parser, write
 
 import jetnh as jn
 from jetnh.constraints import System
@@ -104,33 +100,16 @@ def measure(make, n_runs_list, reps, loop_max):
     return dict(problem=name, rows=rows)
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="fewer runs and repetitions")
-    ap.add_argument("--out", default=os.path.join(os.path.dirname(__file__), "results",
-                                                  "numeric_ensemble.json"))
-    args = ap.parse_args()
+def main(argv=None):
+    args = parser(__doc__, "numeric_ensemble").parse_args(argv)
     sizes = [64, 1024] if args.quick else [64, 1024, 4096]
-    reps = 3 if args.quick else 5
-    results = dict(
-        benchmark="numeric_ensemble",
-        date=datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-        command=" ".join([os.path.relpath(sys.executable)] + sys.argv),
-        machine=dict(platform=platform.platform(), processor=platform.processor(),
-                     cpus=os.cpu_count(), numba_threads=numba.config.NUMBA_NUM_THREADS,
-                     threading_layer=None, python=platform.python_version(),
-                     numba=numba.__version__, scipy=scipy.__version__,
-                     numpy=np.__version__, sympy=sp.__version__,
-                     loadavg_start=os.getloadavg()),
-        problems=[])
-    for make, ns in ((particle_scene, sizes), (disk_scene, sizes[:2])):
-        results["problems"].append(measure(make, ns, reps, loop_max=1024))
-    results["machine"]["threading_layer"] = numba.threading_layer()
-    results["machine"]["loadavg_end"] = os.getloadavg()
-    os.makedirs(os.path.dirname(args.out), exist_ok=True)
-    with open(args.out, "w") as fh:
-        json.dump(results, fh, indent=2)
-    print("wrote", args.out)
+    reps = 2 if args.quick else 3
+    problems = [measure(make, ns, reps, loop_max=1024)
+                for make, ns in ((particle_scene, sizes), (disk_scene, sizes[:2]))]
+    write("numeric_ensemble", dict(
+        threads=dict(numba_threads=numba.config.NUMBA_NUM_THREADS,
+                     threading_layer=numba.threading_layer()),
+        problems=problems), args.out, args.quick)
 
 
 if __name__ == "__main__":

@@ -2,7 +2,8 @@
 
 The public contract (DESIGN.md section 4): ``JetSpace``, ``System``, ``System.equations``,
 ``Equations.accelerations``, ``Scene`` and its ``Trajectory``; ``compare`` decides when two
-principles share solutions.
+principles share solutions; ``sweep`` runs a scene over a grid of parameters and initial
+values (here or on Dask).
 """
 
 from .constraints import PRINCIPLES, System
@@ -11,11 +12,14 @@ from .equivalence import compare
 from .errors import (ConstraintError, IntegrationError, JetnhError, JetSpaceError,
                      LagrangianError, ModelFileError, PrincipleError)
 from .jet import JetSpace
+# bound here, not in __getattr__: a later `import jetnh.sweep` would rebind the name to the
+# module; jetnh/sweep.py is light (pandas, Dask and numba are imported when it runs)
+from .sweep import sweep
 
 __version__ = "0.1.0"
 
 __all__ = ["JetSpace", "System", "Equations", "PRINCIPLES", "compare", "Scene", "Trajectory",
-           "Diagnostics", "Event", "Ensemble", "JetnhError",
+           "Diagnostics", "Event", "Ensemble", "sweep", "JetnhError",
            "JetSpaceError", "ConstraintError", "LagrangianError", "PrincipleError",
            "ModelFileError", "IntegrationError"]
 

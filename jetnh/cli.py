@@ -1,5 +1,5 @@
-"""The ``jetnh`` command: derive, compare and simulate constrained systems; list the catalogue;
-run the benchmarks and the seed paper's reproduction.
+"""The ``jetnh`` command: derive, compare, simulate and sweep constrained systems; list the
+catalogue; run the benchmarks and the seed paper's reproduction.
 
 MODEL is a catalogue name (``jetnh models`` lists them; options as in ``n_trailer:N=4``)
 or the path of a model file (TOML; see ``jetnh.modelfile`` and examples/*.toml).
@@ -415,6 +415,134 @@ def _plot(traj, system, path, title):
     plt.close(fig)
 
 
+# ---------------------------------------------------------------------- sweep
+def _values(text: str, what: str) -> list:
+    """``A:B:N`` (N evenly spaced values from A to B) or ``V1,V2,...``: numbers, parsed
+    by float() (never evaluated)."""
+    import numpy as np
+
+    try:
+        if ":" in text:
+            a, b, n = text.split(":")
+            if int(n) < 1:
+                raise ValueError
+            return list(np.linspace(float(a), float(b), int(n)))
+        return [float(v) for v in text.split(",")]
+    except ValueError:
+        raise UsageError(f"{what}: {text!r} is neither START:STOP:N (N an integer >= 1) nor "
+                         "a comma-separated list of numbers") from None
+
+
+def _grid(items) -> dict:
+    grid = {}
+    for item in items:
+        name, sep, text = item.partition("=")
+        name = name.strip()
+        if not sep or not name:
+            raise UsageError(f"--grid takes NAME=START:STOP:N or NAME=V1,V2,..., got {item!r}")
+        if name in grid:
+            raise UsageError(f"--grid gives {name} twice; give each name once")
+        grid[name] = _values(text, f"--grid {name}")
+    return grid
+
+
+def _progress_bar(progress, what):
+    """A ``progress(done, total)`` callback: a bar on a terminal, else a line per tenth."""
+    if progress.quiet:
+        return None
+    stream, shown = progress.stream, [-1]
+
+    def show(done, total):
+        if progress.tty:
+            k = 30 * done // total
+            stream.write(f"\rjetnh: {what} [{'#' * k}{'.' * (30 - k)}] {done}/{total} points"
+                         + ("\n" if done == total else ""))
+        elif 10 * done // total > shown[0]:
+            shown[0] = 10 * done // total
+            stream.write(f"jetnh: {what}: {done}/{total} points\n")
+        stream.flush()
+    return show
+
+
+def _write_table(df, path: Path):
+    if path.suffix == ".csv":
+        df.to_csv(path, index=False)
+        return
+    try:
+        import pyarrow  # noqa: F401
+    except ImportError:
+        raise JetnhError("writing parquet needs pyarrow: pip install 'jetnh[parquet]' (or "
+                         "write a .csv)") from None
+    df.to_parquet(path, index=False)
+
+
+def cmd_sweep(args, progress) -> int:
+    from .numeric import Scene
+    from .numeric.codegen import multiplier_names
+    from .sweep import plot_map, sweep
+
+    grid = _grid(args.grid)
+    times = _values(args.times, "--times") if args.times else None
+    if args.plot and (len(grid) != 2 or not args.value):
+        raise UsageError("--plot draws a map over two --grid axes of the column --value; "
+                         "give exactly two --grid and a --value")
+    for out, kinds in ((args.out, (".csv", ".parquet")), (args.plot, None)):
+        if not out:
+            continue
+        if not Path(out).resolve().parent.is_dir():
+            raise JetnhError(f"cannot write {out}: the directory "
+                             f"{Path(out).resolve().parent} does not exist")
+        if kinds and Path(out).suffix not in kinds:
+            raise JetnhError(f"cannot write {out}: give a .csv or .parquet path")
+    loaded = _with_split(load_model(args.model), args.split)
+    system = loaded.system
+    sim = loaded.simulation
+    principle = args.principle or loaded.principle or "chetaev"
+    t0 = args.t_start if args.t_start is not None else float(sim.get("t_start", 0.0))
+    t1 = args.t_end if args.t_end is not None else sim.get("t_end")
+    if t1 is None:
+        raise UsageError("give --t-end (the model file has no [simulation] t_end)")
+    method = args.method or sim.get("method", "dop853")
+    states = ([q.name for q in system.J.q] + [v.name for v in system.independent_velocities]
+              + list(multiplier_names(system, principle)))
+    initial = {s: 0.0 for s in states}
+    initial.update({k: v for k, v in loaded.initial.items() if k in states})
+    initial.update(_assignments(args.init, "--init"))
+    known = set(states) | set(scene_names(system))
+    integrals = {k: v for k, v in loaded.integrals.items()
+                 if not {s.name for s in v.free_symbols} - known}
+    params = _assignments(args.set, "--set")
+    scene = Scene(system, principle, params=params, initial=initial, t_span=(t0, float(t1)),
+                  convention=args.convention or loaded.convention or "paper",
+                  integrals=integrals,
+                  runtime_params=[k for k in grid if k in {p.name for p in system.parameters}])
+    with progress.step(f"deriving and compiling the {principle} kernels "
+                       "(cached for later runs)"):
+        scene.compile()
+    where = f"on the Dask cluster at {args.scheduler}" if args.scheduler else "on this machine"
+    df = sweep(scene, grid, client=args.scheduler, times=times,
+               outputs=args.outputs.split(",") if args.outputs else None,
+               chunk_size=args.chunk_size, progress=_progress_bar(progress, f"sweeping {where}"),
+               timeout=args.timeout, connect_timeout=args.connect_timeout, method=method,
+               rtol=args.rtol if args.rtol is not None else float(sim.get("rtol", 1e-9)),
+               atol=args.atol if args.atol is not None else float(sim.get("atol", 1e-12)),
+               **({"n_steps": args.steps} if method == "rk4" else {}))
+    failed = int((~df["success"]).sum())
+    print(f"jetnh: {len(df)} points, {len(df) - failed} succeeded"
+          + (f", {failed} stopped early (see stop_reason)" if failed else ""), file=sys.stderr)
+    if args.out:
+        _write_table(df, Path(args.out))
+        print(f"wrote {args.out}", file=sys.stderr)
+    else:
+        print(df.to_csv(index=False), end="")
+    if args.plot:
+        x, y = df.attrs["grid"]
+        plot_map(df, x, y, args.value, args.plot,
+                 title=f"{system.name or loaded.label} ({principle}): {args.value}")
+        print(f"wrote {args.plot}", file=sys.stderr)
+    return 0
+
+
 # ---------------------------------------------------------------------- models
 def cmd_models(args, progress) -> int:
     from . import models
@@ -456,16 +584,37 @@ def _repo_root() -> Path:
 
 
 def cmd_bench(args, progress) -> int:
+    """List the benchmark scripts (benchmarks/*.py with a ``__main__`` block; helpers
+    such as ``_common.py`` are not listed), run one, or run them all and then
+    ``report.py``, which regenerates BENCHMARKS.md."""
     import ast
     import subprocess
 
     bench_dir = _repo_root() / "benchmarks"
-    scripts = sorted(bench_dir.glob("*.py")) if bench_dir.is_dir() else []
+    scripts = [p for p in sorted(bench_dir.glob("*.py")) if bench_dir.is_dir()
+               and "__main__" in p.read_text(encoding="utf-8", errors="replace")]
     if not scripts:
         raise JetnhError("no benchmarks found: they live in the repository's benchmarks/ "
                          "directory; run `jetnh bench` from a checkout installed with "
                          "`pip install -e .`")
     by_name = {p.stem: p for p in scripts}
+    if args.all:
+        if args.name:
+            raise UsageError("--all runs every benchmark; give no NAME with it")
+        failed = []
+        for p in [p for p in scripts if p.stem != "report"] + [by_name["report"]]:
+            cmd = [sys.executable, str(p)] + (["--quick"] if args.quick and
+                                               p.stem != "report" else [])
+            print(f"jetnh: running {' '.join(cmd[1:])}", file=sys.stderr, flush=True)
+            if subprocess.call(cmd, cwd=str(_repo_root())):
+                failed.append(p.stem)
+        if failed:
+            raise JetnhError(f"these benchmarks failed (their output is above): "
+                             f"{', '.join(failed)}")
+        return 0
+    if args.quick:
+        raise UsageError("--quick goes with --all; for one benchmark write "
+                         "`jetnh bench NAME --quick`")
     if not args.name:
         print(f"benchmarks in {bench_dir}:")
         for p in scripts:
@@ -476,7 +625,9 @@ def cmd_bench(args, progress) -> int:
             first = " ".join(doc.strip().split("\n\n")[0].split()) if doc else ""
             print(f"  {p.stem}: {first[:150]}")
         print("\nrun one with `jetnh bench NAME [ARGS...]` (ARGS go to the script, e.g. "
-              "--help); results are written under benchmarks/results/.")
+              "--quick, --help); every one and then the report with `jetnh bench --all "
+              "[--quick]`; results are written under benchmarks/results/, the report to "
+              "BENCHMARKS.md.")
         return 0
     if args.name not in by_name:
         raise JetnhError(f"no benchmark named {args.name!r}; the benchmarks are "
@@ -613,6 +764,65 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--format", choices=("text", "json"), default="text")
     s.set_defaults(func=cmd_simulate)
 
+    w = sub.add_parser(
+        "sweep", parents=[common], formatter_class=_Formatter,
+        help="run a model over a grid of parameters and initial values (here or on Dask)",
+        description="Run MODEL at every point of the grid (the Cartesian product of the "
+                    "--grid axes) and write one row per point: the grid values (initial "
+                    "values as NAME(t0)), the final values of the states (or their values "
+                    "at --times as NAME(t=T)) and the diagnostics: status, stop_reason, "
+                    "steps, constraint residual, energy and first-integral drift.  A point "
+                    "that fails keeps its row with its stop_reason.  The other values "
+                    "are as for `jetnh simulate`.  With --scheduler the points run as "
+                    "chunks on a Dask cluster (the result is the same to the last bit).",
+        epilog=EPILOG_MODEL + "\n\nexamples:\n"
+               "  jetnh sweep rolling_disk --grid R=0.5:2:16 --grid phi_t=0.1:1:16 "
+               "--out disk.parquet\n"
+               "  jetnh sweep appell_hamel --grid x_t=0:3:31 --times 0.1,0.5 --scheduler "
+               "tcp://127.0.0.1:8786 --out ah.csv\n"
+               "  jetnh sweep rolling_disk --grid R=0.5:2:40 --grid psi_t=-1:1:40 --plot "
+               "map.png --value x --out map.csv")
+    model_args(w)
+    w.add_argument("--grid", action="append", required=True, metavar="NAME=A:B:N",
+                   help="an axis: N values from A to B, or NAME=V1,V2,... (repeatable; "
+                        "NAME a parameter or a state)")
+    w.add_argument("--principle", "-p", choices=PRINCIPLES, default=None,
+                   help="default: the model file's, else chetaev")
+    w.add_argument("--convention", choices=("paper", "imposed"), default=None)
+    w.add_argument("--set", action="append", metavar="NAME=VALUE",
+                   help="a parameter value for every point (repeatable, or comma-separated)")
+    w.add_argument("--init", action="append", metavar="NAME=VALUE",
+                   help="an initial value for every point (repeatable, or comma-separated)")
+    w.add_argument("--t-start", type=float, default=None, metavar="T0", help="default 0")
+    w.add_argument("--t-end", type=float, default=None, metavar="T",
+                   help="end time (default: the model's [simulation] t_end or the "
+                        "catalogue's)")
+    w.add_argument("--times", metavar="T1,T2,...|A:B:N",
+                   help="output times (default: the final time only)")
+    w.add_argument("--outputs", metavar="NAME,...",
+                   help="output columns (default: every state, dependent velocity and "
+                        "integral)")
+    w.add_argument("--method", default=None, choices=("dop853", "dopri5", "rk4"),
+                   help="default: the model file's, else dop853")
+    w.add_argument("--rtol", type=float, default=None, help="default 1e-9")
+    w.add_argument("--atol", type=float, default=None, help="default 1e-12")
+    w.add_argument("--steps", type=int, default=1000, help="steps of rk4 (default 1000)")
+    w.add_argument("--scheduler", metavar="ADDRESS",
+                   help="a Dask scheduler, e.g. tcp://10.0.0.5:8786 (default: this machine, "
+                        "every core)")
+    w.add_argument("--chunk-size", type=int, default=None, metavar="N",
+                   help="points per Dask task (default: 4 tasks per worker thread)")
+    w.add_argument("--timeout", type=float, default=None, metavar="SECONDS",
+                   help="give up on a Dask sweep after this long (default: no limit)")
+    w.add_argument("--connect-timeout", type=float, default=10.0, metavar="SECONDS",
+                   help="time to reach the scheduler (default 10)")
+    w.add_argument("--out", metavar="PATH",
+                   help="write the table to PATH (.parquet or .csv); default: CSV on stdout")
+    w.add_argument("--plot", metavar="PATH",
+                   help="save the map of --value over the two --grid axes (PNG)")
+    w.add_argument("--value", metavar="COLUMN", help="the column --plot shows")
+    w.set_defaults(func=cmd_sweep)
+
     m = sub.add_parser(
         "models", parents=[common], formatter_class=_Formatter,
         help="list the catalogue, show a model, or print it as a model file",
@@ -625,10 +835,17 @@ def build_parser() -> argparse.ArgumentParser:
 
     b = sub.add_parser(
         "bench", parents=[common], formatter_class=_Formatter,
-        help="list or run the benchmark scripts of benchmarks/",
-        description="Without NAME: list the scripts in the repository's benchmarks/ "
-                    "directory.  With NAME: run benchmarks/NAME.py with ARGS (for now a "
-                    "thin launcher; each script documents its own options, try --help).")
+        help="list or run the benchmarks of benchmarks/ and regenerate BENCHMARKS.md",
+        description="Without NAME: list the benchmark scripts in the repository's "
+                    "benchmarks/ directory.  With NAME: run benchmarks/NAME.py with ARGS "
+                    "(each script documents its options, try --help; every one takes "
+                    "--quick and --out).  With --all: run every benchmark, then "
+                    "benchmarks/report.py, which writes BENCHMARKS.md from the results; "
+                    "--all --quick runs each one's quick profile (minutes, not tens of "
+                    "minutes).  `jetnh bench report` regenerates BENCHMARKS.md alone.")
+    b.add_argument("--all", action="store_true",
+                   help="run every benchmark, then the report")
+    b.add_argument("--quick", action="store_true", help="with --all: the quick profiles")
     b.add_argument("name", nargs="?", metavar="NAME")
     b.add_argument("args", nargs=argparse.REMAINDER, metavar="ARGS")
     b.set_defaults(func=cmd_bench)

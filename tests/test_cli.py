@@ -137,8 +137,50 @@ def test_models_listing_and_toml(tmp_path):
 
 def test_bench_lists_the_benchmarks():
     r = clean(run("bench"))
-    assert "numeric_speed" in r.stdout
+    assert "workprecision" in r.stdout and "report" in r.stdout and "--all" in r.stdout
+    assert "_common" not in r.stdout                  # helpers are not benchmarks
     clean(run("bench", "no_such_benchmark"), 1)
+
+
+@pytest.mark.parametrize("args, words", [
+    (("bench", "--quick"), "--quick goes with --all"),
+    (("bench", "--all", "workprecision"), "give no NAME"),
+])
+def test_bench_usage_errors(args, words, capsys):
+    code, _, err = inproc(capsys, *args)
+    assert code == 2 and words in err
+
+
+def test_bench_report_renders_any_results(tmp_path):
+    """The generic format of benchmarks/report.py (stress_*.json and the like)."""
+    doc = {"benchmark": "stress_demo", "date": "2026-01-01T00:00:00+00:00",
+           "command": "python benchmarks/stress_demo.py", "title": "A demo stress test",
+           "summary": ["drift stays bounded"], "limits": ["cos(phi) < 1e-8: unreliable"],
+           "rows": [{"case": "a", "drift": 1.5e-12, "detail": {"steps": 10}}]}
+    (tmp_path / "stress_demo.json").write_text(json.dumps(doc))
+    out = tmp_path / "B.md"
+    clean(run("bench", "report", "--results", str(tmp_path), "--out", str(out)))
+    md = out.read_text()
+    assert "## Summary" in md and "cos(phi) < 1e-8: unreliable" in md
+    assert "## A demo stress test" in md and "| case | drift | detail.steps |" in md
+    assert "python benchmarks/stress_demo.py" in md
+
+
+def test_bench_workprecision_quick_and_report(tmp_path):
+    """Smoke test of the quick profile (no timing is asserted)."""
+    path = str(tmp_path / "workprecision.json")
+    clean(run("bench", "workprecision", "--quick", "--out", path))
+    data = json.loads((tmp_path / "workprecision.json").read_text())
+    assert data["profile"] == "quick" and data["command"].endswith("--quick --out " + path)
+    assert {r["method"] for p in data["panels"] for r in p["runs"]} >= {
+        "jetnh dop853", "jetnh dopri5", "scipy RK45", "scipy DOP853", "scipy LSODA", "scipy Radau"}
+    exact = data["panels"][0]
+    assert exact["reference"]["kind"] == "exact"
+    assert exact["reference"]["tight_run_error"] < 1e-12
+    for png in data["figures"]:
+        assert (tmp_path / png).stat().st_size > 10_000
+    clean(run("bench", "report", "--results", str(tmp_path), "--out", str(tmp_path / "B.md")))
+    assert "Work-precision" in (tmp_path / "B.md").read_text()
 
 
 @pytest.mark.parametrize("args, code, words", [

@@ -70,6 +70,7 @@ def test_ah_fixed_step_stops_before_the_kink(ah_scene):
     assert traj.status == SINGULAR and traj.singularity["indicator"] == "x_t**2 + y_t**2"
     assert t_star - 2 * 0.0025 <= traj.t[-1] <= t_star
     assert "jumps over a kink" in traj.stop_reason and "dop853" in traj.stop_reason
+    assert np.all(np.diff(traj.t) > 0)          # the stop is not a second copy of its row
 
 
 def test_ah_singular_tol_moves_the_stop(ah_scene):

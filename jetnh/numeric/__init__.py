@@ -3,14 +3,17 @@
 ``Scene(system, principle, params, initial, t_span).run(...)`` derives the equations of
 one principle, generates numba kernels through ``sympy.cse`` (``codegen``), caches them
 on disk keyed by the symbolic input (``cache``), and integrates in compiled loops
-(``integrators``: dop853, dopri5, rk4, dla) or with scipy's ``solve_ivp``.
+(``integrators``: dop853, dopri5, rk4, dla, dvi) or with scipy's ``solve_ivp``.
 
 - Singular configurations (``codegen.singular_indicators``): every run stops where the
   dependent velocities cannot be solved for or the accelerations are undefined
   (det df/dqdot^alpha, denominators and square-root arguments of phi and of the
   accelerations crossing zero or falling below ``singular_tol`` of their initial size),
   located on the dense output, with ``status`` SINGULAR and a ``stop_reason`` that names
-  the indicator, the time and the way out.
+  the indicator, the time and the way out; dla and dvi check the indicators of the
+  constraints and the Lagrangian as written at their nodes.
+- Precision (``precision``): 50-digit mpmath values of kernel expressions with a rounding
+  error bound, against which ``benchmarks/stress_mpmath.py`` checks the compiled kernels.
 - User events (``events``): ``run(events=[expr, callable, Event(...)])`` with scipy's
   semantics (terminal, direction), roots on the dense output inside the compiled loop.
 - Ensembles (``ensemble``): ``scene.ensemble(initial=arrays, params=arrays, ...)`` runs

@@ -223,32 +223,14 @@ def generate(system, principle, params: dict, runtime_params=(), integrals=None,
     timings = {}
     t0 = time.perf_counter()
     J = system.J
-    eom = system.equations(principle, form=form, convention=convention)
-    acc = eom.accelerations()
+    eom, acc, prepare, phi_exprs, rhs_exprs = _rhs_parts(
+        system, principle, params, tuple(runtime_params), form, convention)
     timings["derive"] = time.perf_counter() - t0
-    if eom.arbitrary:
-        raise PrincipleError(
-            f"the {principle} equations in the {convention!r} convention leave the multipliers "
-            f"{[s.name for s in eom.arbitrary]} arbitrary; they cannot be simulated")
-
     lams = tuple(eom.multipliers)
     rates = tuple(eom.multiplier_rates)
     ind_vel = system.independent_velocities
     dep_vel = system.dependent_velocities
-    phi = system.phi
     runtime_params = tuple(runtime_params)
-    prepare = _Preparer(system, lams, params, runtime_params)
-
-    phi_exprs = [prepare(phi[v], f"the dependent velocity {v}") for v in dep_vel]
-    rhs_exprs = []
-    for s in J.q:
-        v = J.jet(s, 1)
-        rhs_exprs.append(prepare.rename[v])
-    for v in ind_vel:
-        base = J.split(v)[0]
-        rhs_exprs.append(prepare(acc[J.jet(base, 2)], f"the acceleration of {base}"))
-    for r in rates:
-        rhs_exprs.append(prepare(acc[r], f"the rate {r}"))
 
     # aux: residuals, energy, integrals
     F = system.L + sp.Add(*[lam * f for lam, f in zip(lams, eom.constraints)])
@@ -287,6 +269,39 @@ def generate(system, principle, params: dict, runtime_params=(), integrals=None,
     src.append(f"LAYOUT = {layout.to_json()!r}\n")
     timings["cse_print"] = time.perf_counter() - t1
     return KernelSource(key, layout, "\n".join(src), timings)
+
+
+def _rhs_parts(system, principle, params, runtime_params, form, convention):
+    """The equations, accelerations, preparer, and the expressions of ``rhs`` (see
+    ``kernel_expressions``)."""
+    J = system.J
+    eom = system.equations(principle, form=form, convention=convention)
+    acc = eom.accelerations()
+    if eom.arbitrary:
+        raise PrincipleError(
+            f"the {principle} equations in the {convention!r} convention leave the multipliers "
+            f"{[s.name for s in eom.arbitrary]} arbitrary; they cannot be simulated")
+    prepare = _Preparer(system, tuple(eom.multipliers), params, runtime_params)
+    phi_exprs = [prepare(system.phi[v], f"the dependent velocity {v}")
+                 for v in system.dependent_velocities]
+    rhs_exprs = [prepare.rename[J.jet(s, 1)] for s in J.q]
+    for v in system.independent_velocities:
+        base = J.split(v)[0]
+        rhs_exprs.append(prepare(acc[J.jet(base, 2)], f"the acceleration of {base}"))
+    for r in eom.multiplier_rates:
+        rhs_exprs.append(prepare(acc[r], f"the rate {r}"))
+    return eom, acc, prepare, phi_exprs, rhs_exprs
+
+
+def kernel_expressions(system, principle, params: dict, runtime_params=(), form=None,
+                       convention="paper"):
+    """``(phi_exprs, rhs_exprs)``: what the generated ``rhs`` kernel evaluates (before
+    ``cse``), in kernel symbols -- ``s<i>`` the states, ``v<a>`` the dependent velocities
+    (computed first, ``v<a> = phi_exprs[a]``), ``p<i>`` the runtime parameters, ``t`` --
+    with the other parameters substituted.  For checking the compiled kernel against
+    another evaluation of the same expressions (``benchmarks/stress_mpmath.py``)."""
+    parts = _rhs_parts(system, principle, params, tuple(runtime_params), form, convention)
+    return parts[3], parts[4]
 
 
 def _function(name, layout: Layout, phi_exprs, out_exprs, indices=None) -> str:
@@ -399,7 +414,16 @@ class _Preparer:
         if undefined:
             raise JetnhError(f"{what} contains undefined functions {undefined}; "
                              "jetnh compiles explicit expressions only")
-        return e.xreplace(sub)
+        out = e.xreplace(sub)
+        if out.has(sp.nan, sp.zoo, sp.oo, sp.S.NegativeInfinity):
+            values = ", ".join(f"{k} = {v}" for k, v in sorted(self.numbers.items()))
+            raise JetnhError(
+                f"{what} is undefined for the parameter values {values}: substituting them "
+                "divides by zero (or takes the log of zero) identically -- e.g. a Lagrangian "
+                "degenerate for these values (a singular reduced mass matrix), or a constraint "
+                "that cannot be solved for the dependent velocities; change the values, or "
+                "pass the parameter in runtime_params= to find where the motion is singular")
+        return out
 
 
 # ---------------------------------------------------------------------- singularities
@@ -506,16 +530,37 @@ _JIT = dict(cache=True, error_model="numpy", nogil=True)
 '''
 
 
+def discrete_indicators(system, numbers) -> list[tuple[str, sp.Expr]]:
+    """``(kind, expression)`` of the singularity indicators of the discrete integrators
+    (dla, dvi), at a node (t, q, qdot): ``"constraint"``, the singular bases
+    (``_singular_bases``) of the constraints f^a as written, and ``"lagrangian"``, those of
+    L -- with the compiled parameters (``numbers``) substituted.  The discrete step uses
+    the implicit constraints, never the explicit form phi, so a singular split (the knife
+    edge at cos(phi) = 0) is no singularity for it."""
+    sub = {s: numbers[s.name] for s in system.parameters if s.name in numbers}
+    out, seen = [], set()
+    for kind, exprs in (("constraint", system.constraints), ("lagrangian", [system.L])):
+        for e in exprs:
+            for b in _singular_bases(sp.sympify(e).xreplace(sub)):
+                for f in _factors(b):
+                    if f not in seen:
+                        seen.add(f)
+                        out.append((kind, f))
+    return out
+
+
 def generate_dla(system, params: dict, runtime_params=(), key="",
-                 kind="chetaev") -> KernelSource:
+                 kind="chetaev", integrals=None) -> KernelSource:
     """Kernels of the midpoint discrete Lagrange-d'Alembert step (``integrators.dla``,
     ``kind="chetaev"``) or of the discrete vakonomic step (``integrators.dvi``,
     ``kind="vakonomic"``).
 
-    With ``qb = (q0 + q1)/2``, ``vb = (q1 - q0)/h``, ``tb = t + h/2``, the one-forms
+    The unknown of a step is the increment ``dq = q1 - q0`` (not q1): with ``qb = q0 +
+    dq/2``, ``vb = dq/h``, ``tb = t + h/2``, the velocity carries no rounding error of
+    size eps |q0| / h (a step far from the origin is the same step), and the one-forms
     ``A^a = df^a/dqdot`` and ``B^a = df^a/dq`` at the midpoint:
 
-    ``step_residual(t, h, q0, p0, z, p, G, Jm)``: ``z = (q1, lambda)``;
+    ``step_residual(t, h, q0, p0, z, p, G, Jm)``: ``z = (dq, lambda)``;
         chetaev:   ``G = (p0 - L_v + h/2 L_q + h/2 lambda.A,  f(tb, qb, vb))``;
         vakonomic: ``G = (p0 - L_v + h/2 L_q - lambda.(A - h/2 B),  f(tb, qb, vb))``;
         and its Jacobian in z.
@@ -523,7 +568,9 @@ def generate_dla(system, params: dict, runtime_params=(), key="",
         ``L_v + h/2 L_q + lambda.(A + h/2 B)`` (vakonomic).
     ``legendre(t, q, v, p, out, M)``: ``out = dF/dqdot``, ``M = d^2F/dqdot^2`` with
         ``F = L`` (chetaev) or ``L + lambda.f`` (vakonomic, lambda = q[n:n+k]).
-    ``nodal(t, q, v, p, out)``: ``out = (f^a (k), E = v.F_v - F)`` (lambda as above).
+    ``nodal(t, q, v, p, out)``: ``out = (f^a (k), E = v.F_v - F, I_1..I_m)`` (lambda as
+        above; ``integrals``: name -> expression in t, q, qdot and the multipliers).
+    ``sing(t, q, v, p, out)``: the indicators of ``discrete_indicators`` at a node.
     ``constraint_jac(t, q, v, p, f, A)``: ``f^a`` and ``A = df/dqdot`` at a node (for the
         projection of node velocities onto the constraints).
     """
@@ -574,7 +621,7 @@ def generate_dla(system, params: dict, runtime_params=(), key="",
         force0 = [half * sp.Add(*[lam[a] * A[a][s] for a in range(k)]) for s in range(n)]
         force1 = force0
     G = [sp.Symbol(f"P{s}") - Lv[s] + half * Lq[s] + force0[s] for s in range(n)] + fb
-    # d/dq1 = 1/2 d/dqb + 1/h d/dvb;  d/dlambda
+    # d/d(dq) = 1/2 d/dqb + 1/h d/dvb;  d/dlambda
     Jm = []
     for g in G:
         row = [sp.diff(g, qb[s]) / 2 + sp.diff(g, vb[s]) / h for s in range(n)]
@@ -592,6 +639,16 @@ def generate_dla(system, params: dict, runtime_params=(), key="",
     fn = [at(f, qs, vs, tn) for f in system.constraints]
     An = [[at(sp.diff(f, v), qs, vs, tn) for v in J.qd] for f in system.constraints]
     En = sp.Add(*[vs[s] * Lvn[s] for s in range(n)]) - Ln
+    lam_names = {s.name: l for s, l in zip(codegen_multipliers_symbols(system), ls)} if vak \
+        else {}
+    In = []
+    for name, expr in (integrals or {}).items():
+        e = sp.sympify(expr)
+        e = e.xreplace({s: lam_names[s.name] for s in e.free_symbols if s.name in lam_names})
+        In.append(at(e, qs, vs, tn))
+    indicators = discrete_indicators(system, {k: v for k, v in numbers.items()
+                                              if not isinstance(v, sp.Symbol)})
+    Sn = [at(e, qs, vs, tn) for _, e in indicators]
 
     def body(outputs, pre):
         lines = list(pre)
@@ -603,8 +660,8 @@ def generate_dla(system, params: dict, runtime_params=(), key="",
         return "\n".join("    " + ln for ln in lines) + "\n"
 
     mid = ["tb = t + 0.5*h"]
-    mid += [f"a{s} = 0.5*(q0[{s}] + z[{s}])" for s in range(n)]
-    mid += [f"b{s} = (z[{s}] - q0[{s}])/h" for s in range(n)]
+    mid += [f"a{s} = q0[{s}] + 0.5*z[{s}]" for s in range(n)]
+    mid += [f"b{s} = z[{s}]/h" for s in range(n)]
     mid += [f"z{n + a} = z[{n + a}]" for a in range(k)]
     mid += [f"P{s} = p0[{s}]" for s in range(n)]
     src = [DLA_HEADER.format(version=CODEGEN_VERSION, key=key)]
@@ -631,7 +688,12 @@ def generate_dla(system, params: dict, runtime_params=(), key="",
     src.append('\n@numba.njit("void(float64, float64[::1], float64[::1], float64[::1], '
                'float64[::1])", **_JIT)\n'
                "def nodal(t, q, v, p, out):\n")
-    src.append(body([(f"out[{a}]", e) for a, e in enumerate(fn)] + [(f"out[{k}]", En)], node))
+    src.append(body([(f"out[{a}]", e) for a, e in enumerate(fn)] + [(f"out[{k}]", En)]
+                    + [(f"out[{k + 1 + i}]", e) for i, e in enumerate(In)], node))
+    src.append('\n@numba.njit("void(float64, float64[::1], float64[::1], float64[::1], '
+               'float64[::1])", **_JIT)\n'
+               "def sing(t, q, v, p, out):\n")
+    src.append(body([(f"out[{i}]", e) for i, e in enumerate(Sn)], node))
     src.append('\n@numba.njit("void(float64, float64[::1], float64[::1], float64[::1], '
                'float64[::1], float64[:, ::1])", **_JIT)\n'
                "def constraint_jac(t, q, v, p, f, A):\n")
@@ -643,13 +705,19 @@ def generate_dla(system, params: dict, runtime_params=(), key="",
         velocities=tuple(v.name for v in system.independent_velocities),
         multipliers=codegen_multipliers(system) if vak else (),
         dependent_velocities=tuple(v.name for v in system.dependent_velocities),
-        constraints=k, integrals=(), runtime_params=runtime_params,
-        coordinate_velocities=tuple(v.name for v in J.qd))
+        constraints=k, integrals=tuple(integrals or {}), runtime_params=runtime_params,
+        coordinate_velocities=tuple(v.name for v in J.qd),
+        indicators=tuple(sp.sstr(e) for _, e in indicators),
+        indicator_kinds=tuple(kind for kind, _ in indicators))
     src.append(f"\nLAYOUT = {layout.to_json()!r}\n")
     return KernelSource(key, layout, "".join(src))
 
 
-def codegen_multipliers(system) -> tuple[str, ...]:
+def codegen_multipliers_symbols(system) -> tuple:
     from ..equations import multiplier_symbols
 
-    return tuple(s.name for s in multiplier_symbols(system))
+    return tuple(multiplier_symbols(system))
+
+
+def codegen_multipliers(system) -> tuple[str, ...]:
+    return tuple(s.name for s in codegen_multipliers_symbols(system))

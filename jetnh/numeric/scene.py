@@ -189,19 +189,21 @@ class Scene:
         out.update(required)
         return out
 
-    def _dependent_velocity_values(self, given) -> dict[str, float]:
-        """qdot^alpha = phi^alpha at the initial state, by sympy with numbers (small)."""
+    def _dependent_velocity_values(self, given, t0=None, params=None) -> dict[str, float]:
+        """qdot^alpha = phi^alpha at the initial state (or at ``t0`` with ``params``
+        overriding the scene's), by sympy with numbers (small)."""
         sys_ = self.system
         if not sys_.k:
             return {}
         J = sys_.J
-        sub = {J.t: sp.Float(self.t_span[0])}
+        sub = {J.t: sp.Float(self.t_span[0] if t0 is None else t0)}
         by_name = {s.name: s for s in J.q + J.qd}
         for name, v in given.items():
             if name in by_name:
                 sub[by_name[name]] = sp.Float(v)
+        values = {**self.params, **(params or {})}
         for s in sys_.parameters:
-            sub[s] = sp.Float(self.params[s.name])
+            sub[s] = sp.Float(values[s.name])
         out = {}
         for v in sys_.dependent_velocities:
             val = sys_.phi[v].xreplace(sub)
@@ -292,7 +294,11 @@ class Scene:
         initial size; the point is located on the dense output, ``status`` is
         ``SINGULAR`` and ``stop_reason`` names the indicator, the time and the way out.
         ``singular="ignore"`` skips the check.  NaN or infinity that no indicator
-        explains stops with an ``IntegrationError`` naming the time and the state.
+        explains stops with an ``IntegrationError`` naming the time and the state.  dla
+        and dvi check the indicators of the constraints and the Lagrangian as written
+        (``codegen.discrete_indicators``; never the split) at every node and stop at the
+        last regular one; a failed step next to a vanishing indicator, or where the
+        Lagrangian is degenerate on the constraints, is a singular stop too.
         """
         t0, t1 = self._t_span(t_span) if t_span is not None else self.t_span
         y_init = self.y0 if y0 is None else np.ascontiguousarray(y0, dtype=float)
@@ -316,11 +322,14 @@ class Scene:
             if events:
                 raise JetnhError(f"events need dense output, which the {key} integrator does "
                                  "not have; use dop853, dopri5 or rk4")
+            sing = singular_tol if singular == "stop" else None
+            # the scene's initial dependent velocities hold for its own parameters only
+            own = y0 is None and params is None
             if key in DVI_NAMES:
-                return self._run_dvi(t0, t1, y_init, y0 is None, p, n_steps, h, save,
-                                     newton_tol, max_newton)
-            return self._run_dla(t0, t1, y_init, y0 is None, p, n_steps, h, save, newton_tol,
-                                 max_newton, bool(projection))
+                return self._run_dvi(t0, t1, y_init, own, p, n_steps, h, save, newton_tol,
+                                     max_newton, sing)
+            return self._run_dla(t0, t1, y_init, own, p, n_steps, h, save, newton_tol,
+                                 max_newton, bool(projection), sing)
         if projection:
             raise JetnhError("projection= is an option of the dla integrator; the "
                              "Runge-Kutta methods follow the constraints to their tolerance")
@@ -464,7 +473,10 @@ class Scene:
         f = np.empty_like(y)
         kern.rhs(t, y, p, f)
         if not np.all(np.isfinite(f)):
-            return int(np.argmin(rel))
+            # no indicator is small here: blame the one nearest to vanishing only if one
+            # has moved at all (at the initial state nothing has)
+            i = int(np.argmin(rel))
+            return i if rel[i] < 1.0 else -1
         span = abs(self.t_span[1] - self.t_span[0]) or 1.0
         for s in np.geomspace(1e-12, 1.0, 25):
             for hh in (s * span, -s * span):
@@ -501,6 +513,10 @@ class Scene:
             where = (f"at t = {t:.17g}, {expr} fell to {value:.6g} (initially "
                      f"{initial:.6g}; the threshold is singular_tol = {tol:g} of that)")
         dep = [s.name for s in self.system.dependent]
+        ratio = (self._split_det_ratio(t, y, p, t0, y_init)
+                 if kind != "split" and self.system.k > 3 else None)
+        if ratio is not None and ratio < 1e-6:
+            kind = "split"      # for k > 3 the split's determinant is no indicator of its own
         if kind == "split":
             alt = self._regular_split(t, y, p)
             hint = (f"The determinant of df/dqdot^alpha vanishes: the constraints cannot be "
@@ -516,20 +532,25 @@ class Scene:
             hint = ("A denominator (or a square-root argument) of the accelerations "
                     "vanishes: the reduced mass matrix or the multiplier equations are "
                     "singular here, so the accelerations are not determined")
+        if ratio is not None and ratio > 1e-3 and kind == "constraint":
+            hint = (f"The split is regular here (det df/dqdot^alpha is {ratio:.3g} of its "
+                    "initial value), but with more than 3 constraints phi^alpha comes from a "
+                    f"symbolic LU solve, and {expr} is a denominator of it -- likely a pivot "
+                    "that vanishes where the matrix does not: a singularity of the "
+                    "expressions, not of the motion. Order the constraints so that the solve "
+                    "can pivot on constants, or pass it")
         reason = (f"singular configuration: {where}. {hint}. (If the singularity is removable "
                   "-- a 0/0 that cancels -- run with singular='ignore'.)")
         return {"indicator": expr, "kind": kind, "index": idx, "t": float(t),
                 "value": value, "initial": initial, "reason": reason}
 
-    def _regular_split(self, t, y, p):
-        """A choice of dependent coordinates for which df/dqdot is invertible at (t, y)."""
-        from itertools import combinations
-
+    def _jacobian_at(self, t, y, p):
+        """df/dqdot (k x n) at the state (t, y), numerically, or None."""
         sys_ = self.system
         J = sys_.J
         try:
             aux = np.empty(self.kernels.layout.n_aux)
-            self.kernels.aux(float(t), np.ascontiguousarray(y), p, aux)
+            self.kernels.aux(float(t), np.ascontiguousarray(y, dtype=float), p, aux)
             vals = {J.t: t}
             vals.update(zip(J.q, y[:J.n]))
             vals.update(zip(sys_.independent_velocities, y[J.n:J.n + J.n - sys_.k]))
@@ -541,6 +562,26 @@ class Scene:
                          .evalf(), dtype=float)
         except (TypeError, ValueError):
             return None
+        return A if np.all(np.isfinite(A)) else None
+
+    def _split_det_ratio(self, t, y, p, t0, y0):
+        """|det df/dqdot^alpha| at (t, y) over its value at (t0, y0), or None."""
+        cols = [self.system.J.q.index(s) for s in self.system.dependent]
+        A, A0 = self._jacobian_at(t, y, p), self._jacobian_at(t0, y0, p)
+        if A is None or A0 is None:
+            return None
+        d0 = abs(np.linalg.det(A0[:, cols]))
+        return float(abs(np.linalg.det(A[:, cols])) / d0) if d0 else None
+
+    def _regular_split(self, t, y, p):
+        """A choice of dependent coordinates for which df/dqdot is invertible at (t, y)."""
+        from itertools import combinations
+
+        sys_ = self.system
+        J = sys_.J
+        A = self._jacobian_at(t, y, p)
+        if A is None:
+            return None
         best, choice = 0.0, None
         for cols in combinations(range(J.n), sys_.k):
             d = abs(np.linalg.det(A[:, list(cols)]))
@@ -551,19 +592,29 @@ class Scene:
             return None
         return choice
 
+    def _discrete_kernels(self, kind):
+        compiled_params = {k: v for k, v in self.params.items()
+                           if k not in self.runtime_params}
+        principle = "chetaev" if kind == "dla" else "vakonomic"
+        key = codegen.symbolic_key(self.system, principle, compiled_params,
+                                   self.runtime_params, self.integrals, extra=kind)
+        return _cache.load(key, lambda: codegen.generate_dla(
+            self.system, compiled_params, self.runtime_params, key=key, kind=principle,
+            integrals=self.integrals), persistent=self.cache)
+
     @property
     def dla_kernels(self):
         """Kernels of the discrete Lagrange-d'Alembert step (``codegen.generate_dla``)."""
-        compiled_params = {k: v for k, v in self.params.items()
-                           if k not in self.runtime_params}
-        key = codegen.symbolic_key(self.system, "chetaev", compiled_params,
-                                   self.runtime_params, extra="dla")
-        return _cache.load(key, lambda: codegen.generate_dla(
-            self.system, compiled_params, self.runtime_params, key=key),
-            persistent=self.cache)
+        return self._discrete_kernels("dla")
+
+    @property
+    def dvi_kernels(self):
+        """Kernels of the discrete vakonomic step (``codegen.generate_dla(kind=
+        "vakonomic")``)."""
+        return self._discrete_kernels("dvi")
 
     def _run_dla(self, t0, t1, y_init, default_y0, p, n_steps, h, save, tol, max_iter,
-                 projection=False):
+                 projection=False, singular_tol=1e-10):
         from .integrators import dla
 
         if self.principle != "chetaev":
@@ -573,50 +624,25 @@ class Scene:
                 + (", or dvi (the discrete vakonomic integrator)"
                    if self.principle in ("vakonomic", "holder") else ""))
         n_steps = self._n_steps(n_steps, h, t0, t1, "dla")
-        J = self.system.J
-        n, k = J.n, self.system.k
+        n = self.system.J.n
         q0 = np.ascontiguousarray(y_init[:n])
         v0 = self._full_velocities(t0, y_init, p, default_y0)
         kern = self.dla_kernels
-        solve = dla.solver()
         mode = EVERY_STEP if save == "steps" else ENDPOINTS
+        n_sing = len(kern.layout.indicators) if singular_tol is not None else 0
+        v0 = np.ascontiguousarray(v0, dtype=float)
         tic = time.perf_counter()
-        status, ts, rows, n_out, stats, t_last, y_last = solve(
+        out = dla.solver()(
             kern.step_residual, kern.momentum, kern.legendre, kern.nodal, kern.constraint_jac,
-            t0, t1, q0, np.ascontiguousarray(v0, dtype=float), p, int(n_steps), k, float(tol),
-            int(max_iter), mode, projection)
-        wall = time.perf_counter() - tic
-        if status == NONFINITE:
-            self._raise_nonfinite("dla", t_last, y_last[:n])
-        if status == NOT_CONVERGED:
-            raise IntegrationError(
-                f"dla: Newton's method did not converge in the step from t = {t_last:.17g} "
-                f"(h = {(t1 - t0) / n_steps:.3g}); take a smaller step, or the discrete "
-                "constraint has no nearby solution there")
-        rows = rows[:n_out]
-        ind = [J.q.index(self.system.J.split(J.jet(s, 1))[0]) for s in self.system.independent]
-        ys = np.ascontiguousarray(np.hstack([rows[:, :n], rows[:, [n + i for i in ind]]]))
-        own = {"velocities": {v.name: rows[:, n + i] for i, v in enumerate(J.qd)},
-               "residual": rows[:, 2 * n:2 * n + k], "energy": rows[:, 2 * n + k]}
-        return Trajectory(self, ts[:n_out], ys, p, method="dla" + ("+projection" if projection
-                                                                  else ""), status=int(status),
-                          stop_reason=STATUS_TEXT[int(status)], steps=int(stats[0]),
-                          rejected=0, nfev=int(stats[1]), wall_time=wall, kernels=kern,
-                          projected=self.projected, own=own)
+            kern.sing, t0, t1, q0, v0, p, int(n_steps), self.system.k, float(tol),
+            int(max_iter), mode, projection, n_sing, float(singular_tol or 0.0),
+            len(kern.layout.integrals), self._degenerate_off_constraints(kern, t0, q0, v0, p))
+        return self._discrete_trajectory(
+            "dla" + ("+projection" if projection else ""), kern, out,
+            time.perf_counter() - tic, p, t0, t1, n_steps, singular_tol)
 
-    @property
-    def dvi_kernels(self):
-        """Kernels of the discrete vakonomic step (``codegen.generate_dla(kind=
-        "vakonomic")``)."""
-        compiled_params = {k: v for k, v in self.params.items()
-                           if k not in self.runtime_params}
-        key = codegen.symbolic_key(self.system, "vakonomic", compiled_params,
-                                   self.runtime_params, extra="dvi")
-        return _cache.load(key, lambda: codegen.generate_dla(
-            self.system, compiled_params, self.runtime_params, key=key, kind="vakonomic"),
-            persistent=self.cache)
-
-    def _run_dvi(self, t0, t1, y_init, default_y0, p, n_steps, h, save, tol, max_iter):
+    def _run_dvi(self, t0, t1, y_init, default_y0, p, n_steps, h, save, tol, max_iter,
+                 singular_tol=1e-10):
         from .integrators import dvi
 
         if not (self.principle == "vakonomic" or
@@ -637,30 +663,151 @@ class Scene:
         lam0 = np.ascontiguousarray(y_init[n + n - k:])
         v0 = self._full_velocities(t0, y_init, p, default_y0)
         kern = self.dvi_kernels
-        solve = dvi.solver()
         mode = EVERY_STEP if save == "steps" else ENDPOINTS
+        n_sing = len(kern.layout.indicators) if singular_tol is not None else 0
         tic = time.perf_counter()
-        status, ts, rows, n_out, stats, t_last, y_last = solve(
-            kern.step_residual, kern.momentum, kern.legendre, kern.nodal, t0, t1, q0,
-            v0, lam0, p, int(n_steps), float(tol), int(max_iter), mode)
-        wall = time.perf_counter() - tic
-        if status == NONFINITE:
-            self._raise_nonfinite("dvi", t_last, y_last[:n])
-        if status == NOT_CONVERGED:
-            raise IntegrationError(
-                f"dvi: Newton's method did not converge in the step from t = {t_last:.17g} "
-                f"(h = {(t1 - t0) / n_steps:.3g}); take a smaller step, or the discrete "
-                "constraint has no nearby solution there")
+        out = dvi.solver()(
+            kern.step_residual, kern.momentum, kern.legendre, kern.nodal, kern.sing, t0, t1,
+            q0, v0, lam0, p, int(n_steps), float(tol), int(max_iter), mode, n_sing,
+            float(singular_tol or 0.0), len(kern.layout.integrals))
+        return self._discrete_trajectory("dvi", kern, out, time.perf_counter() - tic, p, t0,
+                                         t1, n_steps, singular_tol)
+
+    def _discrete_trajectory(self, method, kern, out, wall, p, t0, t1, n_steps, singular_tol):
+        """A Trajectory from the result of a dla/dvi solve; a failed Newton step next to a
+        singular configuration becomes a singular stop, any other failure an error."""
+        status, ts, rows, n_out, stats, t_last, y_last, sing_index, t_prev, y_prev = out
+        status = int(status)
+        J = self.system.J
+        n, k = J.n, self.system.k
+        k_lam = k if method == "dvi" else 0
+        name = method.split("+")[0]
+        singularity = None
+        if status == SINGULAR:
+            singularity = self._discrete_singularity(kern, int(sing_index), t_last, y_last, p,
+                                                     rows[0], t0, singular_tol)
+        elif status in (NONFINITE, NOT_CONVERGED):
+            singularity = self._explain_discrete(kern, t_last, y_last, t_prev, y_prev, p,
+                                                 rows[0], t0, singular_tol, n_out)
+            if singularity is None:
+                what = ("the state became NaN or infinite" if status == NONFINITE else
+                        "Newton's method did not converge")
+                raise IntegrationError(
+                    f"{name}: {what} in the step from t = {t_last:.17g} "
+                    f"(h = {(t1 - t0) / n_steps:.3g}); take a smaller step, or the discrete "
+                    "constraint has no nearby solution there")
+            status = SINGULAR
         rows = rows[:n_out]
         ind = [J.q.index(s) for s in self.system.independent]
         ys = np.ascontiguousarray(np.hstack([rows[:, :n], rows[:, [n + i for i in ind]],
-                                             rows[:, 2 * n:2 * n + k]]))
+                                             rows[:, 2 * n:2 * n + k_lam]]))
+        c = 2 * n + k_lam
         own = {"velocities": {v.name: rows[:, n + i] for i, v in enumerate(J.qd)},
-               "residual": rows[:, 2 * n + k:2 * n + 2 * k], "energy": rows[:, 2 * n + 2 * k]}
-        return Trajectory(self, ts[:n_out], ys, p, method="dvi", status=int(status),
-                          stop_reason=STATUS_TEXT[int(status)], steps=int(stats[0]),
-                          rejected=0, nfev=int(stats[1]), wall_time=wall, kernels=kern,
-                          projected=self.projected, own=own)
+               "residual": rows[:, c:c + k], "energy": rows[:, c + k],
+               "integrals": {nm: rows[:, c + k + 1 + i]
+                             for i, nm in enumerate(kern.layout.integrals)}}
+        return Trajectory(self, ts[:n_out], ys, p, method=method, status=status,
+                          stop_reason=(singularity["reason"] if singularity else
+                                       STATUS_TEXT[status]),
+                          steps=int(stats[0]), rejected=0, nfev=int(stats[1]), wall_time=wall,
+                          kernels=kern, projected=self.projected, own=own,
+                          singularity=singularity)
+
+    def _node(self, y):
+        """(q for the node kernels, v) from a discrete state (q, v[, lambda])."""
+        n = self.system.J.n
+        return (np.ascontiguousarray(np.concatenate([y[:n], y[2 * n:]])),
+                np.ascontiguousarray(y[n:2 * n]))
+
+    def _node_indicators(self, kern, t, y, p):
+        g = np.empty(len(kern.layout.indicators))
+        kern.sing(float(t), *self._node(y), p, g)
+        return g
+
+    def _saddle(self, kern, t, q, v, p):
+        """M = d^2F/dqdot^2 and S = [[M, A^T], [A, 0]], A = df/dqdot, at a node: S is the
+        matrix the discrete step inverts as h -> 0."""
+        n, k = self.system.J.n, self.system.k
+        M, mom = np.empty((n, n)), np.empty(n)
+        A, f = np.empty((k, n)), np.empty(k)
+        kern.legendre(float(t), q, v, p, mom, M)
+        kern.constraint_jac(float(t), q, v, p, f, A)
+        return M, np.block([[M, A.T], [A, np.zeros((k, k))]])
+
+    def _saddle_condition(self, kern, t, y, p) -> float:
+        """Condition number of S (``_saddle``) at a node (infinite where S is singular)."""
+        _, S = self._saddle(kern, t, *self._node(y), p)
+        with np.errstate(all="ignore"):
+            c = np.linalg.cond(S) if np.all(np.isfinite(S)) else np.inf
+        return float(c) if np.isfinite(c) else np.inf
+
+    def _degenerate_off_constraints(self, kern, t, q, v, p) -> bool:
+        """Whether dla should take node velocities from the constrained Legendre transform:
+        ||M^-1|| > 100 ||S^-1|| at the initial node (see ``integrators.dla``)."""
+        M, S = self._saddle(kern, t, q, v, p)
+        if not (np.all(np.isfinite(M)) and np.all(np.isfinite(S))):
+            return False
+        smin = lambda X: np.linalg.svd(X, compute_uv=False)[-1]  # noqa: E731
+        return bool(smin(S) > 100 * smin(M))
+
+    def _explain_discrete(self, kern, t, y, t_prev, y_prev, p, row0, t0, tol, n_out):
+        """The singularity next to which a dla/dvi step failed (Newton did not converge or
+        the state became NaN), or None: an indicator below 1 % of its initial size at the
+        last regular node, or one whose linear trend over the last two nodes reaches its
+        threshold within two steps; else a singular matrix [[F_vv, A^T], [A, 0]]."""
+        y0 = row0[:y.shape[0]]
+        if kern.layout.indicators:
+            g0 = self._node_indicators(kern, t0, y0, p)
+            with np.errstate(all="ignore"):
+                sg = np.sign(g0) / np.abs(g0)
+                rel = sg * self._node_indicators(kern, t, y, p)
+                rel_prev = sg * self._node_indicators(kern, t_prev, y_prev, p)
+                bad = (~np.isfinite(rel) | (rel <= max(tol or 0.0, 1e-2))
+                       | (rel + 2 * (rel - rel_prev) <= (tol or 0.0)))
+            if bad.any():
+                return self._discrete_singularity(kern, int(np.argmax(bad)), t, y, p, row0,
+                                                  t0, tol, failed=True)
+        cond = self._saddle_condition(kern, t, y, p)
+        if cond > 1e12:
+            return self._discrete_singularity(kern, -1, t, y, p, row0, t0, tol, failed=True,
+                                              cond=(cond, self._saddle_condition(
+                                                  kern, t0, y0, p)))
+        return None
+
+    def _discrete_singularity(self, kern, idx, t, y, p, row0, t0, tol, failed=False,
+                              cond=None) -> dict:
+        """The stop of a dla/dvi run at a singular configuration, as ``_singularity``."""
+        lay = kern.layout
+        y0 = row0[:y.shape[0]]
+        if cond is not None:
+            expr, kind = "cond([[d2F/dqdot2, (df/dqdot)^T], [df/dqdot, 0]])", "degenerate"
+            value, initial = cond
+        else:
+            expr, kind = lay.indicators[idx], lay.indicator_kinds[idx]
+            initial = float(self._node_indicators(kern, t0, y0, p)[idx])
+            value = float(self._node_indicators(kern, t, y, p)[idx])
+        if cond is None and (not np.isfinite(initial) or initial == 0.0):
+            where = f"the initial state (t = {t:.17g}) is singular: {expr} = {initial:.6g}"
+        elif failed:
+            where = (f"the step after the node t = {t:.17g} failed (Newton's method did not "
+                     f"converge) where {expr} = {value:.6g} (initially {initial:.6g})"
+                     + (" is singular" if cond is not None else
+                        " is about to vanish or change sign"))
+        else:
+            where = (f"after the node t = {t:.17g}, {expr} (there {value:.6g}, initially "
+                     f"{initial:.6g}) crosses zero or falls below singular_tol = {tol:g} of "
+                     "its initial size; the run stops at that last regular node")
+        hint = {
+            "constraint": "The constraints f^a as written are singular or not differentiable "
+                          "here (e.g. the Appell-Hamel constraint at zero horizontal speed), "
+                          "so the motion has no unique continuation",
+            "lagrangian": "The Lagrangian is singular or not differentiable here",
+            "degenerate": "The Lagrangian is degenerate on the constraints here, or the "
+                          "constraints lose rank: the discrete step (like the accelerations) "
+                          "is not determined"}[kind]
+        reason = f"singular configuration: {where}. {hint}."
+        return {"indicator": expr, "kind": kind, "index": idx, "t": float(t),
+                "value": value, "initial": initial, "reason": reason}
 
     def _full_velocities(self, t0, y_init, p, default_y0) -> np.ndarray:
         """Every velocity at the initial state (the dependent ones from the constraints)."""
@@ -669,10 +816,9 @@ class Scene:
         if default_y0:
             v0 = [self.initial[v.name] for v in J.qd]
         else:
-            aux = np.empty(self.kernels.layout.n_aux)
-            self.kernels.aux(t0, np.ascontiguousarray(y_init), p, aux)
-            vals = dict(zip(self.velocities, y_init[n:]))
-            vals.update(zip(self.dependent_velocities, aux[:self.system.k]))
+            vals = dict(zip(self.coordinates + self.velocities, y_init[:2 * n - self.system.k]))
+            vals.update(self._dependent_velocity_values(
+                vals, t0, dict(zip(self.runtime_params, p))))
             v0 = [vals[v.name] for v in J.qd]
         return np.ascontiguousarray(v0, dtype=float)
 
@@ -760,6 +906,8 @@ class Scene:
         kw = {}
         if first_step:
             kw["first_step"] = first_step
+        if not np.all(np.isfinite(fun(t0, y_init))):
+            self._raise_nonfinite(f"scipy-{method}", t0, y_init, kern, p, t0, y_init)
         tic = time.perf_counter()
         sol = solve_ivp(fun, (t0, t1), y_init, method=method, t_eval=t_eval, rtol=rtol,
                         atol=atol, max_step=max_step, events=scipy_events or None, **kw)

@@ -83,8 +83,9 @@ class Trajectory:
         self.y_events = list(y_ev)
         self._info = dict(steps=steps, rejected=rejected, nfev=nfev, wall_time=wall_time,
                           projected=dict(projected or {}))
-        # methods that carry their own velocities, residuals and energy (the discrete
-        # Lagrange-d'Alembert integrator): {"velocities": {name: col}, "residual", "energy"}
+        # methods that carry their own velocities, residuals, energy and first integrals
+        # (the discrete integrators dla, dvi): {"velocities": {name: col}, "residual",
+        # "energy", "integrals": {name: col}}
         self._own = own or {}
         self._own_velocities = self._own.get("velocities")
         lay = self.layout
@@ -112,6 +113,8 @@ class Trajectory:
             return self.y[:, self._state_index[name]]
         if self._own_velocities is not None and name in self._own_velocities:
             return self._own_velocities[name]
+        if name in self._own.get("integrals", {}):
+            return self._own["integrals"][name]
         if name in self._aux_index:
             return self.aux[:, self._aux_index[name]]
         raise JetnhError(
@@ -150,7 +153,7 @@ class Trajectory:
         """Rows of (dependent velocities, constraint residuals, energy, integrals)."""
         if self._own:
             raise JetnhError(f"{self.method} trajectories carry their own velocities, "
-                             "residuals and energy; first integrals are not evaluated")
+                             "residuals, energy and first integrals (no aux rows)")
         out = np.empty((len(self), self.layout.n_aux))
         if len(self):
             self._kernels.aux_rows(self.t, self.y, self._p, out)

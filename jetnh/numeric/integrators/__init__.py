@@ -15,8 +15,9 @@ dvi        2      none (fixed step), symmetric,     Benito & Martin de Diego (20
                   variational (vakonomic)           et al. (2010, 2013); Marsden & West (2001)
 =========  =====  ================================  ==========================================
 
-Every method but dla also takes the singularity indicators and the user events of the
-scene as first-class functions and locates them on its dense output (``_events``);
+The Runge-Kutta methods also take the singularity indicators and the user events of the
+scene as first-class functions and locate them on their dense output (``_events``); dla
+and dvi check the indicators of the constraints and the Lagrangian at their nodes;
 ``ensemble_solver()`` of dop853, dopri5 and rk4 is a compiled driver running the same
 ``solve`` over the rows of an array of initial states and parameters.
 """

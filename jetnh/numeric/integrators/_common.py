@@ -21,11 +21,11 @@ import numpy as np
 # ---------------------------------------------------------------------- disk cache freshness
 def _install_cache_locator():
     """Make numba's disk cache of the integrator modules stale when a *helper* module they
-    inline (this file, ``_events.py``) changes.  numba checks only the decorated function's
-    own file, so without this an edit of a helper would leave the loops running the old
-    helper.  The locator wraps numba's usual one (same cache directory) and adds the
-    helpers' hash to the freshness stamp.  Uses numba's (private) locator list; if that
-    is not there, nothing changes."""
+    inline (this file, ``_events.py``, ``dla.py`` for dvi) changes.  numba checks only the
+    decorated function's own file, so without this an edit of a helper would leave the
+    loops running the old helper.  The locator wraps numba's usual one (same cache
+    directory) and adds the helpers' hash to the freshness stamp.  Uses numba's (private)
+    locator list; if that is not there, nothing changes."""
     try:
         from numba.core import caching
         classes = caching.CacheImpl._locator_classes
@@ -33,7 +33,7 @@ def _install_cache_locator():
     except (ImportError, AttributeError):
         return
     here = os.path.dirname(os.path.abspath(__file__))
-    helpers = [os.path.join(here, f) for f in ("_common.py", "_events.py")]
+    helpers = [os.path.join(here, f) for f in ("_common.py", "_events.py", "dla.py")]
     if any(getattr(c, "_jetnh", False) for c in classes):
         return
     defaults = list(classes)

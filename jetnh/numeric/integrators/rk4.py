@@ -149,8 +149,8 @@ def _solve(rhs, sing, uev, t0, t_end, y0, p, n_steps, mode, n_sing, sing_tol, ev
             t = t_stop
             copy_into(y, y_stop)
             status = stop
-            if mode != ENDPOINTS:
-                ts, ys, n_out = store(ts, ys, n_out, t, y)
+            if mode != ENDPOINTS and t != ts[n_out - 1]:   # a stop at the step's start
+                ts, ys, n_out = store(ts, ys, n_out, t, y)  # is the row stored already
             break
         copy_into(y, y_new)
         t = t_new

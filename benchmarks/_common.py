@@ -1,0 +1,125 @@
+"""What every benchmark script shares: the record that goes with a result (machine, date,
+commit, command), best-of timing, and the JSON writer.
+
+The API (other scripts import it; keep it small and stable):
+
+    RESULTS                        benchmarks/results/ (a Path)
+    parser(doc, name)              argparse parser: --quick, --out (default RESULTS/name.json)
+    best(f, reps, budget)          (best wall time, last result) of repeated calls of f()
+    best_of(fs, reps, budget)      the same for several functions, their calls interleaved
+    record()                       {"date", "command", "commit", "machine"} of this run
+    write(name, data, out, quick)  the record + {"benchmark": name, "profile"} + data -> JSON file
+
+Wall times are ``time.perf_counter`` differences; the machine is shared, so compare only
+figures measured in the same run and take the best of several repetitions.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import math
+import os
+import platform
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "benchmarks" / "results"
+
+
+def parser(doc: str, name: str) -> argparse.ArgumentParser:
+    """The common options: ``--quick`` (seconds, for smoke tests) and ``--out``."""
+    ap = argparse.ArgumentParser(description=doc.strip().splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="a small profile that runs in seconds")
+    ap.add_argument("--out", type=Path, default=RESULTS / f"{name}.json",
+                    help="where the JSON goes (figures go next to it)")
+    return ap
+
+
+def best_of(fs, reps: int, budget: float = math.inf):
+    """Best wall time of each function in ``fs`` over ``reps`` rounds, the calls
+    interleaved so that a change of the machine's load hits every function alike; a
+    function is not called again once its calls have taken ``budget`` seconds in all.
+    Returns ``[(seconds, last result), ...]``."""
+    times = [math.inf] * len(fs)
+    spent = [0.0] * len(fs)
+    outs = [None] * len(fs)
+    for _ in range(reps):
+        for i, f in enumerate(fs):
+            if spent[i] >= budget:
+                continue
+            tic = time.perf_counter()
+            outs[i] = f()
+            dt = time.perf_counter() - tic
+            times[i] = min(times[i], dt)
+            spent[i] += dt
+    return list(zip(times, outs))
+
+
+def best(f, reps: int, budget: float = math.inf):
+    """``(best wall time, last result)`` of ``reps`` calls of ``f()`` (see ``best_of``)."""
+    return best_of([f], reps, budget)[0]
+
+
+def _git(*args) -> str | None:
+    try:
+        r = subprocess.run(["git", "--no-optional-locks", *args], cwd=ROOT, capture_output=True,
+                           text=True, timeout=10)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return r.stdout.strip() if r.returncode == 0 else None
+
+
+def _versions() -> dict:
+    from importlib.metadata import PackageNotFoundError, version
+
+    out = {}
+    for pkg in ("numpy", "scipy", "sympy", "numba", "mpmath", "jetnh"):
+        try:
+            out[pkg] = version(pkg)
+        except PackageNotFoundError:
+            pass
+    return out
+
+
+def record() -> dict:
+    """Date (UTC), the command that reproduces the run, the git commit (with ``+dirty``
+    when the work tree differs from it), and the machine (with its load average)."""
+    python = os.path.relpath(sys.executable, ROOT)
+    script = os.path.relpath(os.path.abspath(sys.argv[0]), ROOT)
+    commit = _git("rev-parse", "--short=12", "HEAD")
+    if commit and _git("status", "--porcelain", "--untracked-files=no"):
+        commit += "+dirty"
+    return {
+        "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        "command": " ".join([python, script] + sys.argv[1:]),
+        "commit": commit,
+        "machine": {"platform": platform.platform(), "processor": platform.processor()
+                    or platform.machine(), "cpus": os.cpu_count(),
+                    "python": platform.python_version(), "versions": _versions(),
+                    "loadavg": list(os.getloadavg())},
+    }
+
+
+def write(name: str, data: dict, out: Path | None = None, quick: bool = False) -> Path:
+    """Write ``{"benchmark": name, "profile": "quick"|"full", **record(), **data}`` as JSON
+    to ``out`` (default ``RESULTS/name.json``); returns the path."""
+    out = Path(out) if out else RESULTS / f"{name}.json"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    doc = {"benchmark": name, "profile": "quick" if quick else "full", **record(), **data}
+    out.write_text(json.dumps(doc, indent=1, default=_jsonable) + "\n")
+    print("wrote", os.path.relpath(out))
+    return out
+
+
+def _jsonable(obj):
+    """numpy scalars and arrays, paths and tuples-as-keys in results."""
+    if hasattr(obj, "tolist"):
+        return obj.tolist()
+    if isinstance(obj, Path):
+        return str(obj)
+    raise TypeError(f"not JSON serializable: {type(obj).__name__}")

@@ -1,0 +1,422 @@
+"""Sweeps: one scene over a grid of parameters and initial values, on this machine or on
+a Dask cluster, as a pandas DataFrame with one row per grid point.
+
+    import jetnh as jn
+    df = jn.sweep(scene, {R: [0.5, 1.0, 2.0], phi_t: np.linspace(0.1, 1.0, 10)})
+    df = jn.sweep(scene, [{"R": 1.0, "phi_t": 0.3}, {"R": 2.0, "phi_t": 0.1}])  # points
+    df = jn.sweep(scene, grid, times=[1.0, 5.0], outputs=["x", "y"], rtol=1e-10)
+    df = jn.sweep(scene, grid, client=dask_client)        # or client="tcp://host:8786"
+
+    from jetnh.sweep import plot_map, separation
+    gap = separation(df_chetaev, df_vakonomic, ["x", "y"])
+    plot_map(df_chetaev, "R", "phi_t(t0)", gap, path="gap.png", log=True)
+
+``grid``: a mapping name or Symbol -> values (the Cartesian product, the last key
+varying fastest), or a list of points (mappings with the same keys), or a DataFrame (one
+point per row).  Keys are parameters of the scene or its states (coordinates,
+independent velocities, multipliers); the rest comes from the scene.
+
+Columns, in this order:
+
+- the grid: a parameter under its name (``R``), an initial value as ``phi_t(t0)``;
+- the outputs (``outputs``: names, default every state, dependent velocity and first
+  integral): at the final time under their names (``x``), or with ``times`` at each time
+  as ``x(t=2.5)`` (NaN after a run's stop);
+- the diagnostics over the output rows: ``status``, ``success``, ``stop_reason``,
+  ``t_final``, ``steps``, ``rejected``, ``rhs_evaluations``, ``residual_max`` (max |f^a|),
+  ``energy_drift`` and ``drift[I]`` (max |I - I(t0)| of each first integral ``I`` of the
+  scene), and ``events[E]``/``first[E]`` for user events.
+
+A point that fails (a singular configuration, NaN, too many steps) keeps its row, with
+its ``status`` and ``stop_reason``; the sweep goes on.  Options (``rtol``, ``atol``,
+``method``, ``events``, ...) are those of ``Scene.ensemble``.
+
+Every point is the scene's compiled single-trajectory loop (``run_ensemble``), so the
+result does not depend on where it ran: ``client=None`` runs the grid here on all cores
+(the ensemble's thread pool); with a ``dask.distributed`` Client (or a scheduler
+address) the grid is split into chunks (``chunk_size`` points), the scene with its
+compiled kernels' source is scattered once to every worker, each chunk is one task, and
+the rows are gathered in grid order.  A worker that dies loses no rows: Dask recomputes
+its chunks elsewhere, and the DataFrame equals the local one to the last bit.
+``chunk_size`` defaults to 4 tasks per worker thread on Dask, and here to the whole grid
+(20 chunks when ``progress(done, total)`` is given: it is called as chunks finish).
+``df.attrs["grid"]`` names the grid columns.  Measured in ``benchmarks/sweep_dask.py``.
+"""
+
+from __future__ import annotations
+
+import math
+import operator
+import warnings
+from collections.abc import Mapping
+
+from .errors import JetnhError
+
+#: options passed on to ``run_ensemble``
+OPTIONS = ("rtol", "atol", "method", "first_step", "max_step", "max_steps", "n_steps", "h",
+           "events", "singular", "singular_tol")
+
+
+def sweep(scene, grid, client=None, *, times=None, outputs=None, chunk_size=None,
+          progress=None, timeout=None, connect_timeout=10.0, **options):
+    """Run ``scene`` at every point of ``grid``: a DataFrame, one row per point (see the
+    module docstring).  ``client``: None (this machine), a ``dask.distributed.Client``
+    or a scheduler address; ``timeout``: seconds the Dask sweep may take (None: no
+    limit); ``connect_timeout``: seconds to reach a scheduler given by address."""
+    import numpy as np
+    import pandas as pd
+
+    from .numeric.ensemble import resolve
+
+    bad = sorted(set(options) - set(OPTIONS))
+    if bad:
+        raise JetnhError(f"sweep has no option {', '.join(map(repr, bad))}; its options are "
+                         f"{', '.join(OPTIONS)} (output times: times=[...])")
+    if chunk_size is not None:
+        chunk_size = _positive_int(chunk_size, "chunk_size")
+    names, values = _points(grid)
+    params, states = _classify(scene, names)
+    scene, Y0, P = resolve(scene, {k: values[:, names.index(k)] for k in states},
+                           {k: values[:, names.index(k)] for k in params})
+    layout = scene.kernels.layout
+    outputs = _outputs(layout, outputs)
+    if times is not None:
+        times = np.ascontiguousarray(times, dtype=float)
+        if times.size == 0:
+            raise JetnhError("times is empty; give output times, or omit it for the final "
+                             "time")
+        scene._check_t_eval(times, *scene.t_span)
+        labels = {f"{t:.12g}" for t in times}
+        if len(labels) != len(times):
+            raise JetnhError("times has values equal to 12 significant digits (their "
+                             "column labels would clash); give distinct times")
+    run = dict(options, t_eval=times, save="final")
+    n = len(values)
+    if client is None:
+        size = chunk_size or (n if progress is None else math.ceil(n / 20))
+        chunks = _chunks(n, size)
+        parts = []
+        for a, b in chunks:
+            parts.append(_run_chunk(scene, Y0[a:b], P[a:b], run, outputs, "threads"))
+            if progress is not None:
+                progress(b, n)
+    else:
+        parts = _on_dask(client, CompiledScene(scene), Y0, P, run, outputs, chunk_size,
+                         progress, timeout, connect_timeout)
+    columns = {(k if k in params else f"{k}(t0)"): values[:, j] for j, k in enumerate(names)}
+    for key in parts[0]:
+        columns[key] = np.concatenate([p[key] for p in parts])
+    df = pd.DataFrame(columns)
+    df.attrs["grid"] = list(columns)[:len(names)]
+    return df
+
+
+# ---------------------------------------------------------------------- the grid
+def _key(k) -> str:
+    import sympy as sp
+
+    if isinstance(k, sp.Symbol):
+        return k.name
+    if isinstance(k, str):
+        return k
+    raise JetnhError(f"grid keys are parameter or state names or Symbols, not "
+                     f"{type(k).__name__} ({k!r})")
+
+
+def _numbers(value, what):
+    import numpy as np
+
+    try:
+        a = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise JetnhError(f"{what} must be numbers, got {value!r}") from None
+    if a.ndim > 1:
+        raise JetnhError(f"{what} must be a number or a 1-d sequence, got shape {a.shape}")
+    a = a.reshape(-1)
+    if not np.all(np.isfinite(a)):
+        raise JetnhError(f"{what} has non-finite values ({a[~np.isfinite(a)][0]}); give "
+                         "finite numbers")
+    return a
+
+
+def _unique(keys) -> list[str]:
+    names = [_key(k) for k in keys]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise JetnhError(f"the grid gives {', '.join(twice)} twice (as a Symbol and as a "
+                         "name?); give each once")
+    return names
+
+
+def _points(grid):
+    """Names and the values [n_points, n_names] of every grid point."""
+    import itertools
+
+    import numpy as np
+    import pandas as pd
+
+    if isinstance(grid, pd.DataFrame):
+        grid = grid.to_dict("records")
+    if isinstance(grid, Mapping):
+        names = _unique(grid)
+        if not names:
+            raise JetnhError("the grid is empty; give at least one parameter or initial "
+                             "value with its values, e.g. {'R': [0.5, 1.0]}")
+        axes = []
+        for name, v in zip(names, grid.values()):
+            a = _numbers(v, f"grid values of {name!r}")
+            if a.size == 0:
+                raise JetnhError(f"grid values of {name!r} are empty; give at least one")
+            axes.append(a)
+        return names, np.array(list(itertools.product(*axes)), dtype=float)
+    if isinstance(grid, (list, tuple)):
+        if not grid:
+            raise JetnhError("the grid has no points; give a list of points such as "
+                             "[{'R': 1.0, 'phi_t': 0.5}, ...]")
+        if not all(isinstance(p, Mapping) for p in grid):
+            raise JetnhError("a grid given as a list holds points: mappings name -> value")
+        names = _unique(grid[0])
+        if not names:
+            raise JetnhError("the grid's points are empty; give each point its values")
+        rows = []
+        for i, point in enumerate(grid):
+            have = _unique(point)
+            if set(have) != set(names):
+                raise JetnhError(f"grid point {i} has keys {sorted(have)} but point 0 has "
+                                 f"{sorted(names)}; give every point the same keys")
+            row = dict(zip(have, point.values()))
+            rows.append(_numbers([row[k] for k in names], f"grid point {i}"))
+        return names, np.array(rows, dtype=float)
+    raise JetnhError(f"the grid is a mapping name -> values, a list of points or a "
+                     f"DataFrame, not {type(grid).__name__}")
+
+
+def _classify(scene, names):
+    """The grid's parameters and states (initial values), checked against the scene."""
+    params = [k for k in names if k in scene.params]
+    states = [k for k in names if k in scene.state_names]
+    for k in names:
+        if k in scene.dependent_velocities:
+            raise JetnhError(
+                f"the grid has {k!r}, a dependent velocity: it follows from the constraints. "
+                f"Sweep the states instead ({', '.join(scene.state_names)})")
+        if k not in params and k not in states:
+            raise JetnhError(
+                f"the grid has {k!r}, which is neither a parameter "
+                f"({', '.join(scene.params) or 'none'}) nor a state "
+                f"({', '.join(scene.state_names)}) of this {scene.principle} scene")
+    return params, states
+
+
+def _outputs(layout, outputs):
+    names = layout.states + layout.dependent_velocities + layout.integrals
+    if outputs is None:
+        return names
+    out = tuple(_key(k) for k in outputs)
+    bad = [k for k in out if k not in names]
+    if bad or not out:
+        raise JetnhError(f"outputs {bad or 'empty'}: choose among {', '.join(names)}")
+    return out
+
+
+def _positive_int(value, what) -> int:
+    try:
+        v = operator.index(value)
+    except TypeError:
+        v = 0
+    if v < 1:
+        raise JetnhError(f"{what} must be a positive integer, not {value!r}")
+    return v
+
+
+def _chunks(n, size):
+    return [(a, min(a + size, n)) for a in range(0, n, size)]
+
+
+# ---------------------------------------------------------------------- one chunk
+def _run_chunk(scene, Y0, P, run, outputs, parallel) -> dict:
+    """The output and diagnostic columns of the points Y0, P (rows) of ``scene`` (or of
+    a ``CompiledScene``, on a worker)."""
+    import numpy as np
+
+    from .numeric.ensemble import run_ensemble
+
+    if isinstance(scene, CompiledScene):
+        scene = scene.load()
+    ens = run_ensemble(scene, Y0, dict(zip(scene.runtime_params, P.T)), parallel=parallel,
+                       on_error="record", **run)
+    times = run["t_eval"]
+    if times is None:
+        final = ens.final
+        cols = {name: final[name] for name in outputs}
+    else:
+        cols = {f"{name}(t={t:.12g})": ens[name][:, j]
+                for name in outputs for j, t in enumerate(times)}
+    with warnings.catch_warnings():      # a run that stopped at t0 has only NaN rows
+        warnings.filterwarnings("ignore", "All-NaN slice", RuntimeWarning)
+        diag = ens.diagnostics()
+    for key in ("status", "success"):
+        cols[key] = diag.pop(key)
+    cols["stop_reason"] = np.array(ens.stop_reasons, dtype=object)
+    cols["t_final"] = diag.pop("t_final")
+    events = {k: diag.pop(k) for k in list(diag) if k.startswith(("events[", "first["))}
+    cols.update(diag)
+    lay = ens.layout
+    start = lay.energy_index + 1
+    for i, name in enumerate(lay.integrals):
+        cols[f"drift[{name}]"] = np.fmax.reduce(
+            np.abs(ens[name] - ens.aux_initial[:, start + i, None]), axis=1)
+    cols.update(events)
+    return cols
+
+
+class CompiledScene:
+    """A scene with the source of its compiled kernels: what a worker needs, shipped once
+    per worker.  ``load()`` installs the kernels in the worker's cache (unless there)
+    without deriving anything, and returns the scene."""
+
+    def __init__(self, scene):
+        kern = scene.kernels
+        self.scene = scene.replace()      # a copy without compiled events (they don't pickle)
+        self.key = self.scene.key         # computed here: it travels with the scene
+        self.layout = kern.layout
+        self.source = (kern.directory / "kernels.py").read_text(encoding="utf-8")
+
+    def load(self):
+        from .numeric import cache
+        from .numeric.codegen import KernelSource
+
+        cache.load(self.key, lambda: KernelSource(self.key, self.layout, self.source),
+                   persistent=self.scene.cache)
+        return self.scene
+
+
+# ---------------------------------------------------------------------- Dask
+def _connect(address, timeout):
+    from distributed import Client
+
+    try:
+        client = Client(address, timeout=timeout, set_as_default=False)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise JetnhError(
+            f"cannot reach a Dask scheduler at {address!r} within {timeout:g} s ({exc}); "
+            "start one (`dask scheduler`, then `dask worker ADDRESS` on each machine) or "
+            "check the address") from None
+    return client
+
+
+def _on_dask(client, shipped, Y0, P, run, outputs, chunk_size, progress, timeout,
+             connect_timeout):
+    """The chunks' columns, computed as Dask tasks, in grid order."""
+    from distributed import Client, KilledWorker, as_completed
+
+    own = not isinstance(client, Client)
+    if own:
+        if not isinstance(client, str):
+            raise JetnhError(f"client is None, a dask.distributed Client or a scheduler "
+                             f"address, not {type(client).__name__}")
+        client = _connect(client, connect_timeout)
+    shipped_future, futures = None, []
+    try:
+        try:
+            client.wait_for_workers(1, timeout=connect_timeout)
+        except TimeoutError:
+            raise JetnhError(f"the Dask scheduler {client.scheduler.address} has no workers "
+                             f"(waited {connect_timeout:g} s); start some with `dask "
+                             "worker ADDRESS`") from None
+        n = len(Y0)
+        threads = sum(client.nthreads().values())
+        chunks = _chunks(n, chunk_size or math.ceil(n / (4 * threads)))
+        shipped_future = client.scatter(shipped, broadcast=True, hash=False)
+        futures = [client.submit(_run_chunk, shipped_future, Y0[a:b], P[a:b], run, outputs,
+                                 "serial", pure=False) for a, b in chunks]
+        where = {f.key: i for i, f in enumerate(futures)}
+        parts, done = [None] * len(chunks), 0
+        try:
+            for fut in as_completed(futures, timeout=timeout):
+                i = where[fut.key]
+                parts[i] = fut.result()
+                done += chunks[i][1] - chunks[i][0]
+                if progress is not None:
+                    progress(done, n)
+        except TimeoutError:
+            raise JetnhError(f"the sweep did not finish within timeout={timeout:g} s ({done} "
+                             f"of {n} points done); allow more time or add workers") from None
+        except KilledWorker as exc:
+            raise JetnhError(f"Dask workers died again and again running a chunk of the "
+                             f"sweep ({exc}); the chunk may exhaust a worker's memory: give "
+                             "a smaller chunk_size") from None
+        return parts
+    finally:
+        client.cancel(futures + ([shipped_future] if shipped_future is not None else []))
+        if own:
+            client.close()
+
+
+# ---------------------------------------------------------------------- results
+def separation(a, b, names):
+    """The Euclidean distance between the ``names`` columns of two sweeps of one grid
+    (e.g. the final positions under two principles), as a Series."""
+    import numpy as np
+
+    grid = a.attrs.get("grid", [])
+    if len(a) != len(b) or any(not np.array_equal(a[c], b[c]) for c in grid if c in b):
+        raise JetnhError("separation compares two sweeps of the same grid; these differ "
+                         f"({len(a)} and {len(b)} rows, grid columns {grid})")
+    names = [_key(k) for k in names]
+    missing = [k for k in names if k not in a or k not in b]
+    if missing:
+        raise JetnhError(f"separation: no column {', '.join(missing)} in both sweeps")
+    return np.sqrt(sum((a[k] - b[k]) ** 2 for k in names)).rename("separation")
+
+
+def plot_map(df, x, y, value, path=None, *, log=False, title=None, mask_failed=True):
+    """The map of ``value`` (a column name, or a Series/array aligned with ``df``, e.g.
+    ``separation(...)``) over the two grid columns ``x`` and ``y``, as a matplotlib
+    Figure (saved to ``path``, PNG or any matplotlib format, when given).  Points that
+    failed (``success`` false) are grey unless ``mask_failed=False``; ``log``: a
+    logarithmic colour scale (non-positive values grey)."""
+    import matplotlib
+    import numpy as np
+    import pandas as pd
+    from matplotlib.colors import LogNorm
+    from matplotlib.figure import Figure
+
+    for c in (x, y):
+        if c not in df:
+            raise JetnhError(f"plot_map: no column {c!r}; the grid columns are "
+                             f"{df.attrs.get('grid', list(df.columns))}")
+    label = value if isinstance(value, str) else getattr(value, "name", None) or "value"
+    if isinstance(value, str):
+        if value not in df:
+            raise JetnhError(f"plot_map: no column {value!r}; choose among "
+                             f"{', '.join(df.columns)}")
+        value = df[value]
+    v = np.array(value, dtype=float)
+    if v.shape != (len(df),):
+        raise JetnhError(f"plot_map: value has shape {v.shape}, the sweep {len(df)} rows")
+    if mask_failed and "success" in df:
+        v[~df["success"].to_numpy(dtype=bool)] = np.nan
+    if log:
+        v[v <= 0] = np.nan
+    table = pd.DataFrame({"x": df[x].to_numpy(), "y": df[y].to_numpy(), "v": v})
+    if table.duplicated(["x", "y"]).any():
+        raise JetnhError(f"plot_map: several rows share a point ({x}, {y}); the map needs "
+                         "a grid over exactly these two columns (fix the others)")
+    grid = table.pivot(index="y", columns="x", values="v")
+    fig = Figure(figsize=(6.4, 4.8), layout="constrained")
+    ax = fig.add_subplot()
+    data = np.ma.masked_invalid(grid.to_numpy())
+    cmap = matplotlib.colormaps["viridis"].with_extremes(bad="0.8")
+    finite = data.compressed()
+    norm = (LogNorm(finite.min(), finite.max()) if log and finite.size else None)
+    mesh = ax.pcolormesh(grid.columns.to_numpy(), grid.index.to_numpy(), data,
+                         shading="nearest", cmap=cmap, norm=norm)
+    fig.colorbar(mesh, ax=ax, label=label)
+    ax.set_xlabel(x)
+    ax.set_ylabel(y)
+    if title:
+        ax.set_title(title)
+    if path is not None:
+        fig.savefig(path, dpi=120)
+    return fig
