@@ -48,6 +48,7 @@ import sympy as sp
 from sympy.core.function import AppliedUndef
 from sympy.printing.pycode import PythonCodePrinter
 
+from .. import dag
 from ..errors import JetnhError, PrincipleError
 
 CODEGEN_VERSION = "7"
@@ -165,8 +166,8 @@ def _derivation_source_hash() -> str:
     editing them invalidates cached kernels (the symbolic input alone would not)."""
     root = pathlib.Path(__file__).resolve().parents[1]
     h = hashlib.sha256()
-    for name in ("jet.py", "linalg.py", "constraints.py", "variations.py", "equations.py",
-                 "numeric/codegen.py", "numeric/events.py"):
+    for name in ("jet.py", "linalg.py", "dag.py", "constraints.py", "variations.py",
+                 "equations.py", "accelerations.py", "numeric/codegen.py", "numeric/events.py"):
         path = root / name
         if path.exists():
             h.update(path.read_bytes())
@@ -244,7 +245,7 @@ def generate(system, principle, params: dict, runtime_params=(), integrals=None,
     indicators = singular_indicators(
         system, [acc[J.jet(J.split(v)[0], 2)] for v in ind_vel] + [acc[r] for r in rates],
         prepare.numbers)
-    sing_exprs = [prepare(e, f"the singularity indicator {e}") for _, e in indicators]
+    sing_exprs = [prepare(e, f"the singularity indicator {_label(e)}") for _, e in indicators]
     t1 = time.perf_counter()
 
     layout = Layout(
@@ -256,7 +257,7 @@ def generate(system, principle, params: dict, runtime_params=(), integrals=None,
         integrals=tuple(integrals),
         runtime_params=runtime_params,
         coordinate_velocities=tuple(v.name for v in J.qd),
-        indicators=tuple(sp.sstr(e) for _, e in indicators),
+        indicators=tuple(_label(e) for _, e in indicators),
         indicator_kinds=tuple(kind for kind, _ in indicators),
     )
     src = [HEADER.format(version=CODEGEN_VERSION, key=key)]
@@ -313,7 +314,7 @@ def _function(name, layout: Layout, phi_exprs, out_exprs, indices=None) -> str:
         body.append(f"s{i} = y[{i}]")
     for i in range(len(layout.runtime_params)):
         body.append(f"p{i} = p[{i}]")
-    used = set().union(*(sp.sympify(e).free_symbols for e in out_exprs)) if out_exprs else set()
+    used = dag.free_symbols(list(out_exprs)) if out_exprs else set()
     if phi_exprs and any(s.name.startswith("v") for s in used):
         reps, red = sp.cse(phi_exprs, symbols=sp.numbered_symbols("d"))
         for sym, e in reps:
@@ -397,7 +398,7 @@ class _Preparer:
     def __call__(self, expr, what):
         e = sp.sympify(expr)
         sub, bad = {}, set()
-        for s in e.free_symbols:
+        for s in dag.free_symbols(e):
             if s in self.rename:
                 sub[s] = self.rename[s]
             elif s.name in self.by_name:
@@ -410,12 +411,12 @@ class _Preparer:
             raise JetnhError(
                 f"{what} contains symbols with no value: {', '.join(sorted(bad))}; "
                 "give them in params=")
-        undefined = [f for f in e.atoms(AppliedUndef)]
+        undefined = list(dag.atoms(e, AppliedUndef))
         if undefined:
             raise JetnhError(f"{what} contains undefined functions {undefined}; "
                              "jetnh compiles explicit expressions only")
-        out = e.xreplace(sub)
-        if out.has(sp.nan, sp.zoo, sp.oo, sp.S.NegativeInfinity):
+        out = dag.xreplace(e, sub)
+        if dag.atoms(out, type(sp.nan), type(sp.zoo), type(sp.oo), type(sp.S.NegativeInfinity)):
             values = ", ".join(f"{k} = {v}" for k, v in sorted(self.numbers.items()))
             raise JetnhError(
                 f"{what} is undefined for the parameter values {values}: substituting them "
@@ -487,7 +488,7 @@ def singular_indicators(system, accelerations, numbers) -> list[tuple[str, sp.Ex
     out, seen = [], set()
 
     def add(kind, b):
-        b = sp.sympify(b).xreplace(sub)
+        b = dag.xreplace(b, sub)
         for f in _factors(b):
             if f not in seen:
                 seen.add(f)
@@ -506,6 +507,19 @@ def singular_indicators(system, accelerations, numbers) -> list[tuple[str, sp.Ex
         for b in _singular_bases(e):
             add("acceleration", b)
     return out
+
+
+def _label(e, limit: int = 400) -> str:
+    """An indicator as text: printed in full when its tree is short; a nested solve's
+    pivot (whose tree can be exponentially long) by its shared size instead."""
+    count, stack = 0, [e]
+    while stack:
+        count += 1
+        if count > limit:
+            return (f"a nested expression of {dag.size(e)} distinct subexpressions in "
+                    + ", ".join(sorted(s.name for s in dag.free_symbols(e))))
+        stack.extend(stack.pop().args)
+    return sp.sstr(e)
 
 
 def _number(v) -> sp.Expr:
