@@ -193,12 +193,10 @@ def _solve(system, kappa, explicit, multipliers, rates):
 
     X = linalg.solve(A_dep, -(A[:, ind].row_join(b))) if k else sp.zeros(0, n + 1)
     Phi, w = X[:, :n - k], X[:, n - k]
-    P = sp.zeros(n, n - k)            # q'' = P u + w_full
+    P = linalg.embed(Phi, ind, dep)   # q'' = P u + w_full
     w_full = sp.zeros(n, 1)
-    for m, i in enumerate(ind):
-        P[i, m] = 1
     for a, i in enumerate(dep):
-        P[i, :], w_full[i] = Phi[a, :], w[a]
+        w_full[i] = w[a]
     HP = linalg.matmul(H1, P)
     K = linalg.matmul(P.T, HP)
     rhs = linalg.matmul(P.T, r1 - linalg.matmul(H1, w_full))

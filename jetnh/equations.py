@@ -118,16 +118,10 @@ def chetaev_admissible(system: System, eta) -> tuple:
 
 def null_basis(system: System) -> sp.Matrix:
     """P (n x (n-k)): columns span ker df/dqdot; rows of independent coordinates are I."""
-    n, k = system.J.n, system.k
-    A = system.jacobian
-    Phi = -linalg.solve(system.jacobian_dependent, A[:, list(system.ind_index)]) if k else None
-    P = sp.zeros(n, n - k)
-    for m, i in enumerate(system.ind_index):
-        P[i, m] = 1
-    for a, i in enumerate(system.dep_index):
-        for m in range(n - k):
-            P[i, m] = Phi[a, m]
-    return P
+    ind = list(system.ind_index)
+    Phi = (-linalg.solve(system.jacobian_dependent, system.jacobian[:, ind]) if system.k
+           else sp.zeros(0, len(ind)))
+    return linalg.embed(Phi, ind, system.dep_index)
 
 
 # ---------------------------------------------------------------------- results

@@ -50,6 +50,17 @@ def matmul(A: sp.Matrix, B: sp.Matrix) -> sp.Matrix:
         A[i, m] * B[m, j] for m in range(A.cols) if A[i, m] != 0 and B[m, j] != 0]))
 
 
+def embed(Phi: sp.Matrix, ind, dep) -> sp.Matrix:
+    """P with the identity on the rows ``ind`` and ``Phi`` on the rows ``dep``: for
+    Phi = -A_dep^-1 A_ind its columns span ker A (q = P u, u the ``ind`` components)."""
+    P = sp.zeros(len(ind) + len(dep), len(ind))
+    for m, i in enumerate(ind):
+        P[i, m] = 1
+    for a, i in enumerate(dep):
+        P[i, :] = Phi[a, :]
+    return P
+
+
 def inverse(M: sp.Matrix) -> sp.Matrix:
     """M^-1 by ``solve`` (adjugate / det for small M)."""
     return solve(M, sp.eye(M.rows))
@@ -141,10 +152,5 @@ def reduced_rank(H: sp.Matrix, A: sp.Matrix, ind, dep, points: int = 3, seed: in
     if ranks:
         return max(ranks)
     with dotprodsimp(False):  # abstract functions: decide symbolically (small systems)
-        Phi = -solve(A[:, dep], A[:, ind]) if dep else sp.zeros(0, len(ind))
-        P = sp.zeros(H.rows, len(ind))
-        for m, i in enumerate(ind):
-            P[i, m] = 1
-        for a, i in enumerate(dep):
-            P[i, :] = Phi[a, :]
+        P = embed(-solve(A[:, dep], A[:, ind]) if dep else sp.zeros(0, len(ind)), ind, dep)
         return numeric_rank(P.T * H * P, points, seed, tol)
