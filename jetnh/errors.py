@@ -30,3 +30,8 @@ class ModelFileError(JetnhError, ValueError):
 
 class IntegrationError(JetnhError, RuntimeError):
     """A numerical integration that cannot go on."""
+
+
+class JetnhWarning(UserWarning):
+    """Input jetnh accepts but that is probably not what was meant (e.g. a parameter
+    named like a velocity, which is a constant, not the velocity)."""
