@@ -81,11 +81,12 @@ def sweep(scene, grid, client=None, *, times=None, outputs=None, chunk_size=None
     layout = scene.kernels.layout
     outputs = _outputs(layout, outputs)
     if times is not None:
-        times = np.ascontiguousarray(times, dtype=float)
+        from .numeric import arguments
+
+        times = arguments.times(times, *scene.t_span)
         if times.size == 0:
             raise JetnhError("times is empty; give output times, or omit it for the final "
                              "time")
-        scene._check_t_eval(times, *scene.t_span)
         labels = {f"{t:.12g}" for t in times}
         if len(labels) != len(times):
             raise JetnhError("times has values equal to 12 significant digits (their "

@@ -23,10 +23,10 @@ on disk keyed by the symbolic input (``cache``), and integrates in compiled loop
 from .ensemble import Ensemble, run_ensemble
 from .events import Event
 from .integrators._common import (EVENT, FINISHED, MAX_STEPS, NONFINITE, NOT_CONVERGED,
-                                  SINGULAR, STATUS_TEXT, TOO_SMALL_STEP)
+                                  SINGULAR, STATUS_TEXT, STOPPED, TOO_SMALL_STEP)
 from .scene import Scene
 from .trajectory import Diagnostics, Trajectory
 
 __all__ = ["Scene", "Trajectory", "Diagnostics", "Event", "Ensemble", "run_ensemble",
            "STATUS_TEXT", "FINISHED", "MAX_STEPS", "TOO_SMALL_STEP", "NONFINITE",
-           "NOT_CONVERGED", "EVENT", "SINGULAR"]
+           "NOT_CONVERGED", "EVENT", "SINGULAR", "STOPPED"]

@@ -46,9 +46,9 @@ from concurrent.futures import ThreadPoolExecutor
 from functools import cached_property
 
 import numpy as np
-import sympy as sp
 
 from ..errors import ConstraintError, IntegrationError, JetnhError
+from . import arguments, interrupt
 from .integrators import ADAPTIVE, METHODS, STATUS_TEXT
 from .integrators._common import (AT_T_EVAL, ENDPOINTS, EVENT, FINISHED, NONFINITE,
                                   SINGULAR, entry_point)
@@ -57,22 +57,15 @@ PARALLEL = ("prange", "threads", "serial")
 
 
 def _name(key) -> str:
-    if isinstance(key, sp.Symbol):
-        return key.name
-    if isinstance(key, str):
-        return key
-    raise JetnhError(f"ensemble inputs are keyed by Symbol or by name, not "
-                     f"{type(key).__name__} ({key!r})")
+    return arguments.name_of(key, "ensemble inputs")
 
 
 def _column(value, what) -> np.ndarray:
-    a = np.asarray(value, dtype=float)
+    a = np.asarray(value)
     if a.ndim > 1:
         raise JetnhError(f"{what} must be a number or a 1-d array (one value per run), "
                          f"got shape {a.shape}")
-    if not np.all(np.isfinite(a)):
-        raise JetnhError(f"{what} has non-finite values; give finite numbers")
-    return a
+    return arguments.real_array(a, what, a.ndim)
 
 
 def _n_runs(columns: dict, n_from_array: int | None) -> int:
@@ -112,15 +105,14 @@ def resolve(scene, initial=None, params=None, project=False):
                              f"{scene.principle} scene; the states are "
                              f"{', '.join(scene.state_names)}")
     elif initial is not None:
-        arr = np.asarray(initial, dtype=float)
+        arr = np.asarray(initial)
         if arr.ndim == 1:
             arr = arr[None, :]
         if arr.ndim != 2 or arr.shape[1] != len(scene.state_names):
             raise JetnhError(f"initial as an array must have shape [n_runs, "
                              f"{len(scene.state_names)}] (states {', '.join(scene.state_names)})"
                              f", got {np.shape(initial)}")
-        if not np.all(np.isfinite(arr)):
-            raise JetnhError("initial has non-finite values; give finite numbers")
+        arr = arguments.real_array(arr, "initial", 2)
         n_arr = arr.shape[0]
     n_runs = _n_runs({**columns, **params}, n_arr)
     Y0 = np.empty((n_runs, len(scene.state_names)))
@@ -310,9 +302,10 @@ def run_ensemble(scene, initial=None, params=None, *, rtol=1e-9, atol=1e-12, t_e
                  save="final", method="dop853", n_steps=None, h=None, first_step=None,
                  max_step=np.inf, max_steps=10_000_000, events=None, singular="stop",
                  singular_tol=1e-10, parallel="threads", workers=None, project=False,
-                 on_error="raise") -> Ensemble:
+                 on_error="raise", timeout=None) -> Ensemble:
     """Integrate ``scene`` from many initial states / parameter sets: see the module
-    docstring.  Options as ``Scene.run``."""
+    docstring.  Options as ``Scene.run`` (``max_steps`` and ``timeout`` are budgets of
+    each run and of the whole ensemble; Ctrl-C stops every run within one step)."""
     import numba
 
     if parallel not in PARALLEL:
@@ -321,6 +314,11 @@ def run_ensemble(scene, initial=None, params=None, *, rtol=1e-9, atol=1e-12, t_e
         raise JetnhError(f"on_error must be 'raise' or 'record', not {on_error!r}")
     if singular not in ("stop", "ignore"):
         raise JetnhError(f"singular must be 'stop' or 'ignore', not {singular!r}")
+    singular_tol = arguments.real(singular_tol, "singular_tol")
+    if not 0.0 <= singular_tol < 1.0:
+        raise JetnhError(f"singular_tol must be in [0, 1), not {singular_tol}")
+    budget = arguments.count(max_steps, "max_steps")
+    limit = arguments.timeout(timeout)
     key = str(method).lower()
     if key not in METHODS:
         raise JetnhError(f"ensembles run the compiled methods {sorted(set(METHODS))}, not "
@@ -330,8 +328,7 @@ def run_ensemble(scene, initial=None, params=None, *, rtol=1e-9, atol=1e-12, t_e
     n_runs, n = Y0.shape
     t0, t1 = scene.t_span
     if t_eval is not None:
-        te = np.ascontiguousarray(t_eval, dtype=float)
-        scene._check_t_eval(te, t0, t1)
+        te = arguments.times(t_eval, t0, t1)
         if method not in ADAPTIVE:
             raise JetnhError("t_eval needs dense output: use dop853 or dopri5 (rk4 gives "
                              "save='final')")
@@ -356,12 +353,16 @@ def run_ensemble(scene, initial=None, params=None, *, rtol=1e-9, atol=1e-12, t_e
     EV_N = np.zeros((n_runs, max(n_ev, 1)), dtype=np.int64)
     EV_T = np.full((n_runs, max(n_ev, 1)), np.nan)
     mod = _integrator_module(method)
+    rtol, atol_v = arguments.tolerances(rtol, atol, n)
     if method in ADAPTIVE:
-        settings = (float(rtol), scene._atol(atol, n), float(first_step or 0.0),
-                    float(max_step), int(max_steps), te, mode)
+        if n_steps is not None or h is not None:
+            raise JetnhError(f"n_steps and h are options of fixed-step methods, not {method}")
+        settings = (rtol, atol_v, *arguments.step_limits(first_step, max_step), budget, te,
+                    mode)
     else:
-        settings = (scene._n_steps(n_steps, h, t0, t1, "rk4"), mode)
-    tail = (int(n_sing), float(singular_tol), ev_dir, ev_max)
+        settings = (arguments.fixed_steps(n_steps, h, t0, t1, "rk4", budget), mode)
+    halt = interrupt.flag()
+    tail = (int(n_sing), singular_tol, ev_dir, ev_max, halt)
     workers = int(workers or numba.config.NUMBA_NUM_THREADS)
 
     def block(drive, a, b):
@@ -369,27 +370,29 @@ def run_ensemble(scene, initial=None, params=None, *, rtol=1e-9, atol=1e-12, t_e
               OUT_T[a:b], OUT_Y[a:b], INFO[a:b], T_LAST[a:b], Y_LAST[a:b], EV_N[a:b],
               EV_T[a:b])
 
-    tic = time.perf_counter()
-    if parallel == "prange":
-        drive = entry_point(mod.ensemble_solver(parallel=True))
-        old = numba.get_num_threads()
-        nt = min(workers, numba.config.NUMBA_NUM_THREADS)
-        numba.set_num_threads(nt)
-        try:
-            # dynamic scheduling in chunks: runs differ in cost (early stops, stiffness)
-            with numba.parallel_chunksize(max(1, n_runs // (8 * nt))):
-                block(drive, 0, n_runs)
-        finally:
-            numba.set_num_threads(old)
-    else:
-        drive = entry_point(mod.ensemble_solver(parallel=False))
-        if parallel == "serial" or workers == 1 or n_runs == 1:
+    drive = entry_point(mod.ensemble_solver(parallel=parallel == "prange"))
+
+    def compute():
+        if parallel == "prange":
+            old = numba.get_num_threads()
+            nt = min(workers, numba.config.NUMBA_NUM_THREADS)
+            numba.set_num_threads(nt)
+            try:
+                # dynamic scheduling in chunks: runs differ in cost (early stops, stiffness)
+                with numba.parallel_chunksize(max(1, n_runs // (8 * nt))):
+                    block(drive, 0, n_runs)
+            finally:
+                numba.set_num_threads(old)
+        elif parallel == "serial" or workers == 1 or n_runs == 1:
             block(drive, 0, n_runs)
         else:
             chunk = max(1, -(-n_runs // (4 * workers)))
             bounds = [(a, min(a + chunk, n_runs)) for a in range(0, n_runs, chunk)]
             with ThreadPoolExecutor(workers) as pool:
                 list(pool.map(lambda ab: block(drive, *ab), bounds))
+
+    tic = time.perf_counter()
+    interrupt.call(compute, halt, limit)
     wall = time.perf_counter() - tic
     ens = Ensemble(scene, method, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N[:, :n_ev],
                    EV_T[:, :n_ev], Y0, P, ce.names if ce is not None else (), wall,

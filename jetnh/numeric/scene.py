@@ -38,11 +38,12 @@ import sympy as sp
 
 from ..constraints import PRINCIPLES, System
 from ..errors import ConstraintError, IntegrationError, JetnhError, PrincipleError
+from . import arguments, interrupt
 from . import cache as _cache
 from . import codegen
 from .integrators import ADAPTIVE, METHODS, STATUS_TEXT
 from .integrators._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, NONFINITE,
-                                  NOT_CONVERGED, SINGULAR)
+                                  NOT_CONVERGED, SINGULAR, STOPPED)
 from .trajectory import Trajectory
 
 SCIPY_METHODS = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
@@ -50,21 +51,11 @@ DLA_NAMES = ("dla", "lda", "nh-midpoint")
 DVI_NAMES = ("dvi", "vakonomic-midpoint")
 
 
-def _name(key, what) -> str:
-    if isinstance(key, sp.Symbol):
-        return key.name
-    if isinstance(key, str):
-        return key
-    raise JetnhError(f"{what} must be keyed by Symbol or by name, not {type(key).__name__} "
-                     f"({key!r})")
-
-
-def _float(value, what) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise JetnhError(f"{what} must be a number, got {value!r}") from None
-    return v
+def _timeout_reason(timeout, t) -> str:
+    if timeout is None:
+        return STATUS_TEXT[STOPPED]
+    return (f"stopped at t = {float(t):.17g} by the wall-clock budget timeout = {timeout:g} s; "
+            "raise timeout (or max_steps) to go further")
 
 
 class Scene:
@@ -94,7 +85,7 @@ class Scene:
         self.t_span = self._t_span(t_span)
         self.multipliers = codegen.multiplier_names(system, principle)
         self.params = self._params(params or {})
-        self.runtime_params = tuple(_name(k, "a runtime parameter") for k in runtime_params)
+        self.runtime_params = tuple(arguments.name_of(k, "a runtime parameter") for k in runtime_params)
         for name in self.runtime_params:
             if name not in self.params:
                 raise JetnhError(f"runtime parameter {name!r} needs a value in params=")
@@ -115,7 +106,7 @@ class Scene:
             t0, t1 = t_span
         except (TypeError, ValueError):
             raise JetnhError(f"t_span must be a pair (t0, t1), got {t_span!r}") from None
-        t0, t1 = _float(t0, "t_span[0]"), _float(t1, "t_span[1]")
+        t0, t1 = arguments.real(t0, "t_span[0]"), arguments.real(t1, "t_span[1]")
         if not (np.isfinite(t0) and np.isfinite(t1)):
             raise JetnhError(f"t_span must be finite, got {t_span!r}")
         return (t0, t1)
@@ -129,12 +120,12 @@ class Scene:
         out = {}
         given = {**{s.name: v for s, v in self.system.defaults.items()}, **dict(params)}
         for k, v in given.items():
-            name = _name(k, "a parameter")
+            name = arguments.name_of(k, "a parameter")
             if name not in needed:
                 raise JetnhError(
                     f"params has {name!r}, which is not a parameter of this system; its "
                     f"parameters are {sorted(needed) or 'none'}")
-            out[name] = _float(v, f"parameter {name!r}")
+            out[name] = arguments.real(v, f"parameter {name!r}")
             if not np.isfinite(out[name]):
                 raise JetnhError(f"parameter {name!r} is {out[name]}; give a finite value")
         missing = sorted(needed - set(out))
@@ -147,13 +138,13 @@ class Scene:
         given = {}
         allowed = set(self.state_names) | set(self.dependent_velocities)
         for k, v in initial.items():
-            name = _name(k, "an initial value")
+            name = arguments.name_of(k, "an initial value")
             if name not in allowed:
                 raise JetnhError(
                     f"initial has {name!r}, which is not a state of this {self.principle} "
                     f"scene; the states are {', '.join(self.state_names)} (and the dependent "
                     f"velocities {', '.join(self.dependent_velocities) or 'none'})")
-            given[name] = _float(v, f"initial value of {name!r}")
+            given[name] = arguments.real(v, f"initial value of {name!r}")
             if not np.isfinite(given[name]):
                 raise JetnhError(f"initial value of {name!r} is {given[name]}")
         missing = [n for n in self.state_names if n not in given]
@@ -267,21 +258,35 @@ class Scene:
 
     # ------------------------------------------------------------------ run
     def run(self, rtol=1e-9, atol=1e-12, t_eval=None, method="dop853", *, backend=None,
-            save="steps", first_step=None, max_step=np.inf, max_steps=10_000_000,
-            n_steps=None, h=None, t_span=None, y0=None, params=None, newton_tol=1e-13,
-            max_newton=50, events=None, singular="stop", singular_tol=1e-10,
-            projection=False) -> Trajectory:
+            save="steps", first_step=None, max_step=None, max_steps=10_000_000,
+            n_steps=None, h=None, t_span=None, y0=None, params=None, newton_tol=None,
+            max_newton=None, events=None, singular="stop", singular_tol=1e-10,
+            projection=False, timeout=None) -> Trajectory:
         """Integrate and return a ``Trajectory``.
 
         ``method``: "dop853" (default), "dopri5" (alias "RK45"), "rk4" (fixed step: give
         ``n_steps`` or ``h``), "dla" (the structure-preserving discrete
         Lagrange-d'Alembert midpoint integrator, Chetaev only, fixed step, Newton tolerance
-        ``newton_tol``; ``projection=True`` projects every node velocity onto the
-        constraints), "dvi" (the discrete vakonomic midpoint variational integrator,
-        vakonomic dynamics, fixed step), or "scipy-<M>" for scipy's ``solve_ivp(method=M)`` on the
-        same compiled right-hand side (also ``backend="scipy"``).  ``t_eval``: output
-        times (dense output); else every accepted step, or the two ends with
-        ``save="final"``.  ``atol`` may be a scalar or one value per state.
+        ``newton_tol`` (1e-13) in at most ``max_newton`` (50) iterations;
+        ``projection=True`` projects every node velocity onto the constraints), "dvi" (the
+        discrete vakonomic midpoint variational integrator, vakonomic dynamics, fixed
+        step), or "scipy-<M>" for scipy's ``solve_ivp(method=M)`` on the same compiled
+        right-hand side (also ``backend="scipy"``).  ``t_eval``: output times (dense
+        output); else every accepted step, or the two ends with ``save="final"``.
+        ``atol`` may be a scalar or one value per state; adaptive steps are bounded by
+        ``first_step`` (default automatic) and ``max_step`` (default none).
+
+        ``y0`` replaces the initial state: a dict keyed by Symbol or name (the other
+        states keep the scene's values; dependent velocities, if given, must agree with
+        the constraints) or a sequence in the order ``scene.state_names``.  ``params``
+        gives the run-time parameters (``runtime_params``): a dict, or a sequence in the
+        order ``scene.runtime_params``.  Every argument is checked before it reaches
+        compiled code (``numeric.arguments``).
+
+        Budgets: at most ``max_steps`` steps (the fixed-step methods refuse more up
+        front); ``timeout`` seconds of wall-clock time, after which the run returns what
+        it has with status ``STOPPED``.  Ctrl-C stops a compiled run within one step
+        (``numeric.interrupt``).
 
         ``events``: user events (sympy expressions, callables g(t, y) or ``Event``; see
         ``jetnh.numeric.events``), located on the dense output with scipy's semantics;
@@ -301,97 +306,158 @@ class Scene:
         Lagrangian is degenerate on the constraints, is a singular stop too.
         """
         t0, t1 = self._t_span(t_span) if t_span is not None else self.t_span
-        y_init = self.y0 if y0 is None else np.ascontiguousarray(y0, dtype=float)
-        p = self.p if params is None else np.ascontiguousarray(params, dtype=float)
+        p = self._run_params(params)
+        y_init = self._run_state(y0, t0, p)
         if singular not in ("stop", "ignore"):
             raise JetnhError(f"singular must be 'stop' or 'ignore', not {singular!r}")
-        singular_tol = _float(singular_tol, "singular_tol")
+        singular_tol = arguments.real(singular_tol, "singular_tol")
         if not 0.0 <= singular_tol < 1.0:
             raise JetnhError(f"singular_tol must be in [0, 1) (a fraction of each "
                              f"indicator's initial size), not {singular_tol}")
+        if save not in ("steps", "final"):
+            raise JetnhError(f"save must be 'steps' or 'final', not {save!r}")
+        budget = arguments.count(max_steps, "max_steps")
+        limit = arguments.timeout(timeout)
+        n = y_init.shape[0]
+        rtol, atol_v = arguments.tolerances(rtol, atol, n)
         name = str(method)
-        if backend == "scipy" or name.lower().startswith("scipy"):
+        key = name.lower()
+        if backend == "scipy" or key.startswith("scipy"):
             m = name.split("-", 1)[1] if "-" in name else name
             m = {"dop853": "DOP853", "dopri5": "RK45", "rk45": "RK45"}.get(m.lower(), m)
-            return self._run_scipy(m, rtol, atol, t_eval, t0, t1, y_init, p, first_step,
-                                   max_step, events, singular, singular_tol)
+            self._unused(f"scipy-{m}", n_steps=n_steps, h=h, newton_tol=newton_tol,
+                         max_newton=max_newton, timeout=timeout,
+                         projection=projection or None)
+            first, mx = arguments.step_limits(first_step, np.inf if max_step is None
+                                              else max_step)
+            te = None if t_eval is None else arguments.times(t_eval, t0, t1)
+            return self._run_scipy(m, rtol, atol_v, te, t0, t1, y_init, p, first or None, mx,
+                                   events, singular, singular_tol)
         if backend not in (None, "numba"):
             raise JetnhError(f"unknown backend {backend!r}; choose 'numba' or 'scipy'")
-        key = name.lower()
         if key in DLA_NAMES or key in DVI_NAMES:
             if events:
                 raise JetnhError(f"events need dense output, which the {key} integrator does "
                                  "not have; use dop853, dopri5 or rk4")
+            self._unused(key, t_eval=t_eval, first_step=first_step, max_step=max_step)
+            steps = arguments.fixed_steps(n_steps, h, t0, t1, key, budget)
+            arguments.output_rows(steps, 3 * self.system.J.n + 2 * self.system.k, save)
+            tol = 1e-13 if newton_tol is None else arguments.positive(newton_tol,
+                                                                     "newton_tol")
+            iters = 50 if max_newton is None else arguments.count(max_newton, "max_newton",
+                                                                  limit=10_000)
             sing = singular_tol if singular == "stop" else None
             # the scene's initial dependent velocities hold for its own parameters only
             own = y0 is None and params is None
             if key in DVI_NAMES:
-                return self._run_dvi(t0, t1, y_init, own, p, n_steps, h, save, newton_tol,
-                                     max_newton, sing)
-            return self._run_dla(t0, t1, y_init, own, p, n_steps, h, save, newton_tol,
-                                 max_newton, bool(projection), sing)
+                if projection:
+                    raise JetnhError("projection= is an option of the dla integrator")
+                return self._run_dvi(t0, t1, y_init, own, p, steps, save, tol, iters, sing,
+                                     limit)
+            return self._run_dla(t0, t1, y_init, own, p, steps, save, tol, iters,
+                                 bool(projection), sing, limit)
         if projection:
             raise JetnhError("projection= is an option of the dla integrator; the "
                              "Runge-Kutta methods follow the constraints to their tolerance")
         if key not in METHODS:
             raise JetnhError(
-                f"unknown method {method!r}; choose one of {sorted(set(METHODS))} or "
-                f"scipy-<{'|'.join(SCIPY_METHODS)}>")
+                f"unknown method {method!r}; choose one of {sorted(set(METHODS))}, dla, dvi "
+                f"or scipy-<{'|'.join(SCIPY_METHODS)}>")
+        self._unused(key, newton_tol=newton_tol, max_newton=max_newton)
         method = METHODS[key]
+        if method in ADAPTIVE:
+            self._unused(method, n_steps=n_steps, h=h)
+            first, mx = arguments.step_limits(first_step, np.inf if max_step is None
+                                              else max_step)
+            mode = EVERY_STEP if save == "steps" else ENDPOINTS
+            te = np.zeros(0)
+            if t_eval is not None:
+                te = arguments.times(t_eval, t0, t1)
+                mode = AT_T_EVAL
+            settings = (rtol, atol_v, first, mx, budget, te, mode)
+        else:
+            if t_eval is not None:
+                raise JetnhError("rk4 is a fixed-step method without dense output; pass "
+                                 "n_steps or h and read every step, or use dop853 with t_eval")
+            self._unused(method, first_step=first_step, max_step=max_step)
+            steps = arguments.fixed_steps(n_steps, h, t0, t1, "rk4", budget)
+            arguments.output_rows(steps, n, save)
+            settings = (steps, EVERY_STEP if save == "steps" else ENDPOINTS)
         kern = self.kernels
         solve = kern.integrator(method)
-        n = y_init.shape[0]
-        if save not in ("steps", "final"):
-            raise JetnhError(f"save must be 'steps' or 'final', not {save!r}")
         ce = self.compile_events(events)
         n_sing = len(kern.layout.indicators) if singular == "stop" else 0
         uev = ce.uev if ce is not None else kern.sing_fp
         ev_dir = ce.direction if ce is not None else np.zeros(0, dtype=np.int64)
         ev_max = ce.max_events if ce is not None else np.zeros(0, dtype=np.int64)
-        te = np.zeros(0)
-        if method in ADAPTIVE:
-            mode = EVERY_STEP if save == "steps" else ENDPOINTS
-            if t_eval is not None:
-                te = np.ascontiguousarray(t_eval, dtype=float)
-                self._check_t_eval(te, t0, t1)
-                mode = AT_T_EVAL
-            atol_v = self._atol(atol, n)
-            tic = time.perf_counter()
-            out = solve(kern.rhs_fp, kern.sing_fp, uev, t0, t1, y_init, p, float(rtol), atol_v,
-                        float(first_step or 0.0), float(max_step), int(max_steps), te, mode,
-                        n_sing, singular_tol, ev_dir, ev_max)
-            wall = time.perf_counter() - tic
-        else:
-            if t_eval is not None:
-                raise JetnhError("rk4 is a fixed-step method without dense output; pass "
-                                 "n_steps or h and read every step, or use dop853 with t_eval")
-            n_steps = self._n_steps(n_steps, h, t0, t1, "rk4")
-            mode = EVERY_STEP if save == "steps" else ENDPOINTS
-            tic = time.perf_counter()
-            out = solve(kern.rhs_fp, kern.sing_fp, uev, t0, t1, y_init, p, n_steps, mode,
-                        n_sing, singular_tol, ev_dir, ev_max)
-            wall = time.perf_counter() - tic
+        halt = interrupt.flag()
+        tic = time.perf_counter()
+        out = interrupt.call(lambda: solve(kern.rhs_fp, kern.sing_fp, uev, t0, t1, y_init, p,
+                                           *settings, n_sing, singular_tol, ev_dir, ev_max,
+                                           halt), halt, limit)
+        wall = time.perf_counter() - tic
         return self._trajectory(method, out, wall, kern, ce, p, t0, y_init, singular_tol,
-                                singular == "stop")
+                                singular == "stop", limit)
 
     # ------------------------------------------------------------------ run helpers
     @staticmethod
-    def _atol(atol, n) -> np.ndarray:
-        a = np.asarray(atol, dtype=float)
-        if a.ndim > 1 or (a.ndim == 1 and a.shape[0] != n):
-            raise JetnhError(f"atol must be a number or one value per state ({n}), "
-                             f"got shape {a.shape}")
-        return np.ascontiguousarray(np.broadcast_to(a, (n,)))
+    def _unused(method, **options):
+        """Refuse options that ``method`` does not use (rather than ignore them)."""
+        given = [k for k, v in options.items() if v is not None]
+        if given:
+            raise JetnhError(f"{', '.join(given)} {'is' if len(given) == 1 else 'are'} not an "
+                             f"option of the {method} method; remove "
+                             f"{'it' if len(given) == 1 else 'them'}")
 
-    @staticmethod
-    def _n_steps(n_steps, h, t0, t1, what) -> int:
-        if n_steps is None:
-            if h is None:
-                raise JetnhError(f"{what} is a fixed-step method: give n_steps= or h=")
-            n_steps = max(1, int(round(abs(t1 - t0) / float(h))))
-        if int(n_steps) < 1:
-            raise JetnhError(f"n_steps must be a positive integer, not {n_steps!r}")
-        return int(n_steps)
+    def _run_params(self, params) -> np.ndarray:
+        """The run-time parameters of one run (``run(params=...)``), checked."""
+        if params is None:
+            return self.p
+        if isinstance(params, dict):
+            for k in params:
+                name = arguments.name_of(k, "params")
+                if name not in self.runtime_params:
+                    if name in self.params:
+                        raise JetnhError(
+                            f"parameter {name!r} is compiled into this scene's kernels "
+                            f"(value {self.params[name]!r}), so run(params=...) cannot change "
+                            f"it; build the scene with runtime_params=[{name!r}] (or use "
+                            f"scene.replace(params={{{name!r}: ...}}))")
+                    raise JetnhError(f"params has {name!r}, which is not a parameter of this "
+                                     f"system; its parameters are {sorted(self.params)}")
+        p, _ = arguments.keyed_or_sequence(params, self.runtime_params, self.p, "params",
+                                           "scene.runtime_params")
+        return p
+
+    def _run_state(self, y0, t0, p) -> np.ndarray:
+        """The initial state of one run (``run(y0=...)``), checked."""
+        if y0 is None:
+            return self.y0
+        if not isinstance(y0, dict):
+            y, _ = arguments.keyed_or_sequence(y0, self.state_names, self.y0, "y0",
+                                               "scene.state_names")
+            return y
+        allowed = self.state_names + self.dependent_velocities
+        for k in y0:
+            name = arguments.name_of(k, "y0")
+            if name not in allowed:
+                raise JetnhError(f"y0 has {name!r}, which is not a state of this "
+                                 f"{self.principle} scene; the states are "
+                                 f"{', '.join(self.state_names)}")
+        y, given = arguments.keyed_or_sequence(
+            y0, allowed, [self.initial[nm] for nm in allowed], "y0", "")
+        y = np.ascontiguousarray(y[:len(self.state_names)])
+        dep = {nm: v for nm, v in given.items() if nm in self.dependent_velocities}
+        if dep:
+            vals = dict(zip(self.state_names, y.tolist()))
+            required = self._dependent_velocity_values(
+                vals, t0, dict(zip(self.runtime_params, p.tolist())))
+            for nm, v in dep.items():
+                if abs(v - required[nm]) > self.consistency_tol * max(1.0, abs(required[nm])):
+                    raise ConstraintError(
+                        f"y0 gives {nm} = {v!r} but the constraints give {required[nm]!r}; "
+                        "omit it (dependent velocities follow from the constraints)")
+        return y
 
     def compile_events(self, events):
         """The compiled form of ``events`` (``events.CompiledEvents``), or None; kept per
@@ -408,7 +474,8 @@ class Scene:
             store[memo] = compile_events(self, evs)
         return store[memo]
 
-    def _trajectory(self, method, out, wall, kern, ce, p, t0, y_init, singular_tol, checked):
+    def _trajectory(self, method, out, wall, kern, ce, p, t0, y_init, singular_tol, checked,
+                    timeout=None):
         """A Trajectory from the result tuple of a compiled solve (or an error)."""
         from .events import split_records
 
@@ -433,6 +500,8 @@ class Scene:
         elif status == EVENT:
             k = int(ev_i[n_ev - 1])
             reason = (f"terminal event {ce.names[k]!r} at t = {float(ev_t[n_ev - 1]):.17g}")
+        elif status == STOPPED:
+            reason = _timeout_reason(timeout, t_last)
         else:
             reason = STATUS_TEXT[status]
         kw = {}
@@ -613,8 +682,8 @@ class Scene:
         "vakonomic")``)."""
         return self._discrete_kernels("dvi")
 
-    def _run_dla(self, t0, t1, y_init, default_y0, p, n_steps, h, save, tol, max_iter,
-                 projection=False, singular_tol=1e-10):
+    def _run_dla(self, t0, t1, y_init, default_y0, p, n_steps, save, tol, max_iter,
+                 projection, singular_tol, timeout):
         from .integrators import dla
 
         if self.principle != "chetaev":
@@ -623,7 +692,6 @@ class Scene:
                 f"(Lagrange-d'Alembert) dynamics, not {self.principle}; use dop853"
                 + (", or dvi (the discrete vakonomic integrator)"
                    if self.principle in ("vakonomic", "holder") else ""))
-        n_steps = self._n_steps(n_steps, h, t0, t1, "dla")
         n = self.system.J.n
         q0 = np.ascontiguousarray(y_init[:n])
         v0 = self._full_velocities(t0, y_init, p, default_y0)
@@ -631,18 +699,21 @@ class Scene:
         mode = EVERY_STEP if save == "steps" else ENDPOINTS
         n_sing = len(kern.layout.indicators) if singular_tol is not None else 0
         v0 = np.ascontiguousarray(v0, dtype=float)
+        solve = dla.solver()
+        constrained = self._degenerate_off_constraints(kern, t0, q0, v0, p)
+        halt = interrupt.flag()
         tic = time.perf_counter()
-        out = dla.solver()(
+        out = interrupt.call(lambda: solve(
             kern.step_residual, kern.momentum, kern.legendre, kern.nodal, kern.constraint_jac,
-            kern.sing, t0, t1, q0, v0, p, int(n_steps), self.system.k, float(tol),
-            int(max_iter), mode, projection, n_sing, float(singular_tol or 0.0),
-            len(kern.layout.integrals), self._degenerate_off_constraints(kern, t0, q0, v0, p))
+            kern.sing, t0, t1, q0, v0, p, n_steps, self.system.k, tol, max_iter, mode,
+            projection, n_sing, float(singular_tol or 0.0), len(kern.layout.integrals),
+            constrained, halt), halt, timeout)
         return self._discrete_trajectory(
             "dla" + ("+projection" if projection else ""), kern, out,
-            time.perf_counter() - tic, p, t0, t1, n_steps, singular_tol)
+            time.perf_counter() - tic, p, t0, t1, n_steps, singular_tol, timeout)
 
-    def _run_dvi(self, t0, t1, y_init, default_y0, p, n_steps, h, save, tol, max_iter,
-                 singular_tol=1e-10):
+    def _run_dvi(self, t0, t1, y_init, default_y0, p, n_steps, save, tol, max_iter,
+                 singular_tol, timeout):
         from .integrators import dvi
 
         if not (self.principle == "vakonomic" or
@@ -656,7 +727,6 @@ class Scene:
             raise PrincipleError(
                 f"dvi uses the multipliers of the constraints as written (the 'multiplier' "
                 f"form); the scene's form {self.form!r} scales them differently: omit form=")
-        n_steps = self._n_steps(n_steps, h, t0, t1, "dvi")
         J = self.system.J
         n, k = J.n, self.system.k
         q0 = np.ascontiguousarray(y_init[:n])
@@ -665,15 +735,18 @@ class Scene:
         kern = self.dvi_kernels
         mode = EVERY_STEP if save == "steps" else ENDPOINTS
         n_sing = len(kern.layout.indicators) if singular_tol is not None else 0
+        solve = dvi.solver()
+        halt = interrupt.flag()
         tic = time.perf_counter()
-        out = dvi.solver()(
+        out = interrupt.call(lambda: solve(
             kern.step_residual, kern.momentum, kern.legendre, kern.nodal, kern.sing, t0, t1,
-            q0, v0, lam0, p, int(n_steps), float(tol), int(max_iter), mode, n_sing,
-            float(singular_tol or 0.0), len(kern.layout.integrals))
+            q0, v0, lam0, p, n_steps, tol, max_iter, mode, n_sing,
+            float(singular_tol or 0.0), len(kern.layout.integrals), halt), halt, timeout)
         return self._discrete_trajectory("dvi", kern, out, time.perf_counter() - tic, p, t0,
-                                         t1, n_steps, singular_tol)
+                                         t1, n_steps, singular_tol, timeout)
 
-    def _discrete_trajectory(self, method, kern, out, wall, p, t0, t1, n_steps, singular_tol):
+    def _discrete_trajectory(self, method, kern, out, wall, p, t0, t1, n_steps, singular_tol,
+                             timeout=None):
         """A Trajectory from the result of a dla/dvi solve; a failed Newton step next to a
         singular configuration becomes a singular stop, any other failure an error."""
         status, ts, rows, n_out, stats, t_last, y_last, sing_index, t_prev, y_prev = out
@@ -708,7 +781,8 @@ class Scene:
                              for i, nm in enumerate(kern.layout.integrals)}}
         return Trajectory(self, ts[:n_out], ys, p, method=method, status=status,
                           stop_reason=(singularity["reason"] if singularity else
-                                       STATUS_TEXT[status]),
+                                       _timeout_reason(timeout, t_last) if status == STOPPED
+                                       else STATUS_TEXT[status]),
                           steps=int(stats[0]), rejected=0, nfev=int(stats[1]), wall_time=wall,
                           kernels=kern, projected=self.projected, own=own,
                           singularity=singularity)
@@ -821,17 +895,6 @@ class Scene:
                 vals, t0, dict(zip(self.runtime_params, p))))
             v0 = [vals[v.name] for v in J.qd]
         return np.ascontiguousarray(v0, dtype=float)
-
-    @staticmethod
-    def _check_t_eval(te, t0, t1):
-        lo, hi = min(t0, t1), max(t0, t1)
-        if te.ndim != 1:
-            raise JetnhError("t_eval must be a 1-d array of times")
-        if te.size and (te.min() < lo or te.max() > hi):
-            raise JetnhError(f"t_eval must lie within t_span = ({t0}, {t1})")
-        d = np.diff(te) * (1 if t1 >= t0 else -1)
-        if np.any(d < 0):
-            raise JetnhError("t_eval must be sorted in the direction of integration")
 
     def _raise_nonfinite(self, method, t, y, kern=None, p=None, t0=None, y_init=None,
                          checked=True):

@@ -7,7 +7,9 @@ allowed number of steps; ``TOO_SMALL_STEP`` (2) the step size fell below ten uni
 the last place of t; ``NONFINITE`` (3) the right-hand side or the state became NaN or
 infinite; ``NOT_CONVERGED`` (4) an implicit stage equation did not converge; ``EVENT``
 (5) a terminal user event occurred; ``SINGULAR`` (6) a singularity indicator crossed zero
-or fell below its threshold (see ``_events``).
+or fell below its threshold (see ``_events``); ``STOPPED`` (7) the caller asked the loop
+to stop (its ``stop`` flag, checked before every step: Ctrl-C or a wall-clock budget,
+see ``numeric.interrupt``).
 """
 
 import hashlib
@@ -81,7 +83,7 @@ def _install_cache_locator():
 
 _install_cache_locator()
 
-FINISHED, MAX_STEPS, TOO_SMALL_STEP, NONFINITE, NOT_CONVERGED, EVENT, SINGULAR = range(7)
+FINISHED, MAX_STEPS, TOO_SMALL_STEP, NONFINITE, NOT_CONVERGED, EVENT, SINGULAR, STOPPED = range(8)
 
 STATUS_TEXT = {
     FINISHED: "reached the end of the interval",
@@ -91,6 +93,7 @@ STATUS_TEXT = {
     NOT_CONVERGED: "an implicit stage equation did not converge",
     EVENT: "a terminal event occurred",
     SINGULAR: "stopped at a singular configuration",
+    STOPPED: "stopped at the wall-clock budget (timeout)",
 }
 
 #: the step-size controller of Hairer-Norsett-Wanner II.4 with scipy's constants

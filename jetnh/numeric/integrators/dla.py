@@ -55,8 +55,8 @@ import numba
 import numpy as np
 
 from ._common import (
-    ENDPOINTS, FINISHED, NONFINITE, NOT_CONVERGED, SINGULAR, all_finite, compiled, copy_into,
-    f8, i8, jit, solve_linear, store)
+    ENDPOINTS, FINISHED, NONFINITE, NOT_CONVERGED, SINGULAR, STOPPED, all_finite, compiled,
+    copy_into, f8, i8, jit, solve_linear, store)
 
 ORDER = 2
 
@@ -222,7 +222,8 @@ def store_node(nodal, ts, ys, n_out, t, q, v, p, n, nod, row):
 
 
 def _solve(step_residual, momentum, legendre, nodal, constraint_jac, sing, t0, t_end, q0, v0,
-           p, n_steps, k, tol, max_iter, mode, project, n_sing, sing_tol, n_int, constrained):
+           p, n_steps, k, tol, max_iter, mode, project, n_sing, sing_tol, n_int, constrained,
+           halt):
     """``n_steps`` steps from (q0, v0); with ``project`` the node velocity of every step
     is projected onto the constraints (``project_velocity``) and the momentum recomputed
     from it before the next step.  Node velocities by the inverse Legendre transform, or
@@ -284,6 +285,9 @@ def _solve(step_residual, momentum, legendre, nodal, constraint_jac, sing, t0, t
     for a in range(k):
         z[n + a] = 0.0
     for step in range(n_steps if status == FINISHED else 0):
+        if halt[0] != 0:
+            status = STOPPED
+            break
         converged = False
         for it in range(max_iter):
             step_residual(t, h, q, pk, z, p, G, Jm)
@@ -359,12 +363,12 @@ def _solve(step_residual, momentum, legendre, nodal, constraint_jac, sing, t0, t
 
 
 ARGS = (STEP, MOMENTUM, LEGENDRE, NODAL, LEGENDRE, NODAL, f8, f8, f8[::1], f8[::1], f8[::1],
-        i8, i8, f8, i8, i8, numba.types.boolean, i8, f8, i8, numba.types.boolean)
+        i8, i8, f8, i8, i8, numba.types.boolean, i8, f8, i8, numba.types.boolean, i8[::1])
 _inverse_legendre = numba.njit(cache=True, error_model="numpy", nogil=True)(_inverse_legendre)
 
 
 def solver():
     """The compiled ``solve(step_residual, momentum, legendre, nodal, constraint_jac, sing,
     t0, t_end, q0, v0, p, n_steps, k, tol, max_iter, mode, project, n_sing, sing_tol,
-    n_int, constrained)``."""
+    n_int, constrained, halt)``; ``halt[0]`` nonzero stops before the next step (STOPPED)."""
     return compiled(_solve, ARGS)

@@ -25,7 +25,7 @@ import numpy as np
 
 from ._common import (
     AT_T_EVAL, ENDPOINTS, EVERY_STEP, FINISHED, MAX_FACTOR, MAX_STEPS, MIN_FACTOR,
-    NONFINITE, RHS, SAFETY, TOO_SMALL_STEP, all_finite, compiled, copy_into, f8, i8,
+    NONFINITE, RHS, SAFETY, STOPPED, TOO_SMALL_STEP, all_finite, compiled, copy_into, f8, i8,
     collect, initial_step_h0, initial_step_h1, jit, min_step, store)
 from ._common import ENSEMBLE_OUT
 from ._events import (SINGULAR, any_user_active, dense_eval, locate, sing_dip, sing_init,
@@ -69,7 +69,7 @@ def _dense_rows(h, y_old, y_new, K, F):
 
 
 def _solve(rhs, sing, uev, t0, t_end, y0, p, rtol, atol, first_step, max_step, max_steps,
-           t_eval, mode, n_sing, sing_tol, ev_dir, ev_max):
+           t_eval, mode, n_sing, sing_tol, ev_dir, ev_max, halt):
     """Integrate y' = rhs(t, y, p) from t0 to t_end; arguments and results as in
     ``dop853._solve`` (events and singularity indicators: ``_events``)."""
     n = y0.shape[0]
@@ -138,6 +138,9 @@ def _solve(rhs, sing, uev, t0, t_end, y0, p, rtol, atol, first_step, max_step, m
     while direction * (t_end - t) > 0.0:
         if stats[0] >= max_steps:
             status = MAX_STEPS
+            break
+        if halt[0] != 0:
+            status = STOPPED
             break
         hmin = min_step(t, direction)
         if h_abs > max_step:
@@ -261,12 +264,12 @@ def _solve(rhs, sing, uev, t0, t_end, y0, p, rtol, atol, first_step, max_step, m
 
 
 ARGS = (RHS, RHS, RHS, f8, f8, f8[::1], f8[::1], f8, f8[::1], f8, f8, i8, f8[::1], i8, i8, f8,
-        i8[::1], i8[::1])
+        i8[::1], i8[::1], i8[::1])
 
 
 def solver():
     """The compiled ``solve(rhs, sing, uev, t0, t_end, y0, p, rtol, atol, first_step,
-    max_step, max_steps, t_eval, mode, n_sing, sing_tol, ev_dir, ev_max)``."""
+    max_step, max_steps, t_eval, mode, n_sing, sing_tol, ev_dir, ev_max, halt)``."""
     return compiled(_solve, ARGS)
 
 
@@ -274,20 +277,20 @@ def solver():
 # Two copies of one driver (numba's cache cannot hold a function compiled both with and
 # without ``parallel``): run r of the ensemble is ``_solve`` on Y0[r], P[r].
 def _ensemble_parallel(rhs, sing, uev, t0, t_end, Y0, P, rtol, atol, first_step, max_step,
-                       max_steps, t_eval, mode, n_sing, sing_tol, ev_dir, ev_max, OUT_T,
+                       max_steps, t_eval, mode, n_sing, sing_tol, ev_dir, ev_max, halt, OUT_T,
                        OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
     for r in numba.prange(Y0.shape[0]):
         res = _SOLVE(rhs, sing, uev, t0, t_end, Y0[r], P[r], rtol, atol, first_step,
-                     max_step, max_steps, t_eval, mode, n_sing, sing_tol, ev_dir, ev_max)
+                     max_step, max_steps, t_eval, mode, n_sing, sing_tol, ev_dir, ev_max, halt)
         collect(r, res, mode, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)
 
 
 def _ensemble_serial(rhs, sing, uev, t0, t_end, Y0, P, rtol, atol, first_step, max_step,
-                     max_steps, t_eval, mode, n_sing, sing_tol, ev_dir, ev_max, OUT_T, OUT_Y,
+                     max_steps, t_eval, mode, n_sing, sing_tol, ev_dir, ev_max, halt, OUT_T, OUT_Y,
                      INFO, T_LAST, Y_LAST, EV_N, EV_T):
     for r in range(Y0.shape[0]):
         res = _SOLVE(rhs, sing, uev, t0, t_end, Y0[r], P[r], rtol, atol, first_step,
-                     max_step, max_steps, t_eval, mode, n_sing, sing_tol, ev_dir, ev_max)
+                     max_step, max_steps, t_eval, mode, n_sing, sing_tol, ev_dir, ev_max, halt)
         collect(r, res, mode, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)
 
 

@@ -46,8 +46,8 @@ J. E. Marsden, M. West, "Discrete mechanics and variational integrators", Acta N
 
 import numpy as np
 
-from ._common import (ENDPOINTS, FINISHED, NONFINITE, NOT_CONVERGED, SINGULAR, all_finite,
-                      compiled, f8, i8, jit, solve_linear, store)
+from ._common import (ENDPOINTS, FINISHED, NONFINITE, NOT_CONVERGED, SINGULAR, STOPPED,
+                      all_finite, compiled, f8, i8, jit, solve_linear, store)
 from .dla import LEGENDRE, MOMENTUM, NODAL, STEP, node_init, node_violated
 
 ORDER = 2
@@ -92,7 +92,7 @@ def _store(nodal, ts, ys, n_out, t, ql, v, p, n, k, nod, row):
 
 
 def _solve(step_residual, momentum, legendre, nodal, sing, t0, t_end, q0, v0, lam0, p,
-           n_steps, tol, max_iter, mode, n_sing, sing_tol, n_int):
+           n_steps, tol, max_iter, mode, n_sing, sing_tol, n_int, halt):
     """``n_steps`` steps from (q0, v0, lambda0).
 
     Returns ``(status, ts, ys, n_out, stats, t, y, sing_index, t_prev, y_prev)`` with rows
@@ -149,6 +149,9 @@ def _solve(step_residual, momentum, legendre, nodal, sing, t0, t_end, q0, v0, la
     t = t0
     # the extra step gives the last node's right side
     for step in range(n_steps + 1 if status == FINISHED else 0):
+        if halt[0] != 0:
+            status = STOPPED
+            break
         if not _newton(step_residual, t, h, q, pk, z, p, G, Jm, dz, n, m, tol, max_iter,
                        stats):
             if step == n_steps:              # extra step failed: one-sided last node
@@ -211,10 +214,11 @@ def _pack(ql, v, n, k, out):
 
 
 ARGS = (STEP, MOMENTUM, LEGENDRE, NODAL, NODAL, f8, f8, f8[::1], f8[::1], f8[::1], f8[::1],
-        i8, f8, i8, i8, i8, f8, i8)
+        i8, f8, i8, i8, i8, f8, i8, i8[::1])
 
 
 def solver():
     """The compiled ``solve(step_residual, momentum, legendre, nodal, sing, t0, t_end, q0,
-    v0, lam0, p, n_steps, tol, max_iter, mode, n_sing, sing_tol, n_int)``."""
+    v0, lam0, p, n_steps, tol, max_iter, mode, n_sing, sing_tol, n_int, halt)``; ``halt[0]``
+    nonzero stops before the next step (STOPPED)."""
     return compiled(_solve, ARGS)

@@ -16,7 +16,7 @@ import numba
 import numpy as np
 
 from ._common import (
-    ENDPOINTS, ENSEMBLE_OUT, FINISHED, NONFINITE, RHS, all_finite, collect, compiled,
+    ENDPOINTS, ENSEMBLE_OUT, FINISHED, NONFINITE, RHS, STOPPED, all_finite, collect, compiled,
     copy_into, f8, i8, store)
 from ._events import (SINGULAR, any_user_active, hermite_defect, hermite_rows, locate,
                       most_watched, sing_dip, sing_init, sing_violated, sing_watch)
@@ -28,7 +28,7 @@ KINK = 0.25
 
 
 def _solve(rhs, sing, uev, t0, t_end, y0, p, n_steps, mode, n_sing, sing_tol, ev_dir,
-           ev_max):
+           ev_max, halt):
     """``n_steps`` RK4 steps from t0 to t_end.
 
     Returns ``(status, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev, sing_index)`` as
@@ -83,6 +83,9 @@ def _solve(rhs, sing, uev, t0, t_end, y0, p, n_steps, mode, n_sing, sing_tol, ev
         uev(t, y, p, gu_old)
     status = FINISHED
     for step in range(n_steps):
+        if halt[0] != 0:
+            status = STOPPED
+            break
         rhs(t, y, p, k1)
         for i in range(n):
             ytmp[i] = y[i] + 0.5 * h * k1[i]
@@ -161,29 +164,29 @@ def _solve(rhs, sing, uev, t0, t_end, y0, p, n_steps, mode, n_sing, sing_tol, ev
     return status, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev, sing_index
 
 
-ARGS = (RHS, RHS, RHS, f8, f8, f8[::1], f8[::1], i8, i8, i8, f8, i8[::1], i8[::1])
+ARGS = (RHS, RHS, RHS, f8, f8, f8[::1], f8[::1], i8, i8, i8, f8, i8[::1], i8[::1], i8[::1])
 
 
 def solver():
     """The compiled ``solve(rhs, sing, uev, t0, t_end, y0, p, n_steps, mode, n_sing,
-    sing_tol, ev_dir, ev_max)``."""
+    sing_tol, ev_dir, ev_max, halt)``; ``halt[0]`` nonzero stops the loop (STOPPED)."""
     return compiled(_solve, ARGS)
 
 
 # ---------------------------------------------------------------------- ensembles
 def _ensemble_parallel(rhs, sing, uev, t0, t_end, Y0, P, n_steps, mode, n_sing, sing_tol,
-                       ev_dir, ev_max, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
+                       ev_dir, ev_max, halt, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
     for r in numba.prange(Y0.shape[0]):
         res = _SOLVE(rhs, sing, uev, t0, t_end, Y0[r], P[r], n_steps, mode, n_sing,
-                     sing_tol, ev_dir, ev_max)
+                     sing_tol, ev_dir, ev_max, halt)
         collect(r, res, mode, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)
 
 
 def _ensemble_serial(rhs, sing, uev, t0, t_end, Y0, P, n_steps, mode, n_sing, sing_tol,
-                     ev_dir, ev_max, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
+                     ev_dir, ev_max, halt, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
     for r in range(Y0.shape[0]):
         res = _SOLVE(rhs, sing, uev, t0, t_end, Y0[r], P[r], n_steps, mode, n_sing,
-                     sing_tol, ev_dir, ev_max)
+                     sing_tol, ev_dir, ev_max, halt)
         collect(r, res, mode, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)
 
 
