@@ -39,13 +39,13 @@ from __future__ import annotations
 import weakref
 from typing import NamedTuple
 
-import numpy as np
+import mpmath
 import symengine as se
 import sympy as sp
 from sympy.core.function import AppliedUndef
 from sympy.matrices.utilities import dotprodsimp
 
-from . import linalg
+from . import dag, linalg
 from .errors import LagrangianError
 
 KAPPA = ("none", "multipliers", "momenta")
@@ -122,22 +122,26 @@ def _cached_parts(system, F, hessian=True) -> EulerParts:
 
 
 def _on_constraints(system, values: dict) -> dict:
-    """``values`` with the dependent velocities set on the constraints (numerically)."""
+    """``values`` with the dependent velocities set on the constraints, in the working
+    precision of mpmath (the rank tests evaluate at 50 and 80 digits)."""
     vel = system.dependent_velocities
     if not vel:
         return values
+    dps = mpmath.mp.dps
     free = {s: v for s, v in values.items() if s not in set(vel)}
     if system.is_affine:      # A_dep qdot_dep = -f(qdot_dep = 0), never the nested phi
-        A = np.array(system.jacobian_dependent.xreplace(free).evalf(), dtype=float)
-        f0 = np.array([float(f.xreplace({**free, **{v: sp.S.Zero for v in vel}}).evalf())
-                       for f in system.constraints])
-        sol = np.linalg.solve(A, -f0)
+        k = system.k
+        f0 = [f.xreplace({v: sp.S.Zero for v in vel}) for f in system.constraints]
+        vals = dag.evaluate(list(system.jacobian_dependent) + f0, free, dps=dps)
+        A = mpmath.matrix([vals[i * k:(i + 1) * k] for i in range(k)])
+        sol = mpmath.lu_solve(A, -mpmath.matrix(vals[k * k:]))
     else:
-        sol = [complex(system.phi[v].xreplace(free).evalf()) for v in vel]
-        if any(abs(z.imag) > 1e-12 * (1 + abs(z)) for z in sol):
+        sol = dag.evaluate([system.phi[v] for v in vel], free, dps=dps)
+        if any(isinstance(z, mpmath.mpc) and abs(z.imag) > 1e-12 * (1 + abs(z))
+               for z in sol):
             raise ValueError("no real point on the constraints here")
-        sol = [z.real for z in sol]
-    return {**free, **{v: sp.Float(x) for v, x in zip(vel, sol)}}
+        sol = [mpmath.re(z) for z in sol]
+    return {**free, **{v: sol[i] for i, v in enumerate(vel)}}
 
 
 def solve(system, kappa: str = "none", explicit: bool = False, multipliers=(),
@@ -181,6 +185,11 @@ def _solve(system, kappa, explicit, multipliers, rates):
             if c.H is not None:
                 H1 = H1 + kap[a] * c.H
 
+    if not (system.L.free_symbols & set(J.qd)):
+        raise LagrangianError(
+            f"the Lagrangian {system.L} contains no velocity: it has no kinetic energy, so no "
+            "principle determines the accelerations. Add the kinetic energy, e.g. "
+            "L = m*J.qd[0]**2/2 - V")
     rank = linalg.reduced_rank(H1, A, ind, dep, complete=lambda v: _on_constraints(system, v),
                                symbols=set().union(*(f.free_symbols for f in system.constraints)))
     if rank < n - k:

@@ -26,6 +26,7 @@ Principles and forms (paper equation numbers):
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -33,7 +34,7 @@ import sympy as sp
 
 from . import accelerations, linalg
 from .constraints import PRINCIPLES, System
-from .errors import PrincipleError
+from .errors import JetnhWarning, PrincipleError
 from .variations import Variation, jet_space, make
 
 FORMS = {
@@ -236,8 +237,10 @@ def _explicit(system: System) -> System:
     """The same system with the constraints in explicit form qdot^alpha - phi^alpha."""
     if system.constraints == system.explicit_constraints:
         return system
-    return System(system.J, system.L, system.explicit_constraints, system.dependent,
-                  defaults=system.defaults, name=system.name)
+    with warnings.catch_warnings():     # the user's system has warned already
+        warnings.simplefilter("ignore", JetnhWarning)
+        return System(system.J, system.L, system.explicit_constraints, system.dependent,
+                      defaults=system.defaults, name=system.name)
 
 
 def _variation(system, kind, explicit, lams=()):

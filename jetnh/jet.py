@@ -57,6 +57,12 @@ def _sym(expr) -> sp.Basic:
         raise JetSpaceError(f"{expr!r} is not a sympy expression: {exc}") from None
 
 
+def _plain_name(s) -> str:
+    """A Symbol name for a non-Symbol free symbol (m[1] -> 'm_1')."""
+    name = re.sub(r"[^A-Za-z0-9]+", "_", str(s)).strip("_")
+    return name if _NAME.match(name) else "m_1"
+
+
 def _order_arg(k, what) -> int:
     try:
         k = operator.index(k)
@@ -213,7 +219,8 @@ class JetSpace:
     def check(self, expr) -> sp.Expr:
         """``expr`` as a sympy expression on this jet space, or a JetSpaceError.
 
-        Refuses strings, symbols that clash with jet names, and coordinates written as
+        Refuses strings, free symbols that are not Symbols (``Indexed`` such as ``m[1]``),
+        symbols that clash with jet names, and coordinates written as
         sympy.physics.mechanics dynamicsymbols such as ``x(t)`` (convert those with
         ``from_dynamic``).  Undefined functions of other names, such as a forcing ``u(t)``
         or a generic ``f(t, x, x_t)``, are explicit functions and allowed.
@@ -222,8 +229,11 @@ class JetSpace:
         if not isinstance(expr, sp.Basic):
             raise JetSpaceError(f"{expr!r} is not a sympy expression")
         for s in expr.free_symbols:
-            if isinstance(s, sp.Symbol):
-                self.split(s)
+            if not isinstance(s, sp.Symbol):
+                raise JetSpaceError(
+                    f"{s} (of type {type(s).__name__}) is not a Symbol; jetnh's parameters are plain "
+                    f"Symbols: write e.g. sp.Symbol({_plain_name(s)!r}) instead")
+            self.split(s)
         for f in expr.atoms(AppliedUndef):
             if f.func.__name__ in self._base_by_name:
                 raise JetSpaceError(

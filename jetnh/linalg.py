@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import random
 
-import numpy as np
+import mpmath
 import sympy as sp
 from sympy.matrices.utilities import dotprodsimp
 
@@ -93,64 +93,159 @@ def _lu_solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
     return X
 
 
-def _numeric_samples(matrices, points: int, seed: int, complete=None, symbols=()):
-    """The matrices evaluated at up to ``points`` random points (values in [0.31, 1.37]),
-    skipping points where an entry is not a finite real number.  ``complete(values)``
-    may overwrite some of the values (e.g. put the point on a manifold); ``symbols`` are
-    drawn too (those ``complete`` needs)."""
-    syms = sorted(set(symbols).union(*(M.free_symbols for M in matrices)), key=lambda s: s.name)
+# ------------------------------------------------------------------ generic rank
+# The rank of a symbolic matrix is decided at random points, in high precision and
+# independently of scale.  Each point is evaluated at two precisions: an entry whose two
+# values disagree is rounding noise of an exact zero (sin^2 + cos^2 - 1, a reduced matrix
+# that vanishes on the constraints) and is set to zero; every other entry is then known
+# to about 40 digits.  Rows and columns are equilibrated (scaled by powers of two, which
+# keeps the rank and the digits) and singular values below _RANK_TOL times the largest
+# count as zero.  So diag(1, 1e-20) or constraints 1e-12 f^1, f^2 have full rank, while
+# f and 1e10 f, or (x' + y')^2, do not: the rank of the matrix as written (binary floats
+# are exact numbers), not of a rounded copy.
+_DPS = (50, 80)          # the two working precisions (decimal digits)
+_NOISE = 1e-12           # relative disagreement between them that marks an entry as noise
+_RANK_TOL = 1e-30        # singular values below this times the largest are zero
+_POINT_TRIES = 4         # attempts per wanted point (a point may leave the domain)
+
+
+def _real(v):
+    """``v`` as a finite mpf, or None (complex beyond noise, infinite, nan)."""
+    if isinstance(v, mpmath.mpc):
+        if abs(v.imag) > mpmath.mpf(10) ** (-(mpmath.mp.dps // 2)) * max(1, abs(v.real)):
+            return None
+        v = v.real
+    v = mpmath.mpf(v)
+    return v if mpmath.isfinite(v) else None
+
+
+def _denoise(lo, hi):
+    """``hi`` with the entries that ``lo`` (the same at lower precision) does not confirm
+    set to zero."""
+    out = hi.copy()
+    for i in range(hi.rows):
+        for j in range(hi.cols):
+            if abs(lo[i, j] - hi[i, j]) > _NOISE * abs(hi[i, j]):
+                out[i, j] = 0
+    return out
+
+
+def _generic_samples(exprs, build, points: int, seed: int, complete=None, symbols=()):
+    """For up to ``points`` random points (values in [0.31, 1.37]): ``build(values)`` of
+    the values of ``exprs`` there (an mpmath matrix), built at both precisions and
+    denoised.  A point where an entry is not a finite real number, or where ``build`` or
+    ``complete`` fails (ValueError, ZeroDivisionError), is skipped.  ``complete(values)``
+    may overwrite values (e.g. put the point on a manifold); it is called within
+    ``mpmath.workdps`` of each precision.  ``symbols`` are drawn too."""
+    syms = sorted(set(symbols).union(*(e.free_symbols for e in exprs)), key=lambda s: s.name)
     rng = random.Random(seed)
-    for _ in range(points):
-        vals = {s: sp.Float(rng.uniform(0.31, 1.37)) for s in syms}
+    got = 0
+    for _ in range(_POINT_TRIES * points):
+        if got >= points:
+            return
+        base = {s: mpmath.mpf(rng.uniform(0.31, 1.37)) for s in syms}
+        mats = []
         try:
-            if complete is not None:
-                vals = complete(vals)
-            values = iter(dag.evaluate([e for M in matrices for e in M], vals, dps=17))
-            arrs = [np.array([float(next(values)) for _ in range(len(M))]).reshape(M.shape)
-                    for M in matrices]
-        except (TypeError, ValueError, ZeroDivisionError, np.linalg.LinAlgError):
+            for dps in _DPS:
+                with mpmath.workdps(dps):
+                    vals = complete(dict(base)) if complete is not None else base
+                    values = [_real(v) for v in dag.evaluate(list(exprs), vals, dps=dps)]
+                    if any(v is None for v in values):
+                        raise ValueError("not a finite real number")
+                    mats.append(build(values))
+        except (TypeError, ValueError, ZeroDivisionError, ArithmeticError):
             continue
-        if all(np.all(np.isfinite(a)) for a in arrs):
-            yield arrs
+        got += 1
+        with mpmath.workdps(_DPS[-1]):
+            yield _denoise(*mats)
 
 
-def _rank(arr, tol) -> int:
-    if arr.size == 0:
+def _equilibrate(M):
+    """D1 M D2 with every non-zero row and column of largest entry in [1/2, 1) (powers
+    of two: no digit is lost, the rank is kept)."""
+    M = M.copy()
+    for _ in range(2):
+        for i in range(M.rows):
+            m = max((abs(M[i, j]) for j in range(M.cols)), default=0)
+            if m:
+                e = mpmath.frexp(m)[1]
+                for j in range(M.cols):
+                    M[i, j] = mpmath.ldexp(M[i, j], -e)
+        for j in range(M.cols):
+            m = max((abs(M[i, j]) for i in range(M.rows)), default=0)
+            if m:
+                e = mpmath.frexp(m)[1]
+                for i in range(M.rows):
+                    M[i, j] = mpmath.ldexp(M[i, j], -e)
+    return M
+
+
+def mp_rank(M) -> int:
+    """The rank of an mpmath matrix known to about 40 digits, after equilibration."""
+    if M.rows == 0 or M.cols == 0:
         return 0
-    s = np.linalg.svd(arr, compute_uv=False)
-    return int(np.sum(s > tol * max(1.0, s[0])))
+    with mpmath.workdps(_DPS[-1]):
+        M = _equilibrate(M)
+        if all(M[i, j] == 0 for i in range(M.rows) for j in range(M.cols)):
+            return 0
+        s = mpmath.svd_r(M, compute_uv=False)
+        top = max(abs(x) for x in s)
+        return sum(1 for x in s if abs(x) > _RANK_TOL * top)
 
 
-def numeric_rank(M: sp.Matrix, points: int = 3, seed: int = 0, tol: float = 1e-9) -> int:
-    """The generic rank of a symbolic matrix: the largest rank at a few random points.
+def _reshape(rows: int, cols: int):
+    return lambda values: mpmath.matrix([values[i * cols:(i + 1) * cols] for i in range(rows)])
+
+
+def numeric_rank(M: sp.Matrix, points: int = 3, seed: int = 0) -> int:
+    """The generic rank of a symbolic matrix: the largest rank at a few random points,
+    decided in high precision, independently of the scale of rows and columns (see the
+    comment above ``_DPS``).
 
     Matrices of abstract (undefined) functions cannot be evaluated; their rank is
     decided symbolically, with zero meaning zero after ``expand``.
     """
-    ranks = [_rank(a, tol) for (a,) in _numeric_samples([M], points, seed)]
+    if M.rows == 0 or M.cols == 0:
+        return 0
+    ranks = [mp_rank(a) for a in _generic_samples(list(M), _reshape(M.rows, M.cols),
+                                                     points, seed)]
     if not ranks:            # abstract functions: no numbers to draw, decide symbolically
         return M.rank(iszerofunc=lambda e: sp.expand(e) == 0, simplify=False)
     return max(ranks)
 
 
 def reduced_rank(H: sp.Matrix, A: sp.Matrix, ind, dep, points: int = 3, seed: int = 0,
-                 tol: float = 1e-9, complete=None, symbols=()) -> int:
+                 complete=None, symbols=()) -> int:
     """The generic rank of P^T H P, P = [I; -A_dep^-1 A_ind] spanning ker A (rows of
-    the ``ind`` and ``dep`` coordinates): numerically from H and A, never from P
-    (``complete`` and ``symbols`` as in ``_numeric_samples``)."""
+    the ``ind`` and ``dep`` coordinates): in high precision from H and A, never from the
+    symbolic P (``complete`` and ``symbols`` as in ``_generic_samples``)."""
     ind, dep = list(ind), list(dep)
-    ranks = []
-    for Hn, An in _numeric_samples([H, A], points, seed, complete, symbols):
-        P = np.zeros((H.rows, len(ind)))
-        P[ind, range(len(ind))] = 1.0
+    n, m = H.rows, len(ind)
+    if m == 0:
+        return 0
+    h, a = _reshape(n, n), _reshape(A.rows, A.cols)
+
+    def build(values):
+        Hn = h(values[:n * n])
+        P = mpmath.zeros(n, m)
+        for c, i in enumerate(ind):
+            P[i, c] = 1
         if dep:
-            try:
-                P[dep, :] = -np.linalg.solve(An[:, dep], An[:, ind])
-            except np.linalg.LinAlgError:
-                continue
-        ranks.append(_rank(P.T @ Hn @ P, tol))
+            An = a(values[n * n:])
+            Ad = mpmath.matrix([[An[r, j] for j in dep] for r in range(An.rows)])
+            Ai = mpmath.matrix([[An[r, j] for j in ind] for r in range(An.rows)])
+            if mp_rank(Ad) < len(dep):
+                raise ZeroDivisionError("singular A_dep at this point")
+            X = -(mpmath.inverse(Ad) * Ai)
+            for r, i in enumerate(dep):
+                for c in range(m):
+                    P[i, c] = X[r, c]
+        return P.T * Hn * P
+
+    ranks = [mp_rank(K) for K in _generic_samples(list(H) + list(A), build, points, seed,
+                                                   complete, symbols)]
     if ranks:
         return max(ranks)
     with dotprodsimp(False):  # abstract functions: decide symbolically (small systems)
         P = embed(-solve(A[:, dep], A[:, ind]) if dep else sp.zeros(0, len(ind)), ind, dep)
-        return numeric_rank(P.T * H * P, points, seed, tol)
+        return numeric_rank(P.T * H * P, points, seed)
