@@ -35,3 +35,7 @@ class IntegrationError(JetnhError, RuntimeError):
 class JetnhWarning(UserWarning):
     """Input jetnh accepts but that is probably not what was meant (e.g. a parameter
     named like a velocity, which is a constant, not the velocity)."""
+
+
+class KernelCacheWarning(JetnhWarning):
+    """The kernel cache cannot be used as configured; kernels go to a temporary cache."""

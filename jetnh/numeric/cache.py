@@ -1,41 +1,121 @@
-"""The disk cache of compiled kernels.
+"""The disk cache of compiled kernels: private, verified before use, self-repairing.
 
-Each scene's kernels live in a small generated package, one directory per key (a hash of
-the symbolic input, ``codegen.symbolic_key``)::
+Where it lives
+--------------
+The root is ``$JETNH_CACHE/v<codegen version>`` when ``JETNH_CACHE`` is set, else
+``~/.cache/jetnh/v<codegen version>`` (``cache_root()``).  ``Scene(..., cache=False)`` uses
+a private temporary directory removed at exit.  Each scene's kernels are one *entry*, a
+directory named by a hash of the symbolic input (``codegen.symbolic_key``)::
 
-    $JETNH_CACHE/v<codegen version>/k<key>/
-        __init__.py
-        kernels.py          rhs, aux, sing, aux_rows (numba, cache=True); or the
-                            user-event kernel ``events`` (its own key)
-        layout.json         the state layout; written last, marks the entry complete
-        __pycache__/        numba's machine code (*.nbi, *.nbc)
+    <root>/hmac.key          32 random bytes, this user's secret (mode 0600)
+    <root>/k<key>/
+        __init__.py          a comment: the entry is a package (never executed)
+        kernels.py           rhs, aux, sing, aux_rows (numba, cache=True); or the
+                             user-event kernel ``events`` (its own key)
+        layout.json          the state layout
+        __pycache__/         numba's machine code of kernels.py (*.nbi, *.nbc)
+        manifest.json        the sha256 of every other file, and an HMAC of that list
 
-The integrators take ``rhs`` as a first-class function (``integrators._common.RHS``), so
-their loops are compiled once for all scenes and cached by numba next to their own
-source; per scene only ``kernels.py`` is compiled.
+A second process that builds the same scene finds the entry, skips the derivation, ``cse``
+and code generation, and numba loads the machine code instead of compiling.  The
+integrators take ``rhs`` as a first-class function (``integrators._common.RHS``), so their
+loops are compiled once for all scenes and cached by numba next to their own source; per
+scene only ``kernels.py`` is compiled.
 
-A second process that builds the same scene finds ``layout.json``, skips the derivation,
-``cse`` and code generation, and numba loads the machine code instead of compiling.
-The root is ``$JETNH_CACHE`` when set, else ``~/.cache/jetnh``; ``cache=False`` uses a
-temporary directory removed at exit.
+Privacy
+-------
+Every directory jetnh creates here is made mode 0700 and every file 0600, whatever the
+umask.  The root and its parent (``$JETNH_CACHE`` or ``~/.cache/jetnh``) must be
+directories of the user that group and others cannot write: the root, jetnh's own, is made
+0700 again if it is not, and so is ``~/.cache/jetnh``; a ``$JETNH_CACHE`` that others can
+write is left alone and not used.  Inside the root, an entry, file or directory that does
+not belong to the user, is writable by group or others, or is a symbolic link, is not
+trusted.
+
+Trust
+-----
+Nothing is read from an entry as code or as a pickle unless its bytes are proved to be
+what this user's jetnh wrote.  When an entry is complete, jetnh writes ``manifest.json``:
+the entry's key and the sha256 of each of its files, including numba's files in
+``__pycache__``, signed with HMAC-SHA256 under the user's secret key ``hmac.key`` (made
+once, atomically, from ``secrets``).  Before using an entry, jetnh checks the MAC, that
+the entry holds exactly the files the manifest lists, and each file's hash.  ``kernels.py``
+is then compiled from the very bytes that were hashed (the import system, and so any
+``.pyc``, is not used); numba reads its cache of the entry only from that entry's
+``__pycache__``, which has just been checked (jetnh points numba's cache locator there, so
+``NUMBA_CACHE_DIR`` does not apply to kernels).  If numba adds machine code to an entry
+(e.g. for another CPU), jetnh signs the new list after loading.
+
+Repair
+------
+An entry that fails any check (a bad or missing manifest, a truncated or edited file, an
+extra file, a corrupt numba index, wrong owner or permissions) or that fails to load is
+removed and generated again, once, from the symbolic input; nothing is executed from it.
+
+Writing
+-------
+A new entry is written and compiled in a private temporary directory next to its place
+(``<root>/.k<key>.*``), sealed with its manifest, and renamed into place as a whole: a
+reader never sees half an entry, and of two processes compiling the same new scene, the
+first rename wins and the other keeps its own kernels in memory and discards its copy.
+If the cache is deleted while a scene compiles, the root is made again and the run goes
+on (the kernels are in memory; the entry is written again when possible).
+
+If the root cannot be used (it cannot be created or written, is not a directory, belongs
+to another user, or is open to others and cannot be made private), jetnh warns once
+(``errors.KernelCacheWarning``, naming the problem and the fix) and uses a private
+temporary cache for the rest of the process; it never fails for that.
 """
 
 from __future__ import annotations
 
 import atexit
-import importlib
-import importlib.util
+import errno
+import hashlib
+import hmac
+import json
 import os
+import secrets
 import shutil
+import stat
 import sys
 import tempfile
+import threading
 import time
+import types
+import warnings
 from pathlib import Path
 
+from ..errors import KernelCacheWarning
 from .codegen import CODEGEN_VERSION, Layout
 
 _LOADED: dict[tuple[str, bool], "CompiledKernels"] = {}
 _TEMP_ROOT: Path | None = None
+_LOCK = threading.Lock()            # guards _LOADED and _KEY_LOCKS
+_EXEC_LOCK = threading.RLock()      # one kernel module compiled at a time (numba settings)
+_KEY_LOCKS: dict[tuple[str, bool], threading.Lock] = {}
+_WARNED: set[str] = set()
+#: directories whose kernels.py numba caches in <dir>/__pycache__ -> sha256 of the source
+_CONFINED: dict[str, bytes] = {}
+
+MANIFEST = "manifest.json"
+KEY_FILE = "hmac.key"
+PYCACHE = "__pycache__"
+SOURCES = ("__init__.py", "kernels.py", "layout.json")
+INIT_TEXT = b"# jetnh generated kernel package\n"
+MANIFEST_FORMAT = 1
+STALE_SECONDS = 3600.0          # a staging directory older than this is left over: removed
+
+_O_NOFOLLOW = getattr(os, "O_NOFOLLOW", 0)
+_O_CLOEXEC = getattr(os, "O_CLOEXEC", 0)
+
+
+class _Untrusted(Exception):
+    """An entry (or file) that must not be used; the message says why."""
+
+
+class _Unusable(Exception):
+    """The cache root cannot be used: ``(problem, fix)``."""
 
 
 def cache_root() -> Path:
@@ -43,14 +123,6 @@ def cache_root() -> Path:
     env = os.environ.get("JETNH_CACHE")
     base = Path(env).expanduser() if env else Path.home() / ".cache" / "jetnh"
     return base / f"v{CODEGEN_VERSION}"
-
-
-def _temp_root() -> Path:
-    global _TEMP_ROOT
-    if _TEMP_ROOT is None:
-        _TEMP_ROOT = Path(tempfile.mkdtemp(prefix="jetnh-kernels-"))
-        atexit.register(shutil.rmtree, _TEMP_ROOT, True)
-    return _TEMP_ROOT
 
 
 def clear(root: Path | None = None):
@@ -62,32 +134,441 @@ def clear(root: Path | None = None):
         del _LOADED[k]
 
 
-def _write(path: Path, text: str):
-    """Atomic write, so concurrent processes never read half a file."""
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
+# ---------------------------------------------------------------------- private files
+def _uid() -> int:
+    return os.geteuid()
 
 
+def _check_stat(st, path, want_dir: bool, secret: bool = False):
+    """Raise ``_Untrusted`` unless ``st`` is a regular file (a directory if ``want_dir``)
+    of this user that group and others cannot write (nor read, for a ``secret``)."""
+    kind = stat.S_ISDIR(st.st_mode) if want_dir else stat.S_ISREG(st.st_mode)
+    if not kind:
+        raise _Untrusted(f"{path} is not a {'directory' if want_dir else 'regular file'}")
+    if st.st_uid != _uid():
+        raise _Untrusted(f"{path} belongs to user {st.st_uid}, not {_uid()}")
+    if st.st_mode & (0o077 if secret else 0o022):
+        raise _Untrusted(f"{path} has mode {stat.S_IMODE(st.st_mode):o}")
+
+
+def _mkdir_private(path):
+    """``mkdir`` with mode 0700 whatever the umask (``FileExistsError`` if there)."""
+    os.mkdir(path, 0o700)
+    os.chmod(path, 0o700)
+
+
+def _makedirs_private(path):
+    """``path`` and its missing parents, each made with mode 0700."""
+    path = os.path.abspath(path)
+    missing = []
+    while not os.path.lexists(path):
+        missing.append(path)
+        parent = os.path.dirname(path)
+        if parent == path:
+            break
+        path = parent
+    for p in reversed(missing):
+        try:
+            _mkdir_private(p)
+        except FileExistsError:
+            pass
+
+
+def _write_private(path, data: bytes):
+    """A new file of mode 0600 (fails if ``path`` exists; never follows a link)."""
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | _O_NOFOLLOW | _O_CLOEXEC,
+                 0o600)
+    try:
+        os.fchmod(fd, 0o600)
+        view = memoryview(data)
+        while view:
+            view = view[os.write(fd, view):]
+    finally:
+        os.close(fd)
+
+
+def _replace_private(path: Path, data: bytes):
+    """Atomic write of a 0600 file: readers see the old or the new file, never half."""
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
+    _write_private(tmp, data)
+    try:
+        os.replace(tmp, path)
+    except OSError:
+        _unlink(tmp)
+        raise
+
+
+def _read_private(path, secret: bool = False) -> tuple[bytes, os.stat_result]:
+    """The bytes of a regular file of this user that others cannot write (``_Untrusted``
+    otherwise; ``FileNotFoundError`` if absent); links are not followed."""
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | _O_NOFOLLOW | _O_CLOEXEC)
+    except FileNotFoundError:
+        raise
+    except OSError as exc:          # ELOOP: a symbolic link; EACCES; ...
+        raise _Untrusted(f"{path} cannot be opened ({exc.strerror})") from None
+    try:
+        st = os.fstat(fd)
+        _check_stat(st, path, want_dir=False, secret=secret)
+        chunks = []
+        while True:
+            chunk = os.read(fd, 1 << 20)
+            if not chunk:
+                break
+            chunks.append(chunk)
+        return b"".join(chunks), st
+    finally:
+        os.close(fd)
+
+
+def _unlink(path):
+    try:
+        os.unlink(path)
+    except OSError:
+        pass
+
+
+def _discard(path: Path):
+    """Remove an untrusted or damaged entry (or whatever is at its place): moved aside
+    first, so a concurrent reader never sees it half removed, then deleted."""
+    try:
+        st = os.lstat(path)
+    except OSError:
+        return
+    if not stat.S_ISDIR(st.st_mode):
+        _unlink(path)
+        return
+    trash = path.with_name(f".trash-{path.name}.{os.getpid()}.{secrets.token_hex(4)}")
+    try:
+        os.rename(path, trash)
+    except OSError:
+        trash = path
+    shutil.rmtree(trash, ignore_errors=True)
+
+
+# ---------------------------------------------------------------------- the root
+def _prepare_root(root: Path, own_base: bool = True) -> Path:
+    """Make ``root`` (and its missing parents) private and check it and, if ``own_base``,
+    its parent (``$JETNH_CACHE`` or ``~/.cache/jetnh``); ``_Unusable`` if it cannot be
+    used.  The version directory is jetnh's: made 0700 if it is not.  ``$JETNH_CACHE``
+    is the user's: never changed, only refused if others can write it."""
+    base = root.parent
+    fix = (f"make {base} a directory of yours that only you can write ('chmod 700 "
+           f"{base}'), or set JETNH_CACHE to one")
+    try:
+        _makedirs_private(root)
+    except OSError as exc:
+        raise _Unusable(f"{exc.filename or root} cannot be created ({exc.strerror})",
+                        fix) from None
+    for path in ((base, root) if own_base else (root,)):
+        try:
+            st = os.stat(path) if path == base else os.lstat(path)
+        except OSError as exc:
+            raise _Unusable(f"{path} cannot be read ({exc.strerror})", fix) from None
+        if not stat.S_ISDIR(st.st_mode):
+            raise _Unusable(f"{path} is not a directory", fix)
+        if st.st_uid != _uid():
+            raise _Unusable(f"{path} belongs to user {st.st_uid}, not to you ({_uid()})", fix)
+        if path == base and st.st_mode & 0o022 and "JETNH_CACHE" in os.environ:
+            raise _Unusable(f"{path} is writable by group or others (mode "
+                            f"{stat.S_IMODE(st.st_mode):o})", fix)
+        if st.st_mode & (0o077 if path == root else 0o022):
+            try:
+                os.chmod(path, 0o700)
+            except OSError as exc:
+                raise _Unusable(f"{path} has mode {stat.S_IMODE(st.st_mode):o} and cannot "
+                                f"be made private ({exc.strerror})", fix) from None
+    if not os.access(root, os.W_OK | os.X_OK):
+        raise _Unusable(f"{root} is not writable", fix)
+    return root
+
+
+def _temp_root() -> Path:
+    """A private temporary cache (0700), removed at exit."""
+    global _TEMP_ROOT
+    if _TEMP_ROOT is None or not _TEMP_ROOT.is_dir():
+        _TEMP_ROOT = Path(tempfile.mkdtemp(prefix="jetnh-kernels-"))
+        atexit.register(shutil.rmtree, _TEMP_ROOT, True)
+    return _TEMP_ROOT
+
+
+def _secret(root: Path) -> bytes:
+    """This user's HMAC key, ``<root>/hmac.key``: 32 random bytes, mode 0600, made once
+    and atomically (written aside, then linked into place: the first one stays)."""
+    path = root / KEY_FILE
+    for _ in range(3):
+        try:
+            data, _st = _read_private(path, secret=True)
+            if len(data) == 32:
+                return data
+            _unlink(path)           # truncated: entries signed with it cannot be checked
+        except FileNotFoundError:
+            pass
+        except _Untrusted:
+            _unlink(path)           # readable or writable by others: no longer a secret
+        tmp = root / f".{KEY_FILE}.{os.getpid()}.{secrets.token_hex(4)}"
+        try:
+            _write_private(tmp, secrets.token_bytes(32))
+            try:
+                os.link(tmp, path)
+            except FileExistsError:
+                pass
+            except OSError:          # no hard links here: a rename, unless one appeared
+                if not os.path.lexists(path):
+                    os.rename(tmp, path)
+        except OSError as exc:
+            raise _Unusable(f"the key {path} cannot be written ({exc.strerror})",
+                            "set JETNH_CACHE to a writable directory of your own") from None
+        finally:
+            _unlink(tmp)
+    raise _Unusable(f"the key {path} cannot be made private",
+                    f"remove {path} (it is made again)")
+
+
+def _root(persistent: bool) -> tuple[Path, bytes]:
+    """The root to use and its key: the configured one, or the temporary fallback."""
+    if persistent:
+        root = cache_root()
+        try:
+            return root, _secret(_prepare_root(root))
+        except _Unusable as exc:
+            problem, fix = exc.args
+            if str(root) + problem not in _WARNED:
+                _WARNED.add(str(root) + problem)
+                warnings.warn(
+                    f"jetnh: the kernel cache {root} cannot be used: {problem}. Compiled "
+                    f"kernels go to a private temporary directory removed at exit; to keep "
+                    f"them between runs, {fix}.", KernelCacheWarning, stacklevel=3)
+    global _TEMP_ROOT
+    for _ in range(2):
+        root = _temp_root()
+        try:
+            return root, _secret(_prepare_root(root, own_base=False))
+        except _Unusable:           # the temporary root was damaged: a new one
+            _TEMP_ROOT = None
+    root = _temp_root()
+    return root, _secret(_prepare_root(root, own_base=False))
+
+
+# ---------------------------------------------------------------------- manifests
+def _mac(secret: bytes, body: dict) -> str:
+    text = json.dumps(body, sort_keys=True, separators=(",", ":")).encode()
+    return hmac.new(secret, text, hashlib.sha256).hexdigest()
+
+
+def _listing(directory: Path) -> dict[str, Path]:
+    """Every file of an entry but the manifest, by relative name (``__pycache__/<name>``
+    for numba's); ``_Untrusted`` if a directory is not private or is unexpected."""
+    _check_stat(os.lstat(directory), directory, want_dir=True)
+    out = {}
+    for name in os.listdir(directory):
+        if name == MANIFEST:
+            continue
+        path = directory / name
+        if name == PYCACHE:
+            _check_stat(os.lstat(path), path, want_dir=True)
+            for sub in os.listdir(path):
+                out[f"{PYCACHE}/{sub}"] = path / sub
+        else:
+            out[name] = path
+    return out
+
+
+def _seal(directory: Path, key: str, secret: bytes, sources: dict[str, str] | None = None):
+    """Write the signed manifest of ``directory``: every file, numba's included (made
+    0600 first: numba creates them with the umask).  With ``sources`` (name -> sha256),
+    only if the sources are still those."""
+    files = {}
+    for rel, path in sorted(_listing(directory).items()):
+        st = os.lstat(path)
+        if stat.S_ISREG(st.st_mode) and st.st_uid == _uid() and st.st_mode & 0o077:
+            os.chmod(path, 0o600)
+        data, _st = _read_private(path)
+        files[rel] = hashlib.sha256(data).hexdigest()
+    if sources is not None and any(files.get(n) != h for n, h in sources.items()):
+        raise _Untrusted(f"{directory} changed while it was loaded")
+    if any(n not in files for n in SOURCES):
+        raise _Untrusted(f"{directory} is incomplete")
+    body = {"format": MANIFEST_FORMAT, "key": key, "files": files}
+    _replace_private(directory / MANIFEST,
+                     json.dumps({"body": body, "mac": _mac(secret, body)}).encode())
+
+
+def _verify(directory: Path, key: str, secret: bytes):
+    """``(contents, stamps, hashes)`` of a trusted entry -- the bytes of its sources, the
+    (size, mtime) of each file, the manifest's hashes -- or ``None`` if there is no
+    entry; ``_Untrusted`` (saying why) if it is not what this user's jetnh wrote."""
+    try:
+        os.lstat(directory)
+    except FileNotFoundError:
+        return None
+    except OSError as exc:
+        raise _Untrusted(f"{directory}: {exc.strerror}") from None
+    try:
+        listing = _listing(directory)
+        raw, _st = _read_private(directory / MANIFEST)
+        doc = json.loads(raw)
+        body, mac = doc["body"], doc["mac"]
+        if not (isinstance(mac, str) and hmac.compare_digest(mac, _mac(secret, body))):
+            raise _Untrusted(f"{directory / MANIFEST} is not signed with your key")
+        files = body["files"]
+        if body["format"] != MANIFEST_FORMAT or body["key"] != key:
+            raise _Untrusted(f"{directory / MANIFEST} is for another entry")
+        if set(listing) != set(files) or any(n not in files for n in SOURCES):
+            extra = sorted(set(listing) - set(files))
+            missing = sorted(set(files) - set(listing))
+            raise _Untrusted(f"{directory}: files not in the manifest {extra}, "
+                             f"missing {missing}")
+        contents, stamps = {}, {}
+        for rel, path in sorted(listing.items()):
+            data, st = _read_private(path)
+            if not hmac.compare_digest(hashlib.sha256(data).hexdigest(), str(files[rel])):
+                raise _Untrusted(f"{path} does not match the manifest")
+            stamps[rel] = (st.st_size, st.st_mtime_ns)
+            if rel in SOURCES:
+                contents[rel] = data
+    except _Untrusted:
+        raise
+    except FileNotFoundError as exc:
+        raise _Untrusted(f"{exc.filename} is missing") from None
+    except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:
+        raise _Untrusted(f"{directory}: {type(exc).__name__}: {exc}") from None
+    return contents, stamps, files
+
+
+def _changed(directory: Path, stamps: dict) -> bool:
+    """Whether the files of ``directory`` are no longer those ``stamps`` recorded (numba
+    added or rewrote machine code while loading)."""
+    try:
+        now = {rel: os.lstat(p) for rel, p in _listing(directory).items()}
+    except (OSError, _Untrusted):
+        return False
+    return (set(now) != set(stamps)
+            or any((st.st_size, st.st_mtime_ns) != stamps[rel] for rel, st in now.items()))
+
+
+# ---------------------------------------------------------------------- numba's cache
+def _install_locator() -> bool:
+    """Make numba cache the functions of a kernel module in ``<its directory>/__pycache__``
+    and nowhere else (not ``NUMBA_CACHE_DIR``, not a user-wide directory), so that the only
+    machine code numba may read for kernels is the code the manifest has just checked.
+    The freshness stamp is the sha256 of the verified source (not re-read from disk).
+    Uses numba's (private) locator list; ``False`` if that is not there."""
+    try:
+        from numba.core import caching
+        classes = caching.CacheImpl._locator_classes
+        base = caching._CacheLocator
+    except (ImportError, AttributeError):
+        return False
+    if any(getattr(c, "_jetnh_kernels", False) for c in classes):
+        return True
+
+    class KernelCacheLocator(base):
+        _jetnh_kernels = True
+
+        def __init__(self, py_func, py_file, stamp):
+            self._py_file = py_file
+            self._lineno = py_func.__code__.co_firstlineno
+            self._stamp = stamp
+            self._cache_path = os.path.join(os.path.dirname(py_file), PYCACHE)
+
+        @classmethod
+        def from_function(cls, py_func, py_file):
+            stamp = _CONFINED.get(os.path.dirname(os.path.abspath(py_file)))
+            return None if stamp is None else cls(py_func, py_file, stamp)
+
+        def ensure_cache_path(self):
+            # made again (privately) if the cache was deleted while compiling
+            _makedirs_private(self._cache_path)
+
+        def get_cache_path(self):
+            return self._cache_path
+
+        def get_source_stamp(self):
+            return self._stamp
+
+        def get_disambiguator(self):
+            return str(self._lineno)
+
+    classes.insert(0, KernelCacheLocator)
+    return True
+
+
+def _forget(package: str):
+    for name in (f"{package}.kernels", package):
+        sys.modules.pop(name, None)
+
+
+def _exec_kernels(package: str, directory: Path, source: bytes):
+    """The module ``<package>.kernels`` compiled from ``source`` (bytes already checked),
+    with numba's cache confined to ``<directory>/__pycache__``.  The module of the same
+    source already in this process is reused."""
+    digest = hashlib.sha256(source).digest()
+    name = f"{package}.kernels"
+    old = sys.modules.get(name)
+    if old is not None and getattr(old, "__jetnh_sha256__", None) == digest:
+        return old
+    if not _install_locator():
+        # numba's locator cannot be set: compile where no stored machine code can be
+        # (a fresh private directory), so numba reads nothing from disk
+        fresh = Path(tempfile.mkdtemp(prefix="jetnh-kernel-", dir=_temp_root()))
+        _write_private(fresh / "kernels.py", source)
+        directory = fresh
+    pkg = types.ModuleType(package, "jetnh generated kernel package")
+    pkg.__path__ = [str(directory)]
+    pkg.__file__ = str(directory / "__init__.py")
+    pkg.__package__ = package
+    mod = types.ModuleType(name)
+    mod.__file__ = str(directory / "kernels.py")
+    mod.__package__ = package
+    mod.__jetnh_sha256__ = digest
+    code = compile(source, mod.__file__, "exec", dont_inherit=True)
+    try:
+        from numba.core import config as numba_config
+    except ImportError:  # pragma: no cover - numba is a dependency
+        numba_config = None
+    with _EXEC_LOCK:
+        saved = getattr(numba_config, "CACHE_LOCATOR_CLASSES", None)
+        _CONFINED[os.path.abspath(directory)] = digest
+        sys.modules[package] = pkg
+        sys.modules[name] = mod
+        try:
+            if saved:               # NUMBA_CACHE_LOCATOR_CLASSES would bypass ours
+                numba_config.CACHE_LOCATOR_CLASSES = ""
+            exec(code, mod.__dict__)  # noqa: S102 - bytes checked against the manifest
+        except BaseException:
+            _forget(package)
+            raise
+        finally:
+            if saved:
+                numba_config.CACHE_LOCATOR_CLASSES = saved
+    pkg.kernels = mod
+    return mod
+
+
+# ---------------------------------------------------------------------- kernels
 class CompiledKernels:
-    """A loaded kernel package: ``rhs``, ``aux``, ``aux_rows``, the layout, integrators."""
+    """A loaded kernel package: ``rhs``, ``aux``, ``aux_rows``, the layout, integrators.
+
+    ``source`` is the text of ``kernels.py`` as it was checked and compiled (read it
+    rather than the file in ``directory``, which may change or go)."""
 
     def __init__(self, key: str, directory: Path, layout: Layout, hit: bool, timings: dict,
-                 persistent: bool = True):
+                 persistent: bool = True, module=None, source: str | None = None):
         self.key = key
         self.directory = directory
         self.layout = layout
         self.hit = hit                     # found on disk (no derivation, no cse)
         self.timings = dict(timings)
         self.package = f"jetnh_kernels_{key}" + ("" if persistent else "_tmp")
-        if self.package not in sys.modules:
-            spec = importlib.util.spec_from_file_location(
-                self.package, directory / "__init__.py",
-                submodule_search_locations=[str(directory)])
-            mod = importlib.util.module_from_spec(spec)
-            sys.modules[self.package] = mod
-            spec.loader.exec_module(mod)
-        self.kernels = importlib.import_module(f"{self.package}.kernels")
+        if module is None:                 # built by hand: the entry must verify
+            found = _verify(Path(directory), key, _secret(Path(directory).parent))
+            if found is None:
+                raise FileNotFoundError(f"no kernel entry at {directory}")
+            module = _exec_kernels(self.package, Path(directory), found[0]["kernels.py"])
+            source = found[0]["kernels.py"].decode("utf-8")
+        self.kernels = module
+        self.source = source
         for name in ("rhs", "rhs_c", "aux", "aux_rows", "sing", "sing_c", "events", "events_c",
                      "step_residual", "momentum", "legendre", "nodal", "constraint_jac"):
             if hasattr(self.kernels, name):
@@ -102,6 +583,8 @@ class CompiledKernels:
     def integrator(self, method: str):
         """The compiled ``solve`` of ``method`` (shared by every scene), as its machine-code
         entry point (no type dispatch per call: ``integrators._common.entry_point``)."""
+        import importlib
+
         from .integrators import METHODS
         from .integrators._common import entry_point
 
@@ -111,34 +594,146 @@ class CompiledKernels:
         return self._methods[method]
 
 
-def load(key: str, make_source, persistent: bool = True) -> CompiledKernels:
-    """The kernels of ``key``: from memory, from disk, or generated by ``make_source()``
-    (a callable returning a ``codegen.KernelSource``)."""
-    memo = (key, persistent)
-    if memo in _LOADED:
-        return _LOADED[memo]
-    root = cache_root() if persistent else _temp_root()
-    directory = root / f"k{key}"
-    layout_file = directory / "layout.json"
-    timings = {}
-    hit = False
-    if layout_file.exists() and (directory / "kernels.py").exists():
+def _load_entry(entry: Path, key: str, secret: bytes, package: str, persistent: bool):
+    """The kernels of a trusted entry, or ``None`` (absent; or untrusted or damaged, and
+    then removed)."""
+    t0 = time.perf_counter()
+    try:
+        found = _verify(entry, key, secret)
+    except _Untrusted:
+        _discard(entry)
+        return None
+    if found is None:
+        return None
+    contents, stamps, files = found
+    t1 = time.perf_counter()
+    try:
+        layout = Layout.from_json(contents["layout.json"].decode("utf-8"))
+        source = contents["kernels.py"]
+        module = _exec_kernels(package, entry, source)
+        ck = CompiledKernels(key, entry, layout, True, {"verify": t1 - t0}, persistent,
+                             module=module, source=source.decode("utf-8"))
+    except Exception:               # a damaged entry (it verified, yet does not load)
+        _forget(package)
+        _discard(entry)
+        return None
+    if _changed(entry, stamps):     # numba wrote machine code (e.g. another CPU): sign it
         try:
-            layout = Layout.from_json(layout_file.read_text())
-            hit = True
-        except (ValueError, TypeError):
-            hit = False
-    if not hit:
-        ks = make_source()
-        timings.update(ks.timings)
-        t0 = time.perf_counter()
-        directory.mkdir(parents=True, exist_ok=True)
-        if not (directory / "__init__.py").exists():
-            _write(directory / "__init__.py", "# jetnh generated kernel package\n")
-        _write(directory / "kernels.py", ks.source)
-        _write(layout_file, ks.layout.to_json())
-        layout = ks.layout
-        timings["write"] = time.perf_counter() - t0
-    ck = CompiledKernels(key, directory, layout, hit, timings, persistent)
-    _LOADED[memo] = ck
+            _seal(entry, key, secret, {n: files[n] for n in SOURCES})
+        except (OSError, _Untrusted):
+            pass                    # left as is: the next load finds it untrusted
     return ck
+
+
+def _stage(root: Path, key: str, source: bytes, layout: bytes) -> Path:
+    """A private staging directory ``<root>/.k<key>.*`` holding the sources."""
+    tmp = Path(tempfile.mkdtemp(prefix=f".k{key}.", dir=root))
+    _write_private(tmp / "__init__.py", INIT_TEXT)
+    _write_private(tmp / "kernels.py", source)
+    _write_private(tmp / "layout.json", layout)
+    _mkdir_private(tmp / PYCACHE)
+    return tmp
+
+
+def _publish(tmp: Path, entry: Path, key: str, secret: bytes) -> bool:
+    """Rename the sealed ``tmp`` to ``entry``.  If another process put a trusted entry
+    there first, that one stays and ``tmp`` is discarded; an untrusted one is replaced."""
+    for _ in range(3):
+        try:
+            os.rename(tmp, entry)
+            return True
+        except OSError as exc:
+            if exc.errno not in (errno.EEXIST, errno.ENOTEMPTY, errno.ENOTDIR, errno.EISDIR):
+                raise
+        try:
+            if _verify(entry, key, secret) is not None:
+                shutil.rmtree(tmp, ignore_errors=True)
+                return True
+        except _Untrusted:
+            _discard(entry)
+    shutil.rmtree(tmp, ignore_errors=True)
+    return False
+
+
+def _remove_stale(root: Path):
+    """Staging and trash directories, and key files being made, left by processes that
+    died."""
+    now = time.time()
+    try:
+        names = os.listdir(root)
+    except OSError:
+        return
+    for name in names:
+        if name.startswith((".k", ".trash-", f".{KEY_FILE}.")):
+            path = root / name
+            try:
+                st = os.lstat(path)
+            except OSError:
+                continue
+            if now - st.st_mtime > STALE_SECONDS:
+                if stat.S_ISDIR(st.st_mode):
+                    shutil.rmtree(path, ignore_errors=True)
+                else:
+                    _unlink(path)
+
+
+def _build(ks, key: str, package: str, persistent: bool, root: Path, secret: bytes):
+    """Write, compile, seal and publish a new entry; the kernels, in memory whatever
+    happens to the cache meanwhile."""
+    timings = dict(ks.timings)
+    t0 = time.perf_counter()
+    source = ks.source.encode("utf-8")
+    layout = ks.layout.to_json().encode("utf-8")
+    _remove_stale(root)
+    module, entry = None, root / f"k{key}"
+    for attempt in range(2):
+        tmp = None
+        try:
+            if attempt:             # the cache went away (or was damaged): again
+                root, secret = _root(persistent)
+                entry = root / f"k{key}"
+            tmp = _stage(root, key, source, layout)
+            if module is None:
+                module = _exec_kernels(package, tmp, source)   # numba writes its cache
+            _seal(tmp, key, secret)
+            if _publish(tmp, entry, key, secret):
+                break
+        except (OSError, _Untrusted):
+            if tmp is not None:
+                shutil.rmtree(tmp, ignore_errors=True)
+        except BaseException:       # the source does not compile: not the cache's doing
+            if tmp is not None:
+                shutil.rmtree(tmp, ignore_errors=True)
+            raise
+    if module is None:              # never compiled: in a private temporary directory
+        tmp = Path(tempfile.mkdtemp(prefix=f".k{key}.", dir=_temp_root()))
+        _write_private(tmp / "kernels.py", source)
+        module = _exec_kernels(package, tmp, source)
+    module.__file__ = str(entry / "kernels.py")
+    timings["write"] = time.perf_counter() - t0
+    return CompiledKernels(key, entry, ks.layout, False, timings, persistent, module=module,
+                           source=ks.source)
+
+
+def load(key: str, make_source, persistent: bool = True) -> CompiledKernels:
+    """The kernels of ``key``: from memory, from a trusted entry on disk, or generated by
+    ``make_source()`` (a callable returning a ``codegen.KernelSource``) and stored."""
+    memo = (key, persistent)
+    ck = _LOADED.get(memo)
+    if ck is not None:
+        return ck
+    with _LOCK:
+        lock = _KEY_LOCKS.setdefault(memo, threading.Lock())
+    with lock:                      # one thread builds a key; others wait for it
+        if memo in _LOADED:
+            return _LOADED[memo]
+        package = f"jetnh_kernels_{key}" + ("" if persistent else "_tmp")
+        root, secret = _root(persistent)
+        ck = _load_entry(root / f"k{key}", key, secret, package, persistent)
+        if ck is None:
+            ks = make_source()
+            root, secret = _root(persistent)      # again: it may have gone meanwhile
+            ck = _build(ks, key, package, persistent, root, secret)
+        with _LOCK:
+            _LOADED[memo] = ck
+        return ck
