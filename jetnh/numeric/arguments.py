@@ -106,10 +106,10 @@ def real_array(value, what, ndim=1) -> np.ndarray:
         raise JetnhError(f"{what} must be {'a number' if ndim == 0 else f'{ndim}-d'}, "
                          f"got shape {a.shape}")
     if not np.all(np.isfinite(a)):
-        bad = np.argwhere(~np.isfinite(a))[0]
-        raise JetnhError(f"{what} has a non-finite value ({a[tuple(bad)]}) at index "
-                         f"{tuple(int(i) for i in bad) if ndim > 1 else int(bad[0])}; "
-                         "give finite numbers")
+        bad = tuple(int(i) for i in np.argwhere(~np.isfinite(a))[0])
+        where = "" if ndim == 0 else f" at index {bad if ndim > 1 else bad[0]}"
+        raise JetnhError(f"{what} has a non-finite value ({a[bad]}){where}; give finite "
+                         "numbers")
     return a
 
 
@@ -119,6 +119,8 @@ def tolerances(rtol, atol, n) -> tuple[float, np.ndarray]:
     if not (math.isfinite(r) and (r == 0.0 or r >= RTOL_MIN)):
         raise JetnhError(f"rtol must be 0 or a finite number >= {RTOL_MIN:.3g} (float64 cannot "
                          f"honour a smaller relative error), got {rtol!r}")
+    if type(atol) is float and atol > 0.0 and atol != math.inf:     # the common case, fast
+        return r, np.full(n, atol)
     a = np.asarray(atol)
     if a.ndim > 1 or (a.ndim == 1 and a.shape[0] != n):
         raise JetnhError(f"atol must be a number or one value per state ({n}), got shape "

@@ -2,35 +2,42 @@
 
 A compiled loop holds no Python frame, so a KeyboardInterrupt cannot reach it until it
 returns, and it reads no clock.  Every compiled solve therefore takes a ``halt`` flag (an
-int64 array of one element) and reads it before each step.  ``call(fn, halt, timeout)``
-runs ``fn()`` (a compiled call that receives ``halt``; compiled with ``nogil``) on a worker
-thread while the calling thread waits in short slices:
+int64 array of one element) and reads it before each step; ``call(fn, halt, timeout)``
+runs ``fn()`` (the compiled call, which receives ``halt``) in the calling thread while a
+watchdog thread sets the flag:
 
-- Ctrl-C sets ``halt[0] = INTERRUPT``; the loop stops within one step and the
-  KeyboardInterrupt goes on from the caller;
-- past ``timeout`` seconds it sets ``halt[0] = TIMEOUT``; the loop stops within one step
-  and returns what it has, with status STOPPED.
+- on SIGINT (Ctrl-C): ``halt[0] = INTERRUPT``; the loop stops within one step, and the
+  SIGINT handler that was in place (Python's KeyboardInterrupt, or the user's own) runs
+  once the compiled call has returned.  The watchdog hears the signal through
+  ``signal.set_wakeup_fd``, which CPython's C-level handler writes to even while the main
+  thread runs machine code; the previous wakeup fd (an asyncio loop's, say) is restored
+  after the call and receives every byte meanwhile.  During the call a recording handler
+  stands in for the usual one, because a KeyboardInterrupt raised inside numba's
+  callbacks into Python would surface as a SystemError;
+- past ``timeout`` seconds: ``halt[0] = TIMEOUT``; the loop returns what it has, with
+  status STOPPED.
 
-The worker is one daemon thread, started on first use and ended after ``IDLE`` seconds
-without work (repeated short runs pay a hand-over of ~20 us, not a thread start, and no
-thread is left behind for a fork).  Off the main thread, where signals never arrive,
-``fn`` runs in the calling thread, with a timer only when a timeout is set.
+The watchdog is one daemon thread, started on demand and ended after ``IDLE`` seconds
+with nothing to watch.  A call costs two registrations (a few microseconds), not a
+thread hand-over.  Signals reach only the main thread, so elsewhere only the timeout is
+watched.
 """
 
 from __future__ import annotations
 
+import itertools
 import os
-import queue
+import select
+import signal
+import socket
 import threading
 import time
 
 import numpy as np
 
 INTERRUPT, TIMEOUT = 1, 2
-#: seconds the worker thread waits for new work before it ends
+#: seconds the watchdog waits with nothing to watch before it ends
 IDLE = 1.0
-#: seconds between two looks at the clock while waiting
-POLL = 0.05
 
 
 def flag() -> np.ndarray:
@@ -38,61 +45,97 @@ def flag() -> np.ndarray:
     return np.zeros(1, dtype=np.int64)
 
 
-class _Job:
-    __slots__ = ("fn", "done", "value", "error")
-
-    def __init__(self, fn):
-        self.fn = fn
-        self.done = threading.Event()
-        self.value = None
-        self.error = None
-
-    def run(self):
-        try:
-            self.value = self.fn()
-        except BaseException as exc:     # handed to the caller's thread
-            self.error = exc
-        finally:
-            self.done.set()
-
-
-class _Worker:
-    """One daemon thread running jobs in order; it ends when idle."""
+class _Watchdog:
+    """Sets the halt flags of the calls in progress on SIGINT and at their deadlines."""
 
     def __init__(self):
         self.lock = threading.Lock()
-        self.jobs = queue.SimpleQueue()
+        self.calls: dict[int, list] = {}          # id -> [halt, deadline, forward fd]
+        self.ids = itertools.count()
+        self.signals, self.signal_w = socket.socketpair()
+        self.control, self.control_w = socket.socketpair()
+        for s in (self.signals, self.signal_w, self.control, self.control_w):
+            s.setblocking(False)
         self.thread = None
 
-    def submit(self, fn) -> _Job:
-        job = _Job(fn)
+    def register(self, halt, deadline, forward) -> int:
         with self.lock:
-            self.jobs.put(job)
+            key = next(self.ids)
+            self.calls[key] = [halt, deadline, forward]
             if self.thread is None:
-                self.thread = threading.Thread(target=self._loop, name="jetnh-compiled",
+                self.thread = threading.Thread(target=self._loop, name="jetnh-watchdog",
                                                daemon=True)
                 self.thread.start()
-        return job
+        if deadline is not None:
+            self._poke()
+        return key
+
+    def unregister(self, key):
+        with self.lock:
+            self.calls.pop(key, None)
+
+    def _poke(self):
+        try:
+            self.control_w.send(b"\0")
+        except OSError:                       # full: the watchdog wakes up anyway
+            pass
 
     def _loop(self):
+        idle_since = time.monotonic()
         while True:
-            try:
-                job = self.jobs.get(timeout=IDLE)
-            except queue.Empty:
-                with self.lock:
-                    if self.jobs.empty():
-                        self.thread = None
-                        return
-                continue
-            job.run()
+            with self.lock:
+                deadlines = [c[1] for c in self.calls.values() if c[1] is not None]
+                if self.calls:
+                    idle_since = time.monotonic()
+                elif time.monotonic() - idle_since > IDLE:
+                    self.thread = None
+                    return
+            wait = IDLE if not deadlines else max(0.0, min(deadlines) - time.monotonic())
+            ready, _, _ = select.select([self.signals, self.control], [], [], wait)
+            if self.control in ready:
+                _drain(self.control)
+            got = _drain(self.signals) if self.signals in ready else b""
+            now = time.monotonic()
+            with self.lock:
+                for c in self.calls.values():
+                    if signal.SIGINT in got:
+                        c[0][0] = INTERRUPT
+                    if c[1] is not None and now >= c[1]:
+                        c[0][0] = TIMEOUT
+                        c[1] = None
+                forward = {c[2] for c in self.calls.values() if c[2] >= 0}
+            for fd in forward:                # the previous owner of the wakeup fd
+                try:
+                    os.write(fd, got)
+                except OSError:
+                    pass
 
 
-_WORKER = _Worker()
+def _drain(sock) -> bytes:
+    data = b""
+    while True:
+        try:
+            chunk = sock.recv(4096)
+        except (BlockingIOError, InterruptedError):
+            return data
+        if not chunk:
+            return data
+        data += chunk
+
+
+_WATCHDOG: _Watchdog | None = None
+
+
+def _watchdog() -> _Watchdog:
+    global _WATCHDOG
+    if _WATCHDOG is None:
+        _WATCHDOG = _Watchdog()
+    return _WATCHDOG
 
 
 def _after_fork():
-    global _WORKER
-    _WORKER = _Worker()
+    global _WATCHDOG
+    _WATCHDOG = None
 
 
 os.register_at_fork(after_in_child=_after_fork)
@@ -101,27 +144,26 @@ os.register_at_fork(after_in_child=_after_fork)
 def call(fn, halt: np.ndarray, timeout: float | None = None):
     """``fn()``, stoppable by Ctrl-C and by ``timeout`` through ``halt`` (see the module
     docstring)."""
-    if threading.current_thread() is not threading.main_thread():
-        if timeout is None:
-            return fn()
-        timer = threading.Timer(timeout, halt.__setitem__, (0, TIMEOUT))
-        timer.daemon = True
-        timer.start()
-        try:
-            return fn()
-        finally:
-            timer.cancel()
-    job = _WORKER.submit(fn)
     deadline = None if timeout is None else time.monotonic() + timeout
+    main = threading.current_thread() is threading.main_thread()
+    if not main and deadline is None:
+        return fn()
+    wd = _watchdog()
+    old_fd, handler, caught = -1, None, []
+    if main:
+        handler = signal.getsignal(signal.SIGINT)
+        if not callable(handler):             # SIG_IGN, SIG_DFL, or not set from Python
+            handler, main = None, False
+    if main:
+        signal.signal(signal.SIGINT, lambda signum, frame: caught.append(frame))
+        old_fd = signal.set_wakeup_fd(wd.signal_w.fileno(), warn_on_full_buffer=False)
+    key = wd.register(halt, deadline, old_fd)
     try:
-        while not job.done.wait(POLL):
-            if deadline is not None and time.monotonic() >= deadline:
-                halt[0] = TIMEOUT
-                deadline = None
-    except KeyboardInterrupt:
-        halt[0] = INTERRUPT
-        job.done.wait()
-        raise
-    if job.error is not None:
-        raise job.error
-    return job.value
+        return fn()
+    finally:
+        wd.unregister(key)
+        if main:
+            signal.set_wakeup_fd(old_fd)
+            signal.signal(signal.SIGINT, handler)
+            if caught:
+                handler(signal.SIGINT, caught[0])

@@ -1,0 +1,286 @@
+"""Every argument of Scene.run and of the ensembles is checked before compiled code sees
+it; Ctrl-C and the wall-clock budget stop compiled loops."""
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+import numpy as np
+import pytest
+import sympy as sp
+from hypothesis import given
+from hypothesis import strategies as st
+
+import jetnh as jn
+from jetnh.errors import ConstraintError, JetnhError
+from jetnh.numeric import STOPPED, Scene
+
+DISK0 = dict(x=0.1, y=-0.2, phi=0.3, psi=0.4, phi_t=1.0, psi_t=0.7)
+
+
+@pytest.fixture(scope="module")
+def disk():
+    """The vertical rolling disk, R a run-time parameter."""
+    J = jn.JetSpace("x y phi psi")
+    x, y, phi, psi = J.q
+    xd, yd, phid, psid = J.qd
+    R, I1, I2 = sp.symbols("R I1 I2")
+    L = (xd**2 + yd**2) / 2 + (I1 * phid**2 + I2 * psid**2) / 2
+    s = jn.System(J, L, [xd - R * sp.cos(psi) * phid, yd - R * sp.sin(psi) * phid],
+                  dependent=[x, y])
+    return Scene(s, "chetaev", params={R: 1.5, I1: 0.5, I2: 0.25}, initial=DISK0,
+                 t_span=(0.0, 2.0), runtime_params=[R], cache=False).compile()
+
+
+def same(a, b):
+    assert np.array_equal(a.t, b.t) and np.array_equal(a.y, b.y)
+
+
+# ---------------------------------------------------------------------- y0 and params
+def test_state_of_wrong_length_is_refused(disk):
+    n = len(disk.state_names)
+    for bad in (disk.y0[:-1], np.append(disk.y0, 1.0), np.zeros(0), disk.y0[:1]):
+        with pytest.raises(JetnhError, match=f"y0 has {bad.size} values, but this scene has "
+                                             f"{n}.*state_names: x, y, phi, psi"):
+            disk.run(y0=bad)
+    with pytest.raises(JetnhError, match="1-d"):
+        disk.run(y0=np.tile(disk.y0, (2, 1)))
+
+
+@pytest.mark.parametrize("bad, match", [
+    ([np.nan, 0, 0, 0, 1, 0.7], "non-finite value"),
+    (["0", "0", "0", "0", "1", "0.7"], "real numbers"),
+    ([1j, 0, 0, 0, 1, 0.7], "real numbers"),
+    ([sp.Symbol("a"), 0, 0, 0, 1, 0.7], "must be a number"),
+    (np.ones(6, dtype=bool), "real numbers"),
+    ("x=1", "dict keyed by name or a sequence"),
+    (3.0, "dict keyed by name or a sequence"),
+])
+def test_state_of_wrong_type_is_refused(disk, bad, match):
+    with pytest.raises(JetnhError, match=match):
+        disk.run(y0=bad)
+
+
+def test_state_by_name_symbol_or_sequence(disk):
+    J = disk.system.J
+    ref = disk.replace(initial={**DISK0, "phi_t": 0.5}).run()
+    same(disk.run(y0={"phi_t": 0.5}), ref)
+    same(disk.run(y0={J.qd[2]: 0.5}), ref)
+    seq = [{**DISK0, "phi_t": 0.5}[n] for n in disk.state_names]
+    same(disk.run(y0=seq), ref)
+    same(disk.run(y0=tuple(seq)), ref)
+    same(disk.run(y0=np.array(seq)), ref)
+    same(disk.run(y0=[sp.Float(v) for v in seq]), ref)
+    with pytest.raises(JetnhError, match="'z', which is not a state"):
+        disk.run(y0={"z": 1.0})
+
+
+def test_state_with_dependent_velocity_is_checked(disk):
+    x_t = 1.5 * np.cos(0.4) * 1.0
+    same(disk.run(y0={"x_t": x_t}), disk.run())
+    with pytest.raises(ConstraintError, match="y0 gives x_t = 3.0 but the constraints"):
+        disk.run(y0={"x_t": 3.0})
+
+
+def test_runtime_parameters_by_name_symbol_or_sequence(disk):
+    R = [s for s in disk.system.parameters if s.name == "R"][0]
+    ref = disk.run(params=np.array([2.0]))
+    same(disk.run(params={"R": 2.0}), ref)
+    same(disk.run(params={R: 2.0}), ref)
+    same(disk.run(params=[2.0]), ref)
+    same(disk.run(params=(2,)), ref)
+    same(disk.run(params={}), disk.run())
+    with pytest.raises(JetnhError, match="params has 2 values, but this scene has 1"):
+        disk.run(params=[2.0, 1.0])
+    with pytest.raises(JetnhError, match="params has 0 values"):
+        disk.run(params=np.zeros(0))
+    with pytest.raises(JetnhError, match="'I1' is compiled into.*runtime_params"):
+        disk.run(params={"I1": 1.0})
+    with pytest.raises(JetnhError, match="'Q', which is not a parameter"):
+        disk.run(params={"Q": 1.0})
+    with pytest.raises(JetnhError, match="finite"):
+        disk.run(params={"R": np.inf})
+
+
+# ---------------------------------------------------------------------- no hangs
+@pytest.mark.parametrize("kw, match", [
+    (dict(rtol=np.nan), "rtol"),
+    (dict(rtol=0.0, atol=0.0), "without an error scale"),
+    (dict(rtol=-1e-6), "rtol"),
+    (dict(atol=-1e-6), "atol must be >= 0"),
+    (dict(atol=[1e-9] * 3), "one value per state"),
+    (dict(atol=np.nan), "non-finite"),
+    (dict(rtol=1e-20), "float64 cannot honour"),
+    (dict(max_step=0.0), "max_step must be a positive"),
+    (dict(max_step=np.nan), "max_step"),
+    (dict(first_step=np.nan), "first_step"),
+    (dict(first_step=0.0), "first_step"),
+    (dict(first_step=-1.0), "first_step"),
+    (dict(t_eval=[0.0, np.nan, 1.0]), "non-finite"),
+    (dict(t_eval=[1.0, 0.5]), "sorted"),
+    (dict(max_steps=0), "max_steps"),
+    (dict(max_steps=2.5), "max_steps"),
+    (dict(timeout=0.0), "timeout"),
+    (dict(timeout=np.nan), "timeout"),
+    (dict(h=0.1), "not an option of the dop853"),
+    (dict(newton_tol=1e-10), "not an option"),
+    (dict(method="rk4", h=0.0), "h must be a positive"),
+    (dict(method="rk4", h=np.nan), "h must be a positive"),
+    (dict(method="rk4", h=-0.1), "h must be a positive"),
+    (dict(method="rk4", h=1e-300), "beyond the budget max_steps"),
+    (dict(method="rk4", n_steps=10.5), "n_steps must be a positive integer"),
+    (dict(method="rk4", n_steps=np.nan), "n_steps"),
+    (dict(method="rk4", n_steps=True), "n_steps"),
+    (dict(method="rk4", n_steps=0), "n_steps"),
+    (dict(method="rk4", n_steps=10, h=0.1), "not both"),
+    (dict(method="rk4", n_steps=10, max_steps=5), "beyond the budget"),
+    (dict(method="rk4", n_steps=10**9, max_steps=10**10), "GiB"),
+    (dict(method="rk4", n_steps=10, max_step=1.0), "not an option of the rk4"),
+    (dict(method="dla", h=0.0), "h must be a positive"),
+    (dict(method="dla", n_steps=10, newton_tol=np.nan), "newton_tol"),
+    (dict(method="dla", n_steps=10, max_newton=0), "max_newton"),
+    (dict(method="dla", n_steps=10, t_eval=[0.5]), "not an option of the dla"),
+    (dict(method="scipy-RK45", max_step=0.0), "max_step"),
+    (dict(method="scipy-RK45", n_steps=3), "not an option"),
+    (dict(singular_tol=np.nan), "singular_tol"),
+    (dict(save="all"), "save"),
+])
+def test_arguments_that_would_hang_or_crash_are_refused(disk, kw, match):
+    tic = time.perf_counter()
+    with pytest.raises(JetnhError, match=match):
+        disk.run(**kw)
+    assert time.perf_counter() - tic < 5.0
+
+
+def test_integral_float_step_counts_are_accepted(disk):
+    same(disk.run(method="rk4", n_steps=100.0), disk.run(method="rk4", n_steps=100))
+    same(disk.run(method="rk4", n_steps=np.int32(100)), disk.run(method="rk4", n_steps=100))
+
+
+def test_ensemble_arguments_are_checked(disk):
+    with pytest.raises(JetnhError, match="shape"):
+        disk.ensemble(initial=np.zeros((2, 3)))
+    with pytest.raises(JetnhError, match="non-finite"):
+        disk.ensemble(initial={"phi_t": [1.0, np.nan]})
+    with pytest.raises(JetnhError, match="without an error scale"):
+        disk.ensemble(initial={"phi_t": [1.0, 2.0]}, rtol=0, atol=0)
+    with pytest.raises(JetnhError, match="h must be a positive"):
+        disk.ensemble(initial={"phi_t": [1.0, 2.0]}, method="rk4", h=0.0)
+    with pytest.raises(JetnhError, match="real numbers"):
+        disk.ensemble(params={"R": ["1", "2"]})
+
+
+# ---------------------------------------------------------------------- property
+CANON = dict(rtol=1e-9, atol=1e-12, t_eval=[0.5, 1.0, 2.0], y0=None, params=None)
+
+
+def _variants(disk):
+    """(value, whether it means the canonical argument) per argument."""
+    seq = [DISK0[n] for n in disk.state_names]
+    return {
+        "rtol": st.sampled_from([(1e-9, True), (np.float64(1e-9), True), (np.nan, False),
+                                 (-1e-9, False), (0.0, False), ("1e-9", False),
+                                 (np.inf, False), (1e-30, False), (None, False)]),
+        "atol": st.sampled_from([(1e-12, True), ([1e-12] * 6, True), (np.nan, False),
+                                 ([1e-12] * 5, False), (-1.0, False), ([[1e-12]], False)]),
+        "t_eval": st.sampled_from([([0.5, 1.0, 2.0], True), (np.array([0.5, 1.0, 2.0]), True),
+                                   ([0.5, np.nan, 2.0], False), ([2.0, 1.0], False),
+                                   ([0.5, 1.0, 3.0], False), ("0.5", False),
+                                   ([[0.5, 1.0]], False)]),
+        "y0": st.sampled_from([(None, True), (seq, True), (dict(DISK0), True),
+                               (seq[:-1], False), (seq + [0.0], False),
+                               ([np.nan] + seq[1:], False), ({"zz": 1.0}, False),
+                               (np.array(seq, dtype=complex), False)]),
+        "params": st.sampled_from([(None, True), ([1.5], True), ({"R": 1.5}, True),
+                                   ([], False), ([1.5, 0.0], False), ([np.inf], False),
+                                   ({"I2": 1.0}, False), ("1.5", False)]),
+    }
+
+
+@given(data=st.data())
+def test_run_arguments_error_or_canonical_result(disk, data):
+    """Either a JetnhError or exactly the canonical trajectory: never a crash, a hang or
+    a different answer."""
+    ref = disk.run(**CANON)
+    kw, canonical = {}, True
+    for name, strategy in _variants(disk).items():
+        value, ok = data.draw(strategy, label=name)
+        kw[name] = value
+        canonical &= ok
+    if canonical:
+        same(disk.run(**kw), ref)
+    else:
+        with pytest.raises(JetnhError):
+            disk.run(**kw)
+
+
+# ---------------------------------------------------------------------- budgets
+@pytest.mark.parametrize("method, kw", [("dop853", dict(max_step=1e-9)),
+                                        ("rk4", dict(n_steps=10**8, save="final")),
+                                        ("dla", dict(n_steps=10**8, save="final"))])
+def test_timeout_stops_a_long_run(disk, method, kw):
+    tic = time.perf_counter()
+    tr = disk.run(method=method, timeout=0.3, max_steps=10**9, **kw)
+    wall = time.perf_counter() - tic
+    assert tr.status == STOPPED and "timeout = 0.3 s" in tr.diagnostics.stop_reason
+    assert 0.0 < tr.t[-1] < 2.0 and np.all(np.isfinite(tr.y[-1]))
+    assert wall < 3.0
+
+
+def test_timeout_stops_an_ensemble(disk):
+    ens = disk.ensemble(initial={"phi_t": np.linspace(0.5, 1.0, 4)}, max_step=1e-8,
+                        max_steps=10**9, timeout=0.3, parallel="serial")
+    assert set(ens.status.tolist()) == {STOPPED}
+    assert ens.wall_time < 3.0
+
+
+CHILD = textwrap.dedent("""
+    import sys, numpy as np, sympy as sp, jetnh as jn
+    J = jn.JetSpace("x y phi psi")
+    x, y, phi, psi = J.q
+    xd, yd, phid, psid = J.qd
+    L = (xd**2 + yd**2 + phid**2 + psid**2) / 2
+    s = jn.System(J, L, [xd - sp.cos(psi) * phid, yd - sp.sin(psi) * phid], dependent=[x, y])
+    sc = jn.Scene(s, "chetaev", initial=dict(x=0, y=0, phi=0, psi=0, phi_t=1, psi_t=0.7),
+                  t_span=(0, 1e9), cache=False).compile()
+    runs = [lambda: sc.run(max_step=1e-6, save="final", max_steps=10**12),
+            lambda: sc.run(method="dla", n_steps=10**10, max_steps=10**12, save="final"),
+            lambda: sc.ensemble(initial={"phi_t": [1.0, 2.0]}, max_step=1e-6,
+                                max_steps=10**12)]
+    sc.run(t_span=(0, 1e-3))                     # compile everything before the signals
+    sc.run(method="dla", n_steps=2, t_span=(0, 1e-3))
+    sc.replace(t_span=(0, 1e-3)).ensemble(initial={"phi_t": [1.0, 2.0]})
+    for i, run in enumerate(runs):
+        print("ready", i, flush=True)
+        try:
+            run()
+            print("finished", i, flush=True)
+        except KeyboardInterrupt:
+            print("interrupted", i, flush=True)
+""")
+
+
+def test_ctrl_c_stops_compiled_runs(tmp_path):
+    """SIGINT to a long compiled run (dop853, dla, an ensemble) in a child process: each
+    stops within a few seconds with a KeyboardInterrupt."""
+    script = tmp_path / "child.py"
+    script.write_text(CHILD)
+    env = dict(os.environ, JETNH_CACHE=str(tmp_path / "cache"))
+    child = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        for i in range(3):
+            line = child.stdout.readline()
+            assert line.split() == ["ready", str(i)], line + child.stderr.read()
+            time.sleep(1.0)                      # well inside the compiled loop
+            tic = time.perf_counter()
+            child.send_signal(signal.SIGINT)
+            line = child.stdout.readline()
+            assert line.split() == ["interrupted", str(i)], line + child.stderr.read()
+            assert time.perf_counter() - tic < 3.0
+        assert child.wait(timeout=30) == 0
+    finally:
+        child.kill()
