@@ -1,6 +1,7 @@
 """The kernel cache: private, verified before use (planted code never runs), self-repairing,
 safe under concurrent writers and deletion, and falling back when the root is unusable."""
 
+import hashlib
 import json
 import math
 import os
@@ -190,7 +191,6 @@ def test_forged_manifest_is_refused(fresh, tmp_path):
     src = (d / "kernels.py").read_bytes() + f"\nopen({str(canary)!r}, 'w').close()\n".encode()
     (d / "kernels.py").write_bytes(src)
     doc = json.loads((d / "manifest.json").read_text())
-    import hashlib
     doc["body"]["files"]["kernels.py"] = hashlib.sha256(src).hexdigest()
     (d / "manifest.json").write_text(json.dumps(doc))
     assert not reload(sc).hit
@@ -361,7 +361,8 @@ def test_unusable_root_warns_once_and_uses_a_temporary_cache(fresh, tmp_path, mo
         assert words in str(ours[0].message) and "JETNH_CACHE" in str(ours[0].message), name
         assert ck.directory.parent == cache._temp_root(), name
         assert stat.S_IMODE(os.stat(cache._temp_root()).st_mode) == 0o700
-    os.chmod(tmp_path / "shared", 0o700)
+    for name in ("shared", "other"):
+        os.chmod(tmp_path / name, 0o700)
 
 
 def test_loose_version_directory_is_made_private(fresh):

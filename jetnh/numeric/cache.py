@@ -542,8 +542,24 @@ def _exec_kernels(package: str, directory: Path, source: bytes):
         finally:
             if saved:
                 numba_config.CACHE_LOCATOR_CLASSES = saved
+    _no_later_disk_cache(mod)
     pkg.kernels = mod
     return mod
+
+
+def _no_later_disk_cache(mod):
+    """The kernels compile when their module runs (explicit signatures), and that is when
+    numba caches them, in the directory that is then sealed.  A function compiled later
+    (lazily, or for new types) is kept in memory only: it would write files the manifest
+    does not list, or into a staging directory already renamed."""
+    try:
+        from numba.core.caching import NullCache
+        from numba.core.dispatcher import Dispatcher
+    except ImportError:  # pragma: no cover - numba internals moved: nothing to do
+        return
+    for value in list(vars(mod).values()):
+        if isinstance(value, Dispatcher):
+            value._cache = NullCache()
 
 
 # ---------------------------------------------------------------------- kernels
