@@ -275,7 +275,7 @@ def scene_names(system) -> set:
 def cmd_simulate(args, progress) -> int:
     import numpy as np
 
-    from .numeric import Scene
+    from .numeric import Scene, arguments
     from .numeric.codegen import multiplier_names
 
     loaded = _with_split(load_model(args.model), args.split)
@@ -290,9 +290,10 @@ def cmd_simulate(args, progress) -> int:
     if t1 is None:
         raise UsageError("give --t-end (the model file has no [simulation] t_end)")
     method = args.method or sim.get("method", "dop853")
-    rtol = args.rtol if args.rtol is not None else float(sim.get("rtol", 1e-9))
-    atol = args.atol if args.atol is not None else float(sim.get("atol", 1e-12))
-    points = args.points if args.points is not None else int(sim.get("points", 201))
+    rtol = args.rtol if args.rtol is not None else sim.get("rtol", 1e-9)
+    atol = args.atol if args.atol is not None else sim.get("atol", 1e-12)
+    points = (args.points if args.points is not None else
+              arguments.count(sim.get("points", 201), "[simulation] points", limit=10**7))
 
     # the initial state: the model's, then --init; missing states start at 0
     lams = multiplier_names(system, principle)
@@ -329,13 +330,13 @@ def cmd_simulate(args, progress) -> int:
                        "(cached for later runs)"):
         scene.compile()
     kw = {}
-    fixed = method.lower() in ("rk4", "dla", "lda", "nh-midpoint")
+    fixed = method.lower() in ("rk4", "dla", "lda", "nh-midpoint", "dvi", "vakonomic-midpoint")
     if fixed:
         kw["n_steps"] = args.steps
     elif points >= 2:
         kw["t_eval"] = np.linspace(t0, float(t1), points)
     with progress.step(f"integrating with {method} over [{t0:g}, {float(t1):g}]"):
-        traj = scene.run(rtol=rtol, atol=atol, method=method, **kw)
+        traj = scene.run(rtol=rtol, atol=atol, method=method, timeout=args.timeout, **kw)
     d = traj.diagnostics
     final = traj.final
     if args.format == "json":
@@ -524,8 +525,8 @@ def cmd_sweep(args, progress) -> int:
                outputs=args.outputs.split(",") if args.outputs else None,
                chunk_size=args.chunk_size, progress=_progress_bar(progress, f"sweeping {where}"),
                timeout=args.timeout, connect_timeout=args.connect_timeout, method=method,
-               rtol=args.rtol if args.rtol is not None else float(sim.get("rtol", 1e-9)),
-               atol=args.atol if args.atol is not None else float(sim.get("atol", 1e-12)),
+               rtol=args.rtol if args.rtol is not None else sim.get("rtol", 1e-9),
+               atol=args.atol if args.atol is not None else sim.get("atol", 1e-12),
                **({"n_steps": args.steps} if method == "rk4" else {}))
     failed = int((~df["success"]).sum())
     print(f"jetnh: {len(df)} points, {len(df) - failed} succeeded"
@@ -749,13 +750,17 @@ def build_parser() -> argparse.ArgumentParser:
                         "catalogue's)")
     s.add_argument("--method", default=None,
                    help="dop853 (default), dopri5, rk4, dla (discrete Lagrange-d'Alembert, "
-                        "chetaev only) or scipy-<RK45|DOP853|Radau|BDF|LSODA>")
+                        "chetaev only), dvi (discrete vakonomic) or "
+                        "scipy-<RK45|DOP853|Radau|BDF|LSODA>")
+    s.add_argument("--timeout", type=float, default=None,
+                   help="wall-clock budget in seconds: the run stops there and reports "
+                        "what it has (default: none)")
     s.add_argument("--rtol", type=float, default=None, help="default 1e-9")
     s.add_argument("--atol", type=float, default=None, help="default 1e-12")
     s.add_argument("--points", type=int, default=None,
                    help="output points of the adaptive methods (default 201; 0: every step)")
     s.add_argument("--steps", type=int, default=1000,
-                   help="steps of the fixed-step methods rk4 and dla (default 1000)")
+                   help="steps of the fixed-step methods rk4, dla and dvi (default 1000)")
     s.add_argument("--project", action="store_true",
                    help="replace initial dependent velocities that contradict the "
                         "constraints by the values the constraints give")
