@@ -122,21 +122,29 @@ def _cached_parts(system, F, hessian=True) -> EulerParts:
 
 
 def _on_constraints(system, values: dict) -> dict:
-    """``values`` with the dependent velocities set on the constraints, in the working
+    """``values`` with the dependent velocities set on the constraints: exactly for a
+    rational point (``linalg.Inexact`` when that is impossible), else in the working
     precision of mpmath (the rank tests evaluate at 50 and 80 digits)."""
     vel = system.dependent_velocities
     if not vel:
         return values
-    dps = mpmath.mp.dps
     free = {s: v for s, v in values.items() if s not in set(vel)}
+    exact = all(isinstance(v, sp.Rational) for v in free.values())
     if system.is_affine:      # A_dep qdot_dep = -f(qdot_dep = 0), never the nested phi
         k = system.k
         f0 = [f.xreplace({v: sp.S.Zero for v in vel}) for f in system.constraints]
-        vals = dag.evaluate(list(system.jacobian_dependent) + f0, free, dps=dps)
-        A = mpmath.matrix([vals[i * k:(i + 1) * k] for i in range(k)])
-        sol = mpmath.lu_solve(A, -mpmath.matrix(vals[k * k:]))
+        exprs = list(system.jacobian_dependent) + f0
+        if exact:
+            vals = linalg._exact(exprs, free)
+            sol = sp.Matrix(k, k, vals[:k * k]).LUsolve(-sp.Matrix(vals[k * k:]))
+        else:
+            vals = dag.evaluate(exprs, free, dps=mpmath.mp.dps)
+            A = mpmath.matrix([vals[i * k:(i + 1) * k] for i in range(k)])
+            sol = mpmath.lu_solve(A, -mpmath.matrix(vals[k * k:]))
+    elif exact:
+        sol = linalg._exact([system.phi[v] for v in vel], free)
     else:
-        sol = dag.evaluate([system.phi[v] for v in vel], free, dps=dps)
+        sol = dag.evaluate([system.phi[v] for v in vel], free, dps=mpmath.mp.dps)
         if any(isinstance(z, mpmath.mpc) and abs(z.imag) > 1e-12 * (1 + abs(z))
                for z in sol):
             raise ValueError("no real point on the constraints here")

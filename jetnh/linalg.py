@@ -94,19 +94,39 @@ def _lu_solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
 
 
 # ------------------------------------------------------------------ generic rank
-# The rank of a symbolic matrix is decided at random points, in high precision and
-# independently of scale.  Each point is evaluated at two precisions: an entry whose two
-# values disagree is rounding noise of an exact zero (sin^2 + cos^2 - 1, a reduced matrix
-# that vanishes on the constraints) and is set to zero; every other entry is then known
-# to about 40 digits.  Rows and columns are equilibrated (scaled by powers of two, which
-# keeps the rank and the digits) and singular values below _RANK_TOL times the largest
-# count as zero.  So diag(1, 1e-20) or constraints 1e-12 f^1, f^2 have full rank, while
-# f and 1e10 f, or (x' + y')^2, do not: the rank of the matrix as written (binary floats
-# are exact numbers), not of a rounded copy.
+# The rank of a symbolic matrix is decided at random points, independently of scale, as
+# the rank of the matrix as written (binary floats are exact numbers, not rounded copies).
+# Where the entries are rational functions of the point (polynomial Lagrangians and
+# constraints) the point is rational and the rank exact.  Otherwise each point is
+# evaluated at two precisions: an entry whose two values disagree is rounding noise of an
+# exact zero (sin^2 + cos^2 - 1, a reduced matrix that vanishes on the constraints) and is
+# set to zero; every other entry is then known to about 40 digits.  Rows and columns are
+# equilibrated (scaled by powers of two, which keeps the rank and the digits) and
+# singular values below _RANK_TOL times the largest count as zero.  So diag(1, 1e-20) or
+# constraints 1e-12 f^1, f^2 have full rank, while f and 1e10 f, or (x' + y')^2, do not.
 _DPS = (50, 80)          # the two working precisions (decimal digits)
 _NOISE = 1e-12           # relative disagreement between them that marks an entry as noise
 _RANK_TOL = 1e-30        # singular values below this times the largest are zero
 _POINT_TRIES = 4         # attempts per wanted point (a point may leave the domain)
+_EXACT_MAX = 4000        # distinct subexpressions up to which exact evaluation is tried
+_DEN = 100 * 2**16       # denominator of the rational points
+
+
+class Inexact(ValueError):
+    """An exact evaluation met an irrational value (use the numeric one)."""
+
+
+def _exact(exprs, values: dict) -> list:
+    """The values of ``exprs`` at the rational point ``values`` as sympy Rationals (floats
+    read as the exact binary numbers they are), or Inexact."""
+    rule = dict(values)
+    rule.update({f: sp.Rational(f) for f in dag.atoms(list(exprs), sp.Float)})
+    out = dag.xreplace(list(exprs), rule)
+    if any(v in (sp.zoo, sp.nan, sp.oo, -sp.oo) for v in out):
+        raise ZeroDivisionError("not finite at this point")
+    if not all(isinstance(v, sp.Rational) for v in out):
+        raise Inexact("not rational at a rational point")
+    return out
 
 
 def _real(v):
@@ -132,24 +152,42 @@ def _denoise(lo, hi):
 
 def _generic_samples(exprs, build, points: int, seed: int, complete=None, symbols=()):
     """For up to ``points`` random points (values in [0.31, 1.37]): ``build(values)`` of
-    the values of ``exprs`` there (an mpmath matrix), built at both precisions and
+    the values of ``exprs`` there -- exact (Rationals; ``build`` then returns a sympy
+    Matrix) when they are rational, else an mpmath matrix built at both precisions and
     denoised.  A point where an entry is not a finite real number, or where ``build`` or
     ``complete`` fails (ValueError, ZeroDivisionError), is skipped.  ``complete(values)``
-    may overwrite values (e.g. put the point on a manifold); it is called within
-    ``mpmath.workdps`` of each precision.  ``symbols`` are drawn too."""
+    may overwrite values (e.g. put the point on a manifold): it gets Rationals (and
+    raises ``Inexact`` when it cannot stay exact) or mpmath numbers, within
+    ``mpmath.workdps`` of the precision.  ``symbols`` are drawn too."""
+    exprs = list(exprs)
     syms = sorted(set(symbols).union(*(e.free_symbols for e in exprs)), key=lambda s: s.name)
     rng = random.Random(seed)
+    try_exact = dag.size(exprs, cap=_EXACT_MAX + 1) <= _EXACT_MAX
     got = 0
     for _ in range(_POINT_TRIES * points):
         if got >= points:
             return
-        base = {s: mpmath.mpf(rng.uniform(0.31, 1.37)) for s in syms}
+        base = {s: sp.Rational(rng.randrange(31 * _DEN // 100, 137 * _DEN // 100), _DEN)
+                for s in syms}
+        if try_exact:
+            try:
+                vals = complete(dict(base)) if complete is not None else base
+                M = build(_exact(exprs, vals))
+            except Inexact:
+                try_exact = False           # irrational entries: numeric from now on
+            except (TypeError, ValueError, ZeroDivisionError, ArithmeticError):
+                continue
+            else:
+                got += 1
+                yield M
+                continue
         mats = []
         try:
             for dps in _DPS:
                 with mpmath.workdps(dps):
-                    vals = complete(dict(base)) if complete is not None else base
-                    values = [_real(v) for v in dag.evaluate(list(exprs), vals, dps=dps)]
+                    mp_base = {s: mpmath.mpf(v.p) / v.q for s, v in base.items()}
+                    vals = complete(mp_base) if complete is not None else mp_base
+                    values = [_real(v) for v in dag.evaluate(exprs, vals, dps=dps)]
                     if any(v is None for v in values):
                         raise ValueError("not a finite real number")
                     mats.append(build(values))
@@ -181,9 +219,12 @@ def _equilibrate(M):
 
 
 def mp_rank(M) -> int:
-    """The rank of an mpmath matrix known to about 40 digits, after equilibration."""
+    """The rank of a sympy Matrix of Rationals (exact), or of an mpmath matrix known to
+    about 40 digits, after equilibration."""
     if M.rows == 0 or M.cols == 0:
         return 0
+    if isinstance(M, sp.MatrixBase):
+        return M.rank()
     with mpmath.workdps(_DPS[-1]):
         M = _equilibrate(M)
         if all(M[i, j] == 0 for i in range(M.rows) for j in range(M.cols)):
@@ -194,7 +235,12 @@ def mp_rank(M) -> int:
 
 
 def _reshape(rows: int, cols: int):
-    return lambda values: mpmath.matrix([values[i * cols:(i + 1) * cols] for i in range(rows)])
+    """values -> a rows x cols matrix: sympy for Rationals, else mpmath."""
+    def build(values):
+        if values and isinstance(values[0], sp.Basic):
+            return sp.Matrix(rows, cols, values)
+        return mpmath.matrix([values[i * cols:(i + 1) * cols] for i in range(rows)])
+    return build
 
 
 def numeric_rank(M: sp.Matrix, points: int = 3, seed: int = 0) -> int:
@@ -226,17 +272,20 @@ def reduced_rank(H: sp.Matrix, A: sp.Matrix, ind, dep, points: int = 3, seed: in
     h, a = _reshape(n, n), _reshape(A.rows, A.cols)
 
     def build(values):
+        exact = bool(values) and isinstance(values[0], sp.Basic)
         Hn = h(values[:n * n])
-        P = mpmath.zeros(n, m)
+        P = (sp.zeros if exact else mpmath.zeros)(n, m)
         for c, i in enumerate(ind):
             P[i, c] = 1
         if dep:
             An = a(values[n * n:])
-            Ad = mpmath.matrix([[An[r, j] for j in dep] for r in range(An.rows)])
-            Ai = mpmath.matrix([[An[r, j] for j in ind] for r in range(An.rows)])
+            Ad = (sp.Matrix if exact else mpmath.matrix)(
+                [[An[r, j] for j in dep] for r in range(An.rows)])
+            Ai = (sp.Matrix if exact else mpmath.matrix)(
+                [[An[r, j] for j in ind] for r in range(An.rows)])
             if mp_rank(Ad) < len(dep):
                 raise ZeroDivisionError("singular A_dep at this point")
-            X = -(mpmath.inverse(Ad) * Ai)
+            X = -(Ad.inv() * Ai) if exact else -(mpmath.inverse(Ad) * Ai)
             for r, i in enumerate(dep):
                 for c in range(m):
                     P[i, c] = X[r, c]
