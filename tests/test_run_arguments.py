@@ -14,7 +14,7 @@ import sympy as sp
 from hypothesis import given
 from hypothesis import strategies as st
 
-import jetnh as jn
+from jetnh import models
 from jetnh.errors import ConstraintError, JetnhError
 from jetnh.numeric import STOPPED, Scene
 
@@ -23,16 +23,9 @@ DISK0 = dict(x=0.1, y=-0.2, phi=0.3, psi=0.4, phi_t=1.0, psi_t=0.7)
 
 @pytest.fixture(scope="module")
 def disk():
-    """The vertical rolling disk, R a run-time parameter."""
-    J = jn.JetSpace("x y phi psi")
-    x, y, phi, psi = J.q
-    xd, yd, phid, psid = J.qd
-    R, I1, I2 = sp.symbols("R I1 I2")
-    L = (xd**2 + yd**2) / 2 + (I1 * phid**2 + I2 * psid**2) / 2
-    s = jn.System(J, L, [xd - R * sp.cos(psi) * phid, yd - R * sp.sin(psi) * phid],
-                  dependent=[x, y])
-    return Scene(s, "chetaev", params={R: 1.5, I1: 0.5, I2: 0.25}, initial=DISK0,
-                 t_span=(0.0, 2.0), runtime_params=[R], cache=False).compile()
+    """The catalogue's vertical rolling disk, R a run-time parameter."""
+    return Scene(models.get("rolling_disk"), "chetaev", params={"R": 1.5}, initial=DISK0,
+                 t_span=(0.0, 2.0), runtime_params=["R"], cache=False).compile()
 
 
 def same(a, b):
@@ -238,13 +231,10 @@ def test_timeout_stops_an_ensemble(disk):
 
 
 CHILD = textwrap.dedent("""
-    import sys, numpy as np, sympy as sp, jetnh as jn
-    J = jn.JetSpace("x y phi psi")
-    x, y, phi, psi = J.q
-    xd, yd, phid, psid = J.qd
-    L = (xd**2 + yd**2 + phid**2 + psid**2) / 2
-    s = jn.System(J, L, [xd - sp.cos(psi) * phid, yd - sp.sin(psi) * phid], dependent=[x, y])
-    sc = jn.Scene(s, "chetaev", initial=dict(x=0, y=0, phi=0, psi=0, phi_t=1, psi_t=0.7),
+    import jetnh as jn
+    from jetnh import models
+    sc = jn.Scene(models.get("rolling_disk"), "chetaev",
+                  initial=dict(x=0, y=0, phi=0, psi=0, phi_t=1, psi_t=0.7),
                   t_span=(0, 1e9), cache=False).compile()
     runs = [lambda: sc.run(max_step=1e-6, save="final", max_steps=10**12),
             lambda: sc.run(method="dla", n_steps=10**10, max_steps=10**12, save="final"),
