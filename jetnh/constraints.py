@@ -285,9 +285,9 @@ class System:
         dep = set(self.dependent)
         self.independent = tuple(s for s in J.q if s not in dep)
         self._check_solvable()
-        if not isinstance(name, str):
+        if not isinstance(name, (str, type(None))):
             raise ConstraintError(f"name must be a str, got {type(name).__name__}")
-        self.name = name
+        self.name = name or ""
         self.defaults = self._defaults({} if defaults is None else defaults)
         if self._branch is not None:
             self.phi                                    # noqa: B018 -- check the branch now
@@ -352,6 +352,12 @@ class System:
                 raise JetSpaceError(
                     f"the parameter {p.name!r} has the name jetnh gives to {reserved[base]} "
                     f"(or its jets); rename the parameter")
+            if m and m.group(2) and p.name not in lookalike:
+                warnings.warn(
+                    f"the symbol {p.name!r} is named like a jet of {base!r}, which is not a "
+                    f"coordinate of {J!r}: jetnh treats it as a constant parameter. Add "
+                    f"{base!r} to the jet space, or rename the parameter",
+                    JetnhWarning, stacklevel=3)
             if p.name in lookalike:
                 q = lookalike[p.name]
                 warnings.warn(

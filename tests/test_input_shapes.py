@@ -171,6 +171,13 @@ def test_velocity_lookalike_names_warn(name):
     assert v in s.parameters
 
 
+def test_jets_of_unknown_bases_and_velocity_named_functions_warn():
+    with pytest.warns(JetnhWarning, match="'u_t' is named like a jet of 'u'"):
+        System(J, T + sp.Symbol("u_t") * x)
+    with pytest.warns(JetnhWarning, match=r"xdot\(t\) is an explicit function, not the velocity"):
+        System(J, T + sp.Function("xdot")(J.t) * x)
+
+
 def test_own_jet_symbols_and_ordinary_parameters_do_not_warn():
     with warnings.catch_warnings():
         warnings.simplefilter("error")

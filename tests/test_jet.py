@@ -444,6 +444,8 @@ def test_jet_of_unknown_base_raises():
     lambda J: None,
     lambda J: object(),
     lambda J: [J.q[0]],
+    lambda J: sp.IndexedBase("m")[1] * J.qd[0],          # not a Symbol: no parameter
+    lambda J: sp.MatrixSymbol("M", 2, 2)[0, 1] * J.q[0],
 ])
 def test_check_refuses(make):
     J = JetSpace("x y")
