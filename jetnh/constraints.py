@@ -261,13 +261,24 @@ class Classification:
 class System:
     """``System(J, L, constraints, dependent)``: a Lagrangian with constraints f^a = 0.
 
-    ``constraints`` are expressions f^a(t, q, qdot) meaning f^a = 0, of any nonlinearity.
-    ``dependent`` is the split: the coordinates whose velocities the constraints
-    determine (one per constraint); chosen automatically when omitted.  ``branch``
-    selects a root when the constraints are nonlinear in the dependent velocities and
-    have several solutions for them.  ``defaults`` maps parameters (Symbols or names)
-    to default numeric values, and ``name`` labels the system; neither changes the
-    symbolic results.
+    ``constraints`` are expressions f^a(t, q, qdot) meaning f^a = 0, of any nonlinearity:
+    a list (or a column Matrix, read as its entries, or one expression alone); an entry
+    ``Eq(lhs, rhs)`` is lhs - rhs.  ``dependent`` is the split: the coordinates whose
+    velocities the constraints determine (one per constraint; Symbols or names, in a
+    list or one alone, or names in one string "x y"); chosen automatically when omitted.
+    ``branch`` (an integer from 0) selects a root when the constraints are nonlinear in
+    the dependent velocities and have several solutions for them; it is checked at
+    construction.  ``defaults`` maps parameters (Symbols or names) to default real
+    numbers, and ``name`` labels the system; neither changes the symbolic results.
+
+    Coordinates may be written as sympy.physics.mechanics dynamicsymbols x(t),
+    x(t).diff(t) (converted to x, x_t).  Abs(u) and sign(u) of t, q, qdot are kept as
+    sqrt(u**2) and u/sqrt(u**2): the same functions, differentiable away from u = 0, where
+    the compiled integrators stop (a singularity indicator); other non-smooth functions
+    (Piecewise, Heaviside, Max, floor, re, ...) of t, q, qdot are refused.  A parameter
+    named like a velocity (xdot, x_dot, dx, ...) is a constant, with a JetnhWarning;
+    parameters named like jetnh's multipliers (lambda_x, nu_x, eta_x) are refused.
+    Strings are never parsed.  Every refusal is a JetnhError saying what to write instead.
     """
 
     def __init__(self, J: JetSpace, L, constraints=(), dependent=None, branch: int | None = None,
