@@ -9,8 +9,9 @@ values (here or on Dask).
 from .constraints import PRINCIPLES, System
 from .equations import Equations
 from .equivalence import compare
-from .errors import (ConstraintError, IntegrationError, JetnhError, JetSpaceError,
-                     LagrangianError, ModelFileError, PrincipleError)
+from .errors import (ArgumentError, ConstraintError, IntegrationError, JetnhError,
+                     JetnhWarning, JetSpaceError, LagrangianError, ModelFileError,
+                     PrincipleError)
 from .jet import JetSpace
 # bound here, not in __getattr__: a later `import jetnh.sweep` would rebind the name to the
 # module; jetnh/sweep.py is light (pandas, Dask and numba are imported when it runs)
@@ -21,7 +22,7 @@ __version__ = "0.1.0"
 __all__ = ["JetSpace", "System", "Equations", "PRINCIPLES", "compare", "Scene", "Trajectory",
            "Diagnostics", "Event", "Ensemble", "sweep", "JetnhError",
            "JetSpaceError", "ConstraintError", "LagrangianError", "PrincipleError",
-           "ModelFileError", "IntegrationError"]
+           "ModelFileError", "IntegrationError", "ArgumentError", "JetnhWarning"]
 
 
 def __getattr__(name):

@@ -28,6 +28,11 @@ class ModelFileError(JetnhError, ValueError):
     """A model file that cannot be read as data."""
 
 
+class ArgumentError(JetnhError, ValueError):
+    """A run argument (state, parameter, tolerance, step, budget) that is refused before
+    it reaches compiled code."""
+
+
 class IntegrationError(JetnhError, RuntimeError):
     """A numerical integration that cannot go on."""
 

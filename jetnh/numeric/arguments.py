@@ -16,7 +16,7 @@ types the compiled loops declare (contiguous float64 arrays, Python floats and i
   ``n_steps`` beyond it up front), the stored rows fit in ``MAX_OUTPUT_BYTES``, and
   ``timeout`` (seconds of wall-clock time) stops a run that takes too long.
 
-Every refusal is a ``JetnhError`` that names the argument, the value and the fix.
+Every refusal is an ``ArgumentError`` (a ``JetnhError`` and ``ValueError``) that names the argument, the value and the fix.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ import operator
 import numpy as np
 import sympy as sp
 
-from ..errors import JetnhError
+from ..errors import ArgumentError
 
 #: the smallest nonzero relative tolerance that float64 arithmetic can honour
 RTOL_MIN = 100 * np.finfo(float).eps
@@ -43,27 +43,27 @@ def name_of(key, what) -> str:
         return key.name
     if isinstance(key, str):
         return key
-    raise JetnhError(f"{what} must be keyed by Symbol or by name, not {type(key).__name__} "
+    raise ArgumentError(f"{what} must be keyed by Symbol or by name, not {type(key).__name__} "
                      f"({key!r})")
 
 
 def real(value, what) -> float:
     """A real number as a float (NaN and infinities pass: see ``finite``)."""
     if isinstance(value, (bool, np.bool_)) or isinstance(value, (str, bytes)):
-        raise JetnhError(f"{what} must be a number, got {value!r}")
+        raise ArgumentError(f"{what} must be a number, got {value!r}")
     if isinstance(value, (complex, np.complexfloating)) or (
             isinstance(value, sp.Basic) and value.is_real is False):
-        raise JetnhError(f"{what} must be a real number, got {value!r}")
+        raise ArgumentError(f"{what} must be a real number, got {value!r}")
     try:
         return float(value)
     except (TypeError, ValueError, OverflowError):
-        raise JetnhError(f"{what} must be a number, got {value!r}") from None
+        raise ArgumentError(f"{what} must be a number, got {value!r}") from None
 
 
 def finite(value, what) -> float:
     v = real(value, what)
     if not math.isfinite(v):
-        raise JetnhError(f"{what} is {v}; give a finite number")
+        raise ArgumentError(f"{what} is {v}; give a finite number")
     return v
 
 
@@ -71,7 +71,7 @@ def positive(value, what, allow_inf=False) -> float:
     """A number > 0 (``inf`` too when ``allow_inf``: "no limit")."""
     v = real(value, what)
     if math.isnan(v) or v <= 0.0 or (math.isinf(v) and not allow_inf):
-        raise JetnhError(f"{what} must be a positive {'number' if allow_inf else 'finite number'}"
+        raise ArgumentError(f"{what} must be a positive {'number' if allow_inf else 'finite number'}"
                          f", got {value!r}")
     return v
 
@@ -79,16 +79,16 @@ def positive(value, what, allow_inf=False) -> float:
 def count(value, what, limit=MAX_STEPS_LIMIT) -> int:
     """A positive integer (an integral float such as ``1e4`` is accepted)."""
     if isinstance(value, (bool, np.bool_)):
-        raise JetnhError(f"{what} must be a positive integer, got {value!r}")
+        raise ArgumentError(f"{what} must be a positive integer, got {value!r}")
     try:
         v = operator.index(value)
     except TypeError:
         f = real(value, what)
         if not (math.isfinite(f) and f.is_integer()):
-            raise JetnhError(f"{what} must be a positive integer, got {value!r}") from None
+            raise ArgumentError(f"{what} must be a positive integer, got {value!r}") from None
         v = int(f)
     if not 1 <= v <= limit:
-        raise JetnhError(f"{what} must be a positive integer of at most {limit}, got {value!r}")
+        raise ArgumentError(f"{what} must be a positive integer of at most {limit}, got {value!r}")
     return v
 
 
@@ -100,15 +100,15 @@ def real_array(value, what, ndim=1) -> np.ndarray:
         flat = [real(v, what) for v in a.ravel()]
         a = np.asarray(flat, dtype=float).reshape(a.shape)
     elif a.dtype.kind in "bc" or a.dtype.kind not in "iuf":
-        raise JetnhError(f"{what} must hold real numbers, got an array of {a.dtype}")
+        raise ArgumentError(f"{what} must hold real numbers, got an array of {a.dtype}")
     a = np.array(a, dtype=float, order="C")      # (ascontiguousarray makes 0-d 1-d)
     if a.ndim != ndim:
-        raise JetnhError(f"{what} must be {'a number' if ndim == 0 else f'{ndim}-d'}, "
+        raise ArgumentError(f"{what} must be {'a number' if ndim == 0 else f'{ndim}-d'}, "
                          f"got shape {a.shape}")
     if not np.all(np.isfinite(a)):
         bad = tuple(int(i) for i in np.argwhere(~np.isfinite(a))[0])
         where = "" if ndim == 0 else f" at index {bad if ndim > 1 else bad[0]}"
-        raise JetnhError(f"{what} has a non-finite value ({a[bad]}){where}; give finite "
+        raise ArgumentError(f"{what} has a non-finite value ({a[bad]}){where}; give finite "
                          "numbers")
     return a
 
@@ -117,21 +117,21 @@ def tolerances(rtol, atol, n) -> tuple[float, np.ndarray]:
     """``(rtol, atol as one value per state)`` for an error scale atol_i + rtol |y_i|."""
     r = real(rtol, "rtol")
     if not (math.isfinite(r) and (r == 0.0 or r >= RTOL_MIN)):
-        raise JetnhError(f"rtol must be 0 or a finite number >= {RTOL_MIN:.3g} (float64 cannot "
+        raise ArgumentError(f"rtol must be 0 or a finite number >= {RTOL_MIN:.3g} (float64 cannot "
                          f"honour a smaller relative error), got {rtol!r}")
     if type(atol) is float and atol > 0.0 and atol != math.inf:     # the common case, fast
         return r, np.full(n, atol)
     a = np.asarray(atol)
     if a.ndim > 1 or (a.ndim == 1 and a.shape[0] != n):
-        raise JetnhError(f"atol must be a number or one value per state ({n}), got shape "
+        raise ArgumentError(f"atol must be a number or one value per state ({n}), got shape "
                          f"{a.shape}")
     a = real_array(a, "atol", a.ndim)
     if np.any(a < 0):
-        raise JetnhError(f"atol must be >= 0, got {atol!r}")
+        raise ArgumentError(f"atol must be >= 0, got {atol!r}")
     a = np.ascontiguousarray(np.broadcast_to(a, (n,)), dtype=float)
     if r == 0.0 and np.any(a == 0.0):
         i = int(np.argmax(a == 0.0))
-        raise JetnhError(f"rtol = 0 and atol[{i}] = 0 leave state {i} without an error scale "
+        raise ArgumentError(f"rtol = 0 and atol[{i}] = 0 leave state {i} without an error scale "
                          "(no step would ever be accepted); give rtol > 0 or atol > 0")
     return r, a
 
@@ -147,30 +147,30 @@ def times(t_eval, t0, t1) -> np.ndarray:
     te = real_array(t_eval, "t_eval")
     lo, hi = min(t0, t1), max(t0, t1)
     if te.size and (te.min() < lo or te.max() > hi):
-        raise JetnhError(f"t_eval must lie within t_span = ({t0}, {t1}); it spans "
+        raise ArgumentError(f"t_eval must lie within t_span = ({t0}, {t1}); it spans "
                          f"[{te.min()}, {te.max()}]")
     if np.any(np.diff(te) * (1 if t1 >= t0 else -1) < 0):
-        raise JetnhError("t_eval must be sorted in the direction of integration")
+        raise ArgumentError("t_eval must be sorted in the direction of integration")
     return te
 
 
 def fixed_steps(n_steps, h, t0, t1, what, max_steps) -> int:
     """The number of steps of a fixed-step method from ``n_steps`` or ``h``."""
     if n_steps is not None and h is not None:
-        raise JetnhError(f"{what}: give n_steps= or h=, not both")
+        raise ArgumentError(f"{what}: give n_steps= or h=, not both")
     if n_steps is None:
         if h is None:
-            raise JetnhError(f"{what} is a fixed-step method: give n_steps= or h=")
+            raise ArgumentError(f"{what} is a fixed-step method: give n_steps= or h=")
         hh = positive(h, "h")
         steps = max(1.0, round(abs(t1 - t0) / hh))
         if steps > max_steps:
-            raise JetnhError(
+            raise ArgumentError(
                 f"h = {hh:g} over t_span = ({t0}, {t1}) needs {steps:.3g} steps, beyond the "
                 f"budget max_steps = {max_steps}; take a larger h or raise max_steps")
         return int(steps)
     steps = count(n_steps, "n_steps")
     if steps > max_steps:
-        raise JetnhError(f"n_steps = {steps} is beyond the budget max_steps = {max_steps}; "
+        raise ArgumentError(f"n_steps = {steps} is beyond the budget max_steps = {max_steps}; "
                          "raise max_steps to allow it")
     return steps
 
@@ -179,7 +179,7 @@ def output_rows(rows, width, save):
     """Refuse an output that cannot be allocated."""
     size = (rows + 1) * (width + 1) * 8
     if save == "steps" and size > MAX_OUTPUT_BYTES:
-        raise JetnhError(
+        raise ArgumentError(
             f"storing {rows + 1} rows of {width} values takes {size / 2**30:.3g} GiB (limit "
             f"{MAX_OUTPUT_BYTES / 2**30:.3g} GiB); pass save='final', or fewer steps")
 
@@ -204,12 +204,12 @@ def keyed_or_sequence(value, names, defaults, what, order_name) -> tuple[np.ndar
         return np.ascontiguousarray(out), given
     if isinstance(value, (str, bytes)) or np.ndim(value) == 0 and not isinstance(
             value, (list, tuple, np.ndarray)):
-        raise JetnhError(f"{what} must be a dict keyed by name or a sequence of "
+        raise ArgumentError(f"{what} must be a dict keyed by name or a sequence of "
                          f"{len(names)} numbers in the order {order_name}, got {value!r}")
     a = real_array(value, what)
     if a.shape[0] != len(names):
         listing = ", ".join(names) if len(names) <= 20 else f"{', '.join(names[:20])}, ..."
-        raise JetnhError(f"{what} has {a.shape[0]} values, but this scene has {len(names)} "
+        raise ArgumentError(f"{what} has {a.shape[0]} values, but this scene has {len(names)} "
                          f"({order_name}: {listing or 'none'}); pass exactly those, or a dict "
                          "keyed by name")
     return a, dict(zip(names, a.tolist()))
