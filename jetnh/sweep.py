@@ -281,7 +281,7 @@ class CompiledScene:
         self.scene = scene.replace()      # a copy without compiled events (they don't pickle)
         self.key = self.scene.key         # computed here: it travels with the scene
         self.layout = kern.layout
-        self.source = (kern.directory / "kernels.py").read_text(encoding="utf-8")
+        self.source = kern.source                # the text the cache verified and compiled
 
     def load(self):
         from .numeric import cache

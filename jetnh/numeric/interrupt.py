@@ -25,6 +25,7 @@ watched.
 
 from __future__ import annotations
 
+import atexit
 import itertools
 import os
 import select
@@ -57,6 +58,10 @@ class _Watchdog:
         for s in (self.signals, self.signal_w, self.control, self.control_w):
             s.setblocking(False)
         self.thread = None
+
+    def close(self):
+        for s in (self.signals, self.signal_w, self.control, self.control_w):
+            s.close()
 
     def register(self, halt, deadline, forward) -> int:
         with self.lock:
@@ -91,7 +96,12 @@ class _Watchdog:
                     self.thread = None
                     return
             wait = IDLE if not deadlines else max(0.0, min(deadlines) - time.monotonic())
-            ready, _, _ = select.select([self.signals, self.control], [], [], wait)
+            try:
+                ready, _, _ = select.select([self.signals, self.control], [], [], wait)
+            except (OSError, ValueError):     # closed at exit
+                with self.lock:
+                    self.thread = None
+                return
             if self.control in ready:
                 _drain(self.control)
             got = _drain(self.signals) if self.signals in ready else b""
@@ -133,12 +143,17 @@ def _watchdog() -> _Watchdog:
     return _WATCHDOG
 
 
-def _after_fork():
+def _forget():
+    """Close the watchdog's sockets (at exit; in a forked child, whose copy has no
+    thread)."""
     global _WATCHDOG
-    _WATCHDOG = None
+    if _WATCHDOG is not None:
+        _WATCHDOG.close()
+        _WATCHDOG = None
 
 
-os.register_at_fork(after_in_child=_after_fork)
+os.register_at_fork(after_in_child=_forget)
+atexit.register(_forget)
 
 
 def call(fn, halt: np.ndarray, timeout: float | None = None):
