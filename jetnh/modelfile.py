@@ -60,11 +60,15 @@ is refused too.
 from __future__ import annotations
 
 import ast
+import codecs
 import keyword
 import math
 import os
+import random
 import re
+import stat
 import tomllib
+import unicodedata
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -76,13 +80,22 @@ from .jet import JetSpace
 
 MAX_CHARS = 20_000
 MAX_NODES = 5_000
+MAX_FILE_NODES = 20_000
 MAX_DEPTH = 100
+MAX_CALL_DEPTH = 5
+MAX_CALL_COST = 2_000
+CALL_COST_BASE = 3
+HYPERBOLIC = frozenset({"sinh", "cosh", "tanh"})
+HYPERBOLIC_COST = 20
+MAX_HYPERBOLIC_ARG = 30
 MAX_EXPONENT = 64
 MAX_INT_DIGITS = 40
 MAX_NUMBER_DIGITS = 200
 MAX_FILE_BYTES = 1_000_000
 MAX_TERMS = 10_000
-MAX_COORDINATES = 500
+MAX_COORDINATES = 100
+MAX_CONSTRAINTS = 16
+MAX_JACOBIAN_COST = 20_000
 
 FUNCTIONS = {
     "sin": (sp.sin, 1), "cos": (sp.cos, 1), "tan": (sp.tan, 1), "cot": (sp.cot, 1),
@@ -138,6 +151,65 @@ _FLOAT = {
     "sqrt": math.sqrt, "Abs": abs, "abs": abs, "sign": _sign,
 }
 _BAD = (sp.zoo, sp.nan, sp.oo, -sp.oo)
+SAMPLE_POINTS = 24
+
+
+class _Unknown(Exception):
+    """An expression the double-precision evaluation does not know."""
+
+
+def _float_value(expr, point: dict, memo: dict):
+    """``expr`` in double precision at ``point`` (Symbol -> float); None when it (or a
+    part of it) is not a finite real number.  Iterative: the tree may be deep."""
+    stack = [(expr, False)]
+    while stack:
+        e, done = stack.pop()
+        if id(e) in memo:
+            continue
+        if not done:
+            if e.is_Symbol:
+                memo[id(e)] = point[e]
+            elif e.is_Number or e is sp.pi or e is sp.E:
+                memo[id(e)] = float(e)
+            else:
+                stack.append((e, True))
+                stack.extend((a, False) for a in e.args)
+            continue
+        vals = [memo[id(a)] for a in e.args]
+        if any(v is None for v in vals):
+            memo[id(e)] = None
+            continue
+        try:
+            if e.is_Add:
+                v = math.fsum(vals)
+            elif e.is_Mul:
+                v = math.prod(vals)
+            elif e.is_Pow:
+                v = math.pow(*vals)
+            elif type(e).__name__ in _FLOAT:
+                v = _FLOAT[type(e).__name__](*vals)
+            else:
+                raise _Unknown(type(e).__name__)
+        except (ValueError, ZeroDivisionError, OverflowError):
+            v = None
+        memo[id(e)] = v if v is not None and math.isfinite(v) else None
+    return memo[id(expr)]
+
+
+def _real_somewhere(exprs, symbols) -> bool:
+    """Whether the expressions are all finite and real at one of ``SAMPLE_POINTS`` random
+    points (every symbol in [0.31, 1.37], as jetnh samples to decide ranks)."""
+    rng = random.Random(0)
+    symbols = sorted(symbols, key=lambda s: s.name)
+    for _ in range(SAMPLE_POINTS):
+        point = {s: rng.uniform(0.31, 1.37) for s in symbols}
+        memo = {}
+        try:
+            if all(_float_value(e, point, memo) is not None for e in exprs):
+                return True
+        except _Unknown:
+            return True                      # cannot tell: leave it to jetnh
+    return False
 
 
 # ====================================================================== expressions
@@ -261,7 +333,7 @@ class _Parser:
         if op in (ast.Mult, ast.Div):
             first, parts = self._chain(node, (ast.Mult, ast.Div))
             e, v, n = self.build(first, depth + 1)
-            out, total, size = e, v, n
+            factors, total, size = [e], v, n
             for o, right in parts:
                 e, v, n = self.build(right, depth + 1)
                 size = self.size(node, size * n)
@@ -271,9 +343,10 @@ class _Parser:
                     total = self.number(node, total * v if o is ast.Mult else total / v)
                 else:
                     total = None
-                out = out * e if o is ast.Mult else out / e
-                out = self.check(node, out)
-            return out, total, size
+                factors.append(e if o is ast.Mult else self.check(node, sp.Pow(e, -1)))
+            # one product of all factors: multiplying one factor at a time re-flattens the
+            # partial product each time (quadratic: a chain of 1000 factors took seconds)
+            return self.check(node, sp.Mul(*factors)), total, size
         if op is ast.Pow:
             base, bv, bn = self.build(node.left, depth + 1)
             exp_, ev, en = self.build(node.right, depth + 1)
@@ -411,25 +484,142 @@ def _line_col(text: str, offset: int) -> tuple[int, int]:
     return line, offset - (before.rfind("\n") + 1)
 
 
-def parse_expression(text, names: dict, where: str = "expression", hint: dict | None = None):
+class _Budget:
+    """What the expressions of one model file may cost together (``MAX_FILE_NODES``
+    syntax nodes and ``MAX_CALL_COST`` units of function calls)."""
+
+    def __init__(self, nodes: int | None = None, calls: int | None = None):
+        self.nodes = MAX_FILE_NODES if nodes is None else nodes
+        self.calls = MAX_CALL_COST if calls is None else calls
+        self.used_nodes = 0
+        self.used_calls = 0
+        self.constraint_nodes = 0
+
+
+def _is_int_literal(node) -> bool:
+    while isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
+        node = node.operand
+    return (isinstance(node, ast.Constant) and isinstance(node.value, int)
+            and not isinstance(node.value, bool))
+
+
+def _call_like(node) -> bool:
+    """Function calls and powers with other than integer-literal exponents: the nodes whose
+    construction makes sympy query the assumptions of their argument (for nested
+    hyperbolic functions those queries expand real and imaginary parts, exponentially
+    in the nesting)."""
+    if isinstance(node, ast.Call):
+        return True
+    return (isinstance(node, ast.BinOp) and isinstance(node.op, ast.Pow)
+            and not _is_int_literal(node.right))
+
+
+def _measure(tree, where: str, fail=None):
+    """(syntax nodes, deepest nesting of calls, call cost) of a syntax tree, by one
+    iterative walk (no recursion: the tree may be deep); stops at ``MAX_NODES`` nodes.
+
+    A call-like node (``_call_like``) with ``k`` calls nested inside it (on its deepest
+    path) costs ``CALL_COST_BASE**k`` units.  The hyperbolic functions (``HYPERBOLIC``)
+    cost ``HYPERBOLIC_COST`` units each and their argument must hold no call-like node
+    and at most ``MAX_HYPERBOLIC_ARG`` syntax nodes (``fail(node, message)`` refuses):
+    sympy decides whether sinh, cosh, tanh of an expression are real by expanding the
+    real and imaginary parts of the expression, at a cost exponential in the nesting
+    and steep in the size (building the derivative of tanh(a sum of 100 terms) does not
+    return within minutes).
+    """
+    count = 0
+    level = {}          # id(node) -> deepest nesting of call-like nodes in its subtree
+    size = {}           # id(node) -> syntax nodes in its subtree
+    cost = 0
+    deepest = 0
+    stack = [(tree, False)]
+    while stack:
+        node, done = stack.pop()
+        if not done:
+            count += 1
+            if count > MAX_NODES:
+                raise ModelFileError(f"{where}: the expression has more than {MAX_NODES} "
+                                     "syntax nodes; split the model into shorter "
+                                     "expressions or raise jetnh.modelfile.MAX_NODES")
+            stack.append((node, True))
+            stack.extend((c, False) for c in ast.iter_child_nodes(node))
+            continue
+        below, n = 0, 1
+        for c in ast.iter_child_nodes(node):
+            below = max(below, level.pop(id(c), 0))
+            n += size.pop(id(c), 0)
+        if _call_like(node):
+            if (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
+                    and node.func.id in HYPERBOLIC):
+                f = node.func.id
+                if below and fail is not None:
+                    fail(node, f"{f} of an expression holding function calls (or non-integer "
+                         "powers) is refused (sympy's cost of it explodes); write it with "
+                         f"exp, e.g. {_EXP_FORM[f]}:")
+                if n - 2 > MAX_HYPERBOLIC_ARG and fail is not None:
+                    fail(node, f"the argument of {f} has {n - 2} syntax nodes, more than "
+                         f"{MAX_HYPERBOLIC_ARG} (sympy's cost of it explodes); write it with "
+                         f"exp, e.g. {_EXP_FORM[f]}:")
+                cost += HYPERBOLIC_COST
+            else:
+                cost += CALL_COST_BASE ** min(below, 40)
+            below += 1
+            deepest = max(deepest, below)
+        level[id(node)] = below
+        size[id(node)] = n
+    return count, deepest, cost
+
+
+_EXP_FORM = {"sinh": "sinh(u) = (exp(u) - exp(-u))/2", "cosh": "cosh(u) = (exp(u) + exp(-u))/2",
+             "tanh": "tanh(u) = (exp(2*u) - 1)/(exp(2*u) + 1)"}
+
+
+def _refuse_non_ascii(text: str, where: str, at=None):
+    """Refuse the first non-ASCII character of ``text``: Python's parser folds letters
+    such as U+FF58 (fullwidth x) or U+1D465 (mathematical italic x) into 'x' (NFKC),
+    so a name could silently mean another."""
+    for i, ch in enumerate(text):
+        if ord(ch) > 127:
+            name = unicodedata.name(ch, "")
+            folded = unicodedata.normalize("NFKC", ch)
+            also = (f"; Python would silently read it as {folded!r}"
+                    if folded != ch and folded.isascii() else "")
+            pos = ""
+            if at is not None:
+                line, col = at(i)
+                pos = f" at line {line}, column {col + 1}"
+            raise ModelFileError(
+                f"{where}: the character U+{ord(ch):04X}{f' ({name})' if name else ''} "
+                f"{ch!r}{pos} is not ASCII{also}; write names, numbers and operators in "
+                "ASCII (letters a-z, A-Z, digits and _)")
+
+
+def parse_expression(text, names: dict, where: str = "expression", hint: dict | None = None,
+                     budget: _Budget | None = None):
     """The sympy expression written in ``text``, with ``names`` (str -> Symbol) declared.
 
     Raises ``ModelFileError`` for anything outside the language of the module docstring.
     ``hint`` maps names to a specific refusal message (e.g. accelerations).  Line breaks
     count as spaces (multi-line TOML strings), positions refer to the text as given.
+    ``budget`` is shared by the expressions of one file (``MAX_FILE_NODES``,
+    ``MAX_CALL_COST``); without it, the expression has a budget of its own.
     """
     if not isinstance(text, str):
         raise ModelFileError(f"{where}: expected an expression in a string, got "
                              f"{type(text).__name__} ({_shorten(repr(text))})")
     if len(text) > MAX_CHARS:
         raise ModelFileError(f"{where}: the expression has {len(text)} characters; the limit "
-                             f"is {MAX_CHARS}")
+                             f"is {MAX_CHARS}; split the model into shorter expressions")
     if "\x00" in text:
-        raise ModelFileError(f"{where}: the expression contains a NUL character")
+        raise ModelFileError(f"{where}: the expression contains a NUL character; remove it")
+    # before ast.parse, which normalises identifiers (NFKC)
+    _refuse_non_ascii(text, where, lambda i: _line_col(text, i))
     if not text.strip():
-        raise ModelFileError(f"{where}: the expression is empty")
+        raise ModelFileError(f"{where}: the expression is empty; write an expression such as "
+                             "'x_t**2/2'")
+    budget = budget if budget is not None else _Budget()
     # one line, same offsets: a line break is white space in an expression
-    flat = text.replace("\r", " ").replace("\n", " ").replace("\t", " ")
+    flat = text.replace("\r", " ").replace("\n", " ").replace("\t", " ").replace("\f", " ")
     lead = len(flat) - len(flat.lstrip())
     body = flat.strip()
     try:
@@ -441,25 +631,49 @@ def parse_expression(text, names: dict, where: str = "expression", hint: dict | 
         at = f" at line {line}, column {col + 1}"
         raise ModelFileError(f"{where}: not a valid expression ({exc.msg}){at}: "
                              f"{_shorten(text)!r}") from None
-    except (RecursionError, MemoryError, ValueError) as exc:
+    except (RecursionError, MemoryError, ValueError, OverflowError) as exc:
         raise ModelFileError(f"{where}: the expression is too deeply nested or too large "
-                             f"to parse ({type(exc).__name__})") from None
-    count = 0
-    for _ in ast.walk(tree):
-        count += 1
-        if count > MAX_NODES:
-            raise ModelFileError(f"{where}: the expression has more than {MAX_NODES} syntax "
-                                 "nodes; split it or raise jetnh.modelfile.MAX_NODES")
+                             f"to parse ({type(exc).__name__}); simplify it") from None
     parser = _Parser(body, names, where, hint, lambda col: _line_col(text, lead + col))
+    count, deepest, cost = _measure(tree, where, parser.fail)
+    if deepest > MAX_CALL_DEPTH:
+        raise ModelFileError(
+            f"{where}: function calls (or non-integer powers) are nested {deepest} deep, "
+            f"e.g. tanh(tanh(...)); the limit is {MAX_CALL_DEPTH} (sympy's cost of building "
+            "and differentiating them grows exponentially with the nesting); introduce a "
+            "coordinate or rewrite the expression flatter")
+    budget.used_nodes += count
+    if budget.used_nodes > budget.nodes:
+        raise ModelFileError(
+            f"{where}: the expressions of this model have more than {budget.nodes} syntax "
+            "nodes together; simplify the model or raise jetnh.modelfile.MAX_FILE_NODES")
+    budget.used_calls += cost
+    if budget.used_calls > budget.calls:
+        raise ModelFileError(
+            f"{where}: the function calls of this model cost {budget.used_calls} units, "
+            f"more than the limit {budget.calls} (a call with k calls nested inside it costs "
+            f"{CALL_COST_BASE}**k units, since building nested functions costs sympy about "
+            "that much); use fewer or less deeply nested functions, or raise "
+            "jetnh.modelfile.MAX_CALL_COST")
     try:
         expr, _, _ = parser.build(tree)
+        if expr.has(*_BAD):
+            raise ModelFileError(f"{where}: the expression is infinite or undefined")
+        if expr.has(sp.I):
+            raise ModelFileError(f"{where}: the expression is complex (jetnh works with real "
+                                 "expressions); write it with real functions")
+    except JetnhError:
+        raise
     except RecursionError:
-        raise ModelFileError(f"{where}: the expression is too deeply nested") from None
-    if expr.has(*_BAD):
-        raise ModelFileError(f"{where}: the expression is infinite or undefined")
-    if expr.has(sp.I):
-        raise ModelFileError(f"{where}: the expression is complex (jetnh works with real "
-                             "expressions)")
+        raise ModelFileError(f"{where}: the expression is too deeply nested; simplify "
+                             "it") from None
+    except (OverflowError, MemoryError, ValueError, ArithmeticError) as exc:
+        raise ModelFileError(f"{where}: sympy cannot build the expression "
+                             f"({type(exc).__name__}: {_shorten(str(exc))}); simplify "
+                             "it") from None
+    except Exception as exc:
+        raise ModelFileError(f"{where}: sympy cannot build the expression (internal: "
+                             f"{type(exc).__name__}: {_shorten(str(exc))})") from exc
     return expr
 
 
@@ -498,13 +712,35 @@ def _expect(where, value, kind):
     if not ok:
         raise ModelFileError(f"{where} must be {'an' if kind[0] in 'aeiou' else 'a'} {kind}, "
                              f"got {_type_name(value)} ({_shorten(repr(value))})")
-    if kind == "number" and not math.isfinite(float(value)):
-        raise ModelFileError(f"{where} must be finite, got {value!r}")
+    if kind == "number":
+        try:
+            finite = math.isfinite(float(value))
+        except OverflowError:                  # an int beyond double precision
+            finite = False
+        if not finite:
+            raise ModelFileError(f"{where} must be finite (a number within double "
+                                 f"precision), got {_shorten(repr(value))}")
     return value
 
 
+_BIDI = set(range(0x202A, 0x202F)) | set(range(0x2066, 0x206A))
+
+
+def _check_text(where, text: str, allowed: str):
+    """Free text (name, description): any Unicode but control characters (terminal
+    escapes) and bidirectional overrides (text that displays other than it reads)."""
+    for i, ch in enumerate(text):
+        if ch not in allowed and (unicodedata.category(ch) == "Cc" or ord(ch) in _BIDI):
+            raise ModelFileError(f"{where}: the control character U+{ord(ch):04X} at "
+                                 f"position {i + 1} is not allowed in text; remove it")
+
+
 def _check_name(where, name, reserved):
-    if not _NAME.match(name) or keyword.iskeyword(name):
+    if not isinstance(name, str):
+        raise ModelFileError(f"{where}: names are strings, got {_type_name(name)} "
+                             f"({_shorten(repr(name))})")
+    _refuse_non_ascii(name, f"{where}: the name {_shorten(name)!r}")
+    if not _NAME.fullmatch(name) or keyword.iskeyword(name):
         raise ModelFileError(
             f"{where}: {name!r} is not a usable name (letters, digits and single underscores, "
             "starting with a letter; not a Python keyword)")
@@ -512,49 +748,167 @@ def _check_name(where, name, reserved):
         raise ModelFileError(f"{where}: the name {name!r} is reserved ({reserved[name]})")
 
 
+def _position(data, offset: int) -> tuple[int, int]:
+    """(line, column), both from 1, of a character (str) or byte (bytes) offset."""
+    before = data[:offset]
+    nl = "\n" if isinstance(before, str) else b"\n"
+    line = before.count(nl) + 1
+    start = before.rfind(nl) + 1
+    head = before[start:]
+    if isinstance(head, bytes):
+        head = head.decode("utf-8", "replace")
+    return line, len(head) + 1
+
+
 def loads(text: str, source: str = "<string>") -> Model:
     """A ``Model`` from the text of a model file."""
     if not isinstance(text, str):
-        raise ModelFileError(f"{source}: a model file is text, got {type(text).__name__}")
-    if len(text.encode("utf-8", "replace")) > MAX_FILE_BYTES:
-        raise ModelFileError(f"{source}: the file is larger than {MAX_FILE_BYTES} bytes")
+        raise ModelFileError(f"{source}: a model file is text (str), got "
+                             f"{type(text).__name__}; decode bytes as UTF-8 first")
+    if len(text) > MAX_FILE_BYTES or len(text.encode("utf-8", "replace")) > MAX_FILE_BYTES:
+        raise ModelFileError(f"{source}: the file is larger than {MAX_FILE_BYTES} bytes, the "
+                             "limit of a model file")
+    nul = text.find("\x00")
+    if nul >= 0:
+        line, col = _position(text, nul)
+        raise ModelFileError(f"{source}: the text contains a NUL character at line {line}, "
+                             f"column {col}; a model file is plain text (is this a binary "
+                             "file?)")
+    if text.startswith("\ufeff"):                    # a UTF-8 byte-order mark
+        text = text[1:]
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise ModelFileError(f"{source}: not valid TOML: {exc}") from None
+        raise ModelFileError(f"{source}: not valid TOML: {exc}; see the format in "
+                             "jetnh.modelfile's documentation") from None
     except RecursionError:
         raise ModelFileError(f"{source}: not valid TOML: nested too deeply") from None
+    except Exception as exc:                       # e.g. ValueError of a 5000-digit integer
+        raise ModelFileError(f"{source}: not valid TOML ({type(exc).__name__}: "
+                             f"{_shorten(str(exc))})") from None
     return from_dict(data, source)
 
 
-def load(path) -> Model:
-    """A ``Model`` from a model file on disk."""
-    p = Path(path)
+_FILE_KINDS = ((stat.S_ISDIR, "a directory"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
+               (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+               (stat.S_ISSOCK, "a socket"))
+
+
+def _not_regular(p, mode) -> ModelFileError:
+    kind = next((name for test, name in _FILE_KINDS if test(mode)), "not a regular file")
+    return ModelFileError(f"{p}: is {kind}, not a regular file; a model file must be a "
+                          "regular file (reading pipes, devices or directories may never "
+                          "end); give the path of a .toml file")
+
+
+def _read_bytes(p: Path) -> bytes:
+    """At most ``MAX_FILE_BYTES`` bytes of the regular file ``p`` (symlinks followed)."""
     try:
-        size = p.stat().st_size
-        if size > MAX_FILE_BYTES:
-            raise ModelFileError(f"{p}: the file has {size} bytes; the limit is {MAX_FILE_BYTES}")
-        raw = p.read_bytes()
+        # stat first, so that devices and FIFOs are not even opened; then check the
+        # opened descriptor itself (the path may have changed in between)
+        before = os.stat(p)
+        if not stat.S_ISREG(before.st_mode):
+            raise _not_regular(p, before.st_mode)
+        flags = (os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0)
+                 | getattr(os, "O_CLOEXEC", 0) | getattr(os, "O_BINARY", 0))
+        fd = os.open(p, flags)
     except ModelFileError:
         raise
     except FileNotFoundError:
-        raise ModelFileError(f"{p}: no such file") from None
-    except IsADirectoryError:
-        raise ModelFileError(f"{p}: is a directory, not a model file") from None
+        raise ModelFileError(f"{p}: no such file; check the path") from None
+    except PermissionError:
+        raise ModelFileError(f"{p}: permission denied; the file must be readable") from None
+    except (OSError, ValueError) as exc:          # ELOOP, ENAMETOOLONG, a NUL in the path
+        why = getattr(exc, "strerror", None) or str(exc)
+        raise ModelFileError(f"{p}: cannot open the file ({why})") from None
+    try:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode):
+            raise _not_regular(p, st.st_mode)
+        if st.st_size > MAX_FILE_BYTES:
+            raise ModelFileError(f"{p}: the file has {st.st_size} bytes; the limit is "
+                                 f"{MAX_FILE_BYTES}")
+        chunks, total = [], 0
+        while total <= MAX_FILE_BYTES:            # never more than the limit + 1 bytes
+            chunk = os.read(fd, min(1 << 16, MAX_FILE_BYTES + 1 - total))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            total += len(chunk)
+        if total > MAX_FILE_BYTES:
+            raise ModelFileError(f"{p}: the file has more than {MAX_FILE_BYTES} bytes (the "
+                                 "limit)")
+        return b"".join(chunks)
+    except ModelFileError:
+        raise
     except OSError as exc:
         raise ModelFileError(f"{p}: cannot read the file ({exc.strerror or exc})") from None
+    finally:
+        os.close(fd)
+
+
+def load(path) -> Model:
+    """A ``Model`` from a model file on disk (a regular file; symlinks are followed)."""
+    if not isinstance(path, (str, os.PathLike)):
+        raise ModelFileError(f"the path of a model file is a str or a Path, got "
+                             f"{type(path).__name__}")
+    try:
+        p = Path(path)
+    except (TypeError, ValueError) as exc:
+        raise ModelFileError(f"{path!r} is not a usable path ({exc})") from None
+    raw = _read_bytes(p)
+    nul = raw.find(b"\x00")
+    if nul >= 0:
+        line, col = _position(raw, nul)
+        raise ModelFileError(f"{p}: contains a NUL byte at line {line}, column {col} (byte "
+                             f"{nul}); a model file is UTF-8 text (is this a binary file?)")
+    if raw.startswith(codecs.BOM_UTF8):
+        raw = raw[len(codecs.BOM_UTF8):]
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
-        raise ModelFileError(f"{p}: not UTF-8 text (byte {exc.start})") from None
+        line, col = _position(raw, exc.start)
+        raise ModelFileError(f"{p}: not UTF-8 text: the byte 0x{raw[exc.start]:02X} at line "
+                             f"{line}, column {col} (byte {exc.start}) cannot be decoded; "
+                             "save the file as UTF-8") from None
     return loads(text, str(p))
+
+
+def _check_keys(data, S):
+    """Every key of the TOML data is a str of ASCII characters (names are ASCII)."""
+    stack = [("", data)]
+    while stack:
+        prefix, table = stack.pop()
+        for k, v in table.items():
+            if not isinstance(k, str):
+                raise ModelFileError(f"{S}: the key {_shorten(repr(k))} is a "
+                                     f"{type(k).__name__}; keys are names (strings)")
+            _refuse_non_ascii(k, f"{S}: the key {prefix}{_shorten(k)!r}")
+            if isinstance(v, dict):
+                stack.append((f"{prefix}{k}.", v))
 
 
 def from_dict(data: dict, source: str = "<string>") -> Model:
     """A ``Model`` from already-parsed TOML data (a dict)."""
+    try:
+        return _from_dict(data, source)
+    except JetnhError:
+        raise
+    except RecursionError:
+        raise ModelFileError(f"{source}: the model is nested too deeply to read") from None
+    except (MemoryError, OverflowError, ArithmeticError, ValueError) as exc:
+        raise ModelFileError(f"{source}: the model cannot be built ({type(exc).__name__}: "
+                             f"{_shorten(str(exc))}); simplify it") from None
+    except Exception as exc:
+        raise ModelFileError(f"{source}: the model cannot be read (internal: "
+                             f"{type(exc).__name__}: {_shorten(str(exc))})") from exc
+
+
+def _from_dict(data: dict, source: str) -> Model:
     S = source
     if not isinstance(data, dict):
         raise ModelFileError(f"{S}: a model file is a TOML table")
+    _check_keys(data, S)
     unknown = sorted(set(data) - TOP_KEYS)
     if unknown:
         raise ModelFileError(f"{S}: unknown key{'s' if len(unknown) > 1 else ''} "
@@ -567,6 +921,8 @@ def from_dict(data: dict, source: str = "<string>") -> Model:
     name = _expect(f"{S}: 'name'", data.get("name", Path(S).stem if S != "<string>" else ""),
                    "string")
     description = _expect(f"{S}: 'description'", data.get("description", ""), "string")
+    _check_text(f"{S}: 'name'", name, "")
+    _check_text(f"{S}: 'description'", description, "\n\t")
 
     # ---------------------------------------------------------------- names
     coords = _expect(f"{S}: 'coordinates'", data["coordinates"], "list of strings")
@@ -574,7 +930,8 @@ def from_dict(data: dict, source: str = "<string>") -> Model:
         raise ModelFileError(f"{S}: 'coordinates' is empty; give at least one name")
     if len(coords) > MAX_COORDINATES:
         raise ModelFileError(f"{S}: {len(coords)} coordinates; the limit is "
-                             f"{MAX_COORDINATES}")
+                             f"{MAX_COORDINATES} (reading builds the constraint Jacobian); "
+                             "raise jetnh.modelfile.MAX_COORDINATES to read larger models")
     reserved = {TIME: "time", **{f: "a function" for f in FUNCTIONS},
                 **{c: "a constant" for c in CONSTANTS}}
     for c in coords:
@@ -612,11 +969,25 @@ def from_dict(data: dict, source: str = "<string>") -> Model:
                 "the constraints are first order):")
 
     # ---------------------------------------------------------------- expressions
-    L = parse_expression(data["lagrangian"], names, f"{S}: lagrangian", hint)
+    budget = _Budget()
+    L = parse_expression(data["lagrangian"], names, f"{S}: lagrangian", hint, budget)
     cons_in = data.get("constraints", [])
     _expect(f"{S}: 'constraints'", cons_in, "list of strings")
-    cons = [parse_expression(c, names, f"{S}: constraints[{i}]", hint)
+    if len(cons_in) > MAX_CONSTRAINTS:
+        raise ModelFileError(f"{S}: {len(cons_in)} constraints; the limit is "
+                             f"{MAX_CONSTRAINTS} (reading checks their rank and chooses the "
+                             "split); raise jetnh.modelfile.MAX_CONSTRAINTS to read larger "
+                             "models")
+    before = budget.used_nodes
+    cons = [parse_expression(c, names, f"{S}: constraints[{i}]", hint, budget)
             for i, c in enumerate(cons_in)]
+    jac = len(coords) * (budget.used_nodes - before)
+    if jac > MAX_JACOBIAN_COST:
+        raise ModelFileError(
+            f"{S}: constraints: {len(coords)} coordinates times "
+            f"{budget.used_nodes - before} syntax nodes of constraints is {jac}, more than "
+            f"{MAX_JACOBIAN_COST} (reading differentiates every constraint by every "
+            "velocity); write shorter constraints or raise jetnh.modelfile.MAX_JACOBIAN_COST")
     used = set().union(L.free_symbols, *(c.free_symbols for c in cons))
     unused = sorted(k for k in params if sp.Symbol(k) not in used)
     if unused:
@@ -624,10 +995,20 @@ def from_dict(data: dict, source: str = "<string>") -> Model:
                              f"{'is' if len(unused) == 1 else 'are'} used neither in the "
                              "Lagrangian nor in the constraints")
 
+    # jetnh decides the rank of the constraints at random points; where they are never
+    # real it falls back to symbolic linear algebra, which can take unbounded time
+    if cons and not _real_somewhere(cons, set().union(*(c.free_symbols for c in cons))):
+        raise ModelFileError(
+            f"{S}: constraints: the constraints are not all finite and real at any of "
+            f"{SAMPLE_POINTS} random points (every coordinate, velocity, parameter and t in "
+            "[0.31, 1.37]); jetnh works with real expressions: check the domains of the "
+            "functions (e.g. acos(3 + x**2) is complex everywhere, log(x - 5) there)")
+
     dependent = data.get("dependent")
     if dependent is not None:
         _expect(f"{S}: 'dependent'", dependent, "list of strings")
         for d in dependent:
+            _refuse_non_ascii(d, f"{S}: dependent: {_shorten(d)!r}")
             if d not in coords:
                 raise ModelFileError(f"{S}: dependent: {d!r} is not one of the coordinates "
                                      f"{coords}")
@@ -650,10 +1031,19 @@ def from_dict(data: dict, source: str = "<string>") -> Model:
                                  f"{convention!r}")
 
     try:
-        system = System(J, L, cons, dependent, branch=branch,
+        # without the branch: System checks a branch by solving the constraints, which
+        # takes sympy unbounded time (a general quartic, two coupled quadratics); reading
+        # never solves, the branch is checked when the equations are first derived
+        system = System(J, L, cons, dependent,
                         defaults={sp.Symbol(k): v for k, v in params.items()}, name=name)
+        system._branch = branch
     except JetnhError as exc:
         raise ModelFileError(f"{S}: {exc}") from None
+    except RecursionError:
+        raise ModelFileError(f"{S}: the model is nested too deeply to build") from None
+    except Exception as exc:
+        raise ModelFileError(f"{S}: the system cannot be built ({type(exc).__name__}: "
+                             f"{_shorten(str(exc))})") from None
 
     # ---------------------------------------------------------------- data
     lams = [f"lambda_{d.name}" for d in system.dependent]
@@ -679,7 +1069,7 @@ def from_dict(data: dict, source: str = "<string>") -> Model:
     integrals = {}
     for k, v in ints_in.items():
         _check_name(f"{S}: [integrals]", k, {})
-        integrals[k] = parse_expression(v, int_names, f"{S}: [integrals] {k}", hint)
+        integrals[k] = parse_expression(v, int_names, f"{S}: [integrals] {k}", hint, budget)
 
     sim = _expect(f"{S}: [simulation]", data.get("simulation", {}), "table")
     for k, v in sim.items():
