@@ -41,7 +41,7 @@ import sympy as sp
 from sympy.core.function import AppliedUndef
 
 from .errors import ConstraintError, JetSpaceError
-from .jet import JetSpace
+from .jet import JetSpace, sympy_object
 
 __all__ = [
     "Form", "differential", "d", "wedge", "interior", "lie_derivative", "pullback",
@@ -191,7 +191,7 @@ class Form:
             if can is None:
                 continue
             sign, k = can
-            c = sp.sympify(c)
+            c = sympy_object(c)
             acc.setdefault(k, []).append(c if sign > 0 else -c)
         self._init(J, p, _collect(acc), order)
 
@@ -222,7 +222,7 @@ class Form:
     @classmethod
     def function(cls, J: JetSpace, f) -> "Form":
         """The 0-form f."""
-        f = sp.sympify(f)
+        f = sympy_object(f)
         return cls._raw(J, 0, {(): f} if f != 0 else {})
 
     # ------------------------------------------------------------------ accessors
@@ -272,7 +272,7 @@ class Form:
     def map(self, fn) -> "Form":
         """Apply ``fn`` to every coefficient (e.g. ``sympy.simplify`` off the hot path)."""
         return Form._raw(self._J, self._p,
-                         {k: v for k, c in self._terms.items() if (v := sp.sympify(fn(c))) != 0},
+                         {k: v for k, c in self._terms.items() if (v := sympy_object(fn(c))) != 0},
                          self._order)
 
     def expand(self) -> "Form":
@@ -346,7 +346,7 @@ class Form:
             if other._p == 0 or self._p == 0:
                 return wedge(self, other)
             raise TypeError("use ^ (or wedge) to multiply forms of positive degree")
-        f = sp.sympify(other)
+        f = sympy_object(other)
         if f == 0:
             return Form.zero(self._J, self._p)
         if f == 1:
@@ -358,7 +358,7 @@ class Form:
     __rmul__ = __mul__
 
     def __truediv__(self, other):
-        return self * (sp.S.One / sp.sympify(other))
+        return self * (sp.S.One / sympy_object(other))
 
     def __xor__(self, other):
         if not isinstance(other, Form):
@@ -374,7 +374,7 @@ class Form:
                 return False
             return (self - other).is_zero()
         try:
-            if sp.sympify(other) == 0:
+            if sympy_object(other) == 0:
                 return self.is_zero()
         except (sp.SympifyError, TypeError):
             return NotImplemented
@@ -515,7 +515,7 @@ def interior(X, form: Form) -> Form:
             x = comps.get(s)
             if x is None:
                 continue
-            x = sp.sympify(x)
+            x = sympy_object(x)
             if x == 0:
                 continue
             v = c * x
@@ -547,7 +547,7 @@ def pullback(form: Form, subs: Mapping, target: JetSpace | None = None) -> Form:
         if isinstance(k, str):
             k = sp.Symbol(k)
         order.need(k)
-        smap[k] = sp.sympify(v)
+        smap[k] = sympy_object(v)
     dcache: dict = {}
 
     def dphi(s):
@@ -626,11 +626,11 @@ def affine_coefficients(J: JetSpace, phi, dependent, independent=None):
             raise ConstraintError(f"{set(ind) & set(dep)} are both dependent and independent")
     if isinstance(phi, Mapping):
         try:
-            phis = [sp.sympify(phi[a] if a in phi else phi[a.name]) for a in dep]
+            phis = [sympy_object(phi[a] if a in phi else phi[a.name]) for a in dep]
         except KeyError as exc:
             raise ConstraintError(f"no phi given for the dependent coordinate {exc}") from None
     else:
-        phis = [sp.sympify(f) for f in phi]
+        phis = [sympy_object(f) for f in phi]
         if len(phis) != len(dep):
             raise ConstraintError(f"{len(phis)} expressions phi for {len(dep)} dependent coordinates")
     qd_ind = [J.jet(m, 1) for m in ind]
@@ -714,7 +714,7 @@ def zero_residual(expr, *, simplify: bool = False, numeric: bool = False, sample
     that are numerically zero but not algebraically zero after expansion -
     trigonometric identities, in practice.
     """
-    raw = sp.sympify(expr)
+    raw = sympy_object(expr)
     if raw == 0:
         return None
     rational = any(p.exp.is_negative for p in raw.atoms(sp.Pow))
@@ -764,7 +764,7 @@ def _polynomial_is_zero(expr) -> bool:
 
 def numeric_is_zero(expr, *, samples: int = 3, seed: int = 0, tol: float = 1e-9) -> bool:
     """True when ``expr`` vanishes at ``samples`` random points (relative tolerance ``tol``)."""
-    expr = sp.sympify(expr)
+    expr = sympy_object(expr)
     opaque = list(expr.atoms(sp.Derivative)) + list(expr.atoms(AppliedUndef))
     if opaque:
         expr = expr.xreplace({a: sp.Dummy(f"u{i}") for i, a in enumerate(opaque)})

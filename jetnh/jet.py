@@ -45,8 +45,9 @@ def _names(spec) -> tuple[str, ...]:
     return tuple(out)
 
 
-def _sym(expr) -> sp.Basic:
-    """A sympy object, never from a string (sympify would execute it)."""
+def sympy_object(expr) -> sp.Basic:
+    """A sympy object from a user's value, never from a string (sympify would execute
+    it); anything else that is not one is a ``JetSpaceError``."""
     if isinstance(expr, str):
         raise JetSpaceError(
             f"got the string {expr!r}; jetnh never parses strings here (that would execute "
@@ -209,7 +210,7 @@ class JetSpace:
         """The highest jet order of the coordinates (or given bases) in ``expr``; -1 if none."""
         bases = set(self._coords if of is None else of)
         best = -1
-        for s in _sym(expr).free_symbols:
+        for s in sympy_object(expr).free_symbols:
             info = self.split(s) if isinstance(s, sp.Symbol) else None
             if info and info[0] in bases:
                 best = max(best, info[1])
@@ -225,7 +226,7 @@ class JetSpace:
         ``from_dynamic``).  Undefined functions of other names, such as a forcing ``u(t)``
         or a generic ``f(t, x, x_t)``, are explicit functions and allowed.
         """
-        expr = _sym(expr)
+        expr = sympy_object(expr)
         if not isinstance(expr, sp.Basic):
             raise JetSpaceError(f"{expr!r} is not a sympy expression")
         for s in expr.free_symbols:
@@ -244,7 +245,7 @@ class JetSpace:
     # ------------------------------------------------------------------- calculus
     def D(self, expr) -> sp.Expr:
         """Total time derivative d/dt = d_t + sum_k q_(k+1) d/dq_(k), on coordinates and fields."""
-        expr = _sym(expr)
+        expr = sympy_object(expr)
         terms = []
         for s in expr.free_symbols:
             if s == self._t:
@@ -267,7 +268,7 @@ class JetSpace:
 
         For first-order ``expr`` this is the paper's [expr]_s = d/dq^s - d/dt d/dqdot^s.
         """
-        expr = _sym(expr)
+        expr = sympy_object(expr)
         bases = self._coords if wrt is None else tuple(wrt)
         for b in bases:
             if not (isinstance(b, sp.Symbol) and self.split(b) and self.split(b)[1] == 0):
@@ -289,7 +290,7 @@ class JetSpace:
         """Replace dynamicsymbols ``x(t)``, ``x(t).diff(t, k)`` by jet Symbols ``x``, ``x_t...``."""
         from sympy.physics.vector import dynamicsymbols
 
-        expr = _sym(expr)
+        expr = sympy_object(expr)
         t_dyn = dynamicsymbols._t
         repl = {}
         for der in expr.atoms(sp.Derivative):
@@ -316,7 +317,7 @@ class JetSpace:
         """Replace jet Symbols by sympy.physics.mechanics dynamicsymbols and derivatives."""
         from sympy.physics.vector import dynamicsymbols
 
-        expr = _sym(expr)
+        expr = sympy_object(expr)
         t_dyn = dynamicsymbols._t
         repl = {}
         for s in expr.free_symbols:
@@ -333,7 +334,7 @@ class JetSpace:
     def latex_names(self, expr) -> dict[sp.Symbol, str]:
         """``symbol_names`` for ``sympy.latex`` that print jets with dots (x_tt -> \\ddot{x})."""
         out = {}
-        for s in _sym(expr).free_symbols:
+        for s in sympy_object(expr).free_symbols:
             info = self.split(s) if isinstance(s, sp.Symbol) else None
             if info and info[1] > 0:
                 base = sp.latex(info[0])

@@ -14,6 +14,7 @@ import sympy as sp
 from hypothesis import given
 from hypothesis import strategies as st
 
+import jetnh as jn
 from jetnh import models
 from jetnh.errors import ConstraintError, JetnhError
 from jetnh.numeric import STOPPED, Scene
@@ -274,3 +275,19 @@ def test_ctrl_c_stops_compiled_runs(tmp_path):
         assert child.wait(timeout=30) == 0
     finally:
         child.kill()
+
+
+def test_strings_are_never_evaluated(tmp_path):
+    """A string where an expression belongs is refused, never handed to sympify (which
+    would run it): scene integrals, form coefficients."""
+    from jetnh.errors import JetSpaceError
+    from jetnh.forms import Form
+
+    canary = tmp_path / "ran"
+    code = f"__import__('pathlib').Path({str(canary)!r}).touch() or 1"
+    J = jn.JetSpace("x y")
+    with pytest.raises(JetSpaceError, match="never parses strings"):
+        Scene(models.get("rolling_disk"), "chetaev", initial=DISK0, integrals={"I": code})
+    with pytest.raises(JetSpaceError, match="never parses strings"):
+        Form.function(J, code)
+    assert not canary.exists()

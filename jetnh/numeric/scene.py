@@ -38,6 +38,7 @@ import sympy as sp
 
 from ..constraints import PRINCIPLES, System
 from ..errors import ConstraintError, IntegrationError, JetnhError, PrincipleError
+from ..jet import sympy_object
 from . import arguments, interrupt
 from . import cache as _cache
 from . import codegen
@@ -81,7 +82,10 @@ class Scene:
         self.form = form
         self.convention = convention
         self.cache = cache
-        self.integrals = {str(k): sp.sympify(v) for k, v in (integrals or {}).items()}
+        if not isinstance(integrals, (dict, type(None))):
+            raise JetnhError(f"integrals must be a dict name -> sympy expression, got "
+                             f"{type(integrals).__name__}")
+        self.integrals = {str(k): sympy_object(v) for k, v in (integrals or {}).items()}
         self.t_span = self._t_span(t_span)
         self.multipliers = codegen.multiplier_names(system, principle)
         self.params = self._params(params or {})
