@@ -291,3 +291,20 @@ def test_strings_are_never_evaluated(tmp_path):
     with pytest.raises(JetSpaceError, match="never parses strings"):
         Form.function(J, code)
     assert not canary.exists()
+
+
+@pytest.mark.parametrize("kw, match", [
+    (dict(params=[1.0]), "params must be a dict"),
+    (dict(initial=[0.0] * 6), "initial must be a dict"),
+    (dict(integrals=["x"]), "integrals must be a dict"),
+    (dict(consistency_tol=np.nan), "consistency_tol"),
+    (dict(t_span=(0.0, np.nan)), "finite"),
+    (dict(runtime_params="R", params={"R": 2.0}), None),
+])
+def test_scene_arguments(kw, match):
+    args = {"initial": DISK0, "t_span": (0.0, 1.0), **kw}
+    if match is None:
+        assert Scene(models.get("rolling_disk"), "chetaev", **args).runtime_params == ("R",)
+    else:
+        with pytest.raises(JetnhError, match=match):
+            Scene(models.get("rolling_disk"), "chetaev", **args)

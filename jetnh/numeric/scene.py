@@ -31,6 +31,7 @@ them by the values the constraints require.
 from __future__ import annotations
 
 import time
+from collections.abc import Mapping
 from functools import cached_property
 
 import numpy as np
@@ -82,14 +83,19 @@ class Scene:
         self.form = form
         self.convention = convention
         self.cache = cache
-        if not isinstance(integrals, (dict, type(None))):
-            raise JetnhError(f"integrals must be a dict name -> sympy expression, got "
-                             f"{type(integrals).__name__}")
+        for what, value in (("params", params), ("initial", initial),
+                            ("integrals", integrals)):
+            if not isinstance(value, (Mapping, type(None))):
+                raise JetnhError(f"{what} must be a dict keyed by Symbol or name, got a "
+                                 f"{type(value).__name__}")
         self.integrals = {str(k): sympy_object(v) for k, v in (integrals or {}).items()}
         self.t_span = self._t_span(t_span)
         self.multipliers = codegen.multiplier_names(system, principle)
         self.params = self._params(params or {})
-        self.runtime_params = tuple(arguments.name_of(k, "a runtime parameter") for k in runtime_params)
+        if isinstance(runtime_params, (str, sp.Symbol)):
+            runtime_params = (runtime_params,)
+        self.runtime_params = tuple(arguments.name_of(k, "a runtime parameter")
+                                    for k in runtime_params)
         for name in self.runtime_params:
             if name not in self.params:
                 raise JetnhError(f"runtime parameter {name!r} needs a value in params=")
@@ -98,7 +104,7 @@ class Scene:
         self.velocities = tuple(v.name for v in system.independent_velocities)
         self.dependent_velocities = tuple(v.name for v in system.dependent_velocities)
         self.state_names = self.coordinates + self.velocities + self.multipliers
-        self.consistency_tol = consistency_tol
+        self.consistency_tol = arguments.positive(consistency_tol, "consistency_tol")
         self.projected: dict[str, tuple[float, float]] = {}
         self.initial = self._initial(initial or {}, project)
         self.y0 = np.array([self.initial[n] for n in self.state_names], dtype=float)
