@@ -1,6 +1,6 @@
 """Model files: a constrained system as TOML data, read without executing anything.
 
-A model file (DESIGN.md section 4)::
+A model file::
 
     name = "vertical rolling disk"
     coordinates = ["x", "y", "phi", "psi"]
@@ -17,22 +17,48 @@ A model file (DESIGN.md section 4)::
     psi_t = 0.7
 
 Optional keys: ``description`` (text), ``branch`` (which solution of nonlinear
-constraints, an integer), ``convention`` ("paper" | "imposed"), ``[multipliers]``
+constraints, an integer >= 0), ``convention`` ("paper" | "imposed"), ``[multipliers]``
 (initial values of the multipliers lambda_<dependent> of the vakonomic, Hoelder and
 Suslov principles; they may also stand in ``[initial]``), ``[integrals]`` (name =
 expression: first integrals for ``jetnh simulate`` to monitor; they may use the
 multipliers) and ``[simulation]`` (``t_start``, ``t_end``, ``method``, ``rtol``,
 ``atol``, ``points``).  Any other key is an error.
 
+What ``load``, ``loads`` and ``from_dict`` guarantee
+----------------------------------------------------
+Every failure is a ``ModelFileError`` (a ``JetnhError``) whose message names the problem
+and the fix; no other exception escapes (an unexpected one from sympy or from building
+the ``System`` is wrapped, its message marked "internal").  Nothing is evaluated,
+executed, imported or sympified, and every documented input is read in a few seconds
+(the limits below were measured so that the largest allowed models read in about 2 s).
+
+The file (``load``): only a regular file is read (symbolic links are followed; the
+target is checked with ``stat`` before opening and with ``fstat`` on the opened
+descriptor, which is opened non-blocking, so FIFOs, devices, sockets and directories are
+refused without blocking); at most ``MAX_FILE_BYTES`` + 1 bytes are read whatever the
+size the file claims; it must be UTF-8 (a leading byte-order mark is skipped) without NUL
+bytes; the position of a bad byte is reported.
+
+The text (``loads``): valid TOML, at most ``MAX_FILE_BYTES`` bytes, no NUL character.
+Every key, name (coordinates, ``dependent``, parameters, initial values, multipliers,
+integrals) and expression is ASCII: Python's parser folds letters such as U+FF58
+(fullwidth x) or U+1D465 (mathematical italic x) into ``x`` (NFKC normalisation), so a
+name could silently mean another; the refusal names the character (checked on the raw
+text, before ``ast.parse``).  Names are letters, digits and single underscores, starting
+with a letter, not Python keywords.  ``name`` and ``description`` may hold any text but
+control characters (terminal escapes; ``description`` may hold line breaks and tabs)
+and bidirectional overrides.  Values have the documented types; numbers are finite.
+
 Expressions
 -----------
 An expression is parsed with ``ast.parse(text, mode="eval")`` and the syntax tree is
-turned into sympy objects node by node; nothing is evaluated, executed, imported or
-sympified.  Allowed:
+turned into sympy objects node by node.  Allowed:
 
 - numbers: integers (at most ``MAX_INT_DIGITS`` digits) and finite decimals;
 - ``+ - * / **``, unary ``+ -`` and parentheses;
-- calls of the elementary functions in ``FUNCTIONS`` with positional arguments;
+- calls of the elementary functions in ``FUNCTIONS`` with positional arguments
+  (``Abs``/``abs`` and ``sign`` are kept by ``System`` as sqrt(u**2) and u/sqrt(u**2),
+  whose kink u = 0 the integrators stop at);
 - the constant ``pi``; ``t`` (time);
 - declared names: the coordinates, their velocities ``<coordinate>_t``, the parameters
   (and, in ``[integrals]``, the multipliers ``lambda_<dependent>``).
@@ -41,20 +67,43 @@ Everything else is refused with a ``ModelFileError`` that quotes the offending t
 its line and column: attribute access, calls of anything but the listed functions,
 keyword or starred arguments, undeclared names, names with double underscores,
 strings, f-strings, lambdas, comprehensions, subscripts, comparisons, boolean and bit
-operators, ``//`` and ``%``, complex numbers, and accelerations (``x_tt``: the
-Lagrangian and the constraints are first order).
+operators, ``//`` and ``%``, complex numbers, non-ASCII characters, and accelerations
+(``x_tt``: the Lagrangian and the constraints are first order).  An expression that is
+infinite, undefined or complex (``1/0``, ``log(0)``, ``sqrt(-1)``) is refused too.
 
-Limits (pathological input is refused, never run): ``MAX_CHARS`` characters per
-expression, ``MAX_NODES`` syntax nodes, nesting depth ``MAX_DEPTH`` (chains of ``+``
-or ``*`` count once), integer exponents of absolute value at most ``MAX_EXPONENT``
-(after sympy combines equal bases), exact numbers of at most ``MAX_NUMBER_DIGITS``
-digits (so ``9**9**9`` is refused before it is computed), every constant
-subexpression finite in double precision (``exp(exp(exp(100)))`` is refused: sympy's
-own evaluation of it does not return), at most ``MAX_TERMS`` terms when expanded
-(estimated from the syntax: ``((x_t + 1)**64 + 1)**64`` is refused), at most
-``MAX_COORDINATES`` coordinates, and files of at most ``MAX_FILE_BYTES`` bytes.  An
-expression that is infinite, undefined or complex (``1/0``, ``log(0)``, ``sqrt(-1)``)
-is refused too.
+Limits
+------
+Pathological input is refused before it is built, from counts on the syntax tree:
+
+- per expression: ``MAX_CHARS`` characters, ``MAX_NODES`` syntax nodes, nesting depth
+  ``MAX_DEPTH`` (chains of ``+`` or ``*`` count once);
+- per file: ``MAX_FILE_NODES`` syntax nodes in all expressions together;
+- function calls (and powers whose exponent is not an integer literal) nested at most
+  ``MAX_CALL_DEPTH`` deep; each costs ``CALL_COST_BASE**k`` units with ``k`` such calls
+  nested inside it, at most ``MAX_CALL_COST`` units per file;
+- ``sinh``, ``cosh``, ``tanh``: sympy decides whether they are real by expanding the real
+  and imaginary parts of their argument, at a cost exponential in its nesting and steep
+  in its size (the derivative of tanh of a sum of 100 terms takes minutes), so their
+  argument holds no call (or non-integer power) and at most ``MAX_HYPERBOLIC_ARG``
+  syntax nodes, and each costs ``HYPERBOLIC_COST`` units; write larger ones with ``exp``;
+- integer exponents of absolute value at most ``MAX_EXPONENT`` (after sympy combines
+  equal bases), exact numbers of at most ``MAX_NUMBER_DIGITS`` digits (so ``9**9**9`` is
+  refused before it is computed), every constant subexpression finite in double
+  precision (``exp(exp(exp(100)))`` is refused: sympy's own evaluation of it does not
+  return), at most ``MAX_TERMS`` terms when expanded (estimated from the syntax:
+  ``((x_t + 1)**64 + 1)**64`` is refused);
+- the model: at most ``MAX_COORDINATES`` coordinates and ``MAX_CONSTRAINTS``
+  constraints, coordinates times constraints at most ``MAX_SPLIT_COST`` (the automatic
+  split tests ranks for each candidate coordinate), coordinates times the syntax nodes of
+  all constraints at most ``MAX_JACOBIAN_COST`` (every constraint is differentiated by
+  every velocity), and the constraints must all be finite and real at one of
+  ``SAMPLE_POINTS`` random points with every symbol in [0.31, 1.37] (where jetnh decides
+  ranks numerically; a model complex everywhere would send it to symbolic algebra).
+
+Reading builds the ``System`` (checking the constraints' rank and choosing the split) but
+never solves the constraints: ``branch`` is checked when the equations are first derived
+(sympy's solution of a general quartic or of two coupled quadratics takes unbounded
+time).  The limits are module attributes: a trusted caller may raise them.
 """
 
 from __future__ import annotations
@@ -96,6 +145,7 @@ MAX_TERMS = 10_000
 MAX_COORDINATES = 100
 MAX_CONSTRAINTS = 16
 MAX_JACOBIAN_COST = 20_000
+MAX_SPLIT_COST = 500
 
 FUNCTIONS = {
     "sin": (sp.sin, 1), "cos": (sp.cos, 1), "tan": (sp.tan, 1), "cot": (sp.cot, 1),
@@ -107,6 +157,9 @@ FUNCTIONS = {
     "Abs": (sp.Abs, 1), "abs": (sp.Abs, 1), "sign": (sp.sign, 1),
 }
 CONSTANTS = {"pi": sp.pi}
+_NONSMOOTH = {"floor", "ceiling", "ceil", "frac", "round", "Heaviside", "heaviside",
+              "DiracDelta", "Min", "Max", "min", "max", "Piecewise", "piecewise", "Mod",
+              "mod", "re", "im", "arg", "conjugate", "step", "clip"}
 TIME = "t"
 
 TOP_KEYS = {"name", "description", "coordinates", "dependent", "lagrangian", "constraints",
@@ -406,6 +459,11 @@ class _Parser:
         if "__" in n:
             self.fail(f, "names with double underscores are not allowed:")
         if n not in FUNCTIONS:
+            if n in _NONSMOOTH:
+                self.fail(node, f"{n}() is not allowed: it is not smooth, and the equations "
+                          "of motion need derivatives; write the model smoothly (e.g. "
+                          "tanh(u/eps) for a step, Abs(u) for |u|, whose kink the "
+                          "integrators stop at):")
             if n in self.names or n in CONSTANTS:
                 self.fail(node, f"{n} is not a function; only {_fnames()} can be called:")
             self.fail(node, f"{n}() is not an allowed function; the functions are "
@@ -514,14 +572,14 @@ def _call_like(node) -> bool:
             and not _is_int_literal(node.right))
 
 
-def _measure(tree, where: str, fail=None):
+def _measure(tree, where: str):
     """(syntax nodes, deepest nesting of calls, call cost) of a syntax tree, by one
     iterative walk (no recursion: the tree may be deep); stops at ``MAX_NODES`` nodes.
 
     A call-like node (``_call_like``) with ``k`` calls nested inside it (on its deepest
     path) costs ``CALL_COST_BASE**k`` units.  The hyperbolic functions (``HYPERBOLIC``)
     cost ``HYPERBOLIC_COST`` units each and their argument must hold no call-like node
-    and at most ``MAX_HYPERBOLIC_ARG`` syntax nodes (``fail(node, message)`` refuses):
+    and at most ``MAX_HYPERBOLIC_ARG`` syntax nodes (the first offence is returned):
     sympy decides whether sinh, cosh, tanh of an expression are real by expanding the
     real and imaginary parts of the expression, at a cost exponential in the nesting
     and steep in the size (building the derivative of tanh(a sum of 100 terms) does not
@@ -532,6 +590,7 @@ def _measure(tree, where: str, fail=None):
     size = {}           # id(node) -> syntax nodes in its subtree
     cost = 0
     deepest = 0
+    bad = None
     stack = [(tree, False)]
     while stack:
         node, done = stack.pop()
@@ -552,12 +611,12 @@ def _measure(tree, where: str, fail=None):
             if (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
                     and node.func.id in HYPERBOLIC):
                 f = node.func.id
-                if below and fail is not None:
-                    fail(node, f"{f} of an expression holding function calls (or non-integer "
+                if below and bad is None:
+                    bad = (node, f"{f} of an expression holding function calls (or non-integer "
                          "powers) is refused (sympy's cost of it explodes); write it with "
                          f"exp, e.g. {_EXP_FORM[f]}:")
-                if n - 2 > MAX_HYPERBOLIC_ARG and fail is not None:
-                    fail(node, f"the argument of {f} has {n - 2} syntax nodes, more than "
+                if n - 2 > MAX_HYPERBOLIC_ARG and bad is None:
+                    bad = (node, f"the argument of {f} has {n - 2} syntax nodes, more than "
                          f"{MAX_HYPERBOLIC_ARG} (sympy's cost of it explodes); write it with "
                          f"exp, e.g. {_EXP_FORM[f]}:")
                 cost += HYPERBOLIC_COST
@@ -567,7 +626,7 @@ def _measure(tree, where: str, fail=None):
             deepest = max(deepest, below)
         level[id(node)] = below
         size[id(node)] = n
-    return count, deepest, cost
+    return count, deepest, cost, bad
 
 
 _EXP_FORM = {"sinh": "sinh(u) = (exp(u) - exp(-u))/2", "cosh": "cosh(u) = (exp(u) + exp(-u))/2",
@@ -635,13 +694,15 @@ def parse_expression(text, names: dict, where: str = "expression", hint: dict | 
         raise ModelFileError(f"{where}: the expression is too deeply nested or too large "
                              f"to parse ({type(exc).__name__}); simplify it") from None
     parser = _Parser(body, names, where, hint, lambda col: _line_col(text, lead + col))
-    count, deepest, cost = _measure(tree, where, parser.fail)
+    count, deepest, cost, bad = _measure(tree, where)
     if deepest > MAX_CALL_DEPTH:
         raise ModelFileError(
             f"{where}: function calls (or non-integer powers) are nested {deepest} deep, "
             f"e.g. tanh(tanh(...)); the limit is {MAX_CALL_DEPTH} (sympy's cost of building "
             "and differentiating them grows exponentially with the nesting); introduce a "
             "coordinate or rewrite the expression flatter")
+    if bad is not None:
+        parser.fail(*bad)
     budget.used_nodes += count
     if budget.used_nodes > budget.nodes:
         raise ModelFileError(
@@ -978,6 +1039,12 @@ def _from_dict(data: dict, source: str) -> Model:
                              f"{MAX_CONSTRAINTS} (reading checks their rank and chooses the "
                              "split); raise jetnh.modelfile.MAX_CONSTRAINTS to read larger "
                              "models")
+    if len(coords) * len(cons_in) > MAX_SPLIT_COST:
+        raise ModelFileError(f"{S}: {len(coords)} coordinates times {len(cons_in)} "
+                             f"constraints is {len(coords) * len(cons_in)}, more than "
+                             f"{MAX_SPLIT_COST} (reading tests the rank of the constraints "
+                             "for each candidate split); give a smaller model or raise "
+                             "jetnh.modelfile.MAX_SPLIT_COST")
     before = budget.used_nodes
     cons = [parse_expression(c, names, f"{S}: constraints[{i}]", hint, budget)
             for i, c in enumerate(cons_in)]
@@ -1221,4 +1288,6 @@ def dump(system: System, path, initial=None, **kw) -> Path:
 __all__ = ["Model", "load", "loads", "from_dict", "dump", "dumps", "parse_expression",
            "expression_text", "FUNCTIONS", "MAX_CHARS", "MAX_NODES", "MAX_DEPTH",
            "MAX_EXPONENT", "MAX_INT_DIGITS", "MAX_NUMBER_DIGITS", "MAX_TERMS",
-           "MAX_COORDINATES", "MAX_FILE_BYTES"]
+           "MAX_COORDINATES", "MAX_FILE_BYTES", "MAX_FILE_NODES", "MAX_CALL_DEPTH",
+           "MAX_CALL_COST", "MAX_HYPERBOLIC_ARG", "MAX_CONSTRAINTS", "MAX_SPLIT_COST",
+           "MAX_JACOBIAN_COST"]

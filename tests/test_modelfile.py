@@ -471,3 +471,289 @@ def test_multipliers_integrals_and_simulation():
     assert m.simulation == {"t_end": 3.0, "method": "dopri5"}
     with pytest.raises(ModelFileError, match="given in \\[initial\\] and in \\[multipliers\\]"):
         mf.loads(_file(**{"[multipliers]": "lambda_z = 0.5", "[initial]": "lambda_z = 0.1"}))
+
+
+# ---------------------------------------------------------------------- the trust boundary
+# One test per class of hostile input: the file itself, the cost of building expressions,
+# identifiers that change meaning, and functions that cannot go through the derivation.
+import ast  # noqa: E402
+import os  # noqa: E402
+import signal  # noqa: E402
+import subprocess  # noqa: E402
+import sys  # noqa: E402
+from contextlib import contextmanager  # noqa: E402
+
+SMALL = 'coordinates = ["x", "y"]\nlagrangian = "(x_t**2 + y_t**2)/2"\n' \
+        'constraints = ["y_t - x*x_t"]\n'
+
+
+@contextmanager
+def deadline(seconds, what):
+    """Fail (instead of hanging) when the block takes longer than ``seconds``."""
+    def boom(*_):
+        raise TimeoutError(f"{what} did not return within {seconds} s")
+    old = signal.signal(signal.SIGALRM, boom)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    t0 = time.monotonic()
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
+    assert time.monotonic() - t0 < seconds, what
+
+
+def test_only_regular_files_are_read(tmp_path):
+    """Class 1: file type and size. A FIFO blocked forever and a symlink to /dev/zero
+    read gigabytes (stat says size 0); now both are refused at once."""
+    fifo = tmp_path / "model.toml"
+    os.mkfifo(fifo)
+    with deadline(5, "load(FIFO)"), pytest.raises(ModelFileError) as info:
+        mf.load(fifo)
+    assert "FIFO" in str(info.value) and "regular file" in str(info.value)
+    zero = tmp_path / "zero.toml"
+    zero.symlink_to("/dev/zero")
+    with deadline(5, "load(-> /dev/zero)"), pytest.raises(ModelFileError,
+                                                          match="character device, not a "
+                                                                "regular file"):
+        mf.load(zero)
+    with pytest.raises(ModelFileError, match="is a directory, not a regular file"):
+        mf.load(tmp_path)
+    with pytest.raises(ModelFileError, match="no such file; check the path"):
+        mf.load(tmp_path / "missing.toml")
+    dangling = tmp_path / "dangling.toml"
+    dangling.symlink_to(tmp_path / "nowhere")
+    with pytest.raises(ModelFileError, match="no such file"):
+        mf.load(dangling)
+    link = tmp_path / "link.toml"                   # a symlink to a regular file is fine
+    (tmp_path / "real.toml").write_text(SMALL)
+    link.symlink_to(tmp_path / "real.toml")
+    assert mf.load(link).system.J.n == 2
+    bad = tmp_path / "bad.toml"
+    bad.write_bytes(b'name = "ok"\nlagrangian = "\xff"\n')
+    with pytest.raises(ModelFileError, match=r"byte 0xFF at line 2, column 15 .* save the file "
+                                             "as UTF-8"):
+        mf.load(bad)
+    nul = tmp_path / "nul.toml"
+    nul.write_bytes(SMALL.encode() + b"# \x00\n")
+    with pytest.raises(ModelFileError, match=r"NUL byte at line 4, column 3"):
+        mf.load(nul)
+    with pytest.raises(ModelFileError, match="NUL character at line 1"):
+        mf.loads("x = 1\x00")
+    with pytest.raises(ModelFileError, match="a str or a Path"):
+        mf.load(3)
+    with pytest.raises(ModelFileError, match="cannot open"):
+        mf.load("bad\x00path.toml")
+    bom = tmp_path / "bom.toml"
+    bom.write_bytes(b"\xef\xbb\xbf" + SMALL.encode())
+    assert mf.load(bom).system.J.n == 2
+
+
+def test_read_is_bounded_whatever_the_size_claims(tmp_path, monkeypatch):
+    """Class 1: at most MAX_FILE_BYTES + 1 bytes are read, even when stat lies (files
+    of /proc report size 0)."""
+    f = tmp_path / "m.toml"
+    f.write_text(SMALL + "# " + "x" * 5000 + "\n")
+    monkeypatch.setattr(mf, "MAX_FILE_BYTES", 4096)
+    real_fstat = os.fstat
+
+    class Lying:
+        def __init__(self, st):
+            self.st_mode, self.st_size = st.st_mode, 0
+    monkeypatch.setattr(mf.os, "fstat", lambda fd: Lying(real_fstat(fd)))
+    reads = []
+    real_read = os.read
+    monkeypatch.setattr(mf.os, "read", lambda fd, n: reads.append(n) or real_read(fd, n))
+    with pytest.raises(ModelFileError, match="more than 4096 bytes"):
+        mf.load(f)
+    assert sum(reads) <= 4097
+
+
+def test_expression_cost_is_bounded():
+    """Class 2: twelve nested tanh took minutes inside the parser (sympy's real-part test
+    of tanh expands real and imaginary parts); the derivative of tanh of a 100-term sum
+    does not return; a product of 1000 factors took seconds (built one factor at a time)."""
+    names = {"x": x, "x_t": x_t, "y": y, "t": t, "a": a}
+    cases = [
+        ("tanh(" * 12 + "x" + ")" * 12, "nested 12 deep"),
+        ("sin(" * 6 + "x" + ")" * 6, "nested 6 deep"),
+        ("tanh(sin(x))", "tanh of an expression holding function calls"),
+        ("cosh(x**0.5)", "cosh of an expression holding function calls"),
+        ("tanh(" + " + ".join(["a*x_t"] * 20) + ")", "the argument of tanh has"),
+        (" + ".join(f"sin(cos(atan({k}*x)))" for k in range(1, 200)), "MAX_CALL_COST"),
+        ("exp(exp(exp(exp(10))))", "overflows"),
+        ("10**10**10", "exponents"),
+        ("10.0**10.0**10.0", "overflows"),
+    ]
+    for text, words in cases:
+        with deadline(3, text[:40]), pytest.raises(ModelFileError) as info:
+            mf.parse_expression(text, names)
+        assert words in str(info.value), str(info.value)
+    ps = sp.symbols("p0:1000")
+    with deadline(3, "a product of 1000 factors"):
+        big = mf.parse_expression("*".join(p.name for p in ps) + "/x",
+                                  {**names, **{p.name: p for p in ps}})
+    assert big == sp.Mul(*ps) / x
+    with deadline(3, "five nested calls"):
+        mf.parse_expression("sin(cos(atan(exp(sqrt(1 + x**2)))))", names)
+
+
+def test_expression_build_errors_become_model_file_errors(monkeypatch):
+    """Class 2: whatever sympy raises while building (OverflowError, RecursionError,
+    MemoryError, ValueError, ...) is a ModelFileError."""
+    for exc in (OverflowError("big"), RecursionError(), MemoryError(), ValueError("v"),
+                KeyError("internal")):
+        def boom(*a, exc=exc):
+            raise exc
+        monkeypatch.setattr(mf.sp, "Mul", boom)
+        with pytest.raises(ModelFileError, match="sympy cannot build the expression|too "
+                                                 "deeply nested"):
+            mf.parse_expression("x*y", NAMES)
+        monkeypatch.undo()
+
+
+def _model(n, cons, L=None, extra=""):
+    coords = ", ".join(f'"q{i}"' for i in range(n))
+    L = L or " + ".join(f"q{i}_t**2" for i in range(n))
+    c = ", ".join(f'"{f}"' for f in cons)
+    return f'coordinates = [{coords}]\nlagrangian = "{L}"\nconstraints = [{c}]\n{extra}'
+
+
+def test_model_limits_are_honest():
+    """Class 2: what the limits allow reads in seconds (100 coordinates with 16
+    constraints took 0.8 s before the rank test became exact; 30 with 29 took 22 s; the
+    constraints complex everywhere sent the rank test to symbolic algebra: 4 of them took
+    13 s); beyond the limits, a refusal at once."""
+    n, k = mf.MAX_SPLIT_COST // mf.MAX_CONSTRAINTS, mf.MAX_CONSTRAINTS
+    per = mf.MAX_JACOBIAN_COST // n // k
+    cons = []
+    for i in range(k):
+        c, j = f"q{i}_t", 0
+        while True:
+            more = c + f" - sin(q{(i + j) % n})*q{(i + j + 1) % n}_t"
+            if sum(1 for _ in ast.walk(ast.parse(more, mode="eval"))) > per:
+                break
+            c, j = more, j + 1
+        cons.append(c)
+    t0 = time.monotonic()
+    with deadline(20, "the largest allowed split"):
+        m = mf.loads(_model(n, cons))
+    assert len(m.system.dependent) == k
+    print(f"largest split: {time.monotonic() - t0:.2f} s")
+    refusals = [
+        (_model(mf.MAX_COORDINATES + 1, []), "the limit is"),
+        (_model(mf.MAX_CONSTRAINTS + 2, [f"q{i}_t - q0_t" for i in range(1, mf.MAX_CONSTRAINTS + 2)]),
+         "constraints; the limit"),
+        (_model(60, [f"q{i}_t - q0_t" for i in range(1, 10)]), "MAX_SPLIT_COST"),
+        (_model(30, [" + ".join(f"q{i}_t*q{j}" for i in range(30) for j in range(4))]),
+         "MAX_JACOBIAN_COST"),
+        (_model(6, [f"q{i}_t - acos(3 + q{i + 1}**2)*q0_t" for i in range(1, 5)]),
+         "not all finite and real"),
+    ]
+    for text, words in refusals:
+        with deadline(3, words), pytest.raises(ModelFileError) as info:
+            mf.loads(text)
+        assert words in str(info.value), str(info.value)
+
+
+def test_reading_never_solves_the_constraints():
+    """Class 2: with a branch, System solved the constraints at construction; a general
+    quartic (or two coupled quadratics) did not return within minutes."""
+    quartic = _model(3, ["q1_t**4 + q0*q1_t**3 + q0_t*q1_t**2 + q2*q1_t + 1"],
+                     extra='dependent = ["q1"]\nbranch = 0\n')
+    with deadline(5, "reading a quartic with a branch"):
+        m = mf.loads(quartic)
+    assert m.system._branch == 0
+
+
+def test_file_node_and_call_budgets_are_shared():
+    """Class 2: the expressions of a file share one budget (a file of many expressions
+    each under the per-expression limits cannot multiply the cost)."""
+    towers = " + ".join(f"sin(cos(atan(exp(q0*{k}))))" for k in range(1, 60))
+    extra = "[integrals]\n" + "".join(f'I{i} = "{towers}"\n' for i in range(3))
+    with deadline(5, "shared budget"), pytest.raises(ModelFileError, match="MAX_CALL_COST"):
+        mf.loads(_model(2, [], extra=extra))
+    polys = " + ".join(f"q0_t*q1*{k}" for k in range(1, 400))
+    extra = "[integrals]\n" + "".join(f'I{i} = "{polys}"\n' for i in range(5))
+    with deadline(5, "shared nodes"), pytest.raises(ModelFileError, match="MAX_FILE_NODES"):
+        mf.loads(_model(2, [], extra=extra))
+
+
+@pytest.mark.parametrize("text, where, char", [
+    ('lagrangian = "\uff58_t**2/2"', "lagrangian", "U+FF58"),            # fullwidth x
+    ('lagrangian = "x_t**2/2 + \U0001d465"', "lagrangian", "U+1D465"),   # math italic x
+    ('lagrangian = "x_t**2/2 + x\u2002"', "lagrangian", "U+2002"),        # en space
+    ('coordinates = ["x", "\uff59"]', "coordinates", "U+FF59"),
+    ('dependent = ["\uff59"]', "dependent", "U+FF59"),
+    ('[parameters]\n"\uff4b" = 1.0', "parameters", "U+FF4B"),
+    ('[initial]\n"\uff58" = 1.0', "initial", "U+FF58"),
+    ('[integrals]\n"\uff25" = "x_t"', "integrals", "U+FF25"),
+    ('"n\u0430me" = "cyrillic a"', "n\u0430me", "U+0430"),
+])
+def test_non_ascii_identifiers_are_refused(text, where, char):
+    """Class 3: Python's parser folds U+FF58 into 'x' (NFKC), so 'ｘ_t' silently meant x_t;
+    every name and expression must be ASCII, and the refusal names the character."""
+    base = {"coordinates": 'coordinates = ["x", "y"]', "lagrangian":
+            'lagrangian = "(x_t**2 + y_t**2)/2"', "constraints": 'constraints = ["y_t - x*x_t"]'}
+    key = text.split(" =")[0] if not text.startswith("[") else None
+    lines = [v for k, v in base.items() if k != key] + [text]
+    tables = [ln for ln in lines if ln.startswith("[")]
+    src = "\n".join([ln for ln in lines if not ln.startswith("[")] + tables) + "\n"
+    with pytest.raises(ModelFileError) as info:
+        mf.loads(src, "m.toml")
+    msg = str(info.value)
+    assert char in msg and "ASCII" in msg and "m.toml" in msg, msg
+    if char in ("U+FF58", "U+1D465"):
+        assert "read it as 'x'" in msg, msg
+
+
+def test_names_match_exactly_and_text_has_no_controls():
+    """Class 3: a name with a trailing line break matched the name pattern ($ matches
+    before a final newline); control characters in the name reached the terminal."""
+    with pytest.raises(ModelFileError, match="not a usable name"):
+        mf.loads('coordinates = ["x\\n", "y"]\nlagrangian = "y_t**2"\n')
+    with pytest.raises(ModelFileError, match="control character U\\+001B"):
+        mf.loads(SMALL + 'name = "\\u001b[2Jowned"\n')
+    with pytest.raises(ModelFileError, match="control character U\\+202E"):
+        mf.loads(SMALL + 'description = "abc\\u202Efed"\n')
+    assert mf.loads(SMALL + 'description = "two\\nlines"\n').description == "two\nlines"
+
+
+@pytest.mark.parametrize("fname", sorted(mf.FUNCTIONS))
+def test_every_function_goes_through_the_derivation(fname):
+    """Class 4: every whitelisted function either derives or is refused at load time.
+    (Abs, abs and sign are derived: System keeps them as sqrt(u**2), u/sqrt(u**2).)"""
+    arg = {"acosh": "2 + sin(x)", "log": "2 + sin(x)", "sqrt": "2 + sin(x)",
+           "cot": "2 + sin(x)", "csc": "2 + sin(x)", "atan2": "x, 2 + cos(x)",
+           "asin": "0.5*sin(x)", "acos": "0.5*sin(x)", "atanh": "0.5*sin(x)",
+           "Abs": "x - 3", "abs": "x - 3", "sign": "x - 5"}.get(fname, "x")
+    F = f"{fname}({arg})"
+    m = mf.loads(f'coordinates = ["x", "y"]\nlagrangian = "(x_t**2 + y_t**2)/2 - {F}"\n'
+                 f'constraints = ["y_t - (1 + {F}/10)*x_t"]\n')
+    acc = m.system.equations("chetaev").accelerations()
+    assert acc
+
+
+@pytest.mark.parametrize("fname", ["floor", "ceiling", "Heaviside", "Min", "Max",
+                                   "Piecewise", "Mod", "re", "im"])
+def test_non_smooth_functions_are_refused_with_a_reason(fname):
+    """Class 4: functions that cannot be differentiated are refused with the reason."""
+    with pytest.raises(ModelFileError, match="not smooth.*need derivatives"):
+        parse(f"{fname}(x) + x_t")
+
+
+def test_cli_derives_and_simulates_every_function(tmp_path):
+    """Class 4, end to end: one model using every whitelisted function, through
+    `jetnh derive` and `jetnh simulate`."""
+    terms = " + ".join(
+        f"{f}({ {'acosh': '2 + sin(x)', 'log': '2 + sin(x)', 'sqrt': '2 + sin(x)', 'cot': '2 + sin(x)', 'csc': '2 + sin(x)', 'atan2': 'x, 2 + cos(x)', 'asin': '0.5*sin(x)', 'acos': '0.5*sin(x)', 'atanh': '0.5*sin(x)', 'tan': '0.3*sin(x)', 'sec': '0.3*sin(x)', 'Abs': 'x - 3', 'abs': 'x + 3', 'sign': 'x - 5', 'exp': '0.1*x'}.get(f, 'x') })"
+        for f in sorted(mf.FUNCTIONS))
+    path = tmp_path / "all.toml"
+    path.write_text(f'coordinates = ["x", "y"]\nlagrangian = "(x_t**2 + y_t**2)/2 - k*({terms})"\n'
+                    'constraints = ["y_t - (1 + 0.1*sin(x) + 0.01*tanh(x) + 0.01*Abs(x - 3))*x_t"]\n'
+                    "[parameters]\nk = 0.1\n[initial]\nx_t = 1.0\n")
+    jetnh = [sys.executable, "-m", "jetnh"]
+    for args in (["derive", str(path), "--principle", "chetaev"],
+                 ["simulate", str(path), "--t-end", "1"]):
+        out = subprocess.run(jetnh + args, capture_output=True, text=True, timeout=600)
+        assert out.returncode == 0, out.stderr
