@@ -216,6 +216,8 @@ def test_run_arguments_error_or_canonical_result(disk, data):
                                         ("rk4", dict(n_steps=10**8, save="final")),
                                         ("dla", dict(n_steps=10**8, save="final"))])
 def test_timeout_stops_a_long_run(disk, method, kw):
+    disk.run(method=method, t_span=(0.0, 0.01), **{**kw, "n_steps": 10} if "n_steps" in kw
+             else kw)                                         # compile first
     tic = time.perf_counter()
     tr = disk.run(method=method, timeout=0.3, max_steps=10**9, **kw)
     wall = time.perf_counter() - tic
@@ -225,6 +227,8 @@ def test_timeout_stops_a_long_run(disk, method, kw):
 
 
 def test_timeout_stops_an_ensemble(disk):
+    disk.replace(t_span=(0.0, 0.01)).ensemble(initial={"phi_t": [0.5, 1.0]},
+                                              parallel="serial")        # compile first
     ens = disk.ensemble(initial={"phi_t": np.linspace(0.5, 1.0, 4)}, max_step=1e-8,
                         max_steps=10**9, timeout=0.3, parallel="serial")
     assert set(ens.status.tolist()) == {STOPPED}

@@ -98,13 +98,13 @@ class _Watchdog:
             wait = IDLE if not deadlines else max(0.0, min(deadlines) - time.monotonic())
             try:
                 ready, _, _ = select.select([self.signals, self.control], [], [], wait)
-            except (OSError, ValueError):     # closed at exit
+                if self.control in ready:
+                    _drain(self.control)
+                got = _drain(self.signals) if self.signals in ready else b""
+            except (OSError, ValueError):     # the sockets were closed at exit
                 with self.lock:
                     self.thread = None
                 return
-            if self.control in ready:
-                _drain(self.control)
-            got = _drain(self.signals) if self.signals in ready else b""
             now = time.monotonic()
             with self.lock:
                 for c in self.calls.values():
