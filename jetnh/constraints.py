@@ -510,6 +510,16 @@ class System:
 
         return derive(self, principle, form=form, convention=convention)
 
+    def _repr_html_(self):
+        from .display import system_html
+
+        return system_html(self)
+
+    def _repr_latex_(self):
+        from .display import system_latex
+
+        return system_latex(self)
+
     def __repr__(self):
         return (f"System(L={self.L}, constraints={list(self.constraints)}, "
                 f"dependent={[s.name for s in self.dependent]})")

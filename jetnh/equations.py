@@ -195,7 +195,14 @@ class Equations:
         return r"\begin{aligned}" + r" \\ ".join(rows) + r"\end{aligned}"
 
     def _repr_latex_(self):
-        return f"$${self.latex()}$$"
+        from .display import equations_latex
+
+        return equations_latex(self)
+
+    def _repr_html_(self):
+        from .display import equations_html
+
+        return equations_html(self)
 
 
 # ---------------------------------------------------------------------- derivation

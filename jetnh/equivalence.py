@@ -79,6 +79,16 @@ class Comparison:
             return f"{a} and {b} agree on the branch lambda_alpha = -p_alpha (32), not in general"
         return f"{a} and {b} do not share solutions in general"
 
+    def _repr_html_(self):
+        from .display import comparison_html
+
+        return comparison_html(self)
+
+    def _repr_latex_(self):
+        from .display import comparison_latex
+
+        return comparison_latex(self)
+
 
 def agrees(system: System, expr, derived=None) -> bool:
     """Whether ``expr`` vanishes at random states on the constraint manifold (with the

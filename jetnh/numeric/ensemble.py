@@ -291,6 +291,16 @@ class Ensemble:
             out[f"first[{name}]"] = self.event_first[:, k]
         return out
 
+    def _repr_html_(self):
+        from ..display import ensemble_html
+
+        return ensemble_html(self)
+
+    def _repr_latex_(self):
+        from ..display import ensemble_latex
+
+        return ensemble_latex(self)
+
     def __repr__(self):
         ok = int(self.success.sum())
         return (f"<Ensemble {self.method}: {self.n_runs} runs x {self.y.shape[1]} rows, "

@@ -385,6 +385,7 @@ class Scene:
                 te = arguments.times(t_eval, t0, t1)
                 mode = AT_T_EVAL
             settings = (rtol, atol_v, first, mx, budget, te, mode)
+            dense = {"rtol": rtol, "atol": atol_v, "mode": mode}
         else:
             if t_eval is not None:
                 raise JetnhError("rk4 is a fixed-step method without dense output; pass "
@@ -393,6 +394,7 @@ class Scene:
             steps = arguments.fixed_steps(n_steps, h, t0, t1, "rk4", budget)
             arguments.output_rows(steps, n, save)
             settings = (steps, EVERY_STEP if save == "steps" else ENDPOINTS)
+            dense = {"mode": settings[1]}
         kern = self.kernels
         solve = kern.integrator(method)
         ce = self.compile_events(events)
@@ -406,8 +408,9 @@ class Scene:
                                            *settings, n_sing, singular_tol, ev_dir, ev_max,
                                            halt), halt, limit)
         wall = time.perf_counter() - tic
+        dense["partial_last"] = int(out[0]) in (EVENT, SINGULAR)    # stopped inside a step
         return self._trajectory(method, out, wall, kern, ce, p, t0, y_init, singular_tol,
-                                singular == "stop", limit)
+                                singular == "stop", limit, dense)
 
     # ------------------------------------------------------------------ run helpers
     @staticmethod
@@ -485,7 +488,7 @@ class Scene:
         return store[memo]
 
     def _trajectory(self, method, out, wall, kern, ce, p, t0, y_init, singular_tol, checked,
-                    timeout=None):
+                    timeout=None, dense=None):
         """A Trajectory from the result tuple of a compiled solve (or an error)."""
         from .events import split_records
 
@@ -521,7 +524,8 @@ class Scene:
         return Trajectory(self, ts[:n_out], ys[:n_out], p, method=method, status=status,
                           stop_reason=reason, steps=int(stats[0]), rejected=int(stats[1]),
                           nfev=int(stats[2]), wall_time=wall, kernels=kern,
-                          projected=self.projected, singularity=singularity, **kw)
+                          projected=self.projected, singularity=singularity, dense=dense,
+                          **kw)
 
     # ------------------------------------------------------------------ singularities
     def indicators(self, t, y, p=None) -> dict[str, float]:

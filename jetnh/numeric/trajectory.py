@@ -58,11 +58,18 @@ class Diagnostics:
 
 
 class Trajectory:
-    """Output times ``t`` and states ``y`` (rows) of one run, with named access."""
+    """Output times ``t`` and states ``y`` (rows) of one run, with named access.
+
+    Array orientation: ``traj.y`` is ``[n_times, n_states]`` (columns in the order
+    ``scene.state_names``), ``traj[name]`` is ``[n_times]``; an ensemble's ``ens.y`` is
+    ``[n_runs, n_times, n_states]``.  ``to_dataframe()``, ``to_xarray()`` and ``plot()``
+    give every series by name (``jetnh.numeric.export``); ``at(times)`` evaluates the run
+    between its rows (``jetnh.numeric.dense``).
+    """
 
     def __init__(self, scene, t, y, p, *, method, status, stop_reason, steps, rejected,
                  nfev, wall_time, kernels, projected=None, own=None, events=None,
-                 singularity=None):
+                 singularity=None, dense=None):
         self.scene = scene
         self.t = np.ascontiguousarray(t, dtype=float)
         self.y = np.ascontiguousarray(y, dtype=float)
@@ -81,6 +88,8 @@ class Trajectory:
         self.event_names = tuple(names)
         self.t_events = list(t_ev)
         self.y_events = list(y_ev)
+        # what re-taking a step needs (tolerances, output mode; see numeric.dense), or None
+        self._dense = dense
         self._info = dict(steps=steps, rejected=rejected, nfev=nfev, wall_time=wall_time,
                           projected=dict(projected or {}))
         # methods that carry their own velocities, residuals, energy and first integrals
@@ -198,6 +207,47 @@ class Trajectory:
             integral_drift=idrift, projected=i["projected"],
             events={n: len(te) for n, te in zip(self.event_names, self.t_events)},
             singularity=self.singularity)
+
+    # ------------------------------------------------------------------ tables, figures
+    def to_dataframe(self, diagnostics=True):
+        """A pandas DataFrame: ``t``, the coordinates, every velocity, the multipliers
+        (then first integrals, ``energy``, ``residual[a]``); ``attrs`` hold method,
+        status, stop_reason, principle and parameters (see ``numeric.export``)."""
+        from .export import to_dataframe
+
+        return to_dataframe(self, diagnostics)
+
+    def to_xarray(self, diagnostics=True):
+        """An xarray Dataset over ``t`` with the DataFrame's series and attributes
+        (``parameters`` as a JSON object); needs ``pip install 'jetnh[xarray]'``."""
+        from .export import to_xarray
+
+        return to_xarray(self, diagnostics)
+
+    def plot(self, names=None, ax=None):
+        """The series ``names`` (default: the coordinates) against t on ``ax`` (or a new
+        figure's axes), labelled; returns the matplotlib Axes."""
+        from .export import plot
+
+        return plot(self, names, ax)
+
+    def at(self, times) -> np.ndarray:
+        """States ``[len(times), n_states]`` at ``times`` inside the span, from the
+        method's dense output (dop853, dopri5: the covering step re-taken, bit for bit
+        what ``t_eval`` gives; rk4: cubic Hermite); needs every step stored."""
+        from .dense import evaluate
+
+        return evaluate(self, times)
+
+    def _repr_html_(self):
+        from ..display import trajectory_html
+
+        return trajectory_html(self)
+
+    def _repr_latex_(self):
+        from ..display import trajectory_latex
+
+        return trajectory_latex(self)
 
     def __repr__(self):
         span = f"t in [{self.t[0]:.6g}, {self.t[-1]:.6g}]" if len(self) else "empty"

@@ -1,0 +1,241 @@
+"""Rich displays (HTML and LaTeX, for notebooks) of jetnh's objects, within a size budget.
+
+Every display is at most ``BUDGET`` characters: an expression whose printed tree would
+be large (over ``TREE_CAP`` nodes, counted on the shared graph so that nothing large is
+ever printed) or whose LaTeX exceeds ``EXPR_BUDGET`` is shown as a summary (its size
+and its symbols), and rows stop, with a count of those left out, before the budget.
+"""
+
+from __future__ import annotations
+
+import html
+
+import numpy as np
+import sympy as sp
+
+from . import dag
+
+BUDGET = 20_000          # characters of one display
+EXPR_BUDGET = 2_000      # characters of one expression's LaTeX
+TREE_CAP = 400           # nodes of an expression's tree printed in full
+MAX_ROWS = 24            # rows of one list (equations, constraints, runs)
+_STYLE = 'style="text-align:left"'
+
+
+def tree_size(expr, cap: int = TREE_CAP) -> int:
+    """Nodes of ``expr`` as a tree (what printing walks), counted on its graph; counting
+    stops once past ``cap``."""
+    size: dict[int, int] = {}
+    for e in dag.nodes(expr, cap=cap + 1):
+        size[id(e)] = 1 + sum(size.get(id(a), cap + 1) for a in e.args)
+        if size[id(e)] > cap:
+            return cap + 1
+    return size.get(id(sp.sympify(expr)), cap + 1)
+
+
+def _summary(expr) -> str:
+    syms = sorted((s.name for s in dag.free_symbols(expr)), key=str)
+    shown = ", ".join(syms[:8]) + (", ..." if len(syms) > 8 else "")
+    return f"expression of {dag.size(expr)} distinct parts in {shown or 'no symbols'}"
+
+
+def latex(expr, J=None) -> str:
+    """LaTeX of ``expr`` (dotted jets with ``J``), or ``\\text{<summary>}`` when large."""
+    expr = sp.sympify(expr)
+    if tree_size(expr) <= TREE_CAP:
+        text = J.latex(expr) if J is not None else sp.latex(expr)
+        if len(text) <= EXPR_BUDGET:
+            return text
+    return r"\langle\text{" + _summary(expr) + r"}\rangle"
+
+
+class Rows:
+    """Rows added until a budget is spent; ``done()`` says how many were left out."""
+
+    def __init__(self, budget: int, max_rows: int = MAX_ROWS):
+        self.rows: list[str] = []
+        self.left = budget
+        self.max_rows = max_rows
+        self.omitted = 0
+
+    def add(self, row: str) -> bool:
+        if self.omitted or len(self.rows) >= self.max_rows or len(row) > self.left:
+            self.omitted += 1
+            return False
+        self.rows.append(row)
+        self.left -= len(row)
+        return True
+
+
+# ---------------------------------------------------------------------- HTML
+def _td(x) -> str:
+    return f"<td {_STYLE}>{x}</td>"
+
+
+def _math(tex: str) -> str:
+    return html.escape(r"\(" + tex + r"\)")
+
+
+def html_table(title: str, facts: list[tuple[str, str]], lists=(), budget=BUDGET) -> str:
+    """A titled table of (label, HTML) facts, then titled lists of rows (label, items as
+    HTML, noun of the items); everything escaped by the caller, within ``budget``."""
+    head = [f"<div><b>{html.escape(title)}</b>", "<table>"]
+    body = Rows(budget - 400 - len(title), max_rows=10_000)
+    for label, value in facts:
+        body.add(f"<tr><th {_STYLE}>{html.escape(label)}</th>{_td(value)}</tr>")
+    for label, items, noun in lists:
+        inner = Rows(max(body.left - 200, 0))
+        for item in items:
+            inner.add(f"<li>{item}</li>")
+        more = (f"<li>... and {inner.omitted} more {noun}</li>" if inner.omitted else "")
+        body.add(f"<tr><th {_STYLE}>{html.escape(label)}</th>"
+                 f"{_td('<ol>' + ''.join(inner.rows) + more + '</ol>')}</tr>")
+    return "\n".join(head + body.rows + ["</table></div>"])
+
+
+def latex_block(title: str, rows, noun: str, budget=BUDGET) -> str:
+    r"""``$$\begin{aligned} ... \end{aligned}$$`` with a title row and ``rows`` (LaTeX,
+    each with an ``&``), within ``budget``."""
+    out = Rows(budget - 200 - len(title))
+    for r in rows:
+        out.add(r)
+    if out.omitted:
+        out.rows.append(r"&\text{... and " + f"{out.omitted} more {noun}" + "}")
+    lines = [r"&\text{" + _tex_text(title) + "}"] + out.rows
+    return "$$\\begin{aligned}" + r" \\ ".join(lines) + "\\end{aligned}$$"
+
+
+def _tex_text(s: str) -> str:
+    for a, b in (("\\", r"\textbackslash "), ("{", r"\{"), ("}", r"\}"), ("_", r"\_"),
+                 ("#", r"\#"), ("%", r"\%"), ("&", r"\&"), ("$", r"\$"), ("^", r"\^{}"),
+                 ("~", r"\~{}")):
+        s = s.replace(a, b)
+    return s
+
+
+def _names(symbols, limit=40) -> str:
+    names = [s.name if isinstance(s, sp.Symbol) else str(s) for s in symbols]
+    text = ", ".join(names[:limit]) + (f", ... ({len(names)} in all)" if len(names) > limit
+                                       else "")
+    return html.escape(text or "none")
+
+
+# ---------------------------------------------------------------------- System
+def _system_title(s) -> str:
+    name = f" {s.name}" if s.name else ""
+    return (f"System{name}: {s.J.n} coordinates, {s.k} constraint"
+            f"{'' if s.k == 1 else 's'}")
+
+
+def system_html(s) -> str:
+    J = s.J
+    params = ", ".join(f"{p.name} = {s.defaults[p]:g}" if p in s.defaults else p.name
+                       for p in s.parameters[:40])
+    facts = [("coordinates", _names(J.q)), ("dependent", _names(s.dependent)),
+             ("parameters", html.escape(params or "none")), ("L", _math(latex(s.L, J)))]
+    cons = (_math(latex(f, J) + " = 0") for f in s.constraints)
+    return html_table(_system_title(s), facts, [("constraints", cons, "constraints")])
+
+
+def system_latex(s) -> str:
+    J = s.J
+    rows = [r"L &= " + latex(s.L, J)]
+    rows += [f"f^{{{a + 1}}} &= " + latex(f, J) + " = 0" for a, f in enumerate(s.constraints)]
+    return latex_block(_system_title(s) + ", dependent " + ", ".join(
+        q.name for q in s.dependent[:40]), rows, "constraints")
+
+
+# ---------------------------------------------------------------------- Equations
+def _equations_title(e) -> str:
+    return f"{e.principle} equations, {e.form} form, {e.convention} convention {e.paper}".strip()
+
+
+def equations_html(e) -> str:
+    facts = [("multipliers", _names(e.multipliers)), ("reactions", _names(e.reactions)),
+             ("equations", str(len(e.expressions)))]
+    rows = (_math(latex(x, e.J) + " = 0") for x in e.expressions)
+    return html_table(_equations_title(e), facts, [("", rows, "equations")])
+
+
+def equations_latex(e) -> str:
+    return latex_block(_equations_title(e), (f"&{latex(x, e.J)} = 0" for x in e.expressions),
+                       "equations")
+
+
+# ---------------------------------------------------------------------- Comparison
+def comparison_html(c, J=None) -> str:
+    rows = (f"{html.escape(q.name)}: {_math(latex(d, J))}" for q, d in c.defects.items())
+    return html_table(f"Comparison of {c.principles[0]} and {c.principles[1]}",
+                      [("verdict", html.escape(str(c))),
+                       ("identical", str(c.identical)),
+                       ("on the branch (32)", str(c.on_branch_32))],
+                      [("difference of accelerations", rows, "coordinates")])
+
+
+def comparison_latex(c) -> str:
+    rows = (f"\\Delta {_tex_text(q.name)} &= {latex(d)}" for q, d in c.defects.items())
+    return latex_block(str(c), rows, "coordinates")
+
+
+# ---------------------------------------------------------------------- runs
+def _trajectory_facts(traj) -> list[tuple[str, str]]:
+    d = traj.diagnostics
+    span = f"[{traj.t[0]:.6g}, {traj.t[-1]:.6g}]" if len(traj) else "empty"
+    return [("principle", traj.scene.principle), ("rows", f"{len(traj)}, t in {span}"),
+            ("status", f"{traj.status} ({'success' if traj.success else 'failure'})"),
+            ("stop reason", traj.stop_reason[:2000]),
+            ("steps", f"{d.steps} (rejected {d.rejected}), {d.rhs_evaluations} rhs evaluations"),
+            ("constraint residual max", f"{d.residual_max:.3e}"),
+            ("energy drift", f"{d.energy_drift:.3e} (relative {d.energy_drift_relative:.3e})")]
+
+
+def trajectory_html(traj) -> str:
+    from .numeric.export import columns
+
+    facts = [(k, html.escape(v)) for k, v in _trajectory_facts(traj)]
+    cols = columns(traj, diagnostics=False)
+    names = list(cols)[:12]
+    n = len(traj)
+    shown = list(range(min(n, 3))) + list(range(max(n - 3, 3), n))
+    head = "".join(f"<th>{html.escape(c)}</th>" for c in names)
+    rows = "".join("<tr>" + "".join(f"<td>{cols[c][i]:.6g}</td>" for c in names) + "</tr>"
+                   for i in shown)
+    more = len(cols) - len(names)
+    facts.append(("rows (first, last)", f"<table><tr>{head}</tr>{rows}</table>"
+                  + (f"... and {more} more columns" if more > 0 else "")))
+    return html_table(f"Trajectory ({traj.method})", facts)
+
+
+def trajectory_latex(traj) -> str:
+    rows = (f"\\text{{{_tex_text(k)}}} &: \\text{{{_tex_text(v[:300])}}}"
+            for k, v in _trajectory_facts(traj))
+    return latex_block(f"Trajectory ({traj.method})", rows, "facts")
+
+
+def _ensemble_facts(ens) -> list[tuple[str, str]]:
+    from .numeric.integrators import STATUS_TEXT
+
+    counts = {int(s): int(c) for s, c in zip(*np.unique(ens.status, return_counts=True))}
+    status = "; ".join(f"{c} x {STATUS_TEXT.get(s, s)}" for s, c in counts.items())
+    checks = []
+    # the checks need the aux rows of every run: computed here only when affordable
+    if ens.n_runs and ("aux" in ens.__dict__ or ens.y.shape[0] * ens.y.shape[1] <= 200_000):
+        with np.errstate(all="ignore"):
+            checks = [("constraint residual max", f"{np.nanmax(ens.residual_max):.3e}"),
+                      ("energy drift max", f"{np.nanmax(ens.energy_drift):.3e}")]
+    return [("principle", ens.scene.principle),
+            ("runs", f"{ens.n_runs} x {ens.y.shape[1]} rows, {int(ens.success.sum())} succeeded"),
+            ("status", status[:2000]),
+            ("run-time parameters", ", ".join(ens.param_names) or "none"),
+            *checks, ("wall time", f"{ens.wall_time * 1e3:.3g} ms ({ens.parallel}, {ens.workers} workers)")]
+
+
+def ensemble_html(ens) -> str:
+    facts = [(k, html.escape(v)) for k, v in _ensemble_facts(ens)]
+    return html_table(f"Ensemble ({ens.method})", facts)
+
+
+def ensemble_latex(ens) -> str:
+    rows = (f"\\text{{{_tex_text(k)}}} &: \\text{{{_tex_text(v[:300])}}}"
+            for k, v in _ensemble_facts(ens))
+    return latex_block(f"Ensemble ({ens.method})", rows, "facts")

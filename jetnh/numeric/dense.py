@@ -1,0 +1,145 @@
+"""Values of a trajectory at any time of its span (``Trajectory.at``).
+
+- dop853, dopri5: the step of the run that covers each time is taken again, from its
+  stored start (t_k, y_k) with the step h_k = t_{k+1} - t_k and the times as ``t_eval``.
+  An accepted step is a function of (t_k, y_k, h_k) alone (its first stage is
+  f(t_k, y_k), which the run reused from the step before), so its dense output is the
+  one the original run gives with those times as ``t_eval``: the same bits.
+- rk4: the cubic Hermite interpolant of each step through y and f(t, y) at its ends,
+  the one rk4 locates events on; its error is O(h^4), the order of the method.
+- dla, dvi and scipy's methods: no interpolant (the discrete integrators have none that
+  matches their nodes and multipliers) and an error that says what to do.
+
+Only a trajectory that holds every step (``save="steps"``, no ``t_eval``) can be
+evaluated; the last interval of a run stopped inside a step (a terminal event or a
+singular stop) is not a whole step, and only its end is available.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import ArgumentError, IntegrationError, JetnhError
+from .integrators._common import AT_T_EVAL, EVERY_STEP
+
+
+def _times(times, lo, hi) -> np.ndarray:
+    try:
+        a = np.asarray(times, dtype=float)
+    except (TypeError, ValueError):
+        raise ArgumentError(f"times must be a number or a 1-d array of numbers, got "
+                            f"{type(times).__name__}") from None
+    a = np.atleast_1d(a)
+    if a.ndim != 1:
+        raise ArgumentError(f"times must be a number or a 1-d array, got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ArgumentError("times must be finite numbers")
+    if a.size and (a.min() < lo or a.max() > hi):
+        raise ArgumentError(f"times must lie within the trajectory's span [{lo!r}, {hi!r}]; "
+                            f"got [{a.min()!r}, {a.max()!r}]")
+    return a
+
+
+def _refusal(traj) -> str | None:
+    """Why ``traj`` cannot be evaluated between its rows, or None."""
+    d = traj._dense
+    if d is None:
+        return (f"{traj.method} trajectories have no dense output to evaluate between rows; "
+                "run with method='dop853' or 'dopri5' (steps re-taken exactly) or 'rk4' "
+                "(cubic Hermite), or pass the times as t_eval= to the run")
+    if d["mode"] != EVERY_STEP:
+        return ("evaluation re-takes the steps of the run, so the trajectory must hold every "
+                "step: run with save='steps' and without t_eval (or pass these times as "
+                "t_eval= to the run)")
+    return None
+
+
+def evaluate(traj, times) -> np.ndarray:
+    """The states at ``times`` (any order, inside the span): ``[len(times), n_states]``."""
+    why = _refusal(traj)
+    if why:
+        raise JetnhError(why)
+    t = traj.t
+    if not len(t):
+        raise JetnhError("the trajectory is empty; there is nothing to evaluate")
+    tau = _times(times, float(t.min()), float(t.max()))
+    out = np.empty((tau.shape[0], traj.y.shape[1]))
+    if len(t) == 1 or not tau.size:
+        out[:] = traj.y[0]
+        return out
+    sgn = 1.0 if t[-1] >= t[0] else -1.0
+    # time tau belongs to the first step whose end is not before it (as t_eval does)
+    k = np.minimum(np.searchsorted(sgn * t[1:], sgn * tau, side="left"), len(t) - 2)
+    last = len(t) - 2
+    if traj._dense["partial_last"]:
+        bad = (k == last) & (tau != t[-1])
+        if bad.any():
+            raise JetnhError(
+                f"the run stopped inside its last step ({traj.stop_reason[:120]}), so "
+                f"[{t[-2]!r}, {t[-1]!r}] is not a whole step and cannot be re-taken; times "
+                f"there (e.g. {tau[bad][0]!r}) are not available, only its end t = {t[-1]!r}")
+        ends = (k == last)
+        out[ends] = traj.y[-1]
+        keep = ~ends
+    else:
+        keep = np.ones(tau.shape[0], dtype=bool)
+    step = _hermite_steps if traj.method == "rk4" else _retaken_steps
+    idx = np.nonzero(keep)[0]
+    if idx.size:
+        order = idx[np.lexsort((sgn * tau[idx], k[idx]))]
+        out[order] = step(traj, k[order], tau[order])
+    return out
+
+
+def _groups(k):
+    """(step, start, stop) of the runs of equal values in the sorted array ``k``."""
+    cut = np.nonzero(np.diff(k))[0] + 1
+    starts = np.concatenate([[0], cut])
+    stops = np.concatenate([cut, [k.shape[0]]])
+    return [(int(k[a]), a, b) for a, b in zip(starts, stops)]
+
+
+def _retaken_steps(traj, k, tau) -> np.ndarray:
+    """dop853/dopri5: re-take step k[i] with the times tau (sorted by step, then time)."""
+    kern, d = traj._kernels, traj._dense
+    solve = kern.integrator(traj.method)
+    t, y, p = traj.t, traj.y, np.ascontiguousarray(traj._p, dtype=float)
+    none = np.zeros(0, dtype=np.int64)
+    halt = np.zeros(1, dtype=np.int64)
+    out = np.empty((tau.shape[0], y.shape[1]))
+    for j, a, b in _groups(k):
+        t0, t1 = float(t[j]), float(t[j + 1])
+        # |h| one ulp up: t0 + first reaches (or passes, and is cut back to) t1, so the
+        # step is h = t1 - t0, the original run's h to the bit
+        first = float(np.nextafter(abs(t1 - t0), np.inf))
+        res = solve(kern.rhs_fp, kern.sing_fp, kern.sing_fp, t0, t1,
+                    np.ascontiguousarray(y[j]), p, d["rtol"], d["atol"], first, np.inf, 1,
+                    np.ascontiguousarray(tau[a:b]), AT_T_EVAL, 0, 0.0, none, none, halt)
+        status, _, ys, n_out, stats = res[:5]
+        if int(status) != 0 or int(stats[1]) != 0 or int(n_out) != b - a:
+            raise IntegrationError(
+                f"re-taking the step from t = {t0!r} to {t1!r} did not reproduce it (status "
+                f"{int(status)}, {int(stats[1])} rejected); the trajectory's arrays were "
+                "changed after the run?")
+        out[a:b] = ys[:b - a]
+    return out
+
+
+def _hermite_steps(traj, k, tau) -> np.ndarray:
+    """rk4: the cubic Hermite interpolant of step k[i] at tau (the form of rk4's own)."""
+    kern = traj._kernels
+    t, y, p = traj.t, traj.y, np.ascontiguousarray(traj._p, dtype=float)
+    n = y.shape[1]
+    nodes = np.unique(np.concatenate([k, k + 1]))
+    f = {}
+    for j in nodes:
+        f[j] = np.empty(n)
+        kern.rhs(float(t[j]), np.ascontiguousarray(y[j]), p, f[j])
+    h = (t[k + 1] - t[k])[:, None]
+    th = ((tau - t[k]) / (t[k + 1] - t[k]))[:, None]
+    f0 = np.array([f[j] for j in k])
+    f1 = np.array([f[j + 1] for j in k])
+    d = y[k + 1] - y[k]
+    F1 = h * f0 - d
+    F2 = d - h * f1 - F1
+    return y[k] + th * (d + (1.0 - th) * (F1 + th * F2))

@@ -1,0 +1,127 @@
+"""A trajectory as a table or a figure: pandas DataFrame, xarray Dataset, matplotlib Axes.
+
+The series, in this order: ``t``; every coordinate; every velocity in the order of the
+coordinates (the dependent ones from the constraints, or the integrator's own for dla
+and dvi); every multiplier that is a state (vakonomic, Hoelder, Suslov; Chetaev's
+reactions are not states); then, with ``diagnostics=True``, the user's first integrals
+by name, ``energy`` and one ``residual[a]`` per constraint f^a (as written).
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import sympy as sp
+
+from ..errors import JetnhError
+
+XARRAY_HINT = "pip install 'jetnh[xarray]'"
+
+
+def kinds(traj, diagnostics=True) -> dict[str, str]:
+    """Series name -> its kind ("coordinate", "velocity", ...), in table order."""
+    lay = traj.layout
+    system = traj.scene.system
+    dep = set(lay.dependent_velocities)
+    out = {"t": "time"}
+
+    def add(name, kind):
+        if name in out:
+            raise JetnhError(
+                f"two series are named {name!r} (a {out[name]} and a {kind}); rename one"
+                + (" or pass diagnostics=False" if kind in ("energy", "constraint residual",
+                                                             "first integral") else ""))
+        out[name] = kind
+
+    for s in system.J.q:
+        add(s.name, "coordinate")
+    for v in system.J.qd:
+        add(v.name, "dependent velocity" if v.name in dep else "velocity")
+    for m in lay.multipliers:
+        add(m, "multiplier")
+    if diagnostics:
+        for name in lay.integrals:
+            add(name, "first integral")
+        add("energy", "energy")
+        for a in range(system.k):
+            add(f"residual[{a}]", "constraint residual")
+    return out
+
+
+def columns(traj, diagnostics=True) -> dict[str, np.ndarray]:
+    """Series name -> values at the output rows, in table order."""
+    out = {}
+    for name, kind in kinds(traj, diagnostics).items():
+        if kind == "time":
+            out[name] = traj.t
+        elif kind == "energy":
+            out[name] = traj.energy
+        elif kind == "constraint residual":
+            out[name] = traj.residual[:, int(name[9:-1])]
+        else:
+            out[name] = traj[name]
+    return out
+
+
+def attributes(traj) -> dict:
+    """method, status, stop_reason, principle, parameters (a JSON object: name -> value)."""
+    sc = traj.scene
+    params = dict(sc.params)
+    params.update(zip(sc.runtime_params, np.asarray(traj._p, dtype=float).tolist()))
+    return {"method": traj.method, "status": int(traj.status),
+            "stop_reason": traj.stop_reason, "principle": sc.principle,
+            "parameters": json.dumps(params, sort_keys=True)}
+
+
+def to_dataframe(traj, diagnostics=True):
+    import pandas as pd
+
+    df = pd.DataFrame(columns(traj, diagnostics))
+    df.attrs.update(attributes(traj))
+    return df
+
+
+def to_xarray(traj, diagnostics=True):
+    try:
+        import xarray as xr
+    except ImportError:
+        raise JetnhError(f"to_xarray needs xarray, which is not installed: {XARRAY_HINT}"
+                         ) from None
+    cols = columns(traj, diagnostics)
+    kind = kinds(traj, diagnostics)
+    t = cols.pop("t")
+    data = {name: ("t", np.asarray(v), {"kind": kind[name]}) for name, v in cols.items()}
+    return xr.Dataset(data, coords={"t": ("t", t, {"kind": "time"})},
+                      attrs=attributes(traj))
+
+
+def plot(traj, names=None, ax=None):
+    """``names`` (Symbols or names of any series; default the coordinates) against t on
+    ``ax``, or on the axes of a new figure."""
+    cols = columns(traj)
+    system = traj.scene.system
+    if names is None:
+        names = [s.name for s in system.J.q]
+    elif isinstance(names, (str, sp.Symbol)):
+        names = [names]
+    chosen = []
+    for key in names:
+        if not isinstance(key, (str, sp.Symbol)):
+            raise JetnhError(f"plot names must be Symbols or names, not {type(key).__name__}")
+        name = key.name if isinstance(key, sp.Symbol) else key
+        if name not in cols or name == "t":
+            raise JetnhError(f"{name!r} is not a series of this trajectory; choose from "
+                             f"{', '.join(n for n in cols if n != 't')}")
+        chosen.append(name)
+    if ax is None:
+        import matplotlib.pyplot as plt
+
+        _, ax = plt.subplots(figsize=(6.4, 4.0), layout="constrained")
+    for name in chosen:
+        ax.plot(cols["t"], cols[name], label=name)
+    ax.set_xlabel(system.J.t.name)
+    ax.set_ylabel(chosen[0] if len(chosen) == 1 else "value")
+    ax.set_title(f"{traj.scene.principle}, {traj.method}")
+    ax.legend()
+    return ax
