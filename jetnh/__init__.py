@@ -3,7 +3,8 @@
 The public contract (DESIGN.md section 4): ``JetSpace``, ``System``, ``System.equations``,
 ``Equations.accelerations``, ``Scene`` and its ``Trajectory``; ``compare`` decides when two
 principles share solutions; ``sweep`` runs a scene over a grid of parameters and initial
-values (here or on Dask).
+values (here or on Dask); ``from_mechanics`` reads a sympy.physics.mechanics
+``LagrangesMethod``.
 """
 
 from .constraints import PRINCIPLES, System
@@ -13,6 +14,7 @@ from .errors import (ArgumentError, ConstraintError, IntegrationError, JetnhErro
                      JetnhWarning, JetSpaceError, LagrangianError, ModelFileError,
                      PrincipleError)
 from .jet import JetSpace
+from .mechanics import from_mechanics
 # bound here, not in __getattr__: a later `import jetnh.sweep` would rebind the name to the
 # module; jetnh/sweep.py is light (pandas, Dask and numba are imported when it runs)
 from .sweep import sweep
@@ -20,7 +22,7 @@ from .sweep import sweep
 __version__ = "0.1.0"
 
 __all__ = ["JetSpace", "System", "Equations", "PRINCIPLES", "compare", "Scene", "Trajectory",
-           "Diagnostics", "Event", "Ensemble", "sweep", "JetnhError",
+           "Diagnostics", "Event", "Ensemble", "sweep", "from_mechanics", "JetnhError",
            "JetSpaceError", "ConstraintError", "LagrangianError", "PrincipleError",
            "ModelFileError", "IntegrationError", "ArgumentError", "JetnhWarning"]
 

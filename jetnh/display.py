@@ -2,8 +2,9 @@
 
 Every display is at most ``BUDGET`` characters: an expression whose printed tree would
 be large (over ``TREE_CAP`` nodes, counted on the shared graph so that nothing large is
-ever printed) or whose LaTeX exceeds ``EXPR_BUDGET`` is shown as a summary (its size
-and its symbols), and rows stop, with a count of those left out, before the budget.
+ever printed), whose LaTeX exceeds ``EXPR_BUDGET`` or does not fit in what is left of
+the budget is shown as a summary (its size and its symbols), and rows stop, with a
+count of those left out, before the budget.
 """
 
 from __future__ import annotations
@@ -16,8 +17,8 @@ import sympy as sp
 from . import dag
 
 BUDGET = 20_000          # characters of one display
-EXPR_BUDGET = 2_000      # characters of one expression's LaTeX
-TREE_CAP = 400           # nodes of an expression's tree printed in full
+EXPR_BUDGET = 8_000      # characters of one expression's LaTeX
+TREE_CAP = 1_500         # nodes of an expression's tree printed in full
 MAX_ROWS = 24            # rows of one list (equations, constraints, runs)
 _STYLE = 'style="text-align:left"'
 
@@ -39,14 +40,16 @@ def _summary(expr) -> str:
     return f"expression of {dag.size(expr)} distinct parts in {shown or 'no symbols'}"
 
 
-def latex(expr, J=None) -> str:
-    """LaTeX of ``expr`` (dotted jets with ``J``), or ``\\text{<summary>}`` when large."""
+def latex(expr, J=None) -> list[str]:
+    """LaTeX of ``expr`` (dotted jets with ``J``) and ``\\text{<summary>}``, or only the
+    summary when the expression is large: the forms to try, longest first."""
     expr = sp.sympify(expr)
+    short = r"\langle\text{" + _tex_text(_summary(expr)) + r"}\rangle"
     if tree_size(expr) <= TREE_CAP:
         text = J.latex(expr) if J is not None else sp.latex(expr)
         if len(text) <= EXPR_BUDGET:
-            return text
-    return r"\langle\text{" + _summary(expr) + r"}\rangle"
+            return [text, short]
+    return [short]
 
 
 class Rows:
@@ -58,13 +61,16 @@ class Rows:
         self.max_rows = max_rows
         self.omitted = 0
 
-    def add(self, row: str) -> bool:
-        if self.omitted or len(self.rows) >= self.max_rows or len(row) > self.left:
-            self.omitted += 1
-            return False
-        self.rows.append(row)
-        self.left -= len(row)
-        return True
+    def add(self, *forms: str) -> bool:
+        """Add the first of ``forms`` that fits (none once one row was left out)."""
+        if not self.omitted and len(self.rows) < self.max_rows:
+            for row in forms:
+                if len(row) <= self.left:
+                    self.rows.append(row)
+                    self.left -= len(row)
+                    return True
+        self.omitted += 1
+        return False
 
 
 # ---------------------------------------------------------------------- HTML
@@ -77,16 +83,17 @@ def _math(tex: str) -> str:
 
 
 def html_table(title: str, facts: list[tuple[str, str]], lists=(), budget=BUDGET) -> str:
-    """A titled table of (label, HTML) facts, then titled lists of rows (label, items as
-    HTML, noun of the items); everything escaped by the caller, within ``budget``."""
+    """A titled table of (label, HTML) facts, then titled lists of rows (label, items,
+    noun of the items; an item is a list of HTML forms, longest first); everything
+    escaped by the caller, within ``budget``."""
     head = [f"<div><b>{html.escape(title)}</b>", "<table>"]
     body = Rows(budget - 400 - len(title), max_rows=10_000)
     for label, value in facts:
         body.add(f"<tr><th {_STYLE}>{html.escape(label)}</th>{_td(value)}</tr>")
     for label, items, noun in lists:
         inner = Rows(max(body.left - 200, 0))
-        for item in items:
-            inner.add(f"<li>{item}</li>")
+        for forms in items:
+            inner.add(*(f"<li>{x}</li>" for x in forms))
         more = (f"<li>... and {inner.omitted} more {noun}</li>" if inner.omitted else "")
         body.add(f"<tr><th {_STYLE}>{html.escape(label)}</th>"
                  f"{_td('<ol>' + ''.join(inner.rows) + more + '</ol>')}</tr>")
@@ -94,11 +101,11 @@ def html_table(title: str, facts: list[tuple[str, str]], lists=(), budget=BUDGET
 
 
 def latex_block(title: str, rows, noun: str, budget=BUDGET) -> str:
-    r"""``$$\begin{aligned} ... \end{aligned}$$`` with a title row and ``rows`` (LaTeX,
-    each with an ``&``), within ``budget``."""
+    r"""``$$\begin{aligned} ... \end{aligned}$$`` with a title row and ``rows`` (each a
+    list of LaTeX forms with an ``&``, longest first), within ``budget``."""
     out = Rows(budget - 200 - len(title))
-    for r in rows:
-        out.add(r)
+    for forms in rows:
+        out.add(*forms)
     if out.omitted:
         out.rows.append(r"&\text{... and " + f"{out.omitted} more {noun}" + "}")
     lines = [r"&\text{" + _tex_text(title) + "}"] + out.rows
@@ -132,15 +139,16 @@ def system_html(s) -> str:
     params = ", ".join(f"{p.name} = {s.defaults[p]:g}" if p in s.defaults else p.name
                        for p in s.parameters[:40])
     facts = [("coordinates", _names(J.q)), ("dependent", _names(s.dependent)),
-             ("parameters", html.escape(params or "none")), ("L", _math(latex(s.L, J)))]
-    cons = (_math(latex(f, J) + " = 0") for f in s.constraints)
+             ("parameters", html.escape(params or "none")), ("L", _math(latex(s.L, J)[0]))]
+    cons = ([_math(x + " = 0") for x in latex(f, J)] for f in s.constraints)
     return html_table(_system_title(s), facts, [("constraints", cons, "constraints")])
 
 
 def system_latex(s) -> str:
     J = s.J
-    rows = [r"L &= " + latex(s.L, J)]
-    rows += [f"f^{{{a + 1}}} &= " + latex(f, J) + " = 0" for a, f in enumerate(s.constraints)]
+    rows = [[r"L &= " + x for x in latex(s.L, J)]]
+    rows += [[f"f^{{{a + 1}}} &= " + x + " = 0" for x in latex(f, J)]
+             for a, f in enumerate(s.constraints)]
     return latex_block(_system_title(s) + ", dependent " + ", ".join(
         q.name for q in s.dependent[:40]), rows, "constraints")
 
@@ -153,18 +161,19 @@ def _equations_title(e) -> str:
 def equations_html(e) -> str:
     facts = [("multipliers", _names(e.multipliers)), ("reactions", _names(e.reactions)),
              ("equations", str(len(e.expressions)))]
-    rows = (_math(latex(x, e.J) + " = 0") for x in e.expressions)
+    rows = ([_math(t + " = 0") for t in latex(x, e.J)] for x in e.expressions)
     return html_table(_equations_title(e), facts, [("", rows, "equations")])
 
 
 def equations_latex(e) -> str:
-    return latex_block(_equations_title(e), (f"&{latex(x, e.J)} = 0" for x in e.expressions),
-                       "equations")
+    return latex_block(_equations_title(e), ([f"&{t} = 0" for t in latex(x, e.J)]
+                                             for x in e.expressions), "equations")
 
 
 # ---------------------------------------------------------------------- Comparison
 def comparison_html(c, J=None) -> str:
-    rows = (f"{html.escape(q.name)}: {_math(latex(d, J))}" for q, d in c.defects.items())
+    rows = ([f"{html.escape(q.name)}: {_math(t)}" for t in latex(d, J)]
+            for q, d in c.defects.items())
     return html_table(f"Comparison of {c.principles[0]} and {c.principles[1]}",
                       [("verdict", html.escape(str(c))),
                        ("identical", str(c.identical)),
@@ -173,7 +182,8 @@ def comparison_html(c, J=None) -> str:
 
 
 def comparison_latex(c) -> str:
-    rows = (f"\\Delta {_tex_text(q.name)} &= {latex(d)}" for q, d in c.defects.items())
+    rows = ([f"\\Delta {_tex_text(q.name)} &= {t}" for t in latex(d)]
+            for q, d in c.defects.items())
     return latex_block(str(c), rows, "coordinates")
 
 
@@ -207,7 +217,7 @@ def trajectory_html(traj) -> str:
 
 
 def trajectory_latex(traj) -> str:
-    rows = (f"\\text{{{_tex_text(k)}}} &: \\text{{{_tex_text(v[:300])}}}"
+    rows = ([f"\\text{{{_tex_text(k)}}} &: \\text{{{_tex_text(v[:300])}}}"]
             for k, v in _trajectory_facts(traj))
     return latex_block(f"Trajectory ({traj.method})", rows, "facts")
 
@@ -236,6 +246,6 @@ def ensemble_html(ens) -> str:
 
 
 def ensemble_latex(ens) -> str:
-    rows = (f"\\text{{{_tex_text(k)}}} &: \\text{{{_tex_text(v[:300])}}}"
+    rows = ([f"\\text{{{_tex_text(k)}}} &: \\text{{{_tex_text(v[:300])}}}"]
             for k, v in _ensemble_facts(ens))
     return latex_block(f"Ensemble ({ens.method})", rows, "facts")

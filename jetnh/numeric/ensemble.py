@@ -4,6 +4,7 @@
                          params={"R": np.full(100, 2.0)}, rtol=1e-10, atol=1e-12,
                          t_eval=np.linspace(0, 10, 51))          # or save="final"
     ens.y                      # [n_runs, n_times, n_states]
+    ens.to_dataframe()         # one row per run and time (a pandas DataFrame)
     ens["x"], ens["x_t"]       # [n_runs, n_times] (dependent velocities, integrals too)
     ens.final["x"]             # [n_runs]
     ens.status, ens.steps, ens.nfev, ens.t_final, ens.residual_max, ens.energy_drift
@@ -290,6 +291,13 @@ class Ensemble:
             out[f"events[{name}]"] = self.event_counts[:, k]
             out[f"first[{name}]"] = self.event_first[:, k]
         return out
+
+    def to_dataframe(self):
+        """One row per run and output time: ``run``, ``t``, every state, dependent
+        velocity and first integral, the run-time parameters (``numeric.export``)."""
+        from .export import ensemble_dataframe
+
+        return ensemble_dataframe(self)
 
     def _repr_html_(self):
         from ..display import ensemble_html

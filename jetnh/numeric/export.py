@@ -125,3 +125,24 @@ def plot(traj, names=None, ax=None):
     ax.set_title(f"{traj.scene.principle}, {traj.method}")
     ax.legend()
     return ax
+
+
+def ensemble_dataframe(ens):
+    """An ensemble as one long table: ``run``, ``t``, then per row every state, dependent
+    velocity and first integral (``ens.names``) and the run's run-time parameters; rows
+    after a run's stop (NaN times) are left out."""
+    import pandas as pd
+
+    n_runs, n_times = ens.t.shape
+    keep = np.isfinite(ens.t).ravel()
+    cols = {"run": np.repeat(np.arange(n_runs), n_times)[keep], "t": ens.t.ravel()[keep]}
+    for name in ens.names:
+        cols[name] = ens[name].ravel()[keep]
+    for j, name in enumerate(ens.param_names):
+        if name in cols:
+            raise JetnhError(f"the run-time parameter {name!r} has the name of a series")
+        cols[name] = np.repeat(ens.params[:, j], n_times)[keep]
+    df = pd.DataFrame(cols)
+    df.attrs.update({"method": ens.method, "principle": ens.scene.principle,
+                     "parameters": json.dumps(ens.scene.params, sort_keys=True)})
+    return df

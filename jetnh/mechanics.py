@@ -1,0 +1,126 @@
+"""The bridge to sympy.physics.mechanics: ``LagrangesMethod`` <-> ``System``.
+
+``from_mechanics(lm)`` reads a ``LagrangesMethod``: its coordinates ``lm.q``
+(dynamicsymbols) become a ``JetSpace`` of the same names, its Lagrangian and its
+constraints become jet expressions (``JetSpace.from_dynamic``).
+
+- ``nonhol_coneqs`` are the constraints as written.
+- ``hol_coneqs`` g(t, q) = 0 enter differentiated, dg/dt = 0, as LagrangesMethod itself
+  uses them (its ``coneqs``); jetnh's Frobenius test finds them integrable.  The
+  configuration must satisfy g = 0 initially: that is the caller's to ensure.
+- ``forcelist``: the generalized forces Q_s = sum F . dv/dqdot^s (``generalized_forces``)
+  are computed, but a non-empty forcelist is refused for now: ``System`` takes no forces
+  yet.
+- Any other function of time in the Lagrangian or the constraints (a specified input
+  u(t)) is refused: substitute it first.
+
+``to_mechanics(system)`` is the way back (``JetSpace.to_dynamic``), for systems without
+forces.
+"""
+
+from __future__ import annotations
+
+import sympy as sp
+
+from .constraints import System
+from .errors import JetnhError, JetSpaceError
+from .jet import JetSpace
+
+
+def _coordinates(lm) -> JetSpace:
+    from sympy.core.function import AppliedUndef
+    from sympy.physics.vector import dynamicsymbols
+
+    t = dynamicsymbols._t
+    names = []
+    for q in lm.q:
+        if not (isinstance(q, AppliedUndef) and q.args == (t,)):
+            raise JetnhError(f"the coordinate {q} of the LagrangesMethod is not a "
+                             "dynamicsymbol q(t); build it with dynamicsymbols('q')")
+        names.append(q.func.__name__)
+    return JetSpace(names, t=t.name)
+
+
+def _convert(J, expr, what):
+    try:
+        return J.from_dynamic(expr)
+    except JetSpaceError as exc:
+        raise JetSpaceError(
+            f"{what} of the LagrangesMethod: {exc}. from_mechanics reads functions of time "
+            "only among lm.q; substitute specified inputs (e.g. u(t)) by parameters or "
+            "expressions first") from None
+
+
+def constraints(lm, J: JetSpace) -> list:
+    """The nonholonomic constraints as written, then the holonomic ones differentiated."""
+    n_hol = len(lm._hol_coneqs)
+    nonhol = list(lm.coneqs[n_hol:])
+    hol = list(lm.coneqs[:n_hol])           # LagrangesMethod stores dg/dt
+    return ([_convert(J, f, f"nonholonomic constraint {a + 1}") for a, f in enumerate(nonhol)]
+            + [_convert(J, f, f"holonomic constraint {a + 1} (differentiated)")
+               for a, f in enumerate(hol)])
+
+
+def generalized_forces(lm, J: JetSpace) -> tuple:
+    """Q_s = sum over the forcelist of F . dv/dqdot^s (v the velocity of the point, or
+    the angular velocity of the frame, in ``lm.inertial``), as jet expressions in the
+    order of ``J.q``; zeros without forces."""
+    from sympy.physics.vector import Point, ReferenceFrame, dynamicsymbols
+
+    loads = list(lm.forcelist or ())
+    if not loads:
+        return (sp.S.Zero,) * J.n
+    N = lm.inertial
+    if N is None:
+        raise JetnhError("the LagrangesMethod has forces but no inertial frame; pass "
+                         "frame=N to LagrangesMethod")
+    pairs = []
+    for load in loads:
+        where, vec = load[0], load[1]
+        if isinstance(where, Point):
+            pairs.append((where.vel(N), vec))
+        elif isinstance(where, ReferenceFrame):
+            pairs.append((where.ang_vel_in(N), vec))
+        else:
+            raise JetnhError(f"a load acts on {where!r}; loads act on a Point or a "
+                             "ReferenceFrame")
+    qds = lm.q.diff(dynamicsymbols._t)
+    return tuple(_convert(J, sp.Add(*[v.diff(qd, N).dot(f) for v, f in pairs]),
+                          f"the generalized force on {J.q[s]}")
+                 for s, qd in enumerate(qds))
+
+
+def _forces_option(lm, J) -> dict:
+    """System's keyword arguments for the loads of ``lm``: System takes no forces yet,
+    so a forcelist is refused (later: ``{"forces": generalized_forces(lm, J)}``)."""
+    if lm.forcelist:
+        raise JetnhError(
+            "forces are not yet supported via from_mechanics: this LagrangesMethod has a "
+            f"forcelist of {len(lm.forcelist)} load(s). Remove the forcelist (a conservative "
+            "force belongs in the Lagrangian as -V)")
+    return {}
+
+
+def from_mechanics(lm, dependent=None, *, branch=None, defaults=None, name="") -> System:
+    """A jetnh ``System`` from a sympy.physics.mechanics ``LagrangesMethod`` (see the
+    module docstring); ``dependent``, ``branch``, ``defaults``, ``name`` as ``System``."""
+    from sympy.physics.mechanics import LagrangesMethod
+
+    if not isinstance(lm, LagrangesMethod):
+        raise JetnhError(f"from_mechanics takes a sympy.physics.mechanics LagrangesMethod, "
+                         f"got {type(lm).__name__}")
+    J = _coordinates(lm)
+    L = _convert(J, lm._L[0], "the Lagrangian")
+    return System(J, L, constraints(lm, J), dependent=dependent, branch=branch,
+                  defaults=defaults, name=name, **_forces_option(lm, J))
+
+
+def to_mechanics(system: System):
+    """A ``LagrangesMethod`` with the system's Lagrangian, coordinates and constraints
+    (as nonholonomic constraints, in dynamicsymbols)."""
+    from sympy.physics.mechanics import LagrangesMethod
+
+    J = system.J
+    return LagrangesMethod(J.to_dynamic(system.L), [J.to_dynamic(q) for q in J.q],
+                           nonhol_coneqs=[J.to_dynamic(f) for f in system.constraints]
+                           or None)
