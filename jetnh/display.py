@@ -86,8 +86,9 @@ def html_table(title: str, facts: list[tuple[str, str]], lists=(), budget=BUDGET
     """A titled table of (label, HTML) facts, then titled lists of rows (label, items,
     noun of the items; an item is a list of HTML forms, longest first); everything
     escaped by the caller, within ``budget``."""
-    head = [f"<div><b>{html.escape(title)}</b>", "<table>"]
-    body = Rows(budget - 400 - len(title), max_rows=10_000)
+    title = html.escape(title[:200])
+    head = [f"<div><b>{title}</b>", "<table>"]
+    body = Rows(budget - 500 - len(title), max_rows=10_000)
     for label, value in facts:
         body.add(f"<tr><th {_STYLE}>{html.escape(label)}</th>{_td(value)}</tr>")
     for label, items, noun in lists:
@@ -97,18 +98,20 @@ def html_table(title: str, facts: list[tuple[str, str]], lists=(), budget=BUDGET
         more = (f"<li>... and {inner.omitted} more {noun}</li>" if inner.omitted else "")
         body.add(f"<tr><th {_STYLE}>{html.escape(label)}</th>"
                  f"{_td('<ol>' + ''.join(inner.rows) + more + '</ol>')}</tr>")
-    return "\n".join(head + body.rows + ["</table></div>"])
+    tail = [f"<tr><td>... and {body.omitted} more rows</td></tr>"] if body.omitted else []
+    return "\n".join(head + body.rows + tail + ["</table></div>"])
 
 
 def latex_block(title: str, rows, noun: str, budget=BUDGET) -> str:
     r"""``$$\begin{aligned} ... \end{aligned}$$`` with a title row and ``rows`` (each a
     list of LaTeX forms with an ``&``, longest first), within ``budget``."""
-    out = Rows(budget - 200 - len(title))
+    title = _tex_text(title[:200])
+    out = Rows(budget - 300 - len(title))
     for forms in rows:
         out.add(*forms)
     if out.omitted:
         out.rows.append(r"&\text{... and " + f"{out.omitted} more {noun}" + "}")
-    lines = [r"&\text{" + _tex_text(title) + "}"] + out.rows
+    lines = [r"&\text{" + title + "}"] + out.rows
     return "$$\\begin{aligned}" + r" \\ ".join(lines) + "\\end{aligned}$$"
 
 
@@ -129,7 +132,7 @@ def _names(symbols, limit=40) -> str:
 
 # ---------------------------------------------------------------------- System
 def _system_title(s) -> str:
-    name = f" {s.name}" if s.name else ""
+    name = f" {s.name[:80]}{'...' if len(s.name) > 80 else ''}" if s.name else ""
     return (f"System{name}: {s.J.n} coordinates, {s.k} constraint"
             f"{'' if s.k == 1 else 's'}")
 
@@ -237,7 +240,8 @@ def _ensemble_facts(ens) -> list[tuple[str, str]]:
             ("runs", f"{ens.n_runs} x {ens.y.shape[1]} rows, {int(ens.success.sum())} succeeded"),
             ("status", status[:2000]),
             ("run-time parameters", ", ".join(ens.param_names) or "none"),
-            *checks, ("wall time", f"{ens.wall_time * 1e3:.3g} ms ({ens.parallel}, {ens.workers} workers)")]
+            *checks, ("wall time", f"{ens.wall_time * 1e3:.3g} ms ({ens.parallel}, "
+                                   f"{ens.workers} workers)")]
 
 
 def ensemble_html(ens) -> str:

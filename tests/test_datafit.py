@@ -12,7 +12,6 @@ from hypothesis import given, settings, strategies as st
 import jetnh as jn
 import jetnh.strategies as jst
 from jetnh import display, models
-from jetnh.constraints import System
 from jetnh.equivalence import Comparison
 from jetnh.errors import ArgumentError, JetnhError
 from jetnh.numeric import Event, Scene
@@ -257,3 +256,14 @@ def test_an_exponentially_large_tree_is_summarized_quickly():
     c = Comparison(("chetaev", "vakonomic"), True, None, {J.qdd[0]: e, J.qdd[1]: J.q[0]})
     for text in (c._repr_html_(), c._repr_latex_()):
         assert len(text) < 2000 and "162 distinct parts in x" in text
+
+
+@given(jst.constrained_systems(min_n=2, max_n=4),
+       st.one_of(st.text(max_size=30), st.text(min_size=300, max_size=3000)))
+def test_system_displays_stay_in_budget_and_name_the_coordinates(case, name):
+    J, L, constraints, dependent = case
+    s = jn.System(J, L, constraints, dependent=dependent, name=name)
+    html, tex = s._repr_html_(), s._repr_latex_()
+    assert len(html) <= display.BUDGET and len(tex) <= display.BUDGET
+    assert ", ".join(q.name for q in J.q) in html
+    assert f"{J.n} coordinates, {len(constraints)} constraint" in tex
