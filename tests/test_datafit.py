@@ -132,15 +132,23 @@ def test_plot_on_given_axes_and_new_figure(traj):
         plt.close(ax2.figure)
     with pytest.raises(JetnhError, match="not a series.*choose from"):
         traj.plot(["nope"], ax=ax)
+    with pytest.raises(ArgumentError, match="ax must be a matplotlib Axes"):
+        traj.plot(ax=ax.figure)
+    with pytest.raises(ArgumentError, match="diagnostics must be True or False"):
+        traj.to_dataframe(diagnostics="no")
 
 
 # ---------------------------------------------------------------------- evaluation
 @pytest.mark.parametrize("method", ["dop853", "dopri5"])
-def test_at_is_bitwise_the_t_eval_run(disk, method):
+@pytest.mark.parametrize("first_step", [None, 3.0])
+def test_at_is_bitwise_the_t_eval_run(disk, method, first_step):
     rng = np.random.default_rng(3)
-    tr = disk.run(method=method, rtol=1e-7, atol=1e-9)
+    kw = dict(method=method, rtol=1e-7, atol=1e-9, first_step=first_step)
+    tr = disk.run(**kw)
+    if first_step:                       # a first step too large: rejected steps on the way
+        assert tr.diagnostics.rejected > 0
     times = np.concatenate([rng.uniform(0.0, 6.0, 40), tr.t[:4], [0.0, 6.0]])
-    ref = disk.run(method=method, rtol=1e-7, atol=1e-9, t_eval=np.sort(times))
+    ref = disk.run(t_eval=np.sort(times), **kw)
     got = tr.at(times)
     order = np.argsort(times, kind="stable")
     assert got.shape == (times.size, 6)

@@ -14,13 +14,15 @@ import json
 import numpy as np
 import sympy as sp
 
-from ..errors import JetnhError
+from ..errors import ArgumentError, JetnhError
 
 XARRAY_HINT = "pip install 'jetnh[xarray]'"
 
 
 def kinds(traj, diagnostics=True) -> dict[str, str]:
     """Series name -> its kind ("coordinate", "velocity", ...), in table order."""
+    if not isinstance(diagnostics, (bool, np.bool_)):
+        raise ArgumentError(f"diagnostics must be True or False, not {diagnostics!r}")
     lay = traj.layout
     system = traj.scene.system
     dep = set(lay.dependent_velocities)
@@ -118,6 +120,12 @@ def plot(traj, names=None, ax=None):
         import matplotlib.pyplot as plt
 
         _, ax = plt.subplots(figsize=(6.4, 4.0), layout="constrained")
+    else:
+        from matplotlib.axes import Axes
+
+        if not isinstance(ax, Axes):
+            raise ArgumentError(f"ax must be a matplotlib Axes (e.g. fig.subplots()), not "
+                                f"{type(ax).__name__}")
     for name in chosen:
         ax.plot(cols["t"], cols[name], label=name)
     ax.set_xlabel(system.J.t.name)
