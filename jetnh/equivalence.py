@@ -110,17 +110,26 @@ class Comparison:
 
 def singular_set(system: System, principle: str, convention: str = "paper") -> list:
     """Where ``principle``'s acceleration system (the linear system in q'' and the
-    multiplier rates) is singular or undefined: the factors (``jetnh.singular``) of the
-    denominators and root, log, ... arguments of its solved accelerations and rates and
-    of phi, and of det(df/dqdot^alpha) for k <= 3, on the constraints.  The solve divides
-    by the determinants of the split and of the reduced mass matrix (k, n - k <= 3) or by
-    the pivots of its LU (larger blocks, whose product is the determinant), so the set
-    contains every singular state (and, for large blocks, possibly more)."""
-    return _singular(system, system.equations(principle, convention=convention).accelerations())
+    multiplier rates) is singular or undefined, on the constraints: the factors
+    (``jetnh.singular``) of what its block solve divides by (``linalg.divisors``: the
+    determinants of the split and of the reduced mass matrix for blocks up to 3, the LU
+    pivots, whose product is the determinant, for larger ones), of det(df/dqdot^alpha)
+    (k <= 3), and of the denominators and root, log, ... arguments of the solved
+    accelerations, rates and phi.  So the set contains every singular state (for blocks
+    larger than 3, possibly more: a pivot may vanish where the block is regular)."""
+    return _singular(system, *_solved(system.equations(principle, convention=convention)))
 
 
-def _singular(system: System, acc: dict) -> list:
-    exprs = list(acc.values()) + [system.phi[v] for v in system.dependent_velocities]
+def _solved(eqs) -> tuple:
+    """The accelerations of ``eqs`` and what their solve divided by (``linalg.divisors``)."""
+    with linalg.divisors() as divs:
+        acc = eqs.accelerations()
+    return acc, divs
+
+
+def _singular(system: System, acc: dict, divs=()) -> list:
+    exprs = (list(acc.values()) + [system.phi[v] for v in system.dependent_velocities]
+             + [1 / d for d in divs])
     k = system.k
     A = system.jacobian_dependent
     if 0 < k <= 3 and any(not e.is_number for e in A):
@@ -136,8 +145,8 @@ def agrees(system: System, expr, derived=None, points: int = _POINTS, seed: int 
     between the two the point is evaluated exactly (rational points of rational
     expressions) or at 120 digits."""
     expr = sp.sympify(expr)
-    if expr.is_number:
-        return bool(expr == 0)
+    if expr == 0:
+        return True
     derived = dict(derived or {})
     vel = set(system.dependent_velocities)
     syms = (dag.free_symbols([expr, *derived.values(), *system.phi.values()])
@@ -208,7 +217,7 @@ def compare(system: System, first: str, second: str, convention: str = "paper") 
     holds off ``Comparison.singular`` (see ``singular_set``)."""
     e1 = system.equations(first, convention=convention)
     e2 = system.equations(second, convention=convention)
-    a1, a2 = e1.accelerations(), e2.accelerations()
+    (a1, d1), (a2, d2) = _solved(e1), _solved(e2)
     qdd = system.J.qdd
     defects = {q: a1[q] - a2[q] for q in qdd}
     same = all(agrees(system, d) for d in defects.values())
@@ -218,8 +227,8 @@ def compare(system: System, first: str, second: str, convention: str = "paper") 
         sub = branch_32(system, owner.multipliers, owner.explicit)
         on_branch = all(agrees(system, d, derived=sub) for d in defects.values())
     sing, seen = [], set()
-    for acc in (a1, a2):
-        for f in _singular(system, acc):
+    for acc, divs in ((a1, d1), (a2, d2)):
+        for f in _singular(system, acc, divs):
             if f not in seen:
                 seen.add(f)
                 sing.append(f)

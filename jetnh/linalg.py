@@ -8,6 +8,8 @@ short, which keeps unit-diagonal (explicit-form) blocks free of divisions.
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import random
 
 import mpmath
@@ -27,18 +29,42 @@ def _pivot_cost(e) -> tuple[int, int]:
     return (1, dag.size(e, cap=200))   # count_ops walks the tree: exponential when nested
 
 
+_DIVISORS: contextvars.ContextVar = contextvars.ContextVar("jetnh_divisors", default=None)
+
+
+@contextlib.contextmanager
+def divisors():
+    """Collect, in a list, what every ``solve`` inside the block divides by: the
+    determinant (k <= 3) or the LU pivots (whose product is the determinant, up to sign).
+    Where one vanishes the solve is singular, whether or not its numerators vanish too."""
+    out: list = []
+    token = _DIVISORS.set(out)
+    try:
+        yield out
+    finally:
+        _DIVISORS.reset(token)
+
+
+def _divides(d):
+    out = _DIVISORS.get()
+    if out is not None and not d.is_number:
+        out.append(d)
+
+
 def solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
     """The solution X of M X = rhs for square M (rhs may have several columns)."""
     k = M.rows
     if k == 0:
         return sp.zeros(0, rhs.cols)
     if k == 1:
+        _divides(M[0, 0])
         return rhs / M[0, 0]
     # sympy's matrix products otherwise run cancel() on every entry (dotprodsimp): that is
     # a simplification on the hot path, minutes long on an N-trailer's reduced mass matrix
     with dotprodsimp(False):
         if k <= _ADJUGATE_MAX:
             det = M.det(method="berkowitz")
+            _divides(det)
             return matmul(M.adjugate(method="berkowitz"), rhs) / det
         return _lu_solve(M, rhs)
 
@@ -79,6 +105,7 @@ def _lu_solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
             A.row_swap(best, col)
             B.row_swap(best, col)
         piv = A[col, col]
+        _divides(piv)
         for r in range(col + 1, k):
             if A[r, col] != 0:
                 fac = A[r, col] / piv

@@ -20,6 +20,7 @@ import sympy as sp
 from . import dag
 
 _FACTOR_MAX = 400        # tree nodes up to which a factor is factored and tested for sign
+_FACTOR_GENERATORS = 3   # functions and roots up to which a factor is factored
 _LABEL_MAX = 400         # tree nodes up to which an expression is printed in full
 
 
@@ -86,11 +87,14 @@ def label(e, limit: int = _LABEL_MAX) -> str:
 
 
 def _split(b) -> list:
-    """The factors of ``b``: small ones through ``sp.factor`` (poles included: where a
+    """The factors of ``b``: small ones (a short tree, few functions and roots: the cost
+    of factoring grows fast with them) through ``sp.factor``, poles included (where a
     factor's denominator vanishes the factor is undefined)."""
     out = []
     for f in factors(b):
-        if tree_size(f, _FACTOR_MAX) > _FACTOR_MAX or not f.is_Add:
+        if not f.is_Add or tree_size(f, _FACTOR_MAX) > _FACTOR_MAX or len(
+                {g for g in dag.nodes(f) if isinstance(g, sp.Function) or (
+                    g.is_Pow and not g.exp.is_Integer)}) > _FACTOR_GENERATORS:
             out.append(f)
             continue
         try:
