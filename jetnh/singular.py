@@ -9,8 +9,9 @@ What "cannot vanish" means here: every symbol (time, coordinates, velocities,
 multipliers, parameters) is taken to be real, and a symbol that is itself in the set is
 taken to be nonzero (the set is a union: off it, that symbol is nonzero).  A factor is
 dropped when sympy's assumptions then prove it nonzero (a nonzero number, exp(u),
-1 + u^2, a^2 + b^2 when a is in the set); nothing else is dropped, a parameter (m) or a
-sum of parameters (I1 + R^2) included.
+1 + u^2, a^2 + b^2 when a is in the set; sin(u)^2 + cos(u)^2, after the one rewrite
+sin(u)^2 -> 1 - cos(u)^2 of small factors); nothing else is dropped, a parameter (m) or
+a sum of parameters (I1 + R^2) included.
 """
 
 from __future__ import annotations
@@ -92,22 +93,33 @@ def _split(b) -> list:
     factor's denominator vanishes the factor is undefined)."""
     out = []
     for f in factors(b):
-        if not f.is_Add or tree_size(f, _FACTOR_MAX) > _FACTOR_MAX or len(
-                {g for g in dag.nodes(f) if isinstance(g, sp.Function) or (
-                    g.is_Pow and not g.exp.is_Integer)}) > _FACTOR_GENERATORS:
-            out.append(f)
-            continue
-        try:
-            g = sp.factor(f)
-        except (sp.PolynomialError, NotImplementedError, ValueError, TypeError):
-            out.append(f)
-            continue
+        g = _pythagoras(f)
+        if g.is_Add and tree_size(g, _FACTOR_MAX) <= _FACTOR_MAX and len(
+                {e for e in dag.nodes(g) if isinstance(e, sp.Function) or (
+                    e.is_Pow and not e.exp.is_Integer)}) <= _FACTOR_GENERATORS:
+            try:
+                g = sp.factor(g)
+            except (sp.PolynomialError, NotImplementedError, ValueError, TypeError):
+                pass
         for h in sp.Mul.make_args(g):
             if h.is_Pow and h.exp.is_number and h.exp.is_negative:
                 out.extend(factors(h.base))
             else:
                 out.extend(factors(h))
     return out
+
+
+def _pythagoras(f):
+    """``f`` with sin(u)^2 replaced by 1 - cos(u)^2 and expanded, when that is shorter
+    (sin^2 + cos^2 sums, common in the norms of constraint rows); only for small ``f``."""
+    if tree_size(f, _FACTOR_MAX) > _FACTOR_MAX:
+        return f
+    squares = {g: 1 - sp.cos(g.base.args[0]) ** 2 for g in dag.nodes(f)
+               if g.is_Pow and g.exp == 2 and isinstance(g.base, sp.sin)}
+    if not squares:
+        return f
+    g = sp.expand(f.xreplace(squares))
+    return g if tree_size(g, _FACTOR_MAX) < tree_size(f, _FACTOR_MAX) else f
 
 
 def _nonzero(f, nonzero_symbols: set) -> bool:
