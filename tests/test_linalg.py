@@ -178,3 +178,26 @@ def test_solves_match_numeric_solves(k, seed):
                                                      for v in values(rhs.col(j), pt)]))
             scale = 1 + max(abs(complex(ref[i])) for i in range(k))
             assert max(abs(got[i * 2 + j] - complex(ref[i])) for i in range(k)) < 1e-12 * scale
+
+
+def test_completing_puts_the_pivot_points_on_a_manifold():
+    """An entry v - x^2 is zero on the manifold v = x^2 only: with ``completing`` the
+    value-based choice sees it as zero there and never divides by it."""
+    x, v = sp.symbols("x v")
+    k = 7
+    M = sp.eye(k) * 2 + sp.Matrix(k, k, lambda i, j: sp.sin(i * x + j) / 9 if i != j else 0)
+    M[0, 0] = 10 * (v - x**2)
+    M[1, 0] = 1 + x * v
+    with linalg.divisors() as free:
+        linalg.solve(M, sp.ones(k, 1))
+
+    def on(values):
+        values = dict(values)
+        values[v] = values[x] ** 2
+        return values
+    with linalg.completing(on), linalg.divisors() as bound:
+        X = linalg.solve(M, sp.ones(k, 1))
+    assert free[0] == M[0, 0]                   # off the manifold it looks largest
+    assert all(d != M[0, 0] for d in bound)
+    got = values(X, {x: sp.Rational(1, 2), v: sp.Rational(1, 4)})
+    assert all(abs(g) < 1e3 for g in got)

@@ -439,7 +439,8 @@ def singular_indicators(system, accelerations, numbers) -> list[tuple[str, sp.Ex
     compiled parameters (``numbers``: name -> number) substituted:
 
     - ``"split"``: det(df^a/dqdot^alpha) on the constraints (k <= 3; for larger k the
-      pivots of the solve for phi appear among the next kind);
+      determinant, or the LU pivots beyond k = 6, of the solve for phi appear among the
+      next kind);
     - ``"constraint"``: denominators and fractional-power/log/... arguments of phi^alpha
       (a constraint not differentiable there, e.g. sqrt(xdot^2 + ydot^2) -> 0);
     - ``"acceleration"``: the same in the accelerations (``accelerations``: expressions),
