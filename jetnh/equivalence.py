@@ -75,8 +75,8 @@ class Comparison:
     """The verdict of ``compare``: which coordinates' accelerations agree, and where.
 
     ``singular``: expressions (on the constraints; multipliers may occur) where one of
-    the two acceleration systems is singular or undefined (``singular``); ``identical``
-    and ``on_branch_32`` hold off the set where one of them vanishes.
+    the two acceleration systems is singular or undefined (``singular_set``);
+    ``identical`` and ``on_branch_32`` hold off the set where one of them vanishes.
     """
 
     principles: tuple
@@ -112,11 +112,11 @@ def singular_set(system: System, principle: str, convention: str = "paper") -> l
     """Where ``principle``'s acceleration system (the linear system in q'' and the
     multiplier rates) is singular or undefined, on the constraints: the factors
     (``jetnh.singular``) of what its block solve divides by (``linalg.divisors``: the
-    determinants of the split and of the reduced mass matrix for blocks up to 3, the LU
+    determinants of the split and of the reduced mass matrix for blocks up to 6, the LU
     pivots, whose product is the determinant, for larger ones), of det(df/dqdot^alpha)
     (k <= 3), and of the denominators and root, log, ... arguments of the solved
     accelerations, rates and phi.  So the set contains every singular state (for blocks
-    larger than 3, possibly more: a pivot may vanish where the block is regular)."""
+    larger than 6, possibly more: a pivot may vanish where the block is regular)."""
     return _singular(system, *_solved(system.equations(principle, convention=convention)))
 
 

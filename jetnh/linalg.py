@@ -3,12 +3,12 @@
 Small systems (k <= 3) are solved by the adjugate over the determinant, and systems up
 to k = 6 by Cramer's rule with shared minors, so that the only denominator is the
 determinant itself: a solve introduces no singularity the matrix does not have (a split
-whose every entry vanishes somewhere, det = 1, is solved everywhere).  Larger systems use LU with pivots chosen by their value at a random point
-(the matrix is eliminated numerically alongside): never an entry that vanishes
-identically; constants first (which keeps unit-diagonal, explicit-form blocks free of
-divisions), then the largest, the shortest among near ties.  A pivot may still vanish
-on a lower-dimensional set where the matrix is regular (their product is the
-determinant); ``divisors`` collects them.
+whose every entry vanishes somewhere, det = 1, is solved everywhere).  Larger systems
+use LU with pivots chosen by their values at random points (the matrix is eliminated
+numerically alongside): never an entry that is zero in value; constants first (which
+keeps unit-diagonal, explicit-form blocks free of divisions), then the largest, the
+shortest among near ties.  A pivot may still vanish on a lower-dimensional set where the
+matrix is regular (their product is the determinant); ``divisors`` collects them.
 """
 
 from __future__ import annotations
