@@ -12,19 +12,23 @@
 
 Agreement of expressions is decided by evaluation at random states on the constraint
 manifold (with random multipliers and parameters), a Schwartz-Zippel style test: a
-nonzero analytic difference vanishes at random points with probability zero.
+nonzero analytic difference vanishes at random points with probability zero.  The
+expressions are evaluated on their shared graph (``dag.evaluate``), never flattened.
+Verdicts hold off the singular sets of the two acceleration systems
+(``Comparison.singular``), where a random point falls with probability zero too.
 """
 
 from __future__ import annotations
 
+import random
 from dataclasses import dataclass, field
 
+import mpmath
 import sympy as sp
 
-from . import dag, linalg
+from . import accelerations, dag, linalg, singular
 from .constraints import System
 from .frobenius import bracket_components
-from .testing import vanishes
 
 _POINTS = 4
 
@@ -62,22 +66,46 @@ def frobenius_T(system: System) -> sp.Matrix:
                                            for r in range(len(coords))]))
 
 
+_SHOWN = 4               # singular factors a verdict's text shows
+_SHOWN_NODES = 60        # tree nodes up to which a shown factor is printed in full
+
+
 @dataclass(frozen=True)
 class Comparison:
-    """The verdict of ``compare``: which coordinates' accelerations agree, and where."""
+    """The verdict of ``compare``: which coordinates' accelerations agree, and where.
+
+    ``singular``: expressions (on the constraints; multipliers may occur) where one of
+    the two acceleration systems is singular or undefined (``singular_set``);
+    ``identical`` and ``on_branch_32`` hold off the set where one of them vanishes.
+    """
 
     principles: tuple
     identical: bool
     on_branch_32: bool | None
     defects: dict = field(default_factory=dict)   # q'' difference (symbolic, unsimplified)
+    singular: list = field(default_factory=list)
+
+    def where(self) -> str:
+        """The singular set as text, within budget ("" when empty)."""
+        shown = [singular.label(e, _SHOWN_NODES) + " = 0" for e in self.singular[:_SHOWN]]
+        more = len(self.singular) - len(shown)
+        return " or ".join(shown + ([f"{more} more"] if more else []))
 
     def __str__(self):
         a, b = self.principles
+        off = (f" off the singular set {self.where()} (there an acceleration system is "
+               "singular or undefined)") if self.singular else ""
         if self.identical:
-            return f"{a} and {b} have the same accelerations at every state"
+            return f"{a} and {b} have the same accelerations at every state{off}"
         if self.on_branch_32:
-            return f"{a} and {b} agree on the branch lambda_alpha = -p_alpha (32), not in general"
-        return f"{a} and {b} do not share solutions in general"
+            return (f"{a} and {b} agree on the branch lambda_alpha = -p_alpha (32), not in "
+                    f"general{',' if off else ''}{off}")
+        return f"{a} and {b} do not share solutions in general{off}"
+
+    def __repr__(self):
+        return (f"Comparison({self.principles!r}, identical={self.identical}, "
+                f"on_branch_32={self.on_branch_32}, defects=<{len(self.defects)} expressions>, "
+                f"singular=<{len(self.singular)}: {self.where()}>)")
 
     def _repr_html_(self):
         from .display import comparison_html
@@ -90,17 +118,116 @@ class Comparison:
         return comparison_latex(self)
 
 
-def agrees(system: System, expr, derived=None) -> bool:
-    """Whether ``expr`` vanishes at random states on the constraint manifold (with the
-    ``derived`` symbols set from the others, as in ``jetnh.testing.vanishes``)."""
-    return vanishes(expr, system, points=_POINTS, derived=derived)
+def singular_set(system: System, principle: str, convention: str = "paper") -> list:
+    """Where ``principle``'s acceleration system (the linear system in q'' and the
+    multiplier rates) is singular or undefined, on the constraints: the factors
+    (``jetnh.singular``) of what its block solve divides by (``linalg.divisors``: the
+    determinants of the split and of the reduced mass matrix for blocks up to 6, the LU
+    pivots, whose product is the determinant, for larger ones), of det(df/dqdot^alpha)
+    (k <= 3), and of the denominators and root, log, ... arguments of the solved
+    accelerations, rates and phi.  So the set contains every singular state (for blocks
+    larger than 6, possibly more: a pivot may vanish where the block is regular)."""
+    return _singular(system, *_solved(system.equations(principle, convention=convention)))
+
+
+def _solved(eqs) -> tuple:
+    """The accelerations of ``eqs`` and what their solve divided by (``linalg.divisors``)."""
+    with linalg.divisors() as divs:
+        acc = eqs.accelerations()
+    return acc, divs
+
+
+def _singular(system: System, acc: dict, divs=()) -> list:
+    exprs = (list(acc.values()) + [system.phi[v] for v in system.dependent_velocities]
+             + [1 / d for d in divs])
+    k = system.k
+    A = system.jacobian_dependent
+    if 0 < k <= 3 and any(not e.is_number for e in A):
+        exprs.append(1 / (A[0, 0] if k == 1 else A.det(method="berkowitz")))
+    return singular.singular_set(exprs, on=system.phi)
+
+
+def agrees(system: System, expr, derived=None, points: int = _POINTS, seed: int = 0) -> bool:
+    """Whether ``expr`` vanishes on the constraint manifold: at random points (random
+    multipliers and parameters; the ``derived`` symbols set from the others), each
+    evaluated on the shared graph at 30 and 60 digits.  A value both precisions confirm
+    is nonzero; one that shrinks with the precision is rounding noise of an exact zero;
+    between the two the point is evaluated exactly (rational points of rational
+    expressions) or at 120 digits."""
+    expr = sp.sympify(expr)
+    if expr == 0:
+        return True
+    derived = dict(derived or {})
+    vel = set(system.dependent_velocities)
+    syms = (dag.free_symbols([expr, *derived.values(), *system.phi.values()])
+            - vel - set(derived))
+    syms = sorted(syms, key=lambda s: s.name)
+    rng = random.Random(seed)
+    got = 0
+    for _ in range(4 * points):
+        if got >= points:
+            return True
+        base = {s: sp.Rational(rng.randrange(31 * _DEN // 100, 137 * _DEN // 100), _DEN)
+                for s in syms}
+        try:
+            zero = _zero_at(system, expr, derived, base)
+        except (ValueError, ZeroDivisionError, ArithmeticError):
+            continue                # off the domain (a root of a negative number, ...)
+        if not zero:
+            return False
+        got += 1
+    return got >= max(1, points // 2)
+
+
+_DEN = 100 * 2**16
+_CONFIRM = 1e-12         # relative agreement of two precisions that confirms a value
+_SHRINK = 1e-20          # a value that shrinks by this going to 60 digits is noise
+
+
+def _values(system, expr, derived, base, dps):
+    """``expr`` at the rational point ``base`` put on the constraints, ``dps`` digits."""
+    with mpmath.workdps(dps):
+        pt = {s: mpmath.mpf(v.p) / v.q for s, v in base.items()}
+        for v in system.dependent_velocities:
+            pt[v] = linalg._real(dag.evaluate(system.phi[v], pt, dps=dps))
+            if pt[v] is None:
+                raise ValueError("no real point on the constraints here")
+        for s, e in derived.items():
+            pt[s] = dag.evaluate(e, pt, dps=dps)
+        val = dag.evaluate(expr, pt, dps=dps)
+    if not mpmath.isfinite(val):
+        raise ZeroDivisionError("not finite here")
+    return val
+
+
+def _zero_at(system, expr, derived, base) -> bool:
+    lo, hi = (_values(system, expr, derived, base, d) for d in (30, 60))
+    if hi == 0 and lo == 0:
+        return True
+    if abs(lo - hi) <= _CONFIRM * abs(hi):
+        return False
+    if abs(hi) <= _SHRINK * abs(lo):
+        return True
+    try:                            # undecided: exactly, when everything is rational
+        if dag.size(expr, cap=linalg._EXACT_MAX + 1) > linalg._EXACT_MAX:
+            raise linalg.Inexact("too large to evaluate exactly")
+        with mpmath.workdps(60):
+            pt = accelerations._on_constraints(system, dict(base))
+        if any(not isinstance(v, sp.Rational) for v in pt.values()):
+            raise linalg.Inexact("irrational point")
+        pt.update({s: linalg._exact([e], pt)[0] for s, e in derived.items()})
+        return linalg._exact([expr], pt)[0] == 0
+    except linalg.Inexact:
+        top = _values(system, expr, derived, base, 120)
+        return abs(top) <= _SHRINK * abs(hi)
 
 
 def compare(system: System, first: str, second: str, convention: str = "paper") -> Comparison:
-    """Do ``first`` and ``second`` give the same coordinate accelerations?"""
+    """Do ``first`` and ``second`` give the same coordinate accelerations?  The verdict
+    holds off ``Comparison.singular`` (see ``singular_set``)."""
     e1 = system.equations(first, convention=convention)
     e2 = system.equations(second, convention=convention)
-    a1, a2 = e1.accelerations(), e2.accelerations()
+    (a1, d1), (a2, d2) = _solved(e1), _solved(e2)
     qdd = system.J.qdd
     defects = {q: a1[q] - a2[q] for q in qdd}
     same = all(agrees(system, d) for d in defects.values())
@@ -109,7 +236,21 @@ def compare(system: System, first: str, second: str, convention: str = "paper") 
     if not same and owner.multipliers:
         sub = branch_32(system, owner.multipliers, owner.explicit)
         on_branch = all(agrees(system, d, derived=sub) for d in defects.values())
-    return Comparison((first, second), same, on_branch, defects)
+    sing, seen = [], set()
+    for acc, divs in ((a1, d1), (a2, d2)):
+        for f in _singular(system, acc, divs):
+            if f not in seen:
+                seen.add(f)
+                sing.append(f)
+    # the branches in the multipliers first, then those in the state, then parameters
+    lams, jet = set(e1.multipliers + e2.multipliers), set(system.J.q + system.J.qd)
+    jet.add(system.J.t)
+
+    def rank(f):
+        syms = dag.free_symbols(f)
+        return 0 if syms & lams else 1 if syms & jet else 2
+    sing.sort(key=rank)
+    return Comparison((first, second), same, on_branch, defects, sing)
 
 
 def defect_along(system: System, first: str, second: str, samples, convention: str = "paper"):

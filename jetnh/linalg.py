@@ -1,13 +1,20 @@
 """Symbolic linear algebra without simplify and without spurious singularities.
 
-Small systems (k <= 3) are solved by the adjugate over the determinant, so that the only
-denominator is the determinant itself: a solve introduces no singularity the matrix does
-not have.  Larger systems use LU with pivots chosen for being constants, then for being
-short, which keeps unit-diagonal (explicit-form) blocks free of divisions.
+Small systems (k <= 3) are solved by the adjugate over the determinant, and systems up
+to k = 6 by Cramer's rule with shared minors, so that the only denominator is the
+determinant itself: a solve introduces no singularity the matrix does not have (a split
+whose every entry vanishes somewhere, det = 1, is solved everywhere).  Larger systems
+use LU with pivots chosen by their values at random points (the matrix is eliminated
+numerically alongside): never an entry that is zero in value; constants first (which
+keeps unit-diagonal, explicit-form blocks free of divisions), then the largest, the
+shortest among near ties.  A pivot may still vanish on a lower-dimensional set where the
+matrix is regular (their product is the determinant); ``divisors`` collects them.
 """
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import random
 
 import mpmath
@@ -17,6 +24,7 @@ from sympy.matrices.utilities import dotprodsimp
 from . import dag
 
 _ADJUGATE_MAX = 3
+_CRAMER_MAX = 6           # larger systems: LU with pivots chosen by value
 
 
 def _pivot_cost(e) -> tuple[int, int]:
@@ -27,20 +35,86 @@ def _pivot_cost(e) -> tuple[int, int]:
     return (1, dag.size(e, cap=200))   # count_ops walks the tree: exponential when nested
 
 
+_DIVISORS: contextvars.ContextVar = contextvars.ContextVar("jetnh_divisors", default=None)
+
+
+@contextlib.contextmanager
+def divisors():
+    """Collect, in a list, what every ``solve`` inside the block divides by: the
+    determinant (k <= 3) or the LU pivots (whose product is the determinant, up to sign).
+    Where one vanishes the solve is singular, whether or not its numerators vanish too."""
+    out: list = []
+    token = _DIVISORS.set(out)
+    try:
+        yield out
+    finally:
+        _DIVISORS.reset(token)
+
+
+def _divides(d):
+    out = _DIVISORS.get()
+    if out is not None and not d.is_number:
+        out.append(d)
+
+
 def solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
     """The solution X of M X = rhs for square M (rhs may have several columns)."""
     k = M.rows
     if k == 0:
         return sp.zeros(0, rhs.cols)
     if k == 1:
+        _divides(M[0, 0])
         return rhs / M[0, 0]
     # sympy's matrix products otherwise run cancel() on every entry (dotprodsimp): that is
     # a simplification on the hot path, minutes long on an N-trailer's reduced mass matrix
     with dotprodsimp(False):
         if k <= _ADJUGATE_MAX:
             det = M.det(method="berkowitz")
+            _divides(det)
             return matmul(M.adjugate(method="berkowitz"), rhs) / det
+        if k <= _CRAMER_MAX:
+            return _cramer_solve(M, rhs)
         return _lu_solve(M, rhs)
+
+
+def _cramer_solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
+    """Cramer's rule with every minor built once (Laplace expansion along the top row,
+    memoised by columns: about 2^k (k/2 + 1) minors per right-hand column), so that the
+    only denominator is det M: fraction-free, no pivot."""
+    k = M.rows
+    memo: dict = {}
+
+    def entry(src, r):
+        return M[r, src] if isinstance(src, int) else rhs[r, src[1]]
+
+    def minor(cols):             # the rows below k - len(cols), these columns in order
+        if not cols:
+            return sp.S.One
+        if cols in memo:
+            return memo[cols]
+        r = k - len(cols)
+        terms = []
+        for i, src in enumerate(cols):
+            e = entry(src, r)
+            if e == 0:
+                continue
+            m = minor(cols[:i] + cols[i + 1:])
+            if m != 0:
+                terms.append((e if i % 2 == 0 else -e) * m)
+        memo[cols] = out = sp.Add(*terms)
+        return out
+
+    det = minor(tuple(range(k)))
+    if det == 0:
+        raise ZeroDivisionError("singular matrix")
+    _divides(det)
+    X = sp.zeros(k, rhs.cols)
+    for c in range(rhs.cols):
+        for j in range(k):
+            num = minor(tuple(range(j)) + (("rhs", c),) + tuple(range(j + 1, k)))
+            if num != 0:
+                X[j, c] = num / det
+    return X
 
 
 def matmul(A: sp.Matrix, B: sp.Matrix) -> sp.Matrix:
@@ -66,26 +140,112 @@ def inverse(M: sp.Matrix) -> sp.Matrix:
     return solve(M, sp.eye(M.rows))
 
 
+_PIVOT_SEED = 20080557  # the random points of pivoting (fixed: the same solve each run)
+_PIVOT_DPS = 30          # digits of the numeric elimination that chooses pivots
+_PIVOT_POINTS = 3        # random points at which pivots are compared
+_PIVOT_ZERO = 1e-15      # |value| below this times the matrix's largest counts as zero
+_PIVOT_TIE = 0.25        # scores within this factor of the best are near ties
+_PIVOT_CONSTANT = 1e-3   # a nonzero constant with this score at least is preferred
+_COMPLETE: contextvars.ContextVar = contextvars.ContextVar("jetnh_complete", default=None)
+
+
+@contextlib.contextmanager
+def completing(complete):
+    """Inside the block, the random points at which ``solve`` chooses pivots are passed
+    through ``complete(values)`` (mpmath numbers, within ``mpmath.workdps``), e.g. to put
+    them on the constraint manifold."""
+    token = _COMPLETE.set(complete)
+    try:
+        yield
+    finally:
+        _COMPLETE.reset(token)
+
+
+def _pivot_values(M: sp.Matrix) -> list:
+    """M's entries at up to ``_PIVOT_POINTS`` random points (mpmath matrices, complex
+    where the entries are); points outside their domain are skipped."""
+    syms = sorted(dag.free_symbols(list(M)), key=lambda s: s.name)
+    rng = random.Random(_PIVOT_SEED)
+    complete = _COMPLETE.get()
+    out = []
+    for _ in range(_POINT_TRIES * _PIVOT_POINTS):
+        if len(out) >= _PIVOT_POINTS:
+            break
+        with mpmath.workdps(_PIVOT_DPS):
+            pt = {s: mpmath.mpf(rng.randrange(31 * _DEN // 100, 137 * _DEN // 100)) / _DEN
+                  for s in syms}
+            try:
+                if complete is not None:
+                    pt = complete(pt)
+                vals = dag.evaluate(list(M), pt, dps=_PIVOT_DPS)
+            except (TypeError, ValueError, ZeroDivisionError, ArithmeticError, Inexact):
+                continue
+            if all(mpmath.isfinite(v) for v in vals):
+                out.append(mpmath.matrix([vals[i * M.cols:(i + 1) * M.cols]
+                                          for i in range(M.rows)]))
+    return out
+
+
+def _choose(A, Ns, col, scales):
+    """The pivot row for column ``col``, by value at the random points (``Ns``, eliminated
+    alongside): each candidate's smallest size relative to the column's largest over the
+    points; a nonzero constant first (unless far smaller), else the best, the cheapest
+    form among near ties.  Entries zero at a point are never chosen while another is
+    not; without values, by form alone."""
+    rows = [r for r in range(col, A.rows) if A[r, col] != 0]
+    if not Ns or not rows:
+        return min(range(col, A.rows), key=lambda r: _pivot_cost(A[r, col]))
+    score = {r: mpmath.inf for r in rows}
+    for N, scale in zip(Ns, scales):
+        top = max(abs(N[r, col]) for r in rows)
+        for r in rows:
+            v = abs(N[r, col])
+            score[r] = min(score[r], v / top if v > _PIVOT_ZERO * scale else 0)
+    best = max(score.values())
+    if best == 0:                            # zero at a point: fall back to the form
+        return min(rows, key=lambda r: _pivot_cost(A[r, col]))
+    consts = [r for r in rows if A[r, col].is_number and score[r] >= _PIVOT_CONSTANT]
+    if consts:
+        return max(consts, key=lambda r: score[r])
+    near = [r for r in rows if score[r] >= _PIVOT_TIE * best]
+    return min(near, key=lambda r: (_pivot_cost(A[r, col]), -score[r]))
+
+
 def _lu_solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
-    """Gaussian elimination with pivots chosen by ``_pivot_cost`` (row pivoting)."""
+    """Gaussian elimination with row pivots chosen by value (``_choose``): the matrix is
+    evaluated at random points (``completing`` puts them on a manifold) and eliminated
+    numerically alongside, so that a pivot is never an entry that vanishes identically
+    (or one that is merely short), and constants are kept as pivots where they serve."""
     A = M.copy().as_mutable()
     B = rhs.copy().as_mutable()
     k = A.rows
-    for col in range(k):
-        best = min(range(col, k), key=lambda r: _pivot_cost(A[r, col]))
-        if A[best, col] == 0:
-            raise ZeroDivisionError("singular matrix")
-        if best != col:
-            A.row_swap(best, col)
-            B.row_swap(best, col)
-        piv = A[col, col]
-        for r in range(col + 1, k):
-            if A[r, col] != 0:
-                fac = A[r, col] / piv
-                for R, j0 in ((A, col), (B, 0)):        # zero entries stay untouched
-                    for j in range(j0, R.cols):
-                        if R[col, j] != 0:
-                            R[r, j] = R[r, j] - fac * R[col, j]
+    Ns = _pivot_values(A)
+    with mpmath.workdps(_PIVOT_DPS):
+        scales = [max(abs(N[i, j]) for i in range(k) for j in range(k)) for N in Ns]
+        for col in range(k):
+            best = _choose(A, Ns, col, scales)
+            if A[best, col] == 0:
+                raise ZeroDivisionError("singular matrix")
+            if best != col:
+                A.row_swap(best, col)
+                B.row_swap(best, col)
+                for N in Ns:
+                    for j in range(k):
+                        N[best, j], N[col, j] = N[col, j], N[best, j]
+            piv = A[col, col]
+            _divides(piv)
+            for r in range(col + 1, k):
+                if A[r, col] != 0:
+                    fac = A[r, col] / piv
+                    for R, j0 in ((A, col), (B, 0)):        # zero entries stay untouched
+                        for j in range(j0, R.cols):
+                            if R[col, j] != 0:
+                                R[r, j] = R[r, j] - fac * R[col, j]
+                for N in Ns:
+                    if N[col, col] != 0:
+                        nf = N[r, col] / N[col, col]
+                        for j in range(col, k):
+                            N[r, j] -= nf * N[col, j]
     X = sp.zeros(k, B.cols)
     for r in range(k - 1, -1, -1):
         acc = B[r, :] - matmul(A[r, r + 1:], X[r + 1:, :])

@@ -1,11 +1,16 @@
-"""Equivalence of principles: identically, on the branch (32), along states."""
+"""Equivalence of principles: identically, on the branch (32), along states; where the
+verdicts hold (the singular sets of the acceleration systems)."""
 
+import random
+
+import mpmath
 import numpy as np
+import sympy as sp
 from hypothesis import given, settings
 
 import jetnh.strategies as jst
-from jetnh import JetSpace, System, compare
-from jetnh.equivalence import defect_along, frobenius_T
+from jetnh import JetSpace, System, compare, dag
+from jetnh.equivalence import agrees, defect_along, frobenius_T, singular_set
 from jetnh.models import appell_hamel, rolling_disk
 from jetnh.testing import vanishes
 
@@ -18,9 +23,152 @@ def test_disk_verdicts():
     assert not c.identical and c.on_branch_32
 
 
-def test_appell_hamel_vakonomic_agrees_for_every_multiplier():
-    c = compare(appell_hamel(), "vakonomic", "suslov")
-    assert c.identical
+def full_matrix(s, lams):
+    """The vakonomic acceleration system's matrix in (q'', lambda'), from L and f by
+    sympy (not by jetnh's solve): [[H + lambda_a G^a, A^T], [A, 0]]."""
+    qd = s.J.qd
+    H = sp.hessian(s.L, qd)
+    for f, lam in zip(s.constraints, lams):
+        H += lam * sp.hessian(f, qd)
+    A = sp.Matrix(s.constraints).jacobian(qd)
+    return H.row_join(A.T).col_join(A.row_join(sp.zeros(s.k, s.k)))
+
+
+def point(s, syms, rng, dps=50):
+    """Random values (mpf) for ``syms``, dependent velocities from phi."""
+    with mpmath.workdps(dps):
+        pt = {x: mpmath.mpf(rng.uniform(0.3, 1.4)) for x in syms
+              if x not in s.dependent_velocities}
+        for v in s.dependent_velocities:
+            pt[v] = dag.evaluate(s.phi[v], pt, dps=dps)
+    return pt
+
+
+def relative_det(M, pt, dps=50):
+    """|det M| / prod of its row norms at ``pt`` (Hadamard: at most 1)."""
+    with mpmath.workdps(dps):
+        vals = dag.evaluate(list(M), pt, dps=dps)
+        Mn = mpmath.matrix([vals[i * M.cols:(i + 1) * M.cols] for i in range(M.rows)])
+        bound = mpmath.fprod(mpmath.norm(Mn[i, :]) for i in range(M.rows))
+        return abs(mpmath.det(Mn)) / bound
+
+
+def test_appell_hamel_agrees_off_the_singular_branch():
+    s = appell_hamel()
+    c = compare(s, "vakonomic", "suslov")
+    assert c.identical and c.on_branch_32 is None
+    lam = s.equations("vakonomic").multipliers[0]
+    m, a, b = sp.symbols("m a b")
+    xd, yd, _ = s.J.qd
+    branch = [f for f in c.singular if lam in f.free_symbols]
+    assert len(branch) == 1 and c.singular[0] == branch[0]
+    # the branch, solved from the factor: lambda_z = a m |v| / b
+    (sol,) = sp.solve(branch[0], lam)
+    assert vanishes(sol - a * m * sp.sqrt(xd**2 + yd**2) / b)
+    # the other factors: the constraint's kink, the mass, the parameter a (b/a)
+    assert set(c.singular) - {branch[0]} == {xd**2 + yd**2, m, a}
+    # the full system (built from L and f by sympy) is singular on the branch, with the
+    # kernel q'' = (-ydot, xdot, 0), lambda' = 0: the motion is not unique there
+    M = full_matrix(s, [lam])
+    on = {lam: a * m * sp.sqrt(xd**2 + yd**2) / b}
+    assert vanishes(M.det(method="berkowitz").xreplace(on), s)
+    assert all(vanishes(e, s) for e in M.xreplace(on) * sp.Matrix([-yd, xd, 0, 0]))
+    rng = random.Random(1)
+    syms = dag.free_symbols(list(M)) | {lam}
+    for _ in range(5):
+        assert relative_det(M, point(s, syms, rng)) > 1e-6
+    # the verdict says where it holds, within budget
+    text = str(c)
+    assert "off the singular set" in text and "lambda_z" in text and len(text) < 600
+    assert len(repr(c)) < 600
+    assert "lambda_z" not in str(compare(s, "chetaev", "suslov"))
+
+
+def test_a_comparison_text_stays_within_budget():
+    J = JetSpace("x y z")
+    x, y, z = J.q
+    xd, yd, zd = J.qd
+    L = (xd**2 + yd**2 + zd**2) / 2 * (2 + sp.sin(x * y))
+    # a long nested constraint: its singular factors are long; the text stays short
+    f = zd - sp.sqrt(1 + sum(sp.cos(k * x) * xd**2 + sp.sin(k * y) * yd**2 for k in range(1, 9)))
+    c = compare(System(J, L, [f], [z]), "vakonomic", "suslov")
+    assert c.singular and len(str(c)) < 1200 and len(repr(c)) < 1200
+
+
+@settings(max_examples=6)
+@given(jst.constrained_systems(max_n=3, affine=False))
+def test_the_singular_set_is_where_the_vakonomic_system_is_singular(case):
+    """Two routes: the factors with multipliers jetnh reports (from its block solve) and
+    the determinant of the full system [[H + lambda G, A^T], [A, 0]] (sympy, from L and f):
+    on every root lambda_1 of a factor the determinant vanishes, and on every root of the
+    determinant some factor vanishes (the other values random)."""
+    J, L, cons, dep = case
+    s = System(J, L, cons, dep)
+    lams = s.equations("vakonomic").multipliers
+    sing = singular_set(s, "vakonomic")
+    M = full_matrix(s, lams)
+    lam = lams[0]
+    branch = [f for f in sing if lam in f.free_symbols]
+    syms = sorted(dag.free_symbols(list(M) + sing + list(s.phi.values())) | set(lams),
+                  key=lambda x: x.name)
+    rng = random.Random(0)
+    with mpmath.workdps(50):
+        pt = point(s, syms, rng)
+
+        def det_at(v):
+            return relative_det(M, {**pt, lam: v})
+
+        # det M is a polynomial in lambda_1 of degree <= n: its coefficients, then roots
+        xs = [mpmath.mpf(i) / 3 for i in range(J.n + 1)]
+        vals = [mpmath.det(mpmath.matrix([[e for e in row] for row in _rows(M, {**pt, lam: v})]))
+                for v in xs]
+        coeffs = mpmath.lu_solve(mpmath.matrix([[v**j for j in range(J.n, -1, -1)] for v in xs]),
+                                 mpmath.matrix(vals))
+        coeffs = list(coeffs)
+        scale = max(abs(c) for c in coeffs)
+        while coeffs and abs(coeffs[0]) < mpmath.mpf(10)**-30 * scale:
+            coeffs.pop(0)
+        roots = mpmath.polyroots(coeffs, maxsteps=200, extraprec=100) if len(coeffs) > 1 else []
+        assert bool(roots) == bool(branch)
+        for r in roots:
+            worst = min(_relative(f, {**pt, lam: r}) for f in branch)
+            assert worst < 1e-20
+        for f in branch:
+            poly = sp.Poly(f, lam)
+            cs = [dag.evaluate(c, pt, dps=50) for c in poly.all_coeffs()]
+            for r in (mpmath.polyroots(cs, maxsteps=200, extraprec=100) if len(cs) > 1 else []):
+                assert det_at(r) < 1e-20
+            # off the factor (lambda_1 random) the system is regular
+            assert det_at(mpmath.mpf(rng.uniform(2, 3))) > 1e-30
+
+
+def _rows(M, pt):
+    vals = dag.evaluate(list(M), pt, dps=50)
+    return [vals[i * M.cols:(i + 1) * M.cols] for i in range(M.rows)]
+
+
+def _relative(f, pt):
+    """|f| relative to its terms' sizes at ``pt``."""
+    terms = list(sp.Add.make_args(f))
+    vals = dag.evaluate([f, *terms], pt, dps=50)
+    return abs(vals[0]) / max([mpmath.mpf(1)] + [abs(v) for v in vals[1:]])
+
+
+def test_agreement_is_decided_on_the_graph_at_two_precisions():
+    s = rolling_disk()
+    x, y, phi, psi = s.J.q
+    # a difference of 1e-25 survives (30-digit arithmetic alone would call it noise)
+    assert not agrees(s, sp.sin(psi)**2 + sp.cos(psi)**2 - 1 + sp.Rational(1, 10**25))
+    assert agrees(s, sp.sin(psi)**2 + sp.cos(psi)**2 - 1)
+    # nested expressions (trees of 3^60 nodes) are never flattened: (e + 1)^2 / (e + 2)
+    # and e + 1 / (e + 2) are the same map, iterated 60 times
+    e1 = e2 = e3 = psi
+    for _ in range(60):
+        e1 = (e1 + 1) * (e1 + 1) / (e1 + 2)
+        e2 = e2 + 1 / (e2 + 2)
+        e3 = e3 + 1 / (e3 + 2 + sp.Rational(1, 10**6))
+    assert agrees(s, e1 - e2)
+    assert not agrees(s, e1 - e3)
 
 
 def test_suslov_differs_from_chetaev_when_p_T_is_nonzero():

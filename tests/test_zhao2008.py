@@ -69,3 +69,17 @@ def test_printed_cache_matches_the_seed():
         pytest.skip("the seed paper is not beside the repository")
     assert printed.extract(printed.SEED.read_text(encoding="utf-8")) == json.loads(
         printed.CACHE.read_text(encoding="utf-8"))
+
+
+def test_appell_hamel_branch_is_shown_where_the_verdicts_rely_on_it(results):
+    items = {i["label"]: i for i in results["items"]}
+    iff, ex2 = items["(32): necessary and sufficient"], items["Example 2: T and equivalence"]
+    assert iff["status"] == "erratum" and ex2["status"] == "verified"
+    for it in (iff, ex2):
+        assert "lambda_z = a m sqrt(xdot^2 + ydot^2) / b" in it["note"]
+        assert "off the singular set" in it["note"] and "lambda_z" in it["note"]
+        assert "every lambda_z)" not in it["note"]
+        checks = [e for e in it["evidence"] if e.endswith((": True", ": False"))]
+        assert len(checks) >= 3 and all(e.endswith(": True") for e in checks), checks
+    text = (results["_out"] / "report.md").read_text()
+    assert "lambda_z = a m sqrt(xdot^2 + ydot^2) / b" in text

@@ -48,7 +48,7 @@ import sympy as sp
 from sympy.core.function import AppliedUndef
 from sympy.printing.pycode import PythonCodePrinter
 
-from .. import dag
+from .. import dag, singular
 from ..errors import JetnhError, PrincipleError
 
 CODEGEN_VERSION = "7"
@@ -167,7 +167,8 @@ def _derivation_source_hash() -> str:
     root = pathlib.Path(__file__).resolve().parents[1]
     h = hashlib.sha256()
     for name in ("jet.py", "linalg.py", "dag.py", "constraints.py", "variations.py",
-                 "equations.py", "accelerations.py", "numeric/codegen.py", "numeric/events.py"):
+                 "equations.py", "accelerations.py", "numeric/codegen.py", "numeric/events.py",
+                 "singular.py"):
         path = root / name
         if path.exists():
             h.update(path.read_bytes())
@@ -428,46 +429,9 @@ class _Preparer:
 
 
 # ---------------------------------------------------------------------- singularities
-def _singular_bases(expr) -> list:
-    """The quantities whose vanishing makes ``expr`` singular or undefined: bases of
-    negative and fractional powers, arguments of log, cos of tan/sec arguments, sin of
-    cot/csc arguments, 1 - u^2 of asin/acos arguments (in the order met; shared
-    subexpressions are visited once)."""
-    out, seen, stack = [], set(), [sp.sympify(expr)]
-    while stack:
-        e = stack.pop()
-        if e in seen or e.is_Atom:
-            continue
-        seen.add(e)
-        if e.is_Pow:
-            b, x = e.as_base_exp()
-            if x.is_number and (x.is_negative or not x.is_integer):
-                out.append(b)
-        elif isinstance(e, sp.log):
-            out.append(e.args[0])
-        elif isinstance(e, (sp.tan, sp.sec)):
-            out.append(sp.cos(e.args[0]))
-        elif isinstance(e, (sp.cot, sp.csc)):
-            out.append(sp.sin(e.args[0]))
-        elif isinstance(e, (sp.asin, sp.acos, sp.atanh)):
-            out.append(1 - e.args[0] ** 2)
-        stack.extend(reversed(e.args))
-    return out
-
-
-def _factors(b) -> list:
-    """``b`` split into the factors whose vanishing makes it vanish, without numbers,
-    positive integer powers or an overall sign."""
-    out = []
-    for f in sp.Mul.make_args(b):
-        while f.is_Pow and f.exp.is_Integer and f.exp > 0:
-            f = f.base
-        if f.is_number:
-            continue
-        if f.could_extract_minus_sign():
-            f = -f
-        out.append(f)
-    return out
+# the shared walk lives in the symbolic core (``compare`` reports the same quantities)
+_singular_bases = singular.bases
+_factors = singular.factors
 
 
 def singular_indicators(system, accelerations, numbers) -> list[tuple[str, sp.Expr]]:
@@ -475,7 +439,8 @@ def singular_indicators(system, accelerations, numbers) -> list[tuple[str, sp.Ex
     compiled parameters (``numbers``: name -> number) substituted:
 
     - ``"split"``: det(df^a/dqdot^alpha) on the constraints (k <= 3; for larger k the
-      pivots of the solve for phi appear among the next kind);
+      determinant, or the LU pivots beyond k = 6, of the solve for phi appear among the
+      next kind);
     - ``"constraint"``: denominators and fractional-power/log/... arguments of phi^alpha
       (a constraint not differentiable there, e.g. sqrt(xdot^2 + ydot^2) -> 0);
     - ``"acceleration"``: the same in the accelerations (``accelerations``: expressions),

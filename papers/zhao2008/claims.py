@@ -165,20 +165,62 @@ def _c_two_sets(ctx):
                    evidence=[str(c1), str(c2)])
 
 
+def _ah_branch(ctx):
+    """Example 2's vakonomic singular branch, derived: (Comparison, the branch as text,
+    checks).  The branch is the root in lambda_z of the factor of ``compare``'s singular
+    set that has lambda_z; on it jetnh's vakonomic rows (44) hold for a whole line of
+    accelerations (any component across the velocity: the motion is not unique), and
+    lambda_z - a m |v| / b is constant along every vakonomic motion, by the rows (so the
+    branch is invariant)."""
+    s = ctx.appell_hamel
+    J = s.J
+    c = compare(s, "vakonomic", "suslov")
+    e = eqs(s, "vakonomic", "embedded")
+    lam = e.multipliers[0]
+    lam_t = e.J.jet(lam, 1)
+    m, g, a, b = sp.symbols("m g a b")
+    xd, yd = J.qd[0], J.qd[1]
+    v = sp.sqrt(xd**2 + yd**2)
+    facs = [f for f in c.singular if lam in f.free_symbols]
+    roots = [r for f in facs for r in sp.solve(f, lam)]
+    stated = a * m * v / b
+    found = len(roots) == 1 and vanishes(roots[0] - stated)
+    # on the branch: accelerations p (along the velocity) and w (across), z'' from D f = 0
+    p_, w_ = sp.symbols("p_par w_perp")
+    acc = {J.qdd[0]: (p_ * xd - w_ * yd) / v, J.qdd[1]: (p_ * yd + w_ * xd) / v}
+    rows = [s.on_constraints(r, prolonged=True).xreplace(acc).xreplace({lam: stated})
+            for r in e.expressions]
+    (rate,) = sp.solve(rows[0], lam_t)                       # (44c)
+    (par,) = sp.solve(xd * rows[1] + yd * rows[2], p_)        # the rows along the velocity
+    free = all(vanishes(r.xreplace({lam_t: rate, p_: par}), s) for r in rows[1:])
+    growth = rate - (m * a / b) * (xd * acc[J.qdd[0]] + yd * acc[J.qdd[1]]) / v
+    invariant = vanishes(growth.xreplace({p_: par}), s)
+    text = "lambda_z = a m sqrt(xdot^2 + ydot^2) / b"
+    checks = [f"the singular factor's root is {text}: {found}",
+              f"on it (44) holds for every acceleration across the velocity: {free}",
+              f"lambda_z - a m |v| / b constant by (44), so the branch is invariant: {invariant}"]
+    return c, text, found and free and invariant, checks
+
+
 @claim("(32): necessary and sufficient",
        r"\lambda_\alpha = -\frac{\partial L}{\partial \dot q^\alpha}\ \text{is necessary and "
        r"sufficient for common solutions}")
 def _c_32_iff(ctx):
-    c = compare(ctx.appell_hamel, "vakonomic", "suslov")
+    c, branch, ok, checks = _ah_branch(ctx)
     return Outcome(ERRATUM,
                    "Sufficient, not necessary: the equations differ by (p_alpha + lambda_alpha) T^alpha_mu "
                    "(proven in (32)), which vanishes for lambda = -p but also wherever T vanishes "
                    "along the motion. Appell-Hamel: T^3_mu is proportional to xddot ydot - xdot "
-                   "yddot, zero on the motion, and jetnh finds: " + str(c) + " (for every "
-                   "lambda_z). Necessity holds only where T^alpha_mu has rank k along the motion.",
+                   "yddot, zero on the motion, and jetnh finds: " + str(c) + ". So the "
+                   "vakonomic and Suslov motions coincide for every lambda_z except on the "
+                   f"invariant branch {branch}, where the vakonomic acceleration system is "
+                   "singular and its motion not unique (jetnh derives the branch: "
+                   f"{'yes' if ok else 'NO'}). Necessity holds only where T^alpha_mu has rank k "
+                   "along the motion.",
                    r"(p_\alpha + \lambda_\alpha)T^\alpha_\mu = 0\ \text{(necessary and sufficient);}"
-                   r"\ \lambda_\alpha = -p_\alpha\ \text{is sufficient}",
-                   [str(c)])
+                   r"\ \lambda_\alpha = -p_\alpha\ \text{is sufficient. Appell-Hamel: common "
+                   r"solutions for every } \lambda_z \ne a m\sqrt{\dot x^2+\dot y^2}/b",
+                   [str(c), *checks])
 
 
 @claim("(32): Chaplygin systems satisfy it",
@@ -321,12 +363,17 @@ def _c_ex2_T(ctx):
     T_ok = vanishes(T[0, 0] - b / a * yd * W / sq3) and vanishes(T[0, 1] - b / a * xd * (-W) / sq3)
     acc = derive(s, "suslov").accelerations()
     W_on = vanishes(W.xreplace(acc), s)
-    c = compare(s, "vakonomic", "suslov")
-    ok = T_ok and W_on and c.identical
+    c, branch, branch_ok, checks = _ah_branch(ctx)
+    ok = T_ok and W_on and c.identical and branch_ok
     return Outcome(VERIFIED if ok else ERRATUM,
                    "The printed T^3_mu equal jetnh's; along the Suslov accelerations "
-                   "xddot ydot - xdot yddot = 0; and jetnh finds: " + str(c) + ".",
-                   evidence=[f"T as printed: {T_ok}", f"W = 0 on the motion: {W_on}", str(c)])
+                   "xddot ydot - xdot yddot = 0; and jetnh finds: " + str(c) + ". The "
+                   "equivalence holds off the invariant branch " + branch + ", where the "
+                   "vakonomic acceleration system is singular: there (44) leaves the "
+                   "acceleration across the velocity free, so the vakonomic motion is not "
+                   "unique and contains motions that are not Suslov's.",
+                   evidence=[f"T as printed: {T_ok}", f"W = 0 on the motion: {W_on}", str(c),
+                             *checks])
 
 
 @claim("Conclusion: two independent sets",

@@ -40,7 +40,8 @@ def write(results: dict, path: pathlib.Path) -> pathlib.Path:
         "Chetaev condition after (31); the vertical disk's vakonomic equations (42b); the "
         "coupling coefficient in (44a, b).",
         "- Overstatements: (32) is sufficient, not necessary (Appell-Hamel agrees for every "
-        "multiplier); Chaplygin systems satisfy (32) only on the branch C = 0; '[f] = 0 is "
+        "multiplier off the invariant branch lambda_z = a m sqrt(xdot^2 + ydot^2) / b, where "
+        "its vakonomic acceleration system is singular and the motion not unique); Chaplygin systems satisfy (32) only on the branch C = 0; '[f] = 0 is "
         "not sufficient for integrability' fails when [f] = 0 holds identically.",
         "- Index misprints only: (22)-(24), (28), (29) carry [L]_k where [L]_s or [L]_mu is meant.",
         "",

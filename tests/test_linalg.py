@@ -1,0 +1,203 @@
+"""Symbolic solves that add no singularity: Cramer with shared minors (k <= 6), LU with
+pivots chosen by value (larger k); checked against numeric solves at chosen points."""
+
+import random
+
+import mpmath
+import pytest
+import sympy as sp
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from jetnh import JetSpace, System, dag, linalg
+
+
+def rotation(n, i, j, th):
+    M = sp.eye(n)
+    c, s = sp.cos(th), sp.sin(th)
+    M[i, i] = M[j, j] = c
+    M[i, j], M[j, i] = -s, s
+    return M
+
+
+def rotations(k, angles):
+    """A product of plane rotations: det 1 everywhere, every entry zero somewhere."""
+    planes = [(i, (i + 1) % k) for i in range(k)] + [(0, 2)]
+    R = sp.eye(k)
+    for (i, j), th in zip(planes, angles):
+        R = R * rotation(k, i, j, th)
+    return R
+
+
+def old_pivots(M):
+    """The pivots the form-based LU (shortest entry first) divided by."""
+    A = M.copy().as_mutable()
+    out = []
+    for col in range(A.rows):
+        best = min(range(col, A.rows), key=lambda r: linalg._pivot_cost(A[r, col]))
+        A.row_swap(best, col)
+        out.append(A[col, col])
+        for r in range(col + 1, A.rows):
+            fac = A[r, col] / A[col, col]
+            for j in range(col, A.cols):
+                A[r, j] = A[r, j] - fac * A[col, j]
+    return out
+
+
+def values(exprs, point, dps=40):
+    with mpmath.workdps(dps):
+        return [complex(v) for v in dag.evaluate(list(exprs), point, dps=dps)]
+
+
+def rotation_system(k):
+    names = " ".join(f"x{i}" for i in range(1, k + 1))
+    J = JetSpace(names + " u w")
+    u, w = J.q[k:]
+    ud, wd = J.qd[k:]
+    R = rotations(k, [u, w, u + w, u - w, 2 * u - w, w - u / 2][:k + 1])
+    b = sp.Matrix([ud, wd, ud * sp.cos(w), wd * sp.sin(u) + 1, ud * wd, 1 + u * ud][:k])
+    f = R * sp.Matrix(J.qd[:k]) - b
+    L = sum(v**2 for v in J.qd) / 2 - sp.cos(u) * sp.sin(w)
+    return System(J, L, list(f), list(J.q[:k])), R, b
+
+
+@pytest.mark.parametrize("k", [4, 5])
+def test_a_regular_split_of_rotations_is_solved_where_old_pivots_vanish(k):
+    s, R, b = rotation_system(k)
+    J = s.J
+    u, w = J.q[k:]
+    ud, wd = J.qd[k:]
+    # the old LU divided by entries that vanish on u = w (k = 4) or elsewhere
+    piv = old_pivots(R)
+    zeros = []
+    for p in piv[:2]:
+        for th in (sp.Rational(7, 10), sp.Rational(3, 10)):
+            sol = [z for z in sp.solve(p.xreplace({u: th}), w) if z.is_real]
+            zeros += [{u: th, w: z} for z in sol[:1]]
+    assert zeros, "the test needs points where the old pivots vanish"
+    with linalg.divisors() as divs:
+        phi = [s.phi[v] for v in s.dependent_velocities]
+    assert len(divs) == 1                       # only det R
+    acc = s.equations("chetaev").accelerations()
+    qdd = [acc[a] for a in J.qdd]
+    for pt in zeros + [{u: sp.Rational(1, 3), w: sp.Rational(5, 4)}]:
+        point = {**pt, ud: sp.Rational(2, 5), wd: sp.Rational(-11, 10)}
+        # the old pivot is zero here, the determinant is 1
+        assert any(abs(values([p], point)[0]) < 1e-30 for p in piv) or pt[u] == sp.Rational(1, 3)
+        assert abs(values(divs, point)[0] - 1) < 1e-30
+        # phi = R^T b (R orthogonal), finite
+        ref = (R.T * b).xreplace(point)
+        got = values(phi, point)
+        assert max(abs(g - complex(r.evalf(40))) for g, r in zip(got, ref)) < 1e-12
+        # the accelerations against a numeric solve of [[H, -A^T], [A, 0]] there
+        full = {**point, **{v: sp.Float(complex(g).real, 40) for v, g in
+                            zip(s.dependent_velocities, got)}}
+        exp = numeric_chetaev(s, full)
+        got_a = values(qdd, full)
+        assert max(abs(g - e) for g, e in zip(got_a, exp)) < 1e-12
+
+
+def numeric_chetaev(s, point):
+    """q'' of H q'' - A^T mu = r, A q'' = -v ([L] + mu A = 0 and D f = 0) by mpmath."""
+    J = s.J
+    q, qd = J.q, J.qd
+    L = s.L
+    H = sp.hessian(L, qd)
+    r = sp.Matrix([sp.diff(L, q[i]) - sum(sp.diff(L, qd[i], q[j]) * qd[j] for j in range(J.n))
+                   - sp.diff(L, qd[i], J.t) for i in range(J.n)])
+    f = sp.Matrix(s.constraints)
+    A = f.jacobian(qd)
+    v = f.jacobian(q) * sp.Matrix(qd) + sp.diff(f, J.t)
+    k, n = s.k, J.n
+    M = H.row_join(-A.T).col_join(A.row_join(sp.zeros(k, k)))
+    rhs = r.col_join(-v)
+    with mpmath.workdps(40):
+        Mn = mpmath.matrix([[mpmath.mpf(complex(x).real) for x in values(M.row(i), point)]
+                            for i in range(n + k)])
+        bn = mpmath.matrix([mpmath.mpf(complex(x).real) for x in values(rhs, point)])
+        sol = mpmath.lu_solve(Mn, bn)
+        return [complex(sol[i]) for i in range(n)]
+
+
+def test_lu_pivots_by_value_for_large_systems():
+    """k = 7 (LU): the form-based choice divided by x (zero at x = 0) and by
+    sin^2 + cos^2 - 1 (zero everywhere); the value-based one by neither."""
+    x, y = sp.symbols("x y")
+    k = 7
+    M = sp.eye(k) * (3 + sp.cos(y))
+    M[0, 0] = x
+    M[1, 0] = 2 + sp.sin(x) * sp.cos(y)
+    M[0, 1] = sp.sin(x) ** 2 + sp.cos(x) ** 2 - 1 + 1
+    M[2, 0] = sp.Rational(1, 3) * (sp.sin(y) ** 2 + sp.cos(y) ** 2 - 1)
+    M[3, 2], M[2, 3] = y, -y
+    for i in range(1, k):
+        M[i, i - 1] = M[i, i - 1] or sp.cos(x * i)
+    rhs = sp.Matrix([sp.sin(i * x + y) for i in range(k)])
+    piv = old_pivots(M)
+    assert piv[0] == x
+    with linalg.divisors() as divs:
+        X = linalg.solve(M, rhs)
+    assert all(d != x for d in divs)
+    for pt in ({x: 0, y: sp.Rational(1, 2)}, {x: sp.Rational(9, 10), y: sp.Rational(1, 7)}):
+        got = values(X, pt)
+        with mpmath.workdps(40):
+            Mn = mpmath.matrix([[complex(v).real for v in values(M.row(i), pt)] for i in range(k)])
+            ref = mpmath.lu_solve(Mn, mpmath.matrix([complex(v).real for v in values(rhs, pt)]))
+        assert max(abs(g - complex(ref[i])) for i, g in enumerate(got)) < 1e-12
+
+
+def test_lu_never_divides_by_an_entry_that_is_zero_in_value():
+    x, y = sp.symbols("x y")
+    k = 7
+    zero = sp.sin(x) ** 2 + sp.cos(x) ** 2 - 1           # short, nonzero in form, 0 in value
+    M = sp.eye(k) + sp.Matrix(k, k, lambda i, j: sp.cos(i * x + j * y) / 5 if i != j else 0)
+    M[0, 0] = zero
+    X = linalg.solve(M, sp.ones(k, 1))
+    got = values(X, {x: sp.Rational(1, 2), y: sp.Rational(1, 3)})
+    assert all(abs(g) < 1e3 for g in got)
+
+
+@settings(max_examples=10, deadline=None)
+@given(st.integers(4, 8), st.integers(0, 10**6))
+def test_solves_match_numeric_solves(k, seed):
+    """Random dense trigonometric matrices, k = 4..8 (Cramer and LU), at random points."""
+    rng = random.Random(seed)
+    x, y = sp.symbols("x y")
+    M = sp.Matrix(k, k, lambda i, j: rng.randint(-3, 3) + rng.choice(
+        [sp.sin, sp.cos])(rng.randint(1, 3) * x - rng.randint(0, 2) * y))
+    rhs = sp.Matrix(k, 2, lambda i, j: rng.randint(-2, 2) * x + sp.cos(j * y))
+    X = linalg.solve(M, rhs)
+    pt = {x: sp.Rational(rng.randint(1, 99), 37), y: sp.Rational(rng.randint(1, 99), 41)}
+    with mpmath.workdps(40):
+        Mn = mpmath.matrix([[complex(v).real for v in values(M.row(i), pt)] for i in range(k)])
+        if abs(mpmath.det(Mn)) < mpmath.mpf(10) ** -10:
+            return
+        got = values(X, pt)
+        for j in range(2):
+            ref = mpmath.lu_solve(Mn, mpmath.matrix([complex(v).real
+                                                     for v in values(rhs.col(j), pt)]))
+            scale = 1 + max(abs(complex(ref[i])) for i in range(k))
+            assert max(abs(got[i * 2 + j] - complex(ref[i])) for i in range(k)) < 1e-12 * scale
+
+
+def test_completing_puts_the_pivot_points_on_a_manifold():
+    """An entry v - x^2 is zero on the manifold v = x^2 only: with ``completing`` the
+    value-based choice sees it as zero there and never divides by it."""
+    x, v = sp.symbols("x v")
+    k = 7
+    M = sp.eye(k) * 2 + sp.Matrix(k, k, lambda i, j: sp.sin(i * x + j) / 9 if i != j else 0)
+    M[0, 0] = 10 * (v - x**2)
+    M[1, 0] = 1 + x * v
+    with linalg.divisors() as free:
+        linalg.solve(M, sp.ones(k, 1))
+
+    def on(values):
+        values = dict(values)
+        values[v] = values[x] ** 2
+        return values
+    with linalg.completing(on), linalg.divisors() as bound:
+        X = linalg.solve(M, sp.ones(k, 1))
+    assert free[0] == M[0, 0]                   # off the manifold it looks largest
+    assert all(d != M[0, 0] for d in bound)
+    got = values(X, {x: sp.Rational(1, 2), v: sp.Rational(1, 4)})
+    assert all(abs(g) < 1e3 for g in got)
