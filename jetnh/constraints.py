@@ -1,4 +1,5 @@
-"""A constrained system: a Lagrangian L(t, q, qdot) and constraints f^a(t, q, qdot) = 0.
+"""A constrained system: a Lagrangian L(t, q, qdot) and constraints f^a(t, q, qdot) = 0,
+with optional non-potential generalized forces Q_s(t, q, qdot).
 
 Implements the objects of Zhao et al. (2008), sections 2-4: the split into independent
 coordinates q^mu and dependent q^alpha, the explicit form qdot^alpha = phi^alpha(t, q, qdot^mu)
@@ -79,9 +80,9 @@ class System:
         self.L = self._first_order(L, "the Lagrangian")
         self.constraints = tuple(self._first_order(f, f"constraint {i + 1}")
                                  for i, f in enumerate(inputs.constraint_list(constraints)))
-        self.forces = {q: self._first_order(e, f"the force on {q.name}")
-                       for q, e in inputs.force_items(forces, J)}
-        self.forces = {q: e for q, e in self.forces.items() if e != 0}
+        checked = ((q, self._first_order(e, f"the force on {q.name}"))
+                   for q, e in inputs.force_items(forces, J))
+        self.forces = {q: e for q, e in checked if e != 0}
         self.dissipation = (sp.S.Zero if dissipation is None
                             else self._first_order(dissipation, "the dissipation function"))
         self._check_dissipation()

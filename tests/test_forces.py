@@ -241,7 +241,7 @@ def _run(name, t_end, params=None, principle="chetaev", **run):
         init.update({f"lambda_{d.name}": 0.0 for d in system.dependent})
     scene = jn.Scene(system, principle, params={**{k.name: v for k, v in
                                                    system.defaults.items()}, **(params or {})},
-                     initial=init, t_span=(0.0, t_end))
+                     initial=init, t_span=(0.0, t_end), runtime_params=("c", "c_r"))
     run = run or dict(rtol=1e-12, atol=1e-14, t_eval=np.linspace(0.0, t_end, 41))
     traj = scene.run(**run)
     assert traj.success, traj.stop_reason
