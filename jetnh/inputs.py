@@ -251,10 +251,7 @@ def force_items(forces, J) -> list:
     for key, val in forces.items():
         if isinstance(key, AppliedUndef):             # a dynamicsymbol x(t)
             key = convert_dynamic(key, J)
-        if isinstance(key, (sp.Symbol, str)) and not isinstance(key, sp.Dummy):
-            name = key.name if isinstance(key, sp.Symbol) else key
-        else:
-            name = None
+        name = key.name if isinstance(key, sp.Symbol) else key if isinstance(key, str) else None
         if name not in by_name:
             info = J.split(sp.Symbol(name)) if name else None
             hint = (f" ({name} is a jet of {info[0].name}: key the force by the coordinate)"

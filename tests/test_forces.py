@@ -308,8 +308,8 @@ def test_damped_chaplygin_sleigh_closed_form():
     assert _err(decay, decay[0]) < 1e-9
 
 
-def test_discrete_lagrange_dalembert_carries_the_forces():
-    """The midpoint step with the discrete forces h/2 Q at both ends: second order."""
+def test_discrete_integrators_carry_the_forces():
+    """The midpoint steps with the discrete forces h/2 Q at both ends: second order."""
     scene, traj = _run("damped_knife_edge", 1.0, method="dla", h=1e-3)
     i, g = scene.initial, scene.params["c"] / scene.params["m"]
     phi = i["phi"] + i["phi_t"] * (1 - np.exp(-g * traj.t)) / g
@@ -317,6 +317,12 @@ def test_discrete_lagrange_dalembert_carries_the_forces():
     assert _err(traj["x"], i["x_t"] / i["phi_t"] * np.sin(phi)) < 1e-6
     with pytest.raises(JetnhError, match="no power column"):
         traj.power                                          # noqa: B018
+    # the discrete vakonomic step follows the forced vakonomic flow
+    _, ref = _run("damped_knife_edge", 1.0, principle="vakonomic")
+    _, dvi = _run("damped_knife_edge", 1.0, principle="vakonomic", method="dvi", h=1e-3)
+    for name in ("x", "y", "phi", "lambda_y"):
+        assert abs(dvi[name][-1] - ref[name][-1]) < 1e-6, name
+    assert abs(ref["phi"][-1] - phi[-1]) > 1e-3             # not Chetaev's motion
 
 
 # ------------------------------------------------------------------ bookkeeping
