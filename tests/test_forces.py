@@ -165,14 +165,17 @@ def test_every_form_with_forces_vanishes_on_its_principles_accelerations(system,
                 acc = eom.accelerations()
                 # every lambda: Suslov's imposed rows keep them with coefficients that vanish
                 vals = manifold_state(system, rnd, extra=multiplier_symbols(system))
-                vals.update({a: _num(e, vals) for a, e in acc.items()})
+                solved = {a: _num(e, vals) for a, e in acc.items()}
+                vals.update(solved)
                 rows = eom.expressions
                 if eom.reactions:                 # Chetaev's multiplier form: nu from rows
                     vals.update(solve_linear([rows[i] for i in system.dep_index],
                                              eom.reactions, vals))
+                # relative to the accelerations (huge near a singular reduced Hessian)
+                scale = max([1] + [abs(v) for v in solved.values()])
                 for i, e in enumerate(rows):
                     v = _num(e, vals)
-                    assert abs(v) <= TOL, f"{principle} {form} {convention} row {i}: {v}"
+                    assert abs(v) <= TOL * scale, f"{principle} {form} {convention} row {i}: {v}"
 
 
 @settings(max_examples=5)
