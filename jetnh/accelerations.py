@@ -17,6 +17,8 @@ every principle's rows read
     suslov             kappa = -A_dep^-T p_dep: in (29) the commutator term P_alpha c^alpha
                        with c = A_dep^-1 [f] eta, (10), cancels lambda_a [f^a]_s.
 
+Generalized forces Q_s (``System.Q``) enter every row beside [L]_s: r_s becomes r_s + Q_s.
+
 The explicit forms ((17)-(20), (29)-(31)) use the constraints qdot^alpha - phi^alpha.
 When f is affine these are S f with S = A_dep^-1, and on f = 0
 
@@ -187,6 +189,8 @@ def _solve(system, kappa, explicit, multipliers, rates):
     else:
         raise ValueError(f"kappa must be one of {KAPPA}, not {kappa!r}")
     H1, r1 = H, r
+    if system.forced:                 # Q_s stands beside [L]_s in every row
+        r1 = r1 + sp.Matrix(system.Q)
     if any(c != 0 for c in kap):
         for a, c in enumerate(cparts):
             r1 = r1 + kap[a] * c.r

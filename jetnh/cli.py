@@ -195,6 +195,7 @@ def cmd_derive(args, progress) -> int:
             "coordinates": [q.name for q in system.J.q],
             "dependent": [q.name for q in system.dependent],
             "parameters": {s.name: v for s, v in system.defaults.items()},
+            "forces": _forces(system), "dissipation": str(system.dissipation),
             "expressions": [str(e) for e in eom.expressions],
             "multipliers": [str(m) for m in eom.multipliers],
             "accelerations": {str(k): str(v) for k, v in acc.items()},
@@ -202,12 +203,21 @@ def cmd_derive(args, progress) -> int:
     else:
         print(f"{system.name or loaded.label}: dependent "
               f"{', '.join(q.name for q in system.dependent) or 'none'}")
+        if system.dissipation != 0:
+            print(f"  dissipation D = {system.dissipation} (Q_s = forces - dD/dqdot^s)")
+        for name, Q in _forces(system).items():
+            print(f"  force Q_{name} = {Q}")
         print(eom)
         print("accelerations (on the constraint manifold):")
         with progress.step("simplifying for display"):
             rows = [f"  {k} = {_display(system, v)}" for k, v in acc.items()]
         print("\n".join(rows))
     return 0
+
+
+def _forces(system) -> dict:
+    """The nonzero generalized forces Q_s (forces and -dD/dqdot^s), by coordinate name."""
+    return {q.name: str(Q) for q, Q in zip(system.J.q, system.Q) if Q != 0}
 
 
 # ---------------------------------------------------------------------- compare
@@ -226,6 +236,8 @@ def cmd_compare(args, progress) -> int:
     print(f"  L = {system.L}")
     for f in system.constraints:
         print(f"  constraint: {f} = 0")
+    for name, Q in _forces(system).items():
+        print(f"  force Q_{name} = {Q}")
     print(f"  classification: {cls}")
     print(f"  L~ = {_display(system, system.L_tilde)}")
     print(f"  T = {T.applyfunc(lambda e: sp.sympify(_display(system, e))).tolist()}")

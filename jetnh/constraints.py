@@ -1,4 +1,5 @@
-"""A constrained system: a Lagrangian L(t, q, qdot) and constraints f^a(t, q, qdot) = 0.
+"""A constrained system: a Lagrangian L(t, q, qdot) and constraints f^a(t, q, qdot) = 0,
+with optional non-potential generalized forces Q_s(t, q, qdot).
 
 Implements the objects of Zhao et al. (2008), sections 2-4: the split into independent
 coordinates q^mu and dependent q^alpha, the explicit form qdot^alpha = phi^alpha(t, q, qdot^mu)
@@ -57,6 +58,9 @@ class System:
     the dependent velocities and have several solutions for them; it is checked at
     construction.  ``defaults`` maps parameters (Symbols or names) to default real
     numbers, and ``name`` labels the system; neither changes the symbolic results.
+    ``forces`` maps coordinates (Symbols or names) to non-potential generalized forces
+    Q_s(t, q, qdot) (others are 0) and ``dissipation`` is a Rayleigh function D(t, q, qdot)
+    adding Q_s = -dD/dqdot^s; every principle's equations carry Q_s beside [L]_s.
 
     Coordinates may be written as sympy.physics.mechanics dynamicsymbols x(t),
     x(t).diff(t) (converted to x, x_t).  Abs(u) and sign(u) of t, q, qdot are kept as
@@ -69,13 +73,19 @@ class System:
     """
 
     def __init__(self, J: JetSpace, L, constraints=(), dependent=None, branch: int | None = None,
-                 defaults=None, name: str = ""):
+                 defaults=None, name: str = "", forces=None, dissipation=None):
         if not isinstance(J, JetSpace):
             raise JetSpaceError(f"the first argument must be a JetSpace, got {type(J).__name__}")
         self.J = J
         self.L = self._first_order(L, "the Lagrangian")
         self.constraints = tuple(self._first_order(f, f"constraint {i + 1}")
                                  for i, f in enumerate(inputs.constraint_list(constraints)))
+        checked = ((q, self._first_order(e, f"the force on {q.name}"))
+                   for q, e in inputs.force_items(forces, J))
+        self.forces = {q: e for q, e in checked if e != 0}
+        self.dissipation = (sp.S.Zero if dissipation is None
+                            else self._first_order(dissipation, "the dissipation function"))
+        self._check_dissipation()
         self._check_names()
         self._branch = inputs.branch_arg(branch)
         self._check_velocities()
@@ -127,11 +137,19 @@ class System:
         if J.order(expr) > 1:
             raise ConstraintError(
                 f"{what} contains accelerations or higher jets ({expr}); jetnh treats "
-                "first-order Lagrangians and constraints f(t, q, qdot)")
+                "first-order Lagrangians, constraints and forces, functions of (t, q, qdot) "
+                "only")
         if any(J.split(s) and J.split(s)[0] in J.fields
                for s in expr.free_symbols if isinstance(s, sp.Symbol)):
             raise ConstraintError(f"{what} contains a field of the jet space; use coordinates only")
         return expr
+
+    def _check_dissipation(self):
+        if self.dissipation != 0 and not (self.dissipation.free_symbols & set(self.J.qd)):
+            raise ConstraintError(
+                f"the dissipation function {self.dissipation} contains no velocity, so it "
+                "gives no force (Q_s = -dD/dqdot^s); write D(t, q, qdot), e.g. "
+                "c*J.qd[0]**2/2, or put a potential into the Lagrangian")
 
     def _check_names(self):
         """Refuse parameters named like jetnh's own symbols; warn about parameters named
@@ -163,8 +181,7 @@ class System:
                     f"as a constant parameter. If it means the velocity of {q.name}, write "
                     f"J.qd[{J.q.index(q)}] (the Symbol {J.jet(q, 1).name!r}) instead",
                     JetnhWarning, stacklevel=3)
-        for f in set().union(self.L.atoms(AppliedUndef),
-                             *(c.atoms(AppliedUndef) for c in self.constraints)):
+        for f in set().union(*(e.atoms(AppliedUndef) for e in self._inputs)):
             if f.func.__name__ in lookalike:
                 q = lookalike[f.func.__name__]
                 warnings.warn(
@@ -296,10 +313,27 @@ class System:
     def independent_velocities(self) -> tuple[sp.Symbol, ...]:
         return self.J.jets(1, self.independent)
 
+    @property
+    def _inputs(self) -> tuple:
+        """Every expression the user gave: L, the constraints, forces and dissipation."""
+        return (self.L, *self.constraints, *self.forces.values(), self.dissipation)
+
+    @cached_property
+    def Q(self) -> tuple[sp.Expr, ...]:
+        """The generalized forces Q_s (every coordinate): ``forces`` - dD/dqdot^s."""
+        J = self.J
+        return tuple(self.forces.get(q, sp.S.Zero) - sp.diff(self.dissipation, v)
+                     for q, v in zip(J.q, J.qd))
+
+    @property
+    def forced(self) -> bool:
+        """Whether any generalized force is nonzero."""
+        return any(e != 0 for e in self.Q)
+
     @cached_property
     def parameters(self) -> tuple[sp.Symbol, ...]:
         """Symbols that are neither time nor jet coordinates, sorted by name."""
-        syms = set().union(self.L.free_symbols, *(f.free_symbols for f in self.constraints))
+        syms = set().union(*(e.free_symbols for e in self._inputs))
         J = self.J
         return tuple(sorted((s for s in syms if s != J.t and not J.split(s)),
                             key=lambda s: s.name))
@@ -501,7 +535,11 @@ class System:
     def with_split(self, dependent) -> "System":
         """The same system with another split."""
         return System(self.J, self.L, self.constraints, dependent, self._branch,
-                      self.defaults, self.name)
+                      self.defaults, self.name, self.forces, self._dissipation_arg)
+
+    @property
+    def _dissipation_arg(self):
+        return self.dissipation if self.dissipation != 0 else None
 
     # ------------------------------------------------------------------ equations
     def equations(self, principle: str, form: str | None = None, convention: str = "paper"):
@@ -521,5 +559,8 @@ class System:
         return system_latex(self)
 
     def __repr__(self):
+        extra = (f", forces={{{', '.join(f'{q.name}: {e}' for q, e in self.forces.items())}}}"
+                 if self.forces else "")
+        extra += f", dissipation={self.dissipation}" if self.dissipation != 0 else ""
         return (f"System(L={self.L}, constraints={list(self.constraints)}, "
-                f"dependent={[s.name for s in self.dependent]})")
+                f"dependent={[s.name for s in self.dependent]}{extra})")

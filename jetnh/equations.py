@@ -22,6 +22,11 @@ Principles and forms (paper equation numbers):
   (30b) alone, without multipliers.
 - chetaev (Lagrange-d'Alembert): "maggi" P^T [L] = 0, "multiplier" [L]_s + nu_a df^a/dqdot^s
   = 0 with reactions nu, "voronets" on L~.
+
+Generalized forces Q_s (``System(..., forces=..., dissipation=...)``) enter every
+principle through their virtual work: the integrand of (13) gains Q_s eta^s, so every
+row gains Q_s beside [L]_s; the projected rows gain P^T Q, and the forms on L~ the
+embedded force Q_mu + Phi^alpha_mu Q_alpha on the constraints.
 """
 
 from __future__ import annotations
@@ -100,13 +105,18 @@ def stationarity(system: System, variation: Variation, multipliers=(), restrict=
     """
     av = action_variation(system, variation, multipliers)
     J, eta = variation.J, variation.eta
-    integrand = av.integrand
+    integrand = av.integrand + virtual_work(system, eta)
     wrt = eta
     if restrict:
         admissible = chetaev_admissible(system, eta)
         integrand = integrand.xreplace({eta[s]: admissible[s] for s in system.dep_index})
         wrt = tuple(eta[i] for i in system.ind_index)
     return J.euler(integrand, wrt=wrt)
+
+
+def virtual_work(system: System, eta) -> sp.Expr:
+    """Q_s eta^s: the virtual work of the generalized forces."""
+    return sp.Add(*[Q * e for Q, e in zip(system.Q, eta)])
 
 
 def chetaev_admissible(system: System, eta) -> tuple:
@@ -236,7 +246,8 @@ def _label(system, principle, form):
 
 def _unconstrained(system, principle):
     return Equations(system, principle, "euler-lagrange", "paper",
-                     lambda: system.J.euler(system.L), paper="",
+                     lambda: tuple(e + Q for e, Q in zip(system.J.euler(system.L), system.Q)),
+                     paper="",
                      solver=lambda: accelerations.solve(system))
 
 
@@ -247,7 +258,8 @@ def _explicit(system: System) -> System:
     with warnings.catch_warnings():     # the user's system has warned already
         warnings.simplefilter("ignore", JetnhWarning)
         return System(system.J, system.L, system.explicit_constraints, system.dependent,
-                      defaults=system.defaults, name=system.name)
+                      defaults=system.defaults, name=system.name, forces=system.forces,
+                      dissipation=system._dissipation_arg)
 
 
 def _variation(system, kind, explicit, lams=()):
@@ -314,7 +326,7 @@ def _chetaev(system, form, convention):
 
         def expressions():
             A = system.jacobian
-            return tuple(system.J.euler(system.L)[s]
+            return tuple(system.J.euler(system.L)[s] + system.Q[s]
                          + sp.Add(*[nus[a] * A[a, s] for a in range(system.k)])
                          for s in range(system.J.n))
         return Equations(system, "chetaev", form, convention, expressions, reactions=nus,
@@ -339,15 +351,18 @@ def _reduced(base, E, J, lams, form, suslov=False):
 
 
 def _embedded(ex: System, J, coefficients=None):
-    """[L~]_mu + Phi^alpha_mu dL~/dq^alpha + c_alpha T^alpha_mu, the projected rows rewritten
-    through (19): c = p (Chetaev, Voronets form), c = p + lambda (vakonomic (20b)),
-    no T term (Suslov (31b), whose p T cancels the one of (19))."""
+    """[L~]_mu + Phi^alpha_mu dL~/dq^alpha + c_alpha T^alpha_mu + Q~_mu, the projected rows
+    rewritten through (19): c = p (Chetaev, Voronets form), c = p + lambda (vakonomic
+    (20b)), no T term (Suslov (31b), whose p T cancels the one of (19)); Q~ is the
+    projected force P^T Q on the constraints."""
     Lt = ex.L_tilde
     T = ex.T(on_constraints=False)
     eul = J.euler(Lt, wrt=ex.independent)
+    Q = [ex.on_constraints(e) for e in ex.Q]
     out = []
-    for m in range(len(ex.independent)):
+    for m, i in enumerate(ex.ind_index):
         e = eul[m] + sp.Add(*[ex.Phi[a, m] * sp.diff(Lt, qa) for a, qa in enumerate(ex.dependent)])
+        e += Q[i] + sp.Add(*[ex.Phi[a, m] * Q[j] for a, j in enumerate(ex.dep_index)])
         if coefficients is not None:
             e += sp.Add(*[coefficients[a] * T[a, m] for a in range(ex.k)])
         out.append(e)

@@ -9,6 +9,8 @@ become jet Symbols; ``Abs`` and ``sign`` of t, q, qdot are rewritten smoothly, w
 kink as a square-root argument (a singularity indicator of the compiled equations); other
 non-smooth functions of t, q, qdot are refused.  Names a user might give a velocity by
 hand (``xdot``, ``x_dot``, ...) are flagged, and numbers are finite and real.
+Generalized forces come as a dict keyed by coordinate, each value checked like the
+Lagrangian.
 """
 
 from __future__ import annotations
@@ -233,3 +235,36 @@ def real_number(val, what: str) -> float:
     if not math.isfinite(z.real):
         raise ConstraintError(f"{what} must be finite, got {val}")
     return float(z.real)
+
+
+def force_items(forces, J) -> list:
+    """``forces`` ({coordinate: Q}, coordinates as Symbols or names) as (coordinate, value)
+    pairs in the order of the coordinates; the values are checked by the caller."""
+    if forces is None:
+        return []
+    if not isinstance(forces, Mapping):
+        raise ConstraintError(
+            f"forces must be a dict {{coordinate: Q(t, q, qdot)}}, got a "
+            f"{type(forces).__name__}")
+    by_name = {q.name: q for q in J.q}
+    given = {}
+    for key, val in forces.items():
+        if isinstance(key, AppliedUndef):             # a dynamicsymbol x(t)
+            key = convert_dynamic(key, J)
+        name = key.name if isinstance(key, sp.Symbol) else key if isinstance(key, str) else None
+        if name not in by_name:
+            info = J.split(sp.Symbol(name)) if name else None
+            hint = (f" ({name} is a jet of {info[0].name}: key the force by the coordinate)"
+                    if info else "")
+            raise ConstraintError(
+                f"forces key {key!r} is not a coordinate of {J!r}{hint}; key each force by "
+                f"a coordinate (Symbol or name: {', '.join(by_name)})")
+        q = by_name[name]
+        if isinstance(val, sp.core.relational.Relational):
+            raise ConstraintError(
+                f"the force on {name} is the relation {val}; give the expression Q_{name} "
+                "itself")
+        if q in given:
+            raise ConstraintError(f"two forces given for the coordinate {name!r}")
+        given[q] = val
+    return [(q, given[q]) for q in J.q if q in given]

@@ -39,6 +39,8 @@ Public names:
     ``(constraints, dependent)`` with constraints qd^a - phi^a(t, q, qd^mu), phi nonlinear.
 ``constrained_systems(min_n=2, max_n=4, affine=None)``
     ``(J, L, constraints, dependent)``.
+``forces(J, max_depth=2)``
+    generalized forces ``{coordinate: Q(t, q, qd)}`` on some of the coordinates.
 """
 
 from __future__ import annotations
@@ -60,6 +62,7 @@ __all__ = [
     "affine_constraints",
     "nonlinear_constraints",
     "constrained_systems",
+    "forces",
 ]
 
 
@@ -373,3 +376,16 @@ def _constrained_systems(draw, spaces, affine):
         affine = draw(st.booleans())
     constraints, dependent = draw(affine_constraints(J) if affine else nonlinear_constraints(J))
     return J, L, constraints, dependent
+
+
+def forces(J: JetSpace, max_depth: int = 2) -> st.SearchStrategy[dict]:
+    """Generalized forces ``{coordinate: Q}`` on one or more of the coordinates: a viscous
+    term ``-c qd_s`` (``c`` a positive rational) plus a small expression in ``t``, ``q``
+    and ``qd`` (:func:`jet_expressions`, at most ``max_depth`` deep)."""
+    def force(q):
+        v = J.jet(q, 1)
+        return st.builds(lambda c, e: -c * v + e, _rationals(positive=True),
+                         jet_expressions(J, order=1, max_depth=max_depth))
+
+    return st.lists(st.sampled_from(J.q), min_size=1, max_size=J.n, unique=True).flatmap(
+        lambda qs: st.fixed_dictionaries({q: force(q) for q in qs}))

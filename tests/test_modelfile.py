@@ -306,6 +306,8 @@ def test_examples_load_and_derive(path):
 def test_catalogue_round_trip(name):
     opts = {"n_trailer": {"N": 1}}.get(name, {})
     s = models.get(name, **opts)
+    if s.forced:
+        pytest.skip("model files carry no generalized forces yet (issue 14)")
     init = models.initial(name, **opts)
     text = mf.dumps(s, init, principle="suslov", simulation={"t_end": 2.0, "method": "rk4",
                                                              "points": 11})

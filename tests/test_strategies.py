@@ -26,7 +26,7 @@ def _finite_real(expr, point):
 def test_public_names():
     assert set(jst.__all__) == {"jet_spaces", "jet_expressions", "polynomials", "lagrangians",
                                 "affine_constraints", "nonlinear_constraints",
-                                "constrained_systems"}
+                                "constrained_systems", "forces"}
     for name in jst.__all__:
         assert getattr(jst, name).__doc__
 

@@ -21,10 +21,13 @@ ball_on_turntable       ball rolling on a rotating table, Euler angles
 suslov_rigid_body       Suslov's problem, Euler angles
 n_trailer               car with N trailers (option N, default 2)
 particle_chain          N coupled nonholonomic particles (option N, default 3)
+damped_knife_edge       knife edge with viscous friction (Rayleigh dissipation)
+damped_chaplygin_sleigh Chaplygin sleigh with viscous friction (Rayleigh dissipation)
 ======================  ==============================================================
 """
 
 from ._registry import INFO, ModelInfo, register
+from .dissipative import damped_chaplygin_sleigh, damped_knife_edge
 from .families import n_trailer, n_trailer_turning, particle_chain
 from .paper import appell_hamel, rolling_disk
 from .planar import (bead_on_parabola, chaplygin_sleigh, isokinetic_particle, knife_edge,
@@ -40,7 +43,8 @@ register("appell_hamel", appell_hamel, dict(x=0.0, y=0.0, z=0.0, x_t=3.0, y_t=1.
 _ORDER = ("rolling_disk", "appell_hamel", "knife_edge", "chaplygin_sleigh",
           "nonholonomic_particle", "isokinetic_particle", "rheonomic_knife_edge",
           "bead_on_parabola", "radial_line", "rolling_ball", "ball_on_turntable",
-          "suslov_rigid_body", "n_trailer", "particle_chain")
+          "suslov_rigid_body", "n_trailer", "particle_chain", "damped_knife_edge",
+          "damped_chaplygin_sleigh")
 assert set(_ORDER) == set(INFO), "every registered model must be listed"
 
 CATALOGUE = {name: INFO[name].factory for name in _ORDER}

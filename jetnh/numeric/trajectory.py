@@ -5,7 +5,8 @@ coordinate, an independent velocity, a multiplier, a dependent velocity (compute
 the constraints by the compiled ``aux`` kernel, on first access) or a user first
 integral.  ``traj.diagnostics`` reports the constraint residual, the energy and its
 drift, first integrals and their drift, steps, right-hand-side evaluations and why the
-integration stopped.
+integration stopped.  With generalized forces the energy is not conserved:
+``traj.power`` is their power Q_s qdot^s, and the diagnostics say that the forces work.
 """
 
 from __future__ import annotations
@@ -39,6 +40,7 @@ class Diagnostics:
     projected: dict = field(default_factory=dict)
     events: dict = field(default_factory=dict)        # event name -> occurrences
     singularity: dict | None = None                   # see Trajectory.singularity
+    forced: bool = False              # generalized forces work: the energy drifts by design
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -49,7 +51,9 @@ class Diagnostics:
                  f"{self.rhs_evaluations}, {self.wall_time * 1e3:.3g} ms",
                  f"  constraint residual max {self.residual_max:.3e}",
                  f"  energy {self.energy_initial:.12g}, drift {self.energy_drift:.3e} "
-                 f"(relative {self.energy_drift_relative:.3e})"]
+                 f"(relative {self.energy_drift_relative:.3e})"
+                 + ("; not conserved: the generalized forces work (traj.power)"
+                    if self.forced else "")]
         for k, v in self.integral_drift.items():
             lines.append(f"  integral {k}: drift {v:.3e}")
         for k, v in self.events.items():
@@ -176,6 +180,16 @@ class Trajectory:
         return self.aux[:, self.layout.energy_index]
 
     @property
+    def power(self) -> np.ndarray:
+        """P = Q_s qdot^s, the power of the generalized forces (zeros without forces)."""
+        if self.layout.power:
+            return self.aux[:, -1]
+        if self.scene.system.forced:
+            raise JetnhError(f"{self.method} trajectories carry no power column; run the "
+                             "scene with an adaptive or rk4 method for traj.power")
+        return np.zeros(len(self))
+
+    @property
     def residual(self) -> np.ndarray:
         """The constraints f^a as written by the user, at every output row (columns: a)."""
         if "residual" in self._own:
@@ -206,7 +220,7 @@ class Trajectory:
             energy_drift_relative=drift / max(abs(e0), 1e-300) if E.size else 0.0,
             integral_drift=idrift, projected=i["projected"],
             events={n: len(te) for n, te in zip(self.event_names, self.t_events)},
-            singularity=self.singularity)
+            singularity=self.singularity, forced=self.scene.system.forced)
 
     # ------------------------------------------------------------------ tables, figures
     def to_dataframe(self, diagnostics=True):
