@@ -8,14 +8,13 @@ constraints become jet expressions (``JetSpace.from_dynamic``).
 - ``hol_coneqs`` g(t, q) = 0 enter differentiated, dg/dt = 0, as LagrangesMethod itself
   uses them (its ``coneqs``); jetnh's Frobenius test finds them integrable.  The
   configuration must satisfy g = 0 initially: that is the caller's to ensure.
-- ``forcelist``: the generalized forces Q_s = sum F . dv/dqdot^s (``generalized_forces``)
-  are computed, but a non-empty forcelist is refused for now: ``System`` takes no forces
-  yet.
+- ``forcelist``: loads on points and frames become the generalized forces
+  Q_s = sum F . dv/dqdot^s (``generalized_forces``), the system's ``forces``.
 - Any other function of time in the Lagrangian or the constraints (a specified input
   u(t)) is refused: substitute it first.
 
 ``to_mechanics(system)`` is the way back (``JetSpace.to_dynamic``), for systems without
-forces.
+forces (a generalized force has no unique load to stand for it).
 """
 
 from __future__ import annotations
@@ -90,17 +89,6 @@ def generalized_forces(lm, J: JetSpace) -> tuple:
                  for s, qd in enumerate(qds))
 
 
-def _forces_option(lm, J) -> dict:
-    """System's keyword arguments for the loads of ``lm``: System takes no forces yet,
-    so a forcelist is refused (later: ``{"forces": generalized_forces(lm, J)}``)."""
-    if lm.forcelist:
-        raise JetnhError(
-            "forces are not yet supported via from_mechanics: this LagrangesMethod has a "
-            f"forcelist of {len(lm.forcelist)} load(s). Remove the forcelist (a conservative "
-            "force belongs in the Lagrangian as -V)")
-    return {}
-
-
 def from_mechanics(lm, dependent=None, *, branch=None, defaults=None, name="") -> System:
     """A jetnh ``System`` from a sympy.physics.mechanics ``LagrangesMethod`` (see the
     module docstring); ``dependent``, ``branch``, ``defaults``, ``name`` as ``System``."""
@@ -111,8 +99,9 @@ def from_mechanics(lm, dependent=None, *, branch=None, defaults=None, name="") -
                          f"got {type(lm).__name__}")
     J = _coordinates(lm)
     L = _convert(J, lm._L[0], "the Lagrangian")
+    forces = {q: Q for q, Q in zip(J.q, generalized_forces(lm, J)) if Q != 0}
     return System(J, L, constraints(lm, J), dependent=dependent, branch=branch,
-                  defaults=defaults, name=name, **_forces_option(lm, J))
+                  defaults=defaults, name=name, forces=forces)
 
 
 def to_mechanics(system: System):
@@ -120,6 +109,10 @@ def to_mechanics(system: System):
     (as nonholonomic constraints, in dynamicsymbols)."""
     from sympy.physics.mechanics import LagrangesMethod
 
+    if system.forced:
+        raise JetnhError("to_mechanics: the system has generalized forces, which have no "
+                         "unique loads on points and frames to stand for them; build the "
+                         "LagrangesMethod's forcelist by hand")
     J = system.J
     return LagrangesMethod(J.to_dynamic(system.L), [J.to_dynamic(q) for q in J.q],
                            nonhol_coneqs=[J.to_dynamic(f) for f in system.constraints]

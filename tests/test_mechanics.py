@@ -170,12 +170,14 @@ def test_random_affine_systems_match_lagranges_method(case, seed):
 F, T = sp.symbols("F T")
 
 
-def test_forces_are_refused_for_now_and_computed_for_later():
+def test_forces_become_generalized_forces():
     pull = lambda N, B, P: (P, F * B.x)          # noqa: E731
     turn = lambda N, B, P: (B, T * N.z)          # noqa: E731
     lm = sleigh([pull, turn])
-    with pytest.raises(JetnhError, match="forces are not yet supported via from_mechanics"):
-        jn.from_mechanics(lm)
+    forced = jn.from_mechanics(lm)
+    assert_chetaev_matches(forced, lm, {m: 2, I: sp.Rational(3, 2), a: sp.Rational(1, 2),
+                                        F: sp.Rational(3, 7), T: sp.Rational(-2, 5)},
+                           points=2, seed=3)
     J = jn.from_mechanics(sleigh()).J
     Q = generalized_forces(lm, J)
     th = J.q[2]
@@ -187,6 +189,7 @@ def test_forces_are_refused_for_now_and_computed_for_later():
     diff = (lm.forcing - free.forcing).applyfunc(J.from_dynamic)
     assert [sp.simplify(d - q) for d, q in zip(diff, Q)] == [0] * 3
     assert generalized_forces(free, J) == (0, 0, 0)
+    assert forced.Q == Q
 
 
 def test_refusals_name_the_problem():
@@ -197,3 +200,8 @@ def test_refusals_name_the_problem():
     lm = LagrangesMethod(x.diff() ** 2 / 2 + u * x, [x])
     with pytest.raises(JetSpaceError, match="the Lagrangian of the LagrangesMethod.*substitute"):
         jn.from_mechanics(lm)
+
+
+def test_to_mechanics_refuses_forces():
+    with pytest.raises(JetnhError, match="generalized forces"):
+        to_mechanics(models.get("damped_knife_edge"))
