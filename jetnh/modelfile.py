@@ -16,7 +16,10 @@ A model file::
     phi_t = 1.0
     psi_t = 0.7
 
-Optional keys: ``description`` (text), ``branch`` (which solution of nonlinear
+Optional keys: ``[forces]`` (coordinate = expression: the non-potential generalized force
+Q_s(t, q, qdot) on that coordinate, beside [L]_s in every principle's equations),
+``dissipation`` (a Rayleigh function D(t, q, qdot): Q_s -= dD/dqdot^s), ``description``
+(text), ``branch`` (which solution of nonlinear
 constraints, an integer >= 0), ``convention`` ("paper" | "imposed"), ``[multipliers]``
 (initial values of the multipliers lambda_<dependent> of the vakonomic, Hoelder and
 Suslov principles; they may also stand in ``[initial]``), ``[integrals]`` (name =
@@ -163,8 +166,8 @@ _NONSMOOTH = {"floor", "ceiling", "ceil", "frac", "round", "Heaviside", "heavisi
 TIME = "t"
 
 TOP_KEYS = {"name", "description", "coordinates", "dependent", "lagrangian", "constraints",
-            "branch", "principle", "convention", "parameters", "initial", "multipliers",
-            "integrals", "simulation"}
+            "forces", "dissipation", "branch", "principle", "convention", "parameters",
+            "initial", "multipliers", "integrals", "simulation"}
 REQUIRED_KEYS = ("coordinates", "lagrangian")
 SIMULATION_KEYS = {"t_start": "number", "t_end": "number", "method": "string",
                    "rtol": "number", "atol": "number", "points": "integer"}
@@ -1055,12 +1058,29 @@ def _from_dict(data: dict, source: str) -> Model:
             f"{budget.used_nodes - before} syntax nodes of constraints is {jac}, more than "
             f"{MAX_JACOBIAN_COST} (reading differentiates every constraint by every "
             "velocity); write shorter constraints or raise jetnh.modelfile.MAX_JACOBIAN_COST")
-    used = set().union(L.free_symbols, *(c.free_symbols for c in cons))
+    forces_in = _expect(f"{S}: [forces]", data.get("forces", {}), "table")
+    forces = {}
+    for k, v in forces_in.items():
+        _refuse_non_ascii(k, f"{S}: [forces] {_shorten(k)!r}")
+        if k not in coords:
+            raise ModelFileError(f"{S}: [forces]: {k!r} is not one of the coordinates "
+                                 f"{coords} (a generalized force Q_s is keyed by its "
+                                 "coordinate)")
+        forces[k] = parse_expression(_expect(f"{S}: [forces] {k}", v, "string"), names,
+                                     f"{S}: [forces] {k}", hint, budget)
+    dissipation = None
+    if "dissipation" in data:
+        dissipation = parse_expression(_expect(f"{S}: 'dissipation'", data["dissipation"],
+                                               "string"), names, f"{S}: dissipation", hint,
+                                       budget)
+    used = set().union(L.free_symbols, *(c.free_symbols for c in cons),
+                       *(f.free_symbols for f in forces.values()),
+                       dissipation.free_symbols if dissipation is not None else set())
     unused = sorted(k for k in params if sp.Symbol(k) not in used)
     if unused:
         raise ModelFileError(f"{S}: [parameters]: {', '.join(unused)} "
                              f"{'is' if len(unused) == 1 else 'are'} used neither in the "
-                             "Lagrangian nor in the constraints")
+                             "Lagrangian, the constraints nor the forces")
 
     # jetnh decides the rank of the constraints at random points; where they are never
     # real it falls back to symbolic linear algebra, which can take unbounded time
@@ -1102,7 +1122,8 @@ def _from_dict(data: dict, source: str) -> Model:
         # takes sympy unbounded time (a general quartic, two coupled quadratics); reading
         # never solves, the branch is checked when the equations are first derived
         system = System(J, L, cons, dependent,
-                        defaults={sp.Symbol(k): v for k, v in params.items()}, name=name)
+                        defaults={sp.Symbol(k): v for k, v in params.items()}, name=name,
+                        forces=forces, dissipation=dissipation)
         system._branch = branch
     except JetnhError as exc:
         raise ModelFileError(f"{S}: {exc}") from None
@@ -1240,6 +1261,8 @@ def dumps(system: System, initial=None, *, params=None, principle=None, conventi
     lines.append(f"lagrangian = {_toml_string(expression_text(system.L))}")
     lines.append("constraints = [" + ", ".join(_toml_string(expression_text(f))
                                                for f in system.constraints) + "]")
+    if system.dissipation != 0:
+        lines.append(f"dissipation = {_toml_string(expression_text(system.dissipation))}")
     if system._branch is not None:
         lines.append(f"branch = {int(system._branch)}")
     if principle:
@@ -1250,6 +1273,10 @@ def dumps(system: System, initial=None, *, params=None, principle=None, conventi
         lines.append("\n[parameters]")
         lines += [f"{k} = {_toml_number(v)}" for k, v in sorted(values.items())
                   if k in {p.name for p in system.parameters}]
+    if system.forces:
+        lines.append("\n[forces]")
+        lines += [f"{q.name} = {_toml_string(expression_text(Q))}"
+                  for q, Q in system.forces.items()]
     init = {key(k): float(v) for k, v in (initial or {}).items()}
     lam = {k: v for k, v in init.items() if k.startswith("lambda_")}
     st = {k: v for k, v in init.items() if k not in lam}

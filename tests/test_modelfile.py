@@ -306,15 +306,14 @@ def test_examples_load_and_derive(path):
 def test_catalogue_round_trip(name):
     opts = {"n_trailer": {"N": 1}}.get(name, {})
     s = models.get(name, **opts)
-    if s.forced:
-        pytest.skip("model files carry no generalized forces yet (issue 14)")
     init = models.initial(name, **opts)
     text = mf.dumps(s, init, principle="suslov", simulation={"t_end": 2.0, "method": "rk4",
                                                              "points": 11})
     m = mf.loads(text)
     s2 = m.system
-    assert (s2.L, s2.constraints, s2.dependent, s2.defaults, s2.name) == \
-        (s.L, s.constraints, s.dependent, s.defaults, s.name)
+    assert (s2.L, s2.constraints, s2.dependent, s2.defaults, s2.name, s2.forces,
+            s2.dissipation) == (s.L, s.constraints, s.dependent, s.defaults, s.name,
+                                s.forces, s.dissipation)
     assert m.initial == init and m.principle == "suslov"
     assert m.simulation == {"t_end": 2.0, "method": "rk4", "points": 11}
 
@@ -759,3 +758,33 @@ def test_cli_derives_and_simulates_every_function(tmp_path):
                  ["simulate", str(path), "--t-end", "1"]):
         out = subprocess.run(jetnh + args, capture_output=True, text=True, timeout=600)
         assert out.returncode == 0, out.stderr
+
+
+def test_forces_and_dissipation_in_model_files():
+    """[forces] and dissipation give the accelerations of the same System built in
+    Python; a force on a non-coordinate is refused."""
+    text = """
+coordinates = ["x", "y"]
+lagrangian = "(x_t**2 + y_t**2)/2"
+constraints = ["y_t - x*x_t"]
+dissipation = "c*y_t**2/2"
+[forces]
+x = "-k*x + sin(t)"
+[parameters]
+c = 0.5
+k = 2.0
+"""
+    s = mf.loads(text).system
+    J = s.J
+    x, xd, yd = J.q[0], J.qd[0], J.qd[1]
+    c, k = sp.symbols("c k")
+    ref = System(J, (xd**2 + yd**2) / 2, [yd - x * xd], forces={x: -k * x + sp.sin(J.t)},
+                    dissipation=c * yd**2 / 2)
+    assert s.Q == ref.Q == (-k * x + sp.sin(J.t), -c * yd)
+    for p in ("chetaev", "vakonomic"):
+        a, b = s.equations(p).accelerations(), ref.equations(p).accelerations()
+        assert all(sp.simplify(a[v] - b[v]) == 0 for v in b)
+    with pytest.raises(ModelFileError, match=r"\[forces\]: 'z' is not one of the coordinates"):
+        mf.loads(text.replace('x = "-k*x', 'z = "-k*x'))
+    with pytest.raises(ModelFileError, match="used neither"):
+        mf.loads(text.replace('dissipation = "c*y_t**2/2"\n', ""))
