@@ -163,7 +163,9 @@ def solve(system, kappa: str = "none", explicit: bool = False, multipliers=(),
     ``rates``: the multiplier rates to solve for (none for Chetaev and the imposed
     convention, whose rows are projected).
     """
-    with dotprodsimp(False):            # no cancel() inside matrix products (hot path)
+    # no cancel() inside matrix products (hot path); pivots of large solves are chosen by
+    # their values at random points on the constraint manifold
+    with dotprodsimp(False), linalg.completing(lambda v: _on_constraints(system, v)):
         return _solve(system, kappa, explicit, tuple(multipliers), tuple(rates))
 
 

@@ -394,6 +394,17 @@ def mp_rank(M) -> int:
         return sum(1 for x in s if abs(x) > _RANK_TOL * top)
 
 
+def _ranks(samples, full: int) -> list[int]:
+    """The ranks of the sampled matrices, up to the first of rank ``full`` (the largest
+    possible: the generic rank is decided, the other points are not drawn)."""
+    out = []
+    for M in samples:
+        out.append(mp_rank(M))
+        if out[-1] >= full:
+            break
+    return out
+
+
 def _reshape(rows: int, cols: int):
     """values -> a rows x cols matrix: sympy for Rationals, else mpmath."""
     def build(values):
@@ -413,8 +424,8 @@ def numeric_rank(M: sp.Matrix, points: int = 3, seed: int = 0) -> int:
     """
     if M.rows == 0 or M.cols == 0:
         return 0
-    ranks = [mp_rank(a) for a in _generic_samples(list(M), _reshape(M.rows, M.cols),
-                                                     points, seed)]
+    ranks = _ranks(_generic_samples(list(M), _reshape(M.rows, M.cols), points, seed),
+                   min(M.rows, M.cols))
     if not ranks:            # abstract functions: no numbers to draw, decide symbolically
         return M.rank(iszerofunc=lambda e: sp.expand(e) == 0, simplify=False)
     return max(ranks)
@@ -451,8 +462,8 @@ def reduced_rank(H: sp.Matrix, A: sp.Matrix, ind, dep, points: int = 3, seed: in
                     P[i, c] = X[r, c]
         return P.T * Hn * P
 
-    ranks = [mp_rank(K) for K in _generic_samples(list(H) + list(A), build, points, seed,
-                                                   complete, symbols)]
+    ranks = _ranks(_generic_samples(list(H) + list(A), build, points, seed, complete,
+                                    symbols), m)
     if ranks:
         return max(ranks)
     with dotprodsimp(False):  # abstract functions: decide symbolically (small systems)
