@@ -83,3 +83,77 @@ def test_appell_hamel_branch_is_shown_where_the_verdicts_rely_on_it(results):
         assert len(checks) >= 3 and all(e.endswith(": True") for e in checks), checks
     text = (results["_out"] / "report.md").read_text()
     assert "lambda_z = a m sqrt(xdot^2 + ydot^2) / b" in text
+
+
+# ---- the committed outputs are the same bytes on every run (issue 16)
+RUN_SPECIFIC_KEYS = {"seconds", "date", "machine", "python", "platform", "versions"}
+
+
+def _keys(obj):
+    if isinstance(obj, dict):
+        for k, v in obj.items():
+            yield k
+            yield from _keys(v)
+    elif isinstance(obj, list):
+        for v in obj:
+            yield from _keys(v)
+
+
+def test_committed_outputs_carry_no_run_specific_fact(results):
+    import platform
+    import re
+
+    out = results["_out"]
+    data = json.loads((out / "results.json").read_text())
+    assert not RUN_SPECIFIC_KEYS & set(_keys(data))
+    assert data["generated"] == {"command": "python -m papers.zhao2008 --fast"}
+    date = re.compile(r"\b20\d\d-\d\d-\d\d\b")
+    for name in ("results.json", "report.md"):
+        text = (out / name).read_text(encoding="utf-8")
+        assert not date.search(text), name
+        assert "time (s)" not in text and " s)" not in text, name
+        if len(platform.node()) > 3:
+            assert platform.node() not in text, name
+    # ... they go to the untracked run.json instead
+    run = json.loads((out / "run.json").read_text())
+    assert {"date", "machine", "python", "versions", "seconds"} <= set(run)
+    assert set(run["item_seconds"]) == {i["label"] for i in data["items"]}
+    assert len(run["proof_seconds"]) == len(data["proofs"])
+
+
+def test_gitignore_lists_run_json():
+    from papers.zhao2008.reproduce import HERE
+    lines = (HERE.parents[1] / ".gitignore").read_text().splitlines()
+    assert "papers/zhao2008/run.json" in lines
+
+
+def test_writers_give_the_same_bytes_twice(results, tmp_path):
+    from papers.zhao2008.report import write as write_report
+    from papers.zhao2008.reproduce import write_results
+
+    data = {k: v for k, v in results.items() if k != "_out"}
+    for i in (1, 2):
+        write_report(data, tmp_path / f"report{i}.md")
+        write_results(data, tmp_path / f"results{i}.json")
+    assert (tmp_path / "report1.md").read_bytes() == (tmp_path / "report2.md").read_bytes()
+    assert (tmp_path / "results1.json").read_bytes() == (tmp_path / "results2.json").read_bytes()
+    # the fixture's files were written by the same writers from the same content
+    assert (tmp_path / "report1.md").read_bytes() == (results["_out"] / "report.md").read_bytes()
+    assert (tmp_path / "results1.json").read_bytes() == (
+        results["_out"] / "results.json").read_bytes()
+
+
+def test_figures_have_no_version_metadata_and_repeat_bytewise(results, tmp_path):
+    from papers.zhao2008.examples import _pyplot, _style, save_figure
+
+    plt = _pyplot()
+    for i in (1, 2):
+        with _style():
+            fig, ax = plt.subplots(figsize=(2, 2))
+            ax.plot([0, 1, 2], [0, 1, 4], label="x")
+            ax.legend()
+            save_figure(fig, tmp_path / f"f{i}.png")
+    assert (tmp_path / "f1.png").read_bytes() == (tmp_path / "f2.png").read_bytes()
+    for fig in ["f1.png"] + [f for s in results["simulations"].values() for f in s["figures"]]:
+        raw = ((tmp_path if fig == "f1.png" else results["_out"]) / fig).read_bytes()
+        assert b"Software" not in raw and b"matplotlib" not in raw.lower(), fig

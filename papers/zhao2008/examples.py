@@ -21,6 +21,28 @@ from jetnh.numeric import Scene
 RTOL, ATOL = 1e-10, 1e-12
 
 
+def _pyplot():
+    """pyplot on the Agg backend (the same pixels on every machine with the same fonts)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    return plt
+
+
+def save_figure(fig, path: pathlib.Path) -> None:
+    """Write ``fig`` as a PNG whose bytes depend on the figure only: no Software
+    (matplotlib version) text chunk, fixed dpi; the figure is closed."""
+    plt = _pyplot()
+    fig.tight_layout()
+    fig.savefig(path, dpi=110, metadata={"Software": None})
+    plt.close(fig)
+
+
+def _style():
+    """matplotlib's default style, whatever the user's matplotlibrc says."""
+    return _pyplot().style.context("default")
+
+
 def _disk(out: pathlib.Path, fast: bool) -> dict:
     s = rolling_disk()
     J = s.J
@@ -81,9 +103,12 @@ def _disk(out: pathlib.Path, fast: bool) -> dict:
 
 
 def _figures_disk(out, runs) -> list[str]:
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    with _style():
+        return _figures_disk_default_style(out, runs)
+
+
+def _figures_disk_default_style(out, runs) -> list[str]:
+    plt = _pyplot()
 
     names = []
     fig, ax = plt.subplots(figsize=(5.5, 5))
@@ -92,7 +117,7 @@ def _figures_disk(out, runs) -> list[str]:
         ax.plot(r["x"], r["y"], styles.get(k, "-"), label=k, lw=2 if k == "chetaev" else 1.2)
     ax.set_xlabel("x"); ax.set_ylabel("y"); ax.set_aspect("equal"); ax.legend(fontsize=8)
     ax.set_title("Vertical disk: contact-point paths")
-    fig.tight_layout(); fig.savefig(out / "disk_paths.png", dpi=110); plt.close(fig)
+    save_figure(fig, out / "disk_paths.png")
     names.append("disk_paths.png")
 
     fig, axs = plt.subplots(2, 1, figsize=(6, 5), sharex=True)
@@ -102,7 +127,7 @@ def _figures_disk(out, runs) -> list[str]:
         axs[1].semilogy(r.t, np.max(np.abs(r.residual), axis=1) + 1e-18, label=k)
     axs[0].set_ylabel("|E(t) - E(0)|"); axs[1].set_ylabel("max |f^a|"); axs[1].set_xlabel("t")
     axs[0].legend(fontsize=7); axs[0].set_title("Vertical disk: energy drift and constraint residual")
-    fig.tight_layout(); fig.savefig(out / "disk_invariants.png", dpi=110); plt.close(fig)
+    save_figure(fig, out / "disk_invariants.png")
     names.append("disk_invariants.png")
     return names
 
@@ -154,9 +179,12 @@ def _appell_hamel(out: pathlib.Path, fast: bool) -> dict:
 
 
 def _figures_ah(out, runs, t_stop) -> list[str]:
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    with _style():
+        return _figures_ah_default_style(out, runs, t_stop)
+
+
+def _figures_ah_default_style(out, runs, t_stop) -> list[str]:
+    plt = _pyplot()
 
     fig, axs = plt.subplots(1, 2, figsize=(10, 4))
     for k, r in runs.items():
@@ -166,7 +194,7 @@ def _figures_ah(out, runs, t_stop) -> list[str]:
     axs[1].set_xlabel("t"); axs[1].set_ylabel("|E(t) - E(0)|")
     axs[1].set_title(f"energy drift (singular at t = {t_stop:.3g})")
     axs[0].legend(fontsize=7)
-    fig.tight_layout(); fig.savefig(out / "appell_hamel.png", dpi=110); plt.close(fig)
+    save_figure(fig, out / "appell_hamel.png")
     return ["appell_hamel.png"]
 
 
