@@ -876,8 +876,8 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--atol", type=float, default=None, help="default 1e-12")
     w.add_argument("--steps", type=int, default=1000, help="steps of rk4 (default 1000)")
     w.add_argument("--scheduler", metavar="ADDRESS",
-                   help="a Dask scheduler, e.g. tcp://10.0.0.5:8786 (default: this machine, "
-                        "every core)")
+                   help="a Dask scheduler, e.g. tcp://10.0.0.5:8786 (needs pip install "
+                        "'jetnh[cluster]'; default: this machine, every core, no Dask)")
     w.add_argument("--chunk-size", type=int, default=None, metavar="N",
                    help="points per Dask task (default: 4 tasks per worker thread)")
     w.add_argument("--timeout", type=float, default=None, metavar="SECONDS",
