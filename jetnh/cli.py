@@ -24,7 +24,7 @@ from pathlib import Path
 import sympy as sp
 
 from .constraints import PRINCIPLES
-from .errors import JetnhError, ModelFileError
+from .errors import ArgumentError, JetnhError, ModelFileError
 
 EPILOG_MODEL = ("MODEL: a catalogue name (see `jetnh models`; scalable ones take options, "
                 "e.g. n_trailer:N=4) or a model file (TOML, e.g. examples/rolling_disk.toml).")
@@ -32,6 +32,17 @@ EPILOG_MODEL = ("MODEL: a catalogue name (see `jetnh models`; scalable ones take
 
 class UsageError(Exception):
     """Bad command-line syntax (exit code 2)."""
+
+
+#: Scene.run's argument names -> the options of simulate and sweep that set them
+OPTION_NAMES = {"n_steps": "--steps", "rtol": "--rtol", "atol": "--atol",
+                "timeout": "--timeout"}
+_ARG_NAME = re.compile(r"(?<![\w-])(" + "|".join(OPTION_NAMES) + r")(?:=(?=\s|$))?(?!\w)")
+
+
+def option_message(message: str) -> str:
+    """An ``ArgumentError`` message with Scene.run's argument names as the CLI options."""
+    return _ARG_NAME.sub(lambda m: OPTION_NAMES[m.group(1)], message)
 
 
 # ---------------------------------------------------------------------- progress
@@ -42,6 +53,11 @@ class Progress:
         self.quiet = quiet
         self.stream = stream or sys.stderr
         self.tty = hasattr(self.stream, "isatty") and self.stream.isatty()
+
+    def note(self, message: str):
+        """A line on stderr, unless quiet (errors are not notes)."""
+        if not self.quiet:
+            print(message, file=self.stream, flush=True)
 
     @contextmanager
     def step(self, what: str):
@@ -322,8 +338,8 @@ def cmd_simulate(args, progress) -> int:
     integrals = {}
     for k, v in loaded.integrals.items():
         if {s.name for s in v.free_symbols} - set(states) - set(scene_names(system)):
-            print(f"jetnh: the integral {k!r} uses multipliers, which the {principle} "
-                  "state does not have; skipped", file=sys.stderr)
+            progress.note(f"jetnh: the integral {k!r} uses multipliers, which the "
+                          f"{principle} state does not have; skipped")
         else:
             integrals[k] = v
 
@@ -370,7 +386,7 @@ def cmd_simulate(args, progress) -> int:
         print(d)
     if args.csv:
         _write_csv(traj, args.csv)
-        print(f"wrote {args.csv}", file=sys.stderr)
+        progress.note(f"wrote {args.csv}")
     if args.plot:
         with progress.step(f"plotting to {args.plot}"):
             _plot(traj, system, args.plot, f"{system.name or loaded.label} ({principle})")
@@ -541,18 +557,18 @@ def cmd_sweep(args, progress) -> int:
                atol=args.atol if args.atol is not None else sim.get("atol", 1e-12),
                **({"n_steps": args.steps} if method == "rk4" else {}))
     failed = int((~df["success"]).sum())
-    print(f"jetnh: {len(df)} points, {len(df) - failed} succeeded"
-          + (f", {failed} stopped early (see stop_reason)" if failed else ""), file=sys.stderr)
+    progress.note(f"jetnh: {len(df)} points, {len(df) - failed} succeeded"
+                  + (f", {failed} stopped early (see stop_reason)" if failed else ""))
     if args.out:
         _write_table(df, Path(args.out))
-        print(f"wrote {args.out}", file=sys.stderr)
+        progress.note(f"wrote {args.out}")
     else:
         print(df.to_csv(index=False), end="")
     if args.plot:
         x, y = df.attrs["grid"]
         plot_map(df, x, y, args.value, args.plot,
                  title=f"{system.name or loaded.label} ({principle}): {args.value}")
-        print(f"wrote {args.plot}", file=sys.stderr)
+        progress.note(f"wrote {args.plot}")
     return 0
 
 
@@ -618,7 +634,7 @@ def cmd_bench(args, progress) -> int:
         for p in [p for p in scripts if p.stem != "report"] + [by_name["report"]]:
             cmd = [sys.executable, str(p)] + (["--quick"] if args.quick and
                                                p.stem != "report" else [])
-            print(f"jetnh: running {' '.join(cmd[1:])}", file=sys.stderr, flush=True)
+            progress.note(f"jetnh: running {' '.join(cmd[1:])}")
             if subprocess.call(cmd, cwd=str(_repo_root())):
                 failed.append(p.stem)
         if failed:
@@ -646,7 +662,7 @@ def cmd_bench(args, progress) -> int:
         raise JetnhError(f"no benchmark named {args.name!r}; the benchmarks are "
                          f"{', '.join(by_name)}")
     cmd = [sys.executable, str(by_name[args.name]), *args.args]
-    print(f"jetnh: running {' '.join(cmd[1:])}", file=sys.stderr)
+    progress.note(f"jetnh: running {' '.join(cmd[1:])}")
     return subprocess.call(cmd, cwd=str(_repo_root()))
 
 
@@ -664,6 +680,38 @@ def cmd_reproduce(args, progress) -> int:
     return reproduce(argv)
 
 
+# ---------------------------------------------------------------------- cache
+def _bytes(n: int) -> str:
+    for unit in ("bytes", "KiB", "MiB", "GiB"):
+        if n < 1024 or unit == "GiB":
+            return f"{n} {unit}" if unit == "bytes" else f"{n:.1f} {unit}"
+        n /= 1024
+
+
+def cmd_cache(args, progress) -> int:
+    """Where the kernel cache lives and what it holds; or empty it."""
+    from .numeric import cache
+
+    if args.action == "clear":
+        root = cache.cache_root()
+        n = cache.clear()
+        print(f"removed {n} cached {'entry' if n == 1 else 'entries'} from {root}")
+        return 0
+    i = cache.info()
+    print(f"kernel cache: {i['root']}"
+          + (" (from JETNH_CACHE)" if i["env"] else " (the user cache directory)"))
+    print(f"entries:      {i['entries']} ({_bytes(i['bytes'])})")
+    if i["old_versions"]:
+        print(f"older jetnh:  {_bytes(i['old_versions'])} of kernels of other versions "
+              "(jetnh cache clear removes them)")
+    if i["fallback"]:
+        print(f"not usable:   {i['fallback']}")
+        print("              runs use a private temporary cache, removed at exit")
+    else:
+        print("usable:       yes (runs keep their kernels here)")
+    return 0
+
+
 # ---------------------------------------------------------------------- parser
 class _Formatter(argparse.RawDescriptionHelpFormatter):
     pass
@@ -674,7 +722,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = argparse.ArgumentParser(
         prog="jetnh", formatter_class=_Formatter,
-        description=__doc__,
+        description=__doc__.replace("``", ""),
         epilog="examples:\n"
                "  jetnh models\n"
                "  jetnh derive rolling_disk --principle suslov --format latex\n"
@@ -683,9 +731,12 @@ def build_parser() -> argparse.ArgumentParser:
                "--plot knife.png\n"
                "  jetnh models chaplygin_sleigh --toml > sleigh.toml")
     p.add_argument("--version", action="version", version=f"jetnh {__version__}")
+    p.add_argument("-q", "--quiet", action="store_true",
+                   help="only errors on stderr: no progress or other messages (also after "
+                        "COMMAND)")
     common = argparse.ArgumentParser(add_help=False)
-    common.add_argument("-q", "--quiet", action="store_true",
-                        help="no progress messages on stderr")
+    common.add_argument("-q", "--quiet", action="store_true", default=argparse.SUPPRESS,
+                        help="only errors on stderr: no progress or other messages")
     common.add_argument("--debug", action="store_true",
                         help="show a traceback for unexpected (internal) errors")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
@@ -825,8 +876,8 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--atol", type=float, default=None, help="default 1e-12")
     w.add_argument("--steps", type=int, default=1000, help="steps of rk4 (default 1000)")
     w.add_argument("--scheduler", metavar="ADDRESS",
-                   help="a Dask scheduler, e.g. tcp://10.0.0.5:8786 (default: this machine, "
-                        "every core)")
+                   help="a Dask scheduler, e.g. tcp://10.0.0.5:8786 (needs pip install "
+                        "'jetnh[cluster]'; default: this machine, every core, no Dask)")
     w.add_argument("--chunk-size", type=int, default=None, metavar="N",
                    help="points per Dask task (default: 4 tasks per worker thread)")
     w.add_argument("--timeout", type=float, default=None, metavar="SECONDS",
@@ -867,6 +918,17 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("args", nargs=argparse.REMAINDER, metavar="ARGS")
     b.set_defaults(func=cmd_bench)
 
+    k = sub.add_parser(
+        "cache", parents=[common], formatter_class=_Formatter,
+        help="show where the compiled-kernel cache lives and what it holds, or empty it",
+        description="info: the cache directory (JETNH_CACHE, else the platform's user "
+                    "cache directory), its entries and their size, and whether runs can "
+                    "use it or fall back to a private temporary cache.  clear: remove "
+                    "every cached kernel (they are compiled again when needed).")
+    k.add_argument("action", choices=("info", "clear"), nargs="?", default="info",
+                   help="default: info")
+    k.set_defaults(func=cmd_cache)
+
     r = sub.add_parser(
         "reproduce", parents=[common], formatter_class=_Formatter,
         help="the machine-checked reproduction of the seed paper "
@@ -889,7 +951,10 @@ def main(argv=None) -> int:
         print(f"jetnh {args.command}: error: {exc}", file=sys.stderr)
         return 2
     except JetnhError as exc:
-        print(f"jetnh: error: {exc}", file=sys.stderr)
+        msg = str(exc)
+        if isinstance(exc, ArgumentError) and args.command in ("simulate", "sweep"):
+            msg = option_message(msg)
+        print(f"jetnh: error: {msg}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         print("jetnh: interrupted", file=sys.stderr)

@@ -293,8 +293,19 @@ class CompiledScene:
 
 
 # ---------------------------------------------------------------------- Dask
+def _distributed():
+    """The ``distributed`` module; a JetnhError naming the extra when it is missing."""
+    try:
+        import distributed
+    except ImportError:
+        raise JetnhError("sweeps on a Dask cluster (client=, jetnh sweep --scheduler) need "
+                         "dask.distributed: pip install 'jetnh[cluster]'; or run the sweep "
+                         "on this machine (client=None, no --scheduler)") from None
+    return distributed
+
+
 def _connect(address, timeout):
-    from distributed import Client
+    Client = _distributed().Client
 
     try:
         client = Client(address, timeout=timeout, set_as_default=False)
@@ -309,7 +320,9 @@ def _connect(address, timeout):
 def _on_dask(client, shipped, Y0, P, run, outputs, chunk_size, progress, timeout,
              connect_timeout):
     """The chunks' columns, computed as Dask tasks, in grid order."""
-    from distributed import Client, KilledWorker, as_completed
+    distributed = _distributed()
+    Client, KilledWorker = distributed.Client, distributed.KilledWorker
+    as_completed = distributed.as_completed
 
     own = not isinstance(client, Client)
     if own:

@@ -245,3 +245,93 @@ def test_hostile_model_file_is_refused_and_not_executed(tmp_path):
     r = clean(run("derive", str(bad)), 1)
     assert "exponents" in r.stderr
     assert not canary.exists()
+
+
+# ---------------------------------------------------------------------- issue 16
+def test_cache_info_and_clear(capsys, tmp_path, monkeypatch):
+    from jetnh.numeric import cache
+
+    root = tmp_path / "c"
+    monkeypatch.setenv("JETNH_CACHE", str(root))
+    code, out, err = inproc(capsys, "cache", "info")
+    assert code == 0 and str(cache.cache_root()) in out and "entries:      0" in out
+    assert "usable:       yes" in out and "JETNH_CACHE" in out
+    entry = cache.cache_root() / "kdeadbeef"
+    entry.mkdir(parents=True)
+    (entry / "kernels.py").write_bytes(b"x" * 2048)
+    code, out, _ = inproc(capsys, "cache")
+    assert code == 0 and "entries:      1 (2.0 KiB)" in out
+    code, out, _ = inproc(capsys, "cache", "clear")
+    assert code == 0 and "removed 1 cached entry" in out and not cache.cache_root().exists()
+    assert not entry.exists()
+    code, out, _ = inproc(capsys, "cache", "clear")
+    assert code == 0 and "removed 0 cached entries" in out
+
+
+def test_cache_info_names_the_fallback(capsys, tmp_path, monkeypatch):
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    shared.chmod(0o777)
+    monkeypatch.setenv("JETNH_CACHE", str(shared))
+    code, out, _ = inproc(capsys, "cache", "info")
+    assert code == 0 and "not usable" in out and "writable by group or others" in out
+    assert "temporary cache" in out
+    code, _, err = inproc(capsys, "cache", "frobnicate")
+    assert code == 2 and "invalid choice" in err
+
+
+@pytest.mark.parametrize("args, words", [
+    (("--rtol", "nan"), "--rtol must be 0 or a finite number"),
+    (("--atol", "-1"), "--atol must be >= 0"),
+    (("--timeout", "0"), "--timeout must be a positive number"),
+    (("--method", "rk4", "--steps", "0"), "--steps must be a positive integer"),
+    (("--rtol", "0", "--atol", "0"), "give --rtol > 0 or --atol > 0"),
+])
+def test_run_argument_errors_name_the_options(capsys, args, words):
+    code, out, err = inproc(capsys, "simulate", "knife_edge", "--t-end", "1", "-q", *args)
+    assert code == 1 and words in err and "Traceback" not in err, err
+    assert "n_steps" not in err and " rtol" not in err and " atol" not in err
+
+
+def test_sweep_argument_errors_name_the_options(capsys):
+    code, _, err = inproc(capsys, "sweep", "rolling_disk", "--t-end", "1", "--grid", "R=1",
+                          "--atol", "-1", "-q")
+    assert code == 1 and "--atol must be >= 0" in err and "Traceback" not in err
+
+
+def test_option_message_translates_whole_names_only():
+    from jetnh.cli import option_message
+
+    assert option_message("give n_steps= or h=, not both") == "give --steps or h=, not both"
+    assert option_message("n_steps = 5 is beyond max_steps = 4") == \
+        "--steps = 5 is beyond max_steps = 4"
+    assert option_message("--rtol and my_rtol and rtols") == "--rtol and my_rtol and rtols"
+
+
+def test_quiet_leaves_only_errors(capsys, tmp_path):
+    out_csv = str(tmp_path / "k.csv")
+    for argv in (("-q", "simulate"), ("simulate", "-q")):
+        code, out, err = inproc(capsys, *argv, "knife_edge", "--t-end", "0.5", "--csv",
+                                out_csv)
+        assert code == 0 and err == "" and "final:" in out, err
+    code, _, err = inproc(capsys, "simulate", "knife_edge", "--t-end", "0.5", "--csv",
+                          out_csv)
+    assert code == 0 and f"wrote {out_csv}" in err
+    code, out, err = inproc(capsys, "-q", "sweep", "rolling_disk", "--t-end", "0.5",
+                            "--grid", "R=1,2")
+    assert code == 0 and err == "" and out.startswith("R,"), err
+    code, _, err = inproc(capsys, "-q", "simulate", "no_such_model")
+    assert code == 1 and "no model named" in err
+
+
+@pytest.mark.parametrize("cmd", ["", "derive", "compare", "simulate", "sweep", "models",
+                                 "bench", "reproduce", "cache"])
+def test_help_is_plain_text(cmd, capsys):
+    code, out, _ = inproc(capsys, *([cmd] if cmd else []), "--help")
+    assert code == 0 and "``" not in out and "usage: jetnh" in out
+
+
+def test_simulate_help_documents_the_discrete_methods(capsys):
+    _, out, _ = inproc(capsys, "simulate", "--help")
+    text = " ".join(out.split())
+    assert "dla (discrete Lagrange-d'Alembert" in text and "dvi (discrete vakonomic)" in text

@@ -387,3 +387,50 @@ def test_hit_overhead_is_small(fresh):
         assert cache._verify(d, key, secret) is not None
     per = (time.perf_counter() - t0) / 20
     assert per < 0.05
+
+
+# ---------------------------------------------------------------------- location
+def test_default_root_is_the_platform_cache_dir(tmp_path, monkeypatch):
+    """Without JETNH_CACHE (unset or empty) the root is under the user cache dir, which
+    honours XDG_CACHE_HOME on Linux; that parent is jetnh's and is made private."""
+    xdg = tmp_path / "xdg"
+    monkeypatch.setenv("XDG_CACHE_HOME", str(xdg))
+    monkeypatch.setattr(cache, "_WARNED", set())
+    for unset in (lambda: monkeypatch.delenv("JETNH_CACHE", raising=False),
+                  lambda: monkeypatch.setenv("JETNH_CACHE", "")):
+        unset()
+        root = cache.cache_root()
+        if sys.platform.startswith("linux"):
+            assert root.parent == xdg / "jetnh"
+        assert cache._env_base() is None
+    if sys.platform.startswith("linux"):
+        (xdg / "jetnh").mkdir(parents=True)
+        os.chmod(xdg / "jetnh", 0o777)
+        cache._prepare_root(root)        # our own default dir: made private, not refused
+        assert stat.S_IMODE(os.stat(xdg / "jetnh").st_mode) == 0o700
+    monkeypatch.setenv("JETNH_CACHE", str(tmp_path / "mine"))
+    assert cache.cache_root().parent == tmp_path / "mine"
+
+
+def test_info_and_clear(fresh):
+    """info() counts the entries and their bytes; clear() removes them and older roots."""
+    i = cache.info()
+    assert i["entries"] == 0 and i["fallback"] is None and i["env"]
+    reload(scene(4.5))
+    old = fresh / "v0"
+    old.mkdir()
+    (old / "x").write_bytes(b"12345")
+    i = cache.info()
+    assert i["root"] == cache.cache_root() and i["entries"] == 1 and i["bytes"] > 0
+    assert i["old_versions"] == 5
+    assert cache.clear() == 1
+    assert not cache.cache_root().exists() and not old.exists()
+    assert cache.info()["entries"] == 0
+
+
+def test_info_names_why_the_fallback_is_used(fresh, tmp_path, monkeypatch):
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    os.chmod(shared, 0o777)
+    monkeypatch.setenv("JETNH_CACHE", str(shared))
+    assert "writable by group or others" in cache.info()["fallback"]

@@ -62,6 +62,7 @@ def failing():
 
 @pytest.fixture(scope="module")
 def client():
+    pytest.importorskip("distributed")
     from distributed import Client, LocalCluster
 
     with LocalCluster(n_workers=2, processes=True, threads_per_worker=1, host="127.0.0.1",
@@ -324,6 +325,21 @@ def test_cli_sweep_files_map_and_scheduler(disk, client, capsys, tmp_path):
 def test_cli_errors(capsys, args, code, words):
     got, _, err = cli(capsys, "sweep", "rolling_disk", "--t-end", "1", *args)
     assert got == code and words in err and "Traceback" not in err, err
+
+
+def test_without_dask_local_sweeps_run_and_cluster_ones_name_the_extra(disk, capsys,
+                                                                      monkeypatch):
+    """dask is the 'cluster' extra: a local sweep never imports it; a client or
+    --scheduler without it is a JetnhError naming pip install 'jetnh[cluster]'."""
+    for mod in ("dask", "distributed"):
+        monkeypatch.setitem(sys.modules, mod, None)       # import dask -> ImportError
+    df = jn.sweep(disk, {"R": [0.5, 1.0]})
+    assert list(df["R"]) == [0.5, 1.0] and df["success"].all()
+    with pytest.raises(JetnhError, match=r"pip install 'jetnh\[cluster\]'"):
+        jn.sweep(disk, {"R": [0.5, 1.0]}, client="tcp://127.0.0.1:9")
+    got, _, err = cli(capsys, "sweep", "rolling_disk", "--t-end", "1", "--grid", "R=1",
+                      "--scheduler", "tcp://127.0.0.1:9")
+    assert got == 1 and "pip install 'jetnh[cluster]'" in err and "Traceback" not in err
 
 
 def test_cli_parquet_needs_pyarrow(capsys, monkeypatch, tmp_path):

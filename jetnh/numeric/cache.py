@@ -3,8 +3,12 @@
 Where it lives
 --------------
 The root is ``$JETNH_CACHE/v<codegen version>`` when ``JETNH_CACHE`` is set, else
-``~/.cache/jetnh/v<codegen version>`` (``cache_root()``).  ``Scene(..., cache=False)`` uses
-a private temporary directory removed at exit.  Each scene's kernels are one *entry*, a
+``<user cache dir>/v<codegen version>`` (``cache_root()``), the user cache dir being where
+the platform keeps caches (``platformdirs.user_cache_dir("jetnh")``: ``~/.cache/jetnh``
+or ``$XDG_CACHE_HOME/jetnh`` on Linux, ``~/Library/Caches/jetnh`` on macOS).
+``jetnh cache info`` and ``jetnh cache clear`` show and empty it (``info()``,
+``clear()``).  ``Scene(..., cache=False)`` uses a private temporary directory removed at
+exit.  Each scene's kernels are one *entry*, a
 directory named by a hash of the symbolic input (``codegen.symbolic_key``)::
 
     <root>/hmac.key          32 random bytes, this user's secret (mode 0600)
@@ -25,12 +29,12 @@ scene only ``kernels.py`` is compiled.
 Privacy
 -------
 Every directory jetnh creates here is made mode 0700 and every file 0600, whatever the
-umask.  The root and its parent (``$JETNH_CACHE`` or ``~/.cache/jetnh``) must be
+umask.  The root and its parent (``$JETNH_CACHE`` or the user cache dir) must be
 directories of the user that group and others cannot write: the root, jetnh's own, is made
-0700 again if it is not, and so is ``~/.cache/jetnh``; a ``$JETNH_CACHE`` that others can
-write is left alone and not used.  Inside the root, an entry, file or directory that does
-not belong to the user, is writable by group or others, or is a symbolic link, is not
-trusted.
+0700 again if it is not, and so is the default parent (the user cache dir); a
+``$JETNH_CACHE`` that others can write is left alone and not used.  Inside the root, an
+entry, file or directory that does not belong to the user, is writable by group or
+others, or is a symbolic link, is not trusted.
 
 Trust
 -----
@@ -118,20 +122,93 @@ class _Unusable(Exception):
     """The cache root cannot be used: ``(problem, fix)``."""
 
 
-def cache_root() -> Path:
-    """Where persistent kernels go: ``$JETNH_CACHE`` or ``~/.cache/jetnh``."""
+def _user_cache_dir() -> Path:
+    """jetnh's directory among the platform's caches (``platformdirs``)."""
+    try:
+        import platformdirs
+    except ImportError:             # a development tree without it: the XDG rule
+        xdg = os.environ.get("XDG_CACHE_HOME", "")
+        base = Path(xdg) if os.path.isabs(xdg) else Path.home() / ".cache"
+        return base / "jetnh"
+    return Path(platformdirs.user_cache_dir("jetnh", appauthor=False))
+
+
+def _env_base() -> Path | None:
+    """``$JETNH_CACHE`` when set (and not empty), else None."""
     env = os.environ.get("JETNH_CACHE")
-    base = Path(env).expanduser() if env else Path.home() / ".cache" / "jetnh"
+    return Path(env).expanduser() if env else None
+
+
+def cache_root() -> Path:
+    """Where persistent kernels go: ``$JETNH_CACHE/v<N>`` or ``<user cache dir>/v<N>``."""
+    base = _env_base() or _user_cache_dir()
     return base / f"v{CODEGEN_VERSION}"
 
 
-def clear(root: Path | None = None):
-    """Remove every cached kernel under ``root`` (default: the persistent cache)."""
-    root = root or cache_root()
-    if root.exists():
-        shutil.rmtree(root)
+def _entries(root: Path) -> list[Path]:
+    """The entries under ``root`` (``k<key>`` directories, not links)."""
+    try:
+        names = os.listdir(root)
+    except OSError:
+        return []
+    return [root / n for n in names
+            if n.startswith("k") and os.path.isdir(root / n) and not os.path.islink(root / n)]
+
+
+def _size(path: Path) -> int:
+    """Bytes of the files under ``path`` (links are not followed)."""
+    total = 0
+    for dirpath, _dirs, files in os.walk(path):
+        for f in files:
+            try:
+                total += os.lstat(os.path.join(dirpath, f)).st_size
+            except OSError:
+                pass
+    return total
+
+
+def _old_versions(root: Path) -> list[Path]:
+    """Roots of other codegen versions next to ``root`` (left by older jetnh)."""
+    try:
+        names = os.listdir(root.parent)
+    except OSError:
+        return []
+    return [root.parent / n for n in names
+            if n != root.name and n[:1] == "v" and n[1:].isdigit()
+            and os.path.isdir(root.parent / n) and not os.path.islink(root.parent / n)]
+
+
+def info() -> dict:
+    """The persistent cache: ``root``, ``entries``, ``bytes``, ``old_versions`` (their
+    bytes), ``env`` (``JETNH_CACHE`` set) and ``fallback`` (None, or why a run would use a
+    private temporary cache instead, and the fix)."""
+    root = cache_root()
+    try:
+        _prepare_root(root)
+        fallback = None
+    except _Unusable as exc:
+        fallback = "{}; to keep kernels between runs, {}".format(*exc.args)
+    old = _old_versions(root)
+    return {"root": root, "entries": len(_entries(root)),
+            "bytes": _size(root) if root.is_dir() else 0,
+            "old_versions": sum(_size(p) for p in old), "env": _env_base() is not None,
+            "fallback": fallback}
+
+
+def clear(root: Path | None = None) -> int:
+    """Remove every cached kernel under ``root`` (default: the persistent cache, and the
+    roots older jetnh versions left next to it); returns how many entries there were."""
+    targets = [root] if root else [cache_root(), *_old_versions(cache_root())]
+    n = 0
+    for r in targets:
+        n += len(_entries(r))
+        if os.path.islink(r):
+            os.unlink(r)
+        elif r.exists():
+            shutil.rmtree(r)
     for k in [k for k in _LOADED if k[1]]:
         del _LOADED[k]
+    return n
 
 
 # ---------------------------------------------------------------------- private files
@@ -249,7 +326,7 @@ def _discard(path: Path):
 # ---------------------------------------------------------------------- the root
 def _prepare_root(root: Path, own_base: bool = True) -> Path:
     """Make ``root`` (and its missing parents) private and check it and, if ``own_base``,
-    its parent (``$JETNH_CACHE`` or ``~/.cache/jetnh``); ``_Unusable`` if it cannot be
+    its parent (``$JETNH_CACHE`` or the user cache dir); ``_Unusable`` if it cannot be
     used.  The version directory is jetnh's: made 0700 if it is not.  ``$JETNH_CACHE``
     is the user's: never changed, only refused if others can write it."""
     base = root.parent
@@ -269,7 +346,7 @@ def _prepare_root(root: Path, own_base: bool = True) -> Path:
             raise _Unusable(f"{path} is not a directory", fix)
         if st.st_uid != _uid():
             raise _Unusable(f"{path} belongs to user {st.st_uid}, not to you ({_uid()})", fix)
-        if path == base and st.st_mode & 0o022 and "JETNH_CACHE" in os.environ:
+        if path == base and st.st_mode & 0o022 and _env_base() is not None:
             raise _Unusable(f"{path} is writable by group or others (mode "
                             f"{stat.S_IMODE(st.st_mode):o})", fix)
         if st.st_mode & (0o077 if path == root else 0o022):
