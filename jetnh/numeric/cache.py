@@ -124,12 +124,8 @@ class _Unusable(Exception):
 
 def _user_cache_dir() -> Path:
     """jetnh's directory among the platform's caches (``platformdirs``)."""
-    try:
-        import platformdirs
-    except ImportError:             # a development tree without it: the XDG rule
-        xdg = os.environ.get("XDG_CACHE_HOME", "")
-        base = Path(xdg) if os.path.isabs(xdg) else Path.home() / ".cache"
-        return base / "jetnh"
+    import platformdirs
+
     return Path(platformdirs.user_cache_dir("jetnh", appauthor=False))
 
 
