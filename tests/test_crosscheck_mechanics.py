@@ -20,36 +20,29 @@ import sympy as sp
 from hypothesis import given, settings, strategies as st
 from sympy.physics.mechanics import LagrangesMethod
 
+
 import jetnh.strategies as jst
 from jetnh import JetSpace
 from jetnh.constraints import System
+from numbers30 import f30, num
 
-PREC = 30
 RTOL = 1e-10
 
 randoms = st.randoms(use_true_random=False)
 
 
 # ------------------------------------------------------------------ helpers
-def _f(x) -> sp.Float:
-    return sp.Float(x, PREC)
-
-
-def _num(expr, vals):
-    v = sp.sympify(expr).xreplace(vals).evalf(PREC)
-    assert v.is_number and v.is_finite, f"not a finite number: {v}"
-    return v
 
 
 def manifold_state(system: System, rnd: random.Random, params=None, lo=-1.0, hi=1.0) -> dict:
     """t, q and the independent velocities at random; dependent velocities from phi."""
     J = system.J
     vals = dict(params or {})
-    vals[J.t] = _f(rnd.uniform(lo, hi))
+    vals[J.t] = f30(rnd.uniform(lo, hi))
     for s in J.q + system.independent_velocities:
-        vals[s] = _f(rnd.uniform(lo, hi))
+        vals[s] = f30(rnd.uniform(lo, hi))
     for v, phi in system.phi.items():
-        vals[v] = _num(phi, vals)
+        vals[v] = num(phi, vals)
     return vals
 
 
@@ -75,7 +68,7 @@ def assert_accelerations_match(system: System, ref: dict, rnd: random.Random, po
     for _ in range(points):
         vals = manifold_state(system, rnd, params)
         for a in J.qdd:
-            va, vb = _num(acc[a], vals), _num(ref[a], vals)
+            va, vb = num(acc[a], vals), num(ref[a], vals)
             scale = max(1, abs(va), abs(vb))
             assert abs(va - vb) <= RTOL * scale, f"{a}: jetnh {va} vs LagrangesMethod {vb}"
 
@@ -133,8 +126,8 @@ def test_chetaev_matches_lagranges_method_on_the_rolling_disk(dependent):
     ref = lagranges_method_accelerations(J, L, cons)
     rnd = random.Random(7)
     for _ in range(3):
-        params = {R: _f(rnd.uniform(0.5, 2)), I1: _f(rnd.uniform(0.2, 1)),
-                  I2: _f(rnd.uniform(0.2, 1))}
+        params = {R: f30(rnd.uniform(0.5, 2)), I1: f30(rnd.uniform(0.2, 1)),
+                  I2: f30(rnd.uniform(0.2, 1))}
         assert_accelerations_match(system, ref, rnd, points=2, params=params)
 
 

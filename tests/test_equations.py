@@ -17,12 +17,13 @@ import pytest
 import sympy as sp
 from hypothesis import Phase, given, settings, strategies as st
 
+
 import jetnh.strategies as jst
 from jetnh import ConstraintError, JetSpace, LagrangianError, PrincipleError
 from jetnh.constraints import System
 from jetnh.equations import FORMS
+from numbers30 import f30, num
 
-PREC = 30
 TOL = 1e-18          # residuals that are identically zero, at 30 digits
 RTOL = 1e-10         # agreement between two routes to the same numbers
 
@@ -32,14 +33,6 @@ any_systems = jst.constrained_systems(min_n=2, max_n=4)
 
 
 # ------------------------------------------------------------------ numeric helpers
-def _f(x) -> sp.Float:
-    return sp.Float(x, PREC)
-
-
-def _num(expr, vals):
-    v = sp.sympify(expr).xreplace(vals).evalf(PREC)
-    assert v.is_number and v.is_finite, f"not a finite number: {v}"
-    return v
 
 
 def manifold_state(system: System, rnd: random.Random, extra=(), params=None) -> dict:
@@ -48,16 +41,16 @@ def manifold_state(system: System, rnd: random.Random, extra=(), params=None) ->
     J = system.J
     vals = dict(params or {})
     for s in (J.t,) + J.q + system.independent_velocities + tuple(extra):
-        vals[s] = _f(rnd.uniform(-1, 1))
+        vals[s] = f30(rnd.uniform(-1, 1))
     for v, phi in system.phi.items():
-        vals[v] = _num(phi, vals)
+        vals[v] = num(phi, vals)
     return vals
 
 
 def with_accelerations(vals: dict, acc: dict) -> dict:
     """``vals`` extended by the numeric accelerations and multiplier rates."""
     out = dict(vals)
-    out.update({a: _num(e, vals) for a, e in acc.items()})
+    out.update({a: num(e, vals) for a, e in acc.items()})
     return out
 
 
@@ -121,8 +114,8 @@ def _multiplier_form_reactions(system, eom, vals):
     """Chetaev's multiplier form [L]_s + nu_a df^a/dqdot^s: nu from the dependent rows."""
     rows = [eom.expressions[i] for i in system.dep_index]
     nus = eom.reactions
-    M = sp.Matrix([[_num(sp.diff(r, nu), vals) for nu in nus] for r in rows])
-    b = sp.Matrix([_num(r.xreplace({nu: 0 for nu in nus}), vals) for r in rows])
+    M = sp.Matrix([[num(sp.diff(r, nu), vals) for nu in nus] for r in rows])
+    b = sp.Matrix([num(r.xreplace({nu: 0 for nu in nus}), vals) for r in rows])
     sol = M.LUsolve(-b)
     return {nu: sol[i] for i, nu in enumerate(nus)}
 
@@ -143,7 +136,7 @@ def test_every_form_vanishes_on_the_accelerations_of_its_principle(case, rnd):
                 if eom.form == "multiplier" and principle == "chetaev":
                     vals = {**vals, **_multiplier_form_reactions(system, eom, vals)}
                 for i, e in enumerate(eom.expressions):
-                    assert_small(_num(e, vals), f"{principle} {eom.form} row {i}")
+                    assert_small(num(e, vals), f"{principle} {eom.form} row {i}")
 
 
 @settings(max_examples=10)
@@ -157,7 +150,7 @@ def test_accelerations_satisfy_the_differentiated_constraints(case, rnd):
         acc = eom.accelerations()
         vals = with_accelerations(manifold_state(system, rnd, extra=eom.multipliers), acc)
         for a, e in enumerate(Df):
-            assert_small(_num(e, vals), f"{principle}: D f^{a}")
+            assert_small(num(e, vals), f"{principle}: D f^{a}")
 
 
 @st.composite
@@ -182,16 +175,16 @@ def test_implicit_constraints_multiplier_form_rescales_the_multipliers(case, rnd
     lams = mult.multipliers
     acc_m, acc_e = mult.accelerations(), expl.accelerations()
     vals = manifold_state(system, rnd, extra=lams)
-    vals_e = {**vals, **{lam: _num(g * lam, vals) for lam in lams}}
+    vals_e = {**vals, **{lam: num(g * lam, vals) for lam in lams}}
     for a in J.qdd:
-        assert_close(_num(acc_m[a], vals), _num(acc_e[a], vals_e), str(a))
+        assert_close(num(acc_m[a], vals), num(acc_e[a], vals_e), str(a))
     # rates: lambda'_t = D(g) lambda + g lambda_t
     full = with_accelerations(vals, acc_m)
     for lam, rate in zip(lams, mult.multiplier_rates):
-        expected = _num(J.D(g) * lam + g * rate, full)
-        assert_close(_num(acc_e[rate], vals_e), expected, str(rate))
+        expected = num(J.D(g) * lam + g * rate, full)
+        assert_close(num(acc_e[rate], vals_e), expected, str(rate))
     for e in mult.expressions:
-        assert_small(_num(e, full))
+        assert_small(num(e, full))
 
 
 # ------------------------------------------------------------------ identity (19)
@@ -208,13 +201,13 @@ def test_identity_19_on_the_constraint_manifold(case, rnd):
     Phi, T, p = system.Phi, system.T(on_constraints=False), system.p_dependent
     vals = manifold_state(system, rnd, extra=J.jets(2, system.independent))
     for a, qa in enumerate(system.dependent):
-        vals[J.jet(qa, 2)] = _num(J.D(system.phi[J.jet(qa, 1)]), vals)
+        vals[J.jet(qa, 2)] = num(J.D(system.phi[J.jet(qa, 1)]), vals)
     for m, qm in enumerate(system.independent):
         lhs = EL[J.q.index(qm)] + sp.Add(*[Phi[a, m] * EL[i]
                                             for a, i in enumerate(system.dep_index)])
         rhs = ELt[m] + sp.Add(*[Phi[a, m] * sp.diff(Lt, qa) + p[a] * T[a, m]
                                 for a, qa in enumerate(system.dependent)])
-        assert_close(_num(lhs, vals), _num(rhs, vals), f"(19) for {qm}", rtol=1e-20)
+        assert_close(num(lhs, vals), num(rhs, vals), f"(19) for {qm}", rtol=1e-20)
 
 
 # ------------------------------------------------------------------ integrable constraints
@@ -265,14 +258,14 @@ def test_integrable_constraints_make_all_principles_coincide(case, rnd):
         vals = manifold_state(system, rnd, extra=lams + J.qdd)
         for f in system.constraints:
             for e in J.euler(f):
-                assert_small(_num(e, vals), "[f]_s")
+                assert_small(num(e, vals), "[f]_s")
         for e in T:
-            assert_small(_num(e, vals), "T on the manifold")
-        ref = {a: _num(chet[a], vals) for a in J.qdd}
+            assert_small(num(e, vals), "T on the manifold")
+        ref = {a: num(chet[a], vals) for a in J.qdd}
         for eom in others:
             acc = eom.accelerations()
             for a in J.qdd:
-                assert_close(_num(acc[a], vals), ref[a], f"{eom.principle} {eom.form} {a}")
+                assert_close(num(acc[a], vals), ref[a], f"{eom.principle} {eom.form} {a}")
 
 
 def test_accelerations_of_a_holonomic_four_coordinate_system_take_no_minutes():
@@ -291,7 +284,7 @@ def test_accelerations_of_a_holonomic_four_coordinate_system_take_no_minutes():
         acc = system.equations("chetaev").accelerations()
     rnd = random.Random(4)
     vals = with_accelerations(manifold_state(system, rnd), acc)
-    assert_small(_num(J.D(J.D(g)), vals), "D^2 g")
+    assert_small(num(J.D(J.D(g)), vals), "D^2 g")
 
 
 @settings(max_examples=6)
@@ -328,7 +321,7 @@ def test_chetaev_accelerations_do_not_depend_on_the_split(case, rnd):
     for _ in range(2):
         vals = manifold_state(s1, rnd)
         for a in s1.J.qdd:
-            assert_close(_num(a1[a], vals), _num(a2[a], vals), str(a))
+            assert_close(num(a1[a], vals), num(a2[a], vals), str(a))
 
 
 @settings(max_examples=10)
@@ -357,13 +350,13 @@ def test_vakonomic_split_change_maps_the_multipliers(case, rnd):
     macc2 = m2.accelerations()
     for _ in range(2):
         vals1 = with_accelerations(manifold_state(s1, rnd, extra=e1.multipliers), acc1)
-        vals2 = {**vals1, **{l2: _num(e, vals1) for l2, e in zip(lam2, lam2_of_1)}}
+        vals2 = {**vals1, **{l2: num(e, vals1) for l2, e in zip(lam2, lam2_of_1)}}
         for a in J.qdd:
-            assert_close(_num(acc2[a], vals2), vals1[a], f"{a}")
+            assert_close(num(acc2[a], vals2), vals1[a], f"{a}")
         for r2, e in zip(rate2, rate2_of_1):
-            assert_close(_num(acc2[r2], vals2), _num(e, vals1), f"{r2}")
+            assert_close(num(acc2[r2], vals2), num(e, vals1), f"{r2}")
         for key, e in macc2.items():
-            assert_close(_num(e.xreplace(rename), vals1), vals1[rename.get(key, key)], f"{key}")
+            assert_close(num(e.xreplace(rename), vals1), vals1[rename.get(key, key)], f"{key}")
 
 
 @settings(max_examples=10)
@@ -379,11 +372,11 @@ def test_suslov_q_accelerations_are_vakonomic_ones_at_minus_p(case, rnd):
     assert vak.multipliers == sus.multipliers
     for _ in range(2):
         vals = manifold_state(system, rnd, extra=sus.multipliers)
-        at_p = {**vals, **{lam: -_num(p, vals) for lam, p in zip(vak.multipliers,
+        at_p = {**vals, **{lam: -num(p, vals) for lam, p in zip(vak.multipliers,
                                                                   system.p_dependent)}}
         for a in system.J.qdd + vak.multiplier_rates:
             # Suslov's accelerations do not depend on the multipliers at all
-            assert_close(_num(asus[a], vals), _num(av[a], at_p), str(a))
+            assert_close(num(asus[a], vals), num(av[a], at_p), str(a))
 
 
 # ------------------------------------------------------------------ Example 1: rolling disk
@@ -479,12 +472,12 @@ def test_example_1_printed_42b_does_not_follow():
     sol = {phitt: system.on_constraints(acc[phitt].xreplace(sub)),
            psitt: system.on_constraints(acc[psitt].xreplace(sub))}
     rnd = random.Random(42)
-    vals = {s: _f(rnd.uniform(0.3, 1.3)) for s in (R, I1, I2, C1, C2, phi, psi, phid, psid)}
+    vals = {s: f30(rnd.uniform(0.3, 1.3)) for s in (R, I1, I2, C1, C2, phi, psi, phid, psid)}
     for angle in (phi, psi):
         S = C1 * sp.sin(angle) - C2 * sp.cos(angle)
         printed = [(R**2 + I1) * phitt - R * S * phid, I2 * psitt + R * S * psid]
         for e in printed:
-            assert abs(_num(e.xreplace(sol), vals)) > 1e-3
+            assert abs(num(e.xreplace(sol), vals)) > 1e-3
 
 
 # ------------------------------------------------------------------ Example 2: Appell-Hamel
@@ -561,19 +554,19 @@ def test_example_2_printed_44_is_not_jetnh_44_but_the_conclusion_holds():
                    - b_ / (a_ * m_) * (m_ * b_ / a_ * s + lz) * yd * W / s**3)
     assert _zero(rows[1] + m_ * corrected_a)
     rnd = random.Random(44)
-    vals = {sym: _f(rnd.uniform(0.3, 1.3)) for sym in (m_, g_, a_, b_, lz, xd, yd, xtt, ytt)}
+    vals = {sym: f30(rnd.uniform(0.3, 1.3)) for sym in (m_, g_, a_, b_, lz, xd, yd, xtt, ytt)}
     # printed (44a) is not (44a derived) / (-m): the difference does not vanish
-    assert abs(_num(printed_a + rows[1] / m_, vals)) > 1e-3
+    assert abs(num(printed_a + rows[1] / m_, vals)) > 1e-3
     # the conclusion: W = 0 and the same q-accelerations as Suslov
     vak = eom.accelerations()
     sus = system.equations("suslov", "embedded").accelerations()
     for _ in range(3):
         state = manifold_state(system, rnd, extra=(lz,), params={
-            sym: _f(rnd.uniform(0.5, 2)) for sym in (m_, g_, a_, b_)})
+            sym: f30(rnd.uniform(0.5, 2)) for sym in (m_, g_, a_, b_)})
         full = with_accelerations(state, vak)
-        assert_small(_num(W, full), "W")
+        assert_small(num(W, full), "W")
         for q in J.qdd:
-            assert_close(full[q], _num(sus[q], state), str(q))
+            assert_close(full[q], num(sus[q], state), str(q))
     # the exceptional branch: det of the (x'', y'') block of the derived rows
     block = sp.Matrix(rows[1:]).jacobian([xtt, ytt])
     det = sp.factor(sp.simplify(block.det()))
@@ -660,7 +653,7 @@ def test_split_dependence_on_the_rolling_disk():
     s2 = s1.with_split(["phi", "y"])
     J = s1.J
     rnd = random.Random(26)
-    params = {R: _f(1.3), I1: _f(0.7), I2: _f(0.4)}
+    params = {R: f30(1.3), I1: f30(0.7), I2: f30(0.4)}
     vals = manifold_state(s1, rnd, params=params)
     # keep away from cos(psi) = 0, where split 2 is singular
     assert abs(sp.cos(vals[J.q[3]])) > 0.1
@@ -669,13 +662,13 @@ def test_split_dependence_on_the_rolling_disk():
         eom = system.equations(principle, "embedded" if principle != "chetaev" else None)
         acc = eom.accelerations()
         # Suslov's accelerations do not depend on the multipliers: any values do
-        v = {**vals, **dict(zip(eom.multipliers, lam_values or [_f(0.5)] * 2))}
-        return [_num(acc[a], v) for a in J.qdd]
+        v = {**vals, **dict(zip(eom.multipliers, lam_values or [f30(0.5)] * 2))}
+        return [num(acc[a], v) for a in J.qdd]
 
     c1, c2 = q_acc(s1, "chetaev"), q_acc(s2, "chetaev")
     for a, b in zip(c1, c2):
         assert_close(a, b)
-    lam1 = [_f(0.3), _f(-0.2)]
+    lam1 = [f30(0.3), f30(-0.2)]
     N = s2.jacobian_dependent.T.xreplace(vals)
     lam2 = list(N * sp.Matrix(lam1))
     v1, v2, v2_naive = (q_acc(s1, "vakonomic", lam1), q_acc(s2, "vakonomic", lam2),

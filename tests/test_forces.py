@@ -21,6 +21,7 @@ import sympy as sp
 from hypothesis import given, settings, strategies as st
 from sympy.physics.mechanics import LagrangesMethod, Point, ReferenceFrame
 
+
 import jetnh as jn
 import jetnh.strategies as jst
 from jetnh import models
@@ -28,8 +29,8 @@ from jetnh.constraints import System
 from jetnh.equations import FORMS, multiplier_symbols
 from jetnh.errors import ConstraintError, JetnhError, JetSpaceError
 from jetnh.numeric import codegen
+from numbers30 import f30, num
 
-PREC = 30
 TOL = 1e-18          # residuals that vanish identically, at 30 digits
 RTOL = 1e-10         # two routes to the same numbers
 
@@ -37,14 +38,6 @@ randoms = st.randoms(use_true_random=False)
 
 
 # ------------------------------------------------------------------ helpers
-def _f(x) -> sp.Float:
-    return sp.Float(x, PREC)
-
-
-def _num(expr, vals):
-    v = sp.sympify(expr).xreplace(vals).evalf(PREC)
-    assert v.is_number and v.is_finite, f"not a finite number: {v}"
-    return v
 
 
 def manifold_state(system: System, rnd: random.Random, extra=()) -> dict:
@@ -53,10 +46,10 @@ def manifold_state(system: System, rnd: random.Random, extra=()) -> dict:
     can be exactly singular.)"""
     J = system.J
     rnd = random.Random(rnd.getrandbits(64))
-    vals = {s: _f(rnd.uniform(-1, 1))
+    vals = {s: f30(rnd.uniform(-1, 1))
             for s in (J.t,) + J.q + system.independent_velocities + tuple(extra)}
     for v, phi in system.phi.items():
-        vals[v] = _num(phi, vals)
+        vals[v] = num(phi, vals)
     return vals
 
 
@@ -77,8 +70,8 @@ def total_derivative(e, J, rates=()):
 
 def solve_linear(rows, unknowns, vals) -> dict:
     """The numeric solution of rows affine in ``unknowns``, at ``vals``."""
-    M = sp.Matrix([[_num(sp.diff(r, u), vals) for u in unknowns] for r in rows])
-    b = sp.Matrix([_num(r.xreplace({u: 0 for u in unknowns}), vals) for r in rows])
+    M = sp.Matrix([[num(sp.diff(r, u), vals) for u in unknowns] for r in rows])
+    b = sp.Matrix([num(r.xreplace({u: 0 for u in unknowns}), vals) for r in rows])
     sol = M.LUsolve(-b)
     return dict(zip(unknowns, sol))
 
@@ -149,13 +142,13 @@ def test_accelerations_with_forces_match_the_equations_built_by_hand(system, rnd
     ref_v = vakonomic_by_hand(system, vak_eom.multipliers, vals)
     ref_s = suslov_by_hand(system, vals)
     for a in J.qdd:
-        assert_close(_num(chet[a], vals), ref_c[a], f"chetaev {a}")
-        assert_close(_num(vak[a], vals), ref_v[a], f"vakonomic {a}")
+        assert_close(num(chet[a], vals), ref_c[a], f"chetaev {a}")
+        assert_close(num(vak[a], vals), ref_v[a], f"vakonomic {a}")
     for r in vak_eom.multiplier_rates:
-        assert_close(_num(vak[r], vals), ref_v[sp.Symbol(r.name)], f"vakonomic {r}")
+        assert_close(num(vak[r], vals), ref_v[sp.Symbol(r.name)], f"vakonomic {r}")
     for q in system.independent:
         a = J.jet(q, 2)
-        assert_close(_num(sus[a], vals), ref_s[a], f"suslov {a}")
+        assert_close(num(sus[a], vals), ref_s[a], f"suslov {a}")
 
 
 @settings(max_examples=6)
@@ -170,7 +163,7 @@ def test_every_form_with_forces_vanishes_on_its_principles_accelerations(system,
                 lams = multiplier_symbols(system)
                 vals = manifold_state(system, rnd, extra=lams + tuple(
                     system.J.with_fields([m.name for m in lams]).jet(m, 1) for m in lams))
-                solved = {a: _num(e, vals) for a, e in acc.items()}
+                solved = {a: num(e, vals) for a, e in acc.items()}
                 vals.update(solved)
                 rows = eom.expressions
                 if eom.reactions:                 # Chetaev's multiplier form: nu from rows
@@ -179,7 +172,7 @@ def test_every_form_with_forces_vanishes_on_its_principles_accelerations(system,
                 # relative to the accelerations (huge near a singular reduced Hessian)
                 scale = max([1] + [abs(v) for v in solved.values()])
                 for i, e in enumerate(rows):
-                    v = _num(e, vals)
+                    v = num(e, vals)
                     assert abs(v) <= TOL * scale, f"{principle} {form} {convention} row {i}: {v}"
 
 
@@ -192,9 +185,9 @@ def test_suslov_with_forces_is_vakonomic_on_the_branch_32(system, rnd):
     eom = system.equations("vakonomic", "embedded")
     vak, sus = eom.accelerations(), system.equations("suslov").accelerations()
     vals = manifold_state(system, rnd)
-    vals.update({lam: -_num(p, vals) for lam, p in zip(eom.multipliers, system.p_dependent)})
+    vals.update({lam: -num(p, vals) for lam, p in zip(eom.multipliers, system.p_dependent)})
     for a in system.J.qdd:
-        assert_close(_num(vak[a], vals), _num(sus[a], vals), str(a))
+        assert_close(num(vak[a], vals), num(sus[a], vals), str(a))
 
 
 # ------------------------------------------------------------------ LagrangesMethod
@@ -225,7 +218,7 @@ def test_chetaev_with_forces_matches_lagranges_method(system, rnd):
     for _ in range(2):
         vals = manifold_state(system, rnd)
         for a in system.J.qdd:
-            assert_close(_num(acc[a], vals), _num(ref[a], vals), f"{a} vs LagrangesMethod")
+            assert_close(num(acc[a], vals), num(ref[a], vals), f"{a} vs LagrangesMethod")
 
 
 def test_forces_change_the_accelerations_by_the_inverse_reduced_mass():
