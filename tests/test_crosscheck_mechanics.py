@@ -20,7 +20,6 @@ import sympy as sp
 from hypothesis import given, settings, strategies as st
 from sympy.physics.mechanics import LagrangesMethod
 
-
 import jetnh.strategies as jst
 from jetnh import JetSpace
 from jetnh.constraints import System

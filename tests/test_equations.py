@@ -17,7 +17,6 @@ import pytest
 import sympy as sp
 from hypothesis import Phase, given, settings, strategies as st
 
-
 import jetnh.strategies as jst
 from jetnh import ConstraintError, JetSpace, LagrangianError, PrincipleError
 from jetnh.constraints import System

@@ -21,7 +21,6 @@ import sympy as sp
 from hypothesis import given, settings, strategies as st
 from sympy.physics.mechanics import LagrangesMethod, Point, ReferenceFrame
 
-
 import jetnh as jn
 import jetnh.strategies as jst
 from jetnh import models
