@@ -13,6 +13,7 @@ from .equivalence import compare
 from .errors import (ArgumentError, ConstraintError, IntegrationError, JetnhError,
                      JetnhWarning, JetSpaceError, LagrangianError, ModelFileError,
                      PrincipleError)
+from .integrals import conserved_quantities
 from .jet import JetSpace
 from .mechanics import from_mechanics
 # bound here, not in __getattr__: a later `import jetnh.sweep` would rebind the name to the
@@ -21,7 +22,7 @@ from .sweep import sweep
 
 __version__ = "0.1.0"
 
-__all__ = ["JetSpace", "System", "Equations", "PRINCIPLES", "compare", "Scene", "Trajectory",
+__all__ = ["JetSpace", "System", "Equations", "PRINCIPLES", "compare", "conserved_quantities", "Scene", "Trajectory",
            "Diagnostics", "Event", "Ensemble", "sweep", "from_mechanics", "JetnhError",
            "JetSpaceError", "ConstraintError", "LagrangianError", "PrincipleError",
            "ModelFileError", "IntegrationError", "ArgumentError", "JetnhWarning"]
