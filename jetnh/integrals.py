@@ -38,7 +38,9 @@ def conserved_quantities(sysm, principle, degree=2, coefficients=None) -> list:
     """A basis (echelon form, rational coefficients) of the nontrivial first integrals of
     ``principle`` polynomial of degree <= ``degree`` in the independent velocities (and
     multipliers), with coefficient functions spanned by ``coefficients`` (expressions in t
-    and q; default: the monomials in t and q of degree <= ``degree``)."""
+    and q; default: the monomials in t and q of degree <= ``degree``).  The constants are
+    numbers: an integral whose coefficients depend on the system's parameters (m x_t**2/2
+    + k x**2/2) is found only when ``coefficients`` holds those parameter factors."""
     if not isinstance(sysm, System):
         raise ArgumentError(f"conserved_quantities needs a jetnh System, not {type(sysm).__name__}")
     if not isinstance(principle, str) or principle not in PRINCIPLES:
