@@ -23,7 +23,7 @@ from sympy.core.function import AppliedUndef
 
 from . import inputs, linalg
 from .errors import ConstraintError, JetnhWarning, JetSpaceError, LagrangianError
-from .jet import JetSpace
+from .jet import JetSpace, key_name
 
 PRINCIPLES = ("chetaev", "vakonomic", "holder", "suslov")
 
@@ -107,11 +107,8 @@ class System:
         by_name = {p.name: p for p in self.parameters}
         out = {}
         for key, val in given.items():
-            if isinstance(key, sp.Symbol):
-                name = key.name
-            elif isinstance(key, str):
-                name = key
-            else:
+            name = key_name(key)
+            if name is None:
                 raise ConstraintError(
                     f"defaults key {key!r} is a {type(key).__name__}; use the parameter's "
                     "Symbol or its name")
@@ -236,11 +233,8 @@ class System:
         by_name = {s.name: s for s in J.q}
         dep = []
         for d in items:
-            if isinstance(d, sp.Symbol):
-                name = d.name
-            elif isinstance(d, str):
-                name = d
-            else:
+            name = key_name(d)
+            if name is None:
                 raise ConstraintError(
                     f"dependent coordinate {d!r} (of type {type(d).__name__}) is not a coordinate; "
                     f"give Symbols of J.q or their names ({', '.join(by_name)})")

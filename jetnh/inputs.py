@@ -26,6 +26,7 @@ import sympy as sp
 from sympy.core.function import AppliedUndef
 
 from .errors import ConstraintError, JetnhWarning, JetSpaceError, LagrangianError
+from .jet import key_name
 
 # Functions that are not differentiable where their argument crosses a threshold.  Abs
 # and sign are rewritten smoothly (sqrt(u**2), u/sqrt(u**2)), whose kink u = 0 the
@@ -251,7 +252,7 @@ def force_items(forces, J) -> list:
     for key, val in forces.items():
         if isinstance(key, AppliedUndef):             # a dynamicsymbol x(t)
             key = convert_dynamic(key, J)
-        name = key.name if isinstance(key, sp.Symbol) else key if isinstance(key, str) else None
+        name = key_name(key)
         if name not in by_name:
             info = J.split(sp.Symbol(name)) if name else None
             hint = (f" ({name} is a jet of {info[0].name}: key the force by the coordinate)"

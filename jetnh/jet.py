@@ -28,20 +28,25 @@ _JET_SUFFIX = re.compile(r"^(.+)_(t+)$")
 _LATEX_DOTS = {1: r"\dot", 2: r"\ddot", 3: r"\dddot", 4: r"\ddddot"}
 
 
+def key_name(key) -> str | None:
+    """The name a user means by ``key`` (a Symbol or a str), else None."""
+    if isinstance(key, sp.Symbol):
+        return key.name
+    return key if isinstance(key, str) else None
+
+
 def _names(spec) -> tuple[str, ...]:
     """Names from ``"x y"``, ``"x, y"`` or an iterable of str / Symbol."""
     if isinstance(spec, str):
         return tuple(n for n in re.split(r"[\s,]+", spec.strip()) if n)
     out = []
     for item in spec:
-        if isinstance(item, sp.Symbol):
-            out.append(item.name)
-        elif isinstance(item, str):
-            out.append(item)
-        else:
+        name = key_name(item)
+        if name is None:
             raise JetSpaceError(
                 f"coordinate {item!r} is a {type(item).__name__}; give names (str) or "
                 "sympy Symbols")
+        out.append(name)
     return tuple(out)
 
 

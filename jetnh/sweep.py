@@ -51,6 +51,7 @@ import warnings
 from collections.abc import Mapping
 
 from .errors import JetnhError
+from .jet import key_name
 
 #: options passed on to ``run_ensemble``
 OPTIONS = ("rtol", "atol", "method", "first_step", "max_step", "max_steps", "n_steps", "h",
@@ -114,12 +115,9 @@ def sweep(scene, grid, client=None, *, times=None, outputs=None, chunk_size=None
 
 # ---------------------------------------------------------------------- the grid
 def _key(k) -> str:
-    import sympy as sp
-
-    if isinstance(k, sp.Symbol):
-        return k.name
-    if isinstance(k, str):
-        return k
+    name = key_name(k)
+    if name is not None:
+        return name
     raise JetnhError(f"grid keys are parameter or state names or Symbols, not "
                      f"{type(k).__name__} ({k!r})")
 

@@ -28,6 +28,7 @@ import numpy as np
 import sympy as sp
 
 from ..errors import ArgumentError
+from ..jet import key_name
 
 #: the smallest nonzero relative tolerance that float64 arithmetic can honour
 RTOL_MIN = 100 * np.finfo(float).eps
@@ -39,10 +40,9 @@ MAX_STEPS_LIMIT = 2**53
 
 def name_of(key, what) -> str:
     """The name of a key given as a Symbol or a string."""
-    if isinstance(key, sp.Symbol):
-        return key.name
-    if isinstance(key, str):
-        return key
+    name = key_name(key)
+    if name is not None:
+        return name
     raise ArgumentError(f"{what} must be keyed by Symbol or by name, not {type(key).__name__} "
                      f"({key!r})")
 

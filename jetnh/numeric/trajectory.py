@@ -15,9 +15,9 @@ from dataclasses import asdict, dataclass, field
 from functools import cached_property
 
 import numpy as np
-import sympy as sp
 
 from ..errors import JetnhError
+from ..jet import key_name
 
 
 @dataclass
@@ -114,10 +114,9 @@ class Trajectory:
         return lay.states + lay.dependent_velocities + lay.integrals
 
     def _name(self, key) -> str:
-        if isinstance(key, sp.Symbol):
-            return key.name
-        if isinstance(key, str):
-            return key
+        name = key_name(key)
+        if name is not None:
+            return name
         raise JetnhError(f"index a trajectory by a Symbol or a name, not {type(key).__name__}")
 
     def __getitem__(self, key) -> np.ndarray:
