@@ -1,7 +1,11 @@
 """Model files: the safe expression parser, reading, writing and the round trip."""
 
+import ast
 import builtins
+import os
 import pathlib
+import subprocess
+import sys
 import time
 
 import pytest
@@ -15,6 +19,7 @@ from jetnh import modelfile as mf
 from jetnh.constraints import PRINCIPLES
 from jetnh.errors import JetnhError, ModelFileError
 from jetnh.testing import vanishes
+from deadline import deadline
 
 EXAMPLES = sorted((pathlib.Path(__file__).resolve().parents[1] / "examples").glob("*.toml"))
 
@@ -477,31 +482,9 @@ def test_multipliers_integrals_and_simulation():
 # ---------------------------------------------------------------------- the trust boundary
 # One test per class of hostile input: the file itself, the cost of building expressions,
 # identifiers that change meaning, and functions that cannot go through the derivation.
-import ast  # noqa: E402
-import os  # noqa: E402
-import signal  # noqa: E402
-import subprocess  # noqa: E402
-import sys  # noqa: E402
-from contextlib import contextmanager  # noqa: E402
 
 SMALL = 'coordinates = ["x", "y"]\nlagrangian = "(x_t**2 + y_t**2)/2"\n' \
         'constraints = ["y_t - x*x_t"]\n'
-
-
-@contextmanager
-def deadline(seconds, what):
-    """Fail (instead of hanging) when the block takes longer than ``seconds``."""
-    def boom(*_):
-        raise TimeoutError(f"{what} did not return within {seconds} s")
-    old = signal.signal(signal.SIGALRM, boom)
-    signal.setitimer(signal.ITIMER_REAL, seconds)
-    t0 = time.monotonic()
-    try:
-        yield
-    finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, old)
-    assert time.monotonic() - t0 < seconds, what
 
 
 def test_only_regular_files_are_read(tmp_path):

@@ -9,9 +9,7 @@ hypothesis profile of tests/conftest.py ("ci": derandomized and bounded; "dev": 
 
 import math
 import pathlib
-import signal
 import tempfile
-import time
 
 import pytest
 from hypothesis import given
@@ -20,6 +18,7 @@ from hypothesis import strategies as st
 from jetnh import models
 from jetnh import modelfile as mf
 from jetnh.errors import JetnhError
+from deadline import deadline
 
 BOUND = 5.0          # seconds per call (the documented limits are measured at about 2 s)
 HARD = 30.0          # a call still running then is interrupted, and the test fails
@@ -65,26 +64,13 @@ HOSTILE_LINES = [
 ]
 
 
-class _Hang(Exception):
-    pass
-
-
 def _guarded(fn, *args):
     """fn(*args), which may return or raise a JetnhError only, within BOUND seconds."""
-    def alarm(*_):
-        raise _Hang(f"no answer within {HARD} s")
-    old = signal.signal(signal.SIGALRM, alarm)
-    signal.setitimer(signal.ITIMER_REAL, HARD)
-    t0 = time.monotonic()
-    try:
-        fn(*args)
-    except JetnhError as exc:
-        assert "(internal" not in str(exc), f"an unexpected error was wrapped: {exc}"
-    finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, old)
-    elapsed = time.monotonic() - t0
-    assert elapsed < BOUND, f"the reader took {elapsed:.1f} s"
+    with deadline(BOUND, "the reader", hard=HARD):
+        try:
+            fn(*args)
+        except JetnhError as exc:
+            assert "(internal" not in str(exc), f"an unexpected error was wrapped: {exc}"
 
 
 # ---------------------------------------------------------------------- mutations
