@@ -186,6 +186,8 @@ def test_at_refusals(disk):
         tr.at([7.0])
     with pytest.raises(ArgumentError, match="finite"):
         tr.at([np.nan])
+    with pytest.raises(ArgumentError, match="real numbers"):
+        tr.at("0.5")                        # never parsed
     with pytest.raises(JetnhError, match="every step.*save='steps'"):
         disk.run(t_eval=[0.0, 1.0], **TOL).at([0.5])
     with pytest.raises(JetnhError, match="every step"):

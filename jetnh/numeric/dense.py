@@ -20,20 +20,14 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ArgumentError, IntegrationError, JetnhError
+from . import arguments
 from .integrators._common import AT_T_EVAL, EVERY_STEP
 
 
 def _times(times, lo, hi) -> np.ndarray:
-    try:
-        a = np.asarray(times, dtype=float)
-    except (TypeError, ValueError):
-        raise ArgumentError(f"times must be a number or a 1-d array of numbers, got "
-                            f"{type(times).__name__}") from None
-    a = np.atleast_1d(a)
-    if a.ndim != 1:
-        raise ArgumentError(f"times must be a number or a 1-d array, got shape {a.shape}")
-    if not np.all(np.isfinite(a)):
-        raise ArgumentError("times must be finite numbers")
+    """Times to evaluate at, checked as every array for compiled code is: real, finite
+    numbers (in any order), inside [lo, hi]."""
+    a = arguments.real_array(np.atleast_1d(times), "times")
     if a.size and (a.min() < lo or a.max() > hi):
         raise ArgumentError(f"times must lie within the trajectory's span [{lo!r}, {hi!r}]; "
                             f"got [{a.min()!r}, {a.max()!r}]")
