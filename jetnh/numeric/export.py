@@ -15,6 +15,7 @@ import numpy as np
 import sympy as sp
 
 from ..errors import ArgumentError, JetnhError
+from ..jet import key_name
 
 XARRAY_HINT = "pip install 'jetnh[xarray]'"
 
@@ -109,9 +110,9 @@ def plot(traj, names=None, ax=None):
         names = [names]
     chosen = []
     for key in names:
-        if not isinstance(key, (str, sp.Symbol)):
+        name = key_name(key)
+        if name is None:
             raise JetnhError(f"plot names must be Symbols or names, not {type(key).__name__}")
-        name = key.name if isinstance(key, sp.Symbol) else key
         if name not in cols or name == "t":
             raise JetnhError(f"{name!r} is not a series of this trajectory; choose from "
                              f"{', '.join(n for n in cols if n != 't')}")
