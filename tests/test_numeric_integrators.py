@@ -7,7 +7,10 @@ import pytest
 import jetnh as jn
 from jetnh.constraints import System
 from jetnh.numeric import Scene
-from jetnh.numeric.integrators import dop853, dopri5
+from jetnh.numeric.integrators import loop
+from jetnh.numeric.integrators.dop853 import DOP853
+from jetnh.numeric.integrators.dopri5 import DOPRI5
+from jetnh.numeric.integrators.rk4 import RK4
 
 PART0 = dict(x=0.1, y=-0.5, z=0.2, x_t=1.0, y_t=0.3)
 T = 4.0
@@ -62,13 +65,17 @@ def test_tolerance_proportionality(scene):
 
 
 def test_method_metadata():
-    assert dopri5.ORDER == 5 and dopri5.ERROR_ORDER == 4
-    assert dop853.ORDER == 8 and dop853.ERROR_ORDER == 7
+    assert DOPRI5.order == 5 and DOPRI5.error_order == 4 and DOPRI5.n_stages == 6
+    assert DOP853.order == 8 and DOP853.error_order == 7 and DOP853.n_stages == 12
+    assert RK4.order == 4 and not RK4.adaptive and DOP853.adaptive
     # the tableau's row sums are the nodes, the weights sum to one
-    assert np.allclose(dopri5.A.sum(axis=1), dopri5.C)
-    assert np.allclose(dop853.A[:12].sum(axis=1), dop853.C[:12])
-    assert np.allclose(dop853.A[13:].sum(axis=1), dop853.C[13:])
-    assert abs(dop853.A[12, :12].sum() - 1) < 1e-14 and abs(dopri5.B.sum() - 1) < 1e-14
+    for m in (DOPRI5, DOP853, RK4):
+        ns = m.n_stages
+        assert np.allclose(m.A[:ns].sum(axis=1), m.C[:ns]), m.name
+        assert abs(m.B.sum() / m.b_den - 1) < 1e-14, m.name
+    assert np.allclose(DOP853.A[13:].sum(axis=1), DOP853.C[13:])
+    with pytest.raises(Exception):
+        DOP853.order = 3            # a method is an immutable value
 
 
 def test_initial_step_matches_scipy(scene):
@@ -142,7 +149,7 @@ def test_integrator_cache_tracks_helper_modules():
     the helpers they inline (_common.py, _events.py), so editing one recompiles."""
     from jetnh.numeric.integrators import _common
 
-    d = dop853.solver()
+    d = loop.solver()
     loc = d._cache._impl.locator
     assert type(loc).__name__ == "IntegratorCacheLocator"
     own, helpers = loc.get_source_stamp()

@@ -667,20 +667,30 @@ class CompiledKernels:
         for name in ("rhs_c", "sing_c", "events_c"):
             if hasattr(self, name):      # rhs_fp, ...: cheap to pass to compiled loops
                 setattr(self, name[:-2] + "_fp", FunctionAddress(getattr(self, name)))
-        self._methods: dict[str, object] = {}
 
-    def integrator(self, method: str):
-        """The compiled ``solve`` of ``method`` (shared by every scene), as its machine-code
-        entry point (no type dispatch per call: ``integrators._common.entry_point``)."""
+    def integrator(self):
+        """The compiled loop of the explicit Runge-Kutta methods (shared by every scene
+        and method), as its machine-code entry point (no type dispatch per call:
+        ``integrators._common.entry_point``)."""
+        return _entry_point("loop")
+
+    def implicit(self):
+        """The compiled loop of radau (``integrators.radau``), as its entry point."""
+        return _entry_point("radau")
+
+
+_ENTRIES: dict[str, object] = {}
+
+
+def _entry_point(module: str):
+    if module not in _ENTRIES:
         import importlib
 
-        from .integrators import METHODS
         from .integrators._common import entry_point
 
-        if method not in self._methods:
-            mod = importlib.import_module(f"jetnh.numeric.integrators.{METHODS[method]}")
-            self._methods[method] = entry_point(mod.solver())
-        return self._methods[method]
+        mod = importlib.import_module(f"jetnh.numeric.integrators.{module}")
+        _ENTRIES[module] = entry_point(mod.solver())
+    return _ENTRIES[module]
 
 
 def _load_entry(entry: Path, key: str, secret: bytes, package: str, persistent: bool):

@@ -50,9 +50,11 @@ import numpy as np
 
 from ..errors import ConstraintError, IntegrationError, JetnhError
 from . import arguments, interrupt
-from .integrators import ADAPTIVE, METHODS, STATUS_TEXT
+from . import integrators
+from .integrators import STATUS_TEXT
 from .integrators._common import (AT_T_EVAL, ENDPOINTS, EVENT, FINISHED, NONFINITE,
                                   SINGULAR, entry_point)
+from .integrators.loop import Control, watch_of
 
 PARALLEL = ("prange", "threads", "serial")
 
@@ -337,19 +339,19 @@ def run_ensemble(scene, initial=None, params=None, *, rtol=1e-9, atol=1e-12, t_e
         raise JetnhError(f"singular_tol must be in [0, 1), not {singular_tol}")
     budget = arguments.count(max_steps, "max_steps")
     limit = arguments.timeout(timeout)
-    key = str(method).lower()
-    if key not in METHODS:
-        raise JetnhError(f"ensembles run the compiled methods {sorted(set(METHODS))}, not "
-                         f"{method!r}")
-    method = METHODS[key]
+    method = integrators.method(method)
+    if integrators.METHODS[method] == "discrete":
+        raise JetnhError(f"ensembles run the Runge-Kutta methods "
+                         f"{', '.join(m for m, k in integrators.METHODS.items() if k != 'discrete')}"
+                         f", not {method!r}")
     scene, Y0, P = resolve(scene, initial, params, project)
     n_runs, n = Y0.shape
     t0, t1 = scene.t_span
     if t_eval is not None:
         te = arguments.times(t_eval, t0, t1)
-        if method not in ADAPTIVE:
-            raise JetnhError("t_eval needs dense output: use dop853 or dopri5 (rk4 gives "
-                             "save='final')")
+        if not integrators.adaptive(method):
+            raise JetnhError("t_eval needs dense output: use dop853, dopri5 or radau (rk4 "
+                             "gives save='final')")
         mode, n_times = AT_T_EVAL, te.shape[0]
     elif save == "final":
         te, mode, n_times = np.zeros(0), ENDPOINTS, 1
@@ -358,11 +360,9 @@ def run_ensemble(scene, initial=None, params=None, *, rtol=1e-9, atol=1e-12, t_e
                          "differs per run); pass t_eval=... or save='final'")
     kern = scene.kernels
     ce = scene.compile_events(events)
-    n_sing = len(kern.layout.indicators) if singular == "stop" else 0
+    watch = watch_of(kern, ce, singular == "stop", singular_tol)
     uev = ce.uev if ce is not None else kern.sing_fp
-    ev_dir = ce.direction if ce is not None else np.zeros(0, dtype=np.int64)
-    ev_max = ce.max_events if ce is not None else np.zeros(0, dtype=np.int64)
-    n_ev = len(ev_dir)
+    n_ev = len(watch.ev_dir)
     OUT_T = np.empty((n_runs, n_times))
     OUT_Y = np.empty((n_runs, n_times, n))
     INFO = np.zeros((n_runs, 6), dtype=np.int64)
@@ -370,25 +370,32 @@ def run_ensemble(scene, initial=None, params=None, *, rtol=1e-9, atol=1e-12, t_e
     Y_LAST = np.empty((n_runs, n))
     EV_N = np.zeros((n_runs, max(n_ev, 1)), dtype=np.int64)
     EV_T = np.full((n_runs, max(n_ev, 1)), np.nan)
-    mod = _integrator_module(method)
     rtol, atol_v = arguments.tolerances(rtol, atol, n)
-    if method in ADAPTIVE:
+    if integrators.adaptive(method):
         if n_steps is not None or h is not None:
             raise JetnhError(f"n_steps and h are options of fixed-step methods, not {method}")
-        settings = (rtol, atol_v, *arguments.step_limits(first_step, max_step), budget, te,
-                    mode)
+        ctl = Control(rtol, atol_v, *arguments.step_limits(first_step, max_step), budget, 0)
     else:
-        settings = (arguments.fixed_steps(n_steps, h, t0, t1, "rk4", budget), mode)
+        ctl = Control(rtol, atol_v, 0.0, np.inf, budget,
+                      arguments.fixed_steps(n_steps, h, t0, t1, "rk4", budget))
     halt = interrupt.flag()
-    tail = (int(n_sing), singular_tol, ev_dir, ev_max, halt)
     workers = int(workers or numba.config.NUMBA_NUM_THREADS)
+    if method == "radau":
+        from .integrators import radau
+
+        head = (kern.rhs_fp, scene.jacobian, kern.sing_fp, uev, t0, t1)
+        tail = (ctl, radau.newton_options(None, None), te, mode, watch, halt)
+        drive = entry_point(radau.ensemble_solver(parallel=parallel == "prange"))
+    else:
+        from .integrators import loop
+
+        head = (kern.rhs_fp, kern.sing_fp, uev, integrators.EXPLICIT[method].arrays(), t0, t1)
+        tail = (ctl, te, mode, watch, halt)
+        drive = entry_point(loop.ensemble_solver(parallel=parallel == "prange"))
 
     def block(drive, a, b):
-        drive(kern.rhs_fp, kern.sing_fp, uev, t0, t1, Y0[a:b], P[a:b], *settings, *tail,
-              OUT_T[a:b], OUT_Y[a:b], INFO[a:b], T_LAST[a:b], Y_LAST[a:b], EV_N[a:b],
-              EV_T[a:b])
-
-    drive = entry_point(mod.ensemble_solver(parallel=parallel == "prange"))
+        drive(*head, Y0[a:b], P[a:b], *tail, OUT_T[a:b], OUT_Y[a:b], INFO[a:b], T_LAST[a:b],
+              Y_LAST[a:b], EV_N[a:b], EV_T[a:b])
 
     def compute():
         if parallel == "prange":
@@ -417,12 +424,6 @@ def run_ensemble(scene, initial=None, params=None, *, rtol=1e-9, atol=1e-12, t_e
                    parallel, workers if parallel != "serial" else 1, save, singular_tol)
     _explain(ens, kern, singular == "stop", singular_tol, on_error)
     return ens
-
-
-def _integrator_module(method):
-    import importlib
-
-    return importlib.import_module(f"jetnh.numeric.integrators.{method}")
 
 
 def _explain(ens, kern, checked, tol, on_error):

@@ -43,14 +43,12 @@ from ..jet import sympy_object
 from . import arguments, interrupt
 from . import cache as _cache
 from . import codegen
-from .integrators import ADAPTIVE, METHODS, STATUS_TEXT
+from . import integrators
+from .integrators import SCIPY_METHODS, STATUS_TEXT
 from .integrators._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, NONFINITE,
                                   NOT_CONVERGED, SINGULAR, STOPPED)
+from .integrators.loop import Control, watch_of
 from .trajectory import Trajectory
-
-SCIPY_METHODS = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
-DLA_NAMES = ("dla", "lda", "nh-midpoint")
-DVI_NAMES = ("dvi", "vakonomic-midpoint")
 
 
 def _timeout_reason(timeout, t) -> str:
@@ -345,10 +343,11 @@ class Scene:
                                    events, singular, singular_tol)
         if backend not in (None, "numba"):
             raise JetnhError(f"unknown backend {backend!r}; choose 'numba' or 'scipy'")
-        if key in DLA_NAMES or key in DVI_NAMES:
+        method = integrators.method(name)
+        if integrators.METHODS[method] == "discrete":
             if events:
                 raise JetnhError(f"events need dense output, which the {key} integrator does "
-                                 "not have; use dop853, dopri5 or rk4")
+                                 "not have; use dop853, dopri5, radau or rk4")
             self._unused(key, t_eval=t_eval, first_step=first_step, max_step=max_step)
             steps = arguments.fixed_steps(n_steps, h, t0, t1, key, budget)
             arguments.output_rows(steps, 3 * self.system.J.n + 2 * self.system.k, save)
@@ -359,7 +358,7 @@ class Scene:
             sing = singular_tol if singular == "stop" else None
             # the scene's initial dependent velocities hold for its own parameters only
             own = y0 is None and params is None
-            if key in DVI_NAMES:
+            if method == "dvi":
                 if projection:
                     raise JetnhError("projection= is an option of the dla integrator")
                 return self._run_dvi(t0, t1, y_init, own, p, steps, save, tol, iters, sing,
@@ -369,13 +368,9 @@ class Scene:
         if projection:
             raise JetnhError("projection= is an option of the dla integrator; the "
                              "Runge-Kutta methods follow the constraints to their tolerance")
-        if key not in METHODS:
-            raise JetnhError(
-                f"unknown method {method!r}; choose one of {sorted(set(METHODS))}, dla, dvi "
-                f"or scipy-<{'|'.join(SCIPY_METHODS)}>")
-        self._unused(key, newton_tol=newton_tol, max_newton=max_newton)
-        method = METHODS[key]
-        if method in ADAPTIVE:
+        if method != "radau":
+            self._unused(key, newton_tol=newton_tol, max_newton=max_newton)
+        if integrators.adaptive(method):
             self._unused(method, n_steps=n_steps, h=h)
             first, mx = arguments.step_limits(first_step, np.inf if max_step is None
                                               else max_step)
@@ -384,7 +379,7 @@ class Scene:
             if t_eval is not None:
                 te = arguments.times(t_eval, t0, t1)
                 mode = AT_T_EVAL
-            settings = (rtol, atol_v, first, mx, budget, te, mode)
+            ctl = Control(rtol, atol_v, first, mx, budget, 0)
             dense = {"rtol": rtol, "atol": atol_v, "mode": mode}
         else:
             if t_eval is not None:
@@ -393,22 +388,34 @@ class Scene:
             self._unused(method, first_step=first_step, max_step=max_step)
             steps = arguments.fixed_steps(n_steps, h, t0, t1, "rk4", budget)
             arguments.output_rows(steps, n, save)
-            settings = (steps, EVERY_STEP if save == "steps" else ENDPOINTS)
-            dense = {"mode": settings[1]}
+            mode = EVERY_STEP if save == "steps" else ENDPOINTS
+            te = np.zeros(0)
+            ctl = Control(rtol, atol_v, 0.0, np.inf, budget, steps)
+            dense = {"mode": mode}
         kern = self.kernels
-        solve = kern.integrator(method)
         ce = self.compile_events(events)
-        n_sing = len(kern.layout.indicators) if singular == "stop" else 0
+        watch = watch_of(kern, ce, singular == "stop", singular_tol)
         uev = ce.uev if ce is not None else kern.sing_fp
-        ev_dir = ce.direction if ce is not None else np.zeros(0, dtype=np.int64)
-        ev_max = ce.max_events if ce is not None else np.zeros(0, dtype=np.int64)
         halt = interrupt.flag()
-        tic = time.perf_counter()
-        out = interrupt.call(lambda: solve(kern.rhs_fp, kern.sing_fp, uev, t0, t1, y_init, p,
-                                           *settings, n_sing, singular_tol, ev_dir, ev_max,
-                                           halt), halt, limit)
+        if method == "radau":
+            from .integrators import radau
+
+            solve = kern.implicit()
+            newton = radau.newton_options(newton_tol, max_newton)
+            jac = self.jacobian
+            tic = time.perf_counter()
+            out = interrupt.call(lambda: solve(kern.rhs_fp, jac, kern.sing_fp, uev, t0, t1,
+                                               y_init, p, ctl, newton, te, mode, watch, halt),
+                                 halt, limit)
+        else:
+            solve = kern.integrator()
+            tab = integrators.EXPLICIT[method].arrays()
+            tic = time.perf_counter()
+            out = interrupt.call(lambda: solve(kern.rhs_fp, kern.sing_fp, uev, tab, t0, t1,
+                                               y_init, p, ctl, te, mode, watch, halt),
+                                 halt, limit)
         wall = time.perf_counter() - tic
-        dense["partial_last"] = int(out[0]) in (EVENT, SINGULAR)    # stopped inside a step
+        dense["partial_last"] = int(out.status) in (EVENT, SINGULAR)  # stopped inside a step
         return self._trajectory(method, out, wall, kern, ce, p, t0, y_init, singular_tol,
                                 singular == "stop", limit, dense)
 

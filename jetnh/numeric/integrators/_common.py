@@ -1,6 +1,7 @@
 """Numeric helpers shared by the compiled integrators (none of them calls the rhs).
 
-Status codes returned by every ``solve``:
+Status codes returned by every ``solve`` (``Status``; the compiled loops use the plain
+integers of the same names):
 
 ``FINISHED`` (0) reached the end of the interval; ``MAX_STEPS`` (1) stopped after the
 allowed number of steps; ``TOO_SMALL_STEP`` (2) the step size fell below ten units in
@@ -12,6 +13,7 @@ to stop (its ``stop`` flag, checked before every step: Ctrl-C or a wall-clock bu
 see ``numeric.interrupt``).
 """
 
+import enum
 import hashlib
 import math
 import os
@@ -35,7 +37,7 @@ def _install_cache_locator():
     except (ImportError, AttributeError):
         return
     here = os.path.dirname(os.path.abspath(__file__))
-    helpers = [os.path.join(here, f) for f in ("_common.py", "_events.py", "dla.py")]
+    helpers = [os.path.join(here, f) for f in ("_common.py", "_events.py", "loop.py", "dla.py")]
     if any(getattr(c, "_jetnh", False) for c in classes):
         return
     defaults = list(classes)
@@ -83,7 +85,23 @@ def _install_cache_locator():
 
 _install_cache_locator()
 
-FINISHED, MAX_STEPS, TOO_SMALL_STEP, NONFINITE, NOT_CONVERGED, EVENT, SINGULAR, STOPPED = range(8)
+
+
+class Status(enum.IntEnum):
+    """Why a run ended (see the module docstring)."""
+
+    FINISHED = 0
+    MAX_STEPS = 1
+    TOO_SMALL_STEP = 2
+    NONFINITE = 3
+    NOT_CONVERGED = 4
+    EVENT = 5
+    SINGULAR = 6
+    STOPPED = 7
+
+
+FINISHED, MAX_STEPS, TOO_SMALL_STEP, NONFINITE, NOT_CONVERGED, EVENT, SINGULAR, STOPPED = (
+    int(s) for s in Status)
 
 STATUS_TEXT = {
     FINISHED: "reached the end of the interval",
@@ -105,15 +123,6 @@ MAX_FACTOR = 10.0
 EVERY_STEP, AT_T_EVAL, ENDPOINTS = 0, 1, 2
 
 jit = numba.njit(cache=True, error_model="numpy", nogil=True)
-
-
-@jit
-def rms_norm(x):
-    """sqrt(mean(x**2)): the error norm of Hairer-Norsett-Wanner (II.4.11)."""
-    s = 0.0
-    for i in range(x.shape[0]):
-        s += x[i] * x[i]
-    return math.sqrt(s / x.shape[0]) if x.shape[0] else 0.0
 
 
 @jit

@@ -55,16 +55,6 @@ def dense_eval(theta, y, F, out):
 
 
 @jit
-def hermite_rows(h, y_old, y_new, f_old, f_new, F):
-    """Cubic Hermite interpolant of a step in the form of ``dense_eval`` (3 rows)."""
-    for i in range(y_old.shape[0]):
-        d = y_new[i] - y_old[i]
-        F[0, i] = d
-        F[1, i] = h * f_old[i] - d
-        F[2, i] = d - h * f_new[i] - F[1, i]
-
-
-@jit
 def sing_init(sing, n_sing, tol, t, y, p, g, sig, eps, gref):
     """Signs, sizes and thresholds of the indicators at the initial state; returns the
     index of an indicator already zero or not finite there, else -1."""

@@ -1,0 +1,483 @@
+"""The one compiled loop of the explicit Runge-Kutta methods.
+
+A method is a small immutable value, ``ExplicitRK`` (its tableau, order, error estimator
+and dense output; one short module each: ``dopri5``, ``dop853``, ``rk4``); the loop
+``solve`` takes the method's arrays as an argument and does everything else: the first
+step, adaptive step control (Hairer-Norsett-Wanner I, II.4, with scipy's constants) or
+equal fixed steps, the budgets (``max_steps``, the ``halt`` flag of ``interrupt``),
+singularity stops and user events on the dense output (``_events``), and the output
+(every step, the points of ``t_eval``, or the two ends).  It is compiled once for every
+method and every scene (the right-hand side is a first-class function) and cached on
+disk; ensembles run the same loop over the rows of an array (``ensemble_solver``).
+
+Arithmetic: a stage is ``y + h * sum_r A[s, r] K[r]`` summed over every earlier stage in
+order, the new state ``y + (h / b_den) * sum_r B[r] K[r]``; with these forms the results
+are those of the hand-written loops of each method that preceded this one, bit for bit
+(``tests/test_numeric_reference.py``).
+
+Error estimators (``error``): ``EMBEDDED`` the RMS norm of ``h sum_r E[r] K[r]`` over the
+stages and ``f(t + h, y_new)`` (DOPRI5); ``DOP853`` Hairer's combination of a 5th- and a
+3rd-order estimate (rows ``E`` and ``E3``); ``NONE`` (fixed step).  Dense output (``dense``,
+in the form of ``_events.dense_eval``): ``HERMITE`` the cubic Hermite rows of the step
+plus ``D @ K`` rows (DOPRI5's ``contd5``; plain Hermite for RK4), ``DOP853`` Hairer's
+``contd8`` with three extra stages (rows ``n_stages + 1 ..`` of ``A``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import namedtuple
+from dataclasses import dataclass, field
+
+import numba
+import numpy as np
+
+from ._common import (
+    AT_T_EVAL, ENDPOINTS, ENSEMBLE_OUT, EVERY_STEP, FINISHED, MAX_FACTOR, MAX_STEPS,
+    MIN_FACTOR, NONFINITE, RHS, SAFETY, SINGULAR, STOPPED, TOO_SMALL_STEP, all_finite,
+    collect, compiled, copy_into, f8, i8, initial_step_h0, initial_step_h1, jit, min_step,
+    store)
+from ._events import (any_user_active, dense_eval, hermite_defect, locate, most_watched,
+                      sing_dip, sing_init, sing_violated, sing_watch)
+
+#: error estimators and dense outputs (see the module docstring)
+NONE, EMBEDDED, DOP853 = 0, 1, 2
+HERMITE = 1
+#: relative defect of a fixed step's Hermite interpolant that marks a kink (``solve``)
+KINK = 0.25
+
+#: what every solve returns
+Result = namedtuple("Result", "status ts ys n_out stats t y ev_t ev_i ev_y n_ev sing_index")
+#: the step control of one run: tolerances and limits (``n_steps`` > 0: fixed steps)
+Control = namedtuple("Control", "rtol atol first_step max_step max_steps n_steps")
+#: what to watch: singularity indicators (``n_sing`` of them, threshold ``sing_tol``)
+#: and user events (direction, terminal count)
+Watch = namedtuple("Watch", "n_sing sing_tol ev_dir ev_max")
+
+
+@dataclass(frozen=True)
+class ExplicitRK:
+    """An explicit Runge-Kutta method as a value: nodes ``C``, stage matrix ``A`` (its rows
+    past ``n_stages`` are the extra stages of the dense output), weights ``B / b_den``,
+    error rows ``E`` (and ``E3``), dense-output rows ``D``; ``error`` and ``dense`` name
+    the estimator and the interpolant (module docstring)."""
+
+    name: str
+    order: int
+    error_order: int
+    C: np.ndarray
+    A: np.ndarray
+    B: np.ndarray
+    error: int
+    dense: int
+    E: np.ndarray = field(default_factory=lambda: np.zeros(1))
+    E3: np.ndarray = field(default_factory=lambda: np.zeros(1))
+    D: np.ndarray = field(default_factory=lambda: np.zeros((0, 1)))
+    b_den: float = 1.0
+
+    @property
+    def n_stages(self) -> int:
+        return self.B.shape[0]
+
+    @property
+    def adaptive(self) -> bool:
+        return self.error != NONE
+
+    def arrays(self):
+        """The method as the loop receives it."""
+        info = np.array([self.n_stages, self.error, self.dense, self.error_order],
+                        dtype=np.int64)
+        f = np.ascontiguousarray
+        return (f(self.C, dtype=float), f(self.A, dtype=float), f(self.B, dtype=float),
+                f(self.E, dtype=float), f(self.E3, dtype=float), f(self.D, dtype=float),
+                info, float(self.b_den))
+
+
+TABLEAU = numba.types.Tuple((f8[::1], f8[:, ::1], f8[::1], f8[::1], f8[::1], f8[:, ::1],
+                             i8[::1], f8))
+
+
+@jit
+def _dense_rows(tab, rhs, t, h, y, y_new, K, F, ytmp, p):
+    """The rows of the step's interpolant (``_events.dense_eval``); K[n_stages] holds
+    f(t + h, y_new).  Returns the number of extra rhs evaluations."""
+    C, A, B, E, E3, D, info, b_den = tab
+    ns = info[0]
+    n = y.shape[0]
+    if info[2] == DOP853:
+        for s in range(ns + 1, ns + 4):
+            for i in range(n):
+                acc = 0.0
+                for r in range(s):
+                    acc += A[s, r] * K[r, i]
+                ytmp[i] = y[i] + h * acc
+            rhs(t + C[s] * h, ytmp, p, K[s])
+        for i in range(n):
+            dy = y_new[i] - y[i]
+            F[0, i] = dy
+            F[1, i] = h * K[0, i] - dy
+            F[2, i] = 2.0 * dy - h * (K[ns, i] + K[0, i])
+            for m in range(D.shape[0]):
+                acc = 0.0
+                for r in range(D.shape[1]):
+                    acc += D[m, r] * K[r, i]
+                F[3 + m, i] = h * acc
+        return 3
+    for i in range(n):
+        d = y_new[i] - y[i]
+        F[0, i] = d
+        F[1, i] = h * K[0, i] - d
+        F[2, i] = d - h * K[ns, i] - F[1, i]
+        for m in range(D.shape[0]):
+            acc = 0.0
+            for r in range(D.shape[1]):
+                acc += D[m, r] * K[r, i]
+            F[3 + m, i] = h * acc
+    return 0
+
+
+@jit
+def _error(tab, h, y, y_new, K, rtol, atol):
+    """The scaled error of the step (<= 1: accept)."""
+    C, A, B, E, E3, D, info, b_den = tab
+    ns = info[0]
+    n = y.shape[0]
+    if info[1] == DOP853:
+        e5 = 0.0
+        e3 = 0.0
+        for i in range(n):
+            a5 = 0.0
+            a3 = 0.0
+            for r in range(ns + 1):
+                a5 += E[r] * K[r, i]
+                a3 += E3[r] * K[r, i]
+            sc = atol[i] + max(abs(y[i]), abs(y_new[i])) * rtol
+            e5 += (a5 / sc) ** 2
+            e3 += (a3 / sc) ** 2
+        if e5 == 0.0 and e3 == 0.0:
+            return 0.0
+        return abs(h) * e5 / math.sqrt((e5 + 0.01 * e3) * n)
+    err = 0.0
+    for i in range(n):
+        e = 0.0
+        for r in range(ns + 1):
+            e += E[r] * K[r, i]
+        sc = atol[i] + max(abs(y[i]), abs(y_new[i])) * rtol
+        err += (h * e / sc) ** 2
+    return math.sqrt(err / n)
+
+
+@jit
+def _stages(tab, rhs, t, h, y, K, y_new, ytmp, p):
+    """Stages 1 .. n_stages - 1 (K[0] given) and the new state."""
+    C, A, B, E, E3, D, info, b_den = tab
+    ns = info[0]
+    n = y.shape[0]
+    for s in range(1, ns):
+        for i in range(n):
+            acc = 0.0
+            for r in range(s):
+                acc += A[s, r] * K[r, i]
+            ytmp[i] = y[i] + h * acc
+        rhs(t + C[s] * h, ytmp, p, K[s])
+    hb = h / b_den
+    for i in range(n):
+        acc = 0.0
+        for r in range(ns):
+            acc += B[r] * K[r, i]
+        y_new[i] = y[i] + hb * acc
+
+
+def _solve(rhs, sing, uev, tab, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
+    """Integrate y' = rhs(t, y, p) from t0 to t_end with the method ``tab``
+    (``ExplicitRK.arrays``) under the step control ``ctl`` (``Control``), watching ``watch``
+    (``Watch``: ``sing`` computes the ``n_sing`` singularity indicators, ``uev`` the user
+    event functions; see ``_events``).  ``mode``: EVERY_STEP, AT_T_EVAL or ENDPOINTS.
+    The loop stops with status STOPPED before a step when ``halt[0]`` is nonzero.
+
+    Returns a ``Result``: the output rows ``ts[:n_out]``, ``ys[:n_out]``, ``stats =
+    [accepted, rejected, rhs evaluations]``, the last state, the event records (time,
+    index, state) and the index of the indicator that stopped the run (-1 if none).
+
+    Fixed steps (``ctl.n_steps > 0``, methods without an error estimate): equal steps
+    ``(t_end - t0) / n_steps``; events and indicators are located on the cubic Hermite
+    interpolant (one extra evaluation in a step that needs it).  A fixed step can jump
+    over a zero that an indicator only touches (the Appell-Hamel speed at a velocity
+    reversal) and settle on a spurious state; so where an indicator is watched (below
+    1 % of its initial size) and the interpolant's defect at the middle of the step
+    exceeds ``KINK``, the run stops at the start of that step as a singular stop.
+    """
+    C, A, B, E, E3, D, info, b_den = tab
+    ns = info[0]
+    adaptive = info[1] != NONE
+    rtol, atol, first_step, max_step, max_steps, n_steps = ctl
+    n_sing, sing_tol, ev_dir, ev_max = watch
+    n = y0.shape[0]
+    direction = 1.0 if t_end >= t0 else -1.0
+    interval = abs(t_end - t0)
+    K = np.empty((max(A.shape[0], ns + 1), n))
+    F = np.empty((3 + D.shape[0], n))
+    y = y0.copy()
+    y_new = np.empty(n)
+    ytmp = np.empty(n)
+    fmid = np.empty(n)
+    y_stop = np.empty(n)
+    scale = np.empty(n)
+    stats = np.zeros(3, dtype=np.int64)
+    if mode == AT_T_EVAL:
+        cap = t_eval.shape[0]
+    elif mode == ENDPOINTS:
+        cap = 2
+    else:
+        cap = 64 if adaptive else n_steps + 1
+    ts = np.empty(max(cap, 1))
+    ys = np.empty((max(cap, 1), n))
+    n_out = np.int64(0)
+    j_eval = np.int64(0)
+    t = t0
+    n_user = ev_dir.shape[0]
+    gs = np.empty(max(n_sing, 1))
+    gs_old = np.empty(max(n_sing, 1))
+    gref = np.empty(max(n_sing, 1))
+    sig = np.empty(max(n_sing, 1))
+    eps = np.empty(max(n_sing, 1))
+    gu_old = np.empty(max(n_user, 1))
+    gu_new = np.empty(max(n_user, 1))
+    gtmp = np.empty(max(n_user, 1))
+    counts = np.zeros(max(n_user, 1), dtype=np.int64)
+    roots = np.empty(max(n_user, 1))
+    which = np.empty(max(n_user, 1), dtype=np.int64)
+    ev_t = np.empty(0)
+    ev_i = np.empty(0, dtype=np.int64)
+    ev_y = np.empty((0, n))
+    n_ev = np.int64(0)
+    if not adaptive:
+        ts, ys, n_out = store(ts, ys, n_out, t, y)
+    sing_index = sing_init(sing, n_sing, sing_tol, t, y, p, gs, sig, eps, gref)
+    copy_into(gs_old, gs)
+    if sing_index >= 0:
+        if adaptive:
+            ts, ys, n_out = store(ts, ys, n_out, t, y)
+        return Result(SINGULAR, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev,
+                      sing_index)
+    if n_user > 0:
+        uev(t, y, p, gu_old)
+    h_abs = 0.0
+    h_fixed = (t_end - t0) / max(n_steps, 1)
+    exponent = -1.0 / (info[3] + 1)
+    if adaptive:
+        rhs(t, y, p, K[0])
+        stats[2] += 1
+        if not all_finite(K[0]):
+            return Result(NONFINITE, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev,
+                          sing_index)
+        if mode != AT_T_EVAL:
+            ts, ys, n_out = store(ts, ys, n_out, t, y)
+        if interval == 0.0:
+            if mode == AT_T_EVAL:
+                while j_eval < t_eval.shape[0] and t_eval[j_eval] == t:
+                    ts, ys, n_out = store(ts, ys, n_out, t, y)
+                    j_eval += 1
+            return Result(FINISHED, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev,
+                          sing_index)
+        if first_step > 0.0:
+            h_abs = first_step
+        else:
+            h0, d1 = initial_step_h0(y, K[0], rtol, atol, interval, scale)
+            for i in range(n):
+                ytmp[i] = y[i] + h0 * direction * K[0, i]
+            rhs(t + h0 * direction, ytmp, p, K[1])
+            stats[2] += 1
+            h_abs = initial_step_h1(K[0], K[1], h0, d1, scale, info[3], interval, max_step)
+    status = FINISHED
+    step = 0
+    while (direction * (t_end - t) > 0.0) if adaptive else (step < n_steps):
+        if adaptive and stats[0] >= max_steps:
+            status = MAX_STEPS
+            break
+        if halt[0] != 0:
+            status = STOPPED
+            break
+        if adaptive:
+            hmin = min_step(t, direction)
+            if h_abs > max_step:
+                h_abs = max_step
+            elif h_abs < hmin:
+                h_abs = hmin
+            rejected = False
+            nonfinite = False
+            while True:
+                if h_abs < hmin:
+                    status = NONFINITE if nonfinite else TOO_SMALL_STEP
+                    break
+                t_new = t + h_abs * direction
+                if direction * (t_new - t_end) > 0.0:
+                    t_new = t_end
+                h = t_new - t
+                h_abs = abs(h)
+                _stages(tab, rhs, t, h, y, K, y_new, ytmp, p)
+                rhs(t_new, y_new, p, K[ns])
+                stats[2] += ns
+                err = _error(tab, h, y, y_new, K, rtol, atol)
+                if not math.isfinite(err) or not all_finite(K[ns]):
+                    nonfinite = True
+                    h_abs *= MIN_FACTOR
+                    rejected = True
+                    stats[1] += 1
+                    continue
+                nonfinite = False
+                if err < 1.0:
+                    if err == 0.0:
+                        factor = MAX_FACTOR
+                    else:
+                        factor = min(MAX_FACTOR, SAFETY * err ** exponent)
+                    if rejected:
+                        factor = min(1.0, factor)
+                    h_abs *= factor
+                    break
+                h_abs *= max(MIN_FACTOR, SAFETY * err ** exponent)
+                rejected = True
+                stats[1] += 1
+            if status != FINISHED:
+                break
+        else:
+            rhs(t, y, p, K[0])
+            _stages(tab, rhs, t, h_fixed, y, K, y_new, ytmp, p)
+            stats[2] += ns
+            if not all_finite(y_new):
+                status = NONFINITE
+                break
+            t_new = t0 + (step + 1) * h_fixed
+            h = t_new - t
+        step += 1
+        stats[0] += 1
+        have_dense = False
+        stop = 0
+        t_stop = t_new
+        if n_sing > 0 or n_user > 0:
+            si = -1
+            theta_hi = 1.0
+            active = False
+            if n_sing > 0:
+                si = sing_violated(sing, n_sing, t_new, y_new, p, gs, sig, eps)
+                if si < 0 and sing_watch(n_sing, gs_old, gs, sig, gref):
+                    if not adaptive:
+                        rhs(t_new, y_new, p, K[ns])
+                        stats[2] += 1
+                    stats[2] += _dense_rows(tab, rhs, t, h, y, y_new, K, F, ytmp, p)
+                    have_dense = True
+                    theta_hi = sing_dip(sing, n_sing, t, h, y, F, p, gs_old, sig, eps,
+                                        gref, ytmp)
+                    if theta_hi > 0.0:
+                        si = 0
+                    elif not adaptive:
+                        stats[2] += 1
+                        if hermite_defect(rhs, t, h, y, F, p, ytmp, fmid) > KINK:
+                            # the step straddles a kink next to a watched indicator: stop
+                            # at its start (theta_hi below the resolution of t)
+                            si = most_watched(n_sing, gs, sig, gref)
+                            theta_hi = 1e-300
+                        else:
+                            theta_hi = 1.0
+                    else:
+                        theta_hi = 1.0
+                copy_into(gs_old, gs)
+                active = si >= 0
+            if n_user > 0:
+                uev(t_new, y_new, p, gu_new)
+                if any_user_active(gu_old, gu_new, ev_dir):
+                    active = True
+            if active:
+                if not have_dense:
+                    if not adaptive:
+                        rhs(t_new, y_new, p, K[ns])
+                        stats[2] += 1
+                    stats[2] += _dense_rows(tab, rhs, t, h, y, y_new, K, F, ytmp, p)
+                    have_dense = True
+                stop, t_stop, sing_index, ev_t, ev_i, ev_y, n_ev = locate(
+                    sing, uev, n_sing, si, theta_hi, t, h, y, F, p, gs, sig, eps, gu_old,
+                    gu_new, ev_dir, ev_max, counts, ytmp, gtmp, roots, which, ev_t, ev_i, ev_y,
+                    n_ev, y_stop)
+            for i in range(n_user):
+                gu_old[i] = gu_new[i]
+        if mode == AT_T_EVAL:
+            while j_eval < t_eval.shape[0] and direction * (t_eval[j_eval] - t_stop) <= 0.0:
+                if not have_dense:
+                    stats[2] += _dense_rows(tab, rhs, t, h, y, y_new, K, F, ytmp, p)
+                    have_dense = True
+                dense_eval((t_eval[j_eval] - t) / h, y, F, ytmp)
+                ts, ys, n_out = store(ts, ys, n_out, t_eval[j_eval], ytmp)
+                j_eval += 1
+        elif mode == EVERY_STEP:
+            if stop == 0:
+                ts, ys, n_out = store(ts, ys, n_out, t_new, y_new)
+            elif adaptive or t_stop != ts[n_out - 1]:   # a fixed step's stop at its start
+                ts, ys, n_out = store(ts, ys, n_out, t_stop, y_stop)  # is stored already
+        if stop != 0:
+            t = t_stop
+            copy_into(y, y_stop)
+            status = stop
+            break
+        t = t_new
+        copy_into(y, y_new)
+        if adaptive:
+            copy_into(K[0], K[ns])
+    if mode == ENDPOINTS:
+        ts, ys, n_out = store(ts, ys, n_out, t, y)
+    return Result(status, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev, sing_index)
+
+
+run = jit(_solve)
+
+CONTROL = numba.typeof(Control(1.0, np.zeros(1), 0.0, 1.0, 1, 0))
+WATCH = numba.typeof(Watch(0, 0.0, np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64)))
+ARGS = (RHS, RHS, RHS, TABLEAU, f8, f8, f8[::1], f8[::1], CONTROL, f8[::1], i8, WATCH,
+        i8[::1])
+
+
+def _entry(rhs, sing, uev, tab, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
+    return run(rhs, sing, uev, tab, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt)
+
+
+def solver():
+    """The compiled ``solve(rhs, sing, uev, tab, t0, t_end, y0, p, ctl, t_eval, mode,
+    watch, halt)`` shared by every explicit method (``_solve``)."""
+    return compiled(_entry, ARGS)
+
+
+# ---------------------------------------------------------------------- ensembles
+# Two copies of one driver (numba's cache cannot hold a function compiled both with and
+# without ``parallel``): run r of the ensemble is the loop on Y0[r], P[r].
+def _ensemble_parallel(rhs, sing, uev, tab, t0, t_end, Y0, P, ctl, t_eval, mode, watch, halt,
+                       OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
+    for r in numba.prange(Y0.shape[0]):
+        res = run(rhs, sing, uev, tab, t0, t_end, Y0[r], P[r], ctl, t_eval, mode, watch, halt)
+        collect(r, res, mode, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)
+
+
+def _ensemble_serial(rhs, sing, uev, tab, t0, t_end, Y0, P, ctl, t_eval, mode, watch, halt,
+                     OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
+    for r in range(Y0.shape[0]):
+        res = run(rhs, sing, uev, tab, t0, t_end, Y0[r], P[r], ctl, t_eval, mode, watch, halt)
+        collect(r, res, mode, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)
+
+
+ENSEMBLE_ARGS = ARGS[:6] + (f8[:, ::1], f8[:, ::1]) + ARGS[8:] + ENSEMBLE_OUT
+
+
+def ensemble_solver(parallel=True):
+    """The compiled ensemble driver ``drive(rhs, sing, uev, tab, t0, t_end, Y0, P, ctl,
+    t_eval, mode, watch, halt, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)``: numba
+    threads over the runs (``parallel``) or one loop (for a Python thread pool)."""
+    return compiled(_ensemble_parallel if parallel else _ensemble_serial, ENSEMBLE_ARGS,
+                    parallel=parallel)
+
+
+def watch_of(kern, compiled_events, singular: bool, singular_tol: float) -> Watch:
+    """What a run of the kernels ``kern`` watches: their singularity indicators (if
+    ``singular``) and the user events (``events.CompiledEvents`` or None)."""
+    ce = compiled_events
+    none = np.zeros(0, dtype=np.int64)
+    return Watch(len(kern.layout.indicators) if singular else 0, float(singular_tol),
+                 ce.direction if ce is not None else none,
+                 ce.max_events if ce is not None else none)
