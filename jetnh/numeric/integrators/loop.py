@@ -20,7 +20,9 @@ stages and ``f(t + h, y_new)`` (DOPRI5); ``DOP853`` Hairer's combination of a 5t
 3rd-order estimate (rows ``E`` and ``E3``); ``NONE`` (fixed step).  Dense output (``dense``,
 in the form of ``_events.dense_eval``): ``HERMITE`` the cubic Hermite rows of the step
 plus ``D @ K`` rows (DOPRI5's ``contd5``; plain Hermite for RK4), ``DOP853`` Hairer's
-``contd8`` with three extra stages (rows ``n_stages + 1 ..`` of ``A``).
+``contd8`` with three extra stages (rows ``n_stages + 1 ..`` of ``A``), ``GIVEN`` rows the
+method fills itself (radau's collocation polynomial).  ``after_step`` and ``output`` are
+what every loop does after an accepted step (radau's too).
 """
 
 from __future__ import annotations
@@ -42,7 +44,7 @@ from ._events import (any_user_active, dense_eval, hermite_defect, locate, most_
 
 #: error estimators and dense outputs (see the module docstring)
 NONE, EMBEDDED, DOP853 = 0, 1, 2
-HERMITE = 1
+HERMITE, GIVEN = 1, 3
 #: relative defect of a fixed step's Hermite interpolant that marks a kink (``solve``)
 KINK = 0.25
 
@@ -104,6 +106,8 @@ def _dense_rows(tab, rhs, t, h, y, y_new, K, F, ytmp, p):
     C, A, B, E, E3, D, info, b_den = tab
     ns = info[0]
     n = y.shape[0]
+    if info[2] == GIVEN:             # filled by the method itself (radau)
+        return 0
     if info[2] == DOP853:
         for s in range(ns + 1, ns + 4):
             for i in range(n):
@@ -188,6 +192,105 @@ def _stages(tab, rhs, t, h, y, K, y_new, ytmp, p):
         y_new[i] = y[i] + hb * acc
 
 
+@jit
+def workspace(n_sing, n_user):
+    """The arrays of the singularity indicators and the user events (``after_step``)."""
+    m = max(n_sing, 1)
+    u = max(n_user, 1)
+    return (np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(u),
+            np.empty(u), np.empty(u), np.zeros(u, dtype=np.int64), np.empty(u),
+            np.empty(u, dtype=np.int64))
+
+
+@jit
+def no_events(n):
+    """Empty event records (time, index, state) and their count."""
+    return np.empty(0), np.empty(0, dtype=np.int64), np.empty((0, n)), np.int64(0)
+
+
+@jit
+def after_step(tab, fixed, rhs, sing, uev, p, t, h, t_new, y, y_new, K, F, ytmp, fmid, y_stop,
+               stats, watch, ws, sing_index, ev_t, ev_i, ev_y, n_ev):
+    """Singularity indicators and user events in the accepted step from (t, y) to
+    (t_new, y_new) (``_events``).  Returns ``(stop, t_stop, sing_index, have_dense, ev_t,
+    ev_i, ev_y, n_ev)``: stop is 0 (go on), EVENT or SINGULAR, with the stop state in
+    ``y_stop``; ``have_dense``: the rows F of the step's interpolant are filled."""
+    n_sing, sing_tol, ev_dir, ev_max = watch
+    gs, gs_old, gref, sig, eps, gu_old, gu_new, gtmp, counts, roots, which = ws
+    ns = tab[6][0]
+    n_user = ev_dir.shape[0]
+    have_dense = False
+    stop = 0
+    t_stop = t_new
+    if n_sing > 0 or n_user > 0:
+        si = -1
+        theta_hi = 1.0
+        active = False
+        if n_sing > 0:
+            si = sing_violated(sing, n_sing, t_new, y_new, p, gs, sig, eps)
+            if si < 0 and sing_watch(n_sing, gs_old, gs, sig, gref):
+                if fixed:
+                    rhs(t_new, y_new, p, K[ns])
+                    stats[2] += 1
+                stats[2] += _dense_rows(tab, rhs, t, h, y, y_new, K, F, ytmp, p)
+                have_dense = True
+                theta_hi = sing_dip(sing, n_sing, t, h, y, F, p, gs_old, sig, eps, gref, ytmp)
+                if theta_hi > 0.0:
+                    si = 0
+                elif fixed:
+                    stats[2] += 1
+                    if hermite_defect(rhs, t, h, y, F, p, ytmp, fmid) > KINK:
+                        # the step straddles a kink next to a watched indicator: stop at
+                        # its start (theta_hi below the resolution of t)
+                        si = most_watched(n_sing, gs, sig, gref)
+                        theta_hi = 1e-300
+                    else:
+                        theta_hi = 1.0
+                else:
+                    theta_hi = 1.0
+            copy_into(gs_old, gs)
+            active = si >= 0
+        if n_user > 0:
+            uev(t_new, y_new, p, gu_new)
+            if any_user_active(gu_old, gu_new, ev_dir):
+                active = True
+        if active:
+            if not have_dense:
+                if fixed:
+                    rhs(t_new, y_new, p, K[ns])
+                    stats[2] += 1
+                stats[2] += _dense_rows(tab, rhs, t, h, y, y_new, K, F, ytmp, p)
+                have_dense = True
+            stop, t_stop, sing_index, ev_t, ev_i, ev_y, n_ev = locate(
+                sing, uev, n_sing, si, theta_hi, t, h, y, F, p, gs, sig, eps, gu_old,
+                gu_new, ev_dir, ev_max, counts, ytmp, gtmp, roots, which, ev_t, ev_i, ev_y,
+                n_ev, y_stop)
+        for i in range(n_user):
+            gu_old[i] = gu_new[i]
+    return stop, t_stop, sing_index, have_dense, ev_t, ev_i, ev_y, n_ev
+
+
+@jit
+def output(tab, fixed, rhs, p, t, h, t_new, y, y_new, K, F, ytmp, y_stop, stop, t_stop,
+           have_dense, stats, mode, t_eval, j_eval, direction, ts, ys, n_out):
+    """The output rows of an accepted step (``mode``); returns ``(ts, ys, n_out,
+    j_eval)``."""
+    if mode == AT_T_EVAL:
+        while j_eval < t_eval.shape[0] and direction * (t_eval[j_eval] - t_stop) <= 0.0:
+            if not have_dense:
+                stats[2] += _dense_rows(tab, rhs, t, h, y, y_new, K, F, ytmp, p)
+                have_dense = True
+            dense_eval((t_eval[j_eval] - t) / h, y, F, ytmp)
+            ts, ys, n_out = store(ts, ys, n_out, t_eval[j_eval], ytmp)
+            j_eval += 1
+    elif mode == EVERY_STEP:
+        if stop == 0:
+            ts, ys, n_out = store(ts, ys, n_out, t_new, y_new)
+        elif not fixed or t_stop != ts[n_out - 1]:   # a fixed step's stop at its start
+            ts, ys, n_out = store(ts, ys, n_out, t_stop, y_stop)  # is stored already
+    return ts, ys, n_out, j_eval
+
+
 def _solve(rhs, sing, uev, tab, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
     """Integrate y' = rhs(t, y, p) from t0 to t_end with the method ``tab``
     (``ExplicitRK.arrays``) under the step control ``ctl`` (``Control``), watching ``watch``
@@ -235,22 +338,9 @@ def _solve(rhs, sing, uev, tab, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt
     n_out = np.int64(0)
     j_eval = np.int64(0)
     t = t0
-    n_user = ev_dir.shape[0]
-    gs = np.empty(max(n_sing, 1))
-    gs_old = np.empty(max(n_sing, 1))
-    gref = np.empty(max(n_sing, 1))
-    sig = np.empty(max(n_sing, 1))
-    eps = np.empty(max(n_sing, 1))
-    gu_old = np.empty(max(n_user, 1))
-    gu_new = np.empty(max(n_user, 1))
-    gtmp = np.empty(max(n_user, 1))
-    counts = np.zeros(max(n_user, 1), dtype=np.int64)
-    roots = np.empty(max(n_user, 1))
-    which = np.empty(max(n_user, 1), dtype=np.int64)
-    ev_t = np.empty(0)
-    ev_i = np.empty(0, dtype=np.int64)
-    ev_y = np.empty((0, n))
-    n_ev = np.int64(0)
+    ws = workspace(n_sing, ev_dir.shape[0])
+    gs, gs_old, gref, sig, eps, gu_old = ws[:6]
+    ev_t, ev_i, ev_y, n_ev = no_events(n)
     if not adaptive:
         ts, ys, n_out = store(ts, ys, n_out, t, y)
     sing_index = sing_init(sing, n_sing, sing_tol, t, y, p, gs, sig, eps, gref)
@@ -260,7 +350,7 @@ def _solve(rhs, sing, uev, tab, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt
             ts, ys, n_out = store(ts, ys, n_out, t, y)
         return Result(SINGULAR, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev,
                       sing_index)
-    if n_user > 0:
+    if ev_dir.shape[0] > 0:
         uev(t, y, p, gu_old)
     h_abs = 0.0
     h_fixed = (t_end - t0) / max(n_steps, 1)
@@ -351,68 +441,12 @@ def _solve(rhs, sing, uev, tab, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt
             h = t_new - t
         step += 1
         stats[0] += 1
-        have_dense = False
-        stop = 0
-        t_stop = t_new
-        if n_sing > 0 or n_user > 0:
-            si = -1
-            theta_hi = 1.0
-            active = False
-            if n_sing > 0:
-                si = sing_violated(sing, n_sing, t_new, y_new, p, gs, sig, eps)
-                if si < 0 and sing_watch(n_sing, gs_old, gs, sig, gref):
-                    if not adaptive:
-                        rhs(t_new, y_new, p, K[ns])
-                        stats[2] += 1
-                    stats[2] += _dense_rows(tab, rhs, t, h, y, y_new, K, F, ytmp, p)
-                    have_dense = True
-                    theta_hi = sing_dip(sing, n_sing, t, h, y, F, p, gs_old, sig, eps,
-                                        gref, ytmp)
-                    if theta_hi > 0.0:
-                        si = 0
-                    elif not adaptive:
-                        stats[2] += 1
-                        if hermite_defect(rhs, t, h, y, F, p, ytmp, fmid) > KINK:
-                            # the step straddles a kink next to a watched indicator: stop
-                            # at its start (theta_hi below the resolution of t)
-                            si = most_watched(n_sing, gs, sig, gref)
-                            theta_hi = 1e-300
-                        else:
-                            theta_hi = 1.0
-                    else:
-                        theta_hi = 1.0
-                copy_into(gs_old, gs)
-                active = si >= 0
-            if n_user > 0:
-                uev(t_new, y_new, p, gu_new)
-                if any_user_active(gu_old, gu_new, ev_dir):
-                    active = True
-            if active:
-                if not have_dense:
-                    if not adaptive:
-                        rhs(t_new, y_new, p, K[ns])
-                        stats[2] += 1
-                    stats[2] += _dense_rows(tab, rhs, t, h, y, y_new, K, F, ytmp, p)
-                    have_dense = True
-                stop, t_stop, sing_index, ev_t, ev_i, ev_y, n_ev = locate(
-                    sing, uev, n_sing, si, theta_hi, t, h, y, F, p, gs, sig, eps, gu_old,
-                    gu_new, ev_dir, ev_max, counts, ytmp, gtmp, roots, which, ev_t, ev_i, ev_y,
-                    n_ev, y_stop)
-            for i in range(n_user):
-                gu_old[i] = gu_new[i]
-        if mode == AT_T_EVAL:
-            while j_eval < t_eval.shape[0] and direction * (t_eval[j_eval] - t_stop) <= 0.0:
-                if not have_dense:
-                    stats[2] += _dense_rows(tab, rhs, t, h, y, y_new, K, F, ytmp, p)
-                    have_dense = True
-                dense_eval((t_eval[j_eval] - t) / h, y, F, ytmp)
-                ts, ys, n_out = store(ts, ys, n_out, t_eval[j_eval], ytmp)
-                j_eval += 1
-        elif mode == EVERY_STEP:
-            if stop == 0:
-                ts, ys, n_out = store(ts, ys, n_out, t_new, y_new)
-            elif adaptive or t_stop != ts[n_out - 1]:   # a fixed step's stop at its start
-                ts, ys, n_out = store(ts, ys, n_out, t_stop, y_stop)  # is stored already
+        stop, t_stop, sing_index, have_dense, ev_t, ev_i, ev_y, n_ev = after_step(
+            tab, not adaptive, rhs, sing, uev, p, t, h, t_new, y, y_new, K, F, ytmp, fmid,
+            y_stop, stats, watch, ws, sing_index, ev_t, ev_i, ev_y, n_ev)
+        ts, ys, n_out, j_eval = output(tab, not adaptive, rhs, p, t, h, t_new, y, y_new, K, F,
+                                       ytmp, y_stop, stop, t_stop, have_dense, stats, mode,
+                                       t_eval, j_eval, direction, ts, ys, n_out)
         if stop != 0:
             t = t_stop
             copy_into(y, y_stop)
