@@ -667,6 +667,10 @@ class CompiledKernels:
         for name in ("rhs_c", "sing_c", "events_c"):
             if hasattr(self, name):      # rhs_fp, ...: cheap to pass to compiled loops
                 setattr(self, name[:-2] + "_fp", FunctionAddress(getattr(self, name)))
+        if hasattr(self.kernels, "jac_c"):   # the generated Jacobian (radau)
+            from .integrators.radau import JAC_SIGNATURE
+
+            self.jac_fp = FunctionAddress(self.kernels.jac_c, JAC_SIGNATURE)
 
     def integrator(self):
         """The compiled loop of the explicit Runge-Kutta methods (shared by every scene

@@ -230,6 +230,18 @@ class Scene:
             self.system, self.principle, compiled_params, self.runtime_params,
             self.integrals, self.form, self.convention, key=self.key), persistent=self.cache)
 
+    @property
+    def jacobian(self):
+        """``jac(t, y, p, J)``, the Jacobian of the right-hand side for radau, as a
+        first-class function: the kernels' generated one where they carry it, else
+        differentiated from the same expressions here (``numeric.jacobian``)."""
+        kern = self.kernels
+        if hasattr(kern, "jac_fp"):
+            return kern.jac_fp
+        from .jacobian import symbolic_jacobian
+
+        return symbolic_jacobian(self)
+
     def replace(self, **changes) -> "Scene":
         """A scene equal to this one except for ``changes`` (constructor arguments:
         params, initial, t_span, runtime_params, integrals, ...).  The initial values
@@ -380,7 +392,10 @@ class Scene:
                 te = arguments.times(t_eval, t0, t1)
                 mode = AT_T_EVAL
             ctl = Control(rtol, atol_v, first, mx, budget, 0)
-            dense = {"rtol": rtol, "atol": atol_v, "mode": mode}
+            # radau's steps depend on the steps before (Newton's starting values, the
+            # Jacobian kept): no re-taking of one step (numeric.dense)
+            dense = None if method == "radau" else {"rtol": rtol, "atol": atol_v,
+                                                    "mode": mode}
         else:
             if t_eval is not None:
                 raise JetnhError("rk4 is a fixed-step method without dense output; pass "
@@ -415,7 +430,8 @@ class Scene:
                                                y_init, p, ctl, te, mode, watch, halt),
                                  halt, limit)
         wall = time.perf_counter() - tic
-        dense["partial_last"] = int(out.status) in (EVENT, SINGULAR)  # stopped inside a step
+        if dense is not None:    # stopped inside a step
+            dense["partial_last"] = int(out.status) in (EVENT, SINGULAR)
         return self._trajectory(method, out, wall, kern, ce, p, t0, y_init, singular_tol,
                                 singular == "stop", limit, dense)
 

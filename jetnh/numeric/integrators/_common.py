@@ -234,15 +234,15 @@ class FunctionAddress:
     """A compiled C callback (a numba ``cfunc``) as numba's *wrapper address protocol*
     object: passed for a first-class-function argument, it unboxes to its cached address
     without the signature comparison numba makes for a cfunc (~20 us a call).  It must
-    wrap a cfunc of the declared signature (``RHS_SIGNATURE``)."""
+    wrap a cfunc of the declared signature (``RHS_SIGNATURE``, or ``signature``)."""
 
     __slots__ = ("address", "cfunc")
 
-    def __init__(self, cfunc):
+    def __init__(self, cfunc, signature=RHS_SIGNATURE):
         if isinstance(cfunc, FunctionAddress):
             cfunc = cfunc.cfunc
-        if cfunc._sig != RHS_SIGNATURE:
-            raise TypeError(f"expected a cfunc of signature {RHS_SIGNATURE}, got {cfunc._sig}")
+        if cfunc._sig != signature:
+            raise TypeError(f"expected a cfunc of signature {signature}, got {cfunc._sig}")
         self.cfunc = cfunc          # keeps the machine code alive
         self.address = cfunc.address
 

@@ -1,0 +1,501 @@
+"""Radau IIA of order 5: an implicit collocation method for stiff problems.
+
+- Three stages at the Radau points c = ((4 - sqrt 6)/10, (4 + sqrt 6)/10, 1); order 5,
+  stiffly accurate (y_new is the last stage), L-stable.  The matrix A and everything
+  below are derived here from the nodes (collocation: ``A[i, j] = int_0^c_i l_j``).
+- Stage equations ``Z = h (A x I) F(Z)`` solved by simplified Newton in the eigenbasis
+  of A^-1 (Hairer & Wanner II, IV.8): with ``T^-1 A^-1 T = diag(gamma, [[alpha, beta],
+  [-beta, alpha]])`` one real n x n system ``(gamma/h - J) dW1 = r1`` and one complex
+  ``((alpha - i beta)/h - J) (dW2 + i dW3) = r2 + i r3`` per iteration, their LU
+  factors kept while h and the Jacobian J stay; J = df/dy is the generated Jacobian of
+  the right-hand side (``jac(t, y, p, J)``, from the symbolic derivation), recomputed
+  after an accepted step unless Newton contracted fast (rate <= 1e-3).  Starting values
+  from the previous step's collocation polynomial; convergence test
+  ``rate / (1 - rate) |dW| <= newton_tol`` (default ``max(10 eps / rtol, min(0.03,
+  rtol^0.5))``, scipy's), at most ``max_newton`` (7) iterations, else h / 2.
+- Error estimate: the embedded order-3 formula with weight ``1/gamma`` on f(t, y) (IV.8,
+  (8.16)-(8.20)) filtered by ``(gamma/h - J)^-1`` (once more with f(t, y + err) after a
+  rejection or on the first step), in the RMS norm scaled by ``atol + rtol |y|`` (the
+  tolerances mean what they mean for the other methods; RADAU5 itself rescales them).
+- Step control: ``h_new = h / max(1/8, min(5, err^(1/4) / fac))`` with ``fac = 0.9 (2
+  max_newton + 1) / (iterations + 2 max_newton)``, the predictive (Gustafsson) controller
+  after an accepted step, h kept when the change is within [1, 1.2] (LU reused).
+- Dense output: the collocation polynomial through y, y + Z1, y + Z2, y_new (cubic, no
+  evaluation), in the rows of ``_events.dense_eval``: ``t_eval``, events and singular
+  stops as the explicit methods (``loop.after_step``, ``loop.output``).
+
+Reference: E. Hairer, G. Wanner, *Solving Ordinary Differential Equations II*, 2nd ed.,
+Springer 1996, section IV.8 (and IV.5 for the collocation form).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import namedtuple
+
+import numba
+import numpy as np
+
+from ._common import (
+    AT_T_EVAL, ENDPOINTS, ENSEMBLE_OUT, FINISHED, MAX_STEPS, NONFINITE, RHS,
+    SINGULAR, STOPPED, TOO_SMALL_STEP, all_finite, collect, compiled, copy_into, f8, i8,
+    initial_step_h0, initial_step_h1, jit, min_step, store)
+from ._events import dense_eval, sing_init
+from .loop import (CONTROL, EMBEDDED, GIVEN, WATCH, Result, after_step, no_events, output,
+                   workspace)
+
+ORDER = 5
+ERROR_ORDER = 3
+#: the Jacobian callback: jac(t, y, p, J) fills J[i, j] = d rhs_i / d y_j
+JAC_SIGNATURE = numba.types.void(f8, f8[::1], f8[::1], f8[:, ::1])
+JAC = numba.types.FunctionType(JAC_SIGNATURE)
+#: Newton options of one run (``tol`` 0: automatic)
+Newton = namedtuple("Newton", "tol max_iter")
+NEWTON = numba.typeof(Newton(0.0, 7))
+SAFETY = 0.9
+#: Newton contraction below which the Jacobian is kept for the next step
+KEEP_JACOBIAN = 1e-3
+
+
+def _method():
+    """Nodes, A, T, T^-1, the eigenvalues and the error weights, derived from the nodes."""
+    s6 = math.sqrt(6.0)
+    c = np.array([(4.0 - s6) / 10.0, (4.0 + s6) / 10.0, 1.0])
+    A = np.empty((3, 3))
+    for j in range(3):
+        others = [c[k] for k in range(3) if k != j]
+        lj = np.polynomial.Polynomial.fromroots(others) / np.prod([c[j] - o for o in others])
+        integral = lj.integ()
+        A[:, j] = integral(c) - integral(0.0)
+    Ainv = np.linalg.inv(A)
+    vals, vecs = np.linalg.eig(Ainv)
+    r = int(np.argmin(np.abs(vals.imag)))
+    k = int(np.argmax(vals.imag))
+    T = np.column_stack([vecs[:, r].real, vecs[:, k].real, vecs[:, k].imag])
+    TI = np.linalg.inv(T)
+    lam = TI @ Ainv @ T
+    gamma, alpha, beta = lam[0, 0], lam[1, 1], lam[1, 2]
+    # embedded order-3 weights: gamma0 = 1/gamma on f(t, y), bh on the stages
+    V = np.vander(c, 3, increasing=True).T
+    bh = np.linalg.solve(V, np.array([1.0 - 1.0 / gamma, 0.5, 1.0 / 3.0]))
+    b = A[2]
+    err_w = gamma * (bh - b) @ Ainv
+    return c, A, T, TI, lam, gamma, alpha, beta, err_w
+
+
+C, A, T, TI, LAMBDA, GAMMA, ALPHA, BETA, ERR_W = _method()
+#: the loop's view of the method (``loop.after_step``): dense rows filled here
+TAB = (C.copy(), np.zeros((3, 3)), np.zeros(3), np.zeros(1), np.zeros(1), np.zeros((0, 1)),
+       np.array([3, EMBEDDED, GIVEN, ERROR_ORDER], dtype=np.int64), 1.0)
+
+
+def newton_options(tol, max_iter) -> Newton:
+    """``Newton`` from ``run``'s ``newton_tol``, ``max_newton`` (None: the defaults)."""
+    from .. import arguments
+
+    return Newton(0.0 if tol is None else arguments.positive(tol, "newton_tol"),
+                  7 if max_iter is None else arguments.count(max_iter, "max_newton",
+                                                             limit=1000))
+
+
+@jit
+def lu_factor(M, piv):
+    """LU with partial pivoting in place (real or complex); False if singular."""
+    n = M.shape[0]
+    for c in range(n):
+        k = c
+        big = abs(M[c, c])
+        for r in range(c + 1, n):
+            if abs(M[r, c]) > big:
+                big = abs(M[r, c])
+                k = r
+        piv[c] = k
+        if big == 0.0 or not math.isfinite(big):
+            return False
+        if k != c:
+            for j in range(n):
+                M[c, j], M[k, j] = M[k, j], M[c, j]
+        inv = 1.0 / M[c, c]
+        for r in range(c + 1, n):
+            m = M[r, c] * inv
+            M[r, c] = m
+            if m != 0.0:
+                for j in range(c + 1, n):
+                    M[r, j] -= m * M[c, j]
+    return True
+
+
+@jit
+def lu_solve(M, piv, b):
+    """Solve with the factors of ``lu_factor``; b is overwritten by the solution."""
+    n = M.shape[0]
+    for c in range(n):
+        k = piv[c]
+        if k != c:
+            b[c], b[k] = b[k], b[c]
+        for r in range(c + 1, n):
+            b[r] -= M[r, c] * b[c]
+    for r in range(n - 1, -1, -1):
+        s = b[r]
+        for j in range(r + 1, n):
+            s -= M[r, j] * b[j]
+        b[r] = s / M[r, r]
+
+
+@jit
+def _factor(Jm, h, E1, E2, piv1, piv2):
+    """E1 = gamma/h - J, E2 = (alpha - i beta)/h - J, factored."""
+    n = Jm.shape[0]
+    g = GAMMA / h
+    s = complex(ALPHA / h, -BETA / h)
+    for i in range(n):
+        for j in range(n):
+            E1[i, j] = -Jm[i, j]
+            E2[i, j] = -Jm[i, j]
+        E1[i, i] += g
+        E2[i, i] += s
+    return lu_factor(E1, piv1) and lu_factor(E2, piv2)
+
+
+@jit
+def _rms(v, scale):
+    s = 0.0
+    for i in range(v.shape[0]):
+        s += (v[i] / scale[i]) ** 2
+    return math.sqrt(s / max(v.shape[0], 1))
+
+
+@jit
+def _newton(rhs, t, h, y, p, W, Z, Fs, ytmp, r, cb, E1, E2, piv1, piv2, scale, tol, max_iter,
+            rate, stats):
+    """Simplified Newton for the stages in the eigenbasis (W = T^-1 Z, given the starting
+    W).  Returns (converged, iterations, rate)."""
+    n = y.shape[0]
+    d_old = 0.0
+    # the first iteration is judged by the last step's contraction (as RADAU5 does)
+    rate = min(max(rate, 1e-16) ** 0.8, 0.9)
+    for it in range(max_iter):
+        for s in range(3):
+            for i in range(n):
+                Z[s, i] = T[s, 0] * W[0, i] + T[s, 1] * W[1, i] + T[s, 2] * W[2, i]
+                ytmp[i] = y[i] + Z[s, i]
+            rhs(t + C[s] * h, ytmp, p, Fs[s])
+        stats[2] += 3
+        if not (all_finite(Fs[0]) and all_finite(Fs[1]) and all_finite(Fs[2])):
+            return False, it + 1, rate
+        for i in range(n):
+            for k in range(3):
+                r[k, i] = (TI[k, 0] * Fs[0, i] + TI[k, 1] * Fs[1, i] + TI[k, 2] * Fs[2, i]
+                           - (LAMBDA[k, 0] * W[0, i] + LAMBDA[k, 1] * W[1, i]
+                              + LAMBDA[k, 2] * W[2, i]) / h)
+            cb[i] = complex(r[1, i], r[2, i])
+        lu_solve(E1, piv1, r[0])
+        lu_solve(E2, piv2, cb)
+        d = 0.0
+        for i in range(n):
+            r[1, i] = cb[i].real
+            r[2, i] = cb[i].imag
+            for k in range(3):
+                W[k, i] += r[k, i]
+                d += (r[k, i] / scale[i]) ** 2
+        d = math.sqrt(d / max(3 * n, 1))
+        if not math.isfinite(d):
+            return False, it + 1, rate
+        if it > 0:
+            rate = d / d_old
+            if rate >= 1.0:
+                return False, it + 1, rate
+            # predicted not to converge within max_iter iterations
+            if rate ** (max_iter - 1 - it) / (1.0 - rate) * d > tol:
+                return False, it + 1, rate
+        if d == 0.0 or rate / (1.0 - rate) * d <= tol:
+            for s in range(3):
+                for i in range(n):
+                    Z[s, i] = T[s, 0] * W[0, i] + T[s, 1] * W[1, i] + T[s, 2] * W[2, i]
+            return True, it + 1, rate
+        d_old = d
+    return False, max_iter, rate
+
+
+@jit
+def _error(rhs, t, h, y, f0, Z, p, E1, piv1, scale, err_v, f1, ytmp, again, stats):
+    """The scaled error of the step: (gamma/h - J)^-1 (f(t, y) + sum_j w_j Z_j / h); with
+    ``again`` once more through f(t, y + err) (the stiff filter of IV.8)."""
+    n = y.shape[0]
+    for i in range(n):
+        f1[i] = (ERR_W[0] * Z[0, i] + ERR_W[1] * Z[1, i] + ERR_W[2] * Z[2, i]) / h
+        err_v[i] = f0[i] + f1[i]
+    lu_solve(E1, piv1, err_v)
+    err = _rms(err_v, scale)
+    if again and err >= 1.0:
+        for i in range(n):
+            ytmp[i] = y[i] + err_v[i]
+        rhs(t, ytmp, p, err_v)
+        stats[2] += 1
+        for i in range(n):
+            err_v[i] += f1[i]
+        lu_solve(E1, piv1, err_v)
+        err = _rms(err_v, scale)
+    return err
+
+
+@jit
+def _dense(y, Z, F):
+    """Rows of the collocation polynomial (``_events.dense_eval``) through (0, y),
+    (c1, y + Z1), (c2, y + Z2), (1, y + Z3)."""
+    c1 = C[0]
+    c2 = C[1]
+    for i in range(y.shape[0]):
+        g1 = (Z[0, i] - c1 * Z[2, i]) / (c1 * (1.0 - c1))
+        g2 = (Z[1, i] - c2 * Z[2, i]) / (c2 * (1.0 - c2))
+        F[0, i] = Z[2, i]
+        F[2, i] = (g1 - g2) / (c1 - c2)
+        F[1, i] = g1 - c1 * F[2, i]
+
+
+def _solve(rhs, jac, sing, uev, t0, t_end, y0, p, ctl, newton, t_eval, mode, watch, halt):
+    """Integrate y' = rhs(t, y, p) from t0 to t_end with Radau IIA (5); ``jac(t, y, p, J)``
+    its Jacobian; the other arguments and the ``Result`` as for ``loop._solve``
+    (``newton``: ``Newton``)."""
+    rtol, atol, first_step, max_step, max_steps, n_steps = ctl
+    n_sing, sing_tol, ev_dir, ev_max = watch
+    tol = newton[0]
+    max_iter = newton[1]
+    if tol <= 0.0:
+        tol = max(10.0 * 2.220446049250313e-16 / rtol, min(0.03, rtol ** 0.5))
+    n = y0.shape[0]
+    direction = 1.0 if t_end >= t0 else -1.0
+    interval = abs(t_end - t0)
+    y = y0.copy()
+    y_new = np.empty(n)
+    ytmp = np.empty(n)
+    fmid = np.empty(n)
+    y_stop = np.empty(n)
+    scale = np.empty(n)
+    f0 = np.empty(n)
+    f1 = np.empty(n)
+    err_v = np.empty(n)
+    K = np.empty((4, n))
+    F = np.empty((3, n))
+    F_prev = np.zeros((3, n))
+    y_prev = np.empty(n)
+    W = np.empty((3, n))
+    Z = np.empty((3, n))
+    Fs = np.empty((3, n))
+    r = np.empty((3, n))
+    cb = np.empty(n, dtype=np.complex128)
+    Jm = np.empty((n, n))
+    E1 = np.empty((n, n))
+    E2 = np.empty((n, n), dtype=np.complex128)
+    piv1 = np.empty(n, dtype=np.int64)
+    piv2 = np.empty(n, dtype=np.int64)
+    stats = np.zeros(3, dtype=np.int64)
+    cap = t_eval.shape[0] if mode == AT_T_EVAL else (2 if mode == ENDPOINTS else 64)
+    ts = np.empty(max(cap, 1))
+    ys = np.empty((max(cap, 1), n))
+    n_out = np.int64(0)
+    j_eval = np.int64(0)
+    t = t0
+    ws = workspace(n_sing, ev_dir.shape[0])
+    gs, gs_old, gref, sig, eps, gu_old = ws[:6]
+    ev_t, ev_i, ev_y, n_ev = no_events(n)
+    sing_index = sing_init(sing, n_sing, sing_tol, t, y, p, gs, sig, eps, gref)
+    copy_into(gs_old, gs)
+    if sing_index >= 0:
+        ts, ys, n_out = store(ts, ys, n_out, t, y)
+        return Result(SINGULAR, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev,
+                      sing_index)
+    if ev_dir.shape[0] > 0:
+        uev(t, y, p, gu_old)
+    rhs(t, y, p, f0)
+    stats[2] += 1
+    if not all_finite(f0):
+        return Result(NONFINITE, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev,
+                      sing_index)
+    if mode != AT_T_EVAL:
+        ts, ys, n_out = store(ts, ys, n_out, t, y)
+    if interval == 0.0:
+        if mode == AT_T_EVAL:
+            while j_eval < t_eval.shape[0] and t_eval[j_eval] == t:
+                ts, ys, n_out = store(ts, ys, n_out, t, y)
+                j_eval += 1
+        return Result(FINISHED, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev,
+                      sing_index)
+    if first_step > 0.0:
+        h_abs = first_step
+    else:
+        h0, d1 = initial_step_h0(y, f0, rtol, atol, interval, scale)
+        for i in range(n):
+            ytmp[i] = y[i] + h0 * direction * f0[i]
+        rhs(t + h0 * direction, ytmp, p, K[0])
+        stats[2] += 1
+        h_abs = initial_step_h1(f0, K[0], h0, d1, scale, ERROR_ORDER, interval, max_step)
+    jac(t, y, p, Jm)
+    jac_fresh = True
+    h_lu = 0.0                  # the h of the current LU factors (0: none)
+    rate = 1.0
+    h_prev = 0.0                # the last accepted step (0: none yet)
+    h_acc = 0.0
+    err_acc = 1e-2
+    first = True
+    status = FINISHED
+    while direction * (t_end - t) > 0.0:
+        if stats[0] >= max_steps:
+            status = MAX_STEPS
+            break
+        if halt[0] != 0:
+            status = STOPPED
+            break
+        hmin = min_step(t, direction)
+        for i in range(n):
+            scale[i] = atol[i] + abs(y[i]) * rtol
+        rejected = False
+        while True:
+            if h_abs > max_step:
+                h_abs = max_step
+            if h_abs < hmin:
+                status = TOO_SMALL_STEP
+                break
+            t_new = t + h_abs * direction
+            if direction * (t_new - t_end) > 0.0:
+                t_new = t_end
+            h = t_new - t
+            h_abs = abs(h)
+            if h != h_lu:
+                if not _factor(Jm, h, E1, E2, piv1, piv2):
+                    h_lu = 0.0
+                    h_abs *= 0.5
+                    stats[1] += 1
+                    rejected = True
+                    continue
+                h_lu = h
+            # starting values: the previous collocation polynomial, extrapolated
+            if h_prev != 0.0:
+                for s in range(3):
+                    dense_eval(1.0 + C[s] * h / h_prev, y_prev, F_prev, ytmp)
+                    for i in range(n):
+                        Z[s, i] = ytmp[i] - y[i]
+            else:
+                for s in range(3):
+                    for i in range(n):
+                        Z[s, i] = 0.0
+            for k in range(3):
+                for i in range(n):
+                    W[k, i] = TI[k, 0] * Z[0, i] + TI[k, 1] * Z[1, i] + TI[k, 2] * Z[2, i]
+            ok, iters, rate = _newton(rhs, t, h, y, p, W, Z, Fs, ytmp, r, cb, E1, E2, piv1,
+                                      piv2, scale, tol, max_iter, rate, stats)
+            if not ok:
+                stats[1] += 1
+                rejected = True
+                h_abs *= 0.5
+                if not jac_fresh:
+                    jac(t, y, p, Jm)
+                    jac_fresh = True
+                    h_lu = 0.0
+                continue
+            for i in range(n):
+                y_new[i] = y[i] + Z[2, i]
+            err = _error(rhs, t, h, y, f0, Z, p, E1, piv1, scale, err_v, f1, ytmp,
+                         first or rejected, stats)
+            fac = min(SAFETY, SAFETY * (2 * max_iter + 1) / (iters + 2 * max_iter))
+            if not math.isfinite(err):
+                stats[1] += 1
+                rejected = True
+                h_abs *= 0.5
+                continue
+            quot = max(0.125, min(5.0, err ** 0.25 / fac))
+            if err < 1.0:
+                if not first:
+                    gus = (h_acc / h_abs) * (err * err / err_acc) ** 0.25 / SAFETY
+                    quot = max(quot, max(0.125, min(5.0, gus)))
+                h_acc = h_abs
+                err_acc = max(1e-2, err)
+                h_new_abs = h_abs / quot
+                if rejected:
+                    h_new_abs = min(h_new_abs, h_abs)
+                break
+            stats[1] += 1
+            rejected = True
+            h_abs = h_abs * 0.1 if first else h_abs / quot
+        if status != FINISHED:
+            break
+        first = False
+        stats[0] += 1
+        _dense(y, Z, F)
+        rhs(t_new, y_new, p, f1)
+        stats[2] += 1
+        if not all_finite(f1):
+            status = NONFINITE
+            break
+        stop, t_stop, sing_index, have_dense, ev_t, ev_i, ev_y, n_ev = after_step(
+            TAB, False, rhs, sing, uev, p, t, h, t_new, y, y_new, K, F, ytmp, fmid, y_stop,
+            stats, watch, ws, sing_index, ev_t, ev_i, ev_y, n_ev)
+        ts, ys, n_out, j_eval = output(TAB, False, rhs, p, t, h, t_new, y, y_new, K, F, ytmp,
+                                       y_stop, stop, t_stop, True, stats, mode, t_eval,
+                                       j_eval, direction, ts, ys, n_out)
+        if stop != 0:
+            t = t_stop
+            copy_into(y, y_stop)
+            status = stop
+            break
+        copy_into(y_prev, y)
+        t = t_new
+        copy_into(y, y_new)
+        copy_into(f0, f1)
+        for k in range(3):
+            copy_into(F_prev[k], F[k])
+        h_prev = h
+        # the next step: keep h (and the LU) for a small increase, keep J if Newton was fast
+        if h_new_abs >= h_abs and h_new_abs <= 1.2 * h_abs and rate <= KEEP_JACOBIAN:
+            h_new_abs = h_abs
+        if rate > KEEP_JACOBIAN:
+            jac(t, y, p, Jm)
+            jac_fresh = True
+            h_lu = 0.0
+        else:
+            jac_fresh = False
+        h_abs = h_new_abs
+    if mode == ENDPOINTS:
+        ts, ys, n_out = store(ts, ys, n_out, t, y)
+    return Result(status, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev, sing_index)
+
+
+run = jit(_solve)
+ARGS = (RHS, JAC, RHS, RHS, f8, f8, f8[::1], f8[::1], CONTROL, NEWTON, f8[::1], i8, WATCH,
+        i8[::1])
+
+
+def _entry(rhs, jac, sing, uev, t0, t_end, y0, p, ctl, newton, t_eval, mode, watch, halt):
+    return run(rhs, jac, sing, uev, t0, t_end, y0, p, ctl, newton, t_eval, mode, watch, halt)
+
+
+def solver():
+    """The compiled ``solve(rhs, jac, sing, uev, t0, t_end, y0, p, ctl, newton, t_eval,
+    mode, watch, halt)``."""
+    return compiled(_entry, ARGS)
+
+
+def _ensemble_parallel(rhs, jac, sing, uev, t0, t_end, Y0, P, ctl, newton, t_eval, mode,
+                       watch, halt, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
+    for r in numba.prange(Y0.shape[0]):
+        res = run(rhs, jac, sing, uev, t0, t_end, Y0[r], P[r], ctl, newton, t_eval, mode, watch,
+                  halt)
+        collect(r, res, mode, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)
+
+
+def _ensemble_serial(rhs, jac, sing, uev, t0, t_end, Y0, P, ctl, newton, t_eval, mode,
+                     watch, halt, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
+    for r in range(Y0.shape[0]):
+        res = run(rhs, jac, sing, uev, t0, t_end, Y0[r], P[r], ctl, newton, t_eval, mode, watch,
+                  halt)
+        collect(r, res, mode, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)
+
+
+ENSEMBLE_ARGS = ARGS[:6] + (f8[:, ::1], f8[:, ::1]) + ARGS[8:] + ENSEMBLE_OUT
+
+
+def ensemble_solver(parallel=True):
+    """The compiled ensemble driver (``loop.ensemble_solver``, with ``jac`` and
+    ``newton``)."""
+    return compiled(_ensemble_parallel if parallel else _ensemble_serial, ENSEMBLE_ARGS,
+                    parallel=parallel)
