@@ -44,7 +44,7 @@ def test_ah_indicator_is_the_sqrt_argument(ah_scene):
     assert all(abs(v) > 0.5 for v in values.values())
 
 
-@pytest.mark.parametrize("method", ["dop853", "dopri5", "scipy-DOP853"])
+@pytest.mark.parametrize("method", ["dop853", "dopri5", "radau", "scipy-DOP853"])
 def test_ah_stops_at_zero_horizontal_speed(ah_scene, method):
     traj = ah_scene.run(method=method, rtol=1e-10, atol=1e-12)
     t_star, t_hit = ah_times()
@@ -271,7 +271,7 @@ def test_direction_filters_crossings(particle):
     assert np.allclose(np.sin(8 * xs), 0.0, atol=1e-12)
 
 
-@pytest.mark.parametrize("method, kw", [("dop853", {}), ("dopri5", {}),
+@pytest.mark.parametrize("method, kw", [("dop853", {}), ("dopri5", {}), ("radau", {}),
                                         ("rk4", dict(n_steps=600))])
 def test_terminal_event(particle, method, kw):
     y = particle.system.J.q[1]

@@ -129,10 +129,11 @@ def lu_factor(M, piv):
 def lu_solve(M, piv, b):
     """Solve with the factors of ``lu_factor``; b is overwritten by the solution."""
     n = M.shape[0]
-    for c in range(n):
+    for c in range(n):              # the row exchanges (whole rows were exchanged)
         k = piv[c]
         if k != c:
             b[c], b[k] = b[k], b[c]
+    for c in range(n):
         for r in range(c + 1, n):
             b[r] -= M[r, c] * b[c]
     for r in range(n - 1, -1, -1):
