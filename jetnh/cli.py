@@ -812,8 +812,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="end time (default: the model's [simulation] t_end or the "
                         "catalogue's)")
     s.add_argument("--method", default=None,
-                   help="dop853 (default), dopri5, rk4, dla (discrete Lagrange-d'Alembert, "
-                        "chetaev only), dvi (discrete vakonomic) or "
+                   help="dop853 (default), dopri5, rk4, radau (implicit, stiff problems), dla "
+                        "(discrete Lagrange-d'Alembert, chetaev only), dvi (discrete "
+                        "vakonomic) or "
                         "scipy-<RK45|DOP853|Radau|BDF|LSODA>")
     s.add_argument("--timeout", type=float, default=None,
                    help="wall-clock budget in seconds: the run stops there and reports "
@@ -870,7 +871,7 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--outputs", metavar="NAME,...",
                    help="output columns (default: every state, dependent velocity and "
                         "integral)")
-    w.add_argument("--method", default=None, choices=("dop853", "dopri5", "rk4"),
+    w.add_argument("--method", default=None, choices=("dop853", "dopri5", "rk4", "radau"),
                    help="default: the model file's, else dop853")
     w.add_argument("--rtol", type=float, default=None, help="default 1e-9")
     w.add_argument("--atol", type=float, default=None, help="default 1e-12")
