@@ -99,7 +99,7 @@ def _retaken_steps(traj, k, tau) -> np.ndarray:
     """dop853/dopri5: re-take step k[i] with the times tau (sorted by step, then time)."""
     kern, d = traj._kernels, traj._dense
     solve = kern.integrator()
-    tab = EXPLICIT[traj.method].arrays()
+    tab = EXPLICIT[traj.method].arrays
     t, y, p = traj.t, traj.y, np.ascontiguousarray(traj._p, dtype=float)
     none = np.zeros(0, dtype=np.int64)
     watch = Watch(0, 0.0, none, none)

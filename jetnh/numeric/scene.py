@@ -424,7 +424,7 @@ class Scene:
                                  halt, limit)
         else:
             solve = kern.integrator()
-            tab = integrators.EXPLICIT[method].arrays()
+            tab = integrators.EXPLICIT[method].arrays
             tic = time.perf_counter()
             out = interrupt.call(lambda: solve(kern.rhs_fp, kern.sing_fp, uev, tab, t0, t1,
                                                y_init, p, ctl, te, mode, watch, halt),

@@ -30,6 +30,7 @@ from __future__ import annotations
 import math
 from collections import namedtuple
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numba
 import numpy as np
@@ -85,8 +86,9 @@ class ExplicitRK:
     def adaptive(self) -> bool:
         return self.error != NONE
 
+    @cached_property
     def arrays(self):
-        """The method as the loop receives it."""
+        """The method as the loop receives it (built once)."""
         info = np.array([self.n_stages, self.error, self.dense, self.error_order],
                         dtype=np.int64)
         f = np.ascontiguousarray
@@ -141,12 +143,10 @@ def _dense_rows(tab, rhs, t, h, y, y_new, K, F, ytmp, p):
 
 
 @jit
-def _error(tab, h, y, y_new, K, rtol, atol):
-    """The scaled error of the step (<= 1: accept)."""
-    C, A, B, E, E3, D, info, b_den = tab
-    ns = info[0]
+def _error(kind, ns, E, E3, h, y, y_new, K, rtol, atol):
+    """The scaled error of the step (<= 1: accept) by the estimator ``kind``."""
     n = y.shape[0]
-    if info[1] == DOP853:
+    if kind == DOP853:
         e5 = 0.0
         e3 = 0.0
         for i in range(n):
@@ -172,10 +172,8 @@ def _error(tab, h, y, y_new, K, rtol, atol):
 
 
 @jit
-def _stages(tab, rhs, t, h, y, K, y_new, ytmp, p):
+def _stages(ns, C, A, B, b_den, rhs, t, h, y, K, y_new, ytmp, p):
     """Stages 1 .. n_stages - 1 (K[0] given) and the new state."""
-    C, A, B, E, E3, D, info, b_den = tab
-    ns = info[0]
     n = y.shape[0]
     for s in range(1, ns):
         for i in range(n):
@@ -315,6 +313,7 @@ def _solve(rhs, sing, uev, tab, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt
     adaptive = info[1] != NONE
     rtol, atol, first_step, max_step, max_steps, n_steps = ctl
     n_sing, sing_tol, ev_dir, ev_max = watch
+    watching = n_sing > 0 or ev_dir.shape[0] > 0
     n = y0.shape[0]
     direction = 1.0 if t_end >= t0 else -1.0
     interval = abs(t_end - t0)
@@ -405,10 +404,10 @@ def _solve(rhs, sing, uev, tab, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt
                     t_new = t_end
                 h = t_new - t
                 h_abs = abs(h)
-                _stages(tab, rhs, t, h, y, K, y_new, ytmp, p)
+                _stages(ns, C, A, B, b_den, rhs, t, h, y, K, y_new, ytmp, p)
                 rhs(t_new, y_new, p, K[ns])
                 stats[2] += ns
-                err = _error(tab, h, y, y_new, K, rtol, atol)
+                err = _error(info[1], ns, E, E3, h, y, y_new, K, rtol, atol)
                 if not math.isfinite(err) or not all_finite(K[ns]):
                     nonfinite = True
                     h_abs *= MIN_FACTOR
@@ -432,7 +431,7 @@ def _solve(rhs, sing, uev, tab, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt
                 break
         else:
             rhs(t, y, p, K[0])
-            _stages(tab, rhs, t, h_fixed, y, K, y_new, ytmp, p)
+            _stages(ns, C, A, B, b_den, rhs, t, h_fixed, y, K, y_new, ytmp, p)
             stats[2] += ns
             if not all_finite(y_new):
                 status = NONFINITE
@@ -441,12 +440,17 @@ def _solve(rhs, sing, uev, tab, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt
             h = t_new - t
         step += 1
         stats[0] += 1
-        stop, t_stop, sing_index, have_dense, ev_t, ev_i, ev_y, n_ev = after_step(
-            tab, not adaptive, rhs, sing, uev, p, t, h, t_new, y, y_new, K, F, ytmp, fmid,
-            y_stop, stats, watch, ws, sing_index, ev_t, ev_i, ev_y, n_ev)
-        ts, ys, n_out, j_eval = output(tab, not adaptive, rhs, p, t, h, t_new, y, y_new, K, F,
-                                       ytmp, y_stop, stop, t_stop, have_dense, stats, mode,
-                                       t_eval, j_eval, direction, ts, ys, n_out)
+        stop = 0
+        t_stop = t_new
+        have_dense = False
+        if watching:
+            stop, t_stop, sing_index, have_dense, ev_t, ev_i, ev_y, n_ev = after_step(
+                tab, not adaptive, rhs, sing, uev, p, t, h, t_new, y, y_new, K, F, ytmp, fmid,
+                y_stop, stats, watch, ws, sing_index, ev_t, ev_i, ev_y, n_ev)
+        if mode != ENDPOINTS:
+            ts, ys, n_out, j_eval = output(tab, not adaptive, rhs, p, t, h, t_new, y, y_new, K,
+                                           F, ytmp, y_stop, stop, t_stop, have_dense, stats,
+                                           mode, t_eval, j_eval, direction, ts, ys, n_out)
         if stop != 0:
             t = t_stop
             copy_into(y, y_stop)
