@@ -1,8 +1,8 @@
-"""Bit-for-bit regression of the explicit Runge-Kutta methods: trajectories recorded with
-the per-method loops that preceded the shared loop (``integrators.loop``) in
-``tests/data/rk_reference.npz``; every output row, event, status and count must agree
-exactly.  Regenerate (only for an intended change of results) with
-``python tests/test_numeric_reference.py``."""
+"""Bit-for-bit regression of the compiled methods: trajectories recorded with the
+per-method loops that preceded the shared loop (``integrators.loop``) and the shared
+Newton solver of dla and dvi (``integrators.newton``) in ``tests/data/rk_reference.npz``;
+every output row, event, status and count must agree exactly.  Regenerate (only for an
+intended change of results) with ``python tests/test_numeric_reference.py``."""
 
 from pathlib import Path
 
@@ -27,6 +27,8 @@ def _scenes():
 
 def _cases():
     part, sleigh, ah = _scenes()
+    vak = Scene(nonholonomic_particle(), "vakonomic", initial=dict(
+        x=0.1, y=-0.5, z=0.2, x_t=1.0, y_t=0.3, lambda_z=0.2), t_span=(0.0, 2.0))
     te = np.linspace(0.0, 6.0, 37)
     x, y = part.system.J.q[:2]
     yield "part-dop853-steps", part, dict(method="dop853", rtol=1e-9, atol=1e-12)
@@ -44,6 +46,9 @@ def _cases():
         yield f"sleigh-{m}", sleigh, dict(method=m, rtol=1e-10, atol=1e-12)
         yield f"ah-{m}-singular", ah, dict(method=m, rtol=1e-10, atol=1e-12)
     yield "ah-rk4-singular", ah, dict(method="rk4", n_steps=200)
+    yield "sleigh-dla", sleigh, dict(method="dla", h=0.02)
+    yield "sleigh-dla-projection", sleigh, dict(method="dla", h=0.05, projection=True)
+    yield "part-dvi", vak, dict(method="dvi", n_steps=50)
     yield "part-dop853-first", part, dict(method="dop853", first_step=0.01, max_step=0.3,
                                           rtol=1e-7, atol=1e-9, save="final")
 

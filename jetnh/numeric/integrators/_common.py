@@ -37,7 +37,8 @@ def _install_cache_locator():
     except (ImportError, AttributeError):
         return
     here = os.path.dirname(os.path.abspath(__file__))
-    helpers = [os.path.join(here, f) for f in ("_common.py", "_events.py", "loop.py", "dla.py")]
+    helpers = [os.path.join(here, f) for f in ("_common.py", "_events.py", "loop.py", "dla.py",
+                                                  "newton.py")]
     if any(getattr(c, "_jetnh", False) for c in classes):
         return
     defaults = list(classes)

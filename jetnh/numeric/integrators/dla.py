@@ -57,6 +57,7 @@ import numpy as np
 from ._common import (
     ENDPOINTS, FINISHED, NONFINITE, NOT_CONVERGED, SINGULAR, STOPPED, all_finite, compiled,
     copy_into, f8, i8, jit, solve_linear, store)
+from .newton import solve_step
 
 ORDER = 2
 
@@ -288,26 +289,8 @@ def _solve(step_residual, momentum, legendre, nodal, constraint_jac, sing, t0, t
         if halt[0] != 0:
             status = STOPPED
             break
-        converged = False
-        for it in range(max_iter):
-            step_residual(t, h, q, pk, z, p, G, Jm)
-            stats[1] += 1
-            for i in range(m):
-                G[i] = -G[i]
-            if not solve_linear(Jm, G, dz):
-                break
-            size = 0.0
-            scale = 0.0
-            for i in range(m):
-                z[i] += dz[i]
-                if i < n:
-                    size = max(size, abs(dz[i]))
-                    scale = max(scale, abs(z[i]))
-            if not all_finite(z):
-                break
-            if size <= tol * (1.0 + scale):
-                converged = True
-                break
+        converged = solve_step(step_residual, t, h, q, pk, z, p, G, Jm, dz, n, m, tol,
+                               max_iter, stats)
         if not converged:
             status = NOT_CONVERGED if all_finite(z) else NONFINITE
             break

@@ -47,34 +47,11 @@ J. E. Marsden, M. West, "Discrete mechanics and variational integrators", Acta N
 import numpy as np
 
 from ._common import (ENDPOINTS, FINISHED, NONFINITE, NOT_CONVERGED, SINGULAR, STOPPED,
-                      all_finite, compiled, f8, i8, jit, solve_linear, store)
+                      all_finite, compiled, f8, i8, jit, store)
 from .dla import LEGENDRE, MOMENTUM, NODAL, STEP, node_init, node_violated
+from .newton import solve_step
 
 ORDER = 2
-
-
-@jit
-def _newton(step_residual, t, h, q, pk, z, p, G, Jm, dz, n, m, tol, max_iter, stats):
-    """Solve the step equations for z = (q1 - q0, lambda) from the predictor in z."""
-    for it in range(max_iter):
-        step_residual(t, h, q, pk, z, p, G, Jm)
-        stats[1] += 1
-        for i in range(m):
-            G[i] = -G[i]
-        if not solve_linear(Jm, G, dz):
-            return False
-        size = 0.0
-        scale = 0.0
-        for i in range(m):
-            z[i] += dz[i]
-            if i < n:
-                size = max(size, abs(dz[i]))
-                scale = max(scale, abs(z[i]))
-        if not all_finite(z):
-            return False
-        if size <= tol * (1.0 + scale):
-            return True
-    return False
 
 
 @jit
@@ -152,7 +129,7 @@ def _solve(step_residual, momentum, legendre, nodal, sing, t0, t_end, q0, v0, la
         if halt[0] != 0:
             status = STOPPED
             break
-        if not _newton(step_residual, t, h, q, pk, z, p, G, Jm, dz, n, m, tol, max_iter,
+        if not solve_step(step_residual, t, h, q, pk, z, p, G, Jm, dz, n, m, tol, max_iter,
                        stats):
             if step == n_steps:              # extra step failed: one-sided last node
                 for i in range(n):
