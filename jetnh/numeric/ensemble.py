@@ -49,7 +49,7 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import ConstraintError, IntegrationError, JetnhError
-from . import arguments, interrupt
+from . import arguments, diagnosis, interrupt
 from . import integrators
 from .integrators import STATUS_TEXT
 from .integrators._common import (AT_T_EVAL, ENDPOINTS, EVENT, FINISHED, NONFINITE,
@@ -270,9 +270,9 @@ class Ensemble:
         s = int(self.status[r])
         if s == SINGULAR:
             sc = self.scene
-            info = sc._singularity(sc.kernels, int(self._sing_index[r]), self.t_final[r],
-                                   self.y_final[r], self.params[r], sc.t_span[0],
-                                   self.initial[r], self._singular_tol)
+            info = diagnosis.singularity(sc, sc.kernels, int(self._sing_index[r]),
+                                         self.t_final[r], self.y_final[r], self.params[r],
+                                         sc.t_span[0], self.initial[r], self._singular_tol)
             return info["reason"]
         if s == EVENT:
             hit = [k for k in range(len(self.event_names)) if self.event_counts[r, k]]
@@ -341,9 +341,9 @@ def run_ensemble(scene, initial=None, params=None, *, rtol=1e-9, atol=1e-12, t_e
     limit = arguments.timeout(timeout)
     method = integrators.method(method)
     if integrators.METHODS[method] == "discrete":
-        raise JetnhError(f"ensembles run the Runge-Kutta methods "
-                         f"{', '.join(m for m, k in integrators.METHODS.items() if k != 'discrete')}"
-                         f", not {method!r}")
+        runnable = [m for m, k in integrators.METHODS.items() if k != "discrete"]
+        raise JetnhError(f"ensembles run the Runge-Kutta methods {', '.join(runnable)}, not "
+                         f"{method!r}")
     scene, Y0, P = resolve(scene, initial, params, project)
     n_runs, n = Y0.shape
     t0, t1 = scene.t_span
@@ -432,15 +432,17 @@ def _explain(ens, kern, checked, tol, on_error):
     sc = ens.scene
     t0 = sc.t_span[0]
     for r in np.nonzero(ens.status == NONFINITE)[0]:
-        idx = (sc._explain_nonfinite(kern, ens.t_final[r], ens.y_final[r], ens.params[r], t0,
-                                     ens.initial[r], tol) if checked else -1)
+        idx = (diagnosis.explain_nonfinite(sc, kern, ens.t_final[r], ens.y_final[r],
+                                           ens.params[r], t0, ens.initial[r], tol)
+               if checked else -1)
         if idx >= 0:
             ens.status[r] = SINGULAR
             ens._sing_index[r] = idx
         elif on_error == "raise":
             try:
-                sc._raise_nonfinite(f"{ens.method} (ensemble run {r})", ens.t_final[r],
-                                    ens.y_final[r], kern, ens.params[r], checked=checked)
+                diagnosis.raise_nonfinite(sc, f"{ens.method} (ensemble run {r})",
+                                          ens.t_final[r], ens.y_final[r], kern, ens.params[r],
+                                          checked=checked)
             except IntegrationError as exc:
                 raise IntegrationError(
                     f"{exc} [pass on_error='record' to keep the other runs; run {r} will "

@@ -38,24 +38,17 @@ import numpy as np
 import sympy as sp
 
 from ..constraints import PRINCIPLES, System
-from ..errors import ConstraintError, IntegrationError, JetnhError, PrincipleError
+from ..errors import ConstraintError, JetnhError, PrincipleError
 from ..jet import sympy_object
 from . import arguments, interrupt
 from . import cache as _cache
 from . import codegen
-from . import integrators
-from .integrators import SCIPY_METHODS, STATUS_TEXT
+from . import diagnosis, discrete, integrators, scipy_backend
+from .integrators import STATUS_TEXT
 from .integrators._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, NONFINITE,
-                                  NOT_CONVERGED, SINGULAR, STOPPED)
+                                  SINGULAR, STOPPED)
 from .integrators.loop import Control, watch_of
 from .trajectory import Trajectory
-
-
-def _timeout_reason(timeout, t) -> str:
-    if timeout is None:
-        return STATUS_TEXT[STOPPED]
-    return (f"stopped at t = {float(t):.17g} by the wall-clock budget timeout = {timeout:g} s; "
-            "raise timeout (or max_steps) to go further")
 
 
 class Scene:
@@ -351,8 +344,8 @@ class Scene:
             first, mx = arguments.step_limits(first_step, np.inf if max_step is None
                                               else max_step)
             te = None if t_eval is None else arguments.times(t_eval, t0, t1)
-            return self._run_scipy(m, rtol, atol_v, te, t0, t1, y_init, p, first or None, mx,
-                                   events, singular, singular_tol)
+            return scipy_backend.run(self, m, rtol, atol_v, te, t0, t1, y_init, p,
+                                     first or None, mx, events, singular, singular_tol)
         if backend not in (None, "numba"):
             raise JetnhError(f"unknown backend {backend!r}; choose 'numba' or 'scipy'")
         method = integrators.method(name)
@@ -373,10 +366,10 @@ class Scene:
             if method == "dvi":
                 if projection:
                     raise JetnhError("projection= is an option of the dla integrator")
-                return self._run_dvi(t0, t1, y_init, own, p, steps, save, tol, iters, sing,
-                                     limit)
-            return self._run_dla(t0, t1, y_init, own, p, steps, save, tol, iters,
-                                 bool(projection), sing, limit)
+                return discrete.run_dvi(self, t0, t1, y_init, own, p, steps, save, tol, iters,
+                                        sing, limit)
+            return discrete.run_dla(self, t0, t1, y_init, own, p, steps, save, tol, iters,
+                                    bool(projection), sing, limit)
         if projection:
             raise JetnhError("projection= is an option of the dla integrator; the "
                              "Runge-Kutta methods follow the constraints to their tolerance")
@@ -520,16 +513,16 @@ class Scene:
         status = int(status)
         singularity = None
         if status == NONFINITE:
-            sing_index = (self._explain_nonfinite(kern, t_last, y_last, p, t0, y_init,
+            sing_index = (diagnosis.explain_nonfinite(self, kern, t_last, y_last, p, t0, y_init,
                                                   singular_tol) if checked else -1)
             if sing_index < 0:
-                self._raise_nonfinite(method, t_last, y_last, kern, p, t0, y_init,
+                diagnosis.raise_nonfinite(self, method, t_last, y_last, kern, p, t0, y_init,
                                       checked=checked)
             status = SINGULAR
-            singularity = self._singularity(kern, int(sing_index), t_last, y_last, p, t0,
+            singularity = diagnosis.singularity(self, kern, int(sing_index), t_last, y_last, p, t0,
                                             y_init, singular_tol, nonfinite=True)
         elif status == SINGULAR:
-            singularity = self._singularity(kern, int(sing_index), t_last, y_last, p, t0,
+            singularity = diagnosis.singularity(self, kern, int(sing_index), t_last, y_last, p, t0,
                                             y_init, singular_tol)
         if singularity is not None:
             reason = singularity["reason"]
@@ -537,7 +530,7 @@ class Scene:
             k = int(ev_i[n_ev - 1])
             reason = (f"terminal event {ce.names[k]!r} at t = {float(ev_t[n_ev - 1]):.17g}")
         elif status == STOPPED:
-            reason = _timeout_reason(timeout, t_last)
+            reason = diagnosis.timeout_reason(timeout, t_last)
         else:
             reason = STATUS_TEXT[status]
         kw = {}
@@ -559,485 +552,16 @@ class Scene:
                   self.p if p is None else np.ascontiguousarray(p, dtype=float), g)
         return dict(zip(kern.layout.indicators, g.tolist()))
 
-    def _explain_nonfinite(self, kern, t, y, p, t0, y_init, tol) -> int:
-        """Index of an indicator that explains a NaN/inf in the step after (t, y): small
-        there (below max(tol, 1e-3) of its initial size), or violated along an Euler
-        probe of the step, else -1."""
-        lay = kern.layout
-        m = len(lay.indicators)
-        if not m:
-            return -1
-        g0 = np.empty(m)
-        g = np.empty(m)
-        kern.sing(t0, y_init, p, g0)
-        kern.sing(t, y, p, g)
-        with np.errstate(all="ignore"):
-            rel = np.abs(g) / np.abs(g0)
-            bad = ~np.isfinite(g) | (np.sign(g) != np.sign(g0)) | (rel < max(tol, 1e-3))
-        if bad.any():
-            return int(np.argmax(bad))
-        f = np.empty_like(y)
-        kern.rhs(t, y, p, f)
-        if not np.all(np.isfinite(f)):
-            # no indicator is small here: blame the one nearest to vanishing only if one
-            # has moved at all (at the initial state nothing has)
-            i = int(np.argmin(rel))
-            return i if rel[i] < 1.0 else -1
-        span = abs(self.t_span[1] - self.t_span[0]) or 1.0
-        for s in np.geomspace(1e-12, 1.0, 25):
-            for hh in (s * span, -s * span):
-                kern.sing(t + hh, y + hh * f, p, g)
-                with np.errstate(all="ignore"):
-                    viol = ~np.isfinite(g) | (np.sign(g) != np.sign(g0))
-                if viol.any():
-                    return int(np.argmax(viol))
-        return -1
-
-    def _singularity(self, kern, idx, t, y, p, t0, y_init, tol, nonfinite=False) -> dict:
-        """What the stop at a singular configuration was: indicator, kind, time, value,
-        and a reason with the way out."""
-        lay = kern.layout
-        expr, kind = lay.indicators[idx], lay.indicator_kinds[idx]
-        g0 = np.empty(len(lay.indicators))
-        g = np.empty(len(lay.indicators))
-        kern.sing(t0, y_init, p, g0)
-        kern.sing(float(t), np.ascontiguousarray(y), p, g)
-        value, initial = float(g[idx]), float(g0[idx])
-        if not np.isfinite(initial) or initial == 0.0:
-            where = (f"the initial state (t = {t:.17g}) is singular: {expr} = {initial:.6g}")
-        elif (np.sign(value) == np.sign(initial) and abs(value) > 4 * tol * abs(initial)
-              and abs(value) > 1e-12 * abs(initial) and not nonfinite):
-            where = (f"the fixed step after t = {t:.17g} jumps over a kink of the right-hand "
-                     f"side next to a zero of {expr} = {value:.6g} (initially {initial:.6g}); "
-                     "the run stops at the last regular point (an adaptive method such as "
-                     "dop853 locates the singular time)")
-        elif nonfinite:
-            where = (f"the right-hand side became NaN or infinite in the step after "
-                     f"t = {t:.17g}, where {expr} = {value:.6g} (initially {initial:.6g}) "
-                     "is about to vanish or change sign")
-        else:
-            where = (f"at t = {t:.17g}, {expr} fell to {value:.6g} (initially "
-                     f"{initial:.6g}; the threshold is singular_tol = {tol:g} of that)")
-        dep = [s.name for s in self.system.dependent]
-        ratio = (self._split_det_ratio(t, y, p, t0, y_init)
-                 if kind != "split" and self.system.k > 3 else None)
-        if ratio is not None and ratio < 1e-6:
-            kind = "split"      # for k > 3 the split's determinant is no indicator of its own
-        if kind == "split":
-            alt = self._regular_split(t, y, p)
-            hint = (f"The determinant of df/dqdot^alpha vanishes: the constraints cannot be "
-                    f"solved for the velocities of the dependent coordinates {dep} here. The "
-                    "split is singular, not necessarily the motion: use another split"
-                    + (f" (here dependent={alt} is regular)" if alt else ""))
-        elif kind == "constraint":
-            hint = ("The explicit form of the constraints qdot^alpha = phi^alpha(t, q, "
-                    "qdot^mu) is singular or not differentiable here, so the dynamics "
-                    "have no unique continuation (e.g. the Appell-Hamel constraint at "
-                    "zero horizontal speed)")
-        else:
-            hint = ("A denominator (or a square-root argument) of the accelerations "
-                    "vanishes: the reduced mass matrix or the multiplier equations are "
-                    "singular here, so the accelerations are not determined")
-        if ratio is not None and ratio > 1e-3 and kind == "constraint":
-            hint = (f"The split is regular here (det df/dqdot^alpha is {ratio:.3g} of its "
-                    "initial value), but with more than 3 constraints phi^alpha comes from a "
-                    f"symbolic LU solve, and {expr} is a denominator of it -- likely a pivot "
-                    "that vanishes where the matrix does not: a singularity of the "
-                    "expressions, not of the motion. Order the constraints so that the solve "
-                    "can pivot on constants, or pass it")
-        reason = (f"singular configuration: {where}. {hint}. (If the singularity is removable "
-                  "-- a 0/0 that cancels -- run with singular='ignore'.)")
-        return {"indicator": expr, "kind": kind, "index": idx, "t": float(t),
-                "value": value, "initial": initial, "reason": reason}
-
-    def _jacobian_at(self, t, y, p):
-        """df/dqdot (k x n) at the state (t, y), numerically, or None."""
-        sys_ = self.system
-        J = sys_.J
-        try:
-            aux = np.empty(self.kernels.layout.n_aux)
-            self.kernels.aux(float(t), np.ascontiguousarray(y, dtype=float), p, aux)
-            vals = {J.t: t}
-            vals.update(zip(J.q, y[:J.n]))
-            vals.update(zip(sys_.independent_velocities, y[J.n:J.n + J.n - sys_.k]))
-            vals.update(zip(sys_.dependent_velocities, aux[:sys_.k]))
-            vals.update({s: self.params[s.name] for s in sys_.parameters})
-            for i, nm in enumerate(self.runtime_params):
-                vals.update({s: p[i] for s in sys_.parameters if s.name == nm})
-            A = np.array(sys_.jacobian.xreplace({k: sp.Float(v) for k, v in vals.items()})
-                         .evalf(), dtype=float)
-        except (TypeError, ValueError):
-            return None
-        return A if np.all(np.isfinite(A)) else None
-
-    def _split_det_ratio(self, t, y, p, t0, y0):
-        """|det df/dqdot^alpha| at (t, y) over its value at (t0, y0), or None."""
-        cols = [self.system.J.q.index(s) for s in self.system.dependent]
-        A, A0 = self._jacobian_at(t, y, p), self._jacobian_at(t0, y0, p)
-        if A is None or A0 is None:
-            return None
-        d0 = abs(np.linalg.det(A0[:, cols]))
-        return float(abs(np.linalg.det(A[:, cols])) / d0) if d0 else None
-
-    def _regular_split(self, t, y, p):
-        """A choice of dependent coordinates for which df/dqdot is invertible at (t, y)."""
-        from itertools import combinations
-
-        sys_ = self.system
-        J = sys_.J
-        A = self._jacobian_at(t, y, p)
-        if A is None:
-            return None
-        best, choice = 0.0, None
-        for cols in combinations(range(J.n), sys_.k):
-            d = abs(np.linalg.det(A[:, list(cols)]))
-            if d > best:
-                best, choice = d, [J.q[c].name for c in cols]
-        norm = max(np.prod(np.linalg.norm(A, axis=1)), 1e-300)
-        if choice is None or best < 1e-3 * norm or choice == [s.name for s in sys_.dependent]:
-            return None
-        return choice
-
-    def _discrete_kernels(self, kind):
-        compiled_params = {k: v for k, v in self.params.items()
-                           if k not in self.runtime_params}
-        principle = "chetaev" if kind == "dla" else "vakonomic"
-        key = codegen.symbolic_key(self.system, principle, compiled_params,
-                                   self.runtime_params, self.integrals, extra=kind)
-        return _cache.load(key, lambda: codegen.generate_dla(
-            self.system, compiled_params, self.runtime_params, key=key, kind=principle,
-            integrals=self.integrals), persistent=self.cache)
-
     @property
     def dla_kernels(self):
         """Kernels of the discrete Lagrange-d'Alembert step (``codegen.generate_dla``)."""
-        return self._discrete_kernels("dla")
+        return discrete.kernels(self, "dla")
 
     @property
     def dvi_kernels(self):
         """Kernels of the discrete vakonomic step (``codegen.generate_dla(kind=
         "vakonomic")``)."""
-        return self._discrete_kernels("dvi")
-
-    def _run_dla(self, t0, t1, y_init, default_y0, p, n_steps, save, tol, max_iter,
-                 projection, singular_tol, timeout):
-        from .integrators import dla
-
-        if self.principle != "chetaev":
-            raise PrincipleError(
-                "the discrete Lagrange-d'Alembert integrator discretizes Chetaev "
-                f"(Lagrange-d'Alembert) dynamics, not {self.principle}; use dop853"
-                + (", or dvi (the discrete vakonomic integrator)"
-                   if self.principle in ("vakonomic", "holder") else ""))
-        n = self.system.J.n
-        q0 = np.ascontiguousarray(y_init[:n])
-        v0 = self._full_velocities(t0, y_init, p, default_y0)
-        kern = self.dla_kernels
-        mode = EVERY_STEP if save == "steps" else ENDPOINTS
-        n_sing = len(kern.layout.indicators) if singular_tol is not None else 0
-        v0 = np.ascontiguousarray(v0, dtype=float)
-        solve = dla.solver()
-        constrained = self._degenerate_off_constraints(kern, t0, q0, v0, p)
-        halt = interrupt.flag()
-        tic = time.perf_counter()
-        out = interrupt.call(lambda: solve(
-            kern.step_residual, kern.momentum, kern.legendre, kern.nodal, kern.constraint_jac,
-            kern.sing, t0, t1, q0, v0, p, n_steps, self.system.k, tol, max_iter, mode,
-            projection, n_sing, float(singular_tol or 0.0), len(kern.layout.integrals),
-            constrained, halt), halt, timeout)
-        return self._discrete_trajectory(
-            "dla" + ("+projection" if projection else ""), kern, out,
-            time.perf_counter() - tic, p, t0, t1, n_steps, singular_tol, timeout)
-
-    def _run_dvi(self, t0, t1, y_init, default_y0, p, n_steps, save, tol, max_iter,
-                 singular_tol, timeout):
-        from .integrators import dvi
-
-        if not (self.principle == "vakonomic" or
-                (self.principle == "holder" and self.convention == "paper")):
-            raise PrincipleError(
-                "the discrete vakonomic integrator discretizes vakonomic dynamics (and "
-                "Hoelder's in the paper's convention, which has the same equations), not "
-                f"{self.principle}" + ("; use dla for Chetaev" if self.principle == "chetaev"
-                                       else "; use dop853"))
-        if self.form not in (None, "multiplier"):
-            raise PrincipleError(
-                f"dvi uses the multipliers of the constraints as written (the 'multiplier' "
-                f"form); the scene's form {self.form!r} scales them differently: omit form=")
-        J = self.system.J
-        n, k = J.n, self.system.k
-        q0 = np.ascontiguousarray(y_init[:n])
-        lam0 = np.ascontiguousarray(y_init[n + n - k:])
-        v0 = self._full_velocities(t0, y_init, p, default_y0)
-        kern = self.dvi_kernels
-        mode = EVERY_STEP if save == "steps" else ENDPOINTS
-        n_sing = len(kern.layout.indicators) if singular_tol is not None else 0
-        solve = dvi.solver()
-        halt = interrupt.flag()
-        tic = time.perf_counter()
-        out = interrupt.call(lambda: solve(
-            kern.step_residual, kern.momentum, kern.legendre, kern.nodal, kern.sing, t0, t1,
-            q0, v0, lam0, p, n_steps, tol, max_iter, mode, n_sing,
-            float(singular_tol or 0.0), len(kern.layout.integrals), halt), halt, timeout)
-        return self._discrete_trajectory("dvi", kern, out, time.perf_counter() - tic, p, t0,
-                                         t1, n_steps, singular_tol, timeout)
-
-    def _discrete_trajectory(self, method, kern, out, wall, p, t0, t1, n_steps, singular_tol,
-                             timeout=None):
-        """A Trajectory from the result of a dla/dvi solve; a failed Newton step next to a
-        singular configuration becomes a singular stop, any other failure an error."""
-        status, ts, rows, n_out, stats, t_last, y_last, sing_index, t_prev, y_prev = out
-        status = int(status)
-        J = self.system.J
-        n, k = J.n, self.system.k
-        k_lam = k if method == "dvi" else 0
-        name = method.split("+")[0]
-        singularity = None
-        if status == SINGULAR:
-            singularity = self._discrete_singularity(kern, int(sing_index), t_last, y_last, p,
-                                                     rows[0], t0, singular_tol)
-        elif status in (NONFINITE, NOT_CONVERGED):
-            singularity = self._explain_discrete(kern, t_last, y_last, t_prev, y_prev, p,
-                                                 rows[0], t0, singular_tol, n_out)
-            if singularity is None:
-                what = ("the state became NaN or infinite" if status == NONFINITE else
-                        "Newton's method did not converge")
-                raise IntegrationError(
-                    f"{name}: {what} in the step from t = {t_last:.17g} "
-                    f"(h = {(t1 - t0) / n_steps:.3g}); take a smaller step, or the discrete "
-                    "constraint has no nearby solution there")
-            status = SINGULAR
-        rows = rows[:n_out]
-        ind = [J.q.index(s) for s in self.system.independent]
-        ys = np.ascontiguousarray(np.hstack([rows[:, :n], rows[:, [n + i for i in ind]],
-                                             rows[:, 2 * n:2 * n + k_lam]]))
-        c = 2 * n + k_lam
-        own = {"velocities": {v.name: rows[:, n + i] for i, v in enumerate(J.qd)},
-               "residual": rows[:, c:c + k], "energy": rows[:, c + k],
-               "integrals": {nm: rows[:, c + k + 1 + i]
-                             for i, nm in enumerate(kern.layout.integrals)}}
-        return Trajectory(self, ts[:n_out], ys, p, method=method, status=status,
-                          stop_reason=(singularity["reason"] if singularity else
-                                       _timeout_reason(timeout, t_last) if status == STOPPED
-                                       else STATUS_TEXT[status]),
-                          steps=int(stats[0]), rejected=0, nfev=int(stats[1]), wall_time=wall,
-                          kernels=kern, projected=self.projected, own=own,
-                          singularity=singularity)
-
-    def _node(self, y):
-        """(q for the node kernels, v) from a discrete state (q, v[, lambda])."""
-        n = self.system.J.n
-        return (np.ascontiguousarray(np.concatenate([y[:n], y[2 * n:]])),
-                np.ascontiguousarray(y[n:2 * n]))
-
-    def _node_indicators(self, kern, t, y, p):
-        g = np.empty(len(kern.layout.indicators))
-        kern.sing(float(t), *self._node(y), p, g)
-        return g
-
-    def _saddle(self, kern, t, q, v, p):
-        """M = d^2F/dqdot^2 and S = [[M, A^T], [A, 0]], A = df/dqdot, at a node: S is the
-        matrix the discrete step inverts as h -> 0."""
-        n, k = self.system.J.n, self.system.k
-        M, mom = np.empty((n, n)), np.empty(n)
-        A, f = np.empty((k, n)), np.empty(k)
-        kern.legendre(float(t), q, v, p, mom, M)
-        kern.constraint_jac(float(t), q, v, p, f, A)
-        return M, np.block([[M, A.T], [A, np.zeros((k, k))]])
-
-    def _saddle_condition(self, kern, t, y, p) -> float:
-        """Condition number of S (``_saddle``) at a node (infinite where S is singular)."""
-        _, S = self._saddle(kern, t, *self._node(y), p)
-        with np.errstate(all="ignore"):
-            c = np.linalg.cond(S) if np.all(np.isfinite(S)) else np.inf
-        return float(c) if np.isfinite(c) else np.inf
-
-    def _degenerate_off_constraints(self, kern, t, q, v, p) -> bool:
-        """Whether dla should take node velocities from the constrained Legendre transform:
-        ||M^-1|| > 100 ||S^-1|| at the initial node (see ``integrators.dla``)."""
-        M, S = self._saddle(kern, t, q, v, p)
-        if not (np.all(np.isfinite(M)) and np.all(np.isfinite(S))):
-            return False
-        smin = lambda X: np.linalg.svd(X, compute_uv=False)[-1]  # noqa: E731
-        return bool(smin(S) > 100 * smin(M))
-
-    def _explain_discrete(self, kern, t, y, t_prev, y_prev, p, row0, t0, tol, n_out):
-        """The singularity next to which a dla/dvi step failed (Newton did not converge or
-        the state became NaN), or None: an indicator below 1 % of its initial size at the
-        last regular node, or one whose linear trend over the last two nodes reaches its
-        threshold within two steps; else a singular matrix [[F_vv, A^T], [A, 0]]."""
-        y0 = row0[:y.shape[0]]
-        if kern.layout.indicators:
-            g0 = self._node_indicators(kern, t0, y0, p)
-            with np.errstate(all="ignore"):
-                sg = np.sign(g0) / np.abs(g0)
-                rel = sg * self._node_indicators(kern, t, y, p)
-                rel_prev = sg * self._node_indicators(kern, t_prev, y_prev, p)
-                bad = (~np.isfinite(rel) | (rel <= max(tol or 0.0, 1e-2))
-                       | (rel + 2 * (rel - rel_prev) <= (tol or 0.0)))
-            if bad.any():
-                return self._discrete_singularity(kern, int(np.argmax(bad)), t, y, p, row0,
-                                                  t0, tol, failed=True)
-        cond = self._saddle_condition(kern, t, y, p)
-        if cond > 1e12:
-            return self._discrete_singularity(kern, -1, t, y, p, row0, t0, tol, failed=True,
-                                              cond=(cond, self._saddle_condition(
-                                                  kern, t0, y0, p)))
-        return None
-
-    def _discrete_singularity(self, kern, idx, t, y, p, row0, t0, tol, failed=False,
-                              cond=None) -> dict:
-        """The stop of a dla/dvi run at a singular configuration, as ``_singularity``."""
-        lay = kern.layout
-        y0 = row0[:y.shape[0]]
-        if cond is not None:
-            expr, kind = "cond([[d2F/dqdot2, (df/dqdot)^T], [df/dqdot, 0]])", "degenerate"
-            value, initial = cond
-        else:
-            expr, kind = lay.indicators[idx], lay.indicator_kinds[idx]
-            initial = float(self._node_indicators(kern, t0, y0, p)[idx])
-            value = float(self._node_indicators(kern, t, y, p)[idx])
-        if cond is None and (not np.isfinite(initial) or initial == 0.0):
-            where = f"the initial state (t = {t:.17g}) is singular: {expr} = {initial:.6g}"
-        elif failed:
-            where = (f"the step after the node t = {t:.17g} failed (Newton's method did not "
-                     f"converge) where {expr} = {value:.6g} (initially {initial:.6g})"
-                     + (" is singular" if cond is not None else
-                        " is about to vanish or change sign"))
-        else:
-            where = (f"after the node t = {t:.17g}, {expr} (there {value:.6g}, initially "
-                     f"{initial:.6g}) crosses zero or falls below singular_tol = {tol:g} of "
-                     "its initial size; the run stops at that last regular node")
-        hint = {
-            "constraint": "The constraints f^a as written are singular or not differentiable "
-                          "here (e.g. the Appell-Hamel constraint at zero horizontal speed), "
-                          "so the motion has no unique continuation",
-            "lagrangian": "The Lagrangian is singular or not differentiable here",
-            "degenerate": "The Lagrangian is degenerate on the constraints here, or the "
-                          "constraints lose rank: the discrete step (like the accelerations) "
-                          "is not determined"}[kind]
-        reason = f"singular configuration: {where}. {hint}."
-        return {"indicator": expr, "kind": kind, "index": idx, "t": float(t),
-                "value": value, "initial": initial, "reason": reason}
-
-    def _full_velocities(self, t0, y_init, p, default_y0) -> np.ndarray:
-        """Every velocity at the initial state (the dependent ones from the constraints)."""
-        J = self.system.J
-        n = J.n
-        if default_y0:
-            v0 = [self.initial[v.name] for v in J.qd]
-        else:
-            vals = dict(zip(self.coordinates + self.velocities, y_init[:2 * n - self.system.k]))
-            vals.update(self._dependent_velocity_values(
-                vals, t0, dict(zip(self.runtime_params, p))))
-            v0 = [vals[v.name] for v in J.qd]
-        return np.ascontiguousarray(v0, dtype=float)
-
-    def _raise_nonfinite(self, method, t, y, kern=None, p=None, t0=None, y_init=None,
-                         checked=True):
-        state = ", ".join(f"{n} = {v:.17g}" for n, v in zip(self.state_names, y))
-        extra = ""
-        if kern is not None and kern.layout.indicators:
-            g = np.empty(len(kern.layout.indicators))
-            kern.sing(float(t), np.ascontiguousarray(y, dtype=float), p, g)
-            extra = ("; singularity indicators there: "
-                     + ", ".join(f"{e} = {v:.6g}" for e, v in zip(kern.layout.indicators, g)))
-        why = ("No singularity indicator explains it: the solution blows up, or an "
-               "expression leaves its domain; check the model and the initial values, or "
-               "integrate a shorter span" if kern is not None and checked else
-               "The singularity checks were off (singular='ignore'); run with "
-               "singular='stop' to stop at singular configurations" if kern is not None else
-               "The equations are singular there (a vanishing denominator of the dependent "
-               "velocities or of the reduced mass matrix), or the solution blows up")
-        raise IntegrationError(
-            f"{method}: the right-hand side or the state became NaN or infinite in the step "
-            f"from t = {t:.17g}; state there: {state}{extra}. {why}")
-
-    def _run_scipy(self, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step,
-                   max_step, events=None, singular="stop", singular_tol=1e-10) -> Trajectory:
-        """scipy's ``solve_ivp`` on the compiled right-hand side; user events and the
-        singularity indicators become scipy events (the indicators terminal, direction -1,
-        on ``s_i g_i - singular_tol |g_i(t0)|``)."""
-        from scipy.integrate import solve_ivp
-
-        if method not in SCIPY_METHODS:
-            raise JetnhError(f"unknown scipy method {method!r}; choose one of {SCIPY_METHODS}")
-        kern = self.kernels
-        rhs = kern.rhs
-        n = y_init.shape[0]
-
-        def fun(t, y):
-            out = np.empty(n)
-            rhs(float(t), np.ascontiguousarray(y, dtype=float), p, out)
-            return out
-
-        ce = self.compile_events(events)
-        scipy_events = []
-        if ce is not None:
-            for f, ev in zip(ce.python_funcs, ce.events):
-                def g(t, y, f=f):
-                    return f(t, y, p)
-                g.terminal = ev.max_events if ev.max_events > 0 else False
-                g.direction = ev.direction
-                scipy_events.append(g)
-        n_user = len(scipy_events)
-        m = len(kern.layout.indicators) if singular == "stop" else 0
-        if m:
-            g0 = np.empty(m)
-            kern.sing(t0, y_init, p, g0)
-            bad = ~np.isfinite(g0) | (g0 == 0.0)
-            if bad.any():
-                idx = int(np.argmax(bad))
-                info = self._singularity(kern, idx, t0, y_init, p, t0, y_init, singular_tol)
-                return Trajectory(self, [t0], [y_init], p, method=f"scipy-{method}",
-                                  status=SINGULAR, stop_reason=info["reason"], steps=0,
-                                  rejected=0, nfev=0, wall_time=0.0, kernels=kern,
-                                  projected=self.projected, singularity=info)
-            sig, thr = np.sign(g0), singular_tol * np.abs(g0)
-            work = np.empty(m)
-            for i in range(m):
-                def gs(t, y, i=i):
-                    kern.sing(float(t), np.ascontiguousarray(y, dtype=float), p, work)
-                    v = sig[i] * work[i] - thr[i]
-                    return v if np.isfinite(v) else -1.0
-                gs.terminal = True
-                gs.direction = -1
-                scipy_events.append(gs)
-        kw = {}
-        if first_step:
-            kw["first_step"] = first_step
-        if not np.all(np.isfinite(fun(t0, y_init))):
-            self._raise_nonfinite(f"scipy-{method}", t0, y_init, kern, p, t0, y_init)
-        tic = time.perf_counter()
-        sol = solve_ivp(fun, (t0, t1), y_init, method=method, t_eval=t_eval, rtol=rtol,
-                        atol=atol, max_step=max_step, events=scipy_events or None, **kw)
-        wall = time.perf_counter() - tic
-        ys = np.ascontiguousarray(sol.y.T)
-        if ys.size and not np.all(np.isfinite(ys)):
-            bad = int(np.argmax(~np.all(np.isfinite(ys), axis=1)))
-            i = max(bad - 1, 0)
-            self._raise_nonfinite(f"scipy-{method}", sol.t[i], ys[i], kern, p, t0, y_init)
-        status, reason, singularity = (0 if sol.status == 0 else 2), sol.message, None
-        kw = {}
-        if sol.status == 1:
-            hit = [(sol.t_events[k][-1], k) for k in range(len(scipy_events))
-                   if len(sol.t_events[k]) and getattr(scipy_events[k], "terminal", False)]
-            t_hit, k = min(hit, key=lambda x: x[0] * (1 if t1 >= t0 else -1))
-            if k < n_user:
-                status, reason = EVENT, f"terminal event {ce.names[k]!r} at t = {t_hit:.17g}"
-            else:
-                status = SINGULAR
-                y_hit = sol.y_events[k][-1]
-                singularity = self._singularity(kern, k - n_user, t_hit, y_hit, p, t0,
-                                                y_init, singular_tol)
-                reason = singularity["reason"]
-        if ce is not None:
-            kw["events"] = (ce.names, [np.asarray(sol.t_events[k]) for k in range(n_user)],
-                            [np.asarray(sol.y_events[k]).reshape(-1, n) for k in range(n_user)])
-        return Trajectory(self, sol.t, ys, p, method=f"scipy-{method}", status=status,
-                          stop_reason=reason, steps=None, rejected=None, nfev=int(sol.nfev),
-                          wall_time=wall, kernels=kern, projected=self.projected,
-                          singularity=singularity, **kw)
+        return discrete.kernels(self, "dvi")
 
     def __repr__(self):
         return (f"Scene({self.principle}, states={list(self.state_names)}, "

@@ -1,0 +1,190 @@
+"""Why a run stopped early: singularity indicators and non-finite values explained.
+
+``singularity`` turns the index of the indicator that stopped a run into its kind, values
+and a reason that names the way out (another split, ``singular='ignore'``, an adaptive
+method); ``explain_nonfinite`` finds the indicator behind a NaN or infinity, and
+``raise_nonfinite`` raises the ``IntegrationError`` when none explains it.  Functions of
+the scene (``Scene.run``, ensembles and the discrete drivers call them).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import sympy as sp
+
+from ..errors import IntegrationError
+from .integrators import STATUS_TEXT
+from .integrators._common import STOPPED
+
+
+def timeout_reason(timeout, t) -> str:
+    """The stop reason of a run that the wall-clock budget (or Ctrl-C) stopped."""
+    if timeout is None:
+        return STATUS_TEXT[STOPPED]
+    return (f"stopped at t = {float(t):.17g} by the wall-clock budget timeout = {timeout:g} s; "
+            "raise timeout (or max_steps) to go further")
+
+
+def explain_nonfinite(scene, kern, t, y, p, t0, y_init, tol) -> int:
+    """Index of an indicator that explains a NaN/inf in the step after (t, y): small
+    there (below max(tol, 1e-3) of its initial size), or violated along an Euler
+    probe of the step, else -1."""
+    lay = kern.layout
+    m = len(lay.indicators)
+    if not m:
+        return -1
+    g0 = np.empty(m)
+    g = np.empty(m)
+    kern.sing(t0, y_init, p, g0)
+    kern.sing(t, y, p, g)
+    with np.errstate(all="ignore"):
+        rel = np.abs(g) / np.abs(g0)
+        bad = ~np.isfinite(g) | (np.sign(g) != np.sign(g0)) | (rel < max(tol, 1e-3))
+    if bad.any():
+        return int(np.argmax(bad))
+    f = np.empty_like(y)
+    kern.rhs(t, y, p, f)
+    if not np.all(np.isfinite(f)):
+        # no indicator is small here: blame the one nearest to vanishing only if one
+        # has moved at all (at the initial state nothing has)
+        i = int(np.argmin(rel))
+        return i if rel[i] < 1.0 else -1
+    span = abs(scene.t_span[1] - scene.t_span[0]) or 1.0
+    for s in np.geomspace(1e-12, 1.0, 25):
+        for hh in (s * span, -s * span):
+            kern.sing(t + hh, y + hh * f, p, g)
+            with np.errstate(all="ignore"):
+                viol = ~np.isfinite(g) | (np.sign(g) != np.sign(g0))
+            if viol.any():
+                return int(np.argmax(viol))
+    return -1
+
+
+def singularity(scene, kern, idx, t, y, p, t0, y_init, tol, nonfinite=False) -> dict:
+    """What the stop at a singular configuration was: indicator, kind, time, value,
+    and a reason with the way out."""
+    lay = kern.layout
+    expr, kind = lay.indicators[idx], lay.indicator_kinds[idx]
+    g0 = np.empty(len(lay.indicators))
+    g = np.empty(len(lay.indicators))
+    kern.sing(t0, y_init, p, g0)
+    kern.sing(float(t), np.ascontiguousarray(y), p, g)
+    value, initial = float(g[idx]), float(g0[idx])
+    if not np.isfinite(initial) or initial == 0.0:
+        where = (f"the initial state (t = {t:.17g}) is singular: {expr} = {initial:.6g}")
+    elif (np.sign(value) == np.sign(initial) and abs(value) > 4 * tol * abs(initial)
+          and abs(value) > 1e-12 * abs(initial) and not nonfinite):
+        where = (f"the fixed step after t = {t:.17g} jumps over a kink of the right-hand "
+                 f"side next to a zero of {expr} = {value:.6g} (initially {initial:.6g}); "
+                 "the run stops at the last regular point (an adaptive method such as "
+                 "dop853 locates the singular time)")
+    elif nonfinite:
+        where = (f"the right-hand side became NaN or infinite in the step after "
+                 f"t = {t:.17g}, where {expr} = {value:.6g} (initially {initial:.6g}) "
+                 "is about to vanish or change sign")
+    else:
+        where = (f"at t = {t:.17g}, {expr} fell to {value:.6g} (initially "
+                 f"{initial:.6g}; the threshold is singular_tol = {tol:g} of that)")
+    dep = [s.name for s in scene.system.dependent]
+    ratio = (split_det_ratio(scene, t, y, p, t0, y_init)
+             if kind != "split" and scene.system.k > 3 else None)
+    if ratio is not None and ratio < 1e-6:
+        kind = "split"      # for k > 3 the split's determinant is no indicator of its own
+    if kind == "split":
+        alt = regular_split(scene, t, y, p)
+        hint = (f"The determinant of df/dqdot^alpha vanishes: the constraints cannot be "
+                f"solved for the velocities of the dependent coordinates {dep} here. The "
+                "split is singular, not necessarily the motion: use another split"
+                + (f" (here dependent={alt} is regular)" if alt else ""))
+    elif kind == "constraint":
+        hint = ("The explicit form of the constraints qdot^alpha = phi^alpha(t, q, "
+                "qdot^mu) is singular or not differentiable here, so the dynamics "
+                "have no unique continuation (e.g. the Appell-Hamel constraint at "
+                "zero horizontal speed)")
+    else:
+        hint = ("A denominator (or a square-root argument) of the accelerations "
+                "vanishes: the reduced mass matrix or the multiplier equations are "
+                "singular here, so the accelerations are not determined")
+    if ratio is not None and ratio > 1e-3 and kind == "constraint":
+        hint = (f"The split is regular here (det df/dqdot^alpha is {ratio:.3g} of its "
+                "initial value), but with more than 3 constraints phi^alpha comes from a "
+                f"symbolic LU solve, and {expr} is a denominator of it -- likely a pivot "
+                "that vanishes where the matrix does not: a singularity of the "
+                "expressions, not of the motion. Order the constraints so that the solve "
+                "can pivot on constants, or pass it")
+    reason = (f"singular configuration: {where}. {hint}. (If the singularity is removable "
+              "-- a 0/0 that cancels -- run with singular='ignore'.)")
+    return {"indicator": expr, "kind": kind, "index": idx, "t": float(t),
+            "value": value, "initial": initial, "reason": reason}
+
+
+def jacobian_at(scene, t, y, p):
+    """df/dqdot (k x n) at the state (t, y), numerically, or None."""
+    sys_ = scene.system
+    J = sys_.J
+    try:
+        aux = np.empty(scene.kernels.layout.n_aux)
+        scene.kernels.aux(float(t), np.ascontiguousarray(y, dtype=float), p, aux)
+        vals = {J.t: t}
+        vals.update(zip(J.q, y[:J.n]))
+        vals.update(zip(sys_.independent_velocities, y[J.n:J.n + J.n - sys_.k]))
+        vals.update(zip(sys_.dependent_velocities, aux[:sys_.k]))
+        vals.update({s: scene.params[s.name] for s in sys_.parameters})
+        for i, nm in enumerate(scene.runtime_params):
+            vals.update({s: p[i] for s in sys_.parameters if s.name == nm})
+        A = np.array(sys_.jacobian.xreplace({k: sp.Float(v) for k, v in vals.items()})
+                     .evalf(), dtype=float)
+    except (TypeError, ValueError):
+        return None
+    return A if np.all(np.isfinite(A)) else None
+
+
+def split_det_ratio(scene, t, y, p, t0, y0):
+    """|det df/dqdot^alpha| at (t, y) over its value at (t0, y0), or None."""
+    cols = [scene.system.J.q.index(s) for s in scene.system.dependent]
+    A, A0 = jacobian_at(scene, t, y, p), jacobian_at(scene, t0, y0, p)
+    if A is None or A0 is None:
+        return None
+    d0 = abs(np.linalg.det(A0[:, cols]))
+    return float(abs(np.linalg.det(A[:, cols])) / d0) if d0 else None
+
+
+def regular_split(scene, t, y, p):
+    """A choice of dependent coordinates for which df/dqdot is invertible at (t, y)."""
+    from itertools import combinations
+
+    sys_ = scene.system
+    J = sys_.J
+    A = jacobian_at(scene, t, y, p)
+    if A is None:
+        return None
+    best, choice = 0.0, None
+    for cols in combinations(range(J.n), sys_.k):
+        d = abs(np.linalg.det(A[:, list(cols)]))
+        if d > best:
+            best, choice = d, [J.q[c].name for c in cols]
+    norm = max(np.prod(np.linalg.norm(A, axis=1)), 1e-300)
+    if choice is None or best < 1e-3 * norm or choice == [s.name for s in sys_.dependent]:
+        return None
+    return choice
+
+
+def raise_nonfinite(scene, method, t, y, kern=None, p=None, t0=None, y_init=None,
+                    checked=True):
+    state = ", ".join(f"{n} = {v:.17g}" for n, v in zip(scene.state_names, y))
+    extra = ""
+    if kern is not None and kern.layout.indicators:
+        g = np.empty(len(kern.layout.indicators))
+        kern.sing(float(t), np.ascontiguousarray(y, dtype=float), p, g)
+        extra = ("; singularity indicators there: "
+                 + ", ".join(f"{e} = {v:.6g}" for e, v in zip(kern.layout.indicators, g)))
+    why = ("No singularity indicator explains it: the solution blows up, or an "
+           "expression leaves its domain; check the model and the initial values, or "
+           "integrate a shorter span" if kern is not None and checked else
+           "The singularity checks were off (singular='ignore'); run with "
+           "singular='stop' to stop at singular configurations" if kern is not None else
+           "The equations are singular there (a vanishing denominator of the dependent "
+           "velocities or of the reduced mass matrix), or the solution blows up")
+    raise IntegrationError(
+        f"{method}: the right-hand side or the state became NaN or infinite in the step "
+        f"from t = {t:.17g}; state there: {state}{extra}. {why}")

@@ -1,0 +1,104 @@
+"""scipy's ``solve_ivp`` on a scene's compiled right-hand side (``method="scipy-<M>"``):
+user events and the singularity indicators become scipy events.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..errors import JetnhError
+from . import diagnosis
+from .integrators import SCIPY_METHODS
+from .integrators._common import EVENT, SINGULAR
+from .trajectory import Trajectory
+
+
+def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_step,
+        events=None, singular="stop", singular_tol=1e-10) -> Trajectory:
+    """scipy's ``solve_ivp`` on the compiled right-hand side; user events and the
+    singularity indicators become scipy events (the indicators terminal, direction -1,
+    on ``s_i g_i - singular_tol |g_i(t0)|``)."""
+    from scipy.integrate import solve_ivp
+
+    if method not in SCIPY_METHODS:
+        raise JetnhError(f"unknown scipy method {method!r}; choose one of {SCIPY_METHODS}")
+    kern = scene.kernels
+    rhs = kern.rhs
+    n = y_init.shape[0]
+
+    def fun(t, y):
+        out = np.empty(n)
+        rhs(float(t), np.ascontiguousarray(y, dtype=float), p, out)
+        return out
+
+    ce = scene.compile_events(events)
+    scipy_events = []
+    if ce is not None:
+        for f, ev in zip(ce.python_funcs, ce.events):
+            def g(t, y, f=f):
+                return f(t, y, p)
+            g.terminal = ev.max_events if ev.max_events > 0 else False
+            g.direction = ev.direction
+            scipy_events.append(g)
+    n_user = len(scipy_events)
+    m = len(kern.layout.indicators) if singular == "stop" else 0
+    if m:
+        g0 = np.empty(m)
+        kern.sing(t0, y_init, p, g0)
+        bad = ~np.isfinite(g0) | (g0 == 0.0)
+        if bad.any():
+            idx = int(np.argmax(bad))
+            info = diagnosis.singularity(scene, kern, idx, t0, y_init, p, t0, y_init,
+                                         singular_tol)
+            return Trajectory(scene, [t0], [y_init], p, method=f"scipy-{method}",
+                              status=SINGULAR, stop_reason=info["reason"], steps=0,
+                              rejected=0, nfev=0, wall_time=0.0, kernels=kern,
+                              projected=scene.projected, singularity=info)
+        sig, thr = np.sign(g0), singular_tol * np.abs(g0)
+        work = np.empty(m)
+        for i in range(m):
+            def gs(t, y, i=i):
+                kern.sing(float(t), np.ascontiguousarray(y, dtype=float), p, work)
+                v = sig[i] * work[i] - thr[i]
+                return v if np.isfinite(v) else -1.0
+            gs.terminal = True
+            gs.direction = -1
+            scipy_events.append(gs)
+    kw = {}
+    if first_step:
+        kw["first_step"] = first_step
+    if not np.all(np.isfinite(fun(t0, y_init))):
+        diagnosis.raise_nonfinite(scene, f"scipy-{method}", t0, y_init, kern, p, t0, y_init)
+    tic = time.perf_counter()
+    sol = solve_ivp(fun, (t0, t1), y_init, method=method, t_eval=t_eval, rtol=rtol,
+                    atol=atol, max_step=max_step, events=scipy_events or None, **kw)
+    wall = time.perf_counter() - tic
+    ys = np.ascontiguousarray(sol.y.T)
+    if ys.size and not np.all(np.isfinite(ys)):
+        bad = int(np.argmax(~np.all(np.isfinite(ys), axis=1)))
+        i = max(bad - 1, 0)
+        diagnosis.raise_nonfinite(scene, f"scipy-{method}", sol.t[i], ys[i], kern, p, t0,
+                                  y_init)
+    status, reason, singularity = (0 if sol.status == 0 else 2), sol.message, None
+    kw = {}
+    if sol.status == 1:
+        hit = [(sol.t_events[k][-1], k) for k in range(len(scipy_events))
+               if len(sol.t_events[k]) and getattr(scipy_events[k], "terminal", False)]
+        t_hit, k = min(hit, key=lambda x: x[0] * (1 if t1 >= t0 else -1))
+        if k < n_user:
+            status, reason = EVENT, f"terminal event {ce.names[k]!r} at t = {t_hit:.17g}"
+        else:
+            status = SINGULAR
+            y_hit = sol.y_events[k][-1]
+            singularity = diagnosis.singularity(scene, kern, k - n_user, t_hit, y_hit, p, t0,
+                                                y_init, singular_tol)
+            reason = singularity["reason"]
+    if ce is not None:
+        kw["events"] = (ce.names, [np.asarray(sol.t_events[k]) for k in range(n_user)],
+                        [np.asarray(sol.y_events[k]).reshape(-1, n) for k in range(n_user)])
+    return Trajectory(scene, sol.t, ys, p, method=f"scipy-{method}", status=status,
+                      stop_reason=reason, steps=None, rejected=None, nfev=int(sol.nfev),
+                      wall_time=wall, kernels=kern, projected=scene.projected,
+                      singularity=singularity, **kw)
