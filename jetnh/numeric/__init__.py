@@ -3,7 +3,7 @@
 ``Scene(system, principle, params, initial, t_span).run(...)`` derives the equations of
 one principle, generates numba kernels through ``sympy.cse`` (``codegen``), caches them
 on disk keyed by the symbolic input (``cache``), and integrates in compiled loops
-(``integrators``: dop853, dopri5, rk4, dla, dvi) or with scipy's ``solve_ivp``.
+(``integrators``: dop853, dopri5, rk4, radau, dla, dvi) or with scipy's ``solve_ivp``.
 
 - Singular configurations (``codegen.singular_indicators``): every run stops where the
   dependent velocities cannot be solved for or the accelerations are undefined
@@ -23,10 +23,10 @@ on disk keyed by the symbolic input (``cache``), and integrates in compiled loop
 from .ensemble import Ensemble, run_ensemble
 from .events import Event
 from .integrators._common import (EVENT, FINISHED, MAX_STEPS, NONFINITE, NOT_CONVERGED,
-                                  SINGULAR, STATUS_TEXT, STOPPED, TOO_SMALL_STEP)
+                                  SINGULAR, STATUS_TEXT, STOPPED, TOO_SMALL_STEP, Status)
 from .scene import Scene
 from .trajectory import Diagnostics, Trajectory
 
 __all__ = ["Scene", "Trajectory", "Diagnostics", "Event", "Ensemble", "run_ensemble",
-           "STATUS_TEXT", "FINISHED", "MAX_STEPS", "TOO_SMALL_STEP", "NONFINITE",
+           "Status", "STATUS_TEXT", "FINISHED", "MAX_STEPS", "TOO_SMALL_STEP", "NONFINITE",
            "NOT_CONVERGED", "EVENT", "SINGULAR", "STOPPED"]

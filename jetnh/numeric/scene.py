@@ -5,6 +5,7 @@
     traj = scene.run(rtol=1e-10, atol=1e-12)            # compiled DOP853
     traj = scene.run(method="dopri5")                   # compiled Dormand-Prince 5(4)
     traj = scene.run(method="rk4", n_steps=1000)        # compiled fixed-step RK4
+    traj = scene.run(method="radau")                    # implicit Radau IIA (5), stiff
     traj = scene.run(method="dla", h=0.01)              # discrete Lagrange-d'Alembert
     traj = scene.run(method="dla", h=0.01, projection=True)   # nodes on the constraints
     traj = scene.run(method="dvi", h=0.01)              # discrete vakonomic (variational)
@@ -278,7 +279,9 @@ class Scene:
         """Integrate and return a ``Trajectory``.
 
         ``method``: "dop853" (default), "dopri5" (alias "RK45"), "rk4" (fixed step: give
-        ``n_steps`` or ``h``), "dla" (the structure-preserving discrete
+        ``n_steps`` or ``h``), "radau" (implicit Radau IIA of order 5 for stiff problems,
+        with the Jacobian from the symbolic derivation; ``newton_tol``, ``max_newton`` (7)
+        bound its simplified Newton iteration), "dla" (the structure-preserving discrete
         Lagrange-d'Alembert midpoint integrator, Chetaev only, fixed step, Newton tolerance
         ``newton_tol`` (1e-13) in at most ``max_newton`` (50) iterations;
         ``projection=True`` projects every node velocity onto the constraints), "dvi" (the
