@@ -317,5 +317,39 @@ def test_event_errors(particle):
         return float(sp.pi) * y[0]       # a sympy object: numba cannot type it
     with pytest.raises(JetnhError, match="cannot be compiled by numba"):
         particle.run(events=[not_numba])
-    with pytest.raises(JetnhError, match="dla integrator"):
-        particle.run(method="dla", n_steps=10, events=[x])
+
+
+# ---------------------------------------------------------------------- discrete methods
+def test_dla_events_on_the_nodes(particle):
+    """dla: events located on the linear interpolant of the nodes (second order, the
+    method's), scipy's semantics as the Runge-Kutta methods; a terminal one ends the
+    trajectory there, with the state interpolated to it."""
+    x, y = particle.system.J.q[:2]
+    evs = [Event(y + 0.25, name="y=-1/4"), Event(x - 2.0, terminal=True, direction=1)]
+    ref = particle.run(rtol=1e-12, atol=1e-13, events=evs)
+    errs = []
+    for n in (300, 600):
+        tr = particle.run(method="dla", n_steps=n, events=evs)
+        assert tr.status == EVENT and tr.success
+        assert [len(te) for te in tr.t_events] == [len(te) for te in ref.t_events]
+        assert tr.t[-1] == tr.t_events[1][0] and np.all(np.diff(tr.t) > 0)
+        assert abs(tr["x"][-1] - 2.0) < 1e-12           # the root on the interpolant
+        assert tr.stop_reason.startswith("terminal event")
+        errs.append(abs(tr.t_events[1][0] - ref.t_events[1][0]))
+    assert errs[1] < errs[0] / 3                        # O(h^2)
+    final = particle.run(method="dla", n_steps=600, events=evs, save="final")
+    assert len(final) == 2 and final.t[-1] == tr.t[-1]
+
+
+def test_dvi_events_counted_like_dop853():
+    J = jn.JetSpace("x y z")
+    x, y, z = J.q
+    xd, yd, zd = J.qd
+    s = System(J, (xd**2 + yd**2 + zd**2) / 2, [zd - y * xd], dependent=[z])
+    sc = Scene(s, "vakonomic", initial=dict(PART0, lambda_z=0.1), t_span=(0.0, 3.0),
+               cache=False)
+    ev = Event(sp.sin(4 * x), name="sin4x")
+    a = sc.run(method="dvi", n_steps=600, events=[ev])
+    b = sc.run(rtol=1e-11, atol=1e-12, events=[ev])
+    assert a.status == FINISHED and len(a.t_events[0]) == len(b.t_events[0]) > 1
+    assert np.allclose(a.t_events[0], b.t_events[0], atol=1e-3)

@@ -14,8 +14,9 @@ from ..errors import IntegrationError, PrincipleError
 from . import cache as _cache
 from . import codegen, diagnosis, interrupt
 from .integrators import STATUS_TEXT
-from .integrators._common import (ENDPOINTS, EVERY_STEP, NONFINITE, NOT_CONVERGED, SINGULAR,
-                                  STOPPED)
+from .events import split_records
+from .integrators._common import (ENDPOINTS, EVENT, EVERY_STEP, NONFINITE, NOT_CONVERGED,
+                                  SINGULAR, STOPPED)
 from .trajectory import Trajectory
 
 
@@ -31,7 +32,8 @@ def kernels(scene, kind):
 
 
 def run_dla(scene, t0, t1, y_init, default_y0, p, n_steps, save, tol, max_iter,
-             projection, singular_tol, timeout):
+            projection, singular_tol, timeout, ce=None):
+    """A dla run (``integrators.dla``); ``ce``: compiled user events (``node_events``)."""
     from .integrators import dla
 
     if scene.principle != "chetaev":
@@ -44,7 +46,7 @@ def run_dla(scene, t0, t1, y_init, default_y0, p, n_steps, save, tol, max_iter,
     q0 = np.ascontiguousarray(y_init[:n])
     v0 = full_velocities(scene, t0, y_init, p, default_y0)
     kern = scene.dla_kernels
-    mode = EVERY_STEP if save == "steps" else ENDPOINTS
+    mode = EVERY_STEP if save == "steps" or ce is not None else ENDPOINTS
     n_sing = len(kern.layout.indicators) if singular_tol is not None else 0
     v0 = np.ascontiguousarray(v0, dtype=float)
     solve = dla.solver()
@@ -57,11 +59,13 @@ def run_dla(scene, t0, t1, y_init, default_y0, p, n_steps, save, tol, max_iter,
         projection, n_sing, float(singular_tol or 0.0), len(kern.layout.integrals),
         constrained, halt), halt, timeout)
     return trajectory(scene, "dla" + ("+projection" if projection else ""), kern, out,
-                      time.perf_counter() - tic, p, t0, t1, n_steps, singular_tol, timeout)
+                      time.perf_counter() - tic, p, t0, t1, n_steps, singular_tol, timeout,
+                      ce, save)
 
 
 def run_dvi(scene, t0, t1, y_init, default_y0, p, n_steps, save, tol, max_iter,
-             singular_tol, timeout):
+            singular_tol, timeout, ce=None):
+    """A dvi run (``integrators.dvi``); ``ce``: compiled user events (``node_events``)."""
     from .integrators import dvi
 
     if not (scene.principle == "vakonomic" or
@@ -81,7 +85,7 @@ def run_dvi(scene, t0, t1, y_init, default_y0, p, n_steps, save, tol, max_iter,
     lam0 = np.ascontiguousarray(y_init[n + n - k:])
     v0 = full_velocities(scene, t0, y_init, p, default_y0)
     kern = scene.dvi_kernels
-    mode = EVERY_STEP if save == "steps" else ENDPOINTS
+    mode = EVERY_STEP if save == "steps" or ce is not None else ENDPOINTS
     n_sing = len(kern.layout.indicators) if singular_tol is not None else 0
     solve = dvi.solver()
     halt = interrupt.flag()
@@ -91,13 +95,15 @@ def run_dvi(scene, t0, t1, y_init, default_y0, p, n_steps, save, tol, max_iter,
         q0, v0, lam0, p, n_steps, tol, max_iter, mode, n_sing,
         float(singular_tol or 0.0), len(kern.layout.integrals), halt), halt, timeout)
     return trajectory(scene, "dvi", kern, out, time.perf_counter() - tic, p, t0,
-                      t1, n_steps, singular_tol, timeout)
+                      t1, n_steps, singular_tol, timeout, ce, save)
 
 
 def trajectory(scene, method, kern, out, wall, p, t0, t1, n_steps, singular_tol,
-               timeout=None):
+               timeout=None, ce=None, save="steps"):
     """A Trajectory from the result of a dla/dvi solve; a failed Newton step next to a
-    singular configuration becomes a singular stop, any other failure an error."""
+    singular configuration becomes a singular stop, any other failure an error; user
+    events ``ce`` located on the nodes (``node_events``), a terminal one ending the
+    trajectory there."""
     status, ts, rows, n_out, stats, t_last, y_last, sing_index, t_prev, y_prev = out
     status = int(status)
     J = scene.system.J
@@ -123,18 +129,80 @@ def trajectory(scene, method, kern, out, wall, p, t0, t1, n_steps, singular_tol,
     ind = [J.q.index(s) for s in scene.system.independent]
     ys = np.ascontiguousarray(np.hstack([rows[:, :n], rows[:, [n + i for i in ind]],
                                          rows[:, 2 * n:2 * n + k_lam]]))
+    ts = ts[:n_out]
+    kw = {}
+    reason = (singularity["reason"] if singularity else diagnosis.timeout_reason(timeout, t_last)
+              if status == STOPPED else STATUS_TEXT[status])
+    if ce is not None:
+        records, stop = node_events(ce, ts, ys, p)
+        if stop is not None:         # a terminal event: the rows end there
+            i, theta, k = stop
+            rows = np.vstack([rows[:i + 1], rows[i] + theta * (rows[i + 1] - rows[i])])
+            ys = np.vstack([ys[:i + 1], ys[i] + theta * (ys[i + 1] - ys[i])])
+            ts = np.append(ts[:i + 1], records[-1][0])
+            status, singularity = EVENT, None
+            reason = f"terminal event {ce.names[k]!r} at t = {float(ts[-1]):.17g}"
+        if save != "steps":
+            keep = [0, len(ts) - 1] if len(ts) > 1 else [0]
+            rows, ys, ts = rows[keep], ys[keep], ts[keep]
+        kw["events"] = (ce.names, *split_records(
+            len(ce), np.array([r[0] for r in records]),
+            np.array([r[1] for r in records], dtype=np.int64),
+            np.array([r[2] for r in records]).reshape(len(records), ys.shape[1])))
     c = 2 * n + k_lam
     own = {"velocities": {v.name: rows[:, n + i] for i, v in enumerate(J.qd)},
            "residual": rows[:, c:c + k], "energy": rows[:, c + k],
            "integrals": {nm: rows[:, c + k + 1 + i]
                          for i, nm in enumerate(kern.layout.integrals)}}
-    return Trajectory(scene, ts[:n_out], ys, p, method=method, status=status,
-                      stop_reason=(singularity["reason"] if singularity else
-                                   diagnosis.timeout_reason(timeout, t_last)
-                                   if status == STOPPED else STATUS_TEXT[status]),
-                      steps=int(stats[0]), rejected=0, nfev=int(stats[1]), wall_time=wall,
-                      kernels=kern, projected=scene.projected, own=own,
-                      singularity=singularity)
+    return Trajectory(scene, ts, np.ascontiguousarray(ys), p, method=method, status=status,
+                      stop_reason=reason, steps=int(stats[0]), rejected=0,
+                      nfev=int(stats[1]), wall_time=wall, kernels=kern,
+                      projected=scene.projected, own=own, singularity=singularity, **kw)
+
+
+def _active(g_old, g_new, direction) -> bool:
+    """scipy's rule (as ``_events.user_active``): a crossing in the event's direction."""
+    up = g_old <= 0.0 <= g_new
+    down = g_old >= 0.0 >= g_new
+    return up if direction > 0 else down if direction < 0 else (up or down)
+
+
+def node_events(ce, ts, ys, p):
+    """User events of a discrete run, with scipy's semantics as the compiled loops have
+    them (``_events.locate``): each event function at every node; in a step where one
+    crosses zero its root by Brent's method (xtol = rtol = 4 eps) on the linear
+    interpolant of the state between the nodes (second order, the order of dla and dvi);
+    every active event counted, then the first terminal one (``max_events``-th
+    occurrence) ends the run.  Returns ``(records, stop)``: records ``(t, index, state)``
+    in order, stop ``(node, theta, index)`` of the terminal event or None."""
+    from scipy.optimize import brentq
+
+    funcs = ce.python_funcs
+    G = np.array([[f(float(t), y, p) for f in funcs] for t, y in zip(ts, ys)])
+    counts = np.zeros(len(funcs), dtype=np.int64)
+    records = []
+    eps = 4 * np.finfo(float).eps
+    for i in range(len(ts) - 1):
+        active = [k for k in range(len(funcs)) if _active(G[i, k], G[i + 1, k],
+                                                          ce.direction[k])]
+        if not active:
+            continue
+        t0, h, y0, dy = ts[i], ts[i + 1] - ts[i], ys[i], ys[i + 1] - ys[i]
+        roots = []
+        for k in active:
+            if G[i, k] == 0.0 or G[i + 1, k] == 0.0:
+                theta = 0.0 if G[i, k] == 0.0 else 1.0
+            else:
+                theta = brentq(lambda th, k=k: funcs[k](t0 + th * h, y0 + th * dy, p),
+                               0.0, 1.0, xtol=eps, rtol=eps)
+            roots.append((theta, k))
+            counts[k] += 1
+        roots.sort(key=lambda r: r[0])
+        for theta, k in roots:
+            records.append((t0 + theta * h, k, y0 + theta * dy))
+            if 0 < ce.max_events[k] <= counts[k]:
+                return records, (i, theta, k)
+    return records, None
 
 
 def node(scene, y):

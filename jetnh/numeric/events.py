@@ -19,8 +19,9 @@ crossings from negative to positive, < 0 only from positive to negative, 0 on bo
 ``terminal`` True (or a positive integer m) stops the integration at the first (m-th)
 occurrence, at the located time; callables may carry ``terminal`` and ``direction`` as
 attributes.  Roots are found by Brent's method (scipy's ``brentq``, xtol = rtol = 4 eps)
-on the dense output of DOP853 / DOPRI5 (the cubic Hermite interpolant for RK4), inside
-the compiled loop (``integrators._events``).
+on the dense output of DOP853 / DOPRI5 / radau (the cubic Hermite interpolant for RK4),
+inside the compiled loop (``integrators._events``); for dla and dvi on the linear
+interpolant of their nodes after the run (``discrete.node_events``).
 """
 
 from __future__ import annotations

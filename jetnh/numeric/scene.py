@@ -305,7 +305,8 @@ class Scene:
         (``numeric.interrupt``).
 
         ``events``: user events (sympy expressions, callables g(t, y) or ``Event``; see
-        ``jetnh.numeric.events``), located on the dense output with scipy's semantics;
+        ``jetnh.numeric.events``), located on the dense output with scipy's semantics
+        (dla and dvi: on the linear interpolant of their nodes, ``discrete.node_events``);
         the trajectory reports ``t_events``, ``y_events`` and ``events``.
 
         ``singular="stop"`` (default) stops at a singular configuration: where a
@@ -353,9 +354,6 @@ class Scene:
             raise JetnhError(f"unknown backend {backend!r}; choose 'numba' or 'scipy'")
         method = integrators.method(name)
         if integrators.METHODS[method] == "discrete":
-            if events:
-                raise JetnhError(f"events need dense output, which the {key} integrator does "
-                                 "not have; use dop853, dopri5, radau or rk4")
             self._unused(key, t_eval=t_eval, first_step=first_step, max_step=max_step)
             steps = arguments.fixed_steps(n_steps, h, t0, t1, key, budget)
             arguments.output_rows(steps, 3 * self.system.J.n + 2 * self.system.k, save)
@@ -370,9 +368,9 @@ class Scene:
                 if projection:
                     raise JetnhError("projection= is an option of the dla integrator")
                 return discrete.run_dvi(self, t0, t1, y_init, own, p, steps, save, tol, iters,
-                                        sing, limit)
+                                        sing, limit, self.compile_events(events))
             return discrete.run_dla(self, t0, t1, y_init, own, p, steps, save, tol, iters,
-                                    bool(projection), sing, limit)
+                                    bool(projection), sing, limit, self.compile_events(events))
         if projection:
             raise JetnhError("projection= is an option of the dla integrator; the "
                              "Runge-Kutta methods follow the constraints to their tolerance")
