@@ -17,75 +17,10 @@ import enum
 import hashlib
 import math
 import os
+import types
 
 import numba
 import numpy as np
-
-
-# ---------------------------------------------------------------------- disk cache freshness
-def _install_cache_locator():
-    """Make numba's disk cache of the integrator modules stale when a *helper* module they
-    inline (this file, ``_events.py``, ``dla.py`` for dvi) changes.  numba checks only the
-    decorated function's own file, so without this an edit of a helper would leave the
-    loops running the old helper.  The locator wraps numba's usual one (same cache
-    directory) and adds the helpers' hash to the freshness stamp.  Uses numba's (private)
-    locator list; if that is not there, nothing changes."""
-    try:
-        from numba.core import caching
-        classes = caching.CacheImpl._locator_classes
-        base = caching._CacheLocator
-    except (ImportError, AttributeError):
-        return
-    here = os.path.dirname(os.path.abspath(__file__))
-    helpers = [os.path.join(here, f) for f in ("_common.py", "_events.py", "loop.py", "dla.py",
-                                                  "newton.py")]
-    if any(getattr(c, "_jetnh", False) for c in classes):
-        return
-    defaults = list(classes)
-
-    def helpers_hash():
-        h = hashlib.sha256()
-        for path in helpers:
-            try:
-                with open(path, "rb") as f:
-                    h.update(f.read())
-            except OSError:
-                pass
-        return h.hexdigest()
-
-    class IntegratorCacheLocator(base):
-        _jetnh = True
-
-        def __init__(self, inner):
-            self._inner = inner
-
-        @classmethod
-        def from_function(cls, py_func, py_file):
-            if os.path.dirname(os.path.abspath(py_file)) != here:
-                return None
-            for lc in defaults:
-                inner = lc.from_function(py_func, py_file)
-                if inner is not None:
-                    return cls(inner)
-            return None
-
-        def ensure_cache_path(self):
-            return self._inner.ensure_cache_path()
-
-        def get_cache_path(self):
-            return self._inner.get_cache_path()
-
-        def get_source_stamp(self):
-            return (self._inner.get_source_stamp(), helpers_hash())
-
-        def get_disambiguator(self):
-            return self._inner.get_disambiguator()
-
-    classes.insert(0, IntegratorCacheLocator)
-
-
-_install_cache_locator()
-
 
 
 class Status(enum.IntEnum):
@@ -123,7 +58,8 @@ MAX_FACTOR = 10.0
 #: output modes
 EVERY_STEP, AT_T_EVAL, ENDPOINTS = 0, 1, 2
 
-jit = numba.njit(cache=True, error_model="numpy", nogil=True)
+#: the helpers: compiled into the loops that call them (only the loops are cached on disk)
+jit = numba.njit(error_model="numpy", nogil=True)
 
 
 @jit
@@ -214,20 +150,39 @@ RHS_SIGNATURE = numba.types.void(f8, f8[::1], f8[::1], f8[::1])
 RHS = numba.types.FunctionType(RHS_SIGNATURE)
 
 _COMPILED = {}
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def sources_hash() -> str:
+    """A hash of every module of this package: what the compiled loops are made of."""
+    h = hashlib.sha256()
+    for name in sorted(os.listdir(HERE)):
+        if name.endswith(".py"):
+            with open(os.path.join(HERE, name), "rb") as f:
+                h.update(name.encode() + b"\0" + f.read())
+    return h.hexdigest()[:16]
 
 
 def compiled(pyfunc, argtypes, parallel=False):
-    """``pyfunc`` compiled for ``argtypes`` on first use (cached on disk by numba).
+    """``pyfunc`` compiled for ``argtypes`` on first use and cached on disk by numba.
 
     The right-hand side is an argument of type ``RHS`` (a first-class function), so the
     compiled loop does not depend on which scene calls it: one compilation serves all.
-    (numba's disk cache does not key on ``parallel``: a function compiled both ways must
-    be two Python functions.)
+    numba checks only the file of the function it caches, not the helpers compiled into
+    it (``jit``, from other modules), so the cache key carries what the loop depends on:
+    the function is cached under its name suffixed with ``sources_hash()``, and an edit
+    of any module here compiles it anew.  (numba's disk cache does not key on
+    ``parallel``: a function compiled both ways must be two Python functions.)
     """
     key = (pyfunc.__module__, pyfunc.__qualname__)
     if key not in _COMPILED:
+        func = types.FunctionType(pyfunc.__code__, pyfunc.__globals__, pyfunc.__name__,
+                                  pyfunc.__defaults__, pyfunc.__closure__)
+        func.__qualname__ = f"{pyfunc.__qualname__}_{sources_hash()}"
+        func.__module__ = pyfunc.__module__
+        func.__doc__ = pyfunc.__doc__
         _COMPILED[key] = numba.njit(argtypes, cache=True, error_model="numpy",
-                                    nogil=True, parallel=parallel)(pyfunc)
+                                    nogil=True, parallel=parallel)(func)
     return _COMPILED[key]
 
 

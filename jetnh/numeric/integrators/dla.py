@@ -135,7 +135,7 @@ def constrained_legendre(legendre, constraint_jac, t, q, p_target, v, p, tol, ma
     return False
 
 
-@numba.njit(cache=True, error_model="numpy", nogil=True)
+@jit
 def project_velocity(constraint_jac, legendre, t, q, v, p, tol, max_iter, f, A, M, W, S,
                      work, rhs, mu):
     """Move v to the nearest point (in the metric of M = d^2F/dqdot^2) of the constraint
@@ -347,7 +347,7 @@ def _solve(step_residual, momentum, legendre, nodal, constraint_jac, sing, t0, t
 
 ARGS = (STEP, MOMENTUM, LEGENDRE, NODAL, LEGENDRE, NODAL, f8, f8, f8[::1], f8[::1], f8[::1],
         i8, i8, f8, i8, i8, numba.types.boolean, i8, f8, i8, numba.types.boolean, i8[::1])
-_inverse_legendre = numba.njit(cache=True, error_model="numpy", nogil=True)(_inverse_legendre)
+_inverse_legendre = jit(_inverse_legendre)
 
 
 def solver():
