@@ -2,7 +2,7 @@
 
     python -m papers.zhao2008 [--fast] [--no-figures]
 
-writes ``results.json`` (DESIGN.md section 4 format), ``report.md`` and the figures beside
+writes ``results.json`` (one item per equation and claim), ``report.md`` and the figures beside
 this file, and prints the summary: counts per status, the errata, and where the report is.
 ``--fast`` proves the general identities for n <= 3 only and shortens the simulations.
 
