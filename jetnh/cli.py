@@ -93,10 +93,10 @@ class Progress:
     def bar(self, what: str, unit: str):
         """A ``progress(done, total)`` callback and a function that ends it: a tqdm bar
         on a terminal, else one line per tenth (None when quiet)."""
-        from tqdm import tqdm
-
         if self.quiet:
             return None, lambda: None
+        from tqdm import tqdm
+
         if self.tty:
             bars = []
 

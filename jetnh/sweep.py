@@ -23,9 +23,9 @@ Columns, in this order:
   integral): at the final time under their names (``x``), or with ``times`` at each time
   as ``x(t=2.5)`` (NaN after a run's stop);
 - the diagnostics over the output rows: ``status``, ``success``, ``stop_reason``,
-  ``t_final``, ``steps``, ``rejected``, ``rhs_evaluations``, ``residual_max`` (``max |f^a|``),
-  ``energy_drift`` and ``drift[I]`` (``max |I - I(t0)|`` of each first integral ``I`` of the
-  scene), and ``events[E]``/``first[E]`` for user events.
+  ``t_final``, ``steps``, ``rejected``, ``rhs_evaluations``, ``residual_max``
+  (``max |f^a|``), ``energy_drift`` and ``drift[I]`` (``max |I - I(t0)|`` of each first
+  integral ``I`` of the scene), and ``events[E]``/``first[E]`` for user events.
 
 A point that fails (a singular configuration, NaN, too many steps) keeps its row, with
 its ``status`` and ``stop_reason``; the sweep goes on.  Options (``rtol``, ``atol``,

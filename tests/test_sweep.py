@@ -247,6 +247,16 @@ def test_point_methods_times_and_their_limits(disk):
         jn.sweep(disk, {"R": [1.0]}, newton_tol=1e-12)
 
 
+def test_point_methods_keep_failing_rows(failing):
+    _, blow = failing
+    for method, options in (("scipy-RK45", {}), ("dla", {"n_steps": 100})):
+        df = jn.sweep(blow, {"c": [0.0, 800.0]}, method=method, **options)
+        assert list(df["status"]) == [FINISHED, NONFINITE], method
+        assert list(df["success"]) == [True, False] and np.isnan(df["x"][1])
+        assert df["x"][0] == pytest.approx(2.0, rel=1e-12)
+        assert method in df["stop_reason"][1]
+
+
 def test_dvi_sweeps_the_vakonomic_disk():
     """dvi (second order, variational) against dop853 on a vakonomic grid."""
     scene = Scene(rolling_disk(), "vakonomic", initial=dict(DISK0, lambda_x=0.1, lambda_y=0.0),
