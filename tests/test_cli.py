@@ -1,5 +1,6 @@
 """The jetnh command end to end, in a subprocess."""
 
+import io
 import json
 import subprocess
 import sys
@@ -337,7 +338,7 @@ def test_simulate_help_documents_the_discrete_methods(capsys):
     assert "dla (discrete Lagrange-d'Alembert" in text and "dvi (discrete vakonomic)" in text
 
 
-class _Terminal(__import__("io").StringIO):
+class _Terminal(io.StringIO):
     def isatty(self):
         return True
 
@@ -346,8 +347,6 @@ def test_long_steps_show_a_sign_of_life_on_a_terminal_only(monkeypatch):
     """On a terminal a step shows its elapsed time while it runs (a tqdm status line,
     here from the start), cleared before its final line; elsewhere plain lines; -q
     nothing."""
-    import io
-
     import jetnh.cli as cli
 
     monkeypatch.setattr(cli, "SIGN_OF_LIFE", 0.0)
@@ -368,8 +367,6 @@ def test_long_steps_show_a_sign_of_life_on_a_terminal_only(monkeypatch):
 
 
 def test_sweep_progress_is_a_bar_on_a_terminal_and_tenths_elsewhere():
-    import io
-
     from jetnh.cli import Progress
 
     pipe = io.StringIO()
