@@ -35,4 +35,4 @@ docs: $(DOCS_STAMP)
 	@echo "the site is in docs/_build/html (open docs/_build/html/index.html)"
 
 clean:
-	rm -rf $(VENV) .pytest_cache .hypothesis docs/_build docs/api/generated
+	rm -rf $(VENV) .pytest_cache .hypothesis docs/_build
