@@ -1,18 +1,25 @@
 # Two commands do all the set-up on a fresh machine:
 #   make run    the machine-checked reproduction of the seed paper (papers/zhao2008)
 #   make test   run the whole test suite (hypothesis profile "ci"; HYPOTHESIS_PROFILE=dev for more)
+# and one builds the documentation:
+#   make docs   the site (Sphinx, notebooks executed) in docs/_build/html; warnings are errors
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
+DOCS_STAMP := $(VENV)/.installed-docs
 
-.PHONY: run test venv clean
+.PHONY: run test docs venv clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[test]'
 	touch $(STAMP)
+
+$(DOCS_STAMP): $(STAMP)
+	$(BIN)/python -m pip install --quiet -e '.[test,docs]'
+	touch $(DOCS_STAMP)
 
 venv: $(STAMP)
 
@@ -22,5 +29,10 @@ run: $(STAMP)
 test: $(STAMP)
 	$(BIN)/python -m pytest -n 2 --dist loadfile -q
 
+# the executed notebooks and their compiled kernels are cached in docs/_build only
+docs: $(DOCS_STAMP)
+	$(BIN)/sphinx-build -b html -W --keep-going -n -q docs docs/_build/html
+	@echo "the site is in docs/_build/html (open docs/_build/html/index.html)"
+
 clean:
-	rm -rf $(VENV) .pytest_cache .hypothesis
+	rm -rf $(VENV) .pytest_cache .hypothesis docs/_build

@@ -1,6 +1,6 @@
 """jetnh: nonholonomic constrained mechanics on jet bundles.
 
-The public contract (DESIGN.md section 4): ``JetSpace``, ``System``, ``System.equations``,
+The public contract: ``JetSpace``, ``System``, ``System.equations``,
 ``Equations.accelerations``, ``Scene`` and its ``Trajectory``; ``compare`` decides when two
 principles share solutions; ``sweep`` runs a scene over a grid of parameters and initial
 values (here or on Dask); ``from_mechanics`` reads a sympy.physics.mechanics

@@ -2,13 +2,13 @@
 multiplier rates, solved by blocks (what ``Equations.accelerations()`` returns).
 
 The rows ``jetnh.equations`` derives from (13) are affine in the accelerations and the
-multiplier rates.  With
+multiplier rates.  With::
 
     [L]_s   = r_s - H_sr q''^r           H = d2L / dqdot^s dqdot^r
     [f^a]_s = g^a_s - G^a_sr q''^r       G^a = d2f^a / dqdot^s dqdot^r
     D f^a   = A_as q''^s + b^a            A = df / dqdot
 
-every principle's rows read
+every principle's rows read::
 
     (r + kappa_a g^a)_s - (H + kappa_a G^a)_sr q''^r - A_as mu'_a = 0            (*)
 

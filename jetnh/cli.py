@@ -2,7 +2,7 @@
 catalogue; run the benchmarks and the seed paper's reproduction.
 
 MODEL is a catalogue name (``jetnh models`` lists them; options as in ``n_trailer:N=4``)
-or the path of a model file (TOML; see ``jetnh.modelfile`` and examples/*.toml).
+or the path of a model file (TOML; see ``jetnh.modelfile`` and ``examples/*.toml``).
 
 Exit codes: 0 ok, 2 usage, 1 model or numerical error.  Errors print a message on
 stderr, never a traceback (``--debug`` shows one for errors that are jetnh's own bugs).
@@ -46,8 +46,15 @@ def option_message(message: str) -> str:
 
 
 # ---------------------------------------------------------------------- progress
+#: seconds a step runs before a terminal shows its elapsed time (a sign of life)
+SIGN_OF_LIFE = 1.0
+
+
 class Progress:
-    """Step-by-step progress on stderr: ``jetnh: deriving chetaev ... 0.31 s``."""
+    """Step-by-step progress on stderr: ``jetnh: deriving chetaev ... 0.31 s``.  On a
+    terminal a step that takes longer than ``SIGN_OF_LIFE`` seconds shows its elapsed
+    time while it runs (a tqdm status line), and sweeps show a tqdm bar; elsewhere
+    (a pipe, a log) each step is a line.  ``quiet``: nothing."""
 
     def __init__(self, quiet=False, stream=None):
         self.quiet = quiet
@@ -65,20 +72,77 @@ class Progress:
             yield
             return
         t0 = time.perf_counter()
-        self.stream.write(f"jetnh: {what} ...")
-        self.stream.write(" " if self.tty else "\n")
-        self.stream.flush()
+        if not self.tty:
+            self.stream.write(f"jetnh: {what} ...\n")
+            self.stream.flush()
+        ticker = _Ticker(self.stream, f"jetnh: {what} ...") if self.tty else None
         ok = False
         try:
             yield
             ok = True
         finally:
             dt = time.perf_counter() - t0
-            if self.tty:
-                self.stream.write(f"{'done' if ok else 'failed'} ({dt:.2f} s)\n")
+            if ticker is not None:
+                ticker.close()
+                self.stream.write(f"jetnh: {what} ... {'done' if ok else 'failed'} "
+                                  f"({dt:.2f} s)\n")
             elif dt >= 0.5 or not ok:
                 self.stream.write(f"jetnh: {what}: {'done' if ok else 'failed'} ({dt:.2f} s)\n")
             self.stream.flush()
+
+    def bar(self, what: str, unit: str):
+        """A ``progress(done, total)`` callback and a function that ends it: a tqdm bar
+        on a terminal, else one line per tenth (None when quiet)."""
+        if self.quiet:
+            return None, lambda: None
+        from tqdm import tqdm
+
+        if self.tty:
+            bars = []
+
+            def show(done, total):
+                if not bars:
+                    bars.append(tqdm(total=total, desc=f"jetnh: {what}", unit=unit,
+                                     file=self.stream))
+                bars[0].update(done - bars[0].n)
+            return show, lambda: bars and bars[0].close()
+        shown, t0 = [-1], time.perf_counter()
+
+        def line(done, total):
+            if 10 * done // total > shown[0]:
+                shown[0] = 10 * done // total
+                text = tqdm.format_meter(
+                    done, total, time.perf_counter() - t0, prefix=f"jetnh: {what}",
+                    bar_format="{desc}: {n_fmt}/{total_fmt} " + unit + "s [{elapsed}<"
+                               "{remaining}]")
+                self.stream.write(text + "\n")
+                self.stream.flush()
+        return line, lambda: None
+
+
+class _Ticker:
+    """A tqdm status line with the elapsed time of a running step, refreshed from a
+    thread, shown once the step has run ``SIGN_OF_LIFE`` seconds; cleared on close."""
+
+    def __init__(self, stream, what):
+        import threading
+
+        from tqdm import tqdm
+
+        self.bar = tqdm(total=None, desc=what, file=stream, leave=False,
+                        delay=SIGN_OF_LIFE, mininterval=0.2, bar_format="{desc} {elapsed}")
+        self.stop = threading.Event()
+        self.thread = threading.Thread(target=self._run, daemon=True)
+        self.thread.start()
+
+    def _run(self):
+        while not self.stop.wait(0.25):
+            self.bar.update(0)
+
+    def close(self):
+        self.stop.set()
+        self.thread.join()
+        self.bar.close()
 
 
 # ---------------------------------------------------------------------- models
@@ -293,6 +357,13 @@ def _assignments(items, what) -> dict:
     return out
 
 
+#: the fixed-step methods (and their aliases): --steps sets their number of steps
+FIXED_STEP = ("rk4", "dla", "lda", "nh-midpoint", "dvi", "vakonomic-midpoint")
+METHOD_HELP = ("dop853 (default), dopri5, rk4, radau (implicit, for stiff problems), dla "
+               "(discrete Lagrange-d'Alembert, chetaev only), dvi (discrete vakonomic) or "
+               "scipy-<RK45|DOP853|Radau|BDF|LSODA>")
+
+
 def scene_names(system) -> set:
     """Names an expression of a scene may use besides the states: time, dependent
     velocities and parameters."""
@@ -358,8 +429,7 @@ def cmd_simulate(args, progress) -> int:
                        "(cached for later runs)"):
         scene.compile()
     kw = {}
-    fixed = method.lower() in ("rk4", "dla", "lda", "nh-midpoint", "dvi", "vakonomic-midpoint")
-    if fixed:
+    if method.lower() in FIXED_STEP:
         kw["n_steps"] = args.steps
     elif points >= 2:
         kw["t_eval"] = np.linspace(t0, float(t1), points)
@@ -475,24 +545,6 @@ def _grid(items) -> dict:
     return grid
 
 
-def _progress_bar(progress, what):
-    """A ``progress(done, total)`` callback: a bar on a terminal, else a line per tenth."""
-    if progress.quiet:
-        return None
-    stream, shown = progress.stream, [-1]
-
-    def show(done, total):
-        if progress.tty:
-            k = 30 * done // total
-            stream.write(f"\rjetnh: {what} [{'#' * k}{'.' * (30 - k)}] {done}/{total} points"
-                         + ("\n" if done == total else ""))
-        elif 10 * done // total > shown[0]:
-            shown[0] = 10 * done // total
-            stream.write(f"jetnh: {what}: {done}/{total} points\n")
-        stream.flush()
-    return show
-
-
 def _write_table(df, path: Path):
     if path.suffix == ".csv":
         df.to_csv(path, index=False)
@@ -532,6 +584,10 @@ def cmd_sweep(args, progress) -> int:
     if t1 is None:
         raise UsageError("give --t-end (the model file has no [simulation] t_end)")
     method = args.method or sim.get("method", "dop853")
+    if times is not None and method.lower() in FIXED_STEP:
+        raise UsageError(f"--times needs dense output, which {method} does not have; use "
+                         "--method dop853, dopri5, radau or scipy-<M>, or omit --times (final "
+                         "values)")
     states = ([q.name for q in system.J.q] + [v.name for v in system.independent_velocities]
               + list(multiplier_names(system, principle)))
     initial = {s: 0.0 for s in states}
@@ -549,13 +605,17 @@ def cmd_sweep(args, progress) -> int:
                        "(cached for later runs)"):
         scene.compile()
     where = f"on the Dask cluster at {args.scheduler}" if args.scheduler else "on this machine"
-    df = sweep(scene, grid, client=args.scheduler, times=times,
-               outputs=args.outputs.split(",") if args.outputs else None,
-               chunk_size=args.chunk_size, progress=_progress_bar(progress, f"sweeping {where}"),
-               timeout=args.timeout, connect_timeout=args.connect_timeout, method=method,
-               rtol=args.rtol if args.rtol is not None else sim.get("rtol", 1e-9),
-               atol=args.atol if args.atol is not None else sim.get("atol", 1e-12),
-               **({"n_steps": args.steps} if method == "rk4" else {}))
+    show, close = progress.bar(f"sweeping {where}", "point")
+    try:
+        df = sweep(scene, grid, client=args.scheduler, times=times,
+                   outputs=args.outputs.split(",") if args.outputs else None,
+                   chunk_size=args.chunk_size, progress=show, timeout=args.timeout,
+                   connect_timeout=args.connect_timeout, method=method,
+                   rtol=args.rtol if args.rtol is not None else sim.get("rtol", 1e-9),
+                   atol=args.atol if args.atol is not None else sim.get("atol", 1e-12),
+                   **({"n_steps": args.steps} if method.lower() in FIXED_STEP else {}))
+    finally:
+        close()
     failed = int((~df["success"]).sum())
     progress.note(f"jetnh: {len(df)} points, {len(df) - failed} succeeded"
                   + (f", {failed} stopped early (see stop_reason)" if failed else ""))
@@ -811,11 +871,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--t-end", type=float, default=None, metavar="T",
                    help="end time (default: the model's [simulation] t_end or the "
                         "catalogue's)")
-    s.add_argument("--method", default=None,
-                   help="dop853 (default), dopri5, rk4, radau (implicit, stiff problems), dla "
-                        "(discrete Lagrange-d'Alembert, chetaev only), dvi (discrete "
-                        "vakonomic) or "
-                        "scipy-<RK45|DOP853|Radau|BDF|LSODA>")
+    s.add_argument("--method", default=None, help=METHOD_HELP)
     s.add_argument("--timeout", type=float, default=None,
                    help="wall-clock budget in seconds: the run stops there and reports "
                         "what it has (default: none)")
@@ -871,11 +927,14 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--outputs", metavar="NAME,...",
                    help="output columns (default: every state, dependent velocity and "
                         "integral)")
-    w.add_argument("--method", default=None, choices=("dop853", "dopri5", "rk4", "radau"),
-                   help="default: the model file's, else dop853")
+    w.add_argument("--method", default=None,
+                   help=METHOD_HELP.replace("(default)", "(default: the model file's, else "
+                                                         "dop853)")
+                        + "; dla, dvi and scipy run point by point")
     w.add_argument("--rtol", type=float, default=None, help="default 1e-9")
     w.add_argument("--atol", type=float, default=None, help="default 1e-12")
-    w.add_argument("--steps", type=int, default=1000, help="steps of rk4 (default 1000)")
+    w.add_argument("--steps", type=int, default=1000,
+                   help="steps of the fixed-step methods rk4, dla and dvi (default 1000)")
     w.add_argument("--scheduler", metavar="ADDRESS",
                    help="a Dask scheduler, e.g. tcp://10.0.0.5:8786 (needs pip install "
                         "'jetnh[cluster]'; default: this machine, every core, no Dask)")

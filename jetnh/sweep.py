@@ -23,13 +23,16 @@ Columns, in this order:
   integral): at the final time under their names (``x``), or with ``times`` at each time
   as ``x(t=2.5)`` (NaN after a run's stop);
 - the diagnostics over the output rows: ``status``, ``success``, ``stop_reason``,
-  ``t_final``, ``steps``, ``rejected``, ``rhs_evaluations``, ``residual_max`` (max |f^a|),
-  ``energy_drift`` and ``drift[I]`` (max |I - I(t0)| of each first integral ``I`` of the
-  scene), and ``events[E]``/``first[E]`` for user events.
+  ``t_final``, ``steps``, ``rejected``, ``rhs_evaluations``, ``residual_max``
+  (``max |f^a|``), ``energy_drift`` and ``drift[I]`` (``max |I - I(t0)|`` of each first
+  integral ``I`` of the scene), and ``events[E]``/``first[E]`` for user events.
 
 A point that fails (a singular configuration, NaN, too many steps) keeps its row, with
 its ``status`` and ``stop_reason``; the sweep goes on.  Options (``rtol``, ``atol``,
-``method``, ``events``, ...) are those of ``Scene.ensemble``.
+``method``, ``n_steps``, ``events``, ...) are those of ``Scene.run``.  Every method of
+``Scene.run`` works: dop853, dopri5, rk4 and radau run as a compiled ensemble; dla, dvi and
+``scipy-<M>`` run ``Scene.run`` point by point (``times`` needs dense output: dop853, radau,
+dopri5 or scipy).
 
 Every point is the scene's compiled single-trajectory loop (``run_ensemble``), so the
 result does not depend on where it ran: ``client=None`` runs the grid here on all cores
@@ -39,7 +42,8 @@ compiled kernels' source is scattered once to every worker, each chunk is one ta
 the rows are gathered in grid order.  A worker that dies loses no rows: Dask recomputes
 its chunks elsewhere, and the DataFrame equals the local one to the last bit.
 ``chunk_size`` defaults to 4 tasks per worker thread on Dask, and here to the whole grid
-(20 chunks when ``progress(done, total)`` is given: it is called as chunks finish).
+(20 chunks when ``progress`` is given: ``progress(done, total)`` is called as chunks
+finish; ``progress=True`` shows a tqdm bar on stderr).
 ``df.attrs["grid"]`` names the grid columns.  Measured in ``benchmarks/sweep_dask.py``.
 """
 
@@ -53,9 +57,11 @@ from collections.abc import Mapping
 from .errors import JetnhError
 from .jet import key_name
 
-#: options passed on to ``run_ensemble``
+#: options passed on to ``run_ensemble`` (or to ``Scene.run``)
 OPTIONS = ("rtol", "atol", "method", "first_step", "max_step", "max_steps", "n_steps", "h",
            "events", "singular", "singular_tol")
+#: options that only ``Scene.run`` takes (methods run point by point)
+POINT_OPTIONS = ("newton_tol", "max_newton", "projection")
 
 
 def sweep(scene, grid, client=None, *, times=None, outputs=None, chunk_size=None,
@@ -63,16 +69,27 @@ def sweep(scene, grid, client=None, *, times=None, outputs=None, chunk_size=None
     """Run ``scene`` at every point of ``grid``: a DataFrame, one row per point (see the
     module docstring).  ``client``: None (this machine), a ``dask.distributed.Client``
     or a scheduler address; ``timeout``: seconds the Dask sweep may take (None: no
-    limit); ``connect_timeout``: seconds to reach a scheduler given by address."""
+    limit); ``connect_timeout``: seconds to reach a scheduler given by address;
+    ``progress``: None, True (a tqdm bar on stderr) or a callable ``progress(done,
+    total)``."""
     import numpy as np
     import pandas as pd
 
     from .numeric.ensemble import resolve
 
-    bad = sorted(set(options) - set(OPTIONS))
+    bad = sorted(set(options) - set(OPTIONS) - set(POINT_OPTIONS))
     if bad:
         raise JetnhError(f"sweep has no option {', '.join(map(repr, bad))}; its options are "
-                         f"{', '.join(OPTIONS)} (output times: times=[...])")
+                         f"{', '.join(OPTIONS + POINT_OPTIONS)} (output times: "
+                         "times=[...])")
+    if not _in_ensemble(options.get("method", "dop853")):
+        if times is not None and not str(options["method"]).lower().startswith("scipy"):
+            raise JetnhError(f"times needs dense output, which {options['method']} does not "
+                             "have; use dop853, dopri5, radau or scipy-<M>, or omit times for the "
+                             "final values")
+    elif set(options) & set(POINT_OPTIONS):
+        raise JetnhError(f"{', '.join(sorted(set(options) & set(POINT_OPTIONS)))}: options "
+                         "of the dla and dvi methods")
     if chunk_size is not None:
         chunk_size = _positive_int(chunk_size, "chunk_size")
     names, values = _points(grid)
@@ -94,17 +111,21 @@ def sweep(scene, grid, client=None, *, times=None, outputs=None, chunk_size=None
                              "column labels would clash); give distinct times")
     run = dict(options, t_eval=times, save="final")
     n = len(values)
-    if client is None:
-        size = chunk_size or (n if progress is None else math.ceil(n / 20))
-        chunks = _chunks(n, size)
-        parts = []
-        for a, b in chunks:
-            parts.append(_run_chunk(scene, Y0[a:b], P[a:b], run, outputs, "threads"))
-            if progress is not None:
-                progress(b, n)
-    else:
-        parts = _on_dask(client, CompiledScene(scene), Y0, P, run, outputs, chunk_size,
-                         progress, timeout, connect_timeout)
+    progress, close = _progress(progress, n)
+    try:
+        if client is None:
+            size = chunk_size or (n if progress is None else math.ceil(n / 20))
+            chunks = _chunks(n, size)
+            parts = []
+            for a, b in chunks:
+                parts.append(_run_chunk(scene, Y0[a:b], P[a:b], run, outputs, "threads"))
+                if progress is not None:
+                    progress(b, n)
+        else:
+            parts = _on_dask(client, CompiledScene(scene), Y0, P, run, outputs, chunk_size,
+                             progress, timeout, connect_timeout)
+    finally:
+        close()
     columns = {(k if k in params else f"{k}(t0)"): values[:, j] for j, k in enumerate(names)}
     for key in parts[0]:
         columns[key] = np.concatenate([p[key] for p in parts])
@@ -232,6 +253,35 @@ def _chunks(n, size):
     return [(a, min(a + size, n)) for a in range(0, n, size)]
 
 
+def _progress(progress, total):
+    """The ``progress(done, total)`` callback and a function that ends it: ``True`` is a
+    tqdm bar on stderr, a callable is used as it is."""
+    if progress is None or progress is False:
+        return None, lambda: None
+    if progress is not True:
+        if not callable(progress):
+            raise JetnhError(f"progress is None, True or a callable progress(done, total), "
+                             f"not {type(progress).__name__}")
+        return progress, lambda: None
+    from tqdm import tqdm
+
+    bar = tqdm(total=total, desc="sweep", unit="point")
+
+    def show(done, _total):
+        bar.update(done - bar.n)
+    return show, bar.close
+
+
+def _in_ensemble(method) -> bool:
+    """Does ``method`` run as a compiled ensemble (else ``Scene.run`` point by point)?"""
+    from .numeric import integrators
+
+    try:
+        return integrators.METHODS[integrators.method(method)] != "discrete"
+    except JetnhError:  # scipy-<M>
+        return False
+
+
 # ---------------------------------------------------------------------- one chunk
 def _run_chunk(scene, Y0, P, run, outputs, parallel) -> dict:
     """The output and diagnostic columns of the points Y0, P (rows) of ``scene`` (or of
@@ -242,6 +292,8 @@ def _run_chunk(scene, Y0, P, run, outputs, parallel) -> dict:
 
     if isinstance(scene, CompiledScene):
         scene = scene.load()
+    if not _in_ensemble(run.get("method", "dop853")):
+        return _run_points(scene, Y0, P, run, outputs)
     ens = run_ensemble(scene, Y0, dict(zip(scene.runtime_params, P.T)), parallel=parallel,
                        on_error="record", **run)
     times = run["t_eval"]
@@ -267,6 +319,59 @@ def _run_chunk(scene, Y0, P, run, outputs, parallel) -> dict:
             np.abs(ens[name] - ens.aux_initial[:, start + i, None]), axis=1)
     cols.update(events)
     return cols
+
+
+def _run_points(scene, Y0, P, run, outputs) -> dict:
+    """The columns of ``_run_chunk`` from ``Scene.run`` at each point: for the methods
+    that have no compiled ensemble (dla, dvi, scipy-<M>).  A run that ends in NaN keeps
+    its row (status 3)."""
+    import numpy as np
+
+    from .errors import IntegrationError
+    from .numeric.integrators._common import NONFINITE
+
+    times = run["t_eval"]
+    opts = {k: v for k, v in run.items() if k != "t_eval"}
+    lay = scene.kernels.layout
+    labels = ([(name, None) for name in outputs] if times is None else
+              [(f"{name}(t={t:.12g})", (name, j)) for name in outputs
+               for j, t in enumerate(times)])
+    n = len(Y0)
+    cols = {label: np.full(n, np.nan) for label, _ in labels}
+    diag = {"status": np.zeros(n, dtype=np.int64), "success": np.zeros(n, dtype=bool),
+            "stop_reason": np.empty(n, dtype=object), "t_final": np.full(n, np.nan),
+            "steps": np.zeros(n, dtype=np.int64), "rejected": np.zeros(n, dtype=np.int64),
+            "rhs_evaluations": np.zeros(n, dtype=np.int64),
+            "residual_max": np.full(n, np.nan), "energy_drift": np.full(n, np.nan)}
+    drift = {f"drift[{name}]": np.full(n, np.nan) for name in lay.integrals}
+    events = {}
+    for i in range(n):
+        params = P[i] if len(scene.runtime_params) else None
+        try:
+            traj = scene.run(y0=Y0[i], params=params, t_eval=times, **opts)
+        except IntegrationError as exc:
+            diag["status"][i], diag["stop_reason"][i] = NONFINITE, str(exc)
+            continue
+        for label, where in labels:
+            if where is None:
+                cols[label][i] = traj[label][-1]
+            else:
+                name, j = where
+                if j < len(traj):
+                    cols[label][i] = traj[name][j]
+        d = traj.diagnostics
+        diag["status"][i], diag["success"][i] = d.status, d.success
+        diag["stop_reason"][i], diag["t_final"][i] = d.stop_reason, traj.t[-1]
+        diag["steps"][i], diag["rejected"][i] = d.steps or 0, d.rejected or 0
+        diag["rhs_evaluations"][i] = d.rhs_evaluations
+        diag["residual_max"][i], diag["energy_drift"][i] = d.residual_max, d.energy_drift
+        for name, v in d.integral_drift.items():
+            drift[f"drift[{name}]"][i] = v
+        for name, te in zip(traj.event_names, traj.t_events):
+            events.setdefault(f"events[{name}]", np.zeros(n, dtype=np.int64))[i] = len(te)
+            events.setdefault(f"first[{name}]", np.full(n, np.nan))[i] = (
+                te[0] if len(te) else np.nan)
+    return {**cols, **diag, **drift, **events}
 
 
 class CompiledScene:

@@ -1,5 +1,6 @@
 """The jetnh command end to end, in a subprocess."""
 
+import io
 import json
 import subprocess
 import sys
@@ -335,3 +336,51 @@ def test_simulate_help_documents_the_discrete_methods(capsys):
     _, out, _ = inproc(capsys, "simulate", "--help")
     text = " ".join(out.split())
     assert "dla (discrete Lagrange-d'Alembert" in text and "dvi (discrete vakonomic)" in text
+
+
+class _Terminal(io.StringIO):
+    def isatty(self):
+        return True
+
+
+def test_long_steps_show_a_sign_of_life_on_a_terminal_only(monkeypatch):
+    """On a terminal a step shows its elapsed time while it runs (a tqdm status line,
+    here from the start), cleared before its final line; elsewhere plain lines; -q
+    nothing."""
+    import jetnh.cli as cli
+
+    monkeypatch.setattr(cli, "SIGN_OF_LIFE", 0.0)
+    tty = _Terminal()
+    with cli.Progress(stream=tty).step("deriving the chetaev equations"):
+        pass
+    text = tty.getvalue()
+    assert "\rjetnh: deriving the chetaev equations ... 00:00" in text
+    assert text.splitlines()[-1].startswith("jetnh: deriving the chetaev equations ... done (")
+    pipe = io.StringIO()
+    with cli.Progress(stream=pipe).step("deriving"):
+        pass
+    assert pipe.getvalue() == "jetnh: deriving ...\n"
+    quiet = _Terminal()
+    with cli.Progress(quiet=True, stream=quiet).step("deriving"):
+        pass
+    assert quiet.getvalue() == ""
+
+
+def test_sweep_progress_is_a_bar_on_a_terminal_and_tenths_elsewhere():
+    from jetnh.cli import Progress
+
+    pipe = io.StringIO()
+    show, close = Progress(stream=pipe).bar("sweeping on this machine", "point")
+    for done in range(1, 21):
+        show(done, 20)
+    close()
+    lines = pipe.getvalue().splitlines()
+    assert len(lines) == 11 and "\r" not in pipe.getvalue()       # tenths 0 to 10
+    assert lines[-1].startswith("jetnh: sweeping on this machine: 20/20 points [")
+    tty = _Terminal()
+    show, close = Progress(stream=tty).bar("sweeping", "point")
+    for done in (5, 20):
+        show(done, 20)
+    close()
+    assert "\r" in tty.getvalue() and "20/20" in tty.getvalue()
+    assert Progress(quiet=True).bar("sweeping", "point")[0] is None

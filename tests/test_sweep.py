@@ -209,6 +209,73 @@ def test_separation_and_map(disk, tmp_path):
         plot_map(pd.concat([a, a], ignore_index=True), "R", "phi_t(t0)", "x")
 
 
+@pytest.mark.parametrize("method, options", [
+    ("dla", dict(n_steps=200)),
+    ("scipy-DOP853", dict(rtol=1e-10, atol=1e-12)),
+])
+def test_point_methods_are_the_single_runs(disk, method, options):
+    """dla and scipy have no compiled ensemble: their rows are Scene.run at each point,
+    with the columns of the ensemble methods; and they agree with dop853."""
+    df = jn.sweep(disk, GRID, method=method, **options)
+    ref = jn.sweep(disk, GRID, rtol=1e-10, atol=1e-12)
+    assert list(df.columns) == list(ref.columns) and df.attrs == ref.attrs
+    names = ["x", "y", "phi", "psi", "phi_t", "psi_t", "x_t", "y_t", "p_psi"]
+    for r in (0, 7, 11):
+        y0 = disk.y0.copy()
+        y0[disk.state_names.index("phi_t")] = df["phi_t(t0)"][r]
+        tr = disk.run(method=method, y0=y0, params=np.array([df["R"][r]]), save="final",
+                      **options)
+        assert [df[n][r] for n in names] == [tr.final[n] for n in names]    # to the bit
+        d = tr.diagnostics
+        assert df["residual_max"][r] == d.residual_max
+        assert df["drift[p_psi]"][r] == d.integral_drift["p_psi"]
+        assert df["stop_reason"][r] == d.stop_reason
+    assert df["success"].all()
+    # second order (dla, 200 steps) or 1e-10 (scipy) against dop853
+    tol = 1e-3 if method == "dla" else 1e-7
+    assert np.max(np.abs(df[["x", "y"]].to_numpy() - ref[["x", "y"]].to_numpy())) < tol
+
+
+def test_point_methods_times_and_their_limits(disk):
+    times = [1.0, 2.5]
+    df = jn.sweep(disk, {"R": [0.5, 2.0]}, method="scipy-RK45", times=times, outputs=["x"])
+    tr = disk.run(method="scipy-RK45", t_eval=times, params=np.array([2.0]))
+    assert list(df.iloc[1][["x(t=1)", "x(t=2.5)"]]) == list(tr["x"])
+    with pytest.raises(JetnhError, match="times needs dense output, which dla"):
+        jn.sweep(disk, {"R": [1.0]}, method="dla", n_steps=10, times=[1.0])
+    with pytest.raises(JetnhError, match="newton_tol: options of the dla and dvi"):
+        jn.sweep(disk, {"R": [1.0]}, newton_tol=1e-12)
+
+
+def test_point_methods_keep_failing_rows(failing):
+    _, blow = failing
+    for method, options in (("scipy-RK45", {}), ("dla", {"n_steps": 100})):
+        df = jn.sweep(blow, {"c": [0.0, 800.0]}, method=method, **options)
+        assert list(df["status"]) == [FINISHED, NONFINITE], method
+        assert list(df["success"]) == [True, False] and np.isnan(df["x"][1])
+        assert df["x"][0] == pytest.approx(2.0, rel=1e-12)
+        assert method in df["stop_reason"][1]
+
+
+def test_dvi_sweeps_the_vakonomic_disk():
+    """dvi (second order, variational) against dop853 on a vakonomic grid."""
+    scene = Scene(rolling_disk(), "vakonomic", initial=dict(DISK0, lambda_x=0.1, lambda_y=0.0),
+                  t_span=(0.0, 2.0))
+    grid = {"R": [0.5, 1.0], "psi_t": [0.2, 0.7]}
+    dvi = jn.sweep(scene, grid, method="dvi", n_steps=800)
+    ref = jn.sweep(scene, grid, rtol=1e-11, atol=1e-12)
+    assert dvi["success"].all() and (dvi["steps"] == 800).all()
+    assert np.max(np.abs(dvi[["x", "y"]].to_numpy() - ref[["x", "y"]].to_numpy())) < 1e-4
+
+
+def test_progress_true_is_a_tqdm_bar(disk, capsys):
+    df = jn.sweep(disk, GRID, progress=True)
+    err = capsys.readouterr().err
+    assert len(df) == 12 and "sweep" in err and "12/12" in err
+    with pytest.raises(JetnhError, match="progress is None, True or a callable"):
+        jn.sweep(disk, GRID, progress="yes")
+
+
 def test_import_is_light_and_sweep_stays_the_function():
     code = ("import sys, jetnh\n"
             "heavy = [m for m in ('pandas', 'distributed', 'numba', 'matplotlib') "
@@ -310,6 +377,21 @@ def test_cli_sweep_files_map_and_scheduler(disk, client, capsys, tmp_path):
     assert_same(pd.read_parquet(tmp_path / "a.parquet"), api)     # attrs (the grid) too
 
 
+def test_cli_point_methods(capsys):
+    """--method takes every method of Scene.run; --steps sets the fixed-step ones."""
+    base = ["sweep", "rolling_disk", "--grid", "R=0.5,1", "--t-end", "1", "--outputs", "x"]
+    scene = Scene(rolling_disk(), "chetaev", initial=DISK0, t_span=(0, 1))
+    code, out, err = cli(capsys, *base, "--method", "dla", "--steps", "50")
+    assert code == 0, err
+    api = jn.sweep(scene, {"R": [0.5, 1.0]}, outputs=["x"], method="dla", n_steps=50)
+    assert [float(r.split(",")[1]) for r in out.splitlines()[1:]] == list(api["x"])
+    vk = ["--init", "lambda_x=0.1", "-p", "vakonomic"]
+    code, out, err = cli(capsys, *base, *vk, "--method", "dvi", "--steps", "50")
+    assert code == 0 and out.count("\n") == 3, err
+    code, _, err = cli(capsys, *base, "--method", "scipy-Radau")
+    assert code == 0, err
+
+
 @pytest.mark.parametrize("args, code, words", [
     (("--grid", "R=0.5:2"), 2, "neither START:STOP:N"),
     (("--grid", "R=0.5:2:x"), 2, "neither START:STOP:N"),
@@ -321,6 +403,10 @@ def test_cli_sweep_files_map_and_scheduler(disk, client, capsys, tmp_path):
     (("--grid", "R=1", "--out", "table.xlsx"), 1, "give a .csv or .parquet path"),
     (("--grid", "R=1", "--scheduler", "tcp://127.0.0.1:9", "--connect-timeout", "0.5"), 1,
      "cannot reach a Dask scheduler"),
+    (("--grid", "R=1", "--method", "dla", "--times", "0.5"), 2, "--times needs dense output"),
+    (("--grid", "R=1", "--method", "dvi", "--steps", "0", "-p", "vakonomic"), 1,
+     "--steps must be a positive integer"),
+    (("--grid", "R=1", "--method", "euler"), 1, "unknown method 'euler'"),
 ])
 def test_cli_errors(capsys, args, code, words):
     got, _, err = cli(capsys, "sweep", "rolling_disk", "--t-end", "1", *args)

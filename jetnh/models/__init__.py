@@ -6,24 +6,24 @@ with its source, its closed-form solutions and its first integrals (each checked
 (what ``jetnh simulate NAME`` uses); scalable families take options, e.g.
 ``get("n_trailer", N=4)`` or, on the command line, ``n_trailer:N=4``.
 
-======================  ==============================================================
-rolling_disk            vertical rolling disk (the paper's Example 1)
-appell_hamel            Appell-Hamel system, nonlinear constraint (Example 2)
-knife_edge              knife edge on an inclined plane
-chaplygin_sleigh        Chaplygin sleigh
-nonholonomic_particle   zdot = y xdot (Heisenberg-type distribution)
-isokinetic_particle     constant speed, xdot^2 + ydot^2 = v^2 (nonlinear)
-rheonomic_knife_edge    prescribed heading w t on a moving belt (time-dependent)
-bead_on_parabola        ydot = 2 a x xdot (integrable, differential form)
-radial_line             y xdot - x ydot = 0 (integrable, differential form)
-rolling_ball            ball rolling on a plane, Euler angles
-ball_on_turntable       ball rolling on a rotating table, Euler angles
-suslov_rigid_body       Suslov's problem, Euler angles
-n_trailer               car with N trailers (option N, default 2)
-particle_chain          N coupled nonholonomic particles (option N, default 3)
-damped_knife_edge       knife edge with viscous friction (Rayleigh dissipation)
-damped_chaplygin_sleigh Chaplygin sleigh with viscous friction (Rayleigh dissipation)
-======================  ==============================================================
+=======================  ==============================================================
+rolling_disk             vertical rolling disk (the paper's Example 1)
+appell_hamel             Appell-Hamel system, nonlinear constraint (Example 2)
+knife_edge               knife edge on an inclined plane
+chaplygin_sleigh         Chaplygin sleigh
+nonholonomic_particle    zdot = y xdot (Heisenberg-type distribution)
+isokinetic_particle      constant speed, xdot^2 + ydot^2 = v^2 (nonlinear)
+rheonomic_knife_edge     prescribed heading w t on a moving belt (time-dependent)
+bead_on_parabola         ydot = 2 a x xdot (integrable, differential form)
+radial_line              y xdot - x ydot = 0 (integrable, differential form)
+rolling_ball             ball rolling on a plane, Euler angles
+ball_on_turntable        ball rolling on a rotating table, Euler angles
+suslov_rigid_body        Suslov's problem, Euler angles
+n_trailer                car with N trailers (option N, default 2)
+particle_chain           N coupled nonholonomic particles (option N, default 3)
+damped_knife_edge        knife edge with viscous friction (Rayleigh dissipation)
+damped_chaplygin_sleigh  Chaplygin sleigh with viscous friction (Rayleigh dissipation)
+=======================  ==============================================================
 """
 
 from ._registry import INFO, ModelInfo, register

@@ -1,4 +1,4 @@
-"""Ensembles: many initial conditions or parameter sets in one call, on all cores.
+"""Ensembles: many initial conditions or parameter sets in one call, on all cores::
 
     ens = scene.ensemble(initial={"phi_t": np.linspace(0.1, 1, 100)},
                          params={"R": np.full(100, 2.0)}, rtol=1e-10, atol=1e-12,
@@ -252,7 +252,7 @@ class Ensemble:
     # ------------------------------------------------------------------ diagnostics
     @property
     def residual_max(self) -> np.ndarray:
-        """Max |f^a| over each run's output rows."""
+        """Max ``|f^a|`` over each run's output rows."""
         k = len(self.layout.dependent_velocities)
         res = np.abs(self.aux[:, :, k:2 * k])
         with np.errstate(all="ignore"):
@@ -260,7 +260,7 @@ class Ensemble:
 
     @property
     def energy_drift(self) -> np.ndarray:
-        """Max |E - E(t0)| over each run's output rows."""
+        """Max ``|E - E(t0)|`` over each run's output rows."""
         e = self.aux[:, :, self.layout.energy_index]
         e0 = self.aux_initial[:, self.layout.energy_index]
         with np.errstate(all="ignore"):

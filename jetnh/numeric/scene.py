@@ -1,4 +1,4 @@
-"""Scenes: a system, a principle, numbers, and a time span, ready to integrate.
+"""Scenes: a system, a principle, numbers, and a time span, ready to integrate::
 
     scene = Scene(system, "chetaev", params={R: 1.0}, initial={x: 0.0, phi_t: 1.0, ...},
                   t_span=(0.0, 10.0))

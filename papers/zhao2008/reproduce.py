@@ -2,8 +2,9 @@
 
     python -m papers.zhao2008 [--fast] [--no-figures]
 
-writes ``results.json`` (DESIGN.md section 4 format), ``report.md`` and the figures beside
-this file, and prints the summary: counts per status, the errata, and where the report is.
+writes ``results.json`` (one item per equation and claim), ``report.md`` and the figures
+beside this file, and prints the summary: counts per status, the errata, and where the
+report is.
 ``--fast`` proves the general identities for n <= 3 only and shortens the simulations.
 
 The committed outputs hold results only, so two runs give the same bytes and a checkout

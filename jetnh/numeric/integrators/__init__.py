@@ -6,19 +6,19 @@ compiled loop of ``loop``; radau has its own loop over the same helpers (``_comm
 generated kernels), so each loop runs as machine code, is compiled once for all scenes
 and is cached on disk by numba.
 
-=========  =====  ================================  ==========================================
-method     order  error estimate / step control     reference
-=========  =====  ================================  ==========================================
-dopri5     5(4)   embedded 4th order                 Dormand & Prince (1980); HNW I, II.4-5
-dop853     8(5,3) 5th and 3rd order combination     Hairer's DOP853; HNW I, II.5 and II.10
-rk4        4      none (fixed step)                  Kutta (1901); HNW I, II.1
-radau      5(3)   embedded 3rd order, predictive    Radau IIA, simplified Newton; Hairer &
-                  (Gustafsson) controller            Wanner II, IV.8 (RADAU5)
-dla        2      none (fixed step), symmetric       Cortes & Martinez (2001); McLachlan &
-                                                    Perlmutter (2006); optional projection
-dvi        2      none (fixed step), symmetric,     Benito & Martin de Diego (2005); Colombo
-                  variational (vakonomic)           et al. (2010, 2013); Marsden & West (2001)
-=========  =====  ================================  ==========================================
+==========  ======  ================================  ==========================================
+method      order   error estimate / step control     reference
+==========  ======  ================================  ==========================================
+dopri5      5(4)    embedded 4th order                Dormand & Prince (1980); HNW I, II.4-5
+dop853      8(5,3)  5th and 3rd order combination     Hairer's DOP853; HNW I, II.5 and II.10
+rk4         4       none (fixed step)                 Kutta (1901); HNW I, II.1
+radau       5(3)    embedded 3rd order, predictive    Radau IIA, simplified Newton; Hairer &
+                    (Gustafsson) controller           Wanner II, IV.8 (RADAU5)
+dla         2       none (fixed step), symmetric      Cortes & Martinez (2001); McLachlan &
+                                                      Perlmutter (2006); optional projection
+dvi         2       none (fixed step), symmetric,     Benito & Martin de Diego (2005); Colombo
+                    variational (vakonomic)           et al. (2010, 2013); Marsden & West (2001)
+==========  ======  ================================  ==========================================
 
 The Runge-Kutta methods take the singularity indicators and the user events of the scene
 as first-class functions and locate them on their dense output (``_events``); dla and dvi

@@ -1,0 +1,54 @@
+"""Sphinx configuration of the jetnh documentation (``make docs``)."""
+
+import os
+from pathlib import Path
+
+import jetnh
+
+HERE = Path(__file__).resolve().parent
+# compiled kernels of the executed pages go to the build directory, not the user's cache
+os.environ.setdefault("JETNH_CACHE", str(HERE / "_build" / "jetnh-cache"))
+
+project = "jetnh"
+author = "the jetnh developers"
+copyright = "the jetnh developers"
+release = version = jetnh.__version__
+
+extensions = [
+    "myst_nb",                       # MyST pages and notebooks, executed at build time
+    "sphinx.ext.autodoc",
+    "sphinx.ext.autosummary",
+    "sphinx.ext.mathjax",
+]
+exclude_patterns = ["_build", "Thumbs.db", ".DS_Store"]
+suppress_warnings = ["myst.header"]    # the included report starts below its own level
+
+myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist"]
+myst_heading_anchors = 3
+
+# executed notebooks: cached in the build directory only, so a clean build runs them all
+nb_execution_mode = "cache"
+nb_execution_cache_path = str(HERE / "_build" / ".jupyter_cache")
+nb_execution_timeout = 300
+nb_execution_show_tb = True
+nb_merge_streams = True
+
+autodoc_member_order = "bysource"
+autodoc_typehints = "description"
+autodoc_default_options = {"members": True, "undoc-members": False}
+
+# warnings are errors (make docs: -W); references must resolve, except to the libraries
+# jetnh builds on (no intersphinx: the build needs no network)
+nitpicky = True
+nitpick_ignore_regex = [
+    (r"py:.*", r"(sympy|sp|numpy|np|pandas|pd|matplotlib|xarray|dask|distributed|scipy|numba"
+               r"|mpmath|hypothesis|collections|typing|pathlib|concurrent|dataclasses)\b.*"),
+    (r"py:.*", r"(int|float|str|bool|dict|list|tuple|set|frozenset|object|callable|None"
+               r"|Exception|ValueError|RuntimeError|UserWarning|bytes|type|Path|Mapping"
+               r"|Sequence|Iterable|Callable|Any|Expr|Symbol|Matrix|ndarray|DataFrame|Series"
+               r"|Figure|Axes)\b.*"),
+]
+
+html_theme = "furo"
+html_title = f"jetnh {release}"
+html_static_path = []
