@@ -217,3 +217,34 @@ def radial_line() -> System:
     return System(J, L, [y * xd - x * yd], [y], defaults={m: 1.0, k: 1.0},
                   name="particle on a line through the origin")
 
+
+
+@model("heisenberg", initial=dict(x=0.0, y=0.2, z=0.0, x_t=1.0, y_t=0.5), t_end=1.0,
+       tags=("affine", "nonholonomic", "sub-Riemannian"))
+def heisenberg() -> System:
+    """Heisenberg system: a particle in the plane whose z records the swept area.
+
+    Source: Brockett, "Control theory and singular Riemannian geometry" (1981); Bloch
+    (2003), ch. 1 (the Heisenberg system); Montgomery, *A Tour of Subriemannian
+    Geometries* (2002), ch. 1.  Coordinates (x, y, z), mass m: L = m (xdot^2 + ydot^2)/2
+    (z carries no kinetic energy); constraint zdot - (x ydot - y xdot) = 0; dependent z.
+    The distribution is the symmetric contact distribution of the Heisenberg group; its
+    vakonomic extremals are sub-Riemannian geodesics (circles in the (x, y) plane).
+
+    Chetaev: the reaction is along (y, -x, 1), so mxddot = nu y, m yddot = -nu x with
+    nu = 0 (L does not involve zdot): the projection moves on straight lines,
+    x = x0 + xdot0 t, y = y0 + ydot0 t.  Vakonomic (F = L + lambda f): lambdadot = 0 and
+    m xddot = -2 lambda ydot, m yddot = 2 lambda xdot: circles of angular rate
+    2 lambda/m.
+    First integrals.  Chetaev: xdot, ydot, the angular momentum x ydot - y xdot, and the
+    energy m (xdot^2 + ydot^2)/2.  Vakonomic (and Hoelder): lambda, m xdot + 2 lambda y,
+    m ydot - 2 lambda x (the momenta of the translations x -> x + a, z -> z + a y and
+    y -> y + b, z -> z - b x) and the energy.
+    """
+    J = JetSpace("x y z")
+    x, y, z = J.q
+    xd, yd, zd = J.qd
+    m = sp.Symbol("m")
+    L = m * (xd**2 + yd**2) / 2
+    return System(J, L, [zd - (x * yd - y * xd)], [z], defaults={m: 1.0},
+                  name="Heisenberg system")
