@@ -84,6 +84,16 @@ class Problem:
     def values(self, point):                           # pragma: no cover - interface
         raise NotImplementedError
 
+    def points(self, rng, count, fixed=None):
+        """``count`` distinct random points (those of as many condition rows)."""
+        out, seen = [], set()
+        while len(out) < count:
+            for _, p in self.rows(rng, count - len(out), fixed):
+                if id(p) not in seen:
+                    seen.add(id(p))
+                    out.append(p)
+        return out
+
 
 def random_parameters(params, rng, wide=False) -> dict:
     """Positive random rationals: in [1/2, 2], or of larger height (``wide``)."""
@@ -104,7 +114,7 @@ def solve(problem: Problem, what: str, max_degree: int = MAX_PARAMETER_DEGREE) -
     if not null:
         return []
     # the functions of the null vectors at random points (theta0): their rank is r
-    pts = [p for _, p in problem.rows(rng, len(null) + 4, theta0)]
+    pts = problem.points(rng, len(null) + 4, theta0)
     F = [problem.values(p) for p in pts]
     with mpmath.workdps(DPS):
         r = _rank([[mpmath.fsum(_mp(f[j]) * v[j] for j in range(n) if v[j]) for v in null]
@@ -169,7 +179,7 @@ def _reduce(problem, vecs, support, atoms, cols, r, monos=None):
     n = problem.n
     rng = random.Random(99)
     theta1 = random_parameters(problem.parameters, rng, wide=True)
-    pts = [p for _, p in problem.rows(rng, len(support) + 4, theta1)]
+    pts = problem.points(rng, len(support) + 4, theta1)
     F = [problem.values(p) for p in pts]
     th = _atom_values(atoms, pts[0]) if atoms else []
     deg = {e: sum(e) for e in (monos or [()])}

@@ -151,13 +151,18 @@ class Sampler:
 
     def draw(self, exprs, rng, count, fixed=None):
         """``count`` (values, point) pairs at random regular points."""
-        out = []
+        out, misses = [], 0
         while len(out) < count:
             p = self.point(rng, fixed)
             try:
                 out.append((self.values(exprs, p), p))
-            except (ZeroDivisionError, ValueError):
-                continue
+            except (ZeroDivisionError, ValueError) as exc:
+                misses += 1
+                if misses > 100 + 10 * count:
+                    raise JetnhError(
+                        f"internal: {misses} random points were singular or incomplete "
+                        f"({exc!r}); the ansatz conditions may be undefined almost "
+                        "everywhere; please report") from None
         return out
 
 
