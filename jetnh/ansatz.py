@@ -117,7 +117,7 @@ def solve(problem: Problem, what: str, max_degree: int = MAX_PARAMETER_DEGREE) -
     pts = problem.points(rng, len(null) + 4, theta0)
     F = [problem.values(p) for p in pts]
     with mpmath.workdps(DPS):
-        r = _rank([[mpmath.fsum(_mp(f[j]) * v[j] for j in range(n) if v[j]) for v in null]
+        r = _rank([[mpmath.fsum(to_mpf(f[j]) * v[j] for j in range(n) if v[j]) for v in null]
                    for f in F])
     if r == 0:
         return []
@@ -136,7 +136,7 @@ def solve(problem: Problem, what: str, max_degree: int = MAX_PARAMETER_DEGREE) -
             th = _atom_values(atoms, p)
             with mpmath.workdps(DPS + 10):
                 tv = {e: _prod(th, e) for e in monos}
-                rows.append([_mp(row[j]) * tv[e] for j, e in cols])
+                rows.append([to_mpf(row[j]) * tv[e] for j, e in cols])
         A, piv = _rref(rows, len(cols))
         vecs = [_read(v) for v in _null_vectors(A, piv, len(cols))]
         found, rank = _reduce(problem, vecs, support, atoms, cols, r, monos)
@@ -150,7 +150,7 @@ def solve(problem: Problem, what: str, max_degree: int = MAX_PARAMETER_DEGREE) -
     return found
 
 
-def _mp(x):
+def to_mpf(x):
     """A value as an mpf (exact rationals converted at the working precision)."""
     if isinstance(x, sp.Rational):
         return mpmath.mpf(int(x.p)) / int(x.q)
@@ -159,7 +159,7 @@ def _mp(x):
 
 def _atom_values(atoms, point):
     with mpmath.workdps(DPS + 10):
-        return [_mp(point[a]) if a in point else dag.evaluate(a, point, dps=DPS + 10)
+        return [to_mpf(point[a]) if a in point else dag.evaluate(a, point, dps=DPS + 10)
                 for a in atoms]
 
 
@@ -188,7 +188,7 @@ def _reduce(problem, vecs, support, atoms, cols, r, monos=None):
         c = [mpmath.mpf(0)] * n
         for (j, e), x in zip(cols if atoms else [(j, ()) for j in range(n)], v):
             if x:
-                c[j] += _mp(x) * (_prod(th, e) if atoms else 1)
+                c[j] += to_mpf(x) * (_prod(th, e) if atoms else 1)
         return c
 
     if atoms:
@@ -209,7 +209,7 @@ def _reduce(problem, vecs, support, atoms, cols, r, monos=None):
     for v in ordered:
         with mpmath.workdps(DPS + 10):
             c = coeffs(v)
-            w = [_frac(mpmath.fsum(_mp(f[j]) * c[j] for j in range(n) if c[j])) for f in F]
+            w = [_frac(mpmath.fsum(to_mpf(f[j]) * c[j] for j in range(n) if c[j])) for f in F]
         if _extends(rows, w):
             kept.append(v)
             if len(kept) == r:

@@ -62,11 +62,15 @@ def conserved_quantities(sysm, principle, degree=2, coefficients=None) -> list:
     lam = list(eom.multipliers) if principle in _WITH_MULTIPLIERS else []
     rates = list(eom.multiplier_rates) if lam else []
     qdd = [J.jet(q, 2) for q in sysm.independent]
-    needed = [acc[a] for a in qdd + rates]
+    def on_manifold(syms):
+        return dag.xreplace([acc[a] for a in syms], sysm.phi) if sysm.phi else \
+            [acc[a] for a in syms]
+
+    needed = on_manifold(qdd + rates)
     if not lam and any(dag.free_symbols(e) & set(eom.multipliers) for e in needed):
         lam = list(eom.multipliers)               # the motion depends on them: keep them
         rates = list(eom.multiplier_rates)
-        needed = [acc[a] for a in qdd + rates]
+        needed = on_manifold(qdd + rates)
     U = vel + lam
     monos = [e for d in range(degree + 1) for e in _exponents(len(U), d)]
     base = {J.t, *J.q}
@@ -193,24 +197,30 @@ class _Integrals(ansatz.Problem):
             [grads[i * n1:(i + 1) * n1] for i in range(c)]
 
     def rows(self, rng, count, fixed=None):
-        out = []
-        U, monos = self.U, self.monos
-        for vals, p in self.sampler.draw(self.exprs, rng, count, fixed):
+        return [(self._row(vals, p), p)
+                for vals, p in self.sampler.draw(self.exprs, rng, count, fixed)]
+
+    def _u(self, p):
+        return [p[x] if self.exact else ansatz.to_mpf(p[x]) for x in self.U]
+
+    def _row(self, vals, p):
+        U = self.U
+        with mpmath.workdps(DPS + 10):
             qdot, accel, gv, grads = self._split(vals)
-            u = [p[x] for x in U]
+            u = self._u(p)
             Dg = [gr[0] + sum(d * v for d, v in zip(gr[1:], qdot)) for gr in grads]
             mv, dm = {}, {}
-            for e in monos:
+            for e in self.monos:
                 mv[e] = _prod(u, e)
                 dm[e] = sum((e[k] * _prod(u, e[:k] + (e[k] - 1,) + e[k + 1:]) * accel[k]
                              for k in range(len(U)) if e[k]), 0)
-            out.append(([Dg[i] * mv[e] + gv[i] * dm[e] for i, e in self.pairs], p))
-        return out
+            return [Dg[i] * mv[e] + gv[i] * dm[e] for i, e in self.pairs]
 
     def values(self, point):
         gv = self.sampler.values(self.G, point)
-        u = [point[x] for x in self.U]
-        return [gv[i] * _prod(u, e) for i, e in self.pairs]
+        with mpmath.workdps(DPS + 10):
+            u = self._u(point)
+            return [gv[i] * _prod(u, e) for i, e in self.pairs]
 
 
 def _prod(u, e):

@@ -77,7 +77,7 @@ class NoetherSymmetry:
 
     @property
     def xi(self):
-        """coordinate -> xi^s (read-only)."""
+        """coordinate -> xi^s, the nonzero ones (read-only)."""
         return MappingProxyType(dict(self.xi_items))
 
     def __repr__(self):
@@ -199,7 +199,10 @@ class _Linear(ansatz.Problem):
 
     def values(self, point):
         gv = self.sampler.values(self.funcs, point)
-        return [g * point[self.W[k]] for g, k in zip(gv, self.comp)]
+        if self.sampler.exact:
+            return [g * point[self.W[k]] for g, k in zip(gv, self.comp)]
+        with mpmath.workdps(ansatz.DPS + 10):
+            return [g * ansatz.to_mpf(point[self.W[k]]) for g, k in zip(gv, self.comp)]
 
 
 # ---------------------------------------------------------------------- Noether
@@ -261,7 +264,8 @@ def _prove_noether(S, sampler, xi0, xi, G):
     prove_conserved(sysm, S.eom.J, I, S.acc, sampler, S.U)
     if dag.size(I, 2000) < 2000:
         I = sp.expand(I)                        # small: the readable form
-    return NoetherSymmetry(S.principle, xi0, tuple(zip(sysm.J.q, xi)), G, I)
+    return NoetherSymmetry(S.principle, xi0, tuple((q, e) for q, e in zip(sysm.J.q, xi) if e != 0),
+                           G, I)
 
 
 def _vanishes(e, sampler, what):
@@ -368,5 +372,6 @@ def lie_symmetries(sysm, principle, degree=1, coefficients=None) -> list:
         total = [sp.Add(*[c * e for c, e in zip(vec, col)]) for col in zip(*conds)]
         for e in total:
             _vanishes(e, problem.sampler, "a determining equation")
-        out.append(LieSymmetry(principle, parts[0], tuple(zip(bases, parts[1:]))))
+        out.append(LieSymmetry(principle, parts[0],
+                               tuple((b, e) for b, e in zip(bases, parts[1:]) if e != 0)))
     return out
