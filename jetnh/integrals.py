@@ -135,8 +135,10 @@ class Sampler:
                          for e in exprs)
 
     def point(self, rng, fixed=None):
-        """Rationals in [-2, 2]; parameters from ``fixed`` or in [1/2, 2]."""
-        p = {s: sp.Rational(rng.randint(-24, 24), rng.randint(7, 12))
+        """Nonzero rationals in [-2, 2] of moderate height (never 0 or a small integer,
+        where charts such as Euler angles are singular); parameters from ``fixed`` or in
+        [1/2, 2]."""
+        p = {s: sp.Rational(rng.choice((-1, 1)) * rng.randint(1, 90), rng.randint(41, 47))
              for s in self.vars if s not in self.parameters}
         p.update(fixed if fixed is not None else
                  ansatz.random_parameters(self.parameters, rng))
