@@ -69,8 +69,9 @@ def parameter_atoms(exprs, parameters) -> tuple:
 
 
 class Problem:
-    """What the solver needs: ``n`` unknowns, ``rows(rng, count, fixed)`` condition rows at
-    random points (parameters from ``fixed`` when given), each returned with its point, and
+    """What the solver needs: ``n`` unknowns, ``rows(rng, count, fixed, columns)`` condition
+    rows at random points (parameters from ``fixed`` when given; only the unknowns
+    ``columns`` when given), each returned with its point, and
     ``values(point)``, the n ansatz functions' values there (to recognise solutions that
     vanish identically, and to rank solutions over the parameters)."""
 
@@ -78,7 +79,7 @@ class Problem:
     parameters: tuple = ()
     atoms: tuple = ()
 
-    def rows(self, rng, count, fixed=None):           # pragma: no cover - interface
+    def rows(self, rng, count, fixed=None, columns=None):   # pragma: no cover - interface
         raise NotImplementedError
 
     def values(self, point):                           # pragma: no cover - interface
@@ -132,11 +133,12 @@ def solve(problem: Problem, what: str, max_degree: int = MAX_PARAMETER_DEGREE) -
         if len(cols) > BUDGET:
             break
         rows = []
-        for row, p in problem.rows(rng, 2 * len(cols) + 4):
+        where = {j: i for i, j in enumerate(support)}
+        for row, p in problem.rows(rng, 2 * len(cols) + 4, columns=support):
             th = _atom_values(atoms, p)
             with mpmath.workdps(DPS + 10):
                 tv = {e: _prod(th, e) for e in monos}
-                rows.append([to_mpf(row[j]) * tv[e] for j, e in cols])
+                rows.append([to_mpf(row[where[j]]) * tv[e] for j, e in cols])
         A, piv = _rref(rows, len(cols))
         vecs = [_read(v) for v in _null_vectors(A, piv, len(cols))]
         found, rank = _reduce(problem, vecs, support, atoms, cols, r, monos)
@@ -154,6 +156,9 @@ def to_mpf(x):
     """A value as an mpf (exact rationals converted at the working precision)."""
     if isinstance(x, sp.Rational):
         return mpmath.mpf(int(x.p)) / int(x.q)
+    if isinstance(x, (Fraction, int)):
+        x = Fraction(x)
+        return mpmath.mpf(x.numerator) / x.denominator
     return mpmath.mpf(x)
 
 
@@ -253,8 +258,7 @@ def _rref(rows, n):
     with mpmath.workdps(DPS):
         A = []
         for r in rows:
-            r = [mpmath.mpf(int(v.p)) / int(v.q) if isinstance(v, sp.Rational) else
-                 mpmath.mpf(v) for v in r]
+            r = [to_mpf(v) for v in r]
             s = max((abs(v) for v in r), default=0)
             if s:
                 A.append([int(mpmath.nint(v / s * 2**P)) for v in r])

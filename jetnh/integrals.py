@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import itertools
 import random
+from fractions import Fraction
 
 import mpmath
 import sympy as sp
@@ -198,31 +199,40 @@ class _Integrals(ansatz.Problem):
         return vals[:a], vals[a:a + b], vals[a + b:a + b + c], \
             [grads[i * n1:(i + 1) * n1] for i in range(c)]
 
-    def rows(self, rng, count, fixed=None):
-        return [(self._row(vals, p), p)
+    def rows(self, rng, count, fixed=None, columns=None):
+        pairs = self.pairs if columns is None else [self.pairs[j] for j in columns]
+        return [(self._row(vals, p, pairs), p)
                 for vals, p in self.sampler.draw(self.exprs, rng, count, fixed)]
 
     def _u(self, p):
-        return [p[x] if self.exact else ansatz.to_mpf(p[x]) for x in self.U]
+        return [_fraction(p[x]) if self.exact else ansatz.to_mpf(p[x]) for x in self.U]
 
-    def _row(self, vals, p):
+    def _row(self, vals, p, pairs):
         U = self.U
         with mpmath.workdps(DPS + 10):
+            if self.exact:                  # Fractions: much faster than sympy Rationals
+                vals = [_fraction(v) for v in vals]
             qdot, accel, gv, grads = self._split(vals)
             u = self._u(p)
             Dg = [gr[0] + sum(d * v for d, v in zip(gr[1:], qdot)) for gr in grads]
             mv, dm = {}, {}
-            for e in self.monos:
+            for e in {e for _, e in pairs}:
                 mv[e] = _prod(u, e)
                 dm[e] = sum((e[k] * _prod(u, e[:k] + (e[k] - 1,) + e[k + 1:]) * accel[k]
                              for k in range(len(U)) if e[k]), 0)
-            return [Dg[i] * mv[e] + gv[i] * dm[e] for i, e in self.pairs]
+            return [Dg[i] * mv[e] + gv[i] * dm[e] for i, e in pairs]
 
     def values(self, point):
         gv = self.sampler.values(self.G, point)
+        if self.exact:
+            gv = [_fraction(v) for v in gv]
         with mpmath.workdps(DPS + 10):
             u = self._u(point)
             return [gv[i] * _prod(u, e) for i, e in self.pairs]
+
+
+def _fraction(v):
+    return Fraction(int(v.p), int(v.q))
 
 
 def _prod(u, e):

@@ -188,13 +188,13 @@ class _Linear(ansatz.Problem):
         self.flat = flat
         self.ncond = len(conds[0]) if conds else 0
 
-    def rows(self, rng, count, fixed=None):
+    def rows(self, rng, count, fixed=None, columns=None):
         out = []
         m = self.ncond
-        per = max(1, m)
-        for vals, p in self.sampler.draw(self.flat, rng, -(-count // per), fixed):
+        cols = range(self.n) if columns is None else columns
+        for vals, p in self.sampler.draw(self.flat, rng, -(-count // max(1, m)), fixed):
             for c in range(m):
-                out.append(([vals[j * m + c] for j in range(self.n)], p))
+                out.append(([vals[j * m + c] for j in cols], p))
         return out[:max(count, 1)]
 
     def values(self, point):
