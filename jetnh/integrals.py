@@ -28,7 +28,6 @@ from .ansatz import monomial as _mono
 from .constraints import PRINCIPLES, System
 from .errors import ArgumentError, JetnhError, PrincipleError
 
-BUDGET = ansatz.BUDGET
 DPS = ansatz.DPS
 
 _WITH_MULTIPLIERS = ("vakonomic", "holder")
@@ -77,7 +76,7 @@ def conserved_quantities(sysm, principle, degree=2, coefficients=None) -> list:
     base = {J.t, *J.q}
     pairs = [(i, e) for i, g in enumerate(G) for e in monos
              if sum(e) or g.free_symbols & base]          # no constant
-    if len(pairs) > BUDGET:
+    if len(pairs) > ansatz.BUDGET:
         raise ansatz.budget_error(
             len(pairs), f"{len(G)} coefficient functions x {len(monos)} monomials of degree "
             f"<= {degree} in {len(U)} velocities and multipliers")
