@@ -40,6 +40,9 @@ BUDGET = 400            # unknowns of one linear solve
 DPS = 50                # digits of the numeric route
 MAX_PARAMETER_DEGREE = 3
 _TOL = mpmath.mpf(10) ** -30
+# an entry of a condition row below this is the rounding of an exact cancellation (the
+# rows are evaluated at 60 digits from terms of order one at the sampled points)
+_ZERO = mpmath.mpf(10) ** -45
 
 
 def exponents(n, d):
@@ -259,6 +262,7 @@ def _rref(rows, n):
         A = []
         for r in rows:
             r = [to_mpf(v) for v in r]
+            r = [v if abs(v) > _ZERO else 0 for v in r]     # cancellation noise
             s = max((abs(v) for v in r), default=0)
             if s:
                 A.append([int(mpmath.nint(v / s * 2**P)) for v in r])
