@@ -121,8 +121,8 @@ def solve(problem: Problem, what: str, max_degree: int = MAX_PARAMETER_DEGREE) -
     pts = problem.points(rng, len(null) + 4, theta0)
     F = [problem.values(p) for p in pts]
     with mpmath.workdps(DPS):
-        r = _rank([[mpmath.fsum(to_mpf(f[j]) * v[j] for j in range(n) if v[j]) for v in null]
-                   for f in F])
+        # with the constant function first: solutions that are constants do not count
+        r = _rank([[mpmath.mpf(1)] + [_combine(f, v) for v in null] for f in F]) - 1
     if r == 0:
         return []
     support = sorted({j for v in null for j in range(n) if abs(v[j]) > _TOL})
@@ -214,10 +214,11 @@ def _reduce(problem, vecs, support, atoms, cols, r, monos=None):
     else:
         ordered = vecs
     kept, rows = [], []
+    _extends(rows, [Fraction(1)] * len(F))      # constants are not solutions
     for v in ordered:
         with mpmath.workdps(DPS + 10):
             c = coeffs(v)
-            w = [_frac(mpmath.fsum(to_mpf(f[j]) * c[j] for j in range(n) if c[j])) for f in F]
+            w = [_frac(_combine(f, c)) for f in F]
         if _extends(rows, w):
             kept.append(v)
             if len(kept) == r:
@@ -230,6 +231,14 @@ def _reduce(problem, vecs, support, atoms, cols, r, monos=None):
                 c[j] += x * (monomial(atoms, e) if atoms else 1)
         out.append(c)
     return out, len(kept)
+
+
+def _combine(f, c):
+    """sum_j f_j c_j, or 0 when it is below 1e-30 of the sum of |f_j c_j| (an exact
+    cancellation, e.g. sin^2 + cos^2 - 1, seen at finite precision)."""
+    terms = [to_mpf(f[j]) * c[j] for j in range(len(c)) if c[j]]
+    v = mpmath.fsum(terms)
+    return v if abs(v) > _TOL * mpmath.fsum(abs(x) for x in terms) else mpmath.mpf(0)
 
 
 def _frac(x):
