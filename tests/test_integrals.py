@@ -155,3 +155,15 @@ def test_planted_cyclic_with_parameter(a, b):
     assert any(sp.cancel(I / pw).free_symbols <= {c} for I in basis)
     for I in basis:
         assert _DI_numeric(s, "chetaev", I) < 1e-30
+
+
+def test_dependent_coefficients_give_no_trivial_quantity():
+    """sin(y)^2 + cos(y)^2 = 1 among the coefficient functions: neither the constant nor
+    the identically vanishing combinations come back."""
+    s = models.get("nonholonomic_particle")
+    x, y, z = s.J.q
+    xd, yd, _ = s.J.qd
+    basis = jn.conserved_quantities(s, "chetaev", degree=1,
+                                    coefficients=[1, sp.sin(y)**2, sp.cos(y)**2])
+    assert len(basis) == 1
+    assert sp.simplify(basis[0] / yd).is_number

@@ -394,13 +394,23 @@ CATALOGUE_INTEGRALS = {
                     ["m*((x_t - U)**2 + y_t**2)/2 - m*g*sin(alpha)*(x - U*t)"]),
         "suslov": (2, "1/cos(w*t)**2, x, t", ["(x_t - U)/cos(w*t)**2 - g*sin(alpha)*t"])},
     "bead_on_parabola": {
-        "chetaev": (2, "1, x, x**2, y", ["y - a*x**2", "m*(x_t**2 + y_t**2)/2 + m*g*y"])},
+        "chetaev": (2, "1, x, x**2, y", ["y - a*x**2", "m*(x_t**2 + y_t**2)/2 + m*g*y"]),
+        "vakonomic": (2, "1, x, x**2, y, t", ["y - a*x**2", "m*(x_t**2 + y_t**2)/2 + m*g*y",
+                                              "a*m*x*x_t + g*m*t/2 + lambda_y/2"])},
     "radial_line": {
         "chetaev": (2, "1, x**2, y**2, x*y, y/x, 1/x**2, y**2/x**2",
                     ["y/x", "m*(x_t**2 + y_t**2)/2 - m*k*(x**2 + y**2)/2"])},
     "rolling_ball": {
         "chetaev": (1, "1, " + _TH, list(_OMEGA.values())),
-        "suslov": (1, "1, " + _TH, [_OMEGA["wz"]], [_OMEGA["wx"]])},
+        "suslov": (1, "1, " + _TH, [_OMEGA["wz"]], [_OMEGA["wx"]]),
+        "vakonomic": (1, "1, " + _TH, [f"m*r*({_OMEGA['wx']}) - lambda_y",
+                                       f"m*r*({_OMEGA['wy']}) + lambda_x"])},
+    "suslov_rigid_body": {
+        "suslov": (1, "sin(theta)*sin(psi), cos(psi), sin(theta)*cos(psi), sin(psi)",
+                   [INTEGRALS["suslov_rigid_body"]["O1"], INTEGRALS["suslov_rigid_body"]["O2"]])},
+    "suslov_rigid_body": {
+        "suslov": (1, "sin(theta)*sin(psi), cos(psi), sin(theta)*cos(psi), sin(psi)",
+                   [INTEGRALS["suslov_rigid_body"]["O1"], INTEGRALS["suslov_rigid_body"]["O2"]])},
     "ball_on_turntable": {"chetaev": (1, "1, cos(theta)", [_OMEGA["wz"]])},
     "damped_knife_edge": {
         "chetaev": (1, "exp(c*t/m)/cos(phi), exp(c_r*t/I)",
