@@ -257,3 +257,25 @@ def test_results_are_immutable_values():
         sym.quantity = 0
     with pytest.raises(TypeError):
         sym.xi[s.J.q[0]] = 0
+
+
+def test_forces_enter_the_noether_identity():
+    """With a viscous force on x only, d/dy stays a symmetry (m ydot) and neither d/dx nor
+    d/dt is one (Q_x xibar^x and Q_x xdot do not vanish): Bahar & Kwatny's forced identity."""
+    J = jn.JetSpace("x y z")
+    x, y, z = J.q
+    xd, yd, zd = J.qd
+    m, c = sp.symbols("m c")
+    s = jn.System(J, m * (xd**2 + yd**2 + zd**2) / 2, [zd - y * xd], [z],
+                  forces={x: -c * xd})
+    dy = jn.LieSymmetry("given", sp.S.Zero, ((y, sp.S.One),))
+    dx = jn.LieSymmetry("given", sp.S.Zero, ((x, sp.S.One), (z, y)))
+    dt = jn.LieSymmetry("given", sp.S.One, ())
+    I = jn.is_noether(s, "chetaev", dy)
+    assert I is not None and sp.expand(I.quantity - m * yd) == 0
+    assert jn.is_noether(s, "chetaev", dx) is None
+    assert jn.is_noether(s, "chetaev", dt) is None
+    free = jn.System(J, s.L, [zd - y * xd], [z])
+    assert jn.is_noether(free, "chetaev", dt) is not None
+    for sym in jn.noether_symmetries(s, "chetaev", degree=1):
+        assert conserved_exactly(s, "chetaev", sym.quantity)
