@@ -351,7 +351,7 @@ def lie_symmetries(sysm, principle, degree=1, coefficients=None) -> list:
     shell = {v: sysm.phi[v] for v in sysm.dependent_velocities}
     shell.update({J.jet(q, 2): on(acc[J0.jet(q, 2)]) for q in J.q})
     shell.update({r: on(acc[sp.Symbol(r.name)]) for r in rates})
-    conds, funcs, comp, fields_ = [], [], [], []
+    conds, funcs, comp = [], [], []
     for k in range(len(bases) + 1):
         for gi in (g if k <= J0.n else gl):
             V = prolong(J, {bases[k - 1]: gi} if k else {}, xi=gi if k == 0 else 0, order=2)

@@ -408,9 +408,6 @@ CATALOGUE_INTEGRALS = {
     "suslov_rigid_body": {
         "suslov": (1, "sin(theta)*sin(psi), cos(psi), sin(theta)*cos(psi), sin(psi)",
                    [INTEGRALS["suslov_rigid_body"]["O1"], INTEGRALS["suslov_rigid_body"]["O2"]])},
-    "suslov_rigid_body": {
-        "suslov": (1, "sin(theta)*sin(psi), cos(psi), sin(theta)*cos(psi), sin(psi)",
-                   [INTEGRALS["suslov_rigid_body"]["O1"], INTEGRALS["suslov_rigid_body"]["O2"]])},
     "ball_on_turntable": {"chetaev": (1, "1, cos(theta)", [_OMEGA["wz"]])},
     "damped_knife_edge": {
         "chetaev": (1, "exp(c*t/m)/cos(phi), exp(c_r*t/I)",
