@@ -57,7 +57,7 @@ def conserved_quantities(sysm, principle, degree=2, coefficients=None) -> list:
     J = sysm.J
     eom = sysm.equations(principle)
     acc = eom.accelerations()                       # its errors propagate
-    G = _coefficients(sysm, coefficients, degree)
+    G = coefficient_functions(sysm, coefficients, degree)
     vel = list(sysm.independent_velocities)
     lam = list(eom.multipliers) if principle in _WITH_MULTIPLIERS else []
     rates = list(eom.multiplier_rates) if lam else []
@@ -91,7 +91,9 @@ def conserved_quantities(sysm, principle, degree=2, coefficients=None) -> list:
 
 
 # ---------------------------------------------------------------------- the ansatz
-def _coefficients(sysm, coefficients, degree):
+def coefficient_functions(sysm, coefficients, degree):
+    """The coefficient functions of an ansatz: ``coefficients`` checked, or the monomials
+    in t and q of degree <= ``degree``."""
     J = sysm.J
     base = [J.t, *J.q]
     if coefficients is None:

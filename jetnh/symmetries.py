@@ -53,7 +53,7 @@ from . import ansatz, dag
 from .ansatz import exponents, monomial
 from .errors import ArgumentError, JetnhError
 from .fields import prolong
-from .integrals import Sampler, check_arguments, prove_conserved
+from .integrals import Sampler, check_arguments, coefficient_functions, prove_conserved
 
 _WIDTH = 72             # characters of each expression in a repr
 
@@ -161,15 +161,13 @@ class _Setting:
         return I
 
 
-def _functions(sysm, coefficients, degree, what, extra=()):
+def _functions(sysm, coefficients, degree, extra=()):
     """The ansatz functions of (t, q[, extra]): ``coefficients`` or the monomials."""
     J = sysm.J
     base = [J.t, *J.q, *extra]
     if coefficients is None:
         return [monomial(base, e) for d in range(degree + 1) for e in exponents(len(base), d)]
-    from .integrals import _coefficients
-
-    return _coefficients(sysm, coefficients, degree)
+    return coefficient_functions(sysm, coefficients, degree)
 
 
 class _Linear(ansatz.Problem):
@@ -220,7 +218,7 @@ def noether_symmetries(sysm, principle, degree=1, coefficients=None) -> list:
     check_arguments(sysm, principle, degree, "noether_symmetries")
     S = _Setting(sysm, principle)
     J = sysm.J
-    g = _functions(sysm, coefficients, degree, "noether_symmetries")
+    g = _functions(sysm, coefficients, degree)
     base = [J.t, *J.q]
     h = [monomial(base, e) for d in range(1, degree + 2) for e in exponents(len(base), d)]
     n = J.n
@@ -336,8 +334,8 @@ def lie_symmetries(sysm, principle, degree=1, coefficients=None) -> list:
     J = J0.with_fields(tuple(m.name for m in lams)) if lams else J0
     lams = tuple(J.fields)
     bases = (*J.q, *lams)
-    g = _functions(sysm, coefficients, degree, "lie_symmetries")
-    gl = _functions(sysm, coefficients, degree, "lie_symmetries", lams) if lams else []
+    g = _functions(sysm, coefficients, degree)
+    gl = _functions(sysm, coefficients, degree, lams) if lams else []
     count = (J0.n + 1) * len(g) + len(lams) * len(gl)
     if count > ansatz.BUDGET:
         raise ansatz.budget_error(count, f"{len(bases) + 1} components x {len(g)} functions")
