@@ -186,7 +186,8 @@ class _Integrals(ansatz.Problem):
         self.exprs = [*qdot, *needed, *G, *itertools.chain(*grads)]
         self.sizes = (len(qdot), len(needed), len(G))
         self.parameters = sysm.parameters
-        self.atoms = ansatz.parameter_atoms([*sysm._inputs, *G], sysm.parameters)
+        self.atoms = ansatz.parameter_atoms([sysm.L, *sysm.constraints, *sysm.Q, *G],
+                                             sysm.parameters)
         self.sampler = Sampler([J.t, *sysm.J.q, *U], sysm.parameters, self.exprs)
         self.exact = self.sampler.exact
 

@@ -180,7 +180,8 @@ class _Linear(ansatz.Problem):
         self.conds, self.funcs, self.comp = conds, funcs, comp
         self.W = sp.symbols(f"_w0:{ncomp}", cls=sp.Dummy)
         self.parameters = sysm.parameters
-        self.atoms = ansatz.parameter_atoms([*sysm._inputs, *funcs], sysm.parameters)
+        self.atoms = ansatz.parameter_atoms([sysm.L, *sysm.constraints, *sysm.Q, *funcs],
+                                             sysm.parameters)
         flat = list(itertools.chain(*conds))
         self.sampler = Sampler([*variables, *self.W], sysm.parameters, flat + funcs)
         self.flat = flat
