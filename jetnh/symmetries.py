@@ -122,7 +122,8 @@ class _Setting:
             self.F = sysm.L + sp.Add(*[m * f for m, f in zip(self.lams, self.eom.constraints)])
             self.vel, self.restrict = tuple(J.qd), False
         else:
-            self.F, self.vel, self.restrict = sysm.L_tilde, tuple(sysm.independent_velocities), True
+            self.F, self.restrict = sysm.L_tilde, True
+            self.vel = tuple(sysm.independent_velocities)
         self.qdot = [sysm.phi.get(v, v) for v in J.qd]
         self.U = tuple(sysm.independent_velocities) + self.lams
         on = sysm.on_constraints

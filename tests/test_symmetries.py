@@ -73,7 +73,7 @@ def test_nonholonomic_particle_noether_by_principle():
     assert (0, {y: 1}) in gens("chetaev") and (0, {z: 1}) in gens("vakonomic")
     assert (0, {x: 1}) in gens("vakonomic") and (0, {x: 1}) not in gens("chetaev")
     assert gens("holder") == gens("vakonomic")     # (22) is (15) in the paper's convention
-    # Suslov conserves (1 + y^2) xdot (the symmetry d/dx + y d/dz), not Chetaev's xdot sqrt(1 + y^2)
+    # Suslov conserves (1 + y^2) xdot (from d/dx + y d/dz), not Chetaev's xdot sqrt(1 + y^2)
     assert any(proportional(sym.quantity, (1 + y**2) * xd, s.J.qd) for sym in found["suslov"])
     # Chetaev: the Galilean boost -t d/dy with gauge m y (Bahar & Kwatny's gauge term)
     assert any(sym.xi0 == 0 and dict(sym.xi) == {y: -s.J.t} and sym.gauge == m * y

@@ -241,15 +241,15 @@ def heisenberg() -> System:
     The distribution is the symmetric contact distribution of the Heisenberg group; its
     vakonomic extremals are sub-Riemannian geodesics (circles in the (x, y) plane).
 
-    Chetaev: the reaction is along (y, -x, 1), so mxddot = nu y, m yddot = -nu x with
+    Chetaev: the reaction is along (y, -x, 1), so m xddot = nu y, m yddot = -nu x with
     nu = 0 (L does not involve zdot): the projection moves on straight lines,
     x = x0 + xdot0 t, y = y0 + ydot0 t.  Vakonomic (F = L + lambda f): lambdadot = 0 and
     m xddot = -2 lambda ydot, m yddot = 2 lambda xdot: circles of angular rate
     2 lambda/m.
     First integrals.  Chetaev and Suslov (L~ = L): xdot, ydot, the angular momentum
-    x ydot - y xdot, and the energy m (xdot^2 + ydot^2)/2.  Vakonomic (and Hoelder): lambda, m xdot + 2 lambda y,
-    m ydot - 2 lambda x (the momenta of the translations x -> x + a, z -> z + a y and
-    y -> y + b, z -> z - b x) and the energy.
+    x ydot - y xdot, and the energy m (xdot^2 + ydot^2)/2.  Vakonomic (and Hoelder):
+    lambda, m xdot + 2 lambda y, m ydot - 2 lambda x (the momenta of the translations
+    x -> x + a, z -> z + a y and y -> y + b, z -> z - b x) and the energy.
     """
     J = JetSpace("x y z")
     x, y, z = J.q
