@@ -192,10 +192,11 @@ class _Linear(ansatz.Problem):
         out = []
         m = self.ncond
         cols = range(self.n) if columns is None else columns
-        for vals, p in self.sampler.draw(self.flat, rng, -(-count // max(1, m)), fixed):
+        # a point per row asked for: the m rows of one point may be dependent
+        for vals, p in self.sampler.draw(self.flat, rng, count, fixed):
             for c in range(m):
                 out.append(([vals[j * m + c] for j in cols], p))
-        return out[:max(count, 1)]
+        return out
 
     def values(self, point):
         gv = self.sampler.values(self.funcs, point)
