@@ -4,7 +4,8 @@ The public contract: ``JetSpace``, ``System``, ``System.equations``,
 ``Equations.accelerations``, ``Scene`` and its ``Trajectory``; ``compare`` decides when two
 principles share solutions; ``sweep`` runs a scene over a grid of parameters and initial
 values (here or on Dask); ``from_mechanics`` reads a sympy.physics.mechanics
-``LagrangesMethod``.
+``LagrangesMethod``; ``conserved_quantities``, ``noether_symmetries``, ``lie_symmetries``
+and ``is_noether`` find and prove first integrals and symmetries under each principle.
 """
 
 from .constraints import PRINCIPLES, System
@@ -16,13 +17,17 @@ from .errors import (ArgumentError, ConstraintError, IntegrationError, JetnhErro
 from .integrals import conserved_quantities
 from .jet import JetSpace
 from .mechanics import from_mechanics
+from .symmetries import (LieSymmetry, NoetherSymmetry, is_noether, lie_symmetries,
+                         noether_symmetries)
 # bound here, not in __getattr__: a later `import jetnh.sweep` would rebind the name to the
 # module; jetnh/sweep.py is light (pandas, Dask and numba are imported when it runs)
 from .sweep import sweep
 
 __version__ = "0.1.0"
 
-__all__ = ["JetSpace", "System", "Equations", "PRINCIPLES", "compare", "conserved_quantities", "Scene", "Trajectory",
+__all__ = ["JetSpace", "System", "Equations", "PRINCIPLES", "compare", "conserved_quantities",
+           "noether_symmetries", "lie_symmetries", "is_noether", "NoetherSymmetry",
+           "LieSymmetry", "Scene", "Trajectory",
            "Diagnostics", "Event", "Ensemble", "sweep", "from_mechanics", "JetnhError",
            "JetSpaceError", "ConstraintError", "LagrangianError", "PrincipleError",
            "ModelFileError", "IntegrationError", "ArgumentError", "JetnhWarning"]

@@ -3,15 +3,14 @@
 ``conserved_quantities(sysm, principle, degree, coefficients)`` returns a basis of the
 functions I(t, q, qdot^mu[, lambda]) = sum_j c_j g_j(t, q) m_j(qdot^mu, lambda), m_j a
 monomial of degree <= ``degree`` in the independent velocities (and, for the vakonomic and
-Hoelder principles, the multipliers), with rational constants c_j, whose total derivative
-vanishes on the equations on the constraint manifold (Olver 1993, section 4.3: first
-integrals as the kernel of the total derivative on the solution manifold).  The condition
-D I = 0 is linear in c: it is imposed at random rational points, solved exactly over Q
-(or at 50 digits, the null vectors then read back as rationals), and every returned I is
-checked again, symbolically where cheap and at fresh points.
-
-Parameters of the system are indeterminates: the c_j do not depend on them (include
-parameter factors in ``coefficients`` to allow it).
+Hoelder principles, the multipliers), whose total derivative vanishes on the equations on
+the constraint manifold (Olver 1993, section 4.3: first integrals as the kernel of the
+total derivative on the solution manifold).  The condition D I = 0 is linear in c and is
+solved by ``jetnh.ansatz``: the constants c_j may depend on the system's parameters
+(polynomially in them and in functions of them such as sin(alpha), after clearing
+denominators), and the basis is reduced over the rational functions of the parameters.
+Every returned I is then proved: D I = 0 exactly (cancel) where the equations are rational,
+and at 20 fresh random points at 50 digits always.
 """
 
 from __future__ import annotations
@@ -23,79 +22,78 @@ from fractions import Fraction
 import mpmath
 import sympy as sp
 
-from . import dag
+from . import ansatz, dag
+from .ansatz import exponents as _exponents
+from .ansatz import monomial as _mono
 from .constraints import PRINCIPLES, System
 from .errors import ArgumentError, JetnhError, PrincipleError
 
-BUDGET = 400            # unknowns of the ansatz
-DPS = 50                # digits of the numeric route
-_TOL = mpmath.mpf(10) ** -30
+DPS = ansatz.DPS
 
 _WITH_MULTIPLIERS = ("vakonomic", "holder")
 
 
-def conserved_quantities(sysm, principle, degree=2, coefficients=None) -> list:
-    """A basis (echelon form, rational coefficients) of the nontrivial first integrals of
-    ``principle`` polynomial of degree <= ``degree`` in the independent velocities (and
-    multipliers), with coefficient functions spanned by ``coefficients`` (expressions in t
-    and q; default: the monomials in t and q of degree <= ``degree``).  The constants are
-    numbers: an integral whose coefficients depend on the system's parameters (m x_t**2/2
-    + k x**2/2) is found only when ``coefficients`` holds those parameter factors."""
+def check_arguments(sysm, principle, degree, what):
     if not isinstance(sysm, System):
-        raise ArgumentError(f"conserved_quantities needs a jetnh System, not {type(sysm).__name__}")
+        raise ArgumentError(f"{what} needs a jetnh System, not {type(sysm).__name__}")
     if not isinstance(principle, str) or principle not in PRINCIPLES:
         raise PrincipleError(f"unknown principle {principle!r}; choose one of {PRINCIPLES}")
     if isinstance(degree, bool) or not isinstance(degree, int) or degree < 1:
-        raise ArgumentError(f"degree must be an integer >= 1 (the degree in the velocities), "
-                            f"not {degree!r}")
+        raise ArgumentError(f"degree must be an integer >= 1, not {degree!r}")
+
+
+def conserved_quantities(sysm, principle, degree=2, coefficients=None) -> list:
+    """A basis of the nontrivial first integrals of ``principle`` polynomial of degree <=
+    ``degree`` in the independent velocities (and multipliers), with coefficient functions
+    spanned by ``coefficients`` (expressions in t and q; default: the monomials in t and q
+    of degree <= ``degree``) and constants that may depend on the parameters.
+
+    None vanishes identically on the constraint manifold (each is written in the
+    independent velocities, so no multiple of a constraint appears), and no two are
+    proportional over the parameters.  For example the Heisenberg system's vakonomic
+    integrals lambda, m x_t + 2 lambda y, m y_t - 2 lambda x and the energy.  A
+    JetnhWarning says when some integral's parameter dependence exceeds the search."""
+    check_arguments(sysm, principle, degree, "conserved_quantities")
     J = sysm.J
     eom = sysm.equations(principle)
     acc = eom.accelerations()                       # its errors propagate
-    G = _coefficients(sysm, coefficients, degree)
+    G = coefficient_functions(sysm, coefficients, degree)
     vel = list(sysm.independent_velocities)
     lam = list(eom.multipliers) if principle in _WITH_MULTIPLIERS else []
     rates = list(eom.multiplier_rates) if lam else []
     qdd = [J.jet(q, 2) for q in sysm.independent]
-    needed = [acc[a] for a in qdd + rates]
-    if not lam and any(e.free_symbols & set(eom.multipliers) for e in needed):
+    def on_manifold(syms):
+        return dag.xreplace([acc[a] for a in syms], sysm.phi) if sysm.phi else \
+            [acc[a] for a in syms]
+
+    needed = on_manifold(qdd + rates)
+    if not lam and any(dag.free_symbols(e) & set(eom.multipliers) for e in needed):
         lam = list(eom.multipliers)               # the motion depends on them: keep them
         rates = list(eom.multiplier_rates)
-        needed = [acc[a] for a in qdd + rates]
+        needed = on_manifold(qdd + rates)
     U = vel + lam
     monos = [e for d in range(degree + 1) for e in _exponents(len(U), d)]
     base = {J.t, *J.q}
     pairs = [(i, e) for i, g in enumerate(G) for e in monos
              if sum(e) or g.free_symbols & base]          # no constant
-    if len(pairs) > BUDGET:
-        raise ArgumentError(
-            f"the ansatz has {len(pairs)} unknowns ({len(G)} coefficient functions x "
-            f"{len(monos)} monomials of degree <= {degree} in {len(U)} velocities and "
-            f"multipliers), over the budget of {BUDGET}; lower degree or pass fewer "
-            "coefficients (e.g. coefficients=[1])")
+    if len(pairs) > ansatz.BUDGET:
+        raise ansatz.budget_error(
+            len(pairs), f"{len(G)} coefficient functions x {len(monos)} monomials of degree "
+            f"<= {degree} in {len(U)} velocities and multipliers")
     qdot = [sysm.phi.get(v, v) for v in J.qd]
-    ev = _Evaluator(sysm, eom.J, G, needed, qdot, U)
-    basis = _nullspace(lambda rng, count: _rows(ev, pairs, monos, U, rng, count),
-                       len(pairs), ev.exact)
+    problem = _Integrals(sysm, eom.J, G, needed, qdot, U, pairs, monos)
     out = []
-    for vec in basis:
+    for vec in ansatz.solve(problem, "conserved_quantities"):
         I = sp.Add(*[c * G[i] * _mono(U, e) for c, (i, e) in zip(vec, pairs) if c])
-        _check(sysm, I, acc, ev, U)
+        _check(sysm, I, acc, problem, U)
         out.append(I)
     return out
 
 
 # ---------------------------------------------------------------------- the ansatz
-def _exponents(n, d):
-    """Exponent tuples of the monomials of degree d in n variables (graded lex order)."""
-    return sorted((tuple(c.count(i) for i in range(n))
-                   for c in itertools.combinations_with_replacement(range(n), d)), reverse=True)
-
-
-def _mono(U, e):
-    return sp.Mul(*[u**k for u, k in zip(U, e)])
-
-
-def _coefficients(sysm, coefficients, degree):
+def coefficient_functions(sysm, coefficients, degree):
+    """The coefficient functions of an ansatz: ``coefficients`` checked, or the monomials
+    in t and q of degree <= ``degree``."""
     J = sysm.J
     base = [J.t, *J.q]
     if coefficients is None:
@@ -127,27 +125,25 @@ def _coefficients(sysm, coefficients, degree):
 
 
 # ---------------------------------------------------------------------- evaluation
-class _Evaluator:
-    """Values at a point of qdot^s, the accelerations, the coefficient functions and
-    their derivatives: exact (Rational) when all are rational functions, else 50 digits."""
+class Sampler:
+    """Values of expressions at random points of ``variables`` (and the parameters):
+    exact (Rational) when all are rational functions, else 50 digits; singular points
+    are skipped."""
 
-    def __init__(self, sysm, J, G, needed, qdot, U):
-        self.J, self.sysm = J, sysm
-        self.vars = [J.t, *sysm.J.q, *U, *sysm.parameters]
-        grads = [[sp.diff(g, x) for x in (J.t, *sysm.J.q)] for g in G]
-        self.exprs = [*qdot, *needed, *G, *itertools.chain(*grads)]
-        self.sizes = (len(qdot), len(needed), len(G))
+    def __init__(self, variables, parameters, exprs):
+        self.parameters = tuple(parameters)
+        self.vars = [*variables, *self.parameters]
         self.exact = all(not e.has(sp.Float) and e.is_rational_function(*self.vars)
-                         for e in self.exprs)
+                         for e in exprs)
 
-    def point(self, rng):
-        """A random point: rationals in [-2, 2] (parameters in [1/2, 2])."""
-        p = {}
-        for s in self.vars:
-            if s in self.sysm.parameters:
-                p[s] = sp.Rational(rng.randint(4, 16), 8)
-            else:
-                p[s] = sp.Rational(rng.randint(-24, 24), rng.randint(7, 12))
+    def point(self, rng, fixed=None):
+        """Nonzero rationals in [-2, 2] of moderate height (never 0 or a small integer,
+        where charts such as Euler angles are singular); parameters from ``fixed`` or in
+        [1/2, 2]."""
+        p = {s: sp.Rational(rng.choice((-1, 1)) * rng.randint(1, 90), rng.randint(41, 47))
+             for s in self.vars if s not in self.parameters}
+        p.update(fixed if fixed is not None else
+                 ansatz.random_parameters(self.parameters, rng))
         return p
 
     def values(self, exprs, point):
@@ -161,32 +157,84 @@ class _Evaluator:
             raise ZeroDivisionError
         return vals
 
-    def split(self, vals):
+    def draw(self, exprs, rng, count, fixed=None):
+        """``count`` (values, point) pairs at random regular points."""
+        out, misses = [], 0
+        while len(out) < count:
+            p = self.point(rng, fixed)
+            try:
+                out.append((self.values(exprs, p), p))
+            except (ZeroDivisionError, ValueError) as exc:
+                misses += 1
+                if misses > 100 + 10 * count:
+                    raise JetnhError(
+                        f"internal: {misses} random points were singular or incomplete "
+                        f"({exc!r}); the ansatz conditions may be undefined almost "
+                        "everywhere; please report") from None
+        return out
+
+
+class _Integrals(ansatz.Problem):
+    """D(g_i m_e) at random points, by the chain rule from the values of qdot^s, the
+    accelerations, the coefficient functions and their gradients."""
+
+    def __init__(self, sysm, J, G, needed, qdot, U, pairs, monos):
+        self.J, self.sysm, self.G, self.U = J, sysm, G, U
+        self.pairs, self.monos = pairs, monos
+        self.n = len(pairs)
+        grads = [[sp.diff(g, x) for x in (J.t, *sysm.J.q)] for g in G]
+        self.exprs = [*qdot, *needed, *G, *itertools.chain(*grads)]
+        self.sizes = (len(qdot), len(needed), len(G))
+        self.parameters = sysm.parameters
+        self.atoms = ansatz.parameter_atoms([sysm.L, *sysm.constraints, *sysm.Q, *G],
+                                             sysm.parameters)
+        self.sampler = Sampler([J.t, *sysm.J.q, *U], sysm.parameters, self.exprs)
+        self.exact = self.sampler.exact
+
+    def point(self, rng):
+        return self.sampler.point(rng)
+
+    def _split(self, vals):
         a, b, c = self.sizes
         grads = vals[a + b + c:]
         n1 = 1 + self.sysm.J.n
         return vals[:a], vals[a:a + b], vals[a + b:a + b + c], \
             [grads[i * n1:(i + 1) * n1] for i in range(c)]
 
+    def rows(self, rng, count, fixed=None, columns=None):
+        pairs = self.pairs if columns is None else [self.pairs[j] for j in columns]
+        return [(self._row(vals, p, pairs), p)
+                for vals, p in self.sampler.draw(self.exprs, rng, count, fixed)]
 
-def _rows(ev, pairs, monos, U, rng, count):
-    """``count`` rows of the linear condition on c: D(g m) at random points."""
-    rows = []
-    while len(rows) < count:
-        p = ev.point(rng)
-        try:
-            qdot, accel, gv, grads = ev.split(ev.values(ev.exprs, p))
-        except (ZeroDivisionError, ValueError):
-            continue
-        u = [p[x] for x in U]
-        Dg = [gr[0] + sum(d * v for d, v in zip(gr[1:], qdot)) for gr in grads]
-        mv, dm = {}, {}
-        for e in monos:
-            mv[e] = _prod(u, e)
-            dm[e] = sum((e[k] * _prod(u, e[:k] + (e[k] - 1,) + e[k + 1:]) * accel[k]
-                         for k in range(len(U)) if e[k]), 0)
-        rows.append([Dg[i] * mv[e] + gv[i] * dm[e] for i, e in pairs])
-    return rows
+    def _u(self, p):
+        return [_fraction(p[x]) if self.exact else ansatz.to_mpf(p[x]) for x in self.U]
+
+    def _row(self, vals, p, pairs):
+        U = self.U
+        with mpmath.workdps(DPS + 10):
+            if self.exact:                  # Fractions: much faster than sympy Rationals
+                vals = [_fraction(v) for v in vals]
+            qdot, accel, gv, grads = self._split(vals)
+            u = self._u(p)
+            Dg = [gr[0] + sum(d * v for d, v in zip(gr[1:], qdot)) for gr in grads]
+            mv, dm = {}, {}
+            for e in {e for _, e in pairs}:
+                mv[e] = _prod(u, e)
+                dm[e] = sum((e[k] * _prod(u, e[:k] + (e[k] - 1,) + e[k + 1:]) * accel[k]
+                             for k in range(len(U)) if e[k]), 0)
+            return [Dg[i] * mv[e] + gv[i] * dm[e] for i, e in pairs]
+
+    def values(self, point):
+        gv = self.sampler.values(self.G, point)
+        if self.exact:
+            gv = [_fraction(v) for v in gv]
+        with mpmath.workdps(DPS + 10):
+            u = self._u(point)
+            return [gv[i] * _prod(u, e) for i, e in self.pairs]
+
+
+def _fraction(v):
+    return Fraction(int(v.p), int(v.q))
 
 
 def _prod(u, e):
@@ -197,80 +245,28 @@ def _prod(u, e):
     return r
 
 
-# ---------------------------------------------------------------------- linear algebra
-def _nullspace(draw, n, exact):
-    """The reduced-echelon null basis (lists of Rationals) of the condition rows."""
-    rng = random.Random(20240614)
-    rows = draw(rng, 2 * n)
-    if exact:       # exact rows: the same fast route, then the exact check (cancel)
-        with mpmath.workdps(DPS):
-            rows = [[mpmath.mpf(int(v.p)) / int(v.q) for v in r] for r in rows]
-    return _numeric_nullspace(rows, n)
-
-
-def _numeric_nullspace(rows, n):
-    """RREF of the 50-digit rows (scaled partial pivoting) in fixed point (integers times
-    2^-256, fast), null vectors read back as rationals."""
-    P = 256
-    tol = int(_TOL * 2**P)
-    with mpmath.workdps(DPS):
-        A = []
-        for r in rows:
-            s = max((abs(v) for v in r), default=0)
-            if s:
-                A.append([int(mpmath.nint(mpmath.mpf(v) / s * 2**P)) for v in r])
-    piv, i = [], 0
-    for j in range(n):
-        k = max(range(i, len(A)), key=lambda k: abs(A[k][j]), default=None)
-        if k is None or abs(A[k][j]) < tol:
-            continue
-        A[i], A[k] = A[k], A[i]
-        p = A[i][j]
-        A[i] = [0] * j + [(v << P) // p for v in A[i][j:]]
-        row = A[i][j:]
-        for k2 in range(len(A)):
-            f = A[k2][j]
-            if k2 != i and f:
-                A[k2][j:] = [a - ((f * b) >> P) for a, b in zip(A[k2][j:], row)]
-        piv.append(j)
-        i += 1
-    free = [j for j in range(n) if j not in set(piv)]
-    out = []
-    with mpmath.workdps(DPS):
-        for f in free:
-            vec = [sp.S.Zero] * n
-            vec[f] = sp.S.One
-            for r, j in enumerate(piv):
-                vec[j] = _rational(-mpmath.mpf(A[r][f]) / 2**P)
-            out.append(vec)
-    return out
-
-
-def _rational(x):
-    fr = Fraction(mpmath.nstr(x, DPS)).limit_denominator(10**12)
-    if abs(x - mpmath.mpf(fr.numerator) / fr.denominator) > _TOL * max(1, abs(x)):
-        raise JetnhError(
-            f"a first integral has the coefficient {mpmath.nstr(x, 20)}, not a rational "
-            "number: jetnh finds integrals with rational coefficients only; pass "
-            "coefficients that absorb the irrational factor")
-    return sp.Rational(fr.numerator, fr.denominator)
-
-
 # ---------------------------------------------------------------------- the final check
-def _check(sysm, I, acc, ev, U):
-    """D I = 0 on the equations and the constraints: symbolically (cancel) where that
-    decides it, and at 20 fresh random points (50 digits) always."""
-    J = ev.J
+def _check(sysm, I, acc, problem, U):
+    prove_conserved(sysm, problem.J, I, acc, problem.sampler, U)
+
+
+def prove_conserved(sysm, J, I, acc, sampler, U=()):
+    """D I = 0 on the equations (``acc``) and the constraints: exactly (cancel) when they
+    are rational, and at 20 fresh random points (50 digits) always; a JetnhError if not."""
     DI = sysm.on_constraints(J.D(I).xreplace(acc))
-    if ev.exact and sp.cancel(sp.together(DI)) != 0:
+    if sampler.exact and sp.cancel(sp.together(DI)) != 0:
         raise JetnhError(f"internal: {I} passed the sampled condition but D I = "
                          f"{sp.cancel(sp.together(DI))} != 0; please report")
     rng = random.Random(7)
     scale = 1 + sum(abs(c) for c in sp.Poly(I, *U).coeffs() if c.is_Number) \
-        if I.is_polynomial(*U) else 1
+        if U and I.is_polynomial(*U) else 1
+    missing = dag.free_symbols(DI) - set(sampler.vars)
+    if missing:
+        raise JetnhError(f"internal: D I depends on {sorted(map(str, missing))}, which the "
+                         "check does not sample; please report")
     done = 0
     while done < 20:
-        p = ev.point(rng)
+        p = sampler.point(rng)
         try:
             v = dag.evaluate(DI, p, dps=DPS)
         except (ZeroDivisionError, ValueError):

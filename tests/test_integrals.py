@@ -4,6 +4,8 @@ import random
 
 import pytest
 import sympy as sp
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import jetnh as jn
 from jetnh import models
@@ -88,3 +90,80 @@ def test_bad_input():
         jn.conserved_quantities(s, "chetaev", coefficients=[s.J.qd[0]])
     with pytest.raises(jn.ArgumentError, match="System"):
         jn.conserved_quantities("rolling_disk", "chetaev")
+
+
+# ---------------------------------------------------------------------- parameters
+def test_heisenberg_vakonomic_parameter_dependent():
+    """lambda, m x_t + 2 lambda y, m y_t - 2 lambda x and the energy: constants that
+    depend on the parameter m (the ansatz solves over polynomials in m)."""
+    s = models.get("heisenberg")
+    x, y, z = s.J.q
+    xd, yd, _ = s.J.qd
+    m, lam = sp.Symbol("m"), sp.Symbol("lambda_z")
+    basis = jn.conserved_quantities(s, "vakonomic", degree=2)
+    gens = (s.J.t, x, y, z, xd, yd, lam)
+    for expected in (lam, m * xd + 2 * lam * y, m * yd - 2 * lam * x, m * (xd**2 + yd**2)):
+        assert _in_span(expected, basis, gens), expected
+    assert not _in_span(xd, basis, gens)              # not a vakonomic integral
+    for I in basis:
+        assert _DI_numeric(s, "vakonomic", I) < 1e-30
+    # no two are proportional over the parameters
+    ratios = {sp.cancel(a / b) for i, a in enumerate(basis) for b in basis[i + 1:]}
+    assert not any(r.free_symbols <= {m} for r in ratios)
+
+
+def test_oscillator_energy_with_parameters():
+    J = jn.JetSpace("x")
+    x, xd = J.q[0], J.qd[0]
+    m, k = sp.symbols("m k")
+    s = jn.System(J, m * xd**2 / 2 - k * x**2 / 2)
+    basis = jn.conserved_quantities(s, "chetaev", degree=2, coefficients=[1, x, x**2])
+    assert len(basis) == 1
+    assert sp.cancel(basis[0] / (m * xd**2 + k * x**2)).is_number
+
+
+def test_parameter_functions_are_atoms():
+    """The knife edge's energy has the factor sin(alpha): a polynomial in the atom
+    sin(alpha), found with the coefficient 1/cos(phi)^2 that v^2 = x_t^2/cos(phi)^2 needs."""
+    s = models.get("knife_edge")
+    x, y, phi = s.J.q
+    xd, _, phid = s.J.qd
+    m, I, g, alpha = (sp.Symbol(n) for n in ("m", "I", "g", "alpha"))
+    basis = jn.conserved_quantities(s, "chetaev", degree=2,
+                                    coefficients=[1, x, 1 / sp.cos(phi)**2])
+    E = m * xd**2 / sp.cos(phi)**2 / 2 + I * phid**2 / 2 - m * g * sp.sin(alpha) * x
+    cs = sp.symbols(f"c0:{len(basis)}")
+    res = sp.expand(E - sum(c * b for c, b in zip(cs, basis)))
+    sol = sp.solve(sp.Poly(res.subs(1 / sp.cos(phi)**2, sp.Symbol("sec2")),
+                           xd, phid, x, sp.Symbol("sec2")).coeffs(), cs, dict=True)
+    assert sol and all(not v.has(x, xd, phid) for v in sol[0].values())
+
+
+@settings(max_examples=5)
+@given(st.integers(1, 3), st.integers(0, 2))
+def test_planted_cyclic_with_parameter(a, b):
+    """A cyclic coordinate w with p_w = c a w_t + b x_t, c a parameter: found, proportional
+    over the parameters to the planted momentum."""
+    J = jn.JetSpace("x y w")
+    x, y, w = J.q
+    xd, yd, wd = J.qd
+    c = sp.Symbol("c")
+    L = ((1 + y**2) * xd**2 + yd**2 + c * a * wd**2 + 2 * b * xd * wd) / 2 - x**2
+    s = jn.System(J, L, [yd - x * xd], [y])
+    basis = jn.conserved_quantities(s, "chetaev", degree=1, coefficients=[1])
+    pw = c * a * wd + b * xd
+    assert any(sp.cancel(I / pw).free_symbols <= {c} for I in basis)
+    for I in basis:
+        assert _DI_numeric(s, "chetaev", I) < 1e-30
+
+
+def test_dependent_coefficients_give_no_trivial_quantity():
+    """sin(y)^2 + cos(y)^2 = 1 among the coefficient functions: neither the constant nor
+    the identically vanishing combinations come back."""
+    s = models.get("nonholonomic_particle")
+    x, y, z = s.J.q
+    xd, yd, _ = s.J.qd
+    basis = jn.conserved_quantities(s, "chetaev", degree=1,
+                                    coefficients=[1, sp.sin(y)**2, sp.cos(y)**2])
+    assert len(basis) == 1
+    assert sp.simplify(basis[0] / yd).is_number

@@ -349,3 +349,116 @@ def test_appell_hamel_speed_decays_linearly():
     v = np.hypot(traj["x_t"], traj["y_t"])
     close(v, v[0] - r * p["g"] * traj.t / (1 + r**2))
     assert traj.diagnostics.energy_drift < 1e-8
+
+
+# ---------------------------------------------------------------------- first integrals
+# model -> principle -> (degree, coefficients, the integrals its docstring lists); each is
+# found by jn.conserved_quantities (in the span of the basis it returns, over the
+# parameters), and each listed "not" integral is not
+_TH = "sin(theta)*sin(phi), sin(theta)*cos(phi), cos(phi), sin(phi), cos(theta)"
+_ENERGY_DISK = "((R**2 + I1)*phi_t**2 + I2*psi_t**2)/2"
+_E_KNIFE = "m*x_t**2/cos(phi)**2/2 + I*phi_t**2/2 - m*g*sin(alpha)*x"
+_E_SLEIGH = "m*x_t**2/cos(theta)**2/2 + (I + m*a**2)*theta_t**2/2"
+_E_PARTICLE = "m*((1 + y**2)*x_t**2 + y_t**2)/2"
+CATALOGUE_INTEGRALS = {
+    "rolling_disk": {
+        "chetaev": (2, "1", ["phi_t", "psi_t", _ENERGY_DISK]),
+        "suslov": (2, "1", ["phi_t", "psi_t", _ENERGY_DISK]),
+        "vakonomic": (2, "1", [_ENERGY_DISK], ["phi_t"])},
+    "appell_hamel": {
+        p: (2, "1, z", ["m*(1 + b**2/a**2)*(x_t**2 + y_t**2)/2 + m*g*z"])
+        for p in ("chetaev", "vakonomic", "suslov")},
+    "knife_edge": {
+        "chetaev": (2, "1, x, 1/cos(phi)**2", ["phi_t", _E_KNIFE]),
+        "vakonomic": (2, "1, x, 1/cos(phi)**2", [_E_KNIFE], ["phi_t"]),
+        "suslov": (2, "1, x, 1/cos(phi)**2", [_E_KNIFE], ["phi_t"])},
+    "chaplygin_sleigh": {
+        "chetaev": (2, "1, 1/cos(theta)**2", [_E_SLEIGH]),
+        "vakonomic": (2, "1, 1/cos(theta)**2",
+                      [_E_SLEIGH, "lambda_y**2 + 2*a*m*lambda_y*theta_t - I*m*theta_t**2"]),
+        "suslov": (2, "1, 1/cos(theta)**2", [_E_SLEIGH, "x_t/cos(theta)**2"])},
+    "nonholonomic_particle": {
+        "chetaev": (2, "1, y, y**2, z", ["y_t", "(1 + y**2)*x_t**2", _E_PARTICLE,
+                                         "(1 + y**2)*x_t - z*y_t"]),
+        "vakonomic": (2, "1, y, y**2", [_E_PARTICLE, "m*x_t - lambda_z*y",
+                                        "m*y*x_t + lambda_z"], ["y_t"]),
+        "suslov": (2, "1, y, y**2", ["(1 + y**2)*x_t", _E_PARTICLE], ["y_t"])},
+    "heisenberg": {
+        "chetaev": (2, "1, x, y", ["x_t", "y_t", "x*y_t - y*x_t", "m*(x_t**2 + y_t**2)/2"]),
+        "vakonomic": (2, "1, x, y", ["lambda_z", "m*x_t + 2*lambda_z*y",
+                                     "m*y_t - 2*lambda_z*x", "m*(x_t**2 + y_t**2)/2"],
+                      ["x_t", "y_t"])},
+    "isokinetic_particle": {"chetaev": (2, "1, t, y", [])},
+    "rheonomic_knife_edge": {
+        "chetaev": (2, "1/cos(w*t)**2, x, t",
+                    ["m*((x_t - U)**2 + y_t**2)/2 - m*g*sin(alpha)*(x - U*t)"]),
+        "suslov": (2, "1/cos(w*t)**2, x, t", ["(x_t - U)/cos(w*t)**2 - g*sin(alpha)*t"])},
+    "bead_on_parabola": {
+        "chetaev": (2, "1, x, x**2, y", ["y - a*x**2", "m*(x_t**2 + y_t**2)/2 + m*g*y"]),
+        "vakonomic": (2, "1, x, x**2, y, t", ["y - a*x**2", "m*(x_t**2 + y_t**2)/2 + m*g*y",
+                                              "a*m*x*x_t + g*m*t/2 + lambda_y/2"])},
+    "radial_line": {
+        "chetaev": (2, "1, x**2, y**2, x*y, y/x, 1/x**2, y**2/x**2",
+                    ["y/x", "m*(x_t**2 + y_t**2)/2 - m*k*(x**2 + y**2)/2"])},
+    "rolling_ball": {
+        "chetaev": (1, "1, " + _TH, list(_OMEGA.values())),
+        "suslov": (1, "1, " + _TH, [_OMEGA["wz"]], [_OMEGA["wx"]]),
+        "vakonomic": (1, "1, " + _TH, [f"m*r*({_OMEGA['wx']}) - lambda_y",
+                                       f"m*r*({_OMEGA['wy']}) + lambda_x"])},
+    "suslov_rigid_body": {
+        "suslov": (1, "sin(theta)*sin(psi), cos(psi), sin(theta)*cos(psi), sin(psi)",
+                   [INTEGRALS["suslov_rigid_body"]["O1"], INTEGRALS["suslov_rigid_body"]["O2"]])},
+    "ball_on_turntable": {"chetaev": (1, "1, cos(theta)", [_OMEGA["wz"]])},
+    "damped_knife_edge": {
+        "chetaev": (1, "exp(c*t/m)/cos(phi), exp(c_r*t/I)",
+                    ["exp(c*t/m)*x_t/cos(phi)", "exp(c_r*t/I)*phi_t"])},
+    "damped_chaplygin_sleigh": {"chetaev": (2, "1, 1/cos(theta)**2", [])},
+}
+
+
+def _in_span_numeric(system, exprs, basis, points=12):
+    """Whether each of ``exprs`` is a combination of ``basis`` (constants at one generic
+    value of the parameters): ranks of their values at random points, 40 digits."""
+    import random
+
+    from jetnh import dag
+    rng = random.Random(5)
+    syms = set().union(*(e.free_symbols for e in exprs + basis)) if exprs + basis else set()
+    fixed = {s: sp.Rational(rng.randint(20, 80), 41) for s in system.parameters}
+    syms -= set(fixed)
+    out = []
+    n = len(basis) + points
+    for e in exprs:
+        cols = [[], []]
+        while len(cols[0]) < n:
+            p = {s: sp.Rational(rng.randint(1, 90), rng.randint(41, 47)) for s in syms}
+            p.update(fixed)
+            try:
+                v = dag.evaluate(basis + [e], p, dps=40)
+            except (ZeroDivisionError, ValueError):
+                continue
+            cols[0].append(v[:-1])
+            cols[1].append(v)
+        r0 = np.linalg.matrix_rank(np.array(cols[0], dtype=float), tol=1e-9) if basis else 0
+        r1 = np.linalg.matrix_rank(np.array(cols[1], dtype=float), tol=1e-9)
+        out.append(r0 == r1)
+    return out
+
+
+@pytest.mark.parametrize("name,principle", [(n, p) for n, d in CATALOGUE_INTEGRALS.items()
+                                            for p in d])
+def test_first_integrals_found(name, principle):
+    s = models.get(name)
+    degree, coeffs, expected, *absent = CATALOGUE_INTEGRALS[name][principle]
+    syms = symbols_of(s)
+    syms.update({f"lambda_{d.name}": sp.Symbol(f"lambda_{d.name}") for d in s.dependent})
+    parse = lambda e: s.on_constraints(mf.parse_expression(e, syms, name))  # noqa: E731
+    coefficients = [parse(c) for c in coeffs.split(", ")]
+    basis = jn.conserved_quantities(s, principle, degree=degree, coefficients=coefficients)
+    if not expected:
+        assert basis == []
+    assert all(_in_span_numeric(s, [parse(e) for e in expected], basis)), basis
+    for e in (absent[0] if absent else []):
+        assert not any(_in_span_numeric(s, [parse(e)], basis)), e
+    for I in basis:                                  # the docstring lists them
+        assert "integral" in (models.CATALOGUE[name].__doc__ or "").lower()

@@ -12,6 +12,7 @@ appell_hamel             Appell-Hamel system, nonlinear constraint (Example 2)
 knife_edge               knife edge on an inclined plane
 chaplygin_sleigh         Chaplygin sleigh
 nonholonomic_particle    zdot = y xdot (Heisenberg-type distribution)
+heisenberg               zdot = x ydot - y xdot (Heisenberg system, sub-Riemannian)
 isokinetic_particle      constant speed, xdot^2 + ydot^2 = v^2 (nonlinear)
 rheonomic_knife_edge     prescribed heading w t on a moving belt (time-dependent)
 bead_on_parabola         ydot = 2 a x xdot (integrable, differential form)
@@ -30,8 +31,8 @@ from ._registry import INFO, ModelInfo, register
 from .dissipative import damped_chaplygin_sleigh, damped_knife_edge
 from .families import n_trailer, n_trailer_turning, particle_chain
 from .paper import appell_hamel, rolling_disk
-from .planar import (bead_on_parabola, chaplygin_sleigh, isokinetic_particle, knife_edge,
-                     nonholonomic_particle, radial_line, rheonomic_knife_edge)
+from .planar import (bead_on_parabola, chaplygin_sleigh, heisenberg, isokinetic_particle,
+                     knife_edge, nonholonomic_particle, radial_line, rheonomic_knife_edge)
 from .rigid import ball_on_turntable, rolling_ball, suslov_rigid_body
 
 register("rolling_disk", rolling_disk,
@@ -41,7 +42,7 @@ register("appell_hamel", appell_hamel, dict(x=0.0, y=0.0, z=0.0, x_t=3.0, y_t=1.
          t_end=0.5, tags=("nonlinear", "nonholonomic", "paper"))
 
 _ORDER = ("rolling_disk", "appell_hamel", "knife_edge", "chaplygin_sleigh",
-          "nonholonomic_particle", "isokinetic_particle", "rheonomic_knife_edge",
+          "nonholonomic_particle", "heisenberg", "isokinetic_particle", "rheonomic_knife_edge",
           "bead_on_parabola", "radial_line", "rolling_ball", "ball_on_turntable",
           "suslov_rigid_body", "n_trailer", "particle_chain", "damped_knife_edge",
           "damped_chaplygin_sleigh")

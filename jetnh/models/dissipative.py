@@ -35,7 +35,8 @@ def damped_knife_edge() -> System:
     of radius v0/w0, x = x0 + (v0/w0)(sin(phi) - sin(phi0)),
     y = y0 - (v0/w0)(cos(phi) - cos(phi0)), left after turning w0/gamma in all.
     First integrals (time-dependent): v exp(c t/m) and phidot exp(c_r t/I); the energy
-    m v^2/2 + I phidot^2/2 decays at the rate 2 D.
+    m v^2/2 + I phidot^2/2 decays at the rate 2 D.  The other principles: none with these
+    coefficient functions.
     """
     J = JetSpace("x y phi")
     x, y, phi = J.q
@@ -70,7 +71,8 @@ def damped_chaplygin_sleigh() -> System:
     by exp(-gamma t): with E0 = m v0^2/2 + K w0^2/2, V = sqrt(2 E0/m), s0 = artanh(v0/V),
     s = m a V tau/K + s0: v = exp(-gamma t) V tanh(s), w = exp(-gamma t) w0 cosh(s0)/cosh(s),
     theta = theta0 + (w0 cosh(s0) K/(m a V)) (gd(s) - gd(s0)), gd(s) = 2 atan(tanh(s/2)).
-    First integral (time-dependent, for c/m = c_r/I): exp(2 gamma t) (m v^2 + K w^2)/2.
+    First integral (time-dependent, for c/m = c_r/I): exp(2 gamma t) (m v^2 + K w^2)/2;
+    none at generic parameters, under any principle.
     """
     J = JetSpace("x y theta")
     x, y, th = J.q

@@ -52,7 +52,7 @@ def n_trailer(N: int = 2) -> System:
     - atan(d/R_i), and all headings turning at the rate Omega, the car's axle follows
     x = R0 sin(Omega t), y = -R0 cos(Omega t) (hitch forces vanish; every wheel's
     reaction is centripetal).  N = 0 is the knife edge on a level plane (a circle).
-    First integral: the energy.
+    First integrals: the energy; for N = 1 also theta0dot (Chetaev only).
     """
     N = _count(N)
     names = ["x", "y"] + [f"theta{i}" for i in range(N + 1)]
@@ -95,7 +95,9 @@ def particle_chain(N: int = 3) -> System:
 
     Chetaev: yddot_i = 0 for every k (y_i = y_i0 + ydot_i0 t); for k = 0 each particle
     follows the closed form of ``nonholonomic_particle``.  First integral: the energy
-    sum_i m ((1 + y_i^2) xdot_i^2 + ydot_i^2)/2 + k sum_i (x_{i+1} - x_i)^2/2.
+    sum_i m ((1 + y_i^2) xdot_i^2 + ydot_i^2)/2 + k sum_i (x_{i+1} - x_i)^2/2, and ydot_i.
+    Vakonomic and Hoelder: the energy, m zdot_i + lambda_i and the total x-momentum
+    sum_i (m xdot_i - lambda_i y_i); Suslov: the energy and sum_i (1 + y_i^2) xdot_i.
     """
     N = _count(N, 1)
     J = JetSpace([f"{c}{i}" for c in "xyz" for i in range(1, N + 1)])

@@ -15,7 +15,9 @@ def rolling_disk() -> System:
 
     Chetaev (nonholonomic) solution: phidot, psidot constant, and for psidot != 0
     x = x0 + R phidot/psidot (sin psi - sin psi0), y = y0 - R phidot/psidot (cos psi - cos psi0).
-    First integrals: energy ((R^2 + I1) phidot^2 + I2 psidot^2)/2, phidot, psidot.
+    First integrals: energy ((R^2 + I1) phidot^2 + I2 psidot^2)/2, phidot, psidot
+    (Chetaev and Suslov, with the time-dependent phi - phidot t, psi - psidot t);
+    vakonomic and Hoelder: the energy only (phidot is not conserved).
     """
     J = JetSpace("x y phi psi")
     x, y, phi, psi = J.q
@@ -33,7 +35,9 @@ def appell_hamel() -> System:
     zdot = (b/a) sqrt(xdot^2 + ydot^2); dependent z.  Chetaev solution: the horizontal
     velocity keeps its direction and its speed v decays linearly,
     (1 + b^2/a^2) dv/dt = -(b/a) g, until v = 0, where the constraint is singular.
-    First integral: energy m (xdot^2 + ydot^2 + zdot^2)/2 + m g z.
+    First integral (every principle): the energy m (xdot^2 + ydot^2 + zdot^2)/2 + m g z;
+    the vakonomic motion has two more whose constants are not polynomial in the
+    parameters (on the branch lambda_z = a m v/b, see ``compare``).
     """
     J = JetSpace("x y z")
     x, y, z = J.q

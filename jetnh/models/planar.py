@@ -32,7 +32,8 @@ def knife_edge() -> System:
     y = y0 + [-A cos(phi) + c (phi - sin(phi) cos(phi))/2]_{phi0}^{phi} / w
     (for phi0 = v0 = 0: x = g sin(alpha) sin(w t)^2/(2 w^2), the skate does not slide
     down the slope on average but drifts across it).
-    First integrals: phidot; the energy m v^2/2 + I phidot^2/2 - m g sin(alpha) x.
+    First integrals: phidot; the energy m v^2/2 + I phidot^2/2 - m g sin(alpha) x
+    (v^2 = xdot^2/cos(phi)^2).  Vakonomic, Hoelder and Suslov: the energy only.
     """
     J = JetSpace("x y phi")
     x, y, phi = J.q
@@ -64,7 +65,9 @@ def chaplygin_sleigh() -> System:
     E = m v^2/2 + (I + m a^2) w^2/2.  Closed form, with K = I + m a^2,
     V = sqrt(2E/m), c = artanh(v0/V), s = m a V t/K + c:
     v = V tanh(s), w = w0 cosh(c)/cosh(s) (the sleigh straightens out and moves forward
-    with all its energy as translation).
+    with all its energy as translation).  Vakonomic and Hoelder: the energy and
+    lambda_y^2 + 2 a m lambda_y thetadot - I m thetadot^2; Suslov: the energy and
+    xdot/cos(theta)^2.
     """
     J = JetSpace("x y theta")
     x, y, th = J.q
@@ -96,6 +99,8 @@ def nonholonomic_particle() -> System:
     First integrals (Chetaev): the energy m ((1 + y^2) xdot^2 + ydot^2)/2, ydot and
     xdot sqrt(1 + y^2).  Vakonomic (F = L + lambda (zdot - y xdot)): x and z are cyclic,
     so m xdot - lambda y and m zdot + lambda are conserved, with the energy.
+    Chetaev also (1 + y^2) xdot - z ydot; Suslov: (1 + y^2) xdot and the energy, not
+    ydot.  Noether: d/dz is a vakonomic symmetry and no Chetaev one, d/dy the reverse.
     """
     J = JetSpace("x y z")
     x, y, z = J.q
@@ -124,7 +129,8 @@ def isokinetic_particle() -> System:
     ydot = v tanh(s), xdot = v sech(s), x = x0 - (v^2/g)(gd(s) - gd(s0)),
     y = y0 - (v^2/g)(log cosh(s) - log cosh(s0)), gd(s) = atan(sinh(s)).
     First integrals: the speed (the constraint itself) and, depending on time,
-    artanh(ydot/v) + g t/v.  The energy is not conserved (the thrust works).
+    artanh(ydot/v) + g t/v.  The energy is not conserved (the thrust works).  None is
+    polynomial in ydot: no principle has one of degree <= 2.
     Suslov's equations (31) are singular everywhere: L~ = m v^2/2 - m g y does not
     depend on ydot, so they reduce to -m g = 0 and determine no acceleration.
     """
@@ -155,7 +161,9 @@ def rheonomic_knife_edge() -> System:
     y = y0 + [c (w t - sin(w t) cos(w t))/2 - A (cos(w t) - 1)]/w
     with c = g sin(alpha)/w, A = v0.  First integral (Jacobi's, in the belt frame):
     m ((xdot - U)^2 + ydot^2)/2 - m g sin(alpha) (x - U t); the energy itself is not
-    conserved when U != 0 (the belt works on the skate).
+    conserved when U != 0 (the belt works on the skate).  Suslov:
+    (xdot - U)/cos(w t)^2 - g sin(alpha) t; vakonomic and Hoelder: none of degree <= 2
+    with the coefficients 1/cos(w t)^2, x, t.
     """
     J = JetSpace("x y")
     x, y = J.q
@@ -182,7 +190,8 @@ def bead_on_parabola() -> System:
     Chetaev equation: (1 + 4 a^2 x^2) xddot + 4 a^2 x xdot^2 + 2 a g x = 0 (no
     elementary closed form: the period is an elliptic-type integral; small oscillations
     have angular frequency sqrt(2 a g)).  First integrals: y - a x^2 (the holonomic
-    constraint) and the energy m (1 + 4 a^2 x^2) xdot^2/2 + m g y.
+    constraint) and the energy m (1 + 4 a^2 x^2) xdot^2/2 + m g y, under every principle;
+    vakonomic and Hoelder also a m x xdot + g m t/2 + lambda_y/2.
     """
     J = JetSpace("x y")
     x, y = J.q
@@ -207,7 +216,8 @@ def radial_line() -> System:
     Chetaev solution: the reaction is normal to the line and the force along it, so
     xddot = k x, yddot = k y: x = x0 cosh(sqrt(k) t) + xdot0 sinh(sqrt(k) t)/sqrt(k),
     y = (y0/x0) x.  First integrals: y/x, and the energy
-    m (xdot^2 + ydot^2)/2 - m k (x^2 + y^2)/2.
+    m (xdot^2 + ydot^2)/2 - m k (x^2 + y^2)/2, under every principle; vakonomic and
+    Hoelder also lambda_y x^2.
     """
     J = JetSpace("x y")
     x, y = J.q
@@ -217,3 +227,34 @@ def radial_line() -> System:
     return System(J, L, [y * xd - x * yd], [y], defaults={m: 1.0, k: 1.0},
                   name="particle on a line through the origin")
 
+
+
+@model("heisenberg", initial=dict(x=0.0, y=0.2, z=0.0, x_t=1.0, y_t=0.5), t_end=1.0,
+       tags=("affine", "nonholonomic", "sub-Riemannian"))
+def heisenberg() -> System:
+    """Heisenberg system: a particle in the plane whose z records the swept area.
+
+    Source: Brockett, "Control theory and singular Riemannian geometry" (1981); Bloch
+    (2003), ch. 1 (the Heisenberg system); Montgomery, *A Tour of Subriemannian
+    Geometries* (2002), ch. 1.  Coordinates (x, y, z), mass m: L = m (xdot^2 + ydot^2)/2
+    (z carries no kinetic energy); constraint zdot - (x ydot - y xdot) = 0; dependent z.
+    The distribution is the symmetric contact distribution of the Heisenberg group; its
+    vakonomic extremals are sub-Riemannian geodesics (circles in the (x, y) plane).
+
+    Chetaev: the reaction is along (y, -x, 1), so m xddot = nu y, m yddot = -nu x with
+    nu = 0 (L does not involve zdot): the projection moves on straight lines,
+    x = x0 + xdot0 t, y = y0 + ydot0 t.  Vakonomic (F = L + lambda f): lambdadot = 0 and
+    m xddot = -2 lambda ydot, m yddot = 2 lambda xdot: circles of angular rate
+    2 lambda/m.
+    First integrals.  Chetaev and Suslov (L~ = L): xdot, ydot, the angular momentum
+    x ydot - y xdot, and the energy m (xdot^2 + ydot^2)/2.  Vakonomic (and Hoelder):
+    lambda, m xdot + 2 lambda y, m ydot - 2 lambda x (the momenta of the translations
+    x -> x + a, z -> z + a y and y -> y + b, z -> z - b x) and the energy.
+    """
+    J = JetSpace("x y z")
+    x, y, z = J.q
+    xd, yd, zd = J.qd
+    m = sp.Symbol("m")
+    L = m * (xd**2 + yd**2) / 2
+    return System(J, L, [zd - (x * yd - y * xd)], [z], defaults={m: 1.0},
+                  name="Heisenberg system")

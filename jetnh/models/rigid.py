@@ -71,7 +71,10 @@ def rolling_ball() -> System:
 
     Chetaev solution: the contact force vanishes, so the centre moves uniformly,
     x = x0 + xdot0 t, y = y0 + ydot0 t, and the spatial angular velocity omega is
-    constant.  First integrals: omega_x, omega_y, omega_z and the energy.
+    constant.  First integrals: omega_x, omega_y, omega_z, the energy, and
+    Omega_3 = phidot cos(theta) + psidot (the spin about the body axis e3).  Vakonomic and
+    Hoelder: I Omega_3 + r (lambda_x cos(phi) + lambda_y sin(phi)) sin(theta) and
+    m r omega_x - lambda_y, m r omega_y + lambda_x (in Euler-angle form); Suslov: omega_z.
     """
     return _ball(False)
 
@@ -91,7 +94,9 @@ def ball_on_turntable() -> System:
     exp(i kappa Omega t), so the ball runs around a circle and never flies off.
     First integrals: omega_z, and the centre of that circle,
     (x + i y) - (xdot + i ydot)/(i kappa Omega).  The energy is not conserved (the table
-    works on the ball).
+    works on the ball).  Vakonomic and Hoelder: the rolling ball's first vakonomic
+    integral I Omega_3 + r (lambda_x cos(phi) + lambda_y sin(phi)) sin(theta); Suslov: none
+    of degree 1 in the velocities.
     """
     return _ball(True)
 
@@ -114,7 +119,8 @@ def suslov_rigid_body() -> System:
     h = (I1 Omega_1^2 + I2 Omega_2^2)/2.  Closed form: with W = sqrt(2 h/I2),
     c = artanh(Omega_2(0)/W), s = I13 W t/I1 + c: Omega_2 = W tanh(s),
     Omega_1 = Omega_1(0) cosh(c)/cosh(s); the body tends to a steady rotation about
-    its second axis.
+    its second axis.  Vakonomic and Hoelder: the same energy (and one more whose constants
+    are not polynomial in the inertia); Suslov: Omega_1 and Omega_2 themselves.
     """
     J = JetSpace("phi theta psi")
     phi, theta, psi = J.q
