@@ -389,9 +389,10 @@ def run_ensemble(scene, initial=None, params=None, *, rtol=1e-9, atol=1e-12, t_e
     else:
         from .integrators import loop
 
-        head = (kern.rhs_fp, kern.sing_fp, uev, integrators.EXPLICIT[method].arrays, t0, t1)
+        head = (kern.rhs_fp, kern.sing_fp, uev, t0, t1)
         tail = (ctl, te, mode, watch, halt)
-        drive = entry_point(loop.ensemble_solver(parallel=parallel == "prange"))
+        drive = entry_point(loop.ensemble_solver(integrators.EXPLICIT[method],
+                                                 parallel=parallel == "prange"))
 
     def block(drive, a, b):
         drive(*head, Y0[a:b], P[a:b], *tail, OUT_T[a:b], OUT_Y[a:b], INFO[a:b], T_LAST[a:b],

@@ -417,10 +417,9 @@ class Scene:
                                                y_init, p, ctl, newton, te, mode, watch, halt),
                                  halt, limit)
         else:
-            solve = kern.integrator()
-            tab = integrators.EXPLICIT[method].arrays
+            solve = integrators.explicit_solver(method)
             tic = time.perf_counter()
-            out = interrupt.call(lambda: solve(kern.rhs_fp, kern.sing_fp, uev, tab, t0, t1,
+            out = interrupt.call(lambda: solve(kern.rhs_fp, kern.sing_fp, uev, t0, t1,
                                                y_init, p, ctl, te, mode, watch, halt),
                                  halt, limit)
         wall = time.perf_counter() - tic
