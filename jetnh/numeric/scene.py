@@ -33,8 +33,6 @@ from __future__ import annotations
 
 import time
 from collections.abc import Mapping
-from functools import cached_property
-
 import numpy as np
 import sympy as sp
 
@@ -49,10 +47,11 @@ from .integrators import STATUS_TEXT
 from .integrators._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, NONFINITE,
                                   SINGULAR, STOPPED)
 from .integrators.loop import Control, watch_of
+from .frozen import Frozen, memo
 from .trajectory import Trajectory
 
 
-class Scene:
+class Scene(Frozen):
     """``Scene(system, principle, params, initial, t_span)``: see the module docstring.
 
     ``params`` default to ``system.defaults`` (the catalogue models carry them).
@@ -61,6 +60,9 @@ class Scene:
     names parameters read at run time instead of compiled in; ``project`` replaces
     inconsistent dependent velocities; ``consistency_tol`` is the relative tolerance of
     that check; ``cache=False`` keeps compiled kernels out of the disk cache.
+
+    A scene is immutable (``FrozenError`` on assignment; ``replace`` makes a changed
+    copy); what it compiles lazily is kept in its private memo (``numeric.frozen``).
     """
 
     def __init__(self, system: System, principle: str = "chetaev", params=None, initial=None,
@@ -207,7 +209,7 @@ class Scene:
         return out
 
     # ------------------------------------------------------------------ kernels
-    @cached_property
+    @memo
     def key(self) -> str:
         compiled_params = {k: v for k, v in self.params.items()
                            if k not in self.runtime_params}
@@ -498,7 +500,7 @@ class Scene:
             return None
         memo = tuple((sp.srepr(e.fun) if e.is_expression else id(e.fun), e.direction,
                       e.max_events, e.name) for e in evs)
-        store = self.__dict__.setdefault("_compiled_events", {})
+        store = self._memo.setdefault("events", {})
         if memo not in store:
             store[memo] = compile_events(self, evs)
         return store[memo]
