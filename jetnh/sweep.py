@@ -55,7 +55,7 @@ from .jet import key_name
 
 #: options passed on to ``run_ensemble``
 OPTIONS = ("rtol", "atol", "method", "first_step", "max_step", "max_steps", "n_steps", "h",
-           "events", "singular", "singular_tol")
+           "events", "singular", "singular_tol", "step")
 
 
 def sweep(scene, grid, client=None, *, times=None, outputs=None, chunk_size=None,

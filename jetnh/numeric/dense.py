@@ -21,7 +21,7 @@ import numpy as np
 
 from ..errors import ArgumentError, IntegrationError, JetnhError
 from . import arguments
-from .integrators import EXPLICIT, explicit_solver
+from .integrators import explicit_solver
 from .integrators._common import AT_T_EVAL, EVERY_STEP
 from .integrators.loop import Control, Watch
 

@@ -48,6 +48,7 @@ from .integrators._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, NONFI
                                   SINGULAR, STOPPED)
 from .integrators.loop import Control, watch_of
 from .frozen import Frozen, memo
+from .options import Newton, StepControl, fields_of, merge, singular_of
 from .trajectory import Trajectory
 
 
@@ -273,11 +274,11 @@ class Scene(Frozen):
         return np.array([self.params[n] for n in self.runtime_params], dtype=float)
 
     # ------------------------------------------------------------------ run
-    def run(self, rtol=1e-9, atol=1e-12, t_eval=None, method="dop853", *, backend=None,
-            save="steps", first_step=None, max_step=None, max_steps=10_000_000,
+    def run(self, rtol=None, atol=None, t_eval=None, method="dop853", *, backend=None,
+            save="steps", first_step=None, max_step=None, max_steps=None,
             n_steps=None, h=None, t_span=None, y0=None, params=None, newton_tol=None,
-            max_newton=None, events=None, singular="stop", singular_tol=1e-10,
-            projection=False, timeout=None) -> Trajectory:
+            max_newton=None, events=None, singular="stop", singular_tol=None,
+            projection=False, timeout=None, step=None, newton=None) -> Trajectory:
         """Integrate and return a ``Trajectory``.
 
         ``method``: "dop853" (default), "dopri5" (alias "RK45"), "rk4" (fixed step: give
@@ -323,12 +324,22 @@ class Scene(Frozen):
         (``codegen.discrete_indicators``; never the split) at every node and stop at the
         last regular one; a failed step next to a vanishing indicator, or where the
         Lagrangian is degenerate on the constraints, is a singular stop too.
+
+        Option values (``numeric.options``) stand for groups of these keywords:
+        ``step=StepControl(rtol, atol, first_step, max_step, max_steps, n_steps, h)``
+        (defaults rtol 1e-9, atol 1e-12, max_steps 10^7), ``singular=Singular(action,
+        tol)`` (defaults "stop", 1e-10), ``newton=Newton(tol, max_iter)``.
         """
+        step = merge(step, StepControl, dict(
+            rtol=rtol, atol=atol, first_step=first_step, max_step=max_step,
+            max_steps=max_steps, n_steps=n_steps, h=h))
+        rtol, atol, first_step, max_step, max_steps, n_steps, h = fields_of(step)
+        singular, singular_tol = fields_of(singular_of(singular, singular_tol))
+        newton_tol, max_newton = fields_of(merge(newton, Newton, dict(tol=newton_tol,
+                                                                     max_iter=max_newton)))
         t0, t1 = self._t_span(t_span) if t_span is not None else self.t_span
         p = self._run_params(params)
         y_init = self._run_state(y0, t0, p)
-        if singular not in ("stop", "ignore"):
-            raise JetnhError(f"singular must be 'stop' or 'ignore', not {singular!r}")
         singular_tol = arguments.real(singular_tol, "singular_tol")
         if not 0.0 <= singular_tol < 1.0:
             raise JetnhError(f"singular_tol must be in [0, 1) (a fraction of each "
