@@ -47,6 +47,11 @@ def test_scene_lazy_state_not_in_dict(scene):
     np.testing.assert_array_equal(traj.t_events[0], again.t_events[0])
     assert scene.replace(t_span=(0.0, 1.0)).t_span == (0.0, 1.0)
     assert scene.t_span == (0.0, 0.5)
+    # a pickled scene keeps its kernels' key (plain data), not its compiled events
+    back = pickle.loads(pickle.dumps(scene))
+    assert back._memo == {"key": key}
+    with pytest.raises(FrozenError):
+        back.t_span = (0.0, 1.0)
 
 
 def test_trajectory_refuses_assignment_and_keeps_dict(scene):

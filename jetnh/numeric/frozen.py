@@ -15,7 +15,10 @@ from ..errors import FrozenError
 
 
 class Frozen:
-    """Base of the immutable objects (module docstring)."""
+    """Base of the immutable objects (module docstring).  ``_portable``: the memo entries
+    that copies and pickles keep (plain data; compiled code stays behind)."""
+
+    _portable: tuple[str, ...] = ()
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
@@ -32,8 +35,8 @@ class Frozen:
         cls.__init__ = frozen_init
 
     def __getstate__(self):
-        """Pickles and copies leave the memo (compiled code) behind."""
-        return {**self.__dict__, "_memo": {}}
+        memo = self.__dict__.get("_memo", {})
+        return {**self.__dict__, "_memo": {k: memo[k] for k in self._portable if k in memo}}
 
     def _refuse(self, name):
         raise FrozenError(f"{type(self).__name__} is immutable: cannot change {name!r} after "

@@ -66,6 +66,8 @@ class Scene(Frozen):
     copy); what it compiles lazily is kept in its private memo (``numeric.frozen``).
     """
 
+    _portable = ("key",)        # a pickled scene (a sweep's worker) keeps its kernels' key
+
     def __init__(self, system: System, principle: str = "chetaev", params=None, initial=None,
                  t_span=(0.0, 1.0), *, form=None, convention="paper", integrals=None,
                  runtime_params=(), project=False, consistency_tol=1e-9, cache=True):
