@@ -2,13 +2,15 @@
 
 A method is a small immutable value, ``ExplicitRK`` (its tableau, order, error estimator
 and dense output; one short module each: ``dopri5``, ``dop853``, ``rk4``); the loop
-``solve`` takes the method's arrays as an argument and does everything else: the first
-step, adaptive step control (Hairer-Norsett-Wanner I, II.4, with scipy's constants) or
-equal fixed steps, the budgets (``max_steps``, the ``halt`` flag of ``interrupt``),
-singularity stops and user events on the dense output (``_events``), and the output
-(every step, the points of ``t_eval``, or the two ends).  It is compiled once for every
-method and every scene (the right-hand side is a first-class function) and cached on
-disk; ensembles run the same loop over the rows of an array (``ensemble_solver``).
+``_solve`` reads the method's arrays as compile-time constants (``_specialised``: one
+compilation per method, at the per-evaluation cost of a hand-written loop) and does
+everything else: the first step, adaptive step control (Hairer-Norsett-Wanner I, II.4,
+with scipy's constants) or equal fixed steps, the budgets (``max_steps``, the ``halt``
+flag of ``interrupt``), singularity stops and user events on the dense output
+(``_events``), and the output (every step, the points of ``t_eval``, or the two ends).
+Each method's loop serves every scene (the right-hand side is a first-class function)
+and is cached on disk; ensembles run the same loop over the rows of an array
+(``ensemble_solver``).
 
 Arithmetic: a stage is ``y + h * sum_r A[s, r] K[r]`` summed over every earlier stage in
 order, the new state ``y + (h / b_den) * sum_r B[r] K[r]``; with these forms the results
