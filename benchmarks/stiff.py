@@ -1,6 +1,6 @@
 """Stiff nonholonomic systems: jetnh's radau against scipy's Radau, BDF, LSODA and dop853.
 
-    .venv/bin/python benchmarks/stiff.py [--quick] [--out PATH]
+    .venv/bin/python benchmarks/stiff.py --before PATH [--quick] [--cost-only] [--out PATH]
 
 (default output: benchmarks/results/stiff.json)
 
@@ -14,11 +14,13 @@
    docstring).  "Speed-up at equal error": scipy's time interpolated (log-log, over its
    tolerances) at radau's error, divided by radau's time.
 2. The refactor of the explicit methods into one loop (``integrators.loop``), before
-   (the repository's main branch, ``--before PATH``, default /work/main) and after (this
-   tree), each in a fresh process with empty numba and kernel caches: the first run of
-   dop853, dopri5 and rk4 (their loops compiled), the fixed cost of a run (T = 1e-6,
-   ``save="final"``) and the cost per rhs evaluation (T = 100 minus the fixed cost) of
-   each method on the rolling disk (rk4: 2000 steps).
+   (the hand-written per-method loops of commit a6430f6, a worktree at ``--before PATH``)
+   and after (this tree), each in a fresh process with empty numba and kernel caches,
+   two alternating pairs of processes (``--cost-only``: this part alone, the family kept
+   from the output file): the first run of dop853, dopri5 and rk4 (their loops
+   compiled), the fixed cost of a run (T = 1e-6, ``save="final"``) and the cost per rhs
+   evaluation (T = 100 minus the fixed cost) of each method on the rolling disk (rk4:
+   2000 steps).
 
 Wall times are best of several repetitions (``_common.best``); ratios are within this run.
 """
@@ -147,22 +149,39 @@ def cost(root, reps_short, reps_long):
     return json.loads(res.stdout.strip().splitlines()[-1])
 
 
+def costs(before_root, after_root, rounds, reps_short, reps_long):
+    """``cost`` of both trees in ``rounds`` alternating pairs of fresh processes (so that a
+    change of the machine's load hits both alike); the best of each figure."""
+    runs = {"before": [], "after": []}
+    for _ in range(rounds):
+        runs["before"].append(cost(before_root, reps_short, reps_long))
+        runs["after"].append(cost(after_root, reps_short, reps_long))
+    return tuple({k: min(r[k] for r in rs) for k in rs[0]} for rs in runs.values())
+
+
 def main(argv=None):
     ap = parser(__doc__, "stiff")
-    ap.add_argument("--before", default="/work/main",
-                    help="the tree of the code before the refactor (default /work/main)")
+    ap.add_argument("--before", required=True,
+                    help="the tree of the per-method loops (git worktree add PATH a6430f6)")
+    ap.add_argument("--cost-only", action="store_true",
+                    help="measure only the explicit loop before/after; keep the stiffness "
+                         "family of the existing output file")
     args = ap.parse_args(argv)
     quick = args.quick
     family = FAMILY[::2] if quick else FAMILY
     tols = (1e-4, 1e-7) if quick else (1e-4, 1e-6, 1e-8, 1e-10)
     reps = 2 if quick else 5
-    rows = []
-    for a in family:
-        rows += family_case(a, tols, reps)
-    speed = {m: speedup(rows, m) for m in METHODS if m != "radau"}
+    if args.cost_only:
+        old = json.loads(args.out.read_text())
+        rows = old["rows"]
+        speed = {m: {float(k): v for k, v in d.items()} for m, d in old["speedup"].items()}
+    else:
+        rows = []
+        for a in family:
+            rows += family_case(a, tols, reps)
+        speed = {m: speedup(rows, m) for m in METHODS if m != "radau"}
     reps_short, reps_long = (50, 3) if quick else (2000, 7)
-    before = cost(args.before, reps_short, reps_long)
-    after = cost(ROOT, reps_short, reps_long)
+    before, after = costs(args.before, ROOT, 1 if quick else 2, reps_short, reps_long)
     stiff = max(r["stiffness"] for r in rows)
     summary = [
         "radau against scipy's Radau on the same compiled rhs at equal error: "

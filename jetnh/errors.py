@@ -37,6 +37,10 @@ class IntegrationError(JetnhError, RuntimeError):
     """A numerical integration that cannot go on."""
 
 
+class FrozenError(JetnhError, AttributeError):
+    """An assignment to an immutable object (a Scene, a Trajectory)."""
+
+
 class JetnhWarning(UserWarning):
     """Input jetnh accepts but that is probably not what was meant (e.g. a parameter
     named like a velocity, which is a constant, not the velocity)."""

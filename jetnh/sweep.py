@@ -59,9 +59,9 @@ from .jet import key_name
 
 #: options passed on to ``run_ensemble`` (or to ``Scene.run``)
 OPTIONS = ("rtol", "atol", "method", "first_step", "max_step", "max_steps", "n_steps", "h",
-           "events", "singular", "singular_tol")
+           "events", "singular", "singular_tol", "step")
 #: options that only ``Scene.run`` takes (methods run point by point)
-POINT_OPTIONS = ("newton_tol", "max_newton", "projection")
+POINT_OPTIONS = ("newton_tol", "max_newton", "newton", "projection")
 
 
 def sweep(scene, grid, client=None, *, times=None, outputs=None, chunk_size=None,

@@ -152,7 +152,7 @@ def test_integrator_cache_key_carries_the_helpers():
 
     h = _common.sources_hash()
     assert len(h) == 16
-    for d in (loop.solver(), radau.solver()):
+    for d in (loop.solver(DOPRI5), radau.solver()):
         assert d.py_func.__qualname__.endswith("_" + h)
         assert d._cache._impl.locator.__class__.__module__.startswith("numba")
     assert type(_common.collect._cache).__name__ == "NullCache"

@@ -18,15 +18,19 @@ on disk keyed by the symbolic input (``cache``), and integrates in compiled loop
   semantics (terminal, direction), roots on the dense output inside the compiled loop.
 - Ensembles (``ensemble``): ``scene.ensemble(initial=arrays, params=arrays, ...)`` runs
   the same compiled loop for every row, on all cores, bit-for-bit the single runs.
+- Run options (``options``): ``StepControl``, ``Singular``, ``Newton`` values, or the
+  keywords they stand for.
 """
 
 from .ensemble import Ensemble, run_ensemble
 from .events import Event
 from .integrators._common import (EVENT, FINISHED, MAX_STEPS, NONFINITE, NOT_CONVERGED,
                                   SINGULAR, STATUS_TEXT, STOPPED, TOO_SMALL_STEP, Status)
+from .options import Newton, Singular, StepControl
 from .scene import Scene
 from .trajectory import Diagnostics, Trajectory
 
 __all__ = ["Scene", "Trajectory", "Diagnostics", "Event", "Ensemble", "run_ensemble",
            "Status", "STATUS_TEXT", "FINISHED", "MAX_STEPS", "TOO_SMALL_STEP", "NONFINITE",
-           "NOT_CONVERGED", "EVENT", "SINGULAR", "STOPPED"]
+           "NOT_CONVERGED", "EVENT", "SINGULAR", "STOPPED", "StepControl", "Singular",
+           "Newton"]

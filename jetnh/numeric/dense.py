@@ -21,7 +21,7 @@ import numpy as np
 
 from ..errors import ArgumentError, IntegrationError, JetnhError
 from . import arguments
-from .integrators import EXPLICIT
+from .integrators import explicit_solver
 from .integrators._common import AT_T_EVAL, EVERY_STEP
 from .integrators.loop import Control, Watch
 
@@ -98,8 +98,7 @@ def _groups(k):
 def _retaken_steps(traj, k, tau) -> np.ndarray:
     """dop853/dopri5: re-take step k[i] with the times tau (sorted by step, then time)."""
     kern, d = traj._kernels, traj._dense
-    solve = kern.integrator()
-    tab = EXPLICIT[traj.method].arrays
+    solve = explicit_solver(traj.method)
     t, y, p = traj.t, traj.y, np.ascontiguousarray(traj._p, dtype=float)
     none = np.zeros(0, dtype=np.int64)
     watch = Watch(0, 0.0, none, none)
@@ -110,7 +109,7 @@ def _retaken_steps(traj, k, tau) -> np.ndarray:
         # |h| one ulp up: t0 + first reaches (or passes, and is cut back to) t1, so the
         # step is h = t1 - t0, the original run's h to the bit
         first = float(np.nextafter(abs(t1 - t0), np.inf))
-        res = solve(kern.rhs_fp, kern.sing_fp, kern.sing_fp, tab, t0, t1,
+        res = solve(kern.rhs_fp, kern.sing_fp, kern.sing_fp, t0, t1,
                     np.ascontiguousarray(y[j]), p, Control(d["rtol"], d["atol"], first, np.inf,
                                                            1, 0),
                     np.ascontiguousarray(tau[a:b]), AT_T_EVAL, watch, halt)

@@ -55,6 +55,7 @@ from .integrators import STATUS_TEXT
 from .integrators._common import (AT_T_EVAL, ENDPOINTS, EVENT, FINISHED, NONFINITE,
                                   SINGULAR, entry_point)
 from .integrators.loop import Control, watch_of
+from .options import StepControl, fields_of, merge, singular_of
 
 PARALLEL = ("prange", "threads", "serial")
 
@@ -318,22 +319,29 @@ class Ensemble:
                 f"{self.workers} workers)>")
 
 
-def run_ensemble(scene, initial=None, params=None, *, rtol=1e-9, atol=1e-12, t_eval=None,
+def run_ensemble(scene, initial=None, params=None, *, rtol=None, atol=None, t_eval=None,
                  save="final", method="dop853", n_steps=None, h=None, first_step=None,
-                 max_step=np.inf, max_steps=10_000_000, events=None, singular="stop",
-                 singular_tol=1e-10, parallel="threads", workers=None, project=False,
-                 on_error="raise", timeout=None) -> Ensemble:
+                 max_step=None, max_steps=None, events=None, singular="stop",
+                 singular_tol=None, parallel="threads", workers=None, project=False,
+                 on_error="raise", timeout=None, step=None) -> Ensemble:
     """Integrate ``scene`` from many initial states / parameter sets: see the module
     docstring.  Options as ``Scene.run`` (``max_steps`` and ``timeout`` are budgets of
-    each run and of the whole ensemble; Ctrl-C stops every run within one step)."""
+    each run and of the whole ensemble; Ctrl-C stops every run within one step), also
+    as the values ``step=StepControl(...)`` and ``singular=Singular(...)``."""
     import numba
+
+    step = merge(step, StepControl, dict(
+        rtol=rtol, atol=atol, first_step=first_step, max_step=max_step,
+        max_steps=max_steps, n_steps=n_steps, h=h))
+    rtol, atol, first_step, max_step, max_steps, n_steps, h = fields_of(step)
+    if max_step is None:
+        max_step = np.inf
+    singular, singular_tol = fields_of(singular_of(singular, singular_tol))
 
     if parallel not in PARALLEL:
         raise JetnhError(f"parallel must be one of {PARALLEL}, not {parallel!r}")
     if on_error not in ("raise", "record"):
         raise JetnhError(f"on_error must be 'raise' or 'record', not {on_error!r}")
-    if singular not in ("stop", "ignore"):
-        raise JetnhError(f"singular must be 'stop' or 'ignore', not {singular!r}")
     singular_tol = arguments.real(singular_tol, "singular_tol")
     if not 0.0 <= singular_tol < 1.0:
         raise JetnhError(f"singular_tol must be in [0, 1), not {singular_tol}")
@@ -389,9 +397,10 @@ def run_ensemble(scene, initial=None, params=None, *, rtol=1e-9, atol=1e-12, t_e
     else:
         from .integrators import loop
 
-        head = (kern.rhs_fp, kern.sing_fp, uev, integrators.EXPLICIT[method].arrays, t0, t1)
+        head = (kern.rhs_fp, kern.sing_fp, uev, t0, t1)
         tail = (ctl, te, mode, watch, halt)
-        drive = entry_point(loop.ensemble_solver(parallel=parallel == "prange"))
+        drive = entry_point(loop.ensemble_solver(integrators.EXPLICIT[method],
+                                                 parallel=parallel == "prange"))
 
     def block(drive, a, b):
         drive(*head, Y0[a:b], P[a:b], *tail, OUT_T[a:b], OUT_Y[a:b], INFO[a:b], T_LAST[a:b],

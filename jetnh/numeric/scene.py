@@ -33,8 +33,6 @@ from __future__ import annotations
 
 import time
 from collections.abc import Mapping
-from functools import cached_property
-
 import numpy as np
 import sympy as sp
 
@@ -49,10 +47,12 @@ from .integrators import STATUS_TEXT
 from .integrators._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, NONFINITE,
                                   SINGULAR, STOPPED)
 from .integrators.loop import Control, watch_of
+from .frozen import Frozen, memo
+from .options import Newton, StepControl, fields_of, merge, singular_of
 from .trajectory import Trajectory
 
 
-class Scene:
+class Scene(Frozen):
     """``Scene(system, principle, params, initial, t_span)``: see the module docstring.
 
     ``params`` default to ``system.defaults`` (the catalogue models carry them).
@@ -61,7 +61,12 @@ class Scene:
     names parameters read at run time instead of compiled in; ``project`` replaces
     inconsistent dependent velocities; ``consistency_tol`` is the relative tolerance of
     that check; ``cache=False`` keeps compiled kernels out of the disk cache.
+
+    A scene is immutable (``FrozenError`` on assignment; ``replace`` makes a changed
+    copy); what it compiles lazily is kept in its private memo (``numeric.frozen``).
     """
+
+    _portable = ("key",)        # a pickled scene (a sweep's worker) keeps its kernels' key
 
     def __init__(self, system: System, principle: str = "chetaev", params=None, initial=None,
                  t_span=(0.0, 1.0), *, form=None, convention="paper", integrals=None,
@@ -207,7 +212,7 @@ class Scene:
         return out
 
     # ------------------------------------------------------------------ kernels
-    @cached_property
+    @memo
     def key(self) -> str:
         compiled_params = {k: v for k, v in self.params.items()
                            if k not in self.runtime_params}
@@ -271,11 +276,11 @@ class Scene:
         return np.array([self.params[n] for n in self.runtime_params], dtype=float)
 
     # ------------------------------------------------------------------ run
-    def run(self, rtol=1e-9, atol=1e-12, t_eval=None, method="dop853", *, backend=None,
-            save="steps", first_step=None, max_step=None, max_steps=10_000_000,
+    def run(self, rtol=None, atol=None, t_eval=None, method="dop853", *, backend=None,
+            save="steps", first_step=None, max_step=None, max_steps=None,
             n_steps=None, h=None, t_span=None, y0=None, params=None, newton_tol=None,
-            max_newton=None, events=None, singular="stop", singular_tol=1e-10,
-            projection=False, timeout=None) -> Trajectory:
+            max_newton=None, events=None, singular="stop", singular_tol=None,
+            projection=False, timeout=None, step=None, newton=None) -> Trajectory:
         """Integrate and return a ``Trajectory``.
 
         ``method``: "dop853" (default), "dopri5" (alias "RK45"), "rk4" (fixed step: give
@@ -321,12 +326,22 @@ class Scene:
         (``codegen.discrete_indicators``; never the split) at every node and stop at the
         last regular one; a failed step next to a vanishing indicator, or where the
         Lagrangian is degenerate on the constraints, is a singular stop too.
+
+        Option values (``numeric.options``) stand for groups of these keywords:
+        ``step=StepControl(rtol, atol, first_step, max_step, max_steps, n_steps, h)``
+        (defaults rtol 1e-9, atol 1e-12, max_steps 10^7), ``singular=Singular(action,
+        tol)`` (defaults "stop", 1e-10), ``newton=Newton(tol, max_iter)``.
         """
+        step = merge(step, StepControl, dict(
+            rtol=rtol, atol=atol, first_step=first_step, max_step=max_step,
+            max_steps=max_steps, n_steps=n_steps, h=h))
+        rtol, atol, first_step, max_step, max_steps, n_steps, h = fields_of(step)
+        singular, singular_tol = fields_of(singular_of(singular, singular_tol))
+        newton_tol, max_newton = fields_of(merge(newton, Newton, dict(tol=newton_tol,
+                                                                     max_iter=max_newton)))
         t0, t1 = self._t_span(t_span) if t_span is not None else self.t_span
         p = self._run_params(params)
         y_init = self._run_state(y0, t0, p)
-        if singular not in ("stop", "ignore"):
-            raise JetnhError(f"singular must be 'stop' or 'ignore', not {singular!r}")
         singular_tol = arguments.real(singular_tol, "singular_tol")
         if not 0.0 <= singular_tol < 1.0:
             raise JetnhError(f"singular_tol must be in [0, 1) (a fraction of each "
@@ -417,10 +432,9 @@ class Scene:
                                                y_init, p, ctl, newton, te, mode, watch, halt),
                                  halt, limit)
         else:
-            solve = kern.integrator()
-            tab = integrators.EXPLICIT[method].arrays
+            solve = integrators.explicit_solver(method)
             tic = time.perf_counter()
-            out = interrupt.call(lambda: solve(kern.rhs_fp, kern.sing_fp, uev, tab, t0, t1,
+            out = interrupt.call(lambda: solve(kern.rhs_fp, kern.sing_fp, uev, t0, t1,
                                                y_init, p, ctl, te, mode, watch, halt),
                                  halt, limit)
         wall = time.perf_counter() - tic
@@ -499,7 +513,7 @@ class Scene:
             return None
         memo = tuple((sp.srepr(e.fun) if e.is_expression else id(e.fun), e.direction,
                       e.max_events, e.name) for e in evs)
-        store = self.__dict__.setdefault("_compiled_events", {})
+        store = self._memo.setdefault("events", {})
         if memo not in store:
             store[memo] = compile_events(self, evs)
         return store[memo]

@@ -12,12 +12,12 @@ integration stopped.  With generalized forces the energy is not conserved:
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
-from functools import cached_property
 
 import numpy as np
 
 from ..errors import JetnhError
 from ..jet import key_name
+from .frozen import Frozen, memo
 
 
 @dataclass
@@ -61,14 +61,15 @@ class Diagnostics:
         return "\n".join(lines)
 
 
-class Trajectory:
+class Trajectory(Frozen):
     """Output times ``t`` and states ``y`` (rows) of one run, with named access.
 
     Array orientation: ``traj.y`` is ``[n_times, n_states]`` (columns in the order
     ``scene.state_names``), ``traj[name]`` is ``[n_times]``; an ensemble's ``ens.y`` is
     ``[n_runs, n_times, n_states]``.  ``to_dataframe()``, ``to_xarray()`` and ``plot()``
     give every series by name (``jetnh.numeric.export``); ``at(times)`` evaluates the run
-    between its rows (``jetnh.numeric.dense``).
+    between its rows (``jetnh.numeric.dense``).  Immutable (``numeric.frozen``); the
+    derived columns are computed on first access.
     """
 
     def __init__(self, scene, t, y, p, *, method, status, stop_reason, steps, rejected,
@@ -160,7 +161,7 @@ class Trajectory:
         return out
 
     # ------------------------------------------------------------------ derived columns
-    @cached_property
+    @memo
     def aux(self) -> np.ndarray:
         """Rows of (dependent velocities, constraint residuals, energy, integrals)."""
         if self._own:
@@ -199,7 +200,7 @@ class Trajectory:
     def integral(self, name) -> np.ndarray:
         return self[name]
 
-    @cached_property
+    @memo
     def diagnostics(self) -> Diagnostics:
         res = self.residual
         rmax = float(np.max(np.abs(res))) if res.size else 0.0

@@ -28,7 +28,7 @@ check the indicators of the constraints and the Lagrangian at their nodes.
 """
 
 from ...errors import JetnhError
-from ._common import STATUS_TEXT, Status  # noqa: F401
+from ._common import STATUS_TEXT, Status, entry_point  # noqa: F401
 from .dop853 import DOP853
 from .dopri5 import DOPRI5
 from .rk4 import RK4
@@ -52,6 +52,19 @@ def method(name) -> str:
         raise JetnhError(f"unknown method {name!r}; choose one of {', '.join(METHODS)} or "
                          f"scipy-<{'|'.join(SCIPY_METHODS)}>")
     return key
+
+
+def explicit_solver(name: str):
+    """The compiled loop of the explicit method ``name`` as its machine-code entry point
+    (``loop.solver``; no type dispatch per call: ``_common.entry_point``)."""
+    if name not in _ENTRIES:
+        from .loop import solver
+
+        _ENTRIES[name] = entry_point(solver(EXPLICIT[name]))
+    return _ENTRIES[name]
+
+
+_ENTRIES: dict = {}
 
 
 def adaptive(name: str) -> bool:

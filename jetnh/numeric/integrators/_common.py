@@ -163,8 +163,10 @@ def sources_hash() -> str:
     return h.hexdigest()[:16]
 
 
-def compiled(pyfunc, argtypes, parallel=False):
-    """``pyfunc`` compiled for ``argtypes`` on first use and cached on disk by numba.
+def compiled(pyfunc, argtypes, parallel=False, namespace=None, tag=""):
+    """``pyfunc`` compiled for ``argtypes`` on first use and cached on disk by numba;
+    with ``namespace``, over those globals instead of its module's (a specialisation,
+    cached under the name suffixed with ``tag``).
 
     The right-hand side is an argument of type ``RHS`` (a first-class function), so the
     compiled loop does not depend on which scene calls it: one compilation serves all.
@@ -174,16 +176,23 @@ def compiled(pyfunc, argtypes, parallel=False):
     of any module here compiles it anew.  (numba's disk cache does not key on
     ``parallel``: a function compiled both ways must be two Python functions.)
     """
-    key = (pyfunc.__module__, pyfunc.__qualname__)
+    key = (pyfunc.__module__, pyfunc.__qualname__, tag)
     if key not in _COMPILED:
-        func = types.FunctionType(pyfunc.__code__, pyfunc.__globals__, pyfunc.__name__,
-                                  pyfunc.__defaults__, pyfunc.__closure__)
-        func.__qualname__ = f"{pyfunc.__qualname__}_{sources_hash()}"
+        func = rebound(pyfunc, namespace)
+        func.__qualname__ = "_".join(filter(None, (pyfunc.__qualname__, tag, sources_hash())))
         func.__module__ = pyfunc.__module__
         func.__doc__ = pyfunc.__doc__
         _COMPILED[key] = numba.njit(argtypes, cache=True, error_model="numpy",
                                     nogil=True, parallel=parallel)(func)
     return _COMPILED[key]
+
+
+def rebound(pyfunc, namespace=None):
+    """A copy of the Python function ``pyfunc`` whose globals are ``namespace`` (default:
+    its own)."""
+    return types.FunctionType(pyfunc.__code__, pyfunc.__globals__ if namespace is None
+                              else namespace, pyfunc.__name__, pyfunc.__defaults__,
+                              pyfunc.__closure__)
 
 
 class FunctionAddress:

@@ -2,13 +2,15 @@
 
 A method is a small immutable value, ``ExplicitRK`` (its tableau, order, error estimator
 and dense output; one short module each: ``dopri5``, ``dop853``, ``rk4``); the loop
-``solve`` takes the method's arrays as an argument and does everything else: the first
-step, adaptive step control (Hairer-Norsett-Wanner I, II.4, with scipy's constants) or
-equal fixed steps, the budgets (``max_steps``, the ``halt`` flag of ``interrupt``),
-singularity stops and user events on the dense output (``_events``), and the output
-(every step, the points of ``t_eval``, or the two ends).  It is compiled once for every
-method and every scene (the right-hand side is a first-class function) and cached on
-disk; ensembles run the same loop over the rows of an array (``ensemble_solver``).
+``_solve`` reads the method's arrays as compile-time constants (``_specialised``: one
+compilation per method, at the per-evaluation cost of a hand-written loop) and does
+everything else: the first step, adaptive step control (Hairer-Norsett-Wanner I, II.4,
+with scipy's constants) or equal fixed steps, the budgets (``max_steps``, the ``halt``
+flag of ``interrupt``), singularity stops and user events on the dense output
+(``_events``), and the output (every step, the points of ``t_eval``, or the two ends).
+Each method's loop serves every scene (the right-hand side is a first-class function)
+and is cached on disk; ensembles run the same loop over the rows of an array
+(``ensemble_solver``).
 
 Arithmetic: a stage is ``y + h * sum_r A[s, r] K[r]`` summed over every earlier stage in
 order, the new state ``y + (h / b_den) * sum_r B[r] K[r]``; with these forms the results
@@ -39,7 +41,7 @@ from ._common import (
     AT_T_EVAL, ENDPOINTS, ENSEMBLE_OUT, EVERY_STEP, FINISHED, MAX_FACTOR, MAX_STEPS,
     MIN_FACTOR, NONFINITE, RHS, SAFETY, SINGULAR, STOPPED, TOO_SMALL_STEP, all_finite,
     collect, compiled, copy_into, f8, i8, initial_step_h0, initial_step_h1, jit, min_step,
-    store)
+    rebound, store)
 from ._events import (any_user_active, dense_eval, hermite_defect, locate, most_watched,
                       sing_dip, sing_init, sing_violated, sing_watch)
 
@@ -95,10 +97,6 @@ class ExplicitRK:
         return (f(self.C, dtype=float), f(self.A, dtype=float), f(self.B, dtype=float),
                 f(self.E, dtype=float), f(self.E3, dtype=float), f(self.D, dtype=float),
                 info, float(self.b_den))
-
-
-TABLEAU = numba.types.Tuple((f8[::1], f8[:, ::1], f8[::1], f8[::1], f8[::1], f8[:, ::1],
-                             i8[::1], f8))
 
 
 @jit
@@ -171,7 +169,7 @@ def _error(kind, ns, E, E3, h, y, y_new, K, rtol, atol):
     return math.sqrt(err / n)
 
 
-@jit
+@numba.njit(error_model="numpy", nogil=True, inline="always")
 def _stages(ns, C, A, B, b_den, rhs, t, h, y, K, y_new, ytmp, p):
     """Stages 1 .. n_stages - 1 (K[0] given) and the new state."""
     n = y.shape[0]
@@ -289,9 +287,9 @@ def output(tab, fixed, rhs, p, t, h, t_new, y, y_new, K, F, ytmp, y_stop, stop, 
     return ts, ys, n_out, j_eval
 
 
-def _solve(rhs, sing, uev, tab, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
-    """Integrate y' = rhs(t, y, p) from t0 to t_end with the method ``tab``
-    (``ExplicitRK.arrays``) under the step control ``ctl`` (``Control``), watching ``watch``
+def _solve(rhs, sing, uev, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
+    """Integrate y' = rhs(t, y, p) from t0 to t_end with the method ``TAB``
+    (``ExplicitRK.arrays``, compile-time constants: ``_specialised``) under the step control ``ctl`` (``Control``), watching ``watch``
     (``Watch``: ``sing`` computes the ``n_sing`` singularity indicators, ``uev`` the user
     event functions; see ``_events``).  ``mode``: EVERY_STEP, AT_T_EVAL or ENDPOINTS.
     The loop stops with status STOPPED before a step when ``halt[0]`` is nonzero.
@@ -308,9 +306,10 @@ def _solve(rhs, sing, uev, tab, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt
     1 % of its initial size) and the interpolant's defect at the middle of the step
     exceeds ``KINK``, the run stops at the start of that step as a singular stop.
     """
+    tab = TAB
     C, A, B, E, E3, D, info, b_den = tab
-    ns = info[0]
-    adaptive = info[1] != NONE
+    ns, kind, _, error_order = SHAPE
+    adaptive = kind != NONE
     rtol, atol, first_step, max_step, max_steps, n_steps = ctl
     n_sing, sing_tol, ev_dir, ev_max = watch
     watching = n_sing > 0 or ev_dir.shape[0] > 0
@@ -353,7 +352,7 @@ def _solve(rhs, sing, uev, tab, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt
         uev(t, y, p, gu_old)
     h_abs = 0.0
     h_fixed = (t_end - t0) / max(n_steps, 1)
-    exponent = -1.0 / (info[3] + 1)
+    exponent = -1.0 / (error_order + 1)
     if adaptive:
         rhs(t, y, p, K[0])
         stats[2] += 1
@@ -377,7 +376,8 @@ def _solve(rhs, sing, uev, tab, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt
                 ytmp[i] = y[i] + h0 * direction * K[0, i]
             rhs(t + h0 * direction, ytmp, p, K[1])
             stats[2] += 1
-            h_abs = initial_step_h1(K[0], K[1], h0, d1, scale, info[3], interval, max_step)
+            h_abs = initial_step_h1(K[0], K[1], h0, d1, scale, error_order, interval,
+                                    max_step)
     status = FINISHED
     step = 0
     while (direction * (t_end - t) > 0.0) if adaptive else (step < n_steps):
@@ -407,7 +407,7 @@ def _solve(rhs, sing, uev, tab, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt
                 _stages(ns, C, A, B, b_den, rhs, t, h, y, K, y_new, ytmp, p)
                 rhs(t_new, y_new, p, K[ns])
                 stats[2] += ns
-                err = _error(info[1], ns, E, E3, h, y, y_new, K, rtol, atol)
+                err = _error(kind, ns, E, E3, h, y, y_new, K, rtol, atol)
                 if not math.isfinite(err) or not all_finite(K[ns]):
                     nonfinite = True
                     h_abs *= MIN_FACTOR
@@ -465,50 +465,67 @@ def _solve(rhs, sing, uev, tab, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt
     return Result(status, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev, sing_index)
 
 
-run = jit(_solve)
+#: the method a specialised loop runs and that loop (``_specialised``; unbound here)
+TAB = SHAPE = run = None
+_SPECIALISED = {}
+
+
+def _specialised(method):
+    """The globals of this module with ``TAB`` bound to ``method.arrays`` and ``run`` to
+    ``_solve`` over them: numba freezes a global tuple of arrays into constants, so each
+    method's loop is compiled with its tableau (stage counts, coefficients) known, as the
+    hand-written loops were, at the per-evaluation cost of theirs."""
+    if method.name not in _SPECIALISED:
+        namespace = dict(globals())
+        namespace["TAB"] = method.arrays
+        namespace["SHAPE"] = tuple(int(k) for k in method.arrays[6])
+        namespace["run"] = jit(rebound(_solve, namespace))
+        _SPECIALISED[method.name] = namespace
+    return _SPECIALISED[method.name]
 
 CONTROL = numba.typeof(Control(1.0, np.zeros(1), 0.0, 1.0, 1, 0))
 WATCH = numba.typeof(Watch(0, 0.0, np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64)))
-ARGS = (RHS, RHS, RHS, TABLEAU, f8, f8, f8[::1], f8[::1], CONTROL, f8[::1], i8, WATCH,
+ARGS = (RHS, RHS, RHS, f8, f8, f8[::1], f8[::1], CONTROL, f8[::1], i8, WATCH,
         i8[::1])
 
 
-def _entry(rhs, sing, uev, tab, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
-    return run(rhs, sing, uev, tab, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt)
+def _entry(rhs, sing, uev, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
+    return run(rhs, sing, uev, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt)
 
 
-def solver():
-    """The compiled ``solve(rhs, sing, uev, tab, t0, t_end, y0, p, ctl, t_eval, mode,
-    watch, halt)`` shared by every explicit method (``_solve``)."""
-    return compiled(_entry, ARGS)
+def solver(method):
+    """The compiled ``solve(rhs, sing, uev, t0, t_end, y0, p, ctl, t_eval, mode, watch,
+    halt)`` of the explicit method ``method`` (``_solve`` over its tableau)."""
+    return compiled(_entry, ARGS, namespace=_specialised(method), tag=method.name)
 
 
 # ---------------------------------------------------------------------- ensembles
 # Two copies of one driver (numba's cache cannot hold a function compiled both with and
 # without ``parallel``): run r of the ensemble is the loop on Y0[r], P[r].
-def _ensemble_parallel(rhs, sing, uev, tab, t0, t_end, Y0, P, ctl, t_eval, mode, watch, halt,
+def _ensemble_parallel(rhs, sing, uev, t0, t_end, Y0, P, ctl, t_eval, mode, watch, halt,
                        OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
     for r in numba.prange(Y0.shape[0]):
-        res = run(rhs, sing, uev, tab, t0, t_end, Y0[r], P[r], ctl, t_eval, mode, watch, halt)
+        res = run(rhs, sing, uev, t0, t_end, Y0[r], P[r], ctl, t_eval, mode, watch, halt)
         collect(r, res, mode, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)
 
 
-def _ensemble_serial(rhs, sing, uev, tab, t0, t_end, Y0, P, ctl, t_eval, mode, watch, halt,
+def _ensemble_serial(rhs, sing, uev, t0, t_end, Y0, P, ctl, t_eval, mode, watch, halt,
                      OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
     for r in range(Y0.shape[0]):
-        res = run(rhs, sing, uev, tab, t0, t_end, Y0[r], P[r], ctl, t_eval, mode, watch, halt)
+        res = run(rhs, sing, uev, t0, t_end, Y0[r], P[r], ctl, t_eval, mode, watch, halt)
         collect(r, res, mode, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)
 
 
-ENSEMBLE_ARGS = ARGS[:6] + (f8[:, ::1], f8[:, ::1]) + ARGS[8:] + ENSEMBLE_OUT
+ENSEMBLE_ARGS = ARGS[:5] + (f8[:, ::1], f8[:, ::1]) + ARGS[7:] + ENSEMBLE_OUT
 
 
-def ensemble_solver(parallel=True):
-    """The compiled ensemble driver ``drive(rhs, sing, uev, tab, t0, t_end, Y0, P, ctl,
-    t_eval, mode, watch, halt, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)``: numba
-    threads over the runs (``parallel``) or one loop (for a Python thread pool)."""
+def ensemble_solver(method, parallel=True):
+    """The compiled ensemble driver ``drive(rhs, sing, uev, t0, t_end, Y0, P, ctl, t_eval,
+    mode, watch, halt, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)`` of the method
+    ``method``: numba threads over the runs (``parallel``) or one loop (for a Python
+    thread pool)."""
     return compiled(_ensemble_parallel if parallel else _ensemble_serial, ENSEMBLE_ARGS,
-                    parallel=parallel)
+                    parallel=parallel, namespace=_specialised(method), tag=method.name)
 
 
 def watch_of(kern, compiled_events, singular: bool, singular_tol: float) -> Watch:

@@ -1,0 +1,73 @@
+"""Immutable objects (``Scene``, ``Trajectory``): attributes are set in ``__init__`` only.
+
+``Frozen.__init_subclass__`` wraps the subclass's ``__init__``: once it returns, setting
+or deleting an attribute raises ``FrozenError``.  Values computed on first use (compiled
+kernels and events, derived columns) go to the object's private ``_memo`` through
+``memo`` (like ``functools.cached_property``, but the instance's ``__dict__`` is never
+written after construction).
+"""
+
+from __future__ import annotations
+
+import functools
+
+from ..errors import FrozenError
+
+
+class Frozen:
+    """Base of the immutable objects (module docstring).  ``_portable``: the memo entries
+    that copies and pickles keep (plain data; compiled code stays behind)."""
+
+    _portable: tuple[str, ...] = ()
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        init = cls.__dict__.get("__init__")
+        if init is None:
+            return
+
+        @functools.wraps(init)
+        def frozen_init(self, *args, **kw):
+            init(self, *args, **kw)
+            if type(self).__init__ is frozen_init:    # the outermost __init__ freezes
+                object.__setattr__(self, "_memo", {})
+
+        cls.__init__ = frozen_init
+
+    def __getstate__(self):
+        memo = self.__dict__.get("_memo", {})
+        return {**self.__dict__, "_memo": {k: memo[k] for k in self._portable if k in memo}}
+
+    def _refuse(self, name):
+        raise FrozenError(f"{type(self).__name__} is immutable: cannot change {name!r} after "
+                          "construction; make a new one (Scene.replace(...) for a scene)")
+
+    def __setattr__(self, name, value):
+        if "_memo" in self.__dict__:
+            self._refuse(name)
+        object.__setattr__(self, name, value)
+
+    def __delattr__(self, name):
+        if "_memo" in self.__dict__:
+            self._refuse(name)
+        object.__delattr__(self, name)
+
+
+class memo:
+    """A property computed on first use and kept in the object's ``_memo``."""
+
+    def __init__(self, fget):
+        self.fget = fget
+        self.name = fget.__name__
+        self.__doc__ = fget.__doc__
+
+    def __get__(self, obj, cls=None):
+        if obj is None:
+            return self
+        store = obj._memo
+        if self.name not in store:
+            store[self.name] = self.fget(obj)
+        return store[self.name]
+
+    def __set__(self, obj, value):
+        obj._refuse(self.name)

@@ -1,0 +1,107 @@
+"""Run options as small immutable values, shared by ``Scene.run`` and ``run_ensemble``.
+
+    scene.run(step=StepControl(rtol=1e-11, max_step=0.1), singular=Singular(tol=1e-8))
+    scene.run(rtol=1e-11, max_step=0.1, singular_tol=1e-8)         # the same run
+
+``StepControl``: tolerances, step limits and the step budget (adaptive methods) or the
+fixed step (``n_steps`` or ``h``); ``Singular``: what to do at a singular configuration
+(``"stop"`` or ``"ignore"``) and the threshold of the indicators; ``Newton``: the
+iteration of the implicit and discrete methods.  The keyword arguments stay accepted:
+``merge`` folds them into the value (a keyword given together with a value that sets it
+too is refused).  Values are checked where the run uses them (``numeric.arguments``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields, replace
+
+from ..errors import ArgumentError
+
+
+@dataclass(frozen=True)
+class StepControl:
+    """Step control: ``rtol``, ``atol`` (scalar or per state), ``first_step``,
+    ``max_step`` (None: automatic, none), ``max_steps`` (budget), ``n_steps`` or ``h``
+    (fixed-step methods)."""
+
+    rtol: float = 1e-9
+    atol: object = 1e-12
+    first_step: float | None = None
+    max_step: float | None = None
+    max_steps: int = 10_000_000
+    n_steps: int | None = None
+    h: float | None = None
+
+
+@dataclass(frozen=True)
+class Singular:
+    """At a singular configuration: ``action`` "stop" (the default) or "ignore"; an
+    indicator below ``tol`` times its initial size counts as zero."""
+
+    action: str = "stop"
+    tol: float = 1e-10
+
+    def __post_init__(self):
+        if self.action not in ("stop", "ignore"):
+            raise ArgumentError(f"singular must be 'stop' or 'ignore', not {self.action!r}")
+
+    @property
+    def stops(self) -> bool:
+        return self.action == "stop"
+
+
+@dataclass(frozen=True)
+class Newton:
+    """The Newton iteration of radau, dla and dvi: tolerance and iteration limit (None:
+    the method's default)."""
+
+    tol: float | None = None
+    max_iter: int | None = None
+
+
+def merge(value, cls, given: dict):
+    """``value`` (an instance of ``cls`` or None: the defaults) with the keywords
+    ``given`` (named as the fields) that are not None folded in."""
+    set_ = {k: v for k, v in given.items() if v is not None}
+    if value is None:
+        return cls(**set_) if set_ else _DEFAULT[cls]
+    if not isinstance(value, cls):
+        raise ArgumentError(f"expected a {cls.__name__}, got {type(value).__name__}")
+    if not set_:
+        return value
+    default = _DEFAULT[cls]
+    clash = [k for k in set_ if not _same(getattr(value, k), getattr(default, k))]
+    if clash:
+        raise ArgumentError(f"{', '.join(clash)} given both as keyword and in the "
+                            f"{cls.__name__} value; give it once")
+    return replace(value, **set_)
+
+
+def fields_of(value) -> tuple:
+    """The fields of an option value, in order (cheaper than ``dataclasses.astuple``,
+    which copies them)."""
+    return tuple(vars(value).values())
+
+
+def _same(a, b) -> bool:
+    try:
+        return bool(a is b or a == b)
+    except ValueError:          # an array
+        return False
+
+
+def singular_of(singular, singular_tol) -> Singular:
+    """The ``Singular`` of the keywords ``singular`` (a string or a ``Singular``) and
+    ``singular_tol``."""
+    if isinstance(singular, Singular):
+        return merge(singular, Singular, {"tol": singular_tol})
+    return merge(None, Singular, {"action": None if singular == "stop" else singular,
+                                  "tol": singular_tol})
+
+
+_DEFAULT = {cls: cls() for cls in (StepControl, Singular, Newton)}
+
+#: the keyword run options each value stands for
+KEYWORDS = {"step": tuple(f.name for f in fields(StepControl)),
+            "singular": ("singular", "singular_tol"),
+            "newton": ("newton_tol", "max_newton")}
