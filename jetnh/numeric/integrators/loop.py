@@ -479,7 +479,13 @@ def _specialised(method):
         namespace = dict(globals())
         namespace["TAB"] = method.arrays
         namespace["SHAPE"] = tuple(int(k) for k in method.arrays[6])
-        namespace["run"] = jit(rebound(_solve, namespace))
+        # a name of its own: numba links compiled functions by their mangled names
+        # (qualified name and a per-process counter), so two specialisations called
+        # ``_solve`` could resolve to one another's machine code when one is read from the
+        # disk cache and the other compiled in this process
+        func = rebound(_solve, namespace)
+        func.__qualname__ = f"_solve_{method.name}"
+        namespace["run"] = jit(func)
         _SPECIALISED[method.name] = namespace
     return _SPECIALISED[method.name]
 
