@@ -72,6 +72,8 @@ import math
 import numba
 import numpy as np
 
+from jetnh.numeric.codegen import straight_line
+
 _JIT = dict(cache=True, error_model="numpy", nogil=True)
 _SIG = "void(float64, float64[::1], float64[::1], float64[::1])"
 _JAC_SIG = "{jac_sig}"
@@ -594,11 +596,21 @@ def kernel_expressions(system, principle, params: dict, runtime_params=(), form=
 
 
 def _function(name, layout: Layout, phi_exprs, out_exprs, indices=None) -> str:
-    """One kernel: load states, the dependent velocities ``v<a>`` (when used), then the
-    outputs (to ``out[indices[i]]``, default ``out[i]``), by one ``Emitter``."""
+    """One kernel: the dependent velocities ``v<a>`` (when used), then the outputs (to
+    ``out[indices[i]]``, default ``out[i]``), from one ``Emitter``: as a straight-line
+    program compiled by LLVM (``program``, ``straight_line``), or, for a head the program
+    lacks, as Python text compiled by numba."""
     lines = ["@numba.njit(_SIG, **_JIT)", f"def {name}(t, y, p, out):"]
-    body = _loads(layout)
     em, phi = _emitter(phi_exprs, out_exprs)
+    slots = [i if indices is None else indices[i] for i in range(len(out_exprs))]
+    try:
+        ops = program(em, phi, list(zip(slots, out_exprs)))
+    except _Unsupported:
+        pass
+    else:
+        return (f"_P_{name} = {ops!r}\n_B_{name} = straight_line(_P_{name})\n\n\n"
+                + "\n".join(lines) + f"\n    _B_{name}(t, y, p, out)\n")
+    body = _loads(layout)
     body += em.emit(phi)
     body += em.emit([(f"out[{i if indices is None else indices[i]}]", e)
                      for i, e in enumerate(out_exprs)])
@@ -1020,3 +1032,156 @@ def codegen_multipliers_symbols(system) -> tuple:
 
 def codegen_multipliers(system) -> tuple[str, ...]:
     return tuple(s.name for s in codegen_multipliers_symbols(system))
+
+
+# ---------------------------------------------------------------------- straight-line LLVM
+_LLVM_UNARY = {"sin": "llvm.sin.f64", "cos": "llvm.cos.f64", "exp": "llvm.exp.f64",
+               "log": "llvm.log.f64", "abs": "llvm.fabs.f64", "sqrt": "llvm.sqrt.f64"}
+
+
+class _Unsupported(Exception):
+    """A head the straight-line program has no instruction for (printed as text instead)."""
+
+
+def program(em: "Emitter", phi, outputs) -> tuple:
+    """The graph of ``phi`` (``[(v<a>, expr)]``) and ``outputs`` (``[(slot, expr)]``) as
+    straight-line instructions ``(op, operands...)``, operands being indices of earlier
+    instructions: ``("y", i)``, ``("p", i)``, ``("t",)``, ``("c", x)``, ``("add", ...)``,
+    ``("mul", ...)``, ``("div", a, b)``, ``("powi", a, k)``, ``("pow", a, b)``,
+    ``("fn", name, ...)``, ``("out", slot, a)``.  Each distinct node is one instruction."""
+    ops, at = [], {}            # canonical index -> instruction index
+    symbol = {}
+
+    def add(op):
+        ops.append(op)
+        return len(ops) - 1
+
+    def node(e):
+        i = em.index[id(e)]
+        if i in at:
+            return at[i]
+        if not e.args:
+            if e.is_Symbol:
+                name = e.name
+                if name in symbol:
+                    at[i] = symbol[name]
+                elif name == "t":
+                    at[i] = add(("t",))
+                elif name[0] in "sp" and name[1:].isdigit():
+                    at[i] = add(("y" if name[0] == "s" else "p", int(name[1:])))
+                else:
+                    raise _Unsupported(name)
+            elif e.is_Number or e.is_NumberSymbol:
+                at[i] = add(("c", float(e)))
+            else:
+                raise _Unsupported(type(e).__name__)
+            return at[i]
+        if e.is_Add:
+            at[i] = add(("add", *[node(a) for a in e.args]))
+        elif e.is_Mul:
+            num, den = [], []
+            for a in e.args:
+                if a.is_Pow and a.exp.is_Integer and a.exp < 0:
+                    k = -int(a.exp)
+                    b = node(a.base)
+                    den.append(b if k == 1 else add(("powi", b, k)))
+                else:
+                    num.append(node(a))
+            top = num[0] if len(num) == 1 else add(("mul", *num)) if num else add(("c", 1.0))
+            if den:
+                bottom = den[0] if len(den) == 1 else add(("mul", *den))
+                top = add(("div", top, bottom))
+            at[i] = top
+        elif e.is_Pow:
+            b, x = e.args
+            if x.is_Integer:
+                k = int(x)
+                pos = add(("powi", node(b), abs(k)))
+                at[i] = pos if k > 0 else add(("div", add(("c", 1.0)), pos))
+            elif x == sp.S.Half:
+                at[i] = add(("fn", "sqrt", node(b)))
+            elif x == -sp.S.Half:
+                at[i] = add(("div", add(("c", 1.0)), add(("fn", "sqrt", node(b)))))
+            else:
+                at[i] = add(("pow", node(b), node(x)))
+        elif isinstance(e, sp.Abs):
+            at[i] = add(("fn", "abs", node(e.args[0])))
+        elif isinstance(e, sp.Function) and type(e).__name__ in _MATH:
+            at[i] = add(("fn", type(e).__name__, *[node(a) for a in e.args]))
+        else:
+            raise _Unsupported(type(e).__name__)
+        return at[i]
+
+    for name, e in phi:
+        symbol[name] = node(e)
+    for slot, e in outputs:
+        add(("out", slot, node(e)))
+    return tuple(ops)
+
+
+def straight_line(ops: tuple):
+    """A numba intrinsic ``body(t, y, p, out)`` that emits ``ops`` (``program``) as LLVM
+    instructions: numba types one call instead of every operation (its type inference
+    costs about a millisecond per operation), and LLVM compiles the block."""
+    from llvmlite import ir
+    from numba import types
+    from numba.core import cgutils
+    from numba.extending import intrinsic
+
+    dbl = ir.DoubleType()
+    i64 = ir.IntType(64)
+
+    @intrinsic
+    def body(typingctx, t, y, p, out):
+        def codegen(context, builder, signature, args):
+            mod = builder.module
+            ptr = {name: context.make_array(ty)(context, builder, v).data
+                   for name, ty, v in zip("ypo", signature.args[1:], args[1:])}
+
+            def fn(name, n=1):
+                return cgutils.get_or_insert_function(
+                    mod, ir.FunctionType(dbl, [dbl] * n), _LLVM_UNARY.get(name, name))
+
+            def prod(xs):
+                acc = xs[0]
+                for x in xs[1:]:
+                    acc = builder.fmul(acc, x)
+                return acc
+
+            vals = []
+            for op in ops:
+                kind = op[0]
+                if kind == "y" or kind == "p":
+                    v = builder.load(builder.gep(ptr[kind], [ir.Constant(i64, op[1])]))
+                elif kind == "t":
+                    v = args[0]
+                elif kind == "c":
+                    v = ir.Constant(dbl, op[1])
+                elif kind == "add":
+                    v = vals[op[1]]
+                    for a in op[2:]:
+                        v = builder.fadd(v, vals[a])
+                elif kind == "mul":
+                    v = prod([vals[a] for a in op[1:]])
+                elif kind == "div":
+                    v = builder.fdiv(vals[op[1]], vals[op[2]])
+                elif kind == "powi":
+                    k = op[2]
+                    if k <= 4:
+                        v = prod([vals[op[1]]] * k)
+                    else:
+                        v = builder.call(fn("llvm.pow.f64", 2),
+                                         [vals[op[1]], ir.Constant(dbl, float(k))])
+                elif kind == "pow":
+                    v = builder.call(fn("llvm.pow.f64", 2), [vals[op[1]], vals[op[2]]])
+                elif kind == "fn":
+                    v = builder.call(fn(op[1], len(op) - 2), [vals[a] for a in op[2:]])
+                else:       # "out"
+                    builder.store(vals[op[2]], builder.gep(ptr["o"], [ir.Constant(i64, op[1])]))
+                    v = None
+                vals.append(v)
+            return context.get_dummy_value()
+
+        return types.void(t, y, p, out), codegen
+
+    return body
