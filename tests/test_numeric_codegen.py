@@ -138,12 +138,48 @@ class _NoNumba:
     cfunc = njit
 
 
+def _interpret(ops):
+    """A straight-line program (``codegen.program``) run by Python: what the LLVM
+    instructions of ``straight_line`` compute, written a second time."""
+    import math
+
+    def run(t, y, p, out):
+        flat = out.reshape(-1)
+        vals = []
+        for op in ops:
+            kind, v = op[0], None
+            if kind in ("y", "p"):
+                v = (y if kind == "y" else p)[op[1]]
+            elif kind == "t":
+                v = t
+            elif kind == "c":
+                v = op[1]
+            elif kind == "add":
+                v = sum(vals[a] for a in op[1:])
+            elif kind == "mul":
+                v = math.prod(vals[a] for a in op[1:])
+            elif kind == "div":
+                v = vals[op[1]] / vals[op[2]]
+            elif kind == "powi":
+                v = vals[op[1]] ** op[2]
+            elif kind == "pow":
+                v = vals[op[1]] ** vals[op[2]]
+            elif kind == "fn":
+                f = abs if op[1] == "abs" else getattr(math, op[1])
+                v = f(*[vals[a] for a in op[2:]])
+            else:
+                flat[op[1]] = vals[op[2]]
+            vals.append(v)
+
+    return run
+
+
 def _plain(source):
     """The generated module's namespace, executed as Python (numba decorators inert;
-    the LLVM-compiled kernels absent)."""
+    the straight-line programs interpreted)."""
     source = source.replace("from jetnh.numeric.codegen import straight_line",
-                            "straight_line = lambda ops: None")
-    ns = {}
+                            "straight_line = _interpret")
+    ns = {"_interpret": _interpret}
     with pytest.MonkeyPatch.context() as mp:
         mp.setitem(sys.modules, "numba", _NoNumba)
         exec(compile(source, "<kernels>", "exec"), ns)
@@ -282,3 +318,25 @@ def test_compiled_jacobian_against_finite_differences():
         fd[:, j] = (op - om) / (2 * h)
     assert np.allclose(Jm, fd, rtol=1e-6, atol=1e-7)
     assert np.count_nonzero(Jm) > n            # not trivially the kinematic rows
+
+
+def test_printed_jacobian_for_heads_the_program_lacks():
+    """Emitter.jacobian (the text path: Abs, Piecewise) against sympy's derivative."""
+    import math
+
+    x, y = sp.symbols("s0 s1", real=True)
+    v = sp.Symbol("v0")
+    phi = sp.Abs(x) * y + sp.sin(x * y)
+    exprs = [v * sp.Piecewise((x**2, y > 0), (sp.cos(x), True)) + sp.atan2(y, x), v / (1 + y**2)]
+    em = codegen.Emitter([phi] + exprs, inline=0)
+    lines = em.emit([("v0", phi)]) + em.emit([(None, e) for e in exprs])
+    lines += em.jacobian(list(enumerate(exprs)), {x: 0, y: 1}, {v: phi})
+    full = [e.xreplace({v: phi}) for e in exprs]
+    for point in ({x: 0.7, y: -0.4}, {x: -1.3, y: 0.9}):
+        J = np.zeros((2, 2))
+        ns = {"math": math, "J": J, "s0": point[x], "s1": point[y]}
+        exec("\n".join(lines), ns)
+        for i, e in enumerate(full):
+            for j, s in enumerate((x, y)):
+                ref = float(sp.diff(e, s).subs(point).evalf(30))
+                assert J[i, j] == pytest.approx(ref, rel=1e-13, abs=1e-14), (i, j)

@@ -135,6 +135,16 @@ def _fast(e) -> bool:
             or (isinstance(e, sp.Function) and type(e).__name__ in _MATH))
 
 
+def _parts(e):
+    """The nodes the value of ``e`` depends on: its arguments, through structural ones
+    (a Piecewise's pairs)."""
+    for a in e.args:
+        if isinstance(a, _STRUCTURAL):
+            yield from _parts(a)
+        else:
+            yield a
+
+
 class Emitter:
     """Straight-line code for a shared graph (``roots``: every expression the code will
     assign, so that uses are counted once for all).
@@ -310,7 +320,7 @@ class Emitter:
                 return D.get(chain[i], {}) if i in chain else {}
             if isinstance(e, _STRUCTURAL) or not isinstance(e, sp.Expr):
                 return {}
-            kids = [self.index[id(a)] for a in e.args]
+            kids = [self.index[id(a)] for a in _parts(e)]
             live = [k for k in range(len(kids)) if D.get(kids[k])]
             if not live:
                 return {}
@@ -348,10 +358,10 @@ class Emitter:
         """Text of d e / d (child k) for the children ``live``, in the names of the
         node and its children (every compound node is named in a Jacobian kernel)."""
         val = self.text[self.index[id(e)]][0]
-        names = [self.text[self.index[id(a)]][0] if not isinstance(a, _STRUCTURAL) else ""
-                 for a in e.args]
+        parts = list(_parts(e))
+        names = [self.text[self.index[id(a)]][0] for a in parts]
         paren = [n if self.text[self.index[id(a)]][1] >= _ATOM else f"({n})"
-                 for n, a in zip(names, e.args)]
+                 for n, a in zip(names, parts)]
         out = {}
         if e.is_Add:
             return {k: "1.0" for k in live}
@@ -659,9 +669,19 @@ def _emitter(phi_exprs, out_exprs, inline: int = 160):
 
 
 def _jacobian_function(layout: Layout, phi_exprs, rhs_exprs) -> str:
-    """``jac(t, y, p, J)``: J[i, j] = d rhs_i / d y_j (forward mode over the graph:
-    ``Emitter.jacobian``); the dependent velocities enter through phi."""
+    """``jac(t, y, p, J)``: J[i, j] = d rhs_i / d y_j by forward mode over the graph --
+    on the straight-line program (``_derivative_program``), or for heads it lacks on the
+    printed nodes (``Emitter.jacobian``); the dependent velocities enter through phi."""
     lines = ['@numba.njit(_JAC_SIG, **_JIT)', "def jac(t, y, p, J):"]
+    em, phi = _emitter(phi_exprs, rhs_exprs)
+    try:
+        ops = _derivative_program(program(em, phi, list(enumerate(rhs_exprs))),
+                                  layout.n_state)
+    except _Unsupported:
+        pass
+    else:
+        return (f"_P_jac = {ops!r}\n_B_jac = straight_line(_P_jac)\n\n\n"
+                + "\n".join(lines) + "\n    J[:, :] = 0.0\n    _B_jac(t, y, p, J)\n")
     body = _loads(layout)
     em, phi = _emitter(phi_exprs, rhs_exprs, inline=0)
     body += em.emit(phi)
@@ -1212,3 +1232,128 @@ def straight_line(ops: tuple):
         return types.void(t, y, p, out), codegen
 
     return body
+
+
+def _derivative_program(ops: tuple, n: int) -> tuple:
+    """The forward-mode derivative of a straight-line program: every instruction's
+    derivatives in the states ``y[j]`` (only the nonzero ones) by the chain rule on the
+    instruction itself; each ``("out", i, a)`` becomes ``("out", i*n + j, da/dy_j)``
+    (row-major slots of an n-column matrix).  Raises ``_Unsupported`` for ``abs``."""
+    out = list(ops)
+    const: dict = {}
+
+    def add(op):
+        out.append(op)
+        return len(out) - 1
+
+    def c(x):
+        if x not in const:
+            const[x] = add(("c", float(x)))
+        return const[x]
+
+    def total(terms):
+        return terms[0] if len(terms) == 1 else add(("add", *terms))
+
+    def fprime(name, i, args):
+        a = args[0]
+        if name == "sin":
+            return add(("fn", "cos", a))
+        if name == "cos":
+            return add(("mul", c(-1), add(("fn", "sin", a))))
+        if name == "exp":
+            return i
+        if name == "log":
+            return add(("div", c(1), a))
+        if name == "sqrt":
+            return add(("div", c(0.5), i))
+        if name in ("tan", "tanh"):
+            sq = add(("powi", i, 2))
+            return add(("add", c(1), sq)) if name == "tan" else add(
+                ("add", c(1), add(("mul", c(-1), sq))))
+        if name == "sinh":
+            return add(("fn", "cosh", a))
+        if name == "cosh":
+            return add(("fn", "sinh", a))
+        sq = add(("powi", a, 2))
+        if name == "atan":
+            return add(("div", c(1), add(("add", c(1), sq))))
+        if name in ("asin", "acos"):
+            r = add(("div", c(1 if name == "asin" else -1),
+                     add(("fn", "sqrt", add(("add", c(1), add(("mul", c(-1), sq))))))))
+            return r
+        if name == "asinh":
+            return add(("div", c(1), add(("fn", "sqrt", add(("add", sq, c(1)))))))
+        if name == "acosh":
+            return add(("div", c(1), add(("fn", "sqrt", add(("add", sq, c(-1)))))))
+        if name == "atanh":
+            return add(("div", c(1), add(("add", c(1), add(("mul", c(-1), sq))))))
+        raise _Unsupported(name)
+
+    D: list = []
+    for i, op in enumerate(ops):
+        kind, d = op[0], {}
+        if kind == "y":
+            d = {op[1]: c(1)}
+        elif kind == "add":
+            acc: dict = {}
+            for a in op[1:]:
+                for j, x in D[a].items():
+                    acc.setdefault(j, []).append(x)
+            d = {j: total(t) for j, t in acc.items()}
+        elif kind == "mul":
+            acc = {}
+            args = list(op[1:])
+            for k, a in enumerate(args):
+                others = args[:k] + args[k + 1:]
+                for j, x in D[a].items():
+                    acc.setdefault(j, []).append(add(("mul", *others, x)) if others else x)
+            d = {j: total(t) for j, t in acc.items()}
+        elif kind == "div":
+            a, b = op[1], op[2]
+            acc = {}
+            for j, x in D[a].items():
+                acc.setdefault(j, []).append(add(("div", x, b)))
+            for j, x in D[b].items():
+                acc.setdefault(j, []).append(add(("div", add(("mul", c(-1), i, x)), b)))
+            d = {j: total(t) for j, t in acc.items()}
+        elif kind == "powi":
+            a, k = op[1], op[2]
+            if D[a]:
+                f = c(k) if k == 1 else add(("mul", c(k), a if k == 2 else add(("powi", a, k - 1))))
+                d = {j: add(("mul", f, x)) for j, x in D[a].items()}
+        elif kind == "pow":
+            a, b = op[1], op[2]
+            acc = {}
+            if D[a]:
+                f = add(("mul", b, add(("pow", a, add(("add", b, c(-1)))))))
+                for j, x in D[a].items():
+                    acc.setdefault(j, []).append(add(("mul", f, x)))
+            if D[b]:
+                g = add(("mul", i, add(("fn", "log", a))))
+                for j, x in D[b].items():
+                    acc.setdefault(j, []).append(add(("mul", g, x)))
+            d = {j: total(t) for j, t in acc.items()}
+        elif kind == "fn":
+            args = list(op[2:])
+            acc = {}
+            if op[1] == "atan2":            # atan2(u, w): (w du - u dw) / (u^2 + w^2)
+                u, w = args
+                r2 = add(("add", add(("powi", u, 2)), add(("powi", w, 2))))
+                for j, x in D[u].items():
+                    acc.setdefault(j, []).append(add(("div", add(("mul", w, x)), r2)))
+                for j, x in D[w].items():
+                    acc.setdefault(j, []).append(
+                        add(("div", add(("mul", c(-1), u, x)), r2)))
+            elif D[args[0]]:
+                f = fprime(op[1], i, args)
+                for j, x in D[args[0]].items():
+                    acc.setdefault(j, []).append(add(("mul", f, x)))
+            d = {j: total(t) for j, t in acc.items()}
+        D.append(d)
+    # the value stores become placeholders (indices unchanged); the matrix's stores follow
+    result = [op if op[0] != "out" else ("c", 0.0) for op in out]
+    for op in ops:
+        if op[0] == "out":
+            for j, x in sorted(D[op[2]].items()):
+                result.append(("out", op[1] * n + j, x))
+    return tuple(result)
