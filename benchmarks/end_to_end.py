@@ -3,7 +3,7 @@ cache, jetnh (Chetaev and vakonomic) against the route a sympy.physics.mechanics
 takes (LagrangesMethod, ``rhs()``, ``lambdify``, ``scipy.integrate.solve_ivp``).
 
     .venv/bin/python benchmarks/end_to_end.py [--quick] [--ns 1,2,4,8,16,32,64]
-        [--budget 120] [--timeout 600] [--out PATH]
+        [--budget 120] [--timeout 600] [--baseline-timeout 120] [--out PATH]
 
 (default output: benchmarks/results/end_to_end.json, figure end_to_end.png)
 
@@ -72,7 +72,7 @@ def _initial(system, N):
 
 
 def work_jetnh(N: int, principle: str, timeout: float) -> dict:
-    from jetnh import dag, models
+    from jetnh import models
     from jetnh.numeric import Scene, codegen
     from jetnh.numeric import cache as _cache
     from jetnh.numeric.codegen import multiplier_names
@@ -94,11 +94,23 @@ def work_jetnh(N: int, principle: str, timeout: float) -> dict:
     t3 = time.perf_counter()
     tr = sc.run(method="dop853", rtol=1e-8, atol=1e-10)
     t4 = time.perf_counter()
-    phi, rhs = codegen.kernel_expressions(system, principle, compiled)
     return {"seconds": t4 - tic, "derive": ks.timings["derive"],
             "generate": t2 - t1 - ks.timings["derive"], "compile": t3 - t2, "run": t4 - t3,
-            "shared": dag.size(phi + rhs), "kernel_chars": len(ks.source),
+            "shared": work_shared(N, principle, system)["shared"],
+            "kernel_chars": len(ks.source),
             "kernel_lines": ks.source.count("\n"), "x_end": float(tr["x"][-1])}
+
+
+def work_shared(N: int, principle: str, system=None) -> dict:
+    """The shared size of the rhs kernel's expressions: distinct nodes, equal copies
+    merged (``codegen.Emitter``)."""
+    from jetnh import models
+    from jetnh.numeric import codegen
+
+    system = system or models.get("n_trailer", N=N)
+    params = {getattr(k, "name", k): float(v) for k, v in system.defaults.items()}
+    phi, rhs = codegen.kernel_expressions(system, principle, params)
+    return {"shared": len(codegen.Emitter(phi + rhs))}
 
 
 def work_scene_init(N: int) -> dict:
@@ -210,6 +222,48 @@ def percall(baseline: str, reps: int = 20000, rounds: int = 7) -> list:
     return out_rows
 
 
+def summarize(rows) -> list[str]:
+    """The findings of a run, computed from its rows."""
+    out = ["jetnh total = derive + generate + compile + run; mechanics = LagrangesMethod + "
+           "rhs() + lambdify + solve_ivp; scene_init = the Scene constructor alone (it "
+           "evaluates phi on the flattened tree).  '>' is a time-out (the tool is then "
+           "not run for larger N)."]
+    for p in PRINCIPLES:
+        pts = [r[p] for r in rows if "shared" in r.get(p, {})]
+        if len(pts) < 2:
+            continue
+        big = max(pts, key=lambda m: m["shared"])
+        out.append(
+            f"{p}: generate {1e6 * big['generate'] / big['shared']:.0f} us and compile "
+            f"{1e3 * big['compile'] / big['shared']:.2f} ms per shared node, kernel "
+            f"{big['kernel_chars'] / big['shared']:.0f} characters per node at the largest "
+            f"N measured ({big['shared']} nodes); at the smallest "
+            f"{1e6 * pts[0]['generate'] / pts[0]['shared']:.0f} us, "
+            f"{1e3 * pts[0]['compile'] / pts[0]['shared']:.2f} ms, "
+            f"{pts[0]['kernel_chars'] / pts[0]['shared']:.0f} characters.")
+    for r in rows:
+        if r["N"] in (16, 32):
+            figs = ", ".join(f"{p} {fmt(r.get(p))} s" for p in PRINCIPLES)
+            out.append(f"N = {r['N']}: model to first trajectory {figs}.")
+    return out
+
+
+def time_table(rows) -> dict:
+    table = []
+    for r in rows:
+        for p in PRINCIPLES:
+            m = r.get(p)
+            if m and "shared" in m:
+                table.append([r["N"], p, f"{m['seconds']:.2f}", f"{m['derive']:.2f}",
+                              f"{m['generate']:.2f}", f"{m['compile']:.2f}",
+                              f"{m['run']:.3f}", m["shared"], m["kernel_chars"]])
+            elif m:
+                table.append([r["N"], p, fmt(m), "", "", "", "", "", ""])
+    return {"title": "jetnh: where the time goes",
+            "columns": ["N", "principle", "total s", "derive s", "generate s", "compile s",
+                        "run s", "shared nodes", "kernel chars"], "rows": table}
+
+
 def percall_table(rows) -> dict:
     return {"title": PERCALL_TITLE,
             "columns": ["case", "new ns", "baseline ns", "ratio", "new chars",
@@ -274,21 +328,33 @@ def main(argv=None) -> int:
     ap.add_argument("--ns", default=None, help="comma-separated N (default 1,2,4,8,16,32,64)")
     ap.add_argument("--budget", type=float, default=120.0,
                     help="stop a tool after a run longer than this (seconds)")
-    ap.add_argument("--timeout", type=float, default=600.0, help="per run (seconds)")
+    ap.add_argument("--timeout", type=float, default=600.0, help="per jetnh run (seconds)")
+    ap.add_argument("--baseline-timeout", type=float, default=120.0,
+                    help="per run of mechanics and scene_init (seconds)")
     ap.add_argument("--percall", default=None, metavar="BASELINE_CHECKOUT",
                     help="time one rhs call against the kernels of another checkout")
     ap.add_argument("--worker", default=None, help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.percall:
         previous = json.loads(args.out.read_text()) if args.out.exists() else {}
+        for row in previous.get("rows", []):      # sizes measured the same way
+            for p in PRINCIPLES:
+                if "shared" in row.get(p, {}):
+                    r = run_worker({"kind": "shared", "N": row["N"], "principle": p},
+                                   args.timeout)
+                    row[p]["shared"] = r.get("shared", row[p]["shared"])
         previous["percall"] = percall(args.percall)
-        previous.setdefault("tables", [])
-        previous["tables"] = [t for t in previous["tables"] if t.get("title") != PERCALL_TITLE]
-        previous["tables"].append(percall_table(previous["percall"]))
+        previous["summary"] = summarize(previous.get("rows", []))
+        previous["tables"] = [time_table(previous.get("rows", [])),
+                              percall_table(previous["percall"])]
+        plot(previous.get("rows", []), args.out.with_suffix(".png"))
         args.out.write_text(json.dumps(previous, indent=1) + "\n")
         return 0
     if args.worker:
         s = json.loads(args.worker)
+        if s["kind"] == "shared":
+            print(json.dumps(work_shared(s["N"], s["principle"])))
+            return 0
         if s["kind"] == "source":
             print(json.dumps(work_source(s["name"], s["options"], s["principle"], s["path"])))
             return 0
@@ -316,37 +382,20 @@ def main(argv=None) -> int:
                 continue
             spec = ({"kind": "jetnh", "principle": tool} if tool in PRINCIPLES
                     else {"kind": tool})
-            r = row[tool] = run_worker({**spec, "N": N}, timeout)
+            r = row[tool] = run_worker({**spec, "N": N},
+                                       timeout if tool in PRINCIPLES else args.baseline_timeout)
             if r.get("timeout") or "error" in r or r["seconds"] > budget:
                 stopped.add(tool)
         rows.append(row)
         print(f"{N:>3} | " + " ".join(f"{fmt(row.get(t)):>10}" for t in tools), flush=True)
         fig = args.out.with_suffix(".png").name
         plot(rows, args.out.with_name(fig))
-        table = []
-        for r in rows:
-            for p in PRINCIPLES:
-                m = r.get(p)
-                if m and "shared" in m:
-                    table.append([r["N"], p, f"{m['seconds']:.2f}", f"{m['derive']:.2f}",
-                                  f"{m['generate']:.2f}", f"{m['compile']:.2f}",
-                                  f"{m['run']:.3f}", m["shared"], m["kernel_chars"]])
-                elif m:
-                    table.append([r["N"], p, fmt(m), "", "", "", "", "", ""])
         write("end_to_end", {
             "title": "End to end: model to first trajectory (N-trailer, empty kernel cache)",
-            "summary": [
-                "jetnh total = derive + generate + numba compile + run (seconds); "
-                "mechanics = LagrangesMethod + rhs() + lambdify + solve_ivp; scene_init = "
-                "the Scene constructor alone (phi evaluated on the flattened tree).",
-                "A '>' figure is a time-out; a tool is not run again after one."],
+            "summary": summarize(rows),
             "columns": ["N", "chetaev", "vakonomic", "mechanics", "scene_init"],
             "rows": rows,
-            "tables": [{"title": "jetnh: where the time goes",
-                        "columns": ["N", "principle", "total s", "derive s", "generate s",
-                                    "compile s", "run s", "shared nodes", "kernel chars"],
-                        "rows": table}]
-            + ([percall_table(kept["percall"])] if kept else []),
+            "tables": [time_table(rows)] + ([percall_table(kept["percall"])] if kept else []),
             "figures": [fig], "budget_s": budget, "timeout_s": timeout, **kept},
             args.out, args.quick)
     return 0

@@ -529,19 +529,19 @@ def generate(system, principle, params: dict, runtime_params=(), integrals=None,
     # aux: residuals, energy, integrals
     F = system.L + sp.Add(*[lam * f for lam, f in zip(lams, eom.constraints)])
     energy = sp.Add(*[v * sp.diff(F, v) for v in J.qd]) - F
-    aux_exprs = [prepare.rename[v] for v in dep_vel]
-    aux_exprs += [prepare(f, f"constraint {a + 1}") for a, f in enumerate(system.constraints)]
-    aux_exprs.append(prepare(energy, "the energy"))
+    pairs = [(f, f"constraint {a + 1}") for a, f in enumerate(system.constraints)]
+    pairs.append((energy, "the energy"))
     integrals = dict(integrals or {})
-    for name, expr in integrals.items():
-        aux_exprs.append(prepare(expr, f"the first integral {name!r}"))
+    pairs += [(expr, f"the first integral {name!r}") for name, expr in integrals.items()]
     if system.forced:
-        aux_exprs.append(prepare(sp.Add(*[Q * v for Q, v in zip(system.Q, J.qd)]),
-                                 "the power of the forces"))
+        pairs.append((sp.Add(*[Q * v for Q, v in zip(system.Q, J.qd)]),
+                      "the power of the forces"))
+    aux_exprs = [prepare.rename[v] for v in dep_vel] + prepare.many(pairs)
     indicators = singular_indicators(
         system, [acc[J.jet(J.split(v)[0], 2)] for v in ind_vel] + [acc[r] for r in rates],
         prepare.numbers)
-    sing_exprs = [prepare(e, f"the singularity indicator {_label(e)}") for _, e in indicators]
+    sing_exprs = prepare.many([(e, f"the singularity indicator {_label(e)}")
+                               for _, e in indicators])
     t1 = time.perf_counter()
 
     layout = Layout(
@@ -583,14 +583,16 @@ def _rhs_parts(system, principle, params, runtime_params, form, convention):
             f"the {principle} equations in the {convention!r} convention leave the multipliers "
             f"{[s.name for s in eom.arbitrary]} arbitrary; they cannot be simulated")
     prepare = _Preparer(system, tuple(eom.multipliers), params, runtime_params)
-    phi_exprs = [prepare(system.phi[v], f"the dependent velocity {v}")
-                 for v in system.dependent_velocities]
-    rhs_exprs = [prepare.rename[J.jet(s, 1)] for s in J.q]
+    pairs = [(system.phi[v], f"the dependent velocity {v}")
+             for v in system.dependent_velocities]
     for v in system.independent_velocities:
         base = J.split(v)[0]
-        rhs_exprs.append(prepare(acc[J.jet(base, 2)], f"the acceleration of {base}"))
-    for r in eom.multiplier_rates:
-        rhs_exprs.append(prepare(acc[r], f"the rate {r}"))
+        pairs.append((acc[J.jet(base, 2)], f"the acceleration of {base}"))
+    pairs += [(acc[r], f"the rate {r}") for r in eom.multiplier_rates]
+    prepared = prepare.many(pairs)
+    k = len(system.dependent_velocities)
+    phi_exprs = prepared[:k]
+    rhs_exprs = [prepare.rename[J.jet(s, 1)] for s in J.q] + prepared[k:]
     return eom, acc, prepare, phi_exprs, rhs_exprs
 
 
@@ -775,8 +777,19 @@ class _Preparer:
         self.by_name.update(self.numbers)
         self.names = {s.name: s for s in self.rename}
 
-    def __call__(self, expr, what):
-        e = sp.sympify(expr)
+    def many(self, pairs) -> list:
+        """``[self(expr, what) for expr, what in pairs]`` by one substitution over the
+        graph of them all (shared parts rebuilt once); any error is reported by ``self``
+        on the first expression that has it."""
+        exprs = [sp.sympify(e) for e, _ in pairs]
+        sub, bad = self._rule(exprs)
+        out = None if bad or dag.atoms(exprs, AppliedUndef) else dag.xreplace(exprs, sub)
+        if out is None or dag.atoms(out, type(sp.nan), type(sp.zoo), type(sp.oo),
+                                    type(sp.S.NegativeInfinity)):
+            return [self(e, what) for e, what in pairs]
+        return out
+
+    def _rule(self, e):
         sub, bad = {}, set()
         for s in dag.free_symbols(e):
             if s in self.rename:
@@ -787,6 +800,11 @@ class _Preparer:
                 sub[s] = self.rename[self.names[s.name]]
             else:
                 bad.add(s.name)
+        return sub, bad
+
+    def __call__(self, expr, what):
+        e = sp.sympify(expr)
+        sub, bad = self._rule(e)
         if bad:
             raise JetnhError(
                 f"{what} contains symbols with no value: {', '.join(sorted(bad))}; "
