@@ -847,27 +847,25 @@ def singular_indicators(system, accelerations, numbers) -> list[tuple[str, sp.Ex
     No simplification: a quantity is an indicator as the derivation wrote it.
     """
     sub = {s: numbers[s.name] for s in system.parameters if s.name in numbers}
-    out, seen = [], set()
-
-    def add(kind, b):
-        b = dag.xreplace(b, sub)
-        for f in _factors(b):
-            if f not in seen:
-                seen.add(f)
-                out.append((kind, f))
-
+    found = []
     k = system.k
     if 0 < k <= 3:
         A = system.jacobian_dependent
         if any(not e.is_number for e in A):
             det = A[0, 0] if k == 1 else A.det(method="berkowitz")
-            add("split", system.on_constraints(det))
+            found.append(("split", system.on_constraints(det)))
     for v in system.dependent_velocities:
-        for b in _singular_bases(system.phi[v]):
-            add("constraint", b)
+        found += [("constraint", b) for b in _singular_bases(system.phi[v])]
     for e in accelerations:
-        for b in _singular_bases(e):
-            add("acceleration", b)
+        found += [("acceleration", b) for b in _singular_bases(e)]
+    # one substitution for all: equal parts stay one object (no tree comparisons below)
+    bases = dag.xreplace([b for _, b in found], sub)
+    out, seen = [], set()
+    for (kind, _), b in zip(found, bases):
+        for f in _factors(b):
+            if f not in seen:
+                seen.add(f)
+                out.append((kind, f))
     return out
 
 
