@@ -44,6 +44,7 @@ from typing import NamedTuple
 import mpmath
 import symengine as se
 import sympy as sp
+from sympy.core.cache import clear_cache
 from sympy.core.function import AppliedUndef
 from sympy.matrices.utilities import dotprodsimp
 
@@ -163,6 +164,10 @@ def solve(system, kappa: str = "none", explicit: bool = False, multipliers=(),
     ``rates``: the multiplier rates to solve for (none for Chetaev and the imposed
     convention, whose rows are projected).
     """
+    # sympy's construction cache would hand back equal but distinct copies of nodes built
+    # by an earlier derivation; comparing such copies (sympy's __eq__ walks the tree, not
+    # the graph) costs time exponential in the nesting of the solve
+    clear_cache()
     # no cancel() inside matrix products (hot path); pivots of large solves are chosen by
     # their values at random points on the constraint manifold
     with dotprodsimp(False), linalg.completing(lambda v: _on_constraints(system, v)):

@@ -38,6 +38,19 @@ def size(expr, cap: int | None = None) -> int:
     return len(nodes(expr, cap))
 
 
+def tree_size(expr, cap: int | None = None) -> int:
+    """The number of nodes of ``expr`` (a Basic or a list) as a tree -- what a tree walk
+    (``sympy.cse``, printing) visits -- counted on the graph; ``cap + 1`` once above
+    ``cap``."""
+    count: dict = {}
+    for e in nodes(expr):
+        n = 1 + sum(count[id(a)] for a in e.args)
+        count[id(e)] = n if cap is None else min(n, cap + 1)
+    roots = list(expr) if isinstance(expr, (list, tuple)) else [expr]
+    total = sum(count[id(sp.sympify(e))] for e in roots)
+    return total if cap is None else min(total, cap + 1)
+
+
 def free_symbols(expr) -> set:
     """The free symbols (Symbols among the atoms; no bound variables are expected)."""
     return {e for e in nodes(expr) if isinstance(e, sp.Symbol)}

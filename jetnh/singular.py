@@ -54,14 +54,16 @@ def bases(expr) -> list:
 
 def factors(b) -> list:
     """``b`` split into the factors whose vanishing makes it vanish, without numbers,
-    positive integer powers or an overall sign."""
+    positive integer powers or (for a factor of at most ``_FACTOR_MAX`` tree nodes) an
+    overall sign."""
     out = []
     for f in sp.Mul.make_args(b):
         while f.is_Pow and f.exp.is_Integer and f.exp > 0:
             f = f.base
         if f.is_number:
             continue
-        if f.could_extract_minus_sign():
+        # sympy decides the sign on the tree: only for a small one
+        if tree_size(f, _FACTOR_MAX) <= _FACTOR_MAX and f.could_extract_minus_sign():
             f = -f
         out.append(f)
     return out

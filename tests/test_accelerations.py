@@ -84,3 +84,27 @@ def test_explicit_forms_rates_are_those_of_the_explicit_multipliers(form):
     acc = eom.accelerations()
     for e in eom.expressions:
         assert vanishes(system.on_constraints(e.xreplace(acc)), system), (form, e)
+
+
+def test_a_derivation_does_no_more_work_after_another_one(monkeypatch):
+    """sympy's construction cache must not mix equal-but-distinct copies of an earlier
+    derivation's nodes into a later one: comparing them walks trees, not the graph (it
+    made the second N = 16 trailer derivation in a process ten times slower).  Counted in
+    calls of Basic.__eq__, not timed."""
+    from sympy.core.basic import Basic
+
+    calls = [0]
+    original = Basic.__eq__
+
+    def counting(a, b):
+        calls[0] += 1
+        return original(a, b)
+
+    monkeypatch.setattr(Basic, "__eq__", counting)
+    work = []
+    for principle in ("vakonomic", "chetaev", "vakonomic"):
+        system = models.get("n_trailer", N=6)
+        calls[0] = 0
+        system.equations(principle).accelerations()
+        work.append(calls[0])
+    assert work[2] <= 1.2 * work[0], work

@@ -44,3 +44,18 @@ def test_nested_expression_of_exponential_tree_size():
     assert v == 1                               # at t = 0 every x_k is x_(k-1), so b
     at = {a: 0.5, b: 0.25, t: sp.Rational(1, 3)}
     assert abs(dag.evaluate(xs[12], at) - xs[12].xreplace(at).evalf(30)) < 1e-25
+
+
+def test_tree_size_counts_the_tree_on_the_graph():
+    """tree_size is what a tree walk visits (sympy's preorder_traversal), counted in time
+    linear in the graph, and capped."""
+    x, y = sp.symbols("x y")
+    e = x + y
+    for _ in range(4):
+        e = sp.sin(e) * e + e**2
+    assert dag.tree_size(e) == sum(1 for _ in sp.preorder_traversal(e))
+    assert dag.tree_size([e, x]) == dag.tree_size(e) + 1
+    deep = x + y
+    for _ in range(60):                    # 3^60 tree nodes
+        deep = sp.sin(deep) * deep + deep**2
+    assert dag.tree_size(deep, cap=10**6) == 10**6 + 1

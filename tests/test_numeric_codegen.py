@@ -1,12 +1,17 @@
-"""Code generation (cse, exact printing, no user text in the source) and the disk cache."""
+"""Code generation (the graph emitter, exact printing, no user text in the source, the
+Jacobian kernel) and the disk cache."""
 
 import json
 import os
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 import sympy as sp
+from hypothesis import assume, given, settings
+
+import jetnh.strategies as jst
 
 import jetnh as jn
 from jetnh.constraints import System
@@ -120,3 +125,218 @@ def test_disk_cache_across_processes(tmp_path):
 def test_cache_root_env(tmp_path, monkeypatch):
     monkeypatch.setenv("JETNH_CACHE", str(tmp_path))
     assert str(cache.cache_root()).startswith(str(tmp_path))
+
+
+# ---------------------------------------------------------------------- the emitter
+class _NoNumba:
+    """Stands for numba while a generated module runs as plain Python (no compilation)."""
+
+    @staticmethod
+    def njit(*args, **kwargs):
+        return lambda f: f
+
+    cfunc = njit
+
+
+def _interpret(ops):
+    """A straight-line program (``codegen.program``) run by Python: what the LLVM
+    instructions of ``straight_line`` compute, written a second time."""
+    import math
+
+    def run(t, y, p, out):
+        flat = out.reshape(-1)
+        vals = []
+        for op in ops:
+            kind, v = op[0], None
+            if kind in ("y", "p"):
+                v = (y if kind == "y" else p)[op[1]]
+            elif kind == "t":
+                v = t
+            elif kind == "c":
+                v = op[1]
+            elif kind == "add":
+                v = sum(vals[a] for a in op[1:])
+            elif kind == "mul":
+                v = math.prod(vals[a] for a in op[1:])
+            elif kind == "div":
+                v = vals[op[1]] / vals[op[2]]
+            elif kind == "powi":
+                v = vals[op[1]] ** op[2]
+            elif kind == "pow":
+                v = vals[op[1]] ** vals[op[2]]
+            elif kind == "fn":
+                f = abs if op[1] == "abs" else getattr(math, op[1])
+                v = f(*[vals[a] for a in op[2:]])
+            else:
+                flat[op[1]] = vals[op[2]]
+            vals.append(v)
+
+    return run
+
+
+def _plain(source):
+    """The generated module's namespace, executed as Python (numba decorators inert;
+    the straight-line programs interpreted)."""
+    source = source.replace("from jetnh.numeric.codegen import straight_line",
+                            "straight_line = _interpret")
+    ns = {"_interpret": _interpret}
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setitem(sys.modules, "numba", _NoNumba)
+        exec(compile(source, "<kernels>", "exec"), ns)
+    return ns
+
+
+def _chain(depth):
+    """A chain whose tree has 3^depth leaves but 4 depth nodes: e <- sin(e) e + e^2/(1+e)."""
+    x, y = sp.symbols("s0 s1")
+    e = x + y
+    for _ in range(depth):
+        e = sp.sin(e) * e + e**2 / (1 + e)
+    return e
+
+
+def test_emitter_prints_each_shared_node_once():
+    """Generation and text are linear in the shared size (never the tree), and the
+    straight-line code computes the graph's value."""
+    import math
+
+    sizes = {}
+    for depth in (10, 20, 40):
+        e = _chain(depth)
+        em = codegen.Emitter([e])
+        lines = em.emit([("r", e)])
+        sizes[depth] = sum(map(len, lines))
+        if depth == 10:
+            ns = {"math": math, "s0": 0.3, "s1": -0.1}
+            exec("\n".join(lines), ns)
+            from jetnh import dag
+            ref = dag.evaluate(e, {sp.Symbol("s0"): 0.3, sp.Symbol("s1"): -0.1})
+            assert ns["r"] == pytest.approx(float(ref), rel=1e-12)
+    assert sizes[40] < 4.5 * sizes[10]        # linear (the tree grows by 3^30)
+    assert sizes[40] < 12000
+
+
+def test_emitter_merges_equal_copies():
+    """Two equal but distinct copies of a subgraph are one set of assignments."""
+    from sympy.core.cache import clear_cache
+
+    x, y = sp.symbols("s0 s1")
+    a = _chain(6)
+    clear_cache()
+    b = _chain(6)                    # built again: equal, distinct objects at every level
+    assert a == b and a is not b and a.args[0] is not b.args[0]
+    c = sp.cos(x) * y
+    em = codegen.Emitter([a + c, b * c])
+    lines = em.emit([("out[0]", a + c), ("out[1]", b * c)])
+    single = codegen.Emitter([a]).emit([("r", a)])
+    assert len(lines) <= len(single) + 4     # + a named, c, two outputs
+
+
+def test_emitter_prints_exact_numbers_and_fallback_heads():
+    import math
+
+    x, y = sp.symbols("s0 s1")
+    exprs = [sp.Rational(1, 3) * x - 2 * y**3 / sp.sqrt(x),
+             sp.Piecewise((x, y > 0), (-x, True)) + sp.Abs(y) + sp.atan2(y, x),
+             x ** sp.Rational(3, 2) + sp.exp(-x) / (1 + y**2) ** 2]
+    em = codegen.Emitter(exprs)
+    lines = em.emit([(f"r{i}", e) for i, e in enumerate(exprs)])
+    for point in ({"s0": 0.7, "s1": -0.4}, {"s0": 1.3, "s1": 0.9}):
+        ns = {"math": math, **point}
+        exec("\n".join(lines), ns)
+        for i, e in enumerate(exprs):
+            ref = float(e.subs({x: point["s0"], y: point["s1"]}).evalf(30))
+            assert ns[f"r{i}"] == pytest.approx(ref, rel=1e-14, abs=1e-15), (i, lines)
+
+
+# ---------------------------------------------------------------------- the Jacobian
+def _jacobian_route(s, principle, params, n, y, t):
+    """d rhs / d y by sympy on the (small) kernel expressions, phi substituted for v<a>,
+    evaluated at 40 digits: the second route."""
+    from jetnh import dag
+
+    phi, rhs = codegen.kernel_expressions(s, principle, params)
+    vs = {sp.Symbol(f"v{a}"): f for a, f in enumerate(phi)}
+    rhs = [e.xreplace(vs) for e in rhs]
+    ys = [sp.Symbol(f"s{i}") for i in range(n)]
+    point = {sym: sp.Float(v, 40) for sym, v in zip(ys, y)}
+    point[sp.Symbol("t")] = sp.Float(t, 40)
+    entries = [sp.diff(e, q) for e in rhs for q in ys]
+    vals = dag.evaluate(entries, point, dps=40)
+    return np.array([float(v) for v in vals]).reshape(n, n)
+
+
+@pytest.mark.parametrize("principle", ["chetaev", "vakonomic"])
+@settings(max_examples=6, deadline=None)
+@given(case=jst.constrained_systems(min_n=2, max_n=3))
+def test_jacobian_matches_the_derivative_of_the_expressions(case, principle):
+    """jac (forward mode over the graph) against sympy's derivative of the kernel
+    expressions at 40 digits, at random states of random systems."""
+    J, L, cons, dep = case
+    s = System(J, L, list(cons), dependent=list(dep))
+    try:
+        ks = codegen.generate(s, principle, {}, jacobian=True)
+    except JetnhError:
+        assume(False)
+    ns = _plain(ks.source)
+    n = ks.layout.n_state
+    rng = np.random.default_rng(11)
+    for _ in range(2):
+        y = rng.uniform(-1.2, 1.2, n)
+        t = float(rng.uniform(0.0, 1.0))
+        Jm = np.full((n, n), np.nan)
+        try:
+            ns["jac"](t, y, np.empty(0), Jm)
+        except (ZeroDivisionError, ValueError):
+            continue                          # a singular state of this draw
+        ref = _jacobian_route(s, principle, {}, n, y, t)
+        ok = np.isfinite(ref)
+        assert np.allclose(Jm[ok], ref[ok], rtol=1e-9, atol=1e-9 * (1 + abs(ref[ok]).max()))
+
+
+def test_compiled_jacobian_against_finite_differences():
+    """The compiled jac_c/jac of the disk's vakonomic scene against central differences
+    of the compiled rhs (``jacobian_kernels``)."""
+    s = disk_system()
+    ini = dict(x=0.0, y=0.0, phi=0.3, psi=0.2, phi_t=1.0, psi_t=0.5,
+               lambda_x=0.1, lambda_y=-0.2)
+    sc = Scene(s, "vakonomic", params=PARAMS, initial=ini, cache=False)
+    ck = codegen.jacobian_kernels(sc)
+    assert ck.jac_c._sig is not None
+    n = len(sc.state_names)
+    y = sc.y0 + np.linspace(0.1, 0.4, n)
+    Jm = np.zeros((n, n))
+    ck.jac(0.2, y, np.empty(0), Jm)
+    fd = np.zeros((n, n))
+    for j in range(n):
+        h = 1e-6 * (1 + abs(y[j]))
+        yp, ym, op, om = y.copy(), y.copy(), np.zeros(n), np.zeros(n)
+        yp[j] += h
+        ym[j] -= h
+        ck.rhs(0.2, yp, np.empty(0), op)
+        ck.rhs(0.2, ym, np.empty(0), om)
+        fd[:, j] = (op - om) / (2 * h)
+    assert np.allclose(Jm, fd, rtol=1e-6, atol=1e-7)
+    assert np.count_nonzero(Jm) > n            # not trivially the kinematic rows
+
+
+def test_printed_jacobian_for_heads_the_program_lacks():
+    """Emitter.jacobian (the text path: Abs, Piecewise) against sympy's derivative."""
+    import math
+
+    x, y = sp.symbols("s0 s1", real=True)
+    v = sp.Symbol("v0")
+    phi = sp.Abs(x) * y + sp.sin(x * y)
+    exprs = [v * sp.Piecewise((x**2, y > 0), (sp.cos(x), True)) + sp.atan2(y, x), v / (1 + y**2)]
+    em = codegen.Emitter([phi] + exprs, inline=0)
+    lines = em.emit([("v0", phi)]) + em.emit([(None, e) for e in exprs])
+    lines += em.jacobian(list(enumerate(exprs)), {x: 0, y: 1}, {v: phi})
+    full = [e.xreplace({v: phi}) for e in exprs]
+    for point in ({x: 0.7, y: -0.4}, {x: -1.3, y: 0.9}):
+        J = np.zeros((2, 2))
+        ns = {"math": math, "J": J, "s0": point[x], "s1": point[y]}
+        exec("\n".join(lines), ns)
+        for i, e in enumerate(full):
+            for j, s in enumerate((x, y)):
+                ref = float(sp.diff(e, s).subs(point).evalf(30))
+                assert J[i, j] == pytest.approx(ref, rel=1e-13, abs=1e-14), (i, j)

@@ -659,6 +659,7 @@ class CompiledKernels:
         self.kernels = module
         self.source = source
         for name in ("rhs", "rhs_c", "aux", "aux_rows", "sing", "sing_c", "events", "events_c",
+                     "jac", "jac_c",
                      "step_residual", "momentum", "legendre", "nodal", "constraint_jac"):
             if hasattr(self.kernels, name):
                 setattr(self, name, getattr(self.kernels, name))
