@@ -1,5 +1,5 @@
 """radau (Radau IIA, order 5, of jetnh's own): the method derived from its nodes, the
-symbolic Jacobian, order of convergence, closed forms, agreement with dop853, the stiff
+generated Jacobian, order of convergence, closed forms, agreement with dop853, the stiff
 Chaplygin sleigh, events, singular stops, budgets and ensembles."""
 
 import math
@@ -7,14 +7,11 @@ import math
 import numpy as np
 import pytest
 import sympy as sp
-from hypothesis import given
-from hypothesis import strategies as st
 
 from jetnh.models import chaplygin_sleigh, damped_chaplygin_sleigh, nonholonomic_particle
 from jetnh.numeric import Event, Scene
 from jetnh.numeric.integrators import radau
 from jetnh.numeric.integrators._common import EVENT, FINISHED, MAX_STEPS
-from jetnh.numeric.jacobian import jacobian_source
 
 PART0 = dict(x=0.1, y=-0.5, z=0.2, x_t=1.0, y_t=0.3)
 T = 4.0
@@ -67,46 +64,6 @@ def test_lu_real_and_complex():
         assert np.allclose(x, want, atol=1e-12)
 
 
-# ---------------------------------------------------------------------- the Jacobian
-_S = sp.symbols("s0 s1 s2")
-_V = sp.Symbol("v0")
-_atoms = st.sampled_from([_S[0], _S[1], _S[2], _V, sp.Symbol("p0"), sp.Symbol("t"),
-                          sp.Integer(2), sp.Rational(1, 3)])
-
-
-@st.composite
-def _expr(draw, depth=3):
-    if depth == 0:
-        return draw(_atoms)
-    op = draw(st.sampled_from(["add", "mul", "sin", "cos", "atom"]))
-    if op == "atom":
-        return draw(_atoms)
-    a = draw(_expr(depth - 1))
-    if op in ("sin", "cos"):
-        return getattr(sp, op)(a)
-    b = draw(_expr(depth - 1))
-    return a + b if op == "add" else a * b
-
-
-@given(phi=_expr(), outs=st.lists(_expr(), min_size=3, max_size=3),
-       point=st.lists(st.floats(-2, 2), min_size=5, max_size=5))
-def test_jacobian_source_is_the_chain_rule(phi, outs, point):
-    """The generated jac (v0 kept as a symbol, chain rule) equals sympy's Jacobian of the
-    outputs with phi substituted for v0 -- two routes."""
-    phi = phi.subs(_V, _S[0] + 1)        # phi depends on the states, not on itself
-    src = jacobian_source([phi], outs, 1)
-    space = {"math": math, "np": np}
-    exec(src, space)
-    y, p, t = np.array(point[:3]), np.array([point[3]]), point[4]
-    J = np.empty((3, 3))
-    space["jac"](t, y, p, J)
-    subs = {_S[0]: y[0], _S[1]: y[1], _S[2]: y[2], sp.Symbol("p0"): p[0],
-            sp.Symbol("t"): t}
-    full = sp.Matrix([o.subs(_V, phi) for o in outs]).jacobian(sp.Matrix(_S))
-    want = np.array(full.subs(subs).evalf(), dtype=float)
-    assert np.allclose(J, want, rtol=1e-12, atol=1e-12)
-
-
 # ---------------------------------------------------------------------- non-stiff
 @pytest.fixture(scope="module")
 def particle():
@@ -120,16 +77,17 @@ def exact_x(t):
     return PART0["x"] + c / v * (np.arcsinh(y0 + v * t) - np.arcsinh(y0))
 
 
-def test_symbolic_jacobian_matches_differences(particle):
-    kern, jac = particle.kernels, particle.jacobian
-    y, p = particle.y0 + 0.1, particle.p
-    J = np.empty((len(y), len(y)))
+def test_scene_jacobian_is_the_generated_one_and_matches_differences(particle):
+    """radau's Jacobian is the kernel generated from the derivation (codegen), checked
+    against central differences of the compiled rhs."""
     from jetnh.numeric import codegen
 
-    phi, out = codegen.kernel_expressions(particle.system, "chetaev", particle.params)
-    space = {"math": math, "np": np}
-    exec(jacobian_source(phi, out, 0), space)
-    space["jac"](0.3, y, p, J)
+    ck = codegen.jacobian_kernels(particle)
+    assert particle.jacobian.address == ck.jac_fp.address
+    kern = particle.kernels
+    y, p = particle.y0 + 0.1, particle.p
+    J = np.empty((len(y), len(y)))
+    ck.jac(0.3, y, p, J)
     f0, f1 = np.empty_like(y), np.empty_like(y)
     for j in range(len(y)):
         e = np.zeros_like(y)
@@ -137,7 +95,6 @@ def test_symbolic_jacobian_matches_differences(particle):
         kern.rhs(0.3, y + e, p, f1)
         kern.rhs(0.3, y - e, p, f0)
         assert np.allclose(J[:, j], (f1 - f0) / 2e-6, atol=1e-8)
-    assert jac is particle.jacobian
 
 
 def test_observed_order_five(particle):

@@ -232,14 +232,9 @@ class Scene(Frozen):
     @property
     def jacobian(self):
         """``jac(t, y, p, J)``, the Jacobian of the right-hand side for radau, as a
-        first-class function: the kernels' generated one where they carry it, else
-        differentiated from the same expressions here (``numeric.jacobian``)."""
-        kern = self.kernels
-        if hasattr(kern, "jac_fp"):
-            return kern.jac_fp
-        from .jacobian import symbolic_jacobian
-
-        return symbolic_jacobian(self)
+        first-class function: the kernel generated from the derivation
+        (``codegen.jacobian_kernels``, forward mode over the shared graph)."""
+        return codegen.jacobian_kernels(self).jac_fp
 
     def replace(self, **changes) -> "Scene":
         """A scene equal to this one except for ``changes`` (constructor arguments:
