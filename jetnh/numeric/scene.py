@@ -33,9 +33,11 @@ from __future__ import annotations
 
 import time
 from collections.abc import Mapping
+import mpmath
 import numpy as np
 import sympy as sp
 
+from .. import dag
 from ..constraints import PRINCIPLES, System
 from ..errors import ConstraintError, JetnhError, PrincipleError
 from ..jet import sympy_object
@@ -189,27 +191,29 @@ class Scene(Frozen):
 
     def _dependent_velocity_values(self, given, t0=None, params=None) -> dict[str, float]:
         """qdot^alpha = phi^alpha at the initial state (or at ``t0`` with ``params``
-        overriding the scene's), by sympy with numbers (small)."""
+        overriding the scene's), evaluated on the shared graph at 30 digits (NaN where
+        phi is undefined or not real)."""
         sys_ = self.system
         if not sys_.k:
             return {}
         J = sys_.J
-        sub = {J.t: sp.Float(self.t_span[0] if t0 is None else t0)}
+        point = {J.t: self.t_span[0] if t0 is None else t0}
         by_name = {s.name: s for s in J.q + J.qd}
-        for name, v in given.items():
-            if name in by_name:
-                sub[by_name[name]] = sp.Float(v)
+        point.update((by_name[name], v) for name, v in given.items() if name in by_name)
         values = {**self.params, **(params or {})}
-        for s in sys_.parameters:
-            sub[s] = sp.Float(values[s.name])
-        out = {}
-        for v in sys_.dependent_velocities:
-            val = sys_.phi[v].xreplace(sub)
-            try:
-                out[v.name] = float(sp.N(val, 17))
-            except TypeError:
-                out[v.name] = float("nan")
-        return out
+        point.update((s, values[s.name]) for s in sys_.parameters)
+        vs = sys_.dependent_velocities
+        phis = [sys_.phi[v] for v in vs]
+        try:
+            found = dag.evaluate(phis, point)
+        except (ZeroDivisionError, ValueError):     # one undefined: each on its own
+            found = []
+            for e in phis:
+                try:
+                    found += dag.evaluate(e, point)
+                except (ZeroDivisionError, ValueError):
+                    found.append(None)
+        return {v.name: _real(x) for v, x in zip(vs, found)}
 
     # ------------------------------------------------------------------ kernels
     @memo
@@ -576,3 +580,10 @@ class Scene(Frozen):
     def __repr__(self):
         return (f"Scene({self.principle}, states={list(self.state_names)}, "
                 f"t_span={self.t_span})")
+
+
+def _real(x) -> float:
+    """An mpmath value as a float; NaN when it is missing or not real."""
+    if x is None or (isinstance(x, mpmath.mpc) and x.imag != 0):
+        return float("nan")
+    return float(mpmath.re(x))
