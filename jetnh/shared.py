@@ -59,10 +59,11 @@ class SharedForm:
     def printed(self, printer=sp.sstr, cut: bool = False):
         """The rows as headings and (lhs text or None, expression text) pairs, and the
         definitions as (name, text); with ``cut`` each text within ``LINE_MAX``."""
+        tex = printer is not sp.sstr
         rows = [r if isinstance(r, str) else
                 (None if r[0] is None else printer(r[0]) if isinstance(r[0], sp.Basic)
-                 else str(r[0]), _cut(printer(r[1]), cut)) for r in self.rows]
-        return rows, [(printer(s), _cut(printer(e), cut)) for s, e in self.where]
+                 else str(r[0]), _cut(printer(r[1]), cut, tex)) for r in self.rows]
+        return rows, [(printer(s), _cut(printer(e), cut, tex)) for s, e in self.where]
 
     def text(self, budget: int | None = None, more: str = "") -> str:
         """Plain text: the rows, then "where" and the definitions; past ``budget``
@@ -117,10 +118,14 @@ class SharedForm:
 WHERE_TEX = r"&\text{where}"
 
 
-def _cut(text: str, cut: bool) -> str:
-    if cut and len(text) > LINE_MAX:            # a sum of thousands of names
-        return text[:LINE_MAX] + f" ... ({len(text) - LINE_MAX} more characters)"
-    return text
+def _cut(text: str, cut: bool, latex: bool = False) -> str:
+    """A line over ``LINE_MAX`` (a sum of thousands of terms) cut, or in LaTeX, whose
+    syntax a cut would break, replaced by a note."""
+    if not cut or len(text) <= LINE_MAX:
+        return text
+    if latex:
+        return r"\text{" + f"(a line of {len(text)} characters: see the full form)" + "}"
+    return text[:LINE_MAX] + f" ... ({len(text) - LINE_MAX} more characters)"
 
 
 def _keep(sizes: list, budget: int | None) -> int:
