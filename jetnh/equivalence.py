@@ -20,13 +20,12 @@ Verdicts hold off the singular sets of the two acceleration systems
 
 from __future__ import annotations
 
-import random
 from dataclasses import dataclass, field
 
 import mpmath
 import sympy as sp
 
-from . import accelerations, dag, linalg, singular
+from . import accelerations, dag, linalg, singular, zero
 from .constraints import System
 from .frobenius import bracket_components
 
@@ -149,88 +148,34 @@ def _singular(system: System, acc: dict, divs=()) -> list:
 
 def agrees(system: System, expr, derived=None, points: int = _POINTS, seed: int = 0) -> bool:
     """Whether ``expr`` (an expression, or a list: every one of them) vanishes on the
-    constraint manifold: at random points (random multipliers and parameters; the
-    ``derived`` symbols set from the others), evaluated on the shared graph at 30 and 60
-    digits (a list in one walk).  A value both precisions confirm is nonzero; one that
-    shrinks with the precision is rounding noise of an exact zero; between the two the
-    point is evaluated exactly (rational points of rational expressions) or at 120
-    digits."""
-    exprs = [sp.sympify(e) for e in (expr if isinstance(expr, (list, tuple)) else [expr])]
-    exprs = [e for e in exprs if e != 0]
-    if not exprs:
-        return True
+    constraint manifold: ``zero.vanishes`` at random points (random multipliers and
+    parameters, the dependent velocities on the constraints, the ``derived`` symbols set
+    from the others), the list evaluated in one walk of its shared graph."""
+    exprs = list(expr) if isinstance(expr, (list, tuple)) else [expr]
     derived = dict(derived or {})
-    vel = set(system.dependent_velocities)
+    vel = system.dependent_velocities
     syms = (dag.free_symbols([*exprs, *derived.values(), *system.phi.values()])
-            - vel - set(derived))
-    syms = sorted(syms, key=lambda s: s.name)
-    rng = random.Random(seed)
-    got = 0
-    for _ in range(4 * points):
-        if got >= points:
-            return True
-        base = {s: sp.Rational(rng.randrange(31 * _DEN // 100, 137 * _DEN // 100), _DEN)
-                for s in syms}
-        try:
-            zero = _zero_at(system, exprs, derived, base)
-        except (ValueError, ZeroDivisionError, ArithmeticError):
-            continue                # off the domain (a root of a negative number, ...)
-        if not zero:
-            return False
-        got += 1
-    return got >= max(1, points // 2)
+            - set(vel) - set(derived))
+    names = list(derived)
 
-
-_DEN = 100 * 2**16
-_CONFIRM = 1e-12         # relative agreement of two precisions that confirms a value
-_SHRINK = 1e-20          # a value that shrinks by this going to 60 digits is noise
-
-
-def _values(system, exprs, derived, base, dps) -> list:
-    """``exprs`` at the rational point ``base`` put on the constraints, ``dps`` digits."""
-    with mpmath.workdps(dps):
+    def point(base, dps):
         pt = {s: mpmath.mpf(v.p) / v.q for s, v in base.items()}
-        vel = system.dependent_velocities
         for v, x in zip(vel, dag.evaluate([system.phi[v] for v in vel], pt, dps=dps)):
             pt[v] = linalg._real(x)
             if pt[v] is None:
                 raise ValueError("no real point on the constraints here")
-        names = list(derived)
         pt.update(zip(names, dag.evaluate([derived[s] for s in names], pt, dps=dps)))
-        vals = dag.evaluate(exprs, pt, dps=dps)
-    if not all(mpmath.isfinite(v) for v in vals):
-        raise ZeroDivisionError("not finite here")
-    return vals
+        return pt
 
-
-def _zero_at(system, exprs, derived, base) -> bool:
-    """Whether every one of ``exprs`` vanishes at ``base`` (``agrees``)."""
-    los, his = (_values(system, exprs, derived, base, d) for d in (30, 60))
-    undecided = []
-    for e, lo, hi in zip(exprs, los, his):
-        if hi == 0 and lo == 0:
-            continue
-        if abs(lo - hi) <= _CONFIRM * abs(hi):
-            return False
-        if abs(hi) > _SHRINK * abs(lo):
-            undecided.append((e, hi))
-    return all(_zero_exactly(system, e, hi, derived, base) for e, hi in undecided)
-
-
-def _zero_exactly(system, expr, hi, derived, base) -> bool:
-    """An undecided value: exactly, when everything is rational, else at 120 digits."""
-    try:
-        if dag.size(expr, cap=linalg._EXACT_MAX + 1) > linalg._EXACT_MAX:
-            raise linalg.Inexact("too large to evaluate exactly")
+    def exact_point(base):
         with mpmath.workdps(60):
             pt = accelerations._on_constraints(system, dict(base))
         if any(not isinstance(v, sp.Rational) for v in pt.values()):
             raise linalg.Inexact("irrational point")
         pt.update({s: linalg._exact([e], pt)[0] for s, e in derived.items()})
-        return linalg._exact([expr], pt)[0] == 0
-    except linalg.Inexact:
-        top = _values(system, [expr], derived, base, 120)[0]
-        return abs(top) <= _SHRINK * abs(hi)
+        return pt
+
+    return zero.vanishes(exprs, point, exact_point, points, seed, symbols=syms)
 
 
 def compare(system: System, first: str, second: str, convention: str = "paper") -> Comparison:
