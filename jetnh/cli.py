@@ -18,7 +18,6 @@ import sys
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from itertools import combinations
 from pathlib import Path
 
 import sympy as sp
@@ -204,7 +203,8 @@ def _simplified(form, seconds, progress):
         rows = [r if isinstance(r, str) else (r[0], simp(r[1])) for r in form.rows]
         where = [(name, simp(e)) for name, e in form.where]
     progress.note(f"jetnh: simplified {simp.done} of {len(form.expressions()) + len(where)} expressions ("
-                  f"{simp.large} too large, {simp.timed_out} out of time, {simp.unstarted} "
+                  f"{simp.large} too large, {simp.timed_out} out of time, "
+                  f"{simp.unstarted} "
                   f"past the {simp.total:g} s budget: shown as derived)")
     return SharedForm(rows, where)
 

@@ -713,9 +713,9 @@ def zero_residual(expr, *, simplify: bool = False, numeric: bool = False, sample
     decides a nonzero one, and one numerically zero that Poly does not prove zero goes
     to ``zero.vanishes`` too.  Otherwise, steps, cheapest first: (1) ``sympy.expand``
     (for a rational expression, whose expansion can be huge, instead the numerator of
-    ``together(expr)`` is expanded after step 2); (2) one evaluation at a random point: a clearly nonzero value proves
-    non-zero and ends the test; (3) ``numeric``: evaluation at ``samples`` points decides;
-    otherwise (4) ``simplify`` when asked.  So ``simplify`` only ever runs on expressions
+    ``together(expr)`` is expanded after step 2); (2) one evaluation at a random point:
+    a clearly nonzero value proves non-zero and ends the test; (3) ``numeric``:
+    evaluation at ``samples`` points decides; otherwise (4) ``simplify`` when asked.  So ``simplify`` only ever runs on expressions
     that are numerically zero but not algebraically zero after expansion -
     trigonometric identities, in practice.
     """

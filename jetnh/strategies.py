@@ -371,7 +371,8 @@ def nonlinear_constraints(J: JetSpace, m: int | None = None,
     ``exp(c qd[a]) - (1 + phi^2)/(1 + w^2)``, ``phi = c0 + c1 qd_mu + c2 qd_mu qd_nu``,
     ``w = c3 q_r`` (small rationals: sympy solves it quickly), nonlinear in the dependent
     velocity too; its only solution is ``qd[a] = log((1 + phi^2)/(1 + w^2))/c`` and its
-    Jacobian ``c exp(c qd[a])`` never vanishes.  ``m`` and ``dependent`` as in :func:`affine_constraints`.
+    Jacobian ``c exp(c qd[a])`` never vanishes.  ``m`` and ``dependent`` as in
+    :func:`affine_constraints`.
     """
     if implicit and (m or 1) != 1 or implicit and dependent is not None and len(dependent) != 1:
         raise InvalidArgument("implicit nonlinear constraints come one at a time (m=1)")
