@@ -18,7 +18,6 @@ import sys
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from itertools import combinations
 from pathlib import Path
 
 import sympy as sp
@@ -208,25 +207,98 @@ def _with_split(loaded: Loaded, split: str | None) -> Loaded:
     return loaded
 
 
+# ---------------------------------------------------------------------- derive
+#: characters of a result printed on the screen; --out FILE writes the full form
+SCREEN_BUDGET = 20_000
+
+
+def _label(expr) -> str:
+    """A short input expression (L, a force) in full, a large one summarized."""
+    from .singular import label
+
+    return label(sp.sympify(expr))
+
+
+def _write(args, progress, text: str, form) -> None:
+    """The result: to --out in full, else on stdout (``text`` is the short form)."""
+    if args.out:
+        path = Path(args.out)
+        if not path.resolve().parent.is_dir():
+            raise JetnhError(f"cannot write {path}: the directory {path.resolve().parent} "
+                             "does not exist")
+        path.write_text(text + "\n", encoding="utf-8")
+        progress.note(f"jetnh: wrote {path} ({len(form.where)} named quantities)")
+    else:
+        print(text)
+
+
+def _render(args, form, header: list, data: dict, J, keys=None) -> str:
+    """``form`` (``jetnh.shared``) after ``header`` lines (text and LaTeX) or inside
+    ``data`` (JSON, its headings renamed by ``keys``): in full with --out, else within
+    the screen budget."""
+    from .shared import SharedForm
+
+    budget = None if args.out else SCREEN_BUDGET
+    more = " (write them all with --out FILE)"
+    if args.format == "json":
+        keys = keys or {}
+        form = SharedForm([keys.get(r, r) if isinstance(r, str) else r for r in form.rows],
+                          form.where)
+        data.update(form.as_dict(budget))
+        return json.dumps(data, indent=2)
+    if args.format == "latex":
+        return form.latex(J, budget, more)
+    return "\n".join(header + [form.text(budget, more)])
+
+
+def _simplified(form, seconds, progress):
+    """``form`` with its small expressions (rows and named quantities: ``Simplifier``)
+    trigsimp'd within ``seconds`` each, 10 x ``seconds`` in all, the others kept (the
+    rows refer to the named quantities by name).  ``seconds`` None: 0.5 s for a result
+    small enough to be shown without names, else none."""
+    from .shared import SharedForm
+
+    if seconds is None:
+        seconds = 0.0 if form.where else 0.5
+    simp = Simplifier(per=seconds, total=10 * seconds)
+    if not simp.ok:
+        return form
+    with progress.step(f"simplifying for display ({seconds:g} s each)"):
+        rows = [r if isinstance(r, str) else (r[0], simp(r[1])) for r in form.rows]
+        where = [(name, simp(e)) for name, e in form.where]
+    progress.note(f"jetnh: simplified {simp.done} of {len(form.expressions()) + len(where)} expressions ("
+                  f"{simp.large} too large, {simp.timed_out} out of time, "
+                  f"{simp.unstarted} "
+                  f"past the {simp.total:g} s budget: shown as derived)")
+    return SharedForm(rows, where)
+
+
 class _Budget(Exception):
     pass
 
 
 class Simplifier:
-    """trigsimp for display (never on a hot path), within a time budget: at most
-    ``per`` seconds per expression and ``total`` seconds per command (SIGALRM; where
+    """trigsimp for display (never on a hot path): each expression of at most ``nodes``
+    tree nodes within ``per`` seconds, at most ``total`` seconds in all (SIGALRM; where
     that is unavailable, or with ``per = 0``, expressions are shown as derived)."""
 
-    def __init__(self, per: float = 0.5, total: float = 5.0):
+    def __init__(self, per: float = 0.5, total: float = 5.0, nodes: int = 60):
         import signal
         import threading
 
-        self.per, self.left = per, total
+        self.per, self.left, self.total, self.nodes = per, total, total, nodes
+        self.done = self.timed_out = self.unstarted = self.large = 0
         self.ok = (per > 0 and hasattr(signal, "setitimer")
                    and threading.current_thread() is threading.main_thread())
 
     def __call__(self, expr):
+        from .shared import tree_size
+
+        if tree_size([expr], self.nodes) > self.nodes:
+            self.large += 1
+            return expr
         if not self.ok or self.left <= 0:
+            self.unstarted += 1
             return expr
         import signal
 
@@ -238,107 +310,125 @@ class Simplifier:
         try:
             signal.setitimer(signal.ITIMER_REAL, budget)
             try:
-                return sp.trigsimp(expr)
+                out = sp.trigsimp(expr)
+                self.done += 1
+                return out
             finally:
                 signal.setitimer(signal.ITIMER_REAL, 0)
         except _Budget:
+            self.timed_out += 1
             return expr
         finally:
             signal.signal(signal.SIGALRM, old)
             self.left -= time.perf_counter() - t0
 
 
-_SIMPLIFY = Simplifier(per=0.0)
-
-
-def _display(system, expr) -> str:
-    """A readable form for people: on the constraints, trigsimp'd within the budget."""
-    return str(_SIMPLIFY(system.on_constraints(expr)))
-
-
-# ---------------------------------------------------------------------- derive
 def cmd_derive(args, progress) -> int:
+    from .shared import shared_form
+
     loaded = _with_split(load_model(args.model), args.split)
     system = loaded.system
     principle = args.principle or loaded.principle or "chetaev"
     convention = args.convention or loaded.convention or "paper"
     with progress.step(f"deriving the {principle} equations"):
         eom = system.equations(principle, form=args.form, convention=convention)
+        exprs = eom.expressions
     with progress.step("solving for the accelerations"):
         acc = eom.accelerations()
-    if args.format == "latex":
-        print(eom.latex())
-    elif args.format == "json":
-        print(json.dumps({
-            "model": loaded.label, "name": system.name, "principle": eom.principle,
+    heads = [f"{eom.principle} equations, {eom.form} form {eom.paper}".rstrip(),
+             "accelerations (on the constraint manifold)", "the constraint manifold"]
+    with progress.step("writing in shared form"):
+        form = shared_form([heads[0]] + [(None, e) for e in exprs] + [heads[1]]
+                           + list(acc.items()) + ([heads[2]] if system.phi else [])
+                           + list(system.phi.items()))
+    form = _simplified(form, args.simplify, progress)
+    name = system.name or loaded.label
+    header = [f"{name}: dependent {', '.join(q.name for q in system.dependent) or 'none'}"]
+    if system.dissipation != 0:
+        header.append(f"  dissipation D = {_label(system.dissipation)} "
+                      "(Q_s = forces - dD/dqdot^s)")
+    header += [f"  force Q_{k} = {v}" for k, v in _forces(system).items()]
+    data = {"model": loaded.label, "name": system.name, "principle": eom.principle,
             "form": eom.form, "convention": eom.convention, "paper": eom.paper,
             "coordinates": [q.name for q in system.J.q],
             "dependent": [q.name for q in system.dependent],
             "parameters": {s.name: v for s, v in system.defaults.items()},
-            "forces": _forces(system), "dissipation": str(system.dissipation),
-            "expressions": [str(e) for e in eom.expressions],
-            "multipliers": [str(m) for m in eom.multipliers],
-            "accelerations": {str(k): str(v) for k, v in acc.items()},
-        }, indent=2))
-    else:
-        print(f"{system.name or loaded.label}: dependent "
-              f"{', '.join(q.name for q in system.dependent) or 'none'}")
-        if system.dissipation != 0:
-            print(f"  dissipation D = {system.dissipation} (Q_s = forces - dD/dqdot^s)")
-        for name, Q in _forces(system).items():
-            print(f"  force Q_{name} = {Q}")
-        print(eom)
-        print("accelerations (on the constraint manifold):")
-        with progress.step("simplifying for display"):
-            rows = [f"  {k} = {_display(system, v)}" for k, v in acc.items()]
-        print("\n".join(rows))
+            "forces": _forces(system), "dissipation": _label(system.dissipation),
+            "multipliers": [str(m) for m in eom.multipliers]}
+    keys = dict(zip(heads, ("expressions", "accelerations", "dependent_velocities")))
+    _write(args, progress, _render(args, form, header, data, eom.J, keys), form)
     return 0
 
 
 def _forces(system) -> dict:
     """The nonzero generalized forces Q_s (forces and -dD/dqdot^s), by coordinate name."""
-    return {q.name: str(Q) for q, Q in zip(system.J.q, system.Q) if Q != 0}
+    return {q.name: _label(Q) for q, Q in zip(system.J.q, system.Q) if Q != 0}
 
 
 # ---------------------------------------------------------------------- compare
+#: tree nodes of phi up to which compare shows the forms on L~ and T (they
+#: differentiate phi as a tree: exponential in a chain of constraints)
+PHI_TREE_MAX = 2_000
+_COMPARE_FORMS = {"chetaev": "voronets", "vakonomic": "embedded", "holder": "embedded",
+                  "suslov": "embedded"}
+
+
 def cmd_compare(args, progress) -> int:
-    from .equivalence import compare
+    from .equivalence import comparisons
+    from .shared import shared_form, tree_size
 
     loaded = _with_split(load_model(args.model), args.split)
     system = loaded.system
     J = system.J
+    small = tree_size(list(system.phi.values()), PHI_TREE_MAX) <= PHI_TREE_MAX
     with progress.step("classifying"):
         cls = system.classify()
-        T = system.T()
-    print(f"{system.name or loaded.label}")
-    print(f"  coordinates: {' '.join(q.name for q in J.q)}; dependent: "
-          f"{' '.join(q.name for q in system.dependent)}")
-    print(f"  L = {system.L}")
-    for f in system.constraints:
-        print(f"  constraint: {f} = 0")
-    for name, Q in _forces(system).items():
-        print(f"  force Q_{name} = {Q}")
-    print(f"  classification: {cls}")
-    print(f"  L~ = {_display(system, system.L_tilde)}")
-    print(f"  T = {T.applyfunc(lambda e: sp.sympify(_display(system, e))).tolist()}")
+    header = [f"{system.name or loaded.label}",
+              f"  coordinates: {' '.join(q.name for q in J.q)}; dependent: "
+              f"{' '.join(q.name for q in system.dependent)}",
+              f"  L = {_label(system.L)}"]
+    header += [f"  constraint: {_label(f)} = 0" for f in system.constraints]
+    header += [f"  force Q_{k} = {v}" for k, v in _forces(system).items()]
+    header.append(f"  classification: {cls}")
+    rows: list = ["the constraint manifold and the embedded Lagrangian"]
+    rows += list(system.phi.items()) + [("L~", system.L_tilde)]
+    if small:
+        with progress.step("computing T"):
+            T = system.T()
+        rows += [(f"T^{system.dependent[a].name}_{system.independent[m].name}", T[a, m])
+                 for a in range(T.rows) for m in range(T.cols)]
+    else:
+        header.append(f"  (phi is a nested expression of over {PHI_TREE_MAX} tree nodes: T "
+                      "and the forms on L~, which differentiate it, are not shown; the "
+                      "accelerations are)")
+    solved = {}
     for principle in PRINCIPLES:
-        form = {"chetaev": "voronets", "holder": "embedded"}.get(principle, "embedded")
+        form = _COMPARE_FORMS[principle] if small else None
         with progress.step(f"deriving {principle}"):
             eom = system.equations(principle, form=form)
-            acc = eom.accelerations()
-            rows = [f"  {_display(system, e)} = 0" for e in eom.expressions]
-            accs = [f"    {k} = {_display(system, v)}" for k, v in acc.items()]
-        print()
-        print(f"{principle} ({form} form {eom.paper})".replace(" )", ")"))
-        print("\n".join(rows))
-        print("  accelerations:")
-        print("\n".join(accs))
-    print()
-    print("equivalence:")
-    for a, b in combinations(PRINCIPLES, 2):
-        with progress.step(f"comparing {a} and {b}"):
-            verdict = compare(system, a, b)
-        print(f"  {verdict}")
+            solved[principle] = eom
+            if small:
+                rows.append(f"{principle} ({eom.form} form {eom.paper})".replace(" )", ")"))
+                rows += [(None, e) for e in eom.expressions]
+            rows.append(f"{principle} accelerations")
+            rows += list(eom.accelerations().items())
+    with progress.step("writing in shared form"):
+        form = shared_form(rows)
+    form = _simplified(form, args.simplify, progress)
+    verdicts = []
+    with progress.step("comparing every pair of principles"):
+        for c in comparisons(system, solved):
+            verdicts.append(f"  {c}")
+    if args.format == "json":
+        data = {"model": loaded.label, "name": system.name,
+                "coordinates": [q.name for q in J.q],
+                "dependent": [q.name for q in system.dependent],
+                "classification": str(cls),
+                "equivalence": [v.strip() for v in verdicts]}
+        text = _render(args, form, [], data, J)
+    else:
+        text = "\n".join([_render(args, form, header, {}, J), "", "equivalence:"] + verdicts)
+    _write(args, progress, text, form)
     return 0
 
 
@@ -808,6 +898,20 @@ def build_parser() -> argparse.ArgumentParser:
                              help="dependent coordinates, comma-separated (overrides the "
                                   "model's; e.g. --split x,y)")
 
+    def shown_args(sp_):
+        sp_.add_argument("--format", choices=("text", "latex", "json"), default="text",
+                         help="text (default), latex (an aligned block) or json; each "
+                              "in the same shared form")
+        sp_.add_argument("--out", metavar="FILE",
+                         help="write the full result to FILE (on the screen large results "
+                              f"are cut to about {SCREEN_BUDGET // 1000} kB)")
+        sp_.add_argument("--simplify", type=float, default=None, metavar="SECONDS",
+                         help="trigsimp each small expression shown (at most 60 tree "
+                              "nodes) within SECONDS, 10 x SECONDS in all; larger ones are "
+                              "shown as derived, and a note says how many were simplified "
+                              "(default: 0.5 for results shown without named quantities, "
+                              "else 0; 0: none)")
+
     d = sub.add_parser(
         "derive", parents=[common], formatter_class=_Formatter,
         help="equations of motion of a model under one principle",
@@ -826,10 +930,7 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--convention", choices=("paper", "imposed"), default=None,
                    help="paper: every variation is independent after the commutator (as "
                         "the paper); imposed: the variation's own condition is imposed")
-    d.add_argument("--format", choices=("text", "latex", "json"), default="text")
-    d.add_argument("--simplify", type=float, default=0.5, metavar="SECONDS",
-                   help="time allowed to trigsimp each displayed acceleration (default "
-                        "0.5, at most 5 s in all; 0: show them as derived)")
+    shown_args(d)
     d.set_defaults(func=cmd_derive)
 
     c = sub.add_parser(
@@ -841,9 +942,7 @@ def build_parser() -> argparse.ArgumentParser:
                     "(identically, or on the branch lambda = -p of (32)).",
         epilog=EPILOG_MODEL)
     model_args(c)
-    c.add_argument("--simplify", type=float, default=0.5, metavar="SECONDS",
-                   help="time allowed to trigsimp each displayed expression (default 0.5, "
-                        "at most 5 s in all; 0: show them as derived)")
+    shown_args(c)
     c.set_defaults(func=cmd_compare)
 
     s = sub.add_parser(
@@ -1003,8 +1102,6 @@ def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     progress = Progress(quiet=getattr(args, "quiet", False))
-    global _SIMPLIFY
-    _SIMPLIFY = Simplifier(per=getattr(args, "simplify", 0.0) or 0.0)
     try:
         return args.func(args, progress)
     except UsageError as exc:

@@ -1,6 +1,8 @@
 """Rich displays (HTML and LaTeX, for notebooks) of jetnh's objects, within a size budget.
 
-Every display is at most ``BUDGET`` characters: an expression whose printed tree would
+Every display is at most ``BUDGET`` characters.  Equations and comparisons are shown in
+shared form (``jetnh.shared``: named intermediate quantities), the rows and quantities
+that do not fit counted.  In the other displays an expression whose printed tree would
 be large (over ``TREE_CAP`` nodes, counted on the shared graph so that nothing large is
 ever printed), whose LaTeX exceeds ``EXPR_BUDGET`` or does not fit in what is left of
 the budget is shown as a summary (its size and its symbols), and rows stop, with a
@@ -15,11 +17,14 @@ import numpy as np
 import sympy as sp
 
 from . import dag
+from .shared import WHERE_TEX, shared_form, tex_text as _tex_text
 
 BUDGET = 20_000          # characters of one display
+TEXT_BUDGET = 20_000     # characters of a printed (str) result
 EXPR_BUDGET = 8_000      # characters of one expression's LaTeX
 TREE_CAP = 1_500         # nodes of an expression's tree printed in full
-MAX_ROWS = 24            # rows of one list (equations, constraints, runs)
+MAX_ROWS = 24            # rows of one list (constraints, runs)
+SHARED_ROWS = 80         # lines of a shared form (rows, "where", named quantities)
 _STYLE = 'style="text-align:left"'
 
 
@@ -91,8 +96,8 @@ def html_table(title: str, facts: list[tuple[str, str]], lists=(), budget=BUDGET
     body = Rows(budget - 500 - len(title), max_rows=10_000)
     for label, value in facts:
         body.add(f"<tr><th {_STYLE}>{html.escape(label)}</th>{_td(value)}</tr>")
-    for label, items, noun in lists:
-        inner = Rows(max(body.left - 200, 0))
+    for label, items, noun, *most in lists:
+        inner = Rows(max(body.left - 200, 0), *most)
         for forms in items:
             inner.add(*(f"<li>{x}</li>" for x in forms))
         more = (f"<li>... and {inner.omitted} more {noun}</li>" if inner.omitted else "")
@@ -102,25 +107,17 @@ def html_table(title: str, facts: list[tuple[str, str]], lists=(), budget=BUDGET
     return "\n".join(head + body.rows + tail + ["</table></div>"])
 
 
-def latex_block(title: str, rows, noun: str, budget=BUDGET) -> str:
+def latex_block(title: str, rows, noun: str, budget=BUDGET, max_rows=MAX_ROWS) -> str:
     r"""``$$\begin{aligned} ... \end{aligned}$$`` with a title row and ``rows`` (each a
     list of LaTeX forms with an ``&``, longest first), within ``budget``."""
     title = _tex_text(title[:200])
-    out = Rows(budget - 300 - len(title))
+    out = Rows(budget - 300 - len(title), max_rows)
     for forms in rows:
         out.add(*forms)
     if out.omitted:
         out.rows.append(r"&\text{... and " + f"{out.omitted} more {noun}" + "}")
     lines = [r"&\text{" + title + "}"] + out.rows
     return "$$\\begin{aligned}" + r" \\ ".join(lines) + "\\end{aligned}$$"
-
-
-def _tex_text(s: str) -> str:
-    for a, b in (("\\", r"\textbackslash "), ("{", r"\{"), ("}", r"\}"), ("_", r"\_"),
-                 ("#", r"\#"), ("%", r"\%"), ("&", r"\&"), ("$", r"\$"), ("^", r"\^{}"),
-                 ("~", r"\~{}")):
-        s = s.replace(a, b)
-    return s
 
 
 def _names(symbols, limit=40) -> str:
@@ -161,33 +158,45 @@ def _equations_title(e) -> str:
     return f"{e.principle} equations, {e.form} form, {e.convention} convention {e.paper}".strip()
 
 
+def _shared_items(form, J) -> list:
+    """The rows, "where" and the definitions of a shared form as HTML list items."""
+    return [[_math(x)] if x != WHERE_TEX else ["where"] for x in _shared_lines(form, J)]
+
+
+def _shared_lines(form, J) -> list:
+    rows, defs = form.latex_lines(J)
+    return rows + ([WHERE_TEX] if defs else []) + defs
+
+
 def equations_html(e) -> str:
     facts = [("multipliers", _names(e.multipliers)), ("reactions", _names(e.reactions)),
              ("equations", str(len(e.expressions)))]
-    rows = ([_math(t + " = 0") for t in latex(x, e.J)] for x in e.expressions)
-    return html_table(_equations_title(e), facts, [("", rows, "equations")])
+    return html_table(_equations_title(e), facts,
+                      [("", _shared_items(e.shared_form(), e.J), "lines", SHARED_ROWS)])
 
 
 def equations_latex(e) -> str:
-    return latex_block(_equations_title(e), ([f"&{t} = 0" for t in latex(x, e.J)]
-                                             for x in e.expressions), "equations")
+    return latex_block(_equations_title(e), ([x] for x in _shared_lines(e.shared_form(), e.J)),
+                       "lines", max_rows=SHARED_ROWS)
 
 
 # ---------------------------------------------------------------------- Comparison
+def _defects(c):
+    return shared_form([(sp.Symbol(f"Delta_{q.name}"), d) for q, d in c.defects.items()])
+
+
 def comparison_html(c, J=None) -> str:
-    rows = ([f"{html.escape(q.name)}: {_math(t)}" for t in latex(d, J)]
-            for q, d in c.defects.items())
     return html_table(f"Comparison of {c.principles[0]} and {c.principles[1]}",
                       [("verdict", html.escape(str(c))),
                        ("identical", str(c.identical)),
                        ("on the branch (32)", str(c.on_branch_32))],
-                      [("difference of accelerations", rows, "coordinates")])
+                      [("difference of accelerations", _shared_items(_defects(c), J),
+                        "lines", SHARED_ROWS)])
 
 
 def comparison_latex(c) -> str:
-    rows = ([f"\\Delta {_tex_text(q.name)} &= {t}" for t in latex(d)]
-            for q, d in c.defects.items())
-    return latex_block(str(c), rows, "coordinates")
+    return latex_block(str(c), ([x] for x in _shared_lines(_defects(c), None)), "lines",
+                       max_rows=SHARED_ROWS)
 
 
 # ---------------------------------------------------------------------- runs

@@ -196,13 +196,23 @@ class Equations:
     def __repr__(self):
         return f"<Equations {self.principle} ({self.form}, {self.convention} convention) {self.paper}>"
 
+    def shared_form(self):
+        """The expressions in shared form (``jetnh.shared``): named intermediate
+        quantities, linear in the shared size, never flattened."""
+        from .shared import shared_form
+
+        return shared_form([(None, e) for e in self.expressions])
+
     def __str__(self):
+        from .display import TEXT_BUDGET
+
         head = f"{self.principle} equations, {self.form} form {self.paper}".rstrip()
-        return "\n".join([head] + [f"  {e} = 0" for e in self.expressions])
+        return head + "\n" + self.shared_form().text(
+            TEXT_BUDGET, more=" (eom.shared_form().text() shows them all)")
 
     def latex(self) -> str:
-        rows = [self.J.latex(e) + " = 0" for e in self.expressions]
-        return r"\begin{aligned}" + r" \\ ".join(rows) + r"\end{aligned}"
+        """Every expression, in shared form (``aligned``; no size budget)."""
+        return self.shared_form().latex(self.J)
 
     def _repr_latex_(self):
         from .display import equations_latex

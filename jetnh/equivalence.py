@@ -20,13 +20,12 @@ Verdicts hold off the singular sets of the two acceleration systems
 
 from __future__ import annotations
 
-import random
 from dataclasses import dataclass, field
 
 import mpmath
 import sympy as sp
 
-from . import accelerations, dag, linalg, singular
+from . import accelerations, dag, linalg, singular, zero
 from .constraints import System
 from .frobenius import bracket_components
 
@@ -148,100 +147,66 @@ def _singular(system: System, acc: dict, divs=()) -> list:
 
 
 def agrees(system: System, expr, derived=None, points: int = _POINTS, seed: int = 0) -> bool:
-    """Whether ``expr`` vanishes on the constraint manifold: at random points (random
-    multipliers and parameters; the ``derived`` symbols set from the others), each
-    evaluated on the shared graph at 30 and 60 digits.  A value both precisions confirm
-    is nonzero; one that shrinks with the precision is rounding noise of an exact zero;
-    between the two the point is evaluated exactly (rational points of rational
-    expressions) or at 120 digits."""
-    expr = sp.sympify(expr)
-    if expr == 0:
-        return True
+    """Whether ``expr`` (an expression, or a list: every one of them) vanishes on the
+    constraint manifold: ``zero.vanishes`` at random points (random multipliers and
+    parameters, the dependent velocities on the constraints, the ``derived`` symbols set
+    from the others), the list evaluated in one walk of its shared graph."""
+    exprs = list(expr) if isinstance(expr, (list, tuple)) else [expr]
     derived = dict(derived or {})
-    vel = set(system.dependent_velocities)
-    syms = (dag.free_symbols([expr, *derived.values(), *system.phi.values()])
-            - vel - set(derived))
-    syms = sorted(syms, key=lambda s: s.name)
-    rng = random.Random(seed)
-    got = 0
-    for _ in range(4 * points):
-        if got >= points:
-            return True
-        base = {s: sp.Rational(rng.randrange(31 * _DEN // 100, 137 * _DEN // 100), _DEN)
-                for s in syms}
-        try:
-            zero = _zero_at(system, expr, derived, base)
-        except (ValueError, ZeroDivisionError, ArithmeticError):
-            continue                # off the domain (a root of a negative number, ...)
-        if not zero:
-            return False
-        got += 1
-    return got >= max(1, points // 2)
+    vel = system.dependent_velocities
+    syms = (dag.free_symbols([*exprs, *derived.values(), *system.phi.values()])
+            - set(vel) - set(derived))
+    names = list(derived)
 
-
-_DEN = 100 * 2**16
-_CONFIRM = 1e-12         # relative agreement of two precisions that confirms a value
-_SHRINK = 1e-20          # a value that shrinks by this going to 60 digits is noise
-
-
-def _values(system, expr, derived, base, dps):
-    """``expr`` at the rational point ``base`` put on the constraints, ``dps`` digits."""
-    with mpmath.workdps(dps):
+    def point(base, dps):
         pt = {s: mpmath.mpf(v.p) / v.q for s, v in base.items()}
-        for v in system.dependent_velocities:
-            pt[v] = linalg._real(dag.evaluate(system.phi[v], pt, dps=dps))
+        for v, x in zip(vel, dag.evaluate([system.phi[v] for v in vel], pt, dps=dps)):
+            pt[v] = linalg._real(x)
             if pt[v] is None:
                 raise ValueError("no real point on the constraints here")
-        for s, e in derived.items():
-            pt[s] = dag.evaluate(e, pt, dps=dps)
-        val = dag.evaluate(expr, pt, dps=dps)
-    if not mpmath.isfinite(val):
-        raise ZeroDivisionError("not finite here")
-    return val
+        pt.update(zip(names, dag.evaluate([derived[s] for s in names], pt, dps=dps)))
+        return pt
 
-
-def _zero_at(system, expr, derived, base) -> bool:
-    lo, hi = (_values(system, expr, derived, base, d) for d in (30, 60))
-    if hi == 0 and lo == 0:
-        return True
-    if abs(lo - hi) <= _CONFIRM * abs(hi):
-        return False
-    if abs(hi) <= _SHRINK * abs(lo):
-        return True
-    try:                            # undecided: exactly, when everything is rational
-        if dag.size(expr, cap=linalg._EXACT_MAX + 1) > linalg._EXACT_MAX:
-            raise linalg.Inexact("too large to evaluate exactly")
+    def exact_point(base):
         with mpmath.workdps(60):
             pt = accelerations._on_constraints(system, dict(base))
         if any(not isinstance(v, sp.Rational) for v in pt.values()):
             raise linalg.Inexact("irrational point")
         pt.update({s: linalg._exact([e], pt)[0] for s, e in derived.items()})
-        return linalg._exact([expr], pt)[0] == 0
-    except linalg.Inexact:
-        top = _values(system, expr, derived, base, 120)
-        return abs(top) <= _SHRINK * abs(hi)
+        return pt
+
+    return zero.vanishes(exprs, point, exact_point, points, seed, symbols=syms)
 
 
 def compare(system: System, first: str, second: str, convention: str = "paper") -> Comparison:
     """Do ``first`` and ``second`` give the same coordinate accelerations?  The verdict
     holds off ``Comparison.singular`` (see ``singular_set``)."""
-    e1 = system.equations(first, convention=convention)
-    e2 = system.equations(second, convention=convention)
-    (a1, d1), (a2, d2) = _solved(e1), _solved(e2)
+    return comparisons(system, {p: system.equations(p, convention=convention)
+                                for p in (first, second)})[0]
+
+
+def comparisons(system: System, equations: dict) -> list:
+    """``compare`` for every pair of ``equations`` (principle -> Equations, in order),
+    each principle solved once."""
+    solved = {p: _solved(e) for p, e in equations.items()}
+    sing = {p: _singular(system, *s) for p, s in solved.items()}
+    names = list(equations)
+    return [_compare(system, (a, b), (equations[a], equations[b]),
+                     (solved[a][0], solved[b][0]), sing[a] + sing[b])
+            for i, a in enumerate(names) for b in names[i + 1:]]
+
+
+def _compare(system, principles, eqs, accs, factors) -> Comparison:
+    (e1, e2), (a1, a2) = eqs, accs
     qdd = system.J.qdd
     defects = {q: a1[q] - a2[q] for q in qdd}
-    same = all(agrees(system, d) for d in defects.values())
+    same = agrees(system, list(defects.values()))
     on_branch = None
     owner = e1 if e1.multipliers else e2
     if not same and owner.multipliers:
         sub = branch_32(system, owner.multipliers, owner.explicit)
-        on_branch = all(agrees(system, d, derived=sub) for d in defects.values())
-    sing, seen = [], set()
-    for acc, divs in ((a1, d1), (a2, d2)):
-        for f in _singular(system, acc, divs):
-            if f not in seen:
-                seen.add(f)
-                sing.append(f)
+        on_branch = agrees(system, list(defects.values()), derived=sub)
+    sing = list(dict.fromkeys(factors))
     # the branches in the multipliers first, then those in the state, then parameters
     lams, jet = set(e1.multipliers + e2.multipliers), set(system.J.q + system.J.qd)
     jet.add(system.J.t)
@@ -250,7 +215,7 @@ def compare(system: System, first: str, second: str, convention: str = "paper") 
         syms = dag.free_symbols(f)
         return 0 if syms & lams else 1 if syms & jet else 2
     sing.sort(key=rank)
-    return Comparison((first, second), same, on_branch, defects, sing)
+    return Comparison(principles, same, on_branch, defects, sing)
 
 
 def defect_along(system: System, first: str, second: str, samples, convention: str = "paper"):

@@ -40,6 +40,7 @@ from typing import Mapping
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
+from . import dag, zero
 from .errors import ConstraintError, JetSpaceError
 from .jet import JetSpace, sympy_object
 
@@ -706,20 +707,27 @@ def zero_residual(expr, *, simplify: bool = False, numeric: bool = False, sample
                   seed: int = 0, tol: float = 1e-9):
     """None when ``expr`` is decided zero, else a nonzero form of it (expanded/simplified).
 
-    Steps, cheapest first: (1) ``sympy.expand`` (for a rational expression, whose
-    expansion can be huge, instead the numerator of ``together(expr)`` is expanded after
-    step 2); (2) one evaluation at a random point: a clearly nonzero value proves
-    non-zero and ends the test; (3) ``numeric``: evaluation at ``samples`` points decides;
-    otherwise (4) ``simplify`` when asked.  So ``simplify`` only ever runs on expressions
+    An expression over ``zero.TREE_MAX`` tree nodes is decided by evaluation at random
+    points on its shared graph (``zero.vanishes``) and returned as it is.  One over
+    ``zero.SIMPLIFY_MAX`` is not expanded (its expansion can still explode): step (2)
+    decides a nonzero one, and one numerically zero that Poly does not prove zero goes
+    to ``zero.vanishes`` too.  Otherwise, steps, cheapest first: (1) ``sympy.expand``
+    (for a rational expression, whose expansion can be huge, instead the numerator of
+    ``together(expr)`` is expanded after step 2); (2) one evaluation at a random point:
+    a clearly nonzero value proves non-zero and ends the test; (3) ``numeric``:
+    evaluation at ``samples`` points decides; otherwise (4) ``simplify`` when asked.  So ``simplify`` only ever runs on expressions
     that are numerically zero but not algebraically zero after expansion -
     trigonometric identities, in practice.
     """
     raw = sympy_object(expr)
     if raw == 0:
         return None
+    if zero.large(raw):                  # expand/simplify would explode: evaluate
+        return _by_evaluation(raw, seed)
     rational = any(p.exp.is_negative for p in raw.atoms(sp.Pow))
+    small = not zero.large(raw, zero.SIMPLIFY_MAX)
     e = raw
-    if not rational:
+    if not rational and small:
         e = sp.expand(raw)
         if e == 0:
             return None
@@ -729,9 +737,11 @@ def zero_residual(expr, *, simplify: bool = False, numeric: bool = False, sample
         looks_zero = True
     if not looks_zero:
         return e
-    if rational:
-        if _polynomial_is_zero(sp.numer(sp.together(raw))):
-            return None
+    if rational and _polynomial_is_zero(sp.numer(sp.together(raw))):
+        return None
+    if not small and not numeric:
+        return _by_evaluation(raw, seed)
+    if rational and small:
         e = sp.expand(raw)
         if e == 0:
             return None
@@ -744,6 +754,14 @@ def zero_residual(expr, *, simplify: bool = False, numeric: bool = False, sample
         s_ = sp.simplify(e)
         return None if s_ == 0 else s_
     return e
+
+
+def _by_evaluation(raw, seed):
+    """``zero_residual`` of a large expression: ``zero.vanishes`` on its graph (undefined
+    functions and derivatives as independent symbols)."""
+    opaque = [a for a in dag.nodes(raw) if isinstance(a, (sp.Derivative, AppliedUndef))]
+    plain = dag.xreplace(raw, {a: sp.Dummy(f"u{i}") for i, a in enumerate(opaque)})
+    return None if zero.vanishes([plain], seed=seed) else raw
 
 
 def _polynomial_is_zero(expr) -> bool:

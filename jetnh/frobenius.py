@@ -29,7 +29,10 @@ g^alpha(t, q) = c^alpha whose prolongations are the constraints.  Two independen
 
 Deciding zero
 -------------
-Each candidate obstruction is expanded (``sympy.expand``; a rational one is not expanded
+A candidate obstruction over ``zero.TREE_MAX`` tree nodes (the coefficients of a long
+chain of constraints nest) is decided by evaluation at random points on its shared
+graph (``zero.vanishes``), and the result says so (``decided_by``).  Each smaller one is
+expanded (``sympy.expand``; a rational one is not expanded
 but kept for step 3).  It is then evaluated once at a random point: a clearly nonzero
 value proves it nonzero and ends the test, so nonintegrable systems cost no symbolic
 simplification.  A rational obstruction is put over a common denominator (``together``
@@ -44,11 +47,12 @@ the coefficients (and denominators) are defined.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Sequence
 
 import sympy as sp
 
+from . import zero
 from .errors import ConstraintError
 from .forms import Form, _canon, _order, affine_coefficients, d, wedge, zero_residual
 from .jet import JetSpace
@@ -68,15 +72,29 @@ class FrobeniusResult:
     x_rho, x_sigma among (t, independent coordinates), rho before sigma, the component
     [X_rho, X_sigma]^alpha; for constraints whose fibres are not affine, a single entry
     {"fibres": explanation}.  ``method``: "brackets", "forms" or "affinity".
+    ``decided_by``: "symbolic", or how many components, too large to expand
+    (``zero.TREE_MAX``), were decided by evaluation at random points (``zero.vanishes``;
+    a nonzero value is confirmed at two precisions, a zero is probabilistic).
     ``bool(result)`` is ``result.integrable``.
     """
 
     integrable: bool
     obstructions: dict = field(default_factory=dict)
     method: str = "brackets"
+    decided_by: str = "symbolic"
 
     def __bool__(self):
         return self.integrable
+
+    def __repr__(self):
+        from .singular import label
+
+        shown = [f"{k}: {label(v, 60) if isinstance(v, sp.Basic) else str(v)[:300]}"
+                 for k, v in list(self.obstructions.items())[:4]]
+        more = len(self.obstructions) - len(shown)
+        return (f"FrobeniusResult(integrable={self.integrable}, method={self.method!r}, "
+                f"decided_by={self.decided_by!r}, obstructions={{{', '.join(shown)}"
+                f"{f', ... ({more} more)' if more > 0 else ''}}})")
 
 
 def decide_zero(expr, *, numeric: bool = False, simplify: bool = True, samples: int = 3,
@@ -145,9 +163,13 @@ def frobenius(J: JetSpace, B, dependent: Sequence, independent: Sequence | None 
             raise ConstraintError(f"{both} are both dependent and independent")
     B = _check_B(J, B, len(dep), len(ind))
     opts = dict(numeric=numeric, simplify=simplify, samples=samples, seed=seed)
-    if method == "brackets":
-        return _brackets(J, B, dep, ind, opts)
-    return _forms(J, B, dep, ind, opts)
+    with zero.decisions() as evaluated:
+        out = (_brackets if method == "brackets" else _forms)(J, B, dep, ind, opts)
+    if evaluated:
+        out = replace(out, decided_by=(
+            f"evaluation at random points ({len(evaluated)} component"
+            f"{'s' if len(evaluated) > 1 else ''} over the size budget)"))
+    return out
 
 
 def bracket_components(J: JetSpace, B, dep, ind) -> dict:

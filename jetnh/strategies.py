@@ -31,13 +31,16 @@ Public names:
     expressions in t and the jets of order <= ``order`` of the bases ``of``.
 ``polynomials(J, order=1, max_degree=2, max_terms=3, with_time=True, of=None)``
     polynomials in the same variables.
-``lagrangians(J, with_time=True, gyroscopic=None, max_depth=2)``
-    regular Lagrangians 1/2 qd^T M(q) qd (+ gyroscopic terms) - V(t, q).
-``affine_constraints(J, m=None, dependent=None)``
-    ``(constraints, dependent)`` with constraints qd^a - B^a_mu qd^mu - B^a_0.
-``nonlinear_constraints(J, m=None, dependent=None)``
-    ``(constraints, dependent)`` with constraints qd^a - phi^a(t, q, qd^mu), phi nonlinear.
-``constrained_systems(min_n=2, max_n=4, affine=None)``
+``lagrangians(J, with_time=True, gyroscopic=None, max_depth=2, mass="diagonal")``
+    regular Lagrangians 1/2 qd^T M(q) qd (+ gyroscopic terms) - V(t, q); ``mass="full"``
+    for non-diagonal configuration-dependent M.
+``affine_constraints(J, m=None, dependent=None, implicit=False)``
+    ``(constraints, dependent)`` with constraints qd^a - B^a_mu qd^mu - B^a_0, or with
+    ``implicit`` A(q) qd + b(t, q).
+``nonlinear_constraints(J, m=None, dependent=None, implicit=False)``
+    ``(constraints, dependent)`` with constraints qd^a - phi^a(t, q, qd^mu), phi nonlinear,
+    or with ``implicit`` nonlinear in the dependent velocities too.
+``constrained_systems(min_n=2, max_n=4, affine=None, implicit=False, mass="diagonal")``
     ``(J, L, constraints, dependent)``.
 ``forces(J, max_depth=2)``
     generalized forces ``{coordinate: Q(t, q, qd)}`` on some of the coordinates.
@@ -212,18 +215,25 @@ def polynomials(J: JetSpace, order: int = 1, max_degree: int = 2, max_terms: int
         st.lists(_monomial(variables, max_degree), max_size=max_terms))
 
 
+MASSES = ("diagonal", "full")
+
+
 @st.composite
 def lagrangians(draw, J: JetSpace, with_time: bool = True, gyroscopic: bool | None = None,
-                max_depth: int = 2) -> sp.Expr:
-    """Regular Lagrangians ``1/2 sum_s m_s g_s(q) qd_s**2 + sum_s A_s(t, q) qd_s - V(t, q)``.
+                max_depth: int = 2, mass: str | None = "diagonal") -> sp.Expr:
+    """Regular Lagrangians ``1/2 qd^T M(q) qd + sum_s A_s(t, q) qd_s - V(t, q)``.
 
-    ``m_s`` are positive rationals; ``g_s`` is 1 except, sometimes, for one coordinate
-    where it is ``1 + q_r**2/2`` (configuration-dependent, still >= 1).  So the velocity
-    Hessian ``d^2 L / dqd dqd`` is diagonal and positive definite everywhere.  ``V`` is a
-    small expression of order 0 (nested at most ``max_depth`` deep); ``with_time=False``
-    makes ``L`` autonomous.  Gyroscopic terms ``A_s(t, q) qd_s`` (linear in velocities)
-    appear sometimes; ``gyroscopic=True/False`` forces them on or off.
+    ``mass="diagonal"``: ``M = diag(m_s g_s)``, ``m_s`` positive rationals, ``g_s`` 1
+    except, sometimes, for one coordinate where it is ``1 + q_r**2/2``.  ``mass="full"``:
+    that diagonal plus one or two ``w w^T`` with ``w_s(q)`` rationals or small order-0
+    expressions, so M is non-diagonal and configuration-dependent; ``None`` draws
+    either.  M is positive definite everywhere.  ``V`` is a small expression of order 0
+    (nested at most ``max_depth`` deep); ``with_time=False`` makes ``L`` autonomous.
+    Gyroscopic terms ``A_s(t, q) qd_s`` (linear in velocities) appear sometimes;
+    ``gyroscopic=True/False`` forces them on or off.
     """
+    if mass not in MASSES + (None,):
+        raise InvalidArgument(f"mass must be one of {MASSES} or None, got {mass!r}")
     masses = draw(st.lists(_rationals(max_num=3, max_den=2, positive=True),
                            min_size=J.n, max_size=J.n))
     gains = [sp.S.One] * J.n
@@ -232,6 +242,12 @@ def lagrangians(draw, J: JetSpace, with_time: bool = True, gyroscopic: bool | No
         r = draw(st.sampled_from(J.q))
         gains[s] = 1 + r**2 / 2
     kinetic = sp.Add(*(m * g * v**2 for m, g, v in zip(masses, gains, J.qd))) / 2
+    if (mass or draw(st.sampled_from(MASSES))) == "full":
+        entry = st.one_of(_rationals(), jet_expressions(J, order=0, max_depth=1,
+                                                        with_time=False))
+        for _ in range(draw(st.integers(1, 2))):
+            w = draw(st.lists(entry, min_size=J.n, max_size=J.n))
+            kinetic += sp.Add(*(c * v for c, v in zip(w, J.qd))) ** 2 / 2
     order0 = jet_expressions(J, order=0, max_depth=max_depth, with_time=with_time)
     potential = draw(st.one_of(st.just(sp.S.Zero), order0))
     L = kinetic - potential
@@ -281,20 +297,22 @@ def _coefficients(J: JetSpace, with_time: bool = True):
 
 
 def affine_constraints(J: JetSpace, m: int | None = None,
-                       dependent: Sequence[sp.Symbol] | None = None):
-    """``(constraints, dependent)``: m affine constraints solved for the dependent velocities.
+                       dependent: Sequence[sp.Symbol] | None = None, implicit: bool = False):
+    """``(constraints, dependent)``: m affine constraints.
 
-    Each constraint is ``qd[a] - sum_mu B_mu(t, q) qd[mu] - B_0(t, q)`` for a dependent
-    coordinate ``a`` and the independent ones ``mu``, with each ``B`` zero, a constant or a
-    small expression of order 0.  ``m`` (1 <= m < n) and ``dependent`` are drawn unless
-    given (``dependent`` as Symbols or names).  Returns
+    Explicit (``implicit=False``): each constraint is ``qd[a] - sum_mu B_mu(t, q) qd[mu] -
+    B_0(t, q)`` for a dependent coordinate ``a`` and the independent ones ``mu``, with each
+    ``B`` zero, a constant or a small expression of order 0.  Implicit: ``A(q) qd + b(t,
+    q)``, those explicit ones mixed by ``S(q)`` (:func:`_mixing`, invertible everywhere),
+    so that ``A_dep = S`` is full and configuration-dependent.  ``m`` (1 <= m < n) and
+    ``dependent`` are drawn unless given (``dependent`` as Symbols or names).  Returns
     ``(tuple_of_expressions, tuple_of_dependent_coordinates)``.
     """
-    return _affine_constraints(J, m, _check_split(J, m, dependent))
+    return _affine_constraints(J, m, _check_split(J, m, dependent), implicit)
 
 
 @st.composite
-def _affine_constraints(draw, J, m, dependent):
+def _affine_constraints(draw, J, m, dependent, implicit=False):
     dep, indep = draw(_split(J, m, dependent))
     coeffs = _coefficients(J)
     constraints = []
@@ -302,7 +320,23 @@ def _affine_constraints(draw, J, m, dependent):
         rhs = sum((draw(coeffs) * J.qd[J.q.index(mu)] for mu in indep), sp.S.Zero)
         rhs += draw(coeffs)
         constraints.append(J.qd[J.q.index(a)] - rhs)
+    if implicit:
+        constraints = list(draw(_mixing(J, len(dep))) * sp.Matrix(constraints))
     return tuple(constraints), tuple(dep)
+
+
+@st.composite
+def _mixing(draw, J: JetSpace, k: int):
+    """S(q) = U(q) diag(1 + w_a(q)^2) with U unit upper-triangular: det S >= 1 everywhere;
+    entries rationals or small order-0 expressions (time-independent)."""
+    entry = st.one_of(_rationals(nonzero=True), jet_expressions(J, order=0, max_depth=1,
+                                                                with_time=False))
+    U = sp.eye(k)
+    for a in range(k):
+        for b in range(a + 1, k):
+            U[a, b] = draw(entry)
+    scale = [1 + draw(entry) ** 2 for _ in range(k)]
+    return U * sp.diag(*scale)
 
 
 @st.composite
@@ -325,24 +359,41 @@ def _nonlinear_term(draw, J: JetSpace, indep_v: Sequence[sp.Symbol]):
 
 
 def nonlinear_constraints(J: JetSpace, m: int | None = None,
-                          dependent: Sequence[sp.Symbol] | None = None):
-    """``(constraints, dependent)``: explicit constraints nonlinear in independent velocities.
+                          dependent: Sequence[sp.Symbol] | None = None,
+                          implicit: bool = False):
+    """``(constraints, dependent)``: constraints nonlinear in the velocities.
 
-    Each constraint is ``qd[a] - phi(t, q, qd_mu)`` where ``phi`` is an affine part (as in
-    :func:`affine_constraints`) plus one or two nonlinear terms among ``c qd_mu qd_nu``,
-    ``c sqrt(1 + qd_mu**2)``, ``c (1 + w(q)**2) qd_mu**2`` and ``c qd_mu**2 qd_nu``.  Every
-    constraint is nonlinear and explicitly solved for ``qd[a]``.  ``m`` and ``dependent``
-    as in :func:`affine_constraints`.
+    Explicit (``implicit=False``): each constraint is ``qd[a] - phi(t, q, qd_mu)`` where
+    ``phi`` is an affine part (as in :func:`affine_constraints`) plus one or two
+    nonlinear terms among ``c qd_mu qd_nu``, ``c sqrt(1 + qd_mu**2)``, ``c (1 +
+    w(q)**2) qd_mu**2`` and ``c qd_mu**2 qd_nu``: nonlinear in the independent
+    velocities.  Implicit: one constraint (m = 1: sympy's solve of several such is slow)
+    ``exp(c qd[a]) - (1 + phi^2)/(1 + w^2)``, ``phi = c0 + c1 qd_mu + c2 qd_mu qd_nu``,
+    ``w = c3 q_r`` (small rationals: sympy solves it quickly), nonlinear in the dependent
+    velocity too; its only solution is ``qd[a] = log((1 + phi^2)/(1 + w^2))/c`` and its
+    Jacobian ``c exp(c qd[a])`` never vanishes.  ``m`` and ``dependent`` as in
+    :func:`affine_constraints`.
     """
-    return _nonlinear_constraints(J, m, _check_split(J, m, dependent))
+    if implicit and (m or 1) != 1 or implicit and dependent is not None and len(dependent) != 1:
+        raise InvalidArgument("implicit nonlinear constraints come one at a time (m=1)")
+    return _nonlinear_constraints(J, 1 if implicit else m, _check_split(J, m, dependent),
+                                  implicit)
 
 
 @st.composite
-def _nonlinear_constraints(draw, J, m, dependent):
+def _nonlinear_constraints(draw, J, m, dependent, implicit=False):
     dep, indep = draw(_split(J, m, dependent))
     indep_v = tuple(J.qd[J.q.index(mu)] for mu in indep)
     coeffs = _coefficients(J)
     constraints = []
+    if implicit:                        # small coefficients: sympy solves it quickly
+        u, x = draw(_choice(indep_v)), draw(_choice(J.q))
+        phi = (draw(_rationals()) + draw(_rationals(nonzero=True)) * u
+               + draw(_rationals(nonzero=True)) * u * draw(_choice(indep_v)))
+        c = draw(st.sampled_from((1, sp.Rational(1, 2), -sp.Rational(1, 2))))
+        v = J.qd[J.q.index(dep[0])]
+        w = draw(_rationals(nonzero=True)) * x
+        return (sp.exp(c * v) - (1 + phi**2) / (1 + w**2),), tuple(dep)
     for a in dep:
         phi = draw(coeffs)
         if draw(st.booleans()):
@@ -355,26 +406,34 @@ def _nonlinear_constraints(draw, J, m, dependent):
     return tuple(constraints), tuple(dep)
 
 
-def constrained_systems(min_n: int = 2, max_n: int = 4, affine: bool | None = None):
+def constrained_systems(min_n: int = 2, max_n: int = 4, affine: bool | None = None,
+                        implicit: bool | None = False, mass: str | None = "diagonal"):
     """``(J, L, constraints, dependent)``: a jet space, a regular Lagrangian and constraints.
 
-    ``J`` has ``min_n <= n <= max_n`` coordinates (``min_n >= 2``), ``L`` comes from
-    :func:`lagrangians`; ``affine=True`` draws :func:`affine_constraints`, ``False``
-    :func:`nonlinear_constraints`, ``None`` either.
+    ``J`` has ``min_n <= n <= max_n`` coordinates (``min_n >= 2``; larger ``max_n`` for
+    larger systems: sympy's cost grows fast with n), ``L`` comes from
+    :func:`lagrangians` with ``mass``; ``affine=True`` draws :func:`affine_constraints`,
+    ``False`` :func:`nonlinear_constraints`, ``None`` either; ``implicit`` is passed to
+    them (``None``: either).
     """
     if min_n < 2:
         raise InvalidArgument(f"constrained systems need min_n >= 2, got {min_n}")
+    if mass not in MASSES + (None,):
+        raise InvalidArgument(f"mass must be one of {MASSES} or None, got {mass!r}")
     spaces = jet_spaces(min_n, max_n)
-    return _constrained_systems(spaces, affine)
+    return _constrained_systems(spaces, affine, implicit, mass)
 
 
 @st.composite
-def _constrained_systems(draw, spaces, affine):
+def _constrained_systems(draw, spaces, affine, implicit=False, mass="diagonal"):
     J = draw(spaces)
-    L = draw(lagrangians(J))
+    L = draw(lagrangians(J, mass=mass))
     if affine is None:
         affine = draw(st.booleans())
-    constraints, dependent = draw(affine_constraints(J) if affine else nonlinear_constraints(J))
+    if implicit is None:
+        implicit = draw(st.booleans())
+    kind = affine_constraints if affine else nonlinear_constraints
+    constraints, dependent = draw(kind(J, implicit=implicit))
     return J, L, constraints, dependent
 
 

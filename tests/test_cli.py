@@ -384,3 +384,47 @@ def test_sweep_progress_is_a_bar_on_a_terminal_and_tenths_elsewhere():
     close()
     assert "\r" in tty.getvalue() and "20/20" in tty.getvalue()
     assert Progress(quiet=True).bar("sweeping", "point")[0] is None
+
+
+# ---------------------------------------------------------------------- issue 13
+def test_derive_large_model_bounded_on_screen_and_complete_in_a_file(capsys, tmp_path):
+    code, out, err = inproc(capsys, "derive", "n_trailer:N=8", "-p", "vakonomic")
+    assert code == 0 and len(out) <= 21_000
+    assert "x_tt = " in out and "where" in out and "more named quantities" in out
+    assert "--out FILE" in out and "simplifying" not in err
+    path = tmp_path / "full.json"
+    code, out, err = inproc(capsys, "derive", "n_trailer:N=8", "-p", "vakonomic",
+                            "--format", "json", "--out", str(path))
+    assert code == 0 and out == "" and f"wrote {path}" in err
+    data = json.loads(path.read_text())
+    assert "omitted" not in data and len(data["where"]) > 300
+    assert set(data["accelerations"]) >= {"x_tt", "theta8_tt", "lambda_theta8_t"}
+    names = set(data["where"])
+    used = {w for text in data["accelerations"].values() for w in text.replace("(", " ")
+            .replace(")", " ").replace("*", " ").replace("/", " ").split() if w in names}
+    assert used                              # the rows refer to the named quantities
+    tex = tmp_path / "full.tex"
+    code, _, _ = inproc(capsys, "derive", "n_trailer:N=8", "-p", "vakonomic",
+                        "--format", "latex", "--out", str(tex), "-q")
+    text = tex.read_text()
+    assert code == 0 and text.startswith(r"\begin{aligned}") and "more" not in text
+    assert text.count(" &= ") >= len(data["where"]) + len(data["accelerations"])
+
+
+def test_simplify_applies_to_small_results_and_zero_skips_it(capsys):
+    code, out, err = inproc(capsys, "derive", DISK, "-p", "vakonomic")
+    assert code == 0 and "simplified" in err and "I1 + R**2)" in out
+    code, out, err = inproc(capsys, "derive", DISK, "-p", "vakonomic", "--simplify", "0")
+    assert code == 0 and "simplif" not in err and "sin(psi)**2" in out
+
+
+def test_compare_large_model_bounded(capsys):
+    code, out, err = inproc(capsys, "compare", "n_trailer:N=5")
+    assert code == 0 and len(out) <= 30_000
+    assert "T and the forms on L~" in out and "chetaev accelerations" in out
+    assert "vakonomic and holder have the same accelerations" in out
+    assert "vakonomic and suslov agree on the branch" in out
+    code, out, _ = inproc(capsys, "compare", "rolling_disk", "--format", "json", "-q")
+    data = json.loads(out)
+    assert "T^x_phi" in data["the constraint manifold and the embedded Lagrangian"]
+    assert any("chetaev and suslov have the same" in v for v in data["equivalence"])

@@ -222,11 +222,11 @@ def test_large_system_and_equations_display_within_budget(trailer):
     assert "theta8" in trailer._repr_html_()
     eq = trailer.equations("vakonomic")
     html, tex = eq._repr_html_(), eq._repr_latex_()
-    assert len(eq.latex()) > 5 * display.BUDGET          # the unbounded printout is large
+    assert len(eq.latex()) > 2 * display.BUDGET          # the complete (shared) form is large
     for text in (html, tex):
         assert len(text) <= display.BUDGET
         assert "vakonomic equations" in text
-    assert "lambda_theta8" in html and r"\text{expression of" in tex and r"lambda\_" in tex
+    assert "lambda_theta8" in html and "more lines" in tex
     big = Comparison(("vakonomic", "suslov"), False, None,
                      {q: e for q, e in zip(trailer.J.qdd, eq.expressions)})
     for text in (big._repr_html_(), big._repr_latex_()):
@@ -264,8 +264,8 @@ def test_an_exponentially_large_tree_is_summarized_quickly():
         e = sp.Mul(e, sp.Add(e, J.q[1], evaluate=False), evaluate=False)
     assert display.tree_size(e) == display.TREE_CAP + 1
     c = Comparison(("chetaev", "vakonomic"), True, None, {J.qdd[0]: e, J.qdd[1]: J.q[0]})
-    for text in (c._repr_html_(), c._repr_latex_()):
-        assert len(text) < 2000 and "162 distinct parts in x" in text
+    for text in (c._repr_html_(), c._repr_latex_()):              # in shared form
+        assert len(text) < display.BUDGET and "u_{1}" in text
 
 
 @given(jst.constrained_systems(min_n=2, max_n=4),

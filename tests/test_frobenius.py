@@ -302,3 +302,47 @@ def test_single_constraint_matches_omega_wedge_d_omega(case):
     three = om ^ d(om)
     direct = all(decide_zero(cf) is None for cf in three.terms.values())
     assert frobenius_from_constraints(J3, [f], [X]).integrable == direct
+
+
+# ---------------------------------------------------------------------- size budget
+def _nested(y, z, depth):
+    g = y * z
+    for _ in range(depth):                   # the tree doubles at every level
+        g = g * sp.sin(g) + y
+    return g
+
+
+def test_large_coefficients_are_decided_by_evaluation_and_say_so():
+    import jetnh as jn
+    from jetnh import zero
+    from jetnh.shared import tree_size
+
+    J = jn.JetSpace("x y z")
+    x, y, z = J.q
+    G = _nested(y, z, 7)
+    assert tree_size([sp.diff(G, y)], zero.TREE_MAX) > zero.TREE_MAX
+    # x' = dG/dt: the prolongation of x - G(y, z) = 0, integrable however large G is
+    one = sp.sin(z) ** 2 + sp.cos(z) ** 2        # so that no component is 0 as written
+    r = frobenius(J, sp.Matrix([[0, sp.diff(G, y), sp.diff(G, z) * one]]), [x])
+    assert r.integrable and r.decided_by.startswith("evaluation at random points")
+    # x' = G y': [X_y, X_z] = -dG/dz d_x, nonzero
+    r = frobenius(J, sp.Matrix([[0, G, 0]]), [x])
+    assert not r.integrable and list(r.obstructions) == [(y, z, x)]
+    assert r.decided_by != "symbolic" and len(repr(r)) < 2_000
+    small = frobenius(J, sp.Matrix([[0, z, 0]]), [x])
+    assert small.decided_by == "symbolic" and small.obstructions == {(y, z, x): -1}
+
+
+def test_a_zero_of_a_large_expression_is_told_from_a_tiny_offset():
+    from jetnh import zero
+
+    y, z = sp.symbols("y z")
+    G = _nested(y, z, 6)
+    one = sp.sin(z) ** 2 + sp.cos(z) ** 2
+    gyz, gzy = sp.diff(sp.diff(G, y), z) * one, sp.diff(sp.diff(G, z), y)
+    assert zero.large(gyz - gzy) and zero.vanishes([gyz - gzy])
+    assert not zero.vanishes([G * (1 + sp.Rational(1, 10**25)) - G])
+    with zero.decisions() as evaluated:
+        assert decide_zero(gyz - gzy) is None
+        assert decide_zero(gyz - gzy + sp.Rational(1, 10**20)) is not None
+    assert len(evaluated) == 2

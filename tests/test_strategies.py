@@ -160,8 +160,74 @@ def test_constrained_systems_affine_flag(system):
     lambda: jst.nonlinear_constraints(JetSpace("x y z"), m=1, dependent=["x", "y"]),
     lambda: jst.nonlinear_constraints(JetSpace("x y"), dependent=["x", "y"]),
     lambda: jst.constrained_systems(min_n=1),
+    lambda: jst.constrained_systems(mass="dense"),
+    lambda: jst.nonlinear_constraints(JetSpace("x y z"), m=2, implicit=True),
 ])
 def test_bad_arguments_raise_invalid_argument(make):
     with pytest.raises(InvalidArgument):
         make()
 
+
+
+# ---------------------------------------------------------------------- broader systems
+@given(st.data(), st.randoms(use_true_random=False))
+def test_full_mass_matrices_are_positive_definite_and_not_diagonal(data, rnd):
+    J = data.draw(jst.jet_spaces(2, 4))
+    L = data.draw(jst.lagrangians(J, mass="full", gyroscopic=False))
+    H = sp.hessian(L, J.qd)
+    assert all(J.order(e) <= 0 for e in H)                     # depends on (t, q) only
+    for _ in range(2):
+        Hn = H.xreplace(_values([H], rnd)).evalf(30)
+        assert all(Hn[:i, :i].det() > 0 for i in range(1, J.n + 1))   # Sylvester
+
+
+def test_full_mass_matrices_are_drawn_off_the_diagonal():
+    seen = set()
+
+    @given(jst.jet_spaces(2, 3).flatmap(lambda J: jst.lagrangians(J, mass="full").map(
+        lambda L: (J, L))))
+    def draw(case):
+        J, L = case
+        H = sp.hessian(L, J.qd)
+        seen.add(any(H[i, j] != 0 for i in range(J.n) for j in range(J.n) if i != j))
+        seen.add(("q", bool(H.free_symbols & set(J.q))))
+    draw()
+    assert True in seen and ("q", True) in seen
+
+
+@given(st.data(), st.randoms(use_true_random=False))
+def test_implicit_affine_constraints_have_an_invertible_full_dependent_block(data, rnd):
+    J = data.draw(jst.jet_spaces(3, 5))
+    constraints, dependent = data.draw(jst.affine_constraints(J, implicit=True))
+    dep_v = [J.qd[J.q.index(a)] for a in dependent]
+    A = sp.Matrix([[sp.diff(f, v) for v in dep_v] for f in constraints])
+    assert all(J.order(e) <= 0 and J.t not in e.free_symbols for e in A)
+    for f in constraints:                                      # affine in the velocities
+        assert all(J.order(sp.diff(f, v)) <= 0 for v in J.qd)
+    det = A.det()
+    for _ in range(2):
+        assert abs(det.xreplace(_values([det], rnd)).evalf(30)) >= 1 - 1e-20
+
+
+@given(st.data(), st.randoms(use_true_random=False))
+def test_implicit_nonlinear_constraints_are_nonlinear_in_the_dependent_velocity(data, rnd):
+    import jetnh as jn
+
+    J = data.draw(jst.jet_spaces(2, 4))
+    constraints, dependent = data.draw(jst.nonlinear_constraints(J, implicit=True))
+    system = jn.System(J, J.qd[0] ** 2 / 2, constraints, dependent=dependent)
+    v = J.jet(dependent[0], 1)
+    assert sp.diff(constraints[0], v, v) != 0
+    for f, a in zip(constraints, dependent):
+        v = J.jet(a, 1)
+        phi = system.phi[v]
+        point = _values([phi, f], rnd, spread=1.0)
+        point[v] = phi.xreplace(point).evalf(30)
+        assert abs(f.xreplace(point).evalf(30)) < 1e-20        # phi solves f = 0
+
+
+@given(jst.constrained_systems(2, 5, affine=None, implicit=None, mass=None))
+def test_constrained_systems_with_every_option(system):
+    J, L, constraints, dependent = system
+    assert 2 <= J.n <= 5 and len(constraints) == len(dependent)
+    assert J.order(L) == 1 and all(J.order(f) <= 1 for f in constraints)
