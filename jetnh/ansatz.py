@@ -140,7 +140,7 @@ def solve(problem: Problem, what: str, max_degree: int = MAX_PARAMETER_DEGREE) -
         for row, p in problem.rows(rng, 2 * len(cols) + 4, columns=support):
             th = _atom_values(atoms, p)
             with mpmath.workdps(DPS + 10):
-                tv = {e: _prod(th, e) for e in monos}
+                tv = {e: power_product(th, e) for e in monos}
                 rows.append([to_mpf(row[where[j]]) * tv[e] for j, e in cols])
         A, piv = _rref(rows, len(cols))
         vecs = [_read(v) for v in _null_vectors(A, piv, len(cols))]
@@ -171,7 +171,8 @@ def _atom_values(atoms, point):
                 for a in atoms]
 
 
-def _prod(u, e):
+def power_product(u, e):
+    """prod u_k^e_k of numbers (mpmath or exact), skipping the zero exponents."""
     r = 1
     for x, k in zip(u, e):
         if k:
@@ -196,7 +197,7 @@ def _reduce(problem, vecs, support, atoms, cols, r, monos=None):
         c = [mpmath.mpf(0)] * n
         for (j, e), x in zip(cols if atoms else [(j, ()) for j in range(n)], v):
             if x:
-                c[j] += to_mpf(x) * (_prod(th, e) if atoms else 1)
+                c[j] += to_mpf(x) * (power_product(th, e) if atoms else 1)
         return c
 
     if atoms:

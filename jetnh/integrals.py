@@ -25,6 +25,7 @@ import sympy as sp
 from . import ansatz, dag
 from .ansatz import exponents as _exponents
 from .ansatz import monomial as _mono
+from .ansatz import power_product
 from .constraints import PRINCIPLES, System
 from .errors import ArgumentError, JetnhError, PrincipleError
 
@@ -219,9 +220,9 @@ class _Integrals(ansatz.Problem):
             Dg = [gr[0] + sum(d * v for d, v in zip(gr[1:], qdot)) for gr in grads]
             mv, dm = {}, {}
             for e in {e for _, e in pairs}:
-                mv[e] = _prod(u, e)
-                dm[e] = sum((e[k] * _prod(u, e[:k] + (e[k] - 1,) + e[k + 1:]) * accel[k]
-                             for k in range(len(U)) if e[k]), 0)
+                mv[e] = power_product(u, e)
+                dm[e] = sum((e[k] * power_product(u, e[:k] + (e[k] - 1,) + e[k + 1:])
+                             * accel[k] for k in range(len(U)) if e[k]), 0)
             return [Dg[i] * mv[e] + gv[i] * dm[e] for i, e in pairs]
 
     def values(self, point):
@@ -230,19 +231,11 @@ class _Integrals(ansatz.Problem):
             gv = [_fraction(v) for v in gv]
         with mpmath.workdps(DPS + 10):
             u = self._u(point)
-            return [gv[i] * _prod(u, e) for i, e in self.pairs]
+            return [gv[i] * power_product(u, e) for i, e in self.pairs]
 
 
 def _fraction(v):
     return Fraction(int(v.p), int(v.q))
-
-
-def _prod(u, e):
-    r = 1
-    for x, k in zip(u, e):
-        if k:
-            r = r * x**k
-    return r
 
 
 # ---------------------------------------------------------------------- the final check
