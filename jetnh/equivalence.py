@@ -104,7 +104,7 @@ class Comparison:
     def __repr__(self):
         return (f"Comparison({self.principles!r}, identical={self.identical}, "
                 f"on_branch_32={self.on_branch_32}, defects=<{len(self.defects)} expressions>, "
-                f"singular=<{len(self.singular)}: {self.where()}>)")
+                f"singular=<{len(self.singular)}{': ' + self.where() if self.singular else ''}>)")
 
     def _repr_html_(self):
         from .display import comparison_html

@@ -95,6 +95,15 @@ def test_a_comparison_text_stays_within_budget():
     assert c.singular and len(str(c)) < 1200 and len(repr(c)) < 1200
 
 
+def test_an_empty_singular_set_reads_as_empty():
+    J = JetSpace("x y z")
+    x, y, z = J.q
+    xd, yd, zd = J.qd
+    c = compare(System(J, (xd**2 + yd**2 + zd**2) / 2, [zd - y * xd], [z]), "chetaev", "suslov")
+    assert not c.singular and repr(c).endswith("singular=<0>)")
+    assert "singular set" not in str(c)
+
+
 @settings(max_examples=6)
 @given(jst.constrained_systems(max_n=3, affine=False))
 def test_the_singular_set_is_where_the_vakonomic_system_is_singular(case):
