@@ -776,6 +776,8 @@ class _Preparer:
                         if name not in runtime_params}
         self.by_name.update(self.numbers)
         self.names = {s.name: s for s in self.rename}
+        #: the results of every call, one object per value (``dag.xreplace``)
+        self.canon: dict = {}
 
     def many(self, pairs) -> list:
         """``[self(expr, what) for expr, what in pairs]`` by one substitution over the
@@ -783,7 +785,7 @@ class _Preparer:
         on the first expression that has it."""
         exprs = [sp.sympify(e) for e, _ in pairs]
         sub, bad = self._rule(exprs)
-        out = None if bad or dag.atoms(exprs, AppliedUndef) else dag.xreplace(exprs, sub)
+        out = None if bad or dag.atoms(exprs, AppliedUndef) else dag.xreplace(exprs, sub, self.canon)
         if out is None or dag.atoms(out, type(sp.nan), type(sp.zoo), type(sp.oo),
                                     type(sp.S.NegativeInfinity)):
             return [self(e, what) for e, what in pairs]
@@ -813,7 +815,7 @@ class _Preparer:
         if undefined:
             raise JetnhError(f"{what} contains undefined functions {undefined}; "
                              "jetnh compiles explicit expressions only")
-        out = dag.xreplace(e, sub)
+        out = dag.xreplace(e, sub, self.canon)
         if dag.atoms(out, type(sp.nan), type(sp.zoo), type(sp.oo), type(sp.S.NegativeInfinity)):
             values = ", ".join(f"{k} = {v}" for k, v in sorted(self.numbers.items()))
             raise JetnhError(
