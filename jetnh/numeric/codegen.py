@@ -58,6 +58,7 @@ from sympy.functions.elementary.piecewise import ExprCondPair
 from sympy.printing.pycode import PythonCodePrinter
 
 from .. import dag, singular
+from ..accelerations import _cached_parts
 from ..errors import JetnhError, PrincipleError
 
 CODEGEN_VERSION = "9"
@@ -527,8 +528,11 @@ def generate(system, principle, params: dict, runtime_params=(), integrals=None,
     runtime_params = tuple(runtime_params)
 
     # aux: residuals, energy, integrals
-    F = system.L + sp.Add(*[lam * f for lam, f in zip(lams, eom.constraints)])
-    energy = sp.Add(*[v * sp.diff(F, v) for v in J.qd]) - F
+    # dL/dqdot from the derivation's Euler parts (sympy's diff of a long chain's L is slow)
+    Fc = sp.Add(*[lam * f for lam, f in zip(lams, eom.constraints)])
+    dL = _cached_parts(system, system.L).p
+    energy = (sp.Add(*[v * (pv + sp.diff(Fc, v)) for v, pv in zip(J.qd, dL)])
+              - system.L - Fc)
     pairs = [(f, f"constraint {a + 1}") for a, f in enumerate(system.constraints)]
     pairs.append((energy, "the energy"))
     integrals = dict(integrals or {})
