@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import mpmath
 import sympy as sp
-from sympy.core.operations import AssocOp
 
 
 def nodes(expr, cap: int | None = None) -> list:
@@ -86,7 +85,7 @@ def xreplace(expr, rule: dict, canon: dict | None = None):
                 changed.add(id(e))
             elif all(a is b for a, b in zip(args, e.args)):
                 new = e
-            elif isinstance(e, AssocOp):   # equal children, made one object: no rewrite
+            elif isinstance(e, (sp.Add, sp.Mul)):   # equal children made one: no rewrite
                 new = e.func._from_args(args, e.is_commutative)
             else:
                 new = e.func(*args)
