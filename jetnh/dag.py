@@ -61,19 +61,37 @@ def atoms(expr, *types) -> set:
     return {e for e in nodes(expr) if isinstance(e, types)}
 
 
-def xreplace(expr, rule: dict):
+def xreplace(expr, rule: dict, canon: dict | None = None):
     """``expr.xreplace(rule)``, rebuilding each distinct subexpression once; ``expr``
-    may be a list, whose shared parts are then rebuilt once for all (a list returned)."""
+    may be a list, whose shared parts are then rebuilt once for all (a list returned).
+
+    Equal results are made one object (hash-consed, children first): the substitution
+    can make distinct subexpressions equal (parameters set to the same number), and
+    sympy compares equal, non-identical objects by walking their trees -- exponentially
+    long for nested solves -- whenever it meets them in a cache or a sum's terms.
+    ``canon`` (object -> itself) carries the one objects over several calls (results of
+    one call equal to those of another are then the same object too)."""
     done: dict = {}
+    canon = {} if canon is None else canon
+    changed: set = set()     # ids of the subexpressions the rule reaches
     for e in nodes(expr):
         if e in rule:
-            done[id(e)] = rule[e]
+            new = rule[e]
+            changed.add(id(e))
         elif e.args:
             args = tuple(done[id(a)] for a in e.args)
-            done[id(e)] = e.func(*args) if any(
-                a is not b for a, b in zip(args, e.args)) else e
+            if any(id(a) in changed for a in e.args):
+                new = e.func(*args)
+                changed.add(id(e))
+            elif all(a is b for a, b in zip(args, e.args)):
+                new = e
+            elif isinstance(e, (sp.Add, sp.Mul)):   # equal children made one: no rewrite
+                new = e.func._from_args(args, e.is_commutative)
+            else:
+                new = e.func(*args)
         else:
-            done[id(e)] = e
+            new = e
+        done[id(e)] = canon.setdefault(new, new)
     if isinstance(expr, (list, tuple)):
         return [done[id(sp.sympify(e))] for e in expr]
     return done[id(sp.sympify(expr))]

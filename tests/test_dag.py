@@ -46,6 +46,30 @@ def test_nested_expression_of_exponential_tree_size():
     assert abs(dag.evaluate(xs[12], at) - xs[12].xreplace(at).evalf(30)) < 1e-25
 
 
+def test_substitution_makes_equal_results_one_object():
+    """Two chains of exponential tree size in different symbols, made equal by the rule:
+    the rebuilt chain is the other chain's object at every level (so sympy never compares
+    them as trees: their difference cancels at once), also across calls sharing ``canon``."""
+    t, a, b, c, d = sp.symbols("t a b c d")
+
+    def chain(u, v, n=40):
+        xs = [u, v]
+        for _ in range(n):
+            xs.append(sp.cos(t) * xs[-1] + sp.sin(t) * xs[-2])
+        return xs
+
+    xs, ys = chain(a, b), chain(c, d)
+    rule = {c: a, d: b}
+    x, y = dag.xreplace([xs[-1], ys[-1]], rule)
+    assert x is xs[-1] and y is xs[-1]
+    assert dag.xreplace(xs[-1] - ys[-1], rule) == 0
+    canon: dict = {}
+    first = dag.xreplace(xs[-1], {a: c}, canon)
+    again = dag.xreplace(ys[-1], {d: b}, canon)
+    assert first is again and first is not xs[-1]
+    assert dag.free_symbols(first) == {t, c, b}
+
+
 def test_tree_size_counts_the_tree_on_the_graph():
     """tree_size is what a tree walk visits (sympy's preorder_traversal), counted in time
     linear in the graph, and capped."""

@@ -58,6 +58,7 @@ from sympy.functions.elementary.piecewise import ExprCondPair
 from sympy.printing.pycode import PythonCodePrinter
 
 from .. import dag, singular
+from ..accelerations import _cached_parts
 from ..errors import JetnhError, PrincipleError
 
 CODEGEN_VERSION = "9"
@@ -527,8 +528,11 @@ def generate(system, principle, params: dict, runtime_params=(), integrals=None,
     runtime_params = tuple(runtime_params)
 
     # aux: residuals, energy, integrals
-    F = system.L + sp.Add(*[lam * f for lam, f in zip(lams, eom.constraints)])
-    energy = sp.Add(*[v * sp.diff(F, v) for v in J.qd]) - F
+    # dL/dqdot from the derivation's Euler parts (sympy's diff of a long chain's L is slow)
+    Fc = sp.Add(*[lam * f for lam, f in zip(lams, eom.constraints)])
+    dL = _cached_parts(system, system.L).p
+    energy = (sp.Add(*[v * (pv + sp.diff(Fc, v)) for v, pv in zip(J.qd, dL)])
+              - system.L - Fc)
     pairs = [(f, f"constraint {a + 1}") for a, f in enumerate(system.constraints)]
     pairs.append((energy, "the energy"))
     integrals = dict(integrals or {})
@@ -776,6 +780,8 @@ class _Preparer:
                         if name not in runtime_params}
         self.by_name.update(self.numbers)
         self.names = {s.name: s for s in self.rename}
+        #: the results of every call, one object per value (``dag.xreplace``)
+        self.canon: dict = {}
 
     def many(self, pairs) -> list:
         """``[self(expr, what) for expr, what in pairs]`` by one substitution over the
@@ -783,7 +789,7 @@ class _Preparer:
         on the first expression that has it."""
         exprs = [sp.sympify(e) for e, _ in pairs]
         sub, bad = self._rule(exprs)
-        out = None if bad or dag.atoms(exprs, AppliedUndef) else dag.xreplace(exprs, sub)
+        out = None if bad or dag.atoms(exprs, AppliedUndef) else dag.xreplace(exprs, sub, self.canon)
         if out is None or dag.atoms(out, type(sp.nan), type(sp.zoo), type(sp.oo),
                                     type(sp.S.NegativeInfinity)):
             return [self(e, what) for e, what in pairs]
@@ -813,7 +819,7 @@ class _Preparer:
         if undefined:
             raise JetnhError(f"{what} contains undefined functions {undefined}; "
                              "jetnh compiles explicit expressions only")
-        out = dag.xreplace(e, sub)
+        out = dag.xreplace(e, sub, self.canon)
         if dag.atoms(out, type(sp.nan), type(sp.zoo), type(sp.oo), type(sp.S.NegativeInfinity)):
             values = ", ".join(f"{k} = {v}" for k, v in sorted(self.numbers.items()))
             raise JetnhError(
