@@ -22,6 +22,7 @@ from . import dag
 
 _FACTOR_MAX = 400        # tree nodes up to which a factor is factored and tested for sign
 _FACTOR_GENERATORS = 3   # functions and roots up to which a factor is factored
+_POLY_GENS, _POLY_DEGREE, _POLY_TERMS = 12, 10, 24  # ... and its size as a polynomial
 _LABEL_MAX = 400         # tree nodes up to which an expression is printed in full
 
 
@@ -96,9 +97,7 @@ def _split(b) -> list:
     out = []
     for f in factors(b):
         g = _pythagoras(f)
-        if g.is_Add and tree_size(g, _FACTOR_MAX) <= _FACTOR_MAX and len(
-                {e for e in dag.nodes(g) if isinstance(e, sp.Function) or (
-                    e.is_Pow and not e.exp.is_Integer)}) <= _FACTOR_GENERATORS:
+        if _factorable(g):
             try:
                 g = sp.factor(g)
             except (sp.PolynomialError, NotImplementedError, ValueError, TypeError):
@@ -109,6 +108,23 @@ def _split(b) -> list:
             else:
                 out.extend(factors(h))
     return out
+
+
+def _factorable(g) -> bool:
+    """Whether ``g`` is small enough to factor: a sum with a short tree, few functions and
+    roots, and as a polynomial few generators, terms and a low degree (the time of
+    sympy's multivariate factoring, Wang's algorithm with random evaluation points, grows
+    fast and unpredictably with these)."""
+    if not g.is_Add or tree_size(g, _FACTOR_MAX) > _FACTOR_MAX or len(
+            {e for e in dag.nodes(g) if isinstance(e, sp.Function) or (
+                e.is_Pow and not e.exp.is_Integer)}) > _FACTOR_GENERATORS:
+        return False
+    try:
+        p = sp.Poly(g)
+    except (sp.PolynomialError, sp.GeneratorsNeeded):
+        return False
+    return (len(p.gens) <= _POLY_GENS and p.total_degree() <= _POLY_DEGREE
+            and len(p.terms()) <= _POLY_TERMS)
 
 
 def _pythagoras(f):

@@ -211,3 +211,17 @@ def test_defect_along_states():
     assert defect_along(s, "chetaev", "vakonomic", d) < 1e-12
     d["lambda_x"] = d["lambda_x"] + 0.3
     assert defect_along(s, "chetaev", "vakonomic", d) > 1e-3
+
+
+def test_large_polynomial_factors_are_kept_whole():
+    """A singular factor too large to factor safely (sympy's multivariate factoring can
+    take minutes, depending on its random evaluation points) is kept as one factor; small
+    ones are factored."""
+    from jetnh import singular
+
+    xs = sp.symbols("a0:8")
+    big = sum((k + 1) * xs[k % 8] ** (k % 5) * xs[(3 * k) % 8] ** 2 for k in range(30)) + 1
+    assert not singular._factorable(sp.expand(big))
+    assert singular._split(sp.expand(big)) == [sp.expand(big)]
+    small = sp.expand((xs[0] + xs[1]) * (xs[2] - 3))
+    assert set(singular._split(small)) == {xs[0] + xs[1], xs[2] - 3}
