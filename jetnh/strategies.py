@@ -303,7 +303,7 @@ def affine_constraints(J: JetSpace, m: int | None = None,
     Explicit (``implicit=False``): each constraint is ``qd[a] - sum_mu B_mu(t, q) qd[mu] -
     B_0(t, q)`` for a dependent coordinate ``a`` and the independent ones ``mu``, with each
     ``B`` zero, a constant or a small expression of order 0.  Implicit: ``A(q) qd + b(t,
-    q)``, those explicit ones mixed by ``S(q)`` (:func:`_mixing`, invertible everywhere),
+    q)``, those explicit ones mixed by ``S(q)`` (``_mixing``, invertible everywhere),
     so that ``A_dep = S`` is full and configuration-dependent.  ``m`` (1 <= m < n) and
     ``dependent`` are drawn unless given (``dependent`` as Symbols or names).  Returns
     ``(tuple_of_expressions, tuple_of_dependent_coordinates)``.
