@@ -145,6 +145,7 @@ _PIVOT_DPS = 30          # digits of the numeric elimination that chooses pivots
 _PIVOT_POINTS = 3        # random points at which pivots are compared
 _PIVOT_ZERO = 1e-15      # |value| below this times the matrix's largest counts as zero
 _PIVOT_TIE = 0.25        # scores within this factor of the best are near ties
+_PIVOT_SPARSE = 0.01     # ... within this factor, the sparsest row is preferred
 _PIVOT_CONSTANT = 1e-3   # a nonzero constant with this score at least is preferred
 _COMPLETE: contextvars.ContextVar = contextvars.ContextVar("jetnh_complete", default=None)
 
@@ -189,9 +190,11 @@ def _pivot_values(M: sp.Matrix) -> list:
 def _choose(A, Ns, col, scales):
     """The pivot row for column ``col``, by value at the random points (``Ns``, eliminated
     alongside): each candidate's smallest size relative to the column's largest over the
-    points; a nonzero constant first (unless far smaller), else the best, the cheapest
-    form among near ties.  Entries zero at a point are never chosen while another is
-    not; without values, by form alone."""
+    points.  Among the candidates not far smaller than the best (``_PIVOT_SPARSE``), the
+    row with the fewest nonzero entries left (Markowitz: the least fill-in, so a sparse,
+    e.g. triangular, block keeps a solve of size O(k^2), not O(k^3)); then a nonzero
+    constant, then near ties by the cheapest form.  Entries zero at a point are never
+    chosen while another is not; without values, by form alone."""
     rows = [r for r in range(col, A.rows) if A[r, col] != 0]
     if not Ns or not rows:
         return min(range(col, A.rows), key=lambda r: _pivot_cost(A[r, col]))
@@ -204,9 +207,13 @@ def _choose(A, Ns, col, scales):
     best = max(score.values())
     if best == 0:                            # zero at a point: fall back to the form
         return min(rows, key=lambda r: _pivot_cost(A[r, col]))
+    fill = {r: sum(1 for j in range(col + 1, A.cols) if A[r, j] != 0) for r in rows}
+    least = min(fill[r] for r in rows if score[r] >= _PIVOT_SPARSE * best)
+    rows = [r for r in rows if fill[r] == least and score[r] >= _PIVOT_SPARSE * best]
     consts = [r for r in rows if A[r, col].is_number and score[r] >= _PIVOT_CONSTANT]
     if consts:
         return max(consts, key=lambda r: score[r])
+    best = max(score[r] for r in rows)
     near = [r for r in rows if score[r] >= _PIVOT_TIE * best]
     return min(near, key=lambda r: (_pivot_cost(A[r, col]), -score[r]))
 

@@ -291,18 +291,18 @@ def test_cache_deleted_while_compiling(fresh, monkeypatch):
     removed again before the generated source is returned: the run goes on, and the
     entry is written again."""
     sc = scene(4.25)
-    real_njit = numba.njit
+    real_cfunc = numba.cfunc
     state = {"deleted": 0}
 
-    def njit(*args, **kw):
+    def cfunc(*args, **kw):
         if not state["deleted"]:
             state["deleted"] = 1
             shutil.rmtree(fresh)
-        return real_njit(*args, **kw)
+        return real_cfunc(*args, **kw)
 
-    monkeypatch.setattr(numba, "njit", njit)
+    monkeypatch.setattr(numba, "cfunc", cfunc)
     ck = sc.kernels
-    monkeypatch.setattr(numba, "njit", real_njit)
+    monkeypatch.setattr(numba, "cfunc", real_cfunc)
     assert state["deleted"] and not ck.hit
     assert_runs(sc, 4.25)
     assert trusted(ck.directory, sc.key)

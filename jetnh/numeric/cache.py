@@ -14,7 +14,7 @@ directory named by a hash of the symbolic input (``codegen.symbolic_key``)::
     <root>/hmac.key          32 random bytes, this user's secret (mode 0600)
     <root>/k<key>/
         __init__.py          a comment: the entry is a package (never executed)
-        kernels.py           rhs, aux, sing, aux_rows (numba, cache=True); or the
+        kernels.py           rhs_c, aux_c, sing_c (numba cfuncs, cache=True); or the
                              user-event kernel ``events`` (its own key)
         layout.json          the state layout
         __pycache__/         numba's machine code of kernels.py (*.nbi, *.nbc)
@@ -637,7 +637,9 @@ def _no_later_disk_cache(mod):
 
 # ---------------------------------------------------------------------- kernels
 class CompiledKernels:
-    """A loaded kernel package: ``rhs``, ``aux``, ``aux_rows``, the layout, integrators.
+    """A loaded kernel package: ``rhs``, ``aux``, ``sing``, ``aux_rows`` (callable from
+    Python, ``calls``), their C callbacks (``rhs_fp``, ...: for the compiled loops), the
+    layout, integrators.
 
     ``source`` is the text of ``kernels.py`` as it was checked and compiled (read it
     rather than the file in ``directory``, which may change or go)."""
@@ -658,20 +660,28 @@ class CompiledKernels:
             source = found[0]["kernels.py"].decode("utf-8")
         self.kernels = module
         self.source = source
-        for name in ("rhs", "rhs_c", "aux", "aux_rows", "sing", "sing_c", "events", "events_c",
-                     "jac", "jac_c",
+        for name in ("rhs_c", "aux_c", "sing_c", "jac_c", "events", "events_c", "sing",
                      "step_residual", "momentum", "legendre", "nodal", "constraint_jac"):
             if hasattr(self.kernels, name):
                 setattr(self, name, getattr(self.kernels, name))
+        from . import calls
         from .integrators._common import FunctionAddress
 
-        for name in ("rhs_c", "sing_c", "events_c"):
+        for name in ("rhs_c", "aux_c", "sing_c", "events_c"):
             if hasattr(self, name):      # rhs_fp, ...: cheap to pass to compiled loops
                 setattr(self, name[:-2] + "_fp", FunctionAddress(getattr(self, name)))
-        if hasattr(self.kernels, "jac_c"):   # the generated Jacobian (radau)
-            from .integrators.radau import JAC_SIGNATURE
-
-            self.jac_fp = FunctionAddress(self.kernels.jac_c, JAC_SIGNATURE)
+        lay = layout
+        n_y, n_p = lay.n_state, len(lay.runtime_params)
+        sizes = {"rhs": lay.n_state, "aux": lay.n_aux, "sing": len(lay.indicators)}
+        for name, n_out in sizes.items():     # rhs, aux, sing from Python
+            if hasattr(self, f"{name}_fp") and not hasattr(self, name):
+                setattr(self, name, calls.Kernel(getattr(self, f"{name}_fp"),
+                                                 (n_y, n_p, n_out)))
+        if hasattr(self, "aux_fp"):
+            self.aux_rows = calls.Rows(self.aux_fp, (n_y, n_p, lay.n_aux))
+        if hasattr(self, "jac_c"):           # the generated Jacobian (radau)
+            self.jac_fp = calls.jacobian_address(self.jac_c)
+            self.jac = calls.Kernel(self.jac_fp, (n_y, n_p, n_y), jacobian=True)
 
     def integrator(self):
         """The compiled loop of the explicit Runge-Kutta methods (shared by every scene

@@ -1,10 +1,12 @@
 """Code generation: equations of motion -> numba kernels, from the shared graph.
 
-A scene's equations become Python source text for two kernels, written to a module file
-and compiled by numba with explicit signatures (``@njit(sig, cache=True)``), so that a
-second process finds the machine code on disk (see ``jetnh.numeric.cache``).  The
-integrators receive ``rhs`` as a first-class function and are compiled once for all
-scenes:
+A scene's equations become Python source text for its kernels, written to a module file
+and compiled by numba as C callbacks with explicit signatures (``@cfunc(sig,
+cache=True)``), so that a second process finds the machine code on disk (see
+``jetnh.numeric.cache``).  The integrators receive ``rhs_c`` as a first-class function and
+are compiled once for all scenes; from Python, ``CompiledKernels.rhs`` and the like call
+the callbacks through trampolines compiled once (``jetnh.numeric.calls``).  Each body is
+compiled once: an njit function beside its callback would compile it a second time.
 
 ``rhs(t, y, p, out)``
     the first-order system.  State layout ``y = (q^1..q^n, qdot^mu, lambda_a)``: every
@@ -25,9 +27,13 @@ scenes:
     crosses zero or falls below ``singular_tol`` times its initial size.
 ``jac(t, y, p, J)`` (``generate(..., jacobian=True)``, or ``jacobian_kernels(scene)``)
     ``J[i, j] = d rhs_i / d y_j`` (an n_state x n_state C-contiguous array), by forward
-    mode over the graph; ``jac_c`` is its C callback (signature ``JAC_SIGNATURE``).
+    mode over the graph (signature ``JAC_SIGNATURE``).
 ``events(t, y, p, out)`` (``generate_events``, a separate small module)
-    user event functions given as sympy expressions.
+    user event functions given as sympy expressions (an njit function, which compiled
+    event callables call, and its callback ``events_c``).
+
+The module defines ``rhs_c``, ``aux_c``, ``sing_c`` (and ``jac_c``), the callbacks of the
+kernels above.
 
 ``p`` holds the *runtime* parameters only (for ensembles over parameters without
 recompiling); every other parameter is a number substituted on the graph
@@ -76,6 +82,7 @@ import numpy as np
 from jetnh.numeric.codegen import straight_line
 
 _JIT = dict(cache=True, error_model="numpy", nogil=True)
+_CB = dict(cache=True, error_model="numpy")
 _SIG = "void(float64, float64[::1], float64[::1], float64[::1])"
 _JAC_SIG = "{jac_sig}"
 
@@ -528,10 +535,15 @@ def generate(system, principle, params: dict, runtime_params=(), integrals=None,
     runtime_params = tuple(runtime_params)
 
     # aux: residuals, energy, integrals
-    # dL/dqdot from the derivation's Euler parts (sympy's diff of a long chain's L is slow)
+    # dL/dqdot and df/dqdot from the derivation's Euler parts (sympy's diff of a long
+    # chain's L or constraints is slow)
     Fc = sp.Add(*[lam * f for lam, f in zip(lams, eom.constraints)])
     dL = _cached_parts(system, system.L).p
-    energy = (sp.Add(*[v * (pv + sp.diff(Fc, v)) for v, pv in zip(J.qd, dL)])
+    own = {id(f) for f in system.constraints}
+    df = [_cached_parts(system, f, hessian=not system.is_affine).p if id(f) in own
+          else [sp.diff(f, v) for v in J.qd] for f in eom.constraints]
+    energy = (sp.Add(*[v * (pv + sp.Add(*[lam * d[s] for lam, d in zip(lams, df)]))
+                       for s, (v, pv) in enumerate(zip(J.qd, dL))])
               - system.L - Fc)
     pairs = [(f, f"constraint {a + 1}") for a, f in enumerate(system.constraints)]
     pairs.append((energy, "the energy"))
@@ -565,12 +577,8 @@ def generate(system, principle, params: dict, runtime_params=(), integrals=None,
     src.append(_function("rhs", layout, phi_exprs, rhs_exprs))
     if jacobian:
         src.append(_jacobian_function(layout, phi_exprs, rhs_exprs))
-        src.append(_cfunc("jac", "_JAC_SIG"))
     src.append(_function("aux", layout, phi_exprs, aux_exprs))
     src.append(_function("sing", layout, phi_exprs, sing_exprs))
-    src.append(_RHS_CFUNC)
-    src.append(_cfunc("sing"))
-    src.append(_AUX_ROWS)
     src.append(f"LAYOUT = {layout.to_json()!r}\n")
     timings["print"] = time.perf_counter() - t1
     return KernelSource(key, layout, "\n".join(src), timings)
@@ -611,12 +619,17 @@ def kernel_expressions(system, principle, params: dict, runtime_params=(), form=
     return parts[3], parts[4]
 
 
-def _function(name, layout: Layout, phi_exprs, out_exprs, indices=None) -> str:
+def _function(name, layout: Layout, phi_exprs, out_exprs, indices=None,
+              callback=True) -> str:
     """One kernel: the dependent velocities ``v<a>`` (when used), then the outputs (to
     ``out[indices[i]]``, default ``out[i]``), from one ``Emitter``: as a straight-line
     program compiled by LLVM (``program``, ``straight_line``), or, for a head the program
-    lacks, as Python text compiled by numba."""
-    lines = ["@numba.njit(_SIG, **_JIT)", f"def {name}(t, y, p, out):"]
+    lacks, as Python text compiled by numba.  With ``callback``, the C callback
+    ``<name>_c`` alone (the integrators call it; ``calls`` from Python): an njit function
+    and a cfunc calling it would each compile the whole body, twice the time.  Else the
+    njit function ``name``."""
+    lines = (["@numba.cfunc(_SIG, **_CB)", f"def {name}_c(t, y, p, out):"] if callback
+             else ["@numba.njit(_SIG, **_JIT)", f"def {name}(t, y, p, out):"])
     pre, out_exprs = _small_cse(_used_phi(phi_exprs, out_exprs), list(out_exprs))
     em = Emitter([e for _, e in pre] + out_exprs)
     slots = [i if indices is None else indices[i] for i in range(len(out_exprs))]
@@ -675,10 +688,10 @@ def _emitter(phi_exprs, out_exprs, inline: int = 160):
 
 
 def _jacobian_function(layout: Layout, phi_exprs, rhs_exprs) -> str:
-    """``jac(t, y, p, J)``: J[i, j] = d rhs_i / d y_j by forward mode over the graph --
+    """``jac_c(t, y, p, J)``: J[i, j] = d rhs_i / d y_j by forward mode over the graph --
     on the straight-line program (``_derivative_program``), or for heads it lacks on the
     printed nodes (``Emitter.jacobian``); the dependent velocities enter through phi."""
-    lines = ['@numba.njit(_JAC_SIG, **_JIT)', "def jac(t, y, p, J):"]
+    lines = ["@numba.cfunc(_JAC_SIG, **_CB)", "def jac_c(t, y, p, J):"]
     em, phi = _emitter(phi_exprs, rhs_exprs)
     try:
         ops = _derivative_program(program(em, phi, list(enumerate(rhs_exprs))),
@@ -724,15 +737,16 @@ def generate_events(system, principle, params: dict, runtime_params, events, lay
                  for v in system.dependent_velocities]
     exprs = [prepare(e, f"event {i}") for i, e in events]
     src = [HEADER.format(version=CODEGEN_VERSION, key=key, jac_sig=JAC_SIGNATURE)]
-    src.append(_function("events", layout, phi_exprs, exprs, [i for i, _ in events]))
+    src.append(_function("events", layout, phi_exprs, exprs, [i for i, _ in events],
+                         callback=False))
     src.append(_cfunc("events"))
     return KernelSource(key, layout, "\n".join(src))
 
 
 def jacobian_kernels(scene):
     """The compiled kernels of ``scene`` with the Jacobian of its right-hand side:
-    ``ck.jac(t, y, p, J)`` (a numba function; ``ck.jac_c`` its C callback of signature
-    ``JAC_SIGNATURE``) writes ``J[i, j] = d rhs_i / d y_j`` for ``J`` a C-contiguous
+    ``ck.jac(t, y, p, J)`` (``ck.jac_fp`` its C callback, signature ``JAC_SIGNATURE``)
+    writes ``J[i, j] = d rhs_i / d y_j`` for ``J`` a C-contiguous
     ``(n_state, n_state)`` float64 array.  Cached on disk beside the scene's kernels
     (the key has ``jacobian`` in it)."""
     from . import cache as _cache
@@ -743,23 +757,6 @@ def jacobian_kernels(scene):
     return _cache.load(key, lambda: generate(
         scene.system, scene.principle, compiled, scene.runtime_params, scene.integrals,
         scene.form, scene.convention, key=key, jacobian=True), persistent=scene.cache)
-
-
-_RHS_CFUNC = '''
-@numba.cfunc(_SIG, cache=True, error_model="numpy")
-def rhs_c(t, y, p, out):
-    """rhs as a C callback: what the integrators receive (passing a cfunc costs ~20 us per
-    call from Python, passing the dispatcher ~300 us)."""
-    rhs(t, y, p, out)
-'''
-
-_AUX_ROWS = '''
-@numba.njit("void(float64[::1], float64[:, ::1], float64[::1], float64[:, ::1])", **_JIT)
-def aux_rows(ts, ys, p, out):
-    """aux at every row of ys."""
-    for i in range(ts.shape[0]):
-        aux(ts[i], ys[i], p, out[i])
-'''
 
 
 class _Preparer:
@@ -860,10 +857,10 @@ def singular_indicators(system, accelerations, numbers) -> list[tuple[str, sp.Ex
         if any(not e.is_number for e in A):
             det = A[0, 0] if k == 1 else A.det(method="berkowitz")
             found.append(("split", system.on_constraints(det)))
-    for v in system.dependent_velocities:
-        found += [("constraint", b) for b in _singular_bases(system.phi[v])]
-    for e in accelerations:
-        found += [("acceleration", b) for b in _singular_bases(e)]
+    # one walk over each shared graph (one per expression would revisit the shared parts)
+    phi = [system.phi[v] for v in system.dependent_velocities]
+    found += [("constraint", b) for b in _singular_bases(sp.Tuple(*phi))]
+    found += [("acceleration", b) for b in _singular_bases(sp.Tuple(*accelerations))]
     # one substitution for all: equal parts stay one object (no tree comparisons below)
     bases = dag.xreplace([b for _, b in found], sub)
     out, seen = [], set()
