@@ -201,3 +201,28 @@ def test_completing_puts_the_pivot_points_on_a_manifold():
     assert all(d != M[0, 0] for d in bound)
     got = values(X, {x: sp.Rational(1, 2), v: sp.Rational(1, 4)})
     assert all(abs(g) < 1e3 for g in got)
+
+
+@pytest.mark.parametrize("k", [12, 24])
+def test_lu_keeps_a_triangular_block_sparse(k):
+    """A lower-triangular block with a full first column (the N-trailer's split): the
+    sparsest acceptable row is the pivot (Markowitz), so the solve has no fill-in -- its
+    size grows like k^2, not k^3 -- and divides by the diagonal alone (the factors of
+    det M), never by an entry of the first column (a singularity M does not have)."""
+    xs = sp.symbols(f"x0:{k}")
+    M = sp.zeros(k, k)
+    for i in range(k):
+        M[i, 0] = sp.cos(xs[i])
+        for j in range(1, i + 1):
+            M[i, j] = 2 + sp.sin(xs[i]) if i == j else xs[i] * xs[j] / 3
+    rhs = sp.Matrix([sp.sin(x) + 1 for x in xs])
+    with linalg.divisors() as divs:
+        X = linalg.solve(M, rhs)
+    assert divs == [M[i, i] for i in range(k)]
+    assert dag.size(list(X)) < 4 * k * k
+    pt = {x: sp.Rational(3 + i % 5, 7) for i, x in enumerate(xs)}
+    Mn = mpmath.matrix([[complex(v).real for v in values(M.row(i), pt)] for i in range(k)])
+    ref = mpmath.lu_solve(Mn, mpmath.matrix([complex(v).real for v in values(rhs, pt)]))
+    got = values(X, pt)
+    assert max(abs(got[i] - complex(ref[i])) for i in range(k)) < 1e-12 * (
+        1 + max(abs(complex(ref[i])) for i in range(k)))

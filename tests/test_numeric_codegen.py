@@ -340,3 +340,42 @@ def test_printed_jacobian_for_heads_the_program_lacks():
             for j, s in enumerate((x, y)):
                 ref = float(sp.diff(e, s).subs(point).evalf(30))
                 assert J[i, j] == pytest.approx(ref, rel=1e-13, abs=1e-14), (i, j)
+
+
+def test_kernels_are_compiled_once_and_called_from_python_through_their_callbacks():
+    """The module holds the C callbacks alone (one compilation of each body); from Python
+    ``rhs``/``aux``/``sing``/``aux_rows`` call them, and refuse arrays the kernels would
+    read or write out of bounds."""
+    s = disk_system()
+    ini = dict(x=0.0, y=0.0, phi=0.3, psi=0.2, phi_t=1.0, psi_t=0.5)
+    sc = Scene(s, "chetaev", params=PARAMS, initial=ini, cache=False)
+    ck = sc.kernels
+    assert not any(hasattr(ck.kernels, name) for name in ("rhs", "aux", "sing", "aux_rows"))
+    lay = ck.layout
+    n, p = lay.n_state, np.empty(0)
+    ys = np.ascontiguousarray(sc.y0 + np.outer(np.linspace(0, 1, 4), np.ones(n)))
+    ts = np.linspace(0.0, 0.3, 4)
+    rows = np.zeros((4, lay.n_aux))
+    ck.aux_rows(ts, ys, p, rows)
+    for i in range(4):
+        one = np.zeros(lay.n_aux)
+        ck.aux(ts[i], ys[i], p, one)
+        assert np.array_equal(one, rows[i])
+    f = np.zeros(n)
+    ck.rhs(0.1, ys[1], p, f)
+    phi, rhs = codegen.kernel_expressions(s, "chetaev", PARAMS)   # the second route
+    point = {sp.Symbol(f"s{i}"): v for i, v in enumerate(ys[1])}
+    point[sp.Symbol("t")] = 0.1
+    point.update({sp.Symbol(f"v{a}"): float(e.xreplace(point)) for a, e in enumerate(phi)})
+    assert np.allclose(f, [float(e.xreplace(point)) for e in rhs], rtol=1e-12, atol=1e-14)
+    g = np.zeros(len(lay.indicators))
+    ck.sing(0.1, ys[1], p, g)
+    assert np.all(np.isfinite(g))
+    with pytest.raises(TypeError, match="C-contiguous float64"):
+        ck.rhs(0.1, ys[:, 0], p, f)                      # a strided column
+    with pytest.raises(TypeError, match="C-contiguous float64"):
+        ck.rhs(0.1, ys[1].astype(np.float32), p, f)
+    with pytest.raises(ValueError, match="needs"):
+        ck.rhs(0.1, ys[1], p, np.zeros(n - 1))         # out too short
+    with pytest.raises(ValueError, match="rows"):
+        ck.aux_rows(ts, ys[:3], p, rows)
