@@ -91,7 +91,7 @@ import warnings
 from pathlib import Path
 
 from ..errors import KernelCacheWarning
-from .codegen import CODEGEN_VERSION, Layout
+from .layout import CODEGEN_VERSION, Layout
 
 _LOADED: dict[tuple[str, bool], "CompiledKernels"] = {}
 _TEMP_ROOT: Path | None = None

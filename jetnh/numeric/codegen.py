@@ -54,7 +54,6 @@ from __future__ import annotations
 
 import functools
 import hashlib
-import json
 import pathlib
 from dataclasses import dataclass, field
 
@@ -66,8 +65,8 @@ from sympy.printing.pycode import PythonCodePrinter
 from .. import dag, singular
 from ..accelerations import _cached_parts
 from ..errors import JetnhError, PrincipleError
+from .layout import CODEGEN_VERSION, Layout
 
-CODEGEN_VERSION = "9"
 #: the numba signature of ``jac`` and ``jac_c`` (t, y, p, J)
 JAC_SIGNATURE = "void(float64, float64[::1], float64[::1], float64[:, ::1])"
 
@@ -403,47 +402,6 @@ class Emitter:
 
 
 # ---------------------------------------------------------------------- layout
-@dataclass(frozen=True)
-class Layout:
-    """Names and positions of everything a kernel reads or writes."""
-
-    coordinates: tuple[str, ...]
-    velocities: tuple[str, ...]            # independent velocities (states)
-    multipliers: tuple[str, ...]           # multiplier states
-    dependent_velocities: tuple[str, ...]  # computed by aux
-    constraints: int                       # number of residuals in aux
-    integrals: tuple[str, ...]             # user first integrals in aux
-    runtime_params: tuple[str, ...]
-    coordinate_velocities: tuple[str, ...] = ()  # velocity name of each coordinate
-    indicators: tuple[str, ...] = ()           # singularity indicators (sing kernel)
-    indicator_kinds: tuple[str, ...] = ()      # "split" | "constraint" | "acceleration"
-    power: bool = False                        # aux ends with the power of the forces
-
-    @property
-    def states(self) -> tuple[str, ...]:
-        return self.coordinates + self.velocities + self.multipliers
-
-    @property
-    def n_state(self) -> int:
-        return len(self.states)
-
-    @property
-    def n_aux(self) -> int:
-        return 2 * len(self.dependent_velocities) + 1 + len(self.integrals) + self.power
-
-    @property
-    def energy_index(self) -> int:
-        return 2 * len(self.dependent_velocities)
-
-    def to_json(self) -> str:
-        return json.dumps(self.__dict__, sort_keys=True)
-
-    @classmethod
-    def from_json(cls, text: str) -> "Layout":
-        d = json.loads(text)
-        return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in d.items()})
-
-
 @dataclass
 class KernelSource:
     """Generated source text and its layout."""
