@@ -434,3 +434,60 @@ def test_info_names_why_the_fallback_is_used(fresh, tmp_path, monkeypatch):
     os.chmod(shared, 0o777)
     monkeypatch.setenv("JETNH_CACHE", str(shared))
     assert "writable by group or others" in cache.info()["fallback"]
+
+
+# ---------------------------------------------------------------------- numba's own cache
+NUMBA_DIR = r"""
+import json, sys, warnings
+sys.path.insert(0, sys.argv[1])
+import sympy as sp, jetnh as jn
+from jetnh.numeric import Scene
+J = jn.JetSpace("x")
+(x,), (xd,) = J.q, J.qd
+k = sp.Symbol("k")
+s = jn.System(J, xd**2 / 2 - k * x**2 / 2, [])
+with warnings.catch_warnings(record=True) as w:
+    warnings.simplefilter("always")
+    sc = Scene(s, "chetaev", params={k: 2.5}, initial=dict(x=1.0, x_t=0.0), t_span=(0, 1))
+    ck = sc.kernels
+    x1 = float(sc.run(save="final")["x"][-1])
+print(json.dumps(dict(hit=ck.hit, code_hits=ck.rhs_c.cache_hits, x1=x1,
+                      warned=[str(m.message) for m in w
+                              if m.category.__name__ == "KernelCacheWarning"])))
+"""
+
+
+@pytest.mark.parametrize("redirect", [False, True])
+def test_numba_reads_kernel_machine_code_only_from_the_checked_entry(tmp_path, redirect):
+    """By default numba caches a kernel module beside it, in its entry (which the manifest
+    covers): a second process loads that machine code.  With NUMBA_CACHE_DIR set, numba
+    would read it from where jetnh checks nothing: the kernels are compiled in each
+    process instead, nothing of theirs is written there, and a warning says so."""
+    elsewhere = tmp_path / "numba"
+    env = dict(os.environ, JETNH_CACHE=str(tmp_path / "cache"))
+    env.pop("NUMBA_CACHE_DIR", None)
+    env.pop("NUMBA_CACHE_LOCATOR_CLASSES", None)
+    if redirect:
+        env["NUMBA_CACHE_DIR"] = str(elsewhere)
+
+    def run():
+        out = subprocess.run([sys.executable, "-c", NUMBA_DIR, str(REPO)], env=env,
+                             capture_output=True, text=True, timeout=600)
+        assert out.returncode == 0, out.stderr[-3000:]
+        return json.loads(out.stdout.strip().splitlines()[-1])
+
+    cold, warm = run(), run()
+    assert not cold["hit"] and warm["hit"]               # derivation and code: cached
+    assert abs(warm["x1"] - math.cos(math.sqrt(2.5))) < 1e-6 and warm["x1"] == cold["x1"]
+    entry = next((tmp_path / "cache").glob("v*/k*"))
+    pycache = sorted(p.name for p in (entry / "__pycache__").iterdir())
+    listed = json.loads((entry / "manifest.json").read_text())["body"]["files"]
+    assert all(f"__pycache__/{name}" in listed for name in pycache)
+    if redirect:
+        assert warm["code_hits"] == 0 and warm["warned"] and cold["warned"]
+        assert "NUMBA_CACHE_DIR" in warm["warned"][0]
+        assert not pycache                                # nothing cached at all
+        assert not any("kernels" in p.name for p in elsewhere.rglob("*"))
+    else:
+        assert warm["code_hits"] >= 1 and not warm["warned"]
+        assert any(name.endswith(".nbc") for name in pycache)

@@ -45,10 +45,14 @@ the entry's key and the sha256 of each of its files, including numba's files in
 once, atomically, from ``secrets``).  Before using an entry, jetnh checks the MAC, that
 the entry holds exactly the files the manifest lists, and each file's hash.  ``kernels.py``
 is then compiled from the very bytes that were hashed (the import system, and so any
-``.pyc``, is not used); numba reads its cache of the entry only from that entry's
-``__pycache__``, which has just been checked (jetnh points numba's cache locator there, so
-``NUMBA_CACHE_DIR`` does not apply to kernels).  If numba adds machine code to an entry
-(e.g. for another CPU), jetnh signs the new list after loading.
+``.pyc``, is not used), as the file they came from: numba's default cache locator keeps
+the machine code of a module in ``<its directory>/__pycache__``, so the only machine code
+numba may read for kernels is the entry's, which has just been checked.  The entry's key
+carries what the kernels depend on (the symbolic input, the sources of the derivation and
+of the code generator, the versions of sympy and numba).  When ``NUMBA_CACHE_DIR`` or
+``NUMBA_CACHE_LOCATOR_CLASSES`` send numba's cache elsewhere, kernels are compiled in
+every process instead (a ``KernelCacheWarning`` says so).  If numba adds machine code to
+an entry (e.g. for another CPU), jetnh signs the new list after loading.
 
 Repair
 ------
@@ -96,11 +100,9 @@ from .layout import CODEGEN_VERSION, Layout
 _LOADED: dict[tuple[str, bool], "CompiledKernels"] = {}
 _TEMP_ROOT: Path | None = None
 _LOCK = threading.Lock()            # guards _LOADED and _KEY_LOCKS
-_EXEC_LOCK = threading.RLock()      # one kernel module compiled at a time (numba settings)
+_EXEC_LOCK = threading.RLock()      # one kernel module compiled at a time
 _KEY_LOCKS: dict[tuple[str, bool], threading.Lock] = {}
 _WARNED: set[str] = set()
-#: directories whose kernels.py numba caches in <dir>/__pycache__ -> sha256 of the source
-_CONFINED: dict[str, bytes] = {}
 
 MANIFEST = "manifest.json"
 KEY_FILE = "hmac.key"
@@ -451,6 +453,10 @@ def _seal(directory: Path, key: str, secret: bytes, sources: dict[str, str] | No
     """Write the signed manifest of ``directory``: every file, numba's included (made
     0600 first: numba creates them with the umask).  With ``sources`` (name -> sha256),
     only if the sources are still those."""
+    pycache = directory / PYCACHE       # numba makes it with the umask if it was gone
+    st = os.lstat(pycache) if os.path.isdir(pycache) else None
+    if st is not None and st.st_uid == _uid() and st.st_mode & 0o077:
+        os.chmod(pycache, 0o700)
     files = {}
     for rel, path in sorted(_listing(directory).items()):
         st = os.lstat(path)
@@ -521,50 +527,15 @@ def _changed(directory: Path, stamps: dict) -> bool:
 
 
 # ---------------------------------------------------------------------- numba's cache
-def _install_locator() -> bool:
-    """Make numba cache the functions of a kernel module in ``<its directory>/__pycache__``
-    and nowhere else (not ``NUMBA_CACHE_DIR``, not a user-wide directory), so that the only
-    machine code numba may read for kernels is the code the manifest has just checked.
-    The freshness stamp is the sha256 of the verified source (not re-read from disk).
-    Uses numba's (private) locator list; ``False`` if that is not there."""
-    try:
-        from numba.core import caching
-        classes = caching.CacheImpl._locator_classes
-        base = caching._CacheLocator
-    except (ImportError, AttributeError):
-        return False
-    if any(getattr(c, "_jetnh_kernels", False) for c in classes):
-        return True
+def _numba_caches_in_tree() -> bool:
+    """Whether numba caches the functions of a module in ``<its directory>/__pycache__``
+    (its default, ``numba.core.caching.InTreeCacheLocator``, for a writable directory):
+    then the only machine code numba may read for kernels is the entry's, which the
+    manifest has just checked.  ``NUMBA_CACHE_DIR`` or ``NUMBA_CACHE_LOCATOR_CLASSES``
+    send it elsewhere, where jetnh checks nothing."""
+    from numba.core import config
 
-    class KernelCacheLocator(base):
-        _jetnh_kernels = True
-
-        def __init__(self, py_func, py_file, stamp):
-            self._py_file = py_file
-            self._lineno = py_func.__code__.co_firstlineno
-            self._stamp = stamp
-            self._cache_path = os.path.join(os.path.dirname(py_file), PYCACHE)
-
-        @classmethod
-        def from_function(cls, py_func, py_file):
-            stamp = _CONFINED.get(os.path.dirname(os.path.abspath(py_file)))
-            return None if stamp is None else cls(py_func, py_file, stamp)
-
-        def ensure_cache_path(self):
-            # made again (privately) if the cache was deleted while compiling
-            _makedirs_private(self._cache_path)
-
-        def get_cache_path(self):
-            return self._cache_path
-
-        def get_source_stamp(self):
-            return self._stamp
-
-        def get_disambiguator(self):
-            return str(self._lineno)
-
-    classes.insert(0, KernelCacheLocator)
-    return True
+    return not (getattr(config, "CACHE_DIR", "") or getattr(config, "CACHE_LOCATOR_CLASSES", ""))
 
 
 def _forget(package: str):
@@ -573,20 +544,26 @@ def _forget(package: str):
 
 
 def _exec_kernels(package: str, directory: Path, source: bytes):
-    """The module ``<package>.kernels`` compiled from ``source`` (bytes already checked),
-    with numba's cache confined to ``<directory>/__pycache__``.  The module of the same
-    source already in this process is reused."""
+    """The module ``<package>.kernels`` compiled from ``source`` (bytes already checked)
+    as ``<directory>/kernels.py``, the file those bytes came from (numba's default
+    locator caches next to it: in the entry).  If numba's cache is sent elsewhere
+    (``_numba_caches_in_tree``), the kernels are compiled without it (``JETNH_NUMBA_CACHE``
+    in the module's globals, read by the generated header), with a warning.  The module
+    of the same source already in this process is reused."""
     digest = hashlib.sha256(source).digest()
     name = f"{package}.kernels"
     old = sys.modules.get(name)
     if old is not None and getattr(old, "__jetnh_sha256__", None) == digest:
         return old
-    if not _install_locator():
-        # numba's locator cannot be set: compile where no stored machine code can be
-        # (a fresh private directory), so numba reads nothing from disk
-        fresh = Path(tempfile.mkdtemp(prefix="jetnh-kernel-", dir=_temp_root()))
-        _write_private(fresh / "kernels.py", source)
-        directory = fresh
+    in_tree = _numba_caches_in_tree()
+    if not in_tree and "numba" not in _WARNED:
+        _WARNED.add("numba")
+        warnings.warn(
+            "jetnh: NUMBA_CACHE_DIR (or NUMBA_CACHE_LOCATOR_CLASSES) is set, so numba would "
+            "keep the machine code of jetnh's kernels where jetnh cannot check it; the "
+            "kernels are compiled anew in each process (their derivation and code are still "
+            "cached). Unset it to load compiled kernels from jetnh's cache.",
+            KernelCacheWarning, stacklevel=4)
     pkg = types.ModuleType(package, "jetnh generated kernel package")
     pkg.__path__ = [str(directory)]
     pkg.__file__ = str(directory / "__init__.py")
@@ -595,44 +572,23 @@ def _exec_kernels(package: str, directory: Path, source: bytes):
     mod.__file__ = str(directory / "kernels.py")
     mod.__package__ = package
     mod.__jetnh_sha256__ = digest
+    mod.JETNH_NUMBA_CACHE = in_tree
     code = compile(source, mod.__file__, "exec", dont_inherit=True)
-    try:
-        from numba.core import config as numba_config
-    except ImportError:  # pragma: no cover - numba is a dependency
-        numba_config = None
     with _EXEC_LOCK:
-        saved = getattr(numba_config, "CACHE_LOCATOR_CLASSES", None)
-        _CONFINED[os.path.abspath(directory)] = digest
         sys.modules[package] = pkg
         sys.modules[name] = mod
         try:
-            if saved:               # NUMBA_CACHE_LOCATOR_CLASSES would bypass ours
-                numba_config.CACHE_LOCATOR_CLASSES = ""
             exec(code, mod.__dict__)  # noqa: S102 - bytes checked against the manifest
         except BaseException:
             _forget(package)
             raise
-        finally:
-            if saved:
-                numba_config.CACHE_LOCATOR_CLASSES = saved
-    _no_later_disk_cache(mod)
+    for value in list(vars(mod).values()):
+        if hasattr(value, "disable_compile"):
+            # compiled when the module ran (explicit signatures), and cached then, in the
+            # directory that is then sealed: nothing compiles (nor writes) later
+            value.disable_compile()
     pkg.kernels = mod
     return mod
-
-
-def _no_later_disk_cache(mod):
-    """The kernels compile when their module runs (explicit signatures), and that is when
-    numba caches them, in the directory that is then sealed.  A function compiled later
-    (lazily, or for new types) is kept in memory only: it would write files the manifest
-    does not list, or into a staging directory already renamed."""
-    try:
-        from numba.core.caching import NullCache
-        from numba.core.dispatcher import Dispatcher
-    except ImportError:  # pragma: no cover - numba internals moved: nothing to do
-        return
-    for value in list(vars(mod).values()):
-        if isinstance(value, Dispatcher):
-            value._cache = NullCache()
 
 
 # ---------------------------------------------------------------------- kernels
@@ -815,7 +771,13 @@ def _build(ks, key: str, package: str, persistent: bool, root: Path, secret: byt
         except (OSError, _Untrusted):
             if tmp is not None:
                 shutil.rmtree(tmp, ignore_errors=True)
-        except BaseException:       # the source does not compile: not the cache's doing
+        except Exception:
+            if tmp is not None and not (tmp / "kernels.py").exists():
+                continue            # removed while numba compiled (it caches beside it)
+            if tmp is not None:     # the source does not compile: not the cache's doing
+                shutil.rmtree(tmp, ignore_errors=True)
+            raise
+        except BaseException:
             if tmp is not None:
                 shutil.rmtree(tmp, ignore_errors=True)
             raise

@@ -80,8 +80,10 @@ import numpy as np
 
 from jetnh.numeric.codegen import straight_line
 
-_JIT = dict(cache=True, error_model="numpy", nogil=True)
-_CB = dict(cache=True, error_model="numpy")
+# numba caches beside this file unless the loader says not to (jetnh.numeric.cache)
+_CACHE = globals().get("JETNH_NUMBA_CACHE", True)
+_JIT = dict(cache=_CACHE, error_model="numpy", nogil=True)
+_CB = dict(cache=_CACHE, error_model="numpy")
 _SIG = "void(float64, float64[::1], float64[::1], float64[::1])"
 _JAC_SIG = "{jac_sig}"
 
@@ -673,7 +675,7 @@ def _jacobian_function(layout: Layout, phi_exprs, rhs_exprs) -> str:
 def _cfunc(name, sig="_SIG") -> str:
     """``<name>_c``: the kernel ``name`` as a C callback (a first-class function for the
     compiled integrators)."""
-    return (f'\n@numba.cfunc({sig}, cache=True, error_model="numpy")\n'
+    return (f'\n@numba.cfunc({sig}, **_CB)\n'
             f"def {name}_c(t, y, p, out):\n    {name}(t, y, p, out)\n")
 
 
@@ -860,7 +862,8 @@ import math
 import numba
 import numpy as np
 
-_JIT = dict(cache=True, error_model="numpy", nogil=True)
+# numba caches beside this file unless the loader says not to (jetnh.numeric.cache)
+_JIT = dict(cache=globals().get("JETNH_NUMBA_CACHE", True), error_model="numpy", nogil=True)
 
 '''
 
