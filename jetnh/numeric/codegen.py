@@ -403,7 +403,7 @@ class Emitter:
         return out
 
 
-# ---------------------------------------------------------------------- layout
+# ---------------------------------------------------------------------- source
 @dataclass
 class KernelSource:
     """Generated source text and its layout."""
@@ -422,8 +422,8 @@ def _derivation_source_hash() -> str:
     root = pathlib.Path(__file__).resolve().parents[1]
     h = hashlib.sha256()
     for name in ("jet.py", "linalg.py", "dag.py", "constraints.py", "variations.py",
-                 "equations.py", "accelerations.py", "numeric/codegen.py", "numeric/events.py",
-                 "singular.py"):
+                 "equations.py", "accelerations.py", "numeric/codegen.py", "numeric/layout.py",
+                 "numeric/events.py", "singular.py"):
         path = root / name
         if path.exists():
             h.update(path.read_bytes())
