@@ -263,6 +263,11 @@ def summarize(rows) -> list[str]:
                 f"matrix is dense: O(N^2) entries); against the shared size s, generate ~ "
                 f"s^{vs_size('generate'):.2f}, compile ~ s^{vs_size('compile'):.2f}, "
                 f"kernel characters ~ s^{vs_size('kernel_chars'):.2f}.")
+    runs = [f"N = {r['N']} {p} " + "/".join(f"{x:.2f}" for x in r[p]["totals"])
+            + f" (load {r[p]['loadavg'][0]:.1f})"
+            for r in rows for p in PRINCIPLES if "totals" in r.get(p, {})]
+    if runs:
+        out.append("Every run, seconds: " + "; ".join(runs) + ".")
     for r in rows:
         if r["N"] in (16, 32, 64):
             figs = ", ".join(f"{p} {fmt(r.get(p))} s" for p in PRINCIPLES)
