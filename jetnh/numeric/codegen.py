@@ -470,8 +470,7 @@ def multiplier_names(system, principle) -> tuple[str, ...]:
 
 
 def generate(system, principle, params: dict, runtime_params=(), integrals=None,
-             form=None, convention="paper", key="", cache=True,
-             jacobian=False) -> KernelSource:
+             form=None, convention="paper", key="", jacobian=False) -> KernelSource:
     """Derive the equations of ``principle`` and write the kernels' source.
 
     ``params``: parameter name -> float, compiled in as constants.
