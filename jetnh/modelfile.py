@@ -1111,8 +1111,10 @@ def _from_dict(data: dict, source: str) -> Model:
         _expect(f"{S}: 'principle'", principle, "string")
         try:
             principle = principles.canonical(principle)
-        except PrincipleError as exc:
-            raise ModelFileError(f"{S}: 'principle': {exc}") from None
+        except PrincipleError:
+            raise ModelFileError(
+                f"{S}: 'principle' must be one of {', '.join(principles.PRINCIPLES)} (or an "
+                f"alias, jetnh.principles); got {_shorten(principle)!r}") from None
     convention = data.get("convention")
     if convention is not None:
         _expect(f"{S}: 'convention'", convention, "string")

@@ -17,8 +17,8 @@ A = int (L + lambda_a f^a) dt of Zhao et al. (2008), and what they carry:
 
 The principles (section 3 of the paper):
 
-- **chetaev** (Lagrange-d'Alembert; aliases "lagrange_dalembert", "lagrange-d'alembert",
-  "dalembert", "nonholonomic"): Hoelder's variation (7), c = [d, delta] q = 0 with
+- **chetaev** (Lagrange-d'Alembert; aliases "lagrange_dalembert", "dalembert",
+  "nonholonomic"): Hoelder's variation (7), c = [d, delta] q = 0 with
   Chetaev's condition df^a/dqdot^s eta^s = 0, applied to L alone.  delta int L dt =
   int ([L]_s + Q_s) eta^s dt vanishes for every admissible eta, so eta is restricted
   first: P^T ([L] + Q) = 0 (Maggi), or [L]_s + Q_s + nu_a df^a/dqdot^s = 0 with reactions
@@ -34,8 +34,10 @@ The principles (section 3 of the paper):
   (30), (31), affine (38); imposed, (30b) alone.  Its multipliers follow the motion
   without acting on it (kappa = -A_dep^-T p_dep).
 
-``get(name_or_principle)`` returns the registered value; the public surface keeps taking
-the canonical strings ``PRINCIPLES`` (and every alias) and reports canonical names.
+``get(name_or_principle)`` returns the registered value; case, hyphens, dashes, spaces
+and apostrophes do not matter in a name ("Lagrange-d'Alembert" is "lagrange_dalembert").
+The public surface keeps taking the canonical strings ``PRINCIPLES`` (and every alias)
+and reports canonical names.
 """
 
 from __future__ import annotations
@@ -140,7 +142,7 @@ _PROJECTED = (Form("multiplier", "(15)"), Form("explicit", "(17)", explicit=True
 
 CHETAEV = Principle(
     "chetaev", "Chetaev (Lagrange-d'Alembert)",
-    ("lagrange_dalembert", "lagrange-d'alembert", "dalembert", "nonholonomic"),
+    ("lagrange_dalembert", "dalembert", "nonholonomic"),
     variation="holder", restricted=CONVENTIONS,
     forms=(Form("maggi"), Form("multiplier"), Form("voronets", explicit=True)),
     reactions="nu", discrete="dla")
