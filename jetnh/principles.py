@@ -7,13 +7,15 @@ A = int (L + lambda_a f^a) dt of Zhao et al. (2008), and what they carry:
 - ``restricted``: the conventions in which eta is restricted to the Chetaev subspace
   ker(df/dqdot) (eta^alpha = Phi^alpha_mu eta^mu) before the coefficients of the eta's
   are taken; otherwise every eta^s counts as independent (the paper's convention);
+  ``restricted_label``: the paper's label of the restricted equations;
 - ``forms``: its forms of the equations, with the paper's equation labels;
 - ``multipliers``/``reactions``: the prefixes of its multipliers, named after the
   dependent coordinates (lambda_x: states of the motion; nu_x: the algebraic reactions of
   Chetaev's multiplier form); a principle without multipliers varies L alone;
 - ``kappa``: how the multipliers weigh the constraint Hessians in the acceleration rows
   (``jetnh.accelerations``);
-- ``discrete``: its structure-preserving discrete integrator, where there is one.
+- ``discrete``: its structure-preserving discrete integrator, where there is one, for its
+  equations in the ``discrete_conventions``.
 
 The principles (section 3 of the paper):
 
@@ -84,7 +86,6 @@ class Principle:
     """One principle (see the module docstring); compare and hash by value."""
 
     name: str
-    title: str
     aliases: tuple[str, ...]
     variation: str
     restricted: tuple[str, ...]
@@ -135,26 +136,30 @@ class Principle:
     def __str__(self):
         return self.name
 
+    def __repr__(self):
+        forms = ", ".join(f.name for f in self.forms)
+        return (f"<Principle {self.name}: {self.variation} variation, forms {forms}"
+                + (f", discrete {self.discrete}" if self.discrete else "") + ">")
+
 
 _PROJECTED = (Form("multiplier", "(15)"), Form("explicit", "(17)", explicit=True),
               Form("reduced", "(18)", "(36)", explicit=True),
               Form("embedded", "(20)", "(37)", explicit=True))
 
 CHETAEV = Principle(
-    "chetaev", "Chetaev (Lagrange-d'Alembert)",
-    ("lagrange_dalembert", "dalembert", "nonholonomic"),
+    "chetaev", ("lagrange_dalembert", "dalembert", "nonholonomic"),
     variation="holder", restricted=CONVENTIONS,
     forms=(Form("maggi"), Form("multiplier"), Form("voronets", explicit=True)),
     reactions="nu", discrete="dla")
 VAKONOMIC = Principle(
-    "vakonomic", "vakonomic", ("variational",), variation="vakonomic", restricted=(),
+    "vakonomic", ("variational",), variation="vakonomic", restricted=(),
     forms=_PROJECTED, multipliers="lambda", kappa="multipliers", discrete="dvi")
 HOLDER = Principle(
-    "holder", "Hoelder", ("hoelder", "hölder"), variation="holder", restricted=("imposed",),
+    "holder", ("hoelder", "hölder"), variation="holder", restricted=("imposed",),
     forms=(Form("multiplier", "(22)"), *_PROJECTED[1:]), multipliers="lambda",
     kappa="multipliers", discrete="dvi", discrete_conventions=("paper",))
 SUSLOV = Principle(
-    "suslov", "Suslov", (), variation="suslov", restricted=("imposed",),
+    "suslov", (), variation="suslov", restricted=("imposed",),
     forms=(Form("multiplier", "(29)", explicit=True),
            Form("reduced", "(30)", "(38)", explicit=True),
            Form("embedded", "(31)", "(38)", explicit=True)),

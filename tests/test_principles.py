@@ -87,6 +87,8 @@ def test_principles_are_immutable_values():
         p.name = "other"
     assert p == dataclasses.replace(p) and hash(p) == hash(dataclasses.replace(p))
     assert str(p) == "chetaev"
+    assert repr(p) == ("<Principle chetaev: holder variation, forms maggi, multiplier, "
+                       "voronets, discrete dla>")
 
 
 # ---------------------------------------------------------------------- entries
