@@ -1,14 +1,16 @@
 """jetnh: nonholonomic constrained mechanics on jet bundles.
 
 The public contract: ``JetSpace``, ``System``, ``System.equations``,
-``Equations.accelerations``, ``Scene`` and its ``Trajectory``; ``compare`` decides when two
-principles share solutions; ``sweep`` runs a scene over a grid of parameters and initial
-values (here or on Dask); ``from_mechanics`` reads a sympy.physics.mechanics
-``LagrangesMethod``; ``conserved_quantities``, ``noether_symmetries``, ``lie_symmetries``
-and ``is_noether`` find and prove first integrals and symmetries under each principle.
+``Equations.accelerations``, ``Scene`` and its ``Trajectory``; ``PRINCIPLES`` names the
+four principles (``Principle`` values and aliases: ``jetnh.principles``); ``compare``
+decides when two principles share solutions; ``sweep`` runs a scene over a grid of
+parameters and initial values (here or on Dask); ``from_mechanics`` reads a
+sympy.physics.mechanics ``LagrangesMethod``; ``conserved_quantities``,
+``noether_symmetries``, ``lie_symmetries`` and ``is_noether`` find and prove first
+integrals and symmetries under each principle.
 """
 
-from .constraints import PRINCIPLES, System
+from .constraints import System
 from .equations import Equations
 from .equivalence import compare
 from .errors import (ArgumentError, ConstraintError, IntegrationError, JetnhError,
@@ -17,6 +19,7 @@ from .errors import (ArgumentError, ConstraintError, IntegrationError, JetnhErro
 from .integrals import conserved_quantities
 from .jet import JetSpace
 from .mechanics import from_mechanics
+from .principles import PRINCIPLES, Principle
 from .symmetries import (LieSymmetry, NoetherSymmetry, is_noether, lie_symmetries,
                          noether_symmetries)
 # bound here, not in __getattr__: a later `import jetnh.sweep` would rebind the name to the
@@ -25,7 +28,7 @@ from .sweep import sweep
 
 __version__ = "0.1.0"
 
-__all__ = ["JetSpace", "System", "Equations", "PRINCIPLES", "compare", "conserved_quantities",
+__all__ = ["JetSpace", "System", "Equations", "PRINCIPLES", "Principle", "compare", "conserved_quantities",
            "noether_symmetries", "lie_symmetries", "is_noether", "NoetherSymmetry",
            "LieSymmetry", "Scene", "Trajectory",
            "Diagnostics", "Event", "Ensemble", "sweep", "from_mechanics", "JetnhError",

@@ -22,8 +22,9 @@ from pathlib import Path
 
 import sympy as sp
 
-from .constraints import PRINCIPLES
-from .errors import ArgumentError, JetnhError, ModelFileError
+from . import principles
+from .errors import ArgumentError, JetnhError, ModelFileError, PrincipleError
+from .principles import PRINCIPLES
 
 EPILOG_MODEL = ("MODEL: a catalogue name (see `jetnh models`; scalable ones take options, "
                 "e.g. n_trailer:N=4) or a model file (TOML, e.g. examples/rolling_disk.toml).")
@@ -867,6 +868,18 @@ class _Formatter(argparse.RawDescriptionHelpFormatter):
     pass
 
 
+_ALIASES = "aliases: " + "; ".join(f"{', '.join(p.aliases)} (= {p.name})"
+                                   for p in principles.REGISTRY if p.aliases)
+
+
+def _principle(name: str) -> str:
+    """--principle: an alias is read as its canonical name (argparse checks the choice)."""
+    try:
+        return principles.canonical(name)
+    except PrincipleError:
+        return name
+
+
 def build_parser() -> argparse.ArgumentParser:
     from . import __version__
 
@@ -920,9 +933,9 @@ def build_parser() -> argparse.ArgumentParser:
         epilog=EPILOG_MODEL + "\n\nexample: jetnh derive appell_hamel --principle suslov "
                               "--format json")
     model_args(d)
-    d.add_argument("--principle", "-p", choices=PRINCIPLES, default=None,
+    d.add_argument("--principle", "-p", choices=PRINCIPLES, type=_principle, default=None,
                    help="chetaev (Lagrange-d'Alembert), vakonomic, holder or suslov "
-                        "(default: the model file's, else chetaev)")
+                        "(default: the model file's, else chetaev); " + _ALIASES)
     d.add_argument("--form", default=None,
                    help="form of the equations: chetaev maggi|multiplier|voronets; "
                         "vakonomic and holder multiplier|explicit|reduced|embedded; suslov "
@@ -958,8 +971,8 @@ def build_parser() -> argparse.ArgumentParser:
         epilog=EPILOG_MODEL + "\n\nexample: jetnh simulate examples/rolling_disk.toml "
                               "--t-end 10 --init psi_t=0.3 --csv disk.csv --plot disk.png")
     model_args(s)
-    s.add_argument("--principle", "-p", choices=PRINCIPLES, default=None,
-                   help="default: the model file's, else chetaev")
+    s.add_argument("--principle", "-p", choices=PRINCIPLES, type=_principle, default=None,
+                   help="default: the model file's, else chetaev; " + _ALIASES)
     s.add_argument("--convention", choices=("paper", "imposed"), default=None)
     s.add_argument("--set", action="append", metavar="NAME=VALUE",
                    help="a parameter value (repeatable, or comma-separated)")
@@ -1010,8 +1023,8 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--grid", action="append", required=True, metavar="NAME=A:B:N",
                    help="an axis: N values from A to B, or NAME=V1,V2,... (repeatable; "
                         "NAME a parameter or a state)")
-    w.add_argument("--principle", "-p", choices=PRINCIPLES, default=None,
-                   help="default: the model file's, else chetaev")
+    w.add_argument("--principle", "-p", choices=PRINCIPLES, type=_principle, default=None,
+                   help="default: the model file's, else chetaev; " + _ALIASES)
     w.add_argument("--convention", choices=("paper", "imposed"), default=None)
     w.add_argument("--set", action="append", metavar="NAME=VALUE",
                    help="a parameter value for every point (repeatable, or comma-separated)")

@@ -24,8 +24,7 @@ from sympy.core.function import AppliedUndef
 from . import inputs, linalg
 from .errors import ConstraintError, JetnhWarning, JetSpaceError, LagrangianError
 from .jet import JetSpace, key_name
-
-PRINCIPLES = ("chetaev", "vakonomic", "holder", "suslov")
+from .principles import NAMED, PRINCIPLES  # noqa: F401 -- PRINCIPLES kept importable here
 
 @dataclass(frozen=True)
 class Classification:
@@ -154,8 +153,7 @@ class System:
         J = self.J
         reserved = {}
         for q in J.q:
-            for prefix, what in (("lambda", "the multiplier"), ("nu", "the reaction"),
-                                 ("eta", "the variation")):
+            for prefix, what in NAMED.items():
                 reserved[f"{prefix}_{q.name}"] = f"{what} of {q.name}"
         lookalike = inputs.velocity_lookalikes(J)
         for p in self.parameters:
@@ -536,11 +534,15 @@ class System:
         return self.dissipation if self.dissipation != 0 else None
 
     # ------------------------------------------------------------------ equations
-    def equations(self, principle: str, form: str | None = None, convention: str = "paper"):
-        """The equations of motion under ``principle`` (see ``jetnh.equations``)."""
-        from .equations import derive
+    #: the derivation behind ``equations``: ``jetnh.equations.derive``, bound when that
+    #: module loads (``import jetnh`` loads it), so that the derivation depends on System
+    #: and System not on it
+    _derive = None
 
-        return derive(self, principle, form=form, convention=convention)
+    def equations(self, principle: str, form: str | None = None, convention: str = "paper"):
+        """The equations of motion under ``principle`` (a name, an alias or a
+        ``jetnh.principles.Principle``) in ``form`` (see ``jetnh.equations``)."""
+        return self._derive(principle, form=form, convention=convention)
 
     def _repr_html_(self):
         from .display import system_html

@@ -12,7 +12,7 @@ used; with ``convention="imposed"`` the variation's Chetaev condition restricts 
 eta^alpha = Phi^alpha_mu eta^mu first.  The coefficients are taken with the Euler
 operator in the eta fields, so no printed formula is used.
 
-Principles and forms (paper equation numbers):
+Principles and forms (paper equation numbers; the registry is ``jetnh.principles``):
 
 - vakonomic: "multiplier" (15), "explicit" (17), "reduced" (18), "embedded" (20);
   affine: (36), (37).  The imposed convention gives the same equations (normal extremals).
@@ -20,8 +20,9 @@ Principles and forms (paper equation numbers):
   P^T([L] + lambda [f]) = 0 with lambda left arbitrary.
 - suslov: "multiplier" (29), "reduced" (30), "embedded" (31); affine (38).  Imposed:
   (30b) alone, without multipliers.
-- chetaev (Lagrange-d'Alembert): "maggi" P^T [L] = 0, "multiplier" [L]_s + nu_a df^a/dqdot^s
-  = 0 with reactions nu, "voronets" on L~.
+- chetaev (Lagrange-d'Alembert): the action of L alone under Hoelder's variation, eta
+  restricted in either convention: "maggi" P^T [L] = 0, "multiplier" [L]_s + nu_a
+  df^a/dqdot^s = 0 with reactions nu, "voronets" on L~.
 
 Generalized forces Q_s (``System(..., forces=..., dissipation=...)``) enter every
 principle through their virtual work: the integrand of (13) gains Q_s eta^s, so every
@@ -37,33 +38,15 @@ from functools import cached_property
 
 import sympy as sp
 
-from . import accelerations, linalg
-from .constraints import PRINCIPLES, System
+from . import accelerations, linalg, principles
+from .constraints import System
 from .errors import JetnhWarning, PrincipleError
+from .principles import CONVENTIONS, Form, Principle
+from .principles import multiplier_symbols  # noqa: F401 -- kept importable from here
 from .variations import Variation, jet_space, make
 
-FORMS = {
-    "vakonomic": ("multiplier", "explicit", "reduced", "embedded"),
-    "holder": ("multiplier", "explicit", "reduced", "embedded"),
-    "suslov": ("multiplier", "reduced", "embedded"),
-    "chetaev": ("maggi", "multiplier", "voronets"),
-}
-CONVENTIONS = ("paper", "imposed")
-_PAPER = {
-    ("vakonomic", "multiplier"): "(15)", ("vakonomic", "explicit"): "(17)",
-    ("vakonomic", "reduced"): "(18)", ("vakonomic", "embedded"): "(20)",
-    ("holder", "multiplier"): "(22)", ("holder", "explicit"): "(17)",
-    ("holder", "reduced"): "(18)", ("holder", "embedded"): "(20)",
-    ("suslov", "multiplier"): "(29)", ("suslov", "reduced"): "(30)",
-    ("suslov", "embedded"): "(31)",
-}
-_PAPER_AFFINE = {"reduced": {"vakonomic": "(36)", "holder": "(36)", "suslov": "(38)"},
-                 "embedded": {"vakonomic": "(37)", "holder": "(37)", "suslov": "(38)"}}
-
-
-def multiplier_symbols(system: System, prefix: str = "lambda") -> tuple[sp.Symbol, ...]:
-    """One multiplier per constraint, named after its dependent coordinate: lambda_x, ..."""
-    return tuple(sp.Symbol(f"{prefix}_{d.name}") for d in system.dependent)
+#: each principle's forms (``jetnh.principles``), by canonical name
+FORMS = {p.name: tuple(f.name for f in p.forms) for p in principles.REGISTRY}
 
 
 # ---------------------------------------------------------------------- (13)
@@ -226,36 +209,29 @@ class Equations:
 
 
 # ---------------------------------------------------------------------- derivation
-def derive(system: System, principle: str, form: str | None = None,
+def derive(system: System, principle: str | Principle, form: str | None = None,
            convention: str = "paper") -> Equations:
-    """The equations of ``principle`` in ``form`` (see the module docstring); the
-    expressions and the accelerations are derived when first asked for."""
-    if principle not in PRINCIPLES:
-        raise PrincipleError(f"unknown principle {principle!r}; choose one of {PRINCIPLES}")
+    """The equations of ``principle`` (a name, an alias or a ``Principle``) in ``form``
+    (see the module docstring); the expressions and the accelerations are derived when
+    first asked for."""
+    p = principles.get(principle)
     if convention not in CONVENTIONS:
         raise PrincipleError(f"unknown convention {convention!r}; choose one of {CONVENTIONS}")
-    forms = FORMS[principle]
-    form = form or forms[0]
-    if form not in forms:
-        raise PrincipleError(f"{principle} has forms {forms}, not {form!r}")
+    f = p.form(form)
     if system.k == 0:
-        return _unconstrained(system, principle)
-    if principle == "chetaev":
-        return _chetaev(system, form, convention)
-    if principle in ("vakonomic", "holder"):
-        return _vakonomic(system, principle, form, convention)
-    return _suslov(system, form, convention)
+        return _unconstrained(system, p)
+    if not p.has_multipliers:
+        return _chetaev(system, p, f, convention)
+    if p.restricts(convention):
+        return _restricted(system, p, f, convention)
+    return _composite(system, p, f, convention)
 
 
-def _label(system, principle, form):
-    label = _PAPER.get((principle, form), "")
-    if system.is_affine and form in _PAPER_AFFINE and principle in _PAPER_AFFINE[form]:
-        label += " " + _PAPER_AFFINE[form][principle]
-    return label
+System._derive = derive     # System.equations' late-binding point (see System.equations)
 
 
-def _unconstrained(system, principle):
-    return Equations(system, principle, "euler-lagrange", "paper",
+def _unconstrained(system, p):
+    return Equations(system, p.name, "euler-lagrange", "paper",
                      lambda: tuple(e + Q for e, Q in zip(system.J.euler(system.L), system.Q)),
                      paper="",
                      solver=lambda: accelerations.solve(system))
@@ -278,83 +254,73 @@ def _variation(system, kind, explicit, lams=()):
     return base, make(base, kind, extra_fields=[m.name for m in lams])
 
 
-def _vakonomic(system, principle, form, convention):
-    explicit = form != "multiplier"
-    lams = multiplier_symbols(system)
+def _composite(system, p: Principle, f: Form, convention):
+    """Every eta independent: the coefficients of (13) for the composite action, then
+    (projected, on L~) the reduced and embedded forms."""
+    lams = p.multiplier_symbols(system)
     J = jet_space(system, lams)
-    if principle == "holder" and convention == "imposed":
-        return Equations(
-            system, principle, form, convention,
-            lambda: stationarity(*_variation(system, principle, explicit, lams), lams,
-                                 restrict=True),
-            arbitrary=lams, J=J, paper="", explicit=explicit,
-            solver=lambda: accelerations.solve(system, "multipliers", explicit, lams))
 
     def expressions():
-        base, var = _variation(system, principle, explicit, lams)
+        base, var = _variation(system, p.variation, f.explicit, lams)
         E = stationarity(base, var, lams)
-        return E if form in ("multiplier", "explicit") else _reduced(base, E, J, lams, form)
+        if f.name in ("multiplier", "explicit"):
+            return E
+        return _reduced(base, E, J, lams, f.name, with_T=p.multipliers_act)
 
     rates = tuple(J.jet(m, 1) for m in lams)
-    return Equations(system, principle, form, convention, expressions, lams, J=J,
-                     paper=_label(system, principle, form), explicit=explicit,
-                     solver=lambda: accelerations.solve(system, "multipliers", explicit,
+    return Equations(system, p.name, f.name, convention, expressions, lams, J=J,
+                     paper=f.label(system.is_affine), explicit=f.explicit,
+                     solver=lambda: accelerations.solve(system, p.kappa, f.explicit,
                                                         lams, rates))
 
 
-def _suslov(system, form, convention):
-    lams = multiplier_symbols(system)
-    J = jet_space(system, lams)
-    if convention == "imposed":
-        return Equations(
-            system, "suslov", form, convention,
-            lambda: stationarity(*_variation(system, "suslov", True, lams), lams,
-                                 restrict=True),
-            J=J, paper="(30b)", explicit=True,
-            solver=lambda: accelerations.solve(system, "momenta", True))
-
-    def expressions():
-        base, var = _variation(system, "suslov", True, lams)
-        E = stationarity(base, var, lams)
-        return E if form == "multiplier" else _reduced(base, E, J, lams, form, suslov=True)
-
-    rates = tuple(J.jet(m, 1) for m in lams)
-    return Equations(system, "suslov", form, convention, expressions, lams, J=J,
-                     paper=_label(system, "suslov", form), explicit=True,
-                     solver=lambda: accelerations.solve(system, "momenta", True, lams, rates))
+def _restricted(system, p: Principle, f: Form, convention):
+    """eta restricted to the Chetaev subspace first: one equation per independent
+    coordinate.  Multipliers that act on the motion stay arbitrary (Hoelder imposed);
+    the others drop out (Suslov imposed, (30b)); Chetaev's Maggi form has none."""
+    lams = p.multiplier_symbols(system)
+    arbitrary = lams if p.multipliers_act else ()
+    return Equations(
+        system, p.name, f.name, convention,
+        lambda: stationarity(*_variation(system, p.variation, f.explicit, lams), lams,
+                             restrict=True),
+        arbitrary=arbitrary, J=jet_space(system, lams), paper=p.restricted_label,
+        explicit=f.explicit,
+        solver=lambda: accelerations.solve(system, p.kappa, f.explicit, arbitrary))
 
 
-def _chetaev(system, form, convention):
+def _chetaev(system, p: Principle, f: Form, convention):
+    """The action of L alone, eta restricted (Maggi); or the same rows with the reactions
+    nu_a df^a/dqdot^s (multiplier form), or on L~ (Voronets)."""
+    if f.name == "maggi":
+        return _restricted(system, p, f, convention)
     J = jet_space(system)
-    solver = lambda: accelerations.solve(system)  # noqa: E731
-    if form == "maggi":
-        return Equations(system, "chetaev", form, convention,
-                         lambda: stationarity(*_variation(system, "holder", False), (),
-                                              restrict=True), J=J, solver=solver)
-    if form == "multiplier":
-        nus = multiplier_symbols(system, "nu")
+    solver = lambda: accelerations.solve(system, p.kappa)  # noqa: E731
+    if f.name == "multiplier":
+        nus = p.reaction_symbols(system)
 
         def expressions():
             A = system.jacobian
             return tuple(system.J.euler(system.L)[s] + system.Q[s]
                          + sp.Add(*[nus[a] * A[a, s] for a in range(system.k)])
                          for s in range(system.J.n))
-        return Equations(system, "chetaev", form, convention, expressions, reactions=nus,
+        return Equations(system, p.name, f.name, convention, expressions, reactions=nus,
                          J=J, solver=solver)
-    return Equations(system, "chetaev", form, convention,
+    return Equations(system, p.name, f.name, convention,
                      lambda: _embedded(_explicit(system), J, system.p_dependent), J=J,
-                     explicit=True, solver=solver)
+                     explicit=f.explicit, solver=solver)
 
 
-def _reduced(base, E, J, lams, form, suslov=False):
+def _reduced(base, E, J, lams, form, with_T=True):
     """(18)/(30): dependent rows as they are, independent rows projected by P^T;
-    (20)/(31): the projected rows rewritten on L~ through identity (19)."""
+    (20)/(31): the projected rows rewritten on L~ through identity (19), with the T
+    term of acting multipliers (``with_T``; Suslov's cancels)."""
     dep_rows = [E[i] for i in base.dep_index]
     if form == "reduced":
         P = null_basis(base)
         proj = [sp.Add(*[P[s, m] * E[s] for s in range(J.n)]) for m in range(P.cols)]
         return tuple(dep_rows + proj)
-    if suslov:
+    if not with_T:
         return tuple(dep_rows + list(_embedded(base, J)))
     coef = [p + lam for p, lam in zip(base.p_dependent, lams)]
     return tuple(dep_rows + list(_embedded(base, J, coef)))

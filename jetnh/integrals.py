@@ -22,25 +22,25 @@ from fractions import Fraction
 import mpmath
 import sympy as sp
 
-from . import ansatz, dag
+from . import ansatz, dag, principles
 from .ansatz import exponents as _exponents
 from .ansatz import monomial as _mono
 from .ansatz import power_product
-from .constraints import PRINCIPLES, System
-from .errors import ArgumentError, JetnhError, PrincipleError
+from .constraints import System
+from .errors import ArgumentError, JetnhError
+from .principles import Principle
 
 DPS = ansatz.DPS
 
-_WITH_MULTIPLIERS = ("vakonomic", "holder")
 
-
-def check_arguments(sysm, principle, degree, what):
+def check_arguments(sysm, principle, degree, what) -> Principle:
+    """The registered principle of ``principle`` after checking the arguments."""
     if not isinstance(sysm, System):
         raise ArgumentError(f"{what} needs a jetnh System, not {type(sysm).__name__}")
-    if not isinstance(principle, str) or principle not in PRINCIPLES:
-        raise PrincipleError(f"unknown principle {principle!r}; choose one of {PRINCIPLES}")
+    p = principles.get(principle)
     if isinstance(degree, bool) or not isinstance(degree, int) or degree < 1:
         raise ArgumentError(f"degree must be an integer >= 1, not {degree!r}")
+    return p
 
 
 def conserved_quantities(sysm, principle, degree=2, coefficients=None) -> list:
@@ -54,13 +54,13 @@ def conserved_quantities(sysm, principle, degree=2, coefficients=None) -> list:
     proportional over the parameters.  For example the Heisenberg system's vakonomic
     integrals lambda, m x_t + 2 lambda y, m y_t - 2 lambda x and the energy.  A
     JetnhWarning says when some integral's parameter dependence exceeds the search."""
-    check_arguments(sysm, principle, degree, "conserved_quantities")
+    p = check_arguments(sysm, principle, degree, "conserved_quantities")
     J = sysm.J
-    eom = sysm.equations(principle)
+    eom = sysm.equations(p)
     acc = eom.accelerations()                       # its errors propagate
     G = coefficient_functions(sysm, coefficients, degree)
     vel = list(sysm.independent_velocities)
-    lam = list(eom.multipliers) if principle in _WITH_MULTIPLIERS else []
+    lam = list(eom.multipliers) if p.multipliers_act else []
     rates = list(eom.multiplier_rates) if lam else []
     qdd = [J.jet(q, 2) for q in sysm.independent]
     def on_manifold(syms):

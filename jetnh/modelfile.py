@@ -20,7 +20,8 @@ Optional keys: ``[forces]`` (coordinate = expression: the non-potential generali
 Q_s(t, q, qdot) on that coordinate, beside [L]_s in every principle's equations),
 ``dissipation`` (a Rayleigh function D(t, q, qdot): Q_s -= dD/dqdot^s), ``description``
 (text), ``branch`` (which solution of nonlinear
-constraints, an integer >= 0), ``convention`` ("paper" | "imposed"), ``[multipliers]``
+constraints, an integer >= 0), ``principle`` (a name or an alias, ``jetnh.principles``;
+read as its canonical name), ``convention`` ("paper" | "imposed"), ``[multipliers]``
 (initial values of the multipliers lambda_<dependent> of the vakonomic, Hoelder and
 Suslov principles; they may also stand in ``[initial]``), ``[integrals]`` (name =
 expression: first integrals for ``jetnh simulate`` to monitor; they may use the
@@ -126,8 +127,9 @@ from pathlib import Path
 
 import sympy as sp
 
-from .constraints import PRINCIPLES, System
-from .errors import JetnhError, ModelFileError
+from . import principles
+from .constraints import System
+from .errors import JetnhError, ModelFileError, PrincipleError
 from .jet import JetSpace
 
 MAX_CHARS = 20_000
@@ -1107,9 +1109,12 @@ def _from_dict(data: dict, source: str) -> Model:
     principle = data.get("principle")
     if principle is not None:
         _expect(f"{S}: 'principle'", principle, "string")
-        if principle not in PRINCIPLES:
-            raise ModelFileError(f"{S}: 'principle' must be one of {', '.join(PRINCIPLES)}; "
-                                 f"got {principle!r}")
+        try:
+            principle = principles.canonical(principle)
+        except PrincipleError:
+            raise ModelFileError(
+                f"{S}: 'principle' must be one of {', '.join(principles.PRINCIPLES)} (or an "
+                f"alias, jetnh.principles); got {_shorten(principle)!r}") from None
     convention = data.get("convention")
     if convention is not None:
         _expect(f"{S}: 'convention'", convention, "string")
@@ -1134,7 +1139,7 @@ def _from_dict(data: dict, source: str) -> Model:
                              f"{_shorten(str(exc))})") from None
 
     # ---------------------------------------------------------------- data
-    lams = [f"lambda_{d.name}" for d in system.dependent]
+    lams = [m.name for m in principles.multiplier_symbols(system)]
     states = set(names) - {TIME} - set(params)
     initial = {}
     for table in ("initial", "multipliers"):
@@ -1266,7 +1271,7 @@ def dumps(system: System, initial=None, *, params=None, principle=None, conventi
     if system._branch is not None:
         lines.append(f"branch = {int(system._branch)}")
     if principle:
-        lines.append(f"principle = {_toml_string(principle)}")
+        lines.append(f"principle = {_toml_string(principles.canonical(principle))}")
     if convention:
         lines.append(f"convention = {_toml_string(convention)}")
     if values:

@@ -108,20 +108,20 @@ class LieSymmetry:
 class _Setting:
     """One principle's Noether data: F, its velocities, restriction rows, the manifold."""
 
-    def __init__(self, sysm, principle):
-        self.sysm, self.principle = sysm, principle
+    def __init__(self, sysm, p):
+        self.sysm, self.principle = sysm, p.name
         J = sysm.J
         self.J = J
-        self.eom = sysm.equations(principle)
+        self.eom = sysm.equations(p)
         self.acc = self.eom.accelerations()             # its errors propagate
         self.lams = ()
-        if principle == "chetaev":
+        if not p.has_multipliers:                       # Chetaev: L, eta restricted
             self.F, self.vel, self.restrict = sysm.L, tuple(J.qd), True
-        elif principle in ("vakonomic", "holder"):
+        elif p.multipliers_act:                         # vakonomic, Hoelder: L + lambda f
             self.lams = tuple(self.eom.multipliers)
             self.F = sysm.L + sp.Add(*[m * f for m, f in zip(self.lams, self.eom.constraints)])
             self.vel, self.restrict = tuple(J.qd), False
-        else:
+        else:                                           # Suslov: L~, eta restricted
             self.F, self.restrict = sysm.L_tilde, True
             self.vel = tuple(sysm.independent_velocities)
         self.qdot = [sysm.phi.get(v, v) for v in J.qd]
@@ -218,8 +218,7 @@ def noether_symmetries(sysm, principle, degree=1, coefficients=None) -> list:
     Example (the principles differ): for ``models.get("nonholonomic_particle")``, d/dz
     is a vakonomic symmetry with I = m zdot + lambda_z and is not a Chetaev one; d/dy is
     a Chetaev symmetry (I = m ydot) and not a vakonomic one."""
-    check_arguments(sysm, principle, degree, "noether_symmetries")
-    S = _Setting(sysm, principle)
+    S = _Setting(sysm, check_arguments(sysm, principle, degree, "noether_symmetries"))
     J = sysm.J
     g = _functions(sysm, coefficients, degree)
     base = [J.t, *J.q]
@@ -299,8 +298,7 @@ def is_noether(sysm, principle, symmetry, degree=None):
     if not isinstance(symmetry, (LieSymmetry, NoetherSymmetry)):
         raise ArgumentError(f"is_noether needs a LieSymmetry or NoetherSymmetry, not "
                             f"{type(symmetry).__name__}")
-    check_arguments(sysm, principle, 1, "is_noether")
-    S = _Setting(sysm, principle)
+    S = _Setting(sysm, check_arguments(sysm, principle, 1, "is_noether"))
     J = sysm.J
     xi = [symmetry.xi.get(q, sp.S.Zero) for q in J.q]
     base = [J.t, *J.q]
@@ -329,11 +327,11 @@ def lie_symmetries(sysm, principle, degree=1, coefficients=None) -> list:
     pr X(qddot^mu - A^mu) = 0 (and pr X(lambdadot - R) = 0) on the solutions; requiring
     them at random points of (t, q, qdot^mu, lambda) is the same as splitting them by
     powers of the velocities."""
-    check_arguments(sysm, principle, degree, "lie_symmetries")
-    eom = sysm.equations(principle)
+    p = check_arguments(sysm, principle, degree, "lie_symmetries")
+    eom = sysm.equations(p)
     acc = eom.accelerations()
     J0 = sysm.J
-    lams = tuple(eom.multipliers) if principle in ("vakonomic", "holder") else ()
+    lams = tuple(eom.multipliers) if p.multipliers_act else ()
     J = J0.with_fields(tuple(m.name for m in lams)) if lams else J0
     lams = tuple(J.fields)
     bases = (*J.q, *lams)
@@ -373,6 +371,6 @@ def lie_symmetries(sysm, principle, degree=1, coefficients=None) -> list:
         total = [sp.Add(*[c * e for c, e in zip(vec, col)]) for col in zip(*conds)]
         for e in total:
             _vanishes(e, problem.sampler, "a determining equation")
-        out.append(LieSymmetry(principle, parts[0],
+        out.append(LieSymmetry(p.name, parts[0],
                                tuple((b, e) for b, e in zip(bases, parts[1:]) if e != 0)))
     return out

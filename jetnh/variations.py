@@ -23,13 +23,15 @@ import sympy as sp
 
 from . import linalg
 from .constraints import System
+from .errors import PrincipleError
+from .principles import named
 
 KINDS = ("free", "vakonomic", "holder", "suslov")
 
 
 def eta_symbols(J) -> tuple[sp.Symbol, ...]:
     """The variation components eta^s as field names ``eta_<coordinate>``."""
-    return tuple(sp.Symbol(f"eta_{q.name}") for q in J.q)
+    return named("eta", J.q)
 
 
 @dataclass(frozen=True)
@@ -114,7 +116,7 @@ def make(system: System, kind: str, eta=None, extra_fields=()) -> Variation:
     computed from the implicit constraints by (10): df/dqdot^alpha c^alpha = [f]_s eta^s.
     """
     if kind not in KINDS:
-        raise ValueError(f"unknown variation {kind!r}; choose one of {KINDS}")
+        raise PrincipleError(f"unknown variation {kind!r}; choose one of {KINDS}")
     J, etas = _space(system, extra_fields)
     eta = tuple(etas if eta is None else eta)
     zero = tuple(sp.S.Zero for _ in J.q)

@@ -5,6 +5,7 @@ the site (warnings are errors); CI runs it."""
 
 import ast
 import re
+import tokenize
 from pathlib import Path
 
 import pytest
@@ -103,3 +104,14 @@ def test_docstrings_refer_to_no_files_outside_the_repository():
            for m in OUTSIDE.finditer(doc)]
     assert not bad, bad
 
+
+
+def test_comments_refer_to_no_files_outside_the_repository():
+    bad = []
+    for base in ("jetnh", "papers", "benchmarks"):
+        for path in sorted((ROOT / base).rglob("*.py")):
+            with tokenize.open(path) as fh:
+                bad += [f"{path.relative_to(ROOT)}:{tok.start[0]}: {tok.string}"
+                        for tok in tokenize.generate_tokens(fh.readline)
+                        if tok.type == tokenize.COMMENT and OUTSIDE.search(tok.string)]
+    assert not bad, bad

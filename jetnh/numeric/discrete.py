@@ -10,6 +10,7 @@ import time
 
 import numpy as np
 
+from .. import principles
 from ..errors import IntegrationError, PrincipleError
 from . import cache as _cache
 from . import codegen, diagnosis, interrupt
@@ -36,7 +37,7 @@ def run_dla(scene, t0, t1, y_init, default_y0, p, n_steps, save, tol, max_iter,
     """A dla run (``integrators.dla``); ``ce``: compiled user events (``node_events``)."""
     from .integrators import dla
 
-    if scene.principle != "chetaev":
+    if principles.get(scene.principle).integrator(scene.convention) != "dla":
         raise PrincipleError(
             "the discrete Lagrange-d'Alembert integrator discretizes Chetaev "
             f"(Lagrange-d'Alembert) dynamics, not {scene.principle}; use dop853"
@@ -68,8 +69,7 @@ def run_dvi(scene, t0, t1, y_init, default_y0, p, n_steps, save, tol, max_iter,
     """A dvi run (``integrators.dvi``); ``ce``: compiled user events (``node_events``)."""
     from .integrators import dvi
 
-    if not (scene.principle == "vakonomic" or
-            (scene.principle == "holder" and scene.convention == "paper")):
+    if principles.get(scene.principle).integrator(scene.convention) != "dvi":
         raise PrincipleError(
             "the discrete vakonomic integrator discretizes vakonomic dynamics (and "
             "Hoelder's in the paper's convention, which has the same equations), not "

@@ -37,9 +37,9 @@ import mpmath
 import numpy as np
 import sympy as sp
 
-from .. import dag
-from ..constraints import PRINCIPLES, System
-from ..errors import ConstraintError, JetnhError, PrincipleError
+from .. import dag, principles
+from ..constraints import System
+from ..errors import ConstraintError, JetnhError
 from ..jet import sympy_object
 from . import arguments, interrupt
 from . import cache as _cache
@@ -75,8 +75,7 @@ class Scene(Frozen):
                  runtime_params=(), project=False, consistency_tol=1e-9, cache=True):
         if not isinstance(system, System):
             raise JetnhError(f"a Scene needs a jetnh System, got {type(system).__name__}")
-        if principle not in PRINCIPLES:
-            raise PrincipleError(f"unknown principle {principle!r}; choose one of {PRINCIPLES}")
+        principle = principles.canonical(principle)     # a name, an alias or a Principle
         self.system = system
         self.principle = principle
         self.form = form
