@@ -31,10 +31,7 @@ ALLOWED_UPWARD = {
 }
 
 #: cycles allowed for now, each to be removed when the named work lands
-ALLOWED_CYCLES = {
-    frozenset({"numeric.cache", "numeric.codegen"}): "cache <-> codegen: being split in the "
-                                                     "numeric rework",
-}
+ALLOWED_CYCLES: dict = {}
 
 
 def _modules() -> dict[str, Path]:
