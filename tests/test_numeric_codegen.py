@@ -99,7 +99,7 @@ t2 = time.perf_counter()
 tr = sc.run(rtol=1e-10, atol=1e-12, save="final")
 t3 = time.perf_counter()
 print(json.dumps(dict(hit=k.hit, kernels=t2 - t1, run=t3 - t2, x=tr["x"][-1],
-                      rhs_cache_hits=k.rhs_c.cache_hits)))
+                      rhs_cache_hits=k.rhs_c.cache_hits, steps=sorted(k.timings))))
 """
 
 
@@ -117,7 +117,7 @@ def test_disk_cache_across_processes(tmp_path):
     assert not cold["hit"] and warm["hit"]
     assert warm["rhs_cache_hits"] >= 1          # numba loaded machine code, no compile
     assert warm["x"] == cold["x"]
-    assert warm["kernels"] < cold["kernels"]
+    assert "derive" in cold["steps"] and "derive" not in warm["steps"]   # nothing derived
     print(f"\nkernels cold {cold['kernels']:.2f} s, warm {warm['kernels']:.2f} s")
     assert any(p.name == "layout.json" for p in tmp_path.rglob("layout.json"))
 
