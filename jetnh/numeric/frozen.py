@@ -42,6 +42,13 @@ class Frozen:
         raise FrozenError(f"{type(self).__name__} is immutable: cannot change {name!r} after "
                           "construction; make a new one (Scene.replace(...) for a scene)")
 
+    def _set(self, **values):
+        """Set attributes in ``__init__``, in one go (as many assignments, without a call of
+        ``__setattr__`` each: a trajectory is made on every run)."""
+        if "_memo" in self.__dict__:
+            self._refuse(next(iter(values)))
+        self.__dict__.update(values)
+
     def __setattr__(self, name, value):
         if "_memo" in self.__dict__:
             self._refuse(name)
