@@ -49,7 +49,7 @@ from .integrators import STATUS_TEXT
 from .integrators._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, NONFINITE,
                                   SINGULAR, STOPPED)
 from .integrators.loop import Control, watch_of
-from .frozen import Frozen, memo
+from .frozen import Frozen, FrozenDict, memo
 from .options import fields_of, options
 from .trajectory import Trajectory
 
@@ -87,10 +87,11 @@ class Scene(Frozen):
             if not isinstance(value, (Mapping, type(None))):
                 raise JetnhError(f"{what} must be a dict keyed by Symbol or name, got a "
                                  f"{type(value).__name__}")
-        self.integrals = {str(k): sympy_object(v) for k, v in (integrals or {}).items()}
+        self.integrals = FrozenDict({str(k): sympy_object(v)
+                                     for k, v in (integrals or {}).items()})
         self.t_span = self._t_span(t_span)
         self.multipliers = codegen.multiplier_names(system, principle)
-        self.params = self._params(params or {})
+        self.params = FrozenDict(self._params(params or {}))
         if isinstance(runtime_params, (str, sp.Symbol)):
             runtime_params = (runtime_params,)
         self.runtime_params = tuple(arguments.name_of(k, "a runtime parameter")
@@ -105,7 +106,7 @@ class Scene(Frozen):
         self.state_names = self.coordinates + self.velocities + self.multipliers
         self.consistency_tol = arguments.positive(consistency_tol, "consistency_tol")
         self.projected: dict[str, tuple[float, float]] = {}
-        self.initial = self._initial(initial or {}, project)
+        self.initial = FrozenDict(self._initial(initial or {}, project))
         self.y0 = np.array([self.initial[n] for n in self.state_names], dtype=float)
 
     # ------------------------------------------------------------------ input checks
