@@ -381,3 +381,33 @@ def locate(sing, uev, n_sing, si, theta_hi, t_old, h, y_old, F, p, gs, sig, eps,
     if stop != 0:
         dense_eval((t_stop - t_old) / h, y_old, F, y_stop)
     return stop, t_stop, sing_index, ev_t, ev_i, ev_y, n_ev
+
+
+# ---------------------------------------------------------------------- discrete nodes
+@jit
+def node_event_values(uev, t, row, cols, p, y, g):
+    """The user event functions at a node of a discrete run (dla, dvi): the state ``y =
+    row[cols]`` (coordinates, independent velocities, multipliers), ``g = uev(t, y)``."""
+    for j in range(cols.shape[0]):
+        y[j] = row[cols[j]]
+    uev(t, y, p, g)
+
+
+@jit
+def node_terminal(uev, t, row, cols, p, y, g_old, g_new, direction, max_events, counts):
+    """The user events from the previous node (``g_old``) to this one, with the rule of
+    ``user_active``: each crossing counted; True if a terminal event (its ``max_events``-th
+    crossing) occurred, so that the run ends at this node (the root between the two is
+    located afterwards, ``numeric.discrete.node_events``).  ``g_old`` becomes this node's."""
+    n_user = direction.shape[0]
+    if n_user == 0:
+        return False
+    node_event_values(uev, t, row, cols, p, y, g_new)
+    stop = False
+    for i in range(n_user):
+        if user_active(g_old, g_new, direction, i):
+            counts[i] += 1
+            if 0 < max_events[i] <= counts[i]:
+                stop = True
+        g_old[i] = g_new[i]
+    return stop
