@@ -47,6 +47,9 @@ from ._events import (any_user_active, dense_eval, hermite_defect, locate, most_
 #: error estimators and dense outputs (see the module docstring)
 NONE, EMBEDDED, DOP853 = 0, 1, 2
 HERMITE, GIVEN = 1, 3
+#: the pieces of the loop: compiled into it at numba's IR level (one compilation, no library
+#: of their own: each such library is optimised again in every function linking it)
+inline = numba.njit(error_model="numpy", nogil=True, inline="always")
 #: relative defect of a fixed step's Hermite interpolant that marks a kink (``solve``)
 KINK = 0.25
 
@@ -108,8 +111,7 @@ def _dense_rows(tab, rhs, t, h, y, y_new, K, F, ytmp, p):
     if info[2] == GIVEN:             # filled by the method itself (radau)
         return 0
     if info[2] == DOP853:
-        for s in range(ns + 1, ns + 4):
-            _stage(s, C, A, rhs, t, h, y, K, ytmp, p)
+        _stages(ns + 1, ns + 4, C, A, rhs, t, h, y, K, ytmp, p)
         for i in range(n):
             dy = y_new[i] - y[i]
             F[0, i] = dy
@@ -163,25 +165,24 @@ def _error(kind, ns, E, E3, h, y, y_new, K, rtol, atol):
     return math.sqrt(err / n)
 
 
-@numba.njit(error_model="numpy", nogil=True, inline="always")
-def _stage(s, C, A, rhs, t, h, y, K, ytmp, p):
-    """Stage s: K[s] = f(t + C[s] h, y + h sum_{r < s} A[s, r] K[r])."""
-    for i in range(y.shape[0]):
-        acc = 0.0
-        for r in range(s):
-            acc += A[s, r] * K[r, i]
-        ytmp[i] = y[i] + h * acc
-    rhs(t + C[s] * h, ytmp, p, K[s])
+@inline
+def _stages(first, last, C, A, rhs, t, h, y, K, ytmp, p):
+    """Stages ``first .. last - 1``: K[s] = f(t + C[s] h, y + h sum_{r < s} A[s, r] K[r])
+    (the steps' stages and DOP853's extra dense-output stages)."""
+    for s in range(first, last):
+        for i in range(y.shape[0]):
+            acc = 0.0
+            for r in range(s):
+                acc += A[s, r] * K[r, i]
+            ytmp[i] = y[i] + h * acc
+        rhs(t + C[s] * h, ytmp, p, K[s])
 
 
-@numba.njit(error_model="numpy", nogil=True, inline="always")
-def _stages(ns, C, A, B, b_den, rhs, t, h, y, K, y_new, ytmp, p):
-    """Stages 1 .. n_stages - 1 (K[0] given) and the new state."""
-    n = y.shape[0]
-    for s in range(1, ns):
-        _stage(s, C, A, rhs, t, h, y, K, ytmp, p)
+@inline
+def _new_state(ns, B, b_den, h, y, K, y_new):
+    """y_new = y + (h / b_den) sum_r B[r] K[r]."""
     hb = h / b_den
-    for i in range(n):
+    for i in range(y.shape[0]):
         acc = 0.0
         for r in range(ns):
             acc += B[r] * K[r, i]
@@ -383,7 +384,8 @@ def _solve(rhs, sing, uev, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
                     t_new = t_end
                 h = t_new - t
                 h_abs = abs(h)
-                _stages(ns, C, A, B, b_den, rhs, t, h, y, K, y_new, ytmp, p)
+                _stages(1, ns, C, A, rhs, t, h, y, K, ytmp, p)
+                _new_state(ns, B, b_den, h, y, K, y_new)
                 rhs(t_new, y_new, p, K[ns])
                 stats[2] += ns
                 err = _error(kind, ns, E, E3, h, y, y_new, K, rtol, atol)
@@ -410,7 +412,8 @@ def _solve(rhs, sing, uev, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
                 break
         else:
             rhs(t, y, p, K[0])
-            _stages(ns, C, A, B, b_den, rhs, t, h_fixed, y, K, y_new, ytmp, p)
+            _stages(1, ns, C, A, rhs, t, h_fixed, y, K, ytmp, p)
+            _new_state(ns, B, b_den, h_fixed, y, K, y_new)
             stats[2] += ns
             if not all_finite(y_new):
                 status = NONFINITE
