@@ -24,7 +24,8 @@ in the form of ``_events.dense_eval``): ``HERMITE`` the cubic Hermite rows of th
 plus ``D @ K`` rows (DOPRI5's ``contd5``; plain Hermite for RK4), ``DOP853`` Hairer's
 ``contd8`` with three extra stages (rows ``n_stages + 1 ..`` of ``A``), ``GIVEN`` rows the
 method fills itself (radau's collocation polynomial).  ``after_step`` and ``output`` are
-what every loop does after an accepted step (radau's too).
+what every loop does after an accepted step, ``_common.start`` what it does first (radau's
+too).
 """
 
 from __future__ import annotations
@@ -291,9 +292,10 @@ def output(tab, fixed, rhs, p, t, h, t_new, y, y_new, K, F, ytmp, y_stop, stop, 
 
 def _solve(rhs, sing, uev, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
     """Integrate y' = rhs(t, y, p) from t0 to t_end with the method ``TAB``
-    (``ExplicitRK.arrays``, compile-time constants: ``_specialised``) under the step control ``ctl`` (``Control``), watching ``watch``
-    (``Watch``: ``sing`` computes the ``n_sing`` singularity indicators, ``uev`` the user
-    event functions; see ``_events``).  ``mode``: EVERY_STEP, AT_T_EVAL or ENDPOINTS.
+    (``ExplicitRK.arrays``; it and ``ADAPTIVE`` are compile-time constants, so the path
+    of the other step kind is not compiled: ``_specialised``) under the step control
+    ``ctl`` (``Control``), watching ``watch`` (``Watch``: ``sing`` computes the ``n_sing``
+    singularity indicators, ``uev`` the user event functions; see ``_events``).  ``mode``: EVERY_STEP, AT_T_EVAL or ENDPOINTS.
     The loop stops with status STOPPED before a step when ``halt[0]`` is nonzero.
 
     Returns a ``Result``: the output rows ``ts[:n_out]``, ``ys[:n_out]``, ``stats =
