@@ -138,7 +138,9 @@ def main(argv=None):
             print(f"round {r + 1}, {name}: {json.dumps(runs[name][-1])}", flush=True)
     best = {name: {k: min(x[k] for x in rs) for k in rs[0]} for name, rs in runs.items()}
     names = list(trees)
-    scale = lambda k: 1.0 if k.startswith("first") else 1e9 if "per_eval" in k else 1e6  # noqa: E731
+
+    def scale(key):
+        return 1.0 if key.startswith("first") else 1e9 if "per_eval" in key else 1e6
     rows = []
     for key, label in ROWS:
         vals = [best[n].get(key) for n in names]

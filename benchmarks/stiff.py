@@ -6,12 +6,13 @@
 
 The stiffness family: the Chaplygin sleigh with its centre of mass a distance a ahead of
 the blade, m = 1, I = a^2 / 4, from v0 = 0.5, w0 = 1: the turning rate decays at lambda =
-m a V / (I + m a^2) (V the speed the sleigh ends with), so a -> 0 makes it stiff (a = 1 .. 1e-4: lambda from about 1 to 4000).  Every method runs on the same
-compiled right-hand side (scipy's through ``method="scipy-<M>"``) to T = 5 at rtol = 1e-4
-.. 1e-10 (atol = 1e-3 rtol); the error is the largest deviation of theta, theta_t and the
-forward speed at T from the closed form (the catalogue's docstring).  "Speed-up at equal
-error": scipy's time interpolated (log-log, over its tolerances) at radau's error, divided
-by radau's time.
+m a V / (I + m a^2) (V the speed the sleigh ends with), so a -> 0 makes it stiff (a = 1
+.. 1e-4: lambda from about 1 to 4000). Every method runs on the same compiled right-hand
+side (scipy's through ``method="scipy-<M>"``) to T = 5 at rtol = 1e-4 .. 1e-10 (atol =
+1e-3 rtol); the error is the largest deviation of theta, theta_t and the forward speed at
+T from the closed form (the catalogue's docstring). "Speed-up at equal error": scipy's
+time interpolated (log-log, over its tolerances) at radau's error, divided by radau's
+time.
 
 (The first run, the fixed cost and the cost per evaluation of a run, before and after
 the one compiled loop of the explicit methods: ``benchmarks/overhead.py``.)

@@ -295,8 +295,9 @@ def _solve(rhs, sing, uev, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
     (``ExplicitRK.arrays``; it and ``ADAPTIVE`` are compile-time constants, so the path
     of the other step kind is not compiled: ``_specialised``) under the step control
     ``ctl`` (``Control``), watching ``watch`` (``Watch``: ``sing`` computes the ``n_sing``
-    singularity indicators, ``uev`` the user event functions; see ``_events``).  ``mode``: EVERY_STEP, AT_T_EVAL or ENDPOINTS.
-    The loop stops with status STOPPED before a step when ``halt[0]`` is nonzero.
+    singularity indicators, ``uev`` the user event functions; see ``_events``).  ``mode``:
+    EVERY_STEP, AT_T_EVAL or ENDPOINTS.  The loop stops with status STOPPED before a step
+    when ``halt[0]`` is nonzero.
 
     Returns a ``Result``: the output rows ``ts[:n_out]``, ``ys[:n_out]``, ``stats =
     [accepted, rejected, rhs evaluations]``, the last state, the event records (time,
