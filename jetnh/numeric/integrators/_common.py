@@ -58,8 +58,12 @@ MAX_FACTOR = 10.0
 #: output modes
 EVERY_STEP, AT_T_EVAL, ENDPOINTS = 0, 1, 2
 
-#: the helpers: compiled into the loops that call them (only the loops are cached on disk)
+#: the helpers: compiled into the loops that call them (only the loops are cached on disk);
+#: ``jit`` each once per process (a library of its own, linked into its callers), ``inline``
+#: into each caller at numba's IR level: the helpers called once or twice, which would
+#: cost more as libraries (each compiled, then optimised again in every caller) than as code
 jit = numba.njit(error_model="numpy", nogil=True)
+inline = numba.njit(error_model="numpy", nogil=True, inline="always")
 
 
 @jit
@@ -94,7 +98,7 @@ def store(ts, ys, n, t, y):
     return ts, ys, n + 1
 
 
-@jit
+@inline
 def initial_step_h0(y0, f0, rtol, atol, interval, scale):
     """First half of the starting-step heuristic (Hairer-Norsett-Wanner II.4, p. 169):
     h0 from |y0| and |f0|; fills ``scale`` = atol + rtol |y0|."""
@@ -115,7 +119,7 @@ def initial_step_h0(y0, f0, rtol, atol, interval, scale):
     return min(h0, interval), d1
 
 
-@jit
+@inline
 def initial_step_h1(f0, f1, h0, d1, scale, order, interval, max_step):
     """Second half: an explicit Euler step of size h0 estimates the second derivative."""
     d2 = 0.0
@@ -129,7 +133,7 @@ def initial_step_h1(f0, f1, h0, d1, scale, order, interval, max_step):
     return min(100 * h0, h1, interval, max_step)
 
 
-@jit
+@inline
 def start(rhs, t, y, p, f0, f1, ytmp, scale, ctl, error_order, t_end, stats, mode, t_eval,
           ts, ys, n_out):
     """The start of an adaptive run (every adaptive loop): ``f0 = f(t0, y0)`` checked
@@ -171,7 +175,7 @@ def copy_into(dst, src):
         dst[i] = src[i]
 
 
-@jit
+@inline
 def min_step(t, direction):
     """Ten units in the last place of t in the direction of integration."""
     return 10.0 * abs(np.nextafter(t, direction * np.inf) - t)

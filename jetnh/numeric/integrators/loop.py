@@ -41,17 +41,13 @@ import numpy as np
 from ._common import (
     AT_T_EVAL, ENDPOINTS, ENSEMBLE_OUT, EVERY_STEP, FINISHED, MAX_FACTOR, MAX_STEPS,
     MIN_FACTOR, NONFINITE, RHS, SAFETY, SINGULAR, STOPPED, TOO_SMALL_STEP, all_finite,
-    collect, compiled, copy_into, f8, i8, jit, min_step, start, store)
+    collect, compiled, copy_into, f8, i8, inline, jit, min_step, start, store)
 from ._events import (any_user_active, dense_eval, hermite_defect, locate, most_watched,
                       sing_dip, sing_init, sing_violated, sing_watch)
 
 #: error estimators and dense outputs (see the module docstring)
 NONE, EMBEDDED, DOP853 = 0, 1, 2
 HERMITE, GIVEN = 1, 3
-#: the stage loops: compiled into the loop at numba's IR level, where the tableau's
-#: coefficients are constants (a helper called from such a helper lost that: 1.4x per
-#: evaluation)
-inline = numba.njit(error_model="numpy", nogil=True, inline="always")
 #: relative defect of a fixed step's Hermite interpolant that marks a kink (``solve``)
 KINK = 0.25
 
@@ -138,7 +134,7 @@ def _dense_rows(tab, rhs, t, h, y, y_new, K, F, ytmp, p):
     return 0
 
 
-@jit
+@inline
 def _error(kind, ns, E, E3, h, y, y_new, K, rtol, atol):
     """The scaled error of the step (<= 1: accept) by the estimator ``kind``."""
     n = y.shape[0]
@@ -170,7 +166,9 @@ def _error(kind, ns, E, E3, h, y, y_new, K, rtol, atol):
 @inline
 def _stages(first, last, C, A, rhs, t, h, y, K, ytmp, p):
     """Stages ``first .. last - 1``: K[s] = f(t + C[s] h, y + h sum_{r < s} A[s, r] K[r])
-    (the steps' stages and DOP853's extra dense-output stages)."""
+    (the steps' stages and DOP853's extra dense-output stages).  Inlined where the
+    tableau's coefficients are constants; it calls no helper (one called from an inlined
+    helper cost dop853 1.4x per evaluation)."""
     for s in range(first, last):
         for i in range(y.shape[0]):
             acc = 0.0
@@ -191,7 +189,7 @@ def _new_state(ns, B, b_den, h, y, K, y_new):
         y_new[i] = y[i] + hb * acc
 
 
-@jit
+@inline
 def workspace(n_sing, n_user):
     """The arrays of the singularity indicators and the user events (``after_step``)."""
     m = max(n_sing, 1)
@@ -201,7 +199,7 @@ def workspace(n_sing, n_user):
             np.empty(u, dtype=np.int64))
 
 
-@jit
+@inline
 def no_events(n):
     """Empty event records (time, index, state) and their count."""
     return np.empty(0), np.empty(0, dtype=np.int64), np.empty((0, n)), np.int64(0)
