@@ -11,7 +11,9 @@ fresh processes with empty numba and kernel caches, the trees alternating within
 
 1. First run: the time of the first ``run`` of dop853, dopri5 and rk4 (the kernels
    generated before the clock starts), i.e. the compilation of its loop from nothing:
-   each method in a process of its own, and the three one after the other in one process.
+   each method in a process of its own, and the three one after the other in one process;
+   wall-clock and CPU seconds of the process (CPU time is the steadier figure on a loaded
+   machine).
 2. Fixed cost: a run to T = 1e-6 with ``save="final"`` (best of many calls).  On this
    tree also the compiled loop called directly with the same arguments (its entry point,
    no argument checks, no Trajectory): the floor a run's Python side adds to.
@@ -46,9 +48,10 @@ def best(f, n):
 FIRST = SETUP + r"""
 out = {}
 for m in METHODS:
-    tic = time.perf_counter()
+    tic, cpu = time.perf_counter(), time.process_time()
     sc.run(method=m, save="final", **({"n_steps": 100} if m == "rk4" else {}))
     out[m] = time.perf_counter() - tic
+    out[m + "_cpu"] = time.process_time() - cpu
 print(json.dumps(out))
 """
 
@@ -106,16 +109,21 @@ def measure(root, reps_short, reps_long) -> dict:
     """Every figure of one tree in one round."""
     out = {}
     for m in METHODS:
-        out[f"first_{m}_alone"] = fresh(root, FIRST.replace("METHODS", repr((m,))))[m]
+        alone = fresh(root, FIRST.replace("METHODS", repr((m,))))
+        out[f"first_{m}_alone"] = alone[m]
+        out[f"first_{m}_alone_cpu"] = alone[m + "_cpu"]
     three = fresh(root, FIRST.replace("METHODS", repr(METHODS)))
-    out["first_three"] = sum(three.values())
+    out["first_three"] = sum(three[m] for m in METHODS)
+    out["first_three_cpu"] = sum(three[m + "_cpu"] for m in METHODS)
     out.update(fresh(root, COST.replace("REPS_SHORT", str(reps_short))
                      .replace("REPS_LONG", str(reps_long))))
     return out
 
 
-ROWS = ([(f"first_{m}_alone", f"first run of {m} alone (s)") for m in METHODS]
-        + [("first_three", "first runs of the three in one process (s)")]
+ROWS = ([(f"first_{m}_alone{c}", f"first run of {m} alone ({w})") for m in METHODS
+         for c, w in (("", "s"), ("_cpu", "CPU s"))]
+        + [(f"first_three{c}", f"first runs of the three in one process ({w})")
+           for c, w in (("", "s"), ("_cpu", "CPU s"))]
         + [(f"fixed_s_{m}", f"fixed cost of a {m} run (us)") for m in METHODS]
         + [("call_s_dop853", "the compiled dop853 loop called directly (us)")]
         + [(f"per_eval_s_{m}", f"{m}: cost per rhs evaluation (ns)") for m in METHODS])
@@ -153,11 +161,11 @@ def main(argv=None):
     for name in names[:-1]:
         b = best[name]
         summary.append(
-            f"after / {name}: first runs (loops compiled from nothing) "
-            + ", ".join(f"{m} {a[f'first_{m}_alone']:.1f} s vs {b[f'first_{m}_alone']:.1f} s"
-                        for m in METHODS)
-            + f"; the three in one process {a['first_three']:.1f} s vs "
-              f"{b['first_three']:.1f} s; fixed cost "
+            f"after / {name}: first runs (loops compiled from nothing; CPU seconds) "
+            + ", ".join(f"{m} {a[f'first_{m}_alone_cpu']:.1f} s vs "
+                        f"{b[f'first_{m}_alone_cpu']:.1f} s" for m in METHODS)
+            + f"; the three in one process {a['first_three_cpu']:.1f} s vs "
+              f"{b['first_three_cpu']:.1f} s; fixed cost "
             + ", ".join(f"{m} {a[f'fixed_s_{m}'] / b[f'fixed_s_{m}']:.2f}" for m in METHODS)
             + "; per evaluation "
             + ", ".join(f"{m} {a[f'per_eval_s_{m}'] / b[f'per_eval_s_{m}']:.2f}"
