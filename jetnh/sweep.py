@@ -57,11 +57,16 @@ from collections.abc import Mapping
 from .errors import JetnhError
 from .jet import key_name
 
-#: options passed on to ``run_ensemble`` (or to ``Scene.run``)
-OPTIONS = ("rtol", "atol", "method", "first_step", "max_step", "max_steps", "n_steps", "h",
-           "events", "singular", "singular_tol", "step")
 #: options that only ``Scene.run`` takes (methods run point by point)
-POINT_OPTIONS = ("newton_tol", "max_newton", "newton", "projection")
+POINT_OPTIONS = ("projection",)
+
+
+def _options() -> tuple[str, ...]:
+    """The options passed on to ``run_ensemble`` (or to ``Scene.run``): the method, the
+    events and the run options (``numeric.options``, imported when a sweep runs)."""
+    from .numeric.options import NAMES
+
+    return ("method", "events") + NAMES
 
 
 def sweep(scene, grid, client=None, *, times=None, outputs=None, chunk_size=None,
@@ -77,10 +82,11 @@ def sweep(scene, grid, client=None, *, times=None, outputs=None, chunk_size=None
 
     from .numeric.ensemble import resolve
 
-    bad = sorted(set(options) - set(OPTIONS) - set(POINT_OPTIONS))
+    known = _options() + POINT_OPTIONS
+    bad = sorted(set(options) - set(known))
     if bad:
         raise JetnhError(f"sweep has no option {', '.join(map(repr, bad))}; its options are "
-                         f"{', '.join(OPTIONS + POINT_OPTIONS)} (output times: "
+                         f"{', '.join(known)} (output times: "
                          "times=[...])")
     if not _in_ensemble(options.get("method", "dop853")):
         if times is not None and not str(options["method"]).lower().startswith("scipy"):
@@ -88,8 +94,8 @@ def sweep(scene, grid, client=None, *, times=None, outputs=None, chunk_size=None
                              "have; use dop853, dopri5, radau or scipy-<M>, or omit times for the "
                              "final values")
     elif set(options) & set(POINT_OPTIONS):
-        raise JetnhError(f"{', '.join(sorted(set(options) & set(POINT_OPTIONS)))}: options "
-                         "of the dla and dvi methods")
+        raise JetnhError(f"{', '.join(sorted(set(options) & set(POINT_OPTIONS)))}: an option "
+                         "of the dla method")
     if chunk_size is not None:
         chunk_size = _positive_int(chunk_size, "chunk_size")
     names, values = _points(grid)

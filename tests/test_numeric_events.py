@@ -353,3 +353,34 @@ def test_dvi_events_counted_like_dop853():
     b = sc.run(rtol=1e-11, atol=1e-12, events=[ev])
     assert a.status == FINISHED and len(a.t_events[0]) == len(b.t_events[0]) > 1
     assert np.allclose(a.t_events[0], b.t_events[0], atol=1e-3)
+
+
+@pytest.mark.parametrize("method", ["dla", "dvi"])
+def test_discrete_terminal_event_stops_the_run(particle, method):
+    """dla and dvi evaluate the events at every node and stop at the node after a
+    terminal one (the m-th occurrence for terminal=m): the steps end there, and the rows,
+    the event times and states are those of the run without the terminal flag, cut at
+    the terminal event's time."""
+    sc = particle if method == "dla" else Scene(
+        particle.system, "vakonomic", initial=dict(PART0, lambda_z=0.1), t_span=(0.0, 6.0),
+        cache=False)
+    x, y = sc.system.J.q[:2]
+    n = 600
+    quiet = [Event(sp.sin(4 * x), name="wave"), Event(y + 0.25, name="low")]
+    full = sc.run(method=method, n_steps=n, events=quiet)
+    assert len(full.t_events[0]) >= 3 and len(full.t_events[1]) == 1
+    for terminal, stop in ((True, 0), (3, 2)):
+        watched = [Event(sp.sin(4 * x), name="wave", terminal=terminal), quiet[1]]
+        tr = sc.run(method=method, n_steps=n, events=watched)
+        t_stop = full.t_events[0][stop]
+        assert tr.status == EVENT and tr.t[-1] == t_stop
+        # the loop ended at the node after the event: steps taken = rows before it
+        assert tr.diagnostics.steps == len(tr.t) - 1 < n
+        keep = full.t < t_stop
+        np.testing.assert_array_equal(tr.t[:-1], full.t[keep])
+        np.testing.assert_array_equal(tr.y[:-1], full.y[keep])
+        for k in range(2):
+            before = full.t_events[k] <= t_stop
+            np.testing.assert_array_equal(tr.t_events[k], full.t_events[k][before])
+            np.testing.assert_array_equal(tr.y_events[k], full.y_events[k][before])
+        assert len(tr.t_events[0]) == stop + 1

@@ -2,6 +2,7 @@
 (kernels' key, compiled events, derived columns) never lands in their ``__dict__``."""
 
 import copy
+import json
 import pickle
 
 import numpy as np
@@ -32,6 +33,27 @@ def test_scene_refuses_assignment(scene):
     with pytest.raises(JetnhError):
         scene.key = "x"
     assert scene.t_span == (0.0, 0.5) and not hasattr(scene, "new")
+
+
+def test_scene_mappings_are_read_only(scene):
+    params, initial = dict(scene.params), dict(scene.initial)
+    writes = (lambda d: d.__setitem__("x", 1.0), lambda d: d.__delitem__("x"),
+              lambda d: d.update(x=1.0), lambda d: d.pop("x"), lambda d: d.setdefault("q", 1),
+              lambda d: d.clear(), lambda d: d.popitem())
+    for mapping in (scene.initial, scene.params, scene.integrals):
+        for write in writes:
+            with pytest.raises(FrozenError, match="read-only.*Scene.replace"):
+                write(mapping)
+    with pytest.raises(FrozenError):
+        scene.initial["x"] += 1.0
+    assert dict(scene.params) == params and dict(scene.initial) == initial
+    # reads as a dict: lookups, copies, JSON, pickling, a new scene from it
+    assert scene.initial["x_t"] == 0.6 and {**scene.initial} == initial
+    assert json.loads(json.dumps(scene.initial)) == initial
+    back = pickle.loads(pickle.dumps(scene.initial))
+    assert back == initial and type(back) is type(scene.initial)
+    moved = scene.replace(initial={**scene.initial, "x": 1.0})
+    assert moved.initial["x"] == 1.0 and scene.initial["x"] == 0.0
 
 
 def test_scene_lazy_state_not_in_dict(scene):

@@ -87,3 +87,29 @@ def test_sweep_passes_the_values_on(scene):
     a = sweep(scene, grid, step=StepControl(rtol=1e-7), singular=Singular(tol=1e-6))
     b = sweep(scene, grid, rtol=1e-7, singular_tol=1e-6)
     assert a.equals(b)
+
+
+def test_one_definition_of_the_run_options(scene):
+    """Scene.run, run_ensemble and sweep take the run options of ``options.NAMES``; an
+    unknown keyword is refused naming them; radau's Newton options reach the ensemble."""
+    from jetnh.numeric.options import NAMES, Options, options
+
+    assert set(NAMES) == {"step", "singular", "newton"} | {
+        k for ks in KEYWORDS.values() for k in ks}
+    for call in (lambda: scene.run(rtool=1e-3), lambda: run_ensemble(scene, rtool=1e-3)):
+        with pytest.raises(ArgumentError, match="rtool: not a run option; the run options "
+                                                "are step, singular, newton, rtol"):
+            call()
+    opts = options(rtol=1e-7, singular_tol=1e-6, max_newton=5)
+    assert opts == Options(StepControl(rtol=1e-7), Singular(tol=1e-6), Newton(max_iter=5))
+    assert options(rtol=1e-7, singular_tol=1e-6, max_newton=5) is opts   # kept
+    assert options(rtol=True) is not options(rtol=1)          # the types count
+    x_t = np.array([0.6, 0.5])
+    ens = run_ensemble(scene, {"x_t": x_t}, method="radau",
+                       newton=Newton(tol=1e-8, max_iter=5))
+    for r, v in enumerate(x_t):
+        one = scene.run(method="radau", newton_tol=1e-8, max_newton=5, y0={"x_t": v},
+                        save="final")
+        np.testing.assert_array_equal(ens.y[r, -1], one.y[-1])
+    with pytest.raises(JetnhError, match="newton_tol and max_newton are options of radau"):
+        run_ensemble(scene, {"x_t": x_t}, newton_tol=1e-8)

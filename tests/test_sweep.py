@@ -243,7 +243,9 @@ def test_point_methods_times_and_their_limits(disk):
     assert list(df.iloc[1][["x(t=1)", "x(t=2.5)"]]) == list(tr["x"])
     with pytest.raises(JetnhError, match="times needs dense output, which dla"):
         jn.sweep(disk, {"R": [1.0]}, method="dla", n_steps=10, times=[1.0])
-    with pytest.raises(JetnhError, match="newton_tol: options of the dla and dvi"):
+    with pytest.raises(JetnhError, match="projection: an option of the dla method"):
+        jn.sweep(disk, {"R": [1.0]}, projection=True)
+    with pytest.raises(JetnhError, match="newton_tol and max_newton are options of radau"):
         jn.sweep(disk, {"R": [1.0]}, newton_tol=1e-12)
 
 

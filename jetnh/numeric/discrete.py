@@ -6,6 +6,7 @@ degenerate on the constraints).  Functions of the scene (``Scene.run`` calls the
 
 from __future__ import annotations
 
+import functools
 import time
 
 import numpy as np
@@ -52,13 +53,14 @@ def run_dla(scene, t0, t1, y_init, default_y0, p, n_steps, save, tol, max_iter,
     v0 = np.ascontiguousarray(v0, dtype=float)
     solve = dla.solver()
     constrained = degenerate_off_constraints(scene, kern, t0, q0, v0, p)
+    uev, cols, ev_dir, ev_max = watched_events(scene, ce, 0)
     halt = interrupt.flag()
     tic = time.perf_counter()
     out = interrupt.call(lambda: solve(
         kern.step_residual, kern.momentum, kern.legendre, kern.nodal, kern.constraint_jac,
-        kern.sing, t0, t1, q0, v0, p, n_steps, scene.system.k, tol, max_iter, mode,
+        kern.sing, uev, t0, t1, q0, v0, p, n_steps, scene.system.k, tol, max_iter, mode,
         projection, n_sing, float(singular_tol or 0.0), len(kern.layout.integrals),
-        constrained, halt), halt, timeout)
+        constrained, cols, ev_dir, ev_max, halt), halt, timeout)
     return trajectory(scene, "dla" + ("+projection" if projection else ""), kern, out,
                       time.perf_counter() - tic, p, t0, t1, n_steps, singular_tol, timeout,
                       ce, save)
@@ -88,22 +90,53 @@ def run_dvi(scene, t0, t1, y_init, default_y0, p, n_steps, save, tol, max_iter,
     mode = EVERY_STEP if save == "steps" or ce is not None else ENDPOINTS
     n_sing = len(kern.layout.indicators) if singular_tol is not None else 0
     solve = dvi.solver()
+    uev, cols, ev_dir, ev_max = watched_events(scene, ce, k)
     halt = interrupt.flag()
     tic = time.perf_counter()
     out = interrupt.call(lambda: solve(
-        kern.step_residual, kern.momentum, kern.legendre, kern.nodal, kern.sing, t0, t1,
-        q0, v0, lam0, p, n_steps, tol, max_iter, mode, n_sing,
-        float(singular_tol or 0.0), len(kern.layout.integrals), halt), halt, timeout)
+        kern.step_residual, kern.momentum, kern.legendre, kern.nodal, kern.sing, uev, t0,
+        t1, q0, v0, lam0, p, n_steps, tol, max_iter, mode, n_sing,
+        float(singular_tol or 0.0), len(kern.layout.integrals), cols, ev_dir, ev_max, halt),
+        halt, timeout)
     return trajectory(scene, "dvi", kern, out, time.perf_counter() - tic, p, t0,
                       t1, n_steps, singular_tol, timeout, ce, save)
+
+
+def watched_events(scene, ce, k_lam):
+    """What a discrete loop watches of the user events ``ce`` (or None): ``(uev, cols,
+    direction, max_events)``, ``cols`` the columns of a node row that make the scene's
+    state (coordinates, independent velocities, ``k_lam`` multipliers)."""
+    J = scene.system.J
+    n = J.n
+    ind = [J.q.index(s) for s in scene.system.independent]
+    cols = np.array([*range(n), *(n + i for i in ind), *range(2 * n, 2 * n + k_lam)],
+                    dtype=np.int64)
+    if ce is None:
+        none = np.zeros(0, dtype=np.int64)
+        return _no_events(), cols, none, none
+    return ce.uev.cfunc, cols, ce.direction, ce.max_events
+
+
+@functools.cache
+def _no_events():
+    """The event function of a run without events (never called): a compiled no-op."""
+    import numba
+
+    from .integrators._common import RHS_SIGNATURE
+
+    return numba.cfunc(RHS_SIGNATURE, cache=True)(_nothing)
+
+
+def _nothing(t, y, p, out):
+    pass
 
 
 def trajectory(scene, method, kern, out, wall, p, t0, t1, n_steps, singular_tol,
                timeout=None, ce=None, save="steps"):
     """A Trajectory from the result of a dla/dvi solve; a failed Newton step next to a
     singular configuration becomes a singular stop, any other failure an error; user
-    events ``ce`` located on the nodes (``node_events``), a terminal one ending the
-    trajectory there."""
+    events ``ce`` located between the nodes (``node_events``; the run itself ended at
+    the node after a terminal one), the trajectory ending at a terminal one."""
     status, ts, rows, n_out, stats, t_last, y_last, sing_index, t_prev, y_prev = out
     status = int(status)
     J = scene.system.J

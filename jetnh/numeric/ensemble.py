@@ -55,7 +55,7 @@ from .integrators import STATUS_TEXT
 from .integrators._common import (AT_T_EVAL, ENDPOINTS, EVENT, FINISHED, NONFINITE,
                                   SINGULAR, entry_point)
 from .integrators.loop import Control, watch_of
-from .options import StepControl, fields_of, merge, singular_of
+from .options import fields_of, options
 
 PARALLEL = ("prange", "threads", "serial")
 
@@ -319,24 +319,23 @@ class Ensemble:
                 f"{self.workers} workers)>")
 
 
-def run_ensemble(scene, initial=None, params=None, *, rtol=None, atol=None, t_eval=None,
-                 save="final", method="dop853", n_steps=None, h=None, first_step=None,
-                 max_step=None, max_steps=None, events=None, singular="stop",
-                 singular_tol=None, parallel="threads", workers=None, project=False,
-                 on_error="raise", timeout=None, step=None) -> Ensemble:
+def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
+                 method="dop853", events=None, parallel="threads", workers=None,
+                 project=False, on_error="raise", timeout=None, step=None, singular="stop",
+                 newton=None, **keywords) -> Ensemble:
     """Integrate ``scene`` from many initial states / parameter sets: see the module
-    docstring.  Options as ``Scene.run`` (``max_steps`` and ``timeout`` are budgets of
-    each run and of the whole ensemble; Ctrl-C stops every run within one step), also
-    as the values ``step=StepControl(...)`` and ``singular=Singular(...)``."""
+    docstring.  The run options as ``Scene.run`` (``numeric.options``: the values
+    ``step``, ``singular``, ``newton`` or their keywords ``rtol``, ``atol``, ...);
+    ``max_steps`` and ``timeout`` are budgets of each run and of the whole ensemble;
+    Ctrl-C stops every run within one step."""
     import numba
 
-    step = merge(step, StepControl, dict(
-        rtol=rtol, atol=atol, first_step=first_step, max_step=max_step,
-        max_steps=max_steps, n_steps=n_steps, h=h))
-    rtol, atol, first_step, max_step, max_steps, n_steps, h = fields_of(step)
+    opts = options(step, singular, newton, **keywords)
+    rtol, atol, first_step, max_step, max_steps, n_steps, h = fields_of(opts.step)
     if max_step is None:
         max_step = np.inf
-    singular, singular_tol = fields_of(singular_of(singular, singular_tol))
+    singular, singular_tol = fields_of(opts.singular)
+    newton_tol, max_newton = fields_of(opts.newton)
 
     if parallel not in PARALLEL:
         raise JetnhError(f"parallel must be one of {PARALLEL}, not {parallel!r}")
@@ -379,6 +378,8 @@ def run_ensemble(scene, initial=None, params=None, *, rtol=None, atol=None, t_ev
     EV_N = np.zeros((n_runs, max(n_ev, 1)), dtype=np.int64)
     EV_T = np.full((n_runs, max(n_ev, 1)), np.nan)
     rtol, atol_v = arguments.tolerances(rtol, atol, n)
+    if method != "radau" and (newton_tol is not None or max_newton is not None):
+        raise JetnhError(f"newton_tol and max_newton are options of radau, not {method}")
     if integrators.adaptive(method):
         if n_steps is not None or h is not None:
             raise JetnhError(f"n_steps and h are options of fixed-step methods, not {method}")
@@ -392,7 +393,7 @@ def run_ensemble(scene, initial=None, params=None, *, rtol=None, atol=None, t_ev
         from .integrators import radau
 
         head = (kern.rhs_fp, scene.jacobian, kern.sing_fp, uev, t0, t1)
-        tail = (ctl, radau.newton_options(None, None), te, mode, watch, halt)
+        tail = (ctl, radau.newton_options(newton_tol, max_newton), te, mode, watch, halt)
         drive = entry_point(radau.ensemble_solver(parallel=parallel == "prange"))
     else:
         from .integrators import loop

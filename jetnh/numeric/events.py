@@ -20,8 +20,9 @@ crossings from negative to positive, < 0 only from positive to negative, 0 on bo
 occurrence, at the located time; callables may carry ``terminal`` and ``direction`` as
 attributes.  Roots are found by Brent's method (scipy's ``brentq``, xtol = rtol = 4 eps)
 on the dense output of DOP853 / DOPRI5 / radau (the cubic Hermite interpolant for RK4),
-inside the compiled loop (``integrators._events``); for dla and dvi on the linear
-interpolant of their nodes after the run (``discrete.node_events``).
+inside the compiled loop (``integrators._events``).  dla and dvi evaluate the events at
+every node as they go and end the run at the node after a terminal one; the roots are
+then located on the linear interpolant between the nodes (``discrete.node_events``).
 """
 
 from __future__ import annotations

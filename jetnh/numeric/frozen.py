@@ -1,4 +1,6 @@
 """Immutable objects (``Scene``, ``Trajectory``): attributes are set in ``__init__`` only.
+Their mappings (``scene.params``, ``scene.initial``) are ``FrozenDict``: read as dicts,
+written never.
 
 ``Frozen.__init_subclass__`` wraps the subclass's ``__init__``: once it returns, setting
 or deleting an attribute raises ``FrozenError``.  Values computed on first use (compiled
@@ -42,6 +44,13 @@ class Frozen:
         raise FrozenError(f"{type(self).__name__} is immutable: cannot change {name!r} after "
                           "construction; make a new one (Scene.replace(...) for a scene)")
 
+    def _set(self, **values):
+        """Set attributes in ``__init__``, in one go (as many assignments, without a call of
+        ``__setattr__`` each: a trajectory is made on every run)."""
+        if "_memo" in self.__dict__:
+            self._refuse(next(iter(values)))
+        self.__dict__.update(values)
+
     def __setattr__(self, name, value):
         if "_memo" in self.__dict__:
             self._refuse(name)
@@ -71,3 +80,21 @@ class memo:
 
     def __set__(self, obj, value):
         obj._refuse(self.name)
+
+
+class FrozenDict(dict):
+    """A dict that refuses writes (``FrozenError``); reads, copies (``dict(d)``), JSON and
+    pickling work as for a dict."""
+
+    __slots__ = ()
+
+    def _refuse(self, *args, **kwargs):
+        raise FrozenError("this mapping is read-only (a scene's params and initial values "
+                          "are fixed at construction); make a new scene with "
+                          "Scene.replace(params=..., initial=...)")
+
+    __setitem__ = __delitem__ = __ior__ = _refuse
+    clear = pop = popitem = setdefault = update = _refuse
+
+    def __reduce__(self):
+        return FrozenDict, (dict(self),)

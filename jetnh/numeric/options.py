@@ -1,4 +1,5 @@
-"""Run options as small immutable values, shared by ``Scene.run`` and ``run_ensemble``.
+"""Run options as small immutable values: one definition for ``Scene.run``,
+``run_ensemble`` and ``sweep``.
 
     scene.run(step=StepControl(rtol=1e-11, max_step=0.1), singular=Singular(tol=1e-8))
     scene.run(rtol=1e-11, max_step=0.1, singular_tol=1e-8)         # the same run
@@ -6,9 +7,11 @@
 ``StepControl``: tolerances, step limits and the step budget (adaptive methods) or the
 fixed step (``n_steps`` or ``h``); ``Singular``: what to do at a singular configuration
 (``"stop"`` or ``"ignore"``) and the threshold of the indicators; ``Newton``: the
-iteration of the implicit and discrete methods.  The keyword arguments stay accepted:
-``merge`` folds them into the value (a keyword given together with a value that sets it
-too is refused).  Values are checked where the run uses them (``numeric.arguments``).
+iteration of the implicit and discrete methods.  Each field is also a keyword of the
+run (``KEYWORDS``: the fields' names; ``singular_tol``, ``newton_tol`` and
+``max_newton`` for the other two): ``options`` folds the keywords into the values (a
+keyword given together with a value that sets it too is refused) and returns them as
+one ``Options``.  Values are checked where the run uses them (``numeric.arguments``).
 """
 
 from __future__ import annotations
@@ -105,3 +108,44 @@ _DEFAULT = {cls: cls() for cls in (StepControl, Singular, Newton)}
 KEYWORDS = {"step": tuple(f.name for f in fields(StepControl)),
             "singular": ("singular", "singular_tol"),
             "newton": ("newton_tol", "max_newton")}
+#: every run option these values define: the values and their keywords
+NAMES = tuple(dict.fromkeys(("step", "singular", "newton") + sum(KEYWORDS.values(), ())))
+
+
+@dataclass(frozen=True)
+class Options:
+    """The grouped options of one run (``options``)."""
+
+    step: StepControl
+    singular: Singular
+    newton: Newton
+
+
+def options(step=None, singular="stop", newton=None, **keywords) -> Options:
+    """The ``Options`` of the values ``step``, ``singular`` (a ``Singular`` or its
+    action), ``newton`` and their keywords (``KEYWORDS``; None: not given).  Repeated
+    calls with the same plain keywords return one value."""
+    if step is None and newton is None and type(singular) is str:
+        try:
+            key = (singular, *((k, type(v), v) for k, v in sorted(keywords.items())))
+            hit = _SEEN.get(key)
+        except TypeError:       # an array: not hashable
+            key = hit = None
+        if hit is not None:
+            return hit
+    else:
+        key = None
+    unknown = [k for k in keywords if k not in NAMES]
+    if unknown:
+        raise ArgumentError(f"{', '.join(unknown)}: not a run option; the run options are "
+                            f"{', '.join(NAMES)}")
+    g = keywords.get
+    out = Options(merge(step, StepControl, {k: g(k) for k in KEYWORDS["step"]}),
+                  singular_of(singular, g("singular_tol")),
+                  merge(newton, Newton, dict(tol=g("newton_tol"), max_iter=g("max_newton"))))
+    if key is not None and len(_SEEN) < 256:
+        _SEEN[key] = out
+    return out
+
+
+_SEEN: dict = {}

@@ -49,8 +49,8 @@ from .integrators import STATUS_TEXT
 from .integrators._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, NONFINITE,
                                   SINGULAR, STOPPED)
 from .integrators.loop import Control, watch_of
-from .frozen import Frozen, memo
-from .options import Newton, StepControl, fields_of, merge, singular_of
+from .frozen import Frozen, FrozenDict, memo
+from .options import fields_of, options
 from .trajectory import Trajectory
 
 
@@ -86,10 +86,11 @@ class Scene(Frozen):
             if not isinstance(value, (Mapping, type(None))):
                 raise JetnhError(f"{what} must be a dict keyed by Symbol or name, got a "
                                  f"{type(value).__name__}")
-        self.integrals = {str(k): sympy_object(v) for k, v in (integrals or {}).items()}
+        self.integrals = FrozenDict({str(k): sympy_object(v)
+                                     for k, v in (integrals or {}).items()})
         self.t_span = self._t_span(t_span)
         self.multipliers = codegen.multiplier_names(system, principle)
-        self.params = self._params(params or {})
+        self.params = FrozenDict(self._params(params or {}))
         if isinstance(runtime_params, (str, sp.Symbol)):
             runtime_params = (runtime_params,)
         self.runtime_params = tuple(arguments.name_of(k, "a runtime parameter")
@@ -104,7 +105,7 @@ class Scene(Frozen):
         self.state_names = self.coordinates + self.velocities + self.multipliers
         self.consistency_tol = arguments.positive(consistency_tol, "consistency_tol")
         self.projected: dict[str, tuple[float, float]] = {}
-        self.initial = self._initial(initial or {}, project)
+        self.initial = FrozenDict(self._initial(initial or {}, project))
         self.y0 = np.array([self.initial[n] for n in self.state_names], dtype=float)
 
     # ------------------------------------------------------------------ input checks
@@ -274,69 +275,63 @@ class Scene(Frozen):
         return np.array([self.params[n] for n in self.runtime_params], dtype=float)
 
     # ------------------------------------------------------------------ run
-    def run(self, rtol=None, atol=None, t_eval=None, method="dop853", *, backend=None,
-            save="steps", first_step=None, max_step=None, max_steps=None,
-            n_steps=None, h=None, t_span=None, y0=None, params=None, newton_tol=None,
-            max_newton=None, events=None, singular="stop", singular_tol=None,
-            projection=False, timeout=None, step=None, newton=None) -> Trajectory:
+    def run(self, rtol=None, atol=None, t_eval=None, method="dop853", *, save="steps",
+            events=None, t_span=None, y0=None, params=None, timeout=None, projection=False,
+            backend=None, step=None, singular="stop", newton=None,
+            **keywords) -> Trajectory:
         """Integrate and return a ``Trajectory``.
 
-        ``method``: "dop853" (default), "dopri5" (alias "RK45"), "rk4" (fixed step: give
-        ``n_steps`` or ``h``), "radau" (implicit Radau IIA of order 5 for stiff problems,
-        with the Jacobian from the symbolic derivation; ``newton_tol``, ``max_newton`` (7)
-        bound its simplified Newton iteration), "dla" (the structure-preserving discrete
-        Lagrange-d'Alembert midpoint integrator, Chetaev only, fixed step, Newton tolerance
-        ``newton_tol`` (1e-13) in at most ``max_newton`` (50) iterations;
-        ``projection=True`` projects every node velocity onto the constraints), "dvi" (the
-        discrete vakonomic midpoint variational integrator, vakonomic dynamics, fixed
-        step), or "scipy-<M>" for scipy's ``solve_ivp(method=M)`` on the same compiled
-        right-hand side (also ``backend="scipy"``).  ``t_eval``: output times (dense
-        output); else every accepted step, or the two ends with ``save="final"``.
-        ``atol`` may be a scalar or one value per state; adaptive steps are bounded by
-        ``first_step`` (default automatic) and ``max_step`` (default none).
+        What: ``t_span`` replaces the scene's; ``y0`` the initial state (a dict keyed by
+        Symbol or name, the other states keeping the scene's values and dependent
+        velocities, if given, agreeing with the constraints; or a sequence in the order
+        ``scene.state_names``); ``params`` the run-time parameters (``runtime_params``: a
+        dict, or a sequence in the order ``scene.runtime_params``).
 
-        ``y0`` replaces the initial state: a dict keyed by Symbol or name (the other
-        states keep the scene's values; dependent velocities, if given, must agree with
-        the constraints) or a sequence in the order ``scene.state_names``.  ``params``
-        gives the run-time parameters (``runtime_params``): a dict, or a sequence in the
-        order ``scene.runtime_params``.  Every argument is checked before it reaches
-        compiled code (``numeric.arguments``).
+        How: ``method`` "dop853" (default), "dopri5" (alias "RK45"), "rk4" (fixed step),
+        "radau" (implicit Radau IIA of order 5 for stiff problems, with the Jacobian from
+        the symbolic derivation), "dla" (the structure-preserving discrete
+        Lagrange-d'Alembert midpoint integrator, Chetaev only, fixed step;
+        ``projection=True`` projects every node velocity onto the constraints), "dvi"
+        (the discrete vakonomic midpoint variational integrator, fixed step), or
+        "scipy-<M>" for scipy's ``solve_ivp(method=M)`` on the same compiled right-hand
+        side (also ``backend="scipy"``).
 
-        Budgets: at most ``max_steps`` steps (the fixed-step methods refuse more up
-        front); ``timeout`` seconds of wall-clock time, after which the run returns what
-        it has with status ``STOPPED``.  Ctrl-C stops a compiled run within one step
-        (``numeric.interrupt``).
+        The run options (``numeric.options``), as values or as their keywords:
 
-        ``events``: user events (sympy expressions, callables g(t, y) or ``Event``; see
-        ``jetnh.numeric.events``), located on the dense output with scipy's semantics
-        (dla and dvi: on the linear interpolant of their nodes, ``discrete.node_events``);
-        the trajectory reports ``t_events``, ``y_events`` and ``events``.
+        - ``step=StepControl(rtol, atol, first_step, max_step, max_steps, n_steps, h)``:
+          tolerances (1e-9, 1e-12; ``atol`` a scalar or one value per state), the first
+          and the largest adaptive step (automatic, none), the budget of steps (10^7; the
+          fixed-step methods refuse more up front) and the fixed step of rk4, dla and dvi
+          (``n_steps`` or ``h``);
+        - ``singular=Singular(action, tol)`` or ``singular="stop"|"ignore"`` with
+          ``singular_tol``: "stop" (default) ends the run at a singular configuration,
+          where a singularity indicator of the scene (``kernels.layout.indicators``: the
+          determinant of df/dqdot^alpha, denominators and square-root arguments of phi
+          and of the accelerations) crosses zero or falls below ``tol`` (1e-10) times its
+          initial size; the point is located on the dense output, ``status`` is SINGULAR
+          and ``stop_reason`` names the indicator, the time and the way out.  dla and dvi
+          check the indicators of the constraints and the Lagrangian as written
+          (``codegen.discrete_indicators``) at every node and stop at the last regular
+          one.  NaN or infinity that no indicator explains raises an ``IntegrationError``
+          naming the time and the state;
+        - ``newton=Newton(tol, max_iter)`` or ``newton_tol``, ``max_newton``: the Newton
+          iteration of radau (automatic, 7) and of dla and dvi (1e-13, 50).
 
-        ``singular="stop"`` (default) stops at a singular configuration: where a
-        singularity indicator of the scene (``kernels.layout.indicators``: the
-        determinant of df/dqdot^alpha, denominators and square-root arguments of phi and
-        of the accelerations) crosses zero or falls below ``singular_tol`` times its
-        initial size; the point is located on the dense output, ``status`` is
-        ``SINGULAR`` and ``stop_reason`` names the indicator, the time and the way out.
-        ``singular="ignore"`` skips the check.  NaN or infinity that no indicator
-        explains stops with an ``IntegrationError`` naming the time and the state.  dla
-        and dvi check the indicators of the constraints and the Lagrangian as written
-        (``codegen.discrete_indicators``; never the split) at every node and stop at the
-        last regular one; a failed step next to a vanishing indicator, or where the
-        Lagrangian is degenerate on the constraints, is a singular stop too.
+        Events: ``events`` (sympy expressions, callables g(t, y) or ``Event``; see
+        ``jetnh.numeric.events``) with scipy's semantics, located on the dense output
+        (dla and dvi: on the line between their nodes, ``discrete``); the trajectory
+        reports ``t_events``, ``y_events`` and ``events``; a terminal event ends the run.
 
-        Option values (``numeric.options``) stand for groups of these keywords:
-        ``step=StepControl(rtol, atol, first_step, max_step, max_steps, n_steps, h)``
-        (defaults rtol 1e-9, atol 1e-12, max_steps 10^7), ``singular=Singular(action,
-        tol)`` (defaults "stop", 1e-10), ``newton=Newton(tol, max_iter)``.
+        Output: the points of ``t_eval`` (dense output), else every step, or the two ends
+        with ``save="final"``.  Budget: ``timeout`` seconds of wall-clock time, after
+        which the run returns what it has with status STOPPED; Ctrl-C stops a compiled run
+        within one step (``numeric.interrupt``).  Every argument is checked before it
+        reaches compiled code (``numeric.arguments``).
         """
-        step = merge(step, StepControl, dict(
-            rtol=rtol, atol=atol, first_step=first_step, max_step=max_step,
-            max_steps=max_steps, n_steps=n_steps, h=h))
-        rtol, atol, first_step, max_step, max_steps, n_steps, h = fields_of(step)
-        singular, singular_tol = fields_of(singular_of(singular, singular_tol))
-        newton_tol, max_newton = fields_of(merge(newton, Newton, dict(tol=newton_tol,
-                                                                     max_iter=max_newton)))
+        opts = options(step, singular, newton, rtol=rtol, atol=atol, **keywords)
+        rtol, atol, first_step, max_step, max_steps, n_steps, h = fields_of(opts.step)
+        singular, singular_tol = fields_of(opts.singular)
+        newton_tol, max_newton = fields_of(opts.newton)
         t0, t1 = self._t_span(t_span) if t_span is not None else self.t_span
         p = self._run_params(params)
         y_init = self._run_state(y0, t0, p)
@@ -415,8 +410,8 @@ class Scene(Frozen):
             ctl = Control(rtol, atol_v, 0.0, np.inf, budget, steps)
             dense = {"mode": mode}
         kern = self.kernels
-        ce = self.compile_events(events)
-        watch = watch_of(kern, ce, singular == "stop", singular_tol)
+        ce = None if events is None else self.compile_events(events)
+        watch = self._watch(kern, ce, singular == "stop", singular_tol)
         uev = ce.uev if ce is not None else kern.sing_fp
         halt = interrupt.flag()
         if method == "radau":
@@ -451,10 +446,25 @@ class Scene(Frozen):
                              f"option of the {method} method; remove "
                              f"{'it' if len(given) == 1 else 'them'}")
 
+    def _watch(self, kern, ce, singular, singular_tol):
+        """``loop.watch_of``, kept per scene for the runs without events."""
+        if ce is not None:
+            return watch_of(kern, ce, singular, singular_tol)
+        store = self._memo.setdefault("watch", {})
+        key = (singular, singular_tol)
+        if key not in store:
+            store[key] = watch_of(kern, None, singular, singular_tol)
+        return store[key]
+
+    @memo
+    def _p(self) -> np.ndarray:
+        """``p``, made once: the run-time parameters the runs read (never written)."""
+        return self.p
+
     def _run_params(self, params) -> np.ndarray:
         """The run-time parameters of one run (``run(params=...)``), checked."""
         if params is None:
-            return self.p
+            return self._p
         if isinstance(params, dict):
             for k in params:
                 name = arguments.name_of(k, "params")

@@ -61,6 +61,22 @@ class Diagnostics:
         return "\n".join(lines)
 
 
+def _columns(layout) -> tuple[dict, dict]:
+    """Name -> column of the states and of the aux rows (dependent velocities, first
+    integrals) of ``layout``; built once per layout."""
+    hit = _COLUMNS.get(id(layout))
+    if hit is None or hit[0] is not layout:
+        k = len(layout.dependent_velocities)
+        aux = {name: a for a, name in enumerate(layout.dependent_velocities)}
+        aux.update({name: 2 * k + 1 + i for i, name in enumerate(layout.integrals)})
+        hit = _COLUMNS[id(layout)] = (layout, {n: i for i, n in enumerate(layout.states)},
+                                      aux)
+    return hit[1], hit[2]
+
+
+_COLUMNS: dict = {}
+
+
 class Trajectory(Frozen):
     """Output times ``t`` and states ``y`` (rows) of one run, with named access.
 
@@ -75,38 +91,32 @@ class Trajectory(Frozen):
     def __init__(self, scene, t, y, p, *, method, status, stop_reason, steps, rejected,
                  nfev, wall_time, kernels, projected=None, own=None, events=None,
                  singularity=None, dense=None):
-        self.scene = scene
-        self.t = np.ascontiguousarray(t, dtype=float)
-        self.y = np.ascontiguousarray(y, dtype=float)
-        self._p = p
-        self._kernels = kernels
-        self.layout = kernels.layout
-        self.method = method
-        self.status = status
-        self.stop_reason = stop_reason
-        # scipy's convention: a terminal event is a success; a singular stop is not
-        self.success = status in (0, 5)
-        #: the stop at a singular configuration: {"indicator", "kind", "index", "t",
-        #: "value", "initial", "reason"}, or None
-        self.singularity = singularity
         names, t_ev, y_ev = events if events is not None else ((), [], [])
-        self.event_names = tuple(names)
-        self.t_events = list(t_ev)
-        self.y_events = list(y_ev)
-        # what re-taking a step needs (tolerances, output mode; see numeric.dense), or None
-        self._dense = dense
-        self._info = dict(steps=steps, rejected=rejected, nfev=nfev, wall_time=wall_time,
-                          projected=dict(projected or {}))
-        # methods that carry their own velocities, residuals, energy and first integrals
-        # (the discrete integrators dla, dvi): {"velocities": {name: col}, "residual",
-        # "energy", "integrals": {name: col}}
-        self._own = own or {}
-        self._own_velocities = self._own.get("velocities")
-        lay = self.layout
-        self._state_index = {name: i for i, name in enumerate(lay.states)}
-        k = len(lay.dependent_velocities)
-        self._aux_index = {name: a for a, name in enumerate(lay.dependent_velocities)}
-        self._aux_index.update({name: 2 * k + 1 + i for i, name in enumerate(lay.integrals)})
+        self._set(
+            scene=scene, t=np.ascontiguousarray(t, dtype=float),
+            y=np.ascontiguousarray(y, dtype=float), _p=p, _kernels=kernels, method=method,
+            status=status, stop_reason=stop_reason,
+            #: the stop at a singular configuration: {"indicator", "kind", "index", "t",
+            #: "value", "initial", "reason"}, or None
+            singularity=singularity,
+            event_names=tuple(names), t_events=list(t_ev), y_events=list(y_ev),
+            # what re-taking a step needs (tolerances, output mode; see numeric.dense)
+            _dense=dense,
+            _info=dict(steps=steps, rejected=rejected, nfev=nfev, wall_time=wall_time,
+                       projected=dict(projected or {})),
+            # methods that carry their own velocities, residuals, energy and first
+            # integrals (the discrete integrators dla, dvi): {"velocities": {name: col},
+            # "residual", "energy", "integrals": {name: col}}
+            _own=own or {})
+
+    @property
+    def layout(self):
+        return self._kernels.layout
+
+    @property
+    def success(self) -> bool:
+        """scipy's convention: a terminal event is a success; a singular stop is not."""
+        return self.status in (0, 5)
 
     # ------------------------------------------------------------------ access
     @property
@@ -122,14 +132,16 @@ class Trajectory(Frozen):
 
     def __getitem__(self, key) -> np.ndarray:
         name = self._name(key)
-        if name in self._state_index:
-            return self.y[:, self._state_index[name]]
-        if self._own_velocities is not None and name in self._own_velocities:
-            return self._own_velocities[name]
+        states, aux = _columns(self.layout)
+        if name in states:
+            return self.y[:, states[name]]
+        own = self._own.get("velocities")
+        if own is not None and name in own:
+            return own[name]
         if name in self._own.get("integrals", {}):
             return self._own["integrals"][name]
-        if name in self._aux_index:
-            return self.aux[:, self._aux_index[name]]
+        if name in aux:
+            return self.aux[:, aux[name]]
         raise JetnhError(
             f"{name!r} is not in this trajectory; it has {', '.join(self.names)}")
 

@@ -22,7 +22,8 @@ dvi         2       none (fixed step), symmetric,     Benito & Martin de Diego (
 
 The Runge-Kutta methods take the singularity indicators and the user events of the scene
 as first-class functions and locate them on their dense output (``_events``); dla and dvi
-check the indicators of the constraints and the Lagrangian at their nodes.
+check the indicators of the constraints and the Lagrangian and the user events at their
+nodes (a terminal event ends the run at the node after it).
 
 ``METHODS`` is the one table of method names (``method(name)`` reads a name or an alias).
 """

@@ -58,8 +58,12 @@ MAX_FACTOR = 10.0
 #: output modes
 EVERY_STEP, AT_T_EVAL, ENDPOINTS = 0, 1, 2
 
-#: the helpers: compiled into the loops that call them (only the loops are cached on disk)
+#: the helpers: compiled into the loops that call them (only the loops are cached on disk);
+#: ``jit`` each once per process (a library of its own, linked into its callers), ``inline``
+#: into each caller at numba's IR level: the helpers called once or twice, which would
+#: cost more as libraries (each compiled, then optimised again in every caller) than as code
 jit = numba.njit(error_model="numpy", nogil=True)
+inline = numba.njit(error_model="numpy", nogil=True, inline="always")
 
 
 @jit
@@ -94,7 +98,7 @@ def store(ts, ys, n, t, y):
     return ts, ys, n + 1
 
 
-@jit
+@inline
 def initial_step_h0(y0, f0, rtol, atol, interval, scale):
     """First half of the starting-step heuristic (Hairer-Norsett-Wanner II.4, p. 169):
     h0 from |y0| and |f0|; fills ``scale`` = atol + rtol |y0|."""
@@ -115,7 +119,7 @@ def initial_step_h0(y0, f0, rtol, atol, interval, scale):
     return min(h0, interval), d1
 
 
-@jit
+@inline
 def initial_step_h1(f0, f1, h0, d1, scale, order, interval, max_step):
     """Second half: an explicit Euler step of size h0 estimates the second derivative."""
     d2 = 0.0
@@ -129,6 +133,41 @@ def initial_step_h1(f0, f1, h0, d1, scale, order, interval, max_step):
     return min(100 * h0, h1, interval, max_step)
 
 
+@inline
+def start(rhs, t, y, p, f0, f1, ytmp, scale, ctl, error_order, t_end, stats, mode, t_eval,
+          ts, ys, n_out):
+    """The start of an adaptive run (every adaptive loop): ``f0 = f(t0, y0)`` checked
+    finite, the first output row, a zero-length span answered, and the first step
+    (``ctl.first_step`` or the heuristic of ``initial_step_h0``/``_h1``; ``f1`` is
+    scratch).  Returns ``(status, h_abs, ts, ys, n_out)``: status NONFINITE or FINISHED
+    (the run is over) or -1 (go on with the step h_abs)."""
+    rtol, atol, first_step, max_step = ctl[0], ctl[1], ctl[2], ctl[3]
+    direction = 1.0 if t_end >= t else -1.0
+    interval = abs(t_end - t)
+    rhs(t, y, p, f0)
+    stats[2] += 1
+    if not all_finite(f0):
+        return NONFINITE, 0.0, ts, ys, n_out
+    if mode != AT_T_EVAL:
+        ts, ys, n_out = store(ts, ys, n_out, t, y)
+    if interval == 0.0:
+        if mode == AT_T_EVAL:
+            j = 0
+            while j < t_eval.shape[0] and t_eval[j] == t:
+                ts, ys, n_out = store(ts, ys, n_out, t, y)
+                j += 1
+        return FINISHED, 0.0, ts, ys, n_out
+    if first_step > 0.0:
+        return -1, first_step, ts, ys, n_out
+    h0, d1 = initial_step_h0(y, f0, rtol, atol, interval, scale)
+    for i in range(y.shape[0]):
+        ytmp[i] = y[i] + h0 * direction * f0[i]
+    rhs(t + h0 * direction, ytmp, p, f1)
+    stats[2] += 1
+    return -1, initial_step_h1(f0, f1, h0, d1, scale, error_order, interval, max_step), ts, \
+        ys, n_out
+
+
 @jit
 def copy_into(dst, src):
     """dst[:] = src as a loop (numba compiles slice assignment slowly)."""
@@ -136,7 +175,7 @@ def copy_into(dst, src):
         dst[i] = src[i]
 
 
-@jit
+@inline
 def min_step(t, direction):
     """Ten units in the last place of t in the direction of integration."""
     return 10.0 * abs(np.nextafter(t, direction * np.inf) - t)

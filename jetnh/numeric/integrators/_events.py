@@ -31,7 +31,7 @@ import math
 
 import numpy as np
 
-from ._common import EVENT, SINGULAR, jit  # noqa: F401
+from ._common import EVENT, SINGULAR, inline, jit  # noqa: F401
 
 EPS = np.finfo(np.float64).eps
 #: indicators below this fraction of their initial size are searched inside each step
@@ -54,7 +54,7 @@ def dense_eval(theta, y, F, out):
         out[i] = y[i] + theta * v
 
 
-@jit
+@inline
 def sing_init(sing, n_sing, tol, t, y, p, g, sig, eps, gref):
     """Signs, sizes and thresholds of the indicators at the initial state; returns the
     index of an indicator already zero or not finite there, else -1."""
@@ -92,7 +92,7 @@ def _worst(sing, n_sing, t, y, p, g, sig, eps, gref):
     return w
 
 
-@jit
+@inline
 def sing_dip(sing, n_sing, t_old, h, y_old, F, p, g, sig, eps, gref, ytmp):
     """Search inside a step whose ends are regular for a dip of an indicator below its
     threshold; returns theta in (0, 1) where one is violated, or -1.0."""
@@ -151,7 +151,7 @@ def sing_violated(sing, n_sing, t, y, p, g, sig, eps):
     return -1
 
 
-@jit
+@inline
 def hermite_defect(rhs, t_old, h, y_old, F, p, ytmp, fmid):
     """Relative defect of the cubic Hermite interpolant at the middle of a step:
     |p'(1/2)/h - f(t + h/2, p(1/2))| / |f| (RMS norms).  O(h^3) where the solution is
@@ -169,7 +169,7 @@ def hermite_defect(rhs, t_old, h, y_old, F, p, ytmp, fmid):
     return math.sqrt(2.0 * num / den)
 
 
-@jit
+@inline
 def most_watched(n_sing, g, sig, gref):
     """Index of the indicator smallest relative to its initial size."""
     best = np.inf
@@ -193,7 +193,7 @@ def user_active(g_old, g_new, direction, i):
     return up or down
 
 
-@jit
+@inline
 def any_user_active(g_old, g_new, direction):
     for i in range(direction.shape[0]):
         if user_active(g_old, g_new, direction, i):
@@ -201,14 +201,14 @@ def any_user_active(g_old, g_new, direction):
     return False
 
 
-@jit
+@inline
 def _event_value(uev, i, t, t_old, h, y_old, F, p, ytmp, g):
     dense_eval((t - t_old) / h, y_old, F, ytmp)
     uev(t, ytmp, p, g)
     return g[i]
 
 
-@jit
+@inline
 def brentq_event(uev, i, xa, xb, t_old, h, y_old, F, p, ytmp, g):
     """Root of event i on [xa, xb] by scipy's brentq (xtol = rtol = 4 eps, 100 iterations).
     If rounding of the dense output unbrackets the root, the end nearer to zero wins."""
@@ -271,7 +271,7 @@ def brentq_event(uev, i, xa, xb, t_old, h, y_old, F, p, ytmp, g):
     return xcur
 
 
-@jit
+@inline
 def sing_locate(sing, n_sing, t_old, h, y_old, F, p, g, sig, eps, ytmp, theta_hi):
     """Bisection for the first violation of an indicator in the step (it is regular at
     theta = 0 and violated at theta_hi).  Returns (theta_regular, index violated)."""
@@ -292,7 +292,7 @@ def sing_locate(sing, n_sing, t_old, h, y_old, F, p, g, sig, eps, ytmp, theta_hi
     return lo, idx
 
 
-@jit
+@inline
 def store_event(ev_t, ev_i, ev_y, n_ev, t, i, y):
     if n_ev >= ev_t.shape[0]:
         cap = max(2 * ev_t.shape[0], 8)
@@ -312,7 +312,7 @@ def store_event(ev_t, ev_i, ev_y, n_ev, t, i, y):
     return ev_t, ev_i, ev_y, n_ev + 1
 
 
-@jit
+@inline
 def locate(sing, uev, n_sing, si, theta_hi, t_old, h, y_old, F, p, gs, sig, eps, gu_old,
            gu_new, ev_dir, ev_max, counts, ytmp, gtmp, roots, which, ev_t, ev_i, ev_y, n_ev,
            y_stop):
@@ -381,3 +381,33 @@ def locate(sing, uev, n_sing, si, theta_hi, t_old, h, y_old, F, p, gs, sig, eps,
     if stop != 0:
         dense_eval((t_stop - t_old) / h, y_old, F, y_stop)
     return stop, t_stop, sing_index, ev_t, ev_i, ev_y, n_ev
+
+
+# ---------------------------------------------------------------------- discrete nodes
+@jit
+def node_event_values(uev, t, row, cols, p, y, g):
+    """The user event functions at a node of a discrete run (dla, dvi): the state ``y =
+    row[cols]`` (coordinates, independent velocities, multipliers), ``g = uev(t, y)``."""
+    for j in range(cols.shape[0]):
+        y[j] = row[cols[j]]
+    uev(t, y, p, g)
+
+
+@jit
+def node_terminal(uev, t, row, cols, p, y, g_old, g_new, direction, max_events, counts):
+    """The user events from the previous node (``g_old``) to this one, with the rule of
+    ``user_active``: each crossing counted; True if a terminal event (its ``max_events``-th
+    crossing) occurred, so that the run ends at this node (the root between the two is
+    located afterwards, ``numeric.discrete.node_events``).  ``g_old`` becomes this node's."""
+    n_user = direction.shape[0]
+    if n_user == 0:
+        return False
+    node_event_values(uev, t, row, cols, p, y, g_new)
+    stop = False
+    for i in range(n_user):
+        if user_active(g_old, g_new, direction, i):
+            counts[i] += 1
+            if 0 < max_events[i] <= counts[i]:
+                stop = True
+        g_old[i] = g_new[i]
+    return stop

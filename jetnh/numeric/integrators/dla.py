@@ -55,8 +55,9 @@ import numba
 import numpy as np
 
 from ._common import (
-    ENDPOINTS, FINISHED, NONFINITE, NOT_CONVERGED, SINGULAR, STOPPED, all_finite, compiled,
-    copy_into, f8, i8, jit, solve_linear, store)
+    ENDPOINTS, EVENT, FINISHED, NONFINITE, NOT_CONVERGED, RHS, SINGULAR, STOPPED, all_finite,
+    compiled, copy_into, f8, i8, jit, solve_linear, store)
+from ._events import node_event_values, node_terminal
 from .newton import solve_step
 
 ORDER = 2
@@ -222,16 +223,19 @@ def store_node(nodal, ts, ys, n_out, t, q, v, p, n, nod, row):
     return store(ts, ys, n_out, t, row)
 
 
-def _solve(step_residual, momentum, legendre, nodal, constraint_jac, sing, t0, t_end, q0, v0,
-           p, n_steps, k, tol, max_iter, mode, project, n_sing, sing_tol, n_int, constrained,
-           halt):
+def _solve(step_residual, momentum, legendre, nodal, constraint_jac, sing, uev, t0, t_end, q0,
+           v0, p, n_steps, k, tol, max_iter, mode, project, n_sing, sing_tol, n_int,
+           constrained, cols, ev_dir, ev_max, halt):
     """``n_steps`` steps from (q0, v0); with ``project`` the node velocity of every step
     is projected onto the constraints (``project_velocity``) and the momentum recomputed
     from it before the next step.  Node velocities by the inverse Legendre transform, or
     (``constrained``, or where that fails) by ``constrained_legendre``.  The ``n_sing``
     node indicators (``sing``) are checked at every node: where one is not finite, changes
     sign or falls below ``sing_tol`` of its initial size, the run stops at the last regular
-    node with status SINGULAR.
+    node with status SINGULAR.  The user events ``uev`` (directions ``ev_dir``, terminal
+    counts ``ev_max``; none if empty) are evaluated at every node on the state
+    ``row[cols]``: the run ends with status EVENT at the node after a terminal one
+    (``_events.node_terminal``).
 
     Returns ``(status, ts, ys, n_out, stats, t, y, sing_index, t_prev, y_prev)`` with rows
     ``ys = (q (n), v (n), f (k), E, integrals (n_int))``, ``stats = [steps, Newton
@@ -279,6 +283,13 @@ def _solve(step_residual, momentum, legendre, nodal, constraint_jac, sing, t0, t
     t = t0
     t_old = t0
     ts, ys, n_out = store_node(nodal, ts, ys, n_out, t, q, v, p, n, nod, row)
+    n_user = ev_dir.shape[0]
+    ystate = np.empty(cols.shape[0])
+    gu_old = np.empty(n_user)
+    gu_new = np.empty(n_user)
+    counts = np.zeros(n_user, dtype=np.int64)
+    if n_user > 0:
+        node_event_values(uev, t, row, cols, p, ystate, gu_old)
     sing_index = node_init(sing, n_sing, sing_tol, t, q, v, p, g, sig, eps)
     status = FINISHED if sing_index < 0 else SINGULAR
     for i in range(n):
@@ -333,6 +344,10 @@ def _solve(step_residual, momentum, legendre, nodal, constraint_jac, sing, t0, t
         stats[0] += 1
         if mode != ENDPOINTS or step == n_steps - 1:
             ts, ys, n_out = store_node(nodal, ts, ys, n_out, t, q, v, p, n, nod, row)
+        if node_terminal(uev, t, row, cols, p, ystate, gu_old, gu_new, ev_dir, ev_max,
+                         counts):
+            status = EVENT
+            break
     if mode == ENDPOINTS and status != FINISHED and stats[0] > 0:
         ts, ys, n_out = store_node(nodal, ts, ys, n_out, t, q, v, p, n, nod, row)
     y = np.empty(2 * n)
@@ -345,13 +360,15 @@ def _solve(step_residual, momentum, legendre, nodal, constraint_jac, sing, t0, t
     return status, ts, ys, n_out, stats, t, y, sing_index, t_old, y_prev
 
 
-ARGS = (STEP, MOMENTUM, LEGENDRE, NODAL, LEGENDRE, NODAL, f8, f8, f8[::1], f8[::1], f8[::1],
-        i8, i8, f8, i8, i8, numba.types.boolean, i8, f8, i8, numba.types.boolean, i8[::1])
+ARGS = (STEP, MOMENTUM, LEGENDRE, NODAL, LEGENDRE, NODAL, RHS, f8, f8, f8[::1], f8[::1],
+        f8[::1], i8, i8, f8, i8, i8, numba.types.boolean, i8, f8, i8, numba.types.boolean,
+        i8[::1], i8[::1], i8[::1], i8[::1])
 _inverse_legendre = jit(_inverse_legendre)
 
 
 def solver():
     """The compiled ``solve(step_residual, momentum, legendre, nodal, constraint_jac, sing,
-    t0, t_end, q0, v0, p, n_steps, k, tol, max_iter, mode, project, n_sing, sing_tol,
-    n_int, constrained, halt)``; ``halt[0]`` nonzero stops before the next step (STOPPED)."""
+    uev, t0, t_end, q0, v0, p, n_steps, k, tol, max_iter, mode, project, n_sing, sing_tol,
+    n_int, constrained, cols, ev_dir, ev_max, halt)``; ``halt[0]`` nonzero stops before
+    the next step (STOPPED)."""
     return compiled(_solve, ARGS)

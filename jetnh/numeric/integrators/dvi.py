@@ -46,8 +46,9 @@ J. E. Marsden, M. West, "Discrete mechanics and variational integrators", Acta N
 
 import numpy as np
 
-from ._common import (ENDPOINTS, FINISHED, NONFINITE, NOT_CONVERGED, SINGULAR, STOPPED,
-                      all_finite, compiled, f8, i8, jit, store)
+from ._common import (ENDPOINTS, EVENT, FINISHED, NONFINITE, NOT_CONVERGED, RHS, SINGULAR,
+                      STOPPED, all_finite, compiled, f8, i8, jit, store)
+from ._events import node_event_values, node_terminal
 from .dla import LEGENDRE, MOMENTUM, NODAL, STEP, node_init, node_violated
 from .newton import solve_step
 
@@ -68,15 +69,16 @@ def _store(nodal, ts, ys, n_out, t, ql, v, p, n, k, nod, row):
     return store(ts, ys, n_out, t, row)
 
 
-def _solve(step_residual, momentum, legendre, nodal, sing, t0, t_end, q0, v0, lam0, p,
-           n_steps, tol, max_iter, mode, n_sing, sing_tol, n_int, halt):
+def _solve(step_residual, momentum, legendre, nodal, sing, uev, t0, t_end, q0, v0, lam0, p,
+           n_steps, tol, max_iter, mode, n_sing, sing_tol, n_int, cols, ev_dir, ev_max, halt):
     """``n_steps`` steps from (q0, v0, lambda0).
 
     Returns ``(status, ts, ys, n_out, stats, t, y, sing_index, t_prev, y_prev)`` with rows
     ``ys = (q (n), v (n), lambda (k), f (k), E, integrals (n_int))`` at the nodes,
     ``stats = [steps, Newton iterations, 0]``, and the last regular node ``(t, y = (q, v,
     lambda))`` and the one before it.  The node indicators (``sing``, as in ``dla``) are
-    checked at every node; the run stops at the last regular node (status SINGULAR).
+    checked at every node; the run stops at the last regular node (status SINGULAR).  User
+    events as in ``dla``: a terminal one ends the run at the node after it (status EVENT).
     """
     n = q0.shape[0]
     k = lam0.shape[0]
@@ -113,6 +115,13 @@ def _solve(step_residual, momentum, legendre, nodal, sing, t0, t_end, q0, v0, la
     legendre(t0, ql, v, p, pk, M)
     # the initial node: exact velocity and multiplier
     ts, ys, n_out = _store(nodal, ts, ys, n_out, t0, ql, v, p, n, k, nod, row)
+    n_user = ev_dir.shape[0]
+    ystate = np.empty(cols.shape[0])
+    gu_old = np.empty(n_user)
+    gu_new = np.empty(n_user)
+    counts = np.zeros(n_user, dtype=np.int64)
+    if n_user > 0:
+        node_event_values(uev, t0, row, cols, p, ystate, gu_old)
     _pack(ql, v, n, k, last)
     _pack(ql, v, n, k, before)
     t_last = t0
@@ -157,6 +166,10 @@ def _solve(step_residual, momentum, legendre, nodal, sing, t0, t_end, q0, v0, la
             t_last = t
             if mode != ENDPOINTS or step == n_steps:
                 ts, ys, n_out = _store(nodal, ts, ys, n_out, t, ql, v, p, n, k, nod, row)
+            if node_terminal(uev, t, row, cols, p, ystate, gu_old, gu_new, ev_dir, ev_max,
+                             counts):
+                status = EVENT
+                break
         if step == n_steps:
             break
         momentum(t, h, q, z, p, pk)
@@ -190,12 +203,12 @@ def _pack(ql, v, n, k, out):
         out[2 * n + a] = ql[n + a]
 
 
-ARGS = (STEP, MOMENTUM, LEGENDRE, NODAL, NODAL, f8, f8, f8[::1], f8[::1], f8[::1], f8[::1],
-        i8, f8, i8, i8, i8, f8, i8, i8[::1])
+ARGS = (STEP, MOMENTUM, LEGENDRE, NODAL, NODAL, RHS, f8, f8, f8[::1], f8[::1], f8[::1],
+        f8[::1], i8, f8, i8, i8, i8, f8, i8, i8[::1], i8[::1], i8[::1], i8[::1])
 
 
 def solver():
-    """The compiled ``solve(step_residual, momentum, legendre, nodal, sing, t0, t_end, q0,
-    v0, lam0, p, n_steps, tol, max_iter, mode, n_sing, sing_tol, n_int, halt)``; ``halt[0]``
-    nonzero stops before the next step (STOPPED)."""
+    """The compiled ``solve(step_residual, momentum, legendre, nodal, sing, uev, t0, t_end,
+    q0, v0, lam0, p, n_steps, tol, max_iter, mode, n_sing, sing_tol, n_int, cols, ev_dir,
+    ev_max, halt)``; ``halt[0]`` nonzero stops before the next step (STOPPED)."""
     return compiled(_solve, ARGS)

@@ -24,7 +24,8 @@ in the form of ``_events.dense_eval``): ``HERMITE`` the cubic Hermite rows of th
 plus ``D @ K`` rows (DOPRI5's ``contd5``; plain Hermite for RK4), ``DOP853`` Hairer's
 ``contd8`` with three extra stages (rows ``n_stages + 1 ..`` of ``A``), ``GIVEN`` rows the
 method fills itself (radau's collocation polynomial).  ``after_step`` and ``output`` are
-what every loop does after an accepted step (radau's too).
+what every loop does after an accepted step, ``_common.start`` what it does first (radau's
+too).
 """
 
 from __future__ import annotations
@@ -40,8 +41,7 @@ import numpy as np
 from ._common import (
     AT_T_EVAL, ENDPOINTS, ENSEMBLE_OUT, EVERY_STEP, FINISHED, MAX_FACTOR, MAX_STEPS,
     MIN_FACTOR, NONFINITE, RHS, SAFETY, SINGULAR, STOPPED, TOO_SMALL_STEP, all_finite,
-    collect, compiled, copy_into, f8, i8, initial_step_h0, initial_step_h1, jit, min_step,
-    rebound, store)
+    collect, compiled, copy_into, f8, i8, inline, jit, min_step, start, store)
 from ._events import (any_user_active, dense_eval, hermite_defect, locate, most_watched,
                       sing_dip, sing_init, sing_violated, sing_watch)
 
@@ -109,13 +109,7 @@ def _dense_rows(tab, rhs, t, h, y, y_new, K, F, ytmp, p):
     if info[2] == GIVEN:             # filled by the method itself (radau)
         return 0
     if info[2] == DOP853:
-        for s in range(ns + 1, ns + 4):
-            for i in range(n):
-                acc = 0.0
-                for r in range(s):
-                    acc += A[s, r] * K[r, i]
-                ytmp[i] = y[i] + h * acc
-            rhs(t + C[s] * h, ytmp, p, K[s])
+        _stages(ns + 1, ns + 4, C, A, rhs, t, h, y, K, ytmp, p)
         for i in range(n):
             dy = y_new[i] - y[i]
             F[0, i] = dy
@@ -140,7 +134,7 @@ def _dense_rows(tab, rhs, t, h, y, y_new, K, F, ytmp, p):
     return 0
 
 
-@jit
+@inline
 def _error(kind, ns, E, E3, h, y, y_new, K, rtol, atol):
     """The scaled error of the step (<= 1: accept) by the estimator ``kind``."""
     n = y.shape[0]
@@ -169,26 +163,33 @@ def _error(kind, ns, E, E3, h, y, y_new, K, rtol, atol):
     return math.sqrt(err / n)
 
 
-@numba.njit(error_model="numpy", nogil=True, inline="always")
-def _stages(ns, C, A, B, b_den, rhs, t, h, y, K, y_new, ytmp, p):
-    """Stages 1 .. n_stages - 1 (K[0] given) and the new state."""
-    n = y.shape[0]
-    for s in range(1, ns):
-        for i in range(n):
+@inline
+def _stages(first, last, C, A, rhs, t, h, y, K, ytmp, p):
+    """Stages ``first .. last - 1``: K[s] = f(t + C[s] h, y + h sum_{r < s} A[s, r] K[r])
+    (the steps' stages and DOP853's extra dense-output stages).  Inlined where the
+    tableau's coefficients are constants; it calls no helper (one called from an inlined
+    helper cost dop853 1.4x per evaluation)."""
+    for s in range(first, last):
+        for i in range(y.shape[0]):
             acc = 0.0
             for r in range(s):
                 acc += A[s, r] * K[r, i]
             ytmp[i] = y[i] + h * acc
         rhs(t + C[s] * h, ytmp, p, K[s])
+
+
+@inline
+def _new_state(ns, B, b_den, h, y, K, y_new):
+    """y_new = y + (h / b_den) sum_r B[r] K[r]."""
     hb = h / b_den
-    for i in range(n):
+    for i in range(y.shape[0]):
         acc = 0.0
         for r in range(ns):
             acc += B[r] * K[r, i]
         y_new[i] = y[i] + hb * acc
 
 
-@jit
+@inline
 def workspace(n_sing, n_user):
     """The arrays of the singularity indicators and the user events (``after_step``)."""
     m = max(n_sing, 1)
@@ -198,7 +199,7 @@ def workspace(n_sing, n_user):
             np.empty(u, dtype=np.int64))
 
 
-@jit
+@inline
 def no_events(n):
     """Empty event records (time, index, state) and their count."""
     return np.empty(0), np.empty(0, dtype=np.int64), np.empty((0, n)), np.int64(0)
@@ -289,10 +290,12 @@ def output(tab, fixed, rhs, p, t, h, t_new, y, y_new, K, F, ytmp, y_stop, stop, 
 
 def _solve(rhs, sing, uev, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
     """Integrate y' = rhs(t, y, p) from t0 to t_end with the method ``TAB``
-    (``ExplicitRK.arrays``, compile-time constants: ``_specialised``) under the step control ``ctl`` (``Control``), watching ``watch``
-    (``Watch``: ``sing`` computes the ``n_sing`` singularity indicators, ``uev`` the user
-    event functions; see ``_events``).  ``mode``: EVERY_STEP, AT_T_EVAL or ENDPOINTS.
-    The loop stops with status STOPPED before a step when ``halt[0]`` is nonzero.
+    (``ExplicitRK.arrays``; it and ``ADAPTIVE`` are compile-time constants, so the path
+    of the other step kind is not compiled: ``_specialised``) under the step control
+    ``ctl`` (``Control``), watching ``watch`` (``Watch``: ``sing`` computes the ``n_sing``
+    singularity indicators, ``uev`` the user event functions; see ``_events``).  ``mode``:
+    EVERY_STEP, AT_T_EVAL or ENDPOINTS.  The loop stops with status STOPPED before a step
+    when ``halt[0]`` is nonzero.
 
     Returns a ``Result``: the output rows ``ts[:n_out]``, ``ys[:n_out]``, ``stats =
     [accepted, rejected, rhs evaluations]``, the last state, the event records (time,
@@ -309,13 +312,12 @@ def _solve(rhs, sing, uev, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
     tab = TAB
     C, A, B, E, E3, D, info, b_den = tab
     ns, kind, _, error_order = SHAPE
-    adaptive = kind != NONE
-    rtol, atol, first_step, max_step, max_steps, n_steps = ctl
+    rtol, atol, max_steps, n_steps = ctl.rtol, ctl.atol, ctl.max_steps, ctl.n_steps
+    max_step = ctl.max_step
     n_sing, sing_tol, ev_dir, ev_max = watch
     watching = n_sing > 0 or ev_dir.shape[0] > 0
     n = y0.shape[0]
     direction = 1.0 if t_end >= t0 else -1.0
-    interval = abs(t_end - t0)
     K = np.empty((max(A.shape[0], ns + 1), n))
     F = np.empty((3 + D.shape[0], n))
     y = y0.copy()
@@ -330,7 +332,7 @@ def _solve(rhs, sing, uev, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
     elif mode == ENDPOINTS:
         cap = 2
     else:
-        cap = 64 if adaptive else n_steps + 1
+        cap = 64 if ADAPTIVE else n_steps + 1
     ts = np.empty(max(cap, 1))
     ys = np.empty((max(cap, 1), n))
     n_out = np.int64(0)
@@ -339,12 +341,12 @@ def _solve(rhs, sing, uev, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
     ws = workspace(n_sing, ev_dir.shape[0])
     gs, gs_old, gref, sig, eps, gu_old = ws[:6]
     ev_t, ev_i, ev_y, n_ev = no_events(n)
-    if not adaptive:
+    if not ADAPTIVE:
         ts, ys, n_out = store(ts, ys, n_out, t, y)
     sing_index = sing_init(sing, n_sing, sing_tol, t, y, p, gs, sig, eps, gref)
     copy_into(gs_old, gs)
     if sing_index >= 0:
-        if adaptive:
+        if ADAPTIVE:
             ts, ys, n_out = store(ts, ys, n_out, t, y)
         return Result(SINGULAR, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev,
                       sing_index)
@@ -353,41 +355,21 @@ def _solve(rhs, sing, uev, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
     h_abs = 0.0
     h_fixed = (t_end - t0) / max(n_steps, 1)
     exponent = -1.0 / (error_order + 1)
-    if adaptive:
-        rhs(t, y, p, K[0])
-        stats[2] += 1
-        if not all_finite(K[0]):
-            return Result(NONFINITE, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev,
-                          sing_index)
-        if mode != AT_T_EVAL:
-            ts, ys, n_out = store(ts, ys, n_out, t, y)
-        if interval == 0.0:
-            if mode == AT_T_EVAL:
-                while j_eval < t_eval.shape[0] and t_eval[j_eval] == t:
-                    ts, ys, n_out = store(ts, ys, n_out, t, y)
-                    j_eval += 1
-            return Result(FINISHED, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev,
-                          sing_index)
-        if first_step > 0.0:
-            h_abs = first_step
-        else:
-            h0, d1 = initial_step_h0(y, K[0], rtol, atol, interval, scale)
-            for i in range(n):
-                ytmp[i] = y[i] + h0 * direction * K[0, i]
-            rhs(t + h0 * direction, ytmp, p, K[1])
-            stats[2] += 1
-            h_abs = initial_step_h1(K[0], K[1], h0, d1, scale, error_order, interval,
-                                    max_step)
+    if ADAPTIVE:
+        go, h_abs, ts, ys, n_out = start(rhs, t, y, p, K[0], K[1], ytmp, scale, ctl,
+                                         error_order, t_end, stats, mode, t_eval, ts, ys, n_out)
+        if go >= 0:
+            return Result(go, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev, sing_index)
     status = FINISHED
     step = 0
-    while (direction * (t_end - t) > 0.0) if adaptive else (step < n_steps):
-        if adaptive and stats[0] >= max_steps:
+    while (direction * (t_end - t) > 0.0) if ADAPTIVE else (step < n_steps):
+        if ADAPTIVE and stats[0] >= max_steps:
             status = MAX_STEPS
             break
         if halt[0] != 0:
             status = STOPPED
             break
-        if adaptive:
+        if ADAPTIVE:
             hmin = min_step(t, direction)
             if h_abs > max_step:
                 h_abs = max_step
@@ -404,7 +386,8 @@ def _solve(rhs, sing, uev, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
                     t_new = t_end
                 h = t_new - t
                 h_abs = abs(h)
-                _stages(ns, C, A, B, b_den, rhs, t, h, y, K, y_new, ytmp, p)
+                _stages(1, ns, C, A, rhs, t, h, y, K, ytmp, p)
+                _new_state(ns, B, b_den, h, y, K, y_new)
                 rhs(t_new, y_new, p, K[ns])
                 stats[2] += ns
                 err = _error(kind, ns, E, E3, h, y, y_new, K, rtol, atol)
@@ -431,7 +414,8 @@ def _solve(rhs, sing, uev, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
                 break
         else:
             rhs(t, y, p, K[0])
-            _stages(ns, C, A, B, b_den, rhs, t, h_fixed, y, K, y_new, ytmp, p)
+            _stages(1, ns, C, A, rhs, t, h_fixed, y, K, ytmp, p)
+            _new_state(ns, B, b_den, h_fixed, y, K, y_new)
             stats[2] += ns
             if not all_finite(y_new):
                 status = NONFINITE
@@ -445,10 +429,10 @@ def _solve(rhs, sing, uev, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
         have_dense = False
         if watching:
             stop, t_stop, sing_index, have_dense, ev_t, ev_i, ev_y, n_ev = after_step(
-                tab, not adaptive, rhs, sing, uev, p, t, h, t_new, y, y_new, K, F, ytmp, fmid,
+                tab, not ADAPTIVE, rhs, sing, uev, p, t, h, t_new, y, y_new, K, F, ytmp, fmid,
                 y_stop, stats, watch, ws, sing_index, ev_t, ev_i, ev_y, n_ev)
         if mode != ENDPOINTS:
-            ts, ys, n_out, j_eval = output(tab, not adaptive, rhs, p, t, h, t_new, y, y_new, K,
+            ts, ys, n_out, j_eval = output(tab, not ADAPTIVE, rhs, p, t, h, t_new, y, y_new, K,
                                            F, ytmp, y_stop, stop, t_stop, have_dense, stats,
                                            mode, t_eval, j_eval, direction, ts, ys, n_out)
         if stop != 0:
@@ -458,7 +442,7 @@ def _solve(rhs, sing, uev, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
             break
         t = t_new
         copy_into(y, y_new)
-        if adaptive:
+        if ADAPTIVE:
             copy_into(K[0], K[ns])
     if mode == ENDPOINTS:
         ts, ys, n_out = store(ts, ys, n_out, t, y)
@@ -466,43 +450,36 @@ def _solve(rhs, sing, uev, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
 
 
 #: the method a specialised loop runs and that loop (``_specialised``; unbound here)
-TAB = SHAPE = run = None
+TAB = SHAPE = ADAPTIVE = run = None
 _SPECIALISED = {}
-
-
-def _specialised(method):
-    """The globals of this module with ``TAB`` bound to ``method.arrays`` and ``run`` to
-    ``_solve`` over them: numba freezes a global tuple of arrays into constants, so each
-    method's loop is compiled with its tableau (stage counts, coefficients) known, as the
-    hand-written loops were, at the per-evaluation cost of theirs."""
-    if method.name not in _SPECIALISED:
-        namespace = dict(globals())
-        namespace["TAB"] = method.arrays
-        namespace["SHAPE"] = tuple(int(k) for k in method.arrays[6])
-        # a name of its own: numba links compiled functions by their mangled names
-        # (qualified name and a per-process counter), so two specialisations called
-        # ``_solve`` could resolve to one another's machine code when one is read from the
-        # disk cache and the other compiled in this process
-        func = rebound(_solve, namespace)
-        func.__qualname__ = f"_solve_{method.name}"
-        namespace["run"] = jit(func)
-        _SPECIALISED[method.name] = namespace
-    return _SPECIALISED[method.name]
-
 CONTROL = numba.typeof(Control(1.0, np.zeros(1), 0.0, 1.0, 1, 0))
 WATCH = numba.typeof(Watch(0, 0.0, np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64)))
 ARGS = (RHS, RHS, RHS, f8, f8, f8[::1], f8[::1], CONTROL, f8[::1], i8, WATCH,
         i8[::1])
 
 
-def _entry(rhs, sing, uev, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
-    return run(rhs, sing, uev, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt)
+def _specialised(method):
+    """The globals of this module with ``TAB`` bound to ``method.arrays`` and ``run`` to
+    ``_solve`` compiled over them: numba freezes a global tuple of arrays into constants,
+    so each method's loop is compiled with its tableau (stage counts, coefficients) known,
+    as the hand-written loops were, at the per-evaluation cost of theirs.  Each loop has
+    a name of its own (``compiled``: ``_solve_<method>_<sources hash>``): numba links
+    compiled functions by their mangled names, so two loops of one name could resolve to
+    one another's machine code."""
+    if method.name not in _SPECIALISED:
+        namespace = dict(globals())
+        namespace["TAB"] = method.arrays
+        namespace["SHAPE"] = tuple(int(k) for k in method.arrays[6])
+        namespace["ADAPTIVE"] = method.adaptive
+        namespace["run"] = compiled(_solve, ARGS, namespace=namespace, tag=method.name)
+        _SPECIALISED[method.name] = namespace
+    return _SPECIALISED[method.name]
 
 
 def solver(method):
     """The compiled ``solve(rhs, sing, uev, t0, t_end, y0, p, ctl, t_eval, mode, watch,
     halt)`` of the explicit method ``method`` (``_solve`` over its tableau)."""
-    return compiled(_entry, ARGS, namespace=_specialised(method), tag=method.name)
+    return _specialised(method)["run"]
 
 
 # ---------------------------------------------------------------------- ensembles

@@ -39,7 +39,7 @@ import numpy as np
 from ._common import (
     AT_T_EVAL, ENDPOINTS, ENSEMBLE_OUT, FINISHED, MAX_STEPS, NONFINITE, RHS,
     SINGULAR, STOPPED, TOO_SMALL_STEP, all_finite, collect, compiled, copy_into, f8, i8,
-    initial_step_h0, initial_step_h1, jit, min_step, store)
+    jit, min_step, start, store)
 from ._events import dense_eval, sing_init
 from .loop import (CONTROL, EMBEDDED, GIVEN, WATCH, Result, after_step, no_events, output,
                    workspace)
@@ -266,7 +266,6 @@ def _solve(rhs, jac, sing, uev, t0, t_end, y0, p, ctl, newton, t_eval, mode, wat
         tol = max(10.0 * 2.220446049250313e-16 / rtol, min(0.03, rtol ** 0.5))
     n = y0.shape[0]
     direction = 1.0 if t_end >= t0 else -1.0
-    interval = abs(t_end - t0)
     y = y0.copy()
     y_new = np.empty(n)
     ytmp = np.empty(n)
@@ -308,29 +307,10 @@ def _solve(rhs, jac, sing, uev, t0, t_end, y0, p, ctl, newton, t_eval, mode, wat
                       sing_index)
     if ev_dir.shape[0] > 0:
         uev(t, y, p, gu_old)
-    rhs(t, y, p, f0)
-    stats[2] += 1
-    if not all_finite(f0):
-        return Result(NONFINITE, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev,
-                      sing_index)
-    if mode != AT_T_EVAL:
-        ts, ys, n_out = store(ts, ys, n_out, t, y)
-    if interval == 0.0:
-        if mode == AT_T_EVAL:
-            while j_eval < t_eval.shape[0] and t_eval[j_eval] == t:
-                ts, ys, n_out = store(ts, ys, n_out, t, y)
-                j_eval += 1
-        return Result(FINISHED, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev,
-                      sing_index)
-    if first_step > 0.0:
-        h_abs = first_step
-    else:
-        h0, d1 = initial_step_h0(y, f0, rtol, atol, interval, scale)
-        for i in range(n):
-            ytmp[i] = y[i] + h0 * direction * f0[i]
-        rhs(t + h0 * direction, ytmp, p, K[0])
-        stats[2] += 1
-        h_abs = initial_step_h1(f0, K[0], h0, d1, scale, ERROR_ORDER, interval, max_step)
+    go, h_abs, ts, ys, n_out = start(rhs, t, y, p, f0, K[0], ytmp, scale, ctl, ERROR_ORDER,
+                                     t_end, stats, mode, t_eval, ts, ys, n_out)
+    if go >= 0:
+        return Result(go, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev, sing_index)
     jac(t, y, p, Jm)
     jac_fresh = True
     h_lu = 0.0                  # the h of the current LU factors (0: none)
@@ -461,19 +441,18 @@ def _solve(rhs, jac, sing, uev, t0, t_end, y0, p, ctl, newton, t_eval, mode, wat
     return Result(status, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev, sing_index)
 
 
-run = jit(_solve)
 ARGS = (RHS, JAC, RHS, RHS, f8, f8, f8[::1], f8[::1], CONTROL, NEWTON, f8[::1], i8, WATCH,
         i8[::1])
 
 
-def _entry(rhs, jac, sing, uev, t0, t_end, y0, p, ctl, newton, t_eval, mode, watch, halt):
-    return run(rhs, jac, sing, uev, t0, t_end, y0, p, ctl, newton, t_eval, mode, watch, halt)
+#: the compiled loop in the namespace of the ensemble drivers (``ensemble_solver``)
+run = None
 
 
 def solver():
     """The compiled ``solve(rhs, jac, sing, uev, t0, t_end, y0, p, ctl, newton, t_eval,
     mode, watch, halt)``."""
-    return compiled(_entry, ARGS)
+    return compiled(_solve, ARGS)
 
 
 def _ensemble_parallel(rhs, jac, sing, uev, t0, t_end, Y0, P, ctl, newton, t_eval, mode,
@@ -499,4 +478,4 @@ def ensemble_solver(parallel=True):
     """The compiled ensemble driver (``loop.ensemble_solver``, with ``jac`` and
     ``newton``)."""
     return compiled(_ensemble_parallel if parallel else _ensemble_serial, ENSEMBLE_ARGS,
-                    parallel=parallel)
+                    parallel=parallel, namespace=dict(globals(), run=solver()))

@@ -1,0 +1,190 @@
+"""The overhead of a run: the first run on a fresh machine, the fixed cost of a short run
+and the cost per right-hand-side evaluation, on this tree and on earlier ones.
+
+    .venv/bin/python benchmarks/overhead.py --tree before=PATH [--tree NAME=PATH ...]
+                                            [--rounds 3] [--quick] [--out PATH]
+
+(default output: benchmarks/results/overhead.json; a tree is a git worktree, e.g.
+``git worktree add /tmp/before a6430f6``; this tree is "after").  Every figure comes from
+fresh processes with empty numba and kernel caches, the trees alternating within each of
+``--rounds`` rounds; each figure is the best over the rounds.  On the rolling disk:
+
+1. First run: the time of the first ``run`` of dop853, dopri5 and rk4 (the kernels
+   generated before the clock starts), i.e. the compilation of its loop from nothing:
+   each method in a process of its own, and the three one after the other in one process;
+   wall-clock and CPU seconds of the process (CPU time is the steadier figure on a loaded
+   machine).
+2. Fixed cost: a run to T = 1e-6 with ``save="final"`` (best of many calls).  On this
+   tree also the compiled loop called directly with the same arguments (its entry point,
+   no argument checks, no Trajectory): the floor a run's Python side adds to.
+3. Per evaluation: (a run to T = 100 minus the fixed cost) / the extra rhs evaluations
+   (rk4: 2000 steps against 1).
+"""
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+from _common import ROOT, parser, write
+
+METHODS = ("dop853", "dopri5", "rk4")
+
+SETUP = r"""
+import json, time
+import numpy as np
+import jetnh.models as models
+from jetnh.numeric import Scene
+sc = Scene(models.get("rolling_disk"), "chetaev", initial=models.initial("rolling_disk"),
+           t_span=(0.0, 10.0)).compile()
+def best(f, n):
+    b = 1e9
+    for _ in range(n):
+        tic = time.perf_counter(); f(); b = min(b, time.perf_counter() - tic)
+    return b
+"""
+
+FIRST = SETUP + r"""
+out = {}
+for m in METHODS:
+    tic, cpu = time.perf_counter(), time.process_time()
+    sc.run(method=m, save="final", **({"n_steps": 100} if m == "rk4" else {}))
+    out[m] = time.perf_counter() - tic
+    out[m + "_cpu"] = time.process_time() - cpu
+print(json.dumps(out))
+"""
+
+COST = SETUP + r"""
+out = {}
+for m in ("dop853", "dopri5", "rk4"):
+    sc.run(method=m, save="final", **({"n_steps": 100} if m == "rk4" else {}))
+for m in ("dop853", "dopri5", "rk4"):
+    kw = dict(rtol=1e-9, atol=1e-12) if m != "rk4" else {}
+    short = lambda: sc.run(method=m, t_span=(0.0, 1e-6), save="final",
+                           **(kw or {"n_steps": 1}))
+    long = lambda: sc.run(method=m, t_span=(0.0, 100.0), save="final",
+                          **(kw or {"n_steps": 2000}))
+    n0 = short().diagnostics.rhs_evaluations
+    n1 = long().diagnostics.rhs_evaluations
+    fs, gs = [], []
+    for _ in range(3):
+        fs.append(best(short, REPS_SHORT))
+        gs.append(best(long, REPS_LONG))
+    out["fixed_s_" + m] = min(fs)
+    out["per_eval_s_" + m] = (min(gs) - min(fs)) / (n1 - n0)
+try:            # the compiled loop alone (this tree's API)
+    from jetnh.numeric import interrupt
+    from jetnh.numeric.integrators import explicit_solver
+    from jetnh.numeric.integrators.loop import Control, watch_of
+    kern = sc.kernels
+    solve = explicit_solver("dop853")
+    ctl = Control(1e-9, np.full(len(sc.y0), 1e-12), 0.0, np.inf, 10**7, 0)
+    args = (kern.rhs_fp, kern.sing_fp, kern.sing_fp, 0.0, 1e-6, sc.y0, sc.p, ctl,
+            np.zeros(0), 2, watch_of(kern, None, True, 1e-10), interrupt.flag())
+    out["call_s_dop853"] = min(best(lambda: solve(*args), REPS_SHORT) for _ in range(3))
+except ImportError:
+    pass
+print(json.dumps(out))
+"""
+
+
+def fresh(root, code):
+    """``code`` in a fresh process on the tree ``root`` with empty caches: its JSON line."""
+    with tempfile.TemporaryDirectory() as tmp:
+        env = dict(os.environ, PYTHONPATH=str(root), JETNH_CACHE=os.path.join(tmp, "jc"),
+                   NUMBA_CACHE_DIR=os.path.join(tmp, "numba"))
+        res = subprocess.run([sys.executable, "-c", code], env=env, cwd=tmp,
+                             capture_output=True, text=True, check=True)
+    return json.loads(res.stdout.strip().splitlines()[-1])
+
+
+def commit(root) -> str:
+    r = subprocess.run(["git", "-C", str(root), "rev-parse", "--short", "HEAD"],
+                       capture_output=True, text=True)
+    return r.stdout.strip() or "?"
+
+
+def measure(root, reps_short, reps_long) -> dict:
+    """Every figure of one tree in one round."""
+    out = {}
+    for m in METHODS:
+        alone = fresh(root, FIRST.replace("METHODS", repr((m,))))
+        out[f"first_{m}_alone"] = alone[m]
+        out[f"first_{m}_alone_cpu"] = alone[m + "_cpu"]
+    three = fresh(root, FIRST.replace("METHODS", repr(METHODS)))
+    out["first_three"] = sum(three[m] for m in METHODS)
+    out["first_three_cpu"] = sum(three[m + "_cpu"] for m in METHODS)
+    out.update(fresh(root, COST.replace("REPS_SHORT", str(reps_short))
+                     .replace("REPS_LONG", str(reps_long))))
+    return out
+
+
+ROWS = ([(f"first_{m}_alone{c}", f"first run of {m} alone ({w})") for m in METHODS
+         for c, w in (("", "s"), ("_cpu", "CPU s"))]
+        + [(f"first_three{c}", f"first runs of the three in one process ({w})")
+           for c, w in (("", "s"), ("_cpu", "CPU s"))]
+        + [(f"fixed_s_{m}", f"fixed cost of a {m} run (us)") for m in METHODS]
+        + [("call_s_dop853", "the compiled dop853 loop called directly (us)")]
+        + [(f"per_eval_s_{m}", f"{m}: cost per rhs evaluation (ns)") for m in METHODS])
+
+
+def main(argv=None):
+    ap = parser(__doc__, "overhead")
+    ap.add_argument("--tree", action="append", default=[], metavar="NAME=PATH",
+                    help="an earlier tree to measure too (a git worktree)")
+    ap.add_argument("--rounds", type=int, default=3)
+    args = ap.parse_args(argv)
+    trees = dict(t.split("=", 1) for t in args.tree)
+    trees["after"] = str(ROOT)
+    reps_short, reps_long = (50, 2) if args.quick else (2000, 5)
+    rounds = 1 if args.quick else args.rounds
+    runs = {name: [] for name in trees}
+    for r in range(rounds):
+        for name, root in trees.items():
+            runs[name].append(measure(root, reps_short, reps_long))
+            print(f"round {r + 1}, {name}: {json.dumps(runs[name][-1])}", flush=True)
+    best = {name: {k: min(x[k] for x in rs) for k in rs[0]} for name, rs in runs.items()}
+    names = list(trees)
+
+    def scale(key):
+        return 1.0 if key.startswith("first") else 1e9 if "per_eval" in key else 1e6
+    rows = []
+    for key, label in ROWS:
+        vals = [best[n].get(key) for n in names]
+        after = best["after"].get(key)
+        rows.append([label] + [("-" if v is None else f"{v * scale(key):.4g}") for v in vals]
+                    + [("-" if v is None or after is None else f"{after / v:.2f}")
+                       for v in vals[:-1]])
+    a = best["after"]
+    summary = []
+    for name in names[:-1]:
+        b = best[name]
+        summary.append(
+            f"after / {name}: first runs (loops compiled from nothing; CPU seconds) "
+            + ", ".join(f"{m} {a[f'first_{m}_alone_cpu']:.1f} s vs "
+                        f"{b[f'first_{m}_alone_cpu']:.1f} s" for m in METHODS)
+            + f"; the three in one process {a['first_three_cpu']:.1f} s vs "
+              f"{b['first_three_cpu']:.1f} s; fixed cost "
+            + ", ".join(f"{m} {a[f'fixed_s_{m}'] / b[f'fixed_s_{m}']:.2f}" for m in METHODS)
+            + "; per evaluation "
+            + ", ".join(f"{m} {a[f'per_eval_s_{m}'] / b[f'per_eval_s_{m}']:.2f}"
+                        for m in METHODS))
+    if "call_s_dop853" in a:
+        summary.append(f"a dop853 run to T = 1e-6 costs {a['fixed_s_dop853'] * 1e6:.1f} us, "
+                       f"of which the compiled loop {a['call_s_dop853'] * 1e6:.1f} us")
+    for s in summary:
+        print(s)
+    tables = [dict(title="First run, fixed cost, cost per evaluation (rolling disk; fresh "
+                         "processes, empty caches; best of the rounds)",
+                   columns=[""] + names + [f"after / {n}" for n in names[:-1]], rows=rows,
+                   note="trees (commits): " + ", ".join(f"{n} = {commit(p)}"
+                                                        for n, p in trees.items()))]
+    write("overhead", dict(title="Overhead of a run: first run, fixed cost, cost per "
+                                 "evaluation", summary=summary, tables=tables, runs=runs,
+                           trees={n: commit(p) for n, p in trees.items()}),
+          args.out, args.quick)
+
+
+if __name__ == "__main__":
+    main()
