@@ -394,6 +394,19 @@ def node_event_values(uev, t, row, cols, p, y, g):
 
 
 @jit
+def node_events_start(uev, t, row, cols, p, n_user):
+    """The work arrays of the user events of a discrete run, with the first node's values:
+    the state ``y``, ``g_old`` (this node's values), ``g_new`` and the crossing counts."""
+    y = np.empty(cols.shape[0])
+    g_old = np.empty(n_user)
+    g_new = np.empty(n_user)
+    counts = np.zeros(n_user, dtype=np.int64)
+    if n_user > 0:
+        node_event_values(uev, t, row, cols, p, y, g_old)
+    return y, g_old, g_new, counts
+
+
+@jit
 def node_terminal(uev, t, row, cols, p, y, g_old, g_new, direction, max_events, counts):
     """The user events from the previous node (``g_old``) to this one, with the rule of
     ``user_active``: each crossing counted; True if a terminal event (its ``max_events``-th

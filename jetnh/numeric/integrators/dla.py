@@ -57,7 +57,7 @@ import numpy as np
 from ._common import (
     ENDPOINTS, EVENT, FINISHED, NONFINITE, NOT_CONVERGED, RHS, SINGULAR, STOPPED, all_finite,
     compiled, copy_into, f8, i8, jit, solve_linear, store)
-from ._events import node_event_values, node_terminal
+from ._events import node_events_start, node_terminal
 from .newton import solve_step
 
 ORDER = 2
@@ -283,13 +283,8 @@ def _solve(step_residual, momentum, legendre, nodal, constraint_jac, sing, uev, 
     t = t0
     t_old = t0
     ts, ys, n_out = store_node(nodal, ts, ys, n_out, t, q, v, p, n, nod, row)
-    n_user = ev_dir.shape[0]
-    ystate = np.empty(cols.shape[0])
-    gu_old = np.empty(n_user)
-    gu_new = np.empty(n_user)
-    counts = np.zeros(n_user, dtype=np.int64)
-    if n_user > 0:
-        node_event_values(uev, t, row, cols, p, ystate, gu_old)
+    ystate, gu_old, gu_new, counts = node_events_start(uev, t, row, cols, p,
+                                                       ev_dir.shape[0])
     sing_index = node_init(sing, n_sing, sing_tol, t, q, v, p, g, sig, eps)
     status = FINISHED if sing_index < 0 else SINGULAR
     for i in range(n):

@@ -48,7 +48,7 @@ import numpy as np
 
 from ._common import (ENDPOINTS, EVENT, FINISHED, NONFINITE, NOT_CONVERGED, RHS, SINGULAR,
                       STOPPED, all_finite, compiled, f8, i8, jit, store)
-from ._events import node_event_values, node_terminal
+from ._events import node_events_start, node_terminal
 from .dla import LEGENDRE, MOMENTUM, NODAL, STEP, node_init, node_violated
 from .newton import solve_step
 
@@ -115,13 +115,8 @@ def _solve(step_residual, momentum, legendre, nodal, sing, uev, t0, t_end, q0, v
     legendre(t0, ql, v, p, pk, M)
     # the initial node: exact velocity and multiplier
     ts, ys, n_out = _store(nodal, ts, ys, n_out, t0, ql, v, p, n, k, nod, row)
-    n_user = ev_dir.shape[0]
-    ystate = np.empty(cols.shape[0])
-    gu_old = np.empty(n_user)
-    gu_new = np.empty(n_user)
-    counts = np.zeros(n_user, dtype=np.int64)
-    if n_user > 0:
-        node_event_values(uev, t0, row, cols, p, ystate, gu_old)
+    ystate, gu_old, gu_new, counts = node_events_start(uev, t0, row, cols, p,
+                                                       ev_dir.shape[0])
     _pack(ql, v, n, k, last)
     _pack(ql, v, n, k, before)
     t_last = t0
