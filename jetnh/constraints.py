@@ -21,7 +21,7 @@ from functools import cached_property
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
-from . import inputs, linalg
+from . import dag, inputs, linalg
 from .errors import ConstraintError, JetnhWarning, JetSpaceError, LagrangianError
 from .jet import JetSpace, key_name
 
@@ -336,7 +336,7 @@ class System:
     def jacobian(self) -> sp.Matrix:
         """df^a/dqdot^s (k x n)."""
         return sp.Matrix(self.k, self.J.n,
-                         lambda a, s: sp.diff(self.constraints[a], self.J.qd[s]))
+                         lambda a, s: dag.diff(self.constraints[a], self.J.qd[s]))
 
     @cached_property
     def jacobian_dependent(self) -> sp.Matrix:

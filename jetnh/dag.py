@@ -1,5 +1,5 @@
-"""Expressions as shared graphs: size, free symbols, atoms, substitution and numeric
-evaluation in time linear in the number of *distinct* subexpressions.
+"""Expressions as shared graphs: size, free symbols, atoms, substitution, derivatives and
+numeric evaluation in time linear in the number of *distinct* subexpressions.
 
 Solved equations share their subexpressions (the accelerations of a chain of k
 constraints nest k solves), so as trees they are exponentially larger than as graphs.
@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import mpmath
 import sympy as sp
+from sympy.core.function import ArgumentIndexError
 
 
 def nodes(expr, cap: int | None = None) -> list:
@@ -95,6 +96,80 @@ def xreplace(expr, rule: dict, canon: dict | None = None):
     if isinstance(expr, (list, tuple)):
         return [done[id(sp.sympify(e))] for e in expr]
     return done[id(sp.sympify(expr))]
+
+
+def diff(expr, *symbols, cache: dict | None = None):
+    """``sympy.diff(expr, *symbols)`` (successive first derivatives by Symbols), each
+    distinct subexpression differentiated once: sympy's rules (sum, product, power and
+    chain rule through ``fdiff``) applied children first, so the result shares the
+    subexpressions of ``expr`` and of the derivatives of its parts; never flattened or
+    simplified.  Subexpressions whose derivative sympy defines otherwise (``Abs``,
+    ``Piecewise``, ``Derivative``, ...) are passed to ``sympy.diff``.
+
+    ``cache`` (a dict, filled here) carries the derivatives of subexpressions over several
+    calls, e.g. by every symbol of one expression (``jacobian``, the total derivative)."""
+    cache = {} if cache is None else cache
+    expr = sp.sympify(expr)
+    for x in symbols:
+        if not isinstance(x, sp.Symbol):
+            raise TypeError(f"dag.diff differentiates by Symbols, not {x!r}")
+        expr = _diff(expr, x, cache)
+    return expr
+
+
+def jacobian(exprs, symbols, cache: dict | None = None) -> sp.Matrix:
+    """The matrix d exprs[i] / d symbols[j] (``diff``; one cache for all entries)."""
+    cache = {} if cache is None else cache
+    exprs = [sp.sympify(e) for e in exprs]
+    return sp.Matrix(len(exprs), len(symbols),
+                     lambda i, j: _diff(exprs[i], symbols[j], cache))
+
+
+def _diff(expr, x, cache: dict):
+    """d expr / dx; ``cache``: (id(node), x) -> (node, derivative), the node kept alive
+    so that its id is not reused."""
+    stack = [(expr, False)]
+    while stack:
+        e, expanded = stack.pop()
+        key = (id(e), x)
+        if key in cache:
+            continue
+        if not expanded and e.args:
+            stack.append((e, True))
+            stack.extend((a, False) for a in e.args if (id(a), x) not in cache)
+            continue
+        cache[key] = (e, _rule(e, x, cache))
+    return cache[(id(expr), x)][1]
+
+
+def _rule(e, x, cache):
+    """The derivative of node ``e`` from those of its children (all in ``cache``)."""
+    if not e.args:
+        return sp.S.One if e == x else sp.S.Zero
+    ds = [cache[(id(a), x)][1] for a in e.args]
+    if all(d is sp.S.Zero for d in ds):
+        return sp.S.Zero
+    if isinstance(e, sp.Add):
+        return sp.Add(*[d for d in ds if d is not sp.S.Zero])
+    if isinstance(e, sp.Mul):
+        args = list(e.args)
+        return sp.Add(*[sp.Mul(*args[:i], d, *args[i + 1:])
+                        for i, d in enumerate(ds) if d is not sp.S.Zero])
+    if isinstance(e, sp.Pow):
+        (b, p), (db, dp) = e.args, ds
+        return e * (dp * sp.log(b) + db * p / b)
+    if isinstance(e, sp.Function) and type(e)._eval_derivative is sp.Function._eval_derivative:
+        out = []
+        for i, d in enumerate(ds, 1):
+            if d is sp.S.Zero:
+                continue
+            try:
+                df = e.fdiff(i)
+            except ArgumentIndexError:
+                df = sp.Function.fdiff(e, i)
+            out.append(df * d)
+        return sp.Add(*out)
+    return sp.diff(e, x)
 
 
 _SPECIAL = {"Abs": abs, "re": mpmath.re, "im": mpmath.im, "conjugate": mpmath.conj}

@@ -37,7 +37,7 @@ from functools import cached_property
 
 import sympy as sp
 
-from . import accelerations, linalg
+from . import accelerations, dag, linalg
 from .constraints import PRINCIPLES, System
 from .errors import JetnhWarning, PrincipleError
 from .variations import Variation, jet_space, make
@@ -89,7 +89,7 @@ def action_variation(system: System, variation: Variation, multipliers=()) -> Ac
     J = variation.J
     F = system.L + sp.Add(*[lam * f for lam, f in zip(multipliers, system.constraints)])
     E = J.euler(F, wrt=J.q)
-    P = tuple(sp.diff(F, v) for v in J.qd)
+    P = tuple(dag.diff(F, v) for v in J.qd)
     eta, c = variation.eta, variation.c
     integrand = sp.Add(*[E[s] * eta[s] - P[s] * c[s] for s in range(J.n)])
     boundary = sp.Add(*[P[s] * eta[s] for s in range(J.n)])
