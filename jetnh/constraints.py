@@ -440,7 +440,7 @@ class System:
     def Phi(self) -> sp.Matrix:
         """d phi^alpha / d qdot^mu (rows: dependent, cols: independent)."""
         return sp.Matrix(self.k, len(self.independent),
-                         lambda a, m: sp.diff(self.phi[self.dependent_velocities[a]],
+                         lambda a, m: dag.diff(self.phi[self.dependent_velocities[a]],
                                               self.independent_velocities[m]))
 
     @cached_property
@@ -453,8 +453,8 @@ class System:
         vel = self.independent_velocities
         cols = []
         for v, phi in ((v, self.phi[v]) for v in self.dependent_velocities):
-            b0 = phi.xreplace({u: 0 for u in vel})
-            cols.append([b0] + [sp.diff(phi, u) for u in vel])
+            b0 = dag.xreplace(phi, {u: sp.S.Zero for u in vel})
+            cols.append([b0] + [dag.diff(phi, u) for u in vel])
         return sp.Matrix(cols)
 
     # ------------------------------------------------------------------ L~, p, T
@@ -466,7 +466,7 @@ class System:
     @cached_property
     def p_dependent(self) -> tuple[sp.Expr, ...]:
         """p_alpha = dL/dqdot^alpha (not restricted to the constraints)."""
-        return tuple(sp.diff(self.L, v) for v in self.dependent_velocities)
+        return tuple(dag.diff(self.L, v) for v in self.dependent_velocities)
 
     def T(self, on_constraints: bool = True) -> sp.Matrix:
         """T^alpha_mu = -[phi^alpha]_mu - dphi^alpha/dq^beta dphi^beta/dqdot^mu (text under (18)).
@@ -479,7 +479,7 @@ class System:
         for a, va in enumerate(self.dependent_velocities):
             ph = self.phi[va]
             eul = J.euler(ph, wrt=self.independent)
-            rows.append([-eul[m] - sum((sp.diff(ph, qb) * self.Phi[b, m]
+            rows.append([-eul[m] - sum((dag.diff(ph, qb) * self.Phi[b, m]
                                         for b, qb in enumerate(self.dependent)), sp.S.Zero)
                          for m in range(len(self.independent))])
         T = sp.Matrix(rows) if rows else sp.zeros(0, len(self.independent))
@@ -502,7 +502,7 @@ class System:
     def mass_matrix(self) -> sp.Matrix:
         """d^2 L / dqdot^r dqdot^s."""
         qd = self.J.qd
-        return sp.Matrix(self.J.n, self.J.n, lambda r, s: sp.diff(self.L, qd[r], qd[s]))
+        return sp.Matrix(self.J.n, self.J.n, lambda r, s: dag.diff(self.L, qd[r], qd[s]))
 
     def is_regular(self) -> bool:
         """Whether the Hessian of L in the velocities is generically invertible."""
