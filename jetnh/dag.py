@@ -207,6 +207,42 @@ def evaluate(expr, point: dict, dps: int = 30) -> list:
     return out if isinstance(expr, (list, tuple)) else out[0]
 
 
+def evaluate_numpy(expr, point: dict):
+    """The values (numpy float arrays, broadcast) of ``expr`` (a Basic or a list) at
+    ``point`` (Symbol -> number or array), each distinct subexpression computed once
+    over all the points; a function node by ``lambdify`` of its head alone (applied to
+    the values of its arguments), so the graph is never flattened.  Raises ValueError
+    for a symbol without a value."""
+    import numpy as np
+
+    roots = list(expr) if isinstance(expr, (list, tuple)) else [expr]
+    val: dict = {}
+    heads: dict = {}
+    with np.errstate(all="ignore"):
+        for e in nodes(roots):
+            if e in point:
+                v = np.asarray(point[e], dtype=float)
+            elif e.is_Number or e.is_NumberSymbol:
+                v = np.float64(float(e))
+            elif e.is_Add:
+                v = sum(val[id(a)] for a in e.args)
+            elif e.is_Mul:
+                v = np.prod(np.broadcast_arrays(*(val[id(a)] for a in e.args)), axis=0)
+            elif e.is_Pow:
+                v = np.power(val[id(e.base)], val[id(e.exp)])
+            elif isinstance(e, sp.Function):
+                key = (e.func, len(e.args))
+                if key not in heads:
+                    xs = sp.symbols(f"a:{len(e.args)}", cls=sp.Dummy)
+                    heads[key] = sp.lambdify(xs, e.func(*xs), "numpy")
+                v = heads[key](*(val[id(a)] for a in e.args))
+            else:
+                raise ValueError(f"cannot evaluate {e!r} numerically (no value given)")
+            val[id(e)] = v
+    out = [val[id(sp.sympify(e))] for e in roots]
+    return out if isinstance(expr, (list, tuple)) else out[0]
+
+
 def to_sympy(v) -> sp.Expr:
     """An mpmath number as a sympy Float (or complex), keeping its precision."""
     if isinstance(v, mpmath.mpc):

@@ -220,7 +220,8 @@ def _compare(system, principles, eqs, accs, factors) -> Comparison:
 
 def defect_along(system: System, first: str, second: str, samples, convention: str = "paper"):
     """Largest |q''_first - q''_second| over given states: do the principles agree along a
-    trajectory?  ``samples`` maps names (or Symbols) to arrays of equal length, e.g.
+    trajectory?  Evaluated on the shared graph, all the states at once
+    (``dag.evaluate_numpy``).  ``samples`` maps names (or Symbols) to arrays of equal length, e.g.
     ``traj.as_dict()`` of a jetnh Trajectory; multipliers missing from it count as zero."""
     import numpy as np
 
@@ -229,18 +230,15 @@ def defect_along(system: System, first: str, second: str, samples, convention: s
     a1, a2 = e1.accelerations(), e2.accelerations()
     data = {(k.name if isinstance(k, sp.Symbol) else str(k)): np.asarray(v, dtype=float)
             for k, v in dict(samples).items()}
-    worst = 0.0
-    for q in system.J.qdd:
-        d = dag.xreplace(a1[q] - a2[q], system.phi)
-        syms = sorted(dag.free_symbols(d), key=lambda s: s.name)
-        missing = [s.name for s in syms if s.name not in data
-                   and s not in (e1.multipliers + e2.multipliers)]
-        if missing:
-            from .errors import JetnhError
-            raise JetnhError(f"the samples lack values for {missing}; pass every coordinate, "
-                             "velocity and parameter (e.g. traj.as_dict() plus parameters)")
-        n = len(next(iter(data.values())))
-        args = [data.get(s.name, np.zeros(n)) for s in syms]
-        val = sp.lambdify(syms, d, "numpy", cse=True)(*args)
-        worst = max(worst, float(np.max(np.abs(np.broadcast_to(val, (n,))))))
-    return worst
+    defects = dag.xreplace([a1[q] - a2[q] for q in system.J.qdd], system.phi)
+    syms = sorted(dag.free_symbols(defects), key=lambda s: s.name)
+    missing = [s.name for s in syms if s.name not in data
+               and s not in (e1.multipliers + e2.multipliers)]
+    if missing:
+        from .errors import JetnhError
+        raise JetnhError(f"the samples lack values for {missing}; pass every coordinate, "
+                         "velocity and parameter (e.g. traj.as_dict() plus parameters)")
+    n = len(next(iter(data.values())))
+    point = {s: data.get(s.name, np.zeros(n)) for s in syms}
+    vals = dag.evaluate_numpy(defects, point)
+    return max((float(np.max(np.abs(np.broadcast_to(v, (n,))))) for v in vals), default=0.0)

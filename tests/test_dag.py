@@ -3,6 +3,7 @@ expressions whose tree is exponential."""
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 import sympy as sp
 from hypothesis import given, strategies as st
@@ -28,6 +29,11 @@ def test_walks_agree_with_sympy(case):
     point = {s: sp.Float(0.3 + 0.17 * i, 30) for i, s in enumerate(sorted(e.free_symbols, key=str))}
     ref = complex(e.xreplace(point).evalf(30))
     assert abs(complex(dag.evaluate(e, point)) - ref) <= 1e-25 * max(1.0, abs(ref))
+    arrays = {s: [float(v), float(v) / 2] for s, v in point.items()}
+    half = complex(e.xreplace({s: v / 2 for s, v in point.items()}).evalf(30))
+    got = np.broadcast_to(dag.evaluate_numpy([e], arrays)[0], (2,))     # a constant: a scalar
+    assert abs(got[0] - ref) <= 1e-12 * max(1.0, abs(ref))
+    assert abs(got[1] - half) <= 1e-12 * max(1.0, abs(half))
     tree = list(sp.preorder_traversal(e))        # equal nodes may be distinct objects
     assert len(set(tree)) <= dag.size(e) <= len(tree)
 

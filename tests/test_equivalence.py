@@ -213,6 +213,28 @@ def test_defect_along_states():
     assert defect_along(s, "chetaev", "vakonomic", d) > 1e-3
 
 
+def test_defect_along_a_nested_system_agrees_with_mpmath():
+    """n_trailer (nested accelerations): the largest defect over states, evaluated on the
+    graph with numpy, is the largest of the defects evaluated one state at a time with
+    mpmath (dag.evaluate, 30 digits)."""
+    from jetnh import dag
+    from jetnh.models import n_trailer
+
+    s = n_trailer(N=3)
+    rng = np.random.default_rng(1)
+    n = 5
+    lams = s.equations("vakonomic").multipliers
+    free = [x for x in s.J.q + s.independent_velocities + s.parameters + lams]
+    d = {x.name: rng.uniform(0.3, 1.2, n) for x in free}
+    got = defect_along(s, "chetaev", "vakonomic", d)
+    a1 = s.equations("chetaev").accelerations()
+    a2 = s.equations("vakonomic").accelerations()
+    defects = dag.xreplace([a1[q] - a2[q] for q in s.J.qdd], s.phi)
+    ref = max(abs(float(v)) for i in range(n)
+              for v in dag.evaluate(defects, {x: d[x.name][i] for x in free}))
+    assert ref > 1e-3 and abs(got - ref) <= 1e-9 * ref
+
+
 def test_large_polynomial_factors_are_kept_whole():
     """A singular factor too large to factor safely (sympy's multivariate factoring can
     take minutes, depending on its random evaluation points) is kept as one factor; small
