@@ -22,10 +22,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import mpmath
 import sympy as sp
 
-from . import accelerations, dag, linalg, singular, zero
+from . import dag, linalg, singular, zero
 from .constraints import System
 from .frobenius import bracket_components
 
@@ -150,32 +149,8 @@ def agrees(system: System, expr, derived=None, points: int = _POINTS, seed: int 
     """Whether ``expr`` (an expression, or a list: every one of them) vanishes on the
     constraint manifold: ``zero.vanishes`` at random points (random multipliers and
     parameters, the dependent velocities on the constraints, the ``derived`` symbols set
-    from the others), the list evaluated in one walk of its shared graph."""
-    exprs = list(expr) if isinstance(expr, (list, tuple)) else [expr]
-    derived = dict(derived or {})
-    vel = system.dependent_velocities
-    syms = (dag.free_symbols([*exprs, *derived.values(), *system.phi.values()])
-            - set(vel) - set(derived))
-    names = list(derived)
-
-    def point(base, dps):
-        pt = {s: mpmath.mpf(v.p) / v.q for s, v in base.items()}
-        for v, x in zip(vel, dag.evaluate([system.phi[v] for v in vel], pt, dps=dps)):
-            pt[v] = linalg._real(x)
-            if pt[v] is None:
-                raise ValueError("no real point on the constraints here")
-        pt.update(zip(names, dag.evaluate([derived[s] for s in names], pt, dps=dps)))
-        return pt
-
-    def exact_point(base):
-        with mpmath.workdps(60):
-            pt = accelerations._on_constraints(system, dict(base))
-        if any(not isinstance(v, sp.Rational) for v in pt.values()):
-            raise linalg.Inexact("irrational point")
-        pt.update({s: linalg._exact([e], pt)[0] for s, e in derived.items()})
-        return pt
-
-    return zero.vanishes(exprs, point, exact_point, points, seed, symbols=syms)
+    from the others)."""
+    return zero.vanishes(expr, system, points, seed, derived=derived)
 
 
 def compare(system: System, first: str, second: str, convention: str = "paper") -> Comparison:

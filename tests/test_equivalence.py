@@ -12,7 +12,7 @@ import jetnh.strategies as jst
 from jetnh import JetSpace, System, compare, dag
 from jetnh.equivalence import agrees, defect_along, frobenius_T, singular_set
 from jetnh.models import appell_hamel, rolling_disk
-from jetnh.testing import vanishes
+from jetnh.zero import vanishes
 
 
 def test_disk_verdicts():
