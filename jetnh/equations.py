@@ -371,7 +371,7 @@ def _embedded(ex: System, J, coefficients=None):
     Q = [ex.on_constraints(e) for e in ex.Q]
     out = []
     for m, i in enumerate(ex.ind_index):
-        e = eul[m] + sp.Add(*[ex.Phi[a, m] * sp.diff(Lt, qa) for a, qa in enumerate(ex.dependent)])
+        e = eul[m] + sp.Add(*[ex.Phi[a, m] * dag.diff(Lt, qa) for a, qa in enumerate(ex.dependent)])
         e += Q[i] + sp.Add(*[ex.Phi[a, m] * Q[j] for a, j in enumerate(ex.dep_index)])
         if coefficients is not None:
             e += sp.Add(*[coefficients[a] * T[a, m] for a in range(ex.k)])
