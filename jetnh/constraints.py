@@ -126,7 +126,7 @@ class System:
         J = self.J
         err = LagrangianError if what == "the Lagrangian" else ConstraintError
         expr = inputs.scalar(expr, what, err)
-        if expr.has(AppliedUndef):              # dynamicsymbols x(t), x(t).diff(t): convert
+        if dag.has(expr, AppliedUndef):         # dynamicsymbols x(t), x(t).diff(t): convert
             expr = inputs.convert_dynamic(expr, J)
         expr = J.check(expr)
         inputs.refuse_specials(expr, J, what, err)
@@ -137,7 +137,7 @@ class System:
                 "first-order Lagrangians, constraints and forces, functions of (t, q, qdot) "
                 "only")
         if any(J.split(s) and J.split(s)[0] in J.fields
-               for s in expr.free_symbols if isinstance(s, sp.Symbol)):
+               for s in dag.free_symbols(expr)):
             raise ConstraintError(f"{what} contains a field of the jet space; use coordinates only")
         return expr
 
@@ -178,7 +178,7 @@ class System:
                     f"as a constant parameter. If it means the velocity of {q.name}, write "
                     f"J.qd[{J.q.index(q)}] (the Symbol {J.jet(q, 1).name!r}) instead",
                     JetnhWarning, stacklevel=3)
-        for f in set().union(*(e.atoms(AppliedUndef) for e in self._inputs)):
+        for f in set().union(*(dag.atoms(e, AppliedUndef) for e in self._inputs)):
             if f.func.__name__ in lookalike:
                 q = lookalike[f.func.__name__]
                 warnings.warn(
@@ -192,12 +192,13 @@ class System:
             if f == 0:
                 raise ConstraintError(
                     f"constraint {i + 1} is identically zero (0 = 0); remove it")
-            if not (f.free_symbols & (set(J.q) | set(J.qd) | {J.t})) and not f.has(AppliedUndef):
+            if (not (dag.free_symbols(f) & (set(J.q) | set(J.qd) | {J.t}))
+                    and not dag.has(f, AppliedUndef)):
                 raise ConstraintError(
                     f"constraint {i + 1}, {f} = 0, involves neither time, coordinates nor "
                     "velocities: it is a condition on the parameters, not a constraint; "
                     "remove it")
-            if not (f.free_symbols & set(J.qd)):
+            if not (dag.free_symbols(f) & set(J.qd)):
                 raise ConstraintError(
                     f"constraint {i + 1}, {f} = 0, contains no velocity: it is holonomic. "
                     f"Eliminate a coordinate, or pass its time derivative J.D(f) instead")
@@ -327,7 +328,7 @@ class System:
     @cached_property
     def parameters(self) -> tuple[sp.Symbol, ...]:
         """Symbols that are neither time nor jet coordinates, sorted by name."""
-        syms = set().union(*(e.free_symbols for e in self._inputs))
+        syms = set().union(*(dag.free_symbols(e) for e in self._inputs))
         J = self.J
         return tuple(sorted((s for s in syms if s != J.t and not J.split(s)),
                             key=lambda s: s.name))

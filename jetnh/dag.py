@@ -62,6 +62,13 @@ def atoms(expr, *types) -> set:
     return {e for e in nodes(expr) if isinstance(e, types)}
 
 
+def has(expr, *what) -> bool:
+    """``expr.has(*what)`` for types and objects (no patterns), on the graph."""
+    types = tuple(w for w in what if isinstance(w, type))
+    objs = {w for w in what if not isinstance(w, type)}
+    return any(isinstance(e, types) or e in objs for e in nodes(expr))
+
+
 def xreplace(expr, rule: dict, canon: dict | None = None):
     """``expr.xreplace(rule)``, rebuilding each distinct subexpression once; ``expr``
     may be a list, whose shared parts are then rebuilt once for all (a list returned).
