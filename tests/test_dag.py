@@ -24,6 +24,8 @@ def test_walks_agree_with_sympy(case):
     assert dag.free_symbols(e) == e.free_symbols
     assert dag.atoms(e, sp.Symbol) == e.atoms(sp.Symbol)
     assert dag.atoms(e, sp.sin, sp.cos) == e.atoms(sp.sin, sp.cos)
+    for what in ((sp.sin,), (sp.exp, sp.Pow), (J.t,), (J.q[0], sp.I)):
+        assert dag.has(e, *what) == e.has(*what)
     rule = {s: sp.Integer(i + 2) for i, s in enumerate(sorted(e.free_symbols, key=str))}
     assert dag.xreplace(e, rule) == e.xreplace(rule)
     point = {s: sp.Float(0.3 + 0.17 * i, 30) for i, s in enumerate(sorted(e.free_symbols, key=str))}
