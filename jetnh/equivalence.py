@@ -165,9 +165,13 @@ def comparisons(system: System, equations: dict) -> list:
     each principle solved once."""
     solved = {p: _solved(e) for p, e in equations.items()}
     sing = {p: _singular(system, *s) for p, s in solved.items()}
+    canon: dict = {}        # equal subexpressions of all principles made one object, so
+    accs = {}               # that their differences never compare trees (dag.xreplace)
+    for p, (acc, _) in solved.items():
+        accs[p] = dict(zip(acc, dag.xreplace(list(acc.values()), {}, canon)))
     names = list(equations)
     return [_compare(system, (a, b), (equations[a], equations[b]),
-                     (solved[a][0], solved[b][0]), sing[a] + sing[b])
+                     (accs[a], accs[b]), sing[a] + sing[b])
             for i, a in enumerate(names) for b in names[i + 1:]]
 
 

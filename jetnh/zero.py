@@ -170,7 +170,7 @@ def _zero_at(exprs, base, point, exact_point) -> bool:
             return False
         if abs(hi) > _SHRINK * abs(lo):
             undecided.append((e, hi))
-    return all(_zero_exactly(e, hi, base, point, exact_point) for e, hi in undecided)
+    return not undecided or _zero_exactly(undecided, base, point, exact_point)
 
 
 def _small_at(exprs, base, point) -> bool:
@@ -187,13 +187,20 @@ def _small_at(exprs, base, point) -> bool:
     return True
 
 
-def _zero_exactly(expr, hi, base, point, exact_point) -> bool:
-    """An undecided value: exactly, when everything is rational, else at 120 digits."""
-    try:
-        if dag.size(expr, cap=linalg._EXACT_MAX + 1) > linalg._EXACT_MAX:
-            raise linalg.Inexact("too large to evaluate exactly")
-        pt = exact_point(base) if exact_point else dict(base)
-        return linalg._exact([expr], pt)[0] == 0
-    except linalg.Inexact:
-        top = _values([expr], base, point, 120)[0]
-        return abs(top) <= _SHRINK * abs(hi)
+def _zero_exactly(undecided, base, point, exact_point) -> bool:
+    """Undecided values ``[(expr, value at 60 digits), ...]``: exactly, those small enough
+    when everything is rational (one point, one walk for all), else at 120 digits."""
+    small = [(e, hi) for e, hi in undecided
+             if dag.size(e, cap=linalg._EXACT_MAX + 1) <= linalg._EXACT_MAX]
+    rest = [u for u in undecided if all(u is not v for v in small)]
+    if small:
+        try:
+            pt = exact_point(base) if exact_point else dict(base)
+            if any(v != 0 for v in linalg._exact([e for e, _ in small], pt)):
+                return False
+        except linalg.Inexact:
+            rest = undecided
+    if not rest:
+        return True
+    tops = _values([e for e, _ in rest], base, point, 120)
+    return all(abs(top) <= _SHRINK * abs(hi) for top, (_, hi) in zip(tops, rest))
