@@ -23,7 +23,7 @@ import random
 import mpmath
 import sympy as sp
 
-from . import dag, linalg
+from . import accelerations, dag, linalg
 
 POINTS = 4
 TREE_MAX = 400           # tree nodes above which the symbolic zero tests evaluate instead
@@ -69,7 +69,7 @@ def vanishes(exprs, system=None, points: int = POINTS, seed: int = 0, *, derived
     the domain: the point is skipped); ``exact_point(base)`` the same as rationals, or
     ``linalg.Inexact``.
     """
-    exprs = [sp.sympify(e) for e in (exprs if isinstance(exprs, (list, tuple)) else [exprs])]
+    exprs = [sp.sympify(e) for e in ([exprs] if isinstance(exprs, sp.Basic) else exprs)]
     exprs = [e for e in exprs if e != 0]
     log = _LOG.get()
     if log is not None:
@@ -103,8 +103,6 @@ def vanishes(exprs, system=None, points: int = POINTS, seed: int = 0, *, derived
 def _manifold(exprs, system, derived: dict):
     """The symbols to draw and the ``point``/``exact_point`` of ``vanishes`` on the
     constraint manifold of ``system`` (or none), with the ``derived`` symbols."""
-    from . import accelerations
-
     vel = system.dependent_velocities if system is not None else ()
     phi = [system.phi[v] for v in vel]
     syms = dag.free_symbols([*exprs, *derived.values(), *phi]) - set(vel) - set(derived)
