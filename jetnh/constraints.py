@@ -515,10 +515,11 @@ class System:
         if not (self.k and self.is_affine):
             return False
         B = self.B
-        if any(e != 0 for e in B[:, 0]) or self.J.t in B.free_symbols:
+        syms = dag.free_symbols(list(B))
+        if any(e != 0 for e in B[:, 0]) or self.J.t in syms:
             return False
         dep = set(self.dependent)
-        return not (B.free_symbols & dep) and not (self.L.free_symbols & dep)
+        return not (syms & dep) and not (dag.free_symbols(self.L) & dep)
 
     def classify(self) -> Classification:
         J = self.J
