@@ -21,7 +21,7 @@ from functools import cached_property
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
-from . import inputs, linalg
+from . import dag, inputs, linalg
 from .errors import ConstraintError, JetnhWarning, JetSpaceError, LagrangianError
 from .jet import JetSpace, key_name
 from .principles import NAMED, PRINCIPLES  # noqa: F401 -- PRINCIPLES kept importable here
@@ -125,7 +125,7 @@ class System:
         J = self.J
         err = LagrangianError if what == "the Lagrangian" else ConstraintError
         expr = inputs.scalar(expr, what, err)
-        if expr.has(AppliedUndef):              # dynamicsymbols x(t), x(t).diff(t): convert
+        if dag.has(expr, AppliedUndef):         # dynamicsymbols x(t), x(t).diff(t): convert
             expr = inputs.convert_dynamic(expr, J)
         expr = J.check(expr)
         inputs.refuse_specials(expr, J, what, err)
@@ -136,7 +136,7 @@ class System:
                 "first-order Lagrangians, constraints and forces, functions of (t, q, qdot) "
                 "only")
         if any(J.split(s) and J.split(s)[0] in J.fields
-               for s in expr.free_symbols if isinstance(s, sp.Symbol)):
+               for s in dag.free_symbols(expr)):
             raise ConstraintError(f"{what} contains a field of the jet space; use coordinates only")
         return expr
 
@@ -176,7 +176,7 @@ class System:
                     f"as a constant parameter. If it means the velocity of {q.name}, write "
                     f"J.qd[{J.q.index(q)}] (the Symbol {J.jet(q, 1).name!r}) instead",
                     JetnhWarning, stacklevel=3)
-        for f in set().union(*(e.atoms(AppliedUndef) for e in self._inputs)):
+        for f in set().union(*(dag.atoms(e, AppliedUndef) for e in self._inputs)):
             if f.func.__name__ in lookalike:
                 q = lookalike[f.func.__name__]
                 warnings.warn(
@@ -190,12 +190,13 @@ class System:
             if f == 0:
                 raise ConstraintError(
                     f"constraint {i + 1} is identically zero (0 = 0); remove it")
-            if not (f.free_symbols & (set(J.q) | set(J.qd) | {J.t})) and not f.has(AppliedUndef):
+            if (not (dag.free_symbols(f) & (set(J.q) | set(J.qd) | {J.t}))
+                    and not dag.has(f, AppliedUndef)):
                 raise ConstraintError(
                     f"constraint {i + 1}, {f} = 0, involves neither time, coordinates nor "
                     "velocities: it is a condition on the parameters, not a constraint; "
                     "remove it")
-            if not (f.free_symbols & set(J.qd)):
+            if not (dag.free_symbols(f) & set(J.qd)):
                 raise ConstraintError(
                     f"constraint {i + 1}, {f} = 0, contains no velocity: it is holonomic. "
                     f"Eliminate a coordinate, or pass its time derivative J.D(f) instead")
@@ -325,7 +326,7 @@ class System:
     @cached_property
     def parameters(self) -> tuple[sp.Symbol, ...]:
         """Symbols that are neither time nor jet coordinates, sorted by name."""
-        syms = set().union(*(e.free_symbols for e in self._inputs))
+        syms = set().union(*(dag.free_symbols(e) for e in self._inputs))
         J = self.J
         return tuple(sorted((s for s in syms if s != J.t and not J.split(s)),
                             key=lambda s: s.name))
@@ -334,7 +335,7 @@ class System:
     def jacobian(self) -> sp.Matrix:
         """df^a/dqdot^s (k x n)."""
         return sp.Matrix(self.k, self.J.n,
-                         lambda a, s: sp.diff(self.constraints[a], self.J.qd[s]))
+                         lambda a, s: dag.diff(self.constraints[a], self.J.qd[s]))
 
     @cached_property
     def jacobian_dependent(self) -> sp.Matrix:
@@ -438,7 +439,7 @@ class System:
     def Phi(self) -> sp.Matrix:
         """d phi^alpha / d qdot^mu (rows: dependent, cols: independent)."""
         return sp.Matrix(self.k, len(self.independent),
-                         lambda a, m: sp.diff(self.phi[self.dependent_velocities[a]],
+                         lambda a, m: dag.diff(self.phi[self.dependent_velocities[a]],
                                               self.independent_velocities[m]))
 
     @cached_property
@@ -451,8 +452,8 @@ class System:
         vel = self.independent_velocities
         cols = []
         for v, phi in ((v, self.phi[v]) for v in self.dependent_velocities):
-            b0 = phi.xreplace({u: 0 for u in vel})
-            cols.append([b0] + [sp.diff(phi, u) for u in vel])
+            b0 = dag.xreplace(phi, {u: sp.S.Zero for u in vel})
+            cols.append([b0] + [dag.diff(phi, u) for u in vel])
         return sp.Matrix(cols)
 
     # ------------------------------------------------------------------ L~, p, T
@@ -464,7 +465,7 @@ class System:
     @cached_property
     def p_dependent(self) -> tuple[sp.Expr, ...]:
         """p_alpha = dL/dqdot^alpha (not restricted to the constraints)."""
-        return tuple(sp.diff(self.L, v) for v in self.dependent_velocities)
+        return tuple(dag.diff(self.L, v) for v in self.dependent_velocities)
 
     def T(self, on_constraints: bool = True) -> sp.Matrix:
         """T^alpha_mu = -[phi^alpha]_mu - dphi^alpha/dq^beta dphi^beta/dqdot^mu (text under (18)).
@@ -477,7 +478,7 @@ class System:
         for a, va in enumerate(self.dependent_velocities):
             ph = self.phi[va]
             eul = J.euler(ph, wrt=self.independent)
-            rows.append([-eul[m] - sum((sp.diff(ph, qb) * self.Phi[b, m]
+            rows.append([-eul[m] - sum((dag.diff(ph, qb) * self.Phi[b, m]
                                         for b, qb in enumerate(self.dependent)), sp.S.Zero)
                          for m in range(len(self.independent))])
         T = sp.Matrix(rows) if rows else sp.zeros(0, len(self.independent))
@@ -500,7 +501,7 @@ class System:
     def mass_matrix(self) -> sp.Matrix:
         """d^2 L / dqdot^r dqdot^s."""
         qd = self.J.qd
-        return sp.Matrix(self.J.n, self.J.n, lambda r, s: sp.diff(self.L, qd[r], qd[s]))
+        return sp.Matrix(self.J.n, self.J.n, lambda r, s: dag.diff(self.L, qd[r], qd[s]))
 
     def is_regular(self) -> bool:
         """Whether the Hessian of L in the velocities is generically invertible."""
@@ -512,10 +513,11 @@ class System:
         if not (self.k and self.is_affine):
             return False
         B = self.B
-        if any(e != 0 for e in B[:, 0]) or self.J.t in B.free_symbols:
+        syms = dag.free_symbols(list(B))
+        if any(e != 0 for e in B[:, 0]) or self.J.t in syms:
             return False
         dep = set(self.dependent)
-        return not (B.free_symbols & dep) and not (self.L.free_symbols & dep)
+        return not (syms & dep) and not (dag.free_symbols(self.L) & dep)
 
     def classify(self) -> Classification:
         J = self.J

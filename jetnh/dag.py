@@ -1,5 +1,5 @@
-"""Expressions as shared graphs: size, free symbols, atoms, substitution and numeric
-evaluation in time linear in the number of *distinct* subexpressions.
+"""Expressions as shared graphs: size, free symbols, atoms, substitution, derivatives and
+numeric evaluation in time linear in the number of *distinct* subexpressions.
 
 Solved equations share their subexpressions (the accelerations of a chain of k
 constraints nest k solves), so as trees they are exponentially larger than as graphs.
@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import mpmath
 import sympy as sp
+from sympy.core.function import ArgumentIndexError
 
 
 def nodes(expr, cap: int | None = None) -> list:
@@ -61,6 +62,13 @@ def atoms(expr, *types) -> set:
     return {e for e in nodes(expr) if isinstance(e, types)}
 
 
+def has(expr, *what) -> bool:
+    """``expr.has(*what)`` for types and objects (no patterns), on the graph."""
+    types = tuple(w for w in what if isinstance(w, type))
+    objs = {w for w in what if not isinstance(w, type)}
+    return any(isinstance(e, types) or e in objs for e in nodes(expr))
+
+
 def xreplace(expr, rule: dict, canon: dict | None = None):
     """``expr.xreplace(rule)``, rebuilding each distinct subexpression once; ``expr``
     may be a list, whose shared parts are then rebuilt once for all (a list returned).
@@ -97,6 +105,80 @@ def xreplace(expr, rule: dict, canon: dict | None = None):
     return done[id(sp.sympify(expr))]
 
 
+def diff(expr, *symbols, cache: dict | None = None):
+    """``sympy.diff(expr, *symbols)`` (successive first derivatives by Symbols), each
+    distinct subexpression differentiated once: sympy's rules (sum, product, power and
+    chain rule through ``fdiff``) applied children first, so the result shares the
+    subexpressions of ``expr`` and of the derivatives of its parts; never flattened or
+    simplified.  Subexpressions whose derivative sympy defines otherwise (``Abs``,
+    ``Piecewise``, ``Derivative``, ...) are passed to ``sympy.diff``.
+
+    ``cache`` (a dict, filled here) carries the derivatives of subexpressions over several
+    calls, e.g. by every symbol of one expression (``jacobian``, the total derivative)."""
+    cache = {} if cache is None else cache
+    expr = sp.sympify(expr)
+    for x in symbols:
+        if not isinstance(x, sp.Symbol):
+            raise TypeError(f"dag.diff differentiates by Symbols, not {x!r}")
+        expr = _diff(expr, x, cache)
+    return expr
+
+
+def jacobian(exprs, symbols, cache: dict | None = None) -> sp.Matrix:
+    """The matrix d exprs[i] / d symbols[j] (``diff``; one cache for all entries)."""
+    cache = {} if cache is None else cache
+    exprs = [sp.sympify(e) for e in exprs]
+    return sp.Matrix(len(exprs), len(symbols),
+                     lambda i, j: _diff(exprs[i], symbols[j], cache))
+
+
+def _diff(expr, x, cache: dict):
+    """d expr / dx; ``cache``: (id(node), x) -> (node, derivative), the node kept alive
+    so that its id is not reused."""
+    stack = [(expr, False)]
+    while stack:
+        e, expanded = stack.pop()
+        key = (id(e), x)
+        if key in cache:
+            continue
+        if not expanded and e.args:
+            stack.append((e, True))
+            stack.extend((a, False) for a in e.args if (id(a), x) not in cache)
+            continue
+        cache[key] = (e, _rule(e, x, cache))
+    return cache[(id(expr), x)][1]
+
+
+def _rule(e, x, cache):
+    """The derivative of node ``e`` from those of its children (all in ``cache``)."""
+    if not e.args:
+        return sp.S.One if e == x else sp.S.Zero
+    ds = [cache[(id(a), x)][1] for a in e.args]
+    if all(d is sp.S.Zero for d in ds):
+        return sp.S.Zero
+    if isinstance(e, sp.Add):
+        return sp.Add(*[d for d in ds if d is not sp.S.Zero])
+    if isinstance(e, sp.Mul):
+        args = list(e.args)
+        return sp.Add(*[sp.Mul(*args[:i], d, *args[i + 1:])
+                        for i, d in enumerate(ds) if d is not sp.S.Zero])
+    if isinstance(e, sp.Pow):
+        (b, p), (db, dp) = e.args, ds
+        return e * (dp * sp.log(b) + db * p / b)
+    if isinstance(e, sp.Function) and type(e)._eval_derivative is sp.Function._eval_derivative:
+        out = []
+        for i, d in enumerate(ds, 1):
+            if d is sp.S.Zero:
+                continue
+            try:
+                df = e.fdiff(i)
+            except ArgumentIndexError:
+                df = sp.Function.fdiff(e, i)
+            out.append(df * d)
+        return sp.Add(*out)
+    return sp.diff(e, x)
+
+
 _SPECIAL = {"Abs": abs, "re": mpmath.re, "im": mpmath.im, "conjugate": mpmath.conj}
 
 
@@ -125,6 +207,42 @@ def evaluate(expr, point: dict, dps: int = 30) -> list:
                 args = [val[id(a)] for a in e.args]
                 f = _SPECIAL.get(type(e).__name__) or getattr(mpmath, type(e).__name__, None)
                 v = f(*args) if f else _number(e.func(*map(to_sympy, args)).evalf(dps), prec)
+            else:
+                raise ValueError(f"cannot evaluate {e!r} numerically (no value given)")
+            val[id(e)] = v
+    out = [val[id(sp.sympify(e))] for e in roots]
+    return out if isinstance(expr, (list, tuple)) else out[0]
+
+
+def evaluate_numpy(expr, point: dict):
+    """The values (numpy float arrays, broadcast) of ``expr`` (a Basic or a list) at
+    ``point`` (Symbol -> number or array), each distinct subexpression computed once
+    over all the points; a function node by ``lambdify`` of its head alone (applied to
+    the values of its arguments), so the graph is never flattened.  Raises ValueError
+    for a symbol without a value."""
+    import numpy as np
+
+    roots = list(expr) if isinstance(expr, (list, tuple)) else [expr]
+    val: dict = {}
+    heads: dict = {}
+    with np.errstate(all="ignore"):
+        for e in nodes(roots):
+            if e in point:
+                v = np.asarray(point[e], dtype=float)
+            elif e.is_Number or e.is_NumberSymbol:
+                v = np.float64(float(e))
+            elif e.is_Add:
+                v = sum(val[id(a)] for a in e.args)
+            elif e.is_Mul:
+                v = np.prod(np.broadcast_arrays(*(val[id(a)] for a in e.args)), axis=0)
+            elif e.is_Pow:
+                v = np.power(val[id(e.base)], val[id(e.exp)])
+            elif isinstance(e, sp.Function):
+                key = (e.func, len(e.args))
+                if key not in heads:
+                    xs = sp.symbols(f"a:{len(e.args)}", cls=sp.Dummy)
+                    heads[key] = sp.lambdify(xs, e.func(*xs), "numpy")
+                v = heads[key](*(val[id(a)] for a in e.args))
             else:
                 raise ValueError(f"cannot evaluate {e!r} numerically (no value given)")
             val[id(e)] = v

@@ -38,7 +38,7 @@ from functools import cached_property
 
 import sympy as sp
 
-from . import accelerations, linalg, principles
+from . import accelerations, dag, linalg, principles
 from .constraints import System
 from .errors import JetnhWarning, PrincipleError
 from .principles import CONVENTIONS, Form, Principle
@@ -72,7 +72,7 @@ def action_variation(system: System, variation: Variation, multipliers=()) -> Ac
     J = variation.J
     F = system.L + sp.Add(*[lam * f for lam, f in zip(multipliers, system.constraints)])
     E = J.euler(F, wrt=J.q)
-    P = tuple(sp.diff(F, v) for v in J.qd)
+    P = tuple(dag.diff(F, v) for v in J.qd)
     eta, c = variation.eta, variation.c
     integrand = sp.Add(*[E[s] * eta[s] - P[s] * c[s] for s in range(J.n)])
     boundary = sp.Add(*[P[s] * eta[s] for s in range(J.n)])
@@ -337,7 +337,7 @@ def _embedded(ex: System, J, coefficients=None):
     Q = [ex.on_constraints(e) for e in ex.Q]
     out = []
     for m, i in enumerate(ex.ind_index):
-        e = eul[m] + sp.Add(*[ex.Phi[a, m] * sp.diff(Lt, qa) for a, qa in enumerate(ex.dependent)])
+        e = eul[m] + sp.Add(*[ex.Phi[a, m] * dag.diff(Lt, qa) for a, qa in enumerate(ex.dependent)])
         e += Q[i] + sp.Add(*[ex.Phi[a, m] * Q[j] for a, j in enumerate(ex.dep_index)])
         if coefficients is not None:
             e += sp.Add(*[coefficients[a] * T[a, m] for a in range(ex.k)])

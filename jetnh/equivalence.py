@@ -22,10 +22,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import mpmath
 import sympy as sp
 
-from . import accelerations, dag, linalg, singular, zero
+from . import dag, linalg, singular, zero
 from .constraints import System
 from .frobenius import bracket_components
 
@@ -150,32 +149,8 @@ def agrees(system: System, expr, derived=None, points: int = _POINTS, seed: int 
     """Whether ``expr`` (an expression, or a list: every one of them) vanishes on the
     constraint manifold: ``zero.vanishes`` at random points (random multipliers and
     parameters, the dependent velocities on the constraints, the ``derived`` symbols set
-    from the others), the list evaluated in one walk of its shared graph."""
-    exprs = list(expr) if isinstance(expr, (list, tuple)) else [expr]
-    derived = dict(derived or {})
-    vel = system.dependent_velocities
-    syms = (dag.free_symbols([*exprs, *derived.values(), *system.phi.values()])
-            - set(vel) - set(derived))
-    names = list(derived)
-
-    def point(base, dps):
-        pt = {s: mpmath.mpf(v.p) / v.q for s, v in base.items()}
-        for v, x in zip(vel, dag.evaluate([system.phi[v] for v in vel], pt, dps=dps)):
-            pt[v] = linalg._real(x)
-            if pt[v] is None:
-                raise ValueError("no real point on the constraints here")
-        pt.update(zip(names, dag.evaluate([derived[s] for s in names], pt, dps=dps)))
-        return pt
-
-    def exact_point(base):
-        with mpmath.workdps(60):
-            pt = accelerations._on_constraints(system, dict(base))
-        if any(not isinstance(v, sp.Rational) for v in pt.values()):
-            raise linalg.Inexact("irrational point")
-        pt.update({s: linalg._exact([e], pt)[0] for s, e in derived.items()})
-        return pt
-
-    return zero.vanishes(exprs, point, exact_point, points, seed, symbols=syms)
+    from the others)."""
+    return zero.vanishes(expr, system, points, seed, derived=derived)
 
 
 def compare(system: System, first: str, second: str, convention: str = "paper") -> Comparison:
@@ -190,9 +165,13 @@ def comparisons(system: System, equations: dict) -> list:
     each principle solved once."""
     solved = {p: _solved(e) for p, e in equations.items()}
     sing = {p: _singular(system, *s) for p, s in solved.items()}
+    canon: dict = {}        # equal subexpressions of all principles made one object, so
+    accs = {}               # that their differences never compare trees (dag.xreplace)
+    for p, (acc, _) in solved.items():
+        accs[p] = dict(zip(acc, dag.xreplace(list(acc.values()), {}, canon)))
     names = list(equations)
     return [_compare(system, (a, b), (equations[a], equations[b]),
-                     (solved[a][0], solved[b][0]), sing[a] + sing[b])
+                     (accs[a], accs[b]), sing[a] + sing[b])
             for i, a in enumerate(names) for b in names[i + 1:]]
 
 
@@ -220,7 +199,8 @@ def _compare(system, principles, eqs, accs, factors) -> Comparison:
 
 def defect_along(system: System, first: str, second: str, samples, convention: str = "paper"):
     """Largest |q''_first - q''_second| over given states: do the principles agree along a
-    trajectory?  ``samples`` maps names (or Symbols) to arrays of equal length, e.g.
+    trajectory?  Evaluated on the shared graph, all the states at once
+    (``dag.evaluate_numpy``).  ``samples`` maps names (or Symbols) to arrays of equal length, e.g.
     ``traj.as_dict()`` of a jetnh Trajectory; multipliers missing from it count as zero."""
     import numpy as np
 
@@ -229,18 +209,15 @@ def defect_along(system: System, first: str, second: str, samples, convention: s
     a1, a2 = e1.accelerations(), e2.accelerations()
     data = {(k.name if isinstance(k, sp.Symbol) else str(k)): np.asarray(v, dtype=float)
             for k, v in dict(samples).items()}
-    worst = 0.0
-    for q in system.J.qdd:
-        d = dag.xreplace(a1[q] - a2[q], system.phi)
-        syms = sorted(dag.free_symbols(d), key=lambda s: s.name)
-        missing = [s.name for s in syms if s.name not in data
-                   and s not in (e1.multipliers + e2.multipliers)]
-        if missing:
-            from .errors import JetnhError
-            raise JetnhError(f"the samples lack values for {missing}; pass every coordinate, "
-                             "velocity and parameter (e.g. traj.as_dict() plus parameters)")
-        n = len(next(iter(data.values())))
-        args = [data.get(s.name, np.zeros(n)) for s in syms]
-        val = sp.lambdify(syms, d, "numpy", cse=True)(*args)
-        worst = max(worst, float(np.max(np.abs(np.broadcast_to(val, (n,))))))
-    return worst
+    defects = dag.xreplace([a1[q] - a2[q] for q in system.J.qdd], system.phi)
+    syms = sorted(dag.free_symbols(defects), key=lambda s: s.name)
+    missing = [s.name for s in syms if s.name not in data
+               and s not in (e1.multipliers + e2.multipliers)]
+    if missing:
+        from .errors import JetnhError
+        raise JetnhError(f"the samples lack values for {missing}; pass every coordinate, "
+                         "velocity and parameter (e.g. traj.as_dict() plus parameters)")
+    n = len(next(iter(data.values())))
+    point = {s: data.get(s.name, np.zeros(n)) for s in syms}
+    vals = dag.evaluate_numpy(defects, point)
+    return max((float(np.max(np.abs(np.broadcast_to(v, (n,))))) for v in vals), default=0.0)

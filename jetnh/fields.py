@@ -30,6 +30,7 @@ from types import MappingProxyType
 
 import sympy as sp
 
+from . import dag
 from .errors import JetSpaceError
 from .jet import JetSpace
 
@@ -182,8 +183,8 @@ class VectorField:
         return self._apply(_expr(self._J, f, "the function a vector field acts on"))
 
     def _apply(self, f: sp.Expr) -> sp.Expr:
-        fs = f.free_symbols
-        return sp.Add(*[c * sp.diff(f, s) for s, c in self._c.items() if s in fs])
+        fs, cache = dag.free_symbols(f), {}
+        return sp.Add(*[c * dag.diff(f, s, cache=cache) for s, c in self._c.items() if s in fs])
 
     def bracket(self, other: "VectorField") -> "VectorField":
         """The Lie bracket [X, Y] with components X(Y^i) - Y(X^i)."""

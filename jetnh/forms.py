@@ -479,12 +479,13 @@ def d(form: Form) -> Form:
     order = form._order
     rank = order.rank
     acc: dict = {}
+    cache: dict = {}          # derivatives of shared subexpressions of the coefficients
     for key, c in form._terms.items():
-        for y in c.free_symbols:
+        for y in dag.free_symbols(c):
             r = order.key(y)
             if r is None or y in key:
                 continue
-            dc = sp.diff(c, y)
+            dc = dag.diff(c, y, cache=cache)
             if dc == 0:
                 continue
             # insert dy in front: sign = (-1)^(number of key elements ranked before y)

@@ -52,7 +52,7 @@ from typing import Sequence
 
 import sympy as sp
 
-from . import zero
+from . import dag, zero
 from .errors import ConstraintError
 from .forms import Form, _canon, _order, affine_coefficients, d, wedge, zero_residual
 from .jet import JetSpace
@@ -131,8 +131,8 @@ def _check_B(J: JetSpace, B, k: int, m: int) -> sp.Matrix:
             f"columns (time first): expected {(k, 1 + m)}, got {B.shape}")
     for e in B:
         J.check(e)
-        for s in e.free_symbols:
-            info = J.split(s) if isinstance(s, sp.Symbol) else None
+        for s in dag.free_symbols(e):
+            info = J.split(s)
             if info and (info[1] > 0 or info[0] in J.fields):
                 raise ConstraintError(
                     f"B^alpha_rho = {e} depends on {s}; the coefficients of affine constraints "
@@ -177,13 +177,14 @@ def bracket_components(J: JetSpace, B, dep, ind) -> dict:
     (t, independent), keyed (x_rho, x_sigma, q_alpha); not reduced, zeros included."""
     xs = (J.t,) + tuple(ind)
     k = len(dep)
+    cache: dict = {}        # derivatives of the shared subexpressions of B, once
 
     def X(rho, f):
-        out = [sp.diff(f, xs[rho])]
+        out = [dag.diff(f, xs[rho], cache=cache)]
         for a in range(k):
             c = B[a, rho]
             if c != 0:
-                out.append(c * sp.diff(f, dep[a]))
+                out.append(c * dag.diff(f, dep[a], cache=cache))
         return sp.Add(*out)
 
     return {(xs[r], xs[s], dep[a]): X(r, B[a, s]) - X(s, B[a, r])
@@ -277,12 +278,13 @@ def frobenius_from_constraints(J: JetSpace, constraints: Sequence, dependent: Se
     v_ind = [J.jet(m, 1) for m in ind]
     vel = v_dep + v_ind
     opts = dict(numeric=numeric, simplify=simplify)
-    affine = all(decide_zero(sp.diff(f, v, w), **opts) is None
+    cache: dict = {}
+    affine = all(decide_zero(dag.diff(f, v, w, cache=cache), **opts) is None
                  for f in fs for i, v in enumerate(vel) for w in vel[i:])
     if affine:
         # unexpanded on purpose: the structure keeps the rational zero tests cheap
-        A = sp.Matrix([[sp.diff(f, v) for v in v_dep] for f in fs])
-        C = sp.Matrix([[sp.diff(f, v) for v in v_ind] for f in fs])
+        A = dag.jacobian(fs, v_dep)
+        C = dag.jacobian(fs, v_ind)
         c0 = sp.Matrix([f.xreplace({v: 0 for v in vel}) for f in fs])
         if any(s in sp.expand(e).free_symbols for e in list(A) + list(C) for s in vel):
             affine = False        # affine only up to identities expand cannot see

@@ -25,6 +25,7 @@ from collections.abc import Mapping, Set
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
+from . import dag
 from .errors import ConstraintError, JetnhWarning, JetSpaceError, LagrangianError
 from .jet import key_name
 
@@ -107,9 +108,9 @@ def scalar(expr, what: str, err) -> sp.Expr:
         expr = sp.sympify(expr)
     else:
         raise err(f"{what}, {expr!r}, is of type {type(expr).__name__}, not a sympy expression")
-    if expr.has(sp.oo, -sp.oo, sp.zoo, sp.nan):
+    if dag.has(expr, sp.oo, -sp.oo, sp.zoo, sp.nan):
         raise err(f"{what}, {expr}, contains an infinity or nan")
-    if expr.has(sp.I):
+    if dag.has(expr, sp.I):
         raise err(f"{what}, {expr}, contains the imaginary unit; jetnh's Lagrangians and "
                   "constraints are real")
     return expr
@@ -137,13 +138,13 @@ def convert_dynamic(expr, J):
 
 def on_jets(e, J) -> bool:
     """Whether ``e`` depends on time or a jet coordinate (or an explicit function)."""
-    return e.has(AppliedUndef) or any(
-        s == J.t or (isinstance(s, sp.Symbol) and J.split(s)) for s in e.free_symbols)
+    return dag.has(e, AppliedUndef) or any(
+        s == J.t or J.split(s) for s in dag.free_symbols(e))
 
 
 def refuse_specials(expr, J, what: str, err):
     """Non-smooth functions of t, q, qdot, and unevaluated derivatives, are errors."""
-    for e in sp.preorder_traversal(expr):
+    for e in dag.nodes(expr):
         if isinstance(e, NONSMOOTH) and on_jets(e, J):
             raise err(
                 f"{what} contains {e}, which is not differentiable where its argument "
@@ -171,13 +172,13 @@ def smooth_kinks(expr, J, what: str, err):
         return sp.sqrt(u**2) if isinstance(e, sp.Abs) else u / sp.sqrt(u**2)
 
     for _ in range(4):
-        if not expr.has(sp.Abs, sp.sign):
+        if not dag.has(expr, sp.Abs, sp.sign):
             break
         new = expr.replace(kink, smooth)
         if new == expr:
             break
         expr = new
-    for e in sp.preorder_traversal(expr):
+    for e in dag.nodes(expr):
         if kink(e):
             raise err(f"{what} contains {e}, which jetnh cannot rewrite smoothly; write "
                       "sqrt(u**2) for Abs(u) and u/sqrt(u**2) for sign(u)")

@@ -20,6 +20,7 @@ from typing import Iterable
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
+from . import dag
 from .errors import JetSpaceError
 
 _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9]*(?:_[A-Za-z0-9]+)*$")
@@ -61,6 +62,13 @@ def sympy_object(expr) -> sp.Basic:
         return sp.sympify(expr, strict=True)
     except (sp.SympifyError, TypeError) as exc:
         raise JetSpaceError(f"{expr!r} is not a sympy expression: {exc}") from None
+
+
+def _free(expr) -> set:
+    """``expr.free_symbols`` on its shared graph: the union of those of the subexpressions
+    that define their own (Symbols, ``Indexed``, ``MatrixSymbol``, ...)."""
+    own = [e for e in dag.nodes(expr) if type(e).free_symbols is not sp.Basic.free_symbols]
+    return set().union(*(e.free_symbols for e in own))
 
 
 def _plain_name(s) -> str:
@@ -215,8 +223,8 @@ class JetSpace:
         """The highest jet order of the coordinates (or given bases) in ``expr``; -1 if none."""
         bases = set(self._coords if of is None else of)
         best = -1
-        for s in sympy_object(expr).free_symbols:
-            info = self.split(s) if isinstance(s, sp.Symbol) else None
+        for s in dag.free_symbols(sympy_object(expr)):
+            info = self.split(s)
             if info and info[0] in bases:
                 best = max(best, info[1])
         return best
@@ -234,13 +242,13 @@ class JetSpace:
         expr = sympy_object(expr)
         if not isinstance(expr, sp.Basic):
             raise JetSpaceError(f"{expr!r} is not a sympy expression")
-        for s in expr.free_symbols:
+        for s in _free(expr):
             if not isinstance(s, sp.Symbol):
                 raise JetSpaceError(
                     f"{s} (of type {type(s).__name__}) is not a Symbol; jetnh's parameters are plain "
                     f"Symbols: write e.g. sp.Symbol({_plain_name(s)!r}) instead")
             self.split(s)
-        for f in expr.atoms(AppliedUndef):
+        for f in dag.atoms(expr, AppliedUndef):
             if f.func.__name__ in self._base_by_name:
                 raise JetSpaceError(
                     f"{f} is a function of time in dynamicsymbols style; convert the "
@@ -248,17 +256,20 @@ class JetSpace:
         return expr
 
     # ------------------------------------------------------------------- calculus
-    def D(self, expr) -> sp.Expr:
-        """Total time derivative d/dt = d_t + sum_k q_(k+1) d/dq_(k), on coordinates and fields."""
+    def D(self, expr, cache: dict | None = None) -> sp.Expr:
+        """Total time derivative d/dt = d_t + sum_k q_(k+1) d/dq_(k), on coordinates and
+        fields; the partial derivatives on the shared graph (``dag.diff``, whose
+        ``cache`` it takes)."""
         expr = sympy_object(expr)
+        cache = {} if cache is None else cache
         terms = []
-        for s in expr.free_symbols:
+        for s in sorted(dag.free_symbols(expr), key=lambda s: s.name):
             if s == self._t:
-                terms.append(sp.diff(expr, s))
+                terms.append(dag.diff(expr, s, cache=cache))
                 continue
-            info = self.split(s) if isinstance(s, sp.Symbol) else None
+            info = self.split(s)
             if info is not None:
-                terms.append(sp.diff(expr, s) * self.jet(info[0], info[1] + 1))
+                terms.append(dag.diff(expr, s, cache=cache) * self.jet(info[0], info[1] + 1))
         return sp.Add(*terms)
 
     def Dk(self, expr, k: int) -> sp.Expr:
@@ -278,15 +289,16 @@ class JetSpace:
         for b in bases:
             if not (isinstance(b, sp.Symbol) and self.split(b) and self.split(b)[1] == 0):
                 raise JetSpaceError(f"euler(..., wrt=...) takes coordinates or fields, not {b!r}")
+        cache: dict = {}            # derivatives of shared subexpressions, computed once
         out = []
         for b in bases:
             top = self.order(expr, of=(b,))
             if top < 0:
                 out.append(sp.S.Zero)
                 continue
-            e = sp.diff(expr, self.jet(b, top))
+            e = dag.diff(expr, self.jet(b, top), cache=cache)
             for k in range(top - 1, -1, -1):          # Horner form of sum (-D)^k d/db_(k)
-                e = sp.diff(expr, self.jet(b, k)) - self.D(e)
+                e = dag.diff(expr, self.jet(b, k), cache=cache) - self.D(e, cache)
             out.append(e)
         return tuple(out)
 

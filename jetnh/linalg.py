@@ -327,7 +327,7 @@ def _generic_samples(exprs, build, points: int, seed: int, complete=None, symbol
     raises ``Inexact`` when it cannot stay exact) or mpmath numbers, within
     ``mpmath.workdps`` of the precision.  ``symbols`` are drawn too."""
     exprs = list(exprs)
-    syms = sorted(set(symbols).union(*(e.free_symbols for e in exprs)), key=lambda s: s.name)
+    syms = sorted(set(symbols) | dag.free_symbols(exprs), key=lambda s: s.name)
     rng = random.Random(seed)
     try_exact = dag.size(exprs, cap=_EXACT_MAX + 1) <= _EXACT_MAX
     got = 0

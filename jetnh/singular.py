@@ -34,9 +34,9 @@ def bases(expr) -> list:
     out, seen, stack = [], set(), [sp.sympify(expr)]
     while stack:
         e = stack.pop()
-        if e in seen or e.is_Atom:
+        if id(e) in seen or e.is_Atom:      # by identity: equal trees never compared
             continue
-        seen.add(e)
+        seen.add(id(e))
         if e.is_Pow:
             b, x = e.as_base_exp()
             if x.is_number and (x.is_negative or not x.is_integer):
@@ -158,8 +158,8 @@ def singular_set(exprs, on=None) -> list:
     found: list = []
     for e in exprs:
         found.extend(bases(e))
-    if on:
-        found = dag.xreplace(found, on)
+    # one object per distinct base (dag.xreplace hash-conses), each split once
+    found = list({id(b): b for b in dag.xreplace(found, on or {})}.values())
     out, seen = [], set()
     for b in found:
         for f in _split(b):

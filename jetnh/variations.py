@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
-from . import linalg
+from . import dag, linalg
 from .constraints import System
 from .errors import PrincipleError
 from .principles import named
@@ -59,7 +59,8 @@ class Variation:
         """delta F = dF/dq^s eta^s + dF/dqdot^s delta qdot^s for first-order F."""
         J = self.J
         dv = self.velocity_components()
-        return sp.Add(*[sp.diff(F, q) * e + sp.diff(F, v) * w
+        cache: dict = {}
+        return sp.Add(*[dag.diff(F, q, cache=cache) * e + dag.diff(F, v, cache=cache) * w
                         for q, v, e, w in zip(J.q, J.qd, self.eta, dv)])
 
     def as_field(self):

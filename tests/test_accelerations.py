@@ -14,7 +14,7 @@ import jetnh.strategies as jst
 from jetnh import JetSpace, models
 from jetnh.accelerations import euler_parts
 from jetnh import dag
-from jetnh.testing import vanishes
+from jetnh.zero import vanishes
 
 
 @st.composite

@@ -8,7 +8,7 @@ import jetnh.strategies as jst
 from jetnh import ConstraintError, JetSpace, JetSpaceError, LagrangianError
 from jetnh.constraints import System
 from jetnh.equivalence import frobenius_T
-from jetnh.testing import vanishes
+from jetnh.zero import vanishes
 
 R, I1, I2 = sp.symbols("R I1 I2")
 

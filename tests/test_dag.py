@@ -3,6 +3,8 @@ expressions whose tree is exponential."""
 
 from __future__ import annotations
 
+import numpy as np
+import pytest
 import sympy as sp
 from hypothesis import given, strategies as st
 
@@ -22,11 +24,18 @@ def test_walks_agree_with_sympy(case):
     assert dag.free_symbols(e) == e.free_symbols
     assert dag.atoms(e, sp.Symbol) == e.atoms(sp.Symbol)
     assert dag.atoms(e, sp.sin, sp.cos) == e.atoms(sp.sin, sp.cos)
+    for what in ((sp.sin,), (sp.exp, sp.Pow), (J.t,), (J.q[0], sp.I)):
+        assert dag.has(e, *what) == e.has(*what)
     rule = {s: sp.Integer(i + 2) for i, s in enumerate(sorted(e.free_symbols, key=str))}
     assert dag.xreplace(e, rule) == e.xreplace(rule)
     point = {s: sp.Float(0.3 + 0.17 * i, 30) for i, s in enumerate(sorted(e.free_symbols, key=str))}
     ref = complex(e.xreplace(point).evalf(30))
     assert abs(complex(dag.evaluate(e, point)) - ref) <= 1e-25 * max(1.0, abs(ref))
+    arrays = {s: [float(v), float(v) / 2] for s, v in point.items()}
+    half = complex(e.xreplace({s: v / 2 for s, v in point.items()}).evalf(30))
+    got = np.broadcast_to(dag.evaluate_numpy([e], arrays)[0], (2,))     # a constant: a scalar
+    assert abs(got[0] - ref) <= 1e-12 * max(1.0, abs(ref))
+    assert abs(got[1] - half) <= 1e-12 * max(1.0, abs(half))
     tree = list(sp.preorder_traversal(e))        # equal nodes may be distinct objects
     assert len(set(tree)) <= dag.size(e) <= len(tree)
 
@@ -83,3 +92,73 @@ def test_tree_size_counts_the_tree_on_the_graph():
     for _ in range(60):                    # 3^60 tree nodes
         deep = sp.sin(deep) * deep + deep**2
     assert dag.tree_size(deep, cap=10**6) == 10**6 + 1
+
+
+# ------------------------------------------------------------------------ derivatives
+def _close(a, b, point, dps=40):
+    """a and b agree at ``point`` to ``dps - 10`` digits (evaluated on their graphs)."""
+    va, vb = dag.evaluate([a, b], point, dps=dps)
+    return abs(va - vb) <= sp.Float(10) ** (10 - dps) * max(1, abs(vb))
+
+
+@st.composite
+def nested(draw):
+    """A random expression and a chain of products and sums nested on it: a graph whose
+    parts are shared by several parents (its tree grows exponentially with the depth)."""
+    J = draw(jst.jet_spaces(min_n=1, max_n=3))
+    parts = [draw(jst.jet_expressions(J, order=1, max_depth=2)) for _ in range(2)]
+    for op in draw(st.lists(st.sampled_from("+*/s"), min_size=0, max_size=5)):
+        a, b = parts[-1], parts[-2]
+        parts.append({"+": lambda: a + b, "*": lambda: a * b, "/": lambda: a / (2 + b**2),
+                      "s": lambda: sp.sin(a) * b}[op]())
+    return J, parts[-1]
+
+
+@given(nested(), st.data())
+def test_diff_agrees_with_sympy_at_random_points(case, data):
+    """dag.diff = sympy.diff (first and second derivatives), at random points, 40 digits."""
+    J, e = case
+    syms = sorted(dag.free_symbols(e) | {J.t, J.qd[0]}, key=lambda s: s.name)
+    x, y = data.draw(st.sampled_from(syms)), data.draw(st.sampled_from(syms))
+    point = {s: sp.Rational(data.draw(st.integers(11, 97)), 37) for s in syms}
+    cache: dict = {}
+    d1 = dag.diff(e, x, cache=cache)
+    assert _close(d1, sp.diff(e, x), point)
+    assert _close(dag.diff(e, x, y, cache=cache), sp.diff(e, x, y), point)
+    assert dag.diff(e, x, cache=cache) is d1                  # from the cache
+    jac = dag.jacobian([e, x * e], [x, y])
+    assert _close(jac[1, 0], e + x * d1, point)
+
+
+def test_diff_is_sympy_diff_on_small_expressions():
+    """The same rules as sympy: on tree-shaped input the very same expressions."""
+    x, y = sp.symbols("x y")
+    f = sp.Function("f")
+    for e in (x**2 * sp.sin(x * y), sp.exp(x) / (1 + y * x) ** sp.Rational(3, 2), x**y,
+              sp.atan2(y, x) * sp.Abs(x), f(x, x * y), sp.sqrt(1 + sp.cos(x) ** 2) / y):
+        assert dag.diff(e, x) == sp.diff(e, x)
+        assert dag.diff(e, x, y) == sp.diff(sp.diff(e, x), y)
+    assert dag.diff(x * y, sp.Symbol("z")) == 0
+    with pytest.raises(TypeError, match="Symbols"):
+        dag.diff(x, f(x))
+
+
+def test_diff_of_nested_expression_stays_shared():
+    """x_k = cos(t) x_(k-1) + sin(t) x_(k-2), 60 deep: ~1.6^60 tree nodes.  Its derivative
+    is a graph of size linear in k (sympy.diff would walk the tree), and its value at a
+    point is the derivative of the recursion, computed by dual numbers."""
+    t, a, b = sp.symbols("t a b")
+    xs = [a, b]
+    for _ in range(60):
+        xs.append(sp.cos(t) * xs[-1] + sp.sin(t) * xs[-2])
+    d = dag.diff(xs[-1], t)
+    assert dag.size(d) < 20 * dag.size(xs[-1])
+    at = {a: sp.Rational(1, 2), b: sp.Rational(1, 4), t: sp.Rational(1, 3)}
+    import mpmath
+    with mpmath.workdps(40):
+        c, s = mpmath.cos(mpmath.mpf(1) / 3), mpmath.sin(mpmath.mpf(1) / 3)
+        v = [(mpmath.mpf(1) / 2, 0), (mpmath.mpf(1) / 4, 0)]     # (value, d/dt)
+        for _ in range(60):
+            (u, du), (w, dw) = v[-1], v[-2]
+            v.append((c * u + s * w, -s * u + c * du + c * w + s * dw))
+        assert abs(dag.evaluate(d, at, dps=40) - v[-1][1]) < 1e-30 * abs(v[-1][1])

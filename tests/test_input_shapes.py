@@ -16,7 +16,7 @@ from jetnh import linalg
 from jetnh.constraints import System
 from jetnh.errors import (ConstraintError, JetnhError, JetnhWarning, JetSpaceError,
                           LagrangianError, PrincipleError)
-from jetnh.testing import vanishes
+from jetnh.zero import vanishes
 
 J = jn.JetSpace("x y z")
 x, y, z = J.q

@@ -18,7 +18,7 @@ from jetnh import JetSpace, System, models
 from jetnh import modelfile as mf
 from jetnh.constraints import PRINCIPLES
 from jetnh.errors import JetnhError, ModelFileError
-from jetnh.testing import vanishes
+from jetnh.zero import vanishes
 from deadline import deadline
 
 EXAMPLES = sorted((pathlib.Path(__file__).resolve().parents[1] / "examples").glob("*.toml"))

@@ -17,7 +17,7 @@ from jetnh import modelfile as mf
 from jetnh import models
 from jetnh.constraints import PRINCIPLES
 from jetnh.errors import LagrangianError, ModelFileError
-from jetnh.testing import vanishes
+from jetnh.zero import vanishes
 
 PAPER = {"rolling_disk", "appell_hamel"}
 # small instances of the scalable families, to keep the run short

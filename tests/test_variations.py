@@ -10,7 +10,7 @@ import jetnh.strategies as jst
 from jetnh import JetSpace
 from jetnh.constraints import System
 from jetnh.equations import action_variation, chetaev_admissible, multiplier_symbols
-from jetnh.testing import on_manifold_point, value, vanishes
+from jetnh.zero import on_manifold_point, value, vanishes
 from jetnh.variations import (KINDS, defect, identity_residual, make,
                               printed_identity_residual, reduced_identity_residual)
 

@@ -9,7 +9,7 @@ from jetnh.equations import chetaev_admissible, derive
 from jetnh.equivalence import compare
 from jetnh.forms import Form, d, interior
 from jetnh.proof import is_zero
-from jetnh.testing import vanishes
+from jetnh.zero import vanishes
 from jetnh.variations import defect, euler_of_constraints, make
 
 from .items import ERRATUM, NOT_CHECKABLE, VERIFIED, Outcome, eqs, item

@@ -21,7 +21,7 @@ from jetnh.equations import action_variation, chetaev_admissible, derive, multip
 from jetnh.equivalence import frobenius_T
 from jetnh.models import appell_hamel, rolling_disk
 from jetnh.proof import generic_system, is_zero
-from jetnh.testing import vanishes
+from jetnh.zero import vanishes
 from jetnh.variations import (Variation, defect, euler_of_constraints, identity_residual,
                               make, printed_identity_residual, reduced_identity_residual)
 

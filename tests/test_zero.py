@@ -1,0 +1,47 @@
+"""Tests of jetnh.zero: the one zero test by evaluation at random points."""
+
+from __future__ import annotations
+
+import sympy as sp
+
+from jetnh import zero
+from jetnh.models import rolling_disk
+
+
+def test_identities_and_non_identities():
+    x, y = sp.symbols("x y")
+    assert zero.vanishes(sp.sin(x + y) - sp.sin(x) * sp.cos(y) - sp.cos(x) * sp.sin(y))
+    assert zero.vanishes([sp.sqrt(x**2) - x, (x**2 - y**2) / (x - y) - x - y])
+    assert not zero.vanishes([x - x, sp.sin(x) ** 2 - sp.sin(x)])
+    assert not zero.vanishes(sp.Rational(1, 10**30) * x)        # tiny, exact: not zero
+
+
+def test_on_the_constraint_manifold_and_on_a_branch():
+    """The constraints vanish on the manifold of their system only; a multiplier set
+    by ``derived`` (here lambda = -p, the branch (32)) is evaluated at each point."""
+    s = rolling_disk()
+    f = s.constraints[0]
+    assert zero.vanishes(s.constraints, s)
+    assert not zero.vanishes(f)
+    lam = sp.Symbol("lambda_x")
+    p = s.on_constraints(s.p_dependent[0])
+    assert zero.vanishes(lam + p, s, derived={lam: -p})
+    assert not zero.vanishes(lam + p, s, derived={lam: p})
+
+
+def test_floats_are_zero_up_to_their_rounding():
+    """Input with Floats is zero below ROUNDING times its terms (exact input is decided
+    exactly: the same residual with a Rational is not zero)."""
+    x = sp.Symbol("x")
+    assert zero.vanishes(sp.Float(0.1) * 3 * x - sp.Float(0.3) * x + sp.Float(1e-17) * x)
+    assert not zero.vanishes(sp.Float(1e-6) * x)
+    assert not zero.vanishes(sp.Rational(1, 10**17) * x)
+
+
+def test_value_and_manifold_point():
+    import random
+
+    s = rolling_disk()
+    pt = zero.on_manifold_point(s, s.J.q, random.Random(0))
+    assert set(s.dependent_velocities) <= set(pt)
+    assert all(abs(zero.value(f, pt)) < 1e-25 for f in s.constraints)
