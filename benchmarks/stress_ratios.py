@@ -363,9 +363,9 @@ def limits(rows):
             out.append(f"Dissipative stiffness (sleigh, lambda T up to {hi:.0e}): explicit "
                        f"steps grow like lambda T (dop853 {d8[0]['steps']} steps, "
                        f"{d8[0]['wall_s']:.2f} s) against ~{rad[0]['steps']} for scipy Radau "
-                       f"({rad[0]['wall_s']:.2f} s) on the compiled rhs; jetnh has no implicit "
-                       "method of its own -- for stiffer problems use scene.run(method="
-                       "'scipy-Radau' | 'scipy-BDF' | 'scipy-LSODA')")
+                       f"({rad[0]['wall_s']:.2f} s) on the compiled rhs; for such problems use "
+                       "scene.run(method='radau'), jetnh's Radau IIA with the Jacobian from "
+                       "the derivation (see the stiff benchmark)")
     return out
 
 

@@ -41,14 +41,13 @@ from __future__ import annotations
 import weakref
 from typing import NamedTuple
 
-import mpmath
 import symengine as se
 import sympy as sp
 from sympy.core.cache import clear_cache
 from sympy.core.function import AppliedUndef
 from sympy.matrices.utilities import dotprodsimp
 
-from . import dag, linalg
+from . import linalg, zero
 from .errors import LagrangianError
 
 KAPPA = ("none", "multipliers", "momenta")
@@ -124,37 +123,6 @@ def _cached_parts(system, F, hessian=True) -> EulerParts:
     return cache[F, hessian]
 
 
-def _on_constraints(system, values: dict) -> dict:
-    """``values`` with the dependent velocities set on the constraints: exactly for a
-    rational point (``linalg.Inexact`` when that is impossible), else in the working
-    precision of mpmath (the rank tests evaluate at 50 and 80 digits)."""
-    vel = system.dependent_velocities
-    if not vel:
-        return values
-    free = {s: v for s, v in values.items() if s not in set(vel)}
-    exact = all(isinstance(v, sp.Rational) for v in free.values())
-    if system.is_affine:      # A_dep qdot_dep = -f(qdot_dep = 0), never the nested phi
-        k = system.k
-        f0 = [f.xreplace({v: sp.S.Zero for v in vel}) for f in system.constraints]
-        exprs = list(system.jacobian_dependent) + f0
-        if exact:
-            vals = linalg._exact(exprs, free)
-            sol = sp.Matrix(k, k, vals[:k * k]).LUsolve(-sp.Matrix(vals[k * k:]))
-        else:
-            vals = dag.evaluate(exprs, free, dps=mpmath.mp.dps)
-            A = mpmath.matrix([vals[i * k:(i + 1) * k] for i in range(k)])
-            sol = mpmath.lu_solve(A, -mpmath.matrix(vals[k * k:]))
-    elif exact:
-        sol = linalg._exact([system.phi[v] for v in vel], free)
-    else:
-        sol = dag.evaluate([system.phi[v] for v in vel], free, dps=mpmath.mp.dps)
-        if any(isinstance(z, mpmath.mpc) and abs(z.imag) > 1e-12 * (1 + abs(z))
-               for z in sol):
-            raise ValueError("no real point on the constraints here")
-        sol = [mpmath.re(z) for z in sol]
-    return {**free, **{v: sol[i] for i, v in enumerate(vel)}}
-
-
 def solve(system, kappa: str = "none", explicit: bool = False, multipliers=(),
           rates=()) -> dict:
     """q''^s (and the ``rates`` of ``multipliers``) of the rows (*) on the constraints.
@@ -170,7 +138,7 @@ def solve(system, kappa: str = "none", explicit: bool = False, multipliers=(),
     clear_cache()
     # no cancel() inside matrix products (hot path); pivots of large solves are chosen by
     # their values at random points on the constraint manifold
-    with dotprodsimp(False), linalg.completing(lambda v: _on_constraints(system, v)):
+    with dotprodsimp(False), linalg.completing(lambda v: zero.on_constraints(system, v)):
         return _solve(system, kappa, explicit, tuple(multipliers), tuple(rates))
 
 
@@ -209,7 +177,8 @@ def _solve(system, kappa, explicit, multipliers, rates):
             f"the Lagrangian {system.L} contains no velocity: it has no kinetic energy, so no "
             "principle determines the accelerations. Add the kinetic energy, e.g. "
             "L = m*J.qd[0]**2/2 - V")
-    rank = linalg.reduced_rank(H1, A, ind, dep, complete=lambda v: _on_constraints(system, v),
+    rank = linalg.reduced_rank(H1, A, ind, dep,
+                               complete=lambda v: zero.on_constraints(system, v),
                                symbols=set().union(*(f.free_symbols for f in system.constraints)))
     if rank < n - k:
         raise LagrangianError(

@@ -24,8 +24,9 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
-from . import dag, linalg, singular, zero
+from . import dag, linalg, principles, singular, zero
 from .constraints import System
+from .errors import PrincipleError
 from .frobenius import bracket_components
 
 _POINTS = 4
@@ -155,9 +156,14 @@ def agrees(system: System, expr, derived=None, points: int = _POINTS, seed: int 
 
 def compare(system: System, first: str, second: str, convention: str = "paper") -> Comparison:
     """Do ``first`` and ``second`` give the same coordinate accelerations?  The verdict
-    holds off ``Comparison.singular`` (see ``singular_set``)."""
+    holds off ``Comparison.singular`` (see ``singular_set``).  The principles are given
+    by name or alias (``jetnh.principles``) and reported by their canonical names."""
+    names = [principles.canonical(p) for p in (first, second)]
+    if names[0] == names[1]:
+        raise PrincipleError(f"compare needs two different principles; {first!r} and "
+                             f"{second!r} are both {names[0]}")
     return comparisons(system, {p: system.equations(p, convention=convention)
-                                for p in (first, second)})[0]
+                                for p in names})[0]
 
 
 def comparisons(system: System, equations: dict) -> list:

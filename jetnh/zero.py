@@ -23,7 +23,7 @@ import random
 import mpmath
 import sympy as sp
 
-from . import accelerations, dag, linalg
+from . import dag, linalg
 
 POINTS = 4
 TREE_MAX = 400           # tree nodes above which the symbolic zero tests evaluate instead
@@ -100,6 +100,37 @@ def vanishes(exprs, system=None, points: int = POINTS, seed: int = 0, *, derived
     return got >= max(1, points // 2)
 
 
+def on_constraints(system, values: dict) -> dict:
+    """``values`` with the dependent velocities set on the constraints: exactly for a
+    rational point (``linalg.Inexact`` when that is impossible), else in the working
+    precision of mpmath (the rank tests evaluate at 50 and 80 digits)."""
+    vel = system.dependent_velocities
+    if not vel:
+        return values
+    free = {s: v for s, v in values.items() if s not in set(vel)}
+    exact = all(isinstance(v, sp.Rational) for v in free.values())
+    if system.is_affine:      # A_dep qdot_dep = -f(qdot_dep = 0), never the nested phi
+        k = system.k
+        f0 = [f.xreplace({v: sp.S.Zero for v in vel}) for f in system.constraints]
+        exprs = list(system.jacobian_dependent) + f0
+        if exact:
+            vals = linalg._exact(exprs, free)
+            sol = sp.Matrix(k, k, vals[:k * k]).LUsolve(-sp.Matrix(vals[k * k:]))
+        else:
+            vals = dag.evaluate(exprs, free, dps=mpmath.mp.dps)
+            A = mpmath.matrix([vals[i * k:(i + 1) * k] for i in range(k)])
+            sol = mpmath.lu_solve(A, -mpmath.matrix(vals[k * k:]))
+    elif exact:
+        sol = linalg._exact([system.phi[v] for v in vel], free)
+    else:
+        sol = dag.evaluate([system.phi[v] for v in vel], free, dps=mpmath.mp.dps)
+        if any(isinstance(z, mpmath.mpc) and abs(z.imag) > 1e-12 * (1 + abs(z))
+               for z in sol):
+            raise ValueError("no real point on the constraints here")
+        sol = [mpmath.re(z) for z in sol]
+    return {**free, **{v: sol[i] for i, v in enumerate(vel)}}
+
+
 def _manifold(exprs, system, derived: dict):
     """The symbols to draw and the ``point``/``exact_point`` of ``vanishes`` on the
     constraint manifold of ``system`` (or none), with the ``derived`` symbols."""
@@ -121,7 +152,7 @@ def _manifold(exprs, system, derived: dict):
         pt = dict(base)
         if system is not None:
             with mpmath.workdps(60):
-                pt = accelerations._on_constraints(system, pt)
+                pt = on_constraints(system, pt)
         if any(not isinstance(v, sp.Rational) for v in pt.values()):
             raise linalg.Inexact("irrational point")
         pt.update({s: linalg._exact([e], pt)[0] for s, e in derived.items()})

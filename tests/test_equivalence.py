@@ -5,12 +5,14 @@ import random
 
 import mpmath
 import numpy as np
+import pytest
 import sympy as sp
 from hypothesis import given, settings
 
 import jetnh.strategies as jst
 from jetnh import JetSpace, System, compare, dag
 from jetnh.equivalence import agrees, defect_along, frobenius_T, singular_set
+from jetnh.errors import PrincipleError
 from jetnh.models import appell_hamel, rolling_disk
 from jetnh.zero import vanishes
 
@@ -247,3 +249,18 @@ def test_large_polynomial_factors_are_kept_whole():
     assert singular._split(sp.expand(big)) == [sp.expand(big)]
     small = sp.expand((xs[0] + xs[1]) * (xs[2] - 3))
     assert set(singular._split(small)) == {xs[0] + xs[1], xs[2] - 3}
+
+
+def test_compare_takes_aliases_and_reports_canonical_names():
+    s = rolling_disk()
+    by_alias = compare(s, "nonholonomic", "hoelder")
+    by_name = compare(s, "chetaev", "holder")
+    assert by_alias.principles == by_name.principles == ("chetaev", "holder")
+    assert by_alias.identical == by_name.identical
+    assert [sp.srepr(by_alias.defects[q]) for q in s.J.qdd] == \
+        [sp.srepr(by_name.defects[q]) for q in s.J.qdd]
+
+
+def test_compare_refuses_one_principle_twice():
+    with pytest.raises(PrincipleError, match="both chetaev"):
+        compare(rolling_disk(), "chetaev", "Lagrange-d'Alembert")

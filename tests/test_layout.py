@@ -14,7 +14,7 @@ ROOT = Path(__file__).resolve().parent.parent / "jetnh"
 #: ("numeric" holds jetnh.numeric and every jetnh.numeric.*)
 LAYERS = (
     ("base", ("errors",)),
-    ("algebra", ("dag", "linalg", "zero", "shared", "singular", "testing")),
+    ("algebra", ("dag", "linalg", "zero", "shared", "singular")),
     ("geometry", ("jet", "inputs", "fields", "forms", "frobenius")),
     ("mechanics", ("principles", "constraints", "variations", "accelerations", "equations",
                    "equivalence", "ansatz", "integrals", "symmetries", "proof")),
