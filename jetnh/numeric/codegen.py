@@ -62,7 +62,7 @@ from sympy.core.function import AppliedUndef
 from sympy.functions.elementary.piecewise import ExprCondPair
 from sympy.printing.pycode import PythonCodePrinter
 
-from .. import dag, singular
+from .. import dag, principles, singular
 from ..accelerations import _cached_parts
 from ..errors import JetnhError, PrincipleError
 from .layout import CODEGEN_VERSION, Layout
@@ -461,12 +461,9 @@ def symbolic_key(system, principle, params, runtime_params=(), integrals=None, f
 
 # ---------------------------------------------------------------------- generation
 def multiplier_names(system, principle) -> tuple[str, ...]:
-    """Names of the multiplier states of ``principle`` (without deriving)."""
-    from ..equations import multiplier_symbols
-
-    if principle == "chetaev" or system.k == 0:
-        return ()
-    return tuple(s.name for s in multiplier_symbols(system))
+    """Names of the multiplier states of ``principle`` (name, alias or value; without
+    deriving)."""
+    return tuple(s.name for s in principles.get(principle).multiplier_symbols(system))
 
 
 def generate(system, principle, params: dict, runtime_params=(), integrals=None,
