@@ -4,8 +4,10 @@ A scene's kernels are compiled as C callbacks only (``codegen``): the integrator
 them by address, and an njit function beside each would compile the same body twice.
 From Python, ``Kernel(address)(t, y, p, out)`` calls a callback through a trampoline
 that takes it as a first-class function; the trampolines are compiled once for all
-scenes (and cached on disk by numba), and called at their machine-code entry, so a call
-costs about what a call of an njit function costs.
+scenes (and cached on disk by numba) and called at their machine-code entry.  A call from
+Python costs about 3 us, mostly numba unboxing the first-class function (an njit call
+with arrays costs about 0.2 us): well below a step of scipy's ``solve_ivp``, the one
+caller per step; the compiled loops call the callbacks directly.
 """
 
 from __future__ import annotations
