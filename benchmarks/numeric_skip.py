@@ -149,8 +149,8 @@ def derive_one_vs_all(reps):
 # ---------------------------------------------------------------------- 3. parameters
 def rhs_ns(kern, y, p, n_calls):
     drive = rhs_driver()
-    drive(kern.rhs, y.copy(), p, 10)
-    t, _ = best(lambda: drive(kern.rhs, y.copy(), p, n_calls), 3)
+    drive(kern.rhs_fp, y.copy(), p, 10)
+    t, _ = best(lambda: drive(kern.rhs_fp, y.copy(), p, n_calls), 3)
     return t / n_calls * 1e9
 
 
@@ -166,7 +166,7 @@ def params_compiled_vs_runtime(reps, n_calls):
             sc = base.replace(runtime_params=rt, cache=False).compile()
             build = time.perf_counter() - tic
             src = (sc.kernels.directory / "kernels.py").read_text()
-            body = src[src.index("def rhs("):src.index("def aux(")]
+            body = src[src.index("def rhs_c("):src.index("def aux_c(")]
             scenes[label] = sc
             out[label] = dict(build_s=build, rhs_lines=body.count("\n"))
         runs = best_of([lambda sc=sc: sc.run(rtol=1e-10, atol=1e-12, save="final")

@@ -33,8 +33,9 @@ RUN_CASES = (Case("rolling_disk", "chetaev", 10.0), Case("rolling_disk", "vakono
 
 
 def rhs_driver():
-    """A compiled loop calling an rhs kernel n times (``drive(rhs, y, p, n)``)."""
-    from jetnh.numeric.integrators._common import RHS, f8, i8
+    """A compiled loop calling an rhs kernel n times (``drive(rhs, y, p, n)``), ``rhs`` a
+    C callback by address (``FunctionAddress``), as the integrators call it."""
+    from jetnh.numeric.integrators._common import RHS, entry_point, f8, i8
 
     @numba.njit((RHS, f8[::1], f8[::1], i8))
     def drive(rhs, y, p, n):
@@ -45,7 +46,7 @@ def rhs_driver():
             rhs(0.0, y, p, out)
             acc += out[-1]
         return acc
-    return drive
+    return entry_point(drive)
 
 
 @numba.njit("void(float64, float64[::1], float64[::1], float64[::1])", error_model="numpy")
@@ -65,15 +66,18 @@ def rhs_call(case, n_calls, reps):
     scene = scene_of(case).compile()
     f = researcher_rhs(scene)
     y, p = scene.y0.copy(), scene.p
+    from jetnh.numeric.integrators._common import RHS_SIGNATURE, FunctionAddress
+
     drive = rhs_driver()
-    fns = {"generated": scene.kernels.rhs}
+    fns = {"generated": scene.kernels.rhs_fp}
     if case.model == "rolling_disk":
         out = np.empty(6)
         disk_by_hand(0.0, y, p, out)
         ref = np.empty(6)
         scene.kernels.rhs(0.0, y, p, ref)
         assert np.allclose(out, ref), "the hand-written disk rhs must be the same function"
-        fns["hand-written numba"] = disk_by_hand
+        fns["hand-written numba"] = FunctionAddress(
+            numba.cfunc(RHS_SIGNATURE, error_model="numpy")(disk_by_hand.py_func))
     res = {}
     for label, fn in fns.items():
         drive(fn, y.copy(), p, 10)
