@@ -9,6 +9,11 @@ The API (other scripts import it; keep it small and stable):
     best_of(fs, reps, budget)      the same for several functions, their calls interleaved
     record()                       {"date", "command", "commit", "machine"} of this run
     write(name, data, out, quick)  the record + {"benchmark": name, "profile"} + data -> JSON file
+    run_worker(script, spec, timeout, env)
+                                   one measurement of ``script --worker SPEC`` in a fresh
+                                   interpreter: its last stdout line as JSON, or
+                                   {"timeout": True, "seconds_lower_bound"} / {"error"}
+    fmt_seconds(r)                 such a result as table text: seconds, ">T" or "error"
 
 Wall times are ``time.perf_counter`` differences; the machine is shared, so compare only
 figures measured in the same run and take the best of several repetitions.
@@ -123,3 +128,26 @@ def _jsonable(obj):
     if isinstance(obj, Path):
         return str(obj)
     raise TypeError(f"not JSON serializable: {type(obj).__name__}")
+
+
+def run_worker(script: str, spec: dict, timeout: float, env: dict | None = None) -> dict:
+    """One measurement in a fresh interpreter: ``script --worker SPEC`` prints its result
+    as JSON on its last line; ``{"timeout": True, "seconds_lower_bound": timeout}`` when
+    it runs out, ``{"error": <its last stderr line>}`` when it fails."""
+    cmd = [sys.executable, os.path.abspath(script), "--worker", json.dumps(spec)]
+    try:
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=env)
+    except subprocess.TimeoutExpired:
+        return {"timeout": True, "seconds_lower_bound": timeout}
+    if proc.returncode != 0:
+        return {"error": (proc.stderr.strip().splitlines() or ["?"])[-1][:200]}
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def fmt_seconds(r) -> str:
+    """A ``run_worker`` result as table text: its seconds, ">T" for a time-out, "error"."""
+    if not r:
+        return "-"
+    if r.get("timeout"):
+        return f">{r['seconds_lower_bound']:.0f}"
+    return "error" if "error" in r else f"{r['seconds']:.2f}"

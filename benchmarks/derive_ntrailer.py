@@ -37,12 +37,11 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
 import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from _common import parser, write  # noqa: E402
+from _common import fmt_seconds, parser, run_worker, write  # noqa: E402
 
 PRINCIPLES = ("chetaev", "vakonomic", "holder", "suslov")
 BASELINES = ("lagranges_method", "kanes_method")
@@ -155,24 +154,12 @@ WORKERS = {"jetnh": lambda s: work_jetnh(s["N"], s["principle"], s["sizes"]),
            "kanes_method": lambda s: work_kane(s["N"], s["sizes"])}
 
 
-def run_worker(spec: dict, timeout: float) -> dict:
-    """One measurement in a fresh interpreter; {"timeout": True, ...} when it runs out."""
-    cmd = [sys.executable, os.path.abspath(__file__), "--worker", json.dumps(spec)]
-    try:
-        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
-    except subprocess.TimeoutExpired:
-        return {"timeout": True, "seconds_lower_bound": timeout}
-    if proc.returncode != 0:
-        return {"error": (proc.stderr.strip().splitlines() or ["?"])[-1]}
-    return json.loads(proc.stdout.strip().splitlines()[-1])
-
-
 def measure(spec: dict, timeout: float, sizes: bool) -> dict:
     """The timing run, then (separately, so that a slow ``cse`` cannot hide the timing)
     the size run."""
-    r = run_worker({**spec, "sizes": False}, timeout)
+    r = run_worker(__file__, {**spec, "sizes": False}, timeout)
     if sizes and "seconds" in r:
-        s = run_worker({**spec, "sizes": True}, timeout)
+        s = run_worker(__file__, {**spec, "sizes": True}, timeout)
         r["cse_count_ops"] = s.get("cse_count_ops")
     return r
 
@@ -181,14 +168,6 @@ def seconds(r) -> float | None:
     if not r:
         return None
     return r.get("seconds", r.get("seconds_lower_bound"))
-
-
-def fmt(r) -> str:
-    if not r:
-        return "-"
-    if r.get("timeout"):
-        return f">{r['seconds_lower_bound']:.0f}"
-    return "error" if "error" in r else f"{r['seconds']:.2f}"
 
 
 def main(argv=None) -> int:
@@ -234,8 +213,8 @@ def main(argv=None) -> int:
                 row[f"{b}_ratio_is_lower_bound"] = bool(row[b].get("timeout"))
         rows.append(row)
         ratio = row.get("lagranges_method_over_chetaev")
-        print(f"{N:>3} | " + " ".join(f"{fmt(row['jetnh'].get(p)):>9}" for p in PRINCIPLES)
-              + " | " + " ".join(f"{fmt(row.get(b)):>9}" for b in BASELINES)
+        print(f"{N:>3} | " + " ".join(f"{fmt_seconds(row['jetnh'].get(p)):>9}" for p in PRINCIPLES)
+              + " | " + " ".join(f"{fmt_seconds(row.get(b)):>9}" for b in BASELINES)
               + " | " + (f"{ratio:.1f}x" if ratio else "-"), flush=True)
         write("derive_ntrailer", {
             "model": "car with N on-axle trailers (Murray-Sastry 1993), m=1, I=1/3, d=1; "

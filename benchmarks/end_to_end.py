@@ -47,7 +47,8 @@ import tempfile
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from _common import parser, write  # noqa: E402
+import _common  # noqa: E402
+from _common import fmt_seconds, parser, write  # noqa: E402
 
 PRINCIPLES = ("chetaev", "vakonomic")
 PERCALL_TITLE = "Per-call cost of the generated rhs against the baseline kernels"
@@ -267,7 +268,7 @@ def summarize(rows) -> list[str]:
         out.append("Every run, seconds: " + "; ".join(runs) + ".")
     for r in rows:
         if r["N"] in (16, 32, 64):
-            figs = ", ".join(f"{p} {fmt(r.get(p))} s" for p in PRINCIPLES)
+            figs = ", ".join(f"{p} {fmt_seconds(r.get(p))} s" for p in PRINCIPLES)
             out.append(f"N = {r['N']}: model to first trajectory {figs}.")
     return out
 
@@ -282,7 +283,7 @@ def time_table(rows) -> dict:
                               f"{m['generate']:.2f}", f"{m['compile']:.2f}",
                               f"{m['run']:.3f}", m["shared"], m["kernel_chars"]])
             elif m:
-                table.append([r["N"], p, fmt(m), "", "", "", "", "", ""])
+                table.append([r["N"], p, fmt_seconds(m), "", "", "", "", "", ""])
     return {"title": "jetnh: where the time goes",
             "columns": ["N", "principle", "total s", "derive s", "generate s", "compile s",
                         "run s", "shared nodes", "kernel chars"], "rows": table}
@@ -301,24 +302,8 @@ def percall_table(rows) -> dict:
 
 def run_worker(spec: dict, timeout: float) -> dict:
     """One measurement in a fresh interpreter with an empty kernel cache."""
-    cmd = [sys.executable, os.path.abspath(__file__), "--worker", json.dumps(spec)]
     with tempfile.TemporaryDirectory(prefix="jetnh-e2e-") as tmp:
-        env = dict(os.environ, JETNH_CACHE=tmp)
-        try:
-            proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=env)
-        except subprocess.TimeoutExpired:
-            return {"timeout": True, "seconds_lower_bound": timeout}
-    if proc.returncode != 0:
-        return {"error": (proc.stderr.strip().splitlines() or ["?"])[-1][:200]}
-    return json.loads(proc.stdout.strip().splitlines()[-1])
-
-
-def fmt(r) -> str:
-    if not r:
-        return "-"
-    if r.get("timeout"):
-        return f">{r['seconds_lower_bound']:.0f}"
-    return "error" if "error" in r else f"{r['seconds']:.2f}"
+        return _common.run_worker(__file__, spec, timeout, dict(os.environ, JETNH_CACHE=tmp))
 
 
 def plot(rows, path):
@@ -439,7 +424,7 @@ def main(argv=None) -> int:
             if r.get("timeout") or "error" in r or r["seconds"] > budget:
                 stopped.add(tool)
         rows.append(row)
-        print(f"{N:>3} | " + " ".join(f"{fmt(row.get(t)):>10}" for t in tools), flush=True)
+        print(f"{N:>3} | " + " ".join(f"{fmt_seconds(row.get(t)):>10}" for t in tools), flush=True)
         fig = args.out.with_suffix(".png").name
         plot(rows, args.out.with_name(fig))
         title = "End to end: model to first trajectory (N-trailer, empty kernel cache)"
