@@ -819,8 +819,13 @@ def singular_indicators(system, accelerations, numbers) -> list[tuple[str, sp.Ex
     found += [("acceleration", b) for b in _singular_bases(sp.Tuple(*accelerations))]
     # one substitution for all: equal parts stay one object (no tree comparisons below)
     bases = dag.xreplace([b for _, b in found], sub)
+    return _distinct_factors((kind, b) for (kind, _), b in zip(found, bases))
+
+
+def _distinct_factors(found) -> list[tuple[str, sp.Expr]]:
+    """``(kind, factor)`` of the ``(kind, base)`` pairs, each factor once (its first kind)."""
     out, seen = [], set()
-    for (kind, _), b in zip(found, bases):
+    for kind, b in found:
         for f in _factors(b):
             if f not in seen:
                 seen.add(f)
@@ -872,15 +877,10 @@ def discrete_indicators(system, numbers) -> list[tuple[str, sp.Expr]]:
     the implicit constraints, never the explicit form phi, so a singular split (the knife
     edge at cos(phi) = 0) is no singularity for it."""
     sub = {s: numbers[s.name] for s in system.parameters if s.name in numbers}
-    out, seen = [], set()
-    for kind, exprs in (("constraint", system.constraints), ("lagrangian", [system.L])):
-        for e in exprs:
-            for b in _singular_bases(sp.sympify(e).xreplace(sub)):
-                for f in _factors(b):
-                    if f not in seen:
-                        seen.add(f)
-                        out.append((kind, f))
-    return out
+    return _distinct_factors(
+        (kind, b) for kind, exprs in (("constraint", system.constraints),
+                                      ("lagrangian", [system.L]))
+        for e in exprs for b in _singular_bases(sp.sympify(e).xreplace(sub)))
 
 
 def generate_dla(system, params: dict, runtime_params=(), key="",
