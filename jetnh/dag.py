@@ -182,36 +182,54 @@ def _rule(e, x, cache):
 _SPECIAL = {"Abs": abs, "re": mpmath.re, "im": mpmath.im, "conjugate": mpmath.conj}
 
 
+def _values(expr, leaf, add, mul, power, function):
+    """The values of ``expr`` (a Basic or a list), each distinct subexpression computed
+    once, children first: ``leaf(e)`` is the value of a given symbol or a number (None
+    for any other node), the others come from their children's values by ``add(values)``,
+    ``mul(values)``, ``power(base, exp)`` or ``function(node, values)``.  Raises
+    ValueError for a symbol without a value."""
+    roots = list(expr) if isinstance(expr, (list, tuple)) else [expr]
+    val: dict = {}
+    for e in nodes(roots):
+        v = leaf(e)
+        if v is None:
+            args = [val[id(a)] for a in e.args]
+            if e.is_Add:
+                v = add(args)
+            elif e.is_Mul:
+                v = mul(args)
+            elif e.is_Pow:
+                v = power(*args)
+            elif isinstance(e, sp.Function):
+                v = function(e, args)
+            else:
+                raise ValueError(f"cannot evaluate {e!r} numerically (no value given)")
+        val[id(e)] = v
+    out = [val[id(sp.sympify(e))] for e in roots]
+    return out if isinstance(expr, (list, tuple)) else out[0]
+
+
 def evaluate(expr, point: dict, dps: int = 30) -> list:
     """The values (mpmath numbers, ``dps`` digits) of ``expr`` (a Basic or a list) at
     ``point`` (Symbol -> number), each distinct subexpression computed once (functions
     mpmath lacks by sympy's evalf).  Raises ValueError for a symbol without a value."""
-    roots = list(expr) if isinstance(expr, (list, tuple)) else [expr]
-    val: dict = {}
     with mpmath.workdps(dps):
         prec = mpmath.mp.prec
         given = {s: mpmath.mpmathify(v) if not isinstance(v, sp.Basic)
                  else _number(sp.sympify(v), prec) for s, v in point.items()}
-        for e in nodes(roots):
+
+        def leaf(e):
             if e in given:
-                v = given[e]
-            elif e.is_Number or e.is_NumberSymbol or e is sp.I:
-                v = _number(e, prec)
-            elif e.is_Add:
-                v = mpmath.fsum(val[id(a)] for a in e.args)
-            elif e.is_Mul:
-                v = mpmath.fprod(val[id(a)] for a in e.args)
-            elif e.is_Pow:
-                v = mpmath.power(val[id(e.base)], val[id(e.exp)])
-            elif isinstance(e, sp.Function):
-                args = [val[id(a)] for a in e.args]
-                f = _SPECIAL.get(type(e).__name__) or getattr(mpmath, type(e).__name__, None)
-                v = f(*args) if f else _number(e.func(*map(to_sympy, args)).evalf(dps), prec)
-            else:
-                raise ValueError(f"cannot evaluate {e!r} numerically (no value given)")
-            val[id(e)] = v
-    out = [val[id(sp.sympify(e))] for e in roots]
-    return out if isinstance(expr, (list, tuple)) else out[0]
+                return given[e]
+            if e.is_Number or e.is_NumberSymbol or e is sp.I:
+                return _number(e, prec)
+            return None
+
+        def function(e, args):
+            f = _SPECIAL.get(type(e).__name__) or getattr(mpmath, type(e).__name__, None)
+            return f(*args) if f else _number(e.func(*map(to_sympy, args)).evalf(dps), prec)
+
+        return _values(expr, leaf, mpmath.fsum, mpmath.fprod, mpmath.power, function)
 
 
 def evaluate_numpy(expr, point: dict):
@@ -222,32 +240,26 @@ def evaluate_numpy(expr, point: dict):
     for a symbol without a value."""
     import numpy as np
 
-    roots = list(expr) if isinstance(expr, (list, tuple)) else [expr]
-    val: dict = {}
     heads: dict = {}
+
+    def leaf(e):
+        if e in point:
+            return np.asarray(point[e], dtype=float)
+        if e.is_Number or e.is_NumberSymbol:
+            return np.float64(float(e))
+        return None
+
+    def function(e, args):
+        key = (e.func, len(args))
+        if key not in heads:
+            xs = sp.symbols(f"a:{len(args)}", cls=sp.Dummy)
+            heads[key] = sp.lambdify(xs, e.func(*xs), "numpy")
+        return heads[key](*args)
+
     with np.errstate(all="ignore"):
-        for e in nodes(roots):
-            if e in point:
-                v = np.asarray(point[e], dtype=float)
-            elif e.is_Number or e.is_NumberSymbol:
-                v = np.float64(float(e))
-            elif e.is_Add:
-                v = sum(val[id(a)] for a in e.args)
-            elif e.is_Mul:
-                v = np.prod(np.broadcast_arrays(*(val[id(a)] for a in e.args)), axis=0)
-            elif e.is_Pow:
-                v = np.power(val[id(e.base)], val[id(e.exp)])
-            elif isinstance(e, sp.Function):
-                key = (e.func, len(e.args))
-                if key not in heads:
-                    xs = sp.symbols(f"a:{len(e.args)}", cls=sp.Dummy)
-                    heads[key] = sp.lambdify(xs, e.func(*xs), "numpy")
-                v = heads[key](*(val[id(a)] for a in e.args))
-            else:
-                raise ValueError(f"cannot evaluate {e!r} numerically (no value given)")
-            val[id(e)] = v
-    out = [val[id(sp.sympify(e))] for e in roots]
-    return out if isinstance(expr, (list, tuple)) else out[0]
+        return _values(expr, leaf, sum,
+                       lambda vs: np.prod(np.broadcast_arrays(*vs), axis=0), np.power,
+                       function)
 
 
 def to_sympy(v) -> sp.Expr:
