@@ -81,7 +81,7 @@ def cse_size(exprs) -> int:
 
 # ---------------------------------------------------------------------- workers
 def work_jetnh(N: int, principle: str, sizes: bool) -> dict:
-    from jetnh.constraints import System
+    from jetnh.mechanics.system import System
 
     J, L, cons, dep = ntrailer(N)
     tic = time.perf_counter()

@@ -58,7 +58,8 @@ def _initial(system, N):
     """The scene's initial state, dependent velocities by dag.evaluate (no tree)."""
     import sympy as sp
 
-    from jetnh import dag, models
+    from jetnh.algebra import dag
+    from jetnh import models
 
     ini = dict(models.initial("n_trailer", N=N))
     J = system.J
@@ -187,7 +188,7 @@ def percall(baseline: str, reps: int = 20000, rounds: int = 7) -> list:
     import numpy as np
 
     from _common import best_of
-    from jetnh.numeric.integrators._common import RHS, FunctionAddress, entry_point
+    from jetnh.numeric.methods._common import RHS, FunctionAddress, entry_point
 
     f8 = numba.types.float64
 

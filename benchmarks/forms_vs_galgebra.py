@@ -1,11 +1,11 @@
-"""Could galgebra's exterior algebra be the engine of jetnh.forms?  Measure it.
+"""Could galgebra's exterior algebra be the engine of jetnh.geometry.forms?  Measure it.
 
 On the coordinates (t, q^1..q^n, qdot^1..qdot^n) of J^1 M (dimension 2n+1) this times,
 for dense random 1-forms a, b, c (every component a small random expression):
 
 * wedge2: a ^ b        * wedge3: a ^ b ^ c        * d: the exterior derivative of a
 
-with ``jetnh.forms`` (sparse dict of sorted coordinate tuples -> coefficients) and with
+with ``jetnh.geometry.forms`` (sparse dict of sorted coordinate tuples -> coefficients) and with
 galgebra (``Ga`` with a Euclidean metric on those coordinates: the outer product ``^`` of
 grade-1 multivectors is the wedge of 1-forms, and ``grad ^ A`` is d A in Cartesian
 coordinates), in the same process, on the same inputs.  Before every timed call sympy's
@@ -33,7 +33,7 @@ from sympy.core.cache import clear_cache
 from _common import parser, write
 
 from jetnh import JetSpace
-from jetnh.forms import Form, d, expr_is_zero
+from jetnh.geometry.forms import Form, d, expr_is_zero
 
 BUDGET_S = 120.0          # stop repeating an operation once one call took longer than this
 
@@ -136,7 +136,7 @@ def main(argv=None):
     t0 = time.perf_counter()
     rows, ga_version = run(ns, args.repeats or (1 if args.quick else 3))
     write("forms_vs_galgebra", {
-        "title": "jetnh.forms vs galgebra exterior algebra on J^1 coordinates (2n+1 dims)",
+        "title": "jetnh.geometry.forms vs galgebra exterior algebra on J^1 coordinates (2n+1 dims)",
         "galgebra": ga_version,
         "method": ("median over `repeats` random instances of dense 1-forms; sympy cache "
                    "cleared before every timed call; jetnh result left unexpanded "

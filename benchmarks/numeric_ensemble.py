@@ -20,7 +20,7 @@ import sympy as sp
 from _common import parser, write
 
 import jetnh as jn
-from jetnh.constraints import System
+from jetnh.mechanics.system import System
 from jetnh.numeric import Scene
 
 

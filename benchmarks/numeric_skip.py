@@ -39,7 +39,7 @@ from numeric_speed import rhs_driver  # noqa: E402
 from workprecision import Case, researcher_rhs, scene_of  # noqa: E402
 
 import jetnh.models as models  # noqa: E402
-from jetnh.constraints import PRINCIPLES  # noqa: E402
+from jetnh.mechanics.system import PRINCIPLES  # noqa: E402
 from jetnh.numeric import Event, Scene  # noqa: E402
 
 COLD_CASES = (Case("rolling_disk", "vakonomic", 100.0),

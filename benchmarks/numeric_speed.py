@@ -35,7 +35,7 @@ RUN_CASES = (Case("rolling_disk", "chetaev", 10.0), Case("rolling_disk", "vakono
 def rhs_driver():
     """A compiled loop calling an rhs kernel n times (``drive(rhs, y, p, n)``), ``rhs`` a
     C callback by address (``FunctionAddress``), as the integrators call it."""
-    from jetnh.numeric.integrators._common import RHS, entry_point, f8, i8
+    from jetnh.numeric.methods._common import RHS, entry_point, f8, i8
 
     @numba.njit((RHS, f8[::1], f8[::1], i8))
     def drive(rhs, y, p, n):
@@ -66,7 +66,7 @@ def rhs_call(case, n_calls, reps):
     scene = scene_of(case).compile()
     f = researcher_rhs(scene)
     y, p = scene.y0.copy(), scene.p
-    from jetnh.numeric.integrators._common import RHS_SIGNATURE, FunctionAddress
+    from jetnh.numeric.methods._common import RHS_SIGNATURE, FunctionAddress
 
     drive = rhs_driver()
     fns = {"generated": scene.kernels.rhs_fp}

@@ -75,8 +75,8 @@ for m in ("dop853", "dopri5", "rk4"):
     out["per_eval_s_" + m] = (min(gs) - min(fs)) / (n1 - n0)
 try:            # the compiled loop alone (this tree's API)
     from jetnh.numeric import interrupt
-    from jetnh.numeric.integrators import explicit_solver
-    from jetnh.numeric.integrators.loop import Control, watch_of
+    from jetnh.numeric.methods import explicit_solver
+    from jetnh.numeric.methods.loop import Control, watch_of
     kern = sc.kernels
     solve = explicit_solver("dop853")
     ctl = Control(1e-9, np.full(len(sc.y0), 1e-12), 0.0, np.inf, 10**7, 0)

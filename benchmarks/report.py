@@ -45,7 +45,7 @@ TITLES = {"workprecision": "Work-precision: error against run time",
           "numeric_speed": "Where the numerical speed comes from",
           "numeric_ensemble": "Ensembles",
           "derive_ntrailer": "Derivation scaling: N-trailer against sympy.physics.mechanics",
-          "forms_vs_galgebra": "Differential forms: jetnh.forms against galgebra"}
+          "forms_vs_galgebra": "Differential forms: jetnh.geometry.forms against galgebra"}
 
 
 # ---------------------------------------------------------------------- formatting

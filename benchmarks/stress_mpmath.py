@@ -27,7 +27,7 @@ from _common import parser, write
 from stress_common import fmt, pyplot, save
 
 import jetnh.strategies as jst
-from jetnh.constraints import System
+from jetnh.mechanics.system import System
 from jetnh.errors import JetnhError
 from jetnh.numeric import Scene, codegen
 from jetnh.numeric.precision import cancellation, reference

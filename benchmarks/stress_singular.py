@@ -26,7 +26,7 @@ from stress_common import fmt, pyplot, save
 from jetnh import models
 from jetnh.errors import JetnhError
 from jetnh.numeric import Scene
-from jetnh.constraints import System
+from jetnh.mechanics.system import System
 
 SING_TOL = 1e-10        # the default singular_tol
 

@@ -26,7 +26,8 @@ import sympy as sp
 from _common import best, parser, write
 
 import jetnh as jn
-from jetnh import ansatz, models
+from jetnh.algebra import ansatz
+from jetnh import models
 from jetnh.errors import ArgumentError
 
 

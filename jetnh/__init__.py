@@ -2,7 +2,7 @@
 
 The public contract: ``JetSpace``, ``System``, ``System.equations``,
 ``Equations.accelerations``, ``Scene`` and its ``Trajectory``; ``PRINCIPLES`` names the
-four principles (``Principle`` values and aliases: ``jetnh.principles``); ``compare``
+four principles (``Principle`` values and aliases: ``jetnh.mechanics.principles``); ``compare``
 decides when two principles share solutions; ``sweep`` runs a scene over a grid of
 parameters and initial values (here or on Dask); ``from_mechanics`` reads a
 sympy.physics.mechanics ``LagrangesMethod``; ``conserved_quantities``,
@@ -10,18 +10,17 @@ sympy.physics.mechanics ``LagrangesMethod``; ``conserved_quantities``,
 integrals and symmetries under each principle.
 """
 
-from .constraints import System
-from .equations import Equations
-from .equivalence import compare
+from .mechanics.system import System
+from .mechanics.equations import Equations
+from .mechanics.equivalence import compare
 from .errors import (ArgumentError, ConstraintError, IntegrationError, JetnhError,
                      JetnhWarning, JetSpaceError, LagrangianError, ModelFileError,
                      PrincipleError)
-from .integrals import conserved_quantities
-from .jet import JetSpace
-from .mechanics import from_mechanics
-from .principles import PRINCIPLES, Principle
-from .symmetries import (LieSymmetry, NoetherSymmetry, is_noether, lie_symmetries,
-                         noether_symmetries)
+from .mechanics.integrals import conserved_quantities
+from .geometry.jet import JetSpace
+from .mechanics.sympy_bridge import from_mechanics
+from .mechanics.principles import PRINCIPLES, Principle
+from .mechanics.symmetries import LieSymmetry, NoetherSymmetry, is_noether, lie_symmetries, noether_symmetries
 # bound here, not in __getattr__: a later `import jetnh.sweep` would rebind the name to the
 # module; jetnh/sweep.py is light (pandas, Dask and numba are imported when it runs)
 from .sweep import sweep

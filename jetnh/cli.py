@@ -22,9 +22,9 @@ from pathlib import Path
 
 import sympy as sp
 
-from . import principles
+from .mechanics import principles
 from .errors import ArgumentError, JetnhError, ModelFileError, PrincipleError
-from .principles import PRINCIPLES
+from .mechanics.principles import PRINCIPLES
 
 EPILOG_MODEL = ("MODEL: a catalogue name (see `jetnh models`; scalable ones take options, "
                 "e.g. n_trailer:N=4) or a model file (TOML, e.g. examples/rolling_disk.toml).")
@@ -215,7 +215,7 @@ SCREEN_BUDGET = 20_000
 
 def _label(expr) -> str:
     """A short input expression (L, a force) in full, a large one summarized."""
-    from .singular import label
+    from .algebra.singular import label
 
     return label(sp.sympify(expr))
 
@@ -234,10 +234,10 @@ def _write(args, progress, text: str, form) -> None:
 
 
 def _render(args, form, header: list, data: dict, J, keys=None) -> str:
-    """``form`` (``jetnh.shared``) after ``header`` lines (text and LaTeX) or inside
+    """``form`` (``jetnh.algebra.shared``) after ``header`` lines (text and LaTeX) or inside
     ``data`` (JSON, its headings renamed by ``keys``): in full with --out, else within
     the screen budget."""
-    from .shared import SharedForm
+    from .algebra.shared import SharedForm
 
     budget = None if args.out else SCREEN_BUDGET
     more = " (write them all with --out FILE)"
@@ -257,7 +257,7 @@ def _simplified(form, seconds, progress):
     trigsimp'd within ``seconds`` each, 10 x ``seconds`` in all, the others kept (the
     rows refer to the named quantities by name).  ``seconds`` None: 0.5 s for a result
     small enough to be shown without names, else none."""
-    from .shared import SharedForm
+    from .algebra.shared import SharedForm
 
     if seconds is None:
         seconds = 0.0 if form.where else 0.5
@@ -293,7 +293,7 @@ class Simplifier:
                    and threading.current_thread() is threading.main_thread())
 
     def __call__(self, expr):
-        from .shared import tree_size
+        from .algebra.shared import tree_size
 
         if tree_size([expr], self.nodes) > self.nodes:
             self.large += 1
@@ -325,7 +325,7 @@ class Simplifier:
 
 
 def cmd_derive(args, progress) -> int:
-    from .shared import shared_form
+    from .algebra.shared import shared_form
 
     loaded = _with_split(load_model(args.model), args.split)
     system = loaded.system
@@ -375,8 +375,8 @@ _COMPARE_FORMS = {"chetaev": "voronets", "vakonomic": "embedded", "holder": "emb
 
 
 def cmd_compare(args, progress) -> int:
-    from .equivalence import comparisons
-    from .shared import shared_form, tree_size
+    from .mechanics.equivalence import comparisons
+    from .algebra.shared import shared_form, tree_size
 
     loaded = _with_split(load_model(args.model), args.split)
     system = loaded.system
@@ -465,7 +465,8 @@ def scene_names(system) -> set:
 def cmd_simulate(args, progress) -> int:
     import numpy as np
 
-    from .numeric import Scene, arguments
+    from .numeric import Scene
+    from .numeric import arguments
     from .numeric.codegen import multiplier_names
 
     loaded = _with_split(load_model(args.model), args.split)

@@ -1,7 +1,7 @@
 """Rich displays (HTML and LaTeX, for notebooks) of jetnh's objects, within a size budget.
 
 Every display is at most ``BUDGET`` characters.  Equations and comparisons are shown in
-shared form (``jetnh.shared``: named intermediate quantities), the rows and quantities
+shared form (``jetnh.algebra.shared``: named intermediate quantities), the rows and quantities
 that do not fit counted.  In the other displays an expression whose printed tree would
 be large (over ``TREE_CAP`` nodes, counted on the shared graph so that nothing large is
 ever printed), whose LaTeX exceeds ``EXPR_BUDGET`` or does not fit in what is left of
@@ -16,8 +16,8 @@ import html
 import numpy as np
 import sympy as sp
 
-from . import dag
-from .shared import WHERE_TEX, shared_form, tex_text as _tex_text
+from .algebra import dag
+from .algebra.shared import WHERE_TEX, shared_form, tex_text as _tex_text
 
 BUDGET = 20_000          # characters of one display
 TEXT_BUDGET = 20_000     # characters of a printed (str) result
@@ -235,7 +235,7 @@ def trajectory_latex(traj) -> str:
 
 
 def _ensemble_facts(ens) -> list[tuple[str, str]]:
-    from .numeric.integrators import STATUS_TEXT
+    from .numeric.methods import STATUS_TEXT
 
     counts = {int(s): int(c) for s, c in zip(*np.unique(ens.status, return_counts=True))}
     status = "; ".join(f"{c} x {STATUS_TEXT.get(s, s)}" for s, c in counts.items())

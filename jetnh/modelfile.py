@@ -20,7 +20,7 @@ Optional keys: ``[forces]`` (coordinate = expression: the non-potential generali
 Q_s(t, q, qdot) on that coordinate, beside [L]_s in every principle's equations),
 ``dissipation`` (a Rayleigh function D(t, q, qdot): Q_s -= dD/dqdot^s), ``description``
 (text), ``branch`` (which solution of nonlinear
-constraints, an integer >= 0), ``principle`` (a name or an alias, ``jetnh.principles``;
+constraints, an integer >= 0), ``principle`` (a name or an alias, ``jetnh.mechanics.principles``;
 read as its canonical name), ``convention`` ("paper" | "imposed"), ``[multipliers]``
 (initial values of the multipliers lambda_<dependent> of the vakonomic, Hoelder and
 Suslov principles; they may also stand in ``[initial]``), ``[integrals]`` (name =
@@ -127,10 +127,10 @@ from pathlib import Path
 
 import sympy as sp
 
-from . import principles
-from .constraints import System
+from .mechanics import principles
+from .mechanics.system import System
 from .errors import JetnhError, ModelFileError, PrincipleError
-from .jet import JetSpace
+from .geometry.jet import JetSpace
 
 MAX_CHARS = 20_000
 MAX_NODES = 5_000
@@ -1114,7 +1114,7 @@ def _from_dict(data: dict, source: str) -> Model:
         except PrincipleError:
             raise ModelFileError(
                 f"{S}: 'principle' must be one of {', '.join(principles.PRINCIPLES)} (or an "
-                f"alias, jetnh.principles); got {_shorten(principle)!r}") from None
+                f"alias, jetnh.mechanics.principles); got {_shorten(principle)!r}") from None
     convention = data.get("convention")
     if convention is not None:
         _expect(f"{S}: 'convention'", convention, "string")

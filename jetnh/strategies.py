@@ -55,7 +55,7 @@ import sympy as sp
 from hypothesis import strategies as st
 from hypothesis.errors import InvalidArgument
 
-from .jet import JetSpace
+from .geometry.jet import JetSpace
 
 __all__ = [
     "jet_spaces",

@@ -55,7 +55,7 @@ import warnings
 from collections.abc import Mapping
 
 from .errors import JetnhError
-from .jet import key_name
+from .geometry.jet import key_name
 
 #: options that only ``Scene.run`` takes (methods run point by point)
 POINT_OPTIONS = ("projection",)
@@ -280,10 +280,10 @@ def _progress(progress, total):
 
 def _in_ensemble(method) -> bool:
     """Does ``method`` run as a compiled ensemble (else ``Scene.run`` point by point)?"""
-    from .numeric import integrators
+    from .numeric import methods
 
     try:
-        return integrators.METHODS[integrators.method(method)] != "discrete"
+        return methods.METHODS[methods.method(method)] != "discrete"
     except JetnhError:  # scipy-<M>
         return False
 
@@ -334,7 +334,7 @@ def _run_points(scene, Y0, P, run, outputs) -> dict:
     import numpy as np
 
     from .errors import IntegrationError
-    from .numeric.integrators._common import NONFINITE
+    from .numeric.methods._common import NONFINITE
 
     times = run["t_eval"]
     opts = {k: v for k, v in run.items() if k != "t_eval"}

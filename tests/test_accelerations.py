@@ -1,4 +1,4 @@
-"""Tests of jetnh.accelerations: the parts of [F] and D F taken by symengine against
+"""Tests of jetnh.mechanics.accelerations: the parts of [F] and D F taken by symengine against
 sympy's own Euler operator and total derivative, and the block solve on a long chain
 against sympy.physics.mechanics."""
 
@@ -12,9 +12,9 @@ from hypothesis import given, strategies as st
 
 import jetnh.strategies as jst
 from jetnh import JetSpace, models
-from jetnh.accelerations import euler_parts
-from jetnh import dag
-from jetnh.zero import vanishes
+from jetnh.mechanics.accelerations import euler_parts
+from jetnh.algebra import dag
+from jetnh.algebra.zero import vanishes
 
 
 @st.composite
@@ -43,7 +43,7 @@ def test_parts_keep_the_symbols_assumptions_and_undefined_functions():
     parts = euler_parts(J, m * (xd**2 + yd**2) / 2 - m * y)
     assert parts.H == sp.Matrix([[m, 0], [0, m]]) and parts.r[1] == -m
     g = sp.Function("g")
-    parts = euler_parts(J, g(x, xd))                 # jetnh.proof's generic functions
+    parts = euler_parts(J, g(x, xd))                 # jetnh.mechanics.proof's generic functions
     assert parts.p[0] == sp.diff(g(x, xd), xd)
 
 

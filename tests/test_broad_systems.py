@@ -13,7 +13,7 @@ from hypothesis import given, settings, strategies as st
 
 import jetnh as jn
 import jetnh.strategies as jst
-from jetnh.constraints import System
+from jetnh.mechanics.system import System
 from numbers30 import f30, num
 from test_crosscheck_mechanics import assert_accelerations_match, lagranges_method_accelerations
 

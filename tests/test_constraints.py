@@ -6,9 +6,9 @@ from hypothesis import given, settings
 
 import jetnh.strategies as jst
 from jetnh import ConstraintError, JetSpace, JetSpaceError, LagrangianError
-from jetnh.constraints import System
-from jetnh.equivalence import frobenius_T
-from jetnh.zero import vanishes
+from jetnh.mechanics.system import System
+from jetnh.mechanics.equivalence import frobenius_T
+from jetnh.algebra.zero import vanishes
 
 R, I1, I2 = sp.symbols("R I1 I2")
 

@@ -22,7 +22,7 @@ from sympy.physics.mechanics import LagrangesMethod
 
 import jetnh.strategies as jst
 from jetnh import JetSpace
-from jetnh.constraints import System
+from jetnh.mechanics.system import System
 from numbers30 import f30, num
 
 RTOL = 1e-10

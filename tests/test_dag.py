@@ -1,4 +1,4 @@
-"""Tests of jetnh.dag: graph walks agree with sympy's tree walks, and stay linear on
+"""Tests of jetnh.algebra.dag: graph walks agree with sympy's tree walks, and stay linear on
 expressions whose tree is exponential."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import sympy as sp
 from hypothesis import given, strategies as st
 
 import jetnh.strategies as jst
-from jetnh import dag
+from jetnh.algebra import dag
 
 
 @st.composite

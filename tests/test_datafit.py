@@ -12,7 +12,7 @@ from hypothesis import given, settings, strategies as st
 import jetnh as jn
 import jetnh.strategies as jst
 from jetnh import display, models
-from jetnh.equivalence import Comparison
+from jetnh.mechanics.equivalence import Comparison
 from jetnh.errors import ArgumentError, JetnhError
 from jetnh.numeric import Event, Scene
 

@@ -1,4 +1,4 @@
-"""Tests of jetnh.equations: the equations of motion under each principle, by value.
+"""Tests of jetnh.mechanics.equations: the equations of motion under each principle, by value.
 
 Zhao et al. (2008), sections 3-5.  Every check compares jetnh's derivation with an
 independent one (the Euler-Lagrange equations of L + lambda f, identity (19) assembled
@@ -19,8 +19,8 @@ from hypothesis import Phase, given, settings, strategies as st
 
 import jetnh.strategies as jst
 from jetnh import ConstraintError, JetSpace, LagrangianError, PrincipleError
-from jetnh.constraints import System
-from jetnh.equations import FORMS
+from jetnh.mechanics.system import System
+from jetnh.mechanics.equations import FORMS
 from numbers30 import f30, num
 
 TOL = 1e-18          # residuals that are identically zero, at 30 digits

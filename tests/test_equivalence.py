@@ -10,11 +10,12 @@ import sympy as sp
 from hypothesis import given, settings
 
 import jetnh.strategies as jst
-from jetnh import JetSpace, System, compare, dag
-from jetnh.equivalence import agrees, defect_along, frobenius_T, singular_set
+from jetnh import JetSpace, System, compare
+from jetnh.algebra import dag
+from jetnh.mechanics.equivalence import agrees, defect_along, frobenius_T, singular_set
 from jetnh.errors import PrincipleError
 from jetnh.models import appell_hamel, rolling_disk
-from jetnh.zero import vanishes
+from jetnh.algebra.zero import vanishes
 
 
 def test_disk_verdicts():
@@ -219,7 +220,7 @@ def test_defect_along_a_nested_system_agrees_with_mpmath():
     """n_trailer (nested accelerations): the largest defect over states, evaluated on the
     graph with numpy, is the largest of the defects evaluated one state at a time with
     mpmath (dag.evaluate, 30 digits)."""
-    from jetnh import dag
+    from jetnh.algebra import dag
     from jetnh.models import n_trailer
 
     s = n_trailer(N=3)
@@ -241,7 +242,7 @@ def test_large_polynomial_factors_are_kept_whole():
     """A singular factor too large to factor safely (sympy's multivariate factoring can
     take minutes, depending on its random evaluation points) is kept as one factor; small
     ones are factored."""
-    from jetnh import singular
+    from jetnh.algebra import singular
 
     xs = sp.symbols("a0:8")
     big = sum((k + 1) * xs[k % 8] ** (k % 5) * xs[(3 * k) % 8] ** 2 for k in range(30)) + 1

@@ -1,4 +1,4 @@
-"""Tests of jetnh.fields: vector fields, Lie bracket, total derivative field, prolongation.
+"""Tests of jetnh.geometry.fields: vector fields, Lie bracket, total derivative field, prolongation.
 
 Property tests draw small random expressions (polynomial and trigonometric in t, q, qd)
 from the local strategies below and compare results numerically at fixed pseudo-random
@@ -14,7 +14,7 @@ import sympy as sp
 from hypothesis import given, strategies as st
 
 import jetnh as jn
-from jetnh.fields import (VectorField, commutator, prolong, total_derivative_field,
+from jetnh.geometry.fields import (VectorField, commutator, prolong, total_derivative_field,
                           vertical_field)
 
 try:                                    # the shared strategies, when present

@@ -1,7 +1,7 @@
 """Non-potential generalized forces Q_s(t, q, qdot): ``System(..., forces=, dissipation=)``.
 
 Every principle's accelerations with forces are checked against a route that shares no
-code with ``jetnh.equations`` or ``jetnh.accelerations``: the rows assembled here by hand
+code with ``jetnh.mechanics.equations`` or ``jetnh.mechanics.accelerations``: the rows assembled here by hand
 (partial derivatives and a chain-rule total derivative) and solved numerically --
 vakonomic: [L + lambda f]_s + Q_s = 0 with D f = 0; Chetaev: [L]_s + Q_s + nu df/dqdot^s = 0
 with D f = 0; Suslov: (31) on L~ with the projected force Q_mu + Phi^alpha_mu Q_alpha --
@@ -24,8 +24,8 @@ from sympy.physics.mechanics import LagrangesMethod, Point, ReferenceFrame
 import jetnh as jn
 import jetnh.strategies as jst
 from jetnh import models
-from jetnh.constraints import System
-from jetnh.equations import FORMS, multiplier_symbols
+from jetnh.mechanics.system import System
+from jetnh.mechanics.equations import FORMS, multiplier_symbols
 from jetnh.errors import ConstraintError, JetnhError, JetSpaceError
 from jetnh.numeric import codegen
 from numbers30 import f30, num
@@ -178,7 +178,7 @@ def test_every_form_with_forces_vanishes_on_its_principles_accelerations(system,
 @settings(max_examples=5)
 @given(forced_systems(affine=True), randoms)
 def test_suslov_with_forces_is_vakonomic_on_the_branch_32(system, rnd):
-    from jetnh.equivalence import compare
+    from jetnh.mechanics.equivalence import compare
 
     assert compare(system, "vakonomic", "suslov").on_branch_32 in (True, None)
     eom = system.equations("vakonomic", "embedded")

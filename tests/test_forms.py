@@ -1,4 +1,4 @@
-"""Tests of jetnh.forms: Cartan calculus identities on random forms, known values, contact
+"""Tests of jetnh.geometry.forms: Cartan calculus identities on random forms, known values, contact
 and constraint forms, and galgebra's exterior algebra as an independent cross-check."""
 
 import pytest
@@ -6,7 +6,7 @@ import sympy as sp
 from hypothesis import given, strategies as st
 
 from jetnh import ConstraintError, JetSpace, JetSpaceError
-from jetnh.forms import (Form, affine_coefficients, constraint_forms, contact_forms,
+from jetnh.geometry.forms import (Form, affine_coefficients, constraint_forms, contact_forms,
                          coordinate_key, d, differential, expr_is_zero, interior,
                          lie_derivative, numeric_is_zero, pullback, wedge)
 

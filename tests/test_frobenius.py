@@ -1,4 +1,4 @@
-"""Tests of jetnh.frobenius: classic examples with known verdicts and obstructions,
+"""Tests of jetnh.geometry.frobenius: classic examples with known verdicts and obstructions,
 time-dependent constraints, and property tests on random constraints (holonomic ones
 are integrable; brackets and forms agree; the verdict does not depend on the split)."""
 
@@ -7,7 +7,7 @@ import sympy as sp
 from hypothesis import assume, given, strategies as st
 
 from jetnh import ConstraintError, JetSpace, JetSpaceError
-from jetnh.frobenius import (FrobeniusResult, decide_zero, frobenius,
+from jetnh.geometry.frobenius import (FrobeniusResult, decide_zero, frobenius,
                              frobenius_from_constraints)
 
 METHODS = ("brackets", "forms")
@@ -295,7 +295,7 @@ def test_verdict_does_not_depend_on_the_split(case, method):
 @given(one_constraint_two_splits())
 def test_single_constraint_matches_omega_wedge_d_omega(case):
     """For one constraint, Frobenius is omega ^ d omega = 0 (a third, direct route)."""
-    from jetnh.forms import Form, d
+    from jetnh.geometry.forms import Form, d
     f, _ = case
     om = Form(J3, 1, {(s,): sp.diff(f, v) for s, v in zip(J3.q, J3.qd)} | {
         (T,): f.xreplace({v: 0 for v in J3.qd})})
@@ -314,8 +314,8 @@ def _nested(y, z, depth):
 
 def test_large_coefficients_are_decided_by_evaluation_and_say_so():
     import jetnh as jn
-    from jetnh import zero
-    from jetnh.shared import tree_size
+    from jetnh.algebra import zero
+    from jetnh.algebra.shared import tree_size
 
     J = jn.JetSpace("x y z")
     x, y, z = J.q
@@ -334,7 +334,7 @@ def test_large_coefficients_are_decided_by_evaluation_and_say_so():
 
 
 def test_a_zero_of_a_large_expression_is_told_from_a_tiny_offset():
-    from jetnh import zero
+    from jetnh.algebra import zero
 
     y, z = sp.symbols("y z")
     G = _nested(y, z, 6)

@@ -12,11 +12,11 @@ from hypothesis import strategies as st
 from sympy.physics.mechanics import dynamicsymbols
 
 import jetnh as jn
-from jetnh import linalg
-from jetnh.constraints import System
+from jetnh.algebra import linalg
+from jetnh.mechanics.system import System
 from jetnh.errors import (ConstraintError, JetnhError, JetnhWarning, JetSpaceError,
                           LagrangianError, PrincipleError)
-from jetnh.zero import vanishes
+from jetnh.algebra.zero import vanishes
 
 J = jn.JetSpace("x y z")
 x, y, z = J.q
@@ -329,7 +329,7 @@ def test_scene_stops_at_the_kink_of_abs():
     """V = |x| from x = 1 at rest: x = 1 - t^2/2 reaches the kink at t = sqrt(2), where
     the integrator stops (SINGULAR) instead of stepping across it."""
     from jetnh.numeric import Scene
-    from jetnh.numeric.integrators._common import SINGULAR
+    from jetnh.numeric.methods._common import SINGULAR
 
     J1 = jn.JetSpace("x")
     s = System(J1, J1.qd[0]**2 / 2 - sp.Abs(J1.q[0]))

@@ -1,4 +1,4 @@
-"""Tests of jetnh.jet: the jet space, the total derivative D, the Euler operator, conversions.
+"""Tests of jetnh.geometry.jet: the jet space, the total derivative D, the Euler operator, conversions.
 
 Identities are checked on random expressions from jetnh.strategies, numerically at random
 points with 40-digit arithmetic (fast, and exact enough to see any real discrepancy),
@@ -535,7 +535,7 @@ def test_total_derivative_and_euler_on_the_n_trailer_agree_with_sympy_diff():
     """On nested expressions (the 3-trailer's phi and embedded Lagrangian L~), J.D and
     J.euler, computed on the shared graph (dag.diff), agree with the same operators
     built from sympy.diff on the trees, at a random point to 35 digits."""
-    from jetnh import dag
+    from jetnh.algebra import dag
     from jetnh.models import n_trailer
 
     s = n_trailer(N=3)

@@ -9,7 +9,8 @@ import sympy as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from jetnh import JetSpace, System, dag, linalg
+from jetnh import JetSpace, System
+from jetnh.algebra import dag, linalg
 
 
 def rotation(n, i, j, th):

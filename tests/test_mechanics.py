@@ -18,9 +18,9 @@ from sympy.physics.mechanics import (LagrangesMethod, Lagrangian, Point, Referen
 import jetnh as jn
 import jetnh.strategies as jst
 from jetnh import models
-from jetnh.constraints import System
+from jetnh.mechanics.system import System
 from jetnh.errors import JetnhError, JetSpaceError
-from jetnh.mechanics import generalized_forces, to_mechanics
+from jetnh.mechanics.sympy_bridge import generalized_forces, to_mechanics
 
 PREC = 30
 RTOL = 1e-20

@@ -16,9 +16,9 @@ from hypothesis import strategies as st
 import jetnh.strategies as jst
 from jetnh import JetSpace, System, models
 from jetnh import modelfile as mf
-from jetnh.constraints import PRINCIPLES
+from jetnh.mechanics.system import PRINCIPLES
 from jetnh.errors import JetnhError, ModelFileError
-from jetnh.zero import vanishes
+from jetnh.algebra.zero import vanishes
 from deadline import deadline
 
 EXAMPLES = sorted((pathlib.Path(__file__).resolve().parents[1] / "examples").glob("*.toml"))

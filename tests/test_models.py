@@ -15,9 +15,9 @@ import sympy as sp
 import jetnh as jn
 from jetnh import modelfile as mf
 from jetnh import models
-from jetnh.constraints import PRINCIPLES
+from jetnh.mechanics.system import PRINCIPLES
 from jetnh.errors import LagrangianError, ModelFileError
-from jetnh.zero import vanishes
+from jetnh.algebra.zero import vanishes
 
 PAPER = {"rolling_disk", "appell_hamel"}
 # small instances of the scalable families, to keep the run short
@@ -421,7 +421,7 @@ def _in_span_numeric(system, exprs, basis, points=12):
     value of the parameters): ranks of their values at random points, 40 digits."""
     import random
 
-    from jetnh import dag
+    from jetnh.algebra import dag
     rng = random.Random(5)
     syms = set().union(*(e.free_symbols for e in exprs + basis)) if exprs + basis else set()
     fixed = {s: sp.Rational(rng.randint(20, 80), 41) for s in system.parameters}

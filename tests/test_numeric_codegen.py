@@ -14,7 +14,7 @@ from hypothesis import assume, given, settings
 import jetnh.strategies as jst
 
 import jetnh as jn
-from jetnh.constraints import System
+from jetnh.mechanics.system import System
 from jetnh.errors import JetnhError
 from jetnh.numeric import Scene, cache, codegen
 
@@ -86,7 +86,7 @@ SCRIPT = r"""
 import json, sys, time
 t0 = time.perf_counter()
 import sympy as sp, jetnh as jn
-from jetnh.constraints import System
+from jetnh.mechanics.system import System
 from jetnh.numeric import Scene
 J = jn.JetSpace("x y z")
 x, y, z = J.q
@@ -209,7 +209,7 @@ def test_emitter_prints_each_shared_node_once():
         if depth == 10:
             ns = {"math": math, "s0": 0.3, "s1": -0.1}
             exec("\n".join(lines), ns)
-            from jetnh import dag
+            from jetnh.algebra import dag
             ref = dag.evaluate(e, {sp.Symbol("s0"): 0.3, sp.Symbol("s1"): -0.1})
             assert ns["r"] == pytest.approx(float(ref), rel=1e-12)
     assert sizes[40] < 4.5 * sizes[10]        # linear (the tree grows by 3^30)
@@ -253,7 +253,7 @@ def test_emitter_prints_exact_numbers_and_fallback_heads():
 def _jacobian_route(s, principle, params, n, y, t):
     """d rhs / d y by sympy on the (small) kernel expressions, phi substituted for v<a>,
     evaluated at 40 digits: the second route."""
-    from jetnh import dag
+    from jetnh.algebra import dag
 
     phi, rhs = codegen.kernel_expressions(s, principle, params)
     vs = {sp.Symbol(f"v{a}"): f for a, f in enumerate(phi)}

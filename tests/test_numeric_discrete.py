@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import jetnh as jn
-from jetnh.constraints import System
+from jetnh.mechanics.system import System
 from jetnh.errors import JetnhError, PrincipleError
 from jetnh.numeric import Scene
 

@@ -6,11 +6,11 @@ import pytest
 import sympy as sp
 
 import jetnh as jn
-from jetnh.constraints import System
+from jetnh.mechanics.system import System
 from jetnh.errors import ConstraintError, IntegrationError, JetnhError
 from jetnh.models import appell_hamel
 from jetnh.numeric import Event, Scene
-from jetnh.numeric.integrators._common import EVENT, FINISHED, NONFINITE, SINGULAR
+from jetnh.numeric.methods._common import EVENT, FINISHED, NONFINITE, SINGULAR
 
 DISK0 = dict(x=0.1, y=-0.2, phi=0.3, psi=0.4, phi_t=1.0, psi_t=0.7)
 N = 12

@@ -6,11 +6,11 @@ import pytest
 import sympy as sp
 
 import jetnh as jn
-from jetnh.constraints import System
+from jetnh.mechanics.system import System
 from jetnh.errors import IntegrationError, JetnhError
 from jetnh.models import appell_hamel
 from jetnh.numeric import Event, Scene
-from jetnh.numeric.integrators._common import EVENT, FINISHED, SINGULAR
+from jetnh.numeric.methods._common import EVENT, FINISHED, SINGULAR
 
 TOL = 1e-10
 

@@ -5,12 +5,12 @@ import numpy as np
 import pytest
 
 import jetnh as jn
-from jetnh.constraints import System
+from jetnh.mechanics.system import System
 from jetnh.numeric import Scene
-from jetnh.numeric.integrators import loop
-from jetnh.numeric.integrators.dop853 import DOP853
-from jetnh.numeric.integrators.dopri5 import DOPRI5
-from jetnh.numeric.integrators.rk4 import RK4
+from jetnh.numeric.methods import loop
+from jetnh.numeric.methods.dop853 import DOP853
+from jetnh.numeric.methods.dopri5 import DOPRI5
+from jetnh.numeric.methods.rk4 import RK4
 
 PART0 = dict(x=0.1, y=-0.5, z=0.2, x_t=1.0, y_t=0.3)
 T = 4.0
@@ -148,7 +148,7 @@ def test_integrator_cache_key_carries_the_helpers():
     """numba checks only a cached function's own file; the compiled loops are cached under
     a name that carries the hash of every integrator module (the helpers compiled into
     them), and the helpers themselves are not cached on their own."""
-    from jetnh.numeric.integrators import _common, radau
+    from jetnh.numeric.methods import _common, radau
 
     h = _common.sources_hash()
     assert len(h) == 16

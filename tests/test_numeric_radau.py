@@ -10,8 +10,8 @@ import sympy as sp
 
 from jetnh.models import chaplygin_sleigh, damped_chaplygin_sleigh, nonholonomic_particle
 from jetnh.numeric import Event, Scene
-from jetnh.numeric.integrators import radau
-from jetnh.numeric.integrators._common import EVENT, FINISHED, MAX_STEPS
+from jetnh.numeric.methods import radau
+from jetnh.numeric.methods._common import EVENT, FINISHED, MAX_STEPS
 
 PART0 = dict(x=0.1, y=-0.5, z=0.2, x_t=1.0, y_t=0.3)
 T = 4.0

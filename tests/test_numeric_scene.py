@@ -5,7 +5,7 @@ import pytest
 import sympy as sp
 
 import jetnh as jn
-from jetnh.constraints import System
+from jetnh.mechanics.system import System
 from jetnh.errors import ConstraintError, IntegrationError, JetnhError
 from jetnh.numeric import Scene
 

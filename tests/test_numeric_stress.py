@@ -11,7 +11,7 @@ from hypothesis import HealthCheck, assume, given, settings
 import jetnh as jn
 import jetnh.strategies as jst
 from jetnh import models
-from jetnh.constraints import System
+from jetnh.mechanics.system import System
 from jetnh.errors import IntegrationError, JetnhError
 from jetnh.numeric import SINGULAR, Scene, codegen
 from jetnh.numeric.precision import U, cancellation, reference

@@ -11,10 +11,10 @@ from hypothesis import given, settings, strategies as st
 
 import jetnh as jn
 import jetnh.strategies as jst
-from jetnh import accelerations, principles, variations
-from jetnh.constraints import System
-from jetnh.equations import derive
-from jetnh.principles import REGISTRY
+from jetnh.mechanics import accelerations, principles, variations
+from jetnh.mechanics.system import System
+from jetnh.mechanics.equations import derive
+from jetnh.mechanics.principles import REGISTRY
 from numbers30 import f30, num
 
 ALIASES = [(a, p.name) for p in REGISTRY for a in (p.name, *p.aliases)]

@@ -285,7 +285,7 @@ def test_strings_are_never_evaluated(tmp_path):
     """A string where an expression belongs is refused, never handed to sympify (which
     would run it): scene integrals, form coefficients."""
     from jetnh.errors import JetSpaceError
-    from jetnh.forms import Form
+    from jetnh.geometry.forms import Form
 
     canary = tmp_path / "ran"
     code = f"__import__('pathlib').Path({str(canary)!r}).touch() or 1"

@@ -1,4 +1,4 @@
-"""Shared form (jetnh.shared): named intermediate quantities stand for the expressions
+"""Shared form (jetnh.algebra.shared): named intermediate quantities stand for the expressions
 exactly, every line is short, and the whole is linear in the shared size."""
 
 import json
@@ -12,8 +12,9 @@ from hypothesis import strategies as st
 
 import jetnh as jn
 import jetnh.strategies as jst
-from jetnh import dag, models
-from jetnh.shared import INLINE_MAX, shared_form, tree_size
+from jetnh.algebra import dag
+from jetnh import models
+from jetnh.algebra.shared import INLINE_MAX, shared_form, tree_size
 
 
 def _values(form, point, dps=30):

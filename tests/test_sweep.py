@@ -19,7 +19,7 @@ import jetnh as jn
 from jetnh.errors import JetnhError
 from jetnh.models import appell_hamel, rolling_disk
 from jetnh.numeric import Event, Scene
-from jetnh.numeric.integrators._common import FINISHED, NONFINITE, SINGULAR
+from jetnh.numeric.methods._common import FINISHED, NONFINITE, SINGULAR
 from jetnh.sweep import plot_map, separation
 
 DISK0 = dict(x=0.1, y=-0.2, phi=0.3, psi=0.4, phi_t=1.0, psi_t=0.7)

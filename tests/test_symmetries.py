@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 
 import jetnh as jn
 from jetnh import models
-from jetnh.fields import prolong
+from jetnh.geometry.fields import prolong
 
 pytestmark = pytest.mark.filterwarnings("ignore")
 
@@ -16,7 +16,7 @@ pytestmark = pytest.mark.filterwarnings("ignore")
 # ---------------------------------------------------------------------- second routes
 def sympy_accelerations(sysm, principle):
     """The accelerations (and multiplier rates) by sympy's linear solve of the multiplier
-    form with D f = 0, independent of jetnh.accelerations."""
+    form with D f = 0, independent of jetnh.mechanics.accelerations."""
     eom = sysm.equations(principle, "multiplier")
     J = eom.J
     unknowns = list(J.qdd) + (list(eom.reactions) if principle == "chetaev"

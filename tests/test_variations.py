@@ -8,11 +8,10 @@ from hypothesis import given, settings
 
 import jetnh.strategies as jst
 from jetnh import JetSpace
-from jetnh.constraints import System
-from jetnh.equations import action_variation, chetaev_admissible, multiplier_symbols
-from jetnh.zero import on_manifold_point, value, vanishes
-from jetnh.variations import (KINDS, defect, identity_residual, make,
-                              printed_identity_residual, reduced_identity_residual)
+from jetnh.mechanics.system import System
+from jetnh.mechanics.equations import action_variation, chetaev_admissible, multiplier_symbols
+from jetnh.algebra.zero import on_manifold_point, value, vanishes
+from jetnh.mechanics.variations import KINDS, defect, identity_residual, make, printed_identity_residual, reduced_identity_residual
 
 
 def disk():

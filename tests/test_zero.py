@@ -1,10 +1,10 @@
-"""Tests of jetnh.zero: the one zero test by evaluation at random points."""
+"""Tests of jetnh.algebra.zero: the one zero test by evaluation at random points."""
 
 from __future__ import annotations
 
 import sympy as sp
 
-from jetnh import zero
+from jetnh.algebra import zero
 from jetnh.models import rolling_disk
 
 

@@ -8,8 +8,8 @@ is checked in ``tests/test_forces.py``.
 
 import sympy as sp
 
-from ..constraints import System
-from ..jet import JetSpace
+from ..mechanics.system import System
+from ..geometry.jet import JetSpace
 from ._registry import model
 
 

@@ -4,9 +4,9 @@ import math
 
 import sympy as sp
 
-from ..constraints import System
+from ..mechanics.system import System
 from ..errors import ModelFileError
-from ..jet import JetSpace
+from ..geometry.jet import JetSpace
 from ._registry import model
 
 

@@ -2,8 +2,8 @@
 
 import sympy as sp
 
-from ..constraints import System
-from ..jet import JetSpace
+from ..mechanics.system import System
+from ..geometry.jet import JetSpace
 
 
 def rolling_disk() -> System:

@@ -7,8 +7,8 @@ integrals.  Each claim is checked in ``tests/test_models.py``.
 
 import sympy as sp
 
-from ..constraints import System
-from ..jet import JetSpace
+from ..mechanics.system import System
+from ..geometry.jet import JetSpace
 from ._registry import model
 
 

@@ -16,8 +16,8 @@ import math
 
 import sympy as sp
 
-from ..constraints import System
-from ..jet import JetSpace
+from ..mechanics.system import System
+from ..geometry.jet import JetSpace
 from ._registry import model
 
 

@@ -3,7 +3,7 @@
 ``Scene(system, principle, params, initial, t_span).run(...)`` derives the equations of
 one principle, generates numba kernels through ``sympy.cse`` (``codegen``), caches them
 on disk keyed by the symbolic input (``cache``), and integrates in compiled loops
-(``integrators``: dop853, dopri5, rk4, radau, dla, dvi) or with scipy's ``solve_ivp``.
+(``methods``: dop853, dopri5, rk4, radau, dla, dvi) or with scipy's ``solve_ivp``.
 
 - Singular configurations (``codegen.singular_indicators``): every run stops where the
   dependent velocities cannot be solved for or the accelerations are undefined
@@ -24,8 +24,7 @@ on disk keyed by the symbolic input (``cache``), and integrates in compiled loop
 
 from .ensemble import Ensemble, run_ensemble
 from .events import Event
-from .integrators._common import (EVENT, FINISHED, MAX_STEPS, NONFINITE, NOT_CONVERGED,
-                                  SINGULAR, STATUS_TEXT, STOPPED, TOO_SMALL_STEP, Status)
+from .methods._common import EVENT, FINISHED, MAX_STEPS, NONFINITE, NOT_CONVERGED, SINGULAR, STATUS_TEXT, STOPPED, TOO_SMALL_STEP, Status
 from .options import Newton, Singular, StepControl
 from .scene import Scene
 from .trajectory import Diagnostics, Trajectory

@@ -28,7 +28,7 @@ import numpy as np
 import sympy as sp
 
 from ..errors import ArgumentError
-from ..jet import key_name
+from ..geometry.jet import key_name
 
 #: the smallest nonzero relative tolerance that float64 arithmetic can honour
 RTOL_MIN = 100 * np.finfo(float).eps

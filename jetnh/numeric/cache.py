@@ -22,7 +22,7 @@ directory named by a hash of the symbolic input (``codegen.symbolic_key``)::
 
 A second process that builds the same scene finds the entry, skips the derivation, ``cse``
 and code generation, and numba loads the machine code instead of compiling.  The
-integrators take ``rhs`` as a first-class function (``integrators._common.RHS``), so their
+integrators take ``rhs`` as a first-class function (``methods._common.RHS``), so their
 loops are compiled once for all scenes and cached by numba next to their own source; per
 scene only ``kernels.py`` is compiled.
 
@@ -621,7 +621,7 @@ class CompiledKernels:
             if hasattr(self.kernels, name):
                 setattr(self, name, getattr(self.kernels, name))
         from . import calls
-        from .integrators._common import FunctionAddress
+        from .methods._common import FunctionAddress
 
         for name in ("rhs_c", "aux_c", "sing_c", "events_c"):
             if hasattr(self, name):      # rhs_fp, ...: cheap to pass to compiled loops
@@ -642,11 +642,11 @@ class CompiledKernels:
     def integrator(self):
         """The compiled loop of the explicit Runge-Kutta methods (shared by every scene
         and method), as its machine-code entry point (no type dispatch per call:
-        ``integrators._common.entry_point``)."""
+        ``methods._common.entry_point``)."""
         return _entry_point("loop")
 
     def implicit(self):
-        """The compiled loop of radau (``integrators.radau``), as its entry point."""
+        """The compiled loop of radau (``methods.radau``), as its entry point."""
         return _entry_point("radau")
 
 
@@ -657,9 +657,9 @@ def _entry_point(module: str):
     if module not in _ENTRIES:
         import importlib
 
-        from .integrators._common import entry_point
+        from .methods._common import entry_point
 
-        mod = importlib.import_module(f"jetnh.numeric.integrators.{module}")
+        mod = importlib.import_module(f"jetnh.numeric.methods.{module}")
         _ENTRIES[module] = entry_point(mod.solver())
     return _ENTRIES[module]
 

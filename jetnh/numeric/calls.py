@@ -15,8 +15,8 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from .integrators._common import RHS, FunctionAddress, entry_point
-from .integrators.radau import JAC, JAC_SIGNATURE
+from .methods._common import RHS, FunctionAddress, entry_point
+from .methods.radau import JAC, JAC_SIGNATURE
 
 _f8 = numba.types.float64
 _JIT = dict(cache=True, error_model="numpy", nogil=True)

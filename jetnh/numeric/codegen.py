@@ -62,8 +62,9 @@ from sympy.core.function import AppliedUndef
 from sympy.functions.elementary.piecewise import ExprCondPair
 from sympy.printing.pycode import PythonCodePrinter
 
-from .. import dag, principles, singular
-from ..accelerations import _cached_parts
+from ..algebra import dag, singular
+from ..mechanics import principles
+from ..mechanics.accelerations import _cached_parts
 from ..errors import JetnhError, PrincipleError
 from .layout import CODEGEN_VERSION, Layout
 
@@ -415,19 +416,20 @@ class KernelSource:
 
 
 # ---------------------------------------------------------------------- keys
+def source_hash(root: pathlib.Path) -> str:
+    """A hash of every Python file of the package at ``root`` (path and bytes, in path
+    order): any edit, move or new module invalidates the cached kernels, so no hand-kept
+    list of the modules that shape a kernel can go stale."""
+    h = hashlib.sha256()
+    for path in sorted(root.rglob("*.py")):
+        h.update(path.relative_to(root).as_posix().encode() + b"\0")
+        h.update(path.read_bytes() + b"\0")
+    return h.hexdigest()[:16]
+
+
 @functools.lru_cache(maxsize=1)
 def _derivation_source_hash() -> str:
-    """A hash of the source of the modules that derive the equations and generate code:
-    editing them invalidates cached kernels (the symbolic input alone would not)."""
-    root = pathlib.Path(__file__).resolve().parents[1]
-    h = hashlib.sha256()
-    for name in ("jet.py", "linalg.py", "dag.py", "constraints.py", "variations.py",
-                 "equations.py", "accelerations.py", "numeric/codegen.py", "numeric/layout.py",
-                 "numeric/events.py", "singular.py"):
-        path = root / name
-        if path.exists():
-            h.update(path.read_bytes())
-    return h.hexdigest()[:16]
+    return source_hash(pathlib.Path(__file__).resolve().parents[1])
 
 
 def symbolic_key(system, principle, params, runtime_params=(), integrals=None, form=None,
@@ -684,7 +686,7 @@ def generate_events(system, principle, params: dict, runtime_params, events, lay
     t, the coordinates, every velocity (dependent ones through phi), the multipliers of
     ``principle`` and the parameters.  Nothing is derived: only phi is needed.
     """
-    from ..equations import multiplier_symbols
+    from ..mechanics.equations import multiplier_symbols
 
     lams = multiplier_symbols(system) if (principle != "chetaev" and system.k) else ()
     prepare = _Preparer(system, lams, params, tuple(runtime_params))
@@ -885,8 +887,8 @@ def discrete_indicators(system, numbers) -> list[tuple[str, sp.Expr]]:
 
 def generate_dla(system, params: dict, runtime_params=(), key="",
                  kind="chetaev", integrals=None) -> KernelSource:
-    """Kernels of the midpoint discrete Lagrange-d'Alembert step (``integrators.dla``,
-    ``kind="chetaev"``) or of the discrete vakonomic step (``integrators.dvi``,
+    """Kernels of the midpoint discrete Lagrange-d'Alembert step (``methods.dla``,
+    ``kind="chetaev"``) or of the discrete vakonomic step (``methods.dvi``,
     ``kind="vakonomic"``).
 
     The unknown of a step is the increment ``dq = q1 - q0`` (not q1): with ``qb = q0 +
@@ -1048,7 +1050,7 @@ def generate_dla(system, params: dict, runtime_params=(), key="",
 
 
 def codegen_multipliers_symbols(system) -> tuple:
-    from ..equations import multiplier_symbols
+    from ..mechanics.equations import multiplier_symbols
 
     return tuple(multiplier_symbols(system))
 

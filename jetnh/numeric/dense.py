@@ -21,9 +21,9 @@ import numpy as np
 
 from ..errors import ArgumentError, IntegrationError, JetnhError
 from . import arguments
-from .integrators import explicit_solver
-from .integrators._common import AT_T_EVAL, EVERY_STEP
-from .integrators.loop import Control, Watch
+from .methods import explicit_solver
+from .methods._common import AT_T_EVAL, EVERY_STEP
+from .methods.loop import Control, Watch
 
 
 def _times(times, lo, hi) -> np.ndarray:

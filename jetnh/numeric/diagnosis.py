@@ -13,8 +13,8 @@ import numpy as np
 import sympy as sp
 
 from ..errors import IntegrationError
-from .integrators import STATUS_TEXT
-from .integrators._common import STOPPED
+from .methods import STATUS_TEXT
+from .methods._common import STOPPED
 
 
 def timeout_reason(timeout, t) -> str:

@@ -1,5 +1,5 @@
-"""The drivers of the discrete integrators dla and dvi (``integrators.dla``,
-``integrators.dvi``): their kernels (``codegen.generate_dla``), the run, the trajectory of
+"""The drivers of the discrete integrators dla and dvi (``methods.dla``,
+``methods.dvi``): their kernels (``codegen.generate_dla``), the run, the trajectory of
 the nodes, and the explanation of a failed step (a singular configuration, a Lagrangian
 degenerate on the constraints).  Functions of the scene (``Scene.run`` calls them).
 """
@@ -11,14 +11,13 @@ import time
 
 import numpy as np
 
-from .. import principles
+from ..mechanics import principles
 from ..errors import IntegrationError, PrincipleError
 from . import cache as _cache
 from . import codegen, diagnosis, interrupt
-from .integrators import STATUS_TEXT
+from .methods import STATUS_TEXT
 from .events import split_records
-from .integrators._common import (ENDPOINTS, EVENT, EVERY_STEP, NONFINITE, NOT_CONVERGED,
-                                  SINGULAR, STOPPED)
+from .methods._common import ENDPOINTS, EVENT, EVERY_STEP, NONFINITE, NOT_CONVERGED, SINGULAR, STOPPED
 from .trajectory import Trajectory
 
 
@@ -35,8 +34,8 @@ def kernels(scene, kind):
 
 def run_dla(scene, t0, t1, y_init, default_y0, p, n_steps, save, tol, max_iter,
             projection, singular_tol, timeout, ce=None):
-    """A dla run (``integrators.dla``); ``ce``: compiled user events (``node_events``)."""
-    from .integrators import dla
+    """A dla run (``methods.dla``); ``ce``: compiled user events (``node_events``)."""
+    from .methods import dla
 
     if principles.get(scene.principle).integrator(scene.convention) != "dla":
         raise PrincipleError(
@@ -68,8 +67,8 @@ def run_dla(scene, t0, t1, y_init, default_y0, p, n_steps, save, tol, max_iter,
 
 def run_dvi(scene, t0, t1, y_init, default_y0, p, n_steps, save, tol, max_iter,
             singular_tol, timeout, ce=None):
-    """A dvi run (``integrators.dvi``); ``ce``: compiled user events (``node_events``)."""
-    from .integrators import dvi
+    """A dvi run (``methods.dvi``); ``ce``: compiled user events (``node_events``)."""
+    from .methods import dvi
 
     if principles.get(scene.principle).integrator(scene.convention) != "dvi":
         raise PrincipleError(
@@ -122,7 +121,7 @@ def _no_events():
     """The event function of a run without events (never called): a compiled no-op."""
     import numba
 
-    from .integrators._common import RHS_SIGNATURE
+    from .methods._common import RHS_SIGNATURE
 
     return numba.cfunc(RHS_SIGNATURE, cache=True)(_nothing)
 
@@ -272,7 +271,7 @@ def saddle_condition(scene, kern, t, y, p) -> float:
 
 def degenerate_off_constraints(scene, kern, t, q, v, p) -> bool:
     """Whether dla should take node velocities from the constrained Legendre transform:
-    ||M^-1|| > 100 ||S^-1|| at the initial node (see ``integrators.dla``)."""
+    ||M^-1|| > 100 ||S^-1|| at the initial node (see ``methods.dla``)."""
     M, S = saddle(scene, kern, t, q, v, p)
     if not (np.all(np.isfinite(M)) and np.all(np.isfinite(S))):
         return False

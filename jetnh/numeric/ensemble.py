@@ -50,11 +50,10 @@ import numpy as np
 
 from ..errors import ConstraintError, IntegrationError, JetnhError
 from . import arguments, diagnosis, interrupt
-from . import integrators
-from .integrators import STATUS_TEXT
-from .integrators._common import (AT_T_EVAL, ENDPOINTS, EVENT, FINISHED, NONFINITE,
-                                  SINGULAR, entry_point)
-from .integrators.loop import Control, watch_of
+from . import methods
+from .methods import STATUS_TEXT
+from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, FINISHED, NONFINITE, SINGULAR, entry_point
+from .methods.loop import Control, watch_of
 from .options import fields_of, options
 
 PARALLEL = ("prange", "threads", "serial")
@@ -346,9 +345,9 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
         raise JetnhError(f"singular_tol must be in [0, 1), not {singular_tol}")
     budget = arguments.count(max_steps, "max_steps")
     limit = arguments.timeout(timeout)
-    method = integrators.method(method)
-    if integrators.METHODS[method] == "discrete":
-        runnable = [m for m, k in integrators.METHODS.items() if k != "discrete"]
+    method = methods.method(method)
+    if methods.METHODS[method] == "discrete":
+        runnable = [m for m, k in methods.METHODS.items() if k != "discrete"]
         raise JetnhError(f"ensembles run the Runge-Kutta methods {', '.join(runnable)}, not "
                          f"{method!r}")
     scene, Y0, P = resolve(scene, initial, params, project)
@@ -356,7 +355,7 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
     t0, t1 = scene.t_span
     if t_eval is not None:
         te = arguments.times(t_eval, t0, t1)
-        if not integrators.adaptive(method):
+        if not methods.adaptive(method):
             raise JetnhError("t_eval needs dense output: use dop853, dopri5 or radau (rk4 "
                              "gives save='final')")
         mode, n_times = AT_T_EVAL, te.shape[0]
@@ -380,7 +379,7 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
     rtol, atol_v = arguments.tolerances(rtol, atol, n)
     if method != "radau" and (newton_tol is not None or max_newton is not None):
         raise JetnhError(f"newton_tol and max_newton are options of radau, not {method}")
-    if integrators.adaptive(method):
+    if methods.adaptive(method):
         if n_steps is not None or h is not None:
             raise JetnhError(f"n_steps and h are options of fixed-step methods, not {method}")
         ctl = Control(rtol, atol_v, *arguments.step_limits(first_step, max_step), budget, 0)
@@ -390,17 +389,17 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
     halt = interrupt.flag()
     workers = int(workers or numba.config.NUMBA_NUM_THREADS)
     if method == "radau":
-        from .integrators import radau
+        from .methods import radau
 
         head = (kern.rhs_fp, scene.jacobian, kern.sing_fp, uev, t0, t1)
         tail = (ctl, radau.newton_options(newton_tol, max_newton), te, mode, watch, halt)
         drive = entry_point(radau.ensemble_solver(parallel=parallel == "prange"))
     else:
-        from .integrators import loop
+        from .methods import loop
 
         head = (kern.rhs_fp, kern.sing_fp, uev, t0, t1)
         tail = (ctl, te, mode, watch, halt)
-        drive = entry_point(loop.ensemble_solver(integrators.EXPLICIT[method],
+        drive = entry_point(loop.ensemble_solver(methods.EXPLICIT[method],
                                                  parallel=parallel == "prange"))
 
     def block(drive, a, b):

@@ -20,7 +20,7 @@ crossings from negative to positive, < 0 only from positive to negative, 0 on bo
 occurrence, at the located time; callables may carry ``terminal`` and ``direction`` as
 attributes.  Roots are found by Brent's method (scipy's ``brentq``, xtol = rtol = 4 eps)
 on the dense output of DOP853 / DOPRI5 / radau (the cubic Hermite interpolant for RK4),
-inside the compiled loop (``integrators._events``).  dla and dvi evaluate the events at
+inside the compiled loop (``methods._events``).  dla and dvi evaluate the events at
 every node as they go and end the run at the node after a terminal one; the roots are
 then located on the linear interpolant between the nodes (``discrete.node_events``).
 """
@@ -110,7 +110,7 @@ class CompiledEvents:
 
     def __init__(self, events, uev, python_funcs):
         self.events = events
-        from .integrators._common import FunctionAddress
+        from .methods._common import FunctionAddress
 
         self.uev = FunctionAddress(uev)         # cfunc (t, y, p, out), by address
         self.names = tuple(e.name for e in events)
@@ -141,7 +141,7 @@ def compile_events(scene, events: list[Event]) -> CompiledEvents:
     scene's conventions and cached on disk; callables compiled by numba)."""
     import numba
 
-    from .integrators._common import RHS_SIGNATURE
+    from .methods._common import RHS_SIGNATURE
 
     exprs = [(i, e.fun) for i, e in enumerate(events) if e.is_expression]
     calls = [(i, e.fun) for i, e in enumerate(events) if not e.is_expression]

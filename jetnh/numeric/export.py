@@ -15,7 +15,7 @@ import numpy as np
 import sympy as sp
 
 from ..errors import ArgumentError, JetnhError
-from ..jet import key_name
+from ..geometry.jet import key_name
 
 XARRAY_HINT = "pip install 'jetnh[xarray]'"
 

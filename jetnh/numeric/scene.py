@@ -37,18 +37,18 @@ import mpmath
 import numpy as np
 import sympy as sp
 
-from .. import dag, principles
-from ..constraints import System
+from ..algebra import dag
+from ..mechanics import principles
+from ..mechanics.system import System
 from ..errors import ConstraintError, JetnhError
-from ..jet import sympy_object
+from ..geometry.jet import sympy_object
 from . import arguments, interrupt
 from . import cache as _cache
 from . import codegen
-from . import diagnosis, discrete, integrators, scipy_backend
-from .integrators import STATUS_TEXT
-from .integrators._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, NONFINITE,
-                                  SINGULAR, STOPPED)
-from .integrators.loop import Control, watch_of
+from . import diagnosis, discrete, methods, scipy_backend
+from .methods import STATUS_TEXT
+from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, NONFINITE, SINGULAR, STOPPED
+from .methods.loop import Control, watch_of
 from .frozen import Frozen, FrozenDict, memo
 from .options import fields_of, options
 from .trajectory import Trajectory
@@ -360,8 +360,8 @@ class Scene(Frozen):
                                      first or None, mx, events, singular, singular_tol)
         if backend not in (None, "numba"):
             raise JetnhError(f"unknown backend {backend!r}; choose 'numba' or 'scipy'")
-        method = integrators.method(name)
-        if integrators.METHODS[method] == "discrete":
+        method = methods.method(name)
+        if methods.METHODS[method] == "discrete":
             self._unused(key, t_eval=t_eval, first_step=first_step, max_step=max_step)
             steps = arguments.fixed_steps(n_steps, h, t0, t1, key, budget)
             arguments.output_rows(steps, 3 * self.system.J.n + 2 * self.system.k, save)
@@ -384,7 +384,7 @@ class Scene(Frozen):
                              "Runge-Kutta methods follow the constraints to their tolerance")
         if method != "radau":
             self._unused(key, newton_tol=newton_tol, max_newton=max_newton)
-        if integrators.adaptive(method):
+        if methods.adaptive(method):
             self._unused(method, n_steps=n_steps, h=h)
             first, mx = arguments.step_limits(first_step, np.inf if max_step is None
                                               else max_step)
@@ -415,7 +415,7 @@ class Scene(Frozen):
         uev = ce.uev if ce is not None else kern.sing_fp
         halt = interrupt.flag()
         if method == "radau":
-            from .integrators import radau
+            from .methods import radau
 
             solve = kern.implicit()
             newton = radau.newton_options(newton_tol, max_newton)
@@ -425,7 +425,7 @@ class Scene(Frozen):
                                                y_init, p, ctl, newton, te, mode, watch, halt),
                                  halt, limit)
         else:
-            solve = integrators.explicit_solver(method)
+            solve = methods.explicit_solver(method)
             tic = time.perf_counter()
             out = interrupt.call(lambda: solve(kern.rhs_fp, kern.sing_fp, uev, t0, t1,
                                                y_init, p, ctl, te, mode, watch, halt),

@@ -10,8 +10,8 @@ import numpy as np
 
 from ..errors import JetnhError
 from . import diagnosis
-from .integrators import SCIPY_METHODS
-from .integrators._common import EVENT, SINGULAR
+from .methods import SCIPY_METHODS
+from .methods._common import EVENT, SINGULAR
 from .trajectory import Trajectory
 
 

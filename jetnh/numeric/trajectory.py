@@ -16,7 +16,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from ..errors import JetnhError
-from ..jet import key_name
+from ..geometry.jet import key_name
 from .frozen import Frozen, memo
 
 

@@ -5,12 +5,12 @@ from __future__ import annotations
 import sympy as sp
 
 from jetnh import JetSpace, System
-from jetnh.equations import chetaev_admissible, derive
-from jetnh.equivalence import compare
-from jetnh.forms import Form, d, interior
-from jetnh.proof import is_zero
-from jetnh.zero import vanishes
-from jetnh.variations import defect, euler_of_constraints, make
+from jetnh.mechanics.equations import chetaev_admissible, derive
+from jetnh.mechanics.equivalence import compare
+from jetnh.geometry.forms import Form, d, interior
+from jetnh.mechanics.proof import is_zero
+from jetnh.algebra.zero import vanishes
+from jetnh.mechanics.variations import defect, euler_of_constraints, make
 
 from .items import ERRATUM, NOT_CHECKABLE, VERIFIED, Outcome, eqs, item
 
@@ -107,7 +107,7 @@ def _c_use6(ctx):
     J, lams = e.J, e.multipliers
     # replace lambda_a [f^a]_s eta^s by -lambda_a D(f_qdot eta) (6), integrate by parts:
     # +lambda_dot_a f_qdot eta; so E_s eta^s becomes [L]_s eta^s
-    from jetnh.variations import eta_symbols
+    from jetnh.mechanics.variations import eta_symbols
     eta = eta_symbols(s.J)
     Jf = J
     A = s.jacobian

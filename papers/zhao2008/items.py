@@ -5,7 +5,7 @@ read the way the paper defines them), derives jetnh's own version with its machi
 and returns a status: "verified" (the derivation agrees), "erratum" (it does not; the
 derived form is given) or "not-checkable" (a definition, a notation or a choice).
 Decisions on general statements use generic systems (undefined L, f, phi, B) and exact
-zero tests (``jetnh.proof.is_zero``); decisions on the examples use the paper's systems;
+zero tests (``jetnh.mechanics.proof.is_zero``); decisions on the examples use the paper's systems;
 every erratum also has a concrete witness evaluated at random states.
 """
 
@@ -17,13 +17,12 @@ from functools import cached_property
 import sympy as sp
 
 from jetnh import JetSpace, System
-from jetnh.equations import action_variation, chetaev_admissible, derive, multiplier_symbols
-from jetnh.equivalence import frobenius_T
+from jetnh.mechanics.equations import action_variation, chetaev_admissible, derive, multiplier_symbols
+from jetnh.mechanics.equivalence import frobenius_T
 from jetnh.models import appell_hamel, rolling_disk
-from jetnh.proof import generic_system, is_zero
-from jetnh.zero import vanishes
-from jetnh.variations import (Variation, defect, euler_of_constraints, identity_residual,
-                              make, printed_identity_residual, reduced_identity_residual)
+from jetnh.mechanics.proof import generic_system, is_zero
+from jetnh.algebra.zero import vanishes
+from jetnh.mechanics.variations import Variation, defect, euler_of_constraints, identity_residual, make, printed_identity_residual, reduced_identity_residual
 
 VERIFIED, ERRATUM, NOT_CHECKABLE = "verified", "erratum", "not-checkable"
 
@@ -191,7 +190,7 @@ def _eq4(ctx):
 @item("(5)")
 def _eq5(ctx):
     return Outcome(NOT_CHECKABLE, "Definition of the vakonomic variation: "
-                   "jetnh.variations.make(system, 'vakonomic') (c = 0, condition delta f = 0).")
+                   "jetnh.mechanics.variations.make(system, 'vakonomic') (c = 0, condition delta f = 0).")
 
 
 def _reduced(ctx, kind, extra):
@@ -277,7 +276,7 @@ def _eq11(ctx):
 @item("(12)")
 def _eq12(ctx):
     return Outcome(NOT_CHECKABLE, "Definition of the composite action; "
-                   "jetnh.equations.action_variation works with its integrand L + lambda_a f^a.")
+                   "jetnh.mechanics.equations.action_variation works with its integrand L + lambda_a f^a.")
 
 
 def _action13(s, kind):

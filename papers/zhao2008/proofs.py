@@ -1,7 +1,7 @@
 """Symbolic proofs of the paper's general identities for generic systems, n <= 4, k < n.
 
 Each proof uses undefined functions L(t, q, qdot), f^a(t, q, qdot), phi^alpha(t, q, qdot^mu)
-or B^alpha_rho(t, q) (``jetnh.proof.generic_system``), so it holds for every smooth system
+or B^alpha_rho(t, q) (``jetnh.mechanics.proof.generic_system``), so it holds for every smooth system
 of that size, and records the steps it used.  Identities: (3), (6), (8), (10), (11), (13),
 (19), the passage (29) -> (30) -> (31), (32) and (39).
 """
@@ -12,13 +12,11 @@ import time
 
 import sympy as sp
 
-from jetnh.equations import (action_variation, chetaev_admissible, derive, multiplier_symbols,
-                             null_basis)
-from jetnh.equivalence import frobenius_T, obstructions
-from jetnh.frobenius import frobenius
-from jetnh.proof import Proof, generic_system
-from jetnh.variations import (Variation, defect, identity_residual, make,
-                              printed_identity_residual, reduced_identity_residual)
+from jetnh.mechanics.equations import action_variation, chetaev_admissible, derive, multiplier_symbols, null_basis
+from jetnh.mechanics.equivalence import frobenius_T, obstructions
+from jetnh.geometry.frobenius import frobenius
+from jetnh.mechanics.proof import Proof, generic_system
+from jetnh.mechanics.variations import Variation, defect, identity_residual, make, printed_identity_residual, reduced_identity_residual
 
 
 def _arbitrary(s, kind):

@@ -76,7 +76,7 @@ def write(results: dict, path: pathlib.Path) -> pathlib.Path:
     lines += ["", "## Symbolic proofs for generic systems", "",
               "Undefined functions L(t, q, qdot), f^a, phi^alpha, B^alpha_rho; exact zero tests "
               "after rewriting derivatives of undefined functions by slot "
-              "(`jetnh.proof.canonical`).", "",
+              "(`jetnh.mechanics.proof.canonical`).", "",
               "| identity | (n, k) proven | steps |", "|---|---|---|"]
     by_stmt: dict = {}
     for p in proofs:

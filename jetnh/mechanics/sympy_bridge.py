@@ -21,9 +21,9 @@ from __future__ import annotations
 
 import sympy as sp
 
-from .constraints import System
-from .errors import JetnhError, JetSpaceError
-from .jet import JetSpace
+from .system import System
+from ..errors import JetnhError, JetSpaceError
+from ..geometry.jet import JetSpace
 
 
 def _coordinates(lm) -> JetSpace:

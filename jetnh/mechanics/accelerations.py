@@ -1,7 +1,7 @@
 """Accelerations: every principle's equations as one linear system in q'' and the
 multiplier rates, solved by blocks (what ``Equations.accelerations()`` returns).
 
-The rows ``jetnh.equations`` derives from (13) are affine in the accelerations and the
+The rows ``jetnh.mechanics.equations`` derives from (13) are affine in the accelerations and the
 multiplier rates.  With::
 
     [L]_s   = r_s - H_sr q''^r           H = d2L / dqdot^s dqdot^r
@@ -47,8 +47,8 @@ from sympy.core.cache import clear_cache
 from sympy.core.function import AppliedUndef
 from sympy.matrices.utilities import dotprodsimp
 
-from . import linalg, zero
-from .errors import LagrangianError
+from ..algebra import linalg, zero
+from ..errors import LagrangianError
 
 KAPPA = ("none", "multipliers", "momenta")
 _PARTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
@@ -68,7 +68,7 @@ def euler_parts(J, F, hessian: bool = True) -> EulerParts:
 
     The derivatives are taken by symengine (tens of times faster than sympy's diff on
     a long chain's Lagrangian) and returned as sympy expressions in the original
-    symbols; expressions of undefined functions (``jetnh.proof``) stay with sympy.
+    symbols; expressions of undefined functions (``jetnh.mechanics.proof``) stay with sympy.
     """
     n = J.n
     if F.has(AppliedUndef, sp.Derivative, sp.Subs):

@@ -16,8 +16,8 @@ from dataclasses import dataclass, field
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
-from .constraints import System
-from .jet import JetSpace
+from .system import System
+from ..geometry.jet import JetSpace
 
 
 def canonical(expr) -> sp.Expr:

@@ -3,7 +3,7 @@
 A ``Principle`` says how its equations of motion are built from the composite action (12)
 A = int (L + lambda_a f^a) dt of Zhao et al. (2008), and what they carry:
 
-- ``variation``: the variation operator delta it varies with (``jetnh.variations``);
+- ``variation``: the variation operator delta it varies with (``jetnh.mechanics.variations``);
 - ``restricted``: the conventions in which eta is restricted to the Chetaev subspace
   ker(df/dqdot) (eta^alpha = Phi^alpha_mu eta^mu) before the coefficients of the eta's
   are taken; otherwise every eta^s counts as independent (the paper's convention);
@@ -13,7 +13,7 @@ A = int (L + lambda_a f^a) dt of Zhao et al. (2008), and what they carry:
   dependent coordinates (lambda_x: states of the motion; nu_x: the algebraic reactions of
   Chetaev's multiplier form); a principle without multipliers varies L alone;
 - ``kappa``: how the multipliers weigh the constraint Hessians in the acceleration rows
-  (``jetnh.accelerations``);
+  (``jetnh.mechanics.accelerations``);
 - ``discrete``: its structure-preserving discrete integrator, where there is one, for its
   equations in the ``discrete_conventions``.
 
@@ -48,7 +48,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from .errors import PrincipleError
+from ..errors import PrincipleError
 
 CONVENTIONS = ("paper", "imposed")
 #: prefixes of the symbols jetnh names after a coordinate q: lambda_q, nu_q, eta_q
@@ -201,7 +201,7 @@ def _unknown(principle):
                              f"registered principles; use one of {PRINCIPLES}")
     if not isinstance(principle, str):
         raise PrincipleError(
-            f"a principle is a name (str) or a jetnh.principles.Principle, not a "
+            f"a principle is a name (str) or a jetnh.mechanics.principles.Principle, not a "
             f"{type(principle).__name__} ({principle!r:.80}); choose one of {PRINCIPLES}")
     raise PrincipleError(f"unknown principle {principle!r:.80}; choose one of {PRINCIPLES} "
                          f"(aliases {aliases})")

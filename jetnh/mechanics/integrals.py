@@ -6,7 +6,7 @@ monomial of degree <= ``degree`` in the independent velocities (and, for the vak
 Hoelder principles, the multipliers), whose total derivative vanishes on the equations on
 the constraint manifold (Olver 1993, section 4.3: first integrals as the kernel of the
 total derivative on the solution manifold).  The condition D I = 0 is linear in c and is
-solved by ``jetnh.ansatz``: the constants c_j may depend on the system's parameters
+solved by ``jetnh.algebra.ansatz``: the constants c_j may depend on the system's parameters
 (polynomially in them and in functions of them such as sin(alpha), after clearing
 denominators), and the basis is reduced over the rational functions of the parameters.
 Every returned I is then proved: D I = 0 exactly (cancel) where the equations are rational,
@@ -22,12 +22,13 @@ from fractions import Fraction
 import mpmath
 import sympy as sp
 
-from . import ansatz, dag, principles
-from .ansatz import exponents as _exponents
-from .ansatz import monomial as _mono
-from .ansatz import power_product
-from .constraints import System
-from .errors import ArgumentError, JetnhError
+from ..algebra import ansatz, dag
+from . import principles
+from ..algebra.ansatz import exponents as _exponents
+from ..algebra.ansatz import monomial as _mono
+from ..algebra.ansatz import power_product
+from .system import System
+from ..errors import ArgumentError, JetnhError
 from .principles import Principle
 
 DPS = ansatz.DPS

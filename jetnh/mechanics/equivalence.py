@@ -24,10 +24,11 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
-from . import dag, linalg, principles, singular, zero
-from .constraints import System
-from .errors import PrincipleError
-from .frobenius import bracket_components
+from ..algebra import dag, linalg, singular, zero
+from . import principles
+from .system import System
+from ..errors import PrincipleError
+from ..geometry.frobenius import bracket_components
 
 _POINTS = 4
 
@@ -107,12 +108,12 @@ class Comparison:
                 f"singular=<{len(self.singular)}{': ' + self.where() if self.singular else ''}>)")
 
     def _repr_html_(self):
-        from .display import comparison_html
+        from ..display import comparison_html
 
         return comparison_html(self)
 
     def _repr_latex_(self):
-        from .display import comparison_latex
+        from ..display import comparison_latex
 
         return comparison_latex(self)
 
@@ -120,7 +121,7 @@ class Comparison:
 def singular_set(system: System, principle: str, convention: str = "paper") -> list:
     """Where ``principle``'s acceleration system (the linear system in q'' and the
     multiplier rates) is singular or undefined, on the constraints: the factors
-    (``jetnh.singular``) of what its block solve divides by (``linalg.divisors``: the
+    (``jetnh.algebra.singular``) of what its block solve divides by (``linalg.divisors``: the
     determinants of the split and of the reduced mass matrix for blocks up to 6, the LU
     pivots, whose product is the determinant, for larger ones), of det(df/dqdot^alpha)
     (k <= 3), and of the denominators and root, log, ... arguments of the solved
@@ -157,7 +158,7 @@ def agrees(system: System, expr, derived=None, points: int = _POINTS, seed: int 
 def compare(system: System, first: str, second: str, convention: str = "paper") -> Comparison:
     """Do ``first`` and ``second`` give the same coordinate accelerations?  The verdict
     holds off ``Comparison.singular`` (see ``singular_set``).  The principles are given
-    by name or alias (``jetnh.principles``) and reported by their canonical names."""
+    by name or alias (``jetnh.mechanics.principles``) and reported by their canonical names."""
     names = [principles.canonical(p) for p in (first, second)]
     if names[0] == names[1]:
         raise PrincipleError(f"compare needs two different principles; {first!r} and "
@@ -220,7 +221,7 @@ def defect_along(system: System, first: str, second: str, samples, convention: s
     missing = [s.name for s in syms if s.name not in data
                and s not in (e1.multipliers + e2.multipliers)]
     if missing:
-        from .errors import JetnhError
+        from ..errors import JetnhError
         raise JetnhError(f"the samples lack values for {missing}; pass every coordinate, "
                          "velocity and parameter (e.g. traj.as_dict() plus parameters)")
     n = len(next(iter(data.values())))

@@ -33,7 +33,7 @@ lambdadot = R for the multiplier principles) is a field whose prolongation (Olve
 Thm 2.36) annihilates these equations on their solutions.  ``is_noether`` decides which
 Lie symmetries are Noether ones for a principle (a gauge exists).
 
-All three solve a linear ansatz with ``jetnh.ansatz`` (constants may depend on the
+All three solve a linear ansatz with ``jetnh.algebra.ansatz`` (constants may depend on the
 parameters), and every result is proved: the identity holds exactly (cancel) where the
 system is rational, at 20 random points at 50 digits always, and D I = 0 on the
 principle's equations.
@@ -49,10 +49,10 @@ from types import MappingProxyType
 import mpmath
 import sympy as sp
 
-from . import ansatz, dag
-from .ansatz import exponents, monomial
-from .errors import ArgumentError, JetnhError
-from .fields import prolong
+from ..algebra import ansatz, dag
+from ..algebra.ansatz import exponents, monomial
+from ..errors import ArgumentError, JetnhError
+from ..geometry.fields import prolong
 from .integrals import Sampler, check_arguments, coefficient_functions, prove_conserved
 
 _WIDTH = 72             # characters of each expression in a repr

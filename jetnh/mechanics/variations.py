@@ -21,9 +21,9 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
-from . import dag, linalg
-from .constraints import System
-from .errors import PrincipleError
+from ..algebra import dag, linalg
+from .system import System
+from ..errors import PrincipleError
 from .principles import named
 
 KINDS = ("free", "vakonomic", "holder", "suslov")
@@ -65,7 +65,7 @@ class Variation:
 
     def as_field(self):
         """The variation as a vector field on the jet bundle (components on q and qdot)."""
-        from .fields import VectorField
+        from ..geometry.fields import VectorField
 
         comps = dict(zip(self.J.q, self.eta))
         comps.update(zip(self.J.qd, self.velocity_components()))

@@ -9,7 +9,7 @@ The geometry of constrained mechanics on J^k M (M = R x Q) is written with forms
 * the **constraint forms** omega^alpha = dq^alpha - B^alpha_mu dq^mu - B^alpha_0 dt of affine
   constraints qdot^alpha = B^alpha_mu(t, q) qdot^mu + B^alpha_0(t, q) (the paper's eqs.
   (33)-(34), with q^0 = t), whose integrability is decided by Frobenius
-  (``jetnh.frobenius``);
+  (``jetnh.geometry.frobenius``);
 * Cartan calculus (``d``, ``interior``, ``lie_derivative``, ``pullback``) for checking the
   identities the rest of the framework relies on.
 
@@ -40,8 +40,8 @@ from typing import Mapping
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
-from . import dag, zero
-from .errors import ConstraintError, JetSpaceError
+from ..algebra import dag, zero
+from ..errors import ConstraintError, JetSpaceError
 from .jet import JetSpace, sympy_object
 
 __all__ = [
@@ -504,7 +504,7 @@ def interior(X, form: Form) -> Form:
     """The interior product i_X form (contraction in the first slot).
 
     ``X`` is a mapping {coordinate Symbol: component} or any object with a ``.components``
-    mapping (``jetnh.fields.VectorField``).  i_X of a 0-form is the zero form of degree -1,
+    mapping (``jetnh.geometry.fields.VectorField``).  i_X of a 0-form is the zero form of degree -1,
     so that the antiderivation rule i_X(a ^ b) = i_X a ^ b + (-1)^p a ^ i_X b holds
     degree-wise.
     """

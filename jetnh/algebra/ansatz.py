@@ -34,7 +34,7 @@ import mpmath
 import sympy as sp
 
 from . import dag
-from .errors import ArgumentError, JetnhError, JetnhWarning
+from ..errors import ArgumentError, JetnhError, JetnhWarning
 
 BUDGET = 400            # unknowns of one linear solve
 DPS = 50                # digits of the numeric route

@@ -25,9 +25,9 @@ from collections.abc import Mapping, Set
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
-from . import dag
-from .errors import ConstraintError, JetnhWarning, JetSpaceError, LagrangianError
-from .jet import key_name
+from ..algebra import dag
+from ..errors import ConstraintError, JetnhWarning, JetSpaceError, LagrangianError
+from ..geometry.jet import key_name
 
 # Functions that are not differentiable where their argument crosses a threshold.  Abs
 # and sign are rewritten smoothly (sqrt(u**2), u/sqrt(u**2)), whose kink u = 0 the

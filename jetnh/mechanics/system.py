@@ -21,9 +21,10 @@ from functools import cached_property
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
-from . import dag, inputs, linalg
-from .errors import ConstraintError, JetnhWarning, JetSpaceError, LagrangianError
-from .jet import JetSpace, key_name
+from ..algebra import dag, linalg
+from . import inputs
+from ..errors import ConstraintError, JetnhWarning, JetSpaceError, LagrangianError
+from ..geometry.jet import JetSpace, key_name
 from .principles import NAMED, PRINCIPLES  # noqa: F401 -- PRINCIPLES kept importable here
 
 @dataclass(frozen=True)
@@ -486,8 +487,8 @@ class System:
 
     # ------------------------------------------------------------------ classification
     def frobenius(self):
-        """The Frobenius test of the constraints (see ``jetnh.frobenius``)."""
-        from .frobenius import FrobeniusResult, frobenius_from_constraints
+        """The Frobenius test of the constraints (see ``jetnh.geometry.frobenius``)."""
+        from ..geometry.frobenius import FrobeniusResult, frobenius_from_constraints
 
         if not self.k:                      # no constraints: trivially integrable
             return FrobeniusResult(True, {}, "brackets")
@@ -536,23 +537,23 @@ class System:
         return self.dissipation if self.dissipation != 0 else None
 
     # ------------------------------------------------------------------ equations
-    #: the derivation behind ``equations``: ``jetnh.equations.derive``, bound when that
+    #: the derivation behind ``equations``: ``jetnh.mechanics.equations.derive``, bound when that
     #: module loads (``import jetnh`` loads it), so that the derivation depends on System
     #: and System not on it
     _derive = None
 
     def equations(self, principle: str, form: str | None = None, convention: str = "paper"):
         """The equations of motion under ``principle`` (a name, an alias or a
-        ``jetnh.principles.Principle``) in ``form`` (see ``jetnh.equations``)."""
+        ``jetnh.mechanics.principles.Principle``) in ``form`` (see ``jetnh.mechanics.equations``)."""
         return self._derive(principle, form=form, convention=convention)
 
     def _repr_html_(self):
-        from .display import system_html
+        from ..display import system_html
 
         return system_html(self)
 
     def _repr_latex_(self):
-        from .display import system_latex
+        from ..display import system_latex
 
         return system_latex(self)
 

@@ -1,7 +1,7 @@
 """Vector fields on jet space: action on functions, Lie bracket, total derivative, prolongation.
 
 A :class:`VectorField` is an immutable value ``sum_i X^i d/dz^i`` whose coordinates z^i are
-the symbols of a :class:`~jetnh.jet.JetSpace` (time t, coordinates q^s, their jets
+the symbols of a :class:`~jetnh.geometry.jet.JetSpace` (time t, coordinates q^s, their jets
 q^s_(k), fields and their jets) and whose components X^i are sympy expressions on it.
 
 The module provides what the variation operators of ``variations.py`` are built from:
@@ -30,8 +30,8 @@ from types import MappingProxyType
 
 import sympy as sp
 
-from . import dag
-from .errors import JetSpaceError
+from ..algebra import dag
+from ..errors import JetSpaceError
 from .jet import JetSpace
 
 __all__ = ["VectorField", "total_derivative_field", "prolong", "vertical_field",

@@ -12,7 +12,7 @@ used; with ``convention="imposed"`` the variation's Chetaev condition restricts 
 eta^alpha = Phi^alpha_mu eta^mu first.  The coefficients are taken with the Euler
 operator in the eta fields, so no printed formula is used.
 
-Principles and forms (paper equation numbers; the registry is ``jetnh.principles``):
+Principles and forms (paper equation numbers; the registry is ``jetnh.mechanics.principles``):
 
 - vakonomic: "multiplier" (15), "explicit" (17), "reduced" (18), "embedded" (20);
   affine: (36), (37).  The imposed convention gives the same equations (normal extremals).
@@ -38,14 +38,15 @@ from functools import cached_property
 
 import sympy as sp
 
-from . import accelerations, dag, linalg, principles
-from .constraints import System
-from .errors import JetnhWarning, PrincipleError
+from . import accelerations, principles
+from ..algebra import dag, linalg
+from .system import System
+from ..errors import JetnhWarning, PrincipleError
 from .principles import CONVENTIONS, Form, Principle
 from .principles import multiplier_symbols  # noqa: F401 -- kept importable from here
 from .variations import Variation, jet_space, make
 
-#: each principle's forms (``jetnh.principles``), by canonical name
+#: each principle's forms (``jetnh.mechanics.principles``), by canonical name
 FORMS = {p.name: tuple(f.name for f in p.forms) for p in principles.REGISTRY}
 
 
@@ -125,7 +126,7 @@ class Equations:
     ``multipliers`` are the Lagrange multipliers that are states (vakonomic, Hoelder,
     Suslov); ``reactions`` are the algebraic multipliers of Chetaev's multiplier form.
     ``accelerations()`` solves the principle (not merely this form) for the
-    accelerations and multiplier rates (``jetnh.accelerations``).  Both the expressions
+    accelerations and multiplier rates (``jetnh.mechanics.accelerations``).  Both the expressions
     and the accelerations are computed on first use.
     """
 
@@ -180,14 +181,14 @@ class Equations:
         return f"<Equations {self.principle} ({self.form}, {self.convention} convention) {self.paper}>"
 
     def shared_form(self):
-        """The expressions in shared form (``jetnh.shared``): named intermediate
+        """The expressions in shared form (``jetnh.algebra.shared``): named intermediate
         quantities, linear in the shared size, never flattened."""
-        from .shared import shared_form
+        from ..algebra.shared import shared_form
 
         return shared_form([(None, e) for e in self.expressions])
 
     def __str__(self):
-        from .display import TEXT_BUDGET
+        from ..display import TEXT_BUDGET
 
         head = f"{self.principle} equations, {self.form} form {self.paper}".rstrip()
         return head + "\n" + self.shared_form().text(
@@ -198,12 +199,12 @@ class Equations:
         return self.shared_form().latex(self.J)
 
     def _repr_latex_(self):
-        from .display import equations_latex
+        from ..display import equations_latex
 
         return equations_latex(self)
 
     def _repr_html_(self):
-        from .display import equations_html
+        from ..display import equations_html
 
         return equations_html(self)
 

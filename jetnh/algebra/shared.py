@@ -1,7 +1,7 @@
 """Large expressions in shared form: named intermediate quantities, the way a paper
 writes them ("x'' = u_7 / u_3, where u_1 = ..., u_2 = ...").
 
-Solved equations share their subexpressions (``jetnh.dag``): as trees they are
+Solved equations share their subexpressions (``jetnh.algebra.dag``): as trees they are
 exponentially larger than as graphs, so they are never printed flat.  ``shared_form``
 walks the graph of the expressions once and names a subexpression when
 

@@ -52,8 +52,8 @@ from typing import Sequence
 
 import sympy as sp
 
-from . import dag, zero
-from .errors import ConstraintError
+from ..algebra import dag, zero
+from ..errors import ConstraintError
 from .forms import Form, _canon, _order, affine_coefficients, d, wedge, zero_residual
 from .jet import JetSpace
 
@@ -87,7 +87,7 @@ class FrobeniusResult:
         return self.integrable
 
     def __repr__(self):
-        from .singular import label
+        from ..algebra.singular import label
 
         shown = [f"{k}: {label(v, 60) if isinstance(v, sp.Basic) else str(v)[:300]}"
                  for k, v in list(self.obstructions.items())[:4]]
@@ -101,7 +101,7 @@ def decide_zero(expr, *, numeric: bool = False, simplify: bool = True, samples: 
                 seed: int = 0, tol: float = 1e-9):
     """None when ``expr`` is (decided) zero, else the nonzero expression to report.
 
-    :func:`jetnh.forms.zero_residual` with ``simplify`` on by default: expand -> one
+    :func:`jetnh.geometry.forms.zero_residual` with ``simplify`` on by default: expand -> one
     numeric evaluation as a witness of non-zeroness -> numerator over a common
     denominator (rational expressions) -> ``sympy.simplify`` (only for terms still
     numerically zero) or, with ``numeric=True``, evaluation at ``samples`` points.

@@ -20,8 +20,8 @@ from typing import Iterable
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
-from . import dag
-from .errors import JetSpaceError
+from ..algebra import dag
+from ..errors import JetSpaceError
 
 _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9]*(?:_[A-Za-z0-9]+)*$")
 _JET_SUFFIX = re.compile(r"^(.+)_(t+)$")
