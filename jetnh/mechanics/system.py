@@ -72,6 +72,10 @@ class System:
     Strings are never parsed.  Every refusal is a JetnhError saying what to write instead.
     """
 
+    #: for a System read from a Kane model (``from_mechanics``): the map between its
+    #: generalized speeds and the velocities (``jetnh.mechanics.kane_bridge.Speeds``)
+    speeds = None
+
     def __init__(self, J: JetSpace, L, constraints=(), dependent=None, branch: int | None = None,
                  defaults=None, name: str = "", forces=None, dissipation=None):
         if not isinstance(J, JetSpace):
