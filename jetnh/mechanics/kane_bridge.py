@@ -167,10 +167,10 @@ class _Reader:
                 "the kinematic differential equations do not determine the speeds from the "
                 "velocities (and back) at a random state; give one speed per independent "
                 "velocity combination")
-        self.u_of_qd = dict(zip(model.u, k_u.LUsolve(-(k_qd * sp.Matrix(qd) + f_k))))
+        self.u_of_qd = dict(zip(model.u, _solve(k_u, -(k_qd * sp.Matrix(qd) + f_k))))
         self.u_of_qd.update(dict.fromkeys(model.u_aux, 0))
         syms = [sp.Symbol(u.func.__name__) for u in model.u]
-        qd_of_u = k_qd.LUsolve(-(k_u * sp.Matrix(syms) + f_k))
+        qd_of_u = _solve(k_qd, -(k_u * sp.Matrix(syms) + f_k))
         self.speeds = Speeds(self.J, tuple(syms),
                              tuple(self.jet(self.u_of_qd[u], f"the speed {u}") for u in model.u),
                              tuple(self.J.from_dynamic(e) for e in qd_of_u))
@@ -190,6 +190,17 @@ class _Reader:
         """The inertial components of a Vector, as jet expressions."""
         N = self.model.frame
         return sp.Matrix([self.jet(c, what) for c in vec.to_matrix(N)])
+
+
+#: entries of the solved kinematic equations up to this many operations are cancelled
+CANCEL_OPS = 400
+
+
+def _solve(A: sp.Matrix, b: sp.Matrix) -> list:
+    """A^-1 b by LU, small entries cancelled (LU's pivots divide by functions such as
+    sin(q) that cancel in the result: left in, they would be spurious singularities)."""
+    x = A.LUsolve(b)
+    return [sp.cancel(e) if sp.count_ops(e) <= CANCEL_OPS else e for e in x]
 
 
 def _singular(M: sp.Matrix) -> bool:
