@@ -356,3 +356,17 @@ def test_refusals_name_the_fix():
     # no bodies yet
     with pytest.raises(JetnhError, match="kanes_equations"):
         jn.from_mechanics(KanesMethod(N, [q], [u], kd_eqs=[q.diff() - u]))
+
+
+def test_dynamicsymbols_name_their_jet_coordinates():
+    from jetnh.geometry.jet import key_name
+
+    x = dynamicsymbols("x")
+    assert [key_name(k) for k in (x, x.diff(), x.diff(dynamicsymbols._t, 2), sp.Symbol("x"),
+                                  "x_t")] == ["x", "x_t", "x_tt", "x", "x_t"]
+    y = sp.Function("y")
+    assert key_name(y(sp.Symbol("s"))) is None and key_name(x + 1) is None and key_name(3) is None
+    # the refusal of a key that names nothing says what keys are
+    s = jn.System(jn.JetSpace("x"), sp.Symbol("x_t") ** 2 / 2)
+    with pytest.raises(JetnhError, match="keyed by Symbol, by name or by dynamicsymbol"):
+        jn.Scene(s, "chetaev", initial={x + 1: 0.0, "x_t": 1.0})
