@@ -309,7 +309,7 @@ def lagrangian_and_forces(reader: _Reader):
     for b in reader.model.bodies:
         what = f"the body {b.name}"
         _check_point(reader, b.masscenter, what)
-        if hasattr(b, "frame") and not _is_particle(b):
+        if not _is_particle(b):
             _check_frame(reader, b.frame, what)
         T += reader.jet(b.kinetic_energy(N), f"the kinetic energy of {b.name}")
     V = sp.S.Zero

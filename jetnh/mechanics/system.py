@@ -533,8 +533,10 @@ class System:
 
     def with_split(self, dependent) -> "System":
         """The same system with another split."""
-        return System(self.J, self.L, self.constraints, dependent, self._branch,
-                      self.defaults, self.name, self.forces, self._dissipation_arg)
+        out = System(self.J, self.L, self.constraints, dependent, self._branch,
+                     self.defaults, self.name, self.forces, self._dissipation_arg)
+        out.speeds = self.speeds
+        return out
 
     @property
     def _dissipation_arg(self):

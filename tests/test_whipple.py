@@ -1,0 +1,49 @@
+"""The Whipple bicycle (Meijaard et al. 2007) written for KanesMethod, imported into jetnh:
+jetnh's Chetaev accelerations agree with Kane's equations (``test_kane.agreement``) at
+random states on the constraints (the pitch solved from the front contact's height), with
+the benchmark's parameters."""
+
+from __future__ import annotations
+
+import mpmath
+import pytest
+import sympy as sp
+
+import jetnh as jn
+from jetnh.algebra import dag
+from jetnh.models.whipple import benchmark_parameters, whipple_kane
+from test_kane import RTOL, agreement
+
+pytestmark = pytest.mark.slow
+
+
+@pytest.fixture(scope="module")
+def bicycle():
+    km = whipple_kane()
+    return km, jn.from_mechanics(km)
+
+
+def pitch_on_the_ground(km, system, params):
+    """A sampler of configurations: random yaw, roll, steer, wheel angles and contact
+    point; the pitch q4 from the configuration constraint (Newton, 30 digits)."""
+    J = system.J
+    height = J.from_dynamic(km._f_h[0]).xreplace(params)
+    q4 = J.q[5]
+
+    def sample(rnd):
+        qs = [rnd.uniform(-1, 1) for _ in J.q]
+        qs[3], qs[6] = rnd.uniform(-0.3, 0.3), rnd.uniform(-0.4, 0.4)    # roll, steer
+        rest = {q: sp.Float(v, 30) for q, v in zip(J.q, qs) if q != q4}
+        f = sp.lambdify(q4, height.xreplace(rest), "mpmath")
+        with mpmath.workdps(30):
+            qs[5] = mpmath.findroot(f, 0)
+        return qs
+    return sample
+
+
+def test_whipple_bicycle_agrees_with_kane(bicycle):
+    km, s = bicycle
+    assert len(s.constraints) == 5 and len(s.independent_velocities) == 3
+    params = {sp.Symbol(k): v for k, v in benchmark_parameters().items()}
+    err = agreement(s, km, params, sample_q=pitch_on_the_ground(km, s, params), points=2)
+    assert err < RTOL
