@@ -24,19 +24,20 @@ def bicycle():
 
 
 def pitch_on_the_ground(km, system, params):
-    """A sampler of configurations: random yaw, roll, steer, wheel angles and contact
-    point; the pitch q4 from the configuration constraint (Newton, 30 digits)."""
+    """A sampler of configurations: random contact point, yaw, wheel angles, roll q2 and
+    steer q5; the pitch q4 from the configuration constraint (secant, 30 digits)."""
     J = system.J
     height = J.from_dynamic(km._f_h[0]).xreplace(params)
-    q4 = J.q[5]
+    at = {q.name: i for i, q in enumerate(J.q)}
+    q4 = J.q[at["q4"]]
 
     def sample(rnd):
         qs = [rnd.uniform(-1, 1) for _ in J.q]
-        qs[3], qs[6] = rnd.uniform(-0.3, 0.3), rnd.uniform(-0.4, 0.4)    # roll, steer
+        qs[at["q2"]], qs[at["q5"]] = rnd.uniform(-0.3, 0.3), rnd.uniform(-0.4, 0.4)
         rest = {q: sp.Float(v, 30) for q, v in zip(J.q, qs) if q != q4}
         f = sp.lambdify(q4, height.xreplace(rest), "mpmath")
         with mpmath.workdps(30):
-            qs[5] = mpmath.findroot(f, 0)
+            qs[at["q4"]] = mpmath.findroot(f, 0)
         return qs
     return sample
 
