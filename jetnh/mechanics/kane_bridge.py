@@ -33,7 +33,7 @@ import numpy as np
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
-from ..algebra import dag
+from ..algebra import dag, linalg
 from ..errors import JetnhError, JetSpaceError
 from ..geometry.jet import JetSpace, key_name
 
@@ -192,15 +192,10 @@ class _Reader:
         return sp.Matrix([self.jet(c, what) for c in vec.to_matrix(N)])
 
 
-#: entries of the solved kinematic equations up to this many operations are cancelled
-CANCEL_OPS = 400
-
-
 def _solve(A: sp.Matrix, b: sp.Matrix) -> list:
-    """A^-1 b by LU, small entries cancelled (LU's pivots divide by functions such as
-    sin(q) that cancel in the result: left in, they would be spurious singularities)."""
-    x = A.LUsolve(b)
-    return [sp.cancel(e) if sp.count_ops(e) <= CANCEL_OPS else e for e in x]
+    """A^-1 b without spurious singularities (``linalg.solve``: the only denominator of
+    a small system is det A, so u3/cos(q2) is not written over sin(q2))."""
+    return list(linalg.solve(A, b))
 
 
 def _singular(M: sp.Matrix) -> bool:
