@@ -195,7 +195,7 @@ def timeout(value) -> float | None:
 
 
 def keyed_or_sequence(value, names, defaults, what, order_name) -> tuple[np.ndarray, dict]:
-    """Values for ``names``: a dict keyed by Symbol or name (missing keys keep
+    """Values for ``names``: a dict keyed by Symbol, name or dynamicsymbol (missing keys keep
     ``defaults``; returns the given ones too) or a sequence in the order ``names``."""
     if isinstance(value, dict):
         given = {}
