@@ -352,6 +352,25 @@ def test_refusals_name_the_fix():
     km.kanes_equations([Particle("E", E, m)], [])
     with pytest.raises(JetnhError, match="not the time derivative of its position"):
         jn.from_mechanics(km)
+    # sympy's minimal rolling disc: the contact point set at rest builds the rolling
+    # into the kinematics, which then hold only while rolling
+    q1, q2, q3 = dynamicsymbols("q1:4")
+    w1, w2, w3 = dynamicsymbols("w1:4")
+    Yf = N.orientnew("Yf", "Axis", [q1, N.z])
+    Lf = Yf.orientnew("Lf", "Axis", [q2, Yf.x])
+    Rf = Lf.orientnew("Rf", "Axis", [q3, Lf.y])
+    kd = [dot(Rf.ang_vel_in(N) - (w1 * Lf.x + w2 * Lf.y + w3 * Lf.z), e) for e in Lf]
+    Rf.set_ang_vel(N, w1 * Lf.x + w2 * Lf.y + w3 * Lf.z)
+    Cf = Point("Cf")
+    Cf.set_vel(N, 0)
+    Dmc = Cf.locatenew("Dmc", r * Lf.z)
+    Dmc.v2pt_theory(Cf, N, Rf)
+    km = KanesMethod(N, [q1, q2, q3], [w1, w2, w3], kd_eqs=kd)
+    km.kanes_equations([RigidBody("disc", Dmc, Rf, m, (inertia(Lf, 1, 2, 1), Dmc))],
+                       [(Dmc, -m * g * N.z)])
+    with pytest.raises(JetnhError, match="velocity of Dmc.*not the time derivative.*"
+                                         "velocity constraint"):
+        jn.from_mechanics(km)
     # a body potential energy that KanesMethod would not read
     ms = particle_on_circle()
     ms.bodies[0].potential_energy = m * g * dynamicsymbols("y")
