@@ -229,7 +229,7 @@ class Linearization(Frozen):
             point.update(_keyed(at, "at"))
         values = dict(self.params)
         if params is not None:
-            values.update(_params(self._model, params, {}))
+            values = _params(self._model, {**values, **_keyed(params, "params")}, {})
         return _evaluate(self._model, point, values, self._keep,
                          self.t if t is None else arguments.finite(t, "t"))
 
