@@ -147,9 +147,15 @@ class _Model:
         return self._kernels
 
 
+_KEEP_MODELS = 64         # systems whose derived model and kernels stay in memory
+
+
 def _model(system, principle, form=None, convention="paper") -> _Model:
+    """The model of ``system`` under ``principle`` (the last ``_KEEP_MODELS`` kept)."""
     key = (system, principle, form, convention)
     if key not in _MODELS:
+        if len(_MODELS) >= _KEEP_MODELS:
+            _MODELS.pop(next(iter(_MODELS)))
         _MODELS[key] = _Model(system, principle, form, convention)
     return _MODELS[key]
 
