@@ -241,8 +241,9 @@ class Linearization(Frozen):
 
     def steady(self, unknowns, tol: float = 1e-10) -> "Linearization":
         """The linearization at a steady motion: the values of ``unknowns`` (names of
-        kept states) that make x' vanish, starting from this point's values (the others
-        held).  ``LinearizationError`` when none is found near them."""
+        kept states) that make x' vanish (to ``tol`` times max(1, |x'| here)), starting
+        from this point's values (the others held).  ``LinearizationError`` when none
+        is found near them."""
         from scipy.optimize import least_squares
 
         unknowns = [arguments.name_of(u, "unknowns") for u in (
@@ -272,6 +273,7 @@ class Linearization(Frozen):
             return Jm[np.ix_(keep, idx)].copy()
 
         u0 = self._y[idx]
+        start = float(np.linalg.norm(self.rates))
         try:
             sol = least_squares(residual, u0, jac=jacobian, method="trf", xtol=1e-15,
                                 ftol=1e-15, gtol=1e-15, max_nfev=200)
@@ -279,7 +281,7 @@ class Linearization(Frozen):
         except ValueError:       # a non-finite residual at the start
             x, bad = u0, True
         size = float(np.linalg.norm(residual(x))) if not bad else float("nan")
-        if bad or not size <= tol * max(1.0, float(np.abs(x).max(initial=0.0))):
+        if bad or not size <= tol * max(1.0, start):
             given = ", ".join(f"{n} = {self.at[n]:.6g}" for n in self.state_names
                               if n not in unknowns)
             raise LinearizationError(
