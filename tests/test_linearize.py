@@ -73,6 +73,20 @@ def test_A_against_differences_and_the_graph(case, principle, seed):
     assert np.allclose(lin.A, sym_A, atol=1e-10 * scale, rtol=1e-10)
 
 
+@pytest.mark.parametrize("principle", jn.PRINCIPLES)
+def test_nonlinear_constraint_with_nonzero_multipliers(principle):
+    """Appell-Hamel (zdot = (b/a) sqrt(xdot^2 + ydot^2)) off any steady motion, with
+    nonzero multipliers: the case where a linearizer that lets the multiplier term
+    depend on q and lambda only drops a term; A equals the differences of the rhs."""
+    s = models.get("appell_hamel")
+    lams = {m.name: 0.7 for m in principles.get(principle).multiplier_symbols(s)}
+    lin = jn.linearize(s, principle, at={"x": 0.1, "y": -0.3, "z": 0.2, "x_t": 0.9,
+                                         "y_t": 0.4, **lams})
+    D, _ = _differences(lin)
+    assert lin.residual > 0.1 and np.abs(lin.A).max() > 0.1
+    assert np.allclose(lin.A, D, atol=1e-7, rtol=1e-6)
+
+
 # ---------------------------------------------------------------------- closed forms
 def test_sleigh_straight_motion():
     """Chaplygin sleigh running straight at speed v (heading 0.3): eigenvalues 0, 0 and
