@@ -93,7 +93,8 @@ class _Model:
         self.params = tuple(sorted(s.name for s in system.parameters))
         self._eom = eom
         self._kernels = None
-        self._uses: dict = {}
+        self._uses: dict = {}           # (row, coordinate) -> bool
+        self._symbolic: dict = {}       # kept states -> sympy Matrix
 
     @_once
     def rows(self) -> list:
@@ -165,7 +166,9 @@ class Linearization(Frozen):
     """``x' = A x`` about an operating point (module docstring); from ``linearize``.
 
     ``A`` (read-only k x k), ``state_names``, ``eigenvalues`` (complex, by decreasing
-    real part), ``residual`` (the 2-norm of x' at the point: 0 for a steady motion),
+    real part), ``rates`` (x' at the point), ``residual`` (its 2-norm: 0 for a steady
+    motion), ``limit`` (True where the kernels are undefined at the point and A is
+    their limit),
     ``at`` (every coordinate, velocity and multiplier at the point), ``params``,
     ``dropped`` (coordinate names left out), ``verdict``, ``stable``.
     """
@@ -330,11 +333,10 @@ class Linearization(Frozen):
 
 
 def _symbolic(model: _Model, keep) -> sp.Matrix:
-    key = ("symbolic", keep)
-    if key not in model._uses:
+    if keep not in model._symbolic:
         rows = [model.rows[i] for i in keep]
-        model._uses[key] = dag.jacobian(rows, [model.states[i] for i in keep])
-    return model._uses[key]
+        model._symbolic[keep] = dag.jacobian(rows, [model.states[i] for i in keep])
+    return model._symbolic[keep]
 
 
 def _margin(ev: np.ndarray, scale: float) -> float:
