@@ -104,6 +104,17 @@ def test_sleigh_straight_motion():
         assert lin.verdict == ("marginal" if v > 0 else "unstable")
 
 
+def test_bead_on_parabola_small_oscillations():
+    """y = a x^2 through ydot = 2 a x xdot: rest at the bottom is an equilibrium with
+    x'' = -2 a g x, eigenvalues +-i sqrt(2 a g) under Chetaev (the constraint is
+    integrable: a holonomic system)."""
+    s = models.get("bead_on_parabola")
+    lin = jn.linearize(s, at={"x": 0.0, "x_t": 0.0}, params={"a": 0.7, "g": 9.81})
+    assert lin.state_names == ("x", "x_t") and lin.residual == 0.0
+    assert np.allclose(lin.A, [[0.0, 1.0], [-2 * 0.7 * 9.81, 0.0]], atol=1e-12)
+    assert lin.verdict == "marginal" and lin.stable
+
+
 def _coin_by_hand():
     """The Chetaev equations of the rolling coin by plain sympy (functions of t, the
     Lagrange multiplier rule for the two rolling constraints), independent of jetnh:
