@@ -329,8 +329,10 @@ class System:
 
     @property
     def _inputs(self) -> tuple:
-        """Every expression the user gave: L, the constraints, forces and dissipation."""
-        return (self.L, *self.constraints, *self.forces.values(), self.dissipation)
+        """Every expression the user gave: L, the constraints (holonomic ones also as
+        given), forces and dissipation."""
+        return (self.L, *self.constraints, *self.holonomic, *self.forces.values(),
+                self.dissipation)
 
     @cached_property
     def Q(self) -> tuple[sp.Expr, ...]:
