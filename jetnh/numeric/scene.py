@@ -431,7 +431,7 @@ class Scene(Frozen):
             if t_eval is not None:
                 te = arguments.times(t_eval, t0, t1)
                 mode = AT_T_EVAL
-            ctl = Control(rtol, atol_v, first, mx, budget, 0)
+            ctl = Control(rtol, atol_v, first, mx, budget, 0, *self._projection)
             # radau's steps depend on the steps before (Newton's starting values, the
             # Jacobian kept): no re-taking of one step (numeric.dense)
             dense = None if method == "radau" else {"rtol": rtol, "atol": atol_v,
@@ -445,7 +445,7 @@ class Scene(Frozen):
             arguments.output_rows(steps, n, save)
             mode = EVERY_STEP if save == "steps" else ENDPOINTS
             te = np.zeros(0)
-            ctl = Control(rtol, atol_v, 0.0, np.inf, budget, steps)
+            ctl = Control(rtol, atol_v, 0.0, np.inf, budget, steps, *self._projection)
             dense = {"mode": mode}
         kern = self.kernels
         ce = None if events is None else self.compile_events(events)
@@ -459,13 +459,15 @@ class Scene(Frozen):
             newton = radau.newton_options(newton_tol, max_newton)
             jac = self.jacobian
             tic = time.perf_counter()
-            out = interrupt.call(lambda: solve(kern.rhs_fp, jac, kern.sing_fp, uev, t0, t1,
+            out = interrupt.call(lambda: solve(kern.rhs_fp, jac, kern.sing_fp, uev,
+                                               kern.hol_or_none, t0, t1,
                                                y_init, p, ctl, newton, te, mode, watch, halt),
                                  halt, limit)
         else:
             solve = methods.explicit_solver(method)
             tic = time.perf_counter()
-            out = interrupt.call(lambda: solve(kern.rhs_fp, kern.sing_fp, uev, t0, t1,
+            out = interrupt.call(lambda: solve(kern.rhs_fp, kern.sing_fp, uev, kern.hol_or_none,
+                                               t0, t1,
                                                y_init, p, ctl, te, mode, watch, halt),
                                  halt, limit)
         wall = time.perf_counter() - tic
@@ -493,6 +495,12 @@ class Scene(Frozen):
         if key not in store:
             store[key] = watch_of(kern, None, singular, singular_tol)
         return store[key]
+
+    @property
+    def _projection(self) -> tuple[int, int]:
+        """``(n_hol, n_coord)`` of ``Control``: the holonomic constraints every accepted
+        step is projected onto (0: none) and the number of coordinates."""
+        return len(self.system.holonomic), self.system.J.n
 
     @memo
     def _p(self) -> np.ndarray:
