@@ -11,8 +11,10 @@ onto g = 0 by the simplified Gauss-Newton iteration of Hairer, Lubich & Wanner,
 
 until the correction is below the spacing of the floating-point numbers (at most
 ``MAX_ITERATIONS``).  The correction is of the size of the local error, so the method's
-order is kept (HLW IV.4, Theorem 4.2); velocities are not projected, being no states
-of the dependent coordinates (D g = 0 holds exactly at every state).  The loop is
+order is kept (HLW IV.4, Theorem 4.2).  Velocities need no projection: the dependent
+velocities are no states but phi(t, q, qdot^mu), which solves D g = 0 exactly at every
+state.  The step's dense output (``t_eval``) is the method's interpolant between two
+projected states: on g = 0 to the interpolant's error, not to roundoff.  The iteration is
 deterministic: a run is reproducible bit for bit.
 
 ``hol(t, y, p, out)`` is the generated kernel (``codegen``): ``out = (g_1..g_m, dg_i/dq^j
