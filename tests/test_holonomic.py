@@ -283,10 +283,7 @@ def test_tangent_basis_and_independent_coordinates():
 
 
 # ---------------------------------------------------------------------- interfaces
-def test_model_file_constraint_without_velocities_is_holonomic():
-    from jetnh import modelfile
-
-    text = """
+PENDULUM_TOML = """
 name = "pendulum in x, y"
 coordinates = ["x", "y"]
 lagrangian = "(x_t**2 + y_t**2)/2 - G*y"
@@ -298,7 +295,12 @@ l = 1.0
 x = 0.6
 y = -0.8
 """
-    m = modelfile.loads(text)
+
+
+def test_model_file_constraint_without_velocities_is_holonomic():
+    from jetnh import modelfile
+
+    m = modelfile.loads(PENDULUM_TOML)
     x, y = m.system.J.q
     assert m.system.holonomic == (x**2 + y**2 - sp.Symbol("l") ** 2,)
     back = modelfile.loads(modelfile.dumps(m.system, m.initial))
@@ -339,3 +341,14 @@ def test_rolling_disk_from_lagranges_method_refuses_or_completes_z():
     assert tr.status == 0
     assert np.max(np.abs(tr["z"] - 0.5 * np.cos(tr["lean"]))) < 1e-14
     assert tr.diagnostics.holonomic_residual_max < 1e-14
+
+
+def test_cli_simulate_refuses_or_completes_the_configuration(tmp_path, capsys):
+    from jetnh.cli import main
+
+    path = tmp_path / "pendulum.toml"
+    path.write_text(PENDULUM_TOML.replace("y = -0.8", "y = -1.0"))
+    assert main(["simulate", str(path), "--t-end", "1"]) == 1
+    err = capsys.readouterr().err
+    assert "off the holonomic constraints" in err and "pass --complete to solve for y" in err
+    assert main(["simulate", str(path), "--t-end", "1", "--complete"]) == 0

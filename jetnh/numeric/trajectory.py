@@ -218,12 +218,22 @@ class Trajectory(Frozen):
     def holonomic_residual(self) -> np.ndarray:
         """The holonomic constraints g_i(t, q) at every output row (columns: i; none
         without holonomic constraints)."""
-        m = self.layout.holonomic
-        if "holonomic" in self._own:
-            return self._own["holonomic"]
-        if not m or self._own:
+        system = self.scene.system
+        m = len(system.holonomic)
+        if not m:
             return np.zeros((len(self), 0))
-        return self.aux[:, self.layout.n_aux - m:]
+        if not self._own:
+            return self.aux[:, self.layout.n_aux - m:]
+        # the discrete methods carry no aux rows: g evaluated on the coordinates
+        from ..algebra import dag
+
+        J = system.J
+        point = {J.t: self.t, **{q: self.y[:, i] for i, q in enumerate(J.q)}}
+        values = {**self.scene.params, **dict(zip(self.scene.runtime_params,
+                                                   np.asarray(self._p).tolist()))}
+        point.update((s, values[s.name]) for s in system.parameters)
+        cols = dag.evaluate_numpy(list(system.holonomic), point)
+        return np.column_stack([np.broadcast_to(c, self.t.shape) for c in cols])
 
     def integral(self, name) -> np.ndarray:
         return self[name]
