@@ -82,6 +82,20 @@ def test_system_keeps_the_constraint_without_velocities():
     assert mixed.given_constraints[0] == mixed.constraints[0]
 
 
+def test_kernels_of_g_and_of_its_derivative_are_kept_apart():
+    kept = knife_slider()
+    J = kept.J
+    velocity_form = jn.System(J, kept.L, [kept.constraints[0], J.D(kept.holonomic[0])],
+                              dependent=["y", "z"])
+    assert velocity_form.constraints == kept.constraints and not velocity_form.holonomic
+    ini = {"x": 0.0, "y": 0.0, "th": 0.3, "z": 0.4 * np.sin(0.3), "x_t": 1.0, "th_t": 0.7}
+    a = Scene(kept, params=KNIFE, initial=ini)
+    b = Scene(velocity_form, params=KNIFE, initial=ini)
+    assert a.key != b.key
+    assert b.kernels.layout.holonomic == 0 and a.kernels.layout.holonomic == 1
+    assert b.run(t_span=(0.0, 1.0)).diagnostics.holonomic_residual_max == 0.0
+
+
 def test_time_only_constraint_is_refused():
     J = jn.JetSpace("x y")
     with pytest.raises(ConstraintError, match="time only"):

@@ -449,6 +449,7 @@ def symbolic_key(system, principle, params, runtime_params=(), integrals=None, f
         repr(tuple(s.name for s in J.q)), J.t.name,
         sp.srepr(system.L),
         repr(tuple(sp.srepr(f) for f in system.constraints)),
+        repr(tuple(sp.srepr(g) for g in system.holonomic)),
         repr(tuple((q.name, sp.srepr(e)) for q, e in system.forces.items())),
         sp.srepr(system.dissipation),
         repr(tuple(s.name for s in system.dependent)), repr(system._branch),
