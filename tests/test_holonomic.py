@@ -220,6 +220,19 @@ def test_long_runs_stay_on_g_at_roundoff(method, kw):
     assert np.array_equal(tr.y, again.y) and np.array_equal(tr.t, again.t)   # bit for bit
 
 
+def test_ensembles_and_dense_output_of_projected_runs():
+    sc = Scene(pendulum_xy(), params=PARAMS, initial={"x": 0.6, "y": -0.8, "x_t": 2.0},
+               t_span=(0.0, 50.0))
+    ens = sc.ensemble(initial={"x_t": np.array([0.5, 2.0])}, save="final")
+    single = sc.run(save="final")
+    assert np.array_equal(ens.y[1, -1], single.y[-1])          # the same projected loop
+    assert np.all(ens.holonomic_residual_max < 1e-14)
+    assert "holonomic_residual_max" in ens.diagnostics()
+    tr = sc.run()
+    te = np.linspace(0.0, 50.0, 17)
+    assert np.array_equal(tr.at(te), sc.run(t_eval=te).y)      # re-taken steps project too
+
+
 def test_projection_keeps_the_order_of_rk4():
     """The error at T against the angle form solved tightly shrinks by ~2^4 per halving
     of h: the projection does not lower the order (HLW IV.4)."""
