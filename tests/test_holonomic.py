@@ -347,6 +347,8 @@ def test_tangent_basis_and_independent_coordinates():
         moved.update({q: point[q] + eps * B[i, j] for i, q in enumerate(J.q)})
         assert abs(holonomic.residual(s, moved)[0]) < 10 * eps**2
     assert np.array_equal(holonomic.tangent_basis(pendulum_angle(), {}), np.eye(1))
+    by_name = {"t": 0.0, "x": 0.1, "y": 0.2, "th": 0.3, "z": 0.4 * np.sin(0.3), **KNIFE}
+    assert np.array_equal(holonomic.tangent_basis(s, by_name), B)
 
 
 # ---------------------------------------------------------------------- interfaces

@@ -39,6 +39,13 @@ def jacobian(system) -> sp.Matrix:
                      lambda i, s: dag.diff(system.holonomic[i], J.q[s]))
 
 
+def _symbols(system, point) -> dict:
+    """``point`` keyed by Symbol (names of t, coordinates and parameters accepted)."""
+    J = system.J
+    by_name = {s.name: s for s in (J.t, *J.q, *system.parameters)}
+    return {by_name.get(k, k) if isinstance(k, str) else k: v for k, v in point.items()}
+
+
 def _floats(exprs, point) -> np.ndarray:
     try:
         vals = dag.evaluate(list(exprs), point)
@@ -53,14 +60,15 @@ def _floats(exprs, point) -> np.ndarray:
 
 
 def residual(system, point) -> np.ndarray:
-    """g_i at ``point`` (Symbol -> number: t, the coordinates, the parameters)."""
-    return _floats(system.holonomic, point)
+    """g_i at ``point`` (t, the coordinates and the parameters, keyed by Symbol or name;
+    the same for every function here)."""
+    return _floats(system.holonomic, _symbols(system, point))
 
 
 def jacobian_at(system, point) -> np.ndarray:
     """dg_i/dq^s at ``point`` (an m x n array)."""
     m, n = len(system.holonomic), system.J.n
-    return _floats(list(jacobian(system)), point).reshape(m, n)
+    return _floats(list(jacobian(system)), _symbols(system, point)).reshape(m, n)
 
 
 def _describe(system, g) -> str:
@@ -129,6 +137,7 @@ def check(system, point, complete=False, tol: float = TOLERANCE):
     if not system.holonomic:
         return point, {}
     J = system.J
+    point = _symbols(system, point)
     scale = max([1.0] + [abs(float(point[q])) for q in J.q if q in point])
     g = residual(system, point)
     if not np.all(np.isfinite(g)):
