@@ -214,7 +214,8 @@ def test_configuration_constraints_agree_on_the_circle():
     ms = particle_on_circle()
     s = jn.from_mechanics(ms)
     x, y = s.J.q
-    # the configuration constraint enters differentiated
+    # the configuration constraint stays holonomic; the equations use its derivative
+    assert s.holonomic == (x**2 + y**2 - ell**2,)
     assert len(s.constraints) == 1 and sp.expand(
         s.constraints[0] - 2 * (x * s.J.qd[0] + y * s.J.qd[1])) == 0
     assert s.is_integrable()
@@ -224,6 +225,11 @@ def test_configuration_constraints_agree_on_the_circle():
         return [1.1 * math.cos(phi), 1.1 * math.sin(phi)]
 
     assert agreement(s, ms, {m: 0.8, ell: 1.1, g: 9.81}, sample_q=on_circle) < RTOL
+    # a start off the circle, keyed by the model's dynamicsymbols, is refused with the fix
+    xs, ys = dynamicsymbols("x y")
+    with pytest.raises(JetnhError, match="off the holonomic constraints.*complete=True"):
+        jn.Scene(s, "chetaev", params={m: 1.0, ell: 1.0, g: 9.81},
+                 initial={xs: 0.6, ys: 0.0, xs.diff(): 0.0})
 
 
 def test_kanes_method_velocity_constraints_that_restate_the_configuration_constraint():
@@ -240,6 +246,8 @@ def test_kanes_method_velocity_constraints_that_restate_the_configuration_constr
                      velocity_constraints=[x * ux + y * uy])
     km.kanes_equations([Particle("P", P, m)], [(P, -m * g * N.y)])
     s = jn.from_mechanics(km)
+    X, Y = s.J.q
+    assert s.holonomic == (X**2 + Y**2 - ell**2,)
     assert len(s.constraints) == 1 and s.is_integrable()
     assert agreement(s, km, {m: 0.8, ell: 1.1, g: 9.81},
                      sample_q=lambda rnd: [1.1 * math.cos(0.7), 1.1 * math.sin(0.7)]) < RTOL

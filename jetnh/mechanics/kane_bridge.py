@@ -11,8 +11,9 @@ expression of the model is read with u replaced by U:
 - every other load gives generalized forces Q_s = sum F . dv/dqdot^s (v the velocity of
   the point, or the angular velocity of the frame, in the inertial frame);
 - velocity constraints (linear in u) become constraints in qdot; configuration
-  constraints g(t, q) = 0 enter through ``holonomic`` (today differentiated, D g = 0)
-  and the velocity constraints that only restate D g are left out;
+  constraints g(t, q) = 0 stay holonomic (``System.holonomic``: a Scene checks or
+  completes the initial configuration and keeps runs on g = 0), and the velocity
+  constraints that only restate D g are left out;
 - ``Speeds`` keeps the map both ways, u = U(t, q, qdot) and qdot = V(t, q, u).
 
 The model's kinematics must hold for every qdot, not only on the constraints: each body's
@@ -367,13 +368,13 @@ def constraints(reader: _Reader) -> list:
                              "as a velocity (nonholonomic) constraint")
     if hol and model.restates_holonomic:
         vel = _complement(J, vel, hol)
-    return vel + holonomic(J, hol)
+    return vel + holonomic(hol)
 
 
-def holonomic(J: JetSpace, g: list) -> list:
-    """How configuration constraints g(t, q) = 0 enter the System: differentiated, D g = 0
-    (the one place to change when Systems keep them at position level)."""
-    return [J.D(e) for e in g]
+def holonomic(g: list) -> list:
+    """How configuration constraints g(t, q) = 0 enter the System: as written, so that
+    it keeps them at position level (``System.holonomic``; its equations use D g)."""
+    return list(g)
 
 
 def _complement(J: JetSpace, vel: list, hol: list) -> list:
