@@ -333,7 +333,7 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
     rtol, atol, first_step, max_step, max_steps, n_steps, h = fields_of(opts.step)
     if max_step is None:
         max_step = np.inf
-    singular, singular_tol = fields_of(opts.singular)
+    singular, singular_tol, split = fields_of(opts.singular)
     newton_tol, max_newton = fields_of(opts.newton)
 
     if parallel not in PARALLEL:

@@ -45,7 +45,7 @@ from ..geometry.jet import sympy_object
 from . import arguments, interrupt
 from . import cache as _cache
 from . import codegen
-from . import diagnosis, discrete, methods, scipy_backend
+from . import atlas, diagnosis, discrete, methods, scipy_backend
 from .methods import STATUS_TEXT
 from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, NONFINITE, SINGULAR, STOPPED
 from .methods.loop import Control, watch_of
@@ -330,7 +330,7 @@ class Scene(Frozen):
         """
         opts = options(step, singular, newton, rtol=rtol, atol=atol, **keywords)
         rtol, atol, first_step, max_step, max_steps, n_steps, h = fields_of(opts.step)
-        singular, singular_tol = fields_of(opts.singular)
+        singular, singular_tol, split = fields_of(opts.singular)
         newton_tol, max_newton = fields_of(opts.newton)
         t0, t1 = self._t_span(t_span) if t_span is not None else self.t_span
         p = self._run_params(params)
@@ -410,15 +410,31 @@ class Scene(Frozen):
             ctl = Control(rtol, atol_v, 0.0, np.inf, budget, steps)
             dense = {"mode": mode}
         kern = self.kernels
-        ce = None if events is None else self.compile_events(events)
-        watch = self._watch(kern, ce, singular == "stop", singular_tol)
-        uev = ce.uev if ce is not None else kern.sing_fp
-        halt = interrupt.flag()
+        newton = None
         if method == "radau":
             from .methods import radau
 
-            solve = kern.implicit()
             newton = radau.newton_options(newton_tol, max_newton)
+        if split == "switch" and atlas.applies(self, events):
+            return atlas.run(self, method, events, t0, t1, y_init, p, ctl, te, mode, dense,
+                             singular == "stop", singular_tol, newton, limit)
+        ce = None if events is None else self.compile_events(events)
+        watch = self._watch(kern, ce, singular == "stop", singular_tol)
+        out, wall = self._solve(method, kern, ce, watch, t0, t1, y_init, p, ctl, te, mode,
+                                newton, limit)
+        if dense is not None:    # stopped inside a step
+            dense["partial_last"] = int(out.status) in (EVENT, SINGULAR)
+        return self._trajectory(method, out, wall, kern, ce, p, t0, y_init, singular_tol,
+                                singular == "stop", limit, dense)
+
+    def _solve(self, method, kern, ce, watch, t0, t1, y_init, p, ctl, te, mode, newton,
+               limit):
+        """One call of the compiled loop of ``method`` on the kernels ``kern`` (events
+        ``ce``, ``watch``); returns its ``Result`` and the wall-clock time."""
+        uev = ce.uev if ce is not None else kern.sing_fp
+        halt = interrupt.flag()
+        if method == "radau":
+            solve = kern.implicit()
             jac = self.jacobian
             tic = time.perf_counter()
             out = interrupt.call(lambda: solve(kern.rhs_fp, jac, kern.sing_fp, uev, t0, t1,
@@ -430,11 +446,7 @@ class Scene(Frozen):
             out = interrupt.call(lambda: solve(kern.rhs_fp, kern.sing_fp, uev, t0, t1,
                                                y_init, p, ctl, te, mode, watch, halt),
                                  halt, limit)
-        wall = time.perf_counter() - tic
-        if dense is not None:    # stopped inside a step
-            dense["partial_last"] = int(out.status) in (EVENT, SINGULAR)
-        return self._trajectory(method, out, wall, kern, ce, p, t0, y_init, singular_tol,
-                                singular == "stop", limit, dense)
+        return out, time.perf_counter() - tic
 
     # ------------------------------------------------------------------ run helpers
     @staticmethod

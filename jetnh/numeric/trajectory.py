@@ -41,6 +41,7 @@ class Diagnostics:
     events: dict = field(default_factory=dict)        # event name -> occurrences
     singularity: dict | None = None                   # see Trajectory.singularity
     forced: bool = False              # generalized forces work: the energy drifts by design
+    switches: list = field(default_factory=list)      # split changes: {"t", "from", "to"}
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -58,6 +59,10 @@ class Diagnostics:
             lines.append(f"  integral {k}: drift {v:.3e}")
         for k, v in self.events.items():
             lines.append(f"  event {k}: {v} occurrence(s)")
+        if self.switches:
+            lines.append(f"  {len(self.switches)} split switch(es), the first at t = "
+                         f"{self.switches[0]['t']:.6g} ({self.switches[0]['from']} -> "
+                         f"{self.switches[0]['to']})")
         return "\n".join(lines)
 
 
@@ -90,7 +95,7 @@ class Trajectory(Frozen):
 
     def __init__(self, scene, t, y, p, *, method, status, stop_reason, steps, rejected,
                  nfev, wall_time, kernels, projected=None, own=None, events=None,
-                 singularity=None, dense=None):
+                 singularity=None, dense=None, segments=(), switches=()):
         names, t_ev, y_ev = events if events is not None else ((), [], [])
         self._set(
             scene=scene, t=np.ascontiguousarray(t, dtype=float),
@@ -107,7 +112,10 @@ class Trajectory(Frozen):
             # methods that carry their own velocities, residuals, energy and first
             # integrals (the discrete integrators dla, dvi): {"velocities": {name: col},
             # "residual", "energy", "integrals": {name: col}}
-            _own=own or {})
+            _own=own or {},
+            # a run that changed split (``numeric.atlas``): the pieces (rows lo:hi from
+            # the chart's own run) and the switches {"t", "from", "to"}
+            _segments=tuple(segments), switches=tuple(switches))
 
     @property
     def layout(self):
@@ -179,6 +187,10 @@ class Trajectory(Frozen):
         if self._own:
             raise JetnhError(f"{self.method} trajectories carry their own velocities, "
                              "residuals, energy and first integrals (no aux rows)")
+        if self._segments:
+            from .atlas import aux
+
+            return aux(self)
         out = np.empty((len(self), self.layout.n_aux))
         if len(self):
             self._kernels.aux_rows(self.t, self.y, self._p, out)
@@ -232,7 +244,8 @@ class Trajectory(Frozen):
             energy_drift_relative=drift / max(abs(e0), 1e-300) if E.size else 0.0,
             integral_drift=idrift, projected=i["projected"],
             events={n: len(te) for n, te in zip(self.event_names, self.t_events)},
-            singularity=self.singularity, forced=self.scene.system.forced)
+            singularity=self.singularity, forced=self.scene.system.forced,
+            switches=[dict(s) for s in self.switches])
 
     # ------------------------------------------------------------------ tables, figures
     def to_dataframe(self, diagnostics=True):
@@ -260,9 +273,14 @@ class Trajectory(Frozen):
     def at(self, times) -> np.ndarray:
         """States ``[len(times), n_states]`` at ``times`` inside the span, from the
         method's dense output (dop853, dopri5: the covering step re-taken, bit for bit
-        what ``t_eval`` gives; rk4: cubic Hermite); needs every step stored."""
+        what ``t_eval`` gives; rk4: cubic Hermite); needs every step stored.  A run
+        that changed split is evaluated in the chart that ran at each time."""
         from .dense import evaluate
 
+        if self._segments:
+            from .atlas import at
+
+            return at(self, times)
         return evaluate(self, times)
 
     def _repr_html_(self):
