@@ -48,7 +48,7 @@ import sympy as sp
 from ..algebra import linalg
 from ..errors import JetnhError
 from ..mechanics import principles
-from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, STOPPED
+from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, SINGULAR, STOPPED
 from .methods.loop import Control, Watch
 
 #: the event name of a chart's edge (internal: the stitched run does not report it)
@@ -269,63 +269,78 @@ def run(home, method, events, t0, t1, y0, p, ctl, te, mode, dense, checked, sing
 
     at = atlas(home)
     user = as_events(events)
-    counts = np.zeros(len(user), dtype=np.int64)
+    tic = time.perf_counter()
+    parts, switches = follow(at, method, at.own, t0, y0, t1, p, user, np.zeros(len(user), np.int64),
+                             ctl, ctl.max_steps, te, mode, dense, checked, singular_tol,
+                             newton, limit)
+    return stitch(home, at, method, p, parts, switches, user, mode,
+                  time.perf_counter() - tic)
+
+
+def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mode, dense, checked,
+           singular_tol, newton, limit, first=True, h_fixed=None, edge=True):
+    """Run from (t, y) in ``chart`` to ``t1``, changing chart at every edge; returns the
+    pieces ``[(chart, trajectory of the chart's scene, what re-running it needs)]`` and
+    the switches.  ``counts``: occurrences of the user events so far (terminal counts go
+    on); ``first``: whether (t, y) starts the run (else the run goes on after a switch);
+    ``edge``: whether to watch the chart's edge."""
     user_max = np.array([e.max_events for e in user], dtype=np.int64)
-    chart, t, y = at.own, t0, y0
     parts, switches = [], []
-    edge = True
-    direction = 1.0 if t1 >= t0 else -1.0
-    h_fixed = (t1 - t0) / ctl.n_steps if ctl.n_steps > 0 else 0.0
-    steps_left = ctl.max_steps
+    direction = 1.0 if t1 >= t else -1.0
+    if h_fixed is None:
+        h_fixed = (t1 - t) / ctl.n_steps if ctl.n_steps > 0 else 0.0
     tic = time.perf_counter()
     while True:
         scene, kern = chart.scene, chart.kernels
         ce = at.events(chart, user, edge)
         remaining = np.where(user_max > 0, user_max - counts, 0)
-        n_sing = len(kern.layout.indicators) if checked else 0
         none = np.zeros(0, dtype=np.int64)
-        watch = Watch(n_sing, float(singular_tol),
+        watch = Watch(len(kern.layout.indicators) if checked else 0, float(singular_tol),
                       ce.direction if ce is not None else none,
                       np.concatenate([remaining, [1] * edge]).astype(np.int64)
                       if ce is not None else none)
-        seg_ctl = ctl
-        if parts:
+        seg_ctl, seg_te = ctl, te
+        if parts or not first:
             n_steps = (max(1, round(abs(t1 - t) / abs(h_fixed))) if ctl.n_steps > 0 else 0)
             seg_ctl = Control(ctl.rtol, ctl.atol, 0.0, ctl.max_step, max(steps_left, 0),
                               n_steps)
-        seg_te = te if mode != AT_T_EVAL or not parts else np.ascontiguousarray(
-            te[direction * (te - t) > 0.0])
+            if mode == AT_T_EVAL:
+                seg_te = np.ascontiguousarray(te[direction * (te - t) > 0.0])
         left = None if limit is None else limit - (time.perf_counter() - tic)
         seg_dense = None if dense is None else dict(dense)
         out, wall = scene._solve(method, kern, ce, watch, t, t1, y, p, seg_ctl, seg_te, mode,
                                  newton, left)
         if seg_dense is not None:
-            seg_dense["partial_last"] = int(out.status) in (EVENT, 6)
+            seg_dense["partial_last"] = int(out.status) in (EVENT, SINGULAR)
         seg = scene._trajectory(method, out, wall, kern, ce, p, t, y, singular_tol, checked,
                                 limit, seg_dense)
         parts.append((chart, seg, (t, y, t1, seg_ctl, watch, ce)))
         steps_left -= seg._info["steps"]
         for i in range(len(user)):
             counts[i] += len(seg.t_events[i])
-        hit = edge and seg.status == EVENT and len(seg.t_events[-1]) > 0
-        if not hit:
+        if not (edge and seg.status == EVENT and len(seg.t_events[-1]) > 0):
             break
         t = float(seg.t_events[-1][0])
         ys = np.ascontiguousarray(seg.y_events[-1][0])
         if limit is not None and time.perf_counter() - tic >= limit:
             break
-        q, qd, lam, A, _ = chart.universal([t], ys, p)
-        if A is None:
-            A = chart.jacobian(np.array([t]), ys[None, :], p)
-        target = _target(at, chart, A[0], q, qd, lam, A, t, p)
+        target = switch(at, chart, t, ys, p)
         if target is None:          # no better split here: go on without the edge
             edge, y = False, ys
             continue
         new, y = target
         switches.append({"t": t, "from": list(chart.split), "to": list(new.split)})
         chart = new
-    return stitch(home, at, method, p, parts, switches, user, mode,
-                  time.perf_counter() - tic)
+    return parts, switches
+
+
+def switch(at, chart, t, y, p):
+    """The chart to go on in at the edge of ``chart`` (reached at (t, y)) and the state
+    there, or None (``_target``)."""
+    q, qd, lam, A, _ = chart.universal([t], y, p)
+    if A is None:
+        A = chart.jacobian(np.array([t]), np.atleast_2d(y), p)
+    return _target(at, chart, A[0], q, qd, lam, A, t, p)
 
 
 def _target(at, chart, A, q, qd, lam, A_rows, t, p):
@@ -406,20 +421,24 @@ def to_home(own, chart, t, Y, p) -> np.ndarray:
 # ---------------------------------------------------------------------- stitched views
 def aux(traj) -> np.ndarray:
     """The aux rows of a stitched trajectory, each from its own chart's kernels."""
-    lay = traj.layout
-    k = len(lay.dependent_velocities)
-    out = np.empty((len(traj), lay.n_aux))
-    own = atlas(traj.scene).own
-    for lo, hi, chart, seg, a, _ in traj._segments:
+    out = np.empty((len(traj), traj.layout.n_aux))
+    fill_aux(out, atlas(traj.scene).own, traj._segments, traj._p)
+    return out
+
+
+def fill_aux(out, own, pieces, p):
+    """``out[lo:hi]``: the aux rows of the scene (dependent velocities of its split,
+    residuals, energy, integrals) of every piece ``(lo, hi, chart, seg, a, ...)``, rows
+    ``a:a + hi - lo`` of the chart's run ``seg``, from the chart's own kernels."""
+    k = own.k
+    for lo, hi, chart, seg, a, *_ in pieces:
         rows = seg.aux[a:a + hi - lo]
         if chart is own:
             out[lo:hi] = rows
             continue
-        _, qd, _, _, _ = chart.universal(seg.t[a:a + hi - lo], seg.y[a:a + hi - lo],
-                                         traj._p)
+        _, qd, _, _, _ = chart.universal(seg.t[a:a + hi - lo], seg.y[a:a + hi - lo], p)
         out[lo:hi, :k] = qd[:, own.dep]
         out[lo:hi, k:] = rows[:, k:]
-    return out
 
 
 def at(traj, times) -> np.ndarray:
@@ -470,3 +489,20 @@ def _rerun(chart, seg, rerun, times, p) -> np.ndarray:
         raise JetnhError("running the chart's loop again did not reach the times asked for")
     rows[order] = out.ys[:te.shape[0]]
     return rows
+
+
+def go_on(at, method, user, t1, p, t, y, counts, ctl, steps_left, te, mode, checked,
+          singular_tol, newton, limit, h_fixed):
+    """An ensemble's run that stopped at its chart's edge at (t, y) (the scene's own
+    chart), taken on as ``Scene.run`` does: ``(parts, switches)`` of ``follow``."""
+    own = at.own
+    target = switch(at, own, t, y, p)
+    if target is None:
+        return follow(at, method, own, t, y, t1, p, user, counts, ctl, steps_left, te, mode,
+                      None, checked, singular_tol, newton, limit, first=False,
+                      h_fixed=h_fixed, edge=False)
+    chart, y_new = target
+    parts, switches = follow(at, method, chart, t, y_new, t1, p, user, counts, ctl,
+                             steps_left, te, mode, None, checked, singular_tol, newton,
+                             limit, first=False, h_fixed=h_fixed)
+    return parts, [{"t": t, "from": list(own.split), "to": list(chart.split)}] + switches
