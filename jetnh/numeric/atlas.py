@@ -270,11 +270,31 @@ def run(home, method, events, t0, t1, y0, p, ctl, te, mode, dense, checked, sing
     at = atlas(home)
     user = as_events(events)
     tic = time.perf_counter()
-    parts, switches = follow(at, method, at.own, t0, y0, t1, p, user, np.zeros(len(user), np.int64),
-                             ctl, ctl.max_steps, te, mode, dense, checked, singular_tol,
-                             newton, limit)
-    return stitch(home, at, method, p, parts, switches, user, mode,
+    chart, y, first = begin(at, user, t0, y0, p)
+    parts, switches = follow(at, method, chart, t0, y, t1, p, user,
+                             np.zeros(len(user), np.int64), ctl, ctl.max_steps, te, mode,
+                             dense, checked, singular_tol, newton, limit)
+    return stitch(home, at, method, p, parts, first + switches, user, mode,
                   time.perf_counter() - tic)
+
+
+def begin(at, user, t0, y0, p):
+    """The chart a run from (t0, y0) (the scene's state) starts in: the scene's own,
+    unless that is already past its edge there (then the split of largest measure);
+    ``(chart, state in it, [the switch at t0] or [])``."""
+    own = at.own
+    if not at.events(own, user, True).python_funcs[-1](t0, y0, p) < 0.0:
+        return own, y0, []
+    q, qd, lam, A, _ = own.universal([t0], y0, p)
+    if A is None:
+        A = own.jacobian(np.array([t0]), np.atleast_2d(y0), p)
+    if not at.measures(A[0])[own.split] < at.eps:
+        return own, y0, []
+    target = _target(at, own, A[0], q, qd, lam, A, t0, p)
+    if target is None:
+        return own, y0, []
+    chart, y = target
+    return chart, y, [{"t": t0, "from": list(own.split), "to": list(chart.split)}]
 
 
 def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mode, dense, checked,

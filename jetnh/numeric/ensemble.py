@@ -455,6 +455,21 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
     pieces, reasons, switches = {}, {}, {}
     if switching:
         h_fixed = (t1 - t0) / ctl.n_steps if ctl.n_steps > 0 else 0.0
+        edge = ce.python_funcs[-1]
+        for r in range(n_runs):         # runs past the edge at the start: run again
+            if not edge(t0, Y0[r], P[r]) < 0.0:
+                continue
+            chart, y, first = atlas.begin(chart_atlas, user, t0, Y0[r], P[r])
+            if not first:
+                continue
+            parts, sw = atlas.follow(chart_atlas, method, chart, t0, y, t1, P[r], user,
+                                     np.zeros(n_user, np.int64), ctl, budget, te, mode,
+                                     None, singular == "stop", singular_tol, newton, limit)
+            INFO[r, 1:5] = 0
+            EV_N[r], EV_T[r], OUT_T[r], OUT_Y[r] = 0, np.nan, np.nan, np.nan
+            pieces[r] = _taken_on(chart_atlas.own, r, parts, n_user, mode, P[r], OUT_T,
+                                  OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)
+            reasons[r], switches[r] = parts[-1][1].stop_reason, first + sw
         for r in np.nonzero(EV_N[:, n_user] > 0)[0]:
             if INFO[r, 0] != EVENT or T_LAST[r] != EV_T[r, n_user]:
                 continue
