@@ -15,7 +15,9 @@
 
 Every run stops at a singular configuration (``singular="stop"``, the default) with
 ``status`` SINGULAR and a ``stop_reason`` naming the indicator and the time; see
-``run``.
+``run``.  The singular set of the split is not one: at the edge of the split's chart
+the run goes on in another regular split (``numeric.atlas``; ``split="fixed"`` keeps
+the scene's split).
 
 A scene does only what it needs: it derives the equations of its own principle, and only
 when its kernels are not in the disk cache; parameters are numbers substituted before
@@ -313,7 +315,12 @@ class Scene(Frozen):
           check the indicators of the constraints and the Lagrangian as written
           (``codegen.discrete_indicators``) at every node and stop at the last regular
           one.  NaN or infinity that no indicator explains raises an ``IntegrationError``
-          naming the time and the state;
+          naming the time and the state.  ``split="switch"`` (default) or ``"fixed"``:
+          dop853, dopri5, rk4 and radau runs that reach the edge of the split's chart
+          go on in another regular split (``numeric.atlas``: the switch located as an
+          event, the state and multipliers mapped, one trajectory in the scene's states,
+          ``traj.switches`` lists time, from and to); "fixed" keeps the scene's split,
+          which stops at its singular set as before;
         - ``newton=Newton(tol, max_iter)`` or ``newton_tol``, ``max_newton``: the Newton
           iteration of radau (automatic, 7) and of dla and dvi (1e-13, 50).
 

@@ -5,7 +5,8 @@ coordinate, an independent velocity, a multiplier, a dependent velocity (compute
 the constraints by the compiled ``aux`` kernel, on first access) or a user first
 integral.  ``traj.diagnostics`` reports the constraint residual, the energy and its
 drift, first integrals and their drift, steps, right-hand-side evaluations and why the
-integration stopped.  With generalized forces the energy is not conserved:
+integration stopped (and the split switches of a run that changed split,
+``numeric.atlas``).  With generalized forces the energy is not conserved:
 ``traj.power`` is their power Q_s qdot^s, and the diagnostics say that the forces work.
 """
 
