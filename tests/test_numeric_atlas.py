@@ -219,6 +219,26 @@ def test_vakonomic_multipliers_keep_their_values_across_splits():
     assert tr.diagnostics.energy_drift < 1e-9
 
 
+def test_explicit_form_multipliers_map_across_splits():
+    """The vakonomic explicit form (17): its multiplier weighs ydot - phi^y in one split
+    and xdot - phi^x in the other, lambda~_y = A_y^T A_x^-T lambda~_x = -cot(phi)
+    lambda~_x (A = (sin phi, -cos phi, 0))."""
+    sys_ = knife_edge()
+    init = dict(x=0.0, y=0.0, phi=0.7, x_t=0.4, phi_t=W, lambda_y=0.3)
+    home = jn.Scene(sys_, "vakonomic", initial=init, t_span=(0.0, 0.6), form="explicit")
+    te = np.linspace(0.0, 0.6, 13)
+    tr = home.run(**TOL, t_eval=te)
+    assert [s["to"] for s in tr.switches] == [["x"]]
+    lam_x = -0.3 * math.tan(0.7)            # lambda~_x = -tan(phi) lambda~_y at the start
+    other = jn.Scene(sys_.with_split(["x"]), "vakonomic", form="explicit", t_span=(0.0, 0.6),
+                     initial=dict(x=0.0, y=0.0, phi=0.7, y_t=0.4 * math.tan(0.7), phi_t=W,
+                                  lambda_x=lam_x))
+    ref = other.run(**TOL, t_eval=te, split="fixed")
+    for name in ("x", "y", "phi", "x_t", "y_t"):
+        assert np.abs(tr[name] - ref[name]).max() < 1e-9, name
+    assert np.abs(tr["lambda_y"] + ref["lambda_x"] / np.tan(ref["phi"])).max() < 1e-9
+
+
 def _rates(system, principle, form, point, lam):
     eom = system.equations(principle, form=form)
     acc = eom.accelerations()
