@@ -182,6 +182,7 @@ class Atlas:
         self.explicit = bool(p.multipliers) and p.form(home.form).explicit
         self.charts = {self.splits[0]: Chart(home.system, self.splits[0], self.explicit,
                                              home)}
+        self._events: dict = {}
 
     @property
     def own(self) -> Chart:
@@ -247,7 +248,16 @@ class Atlas:
 
     def events(self, chart, user, edge: bool):
         """The compiled events of a run in ``chart``: the user's (rewritten in its
-        multipliers) and, with ``edge``, its edge last; or None."""
+        multipliers) and, with ``edge``, its edge last; or None.  Kept per chart, user
+        events and edge, so that repeated runs build nothing."""
+        key = (chart.split, edge, tuple((sp.srepr(e.fun), e.direction, e.max_events, e.name)
+                                        for e in user))
+        found = self._events.get(key)
+        if found is None:
+            found = self._events[key] = (self._compile_events(chart, user, edge),)
+        return found[0]
+
+    def _compile_events(self, chart, user, edge):
         from .events import Event
 
         sys_ = chart.scene.system
@@ -332,16 +342,19 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
                                  newton, left)
         if seg_dense is not None:
             seg_dense["partial_last"] = int(out.status) in (EVENT, SINGULAR)
+        n_ev = int(out.n_ev)
+        hit = (edge and int(out.status) == EVENT and n_ev > 0
+               and int(out.ev_i[n_ev - 1]) == len(user))
         seg = scene._trajectory(method, out, wall, kern, ce, p, t, y, singular_tol, checked,
-                                limit, seg_dense)
+                                limit, seg_dense, n_events=len(user))
         parts.append((chart, seg, (t, y, t1, seg_ctl, watch, ce)))
         steps_left -= seg._info["steps"]
         for i in range(len(user)):
             counts[i] += len(seg.t_events[i])
-        if not (edge and seg.status == EVENT and len(seg.t_events[-1]) > 0):
+        if not hit:
             break
-        t = float(seg.t_events[-1][0])
-        ys = np.ascontiguousarray(seg.y_events[-1][0])
+        t = float(out.ev_t[n_ev - 1])
+        ys = np.ascontiguousarray(out.ev_y[n_ev - 1])
         if limit is not None and time.perf_counter() - tic >= limit:
             break
         target = switch(at, chart, t, ys, p)
@@ -386,23 +399,14 @@ def stitch(home, at, method, p, parts, switches, user, mode, wall):
 
     own = at.own
     last = parts[-1][1]
-    if len(parts) == 1:
-        chart, seg, _ = parts[0]
-        n = len(user)
-        return Trajectory(home, seg.t, seg.y, p, method=method, status=seg.status,
-                          stop_reason=seg.stop_reason, steps=seg._info["steps"],
-                          rejected=seg._info["rejected"], nfev=seg._info["nfev"],
-                          wall_time=wall, kernels=seg._kernels, projected=home.projected,
-                          singularity=seg.singularity, dense=seg._dense,
-                          events=(seg.event_names[:n], seg.t_events[:n], seg.y_events[:n]))
+    if len(parts) == 1 and not switches:
+        return parts[0][1]
     ts, ys, pieces = [], [], []
     row = 0
     for i, (chart, seg, rerun) in enumerate(parts):
         a, b = 0, len(seg.t)
-        if mode == ENDPOINTS:
-            a, b = (0, 1) if i == 0 else (b - 1, b)
-            if 0 < i < len(parts) - 1:
-                a = b
+        if mode == ENDPOINTS and len(parts) > 1:       # the first row and the last
+            a, b = (0, 1) if i == 0 else (b - 1, b) if i == len(parts) - 1 else (b, b)
         elif i > 0 and mode != AT_T_EVAL:
             a = 1                       # the switch row: the chart before stored it
         Y = to_home(own, chart, seg.t[a:b], seg.y[a:b], p)

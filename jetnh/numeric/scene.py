@@ -546,8 +546,9 @@ class Scene(Frozen):
         return store[memo]
 
     def _trajectory(self, method, out, wall, kern, ce, p, t0, y_init, singular_tol, checked,
-                    timeout=None, dense=None):
-        """A Trajectory from the result tuple of a compiled solve (or an error)."""
+                    timeout=None, dense=None, n_events=None):
+        """A Trajectory from the result tuple of a compiled solve (or an error); with
+        ``n_events``, only the first ``n_events`` events of ``ce`` are reported."""
         from .events import split_records
 
         (status, ts, ys, n_out, stats, t_last, y_last, ev_t, ev_i, ev_y, n_ev,
@@ -577,8 +578,9 @@ class Scene(Frozen):
             reason = STATUS_TEXT[status]
         kw = {}
         if ce is not None:
-            t_events, y_events = split_records(len(ce), ev_t[:n_ev], ev_i[:n_ev], ev_y[:n_ev])
-            kw["events"] = (ce.names, t_events, y_events)
+            n = len(ce) if n_events is None else n_events
+            t_events, y_events = split_records(n, ev_t[:n_ev], ev_i[:n_ev], ev_y[:n_ev])
+            kw["events"] = (ce.names[:n], t_events, y_events)
         return Trajectory(self, ts[:n_out], ys[:n_out], p, method=method, status=status,
                           stop_reason=reason, steps=int(stats[0]), rejected=int(stats[1]),
                           nfev=int(stats[2]), wall_time=wall, kernels=kern,
