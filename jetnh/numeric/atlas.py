@@ -45,7 +45,7 @@ from itertools import combinations
 import numpy as np
 import sympy as sp
 
-from ..algebra import linalg
+from ..algebra import dag, linalg
 from ..errors import JetnhError
 from ..mechanics import principles
 from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, SINGULAR, STOPPED
@@ -236,6 +236,16 @@ class Atlas:
         return (Ad.det(method="berkowitz")**2
                 - sp.Float(self.eps) * gram.det(method="berkowitz"))
 
+    def jacobian_at(self, t, q, qd, p) -> np.ndarray:
+        """df/dqdot (k x n) at one point, from the shared graph (no kernel to compile)."""
+        sys_ = self.home.system
+        J = sys_.J
+        values = {**self.home.params, **dict(zip(self.home.runtime_params, p.tolist()))}
+        point = {J.t: float(t), **dict(zip(J.q, q.tolist())), **dict(zip(J.qd, qd.tolist())),
+                 **{s: values[s.name] for s in sys_.parameters}}
+        found = dag.evaluate_numpy(list(sys_.jacobian), point)
+        return np.array([float(v) for v in found]).reshape(sys_.k, J.n)
+
     def measures(self, A) -> dict:
         """m_beta = det(A_beta)^2 / det(A A^T) of every split at one point (A: k x n)."""
         gram = np.linalg.det(A @ A.T)
@@ -297,7 +307,7 @@ def begin(at, user, t0, y0, p):
         return own, y0, []
     q, qd, lam, A, _ = own.universal([t0], y0, p)
     if A is None:
-        A = own.jacobian(np.array([t0]), np.atleast_2d(y0), p)
+        A = at.jacobian_at(t0, q[0], qd[0], p)[None]
     if not at.measures(A[0])[own.split] < at.eps:
         return own, y0, []
     target = _target(at, own, A[0], q, qd, lam, A, t0, p)
@@ -372,7 +382,7 @@ def switch(at, chart, t, y, p):
     there, or None (``_target``)."""
     q, qd, lam, A, _ = chart.universal([t], y, p)
     if A is None:
-        A = chart.jacobian(np.array([t]), np.atleast_2d(y), p)
+        A = at.jacobian_at(t, q[0], qd[0], p)[None]
     return _target(at, chart, A[0], q, qd, lam, A, t, p)
 
 
