@@ -193,19 +193,15 @@ class Atlas:
         the first time)."""
         found = self.charts.get(split)
         if found is None or found.scene is None:
-            from .scene import Scene
-
             home = self.home
             sys_ = home.system.with_split(list(split))
             mult = [s.name for s in principles.get(home.principle).multiplier_symbols(sys_)]
             names = ([s.name for s in sys_.J.q]
                      + [v.name for v in sys_.independent_velocities] + mult)
-            scene = Scene(sys_, home.principle, params=home.params,
-                          initial=dict(zip(names, np.asarray(y, dtype=float).tolist())),
-                          t_span=(t0, home.t_span[1]), form=home.form,
-                          convention=home.convention,
-                          integrals=self.rewrite(home.integrals, sys_),
-                          runtime_params=home.runtime_params, cache=home.cache)
+            scene = home.replace(system=sys_,
+                                 initial=dict(zip(names, np.asarray(y, dtype=float).tolist())),
+                                 t_span=(t0, home.t_span[1]),
+                                 integrals=self.rewrite(home.integrals, sys_))
             found = self.charts[split] = Chart(sys_, split, self.explicit, scene)
         return found
 
@@ -440,7 +436,7 @@ def stitch(home, at, method, p, parts, switches, user, mode, wall):
                       kernels=home.kernels, projected=home.projected,
                       singularity=last.singularity, dense=parts[0][1]._dense,
                       events=(tuple(e.name for e in user), t_ev, y_ev),
-                      segments=tuple(pieces), switches=tuple(switches))
+                      segments=Stitched(own, tuple(pieces)), switches=tuple(switches))
 
 
 def to_home(own, chart, t, Y, p) -> np.ndarray:
@@ -453,11 +449,25 @@ def to_home(own, chart, t, Y, p) -> np.ndarray:
 
 
 # ---------------------------------------------------------------------- stitched views
-def aux(traj) -> np.ndarray:
-    """The aux rows of a stitched trajectory, each from its own chart's kernels."""
-    out = np.empty((len(traj), traj.layout.n_aux))
-    fill_aux(out, atlas(traj.scene).own, traj._segments, traj._p)
-    return out
+class Stitched:
+    """The pieces of a run that changed split: ``(lo, hi, chart, seg, a, rerun)``, rows
+    ``lo:hi`` of the trajectory from rows ``a:`` of the chart's own run ``seg``; its
+    trajectory's aux rows and dense output come from here (``aux``, ``at``)."""
+
+    def __init__(self, own, pieces):
+        self.own, self.pieces = own, pieces
+
+    def aux(self, traj) -> np.ndarray:
+        """The aux rows of the trajectory, each from its own chart's kernels."""
+        out = np.empty((len(traj), traj.layout.n_aux))
+        fill_aux(out, self.own, self.pieces, traj._p)
+        return out
+
+    def at(self, traj, times) -> np.ndarray:
+        """States at ``times``: each time from the chart that ran there (its steps
+        re-taken; in the part of a step that a switch cut short, the chart's loop run
+        again to it), mapped to the scene's layout."""
+        return _at(self, traj, times)
 
 
 def fill_aux(out, own, pieces, p):
@@ -475,10 +485,7 @@ def fill_aux(out, own, pieces, p):
         out[lo:hi, k:] = rows[:, k:]
 
 
-def at(traj, times) -> np.ndarray:
-    """States of a stitched trajectory at ``times``: each time from the chart that ran
-    there (its steps re-taken; the part of a step cut by a switch by running the chart's
-    loop again to it), mapped to the scene's layout."""
+def _at(stitched, traj, times) -> np.ndarray:
     from .dense import _refusal, _times
 
     why = _refusal(traj)
@@ -486,10 +493,10 @@ def at(traj, times) -> np.ndarray:
         raise JetnhError(why)
     tau = _times(times, float(traj.t.min()), float(traj.t.max()))
     out = np.full((tau.shape[0], traj.y.shape[1]), np.nan)
-    own = atlas(traj.scene).own
+    own = stitched.own
     sgn = 1.0 if traj.t[-1] >= traj.t[0] else -1.0
     done = np.zeros(tau.shape[0], dtype=bool)
-    for lo, hi, chart, seg, a, rerun in traj._segments:
+    for lo, hi, chart, seg, a, rerun in stitched.pieces:
         t_lo, t_hi = float(seg.t[0]), float(seg.t[-1])
         mine = ~done & (sgn * (tau - t_lo) >= 0) & (sgn * (t_hi - tau) >= 0)
         if not mine.any():

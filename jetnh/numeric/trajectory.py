@@ -96,7 +96,7 @@ class Trajectory(Frozen):
 
     def __init__(self, scene, t, y, p, *, method, status, stop_reason, steps, rejected,
                  nfev, wall_time, kernels, projected=None, own=None, events=None,
-                 singularity=None, dense=None, segments=(), switches=()):
+                 singularity=None, dense=None, segments=None, switches=()):
         names, t_ev, y_ev = events if events is not None else ((), [], [])
         self._set(
             scene=scene, t=np.ascontiguousarray(t, dtype=float),
@@ -114,9 +114,9 @@ class Trajectory(Frozen):
             # integrals (the discrete integrators dla, dvi): {"velocities": {name: col},
             # "residual", "energy", "integrals": {name: col}}
             _own=own or {},
-            # a run that changed split (``numeric.atlas``): the pieces (rows lo:hi from
-            # the chart's own run) and the switches {"t", "from", "to"}
-            _segments=tuple(segments), switches=tuple(switches))
+            # a run that changed split: its pieces (``numeric.atlas.Stitched``, which
+            # gives its aux rows and dense output) and switches {"t", "from", "to"}
+            _segments=segments, switches=tuple(switches))
 
     @property
     def layout(self):
@@ -188,10 +188,8 @@ class Trajectory(Frozen):
         if self._own:
             raise JetnhError(f"{self.method} trajectories carry their own velocities, "
                              "residuals, energy and first integrals (no aux rows)")
-        if self._segments:
-            from .atlas import aux
-
-            return aux(self)
+        if self._segments is not None:
+            return self._segments.aux(self)
         out = np.empty((len(self), self.layout.n_aux))
         if len(self):
             self._kernels.aux_rows(self.t, self.y, self._p, out)
@@ -278,10 +276,8 @@ class Trajectory(Frozen):
         that changed split is evaluated in the chart that ran at each time."""
         from .dense import evaluate
 
-        if self._segments:
-            from .atlas import at
-
-            return at(self, times)
+        if self._segments is not None:
+            return self._segments.at(self, times)
         return evaluate(self, times)
 
     def _repr_html_(self):
