@@ -297,6 +297,7 @@ def test_suslov_motions_depend_on_the_split_so_its_runs_keep_it():
                                                   lambda_y=0.0), t_span=(0.0, 2.0))
     tr = scene.run(**TOL)
     assert tr.status == 6 and not tr.switches and "use another split" in tr.stop_reason
+    assert "a run cannot change split" in tr.stop_reason
 
 
 def test_where_no_split_is_regular_the_run_stops():
@@ -307,7 +308,7 @@ def test_where_no_split_is_regular_the_run_stops():
     assert tr.status == 6 and not tr.switches
     assert tr.singularity["kind"] == "split"
     assert abs(tr.t[-1] - math.atanh(0.5)) < 1e-6      # x = cosh t - 2 sinh t = 0
-    assert "here dependent=" not in tr.stop_reason      # no other split to offer
+    assert "No other split was found regular" in tr.stop_reason
 
 
 def test_bad_split_option(knife):
