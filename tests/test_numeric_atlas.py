@@ -153,6 +153,22 @@ def test_ensembles_and_sweeps_switch_as_runs_do(knife):
     assert list(df["switches"]) == counts[1:] and np.array_equal(df["y"], ens.final["y"][1:])
 
 
+def test_a_run_that_starts_past_the_edge_starts_in_the_best_split(knife):
+    """phi0 = 1.45: cos^2 = 0.014 < 1/8, the run begins in x (a switch at t0)."""
+    start = {"phi": 1.45, "x_t": 0.5 * math.cos(1.45)}
+    tr = knife.run(y0=start, t_span=(0.0, 2.0), **TOL)
+    assert tr.switches[0] == {"t": 0.0, "from": ["y"], "to": ["x"]}
+    phi, x, y, _, _ = knife_closed_form(tr.t, 1.45)
+    assert np.abs(tr["y"] - y).max() < 1e-9 and np.abs(tr["x"] - x).max() < 1e-9
+    te = np.linspace(0.0, 2.0, 5)
+    ens = knife.replace(t_span=(0.0, 2.0)).ensemble(
+        initial={"phi": np.array([0.0, 1.45]), "x_t": np.array([0.5, 0.5 * math.cos(1.45)])},
+        t_eval=te, **TOL)
+    assert np.array_equal(ens.y[1], knife.run(y0=start, t_span=(0.0, 2.0), t_eval=te,
+                                              **TOL).y)
+    assert ens.switches[1][0]["t"] == 0.0
+
+
 @settings(max_examples=10, deadline=None)
 @given(phi0=st.floats(-3.0, 3.0), w=st.floats(0.5, 4.0).map(lambda v: v * 1.0),
        v0=st.floats(-1.0, 1.0))

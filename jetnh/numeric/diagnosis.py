@@ -125,7 +125,8 @@ def _switching(scene) -> str:
     from .atlas import split_invariant
 
     if split_invariant(scene.principle, scene.convention):
-        return "; a run with split='switch' goes on in it"
+        return ("; dop853, dopri5, rk4 and radau runs with split='switch' (the default) go "
+                "on in it")
     return ("; but these equations depend on the split (Suslov's in the paper's "
             "convention), so a run cannot change split: start one in the other split")
 
