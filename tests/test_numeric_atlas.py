@@ -241,7 +241,9 @@ def test_explicit_form_multipliers_map_across_splits():
     lambda~_x (A = (sin phi, -cos phi, 0))."""
     sys_ = knife_edge()
     init = dict(x=0.0, y=0.0, phi=0.7, x_t=0.4, phi_t=W, lambda_y=0.3)
-    home = jn.Scene(sys_, "vakonomic", initial=init, t_span=(0.0, 0.6), form="explicit")
+    lam_y = sp.Symbol("lambda_y")
+    home = jn.Scene(sys_, "vakonomic", initial=init, t_span=(0.0, 0.6), form="explicit",
+                    integrals={"lam": lam_y * sys_.J.qd[2]})
     te = np.linspace(0.0, 0.6, 13)
     tr = home.run(**TOL, t_eval=te)
     assert [s["to"] for s in tr.switches] == [["x"]]
@@ -253,6 +255,8 @@ def test_explicit_form_multipliers_map_across_splits():
     for name in ("x", "y", "phi", "x_t", "y_t"):
         assert np.abs(tr[name] - ref[name]).max() < 1e-9, name
     assert np.abs(tr["lambda_y"] + ref["lambda_x"] / np.tan(ref["phi"])).max() < 1e-9
+    # a first integral in the multiplier, computed in the split x after the switch
+    assert np.abs(tr["lam"] - tr["lambda_y"] * tr["phi_t"]).max() < 1e-12
 
 
 def _rates(system, principle, form, point, lam):
