@@ -28,8 +28,12 @@ from the same point, with the state mapped exactly:
 Suslov's equations in the paper's convention (29)-(31) are no chart change away from
 each other: the commutator term P_alpha c^alpha weighs the momenta of the dependent
 coordinates, and the motions of two splits differ (``split_invariant``).  Such runs, runs
-with callable events (functions of one split's state vector), and systems with more than
-3 constraints keep their split and stop at its edge as before.
+with callable events (functions of one split's state vector), systems with more than 3
+constraints, scipy's methods (``scipy-<M>``) and ``split="fixed"`` keep their split and
+stop at its edge as before (dla and dvi never solve for the dependent velocities, so no
+split's edge stops them).  The compiled methods dop853, dopri5, rk4 and radau switch;
+``Scene.run`` calls ``run``, ensembles and sweeps ``begin`` and ``go_on`` (the same
+continuation, so their runs equal single runs bit for bit).
 
 A switched run is one ``Trajectory`` of the scene: its rows are in the scene's state
 layout (the other charts' rows mapped), its dependent velocities, residuals, energy and
@@ -107,8 +111,8 @@ def atlas(scene) -> "Atlas":
 
 class Chart:
     """One split of an atlas: the positions of its dependent and independent coordinates,
-    whether its multipliers weigh the explicit constraints, and its scene (``None`` until
-    the atlas builds it)."""
+    whether its multipliers weigh the explicit constraints, and its scene (``None`` for a
+    chart used only to map a state)."""
 
     def __init__(self, system, split, explicit, scene=None):
         names = [s.name for s in system.J.q]
@@ -192,7 +196,7 @@ class Atlas:
         """The chart of ``split`` (its scene built at the state ``y`` of it at ``t0``
         the first time)."""
         found = self.charts.get(split)
-        if found is None or found.scene is None:
+        if found is None:
             home = self.home
             sys_ = home.system.with_split(list(split))
             mult = [s.name for s in principles.get(home.principle).multiplier_symbols(sys_)]
@@ -245,12 +249,9 @@ class Atlas:
     def measures(self, A) -> dict:
         """m_beta = det(A_beta)^2 / det(A A^T) of every split at one point (A: k x n)."""
         gram = np.linalg.det(A @ A.T)
-        own = self.own
-        out = {}
-        for s in self.splits:
-            cols = own.dep if s == own.split else Chart(self.home.system, s, False).dep
-            out[s] = float(np.linalg.det(A[:, cols]) ** 2 / gram)
-        return out
+        names = [s.name for s in self.home.system.J.q]
+        return {s: float(np.linalg.det(A[:, [names.index(c) for c in s]]) ** 2 / gram)
+                for s in self.splits}
 
     def events(self, chart, user, edge: bool):
         """The compiled events of a run in ``chart``: the user's (rewritten in its
