@@ -243,7 +243,7 @@ class Atlas:
         values = {**self.home.params, **dict(zip(self.home.runtime_params, p.tolist()))}
         point = {J.t: float(t), **dict(zip(J.q, q.tolist())), **dict(zip(J.qd, qd.tolist())),
                  **{s: values[s.name] for s in sys_.parameters}}
-        found = dag.evaluate_numpy(list(sys_.jacobian), point)
+        found = dag.evaluate(list(sys_.jacobian), point, dps=20)
         return np.array([float(v) for v in found]).reshape(sys_.k, J.n)
 
     def measures(self, A) -> dict:
