@@ -53,7 +53,7 @@ from ..algebra import dag, linalg
 from ..errors import JetnhError
 from ..mechanics import principles
 from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, SINGULAR, STOPPED
-from .methods.loop import Control, Watch
+from .methods.loop import Watch
 
 #: the event name of a chart's edge (internal: the stitched run does not report it)
 EDGE = "chart edge"
@@ -339,8 +339,8 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
         seg_ctl, seg_te = ctl, te
         if parts or not first:
             n_steps = (max(1, round(abs(t1 - t) / abs(h_fixed))) if ctl.n_steps > 0 else 0)
-            seg_ctl = Control(ctl.rtol, ctl.atol, 0.0, ctl.max_step, max(steps_left, 0),
-                              n_steps)
+            seg_ctl = ctl._replace(first_step=0.0, max_steps=max(steps_left, 0),
+                                   n_steps=n_steps)
             if mode == AT_T_EVAL:
                 seg_te = np.ascontiguousarray(te[direction * (te - t) > 0.0])
         left = None if limit is None else limit - (time.perf_counter() - tic)
