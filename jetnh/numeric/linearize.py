@@ -313,8 +313,8 @@ class Linearization(Frozen):
         for i in range(len(values) - 1):
             a, b = margins[i], margins[i + 1]
             if np.isfinite(a) and np.isfinite(b) and (a > 0) != (b > 0):
-                crossings.append(_root(lambda v: move(v).margin, float(values[i]),
-                                       float(values[i + 1])))
+                crossings.append(_crossing(move, float(values[i]), float(values[i + 1]),
+                                            lins[i], lins[i + 1]))
         return StabilityScan(name, values, ev, margins, tuple(crossings), self.state_names)
 
     # ------------------------------------------------------------------ symbolic
@@ -343,6 +343,31 @@ def _margin(ev: np.ndarray, scale: float) -> float:
     big = ev[np.abs(ev) > ZERO * scale]
     top = float(big.real.max()) if big.size else 0.0
     return top - REAL * scale
+
+
+def _crossing(move, a: float, b: float, lo: "Linearization", hi: "Linearization") -> float:
+    """Where the margin changes sign in [a, b], counting as zero only the eigenvalues
+    zero at both ends (a real eigenvalue passing through 0 is smaller than ``ZERO`` near
+    its root, where ``margin`` no longer sees it); then, where the largest real part
+    crosses 0 transversally (well clear of ``REAL`` on both sides), its own root."""
+    zeros = min(int(np.sum(np.abs(x.eigenvalues) <= ZERO * x._scale)) for x in (lo, hi))
+
+    def top(v):
+        lin = move(v)
+        rest = lin.eigenvalues[np.argsort(np.abs(lin.eigenvalues), kind="stable")[zeros:]]
+        return (float(rest.real.max()) if rest.size else 0.0), REAL * lin._scale
+
+    def margin(v):
+        x, tol = top(v)
+        return x - tol
+    if (margin(a) > 0) == (margin(b) > 0):
+        return _root(lambda v: move(v).margin, a, b)
+    r = _root(margin, a, b)
+    h = 1e-6 * (b - a)
+    (fl, tol), (fh, _) = top(max(a, r - h)), top(min(b, r + h))
+    if min(abs(fl), abs(fh)) > 100 * tol and (fl > 0) != (fh > 0):
+        return _root(lambda v: top(v)[0], max(a, r - h), min(b, r + h))
+    return r
 
 
 def _root(f, a: float, b: float) -> float:
