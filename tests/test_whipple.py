@@ -6,6 +6,7 @@ the benchmark's parameters."""
 from __future__ import annotations
 
 import mpmath
+import numpy as np
 import pytest
 import sympy as sp
 
@@ -49,3 +50,21 @@ def test_whipple_bicycle_agrees_with_kane(bicycle):
     params = {sp.Symbol(k): v for k, v in benchmark_parameters().items()}
     err = agreement(s, km, params, sample_q=pitch_on_the_ground(s, params), points=2)
     assert err < RTOL
+
+
+def test_weave_and_capsize_speeds():
+    """Meijaard et al. (2007), Table 3 / section 4: weave v_w = 4.29238253634111 m/s and
+    capsize v_c = 6.02426201538837 m/s, the crossings of Re lambda = 0 along the speed of
+    jetnh's own linearization of upright straight running."""
+    km = whipple_kane()
+    bike = jn.from_mechanics(km, dependent=["x", "y", "q1", "q4", "q6"])
+    params = benchmark_parameters()
+    rR = params["WRrad"]
+    at = {q.name: 0.0 for q in bike.J.q}
+    at.update(q2_t=0.0, q5_t=0.0, q3_t=5.0 / rR)
+    lin = jn.linearize(bike, "chetaev", at=at, params=params)
+    scan = lin.along("q3_t", np.linspace(0.0, 10.0, 21) / rR)
+    speeds = [c * rR for c in scan.crossings]
+    assert speeds == pytest.approx([4.29238253634111, 6.02426201538837], abs=1e-10)
+    stable = scan.values[scan.stable] * rR
+    assert stable.min() == pytest.approx(4.5) and stable.max() == pytest.approx(6.0)
