@@ -628,16 +628,18 @@ class CompiledKernels:
                 setattr(self, name[:-2] + "_fp", FunctionAddress(getattr(self, name)))
         lay = layout
         n_y, n_p = lay.n_state, len(lay.runtime_params)
-        sizes = {"rhs": lay.n_state, "aux": lay.n_aux, "sing": len(lay.indicators)}
+        sizes = {"rhs": lay.n_rhs, "aux": lay.n_aux, "sing": len(lay.indicators)}
         for name, n_out in sizes.items():     # rhs, aux, sing from Python
             if hasattr(self, f"{name}_fp") and not hasattr(self, name):
                 setattr(self, name, calls.Kernel(getattr(self, f"{name}_fp"),
-                                                 (n_y, n_p, n_out)))
+                                                 (n_out if name == "rhs" else n_y, n_p,
+                                                  n_out)))
         if hasattr(self, "aux_fp"):
             self.aux_rows = calls.Rows(self.aux_fp, (n_y, n_p, lay.n_aux))
         if hasattr(self, "jac_c"):           # the generated Jacobian (radau)
             self.jac_fp = calls.jacobian_address(self.jac_c)
-            self.jac = calls.Kernel(self.jac_fp, (n_y, n_p, n_y), jacobian=True)
+            self.jac = calls.Kernel(self.jac_fp, (lay.n_rhs, n_p, lay.n_rhs),
+                                    jacobian=True)
 
     def integrator(self):
         """The compiled loop of the explicit Runge-Kutta methods (shared by every scene

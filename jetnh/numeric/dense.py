@@ -63,6 +63,7 @@ def evaluate(traj, times) -> np.ndarray:
     if len(t) == 1 or not tau.size:
         out[:] = traj.y[0]
         return out
+    n = traj.y.shape[1]
     sgn = 1.0 if t[-1] >= t[0] else -1.0
     # time tau belongs to the first step whose end is not before it (as t_eval does)
     k = np.minimum(np.searchsorted(sgn * t[1:], sgn * tau, side="left"), len(t) - 2)
@@ -83,7 +84,7 @@ def evaluate(traj, times) -> np.ndarray:
     idx = np.nonzero(keep)[0]
     if idx.size:
         order = idx[np.lexsort((sgn * tau[idx], k[idx]))]
-        out[order] = step(traj, k[order], tau[order])
+        out[order] = step(traj, k[order], tau[order])[:, :n]
     return out
 
 
@@ -99,7 +100,8 @@ def _retaken_steps(traj, k, tau) -> np.ndarray:
     """dop853/dopri5: re-take step k[i] with the times tau (sorted by step, then time)."""
     kern, d = traj._kernels, traj._dense
     solve = explicit_solver(traj.method)
-    t, y, p = traj.t, traj.y, np.ascontiguousarray(traj._p, dtype=float)
+    rhs = d["rhs"].rhs_fp if "rhs" in d else kern.rhs_fp     # with sensitivities: augmented
+    t, y, p = traj.t, d.get("y", traj.y), np.ascontiguousarray(traj._p, dtype=float)
     none = np.zeros(0, dtype=np.int64)
     watch = Watch(0, 0.0, none, none)
     halt = np.zeros(1, dtype=np.int64)
@@ -109,7 +111,7 @@ def _retaken_steps(traj, k, tau) -> np.ndarray:
         # |h| one ulp up: t0 + first reaches (or passes, and is cut back to) t1, so the
         # step is h = t1 - t0, the original run's h to the bit
         first = float(np.nextafter(abs(t1 - t0), np.inf))
-        res = solve(kern.rhs_fp, kern.sing_fp, kern.sing_fp, t0, t1,
+        res = solve(rhs, kern.sing_fp, kern.sing_fp, t0, t1,
                     np.ascontiguousarray(y[j]), p, Control(d["rtol"], d["atol"], first, np.inf,
                                                            1, 0),
                     np.ascontiguousarray(tau[a:b]), AT_T_EVAL, watch, halt)
@@ -125,8 +127,9 @@ def _retaken_steps(traj, k, tau) -> np.ndarray:
 
 def _hermite_steps(traj, k, tau) -> np.ndarray:
     """rk4: the cubic Hermite interpolant of step k[i] at tau (the form of rk4's own)."""
-    kern = traj._kernels
-    t, y, p = traj.t, traj.y, np.ascontiguousarray(traj._p, dtype=float)
+    kern, d = traj._kernels, traj._dense
+    kern = d.get("rhs", kern)                   # with sensitivities: the augmented rhs
+    t, y, p = traj.t, d.get("y", traj.y), np.ascontiguousarray(traj._p, dtype=float)
     n = y.shape[1]
     nodes = np.unique(np.concatenate([k, k + 1]))
     f = {}

@@ -29,6 +29,13 @@ class Layout:
     indicators: tuple[str, ...] = ()           # singularity indicators (sing kernel)
     indicator_kinds: tuple[str, ...] = ()      # "split" | "constraint" | "acceleration"
     power: bool = False                        # aux ends with the power of the forces
+    sensitivity_columns: int = 0               # rhs carries S = dy/d(y0, p), n x this
+
+    @property
+    def n_rhs(self) -> int:
+        """The size of the state the ``rhs`` kernel integrates: the state, and with
+        sensitivities the n x ``sensitivity_columns`` matrix S after it (row-major)."""
+        return self.n_state * (1 + self.sensitivity_columns)
 
     @property
     def states(self) -> tuple[str, ...]:

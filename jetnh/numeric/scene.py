@@ -277,8 +277,8 @@ class Scene(Frozen):
     # ------------------------------------------------------------------ run
     def run(self, rtol=None, atol=None, t_eval=None, method="dop853", *, save="steps",
             events=None, t_span=None, y0=None, params=None, timeout=None, projection=False,
-            backend=None, step=None, singular="stop", newton=None,
-            **keywords) -> Trajectory:
+            backend=None, step=None, singular="stop", newton=None, sensitivities=False,
+            sensitivity_error=True, **keywords) -> Trajectory:
         """Integrate and return a ``Trajectory``.
 
         What: ``t_span`` replaces the scene's; ``y0`` the initial state (a dict keyed by
@@ -327,6 +327,18 @@ class Scene(Frozen):
         which the run returns what it has with status STOPPED; Ctrl-C stops a compiled run
         within one step (``numeric.interrupt``).  Every argument is checked before it
         reaches compiled code (``numeric.arguments``).
+
+        Sensitivities: ``sensitivities=True`` (dop853, dopri5, rk4, radau, scipy's
+        methods) integrates with the state the variational equations
+        ``S' = (df/dy) S + df/dp``, ``S(t0) = (I | 0)``, of ``S = dy(t)/d(y(t0), p)``, the
+        derivatives of the initial state and of the runtime parameters, with df/dy and
+        df/dp generated from the derivation (forward mode over the graph, compiled:
+        ``codegen.sensitivity_kernels``); ``traj.sensitivity(of, to)`` reads them.
+        ``sensitivity_error=True`` (default) puts S under the error control (its entry
+        (i, k) with the tolerance of state i), so S is as accurate as the state; with
+        ``False`` only the state is controlled (the steps are those of the run without
+        sensitivities, and S is as accurate as those steps make it: cheaper, but
+        uncontrolled).
         """
         opts = options(step, singular, newton, rtol=rtol, atol=atol, **keywords)
         rtol, atol, first_step, max_step, max_steps, n_steps, h = fields_of(opts.step)
@@ -347,6 +359,14 @@ class Scene(Frozen):
         rtol, atol_v = arguments.tolerances(rtol, atol, n)
         name = str(method)
         key = name.lower()
+        sens = None
+        if sensitivities:
+            sens = codegen.sensitivity_kernels(self)
+            y_init, rtol, atol_v = _augmented(sens.layout, y_init, rtol, atol_v,
+                                              bool(sensitivity_error), key)
+        elif sensitivity_error is not True:
+            raise JetnhError("sensitivity_error= is an option of runs with "
+                             "sensitivities=True")
         if backend == "scipy" or key.startswith("scipy"):
             m = name.split("-", 1)[1] if "-" in name else name
             m = {"dop853": "DOP853", "dopri5": "RK45", "rk45": "RK45"}.get(m.lower(), m)
@@ -357,7 +377,8 @@ class Scene(Frozen):
                                               else max_step)
             te = None if t_eval is None else arguments.times(t_eval, t0, t1)
             return scipy_backend.run(self, m, rtol, atol_v, te, t0, t1, y_init, p,
-                                     first or None, mx, events, singular, singular_tol)
+                                     first or None, mx, events, singular, singular_tol,
+                                     sensitivities=sens)
         if backend not in (None, "numba"):
             raise JetnhError(f"unknown backend {backend!r}; choose 'numba' or 'scipy'")
         method = methods.method(name)
@@ -398,6 +419,8 @@ class Scene(Frozen):
             # Jacobian kept): no re-taking of one step (numeric.dense)
             dense = None if method == "radau" else {"rtol": rtol, "atol": atol_v,
                                                     "mode": mode}
+            if dense is not None and sens is not None:
+                dense["rhs"] = sens
         else:
             if t_eval is not None:
                 raise JetnhError("rk4 is a fixed-step method without dense output; pass "
@@ -409,7 +432,10 @@ class Scene(Frozen):
             te = np.zeros(0)
             ctl = Control(rtol, atol_v, 0.0, np.inf, budget, steps)
             dense = {"mode": mode}
+            if sens is not None:
+                dense["rhs"] = sens
         kern = self.kernels
+        run_kern = kern if sens is None else sens
         ce = None if events is None else self.compile_events(events)
         watch = self._watch(kern, ce, singular == "stop", singular_tol)
         uev = ce.uev if ce is not None else kern.sing_fp
@@ -419,22 +445,23 @@ class Scene(Frozen):
 
             solve = kern.implicit()
             newton = radau.newton_options(newton_tol, max_newton)
-            jac = self.jacobian
+            jac = self.jacobian if sens is None else sens.jac_fp
             tic = time.perf_counter()
-            out = interrupt.call(lambda: solve(kern.rhs_fp, jac, kern.sing_fp, uev, t0, t1,
-                                               y_init, p, ctl, newton, te, mode, watch, halt),
+            out = interrupt.call(lambda: solve(run_kern.rhs_fp, jac, kern.sing_fp, uev, t0,
+                                               t1, y_init, p, ctl, newton, te, mode, watch,
+                                               halt),
                                  halt, limit)
         else:
             solve = methods.explicit_solver(method)
             tic = time.perf_counter()
-            out = interrupt.call(lambda: solve(kern.rhs_fp, kern.sing_fp, uev, t0, t1,
+            out = interrupt.call(lambda: solve(run_kern.rhs_fp, kern.sing_fp, uev, t0, t1,
                                                y_init, p, ctl, te, mode, watch, halt),
                                  halt, limit)
         wall = time.perf_counter() - tic
         if dense is not None:    # stopped inside a step
             dense["partial_last"] = int(out.status) in (EVENT, SINGULAR)
         return self._trajectory(method, out, wall, kern, ce, p, t0, y_init, singular_tol,
-                                singular == "stop", limit, dense)
+                                singular == "stop", limit, dense, sens)
 
     # ------------------------------------------------------------------ run helpers
     @staticmethod
@@ -527,13 +554,25 @@ class Scene(Frozen):
         return store[memo]
 
     def _trajectory(self, method, out, wall, kern, ce, p, t0, y_init, singular_tol, checked,
-                    timeout=None, dense=None):
-        """A Trajectory from the result tuple of a compiled solve (or an error)."""
+                    timeout=None, dense=None, sens=None):
+        """A Trajectory from the result tuple of a compiled solve (or an error); with
+        ``sens`` (the kernels of a run with sensitivities) the state's columns, and the
+        sensitivities apart."""
         from .events import split_records
 
         (status, ts, ys, n_out, stats, t_last, y_last, ev_t, ev_i, ev_y, n_ev,
          sing_index) = out
         status = int(status)
+        extra = {}
+        if sens is not None:
+            n = kern.layout.n_state
+            ys = ys[:n_out]
+            if dense is not None:
+                dense["y"] = ys
+            extra["sensitivities"] = (self._sensitivity_columns(), ys[:, n:].reshape(
+                n_out, n, sens.layout.sensitivity_columns))
+            ys, n_out = np.ascontiguousarray(ys[:, :n]), ys.shape[0]
+            y_last, y_init, ev_y = y_last[:n], y_init[:n], ev_y[:, :n]
         singularity = None
         if status == NONFINITE:
             sing_index = (diagnosis.explain_nonfinite(self, kern, t_last, y_last, p, t0, y_init,
@@ -564,7 +603,12 @@ class Scene(Frozen):
                           stop_reason=reason, steps=int(stats[0]), rejected=int(stats[1]),
                           nfev=int(stats[2]), wall_time=wall, kernels=kern,
                           projected=self.projected, singularity=singularity, dense=dense,
-                          **kw)
+                          **kw, **extra)
+
+    def _sensitivity_columns(self) -> tuple[str, ...]:
+        """The names of the columns of S = dy/d(y0, p): the states, then the runtime
+        parameters."""
+        return self.state_names + self.runtime_params
 
     # ------------------------------------------------------------------ singularities
     def indicators(self, t, y, p=None) -> dict[str, float]:
@@ -589,6 +633,25 @@ class Scene(Frozen):
     def __repr__(self):
         return (f"Scene({self.principle}, states={list(self.state_names)}, "
                 f"t_span={self.t_span})")
+
+
+def _augmented(layout, y0, rtol, atol, controlled, method):
+    """The initial state of a run with sensitivities, ``(y0, S0 = (I | 0))`` flattened,
+    and its tolerances: with ``controlled``, entry (i, k) of S has the tolerance of state
+    i; else S has none (atol = inf) and the state's tolerances are scaled by
+    sqrt(n / N), so that the RMS error norm over all N entries equals the norm over the n
+    states of a run without sensitivities (the same steps)."""
+    if method in ("dla", "dvi"):
+        raise JetnhError(f"sensitivities=True is an option of the continuous methods "
+                         f"(dop853, dopri5, rk4, radau, scipy-*), not of {method}")
+    n, m = layout.n_state, layout.sensitivity_columns
+    S0 = np.eye(n, m)
+    y = np.ascontiguousarray(np.concatenate([y0, S0.ravel()]))
+    if controlled:
+        return y, rtol, np.ascontiguousarray(np.concatenate([atol, np.repeat(atol, m)]))
+    r = np.sqrt(n / y.shape[0])
+    return y, rtol * r, np.ascontiguousarray(np.concatenate([atol * r,
+                                                             np.full(n * m, np.inf)]))
 
 
 def _real(x) -> float:

@@ -61,6 +61,12 @@ class Diagnostics:
         return "\n".join(lines)
 
 
+def _read_only(a) -> np.ndarray:
+    a = np.array(a, dtype=float)
+    a.setflags(write=False)
+    return a
+
+
 def _columns(layout) -> tuple[dict, dict]:
     """Name -> column of the states and of the aux rows (dependent velocities, first
     integrals) of ``layout``; built once per layout."""
@@ -90,7 +96,7 @@ class Trajectory(Frozen):
 
     def __init__(self, scene, t, y, p, *, method, status, stop_reason, steps, rejected,
                  nfev, wall_time, kernels, projected=None, own=None, events=None,
-                 singularity=None, dense=None):
+                 singularity=None, dense=None, sensitivities=None):
         names, t_ev, y_ev = events if events is not None else ((), [], [])
         self._set(
             scene=scene, t=np.ascontiguousarray(t, dtype=float),
@@ -107,7 +113,10 @@ class Trajectory(Frozen):
             # methods that carry their own velocities, residuals, energy and first
             # integrals (the discrete integrators dla, dvi): {"velocities": {name: col},
             # "residual", "energy", "integrals": {name: col}}
-            _own=own or {})
+            _own=own or {},
+            # a run with sensitivities: (column names, S [n_times, n_states, n_columns])
+            _sens=None if sensitivities is None else (
+                tuple(sensitivities[0]), _read_only(sensitivities[1])))
 
     @property
     def layout(self):
@@ -171,6 +180,41 @@ class Trajectory(Frozen):
             d.update({s: ye[:, i] for i, s in enumerate(self.layout.states)})
             out[name] = d
         return out
+
+    def sensitivity(self, of, to) -> np.ndarray:
+        """``d of(t) / d to`` over ``t`` (read-only): ``of`` a state (coordinate,
+        independent velocity or multiplier), ``to`` an initial value of a state (at t0)
+        or a runtime parameter, by Symbol or by name; from the variational equations
+        integrated with the run (``scene.run(sensitivities=True)``)."""
+        if self._sens is None:
+            raise JetnhError("this trajectory carries no sensitivities; run the scene with "
+                             "sensitivities=True")
+        columns, S = self._sens
+        states = self.layout.states
+        a, b = self._name(of), self._name(to)
+        if a not in states:
+            raise JetnhError(f"sensitivity of {a!r}: not a state of this trajectory; the "
+                             f"states are {', '.join(states)}")
+        if b not in columns:
+            raise JetnhError(f"sensitivity to {b!r}: not an initial value of a state or a "
+                             f"runtime parameter; choose one of {', '.join(columns)} (a "
+                             "compiled-in parameter needs runtime_params=[...] on the scene)")
+        return S[:, states.index(a), columns.index(b)]
+
+    @property
+    def sensitivities(self) -> np.ndarray:
+        """S = dy(t)/d(y(t0), p) at every row: ``[n_times, n_states, n_columns]``, columns
+        ``sensitivity_columns`` (read-only)."""
+        if self._sens is None:
+            raise JetnhError("this trajectory carries no sensitivities; run the scene with "
+                             "sensitivities=True")
+        return self._sens[1]
+
+    @property
+    def sensitivity_columns(self) -> tuple[str, ...]:
+        """What the columns of ``sensitivities`` differentiate by: the initial states,
+        then the runtime parameters."""
+        return () if self._sens is None else self._sens[0]
 
     # ------------------------------------------------------------------ derived columns
     @memo
