@@ -13,7 +13,7 @@ integrals and symmetries under each principle.
 from .mechanics.system import System
 from .mechanics.equations import Equations
 from .mechanics.equivalence import compare
-from .errors import (ArgumentError, ConstraintError, IntegrationError, JetnhError,
+from .errors import (ArgumentError, ConnectError, ConstraintError, IntegrationError, JetnhError,
                      JetnhWarning, JetSpaceError, LagrangianError, ModelFileError,
                      PrincipleError)
 from .mechanics.integrals import conserved_quantities
@@ -29,7 +29,7 @@ __version__ = "0.1.0"
 
 __all__ = ["JetSpace", "System", "Equations", "PRINCIPLES", "Principle", "compare", "conserved_quantities",
            "noether_symmetries", "lie_symmetries", "is_noether", "NoetherSymmetry",
-           "LieSymmetry", "Scene", "Trajectory",
+           "LieSymmetry", "Scene", "Trajectory", "connect", "Connection", "ConnectError",
            "Diagnostics", "Event", "Ensemble", "sweep", "from_mechanics", "JetnhError",
            "JetSpaceError", "ConstraintError", "LagrangianError", "PrincipleError",
            "ModelFileError", "IntegrationError", "ArgumentError", "JetnhWarning"]
@@ -41,4 +41,8 @@ def __getattr__(name):
         from . import numeric
 
         return getattr(numeric, name)
+    if name in ("connect", "Connection"):
+        from .numeric import connect as module
+
+        return getattr(module, name)
     raise AttributeError(f"module 'jetnh' has no attribute {name!r}")

@@ -50,8 +50,10 @@ def _refusal(traj) -> str | None:
     return None
 
 
-def evaluate(traj, times) -> np.ndarray:
-    """The states at ``times`` (any order, inside the span): ``[len(times), n_states]``."""
+def evaluate(traj, times, full=False) -> np.ndarray:
+    """The states at ``times`` (any order, inside the span): ``[len(times), n_states]``;
+    with ``full``, a run with sensitivities gives its whole integrated state (the
+    state, then S row-major: ``Layout.n_rhs`` columns)."""
     why = _refusal(traj)
     if why:
         raise JetnhError(why)
@@ -59,11 +61,12 @@ def evaluate(traj, times) -> np.ndarray:
     if not len(t):
         raise JetnhError("the trajectory is empty; there is nothing to evaluate")
     tau = _times(times, float(t.min()), float(t.max()))
-    out = np.empty((tau.shape[0], traj.y.shape[1]))
+    rows = traj._dense.get("y", traj.y) if full else traj.y
+    n = rows.shape[1]
+    out = np.empty((tau.shape[0], n))
     if len(t) == 1 or not tau.size:
-        out[:] = traj.y[0]
+        out[:] = rows[0]
         return out
-    n = traj.y.shape[1]
     sgn = 1.0 if t[-1] >= t[0] else -1.0
     # time tau belongs to the first step whose end is not before it (as t_eval does)
     k = np.minimum(np.searchsorted(sgn * t[1:], sgn * tau, side="left"), len(t) - 2)
@@ -76,7 +79,7 @@ def evaluate(traj, times) -> np.ndarray:
                 f"[{t[-2]!r}, {t[-1]!r}] is not a whole step and cannot be re-taken; times "
                 f"there (e.g. {tau[bad][0]!r}) are not available, only its end t = {t[-1]!r}")
         ends = (k == last)
-        out[ends] = traj.y[-1]
+        out[ends] = rows[-1]
         keep = ~ends
     else:
         keep = np.ones(tau.shape[0], dtype=bool)
