@@ -783,8 +783,7 @@ def sensitivity_kernels(scene):
     from . import cache as _cache
 
     compiled = {k: v for k, v in scene.params.items() if k not in scene.runtime_params}
-    key = symbolic_key(scene.system, scene.principle, compiled, scene.runtime_params,
-                       scene.integrals, scene.form, scene.convention, extra="sensitivities")
+    key = scene.sensitivity_key
     return _cache.load(key, lambda: generate(
         scene.system, scene.principle, compiled, scene.runtime_params, scene.integrals,
         scene.form, scene.convention, key=key, jacobian=True, sensitivities=True),

@@ -257,6 +257,11 @@ class _Shooter:
             if np.max(np.abs(F) / scale) <= tol:
                 return u, True, it - 1
             du = self.step(F, Jm)
+            # a step at most the size of the unknowns (and 1): Newton stays on the branch
+            # of solutions it starts near instead of jumping to a far one
+            big = np.linalg.norm(du) / max(1.0, np.linalg.norm(u))
+            if big > 1.0:
+                du = du / big
             norm = np.linalg.norm(F)
             alpha = 1.0
             for _ in range(30):
@@ -427,12 +432,13 @@ def _lagrangian(scene, times, ys) -> np.ndarray:
     return np.broadcast_to(L, times.shape)
 
 
-def gramian_ratio(tr, steps: int = 400) -> float:
+def gramian_ratio(tr, steps: int = 200) -> float:
     """Smallest over largest eigenvalue of the controllability Gramian of the constraint
-    system (qdot^mu = u^mu, qdot^alpha = phi^alpha(t, q, u)) linearized along ``tr``:
-    ``W' = A W + W A^T + B B^T``, W(t0) = 0, by RK4 on ``steps`` equal steps of the dense
-    output (A = d qdot/dq, B = d qdot/du from the graph).  Zero: the endpoint map loses
-    rank along the path (an abnormal extremal)."""
+    system (qdot^mu = u^mu, qdot^alpha = phi^alpha(t, q, u)) linearized along ``tr``,
+    ``W = int Phi(t1, s) B B^T Phi(t1, s)^T ds`` (A = d qdot/dq, B = d qdot/du from the
+    graph on the dense output; the transition matrix Phi by RK4 propagators of ``steps``
+    equal steps, the integral by Simpson's rule on their nodes).  Zero: the endpoint
+    map loses rank along the path (an abnormal extremal)."""
     from ..algebra import dag
 
     scene = tr.scene
@@ -441,43 +447,45 @@ def gramian_ratio(tr, steps: int = 400) -> float:
     n, us = len(J.q), system.independent_velocities
     if not system.k:
         return 1.0
+    steps += steps % 2
     phis = [system.phi[v] for v in system.dependent_velocities]
     dq = dag.jacobian(phis, list(J.q))
     du = dag.jacobian(phis, list(us))
     t0, t1 = float(tr.t[0]), float(tr.t[-1])
     times = np.linspace(t0, t1, 2 * steps + 1)
-    ys = _dense_states(tr, times)
-    point = _point(scene, times, ys)
-    flat = list(dq) + list(du)
-    vals = dag.evaluate_numpy(flat, point)
+    vals = dag.evaluate_numpy(list(dq) + list(du), _point(scene, times, _dense_states(tr,
+                                                                                    times)))
     k = len(phis)
     A = np.zeros((times.size, n, n))
     B = np.zeros((times.size, n, len(us)))
     index = {s: i for i, s in enumerate(J.q)}
     dep_rows = [index[J.split(v)[0]] for v in system.dependent_velocities]
-    ind_rows = [index[J.split(v)[0]] for v in us]
-    for j, r in enumerate(ind_rows):
-        B[:, r, j] = 1.0
+    for j, v in enumerate(us):
+        B[:, index[J.split(v)[0]], j] = 1.0
     for a in range(k):
         for c in range(n):
             A[:, dep_rows[a], c] = np.broadcast_to(vals[a * n + c], times.shape)
         for c in range(len(us)):
             B[:, dep_rows[a], c] = np.broadcast_to(vals[k * n + a * len(us) + c],
                                                    times.shape)
-    BB = B @ np.transpose(B, (0, 2, 1))
-
-    def f(i, W):
-        return A[i] @ W + W @ A[i].T + BB[i]
-
-    W = np.zeros((n, n))
     h = (t1 - t0) / steps
-    for s in range(steps):
-        i = 2 * s
-        k1 = f(i, W)
-        k2 = f(i + 1, W + 0.5 * h * k1)
-        k3 = f(i + 1, W + 0.5 * h * k2)
-        k4 = f(i + 2, W + h * k3)
-        W = W + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+    I = np.eye(n)
+    A0, Am, A1 = A[0:-1:2], A[1::2], A[2::2]
+    K1 = A0
+    K2 = Am @ (I + 0.5 * h * K1)
+    K3 = Am @ (I + 0.5 * h * K2)
+    K4 = A1 @ (I + h * K3)
+    P = I + h / 6.0 * (K1 + 2 * K2 + 2 * K3 + K4)        # Phi(t_{j+1}, t_j)
+    Phi = np.empty((steps + 1, n, n))                     # Phi(t_j, t0)
+    Phi[0] = I
+    for j in range(steps):
+        Phi[j + 1] = P[j] @ Phi[j]
+    G = np.linalg.solve(np.transpose(Phi, (0, 2, 1)), Phi[-1].T).transpose(0, 2, 1)
+    BB = B[::2] @ np.transpose(B[::2], (0, 2, 1))
+    w = np.full(steps + 1, 2.0)
+    w[1::2] = 4.0
+    w[0] = w[-1] = 1.0
+    W = np.einsum("j,jab,jbc,jdc->ad", w * h / 3.0, G, BB, G)
     ev = np.linalg.eigvalsh(0.5 * (W + W.T))
     return float(max(ev[0], 0.0) / ev[-1]) if ev[-1] > 0 else 0.0
 

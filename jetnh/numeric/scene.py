@@ -233,6 +233,16 @@ class Scene(Frozen):
             self.system, self.principle, compiled_params, self.runtime_params,
             self.integrals, self.form, self.convention, key=self.key), persistent=self.cache)
 
+    @memo
+    def sensitivity_key(self) -> str:
+        """The key of the kernels of runs with sensitivities
+        (``codegen.sensitivity_kernels``)."""
+        compiled_params = {k: v for k, v in self.params.items()
+                           if k not in self.runtime_params}
+        return codegen.symbolic_key(self.system, self.principle, compiled_params,
+                                    self.runtime_params, self.integrals, self.form,
+                                    self.convention, extra="sensitivities")
+
     @property
     def jacobian(self):
         """``jac(t, y, p, J)``, the Jacobian of the right-hand side for radau, as a
