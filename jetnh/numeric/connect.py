@@ -205,6 +205,7 @@ class _Shooter:
         self.y0 = np.array([scene.initial[n] for n in names])
         self.rtol, self.atol, self.method, self.rcond = rtol, atol, method, rcond
         self.end_names = tuple(q1)
+        self.seen: dict = {}
 
     def state(self, u) -> np.ndarray:
         y = self.y0.copy()
@@ -212,7 +213,16 @@ class _Shooter:
         return y
 
     def endpoint(self, u):
-        """``(q_named(t1), dq_named(t1)/du)``, or None where the run fails."""
+        """``(q_named(t1), dq_named(t1)/du)``, or None where the run fails (the last
+        few kept: the guess is evaluated more than once)."""
+        key = np.asarray(u, dtype=float).tobytes()
+        if key not in self.seen:
+            if len(self.seen) > 8:
+                self.seen.clear()
+            self.seen[key] = self._endpoint(u)
+        return self.seen[key]
+
+    def _endpoint(self, u):
         try:
             tr = self.scene.run(rtol=self.rtol, atol=self.atol, method=self.method,
                                 y0=self.state(u), save="final", sensitivities=True)
@@ -360,14 +370,15 @@ class _Shooter:
         Jm = tr.sensitivities[-1][np.ix_(self.rows, self.cols)]
         s = np.linalg.svd(Jm, compute_uv=False)
         rank = int(np.sum(s > self.rcond * s[0])) if s.size and s[0] > 0 else 0
-        gram = gramian_ratio(tr)
+        samples = _Samples(tr, self.rtol, self.atol, self.method, self.state(u))
+        gram = gramian_ratio(tr, samples)
         best = Connection(
-            trajectory=tr, cost=action(tr), initial=MappingProxyType(
+            trajectory=tr, cost=action(tr, samples), initial=MappingProxyType(
                 {n: float(v) for n, v in zip(scene.state_names + scene.dependent_velocities,
                                              list(tr.y[0]) + [float(tr[d][0]) for d in
                                                               scene.dependent_velocities])}),
             residual=residual, normal=bool(gram > GRAMIAN_RCOND), conjugate_times=
-            conjugate_times(tr, self.cols, self.rcond), principle=scene.principle,
+            conjugate_times(tr, self.cols, samples, self.rcond), principle=scene.principle,
             unknowns=self.unknowns, rank=rank, singular_values=tuple(s.tolist()),
             iterations=iterations, gramian_ratio=gram)
         if tol is not None and np.max(np.abs(q - self.target) / (1 + np.abs(self.target))) > tol:
@@ -390,19 +401,40 @@ def _dense_states(tr, times, full=False):
     return evaluate(tr, times, full=full)
 
 
-def action(tr) -> float:
-    """``int L dt`` along the trajectory: 5-point Gauss-Legendre on every step of its
-    dense output, L evaluated on the graph (dependent velocities by the aux kernel)."""
-    from ..algebra import dag
+class _Samples:
+    """The states and sensitivities of a trajectory at the times its verdicts need --
+    the 5 Gauss-Legendre nodes of every step (``gauss``) and ``GRID`` + 1 equal-spaced
+    times (``grid``) -- from one run with these times as ``t_eval`` (dense output: the
+    values ``Trajectory.at`` gives, without re-taking each step from Python)."""
 
-    scene = tr.scene
-    t = tr.t
-    a, b = t[:-1], t[1:]
-    half = 0.5 * (b - a)
-    times = (0.5 * (a + b))[:, None] + half[:, None] * _GAUSS_X[None, :]
-    ys = _dense_states(tr, times.ravel())
-    return float(np.sum(_lagrangian(scene, times.ravel(), ys).reshape(times.shape)
-                        * _GAUSS_W[None, :] * half[:, None]))
+    GRID = 400
+
+    def __init__(self, tr, rtol, atol, method, y0):
+        t = tr.t
+        a, b = t[:-1], t[1:]
+        self.half = 0.5 * (b - a)
+        self.gauss = ((0.5 * (a + b))[:, None] + self.half[:, None] * _GAUSS_X[None, :])
+        self.grid = np.linspace(t[0], t[-1], self.GRID + 1)
+        times = np.concatenate([self.gauss.ravel(), self.grid])
+        order = np.argsort(times, kind="stable")
+        run = tr.scene.run(rtol=rtol, atol=atol, method=method, y0=y0, t_eval=times[order],
+                           sensitivities=True)
+        if run.status != 0 or len(run.t) != times.size:
+            raise ConnectError(f"the motion found could not be sampled: {run.stop_reason}")
+        ys = np.empty_like(run.y)
+        S = np.empty_like(run.sensitivities)
+        ys[order], S[order] = run.y, run.sensitivities
+        k = self.gauss.size
+        self.gauss_y, self.grid_y, self.grid_S = ys[:k], ys[k:], S[k:]
+
+
+def action(tr, samples) -> float:
+    """``int L dt`` along the trajectory: 5-point Gauss-Legendre on every step of its
+    dense output (``_Samples``), L evaluated on the graph (dependent velocities by the
+    aux kernel)."""
+    times = samples.gauss
+    L = _lagrangian(tr.scene, times.ravel(), samples.gauss_y).reshape(times.shape)
+    return float(np.sum(L * _GAUSS_W[None, :] * samples.half[:, None]))
 
 
 def _point(scene, times, ys) -> dict:
@@ -432,12 +464,17 @@ def _lagrangian(scene, times, ys) -> np.ndarray:
     return np.broadcast_to(L, times.shape)
 
 
-def gramian_ratio(tr, steps: int = 200) -> float:
+#: system id -> (system, [d phi/dq..., d phi/du...]) for ``gramian_ratio``
+_DERIVATIVES: dict = {}
+
+
+def gramian_ratio(tr, samples) -> float:
     """Smallest over largest eigenvalue of the controllability Gramian of the constraint
     system (qdot^mu = u^mu, qdot^alpha = phi^alpha(t, q, u)) linearized along ``tr``,
     ``W = int Phi(t1, s) B B^T Phi(t1, s)^T ds`` (A = d qdot/dq, B = d qdot/du from the
     graph on the dense output; the transition matrix Phi by RK4 propagators of ``steps``
-    equal steps, the integral by Simpson's rule on their nodes).  Zero: the endpoint
+    equal steps, ``_Samples.GRID / 2`` of them, the integral by Simpson's rule on their
+    nodes).  Zero: the endpoint
     map loses rank along the path (an abnormal extremal)."""
     from ..algebra import dag
 
@@ -447,14 +484,15 @@ def gramian_ratio(tr, steps: int = 200) -> float:
     n, us = len(J.q), system.independent_velocities
     if not system.k:
         return 1.0
-    steps += steps % 2
+    steps = samples.GRID // 2
     phis = [system.phi[v] for v in system.dependent_velocities]
-    dq = dag.jacobian(phis, list(J.q))
-    du = dag.jacobian(phis, list(us))
+    derivatives = _DERIVATIVES.get(id(system))
+    if derivatives is None or derivatives[0] is not system:
+        derivatives = _DERIVATIVES[id(system)] = (
+            system, list(dag.jacobian(phis, list(J.q))) + list(dag.jacobian(phis, list(us))))
     t0, t1 = float(tr.t[0]), float(tr.t[-1])
-    times = np.linspace(t0, t1, 2 * steps + 1)
-    vals = dag.evaluate_numpy(list(dq) + list(du), _point(scene, times, _dense_states(tr,
-                                                                                    times)))
+    times = samples.grid
+    vals = dag.evaluate_numpy(derivatives[1], _point(scene, times, samples.grid_y))
     k = len(phis)
     A = np.zeros((times.size, n, n))
     B = np.zeros((times.size, n, len(us)))
@@ -490,11 +528,12 @@ def gramian_ratio(tr, steps: int = 200) -> float:
     return float(max(ev[0], 0.0) / ev[-1]) if ev[-1] > 0 else 0.0
 
 
-def conjugate_times(tr, cols, rcond=1e-9, samples: int = 400) -> tuple:
+def conjugate_times(tr, cols, samples, rcond=1e-9) -> tuple:
     """The times in (t0, t1] where dq(t)/du (rows: every coordinate; columns ``cols``,
     the unknowns' states) loses rank: the sign changes of its determinant (square case)
-    on ``samples`` points of the dense output, located by Brent's method; and t1 when
-    the matrix is rank-deficient there (relative cut-off ``rcond``)."""
+    on the equal-spaced times of ``samples``, located by Brent's method on the dense
+    output; and t1 when the matrix is rank-deficient there (relative cut-off
+    ``rcond``)."""
     from scipy.optimize import brentq
 
     n = tr.layout.n_state
@@ -514,8 +553,8 @@ def conjugate_times(tr, cols, rcond=1e-9, samples: int = 400) -> tuple:
             norms = np.linalg.norm(M, axis=0)
             return np.linalg.det(M / np.where(norms > 0, norms, 1.0))
 
-        grid = np.linspace(t0, t1, samples + 1)[1:]
-        M = block(grid)
+        grid = samples.grid[1:]
+        M = samples.grid_S[1:, :nq][:, :, cols]
         norms = np.linalg.norm(M, axis=1, keepdims=True)
         d = np.linalg.det(M / np.where(norms > 0, norms, 1.0))
         for i in range(len(grid) - 1):
