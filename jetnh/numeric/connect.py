@@ -50,7 +50,7 @@ import numpy as np
 from ..errors import ConnectError, JetnhError
 from ..mechanics import principles
 from ..mechanics.system import System
-from . import arguments
+from . import arguments, codegen
 from .trajectory import Trajectory
 
 #: the principles whose multipliers are unknowns of the two-point problem
@@ -116,8 +116,6 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     q1 = _configuration(end, coords, "end", complete=False)
     # a scene at the start with placeholder unknowns (the runs replace them)
     velocities = tuple(v.name for v in system.independent_velocities)
-    from . import codegen
-
     mults = codegen.multiplier_names(system, principle)
     unknowns = velocities + (mults if principle in VARIATIONAL else ())
     fixed = {} if principle in VARIATIONAL else {m: 0.0 for m in mults}
@@ -372,16 +370,17 @@ class _Shooter:
         rank = int(np.sum(s > self.rcond * s[0])) if s.size and s[0] > 0 else 0
         samples = _Samples(tr, self.rtol, self.atol, self.method, self.state(u))
         gram = gramian_ratio(tr, samples)
+        start = list(tr.y[0]) + [float(tr[d][0]) for d in scene.dependent_velocities]
         best = Connection(
-            trajectory=tr, cost=action(tr, samples), initial=MappingProxyType(
-                {n: float(v) for n, v in zip(scene.state_names + scene.dependent_velocities,
-                                             list(tr.y[0]) + [float(tr[d][0]) for d in
-                                                              scene.dependent_velocities])}),
-            residual=residual, normal=bool(gram > GRAMIAN_RCOND), conjugate_times=
-            conjugate_times(tr, self.cols, samples, self.rcond), principle=scene.principle,
-            unknowns=self.unknowns, rank=rank, singular_values=tuple(s.tolist()),
-            iterations=iterations, gramian_ratio=gram)
-        if tol is not None and np.max(np.abs(q - self.target) / (1 + np.abs(self.target))) > tol:
+            trajectory=tr, cost=action(tr, samples),
+            initial=MappingProxyType({n: float(v) for n, v in zip(
+                scene.state_names + scene.dependent_velocities, start)}),
+            residual=residual, normal=bool(gram > GRAMIAN_RCOND),
+            conjugate_times=conjugate_times(tr, self.cols, samples, self.rcond),
+            principle=scene.principle, unknowns=self.unknowns, rank=rank,
+            singular_values=tuple(s.tolist()), iterations=iterations, gramian_ratio=gram)
+        if tol is not None and np.max(np.abs(q - self.target)
+                                      / (1 + np.abs(self.target))) > tol:
             raise ConnectError(
                 f"the {scene.principle} motion found ends {residual:.3g} away from end"
                 + self._reachability(u), best)
