@@ -315,3 +315,26 @@ def test_unreachable_in_budget_says_where_it_stopped(heis):
     with pytest.raises(jn.ConnectError, match="stopped at s ="):
         jn.connect(heis, "vakonomic", O, {"x": 1.0, "y": 0.5, "z": 40.0}, (0.0, 1.0),
                    max_iter=2, max_continuation=3)
+
+
+def test_cli_connect(tmp_path):
+    import json
+    import subprocess
+    import sys
+
+    def run(*args):
+        return subprocess.run([sys.executable, "-m", "jetnh", "connect", *args],
+                              capture_output=True, text=True, timeout=600)
+
+    png = tmp_path / "g.png"
+    r = run("heisenberg", "--from", "x=0,y=0,z=0", "--to", "x=1,y=0.5,z=0.2", "--t-end", "1",
+            "--format", "json", "--plot", str(png), "-q")
+    assert r.returncode == 0, r.stderr
+    data = json.loads(r.stdout)
+    assert abs(data["cost"] - 0.672290367016) < 1e-9 and data["normal"] is True
+    assert data["conjugate_times"] == [] and png.stat().st_size > 1000
+    r = run("heisenberg", "--to", "x=1,y=0.5,z=0.2", "--t-end", "1", "-p", "chetaev")
+    assert r.returncode == 1 and "name at most 2 coordinates" in r.stderr
+    assert "Traceback" not in r.stderr
+    r = run("heisenberg", "--t-end", "1")
+    assert r.returncode != 0 and "--to" in r.stderr
