@@ -8,9 +8,9 @@
    equations: solve_bvp calls the scene's compiled right-hand side (one call per mesh
    point), with its default finite-difference Jacobian and with jetnh's compiled Jacobian
    (``codegen.jacobian_kernels``), from a straight-line guess (velocities of the named
-   coordinates, 0.5 for the others, zero multipliers) on 11 nodes.  connect runs at
-   rtol 1e-6 .. 1e-11 (its time includes the verdicts: cost, conjugate times, Gramian);
-   solve_bvp at tol 1e-3 .. 1e-9.  The error is the largest deviation of the initial
+   coordinates, 0.5 for the others, zero multipliers) on 11 nodes, at most 20000 nodes.
+   connect runs at rtol 1e-6 .. 1e-10 (its time includes the verdicts: cost, conjugate
+   times, Gramian); solve_bvp at tol 1e-3 .. 1e-9.  The error is the largest deviation of the initial
    state found (velocities, multipliers) from a reference (connect at rtol 1e-13).
    "Speed-up at equal error": the time of the fastest solve_bvp run at least as accurate
    as connect's, divided by connect's (">" when no solve_bvp run was as accurate: its
@@ -37,11 +37,11 @@ ZERO_DISK = {"x": 0.0, "y": 0.0, "phi": 0.0, "psi": 0.0}
 CASES = (
     ("heisenberg", "vakonomic", {"x": 0.0, "y": 0.0, "z": 0.0},
      {"x": 1.0, "y": 0.5, "z": 0.2}, 1.0),
-    ("rolling_disk", "vakonomic", ZERO_DISK, {"x": 0.5, "y": 0.3, "phi": 1.0, "psi": 0.4},
-     1.0),
     ("rolling_disk", "chetaev", ZERO_DISK, {"x": 0.5, "y": 0.3}, 1.0),
 )
-CONNECT_RTOL = (1e-6, 1e-8, 1e-10, 1e-11)
+CONNECT_RTOL = (1e-6, 1e-8, 1e-10)
+#: solve_bvp's mesh limit and the seconds each route may spend per tolerance
+MAX_NODES, BUDGET = 20_000, 20.0
 BVP_TOL = (1e-3, 1e-5, 1e-7, 1e-9)
 
 
@@ -102,8 +102,9 @@ def connect_case(model, principle, start, end, T, reps, quick):
             def go():
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")
-                    return solve_bvp(fun, bc, t, Y, fun_jac=fjac, tol=tol, max_nodes=100_000)
-            sec, sol = best(go, max(1, reps // 2))
+                    return solve_bvp(fun, bc, t, Y, fun_jac=fjac, tol=tol,
+                                     max_nodes=MAX_NODES)
+            sec, sol = best(go, reps, BUDGET)
             err = float(np.max(np.abs(sol.y[:, 0] - want))) if sol.status == 0 else None
             rows.append(dict(model=model, principle=principle,
                              route="solve_bvp" + (" + jetnh jac" if jacobian else ""),
@@ -148,7 +149,7 @@ def sensitivity_cost(model, principle, initial, T, reps):
 
 def main():
     args = parser(__doc__, "connect_vs_solve_bvp").parse_args()
-    reps = 2 if args.quick else 5
+    reps = 2 if args.quick else 3
     rows, found = [], []
     for case in CASES[:1] if args.quick else CASES:
         ref, r = connect_case(*case, reps, args.quick)
