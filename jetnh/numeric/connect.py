@@ -82,7 +82,7 @@ class Connection:
 
 
 def connect(system, principle, start, end, t_span, params=None, guess=None, *,
-            tol=1e-9, rtol=1e-11, atol=1e-12, max_iter=50, max_continuation=200,
+            tol=1e-9, rtol=1e-11, atol=1e-12, max_iter=30, max_continuation=64,
             rcond=1e-9, method="dop853") -> Connection:
     """The motion of ``principle`` from ``start`` (every coordinate) at t0 to ``end``
     (some or all coordinates) at t1, as a ``Connection`` (module docstring).
@@ -312,7 +312,7 @@ class _Shooter:
                 ds = min(2.0 * ds, 1.0 - s)
             else:
                 ds *= 0.5
-                if ds < 1e-6:
+                if ds < 1e-4:
                     break
         best = self._best(u)
         raise ConnectError(
