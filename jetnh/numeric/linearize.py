@@ -11,20 +11,38 @@
 The state x of a principle's reduced first-order system is the scene's (``Scene``): the
 coordinates, the independent velocities qdot^mu and the multipliers of the principles
 whose multipliers are states (vakonomic, Hoelder, Suslov), less the coordinates that are
-dropped; the dependent velocities follow from the constraints (qdot^alpha = phi^alpha),
-so every perturbation stays on the constraint manifold.  ``A = dx'/dx`` at the operating
+dropped or follow from holonomic constraints (below); the dependent velocities follow
+from the constraints (qdot^alpha = phi^alpha), so every perturbation stays on the
+constraint manifold.  ``A = dx'/dx`` at the operating
 point is the Jacobian kernel generated from the derivation by forward-mode
 differentiation over the shared graph (``codegen.jacobian_kernels``), compiled once per
 system and principle with every parameter read at run time: a ``replace`` costs a kernel
 call and an eigenvalue problem.  ``Linearization.symbolic()`` is the same matrix in the
 user's symbols, by ``dag.jacobian`` on the graph (never flattened).
 
+Holonomic constraints g(t, q) = 0 (``system.holonomic``): the operating point must lie
+on g = 0 (else a ``ConstraintError`` with the residual and values that would put it
+there), and the coordinates are perturbed within g = 0.  Near the point g = 0 is
+parametrised by the independent coordinates q^I of ``holonomic.completion_coordinates``
+(the split's dependent coordinates where g can be solved for them): the eliminated ones
+q^D (``Linearization.eliminated``) follow from g = 0, dq^D = T dq^I with
+T = -(dg/dq^D)^-1 dg/dq^I, and are no states.  The flow keeps g constant (its equations
+use D g = 0), so A = P J E exactly: J the Jacobian of the full system, E the embedding
+(unit columns, plus T in the rows q^D under the q^I columns) and P the rows of the kept
+states.  A holonomic constraint's multiplier under the vakonomic, Hoelder and Suslov
+principles: D g is a total derivative, so its Euler-Lagrange expression vanishes and the
+multiplier enters only through its rate (``lambda_t`` dg/dq, with ``lambda_t`` fixed by
+the other equations); no row depends on its value, its column of J is zero and it is a
+pure zero mode, bookkeeping: such multipliers (checked on the graph, not assumed) are
+left out (``Linearization.inert``) and need no value in ``at``.
+
 Dropped coordinates (``drop="cyclic"``): those the equations of the kept states do not
 depend on -- absent from them, or present with a derivative that vanishes identically
 (decided by ``zero.vanishes`` on the graph, e.g. the heading of a rolling disk, which
-enters phi and the accelerations only in combinations that cancel).  Their rows (their
-drift, such as the position of a rolling body) do not feed back, so ``A`` is the
-Jacobian restricted to the kept states.
+enters phi and the accelerations only in combinations that cancel) -- and that share no
+holonomic constraint with a kept coordinate.  Their rows (their drift, such as the
+position of a rolling body) do not feed back, so ``A`` is the Jacobian restricted to the
+kept states.
 
 Stability is spectral: ``unstable`` when an eigenvalue has a positive real part,
 ``asymptotically stable`` when every one has a negative real part, ``marginal`` when some
@@ -488,7 +506,9 @@ def linearize(system, principle="chetaev", at=None, params=None, drop="cyclic", 
 
     ``at``: coordinates, independent velocities and multipliers keyed by Symbol or name
     (dependent velocities follow from the constraints; if given they must agree; dropped
-    coordinates may be omitted: their values do not enter A).  ``params`` default to
+    coordinates that no holonomic constraint uses and inert multipliers may be omitted:
+    their values do not enter A).  The coordinates must satisfy the holonomic
+    constraints g = 0 (module docstring).  ``params`` default to
     the system's defaults.  ``drop``: ``"cyclic"``, a list of coordinates, or None.
     """
     if not isinstance(system, System):
