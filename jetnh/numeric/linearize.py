@@ -30,8 +30,8 @@ T = -(dg/dq^D)^-1 dg/dq^I, and are no states.  The flow keeps g constant (its eq
 use D g = 0), so A = P J E exactly: J the Jacobian of the full system, E the embedding
 (unit columns, plus T in the rows q^D under the q^I columns) and P the rows of the kept
 states.  A holonomic constraint's multiplier under the vakonomic, Hoelder and Suslov
-principles: D g is a total derivative, so its Euler-Lagrange expression vanishes and the
-multiplier enters only through its rate (``lambda_t`` dg/dq, with ``lambda_t`` fixed by
+principles enters their equations only through its rate (vakonomic: D g is a total
+derivative, so its Euler-Lagrange expression vanishes) (``lambda_t`` dg/dq, with ``lambda_t`` fixed by
 the other equations); no row depends on its value, its column of J is zero and it is a
 pure zero mode, bookkeeping: such multipliers (checked on the graph, not assumed) are
 left out (``Linearization.inert``) and need no value in ``at``.
