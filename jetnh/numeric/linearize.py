@@ -22,19 +22,19 @@ user's symbols, by ``dag.jacobian`` on the graph (never flattened).
 
 Holonomic constraints g(t, q) = 0 (``system.holonomic``): the operating point must lie
 on g = 0 (else a ``ConstraintError`` with the residual and values that would put it
-there), and the coordinates are perturbed within g = 0.  Near the point g = 0 is
-parametrised by the independent coordinates q^I of ``holonomic.completion_coordinates``
-(the split's dependent coordinates where g can be solved for them): the eliminated ones
-q^D (``Linearization.eliminated``) follow from g = 0, dq^D = T dq^I with
-T = -(dg/dq^D)^-1 dg/dq^I, and are no states.  The flow keeps g constant (its equations
-use D g = 0), so A = P J E exactly: J the Jacobian of the full system, E the embedding
-(unit columns, plus T in the rows q^D under the q^I columns) and P the rows of the kept
-states.  A holonomic constraint's multiplier under the vakonomic, Hoelder and Suslov
-principles enters their equations only through its rate (vakonomic: D g is a total
-derivative, so its Euler-Lagrange expression vanishes) (``lambda_t`` dg/dq, with ``lambda_t`` fixed by
-the other equations); no row depends on its value, its column of J is zero and it is a
-pure zero mode, bookkeeping: such multipliers (checked on the graph, not assumed) are
-left out (``Linearization.inert``) and need no value in ``at``.
+there), and the coordinates are perturbed within g = 0.  The coordinates q^D of
+``holonomic.completion_coordinates`` (the split's dependent ones where g can be solved
+for them) are eliminated (``Linearization.eliminated``): near the point they follow
+from the others q^I by g = 0, dq^D = T dq^I with T = -(dg/dq^D)^-1 dg/dq^I, and are no
+states.  The flow keeps g constant (its equations use D g = 0), so A = P J E exactly:
+J the Jacobian of the full system, E the embedding (unit columns, plus T in the rows
+q^D under the q^I columns) and P the rows of the kept states.  A holonomic constraint's
+multiplier under the vakonomic, Hoelder and Suslov principles enters their equations
+only through its rate, as lambda_t dg/dq with lambda_t fixed by the other equations
+(vakonomic: D g is a total derivative, so its Euler-Lagrange expression vanishes): no
+row depends on its value, its column of J is zero, it is a pure zero mode and
+bookkeeping.  Such multipliers (found on the graph, not assumed) are left out
+(``Linearization.inert``) and need no value in ``at``.
 
 Dropped coordinates (``drop="cyclic"``): those the equations of the kept states do not
 depend on -- absent from them, or present with a derivative that vanishes identically
