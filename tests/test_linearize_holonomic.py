@@ -228,3 +228,19 @@ def test_A_along_curves_inside_g(data):
     scale = max(1.0, np.abs(lin.A).max())
     assert np.allclose(lin.A, _along_g(lin), atol=1e-6 * scale, rtol=1e-6)
     assert np.allclose(lin.A, _symbolic_at(lin), atol=1e-10 * scale, rtol=1e-10)
+
+
+def test_along_moves_the_eliminated_coordinates_with_g():
+    """A scan along a coordinate or a parameter keeps the point on g = 0 (y solved from
+    it): along l at the bottom the eigenvalues are +-i sqrt(G/l); along x they are those
+    of ``replace`` at the points with y = -sqrt(l^2 - x^2) given by hand."""
+    s = pendulum_xy()
+    lin = jn.linearize(s, at={"x": 0.0, "y": -1.3, "x_t": 0.0}, params=PENDULUM)
+    ls = np.array([0.5, 1.0, 2.0])
+    scan = lin.along("l", ls)
+    assert np.allclose(scan.eigenvalues[:, 1].imag, np.sqrt(9.81 / ls), rtol=1e-12)
+    xs = np.array([-0.6, 0.2, 0.9])
+    scan = lin.along("x", xs)
+    for x, ev in zip(xs, scan.eigenvalues):
+        ref = lin.replace(at={"x": x, "y": -np.sqrt(1.3**2 - x**2)})
+        assert np.allclose(ev, ref.eigenvalues, atol=1e-12)

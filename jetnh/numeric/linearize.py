@@ -319,11 +319,8 @@ class Linearization(Frozen):
         def put(u):             # the unknowns, and the coordinates g = 0 then gives
             y[idx] = u
             if moves:
-                point = _configuration(model, y, dict(self.params), t)
-                done, _ = holonomic.check(self.system, point,
-                                          complete=list(self.eliminated))
-                for i in self._chart:
-                    y[i] = float(done[model.coordinates[i]])
+                for nm, v in self._on_g({model.names[i]: y[i] for i in idx}, {}).items():
+                    y[model.names.index(nm)] = v
 
         def residual(u):
             put(u)
@@ -361,16 +358,18 @@ class Linearization(Frozen):
 
     def along(self, name, values) -> "StabilityScan":
         """Eigenvalues along a parameter or an operating-point value ``name`` (every
-        other value held): a ``StabilityScan`` with the crossings of Re lambda = 0."""
+        other value held, but the ``eliminated`` coordinates, which follow from g = 0):
+        a ``StabilityScan`` with the crossings of Re lambda = 0."""
         name = arguments.name_of(name, "along")
         values = arguments.real_array(values, "values")
-        if name in self.params:
-            move = lambda v: self.replace(params={name: v})      # noqa: E731
-        elif name in self.at:
-            move = lambda v: self.replace(at={name: v})          # noqa: E731
-        else:
+        if name not in self.params and name not in self.at:
             raise JetnhError(f"{name!r} is neither a parameter ({', '.join(self.params)}) "
                              f"nor a value of the operating point ({', '.join(self.at)})")
+
+        def move(v):
+            if name in self.params:
+                return self.replace(params={name: v}, at=self._on_g({}, {name: v}))
+            return self.replace(at={**self._on_g({name: v}, {}), name: v})
         lins = [move(float(v)) for v in values]
         ev = np.array([lin.eigenvalues for lin in lins])
         margins = np.array([lin.margin for lin in lins])
@@ -381,6 +380,19 @@ class Linearization(Frozen):
                 crossings.append(_root(lambda v: move(v).margin, float(values[i]),
                                        float(values[i + 1])))
         return StabilityScan(name, values, ev, margins, tuple(crossings), self.state_names)
+
+    def _on_g(self, at: dict, params: dict) -> dict:
+        """The eliminated coordinates solved from g = 0 (Newton's method from their
+        values here) with ``at`` and ``params`` changed: name -> value."""
+        if not self.eliminated:
+            return {}
+        model = self._model
+        y = self._y.copy()
+        for nm, v in at.items():
+            y[model.names.index(nm)] = v
+        point = _configuration(model, y, {**self.params, **params}, self.t)
+        done, _ = holonomic.check(self.system, point, complete=list(self.eliminated))
+        return {model.names[i]: float(done[model.coordinates[i]]) for i in self._chart}
 
     # ------------------------------------------------------------------ symbolic
     def symbolic(self) -> sp.Matrix:
