@@ -5,7 +5,8 @@ coordinate, an independent velocity, a multiplier, a dependent velocity (compute
 the constraints by the compiled ``aux`` kernel, on first access) or a user first
 integral.  ``traj.diagnostics`` reports the constraint residual, the energy and its
 drift, first integrals and their drift, steps, right-hand-side evaluations and why the
-integration stopped.  With generalized forces the energy is not conserved:
+integration stopped (and the split switches of a run that changed split,
+``numeric.atlas``).  With generalized forces the energy is not conserved:
 ``traj.power`` is their power Q_s qdot^s, and the diagnostics say that the forces work.
 """
 
@@ -43,6 +44,7 @@ class Diagnostics:
     forced: bool = False              # generalized forces work: the energy drifts by design
     holonomic_residual_max: float = 0.0   # max |g_i| of the holonomic constraints
     completed: dict = field(default_factory=dict)     # see Scene.completed
+    switches: list = field(default_factory=list)      # split changes: {"t", "from", "to"}
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -62,6 +64,10 @@ class Diagnostics:
             lines.append(f"  integral {k}: drift {v:.3e}")
         for k, v in self.events.items():
             lines.append(f"  event {k}: {v} occurrence(s)")
+        if self.switches:
+            lines.append(f"  {len(self.switches)} split switch(es), the first at t = "
+                         f"{self.switches[0]['t']:.6g} ({self.switches[0]['from']} -> "
+                         f"{self.switches[0]['to']})")
         return "\n".join(lines)
 
 
@@ -94,7 +100,7 @@ class Trajectory(Frozen):
 
     def __init__(self, scene, t, y, p, *, method, status, stop_reason, steps, rejected,
                  nfev, wall_time, kernels, projected=None, own=None, events=None,
-                 singularity=None, dense=None):
+                 singularity=None, dense=None, segments=None, switches=()):
         names, t_ev, y_ev = events if events is not None else ((), [], [])
         self._set(
             scene=scene, t=np.ascontiguousarray(t, dtype=float),
@@ -111,7 +117,10 @@ class Trajectory(Frozen):
             # methods that carry their own velocities, residuals, energy and first
             # integrals (the discrete integrators dla, dvi): {"velocities": {name: col},
             # "residual", "energy", "integrals": {name: col}}
-            _own=own or {})
+            _own=own or {},
+            # a run that changed split: its pieces (``numeric.atlas.Stitched``, which
+            # gives its aux rows and dense output) and switches {"t", "from", "to"}
+            _segments=segments, switches=tuple(switches))
 
     @property
     def layout(self):
@@ -183,6 +192,8 @@ class Trajectory(Frozen):
         if self._own:
             raise JetnhError(f"{self.method} trajectories carry their own velocities, "
                              "residuals, energy and first integrals (no aux rows)")
+        if self._segments is not None:
+            return self._segments.aux(self)
         out = np.empty((len(self), self.layout.n_aux))
         if len(self):
             self._kernels.aux_rows(self.t, self.y, self._p, out)
@@ -261,7 +272,8 @@ class Trajectory(Frozen):
             integral_drift=idrift, projected=i["projected"],
             events={n: len(te) for n, te in zip(self.event_names, self.t_events)},
             singularity=self.singularity, forced=self.scene.system.forced,
-            holonomic_residual_max=hmax, completed=dict(self.scene.completed))
+            holonomic_residual_max=hmax, completed=dict(self.scene.completed),
+            switches=[dict(s) for s in self.switches])
 
     # ------------------------------------------------------------------ tables, figures
     def to_dataframe(self, diagnostics=True):
@@ -289,9 +301,12 @@ class Trajectory(Frozen):
     def at(self, times) -> np.ndarray:
         """States ``[len(times), n_states]`` at ``times`` inside the span, from the
         method's dense output (dop853, dopri5: the covering step re-taken, bit for bit
-        what ``t_eval`` gives; rk4: cubic Hermite); needs every step stored."""
+        what ``t_eval`` gives; rk4: cubic Hermite); needs every step stored.  A run
+        that changed split is evaluated in the chart that ran at each time."""
         from .dense import evaluate
 
+        if self._segments is not None:
+            return self._segments.at(self, times)
         return evaluate(self, times)
 
     def _repr_html_(self):
