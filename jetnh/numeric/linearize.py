@@ -13,11 +13,11 @@ coordinates, the independent velocities qdot^mu and the multipliers of the princ
 whose multipliers are states (vakonomic, Hoelder, Suslov), less the coordinates that are
 dropped or follow from holonomic constraints (below); the dependent velocities follow
 from the constraints (qdot^alpha = phi^alpha), so every perturbation stays on the
-constraint manifold.  ``A = dx'/dx`` at the operating
-point is the Jacobian kernel generated from the derivation by forward-mode
-differentiation over the shared graph (``codegen.jacobian_kernels``), compiled once per
-system and principle with every parameter read at run time: a ``replace`` costs a kernel
-call and an eigenvalue problem.  ``Linearization.symbolic()`` is the same matrix in the
+constraint manifold.  ``A = dx'/dx`` at the operating point comes from the Jacobian
+kernel generated from the derivation by forward-mode differentiation over the shared
+graph (``codegen.jacobian_kernels``), compiled once per system and principle with every
+parameter read at run time: a ``replace`` costs a kernel call and an eigenvalue
+problem.  ``Linearization.symbolic()`` is the same matrix in the
 user's symbols, by ``dag.jacobian`` on the graph (never flattened).
 
 Holonomic constraints g(t, q) = 0 (``system.holonomic``): the operating point must lie
