@@ -9,6 +9,16 @@ HERE = Path(__file__).resolve().parent
 # compiled kernels of the executed pages go to the build directory, not the user's cache
 os.environ.setdefault("JETNH_CACHE", str(HERE / "_build" / "jetnh-cache"))
 
+# the notebooks' kernels read their IPython profile from the build directory: a clean
+# profile (no user start-up files) whose kernel logs errors only.  The kernel's one
+# warning is that it talks to the build over local TCP without encryption (myst-nb
+# starts it; the build is a local, short-lived process), printed once per page.
+IPYTHONDIR = HERE / "_build" / "ipython"
+(IPYTHONDIR / "profile_default").mkdir(parents=True, exist_ok=True)
+(IPYTHONDIR / "profile_default" / "ipython_kernel_config.py").write_text(
+    'c.IPKernelApp.log_level = "ERROR"\n', encoding="utf-8")
+os.environ["IPYTHONDIR"] = str(IPYTHONDIR)
+
 project = "jetnh"
 author = "the jetnh developers"
 copyright = "the jetnh developers"
@@ -18,7 +28,11 @@ extensions = [
     "myst_nb",                       # MyST pages and notebooks, executed at build time
     "sphinx.ext.autodoc",
     "sphinx.ext.autosummary",
+    "sphinx.ext.napoleon",           # numpydoc-style sections (Parameters, Returns, ...)
     "sphinx.ext.mathjax",
+    # MathJax 3 shipped with the site (copied into _static/mathjax): formulas render
+    # without network, and no page loads a script from elsewhere
+    "sphinx-mathjax-offline",
 ]
 exclude_patterns = ["_build", "Thumbs.db", ".DS_Store"]
 suppress_warnings = ["myst.header"]    # the included report starts below its own level
@@ -32,6 +46,10 @@ nb_execution_cache_path = str(HERE / "_build" / ".jupyter_cache")
 nb_execution_timeout = 300
 nb_execution_show_tb = True
 nb_merge_streams = True
+
+napoleon_google_docstring = False
+napoleon_numpy_docstring = True
+napoleon_use_rtype = False
 
 autodoc_member_order = "bysource"
 autodoc_typehints = "description"

@@ -4,6 +4,7 @@ copied), and no docstring refers to a file outside the repository.  ``make docs`
 the site (warnings are errors); CI runs it."""
 
 import ast
+import html.parser
 import re
 import tokenize
 from pathlib import Path
@@ -115,3 +116,69 @@ def test_comments_refer_to_no_files_outside_the_repository():
                         for tok in tokenize.generate_tokens(fh.readline)
                         if tok.type == tokenize.COMMENT and OUTSIDE.search(tok.string)]
     assert not bad, bad
+
+
+# ---------------------------------------------------------------------- offline maths
+BUILT = DOCS / "_build" / "html"
+
+
+def test_maths_is_typeset_by_the_mathjax_shipped_with_the_site():
+    conf = (DOCS / "conf.py").read_text(encoding="utf-8")
+    assert '"sphinx-mathjax-offline"' in conf and "mathjax_path" not in conf
+    assert "sphinx-mathjax-offline>=" in (ROOT / "pyproject.toml").read_text(encoding="utf-8")
+
+
+class _Page(html.parser.HTMLParser):
+    """The remote scripts and style sheets of a page, its local scripts, and the TeX
+    delimiters that stand outside math elements and code (MathJax would leave them raw:
+    Sphinx has it typeset the math elements only)."""
+
+    def __init__(self):
+        super().__init__()
+        self.remote, self.scripts, self.raw_tex, self.maths = [], [], [], 0
+        self._open = []                      # per open element: is it a math element?
+
+    def handle_starttag(self, tag, attrs):
+        a = dict(attrs)
+        url = a.get("src") if tag == "script" else (
+            a.get("href") if tag == "link" and "stylesheet" in (a.get("rel") or "") else None)
+        if url and re.match(r"(https?:)?//", url):
+            self.remote.append(url)
+        elif url and tag == "script":
+            self.scripts.append(url)
+        if tag in ("br", "img", "meta", "link", "input", "hr", "source", "wbr"):
+            return
+        math = "math" in (a.get("class") or "").split()
+        self.maths += math
+        self._open.append(math or tag in ("pre", "code", "script", "style", "textarea"))
+
+    def handle_endtag(self, tag):
+        if self._open:
+            self._open.pop()
+
+    def handle_data(self, data):
+        if not any(self._open) and re.search(r"\\\(|\\\[|\$\$", data):
+            self.raw_tex.append(data.strip()[:80])
+
+
+@pytest.mark.skipif(not (BUILT / "index.html").exists(),
+                    reason="the site is not built here (make docs builds it, then runs this)")
+def test_the_built_site_loads_nothing_remote_and_leaves_no_raw_tex():
+    mathjax = BUILT / "_static" / "mathjax" / "tex-chtml.js"
+    assert mathjax.is_file() and mathjax.stat().st_size > 100_000
+    pages = sorted(BUILT.rglob("*.html"))
+    with_maths = 0
+    for page in pages:
+        parsed = _Page()
+        parsed.feed(page.read_text(encoding="utf-8"))
+        rel = page.relative_to(BUILT)
+        assert not parsed.remote, (rel, parsed.remote)
+        for src in parsed.scripts:       # every local script is there
+            assert (page.parent / src.split("?")[0]).resolve().is_file(), (rel, src)
+        if parsed.maths:
+            with_maths += 1
+            assert any(s.split("?")[0].endswith("mathjax/tex-chtml.js")
+                       for s in parsed.scripts), rel
+        # outside code blocks, TeX stands only in math elements, which MathJax typesets
+        assert not parsed.raw_tex, (rel, parsed.raw_tex[:3])
+    assert with_maths >= 5, with_maths
