@@ -15,7 +15,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from ..errors import JetnhError
+from ..errors import ArgumentError, JetnhError
 from ..geometry.jet import key_name
 from .frozen import Frozen, memo
 
@@ -83,8 +83,9 @@ class Trajectory(Frozen):
     Array orientation: ``traj.y`` is ``[n_times, n_states]`` (columns in the order
     ``scene.state_names``), ``traj[name]`` is ``[n_times]``; an ensemble's ``ens.y`` is
     ``[n_runs, n_times, n_states]``.  ``to_dataframe()``, ``to_xarray()`` and ``plot()``
-    give every series by name (``jetnh.numeric.export``); ``at(times)`` evaluates the run
-    between its rows (``jetnh.numeric.dense``).  Immutable (``numeric.frozen``); the
+    give every series by name (``jetnh.numeric.export``; ``plot`` and ``plot_path`` draw
+    smooth curves through the dense output); ``at(times)`` evaluates the run between its
+    rows, as a DataFrame (``jetnh.numeric.dense``).  Immutable (``numeric.frozen``); the
     derived columns are computed on first access.
     """
 
@@ -250,20 +251,67 @@ class Trajectory(Frozen):
 
         return to_xarray(self, diagnostics)
 
-    def plot(self, names=None, ax=None):
-        """The series ``names`` (default: the coordinates) against t on ``ax`` (or a new
-        figure's axes), labelled; returns the matplotlib Axes."""
+    def plot(self, names=None, ax=None, *, x="t", y=None, steps=False, smooth=True):
+        """Plot series of the run; returns the matplotlib Axes.
+
+        Parameters
+        ----------
+        names, y : name, Symbol or list of them, optional
+            The series on the vertical axis (``y`` is another spelling of ``names``);
+            default: the coordinates.
+        ax : matplotlib Axes, optional
+            Where to draw; default: the axes of a new figure.
+        x : name or Symbol, default ``"t"``
+            The series on the horizontal axis: ``traj.plot(x="x", y="y")`` is a phase or
+            path plot (``plot_path`` also gives both axes one scale).
+        steps : bool, default False
+            Mark the stored rows (the accepted steps) with dots.
+        smooth : bool, default True
+            Draw the curves through the method's dense output between the rows (dop853,
+            dopri5, rk4); the rows alone where there is none.
+        """
         from .export import plot
 
-        return plot(self, names, ax)
+        if y is not None:
+            if names is not None:
+                raise ArgumentError("give the vertical series once: names= or y=")
+            names = y
+        return plot(self, names, ax, x=x, steps=steps, smooth=smooth)
 
-    def at(self, times) -> np.ndarray:
-        """States ``[len(times), n_states]`` at ``times`` inside the span, from the
-        method's dense output (dop853, dopri5: the covering step re-taken, bit for bit
-        what ``t_eval`` gives; rk4: cubic Hermite); needs every step stored."""
-        from .dense import evaluate
+    def plot_path(self, x="x", y="y", ax=None, *, steps=False, smooth=True):
+        """The path of the run in the plane of the series ``x`` and ``y`` (default: the
+        coordinates named x and y), both axes on one scale, the start marked by a dot;
+        see ``plot`` for the parameters.  Returns the matplotlib Axes."""
+        from .export import plot
 
-        return evaluate(self, times)
+        return plot(self, y, ax, x=x, steps=steps, smooth=smooth, path=True)
+
+    def at(self, times):
+        """The run at ``times`` inside its span, from the method's dense output.
+
+        dop853, dopri5: the covering step re-taken, bit for bit what ``t_eval`` gives;
+        rk4: cubic Hermite.  Needs every step stored (no ``t_eval``, ``save="steps"``).
+
+        Parameters
+        ----------
+        times : float or array of float
+            In any order, inside the span.
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per time (the index, named ``t``), one column per state, dependent
+            velocity and first integral (``traj.names``): ``traj.at([2.5])["x"]``.
+            ``.to_numpy()[:, :len(scene.state_names)]`` are the states.
+        """
+        import pandas as pd
+
+        from .dense import evaluate, sampled
+
+        y = evaluate(self, times)
+        view = sampled(self, np.atleast_1d(np.asarray(times, dtype=float)), y)
+        return pd.DataFrame({name: view[name] for name in self.names},
+                            index=pd.Index(view.t, name="t"))
 
     def _repr_html_(self):
         from ..display import trajectory_html
