@@ -69,4 +69,5 @@ nitpick_ignore_regex = [
 
 html_theme = "furo"
 html_title = f"jetnh {release}"
-html_static_path = []
+html_static_path = ["_static"]
+html_css_files = ["jetnh.css"]   # outputs wrap or scroll inside the text column
