@@ -33,7 +33,7 @@ test: $(STAMP)
 # the executed notebooks and their compiled kernels are cached in docs/_build only
 docs: $(DOCS_STAMP)
 	$(BIN)/sphinx-build -b html -W --keep-going -n -q docs docs/_build/html
-	$(BIN)/python -m pytest -q -p no:cacheprovider tests/test_docs.py -k built_site
+	$(BIN)/python -m pytest -q -p no:cacheprovider tests/test_docs.py -k "built_site or renders_as_code"
 	@echo "the site is in docs/_build/html (open docs/_build/html/index.html)"
 
 clean:

@@ -182,3 +182,70 @@ def test_the_built_site_loads_nothing_remote_and_leaves_no_raw_tex():
         # outside code blocks, TeX stands only in math elements, which MathJax typesets
         assert not parsed.raw_tex, (rel, parsed.raw_tex[:3])
     assert with_maths >= 5, with_maths
+
+
+# ---------------------------------------------------------------------- API pages
+def test_docstring_examples_run():
+    """The ``>>>`` examples of the package's docstrings, run as doctests."""
+    import doctest
+    import importlib
+    import pkgutil
+
+    import jetnh
+
+    finder, runner = doctest.DocTestFinder(), doctest.DocTestRunner(
+        optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
+    ran = 0
+    for info in pkgutil.walk_packages(jetnh.__path__, "jetnh."):
+        if "cli" in info.name.split(".")[1:2] or info.name.endswith("__main__"):
+            continue
+        module = importlib.import_module(info.name)
+        for test in finder.find(module, module.__name__):
+            if test.examples and test.name.startswith(info.name):
+                runner.run(test)
+                ran += len(test.examples)
+    assert runner.failures == 0, runner.failures
+    assert ran >= 10, ran
+
+
+def test_public_contract_documents_its_parameters():
+    """The public contract's docstrings have numpydoc Parameters sections naming every
+    parameter of the signature (napoleon renders them on the API pages)."""
+    import inspect
+
+    import jetnh as jn
+
+    public = [jn.JetSpace, jn.System, jn.System.equations, jn.Scene, jn.Scene.run,
+              jn.Trajectory.plot, jn.Trajectory.at, jn.compare, jn.conserved_quantities,
+              jn.noether_symmetries, jn.sweep, jn.from_mechanics]
+    for obj in public:
+        doc = inspect.getdoc(obj)
+        assert "\nParameters\n----------\n" in doc, obj.__qualname__
+        section = doc.split("\nParameters\n----------\n")[1].split("\n\n")[0]
+        documented = set()
+        for line in section.splitlines():
+            if line and not line[0].isspace():
+                documented |= {n.strip(" *") for n in line.split(" : ")[0].split(",")}
+        init = obj.__init__ if inspect.isclass(obj) else obj
+        wanted = {n for n in inspect.signature(init).parameters if n != "self"}
+        assert wanted <= documented, (obj.__qualname__, sorted(wanted - documented))
+
+
+def test_docstring_code_renders_as_code():
+    """No docstring of the package has an indented block that reStructuredText would set
+    as a quotation (prose): code and formulas follow ``::`` or are ``>>>`` examples."""
+    docutils_core = pytest.importorskip("docutils.core")
+    napoleon = pytest.importorskip("sphinx.ext.napoleon")
+    from docutils import nodes
+    from sphinx.ext.napoleon.docstring import NumpyDocstring
+
+    config = napoleon.Config(napoleon_use_rtype=False, napoleon_google_docstring=False)
+    quoted = []
+    for path, name, doc in docstrings():
+        if path.parts[0] != "jetnh":
+            continue
+        tree = docutils_core.publish_doctree(
+            str(NumpyDocstring(doc, config)),
+            settings_overrides={"report_level": 5, "halt_level": 5})
+        quoted += [f"{path}:{name}: {q.astext()[:60]!r}" for q in tree.findall(nodes.block_quote)]
+    assert not quoted, quoted

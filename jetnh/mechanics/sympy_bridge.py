@@ -90,8 +90,20 @@ def generalized_forces(lm, J: JetSpace) -> tuple:
 
 
 def from_mechanics(lm, dependent=None, *, branch=None, defaults=None, name="") -> System:
-    """A jetnh ``System`` from a sympy.physics.mechanics ``LagrangesMethod`` (see the
-    module docstring); ``dependent``, ``branch``, ``defaults``, ``name`` as ``System``."""
+    """A jetnh ``System`` from a sympy.physics.mechanics ``LagrangesMethod``.
+
+    Parameters
+    ----------
+    lm : sympy.physics.mechanics.LagrangesMethod
+        Its Lagrangian, coordinates and nonholonomic constraints (``nonhol_coneqs``)
+        become the system's (see the module docstring).
+    dependent, branch, defaults, name
+        As for ``System``.
+
+    Returns
+    -------
+    System
+    """
     from sympy.physics.mechanics import LagrangesMethod
 
     if not isinstance(lm, LagrangesMethod):
