@@ -1,5 +1,6 @@
 """Sphinx configuration of the jetnh documentation (``make docs``)."""
 
+import logging
 import os
 from pathlib import Path
 
@@ -18,6 +19,9 @@ IPYTHONDIR = HERE / "_build" / "ipython"
 (IPYTHONDIR / "profile_default" / "ipython_kernel_config.py").write_text(
     'c.IPKernelApp.log_level = "ERROR"\n', encoding="utf-8")
 os.environ["IPYTHONDIR"] = str(IPYTHONDIR)
+# accessible-pygments (furo's code styles) sets the root logger to INFO when imported,
+# which would print the notebook client's "Executing notebook" line for every page
+logging.getLogger("traitlets").setLevel(logging.WARNING)
 
 project = "jetnh"
 author = "the jetnh developers"
