@@ -32,7 +32,6 @@ extensions = [
     "myst_nb",                       # MyST pages and notebooks, executed at build time
     "sphinx.ext.autodoc",
     "sphinx.ext.autosummary",
-    "sphinx.ext.napoleon",           # numpydoc-style sections (Parameters, Returns, ...)
     "sphinx.ext.mathjax",
     # MathJax 3 shipped with the site (copied into _static/mathjax): formulas render
     # without network, and no page loads a script from elsewhere
@@ -51,10 +50,6 @@ nb_execution_timeout = 300
 nb_execution_show_tb = True
 nb_merge_streams = True
 
-napoleon_google_docstring = False
-napoleon_numpy_docstring = True
-napoleon_use_rtype = False
-
 autodoc_member_order = "bysource"
 autodoc_typehints = "description"
 autodoc_default_options = {"members": True, "undoc-members": False}
@@ -69,9 +64,30 @@ nitpick_ignore_regex = [
                r"|Exception|ValueError|RuntimeError|UserWarning|bytes|type|Path|Mapping"
                r"|Sequence|Iterable|Callable|Any|Expr|Symbol|Matrix|ndarray|DataFrame|Series"
                r"|Figure|Axes)\b.*"),
+    # words of numpydoc type descriptions
+    (r"py:.*", r"(sequence|array_like|expressions?|True|False)$"),
 ]
 
 html_theme = "furo"
 html_title = f"jetnh {release}"
 html_static_path = ["_static"]
 html_css_files = ["jetnh.css"]   # outputs wrap or scroll inside the text column
+
+
+# numpydoc sections (Parameters, Returns, Examples, ...) of functions, classes and
+# modules, written as reST by napoleon; attributes and properties keep their text
+# (napoleon would read a colon in their first line as a type)
+from sphinx.ext.napoleon import Config as _NapoleonConfig  # noqa: E402
+from sphinx.ext.napoleon.docstring import NumpyDocstring  # noqa: E402
+
+NUMPYDOC = _NapoleonConfig(napoleon_google_docstring=False, napoleon_use_rtype=False,
+                           napoleon_preprocess_types=True)
+
+
+def numpydoc_sections(app, what, name, obj, options, lines):
+    if what not in ("attribute", "property", "data"):
+        lines[:] = NumpyDocstring(lines, NUMPYDOC, app, what, name, obj, options).lines()
+
+
+def setup(app):
+    app.connect("autodoc-process-docstring", numpydoc_sections)

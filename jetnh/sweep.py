@@ -80,16 +80,16 @@ def sweep(scene, grid, client=None, *, times=None, outputs=None, chunk_size=None
     ----------
     scene : Scene
         The scene to run; what the grid does not set comes from it.
-    grid : dict, list of dict or DataFrame
+    grid : dict, list or DataFrame
         A mapping name or Symbol -> values (the Cartesian product, the last key varying
         fastest), a list of points (mappings with the same keys), or a DataFrame (one
         point per row); keys are parameters of the scene or its states.
     client : dask.distributed.Client or str, optional
         None runs the grid here on all cores; a Client or a scheduler address runs it
         on a Dask cluster.
-    times : array of float, optional
+    times : array_like, optional
         Output times: the outputs at each as ``x(t=2.5)``; default the final values.
-    outputs : list of names, optional
+    outputs : list of str, optional
         The series to report; default every state, dependent velocity and first
         integral.
     chunk_size : int, optional

@@ -98,7 +98,7 @@ class JetSpace:
     ----------
     coordinates : str or sequence of str or Symbol
         The coordinates q^s: names separated by spaces (``"x y phi psi"``), or a list.
-    t : str or Symbol, default ``"t"``
+    t : str or Symbol, default "t"
         The time.
     fields : sequence of str or Symbol, optional
         Functions of t with jets of their own (the variation components, for instance).

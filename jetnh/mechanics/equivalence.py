@@ -172,7 +172,7 @@ def compare(system: System, first: str, second: str, convention: str = "paper") 
 
     Returns
     -------
-    Comparison
+    jetnh.mechanics.equivalence.Comparison
         ``.equivalent``, the branch on which they agree, the differences of the
         accelerations and the singular set, printed in one shared form.
     """

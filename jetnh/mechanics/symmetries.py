@@ -230,7 +230,7 @@ def noether_symmetries(sysm, principle, degree=1, coefficients=None) -> list:
 
     Returns
     -------
-    list of NoetherSymmetry
+    list of jetnh.mechanics.symmetries.NoetherSymmetry
     """
     S = _Setting(sysm, check_arguments(sysm, principle, degree, "noether_symmetries"))
     J = sysm.J

@@ -59,7 +59,7 @@ class System:
         The f^a(t, q, qdot), meaning f^a = 0, of any nonlinearity: a list (or a column
         Matrix, read as its entries, or one expression alone); an entry ``Eq(lhs, rhs)``
         is lhs - rhs.
-    dependent : Symbol, str or list of them, optional
+    dependent : Symbol, str or list, optional
         The split: the coordinates whose velocities the constraints determine (one per
         constraint; Symbols or names, in a list or one alone, or names in one string
         ``"x y"``); chosen automatically when omitted.
@@ -578,7 +578,7 @@ class System:
 
         Parameters
         ----------
-        principle : str or Principle
+        principle : str or jetnh.mechanics.principles.Principle
             "chetaev", "vakonomic", "holder" or "suslov" (or an alias, or a
             ``jetnh.mechanics.principles.Principle``).
         form : str, optional

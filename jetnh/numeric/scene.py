@@ -70,14 +70,14 @@ class Scene(Frozen):
         Initial values (Symbols or names) of the coordinates, independent velocities and
         multipliers; the dependent velocities follow from the constraints (if given,
         they must agree with them).
-    t_span : (float, float), default (0, 1)
-        The time span of ``run``.
+    t_span : tuple of float
+        The time span of ``run``; default (0, 1).
     form, convention : str, optional
         Passed to ``system.equations``.
     integrals : dict, optional
         Names -> sympy expressions: first integrals to monitor (``traj[name]``, their
         drift in the diagnostics).
-    runtime_params : sequence of names, optional
+    runtime_params : sequence of str, optional
         Parameters read at run time instead of compiled in (ensembles, sweeps).
     project : bool, default False
         Replace inconsistent dependent velocities by the values the constraints require.
@@ -311,7 +311,7 @@ class Scene(Frozen):
         rtol, atol : float, optional
             Tolerances of the adaptive methods (1e-9, 1e-12; ``atol`` a scalar or one
             value per state); short for ``step=StepControl(rtol=..., atol=...)``.
-        t_eval : array of float, optional
+        t_eval : array_like, optional
             Output times inside the span, from the dense output; default every step.
         method : str, default "dop853"
             "dop853", "dopri5" (alias "RK45"), "rk4" (fixed step), "radau" (implicit
@@ -327,7 +327,7 @@ class Scene(Frozen):
             with scipy's semantics, located on the dense output (dla and dvi: on the
             line between their nodes); the trajectory reports ``t_events``,
             ``y_events`` and ``events``; a terminal event ends the run.
-        t_span : (float, float), optional
+        t_span : tuple of float, optional
             Replaces the scene's.
         y0 : dict or sequence, optional
             The initial state: a dict keyed by Symbol or name (the other states keep the
@@ -343,13 +343,13 @@ class Scene(Frozen):
             dla: project every node velocity onto the constraints.
         backend : str, optional
             ``"scipy"`` for scipy's ``solve_ivp`` (as ``method="scipy-<M>"``).
-        step : StepControl, optional
+        step : jetnh.numeric.options.StepControl, optional
             ``StepControl(rtol, atol, first_step, max_step, max_steps, n_steps, h)``
             (``numeric.options``), or those as keywords: the first and the largest
             adaptive step (automatic, none), the budget of steps (10^7; the fixed-step
             methods refuse more up front) and the fixed step of rk4, dla and dvi
             (``n_steps`` or ``h``).
-        singular : {"stop", "ignore"} or Singular, default "stop"
+        singular : {"stop", "ignore"} or jetnh.numeric.options.Singular, default "stop"
             With ``singular_tol`` (or ``Singular(action, tol)``): "stop" ends the run at
             a singular configuration, where a singularity indicator of the scene
             (``kernels.layout.indicators``: the determinant of df/dqdot^alpha,
@@ -359,7 +359,7 @@ class Scene(Frozen):
             names the indicator, the time and the way out.  dla and dvi check the
             indicators of the constraints and the Lagrangian as written at every node
             and stop at the last regular one.
-        newton : Newton, optional
+        newton : jetnh.numeric.options.Newton, optional
             ``Newton(tol, max_iter)`` or ``newton_tol``, ``max_newton``: the Newton
             iteration of radau (automatic, 7) and of dla and dvi (1e-13, 50).
         **keywords

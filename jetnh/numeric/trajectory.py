@@ -256,12 +256,12 @@ class Trajectory(Frozen):
 
         Parameters
         ----------
-        names, y : name, Symbol or list of them, optional
+        names, y : str, Symbol or list, optional
             The series on the vertical axis (``y`` is another spelling of ``names``);
             default: the coordinates.
         ax : matplotlib Axes, optional
             Where to draw; default: the axes of a new figure.
-        x : name or Symbol, default ``"t"``
+        x : str or Symbol, default "t"
             The series on the horizontal axis: ``traj.plot(x="x", y="y")`` is a phase or
             path plot (``plot_path`` also gives both axes one scale).
         steps : bool, default False
@@ -294,7 +294,7 @@ class Trajectory(Frozen):
 
         Parameters
         ----------
-        times : float or array of float
+        times : float or array_like
             In any order, inside the span.
 
         Returns
