@@ -428,3 +428,29 @@ def test_compare_large_model_bounded(capsys):
     data = json.loads(out)
     assert "T^x_phi" in data["the constraint manifold and the embedded Lagrangian"]
     assert any("chetaev and suslov have the same" in v for v in data["equivalence"])
+
+
+def test_simulate_plot_has_the_path_panel():
+    """--plot adds the path in the (x, y) plane when the model has those coordinates,
+    --path chooses the plane, --path none leaves it out."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from jetnh import models
+    from jetnh.cli.commands.simulate import _figure, _path_names
+    from jetnh.cli.usage import UsageError
+    from jetnh.numeric import Scene
+
+    disk = models.get("rolling_disk")
+    assert _path_names(None, disk) == ("x", "y")
+    assert _path_names("phi, psi", disk) == ("phi", "psi") and _path_names("none", disk) is None
+    assert _path_names(None, models.get("suslov_rigid_body")) is None
+    with pytest.raises(UsageError, match="two series names"):
+        _path_names("x", disk)
+    traj = Scene(disk, "chetaev", initial=models.initial("rolling_disk"),
+                 t_span=(0.0, 2.0)).run(rtol=1e-8, atol=1e-10)
+    fig = _figure(traj, disk, "disk", ("x", "y"))
+    plane = fig.axes[-1]
+    assert (plane.get_xlabel(), plane.get_ylabel()) == ("x", "y") and len(fig.axes) == 4
+    assert plane.get_aspect() == 1.0
+    assert len(_figure(traj, disk, "disk").axes) == 3
