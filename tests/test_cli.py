@@ -2,6 +2,7 @@
 
 import io
 import json
+import re
 import subprocess
 import sys
 
@@ -25,6 +26,18 @@ def test_derive_json():
     data = json.loads(r.stdout)
     assert data["principle"] == "suslov" and data["multipliers"] == ["lambda_z"]
     assert set(data["accelerations"]) == {"x_tt", "y_tt", "z_tt", "lambda_z_t"}
+
+
+def test_derive_writes_the_accelerations_in_the_independent_velocities():
+    """On the manifold the dependent velocities are their values phi: the Suslov disk's
+    accelerations are the closed forms x'' = -R phi' psi' sin(psi), phi'' = psi'' = 0."""
+    r = run("derive", "rolling_disk", "--principle", "suslov", "-q")
+    assert r.returncode == 0, r.stderr
+    acc = r.stdout.split("accelerations on the constraint manifold")[1].split(
+        "the constraint manifold")[0]
+    assert "(in the independent velocities: x_t, y_t replaced by their values below)" in acc
+    assert not re.search(r"\b[xy]_t\b", acc.split("\n", 1)[1])
+    assert "x_tt = -R*phi_t*psi_t*sin(psi)" in acc and "phi_tt = 0" in acc
 
 
 def test_errors_exit_codes_and_no_traceback():
