@@ -64,8 +64,9 @@ nitpick_ignore_regex = [
                r"|Exception|ValueError|RuntimeError|UserWarning|bytes|type|Path|Mapping"
                r"|Sequence|Iterable|Callable|Any|Expr|Symbol|Matrix|ndarray|DataFrame|Series"
                r"|Figure|Axes)\b.*"),
-    # words of numpydoc type descriptions
+    # words of numpydoc type descriptions; private classes in type hints
     (r"py:.*", r"(sequence|array_like|expressions?|True|False)$"),
+    (r"py:class", r"(.*\.)?_[A-Za-z]\w*$"),
 ]
 
 html_theme = "furo"
@@ -91,3 +92,6 @@ def numpydoc_sections(app, what, name, obj, options, lines):
 
 def setup(app):
     app.connect("autodoc-process-docstring", numpydoc_sections)
+    # MathJax on every page: the maths in jetnh's HTML displays (notebook outputs) is not
+    # a Sphinx math node, so a page with no other formula would not load it
+    app.set_html_assets_policy("always")
