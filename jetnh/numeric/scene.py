@@ -33,7 +33,7 @@ satisfy them (else ``ConstraintError`` with the residual), or ``complete=True`` 
 them by Newton's method for the split's dependent coordinates (those making dg/dq over
 them regular; ``complete=[z, ...]`` names others), recorded in ``scene.completed``.  The
 compiled explicit and Radau runs project every accepted step back onto g = 0
-(``methods.projection``); ``traj.diagnostics.holonomic_residual_max`` reports max |g|.
+(``methods.projection``); ``traj.diagnostics.holonomic_residual_max`` reports ``max |g|``.
 """
 
 from __future__ import annotations
@@ -90,7 +90,7 @@ class Scene(Frozen):
         Replace inconsistent dependent velocities by the values the constraints require.
     consistency_tol : float, default 1e-9
         The relative tolerance of that check.
-    complete : bool or list of coordinates, default False
+    complete : bool or list, default False
         Solve the holonomic constraints for these coordinates (True: chosen
         automatically) of an initial configuration off g = 0 (else it is refused).
     cache : bool, default True
