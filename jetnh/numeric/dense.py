@@ -98,11 +98,12 @@ def resampled(traj, points=SMOOTH_POINTS):
     """``traj`` at its rows and, where the method has dense output, at evenly spaced
     times inside its steps: at least ``points`` values in all (a run with as many steps
     already is its rows).  A Trajectory of the same run, scene and kernels; without
-    dense output (dla, dvi, scipy's methods, ``t_eval`` or ``save="final"`` runs) ``traj``
-    itself."""
+    dense output (dla, dvi, scipy's methods, ``t_eval`` or ``save="final"`` runs) or with
+    a change of split ``traj`` itself."""
     t = traj.t
     n_steps = len(t) - 1
-    if _refusal(traj) or n_steps < 1 or n_steps >= points:
+    if (traj._segments is not None or _refusal(traj) or n_steps < 1
+            or n_steps >= points):         # (a run that changed split: its rows)
         return traj
     per = -(-points // n_steps)                          # values per step, its start included
     last = n_steps - 1 if traj._dense["partial_last"] else n_steps

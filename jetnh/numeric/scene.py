@@ -15,7 +15,9 @@
 
 Every run stops at a singular configuration (``singular="stop"``, the default) with
 ``status`` SINGULAR and a ``stop_reason`` naming the indicator and the time; see
-``run``.
+``run``.  The singular set of the split is not one: at the edge of the split's chart
+the run goes on in another regular split (``numeric.atlas``; ``split="fixed"`` keeps
+the scene's split).
 
 A scene does only what it needs: it derives the equations of its own principle, and only
 when its kernels are not in the disk cache; parameters are numbers substituted before
@@ -52,7 +54,7 @@ from ..geometry.jet import sympy_object
 from . import arguments, interrupt
 from . import cache as _cache
 from . import codegen
-from . import diagnosis, discrete, methods, scipy_backend
+from . import atlas, diagnosis, discrete, methods, scipy_backend
 from .methods import STATUS_TEXT
 from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, NONFINITE, SINGULAR, STOPPED
 from .methods.loop import Control, watch_of
@@ -400,6 +402,12 @@ class Scene(Frozen):
             names the indicator, the time and the way out.  dla and dvi check the
             indicators of the constraints and the Lagrangian as written at every node
             and stop at the last regular one.
+        split : {"switch", "fixed"}, default "switch"
+            dop853, dopri5, rk4 and radau runs that reach the edge of the split's chart
+            go on in another regular split (``numeric.atlas``: the switch located as an
+            event, the state and multipliers mapped, one trajectory in the scene's
+            states, ``traj.switches`` lists time, from and to); "fixed" keeps the
+            scene's split, which stops at its singular set.
         newton : jetnh.numeric.options.Newton, optional
             ``Newton(tol, max_iter)`` or ``newton_tol``, ``max_newton``: the Newton
             iteration of radau (automatic, 7) and of dla and dvi (1e-13, 50).
@@ -415,7 +423,7 @@ class Scene(Frozen):
         """
         opts = options(step, singular, newton, rtol=rtol, atol=atol, **keywords)
         rtol, atol, first_step, max_step, max_steps, n_steps, h = fields_of(opts.step)
-        singular, singular_tol = fields_of(opts.singular)
+        singular, singular_tol, split = fields_of(opts.singular)
         newton_tol, max_newton = fields_of(opts.newton)
         t0, t1 = self._t_span(t_span) if t_span is not None else self.t_span
         p = self._run_params(params)
@@ -495,33 +503,45 @@ class Scene(Frozen):
             ctl = Control(rtol, atol_v, 0.0, np.inf, budget, steps, *self._projection)
             dense = {"mode": mode}
         kern = self.kernels
-        ce = None if events is None else self.compile_events(events)
-        watch = self._watch(kern, ce, singular == "stop", singular_tol)
-        uev = ce.uev if ce is not None else kern.sing_fp
-        halt = interrupt.flag()
+        newton = None
         if method == "radau":
             from .methods import radau
 
-            solve = kern.implicit()
             newton = radau.newton_options(newton_tol, max_newton)
-            jac = self.jacobian.address
-            tic = time.perf_counter()
-            out = interrupt.call(lambda: solve(kern.rhs_fp, jac, kern.sing_fp, uev,
-                                               kern.hol_or_none, t0, t1,
-                                               y_init, p, ctl, newton, te, mode, watch, halt),
-                                 halt, limit)
-        else:
-            solve = methods.explicit_solver(method)
-            tic = time.perf_counter()
-            out = interrupt.call(lambda: solve(kern.rhs_fp, kern.sing_fp, uev, kern.hol_or_none,
-                                               t0, t1,
-                                               y_init, p, ctl, te, mode, watch, halt),
-                                 halt, limit)
-        wall = time.perf_counter() - tic
+        if split == "switch" and atlas.applies(self, events):
+            return atlas.run(self, method, events, t0, t1, y_init, p, ctl, te, mode, dense,
+                             singular == "stop", singular_tol, newton, limit)
+        ce = None if events is None else self.compile_events(events)
+        watch = self._watch(kern, ce, singular == "stop", singular_tol)
+        out, wall = self._solve(method, kern, ce, watch, t0, t1, y_init, p, ctl, te, mode,
+                                newton, limit)
         if dense is not None:    # stopped inside a step
             dense["partial_last"] = int(out.status) in (EVENT, SINGULAR)
         return self._trajectory(method, out, wall, kern, ce, p, t0, y_init, singular_tol,
                                 singular == "stop", limit, dense)
+
+    def _solve(self, method, kern, ce, watch, t0, t1, y_init, p, ctl, te, mode, newton,
+               limit):
+        """One call of the compiled loop of ``method`` on the kernels ``kern`` (events
+        ``ce``, ``watch``); returns its ``Result`` and the wall-clock time."""
+        uev = ce.uev if ce is not None else kern.sing_fp
+        halt = interrupt.flag()
+        if method == "radau":
+            solve = kern.implicit()
+            jac = self.jacobian.address
+            tic = time.perf_counter()
+            out = interrupt.call(lambda: solve(kern.rhs_fp, jac, kern.sing_fp, uev,
+                                               kern.hol_or_none, t0, t1, y_init, p, ctl,
+                                               newton, te, mode, watch, halt),
+                                 halt, limit)
+        else:
+            solve = methods.explicit_solver(method)
+            tic = time.perf_counter()
+            out = interrupt.call(lambda: solve(kern.rhs_fp, kern.sing_fp, uev,
+                                               kern.hol_or_none, t0, t1, y_init, p, ctl, te,
+                                               mode, watch, halt),
+                                 halt, limit)
+        return out, time.perf_counter() - tic
 
     # ------------------------------------------------------------------ run helpers
     @staticmethod
@@ -635,8 +655,9 @@ class Scene(Frozen):
         return store[memo]
 
     def _trajectory(self, method, out, wall, kern, ce, p, t0, y_init, singular_tol, checked,
-                    timeout=None, dense=None):
-        """A Trajectory from the result tuple of a compiled solve (or an error)."""
+                    timeout=None, dense=None, n_events=None):
+        """A Trajectory from the result tuple of a compiled solve (or an error); with
+        ``n_events``, only the first ``n_events`` events of ``ce`` are reported."""
         from .events import split_records
 
         (status, ts, ys, n_out, stats, t_last, y_last, ev_t, ev_i, ev_y, n_ev,
@@ -666,8 +687,9 @@ class Scene(Frozen):
             reason = STATUS_TEXT[status]
         kw = {}
         if ce is not None:
-            t_events, y_events = split_records(len(ce), ev_t[:n_ev], ev_i[:n_ev], ev_y[:n_ev])
-            kw["events"] = (ce.names, t_events, y_events)
+            n = len(ce) if n_events is None else n_events
+            t_events, y_events = split_records(n, ev_t[:n_ev], ev_i[:n_ev], ev_y[:n_ev])
+            kw["events"] = (ce.names[:n], t_events, y_events)
         return Trajectory(self, ts[:n_out], ys[:n_out], p, method=method, status=status,
                           stop_reason=reason, steps=int(stats[0]), rejected=int(stats[1]),
                           nfev=int(stats[2]), wall_time=wall, kernels=kern,

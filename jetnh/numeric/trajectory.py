@@ -5,7 +5,8 @@ coordinate, an independent velocity, a multiplier, a dependent velocity (compute
 the constraints by the compiled ``aux`` kernel, on first access) or a user first
 integral.  ``traj.diagnostics`` reports the constraint residual, the energy and its
 drift, first integrals and their drift, steps, right-hand-side evaluations and why the
-integration stopped.  With generalized forces the energy is not conserved:
+integration stopped (and the split switches of a run that changed split,
+``numeric.atlas``).  With generalized forces the energy is not conserved:
 ``traj.power`` is their power Q_s qdot^s, and the diagnostics say that the forces work.
 """
 
@@ -43,6 +44,7 @@ class Diagnostics:
     forced: bool = False              # generalized forces work: the energy drifts by design
     holonomic_residual_max: float = 0.0   # max |g_i| of the holonomic constraints
     completed: dict = field(default_factory=dict)     # see Scene.completed
+    switches: list = field(default_factory=list)      # split changes: {"t", "from", "to"}
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -62,6 +64,10 @@ class Diagnostics:
             lines.append(f"  integral {k}: drift {v:.3e}")
         for k, v in self.events.items():
             lines.append(f"  event {k}: {v} occurrence(s)")
+        if self.switches:
+            lines.append(f"  {len(self.switches)} split switch(es), the first at t = "
+                         f"{self.switches[0]['t']:.6g} ({self.switches[0]['from']} -> "
+                         f"{self.switches[0]['to']})")
         return "\n".join(lines)
 
 
@@ -95,7 +101,7 @@ class Trajectory(Frozen):
 
     def __init__(self, scene, t, y, p, *, method, status, stop_reason, steps, rejected,
                  nfev, wall_time, kernels, projected=None, own=None, events=None,
-                 singularity=None, dense=None):
+                 singularity=None, dense=None, segments=None, switches=()):
         names, t_ev, y_ev = events if events is not None else ((), [], [])
         self._set(
             scene=scene, t=np.ascontiguousarray(t, dtype=float),
@@ -112,7 +118,10 @@ class Trajectory(Frozen):
             # methods that carry their own velocities, residuals, energy and first
             # integrals (the discrete integrators dla, dvi): {"velocities": {name: col},
             # "residual", "energy", "integrals": {name: col}}
-            _own=own or {})
+            _own=own or {},
+            # a run that changed split: its pieces (``numeric.atlas.Stitched``, which
+            # gives its aux rows and dense output) and switches {"t", "from", "to"}
+            _segments=segments, switches=tuple(switches))
 
     @property
     def layout(self):
@@ -184,6 +193,8 @@ class Trajectory(Frozen):
         if self._own:
             raise JetnhError(f"{self.method} trajectories carry their own velocities, "
                              "residuals, energy and first integrals (no aux rows)")
+        if self._segments is not None:
+            return self._segments.aux(self)
         out = np.empty((len(self), self.layout.n_aux))
         if len(self):
             self._kernels.aux_rows(self.t, self.y, self._p, out)
@@ -262,7 +273,8 @@ class Trajectory(Frozen):
             integral_drift=idrift, projected=i["projected"],
             events={n: len(te) for n, te in zip(self.event_names, self.t_events)},
             singularity=self.singularity, forced=self.scene.system.forced,
-            holonomic_residual_max=hmax, completed=dict(self.scene.completed))
+            holonomic_residual_max=hmax, completed=dict(self.scene.completed),
+            switches=[dict(s) for s in self.switches])
 
     # ------------------------------------------------------------------ tables, figures
     def to_dataframe(self, diagnostics=True):
@@ -331,12 +343,19 @@ class Trajectory(Frozen):
         pandas.DataFrame
             One row per time (the index, named ``t``), one column per state, dependent
             velocity and first integral (``traj.names``): ``traj.at([2.5])["x"]``.
-            ``.to_numpy()[:, :len(scene.state_names)]`` are the states.
+            ``.to_numpy()[:, :len(scene.state_names)]`` are the states.  A run that
+            changed split is evaluated in the chart that ran at each time, and gives the
+            states alone.
         """
         import pandas as pd
 
         from .dense import evaluate, sampled
 
+        if self._segments is not None:
+            y = self._segments.at(self, times)
+            return pd.DataFrame(y, columns=list(self.layout.states),
+                                index=pd.Index(np.atleast_1d(np.asarray(times, dtype=float)),
+                                               name="t"))
         y = evaluate(self, times)
         view = sampled(self, np.atleast_1d(np.asarray(times, dtype=float)), y)
         return pd.DataFrame({name: view[name] for name in self.names},
