@@ -2,7 +2,7 @@
 
 A split (the dependent coordinates q^alpha) is a chart of the constraint manifold
 f(t, q, qdot) = 0: the constraints solve for qdot^alpha where the minor A_alpha =
-df/dqdot^alpha of A = df/dqdot (k x n) is invertible.  How well, at a point:
+df/dqdot^alpha of A = df/dqdot (k x n) is invertible.  How well, at a point::
 
     m_alpha = det(A_alpha)^2 / det(A A^T)   in [0, 1],
 
