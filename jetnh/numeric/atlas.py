@@ -508,7 +508,7 @@ def _at(stitched, traj, times) -> np.ndarray:
         inner = sgn * (tau[idx] - float(seg.t[-2])) > 0 if cut else np.zeros(idx.size, bool)
         rows = np.empty((idx.size, len(chart.scene.state_names)))
         if (~inner).any():
-            rows[~inner] = seg.at(tau[idx[~inner]])
+            rows[~inner] = seg.at(tau[idx[~inner]]).to_numpy()
         if inner.any():
             rows[inner] = _rerun(chart, seg, rerun, tau[idx[inner]], traj._p)
         out[idx] = to_home(own, chart, tau[idx], rows, traj._p)

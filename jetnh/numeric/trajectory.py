@@ -328,10 +328,11 @@ class Trajectory(Frozen):
         return plot(self, y, ax, x=x, steps=steps, smooth=smooth, path=True)
 
     def at(self, times):
-        """The run at ``times`` inside its span, from the method's dense output.
+        """The states at ``times`` inside the span, from the method's dense output.
 
         dop853, dopri5: the covering step re-taken, bit for bit what ``t_eval`` gives;
         rk4: cubic Hermite.  Needs every step stored (no ``t_eval``, ``save="steps"``).
+        A run that changed split is evaluated in the chart that ran at each time.
 
         Parameters
         ----------
@@ -341,25 +342,19 @@ class Trajectory(Frozen):
         Returns
         -------
         pandas.DataFrame
-            One row per time (the index, named ``t``), one column per state, dependent
-            velocity and first integral (``traj.names``): ``traj.at([2.5])["x"]``.
-            ``.to_numpy()[:, :len(scene.state_names)]`` are the states.  A run that
-            changed split is evaluated in the chart that ran at each time, and gives the
-            states alone.
+            One row per time (the index, named ``t``), one column per state in the order
+            ``scene.state_names``: ``traj.at([2.5])["x"]``; ``.to_numpy()`` is the
+            ``[len(times), n_states]`` array.
         """
         import pandas as pd
 
-        from .dense import evaluate, sampled
+        from .dense import evaluate
 
-        if self._segments is not None:
-            y = self._segments.at(self, times)
-            return pd.DataFrame(y, columns=list(self.layout.states),
-                                index=pd.Index(np.atleast_1d(np.asarray(times, dtype=float)),
-                                               name="t"))
-        y = evaluate(self, times)
-        view = sampled(self, np.atleast_1d(np.asarray(times, dtype=float)), y)
-        return pd.DataFrame({name: view[name] for name in self.names},
-                            index=pd.Index(view.t, name="t"))
+        y = (self._segments.at(self, times) if self._segments is not None
+             else evaluate(self, times))
+        return pd.DataFrame(y, columns=list(self.layout.states),
+                            index=pd.Index(np.atleast_1d(np.asarray(times, dtype=float)),
+                                           name="t"))
 
     def _repr_html_(self):
         from ..display import trajectory_html
