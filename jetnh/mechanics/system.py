@@ -110,6 +110,10 @@ class System:
     False
     """
 
+    #: for a System read from a Kane model (``from_mechanics``): the map between its
+    #: generalized speeds and the velocities (``jetnh.mechanics.kane_bridge.Speeds``)
+    speeds = None
+
     def __init__(self, J: JetSpace, L, constraints=(), dependent=None, branch: int | None = None,
                  defaults=None, name: str = "", forces=None, dissipation=None):
         if not isinstance(J, JetSpace):
@@ -582,8 +586,10 @@ class System:
 
     def with_split(self, dependent) -> "System":
         """The same system with another split."""
-        return System(self.J, self.L, self.given_constraints, dependent, self._branch,
-                      self.defaults, self.name, self.forces, self._dissipation_arg)
+        out = System(self.J, self.L, self.given_constraints, dependent, self._branch,
+                     self.defaults, self.name, self.forces, self._dissipation_arg)
+        out.speeds = self.speeds
+        return out
 
     @property
     def given_constraints(self) -> tuple[sp.Expr, ...]:

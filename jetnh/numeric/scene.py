@@ -26,7 +26,8 @@ is every step, the points of ``t_eval``, or only the end (``save="final"``).
 
 State: every coordinate q^s, the independent velocities qdot^mu and the multipliers of
 the principles that have them (vakonomic, Hoelder, Suslov).  Initial values are keyed by
-Symbol or by name; the dependent velocities follow from the constraints.  If given, they
+Symbol, by name or by sympy.physics.mechanics dynamicsymbol (``x(t)`` for x, ``x(t).diff()``
+for x_t); the dependent velocities follow from the constraints.  If given, they
 must agree with the constraints (else ``ConstraintError``), or ``project=True`` replaces
 them by the values the constraints require.
 
@@ -373,9 +374,9 @@ class Scene(Frozen):
         t_span : tuple of float, optional
             Replaces the scene's.
         y0 : dict or sequence, optional
-            The initial state: a dict keyed by Symbol or name (the other states keep the
-            scene's values; dependent velocities, if given, must agree with the
-            constraints) or a sequence in the order ``scene.state_names``.
+            The initial state: a dict keyed by Symbol, name or dynamicsymbol (the other
+            states keep the scene's values; dependent velocities, if given, must agree
+            with the constraints) or a sequence in the order ``scene.state_names``.
         params : dict or sequence, optional
             The run-time parameters (``runtime_params``): a dict, or a sequence in the
             order ``scene.runtime_params``.

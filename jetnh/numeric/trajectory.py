@@ -1,4 +1,4 @@
-"""Trajectories: the output of ``Scene.run``, indexed by Symbol or by name.
+"""Trajectories: the output of ``Scene.run``, indexed by Symbol, by name or by dynamicsymbol.
 
 ``traj.t`` is the array of output times and ``traj[x]`` / ``traj["x"]`` the column of a
 coordinate, an independent velocity, a multiplier, a dependent velocity (computed from
@@ -142,7 +142,8 @@ class Trajectory(Frozen):
         name = key_name(key)
         if name is not None:
             return name
-        raise JetnhError(f"index a trajectory by a Symbol or a name, not {type(key).__name__}")
+        raise JetnhError(f"index a trajectory by a Symbol, a name or a dynamicsymbol x(t) "
+                         f"(x(t).diff() for x_t), not {type(key).__name__}")
 
     def __getitem__(self, key) -> np.ndarray:
         name = self._name(key)
