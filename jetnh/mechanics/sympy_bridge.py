@@ -96,7 +96,7 @@ def from_mechanics(lm, dependent=None, *, branch=None, defaults=None, name="") -
 
     Parameters
     ----------
-    lm : LagrangesMethod, KanesMethod or sympy.physics.mechanics.System
+    lm : sympy.physics.mechanics.LagrangesMethod or sympy.physics.mechanics.KanesMethod or sympy.physics.mechanics.System
         A ``LagrangesMethod``: its Lagrangian, coordinates and nonholonomic constraints
         (``nonhol_coneqs``) become the system's (see the module docstring).  A
         ``KanesMethod`` or mechanics ``System`` (``kane_bridge``): the result's
