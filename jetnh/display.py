@@ -84,7 +84,9 @@ def _td(x) -> str:
 
 
 def _math(tex: str) -> str:
-    return html.escape(r"\(" + tex + r"\)")
+    """Inline maths for MathJax: the class ``math`` marks it for typesetting where a page
+    typesets only marked elements (Sphinx; Jupyter typesets every output)."""
+    return '<span class="math">' + html.escape(r"\(" + tex + r"\)") + "</span>"
 
 
 def html_table(title: str, facts: list[tuple[str, str]], lists=(), budget=BUDGET) -> str:

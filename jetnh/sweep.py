@@ -1,6 +1,8 @@
 """Sweeps: one scene over a grid of parameters and initial values, on this machine or on
 a Dask cluster, as a pandas DataFrame with one row per grid point.
 
+Example::
+
     import jetnh as jn
     df = jn.sweep(scene, {R: [0.5, 1.0, 2.0], phi_t: np.linspace(0.1, 1.0, 10)})
     df = jn.sweep(scene, [{"R": 1.0, "phi_t": 0.3}, {"R": 2.0, "phi_t": 0.1}])  # points
@@ -71,12 +73,45 @@ def _options() -> tuple[str, ...]:
 
 def sweep(scene, grid, client=None, *, times=None, outputs=None, chunk_size=None,
           progress=None, timeout=None, connect_timeout=10.0, **options):
-    """Run ``scene`` at every point of ``grid``: a DataFrame, one row per point (see the
-    module docstring).  ``client``: None (this machine), a ``dask.distributed.Client``
-    or a scheduler address; ``timeout``: seconds the Dask sweep may take (None: no
-    limit); ``connect_timeout``: seconds to reach a scheduler given by address;
-    ``progress``: None, True (a tqdm bar on stderr) or a callable ``progress(done,
-    total)``."""
+    """Run ``scene`` at every point of ``grid``: a DataFrame, one row per point (the
+    columns and the way a sweep is split: the module docstring).
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene to run; what the grid does not set comes from it.
+    grid : dict, list or DataFrame
+        A mapping name or Symbol -> values (the Cartesian product, the last key varying
+        fastest), a list of points (mappings with the same keys), or a DataFrame (one
+        point per row); keys are parameters of the scene or its states.
+    client : dask.distributed.Client or str, optional
+        None runs the grid here on all cores; a Client or a scheduler address runs it
+        on a Dask cluster.
+    times : array_like, optional
+        Output times: the outputs at each as ``x(t=2.5)``; default the final values.
+    outputs : list of str, optional
+        The series to report; default every state, dependent velocity and first
+        integral.
+    chunk_size : int, optional
+        Points per task (Dask: 4 tasks per worker thread; here: the whole grid, or 20
+        chunks with ``progress``).
+    progress : bool or callable, optional
+        True: a tqdm bar on stderr; a callable ``progress(done, total)`` is called as
+        chunks finish.
+    timeout : float, optional
+        Seconds the Dask sweep may take (None: no limit).
+    connect_timeout : float, default 10
+        Seconds to reach a scheduler given by address.
+    **options
+        Those of ``Scene.run`` (``rtol``, ``atol``, ``method``, ``n_steps``,
+        ``events``, ...).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per grid point, a failed point with its ``status`` and
+        ``stop_reason``; ``df.attrs["grid"]`` names the grid columns.
+    """
     import numpy as np
     import pandas as pd
 

@@ -106,6 +106,24 @@ class JetSpace:
     ``JetSpace("x y phi psi")`` has ``t``, ``q = (x, y, phi, psi)``, ``qd = (x_t, ...)``,
     ``qdd = (x_tt, ...)``; ``jet(x, 3)`` is ``x_ttt``.  Instances are immutable values;
     ``with_fields`` returns a larger space.
+
+    Parameters
+    ----------
+    coordinates : str or sequence of str or Symbol
+        The coordinates q^s: names separated by spaces (``"x y phi psi"``), or a list.
+    t : str or Symbol, default "t"
+        The time.
+    fields : sequence of str or Symbol, optional
+        Functions of t with jets of their own (the variation components, for instance).
+
+    Examples
+    --------
+    >>> import jetnh as jn
+    >>> J = jn.JetSpace("x y")
+    >>> J.q, J.qd, J.qdd
+    ((x, y), (x_t, y_t), (x_tt, y_tt))
+    >>> J.jet(J.q[0], 3)
+    x_ttt
     """
 
     def __init__(self, coordinates, t: str | sp.Symbol = "t", fields=()):

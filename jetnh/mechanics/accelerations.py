@@ -20,7 +20,7 @@ every principle's rows read::
 Generalized forces Q_s (``System.Q``) enter every row beside [L]_s: r_s becomes r_s + Q_s.
 
 The explicit forms ((17)-(20), (29)-(31)) use the constraints qdot^alpha - phi^alpha.
-When f is affine these are S f with S = A_dep^-1, and on f = 0
+When f is affine these are S f with S = A_dep^-1, and on f = 0::
 
     [S f]_s = S ([f]_s + (D A_dep) S A_s),
 

@@ -156,9 +156,26 @@ def agrees(system: System, expr, derived=None, points: int = _POINTS, seed: int 
 
 
 def compare(system: System, first: str, second: str, convention: str = "paper") -> Comparison:
-    """Do ``first`` and ``second`` give the same coordinate accelerations?  The verdict
-    holds off ``Comparison.singular`` (see ``singular_set``).  The principles are given
-    by name or alias (``jetnh.mechanics.principles``) and reported by their canonical names."""
+    """Do ``first`` and ``second`` give the same coordinate accelerations?
+
+    The verdict holds off ``Comparison.singular`` (see ``singular_set``).
+
+    Parameters
+    ----------
+    system : System
+        The constrained system.
+    first, second : str
+        Two different principles by name or alias (``jetnh.mechanics.principles``),
+        reported by their canonical names.
+    convention : {"paper", "imposed"}, default "paper"
+        As in ``System.equations``.
+
+    Returns
+    -------
+    jetnh.mechanics.equivalence.Comparison
+        ``.equivalent``, the branch on which they agree, the differences of the
+        accelerations and the singular set, printed in one shared form.
+    """
     names = [principles.canonical(p) for p in (first, second)]
     if names[0] == names[1]:
         raise PrincipleError(f"compare needs two different principles; {first!r} and "

@@ -45,16 +45,32 @@ def check_arguments(sysm, principle, degree, what) -> Principle:
 
 
 def conserved_quantities(sysm, principle, degree=2, coefficients=None) -> list:
-    """A basis of the nontrivial first integrals of ``principle`` polynomial of degree <=
-    ``degree`` in the independent velocities (and multipliers), with coefficient functions
-    spanned by ``coefficients`` (expressions in t and q; default: the monomials in t and q
-    of degree <= ``degree``) and constants that may depend on the parameters.
+    """A basis of the nontrivial first integrals of ``principle`` that are polynomials in
+    the independent velocities (and multipliers).
 
     None vanishes identically on the constraint manifold (each is written in the
     independent velocities, so no multiple of a constraint appears), and no two are
     proportional over the parameters.  For example the Heisenberg system's vakonomic
     integrals lambda, m x_t + 2 lambda y, m y_t - 2 lambda x and the energy.  A
-    JetnhWarning says when some integral's parameter dependence exceeds the search."""
+    JetnhWarning says when some integral's parameter dependence exceeds the search.
+
+    Parameters
+    ----------
+    sysm : System
+        The constrained system.
+    principle : str
+        The principle whose motions conserve them ("chetaev", "vakonomic", ...).
+    degree : int, default 2
+        The largest degree in the velocities and multipliers.
+    coefficients : list of sympy expressions, optional
+        Functions of t and q spanning the coefficients; default the monomials in t and q
+        of degree <= ``degree``.  The constants may depend on the parameters.
+
+    Returns
+    -------
+    list of sympy expressions
+        The integrals, in t, q, the independent velocities and the multipliers.
+    """
     p = check_arguments(sysm, principle, degree, "conserved_quantities")
     J = sysm.J
     eom = sysm.equations(p)

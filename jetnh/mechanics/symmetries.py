@@ -2,7 +2,7 @@
 
 A point generator X = xi0(t, q) d/dt + xi^s(t, q) d/dq^s with characteristic
 xibar^s = xi^s - qdot^s xi0 is a **Noether symmetry** of a principle, with gauge G(t, q),
-when on the constraint manifold
+when on the constraint manifold::
 
     pr X(F) + F D(xi0) + Q_s xibar^s + D(G) = 0                                  (N)
 
@@ -208,16 +208,30 @@ class _Linear(ansatz.Problem):
 
 # ---------------------------------------------------------------------- Noether
 def noether_symmetries(sysm, principle, degree=1, coefficients=None) -> list:
-    """The Noether point symmetries of ``principle`` (see the module docstring) with xi0
-    and xi^s spanned by ``coefficients`` (functions of t and q; default the monomials of
-    degree <= ``degree``) and the gauge by the monomials of degree <= degree + 1: a basis
+    """The Noether point symmetries of ``principle`` (see the module docstring): a basis
     over the rational functions of the parameters, each a ``NoetherSymmetry`` whose
     identity (N) and conserved quantity are proved.  Symmetries whose quantity is a
     constant are left out.
 
-    Example (the principles differ): for ``models.get("nonholonomic_particle")``, d/dz
-    is a vakonomic symmetry with I = m zdot + lambda_z and is not a Chetaev one; d/dy is
-    a Chetaev symmetry (I = m ydot) and not a vakonomic one."""
+    Parameters
+    ----------
+    sysm : System
+        The constrained system.
+    principle : str
+        "chetaev", "vakonomic", ... (the principles differ: for
+        ``models.get("nonholonomic_particle")``, d/dz is a vakonomic symmetry with
+        I = m zdot + lambda_z and is not a Chetaev one; d/dy is a Chetaev symmetry,
+        I = m ydot, and not a vakonomic one).
+    degree : int, default 1
+        xi0 and xi^s are spanned by the monomials in t and q of degree <= ``degree``, the
+        gauge by those of degree <= degree + 1.
+    coefficients : list of sympy expressions, optional
+        Functions of t and q spanning xi0 and xi^s instead of the monomials.
+
+    Returns
+    -------
+    list of jetnh.mechanics.symmetries.NoetherSymmetry
+    """
     S = _Setting(sysm, check_arguments(sysm, principle, degree, "noether_symmetries"))
     J = sysm.J
     g = _functions(sysm, coefficients, degree)

@@ -981,20 +981,20 @@ def generate_dla(system, params: dict, runtime_params=(), key="",
     size eps |q0| / h (a step far from the origin is the same step), and the one-forms
     ``A^a = df^a/dqdot`` and ``B^a = df^a/dq`` at the midpoint:
 
-    ``step_residual(t, h, q0, p0, z, p, G, Jm)``: ``z = (dq, lambda)``;
-        chetaev:   ``G = (p0 - L_v + h/2 L_q + h/2 Q + h/2 lambda.A,  f(tb, qb, vb))``;
-        vakonomic: ``G = (p0 - L_v + h/2 L_q + h/2 Q - lambda.(A - h/2 B),  f(tb, qb, vb))``;
-        and its Jacobian in z (Q: the generalized forces at the midpoint, the discrete
-        forces h/2 Q at both ends of the step).
-    ``momentum(t, h, q0, z, p, out)``: ``p1 = L_v + h/2 L_q + h/2 Q + h/2 lambda.A``
-        (chetaev), ``L_v + h/2 L_q + h/2 Q + lambda.(A + h/2 B)`` (vakonomic).
-    ``legendre(t, q, v, p, out, M)``: ``out = dF/dqdot``, ``M = d^2F/dqdot^2`` with
-        ``F = L`` (chetaev) or ``L + lambda.f`` (vakonomic, lambda = q[n:n+k]).
-    ``nodal(t, q, v, p, out)``: ``out = (f^a (k), E = v.F_v - F, I_1..I_m)`` (lambda as
-        above; ``integrals``: name -> expression in t, q, qdot and the multipliers).
-    ``sing(t, q, v, p, out)``: the indicators of ``discrete_indicators`` at a node.
-    ``constraint_jac(t, q, v, p, f, A)``: ``f^a`` and ``A = df/dqdot`` at a node (for the
-        projection of node velocities onto the constraints).
+    - ``step_residual(t, h, q0, p0, z, p, G, Jm)``: ``z = (dq, lambda)``;
+      chetaev:   ``G = (p0 - L_v + h/2 L_q + h/2 Q + h/2 lambda.A,  f(tb, qb, vb))``;
+      vakonomic: ``G = (p0 - L_v + h/2 L_q + h/2 Q - lambda.(A - h/2 B),  f(tb, qb, vb))``;
+      and its Jacobian in z (Q: the generalized forces at the midpoint, the discrete
+      forces h/2 Q at both ends of the step).
+    - ``momentum(t, h, q0, z, p, out)``: ``p1 = L_v + h/2 L_q + h/2 Q + h/2 lambda.A``
+      (chetaev), ``L_v + h/2 L_q + h/2 Q + lambda.(A + h/2 B)`` (vakonomic).
+    - ``legendre(t, q, v, p, out, M)``: ``out = dF/dqdot``, ``M = d^2F/dqdot^2`` with
+      ``F = L`` (chetaev) or ``L + lambda.f`` (vakonomic, lambda = q[n:n+k]).
+    - ``nodal(t, q, v, p, out)``: ``out = (f^a (k), E = v.F_v - F, I_1..I_m)`` (lambda as
+      above; ``integrals``: name -> expression in t, q, qdot and the multipliers).
+    - ``sing(t, q, v, p, out)``: the indicators of ``discrete_indicators`` at a node.
+    - ``constraint_jac(t, q, v, p, f, A)``: ``f^a`` and ``A = df/dqdot`` at a node (for the
+      projection of node velocities onto the constraints).
     """
     if kind not in ("chetaev", "vakonomic"):
         raise JetnhError(f"unknown discrete integrator kind {kind!r}")

@@ -1,5 +1,7 @@
 """User events: zero crossings of functions of the state, located on the dense output.
 
+Example::
+
     traj = scene.run(events=[y - 1, Event(x_t, terminal=True, direction=-1, name="turn")])
     traj.t_events[0], traj.y_events[0]          # as scipy's solve_ivp
     traj.events["turn"]                          # {"t": ..., "x": ..., "x_t": ..., ...}

@@ -46,6 +46,10 @@ def add_parser(sub):
                         "of an initial configuration off them (else it is refused)")
     s.add_argument("--csv", metavar="PATH", help="write t and every column to a CSV file")
     s.add_argument("--plot", metavar="PATH", help="save a plot (png, pdf, svg) of the run")
+    s.add_argument("--path", metavar="X,Y",
+                   help="with --plot: a panel of the path in the plane of these two series "
+                        "(default: x,y when the model has coordinates x and y; 'none': no "
+                        "path panel)")
     s.add_argument("--format", choices=("text", "json"), default="text")
     s.set_defaults(func=run)
 
@@ -94,6 +98,7 @@ def run(args, progress) -> int:
         else:
             integrals[k] = v
 
+    path_names = _path_names(args.path, system)
     for out in (args.csv, args.plot):
         if out and not Path(out).resolve().parent.is_dir():
             raise JetnhError(f"cannot write {out}: the directory "
@@ -141,7 +146,8 @@ def run(args, progress) -> int:
         progress.note(f"wrote {args.csv}")
     if args.plot:
         with progress.step(f"plotting to {args.plot}"):
-            _plot(traj, system, args.plot, f"{system.name or loaded.label} ({principle})")
+            _plot(traj, system, args.plot, f"{system.name or loaded.label} ({principle})",
+                  path_names)
     if not traj.success:
         print(f"jetnh: error: the integration stopped early: {traj.stop_reason}",
               file=sys.stderr)
@@ -161,20 +167,50 @@ def _write_csv(traj, path):
             fh.write(",".join(repr(float(x)) for x in row) + "\n")
 
 
-def _plot(traj, system, path, title):
+def _path_names(text, system) -> tuple | None:
+    """The two series of the path panel: ``--path X,Y``, or x and y when the model has
+    such coordinates; None for no panel."""
+    coords = {q.name for q in system.J.q}
+    if text is None:
+        return ("x", "y") if {"x", "y"} <= coords else None
+    if text.strip().lower() == "none":
+        return None
+    names = [n.strip() for n in text.split(",")]
+    if len(names) != 2 or not all(names):
+        raise UsageError(f"--path takes two series names separated by a comma (e.g. "
+                         f"--path x,y), not {text!r}")
+    return tuple(names)
+
+
+def _plot(traj, system, path, title, path_names=None):
     import matplotlib
-    import numpy as np
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
+    fig = _figure(traj, system, title, path_names)
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def _figure(traj, system, title, path_names=None):
+    """The series of the run against t (coordinates, velocities, multipliers, then the
+    constraint residual and the energy drift) and, with ``path_names``, the path in
+    their plane beside them."""
+    import numpy as np
+    from matplotlib.figure import Figure
 
     coords = [q.name for q in system.J.q]
     vels = [v.name for v in system.J.qd]
     lams = [n for n in traj.names if n.startswith("lambda_")]
     groups = [("coordinates", coords), ("velocities", vels)] + ([("multipliers", lams)]
                                                                  if lams else [])
-    fig, axes = plt.subplots(len(groups) + 1, 1, figsize=(8, 2.6 * (len(groups) + 1)),
-                             sharex=True)
+    rows = len(groups) + 1
+    fig = Figure(figsize=(8 + 4.5 * bool(path_names), 2.6 * rows), layout="constrained")
+    grid = fig.add_gridspec(rows, 2 if path_names else 1,
+                            width_ratios=[8, 4.5] if path_names else None)
+    axes = [fig.add_subplot(grid[0, 0])]
+    axes += [fig.add_subplot(grid[i, 0], sharex=axes[0]) for i in range(1, rows)]
     for ax, (label, names) in zip(axes, groups):
         for n in names:
             ax.plot(traj.t, traj[n], label=n)
@@ -190,7 +226,10 @@ def _plot(traj, system, path, title):
     ax.set_ylabel(f"diagnostics (floor {floor:g})")
     ax.legend(fontsize="small")
     axes[-1].set_xlabel("t")
+    if path_names:
+        plane = fig.add_subplot(grid[:, 1])
+        traj.plot_path(*path_names, ax=plane)
+        plane.set_title(f"path in the ({path_names[0]}, {path_names[1]}) plane "
+                        "(dot: the start)")
     fig.suptitle(title)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+    return fig
