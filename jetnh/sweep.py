@@ -20,8 +20,9 @@ Columns, in this order:
 
 - the grid: a parameter under its name (``R``), an initial value as ``phi_t(t0)``;
 - the outputs (``outputs``: names, default every state, dependent velocity and first
-  integral): at the final time under their names (``x``), or with ``times`` at each time
-  as ``x(t=2.5)`` (NaN after a run's stop);
+  integral): at the final time under their names (``x``; NaN when the run stopped
+  before it: its last values are never shown as final ones), or with ``times`` at each
+  time as ``x(t=2.5)`` (NaN after a run's stop);
 - the diagnostics over the output rows: ``status``, ``success``, ``stop_reason``,
   ``t_final``, ``steps``, ``rejected``, ``rhs_evaluations``, ``residual_max``
   (``max |f^a|``), ``energy_drift`` and ``drift[I]`` (``max |I - I(t0)|`` of each first
@@ -304,7 +305,7 @@ def _run_chunk(scene, Y0, P, run, outputs, parallel) -> dict:
                        on_error="record", **run)
     times = run["t_eval"]
     if times is None:
-        final = ens.final
+        final = ens.final_values()
         cols = {name: final[name] for name in outputs}
     else:
         cols = {f"{name}(t={t:.12g})": ens[name][:, j]
@@ -360,7 +361,8 @@ def _run_points(scene, Y0, P, run, outputs) -> dict:
             continue
         for label, where in labels:
             if where is None:
-                cols[label][i] = traj[label][-1]
+                if traj.diagnostics.success:    # else NaN: not the final value
+                    cols[label][i] = traj[label][-1]
             else:
                 name, j = where
                 if j < len(traj):

@@ -1,6 +1,7 @@
 """Immutable objects (``Scene``, ``Trajectory``): attributes are set in ``__init__`` only.
 Their mappings (``scene.params``, ``scene.initial``) are ``FrozenDict``: read as dicts,
-written never.
+written never; every numpy array they hold or compute (``traj.t``, ``traj["x"]``,
+``scene.y0``) is read-only (``readonly``).
 
 ``Frozen.__init_subclass__`` wraps the subclass's ``__init__``: once it returns, setting
 or deleting an attribute raises ``FrozenError``.  Values computed on first use (compiled
@@ -13,7 +14,23 @@ from __future__ import annotations
 
 import functools
 
+import numpy as np
+
 from ..errors import FrozenError
+
+
+def readonly(value):
+    """``value`` with every numpy array in it (also inside lists, tuples and dicts)
+    made read-only in place, so that what a frozen object hands out cannot change it."""
+    if isinstance(value, np.ndarray):
+        value.flags.writeable = False
+    elif isinstance(value, (list, tuple)):
+        for v in value:
+            readonly(v)
+    elif isinstance(value, dict):
+        for v in value.values():
+            readonly(v)
+    return value
 
 
 class Frozen:
@@ -49,12 +66,12 @@ class Frozen:
         ``__setattr__`` each: a trajectory is made on every run)."""
         if "_memo" in self.__dict__:
             self._refuse(next(iter(values)))
-        self.__dict__.update(values)
+        self.__dict__.update(readonly(values))
 
     def __setattr__(self, name, value):
         if "_memo" in self.__dict__:
             self._refuse(name)
-        object.__setattr__(self, name, value)
+        object.__setattr__(self, name, readonly(value))
 
     def __delattr__(self, name):
         if "_memo" in self.__dict__:
@@ -75,7 +92,7 @@ class memo:
             return self
         store = obj._memo
         if self.name not in store:
-            store[self.name] = self.fget(obj)
+            store[self.name] = readonly(self.fget(obj))
         return store[self.name]
 
     def __set__(self, obj, value):

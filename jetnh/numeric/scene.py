@@ -484,7 +484,7 @@ class Scene(Frozen):
     def _run_state(self, y0, t0, p) -> np.ndarray:
         """The initial state of one run (``run(y0=...)``), checked."""
         if y0 is None:
-            return self.y0
+            return self.y0.copy()        # the compiled loop gets its own array
         if not isinstance(y0, dict):
             y, _ = arguments.keyed_or_sequence(y0, self.state_names, self.y0, "y0",
                                                "scene.state_names")

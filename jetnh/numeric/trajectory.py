@@ -17,12 +17,13 @@ import numpy as np
 
 from ..errors import JetnhError
 from ..geometry.jet import key_name
-from .frozen import Frozen, memo
+from .frozen import Frozen, FrozenDict, memo, readonly
 
 
-@dataclass
+@dataclass(frozen=True)
 class Diagnostics:
-    """What happened during one integration, and how well the invariants held."""
+    """What happened during one integration, and how well the invariants held
+    (immutable: its mappings are read-only)."""
 
     method: str
     status: int
@@ -41,6 +42,12 @@ class Diagnostics:
     events: dict = field(default_factory=dict)        # event name -> occurrences
     singularity: dict | None = None                   # see Trajectory.singularity
     forced: bool = False              # generalized forces work: the energy drifts by design
+
+    def __post_init__(self):
+        for name in ("integral_drift", "projected", "events", "singularity"):
+            value = getattr(self, name)
+            if isinstance(value, dict):
+                object.__setattr__(self, name, FrozenDict(readonly(value)))
 
     def as_dict(self) -> dict:
         return asdict(self)
