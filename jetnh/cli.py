@@ -217,7 +217,7 @@ def _label(expr) -> str:
     """A short input expression (L, a force) in full, a large one summarized."""
     from .algebra.singular import label
 
-    return label(sp.sympify(expr))
+    return label(sp.sympify(expr, strict=True))
 
 
 def _write(args, progress, text: str, form) -> None:

@@ -105,7 +105,7 @@ def scalar(expr, what: str, err) -> sp.Expr:
         if not isinstance(expr, sp.Expr):
             raise err(f"{what} is a {type(expr).__name__} ({expr}), not an expression")
     elif isinstance(expr, numbers.Number):
-        expr = sp.sympify(expr)
+        expr = sp.sympify(expr, strict=True)
     else:
         raise err(f"{what}, {expr!r}, is of type {type(expr).__name__}, not a sympy expression")
     if dag.has(expr, sp.oo, -sp.oo, sp.zoo, sp.nan):

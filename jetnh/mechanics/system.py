@@ -24,7 +24,7 @@ from sympy.core.function import AppliedUndef
 from ..algebra import dag, linalg
 from . import inputs
 from ..errors import ConstraintError, JetnhWarning, JetSpaceError, LagrangianError
-from ..geometry.jet import JetSpace, key_name
+from ..geometry.jet import JetSpace, key_name, sympy_object
 from .principles import NAMED, PRINCIPLES  # noqa: F401 -- PRINCIPLES kept importable here
 
 @dataclass(frozen=True)
@@ -419,7 +419,7 @@ class System:
         D(phi^alpha) on the constraints (the first prolongation of the constraint set):
         identities such as (19) hold there, not on J^2 at large.
         """
-        expr = sp.sympify(expr)
+        expr = sympy_object(expr)         # never a string (it would be executed)
         if not self.phi:
             return expr
         # derivatives of undefined functions by a velocity need subs (it builds Subs objects)
