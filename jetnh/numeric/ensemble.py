@@ -232,7 +232,7 @@ class Ensemble:
             if ok.any():
                 tmp = np.empty((int(ok.sum()), self.layout.n_aux))
                 kern.aux_rows(np.ascontiguousarray(self.t[r][ok]),
-                              np.ascontiguousarray(self.y[r][ok]), self.params[r], tmp)
+                              np.ascontiguousarray(self.y[r][ok]), self.params[r].copy(), tmp)
                 out[r][ok] = tmp
         return readonly(out)
 
@@ -242,7 +242,8 @@ class Ensemble:
         out = np.empty((self.n_runs, self.layout.n_aux))
         t0 = self.scene.t_span[0]
         for r in range(self.n_runs):
-            kern.aux(t0, self.initial[r], self.params[r], out[r])
+            # compiled code takes writable arrays: copies of the read-only rows
+            kern.aux(t0, self.initial[r].copy(), self.params[r].copy(), out[r])
         return readonly(out)
 
     @property
@@ -295,8 +296,9 @@ class Ensemble:
         if s == SINGULAR:
             sc = self.scene
             info = diagnosis.singularity(sc, sc.kernels, int(self._sing_index[r]),
-                                         self.t_final[r], self.y_final[r], self.params[r],
-                                         sc.t_span[0], self.initial[r], self._singular_tol)
+                                         self.t_final[r], self.y_final[r].copy(),
+                                         self.params[r].copy(), sc.t_span[0],
+                                         self.initial[r].copy(), self._singular_tol)
             return info["reason"]
         if s == EVENT:
             hit = [k for k in range(len(self.event_names)) if self.event_counts[r, k]]
@@ -452,6 +454,11 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
     tic = time.perf_counter()
     interrupt.call(compute, halt, limit)
     wall = time.perf_counter() - tic
+    # never a success with a NaN or infinite state
+    done = np.isin(INFO[:, 0], (FINISHED, EVENT))
+    INFO[done & ~(np.all(np.isfinite(Y_LAST), axis=1)
+                  & np.all(np.isfinite(OUT_Y) | np.isnan(OUT_T)[:, :, None], axis=(1, 2))),
+         0] = NONFINITE
     ens = Ensemble(scene, method, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N[:, :n_ev],
                    EV_T[:, :n_ev], Y0, P, ce.names if ce is not None else (), wall,
                    parallel, workers if parallel != "serial" else 1, save, singular_tol)

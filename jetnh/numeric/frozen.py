@@ -1,7 +1,8 @@
 """Immutable objects (``Scene``, ``Trajectory``): attributes are set in ``__init__`` only.
 Their mappings (``scene.params``, ``scene.initial``) are ``FrozenDict``: read as dicts,
-written never; every numpy array they hold or compute (``traj.t``, ``traj["x"]``,
-``scene.y0``) is read-only (``readonly``).
+written never; every numpy array of a public attribute or computed value (``traj.t``,
+``traj["x"]``, ``scene.y0``) is read-only (``readonly``); private ones (``_p``) feed
+compiled code, which takes writable arrays, and are never handed out.
 
 ``Frozen.__init_subclass__`` wraps the subclass's ``__init__``: once it returns, setting
 or deleting an attribute raises ``FrozenError``.  Values computed on first use (compiled
@@ -66,12 +67,13 @@ class Frozen:
         ``__setattr__`` each: a trajectory is made on every run)."""
         if "_memo" in self.__dict__:
             self._refuse(next(iter(values)))
-        self.__dict__.update(readonly(values))
+        self.__dict__.update(values)
+        readonly({k: v for k, v in values.items() if not k.startswith("_")})
 
     def __setattr__(self, name, value):
         if "_memo" in self.__dict__:
             self._refuse(name)
-        object.__setattr__(self, name, readonly(value))
+        object.__setattr__(self, name, value if name.startswith("_") else readonly(value))
 
     def __delattr__(self, name):
         if "_memo" in self.__dict__:
@@ -92,7 +94,9 @@ class memo:
             return self
         store = obj._memo
         if self.name not in store:
-            store[self.name] = readonly(self.fget(obj))
+            value = self.fget(obj)
+            # what is handed out is read-only; private values feed compiled code
+            store[self.name] = value if self.name.startswith("_") else readonly(value)
         return store[self.name]
 
     def __set__(self, obj, value):

@@ -46,7 +46,7 @@ class Diagnostics:
     def __post_init__(self):
         for name in ("integral_drift", "projected", "events", "singularity"):
             value = getattr(self, name)
-            if isinstance(value, dict):
+            if isinstance(value, dict) and not isinstance(value, FrozenDict):
                 object.__setattr__(self, name, FrozenDict(readonly(value)))
 
     def as_dict(self) -> dict:
@@ -105,7 +105,7 @@ class Trajectory(Frozen):
             status=status, stop_reason=stop_reason,
             #: the stop at a singular configuration: {"indicator", "kind", "index", "t",
             #: "value", "initial", "reason"}, or None
-            singularity=singularity,
+            singularity=None if singularity is None else FrozenDict(singularity),
             event_names=tuple(names), t_events=list(t_ev), y_events=list(y_ev),
             # what re-taking a step needs (tolerances, output mode; see numeric.dense)
             _dense=dense,
