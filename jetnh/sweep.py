@@ -52,10 +52,11 @@ from __future__ import annotations
 
 import math
 import operator
+import time
 import warnings
 from collections.abc import Mapping
 
-from .errors import JetnhError
+from .errors import ArgumentError, JetnhError
 from .geometry.jet import key_name
 
 #: options that only ``Scene.run`` takes (methods run point by point)
@@ -74,15 +75,23 @@ def sweep(scene, grid, client=None, *, times=None, outputs=None, chunk_size=None
           progress=None, timeout=None, connect_timeout=10.0, **options):
     """Run ``scene`` at every point of ``grid``: a DataFrame, one row per point (see the
     module docstring).  ``client``: None (this machine), a ``dask.distributed.Client``
-    or a scheduler address; ``timeout``: seconds the Dask sweep may take (None: no
-    limit); ``connect_timeout``: seconds to reach a scheduler given by address;
+    or a scheduler address; ``timeout``: seconds the sweep may take, here or on Dask
+    (None: no limit; past it the runs are stopped and a JetnhError says so); ``connect_timeout``: seconds to reach a scheduler given by address;
     ``progress``: None, True (a tqdm bar on stderr) or a callable ``progress(done,
     total)``."""
     import numpy as np
     import pandas as pd
 
     from .numeric.ensemble import resolve
+    from .numeric.scene import Scene
 
+    if not isinstance(scene, Scene):
+        raise ArgumentError(f"sweep needs a Scene (jn.Scene(system, principle, params=..., "
+                            f"initial=..., t_span=...)), not {type(scene).__name__}")
+    if timeout is not None:
+        from .numeric import arguments
+
+        timeout = arguments.timeout(timeout)
     known = _options() + POINT_OPTIONS
     bad = sorted(set(options) - set(known))
     if bad:
@@ -124,10 +133,22 @@ def sweep(scene, grid, client=None, *, times=None, outputs=None, chunk_size=None
             size = chunk_size or (n if progress is None else math.ceil(n / 20))
             chunks = _chunks(n, size)
             parts = []
+            start = time.monotonic()
             for a, b in chunks:
-                parts.append(_run_chunk(scene, Y0[a:b], P[a:b], run, outputs, "threads"))
+                left = None if timeout is None else timeout - (time.monotonic() - start)
+                if left is not None and left <= 0:
+                    raise JetnhError(f"the sweep did not finish within timeout={timeout:g} s "
+                                     f"({a} of {n} points done); raise timeout or sweep "
+                                     "fewer points")
+                parts.append(_run_chunk(scene, Y0[a:b], P[a:b],
+                                        run if left is None else {**run, "timeout": left},
+                                        outputs, "threads"))
                 if progress is not None:
                     progress(b, n)
+            if timeout is not None and time.monotonic() - start > timeout:
+                raise JetnhError(f"the sweep did not finish within timeout={timeout:g} s "
+                                 "(its runs were stopped at the deadline); raise timeout "
+                                 "or sweep fewer points")
         else:
             parts = _on_dask(client, CompiledScene(scene), Y0, P, run, outputs, chunk_size,
                              progress, timeout, connect_timeout)

@@ -70,3 +70,9 @@ def test_cli_refuses_an_unresolvable_span(tmp_path):
                        capture_output=True, text=True, timeout=300)
     assert r.returncode != 0 and "cannot be resolved" in r.stderr, r.stderr
     assert "Traceback" not in r.stderr
+
+
+@pytest.mark.parametrize("method", ["dla", "dvi", "rk4"])
+def test_fixed_step_methods_refuse_a_zero_span(scene, method):
+    with pytest.raises(ArgumentError, match="zero length"):
+        scene.run(method=method, t_span=(1.0, 1.0), n_steps=10)

@@ -27,7 +27,7 @@ import sympy as sp
 from ..algebra import dag, linalg, singular, zero
 from . import principles
 from .system import System
-from ..errors import PrincipleError
+from ..errors import ArgumentError, PrincipleError
 from ..geometry.frobenius import bracket_components
 
 _POINTS = 4
@@ -159,6 +159,12 @@ def compare(system: System, first: str, second: str, convention: str = "paper") 
     """Do ``first`` and ``second`` give the same coordinate accelerations?  The verdict
     holds off ``Comparison.singular`` (see ``singular_set``).  The principles are given
     by name or alias (``jetnh.mechanics.principles``) and reported by their canonical names."""
+    if not isinstance(system, System):
+        raise ArgumentError(f"compare needs a jetnh System, not {type(system).__name__}")
+    for p in (first, second):
+        if not isinstance(p, str):
+            raise ArgumentError(f"compare needs principles by name (e.g. 'chetaev'), not "
+                                f"{type(p).__name__}")
     names = [principles.canonical(p) for p in (first, second)]
     if names[0] == names[1]:
         raise PrincipleError(f"compare needs two different principles; {first!r} and "

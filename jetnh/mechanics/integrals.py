@@ -1,10 +1,11 @@
 """Polynomial first integrals of a principle's equations, found by an ansatz.
 
-``conserved_quantities(sysm, principle, degree, coefficients)`` returns a basis of the
-functions I(t, q, qdot^mu[, lambda]) = sum_j c_j g_j(t, q) m_j(qdot^mu, lambda), m_j a
-monomial of degree <= ``degree`` in the independent velocities (and, for the vakonomic and
-Hoelder principles, the multipliers), whose total derivative vanishes on the equations on
-the constraint manifold (Olver 1993, section 4.3: first integrals as the kernel of the
+``conserved_quantities(sysm, principle, degree, coefficients)`` returns a basis, modulo
+the constraints, of the functions I(t, q, qdot[, lambda]) = sum_j c_j g_j(t, q) m_j(qdot,
+lambda), m_j a monomial of degree <= ``degree`` in all the velocities (the dependent ones
+included) and, for the vakonomic and Hoelder principles, the multipliers, whose total
+derivative vanishes on the equations on the constraint manifold
+(Olver 1993, section 4.3: first integrals as the kernel of the
 total derivative on the solution manifold).  The condition D I = 0 is linear in c and is
 solved by ``jetnh.algebra.ansatz``: the constants c_j may depend on the system's parameters
 (polynomially in them and in functions of them such as sin(alpha), after clearing

@@ -46,6 +46,10 @@ class Classification:
         return ", ".join(flags)
 
 
+#: the most solutions (Bezout's bound) of nonlinear constraints solved in closed form
+MAX_ROOTS = 2
+
+
 class System:
     """``System(J, L, constraints, dependent)``: a Lagrangian with constraints f^a = 0.
 
@@ -379,6 +383,7 @@ class System:
         inputs.single_root_warning(self._branch)
 
     def _solve_nonlinear(self, vel):
+        self._check_root_budget(vel)
         try:
             sols = sp.solve(list(self.constraints), list(vel), dict=True)
         except (NotImplementedError, ValueError) as exc:
@@ -406,6 +411,30 @@ class System:
             inputs.single_root_warning(self._branch)
         s = sols[self._branch or 0]
         return {v: s[v] for v in vel}
+
+    def _check_root_budget(self, vel):
+        """The budget of the nonlinear solve, checked before it starts: every constraint
+        polynomial in the dependent velocities, of degree <= 2, and at most
+        ``MAX_ROOTS`` solutions by Bezout's bound (two coupled quadratics, or a quartic,
+        have closed forms too large to generate code from, when sympy finds them)."""
+        degrees = []
+        for i, f in enumerate(self.constraints):
+            if not f.is_polynomial(*vel):
+                raise ConstraintError(
+                    f"constraint {i} is not polynomial in the dependent velocities "
+                    f"{', '.join(map(str, vel))}; jetnh solves polynomial constraints of "
+                    f"degree <= 2 only: write it in explicit form qdot^alpha - phi^alpha(t, "
+                    "q, qdot^mu), or choose another dependent coordinate")
+            degrees.append(sp.Poly(f, *vel).total_degree())
+        roots = 1
+        for d in degrees:
+            roots *= max(d, 1)
+        if max(degrees) > 2 or roots > MAX_ROOTS:
+            raise ConstraintError(
+                f"the constraints have degrees {degrees} in the dependent velocities: up to "
+                f"{roots} solutions, beyond the budget of {MAX_ROOTS} (degree <= 2, one "
+                "quadratic at most) for solving them in closed form; write them in explicit "
+                "form qdot^alpha - phi^alpha(t, q, qdot^mu) for the branch you mean")
 
     @cached_property
     def explicit_constraints(self) -> tuple[sp.Expr, ...]:

@@ -186,6 +186,9 @@ def times(t_eval, t0, t1) -> np.ndarray:
 
 def fixed_steps(n_steps, h, t0, t1, what, max_steps) -> int:
     """The number of steps of a fixed-step method from ``n_steps`` or ``h``."""
+    if t0 == t1:
+        raise ArgumentError(f"{what}: t_span = ({t0!r}, {t1!r}) has zero length, so its "
+                            "steps would have h = 0; give t1 != t0")
     if n_steps is not None and h is not None:
         raise ArgumentError(f"{what}: give n_steps= or h=, not both")
     if n_steps is None:
