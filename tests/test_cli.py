@@ -349,7 +349,7 @@ def test_long_steps_show_a_sign_of_life_on_a_terminal_only(monkeypatch):
     nothing."""
     import jetnh.cli as cli
 
-    monkeypatch.setattr(cli, "SIGN_OF_LIFE", 0.0)
+    monkeypatch.setattr(cli.progress, "SIGN_OF_LIFE", 0.0)
     tty = _Terminal()
     with cli.Progress(stream=tty).step("deriving the chetaev equations"):
         pass

@@ -1,0 +1,191 @@
+"""``jetnh simulate``: integrate a model under one principle and print diagnostics."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+from ...errors import JetnhError
+from ..loading import load_model, with_split
+from ..parser import EPILOG_MODEL, model_args, subcommand
+from ..running import FIXED_STEP, METHOD_HELP, assignments, scene_names
+from ..usage import UsageError
+
+
+def add_parser(sub):
+    s = subcommand(
+        sub, "simulate", run=True,
+        help="integrate a model under one principle (compiled) and print diagnostics",
+        description="Simulate MODEL with a compiled jetnh Scene.  Parameters default to the "
+                    "model's values and the initial state to the model's [initial] (states "
+                    "not given start at 0; dependent velocities follow from the "
+                    "constraints; the multipliers of vakonomic, holder and suslov are "
+                    "named lambda_<dependent>).  Prints the final state and the "
+                    "diagnostics: constraint residual, energy drift, first integrals "
+                    "([integrals] of a model file), steps.",
+        epilog=EPILOG_MODEL + "\n\nexample: jetnh simulate examples/rolling_disk.toml "
+                              "--t-end 10 --init psi_t=0.3 --csv disk.csv --plot disk.png")
+    model_args(s)
+    s.add_argument("--set", action="append", metavar="NAME=VALUE",
+                   help="a parameter value (repeatable, or comma-separated)")
+    s.add_argument("--init", action="append", metavar="NAME=VALUE",
+                   help="an initial value of a coordinate, velocity (x_t) or multiplier "
+                        "(repeatable, or comma-separated)")
+    s.add_argument("--method", default=None, help=METHOD_HELP)
+    s.add_argument("--timeout", type=float, default=None,
+                   help="wall-clock budget in seconds: the run stops there and reports "
+                        "what it has (default: none)")
+    s.add_argument("--points", type=int, default=None,
+                   help="output points of the adaptive methods (default 201; 0: every step)")
+    s.add_argument("--project", action="store_true",
+                   help="replace initial dependent velocities that contradict the "
+                        "constraints by the values the constraints give")
+    s.add_argument("--csv", metavar="PATH", help="write t and every column to a CSV file")
+    s.add_argument("--plot", metavar="PATH", help="save a plot (png, pdf, svg) of the run")
+    s.add_argument("--format", choices=("text", "json"), default="text")
+    s.set_defaults(func=run)
+
+
+def run(args, progress) -> int:
+    import numpy as np
+
+    from ...numeric import Scene
+    from ...numeric import arguments
+    from ...numeric.codegen import multiplier_names
+
+    loaded = with_split(load_model(args.model), args.split)
+    system = loaded.system
+    sim = loaded.simulation
+    principle = args.principle or loaded.principle or "chetaev"
+    convention = args.convention or loaded.convention or "paper"
+    params = assignments(args.set, "--set")
+    init_override = assignments(args.init, "--init")
+    t0 = args.t_start if args.t_start is not None else float(sim.get("t_start", 0.0))
+    t1 = args.t_end if args.t_end is not None else sim.get("t_end")
+    if t1 is None:
+        raise UsageError("give --t-end (the model file has no [simulation] t_end)")
+    method = args.method or sim.get("method", "dop853")
+    rtol = args.rtol if args.rtol is not None else sim.get("rtol", 1e-9)
+    atol = args.atol if args.atol is not None else sim.get("atol", 1e-12)
+    points = (args.points if args.points is not None else
+              arguments.count(sim.get("points", 201), "[simulation] points", limit=10**7))
+
+    # the initial state: the model's, then --init; missing states start at 0
+    lams = multiplier_names(system, principle)
+    states = ([q.name for q in system.J.q] + [v.name for v in system.independent_velocities]
+              + list(lams))
+    # the model's values of dependent velocities are checked against the constraints,
+    # unless --split changed which velocities are dependent (then they follow from them)
+    dep_vel = {v.name for v in system.dependent_velocities}
+    initial = {k: v for k, v in loaded.initial.items()
+               if k in states or (k in dep_vel and not args.split)}
+    initial.update(init_override)
+    zeros = [s for s in states if s not in initial]
+    initial.update({s: 0.0 for s in zeros})
+    integrals = {}
+    for k, v in loaded.integrals.items():
+        if {s.name for s in v.free_symbols} - set(states) - set(scene_names(system)):
+            progress.note(f"jetnh: the integral {k!r} uses multipliers, which the "
+                          f"{principle} state does not have; skipped")
+        else:
+            integrals[k] = v
+
+    for out in (args.csv, args.plot):
+        if out and not Path(out).resolve().parent.is_dir():
+            raise JetnhError(f"cannot write {out}: the directory "
+                             f"{Path(out).resolve().parent} does not exist")
+    try:
+        scene = Scene(system, principle, params=params, initial=initial,
+                      t_span=(t0, float(t1)), convention=convention, integrals=integrals,
+                      project=args.project)
+    except JetnhError as exc:
+        msg = str(exc).replace("pass project=True", "pass --project")
+        raise type(exc)(msg) from None
+    with progress.step(f"deriving and compiling the {principle} kernels "
+                       "(cached for later runs)"):
+        scene.compile()
+    kw = {}
+    if method.lower() in FIXED_STEP:
+        kw["n_steps"] = args.steps
+    elif points >= 2:
+        kw["t_eval"] = np.linspace(t0, float(t1), points)
+    with progress.step(f"integrating with {method} over [{t0:g}, {float(t1):g}]"):
+        traj = scene.run(rtol=rtol, atol=atol, method=method, timeout=args.timeout, **kw)
+    d = traj.diagnostics
+    final = traj.final
+    if args.format == "json":
+        print(json.dumps({"model": loaded.label, "principle": principle,
+                          "params": scene.params, "initial": scene.initial,
+                          "final": final, "diagnostics": d.as_dict(),
+                          "zero_initial": zeros}, indent=2, default=float))
+    else:
+        print(f"{system.name or loaded.label}: {principle}, t in [{t0:g}, {float(t1):g}]")
+        if scene.params:
+            print("parameters: " + ", ".join(f"{k} = {v:g}" for k, v in scene.params.items()))
+        print("initial:    " + ", ".join(f"{k} = {v:.10g}" for k, v in scene.initial.items()))
+        if zeros:
+            print(f"            (not given, set to 0: {', '.join(zeros)})")
+        if scene.projected:
+            print("projected:  " + ", ".join(f"{k}: {g:g} -> {v:.10g}"
+                                             for k, (g, v) in scene.projected.items()))
+        print("final:      " + ", ".join(f"{k} = {v:.10g}" for k, v in final.items()))
+        print(d)
+    if args.csv:
+        _write_csv(traj, args.csv)
+        progress.note(f"wrote {args.csv}")
+    if args.plot:
+        with progress.step(f"plotting to {args.plot}"):
+            _plot(traj, system, args.plot, f"{system.name or loaded.label} ({principle})")
+    if not traj.success:
+        print(f"jetnh: error: the integration stopped early: {traj.stop_reason}",
+              file=sys.stderr)
+        return 1
+    return 0
+
+
+def _write_csv(traj, path):
+    import numpy as np
+
+    cols = traj.as_dict()
+    names = list(cols)
+    data = np.column_stack([cols[n] for n in names])
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write(",".join(names) + "\n")
+        for row in data:
+            fh.write(",".join(repr(float(x)) for x in row) + "\n")
+
+
+def _plot(traj, system, path, title):
+    import matplotlib
+    import numpy as np
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    coords = [q.name for q in system.J.q]
+    vels = [v.name for v in system.J.qd]
+    lams = [n for n in traj.names if n.startswith("lambda_")]
+    groups = [("coordinates", coords), ("velocities", vels)] + ([("multipliers", lams)]
+                                                                 if lams else [])
+    fig, axes = plt.subplots(len(groups) + 1, 1, figsize=(8, 2.6 * (len(groups) + 1)),
+                             sharex=True)
+    for ax, (label, names) in zip(axes, groups):
+        for n in names:
+            ax.plot(traj.t, traj[n], label=n)
+        ax.set_ylabel(label)
+        ax.legend(fontsize="small", ncol=min(len(names), 4))
+    ax = axes[-1]
+    floor = 1e-17                        # exact zeros would squash the log scale
+    res = traj.residual
+    if res.size:
+        ax.semilogy(traj.t, np.maximum(abs(res).max(axis=1), floor), label="max |f|")
+    E = traj.energy
+    ax.semilogy(traj.t, np.maximum(abs(E - E[0]), floor), label="|E - E(t0)|")
+    ax.set_ylabel(f"diagnostics (floor {floor:g})")
+    ax.legend(fontsize="small")
+    axes[-1].set_xlabel("t")
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)

@@ -1,0 +1,181 @@
+"""``jetnh sweep``: run a model over a grid of parameters and initial values."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ...errors import JetnhError
+from ..loading import load_model, with_split
+from ..parser import EPILOG_MODEL, model_args, subcommand
+from ..running import FIXED_STEP, METHOD_HELP, assignments, scene_names
+from ..usage import UsageError
+
+
+def add_parser(sub):
+    w = subcommand(
+        sub, "sweep", run=True,
+        help="run a model over a grid of parameters and initial values (here or on Dask)",
+        description="Run MODEL at every point of the grid (the Cartesian product of the "
+                    "--grid axes) and write one row per point: the grid values (initial "
+                    "values as NAME(t0)), the final values of the states (or their values "
+                    "at --times as NAME(t=T)) and the diagnostics: status, stop_reason, "
+                    "steps, constraint residual, energy and first-integral drift.  A point "
+                    "that fails keeps its row with its stop_reason.  The other values "
+                    "are as for `jetnh simulate`.  With --scheduler the points run as "
+                    "chunks on a Dask cluster (the result is the same to the last bit).",
+        epilog=EPILOG_MODEL + "\n\nexamples:\n"
+               "  jetnh sweep rolling_disk --grid R=0.5:2:16 --grid phi_t=0.1:1:16 "
+               "--out disk.parquet\n"
+               "  jetnh sweep appell_hamel --grid x_t=0:3:31 --times 0.1,0.5 --scheduler "
+               "tcp://127.0.0.1:8786 --out ah.csv\n"
+               "  jetnh sweep rolling_disk --grid R=0.5:2:40 --grid psi_t=-1:1:40 --plot "
+               "map.png --value x --out map.csv")
+    model_args(w)
+    w.add_argument("--grid", action="append", required=True, metavar="NAME=A:B:N",
+                   help="an axis: N values from A to B, or NAME=V1,V2,... (repeatable; "
+                        "NAME a parameter or a state)")
+    w.add_argument("--set", action="append", metavar="NAME=VALUE",
+                   help="a parameter value for every point (repeatable, or comma-separated)")
+    w.add_argument("--init", action="append", metavar="NAME=VALUE",
+                   help="an initial value for every point (repeatable, or comma-separated)")
+    w.add_argument("--times", metavar="T1,T2,...|A:B:N",
+                   help="output times (default: the final time only)")
+    w.add_argument("--outputs", metavar="NAME,...",
+                   help="output columns (default: every state, dependent velocity and "
+                        "integral)")
+    w.add_argument("--method", default=None,
+                   help=METHOD_HELP.replace("(default)", "(default: the model file's, else "
+                                                         "dop853)")
+                        + "; dla, dvi and scipy run point by point")
+    w.add_argument("--scheduler", metavar="ADDRESS",
+                   help="a Dask scheduler, e.g. tcp://10.0.0.5:8786 (needs pip install "
+                        "'jetnh[cluster]'; default: this machine, every core, no Dask)")
+    w.add_argument("--chunk-size", type=int, default=None, metavar="N",
+                   help="points per Dask task (default: 4 tasks per worker thread)")
+    w.add_argument("--timeout", type=float, default=None, metavar="SECONDS",
+                   help="give up on a Dask sweep after this long (default: no limit)")
+    w.add_argument("--connect-timeout", type=float, default=10.0, metavar="SECONDS",
+                   help="time to reach the scheduler (default 10)")
+    w.add_argument("--out", metavar="PATH",
+                   help="write the table to PATH (.parquet or .csv); default: CSV on stdout")
+    w.add_argument("--plot", metavar="PATH",
+                   help="save the map of --value over the two --grid axes (PNG)")
+    w.add_argument("--value", metavar="COLUMN", help="the column --plot shows")
+    w.set_defaults(func=run)
+
+
+def _values(text: str, what: str) -> list:
+    """``A:B:N`` (N evenly spaced values from A to B) or ``V1,V2,...``: numbers, parsed
+    by float() (never evaluated)."""
+    import numpy as np
+
+    try:
+        if ":" in text:
+            a, b, n = text.split(":")
+            if int(n) < 1:
+                raise ValueError
+            return list(np.linspace(float(a), float(b), int(n)))
+        return [float(v) for v in text.split(",")]
+    except ValueError:
+        raise UsageError(f"{what}: {text!r} is neither START:STOP:N (N an integer >= 1) nor "
+                         "a comma-separated list of numbers") from None
+
+
+def _grid(items) -> dict:
+    grid = {}
+    for item in items:
+        name, sep, text = item.partition("=")
+        name = name.strip()
+        if not sep or not name:
+            raise UsageError(f"--grid takes NAME=START:STOP:N or NAME=V1,V2,..., got {item!r}")
+        if name in grid:
+            raise UsageError(f"--grid gives {name} twice; give each name once")
+        grid[name] = _values(text, f"--grid {name}")
+    return grid
+
+
+def _write_table(df, path: Path):
+    if path.suffix == ".csv":
+        df.to_csv(path, index=False)
+        return
+    try:
+        import pyarrow  # noqa: F401
+    except ImportError:
+        raise JetnhError("writing parquet needs pyarrow: pip install 'jetnh[parquet]' (or "
+                         "write a .csv)") from None
+    df.to_parquet(path, index=False)
+
+
+def run(args, progress) -> int:
+    from ...numeric import Scene
+    from ...numeric.codegen import multiplier_names
+    from ...sweep import plot_map, sweep
+
+    grid = _grid(args.grid)
+    times = _values(args.times, "--times") if args.times else None
+    if args.plot and (len(grid) != 2 or not args.value):
+        raise UsageError("--plot draws a map over two --grid axes of the column --value; "
+                         "give exactly two --grid and a --value")
+    for out, kinds in ((args.out, (".csv", ".parquet")), (args.plot, None)):
+        if not out:
+            continue
+        if not Path(out).resolve().parent.is_dir():
+            raise JetnhError(f"cannot write {out}: the directory "
+                             f"{Path(out).resolve().parent} does not exist")
+        if kinds and Path(out).suffix not in kinds:
+            raise JetnhError(f"cannot write {out}: give a .csv or .parquet path")
+    loaded = with_split(load_model(args.model), args.split)
+    system = loaded.system
+    sim = loaded.simulation
+    principle = args.principle or loaded.principle or "chetaev"
+    t0 = args.t_start if args.t_start is not None else float(sim.get("t_start", 0.0))
+    t1 = args.t_end if args.t_end is not None else sim.get("t_end")
+    if t1 is None:
+        raise UsageError("give --t-end (the model file has no [simulation] t_end)")
+    method = args.method or sim.get("method", "dop853")
+    if times is not None and method.lower() in FIXED_STEP:
+        raise UsageError(f"--times needs dense output, which {method} does not have; use "
+                         "--method dop853, dopri5, radau or scipy-<M>, or omit --times (final "
+                         "values)")
+    states = ([q.name for q in system.J.q] + [v.name for v in system.independent_velocities]
+              + list(multiplier_names(system, principle)))
+    initial = {s: 0.0 for s in states}
+    initial.update({k: v for k, v in loaded.initial.items() if k in states})
+    initial.update(assignments(args.init, "--init"))
+    known = set(states) | set(scene_names(system))
+    integrals = {k: v for k, v in loaded.integrals.items()
+                 if not {s.name for s in v.free_symbols} - known}
+    params = assignments(args.set, "--set")
+    scene = Scene(system, principle, params=params, initial=initial, t_span=(t0, float(t1)),
+                  convention=args.convention or loaded.convention or "paper",
+                  integrals=integrals,
+                  runtime_params=[k for k in grid if k in {p.name for p in system.parameters}])
+    with progress.step(f"deriving and compiling the {principle} kernels "
+                       "(cached for later runs)"):
+        scene.compile()
+    where = f"on the Dask cluster at {args.scheduler}" if args.scheduler else "on this machine"
+    show, close = progress.bar(f"sweeping {where}", "point")
+    try:
+        df = sweep(scene, grid, client=args.scheduler, times=times,
+                   outputs=args.outputs.split(",") if args.outputs else None,
+                   chunk_size=args.chunk_size, progress=show, timeout=args.timeout,
+                   connect_timeout=args.connect_timeout, method=method,
+                   rtol=args.rtol if args.rtol is not None else sim.get("rtol", 1e-9),
+                   atol=args.atol if args.atol is not None else sim.get("atol", 1e-12),
+                   **({"n_steps": args.steps} if method.lower() in FIXED_STEP else {}))
+    finally:
+        close()
+    failed = int((~df["success"]).sum())
+    progress.note(f"jetnh: {len(df)} points, {len(df) - failed} succeeded"
+                  + (f", {failed} stopped early (see stop_reason)" if failed else ""))
+    if args.out:
+        _write_table(df, Path(args.out))
+        progress.note(f"wrote {args.out}")
+    else:
+        print(df.to_csv(index=False), end="")
+    if args.plot:
+        x, y = df.attrs["grid"]
+        plot_map(df, x, y, args.value, args.plot,
+                 title=f"{system.name or loaded.label} ({principle}): {args.value}")
+        progress.note(f"wrote {args.plot}")
+    return 0

@@ -1,0 +1,91 @@
+"""The options the subcommands share: parent parsers (``COMMON`` for every command,
+``RUN`` for the commands that integrate a model) and the arguments of a model and of a
+shown result."""
+
+from __future__ import annotations
+
+import argparse
+
+from ..errors import PrincipleError
+from ..mechanics import principles
+from ..mechanics.principles import PRINCIPLES
+from .render import SCREEN_BUDGET
+
+EPILOG_MODEL = ("MODEL: a catalogue name (see `jetnh models`; scalable ones take options, "
+                "e.g. n_trailer:N=4) or a model file (TOML, e.g. examples/rolling_disk.toml).")
+
+
+class Formatter(argparse.RawDescriptionHelpFormatter):
+    pass
+
+
+ALIASES = "aliases: " + "; ".join(f"{', '.join(p.aliases)} (= {p.name})"
+                                  for p in principles.REGISTRY if p.aliases)
+
+
+def canonical_principle(name: str) -> str:
+    """--principle: an alias is read as its canonical name (argparse checks the choice)."""
+    try:
+        return principles.canonical(name)
+    except PrincipleError:
+        return name
+
+
+def _common() -> argparse.ArgumentParser:
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("-q", "--quiet", action="store_true", default=argparse.SUPPRESS,
+                        help="only errors on stderr: no progress or other messages")
+    common.add_argument("--debug", action="store_true",
+                        help="show a traceback for unexpected (internal) errors")
+    return common
+
+
+def _run() -> argparse.ArgumentParser:
+    run = argparse.ArgumentParser(add_help=False)
+    run.add_argument("--principle", "-p", choices=PRINCIPLES, type=canonical_principle, default=None,
+                     help="default: the model file's, else chetaev; " + ALIASES)
+    run.add_argument("--convention", choices=("paper", "imposed"), default=None)
+    run.add_argument("--t-start", type=float, default=None, metavar="T0", help="default 0")
+    run.add_argument("--t-end", type=float, default=None, metavar="T",
+                     help="end time (default: the model's [simulation] t_end or the "
+                          "catalogue's)")
+    run.add_argument("--rtol", type=float, default=None, help="default 1e-9")
+    run.add_argument("--atol", type=float, default=None, help="default 1e-12")
+    run.add_argument("--steps", type=int, default=1000,
+                     help="steps of the fixed-step methods rk4, dla and dvi (default 1000)")
+    return run
+
+
+#: options of every subcommand
+COMMON = _common()
+#: options of the subcommands that integrate a model (simulate, sweep)
+RUN = _run()
+
+
+def subcommand(sub, name: str, run: bool = False, **kw) -> argparse.ArgumentParser:
+    """The subparser ``name`` with the common options (and the run options if ``run``)."""
+    return sub.add_parser(name, parents=[COMMON, RUN] if run else [COMMON],
+                          formatter_class=Formatter, **kw)
+
+
+def model_args(sp_, split=True):
+    sp_.add_argument("model", metavar="MODEL", help="catalogue name or model file")
+    if split:
+        sp_.add_argument("--split", metavar="Q1,Q2",
+                         help="dependent coordinates, comma-separated (overrides the "
+                              "model's; e.g. --split x,y)")
+
+
+def shown_args(sp_):
+    sp_.add_argument("--format", choices=("text", "latex", "json"), default="text",
+                     help="text (default), latex (an aligned block) or json; each "
+                          "in the same shared form")
+    sp_.add_argument("--out", metavar="FILE",
+                     help="write the full result to FILE (on the screen large results "
+                          f"are cut to about {SCREEN_BUDGET // 1000} kB)")
+    sp_.add_argument("--simplify", type=float, default=None, metavar="SECONDS",
+                     help="trigsimp each small expression shown (at most 60 tree "
+                          "nodes) within SECONDS, 10 x SECONDS in all; larger ones are "
+                          "shown as derived, and a note says how many were simplified "
+                          "(default: 0.5 for results shown without named quantities, "
+                          "else 0; 0: none)")

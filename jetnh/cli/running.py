@@ -1,0 +1,36 @@
+"""What simulate and sweep share: NAME=VALUE lists, the names a scene may use, the
+integration methods."""
+
+from __future__ import annotations
+
+from .usage import UsageError
+
+
+def assignments(items, what) -> dict:
+    """``NAME=VALUE`` items of a repeatable option (each may be comma-separated) as
+    numbers by name."""
+    out = {}
+    for item in items or ():
+        for part in filter(None, (p.strip() for p in item.split(","))):
+            k, sep, v = part.partition("=")
+            if not sep or not k.strip():
+                raise UsageError(f"{what} takes NAME=VALUE, got {part!r}")
+            try:
+                out[k.strip()] = float(v)
+            except ValueError:
+                raise UsageError(f"{what} {k.strip()}: {v!r} is not a number") from None
+    return out
+
+
+#: the fixed-step methods (and their aliases): --steps sets their number of steps
+FIXED_STEP = ("rk4", "dla", "lda", "nh-midpoint", "dvi", "vakonomic-midpoint")
+METHOD_HELP = ("dop853 (default), dopri5, rk4, radau (implicit, for stiff problems), dla "
+               "(discrete Lagrange-d'Alembert, chetaev only), dvi (discrete vakonomic) or "
+               "scipy-<RK45|DOP853|Radau|BDF|LSODA>")
+
+
+def scene_names(system) -> set:
+    """Names an expression of a scene may use besides the states: time, dependent
+    velocities and parameters."""
+    return ({system.J.t.name} | {v.name for v in system.dependent_velocities}
+            | {p.name for p in system.parameters})
