@@ -92,6 +92,10 @@ def sweep(scene, grid, client=None, *, times=None, outputs=None, chunk_size=None
         from .numeric import arguments
 
         timeout = arguments.timeout(timeout)
+    if client is not None:
+        from .numeric import arguments
+
+        connect_timeout = arguments.positive(connect_timeout, "connect_timeout")
     known = _options() + POINT_OPTIONS
     bad = sorted(set(options) - set(known))
     if bad:
@@ -437,16 +441,35 @@ def _distributed():
 
 
 def _connect(address, timeout):
-    Client = _distributed().Client
+    """A Client of the scheduler at ``address``, within ``timeout`` seconds whatever the
+    scheduler does (one that accepts connections and never answers, or answers garbage,
+    is given up on: the connection runs in a daemon thread with a hard deadline)."""
+    import threading
 
-    try:
-        client = Client(address, timeout=timeout, set_as_default=False)
-    except (OSError, TimeoutError, ValueError) as exc:
-        raise JetnhError(
-            f"cannot reach a Dask scheduler at {address!r} within {timeout:g} s ({exc}); "
-            "start one (`dask scheduler`, then `dask worker ADDRESS` on each machine) or "
-            "check the address") from None
-    return client
+    Client = _distributed().Client
+    fix = ("start one (`dask scheduler`, then `dask worker ADDRESS` on each machine) or "
+           "check the address")
+    box = {}
+
+    def connect():
+        try:
+            box["client"] = Client(address, timeout=timeout, set_as_default=False)
+        except BaseException as exc:                   # reported below, in this thread
+            box["error"] = exc
+
+    worker = threading.Thread(target=connect, name="jetnh-dask-connect", daemon=True)
+    worker.start()
+    worker.join(timeout + 1.0)
+    if worker.is_alive() or not box:
+        raise JetnhError(f"the Dask scheduler at {address!r} did not answer within "
+                         f"{timeout:g} s (connect_timeout); {fix}")
+    if "error" in box:
+        exc = box["error"]
+        if isinstance(exc, KeyboardInterrupt):
+            raise exc
+        raise JetnhError(f"cannot reach a Dask scheduler at {address!r} within {timeout:g} "
+                         f"s ({type(exc).__name__}: {exc}); {fix}") from None
+    return box["client"]
 
 
 def _on_dask(client, shipped, Y0, P, run, outputs, chunk_size, progress, timeout,

@@ -76,3 +76,17 @@ def test_cli_refuses_an_unresolvable_span(tmp_path):
 def test_fixed_step_methods_refuse_a_zero_span(scene, method):
     with pytest.raises(ArgumentError, match="zero length"):
         scene.run(method=method, t_span=(1.0, 1.0), n_steps=10)
+
+
+def test_fast_event_resolved_with_max_step_below_its_root_spacing(scene):
+    """The documented resolution limit and its remedy: sin(1000 t) crosses zero every
+    pi/1000; with max_step below that every crossing in (0, 0.2) is reported."""
+    import sympy as sp
+
+    t = scene.system.J.t
+    tr = scene.run(t_span=(0.0, 0.2), events=[sp.sin(1000 * t)], max_step=1e-3,
+                   rtol=1e-10, atol=1e-12)
+    found = tr.t_events[0]
+    expected = np.arange(1, int(0.2 * 1000 / np.pi) + 1) * np.pi / 1000
+    assert len(found) == len(expected)
+    assert np.max(np.abs(found - expected)) < 1e-9

@@ -8,7 +8,8 @@ from pathlib import Path
 
 from ...errors import JetnhError
 from ..loading import load_model, with_split
-from ..parser import EPILOG_MODEL, model_args, subcommand
+from .. import outputs
+from ..parser import EPILOG_MODEL, count, model_args, seconds, subcommand
 from ..running import FIXED_STEP, METHOD_HELP, assignments, scene_names
 from ..usage import UsageError
 
@@ -33,10 +34,10 @@ def add_parser(sub):
                    help="an initial value of a coordinate, velocity (x_t) or multiplier "
                         "(repeatable, or comma-separated)")
     s.add_argument("--method", default=None, help=METHOD_HELP)
-    s.add_argument("--timeout", type=float, default=None,
+    s.add_argument("--timeout", type=seconds, default=None,
                    help="wall-clock budget in seconds: the run stops there and reports "
                         "what it has (default: none)")
-    s.add_argument("--points", type=int, default=None,
+    s.add_argument("--points", type=count, default=None,
                    help="output points of the adaptive methods (default 201; 0: every step)")
     s.add_argument("--project", action="store_true",
                    help="replace initial dependent velocities that contradict the "
@@ -91,10 +92,10 @@ def run(args, progress) -> int:
         else:
             integrals[k] = v
 
-    for out in (args.csv, args.plot):
-        if out and not Path(out).resolve().parent.is_dir():
-            raise JetnhError(f"cannot write {out}: the directory "
-                             f"{Path(out).resolve().parent} does not exist")
+    for out, kinds, what in ((args.csv, outputs.TEXT, "--csv"),
+                             (args.plot, outputs.FIGURE, "--plot")):
+        if out:
+            outputs.check(out, kinds, what)
     try:
         scene = Scene(system, principle, params=params, initial=initial,
                       t_span=(t0, float(t1)), convention=convention, integrals=integrals,
@@ -132,11 +133,13 @@ def run(args, progress) -> int:
         print("final:      " + ", ".join(f"{k} = {v:.10g}" for k, v in final.items()))
         print(d)
     if args.csv:
-        _write_csv(traj, args.csv)
+        outputs.write(args.csv, lambda tmp: _write_csv(traj, tmp))
         progress.note(f"wrote {args.csv}")
     if args.plot:
         with progress.step(f"plotting to {args.plot}"):
-            _plot(traj, system, args.plot, f"{system.name or loaded.label} ({principle})")
+            outputs.write(args.plot, lambda tmp: _plot(
+                traj, system, tmp, f"{system.name or loaded.label} ({principle})",
+                Path(args.plot).suffix[1:]))
     if not traj.success:
         print(f"jetnh: error: the integration stopped early: {traj.stop_reason}",
               file=sys.stderr)
@@ -156,7 +159,7 @@ def _write_csv(traj, path):
             fh.write(",".join(repr(float(x)) for x in row) + "\n")
 
 
-def _plot(traj, system, path, title):
+def _plot(traj, system, path, title, form=None):
     import matplotlib
     import numpy as np
 
@@ -187,5 +190,5 @@ def _plot(traj, system, path, title):
     axes[-1].set_xlabel("t")
     fig.suptitle(title)
     fig.tight_layout()
-    fig.savefig(path)
+    fig.savefig(path, format=form)
     plt.close(fig)
