@@ -461,8 +461,8 @@ def _connect(address, timeout):
     worker.start()
     worker.join(timeout + 1.0)
     if worker.is_alive() or not box:
-        raise JetnhError(f"the Dask scheduler at {address!r} did not answer within "
-                         f"{timeout:g} s (connect_timeout); {fix}")
+        raise JetnhError(f"cannot reach a Dask scheduler at {address!r}: it did not "
+                         f"answer within {timeout:g} s (connect_timeout); {fix}")
     if "error" in box:
         exc = box["error"]
         if isinstance(exc, KeyboardInterrupt):

@@ -87,6 +87,7 @@ def test_fast_event_resolved_with_max_step_below_its_root_spacing(scene):
     tr = scene.run(t_span=(0.0, 0.2), events=[sp.sin(1000 * t)], max_step=1e-3,
                    rtol=1e-10, atol=1e-12)
     found = tr.t_events[0]
+    found = found[found > 1e-12]                  # sin(1000 t0) = 0 at the start
     expected = np.arange(1, int(0.2 * 1000 / np.pi) + 1) * np.pi / 1000
     assert len(found) == len(expected)
     assert np.max(np.abs(found - expected)) < 1e-9

@@ -45,7 +45,7 @@ def check(path, kinds, what: str) -> Path:
     allowed = _figure_formats() if kinds == FIGURE else kinds
     if allowed is not None and suffix not in allowed:
         raise JetnhError(f"cannot write {what} {p}: {suffix or 'no suffix'} is not one of "
-                         f"{', '.join(allowed)}")
+                         f"the formats; give a {' or '.join(allowed)} path")
     if suffix == ".parquet":
         try:
             import pyarrow  # noqa: F401

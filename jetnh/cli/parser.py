@@ -92,13 +92,13 @@ def _run() -> argparse.ArgumentParser:
     run.add_argument("--principle", "-p", choices=PRINCIPLES, type=canonical_principle, default=None,
                      help="default: the model file's, else chetaev; " + ALIASES)
     run.add_argument("--convention", choices=("paper", "imposed"), default=None)
-    run.add_argument("--t-start", type=finite, default=None, metavar="T0", help="default 0")
-    run.add_argument("--t-end", type=finite, default=None, metavar="T",
+    run.add_argument("--t-start", type=float, default=None, metavar="T0", help="default 0")
+    run.add_argument("--t-end", type=float, default=None, metavar="T",
                      help="end time (default: the model's [simulation] t_end or the "
                           "catalogue's)")
-    run.add_argument("--rtol", type=finite, default=None, help="default 1e-9")
-    run.add_argument("--atol", type=finite, default=None, help="default 1e-12")
-    run.add_argument("--steps", type=positive_count, default=1000,
+    run.add_argument("--rtol", type=float, default=None, help="default 1e-9")
+    run.add_argument("--atol", type=float, default=None, help="default 1e-12")
+    run.add_argument("--steps", type=int, default=1000,
                      help="steps of the fixed-step methods rk4, dla and dvi (default 1000)")
     return run
 

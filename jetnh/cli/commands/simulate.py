@@ -9,7 +9,7 @@ from pathlib import Path
 from ...errors import JetnhError
 from ..loading import load_model, with_split
 from .. import outputs
-from ..parser import EPILOG_MODEL, count, model_args, seconds, subcommand
+from ..parser import EPILOG_MODEL, count, model_args, subcommand
 from ..running import FIXED_STEP, METHOD_HELP, assignments, scene_names
 from ..usage import UsageError
 
@@ -34,7 +34,7 @@ def add_parser(sub):
                    help="an initial value of a coordinate, velocity (x_t) or multiplier "
                         "(repeatable, or comma-separated)")
     s.add_argument("--method", default=None, help=METHOD_HELP)
-    s.add_argument("--timeout", type=seconds, default=None,
+    s.add_argument("--timeout", type=float, default=None,
                    help="wall-clock budget in seconds: the run stops there and reports "
                         "what it has (default: none)")
     s.add_argument("--points", type=count, default=None,

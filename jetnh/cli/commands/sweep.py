@@ -52,7 +52,7 @@ def add_parser(sub):
                         "'jetnh[cluster]'; default: this machine, every core, no Dask)")
     w.add_argument("--chunk-size", type=positive_count, default=None, metavar="N",
                    help="points per Dask task (default: 4 tasks per worker thread)")
-    w.add_argument("--timeout", type=seconds, default=None, metavar="SECONDS",
+    w.add_argument("--timeout", type=float, default=None, metavar="SECONDS",
                    help="give up on the sweep after this long (default: no limit)")
     w.add_argument("--connect-timeout", type=seconds, default=10.0, metavar="SECONDS",
                    help="time to reach the scheduler (default 10)")
