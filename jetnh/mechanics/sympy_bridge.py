@@ -1,13 +1,14 @@
-"""The bridge to sympy.physics.mechanics: ``LagrangesMethod`` <-> ``System``.
+"""The bridge to sympy.physics.mechanics: ``LagrangesMethod`` <-> ``System`` (Kane
+models, a ``KanesMethod`` or a mechanics ``System``, come in through ``kane_bridge``).
 
 ``from_mechanics(lm)`` reads a ``LagrangesMethod``: its coordinates ``lm.q``
 (dynamicsymbols) become a ``JetSpace`` of the same names, its Lagrangian and its
 constraints become jet expressions (``JetSpace.from_dynamic``).
 
 - ``nonhol_coneqs`` are the constraints as written.
-- ``hol_coneqs`` g(t, q) = 0 enter differentiated, dg/dt = 0, as LagrangesMethod itself
-  uses them (its ``coneqs``); jetnh's Frobenius test finds them integrable.  The
-  configuration must satisfy g = 0 initially: that is the caller's to ensure.
+- ``hol_coneqs`` g(t, q) = 0 stay holonomic (``System.holonomic``): the equations use
+  dg/dt = 0, as LagrangesMethod itself does (its ``coneqs``), and a ``Scene`` checks (or
+  completes) the initial configuration against g = 0 and keeps its runs on it.
 - ``forcelist``: loads on points and frames become the generalized forces
   Q_s = sum F . dv/dqdot^s (``generalized_forces``), the system's ``forces``.
 - Any other function of time in the Lagrangian or the constraints (a specified input
@@ -21,6 +22,7 @@ from __future__ import annotations
 
 import sympy as sp
 
+from . import kane_bridge
 from .system import System
 from ..errors import JetnhError, JetSpaceError
 from ..geometry.jet import JetSpace
@@ -51,13 +53,13 @@ def _convert(J, expr, what):
 
 
 def constraints(lm, J: JetSpace) -> list:
-    """The nonholonomic constraints as written, then the holonomic ones differentiated."""
+    """The nonholonomic constraints as written, then the holonomic ones g as written
+    (a System keeps a constraint without velocities holonomic)."""
     n_hol = len(lm._hol_coneqs)
     nonhol = list(lm.coneqs[n_hol:])
-    hol = list(lm.coneqs[:n_hol])           # LagrangesMethod stores dg/dt
+    hol = list(lm._hol_coneqs)
     return ([_convert(J, f, f"nonholonomic constraint {a + 1}") for a, f in enumerate(nonhol)]
-            + [_convert(J, f, f"holonomic constraint {a + 1} (differentiated)")
-               for a, f in enumerate(hol)])
+            + [_convert(J, f, f"holonomic constraint {a + 1}") for a, f in enumerate(hol)])
 
 
 def generalized_forces(lm, J: JetSpace) -> tuple:
@@ -91,12 +93,27 @@ def generalized_forces(lm, J: JetSpace) -> tuple:
 
 def from_mechanics(lm, dependent=None, *, branch=None, defaults=None, name="") -> System:
     """A jetnh ``System`` from a sympy.physics.mechanics ``LagrangesMethod`` (see the
-    module docstring); ``dependent``, ``branch``, ``defaults``, ``name`` as ``System``."""
-    from sympy.physics.mechanics import LagrangesMethod
+    module docstring), ``KanesMethod`` or mechanics ``System`` (``kane_bridge``: its
+    ``speeds`` attribute is then the map between the model's generalized speeds and the
+    velocities, ``kane_bridge.Speeds``); ``dependent``, ``branch``, ``defaults``, ``name``
+    as ``System``.  A mechanics System whose equations were formed with LagrangesMethod
+    is read as that LagrangesMethod."""
+    from sympy.physics.mechanics import KanesMethod, LagrangesMethod
+    from sympy.physics.mechanics import System as MechanicsSystem
 
+    if isinstance(lm, MechanicsSystem) and isinstance(lm.eom_method, LagrangesMethod):
+        lm = lm.eom_method
+    if isinstance(lm, (KanesMethod, MechanicsSystem)):
+        J, L, cons, forces, speeds = kane_bridge.read(lm)
+        system = System(J, L, cons, dependent=dependent, branch=branch, defaults=defaults,
+                        name=name, forces=forces)
+        system.speeds = speeds
+        return system
     if not isinstance(lm, LagrangesMethod):
-        raise JetnhError(f"from_mechanics takes a sympy.physics.mechanics LagrangesMethod, "
-                         f"got {type(lm).__name__}")
+        raise JetnhError(
+            f"from_mechanics takes a sympy.physics.mechanics LagrangesMethod, KanesMethod or "
+            f"System, got {type(lm).__name__}; for a Lagrangian and constraints of your own "
+            "build a jetnh System(J, L, constraints) directly")
     J = _coordinates(lm)
     L = _convert(J, lm._L[0], "the Lagrangian")
     forces = {q: Q for q, Q in zip(J.q, generalized_forces(lm, J)) if Q != 0}
@@ -106,7 +123,7 @@ def from_mechanics(lm, dependent=None, *, branch=None, defaults=None, name="") -
 
 def to_mechanics(system: System):
     """A ``LagrangesMethod`` with the system's Lagrangian, coordinates and constraints
-    (as nonholonomic constraints, in dynamicsymbols)."""
+    (holonomic ones as ``hol_coneqs``, the others as nonholonomic, in dynamicsymbols)."""
     from sympy.physics.mechanics import LagrangesMethod
 
     if system.forced:
@@ -114,6 +131,8 @@ def to_mechanics(system: System):
                          "unique loads on points and frames to stand for them; build the "
                          "LagrangesMethod's forcelist by hand")
     J = system.J
+    hol = set(system.holonomic_rows)
+    nonhol = [f for i, f in enumerate(system.constraints) if i not in hol]
     return LagrangesMethod(J.to_dynamic(system.L), [J.to_dynamic(q) for q in J.q],
-                           nonhol_coneqs=[J.to_dynamic(f) for f in system.constraints]
-                           or None)
+                           hol_coneqs=[J.to_dynamic(g) for g in system.holonomic] or None,
+                           nonhol_coneqs=[J.to_dynamic(f) for f in nonhol] or None)

@@ -62,6 +62,13 @@ class System:
     the dependent velocities and have several solutions for them; it is checked at
     construction.  ``defaults`` maps parameters (Symbols or names) to default real
     numbers, and ``name`` labels the system; neither changes the symbolic results.
+    A constraint without velocities, g(t, q) = 0, is *holonomic*: it is kept as such in
+    ``holonomic`` (in the order given) and enters ``constraints`` as its time derivative
+    D g = dg/dt + dg/dq^s qdot^s (at its place in the list), so that every principle's
+    derivation, the split and the accelerations treat it as a velocity constraint whose
+    velocity Jacobian dg/dq^s is the configuration Jacobian; the split's dependent
+    velocities make that block regular.  A ``Scene`` checks (or completes) the initial
+    configuration against g = 0 and keeps its runs on it.
     ``forces`` maps coordinates (Symbols or names) to non-potential generalized forces
     Q_s(t, q, qdot) (others are 0) and ``dissipation`` is a Rayleigh function D(t, q, qdot)
     adding Q_s = -dD/dqdot^s; every principle's equations carry Q_s beside [L]_s.
@@ -76,14 +83,25 @@ class System:
     Strings are never parsed.  Every refusal is a JetnhError saying what to write instead.
     """
 
+    #: for a System read from a Kane model (``from_mechanics``): the map between its
+    #: generalized speeds and the velocities (``jetnh.mechanics.kane_bridge.Speeds``)
+    speeds = None
+
     def __init__(self, J: JetSpace, L, constraints=(), dependent=None, branch: int | None = None,
                  defaults=None, name: str = "", forces=None, dissipation=None):
         if not isinstance(J, JetSpace):
             raise JetSpaceError(f"the first argument must be a JetSpace, got {type(J).__name__}")
         self.J = J
         self.L = self._first_order(L, "the Lagrangian")
-        self.constraints = tuple(self._first_order(f, f"constraint {i + 1}")
-                                 for i, f in enumerate(inputs.constraint_list(constraints)))
+        given = tuple(self._first_order(f, f"constraint {i + 1}")
+                      for i, f in enumerate(inputs.constraint_list(constraints)))
+        self._check_constraints(given)
+        #: the position-level constraints g(t, q) = 0 (the given ones without velocities)
+        self.holonomic = tuple(f for f in given if not self._has_velocity(f))
+        #: their places in ``constraints`` (where D g stands)
+        self.holonomic_rows = tuple(i for i, f in enumerate(given)
+                                    if not self._has_velocity(f))
+        self.constraints = tuple(f if self._has_velocity(f) else J.D(f) for f in given)
         checked = ((q, self._first_order(e, f"the force on {q.name}"))
                    for q, e in inputs.force_items(forces, J))
         self.forces = {q: e for q, e in checked if e != 0}
@@ -189,9 +207,12 @@ class System:
                     f"J.qd[{J.q.index(q)}] (the Symbol {J.jet(q, 1).name!r}) for the velocity",
                     JetnhWarning, stacklevel=3)
 
-    def _check_velocities(self):
+    def _has_velocity(self, f) -> bool:
+        return bool(dag.free_symbols(f) & set(self.J.qd))
+
+    def _check_constraints(self, given):
         J = self.J
-        for i, f in enumerate(self.constraints):
+        for i, f in enumerate(given):
             if f == 0:
                 raise ConstraintError(
                     f"constraint {i + 1} is identically zero (0 = 0); remove it")
@@ -201,10 +222,13 @@ class System:
                     f"constraint {i + 1}, {f} = 0, involves neither time, coordinates nor "
                     "velocities: it is a condition on the parameters, not a constraint; "
                     "remove it")
-            if not (dag.free_symbols(f) & set(J.qd)):
+            if not (dag.free_symbols(f) & (set(J.q) | set(J.qd))):
                 raise ConstraintError(
-                    f"constraint {i + 1}, {f} = 0, contains no velocity: it is holonomic. "
-                    f"Eliminate a coordinate, or pass its time derivative J.D(f) instead")
+                    f"constraint {i + 1}, {f} = 0, involves time only: it holds at isolated "
+                    "instants, not along a motion; remove it (or add the coordinates it "
+                    "relates)")
+
+    def _check_velocities(self):
         if self.k and linalg.numeric_rank(self.jacobian) < self.k:
             raise ConstraintError(
                 "the constraints are dependent: their velocity Jacobian df/dqdot has rank "
@@ -313,8 +337,10 @@ class System:
 
     @property
     def _inputs(self) -> tuple:
-        """Every expression the user gave: L, the constraints, forces and dissipation."""
-        return (self.L, *self.constraints, *self.forces.values(), self.dissipation)
+        """Every expression the user gave: L, the constraints (holonomic ones also as
+        given), forces and dissipation."""
+        return (self.L, *self.constraints, *self.holonomic, *self.forces.values(),
+                self.dissipation)
 
     @cached_property
     def Q(self) -> tuple[sp.Expr, ...]:
@@ -558,8 +584,17 @@ class System:
 
     def with_split(self, dependent) -> "System":
         """The same system with another split."""
-        return System(self.J, self.L, self.constraints, dependent, self._branch,
-                      self.defaults, self.name, self.forces, self._dissipation_arg)
+        out = System(self.J, self.L, self.given_constraints, dependent, self._branch,
+                     self.defaults, self.name, self.forces, self._dissipation_arg)
+        out.speeds = self.speeds
+        return out
+
+    @property
+    def given_constraints(self) -> tuple[sp.Expr, ...]:
+        """The constraints as given: ``constraints`` with each holonomic g in place of
+        its derivative D g."""
+        hol = dict(zip(self.holonomic_rows, self.holonomic))
+        return tuple(hol.get(i, f) for i, f in enumerate(self.constraints))
 
     @property
     def _dissipation_arg(self):
@@ -590,5 +625,6 @@ class System:
         extra = (f", forces={{{', '.join(f'{q.name}: {e}' for q, e in self.forces.items())}}}"
                  if self.forces else "")
         extra += f", dissipation={self.dissipation}" if self.dissipation != 0 else ""
+        extra += f", holonomic={list(self.holonomic)}" if self.holonomic else ""
         return (f"System(L={self.L}, constraints={list(self.constraints)}, "
                 f"dependent={[s.name for s in self.dependent]}{extra})")

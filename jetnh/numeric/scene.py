@@ -15,7 +15,9 @@
 
 Every run stops at a singular configuration (``singular="stop"``, the default) with
 ``status`` SINGULAR and a ``stop_reason`` naming the indicator and the time; see
-``run``.
+``run``.  The singular set of the split is not one: at the edge of the split's chart
+the run goes on in another regular split (``numeric.atlas``; ``split="fixed"`` keeps
+the scene's split).
 
 A scene does only what it needs: it derives the equations of its own principle, and only
 when its kernels are not in the disk cache; parameters are numbers substituted before
@@ -24,9 +26,17 @@ is every step, the points of ``t_eval``, or only the end (``save="final"``).
 
 State: every coordinate q^s, the independent velocities qdot^mu and the multipliers of
 the principles that have them (vakonomic, Hoelder, Suslov).  Initial values are keyed by
-Symbol or by name; the dependent velocities follow from the constraints.  If given, they
+Symbol, by name or by sympy.physics.mechanics dynamicsymbol (``x(t)`` for x, ``x(t).diff()``
+for x_t); the dependent velocities follow from the constraints.  If given, they
 must agree with the constraints (else ``ConstraintError``), or ``project=True`` replaces
 them by the values the constraints require.
+
+Holonomic constraints g(t, q) = 0 (``system.holonomic``): the initial configuration must
+satisfy them (else ``ConstraintError`` with the residual), or ``complete=True`` solves
+them by Newton's method for the split's dependent coordinates (those making dg/dq over
+them regular; ``complete=[z, ...]`` names others), recorded in ``scene.completed``.  The
+compiled explicit and Radau runs project every accepted step back onto g = 0
+(``methods.projection``); ``traj.diagnostics.holonomic_residual_max`` reports max |g|.
 """
 
 from __future__ import annotations
@@ -38,14 +48,14 @@ import numpy as np
 import sympy as sp
 
 from ..algebra import dag
-from ..mechanics import principles
+from ..mechanics import holonomic, principles
 from ..mechanics.system import System
 from ..errors import ConstraintError, JetnhError
 from ..geometry.jet import sympy_object
 from . import arguments, interrupt
 from . import cache as _cache
 from . import codegen
-from . import diagnosis, discrete, methods, scipy_backend
+from . import atlas, diagnosis, discrete, methods, scipy_backend
 from .methods import STATUS_TEXT
 from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, FINISHED, NONFINITE, SINGULAR, STOPPED
 from .methods.loop import Control, watch_of
@@ -62,7 +72,9 @@ class Scene(Frozen):
     maps names to sympy expressions (first integrals to monitor); ``runtime_params``
     names parameters read at run time instead of compiled in; ``project`` replaces
     inconsistent dependent velocities; ``consistency_tol`` is the relative tolerance of
-    that check; ``cache=False`` keeps compiled kernels out of the disk cache.
+    that check; ``complete`` (True or coordinates) solves the holonomic constraints for
+    coordinates of an initial configuration off g = 0 (else it is refused);
+    ``cache=False`` keeps compiled kernels out of the disk cache.
 
     A scene is immutable (``FrozenError`` on assignment; ``replace`` makes a changed
     copy); what it compiles lazily is kept in its private memo (``numeric.frozen``).
@@ -72,7 +84,8 @@ class Scene(Frozen):
 
     def __init__(self, system: System, principle: str = "chetaev", params=None, initial=None,
                  t_span=(0.0, 1.0), *, form=None, convention="paper", integrals=None,
-                 runtime_params=(), project=False, consistency_tol=1e-9, cache=True):
+                 runtime_params=(), project=False, consistency_tol=1e-9, cache=True,
+                 complete=False):
         if not isinstance(system, System):
             raise JetnhError(f"a Scene needs a jetnh System, got {type(system).__name__}")
         principle = principles.canonical(principle)     # a name, an alias or a Principle
@@ -105,7 +118,9 @@ class Scene(Frozen):
         self.state_names = self.coordinates + self.velocities + self.multipliers
         self.consistency_tol = arguments.positive(consistency_tol, "consistency_tol")
         self.projected: dict[str, tuple[float, float]] = {}
-        self.initial = FrozenDict(self._initial(initial or {}, project))
+        #: coordinates moved onto the holonomic constraints: name -> (given, completed)
+        self.completed: dict[str, tuple[float, float]] = {}
+        self.initial = FrozenDict(self._initial(initial or {}, project, complete))
         self.y0 = np.array([self.initial[n] for n in self.state_names], dtype=float)
 
     # ------------------------------------------------------------------ input checks
@@ -136,7 +151,7 @@ class Scene(Frozen):
                              "params={...} (or as the system's defaults)")
         return out
 
-    def _initial(self, initial, project) -> dict[str, float]:
+    def _initial(self, initial, project, complete=False) -> dict[str, float]:
         given = {}
         allowed = set(self.state_names) | set(self.dependent_velocities)
         for k, v in initial.items():
@@ -157,6 +172,7 @@ class Scene(Frozen):
                    f" (the {self.principle} state includes the multipliers "
                    f"{', '.join(self.multipliers)})")
                 + "; give them in initial={...}")
+        given = self._on_holonomic(given, complete)
         required = self._dependent_velocity_values(given)
         bad = []
         for name, value in required.items():
@@ -180,6 +196,31 @@ class Scene(Frozen):
             self.projected = {n: (g, v) for n, g, v in bad}
         out = dict(given)
         out.update(required)
+        return out
+
+    def _holonomic_point(self, values, t0=None, params=None) -> dict:
+        """t, the coordinates (from ``values``, by name) and the parameters, keyed by
+        Symbol (for ``mechanics.holonomic``)."""
+        sys_ = self.system
+        J = sys_.J
+        point = {J.t: self.t_span[0] if t0 is None else t0}
+        point.update((q, values[q.name]) for q in J.q)
+        numbers = {**self.params, **(params or {})}
+        point.update((s, numbers[s.name]) for s in sys_.parameters)
+        return point
+
+    def _on_holonomic(self, given, complete) -> dict[str, float]:
+        """``given`` with the coordinates on the holonomic constraints: checked, or
+        completed (``complete``), else a ConstraintError (``mechanics.holonomic.check``)."""
+        if not self.system.holonomic:
+            return given
+        point, changed = holonomic.check(self.system, self._holonomic_point(given),
+                                         complete)
+        if not changed:
+            return given
+        self.completed = changed
+        out = dict(given)
+        out.update((q.name, float(point[q])) for q in self.system.J.q)
         return out
 
     def _dependent_velocity_values(self, given, t0=None, params=None) -> dict[str, float]:
@@ -244,7 +285,7 @@ class Scene(Frozen):
                     t_span=self.t_span, form=self.form, convention=self.convention,
                     integrals=self.integrals, runtime_params=self.runtime_params,
                     consistency_tol=self.consistency_tol, cache=self.cache)
-        unknown = set(changes) - set(args) - {"project"}
+        unknown = set(changes) - set(args) - {"project", "complete"}
         if unknown:
             raise JetnhError(f"Scene.replace: unknown arguments {sorted(unknown)}")
         args.update(changes)
@@ -277,7 +318,7 @@ class Scene(Frozen):
         """Integrate and return a ``Trajectory``.
 
         What: ``t_span`` replaces the scene's; ``y0`` the initial state (a dict keyed by
-        Symbol or name, the other states keeping the scene's values and dependent
+        Symbol, name or dynamicsymbol, the other states keeping the scene's values and dependent
         velocities, if given, agreeing with the constraints; or a sequence in the order
         ``scene.state_names``); ``params`` the run-time parameters (``runtime_params``: a
         dict, or a sequence in the order ``scene.runtime_params``).
@@ -308,7 +349,12 @@ class Scene(Frozen):
           check the indicators of the constraints and the Lagrangian as written
           (``codegen.discrete_indicators``) at every node and stop at the last regular
           one.  NaN or infinity that no indicator explains raises an ``IntegrationError``
-          naming the time and the state;
+          naming the time and the state.  ``split="switch"`` (default) or ``"fixed"``:
+          dop853, dopri5, rk4 and radau runs that reach the edge of the split's chart
+          go on in another regular split (``numeric.atlas``: the switch located as an
+          event, the state and multipliers mapped, one trajectory in the scene's states,
+          ``traj.switches`` lists time, from and to); "fixed" keeps the scene's split,
+          which stops at its singular set as before;
         - ``newton=Newton(tol, max_iter)`` or ``newton_tol``, ``max_newton``: the Newton
           iteration of radau (automatic, 7) and of dla and dvi (1e-13, 50).
 
@@ -325,7 +371,7 @@ class Scene(Frozen):
         """
         opts = options(step, singular, newton, rtol=rtol, atol=atol, **keywords)
         rtol, atol, first_step, max_step, max_steps, n_steps, h = fields_of(opts.step)
-        singular, singular_tol = fields_of(opts.singular)
+        singular, singular_tol, split = fields_of(opts.singular)
         newton_tol, max_newton = fields_of(opts.newton)
         t0, t1 = self._t_span(t_span) if t_span is not None else self.t_span
         p = self._run_params(params)
@@ -388,7 +434,7 @@ class Scene(Frozen):
             if t_eval is not None:
                 te = arguments.times(t_eval, t0, t1)
                 mode = AT_T_EVAL
-            ctl = Control(rtol, atol_v, first, mx, budget, 0)
+            ctl = Control(rtol, atol_v, first, mx, budget, 0, *self._projection)
             # radau's steps depend on the steps before (Newton's starting values, the
             # Jacobian kept): no re-taking of one step (numeric.dense)
             dense = None if method == "radau" else {"rtol": rtol, "atol": atol_v,
@@ -402,34 +448,48 @@ class Scene(Frozen):
             arguments.output_rows(steps, n, save)
             mode = EVERY_STEP if save == "steps" else ENDPOINTS
             te = np.zeros(0)
-            ctl = Control(rtol, atol_v, 0.0, np.inf, budget, steps)
+            ctl = Control(rtol, atol_v, 0.0, np.inf, budget, steps, *self._projection)
             dense = {"mode": mode}
         kern = self.kernels
-        ce = None if events is None else self.compile_events(events)
-        watch = self._watch(kern, ce, singular == "stop", singular_tol)
-        uev = ce.uev if ce is not None else kern.sing_fp
-        halt = interrupt.flag()
+        newton = None
         if method == "radau":
             from .methods import radau
 
-            solve = kern.implicit()
             newton = radau.newton_options(newton_tol, max_newton)
-            jac = self.jacobian.address
-            tic = time.perf_counter()
-            out = interrupt.call(lambda: solve(kern.rhs_fp, jac, kern.sing_fp, uev, t0, t1,
-                                               y_init, p, ctl, newton, te, mode, watch, halt),
-                                 halt, limit)
-        else:
-            solve = methods.explicit_solver(method)
-            tic = time.perf_counter()
-            out = interrupt.call(lambda: solve(kern.rhs_fp, kern.sing_fp, uev, t0, t1,
-                                               y_init, p, ctl, te, mode, watch, halt),
-                                 halt, limit)
-        wall = time.perf_counter() - tic
+        if split == "switch" and atlas.applies(self, events):
+            return atlas.run(self, method, events, t0, t1, y_init, p, ctl, te, mode, dense,
+                             singular == "stop", singular_tol, newton, limit)
+        ce = None if events is None else self.compile_events(events)
+        watch = self._watch(kern, ce, singular == "stop", singular_tol)
+        out, wall = self._solve(method, kern, ce, watch, t0, t1, y_init, p, ctl, te, mode,
+                                newton, limit)
         if dense is not None:    # stopped inside a step
             dense["partial_last"] = int(out.status) in (EVENT, SINGULAR)
         return self._trajectory(method, out, wall, kern, ce, p, t0, y_init, singular_tol,
                                 singular == "stop", limit, dense)
+
+    def _solve(self, method, kern, ce, watch, t0, t1, y_init, p, ctl, te, mode, newton,
+               limit):
+        """One call of the compiled loop of ``method`` on the kernels ``kern`` (events
+        ``ce``, ``watch``); returns its ``Result`` and the wall-clock time."""
+        uev = ce.uev if ce is not None else kern.sing_fp
+        halt = interrupt.flag()
+        if method == "radau":
+            solve = kern.implicit()
+            jac = self.jacobian.address
+            tic = time.perf_counter()
+            out = interrupt.call(lambda: solve(kern.rhs_fp, jac, kern.sing_fp, uev,
+                                               kern.hol_or_none, t0, t1, y_init, p, ctl,
+                                               newton, te, mode, watch, halt),
+                                 halt, limit)
+        else:
+            solve = methods.explicit_solver(method)
+            tic = time.perf_counter()
+            out = interrupt.call(lambda: solve(kern.rhs_fp, kern.sing_fp, uev,
+                                               kern.hol_or_none, t0, t1, y_init, p, ctl, te,
+                                               mode, watch, halt),
+                                 halt, limit)
+        return out, time.perf_counter() - tic
 
     # ------------------------------------------------------------------ run helpers
     @staticmethod
@@ -450,6 +510,12 @@ class Scene(Frozen):
         if key not in store:
             store[key] = watch_of(kern, None, singular, singular_tol)
         return store[key]
+
+    @property
+    def _projection(self) -> tuple[int, int]:
+        """``(n_hol, n_coord)`` of ``Control``: the holonomic constraints every accepted
+        step is projected onto (0: none) and the number of coordinates."""
+        return len(self.system.holonomic), self.system.J.n
 
     @memo
     def _p(self) -> np.ndarray:
@@ -483,6 +549,7 @@ class Scene(Frozen):
         if not isinstance(y0, dict):
             y, _ = arguments.keyed_or_sequence(y0, self.state_names, self.y0, "y0",
                                                "scene.state_names")
+            self._check_holonomic(y, t0, p)
             return y
         allowed = self.state_names + self.dependent_velocities
         for k in y0:
@@ -494,6 +561,7 @@ class Scene(Frozen):
         y, given = arguments.keyed_or_sequence(
             y0, allowed, [self.initial[nm] for nm in allowed], "y0", "")
         y = np.ascontiguousarray(y[:len(self.state_names)])
+        self._check_holonomic(y, t0, p)
         dep = {nm: v for nm, v in given.items() if nm in self.dependent_velocities}
         if dep:
             vals = dict(zip(self.state_names, y.tolist()))
@@ -505,6 +573,19 @@ class Scene(Frozen):
                         f"y0 gives {nm} = {v!r} but the constraints give {required[nm]!r}; "
                         "omit it (dependent velocities follow from the constraints)")
         return y
+
+    def _check_holonomic(self, y, t0, p):
+        """Refuse a run's initial state off the holonomic constraints."""
+        if not self.system.holonomic:
+            return
+        values = dict(zip(self.state_names, np.asarray(y, dtype=float).tolist()))
+        try:
+            holonomic.check(self.system, self._holonomic_point(
+                values, t0, dict(zip(self.runtime_params, np.asarray(p).tolist()))))
+        except ConstraintError as exc:
+            raise ConstraintError(
+                f"y0: {exc} (a run does not complete y0; use "
+                "scene.replace(initial=..., complete=True))") from None
 
     def compile_events(self, events):
         """The compiled form of ``events`` (``events.CompiledEvents``), or None; kept per
@@ -522,8 +603,9 @@ class Scene(Frozen):
         return store[memo]
 
     def _trajectory(self, method, out, wall, kern, ce, p, t0, y_init, singular_tol, checked,
-                    timeout=None, dense=None):
-        """A Trajectory from the result tuple of a compiled solve (or an error)."""
+                    timeout=None, dense=None, n_events=None):
+        """A Trajectory from the result tuple of a compiled solve (or an error); with
+        ``n_events``, only the first ``n_events`` events of ``ce`` are reported."""
         from .events import split_records
 
         (status, ts, ys, n_out, stats, t_last, y_last, ev_t, ev_i, ev_y, n_ev,
@@ -556,8 +638,9 @@ class Scene(Frozen):
             reason = STATUS_TEXT[status]
         kw = {}
         if ce is not None:
-            t_events, y_events = split_records(len(ce), ev_t[:n_ev], ev_i[:n_ev], ev_y[:n_ev])
-            kw["events"] = (ce.names, t_events, y_events)
+            n = len(ce) if n_events is None else n_events
+            t_events, y_events = split_records(n, ev_t[:n_ev], ev_i[:n_ev], ev_y[:n_ev])
+            kw["events"] = (ce.names[:n], t_events, y_events)
         return Trajectory(self, ts[:n_out], ys[:n_out], p, method=method, status=status,
                           stop_reason=reason, steps=int(stats[0]), rejected=int(stats[1]),
                           nfev=int(stats[2]), wall_time=wall, kernels=kern,

@@ -1,11 +1,12 @@
-"""Trajectories: the output of ``Scene.run``, indexed by Symbol or by name.
+"""Trajectories: the output of ``Scene.run``, indexed by Symbol, by name or by dynamicsymbol.
 
 ``traj.t`` is the array of output times and ``traj[x]`` / ``traj["x"]`` the column of a
 coordinate, an independent velocity, a multiplier, a dependent velocity (computed from
 the constraints by the compiled ``aux`` kernel, on first access) or a user first
 integral.  ``traj.diagnostics`` reports the constraint residual, the energy and its
 drift, first integrals and their drift, steps, right-hand-side evaluations and why the
-integration stopped.  With generalized forces the energy is not conserved:
+integration stopped (and the split switches of a run that changed split,
+``numeric.atlas``).  With generalized forces the energy is not conserved:
 ``traj.power`` is their power Q_s qdot^s, and the diagnostics say that the forces work.
 """
 
@@ -42,6 +43,9 @@ class Diagnostics:
     events: dict = field(default_factory=dict)        # event name -> occurrences
     singularity: dict | None = None                   # see Trajectory.singularity
     forced: bool = False              # generalized forces work: the energy drifts by design
+    holonomic_residual_max: float = 0.0   # max |g_i| of the holonomic constraints
+    completed: dict = field(default_factory=dict)     # see Scene.completed
+    switches: list = field(default_factory=list)      # split changes: {"t", "from", "to"}
 
     def __post_init__(self):
         for name in ("integral_drift", "projected", "events", "singularity"):
@@ -56,7 +60,9 @@ class Diagnostics:
         lines = [f"{self.method}: {self.stop_reason} ({'success' if self.success else 'failure'})",
                  f"  steps {self.steps} (rejected {self.rejected}), rhs evaluations "
                  f"{self.rhs_evaluations}, {self.wall_time * 1e3:.3g} ms",
-                 f"  constraint residual max {self.residual_max:.3e}",
+                 f"  constraint residual max {self.residual_max:.3e}"
+                 + (f", holonomic (position level) {self.holonomic_residual_max:.3e}"
+                    if self.holonomic_residual_max else ""),
                  f"  energy {self.energy_initial:.12g}, drift {self.energy_drift:.3e} "
                  f"(relative {self.energy_drift_relative:.3e})"
                  + ("; not conserved: the generalized forces work (traj.power)"
@@ -65,6 +71,10 @@ class Diagnostics:
             lines.append(f"  integral {k}: drift {v:.3e}")
         for k, v in self.events.items():
             lines.append(f"  event {k}: {v} occurrence(s)")
+        if self.switches:
+            lines.append(f"  {len(self.switches)} split switch(es), the first at t = "
+                         f"{self.switches[0]['t']:.6g} ({self.switches[0]['from']} -> "
+                         f"{self.switches[0]['to']})")
         return "\n".join(lines)
 
 
@@ -97,7 +107,7 @@ class Trajectory(Frozen):
 
     def __init__(self, scene, t, y, p, *, method, status, stop_reason, steps, rejected,
                  nfev, wall_time, kernels, projected=None, own=None, events=None,
-                 singularity=None, dense=None):
+                 singularity=None, dense=None, segments=None, switches=()):
         names, t_ev, y_ev = events if events is not None else ((), [], [])
         self._set(
             scene=scene, t=np.ascontiguousarray(t, dtype=float),
@@ -114,7 +124,10 @@ class Trajectory(Frozen):
             # methods that carry their own velocities, residuals, energy and first
             # integrals (the discrete integrators dla, dvi): {"velocities": {name: col},
             # "residual", "energy", "integrals": {name: col}}
-            _own=own or {})
+            _own=own or {},
+            # a run that changed split: its pieces (``numeric.atlas.Stitched``, which
+            # gives its aux rows and dense output) and switches {"t", "from", "to"}
+            _segments=segments, switches=tuple(switches))
 
     @property
     def layout(self):
@@ -135,7 +148,8 @@ class Trajectory(Frozen):
         name = key_name(key)
         if name is not None:
             return name
-        raise JetnhError(f"index a trajectory by a Symbol or a name, not {type(key).__name__}")
+        raise JetnhError(f"index a trajectory by a Symbol, a name or a dynamicsymbol x(t) "
+                         f"(x(t).diff() for x_t), not {type(key).__name__}")
 
     def __getitem__(self, key) -> np.ndarray:
         name = self._name(key)
@@ -186,6 +200,8 @@ class Trajectory(Frozen):
         if self._own:
             raise JetnhError(f"{self.method} trajectories carry their own velocities, "
                              "residuals, energy and first integrals (no aux rows)")
+        if self._segments is not None:
+            return self._segments.aux(self)
         out = np.empty((len(self), self.layout.n_aux))
         if len(self):
             self._kernels.aux_rows(self.t, self.y, self._p, out)
@@ -201,8 +217,9 @@ class Trajectory(Frozen):
     @property
     def power(self) -> np.ndarray:
         """P = Q_s qdot^s, the power of the generalized forces (zeros without forces)."""
-        if self.layout.power:
-            return self.aux[:, -1]
+        lay = self.layout
+        if lay.power:
+            return self.aux[:, lay.n_aux - 1 - lay.holonomic]
         if self.scene.system.forced:
             raise JetnhError(f"{self.method} trajectories carry no power column; run the "
                              "scene with an adaptive or rk4 method for traj.power")
@@ -216,6 +233,27 @@ class Trajectory(Frozen):
         k = len(self.layout.dependent_velocities)
         return self.aux[:, k:2 * k]
 
+    @property
+    def holonomic_residual(self) -> np.ndarray:
+        """The holonomic constraints g_i(t, q) at every output row (columns: i; none
+        without holonomic constraints)."""
+        system = self.scene.system
+        m = len(system.holonomic)
+        if not m:
+            return np.zeros((len(self), 0))
+        if not self._own:
+            return self.aux[:, self.layout.n_aux - m:]
+        # the discrete methods carry no aux rows: g evaluated on the coordinates
+        from ..algebra import dag
+
+        J = system.J
+        point = {J.t: self.t, **{q: self.y[:, i] for i, q in enumerate(J.q)}}
+        values = {**self.scene.params, **dict(zip(self.scene.runtime_params,
+                                                   np.asarray(self._p).tolist()))}
+        point.update((s, values[s.name]) for s in system.parameters)
+        cols = dag.evaluate_numpy(list(system.holonomic), point)
+        return np.column_stack([np.broadcast_to(c, self.t.shape) for c in cols])
+
     def integral(self, name) -> np.ndarray:
         return self[name]
 
@@ -223,6 +261,8 @@ class Trajectory(Frozen):
     def diagnostics(self) -> Diagnostics:
         res = self.residual
         rmax = float(np.max(np.abs(res))) if res.size else 0.0
+        hol = self.holonomic_residual
+        hmax = float(np.max(np.abs(hol))) if hol.size else 0.0
         E = self.energy
         e0 = float(E[0]) if E.size else float("nan")
         drift = float(np.max(np.abs(E - e0))) if E.size else 0.0
@@ -239,7 +279,9 @@ class Trajectory(Frozen):
             energy_drift_relative=drift / max(abs(e0), 1e-300) if E.size else 0.0,
             integral_drift=idrift, projected=i["projected"],
             events={n: len(te) for n, te in zip(self.event_names, self.t_events)},
-            singularity=self.singularity, forced=self.scene.system.forced)
+            singularity=self.singularity, forced=self.scene.system.forced,
+            holonomic_residual_max=hmax, completed=dict(self.scene.completed),
+            switches=[dict(s) for s in self.switches])
 
     # ------------------------------------------------------------------ tables, figures
     def to_dataframe(self, diagnostics=True):
@@ -267,9 +309,12 @@ class Trajectory(Frozen):
     def at(self, times) -> np.ndarray:
         """States ``[len(times), n_states]`` at ``times`` inside the span, from the
         method's dense output (dop853, dopri5: the covering step re-taken, bit for bit
-        what ``t_eval`` gives; rk4: cubic Hermite); needs every step stored."""
+        what ``t_eval`` gives; rk4: cubic Hermite); needs every step stored.  A run
+        that changed split is evaluated in the chart that ran at each time."""
         from .dense import evaluate
 
+        if self._segments is not None:
+            return self._segments.at(self, times)
         return evaluate(self, times)
 
     def _repr_html_(self):
