@@ -32,7 +32,7 @@ def tree_size(exprs, cap: int) -> int:
     """Nodes of ``exprs`` (a list) as trees, counted on the graph up to ``cap + 1``."""
     size: dict[int, int] = {}
     total = 0
-    roots = [sp.sympify(e) for e in exprs]
+    roots = [sp.sympify(e, strict=True) for e in exprs]
     for e in dag.nodes(roots):
         size[id(e)] = min(cap + 1, 1 + sum(size[id(a)] for a in e.args))
     for e in roots:
@@ -190,7 +190,7 @@ def shared_form(rows, flat_max: int = FLAT_MAX, inline_max: int = INLINE_MAX,
     """``rows`` ((label, expression) pairs, or a dict) in shared form (module docstring);
     time and size linear in the number of distinct subexpressions.  Equal
     subexpressions get one name, however many objects hold them (``canonical``)."""
-    rows = [r if isinstance(r, str) else (r[0], sp.sympify(r[1]))
+    rows = [r if isinstance(r, str) else (r[0], sp.sympify(r[1], strict=True))
             for r in (rows.items() if isinstance(rows, dict) else rows)]
     exprs = [r[1] for r in rows if not isinstance(r, str)]
     if tree_size(exprs, flat_max) <= flat_max:

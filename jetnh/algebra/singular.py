@@ -35,7 +35,7 @@ def bases(expr) -> list:
     negative and fractional powers, arguments of log, cos of tan/sec arguments, sin of
     cot/csc arguments, 1 - u^2 of asin/acos arguments (in the order met; shared
     subexpressions are visited once)."""
-    out, seen, stack = [], set(), [sp.sympify(expr)]
+    out, seen, stack = [], set(), [sp.sympify(expr, strict=True)]
     while stack:
         e = stack.pop()
         if id(e) in seen or e.is_Atom:      # by identity: equal trees never compared

@@ -53,6 +53,11 @@ def _names(spec) -> tuple[str, ...]:
     """Names from ``"x y"``, ``"x, y"`` or an iterable of str / Symbol."""
     if isinstance(spec, str):
         return tuple(n for n in re.split(r"[\s,]+", spec.strip()) if n)
+    if isinstance(spec, sp.Symbol):
+        return (spec.name,)
+    if not isinstance(spec, Iterable):
+        raise JetSpaceError(f"coordinates must be names ('x y phi') or a list of names or "
+                            f"Symbols, not {type(spec).__name__}")
     out = []
     for item in spec:
         name = key_name(item)

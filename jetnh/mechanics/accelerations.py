@@ -84,7 +84,7 @@ def euler_parts(J, F, hessian: bool = True) -> EulerParts:
         fix = {sp.Symbol(name): v for name, v in originals.items() if sp.Symbol(name) != v}
 
         def back(e):
-            e = sp.sympify(e)
+            e = sp.sympify(e, strict=True)
             return e.xreplace(fix) if fix else e
     p, H, r, v = parts
     return EulerParts([back(e) for e in p],

@@ -27,7 +27,7 @@ import sympy as sp
 from ..algebra import dag, linalg, singular, zero
 from . import principles
 from .system import System
-from ..errors import PrincipleError
+from ..errors import ArgumentError, PrincipleError
 from ..geometry.frobenius import bracket_components
 
 _POINTS = 4
@@ -176,6 +176,12 @@ def compare(system: System, first: str, second: str, convention: str = "paper") 
         ``.equivalent``, the branch on which they agree, the differences of the
         accelerations and the singular set, printed in one shared form.
     """
+    if not isinstance(system, System):
+        raise ArgumentError(f"compare needs a jetnh System, not {type(system).__name__}")
+    for p in (first, second):
+        if not isinstance(p, str):
+            raise ArgumentError(f"compare needs principles by name (e.g. 'chetaev'), not "
+                                f"{type(p).__name__}")
     names = [principles.canonical(p) for p in (first, second)]
     if names[0] == names[1]:
         raise PrincipleError(f"compare needs two different principles; {first!r} and "

@@ -24,7 +24,7 @@ from sympy.core.function import AppliedUndef
 from ..algebra import dag, linalg
 from . import inputs
 from ..errors import ConstraintError, JetnhWarning, JetSpaceError, LagrangianError
-from ..geometry.jet import JetSpace, key_name
+from ..geometry.jet import JetSpace, key_name, sympy_object
 from .principles import NAMED, PRINCIPLES  # noqa: F401 -- PRINCIPLES kept importable here
 
 @dataclass(frozen=True)
@@ -44,6 +44,10 @@ class Classification:
                  ("regular L" if self.regular else "singular L"),
                  ("rheonomic" if self.rheonomic else "scleronomic")]
         return ", ".join(flags)
+
+
+#: the most solutions (Bezout's bound) of nonlinear constraints solved in closed form
+MAX_ROOTS = 2
 
 
 class System:
@@ -436,6 +440,7 @@ class System:
         inputs.single_root_warning(self._branch)
 
     def _solve_nonlinear(self, vel):
+        self._check_root_budget(vel)
         try:
             sols = sp.solve(list(self.constraints), list(vel), dict=True)
         except (NotImplementedError, ValueError) as exc:
@@ -464,6 +469,30 @@ class System:
         s = sols[self._branch or 0]
         return {v: s[v] for v in vel}
 
+    def _check_root_budget(self, vel):
+        """The budget of the nonlinear solve, checked before it starts: every constraint
+        polynomial in the dependent velocities, of degree <= 2, and at most
+        ``MAX_ROOTS`` solutions by Bezout's bound (two coupled quadratics, or a quartic,
+        have closed forms too large to generate code from, when sympy finds them)."""
+        degrees = []
+        for i, f in enumerate(self.constraints):
+            if not f.is_polynomial(*vel):
+                raise ConstraintError(
+                    f"constraint {i} is not polynomial in the dependent velocities "
+                    f"{', '.join(map(str, vel))}; jetnh solves polynomial constraints of "
+                    f"degree <= 2 only: write it in explicit form qdot^alpha - phi^alpha(t, "
+                    "q, qdot^mu), or choose another dependent coordinate")
+            degrees.append(sp.Poly(f, *vel).total_degree())
+        roots = 1
+        for d in degrees:
+            roots *= max(d, 1)
+        if max(degrees) > 2 or roots > MAX_ROOTS:
+            raise ConstraintError(
+                f"the constraints have degrees {degrees} in the dependent velocities: up to "
+                f"{roots} solutions, beyond the budget of {MAX_ROOTS} (degree <= 2, one "
+                "quadratic at most) for solving them in closed form; write them in explicit "
+                "form qdot^alpha - phi^alpha(t, q, qdot^mu) for the branch you mean")
+
     @cached_property
     def explicit_constraints(self) -> tuple[sp.Expr, ...]:
         """f^alpha = qdot^alpha - phi^alpha, in the order of ``dependent``."""
@@ -476,7 +505,7 @@ class System:
         D(phi^alpha) on the constraints (the first prolongation of the constraint set):
         identities such as (19) hold there, not on J^2 at large.
         """
-        expr = sp.sympify(expr)
+        expr = sympy_object(expr)         # never a string (it would be executed)
         if not self.phi:
             return expr
         # derivatives of undefined functions by a velocity need subs (it builds Subs objects)

@@ -223,7 +223,7 @@ class Atlas:
             A = self.home.system.jacobian
             lam = linalg.solve(A[:, list(sys_.dep_index)].T, sp.Matrix(new))
             sub = dict(zip(old, list(A[:, list(self.home.system.dep_index)].T * lam)))
-        return {k: sp.sympify(v).xreplace(sub) for k, v in exprs.items()}
+        return {k: sp.sympify(v, strict=True).xreplace(sub) for k, v in exprs.items()}
 
     def edge(self, chart) -> sp.Expr:
         """det(A_alpha)^2 - eps det(A A^T) of the chart's split (A = df/dqdot)."""

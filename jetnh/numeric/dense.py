@@ -152,8 +152,8 @@ def _retaken_steps(traj, k, tau) -> np.ndarray:
         # step is h = t1 - t0, the original run's h to the bit
         first = float(np.nextafter(abs(t1 - t0), np.inf))
         res = solve(rhs, kern.sing_fp, kern.sing_fp, kern.hol_or_none, t0, t1,
-                    np.ascontiguousarray(y[j]), p, Control(d["rtol"], d["atol"], first, np.inf,
-                                                           1, 0, *traj.scene._projection),
+                    np.array(y[j]), p, Control(d["rtol"], d["atol"], first, np.inf,
+                                               1, 0, *traj.scene._projection),
                     np.ascontiguousarray(tau[a:b]), AT_T_EVAL, watch, halt)
         status, _, ys, n_out, stats = res[:5]
         if int(status) != 0 or int(stats[1]) != 0 or int(n_out) != b - a:
@@ -175,7 +175,7 @@ def _hermite_steps(traj, k, tau) -> np.ndarray:
     f = {}
     for j in nodes:
         f[j] = np.empty(n)
-        kern.rhs(float(t[j]), np.ascontiguousarray(y[j]), p, f[j])
+        kern.rhs(float(t[j]), np.array(y[j]), p, f[j])
     h = (t[k + 1] - t[k])[:, None]
     th = ((tau - t[k]) / (t[k + 1] - t[k]))[:, None]
     f0 = np.array([f[j] for j in k])

@@ -57,7 +57,7 @@ from . import cache as _cache
 from . import codegen
 from . import atlas, diagnosis, discrete, methods, scipy_backend
 from .methods import STATUS_TEXT
-from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, NONFINITE, SINGULAR, STOPPED
+from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, FINISHED, NONFINITE, SINGULAR, STOPPED
 from .methods.loop import Control, watch_of
 from .frozen import Frozen, FrozenDict, memo
 from .options import fields_of, options
@@ -152,14 +152,7 @@ class Scene(Frozen):
     # ------------------------------------------------------------------ input checks
     @staticmethod
     def _t_span(t_span):
-        try:
-            t0, t1 = t_span
-        except (TypeError, ValueError):
-            raise JetnhError(f"t_span must be a pair (t0, t1), got {t_span!r}") from None
-        t0, t1 = arguments.real(t0, "t_span[0]"), arguments.real(t1, "t_span[1]")
-        if not (np.isfinite(t0) and np.isfinite(t1)):
-            raise JetnhError(f"t_span must be finite, got {t_span!r}")
-        return (t0, t1)
+        return arguments.time_span(t_span)
 
     def _params(self, params) -> dict[str, float]:
         needed = {s.name for s in self.system.parameters}
@@ -636,7 +629,7 @@ class Scene(Frozen):
     def _run_state(self, y0, t0, p) -> np.ndarray:
         """The initial state of one run (``run(y0=...)``), checked."""
         if y0 is None:
-            return self.y0
+            return self.y0.copy()        # the compiled loop gets its own array
         if not isinstance(y0, dict):
             y, _ = arguments.keyed_or_sequence(y0, self.state_names, self.y0, "y0",
                                                "scene.state_names")
@@ -715,6 +708,9 @@ class Scene(Frozen):
             ys, n_out = np.ascontiguousarray(ys[:, :n]), ys.shape[0]
             y_last, y_init, ev_y = y_last[:n], y_init[:n], ev_y[:, :n]
         singularity = None
+        if status in (FINISHED, EVENT) and not (np.all(np.isfinite(y_last))
+                                                 and np.all(np.isfinite(ys[:n_out]))):
+            status = NONFINITE          # never a success with a NaN or infinite state
         if status == NONFINITE:
             sing_index = (diagnosis.explain_nonfinite(self, kern, t_last, y_last, p, t0, y_init,
                                                   singular_tol) if checked else -1)

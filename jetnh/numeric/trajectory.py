@@ -18,12 +18,13 @@ import numpy as np
 
 from ..errors import ArgumentError, JetnhError
 from ..geometry.jet import key_name
-from .frozen import Frozen, memo
+from .frozen import Frozen, FrozenDict, memo, readonly
 
 
-@dataclass
+@dataclass(frozen=True)
 class Diagnostics:
-    """What happened during one integration, and how well the invariants held."""
+    """What happened during one integration, and how well the invariants held
+    (immutable: its mappings are read-only)."""
 
     method: str
     status: int
@@ -45,6 +46,12 @@ class Diagnostics:
     holonomic_residual_max: float = 0.0   # max |g_i| of the holonomic constraints
     completed: dict = field(default_factory=dict)     # see Scene.completed
     switches: list = field(default_factory=list)      # split changes: {"t", "from", "to"}
+
+    def __post_init__(self):
+        for name in ("integral_drift", "projected", "events", "singularity"):
+            value = getattr(self, name)
+            if isinstance(value, dict) and not isinstance(value, FrozenDict):
+                object.__setattr__(self, name, FrozenDict(readonly(value)))
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -116,7 +123,7 @@ class Trajectory(Frozen):
             status=status, stop_reason=stop_reason,
             #: the stop at a singular configuration: {"indicator", "kind", "index", "t",
             #: "value", "initial", "reason"}, or None
-            singularity=singularity,
+            singularity=None if singularity is None else FrozenDict(singularity),
             event_names=tuple(names), t_events=list(t_ev), y_events=list(y_ev),
             # what re-taking a step needs (tolerances, output mode; see numeric.dense)
             _dense=dense,

@@ -8,7 +8,8 @@ from pathlib import Path
 
 from ...errors import JetnhError
 from ..loading import load_model, with_split
-from ..parser import EPILOG_MODEL, model_args, subcommand
+from .. import outputs
+from ..parser import EPILOG_MODEL, count, model_args, subcommand
 from ..running import FIXED_STEP, METHOD_HELP, assignments, scene_names
 from ..usage import UsageError
 
@@ -36,7 +37,7 @@ def add_parser(sub):
     s.add_argument("--timeout", type=float, default=None,
                    help="wall-clock budget in seconds: the run stops there and reports "
                         "what it has (default: none)")
-    s.add_argument("--points", type=int, default=None,
+    s.add_argument("--points", type=count, default=None,
                    help="output points of the adaptive methods (default 201; 0: every step)")
     s.add_argument("--project", action="store_true",
                    help="replace initial dependent velocities that contradict the "
@@ -99,10 +100,10 @@ def run(args, progress) -> int:
             integrals[k] = v
 
     path_names = _path_names(args.path, system)
-    for out in (args.csv, args.plot):
-        if out and not Path(out).resolve().parent.is_dir():
-            raise JetnhError(f"cannot write {out}: the directory "
-                             f"{Path(out).resolve().parent} does not exist")
+    for out, kinds, what in ((args.csv, outputs.TEXT, "--csv"),
+                             (args.plot, outputs.FIGURE, "--plot")):
+        if out:
+            outputs.check(out, kinds, what)
     try:
         scene = Scene(system, principle, params=params, initial=initial,
                       t_span=(t0, float(t1)), convention=convention, integrals=integrals,
@@ -142,12 +143,13 @@ def run(args, progress) -> int:
         print("final:      " + ", ".join(f"{k} = {v:.10g}" for k, v in final.items()))
         print(d)
     if args.csv:
-        _write_csv(traj, args.csv)
+        outputs.write(args.csv, lambda tmp: _write_csv(traj, tmp))
         progress.note(f"wrote {args.csv}")
     if args.plot:
         with progress.step(f"plotting to {args.plot}"):
-            _plot(traj, system, args.plot, f"{system.name or loaded.label} ({principle})",
-                  path_names)
+            outputs.write(args.plot, lambda tmp: _plot(
+                traj, system, tmp, f"{system.name or loaded.label} ({principle})",
+                path_names, Path(args.plot).suffix[1:]))
     if not traj.success:
         print(f"jetnh: error: the integration stopped early: {traj.stop_reason}",
               file=sys.stderr)
@@ -182,14 +184,14 @@ def _path_names(text, system) -> tuple | None:
     return tuple(names)
 
 
-def _plot(traj, system, path, title, path_names=None):
+def _plot(traj, system, path, title, path_names=None, form=None):
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     fig = _figure(traj, system, title, path_names)
-    fig.savefig(path)
+    fig.savefig(path, format=form)
     plt.close(fig)
 
 
