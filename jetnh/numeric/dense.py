@@ -10,6 +10,9 @@
 - dla, dvi and scipy's methods: no interpolant (the discrete integrators have none that
   matches their nodes and multipliers) and an error that says what to do.
 
+``resampled`` gives the run at the rows and evenly between them (the smooth curves of
+``Trajectory.plot``), or the rows alone where there is no dense output.
+
 Only a trajectory that holds every step (``save="steps"``, no ``t_eval``) can be
 evaluated; the last interval of a run stopped inside a step (a terminal event or a
 singular stop) is not a whole step, and only its end is available.
@@ -50,8 +53,10 @@ def _refusal(traj) -> str | None:
     return None
 
 
-def evaluate(traj, times) -> np.ndarray:
-    """The states at ``times`` (any order, inside the span): ``[len(times), n_states]``."""
+def evaluate(traj, times, full=False) -> np.ndarray:
+    """The states at ``times`` (any order, inside the span): ``[len(times), n_states]``;
+    with ``full``, a run with sensitivities gives its whole integrated state (the
+    state, then S row-major: ``Layout.n_rhs`` columns)."""
     why = _refusal(traj)
     if why:
         raise JetnhError(why)
@@ -59,9 +64,11 @@ def evaluate(traj, times) -> np.ndarray:
     if not len(t):
         raise JetnhError("the trajectory is empty; there is nothing to evaluate")
     tau = _times(times, float(t.min()), float(t.max()))
-    out = np.empty((tau.shape[0], traj.y.shape[1]))
+    rows = traj._dense.get("y", traj.y) if full else traj.y
+    n = rows.shape[1]
+    out = np.empty((tau.shape[0], n))
     if len(t) == 1 or not tau.size:
-        out[:] = traj.y[0]
+        out[:] = rows[0]
         return out
     sgn = 1.0 if t[-1] >= t[0] else -1.0
     # time tau belongs to the first step whose end is not before it (as t_eval does)
@@ -75,7 +82,7 @@ def evaluate(traj, times) -> np.ndarray:
                 f"[{t[-2]!r}, {t[-1]!r}] is not a whole step and cannot be re-taken; times "
                 f"there (e.g. {tau[bad][0]!r}) are not available, only its end t = {t[-1]!r}")
         ends = (k == last)
-        out[ends] = traj.y[-1]
+        out[ends] = rows[-1]
         keep = ~ends
     else:
         keep = np.ones(tau.shape[0], dtype=bool)
@@ -83,8 +90,42 @@ def evaluate(traj, times) -> np.ndarray:
     idx = np.nonzero(keep)[0]
     if idx.size:
         order = idx[np.lexsort((sgn * tau[idx], k[idx]))]
-        out[order] = step(traj, k[order], tau[order])
+        out[order] = step(traj, k[order], tau[order])[:, :n]
     return out
+
+
+#: a resampled run has at least this many points (the rows, and points between them)
+SMOOTH_POINTS = 400
+
+
+def resampled(traj, points=SMOOTH_POINTS):
+    """``traj`` at its rows and, where the method has dense output, at evenly spaced
+    times inside its steps: at least ``points`` values in all (a run with as many steps
+    already is its rows).  A Trajectory of the same run, scene and kernels; without
+    dense output (dla, dvi, scipy's methods, ``t_eval`` or ``save="final"`` runs) or with
+    a change of split ``traj`` itself."""
+    t = traj.t
+    n_steps = len(t) - 1
+    if (traj._segments is not None or _refusal(traj) or n_steps < 1
+            or n_steps >= points):         # (a run that changed split: its rows)
+        return traj
+    per = -(-points // n_steps)                          # values per step, its start included
+    last = n_steps - 1 if traj._dense["partial_last"] else n_steps
+    frac = np.arange(1, per) / per
+    inner = (t[:last, None] + frac[None, :] * np.diff(t)[:last, None]).ravel()
+    inner_y = evaluate(traj, inner).reshape(last, per - 1, -1)
+    ys = np.concatenate([traj.y[:last, None, :], inner_y], axis=1).reshape(-1, traj.y.shape[1])
+    ts = np.concatenate([t[:last, None], inner.reshape(last, per - 1)], axis=1).ravel()
+    ts = np.concatenate([ts, t[last:]])
+    return sampled(traj, ts, np.concatenate([ys, traj.y[last:]]))
+
+
+def sampled(traj, t, y):
+    """A Trajectory of the run of ``traj`` with the states ``y`` at the times ``t`` (its
+    derived columns from the same kernels); no steps, no events, no dense output."""
+    return type(traj)(traj.scene, t, y, traj._p, method=traj.method, status=traj.status,
+                      stop_reason=traj.stop_reason, steps=None, rejected=None, nfev=0,
+                      wall_time=0.0, kernels=traj._kernels)
 
 
 def _groups(k):
@@ -99,7 +140,8 @@ def _retaken_steps(traj, k, tau) -> np.ndarray:
     """dop853/dopri5: re-take step k[i] with the times tau (sorted by step, then time)."""
     kern, d = traj._kernels, traj._dense
     solve = explicit_solver(traj.method)
-    t, y, p = traj.t, traj.y, np.ascontiguousarray(traj._p, dtype=float)
+    rhs = d["rhs"].rhs_fp if "rhs" in d else kern.rhs_fp     # with sensitivities: augmented
+    t, y, p = traj.t, d.get("y", traj.y), np.ascontiguousarray(traj._p, dtype=float)
     none = np.zeros(0, dtype=np.int64)
     watch = Watch(0, 0.0, none, none)
     halt = np.zeros(1, dtype=np.int64)
@@ -109,9 +151,9 @@ def _retaken_steps(traj, k, tau) -> np.ndarray:
         # |h| one ulp up: t0 + first reaches (or passes, and is cut back to) t1, so the
         # step is h = t1 - t0, the original run's h to the bit
         first = float(np.nextafter(abs(t1 - t0), np.inf))
-        res = solve(kern.rhs_fp, kern.sing_fp, kern.sing_fp, kern.hol_or_none, t0, t1,
-                    np.ascontiguousarray(y[j]), p, Control(d["rtol"], d["atol"], first, np.inf,
-                                                           1, 0, *traj.scene._projection),
+        res = solve(rhs, kern.sing_fp, kern.sing_fp, kern.hol_or_none, t0, t1,
+                    np.array(y[j]), p, Control(d["rtol"], d["atol"], first, np.inf,
+                                               1, 0, *traj.scene._projection),
                     np.ascontiguousarray(tau[a:b]), AT_T_EVAL, watch, halt)
         status, _, ys, n_out, stats = res[:5]
         if int(status) != 0 or int(stats[1]) != 0 or int(n_out) != b - a:
@@ -125,14 +167,15 @@ def _retaken_steps(traj, k, tau) -> np.ndarray:
 
 def _hermite_steps(traj, k, tau) -> np.ndarray:
     """rk4: the cubic Hermite interpolant of step k[i] at tau (the form of rk4's own)."""
-    kern = traj._kernels
-    t, y, p = traj.t, traj.y, np.ascontiguousarray(traj._p, dtype=float)
+    kern, d = traj._kernels, traj._dense
+    kern = d.get("rhs", kern)                   # with sensitivities: the augmented rhs
+    t, y, p = traj.t, d.get("y", traj.y), np.ascontiguousarray(traj._p, dtype=float)
     n = y.shape[1]
     nodes = np.unique(np.concatenate([k, k + 1]))
     f = {}
     for j in nodes:
         f[j] = np.empty(n)
-        kern.rhs(float(t[j]), np.ascontiguousarray(y[j]), p, f[j])
+        kern.rhs(float(t[j]), np.array(y[j]), p, f[j])
     h = (t[k + 1] - t[k])[:, None]
     th = ((tau - t[k]) / (t[k + 1] - t[k]))[:, None]
     f0 = np.array([f[j] for j in k])

@@ -36,7 +36,7 @@ satisfy them (else ``ConstraintError`` with the residual), or ``complete=True`` 
 them by Newton's method for the split's dependent coordinates (those making dg/dq over
 them regular; ``complete=[z, ...]`` names others), recorded in ``scene.completed``.  The
 compiled explicit and Radau runs project every accepted step back onto g = 0
-(``methods.projection``); ``traj.diagnostics.holonomic_residual_max`` reports max |g|.
+(``methods.projection``); ``traj.diagnostics.holonomic_residual_max`` reports ``max |g|``.
 """
 
 from __future__ import annotations
@@ -57,7 +57,7 @@ from . import cache as _cache
 from . import codegen
 from . import atlas, diagnosis, discrete, methods, scipy_backend
 from .methods import STATUS_TEXT
-from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, NONFINITE, SINGULAR, STOPPED
+from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, FINISHED, NONFINITE, SINGULAR, STOPPED
 from .methods.loop import Control, watch_of
 from .frozen import Frozen, FrozenDict, memo
 from .options import fields_of, options
@@ -65,19 +65,45 @@ from .trajectory import Trajectory
 
 
 class Scene(Frozen):
-    """``Scene(system, principle, params, initial, t_span)``: see the module docstring.
+    """A system under one principle with numbers and a time span, ready to integrate.
 
-    ``params`` default to ``system.defaults`` (the catalogue models carry them).
-    Options: ``form``/``convention`` are passed to ``system.equations``; ``integrals``
-    maps names to sympy expressions (first integrals to monitor); ``runtime_params``
-    names parameters read at run time instead of compiled in; ``project`` replaces
-    inconsistent dependent velocities; ``consistency_tol`` is the relative tolerance of
-    that check; ``complete`` (True or coordinates) solves the holonomic constraints for
-    coordinates of an initial configuration off g = 0 (else it is refused);
-    ``cache=False`` keeps compiled kernels out of the disk cache.
+    Parameters
+    ----------
+    system : System
+        The constrained system.
+    principle : str, default "chetaev"
+        "chetaev", "vakonomic", "holder" or "suslov" (or an alias).
+    params : dict, optional
+        Parameters (Symbols or names) -> numbers; default ``system.defaults`` (the
+        catalogue models carry them).
+    initial : dict, optional
+        Initial values (Symbols or names) of the coordinates, independent velocities and
+        multipliers; the dependent velocities follow from the constraints (if given,
+        they must agree with them).
+    t_span : tuple of float
+        The time span of ``run``; default (0, 1).
+    form, convention : str, optional
+        Passed to ``system.equations``.
+    integrals : dict, optional
+        Names -> sympy expressions: first integrals to monitor (``traj[name]``, their
+        drift in the diagnostics).
+    runtime_params : sequence of str, optional
+        Parameters read at run time instead of compiled in (ensembles, sweeps).
+    project : bool, default False
+        Replace inconsistent dependent velocities by the values the constraints require.
+    consistency_tol : float, default 1e-9
+        The relative tolerance of that check.
+    complete : bool or list, default False
+        Solve the holonomic constraints for these coordinates (True: chosen
+        automatically) of an initial configuration off g = 0 (else it is refused).
+    cache : bool, default True
+        ``False`` keeps compiled kernels out of the disk cache.
 
+    Notes
+    -----
     A scene is immutable (``FrozenError`` on assignment; ``replace`` makes a changed
     copy); what it compiles lazily is kept in its private memo (``numeric.frozen``).
+    See the module docstring for the state and the methods.
     """
 
     _portable = ("key",)        # a pickled scene (a sweep's worker) keeps its kernels' key
@@ -126,14 +152,7 @@ class Scene(Frozen):
     # ------------------------------------------------------------------ input checks
     @staticmethod
     def _t_span(t_span):
-        try:
-            t0, t1 = t_span
-        except (TypeError, ValueError):
-            raise JetnhError(f"t_span must be a pair (t0, t1), got {t_span!r}") from None
-        t0, t1 = arguments.real(t0, "t_span[0]"), arguments.real(t1, "t_span[1]")
-        if not (np.isfinite(t0) and np.isfinite(t1)):
-            raise JetnhError(f"t_span must be finite, got {t_span!r}")
-        return (t0, t1)
+        return arguments.time_span(t_span)
 
     def _params(self, params) -> dict[str, float]:
         needed = {s.name for s in self.system.parameters}
@@ -274,6 +293,16 @@ class Scene(Frozen):
             self.system, self.principle, compiled_params, self.runtime_params,
             self.integrals, self.form, self.convention, key=self.key), persistent=self.cache)
 
+    @memo
+    def sensitivity_key(self) -> str:
+        """The key of the kernels of runs with sensitivities
+        (``codegen.sensitivity_kernels``)."""
+        compiled_params = {k: v for k, v in self.params.items()
+                           if k not in self.runtime_params}
+        return codegen.symbolic_key(self.system, self.principle, compiled_params,
+                                    self.runtime_params, self.integrals, self.form,
+                                    self.convention, extra="sensitivities")
+
     @property
     def jacobian(self):
         """``jac(t, y, p, J)``: writes ``J[i, j] = d rhs_i / d y_j`` (``J`` a C-contiguous
@@ -320,61 +349,93 @@ class Scene(Frozen):
     # ------------------------------------------------------------------ run
     def run(self, rtol=None, atol=None, t_eval=None, method="dop853", *, save="steps",
             events=None, t_span=None, y0=None, params=None, timeout=None, projection=False,
-            backend=None, step=None, singular="stop", newton=None,
-            **keywords) -> Trajectory:
+            backend=None, step=None, singular="stop", newton=None, sensitivities=False,
+            sensitivity_error=True, **keywords) -> Trajectory:
         """Integrate and return a ``Trajectory``.
 
-        What: ``t_span`` replaces the scene's; ``y0`` the initial state (a dict keyed by
-        Symbol, name or dynamicsymbol, the other states keeping the scene's values and dependent
-        velocities, if given, agreeing with the constraints; or a sequence in the order
-        ``scene.state_names``); ``params`` the run-time parameters (``runtime_params``: a
-        dict, or a sequence in the order ``scene.runtime_params``).
+        Parameters
+        ----------
+        rtol, atol : float, optional
+            Tolerances of the adaptive methods (1e-9, 1e-12; ``atol`` a scalar or one
+            value per state); short for ``step=StepControl(rtol=..., atol=...)``.
+        t_eval : array_like, optional
+            Output times inside the span, from the dense output; default every step.
+        method : str, default "dop853"
+            "dop853", "dopri5" (alias "RK45"), "rk4" (fixed step), "radau" (implicit
+            Radau IIA of order 5 for stiff problems, with the Jacobian from the symbolic
+            derivation), "dla" (the structure-preserving discrete Lagrange-d'Alembert
+            midpoint integrator, Chetaev only, fixed step), "dvi" (the discrete
+            vakonomic midpoint variational integrator, fixed step), or "scipy-<M>" for
+            scipy's ``solve_ivp(method=M)`` on the same compiled right-hand side.
+        save : {"steps", "final"}, default "steps"
+            Every step (or the points of ``t_eval``), or the two ends only.
+        events : list, optional
+            Sympy expressions, callables g(t, y) or ``Event`` (``jetnh.numeric.events``)
+            with scipy's semantics, located on the dense output (dla and dvi: on the
+            line between their nodes); the trajectory reports ``t_events``,
+            ``y_events`` and ``events``; a terminal event ends the run.
+        t_span : tuple of float, optional
+            Replaces the scene's.
+        y0 : dict or sequence, optional
+            The initial state: a dict keyed by Symbol, name or dynamicsymbol (the other
+            states keep the scene's values; dependent velocities, if given, must agree
+            with the constraints) or a sequence in the order ``scene.state_names``.
+        params : dict or sequence, optional
+            The run-time parameters (``runtime_params``): a dict, or a sequence in the
+            order ``scene.runtime_params``.
+        timeout : float, optional
+            Seconds of wall-clock time, after which the run returns what it has with
+            status STOPPED.  Ctrl-C stops a compiled run within one step.
+        projection : bool, default False
+            dla: project every node velocity onto the constraints.
+        backend : str, optional
+            ``"scipy"`` for scipy's ``solve_ivp`` (as ``method="scipy-<M>"``).
+        step : jetnh.numeric.options.StepControl, optional
+            ``StepControl(rtol, atol, first_step, max_step, max_steps, n_steps, h)``
+            (``numeric.options``), or those as keywords: the first and the largest
+            adaptive step (automatic, none), the budget of steps (10^7; the fixed-step
+            methods refuse more up front) and the fixed step of rk4, dla and dvi
+            (``n_steps`` or ``h``).
+        singular : {"stop", "ignore"} or jetnh.numeric.options.Singular, default "stop"
+            With ``singular_tol`` (or ``Singular(action, tol)``): "stop" ends the run at
+            a singular configuration, where a singularity indicator of the scene
+            (``kernels.layout.indicators``: the determinant of df/dqdot^alpha,
+            denominators and square-root arguments of phi and of the accelerations)
+            crosses zero or falls below ``tol`` (1e-10) times its initial size; the point
+            is located on the dense output, ``status`` is SINGULAR and ``stop_reason``
+            names the indicator, the time and the way out.  dla and dvi check the
+            indicators of the constraints and the Lagrangian as written at every node
+            and stop at the last regular one.
+        split : {"switch", "fixed"}, default "switch"
+            dop853, dopri5, rk4 and radau runs that reach the edge of the split's chart
+            go on in another regular split (``numeric.atlas``: the switch located as an
+            event, the state and multipliers mapped, one trajectory in the scene's
+            states, ``traj.switches`` lists time, from and to); "fixed" keeps the
+            scene's split, which stops at its singular set.
+        newton : jetnh.numeric.options.Newton, optional
+            ``Newton(tol, max_iter)`` or ``newton_tol``, ``max_newton``: the Newton
+            iteration of radau (automatic, 7) and of dla and dvi (1e-13, 50).
+        sensitivities : bool, default False
+            dop853, dopri5, rk4, radau and scipy's methods: integrate with the state the
+            variational equations ``S' = (df/dy) S + df/dp``, ``S(t0) = (I | 0)``, of
+            ``S = dy(t)/d(y(t0), p)`` (the derivatives of the initial state and of the
+            runtime parameters), df/dy and df/dp generated from the derivation (forward
+            mode over the graph, compiled: ``codegen.sensitivity_kernels``);
+            ``traj.sensitivity(of, to)`` reads them.  Such a run keeps its split.
+        sensitivity_error : bool, default True
+            Whether S is under the error control (its entry (i, k) with the tolerance of
+            state i, so S is as accurate as the state); with False only the state is
+            controlled (the steps of the run without sensitivities: cheaper, S
+            uncontrolled).
+        **keywords
+            The fields of ``StepControl``, ``Singular`` and ``Newton`` by name.
 
-        How: ``method`` "dop853" (default), "dopri5" (alias "RK45"), "rk4" (fixed step),
-        "radau" (implicit Radau IIA of order 5 for stiff problems, with the Jacobian from
-        the symbolic derivation), "dla" (the structure-preserving discrete
-        Lagrange-d'Alembert midpoint integrator, Chetaev only, fixed step;
-        ``projection=True`` projects every node velocity onto the constraints), "dvi"
-        (the discrete vakonomic midpoint variational integrator, fixed step), or
-        "scipy-<M>" for scipy's ``solve_ivp(method=M)`` on the same compiled right-hand
-        side (also ``backend="scipy"``).
-
-        The run options (``numeric.options``), as values or as their keywords:
-
-        - ``step=StepControl(rtol, atol, first_step, max_step, max_steps, n_steps, h)``:
-          tolerances (1e-9, 1e-12; ``atol`` a scalar or one value per state), the first
-          and the largest adaptive step (automatic, none), the budget of steps (10^7; the
-          fixed-step methods refuse more up front) and the fixed step of rk4, dla and dvi
-          (``n_steps`` or ``h``);
-        - ``singular=Singular(action, tol)`` or ``singular="stop"|"ignore"`` with
-          ``singular_tol``: "stop" (default) ends the run at a singular configuration,
-          where a singularity indicator of the scene (``kernels.layout.indicators``: the
-          determinant of df/dqdot^alpha, denominators and square-root arguments of phi
-          and of the accelerations) crosses zero or falls below ``tol`` (1e-10) times its
-          initial size; the point is located on the dense output, ``status`` is SINGULAR
-          and ``stop_reason`` names the indicator, the time and the way out.  dla and dvi
-          check the indicators of the constraints and the Lagrangian as written
-          (``codegen.discrete_indicators``) at every node and stop at the last regular
-          one.  NaN or infinity that no indicator explains raises an ``IntegrationError``
-          naming the time and the state.  ``split="switch"`` (default) or ``"fixed"``:
-          dop853, dopri5, rk4 and radau runs that reach the edge of the split's chart
-          go on in another regular split (``numeric.atlas``: the switch located as an
-          event, the state and multipliers mapped, one trajectory in the scene's states,
-          ``traj.switches`` lists time, from and to); "fixed" keeps the scene's split,
-          which stops at its singular set as before;
-        - ``newton=Newton(tol, max_iter)`` or ``newton_tol``, ``max_newton``: the Newton
-          iteration of radau (automatic, 7) and of dla and dvi (1e-13, 50).
-
-        Events: ``events`` (sympy expressions, callables g(t, y) or ``Event``; see
-        ``jetnh.numeric.events``) with scipy's semantics, located on the dense output
-        (dla and dvi: on the line between their nodes, ``discrete``); the trajectory
-        reports ``t_events``, ``y_events`` and ``events``; a terminal event ends the run.
-
-        Output: the points of ``t_eval`` (dense output), else every step, or the two ends
-        with ``save="final"``.  Budget: ``timeout`` seconds of wall-clock time, after
-        which the run returns what it has with status STOPPED; Ctrl-C stops a compiled run
-        within one step (``numeric.interrupt``).  Every argument is checked before it
-        reaches compiled code (``numeric.arguments``).
+        Returns
+        -------
+        Trajectory
+            NaN or infinity that no indicator explains raises an ``IntegrationError``
+            naming the time and the state instead.  Every argument is checked before it
+            reaches compiled code (``numeric.arguments``).
         """
         opts = options(step, singular, newton, rtol=rtol, atol=atol, **keywords)
         rtol, atol, first_step, max_step, max_steps, n_steps, h = fields_of(opts.step)
@@ -395,6 +456,14 @@ class Scene(Frozen):
         rtol, atol_v = arguments.tolerances(rtol, atol, n)
         name = str(method)
         key = name.lower()
+        sens = None
+        if sensitivities:
+            sens = codegen.sensitivity_kernels(self)
+            y_init, rtol, atol_v = _augmented(sens.layout, y_init, rtol, atol_v,
+                                              bool(sensitivity_error), key)
+        elif sensitivity_error is not True:
+            raise JetnhError("sensitivity_error= is an option of runs with "
+                             "sensitivities=True")
         if backend == "scipy" or key.startswith("scipy"):
             m = name.split("-", 1)[1] if "-" in name else name
             m = {"dop853": "DOP853", "dopri5": "RK45", "rk45": "RK45"}.get(m.lower(), m)
@@ -405,7 +474,8 @@ class Scene(Frozen):
                                               else max_step)
             te = None if t_eval is None else arguments.times(t_eval, t0, t1)
             return scipy_backend.run(self, m, rtol, atol_v, te, t0, t1, y_init, p,
-                                     first or None, mx, events, singular, singular_tol)
+                                     first or None, mx, events, singular, singular_tol,
+                                     sensitivities=sens)
         if backend not in (None, "numba"):
             raise JetnhError(f"unknown backend {backend!r}; choose 'numba' or 'scipy'")
         method = methods.method(name)
@@ -446,6 +516,8 @@ class Scene(Frozen):
             # Jacobian kept): no re-taking of one step (numeric.dense)
             dense = None if method == "radau" else {"rtol": rtol, "atol": atol_v,
                                                     "mode": mode}
+            if dense is not None and sens is not None:
+                dense["rhs"] = sens
         else:
             if t_eval is not None:
                 raise JetnhError("rk4 is a fixed-step method without dense output; pass "
@@ -457,42 +529,47 @@ class Scene(Frozen):
             te = np.zeros(0)
             ctl = Control(rtol, atol_v, 0.0, np.inf, budget, steps, *self._projection)
             dense = {"mode": mode}
+            if sens is not None:
+                dense["rhs"] = sens
         kern = self.kernels
         newton = None
         if method == "radau":
             from .methods import radau
 
             newton = radau.newton_options(newton_tol, max_newton)
-        if split == "switch" and atlas.applies(self, events):
+        if sens is None and split == "switch" and atlas.applies(self, events):
             return atlas.run(self, method, events, t0, t1, y_init, p, ctl, te, mode, dense,
                              singular == "stop", singular_tol, newton, limit)
         ce = None if events is None else self.compile_events(events)
         watch = self._watch(kern, ce, singular == "stop", singular_tol)
         out, wall = self._solve(method, kern, ce, watch, t0, t1, y_init, p, ctl, te, mode,
-                                newton, limit)
+                                newton, limit, sens)
         if dense is not None:    # stopped inside a step
             dense["partial_last"] = int(out.status) in (EVENT, SINGULAR)
         return self._trajectory(method, out, wall, kern, ce, p, t0, y_init, singular_tol,
-                                singular == "stop", limit, dense)
+                                singular == "stop", limit, dense, sens=sens)
 
     def _solve(self, method, kern, ce, watch, t0, t1, y_init, p, ctl, te, mode, newton,
-               limit):
+               limit, sens=None):
         """One call of the compiled loop of ``method`` on the kernels ``kern`` (events
-        ``ce``, ``watch``); returns its ``Result`` and the wall-clock time."""
+        ``ce``, ``watch``; with ``sens``, the right-hand side and radau's Jacobian of the
+        state augmented by its sensitivities); returns its ``Result`` and the wall-clock
+        time."""
         uev = ce.uev if ce is not None else kern.sing_fp
         halt = interrupt.flag()
+        rhs = kern.rhs_fp if sens is None else sens.rhs_fp
         if method == "radau":
             solve = kern.implicit()
-            jac = self.jacobian.address
+            jac = self.jacobian.address if sens is None else sens.jac_fp
             tic = time.perf_counter()
-            out = interrupt.call(lambda: solve(kern.rhs_fp, jac, kern.sing_fp, uev,
+            out = interrupt.call(lambda: solve(rhs, jac, kern.sing_fp, uev,
                                                kern.hol_or_none, t0, t1, y_init, p, ctl,
                                                newton, te, mode, watch, halt),
                                  halt, limit)
         else:
             solve = methods.explicit_solver(method)
             tic = time.perf_counter()
-            out = interrupt.call(lambda: solve(kern.rhs_fp, kern.sing_fp, uev,
+            out = interrupt.call(lambda: solve(rhs, kern.sing_fp, uev,
                                                kern.hol_or_none, t0, t1, y_init, p, ctl, te,
                                                mode, watch, halt),
                                  halt, limit)
@@ -552,7 +629,7 @@ class Scene(Frozen):
     def _run_state(self, y0, t0, p) -> np.ndarray:
         """The initial state of one run (``run(y0=...)``), checked."""
         if y0 is None:
-            return self.y0
+            return self.y0.copy()        # the compiled loop gets its own array
         if not isinstance(y0, dict):
             y, _ = arguments.keyed_or_sequence(y0, self.state_names, self.y0, "y0",
                                                "scene.state_names")
@@ -610,15 +687,30 @@ class Scene(Frozen):
         return store[memo]
 
     def _trajectory(self, method, out, wall, kern, ce, p, t0, y_init, singular_tol, checked,
-                    timeout=None, dense=None, n_events=None):
+                    timeout=None, dense=None, n_events=None, sens=None):
         """A Trajectory from the result tuple of a compiled solve (or an error); with
-        ``n_events``, only the first ``n_events`` events of ``ce`` are reported."""
+        ``n_events``, only the first ``n_events`` events of ``ce`` are reported; with
+        ``sens`` (the kernels of a run with sensitivities) the state's columns, and the
+        sensitivities apart."""
         from .events import split_records
 
         (status, ts, ys, n_out, stats, t_last, y_last, ev_t, ev_i, ev_y, n_ev,
          sing_index) = out
         status = int(status)
+        extra = {}
+        if sens is not None:
+            n = kern.layout.n_state
+            ys = ys[:n_out]
+            if dense is not None:
+                dense["y"] = ys
+            extra["sensitivities"] = (self._sensitivity_columns(), ys[:, n:].reshape(
+                n_out, n, sens.layout.sensitivity_columns))
+            ys, n_out = np.ascontiguousarray(ys[:, :n]), ys.shape[0]
+            y_last, y_init, ev_y = y_last[:n], y_init[:n], ev_y[:, :n]
         singularity = None
+        if status in (FINISHED, EVENT) and not (np.all(np.isfinite(y_last))
+                                                 and np.all(np.isfinite(ys[:n_out]))):
+            status = NONFINITE          # never a success with a NaN or infinite state
         if status == NONFINITE:
             sing_index = (diagnosis.explain_nonfinite(self, kern, t_last, y_last, p, t0, y_init,
                                                   singular_tol) if checked else -1)
@@ -649,7 +741,12 @@ class Scene(Frozen):
                           stop_reason=reason, steps=int(stats[0]), rejected=int(stats[1]),
                           nfev=int(stats[2]), wall_time=wall, kernels=kern,
                           projected=self.projected, singularity=singularity, dense=dense,
-                          **kw)
+                          **kw, **extra)
+
+    def _sensitivity_columns(self) -> tuple[str, ...]:
+        """The names of the columns of S = dy/d(y0, p): the states, then the runtime
+        parameters."""
+        return self.state_names + self.runtime_params
 
     # ------------------------------------------------------------------ singularities
     def indicators(self, t, y, p=None) -> dict[str, float]:
@@ -674,6 +771,25 @@ class Scene(Frozen):
     def __repr__(self):
         return (f"Scene({self.principle}, states={list(self.state_names)}, "
                 f"t_span={self.t_span})")
+
+
+def _augmented(layout, y0, rtol, atol, controlled, method):
+    """The initial state of a run with sensitivities, ``(y0, S0 = (I | 0))`` flattened,
+    and its tolerances: with ``controlled``, entry (i, k) of S has the tolerance of state
+    i; else S has none (atol = inf) and the state's tolerances are scaled by
+    sqrt(n / N), so that the RMS error norm over all N entries equals the norm over the n
+    states of a run without sensitivities (the same steps)."""
+    if method in ("dla", "dvi"):
+        raise JetnhError(f"sensitivities=True is an option of the continuous methods "
+                         f"(dop853, dopri5, rk4, radau, scipy-*), not of {method}")
+    n, m = layout.n_state, layout.sensitivity_columns
+    S0 = np.eye(n, m)
+    y = np.ascontiguousarray(np.concatenate([y0, S0.ravel()]))
+    if controlled:
+        return y, rtol, np.ascontiguousarray(np.concatenate([atol, np.repeat(atol, m)]))
+    r = np.sqrt(n / y.shape[0])
+    return y, rtol * r, np.ascontiguousarray(np.concatenate([atol * r,
+                                                             np.full(n * m, np.inf)]))
 
 
 def _real(x) -> float:

@@ -16,14 +16,15 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from ..errors import JetnhError
+from ..errors import ArgumentError, JetnhError
 from ..geometry.jet import key_name
-from .frozen import Frozen, memo
+from .frozen import Frozen, FrozenDict, memo, readonly
 
 
-@dataclass
+@dataclass(frozen=True)
 class Diagnostics:
-    """What happened during one integration, and how well the invariants held."""
+    """What happened during one integration, and how well the invariants held
+    (immutable: its mappings are read-only)."""
 
     method: str
     status: int
@@ -45,6 +46,12 @@ class Diagnostics:
     holonomic_residual_max: float = 0.0   # max |g_i| of the holonomic constraints
     completed: dict = field(default_factory=dict)     # see Scene.completed
     switches: list = field(default_factory=list)      # split changes: {"t", "from", "to"}
+
+    def __post_init__(self):
+        for name in ("integral_drift", "projected", "events", "singularity"):
+            value = getattr(self, name)
+            if isinstance(value, dict) and not isinstance(value, FrozenDict):
+                object.__setattr__(self, name, FrozenDict(readonly(value)))
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -71,6 +78,12 @@ class Diagnostics:
         return "\n".join(lines)
 
 
+def _read_only(a) -> np.ndarray:
+    a = np.array(a, dtype=float)
+    a.setflags(write=False)
+    return a
+
+
 def _columns(layout) -> tuple[dict, dict]:
     """Name -> column of the states and of the aux rows (dependent velocities, first
     integrals) of ``layout``; built once per layout."""
@@ -93,14 +106,16 @@ class Trajectory(Frozen):
     Array orientation: ``traj.y`` is ``[n_times, n_states]`` (columns in the order
     ``scene.state_names``), ``traj[name]`` is ``[n_times]``; an ensemble's ``ens.y`` is
     ``[n_runs, n_times, n_states]``.  ``to_dataframe()``, ``to_xarray()`` and ``plot()``
-    give every series by name (``jetnh.numeric.export``); ``at(times)`` evaluates the run
-    between its rows (``jetnh.numeric.dense``).  Immutable (``numeric.frozen``); the
+    give every series by name (``jetnh.numeric.export``; ``plot`` and ``plot_path`` draw
+    smooth curves through the dense output); ``at(times)`` evaluates the run between its
+    rows, as a DataFrame (``jetnh.numeric.dense``).  Immutable (``numeric.frozen``); the
     derived columns are computed on first access.
     """
 
     def __init__(self, scene, t, y, p, *, method, status, stop_reason, steps, rejected,
                  nfev, wall_time, kernels, projected=None, own=None, events=None,
-                 singularity=None, dense=None, segments=None, switches=()):
+                 singularity=None, dense=None, segments=None, switches=(),
+                 sensitivities=None):
         names, t_ev, y_ev = events if events is not None else ((), [], [])
         self._set(
             scene=scene, t=np.ascontiguousarray(t, dtype=float),
@@ -108,7 +123,7 @@ class Trajectory(Frozen):
             status=status, stop_reason=stop_reason,
             #: the stop at a singular configuration: {"indicator", "kind", "index", "t",
             #: "value", "initial", "reason"}, or None
-            singularity=singularity,
+            singularity=None if singularity is None else FrozenDict(singularity),
             event_names=tuple(names), t_events=list(t_ev), y_events=list(y_ev),
             # what re-taking a step needs (tolerances, output mode; see numeric.dense)
             _dense=dense,
@@ -120,7 +135,10 @@ class Trajectory(Frozen):
             _own=own or {},
             # a run that changed split: its pieces (``numeric.atlas.Stitched``, which
             # gives its aux rows and dense output) and switches {"t", "from", "to"}
-            _segments=segments, switches=tuple(switches))
+            _segments=segments, switches=tuple(switches),
+            # a run with sensitivities: (column names, S [n_times, n_states, n_columns])
+            _sens=None if sensitivities is None else (
+                tuple(sensitivities[0]), _read_only(sensitivities[1])))
 
     @property
     def layout(self):
@@ -185,6 +203,41 @@ class Trajectory(Frozen):
             d.update({s: ye[:, i] for i, s in enumerate(self.layout.states)})
             out[name] = d
         return out
+
+    def sensitivity(self, of, to) -> np.ndarray:
+        """``d of(t) / d to`` over ``t`` (read-only): ``of`` a state (coordinate,
+        independent velocity or multiplier), ``to`` an initial value of a state (at t0)
+        or a runtime parameter, by Symbol or by name; from the variational equations
+        integrated with the run (``scene.run(sensitivities=True)``)."""
+        if self._sens is None:
+            raise JetnhError("this trajectory carries no sensitivities; run the scene with "
+                             "sensitivities=True")
+        columns, S = self._sens
+        states = self.layout.states
+        a, b = self._name(of), self._name(to)
+        if a not in states:
+            raise JetnhError(f"sensitivity of {a!r}: not a state of this trajectory; the "
+                             f"states are {', '.join(states)}")
+        if b not in columns:
+            raise JetnhError(f"sensitivity to {b!r}: not an initial value of a state or a "
+                             f"runtime parameter; choose one of {', '.join(columns)} (a "
+                             "compiled-in parameter needs runtime_params=[...] on the scene)")
+        return S[:, states.index(a), columns.index(b)]
+
+    @property
+    def sensitivities(self) -> np.ndarray:
+        """S = dy(t)/d(y(t0), p) at every row: ``[n_times, n_states, n_columns]``, columns
+        ``sensitivity_columns`` (read-only)."""
+        if self._sens is None:
+            raise JetnhError("this trajectory carries no sensitivities; run the scene with "
+                             "sensitivities=True")
+        return self._sens[1]
+
+    @property
+    def sensitivity_columns(self) -> tuple[str, ...]:
+        """What the columns of ``sensitivities`` differentiate by: the initial states,
+        then the runtime parameters."""
+        return () if self._sens is None else self._sens[0]
 
     # ------------------------------------------------------------------ derived columns
     @memo
@@ -292,23 +345,69 @@ class Trajectory(Frozen):
 
         return to_xarray(self, diagnostics)
 
-    def plot(self, names=None, ax=None):
-        """The series ``names`` (default: the coordinates) against t on ``ax`` (or a new
-        figure's axes), labelled; returns the matplotlib Axes."""
+    def plot(self, names=None, ax=None, *, x="t", y=None, steps=False, smooth=True):
+        """Plot series of the run; returns the matplotlib Axes.
+
+        Parameters
+        ----------
+        names, y : str, Symbol or list, optional
+            The series on the vertical axis (``y`` is another spelling of ``names``);
+            default: the coordinates.
+        ax : matplotlib Axes, optional
+            Where to draw; default: the axes of a new figure.
+        x : str or Symbol, default "t"
+            The series on the horizontal axis: ``traj.plot(x="x", y="y")`` is a phase or
+            path plot (``plot_path`` also gives both axes one scale).
+        steps : bool, default False
+            Mark the stored rows (the accepted steps) with dots.
+        smooth : bool, default True
+            Draw the curves through the method's dense output between the rows (dop853,
+            dopri5, rk4); the rows alone where there is none.
+        """
         from .export import plot
 
-        return plot(self, names, ax)
+        if y is not None:
+            if names is not None:
+                raise ArgumentError("give the vertical series once: names= or y=")
+            names = y
+        return plot(self, names, ax, x=x, steps=steps, smooth=smooth)
 
-    def at(self, times) -> np.ndarray:
-        """States ``[len(times), n_states]`` at ``times`` inside the span, from the
-        method's dense output (dop853, dopri5: the covering step re-taken, bit for bit
-        what ``t_eval`` gives; rk4: cubic Hermite); needs every step stored.  A run
-        that changed split is evaluated in the chart that ran at each time."""
+    def plot_path(self, x="x", y="y", ax=None, *, steps=False, smooth=True):
+        """The path of the run in the plane of the series ``x`` and ``y`` (default: the
+        coordinates named x and y), both axes on one scale, the start marked by a dot;
+        see ``plot`` for the parameters.  Returns the matplotlib Axes."""
+        from .export import plot
+
+        return plot(self, y, ax, x=x, steps=steps, smooth=smooth, path=True)
+
+    def at(self, times):
+        """The states at ``times`` inside the span, from the method's dense output.
+
+        dop853, dopri5: the covering step re-taken, bit for bit what ``t_eval`` gives;
+        rk4: cubic Hermite.  Needs every step stored (no ``t_eval``, ``save="steps"``).
+        A run that changed split is evaluated in the chart that ran at each time.
+
+        Parameters
+        ----------
+        times : float or array_like
+            In any order, inside the span.
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per time (the index, named ``t``), one column per state in the order
+            ``scene.state_names``: ``traj.at([2.5])["x"]``; ``.to_numpy()`` is the
+            ``[len(times), n_states]`` array.
+        """
+        import pandas as pd
+
         from .dense import evaluate
 
-        if self._segments is not None:
-            return self._segments.at(self, times)
-        return evaluate(self, times)
+        y = (self._segments.at(self, times) if self._segments is not None
+             else evaluate(self, times))
+        return pd.DataFrame(y, columns=list(self.layout.states),
+                            index=pd.Index(np.atleast_1d(np.asarray(times, dtype=float)),
+                                           name="t"))
 
     def _repr_html_(self):
         from ..display import trajectory_html
