@@ -88,8 +88,9 @@ def sweep(scene, grid, client=None, *, times=None, outputs=None, chunk_size=None
         raise JetnhError(f"sweep has no option {', '.join(map(repr, bad))}; its options are "
                          f"{', '.join(known)} (output times: "
                          "times=[...])")
-    if not _in_ensemble(options.get("method", "dop853")):
-        if times is not None and not str(options["method"]).lower().startswith("scipy"):
+    method = _method(options.get("method", "dop853"))
+    if not method.ensemble:
+        if times is not None and not method.dense:
             raise JetnhError(f"times needs dense output, which {options['method']} does not "
                              "have; use dop853, dopri5, radau or scipy-<M>, or omit times for the "
                              "final values")
@@ -278,14 +279,12 @@ def _progress(progress, total):
     return show, bar.close
 
 
-def _in_ensemble(method) -> bool:
-    """Does ``method`` run as a compiled ensemble (else ``Scene.run`` point by point)?"""
+def _method(name):
+    """The ``numeric.methods.Method`` called ``name``: one that runs as a compiled
+    ensemble (``ensemble``), or else ``Scene.run`` point by point."""
     from .numeric import methods
 
-    try:
-        return methods.METHODS[methods.method(method)] != "discrete"
-    except JetnhError:  # scipy-<M>
-        return False
+    return methods.method(name)
 
 
 # ---------------------------------------------------------------------- one chunk
@@ -298,7 +297,7 @@ def _run_chunk(scene, Y0, P, run, outputs, parallel) -> dict:
 
     if isinstance(scene, CompiledScene):
         scene = scene.load()
-    if not _in_ensemble(run.get("method", "dop853")):
+    if not _method(run.get("method", "dop853")).ensemble:
         return _run_points(scene, Y0, P, run, outputs)
     ens = run_ensemble(scene, Y0, dict(zip(scene.runtime_params, P.T)), parallel=parallel,
                        on_error="record", **run)

@@ -345,18 +345,20 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
         raise JetnhError(f"singular_tol must be in [0, 1), not {singular_tol}")
     budget = arguments.count(max_steps, "max_steps")
     limit = arguments.timeout(timeout)
-    method = methods.method(method)
-    if methods.METHODS[method] == "discrete":
-        runnable = [m for m, k in methods.METHODS.items() if k != "discrete"]
+    m = methods.method(method)
+    if not m.ensemble:
+        runnable = [x.name for x in methods.METHODS.values() if x.ensemble]
         raise JetnhError(f"ensembles run the Runge-Kutta methods {', '.join(runnable)}, not "
-                         f"{method!r}")
+                         f"{m.name!r}")
+    method = m.name
     scene, Y0, P = resolve(scene, initial, params, project)
     n_runs, n = Y0.shape
     t0, t1 = scene.t_span
     if t_eval is not None:
         te = arguments.times(t_eval, t0, t1)
-        if not methods.adaptive(method):
-            raise JetnhError("t_eval needs dense output: use dop853, dopri5 or radau (rk4 "
+        if not m.dense:
+            dense = [x.name for x in methods.METHODS.values() if x.ensemble and x.dense]
+            raise JetnhError(f"t_eval needs dense output: use {', '.join(dense)} ({m.name} "
                              "gives save='final')")
         mode, n_times = AT_T_EVAL, te.shape[0]
     elif save == "final":
@@ -377,18 +379,18 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
     EV_N = np.zeros((n_runs, max(n_ev, 1)), dtype=np.int64)
     EV_T = np.full((n_runs, max(n_ev, 1)), np.nan)
     rtol, atol_v = arguments.tolerances(rtol, atol, n)
-    if method != "radau" and (newton_tol is not None or max_newton is not None):
+    if not m.newton and (newton_tol is not None or max_newton is not None):
         raise JetnhError(f"newton_tol and max_newton are options of radau, not {method}")
-    if methods.adaptive(method):
+    if m.adaptive:
         if n_steps is not None or h is not None:
             raise JetnhError(f"n_steps and h are options of fixed-step methods, not {method}")
         ctl = Control(rtol, atol_v, *arguments.step_limits(first_step, max_step), budget, 0)
     else:
         ctl = Control(rtol, atol_v, 0.0, np.inf, budget,
-                      arguments.fixed_steps(n_steps, h, t0, t1, "rk4", budget))
+                      arguments.fixed_steps(n_steps, h, t0, t1, method, budget))
     halt = interrupt.flag()
     workers = int(workers or numba.config.NUMBA_NUM_THREADS)
-    if method == "radau":
+    if m.solver is methods.Solver.IMPLICIT:
         from .methods import radau
 
         head = (kern.rhs_fp, scene.jacobian, kern.sing_fp, uev, t0, t1)
@@ -399,7 +401,7 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
 
         head = (kern.rhs_fp, kern.sing_fp, uev, t0, t1)
         tail = (ctl, te, mode, watch, halt)
-        drive = entry_point(loop.ensemble_solver(methods.EXPLICIT[method],
+        drive = entry_point(loop.ensemble_solver(m.tableau,
                                                  parallel=parallel == "prange"))
 
     def block(drive, a, b):

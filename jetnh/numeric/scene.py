@@ -46,7 +46,7 @@ from . import arguments, interrupt
 from . import cache as _cache
 from . import codegen
 from . import diagnosis, discrete, methods, scipy_backend
-from .methods import STATUS_TEXT
+from .methods import STATUS_TEXT, Solver
 from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, NONFINITE, SINGULAR, STOPPED
 from .methods.loop import Control, watch_of
 from .frozen import Frozen, FrozenDict, memo
@@ -345,25 +345,19 @@ class Scene(Frozen):
         limit = arguments.timeout(timeout)
         n = y_init.shape[0]
         rtol, atol_v = arguments.tolerances(rtol, atol, n)
-        name = str(method)
-        key = name.lower()
-        if backend == "scipy" or key.startswith("scipy"):
-            m = name.split("-", 1)[1] if "-" in name else name
-            m = {"dop853": "DOP853", "dopri5": "RK45", "rk45": "RK45"}.get(m.lower(), m)
-            self._unused(f"scipy-{m}", n_steps=n_steps, h=h, newton_tol=newton_tol,
+        m = methods.method(method, backend)
+        if m.solver is Solver.SCIPY:
+            self._unused(m.name, n_steps=n_steps, h=h, newton_tol=newton_tol,
                          max_newton=max_newton, timeout=timeout,
                          projection=projection or None)
             first, mx = arguments.step_limits(first_step, np.inf if max_step is None
                                               else max_step)
             te = None if t_eval is None else arguments.times(t_eval, t0, t1)
-            return scipy_backend.run(self, m, rtol, atol_v, te, t0, t1, y_init, p,
+            return scipy_backend.run(self, m.scipy, rtol, atol_v, te, t0, t1, y_init, p,
                                      first or None, mx, events, singular, singular_tol)
-        if backend not in (None, "numba"):
-            raise JetnhError(f"unknown backend {backend!r}; choose 'numba' or 'scipy'")
-        method = methods.method(name)
-        if methods.METHODS[method] == "discrete":
-            self._unused(key, t_eval=t_eval, first_step=first_step, max_step=max_step)
-            steps = arguments.fixed_steps(n_steps, h, t0, t1, key, budget)
+        if m.solver is Solver.DISCRETE:
+            self._unused(m.name, t_eval=t_eval, first_step=first_step, max_step=max_step)
+            steps = arguments.fixed_steps(n_steps, h, t0, t1, m.name, budget)
             arguments.output_rows(steps, 3 * self.system.J.n + 2 * self.system.k, save)
             tol = 1e-13 if newton_tol is None else arguments.positive(newton_tol,
                                                                      "newton_tol")
@@ -372,20 +366,21 @@ class Scene(Frozen):
             sing = singular_tol if singular == "stop" else None
             # the scene's initial dependent velocities hold for its own parameters only
             own = y0 is None and params is None
-            if method == "dvi":
+            if not m.projection:
                 if projection:
                     raise JetnhError("projection= is an option of the dla integrator")
-                return discrete.run_dvi(self, t0, t1, y_init, own, p, steps, save, tol, iters,
-                                        sing, limit, self.compile_events(events))
-            return discrete.run_dla(self, t0, t1, y_init, own, p, steps, save, tol, iters,
-                                    bool(projection), sing, limit, self.compile_events(events))
+                return discrete.run_dvi(self, m, t0, t1, y_init, own, p, steps, save, tol,
+                                        iters, sing, limit, self.compile_events(events))
+            return discrete.run_dla(self, m, t0, t1, y_init, own, p, steps, save, tol, iters,
+                                    bool(projection), sing, limit,
+                                    self.compile_events(events))
         if projection:
             raise JetnhError("projection= is an option of the dla integrator; the "
                              "Runge-Kutta methods follow the constraints to their tolerance")
-        if method != "radau":
-            self._unused(key, newton_tol=newton_tol, max_newton=max_newton)
-        if methods.adaptive(method):
-            self._unused(method, n_steps=n_steps, h=h)
+        if not m.newton:
+            self._unused(m.name, newton_tol=newton_tol, max_newton=max_newton)
+        if m.adaptive:
+            self._unused(m.name, n_steps=n_steps, h=h)
             first, mx = arguments.step_limits(first_step, np.inf if max_step is None
                                               else max_step)
             mode = EVERY_STEP if save == "steps" else ENDPOINTS
@@ -396,14 +391,14 @@ class Scene(Frozen):
             ctl = Control(rtol, atol_v, first, mx, budget, 0)
             # radau's steps depend on the steps before (Newton's starting values, the
             # Jacobian kept): no re-taking of one step (numeric.dense)
-            dense = None if method == "radau" else {"rtol": rtol, "atol": atol_v,
-                                                    "mode": mode}
+            dense = None if m.solver is Solver.IMPLICIT else {"rtol": rtol, "atol": atol_v,
+                                                              "mode": mode}
         else:
             if t_eval is not None:
-                raise JetnhError("rk4 is a fixed-step method without dense output; pass "
+                raise JetnhError(f"{m.name} is a fixed-step method without dense output; pass "
                                  "n_steps or h and read every step, or use dop853 with t_eval")
-            self._unused(method, first_step=first_step, max_step=max_step)
-            steps = arguments.fixed_steps(n_steps, h, t0, t1, "rk4", budget)
+            self._unused(m.name, first_step=first_step, max_step=max_step)
+            steps = arguments.fixed_steps(n_steps, h, t0, t1, m.name, budget)
             arguments.output_rows(steps, n, save)
             mode = EVERY_STEP if save == "steps" else ENDPOINTS
             te = np.zeros(0)
@@ -414,7 +409,7 @@ class Scene(Frozen):
         watch = self._watch(kern, ce, singular == "stop", singular_tol)
         uev = ce.uev if ce is not None else kern.sing_fp
         halt = interrupt.flag()
-        if method == "radau":
+        if m.solver is Solver.IMPLICIT:
             from .methods import radau
 
             solve = kern.implicit()
@@ -425,7 +420,7 @@ class Scene(Frozen):
                                                y_init, p, ctl, newton, te, mode, watch, halt),
                                  halt, limit)
         else:
-            solve = methods.explicit_solver(method)
+            solve = methods.explicit_solver(m)
             tic = time.perf_counter()
             out = interrupt.call(lambda: solve(kern.rhs_fp, kern.sing_fp, uev, t0, t1,
                                                y_init, p, ctl, te, mode, watch, halt),
@@ -433,7 +428,7 @@ class Scene(Frozen):
         wall = time.perf_counter() - tic
         if dense is not None:    # stopped inside a step
             dense["partial_last"] = int(out.status) in (EVENT, SINGULAR)
-        return self._trajectory(method, out, wall, kern, ce, p, t0, y_init, singular_tol,
+        return self._trajectory(m.name, out, wall, kern, ce, p, t0, y_init, singular_tol,
                                 singular == "stop", limit, dense)
 
     # ------------------------------------------------------------------ run helpers
@@ -578,13 +573,13 @@ class Scene(Frozen):
     @property
     def dla_kernels(self):
         """Kernels of the discrete Lagrange-d'Alembert step (``codegen.generate_dla``)."""
-        return discrete.kernels(self, "dla")
+        return discrete.kernels(self, "chetaev")
 
     @property
     def dvi_kernels(self):
         """Kernels of the discrete vakonomic step (``codegen.generate_dla(kind=
         "vakonomic")``)."""
-        return discrete.kernels(self, "dvi")
+        return discrete.kernels(self, "vakonomic")
 
     def __repr__(self):
         return (f"Scene({self.principle}, states={list(self.state_names)}, "
