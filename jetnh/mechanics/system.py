@@ -22,7 +22,8 @@ import sympy as sp
 from sympy.core.function import AppliedUndef
 
 from ..algebra import dag, linalg
-from . import inputs
+from ..frozen import Frozen, FrozenDict
+from . import inputs, principles
 from ..errors import ConstraintError, JetnhWarning, JetSpaceError, LagrangianError
 from ..geometry.jet import JetSpace, key_name
 from .principles import NAMED, PRINCIPLES  # noqa: F401 -- PRINCIPLES kept importable here
@@ -46,7 +47,7 @@ class Classification:
         return ", ".join(flags)
 
 
-class System:
+class System(Frozen):
     """``System(J, L, constraints, dependent)``: a Lagrangian with constraints f^a = 0.
 
     ``constraints`` are expressions f^a(t, q, qdot) meaning f^a = 0, of any nonlinearity:
@@ -70,10 +71,16 @@ class System:
     named like a velocity (xdot, x_dot, dx, ...) is a constant, with a JetnhWarning;
     parameters named like jetnh's multipliers (lambda_x, nu_x, eta_x) are refused.
     Strings are never parsed.  Every refusal is a JetnhError saying what to write instead.
+
+    A System is a value: immutable (``FrozenError`` on assignment; ``forces`` and
+    ``defaults`` are read-only mappings), equal to and hashed as any System built from the
+    same inputs.  ``check_branch=False`` defers the check of ``branch`` to the first use of
+    ``phi`` (a model file is read without solving its constraints).
     """
 
     def __init__(self, J: JetSpace, L, constraints=(), dependent=None, branch: int | None = None,
-                 defaults=None, name: str = "", forces=None, dissipation=None):
+                 defaults=None, name: str = "", forces=None, dissipation=None, *,
+                 check_branch: bool = True):
         if not isinstance(J, JetSpace):
             raise JetSpaceError(f"the first argument must be a JetSpace, got {type(J).__name__}")
         self.J = J
@@ -82,7 +89,7 @@ class System:
                                  for i, f in enumerate(inputs.constraint_list(constraints)))
         checked = ((q, self._first_order(e, f"the force on {q.name}"))
                    for q, e in inputs.force_items(forces, J))
-        self.forces = {q: e for q, e in checked if e != 0}
+        self.forces = FrozenDict({q: e for q, e in checked if e != 0})
         self.dissipation = (sp.S.Zero if dissipation is None
                             else self._first_order(dissipation, "the dissipation function"))
         self._check_dissipation()
@@ -96,9 +103,28 @@ class System:
         if not isinstance(name, (str, type(None))):
             raise ConstraintError(f"name must be a str, got {type(name).__name__}")
         self.name = name or ""
-        self.defaults = self._defaults({} if defaults is None else defaults)
-        if self._branch is not None:
+        self.defaults = FrozenDict(self._defaults({} if defaults is None else defaults))
+        if self._branch is not None and check_branch:
             self.phi                                    # noqa: B018 -- check the branch now
+
+    # ------------------------------------------------------------------ value semantics
+    def _identity(self) -> tuple:
+        """The inputs that define the system (two systems with equal ones are equal)."""
+        return (self.J, self.L, self.constraints, frozenset(self.forces.items()),
+                self.dissipation, self.dependent, self._branch,
+                frozenset(self.defaults.items()), self.name)
+
+    def __eq__(self, other):
+        return self is other or (type(other) is type(self)
+                                 and self._identity() == other._identity())
+
+    def __hash__(self):
+        return hash(self._identity())
+
+    @property
+    def branch(self) -> int | None:
+        """The root of nonlinear constraints selected at construction (None: the only one)."""
+        return self._branch
 
     def _defaults(self, given) -> dict:
         if not isinstance(given, Mapping):
@@ -527,25 +553,40 @@ class System:
                               chaplygin=self.is_chaplygin(), regular=self.is_regular(),
                               rheonomic=rheo)
 
+    def replace(self, **changes) -> "System":
+        """A new System from this one's inputs with ``changes`` (any of ``J``, ``L``,
+        ``constraints``, ``dependent``, ``branch``, ``defaults``, ``name``, ``forces``,
+        ``dissipation``), checked as any new System."""
+        inputs_ = dict(J=self.J, L=self.L, constraints=self.constraints,
+                       dependent=self.dependent, branch=self._branch, defaults=self.defaults,
+                       name=self.name, forces=self.forces,
+                       dissipation=self.dissipation if self.dissipation != 0 else None)
+        unknown = sorted(set(changes) - set(inputs_))
+        if unknown:
+            raise ConstraintError(f"System.replace has no input {', '.join(unknown)}; the "
+                                  f"inputs are {', '.join(inputs_)}")
+        return System(**{**inputs_, **changes})
+
     def with_split(self, dependent) -> "System":
         """The same system with another split."""
-        return System(self.J, self.L, self.constraints, dependent, self._branch,
-                      self.defaults, self.name, self.forces, self._dissipation_arg)
-
-    @property
-    def _dissipation_arg(self):
-        return self.dissipation if self.dissipation != 0 else None
+        return self.replace(dependent=dependent)
 
     # ------------------------------------------------------------------ equations
-    #: the derivation behind ``equations``: ``jetnh.mechanics.equations.derive``, bound when that
-    #: module loads (``import jetnh`` loads it), so that the derivation depends on System
-    #: and System not on it
-    _derive = None
-
     def equations(self, principle: str, form: str | None = None, convention: str = "paper"):
         """The equations of motion under ``principle`` (a name, an alias or a
-        ``jetnh.mechanics.principles.Principle``) in ``form`` (see ``jetnh.mechanics.equations``)."""
-        return self._derive(principle, form=form, convention=convention)
+        ``jetnh.mechanics.principles.Principle``) in ``form`` (see ``jetnh.mechanics.equations``),
+        derived once per principle, form and convention and kept."""
+        from .equations import derive
+
+        key = ("equations", principles.canonical(principle), form, convention)
+        try:
+            found = self._memo.get(key)
+        except TypeError:           # an unhashable form or convention: derive names it
+            return derive(self, principle, form=form, convention=convention)
+        if found is None:
+            found = self._memo[key] = derive(self, principle, form=form,
+                                             convention=convention)
+        return found
 
     def _repr_html_(self):
         from ..display import system_html

@@ -49,6 +49,7 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import ConstraintError, IntegrationError, JetnhError
+from ..frozen import Frozen
 from . import arguments, diagnosis, interrupt
 from . import methods
 from .methods import STATUS_TEXT
@@ -153,8 +154,9 @@ def _check_dependent(scene, Y0, P, given, project):
                 "it (it follows from the constraints) or pass project=True")
 
 
-class Ensemble:
-    """The result of ``run_ensemble``: arrays over runs, with named access."""
+class Ensemble(Frozen):
+    """The result of ``run_ensemble``: arrays over runs, with named access; immutable
+    (``jetnh.frozen``; its arrays are read-only)."""
 
     def __init__(self, scene, method, t, y, info, t_last, y_last, ev_n, ev_t, Y0, P,
                  event_names, wall_time, parallel, workers, save, singular_tol):
@@ -173,8 +175,8 @@ class Ensemble:
         self.event_names = tuple(event_names)
         self.event_counts = ev_n        # [n_runs, n_events]
         self.event_first = np.where(ev_n > 0, ev_t, np.nan)
-        self.initial = Y0
-        self.params = P                 # [n_runs, n_runtime_params]
+        self.initial = Y0.view()        # read-only views: the caller's arrays stay as given
+        self.params = P.view()          # [n_runs, n_runtime_params]
         self.param_names = scene.runtime_params
         self.wall_time = wall_time
         self.parallel = parallel
@@ -434,6 +436,10 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
                    EV_T[:, :n_ev], Y0, P, ce.names if ce is not None else (), wall,
                    parallel, workers if parallel != "serial" else 1, save, singular_tol)
     _explain(ens, kern, singular == "stop", singular_tol, on_error)
+    for a in (ens.t, ens.y, ens.status, ens.steps, ens.rejected, ens.nfev, ens.rows,
+              ens.t_final, ens.y_final, ens.event_counts, ens.event_first, ens.initial,
+              ens.params):
+        a.flags.writeable = False
     return ens
 
 

@@ -49,7 +49,7 @@ from . import diagnosis, discrete, methods, scipy_backend
 from .methods import STATUS_TEXT, Solver
 from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, NONFINITE, SINGULAR, STOPPED
 from .methods.loop import Control, watch_of
-from .frozen import Frozen, FrozenDict, memo
+from ..frozen import Frozen, FrozenDict, memo
 from .options import fields_of, options
 from .trajectory import Trajectory
 
@@ -65,7 +65,7 @@ class Scene(Frozen):
     that check; ``cache=False`` keeps compiled kernels out of the disk cache.
 
     A scene is immutable (``FrozenError`` on assignment; ``replace`` makes a changed
-    copy); what it compiles lazily is kept in its private memo (``numeric.frozen``).
+    copy); what it compiles lazily is kept in its private memo (``jetnh.frozen``).
     """
 
     _portable = ("key",)        # a pickled scene (a sweep's worker) keeps its kernels' key

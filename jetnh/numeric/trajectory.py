@@ -17,10 +17,10 @@ import numpy as np
 
 from ..errors import JetnhError
 from ..geometry.jet import key_name
-from .frozen import Frozen, memo
+from ..frozen import Frozen, memo
 
 
-@dataclass
+@dataclass(frozen=True)
 class Diagnostics:
     """What happened during one integration, and how well the invariants held."""
 
@@ -84,7 +84,7 @@ class Trajectory(Frozen):
     ``scene.state_names``), ``traj[name]`` is ``[n_times]``; an ensemble's ``ens.y`` is
     ``[n_runs, n_times, n_states]``.  ``to_dataframe()``, ``to_xarray()`` and ``plot()``
     give every series by name (``jetnh.numeric.export``); ``at(times)`` evaluates the run
-    between its rows (``jetnh.numeric.dense``).  Immutable (``numeric.frozen``); the
+    between its rows (``jetnh.numeric.dense``).  Immutable (``jetnh.frozen``); the
     derived columns are computed on first access.
     """
 
