@@ -45,12 +45,18 @@ its chunks elsewhere, and the DataFrame equals the local one to the last bit.
 (20 chunks when ``progress`` is given: ``progress(done, total)`` is called as chunks
 finish; ``progress=True`` shows a tqdm bar on stderr).
 ``df.attrs["grid"]`` names the grid columns.  Measured in ``benchmarks/sweep_dask.py``.
+
+``jetnh.sweep`` is this module, and calling it calls its function ``sweep``: so
+``jn.sweep(scene, grid)`` runs a sweep while ``import jetnh.sweep`` gives the module
+(``jetnh.sweep.plot_map``, ``jetnh.sweep.sweep``), as any module of the package.
 """
 
 from __future__ import annotations
 
 import math
 import operator
+import sys
+import types
 import warnings
 from collections.abc import Mapping
 
@@ -542,3 +548,14 @@ def plot_map(df, x, y, value, path=None, *, log=False, title=None, mask_failed=T
     if path is not None:
         fig.savefig(path, dpi=120)
     return fig
+
+
+class _CallableModule(types.ModuleType):
+    """The class of this module: calling ``jetnh.sweep`` calls ``sweep`` (module
+    docstring)."""
+
+    def __call__(self, *args, **kwargs):
+        return sweep(*args, **kwargs)
+
+
+sys.modules[__name__].__class__ = _CallableModule

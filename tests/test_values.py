@@ -96,3 +96,19 @@ def test_diagnostics_and_ensembles_are_immutable():
         ens.status[0] = 0
     Y0[0, 0] = 2.0                        # the caller's array stays writable
     assert Y0.flags.writeable and not ens.initial.flags.writeable
+
+
+def test_jetnh_sweep_is_the_module_and_calls_the_function():
+    import jetnh.sweep
+    import jetnh.sweep as module
+
+    assert module is jetnh.sweep is jn.sweep
+    assert module.__name__ == "jetnh.sweep" and callable(module)
+    assert jn.sweep.plot_map is module.plot_map
+
+
+def test_compiled_kernels_have_no_dead_integrator():
+    from jetnh.numeric.cache import CompiledKernels
+
+    assert not hasattr(CompiledKernels, "integrator")
+    assert callable(CompiledKernels.implicit)

@@ -639,12 +639,6 @@ class CompiledKernels:
             self.jac_fp = calls.jacobian_address(self.jac_c)
             self.jac = calls.Kernel(self.jac_fp, (n_y, n_p, n_y), jacobian=True)
 
-    def integrator(self):
-        """The compiled loop of the explicit Runge-Kutta methods (shared by every scene
-        and method), as its machine-code entry point (no type dispatch per call:
-        ``methods._common.entry_point``)."""
-        return _entry_point("loop")
-
     def implicit(self):
         """The compiled loop of radau (``methods.radau``), as its entry point."""
         return _entry_point("radau")
