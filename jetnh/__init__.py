@@ -7,15 +7,16 @@ decides when two principles share solutions; ``sweep`` runs a scene over a grid 
 parameters and initial values (here or on Dask); ``from_mechanics`` reads a
 sympy.physics.mechanics ``LagrangesMethod``; ``conserved_quantities``,
 ``noether_symmetries``, ``lie_symmetries`` and ``is_noether`` find and prove first
-integrals and symmetries under each principle.
+integrals and symmetries under each principle; ``linearize`` gives the linearization
+about an operating point (a ``Linearization``: A, eigenvalues, stability) under each.
 """
 
 from .mechanics.system import System
 from .mechanics.equations import Equations
 from .mechanics.equivalence import compare
 from .errors import (ArgumentError, ConstraintError, IntegrationError, JetnhError,
-                     JetnhWarning, JetSpaceError, LagrangianError, ModelFileError,
-                     PrincipleError)
+                     JetnhWarning, JetSpaceError, LagrangianError, LinearizationError,
+                     ModelFileError, PrincipleError)
 from .mechanics.integrals import conserved_quantities
 from .geometry.jet import JetSpace
 from .mechanics.sympy_bridge import from_mechanics
@@ -29,10 +30,11 @@ __version__ = "0.1.0"
 
 __all__ = ["JetSpace", "System", "Equations", "PRINCIPLES", "Principle", "compare", "conserved_quantities",
            "noether_symmetries", "lie_symmetries", "is_noether", "NoetherSymmetry",
-           "LieSymmetry", "Scene", "Trajectory",
+           "LieSymmetry", "Scene", "Trajectory", "linearize", "Linearization",
            "Diagnostics", "Event", "Ensemble", "sweep", "from_mechanics", "JetnhError",
            "JetSpaceError", "ConstraintError", "LagrangianError", "PrincipleError",
-           "ModelFileError", "IntegrationError", "ArgumentError", "JetnhWarning"]
+           "ModelFileError", "IntegrationError", "ArgumentError", "JetnhWarning",
+           "LinearizationError"]
 
 
 def __getattr__(name):
@@ -41,4 +43,8 @@ def __getattr__(name):
         from . import numeric
 
         return getattr(numeric, name)
+    if name in ("linearize", "Linearization"):
+        from .numeric import linearize
+
+        return getattr(linearize, name)
     raise AttributeError(f"module 'jetnh' has no attribute {name!r}")

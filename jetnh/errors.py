@@ -48,3 +48,8 @@ class JetnhWarning(UserWarning):
 
 class KernelCacheWarning(JetnhWarning):
     """The kernel cache cannot be used as configured; kernels go to a temporary cache."""
+
+
+class LinearizationError(JetnhError, ValueError):
+    """A linearization that cannot be made: equations undefined at the operating point
+    with no limit there, or no steady motion where one was asked for."""

@@ -83,11 +83,11 @@ def test_scene_jacobian_is_the_generated_one_and_matches_differences(particle):
     from jetnh.numeric import codegen
 
     ck = codegen.jacobian_kernels(particle)
-    assert particle.jacobian.address == ck.jac_fp.address
+    assert particle.jacobian.address.address == ck.jac_fp.address
     kern = particle.kernels
     y, p = particle.y0 + 0.1, particle.p
     J = np.empty((len(y), len(y)))
-    ck.jac(0.3, y, p, J)
+    particle.jacobian(0.3, y, p, J)            # callable as documented
     f0, f1 = np.empty_like(y), np.empty_like(y)
     for j in range(len(y)):
         e = np.zeros_like(y)

@@ -20,6 +20,7 @@ radial_line              y xdot - x ydot = 0 (integrable, differential form)
 rolling_ball             ball rolling on a plane, Euler angles
 ball_on_turntable        ball rolling on a rotating table, Euler angles
 suslov_rigid_body        Suslov's problem, Euler angles
+rolling_coin             disk rolling on a plane, free to lean (upright critical spin)
 n_trailer                car with N trailers (option N, default 2)
 particle_chain           N coupled nonholonomic particles (option N, default 3)
 damped_knife_edge        knife edge with viscous friction (Rayleigh dissipation)
@@ -33,7 +34,7 @@ from .families import n_trailer, n_trailer_turning, particle_chain
 from .paper import appell_hamel, rolling_disk
 from .planar import (bead_on_parabola, chaplygin_sleigh, heisenberg, isokinetic_particle,
                      knife_edge, nonholonomic_particle, radial_line, rheonomic_knife_edge)
-from .rigid import ball_on_turntable, rolling_ball, suslov_rigid_body
+from .rigid import ball_on_turntable, rolling_ball, rolling_coin, suslov_rigid_body
 
 register("rolling_disk", rolling_disk,
          dict(x=0.1, y=-0.2, phi=0.3, psi=0.4, phi_t=1.0, psi_t=0.7), t_end=10.0,
@@ -44,7 +45,7 @@ register("appell_hamel", appell_hamel, dict(x=0.0, y=0.0, z=0.0, x_t=3.0, y_t=1.
 _ORDER = ("rolling_disk", "appell_hamel", "knife_edge", "chaplygin_sleigh",
           "nonholonomic_particle", "heisenberg", "isokinetic_particle", "rheonomic_knife_edge",
           "bead_on_parabola", "radial_line", "rolling_ball", "ball_on_turntable",
-          "suslov_rigid_body", "n_trailer", "particle_chain", "damped_knife_edge",
+          "suslov_rigid_body", "rolling_coin", "n_trailer", "particle_chain", "damped_knife_edge",
           "damped_chaplygin_sleigh")
 assert set(_ORDER) == set(INFO), "every registered model must be listed"
 

@@ -130,3 +130,49 @@ def suslov_rigid_body() -> System:
     L = (I1 * O1**2 + I2 * O2**2 + I3 * O3**2) / 2 + I13 * O1 * O3
     return System(J, L, [O3], [psi], defaults={I1: 1.0, I2: 2.0, I3: 3.0, I13: 0.5},
                   name="Suslov's rigid body")
+
+
+@model("rolling_coin",
+       initial=dict(x=0.0, y=0.0, psi=0.0, theta=0.1, phi=0.0, psi_t=0.0, theta_t=0.0,
+                    phi_t=8.0),
+       t_end=2.0, tags=("affine", "nonholonomic", "3-D"))
+def rolling_coin() -> System:
+    """Disk rolling without slipping on a plane, free to lean (a coin).
+
+    Source: Neimark & Fufaev, *Dynamics of Nonholonomic Systems* (1972), ch. II (the
+    rolling disk); Bloch (2003), section 1.4; O'Reilly, "The dynamics of rolling disks and
+    sliding disks", Nonlinear Dynamics 10 (1996).
+
+    Coordinates (x, y, psi, theta, phi): contact point, heading (yaw) psi of the line of
+    rolling e1 = (cos psi, sin psi, 0), lean theta about e1 (0 upright), spin phi about
+    the disk's axis n = cos(theta) (-sin psi, cos psi, 0) + sin(theta) e_z.  Centre
+    C = (x, y, 0) + r u with u = e1 x n = (sin theta sin psi, -sin theta cos psi,
+    cos theta).  Angular velocity psidot e_z + thetadot e1 + phidot n, with components
+    (thetadot, phidot + psidot sin theta, psidot cos theta) on (e1, n, u).  Mass m,
+    radius r, moments A about the axis and B about a diameter (a thin homogeneous disk:
+    A = m r^2/2, B = m r^2/4):
+    L = m |C'|^2/2 + (A (phidot + psidot sin theta)^2 + B (thetadot^2
+    + psidot^2 cos(theta)^2))/2 - m g r cos(theta).
+    Rolling (the material point at the contact at rest) moves the contact point along e1
+    at r phidot: xdot = r cos(psi) phidot, ydot = r sin(psi) phidot; dependent x, y.
+
+    Steady motions: upright rolling in a straight line (theta = 0, psidot = thetadot = 0,
+    phidot = Omega), stable for Omega^2 > m g r B / (A (A + m r^2)) (g/(3 r) for a thin
+    disk; checked in ``tests/test_linearize.py``); steady turning at constant lean.
+    First integral: the energy m |C'|^2/2 + ... + m g r cos(theta) (Chetaev).
+    """
+    J = JetSpace("x y psi theta phi")
+    x, y, psi, theta, phi = J.q
+    xd, yd, psid, thetad, phid = J.qd
+    m, r, A, B, g = sp.symbols("m r A B g")
+    C = (x + r * sp.sin(theta) * sp.sin(psi), y - r * sp.sin(theta) * sp.cos(psi),
+         r * sp.cos(theta))
+    vC = [sum(sp.diff(c, q) * v for q, v in zip(J.q, J.qd)) for c in C]
+    L = (m * sum(v**2 for v in vC) / 2
+         + (A * (phid + psid * sp.sin(theta))**2
+            + B * (thetad**2 + psid**2 * sp.cos(theta)**2)) / 2
+         - m * g * r * sp.cos(theta))
+    cons = [xd - r * sp.cos(psi) * phid, yd - r * sp.sin(psi) * phid]
+    return System(J, L, cons, [x, y],
+                  defaults={m: 1.0, r: 1.0, A: 0.5, B: 0.25, g: 9.81},
+                  name="rolling coin (disk free to lean)")

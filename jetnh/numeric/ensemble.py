@@ -395,7 +395,7 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
     if m.solver is methods.Solver.IMPLICIT:
         from .methods import radau
 
-        head = (kern.rhs_fp, scene.jacobian, kern.sing_fp, uev, t0, t1)
+        head = (kern.rhs_fp, scene.jacobian.address, kern.sing_fp, uev, t0, t1)
         tail = (ctl, radau.newton_options(newton_tol, max_newton), te, mode, watch, halt)
         drive = entry_point(radau.ensemble_solver(parallel=parallel == "prange"))
     else:

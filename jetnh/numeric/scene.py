@@ -235,10 +235,12 @@ class Scene(Frozen):
 
     @property
     def jacobian(self):
-        """``jac(t, y, p, J)``, the Jacobian of the right-hand side for radau, as a
-        first-class function: the kernel generated from the derivation
-        (``codegen.jacobian_kernels``, forward mode over the shared graph)."""
-        return codegen.jacobian_kernels(self).jac_fp
+        """``jac(t, y, p, J)``: writes ``J[i, j] = d rhs_i / d y_j`` (``J`` a C-contiguous
+        float64 n_state x n_state array; ``y`` in the order ``state_names``, ``p`` the
+        run-time parameters ``self.p``), the kernel generated from the derivation
+        (``codegen.jacobian_kernels``, forward mode over the shared graph) that radau
+        uses; ``jacobian.address`` is its C callback for compiled code."""
+        return codegen.jacobian_kernels(self).jac
 
     def replace(self, **changes) -> "Scene":
         """A scene equal to this one except for ``changes`` (constructor arguments:
@@ -414,7 +416,7 @@ class Scene(Frozen):
 
             solve = kern.implicit()
             newton = radau.newton_options(newton_tol, max_newton)
-            jac = self.jacobian
+            jac = self.jacobian.address
             tic = time.perf_counter()
             out = interrupt.call(lambda: solve(kern.rhs_fp, jac, kern.sing_fp, uev, t0, t1,
                                                y_init, p, ctl, newton, te, mode, watch, halt),

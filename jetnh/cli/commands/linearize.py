@@ -1,0 +1,153 @@
+"""``jetnh linearize``: the linearization of a model about an operating point, its
+eigenvalues and stability verdict; optionally along a parameter (crossings of
+Re lambda = 0, a stability diagram)."""
+
+from __future__ import annotations
+
+import json
+
+from ...errors import JetnhError
+from ..loading import load_model, with_split
+from ..parser import ALIASES, EPILOG_MODEL, canonical_principle, model_args, subcommand
+from ..running import assignments
+from ..usage import UsageError
+
+
+def add_parser(sub):
+    from ...mechanics.principles import PRINCIPLES
+
+    s = subcommand(
+        sub, "linearize",
+        help="linearize a model about an operating point: A, eigenvalues, stability",
+        description="Linearize MODEL's equations under one principle on the constraint "
+                    "manifold about the operating point --at (states not given take the "
+                    "model's initial values, else 0; dependent velocities follow from the "
+                    "constraints).  Prints the state, A, the eigenvalues, the residual "
+                    "|x'| (0: a steady motion) and the verdict.  --steady solves for some "
+                    "states so that the point is a steady motion; --param scans a "
+                    "parameter or a state and locates where Re lambda crosses 0.",
+        epilog=EPILOG_MODEL + "\n\nexample: jetnh linearize rolling_coin --at theta=0,"
+                              "psi_t=0,theta_t=0,phi_t=3 --param phi_t=0.2:4:39 "
+                              "--plot coin.png")
+    model_args(s)
+    s.add_argument("--principle", "-p", choices=PRINCIPLES, type=canonical_principle,
+                   default=None, help="default: the model file's, else chetaev; " + ALIASES)
+    s.add_argument("--at", action="append", metavar="NAME=VALUE",
+                   help="a value of the operating point: coordinate, velocity (x_t) or "
+                        "multiplier (repeatable, or comma-separated)")
+    s.add_argument("--set", action="append", metavar="NAME=VALUE",
+                   help="a parameter value (repeatable, or comma-separated)")
+    s.add_argument("--drop", default="cyclic", metavar="cyclic|none|Q1,Q2",
+                   help="coordinates left out of the state (default: cyclic, those the "
+                        "equations do not use)")
+    s.add_argument("--steady", metavar="NAME,...",
+                   help="states to solve for so that the point is a steady motion")
+    s.add_argument("--param", metavar="NAME=A:B:N",
+                   help="scan NAME (a parameter or a state) over N values from A to B")
+    s.add_argument("--plot", metavar="PATH", help="with --param: save the stability "
+                                                  "diagram (png, pdf, svg)")
+    s.add_argument("--format", choices=("text", "json"), default="text")
+    s.set_defaults(func=run)
+
+
+def _scan_spec(text: str):
+    name, sep, rng = (text or "").partition("=")
+    parts = rng.split(":")
+    if not sep or not name.strip() or len(parts) != 3:
+        raise UsageError(f"--param takes NAME=A:B:N, got {text!r} (e.g. phi_t=0.5:4:50)")
+    try:
+        a, b, n = float(parts[0]), float(parts[1]), int(parts[2])
+    except ValueError:
+        raise UsageError(f"--param {name}: A and B must be numbers and N an integer, got "
+                         f"{rng!r}") from None
+    if not 2 <= n <= 100_000:
+        raise UsageError(f"--param {name}: N must be between 2 and 100000, got {n}")
+    return name.strip(), a, b, n
+
+
+def run(args, progress) -> int:
+    import numpy as np
+
+    from ...numeric.codegen import multiplier_names
+    from ...numeric.linearize import linearize
+
+    loaded = with_split(load_model(args.model), args.split)
+    system = loaded.system
+    principle = args.principle or loaded.principle or "chetaev"
+    params = assignments(args.set, "--set")
+    scan = _scan_spec(args.param) if args.param else None
+    if args.plot and not scan:
+        raise UsageError("--plot draws the stability diagram of a scan: give --param too")
+    states = ([q.name for q in system.J.q] + [v.name for v in system.independent_velocities]
+              + list(multiplier_names(system, principle)))
+    at = {k: v for k, v in loaded.initial.items() if k in states}
+    at.update(assignments(args.at, "--at"))
+    zeros = [s for s in states if s not in at]
+    at.update({s: 0.0 for s in zeros})
+    drop = {"cyclic": "cyclic", "none": None}.get(args.drop)
+    if args.drop not in ("cyclic", "none"):
+        drop = [d.strip() for d in args.drop.split(",") if d.strip()]
+    with progress.step(f"deriving and compiling the {principle} Jacobian "
+                       "(cached for later runs)"):
+        lin = linearize(system, principle, at=at, params=params, drop=drop)
+    if args.steady:
+        lin = lin.steady([n.strip() for n in args.steady.split(",") if n.strip()])
+    result = None
+    if scan:
+        name, a, b, n = scan
+        result = lin.along(name, np.linspace(a, b, n))
+    if args.format == "json":
+        out = {"model": loaded.label, "principle": principle, "params": dict(lin.params),
+               "at": dict(lin.at), "state": list(lin.state_names),
+               "dropped": list(lin.dropped), "A": lin.A.tolist(),
+               "eigenvalues": [[z.real, z.imag] for z in lin.eigenvalues.tolist()],
+               "residual": lin.residual, "verdict": lin.verdict, "zero_at": zeros}
+        if result is not None:
+            out["scan"] = {"name": result.name, "crossings": list(result.crossings),
+                           "values": result.values.tolist(),
+                           "stable": result.stable.tolist()}
+        print(json.dumps(out, indent=2))
+    else:
+        print(f"{system.name or loaded.label}: {principle}")
+        if lin.params:
+            print("parameters: " + ", ".join(f"{k} = {v:g}" for k, v in lin.params.items()))
+        print("at:         " + ", ".join(f"{k} = {v:.10g}" for k, v in lin.at.items()))
+        if zeros:
+            print(f"            (not given, set to 0: {', '.join(zeros)})")
+        print(f"state:      {', '.join(lin.state_names)}"
+              + (f" (dropped: {', '.join(lin.dropped)})" if lin.dropped else ""))
+        with np.printoptions(precision=6, suppress=True, linewidth=100):
+            print("A =")
+            print(lin.A)
+            print(f"eigenvalues: {lin.eigenvalues}")
+        print(f"residual |x'| = {lin.residual:.3g}"
+              + ("  (a steady motion)" if lin.residual < 1e-10 else "  (not steady)"))
+        print(f"verdict: {lin.verdict}")
+        if result is not None:
+            stable = result.stable
+            print(f"scan of {result.name} over [{scan[1]:g}, {scan[2]:g}] ({scan[3]} values): "
+                  f"stable at {int(stable.sum())} of them")
+            print("crossings of Re lambda = 0: "
+                  + (", ".join(f"{c:.12g}" for c in result.crossings) or "none"))
+    if args.plot:
+        _plot(result, args.plot, f"{system.name or loaded.label} ({principle})", progress)
+    return 0
+
+
+def _plot(result, path, title, progress):
+    from pathlib import Path
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    if not Path(path).resolve().parent.is_dir():
+        raise JetnhError(f"cannot write {path}: the directory "
+                         f"{Path(path).resolve().parent} does not exist")
+    with progress.step(f"plotting to {path}"):
+        ax = result.plot()
+        ax.set_title(title)
+        ax.figure.tight_layout()
+        ax.figure.savefig(path)
+        plt.close(ax.figure)

@@ -1,0 +1,621 @@
+"""Linearization on the constraint manifold, and the stability of steady motions::
+
+    lin = linearize(system, "chetaev", at={"theta": 0.0, "phi_t": 5.0}, params={g: 9.81})
+    lin.A, lin.state_names, lin.eigenvalues, lin.residual, lin.verdict
+    lin.replace(params={"g": 1.62}, at={"phi_t": 2.0})      # no derivation, no compilation
+    lin.steady(["phi_t"])             # solve for the rest of a steady motion
+    scan = lin.along("phi_t", np.linspace(0.5, 5, 50))      # eigenvalues along a value
+    scan.frame, scan.crossings, scan.plot()
+    verdicts(system, at, params)      # one steady motion under every principle
+
+The state x of a principle's reduced first-order system is the scene's (``Scene``): the
+coordinates, the independent velocities qdot^mu and the multipliers of the principles
+whose multipliers are states (vakonomic, Hoelder, Suslov), less the coordinates that are
+dropped; the dependent velocities follow from the constraints (qdot^alpha = phi^alpha),
+so every perturbation stays on the constraint manifold.  ``A = dx'/dx`` at the operating
+point is the Jacobian kernel generated from the derivation by forward-mode
+differentiation over the shared graph (``codegen.jacobian_kernels``), compiled once per
+system and principle with every parameter read at run time: a ``replace`` costs a kernel
+call and an eigenvalue problem.  ``Linearization.symbolic()`` is the same matrix in the
+user's symbols, by ``dag.jacobian`` on the graph (never flattened).
+
+Dropped coordinates (``drop="cyclic"``): those the equations of the kept states do not
+depend on -- absent from them, or present with a derivative that vanishes identically
+(decided by ``zero.vanishes`` on the graph, e.g. the heading of a rolling disk, which
+enters phi and the accelerations only in combinations that cancel).  Their rows (their
+drift, such as the position of a rolling body) do not feed back, so ``A`` is the
+Jacobian restricted to the kept states.
+
+Stability is spectral: ``unstable`` when an eigenvalue has a positive real part,
+``asymptotically stable`` when every one has a negative real part, ``marginal`` when some
+lie on the imaginary axis (conservative systems, families of steady motions: the
+linearization does not decide).  Eigenvalues of modulus below ``ZERO`` times the size of
+A count as zero (a defective zero eigenvalue of a family of steady motions is computed
+only to about the square root of the rounding unit).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+import sympy as sp
+
+from ..algebra import dag, zero
+from ..errors import ConstraintError, JetnhError, LinearizationError, PrincipleError
+from ..mechanics import principles
+from ..mechanics.system import System
+from . import arguments
+from ..frozen import Frozen, FrozenDict
+
+#: eigenvalues of modulus below ZERO * max(1, |A|) count as zero
+ZERO = 1e-6
+#: real parts within REAL * max(1, |A|) of zero count as on the imaginary axis
+REAL = 1e-12
+
+_MODELS: dict = {}
+
+
+# ---------------------------------------------------------------------- the derived model
+def _once(f):
+    """A value of a private ``_Model`` computed on first use."""
+    name = "_" + f.__name__
+
+    def get(self):
+        if name not in self.__dict__:
+            self.__dict__[name] = f(self)
+        return self.__dict__[name]
+
+    return property(get, doc=f.__doc__)
+
+
+class _Model:
+    """What a system and a principle give once: the reduced rows in the user's symbols
+    (dependent velocities replaced by phi), which coordinates they use, and the compiled
+    kernels (every parameter a run-time parameter)."""
+
+    def __init__(self, system: System, principle: str, form, convention):
+        self.system, self.principle = system, principle
+        self.form, self.convention = form, convention
+        J = system.J
+        eom = system.equations(principle, form=form, convention=convention)
+        if eom.arbitrary:
+            raise PrincipleError(
+                f"the {principle} equations in the {convention!r} convention leave the "
+                f"multipliers {[s.name for s in eom.arbitrary]} arbitrary: there is no "
+                "first-order system to linearize; use the paper's convention")
+        self.lams = tuple(principles.get(principle).multiplier_symbols(system))
+        self.coordinates = tuple(J.q)
+        self.velocities = tuple(system.independent_velocities)
+        self.states = self.coordinates + self.velocities + self.lams
+        self.names = tuple(s.name for s in self.states)
+        self.dependent = tuple(system.dependent_velocities)
+        self.params = tuple(sorted(s.name for s in system.parameters))
+        self._eom = eom
+        self._kernels = None
+        self._uses: dict = {}           # (row, coordinate) -> bool
+        self._symbolic: dict = {}       # kept states -> sympy Matrix
+
+    @_once
+    def rows(self) -> list:
+        """x' of every state, in the user's symbols: q' (qdot^s, phi^alpha for the
+        dependent ones), the accelerations, the multiplier rates; dependent velocities
+        replaced by phi on the graph."""
+        J, sysm = self.system.J, self.system
+        acc = self._eom.accelerations()
+        phi = {v: sysm.phi[v] for v in self.dependent}
+        rows = [phi.get(J.jet(q, 1), J.jet(q, 1)) for q in self.coordinates]
+        rows += [acc[J.jet(J.split(v)[0], 2)] for v in self.velocities]
+        rows += [acc[r] for r in self._eom.multiplier_rates]
+        return dag.xreplace(rows, phi) if phi else rows
+
+    def uses(self, row: int, coordinate: int) -> bool:
+        """Whether row ``row`` depends on coordinate ``coordinate``: the symbol is in it
+        and its derivative does not vanish identically (``zero.vanishes``)."""
+        key = (row, coordinate)
+        if key not in self._uses:
+            e, q = self.rows[row], self.coordinates[coordinate]
+            self._uses[key] = (q in dag.free_symbols(e)
+                               and not zero.vanishes(dag.diff(e, q)))
+        return self._uses[key]
+
+    def cyclic(self) -> tuple[int, ...]:
+        """Indices of the coordinates no kept row depends on (the largest such set: a
+        coordinate whose only users are dropped coordinates' rows is dropped too)."""
+        n = len(self.coordinates)
+        dropped = set(range(n))
+        changed = True
+        while changed:
+            changed = False
+            kept_rows = [i for i in range(len(self.states)) if i not in dropped]
+            for c in sorted(dropped):
+                if any(self.uses(i, c) for i in kept_rows):
+                    dropped.discard(c)
+                    changed = True
+                    break
+        return tuple(sorted(dropped))
+
+    def kernels(self, params: dict, state: dict, t: float):
+        """The compiled kernels (``rhs``, ``aux``, ``jac``), built on first use."""
+        if self._kernels is None:
+            from . import codegen
+            from .scene import Scene
+
+            scene = Scene(self.system, self.principle, params=params,
+                          initial=state, t_span=(t, t + 1.0), form=self.form,
+                          convention=self.convention, runtime_params=self.params)
+            self._kernels = codegen.jacobian_kernels(scene)
+        return self._kernels
+
+
+_KEEP_MODELS = 64         # systems whose derived model and kernels stay in memory
+
+
+def _model(system, principle, form=None, convention="paper") -> _Model:
+    """The model of ``system`` under ``principle`` (the last ``_KEEP_MODELS`` kept)."""
+    key = (system, principle, form, convention)
+    if key not in _MODELS:
+        if len(_MODELS) >= _KEEP_MODELS:
+            _MODELS.pop(next(iter(_MODELS)))
+        _MODELS[key] = _Model(system, principle, form, convention)
+    return _MODELS[key]
+
+
+# ---------------------------------------------------------------------- the value
+class Linearization(Frozen):
+    """``x' = A x`` about an operating point (module docstring); from ``linearize``.
+
+    ``A`` (read-only k x k), ``state_names``, ``eigenvalues`` (complex, by decreasing
+    real part), ``rates`` (x' at the point), ``residual`` (its 2-norm: 0 for a steady
+    motion), ``limit`` (True where the kernels are undefined at the point and A is
+    their limit),
+    ``at`` (every coordinate, velocity and multiplier at the point), ``params``,
+    ``dropped`` (coordinate names left out), ``verdict``, ``stable``.
+    """
+
+    def __init__(self, model: _Model, at: dict, params: dict, keep: tuple, t: float,
+                 y: np.ndarray, p: np.ndarray, A: np.ndarray, rates: np.ndarray,
+                 limit: bool):
+        self._model = model
+        self.system = model.system
+        self.principle = model.principle
+        self.t = t
+        self.at = FrozenDict(at)
+        self.params = FrozenDict(params)
+        self._keep = keep
+        self._y, self._p = y, p
+        self.state_names = tuple(model.names[i] for i in keep)
+        self.dropped = tuple(n.name for i, n in enumerate(model.coordinates)
+                             if i not in keep)
+        A.setflags(write=False)
+        self.A = A
+        self.rates = rates
+        rates.setflags(write=False)
+        self.residual = float(np.linalg.norm(rates))
+        ev = np.linalg.eigvals(A) if A.size else np.zeros(0, complex)
+        ev = ev[np.lexsort((ev.imag, -ev.real))].astype(complex)
+        ev.setflags(write=False)
+        self.eigenvalues = ev
+        #: True when A is the limit at a point where the kernel itself is undefined
+        self.limit = limit
+
+    # ------------------------------------------------------------------ verdicts
+    @property
+    def _scale(self) -> float:
+        return max(1.0, float(np.abs(self.A).max()) if self.A.size else 1.0)
+
+    @property
+    def margin(self) -> float:
+        """The largest real part among the eigenvalues not counted as zero (``ZERO``),
+        less ``REAL`` times the size of A: > 0 unstable, <= 0 not."""
+        return _margin(self.eigenvalues, self._scale)
+
+    @property
+    def stable(self) -> bool:
+        """No eigenvalue with a positive real part (spectral stability)."""
+        return self.margin <= 0
+
+    @property
+    def verdict(self) -> str:
+        """``"unstable"``, ``"asymptotically stable"`` or ``"marginal"`` (module
+        docstring)."""
+        s = self._scale
+        ev = self.eigenvalues
+        if self.margin > 0:
+            return "unstable"
+        if ev.size and np.all(ev.real < -REAL * s) and np.all(np.abs(ev) > ZERO * s):
+            return "asymptotically stable"
+        return "marginal"
+
+    # ------------------------------------------------------------------ other points
+    def replace(self, params=None, at=None, t=None) -> "Linearization":
+        """The linearization at other parameter values and/or another operating point
+        (``at`` updates the point: names not given keep their values, dependent
+        velocities follow from the constraints again): a kernel call, no derivation."""
+        point = {k: v for k, v in self.at.items()
+                 if k not in {d.name for d in self._model.dependent}}
+        if at is not None:
+            point.update(_keyed(at, "at"))
+        values = dict(self.params)
+        if params is not None:
+            values = _params(self._model, {**values, **_keyed(params, "params")}, {})
+        return _evaluate(self._model, point, values, self._keep,
+                         self.t if t is None else arguments.finite(t, "t"))
+
+    def steady(self, unknowns, tol: float = 1e-10) -> "Linearization":
+        """The linearization at a steady motion: the values of ``unknowns`` (names of
+        kept states) that make x' vanish (to ``tol`` times max(1, |x'| here)), starting
+        from this point's values (the others held).  ``LinearizationError`` when none
+        is found near them."""
+        from scipy.optimize import least_squares
+
+        unknowns = [arguments.name_of(u, "unknowns") for u in (
+            [unknowns] if isinstance(unknowns, (str, sp.Symbol)) else unknowns)]
+        model = self._model
+        idx = []
+        for u in unknowns:
+            if u not in self.state_names:
+                raise JetnhError(
+                    f"cannot solve for {u!r}: the unknowns of a steady motion are kept "
+                    f"states ({', '.join(self.state_names)})")
+            idx.append(model.names.index(u))
+        ck = self._kernels
+        keep = list(self._keep)
+        y, p, t = self._y.copy(), self._p, self.t
+        f = np.empty(len(model.names))
+        Jm = np.empty((len(model.names), len(model.names)))
+
+        def residual(u):
+            y[idx] = u
+            ck.rhs(t, y, p, f)
+            return f[keep].copy()
+
+        def jacobian(u):
+            y[idx] = u
+            ck.jac(t, y, p, Jm)
+            return Jm[np.ix_(keep, idx)].copy()
+
+        u0 = self._y[idx]
+        start = float(np.linalg.norm(self.rates))
+        try:
+            sol = least_squares(residual, u0, jac=jacobian, method="trf", xtol=1e-15,
+                                ftol=1e-15, gtol=1e-15, max_nfev=200)
+            x, bad = sol.x, not np.all(np.isfinite(sol.fun))
+        except ValueError:       # a non-finite residual at the start
+            x, bad = u0, True
+        size = float(np.linalg.norm(residual(x))) if not bad else float("nan")
+        if bad or not size <= tol * max(1.0, start):
+            given = ", ".join(f"{n} = {self.at[n]:.6g}" for n in self.state_names
+                              if n not in unknowns)
+            raise LinearizationError(
+                f"no steady motion found by solving for {', '.join(unknowns)} with "
+                f"{given} held (|x'| = {size:.3g} at the best point, "
+                f"{dict(zip(unknowns, np.round(x, 12).tolist()))}); start from another "
+                "guess (replace(at=...)), solve for other values, or fix fewer of them")
+        return self.replace(at=dict(zip(unknowns, x.tolist())))
+
+    def along(self, name, values) -> "StabilityScan":
+        """Eigenvalues along a parameter or an operating-point value ``name`` (every
+        other value held): a ``StabilityScan`` with the crossings of Re lambda = 0."""
+        name = arguments.name_of(name, "along")
+        values = arguments.real_array(values, "values")
+        if name in self.params:
+            move = lambda v: self.replace(params={name: v})      # noqa: E731
+        elif name in self.at:
+            move = lambda v: self.replace(at={name: v})          # noqa: E731
+        else:
+            raise JetnhError(f"{name!r} is neither a parameter ({', '.join(self.params)}) "
+                             f"nor a value of the operating point ({', '.join(self.at)})")
+        lins = [move(float(v)) for v in values]
+        ev = np.array([lin.eigenvalues for lin in lins])
+        margins = np.array([lin.margin for lin in lins])
+        crossings = []
+        for i in range(len(values) - 1):
+            a, b = margins[i], margins[i + 1]
+            if np.isfinite(a) and np.isfinite(b) and (a > 0) != (b > 0):
+                crossings.append(_root(lambda v: move(v).margin, float(values[i]),
+                                       float(values[i + 1])))
+        return StabilityScan(name, values, ev, margins, tuple(crossings), self.state_names)
+
+    # ------------------------------------------------------------------ symbolic
+    def symbolic(self) -> sp.Matrix:
+        """A in the user's symbols (states, parameters, t): ``dag.jacobian`` of the
+        kept rows on the shared graph (evaluate it with ``dag.evaluate``)."""
+        return _symbolic(self._model, self._keep)
+
+    @property
+    def _kernels(self):
+        return self._model._kernels
+
+    def __repr__(self):
+        return (f"Linearization({self.principle}, states={list(self.state_names)}, "
+                f"residual={self.residual:.3g}, verdict={self.verdict!r})")
+
+
+def _symbolic(model: _Model, keep) -> sp.Matrix:
+    if keep not in model._symbolic:
+        rows = [model.rows[i] for i in keep]
+        model._symbolic[keep] = dag.jacobian(rows, [model.states[i] for i in keep])
+    return model._symbolic[keep]
+
+
+def _margin(ev: np.ndarray, scale: float) -> float:
+    big = ev[np.abs(ev) > ZERO * scale]
+    top = float(big.real.max()) if big.size else 0.0
+    return top - REAL * scale
+
+
+def _root(f, a: float, b: float) -> float:
+    """The point in [a, b] where ``f`` changes sign (Brent, to 1e-13 relative)."""
+    from scipy.optimize import brentq
+
+    return float(brentq(f, a, b, xtol=1e-14, rtol=4 * np.finfo(float).eps, maxiter=200))
+
+
+class StabilityScan(Frozen):
+    """Eigenvalues along one value: ``values``, ``eigenvalues`` (one row per value, each
+    by decreasing real part), ``margins`` (``Linearization.margin``), ``crossings`` (the
+    values where the motion gains or loses stability, to 1e-13 relative), ``frame``
+    and ``plot``."""
+
+    def __init__(self, name, values, eigenvalues, margins, crossings, state_names):
+        self.name = name
+        for a in (values, eigenvalues, margins):
+            a.setflags(write=False)
+        self.values, self.eigenvalues, self.margins = values, eigenvalues, margins
+        self.crossings = crossings
+        self.state_names = state_names
+
+    @property
+    def stable(self) -> np.ndarray:
+        return self.margins <= 0
+
+    @property
+    def frame(self):
+        """pandas DataFrame: one row per value, the value, ``re_i`` and ``im_i`` of each
+        eigenvalue (i = 1..k by decreasing real part) and ``stable``."""
+        import pandas as pd
+
+        k = self.eigenvalues.shape[1] if self.eigenvalues.ndim == 2 else 0
+        data = {self.name: self.values}
+        for i in range(k):
+            data[f"re_{i + 1}"] = self.eigenvalues[:, i].real
+        for i in range(k):
+            data[f"im_{i + 1}"] = self.eigenvalues[:, i].imag
+        data["stable"] = self.stable
+        return pd.DataFrame(data)
+
+    def plot(self, ax=None):
+        """Re and Im of the eigenvalues against the value, the stable ranges shaded and
+        the crossings marked: a matplotlib Axes."""
+        import matplotlib.pyplot as plt
+
+        if ax is None:
+            _, ax = plt.subplots(figsize=(6.4, 4.0))
+        v, ev = self.values, self.eigenvalues
+        k = ev.shape[1] if ev.ndim == 2 else 0
+        for i in range(k):
+            ax.plot(v, ev[:, i].real, ".", color="C0", ms=3,
+                    label="Re λ" if i == 0 else None)
+            ax.plot(v, ev[:, i].imag, ".", color="C1", ms=2, alpha=0.6,
+                    label="Im λ" if i == 0 else None)
+        stable = self.stable
+        start = None
+        for i, s in enumerate(list(stable) + [False]):
+            if s and start is None:
+                start = i
+            elif not s and start is not None:
+                ax.axvspan(v[start], v[i - 1], color="C2", alpha=0.15,
+                           label="stable" if start == np.argmax(stable) else None)
+                start = None
+        for c in self.crossings:
+            ax.axvline(c, color="k", lw=0.8, ls="--")
+        ax.axhline(0.0, color="k", lw=0.5)
+        ax.set_xlabel(self.name)
+        ax.set_ylabel("eigenvalue λ")
+        ax.legend(loc="best")
+        return ax
+
+    def __repr__(self):
+        return (f"StabilityScan({self.name}, {len(self.values)} values, "
+                f"crossings={[round(c, 10) for c in self.crossings]})")
+
+
+# ---------------------------------------------------------------------- entry points
+def linearize(system, principle="chetaev", at=None, params=None, drop="cyclic", *,
+              t=0.0, form=None, convention="paper") -> Linearization:
+    """``x' = A x`` of ``principle``'s reduced system about the point ``at`` (module
+    docstring).
+
+    ``at``: coordinates, independent velocities and multipliers keyed by Symbol or name
+    (dependent velocities follow from the constraints; if given they must agree; dropped
+    coordinates may be omitted: their values do not enter A).  ``params`` default to
+    the system's defaults.  ``drop``: ``"cyclic"``, a list of coordinates, or None.
+    """
+    if not isinstance(system, System):
+        raise JetnhError(f"linearize needs a jetnh System, got {type(system).__name__}")
+    principle = principles.canonical(principle)
+    model = _model(system, principle, form, convention)
+    if not isinstance(at, Mapping):
+        raise JetnhError("at must be a dict of the operating point's values keyed by "
+                         f"Symbol or name ({', '.join(model.names)}), got "
+                         f"{type(at).__name__}")
+    point = _keyed(at, "at")
+    values = _params(model, params or {}, system.defaults)
+    keep = _kept(model, drop)
+    return _evaluate(model, point, values, keep, arguments.finite(t, "t"))
+
+
+def verdicts(system, at, params=None, principles_=None, drop="cyclic", solve_for=None):
+    """One operating point under several principles: a pandas DataFrame, one row per
+    principle, with its residual, state size, largest real part, verdict and
+    eigenvalues.  Missing multipliers start at 0; ``solve_for`` (names, or a dict
+    principle -> names, e.g. the multipliers) makes each point steady first
+    (``Linearization.steady``)."""
+    import pandas as pd
+
+    rows = []
+    for pr in principles_ or principles.PRINCIPLES:
+        pr = principles.canonical(pr)
+        model = _model(system, pr)
+        point = dict(_keyed(at, "at"))
+        for lam in model.lams:
+            point.setdefault(lam.name, 0.0)
+        try:
+            lin = linearize(system, pr, at=point, params=params, drop=drop)
+            unknown = solve_for.get(pr) if isinstance(solve_for, Mapping) else solve_for
+            if unknown:
+                lin = lin.steady(unknown)
+        except JetnhError as err:
+            rows.append({"principle": pr, "residual": np.nan, "states": None,
+                         "max_real": np.nan, "verdict": f"error: {err}",
+                         "eigenvalues": None})
+            continue
+        rows.append({"principle": pr, "residual": lin.residual,
+                     "states": len(lin.state_names),
+                     "max_real": float(lin.eigenvalues.real.max(initial=-np.inf)),
+                     "verdict": lin.verdict, "eigenvalues": lin.eigenvalues})
+    return pd.DataFrame(rows).set_index("principle")
+
+
+# ---------------------------------------------------------------------- helpers
+def _keyed(values, what) -> dict[str, float]:
+    if not isinstance(values, Mapping):
+        raise JetnhError(f"{what} must be a dict keyed by Symbol or name, got "
+                         f"{type(values).__name__}")
+    out = {}
+    for k, v in values.items():
+        name = arguments.name_of(k, what)
+        out[name] = arguments.real(v, f"{what}[{name!r}]")
+        if not np.isfinite(out[name]):
+            raise JetnhError(f"{what}[{name!r}] is {out[name]}; give a finite value")
+    return out
+
+
+def _params(model: _Model, params, defaults) -> dict[str, float]:
+    out = {s.name: float(v) for s, v in defaults.items()}
+    for name, v in _keyed(params, "params").items():
+        if name not in model.params:
+            raise JetnhError(f"params has {name!r}, which is not a parameter of this "
+                             f"system; its parameters are {list(model.params) or 'none'}")
+        out[name] = v
+    missing = [n for n in model.params if n not in out]
+    if missing:
+        raise JetnhError(f"missing parameter values: {', '.join(missing)}; give them in "
+                         "params={...}")
+    return {n: out[n] for n in model.params}
+
+
+def _kept(model: _Model, drop) -> tuple[int, ...]:
+    n = len(model.coordinates)
+    names = [q.name for q in model.coordinates]
+    if drop is None:
+        gone: tuple = ()
+    elif isinstance(drop, str) and drop == "cyclic":
+        gone = model.cyclic()
+    elif isinstance(drop, (list, tuple, set, frozenset)):
+        gone = []
+        for d in drop:
+            name = arguments.name_of(d, "drop")
+            if name not in names:
+                raise JetnhError(f"drop has {name!r}, which is not a coordinate; the "
+                                 f"coordinates are {', '.join(names)}")
+            gone.append(names.index(name))
+        gone = tuple(sorted(set(gone)))
+        kept_rows = [i for i in range(len(model.states)) if i not in gone]
+        for c in gone:
+            users = [model.names[i] for i in kept_rows if model.uses(i, c)]
+            if users:
+                raise JetnhError(
+                    f"cannot drop {names[c]!r}: the equations of {', '.join(users)} depend "
+                    f"on it; keep it, or use drop='cyclic' (drops {', '.join(names[i] for i in model.cyclic()) or 'nothing'})")
+    else:
+        raise JetnhError(f"drop must be 'cyclic', a list of coordinates or None, not "
+                         f"{drop!r}")
+    return tuple(i for i in range(len(model.states)) if not (i < n and i in gone))
+
+
+def _evaluate(model: _Model, point: dict, values: dict, keep, t: float) -> Linearization:
+    """The Linearization at one point (checked) with the compiled kernels."""
+    names = model.names
+    dep = [v.name for v in model.dependent]
+    allowed = set(names) | set(dep)
+    for k in point:
+        if k not in allowed:
+            raise JetnhError(
+                f"at has {k!r}, which is not a state of the {model.principle} system; the "
+                f"states are {', '.join(names)} (and the dependent velocities "
+                f"{', '.join(dep) or 'none'})")
+    n = len(model.coordinates)
+    missing = [nm for i, nm in enumerate(names)
+               if nm not in point and (i >= n or i in keep)]
+    if missing:
+        lams = [s.name for s in model.lams]
+        raise JetnhError(
+            f"missing operating-point values: {', '.join(missing)}"
+            + (f" (the {model.principle} state includes the multipliers {', '.join(lams)})"
+               if set(missing) & set(lams) else "")
+            + "; give them in at={...}")
+    state = {nm: point.get(nm, 0.0) for nm in names}
+    ck = model.kernels(values, state, t)
+    y = np.array([state[nm] for nm in names], dtype=float)
+    p = np.array([values[nm] for nm in model.params], dtype=float)
+    aux = np.empty(ck.layout.n_aux)
+    ck.aux(t, y, p, aux)
+    at = dict(state)
+    k = len(dep)
+    for a, nm in enumerate(dep):
+        v = float(aux[a])
+        if not np.isfinite(v):
+            raise ConstraintError(
+                f"the constraints give no finite value for {nm} at this point: it is "
+                f"singular for the split {[s.name for s in model.system.dependent]}; "
+                "choose another operating point or another split (dependent=)")
+        if nm in point and abs(point[nm] - v) > 1e-9 * max(1.0, abs(v)):
+            raise ConstraintError(
+                f"the point is off the constraints: at gives {nm} = {point[nm]!r} but the "
+                f"constraints give {v!r}; omit it (dependent velocities follow from the "
+                "constraints)")
+        at[nm] = v
+    if k and not np.all(np.isfinite(aux[k:2 * k])):
+        raise ConstraintError("the constraints are undefined at this point")
+    A, rates, limit = _jacobian(ck, y, p, t, list(keep))
+    return Linearization(model, at, values, tuple(keep), t, y, p, A, rates, limit)
+
+
+def _jacobian(ck, y, p, t, keep):
+    """(A, x', limit): the kernels at the point; where they are undefined (0/0), the
+    limit along a random direction by symmetric differences and Richardson
+    extrapolation, and an error if that does not settle."""
+    m = len(y)
+    Jm, f = np.empty((m, m)), np.empty(m)
+    ck.jac(t, y, p, Jm)
+    ck.rhs(t, y, p, f)
+    idx = np.ix_(keep, keep)
+    A, rates = Jm[idx].copy(), f[keep].copy()
+    if np.all(np.isfinite(A)) and np.all(np.isfinite(rates)):
+        return A, rates, False
+    rng = np.random.default_rng(0)
+    d = np.zeros(m)
+    d[keep] = rng.standard_normal(len(keep))
+    d /= np.linalg.norm(d)
+    scale = max(1.0, float(np.abs(y).max()))
+
+    def mean(h):
+        Js, fs = [], []
+        for s in (h, -h):
+            ck.jac(t, y + s * scale * d, p, Jm)
+            ck.rhs(t, y + s * scale * d, p, f)
+            Js.append(Jm[idx].copy())
+            fs.append(f[keep].copy())
+        return (Js[0] + Js[1]) / 2, (fs[0] + fs[1]) / 2
+
+    (A1, r1), (A2, r2) = mean(1e-3), mean(5e-4)
+    A, rates = (4 * A2 - A1) / 3, (4 * r2 - r1) / 3
+    if not (np.all(np.isfinite(A)) and np.all(np.isfinite(rates))) or (
+            np.abs(A2 - A1).max() > 1e-3 * max(1.0, np.abs(A).max())):
+        raise LinearizationError(
+            "the equations are undefined at this point (a singular configuration of "
+            "the principle's equations or of the split) and have no limit there; "
+            "choose another operating point or another split (dependent=)")
+    return A, rates, True
