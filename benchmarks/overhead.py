@@ -80,7 +80,8 @@ try:            # the compiled loop alone (this tree's API)
     kern = sc.kernels
     solve = explicit_solver("dop853")
     ctl = Control(1e-9, np.full(len(sc.y0), 1e-12), 0.0, np.inf, 10**7, 0)
-    args = (kern.rhs_fp, kern.sing_fp, kern.sing_fp, 0.0, 1e-6, sc.y0, sc.p, ctl,
+    args = (kern.rhs_fp, kern.sing_fp, kern.sing_fp, kern.hol_or_none, 0.0, 1e-6, sc.y0, sc.p,
+            ctl,
             np.zeros(0), 2, watch_of(kern, None, True, 1e-10), interrupt.flag())
     out["call_s_dop853"] = min(best(lambda: solve(*args), REPS_SHORT) for _ in range(3))
 except ImportError:

@@ -140,7 +140,7 @@ def system_html(s) -> str:
                        for p in s.parameters[:40])
     facts = [("coordinates", _names(J.q)), ("dependent", _names(s.dependent)),
              ("parameters", html.escape(params or "none")), ("L", _math(latex(s.L, J)[0]))]
-    cons = ([_math(x + " = 0") for x in latex(f, J)] for f in s.constraints)
+    cons = ([_math(x + " = 0") for x in latex(f, J)] for f in s.given_constraints)
     return html_table(_system_title(s), facts, [("constraints", cons, "constraints")])
 
 
@@ -148,7 +148,7 @@ def system_latex(s) -> str:
     J = s.J
     rows = [[r"L &= " + x for x in latex(s.L, J)]]
     rows += [[f"f^{{{a + 1}}} &= " + x + " = 0" for x in latex(f, J)]
-             for a, f in enumerate(s.constraints)]
+             for a, f in enumerate(s.given_constraints)]
     return latex_block(_system_title(s) + ", dependent " + ", ".join(
         q.name for q in s.dependent[:40]), rows, "constraints")
 

@@ -16,6 +16,10 @@ A model file::
     phi_t = 1.0
     psi_t = 0.7
 
+A constraint without velocities (``"x**2 + y**2 - l**2"``) is holonomic: the system keeps
+it at position level (``System.holonomic``), and the ``[initial]`` configuration must
+satisfy it (a simulation refuses one off it, naming the residual).
+
 Optional keys: ``[forces]`` (coordinate = expression: the non-potential generalized force
 Q_s(t, q, qdot) on that coordinate, beside [L]_s in every principle's equations),
 ``dissipation`` (a Rayleigh function D(t, q, qdot): Q_s -= dD/dqdot^s), ``description``
@@ -1265,7 +1269,7 @@ def dumps(system: System, initial=None, *, params=None, principle=None, conventi
                                                  for d in system.dependent) + "]")
     lines.append(f"lagrangian = {_toml_string(expression_text(system.L))}")
     lines.append("constraints = [" + ", ".join(_toml_string(expression_text(f))
-                                               for f in system.constraints) + "]")
+                                               for f in system.given_constraints) + "]")
     if system.dissipation != 0:
         lines.append(f"dissipation = {_toml_string(expression_text(system.dissipation))}")
     if system.branch is not None:

@@ -134,6 +134,7 @@ def test_holonomic_constraints_enter_differentiated():
     s = jn.from_mechanics(lm)
     X, Y = s.J.q
     assert sp.expand(s.constraints[0] - (2 * X * s.J.qd[0] + 2 * Y * s.J.qd[1])) == 0
+    assert s.holonomic == (X**2 + Y**2 - ell**2,)        # kept at position level too
     assert s.is_integrable()
     assert_chetaev_matches(s, lm, {m: 1.1, g: 9.81, ell: 1.0})
     # nonholonomic constraints first, then the differentiated holonomic ones
@@ -144,6 +145,9 @@ def test_holonomic_constraints_enter_differentiated():
     s2 = jn.from_mechanics(lm2)
     J = s2.J
     assert s2.constraints == (J.qd[2] - J.q[1] * J.qd[0], J.qd[0] - J.qd[1])
+    assert s2.holonomic == (J.q[0] - J.q[1],) and s2.holonomic_rows == (1,)
+    back = jn.from_mechanics(to_mechanics(s2))
+    assert back.holonomic == s2.holonomic and back.constraints == s2.constraints
 
 
 # ---------------------------------------------------------------------- random systems

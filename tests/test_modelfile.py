@@ -408,7 +408,7 @@ def _file(**over):
     (dict(lagrangian='"k*x_t**2"'), "unknown name"),
     (dict(constraints='"z_t"'), "must be a list of strings"),
     (dict(constraints='["z_t - y*x_t", 1]'), "must be a list of strings"),
-    (dict(constraints='["y"]'), "holonomic"),
+    (dict(constraints='["t - 1"]'), "time only"),
     (dict(dependent='["w"]'), "'w' is not one of the coordinates"),
     (dict(dependent='["x", "y"]'), "dependent coordinates given for 1 constraints"),
     (dict(branch="-1"), "'branch' must be >= 0"),

@@ -5,9 +5,9 @@
 constraints become jet expressions (``JetSpace.from_dynamic``).
 
 - ``nonhol_coneqs`` are the constraints as written.
-- ``hol_coneqs`` g(t, q) = 0 enter differentiated, dg/dt = 0, as LagrangesMethod itself
-  uses them (its ``coneqs``); jetnh's Frobenius test finds them integrable.  The
-  configuration must satisfy g = 0 initially: that is the caller's to ensure.
+- ``hol_coneqs`` g(t, q) = 0 stay holonomic (``System.holonomic``): the equations use
+  dg/dt = 0, as LagrangesMethod itself does (its ``coneqs``), and a ``Scene`` checks (or
+  completes) the initial configuration against g = 0 and keeps its runs on it.
 - ``forcelist``: loads on points and frames become the generalized forces
   Q_s = sum F . dv/dqdot^s (``generalized_forces``), the system's ``forces``.
 - Any other function of time in the Lagrangian or the constraints (a specified input
@@ -51,13 +51,13 @@ def _convert(J, expr, what):
 
 
 def constraints(lm, J: JetSpace) -> list:
-    """The nonholonomic constraints as written, then the holonomic ones differentiated."""
+    """The nonholonomic constraints as written, then the holonomic ones g as written
+    (a System keeps a constraint without velocities holonomic)."""
     n_hol = len(lm._hol_coneqs)
     nonhol = list(lm.coneqs[n_hol:])
-    hol = list(lm.coneqs[:n_hol])           # LagrangesMethod stores dg/dt
+    hol = list(lm._hol_coneqs)
     return ([_convert(J, f, f"nonholonomic constraint {a + 1}") for a, f in enumerate(nonhol)]
-            + [_convert(J, f, f"holonomic constraint {a + 1} (differentiated)")
-               for a, f in enumerate(hol)])
+            + [_convert(J, f, f"holonomic constraint {a + 1}") for a, f in enumerate(hol)])
 
 
 def generalized_forces(lm, J: JetSpace) -> tuple:
@@ -106,7 +106,7 @@ def from_mechanics(lm, dependent=None, *, branch=None, defaults=None, name="") -
 
 def to_mechanics(system: System):
     """A ``LagrangesMethod`` with the system's Lagrangian, coordinates and constraints
-    (as nonholonomic constraints, in dynamicsymbols)."""
+    (holonomic ones as ``hol_coneqs``, the others as nonholonomic, in dynamicsymbols)."""
     from sympy.physics.mechanics import LagrangesMethod
 
     if system.forced:
@@ -114,6 +114,8 @@ def to_mechanics(system: System):
                          "unique loads on points and frames to stand for them; build the "
                          "LagrangesMethod's forcelist by hand")
     J = system.J
+    hol = set(system.holonomic_rows)
+    nonhol = [f for i, f in enumerate(system.constraints) if i not in hol]
     return LagrangesMethod(J.to_dynamic(system.L), [J.to_dynamic(q) for q in J.q],
-                           nonhol_coneqs=[J.to_dynamic(f) for f in system.constraints]
-                           or None)
+                           hol_coneqs=[J.to_dynamic(g) for g in system.holonomic] or None,
+                           nonhol_coneqs=[J.to_dynamic(f) for f in nonhol] or None)

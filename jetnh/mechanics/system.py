@@ -59,6 +59,13 @@ class System(Frozen):
     the dependent velocities and have several solutions for them; it is checked at
     construction.  ``defaults`` maps parameters (Symbols or names) to default real
     numbers, and ``name`` labels the system; neither changes the symbolic results.
+    A constraint without velocities, g(t, q) = 0, is *holonomic*: it is kept as such in
+    ``holonomic`` (in the order given) and enters ``constraints`` as its time derivative
+    D g = dg/dt + dg/dq^s qdot^s (at its place in the list), so that every principle's
+    derivation, the split and the accelerations treat it as a velocity constraint whose
+    velocity Jacobian dg/dq^s is the configuration Jacobian; the split's dependent
+    velocities make that block regular.  A ``Scene`` checks (or completes) the initial
+    configuration against g = 0 and keeps its runs on it.
     ``forces`` maps coordinates (Symbols or names) to non-potential generalized forces
     Q_s(t, q, qdot) (others are 0) and ``dissipation`` is a Rayleigh function D(t, q, qdot)
     adding Q_s = -dD/dqdot^s; every principle's equations carry Q_s beside [L]_s.
@@ -85,8 +92,15 @@ class System(Frozen):
             raise JetSpaceError(f"the first argument must be a JetSpace, got {type(J).__name__}")
         self.J = J
         self.L = self._first_order(L, "the Lagrangian")
-        self.constraints = tuple(self._first_order(f, f"constraint {i + 1}")
-                                 for i, f in enumerate(inputs.constraint_list(constraints)))
+        given = tuple(self._first_order(f, f"constraint {i + 1}")
+                      for i, f in enumerate(inputs.constraint_list(constraints)))
+        self._check_constraints(given)
+        #: the position-level constraints g(t, q) = 0 (the given ones without velocities)
+        self.holonomic = tuple(f for f in given if not self._has_velocity(f))
+        #: their places in ``constraints`` (where D g stands)
+        self.holonomic_rows = tuple(i for i, f in enumerate(given)
+                                    if not self._has_velocity(f))
+        self.constraints = tuple(f if self._has_velocity(f) else J.D(f) for f in given)
         checked = ((q, self._first_order(e, f"the force on {q.name}"))
                    for q, e in inputs.force_items(forces, J))
         self.forces = FrozenDict({q: e for q, e in checked if e != 0})
@@ -110,7 +124,7 @@ class System(Frozen):
     # ------------------------------------------------------------------ value semantics
     def _identity(self) -> tuple:
         """The inputs that define the system (two systems with equal ones are equal)."""
-        return (self.J, self.L, self.constraints, frozenset(self.forces.items()),
+        return (self.J, self.L, self.given_constraints, frozenset(self.forces.items()),
                 self.dissipation, self.dependent, self._branch,
                 frozenset(self.defaults.items()), self.name)
 
@@ -211,9 +225,12 @@ class System(Frozen):
                     f"J.qd[{J.q.index(q)}] (the Symbol {J.jet(q, 1).name!r}) for the velocity",
                     JetnhWarning, stacklevel=3)
 
-    def _check_velocities(self):
+    def _has_velocity(self, f) -> bool:
+        return bool(dag.free_symbols(f) & set(self.J.qd))
+
+    def _check_constraints(self, given):
         J = self.J
-        for i, f in enumerate(self.constraints):
+        for i, f in enumerate(given):
             if f == 0:
                 raise ConstraintError(
                     f"constraint {i + 1} is identically zero (0 = 0); remove it")
@@ -223,10 +240,13 @@ class System(Frozen):
                     f"constraint {i + 1}, {f} = 0, involves neither time, coordinates nor "
                     "velocities: it is a condition on the parameters, not a constraint; "
                     "remove it")
-            if not (dag.free_symbols(f) & set(J.qd)):
+            if not (dag.free_symbols(f) & (set(J.q) | set(J.qd))):
                 raise ConstraintError(
-                    f"constraint {i + 1}, {f} = 0, contains no velocity: it is holonomic. "
-                    f"Eliminate a coordinate, or pass its time derivative J.D(f) instead")
+                    f"constraint {i + 1}, {f} = 0, involves time only: it holds at isolated "
+                    "instants, not along a motion; remove it (or add the coordinates it "
+                    "relates)")
+
+    def _check_velocities(self):
         if self.k and linalg.numeric_rank(self.jacobian) < self.k:
             raise ConstraintError(
                 "the constraints are dependent: their velocity Jacobian df/dqdot has rank "
@@ -335,8 +355,10 @@ class System(Frozen):
 
     @property
     def _inputs(self) -> tuple:
-        """Every expression the user gave: L, the constraints, forces and dissipation."""
-        return (self.L, *self.constraints, *self.forces.values(), self.dissipation)
+        """Every expression the user gave: L, the constraints (holonomic ones also as
+        given), forces and dissipation."""
+        return (self.L, *self.constraints, *self.holonomic, *self.forces.values(),
+                self.dissipation)
 
     @cached_property
     def Q(self) -> tuple[sp.Expr, ...]:
@@ -557,7 +579,7 @@ class System(Frozen):
         """A new System from this one's inputs with ``changes`` (any of ``J``, ``L``,
         ``constraints``, ``dependent``, ``branch``, ``defaults``, ``name``, ``forces``,
         ``dissipation``), checked as any new System."""
-        inputs_ = dict(J=self.J, L=self.L, constraints=self.constraints,
+        inputs_ = dict(J=self.J, L=self.L, constraints=self.given_constraints,
                        dependent=self.dependent, branch=self._branch, defaults=self.defaults,
                        name=self.name, forces=self.forces,
                        dissipation=self.dissipation if self.dissipation != 0 else None)
@@ -570,6 +592,13 @@ class System(Frozen):
     def with_split(self, dependent) -> "System":
         """The same system with another split."""
         return self.replace(dependent=dependent)
+
+    @property
+    def given_constraints(self) -> tuple[sp.Expr, ...]:
+        """The constraints as given: ``constraints`` with each holonomic g in place of
+        its derivative D g."""
+        hol = dict(zip(self.holonomic_rows, self.holonomic))
+        return tuple(hol.get(i, f) for i, f in enumerate(self.constraints))
 
     # ------------------------------------------------------------------ equations
     def equations(self, principle: str, form: str | None = None, convention: str = "paper"):
@@ -602,5 +631,6 @@ class System(Frozen):
         extra = (f", forces={{{', '.join(f'{q.name}: {e}' for q, e in self.forces.items())}}}"
                  if self.forces else "")
         extra += f", dissipation={self.dissipation}" if self.dissipation != 0 else ""
+        extra += f", holonomic={list(self.holonomic)}" if self.holonomic else ""
         return (f"System(L={self.L}, constraints={list(self.constraints)}, "
                 f"dependent={[s.name for s in self.dependent]}{extra})")

@@ -616,23 +616,27 @@ class CompiledKernels:
             source = found[0]["kernels.py"].decode("utf-8")
         self.kernels = module
         self.source = source
-        for name in ("rhs_c", "aux_c", "sing_c", "jac_c", "events", "events_c", "sing",
+        for name in ("rhs_c", "aux_c", "sing_c", "hol_c", "jac_c", "events", "events_c", "sing",
                      "step_residual", "momentum", "legendre", "nodal", "constraint_jac"):
             if hasattr(self.kernels, name):
                 setattr(self, name, getattr(self.kernels, name))
         from . import calls
         from .methods._common import FunctionAddress
 
-        for name in ("rhs_c", "aux_c", "sing_c", "events_c"):
+        for name in ("rhs_c", "aux_c", "sing_c", "hol_c", "events_c"):
             if hasattr(self, name):      # rhs_fp, ...: cheap to pass to compiled loops
                 setattr(self, name[:-2] + "_fp", FunctionAddress(getattr(self, name)))
         lay = layout
         n_y, n_p = lay.n_state, len(lay.runtime_params)
-        sizes = {"rhs": lay.n_state, "aux": lay.n_aux, "sing": len(lay.indicators)}
+        sizes = {"rhs": lay.n_state, "aux": lay.n_aux, "sing": len(lay.indicators),
+                 "hol": lay.holonomic * (1 + len(lay.coordinates))}
         for name, n_out in sizes.items():     # rhs, aux, sing from Python
             if hasattr(self, f"{name}_fp") and not hasattr(self, name):
                 setattr(self, name, calls.Kernel(getattr(self, f"{name}_fp"),
                                                  (n_y, n_p, n_out)))
+        #: the holonomic kernel for the compiled loops (``methods.projection``); a stand-in
+        #: of the same type, never called, for systems without holonomic constraints
+        self.hol_or_none = getattr(self, "hol_fp", getattr(self, "sing_fp", None))
         if hasattr(self, "aux_fp"):
             self.aux_rows = calls.Rows(self.aux_fp, (n_y, n_p, lay.n_aux))
         if hasattr(self, "jac_c"):           # the generated Jacobian (radau)

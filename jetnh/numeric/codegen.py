@@ -25,6 +25,9 @@ compiled once: an njit function beside its callback would compile it a second ti
     a tan argument, ... that occurs in phi^alpha or in the accelerations (the reduced mass
     matrix's determinant is one of them).  The integrators stop where one of them
     crosses zero or falls below ``singular_tol`` times its initial size.
+``hol(t, y, p, out)`` (systems with holonomic constraints g = 0 only)
+    ``out = (g_1..g_m, dg_i/dq^j row by row)``: what the projection of an accepted step
+    onto g = 0 evaluates (``methods.projection``).  ``aux`` then ends with g_1..g_m.
 ``jac(t, y, p, J)`` (``generate(..., jacobian=True)``, or ``jacobian_kernels(scene)``)
     ``J[i, j] = d rhs_i / d y_j`` (an n_state x n_state C-contiguous array), by forward
     mode over the graph (signature ``JAC_SIGNATURE``).
@@ -446,6 +449,7 @@ def symbolic_key(system, principle, params, runtime_params=(), integrals=None, f
         repr(tuple(s.name for s in J.q)), J.t.name,
         sp.srepr(system.L),
         repr(tuple(sp.srepr(f) for f in system.constraints)),
+        repr(tuple(sp.srepr(g) for g in system.holonomic)),
         repr(tuple((q.name, sp.srepr(e)) for q, e in system.forces.items())),
         sp.srepr(system.dissipation),
         repr(tuple(s.name for s in system.dependent)), repr(system.branch),
@@ -510,6 +514,8 @@ def generate(system, principle, params: dict, runtime_params=(), integrals=None,
     if system.forced:
         pairs.append((sp.Add(*[Q * v for Q, v in zip(system.Q, J.qd)]),
                       "the power of the forces"))
+    hol = system.holonomic
+    pairs += [(g, f"the holonomic constraint {g}") for g in hol]
     aux_exprs = [prepare.rename[v] for v in dep_vel] + prepare.many(pairs)
     indicators = singular_indicators(
         system, [acc[J.jet(J.split(v)[0], 2)] for v in ind_vel] + [acc[r] for r in rates],
@@ -530,6 +536,7 @@ def generate(system, principle, params: dict, runtime_params=(), integrals=None,
         indicators=tuple(_label(e) for _, e in indicators),
         indicator_kinds=tuple(kind for kind, _ in indicators),
         power=system.forced,
+        holonomic=len(hol),
     )
     src = [HEADER.format(version=CODEGEN_VERSION, key=key, jac_sig=JAC_SIGNATURE)]
     src.append(_function("rhs", layout, phi_exprs, rhs_exprs))
@@ -537,6 +544,11 @@ def generate(system, principle, params: dict, runtime_params=(), integrals=None,
         src.append(_jacobian_function(layout, phi_exprs, rhs_exprs))
     src.append(_function("aux", layout, phi_exprs, aux_exprs))
     src.append(_function("sing", layout, phi_exprs, sing_exprs))
+    if hol:
+        hol_pairs = [(g, f"the holonomic constraint {g}") for g in hol]
+        hol_pairs += [(dag.diff(g, q), f"the derivative of {g} by {q}")
+                      for g in hol for q in J.q]
+        src.append(_function("hol", layout, phi_exprs, prepare.many(hol_pairs)))
     src.append(f"LAYOUT = {layout.to_json()!r}\n")
     timings["print"] = time.perf_counter() - t1
     return KernelSource(key, layout, "\n".join(src), timings)

@@ -109,9 +109,9 @@ def _retaken_steps(traj, k, tau) -> np.ndarray:
         # |h| one ulp up: t0 + first reaches (or passes, and is cut back to) t1, so the
         # step is h = t1 - t0, the original run's h to the bit
         first = float(np.nextafter(abs(t1 - t0), np.inf))
-        res = solve(kern.rhs_fp, kern.sing_fp, kern.sing_fp, t0, t1,
+        res = solve(kern.rhs_fp, kern.sing_fp, kern.sing_fp, kern.hol_or_none, t0, t1,
                     np.ascontiguousarray(y[j]), p, Control(d["rtol"], d["atol"], first, np.inf,
-                                                           1, 0),
+                                                           1, 0, *traj.scene._projection),
                     np.ascontiguousarray(tau[a:b]), AT_T_EVAL, watch, halt)
         status, _, ys, n_out, stats = res[:5]
         if int(status) != 0 or int(stats[1]) != 0 or int(n_out) != b - a:

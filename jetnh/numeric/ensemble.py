@@ -50,6 +50,7 @@ import numpy as np
 
 from ..errors import ConstraintError, IntegrationError, JetnhError
 from ..frozen import Frozen
+from ..mechanics import holonomic
 from . import arguments, diagnosis, interrupt
 from . import methods
 from .methods import STATUS_TEXT
@@ -132,7 +133,27 @@ def resolve(scene, initial=None, params=None, project=False):
     dep = {k: v for k, v in columns.items() if k in scene.dependent_velocities}
     if dep:
         _check_dependent(scene, Y0, P, dep, project)
+    if scene.system.holonomic:
+        _check_holonomic(scene, Y0, P)
     return scene, np.ascontiguousarray(Y0), np.ascontiguousarray(P)
+
+
+def _check_holonomic(scene, Y0, P):
+    """Refuse runs whose initial configuration is off the holonomic constraints g = 0."""
+    kern = scene.kernels
+    lay = kern.layout
+    aux = np.empty(lay.n_aux)
+    n = len(lay.coordinates)
+    for r in range(Y0.shape[0]):
+        kern.aux(scene.t_span[0], Y0[r], P[r], aux)
+        g = aux[lay.n_aux - lay.holonomic:]
+        scale = max(1.0, float(np.max(np.abs(Y0[r, :n]))))
+        if not np.all(np.abs(g) <= holonomic.TOLERANCE * scale):
+            raise ConstraintError(
+                f"run {r}: the initial configuration is off the holonomic constraints "
+                f"{list(scene.system.holonomic)} (g = {g.tolist()}); give configurations "
+                "with g = 0 (an ensemble does not complete them: build one Scene per start "
+                "with complete=True)")
 
 
 def _check_dependent(scene, Y0, P, given, project):
@@ -261,6 +282,16 @@ class Ensemble(Frozen):
             return np.nanmax(res.reshape(self.n_runs, -1), axis=1) if k else np.zeros(self.n_runs)
 
     @property
+    def holonomic_residual_max(self) -> np.ndarray:
+        """Max ``|g_i|`` of the holonomic constraints over each run's output rows."""
+        m = self.layout.holonomic
+        if not m:
+            return np.zeros(self.n_runs)
+        res = np.abs(self.aux[:, :, self.layout.n_aux - m:])
+        with np.errstate(all="ignore"):
+            return np.nanmax(res.reshape(self.n_runs, -1), axis=1)
+
+    @property
     def energy_drift(self) -> np.ndarray:
         """Max ``|E - E(t0)|`` over each run's output rows."""
         e = self.aux[:, :, self.layout.energy_index]
@@ -291,6 +322,8 @@ class Ensemble(Frozen):
         out = dict(status=self.status, success=self.success, steps=self.steps,
                    rejected=self.rejected, rhs_evaluations=self.nfev, t_final=self.t_final,
                    residual_max=self.residual_max, energy_drift=self.energy_drift)
+        if self.layout.holonomic:
+            out["holonomic_residual_max"] = self.holonomic_residual_max
         for k, name in enumerate(self.event_names):
             out[f"events[{name}]"] = self.event_counts[:, k]
             out[f"first[{name}]"] = self.event_first[:, k]
@@ -386,22 +419,25 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
     if m.adaptive:
         if n_steps is not None or h is not None:
             raise JetnhError(f"n_steps and h are options of fixed-step methods, not {method}")
-        ctl = Control(rtol, atol_v, *arguments.step_limits(first_step, max_step), budget, 0)
+        ctl = Control(rtol, atol_v, *arguments.step_limits(first_step, max_step), budget, 0,
+                      *scene._projection)
     else:
         ctl = Control(rtol, atol_v, 0.0, np.inf, budget,
-                      arguments.fixed_steps(n_steps, h, t0, t1, method, budget))
+                      arguments.fixed_steps(n_steps, h, t0, t1, method, budget),
+                      *scene._projection)
     halt = interrupt.flag()
     workers = int(workers or numba.config.NUMBA_NUM_THREADS)
     if m.solver is methods.Solver.IMPLICIT:
         from .methods import radau
 
-        head = (kern.rhs_fp, scene.jacobian.address, kern.sing_fp, uev, t0, t1)
+        head = (kern.rhs_fp, scene.jacobian.address, kern.sing_fp, uev, kern.hol_or_none,
+                t0, t1)
         tail = (ctl, radau.newton_options(newton_tol, max_newton), te, mode, watch, halt)
         drive = entry_point(radau.ensemble_solver(parallel=parallel == "prange"))
     else:
         from .methods import loop
 
-        head = (kern.rhs_fp, kern.sing_fp, uev, t0, t1)
+        head = (kern.rhs_fp, kern.sing_fp, uev, kern.hol_or_none, t0, t1)
         tail = (ctl, te, mode, watch, halt)
         drive = entry_point(loop.ensemble_solver(m.tableau,
                                                  parallel=parallel == "prange"))

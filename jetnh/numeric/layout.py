@@ -28,7 +28,8 @@ class Layout:
     coordinate_velocities: tuple[str, ...] = ()  # velocity name of each coordinate
     indicators: tuple[str, ...] = ()           # singularity indicators (sing kernel)
     indicator_kinds: tuple[str, ...] = ()      # "split" | "constraint" | "acceleration"
-    power: bool = False                        # aux ends with the power of the forces
+    power: bool = False                        # aux has the power of the forces
+    holonomic: int = 0                         # aux ends with the m holonomic g_i
 
     @property
     def states(self) -> tuple[str, ...]:
@@ -40,7 +41,8 @@ class Layout:
 
     @property
     def n_aux(self) -> int:
-        return 2 * len(self.dependent_velocities) + 1 + len(self.integrals) + self.power
+        return (2 * len(self.dependent_velocities) + 1 + len(self.integrals) + self.power
+                + self.holonomic)
 
     @property
     def energy_index(self) -> int:

@@ -27,6 +27,13 @@ the principles that have them (vakonomic, Hoelder, Suslov).  Initial values are 
 Symbol or by name; the dependent velocities follow from the constraints.  If given, they
 must agree with the constraints (else ``ConstraintError``), or ``project=True`` replaces
 them by the values the constraints require.
+
+Holonomic constraints g(t, q) = 0 (``system.holonomic``): the initial configuration must
+satisfy them (else ``ConstraintError`` with the residual), or ``complete=True`` solves
+them by Newton's method for the split's dependent coordinates (those making dg/dq over
+them regular; ``complete=[z, ...]`` names others), recorded in ``scene.completed``.  The
+compiled explicit and Radau runs project every accepted step back onto g = 0
+(``methods.projection``); ``traj.diagnostics.holonomic_residual_max`` reports max |g|.
 """
 
 from __future__ import annotations
@@ -38,7 +45,7 @@ import numpy as np
 import sympy as sp
 
 from ..algebra import dag
-from ..mechanics import principles
+from ..mechanics import holonomic, principles
 from ..mechanics.system import System
 from ..errors import ConstraintError, JetnhError
 from ..geometry.jet import sympy_object
@@ -62,7 +69,9 @@ class Scene(Frozen):
     maps names to sympy expressions (first integrals to monitor); ``runtime_params``
     names parameters read at run time instead of compiled in; ``project`` replaces
     inconsistent dependent velocities; ``consistency_tol`` is the relative tolerance of
-    that check; ``cache=False`` keeps compiled kernels out of the disk cache.
+    that check; ``complete`` (True or coordinates) solves the holonomic constraints for
+    coordinates of an initial configuration off g = 0 (else it is refused);
+    ``cache=False`` keeps compiled kernels out of the disk cache.
 
     A scene is immutable (``FrozenError`` on assignment; ``replace`` makes a changed
     copy); what it compiles lazily is kept in its private memo (``jetnh.frozen``).
@@ -72,7 +81,8 @@ class Scene(Frozen):
 
     def __init__(self, system: System, principle: str = "chetaev", params=None, initial=None,
                  t_span=(0.0, 1.0), *, form=None, convention="paper", integrals=None,
-                 runtime_params=(), project=False, consistency_tol=1e-9, cache=True):
+                 runtime_params=(), project=False, consistency_tol=1e-9, cache=True,
+                 complete=False):
         if not isinstance(system, System):
             raise JetnhError(f"a Scene needs a jetnh System, got {type(system).__name__}")
         principle = principles.canonical(principle)     # a name, an alias or a Principle
@@ -105,7 +115,9 @@ class Scene(Frozen):
         self.state_names = self.coordinates + self.velocities + self.multipliers
         self.consistency_tol = arguments.positive(consistency_tol, "consistency_tol")
         self.projected: dict[str, tuple[float, float]] = {}
-        self.initial = FrozenDict(self._initial(initial or {}, project))
+        #: coordinates moved onto the holonomic constraints: name -> (given, completed)
+        self.completed: dict[str, tuple[float, float]] = {}
+        self.initial = FrozenDict(self._initial(initial or {}, project, complete))
         self.y0 = np.array([self.initial[n] for n in self.state_names], dtype=float)
 
     # ------------------------------------------------------------------ input checks
@@ -143,7 +155,7 @@ class Scene(Frozen):
                              "params={...} (or as the system's defaults)")
         return out
 
-    def _initial(self, initial, project) -> dict[str, float]:
+    def _initial(self, initial, project, complete=False) -> dict[str, float]:
         given = {}
         allowed = set(self.state_names) | set(self.dependent_velocities)
         for k, v in initial.items():
@@ -164,6 +176,7 @@ class Scene(Frozen):
                    f" (the {self.principle} state includes the multipliers "
                    f"{', '.join(self.multipliers)})")
                 + "; give them in initial={...}")
+        given = self._on_holonomic(given, complete)
         required = self._dependent_velocity_values(given)
         bad = []
         for name, value in required.items():
@@ -187,6 +200,31 @@ class Scene(Frozen):
             self.projected = {n: (g, v) for n, g, v in bad}
         out = dict(given)
         out.update(required)
+        return out
+
+    def _holonomic_point(self, values, t0=None, params=None) -> dict:
+        """t, the coordinates (from ``values``, by name) and the parameters, keyed by
+        Symbol (for ``mechanics.holonomic``)."""
+        sys_ = self.system
+        J = sys_.J
+        point = {J.t: self.t_span[0] if t0 is None else t0}
+        point.update((q, values[q.name]) for q in J.q)
+        numbers = {**self.params, **(params or {})}
+        point.update((s, numbers[s.name]) for s in sys_.parameters)
+        return point
+
+    def _on_holonomic(self, given, complete) -> dict[str, float]:
+        """``given`` with the coordinates on the holonomic constraints: checked, or
+        completed (``complete``), else a ConstraintError (``mechanics.holonomic.check``)."""
+        if not self.system.holonomic:
+            return given
+        point, changed = holonomic.check(self.system, self._holonomic_point(given),
+                                         complete)
+        if not changed:
+            return given
+        self.completed = changed
+        out = dict(given)
+        out.update((q.name, float(point[q])) for q in self.system.J.q)
         return out
 
     def _dependent_velocity_values(self, given, t0=None, params=None) -> dict[str, float]:
@@ -251,7 +289,7 @@ class Scene(Frozen):
                     t_span=self.t_span, form=self.form, convention=self.convention,
                     integrals=self.integrals, runtime_params=self.runtime_params,
                     consistency_tol=self.consistency_tol, cache=self.cache)
-        unknown = set(changes) - set(args) - {"project"}
+        unknown = set(changes) - set(args) - {"project", "complete"}
         if unknown:
             raise JetnhError(f"Scene.replace: unknown arguments {sorted(unknown)}")
         args.update(changes)
@@ -390,7 +428,7 @@ class Scene(Frozen):
             if t_eval is not None:
                 te = arguments.times(t_eval, t0, t1)
                 mode = AT_T_EVAL
-            ctl = Control(rtol, atol_v, first, mx, budget, 0)
+            ctl = Control(rtol, atol_v, first, mx, budget, 0, *self._projection)
             # radau's steps depend on the steps before (Newton's starting values, the
             # Jacobian kept): no re-taking of one step (numeric.dense)
             dense = None if m.solver is Solver.IMPLICIT else {"rtol": rtol, "atol": atol_v,
@@ -404,7 +442,7 @@ class Scene(Frozen):
             arguments.output_rows(steps, n, save)
             mode = EVERY_STEP if save == "steps" else ENDPOINTS
             te = np.zeros(0)
-            ctl = Control(rtol, atol_v, 0.0, np.inf, budget, steps)
+            ctl = Control(rtol, atol_v, 0.0, np.inf, budget, steps, *self._projection)
             dense = {"mode": mode}
         kern = self.kernels
         ce = None if events is None else self.compile_events(events)
@@ -418,13 +456,15 @@ class Scene(Frozen):
             newton = radau.newton_options(newton_tol, max_newton)
             jac = self.jacobian.address
             tic = time.perf_counter()
-            out = interrupt.call(lambda: solve(kern.rhs_fp, jac, kern.sing_fp, uev, t0, t1,
+            out = interrupt.call(lambda: solve(kern.rhs_fp, jac, kern.sing_fp, uev,
+                                               kern.hol_or_none, t0, t1,
                                                y_init, p, ctl, newton, te, mode, watch, halt),
                                  halt, limit)
         else:
             solve = methods.explicit_solver(m)
             tic = time.perf_counter()
-            out = interrupt.call(lambda: solve(kern.rhs_fp, kern.sing_fp, uev, t0, t1,
+            out = interrupt.call(lambda: solve(kern.rhs_fp, kern.sing_fp, uev, kern.hol_or_none,
+                                               t0, t1,
                                                y_init, p, ctl, te, mode, watch, halt),
                                  halt, limit)
         wall = time.perf_counter() - tic
@@ -452,6 +492,12 @@ class Scene(Frozen):
         if key not in store:
             store[key] = watch_of(kern, None, singular, singular_tol)
         return store[key]
+
+    @property
+    def _projection(self) -> tuple[int, int]:
+        """``(n_hol, n_coord)`` of ``Control``: the holonomic constraints every accepted
+        step is projected onto (0: none) and the number of coordinates."""
+        return len(self.system.holonomic), self.system.J.n
 
     @memo
     def _p(self) -> np.ndarray:
@@ -485,6 +531,7 @@ class Scene(Frozen):
         if not isinstance(y0, dict):
             y, _ = arguments.keyed_or_sequence(y0, self.state_names, self.y0, "y0",
                                                "scene.state_names")
+            self._check_holonomic(y, t0, p)
             return y
         allowed = self.state_names + self.dependent_velocities
         for k in y0:
@@ -496,6 +543,7 @@ class Scene(Frozen):
         y, given = arguments.keyed_or_sequence(
             y0, allowed, [self.initial[nm] for nm in allowed], "y0", "")
         y = np.ascontiguousarray(y[:len(self.state_names)])
+        self._check_holonomic(y, t0, p)
         dep = {nm: v for nm, v in given.items() if nm in self.dependent_velocities}
         if dep:
             vals = dict(zip(self.state_names, y.tolist()))
@@ -507,6 +555,19 @@ class Scene(Frozen):
                         f"y0 gives {nm} = {v!r} but the constraints give {required[nm]!r}; "
                         "omit it (dependent velocities follow from the constraints)")
         return y
+
+    def _check_holonomic(self, y, t0, p):
+        """Refuse a run's initial state off the holonomic constraints."""
+        if not self.system.holonomic:
+            return
+        values = dict(zip(self.state_names, np.asarray(y, dtype=float).tolist()))
+        try:
+            holonomic.check(self.system, self._holonomic_point(
+                values, t0, dict(zip(self.runtime_params, np.asarray(p).tolist()))))
+        except ConstraintError as exc:
+            raise ConstraintError(
+                f"y0: {exc} (a run does not complete y0; use "
+                "scene.replace(initial=..., complete=True))") from None
 
     def compile_events(self, events):
         """The compiled form of ``events`` (``events.CompiledEvents``), or None; kept per

@@ -41,6 +41,8 @@ class Diagnostics:
     events: dict = field(default_factory=dict)        # event name -> occurrences
     singularity: dict | None = None                   # see Trajectory.singularity
     forced: bool = False              # generalized forces work: the energy drifts by design
+    holonomic_residual_max: float = 0.0   # max |g_i| of the holonomic constraints
+    completed: dict = field(default_factory=dict)     # see Scene.completed
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -49,7 +51,9 @@ class Diagnostics:
         lines = [f"{self.method}: {self.stop_reason} ({'success' if self.success else 'failure'})",
                  f"  steps {self.steps} (rejected {self.rejected}), rhs evaluations "
                  f"{self.rhs_evaluations}, {self.wall_time * 1e3:.3g} ms",
-                 f"  constraint residual max {self.residual_max:.3e}",
+                 f"  constraint residual max {self.residual_max:.3e}"
+                 + (f", holonomic (position level) {self.holonomic_residual_max:.3e}"
+                    if self.holonomic_residual_max else ""),
                  f"  energy {self.energy_initial:.12g}, drift {self.energy_drift:.3e} "
                  f"(relative {self.energy_drift_relative:.3e})"
                  + ("; not conserved: the generalized forces work (traj.power)"
@@ -194,8 +198,9 @@ class Trajectory(Frozen):
     @property
     def power(self) -> np.ndarray:
         """P = Q_s qdot^s, the power of the generalized forces (zeros without forces)."""
-        if self.layout.power:
-            return self.aux[:, -1]
+        lay = self.layout
+        if lay.power:
+            return self.aux[:, lay.n_aux - 1 - lay.holonomic]
         if self.scene.system.forced:
             raise JetnhError(f"{self.method} trajectories carry no power column; run the "
                              "scene with an adaptive or rk4 method for traj.power")
@@ -209,6 +214,27 @@ class Trajectory(Frozen):
         k = len(self.layout.dependent_velocities)
         return self.aux[:, k:2 * k]
 
+    @property
+    def holonomic_residual(self) -> np.ndarray:
+        """The holonomic constraints g_i(t, q) at every output row (columns: i; none
+        without holonomic constraints)."""
+        system = self.scene.system
+        m = len(system.holonomic)
+        if not m:
+            return np.zeros((len(self), 0))
+        if not self._own:
+            return self.aux[:, self.layout.n_aux - m:]
+        # the discrete methods carry no aux rows: g evaluated on the coordinates
+        from ..algebra import dag
+
+        J = system.J
+        point = {J.t: self.t, **{q: self.y[:, i] for i, q in enumerate(J.q)}}
+        values = {**self.scene.params, **dict(zip(self.scene.runtime_params,
+                                                   np.asarray(self._p).tolist()))}
+        point.update((s, values[s.name]) for s in system.parameters)
+        cols = dag.evaluate_numpy(list(system.holonomic), point)
+        return np.column_stack([np.broadcast_to(c, self.t.shape) for c in cols])
+
     def integral(self, name) -> np.ndarray:
         return self[name]
 
@@ -216,6 +242,8 @@ class Trajectory(Frozen):
     def diagnostics(self) -> Diagnostics:
         res = self.residual
         rmax = float(np.max(np.abs(res))) if res.size else 0.0
+        hol = self.holonomic_residual
+        hmax = float(np.max(np.abs(hol))) if hol.size else 0.0
         E = self.energy
         e0 = float(E[0]) if E.size else float("nan")
         drift = float(np.max(np.abs(E - e0))) if E.size else 0.0
@@ -232,7 +260,8 @@ class Trajectory(Frozen):
             energy_drift_relative=drift / max(abs(e0), 1e-300) if E.size else 0.0,
             integral_drift=idrift, projected=i["projected"],
             events={n: len(te) for n, te in zip(self.event_names, self.t_events)},
-            singularity=self.singularity, forced=self.scene.system.forced)
+            singularity=self.singularity, forced=self.scene.system.forced,
+            holonomic_residual_max=hmax, completed=dict(self.scene.completed))
 
     # ------------------------------------------------------------------ tables, figures
     def to_dataframe(self, diagnostics=True):

@@ -43,7 +43,9 @@ def run(args, progress) -> int:
               f"  coordinates: {' '.join(q.name for q in J.q)}; dependent: "
               f"{' '.join(q.name for q in system.dependent)}",
               f"  L = {label(system.L)}"]
-    header += [f"  constraint: {label(f)} = 0" for f in system.constraints]
+    header += [f"  constraint: {label(f)} = 0"
+               + (" (holonomic)" if i in system.holonomic_rows else "")
+               for i, f in enumerate(system.given_constraints)]
     header += [f"  force Q_{k} = {v}" for k, v in forces(system).items()]
     header.append(f"  classification: {cls}")
     rows: list = ["the constraint manifold and the embedded Lagrangian"]

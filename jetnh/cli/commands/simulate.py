@@ -41,6 +41,9 @@ def add_parser(sub):
     s.add_argument("--project", action="store_true",
                    help="replace initial dependent velocities that contradict the "
                         "constraints by the values the constraints give")
+    s.add_argument("--complete", action="store_true",
+                   help="solve holonomic constraints g(q) = 0 for the dependent coordinates "
+                        "of an initial configuration off them (else it is refused)")
     s.add_argument("--csv", metavar="PATH", help="write t and every column to a CSV file")
     s.add_argument("--plot", metavar="PATH", help="save a plot (png, pdf, svg) of the run")
     s.add_argument("--format", choices=("text", "json"), default="text")
@@ -98,9 +101,11 @@ def run(args, progress) -> int:
     try:
         scene = Scene(system, principle, params=params, initial=initial,
                       t_span=(t0, float(t1)), convention=convention, integrals=integrals,
-                      project=args.project)
+                      project=args.project, complete=args.complete)
     except JetnhError as exc:
-        msg = str(exc).replace("pass project=True", "pass --project")
+        msg = (str(exc).replace("pass project=True", "pass --project")
+               .replace("pass complete=True", "pass --complete")
+               .replace(" (complete=[...] names other coordinates)", ""))
         raise type(exc)(msg) from None
     with progress.step(f"deriving and compiling the {principle} kernels "
                        "(cached for later runs)"):

@@ -42,6 +42,7 @@ from ._common import (
     AT_T_EVAL, ENDPOINTS, ENSEMBLE_OUT, EVERY_STEP, FINISHED, MAX_FACTOR, MAX_STEPS,
     MIN_FACTOR, NONFINITE, RHS, SAFETY, SINGULAR, STOPPED, TOO_SMALL_STEP, all_finite,
     collect, compiled, copy_into, f8, i8, inline, jit, min_step, start, store)
+from .projection import project, workspace as projection_workspace
 from ._events import (any_user_active, dense_eval, hermite_defect, locate, most_watched,
                       sing_dip, sing_init, sing_violated, sing_watch)
 
@@ -53,8 +54,11 @@ KINK = 0.25
 
 #: what every solve returns
 Result = namedtuple("Result", "status ts ys n_out stats t y ev_t ev_i ev_y n_ev sing_index")
-#: the step control of one run: tolerances and limits (``n_steps`` > 0: fixed steps)
-Control = namedtuple("Control", "rtol atol first_step max_step max_steps n_steps")
+#: the step control of one run: tolerances and limits (``n_steps`` > 0: fixed steps);
+#: ``n_hol`` > 0: project every accepted step onto the ``n_hol`` holonomic constraints of
+#: the first ``n_coord`` states (``projection``)
+Control = namedtuple("Control", "rtol atol first_step max_step max_steps n_steps n_hol n_coord",
+                     defaults=(0, 0))
 #: what to watch: singularity indicators (``n_sing`` of them, threshold ``sing_tol``)
 #: and user events (direction, terminal count)
 Watch = namedtuple("Watch", "n_sing sing_tol ev_dir ev_max")
@@ -288,12 +292,15 @@ def output(tab, fixed, rhs, p, t, h, t_new, y, y_new, K, F, ytmp, y_stop, stop, 
     return ts, ys, n_out, j_eval
 
 
-def _solve(rhs, sing, uev, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
+def _solve(rhs, sing, uev, hol, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
     """Integrate y' = rhs(t, y, p) from t0 to t_end with the method ``TAB``
     (``ExplicitRK.arrays``; it and ``ADAPTIVE`` are compile-time constants, so the path
     of the other step kind is not compiled: ``_specialised``) under the step control
     ``ctl`` (``Control``), watching ``watch`` (``Watch``: ``sing`` computes the ``n_sing``
-    singularity indicators, ``uev`` the user event functions; see ``_events``).  ``mode``:
+    singularity indicators, ``uev`` the user event functions; see ``_events``); ``hol``
+    the holonomic constraints an accepted step is projected onto when ``ctl.n_hol`` > 0
+    (``projection``; the step's last stage is then evaluated again at the projected
+    state).  ``mode``:
     EVERY_STEP, AT_T_EVAL or ENDPOINTS.  The loop stops with status STOPPED before a step
     when ``halt[0]`` is nonzero.
 
@@ -314,6 +321,8 @@ def _solve(rhs, sing, uev, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
     ns, kind, _, error_order = SHAPE
     rtol, atol, max_steps, n_steps = ctl.rtol, ctl.atol, ctl.max_steps, ctl.n_steps
     max_step = ctl.max_step
+    n_hol, n_coord = ctl.n_hol, ctl.n_coord
+    hw, hA, hmu = projection_workspace(n_hol, n_coord)
     n_sing, sing_tol, ev_dir, ev_max = watch
     watching = n_sing > 0 or ev_dir.shape[0] > 0
     n = y0.shape[0]
@@ -422,6 +431,11 @@ def _solve(rhs, sing, uev, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
                 break
             t_new = t0 + (step + 1) * h_fixed
             h = t_new - t
+        if n_hol > 0:
+            project(hol, n_hol, n_coord, t_new, y_new, p, hw, hA, hmu)
+            if ADAPTIVE:
+                rhs(t_new, y_new, p, K[ns])
+                stats[2] += 1
         step += 1
         stats[0] += 1
         stop = 0
@@ -452,9 +466,9 @@ def _solve(rhs, sing, uev, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
 #: the method a specialised loop runs and that loop (``_specialised``; unbound here)
 TAB = SHAPE = ADAPTIVE = run = None
 _SPECIALISED = {}
-CONTROL = numba.typeof(Control(1.0, np.zeros(1), 0.0, 1.0, 1, 0))
+CONTROL = numba.typeof(Control(1.0, np.zeros(1), 0.0, 1.0, 1, 0, 0, 0))
 WATCH = numba.typeof(Watch(0, 0.0, np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64)))
-ARGS = (RHS, RHS, RHS, f8, f8, f8[::1], f8[::1], CONTROL, f8[::1], i8, WATCH,
+ARGS = (RHS, RHS, RHS, RHS, f8, f8, f8[::1], f8[::1], CONTROL, f8[::1], i8, WATCH,
         i8[::1])
 
 
@@ -477,7 +491,7 @@ def _specialised(method):
 
 
 def solver(method):
-    """The compiled ``solve(rhs, sing, uev, t0, t_end, y0, p, ctl, t_eval, mode, watch,
+    """The compiled ``solve(rhs, sing, uev, hol, t0, t_end, y0, p, ctl, t_eval, mode, watch,
     halt)`` of the explicit method ``method`` (``_solve`` over its tableau)."""
     return _specialised(method)["run"]
 
@@ -485,25 +499,25 @@ def solver(method):
 # ---------------------------------------------------------------------- ensembles
 # Two copies of one driver (numba's cache cannot hold a function compiled both with and
 # without ``parallel``): run r of the ensemble is the loop on Y0[r], P[r].
-def _ensemble_parallel(rhs, sing, uev, t0, t_end, Y0, P, ctl, t_eval, mode, watch, halt,
+def _ensemble_parallel(rhs, sing, uev, hol, t0, t_end, Y0, P, ctl, t_eval, mode, watch, halt,
                        OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
     for r in numba.prange(Y0.shape[0]):
-        res = run(rhs, sing, uev, t0, t_end, Y0[r], P[r], ctl, t_eval, mode, watch, halt)
+        res = run(rhs, sing, uev, hol, t0, t_end, Y0[r], P[r], ctl, t_eval, mode, watch, halt)
         collect(r, res, mode, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)
 
 
-def _ensemble_serial(rhs, sing, uev, t0, t_end, Y0, P, ctl, t_eval, mode, watch, halt,
+def _ensemble_serial(rhs, sing, uev, hol, t0, t_end, Y0, P, ctl, t_eval, mode, watch, halt,
                      OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
     for r in range(Y0.shape[0]):
-        res = run(rhs, sing, uev, t0, t_end, Y0[r], P[r], ctl, t_eval, mode, watch, halt)
+        res = run(rhs, sing, uev, hol, t0, t_end, Y0[r], P[r], ctl, t_eval, mode, watch, halt)
         collect(r, res, mode, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)
 
 
-ENSEMBLE_ARGS = ARGS[:5] + (f8[:, ::1], f8[:, ::1]) + ARGS[7:] + ENSEMBLE_OUT
+ENSEMBLE_ARGS = ARGS[:6] + (f8[:, ::1], f8[:, ::1]) + ARGS[8:] + ENSEMBLE_OUT
 
 
 def ensemble_solver(method, parallel=True):
-    """The compiled ensemble driver ``drive(rhs, sing, uev, t0, t_end, Y0, P, ctl, t_eval,
+    """The compiled ensemble driver ``drive(rhs, sing, uev, hol, t0, t_end, Y0, P, ctl, t_eval,
     mode, watch, halt, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)`` of the method
     ``method``: numba threads over the runs (``parallel``) or one loop (for a Python
     thread pool)."""

@@ -41,6 +41,7 @@ from ._common import (
     SINGULAR, STOPPED, TOO_SMALL_STEP, all_finite, collect, compiled, copy_into, f8, i8,
     jit, min_step, start, store)
 from ._events import dense_eval, sing_init
+from .projection import project, workspace as projection_workspace
 from .loop import (CONTROL, EMBEDDED, GIVEN, WATCH, Result, after_step, no_events, output,
                    workspace)
 
@@ -254,11 +255,13 @@ def _dense(y, Z, F):
         F[1, i] = g1 - c1 * F[2, i]
 
 
-def _solve(rhs, jac, sing, uev, t0, t_end, y0, p, ctl, newton, t_eval, mode, watch, halt):
+def _solve(rhs, jac, sing, uev, hol, t0, t_end, y0, p, ctl, newton, t_eval, mode, watch,
+           halt):
     """Integrate y' = rhs(t, y, p) from t0 to t_end with Radau IIA (5); ``jac(t, y, p, J)``
     its Jacobian; the other arguments and the ``Result`` as for ``loop._solve``
     (``newton``: ``Newton``)."""
-    rtol, atol, first_step, max_step, max_steps, n_steps = ctl
+    rtol, atol, first_step, max_step, max_steps, n_steps, n_hol, n_coord = ctl
+    hw, hA, hmu = projection_workspace(n_hol, n_coord)
     n_sing, sing_tol, ev_dir, ev_max = watch
     tol = newton[0]
     max_iter = newton[1]
@@ -402,6 +405,8 @@ def _solve(rhs, jac, sing, uev, t0, t_end, y0, p, ctl, newton, t_eval, mode, wat
             break
         first = False
         stats[0] += 1
+        if n_hol > 0:
+            project(hol, n_hol, n_coord, t_new, y_new, p, hw, hA, hmu)
         _dense(y, Z, F)
         rhs(t_new, y_new, p, f1)
         stats[2] += 1
@@ -441,7 +446,7 @@ def _solve(rhs, jac, sing, uev, t0, t_end, y0, p, ctl, newton, t_eval, mode, wat
     return Result(status, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev, sing_index)
 
 
-ARGS = (RHS, JAC, RHS, RHS, f8, f8, f8[::1], f8[::1], CONTROL, NEWTON, f8[::1], i8, WATCH,
+ARGS = (RHS, JAC, RHS, RHS, RHS, f8, f8, f8[::1], f8[::1], CONTROL, NEWTON, f8[::1], i8, WATCH,
         i8[::1])
 
 
@@ -450,28 +455,28 @@ run = None
 
 
 def solver():
-    """The compiled ``solve(rhs, jac, sing, uev, t0, t_end, y0, p, ctl, newton, t_eval,
+    """The compiled ``solve(rhs, jac, sing, uev, hol, t0, t_end, y0, p, ctl, newton, t_eval,
     mode, watch, halt)``."""
     return compiled(_solve, ARGS)
 
 
-def _ensemble_parallel(rhs, jac, sing, uev, t0, t_end, Y0, P, ctl, newton, t_eval, mode,
-                       watch, halt, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
+def _ensemble_parallel(rhs, jac, sing, uev, hol, t0, t_end, Y0, P, ctl, newton, t_eval,
+                       mode, watch, halt, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
     for r in numba.prange(Y0.shape[0]):
-        res = run(rhs, jac, sing, uev, t0, t_end, Y0[r], P[r], ctl, newton, t_eval, mode, watch,
-                  halt)
+        res = run(rhs, jac, sing, uev, hol, t0, t_end, Y0[r], P[r], ctl, newton, t_eval, mode,
+                  watch, halt)
         collect(r, res, mode, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)
 
 
-def _ensemble_serial(rhs, jac, sing, uev, t0, t_end, Y0, P, ctl, newton, t_eval, mode,
-                     watch, halt, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
+def _ensemble_serial(rhs, jac, sing, uev, hol, t0, t_end, Y0, P, ctl, newton, t_eval,
+                     mode, watch, halt, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
     for r in range(Y0.shape[0]):
-        res = run(rhs, jac, sing, uev, t0, t_end, Y0[r], P[r], ctl, newton, t_eval, mode, watch,
-                  halt)
+        res = run(rhs, jac, sing, uev, hol, t0, t_end, Y0[r], P[r], ctl, newton, t_eval, mode,
+                  watch, halt)
         collect(r, res, mode, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)
 
 
-ENSEMBLE_ARGS = ARGS[:6] + (f8[:, ::1], f8[:, ::1]) + ARGS[8:] + ENSEMBLE_OUT
+ENSEMBLE_ARGS = ARGS[:7] + (f8[:, ::1], f8[:, ::1]) + ARGS[9:] + ENSEMBLE_OUT
 
 
 def ensemble_solver(parallel=True):
