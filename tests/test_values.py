@@ -112,3 +112,16 @@ def test_compiled_kernels_have_no_dead_integrator():
 
     assert not hasattr(CompiledKernels, "integrator")
     assert callable(CompiledKernels.implicit)
+
+
+def test_a_holonomic_constraint_and_its_derivative_are_different_systems():
+    J = jn.JetSpace(["x", "y"])
+    x, y = J.q
+    xd, yd = J.qd
+    L = (xd**2 + yd**2) / 2 - y
+    g = jn.System(J, L, [x**2 + y**2 - 1], dependent=["y"])
+    dg = jn.System(J, L, [2 * x * xd + 2 * y * yd], dependent=["y"])
+    assert g.constraints == dg.constraints and g.holonomic and not dg.holonomic
+    assert g != dg and g == jn.System(J, L, [x**2 + y**2 - 1], dependent=["y"])
+    assert g.replace(name="circle").holonomic == g.holonomic
+    assert g.with_split(["x"]).given_constraints == g.given_constraints
