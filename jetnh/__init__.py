@@ -14,9 +14,9 @@ about an operating point (a ``Linearization``: A, eigenvalues, stability) under 
 from .mechanics.system import System
 from .mechanics.equations import Equations
 from .mechanics.equivalence import compare
-from .errors import (ArgumentError, ConstraintError, IntegrationError, JetnhError,
-                     JetnhWarning, JetSpaceError, LagrangianError, LinearizationError,
-                     ModelFileError, PrincipleError)
+from .errors import (ArgumentError, ConnectError, ConstraintError, IntegrationError,
+                     JetnhError, JetnhWarning, JetSpaceError, LagrangianError,
+                     LinearizationError, ModelFileError, PrincipleError)
 from .mechanics.integrals import conserved_quantities
 from .geometry.jet import JetSpace
 from .mechanics.sympy_bridge import from_mechanics
@@ -30,7 +30,8 @@ __version__ = "0.1.0"
 
 __all__ = ["JetSpace", "System", "Equations", "PRINCIPLES", "Principle", "compare", "conserved_quantities",
            "noether_symmetries", "lie_symmetries", "is_noether", "NoetherSymmetry",
-           "LieSymmetry", "Scene", "Trajectory", "linearize", "Linearization",
+           "LieSymmetry", "Scene", "Trajectory", "linearize", "Linearization", "connect",
+           "Connection", "ConnectError",
            "Diagnostics", "Event", "Ensemble", "sweep", "from_mechanics", "JetnhError",
            "JetSpaceError", "ConstraintError", "LagrangianError", "PrincipleError",
            "ModelFileError", "IntegrationError", "ArgumentError", "JetnhWarning",
@@ -47,4 +48,8 @@ def __getattr__(name):
         from .numeric import linearize
 
         return getattr(linearize, name)
+    if name in ("connect", "Connection"):
+        from .numeric import connect as module
+
+        return getattr(module, name)
     raise AttributeError(f"module 'jetnh' has no attribute {name!r}")

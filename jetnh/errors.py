@@ -37,6 +37,15 @@ class IntegrationError(JetnhError, RuntimeError):
     """A numerical integration that cannot go on."""
 
 
+class ConnectError(JetnhError, RuntimeError):
+    """``connect`` found no motion joining two configurations; ``best`` is the closest
+    ``Connection`` it reached (or None), with its residual."""
+
+    def __init__(self, message, best=None):
+        super().__init__(message)
+        self.best = best
+
+
 class FrozenError(JetnhError, AttributeError):
     """An assignment to an immutable object (a Scene, a Trajectory)."""
 

@@ -152,7 +152,7 @@ def _key(k) -> str:
     name = key_name(k)
     if name is not None:
         return name
-    raise JetnhError(f"grid keys are parameter or state names or Symbols, not "
+    raise JetnhError(f"grid keys are parameter or state names, Symbols or dynamicsymbols, not "
                      f"{type(k).__name__} ({k!r})")
 
 

@@ -65,3 +65,32 @@ def test_usage_errors(args, words, capsys):
 def test_help(capsys):
     code, out, _ = inproc(capsys, "linearize", "--help")
     assert code == 0 and "usage: jetnh linearize" in out and "--param" in out
+
+
+PENDULUM_TOML = """
+name = "pendulum in x, y"
+coordinates = ["x", "y"]
+lagrangian = "(x_t**2 + y_t**2)/2 - G*y"
+constraints = ["x**2 + y**2 - l**2"]
+[parameters]
+G = 9.81
+l = 1.0
+"""
+
+
+def test_holonomic_constraint(capsys, tmp_path):
+    """A model file with g = x^2 + y^2 - l^2: y follows from g = 0 (no zero eigenvalue);
+    a point off g = 0 is refused with the value that would put it there."""
+    path = tmp_path / "pendulum.toml"
+    path.write_text(PENDULUM_TOML)
+    code, out, err = inproc(capsys, "linearize", str(path), "-q", "--at", "x=0,y=-1,x_t=0")
+    assert code == 0, err
+    assert "state:      x, x_t (from g = 0: y)" in out
+    code, out, _ = inproc(capsys, "linearize", str(path), "-q", "--at", "x=0,y=-1,x_t=0",
+                          "--format", "json")
+    data = json.loads(out)
+    assert data["eliminated"] == ["y"]
+    assert np.allclose(sorted(im for _, im in data["eigenvalues"]),
+                       [-np.sqrt(9.81), np.sqrt(9.81)], atol=1e-12)
+    code, _, err = inproc(capsys, "linearize", str(path), "-q", "--at", "x=0.1,y=-1,x_t=0")
+    assert code != 0 and "off the holonomic constraints" in err and "y = -0.99498" in err

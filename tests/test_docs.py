@@ -52,9 +52,11 @@ def test_gallery_and_howtos_are_executed_notebooks(section):
 def test_the_gallery_has_the_promised_examples():
     listed = toctree_entries(DOCS / "gallery" / "index.md")
     assert {"gallery/rolling_disk", "gallery/appell_hamel", "gallery/heisenberg",
-            "gallery/sweep_map", "gallery/from_mechanics", "gallery/conserved"} <= listed
+            "gallery/sweep_map", "gallery/from_mechanics", "gallery/from_kane",
+            "gallery/conserved"} <= listed
     text = {p.stem: p.read_text(encoding="utf-8") for p in (DOCS / "gallery").glob("*.md")}
     assert "jn.from_mechanics(" in text["from_mechanics"]
+    assert all(w in text["from_kane"] for w in ("KanesMethod(", "add_joints(", "jn.compare("))
     assert "c.singular" in text["appell_hamel"]
     assert all(p in text["rolling_disk"] for p in ("vakonomic", "holder", "suslov"))
     assert "jn.conserved_quantities(" in text["conserved"]

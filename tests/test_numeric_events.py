@@ -133,7 +133,7 @@ def knife_y():
 @pytest.mark.parametrize("method", ["dop853", "dopri5", "rk4"])
 def test_knife_edge_split_singular(knife_y, method):
     kw = dict(n_steps=250) if method == "rk4" else dict(rtol=1e-10, atol=1e-12)
-    traj = knife_y.run(method=method, **kw)
+    traj = knife_y.run(method=method, split="fixed", **kw)     # keep the split
     assert traj.status == SINGULAR
     assert traj.singularity["indicator"] == "cos(theta)"
     assert traj.singularity["kind"] == "split"
@@ -142,6 +142,10 @@ def test_knife_edge_split_singular(knife_y, method):
     assert abs(traj.t[-1] - t_hit) < 1e-9
     assert "dependent=['x']" in traj.stop_reason
     assert "split is singular" in traj.stop_reason
+    # by default the run goes on in the split x (numeric.atlas), switching before
+    on = knife_y.run(method=method, **kw)
+    assert on.status == FINISHED and on.switches[0]["to"] == ["x"]
+    assert on.switches[0]["t"] < t_hit
 
 
 def test_knife_edge_other_split_passes(knife_y):

@@ -30,10 +30,23 @@ _LATEX_DOTS = {1: r"\dot", 2: r"\ddot", 3: r"\dddot", 4: r"\ddddot"}
 
 
 def key_name(key) -> str | None:
-    """The name a user means by ``key`` (a Symbol or a str), else None."""
+    """The name a user means by ``key``, else None: a Symbol or a str, or a
+    sympy.physics.mechanics dynamicsymbol ``x(t)`` ("x") or its derivative
+    ``x(t).diff(t, k)`` ("x_t...t", the jet coordinate's name)."""
     if isinstance(key, sp.Symbol):
         return key.name
-    return key if isinstance(key, str) else None
+    if isinstance(key, str):
+        return key
+    from sympy.physics.vector import dynamicsymbols
+
+    t = dynamicsymbols._t
+    order = 0
+    if isinstance(key, sp.Derivative) and all(v == t for v, _ in key.variable_count):
+        order = sum(c for _, c in key.variable_count)
+        key = key.expr
+    if isinstance(key, AppliedUndef) and key.args == (t,):
+        return key.func.__name__ + ("_" + "t" * order if order else "")
+    return None
 
 
 def _names(spec) -> tuple[str, ...]:

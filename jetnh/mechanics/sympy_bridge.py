@@ -1,4 +1,5 @@
-"""The bridge to sympy.physics.mechanics: ``LagrangesMethod`` <-> ``System``.
+"""The bridge to sympy.physics.mechanics: ``LagrangesMethod`` <-> ``System`` (Kane
+models, a ``KanesMethod`` or a mechanics ``System``, come in through ``kane_bridge``).
 
 ``from_mechanics(lm)`` reads a ``LagrangesMethod``: its coordinates ``lm.q``
 (dynamicsymbols) become a ``JetSpace`` of the same names, its Lagrangian and its
@@ -21,6 +22,7 @@ from __future__ import annotations
 
 import sympy as sp
 
+from . import kane_bridge
 from .system import System
 from ..errors import JetnhError, JetSpaceError
 from ..geometry.jet import JetSpace
@@ -91,12 +93,25 @@ def generalized_forces(lm, J: JetSpace) -> tuple:
 
 def from_mechanics(lm, dependent=None, *, branch=None, defaults=None, name="") -> System:
     """A jetnh ``System`` from a sympy.physics.mechanics ``LagrangesMethod`` (see the
-    module docstring); ``dependent``, ``branch``, ``defaults``, ``name`` as ``System``."""
-    from sympy.physics.mechanics import LagrangesMethod
+    module docstring), ``KanesMethod`` or mechanics ``System`` (``kane_bridge``: its
+    ``speeds`` attribute is then the map between the model's generalized speeds and the
+    velocities, ``kane_bridge.Speeds``); ``dependent``, ``branch``, ``defaults``, ``name``
+    as ``System``.  A mechanics System whose equations were formed with LagrangesMethod
+    is read as that LagrangesMethod."""
+    from sympy.physics.mechanics import KanesMethod, LagrangesMethod
+    from sympy.physics.mechanics import System as MechanicsSystem
 
+    if isinstance(lm, MechanicsSystem) and isinstance(lm.eom_method, LagrangesMethod):
+        lm = lm.eom_method
+    if isinstance(lm, (KanesMethod, MechanicsSystem)):
+        J, L, cons, forces, speeds = kane_bridge.read(lm)
+        return System(J, L, cons, dependent=dependent, branch=branch, defaults=defaults,
+                      name=name, forces=forces, speeds=speeds)
     if not isinstance(lm, LagrangesMethod):
-        raise JetnhError(f"from_mechanics takes a sympy.physics.mechanics LagrangesMethod, "
-                         f"got {type(lm).__name__}")
+        raise JetnhError(
+            f"from_mechanics takes a sympy.physics.mechanics LagrangesMethod, KanesMethod or "
+            f"System, got {type(lm).__name__}; for a Lagrangian and constraints of your own "
+            "build a jetnh System(J, L, constraints) directly")
     J = _coordinates(lm)
     L = _convert(J, lm._L[0], "the Lagrangian")
     forces = {q: Q for q, Q in zip(J.q, generalized_forces(lm, J)) if Q != 0}

@@ -87,7 +87,7 @@ class System(Frozen):
 
     def __init__(self, J: JetSpace, L, constraints=(), dependent=None, branch: int | None = None,
                  defaults=None, name: str = "", forces=None, dissipation=None, *,
-                 check_branch: bool = True):
+                 check_branch: bool = True, speeds=None):
         if not isinstance(J, JetSpace):
             raise JetSpaceError(f"the first argument must be a JetSpace, got {type(J).__name__}")
         self.J = J
@@ -118,6 +118,9 @@ class System(Frozen):
             raise ConstraintError(f"name must be a str, got {type(name).__name__}")
         self.name = name or ""
         self.defaults = FrozenDict(self._defaults({} if defaults is None else defaults))
+        #: for a System read from a Kane model (``from_mechanics``): the map between its
+        #: generalized speeds and the velocities (``jetnh.mechanics.kane_bridge.Speeds``)
+        self.speeds = speeds
         if self._branch is not None and check_branch:
             self.phi                                    # noqa: B018 -- check the branch now
 
@@ -578,11 +581,12 @@ class System(Frozen):
     def replace(self, **changes) -> "System":
         """A new System from this one's inputs with ``changes`` (any of ``J``, ``L``,
         ``constraints``, ``dependent``, ``branch``, ``defaults``, ``name``, ``forces``,
-        ``dissipation``), checked as any new System."""
+        ``dissipation``, ``speeds``), checked as any new System."""
         inputs_ = dict(J=self.J, L=self.L, constraints=self.given_constraints,
                        dependent=self.dependent, branch=self._branch, defaults=self.defaults,
                        name=self.name, forces=self.forces,
-                       dissipation=self.dissipation if self.dissipation != 0 else None)
+                       dissipation=self.dissipation if self.dissipation != 0 else None,
+                       speeds=self.speeds)
         unknown = sorted(set(changes) - set(inputs_))
         if unknown:
             raise ConstraintError(f"System.replace has no input {', '.join(unknown)}; the "

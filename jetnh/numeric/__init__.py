@@ -12,6 +12,9 @@ on disk keyed by the symbolic input (``cache``), and integrates in compiled loop
   located on the dense output, with ``status`` SINGULAR and a ``stop_reason`` that names
   the indicator, the time and the way out; dla and dvi check the indicators of the
   constraints and the Lagrangian as written at their nodes.
+- Charts (``atlas``): the singular set of the split is no stop for dop853, dopri5, rk4
+  and radau: at the edge of the split's chart the run goes on in another regular split,
+  with the state mapped, and is reported as one trajectory with ``traj.switches``.
 - Precision (``precision``): 50-digit mpmath values of kernel expressions with a rounding
   error bound, against which ``benchmarks/stress_mpmath.py`` checks the compiled kernels.
 - User events (``events``): ``run(events=[expr, callable, Event(...)])`` with scipy's

@@ -9,9 +9,10 @@ types the compiled loops declare (contiguous float64 arrays, Python floats and i
   integers are integers (``100.0`` is accepted, ``100.5``, ``True`` and ``nan`` are not);
 - tolerances: ``rtol`` 0 or at least 100 eps (finite), ``atol`` >= 0, a scalar or one value per
   state, and every state with a nonzero error scale (``rtol > 0`` or its ``atol > 0``);
-- the state ``y0`` and the run-time parameters ``params``: a dict keyed by Symbol or name
-  (missing entries keep the scene's values) or a sequence in the documented order
-  (``scene.state_names``, ``scene.runtime_params``) of exactly the right length;
+- the state ``y0`` and the run-time parameters ``params``: a dict keyed by Symbol, name or
+  dynamicsymbol (``jetnh.geometry.jet.key_name``; missing entries keep the scene's
+  values) or a sequence in the documented order (``scene.state_names``,
+  ``scene.runtime_params``) of exactly the right length;
 - budgets: ``max_steps`` bounds the steps of every method (the fixed-step methods refuse
   ``n_steps`` beyond it up front), the stored rows fit in ``MAX_OUTPUT_BYTES``, and
   ``timeout`` (seconds of wall-clock time) stops a run that takes too long.
@@ -43,7 +44,8 @@ def name_of(key, what) -> str:
     name = key_name(key)
     if name is not None:
         return name
-    raise ArgumentError(f"{what} must be keyed by Symbol or by name, not {type(key).__name__} "
+    raise ArgumentError(f"{what} must be keyed by Symbol, by name or by dynamicsymbol x(t) "
+                        f"(or x(t).diff()), not {type(key).__name__} "
                      f"({key!r})")
 
 
@@ -193,7 +195,7 @@ def timeout(value) -> float | None:
 
 
 def keyed_or_sequence(value, names, defaults, what, order_name) -> tuple[np.ndarray, dict]:
-    """Values for ``names``: a dict keyed by Symbol or name (missing keys keep
+    """Values for ``names``: a dict keyed by Symbol, name or dynamicsymbol (missing keys keep
     ``defaults``; returns the given ones too) or a sequence in the order ``names``."""
     if isinstance(value, dict):
         given = {}

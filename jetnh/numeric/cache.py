@@ -628,12 +628,13 @@ class CompiledKernels:
                 setattr(self, name[:-2] + "_fp", FunctionAddress(getattr(self, name)))
         lay = layout
         n_y, n_p = lay.n_state, len(lay.runtime_params)
-        sizes = {"rhs": lay.n_state, "aux": lay.n_aux, "sing": len(lay.indicators),
+        sizes = {"rhs": lay.n_rhs, "aux": lay.n_aux, "sing": len(lay.indicators),
                  "hol": lay.holonomic * (1 + len(lay.coordinates))}
         for name, n_out in sizes.items():     # rhs, aux, sing from Python
             if hasattr(self, f"{name}_fp") and not hasattr(self, name):
                 setattr(self, name, calls.Kernel(getattr(self, f"{name}_fp"),
-                                                 (n_y, n_p, n_out)))
+                                                 (n_out if name == "rhs" else n_y, n_p,
+                                                  n_out)))
         #: the holonomic kernel for the compiled loops (``methods.projection``); a stand-in
         #: of the same type, never called, for systems without holonomic constraints
         self.hol_or_none = getattr(self, "hol_fp", getattr(self, "sing_fp", None))
@@ -641,7 +642,8 @@ class CompiledKernels:
             self.aux_rows = calls.Rows(self.aux_fp, (n_y, n_p, lay.n_aux))
         if hasattr(self, "jac_c"):           # the generated Jacobian (radau)
             self.jac_fp = calls.jacobian_address(self.jac_c)
-            self.jac = calls.Kernel(self.jac_fp, (n_y, n_p, n_y), jacobian=True)
+            self.jac = calls.Kernel(self.jac_fp, (lay.n_rhs, n_p, lay.n_rhs),
+                                    jacobian=True)
 
     def implicit(self):
         """The compiled loop of radau (``methods.radau``), as its entry point."""

@@ -473,7 +473,8 @@ def multiplier_names(system, principle) -> tuple[str, ...]:
 
 
 def generate(system, principle, params: dict, runtime_params=(), integrals=None,
-             form=None, convention="paper", key="", jacobian=False) -> KernelSource:
+             form=None, convention="paper", key="", jacobian=False,
+             sensitivities=False) -> KernelSource:
     """Derive the equations of ``principle`` and write the kernels' source.
 
     ``params``: parameter name -> float, compiled in as constants.
@@ -481,6 +482,9 @@ def generate(system, principle, params: dict, runtime_params=(), integrals=None,
     ``integrals``: name -> sympy expression in t, q, qdot (multipliers allowed).
     ``jacobian``: also ``jac(t, y, p, J)`` and its C callback ``jac_c`` (J[i, j] =
     d rhs_i / d y_j, an n_state x n_state C-contiguous array; ``_jacobian_function``).
+    ``sensitivities``: ``rhs_c`` and ``jac_c`` are those of the state augmented by its
+    sensitivities to the initial state and the runtime parameters
+    (``_sensitivity_functions``; ``Layout.sensitivity_columns``).
     """
     import time
 
@@ -537,10 +541,15 @@ def generate(system, principle, params: dict, runtime_params=(), integrals=None,
         indicator_kinds=tuple(kind for kind, _ in indicators),
         power=system.forced,
         holonomic=len(hol),
+        sensitivity_columns=(len(J.q) + len(ind_vel) + len(lams) + len(runtime_params)
+                             if sensitivities else 0),
     )
     src = [HEADER.format(version=CODEGEN_VERSION, key=key, jac_sig=JAC_SIGNATURE)]
-    src.append(_function("rhs", layout, phi_exprs, rhs_exprs))
-    if jacobian:
+    if sensitivities:
+        src.append(_sensitivity_functions(layout, phi_exprs, rhs_exprs))
+    else:
+        src.append(_function("rhs", layout, phi_exprs, rhs_exprs))
+    if jacobian and not sensitivities:
         src.append(_jacobian_function(layout, phi_exprs, rhs_exprs))
     src.append(_function("aux", layout, phi_exprs, aux_exprs))
     src.append(_function("sing", layout, phi_exprs, sing_exprs))
@@ -682,6 +691,54 @@ def _jacobian_function(layout: Layout, phi_exprs, rhs_exprs) -> str:
     return "\n".join(lines + ["    " + b for b in body]) + "\n"
 
 
+def _sensitivity_functions(layout: Layout, phi_exprs, rhs_exprs) -> str:
+    """``rhs_c`` of the state augmented by its sensitivities (``_sensitivity_program``)
+    and ``jac_c``, radau's block-diagonal Jacobian of it
+    (``_sensitivity_jacobian_program``); for heads the straight-line program lacks, the
+    same from the printed nodes (``Emitter.jacobian``, the runtime parameters as the
+    columns after the states)."""
+    n, n_p = layout.n_state, len(layout.runtime_params)
+    m, size = n + n_p, layout.n_rhs
+    rhs = ["@numba.cfunc(_SIG, **_CB)", "def rhs_c(t, y, p, out):"]
+    jac = ["@numba.cfunc(_JAC_SIG, **_CB)", "def jac_c(t, y, p, J):"]
+    em, phi = _emitter(phi_exprs, rhs_exprs)
+    try:
+        ops = program(em, phi, list(enumerate(rhs_exprs)))
+        sens, block = _sensitivity_program(ops, n, n_p), _sensitivity_jacobian_program(
+            ops, n, n_p)
+    except _Unsupported:
+        pass
+    else:
+        return (f"_P_sens = {sens!r}\n_B_sens = straight_line(_P_sens)\n"
+                f"_P_jac = {block!r}\n_B_jac = straight_line(_P_jac)\n\n\n"
+                + "\n".join(rhs) + "\n    _B_sens(t, y, p, out)\n\n\n"
+                + "\n".join(jac) + "\n    J[:, :] = 0.0\n    _B_jac(t, y, p, J)\n")
+    em, phi = _emitter(phi_exprs, rhs_exprs, inline=0)
+    body = _loads(layout) + em.emit(phi)
+    body += em.emit([(f"out[{i}]", e) for i, e in enumerate(rhs_exprs)])
+    body.append(f"J = np.zeros(({n}, {m}))")
+    states = {sp.Symbol(f"s{i}"): i for i in range(n)}
+    states.update({sp.Symbol(f"p{i}"): n + i for i in range(n_p)})
+    body += em.jacobian(list(enumerate(rhs_exprs)), states,
+                        {sp.Symbol(target): e for target, e in phi})
+    body += [f"for i in range({n}):", f"    for k in range({m}):",
+             "        acc = J[i, k] if k >= %d else 0.0" % n,
+             f"        for j in range({n}):",
+             f"            acc += J[i, j] * y[{n} + j * {m} + k]",
+             f"        out[{n} + i * {m} + k] = acc"]
+    blocks = ["J[:, :] = 0.0", f"for i in range({n}):", f"    for j in range({n}):",
+              f"        J[i, j] = A[i, j]", f"        for k in range({m}):",
+              f"            J[{n} + i * {m} + k, {n} + j * {m} + k] = A[i, j]"]
+    return ("\n".join(rhs + ["    " + b for b in body]) + "\n\n\n"
+            + "\n".join(jac + ["    A = np.empty((%d, %d))" % (n, n),
+                                "    _jac_base(t, y, p, A)"]
+                         + ["    " + b for b in blocks]) + "\n\n\n"
+            + _jacobian_function(layout, phi_exprs, rhs_exprs).replace(
+                "@numba.cfunc(_JAC_SIG, **_CB)\ndef jac_c(", "@numba.njit(**_JIT)\n"
+                "def _jac_base(").replace("_P_jac", "_P_jac_base").replace(
+                "_B_jac", "_B_jac_base"))
+
+
 def _cfunc(name, sig="_SIG") -> str:
     """``<name>_c``: the kernel ``name`` as a C callback (a first-class function for the
     compiled integrators)."""
@@ -727,6 +784,22 @@ def jacobian_kernels(scene):
     return _cache.load(key, lambda: generate(
         scene.system, scene.principle, compiled, scene.runtime_params, scene.integrals,
         scene.form, scene.convention, key=key, jacobian=True), persistent=scene.cache)
+
+
+def sensitivity_kernels(scene):
+    """The compiled kernels of ``scene`` for a run with sensitivities: ``rhs_c`` of the
+    state augmented by ``S = dy/d(y0, p)`` (n x m, m = n_state + n_runtime_params,
+    row-major after the state; ``_sensitivity_program``), ``jac_c`` radau's Jacobian of
+    it, and the scene's ``aux_c`` and ``sing_c`` (which read the state alone).  Cached on
+    disk beside the scene's kernels (the key has ``sensitivities`` in it)."""
+    from . import cache as _cache
+
+    compiled = {k: v for k, v in scene.params.items() if k not in scene.runtime_params}
+    key = scene.sensitivity_key
+    return _cache.load(key, lambda: generate(
+        scene.system, scene.principle, compiled, scene.runtime_params, scene.integrals,
+        scene.form, scene.convention, key=key, jacobian=True, sensitivities=True),
+        persistent=scene.cache)
 
 
 class _Preparer:
@@ -1229,6 +1302,76 @@ def _derivative_program(ops: tuple, n: int) -> tuple:
     derivatives in the states ``y[j]`` (only the nonzero ones) by the chain rule on the
     instruction itself; each ``("out", i, a)`` becomes ``("out", i*n + j, da/dy_j)``
     (row-major slots of an n-column matrix).  Raises ``_Unsupported`` for ``abs``."""
+    out, D = _forward(ops)
+    # the value stores become placeholders (indices unchanged); the matrix's stores follow
+    result = [op if op[0] != "out" else ("c", 0.0) for op in out]
+    for op in ops:
+        if op[0] == "out":
+            for j, x in sorted(D[op[2]].items()):
+                result.append(("out", op[1] * n + j, x))
+    return tuple(result)
+
+
+def _sensitivity_program(ops: tuple, n: int, n_p: int) -> tuple:
+    """The variational equations of a straight-line right-hand side ``y' = f(t, y, p)``
+    (``ops``, stores ``out[0..n-1]``) for the state augmented by ``S = dy/d(y0, p)``, an
+    n x m matrix (m = n + n_p) stored row-major after the state (``y[n + i*m + k]``):
+    the stores of f unchanged, then ``S'[i, k] = sum_j df_i/dy_j S[j, k] (+ df_i/dp_l for
+    the column k = n + l)``, the partial derivatives by forward mode on the program
+    (``_forward``: the runtime parameters are the columns n..m-1)."""
+    out, D = _forward(ops, n)
+    m = n + n_p
+    load: dict = {}
+
+    def add(op):
+        out.append(op)
+        return len(out) - 1
+
+    def s(j, k):
+        if (j, k) not in load:
+            load[(j, k)] = add(("y", n + j * m + k))
+        return load[(j, k)]
+
+    zero = add(("c", 0.0))
+    for op in ops:
+        if op[0] != "out":
+            continue
+        i, d = op[1], D[op[2]]
+        for k in range(m):
+            terms = [add(("mul", x, s(j, k))) for j, x in sorted(d.items()) if j < n]
+            if k >= n and k in d:
+                terms.append(d[k])
+            value = zero if not terms else terms[0] if len(terms) == 1 else add(("add", *terms))
+            out.append(("out", n + i * m + k, value))
+    return tuple(out)
+
+
+def _sensitivity_jacobian_program(ops: tuple, n: int, n_p: int) -> tuple:
+    """The Jacobian radau's Newton iteration uses for the augmented state of
+    ``_sensitivity_program``: df/dy on the diagonal block of the state and of every
+    column of S (block-diagonal; the coupling d(df/dy S)/dy is left out, as a simplified
+    Newton iteration may: it changes the iteration's convergence rate, not its solution).
+    Row-major slots of an N x N matrix, N = n (1 + m)."""
+    out, D = _forward(ops)
+    m = n + n_p
+    size = n * (1 + m)
+    result = [op if op[0] != "out" else ("c", 0.0) for op in out]
+    for op in ops:
+        if op[0] != "out":
+            continue
+        i = op[1]
+        for j, x in sorted(D[op[2]].items()):
+            result.append(("out", i * size + j, x))
+            for k in range(m):
+                result.append(("out", (n + i * m + k) * size + n + j * m + k, x))
+    return tuple(result)
+
+
+def _forward(ops: tuple, params_at=None):
+    """Forward mode over a straight-line program: ``(ops extended by the derivative
+    instructions, D)`` with ``D[i]`` = {column: instruction of d op_i / d column}, the
+    columns being the states ``y[j]`` and, with ``params_at`` = c, the runtime parameters
+    ``p[l]`` as columns c + l.  Raises ``_Unsupported`` for ``abs``."""
     out = list(ops)
     const: dict = {}
 
@@ -1284,6 +1427,8 @@ def _derivative_program(ops: tuple, n: int) -> tuple:
         kind, d = op[0], {}
         if kind == "y":
             d = {op[1]: c(1)}
+        elif kind == "p" and params_at is not None:
+            d = {params_at + op[1]: c(1)}
         elif kind == "add":
             acc: dict = {}
             for a in op[1:]:
@@ -1340,10 +1485,4 @@ def _derivative_program(ops: tuple, n: int) -> tuple:
                     acc.setdefault(j, []).append(add(("mul", f, x)))
             d = {j: total(t) for j, t in acc.items()}
         D.append(d)
-    # the value stores become placeholders (indices unchanged); the matrix's stores follow
-    result = [op if op[0] != "out" else ("c", 0.0) for op in out]
-    for op in ops:
-        if op[0] == "out":
-            for j, x in sorted(D[op[2]].items()):
-                result.append(("out", op[1] * n + j, x))
-    return tuple(result)
+    return out, D

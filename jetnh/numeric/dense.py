@@ -50,8 +50,10 @@ def _refusal(traj) -> str | None:
     return None
 
 
-def evaluate(traj, times) -> np.ndarray:
-    """The states at ``times`` (any order, inside the span): ``[len(times), n_states]``."""
+def evaluate(traj, times, full=False) -> np.ndarray:
+    """The states at ``times`` (any order, inside the span): ``[len(times), n_states]``;
+    with ``full``, a run with sensitivities gives its whole integrated state (the
+    state, then S row-major: ``Layout.n_rhs`` columns)."""
     why = _refusal(traj)
     if why:
         raise JetnhError(why)
@@ -59,9 +61,11 @@ def evaluate(traj, times) -> np.ndarray:
     if not len(t):
         raise JetnhError("the trajectory is empty; there is nothing to evaluate")
     tau = _times(times, float(t.min()), float(t.max()))
-    out = np.empty((tau.shape[0], traj.y.shape[1]))
+    rows = traj._dense.get("y", traj.y) if full else traj.y
+    n = rows.shape[1]
+    out = np.empty((tau.shape[0], n))
     if len(t) == 1 or not tau.size:
-        out[:] = traj.y[0]
+        out[:] = rows[0]
         return out
     sgn = 1.0 if t[-1] >= t[0] else -1.0
     # time tau belongs to the first step whose end is not before it (as t_eval does)
@@ -75,7 +79,7 @@ def evaluate(traj, times) -> np.ndarray:
                 f"[{t[-2]!r}, {t[-1]!r}] is not a whole step and cannot be re-taken; times "
                 f"there (e.g. {tau[bad][0]!r}) are not available, only its end t = {t[-1]!r}")
         ends = (k == last)
-        out[ends] = traj.y[-1]
+        out[ends] = rows[-1]
         keep = ~ends
     else:
         keep = np.ones(tau.shape[0], dtype=bool)
@@ -83,7 +87,7 @@ def evaluate(traj, times) -> np.ndarray:
     idx = np.nonzero(keep)[0]
     if idx.size:
         order = idx[np.lexsort((sgn * tau[idx], k[idx]))]
-        out[order] = step(traj, k[order], tau[order])
+        out[order] = step(traj, k[order], tau[order])[:, :n]
     return out
 
 
@@ -99,7 +103,8 @@ def _retaken_steps(traj, k, tau) -> np.ndarray:
     """dop853/dopri5: re-take step k[i] with the times tau (sorted by step, then time)."""
     kern, d = traj._kernels, traj._dense
     solve = explicit_solver(traj.method)
-    t, y, p = traj.t, traj.y, np.ascontiguousarray(traj._p, dtype=float)
+    rhs = d["rhs"].rhs_fp if "rhs" in d else kern.rhs_fp     # with sensitivities: augmented
+    t, y, p = traj.t, d.get("y", traj.y), np.ascontiguousarray(traj._p, dtype=float)
     none = np.zeros(0, dtype=np.int64)
     watch = Watch(0, 0.0, none, none)
     halt = np.zeros(1, dtype=np.int64)
@@ -109,7 +114,7 @@ def _retaken_steps(traj, k, tau) -> np.ndarray:
         # |h| one ulp up: t0 + first reaches (or passes, and is cut back to) t1, so the
         # step is h = t1 - t0, the original run's h to the bit
         first = float(np.nextafter(abs(t1 - t0), np.inf))
-        res = solve(kern.rhs_fp, kern.sing_fp, kern.sing_fp, kern.hol_or_none, t0, t1,
+        res = solve(rhs, kern.sing_fp, kern.sing_fp, kern.hol_or_none, t0, t1,
                     np.ascontiguousarray(y[j]), p, Control(d["rtol"], d["atol"], first, np.inf,
                                                            1, 0, *traj.scene._projection),
                     np.ascontiguousarray(tau[a:b]), AT_T_EVAL, watch, halt)
@@ -125,8 +130,9 @@ def _retaken_steps(traj, k, tau) -> np.ndarray:
 
 def _hermite_steps(traj, k, tau) -> np.ndarray:
     """rk4: the cubic Hermite interpolant of step k[i] at tau (the form of rk4's own)."""
-    kern = traj._kernels
-    t, y, p = traj.t, traj.y, np.ascontiguousarray(traj._p, dtype=float)
+    kern, d = traj._kernels, traj._dense
+    kern = d.get("rhs", kern)                   # with sensitivities: the augmented rhs
+    t, y, p = traj.t, d.get("y", traj.y), np.ascontiguousarray(traj._p, dtype=float)
     n = y.shape[1]
     nodes = np.unique(np.concatenate([k, k + 1]))
     f = {}

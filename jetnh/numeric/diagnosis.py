@@ -93,9 +93,11 @@ def singularity(scene, kern, idx, t, y, p, t0, y_init, tol, nonfinite=False) -> 
     if kind == "split":
         alt = regular_split(scene, t, y, p)
         hint = (f"The determinant of df/dqdot^alpha vanishes: the constraints cannot be "
-                f"solved for the velocities of the dependent coordinates {dep} here. The "
-                "split is singular, not necessarily the motion: use another split"
-                + (f" (here dependent={alt} is regular)" if alt else ""))
+                f"solved for the velocities of the dependent coordinates {dep} here. "
+                + (f"The split is singular, not necessarily the motion: use another split "
+                   f"(here dependent={alt} is regular{_switching(scene)})" if alt else
+                   "No other split was found regular here (df/dqdot may lose rank): the "
+                   "constraints themselves are singular"))
     elif kind == "constraint":
         hint = ("The explicit form of the constraints qdot^alpha = phi^alpha(t, q, "
                 "qdot^mu) is singular or not differentiable here, so the dynamics "
@@ -116,6 +118,17 @@ def singularity(scene, kern, idx, t, y, p, t0, y_init, tol, nonfinite=False) -> 
               "-- a 0/0 that cancels -- run with singular='ignore'.)")
     return {"indicator": expr, "kind": kind, "index": idx, "t": float(t),
             "value": value, "initial": initial, "reason": reason}
+
+
+def _switching(scene) -> str:
+    """What a run with ``split='switch'`` does at the edge of this scene's split."""
+    from .atlas import split_invariant
+
+    if split_invariant(scene.principle, scene.convention):
+        return ("; dop853, dopri5, rk4 and radau runs with split='switch' (the default) go "
+                "on in it")
+    return ("; but these equations depend on the split (Suslov's in the paper's "
+            "convention), so a run cannot change split: start one in the other split")
 
 
 def jacobian_at(scene, t, y, p):

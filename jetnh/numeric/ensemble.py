@@ -51,10 +51,12 @@ import numpy as np
 from ..errors import ConstraintError, IntegrationError, JetnhError
 from ..frozen import Frozen
 from ..mechanics import holonomic
-from . import arguments, diagnosis, interrupt
+from . import arguments, atlas, diagnosis, interrupt
+from .events import as_events
 from . import methods
 from .methods import STATUS_TEXT
-from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, FINISHED, NONFINITE, SINGULAR, entry_point
+from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, FINISHED, NONFINITE, SINGULAR,
+                              entry_point)
 from .methods.loop import Control, watch_of
 from .options import fields_of, options
 
@@ -205,6 +207,11 @@ class Ensemble(Frozen):
         self.save = save
         self._singular_tol = singular_tol
         self.layout = scene.kernels.layout
+        #: runs that changed split (``numeric.atlas``): run -> [{"t", "from", "to"}, ...];
+        #: ``switching``: whether the runs watched their chart's edge
+        self.switches = {}
+        self.switching = False
+        self._pieces, self._reasons = {}, {}
 
     # ------------------------------------------------------------------ shape and access
     @property
@@ -254,6 +261,10 @@ class Ensemble(Frozen):
                 kern.aux_rows(np.ascontiguousarray(self.t[r][ok]),
                               np.ascontiguousarray(self.y[r][ok]), self.params[r], tmp)
                 out[r][ok] = tmp
+        if self._pieces:
+            own = atlas.atlas(self.scene).own
+            for r, pieces in self._pieces.items():
+                atlas.fill_aux(out[r], own, pieces, self.params[r])
         return out
 
     @cached_property
@@ -300,6 +311,8 @@ class Ensemble(Frozen):
             return np.nanmax(np.abs(e - e0[:, None]), axis=1)
 
     def stop_reason(self, r: int) -> str:
+        if r in self._reasons:
+            return self._reasons[r]
         s = int(self.status[r])
         if s == SINGULAR:
             sc = self.scene
@@ -324,6 +337,9 @@ class Ensemble(Frozen):
                    residual_max=self.residual_max, energy_drift=self.energy_drift)
         if self.layout.holonomic:
             out["holonomic_residual_max"] = self.holonomic_residual_max
+        if self.switching:
+            out["switches"] = np.array([len(self.switches.get(r, ()))
+                                        for r in range(self.n_runs)])
         for k, name in enumerate(self.event_names):
             out[f"events[{name}]"] = self.event_counts[:, k]
             out[f"first[{name}]"] = self.event_first[:, k]
@@ -368,7 +384,7 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
     rtol, atol, first_step, max_step, max_steps, n_steps, h = fields_of(opts.step)
     if max_step is None:
         max_step = np.inf
-    singular, singular_tol = fields_of(opts.singular)
+    singular, singular_tol, split = fields_of(opts.singular)
     newton_tol, max_newton = fields_of(opts.newton)
 
     if parallel not in PARALLEL:
@@ -402,7 +418,13 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
         raise JetnhError("an ensemble stores t_eval points or save='final' (every step "
                          "differs per run); pass t_eval=... or save='final'")
     kern = scene.kernels
-    ce = scene.compile_events(events)
+    switching = split == "switch" and atlas.applies(scene, events)
+    if switching:       # the chart's edge: the last event (numeric.atlas)
+        chart_atlas = atlas.atlas(scene)
+        user = as_events(events)
+        ce = chart_atlas.events(chart_atlas.own, user, True)
+    else:
+        ce = scene.compile_events(events)
     watch = watch_of(kern, ce, singular == "stop", singular_tol)
     uev = ce.uev if ce is not None else kern.sing_fp
     n_ev = len(watch.ev_dir)
@@ -432,11 +454,13 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
 
         head = (kern.rhs_fp, scene.jacobian.address, kern.sing_fp, uev, kern.hol_or_none,
                 t0, t1)
-        tail = (ctl, radau.newton_options(newton_tol, max_newton), te, mode, watch, halt)
+        newton = radau.newton_options(newton_tol, max_newton)
+        tail = (ctl, newton, te, mode, watch, halt)
         drive = entry_point(radau.ensemble_solver(parallel=parallel == "prange"))
     else:
         from .methods import loop
 
+        newton = None
         head = (kern.rhs_fp, kern.sing_fp, uev, kern.hol_or_none, t0, t1)
         tail = (ctl, te, mode, watch, halt)
         drive = entry_point(loop.ensemble_solver(m.tableau,
@@ -467,16 +491,83 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
 
     tic = time.perf_counter()
     interrupt.call(compute, halt, limit)
+    n_user = n_ev - 1 if switching else n_ev
+    pieces, reasons, switches = {}, {}, {}
+    if switching:
+        h_fixed = (t1 - t0) / ctl.n_steps if ctl.n_steps > 0 else 0.0
+        edge = ce.python_funcs[-1]
+        for r in range(n_runs):         # runs past the edge at the start: run again
+            if not edge(t0, Y0[r], P[r]) < 0.0:
+                continue
+            chart, y, first = atlas.begin(chart_atlas, user, t0, Y0[r], P[r])
+            if not first:
+                continue
+            parts, sw = atlas.follow(chart_atlas, method, chart, t0, y, t1, P[r], user,
+                                     np.zeros(n_user, np.int64), ctl, budget, te, mode,
+                                     None, singular == "stop", singular_tol, newton, limit)
+            INFO[r, 1:5] = 0
+            EV_N[r], EV_T[r], OUT_T[r], OUT_Y[r] = 0, np.nan, np.nan, np.nan
+            pieces[r] = _taken_on(chart_atlas.own, r, parts, n_user, mode, P[r], OUT_T,
+                                  OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)
+            reasons[r], switches[r] = parts[-1][1].stop_reason, first + sw
+        for r in np.nonzero(EV_N[:, n_user] > 0)[0]:
+            if INFO[r, 0] != EVENT or T_LAST[r] != EV_T[r, n_user]:
+                continue
+            parts, sw = atlas.go_on(chart_atlas, method, user, t1, P[r], float(T_LAST[r]),
+                                    Y_LAST[r].copy(), EV_N[r, :n_user].copy(), ctl,
+                                    budget - INFO[r, 1], te, mode, singular == "stop",
+                                    singular_tol, newton, limit, h_fixed)
+            pieces[r] = _taken_on(chart_atlas.own, r, parts, n_user, mode, P[r], OUT_T, OUT_Y,
+                                  INFO, T_LAST, Y_LAST, EV_N, EV_T)
+            reasons[r], switches[r] = parts[-1][1].stop_reason, sw
     wall = time.perf_counter() - tic
-    ens = Ensemble(scene, method, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N[:, :n_ev],
-                   EV_T[:, :n_ev], Y0, P, ce.names if ce is not None else (), wall,
+    ens = Ensemble(scene, method, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N[:, :n_user],
+                   EV_T[:, :n_user], Y0, P, ce.names[:n_user] if ce is not None else (), wall,
                    parallel, workers if parallel != "serial" else 1, save, singular_tol)
+    ens._pieces, ens._reasons, ens.switches = pieces, reasons, switches
+    ens.switching = switching
     _explain(ens, kern, singular == "stop", singular_tol, on_error)
     for a in (ens.t, ens.y, ens.status, ens.steps, ens.rejected, ens.nfev, ens.rows,
               ens.t_final, ens.y_final, ens.event_counts, ens.event_first, ens.initial,
               ens.params):
         a.flags.writeable = False
     return ens
+
+
+def _taken_on(own, r, parts, n_user, mode, p, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
+    """Run ``r`` of an ensemble taken on past its chart's edge (``atlas.go_on``): its
+    rows, counts and events filled in after the edge; returns the pieces of its rows that
+    other charts ran (``atlas.fill_aux``)."""
+    row = 0 if mode == ENDPOINTS else int(INFO[r, 4])
+    pieces = []
+    for chart, seg, _ in parts:
+        if mode == ENDPOINTS:
+            a, b, row = len(seg.t) - 1, len(seg.t), 0
+        else:
+            a, b = 0, len(seg.t)
+        if b > a:
+            OUT_T[r, row:row + b - a] = seg.t[a:b]
+            OUT_Y[r, row:row + b - a] = atlas.to_home(own, chart, seg.t[a:b], seg.y[a:b], p)
+            pieces.append((row, row + b - a, chart, seg, a))
+            row += b - a
+        info = seg._info
+        INFO[r, 1] += info["steps"]
+        INFO[r, 2] += info["rejected"]
+        INFO[r, 3] += info["nfev"]
+        for i in range(n_user):
+            if len(seg.t_events[i]):
+                if not EV_N[r, i]:
+                    EV_T[r, i] = seg.t_events[i][0]
+                EV_N[r, i] += len(seg.t_events[i])
+    if mode == ENDPOINTS:
+        pieces = pieces[-1:]
+    last_chart, last = parts[-1][0], parts[-1][1]
+    INFO[r, 0] = last.status
+    INFO[r, 4] = row if mode != ENDPOINTS else 1
+    INFO[r, 5] = -1
+    T_LAST[r] = last.t[-1]
+    Y_LAST[r] = atlas.to_home(own, last_chart, last.t[-1:], last.y[-1:], p)[0]
+    return pieces
 
 
 def _explain(ens, kern, checked, tol, on_error):

@@ -145,7 +145,8 @@ def compile_events(scene, events: list[Event]) -> CompiledEvents:
 
     from .methods._common import RHS_SIGNATURE
 
-    exprs = [(i, e.fun) for i, e in enumerate(events) if e.is_expression]
+    J = scene.system.J
+    exprs = [(i, J.from_dynamic(e.fun)) for i, e in enumerate(events) if e.is_expression]
     calls = [(i, e.fun) for i, e in enumerate(events) if not e.is_expression]
     for i, expr in exprs:
         _check_symbols(scene, expr, events[i].name)

@@ -30,6 +30,13 @@ class Layout:
     indicator_kinds: tuple[str, ...] = ()      # "split" | "constraint" | "acceleration"
     power: bool = False                        # aux has the power of the forces
     holonomic: int = 0                         # aux ends with the m holonomic g_i
+    sensitivity_columns: int = 0               # rhs carries S = dy/d(y0, p), n x this
+
+    @property
+    def n_rhs(self) -> int:
+        """The size of the state the ``rhs`` kernel integrates: the state, and with
+        sensitivities the n x ``sensitivity_columns`` matrix S after it (row-major)."""
+        return self.n_state * (1 + self.sensitivity_columns)
 
     @property
     def states(self) -> tuple[str, ...]:

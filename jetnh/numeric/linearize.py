@@ -11,20 +11,38 @@
 The state x of a principle's reduced first-order system is the scene's (``Scene``): the
 coordinates, the independent velocities qdot^mu and the multipliers of the principles
 whose multipliers are states (vakonomic, Hoelder, Suslov), less the coordinates that are
-dropped; the dependent velocities follow from the constraints (qdot^alpha = phi^alpha),
-so every perturbation stays on the constraint manifold.  ``A = dx'/dx`` at the operating
-point is the Jacobian kernel generated from the derivation by forward-mode
-differentiation over the shared graph (``codegen.jacobian_kernels``), compiled once per
-system and principle with every parameter read at run time: a ``replace`` costs a kernel
-call and an eigenvalue problem.  ``Linearization.symbolic()`` is the same matrix in the
+dropped or follow from holonomic constraints (below); the dependent velocities follow
+from the constraints (qdot^alpha = phi^alpha), so every perturbation stays on the
+constraint manifold.  ``A = dx'/dx`` at the operating point comes from the Jacobian
+kernel generated from the derivation by forward-mode differentiation over the shared
+graph (``codegen.jacobian_kernels``), compiled once per system and principle with every
+parameter read at run time: a ``replace`` costs a kernel call and an eigenvalue
+problem.  ``Linearization.symbolic()`` is the same matrix in the
 user's symbols, by ``dag.jacobian`` on the graph (never flattened).
+
+Holonomic constraints g(t, q) = 0 (``system.holonomic``): the operating point must lie
+on g = 0 (else a ``ConstraintError`` with the residual and values that would put it
+there), and the coordinates are perturbed within g = 0.  The coordinates q^D of
+``holonomic.completion_coordinates`` (the split's dependent ones where g can be solved
+for them) are eliminated (``Linearization.eliminated``): near the point they follow
+from the others q^I by g = 0, dq^D = T dq^I with T = -(dg/dq^D)^-1 dg/dq^I, and are no
+states.  The flow keeps g constant (its equations use D g = 0), so A = P J E exactly:
+J the Jacobian of the full system, E the embedding (unit columns, plus T in the rows
+q^D under the q^I columns) and P the rows of the kept states.  A holonomic constraint's
+multiplier under the vakonomic, Hoelder and Suslov principles enters their equations
+only through its rate, as lambda_t dg/dq with lambda_t fixed by the other equations
+(vakonomic: D g is a total derivative, so its Euler-Lagrange expression vanishes): no
+row depends on its value, its column of J is zero, it is a pure zero mode and
+bookkeeping.  Such multipliers (found on the graph, not assumed) are left out
+(``Linearization.inert``) and need no value in ``at``.
 
 Dropped coordinates (``drop="cyclic"``): those the equations of the kept states do not
 depend on -- absent from them, or present with a derivative that vanishes identically
 (decided by ``zero.vanishes`` on the graph, e.g. the heading of a rolling disk, which
-enters phi and the accelerations only in combinations that cancel).  Their rows (their
-drift, such as the position of a rolling body) do not feed back, so ``A`` is the
-Jacobian restricted to the kept states.
+enters phi and the accelerations only in combinations that cancel) -- and that share no
+holonomic constraint with a kept coordinate.  Their rows (their drift, such as the
+position of a rolling body) do not feed back, so ``A`` is the Jacobian restricted to the
+kept states.
 
 Stability is spectral: ``unstable`` when an eigenvalue has a positive real part,
 ``asymptotically stable`` when every one has a negative real part, ``marginal`` when some
@@ -41,9 +59,9 @@ from collections.abc import Mapping
 import numpy as np
 import sympy as sp
 
-from ..algebra import dag, zero
+from ..algebra import dag, linalg, zero
 from ..errors import ConstraintError, JetnhError, LinearizationError, PrincipleError
-from ..mechanics import principles
+from ..mechanics import holonomic, principles
 from ..mechanics.system import System
 from . import arguments
 from ..frozen import Frozen, FrozenDict
@@ -93,8 +111,8 @@ class _Model:
         self.params = tuple(sorted(s.name for s in system.parameters))
         self._eom = eom
         self._kernels = None
-        self._uses: dict = {}           # (row, coordinate) -> bool
-        self._symbolic: dict = {}       # kept states -> sympy Matrix
+        self._uses: dict = {}           # (row, state) -> bool
+        self._symbolic: dict = {}       # (kept states, chart) -> sympy Matrix
 
     @_once
     def rows(self) -> list:
@@ -109,31 +127,55 @@ class _Model:
         rows += [acc[r] for r in self._eom.multiplier_rates]
         return dag.xreplace(rows, phi) if phi else rows
 
-    def uses(self, row: int, coordinate: int) -> bool:
-        """Whether row ``row`` depends on coordinate ``coordinate``: the symbol is in it
-        and its derivative does not vanish identically (``zero.vanishes``)."""
-        key = (row, coordinate)
+    def uses(self, row: int, state: int) -> bool:
+        """Whether row ``row`` depends on state ``state``: the symbol is in it and its
+        derivative does not vanish identically (``zero.vanishes``)."""
+        key = (row, state)
         if key not in self._uses:
-            e, q = self.rows[row], self.coordinates[coordinate]
+            e, q = self.rows[row], self.states[state]
             self._uses[key] = (q in dag.free_symbols(e)
                                and not zero.vanishes(dag.diff(e, q)))
         return self._uses[key]
 
+    @_once
+    def tied(self) -> dict:
+        """Coordinate index -> the indices of the coordinates sharing a holonomic
+        constraint with it (on g = 0 one moves with the others)."""
+        out = {i: set() for i in range(len(self.coordinates))}
+        for g in self.system.holonomic:
+            used = [i for i, q in enumerate(self.coordinates) if q in dag.free_symbols(g)]
+            for i in used:
+                out[i].update(j for j in used if j != i)
+        return out
+
     def cyclic(self) -> tuple[int, ...]:
-        """Indices of the coordinates no kept row depends on (the largest such set: a
-        coordinate whose only users are dropped coordinates' rows is dropped too)."""
+        """Indices of the coordinates no kept row depends on and that share no holonomic
+        constraint with a kept coordinate (the largest such set: a coordinate whose only
+        users are dropped coordinates' rows is dropped too)."""
         n = len(self.coordinates)
         dropped = set(range(n))
         changed = True
         while changed:
             changed = False
-            kept_rows = [i for i in range(len(self.states)) if i not in dropped]
+            kept_rows = [i for i in range(len(self.states))
+                         if i not in dropped and i not in self.inert]
             for c in sorted(dropped):
-                if any(self.uses(i, c) for i in kept_rows):
+                if (any(self.uses(i, c) for i in kept_rows)
+                        or self.tied[c] - dropped):
                     dropped.discard(c)
                     changed = True
                     break
         return tuple(sorted(dropped))
+
+    @_once
+    def inert(self) -> tuple[int, ...]:
+        """State indices of the holonomic constraints' multipliers that no row depends on
+        (a multiplier of D g = 0 enters the vakonomic, Hoelder and Suslov equations only
+        through its rate): each is a pure zero mode, bookkeeping, left out of A."""
+        n = len(self.coordinates) + len(self.velocities)
+        rows = range(len(self.states))
+        return tuple(n + a for a in self.system.holonomic_rows if a < len(self.lams)
+                     and not any(self.uses(i, n + a) for i in rows))
 
     def kernels(self, params: dict, state: dict, t: float):
         """The compiled kernels (``rhs``, ``aux``, ``jac``), built on first use."""
@@ -170,23 +212,30 @@ class Linearization(Frozen):
     motion), ``limit`` (True where the kernels are undefined at the point and A is
     their limit),
     ``at`` (every coordinate, velocity and multiplier at the point), ``params``,
-    ``dropped`` (coordinate names left out), ``verdict``, ``stable``.
+    ``dropped`` (cyclic coordinate names left out), ``eliminated`` (coordinates that
+    follow from the holonomic constraints), ``inert`` (holonomic multipliers left out),
+    ``verdict``, ``stable``.
     """
 
-    def __init__(self, model: _Model, at: dict, params: dict, keep: tuple, t: float,
-                 y: np.ndarray, p: np.ndarray, A: np.ndarray, rates: np.ndarray,
-                 limit: bool):
+    def __init__(self, model: _Model, at: dict, params: dict, keep: tuple, chart: tuple,
+                 E: np.ndarray, t: float, y: np.ndarray, p: np.ndarray, A: np.ndarray,
+                 rates: np.ndarray, limit: bool):
         self._model = model
         self.system = model.system
         self.principle = model.principle
         self.t = t
         self.at = FrozenDict(at)
         self.params = FrozenDict(params)
-        self._keep = keep
+        self._keep, self._chart, self._E = keep, chart, E
+        E.setflags(write=False)
         self._y, self._p = y, p
         self.state_names = tuple(model.names[i] for i in keep)
         self.dropped = tuple(n.name for i, n in enumerate(model.coordinates)
-                             if i not in keep)
+                             if i not in keep and i not in chart)
+        #: the coordinates that follow from the holonomic constraints g = 0 near the point
+        self.eliminated = tuple(model.names[i] for i in chart)
+        #: the holonomic constraints' multipliers left out (no equation depends on them)
+        self.inert = tuple(model.names[i] for i in model.inert)
         A.setflags(write=False)
         self.A = A
         self.rates = rates
@@ -261,19 +310,31 @@ class Linearization(Frozen):
             idx.append(model.names.index(u))
         ck = self._kernels
         keep = list(self._keep)
+        cols = [keep.index(i) for i in idx]
         y, p, t = self._y.copy(), self._p, self.t
         f = np.empty(len(model.names))
         Jm = np.empty((len(model.names), len(model.names)))
+        moves = self._chart and any(i < len(model.coordinates) for i in idx)
+
+        def put(u):             # the unknowns, and the coordinates g = 0 then gives
+            y[idx] = u
+            if moves:
+                for nm, v in self._on_g({model.names[i]: y[i] for i in idx}, {}).items():
+                    y[model.names.index(nm)] = v
 
         def residual(u):
-            y[idx] = u
+            put(u)
             ck.rhs(t, y, p, f)
             return f[keep].copy()
 
         def jacobian(u):
-            y[idx] = u
+            put(u)
             ck.jac(t, y, p, Jm)
-            return Jm[np.ix_(keep, idx)].copy()
+            if not moves:
+                return Jm[np.ix_(keep, idx)].copy()
+            G = holonomic.jacobian_at(self.system, _configuration(
+                model, y, dict(self.params), t))
+            return (Jm[keep] @ _embedding(model, self._keep, self._chart, G))[:, cols]
 
         u0 = self._y[idx]
         start = float(np.linalg.norm(self.rates))
@@ -292,20 +353,23 @@ class Linearization(Frozen):
                 f"{given} held (|x'| = {size:.3g} at the best point, "
                 f"{dict(zip(unknowns, np.round(x, 12).tolist()))}); start from another "
                 "guess (replace(at=...)), solve for other values, or fix fewer of them")
-        return self.replace(at=dict(zip(unknowns, x.tolist())))
+        put(x)
+        return self.replace(at={model.names[i]: float(y[i]) for i in (*idx, *self._chart)})
 
     def along(self, name, values) -> "StabilityScan":
         """Eigenvalues along a parameter or an operating-point value ``name`` (every
-        other value held): a ``StabilityScan`` with the crossings of Re lambda = 0."""
+        other value held, but the ``eliminated`` coordinates, which follow from g = 0):
+        a ``StabilityScan`` with the crossings of Re lambda = 0."""
         name = arguments.name_of(name, "along")
         values = arguments.real_array(values, "values")
-        if name in self.params:
-            move = lambda v: self.replace(params={name: v})      # noqa: E731
-        elif name in self.at:
-            move = lambda v: self.replace(at={name: v})          # noqa: E731
-        else:
+        if name not in self.params and name not in self.at:
             raise JetnhError(f"{name!r} is neither a parameter ({', '.join(self.params)}) "
                              f"nor a value of the operating point ({', '.join(self.at)})")
+
+        def move(v):
+            if name in self.params:
+                return self.replace(params={name: v}, at=self._on_g({}, {name: v}))
+            return self.replace(at={**self._on_g({name: v}, {}), name: v})
         lins = [move(float(v)) for v in values]
         ev = np.array([lin.eigenvalues for lin in lins])
         margins = np.array([lin.margin for lin in lins])
@@ -317,11 +381,27 @@ class Linearization(Frozen):
                                        float(values[i + 1])))
         return StabilityScan(name, values, ev, margins, tuple(crossings), self.state_names)
 
+    def _on_g(self, at: dict, params: dict) -> dict:
+        """The eliminated coordinates solved from g = 0 (Newton's method from their
+        values here) with ``at`` and ``params`` changed: name -> value."""
+        if not self.eliminated:
+            return {}
+        model = self._model
+        y = self._y.copy()
+        for nm, v in at.items():
+            y[model.names.index(nm)] = v
+        point = _configuration(model, y, {**self.params, **params}, self.t)
+        done, _ = holonomic.check(self.system, point, complete=list(self.eliminated))
+        return {model.names[i]: float(done[model.coordinates[i]]) for i in self._chart}
+
     # ------------------------------------------------------------------ symbolic
     def symbolic(self) -> sp.Matrix:
         """A in the user's symbols (states, parameters, t): ``dag.jacobian`` of the
-        kept rows on the shared graph (evaluate it with ``dag.evaluate``)."""
-        return _symbolic(self._model, self._keep)
+        kept rows on the shared graph (evaluate it with ``dag.evaluate``).  With
+        holonomic constraints it holds every coordinate, the eliminated ones too (give
+        them their values on g = 0): the columns of the kept coordinates carry the
+        eliminated ones' motion -(dg/dq^D)^-1 dg/dq^I."""
+        return _symbolic(self._model, self._keep, self._chart)
 
     @property
     def _kernels(self):
@@ -332,11 +412,20 @@ class Linearization(Frozen):
                 f"residual={self.residual:.3g}, verdict={self.verdict!r})")
 
 
-def _symbolic(model: _Model, keep) -> sp.Matrix:
-    if keep not in model._symbolic:
+def _symbolic(model: _Model, keep, chart) -> sp.Matrix:
+    key = (keep, chart)
+    if key not in model._symbolic:
         rows = [model.rows[i] for i in keep]
-        model._symbolic[keep] = dag.jacobian(rows, [model.states[i] for i in keep])
-    return model._symbolic[keep]
+        A = dag.jacobian(rows, [model.states[i] for i in keep])
+        if chart:
+            G = holonomic.jacobian(model.system)
+            ind = [c for c, i in enumerate(keep) if i < len(model.coordinates)]
+            T = -linalg.solve(G[:, list(chart)], G[:, [keep[c] for c in ind]])
+            moved = linalg.matmul(dag.jacobian(rows, [model.states[i] for i in chart]), T)
+            for k, c in enumerate(ind):
+                A[:, c] = A[:, c] + moved[:, k]
+        model._symbolic[key] = A
+    return model._symbolic[key]
 
 
 def _margin(ev: np.ndarray, scale: float) -> float:
@@ -429,7 +518,9 @@ def linearize(system, principle="chetaev", at=None, params=None, drop="cyclic", 
 
     ``at``: coordinates, independent velocities and multipliers keyed by Symbol or name
     (dependent velocities follow from the constraints; if given they must agree; dropped
-    coordinates may be omitted: their values do not enter A).  ``params`` default to
+    coordinates that no holonomic constraint uses and inert multipliers may be omitted:
+    their values do not enter A).  The coordinates must satisfy the holonomic
+    constraints g = 0 (module docstring).  ``params`` default to
     the system's defaults.  ``drop``: ``"cyclic"``, a list of coordinates, or None.
     """
     if not isinstance(system, System):
@@ -507,6 +598,8 @@ def _params(model: _Model, params, defaults) -> dict[str, float]:
 
 
 def _kept(model: _Model, drop) -> tuple[int, ...]:
+    """The state indices kept: every state but the dropped coordinates and the inert
+    multipliers (``_Model.inert``)."""
     n = len(model.coordinates)
     names = [q.name for q in model.coordinates]
     if drop is None:
@@ -522,17 +615,26 @@ def _kept(model: _Model, drop) -> tuple[int, ...]:
                                  f"coordinates are {', '.join(names)}")
             gone.append(names.index(name))
         gone = tuple(sorted(set(gone)))
-        kept_rows = [i for i in range(len(model.states)) if i not in gone]
+        kept_rows = [i for i in range(len(model.states))
+                     if i not in gone and i not in model.inert]
+        cyclic = ", ".join(names[i] for i in model.cyclic()) or "nothing"
         for c in gone:
             users = [model.names[i] for i in kept_rows if model.uses(i, c)]
             if users:
                 raise JetnhError(
                     f"cannot drop {names[c]!r}: the equations of {', '.join(users)} depend "
-                    f"on it; keep it, or use drop='cyclic' (drops {', '.join(names[i] for i in model.cyclic()) or 'nothing'})")
+                    f"on it; keep it, or use drop='cyclic' (drops {cyclic})")
+            tied = [names[j] for j in sorted(model.tied[c]) if j not in gone]
+            if tied:
+                raise JetnhError(
+                    f"cannot drop {names[c]!r}: a holonomic constraint ties it to "
+                    f"{', '.join(tied)}, which is kept; keep it, drop those too, or use "
+                    f"drop='cyclic' (drops {cyclic})")
     else:
         raise JetnhError(f"drop must be 'cyclic', a list of coordinates or None, not "
                          f"{drop!r}")
-    return tuple(i for i in range(len(model.states)) if not (i < n and i in gone))
+    return tuple(i for i in range(len(model.states))
+                 if not (i < n and i in gone) and i not in model.inert)
 
 
 def _evaluate(model: _Model, point: dict, values: dict, keep, t: float) -> Linearization:
@@ -547,8 +649,10 @@ def _evaluate(model: _Model, point: dict, values: dict, keep, t: float) -> Linea
                 f"states are {', '.join(names)} (and the dependent velocities "
                 f"{', '.join(dep) or 'none'})")
     n = len(model.coordinates)
+    on_g = {q.name for q in model.coordinates
+            if any(q in dag.free_symbols(g) for g in model.system.holonomic)}
     missing = [nm for i, nm in enumerate(names)
-               if nm not in point and (i >= n or i in keep)]
+               if nm not in point and (i >= n or i in keep or nm in on_g)]
     if missing:
         lams = [s.name for s in model.lams]
         raise JetnhError(
@@ -557,8 +661,11 @@ def _evaluate(model: _Model, point: dict, values: dict, keep, t: float) -> Linea
                if set(missing) & set(lams) else "")
             + "; give them in at={...}")
     state = {nm: point.get(nm, 0.0) for nm in names}
-    ck = model.kernels(values, state, t)
     y = np.array([state[nm] for nm in names], dtype=float)
+    chart, G = _chart(model, y, values, t)
+    rows = tuple(i for i in keep if i not in chart)
+    E = _embedding(model, rows, chart, G)
+    ck = model.kernels(values, state, t)
     p = np.array([values[nm] for nm in model.params], dtype=float)
     aux = np.empty(ck.layout.n_aux)
     ck.aux(t, y, p, aux)
@@ -579,25 +686,73 @@ def _evaluate(model: _Model, point: dict, values: dict, keep, t: float) -> Linea
         at[nm] = v
     if k and not np.all(np.isfinite(aux[k:2 * k])):
         raise ConstraintError("the constraints are undefined at this point")
-    A, rates, limit = _jacobian(ck, y, p, t, list(keep))
-    return Linearization(model, at, values, tuple(keep), t, y, p, A, rates, limit)
+    A, rates, limit = _jacobian(ck, y, p, t, rows, E)
+    return Linearization(model, at, values, rows, chart, E, t, y, p, A, rates, limit)
 
 
-def _jacobian(ck, y, p, t, keep):
-    """(A, x', limit): the kernels at the point; where they are undefined (0/0), the
-    limit along a random direction by symmetric differences and Richardson
-    extrapolation, and an error if that does not settle."""
+def _configuration(model: _Model, y, values: dict, t: float) -> dict:
+    """t, the coordinates of state ``y`` and the parameters, by name (for
+    ``mechanics.holonomic``)."""
+    return {"t": t, **{q.name: float(v) for q, v in zip(model.coordinates, y)}, **values}
+
+
+def _chart(model: _Model, y, values: dict, t: float):
+    """``(chart, G)``: the indices of the coordinates that follow from g = 0 near the
+    configuration of ``y`` (``holonomic.completion_coordinates``: the split's dependent
+    ones where they can be solved for) and dg/dq there; ``((), None)`` without holonomic
+    constraints.  A configuration off g = 0 is a ConstraintError with the residual and
+    values that would put it on g = 0."""
+    sysm = model.system
+    if not sysm.holonomic:
+        return (), None
+    point = _configuration(model, y, values, t)
+    g = holonomic.residual(sysm, point)
+    scale = max([1.0] + [abs(float(v)) for v in y[:len(model.coordinates)]])
+    if not np.all(np.isfinite(g)) or np.any(np.abs(g) > holonomic.TOLERANCE * scale):
+        told = "; ".join(f"g{i + 1} = {e} is {v:.6g}"
+                         for i, (e, v) in enumerate(zip(sysm.holonomic, g)))
+        try:
+            _, moved = holonomic.check(sysm, point, complete=True)
+            fix = (", e.g. " + ", ".join(f"{nm} = {new:.12g}" for nm, (_, new) in
+                                         moved.items()) + " with the others held")
+        except ConstraintError:
+            fix = ""
+        raise ConstraintError(
+            f"the operating point is off the holonomic constraints: {told} (should be 0). "
+            f"A linearization perturbs within g = 0: give coordinates on it{fix}")
+    deps = holonomic.completion_coordinates(sysm, point)
+    chart = tuple(model.coordinates.index(q) for q in deps)
+    return chart, holonomic.jacobian_at(sysm, point)
+
+
+def _embedding(model: _Model, rows, chart, G) -> np.ndarray:
+    """E (all states x kept states): a kept state's column is its unit vector, plus, for
+    a coordinate, the motion of the ``chart`` coordinates that keeps g = 0 to first
+    order (dq^D = -(dg/dq^D)^-1 dg/dq^I dq^I).  A = (rows of x') E."""
+    E = np.zeros((len(model.states), len(rows)))
+    E[list(rows), range(len(rows))] = 1.0
+    if chart:
+        ind = [(c, i) for c, i in enumerate(rows) if i < len(model.coordinates)]
+        T = -np.linalg.solve(G[:, list(chart)], G[:, [i for _, i in ind]])
+        for a, d in enumerate(chart):
+            E[d, [c for c, _ in ind]] = T[a]
+    return E
+
+
+def _jacobian(ck, y, p, t, rows, E):
+    """(A, x', limit): the kernels at the point, A = (rows of dx'/dx) E; where they are
+    undefined (0/0), the limit along a random kept direction by symmetric differences and
+    Richardson extrapolation, and an error if that does not settle."""
     m = len(y)
+    rows = list(rows)
     Jm, f = np.empty((m, m)), np.empty(m)
     ck.jac(t, y, p, Jm)
     ck.rhs(t, y, p, f)
-    idx = np.ix_(keep, keep)
-    A, rates = Jm[idx].copy(), f[keep].copy()
+    A, rates = Jm[rows] @ E, f[rows].copy()
     if np.all(np.isfinite(A)) and np.all(np.isfinite(rates)):
         return A, rates, False
     rng = np.random.default_rng(0)
-    d = np.zeros(m)
-    d[keep] = rng.standard_normal(len(keep))
+    d = E @ rng.standard_normal(E.shape[1])
     d /= np.linalg.norm(d)
     scale = max(1.0, float(np.abs(y).max()))
 
@@ -606,8 +761,8 @@ def _jacobian(ck, y, p, t, keep):
         for s in (h, -h):
             ck.jac(t, y + s * scale * d, p, Jm)
             ck.rhs(t, y + s * scale * d, p, f)
-            Js.append(Jm[idx].copy())
-            fs.append(f[keep].copy())
+            Js.append(Jm[rows] @ E)
+            fs.append(f[rows].copy())
         return (Js[0] + Js[1]) / 2, (fs[0] + fs[1]) / 2
 
     (A1, r1), (A2, r2) = mean(1e-3), mean(5e-4)

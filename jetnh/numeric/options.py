@@ -39,14 +39,20 @@ class StepControl:
 @dataclass(frozen=True)
 class Singular:
     """At a singular configuration: ``action`` "stop" (the default) or "ignore"; an
-    indicator below ``tol`` times its initial size counts as zero."""
+    indicator below ``tol`` times its initial size counts as zero.  At the edge of the
+    split's chart (``numeric.atlas``): ``split`` "switch" (the default: the run goes on
+    in another regular split) or "fixed" (the run keeps the scene's split and stops at
+    its singular set as at any other)."""
 
     action: str = "stop"
     tol: float = 1e-10
+    split: str = "switch"
 
     def __post_init__(self):
         if self.action not in ("stop", "ignore"):
             raise ArgumentError(f"singular must be 'stop' or 'ignore', not {self.action!r}")
+        if self.split not in ("switch", "fixed"):
+            raise ArgumentError(f"split must be 'switch' or 'fixed', not {self.split!r}")
 
     @property
     def stops(self) -> bool:
@@ -93,20 +99,20 @@ def _same(a, b) -> bool:
         return False
 
 
-def singular_of(singular, singular_tol) -> Singular:
-    """The ``Singular`` of the keywords ``singular`` (a string or a ``Singular``) and
-    ``singular_tol``."""
+def singular_of(singular, singular_tol, split=None) -> Singular:
+    """The ``Singular`` of the keywords ``singular`` (a string or a ``Singular``),
+    ``singular_tol`` and ``split``."""
     if isinstance(singular, Singular):
-        return merge(singular, Singular, {"tol": singular_tol})
+        return merge(singular, Singular, {"tol": singular_tol, "split": split})
     return merge(None, Singular, {"action": None if singular == "stop" else singular,
-                                  "tol": singular_tol})
+                                  "tol": singular_tol, "split": split})
 
 
 _DEFAULT = {cls: cls() for cls in (StepControl, Singular, Newton)}
 
 #: the keyword run options each value stands for
 KEYWORDS = {"step": tuple(f.name for f in fields(StepControl)),
-            "singular": ("singular", "singular_tol"),
+            "singular": ("singular", "singular_tol", "split"),
             "newton": ("newton_tol", "max_newton")}
 #: every run option these values define: the values and their keywords
 NAMES = tuple(dict.fromkeys(("step", "singular", "newton") + sum(KEYWORDS.values(), ())))
@@ -141,7 +147,7 @@ def options(step=None, singular="stop", newton=None, **keywords) -> Options:
                             f"{', '.join(NAMES)}")
     g = keywords.get
     out = Options(merge(step, StepControl, {k: g(k) for k in KEYWORDS["step"]}),
-                  singular_of(singular, g("singular_tol")),
+                  singular_of(singular, g("singular_tol"), g("split")),
                   merge(newton, Newton, dict(tol=g("newton_tol"), max_iter=g("max_newton"))))
     if key is not None and len(_SEEN) < 256:
         _SEEN[key] = out

@@ -15,7 +15,9 @@
 
 Every run stops at a singular configuration (``singular="stop"``, the default) with
 ``status`` SINGULAR and a ``stop_reason`` naming the indicator and the time; see
-``run``.
+``run``.  The singular set of the split is not one: at the edge of the split's chart
+the run goes on in another regular split (``numeric.atlas``; ``split="fixed"`` keeps
+the scene's split).
 
 A scene does only what it needs: it derives the equations of its own principle, and only
 when its kernels are not in the disk cache; parameters are numbers substituted before
@@ -24,7 +26,8 @@ is every step, the points of ``t_eval``, or only the end (``save="final"``).
 
 State: every coordinate q^s, the independent velocities qdot^mu and the multipliers of
 the principles that have them (vakonomic, Hoelder, Suslov).  Initial values are keyed by
-Symbol or by name; the dependent velocities follow from the constraints.  If given, they
+Symbol, by name or by sympy.physics.mechanics dynamicsymbol (``x(t)`` for x, ``x(t).diff()``
+for x_t); the dependent velocities follow from the constraints.  If given, they
 must agree with the constraints (else ``ConstraintError``), or ``project=True`` replaces
 them by the values the constraints require.
 
@@ -52,7 +55,7 @@ from ..geometry.jet import sympy_object
 from . import arguments, interrupt
 from . import cache as _cache
 from . import codegen
-from . import diagnosis, discrete, methods, scipy_backend
+from . import atlas, diagnosis, discrete, methods, scipy_backend
 from .methods import STATUS_TEXT, Solver
 from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, NONFINITE, SINGULAR, STOPPED
 from .methods.loop import Control, watch_of
@@ -271,6 +274,16 @@ class Scene(Frozen):
             self.system, self.principle, compiled_params, self.runtime_params,
             self.integrals, self.form, self.convention, key=self.key), persistent=self.cache)
 
+    @memo
+    def sensitivity_key(self) -> str:
+        """The key of the kernels of runs with sensitivities
+        (``codegen.sensitivity_kernels``)."""
+        compiled_params = {k: v for k, v in self.params.items()
+                           if k not in self.runtime_params}
+        return codegen.symbolic_key(self.system, self.principle, compiled_params,
+                                    self.runtime_params, self.integrals, self.form,
+                                    self.convention, extra="sensitivities")
+
     @property
     def jacobian(self):
         """``jac(t, y, p, J)``: writes ``J[i, j] = d rhs_i / d y_j`` (``J`` a C-contiguous
@@ -317,12 +330,12 @@ class Scene(Frozen):
     # ------------------------------------------------------------------ run
     def run(self, rtol=None, atol=None, t_eval=None, method="dop853", *, save="steps",
             events=None, t_span=None, y0=None, params=None, timeout=None, projection=False,
-            backend=None, step=None, singular="stop", newton=None,
-            **keywords) -> Trajectory:
+            backend=None, step=None, singular="stop", newton=None, sensitivities=False,
+            sensitivity_error=True, **keywords) -> Trajectory:
         """Integrate and return a ``Trajectory``.
 
         What: ``t_span`` replaces the scene's; ``y0`` the initial state (a dict keyed by
-        Symbol or name, the other states keeping the scene's values and dependent
+        Symbol, name or dynamicsymbol, the other states keeping the scene's values and dependent
         velocities, if given, agreeing with the constraints; or a sequence in the order
         ``scene.state_names``); ``params`` the run-time parameters (``runtime_params``: a
         dict, or a sequence in the order ``scene.runtime_params``).
@@ -353,7 +366,12 @@ class Scene(Frozen):
           check the indicators of the constraints and the Lagrangian as written
           (``codegen.discrete_indicators``) at every node and stop at the last regular
           one.  NaN or infinity that no indicator explains raises an ``IntegrationError``
-          naming the time and the state;
+          naming the time and the state.  ``split="switch"`` (default) or ``"fixed"``:
+          dop853, dopri5, rk4 and radau runs that reach the edge of the split's chart
+          go on in another regular split (``numeric.atlas``: the switch located as an
+          event, the state and multipliers mapped, one trajectory in the scene's states,
+          ``traj.switches`` lists time, from and to); "fixed" keeps the scene's split,
+          which stops at its singular set as before;
         - ``newton=Newton(tol, max_iter)`` or ``newton_tol``, ``max_newton``: the Newton
           iteration of radau (automatic, 7) and of dla and dvi (1e-13, 50).
 
@@ -367,10 +385,22 @@ class Scene(Frozen):
         which the run returns what it has with status STOPPED; Ctrl-C stops a compiled run
         within one step (``numeric.interrupt``).  Every argument is checked before it
         reaches compiled code (``numeric.arguments``).
+
+        Sensitivities: ``sensitivities=True`` (dop853, dopri5, rk4, radau, scipy's
+        methods) integrates with the state the variational equations
+        ``S' = (df/dy) S + df/dp``, ``S(t0) = (I | 0)``, of ``S = dy(t)/d(y(t0), p)``, the
+        derivatives of the initial state and of the runtime parameters, with df/dy and
+        df/dp generated from the derivation (forward mode over the graph, compiled:
+        ``codegen.sensitivity_kernels``); ``traj.sensitivity(of, to)`` reads them.
+        ``sensitivity_error=True`` (default) puts S under the error control (its entry
+        (i, k) with the tolerance of state i), so S is as accurate as the state; with
+        ``False`` only the state is controlled (the steps are those of the run without
+        sensitivities, and S is as accurate as those steps make it: cheaper, but
+        uncontrolled).  A run with sensitivities keeps its split (``split="fixed"``).
         """
         opts = options(step, singular, newton, rtol=rtol, atol=atol, **keywords)
         rtol, atol, first_step, max_step, max_steps, n_steps, h = fields_of(opts.step)
-        singular, singular_tol = fields_of(opts.singular)
+        singular, singular_tol, split = fields_of(opts.singular)
         newton_tol, max_newton = fields_of(opts.newton)
         t0, t1 = self._t_span(t_span) if t_span is not None else self.t_span
         p = self._run_params(params)
@@ -386,6 +416,14 @@ class Scene(Frozen):
         n = y_init.shape[0]
         rtol, atol_v = arguments.tolerances(rtol, atol, n)
         m = methods.method(method, backend)
+        sens = None
+        if sensitivities:
+            sens = codegen.sensitivity_kernels(self)
+            y_init, rtol, atol_v = _augmented(sens.layout, y_init, rtol, atol_v,
+                                              bool(sensitivity_error), m)
+        elif sensitivity_error is not True:
+            raise JetnhError("sensitivity_error= is an option of runs with "
+                             "sensitivities=True")
         if m.solver is Solver.SCIPY:
             self._unused(m.name, n_steps=n_steps, h=h, newton_tol=newton_tol,
                          max_newton=max_newton, timeout=timeout,
@@ -394,10 +432,12 @@ class Scene(Frozen):
                                               else max_step)
             te = None if t_eval is None else arguments.times(t_eval, t0, t1)
             return scipy_backend.run(self, m.scipy, rtol, atol_v, te, t0, t1, y_init, p,
-                                     first or None, mx, events, singular, singular_tol)
+                                     first or None, mx, events, singular, singular_tol,
+                                     sensitivities=sens)
+        method = m.name
         if m.solver is Solver.DISCRETE:
-            self._unused(m.name, t_eval=t_eval, first_step=first_step, max_step=max_step)
-            steps = arguments.fixed_steps(n_steps, h, t0, t1, m.name, budget)
+            self._unused(method, t_eval=t_eval, first_step=first_step, max_step=max_step)
+            steps = arguments.fixed_steps(n_steps, h, t0, t1, method, budget)
             arguments.output_rows(steps, 3 * self.system.J.n + 2 * self.system.k, save)
             tol = 1e-13 if newton_tol is None else arguments.positive(newton_tol,
                                                                      "newton_tol")
@@ -418,9 +458,9 @@ class Scene(Frozen):
             raise JetnhError("projection= is an option of the dla integrator; the "
                              "Runge-Kutta methods follow the constraints to their tolerance")
         if not m.newton:
-            self._unused(m.name, newton_tol=newton_tol, max_newton=max_newton)
+            self._unused(method, newton_tol=newton_tol, max_newton=max_newton)
         if m.adaptive:
-            self._unused(m.name, n_steps=n_steps, h=h)
+            self._unused(method, n_steps=n_steps, h=h)
             first, mx = arguments.step_limits(first_step, np.inf if max_step is None
                                               else max_step)
             mode = EVERY_STEP if save == "steps" else ENDPOINTS
@@ -433,45 +473,64 @@ class Scene(Frozen):
             # Jacobian kept): no re-taking of one step (numeric.dense)
             dense = None if m.solver is Solver.IMPLICIT else {"rtol": rtol, "atol": atol_v,
                                                               "mode": mode}
+            if dense is not None and sens is not None:
+                dense["rhs"] = sens
         else:
             if t_eval is not None:
-                raise JetnhError(f"{m.name} is a fixed-step method without dense output; pass "
+                raise JetnhError(f"{method} is a fixed-step method without dense output; pass "
                                  "n_steps or h and read every step, or use dop853 with t_eval")
-            self._unused(m.name, first_step=first_step, max_step=max_step)
-            steps = arguments.fixed_steps(n_steps, h, t0, t1, m.name, budget)
+            self._unused(method, first_step=first_step, max_step=max_step)
+            steps = arguments.fixed_steps(n_steps, h, t0, t1, method, budget)
             arguments.output_rows(steps, n, save)
             mode = EVERY_STEP if save == "steps" else ENDPOINTS
             te = np.zeros(0)
             ctl = Control(rtol, atol_v, 0.0, np.inf, budget, steps, *self._projection)
             dense = {"mode": mode}
+            if sens is not None:
+                dense["rhs"] = sens
         kern = self.kernels
-        ce = None if events is None else self.compile_events(events)
-        watch = self._watch(kern, ce, singular == "stop", singular_tol)
-        uev = ce.uev if ce is not None else kern.sing_fp
-        halt = interrupt.flag()
+        newton = None
         if m.solver is Solver.IMPLICIT:
             from .methods import radau
 
-            solve = kern.implicit()
             newton = radau.newton_options(newton_tol, max_newton)
-            jac = self.jacobian.address
-            tic = time.perf_counter()
-            out = interrupt.call(lambda: solve(kern.rhs_fp, jac, kern.sing_fp, uev,
-                                               kern.hol_or_none, t0, t1,
-                                               y_init, p, ctl, newton, te, mode, watch, halt),
-                                 halt, limit)
-        else:
-            solve = methods.explicit_solver(m)
-            tic = time.perf_counter()
-            out = interrupt.call(lambda: solve(kern.rhs_fp, kern.sing_fp, uev, kern.hol_or_none,
-                                               t0, t1,
-                                               y_init, p, ctl, te, mode, watch, halt),
-                                 halt, limit)
-        wall = time.perf_counter() - tic
+        if sens is None and split == "switch" and atlas.applies(self, events):
+            return atlas.run(self, method, events, t0, t1, y_init, p, ctl, te, mode, dense,
+                             singular == "stop", singular_tol, newton, limit)
+        ce = None if events is None else self.compile_events(events)
+        watch = self._watch(kern, ce, singular == "stop", singular_tol)
+        out, wall = self._solve(method, kern, ce, watch, t0, t1, y_init, p, ctl, te, mode,
+                                newton, limit, sens)
         if dense is not None:    # stopped inside a step
             dense["partial_last"] = int(out.status) in (EVENT, SINGULAR)
-        return self._trajectory(m.name, out, wall, kern, ce, p, t0, y_init, singular_tol,
-                                singular == "stop", limit, dense)
+        return self._trajectory(method, out, wall, kern, ce, p, t0, y_init, singular_tol,
+                                singular == "stop", limit, dense, sens=sens)
+
+    def _solve(self, method, kern, ce, watch, t0, t1, y_init, p, ctl, te, mode, newton,
+               limit, sens=None):
+        """One call of the compiled loop of ``method`` on the kernels ``kern`` (events
+        ``ce``, ``watch``; with ``sens``, the right-hand side and radau's Jacobian of the
+        state augmented by its sensitivities); returns its ``Result`` and the wall-clock
+        time."""
+        uev = ce.uev if ce is not None else kern.sing_fp
+        halt = interrupt.flag()
+        rhs = kern.rhs_fp if sens is None else sens.rhs_fp
+        if methods.method(method).solver is Solver.IMPLICIT:
+            solve = kern.implicit()
+            jac = self.jacobian.address if sens is None else sens.jac_fp
+            tic = time.perf_counter()
+            out = interrupt.call(lambda: solve(rhs, jac, kern.sing_fp, uev,
+                                               kern.hol_or_none, t0, t1, y_init, p, ctl,
+                                               newton, te, mode, watch, halt),
+                                 halt, limit)
+        else:
+            solve = methods.explicit_solver(method)
+            tic = time.perf_counter()
+            out = interrupt.call(lambda: solve(rhs, kern.sing_fp, uev,
+                                               kern.hol_or_none, t0, t1, y_init, p, ctl, te,
+                                               mode, watch, halt),
+                                 halt, limit)
+        return out, time.perf_counter() - tic
 
     # ------------------------------------------------------------------ run helpers
     @staticmethod
@@ -585,13 +644,26 @@ class Scene(Frozen):
         return store[memo]
 
     def _trajectory(self, method, out, wall, kern, ce, p, t0, y_init, singular_tol, checked,
-                    timeout=None, dense=None):
-        """A Trajectory from the result tuple of a compiled solve (or an error)."""
+                    timeout=None, dense=None, n_events=None, sens=None):
+        """A Trajectory from the result tuple of a compiled solve (or an error); with
+        ``n_events``, only the first ``n_events`` events of ``ce`` are reported; with
+        ``sens`` (the kernels of a run with sensitivities) the state's columns, and the
+        sensitivities apart."""
         from .events import split_records
 
         (status, ts, ys, n_out, stats, t_last, y_last, ev_t, ev_i, ev_y, n_ev,
          sing_index) = out
         status = int(status)
+        extra = {}
+        if sens is not None:
+            n = kern.layout.n_state
+            ys = ys[:n_out]
+            if dense is not None:
+                dense["y"] = ys
+            extra["sensitivities"] = (self._sensitivity_columns(), ys[:, n:].reshape(
+                n_out, n, sens.layout.sensitivity_columns))
+            ys, n_out = np.ascontiguousarray(ys[:, :n]), ys.shape[0]
+            y_last, y_init, ev_y = y_last[:n], y_init[:n], ev_y[:, :n]
         singularity = None
         if status == NONFINITE:
             sing_index = (diagnosis.explain_nonfinite(self, kern, t_last, y_last, p, t0, y_init,
@@ -616,13 +688,19 @@ class Scene(Frozen):
             reason = STATUS_TEXT[status]
         kw = {}
         if ce is not None:
-            t_events, y_events = split_records(len(ce), ev_t[:n_ev], ev_i[:n_ev], ev_y[:n_ev])
-            kw["events"] = (ce.names, t_events, y_events)
+            n = len(ce) if n_events is None else n_events
+            t_events, y_events = split_records(n, ev_t[:n_ev], ev_i[:n_ev], ev_y[:n_ev])
+            kw["events"] = (ce.names[:n], t_events, y_events)
         return Trajectory(self, ts[:n_out], ys[:n_out], p, method=method, status=status,
                           stop_reason=reason, steps=int(stats[0]), rejected=int(stats[1]),
                           nfev=int(stats[2]), wall_time=wall, kernels=kern,
                           projected=self.projected, singularity=singularity, dense=dense,
-                          **kw)
+                          **kw, **extra)
+
+    def _sensitivity_columns(self) -> tuple[str, ...]:
+        """The names of the columns of S = dy/d(y0, p): the states, then the runtime
+        parameters."""
+        return self.state_names + self.runtime_params
 
     # ------------------------------------------------------------------ singularities
     def indicators(self, t, y, p=None) -> dict[str, float]:
@@ -636,17 +714,36 @@ class Scene(Frozen):
     @property
     def dla_kernels(self):
         """Kernels of the discrete Lagrange-d'Alembert step (``codegen.generate_dla``)."""
-        return discrete.kernels(self, "chetaev")
+        return discrete.kernels(self, "dla")
 
     @property
     def dvi_kernels(self):
         """Kernels of the discrete vakonomic step (``codegen.generate_dla(kind=
         "vakonomic")``)."""
-        return discrete.kernels(self, "vakonomic")
+        return discrete.kernels(self, "dvi")
 
     def __repr__(self):
         return (f"Scene({self.principle}, states={list(self.state_names)}, "
                 f"t_span={self.t_span})")
+
+
+def _augmented(layout, y0, rtol, atol, controlled, method):
+    """The initial state of a run with sensitivities, ``(y0, S0 = (I | 0))`` flattened,
+    and its tolerances: with ``controlled``, entry (i, k) of S has the tolerance of state
+    i; else S has none (atol = inf) and the state's tolerances are scaled by
+    sqrt(n / N), so that the RMS error norm over all N entries equals the norm over the n
+    states of a run without sensitivities (the same steps)."""
+    if method.solver is Solver.DISCRETE:
+        raise JetnhError(f"sensitivities=True is an option of the continuous methods "
+                         f"(dop853, dopri5, rk4, radau, scipy-*), not of {method.name}")
+    n, m = layout.n_state, layout.sensitivity_columns
+    S0 = np.eye(n, m)
+    y = np.ascontiguousarray(np.concatenate([y0, S0.ravel()]))
+    if controlled:
+        return y, rtol, np.ascontiguousarray(np.concatenate([atol, np.repeat(atol, m)]))
+    r = np.sqrt(n / y.shape[0])
+    return y, rtol * r, np.ascontiguousarray(np.concatenate([atol * r,
+                                                             np.full(n * m, np.inf)]))
 
 
 def _real(x) -> float:

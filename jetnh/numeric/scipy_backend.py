@@ -16,17 +16,20 @@ from .trajectory import Trajectory
 
 
 def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_step,
-        events=None, singular="stop", singular_tol=1e-10) -> Trajectory:
+        events=None, singular="stop", singular_tol=1e-10, sensitivities=None) -> Trajectory:
     """scipy's ``solve_ivp`` on the compiled right-hand side; user events and the
     singularity indicators become scipy events (the indicators terminal, direction -1,
-    on ``s_i g_i - singular_tol |g_i(t0)|``)."""
+    on ``s_i g_i - singular_tol |g_i(t0)|``).  ``sensitivities``: the kernels of the
+    state augmented by its sensitivities (``codegen.sensitivity_kernels``; ``y_init``
+    and the tolerances augmented too)."""
     from scipy.integrate import solve_ivp
 
     if method not in SCIPY_METHODS:
         raise JetnhError(f"unknown scipy method {method!r}; choose one of {SCIPY_METHODS}")
     kern = scene.kernels
-    rhs = kern.rhs
+    rhs = kern.rhs if sensitivities is None else sensitivities.rhs
     n = y_init.shape[0]
+    n_state = kern.layout.n_state
 
     def fun(t, y):
         out = np.empty(n)
@@ -52,7 +55,7 @@ def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_st
             idx = int(np.argmax(bad))
             info = diagnosis.singularity(scene, kern, idx, t0, y_init, p, t0, y_init,
                                          singular_tol)
-            return Trajectory(scene, [t0], [y_init], p, method=f"scipy-{method}",
+            return Trajectory(scene, [t0], [y_init[:n_state]], p, method=f"scipy-{method}",
                               status=SINGULAR, stop_reason=info["reason"], steps=0,
                               rejected=0, nfev=0, wall_time=0.0, kernels=kern,
                               projected=scene.projected, singularity=info)
@@ -97,7 +100,12 @@ def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_st
             reason = singularity["reason"]
     if ce is not None:
         kw["events"] = (ce.names, [np.asarray(sol.t_events[k]) for k in range(n_user)],
-                        [np.asarray(sol.y_events[k]).reshape(-1, n) for k in range(n_user)])
+                        [np.asarray(sol.y_events[k]).reshape(-1, n)[:, :n_state]
+                         for k in range(n_user)])
+    if sensitivities is not None:
+        kw["sensitivities"] = (scene._sensitivity_columns(), ys[:, n_state:].reshape(
+            ys.shape[0], n_state, sensitivities.layout.sensitivity_columns))
+        ys = np.ascontiguousarray(ys[:, :n_state])
     return Trajectory(scene, sol.t, ys, p, method=f"scipy-{method}", status=status,
                       stop_reason=reason, steps=None, rejected=None, nfev=int(sol.nfev),
                       wall_time=wall, kernels=kern, projected=scene.projected,

@@ -1,11 +1,12 @@
-"""Trajectories: the output of ``Scene.run``, indexed by Symbol or by name.
+"""Trajectories: the output of ``Scene.run``, indexed by Symbol, by name or by dynamicsymbol.
 
 ``traj.t`` is the array of output times and ``traj[x]`` / ``traj["x"]`` the column of a
 coordinate, an independent velocity, a multiplier, a dependent velocity (computed from
 the constraints by the compiled ``aux`` kernel, on first access) or a user first
 integral.  ``traj.diagnostics`` reports the constraint residual, the energy and its
 drift, first integrals and their drift, steps, right-hand-side evaluations and why the
-integration stopped.  With generalized forces the energy is not conserved:
+integration stopped (and the split switches of a run that changed split,
+``numeric.atlas``).  With generalized forces the energy is not conserved:
 ``traj.power`` is their power Q_s qdot^s, and the diagnostics say that the forces work.
 """
 
@@ -43,6 +44,7 @@ class Diagnostics:
     forced: bool = False              # generalized forces work: the energy drifts by design
     holonomic_residual_max: float = 0.0   # max |g_i| of the holonomic constraints
     completed: dict = field(default_factory=dict)     # see Scene.completed
+    switches: list = field(default_factory=list)      # split changes: {"t", "from", "to"}
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -62,7 +64,17 @@ class Diagnostics:
             lines.append(f"  integral {k}: drift {v:.3e}")
         for k, v in self.events.items():
             lines.append(f"  event {k}: {v} occurrence(s)")
+        if self.switches:
+            lines.append(f"  {len(self.switches)} split switch(es), the first at t = "
+                         f"{self.switches[0]['t']:.6g} ({self.switches[0]['from']} -> "
+                         f"{self.switches[0]['to']})")
         return "\n".join(lines)
+
+
+def _read_only(a) -> np.ndarray:
+    a = np.array(a, dtype=float)
+    a.setflags(write=False)
+    return a
 
 
 def _columns(layout) -> tuple[dict, dict]:
@@ -94,7 +106,8 @@ class Trajectory(Frozen):
 
     def __init__(self, scene, t, y, p, *, method, status, stop_reason, steps, rejected,
                  nfev, wall_time, kernels, projected=None, own=None, events=None,
-                 singularity=None, dense=None):
+                 singularity=None, dense=None, segments=None, switches=(),
+                 sensitivities=None):
         names, t_ev, y_ev = events if events is not None else ((), [], [])
         self._set(
             scene=scene, t=np.ascontiguousarray(t, dtype=float),
@@ -111,7 +124,13 @@ class Trajectory(Frozen):
             # methods that carry their own velocities, residuals, energy and first
             # integrals (the discrete integrators dla, dvi): {"velocities": {name: col},
             # "residual", "energy", "integrals": {name: col}}
-            _own=own or {})
+            _own=own or {},
+            # a run that changed split: its pieces (``numeric.atlas.Stitched``, which
+            # gives its aux rows and dense output) and switches {"t", "from", "to"}
+            _segments=segments, switches=tuple(switches),
+            # a run with sensitivities: (column names, S [n_times, n_states, n_columns])
+            _sens=None if sensitivities is None else (
+                tuple(sensitivities[0]), _read_only(sensitivities[1])))
 
     @property
     def layout(self):
@@ -132,7 +151,8 @@ class Trajectory(Frozen):
         name = key_name(key)
         if name is not None:
             return name
-        raise JetnhError(f"index a trajectory by a Symbol or a name, not {type(key).__name__}")
+        raise JetnhError(f"index a trajectory by a Symbol, a name or a dynamicsymbol x(t) "
+                         f"(x(t).diff() for x_t), not {type(key).__name__}")
 
     def __getitem__(self, key) -> np.ndarray:
         name = self._name(key)
@@ -176,6 +196,41 @@ class Trajectory(Frozen):
             out[name] = d
         return out
 
+    def sensitivity(self, of, to) -> np.ndarray:
+        """``d of(t) / d to`` over ``t`` (read-only): ``of`` a state (coordinate,
+        independent velocity or multiplier), ``to`` an initial value of a state (at t0)
+        or a runtime parameter, by Symbol or by name; from the variational equations
+        integrated with the run (``scene.run(sensitivities=True)``)."""
+        if self._sens is None:
+            raise JetnhError("this trajectory carries no sensitivities; run the scene with "
+                             "sensitivities=True")
+        columns, S = self._sens
+        states = self.layout.states
+        a, b = self._name(of), self._name(to)
+        if a not in states:
+            raise JetnhError(f"sensitivity of {a!r}: not a state of this trajectory; the "
+                             f"states are {', '.join(states)}")
+        if b not in columns:
+            raise JetnhError(f"sensitivity to {b!r}: not an initial value of a state or a "
+                             f"runtime parameter; choose one of {', '.join(columns)} (a "
+                             "compiled-in parameter needs runtime_params=[...] on the scene)")
+        return S[:, states.index(a), columns.index(b)]
+
+    @property
+    def sensitivities(self) -> np.ndarray:
+        """S = dy(t)/d(y(t0), p) at every row: ``[n_times, n_states, n_columns]``, columns
+        ``sensitivity_columns`` (read-only)."""
+        if self._sens is None:
+            raise JetnhError("this trajectory carries no sensitivities; run the scene with "
+                             "sensitivities=True")
+        return self._sens[1]
+
+    @property
+    def sensitivity_columns(self) -> tuple[str, ...]:
+        """What the columns of ``sensitivities`` differentiate by: the initial states,
+        then the runtime parameters."""
+        return () if self._sens is None else self._sens[0]
+
     # ------------------------------------------------------------------ derived columns
     @memo
     def aux(self) -> np.ndarray:
@@ -183,6 +238,8 @@ class Trajectory(Frozen):
         if self._own:
             raise JetnhError(f"{self.method} trajectories carry their own velocities, "
                              "residuals, energy and first integrals (no aux rows)")
+        if self._segments is not None:
+            return self._segments.aux(self)
         out = np.empty((len(self), self.layout.n_aux))
         if len(self):
             self._kernels.aux_rows(self.t, self.y, self._p, out)
@@ -261,7 +318,8 @@ class Trajectory(Frozen):
             integral_drift=idrift, projected=i["projected"],
             events={n: len(te) for n, te in zip(self.event_names, self.t_events)},
             singularity=self.singularity, forced=self.scene.system.forced,
-            holonomic_residual_max=hmax, completed=dict(self.scene.completed))
+            holonomic_residual_max=hmax, completed=dict(self.scene.completed),
+            switches=[dict(s) for s in self.switches])
 
     # ------------------------------------------------------------------ tables, figures
     def to_dataframe(self, diagnostics=True):
@@ -289,9 +347,12 @@ class Trajectory(Frozen):
     def at(self, times) -> np.ndarray:
         """States ``[len(times), n_states]`` at ``times`` inside the span, from the
         method's dense output (dop853, dopri5: the covering step re-taken, bit for bit
-        what ``t_eval`` gives; rk4: cubic Hermite); needs every step stored."""
+        what ``t_eval`` gives; rk4: cubic Hermite); needs every step stored.  A run
+        that changed split is evaluated in the chart that ran at each time."""
         from .dense import evaluate
 
+        if self._segments is not None:
+            return self._segments.at(self, times)
         return evaluate(self, times)
 
     def _repr_html_(self):

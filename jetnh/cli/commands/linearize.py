@@ -99,7 +99,8 @@ def run(args, progress) -> int:
     if args.format == "json":
         out = {"model": loaded.label, "principle": principle, "params": dict(lin.params),
                "at": dict(lin.at), "state": list(lin.state_names),
-               "dropped": list(lin.dropped), "A": lin.A.tolist(),
+               "dropped": list(lin.dropped), "eliminated": list(lin.eliminated),
+               "A": lin.A.tolist(),
                "eigenvalues": [[z.real, z.imag] for z in lin.eigenvalues.tolist()],
                "residual": lin.residual, "verdict": lin.verdict, "zero_at": zeros}
         if result is not None:
@@ -115,7 +116,8 @@ def run(args, progress) -> int:
         if zeros:
             print(f"            (not given, set to 0: {', '.join(zeros)})")
         print(f"state:      {', '.join(lin.state_names)}"
-              + (f" (dropped: {', '.join(lin.dropped)})" if lin.dropped else ""))
+              + (f" (dropped: {', '.join(lin.dropped)})" if lin.dropped else "")
+              + (f" (from g = 0: {', '.join(lin.eliminated)})" if lin.eliminated else ""))
         with np.printoptions(precision=6, suppress=True, linewidth=100):
             print("A =")
             print(lin.A)

@@ -1,0 +1,204 @@
+"""Two-point problems: jetnh's connect (shooting with sensitivities) against solve_bvp.
+
+    .venv/bin/python benchmarks/connect_vs_solve_bvp.py [--quick] [--out PATH]
+
+(default output: benchmarks/results/connect_vs_solve_bvp.json)
+
+1. ``jn.connect`` against ``scipy.integrate.solve_bvp`` (collocation) on the same
+   equations: solve_bvp calls the scene's compiled right-hand side (one call per mesh
+   point), with its default finite-difference Jacobian and with jetnh's compiled Jacobian
+   (``codegen.jacobian_kernels``), from a straight-line guess (velocities of the named
+   coordinates, 0.5 for the others, zero multipliers) on 11 nodes, at most 20000 nodes.
+   connect runs at rtol 1e-6 .. 1e-10 (its time includes the verdicts: cost, conjugate
+   times, Gramian); solve_bvp at tol 1e-3 .. 1e-9.  The error is the largest deviation of the initial
+   state found (velocities, multipliers) from a reference (connect at rtol 1e-13).
+   "Speed-up at equal error": the time of the fastest solve_bvp run at least as accurate
+   as connect's, divided by connect's (">" when no solve_bvp run was as accurate: its
+   slowest time).
+2. What sensitivities cost: one run to t1 (save="final", dop853, rtol 1e-10) without
+   them, with them under the error control and with them outside it.
+
+Wall times are the best of several repetitions (``_common.best``); ratios are within this
+run; kernels compiled beforehand.
+"""
+
+import warnings
+
+import numpy as np
+from scipy.integrate import solve_bvp
+
+from _common import best, parser, write
+
+import jetnh as jn
+from jetnh.models import get
+from jetnh.numeric import codegen
+
+ZERO_DISK = {"x": 0.0, "y": 0.0, "phi": 0.0, "psi": 0.0}
+CASES = (
+    ("heisenberg", "vakonomic", {"x": 0.0, "y": 0.0, "z": 0.0},
+     {"x": 1.0, "y": 0.5, "z": 0.2}, 1.0),
+    ("rolling_disk", "chetaev", ZERO_DISK, {"x": 0.5, "y": 0.3}, 1.0),
+)
+CONNECT_RTOL = (1e-6, 1e-8, 1e-10)
+#: solve_bvp's mesh limit and the seconds each route may spend per tolerance
+MAX_NODES, BUDGET = 20_000, 20.0
+BVP_TOL = (1e-3, 1e-5, 1e-7, 1e-9)
+
+
+def bvp_problem(scene, start, end, T, jacobian):
+    kern, p, names = scene.kernels, scene.p, scene.state_names
+    n, nq = len(names), len(scene.coordinates)
+    jac = codegen.jacobian_kernels(scene).jac if jacobian else None
+
+    def fun(t, Y):
+        out, o = np.empty_like(Y), np.empty(n)
+        for i in range(Y.shape[1]):
+            kern.rhs(float(t[i]), np.ascontiguousarray(Y[:, i]), p, o)
+            out[:, i] = o
+        return out
+
+    def fun_jac(t, Y):
+        out, Jm = np.empty((n, n, Y.shape[1])), np.empty((n, n))
+        for i in range(Y.shape[1]):
+            jac(float(t[i]), np.ascontiguousarray(Y[:, i]), p, Jm)
+            out[:, :, i] = Jm
+        return out
+
+    rows = [names.index(k) for k in end]
+    target = np.array([end[k] for k in end])
+    first = np.array([start[names[i]] for i in range(nq)])
+
+    def bc(ya, yb):
+        return np.concatenate([ya[:nq] - first, yb[rows] - target])
+
+    t = np.linspace(0.0, T, 11)
+    Y = np.full((n, t.size), 0.5)
+    Y[nq + len(scene.velocities):] = 0.0
+    for i, name in enumerate(names[:nq]):
+        rate = (end.get(name, start[name]) - start[name]) / T
+        Y[i] = start[name] + rate * t
+        if name in end and f"{name}_t" in names:
+            Y[names.index(f"{name}_t")] = rate
+    return fun, (fun_jac if jacobian else None), bc, t, Y
+
+
+def connect_case(model, principle, start, end, T, reps, quick):
+    system = get(model)
+    ref = jn.connect(system, principle, start, end, (0.0, T), rtol=1e-13, atol=1e-14,
+                     tol=1e-11)
+    scene = ref.trajectory.scene
+    names = scene.state_names
+    want = np.array([ref.initial[k] for k in names])
+    rows = []
+    for rtol in CONNECT_RTOL[:2] if quick else CONNECT_RTOL:
+        sec, c = best(lambda: jn.connect(system, principle, start, end, (0.0, T), rtol=rtol,
+                                         atol=rtol * 1e-2, tol=max(1e-10, rtol * 10)), reps)
+        err = float(np.max(np.abs(np.array([c.initial[k] for k in names]) - want)))
+        rows.append(dict(model=model, principle=principle, route="connect", tol=rtol,
+                         seconds=sec, error=err, iterations=c.iterations))
+    for jacobian in (False, True):
+        fun, fjac, bc, t, Y = bvp_problem(scene, start, end, T, jacobian)
+        for tol in BVP_TOL[:2] if quick else BVP_TOL:
+            def go():
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    return solve_bvp(fun, bc, t, Y, fun_jac=fjac, tol=tol,
+                                     max_nodes=MAX_NODES)
+            sec, sol = best(go, reps, BUDGET)
+            err = float(np.max(np.abs(sol.y[:, 0] - want))) if sol.status == 0 else None
+            rows.append(dict(model=model, principle=principle,
+                             route="solve_bvp" + (" + jetnh jac" if jacobian else ""),
+                             tol=tol, seconds=sec, error=err, status=int(sol.status),
+                             nodes=int(sol.x.size)))
+    return ref, rows
+
+
+def speedups(rows):
+    out = []
+    for r in (r for r in rows if r["route"] == "connect"):
+        for route in ("solve_bvp", "solve_bvp + jetnh jac"):
+            other = [o for o in rows if o["route"] == route and o["model"] == r["model"]
+                     and o["principle"] == r["principle"] and o["error"] is not None]
+            good = [o["seconds"] for o in other if o["error"] <= max(r["error"], 1e-13)]
+            if good:
+                text = f"{min(good) / r['seconds']:.3g}"
+            elif other:
+                text = f">{max(o['seconds'] for o in other) / r['seconds']:.3g}"
+            else:
+                text = "solve_bvp failed"
+            out.append([r["model"], r["principle"], f"{r['tol']:.0e}", f"{r['error']:.2e}",
+                        f"{r['seconds'] * 1e3:.3g}", route, text])
+    return out
+
+
+def sensitivity_cost(model, principle, initial, T, reps):
+    sc = jn.Scene(get(model), principle, initial=initial, t_span=(0.0, T))
+    kw = dict(rtol=1e-10, atol=1e-12, save="final")
+    sc.run(**kw), sc.run(sensitivities=True, **kw)
+    plain = best(lambda: sc.run(**kw), reps)
+    ctl = best(lambda: sc.run(sensitivities=True, **kw), reps)
+    free = best(lambda: sc.run(sensitivities=True, sensitivity_error=False, **kw), reps)
+    return dict(model=model, principle=principle, n_state=len(sc.state_names),
+                plain_ms=plain[0] * 1e3, plain_nfev=plain[1].diagnostics.rhs_evaluations,
+                controlled_ms=ctl[0] * 1e3,
+                controlled_nfev=ctl[1].diagnostics.rhs_evaluations,
+                uncontrolled_ms=free[0] * 1e3,
+                uncontrolled_nfev=free[1].diagnostics.rhs_evaluations,
+                ratio_controlled=ctl[0] / plain[0], ratio_uncontrolled=free[0] / plain[0])
+
+
+def main():
+    args = parser(__doc__, "connect_vs_solve_bvp").parse_args()
+    reps = 2 if args.quick else 3
+    rows, found = [], []
+    for case in CASES[:1] if args.quick else CASES:
+        ref, r = connect_case(*case, reps, args.quick)
+        rows += r
+        found.append([case[0], case[1], f"{ref.cost:.10g}", f"{ref.residual:.1e}",
+                      str(ref.normal), ", ".join(f"{t:.6g}" for t in ref.conjugate_times)
+                      or "none", str(ref.iterations)])
+    sens = [sensitivity_cost("heisenberg", "vakonomic",
+                             {"x": 0.1, "y": 0.2, "z": 0.0, "x_t": 1.0, "y_t": 0.3,
+                              "lambda_z": 0.7}, 10.0, reps)]
+    if not args.quick:
+        sens.append(sensitivity_cost("rolling_disk", "vakonomic",
+                                     {**ZERO_DISK, "phi_t": 1.0, "psi_t": 0.7,
+                                      "lambda_x": 0.1, "lambda_y": -0.2}, 10.0, reps))
+        sens.append(sensitivity_cost("chaplygin_sleigh", "chetaev",
+                                     {"x": 0.0, "y": 0.0, "theta": 0.0, "x_t": 0.5,
+                                      "theta_t": 1.0}, 10.0, reps))
+    sp = speedups(rows)
+    best_ratio = {}
+    for m, p, tol, err, ms, route, text in sp:
+        if route == "solve_bvp":
+            best_ratio.setdefault((m, p), []).append(text)
+    summary = [f"{m} {p}: connect against solve_bvp (its finite-difference Jacobian) at "
+               f"equal error: {', '.join(v)} times faster (connect rtol "
+               f"{', '.join(f'{t:.0e}' for t in CONNECT_RTOL[:len(v)])})"
+               for (m, p), v in best_ratio.items()]
+    summary += [f"sensitivities on {s['model']} {s['principle']} ({s['n_state']} states): "
+                f"{s['ratio_controlled']:.2g}x the plain run under the error control, "
+                f"{s['ratio_uncontrolled']:.2g}x outside it" for s in sens]
+    write("connect_vs_solve_bvp", {
+        "summary": summary,
+        "columns": ["model", "principle", "route", "tol", "seconds", "error", "iterations",
+                    "status", "nodes"],
+        "rows": rows,
+        "tables": [
+            {"title": "Speed-up at equal error", "columns": [
+                "model", "principle", "connect rtol", "connect error", "connect ms",
+                "against", "speed-up"], "rows": sp,
+             "note": "the fastest solve_bvp run at least as accurate as connect, over "
+                     "connect's time ('>': no solve_bvp run was as accurate)"},
+            {"title": "What connect found (reference runs)", "columns": [
+                "model", "principle", "cost", "residual", "normal", "conjugate times",
+                "iterations"], "rows": found},
+            {"title": "The cost of sensitivities (one run, save='final')", "columns": list(
+                sens[0]), "rows": [[f"{v:.3g}" if isinstance(v, float) else v
+                                    for v in s.values()] for s in sens]},
+        ],
+    }, args.out, args.quick)
+
+
+if __name__ == "__main__":
+    main()

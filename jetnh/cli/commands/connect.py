@@ -1,0 +1,121 @@
+"""``jetnh connect``: the motion of a principle joining two configurations."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from ...errors import JetnhError
+from ..loading import load_model, with_split
+from ..parser import EPILOG_MODEL, model_args, subcommand
+from ..running import assignments
+from ..usage import UsageError
+
+
+def add_parser(sub):
+    s = subcommand(
+        sub, "connect", run=True,
+        help="the motion of a principle joining two configurations (two-point problem)",
+        description="Find a motion of MODEL under --principle (default vakonomic: the "
+                    "stationary action with fixed endpoints) from the configuration "
+                    "--from at T0 to --to at --t-end, by shooting with the exact "
+                    "sensitivities (jetnh.connect).  Prints the initial state found, the "
+                    "action int L dt, the endpoint residual, whether the extremal is "
+                    "normal, and its conjugate times.  --from defaults to the model's "
+                    "initial configuration (coordinates not given start at 0); --to may "
+                    "name only some coordinates (chetaev and suslov reach at most as "
+                    "many as there are independent velocities).",
+        epilog=EPILOG_MODEL + "\n\nexample: jetnh connect heisenberg --to x=1,y=0.5,z=0.2 "
+                              "--t-end 1 --plot geodesic.png")
+    model_args(s)
+    s.add_argument("--from", dest="start", action="append", metavar="NAME=VALUE",
+                   help="a coordinate at T0 (repeatable, or comma-separated)")
+    s.add_argument("--to", dest="end", action="append", metavar="NAME=VALUE",
+                   help="a coordinate at T (repeatable, or comma-separated); required")
+    s.add_argument("--guess", action="append", metavar="NAME=VALUE",
+                   help="initial velocities and multipliers to start the search from "
+                        "(default: the straight line, zero multipliers)")
+    s.add_argument("--set", action="append", metavar="NAME=VALUE",
+                   help="a parameter value (repeatable, or comma-separated)")
+    s.add_argument("--plot", metavar="PATH",
+                   help="save a plot (png, pdf, svg) of the coordinates against t")
+    s.add_argument("--format", choices=("text", "json"), default="text")
+    s.set_defaults(func=run)
+
+
+def run(args, progress) -> int:
+    from ...numeric.connect import connect
+
+    loaded = with_split(load_model(args.model), args.split)
+    system = loaded.system
+    sim = loaded.simulation
+    principle = args.principle or "vakonomic"
+    end = assignments(args.end, "--to")
+    if not end:
+        raise UsageError("give the end configuration: --to NAME=VALUE[,NAME=VALUE...]")
+    coords = [q.name for q in system.J.q]
+    start = {c: float(loaded.initial.get(c, 0.0)) for c in coords}
+    start.update(assignments(args.start, "--from"))
+    t0 = args.t_start if args.t_start is not None else float(sim.get("t_start", 0.0))
+    t1 = args.t_end if args.t_end is not None else sim.get("t_end")
+    if t1 is None:
+        raise UsageError("give --t-end (the model file has no [simulation] t_end)")
+    guess = assignments(args.guess, "--guess") or None
+    if args.plot and not Path(args.plot).resolve().parent.is_dir():
+        raise JetnhError(f"cannot write {args.plot}: the directory "
+                         f"{Path(args.plot).resolve().parent} does not exist")
+    kw = {"rtol": args.rtol} if args.rtol is not None else {}
+    if args.atol is not None:
+        kw["atol"] = args.atol
+    with progress.step(f"connecting under {principle} over [{t0:g}, {float(t1):g}] "
+                       "(kernels compiled once, then cached)"):
+        c = connect(system, principle, start, end, (t0, float(t1)),
+                    params=assignments(args.set, "--set") or None, guess=guess, **kw)
+    if args.format == "json":
+        print(json.dumps({"model": loaded.label, "principle": c.principle,
+                          "start": start, "end": end, "t_span": [t0, float(t1)],
+                          "initial": dict(c.initial), "cost": c.cost,
+                          "residual": c.residual, "normal": c.normal,
+                          "conjugate_times": list(c.conjugate_times), "rank": c.rank,
+                          "iterations": c.iterations}, indent=2))
+    else:
+        print(f"{system.name or loaded.label}: {c.principle}, t in [{t0:g}, {float(t1):g}]")
+        print("initial:   " + ", ".join(f"{k} = {v:.10g}" for k, v in c.initial.items()))
+        print(f"cost:      {c.cost:.12g} (the action int L dt)")
+        print(f"residual:  {c.residual:.3e} (max |q(t1) - end|)")
+        print(f"normal:    {'yes' if c.normal else 'no: an abnormal extremal'}")
+        print("conjugate: " + (", ".join(f"t = {t:.10g}" for t in c.conjugate_times)
+                               or "none in (t0, t1]"))
+        if c.rank < len(c.unknowns) and c.rank < len(end):
+            print(f"note:      the endpoint is degenerate (shooting Jacobian of rank "
+                  f"{c.rank}): a family of motions arrives, this is one of them")
+    if args.plot:
+        with progress.step(f"plotting to {args.plot}"):
+            _plot(c, coords, args.plot, f"{system.name or loaded.label} ({c.principle})")
+    return 0
+
+
+def _plot(c, coords, path, title):
+    import matplotlib
+    import numpy as np
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    tr = c.trajectory
+    t = np.linspace(tr.t[0], tr.t[-1], 400)
+    q = tr.at(t)
+    fig, ax = plt.subplots(figsize=(8, 4))
+    for i, name in enumerate(coords):
+        ax.plot(t, q[:, i], label=name)
+    for tc in c.conjugate_times:
+        ax.axvline(tc, color="k", ls=":", lw=1)
+    ax.set_xlabel("t")
+    ax.legend(fontsize="small", ncol=min(len(coords), 4))
+    ax.set_title(f"{title}: cost {c.cost:.6g}"
+                 + ("" if c.normal else ", abnormal")
+                 + (f", conjugate at {', '.join(f'{x:.4g}' for x in c.conjugate_times)}"
+                    if c.conjugate_times else ""))
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)

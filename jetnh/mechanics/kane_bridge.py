@@ -1,0 +1,414 @@
+"""Kane models into jetnh: a ``KanesMethod`` or a mechanics ``System`` becomes a ``System``.
+
+A Kane model states its kinematics in generalized speeds u, tied to the coordinates by
+the kinematic differential equations k(t, q, qdot, u) = 0 (linear in qdot and u).  jetnh
+works in q and qdot, so the speeds are solved from them, u = U(t, q, qdot), and every
+expression of the model is read with u replaced by U:
+
+- L = T - V: T the kinetic energies of the bodies and particles; V the potential of the
+  point loads that have one (a force constant in the inertial frame on a point located
+  from a point at rest: V = -F . r), checked against their generalized forces;
+- every other load gives generalized forces Q_s = sum F . dv/dqdot^s (v the velocity of
+  the point, or the angular velocity of the frame, in the inertial frame);
+- velocity constraints (linear in u) become constraints in qdot; configuration
+  constraints g(t, q) = 0 stay holonomic (``System.holonomic``: a Scene checks or
+  completes the initial configuration and keeps runs on g = 0), and the velocity
+  constraints that only restate D g are left out;
+- ``Speeds`` keeps the map both ways, u = U(t, q, qdot) and qdot = V(t, q, u).
+
+The model's kinematics must hold for every qdot, not only on the constraints: each body's
+velocity and angular velocity is checked at random states against the time derivative
+of its position (from a point at rest) and of its orientation.  A model that builds a
+constraint into its kinematics (a rolling contact point set at rest) is refused, with
+the fix: give the contact point coordinates and the constraint as velocity constraints.
+Functions of time other than q and u (specified inputs) are refused, as loads whose
+point has no velocity.
+"""
+
+from __future__ import annotations
+
+import random
+from dataclasses import dataclass
+
+import numpy as np
+import sympy as sp
+from sympy.core.function import AppliedUndef
+
+from ..algebra import dag, linalg
+from ..errors import JetnhError, JetSpaceError
+from ..geometry.jet import JetSpace, key_name
+
+#: relative agreement asked of the kinematic and potential checks at random states
+CHECK_TOL = 1e-12
+#: random states per check
+CHECK_POINTS = 2
+
+
+@dataclass(frozen=True)
+class Speeds:
+    """A Kane model's generalized speeds and jetnh's velocities, both ways.
+
+    ``symbols`` are Symbols named like the speeds (``u1`` for ``u1(t)``);
+    ``of_velocities[i]`` is u_i in t, q, qdot (jet Symbols) and ``velocities[s]`` is
+    qdot^s in t, q and ``symbols``.
+    """
+
+    J: JetSpace
+    symbols: tuple
+    of_velocities: tuple
+    velocities: tuple
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(s.name for s in self.symbols)
+
+    def read(self, traj, params=None) -> dict[str, np.ndarray]:
+        """The speeds along a trajectory (or at a state: anything indexed by the names of
+        t, q and qdot), keyed by name; ``params`` gives the parameters they contain."""
+        J = self.J
+        point = {J.t: np.asarray(traj.t if hasattr(traj, "t") else traj[J.t.name], dtype=float)}
+        point.update((s, np.asarray(traj[s.name], dtype=float)) for s in (*J.q, *J.qd))
+        for k, v in (params or {}).items():
+            name = key_name(k)
+            if name is None:
+                raise JetnhError(f"params keys are parameter Symbols or names, not {k!r}")
+            point[sp.Symbol(name)] = float(v)
+        try:
+            values = dag.evaluate_numpy(list(self.of_velocities), point)
+        except ValueError as exc:
+            raise JetnhError(f"Speeds.read: {exc}; give the parameters in params=") from None
+        return dict(zip(self.names, values))
+
+    def __repr__(self):
+        return "Speeds(" + ", ".join(f"{u} = {e}" for u, e in
+                                     zip(self.names, self.of_velocities)) + ")"
+
+
+# ------------------------------------------------------------------ the model read
+@dataclass(frozen=True)
+class _Kane:
+    """What a Kane model states, in dynamicsymbols."""
+
+    frame: object
+    q: tuple
+    u: tuple
+    u_aux: tuple
+    kdes: tuple
+    bodies: tuple
+    loads: tuple
+    holonomic: tuple          # g(t, q) = 0
+    velocity: tuple           # velocity constraints, linear in u (or qdot)
+    restates_holonomic: bool  # whether ``velocity`` contains D g too (KanesMethod's contract)
+    fixed_point: object       # a point at rest in ``frame``, or None: searched
+
+
+def read_kanes_method(km) -> _Kane:
+    if km.bodies is None:
+        raise JetnhError("the KanesMethod has no bodies yet; pass bodies= (and forcelist=) "
+                         "to KanesMethod or call km.kanes_equations(bodies, loads) first")
+    vel = (sp.Matrix(km._k_nh) * km.u + sp.Matrix(km._f_nh)) if len(km._k_nh) else []
+    return _Kane(km._inertial, tuple(km.q), tuple(km.u), tuple(km._uaux),
+                 tuple(km._k_kqdot_implicit * km.q.diff(_t()) + km._k_ku_implicit * km.u
+                       + km._f_k_implicit) if len(km._k_ku_implicit) else (),
+                 tuple(km.bodies), tuple(km.loads or ()), tuple(km._f_h), tuple(vel), True,
+                 None)
+
+
+def read_mechanics_system(ms) -> _Kane:
+    for b in ms.bodies:
+        if getattr(b, "potential_energy", 0) != 0:
+            raise JetnhError(
+                f"the body {b.name} has a potential_energy, which KanesMethod (the System's "
+                "default) does not read; give the force as a load (e.g. "
+                "System.apply_uniform_gravity), or form the System's equations with "
+                "LagrangesMethod first (system.form_eoms(LagrangesMethod)) to import those")
+    loads = tuple(ms.loads) + tuple(ld for act in ms.actuators for ld in act.to_loads())
+    explicit = ms._vel_constrs is not None
+    return _Kane(ms.frame, tuple(ms.q), tuple(ms.u), tuple(ms.u_aux), tuple(ms.kdes),
+                 tuple(ms.bodies), loads, tuple(ms.holonomic_constraints),
+                 tuple(ms.velocity_constraints if explicit else ms.nonholonomic_constraints),
+                 explicit, ms.fixed_point)
+
+
+def _t():
+    from sympy.physics.vector import dynamicsymbols
+
+    return dynamicsymbols._t
+
+
+# ------------------------------------------------------------------ the conversion
+class _Reader:
+    """Reads the expressions of one Kane model as jet expressions."""
+
+    def __init__(self, model: _Kane):
+        self.model = model
+        t = _t()
+        names = []
+        for q in model.q:
+            if not (isinstance(q, AppliedUndef) and q.args == (t,)):
+                raise JetnhError(f"the coordinate {q} is not a dynamicsymbol q(t); build it "
+                                 "with dynamicsymbols('q')")
+            names.append(q.func.__name__)
+        if len(model.u) != len(model.q):
+            raise JetnhError(
+                f"the model has {len(model.q)} coordinates and {len(model.u)} generalized "
+                "speeds; jetnh reads speeds as an invertible change of the velocities, one "
+                "per coordinate: add the missing speeds (dependent ones with velocity "
+                "constraints) and their kinematic differential equations")
+        if len(model.kdes) != len(model.q):
+            raise JetnhError("the model has no kinematic differential equations for every "
+                             "coordinate; give one per coordinate (e.g. q' - u = 0)")
+        self.J = JetSpace(names, t=t.name)
+        qd = [q.diff(t) for q in model.q]
+        kd = sp.Matrix(model.kdes).xreplace(dict.fromkeys(model.u_aux, 0))
+        k_u, k_qd = kd.jacobian(model.u), kd.jacobian(qd)
+        f_k = kd.xreplace({**dict.fromkeys(model.u, 0), **dict.fromkeys(qd, 0)})
+        if _singular(k_u) or _singular(k_qd):
+            raise JetnhError(
+                "the kinematic differential equations do not determine the speeds from the "
+                "velocities (and back) at a random state; give one speed per independent "
+                "velocity combination")
+        self.u_of_qd = dict(zip(model.u, _solve(k_u, -(k_qd * sp.Matrix(qd) + f_k))))
+        self.u_of_qd.update(dict.fromkeys(model.u_aux, 0))
+        syms = [sp.Symbol(u.func.__name__) for u in model.u]
+        qd_of_u = _solve(k_qd, -(k_u * sp.Matrix(syms) + f_k))
+        self.speeds = Speeds(self.J, tuple(syms),
+                             tuple(self.jet(self.u_of_qd[u], f"the speed {u}") for u in model.u),
+                             tuple(self.J.from_dynamic(e) for e in qd_of_u))
+
+    def jet(self, expr, what):
+        """``expr`` (dynamicsymbols, speeds) in t, q, qdot."""
+        expr = sp.sympify(expr).xreplace(self.u_of_qd)
+        try:
+            return self.J.from_dynamic(expr)
+        except JetSpaceError as exc:
+            raise JetSpaceError(
+                f"{what} of the Kane model: {exc}. from_mechanics reads functions of time "
+                "only among the coordinates and speeds; substitute specified inputs (e.g. "
+                "r(t)) by parameters or expressions of t first") from None
+
+    def vector(self, vec, what) -> sp.Matrix:
+        """The inertial components of a Vector, as jet expressions."""
+        N = self.model.frame
+        return sp.Matrix([self.jet(c, what) for c in vec.to_matrix(N)])
+
+
+def _solve(A: sp.Matrix, b: sp.Matrix) -> list:
+    """A^-1 b without spurious singularities (``linalg.solve``: the only denominator of
+    a small system is det A, so u3/cos(q2) is not written over sin(q2))."""
+    return list(linalg.solve(A, b))
+
+
+def _singular(M: sp.Matrix) -> bool:
+    rnd = random.Random(1)
+    point = {s: sp.Float(rnd.uniform(0.3, 1.3), 30) for s in M.free_symbols}
+    for f in M.atoms(AppliedUndef) | M.atoms(sp.Derivative):
+        point[f] = sp.Float(rnd.uniform(-1, 1), 30)
+    num = M.xreplace(point).evalf(30)
+    return num.rows != num.cols or abs(num.det()) < 1e-20
+
+
+def _random_points(J: JetSpace, exprs, n=CHECK_POINTS, seed=7):
+    """States (t, q, qdot and the parameters of ``exprs``) drawn at random."""
+    rnd = random.Random(seed)
+    free = set().union(*(dag.free_symbols(e) for e in exprs)) if exprs else set()
+    own = {J.t, *J.q, *J.qd}
+    out = []
+    for _ in range(n):
+        p = {s: rnd.uniform(0.4, 1.4) for s in free - own}
+        p.update({s: rnd.uniform(-1, 1) for s in own})
+        out.append(p)
+    return out
+
+
+def _agree(a, b, points) -> bool:
+    for p in points:
+        va, vb = dag.evaluate(list(a), p), dag.evaluate(list(b), p)
+        scale = max([1] + [abs(v) for v in vb])
+        if any(abs(x - y) > CHECK_TOL * scale for x, y in zip(va, vb)):
+            return False
+    return True
+
+
+def _fixed_point(model: _Kane, start):
+    """A point at rest in the inertial frame from which ``start`` is located, or None."""
+    N = model.frame
+    if model.fixed_point is not None:
+        return model.fixed_point
+    seen, todo = {start}, [start]
+    while todo:
+        p = todo.pop()
+        v = p._vel_dict.get(N)
+        if v is not None and v == 0:
+            return p
+        for nxt in p._pos_dict:
+            if nxt not in seen:
+                seen.add(nxt)
+                todo.append(nxt)
+    return None
+
+
+def _position(reader: _Reader, point, what) -> sp.Matrix:
+    O = _fixed_point(reader.model, point)
+    if O is None:
+        raise JetnhError(
+            f"{what} ({point.name}) is not located from a point at rest in "
+            f"{reader.model.frame.name}, so its velocity cannot be checked against its "
+            "motion; locate it (locatenew) from a point whose velocity is set to zero. If "
+            "the model sets a contact point at rest to build a rolling constraint into the "
+            "kinematics, give the contact point coordinates instead and the rolling as "
+            "velocity constraints")
+    try:
+        r = point.pos_from(O)
+    except ValueError:
+        raise JetnhError(f"{what} ({point.name}) has no position from {O.name}") from None
+    return reader.vector(r, f"the position of {point.name}")
+
+
+def _check_point(reader: _Reader, point, what):
+    """The velocity of ``point`` is the time derivative of its position."""
+    J, N = reader.J, reader.model.frame
+    r = _position(reader, point, what)
+    v = reader.vector(point.vel(N), f"the velocity of {point.name}")
+    dr = [J.D(c) for c in r]
+    if not _agree(v, dr, _random_points(J, list(v) + dr)):
+        raise JetnhError(
+            f"the velocity of {point.name} ({what}) in {N.name} is not the time derivative "
+            f"of its position at random states: the kinematics hold only on some "
+            "constraint (e.g. a rolling point set at rest); state the velocities for every "
+            "motion and give the constraint as a velocity constraint")
+    return r
+
+
+def _check_frame(reader: _Reader, frame, what):
+    """The angular velocity of ``frame`` is the one of its orientation (W = C' C^T)."""
+    J, N = reader.J, reader.model.frame
+    C = sp.Matrix(frame.dcm(N)).applyfunc(lambda e: reader.jet(e, f"the orientation of {what}"))
+    Cd = C.applyfunc(J.D)
+    W = Cd * C.T
+    w = [W[1, 2], W[2, 0], W[0, 1]]
+    given = [reader.jet(c, f"the angular velocity of {what}")
+             for c in frame.ang_vel_in(N).to_matrix(frame)]
+    if not _agree(given, w, _random_points(J, given + w)):
+        raise JetnhError(
+            f"the angular velocity of {frame.name} ({what}) in {N.name} is not the one of "
+            "its orientation at random states; set it from the orientation (or with speeds "
+            "whose kinematic differential equations match it)")
+
+
+def lagrangian_and_forces(reader: _Reader):
+    """T - V and the generalized forces of the other loads (see the module docstring)."""
+    from sympy.physics.vector import Point, ReferenceFrame
+
+    J, N = reader.J, reader.model.frame
+    T = sp.S.Zero
+    for b in reader.model.bodies:
+        what = f"the body {b.name}"
+        _check_point(reader, b.masscenter, what)
+        if not _is_particle(b):
+            _check_frame(reader, b.frame, what)
+        T += reader.jet(b.kinetic_energy(N), f"the kinetic energy of {b.name}")
+    V = sp.S.Zero
+    Q = [sp.S.Zero] * J.n
+    for load in reader.model.loads:
+        where, vec = load[0], load[1]
+        if isinstance(where, Point):
+            try:
+                vel = where.vel(N)
+            except ValueError:
+                raise JetnhError(f"a load acts on the point {where.name}, whose velocity in "
+                                 f"{N.name} is not known; set it (set_vel, v2pt_theory)") from None
+            what = f"the point {where.name}"
+        elif isinstance(where, ReferenceFrame):
+            vel, what = where.ang_vel_in(N), f"the frame {where.name}"
+        else:
+            raise JetnhError(f"a load acts on {where!r}; loads act on a Point or a "
+                             "ReferenceFrame")
+        v = reader.vector(vel, f"the velocity of {what}")
+        F = reader.vector(vec, f"the load on {what}")
+        q_load = [sum((F[i] * dag.diff(v[i], qd) for i in range(3)), sp.S.Zero)
+                  for qd in J.qd]
+        pot = _potential(reader, where, F, q_load) if isinstance(where, Point) else None
+        if pot is not None:
+            V += pot
+        else:
+            Q = [a + b for a, b in zip(Q, q_load)]
+    return T - V, {q: e for q, e in zip(J.q, Q) if e != 0}
+
+
+def _is_particle(b) -> bool:
+    from sympy.physics.mechanics import Particle
+
+    return isinstance(b, Particle)
+
+
+def _potential(reader: _Reader, point, F, Q):
+    """-F . r for a force constant in the inertial frame on a point located from a point
+    at rest, when its generalized forces are -dV/dq (checked); else None."""
+    J = reader.J
+    own = {J.t, *J.q, *J.qd}
+    if any(dag.free_symbols(c) & own for c in F) or _fixed_point(reader.model, point) is None:
+        return None
+    r = _check_point(reader, point, "the point of a load")
+    V = -sum((F[i] * r[i] for i in range(3)), sp.S.Zero)
+    minus_dV = [-dag.diff(V, q) for q in J.q]
+    return V if _agree(minus_dV, Q, _random_points(J, minus_dV + list(Q))) else None
+
+
+def constraints(reader: _Reader) -> list:
+    """The velocity constraints in qdot, then the configuration constraints through
+    ``holonomic``; velocity constraints that restate D g are left out."""
+    J, model = reader.J, reader.model
+    vel = [reader.jet(f, f"velocity constraint {a + 1}") for a, f in enumerate(model.velocity)]
+    hol = [reader.jet(g, f"configuration constraint {a + 1}")
+           for a, g in enumerate(model.holonomic)]
+    for a, g in enumerate(hol):
+        if dag.free_symbols(g) & set(J.qd):
+            raise JetnhError(f"configuration constraint {a + 1} contains velocities; give it "
+                             "as a velocity (nonholonomic) constraint")
+    if hol and model.restates_holonomic:
+        vel = _complement(J, vel, hol)
+    return vel + holonomic(hol)
+
+
+def holonomic(g: list) -> list:
+    """How configuration constraints g(t, q) = 0 enter the System: as written, so that
+    it keeps them at position level (``System.holonomic``; its equations use D g)."""
+    return list(g)
+
+
+def _complement(J: JetSpace, vel: list, hol: list) -> list:
+    """The velocity constraints that, with D g, span what all of them span (chosen at a
+    random state, in the given order)."""
+    point = _random_points(J, vel + hol, n=1, seed=11)[0]
+    rows = [[float(x) for x in dag.evaluate([dag.diff(g, q) for q in J.q], point)]
+            for g in hol]
+    rank = np.linalg.matrix_rank(np.array(rows)) if rows else 0
+    if rank < len(hol):
+        raise JetnhError("the configuration constraints are dependent (their Jacobian is "
+                         "rank-deficient at a random configuration); give independent ones")
+    kept = []
+    for f in vel:
+        row = [float(x) for x in dag.evaluate([dag.diff(f, qd) for qd in J.qd], point)]
+        if np.linalg.matrix_rank(np.array(rows + [row])) > len(rows):
+            rows.append(row)
+            kept.append(f)
+    if len(kept) != len(vel) - len(hol):
+        raise JetnhError(
+            f"of the {len(vel)} velocity constraints, {len(kept)} are independent of the "
+            f"{len(hol)} differentiated configuration constraints (expected "
+            f"{len(vel) - len(hol)}): each velocity constraint of a KanesMethod is either "
+            "nonholonomic or a derivative of a configuration constraint; give independent "
+            "ones")
+    return kept
+
+
+def read(model):
+    """``(J, L, constraints, forces, speeds)`` of a KanesMethod or a mechanics System."""
+    from sympy.physics.mechanics import KanesMethod
+
+    kane = (read_kanes_method(model) if isinstance(model, KanesMethod)
+            else read_mechanics_system(model))
+    reader = _Reader(kane)
+    L, forces = lagrangian_and_forces(reader)
+    return reader.J, L, constraints(reader), forces, reader.speeds

@@ -1,0 +1,550 @@
+"""Atlases of splits: a run that reaches the edge of its split's chart goes on in another.
+
+A split (the dependent coordinates q^alpha) is a chart of the constraint manifold
+f(t, q, qdot) = 0: the constraints solve for qdot^alpha where the minor A_alpha =
+df/dqdot^alpha of A = df/dqdot (k x n) is invertible.  How well, at a point:
+
+    m_alpha = det(A_alpha)^2 / det(A A^T)   in [0, 1],
+
+unchanged when the constraints are recombined (f -> M f) and, by the Cauchy-Binet
+formula, summing to 1 over all splits; so among the N splits whose minor is not
+identically zero one has m >= 1/N wherever A has rank k.  A run watches the edge of its
+chart, m_alpha = eps with eps = 1/(4N), as a terminal event (``edge``: det(A_alpha)^2 -
+eps det(A A^T) crossing zero downwards) located on the dense output like any event.  There
+the run continues in the split of largest measure (>= 4 eps: hysteresis, no chattering),
+from the same point, with the state mapped exactly:
+
+- coordinates unchanged; the velocities re-split (the dependent ones, computed from the
+  constraints, become states and the states that are now dependent drop out);
+- multipliers: those of the forms built on the constraints as written (vakonomic and
+  Hoelder (15), (22): F = L + lambda_a f^a) belong to the constraints, not to the split,
+  and keep their values (their names follow the dependent coordinates: lambda_y in one
+  split is lambda_x in the other).  The explicit forms ((17)-(20)) weigh
+  qdot^alpha - phi^alpha instead; on the constraints f = A_alpha (qdot^alpha -
+  phi^alpha) to first order, so their multipliers are A_alpha^T lambda and map as
+  lambda_beta = A_beta^T A_alpha^-T lambda_alpha.  Chetaev's equations have no multiplier
+  states.
+
+Suslov's equations in the paper's convention (29)-(31) are no chart change away from
+each other: the commutator term P_alpha c^alpha weighs the momenta of the dependent
+coordinates, and the motions of two splits differ (``split_invariant``).  Such runs, runs
+with callable events (functions of one split's state vector), systems with more than 3
+constraints, scipy's methods (``scipy-<M>``) and ``split="fixed"`` keep their split and
+stop at its edge as before (dla and dvi never solve for the dependent velocities, so no
+split's edge stops them).  The compiled methods dop853, dopri5, rk4 and radau switch;
+``Scene.run`` calls ``run``, ensembles and sweeps ``begin`` and ``go_on`` (the same
+continuation, so their runs equal single runs bit for bit).
+
+A switched run is one ``Trajectory`` of the scene: its rows are in the scene's state
+layout (the other charts' rows mapped), its dependent velocities, residuals, energy and
+first integrals come from each chart's own kernels, dense output re-takes each chart's
+own steps, and ``traj.switches`` (also in the diagnostics) lists (time, from, to).
+"""
+
+from __future__ import annotations
+
+import time
+from itertools import combinations
+
+import numpy as np
+import sympy as sp
+
+from ..algebra import dag, linalg
+from ..errors import JetnhError
+from ..mechanics import principles
+from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, SINGULAR, STOPPED
+from .methods.loop import Watch
+
+#: the event name of a chart's edge (internal: the stitched run does not report it)
+EDGE = "chart edge"
+#: the largest number of constraints whose splits are watched (symbolic determinants)
+MAX_K = 3
+
+
+def split_invariant(principle, convention) -> bool:
+    """Whether the motions of ``principle`` in ``convention`` are the same in every split
+    (so that a run may change split): all but Suslov's in the paper's convention."""
+    p = principles.get(principle)
+    return not (p.kappa == "momenta" and not p.restricts(convention))
+
+
+def splits(system) -> list[tuple[str, ...]]:
+    """The splits of ``system`` whose minor df/dqdot^alpha is not identically zero, the
+    system's own first."""
+    J, k = system.J, system.k
+    A = system.jacobian
+    own = tuple(s.name for s in system.dependent)
+    out = [own]
+    for cols in combinations(range(J.n), k):
+        names = tuple(J.q[c].name for c in cols)
+        if names != own and linalg.numeric_rank(A[:, list(cols)]) == k:
+            out.append(names)
+    return out
+
+
+def applies(scene, events) -> bool:
+    """Whether a run of ``scene`` with ``events`` watches its chart's edge: at most
+    ``MAX_K`` constraints, a split whose minor varies, a principle whose motions do not
+    depend on the split, another split to go to, and no callable events."""
+    static = scene._memo.get("atlas_applies")
+    if static is None:
+        sys_ = scene.system
+        static = (0 < sys_.k <= MAX_K
+                  and not all(e.is_number for e in sys_.jacobian_dependent)
+                  and split_invariant(scene.principle, scene.convention)
+                  and len(atlas(scene).splits) > 1)
+        scene._memo["atlas_applies"] = static
+    if not static or events is None:
+        return static
+    from .events import as_events
+
+    return all(e.is_expression for e in as_events(events))
+
+
+def atlas(scene) -> "Atlas":
+    """The atlas of ``scene`` (built once, kept in its memo)."""
+    found = scene._memo.get("atlas")
+    if found is None:
+        found = scene._memo["atlas"] = Atlas(scene)
+    return found
+
+
+class Chart:
+    """One split of an atlas: the positions of its dependent and independent coordinates,
+    whether its multipliers weigh the explicit constraints, and its scene (``None`` for a
+    chart used only to map a state)."""
+
+    def __init__(self, system, split, explicit, scene=None):
+        names = [s.name for s in system.J.q]
+        self.split = tuple(split)
+        self.dep = np.array([names.index(c) for c in split], dtype=np.int64)
+        self.ind = np.array([i for i in range(len(names)) if names[i] not in split],
+                            dtype=np.int64)
+        self.explicit = explicit
+        self.n, self.k = len(names), len(split)
+        self.scene = scene
+
+    @property
+    def kernels(self):
+        return self.scene.kernels
+
+    def jacobian(self, t, Y, p) -> np.ndarray:
+        """df/dqdot at the rows (t, Y) of this chart: [rows, k, n]."""
+        from .calls import Kernel
+
+        ce = self.scene.compile_events(_jacobian_events(self.scene.system))
+        kern = Kernel(ce.uev, (Y.shape[1], p.shape[0], self.k * self.n))
+        out = np.empty((Y.shape[0], self.k * self.n))
+        for r in range(Y.shape[0]):
+            kern(float(t[r]), np.ascontiguousarray(Y[r]), p, out[r])
+        return out.reshape(-1, self.k, self.n)
+
+    def universal(self, t, Y, p):
+        """``(q, qdot, lam, A, aux)`` of rows of this chart: every velocity, the
+        multipliers of the constraints as written, df/dqdot (explicit forms with
+        multipliers, else None) and the aux rows."""
+        Y = np.ascontiguousarray(np.atleast_2d(Y), dtype=float)
+        t = np.ascontiguousarray(np.atleast_1d(np.asarray(t, dtype=float)))
+        n, k = self.n, self.k
+        aux = np.empty((Y.shape[0], self.kernels.layout.n_aux))
+        if Y.shape[0]:
+            self.kernels.aux_rows(t, Y, p, aux)
+        qd = np.empty((Y.shape[0], n))
+        qd[:, self.ind] = Y[:, n:2 * n - k]
+        qd[:, self.dep] = aux[:, :k]
+        lam = Y[:, 2 * n - k:]
+        A = None
+        if self.explicit and lam.shape[1] and Y.shape[0]:
+            A = self.jacobian(t, Y, p)
+            lam = np.linalg.solve(np.transpose(A[:, :, self.dep], (0, 2, 1)),
+                                  lam[:, :, None])[:, :, 0]
+        return Y[:, :n], qd, lam, A, aux
+
+    def state(self, q, qd, lam, A) -> np.ndarray:
+        """Rows of this chart's state from ``(q, qdot, lam, A)`` (``universal``)."""
+        if self.explicit and lam.shape[1]:
+            lam = np.einsum("rai,ra->ri", A[:, :, self.dep], lam)
+        return np.ascontiguousarray(np.hstack([q, qd[:, self.ind], lam]))
+
+
+def _jacobian_events(system):
+    from .events import Event
+
+    return [Event(e, name=f"A{i}") for i, e in enumerate(system.jacobian)]
+
+
+class Atlas:
+    """The charts of a scene's system (``splits``), each a ``Scene`` of
+    ``system.with_split`` built when a run first enters it; ``eps`` the edge of every
+    chart."""
+
+    def __init__(self, home):
+        self.home = home
+        self.splits = splits(home.system)
+        self.eps = 1.0 / (4 * len(self.splits))
+        p = principles.get(home.principle)
+        self.explicit = bool(p.multipliers) and p.form(home.form).explicit
+        self.charts = {self.splits[0]: Chart(home.system, self.splits[0], self.explicit,
+                                             home)}
+        self._events: dict = {}
+
+    @property
+    def own(self) -> Chart:
+        return self.charts[self.splits[0]]
+
+    def chart(self, split, t0, y) -> Chart:
+        """The chart of ``split`` (its scene built at the state ``y`` of it at ``t0``
+        the first time)."""
+        found = self.charts.get(split)
+        if found is None:
+            home = self.home
+            sys_ = home.system.with_split(list(split))
+            mult = [s.name for s in principles.get(home.principle).multiplier_symbols(sys_)]
+            names = ([s.name for s in sys_.J.q]
+                     + [v.name for v in sys_.independent_velocities] + mult)
+            scene = home.replace(system=sys_,
+                                 initial=dict(zip(names, np.asarray(y, dtype=float).tolist())),
+                                 t_span=(t0, home.t_span[1]),
+                                 integrals=self.rewrite(home.integrals, sys_))
+            found = self.charts[split] = Chart(sys_, split, self.explicit, scene)
+        return found
+
+    def rewrite(self, exprs: dict, sys_) -> dict:
+        """Expressions in the home split's multipliers, rewritten in those of ``sys_``
+        (the map of the module docstring)."""
+        p = principles.get(self.home.principle)
+        old = p.multiplier_symbols(self.home.system)
+        new = p.multiplier_symbols(sys_)
+        if not old or tuple(old) == tuple(new):
+            return dict(exprs)
+        if not self.explicit:
+            sub = dict(zip(old, new))
+        else:
+            A = self.home.system.jacobian
+            lam = linalg.solve(A[:, list(sys_.dep_index)].T, sp.Matrix(new))
+            sub = dict(zip(old, list(A[:, list(self.home.system.dep_index)].T * lam)))
+        return {k: sp.sympify(v).xreplace(sub) for k, v in exprs.items()}
+
+    def edge(self, chart) -> sp.Expr:
+        """det(A_alpha)^2 - eps det(A A^T) of the chart's split (A = df/dqdot)."""
+        sys_ = chart.scene.system
+        A = sys_.jacobian
+        Ad = A[:, list(sys_.dep_index)]
+        gram = A * A.T
+        if sys_.k == 1:
+            return Ad[0, 0]**2 - sp.Float(self.eps) * gram[0, 0]
+        return (Ad.det(method="berkowitz")**2
+                - sp.Float(self.eps) * gram.det(method="berkowitz"))
+
+    def jacobian_at(self, t, q, qd, p) -> np.ndarray:
+        """df/dqdot (k x n) at one point, from the shared graph (no kernel to compile)."""
+        sys_ = self.home.system
+        J = sys_.J
+        values = {**self.home.params, **dict(zip(self.home.runtime_params, p.tolist()))}
+        point = {J.t: float(t), **dict(zip(J.q, q.tolist())), **dict(zip(J.qd, qd.tolist())),
+                 **{s: values[s.name] for s in sys_.parameters}}
+        found = dag.evaluate(list(sys_.jacobian), point, dps=20)
+        return np.array([float(v) for v in found]).reshape(sys_.k, J.n)
+
+    def measures(self, A) -> dict:
+        """m_beta = det(A_beta)^2 / det(A A^T) of every split at one point (A: k x n)."""
+        gram = np.linalg.det(A @ A.T)
+        names = [s.name for s in self.home.system.J.q]
+        return {s: float(np.linalg.det(A[:, [names.index(c) for c in s]]) ** 2 / gram)
+                for s in self.splits}
+
+    def events(self, chart, user, edge: bool):
+        """The compiled events of a run in ``chart``: the user's (rewritten in its
+        multipliers) and, with ``edge``, its edge last; or None.  Kept per chart, user
+        events and edge, so that repeated runs build nothing."""
+        key = (chart.split, edge, tuple((sp.srepr(e.fun), e.direction, e.max_events, e.name)
+                                        for e in user))
+        found = self._events.get(key)
+        if found is None:
+            found = self._events[key] = (self._compile_events(chart, user, edge),)
+        return found[0]
+
+    def _compile_events(self, chart, user, edge):
+        from .events import Event
+
+        sys_ = chart.scene.system
+        evs = [Event(e2, terminal=e.max_events, direction=e.direction, name=e.name)
+               for e, e2 in zip(user, self.rewrite({i: e.fun for i, e in enumerate(user)},
+                                                   sys_).values())]
+        if edge:
+            evs.append(Event(self.edge(chart), terminal=True, direction=-1, name=EDGE))
+        return chart.scene.compile_events(evs) if evs else None
+
+
+# ---------------------------------------------------------------------- the driver
+def run(home, method, events, t0, t1, y0, p, ctl, te, mode, dense, checked, singular_tol,
+        newton, limit):
+    """``Scene.run`` of a scene whose split has an edge (``applies``): the compiled loop
+    in one chart until the run ends or reaches the chart's edge, where it goes on in the
+    split of largest measure with the state mapped; one Trajectory of ``home``."""
+    from .events import as_events
+
+    at = atlas(home)
+    user = as_events(events)
+    tic = time.perf_counter()
+    chart, y, first = begin(at, user, t0, y0, p)
+    parts, switches = follow(at, method, chart, t0, y, t1, p, user,
+                             np.zeros(len(user), np.int64), ctl, ctl.max_steps, te, mode,
+                             dense, checked, singular_tol, newton, limit)
+    return stitch(home, at, method, p, parts, first + switches, user, mode,
+                  time.perf_counter() - tic)
+
+
+def begin(at, user, t0, y0, p):
+    """The chart a run from (t0, y0) (the scene's state) starts in: the scene's own,
+    unless that is already past its edge there (then the split of largest measure);
+    ``(chart, state in it, [the switch at t0] or [])``."""
+    own = at.own
+    if not at.events(own, user, True).python_funcs[-1](t0, y0, p) < 0.0:
+        return own, y0, []
+    q, qd, lam, A, _ = own.universal([t0], y0, p)
+    if A is None:
+        A = at.jacobian_at(t0, q[0], qd[0], p)[None]
+    if not at.measures(A[0])[own.split] < at.eps:
+        return own, y0, []
+    target = _target(at, own, A[0], q, qd, lam, A, t0, p)
+    if target is None:
+        return own, y0, []
+    chart, y = target
+    return chart, y, [{"t": t0, "from": list(own.split), "to": list(chart.split)}]
+
+
+def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mode, dense, checked,
+           singular_tol, newton, limit, first=True, h_fixed=None, edge=True):
+    """Run from (t, y) in ``chart`` to ``t1``, changing chart at every edge; returns the
+    pieces ``[(chart, trajectory of the chart's scene, what re-running it needs)]`` and
+    the switches.  ``counts``: occurrences of the user events so far (terminal counts go
+    on); ``first``: whether (t, y) starts the run (else the run goes on after a switch);
+    ``edge``: whether to watch the chart's edge."""
+    user_max = np.array([e.max_events for e in user], dtype=np.int64)
+    parts, switches = [], []
+    direction = 1.0 if t1 >= t else -1.0
+    if h_fixed is None:
+        h_fixed = (t1 - t) / ctl.n_steps if ctl.n_steps > 0 else 0.0
+    tic = time.perf_counter()
+    while True:
+        scene, kern = chart.scene, chart.kernels
+        ce = at.events(chart, user, edge)
+        remaining = np.where(user_max > 0, user_max - counts, 0)
+        none = np.zeros(0, dtype=np.int64)
+        watch = Watch(len(kern.layout.indicators) if checked else 0, float(singular_tol),
+                      ce.direction if ce is not None else none,
+                      np.concatenate([remaining, [1] * edge]).astype(np.int64)
+                      if ce is not None else none)
+        seg_ctl, seg_te = ctl, te
+        if parts or not first:
+            n_steps = (max(1, round(abs(t1 - t) / abs(h_fixed))) if ctl.n_steps > 0 else 0)
+            seg_ctl = ctl._replace(first_step=0.0, max_steps=max(steps_left, 0),
+                                   n_steps=n_steps)
+            if mode == AT_T_EVAL:
+                seg_te = np.ascontiguousarray(te[direction * (te - t) > 0.0])
+        left = None if limit is None else limit - (time.perf_counter() - tic)
+        seg_dense = None if dense is None else dict(dense)
+        out, wall = scene._solve(method, kern, ce, watch, t, t1, y, p, seg_ctl, seg_te, mode,
+                                 newton, left)
+        if seg_dense is not None:
+            seg_dense["partial_last"] = int(out.status) in (EVENT, SINGULAR)
+        n_ev = int(out.n_ev)
+        hit = (edge and int(out.status) == EVENT and n_ev > 0
+               and int(out.ev_i[n_ev - 1]) == len(user))
+        seg = scene._trajectory(method, out, wall, kern, ce, p, t, y, singular_tol, checked,
+                                limit, seg_dense, n_events=len(user))
+        parts.append((chart, seg, (t, y, t1, seg_ctl, watch, ce)))
+        steps_left -= seg._info["steps"]
+        for i in range(len(user)):
+            counts[i] += len(seg.t_events[i])
+        if not hit:
+            break
+        t = float(out.ev_t[n_ev - 1])
+        ys = np.ascontiguousarray(out.ev_y[n_ev - 1])
+        if limit is not None and time.perf_counter() - tic >= limit:
+            break
+        target = switch(at, chart, t, ys, p)
+        if target is None:          # no better split here: go on without the edge
+            edge, y = False, ys
+            continue
+        new, y = target
+        switches.append({"t": t, "from": list(chart.split), "to": list(new.split)})
+        chart = new
+    return parts, switches
+
+
+def switch(at, chart, t, y, p):
+    """The chart to go on in at the edge of ``chart`` (reached at (t, y)) and the state
+    there, or None (``_target``)."""
+    q, qd, lam, A, _ = chart.universal([t], y, p)
+    if A is None:
+        A = at.jacobian_at(t, q[0], qd[0], p)[None]
+    return _target(at, chart, A[0], q, qd, lam, A, t, p)
+
+
+def _target(at, chart, A, q, qd, lam, A_rows, t, p):
+    """The chart to go on in at the edge of ``chart`` and the state there: the split of
+    largest measure (at least twice the edge) whose constraints give back the
+    velocities (the same branch), or None."""
+    m = at.measures(A)
+    for split in sorted(m, key=lambda s: -m[s]):
+        if split == chart.split or m[split] < 2 * at.eps:
+            continue
+        draft = Chart(at.home.system, split, at.explicit)
+        y = draft.state(q, qd, lam, A_rows)[0]
+        new = at.chart(split, t, y)
+        _, qd2, _, _, _ = new.universal([t], y, p)
+        if np.all(np.abs(qd2 - qd) <= 1e-8 * np.maximum(1.0, np.abs(qd))):
+            return new, y
+    return None
+
+
+def stitch(home, at, method, p, parts, switches, user, mode, wall):
+    """One Trajectory of ``home`` from the runs in the charts ``parts``."""
+    from .trajectory import Trajectory
+
+    own = at.own
+    last = parts[-1][1]
+    if len(parts) == 1 and not switches:
+        return parts[0][1]
+    ts, ys, pieces = [], [], []
+    row = 0
+    for i, (chart, seg, rerun) in enumerate(parts):
+        a, b = 0, len(seg.t)
+        if mode == ENDPOINTS and len(parts) > 1:       # the first row and the last
+            a, b = (0, 1) if i == 0 else (b - 1, b) if i == len(parts) - 1 else (b, b)
+        elif i > 0 and mode != AT_T_EVAL:
+            a = 1                       # the switch row: the chart before stored it
+        Y = to_home(own, chart, seg.t[a:b], seg.y[a:b], p)
+        ts.append(seg.t[a:b])
+        ys.append(Y)
+        pieces.append((row, row + b - a, chart, seg, a, rerun))
+        row += b - a
+    t_ev, y_ev = [], []
+    for i in range(len(user)):
+        t_ev.append(np.concatenate([seg.t_events[i] for _, seg, _ in parts]))
+        y_ev.append(np.concatenate([
+            to_home(own, chart, seg.t_events[i], seg.y_events[i].reshape(
+                -1, len(chart.scene.state_names)), p).ravel()
+            for chart, seg, _ in parts]))
+    info = [seg._info for _, seg, _ in parts]
+    return Trajectory(home, np.concatenate(ts), np.vstack(ys), p, method=method,
+                      status=last.status, stop_reason=last.stop_reason,
+                      steps=sum(i["steps"] for i in info),
+                      rejected=sum(i["rejected"] for i in info),
+                      nfev=sum(i["nfev"] for i in info), wall_time=wall,
+                      kernels=home.kernels, projected=home.projected,
+                      singularity=last.singularity, dense=parts[0][1]._dense,
+                      events=(tuple(e.name for e in user), t_ev, y_ev),
+                      segments=Stitched(own, tuple(pieces)), switches=tuple(switches))
+
+
+def to_home(own, chart, t, Y, p) -> np.ndarray:
+    """Rows of ``chart`` as rows of the home chart ``own``."""
+    Y = np.ascontiguousarray(np.atleast_2d(Y), dtype=float)
+    if chart is own or not Y.shape[0]:
+        return Y.reshape(Y.shape[0], len(own.scene.state_names))
+    q, qd, lam, A, _ = chart.universal(t, Y, p)
+    return own.state(q, qd, lam, A)
+
+
+# ---------------------------------------------------------------------- stitched views
+class Stitched:
+    """The pieces of a run that changed split: ``(lo, hi, chart, seg, a, rerun)``, rows
+    ``lo:hi`` of the trajectory from rows ``a:`` of the chart's own run ``seg``; its
+    trajectory's aux rows and dense output come from here (``aux``, ``at``)."""
+
+    def __init__(self, own, pieces):
+        self.own, self.pieces = own, pieces
+
+    def aux(self, traj) -> np.ndarray:
+        """The aux rows of the trajectory, each from its own chart's kernels."""
+        out = np.empty((len(traj), traj.layout.n_aux))
+        fill_aux(out, self.own, self.pieces, traj._p)
+        return out
+
+    def at(self, traj, times) -> np.ndarray:
+        """States at ``times``: each time from the chart that ran there (its steps
+        re-taken; in the part of a step that a switch cut short, the chart's loop run
+        again to it), mapped to the scene's layout."""
+        return _at(self, traj, times)
+
+
+def fill_aux(out, own, pieces, p):
+    """``out[lo:hi]``: the aux rows of the scene (dependent velocities of its split,
+    residuals, energy, integrals) of every piece ``(lo, hi, chart, seg, a, ...)``, rows
+    ``a:a + hi - lo`` of the chart's run ``seg``, from the chart's own kernels."""
+    k = own.k
+    for lo, hi, chart, seg, a, *_ in pieces:
+        rows = seg.aux[a:a + hi - lo]
+        if chart is own:
+            out[lo:hi] = rows
+            continue
+        _, qd, _, _, _ = chart.universal(seg.t[a:a + hi - lo], seg.y[a:a + hi - lo], p)
+        out[lo:hi, :k] = qd[:, own.dep]
+        out[lo:hi, k:] = rows[:, k:]
+
+
+def _at(stitched, traj, times) -> np.ndarray:
+    from .dense import _refusal, _times
+
+    why = _refusal(traj)
+    if why:
+        raise JetnhError(why)
+    tau = _times(times, float(traj.t.min()), float(traj.t.max()))
+    out = np.full((tau.shape[0], traj.y.shape[1]), np.nan)
+    own = stitched.own
+    sgn = 1.0 if traj.t[-1] >= traj.t[0] else -1.0
+    done = np.zeros(tau.shape[0], dtype=bool)
+    for lo, hi, chart, seg, a, rerun in stitched.pieces:
+        t_lo, t_hi = float(seg.t[0]), float(seg.t[-1])
+        mine = ~done & (sgn * (tau - t_lo) >= 0) & (sgn * (t_hi - tau) >= 0)
+        if not mine.any():
+            continue
+        done |= mine
+        idx = np.nonzero(mine)[0]
+        cut = seg._dense["partial_last"] and len(seg.t) > 1
+        inner = sgn * (tau[idx] - float(seg.t[-2])) > 0 if cut else np.zeros(idx.size, bool)
+        rows = np.empty((idx.size, len(chart.scene.state_names)))
+        if (~inner).any():
+            rows[~inner] = seg.at(tau[idx[~inner]])
+        if inner.any():
+            rows[inner] = _rerun(chart, seg, rerun, tau[idx[inner]], traj._p)
+        out[idx] = to_home(own, chart, tau[idx], rows, traj._p)
+    return out
+
+
+def _rerun(chart, seg, rerun, times, p) -> np.ndarray:
+    """The states at ``times`` inside the last, cut step of a segment: the segment's
+    loop run again from its start with these times as t_eval (the same steps, the same
+    dense output: what t_eval gives)."""
+    t0, y0, t1, ctl, watch, ce = rerun
+    order = np.argsort(times, kind="stable")
+    if seg.t[-1] < seg.t[0]:
+        order = order[::-1]
+    te = np.ascontiguousarray(times[order])
+    out, _ = chart.scene._solve(seg.method, chart.kernels, ce, watch, t0, t1, y0, p, ctl,
+                                te, AT_T_EVAL, None, None)
+    rows = np.empty((te.shape[0], seg.y.shape[1]))
+    if int(out.n_out) != te.shape[0] or int(out.status) == STOPPED:
+        raise JetnhError("running the chart's loop again did not reach the times asked for")
+    rows[order] = out.ys[:te.shape[0]]
+    return rows
+
+
+def go_on(at, method, user, t1, p, t, y, counts, ctl, steps_left, te, mode, checked,
+          singular_tol, newton, limit, h_fixed):
+    """An ensemble's run that stopped at its chart's edge at (t, y) (the scene's own
+    chart), taken on as ``Scene.run`` does: ``(parts, switches)`` of ``follow``."""
+    own = at.own
+    target = switch(at, own, t, y, p)
+    if target is None:
+        return follow(at, method, own, t, y, t1, p, user, counts, ctl, steps_left, te, mode,
+                      None, checked, singular_tol, newton, limit, first=False,
+                      h_fixed=h_fixed, edge=False)
+    chart, y_new = target
+    parts, switches = follow(at, method, chart, t, y_new, t1, p, user, counts, ctl,
+                             steps_left, te, mode, None, checked, singular_tol, newton,
+                             limit, first=False, h_fixed=h_fixed)
+    return parts, [{"t": t, "from": list(own.split), "to": list(chart.split)}] + switches

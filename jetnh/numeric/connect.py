@@ -1,0 +1,567 @@
+"""The two-point problem of the action principle: which motion joins two configurations?
+
+``connect(system, principle, start, end, t_span, params, guess)`` finds a motion of
+``principle`` from the configuration ``start`` at t0 to ``end`` at t1 (``end`` may name
+only some coordinates) by shooting on the initial unknowns:
+
+- vakonomic and Hoelder (the stationary composite action with fixed endpoints): the
+  independent velocities and the multipliers at t0, n unknowns for the n coordinates
+  (for L kinetic and f linear the motions are sub-Riemannian geodesics);
+- Chetaev and Suslov: the independent velocities alone (m = n - k unknowns; Suslov's
+  multipliers keep their guessed values), so an ``end`` naming all n coordinates is
+  overdetermined: solved in the least-squares sense, and refused with the best answer
+  and its residual (``ConnectError.best``) when the end is not reached.
+
+The shooting map's Jacobian is the sensitivity matrix of the run
+(``scene.run(sensitivities=True)``: the variational equations, compiled from the
+derivation), never finite differences.  The Newton iteration solves each step by the
+singular value decomposition with a rank cut-off (``rcond``): a rank-deficient Jacobian
+(a degenerate endpoint with a whole family of solutions, such as the circles of the
+Heisenberg group through a point of its z-axis) gives the minimum-norm step; a damped
+step (backtracking on the residual) keeps it from diverging.  When Newton fails from the
+guess, continuation in the endpoint follows ``end(s) = q(t1; guess) + s (end - q(t1;
+guess))`` from s = 0 (solved by the guess) to 1 with adaptive steps.  Iterations and
+continuation steps have budgets; where they stop, ``ConnectError`` says so.
+
+Verdicts on the answer:
+
+- ``conjugate_times``: the times in (t0, t1] where the map from the initial unknowns to
+  the configuration, ``dq(t)/du`` (a block of the sensitivity matrix: the Jacobi fields
+  of the extremal), loses rank -- sign changes of its determinant located by Brent's
+  method on the dense output, and t1 itself where it is rank-deficient there.  Past the
+  first, the extremal is no longer a local minimizer of the action.
+- ``normal``: False when the endpoint map of the constraint system (the kinematic
+  control system qdot^mu = u^mu, qdot^alpha = phi^alpha(t, q, u)) loses rank along the
+  path, i.e. its controllability Gramian ``W' = A W + W A^T + B B^T`` (A, B the partial
+  derivatives of the constraint system along the path, from the graph) is singular: the
+  path is then an abnormal extremal (the multiplier rule holds with lambda_0 = 0), which
+  a small residual does not make normal.
+- ``cost``: the action ``int L dt`` along the answer, by 5-point Gauss-Legendre on every
+  step of the dense output.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from types import MappingProxyType
+
+import numpy as np
+
+from ..errors import ConnectError, JetnhError
+from ..mechanics import principles
+from ..mechanics.system import System
+from . import arguments, codegen
+from .trajectory import Trajectory
+
+#: the principles whose multipliers are unknowns of the two-point problem
+VARIATIONAL = ("vakonomic", "holder")
+
+
+@dataclass(frozen=True)
+class Connection:
+    """A motion of ``principle`` joining two configurations (``connect``)."""
+
+    trajectory: Trajectory           # from start at t0 to (near) end at t1
+    cost: float                      # the action int L dt along it
+    initial: MappingProxyType        # the full initial state found (name -> value)
+    residual: float                  # max |q(t1) - end| over the named coordinates
+    normal: bool                     # False: an abnormal extremal (module docstring)
+    conjugate_times: tuple           # times in (t0, t1] where dq/du loses rank
+    principle: str
+    unknowns: tuple                  # names of the shooting unknowns
+    rank: int                        # rank of the shooting Jacobian at the answer
+    singular_values: tuple           # of the shooting Jacobian at the answer
+    iterations: int                  # Newton iterations (all continuation steps)
+    gramian_ratio: float             # smallest / largest eigenvalue of the Gramian
+
+    def __repr__(self):
+        return (f"Connection({self.principle}: cost {self.cost:.12g}, residual "
+                f"{self.residual:.2e}, normal={self.normal}, conjugate_times="
+                f"{tuple(round(t, 10) for t in self.conjugate_times)}, initial="
+                f"{dict(self.initial)})")
+
+
+def connect(system, principle, start, end, t_span, params=None, guess=None, *,
+            tol=1e-9, rtol=1e-11, atol=1e-12, max_iter=30, max_continuation=64,
+            rcond=1e-9, method="dop853") -> Connection:
+    """The motion of ``principle`` from ``start`` (every coordinate) at t0 to ``end``
+    (some or all coordinates) at t1, as a ``Connection`` (module docstring).
+
+    ``guess``: the initial unknowns (a dict by name, or a sequence in the order of
+    ``Connection.unknowns``: the independent velocities, then for vakonomic and Hoelder
+    the multipliers; Suslov's multipliers may be given too and are kept); default: the
+    straight-line velocities and zero multipliers.  ``tol``: the largest accepted
+    endpoint error (max norm, relative to 1 + |end|); ``rtol``, ``atol``: the
+    integration's; ``max_iter`` Newton iterations per continuation step,
+    ``max_continuation`` continuation steps; ``rcond`` the relative cut-off of singular
+    values; ``method`` "dop853" or "dopri5".
+    """
+    from .scene import Scene
+
+    if not isinstance(system, System):
+        raise JetnhError(f"connect needs a jetnh System, got {type(system).__name__}")
+    principle = principles.canonical(principle)
+    t0, t1 = Scene._t_span(t_span)
+    if t1 == t0:
+        raise JetnhError(f"t_span {t_span!r} has zero length: no motion joins two "
+                         "configurations in no time; give t1 != t0")
+    if str(method).lower() not in ("dop853", "dopri5"):
+        raise JetnhError(f"connect integrates with 'dop853' or 'dopri5' (dense output), "
+                         f"not {method!r}")
+    tol = arguments.positive(tol, "tol")
+    max_iter = arguments.count(max_iter, "max_iter", limit=10_000)
+    max_continuation = arguments.count(max_continuation, "max_continuation", limit=100_000)
+    coords = tuple(s.name for s in system.J.q)
+    q0 = _configuration(start, coords, "start", complete=True)
+    q1 = _configuration(end, coords, "end", complete=False)
+    # a scene at the start with placeholder unknowns (the runs replace them)
+    velocities = tuple(v.name for v in system.independent_velocities)
+    mults = codegen.multiplier_names(system, principle)
+    unknowns = velocities + (mults if principle in VARIATIONAL else ())
+    fixed = {} if principle in VARIATIONAL else {m: 0.0 for m in mults}
+    u0, fixed = _guess(guess, unknowns, fixed, system, q0, q1, t1 - t0)
+    scene = Scene(system, principle, params=params,
+                  initial={**q0, **dict(zip(unknowns, u0)), **fixed}, t_span=(t0, t1))
+    shooter = _Shooter(scene, q0, q1, unknowns, fixed, rtol, atol, method, rcond)
+    if guess is None:
+        u0 = shooter.regular_start(u0, q0, q1, t1 - t0)
+    u, iterations = shooter.solve(u0, tol, max_iter, max_continuation)
+    return shooter.connection(u, iterations, tol)
+
+
+# ---------------------------------------------------------------------- input
+def _configuration(values, coords, what, complete) -> dict[str, float]:
+    if not hasattr(values, "items"):
+        raise JetnhError(f"{what} must be a dict of coordinate values keyed by Symbol or "
+                         f"name, got a {type(values).__name__}")
+    out = {}
+    for k, v in values.items():
+        name = arguments.name_of(k, f"a coordinate of {what}")
+        if name not in coords:
+            raise JetnhError(f"{what} has {name!r}, which is not a coordinate of this "
+                             f"system; its coordinates are {', '.join(coords)}")
+        out[name] = arguments.real(v, f"{what}[{name!r}]")
+        if not np.isfinite(out[name]):
+            raise JetnhError(f"{what}[{name!r}] is {out[name]}; give a finite value")
+    missing = [c for c in coords if c not in out]
+    if complete and missing:
+        raise JetnhError(f"start must give every coordinate; missing {', '.join(missing)}")
+    if not out:
+        raise JetnhError(f"{what} names no coordinate; give the end configuration "
+                         f"(some of {', '.join(coords)})")
+    return out
+
+
+def _guess(guess, unknowns, fixed, system, q0, q1, T):
+    """The starting unknowns (and Suslov's fixed multipliers) from ``guess`` or the
+    straight line."""
+    if guess is None:
+        u = []
+        for v in unknowns:
+            base = next((system.J.split(s)[0].name for s in system.independent_velocities
+                         if s.name == v), None)
+            u.append((q1[base] - q0[base]) / T if base in q1 else 0.0)
+        return np.array(u, dtype=float), fixed
+    if hasattr(guess, "items"):
+        u = {}
+        for k, val in guess.items():
+            name = arguments.name_of(k, "a guess")
+            if name in fixed:
+                fixed = {**fixed, name: arguments.real(val, f"guess[{name!r}]")}
+                continue
+            if name not in unknowns:
+                raise JetnhError(f"guess has {name!r}, which is not an unknown of this "
+                                 f"problem; the unknowns are {', '.join(unknowns)}")
+            u[name] = arguments.real(val, f"guess[{name!r}]")
+        missing = [n for n in unknowns if n not in u]
+        if missing:
+            raise JetnhError(f"guess lacks {', '.join(missing)}; give every unknown "
+                             f"({', '.join(unknowns)}) or pass guess=None")
+        vec = np.array([u[n] for n in unknowns], dtype=float)
+    else:
+        vec = np.asarray(guess, dtype=float) if np.ndim(guess) == 1 else None
+        if vec is None or vec.shape != (len(unknowns),):
+            raise JetnhError(f"guess must hold {len(unknowns)} values (the unknowns "
+                             f"{', '.join(unknowns)}), got shape {np.shape(guess)}; pass a "
+                             "dict by name, a sequence of that length, or None")
+    if not np.all(np.isfinite(vec)):
+        raise JetnhError(f"guess has a non-finite value: {vec.tolist()}")
+    return vec, fixed
+
+
+# ---------------------------------------------------------------------- shooting
+class _Shooter:
+    """Runs of one scene from the start with the unknowns ``u``: the endpoint residual
+    and its Jacobian from the sensitivities."""
+
+    def __init__(self, scene, q0, q1, unknowns, fixed, rtol, atol, method, rcond):
+        self.scene, self.unknowns, self.fixed = scene, unknowns, fixed
+        names = scene.state_names
+        self.rows = [names.index(c) for c in q1]
+        self.target = np.array(list(q1.values()))
+        self.cols = [names.index(u) for u in unknowns]
+        self.y0 = np.array([scene.initial[n] for n in names])
+        self.rtol, self.atol, self.method, self.rcond = rtol, atol, method, rcond
+        self.end_names = tuple(q1)
+        self.seen: dict = {}
+
+    def state(self, u) -> np.ndarray:
+        y = self.y0.copy()
+        y[self.cols] = u
+        return y
+
+    def endpoint(self, u):
+        """``(q_named(t1), dq_named(t1)/du)``, or None where the run fails (the last
+        few kept: the guess is evaluated more than once)."""
+        key = np.asarray(u, dtype=float).tobytes()
+        if key not in self.seen:
+            if len(self.seen) > 8:
+                self.seen.clear()
+            self.seen[key] = self._endpoint(u)
+        return self.seen[key]
+
+    def _endpoint(self, u):
+        try:
+            tr = self.scene.run(rtol=self.rtol, atol=self.atol, method=self.method,
+                                y0=self.state(u), save="final", sensitivities=True)
+        except JetnhError:
+            return None
+        if tr.status != 0 or not np.all(np.isfinite(tr.y[-1])):
+            return None
+        S = tr.sensitivities[-1]
+        return tr.y[-1, self.rows], S[np.ix_(self.rows, self.cols)]
+
+    def regular_start(self, u0, q0, q1, T):
+        """The default guess, moved off a point where the shooting Jacobian is
+        rank-deficient (zero velocities, a straight line along an abnormal direction):
+        by a fixed pattern of the size of the straight-line velocities, up to 8 tries."""
+        scale = max([abs(q1[c] - q0[c]) for c in q1] + [1.0]) / abs(T)
+        pattern = 0.5 * (-0.6) ** np.arange(len(u0))
+        u = u0
+        for k in range(8):
+            got = self.endpoint(u)
+            if got is not None:
+                s = np.linalg.svd(got[1], compute_uv=False)
+                if s.size and s[0] > 0 and s[-1] > 1e-6 * s[0]:
+                    return u
+            u = u0 + scale * np.roll(pattern, k) * (1 + k)
+        return u0
+
+    def step(self, F, Jm):
+        """The minimum-norm Newton (Gauss-Newton) step of the truncated SVD."""
+        U, s, Vt = np.linalg.svd(Jm, full_matrices=False)
+        r = int(np.sum(s > self.rcond * s[0])) if s.size and s[0] > 0 else 0
+        return -(Vt[:r].T @ ((U[:, :r].T @ F) / s[:r]))
+
+    def newton(self, u, target, tol, max_iter):
+        """Damped Newton on q(t1; u) = target.  Returns ``(u, converged, iterations)``."""
+        got = self.endpoint(u)
+        if got is None:
+            return u, False, 0
+        scale = 1.0 + np.abs(target)
+        for it in range(1, max_iter + 1):
+            q, Jm = got
+            F = q - target
+            if np.max(np.abs(F) / scale) <= tol:
+                return u, True, it - 1
+            du = self.step(F, Jm)
+            # a step at most the size of the unknowns (and 1): Newton stays on the branch
+            # of solutions it starts near instead of jumping to a far one
+            big = np.linalg.norm(du) / max(1.0, np.linalg.norm(u))
+            if big > 1.0:
+                du = du / big
+            norm = np.linalg.norm(F)
+            alpha = 1.0
+            for _ in range(30):
+                trial = self.endpoint(u + alpha * du)
+                if trial is not None and np.linalg.norm(trial[0] - target) < (
+                        1.0 - 1e-4 * alpha) * norm:
+                    break
+                alpha *= 0.5
+            else:
+                if self.least_squares_point(F, Jm):
+                    raise self.unreachable(u)
+                return u, False, it
+            u, got = u + alpha * du, trial
+        q = got[0]
+        return u, bool(np.max(np.abs(q - target) / scale) <= tol), max_iter
+
+    def solve(self, u0, tol, max_iter, max_continuation):
+        """Newton from ``u0``, else continuation in the endpoint from q(t1; u0)."""
+        u, ok, its = self.newton(u0, self.target, tol, max_iter)
+        if ok:
+            return u, its
+        got = self.endpoint(u0)
+        if got is None:
+            raise ConnectError(
+                f"the {self.scene.principle} run from the start with the guess "
+                f"{dict(zip(self.unknowns, u0.tolist()))} fails before t1 (a singular "
+                "configuration or a non-finite state); give another guess")
+        first = got[0]
+        total, s, ds, u = its, 0.0, 0.25, u0
+        for _ in range(max_continuation):
+            s_try = min(1.0, s + ds)
+            target = first + s_try * (self.target - first)
+            v, ok, k = self.newton(u, target, tol if s_try == 1.0 else max(tol, 1e-6),
+                                   max_iter)
+            total += k
+            if ok:
+                s, u = s_try, v
+                if s == 1.0:
+                    return u, total
+                ds = min(2.0 * ds, 1.0 - s)
+            else:
+                ds *= 0.5
+                if ds < 1e-4:
+                    break
+        best = self._best(u)
+        raise ConnectError(
+            f"connect did not reach the end: continuation in the endpoint stopped at "
+            f"s = {s:.6g} of 1 (step {ds:.3g}, {total} Newton iterations); the closest "
+            f"motion ends {best.residual:.3g} away from end"
+            + self._reachability(u) + "; try another guess, a shorter span or an end "
+            "nearer the start (ConnectError.best is that motion)", best)
+
+    def least_squares_point(self, F, Jm) -> bool:
+        """Whether ``u`` is a stationary point of |F|^2 with F != 0 (J^T F = 0): more
+        conditions than the motions can meet there."""
+        g = np.linalg.norm(Jm.T @ F)
+        return bool(Jm.shape[0] > Jm.shape[1]
+                    and g <= 1e-7 * max(np.linalg.norm(Jm), 1e-300) * np.linalg.norm(F))
+
+    def unreachable(self, u) -> ConnectError:
+        best = self._best(u)
+        return ConnectError(
+            f"the {self.scene.principle} motions from the start do not reach end in this "
+            f"time: the least-squares answer ends "
+            f"{'?' if best is None else format(best.residual, '.3g')} away"
+            + self._reachability(u) + " (ConnectError.best is that answer)", best)
+
+    def _reachability(self, u) -> str:
+        got = self.endpoint(u)
+        if got is None:
+            return ""
+        s = np.linalg.svd(got[1], compute_uv=False)
+        r = int(np.sum(s > self.rcond * s[0])) if s.size and s[0] > 0 else 0
+        if len(self.rows) > r:
+            return (f" (the {self.scene.principle} motions from the start reach a "
+                    f"{r}-dimensional set of the {len(self.rows)} named coordinates near "
+                    f"there: {len(self.unknowns)} unknowns "
+                    f"{', '.join(self.unknowns)}; name at most {r} coordinates in end)")
+        return ""
+
+    def _best(self, u):
+        try:
+            return self.connection(u, 0, None)
+        except JetnhError:
+            return None
+
+    # ------------------------------------------------------------------ the answer
+    def connection(self, u, iterations, tol) -> Connection:
+        scene = self.scene
+        tr = scene.run(rtol=self.rtol, atol=self.atol, method=self.method,
+                       y0=self.state(u), sensitivities=True)
+        if tr.status != 0:
+            raise ConnectError(f"the motion found stops before t1: {tr.stop_reason}")
+        q = tr.y[-1, self.rows]
+        residual = float(np.max(np.abs(q - self.target)))
+        Jm = tr.sensitivities[-1][np.ix_(self.rows, self.cols)]
+        s = np.linalg.svd(Jm, compute_uv=False)
+        rank = int(np.sum(s > self.rcond * s[0])) if s.size and s[0] > 0 else 0
+        samples = _Samples(tr, self.rtol, self.atol, self.method, self.state(u))
+        gram = gramian_ratio(tr, samples)
+        start = list(tr.y[0]) + [float(tr[d][0]) for d in scene.dependent_velocities]
+        best = Connection(
+            trajectory=tr, cost=action(tr, samples),
+            initial=MappingProxyType({n: float(v) for n, v in zip(
+                scene.state_names + scene.dependent_velocities, start)}),
+            residual=residual, normal=bool(gram > GRAMIAN_RCOND),
+            conjugate_times=conjugate_times(tr, self.cols, samples, self.rcond),
+            principle=scene.principle, unknowns=self.unknowns, rank=rank,
+            singular_values=tuple(s.tolist()), iterations=iterations, gramian_ratio=gram)
+        if tol is not None and np.max(np.abs(q - self.target)
+                                      / (1 + np.abs(self.target))) > tol:
+            raise ConnectError(
+                f"the {scene.principle} motion found ends {residual:.3g} away from end"
+                + self._reachability(u), best)
+        return best
+
+
+# ---------------------------------------------------------------------- verdicts
+#: smallest / largest eigenvalue of the controllability Gramian below which the path is
+#: abnormal
+GRAMIAN_RCOND = 1e-9
+_GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(5)
+
+
+def _dense_states(tr, times, full=False):
+    from .dense import evaluate
+
+    return evaluate(tr, times, full=full)
+
+
+class _Samples:
+    """The states and sensitivities of a trajectory at the times its verdicts need --
+    the 5 Gauss-Legendre nodes of every step (``gauss``) and ``GRID`` + 1 equal-spaced
+    times (``grid``) -- from one run with these times as ``t_eval`` (dense output: the
+    values ``Trajectory.at`` gives, without re-taking each step from Python)."""
+
+    GRID = 400
+
+    def __init__(self, tr, rtol, atol, method, y0):
+        t = tr.t
+        a, b = t[:-1], t[1:]
+        self.half = 0.5 * (b - a)
+        self.gauss = ((0.5 * (a + b))[:, None] + self.half[:, None] * _GAUSS_X[None, :])
+        self.grid = np.linspace(t[0], t[-1], self.GRID + 1)
+        times = np.concatenate([self.gauss.ravel(), self.grid])
+        order = np.argsort(times, kind="stable")
+        run = tr.scene.run(rtol=rtol, atol=atol, method=method, y0=y0, t_eval=times[order],
+                           sensitivities=True)
+        if run.status != 0 or len(run.t) != times.size:
+            raise ConnectError(f"the motion found could not be sampled: {run.stop_reason}")
+        ys = np.empty_like(run.y)
+        S = np.empty_like(run.sensitivities)
+        ys[order], S[order] = run.y, run.sensitivities
+        k = self.gauss.size
+        self.gauss_y, self.grid_y, self.grid_S = ys[:k], ys[k:], S[k:]
+
+
+def action(tr, samples) -> float:
+    """``int L dt`` along the trajectory: 5-point Gauss-Legendre on every step of its
+    dense output (``_Samples``), L evaluated on the graph (dependent velocities by the
+    aux kernel)."""
+    times = samples.gauss
+    L = _lagrangian(tr.scene, times.ravel(), samples.gauss_y).reshape(times.shape)
+    return float(np.sum(L * _GAUSS_W[None, :] * samples.half[:, None]))
+
+
+def _point(scene, times, ys) -> dict:
+    """Symbol -> values of t, q, every velocity and the parameters at the rows ``ys``."""
+    system = scene.system
+    J = system.J
+    kern = scene.kernels
+    aux = np.empty((ys.shape[0], kern.layout.n_aux))
+    kern.aux_rows(np.ascontiguousarray(times), np.ascontiguousarray(ys), scene.p, aux)
+    col = {n: i for i, n in enumerate(scene.state_names)}
+    point = {J.t: times}
+    for s in J.q:
+        point[s] = ys[:, col[s.name]]
+    for v in system.independent_velocities:
+        point[v] = ys[:, col[v.name]]
+    for a, v in enumerate(system.dependent_velocities):
+        point[v] = aux[:, a]
+    for s in system.parameters:
+        point[s] = scene.params[s.name]
+    return point
+
+
+def _lagrangian(scene, times, ys) -> np.ndarray:
+    from ..algebra import dag
+
+    (L,) = dag.evaluate_numpy([scene.system.L], _point(scene, times, ys))
+    return np.broadcast_to(L, times.shape)
+
+
+#: system id -> (system, [d phi/dq..., d phi/du...]) for ``gramian_ratio``
+_DERIVATIVES: dict = {}
+
+
+def gramian_ratio(tr, samples) -> float:
+    """Smallest over largest eigenvalue of the controllability Gramian of the constraint
+    system (qdot^mu = u^mu, qdot^alpha = phi^alpha(t, q, u)) linearized along ``tr``,
+    ``W = int Phi(t1, s) B B^T Phi(t1, s)^T ds`` (A = d qdot/dq, B = d qdot/du from the
+    graph on the dense output; the transition matrix Phi by RK4 propagators of ``steps``
+    equal steps, ``_Samples.GRID / 2`` of them, the integral by Simpson's rule on their
+    nodes).  Zero: the endpoint
+    map loses rank along the path (an abnormal extremal)."""
+    from ..algebra import dag
+
+    scene = tr.scene
+    system = scene.system
+    J = system.J
+    n, us = len(J.q), system.independent_velocities
+    if not system.k:
+        return 1.0
+    steps = samples.GRID // 2
+    phis = [system.phi[v] for v in system.dependent_velocities]
+    derivatives = _DERIVATIVES.get(id(system))
+    if derivatives is None or derivatives[0] is not system:
+        derivatives = _DERIVATIVES[id(system)] = (
+            system, list(dag.jacobian(phis, list(J.q))) + list(dag.jacobian(phis, list(us))))
+    t0, t1 = float(tr.t[0]), float(tr.t[-1])
+    times = samples.grid
+    vals = dag.evaluate_numpy(derivatives[1], _point(scene, times, samples.grid_y))
+    k = len(phis)
+    A = np.zeros((times.size, n, n))
+    B = np.zeros((times.size, n, len(us)))
+    index = {s: i for i, s in enumerate(J.q)}
+    dep_rows = [index[J.split(v)[0]] for v in system.dependent_velocities]
+    for j, v in enumerate(us):
+        B[:, index[J.split(v)[0]], j] = 1.0
+    for a in range(k):
+        for c in range(n):
+            A[:, dep_rows[a], c] = np.broadcast_to(vals[a * n + c], times.shape)
+        for c in range(len(us)):
+            B[:, dep_rows[a], c] = np.broadcast_to(vals[k * n + a * len(us) + c],
+                                                   times.shape)
+    h = (t1 - t0) / steps
+    I = np.eye(n)
+    A0, Am, A1 = A[0:-1:2], A[1::2], A[2::2]
+    K1 = A0
+    K2 = Am @ (I + 0.5 * h * K1)
+    K3 = Am @ (I + 0.5 * h * K2)
+    K4 = A1 @ (I + h * K3)
+    P = I + h / 6.0 * (K1 + 2 * K2 + 2 * K3 + K4)        # Phi(t_{j+1}, t_j)
+    Phi = np.empty((steps + 1, n, n))                     # Phi(t_j, t0)
+    Phi[0] = I
+    for j in range(steps):
+        Phi[j + 1] = P[j] @ Phi[j]
+    G = np.linalg.solve(np.transpose(Phi, (0, 2, 1)), Phi[-1].T).transpose(0, 2, 1)
+    BB = B[::2] @ np.transpose(B[::2], (0, 2, 1))
+    w = np.full(steps + 1, 2.0)
+    w[1::2] = 4.0
+    w[0] = w[-1] = 1.0
+    W = np.einsum("j,jab,jbc,jdc->ad", w * h / 3.0, G, BB, G)
+    ev = np.linalg.eigvalsh(0.5 * (W + W.T))
+    return float(max(ev[0], 0.0) / ev[-1]) if ev[-1] > 0 else 0.0
+
+
+def conjugate_times(tr, cols, samples, rcond=1e-9) -> tuple:
+    """The times in (t0, t1] where dq(t)/du (rows: every coordinate; columns ``cols``,
+    the unknowns' states) loses rank: the sign changes of its determinant (square case)
+    on the equal-spaced times of ``samples``, located by Brent's method on the dense
+    output; and t1 when the matrix is rank-deficient there (relative cut-off
+    ``rcond``)."""
+    from scipy.optimize import brentq
+
+    n = tr.layout.n_state
+    nq = len(tr.layout.coordinates)
+    m = tr.sensitivities.shape[2]
+    t0, t1 = float(tr.t[0]), float(tr.t[-1])
+    found = []
+
+    def block(times):
+        Y = _dense_states(tr, np.atleast_1d(times), full=True)
+        S = Y[:, n:].reshape(-1, n, m)
+        return S[:, :nq][:, :, cols]
+
+    if len(cols) == nq:
+        def det(t):
+            M = block(t)[0]
+            norms = np.linalg.norm(M, axis=0)
+            return np.linalg.det(M / np.where(norms > 0, norms, 1.0))
+
+        grid = samples.grid[1:]
+        M = samples.grid_S[1:, :nq][:, :, cols]
+        norms = np.linalg.norm(M, axis=1, keepdims=True)
+        d = np.linalg.det(M / np.where(norms > 0, norms, 1.0))
+        for i in range(len(grid) - 1):
+            if d[i] == 0.0 or np.sign(d[i]) == np.sign(d[i + 1]) or i + 1 == len(grid) - 1 \
+                    and abs(d[i + 1]) < 1e-8:
+                continue
+            found.append(float(brentq(det, grid[i], grid[i + 1], xtol=1e-14, rtol=1e-14)))
+    s = np.linalg.svd(tr.sensitivities[-1][:nq][:, cols], compute_uv=False)
+    if s.size and (s[0] == 0 or s[-1] <= rcond * s[0] * 1e2) and len(cols) >= nq:
+        found.append(t1)
+    return tuple(found)

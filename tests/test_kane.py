@@ -1,0 +1,409 @@
+"""Kane models into jetnh: ``from_mechanics`` of a ``KanesMethod`` or a mechanics ``System``.
+
+Route 1: jetnh's Chetaev accelerations q'' of the imported System, turned into speed rates
+u' = D U(t, q, qdot) through the imported speed map.  Route 2: the model's own Kane
+equations, ``mass_matrix u' = forcing`` (the dependent rows from the differentiated
+velocity constraints), solved in 30-digit arithmetic.  States: random coordinates (on the
+configuration constraints), random independent velocities, dependent ones from jetnh's
+split; Kane reads the speeds u = U(q, qdot) of that state.
+"""
+
+from __future__ import annotations
+
+import math
+import random
+
+import mpmath
+import numpy as np
+import pytest
+import sympy as sp
+from hypothesis import given, settings, strategies as st
+from sympy.physics.mechanics import (KanesMethod, Particle, PinJoint, PlanarJoint, Point,
+                                     PrismaticJoint, ReferenceFrame, RigidBody, dot,
+                                     dynamicsymbols, inertia)
+from sympy.physics.mechanics import System as MechanicsSystem
+
+import jetnh as jn
+from jetnh.algebra import dag
+from jetnh.errors import JetnhError, JetSpaceError
+
+PREC = 30
+RTOL = 1e-20
+
+r, m, g, c, tau, ell, a, M = sp.symbols("r m g c tau ell a M", positive=True)
+
+
+# ---------------------------------------------------------------------- the two routes
+def kane_of(model):
+    """The KanesMethod behind a model (a mechanics System forms its equations)."""
+    if isinstance(model, MechanicsSystem):
+        if model.eom_method is None:
+            model.form_eoms()
+        return model.eom_method
+    return model
+
+
+def agreement(system, model, params, sample_q=None, points=3, seed=0):
+    """The largest relative difference of u' between jetnh and Kane at random states."""
+    km = kane_of(model)
+    J, speeds = system.J, system.speeds
+    acc = system.equations("chetaev").accelerations()
+    udot_jet = [J.D(U) for U in speeds.of_velocities]
+    M_k, F_k = km.mass_matrix, km.forcing
+    rnd = random.Random(seed)
+    worst = 0.0
+    for _ in range(points):
+        vals = {p: sp.Float(v, PREC) for p, v in params.items()}
+        vals[J.t] = sp.Float(rnd.uniform(-1, 1), PREC)
+        qs = sample_q(rnd) if sample_q else [rnd.uniform(-1, 1) for _ in J.q]
+        vals.update({q: sp.Float(v, PREC) for q, v in zip(J.q, qs)})
+        vals.update({v: sp.Float(rnd.uniform(-1, 1), PREC)
+                     for v in system.independent_velocities})
+        for v, phi in system.phi.items():
+            vals[v] = dag.evaluate(phi, vals, PREC)
+        vals.update({a_: dag.evaluate(acc[a_], vals, PREC) for a_ in J.qdd})
+        jet = [dag.evaluate(e, vals, PREC) for e in udot_jet]
+        u = [dag.evaluate(e, vals, PREC) for e in speeds.of_velocities]
+        dyn = {dynamicsymbols._t: vals[J.t], **{q: vals[s] for q, s in zip(km.q, J.q)},
+               **dict(zip(km.u, u)), **{p: v for p, v in vals.items() if p in params}}
+        with mpmath.workdps(PREC):
+            num = [dag.to_sympy(v) for v in dag.evaluate(list(M_k) + list(F_k), dyn, PREC)]
+            jet = [dag.to_sympy(v) for v in jet]
+        o = len(km.u)
+        ref = sp.Matrix(o, o, num[:o * o]).LUsolve(sp.Matrix(num[o * o:]))
+        for x, y in zip(jet, ref):
+            worst = max(worst, float(abs(x - y) / max(1, abs(y))))
+    return worst
+
+
+# ---------------------------------------------------------------------- models
+def rolling_disc():
+    """sympy's rolling disc (Kane): yaw q1, lean q2, spin q3, contact point (x, y); the
+    speeds u1..u3 are the disc's angular velocity in the lean frame, u4, u5 = x', y'
+    (dependent: rolling without slip), gravity on the centre."""
+    q1, q2, q3, x, y = dynamicsymbols("q1 q2 q3 x y")
+    u1, u2, u3, u4, u5 = dynamicsymbols("u1:6")
+    N = ReferenceFrame("N")
+    Y = N.orientnew("Y", "Axis", [q1, N.z])
+    L = Y.orientnew("L", "Axis", [q2, Y.x])
+    R = L.orientnew("R", "Axis", [q3, L.y])
+    kd = [dot(R.ang_vel_in(N) - (u1 * L.x + u2 * L.y + u3 * L.z), e) for e in L]
+    kd += [x.diff() - u4, y.diff() - u5]
+    R.set_ang_vel(N, u1 * L.x + u2 * L.y + u3 * L.z)
+    O = Point("O")
+    O.set_vel(N, 0)
+    C = O.locatenew("C", x * N.x + y * N.y)
+    C.set_vel(N, u4 * N.x + u5 * N.y)
+    Dmc = C.locatenew("Dmc", r * L.z)
+    Dmc.set_vel(N, C.vel(N) + L.ang_vel_in(N).cross(r * L.z))
+    slip = Dmc.vel(N) + R.ang_vel_in(N).cross(-r * L.z)
+    disc = RigidBody("disc", Dmc, R, m, (inertia(L, m * r**2 / 4, m * r**2 / 2, m * r**2 / 4),
+                                         Dmc))
+    km = KanesMethod(N, q_ind=[q1, q2, q3, x, y], u_ind=[u1, u2, u3], kd_eqs=kd,
+                     u_dependent=[u4, u5], velocity_constraints=[slip.dot(N.x), slip.dot(N.y)])
+    km.kanes_equations([disc], [(Dmc, -m * g * N.z)])
+    return km
+
+
+def cart_pendulum():
+    """A joint-built mechanics System: a cart on a prismatic joint, a pendulum on a pin;
+    gravity, a damper on the cart and a torque on the pendulum (not potential)."""
+    rail = RigidBody("rail")
+    ms = MechanicsSystem.from_newtonian(rail)
+    cart = RigidBody("cart", mass=M)
+    bob = RigidBody("rod", mass=m)
+    bob.inertia = (inertia(bob.frame, 0, 0, m * ell**2 / 12), bob.masscenter)
+    s, th = dynamicsymbols("s theta")
+    v, w = dynamicsymbols("v omega")
+    slider = PrismaticJoint("slider", rail, cart, s, v, joint_axis=rail.x)
+    pin = PinJoint("pin", cart, bob, th, w, joint_axis=cart.z, child_point=ell * bob.x)
+    ms.add_joints(slider, pin)
+    ms.apply_uniform_gravity(-g * rail.y)
+    ms.add_loads((cart.masscenter, -c * v * rail.x), (bob.frame, tau * rail.z))
+    return ms
+
+
+def planar_sleigh():
+    """A joint-built Chaplygin sleigh: a planar joint (rotation about the ground's x axis,
+    sliding in its y-z plane), the blade's side slip forbidden by
+    add_nonholonomic_constraints, a linear drag (not potential)."""
+    ground = RigidBody("ground")
+    ms = MechanicsSystem.from_newtonian(ground)
+    body = RigidBody("sleigh", mass=m)
+    body.inertia = (inertia(body.frame, m * a**2, 0, 0), body.masscenter)
+    th, x, y = dynamicsymbols("theta x y")
+    w, vx, vy = dynamicsymbols("omega v_x v_y")
+    ms.add_joints(PlanarJoint("planar", ground, body, rotation_coordinate=th,
+                              planar_coordinates=[x, y], rotation_speed=w,
+                              planar_speeds=[vx, vy]))
+    ms.u_ind, ms.u_dep = [w, vx], [vy]
+    blade = body.masscenter.locatenew("blade", -a * body.y)
+    blade.v2pt_theory(body.masscenter, ground.frame, body.frame)
+    ms.add_nonholonomic_constraints(blade.vel(ground.frame).dot(body.z))
+    ms.add_loads((body.masscenter, -c * body.masscenter.vel(ground.frame)))
+    return ms
+
+
+def particle_on_circle():
+    """A mechanics System with a configuration constraint: a particle on a circle of
+    radius ell in gravity, coordinates x (independent), y (dependent)."""
+    x, y = dynamicsymbols("x y")
+    ux, uy = dynamicsymbols("u_x u_y")
+    N = ReferenceFrame("N")
+    O = Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", x * N.x + y * N.y)
+    P.set_vel(N, ux * N.x + uy * N.y)
+    ms = MechanicsSystem(N, O)
+    ms.add_coordinates(x)
+    ms.add_coordinates(y, independent=False)
+    ms.add_speeds(ux)
+    ms.add_speeds(uy, independent=False)
+    ms.add_kdes(x.diff() - ux, y.diff() - uy)
+    ms.add_bodies(Particle("P", P, m))
+    ms.add_holonomic_constraints(x**2 + y**2 - ell**2)
+    ms.add_loads((P, -m * g * N.y))
+    return ms
+
+
+@pytest.fixture(scope="module")
+def disc():
+    km = rolling_disc()
+    return km, jn.from_mechanics(km)
+
+
+@pytest.fixture(scope="module")
+def cart():
+    ms = cart_pendulum()
+    return ms, jn.from_mechanics(ms)
+
+
+# ---------------------------------------------------------------------- agreement
+def test_rolling_disc_agrees_with_kane(disc):
+    km, s = disc
+    assert s.speeds.names == ("u1", "u2", "u3", "u4", "u5")
+    q1, q2, q3 = s.J.q[:3]
+    q1_t, q2_t, q3_t = s.J.qd[:3]
+    # the speeds are the body-frame angular velocity, read through the kinematic equations
+    assert [sp.expand(e) for e in s.speeds.of_velocities[:3]] == [
+        q2_t, q1_t * sp.sin(q2) + q3_t, q1_t * sp.cos(q2)]
+    # gravity is potential here: it enters L, not the forces
+    assert not s.forces and s.L.has(g)
+    assert sp.expand(s.L.xreplace(dict.fromkeys(s.J.qd, 0)) + m * g * r * sp.cos(q2)) == 0
+    assert not s.is_integrable()
+    assert agreement(s, km, {r: 0.7, m: 1.3, g: 9.81}, points=3) < RTOL
+
+
+def test_joint_built_system_with_loads_that_are_not_potential(cart):
+    ms, s = cart
+    s_, th = s.J.q
+    # the damper and the torque are generalized forces; gravity is potential
+    assert set(s.forces) == {s_, th} and not s.L.xreplace(dict.fromkeys(s.J.qd, 0)).has(c)
+    assert sp.expand(s.forces[th] - tau) == 0
+    assert agreement(s, ms, {M: 2.0, m: 0.7, ell: 1.1, g: 9.81, c: 0.3, tau: 0.4}) < RTOL
+
+
+def test_joint_built_sleigh_with_a_nonholonomic_constraint():
+    ms = planar_sleigh()
+    s = jn.from_mechanics(ms)
+    assert len(s.constraints) == 1 and not s.is_integrable() and s.forces
+    assert agreement(s, ms, {m: 1.5, a: 0.4, c: 0.2}, seed=2) < RTOL
+
+
+def test_configuration_constraints_agree_on_the_circle():
+    ms = particle_on_circle()
+    s = jn.from_mechanics(ms)
+    x, y = s.J.q
+    # the configuration constraint stays holonomic; the equations use its derivative
+    assert s.holonomic == (x**2 + y**2 - ell**2,)
+    assert len(s.constraints) == 1 and sp.expand(
+        s.constraints[0] - 2 * (x * s.J.qd[0] + y * s.J.qd[1])) == 0
+    assert s.is_integrable()
+
+    def on_circle(rnd):
+        phi = rnd.uniform(0.3, 1.3)
+        return [1.1 * math.cos(phi), 1.1 * math.sin(phi)]
+
+    assert agreement(s, ms, {m: 0.8, ell: 1.1, g: 9.81}, sample_q=on_circle) < RTOL
+    # a start off the circle, keyed by the model's dynamicsymbols, is refused with the fix
+    xs, ys = dynamicsymbols("x y")
+    with pytest.raises(JetnhError, match="off the holonomic constraints.*complete=True"):
+        jn.Scene(s, "chetaev", params={m: 1.0, ell: 1.0, g: 9.81},
+                 initial={xs: 0.6, ys: 0.0, xs.diff(): 0.0})
+
+
+def test_kanes_method_velocity_constraints_that_restate_the_configuration_constraint():
+    """A KanesMethod's velocity constraints include D g; jetnh keeps D g once."""
+    x, y = dynamicsymbols("x y")
+    ux, uy = dynamicsymbols("u_x u_y")
+    N = ReferenceFrame("N")
+    O = Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", x * N.x + y * N.y)
+    P.set_vel(N, ux * N.x + uy * N.y)
+    km = KanesMethod(N, [x], [ux], kd_eqs=[x.diff() - ux, y.diff() - uy], q_dependent=[y],
+                     configuration_constraints=[x**2 + y**2 - ell**2], u_dependent=[uy],
+                     velocity_constraints=[x * ux + y * uy])
+    km.kanes_equations([Particle("P", P, m)], [(P, -m * g * N.y)])
+    s = jn.from_mechanics(km)
+    X, Y = s.J.q
+    assert s.holonomic == (X**2 + Y**2 - ell**2,)
+    assert len(s.constraints) == 1 and s.is_integrable()
+    assert agreement(s, km, {m: 0.8, ell: 1.1, g: 9.81},
+                     sample_q=lambda rnd: [1.1 * math.cos(0.7), 1.1 * math.sin(0.7)]) < RTOL
+
+
+# ---------------------------------------------------------------------- random rotations
+ORDERS = ["123", "231", "312", "132", "213", "321", "121", "131", "212", "232", "313", "323"]
+
+
+def heavy_top(kind, order, mix):
+    """A rigid body pivoted at a fixed point, oriented by the rotation ``order`` (body- or
+    space-fixed: ``kind``); its speeds are mix . (its angular velocity in body components)
+    and a linear drag torque acts on it."""
+    q = dynamicsymbols("q1:4")
+    u = dynamicsymbols("u1:4")
+    N = ReferenceFrame("N")
+    B = ReferenceFrame("B")
+    getattr(B, f"orient_{kind}_fixed")(N, q, order)
+    comps = sp.Matrix(mix) * B.ang_vel_in(N).to_matrix(B)
+    kd = [comps[i] - u[i] for i in range(3)]
+    w = sp.Matrix(mix).LUsolve(sp.Matrix(u))
+    B.set_ang_vel(N, w[0] * B.x + w[1] * B.y + w[2] * B.z)
+    O = Point("O")
+    O.set_vel(N, 0)
+    G = O.locatenew("G", a * B.z + a / 3 * B.x)
+    G.v2pt_theory(O, N, B)
+    body = RigidBody("top", G, B, m, (inertia(B, 1, sp.Rational(3, 2), 2, sp.Rational(1, 5)), G))
+    km = KanesMethod(N, q, u, kd_eqs=kd)
+    km.kanes_equations([body], [(G, -m * g * N.z), (B, -c * B.ang_vel_in(N))])
+    return km
+
+
+@settings(max_examples=5)
+@given(st.sampled_from(["body", "space"]), st.sampled_from(ORDERS),
+       st.lists(st.integers(-2, 2), min_size=9, max_size=9), st.integers(0, 2**16))
+def test_random_rotation_parametrised_speeds(kind, order, entries, seed):
+    mix = sp.Matrix(3, 3, entries) + 5 * sp.eye(3)       # diagonally dominant: invertible
+    km = heavy_top(kind, order, mix)
+    s = jn.from_mechanics(km)
+    # the speeds map both ways: U(V(u)) = u
+    back = [e.xreplace(dict(zip(s.J.qd, s.speeds.velocities))) for e in s.speeds.of_velocities]
+    rnd = random.Random(seed)
+    pt = {q: rnd.uniform(0.3, 1.2) for q in s.J.q}
+    pt.update({u: rnd.uniform(-1, 1) for u in s.speeds.symbols})
+    assert all(abs(dag.evaluate(b, pt) - pt[u]) < 1e-20 for b, u in zip(back, s.speeds.symbols))
+    # gravity is potential, the drag is a generalized force
+    assert s.L.has(g) and s.forces and not any(Q.has(g) for Q in s.forces.values())
+    # Euler angles away from their singular sets (middle angle in (0.3, 1.2))
+    sample = lambda rnd: [rnd.uniform(-1, 1), rnd.uniform(0.3, 1.2), rnd.uniform(-1, 1)]  # noqa: E731
+    assert agreement(s, km, {m: 1.2, a: 0.5, g: 9.81, c: 0.3}, sample_q=sample, points=1,
+                     seed=seed) < RTOL
+
+
+# ---------------------------------------------------------------------- speeds on runs
+def test_speeds_read_along_a_run(cart):
+    ms, s = cart
+    th, s_ = dynamicsymbols("theta s")
+    scene = jn.Scene(s, "chetaev", params={M: 2.0, m: 0.7, ell: 1.1, g: 9.81, c: 0.3, tau: 0.0},
+                     initial={s_: 0.0, th: 0.3, s_.diff(): 0.0, th.diff(): 0.0}, t_span=(0, 1))
+    traj = scene.run(method="rk4", n_steps=200)
+    u = s.speeds.read(traj)
+    assert np.array_equal(u["omega"], traj["theta_t"]) and np.array_equal(u["v"], traj["s_t"])
+    # dynamicsymbol keys give the same run as names
+    by_name = jn.Scene(s, "chetaev", params={"M": 2.0, "m": 0.7, "ell": 1.1, "g": 9.81,
+                                             "c": 0.3, "tau": 0.0},
+                       initial={"s": 0.0, "theta": 0.3, "s_t": 0.0, "theta_t": 0.0},
+                       t_span=(0, 1)).run(method="rk4", n_steps=200)
+    assert np.array_equal(traj.y, by_name.y)
+    assert np.array_equal(traj[th.diff()], by_name["theta_t"])
+    again = scene.run(method="rk4", n_steps=200, y0={th: 0.3, s_.diff(): 0.0})
+    assert np.array_equal(again.y, traj.y)
+
+
+# ---------------------------------------------------------------------- refusals
+def test_refusals_name_the_fix():
+    with pytest.raises(JetnhError, match="LagrangesMethod, KanesMethod or System.*jetnh System"):
+        jn.from_mechanics(sp.Matrix([1]))
+    # a specified input r(t) in a load
+    x, ux, f = dynamicsymbols("x u_x f")
+    N = ReferenceFrame("N")
+    O = Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", x * N.x)
+    P.set_vel(N, ux * N.x)
+    km = KanesMethod(N, [x], [ux], kd_eqs=[x.diff() - ux])
+    km.kanes_equations([Particle("P", P, m)], [(P, f * N.x)])
+    with pytest.raises(JetSpaceError, match="load on the point P.*substitute specified inputs"):
+        jn.from_mechanics(km)
+    # a contact point set at rest: the rolling constraint built into the kinematics
+    q, u = dynamicsymbols("q u")
+    A = N.orientnew("A", "Axis", [q, N.z])
+    A.set_ang_vel(N, u * N.z)
+    C = Point("C")
+    C.set_vel(N, 0)
+    D = C.locatenew("D", r * A.x)
+    D.v2pt_theory(C, N, A)
+    km = KanesMethod(N, [q], [u], kd_eqs=[q.diff() - u])
+    km.kanes_equations([Particle("D", D, m)], [])
+    jn.from_mechanics(km)      # a point at rest that is a true pivot is fine
+    Q = Point("Q")             # a point with a velocity but no position
+    Q.set_vel(N, u * r * N.x)
+    km = KanesMethod(N, [q], [u], kd_eqs=[q.diff() - u])
+    km.kanes_equations([Particle("Q", Q, m)], [])
+    with pytest.raises(JetnhError, match="not located from a point at rest.*velocity constraints"):
+        jn.from_mechanics(km)
+    # a velocity that is not the derivative of the position (rolling built in)
+    E = O.locatenew("E", q * N.x)
+    E.set_vel(N, 2 * u * N.x)
+    km = KanesMethod(N, [q], [u], kd_eqs=[q.diff() - u])
+    km.kanes_equations([Particle("E", E, m)], [])
+    with pytest.raises(JetnhError, match="not the time derivative of its position"):
+        jn.from_mechanics(km)
+    # sympy's minimal rolling disc: the contact point set at rest builds the rolling
+    # into the kinematics, which then hold only while rolling
+    q1, q2, q3 = dynamicsymbols("q1:4")
+    w1, w2, w3 = dynamicsymbols("w1:4")
+    Yf = N.orientnew("Yf", "Axis", [q1, N.z])
+    Lf = Yf.orientnew("Lf", "Axis", [q2, Yf.x])
+    Rf = Lf.orientnew("Rf", "Axis", [q3, Lf.y])
+    kd = [dot(Rf.ang_vel_in(N) - (w1 * Lf.x + w2 * Lf.y + w3 * Lf.z), e) for e in Lf]
+    Rf.set_ang_vel(N, w1 * Lf.x + w2 * Lf.y + w3 * Lf.z)
+    Cf = Point("Cf")
+    Cf.set_vel(N, 0)
+    Dmc = Cf.locatenew("Dmc", r * Lf.z)
+    Dmc.v2pt_theory(Cf, N, Rf)
+    km = KanesMethod(N, [q1, q2, q3], [w1, w2, w3], kd_eqs=kd)
+    km.kanes_equations([RigidBody("disc", Dmc, Rf, m, (inertia(Lf, 1, 2, 1), Dmc))],
+                       [(Dmc, -m * g * N.z)])
+    with pytest.raises(JetnhError, match="velocity of Dmc.*not the time derivative.*"
+                                         "velocity constraint"):
+        jn.from_mechanics(km)
+    # a body potential energy that KanesMethod would not read
+    ms = particle_on_circle()
+    ms.bodies[0].potential_energy = m * g * dynamicsymbols("y")
+    with pytest.raises(JetnhError, match="potential_energy.*apply_uniform_gravity"):
+        jn.from_mechanics(ms)
+    # no bodies yet
+    with pytest.raises(JetnhError, match="kanes_equations"):
+        jn.from_mechanics(KanesMethod(N, [q], [u], kd_eqs=[q.diff() - u]))
+
+
+def test_dynamicsymbols_name_their_jet_coordinates():
+    from jetnh.geometry.jet import key_name
+
+    x = dynamicsymbols("x")
+    assert [key_name(k) for k in (x, x.diff(), x.diff(dynamicsymbols._t, 2), sp.Symbol("x"),
+                                  "x_t")] == ["x", "x_t", "x_tt", "x", "x_t"]
+    y = sp.Function("y")
+    assert key_name(y(sp.Symbol("s"))) is None and key_name(x + 1) is None and key_name(3) is None
+    # the refusal of a key that names nothing says what keys are
+    s = jn.System(jn.JetSpace("x"), sp.Symbol("x_t") ** 2 / 2)
+    with pytest.raises(JetnhError, match="keyed by Symbol, by name or by dynamicsymbol"):
+        jn.Scene(s, "chetaev", initial={x + 1: 0.0, "x_t": 1.0})
+
+
+def test_speeds_survive_another_split(disc):
+    _, s = disc
+    other = s.with_split(["x", "q3"])
+    assert other.speeds is s.speeds and other.dependent != s.dependent
