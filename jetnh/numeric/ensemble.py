@@ -182,7 +182,8 @@ class Ensemble(Frozen):
     (``jetnh.frozen``; its arrays are read-only)."""
 
     def __init__(self, scene, method, t, y, info, t_last, y_last, ev_n, ev_t, Y0, P,
-                 event_names, wall_time, parallel, workers, save, singular_tol):
+                 event_names, wall_time, parallel, workers, save, singular_tol, *,
+                 switching=False, switches=None, pieces=None, reasons=None):
         self.scene = scene
         self.method = method
         self.t = t                      # [n_runs, n_times]
@@ -209,9 +210,9 @@ class Ensemble(Frozen):
         self.layout = scene.kernels.layout
         #: runs that changed split (``numeric.atlas``): run -> [{"t", "from", "to"}, ...];
         #: ``switching``: whether the runs watched their chart's edge
-        self.switches = {}
-        self.switching = False
-        self._pieces, self._reasons = {}, {}
+        self.switches = switches or {}
+        self.switching = switching
+        self._pieces, self._reasons = pieces or {}, reasons or {}
 
     # ------------------------------------------------------------------ shape and access
     @property
@@ -523,9 +524,8 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
     wall = time.perf_counter() - tic
     ens = Ensemble(scene, method, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N[:, :n_user],
                    EV_T[:, :n_user], Y0, P, ce.names[:n_user] if ce is not None else (), wall,
-                   parallel, workers if parallel != "serial" else 1, save, singular_tol)
-    ens._pieces, ens._reasons, ens.switches = pieces, reasons, switches
-    ens.switching = switching
+                   parallel, workers if parallel != "serial" else 1, save, singular_tol,
+                   switching=switching, switches=switches, pieces=pieces, reasons=reasons)
     _explain(ens, kern, singular == "stop", singular_tol, on_error)
     for a in (ens.t, ens.y, ens.status, ens.steps, ens.rejected, ens.nfev, ens.rows,
               ens.t_final, ens.y_final, ens.event_counts, ens.event_first, ens.initial,
