@@ -714,13 +714,13 @@ class Scene(Frozen):
     @property
     def dla_kernels(self):
         """Kernels of the discrete Lagrange-d'Alembert step (``codegen.generate_dla``)."""
-        return discrete.kernels(self, "dla")
+        return discrete.kernels(self, "chetaev")
 
     @property
     def dvi_kernels(self):
         """Kernels of the discrete vakonomic step (``codegen.generate_dla(kind=
         "vakonomic")``)."""
-        return discrete.kernels(self, "dvi")
+        return discrete.kernels(self, "vakonomic")
 
     def __repr__(self):
         return (f"Scene({self.principle}, states={list(self.state_names)}, "
