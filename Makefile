@@ -2,7 +2,8 @@
 #   make run    the machine-checked reproduction of the seed paper (papers/zhao2008)
 #   make test   run the whole test suite (hypothesis profile "ci"; HYPOTHESIS_PROFILE=dev for more)
 # and one builds the documentation:
-#   make docs   the site (Sphinx, notebooks executed) in docs/_build/html; warnings are errors
+#   make docs   the site (Sphinx, notebooks executed) in docs/_build/html; warnings are errors,
+#               and the built pages are checked to load nothing from the network
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
@@ -32,6 +33,7 @@ test: $(STAMP)
 # the executed notebooks and their compiled kernels are cached in docs/_build only
 docs: $(DOCS_STAMP)
 	$(BIN)/sphinx-build -b html -W --keep-going -n -q docs docs/_build/html
+	$(BIN)/python -m pytest -q -p no:cacheprovider tests/test_docs.py -k "built_site or renders_as_code"
 	@echo "the site is in docs/_build/html (open docs/_build/html/index.html)"
 
 clean:

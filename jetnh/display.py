@@ -36,7 +36,7 @@ def tree_size(expr, cap: int = TREE_CAP) -> int:
         size[id(e)] = 1 + sum(size.get(id(a), cap + 1) for a in e.args)
         if size[id(e)] > cap:
             return cap + 1
-    return size.get(id(sp.sympify(expr)), cap + 1)
+    return size.get(id(sp.sympify(expr, strict=True)), cap + 1)
 
 
 def _summary(expr) -> str:
@@ -48,7 +48,7 @@ def _summary(expr) -> str:
 def latex(expr, J=None) -> list[str]:
     """LaTeX of ``expr`` (dotted jets with ``J``) and ``\\text{<summary>}``, or only the
     summary when the expression is large: the forms to try, longest first."""
-    expr = sp.sympify(expr)
+    expr = sp.sympify(expr, strict=True)
     short = r"\langle\text{" + _tex_text(_summary(expr)) + r"}\rangle"
     if tree_size(expr) <= TREE_CAP:
         text = J.latex(expr) if J is not None else sp.latex(expr)
@@ -84,7 +84,9 @@ def _td(x) -> str:
 
 
 def _math(tex: str) -> str:
-    return html.escape(r"\(" + tex + r"\)")
+    """Inline maths for MathJax: the class ``math`` marks it for typesetting where a page
+    typesets only marked elements (Sphinx; Jupyter typesets every output)."""
+    return '<span class="math">' + html.escape(r"\(" + tex + r"\)") + "</span>"
 
 
 def html_table(title: str, facts: list[tuple[str, str]], lists=(), budget=BUDGET) -> str:

@@ -1,6 +1,9 @@
 """Immutable objects (``System``, ``Equations``, ``Scene``, ``Trajectory``, ``Event``,
 ``Ensemble``): attributes are set in ``__init__`` only.  Their mappings (``system.forces``,
-``scene.params``, ``scene.initial``) are ``FrozenDict``: read as dicts, written never.
+``scene.params``, ``scene.initial``) are ``FrozenDict``: read as dicts, written never;
+every numpy array of a public attribute or computed value (``traj.t``, ``traj["x"]``,
+``scene.y0``) is read-only (``readonly``); private ones (``_p``) feed compiled code,
+which takes writable arrays, and are never handed out.
 
 ``Frozen.__init_subclass__`` wraps the subclass's ``__init__``: once it returns, setting
 or deleting an attribute raises ``FrozenError``.  Values computed on first use (compiled
@@ -13,7 +16,23 @@ from __future__ import annotations
 
 import functools
 
+import numpy as np
+
 from .errors import FrozenError
+
+
+def readonly(value):
+    """``value`` with every numpy array in it (also inside lists, tuples and dicts)
+    made read-only in place, so that what a frozen object hands out cannot change it."""
+    if isinstance(value, np.ndarray):
+        value.flags.writeable = False
+    elif isinstance(value, (list, tuple)):
+        for v in value:
+            readonly(v)
+    elif isinstance(value, dict):
+        for v in value.values():
+            readonly(v)
+    return value
 
 
 class Frozen:
@@ -50,11 +69,12 @@ class Frozen:
         if "_memo" in self.__dict__:
             self._refuse(next(iter(values)))
         self.__dict__.update(values)
+        readonly({k: v for k, v in values.items() if not k.startswith("_")})
 
     def __setattr__(self, name, value):
         if "_memo" in self.__dict__:
             self._refuse(name)
-        object.__setattr__(self, name, value)
+        object.__setattr__(self, name, value if name.startswith("_") else readonly(value))
 
     def __delattr__(self, name):
         if "_memo" in self.__dict__:
@@ -75,7 +95,9 @@ class memo:
             return self
         store = obj._memo
         if self.name not in store:
-            store[self.name] = self.fget(obj)
+            value = self.fget(obj)
+            # what is handed out is read-only; private values feed compiled code
+            store[self.name] = value if self.name.startswith("_") else readonly(value)
         return store[self.name]
 
     def __set__(self, obj, value):

@@ -1,6 +1,8 @@
 """Sweeps: one scene over a grid of parameters and initial values, on this machine or on
 a Dask cluster, as a pandas DataFrame with one row per grid point.
 
+Example::
+
     import jetnh as jn
     df = jn.sweep(scene, {R: [0.5, 1.0, 2.0], phi_t: np.linspace(0.1, 1.0, 10)})
     df = jn.sweep(scene, [{"R": 1.0, "phi_t": 0.3}, {"R": 2.0, "phi_t": 0.1}])  # points
@@ -20,8 +22,9 @@ Columns, in this order:
 
 - the grid: a parameter under its name (``R``), an initial value as ``phi_t(t0)``;
 - the outputs (``outputs``: names, default every state, dependent velocity and first
-  integral): at the final time under their names (``x``), or with ``times`` at each time
-  as ``x(t=2.5)`` (NaN after a run's stop);
+  integral): at the final time under their names (``x``; NaN when the run stopped
+  before it: its last values are never shown as final ones), or with ``times`` at each
+  time as ``x(t=2.5)`` (NaN after a run's stop);
 - the diagnostics over the output rows: ``status``, ``success``, ``stop_reason``,
   ``t_final``, ``steps``, ``rejected``, ``rhs_evaluations``, ``residual_max``
   (``max |f^a|``), ``energy_drift`` and ``drift[I]`` (``max |I - I(t0)|`` of each first
@@ -56,11 +59,12 @@ from __future__ import annotations
 import math
 import operator
 import sys
+import time
 import types
 import warnings
 from collections.abc import Mapping
 
-from .errors import JetnhError
+from .errors import ArgumentError, JetnhError
 from .geometry.jet import key_name
 
 #: options that only ``Scene.run`` takes (methods run point by point)
@@ -77,17 +81,63 @@ def _options() -> tuple[str, ...]:
 
 def sweep(scene, grid, client=None, *, times=None, outputs=None, chunk_size=None,
           progress=None, timeout=None, connect_timeout=10.0, **options):
-    """Run ``scene`` at every point of ``grid``: a DataFrame, one row per point (see the
-    module docstring).  ``client``: None (this machine), a ``dask.distributed.Client``
-    or a scheduler address; ``timeout``: seconds the Dask sweep may take (None: no
-    limit); ``connect_timeout``: seconds to reach a scheduler given by address;
-    ``progress``: None, True (a tqdm bar on stderr) or a callable ``progress(done,
-    total)``."""
+    """Run ``scene`` at every point of ``grid``: a DataFrame, one row per point (the
+    columns and the way a sweep is split: the module docstring).
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene to run; what the grid does not set comes from it.
+    grid : dict, list or DataFrame
+        A mapping name or Symbol -> values (the Cartesian product, the last key varying
+        fastest), a list of points (mappings with the same keys), or a DataFrame (one
+        point per row); keys are parameters of the scene or its states.
+    client : dask.distributed.Client or str, optional
+        None runs the grid here on all cores; a Client or a scheduler address runs it
+        on a Dask cluster.
+    times : array_like, optional
+        Output times: the outputs at each as ``x(t=2.5)``; default the final values.
+    outputs : list of str, optional
+        The series to report; default every state, dependent velocity and first
+        integral.
+    chunk_size : int, optional
+        Points per task (Dask: 4 tasks per worker thread; here: the whole grid, or 20
+        chunks with ``progress``).
+    progress : bool or callable, optional
+        True: a tqdm bar on stderr; a callable ``progress(done, total)`` is called as
+        chunks finish.
+    timeout : float, optional
+        Seconds the sweep may take, here or on Dask (None: no limit; past it the runs
+        are stopped and a JetnhError says so).
+    connect_timeout : float, default 10
+        Seconds to reach a scheduler given by address.
+    **options
+        Those of ``Scene.run`` (``rtol``, ``atol``, ``method``, ``n_steps``,
+        ``events``, ...).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per grid point, a failed point with its ``status`` and
+        ``stop_reason``; ``df.attrs["grid"]`` names the grid columns.
+    """
     import numpy as np
     import pandas as pd
 
     from .numeric.ensemble import resolve
+    from .numeric.scene import Scene
 
+    if not isinstance(scene, Scene):
+        raise ArgumentError(f"sweep needs a Scene (jn.Scene(system, principle, params=..., "
+                            f"initial=..., t_span=...)), not {type(scene).__name__}")
+    if timeout is not None:
+        from .numeric import arguments
+
+        timeout = arguments.timeout(timeout)
+    if client is not None:
+        from .numeric import arguments
+
+        connect_timeout = arguments.positive(connect_timeout, "connect_timeout")
     known = _options() + POINT_OPTIONS
     bad = sorted(set(options) - set(known))
     if bad:
@@ -130,10 +180,22 @@ def sweep(scene, grid, client=None, *, times=None, outputs=None, chunk_size=None
             size = chunk_size or (n if progress is None else math.ceil(n / 20))
             chunks = _chunks(n, size)
             parts = []
+            start = time.monotonic()
             for a, b in chunks:
-                parts.append(_run_chunk(scene, Y0[a:b], P[a:b], run, outputs, "threads"))
+                left = None if timeout is None else timeout - (time.monotonic() - start)
+                if left is not None and left <= 0:
+                    raise JetnhError(f"the sweep did not finish within timeout={timeout:g} s "
+                                     f"({a} of {n} points done); raise timeout or sweep "
+                                     "fewer points")
+                parts.append(_run_chunk(scene, Y0[a:b], P[a:b],
+                                        run if left is None else {**run, "timeout": left},
+                                        outputs, "threads"))
                 if progress is not None:
                     progress(b, n)
+            if timeout is not None and time.monotonic() - start > timeout:
+                raise JetnhError(f"the sweep did not finish within timeout={timeout:g} s "
+                                 "(its runs were stopped at the deadline); raise timeout "
+                                 "or sweep fewer points")
         else:
             parts = _on_dask(client, CompiledScene(scene), Y0, P, run, outputs, chunk_size,
                              progress, timeout, connect_timeout)
@@ -309,7 +371,7 @@ def _run_chunk(scene, Y0, P, run, outputs, parallel) -> dict:
                        on_error="record", **run)
     times = run["t_eval"]
     if times is None:
-        final = ens.final
+        final = ens.final_values()
         cols = {name: final[name] for name in outputs}
     else:
         cols = {f"{name}(t={t:.12g})": ens[name][:, j]
@@ -365,7 +427,8 @@ def _run_points(scene, Y0, P, run, outputs) -> dict:
             continue
         for label, where in labels:
             if where is None:
-                cols[label][i] = traj[label][-1]
+                if traj.diagnostics.success:    # else NaN: not the final value
+                    cols[label][i] = traj[label][-1]
             else:
                 name, j = where
                 if j < len(traj):
@@ -419,16 +482,35 @@ def _distributed():
 
 
 def _connect(address, timeout):
-    Client = _distributed().Client
+    """A Client of the scheduler at ``address``, within ``timeout`` seconds whatever the
+    scheduler does (one that accepts connections and never answers, or answers garbage,
+    is given up on: the connection runs in a daemon thread with a hard deadline)."""
+    import threading
 
-    try:
-        client = Client(address, timeout=timeout, set_as_default=False)
-    except (OSError, TimeoutError, ValueError) as exc:
-        raise JetnhError(
-            f"cannot reach a Dask scheduler at {address!r} within {timeout:g} s ({exc}); "
-            "start one (`dask scheduler`, then `dask worker ADDRESS` on each machine) or "
-            "check the address") from None
-    return client
+    Client = _distributed().Client
+    fix = ("start one (`dask scheduler`, then `dask worker ADDRESS` on each machine) or "
+           "check the address")
+    box = {}
+
+    def connect():
+        try:
+            box["client"] = Client(address, timeout=timeout, set_as_default=False)
+        except BaseException as exc:                   # reported below, in this thread
+            box["error"] = exc
+
+    worker = threading.Thread(target=connect, name="jetnh-dask-connect", daemon=True)
+    worker.start()
+    worker.join(timeout + 1.0)
+    if worker.is_alive() or not box:
+        raise JetnhError(f"cannot reach a Dask scheduler at {address!r}: it did not "
+                         f"answer within {timeout:g} s (connect_timeout); {fix}")
+    if "error" in box:
+        exc = box["error"]
+        if isinstance(exc, KeyboardInterrupt):
+            raise exc
+        raise JetnhError(f"cannot reach a Dask scheduler at {address!r} within {timeout:g} "
+                         f"s ({type(exc).__name__}: {exc}); {fix}") from None
+    return box["client"]
 
 
 def _on_dask(client, shipped, Y0, P, run, outputs, chunk_size, progress, timeout,

@@ -2,6 +2,7 @@
 
 import io
 import json
+import re
 import subprocess
 import sys
 
@@ -25,6 +26,18 @@ def test_derive_json():
     data = json.loads(r.stdout)
     assert data["principle"] == "suslov" and data["multipliers"] == ["lambda_z"]
     assert set(data["accelerations"]) == {"x_tt", "y_tt", "z_tt", "lambda_z_t"}
+
+
+def test_derive_writes_the_accelerations_in_the_independent_velocities():
+    """On the manifold the dependent velocities are their values phi: the Suslov disk's
+    accelerations are the closed forms x'' = -R phi' psi' sin(psi), phi'' = psi'' = 0."""
+    r = run("derive", "rolling_disk", "--principle", "suslov", "-q")
+    assert r.returncode == 0, r.stderr
+    acc = r.stdout.split("accelerations on the constraint manifold")[1].split(
+        "the constraint manifold")[0]
+    assert "(in the independent velocities: x_t, y_t replaced by their values below)" in acc
+    assert not re.search(r"\b[xy]_t\b", acc.split("\n", 1)[1])
+    assert "x_tt = -R*phi_t*psi_t*sin(psi)" in acc and "phi_tt = 0" in acc
 
 
 def test_errors_exit_codes_and_no_traceback():
@@ -428,3 +441,29 @@ def test_compare_large_model_bounded(capsys):
     data = json.loads(out)
     assert "T^x_phi" in data["the constraint manifold and the embedded Lagrangian"]
     assert any("chetaev and suslov have the same" in v for v in data["equivalence"])
+
+
+def test_simulate_plot_has_the_path_panel():
+    """--plot adds the path in the (x, y) plane when the model has those coordinates,
+    --path chooses the plane, --path none leaves it out."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from jetnh import models
+    from jetnh.cli.commands.simulate import _figure, _path_names
+    from jetnh.cli.usage import UsageError
+    from jetnh.numeric import Scene
+
+    disk = models.get("rolling_disk")
+    assert _path_names(None, disk) == ("x", "y")
+    assert _path_names("phi, psi", disk) == ("phi", "psi") and _path_names("none", disk) is None
+    assert _path_names(None, models.get("suslov_rigid_body")) is None
+    with pytest.raises(UsageError, match="two series names"):
+        _path_names("x", disk)
+    traj = Scene(disk, "chetaev", initial=models.initial("rolling_disk"),
+                 t_span=(0.0, 2.0)).run(rtol=1e-8, atol=1e-10)
+    fig = _figure(traj, disk, "disk", ("x", "y"))
+    plane = fig.axes[-1]
+    assert (plane.get_xlabel(), plane.get_ylabel()) == ("x", "y") and len(fig.axes) == 4
+    assert plane.get_aspect() == 1.0
+    assert len(_figure(traj, disk, "disk").axes) == 3

@@ -169,7 +169,7 @@ def test_plain_runs_unchanged_and_uncontrolled_sensitivities_take_its_steps(heis
     assert len(ctl.t) >= len(plain.t)
     # dense output of a run with sensitivities re-takes the augmented steps
     mid = 0.5 * (ctl.t[1] + ctl.t[2])
-    assert np.allclose(ctl.at([mid])[0], sc.run(rtol=1e-9, atol=1e-12, t_eval=[mid]).y[0],
+    assert np.allclose(ctl.at([mid]).to_numpy()[0], sc.run(rtol=1e-9, atol=1e-12, t_eval=[mid]).y[0],
                        atol=1e-9)
     with pytest.raises(jn.JetnhError, match="sensitivities=True"):
         plain.sensitivity("x", "y")

@@ -117,11 +117,21 @@ def test_ensemble_dataframe(disk):
 def test_plot_on_given_axes_and_new_figure(traj):
     from matplotlib.figure import Figure
 
+    from jetnh.numeric.dense import resampled
+
     ax = Figure().subplots()
     out = traj.plot(["x", sp.Symbol("y_t")], ax=ax)
     assert out is ax
     assert [ln.get_label() for ln in ax.get_lines()] == ["x", "y_t"]
-    assert np.array_equal(ax.get_lines()[1].get_ydata(), traj["y_t"])
+    t_line = ax.get_lines()[1].get_xdata()
+    rows = np.isin(t_line, traj.t)                  # the curve passes through every row
+    assert rows.sum() == len(traj) and len(t_line) >= 400
+    assert np.array_equal(ax.get_lines()[1].get_ydata()[rows], traj["y_t"])
+    between = resampled(traj)                       # and through the dense output between
+    assert np.array_equal(ax.get_lines()[1].get_ydata(), between["y_t"])
+    assert np.array_equal(between.y[~rows], traj.at(t_line[~rows]).to_numpy())
+    rough = traj.plot("x", ax=Figure().subplots(), smooth=False, steps=True)
+    assert [np.array_equal(ln.get_xdata(), traj.t) for ln in rough.get_lines()] == [True] * 2
     assert ax.get_xlabel() == "t" and ax.get_legend() is not None
     import matplotlib.pyplot as plt
 
@@ -136,6 +146,31 @@ def test_plot_on_given_axes_and_new_figure(traj):
         traj.plot(ax=ax.figure)
     with pytest.raises(ArgumentError, match="diagnostics must be True or False"):
         traj.to_dataframe(diagnostics="no")
+    with pytest.raises(ArgumentError, match="names= or y="):
+        traj.plot("x", y="y", ax=ax)
+
+
+def test_the_path_of_the_disk_is_a_circle():
+    """Closed form: with phi_t = 1, psi_t = w and R = 1 the contact point runs on the
+    circle of radius 1/w about (0, 1/w) (from x = 0, y = 0, psi = 0); the smooth path
+    keeps to it between the steps, where straight chords would leave it."""
+    from matplotlib.figure import Figure
+
+    w = 0.7
+    sc = Scene(models.get("rolling_disk"), "chetaev", t_span=(0.0, 10.0),
+               initial=dict(x=0, y=0, phi=0, psi=0, phi_t=1.0, psi_t=w))
+    tr = sc.run(rtol=1e-10, atol=1e-12)
+    assert len(tr) < 40                             # few steps: chords would show
+    ax = tr.plot_path(ax=Figure().subplots())
+    x, y = ax.get_lines()[0].get_data()
+    assert ax.get_xlabel() == "x" and ax.get_ylabel() == "y"
+    assert ax.get_aspect() == 1.0
+    off = np.abs(np.hypot(x, y - 1 / w) - 1 / w)
+    assert off.max() < 1e-8 and len(x) >= 400
+    mid = (tr["x"][:-1] + tr["x"][1:]) / 2, (tr["y"][:-1] + tr["y"][1:]) / 2
+    assert np.max(np.abs(np.hypot(mid[0], mid[1] - 1 / w) - 1 / w)) > 1e-3
+    same = tr.plot(x="x", y="y", ax=Figure().subplots())
+    assert np.array_equal(same.get_lines()[0].get_xdata(), x)
 
 
 # ---------------------------------------------------------------------- evaluation
@@ -151,8 +186,11 @@ def test_at_is_bitwise_the_t_eval_run(disk, method, first_step):
     ref = disk.run(t_eval=np.sort(times), **kw)
     got = tr.at(times)
     order = np.argsort(times, kind="stable")
-    assert got.shape == (times.size, 6)
-    assert np.array_equal(got[order], ref.y)        # to the last bit
+    assert list(got.columns) == list(disk.state_names) and np.array_equal(got.index, times)
+    states = got.to_numpy()
+    assert states.shape == (times.size, 6)
+    assert np.array_equal(states[order], ref.y)     # to the last bit
+    assert np.array_equal(got["phi_t"].to_numpy()[order], ref["phi_t"])
 
 
 @settings(max_examples=10)
@@ -163,7 +201,7 @@ def test_at_backward_runs_match_t_eval(disk, times, method):
     times = np.array(times)
     ref = disk.run(method=method, rtol=1e-7, atol=1e-9, t_span=(0.0, -2.0),
                    t_eval=np.sort(times)[::-1])
-    got = tr.at(times)
+    got = tr.at(times).to_numpy()[:, :6]
     assert np.array_equal(got[np.argsort(-times, kind="stable")], ref.y)
 
 
@@ -173,9 +211,9 @@ def test_at_rk4_hermite_has_the_order_of_rk4(disk):
     for n in (60, 120):
         tr = disk.run(method="rk4", n_steps=n)
         # nodes: the stored rows themselves
-        assert np.array_equal(tr.at(tr.t[5:8]), tr.y[5:8])
+        assert np.array_equal(tr.at(tr.t[5:8]).to_numpy()[:, :6], tr.y[5:8])
         t_mid = (tr.t[:-1] + tr.t[1:]) / 2
-        mid.append(np.max(np.abs(tr.at(t_mid) - ref_run.at(t_mid))))
+        mid.append(np.max(np.abs(tr.at(t_mid).to_numpy() - ref_run.at(t_mid).to_numpy())))
     assert mid[1] < 1e-6
     assert 10 < mid[0] / mid[1] < 24               # O(h^4): ratio 16 when h halves
 
@@ -200,13 +238,13 @@ def test_at_refusals(disk):
 def test_at_after_a_terminal_event(disk):
     tr = disk.run(events=[Event(sp.Symbol("x") - 0.5, terminal=True)], **TOL)
     assert tr.status == 5
-    assert np.array_equal(tr.at(tr.t[-1]), tr.y[-1:])
+    assert np.array_equal(tr.at(tr.t[-1]).to_numpy()[:, :6], tr.y[-1:])
     inside = (tr.t[-2] + tr.t[-1]) / 2
     with pytest.raises(JetnhError, match="stopped inside its last step"):
         tr.at(inside)
     before = (tr.t[-3] + tr.t[-2]) / 2
     ref = disk.run(t_eval=[before], **TOL)
-    assert np.array_equal(tr.at(before), ref.y)
+    assert np.array_equal(tr.at(before).to_numpy()[:, :6], ref.y)
 
 
 # ---------------------------------------------------------------------- displays

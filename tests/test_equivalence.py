@@ -265,3 +265,20 @@ def test_compare_takes_aliases_and_reports_canonical_names():
 def test_compare_refuses_one_principle_twice():
     with pytest.raises(PrincipleError, match="both chetaev"):
         compare(rolling_disk(), "chetaev", "Lagrange-d'Alembert")
+
+
+def test_singular_factors_are_drawn_out_and_declared_signs_kept():
+    """Closed forms: a sum that is a monomial after sin^2 = 1 - cos^2 is that monomial's
+    factors; a sum too large to factor has its terms' common factors drawn out; a
+    parameter declared positive is never in the set."""
+    from jetnh.algebra.singular import singular_set
+
+    m, r, q2, x, a, b, c, d = sp.symbols("m r q2 x a b c d")
+    M = sp.Symbol("M", positive=True)
+    e = (45 * m**3 * r**6 * sp.sin(q2)**2 / 16 + 75 * m**3 * r**6 * sp.cos(q2)**2 / 32
+         - 45 * m**3 * r**6 / 16)                     # = -15/32 m^3 r^6 cos(q2)^2
+    assert singular_set([1 / e]) == [m, r, sp.cos(q2)]
+    big = sp.expand(m**3 * r**6 * (sp.sin(a) + sp.cos(b) + sp.sin(c) + sp.cos(d) + x))
+    assert singular_set([1 / big]) == [m, r, x + sp.sin(a) + sp.sin(c) + sp.cos(b) + sp.cos(d)]
+    assert singular_set([1 / (m * x)]) == [m, x] and singular_set([1 / (M * x)]) == [x]
+    assert singular_set([sp.sqrt(M - x**2) / M]) == [M - x**2]

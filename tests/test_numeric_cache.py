@@ -417,15 +417,39 @@ def test_info_and_clear(fresh):
     i = cache.info()
     assert i["entries"] == 0 and i["fallback"] is None and i["env"]
     reload(scene(4.5))
-    old = fresh / "v0"
+    old = fresh / "v0"                  # an older jetnh's root: it holds the marker
     old.mkdir()
     (old / "x").write_bytes(b"12345")
+    (old / cache.MARKER).write_bytes(b"")
+    mine = fresh / "v1"                 # the user's own directory of that name: no marker
+    (mine / "k1").mkdir(parents=True)
+    (mine / "thesis.tex").write_bytes(b"irreplaceable")
     i = cache.info()
     assert i["root"] == cache.cache_root() and i["entries"] == 1 and i["bytes"] > 0
     assert i["old_versions"] == 5
+    assert cache.owned(cache.cache_root())
     assert cache.clear() == 1
     assert not cache.cache_root().exists() and not old.exists()
+    assert (mine / "thesis.tex").read_bytes() == b"irreplaceable" and (mine / "k1").is_dir()
     assert cache.info()["entries"] == 0
+
+
+def test_clear_never_deletes_what_jetnh_did_not_make(fresh):
+    """JETNH_CACHE=$HOME with the user's own v1, v2024 and a current-version directory
+    jetnh did not make (no marker), a link to elsewhere: clear deletes none of them."""
+    root = cache.cache_root()
+    dirs = [fresh / "v1", fresh / "v2024", root]
+    for d in dirs:
+        (d / "k0").mkdir(parents=True)
+        (d / "k0" / "data").write_bytes(b"user data")
+    elsewhere = fresh.parent / "elsewhere"
+    (elsewhere / "k0").mkdir(parents=True)
+    os.symlink(elsewhere, fresh / "v3")
+    (elsewhere / cache.MARKER).write_bytes(b"")
+    assert cache.clear() == 0
+    for d in dirs:
+        assert (d / "k0" / "data").read_bytes() == b"user data"
+    assert (elsewhere / "k0").is_dir() and os.path.islink(fresh / "v3")
 
 
 def test_info_names_why_the_fallback_is_used(fresh, tmp_path, monkeypatch):

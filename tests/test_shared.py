@@ -64,6 +64,35 @@ def test_an_exponential_tree_gets_a_linear_form():
     assert mpmath.almosteq(_values(form, pt)[0], dag.evaluate(e, pt), 1e-20)
 
 
+def test_equal_subexpressions_built_apart_get_one_name():
+    """Two principles' equations hold equal subexpressions as distinct objects; each gets
+    one name, and equal rows print alike (a 2^60-node tree built twice: no tree is
+    ever compared)."""
+    x, y = sp.symbols("x y")
+
+    def build():
+        e = x
+        for _ in range(60):
+            e = sp.Mul(e, sp.Add(e, y, evaluate=False), evaluate=False)
+        return e
+
+    e1 = build()
+    sp.core.cache.clear_cache()              # else sympy's cache hands out the same objects
+    e2 = build()
+    apart = e1 is not e2 and e1.args[0] is not e2.args[0]
+    assert apart                             # (no tree in an assert: pytest would print it)
+    one = len(shared_form([("f", e1)]).where)
+    F = sp.Function("F")
+    two = shared_form([("f", e1), ("g", e2), ("h", sp.Add(F(e2), y, evaluate=False))])
+    rows = [str(r[1]) for r in two.rows]
+    # the same names as one tree alone, plus the whole tree (used in h too)
+    assert len(two.where) == one + 1 and rows[0] == rows[1] and rows[2] == f"y + F({rows[0]})"
+    pt = {x: mpmath.mpf("1.0000001"), y: mpmath.mpf("0.5")}
+    a, b = _values(shared_form([("f", e1), ("g", e2)]), pt)
+    close = a == b and mpmath.almosteq(a, dag.evaluate(e2, pt), 1e-20)
+    assert close
+
+
 def test_small_results_are_shown_flat_and_names_avoid_the_symbols():
     u1, x = sp.symbols("u_1 x")
     form = shared_form([("f", x**2 + 1)])

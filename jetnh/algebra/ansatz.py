@@ -5,8 +5,11 @@ must hold at every point p = (t, q, velocities, multipliers, parameters); the an
 the null space.  Conserved quantities (``integrals.py``) and Noether and Lie symmetries
 (``symmetries.py``) are such problems.  The route:
 
-1. At one random rational value theta0 of the parameters the conditions are imposed at
-   twice as many random points as unknowns and reduced (50 digits, fixed-point integers):
+1. At one random rational value theta0 of the parameters the unknowns whose ansatz
+   functions are dependent at random points (on the constraint manifold: multiples of a
+   constraint) are dropped, keeping the earlier ones (``independent_columns``); the
+   conditions are imposed at twice as many random points as unknowns kept and reduced
+   (50 digits, fixed-point integers):
    the generic dimension r of the solution space and the unknowns it uses (its support S).
    Combinations whose ansatz function vanishes identically (dependent ansatz functions)
    are not counted.
@@ -31,12 +34,14 @@ import warnings
 from fractions import Fraction
 
 import mpmath
+import numpy as np
 import sympy as sp
 
 from . import dag
 from ..errors import ArgumentError, JetnhError, JetnhWarning
 
-BUDGET = 400            # unknowns of one linear solve
+BUDGET = 400            # unknowns of one linear solve (after independent_columns)
+RAW_BUDGET = 1600       # unknowns of an ansatz as written (checked before it is built)
 DPS = 50                # digits of the numeric route
 MAX_PARAMETER_DEGREE = 3
 _TOL = mpmath.mpf(10) ** -30
@@ -88,11 +93,21 @@ class Problem:
     def values(self, point):                           # pragma: no cover - interface
         raise NotImplementedError
 
+    def float_values(self, points):
+        """The ansatz functions' values at ``points`` as a float array [points, n]
+        (subclasses evaluate all points at once)."""
+        return np.array([[float(x) for x in self.values(p)] for p in points],
+                        dtype=float).reshape(-1, self.n)
+
+    def raw_points(self, rng, count, fixed=None):
+        """``count`` random points, not checked for regularity (``float_values`` is)."""
+        return self.points(rng, count, fixed)
+
     def points(self, rng, count, fixed=None):
         """``count`` distinct random points (those of as many condition rows)."""
         out, seen = [], set()
         while len(out) < count:
-            for _, p in self.rows(rng, count - len(out), fixed):
+            for _, p in self.rows(rng, count - len(out), fixed, columns=[]):
                 if id(p) not in seen:
                     seen.add(id(p))
                     out.append(p)
@@ -112,9 +127,19 @@ def solve(problem: Problem, what: str, max_degree: int = MAX_PARAMETER_DEGREE) -
     n = problem.n
     rng = random.Random(20240614)
     theta0 = random_parameters(problem.parameters, rng, wide=True)
-    rows0 = [r for r, _ in problem.rows(rng, 2 * n + 4, theta0)]
-    A, piv = _rref(rows0, n)
-    null = _null_vectors(A, piv, n)
+    keep = independent_columns(problem, rng, theta0)
+    m = len(keep)
+    if m > BUDGET:
+        raise budget_error(m, f"{what}: independent ansatz functions on the constraint "
+                              f"manifold, of {n} written")
+    rows0 = [r for r, _ in problem.rows(rng, 2 * m + 4, theta0, columns=keep)]
+    A, piv = _rref(rows0, m)
+    null = []
+    for v in _null_vectors(A, piv, m):
+        full = [mpmath.mpf(0)] * n
+        for j, x in zip(keep, v):
+            full[j] = x
+        null.append(full)
     if not null:
         return []
     # the functions of the null vectors at random points (theta0): their rank is r
@@ -153,6 +178,32 @@ def solve(problem: Problem, what: str, max_degree: int = MAX_PARAMETER_DEGREE) -
         f"{[str(a) for a in atoms]} within the budget of {BUDGET} unknowns; pass "
         "coefficients that carry those parameter factors", JetnhWarning, stacklevel=3)
     return found
+
+
+def independent_columns(problem, rng, theta) -> list:
+    """The unknowns whose ansatz functions are linearly independent at random points
+    (parameters ``theta``), each kept when it is not a combination of those before it:
+    a basis of the ansatz modulo the functions that vanish where the points lie (the
+    constraint manifold), so the solve neither meets trivial solutions nor loses any.
+    Float64 with a relative threshold of 1e-9 on the orthogonalized column (exact
+    dependencies leave 1e-15)."""
+    n = problem.n
+    with np.errstate(all="ignore"):
+        F = problem.float_values(problem.raw_points(rng, 2 * n + 20, theta))
+    F = F[np.all(np.isfinite(F), axis=1)][:n + 10]       # regular points only
+    norms = np.linalg.norm(F, axis=0)
+    keep, Q = [], np.zeros((F.shape[0], 0))
+    for j in range(n):
+        if not np.isfinite(norms[j]) or norms[j] == 0:
+            continue
+        v = F[:, j] / norms[j]
+        for _ in range(2):                              # Gram-Schmidt, twice
+            v = v - Q @ (Q.T @ v)
+        size = np.linalg.norm(v)
+        if size > 1e-9:
+            keep.append(j)
+            Q = np.column_stack([Q, v / size])
+    return keep
 
 
 def to_mpf(x):
@@ -332,7 +383,7 @@ def _rational(x):
     return sp.Rational(fr.numerator, fr.denominator)
 
 
-def budget_error(count, detail):
+def budget_error(count, detail, budget=BUDGET):
     return ArgumentError(
-        f"the ansatz has {count} unknowns ({detail}), over the budget of {BUDGET}; lower "
+        f"the ansatz has {count} unknowns ({detail}), over the budget of {budget}; lower "
         "degree or pass fewer coefficients (e.g. coefficients=[1])")

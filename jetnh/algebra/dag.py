@@ -18,7 +18,7 @@ def nodes(expr, cap: int | None = None) -> list:
     """The distinct subexpressions of ``expr`` (a Basic or a list of them), children
     before parents (at most ``cap``)."""
     roots = list(expr) if isinstance(expr, (list, tuple)) else [expr]
-    order, seen, stack = [], set(), [(sp.sympify(e), False) for e in reversed(roots)]
+    order, seen, stack = [], set(), [(sp.sympify(e, strict=True), False) for e in reversed(roots)]
     while stack:
         e, expanded = stack.pop()
         if expanded:
@@ -48,7 +48,7 @@ def tree_size(expr, cap: int | None = None) -> int:
         n = 1 + sum(count[id(a)] for a in e.args)
         count[id(e)] = n if cap is None else min(n, cap + 1)
     roots = list(expr) if isinstance(expr, (list, tuple)) else [expr]
-    total = sum(count[id(sp.sympify(e))] for e in roots)
+    total = sum(count[id(sp.sympify(e, strict=True))] for e in roots)
     return total if cap is None else min(total, cap + 1)
 
 
@@ -101,8 +101,8 @@ def xreplace(expr, rule: dict, canon: dict | None = None):
             new = e
         done[id(e)] = canon.setdefault(new, new)
     if isinstance(expr, (list, tuple)):
-        return [done[id(sp.sympify(e))] for e in expr]
-    return done[id(sp.sympify(expr))]
+        return [done[id(sp.sympify(e, strict=True))] for e in expr]
+    return done[id(sp.sympify(expr, strict=True))]
 
 
 def diff(expr, *symbols, cache: dict | None = None):
@@ -116,7 +116,7 @@ def diff(expr, *symbols, cache: dict | None = None):
     ``cache`` (a dict, filled here) carries the derivatives of subexpressions over several
     calls, e.g. by every symbol of one expression (``jacobian``, the total derivative)."""
     cache = {} if cache is None else cache
-    expr = sp.sympify(expr)
+    expr = sp.sympify(expr, strict=True)
     for x in symbols:
         if not isinstance(x, sp.Symbol):
             raise TypeError(f"dag.diff differentiates by Symbols, not {x!r}")
@@ -127,7 +127,7 @@ def diff(expr, *symbols, cache: dict | None = None):
 def jacobian(exprs, symbols, cache: dict | None = None) -> sp.Matrix:
     """The matrix d exprs[i] / d symbols[j] (``diff``; one cache for all entries)."""
     cache = {} if cache is None else cache
-    exprs = [sp.sympify(e) for e in exprs]
+    exprs = [sp.sympify(e, strict=True) for e in exprs]
     return sp.Matrix(len(exprs), len(symbols),
                      lambda i, j: _diff(exprs[i], symbols[j], cache))
 
@@ -205,7 +205,7 @@ def _values(expr, leaf, add, mul, power, function):
             else:
                 raise ValueError(f"cannot evaluate {e!r} numerically (no value given)")
         val[id(e)] = v
-    out = [val[id(sp.sympify(e))] for e in roots]
+    out = [val[id(sp.sympify(e, strict=True))] for e in roots]
     return out if isinstance(expr, (list, tuple)) else out[0]
 
 
@@ -216,7 +216,7 @@ def evaluate(expr, point: dict, dps: int = 30) -> list:
     with mpmath.workdps(dps):
         prec = mpmath.mp.prec
         given = {s: mpmath.mpmathify(v) if not isinstance(v, sp.Basic)
-                 else _number(sp.sympify(v), prec) for s, v in point.items()}
+                 else _number(sp.sympify(v, strict=True), prec) for s, v in point.items()}
 
         def leaf(e):
             if e in given:

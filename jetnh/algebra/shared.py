@@ -32,7 +32,7 @@ def tree_size(exprs, cap: int) -> int:
     """Nodes of ``exprs`` (a list) as trees, counted on the graph up to ``cap + 1``."""
     size: dict[int, int] = {}
     total = 0
-    roots = [sp.sympify(e) for e in exprs]
+    roots = [sp.sympify(e, strict=True) for e in exprs]
     for e in dag.nodes(roots):
         size[id(e)] = min(cap + 1, 1 + sum(size[id(a)] for a in e.args))
     for e in roots:
@@ -174,37 +174,56 @@ def _prefix(exprs) -> str:
     return "shared"
 
 
+def canonical(order: list) -> dict:
+    """id of each node of ``order`` (children before parents) -> the first node of
+    ``order`` equal to it as a tree: equal subexpressions built apart (two principles'
+    equations) become one, in time linear in the number of nodes (no tree is compared)."""
+    rep, table = {}, {}
+    for e in order:
+        key = (type(e), e) if not e.args else (e.func, tuple(id(rep[id(a)]) for a in e.args))
+        rep[id(e)] = table.setdefault(key, e)
+    return rep
+
+
 def shared_form(rows, flat_max: int = FLAT_MAX, inline_max: int = INLINE_MAX,
                 shared_min: int = SHARED_MIN) -> SharedForm:
     """``rows`` ((label, expression) pairs, or a dict) in shared form (module docstring);
-    time and size linear in the number of distinct subexpressions."""
-    rows = [r if isinstance(r, str) else (r[0], sp.sympify(r[1]))
+    time and size linear in the number of distinct subexpressions.  Equal
+    subexpressions get one name, however many objects hold them (``canonical``)."""
+    rows = [r if isinstance(r, str) else (r[0], sp.sympify(r[1], strict=True))
             for r in (rows.items() if isinstance(rows, dict) else rows)]
     exprs = [r[1] for r in rows if not isinstance(r, str)]
     if tree_size(exprs, flat_max) <= flat_max:
         return SharedForm(rows, [])
     order = dag.nodes(exprs)
+    rep = canonical(order)
+    order = [e for e in order if rep[id(e)] is e]
+
+    def key(a) -> int:
+        return id(rep[id(a)])
+
     uses: dict[int, int] = {}
     for e in order:
-        for a in {id(a) for a in e.args}:
+        for a in {key(a) for a in e.args}:
             uses[a] = uses.get(a, 0) + 1
-    for e in exprs:
-        uses[id(e)] = uses.get(id(e), 0) + 1
+    for k in {key(e) for e in exprs}:   # a row repeated (two principles agree) is
+        uses[k] = uses.get(k, 0) + 1    # printed again, not named
     size: dict[int, int] = {}           # tree nodes as printed (a name counts one)
     named: set[int] = set()
     for e in order:
         if not e.args:
             size[id(e)] = 1
             continue
-        parts = sorted((a for a in set(e.args) if id(a) not in named),
+        args = [rep[id(a)] for a in e.args]
+        parts = sorted((a for a in {id(a): a for a in args}.values() if id(a) not in named),
                        key=lambda a: -size[id(a)])
-        s = 1 + sum(1 if id(a) in named else size[id(a)] for a in e.args)
+        s = 1 + sum(1 if id(a) in named else size[id(a)] for a in args)
         for a in parts:                 # name the largest parts until the line fits
             if size[id(a)] <= inline_max and (e.is_Add or s <= inline_max
                                               or size[id(a)] <= 2):
                 break                   # (a sum of short terms reads well on one line)
             named.add(id(a))
-            s -= (size[id(a)] - 1) * e.args.count(a)
+            s -= (size[id(a)] - 1) * sum(b is a for b in args)
         size[id(e)] = s
         if uses.get(id(e), 0) > 1 and s >= shared_min:
             named.add(id(e))
@@ -215,7 +234,7 @@ def shared_form(rows, flat_max: int = FLAT_MAX, inline_max: int = INLINE_MAX,
         if not e.args:
             shown[id(e)] = e
             continue
-        args = tuple(shown[id(a)] for a in e.args)
+        args = tuple(shown[key(a)] for a in e.args)
         body = e.func(*args) if any(a is not b for a, b in zip(args, e.args)) else e
         if id(e) in named:
             name = sp.Symbol(f"{prefix}_{len(where) + 1}")
@@ -223,5 +242,5 @@ def shared_form(rows, flat_max: int = FLAT_MAX, inline_max: int = INLINE_MAX,
             shown[id(e)] = name
         else:
             shown[id(e)] = body
-    return SharedForm([r if isinstance(r, str) else (r[0], shown[id(r[1])]) for r in rows],
+    return SharedForm([r if isinstance(r, str) else (r[0], shown[key(r[1])]) for r in rows],
                       where)

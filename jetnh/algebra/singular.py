@@ -10,8 +10,11 @@ multipliers, parameters) is taken to be real, and a symbol that is itself in the
 taken to be nonzero (the set is a union: off it, that symbol is nonzero).  A factor is
 dropped when sympy's assumptions then prove it nonzero (a nonzero number, exp(u),
 1 + u^2, a^2 + b^2 when a is in the set; sin(u)^2 + cos(u)^2, after the one rewrite
-sin(u)^2 -> 1 - cos(u)^2 of small factors); nothing else is dropped, a parameter (m) or
-a sum of parameters (I1 + R^2) included.
+sin(u)^2 -> 1 - cos(u)^2 of small factors); a symbol keeps a sign it was declared with
+(``Symbol("m", positive=True)``: m = 0 is never in the set).  Nothing else is dropped, a
+parameter (m) or a sum of parameters (I1 + R^2) included.  Small factors are factored;
+larger sums (up to ``_TERMS_MAX`` tree nodes) have their terms' common factors drawn out
+(``factor_terms``), never a full factorization.
 """
 
 from __future__ import annotations
@@ -22,6 +25,7 @@ from . import dag
 
 _FACTOR_MAX = 400        # tree nodes up to which a factor is factored and tested for sign
 _FACTOR_GENERATORS = 3   # functions and roots up to which a factor is factored
+_TERMS_MAX = 4_000       # tree nodes up to which a larger sum's common factors are drawn out
 _POLY_GENS, _POLY_DEGREE, _POLY_TERMS = 12, 10, 24  # ... and its size as a polynomial
 _LABEL_MAX = 400         # tree nodes up to which an expression is printed in full
 
@@ -31,7 +35,7 @@ def bases(expr) -> list:
     negative and fractional powers, arguments of log, cos of tan/sec arguments, sin of
     cot/csc arguments, 1 - u^2 of asin/acos arguments (in the order met; shared
     subexpressions are visited once)."""
-    out, seen, stack = [], set(), [sp.sympify(expr)]
+    out, seen, stack = [], set(), [sp.sympify(expr, strict=True)]
     while stack:
         e = stack.pop()
         if id(e) in seen or e.is_Atom:      # by identity: equal trees never compared
@@ -102,6 +106,8 @@ def _split(b) -> list:
                 g = sp.factor(g)
             except (sp.PolynomialError, NotImplementedError, ValueError, TypeError):
                 pass
+        elif g.is_Add and tree_size(g, _TERMS_MAX) <= _TERMS_MAX:
+            g = sp.factor_terms(g)      # too large to factor: common factors of the terms
         for h in sp.Mul.make_args(g):
             if h.is_Pow and h.exp.is_number and h.exp.is_negative:
                 out.extend(factors(h.base))
@@ -145,9 +151,17 @@ def _nonzero(f, nonzero_symbols: set) -> bool:
     ``nonzero_symbols`` also nonzero); only for small ``f``."""
     if tree_size(f, _FACTOR_MAX) > _FACTOR_MAX:
         return False
-    real = {s: sp.Dummy(s.name, real=True, nonzero=(s in nonzero_symbols) or None)
-            for s in f.free_symbols if isinstance(s, sp.Symbol)}
+    real = {s: _real(s, s in nonzero_symbols) for s in f.free_symbols
+            if isinstance(s, sp.Symbol)}
     return f.xreplace(real).is_zero is False
+
+
+def _real(s, nonzero: bool):
+    """``s`` as a real symbol that keeps its declared sign (``positive=True`` and the
+    like), nonzero when ``nonzero``."""
+    sign = ({"positive": True} if s.is_positive else {"negative": True} if s.is_negative
+            else {"nonzero": True} if nonzero or s.is_nonzero else {})
+    return sp.Dummy(s.name, real=True, **sign)
 
 
 def singular_set(exprs, on=None) -> list:

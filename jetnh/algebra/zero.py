@@ -69,7 +69,7 @@ def vanishes(exprs, system=None, points: int = POINTS, seed: int = 0, *, derived
     the domain: the point is skipped); ``exact_point(base)`` the same as rationals, or
     ``linalg.Inexact``.
     """
-    exprs = [sp.sympify(e) for e in ([exprs] if isinstance(exprs, sp.Basic) else exprs)]
+    exprs = [sp.sympify(e, strict=True) for e in ([exprs] if isinstance(exprs, sp.Basic) else exprs)]
     exprs = [e for e in exprs if e != 0]
     log = _LOG.get()
     if log is not None:

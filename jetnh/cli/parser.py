@@ -5,6 +5,7 @@ shown result."""
 from __future__ import annotations
 
 import argparse
+import math
 
 from ..errors import PrincipleError
 from ..mechanics import principles
@@ -17,6 +18,52 @@ EPILOG_MODEL = ("MODEL: a catalogue name (see `jetnh models`; scalable ones take
 
 class Formatter(argparse.RawDescriptionHelpFormatter):
     pass
+
+
+# ---------------------------------------------------------------------- value types
+def _number(text: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+
+
+def finite(text: str) -> float:
+    """A finite number (no nan, no inf)."""
+    v = _number(text)
+    if not math.isfinite(v):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number")
+    return v
+
+
+def seconds(text: str) -> float:
+    """A duration: finite and > 0."""
+    v = finite(text)
+    if v <= 0:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a positive number of seconds")
+    return v
+
+
+def budget_seconds(text: str) -> float:
+    """A duration from 0 (none) to an hour (the display's alarm timer)."""
+    v = finite(text)
+    if not 0 <= v <= 3600:
+        raise argparse.ArgumentTypeError(f"{text!r} is not from 0 to 3600 seconds")
+    return v
+
+
+def count(text: str, low: int = 0) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+    if v < low:
+        raise argparse.ArgumentTypeError(f"{text!r} is below {low}")
+    return v
+
+
+def positive_count(text: str) -> int:
+    return count(text, 1)
 
 
 ALIASES = "aliases: " + "; ".join(f"{', '.join(p.aliases)} (= {p.name})"
@@ -83,7 +130,7 @@ def shown_args(sp_):
     sp_.add_argument("--out", metavar="FILE",
                      help="write the full result to FILE (on the screen large results "
                           f"are cut to about {SCREEN_BUDGET // 1000} kB)")
-    sp_.add_argument("--simplify", type=float, default=None, metavar="SECONDS",
+    sp_.add_argument("--simplify", type=budget_seconds, default=None, metavar="SECONDS",
                      help="trigsimp each small expression shown (at most 60 tree "
                           "nodes) within SECONDS, 10 x SECONDS in all; larger ones are "
                           "shown as derived, and a note says how many were simplified "

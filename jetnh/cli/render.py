@@ -9,7 +9,7 @@ from pathlib import Path
 
 import sympy as sp
 
-from ..errors import JetnhError
+from . import outputs
 
 #: characters of a result printed on the screen; --out FILE writes the full form
 SCREEN_BUDGET = 20_000
@@ -19,17 +19,14 @@ def label(expr) -> str:
     """A short input expression (L, a force) in full, a large one summarized."""
     from ..algebra.singular import label as summarized
 
-    return summarized(sp.sympify(expr))
+    return summarized(sp.sympify(expr, strict=True))
 
 
 def write(args, progress, text: str, form) -> None:
     """The result: to --out in full, else on stdout (``text`` is the short form)."""
     if args.out:
-        path = Path(args.out)
-        if not path.resolve().parent.is_dir():
-            raise JetnhError(f"cannot write {path}: the directory {path.resolve().parent} "
-                             "does not exist")
-        path.write_text(text + "\n", encoding="utf-8")
+        path = outputs.check(args.out, outputs.TEXT, "--out")
+        outputs.write(path, lambda tmp: Path(tmp).write_text(text + "\n", encoding="utf-8"))
         progress.note(f"jetnh: wrote {path} ({len(form.where)} named quantities)")
     else:
         print(text)

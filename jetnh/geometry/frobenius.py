@@ -1,11 +1,11 @@
 """The Frobenius test for affine (possibly time-dependent) constraints on R x Q.
 
-Affine constraints (the paper's eqs. (33)-(34), with q^0 = t)
+Affine constraints (the paper's eqs. (33)-(34), with q^0 = t)::
 
     qdot^alpha = B^alpha_mu(t, q) qdot^mu + B^alpha_0(t, q) = B^alpha_rho qdot^rho
 
 say that the tangent (1, qdot) of a motion t -> (t, q(t)) of the extended configuration
-space R x Q lies in the distribution
+space R x Q lies in the distribution::
 
     Delta = span{ X_rho = d_rho + B^alpha_rho d_alpha },  rho = 0 (time), independent mu,
 

@@ -53,6 +53,11 @@ def _names(spec) -> tuple[str, ...]:
     """Names from ``"x y"``, ``"x, y"`` or an iterable of str / Symbol."""
     if isinstance(spec, str):
         return tuple(n for n in re.split(r"[\s,]+", spec.strip()) if n)
+    if isinstance(spec, sp.Symbol):
+        return (spec.name,)
+    if not isinstance(spec, Iterable):
+        raise JetSpaceError(f"coordinates must be names ('x y phi') or a list of names or "
+                            f"Symbols, not {type(spec).__name__}")
     out = []
     for item in spec:
         name = key_name(item)
@@ -106,6 +111,24 @@ class JetSpace:
     ``JetSpace("x y phi psi")`` has ``t``, ``q = (x, y, phi, psi)``, ``qd = (x_t, ...)``,
     ``qdd = (x_tt, ...)``; ``jet(x, 3)`` is ``x_ttt``.  Instances are immutable values;
     ``with_fields`` returns a larger space.
+
+    Parameters
+    ----------
+    coordinates : str or sequence of str or Symbol
+        The coordinates q^s: names separated by spaces (``"x y phi psi"``), or a list.
+    t : str or Symbol, default "t"
+        The time.
+    fields : sequence of str or Symbol, optional
+        Functions of t with jets of their own (the variation components, for instance).
+
+    Examples
+    --------
+    >>> import jetnh as jn
+    >>> J = jn.JetSpace("x y")
+    >>> J.q, J.qd, J.qdd
+    ((x, y), (x_t, y_t), (x_tt, y_tt))
+    >>> J.jet(J.q[0], 3)
+    x_ttt
     """
 
     def __init__(self, coordinates, t: str | sp.Symbol = "t", fields=()):

@@ -20,7 +20,7 @@ every principle's rows read::
 Generalized forces Q_s (``System.Q``) enter every row beside [L]_s: r_s becomes r_s + Q_s.
 
 The explicit forms ((17)-(20), (29)-(31)) use the constraints qdot^alpha - phi^alpha.
-When f is affine these are S f with S = A_dep^-1, and on f = 0
+When f is affine these are S f with S = A_dep^-1, and on f = 0::
 
     [S f]_s = S ([f]_s + (D A_dep) S A_s),
 
@@ -84,7 +84,7 @@ def euler_parts(J, F, hessian: bool = True) -> EulerParts:
         fix = {sp.Symbol(name): v for name, v in originals.items() if sp.Symbol(name) != v}
 
         def back(e):
-            e = sp.sympify(e)
+            e = sp.sympify(e, strict=True)
             return e.xreplace(fix) if fix else e
     p, H, r, v = parts
     return EulerParts([back(e) for e in p],

@@ -1,7 +1,7 @@
 """Equations of motion from the composite action (12) under each variation, and Chetaev's.
 
 Zhao et al. (2008), section 3.  The variation of A = int (L + lambda_a f^a) dt under any
-variation delta (components eta^s, commutator c^s) is, after integration by parts, (13):
+variation delta (components eta^s, commutator c^s) is, after integration by parts, (13)::
 
     delta A = int { E_s eta^s - P_s c^s } dt + [P_s eta^s]_{t1}^{t2},
     E_s = [L]_s + lambda_a [f^a]_s - lambda_a_t df^a/dqdot^s,   P_s = dF/dqdot^s.
@@ -162,8 +162,16 @@ class Equations(Frozen):
     def accelerations(self) -> dict:
         """Every J.qdd[s] and multiplier rate -> expression in t, q, qdot, multipliers, parameters.
 
-        Valid on the constraint manifold.  Linear solves only (no simplify), structured so
-        that the only denominators are det(df/dqdot^alpha) and the reduced mass matrix.
+        Valid on the constraint manifold: the dependent velocities qdot^alpha stand for
+        their values phi^alpha (``System.phi``) there; substitute them
+        (``expr.xreplace(system.phi)``) to write an acceleration in the independent
+        velocities alone.  Linear solves only (no simplify), structured so that the only
+        denominators are det(df/dqdot^alpha) and the reduced mass matrix.
+
+        Returns
+        -------
+        dict
+            Symbol (``x_tt``, ``lambda_x_t``, ...) -> sympy expression.
         """
         return dict(self._accelerations)
 

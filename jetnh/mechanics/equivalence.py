@@ -27,7 +27,7 @@ import sympy as sp
 from ..algebra import dag, linalg, singular, zero
 from . import principles
 from .system import System
-from ..errors import PrincipleError
+from ..errors import ArgumentError, PrincipleError
 from ..geometry.frobenius import bracket_components
 
 _POINTS = 4
@@ -156,9 +156,32 @@ def agrees(system: System, expr, derived=None, points: int = _POINTS, seed: int 
 
 
 def compare(system: System, first: str, second: str, convention: str = "paper") -> Comparison:
-    """Do ``first`` and ``second`` give the same coordinate accelerations?  The verdict
-    holds off ``Comparison.singular`` (see ``singular_set``).  The principles are given
-    by name or alias (``jetnh.mechanics.principles``) and reported by their canonical names."""
+    """Do ``first`` and ``second`` give the same coordinate accelerations?
+
+    The verdict holds off ``Comparison.singular`` (see ``singular_set``).
+
+    Parameters
+    ----------
+    system : System
+        The constrained system.
+    first, second : str
+        Two different principles by name or alias (``jetnh.mechanics.principles``),
+        reported by their canonical names.
+    convention : {"paper", "imposed"}, default "paper"
+        As in ``System.equations``.
+
+    Returns
+    -------
+    jetnh.mechanics.equivalence.Comparison
+        ``.equivalent``, the branch on which they agree, the differences of the
+        accelerations and the singular set, printed in one shared form.
+    """
+    if not isinstance(system, System):
+        raise ArgumentError(f"compare needs a jetnh System, not {type(system).__name__}")
+    for p in (first, second):
+        if not isinstance(p, str):
+            raise ArgumentError(f"compare needs principles by name (e.g. 'chetaev'), not "
+                                f"{type(p).__name__}")
     names = [principles.canonical(p) for p in (first, second)]
     if names[0] == names[1]:
         raise PrincipleError(f"compare needs two different principles; {first!r} and "

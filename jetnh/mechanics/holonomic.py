@@ -26,7 +26,7 @@ import sympy as sp
 from ..algebra import dag
 from ..errors import ConstraintError
 
-#: the largest |g_i| accepted as "on g = 0", relative to max(1, scale of the coordinates)
+#: the largest ``|g_i|`` accepted as "on g = 0", relative to max(1, scale of the coordinates)
 TOLERANCE = 1e-9
 #: Newton iterations of a completion
 MAX_ITERATIONS = 50
@@ -129,8 +129,8 @@ def completion_coordinates(system, point, coordinates=None) -> tuple:
 
 
 def check(system, point, complete=False, tol: float = TOLERANCE):
-    """``(point, changed)``: ``point`` if g = 0 holds there (|g_i| <= tol times max(1,
-    the largest |q^s|)), else with the coordinates of ``completion_coordinates`` solved
+    """``(point, changed)``: ``point`` if g = 0 holds there (``|g_i| <= tol * max(1,
+    max |q^s|)``), else with the coordinates of ``completion_coordinates`` solved
     by Newton's method when ``complete`` (True, or the coordinates), else a
     ``ConstraintError`` with the residual and the fix.  ``changed``: name -> (given,
     completed) of the coordinates moved."""

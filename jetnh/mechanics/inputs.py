@@ -105,7 +105,7 @@ def scalar(expr, what: str, err) -> sp.Expr:
         if not isinstance(expr, sp.Expr):
             raise err(f"{what} is a {type(expr).__name__} ({expr}), not an expression")
     elif isinstance(expr, numbers.Number):
-        expr = sp.sympify(expr)
+        expr = sp.sympify(expr, strict=True)
     else:
         raise err(f"{what}, {expr!r}, is of type {type(expr).__name__}, not a sympy expression")
     if dag.has(expr, sp.oo, -sp.oo, sp.zoo, sp.nan):
@@ -113,7 +113,21 @@ def scalar(expr, what: str, err) -> sp.Expr:
     if dag.has(expr, sp.I):
         raise err(f"{what}, {expr}, contains the imaginary unit; jetnh's Lagrangians and "
                   "constraints are real")
+    for e in dag.nodes(expr):
+        if e.is_Pow and e.exp.is_Number and abs(e.exp) > MAX_POWER and e.base.free_symbols:
+            raise err(f"{what} has the power {_clip(e)} with exponent {_clip(e.exp)}, beyond "
+                      f"the budget of |exponent| <= {MAX_POWER} (its derivatives and their "
+                      "code grow with it); rescale the model")
     return expr
+
+
+#: the largest |exponent| of a power of a variable in L, the constraints and the forces
+MAX_POWER = 64
+
+
+def _clip(e, width=60) -> str:
+    text = str(e)
+    return text if len(text) <= width else text[:width - 4] + " ..."
 
 
 def convert_dynamic(expr, J):

@@ -1,10 +1,11 @@
 """Polynomial first integrals of a principle's equations, found by an ansatz.
 
-``conserved_quantities(sysm, principle, degree, coefficients)`` returns a basis of the
-functions I(t, q, qdot^mu[, lambda]) = sum_j c_j g_j(t, q) m_j(qdot^mu, lambda), m_j a
-monomial of degree <= ``degree`` in the independent velocities (and, for the vakonomic and
-Hoelder principles, the multipliers), whose total derivative vanishes on the equations on
-the constraint manifold (Olver 1993, section 4.3: first integrals as the kernel of the
+``conserved_quantities(sysm, principle, degree, coefficients)`` returns a basis, modulo
+the constraints, of the functions I(t, q, qdot[, lambda]) = sum_j c_j g_j(t, q) m_j(qdot,
+lambda), m_j a monomial of degree <= ``degree`` in all the velocities (the dependent ones
+included) and, for the vakonomic and Hoelder principles, the multipliers, whose total
+derivative vanishes on the equations on the constraint manifold
+(Olver 1993, section 4.3: first integrals as the kernel of the
 total derivative on the solution manifold).  The condition D I = 0 is linear in c and is
 solved by ``jetnh.algebra.ansatz``: the constants c_j may depend on the system's parameters
 (polynomially in them and in functions of them such as sin(alpha), after clearing
@@ -16,10 +17,14 @@ and at 20 fresh random points at 50 digits always.
 from __future__ import annotations
 
 import itertools
+import numbers
 import random
+from collections.abc import Iterable
 from fractions import Fraction
+from math import comb
 
 import mpmath
+import numpy as np
 import sympy as sp
 
 from ..algebra import ansatz, dag
@@ -45,72 +50,149 @@ def check_arguments(sysm, principle, degree, what) -> Principle:
 
 
 def conserved_quantities(sysm, principle, degree=2, coefficients=None) -> list:
-    """A basis of the nontrivial first integrals of ``principle`` polynomial of degree <=
-    ``degree`` in the independent velocities (and multipliers), with coefficient functions
-    spanned by ``coefficients`` (expressions in t and q; default: the monomials in t and q
-    of degree <= ``degree``) and constants that may depend on the parameters.
+    """A basis, modulo the constraints, of the nontrivial first integrals of ``principle``
+    polynomial of total degree <= ``degree`` in all the velocities (dependent ones
+    included) and, for the vakonomic and Hoelder principles, the multipliers.
 
-    None vanishes identically on the constraint manifold (each is written in the
-    independent velocities, so no multiple of a constraint appears), and no two are
-    proportional over the parameters.  For example the Heisenberg system's vakonomic
-    integrals lambda, m x_t + 2 lambda y, m y_t - 2 lambda x and the energy.  A
-    JetnhWarning says when some integral's parameter dependence exceeds the search."""
+    The search is complete in its space: an empty list means that no integral exists
+    there.  None vanishes on the constraint manifold (checked exactly against the
+    constraints), no combination of them does, and integrals that are polynomial in the
+    independent velocities are written in them.  For example the Heisenberg system's
+    vakonomic integrals lambda, m x_t + 2 lambda y, m y_t - 2 lambda x and the energy.  A
+    JetnhWarning says when some integral's parameter dependence exceeds the search; an
+    ``ArgumentError`` refuses an ansatz over the budget before it is built.
+
+    Parameters
+    ----------
+    sysm : System
+        The constrained system.
+    principle : str
+        The principle whose motions conserve them ("chetaev", "vakonomic", ...).
+    degree : int, default 2
+        The largest total degree in the velocities and multipliers.
+    coefficients : list of sympy expressions, optional
+        Functions of t and q spanning the coefficients; default the monomials in t and q
+        of degree <= ``degree``, and those times each function of q that L, the
+        constraints and the forces contain (such as sin(theta)).  The constants may
+        depend on the parameters.  Strings are refused (never parsed).
+
+    Returns
+    -------
+    list of sympy expressions
+        The integrals, in t, q, the velocities and the multipliers.
+    """
     p = check_arguments(sysm, principle, degree, "conserved_quantities")
     J = sysm.J
+    # sizes first (nothing built yet): at least the n velocities enter
+    G_count = coefficient_count(sysm, coefficients, degree)
+    check_budget(G_count * _count(J.n, degree) - 1,
+                 f"{G_count} coefficient functions x the monomials of degree <= {degree} "
+                 f"in {J.n} velocities")
     eom = sysm.equations(p)
     acc = eom.accelerations()                       # its errors propagate
-    G = coefficient_functions(sysm, coefficients, degree)
-    vel = list(sysm.independent_velocities)
     lam = list(eom.multipliers) if p.multipliers_act else []
     rates = list(eom.multiplier_rates) if lam else []
-    qdd = [J.jet(q, 2) for q in sysm.independent]
+    on = sysm.on_constraints
+
     def on_manifold(syms):
         return dag.xreplace([acc[a] for a in syms], sysm.phi) if sysm.phi else \
             [acc[a] for a in syms]
 
-    needed = on_manifold(qdd + rates)
+    needed = on_manifold(list(J.qdd) + rates)
     if not lam and any(dag.free_symbols(e) & set(eom.multipliers) for e in needed):
         lam = list(eom.multipliers)               # the motion depends on them: keep them
         rates = list(eom.multiplier_rates)
-        needed = on_manifold(qdd + rates)
-    U = vel + lam
+        needed = on_manifold(list(J.qdd) + rates)
+    U = [*J.qd, *lam]
+    check_budget(G_count * _count(len(U), degree) - 1,
+                 f"{G_count} coefficient functions x the monomials of degree <= {degree} "
+                 f"in {len(U)} velocities and multipliers")
+    G = coefficient_functions(sysm, coefficients, degree)
+    dep = {U.index(v) for v in sysm.dependent_velocities}
     monos = [e for d in range(degree + 1) for e in _exponents(len(U), d)]
     base = {J.t, *J.q}
     pairs = [(i, e) for i, g in enumerate(G) for e in monos
              if sum(e) or g.free_symbols & base]          # no constant
-    if len(pairs) > ansatz.BUDGET:
-        raise ansatz.budget_error(
-            len(pairs), f"{len(G)} coefficient functions x {len(monos)} monomials of degree "
-            f"<= {degree} in {len(U)} velocities and multipliers")
-    qdot = [sysm.phi.get(v, v) for v in J.qd]
-    problem = _Integrals(sysm, eom.J, G, needed, qdot, U, pairs, monos)
+    # the unknowns free of the dependent velocities first: an integral that is polynomial
+    # in the independent velocities comes out written in them
+    pairs.sort(key=lambda ie: any(ie[1][k] for k in dep))
+    qdot = [on(v) for v in J.qd]
+    problem = _Integrals(sysm, eom.J, G, needed, qdot, U, lam, pairs)
     out = []
     for vec in ansatz.solve(problem, "conserved_quantities"):
         I = sp.Add(*[c * G[i] * _mono(U, e) for c, (i, e) in zip(vec, pairs) if c])
+        if problem.exact and sp.cancel(sp.together(on(I))) == 0:
+            raise JetnhError(f"internal: {I} vanishes on the constraints but passed the "
+                             "sampled rank test; please report")
         _check(sysm, I, acc, problem, U)
         out.append(I)
     return out
 
 
 # ---------------------------------------------------------------------- the ansatz
-def coefficient_functions(sysm, coefficients, degree):
-    """The coefficient functions of an ansatz: ``coefficients`` checked, or the monomials
-    in t and q of degree <= ``degree``."""
+def _count(n, d) -> int:
+    """The number of monomials of degree <= d in n variables."""
+    return comb(n + d, d)
+
+
+def check_budget(count, detail):
+    """An ``ArgumentError`` when an ansatz of ``count`` unknowns is over the budget of
+    the ansatz as written (``ansatz.RAW_BUDGET``; the solve has its own, ``BUDGET``)."""
+    if count > ansatz.RAW_BUDGET:
+        raise ansatz.budget_error(count, detail, ansatz.RAW_BUDGET)
+
+
+def functions_of_q(sysm) -> tuple:
+    """The non-polynomial functions of t and q that L, the constraints and the forces
+    contain (sin(theta), cos(theta), sqrt(x**2 + y**2), ...), sorted by their text."""
+    J = sysm.J
+    base = {J.t, *J.q}
+    found = set()
+    for e in dag.nodes([sysm.L, *sysm.constraints, *sysm.Q]):
+        fs = e.free_symbols
+        if fs & base and fs <= base | set(sysm.parameters) and (
+                isinstance(e, sp.Function) or (e.is_Pow and not e.exp.is_Integer)):
+            found.add(e)
+    return tuple(sorted(found, key=str))
+
+
+def coefficient_count(sysm, coefficients, degree) -> int:
+    """How many coefficient functions ``coefficient_functions`` gives, without building
+    them (so that budgets are checked first)."""
+    if coefficients is None:
+        return _count(1 + sysm.J.n, degree) * (1 + len(functions_of_q(sysm)))
+    return len(check_coefficients(sysm, coefficients))
+
+
+def check_coefficients(sysm, coefficients) -> list:
+    """The user's coefficient functions, checked: sympy expressions (never strings, which
+    would be executed) in t, q and the parameters, finite, nonzero, at most one constant."""
     J = sysm.J
     base = [J.t, *J.q]
-    if coefficients is None:
-        return [_mono(base, e) for d in range(degree + 1) for e in _exponents(len(base), d)]
-    if isinstance(coefficients, (str, bytes)) or not hasattr(coefficients, "__iter__"):
-        raise ArgumentError("coefficients must be a list of expressions in t and q, "
-                            f"not {coefficients!r}")
+    if isinstance(coefficients, (str, bytes)) or not isinstance(coefficients, Iterable):
+        raise ArgumentError("coefficients must be a list of sympy expressions in t and q "
+                            f"(e.g. [1, sympy.sin(theta)]), not {coefficients!r}")
+    coefficients = list(coefficients)
+    if len(coefficients) > ansatz.BUDGET:
+        raise ansatz.budget_error(len(coefficients), "coefficient functions")
     allowed = set(base) | set(sysm.parameters)
     G = []
     for c in coefficients:
-        try:
-            g = sp.sympify(c)
-        except (sp.SympifyError, TypeError):
-            raise ArgumentError(f"coefficient {c!r} is not an expression; give expressions "
-                                "in t and q") from None
+        if isinstance(c, (str, bytes)):
+            raise ArgumentError(
+                f"coefficient {c!r} is a string; jetnh never parses strings here (that "
+                "would execute code): build it from the system's Symbols, e.g. "
+                "sympy.sin(J.q[2])")
+        if isinstance(c, bool) or not isinstance(c, (sp.Expr, numbers.Number)):
+            raise ArgumentError(f"coefficient {c!r} is a {type(c).__name__}, not a sympy "
+                                "expression or a number; give expressions in t and q")
+        g = sp.sympify(c, strict=True)
+        if not isinstance(g, sp.Expr) or dag.has(g, sp.nan, sp.oo, -sp.oo, sp.zoo) or (
+                g.is_Number and not g.is_finite):
+            raise ArgumentError(f"coefficient {c!r} is not a finite expression; give "
+                                "finite expressions in t and q")
+        if g.is_Number and g.is_Float:
+            g = sp.nsimplify(g, rational=True)
         extra = g.free_symbols - allowed
         if extra or g == 0:
             raise ArgumentError(
@@ -124,6 +206,18 @@ def coefficient_functions(sysm, coefficients, degree):
     if len(consts) > 1:
         raise ArgumentError(f"coefficients has {len(consts)} constants ({consts}); keep one")
     return G
+
+
+def coefficient_functions(sysm, coefficients, degree, extra=()):
+    """The coefficient functions of an ansatz: ``coefficients`` checked, or the monomials
+    in t, q (and ``extra``) of degree <= ``degree``, and those times each function of q
+    that the system contains (``functions_of_q``)."""
+    J = sysm.J
+    if coefficients is not None:
+        return check_coefficients(sysm, coefficients)
+    base = [J.t, *J.q, *extra]
+    monos = [_mono(base, e) for d in range(degree + 1) for e in _exponents(len(base), d)]
+    return monos + [m * f for f in functions_of_q(sysm) for m in monos]
 
 
 # ---------------------------------------------------------------------- evaluation
@@ -177,12 +271,13 @@ class Sampler:
 
 
 class _Integrals(ansatz.Problem):
-    """D(g_i m_e) at random points, by the chain rule from the values of qdot^s, the
-    accelerations, the coefficient functions and their gradients."""
+    """D(g_i m_e) at random points of the constraint manifold, by the chain rule from the
+    values of every qdot^s (the dependent ones from the constraints), the accelerations,
+    the coefficient functions and their gradients."""
 
-    def __init__(self, sysm, J, G, needed, qdot, U, pairs, monos):
+    def __init__(self, sysm, J, G, needed, qdot, U, lam, pairs):
         self.J, self.sysm, self.G, self.U = J, sysm, G, U
-        self.pairs, self.monos = pairs, monos
+        self.pairs, self.lam = pairs, lam
         self.n = len(pairs)
         grads = [[sp.diff(g, x) for x in (J.t, *sysm.J.q)] for g in G]
         self.exprs = [*qdot, *needed, *G, *itertools.chain(*grads)]
@@ -190,11 +285,9 @@ class _Integrals(ansatz.Problem):
         self.parameters = sysm.parameters
         self.atoms = ansatz.parameter_atoms([sysm.L, *sysm.constraints, *sysm.Q, *G],
                                              sysm.parameters)
-        self.sampler = Sampler([J.t, *sysm.J.q, *U], sysm.parameters, self.exprs)
+        self.sampler = Sampler([J.t, *sysm.J.q, *sysm.independent_velocities, *lam],
+                               sysm.parameters, self.exprs)
         self.exact = self.sampler.exact
-
-    def point(self, rng):
-        return self.sampler.point(rng)
 
     def _split(self, vals):
         a, b, c = self.sizes
@@ -208,8 +301,8 @@ class _Integrals(ansatz.Problem):
         return [(self._row(vals, p, pairs), p)
                 for vals, p in self.sampler.draw(self.exprs, rng, count, fixed)]
 
-    def _u(self, p):
-        return [_fraction(p[x]) if self.exact else ansatz.to_mpf(p[x]) for x in self.U]
+    def _num(self, v):
+        return _fraction(v) if self.exact else ansatz.to_mpf(v)
 
     def _row(self, vals, p, pairs):
         U = self.U
@@ -217,7 +310,7 @@ class _Integrals(ansatz.Problem):
             if self.exact:                  # Fractions: much faster than sympy Rationals
                 vals = [_fraction(v) for v in vals]
             qdot, accel, gv, grads = self._split(vals)
-            u = self._u(p)
+            u = [*qdot, *(self._num(p[m]) for m in self.lam)]
             Dg = [gr[0] + sum(d * v for d, v in zip(gr[1:], qdot)) for gr in grads]
             mv, dm = {}, {}
             for e in {e for _, e in pairs}:
@@ -226,12 +319,28 @@ class _Integrals(ansatz.Problem):
                              * accel[k] for k in range(len(U)) if e[k]), 0)
             return [Dg[i] * mv[e] + gv[i] * dm[e] for i, e in pairs]
 
+    def raw_points(self, rng, count, fixed=None):
+        return [self.sampler.point(rng, fixed) for _ in range(count)]
+
+    def float_values(self, points):
+        a = self.sizes[0]
+        at = {s: np.array([float(p[s]) for p in points]) for s in points[0]}
+        vals = dag.evaluate_numpy([*self.exprs[:a], *self.G], at)
+        k = len(points)
+        vals = [np.broadcast_to(np.asarray(v, dtype=float), (k,)) for v in vals]
+        u = [*vals[:a], *(at[m] for m in self.lam)]
+        gv = vals[a:]
+        return np.column_stack([gv[i] * power_product(u, e) for i, e in self.pairs]) \
+            if self.pairs else np.zeros((k, 0))
+
     def values(self, point):
-        gv = self.sampler.values(self.G, point)
+        a, _, c = self.sizes
+        vals = self.sampler.values([*self.exprs[:a], *self.G], point)
         if self.exact:
-            gv = [_fraction(v) for v in gv]
+            vals = [_fraction(v) for v in vals]
         with mpmath.workdps(DPS + 10):
-            u = self._u(point)
+            u = [*vals[:a], *(self._num(point[m]) for m in self.lam)]
+            gv = vals[a:]
             return [gv[i] * power_product(u, e) for i, e in self.pairs]
 
 

@@ -178,7 +178,7 @@ class _Reader:
 
     def jet(self, expr, what):
         """``expr`` (dynamicsymbols, speeds) in t, q, qdot."""
-        expr = sp.sympify(expr).xreplace(self.u_of_qd)
+        expr = sp.sympify(expr, strict=True).xreplace(self.u_of_qd)
         try:
             return self.J.from_dynamic(expr)
         except JetSpaceError as exc:

@@ -39,7 +39,7 @@ def canonical(expr) -> sp.Expr:
         if e.args:
             return e.func(*[visit(a) for a in e.args])
         return e
-    return visit(sp.sympify(expr))
+    return visit(sp.sympify(expr, strict=True))
 
 
 def is_zero(expr) -> bool:

@@ -2,7 +2,7 @@
 
 A point generator X = xi0(t, q) d/dt + xi^s(t, q) d/dq^s with characteristic
 xibar^s = xi^s - qdot^s xi0 is a **Noether symmetry** of a principle, with gauge G(t, q),
-when on the constraint manifold
+when on the constraint manifold::
 
     pr X(F) + F D(xi0) + Q_s xibar^s + D(G) = 0                                  (N)
 
@@ -43,17 +43,20 @@ from __future__ import annotations
 
 import itertools
 import random
+from math import comb
 from dataclasses import dataclass
 from types import MappingProxyType
 
 import mpmath
+import numpy as np
 import sympy as sp
 
 from ..algebra import ansatz, dag
 from ..algebra.ansatz import exponents, monomial
 from ..errors import ArgumentError, JetnhError
 from ..geometry.fields import prolong
-from .integrals import Sampler, check_arguments, coefficient_functions, prove_conserved
+from .integrals import (Sampler, check_arguments, check_budget, coefficient_count,
+                        coefficient_functions, prove_conserved)
 
 _WIDTH = 72             # characters of each expression in a repr
 
@@ -163,12 +166,9 @@ class _Setting:
 
 
 def _functions(sysm, coefficients, degree, extra=()):
-    """The ansatz functions of (t, q[, extra]): ``coefficients`` or the monomials."""
-    J = sysm.J
-    base = [J.t, *J.q, *extra]
-    if coefficients is None:
-        return [monomial(base, e) for d in range(degree + 1) for e in exponents(len(base), d)]
-    return coefficient_functions(sysm, coefficients, degree)
+    """The ansatz functions of (t, q[, extra]): ``coefficients``, or the monomials of
+    degree <= ``degree`` and those times each function of q the system contains."""
+    return coefficient_functions(sysm, coefficients, degree, extra)
 
 
 class _Linear(ansatz.Problem):
@@ -198,6 +198,16 @@ class _Linear(ansatz.Problem):
                 out.append(([vals[j * m + c] for j in cols], p))
         return out
 
+    def raw_points(self, rng, count, fixed=None):
+        return [self.sampler.point(rng, fixed) for _ in range(count)]
+
+    def float_values(self, points):
+        at = {s: np.array([float(p[s]) for p in points]) for s in points[0]}
+        k = len(points)
+        gv = [np.broadcast_to(np.asarray(v, dtype=float), (k,))
+              for v in dag.evaluate_numpy(list(self.funcs), at)]
+        return np.column_stack([g * at[self.W[c]] for g, c in zip(gv, self.comp)])
+
     def values(self, point):
         gv = self.sampler.values(self.funcs, point)
         if self.sampler.exact:
@@ -208,26 +218,40 @@ class _Linear(ansatz.Problem):
 
 # ---------------------------------------------------------------------- Noether
 def noether_symmetries(sysm, principle, degree=1, coefficients=None) -> list:
-    """The Noether point symmetries of ``principle`` (see the module docstring) with xi0
-    and xi^s spanned by ``coefficients`` (functions of t and q; default the monomials of
-    degree <= ``degree``) and the gauge by the monomials of degree <= degree + 1: a basis
+    """The Noether point symmetries of ``principle`` (see the module docstring): a basis
     over the rational functions of the parameters, each a ``NoetherSymmetry`` whose
     identity (N) and conserved quantity are proved.  Symmetries whose quantity is a
     constant are left out.
 
-    Example (the principles differ): for ``models.get("nonholonomic_particle")``, d/dz
-    is a vakonomic symmetry with I = m zdot + lambda_z and is not a Chetaev one; d/dy is
-    a Chetaev symmetry (I = m ydot) and not a vakonomic one."""
-    S = _Setting(sysm, check_arguments(sysm, principle, degree, "noether_symmetries"))
+    Parameters
+    ----------
+    sysm : System
+        The constrained system.
+    principle : str
+        "chetaev", "vakonomic", ... (the principles differ: for
+        ``models.get("nonholonomic_particle")``, d/dz is a vakonomic symmetry with
+        I = m zdot + lambda_z and is not a Chetaev one; d/dy is a Chetaev symmetry,
+        I = m ydot, and not a vakonomic one).
+    degree : int, default 1
+        xi0 and xi^s are spanned by the monomials in t and q of degree <= ``degree``, the
+        gauge by those of degree <= degree + 1.
+    coefficients : list of sympy expressions, optional
+        Functions of t and q spanning xi0 and xi^s instead of the monomials.
+
+    Returns
+    -------
+    list of jetnh.mechanics.symmetries.NoetherSymmetry
+    """
+    p = check_arguments(sysm, principle, degree, "noether_symmetries")
     J = sysm.J
+    n = J.n
+    ng, nh = coefficient_count(sysm, coefficients, degree), comb(n + 2 + degree, degree + 1) - 1
+    check_budget((n + 1) * ng + nh, f"{n + 1} components x {ng} functions + {nh} gauge "
+                 "functions")                   # sizes first: nothing built yet
+    S = _Setting(sysm, p)
     g = _functions(sysm, coefficients, degree)
     base = [J.t, *J.q]
     h = [monomial(base, e) for d in range(1, degree + 2) for e in exponents(len(base), d)]
-    n = J.n
-    count = (n + 1) * len(g) + len(h)
-    if count > ansatz.BUDGET:
-        raise ansatz.budget_error(count, f"{n + 1} components x {len(g)} functions + "
-                                  f"{len(h)} gauge functions")
     zero = [sp.S.Zero] * n
     conds, funcs, comp = [], [], []
     for k in range(n + 1):
@@ -328,6 +352,8 @@ def lie_symmetries(sysm, principle, degree=1, coefficients=None) -> list:
     them at random points of (t, q, qdot^mu, lambda) is the same as splitting them by
     powers of the velocities."""
     p = check_arguments(sysm, principle, degree, "lie_symmetries")
+    ng = coefficient_count(sysm, coefficients, degree)
+    check_budget((sysm.J.n + 1) * ng, f"{sysm.J.n + 1} components x {ng} functions")
     eom = sysm.equations(p)
     acc = eom.accelerations()
     J0 = sysm.J
@@ -337,9 +363,8 @@ def lie_symmetries(sysm, principle, degree=1, coefficients=None) -> list:
     bases = (*J.q, *lams)
     g = _functions(sysm, coefficients, degree)
     gl = _functions(sysm, coefficients, degree, lams) if lams else []
-    count = (J0.n + 1) * len(g) + len(lams) * len(gl)
-    if count > ansatz.BUDGET:
-        raise ansatz.budget_error(count, f"{len(bases) + 1} components x {len(g)} functions")
+    check_budget((J0.n + 1) * len(g) + len(lams) * len(gl),
+                 f"{len(bases) + 1} components x {len(g)} functions")
     on = sysm.on_constraints
     rates = [J.jet(m, 1) for m in lams]
     # targets: (jet symbol, its value on the solutions as a function of the state)

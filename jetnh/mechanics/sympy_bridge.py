@@ -92,12 +92,24 @@ def generalized_forces(lm, J: JetSpace) -> tuple:
 
 
 def from_mechanics(lm, dependent=None, *, branch=None, defaults=None, name="") -> System:
-    """A jetnh ``System`` from a sympy.physics.mechanics ``LagrangesMethod`` (see the
-    module docstring), ``KanesMethod`` or mechanics ``System`` (``kane_bridge``: its
-    ``speeds`` attribute is then the map between the model's generalized speeds and the
-    velocities, ``kane_bridge.Speeds``); ``dependent``, ``branch``, ``defaults``, ``name``
-    as ``System``.  A mechanics System whose equations were formed with LagrangesMethod
-    is read as that LagrangesMethod."""
+    """A jetnh ``System`` from a sympy.physics.mechanics model.
+
+    Parameters
+    ----------
+    lm : sympy.physics.mechanics.LagrangesMethod or sympy.physics.mechanics.KanesMethod or sympy.physics.mechanics.System
+        A ``LagrangesMethod``: its Lagrangian, coordinates and nonholonomic constraints
+        (``nonhol_coneqs``) become the system's (see the module docstring).  A
+        ``KanesMethod`` or mechanics ``System`` (``kane_bridge``): the result's
+        ``speeds`` attribute is then the map between the model's generalized speeds and
+        the velocities (``kane_bridge.Speeds``); a mechanics System whose equations were
+        formed with LagrangesMethod is read as that LagrangesMethod.
+    dependent, branch, defaults, name
+        As for ``System``.
+
+    Returns
+    -------
+    System
+    """
     from sympy.physics.mechanics import KanesMethod, LagrangesMethod
     from sympy.physics.mechanics import System as MechanicsSystem
 

@@ -25,7 +25,7 @@ from ..algebra import dag, linalg
 from ..frozen import Frozen, FrozenDict
 from . import inputs, principles
 from ..errors import ConstraintError, JetnhWarning, JetSpaceError, LagrangianError
-from ..geometry.jet import JetSpace, key_name
+from ..geometry.jet import JetSpace, key_name, sympy_object
 from .principles import NAMED, PRINCIPLES  # noqa: F401 -- PRINCIPLES kept importable here
 
 @dataclass(frozen=True)
@@ -47,29 +47,50 @@ class Classification:
         return ", ".join(flags)
 
 
+#: the most solutions (Bezout's bound) of nonlinear constraints solved in closed form
+MAX_ROOTS = 2
+
+
 class System(Frozen):
     """``System(J, L, constraints, dependent)``: a Lagrangian with constraints f^a = 0.
 
-    ``constraints`` are expressions f^a(t, q, qdot) meaning f^a = 0, of any nonlinearity:
-    a list (or a column Matrix, read as its entries, or one expression alone); an entry
-    ``Eq(lhs, rhs)`` is lhs - rhs.  ``dependent`` is the split: the coordinates whose
-    velocities the constraints determine (one per constraint; Symbols or names, in a
-    list or one alone, or names in one string "x y"); chosen automatically when omitted.
-    ``branch`` (an integer from 0) selects a root when the constraints are nonlinear in
-    the dependent velocities and have several solutions for them; it is checked at
-    construction.  ``defaults`` maps parameters (Symbols or names) to default real
-    numbers, and ``name`` labels the system; neither changes the symbolic results.
-    A constraint without velocities, g(t, q) = 0, is *holonomic*: it is kept as such in
-    ``holonomic`` (in the order given) and enters ``constraints`` as its time derivative
-    D g = dg/dt + dg/dq^s qdot^s (at its place in the list), so that every principle's
-    derivation, the split and the accelerations treat it as a velocity constraint whose
-    velocity Jacobian dg/dq^s is the configuration Jacobian; the split's dependent
-    velocities make that block regular.  A ``Scene`` checks (or completes) the initial
-    configuration against g = 0 and keeps its runs on it.
-    ``forces`` maps coordinates (Symbols or names) to non-potential generalized forces
-    Q_s(t, q, qdot) (others are 0) and ``dissipation`` is a Rayleigh function D(t, q, qdot)
-    adding Q_s = -dD/dqdot^s; every principle's equations carry Q_s beside [L]_s.
+    Parameters
+    ----------
+    J : JetSpace
+        The coordinates and their velocities.
+    L : sympy expression
+        The Lagrangian L(t, q, qdot) in ``J``'s symbols and parameters.
+    constraints : expression or list of expressions, optional
+        The f^a(t, q, qdot), meaning f^a = 0, of any nonlinearity: a list (or a column
+        Matrix, read as its entries, or one expression alone); an entry ``Eq(lhs, rhs)``
+        is lhs - rhs.  A constraint without velocities, g(t, q) = 0, is *holonomic*:
+        it is kept as such in ``holonomic`` (in the order given) and enters
+        ``constraints`` as its time derivative D g = dg/dt + dg/dq^s qdot^s (at its place
+        in the list), so that every principle's derivation, the split and the
+        accelerations treat it as a velocity constraint whose velocity Jacobian dg/dq^s
+        is the configuration Jacobian; the split's dependent velocities make that block
+        regular.  A ``Scene`` checks (or completes) the initial configuration against
+        g = 0 and keeps its runs on it.
+    dependent : Symbol, str or list, optional
+        The split: the coordinates whose velocities the constraints determine (one per
+        constraint; Symbols or names, in a list or one alone, or names in one string
+        ``"x y"``); chosen automatically when omitted.
+    branch : int, optional
+        Selects a root (from 0) when the constraints are nonlinear in the dependent
+        velocities and have several solutions for them; checked at construction.
+    defaults : dict, optional
+        Parameters (Symbols or names) -> default real numbers, used by ``Scene``.
+    name : str, optional
+        A label; neither it nor ``defaults`` changes the symbolic results.
+    forces : dict, optional
+        Coordinates (Symbols or names) -> non-potential generalized forces
+        Q_s(t, q, qdot) (the others are 0).
+    dissipation : sympy expression, optional
+        A Rayleigh function D(t, q, qdot) adding Q_s = -dD/dqdot^s.  Every principle's
+        equations carry Q_s beside [L]_s.
 
+    Notes
+    -----
     Coordinates may be written as sympy.physics.mechanics dynamicsymbols x(t),
     x(t).diff(t) (converted to x, x_t).  Abs(u) and sign(u) of t, q, qdot are kept as
     sqrt(u**2) and u/sqrt(u**2): the same functions, differentiable away from u = 0, where
@@ -83,6 +104,20 @@ class System(Frozen):
     ``defaults`` are read-only mappings), equal to and hashed as any System built from the
     same inputs.  ``check_branch=False`` defers the check of ``branch`` to the first use of
     ``phi`` (a model file is read without solving its constraints).
+
+    Examples
+    --------
+    A knife edge: it moves only along its heading theta.
+
+    >>> import sympy as sp
+    >>> import jetnh as jn
+    >>> J = jn.JetSpace("x y theta")
+    >>> x, y, th = J.q
+    >>> xd, yd, thd = J.qd
+    >>> knife = jn.System(J, (xd**2 + yd**2 + thd**2) / 2,
+    ...                   constraints=[sp.sin(th) * xd - sp.cos(th) * yd], dependent=[y])
+    >>> knife.is_integrable()
+    False
     """
 
     def __init__(self, J: JetSpace, L, constraints=(), dependent=None, branch: int | None = None,
@@ -430,6 +465,7 @@ class System(Frozen):
         inputs.single_root_warning(self._branch)
 
     def _solve_nonlinear(self, vel):
+        self._check_root_budget(vel)
         try:
             sols = sp.solve(list(self.constraints), list(vel), dict=True)
         except (NotImplementedError, ValueError) as exc:
@@ -458,6 +494,30 @@ class System(Frozen):
         s = sols[self._branch or 0]
         return {v: s[v] for v in vel}
 
+    def _check_root_budget(self, vel):
+        """The budget of the nonlinear solve, checked before it starts: every constraint
+        polynomial in the dependent velocities, of degree <= 2, and at most
+        ``MAX_ROOTS`` solutions by Bezout's bound (two coupled quadratics, or a quartic,
+        have closed forms too large to generate code from, when sympy finds them)."""
+        degrees = []
+        for i, f in enumerate(self.constraints):
+            if not f.is_polynomial(*vel):
+                raise ConstraintError(
+                    f"constraint {i} is not polynomial in the dependent velocities "
+                    f"{', '.join(map(str, vel))}; jetnh solves polynomial constraints of "
+                    f"degree <= 2 only: write it in explicit form qdot^alpha - phi^alpha(t, "
+                    "q, qdot^mu), or choose another dependent coordinate")
+            degrees.append(sp.Poly(f, *vel).total_degree())
+        roots = 1
+        for d in degrees:
+            roots *= max(d, 1)
+        if max(degrees) > 2 or roots > MAX_ROOTS:
+            raise ConstraintError(
+                f"the constraints have degrees {degrees} in the dependent velocities: up to "
+                f"{roots} solutions, beyond the budget of {MAX_ROOTS} (degree <= 2, one "
+                "quadratic at most) for solving them in closed form; write them in explicit "
+                "form qdot^alpha - phi^alpha(t, q, qdot^mu) for the branch you mean")
+
     @cached_property
     def explicit_constraints(self) -> tuple[sp.Expr, ...]:
         """f^alpha = qdot^alpha - phi^alpha, in the order of ``dependent``."""
@@ -470,7 +530,7 @@ class System(Frozen):
         D(phi^alpha) on the constraints (the first prolongation of the constraint set):
         identities such as (19) hold there, not on J^2 at large.
         """
-        expr = sp.sympify(expr)
+        expr = sympy_object(expr)         # never a string (it would be executed)
         if not self.phi:
             return expr
         # derivatives of undefined functions by a velocity need subs (it builds Subs objects)
@@ -606,9 +666,26 @@ class System(Frozen):
 
     # ------------------------------------------------------------------ equations
     def equations(self, principle: str, form: str | None = None, convention: str = "paper"):
-        """The equations of motion under ``principle`` (a name, an alias or a
-        ``jetnh.mechanics.principles.Principle``) in ``form`` (see ``jetnh.mechanics.equations``),
-        derived once per principle, form and convention and kept."""
+        """The equations of motion under ``principle``, each expression meaning = 0.
+
+        Parameters
+        ----------
+        principle : str or jetnh.mechanics.principles.Principle
+            "chetaev", "vakonomic", "holder" or "suslov" (or an alias, or a
+            ``jetnh.mechanics.principles.Principle``).
+        form : str, optional
+            One of the principle's forms (``jetnh.mechanics.equations``: "multiplier",
+            "reduced", "embedded", ...); default its first.
+        convention : {"paper", "imposed"}, default "paper"
+            Whether every eta^s counts as independent after the commutator has been used
+            (the paper's reading) or the Chetaev condition restricts eta first.
+
+        Returns
+        -------
+        Equations
+            ``.expressions``, ``.multipliers`` and ``.accelerations()``; derived once per
+            principle, form and convention and kept.
+        """
         from .equations import derive
 
         key = ("equations", principles.canonical(principle), form, convention)

@@ -10,9 +10,12 @@ delta qdot^s = D eta^s - c^s.  Zhao et al. (2008), section 2:
 - Suslov:      delta f = 0 and the Chetaev condition, eq. (9); with c^mu = 0 (26) the
                commutator of the dependent coordinates follows from (10): (25), (27).
 
-The variational identity that all of them satisfy is derived here, not copied:
-delta f + df/dqdot^s c^s - d/dt(df/dqdot^s eta^s) = [f]_s eta^s.  (The paper's (3)
-prints df/dq^s in the second term; ``printed_identity_residual`` shows that form fails.)
+The variational identity that all of them satisfy is derived here, not copied::
+
+    delta f + df/dqdot^s c^s - d/dt(df/dqdot^s eta^s) = [f]_s eta^s
+
+(The paper's (3) prints df/dq^s in the second term; ``printed_identity_residual`` shows
+that form fails.)
 """
 
 from __future__ import annotations

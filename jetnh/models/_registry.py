@@ -11,6 +11,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Callable
 
+#: the largest value of a family's size option (N of n_trailer): checked before anything
+#: is built (a derivation grows with it; N = 64 already means 67 coordinates)
+MAX_OPTION = 64
+
 
 @dataclass(frozen=True)
 class ModelInfo:
@@ -28,8 +32,8 @@ class ModelInfo:
         doc = (self.factory.__doc__ or "").strip()
         return doc.splitlines()[0] if doc else self.name
 
-    def system(self, **options):
-        """The System, with ``options`` (e.g. N=3) overriding the defaults."""
+    def _checked(self, options) -> dict:
+        """``options`` after checking names and the size budget (before any building)."""
         from ..errors import ModelFileError
 
         unknown = sorted(set(options) - set(self.options))
@@ -37,11 +41,20 @@ class ModelInfo:
             have = ", ".join(f"{k} (default {v})" for k, v in self.options.items()) or "none"
             raise ModelFileError(f"model {self.name!r} has no option {', '.join(unknown)}; "
                                  f"its options: {have}")
-        return self.factory(**options)
+        for k, v in options.items():
+            if isinstance(v, bool) or not isinstance(v, int) or not 1 <= v <= MAX_OPTION:
+                raise ModelFileError(
+                    f"model {self.name!r}: option {k} must be an integer from 1 to "
+                    f"{MAX_OPTION} (the size budget), not {v!r}")
+        return options
+
+    def system(self, **options):
+        """The System, with ``options`` (e.g. N=3) overriding the defaults."""
+        return self.factory(**self._checked(options))
 
     def initial(self, **options) -> dict:
         """The default initial state (names -> floats) for these options."""
-        opts = {**self.options, **options}
+        opts = {**self.options, **self._checked(options)}
         return dict(self.initial_state(**opts)) if self.options else dict(self.initial_state())
 
 

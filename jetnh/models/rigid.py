@@ -1,7 +1,8 @@
 """Rigid bodies in Euler angles: the rolling ball (also on a turntable) and Suslov's problem.
 
 Euler angles are the classical z-x-z ones (phi precession, theta nutation, psi spin).
-Angular velocity in the space frame:
+Angular velocity in the space frame::
+
     omega_x = thetadot cos(phi) + psidot sin(theta) sin(phi)
     omega_y = thetadot sin(phi) - psidot sin(theta) cos(phi)
     omega_z = phidot + psidot cos(theta)

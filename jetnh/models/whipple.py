@@ -7,7 +7,7 @@ wheel), knife-edge wheels rolling without slipping on a level ground, no forces 
 gravity.  The geometry and the parameter names follow sympy's own benchmark test
 (``sympy/physics/mechanics/tests/test_kane3.py``, ported from Autolev), which keeps only
 yaw, roll, pitch and steer and sets the rear contact point at rest; here every
-coordinate is kept, so that the kinematics hold for every motion:
+coordinate is kept, so that the kinematics hold for every motion::
 
     x, y   the rear contact point          q1  yaw        q2  roll
     q3     the rear wheel's rotation       q4  pitch      q5  steer

@@ -138,6 +138,36 @@ def tolerances(rtol, atol, n) -> tuple[float, np.ndarray]:
     return r, a
 
 
+#: the fewest representable times a span must hold (2**16: steps of a thousandth of the
+#: span are still resolved to 1.5 %; fewer and t + h == t, or h is rounded to nothing)
+MIN_TIME_RESOLUTION = 2**16
+
+
+def time_span(t_span) -> tuple[float, float]:
+    """``(t0, t1)``: real, finite, with a finite length, and either equal or holding at
+    least ``MIN_TIME_RESOLUTION`` representable times (else steps cannot be resolved:
+    ``t + h == t``)."""
+    try:
+        t0, t1 = t_span
+    except (TypeError, ValueError):
+        raise ArgumentError(f"t_span must be a pair (t0, t1), got {t_span!r}") from None
+    t0, t1 = real(t0, "t_span[0]"), real(t1, "t_span[1]")
+    if not (math.isfinite(t0) and math.isfinite(t1)):
+        raise ArgumentError(f"t_span must be finite, got {t_span!r}")
+    if t0 != t1:
+        length = abs(t1 - t0)
+        ulp = math.ulp(max(abs(t0), abs(t1)))
+        if not math.isfinite(length) or length < MIN_TIME_RESOLUTION * ulp:
+            raise ArgumentError(
+                f"t_span = ({t0!r}, {t1!r}) cannot be resolved in floating point: "
+                + (f"its length overflows" if not math.isfinite(length) else
+                   f"it holds only {length / ulp:.3g} representable times (at least "
+                   f"{MIN_TIME_RESOLUTION} are needed, or t + h == t for the steps)")
+                + "; shift the time origin (for an autonomous system t_span=(0, "
+                "t1 - t0) gives the same motion) or shorten the span")
+    return t0, t1
+
+
 def step_limits(first_step, max_step) -> tuple[float, float]:
     """``(first_step or 0.0 = automatic, max_step)`` of an adaptive method."""
     first = 0.0 if first_step is None else positive(first_step, "first_step")
@@ -158,6 +188,9 @@ def times(t_eval, t0, t1) -> np.ndarray:
 
 def fixed_steps(n_steps, h, t0, t1, what, max_steps) -> int:
     """The number of steps of a fixed-step method from ``n_steps`` or ``h``."""
+    if t0 == t1:
+        raise ArgumentError(f"{what}: t_span = ({t0!r}, {t1!r}) has zero length, so its "
+                            "steps would have h = 0; give t1 != t0")
     if n_steps is not None and h is not None:
         raise ArgumentError(f"{what}: give n_steps= or h=, not both")
     if n_steps is None:

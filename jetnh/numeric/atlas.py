@@ -2,7 +2,7 @@
 
 A split (the dependent coordinates q^alpha) is a chart of the constraint manifold
 f(t, q, qdot) = 0: the constraints solve for qdot^alpha where the minor A_alpha =
-df/dqdot^alpha of A = df/dqdot (k x n) is invertible.  How well, at a point:
+df/dqdot^alpha of A = df/dqdot (k x n) is invertible.  How well, at a point::
 
     m_alpha = det(A_alpha)^2 / det(A A^T)   in [0, 1],
 
@@ -223,7 +223,7 @@ class Atlas:
             A = self.home.system.jacobian
             lam = linalg.solve(A[:, list(sys_.dep_index)].T, sp.Matrix(new))
             sub = dict(zip(old, list(A[:, list(self.home.system.dep_index)].T * lam)))
-        return {k: sp.sympify(v).xreplace(sub) for k, v in exprs.items()}
+        return {k: sp.sympify(v, strict=True).xreplace(sub) for k, v in exprs.items()}
 
     def edge(self, chart) -> sp.Expr:
         """det(A_alpha)^2 - eps det(A A^T) of the chart's split (A = df/dqdot)."""
@@ -508,7 +508,7 @@ def _at(stitched, traj, times) -> np.ndarray:
         inner = sgn * (tau[idx] - float(seg.t[-2])) > 0 if cut else np.zeros(idx.size, bool)
         rows = np.empty((idx.size, len(chart.scene.state_names)))
         if (~inner).any():
-            rows[~inner] = seg.at(tau[idx[~inner]])
+            rows[~inner] = seg.at(tau[idx[~inner]]).to_numpy()
         if inner.any():
             rows[inner] = _rerun(chart, seg, rerun, tau[idx[inner]], traj._p)
         out[idx] = to_home(own, chart, tau[idx], rows, traj._p)

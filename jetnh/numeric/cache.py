@@ -106,6 +106,9 @@ _WARNED: set[str] = set()
 
 MANIFEST = "manifest.json"
 KEY_FILE = "hmac.key"
+#: the file jetnh writes into every cache root it creates: ``clear`` removes a root only
+#: when it holds it (a user's own ``~/v1`` under ``JETNH_CACHE=$HOME`` is never touched)
+MARKER = ".jetnh-kernel-cache"
 PYCACHE = "__pycache__"
 SOURCES = ("__init__.py", "kernels.py", "layout.json")
 INIT_TEXT = b"# jetnh generated kernel package\n"
@@ -173,7 +176,17 @@ def _old_versions(root: Path) -> list[Path]:
         return []
     return [root.parent / n for n in names
             if n != root.name and n[:1] == "v" and n[1:].isdigit()
-            and os.path.isdir(root.parent / n) and not os.path.islink(root.parent / n)]
+            and os.path.isdir(root.parent / n) and not os.path.islink(root.parent / n)
+            and owned(root.parent / n)]
+
+
+def owned(root: Path) -> bool:
+    """Whether jetnh provably made ``root``: it holds jetnh's marker file (a regular file,
+    not a link)."""
+    try:
+        return stat.S_ISREG(os.lstat(Path(root) / MARKER).st_mode)
+    except OSError:
+        return False
 
 
 def info() -> dict:
@@ -195,15 +208,16 @@ def info() -> dict:
 
 def clear(root: Path | None = None) -> int:
     """Remove every cached kernel under ``root`` (default: the persistent cache, and the
-    roots older jetnh versions left next to it); returns how many entries there were."""
+    roots older jetnh versions left next to it); returns how many entries there were.
+    Only directories holding jetnh's ``MARKER`` (written when jetnh made them) are
+    removed; anything else, a link included, is left alone."""
     targets = [root] if root else [cache_root(), *_old_versions(cache_root())]
     n = 0
     for r in targets:
+        if os.path.islink(r) or not owned(r):
+            continue                    # not provably jetnh's: never deleted
         n += len(_entries(r))
-        if os.path.islink(r):
-            os.unlink(r)
-        elif r.exists():
-            shutil.rmtree(r)
+        shutil.rmtree(r)
     for k in [k for k in _LOADED if k[1]]:
         del _LOADED[k]
     return n
@@ -330,6 +344,7 @@ def _prepare_root(root: Path, own_base: bool = True) -> Path:
     base = root.parent
     fix = (f"make {base} a directory of yours that only you can write ('chmod 700 "
            f"{base}'), or set JETNH_CACHE to one")
+    made = not os.path.lexists(root)
     try:
         _makedirs_private(root)
     except OSError as exc:
@@ -355,6 +370,15 @@ def _prepare_root(root: Path, own_base: bool = True) -> Path:
                                 f"be made private ({exc.strerror})", fix) from None
     if not os.access(root, os.W_OK | os.X_OK):
         raise _Unusable(f"{root} is not writable", fix)
+    # the marker: in a root jetnh made now, or one whose key file shows jetnh made it
+    if (made or os.path.isfile(root / KEY_FILE)) and not owned(root):
+        try:
+            _write_private(root / MARKER, b"jetnh kernel cache: jetnh made this directory\n")
+        except FileExistsError:
+            pass
+        except OSError as exc:
+            raise _Unusable(f"{root / MARKER} cannot be written ({exc.strerror})",
+                            fix) from None
     return root
 
 

@@ -171,7 +171,7 @@ class Emitter:
     """
 
     def __init__(self, roots, prefix: str = "c", inline: int = 160):
-        self.roots = [sp.sympify(r) for r in roots]   # keeps the ids below alive
+        self.roots = [sp.sympify(r, strict=True) for r in roots]   # keeps the ids below alive
         self.prefix, self.inline = prefix, inline
         self.index: dict = {}       # id(node) -> canonical index
         self.rep: list = []         # canonical index -> node
@@ -225,7 +225,7 @@ class Emitter:
             self.text[i] = (text, prec)
         for target, expr in outputs:
             if target is not None:
-                lines.append(f"{target} = {self.text[self.index[id(sp.sympify(expr))]][0]}")
+                lines.append(f"{target} = {self.text[self.index[id(sp.sympify(expr, strict=True))]][0]}")
         return lines
 
     # ------------------------------------------------------------------ printing
@@ -321,7 +321,7 @@ class Emitter:
         v<a> = phi^a).  Writes ``J[row, column] = ...`` for the nonzero entries only.
         """
         col = {self.index[id(s)]: j for s, j in states.items() if id(s) in self.index}
-        chain = {self.index[id(s)]: self.index[id(sp.sympify(e))]
+        chain = {self.index[id(s)]: self.index[id(sp.sympify(e, strict=True))]
                  for s, e in (chains or {}).items() if id(s) in self.index}
         lines, D = [], {}
 
@@ -363,7 +363,7 @@ class Emitter:
             if i not in D:
                 D[i] = deriv(i)
         for row, expr in outputs:
-            for j, d in sorted(D[self.index[id(sp.sympify(expr))]].items()):
+            for j, d in sorted(D[self.index[id(sp.sympify(expr, strict=True))]].items()):
                 lines.append(f"J[{row}, {j}] = {d}")
         return lines
 
@@ -827,7 +827,7 @@ class _Preparer:
         """``[self(expr, what) for expr, what in pairs]`` by one substitution over the
         graph of them all (shared parts rebuilt once); any error is reported by ``self``
         on the first expression that has it."""
-        exprs = [sp.sympify(e) for e, _ in pairs]
+        exprs = [sp.sympify(e, strict=True) for e, _ in pairs]
         sub, bad = self._rule(exprs)
         out = None if bad or dag.atoms(exprs, AppliedUndef) else dag.xreplace(exprs, sub, self.canon)
         if out is None or dag.atoms(out, type(sp.nan), type(sp.zoo), type(sp.oo),
@@ -849,7 +849,7 @@ class _Preparer:
         return sub, bad
 
     def __call__(self, expr, what):
-        e = sp.sympify(expr)
+        e = sp.sympify(expr, strict=True)
         sub, bad = self._rule(e)
         if bad:
             raise JetnhError(
@@ -967,7 +967,7 @@ def discrete_indicators(system, numbers) -> list[tuple[str, sp.Expr]]:
     return _distinct_factors(
         (kind, b) for kind, exprs in (("constraint", system.constraints),
                                       ("lagrangian", [system.L]))
-        for e in exprs for b in _singular_bases(sp.sympify(e).xreplace(sub)))
+        for e in exprs for b in _singular_bases(sp.sympify(e, strict=True).xreplace(sub)))
 
 
 def generate_dla(system, params: dict, runtime_params=(), key="",
@@ -981,20 +981,20 @@ def generate_dla(system, params: dict, runtime_params=(), key="",
     size eps |q0| / h (a step far from the origin is the same step), and the one-forms
     ``A^a = df^a/dqdot`` and ``B^a = df^a/dq`` at the midpoint:
 
-    ``step_residual(t, h, q0, p0, z, p, G, Jm)``: ``z = (dq, lambda)``;
-        chetaev:   ``G = (p0 - L_v + h/2 L_q + h/2 Q + h/2 lambda.A,  f(tb, qb, vb))``;
-        vakonomic: ``G = (p0 - L_v + h/2 L_q + h/2 Q - lambda.(A - h/2 B),  f(tb, qb, vb))``;
-        and its Jacobian in z (Q: the generalized forces at the midpoint, the discrete
-        forces h/2 Q at both ends of the step).
-    ``momentum(t, h, q0, z, p, out)``: ``p1 = L_v + h/2 L_q + h/2 Q + h/2 lambda.A``
-        (chetaev), ``L_v + h/2 L_q + h/2 Q + lambda.(A + h/2 B)`` (vakonomic).
-    ``legendre(t, q, v, p, out, M)``: ``out = dF/dqdot``, ``M = d^2F/dqdot^2`` with
-        ``F = L`` (chetaev) or ``L + lambda.f`` (vakonomic, lambda = q[n:n+k]).
-    ``nodal(t, q, v, p, out)``: ``out = (f^a (k), E = v.F_v - F, I_1..I_m)`` (lambda as
-        above; ``integrals``: name -> expression in t, q, qdot and the multipliers).
-    ``sing(t, q, v, p, out)``: the indicators of ``discrete_indicators`` at a node.
-    ``constraint_jac(t, q, v, p, f, A)``: ``f^a`` and ``A = df/dqdot`` at a node (for the
-        projection of node velocities onto the constraints).
+    - ``step_residual(t, h, q0, p0, z, p, G, Jm)``: ``z = (dq, lambda)``;
+      chetaev:   ``G = (p0 - L_v + h/2 L_q + h/2 Q + h/2 lambda.A,  f(tb, qb, vb))``;
+      vakonomic: ``G = (p0 - L_v + h/2 L_q + h/2 Q - lambda.(A - h/2 B),  f(tb, qb, vb))``;
+      and its Jacobian in z (Q: the generalized forces at the midpoint, the discrete
+      forces h/2 Q at both ends of the step).
+    - ``momentum(t, h, q0, z, p, out)``: ``p1 = L_v + h/2 L_q + h/2 Q + h/2 lambda.A``
+      (chetaev), ``L_v + h/2 L_q + h/2 Q + lambda.(A + h/2 B)`` (vakonomic).
+    - ``legendre(t, q, v, p, out, M)``: ``out = dF/dqdot``, ``M = d^2F/dqdot^2`` with
+      ``F = L`` (chetaev) or ``L + lambda.f`` (vakonomic, lambda = q[n:n+k]).
+    - ``nodal(t, q, v, p, out)``: ``out = (f^a (k), E = v.F_v - F, I_1..I_m)`` (lambda as
+      above; ``integrals``: name -> expression in t, q, qdot and the multipliers).
+    - ``sing(t, q, v, p, out)``: the indicators of ``discrete_indicators`` at a node.
+    - ``constraint_jac(t, q, v, p, f, A)``: ``f^a`` and ``A = df/dqdot`` at a node (for the
+      projection of node velocities onto the constraints).
     """
     if kind not in ("chetaev", "vakonomic"):
         raise JetnhError(f"unknown discrete integrator kind {kind!r}")
@@ -1014,7 +1014,7 @@ def generate_dla(system, params: dict, runtime_params=(), key="",
     own = set(ls)
 
     def at(expr, qs, vs, ts):
-        e = sp.sympify(expr)
+        e = sp.sympify(expr, strict=True)
         sub = {s: v for s, v in zip(J.q, qs)}
         sub.update({s: v for s, v in zip(J.qd, vs)})
         sub[J.t] = ts
@@ -1067,7 +1067,7 @@ def generate_dla(system, params: dict, runtime_params=(), key="",
         else {}
     In = []
     for name, expr in (integrals or {}).items():
-        e = sp.sympify(expr)
+        e = sp.sympify(expr, strict=True)
         e = e.xreplace({s: lam_names[s.name] for s in e.free_symbols if s.name in lam_names})
         In.append(at(e, qs, vs, tn))
     indicators = discrete_indicators(system, {k: v for k, v in numbers.items()

@@ -10,6 +10,9 @@
 - dla, dvi and scipy's methods: no interpolant (the discrete integrators have none that
   matches their nodes and multipliers) and an error that says what to do.
 
+``resampled`` gives the run at the rows and evenly between them (the smooth curves of
+``Trajectory.plot``), or the rows alone where there is no dense output.
+
 Only a trajectory that holds every step (``save="steps"``, no ``t_eval``) can be
 evaluated; the last interval of a run stopped inside a step (a terminal event or a
 singular stop) is not a whole step, and only its end is available.
@@ -91,6 +94,40 @@ def evaluate(traj, times, full=False) -> np.ndarray:
     return out
 
 
+#: a resampled run has at least this many points (the rows, and points between them)
+SMOOTH_POINTS = 400
+
+
+def resampled(traj, points=SMOOTH_POINTS):
+    """``traj`` at its rows and, where the method has dense output, at evenly spaced
+    times inside its steps: at least ``points`` values in all (a run with as many steps
+    already is its rows).  A Trajectory of the same run, scene and kernels; without
+    dense output (dla, dvi, scipy's methods, ``t_eval`` or ``save="final"`` runs) or with
+    a change of split ``traj`` itself."""
+    t = traj.t
+    n_steps = len(t) - 1
+    if (traj._segments is not None or _refusal(traj) or n_steps < 1
+            or n_steps >= points):         # (a run that changed split: its rows)
+        return traj
+    per = -(-points // n_steps)                          # values per step, its start included
+    last = n_steps - 1 if traj._dense["partial_last"] else n_steps
+    frac = np.arange(1, per) / per
+    inner = (t[:last, None] + frac[None, :] * np.diff(t)[:last, None]).ravel()
+    inner_y = evaluate(traj, inner).reshape(last, per - 1, -1)
+    ys = np.concatenate([traj.y[:last, None, :], inner_y], axis=1).reshape(-1, traj.y.shape[1])
+    ts = np.concatenate([t[:last, None], inner.reshape(last, per - 1)], axis=1).ravel()
+    ts = np.concatenate([ts, t[last:]])
+    return sampled(traj, ts, np.concatenate([ys, traj.y[last:]]))
+
+
+def sampled(traj, t, y):
+    """A Trajectory of the run of ``traj`` with the states ``y`` at the times ``t`` (its
+    derived columns from the same kernels); no steps, no events, no dense output."""
+    return type(traj)(traj.scene, t, y, traj._p, method=traj.method, status=traj.status,
+                      stop_reason=traj.stop_reason, steps=None, rejected=None, nfev=0,
+                      wall_time=0.0, kernels=traj._kernels)
+
+
 def _groups(k):
     """(step, start, stop) of the runs of equal values in the sorted array ``k``."""
     cut = np.nonzero(np.diff(k))[0] + 1
@@ -115,8 +152,8 @@ def _retaken_steps(traj, k, tau) -> np.ndarray:
         # step is h = t1 - t0, the original run's h to the bit
         first = float(np.nextafter(abs(t1 - t0), np.inf))
         res = solve(rhs, kern.sing_fp, kern.sing_fp, kern.hol_or_none, t0, t1,
-                    np.ascontiguousarray(y[j]), p, Control(d["rtol"], d["atol"], first, np.inf,
-                                                           1, 0, *traj.scene._projection),
+                    np.array(y[j]), p, Control(d["rtol"], d["atol"], first, np.inf,
+                                               1, 0, *traj.scene._projection),
                     np.ascontiguousarray(tau[a:b]), AT_T_EVAL, watch, halt)
         status, _, ys, n_out, stats = res[:5]
         if int(status) != 0 or int(stats[1]) != 0 or int(n_out) != b - a:
@@ -138,7 +175,7 @@ def _hermite_steps(traj, k, tau) -> np.ndarray:
     f = {}
     for j in nodes:
         f[j] = np.empty(n)
-        kern.rhs(float(t[j]), np.ascontiguousarray(y[j]), p, f[j])
+        kern.rhs(float(t[j]), np.array(y[j]), p, f[j])
     h = (t[k + 1] - t[k])[:, None]
     th = ((tau - t[k]) / (t[k + 1] - t[k]))[:, None]
     f0 = np.array([f[j] for j in k])

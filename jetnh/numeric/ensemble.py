@@ -6,7 +6,7 @@
     ens.y                      # [n_runs, n_times, n_states]
     ens.to_dataframe()         # one row per run and time (a pandas DataFrame)
     ens["x"], ens["x_t"]       # [n_runs, n_times] (dependent velocities, integrals too)
-    ens.final["x"]             # [n_runs]
+    ens.final["x"]             # [n_runs]; NaN for runs that stopped before the end
     ens.status, ens.steps, ens.nfev, ens.t_final, ens.residual_max, ens.energy_drift
 
 ``run_ensemble(scene, initial, params, ...)`` is a plain function of the scene and
@@ -30,6 +30,7 @@ arrays (``Scene.ensemble`` calls it), so a later ``jetnh.sweep`` can hand it chu
   thread pool was as fast as or faster than prange there and needs no extra compiled
   driver, hence the default.  A Python loop of ``scene.run`` pays ~0.1 ms of dispatch
   per run, which the drivers do not.
+- Every array an ensemble holds or hands out is read-only.
 - Output: ``t_eval`` points (runs that stop early are NaN after their stop), or
   ``save="final"`` (one row per run, its final state).  Every accepted step is not
   available (ragged); use ``scene.run`` for that.
@@ -43,13 +44,14 @@ arrays (``Scene.ensemble`` calls it), so a later ``jetnh.sweep`` can hand it chu
 from __future__ import annotations
 
 import time
+import warnings
 from concurrent.futures import ThreadPoolExecutor
 from functools import cached_property
 
 import numpy as np
 
-from ..errors import ConstraintError, IntegrationError, JetnhError
-from ..frozen import Frozen
+from ..errors import ConstraintError, IntegrationError, JetnhError, JetnhWarning
+from ..frozen import Frozen, readonly
 from ..mechanics import holonomic
 from . import arguments, atlas, diagnosis, interrupt
 from .events import as_events
@@ -260,13 +262,13 @@ class Ensemble(Frozen):
             if ok.any():
                 tmp = np.empty((int(ok.sum()), self.layout.n_aux))
                 kern.aux_rows(np.ascontiguousarray(self.t[r][ok]),
-                              np.ascontiguousarray(self.y[r][ok]), self.params[r], tmp)
+                              np.ascontiguousarray(self.y[r][ok]), self.params[r].copy(), tmp)
                 out[r][ok] = tmp
         if self._pieces:
             own = atlas.atlas(self.scene).own
             for r, pieces in self._pieces.items():
-                atlas.fill_aux(out[r], own, pieces, self.params[r])
-        return out
+                atlas.fill_aux(out[r], own, pieces, self.params[r].copy())
+        return readonly(out)
 
     @cached_property
     def aux_initial(self) -> np.ndarray:
@@ -274,15 +276,37 @@ class Ensemble(Frozen):
         out = np.empty((self.n_runs, self.layout.n_aux))
         t0 = self.scene.t_span[0]
         for r in range(self.n_runs):
-            kern.aux(t0, self.initial[r], self.params[r], out[r])
-        return out
+            # compiled code takes writable arrays: copies of the read-only rows
+            kern.aux(t0, self.initial[r].copy(), self.params[r].copy(), out[r])
+        return readonly(out)
 
     @property
     def final(self) -> dict[str, np.ndarray]:
-        """Name -> [n_runs] values at each run's last output row."""
+        """Name -> [n_runs] (read-only) values at the requested end of each run: the
+        final time, or a terminal event.  A run that stopped before (a singular
+        configuration, NaN, the step budget; ``status``, ``stop_reasons``) has NaN there,
+        never the values where it stopped, and a ``JetnhWarning`` says how many did."""
+        out = self.final_values()
+        bad = np.flatnonzero(~self.success)
+        if bad.size:
+            warnings.warn(
+                f"{bad.size} of the {self.n_runs} runs did not reach the final time (run "
+                f"{bad[0]}: {self.stop_reason(int(bad[0]))}); their final values are NaN. "
+                "Their last rows are in ens[name] and ens.t_final", JetnhWarning,
+                stacklevel=2)
+        return out
+
+    def final_values(self) -> dict[str, np.ndarray]:
+        """``final`` without the warning (for tables that carry ``status`` alongside)."""
         last = np.maximum(np.sum(np.isfinite(self.t), axis=1) - 1, 0)
         idx = np.arange(self.n_runs)
-        return {name: self[name][idx, last] for name in self.names}
+        ok = self.success
+        out = {}
+        for name in self.names:
+            v = np.where(ok, self[name][idx, last], np.nan)
+            v.flags.writeable = False
+            out[name] = v
+        return out
 
     # ------------------------------------------------------------------ diagnostics
     @property
@@ -318,8 +342,9 @@ class Ensemble(Frozen):
         if s == SINGULAR:
             sc = self.scene
             info = diagnosis.singularity(sc, sc.kernels, int(self._sing_index[r]),
-                                         self.t_final[r], self.y_final[r], self.params[r],
-                                         sc.t_span[0], self.initial[r], self._singular_tol)
+                                         self.t_final[r], self.y_final[r].copy(),
+                                         self.params[r].copy(), sc.t_span[0],
+                                         self.initial[r].copy(), self._singular_tol)
             return info["reason"]
         if s == EVENT:
             hit = [k for k in range(len(self.event_names)) if self.event_counts[r, k]]
@@ -522,15 +547,18 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
                                   INFO, T_LAST, Y_LAST, EV_N, EV_T)
             reasons[r], switches[r] = parts[-1][1].stop_reason, sw
     wall = time.perf_counter() - tic
+    # never a success with a NaN or infinite state
+    done = np.isin(INFO[:, 0], (FINISHED, EVENT))
+    INFO[done & ~(np.all(np.isfinite(Y_LAST), axis=1)
+                  & np.all(np.isfinite(OUT_Y) | np.isnan(OUT_T)[:, :, None], axis=(1, 2))),
+         0] = NONFINITE
     ens = Ensemble(scene, method, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N[:, :n_user],
                    EV_T[:, :n_user], Y0, P, ce.names[:n_user] if ce is not None else (), wall,
                    parallel, workers if parallel != "serial" else 1, save, singular_tol,
                    switching=switching, switches=switches, pieces=pieces, reasons=reasons)
     _explain(ens, kern, singular == "stop", singular_tol, on_error)
-    for a in (ens.t, ens.y, ens.status, ens.steps, ens.rejected, ens.nfev, ens.rows,
-              ens.t_final, ens.y_final, ens.event_counts, ens.event_first, ens.initial,
-              ens.params):
-        a.flags.writeable = False
+    # what it hands out cannot be changed (private pieces feed compiled code)
+    readonly({k: v for k, v in vars(ens).items() if not k.startswith("_")})
     return ens
 
 

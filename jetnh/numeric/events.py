@@ -1,5 +1,7 @@
 """User events: zero crossings of functions of the state, located on the dense output.
 
+Example::
+
     traj = scene.run(events=[y - 1, Event(x_t, terminal=True, direction=-1, name="turn")])
     traj.t_events[0], traj.y_events[0]          # as scipy's solve_ivp
     traj.events["turn"]                          # {"t": ..., "x": ..., "x_t": ..., ...}
@@ -23,6 +25,12 @@ on the dense output of DOP853 / DOPRI5 / radau (the cubic Hermite interpolant fo
 inside the compiled loop (``methods._events``).  dla and dvi evaluate the events at
 every node as they go and end the run at the node after a terminal one; the roots are
 then located on the linear interpolant between the nodes (``discrete.node_events``).
+
+Resolution limit (as scipy's): an event is seen where its function changes sign between
+the ends of an accepted step; an even number of crossings inside one step (an event on
+``sin(1000 t)`` with steps longer than its half period pi/1000) cancels out and is not
+reported.  The steps follow the motion, not the events: for an event that oscillates
+faster than the motion, pass ``max_step`` below the spacing of its roots.
 """
 
 from __future__ import annotations

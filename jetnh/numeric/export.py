@@ -99,40 +99,61 @@ def to_xarray(traj, diagnostics=True):
                       attrs=attributes(traj))
 
 
-def plot(traj, names=None, ax=None):
-    """``names`` (Symbols or names of any series; default the coordinates) against t on
-    ``ax``, or on the axes of a new figure."""
-    cols = columns(traj)
-    system = traj.scene.system
-    if names is None:
-        names = [s.name for s in system.J.q]
-    elif isinstance(names, (str, sp.Symbol)):
-        names = [names]
+def _series(cols, keys, what) -> list[str]:
+    """The names of the series ``keys`` (a name, a Symbol or a list of them), checked."""
+    if isinstance(keys, (str, sp.Symbol)):
+        keys = [keys]
     chosen = []
-    for key in names:
+    for key in keys:
         name = key_name(key)
         if name is None:
-            raise JetnhError(f"plot names must be Symbols or names, not {type(key).__name__}")
-        if name not in cols or name == "t":
+            raise JetnhError(f"{what} must be Symbols or names, not {type(key).__name__}")
+        if name not in cols:
             raise JetnhError(f"{name!r} is not a series of this trajectory; choose from "
                              f"{', '.join(n for n in cols if n != 't')}")
         chosen.append(name)
+    return chosen
+
+
+def plot(traj, names=None, ax=None, *, x="t", steps=False, smooth=True, path=False):
+    """``names`` (Symbols or names of any series; default the coordinates) against the
+    series ``x`` (default t) on ``ax``, or on the axes of a new figure.  ``smooth``: the
+    curves through the method's dense output between the rows (``dense.resampled``);
+    ``steps``: the stored rows marked; ``path``: equal scales on both axes."""
+    from .dense import resampled
+
+    cols = columns(traj)
+    if names is None:
+        names = [s.name for s in traj.scene.system.J.q]
+    chosen = _series(cols, names, "plot names")
+    (x,) = _series(cols, x, "x")
     if ax is None:
         import matplotlib.pyplot as plt
 
-        _, ax = plt.subplots(figsize=(6.4, 4.0), layout="constrained")
+        _, ax = plt.subplots(figsize=(4.8, 4.8) if path else (6.4, 4.0),
+                             layout="constrained")
     else:
         from matplotlib.axes import Axes
 
         if not isinstance(ax, Axes):
             raise ArgumentError(f"ax must be a matplotlib Axes (e.g. fig.subplots()), not "
                                 f"{type(ax).__name__}")
+    curve = columns(resampled(traj)) if smooth else cols
     for name in chosen:
-        ax.plot(cols["t"], cols[name], label=name)
-    ax.set_xlabel(system.J.t.name)
+        (line,) = ax.plot(curve[x], curve[name], label=name)
+        if steps:
+            ax.plot(cols[x], cols[name], ".", color=line.get_color(), ms=4,
+                    label="_steps")
+    if path:
+        for name in chosen:
+            ax.plot(cols[x][:1], cols[name][:1], "o", color="k", ms=4, label="_start")
+        ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel(x)
     ax.set_ylabel(chosen[0] if len(chosen) == 1 else "value")
-    ax.set_title(f"{traj.scene.principle}, {traj.method}")
-    ax.legend()
+    ax.set_title(f"{traj.scene.principle}, {traj.method}"
+                 + (" (dots: the steps)" if steps else ""))
+    if len(chosen) > 1:
+        ax.legend()
     return ax
 
 

@@ -293,7 +293,7 @@ class Linearization(Frozen):
 
     def steady(self, unknowns, tol: float = 1e-10) -> "Linearization":
         """The linearization at a steady motion: the values of ``unknowns`` (names of
-        kept states) that make x' vanish (to ``tol`` times max(1, |x'| here)), starting
+        kept states) that make x' vanish (to ``tol`` times ``max(1, |x'|)`` here), starting
         from this point's values (the others held).  ``LinearizationError`` when none
         is found near them."""
         from scipy.optimize import least_squares

@@ -1,5 +1,5 @@
 """Run options as small immutable values: one definition for ``Scene.run``,
-``run_ensemble`` and ``sweep``.
+``run_ensemble`` and ``sweep``.  Two spellings of one run::
 
     scene.run(step=StepControl(rtol=1e-11, max_step=0.1), singular=Singular(tol=1e-8))
     scene.run(rtol=1e-11, max_step=0.1, singular_tol=1e-8)         # the same run

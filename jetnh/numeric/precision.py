@@ -98,8 +98,8 @@ def reference(exprs, values, dps=50, intermediates=()) -> list[tuple[float, floa
     with mpmath.workdps(dps):
         ev = _Evaluator(values)
         for sym, e in intermediates:
-            ev.memo[sym] = ev(sp.sympify(e))
-        return [(float(v), float(err * U)) for v, err in (ev(sp.sympify(e)) for e in exprs)]
+            ev.memo[sym] = ev(sp.sympify(e, strict=True))
+        return [(float(v), float(err * U)) for v, err in (ev(sp.sympify(e, strict=True)) for e in exprs)]
 
 
 def cancellation(expr, values, dps=50, intermediates=()) -> tuple[float, sp.Expr | None]:
@@ -109,8 +109,8 @@ def cancellation(expr, values, dps=50, intermediates=()) -> tuple[float, sp.Expr
     with mpmath.workdps(dps):
         ev = _Evaluator(values)
         for sym, e in intermediates:
-            ev.memo[sym] = ev(sp.sympify(e))
-        ev(sp.sympify(expr))
+            ev.memo[sym] = ev(sp.sympify(e, strict=True))
+        ev(sp.sympify(expr, strict=True))
         best, where = 0.0, None
         for e, (v, _) in list(ev.memo.items()):
             if e.is_Add:

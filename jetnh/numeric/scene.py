@@ -36,7 +36,7 @@ satisfy them (else ``ConstraintError`` with the residual), or ``complete=True`` 
 them by Newton's method for the split's dependent coordinates (those making dg/dq over
 them regular; ``complete=[z, ...]`` names others), recorded in ``scene.completed``.  The
 compiled explicit and Radau runs project every accepted step back onto g = 0
-(``methods.projection``); ``traj.diagnostics.holonomic_residual_max`` reports max |g|.
+(``methods.projection``); ``traj.diagnostics.holonomic_residual_max`` reports ``max |g|``.
 """
 
 from __future__ import annotations
@@ -57,7 +57,7 @@ from . import cache as _cache
 from . import codegen
 from . import atlas, diagnosis, discrete, methods, scipy_backend
 from .methods import STATUS_TEXT, Solver
-from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, NONFINITE, SINGULAR, STOPPED
+from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, FINISHED, NONFINITE, SINGULAR, STOPPED
 from .methods.loop import Control, watch_of
 from ..frozen import Frozen, FrozenDict, memo
 from .options import fields_of, options
@@ -65,19 +65,45 @@ from .trajectory import Trajectory
 
 
 class Scene(Frozen):
-    """``Scene(system, principle, params, initial, t_span)``: see the module docstring.
+    """A system under one principle with numbers and a time span, ready to integrate.
 
-    ``params`` default to ``system.defaults`` (the catalogue models carry them).
-    Options: ``form``/``convention`` are passed to ``system.equations``; ``integrals``
-    maps names to sympy expressions (first integrals to monitor); ``runtime_params``
-    names parameters read at run time instead of compiled in; ``project`` replaces
-    inconsistent dependent velocities; ``consistency_tol`` is the relative tolerance of
-    that check; ``complete`` (True or coordinates) solves the holonomic constraints for
-    coordinates of an initial configuration off g = 0 (else it is refused);
-    ``cache=False`` keeps compiled kernels out of the disk cache.
+    Parameters
+    ----------
+    system : System
+        The constrained system.
+    principle : str, default "chetaev"
+        "chetaev", "vakonomic", "holder" or "suslov" (or an alias).
+    params : dict, optional
+        Parameters (Symbols or names) -> numbers; default ``system.defaults`` (the
+        catalogue models carry them).
+    initial : dict, optional
+        Initial values (Symbols or names) of the coordinates, independent velocities and
+        multipliers; the dependent velocities follow from the constraints (if given,
+        they must agree with them).
+    t_span : tuple of float
+        The time span of ``run``; default (0, 1).
+    form, convention : str, optional
+        Passed to ``system.equations``.
+    integrals : dict, optional
+        Names -> sympy expressions: first integrals to monitor (``traj[name]``, their
+        drift in the diagnostics).
+    runtime_params : sequence of str, optional
+        Parameters read at run time instead of compiled in (ensembles, sweeps).
+    project : bool, default False
+        Replace inconsistent dependent velocities by the values the constraints require.
+    consistency_tol : float, default 1e-9
+        The relative tolerance of that check.
+    complete : bool or list, default False
+        Solve the holonomic constraints for these coordinates (True: chosen
+        automatically) of an initial configuration off g = 0 (else it is refused).
+    cache : bool, default True
+        ``False`` keeps compiled kernels out of the disk cache.
 
+    Notes
+    -----
     A scene is immutable (``FrozenError`` on assignment; ``replace`` makes a changed
     copy); what it compiles lazily is kept in its private memo (``jetnh.frozen``).
+    See the module docstring for the state and the methods.
     """
 
     _portable = ("key",)        # a pickled scene (a sweep's worker) keeps its kernels' key
@@ -126,14 +152,7 @@ class Scene(Frozen):
     # ------------------------------------------------------------------ input checks
     @staticmethod
     def _t_span(t_span):
-        try:
-            t0, t1 = t_span
-        except (TypeError, ValueError):
-            raise JetnhError(f"t_span must be a pair (t0, t1), got {t_span!r}") from None
-        t0, t1 = arguments.real(t0, "t_span[0]"), arguments.real(t1, "t_span[1]")
-        if not (np.isfinite(t0) and np.isfinite(t1)):
-            raise JetnhError(f"t_span must be finite, got {t_span!r}")
-        return (t0, t1)
+        return arguments.time_span(t_span)
 
     def _params(self, params) -> dict[str, float]:
         needed = {s.name for s in self.system.parameters}
@@ -334,69 +353,89 @@ class Scene(Frozen):
             sensitivity_error=True, **keywords) -> Trajectory:
         """Integrate and return a ``Trajectory``.
 
-        What: ``t_span`` replaces the scene's; ``y0`` the initial state (a dict keyed by
-        Symbol, name or dynamicsymbol, the other states keeping the scene's values and dependent
-        velocities, if given, agreeing with the constraints; or a sequence in the order
-        ``scene.state_names``); ``params`` the run-time parameters (``runtime_params``: a
-        dict, or a sequence in the order ``scene.runtime_params``).
+        Parameters
+        ----------
+        rtol, atol : float, optional
+            Tolerances of the adaptive methods (1e-9, 1e-12; ``atol`` a scalar or one
+            value per state); short for ``step=StepControl(rtol=..., atol=...)``.
+        t_eval : array_like, optional
+            Output times inside the span, from the dense output; default every step.
+        method : str, default "dop853"
+            "dop853", "dopri5" (alias "RK45"), "rk4" (fixed step), "radau" (implicit
+            Radau IIA of order 5 for stiff problems, with the Jacobian from the symbolic
+            derivation), "dla" (the structure-preserving discrete Lagrange-d'Alembert
+            midpoint integrator, Chetaev only, fixed step), "dvi" (the discrete
+            vakonomic midpoint variational integrator, fixed step), or "scipy-<M>" for
+            scipy's ``solve_ivp(method=M)`` on the same compiled right-hand side.
+        save : {"steps", "final"}, default "steps"
+            Every step (or the points of ``t_eval``), or the two ends only.
+        events : list, optional
+            Sympy expressions, callables g(t, y) or ``Event`` (``jetnh.numeric.events``)
+            with scipy's semantics, located on the dense output (dla and dvi: on the
+            line between their nodes); the trajectory reports ``t_events``,
+            ``y_events`` and ``events``; a terminal event ends the run.
+        t_span : tuple of float, optional
+            Replaces the scene's.
+        y0 : dict or sequence, optional
+            The initial state: a dict keyed by Symbol, name or dynamicsymbol (the other
+            states keep the scene's values; dependent velocities, if given, must agree
+            with the constraints) or a sequence in the order ``scene.state_names``.
+        params : dict or sequence, optional
+            The run-time parameters (``runtime_params``): a dict, or a sequence in the
+            order ``scene.runtime_params``.
+        timeout : float, optional
+            Seconds of wall-clock time, after which the run returns what it has with
+            status STOPPED.  Ctrl-C stops a compiled run within one step.
+        projection : bool, default False
+            dla: project every node velocity onto the constraints.
+        backend : str, optional
+            ``"scipy"`` for scipy's ``solve_ivp`` (as ``method="scipy-<M>"``).
+        step : jetnh.numeric.options.StepControl, optional
+            ``StepControl(rtol, atol, first_step, max_step, max_steps, n_steps, h)``
+            (``numeric.options``), or those as keywords: the first and the largest
+            adaptive step (automatic, none), the budget of steps (10^7; the fixed-step
+            methods refuse more up front) and the fixed step of rk4, dla and dvi
+            (``n_steps`` or ``h``).
+        singular : {"stop", "ignore"} or jetnh.numeric.options.Singular, default "stop"
+            With ``singular_tol`` (or ``Singular(action, tol)``): "stop" ends the run at
+            a singular configuration, where a singularity indicator of the scene
+            (``kernels.layout.indicators``: the determinant of df/dqdot^alpha,
+            denominators and square-root arguments of phi and of the accelerations)
+            crosses zero or falls below ``tol`` (1e-10) times its initial size; the point
+            is located on the dense output, ``status`` is SINGULAR and ``stop_reason``
+            names the indicator, the time and the way out.  dla and dvi check the
+            indicators of the constraints and the Lagrangian as written at every node
+            and stop at the last regular one.
+        split : {"switch", "fixed"}, default "switch"
+            dop853, dopri5, rk4 and radau runs that reach the edge of the split's chart
+            go on in another regular split (``numeric.atlas``: the switch located as an
+            event, the state and multipliers mapped, one trajectory in the scene's
+            states, ``traj.switches`` lists time, from and to); "fixed" keeps the
+            scene's split, which stops at its singular set.
+        newton : jetnh.numeric.options.Newton, optional
+            ``Newton(tol, max_iter)`` or ``newton_tol``, ``max_newton``: the Newton
+            iteration of radau (automatic, 7) and of dla and dvi (1e-13, 50).
+        sensitivities : bool, default False
+            dop853, dopri5, rk4, radau and scipy's methods: integrate with the state the
+            variational equations ``S' = (df/dy) S + df/dp``, ``S(t0) = (I | 0)``, of
+            ``S = dy(t)/d(y(t0), p)`` (the derivatives of the initial state and of the
+            runtime parameters), df/dy and df/dp generated from the derivation (forward
+            mode over the graph, compiled: ``codegen.sensitivity_kernels``);
+            ``traj.sensitivity(of, to)`` reads them.  Such a run keeps its split.
+        sensitivity_error : bool, default True
+            Whether S is under the error control (its entry (i, k) with the tolerance of
+            state i, so S is as accurate as the state); with False only the state is
+            controlled (the steps of the run without sensitivities: cheaper, S
+            uncontrolled).
+        **keywords
+            The fields of ``StepControl``, ``Singular`` and ``Newton`` by name.
 
-        How: ``method`` "dop853" (default), "dopri5" (alias "RK45"), "rk4" (fixed step),
-        "radau" (implicit Radau IIA of order 5 for stiff problems, with the Jacobian from
-        the symbolic derivation), "dla" (the structure-preserving discrete
-        Lagrange-d'Alembert midpoint integrator, Chetaev only, fixed step;
-        ``projection=True`` projects every node velocity onto the constraints), "dvi"
-        (the discrete vakonomic midpoint variational integrator, fixed step), or
-        "scipy-<M>" for scipy's ``solve_ivp(method=M)`` on the same compiled right-hand
-        side (also ``backend="scipy"``).
-
-        The run options (``numeric.options``), as values or as their keywords:
-
-        - ``step=StepControl(rtol, atol, first_step, max_step, max_steps, n_steps, h)``:
-          tolerances (1e-9, 1e-12; ``atol`` a scalar or one value per state), the first
-          and the largest adaptive step (automatic, none), the budget of steps (10^7; the
-          fixed-step methods refuse more up front) and the fixed step of rk4, dla and dvi
-          (``n_steps`` or ``h``);
-        - ``singular=Singular(action, tol)`` or ``singular="stop"|"ignore"`` with
-          ``singular_tol``: "stop" (default) ends the run at a singular configuration,
-          where a singularity indicator of the scene (``kernels.layout.indicators``: the
-          determinant of df/dqdot^alpha, denominators and square-root arguments of phi
-          and of the accelerations) crosses zero or falls below ``tol`` (1e-10) times its
-          initial size; the point is located on the dense output, ``status`` is SINGULAR
-          and ``stop_reason`` names the indicator, the time and the way out.  dla and dvi
-          check the indicators of the constraints and the Lagrangian as written
-          (``codegen.discrete_indicators``) at every node and stop at the last regular
-          one.  NaN or infinity that no indicator explains raises an ``IntegrationError``
-          naming the time and the state.  ``split="switch"`` (default) or ``"fixed"``:
-          dop853, dopri5, rk4 and radau runs that reach the edge of the split's chart
-          go on in another regular split (``numeric.atlas``: the switch located as an
-          event, the state and multipliers mapped, one trajectory in the scene's states,
-          ``traj.switches`` lists time, from and to); "fixed" keeps the scene's split,
-          which stops at its singular set as before;
-        - ``newton=Newton(tol, max_iter)`` or ``newton_tol``, ``max_newton``: the Newton
-          iteration of radau (automatic, 7) and of dla and dvi (1e-13, 50).
-
-        Events: ``events`` (sympy expressions, callables g(t, y) or ``Event``; see
-        ``jetnh.numeric.events``) with scipy's semantics, located on the dense output
-        (dla and dvi: on the line between their nodes, ``discrete``); the trajectory
-        reports ``t_events``, ``y_events`` and ``events``; a terminal event ends the run.
-
-        Output: the points of ``t_eval`` (dense output), else every step, or the two ends
-        with ``save="final"``.  Budget: ``timeout`` seconds of wall-clock time, after
-        which the run returns what it has with status STOPPED; Ctrl-C stops a compiled run
-        within one step (``numeric.interrupt``).  Every argument is checked before it
-        reaches compiled code (``numeric.arguments``).
-
-        Sensitivities: ``sensitivities=True`` (dop853, dopri5, rk4, radau, scipy's
-        methods) integrates with the state the variational equations
-        ``S' = (df/dy) S + df/dp``, ``S(t0) = (I | 0)``, of ``S = dy(t)/d(y(t0), p)``, the
-        derivatives of the initial state and of the runtime parameters, with df/dy and
-        df/dp generated from the derivation (forward mode over the graph, compiled:
-        ``codegen.sensitivity_kernels``); ``traj.sensitivity(of, to)`` reads them.
-        ``sensitivity_error=True`` (default) puts S under the error control (its entry
-        (i, k) with the tolerance of state i), so S is as accurate as the state; with
-        ``False`` only the state is controlled (the steps are those of the run without
-        sensitivities, and S is as accurate as those steps make it: cheaper, but
-        uncontrolled).  A run with sensitivities keeps its split (``split="fixed"``).
+        Returns
+        -------
+        Trajectory
+            NaN or infinity that no indicator explains raises an ``IntegrationError``
+            naming the time and the state instead.  Every argument is checked before it
+            reaches compiled code (``numeric.arguments``).
         """
         opts = options(step, singular, newton, rtol=rtol, atol=atol, **keywords)
         rtol, atol, first_step, max_step, max_steps, n_steps, h = fields_of(opts.step)
@@ -586,7 +625,7 @@ class Scene(Frozen):
     def _run_state(self, y0, t0, p) -> np.ndarray:
         """The initial state of one run (``run(y0=...)``), checked."""
         if y0 is None:
-            return self.y0
+            return self.y0.copy()        # the compiled loop gets its own array
         if not isinstance(y0, dict):
             y, _ = arguments.keyed_or_sequence(y0, self.state_names, self.y0, "y0",
                                                "scene.state_names")
@@ -665,6 +704,9 @@ class Scene(Frozen):
             ys, n_out = np.ascontiguousarray(ys[:, :n]), ys.shape[0]
             y_last, y_init, ev_y = y_last[:n], y_init[:n], ev_y[:, :n]
         singularity = None
+        if status in (FINISHED, EVENT) and not (np.all(np.isfinite(y_last))
+                                                 and np.all(np.isfinite(ys[:n_out]))):
+            status = NONFINITE          # never a success with a NaN or infinite state
         if status == NONFINITE:
             sing_index = (diagnosis.explain_nonfinite(self, kern, t_last, y_last, p, t0, y_init,
                                                   singular_tol) if checked else -1)

@@ -16,14 +16,15 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from ..errors import JetnhError
+from ..errors import ArgumentError, JetnhError
 from ..geometry.jet import key_name
-from ..frozen import Frozen, memo
+from ..frozen import Frozen, FrozenDict, memo, readonly
 
 
 @dataclass(frozen=True)
 class Diagnostics:
-    """What happened during one integration, and how well the invariants held."""
+    """What happened during one integration, and how well the invariants held
+    (immutable: its mappings are read-only)."""
 
     method: str
     status: int
@@ -45,6 +46,12 @@ class Diagnostics:
     holonomic_residual_max: float = 0.0   # max |g_i| of the holonomic constraints
     completed: dict = field(default_factory=dict)     # see Scene.completed
     switches: list = field(default_factory=list)      # split changes: {"t", "from", "to"}
+
+    def __post_init__(self):
+        for name in ("integral_drift", "projected", "events", "singularity"):
+            value = getattr(self, name)
+            if isinstance(value, dict) and not isinstance(value, FrozenDict):
+                object.__setattr__(self, name, FrozenDict(readonly(value)))
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -99,8 +106,9 @@ class Trajectory(Frozen):
     Array orientation: ``traj.y`` is ``[n_times, n_states]`` (columns in the order
     ``scene.state_names``), ``traj[name]`` is ``[n_times]``; an ensemble's ``ens.y`` is
     ``[n_runs, n_times, n_states]``.  ``to_dataframe()``, ``to_xarray()`` and ``plot()``
-    give every series by name (``jetnh.numeric.export``); ``at(times)`` evaluates the run
-    between its rows (``jetnh.numeric.dense``).  Immutable (``jetnh.frozen``); the
+    give every series by name (``jetnh.numeric.export``; ``plot`` and ``plot_path`` draw
+    smooth curves through the dense output); ``at(times)`` evaluates the run between its
+    rows, as a DataFrame (``jetnh.numeric.dense``).  Immutable (``jetnh.frozen``); the
     derived columns are computed on first access.
     """
 
@@ -115,7 +123,7 @@ class Trajectory(Frozen):
             status=status, stop_reason=stop_reason,
             #: the stop at a singular configuration: {"indicator", "kind", "index", "t",
             #: "value", "initial", "reason"}, or None
-            singularity=singularity,
+            singularity=None if singularity is None else FrozenDict(singularity),
             event_names=tuple(names), t_events=list(t_ev), y_events=list(y_ev),
             # what re-taking a step needs (tolerances, output mode; see numeric.dense)
             _dense=dense,
@@ -337,23 +345,69 @@ class Trajectory(Frozen):
 
         return to_xarray(self, diagnostics)
 
-    def plot(self, names=None, ax=None):
-        """The series ``names`` (default: the coordinates) against t on ``ax`` (or a new
-        figure's axes), labelled; returns the matplotlib Axes."""
+    def plot(self, names=None, ax=None, *, x="t", y=None, steps=False, smooth=True):
+        """Plot series of the run; returns the matplotlib Axes.
+
+        Parameters
+        ----------
+        names, y : str, Symbol or list, optional
+            The series on the vertical axis (``y`` is another spelling of ``names``);
+            default: the coordinates.
+        ax : matplotlib Axes, optional
+            Where to draw; default: the axes of a new figure.
+        x : str or Symbol, default "t"
+            The series on the horizontal axis: ``traj.plot(x="x", y="y")`` is a phase or
+            path plot (``plot_path`` also gives both axes one scale).
+        steps : bool, default False
+            Mark the stored rows (the accepted steps) with dots.
+        smooth : bool, default True
+            Draw the curves through the method's dense output between the rows (dop853,
+            dopri5, rk4); the rows alone where there is none.
+        """
         from .export import plot
 
-        return plot(self, names, ax)
+        if y is not None:
+            if names is not None:
+                raise ArgumentError("give the vertical series once: names= or y=")
+            names = y
+        return plot(self, names, ax, x=x, steps=steps, smooth=smooth)
 
-    def at(self, times) -> np.ndarray:
-        """States ``[len(times), n_states]`` at ``times`` inside the span, from the
-        method's dense output (dop853, dopri5: the covering step re-taken, bit for bit
-        what ``t_eval`` gives; rk4: cubic Hermite); needs every step stored.  A run
-        that changed split is evaluated in the chart that ran at each time."""
+    def plot_path(self, x="x", y="y", ax=None, *, steps=False, smooth=True):
+        """The path of the run in the plane of the series ``x`` and ``y`` (default: the
+        coordinates named x and y), both axes on one scale, the start marked by a dot;
+        see ``plot`` for the parameters.  Returns the matplotlib Axes."""
+        from .export import plot
+
+        return plot(self, y, ax, x=x, steps=steps, smooth=smooth, path=True)
+
+    def at(self, times):
+        """The states at ``times`` inside the span, from the method's dense output.
+
+        dop853, dopri5: the covering step re-taken, bit for bit what ``t_eval`` gives;
+        rk4: cubic Hermite.  Needs every step stored (no ``t_eval``, ``save="steps"``).
+        A run that changed split is evaluated in the chart that ran at each time.
+
+        Parameters
+        ----------
+        times : float or array_like
+            In any order, inside the span.
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per time (the index, named ``t``), one column per state in the order
+            ``scene.state_names``: ``traj.at([2.5])["x"]``; ``.to_numpy()`` is the
+            ``[len(times), n_states]`` array.
+        """
+        import pandas as pd
+
         from .dense import evaluate
 
-        if self._segments is not None:
-            return self._segments.at(self, times)
-        return evaluate(self, times)
+        y = (self._segments.at(self, times) if self._segments is not None
+             else evaluate(self, times))
+        return pd.DataFrame(y, columns=list(self.layout.states),
+                            index=pd.Index(np.atleast_1d(np.asarray(times, dtype=float)),
+                                           name="t"))
 
     def _repr_html_(self):
         from ..display import trajectory_html

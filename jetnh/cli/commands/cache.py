@@ -12,7 +12,8 @@ def add_parser(sub):
         description="info: the cache directory (JETNH_CACHE, else the platform's user "
                     "cache directory), its entries and their size, and whether runs can "
                     "use it or fall back to a private temporary cache.  clear: remove "
-                    "every cached kernel (they are compiled again when needed).")
+                    "every cached kernel (they are compiled again when needed): only "
+                    "directories jetnh made (they hold its marker file) are deleted.")
     k.add_argument("action", choices=("info", "clear"), nargs="?", default="info",
                    help="default: info")
     k.set_defaults(func=run)
@@ -31,8 +32,11 @@ def run(args, progress) -> int:
 
     if args.action == "clear":
         root = cache.cache_root()
+        mine = cache.owned(root)
         n = cache.clear()
-        print(f"removed {n} cached {'entry' if n == 1 else 'entries'} from {root}")
+        print(f"removed {n} cached {'entry' if n == 1 else 'entries'} from {root}"
+              if mine or not root.exists() else
+              f"left {root} alone: it has no {cache.MARKER} file, so jetnh did not make it")
         return 0
     i = cache.info()
     print(f"kernel cache: {i['root']}"

@@ -104,7 +104,7 @@ def _plot(c, coords, path, title):
 
     tr = c.trajectory
     t = np.linspace(tr.t[0], tr.t[-1], 400)
-    q = tr.at(t)
+    q = tr.at(t).to_numpy()
     fig, ax = plt.subplots(figsize=(8, 4))
     for i, name in enumerate(coords):
         ax.plot(t, q[:, i], label=name)

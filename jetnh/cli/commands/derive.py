@@ -32,6 +32,7 @@ def add_parser(sub):
 
 
 def run(args, progress) -> int:
+    from ...algebra import dag
     from ...algebra.shared import shared_form
 
     loaded = with_split(load_model(args.model), args.split)
@@ -43,8 +44,14 @@ def run(args, progress) -> int:
         exprs = eom.expressions
     with progress.step("solving for the accelerations"):
         acc = eom.accelerations()
+    dependent = ", ".join(v.name for v in system.phi)
+    if system.phi:                   # on the manifold: the dependent velocities are phi
+        acc = dict(zip(acc, dag.xreplace(list(acc.values()), system.phi)))
     heads = [f"{eom.principle} equations, {eom.form} form {eom.paper}".rstrip(),
-             "accelerations (on the constraint manifold)", "the constraint manifold"]
+             "accelerations on the constraint manifold" + (
+                 f" (in the independent velocities: {dependent} replaced by their values "
+                 "below)" if system.phi else ""),
+             "the constraint manifold"]
     with progress.step("writing in shared form"):
         form = shared_form([heads[0]] + [(None, e) for e in exprs] + [heads[1]]
                            + list(acc.items()) + ([heads[2]] if system.phi else [])

@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import json
 
-from ...errors import JetnhError
 from ..loading import load_model, with_split
+from .. import outputs
 from ..parser import ALIASES, EPILOG_MODEL, canonical_principle, model_args, subcommand
 from ..running import assignments
 from ..usage import UsageError
@@ -78,6 +78,8 @@ def run(args, progress) -> int:
     scan = _scan_spec(args.param) if args.param else None
     if args.plot and not scan:
         raise UsageError("--plot draws the stability diagram of a scan: give --param too")
+    if args.plot:
+        outputs.check(args.plot, outputs.FIGURE, "--plot")
     states = ([q.name for q in system.J.q] + [v.name for v in system.independent_velocities]
               + list(multiplier_names(system, principle)))
     at = {k: v for k, v in loaded.initial.items() if k in states}
@@ -144,12 +146,9 @@ def _plot(result, path, title, progress):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    if not Path(path).resolve().parent.is_dir():
-        raise JetnhError(f"cannot write {path}: the directory "
-                         f"{Path(path).resolve().parent} does not exist")
     with progress.step(f"plotting to {path}"):
         ax = result.plot()
         ax.set_title(title)
         ax.figure.tight_layout()
-        ax.figure.savefig(path)
+        outputs.write(path, lambda tmp: ax.figure.savefig(tmp, format=Path(path).suffix[1:]))
         plt.close(ax.figure)

@@ -8,7 +8,8 @@ from pathlib import Path
 
 from ...errors import JetnhError
 from ..loading import load_model, with_split
-from ..parser import EPILOG_MODEL, model_args, subcommand
+from .. import outputs
+from ..parser import EPILOG_MODEL, count, model_args, subcommand
 from ..running import METHOD_HELP, assignments, method_of, scene_names
 from ..usage import UsageError
 
@@ -36,7 +37,7 @@ def add_parser(sub):
     s.add_argument("--timeout", type=float, default=None,
                    help="wall-clock budget in seconds: the run stops there and reports "
                         "what it has (default: none)")
-    s.add_argument("--points", type=int, default=None,
+    s.add_argument("--points", type=count, default=None,
                    help="output points of the adaptive methods (default 201; 0: every step)")
     s.add_argument("--project", action="store_true",
                    help="replace initial dependent velocities that contradict the "
@@ -46,6 +47,10 @@ def add_parser(sub):
                         "of an initial configuration off them (else it is refused)")
     s.add_argument("--csv", metavar="PATH", help="write t and every column to a CSV file")
     s.add_argument("--plot", metavar="PATH", help="save a plot (png, pdf, svg) of the run")
+    s.add_argument("--path", metavar="X,Y",
+                   help="with --plot: a panel of the path in the plane of these two series "
+                        "(default: x,y when the model has coordinates x and y; 'none': no "
+                        "path panel)")
     s.add_argument("--format", choices=("text", "json"), default="text")
     s.set_defaults(func=run)
 
@@ -94,10 +99,11 @@ def run(args, progress) -> int:
         else:
             integrals[k] = v
 
-    for out in (args.csv, args.plot):
-        if out and not Path(out).resolve().parent.is_dir():
-            raise JetnhError(f"cannot write {out}: the directory "
-                             f"{Path(out).resolve().parent} does not exist")
+    path_names = _path_names(args.path, system)
+    for out, kinds, what in ((args.csv, outputs.TEXT, "--csv"),
+                             (args.plot, outputs.FIGURE, "--plot")):
+        if out:
+            outputs.check(out, kinds, what)
     try:
         scene = Scene(system, principle, params=params, initial=initial,
                       t_span=(t0, float(t1)), convention=convention, integrals=integrals,
@@ -137,11 +143,13 @@ def run(args, progress) -> int:
         print("final:      " + ", ".join(f"{k} = {v:.10g}" for k, v in final.items()))
         print(d)
     if args.csv:
-        _write_csv(traj, args.csv)
+        outputs.write(args.csv, lambda tmp: _write_csv(traj, tmp))
         progress.note(f"wrote {args.csv}")
     if args.plot:
         with progress.step(f"plotting to {args.plot}"):
-            _plot(traj, system, args.plot, f"{system.name or loaded.label} ({principle})")
+            outputs.write(args.plot, lambda tmp: _plot(
+                traj, system, tmp, f"{system.name or loaded.label} ({principle})",
+                path_names, Path(args.plot).suffix[1:]))
     if not traj.success:
         print(f"jetnh: error: the integration stopped early: {traj.stop_reason}",
               file=sys.stderr)
@@ -161,20 +169,50 @@ def _write_csv(traj, path):
             fh.write(",".join(repr(float(x)) for x in row) + "\n")
 
 
-def _plot(traj, system, path, title):
+def _path_names(text, system) -> tuple | None:
+    """The two series of the path panel: ``--path X,Y``, or x and y when the model has
+    such coordinates; None for no panel."""
+    coords = {q.name for q in system.J.q}
+    if text is None:
+        return ("x", "y") if {"x", "y"} <= coords else None
+    if text.strip().lower() == "none":
+        return None
+    names = [n.strip() for n in text.split(",")]
+    if len(names) != 2 or not all(names):
+        raise UsageError(f"--path takes two series names separated by a comma (e.g. "
+                         f"--path x,y), not {text!r}")
+    return tuple(names)
+
+
+def _plot(traj, system, path, title, path_names=None, form=None):
     import matplotlib
-    import numpy as np
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
+    fig = _figure(traj, system, title, path_names)
+    fig.savefig(path, format=form)
+    plt.close(fig)
+
+
+def _figure(traj, system, title, path_names=None):
+    """The series of the run against t (coordinates, velocities, multipliers, then the
+    constraint residual and the energy drift) and, with ``path_names``, the path in
+    their plane beside them."""
+    import numpy as np
+    from matplotlib.figure import Figure
 
     coords = [q.name for q in system.J.q]
     vels = [v.name for v in system.J.qd]
     lams = [n for n in traj.names if n.startswith("lambda_")]
     groups = [("coordinates", coords), ("velocities", vels)] + ([("multipliers", lams)]
                                                                  if lams else [])
-    fig, axes = plt.subplots(len(groups) + 1, 1, figsize=(8, 2.6 * (len(groups) + 1)),
-                             sharex=True)
+    rows = len(groups) + 1
+    fig = Figure(figsize=(8 + 4.5 * bool(path_names), 2.6 * rows), layout="constrained")
+    grid = fig.add_gridspec(rows, 2 if path_names else 1,
+                            width_ratios=[8, 4.5] if path_names else None)
+    axes = [fig.add_subplot(grid[0, 0])]
+    axes += [fig.add_subplot(grid[i, 0], sharex=axes[0]) for i in range(1, rows)]
     for ax, (label, names) in zip(axes, groups):
         for n in names:
             ax.plot(traj.t, traj[n], label=n)
@@ -190,7 +228,10 @@ def _plot(traj, system, path, title):
     ax.set_ylabel(f"diagnostics (floor {floor:g})")
     ax.legend(fontsize="small")
     axes[-1].set_xlabel("t")
+    if path_names:
+        plane = fig.add_subplot(grid[:, 1])
+        traj.plot_path(*path_names, ax=plane)
+        plane.set_title(f"path in the ({path_names[0]}, {path_names[1]}) plane "
+                        "(dot: the start)")
     fig.suptitle(title)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+    return fig

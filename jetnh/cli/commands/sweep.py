@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ...errors import JetnhError
 from ..loading import load_model, with_split
-from ..parser import EPILOG_MODEL, model_args, subcommand
+from .. import outputs
+from ..parser import EPILOG_MODEL, model_args, positive_count, seconds, subcommand
 from ..running import METHOD_HELP, assignments, method_of, scene_names
 from ..usage import UsageError
 
@@ -50,11 +50,11 @@ def add_parser(sub):
     w.add_argument("--scheduler", metavar="ADDRESS",
                    help="a Dask scheduler, e.g. tcp://10.0.0.5:8786 (needs pip install "
                         "'jetnh[cluster]'; default: this machine, every core, no Dask)")
-    w.add_argument("--chunk-size", type=int, default=None, metavar="N",
+    w.add_argument("--chunk-size", type=positive_count, default=None, metavar="N",
                    help="points per Dask task (default: 4 tasks per worker thread)")
     w.add_argument("--timeout", type=float, default=None, metavar="SECONDS",
-                   help="give up on a Dask sweep after this long (default: no limit)")
-    w.add_argument("--connect-timeout", type=float, default=10.0, metavar="SECONDS",
+                   help="give up on the sweep after this long (default: no limit)")
+    w.add_argument("--connect-timeout", type=seconds, default=10.0, metavar="SECONDS",
                    help="time to reach the scheduler (default 10)")
     w.add_argument("--out", metavar="PATH",
                    help="write the table to PATH (.parquet or .csv); default: CSV on stdout")
@@ -95,15 +95,10 @@ def _grid(items) -> dict:
 
 
 def _write_table(df, path: Path):
-    if path.suffix == ".csv":
-        df.to_csv(path, index=False)
-        return
-    try:
-        import pyarrow  # noqa: F401
-    except ImportError:
-        raise JetnhError("writing parquet needs pyarrow: pip install 'jetnh[parquet]' (or "
-                         "write a .csv)") from None
-    df.to_parquet(path, index=False)
+    if path.suffix.lower() == ".csv":
+        outputs.write(path, lambda tmp: df.to_csv(tmp, index=False))
+    else:
+        outputs.write(path, lambda tmp: df.to_parquet(tmp, index=False))
 
 
 def run(args, progress) -> int:
@@ -116,14 +111,10 @@ def run(args, progress) -> int:
     if args.plot and (len(grid) != 2 or not args.value):
         raise UsageError("--plot draws a map over two --grid axes of the column --value; "
                          "give exactly two --grid and a --value")
-    for out, kinds in ((args.out, (".csv", ".parquet")), (args.plot, None)):
-        if not out:
-            continue
-        if not Path(out).resolve().parent.is_dir():
-            raise JetnhError(f"cannot write {out}: the directory "
-                             f"{Path(out).resolve().parent} does not exist")
-        if kinds and Path(out).suffix not in kinds:
-            raise JetnhError(f"cannot write {out}: give a .csv or .parquet path")
+    for out, kinds, what in ((args.out, outputs.TABLE, "--out"),
+                             (args.plot, outputs.FIGURE, "--plot")):
+        if out:
+            outputs.check(out, kinds, what)
     loaded = with_split(load_model(args.model), args.split)
     system = loaded.system
     sim = loaded.simulation
@@ -175,7 +166,7 @@ def run(args, progress) -> int:
         print(df.to_csv(index=False), end="")
     if args.plot:
         x, y = df.attrs["grid"]
-        plot_map(df, x, y, args.value, args.plot,
-                 title=f"{system.name or loaded.label} ({principle}): {args.value}")
+        title = f"{system.name or loaded.label} ({principle}): {args.value}"
+        outputs.write(args.plot, lambda tmp: plot_map(df, x, y, args.value, tmp, title=title))
         progress.note(f"wrote {args.plot}")
     return 0

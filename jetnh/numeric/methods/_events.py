@@ -19,7 +19,7 @@ initial size is also searched *inside* each step (8 samples of the dense output,
 golden-section minimization), so that a zero it only touches -- xdot^2 + ydot^2 at a
 velocity reversal, which a fixed step jumps over -- is not missed.
 
-Dense output of every method in one form (``dense_eval``): with ``th1 = 1 - theta``,
+Dense output of every method in one form (``dense_eval``): with ``th1 = 1 - theta``::
 
     y(theta) = y0 + theta (F0 + th1 (F1 + theta (F2 + th1 (F3 + ...))))
 

@@ -5,7 +5,7 @@ Perlmutter (2006), with the midpoint discrete Lagrangian
 ``L_d(q0, q1) = h L(t + h/2, (q0 + q1)/2, (q1 - q0)/h)``, the discrete constraint
 imposed at the midpoint, ``f(t + h/2, (q0 + q1)/2, (q1 - q0)/h) = 0``, and the Chetaev
 reaction forces ``lambda_a df^a/dqdot`` evaluated there and split equally between the two
-ends.  One step maps (q_k, p_k) to (q_k+1, p_k+1):
+ends.  One step maps (q_k, p_k) to (q_k+1, p_k+1)::
 
     p_k   = -D1 L_d(q_k, q_k+1) - h/2 lambda.A      (n equations)
     0     = f(midpoint)                             (k equations)   -> q_k+1, lambda

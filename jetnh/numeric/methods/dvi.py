@@ -3,7 +3,7 @@ dynamics.
 
 The discrete vakonomic principle of Benito & Martin de Diego (2005): the discrete action
 of the extended Lagrangian ``L + lambda_a f^a`` with the constraints imposed in discrete
-form,
+form::
 
     S_d = sum_k [ L_d(q_k, q_k+1) + lambda_k+1/2 . phi_d(q_k, q_k+1) ],
     L_d  = h L(t + h/2, (q_k + q_k+1)/2, (q_k+1 - q_k)/h),
@@ -12,7 +12,7 @@ form,
 is stationary for variations of the interior q_k and of every multiplier
 lambda_k+1/2 (one per step, living at the midpoint).  With the discrete momenta
 ``p_k = -D1 (L_d + lambda phi_d)(q_k, q_k+1) = D2 (L_d + lambda phi_d)(q_k-1, q_k)`` one
-step maps (q_k, p_k) to (q_k+1, p_k+1, lambda_k+1/2):
+step maps (q_k, p_k) to (q_k+1, p_k+1, lambda_k+1/2)::
 
     p_k   = L_v - h/2 L_q + lambda.(f_v - h/2 f_q)       (n equations, at the midpoint)
     0     = f(midpoint)                                  (k equations)

@@ -5,7 +5,7 @@ The equations of a system with holonomic constraints use their derivatives D g =
 flow, while a numerical step changes it by its local error: unchecked, |g| grows like
 the global error.  After every accepted step the coordinates are moved orthogonally back
 onto g = 0 by the simplified Gauss-Newton iteration of Hairer, Lubich & Wanner,
-*Geometric Numerical Integration* (2006), section IV.4 (standard projection):
+*Geometric Numerical Integration* (2006), section IV.4 (standard projection)::
 
     q <- q - G^T (G G^T)^{-1} g(t, q),   G = dg/dq at the current q,
 

@@ -1,0 +1,77 @@
+"""Output files of the command line: checked before any work, written atomically.
+
+``check(path, kinds, what)`` refuses, before a derivation or a run starts, a path that is
+a directory, whose directory does not exist or cannot be written, whose suffix is not a
+format of ``kinds`` (``TABLE``, ``CSV``, ``TEXT`` or ``FIGURE``: matplotlib's formats)
+or whose format needs a library that is not installed (pyarrow for parquet, matplotlib
+for figures).  ``write(path, fill)`` calls ``fill(tmp)`` on a temporary file in the same
+directory, then renames it over ``path`` (``os.replace``): a failed write (a full disk)
+leaves the previous file as it was, removes the temporary one and names the path.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+from ..errors import JetnhError
+
+CSV = (".csv",)
+TABLE = (".csv", ".parquet")
+TEXT = None                     # any suffix
+FIGURE = "figure"
+
+
+def _figure_formats() -> tuple[str, ...]:
+    try:
+        from matplotlib.backend_bases import FigureCanvasBase
+    except ImportError:
+        raise JetnhError("plots need matplotlib: pip install matplotlib") from None
+    return tuple("." + k for k in FigureCanvasBase.get_supported_filetypes())
+
+
+def check(path, kinds, what: str) -> Path:
+    """``path`` as a Path after the checks above (a ``JetnhError`` naming it)."""
+    p = Path(path)
+    if p.is_dir():
+        raise JetnhError(f"cannot write {what} {p}: it is a directory; give a file name")
+    parent = p.resolve().parent
+    if not parent.is_dir():
+        raise JetnhError(f"cannot write {what} {p}: the directory {parent} does not exist")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise JetnhError(f"cannot write {what} {p}: the directory {parent} is not writable")
+    suffix = p.suffix.lower()
+    allowed = _figure_formats() if kinds == FIGURE else kinds
+    if allowed is not None and suffix not in allowed:
+        raise JetnhError(f"cannot write {what} {p}: {suffix or 'no suffix'} is not one of "
+                         f"the formats; give a {' or '.join(allowed)} path")
+    if suffix == ".parquet":
+        try:
+            import pyarrow  # noqa: F401
+        except ImportError:
+            raise JetnhError(f"cannot write {what} {p}: parquet needs pyarrow (pip install "
+                             "'jetnh[parquet]'), or write a .csv") from None
+    return p
+
+
+def write(path, fill) -> None:
+    """``fill(tmp)`` writes the content to the path ``tmp``; then it replaces ``path``."""
+    p = Path(path)
+    fd, tmp = tempfile.mkstemp(dir=p.resolve().parent, prefix=f".{p.name}.",
+                               suffix=f".partial{p.suffix}")
+    os.close(fd)
+    try:
+        fill(tmp)
+        with open(tmp, "rb+") as fh:
+            os.fsync(fh.fileno())
+        os.replace(tmp, p)
+    except BaseException as exc:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        if isinstance(exc, OSError):
+            raise JetnhError(f"cannot write {p}: {exc.strerror or exc}; the previous file, "
+                             "if any, is unchanged") from None
+        raise
