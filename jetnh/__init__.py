@@ -22,9 +22,9 @@ from .geometry.jet import JetSpace
 from .mechanics.sympy_bridge import from_mechanics
 from .mechanics.principles import PRINCIPLES, Principle
 from .mechanics.symmetries import LieSymmetry, NoetherSymmetry, is_noether, lie_symmetries, noether_symmetries
-# bound here, not in __getattr__: a later `import jetnh.sweep` would rebind the name to the
-# module; jetnh/sweep.py is light (pandas, Dask and numba are imported when it runs)
-from .sweep import sweep
+# jetnh.sweep is the module, and calling it runs a sweep (jetnh/sweep.py: a callable
+# module); it is light (pandas, Dask and numba are imported when it runs)
+from . import sweep
 
 __version__ = "0.1.0"
 

@@ -1127,13 +1127,13 @@ def _from_dict(data: dict, source: str) -> Model:
                                  f"{convention!r}")
 
     try:
-        # without the branch: System checks a branch by solving the constraints, which
+        # the branch unchecked: System checks a branch by solving the constraints, which
         # takes sympy unbounded time (a general quartic, two coupled quadratics); reading
         # never solves, the branch is checked when the equations are first derived
         system = System(J, L, cons, dependent,
                         defaults={sp.Symbol(k): v for k, v in params.items()}, name=name,
-                        forces=forces, dissipation=dissipation)
-        system._branch = branch
+                        forces=forces, dissipation=dissipation, branch=branch,
+                        check_branch=False)
     except JetnhError as exc:
         raise ModelFileError(f"{S}: {exc}") from None
     except RecursionError:
@@ -1272,8 +1272,8 @@ def dumps(system: System, initial=None, *, params=None, principle=None, conventi
                                                for f in system.given_constraints) + "]")
     if system.dissipation != 0:
         lines.append(f"dissipation = {_toml_string(expression_text(system.dissipation))}")
-    if system._branch is not None:
-        lines.append(f"branch = {int(system._branch)}")
+    if system.branch is not None:
+        lines.append(f"branch = {int(system.branch)}")
     if principle:
         lines.append(f"principle = {_toml_string(principles.canonical(principle))}")
     if convention:

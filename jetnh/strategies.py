@@ -44,6 +44,20 @@ Public names:
     ``(J, L, constraints, dependent)``.
 ``forces(J, max_depth=2)``
     generalized forces ``{coordinate: Q(t, q, qd)}`` on some of the coordinates.
+
+Values, for tests that need a system, a principle or a scene rather than its parts::
+
+    @given(jst.scenes(jst.systems(max_n=3, affine=True)))
+    def test_a_scene(scene):
+        ...
+
+``systems(min_n=2, max_n=4, affine=None, implicit=False, mass="diagonal", forced=False)``
+    ``System`` values from :func:`constrained_systems` (with :func:`forces` if ``forced``).
+``principles()``
+    the registered ``Principle`` values.
+``scenes(of=None, under=None, t_end=1.0, max_value=1.0)``
+    ``jetnh.Scene`` values: a system (of ``of``), a principle (of ``under``) and a state in
+    [-max_value, max_value] (dependent velocities from the constraints).
 """
 
 from __future__ import annotations
@@ -66,6 +80,9 @@ __all__ = [
     "nonlinear_constraints",
     "constrained_systems",
     "forces",
+    "systems",
+    "principles",
+    "scenes",
 ]
 
 
@@ -448,3 +465,53 @@ def forces(J: JetSpace, max_depth: int = 2) -> st.SearchStrategy[dict]:
 
     return st.lists(st.sampled_from(J.q), min_size=1, max_size=J.n, unique=True).flatmap(
         lambda qs: st.fixed_dictionaries({q: force(q) for q in qs}))
+
+
+# ---------------------------------------------------------------------------- values
+def systems(min_n: int = 2, max_n: int = 4, affine: bool | None = None,
+            implicit: bool | None = False, mass: str | None = "diagonal",
+            forced: bool = False) -> st.SearchStrategy:
+    """``System`` values: :func:`constrained_systems` (same arguments) built into a
+    System, with generalized forces from :func:`forces` when ``forced``."""
+    cases = constrained_systems(min_n, max_n, affine, implicit, mass)
+    if forced:
+        return cases.flatmap(lambda c: forces(c[0]).map(lambda f: _system(c, f)))
+    return cases.map(_system)
+
+
+def _system(case, forces_=None):
+    from .mechanics.system import System
+
+    J, L, constraints, dependent = case
+    return System(J, L, constraints, dependent, forces=forces_)
+
+
+def principles() -> st.SearchStrategy:
+    """The registered ``jetnh.Principle`` values (chetaev, vakonomic, holder, suslov)."""
+    from .mechanics.principles import REGISTRY
+
+    return st.sampled_from(REGISTRY)
+
+
+def scenes(of: st.SearchStrategy | None = None, under: st.SearchStrategy | None = None,
+           t_end: float = 1.0, max_value: float = 1.0) -> st.SearchStrategy:
+    """``jetnh.Scene`` values over (0, ``t_end``): a system drawn from ``of`` (default
+    :func:`systems`) under a principle drawn from ``under`` (default :func:`principles`),
+    with an initial state (coordinates, independent velocities, multipliers) drawn in
+    [-``max_value``, ``max_value``]; the dependent velocities follow from the
+    constraints.  Building one derives nothing: its kernels compile on first use."""
+    return _scenes(systems() if of is None else of, principles() if under is None else under,
+                   float(t_end), float(max_value))
+
+
+@st.composite
+def _scenes(draw, of, under, t_end, max_value):
+    from .numeric import Scene
+
+    system = draw(of)
+    principle = draw(under)
+    names = ([q.name for q in system.J.q] + [v.name for v in system.independent_velocities]
+             + [m.name for m in principle.multiplier_symbols(system)])
+    value = st.floats(-max_value, max_value, allow_nan=False, allow_infinity=False)
+    initial = {n: draw(value) for n in names}
+    return Scene(system, principle, initial=initial, t_span=(0.0, t_end))

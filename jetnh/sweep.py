@@ -48,13 +48,19 @@ its chunks elsewhere, and the DataFrame equals the local one to the last bit.
 (20 chunks when ``progress`` is given: ``progress(done, total)`` is called as chunks
 finish; ``progress=True`` shows a tqdm bar on stderr).
 ``df.attrs["grid"]`` names the grid columns.  Measured in ``benchmarks/sweep_dask.py``.
+
+``jetnh.sweep`` is this module, and calling it calls its function ``sweep``: so
+``jn.sweep(scene, grid)`` runs a sweep while ``import jetnh.sweep`` gives the module
+(``jetnh.sweep.plot_map``, ``jetnh.sweep.sweep``), as any module of the package.
 """
 
 from __future__ import annotations
 
 import math
 import operator
+import sys
 import time
+import types
 import warnings
 from collections.abc import Mapping
 
@@ -138,8 +144,9 @@ def sweep(scene, grid, client=None, *, times=None, outputs=None, chunk_size=None
         raise JetnhError(f"sweep has no option {', '.join(map(repr, bad))}; its options are "
                          f"{', '.join(known)} (output times: "
                          "times=[...])")
-    if not _in_ensemble(options.get("method", "dop853")):
-        if times is not None and not str(options["method"]).lower().startswith("scipy"):
+    method = _method(options.get("method", "dop853"))
+    if not method.ensemble:
+        if times is not None and not method.dense:
             raise JetnhError(f"times needs dense output, which {options['method']} does not "
                              "have; use dop853, dopri5, radau or scipy-<M>, or omit times for the "
                              "final values")
@@ -340,14 +347,12 @@ def _progress(progress, total):
     return show, bar.close
 
 
-def _in_ensemble(method) -> bool:
-    """Does ``method`` run as a compiled ensemble (else ``Scene.run`` point by point)?"""
+def _method(name):
+    """The ``numeric.methods.Method`` called ``name``: one that runs as a compiled
+    ensemble (``ensemble``), or else ``Scene.run`` point by point."""
     from .numeric import methods
 
-    try:
-        return methods.METHODS[methods.method(method)] != "discrete"
-    except JetnhError:  # scipy-<M>
-        return False
+    return methods.method(name)
 
 
 # ---------------------------------------------------------------------- one chunk
@@ -360,7 +365,7 @@ def _run_chunk(scene, Y0, P, run, outputs, parallel) -> dict:
 
     if isinstance(scene, CompiledScene):
         scene = scene.load()
-    if not _in_ensemble(run.get("method", "dop853")):
+    if not _method(run.get("method", "dop853")).ensemble:
         return _run_points(scene, Y0, P, run, outputs)
     ens = run_ensemble(scene, Y0, dict(zip(scene.runtime_params, P.T)), parallel=parallel,
                        on_error="record", **run)
@@ -625,3 +630,14 @@ def plot_map(df, x, y, value, path=None, *, log=False, title=None, mask_failed=T
     if path is not None:
         fig.savefig(path, dpi=120)
     return fig
+
+
+class _CallableModule(types.ModuleType):
+    """The class of this module: calling ``jetnh.sweep`` calls ``sweep`` (module
+    docstring)."""
+
+    def __call__(self, *args, **kwargs):
+        return sweep(*args, **kwargs)
+
+
+sys.modules[__name__].__class__ = _CallableModule

@@ -647,7 +647,7 @@ def test_reading_never_solves_the_constraints():
                      extra='dependent = ["q1"]\nbranch = 0\n')
     with deadline(5, "reading a quartic with a branch"):
         m = mf.loads(quartic)
-    assert m.system._branch == 0
+    assert m.system.branch == 0
 
 
 def test_file_node_and_call_budgets_are_shared():

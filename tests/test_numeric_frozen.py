@@ -11,7 +11,7 @@ import pytest
 from jetnh.errors import FrozenError, JetnhError
 from jetnh.models import appell_hamel
 from jetnh.numeric import Event, Scene
-from jetnh.numeric.frozen import Frozen, memo
+from jetnh.frozen import Frozen, memo
 
 
 @pytest.fixture(scope="module")

@@ -8,6 +8,8 @@ from hypothesis import given, strategies as st
 from hypothesis.errors import InvalidArgument
 
 import jetnh.strategies as jst
+import jetnh as jn
+import jetnh.mechanics.principles
 from jetnh import JetSpace
 
 
@@ -26,9 +28,19 @@ def _finite_real(expr, point):
 def test_public_names():
     assert set(jst.__all__) == {"jet_spaces", "jet_expressions", "polynomials", "lagrangians",
                                 "affine_constraints", "nonlinear_constraints",
-                                "constrained_systems", "forces"}
+                                "constrained_systems", "forces", "systems", "principles",
+                                "scenes"}
     for name in jst.__all__:
         assert getattr(jst, name).__doc__
+
+
+@given(jst.systems(max_n=3, forced=True), jst.principles())
+def test_systems_and_principles_are_values(system, principle):
+    assert isinstance(system, jn.System) and system.forces and system.k >= 1
+    assert principle in jn.mechanics.principles.REGISTRY
+    assert principle.multiplier_symbols(system) == (
+        () if principle.name == "chetaev" else tuple(
+            sp.Symbol(f"lambda_{q.name}") for q in system.dependent))
 
 
 @given(jst.jet_spaces(2, 5))

@@ -22,8 +22,14 @@ def assignments(items, what) -> dict:
     return out
 
 
-#: the fixed-step methods (and their aliases): --steps sets their number of steps
-FIXED_STEP = ("rk4", "dla", "lda", "nh-midpoint", "dvi", "vakonomic-midpoint")
+def method_of(name: str):
+    """The integration method called ``name`` (a ``jetnh.numeric.methods.Method``: --steps
+    sets the number of steps of the fixed-step ones, --times needs dense output)."""
+    from ..numeric.methods import method
+
+    return method(name)
+
+
 METHOD_HELP = ("dop853 (default), dopri5, rk4, radau (implicit, for stiff problems), dla "
                "(discrete Lagrange-d'Alembert, chetaev only), dvi (discrete vakonomic) or "
                "scipy-<RK45|DOP853|Radau|BDF|LSODA>")

@@ -40,7 +40,7 @@ import sympy as sp
 
 from . import accelerations, principles
 from ..algebra import dag, linalg
-from .system import System
+from ..frozen import Frozen
 from ..errors import JetnhWarning, PrincipleError
 from .principles import CONVENTIONS, Form, Principle
 from .principles import multiplier_symbols  # noqa: F401 -- kept importable from here
@@ -120,14 +120,14 @@ def null_basis(system: System) -> sp.Matrix:
 
 
 # ---------------------------------------------------------------------- results
-class Equations:
+class Equations(Frozen):
     """The equations of motion of one principle in one form; each expression means = 0.
 
     ``multipliers`` are the Lagrange multipliers that are states (vakonomic, Hoelder,
     Suslov); ``reactions`` are the algebraic multipliers of Chetaev's multiplier form.
     ``accelerations()`` solves the principle (not merely this form) for the
     accelerations and multiplier rates (``jetnh.mechanics.accelerations``).  Both the expressions
-    and the accelerations are computed on first use.
+    and the accelerations are computed on first use.  Immutable (``jetnh.frozen``).
     """
 
     def __init__(self, system, principle, form, convention, expressions, multipliers=(),
@@ -236,8 +236,6 @@ def derive(system: System, principle: str | Principle, form: str | None = None,
     return _composite(system, p, f, convention)
 
 
-System._derive = derive     # System.equations' late-binding point (see System.equations)
-
 
 def _unconstrained(system, p):
     return Equations(system, p.name, "euler-lagrange", "paper",
@@ -252,9 +250,7 @@ def _explicit(system: System) -> System:
         return system
     with warnings.catch_warnings():     # the user's system has warned already
         warnings.simplefilter("ignore", JetnhWarning)
-        return System(system.J, system.L, system.explicit_constraints, system.dependent,
-                      defaults=system.defaults, name=system.name, forces=system.forces,
-                      dissipation=system._dissipation_arg)
+        return system.replace(constraints=system.explicit_constraints, branch=None)
 
 
 def _variation(system, kind, explicit, lams=()):

@@ -117,10 +117,8 @@ def from_mechanics(lm, dependent=None, *, branch=None, defaults=None, name="") -
         lm = lm.eom_method
     if isinstance(lm, (KanesMethod, MechanicsSystem)):
         J, L, cons, forces, speeds = kane_bridge.read(lm)
-        system = System(J, L, cons, dependent=dependent, branch=branch, defaults=defaults,
-                        name=name, forces=forces)
-        system.speeds = speeds
-        return system
+        return System(J, L, cons, dependent=dependent, branch=branch, defaults=defaults,
+                      name=name, forces=forces, speeds=speeds)
     if not isinstance(lm, LagrangesMethod):
         raise JetnhError(
             f"from_mechanics takes a sympy.physics.mechanics LagrangesMethod, KanesMethod or "

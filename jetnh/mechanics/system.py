@@ -22,7 +22,8 @@ import sympy as sp
 from sympy.core.function import AppliedUndef
 
 from ..algebra import dag, linalg
-from . import inputs
+from ..frozen import Frozen, FrozenDict
+from . import inputs, principles
 from ..errors import ConstraintError, JetnhWarning, JetSpaceError, LagrangianError
 from ..geometry.jet import JetSpace, key_name, sympy_object
 from .principles import NAMED, PRINCIPLES  # noqa: F401 -- PRINCIPLES kept importable here
@@ -50,7 +51,7 @@ class Classification:
 MAX_ROOTS = 2
 
 
-class System:
+class System(Frozen):
     """``System(J, L, constraints, dependent)``: a Lagrangian with constraints f^a = 0.
 
     Parameters
@@ -99,6 +100,11 @@ class System:
     parameters named like jetnh's multipliers (lambda_x, nu_x, eta_x) are refused.
     Strings are never parsed.  Every refusal is a JetnhError saying what to write instead.
 
+    A System is a value: immutable (``FrozenError`` on assignment; ``forces`` and
+    ``defaults`` are read-only mappings), equal to and hashed as any System built from the
+    same inputs.  ``check_branch=False`` defers the check of ``branch`` to the first use of
+    ``phi`` (a model file is read without solving its constraints).
+
     Examples
     --------
     A knife edge: it moves only along its heading theta.
@@ -114,12 +120,9 @@ class System:
     False
     """
 
-    #: for a System read from a Kane model (``from_mechanics``): the map between its
-    #: generalized speeds and the velocities (``jetnh.mechanics.kane_bridge.Speeds``)
-    speeds = None
-
     def __init__(self, J: JetSpace, L, constraints=(), dependent=None, branch: int | None = None,
-                 defaults=None, name: str = "", forces=None, dissipation=None):
+                 defaults=None, name: str = "", forces=None, dissipation=None, *,
+                 check_branch: bool = True, speeds=None):
         if not isinstance(J, JetSpace):
             raise JetSpaceError(f"the first argument must be a JetSpace, got {type(J).__name__}")
         self.J = J
@@ -135,7 +138,7 @@ class System:
         self.constraints = tuple(f if self._has_velocity(f) else J.D(f) for f in given)
         checked = ((q, self._first_order(e, f"the force on {q.name}"))
                    for q, e in inputs.force_items(forces, J))
-        self.forces = {q: e for q, e in checked if e != 0}
+        self.forces = FrozenDict({q: e for q, e in checked if e != 0})
         self.dissipation = (sp.S.Zero if dissipation is None
                             else self._first_order(dissipation, "the dissipation function"))
         self._check_dissipation()
@@ -149,9 +152,31 @@ class System:
         if not isinstance(name, (str, type(None))):
             raise ConstraintError(f"name must be a str, got {type(name).__name__}")
         self.name = name or ""
-        self.defaults = self._defaults({} if defaults is None else defaults)
-        if self._branch is not None:
+        self.defaults = FrozenDict(self._defaults({} if defaults is None else defaults))
+        #: for a System read from a Kane model (``from_mechanics``): the map between its
+        #: generalized speeds and the velocities (``jetnh.mechanics.kane_bridge.Speeds``)
+        self.speeds = speeds
+        if self._branch is not None and check_branch:
             self.phi                                    # noqa: B018 -- check the branch now
+
+    # ------------------------------------------------------------------ value semantics
+    def _identity(self) -> tuple:
+        """The inputs that define the system (two systems with equal ones are equal)."""
+        return (self.J, self.L, self.given_constraints, frozenset(self.forces.items()),
+                self.dissipation, self.dependent, self._branch,
+                frozenset(self.defaults.items()), self.name)
+
+    def __eq__(self, other):
+        return self is other or (type(other) is type(self)
+                                 and self._identity() == other._identity())
+
+    def __hash__(self):
+        return hash(self._identity())
+
+    @property
+    def branch(self) -> int | None:
+        """The root of nonlinear constraints selected at construction (None: the only one)."""
+        return self._branch
 
     def _defaults(self, given) -> dict:
         if not isinstance(given, Mapping):
@@ -613,12 +638,24 @@ class System:
                               chaplygin=self.is_chaplygin(), regular=self.is_regular(),
                               rheonomic=rheo)
 
+    def replace(self, **changes) -> "System":
+        """A new System from this one's inputs with ``changes`` (any of ``J``, ``L``,
+        ``constraints``, ``dependent``, ``branch``, ``defaults``, ``name``, ``forces``,
+        ``dissipation``, ``speeds``), checked as any new System."""
+        inputs_ = dict(J=self.J, L=self.L, constraints=self.given_constraints,
+                       dependent=self.dependent, branch=self._branch, defaults=self.defaults,
+                       name=self.name, forces=self.forces,
+                       dissipation=self.dissipation if self.dissipation != 0 else None,
+                       speeds=self.speeds)
+        unknown = sorted(set(changes) - set(inputs_))
+        if unknown:
+            raise ConstraintError(f"System.replace has no input {', '.join(unknown)}; the "
+                                  f"inputs are {', '.join(inputs_)}")
+        return System(**{**inputs_, **changes})
+
     def with_split(self, dependent) -> "System":
         """The same system with another split."""
-        out = System(self.J, self.L, self.given_constraints, dependent, self._branch,
-                     self.defaults, self.name, self.forces, self._dissipation_arg)
-        out.speeds = self.speeds
-        return out
+        return self.replace(dependent=dependent)
 
     @property
     def given_constraints(self) -> tuple[sp.Expr, ...]:
@@ -627,16 +664,7 @@ class System:
         hol = dict(zip(self.holonomic_rows, self.holonomic))
         return tuple(hol.get(i, f) for i, f in enumerate(self.constraints))
 
-    @property
-    def _dissipation_arg(self):
-        return self.dissipation if self.dissipation != 0 else None
-
     # ------------------------------------------------------------------ equations
-    #: the derivation behind ``equations``: ``jetnh.mechanics.equations.derive``, bound when that
-    #: module loads (``import jetnh`` loads it), so that the derivation depends on System
-    #: and System not on it
-    _derive = None
-
     def equations(self, principle: str, form: str | None = None, convention: str = "paper"):
         """The equations of motion under ``principle``, each expression meaning = 0.
 
@@ -655,9 +683,20 @@ class System:
         Returns
         -------
         Equations
-            ``.expressions``, ``.multipliers`` and ``.accelerations()``.
+            ``.expressions``, ``.multipliers`` and ``.accelerations()``; derived once per
+            principle, form and convention and kept.
         """
-        return self._derive(principle, form=form, convention=convention)
+        from .equations import derive
+
+        key = ("equations", principles.canonical(principle), form, convention)
+        try:
+            found = self._memo.get(key)
+        except TypeError:           # an unhashable form or convention: derive names it
+            return derive(self, principle, form=form, convention=convention)
+        if found is None:
+            found = self._memo[key] = derive(self, principle, form=form,
+                                             convention=convention)
+        return found
 
     def _repr_html_(self):
         from ..display import system_html

@@ -25,7 +25,6 @@ from dataclasses import dataclass, field
 import sympy as sp
 
 from ..algebra import dag, linalg
-from .system import System
 from ..errors import PrincipleError
 from .principles import named
 

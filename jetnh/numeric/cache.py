@@ -669,12 +669,6 @@ class CompiledKernels:
             self.jac = calls.Kernel(self.jac_fp, (lay.n_rhs, n_p, lay.n_rhs),
                                     jacobian=True)
 
-    def integrator(self):
-        """The compiled loop of the explicit Runge-Kutta methods (shared by every scene
-        and method), as its machine-code entry point (no type dispatch per call:
-        ``methods._common.entry_point``)."""
-        return _entry_point("loop")
-
     def implicit(self):
         """The compiled loop of radau (``methods.radau``), as its entry point."""
         return _entry_point("radau")

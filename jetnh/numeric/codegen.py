@@ -452,7 +452,7 @@ def symbolic_key(system, principle, params, runtime_params=(), integrals=None, f
         repr(tuple(sp.srepr(g) for g in system.holonomic)),
         repr(tuple((q.name, sp.srepr(e)) for q, e in system.forces.items())),
         sp.srepr(system.dissipation),
-        repr(tuple(s.name for s in system.dependent)), repr(system._branch),
+        repr(tuple(s.name for s in system.dependent)), repr(system.branch),
         principle, repr(form), convention,
         repr(sorted((k, float(v).hex()) for k, v in params.items())),
         repr(tuple(runtime_params)),

@@ -50,7 +50,7 @@ import numpy as np
 from ..errors import ConnectError, JetnhError
 from ..mechanics import principles
 from ..mechanics.system import System
-from . import arguments, codegen
+from . import arguments, codegen, methods
 from .trajectory import Trajectory
 
 #: the principles whose multipliers are unknowns of the two-point problem
@@ -105,7 +105,8 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     if t1 == t0:
         raise JetnhError(f"t_span {t_span!r} has zero length: no motion joins two "
                          "configurations in no time; give t1 != t0")
-    if str(method).lower() not in ("dop853", "dopri5"):
+    m = methods.method(method)
+    if m.solver is not methods.Solver.EXPLICIT or not m.dense:     # dop853, dopri5
         raise JetnhError(f"connect integrates with 'dop853' or 'dopri5' (dense output), "
                          f"not {method!r}")
     tol = arguments.positive(tol, "tol")

@@ -24,7 +24,7 @@ import numpy as np
 
 from ..errors import ArgumentError, IntegrationError, JetnhError
 from . import arguments
-from .methods import explicit_solver
+from .methods import explicit_solver, method
 from .methods._common import AT_T_EVAL, EVERY_STEP
 from .methods.loop import Control, Watch
 
@@ -86,7 +86,7 @@ def evaluate(traj, times, full=False) -> np.ndarray:
         keep = ~ends
     else:
         keep = np.ones(tau.shape[0], dtype=bool)
-    step = _hermite_steps if traj.method == "rk4" else _retaken_steps
+    step = _hermite_steps if method(traj.method).fixed_step else _retaken_steps
     idx = np.nonzero(keep)[0]
     if idx.size:
         order = idx[np.lexsort((sgn * tau[idx], k[idx]))]

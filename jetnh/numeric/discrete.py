@@ -21,23 +21,24 @@ from .methods._common import ENDPOINTS, EVENT, EVERY_STEP, NONFINITE, NOT_CONVER
 from .trajectory import Trajectory
 
 
-def kernels(scene, kind):
+def kernels(scene, principle):
+    """The kernels of the discrete step of ``principle`` (chetaev: dla, vakonomic: dvi)."""
     compiled_params = {k: v for k, v in scene.params.items()
                        if k not in scene.runtime_params}
-    principle = "chetaev" if kind == "dla" else "vakonomic"
     key = codegen.symbolic_key(scene.system, principle, compiled_params,
-                               scene.runtime_params, scene.integrals, extra=kind)
+                               scene.runtime_params, scene.integrals, extra="discrete")
     return _cache.load(key, lambda: codegen.generate_dla(
         scene.system, compiled_params, scene.runtime_params, key=key, kind=principle,
         integrals=scene.integrals), persistent=scene.cache)
 
 
-def run_dla(scene, t0, t1, y_init, default_y0, p, n_steps, save, tol, max_iter,
+def run_dla(scene, method, t0, t1, y_init, default_y0, p, n_steps, save, tol, max_iter,
             projection, singular_tol, timeout, ce=None):
-    """A dla run (``methods.dla``); ``ce``: compiled user events (``node_events``)."""
+    """A dla run (``methods.dla``, ``method`` its ``Method``); ``ce``: compiled user
+    events (``node_events``)."""
     from .methods import dla
 
-    if principles.get(scene.principle).integrator(scene.convention) != "dla":
+    if principles.get(scene.principle).integrator(scene.convention) != method.name:
         raise PrincipleError(
             "the discrete Lagrange-d'Alembert integrator discretizes Chetaev "
             f"(Lagrange-d'Alembert) dynamics, not {scene.principle}; use dop853"
@@ -60,17 +61,18 @@ def run_dla(scene, t0, t1, y_init, default_y0, p, n_steps, save, tol, max_iter,
         kern.sing, uev, t0, t1, q0, v0, p, n_steps, scene.system.k, tol, max_iter, mode,
         projection, n_sing, float(singular_tol or 0.0), len(kern.layout.integrals),
         constrained, cols, ev_dir, ev_max, halt), halt, timeout)
-    return trajectory(scene, "dla" + ("+projection" if projection else ""), kern, out,
+    return trajectory(scene, method.name + ("+projection" if projection else ""), kern, out,
                       time.perf_counter() - tic, p, t0, t1, n_steps, singular_tol, timeout,
                       ce, save)
 
 
-def run_dvi(scene, t0, t1, y_init, default_y0, p, n_steps, save, tol, max_iter,
+def run_dvi(scene, method, t0, t1, y_init, default_y0, p, n_steps, save, tol, max_iter,
             singular_tol, timeout, ce=None):
-    """A dvi run (``methods.dvi``); ``ce``: compiled user events (``node_events``)."""
+    """A dvi run (``methods.dvi``, ``method`` its ``Method``); ``ce``: compiled user
+    events (``node_events``)."""
     from .methods import dvi
 
-    if principles.get(scene.principle).integrator(scene.convention) != "dvi":
+    if principles.get(scene.principle).integrator(scene.convention) != method.name:
         raise PrincipleError(
             "the discrete vakonomic integrator discretizes vakonomic dynamics (and "
             "Hoelder's in the paper's convention, which has the same equations), not "
@@ -97,7 +99,7 @@ def run_dvi(scene, t0, t1, y_init, default_y0, p, n_steps, save, tol, max_iter,
         t1, q0, v0, lam0, p, n_steps, tol, max_iter, mode, n_sing,
         float(singular_tol or 0.0), len(kern.layout.integrals), cols, ev_dir, ev_max, halt),
         halt, timeout)
-    return trajectory(scene, "dvi", kern, out, time.perf_counter() - tic, p, t0,
+    return trajectory(scene, method.name, kern, out, time.perf_counter() - tic, p, t0,
                       t1, n_steps, singular_tol, timeout, ce, save)
 
 
@@ -140,7 +142,7 @@ def trajectory(scene, method, kern, out, wall, p, t0, t1, n_steps, singular_tol,
     status = int(status)
     J = scene.system.J
     n, k = J.n, scene.system.k
-    k_lam = k if method == "dvi" else 0
+    k_lam = len(scene.state_names) - (2 * n - k)          # dvi: the multipliers
     name = method.split("+")[0]
     singularity = None
     if status == SINGULAR:

@@ -51,6 +51,7 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import ConstraintError, IntegrationError, JetnhError, JetnhWarning
+from ..frozen import Frozen, readonly
 from ..mechanics import holonomic
 from . import arguments, atlas, diagnosis, interrupt
 from .events import as_events
@@ -59,7 +60,6 @@ from .methods import STATUS_TEXT
 from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, FINISHED, NONFINITE, SINGULAR,
                               entry_point)
 from .methods.loop import Control, watch_of
-from .frozen import readonly
 from .options import fields_of, options
 
 PARALLEL = ("prange", "threads", "serial")
@@ -179,11 +179,13 @@ def _check_dependent(scene, Y0, P, given, project):
                 "it (it follows from the constraints) or pass project=True")
 
 
-class Ensemble:
-    """The result of ``run_ensemble``: arrays over runs, with named access."""
+class Ensemble(Frozen):
+    """The result of ``run_ensemble``: arrays over runs, with named access; immutable
+    (``jetnh.frozen``; its arrays are read-only)."""
 
     def __init__(self, scene, method, t, y, info, t_last, y_last, ev_n, ev_t, Y0, P,
-                 event_names, wall_time, parallel, workers, save, singular_tol):
+                 event_names, wall_time, parallel, workers, save, singular_tol, *,
+                 switching=False, switches=None, pieces=None, reasons=None):
         self.scene = scene
         self.method = method
         self.t = t                      # [n_runs, n_times]
@@ -199,8 +201,8 @@ class Ensemble:
         self.event_names = tuple(event_names)
         self.event_counts = ev_n        # [n_runs, n_events]
         self.event_first = np.where(ev_n > 0, ev_t, np.nan)
-        self.initial = Y0
-        self.params = P                 # [n_runs, n_runtime_params]
+        self.initial = Y0.view()        # read-only views: the caller's arrays stay as given
+        self.params = P.view()          # [n_runs, n_runtime_params]
         self.param_names = scene.runtime_params
         self.wall_time = wall_time
         self.parallel = parallel
@@ -210,9 +212,9 @@ class Ensemble:
         self.layout = scene.kernels.layout
         #: runs that changed split (``numeric.atlas``): run -> [{"t", "from", "to"}, ...];
         #: ``switching``: whether the runs watched their chart's edge
-        self.switches = {}
-        self.switching = False
-        self._pieces, self._reasons = {}, {}
+        self.switches = switches or {}
+        self.switching = switching
+        self._pieces, self._reasons = pieces or {}, reasons or {}
 
     # ------------------------------------------------------------------ shape and access
     @property
@@ -420,18 +422,20 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
         raise JetnhError(f"singular_tol must be in [0, 1), not {singular_tol}")
     budget = arguments.count(max_steps, "max_steps")
     limit = arguments.timeout(timeout)
-    method = methods.method(method)
-    if methods.METHODS[method] == "discrete":
-        runnable = [m for m, k in methods.METHODS.items() if k != "discrete"]
+    m = methods.method(method)
+    if not m.ensemble:
+        runnable = [x.name for x in methods.METHODS.values() if x.ensemble]
         raise JetnhError(f"ensembles run the Runge-Kutta methods {', '.join(runnable)}, not "
-                         f"{method!r}")
+                         f"{m.name!r}")
+    method = m.name
     scene, Y0, P = resolve(scene, initial, params, project)
     n_runs, n = Y0.shape
     t0, t1 = scene.t_span
     if t_eval is not None:
         te = arguments.times(t_eval, t0, t1)
-        if not methods.adaptive(method):
-            raise JetnhError("t_eval needs dense output: use dop853, dopri5 or radau (rk4 "
+        if not m.dense:
+            dense = [x.name for x in methods.METHODS.values() if x.ensemble and x.dense]
+            raise JetnhError(f"t_eval needs dense output: use {', '.join(dense)} ({m.name} "
                              "gives save='final')")
         mode, n_times = AT_T_EVAL, te.shape[0]
     elif save == "final":
@@ -458,20 +462,20 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
     EV_N = np.zeros((n_runs, max(n_ev, 1)), dtype=np.int64)
     EV_T = np.full((n_runs, max(n_ev, 1)), np.nan)
     rtol, atol_v = arguments.tolerances(rtol, atol, n)
-    if method != "radau" and (newton_tol is not None or max_newton is not None):
+    if not m.newton and (newton_tol is not None or max_newton is not None):
         raise JetnhError(f"newton_tol and max_newton are options of radau, not {method}")
-    if methods.adaptive(method):
+    if m.adaptive:
         if n_steps is not None or h is not None:
             raise JetnhError(f"n_steps and h are options of fixed-step methods, not {method}")
         ctl = Control(rtol, atol_v, *arguments.step_limits(first_step, max_step), budget, 0,
                       *scene._projection)
     else:
         ctl = Control(rtol, atol_v, 0.0, np.inf, budget,
-                      arguments.fixed_steps(n_steps, h, t0, t1, "rk4", budget),
+                      arguments.fixed_steps(n_steps, h, t0, t1, method, budget),
                       *scene._projection)
     halt = interrupt.flag()
     workers = int(workers or numba.config.NUMBA_NUM_THREADS)
-    if method == "radau":
+    if m.solver is methods.Solver.IMPLICIT:
         from .methods import radau
 
         head = (kern.rhs_fp, scene.jacobian.address, kern.sing_fp, uev, kern.hol_or_none,
@@ -485,7 +489,7 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
         newton = None
         head = (kern.rhs_fp, kern.sing_fp, uev, kern.hol_or_none, t0, t1)
         tail = (ctl, te, mode, watch, halt)
-        drive = entry_point(loop.ensemble_solver(methods.EXPLICIT[method],
+        drive = entry_point(loop.ensemble_solver(m.tableau,
                                                  parallel=parallel == "prange"))
 
     def block(drive, a, b):
@@ -550,9 +554,8 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
          0] = NONFINITE
     ens = Ensemble(scene, method, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N[:, :n_user],
                    EV_T[:, :n_user], Y0, P, ce.names[:n_user] if ce is not None else (), wall,
-                   parallel, workers if parallel != "serial" else 1, save, singular_tol)
-    ens._pieces, ens._reasons, ens.switches = pieces, reasons, switches
-    ens.switching = switching
+                   parallel, workers if parallel != "serial" else 1, save, singular_tol,
+                   switching=switching, switches=switches, pieces=pieces, reasons=reasons)
     _explain(ens, kern, singular == "stop", singular_tol, on_error)
     # what it hands out cannot be changed (private pieces feed compiled code)
     readonly({k: v for k, v in vars(ens).items() if not k.startswith("_")})

@@ -39,12 +39,13 @@ import numpy as np
 import sympy as sp
 
 from ..errors import JetnhError
+from ..frozen import Frozen
 from . import cache as _cache
 from . import codegen
 
 
-class Event:
-    """One event function with scipy's options: see the module docstring."""
+class Event(Frozen):
+    """One event function with scipy's options: see the module docstring.  Immutable."""
 
     def __init__(self, fun, terminal=False, direction=0, name=None):
         if isinstance(fun, Event):
@@ -109,7 +110,8 @@ def as_events(events) -> list[Event]:
     names = [e.name for e in out]
     for i, nm in enumerate(names):
         if nm in names[:i]:
-            out[i].name = f"{nm}#{i}"
+            e = out[i]              # renamed in a copy: the caller's Event stays as given
+            out[i] = Event(e.fun, e.terminal, e.direction, name=f"{nm}#{i}")
     return out
 
 

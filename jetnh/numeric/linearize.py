@@ -64,7 +64,7 @@ from ..errors import ConstraintError, JetnhError, LinearizationError, PrincipleE
 from ..mechanics import holonomic, principles
 from ..mechanics.system import System
 from . import arguments
-from .frozen import Frozen, FrozenDict
+from ..frozen import Frozen, FrozenDict
 
 #: eigenvalues of modulus below ZERO * max(1, |A|) count as zero
 ZERO = 1e-6

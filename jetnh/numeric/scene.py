@@ -56,10 +56,10 @@ from . import arguments, interrupt
 from . import cache as _cache
 from . import codegen
 from . import atlas, diagnosis, discrete, methods, scipy_backend
-from .methods import STATUS_TEXT
+from .methods import STATUS_TEXT, Solver
 from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, FINISHED, NONFINITE, SINGULAR, STOPPED
 from .methods.loop import Control, watch_of
-from .frozen import Frozen, FrozenDict, memo
+from ..frozen import Frozen, FrozenDict, memo
 from .options import fields_of, options
 from .trajectory import Trajectory
 
@@ -102,7 +102,7 @@ class Scene(Frozen):
     Notes
     -----
     A scene is immutable (``FrozenError`` on assignment; ``replace`` makes a changed
-    copy); what it compiles lazily is kept in its private memo (``numeric.frozen``).
+    copy); what it compiles lazily is kept in its private memo (``jetnh.frozen``).
     See the module docstring for the state and the methods.
     """
 
@@ -454,34 +454,29 @@ class Scene(Frozen):
         limit = arguments.timeout(timeout)
         n = y_init.shape[0]
         rtol, atol_v = arguments.tolerances(rtol, atol, n)
-        name = str(method)
-        key = name.lower()
+        m = methods.method(method, backend)
         sens = None
         if sensitivities:
             sens = codegen.sensitivity_kernels(self)
             y_init, rtol, atol_v = _augmented(sens.layout, y_init, rtol, atol_v,
-                                              bool(sensitivity_error), key)
+                                              bool(sensitivity_error), m)
         elif sensitivity_error is not True:
             raise JetnhError("sensitivity_error= is an option of runs with "
                              "sensitivities=True")
-        if backend == "scipy" or key.startswith("scipy"):
-            m = name.split("-", 1)[1] if "-" in name else name
-            m = {"dop853": "DOP853", "dopri5": "RK45", "rk45": "RK45"}.get(m.lower(), m)
-            self._unused(f"scipy-{m}", n_steps=n_steps, h=h, newton_tol=newton_tol,
+        if m.solver is Solver.SCIPY:
+            self._unused(m.name, n_steps=n_steps, h=h, newton_tol=newton_tol,
                          max_newton=max_newton, timeout=timeout,
                          projection=projection or None)
             first, mx = arguments.step_limits(first_step, np.inf if max_step is None
                                               else max_step)
             te = None if t_eval is None else arguments.times(t_eval, t0, t1)
-            return scipy_backend.run(self, m, rtol, atol_v, te, t0, t1, y_init, p,
+            return scipy_backend.run(self, m.scipy, rtol, atol_v, te, t0, t1, y_init, p,
                                      first or None, mx, events, singular, singular_tol,
                                      sensitivities=sens)
-        if backend not in (None, "numba"):
-            raise JetnhError(f"unknown backend {backend!r}; choose 'numba' or 'scipy'")
-        method = methods.method(name)
-        if methods.METHODS[method] == "discrete":
-            self._unused(key, t_eval=t_eval, first_step=first_step, max_step=max_step)
-            steps = arguments.fixed_steps(n_steps, h, t0, t1, key, budget)
+        method = m.name
+        if m.solver is Solver.DISCRETE:
+            self._unused(method, t_eval=t_eval, first_step=first_step, max_step=max_step)
+            steps = arguments.fixed_steps(n_steps, h, t0, t1, method, budget)
             arguments.output_rows(steps, 3 * self.system.J.n + 2 * self.system.k, save)
             tol = 1e-13 if newton_tol is None else arguments.positive(newton_tol,
                                                                      "newton_tol")
@@ -490,19 +485,20 @@ class Scene(Frozen):
             sing = singular_tol if singular == "stop" else None
             # the scene's initial dependent velocities hold for its own parameters only
             own = y0 is None and params is None
-            if method == "dvi":
+            if not m.projection:
                 if projection:
                     raise JetnhError("projection= is an option of the dla integrator")
-                return discrete.run_dvi(self, t0, t1, y_init, own, p, steps, save, tol, iters,
-                                        sing, limit, self.compile_events(events))
-            return discrete.run_dla(self, t0, t1, y_init, own, p, steps, save, tol, iters,
-                                    bool(projection), sing, limit, self.compile_events(events))
+                return discrete.run_dvi(self, m, t0, t1, y_init, own, p, steps, save, tol,
+                                        iters, sing, limit, self.compile_events(events))
+            return discrete.run_dla(self, m, t0, t1, y_init, own, p, steps, save, tol, iters,
+                                    bool(projection), sing, limit,
+                                    self.compile_events(events))
         if projection:
             raise JetnhError("projection= is an option of the dla integrator; the "
                              "Runge-Kutta methods follow the constraints to their tolerance")
-        if method != "radau":
-            self._unused(key, newton_tol=newton_tol, max_newton=max_newton)
-        if methods.adaptive(method):
+        if not m.newton:
+            self._unused(method, newton_tol=newton_tol, max_newton=max_newton)
+        if m.adaptive:
             self._unused(method, n_steps=n_steps, h=h)
             first, mx = arguments.step_limits(first_step, np.inf if max_step is None
                                               else max_step)
@@ -514,16 +510,16 @@ class Scene(Frozen):
             ctl = Control(rtol, atol_v, first, mx, budget, 0, *self._projection)
             # radau's steps depend on the steps before (Newton's starting values, the
             # Jacobian kept): no re-taking of one step (numeric.dense)
-            dense = None if method == "radau" else {"rtol": rtol, "atol": atol_v,
-                                                    "mode": mode}
+            dense = None if m.solver is Solver.IMPLICIT else {"rtol": rtol, "atol": atol_v,
+                                                              "mode": mode}
             if dense is not None and sens is not None:
                 dense["rhs"] = sens
         else:
             if t_eval is not None:
-                raise JetnhError("rk4 is a fixed-step method without dense output; pass "
+                raise JetnhError(f"{method} is a fixed-step method without dense output; pass "
                                  "n_steps or h and read every step, or use dop853 with t_eval")
             self._unused(method, first_step=first_step, max_step=max_step)
-            steps = arguments.fixed_steps(n_steps, h, t0, t1, "rk4", budget)
+            steps = arguments.fixed_steps(n_steps, h, t0, t1, method, budget)
             arguments.output_rows(steps, n, save)
             mode = EVERY_STEP if save == "steps" else ENDPOINTS
             te = np.zeros(0)
@@ -533,7 +529,7 @@ class Scene(Frozen):
                 dense["rhs"] = sens
         kern = self.kernels
         newton = None
-        if method == "radau":
+        if m.solver is Solver.IMPLICIT:
             from .methods import radau
 
             newton = radau.newton_options(newton_tol, max_newton)
@@ -558,7 +554,7 @@ class Scene(Frozen):
         uev = ce.uev if ce is not None else kern.sing_fp
         halt = interrupt.flag()
         rhs = kern.rhs_fp if sens is None else sens.rhs_fp
-        if method == "radau":
+        if methods.method(method).solver is Solver.IMPLICIT:
             solve = kern.implicit()
             jac = self.jacobian.address if sens is None else sens.jac_fp
             tic = time.perf_counter()
@@ -760,13 +756,13 @@ class Scene(Frozen):
     @property
     def dla_kernels(self):
         """Kernels of the discrete Lagrange-d'Alembert step (``codegen.generate_dla``)."""
-        return discrete.kernels(self, "dla")
+        return discrete.kernels(self, "chetaev")
 
     @property
     def dvi_kernels(self):
         """Kernels of the discrete vakonomic step (``codegen.generate_dla(kind=
         "vakonomic")``)."""
-        return discrete.kernels(self, "dvi")
+        return discrete.kernels(self, "vakonomic")
 
     def __repr__(self):
         return (f"Scene({self.principle}, states={list(self.state_names)}, "
@@ -779,9 +775,9 @@ def _augmented(layout, y0, rtol, atol, controlled, method):
     i; else S has none (atol = inf) and the state's tolerances are scaled by
     sqrt(n / N), so that the RMS error norm over all N entries equals the norm over the n
     states of a run without sensitivities (the same steps)."""
-    if method in ("dla", "dvi"):
+    if method.solver is Solver.DISCRETE:
         raise JetnhError(f"sensitivities=True is an option of the continuous methods "
-                         f"(dop853, dopri5, rk4, radau, scipy-*), not of {method}")
+                         f"(dop853, dopri5, rk4, radau, scipy-*), not of {method.name}")
     n, m = layout.n_state, layout.sensitivity_columns
     S0 = np.eye(n, m)
     y = np.ascontiguousarray(np.concatenate([y0, S0.ravel()]))

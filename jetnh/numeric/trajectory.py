@@ -18,7 +18,7 @@ import numpy as np
 
 from ..errors import ArgumentError, JetnhError
 from ..geometry.jet import key_name
-from .frozen import Frozen, FrozenDict, memo, readonly
+from ..frozen import Frozen, FrozenDict, memo, readonly
 
 
 @dataclass(frozen=True)
@@ -108,7 +108,7 @@ class Trajectory(Frozen):
     ``[n_runs, n_times, n_states]``.  ``to_dataframe()``, ``to_xarray()`` and ``plot()``
     give every series by name (``jetnh.numeric.export``; ``plot`` and ``plot_path`` draw
     smooth curves through the dense output); ``at(times)`` evaluates the run between its
-    rows, as a DataFrame (``jetnh.numeric.dense``).  Immutable (``numeric.frozen``); the
+    rows, as a DataFrame (``jetnh.numeric.dense``).  Immutable (``jetnh.frozen``); the
     derived columns are computed on first access.
     """
 

@@ -10,7 +10,7 @@ from ...errors import JetnhError
 from ..loading import load_model, with_split
 from .. import outputs
 from ..parser import EPILOG_MODEL, count, model_args, subcommand
-from ..running import FIXED_STEP, METHOD_HELP, assignments, scene_names
+from ..running import METHOD_HELP, assignments, method_of, scene_names
 from ..usage import UsageError
 
 
@@ -117,7 +117,7 @@ def run(args, progress) -> int:
                        "(cached for later runs)"):
         scene.compile()
     kw = {}
-    if method.lower() in FIXED_STEP:
+    if method_of(method).fixed_step:
         kw["n_steps"] = args.steps
     elif points >= 2:
         kw["t_eval"] = np.linspace(t0, float(t1), points)

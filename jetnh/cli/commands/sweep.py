@@ -7,7 +7,7 @@ from pathlib import Path
 from ..loading import load_model, with_split
 from .. import outputs
 from ..parser import EPILOG_MODEL, model_args, positive_count, seconds, subcommand
-from ..running import FIXED_STEP, METHOD_HELP, assignments, scene_names
+from ..running import METHOD_HELP, assignments, method_of, scene_names
 from ..usage import UsageError
 
 
@@ -124,7 +124,7 @@ def run(args, progress) -> int:
     if t1 is None:
         raise UsageError("give --t-end (the model file has no [simulation] t_end)")
     method = args.method or sim.get("method", "dop853")
-    if times is not None and method.lower() in FIXED_STEP:
+    if times is not None and not method_of(method).dense:
         raise UsageError(f"--times needs dense output, which {method} does not have; use "
                          "--method dop853, dopri5, radau or scipy-<M>, or omit --times (final "
                          "values)")
@@ -153,7 +153,7 @@ def run(args, progress) -> int:
                    connect_timeout=args.connect_timeout, method=method,
                    rtol=args.rtol if args.rtol is not None else sim.get("rtol", 1e-9),
                    atol=args.atol if args.atol is not None else sim.get("atol", 1e-12),
-                   **({"n_steps": args.steps} if method.lower() in FIXED_STEP else {}))
+                   **({"n_steps": args.steps} if method_of(method).fixed_step else {}))
     finally:
         close()
     failed = int((~df["success"]).sum())

@@ -25,49 +25,125 @@ as first-class functions and locate them on their dense output (``_events``); dl
 check the indicators of the constraints and the Lagrangian and the user events at their
 nodes (a terminal event ends the run at the node after it).
 
-``METHODS`` is the one table of method names (``method(name)`` reads a name or an alias).
+``METHODS`` is the one table of the methods, as ``Method`` values (with scipy's
+``solve_ivp`` methods as ``scipy-<M>``); ``method(name)`` reads a name or an alias.  Every
+question about a method (is it adaptive, has it dense output, does it run as an
+ensemble, how is it solved) is asked of its ``Method``, never of its name.
 """
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
 
 from ...errors import JetnhError
 from ._common import STATUS_TEXT, Status, entry_point  # noqa: F401
 from .dop853 import DOP853
 from .dopri5 import DOPRI5
+from .loop import ExplicitRK
 from .rk4 import RK4
 
-#: the explicit Runge-Kutta methods, as values
-EXPLICIT = {m.name: m for m in (DOP853, DOPRI5, RK4)}
-#: every method of the compiled backend: name -> kind
-METHODS = {"dop853": "explicit", "dopri5": "explicit", "rk4": "explicit",
-           "radau": "implicit", "dla": "discrete", "dvi": "discrete"}
-ALIASES = {"rk45": "dopri5", "dp5": "dopri5", "radau5": "radau", "lda": "dla",
-           "nh-midpoint": "dla", "vakonomic-midpoint": "dvi"}
+
+class Solver(enum.Enum):
+    """How a method is solved."""
+
+    EXPLICIT = "the compiled explicit Runge-Kutta loop (loop.py)"
+    IMPLICIT = "the compiled Radau IIA loop with simplified Newton (radau.py)"
+    DISCRETE = "a discrete variational step solved by Newton (dla.py, dvi.py)"
+    SCIPY = "scipy's solve_ivp on the compiled right-hand side"
+
+
+@dataclass(frozen=True)
+class Method:
+    """An integration method: its ``name`` (as trajectories report it), ``aliases``,
+    ``order`` (None: variable), whether it controls its step (``adaptive``; else
+    ``fixed_step``: ``n_steps`` or ``h``), has ``dense`` output (``t_eval``), runs as a
+    compiled batched ``ensemble``, takes ``newton`` options and dla's ``projection``, and
+    how it is solved (``solver``; ``tableau`` of an explicit method, ``scipy`` the name of
+    solve_ivp's method)."""
+
+    name: str
+    solver: Solver
+    order: int | None
+    adaptive: bool
+    dense: bool
+    ensemble: bool
+    aliases: tuple = ()
+    newton: bool = False
+    projection: bool = False
+    tableau: ExplicitRK | None = None
+    scipy: str = ""
+
+    @property
+    def fixed_step(self) -> bool:
+        return not self.adaptive
+
+
+def _explicit(rk: ExplicitRK, aliases=()) -> Method:
+    return Method(rk.name, Solver.EXPLICIT, rk.order, rk.adaptive, dense=rk.adaptive,
+                  ensemble=True, aliases=aliases, tableau=rk)
+
+
+def _scipy(name: str, order, aliases=()) -> Method:
+    return Method(f"scipy-{name}", Solver.SCIPY, order, adaptive=True, dense=True,
+                  ensemble=False, aliases=aliases, scipy=name)
+
+
+#: every method, by name (radau's Newton options: ``radau.newton_options``; dla's and
+#: dvi's: ``Scene.run``)
+METHODS = {m.name: m for m in (
+    _explicit(DOP853),
+    _explicit(DOPRI5, aliases=("rk45", "dp5")),
+    _explicit(RK4),
+    Method("radau", Solver.IMPLICIT, 5, adaptive=True, dense=True, ensemble=True,
+           aliases=("radau5",), newton=True),
+    Method("dla", Solver.DISCRETE, 2, adaptive=False, dense=False, ensemble=False,
+           aliases=("lda", "nh-midpoint"), newton=True, projection=True),
+    Method("dvi", Solver.DISCRETE, 2, adaptive=False, dense=False, ensemble=False,
+           aliases=("vakonomic-midpoint",), newton=True),
+    _scipy("RK45", 5, aliases=("scipy-dopri5",)),
+    _scipy("RK23", 3),
+    _scipy("DOP853", 8),
+    _scipy("Radau", 5),
+    _scipy("BDF", None),
+    _scipy("LSODA", None))}
 #: the methods of scipy's solve_ivp (``method="scipy-<name>"``)
-SCIPY_METHODS = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
+SCIPY_METHODS = tuple(m.scipy for m in METHODS.values() if m.solver is Solver.SCIPY)
+_BY_NAME = {n.lower(): m for m in METHODS.values() for n in (m.name, *m.aliases)}
 
 
-def method(name) -> str:
-    """The method called ``name`` (case-insensitive, aliases accepted)."""
+def method(name, backend=None) -> Method:
+    """The method called ``name`` (case-insensitive, aliases accepted; a ``Method`` is
+    returned as it is); ``backend="scipy"``: scipy's method of that name (``"DOP853"``,
+    ``"dopri5"``: ``scipy-RK45``)."""
+    if isinstance(name, Method):
+        return name
     key = str(name).lower()
-    key = ALIASES.get(key, key)
-    if key not in METHODS:
-        raise JetnhError(f"unknown method {name!r}; choose one of {', '.join(METHODS)} or "
+    if backend not in (None, "numba", "scipy"):
+        raise JetnhError(f"unknown backend {backend!r}; choose 'numba' or 'scipy'")
+    if backend == "scipy" and not key.startswith("scipy-"):
+        key = "scipy-" + key
+    found = _BY_NAME.get(key)
+    if found is None and key.startswith("scipy"):
+        raise JetnhError(f"unknown scipy method {str(name).split('-', 1)[-1]!r}; choose one "
+                         f"of {SCIPY_METHODS}")
+    if found is None:
+        compiled = [m.name for m in METHODS.values() if m.solver is not Solver.SCIPY]
+        raise JetnhError(f"unknown method {name!r}; choose one of {', '.join(compiled)} or "
                          f"scipy-<{'|'.join(SCIPY_METHODS)}>")
-    return key
+    return found
 
 
-def explicit_solver(name: str):
-    """The compiled loop of the explicit method ``name`` as its machine-code entry point
-    (``loop.solver``; no type dispatch per call: ``_common.entry_point``)."""
-    if name not in _ENTRIES:
+def explicit_solver(m):
+    """The compiled loop of the explicit method ``m`` (a ``Method`` or its name) as its
+    machine-code entry point (``loop.solver``; no type dispatch per call:
+    ``_common.entry_point``)."""
+    m = method(m)
+    if m.name not in _ENTRIES:
         from .loop import solver
 
-        _ENTRIES[name] = entry_point(solver(EXPLICIT[name]))
-    return _ENTRIES[name]
+        _ENTRIES[m.name] = entry_point(solver(m.tableau))
+    return _ENTRIES[m.name]
 
 
 _ENTRIES: dict = {}
-
-
-def adaptive(name: str) -> bool:
-    """Whether the method ``name`` controls its step size (and has dense output)."""
-    return name == "radau" or (name in EXPLICIT and EXPLICIT[name].adaptive)

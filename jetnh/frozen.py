@@ -1,8 +1,9 @@
-"""Immutable objects (``Scene``, ``Trajectory``): attributes are set in ``__init__`` only.
-Their mappings (``scene.params``, ``scene.initial``) are ``FrozenDict``: read as dicts,
-written never; every numpy array of a public attribute or computed value (``traj.t``,
-``traj["x"]``, ``scene.y0``) is read-only (``readonly``); private ones (``_p``) feed
-compiled code, which takes writable arrays, and are never handed out.
+"""Immutable objects (``System``, ``Equations``, ``Scene``, ``Trajectory``, ``Event``,
+``Ensemble``): attributes are set in ``__init__`` only.  Their mappings (``system.forces``,
+``scene.params``, ``scene.initial``) are ``FrozenDict``: read as dicts, written never;
+every numpy array of a public attribute or computed value (``traj.t``, ``traj["x"]``,
+``scene.y0``) is read-only (``readonly``); private ones (``_p``) feed compiled code,
+which takes writable arrays, and are never handed out.
 
 ``Frozen.__init_subclass__`` wraps the subclass's ``__init__``: once it returns, setting
 or deleting an attribute raises ``FrozenError``.  Values computed on first use (compiled
@@ -17,7 +18,7 @@ import functools
 
 import numpy as np
 
-from ..errors import FrozenError
+from .errors import FrozenError
 
 
 def readonly(value):
@@ -60,7 +61,7 @@ class Frozen:
 
     def _refuse(self, name):
         raise FrozenError(f"{type(self).__name__} is immutable: cannot change {name!r} after "
-                          "construction; make a new one (Scene.replace(...) for a scene)")
+                          "construction; make a new one (Scene.replace, System.replace)")
 
     def _set(self, **values):
         """Set attributes in ``__init__``, in one go (as many assignments, without a call of
@@ -110,9 +111,10 @@ class FrozenDict(dict):
     __slots__ = ()
 
     def _refuse(self, *args, **kwargs):
-        raise FrozenError("this mapping is read-only (a scene's params and initial values "
-                          "are fixed at construction); make a new scene with "
-                          "Scene.replace(params=..., initial=...)")
+        raise FrozenError("this mapping is read-only (fixed at construction, as a system's "
+                          "forces and defaults and a scene's params and initial values); "
+                          "make a new one: a new System, or Scene.replace(params=..., "
+                          "initial=...)")
 
     __setitem__ = __delitem__ = __ior__ = _refuse
     clear = pop = popitem = setdefault = update = _refuse
