@@ -474,6 +474,15 @@ class System(Frozen):
         else:
             reason = ""
         sols = [s for s in sols if all(v in s for v in vel)]
+        special = {type(a).__name__ for s in sols for e in s.values()
+                   for a in sp.preorder_traversal(e)
+                   if isinstance(a, (sp.LambertW, sp.RootOf, sp.Piecewise))}
+        if special:
+            raise ConstraintError(
+                "the dependent velocities solve the constraints only through "
+                f"{', '.join(sorted(special))}, which jetnh does not compile; write the "
+                "constraints in explicit form qdot^alpha - phi^alpha(t, q, qdot^mu), or choose "
+                "another dependent coordinate")
         if not sols:
             raise ConstraintError(
                 "the dependent velocities cannot be isolated from the constraints" + reason +
@@ -497,8 +506,11 @@ class System(Frozen):
     def _check_root_budget(self, vel):
         """The budget of the nonlinear solve, checked before it starts: every constraint
         polynomial in the dependent velocities, of degree <= 2, and at most
-        ``MAX_ROOTS`` solutions by Bezout's bound (two coupled quadratics, or a quartic,
+        ``MAX_ROOTS`` solutions by Bezout's bound (one transcendental equation in one
+        dependent velocity is solved and its solutions checked instead) (two coupled quadratics, or a quartic,
         have closed forms too large to generate code from, when sympy finds them)."""
+        if len(vel) == 1 and not self.constraints[0].is_polynomial(*vel):
+            return          # one equation in one unknown: sympy's solve, checked after
         degrees = []
         for i, f in enumerate(self.constraints):
             if not f.is_polynomial(*vel):
