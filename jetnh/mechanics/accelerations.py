@@ -51,7 +51,9 @@ from ..algebra import linalg, zero
 from ..errors import LagrangianError
 
 KAPPA = ("none", "multipliers", "momenta")
-_PARTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+#: id(system) -> (weak reference, {(F, hessian): parts}): by identity, never by equality
+#: (equal systems built apart must not share nodes: comparing them walks trees)
+_PARTS: dict = {}
 
 
 class EulerParts(NamedTuple):
@@ -117,7 +119,14 @@ def _parts(F, t, q, qd, hessian, zero, add):
 
 def _cached_parts(system, F, hessian=True) -> EulerParts:
     """``euler_parts`` of the system's Lagrangian or constraints, once per system."""
-    cache = _PARTS.setdefault(system, {})
+    key = id(system)
+    entry = _PARTS.get(key)
+    if entry is None or entry[0]() is not system:
+        def forget(ref, key=key):
+            if _PARTS.get(key, (None,))[0] is ref:
+                del _PARTS[key]
+        entry = _PARTS[key] = (weakref.ref(system, forget), {})
+    cache = entry[1]
     if (F, hessian) not in cache:
         cache[F, hessian] = euler_parts(system.J, F, hessian)
     return cache[F, hessian]
