@@ -42,9 +42,9 @@ class ModelInfo:
             raise ModelFileError(f"model {self.name!r} has no option {', '.join(unknown)}; "
                                  f"its options: {have}")
         for k, v in options.items():
-            if isinstance(v, bool) or not isinstance(v, int) or not 1 <= v <= MAX_OPTION:
+            if isinstance(v, bool) or not isinstance(v, int) or not 0 <= v <= MAX_OPTION:
                 raise ModelFileError(
-                    f"model {self.name!r}: option {k} must be an integer from 1 to "
+                    f"model {self.name!r}: option {k} must be an integer from 0 to "
                     f"{MAX_OPTION} (the size budget), not {v!r}")
         return options
 
