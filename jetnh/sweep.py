@@ -86,7 +86,7 @@ def sweep(scene, grid, client=None, *, times=None, outputs=None, chunk_size=None
 
     Parameters
     ----------
-    scene : Scene
+    scene : jetnh.numeric.scene.Scene
         The scene to run; what the grid does not set comes from it.
     grid : dict, list or DataFrame
         A mapping name or Symbol -> values (the Cartesian product, the last key varying
