@@ -88,6 +88,12 @@ class System(Frozen):
     dissipation : sympy expression, optional
         A Rayleigh function D(t, q, qdot) adding Q_s = -dD/dqdot^s.  Every principle's
         equations carry Q_s beside [L]_s.
+    check_branch : bool, default True
+        False defers the check of ``branch`` to the first use of ``phi`` (a model file
+        is read without solving its constraints).
+    speeds : jetnh.mechanics.kane_bridge.Speeds, optional
+        The map between a Kane model's generalized speeds and the velocities
+        (``from_mechanics`` sets it; ``System.speeds``).
 
     Notes
     -----
@@ -102,8 +108,7 @@ class System(Frozen):
 
     A System is a value: immutable (``FrozenError`` on assignment; ``forces`` and
     ``defaults`` are read-only mappings), equal to and hashed as any System built from the
-    same inputs.  ``check_branch=False`` defers the check of ``branch`` to the first use of
-    ``phi`` (a model file is read without solving its constraints).
+    same inputs.
 
     Examples
     --------
