@@ -552,11 +552,12 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
     INFO[done & ~(np.all(np.isfinite(Y_LAST), axis=1)
                   & np.all(np.isfinite(OUT_Y) | np.isnan(OUT_T)[:, :, None], axis=(1, 2))),
          0] = NONFINITE
+    _explain(scene, method, kern, singular == "stop", singular_tol, on_error, INFO, T_LAST,
+             Y_LAST, P, Y0)
     ens = Ensemble(scene, method, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N[:, :n_user],
                    EV_T[:, :n_user], Y0, P, ce.names[:n_user] if ce is not None else (), wall,
                    parallel, workers if parallel != "serial" else 1, save, singular_tol,
                    switching=switching, switches=switches, pieces=pieces, reasons=reasons)
-    _explain(ens, kern, singular == "stop", singular_tol, on_error)
     # what it hands out cannot be changed (private pieces feed compiled code)
     readonly({k: v for k, v in vars(ens).items() if not k.startswith("_")})
     return ens
@@ -598,23 +599,23 @@ def _taken_on(own, r, parts, n_user, mode, p, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST
     return pieces
 
 
-def _explain(ens, kern, checked, tol, on_error):
+def _explain(scene, method, kern, checked, tol, on_error, INFO, T_LAST, Y_LAST, P, Y0):
     """Runs that hit NaN/inf: a singular stop when an indicator explains it, else an
-    error (or status 3 with ``on_error="record"``)."""
-    sc = ens.scene
-    t0 = sc.t_span[0]
-    for r in np.nonzero(ens.status == NONFINITE)[0]:
-        idx = (diagnosis.explain_nonfinite(sc, kern, ens.t_final[r], ens.y_final[r],
-                                           ens.params[r], t0, ens.initial[r], tol)
+    error (or status 3 with ``on_error="record"``).  Works on the run's own arrays
+    (``INFO[:, 0]`` status, ``INFO[:, 5]`` the indicator), before the Ensemble freezes
+    them."""
+    t0 = scene.t_span[0]
+    for r in np.nonzero(INFO[:, 0] == NONFINITE)[0]:
+        idx = (diagnosis.explain_nonfinite(scene, kern, T_LAST[r], Y_LAST[r], P[r], t0,
+                                           Y0[r], tol)
                if checked else -1)
         if idx >= 0:
-            ens.status[r] = SINGULAR
-            ens._sing_index[r] = idx
+            INFO[r, 0] = SINGULAR
+            INFO[r, 5] = idx
         elif on_error == "raise":
             try:
-                diagnosis.raise_nonfinite(sc, f"{ens.method} (ensemble run {r})",
-                                          ens.t_final[r], ens.y_final[r], kern, ens.params[r],
-                                          checked=checked)
+                diagnosis.raise_nonfinite(scene, f"{method} (ensemble run {r})", T_LAST[r],
+                                          Y_LAST[r], kern, P[r], checked=checked)
             except IntegrationError as exc:
                 raise IntegrationError(
                     f"{exc} [pass on_error='record' to keep the other runs; run {r} will "
