@@ -215,9 +215,9 @@ def summarize(rows) -> dict:
                      f"{r['rhs_ns_full']:.0f} ns ({r['rhs_cost_ratio']:.2f}x)")
         summary.append(line)
     columns = ["N", "principle", "load", "seconds", "cpu", "scene", "derive", "print",
-               "compile_cpu", "compile_again_cpu", "compile_full_cpu", "run", "rhs_ops", "rhs_level", "aux_ops",
-               "aux_level", "sing_ops", "sing_level", "rhs_ns", "rhs_ns_full",
-               "before_seconds_est"]
+               "compile_cpu", "compile_again_cpu", "compile_full_cpu", "run", "rhs_ops",
+               "rhs_level", "aux_ops", "aux_level", "sing_ops", "sing_level", "rhs_ns",
+               "rhs_ns_full", "before_seconds_est"]
     return {"title": "Model to first trajectory (N-trailer, every principle, empty kernel "
                      "cache): quick compilation of huge kernels",
             "summary": summary, "columns": columns, "rows": rows}
