@@ -10,8 +10,6 @@ but the runtime ones substituted.
 
 from __future__ import annotations
 
-import re
-
 import sympy as sp
 
 from ...algebra import dag
@@ -316,10 +314,10 @@ def _sensitivity_functions(layout: Layout, phi_exprs, rhs_exprs) -> str:
             + "\n".join(jac + ["    A = np.empty((%d, %d))" % (n, n),
                                 "    _jac_base(t, y, p, A)"]
                          + ["    " + b for b in blocks]) + "\n\n\n"
-            + re.sub(r"@(numba\.cfunc|quick_cfunc)\(_JAC_SIG, \*\*_CB\)\ndef jac_c\(",
-                     "@numba.njit(**_JIT)\ndef _jac_base(",
-                     _jacobian_function(layout, phi_exprs, rhs_exprs)).replace(
-                "_P_jac", "_P_jac_base").replace("_B_jac", "_B_jac_base"))
+            + _jacobian_function(layout, phi_exprs, rhs_exprs).replace(
+                "@numba.cfunc(_JAC_SIG, **_CB)\ndef jac_c(", "@numba.njit(**_JIT)\n"
+                "def _jac_base(").replace("_P_jac", "_P_jac_base").replace(
+                "_B_jac", "_B_jac_base"))
 
 
 def _cfunc(name, sig="_SIG") -> str:
