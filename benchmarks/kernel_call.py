@@ -26,6 +26,7 @@ from _common import parser, write
 def measure(rounds: int, number: int) -> dict:
     import jetnh.models as models
     from jetnh.numeric import Scene, kernels
+    from jetnh.numeric.methods._common import RHS, FunctionAddress, entry_point
 
     sc = Scene(models.get("rolling_disk"), "chetaev", initial=models.initial("rolling_disk"),
                t_span=(0.0, 1.0)).compile()
@@ -42,6 +43,12 @@ def measure(rounds: int, number: int) -> dict:
     def njit_aux(t, y, p, out):
         aux_c(t, y, p, out)
 
+    @numba.njit(numba.types.void(RHS, numba.float64, numba.float64[::1], numba.float64[::1],
+                                 numba.float64[::1]))
+    def first_class(f, t, y, p, out):
+        f(t, y, p, out)
+
+    before, address = entry_point(first_class), FunctionAddress(rhs_c)
     n = ck.layout.n_state
     y, p = np.array(sc.y0, dtype=float), np.array(sc.p, dtype=float)      # writable copies
     out, aux, J = np.empty(n), np.empty(ck.layout.n_aux), np.empty((n, n))
@@ -52,6 +59,7 @@ def measure(rounds: int, number: int) -> dict:
     calls = {
         "njit_rhs": lambda: njit_rhs(0.1, y, p, out),
         "rhs": lambda: ck.rhs(0.1, y, p, out),
+        "before_rhs": lambda: before(address, 0.1, y, p, out),
         "njit_aux": lambda: njit_aux(0.1, y, p, aux),
         "aux": lambda: ck.aux(0.1, y, p, aux),
         "jac": lambda: jk.jac(0.1, y, p, J),
@@ -64,6 +72,7 @@ def measure(rounds: int, number: int) -> dict:
     out = {f"{k}_s": v - empty for k, v in best.items()}
     out["lambda_s"] = empty
     out["rhs_vs_njit"] = out["rhs_s"] / out["njit_rhs_s"]
+    out["before_vs_njit"] = out["before_rhs_s"] / out["njit_rhs_s"]
     out["aux_vs_njit"] = out["aux_s"] / out["njit_aux_s"]
     out["load"] = os.getloadavg()
     return out
@@ -77,7 +86,8 @@ def main(argv=None):
     r = measure(rounds, number)
     summary = [
         f"ck.rhs {r['rhs_s'] * 1e6:.3f} us, a bare njit call of the same kernel "
-        f"{r['njit_rhs_s'] * 1e6:.3f} us: {r['rhs_vs_njit']:.2f}x; ck.aux "
+        f"{r['njit_rhs_s'] * 1e6:.3f} us: {r['rhs_vs_njit']:.2f}x (the previous route, "
+        f"unchecked: {r['before_vs_njit']:.2f}x); ck.aux "
         f"{r['aux_vs_njit']:.2f}x; ck.jac {r['jac_s'] * 1e6:.3f} us "
         f"(load {r['load'][0]:.1f} on {os.cpu_count()} cores; the lambda each call goes "
         f"through, {r['lambda_s'] * 1e9:.0f} ns, subtracted)"]
@@ -85,6 +95,8 @@ def main(argv=None):
     rows = [[name, f"{r[key] * 1e6:.3f}", f"{r[key] / r[base]:.2f}"]
             for name, key, base in (("njit call of the rhs kernel", "njit_rhs_s", "njit_rhs_s"),
                                     ("ck.rhs (checked)", "rhs_s", "njit_rhs_s"),
+                                    ("previous route: FunctionAddress unboxed (unchecked)",
+                                     "before_rhs_s", "njit_rhs_s"),
                                     ("njit call of the aux kernel", "njit_aux_s", "njit_aux_s"),
                                     ("ck.aux (checked)", "aux_s", "njit_aux_s"),
                                     ("ck.jac (checked)", "jac_s", "njit_rhs_s"))]
