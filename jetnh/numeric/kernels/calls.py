@@ -5,12 +5,14 @@ call them by address, and an njit function beside each would compile the same bo
 From Python, ``Kernel(address, sizes)(t, y, p, out)`` calls a callback through a
 trampoline that takes its address as an integer (``_call_at``, an intrinsic that calls
 the address with the C signature of the kernels): the trampolines are compiled once for
-all scenes (and cached on disk by numba), and a call costs about what a call of an njit
-function with the same arrays costs (``benchmarks/kernel_call.py``).
+all scenes (and cached on disk by numba), and a call costs less than twice a call of an
+njit function computing the same kernel (``benchmarks/kernel_call.py``; passing the
+callback as a first-class function instead, numba unboxed it on every call, ten times
+that).
 
 Every array is checked before the callback reads it: its type, dtype, dimensions and
-layout by numba's dispatcher (which accepts exactly C-contiguous float64 arrays of the
-declared dimensions, and converts nothing else; ``_explain`` names what was wrong), and
+layout by numba's dispatcher (which takes C-contiguous float64 arrays of the declared
+dimensions, the output writable, and nothing else; ``_explain`` names what was wrong), and
 its size inside the trampoline, before the call (the kernels read and write without
 bounds checks).
 """
