@@ -205,9 +205,10 @@ def summarize(rows) -> dict:
     ok = [r for r in rows if "seconds" in r]
     summary = []
     for r in ok:
-        line = (f"N = {r['N']} {r['principle']}: {r['seconds']:.1f} s wall "
-                f"({r['cpu']:.1f} CPU s; derive {r['derive']:.1f}, compile "
-                f"{r['compile_cpu']:.1f} CPU s, run {r['run']:.2f} s) at load {r['load']}")
+        line = (f"N = {r['N']} {r['principle']}: {r['seconds']:.1f} s wall, "
+                f"{r['cpu']:.1f} CPU s (derivation {r['derive']:.1f} s wall; compilation "
+                f"{r['compile_cpu']:.1f} CPU s, {r['rhs_level']} rhs; run {r['run']:.2f} s "
+                f"wall) at load {r['load']}")
         if "compile_full_cpu" in r:
             line += (f"; compiled again: {r['compile_again_cpu']:.2f} CPU s as generated, "
                      f"{r['compile_full_cpu']:.2f} at -O3 throughout "
