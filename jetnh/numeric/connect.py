@@ -82,7 +82,7 @@ class Connection:
 
 
 def connect(system, principle, start, end, t_span, params=None, guess=None, *,
-            tol=1e-9, rtol=1e-11, atol=1e-12, max_iter=30, max_continuation=64,
+            tol=1e-9, rtol=1e-11, atol=1e-12, max_iter=100, max_continuation=64,
             rcond=1e-9, method="dop853") -> Connection:
     """The motion of ``principle`` from ``start`` (every coordinate) at t0 to ``end``
     (some or all coordinates) at t1, as a ``Connection`` (module docstring).
@@ -248,44 +248,62 @@ class _Shooter:
             u = u0 + scale * np.roll(pattern, k) * (1 + k)
         return u0
 
-    def step(self, F, Jm):
-        """The minimum-norm Newton (Gauss-Newton) step of the truncated SVD."""
+    def svd(self, Jm):
+        """The singular value decomposition of the shooting Jacobian with its numerical
+        rank (relative cut-off ``rcond``)."""
         U, s, Vt = np.linalg.svd(Jm, full_matrices=False)
         r = int(np.sum(s > self.rcond * s[0])) if s.size and s[0] > 0 else 0
-        return -(Vt[:r].T @ ((U[:, :r].T @ F) / s[:r]))
+        return U[:, :r], s[:r], Vt[:r]
 
     def newton(self, u, target, tol, max_iter):
-        """Damped Newton on q(t1; u) = target.  Returns ``(u, converged, iterations)``."""
+        """Levenberg-Marquardt on q(t1; u) = target, in unknowns scaled by the largest
+        column norms of the Jacobian seen so far (More's scaling: the multipliers'
+        columns are often orders of magnitude smaller than the velocities'): the step
+        ``-D^-1 V diag(s / (s^2 + mu)) U^T F`` of the truncated SVD of ``J D^-1``
+        (mu -> 0: the minimum-norm Gauss-Newton step, quadratic convergence near a
+        solution; mu large: a short step down the gradient), mu adapted by the ratio of
+        the actual to the predicted decrease (Nielsen's rule), a run that fails before
+        t1 counted as no decrease.  Returns ``(u, converged, runs)``."""
         got = self.endpoint(u)
         if got is None:
             return u, False, 0
         scale = 1.0 + np.abs(target)
+        q, Jm = got
+        F = q - target
+        d = np.ones(len(u))
+        mu = nu = None
         for it in range(1, max_iter + 1):
-            q, Jm = got
-            F = q - target
             if np.max(np.abs(F) / scale) <= tol:
                 return u, True, it - 1
-            du = self.step(F, Jm)
-            # a step at most the size of the unknowns (and 1): Newton stays on the branch
-            # of solutions it starts near instead of jumping to a far one
-            big = np.linalg.norm(du) / max(1.0, np.linalg.norm(u))
-            if big > 1.0:
-                du = du / big
-            norm = np.linalg.norm(F)
-            alpha = 1.0
-            for _ in range(30):
-                trial = self.endpoint(u + alpha * du)
-                if trial is not None and np.linalg.norm(trial[0] - target) < (
-                        1.0 - 1e-4 * alpha) * norm:
-                    break
-                alpha *= 0.5
+            norms = np.linalg.norm(Jm, axis=0)
+            d = np.maximum(d, np.where(norms > 0, norms, 1.0)) if it > 1 else np.where(
+                norms > 0, norms, 1.0)
+            U, s, Vt = self.svd(Jm / d)
+            if not s.size:
+                return u, False, it
+            if mu is None:
+                mu, nu = 1e-3 * s[0] ** 2, 2.0
+            du = -(Vt.T @ (s * (U.T @ F) / (s**2 + mu))) / d
+            # at most the size of the unknowns (and 1): stay on the branch of solutions
+            # the search starts near instead of jumping to a far one
+            du /= max(1.0, np.linalg.norm(du) / max(1.0, np.linalg.norm(u)))
+            trial = self.endpoint(u + du)
+            linear = F + Jm @ du
+            predicted = F @ F - linear @ linear
+            rho = -1.0
+            if trial is not None and predicted > 0:
+                F_new = trial[0] - target
+                rho = (F @ F - F_new @ F_new) / predicted
+            if rho > 0:
+                u, (q, Jm), F = u + du, trial, F_new
+                mu *= max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
+                nu = 2.0
             else:
                 if self.least_squares_point(F, Jm):
                     raise self.unreachable(u)
-                return u, False, it
-            u, got = u + alpha * du, trial
-        q = got[0]
-        return u, bool(np.max(np.abs(q - target) / scale) <= tol), max_iter
+                mu *= nu
+                nu *= 2.0
+        return u, bool(np.max(np.abs(F) / scale) <= tol), max_iter
 
     def solve(self, u0, tol, max_iter, max_continuation):
         """Newton from ``u0``, else continuation in the endpoint from q(t1; u0)."""
