@@ -125,7 +125,7 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
                   initial={**q0, **dict(zip(unknowns, u0)), **fixed}, t_span=(t0, t1))
     shooter = _Shooter(scene, q0, q1, unknowns, fixed, rtol, atol, method, rcond)
     if guess is None:
-        u0 = shooter.regular_start(u0, q0, q1, t1 - t0)
+        u0 = shooter.regular_start(u0, q0, q1, t1 - t0, len(velocities))
     u, iterations = shooter.solve(u0, tol, max_iter, max_continuation)
     return shooter.connection(u, iterations, tol)
 
@@ -232,21 +232,27 @@ class _Shooter:
         S = tr.sensitivities[-1]
         return tr.y[-1, self.rows], S[np.ix_(self.rows, self.cols)]
 
-    def regular_start(self, u0, q0, q1, T):
-        """The default guess, moved off a point where the shooting Jacobian is
-        rank-deficient (zero velocities, a straight line along an abnormal direction):
-        by a fixed pattern of the size of the straight-line velocities, up to 8 tries."""
+    def regular_start(self, u0, q0, q1, T, n_velocities):
+        """The default guess, moved off a point where the run stops before t1 (a speed
+        that falls to a singular zero) or where the shooting Jacobian is rank-deficient
+        (zero velocities, a straight line along an abnormal direction): by a fixed
+        pattern of the size of the straight-line velocities, then with the velocities
+        doubled and quadrupled; 12 tries, the first regular one kept (else the first
+        that reaches t1)."""
         scale = max([abs(q1[c] - q0[c]) for c in q1] + [1.0]) / abs(T)
         pattern = 0.5 * (-0.6) ** np.arange(len(u0))
-        u = u0
-        for k in range(8):
+        speed = np.ones(len(u0))
+        reaching = None
+        for k in range(12):
+            speed[:n_velocities] = 2.0 ** (k // 4)
+            u = speed * u0 + (scale * np.roll(pattern, k) * (k % 4) if k % 4 else 0.0)
             got = self.endpoint(u)
             if got is not None:
                 s = np.linalg.svd(got[1], compute_uv=False)
                 if s.size and s[0] > 0 and s[-1] > 1e-6 * s[0]:
                     return u
-            u = u0 + scale * np.roll(pattern, k) * (1 + k)
-        return u0
+                reaching = u if reaching is None else reaching
+        return u0 if reaching is None else reaching
 
     def svd(self, Jm):
         """The singular value decomposition of the shooting Jacobian with its numerical
@@ -263,7 +269,7 @@ class _Shooter:
         (mu -> 0: the minimum-norm Gauss-Newton step, quadratic convergence near a
         solution; mu large: a short step down the gradient), mu adapted by the ratio of
         the actual to the predicted decrease (Nielsen's rule), a run that fails before
-        t1 counted as no decrease.  Returns ``(u, converged, runs)``."""
+        t1 counted as no decrease.  Returns ``(u, converged, iterations)``."""
         got = self.endpoint(u)
         if got is None:
             return u, False, 0
@@ -275,9 +281,11 @@ class _Shooter:
         for it in range(1, max_iter + 1):
             if np.max(np.abs(F) / scale) <= tol:
                 return u, True, it - 1
+            # a column far below the largest (an unknown the end does not feel) keeps
+            # a floor: its scaled column is then cut by rcond instead of blown up
             norms = np.linalg.norm(Jm, axis=0)
-            d = np.maximum(d, np.where(norms > 0, norms, 1.0)) if it > 1 else np.where(
-                norms > 0, norms, 1.0)
+            norms = np.maximum(norms, 1e-6 * norms.max()) if norms.max() > 0 else 1.0
+            d = np.maximum(d, norms) if it > 1 else norms
             U, s, Vt = self.svd(Jm / d)
             if not s.size:
                 return u, False, it
@@ -410,6 +418,8 @@ class _Shooter:
 #: smallest / largest eigenvalue of the controllability Gramian below which the path is
 #: abnormal
 GRAMIAN_RCOND = 1e-9
+#: |det| of dq/du with normalized columns below which it has no sign (rounding level)
+DET_ZERO = 1e-10
 _GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(5)
 
 
@@ -576,8 +586,10 @@ def conjugate_times(tr, cols, samples, rcond=1e-9) -> tuple:
         norms = np.linalg.norm(M, axis=1, keepdims=True)
         d = np.linalg.det(M / np.where(norms > 0, norms, 1.0))
         for i in range(len(grid) - 1):
-            if d[i] == 0.0 or np.sign(d[i]) == np.sign(d[i + 1]) or i + 1 == len(grid) - 1 \
-                    and abs(d[i + 1]) < 1e-8:
+            # |det| of the normalized columns at rounding level: singular there (along a
+            # whole stretch when an unknown has no effect), no sign to follow
+            if min(abs(d[i]), abs(d[i + 1])) < DET_ZERO or np.sign(d[i]) == np.sign(
+                    d[i + 1]):
                 continue
             found.append(float(brentq(det, grid[i], grid[i + 1], xtol=1e-14, rtol=1e-14)))
     s = np.linalg.svd(tr.sensitivities[-1][:nq][:, cols], compute_uv=False)
