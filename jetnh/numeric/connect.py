@@ -42,7 +42,8 @@ Verdicts on the answer:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import cached_property
 from types import MappingProxyType
 
 import numpy as np
@@ -59,20 +60,52 @@ VARIATIONAL = ("vakonomic", "holder")
 
 @dataclass(frozen=True)
 class Connection:
-    """A motion of ``principle`` joining two configurations (``connect``)."""
+    """A motion of ``principle`` joining two configurations (``connect``).
+
+    The verdicts ``cost``, ``normal``, ``gramian_ratio`` and ``conjugate_times`` are
+    computed on first access (one more run, sampled on the dense output) and then kept.
+    """
 
     trajectory: Trajectory           # from start at t0 to (near) end at t1
-    cost: float                      # the action int L dt along it
     initial: MappingProxyType        # the full initial state found (name -> value)
     residual: float                  # max |q(t1) - end| over the named coordinates
-    normal: bool                     # False: an abnormal extremal (module docstring)
-    conjugate_times: tuple           # times in (t0, t1] where dq/du loses rank
     principle: str
     unknowns: tuple                  # names of the shooting unknowns
     rank: int                        # rank of the shooting Jacobian at the answer
     singular_values: tuple           # of the shooting Jacobian at the answer
-    iterations: int                  # Newton iterations (all continuation steps)
-    gramian_ratio: float             # smallest / largest eigenvalue of the Gramian
+    iterations: int                  # Levenberg-Marquardt iterations (all steps)
+    _columns: tuple = field(repr=False, compare=False)     # the unknowns' states
+    _rcond: float = field(repr=False, compare=False)
+    _run: MappingProxyType = field(repr=False, compare=False)   # rtol, atol, method
+
+    @cached_property
+    def _samples(self):
+        tr = self.trajectory
+        return _Samples(tr, self._run["rtol"], self._run["atol"], self._run["method"],
+                        tr.y[0])
+
+    @cached_property
+    def cost(self) -> float:
+        """The action int L dt along the motion (``action``)."""
+        return action(self.trajectory, self._samples)
+
+    @cached_property
+    def gramian_ratio(self) -> float:
+        """Smallest / largest eigenvalue of the constraint system's controllability
+        Gramian along the motion (``gramian_ratio``)."""
+        return gramian_ratio(self.trajectory, self._samples)
+
+    @property
+    def normal(self) -> bool:
+        """False: an abnormal extremal (the constraint system's endpoint map loses rank
+        along the motion: ``gramian_ratio`` below ``GRAMIAN_RCOND``)."""
+        return bool(self.gramian_ratio > GRAMIAN_RCOND)
+
+    @cached_property
+    def conjugate_times(self) -> tuple:
+        """The times in (t0, t1] where dq/du loses rank (``conjugate_times``)."""
+        return conjugate_times(self.trajectory, list(self._columns), self._samples,
+                               self._rcond)
 
     def __repr__(self):
         return (f"Connection({self.principle}: cost {self.cost:.12g}, residual "
@@ -121,8 +154,8 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     unknowns = velocities + (mults if principle in VARIATIONAL else ())
     fixed = {} if principle in VARIATIONAL else {m: 0.0 for m in mults}
     u0, fixed = _guess(guess, unknowns, fixed, system, q0, q1, t1 - t0)
-    scene = Scene(system, principle, params=params,
-                  initial={**q0, **dict(zip(unknowns, u0)), **fixed}, t_span=(t0, t1))
+    scene = _scene(system, principle, params, {**q0, **dict(zip(unknowns, u0)), **fixed},
+                   (t0, t1))
     shooter = _Shooter(scene, q0, q1, unknowns, fixed, rtol, atol, method, rcond)
     if guess is None:
         u0 = shooter.regular_start(u0, q0, q1, t1 - t0, len(velocities))
@@ -131,6 +164,32 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
 
 
 # ---------------------------------------------------------------------- input
+#: (id(system), principle, params, t_span) -> (system, Scene): a scene's kernel keys
+#: take milliseconds to compute, so repeated problems on one system reuse its scene (the
+#: runs give every initial value; the scene's own are those of the first problem)
+_SCENES: dict = {}
+
+
+def _scene(system, principle, params, initial, t_span):
+    from .scene import Scene
+
+    try:
+        key = (id(system), principle, None if params is None else tuple(sorted(
+            (arguments.name_of(k, "a parameter"), float(v)) for k, v in params.items())),
+            t_span)
+    except (AttributeError, TypeError, ValueError, JetnhError):
+        key = None                       # Scene says what is wrong with params
+    hit = _SCENES.get(key)
+    if hit is not None and hit[0] is system:
+        return hit[1]
+    scene = Scene(system, principle, params=params, initial=initial, t_span=t_span)
+    if key is not None:
+        if len(_SCENES) >= 16:
+            _SCENES.clear()
+        _SCENES[key] = (system, scene)
+    return scene
+
+
 def _configuration(values, coords, what, complete) -> dict[str, float]:
     if not hasattr(values, "items"):
         raise JetnhError(f"{what} must be a dict of coordinate values keyed by Symbol or "
@@ -201,7 +260,8 @@ class _Shooter:
         self.rows = [names.index(c) for c in q1]
         self.target = np.array(list(q1.values()))
         self.cols = [names.index(u) for u in unknowns]
-        self.y0 = np.array([scene.initial[n] for n in names])
+        given = {**q0, **fixed}
+        self.y0 = np.array([given.get(n, 0.0) for n in names])
         self.rtol, self.atol, self.method, self.rcond = rtol, atol, method, rcond
         self.end_names = tuple(q1)
         self.seen: dict = {}
@@ -212,8 +272,8 @@ class _Shooter:
         return y
 
     def endpoint(self, u):
-        """``(q_named(t1), dq_named(t1)/du)``, or None where the run fails (the last
-        few kept: the guess is evaluated more than once)."""
+        """``(q_named(t1), dq_named(t1)/du, the run)``, or None where the run fails
+        (the last few kept: the guess and the answer are evaluated more than once)."""
         key = np.asarray(u, dtype=float).tobytes()
         if key not in self.seen:
             if len(self.seen) > 8:
@@ -222,15 +282,21 @@ class _Shooter:
         return self.seen[key]
 
     def _endpoint(self, u):
-        try:
-            tr = self.scene.run(rtol=self.rtol, atol=self.atol, method=self.method,
-                                y0=self.state(u), save="final", sensitivities=True)
-        except JetnhError:
-            return None
-        if tr.status != 0 or not np.all(np.isfinite(tr.y[-1])):
+        tr = self.run(u)
+        if tr is None:
             return None
         S = tr.sensitivities[-1]
-        return tr.y[-1, self.rows], S[np.ix_(self.rows, self.cols)]
+        return tr.y[-1, self.rows], S[np.ix_(self.rows, self.cols)], tr
+
+    def run(self, u):
+        """The run from the start with the unknowns ``u`` (every step, with
+        sensitivities), or None where it fails before t1."""
+        try:
+            tr = self.scene.run(rtol=self.rtol, atol=self.atol, method=self.method,
+                                y0=self.state(u), sensitivities=True)
+        except JetnhError:
+            return None
+        return tr if tr.status == 0 and np.all(np.isfinite(tr.y[-1])) else None
 
     def regular_start(self, u0, q0, q1, T, n_velocities):
         """The default guess, moved off a point where the run stops before t1 (a speed
@@ -274,7 +340,7 @@ class _Shooter:
         if got is None:
             return u, False, 0
         scale = 1.0 + np.abs(target)
-        q, Jm = got
+        q, Jm, _ = got
         F = q - target
         d = np.ones(len(u))
         mu = nu = None
@@ -290,7 +356,7 @@ class _Shooter:
             if not s.size:
                 return u, False, it
             if mu is None:
-                mu, nu = 1e-3 * s[0] ** 2, 2.0
+                mu, nu = 1e-6 * s[0] ** 2, 2.0
             du = -(Vt.T @ (s * (U.T @ F) / (s**2 + mu))) / d
             # at most the size of the unknowns (and 1): stay on the branch of solutions
             # the search starts near instead of jumping to a far one
@@ -303,7 +369,7 @@ class _Shooter:
                 F_new = trial[0] - target
                 rho = (F @ F - F_new @ F_new) / predicted
             if rho > 0:
-                u, (q, Jm), F = u + du, trial, F_new
+                u, (q, Jm, _), F = u + du, trial, F_new
                 mu *= max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
                 nu = 2.0
             else:
@@ -386,26 +452,25 @@ class _Shooter:
     # ------------------------------------------------------------------ the answer
     def connection(self, u, iterations, tol) -> Connection:
         scene = self.scene
-        tr = scene.run(rtol=self.rtol, atol=self.atol, method=self.method,
-                       y0=self.state(u), sensitivities=True)
-        if tr.status != 0:
-            raise ConnectError(f"the motion found stops before t1: {tr.stop_reason}")
+        got = self.endpoint(u)
+        if got is None:
+            raise ConnectError(f"the motion found stops before t1: "
+                               f"{scene.run(y0=self.state(u)).stop_reason}")
+        tr = got[2]
         q = tr.y[-1, self.rows]
         residual = float(np.max(np.abs(q - self.target)))
-        Jm = tr.sensitivities[-1][np.ix_(self.rows, self.cols)]
-        s = np.linalg.svd(Jm, compute_uv=False)
-        rank = int(np.sum(s > self.rcond * s[0])) if s.size and s[0] > 0 else 0
-        samples = _Samples(tr, self.rtol, self.atol, self.method, self.state(u))
-        gram = gramian_ratio(tr, samples)
+        _, s, _ = self.svd(tr.sensitivities[-1][np.ix_(self.rows, self.cols)])
+        full = np.linalg.svd(tr.sensitivities[-1][np.ix_(self.rows, self.cols)],
+                             compute_uv=False)
         start = list(tr.y[0]) + [float(tr[d][0]) for d in scene.dependent_velocities]
         best = Connection(
-            trajectory=tr, cost=action(tr, samples),
+            trajectory=tr,
             initial=MappingProxyType({n: float(v) for n, v in zip(
                 scene.state_names + scene.dependent_velocities, start)}),
-            residual=residual, normal=bool(gram > GRAMIAN_RCOND),
-            conjugate_times=conjugate_times(tr, self.cols, samples, self.rcond),
-            principle=scene.principle, unknowns=self.unknowns, rank=rank,
-            singular_values=tuple(s.tolist()), iterations=iterations, gramian_ratio=gram)
+            residual=residual, principle=scene.principle, unknowns=self.unknowns,
+            rank=len(s), singular_values=tuple(full.tolist()), iterations=iterations,
+            _columns=tuple(self.cols), _rcond=self.rcond, _run=MappingProxyType(
+                {"rtol": self.rtol, "atol": self.atol, "method": self.method}))
         if tol is not None and np.max(np.abs(q - self.target)
                                       / (1 + np.abs(self.target))) > tol:
             raise ConnectError(
@@ -588,7 +653,7 @@ def conjugate_times(tr, cols, samples, rcond=1e-9) -> tuple:
         for i in range(len(grid) - 1):
             # |det| of the normalized columns at rounding level: singular there (along a
             # whole stretch when an unknown has no effect), no sign to follow
-            if min(abs(d[i]), abs(d[i + 1])) < DET_ZERO or np.sign(d[i]) == np.sign(
+            if max(abs(d[i]), abs(d[i + 1])) < DET_ZERO or np.sign(d[i]) == np.sign(
                     d[i + 1]):
                 continue
             found.append(float(brentq(det, grid[i], grid[i + 1], xtol=1e-14, rtol=1e-14)))
