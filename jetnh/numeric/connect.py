@@ -612,11 +612,11 @@ def gramian_ratio(tr, samples) -> float:
     for j in range(steps):
         Phi[j + 1] = P[j] @ Phi[j]
     G = np.linalg.solve(np.transpose(Phi, (0, 2, 1)), Phi[-1].T).transpose(0, 2, 1)
-    BB = B[::2] @ np.transpose(B[::2], (0, 2, 1))
+    GB = G @ B[::2]                                       # Phi(t1, s_j) B(s_j)
     w = np.full(steps + 1, 2.0)
     w[1::2] = 4.0
     w[0] = w[-1] = 1.0
-    W = np.einsum("j,jab,jbc,jdc->ad", w * h / 3.0, G, BB, G)
+    W = np.einsum("j,jam,jbm->ab", w * h / 3.0, GB, GB)
     ev = np.linalg.eigvalsh(0.5 * (W + W.T))
     return float(max(ev[0], 0.0) / ev[-1]) if ev[-1] > 0 else 0.0
 
