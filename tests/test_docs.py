@@ -219,7 +219,9 @@ def test_public_contract_documents_its_parameters():
 
     public = [jn.JetSpace, jn.System, jn.System.equations, jn.Scene, jn.Scene.run,
               jn.Trajectory.plot, jn.Trajectory.at, jn.compare, jn.conserved_quantities,
-              jn.noether_symmetries, jn.sweep.sweep, jn.from_mechanics]
+              jn.noether_symmetries, jn.sweep.sweep, jn.from_mechanics, jn.linearize,
+              jn.Linearization.replace, jn.Linearization.steady, jn.Linearization.along,
+              jn.connect]
     for obj in public:
         doc = inspect.getdoc(obj)
         assert "\nParameters\n----------\n" in doc, obj.__qualname__

@@ -14,14 +14,16 @@ only some coordinates) by shooting on the initial unknowns:
 
 The shooting map's Jacobian is the sensitivity matrix of the run
 (``scene.run(sensitivities=True)``: the variational equations, compiled from the
-derivation), never finite differences.  The Newton iteration solves each step by the
-singular value decomposition with a rank cut-off (``rcond``): a rank-deficient Jacobian
-(a degenerate endpoint with a whole family of solutions, such as the circles of the
-Heisenberg group through a point of its z-axis) gives the minimum-norm step; a damped
-step (backtracking on the residual) keeps it from diverging.  When Newton fails from the
-guess, continuation in the endpoint follows ``end(s) = q(t1; guess) + s (end - q(t1;
-guess))`` from s = 0 (solved by the guess) to 1 with adaptive steps.  Iterations and
-continuation steps have budgets; where they stop, ``ConnectError`` says so.
+derivation), never finite differences.  The search is Levenberg-Marquardt in unknowns
+scaled by the Jacobian's column norms, each step from the singular value decomposition
+with a rank cut-off (``rcond``): a rank-deficient Jacobian (a degenerate endpoint with a
+whole family of solutions, such as the circles of the Heisenberg group through a point of
+its z-axis) gives the minimum-norm step; the damping adapts to the ratio of the actual to
+the predicted decrease, so the search neither diverges far from the guess nor loses
+Newton's quadratic convergence near a solution.  When it fails from the guess,
+continuation in the endpoint follows ``end(s) = q(t1; guess) + s (end - q(t1; guess))``
+from s = 0 (solved by the guess) to 1 with adaptive steps.  Iterations and continuation
+steps have budgets; where they stop, ``ConnectError`` says so.
 
 Verdicts on the answer:
 
@@ -120,14 +122,57 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     """The motion of ``principle`` from ``start`` (every coordinate) at t0 to ``end``
     (some or all coordinates) at t1, as a ``Connection`` (module docstring).
 
-    ``guess``: the initial unknowns (a dict by name, or a sequence in the order of
-    ``Connection.unknowns``: the independent velocities, then for vakonomic and Hoelder
-    the multipliers; Suslov's multipliers may be given too and are kept); default: the
-    straight-line velocities and zero multipliers.  ``tol``: the largest accepted
-    endpoint error (max norm, relative to 1 + |end|); ``rtol``, ``atol``: the
-    integration's; ``max_iter`` Newton iterations per continuation step,
-    ``max_continuation`` continuation steps; ``rcond`` the relative cut-off of singular
-    values; ``method`` "dop853" or "dopri5".
+    Parameters
+    ----------
+    system : jetnh.System
+        The constrained system.
+    principle : str
+        "vakonomic" or "holder" (the unknowns: independent velocities and multipliers
+        at t0), "chetaev" or "suslov" (the independent velocities alone).
+    start : dict
+        Every coordinate at t0, keyed by Symbol or name.
+    end : dict
+        Some or all coordinates at t1; Chetaev and Suslov reach at most as many as
+        there are independent velocities (otherwise ``ConnectError`` with the
+        least-squares answer in ``.best``).
+    t_span : tuple of float
+        ``(t0, t1)``, of nonzero length (t1 < t0 runs backwards).
+    params : dict, optional
+        Parameter values; the system's defaults otherwise.
+    guess : dict or sequence, optional
+        The initial unknowns: a dict by name, or a sequence in the order of
+        ``Connection.unknowns`` (the independent velocities, then for vakonomic and
+        Hoelder the multipliers; Suslov's multipliers may be given too and are kept).
+        Default: the straight-line velocities and zero multipliers, moved off runs
+        that stop before t1 or start rank-deficient.
+    tol : float, default 1e-9
+        The largest accepted endpoint error (max norm, relative to 1 + |end|).
+    rtol, atol : float, default 1e-11, 1e-12
+        The integration's tolerances.
+    max_iter : int, default 100
+        Levenberg-Marquardt iterations (one run each) from the guess and per
+        continuation step.
+    max_continuation : int, default 64
+        Steps of the continuation in the endpoint (after a failed first search).
+    rcond : float, default 1e-9
+        The relative cut-off of singular values: the rank of the shooting Jacobian.
+    method : {"dop853", "dopri5"}, default "dop853"
+        The integrator (explicit, with dense output).
+
+    Returns
+    -------
+    Connection
+        The motion, its initial state, residual and rank; its verdicts (``cost``,
+        ``normal``, ``conjugate_times``) on first access.
+
+    Raises
+    ------
+    ConnectError
+        The end is not reached within the budgets (the message says where the search
+        stopped and what the motions reach; ``.best`` is the closest motion found).
+    JetnhError
+        Bad input: an unknown coordinate, a span of zero length, a guess of the wrong
+        shape.
     """
     from .scene import Scene
 
