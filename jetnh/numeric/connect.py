@@ -58,6 +58,8 @@ from .trajectory import Trajectory
 
 #: the principles whose multipliers are unknowns of the two-point problem
 VARIATIONAL = ("vakonomic", "holder")
+#: Levenberg-Marquardt iterations per continuation step (at most ``max_iter``)
+STEP_ITER = 20
 
 
 @dataclass(frozen=True)
@@ -150,8 +152,8 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     rtol, atol : float, default 1e-11, 1e-12
         The integration's tolerances.
     max_iter : int, default 100
-        Levenberg-Marquardt iterations (one run each) from the guess and per
-        continuation step.
+        Levenberg-Marquardt iterations (one run each) from the guess; each
+        continuation step takes at most ``min(max_iter, STEP_ITER)`` (20).
     max_continuation : int, default 64
         Steps of the continuation in the endpoint (after a failed first search).
     rcond : float, default 1e-9
@@ -440,8 +442,10 @@ class _Shooter:
         for _ in range(max_continuation):
             s_try = min(1.0, s + ds)
             target = first + s_try * (self.target - first)
+            # a continuation step starts near its solution: a short budget, so that an
+            # unreachable end fails in seconds
             v, ok, k = self.newton(u, target, tol if s_try == 1.0 else max(tol, 1e-6),
-                                   max_iter)
+                                   min(max_iter, STEP_ITER))
             total += k
             if ok:
                 s, u = s_try, v
