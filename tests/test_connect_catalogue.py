@@ -115,3 +115,40 @@ def test_appell_hamel_vakonomic_reaches_the_cone_only():
     with pytest.raises(jn.ConnectError, match="name at most 2 coordinates"):
         jn.connect(ah, "vakonomic", O, {"x": 3.0, "y": 1.0, "z": k * d + 0.3}, (0, 1),
                    max_iter=20, max_continuation=4)
+
+
+def test_chetaev_against_vakonomic_in_process_cli(capsys):
+    """``jetnh connect --compare``: the Chaplygin sleigh's Chetaev motion to (x, y) and
+    the vakonomic motion to the configuration it reached -- the same endpoints, the
+    vakonomic action no larger (the answer below is a minimizer: no conjugate time), the
+    paths apart; checked against connect called directly."""
+    import json
+
+    from jetnh.cli import main
+
+    code = main(["connect", "chaplygin_sleigh", "-p", "chetaev", "--from",
+                 "x=0,y=0,theta=0", "--to", "x=0.5,y=0.5", "--t-end", "1", "--compare",
+                 "vakonomic", "--format", "json", "-q"])
+    assert code == 0
+    data = json.loads(capsys.readouterr().out)
+    a, b = data, data["compared"]
+    assert a["principle"] == "chetaev" and b["principle"] == "vakonomic"
+    assert b["residual"] < 1e-8 and b["conjugate_times"] == []
+    assert b["cost"] < a["cost"] - 1e-5
+    sleigh = get("chaplygin_sleigh")
+    O = {"x": 0.0, "y": 0.0, "theta": 0.0}
+    c = jn.connect(sleigh, "chetaev", O, {"x": 0.5, "y": 0.5}, (0.0, 1.0))
+    reached = {n: float(c.trajectory[n][-1]) for n in O}
+    v = jn.connect(sleigh, "vakonomic", O, reached, (0.0, 1.0))
+    assert abs(v.cost - b["cost"]) < 1e-9 and abs(c.cost - a["cost"]) < 1e-9
+    t = np.linspace(0.0, 1.0, 50)
+    assert np.max(np.abs(c.trajectory.at(t)["y"] - v.trajectory.at(t)["y"])) > 1e-3
+    # the rolling disk's Chetaev motions are vakonomic (multipliers -(xdot, ydot))
+    disk = get("rolling_disk")
+    ch = jn.connect(disk, "chetaev", DISK0, {"x": 0.5, "y": 0.3}, (0.0, 1.0))
+    full = {n: float(ch.trajectory[n][-1]) for n in DISK0}
+    vk = jn.connect(disk, "vakonomic", DISK0, full, (0.0, 1.0),
+                    guess={"phi_t": 1.0, "psi_t": 1.0, "lambda_x": -0.5, "lambda_y": -0.2})
+    assert abs(vk.cost - ch.cost) < 1e-9
+    assert abs(vk.initial["lambda_x"] + ch.initial["x_t"]) < 1e-7
+    assert abs(vk.initial["lambda_y"] + ch.initial["y_t"]) < 1e-7

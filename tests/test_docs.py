@@ -53,6 +53,7 @@ def test_gallery_and_howtos_are_executed_notebooks(section):
 def test_the_gallery_has_the_promised_examples():
     listed = toctree_entries(DOCS / "gallery" / "index.md")
     assert {"gallery/rolling_disk", "gallery/appell_hamel", "gallery/heisenberg",
+            "gallery/two_point",
             "gallery/sweep_map", "gallery/from_mechanics", "gallery/from_kane",
             "gallery/conserved"} <= listed
     text = {p.stem: p.read_text(encoding="utf-8") for p in (DOCS / "gallery").glob("*.md")}

@@ -459,7 +459,7 @@ class _Shooter:
         best = self._best(u)
         raise ConnectError(
             f"connect did not reach the end: continuation in the endpoint stopped at "
-            f"s = {s:.6g} of 1 (step {ds:.3g}, {total} Newton iterations); the closest "
+            f"s = {s:.6g} of 1 (step {ds:.3g}, {total} iterations in all); the closest "
             f"motion ends {best.residual:.3g} away from end"
             + self._reachability(u) + "; try another guess, a shorter span or an end "
             "nearer the start (ConnectError.best is that motion)", best)
