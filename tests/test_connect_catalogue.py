@@ -22,14 +22,14 @@ from scipy.integrate import solve_bvp
 
 import jetnh as jn
 from jetnh.models import get
-from jetnh.numeric import codegen
+from jetnh.numeric import kernels
 
 DISK0 = {"x": 0.0, "y": 0.0, "phi": 0.0, "psi": 0.0}
 
 
 def _collocation(scene, start, end, T, Y0):
     kern, p, names = scene.kernels, scene.p, scene.state_names
-    jac = codegen.jacobian_kernels(scene).jac
+    jac = kernels.jacobian_kernels(scene).jac
     n, nq = len(names), len(scene.coordinates)
 
     def fun(t, Y):
