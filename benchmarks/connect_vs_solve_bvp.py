@@ -28,7 +28,7 @@ import warnings
 import numpy as np
 from scipy.integrate import solve_bvp
 
-from _common import best, best_of, parser, write
+from _common import best_of, parser, write
 
 import jetnh as jn
 from jetnh.models import get
@@ -151,9 +151,9 @@ def sensitivity_cost(model, principle, initial, T, reps):
     sc = jn.Scene(get(model), principle, initial=initial, t_span=(0.0, T))
     kw = dict(rtol=1e-10, atol=1e-12, save="final")
     sc.run(**kw), sc.run(sensitivities=True, **kw)
-    plain = best(lambda: sc.run(**kw), reps)
-    ctl = best(lambda: sc.run(sensitivities=True, **kw), reps)
-    free = best(lambda: sc.run(sensitivities=True, sensitivity_error=False, **kw), reps)
+    plain, ctl, free = best_of([
+        lambda: sc.run(**kw), lambda: sc.run(sensitivities=True, **kw),
+        lambda: sc.run(sensitivities=True, sensitivity_error=False, **kw)], 5 * reps)
     return dict(model=model, principle=principle, n_state=len(sc.state_names),
                 plain_ms=plain[0] * 1e3, plain_nfev=plain[1].diagnostics.rhs_evaluations,
                 controlled_ms=ctl[0] * 1e3,
@@ -165,7 +165,7 @@ def sensitivity_cost(model, principle, initial, T, reps):
 
 def main():
     args = parser(__doc__, "connect_vs_solve_bvp").parse_args()
-    reps = 2 if args.quick else 3
+    reps = 2 if args.quick else 9
     rows, found = [], []
     for case in CASES[:1] if args.quick else CASES:
         ref, r = connect_case(*case, reps, args.quick)
