@@ -60,6 +60,8 @@ from .trajectory import Trajectory
 VARIATIONAL = ("vakonomic", "holder")
 #: Levenberg-Marquardt iterations per continuation step (at most ``max_iter``)
 STEP_ITER = 20
+#: steps a shooting run may take (a run that needs more counts as failed)
+MAX_STEPS = 20_000
 
 
 @dataclass(frozen=True)
@@ -337,10 +339,11 @@ class _Shooter:
 
     def run(self, u):
         """The run from the start with the unknowns ``u`` (every step, with
-        sensitivities), or None where it fails before t1."""
+        sensitivities), or None where it fails before t1 (or takes more than
+        ``MAX_STEPS`` steps: a wild trial of the search must not take minutes)."""
         try:
             tr = self.scene.run(rtol=self.rtol, atol=self.atol, method=self.method,
-                                y0=self.state(u), sensitivities=True)
+                                y0=self.state(u), sensitivities=True, max_steps=MAX_STEPS)
         except JetnhError:
             return None
         return tr if tr.status == 0 and np.all(np.isfinite(tr.y[-1])) else None
