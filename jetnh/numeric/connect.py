@@ -427,6 +427,8 @@ class _Shooter:
                     raise self.unreachable(u)
                 mu *= nu
                 nu *= 2.0
+                if mu > 1e20 * s[0] ** 2:          # no step of any length decreases |F|
+                    return u, False, it
         return u, bool(np.max(np.abs(F) / scale) <= tol), max_iter
 
     def solve(self, u0, tol, max_iter, max_continuation):
