@@ -544,10 +544,10 @@ def test_read_is_bounded_whatever_the_size_claims(tmp_path, monkeypatch):
     class Lying:
         def __init__(self, st):
             self.st_mode, self.st_size = st.st_mode, 0
-    monkeypatch.setattr(mf.os, "fstat", lambda fd: Lying(real_fstat(fd)))
+    monkeypatch.setattr(os, "fstat", lambda fd: Lying(real_fstat(fd)))
     reads = []
     real_read = os.read
-    monkeypatch.setattr(mf.os, "read", lambda fd, n: reads.append(n) or real_read(fd, n))
+    monkeypatch.setattr(os, "read", lambda fd, n: reads.append(n) or real_read(fd, n))
     with pytest.raises(ModelFileError, match="more than 4096 bytes"):
         mf.load(f)
     assert sum(reads) <= 4097
@@ -589,7 +589,7 @@ def test_expression_build_errors_become_model_file_errors(monkeypatch):
                 KeyError("internal")):
         def boom(*a, exc=exc):
             raise exc
-        monkeypatch.setattr(mf.sp, "Mul", boom)
+        monkeypatch.setattr(sp, "Mul", boom)
         with pytest.raises(ModelFileError, match="sympy cannot build the expression|too "
                                                  "deeply nested"):
             mf.parse_expression("x*y", NAMES)
