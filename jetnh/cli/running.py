@@ -1,5 +1,5 @@
-"""What simulate and sweep share: NAME=VALUE lists, the names a scene may use, the
-integration methods."""
+"""What the commands that run a model share: NAME=VALUE lists, the names of a scene's
+state and the others it may use, the integration methods."""
 
 from __future__ import annotations
 
@@ -33,6 +33,14 @@ def method_of(name: str):
 METHOD_HELP = ("dop853 (default), dopri5, rk4, radau (implicit, for stiff problems), dla "
                "(discrete Lagrange-d'Alembert, chetaev only), dvi (discrete vakonomic) or "
                "scipy-<RK45|DOP853|Radau|BDF|LSODA>")
+
+
+def state_names(system, principle) -> list:
+    """The names of a scene's state: coordinates, independent velocities, multipliers."""
+    from ..numeric.codegen import multiplier_names
+
+    return ([q.name for q in system.J.q] + [v.name for v in system.independent_velocities]
+            + list(multiplier_names(system, principle)))
 
 
 def scene_names(system) -> set:
