@@ -10,6 +10,7 @@ import math
 from ..errors import PrincipleError
 from ..mechanics import principles
 from ..mechanics.principles import PRINCIPLES
+from .loading import DEFAULTS
 from .render import SCREEN_BUDGET
 
 EPILOG_MODEL = ("MODEL: a catalogue name (see `jetnh models`; scalable ones take options, "
@@ -101,12 +102,15 @@ def _principle() -> argparse.ArgumentParser:
 
 def _run() -> argparse.ArgumentParser:
     run = argparse.ArgumentParser(add_help=False, parents=[PRINCIPLE])
-    run.add_argument("--t-start", type=float, default=None, metavar="T0", help="default 0")
+    run.add_argument("--t-start", type=float, default=None, metavar="T0",
+                     help=f"default: the model's, else {DEFAULTS['t_start']:g}")
     run.add_argument("--t-end", type=float, default=None, metavar="T",
                      help="end time (default: the model's [simulation] t_end or the "
                           "catalogue's)")
-    run.add_argument("--rtol", type=float, default=None, help="default 1e-9")
-    run.add_argument("--atol", type=float, default=None, help="default 1e-12")
+    run.add_argument("--rtol", type=float, default=None,
+                     help=f"default: the model's, else {DEFAULTS['rtol']:g}")
+    run.add_argument("--atol", type=float, default=None,
+                     help=f"default: the model's, else {DEFAULTS['atol']:g}")
     run.add_argument("--steps", type=int, default=1000,
                      help="steps of the fixed-step methods rk4, dla and dvi (default 1000)")
     return run

@@ -9,7 +9,7 @@ import json
 from ..loading import load_model, settings, with_split
 from .. import outputs
 from ..parser import EPILOG_MODEL, model_args, subcommand
-from ..running import assignments, state_names
+from ..running import assignments, initial_values
 from ..usage import UsageError
 
 
@@ -76,11 +76,7 @@ def run(args, progress) -> int:
         raise UsageError("--plot draws the stability diagram of a scan: give --param too")
     if args.plot:
         outputs.check(args.plot, outputs.FIGURE, "--plot")
-    states = state_names(system, principle)
-    at = {k: v for k, v in model.initial.items() if k in states}
-    at.update(assignments(args.at, "--at"))
-    zeros = [s for s in states if s not in at]
-    at.update({s: 0.0 for s in zeros})
+    at, zeros = initial_values(model, principle, assignments(args.at, "--at"))
     drop = {"cyclic": "cyclic", "none": None}.get(args.drop)
     if args.drop not in ("cyclic", "none"):
         drop = [d.strip() for d in args.drop.split(",") if d.strip()]

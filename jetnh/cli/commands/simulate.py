@@ -10,7 +10,8 @@ from ...errors import JetnhError
 from ..loading import load_model, settings, with_split
 from .. import outputs
 from ..parser import EPILOG_MODEL, count, model_args, subcommand
-from ..running import METHOD_HELP, assignments, method_of, scene_names, state_names
+from ..running import (METHOD_HELP, assignments, initial_values, method_of,
+                       monitored_integrals)
 from ..usage import UsageError
 
 
@@ -67,23 +68,15 @@ def run(args, progress) -> int:
     t0, t1 = opts.t_span
     params = assignments(args.set, "--set")
 
-    # the initial state: the model's, then --init; missing states start at 0
-    states = state_names(system, principle)
-    # the model's values of dependent velocities are checked against the constraints,
-    # unless --split changed which velocities are dependent (then they follow from them)
-    dep_vel = {v.name for v in system.dependent_velocities}
-    initial = {k: v for k, v in model.initial.items()
-               if k in states or (k in dep_vel and not args.split)}
-    initial.update(assignments(args.init, "--init"))
-    zeros = [s for s in states if s not in initial]
-    initial.update({s: 0.0 for s in zeros})
-    integrals = {}
-    for k, v in model.integrals.items():
-        if {s.name for s in v.free_symbols} - set(states) - set(scene_names(system)):
-            progress.note(f"jetnh: the integral {k!r} uses multipliers, which the "
-                          f"{principle} state does not have; skipped")
-        else:
-            integrals[k] = v
+    # the initial state: the model's, then --init; missing states start at 0.  The model's
+    # values of dependent velocities are checked against the constraints, unless --split
+    # changed which velocities are dependent (then they follow from them)
+    initial, zeros = initial_values(model, principle, assignments(args.init, "--init"),
+                                    dependent_velocities=not args.split)
+    integrals, skipped = monitored_integrals(model, principle)
+    for k in skipped:
+        progress.note(f"jetnh: the integral {k!r} uses multipliers, which the {principle} "
+                      "state does not have; skipped")
 
     path_names = _path_names(args.path, system)
     for out, kinds, what in ((args.csv, outputs.TEXT, "--csv"),

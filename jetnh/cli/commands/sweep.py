@@ -7,7 +7,8 @@ from pathlib import Path
 from ..loading import load_model, settings, with_split
 from .. import outputs
 from ..parser import EPILOG_MODEL, model_args, positive_count, seconds, subcommand
-from ..running import METHOD_HELP, assignments, method_of, scene_names, state_names
+from ..running import (METHOD_HELP, assignments, initial_values, method_of,
+                       monitored_integrals)
 from ..usage import UsageError
 
 
@@ -123,13 +124,8 @@ def run(args, progress) -> int:
         raise UsageError(f"--times needs dense output, which {method} does not have; use "
                          "--method dop853, dopri5, radau or scipy-<M>, or omit --times (final "
                          "values)")
-    states = state_names(system, principle)
-    initial = {s: 0.0 for s in states}
-    initial.update({k: v for k, v in model.initial.items() if k in states})
-    initial.update(assignments(args.init, "--init"))
-    known = set(states) | set(scene_names(system))
-    integrals = {k: v for k, v in model.integrals.items()
-                 if not {s.name for s in v.free_symbols} - known}
+    initial, _ = initial_values(model, principle, assignments(args.init, "--init"))
+    integrals, _ = monitored_integrals(model, principle)
     params = assignments(args.set, "--set")
     scene = Scene(system, principle, params=params, initial=initial, t_span=t_span,
                   convention=opts.convention, integrals=integrals,
