@@ -20,6 +20,7 @@ from jetnh.errors import ConstraintError
 from jetnh.mechanics import holonomic
 from jetnh.numeric import Scene
 from jetnh.numeric.codegen import multiplier_names
+from model_texts import PENDULUM_XY
 
 PRINCIPLES = ("chetaev", "vakonomic", "holder", "suslov")
 l_, G_ = sp.symbols("l G", positive=True)
@@ -357,15 +358,7 @@ def test_tangent_basis_and_independent_coordinates():
 
 
 # ---------------------------------------------------------------------- interfaces
-PENDULUM_TOML = """
-name = "pendulum in x, y"
-coordinates = ["x", "y"]
-lagrangian = "(x_t**2 + y_t**2)/2 - G*y"
-constraints = ["x**2 + y**2 - l**2"]
-[parameters]
-G = 9.81
-l = 1.0
-[initial]
+PENDULUM_TOML = PENDULUM_XY + """[initial]
 x = 0.6
 y = -0.8
 """
