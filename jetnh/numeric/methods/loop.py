@@ -407,10 +407,11 @@ def _solve(rhs, sing, uev, hol, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt
             t_new = t0 + (step + 1) * h_fixed
             h = t_new - t
         if PROJECT:
-            projection.project(hol, ctl, t_new, y_new, p, hw)
-            if ADAPTIVE:
-                rhs(t_new, y_new, p, K[ns])
-                stats[2] += 1
+            if ctl.n_hol > 0:
+                projection.project(hol, ctl, t_new, y_new, p, hw)
+                if ADAPTIVE:
+                    rhs(t_new, y_new, p, K[ns])
+                    stats[2] += 1
         step += 1
         stats[0] += 1
         stop = 0
