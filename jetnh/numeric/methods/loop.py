@@ -283,8 +283,9 @@ def output(tab, fixed, rhs, p, t, h, t_new, y, y_new, K, F, ytmp, y_stop, stop, 
 
 def _solve(rhs, sing, uev, hol, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
     """Integrate y' = rhs(t, y, p) from t0 to t_end with the method ``TAB``
-    (``ExplicitRK.arrays``; it and ``ADAPTIVE`` are compile-time constants, so the path
-    of the other step kind is not compiled: ``_specialised``) under the step control
+    (``ExplicitRK.arrays``; it, ``ADAPTIVE`` and the parts ``WATCH``, ``PROJECT``,
+    ``DENSE`` are compile-time constants, so the path of the other step kind and the
+    parts the run does not need are not compiled: ``_specialised``) under the step control
     ``ctl`` (``Control``), watching ``watch`` (``Watch``: ``sing`` computes the ``n_sing``
     singularity indicators, ``uev`` the user event functions; see ``_events``); ``hol``
     the holonomic constraints an accepted step is projected onto when ``ctl.n_hol`` > 0
