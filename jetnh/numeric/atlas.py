@@ -52,6 +52,7 @@ import sympy as sp
 from ..algebra import dag, linalg
 from ..errors import JetnhError
 from ..mechanics import principles
+from .methods import projection
 from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, SINGULAR, STOPPED
 from .methods.loop import Watch
 
@@ -352,6 +353,8 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
         n_ev = int(out.n_ev)
         hit = (edge and int(out.status) == EVENT and n_ev > 0
                and int(out.ev_i[n_ev - 1]) == len(user))
+        if hit:
+            _project_stop(chart, out, p)
         seg = scene._trajectory(method, out, wall, kern, ce, p, t, y, singular_tol, checked,
                                 limit, seg_dense, n_events=len(user))
         parts.append((chart, seg, (t, y, t1, seg_ctl, watch, ce)))
@@ -374,9 +377,32 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
     return parts, switches
 
 
+def _on_constraints(chart, t, y, p) -> np.ndarray:
+    """``y`` (a state of ``chart``) with its coordinates moved onto the holonomic
+    constraints g = 0, as the loops move every accepted step (``methods.projection``)."""
+    system = chart.scene.system
+    if not system.holonomic:
+        return np.ascontiguousarray(y, dtype=float)
+    return projection.onto(chart.kernels.hol, len(system.holonomic), system.J.n, t, y, p)
+
+
+def _project_stop(chart, out, p):
+    """Project the state where a run reached its chart's edge, in the run's ``Result``
+    (the event record, the last state, and the last output row where it is that state):
+    the edge is located on the step's dense output, off g = 0 by its error."""
+    k = int(out.n_ev) - 1
+    t = float(out.ev_t[k])
+    y = _on_constraints(chart, t, out.ev_y[k], p)
+    out.ev_y[k] = y
+    out.y[:] = y
+    if int(out.n_out) > 0 and out.ts[int(out.n_out) - 1] == t:
+        out.ys[int(out.n_out) - 1] = y
+
+
 def switch(at, chart, t, y, p):
-    """The chart to go on in at the edge of ``chart`` (reached at (t, y)) and the state
-    there, or None (``_target``)."""
+    """The chart to go on in at the edge of ``chart`` (reached at (t, y), moved onto the
+    holonomic constraints) and the state there, or None (``_target``)."""
+    y = _on_constraints(chart, t, y, p)
     q, qd, lam, A, _ = chart.universal([t], y, p)
     if A is None:
         A = at.jacobian_at(t, q[0], qd[0], p)[None]

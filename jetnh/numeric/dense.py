@@ -145,6 +145,7 @@ def _retaken_steps(traj, k, tau) -> np.ndarray:
     none = np.zeros(0, dtype=np.int64)
     watch = Watch(0, 0.0, none, none)
     halt = np.zeros(1, dtype=np.int64)
+    n_sens = d["rhs"].layout.sensitivity_columns if "rhs" in d else 0
     out = np.empty((tau.shape[0], y.shape[1]))
     for j, a, b in _groups(k):
         t0, t1 = float(t[j]), float(t[j + 1])
@@ -153,7 +154,7 @@ def _retaken_steps(traj, k, tau) -> np.ndarray:
         first = float(np.nextafter(abs(t1 - t0), np.inf))
         res = solve(rhs, kern.sing_fp, kern.sing_fp, kern.hol_or_none, t0, t1,
                     np.array(y[j]), p, Control(d["rtol"], d["atol"], first, np.inf,
-                                               1, 0, *traj.scene._projection),
+                                               1, 0, *traj.scene._projection, n_sens),
                     np.ascontiguousarray(tau[a:b]), AT_T_EVAL, watch, halt)
         status, _, ys, n_out, stats = res[:5]
         if int(status) != 0 or int(stats[1]) != 0 or int(n_out) != b - a:

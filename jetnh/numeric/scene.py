@@ -517,6 +517,8 @@ class Scene(Frozen):
             dense = {"mode": mode}
             if sens is not None:
                 dense["rhs"] = sens
+        if sens is not None:     # the projection moves the sensitivities with the state
+            ctl = ctl._replace(n_sens=sens.layout.sensitivity_columns)
         kern = self.kernels
         newton = None
         if m.solver is Solver.IMPLICIT:
