@@ -321,6 +321,8 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
     the switches.  ``counts``: occurrences of the user events so far (terminal counts go
     on); ``first``: whether (t, y) starts the run (else the run goes on after a switch);
     ``edge``: whether to watch the chart's edge."""
+    from . import solve
+
     user_max = np.array([e.max_events for e in user], dtype=np.int64)
     parts, switches = [], []
     direction = 1.0 if t1 >= t else -1.0
@@ -345,15 +347,15 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
                 seg_te = np.ascontiguousarray(te[direction * (te - t) > 0.0])
         left = None if limit is None else limit - (time.perf_counter() - tic)
         seg_dense = None if dense is None else dict(dense)
-        out, wall = scene._solve(method, kern, ce, watch, t, t1, y, p, seg_ctl, seg_te, mode,
-                                 newton, left)
+        out, wall = solve.call(scene, method, kern, ce, watch, t, t1, y, p, seg_ctl, seg_te,
+                               mode, newton, left)
         if seg_dense is not None:
             seg_dense["partial_last"] = int(out.status) in (EVENT, SINGULAR)
         n_ev = int(out.n_ev)
         hit = (edge and int(out.status) == EVENT and n_ev > 0
                and int(out.ev_i[n_ev - 1]) == len(user))
-        seg = scene._trajectory(method, out, wall, kern, ce, p, t, y, singular_tol, checked,
-                                limit, seg_dense, n_events=len(user))
+        seg = solve.trajectory(scene, method, out, wall, kern, ce, p, t, y, singular_tol,
+                               checked, limit, seg_dense, n_events=len(user))
         parts.append((chart, seg, (t, y, t1, seg_ctl, watch, ce)))
         steps_left -= seg._info["steps"]
         for i in range(len(user)):
@@ -519,13 +521,15 @@ def _rerun(chart, seg, rerun, times, p) -> np.ndarray:
     """The states at ``times`` inside the last, cut step of a segment: the segment's
     loop run again from its start with these times as t_eval (the same steps, the same
     dense output: what t_eval gives)."""
+    from . import solve
+
     t0, y0, t1, ctl, watch, ce = rerun
     order = np.argsort(times, kind="stable")
     if seg.t[-1] < seg.t[0]:
         order = order[::-1]
     te = np.ascontiguousarray(times[order])
-    out, _ = chart.scene._solve(seg.method, chart.kernels, ce, watch, t0, t1, y0, p, ctl,
-                                te, AT_T_EVAL, None, None)
+    out, _ = solve.call(chart.scene, seg.method, chart.kernels, ce, watch, t0, t1, y0, p,
+                        ctl, te, AT_T_EVAL, None, None)
     rows = np.empty((te.shape[0], seg.y.shape[1]))
     if int(out.n_out) != te.shape[0] or int(out.status) == STOPPED:
         raise JetnhError("running the chart's loop again did not reach the times asked for")
