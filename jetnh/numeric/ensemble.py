@@ -30,6 +30,11 @@ arrays (``Scene.ensemble`` calls it), so a later ``jetnh.sweep`` can hand it chu
   thread pool was as fast as or faster than prange there and needs no extra compiled
   driver, hence the default.  A Python loop of ``scene.run`` pays ~0.1 ms of dispatch
   per run, which the drivers do not.
+- ``sensitivities=True``: every run integrates its variational equations as
+  ``Scene.run(sensitivities=True)`` does; ``ens.sensitivities`` is ``[n_runs, n_times,
+  n_states, n_columns]`` (columns ``ens.sensitivity_columns``: the initial states, then
+  the runtime parameters), ``ens.sensitivity(of, to)`` one entry over runs and times;
+  each run's bits are the single run's.
 - Every array an ensemble holds or hands out is read-only.
 - Output: ``t_eval`` points (runs that stop early are NaN after their stop), or
   ``save="final"`` (one row per run, its final state).  Every accepted step is not
@@ -181,7 +186,8 @@ class Ensemble(Frozen):
 
     def __init__(self, scene, method, t, y, info, t_last, y_last, ev_n, ev_t, Y0, P,
                  event_names, wall_time, parallel, workers, save, singular_tol, *,
-                 switching=False, switches=None, pieces=None, reasons=None):
+                 switching=False, switches=None, pieces=None, reasons=None,
+                 sensitivities=None):
         info = info.T.copy()            # (one copy: its rows are the columns below)
         # read-only views: the caller's arrays stay as given
         arrays = dict(t=t,              # [n_runs, n_times]
@@ -191,6 +197,8 @@ class Ensemble(Frozen):
                       event_counts=ev_n,    # [n_runs, n_events]
                       event_first=np.where(ev_n > 0, ev_t, np.nan), initial=Y0.view(),
                       params=P.view())      # [n_runs, n_runtime_params]
+        if sensitivities is not None:
+            arrays["sensitivities"] = sensitivities[1]
         for a in arrays.values():
             a.flags.writeable = False
         # the attributes in one go (``Frozen._set`` without its walk over every value)
@@ -202,7 +210,11 @@ class Ensemble(Frozen):
             #: runs that changed split (``numeric.atlas``): run -> [{"t", "from", "to"},
             #: ...]; ``switching``: whether the runs watched their chart's edge
             switches=readonly(switches or {}), switching=switching,
-            _pieces=pieces or {}, _reasons=reasons or {})
+            _pieces=pieces or {}, _reasons=reasons or {},
+            #: what ``sensitivities`` (``[n_runs, n_times, n_states, n_columns]``, with a
+            #: run with ``sensitivities=True``) differentiate by: the initial states,
+            #: then the runtime parameters
+            sensitivity_columns=() if sensitivities is None else tuple(sensitivities[0]))
 
     # ------------------------------------------------------------------ shape and access
     @property
@@ -237,6 +249,25 @@ class Ensemble(Frozen):
         if name in lay.integrals:
             return self.aux[:, :, 2 * k + 1 + lay.integrals.index(name)]
         raise JetnhError(f"{name!r} is not in this ensemble; it has {', '.join(self.names)}")
+
+    def sensitivity(self, of, to) -> np.ndarray:
+        """``d of(t) / d to`` over the runs and output times (``[n_runs, n_times]``,
+        read-only): ``of`` a state, ``to`` an initial value of a state or a runtime
+        parameter (``Trajectory.sensitivity``; an ensemble run with
+        ``sensitivities=True``)."""
+        if not self.sensitivity_columns:
+            raise JetnhError("this ensemble carries no sensitivities; run it with "
+                             "sensitivities=True")
+        a, b = _name(of), _name(to)
+        if a not in self.layout.states:
+            raise JetnhError(f"sensitivity of {a!r}: not a state of this ensemble; the "
+                             f"states are {', '.join(self.layout.states)}")
+        if b not in self.sensitivity_columns:
+            raise JetnhError(f"sensitivity to {b!r}: not an initial value of a state or a "
+                             f"runtime parameter; choose one of "
+                             f"{', '.join(self.sensitivity_columns)}")
+        return self.sensitivities[:, :, self.layout.states.index(a),
+                                  self.sensitivity_columns.index(b)]
 
     @cached_property
     def aux(self) -> np.ndarray:
@@ -386,10 +417,12 @@ class Ensemble(Frozen):
 def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
                  method="dop853", events=None, parallel="threads", workers=None,
                  project=False, on_error="raise", timeout=None, step=None, singular="stop",
-                 newton=None, **keywords) -> Ensemble:
+                 newton=None, sensitivities=False, sensitivity_error=True,
+                 **keywords) -> Ensemble:
     """Integrate ``scene`` from many initial states / parameter sets: see the module
     docstring.  The run options as ``Scene.run`` (``numeric.options``: the values
-    ``step``, ``singular``, ``newton`` or their keywords ``rtol``, ``atol``, ...);
+    ``step``, ``singular``, ``newton`` or their keywords ``rtol``, ``atol``, ...;
+    ``sensitivities`` and ``sensitivity_error`` as there);
     ``max_steps`` and ``timeout`` are budgets of each run and of the whole ensemble;
     Ctrl-C stops every run within one step."""
     opts = options(step, singular, newton, **keywords)
@@ -400,25 +433,35 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
     scene, Y0, P = resolve(scene, initial, params, project)
     return run_resolved(scene, Y0, P, opts, t_eval=t_eval, save=save, method=method,
                         events=events, parallel=parallel, workers=workers,
-                        on_error=on_error, timeout=timeout)
+                        on_error=on_error, timeout=timeout, sensitivities=sensitivities,
+                        sensitivity_error=sensitivity_error)
 
 
 def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop853",
                  events=None, parallel="threads", workers=None, on_error="raise",
-                 timeout=None) -> Ensemble:
+                 timeout=None, sensitivities=False, sensitivity_error=True) -> Ensemble:
     """``run_ensemble`` of the runs ``resolve`` gave (``scene``, the rows of ``Y0`` and
     ``P``) with the run options ``opts`` (``numeric.options.Options``)."""
     import numba
 
     key = ("batch", opts, method, save, solve.hashable(events), solve.hashable(t_eval),
-           timeout)
+           timeout, sensitivities, sensitivity_error)
     plan = solve.planned(scene, (key, tuple(map(type, key))), lambda: solve.plan(
         scene, method, opts=opts, t_eval=t_eval, save=save, events=events, timeout=timeout,
-        batch=True))
+        sensitivities=sensitivities, sensitivity_error=sensitivity_error, batch=True))
     method = plan.method.name
     workers = int(workers or numba.config.NUMBA_NUM_THREADS)
-    (OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T), wall = solve.batch(
-        scene, plan, Y0, P, parallel, workers)
+    sens = None
+    if plan.sens is None:
+        (OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T), wall = solve.batch(
+            scene, plan, Y0, P, parallel, workers)
+    else:       # the state augmented by S = dy/d(y0, p): S apart, as in a single run
+        (OUT_T, OUT_A, INFO, T_LAST, Y_A, EV_N, EV_T), wall = solve.batch(
+            scene, plan, solve.augmented(plan.sens.layout, Y0), P, parallel, workers)
+        n = Y0.shape[1]
+        OUT_Y, Y_LAST = np.ascontiguousarray(OUT_A[:, :, :n]), Y_A[:, :n].copy()
+        sens = (scene._sensitivity_columns(), OUT_A[:, :, n:].reshape(
+            OUT_A.shape[0], OUT_A.shape[1], n, plan.sens.layout.sensitivity_columns))
     n_runs = Y0.shape[0]
     t0, t1 = plan.t0, plan.t1
     ce, ctl, te, mode, limit = plan.ce, plan.ctl, plan.te, plan.mode, plan.limit
@@ -470,7 +513,7 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
                     EV_T[:, :n_user], Y0, P, ce.names[:n_user] if ce is not None else (),
                     wall, parallel, workers if parallel != "serial" else 1, save,
                     singular_tol, switching=switching, switches=switches, pieces=pieces,
-                    reasons=reasons)
+                    reasons=reasons, sensitivities=sens)
 
 
 def _taken_on(own, r, parts, n_user, mode, p, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):

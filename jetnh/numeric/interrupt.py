@@ -7,14 +7,16 @@ runs ``fn()`` (the compiled call, which receives ``halt``) in the calling thread
 watchdog thread sets the flag:
 
 - on SIGINT (Ctrl-C): ``halt[0] = INTERRUPT``; the loop stops within one step, and the
-  SIGINT handler in place (Python's KeyboardInterrupt, or the user's own) runs once the
-  compiled call has returned (the loops never call back into Python: events are compiled
-  too, so no handler can run inside them).  The watchdog hears the signal through
-  ``signal.set_wakeup_fd``, which CPython's C-level handler writes to even while the
-  main thread runs machine code.  The watchdog's socket stays the wakeup fd between runs
-  when no one else had set one (a run then costs one ``set_wakeup_fd`` to confirm it);
-  a previous wakeup fd (an asyncio loop's, say) receives every byte during the call and
-  is restored after it;
+  SIGINT handler that was in place (Python's KeyboardInterrupt, or the user's own) runs
+  once the compiled call has returned.  The watchdog hears the signal through
+  ``signal.set_wakeup_fd``, which CPython's C-level handler writes to even while the main
+  thread runs machine code.  A KeyboardInterrupt raised inside numba's callbacks into
+  Python would surface as a SystemError (or worse), so the Python-level SIGINT handler is
+  ``_on_sigint``, installed once (again if it was replaced): during a compiled call it
+  only records the signal, otherwise it calls the handler it stands in for.  The
+  watchdog's socket stays the wakeup fd between runs when no one else had set one (a
+  run then costs one ``set_wakeup_fd`` to confirm it); a previous wakeup fd (an asyncio
+  loop's, say) receives every byte during the call and is restored after it;
 - past ``timeout`` seconds: ``halt[0] = TIMEOUT``; the loop returns what it has, with
   status STOPPED.
 
@@ -160,18 +162,51 @@ def _forget():
             pass
         _WATCHDOG.close()
         _WATCHDOG = None
+    _DEPTH[0] = 0
+    _CAUGHT.clear()
 
 
 os.register_at_fork(after_in_child=_forget)
 atexit.register(_forget)
 _MAIN = threading.main_thread().ident
+_SIGINT = int(signal.SIGINT)
+_getsignal = _signal.getsignal       # (signal.getsignal: the same, as an enum, slower)
+#: the SIGINT handler ``_on_sigint`` stands in for, the compiled calls in progress in
+#: the main thread, and the frames of the signals they held back
+_DELEGATE: list = [None]
+_DEPTH = [0]
+_CAUGHT: list = []
+
+
+def _on_sigint(signum, frame):
+    """The Python-level SIGINT handler: recorded during a compiled call (its handler
+    runs once the call has returned), else the handler it stands in for."""
+    if _DEPTH[0]:
+        _CAUGHT.append(frame)
+    else:
+        _DELEGATE[0](signum, frame)
+
+
+def _listening() -> bool:
+    """Whether this thread hears SIGINT through a Python-level handler (the main thread,
+    a callable handler), with ``_on_sigint`` installed in front of it."""
+    if threading.get_ident() != _MAIN:
+        return False
+    handler = _getsignal(_SIGINT)
+    if handler is _on_sigint:
+        return True
+    if not callable(handler):             # SIG_IGN, SIG_DFL, or not set from Python
+        return False
+    _DELEGATE[0] = handler
+    _signal.signal(_SIGINT, _on_sigint)
+    return True
 
 
 def call(fn, halt: np.ndarray, timeout: float | None = None):
     """``fn()``, stoppable by Ctrl-C and by ``timeout`` through ``halt`` (see the module
     docstring)."""
     deadline = None if timeout is None else time.monotonic() + timeout
-    listen = threading.get_ident() == _MAIN and callable(_getsignal(_SIGINT))
+    listen = _listening()
     if not listen and deadline is None:
         return fn()
     wd = _WATCHDOG or _watchdog()
@@ -181,14 +216,17 @@ def call(fn, halt: np.ndarray, timeout: float | None = None):
         old = signal.set_wakeup_fd(own, warn_on_full_buffer=False)
         if old == own:
             old = -1
+        _DEPTH[0] += 1
     key = wd.register(halt, deadline, old)
     try:
         return fn()
     finally:
         wd.unregister(key)
-        if old >= 0:                          # someone else's: theirs again
-            signal.set_wakeup_fd(old)
-
-
-_SIGINT = int(signal.SIGINT)
-_getsignal = _signal.getsignal       # (signal.getsignal: the same, as an enum, slower)
+        if listen:
+            _DEPTH[0] -= 1
+            if old >= 0:                      # someone else's: theirs again
+                signal.set_wakeup_fd(old)
+            if _CAUGHT and not _DEPTH[0]:
+                frame = _CAUGHT[0]
+                _CAUGHT.clear()
+                _DELEGATE[0](_SIGINT, frame)
