@@ -444,8 +444,8 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
     ``P``) with the run options ``opts`` (``numeric.options.Options``)."""
     import numba
 
-    key = ("batch", opts, method, save, solve.hashable(events), solve.hashable(t_eval),
-           timeout, sensitivities, sensitivity_error)
+    key = ("batch", scene.t_span, opts, method, save, solve.hashable(events),
+           solve.hashable(t_eval), timeout, sensitivities, sensitivity_error)
     plan = solve.planned(scene, (key, tuple(map(type, key))), lambda: solve.plan(
         scene, method, opts=opts, t_eval=t_eval, save=save, events=events, timeout=timeout,
         sensitivities=sensitivities, sensitivity_error=sensitivity_error, batch=True))

@@ -229,7 +229,9 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
 
 def planned(scene, key, make) -> Plan:
     """The plan of ``key`` kept on ``scene`` (``make()`` when there is none; an
-    unhashable key plans afresh)."""
+    unhashable key plans afresh).  The key holds every input of the plan but the
+    kernels, the time span too: scenes with the same kernels share their plans
+    (``Scene.replace``)."""
     store = scene._memo.get("plans")
     if store is None:
         store = scene._memo["plans"] = {}
