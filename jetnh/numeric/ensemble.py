@@ -48,6 +48,7 @@ arrays (``Scene.ensemble`` calls it), so a later ``jetnh.sweep`` can hand it chu
 
 from __future__ import annotations
 
+import math
 import time
 import warnings
 from functools import cached_property
@@ -131,7 +132,7 @@ def resolve(scene, initial=None, params=None, project=False):
         if s in columns:
             Y0[:, j] = columns[s]
     P = np.empty((n_runs, len(scene.runtime_params)))
-    P[:] = scene.p
+    P[:] = scene._p
     for j, s in enumerate(scene.runtime_params):
         if s in params:
             P[:, j] = params[s]
@@ -502,11 +503,12 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
                                   INFO, T_LAST, Y_LAST, EV_N, EV_T)
             reasons[r], switches[r] = parts[-1][1].stop_reason, sw
     wall += time.perf_counter() - tic
-    # never a success with a NaN or infinite state
-    done = (INFO[:, 0] == FINISHED) | (INFO[:, 0] == EVENT)
-    INFO[done & ~(np.all(np.isfinite(Y_LAST), axis=1)
-                  & np.all(np.isfinite(OUT_Y) | np.isnan(OUT_T)[:, :, None], axis=(1, 2))),
-         0] = NONFINITE
+    # never a success with a NaN or infinite state (a finite sum: all finite, cheaply)
+    if not math.isfinite(OUT_Y.sum() + Y_LAST.sum()):
+        done = (INFO[:, 0] == FINISHED) | (INFO[:, 0] == EVENT)
+        INFO[done & ~(np.all(np.isfinite(Y_LAST), axis=1)
+                      & np.all(np.isfinite(OUT_Y) | np.isnan(OUT_T)[:, :, None],
+                               axis=(1, 2))), 0] = NONFINITE
     _explain(scene, method, plan.kern, checked, singular_tol, on_error, INFO, T_LAST,
              Y_LAST, P, Y0)
     return Ensemble(scene, method, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N[:, :n_user],
