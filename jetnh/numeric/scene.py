@@ -20,7 +20,10 @@ the run goes on in another regular split (``numeric.atlas``; ``split="fixed"`` k
 the scene's split).
 
 A scene does only what it needs: it derives the equations of its own principle, and only
-when its kernels are not in the disk cache; parameters are numbers substituted before
+when its kernels are not in the disk cache; a run's options are checked and planned once
+(``numeric.solve``, the one driver of runs, ensembles and sweeps) and the plan kept for
+the next run with the same options, also by the scenes ``replace`` makes with the same
+kernels (other initial values, time span or run-time parameter values); parameters are numbers substituted before
 code generation (``runtime_params`` keeps some as run-time inputs for ensembles); output
 is every step, the points of ``t_eval``, or only the end (``save="final"``).
 
