@@ -4,7 +4,8 @@ and the cost per right-hand-side evaluation, on this tree and on earlier ones.
     .venv/bin/python benchmarks/overhead.py --tree before=PATH [--tree NAME=PATH ...]
                                             [--rounds 3] [--quick] [--fixed] [--out PATH]
 
-(default output: benchmarks/results/overhead.json; a tree is a git worktree, e.g.
+(default output: benchmarks/results/overhead.json, with ``--fixed``
+benchmarks/results/overhead_fixed.json; a tree is a git worktree, e.g.
 ``git worktree add /tmp/before a6430f6``; this tree is "after").  Every figure comes from
 fresh processes with empty numba and kernel caches, the trees alternating within each of
 ``--rounds`` rounds; each figure is the best over the rounds.  On the rolling disk:
@@ -35,7 +36,7 @@ import subprocess
 import sys
 import tempfile
 
-from _common import ROOT, parser, write
+from _common import RESULTS, ROOT, parser, write
 
 METHODS = ("dop853", "dopri5", "rk4")
 
@@ -213,10 +214,11 @@ def main(argv=None):
         f" an ensemble of one {a['ensemble of one'] / a['bare call']:.2f}x")
     print(fixed_summary)
     if args.fixed:
-        write("overhead", dict(title="Overhead of a run: the fixed cost against the bare "
+        out = args.out if args.out != RESULTS / "overhead.json" else None
+        write("overhead_fixed", dict(title="Overhead of a run: the fixed cost against the bare "
                                      "call", summary=[fixed_summary], tables=[fixed_table],
                                fixed=cost, trees={n: commit(p) for n, p in trees.items()}),
-              args.out, args.quick)
+              out, args.quick)
         return
     runs = {name: [] for name in trees}
     for r in range(rounds):
