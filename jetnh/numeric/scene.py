@@ -55,9 +55,9 @@ from ..mechanics.system import System
 from ..errors import ConstraintError, JetnhError
 from ..geometry.jet import sympy_object
 from . import arguments, solve
-from . import cache as _cache
 from . import codegen
 from . import discrete
+from .kernels import jacobian_kernels, load as load_kernels
 from ..frozen import Frozen, FrozenDict, memo
 from .options import options
 from .trajectory import Trajectory
@@ -276,40 +276,30 @@ class Scene(Frozen):
 
     # ------------------------------------------------------------------ kernels
     @memo
+    def spec(self) -> codegen.KernelSpec:
+        """The identity of the scene's kernels (``codegen.KernelSpec``) and its key."""
+        return codegen.KernelSpec(self.system, self.principle, self.params,
+                                  self.runtime_params, self.integrals, self.form,
+                                  self.convention)
+
+    @memo
     def key(self) -> str:
-        compiled_params = {k: v for k, v in self.params.items()
-                           if k not in self.runtime_params}
-        return codegen.symbolic_key(self.system, self.principle, compiled_params,
-                                    self.runtime_params, self.integrals, self.form,
-                                    self.convention)
+        return self.spec.key
 
     @property
     def kernels(self):
         """The compiled kernels (from memory, the disk cache, or generated now)."""
-        compiled_params = {k: v for k, v in self.params.items()
-                           if k not in self.runtime_params}
-        return _cache.load(self.key, lambda: codegen.generate(
-            self.system, self.principle, compiled_params, self.runtime_params,
-            self.integrals, self.form, self.convention, key=self.key), persistent=self.cache)
-
-    @memo
-    def sensitivity_key(self) -> str:
-        """The key of the kernels of runs with sensitivities
-        (``codegen.sensitivity_kernels``)."""
-        compiled_params = {k: v for k, v in self.params.items()
-                           if k not in self.runtime_params}
-        return codegen.symbolic_key(self.system, self.principle, compiled_params,
-                                    self.runtime_params, self.integrals, self.form,
-                                    self.convention, extra="sensitivities")
+        return load_kernels(self.key, lambda: codegen.generate(self.spec),
+                            persistent=self.cache)
 
     @property
     def jacobian(self):
         """``jac(t, y, p, J)``: writes ``J[i, j] = d rhs_i / d y_j`` (``J`` a C-contiguous
         float64 n_state x n_state array; ``y`` in the order ``state_names``, ``p`` the
         run-time parameters ``self.p``), the kernel generated from the derivation
-        (``codegen.jacobian_kernels``, forward mode over the shared graph) that radau
+        (``kernels.jacobian_kernels``, forward mode over the shared graph) that radau
         uses; ``jacobian.address`` is its C callback for compiled code."""
-        return codegen.jacobian_kernels(self).jac
+        return jacobian_kernels(self).jac
 
     def replace(self, **changes) -> "Scene":
         """A scene equal to this one except for ``changes`` (constructor arguments:
@@ -429,7 +419,7 @@ class Scene(Frozen):
             variational equations ``S' = (df/dy) S + df/dp``, ``S(t0) = (I | 0)``, of
             ``S = dy(t)/d(y(t0), p)`` (the derivatives of the initial state and of the
             runtime parameters), df/dy and df/dp generated from the derivation (forward
-            mode over the graph, compiled: ``codegen.sensitivity_kernels``);
+            mode over the graph, compiled: ``kernels.sensitivity_kernels``);
             ``traj.sensitivity(of, to)`` reads them.  Such a run keeps its split.
         sensitivity_error : bool, default True
             Whether S is under the error control (its entry (i, k) with the tolerance of
@@ -579,7 +569,7 @@ class Scene(Frozen):
 #: what a scene with the same kernels (``Scene.replace``) takes over from the memo: the
 #: kernels' keys, the plans of runs (``solve.planned``), compiled events, whether an
 #: atlas applies
-_SHARED = ("key", "sensitivity_key", "plans", "events", "atlas_applies")
+_SHARED = ("spec", "key", "plans", "events", "atlas_applies")
 
 
 def _real(x) -> float:

@@ -27,6 +27,7 @@ from . import arguments, atlas, diagnosis, discrete, interrupt, methods, scipy_b
 from .methods import STATUS_TEXT, Solver
 from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, FINISHED, NONFINITE,
                               SINGULAR, STOPPED, entry_point)
+from .kernels import sensitivity_kernels
 from .methods.loop import Control, Watch
 from .options import fields_of, options
 from .trajectory import Trajectory
@@ -138,9 +139,7 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
         if m.solver is Solver.DISCRETE:
             raise JetnhError(f"sensitivities=True is an option of the continuous methods "
                              f"(dop853, dopri5, rk4, radau, scipy-*), not of {m.name}")
-        from . import codegen
-
-        sens = codegen.sensitivity_kernels(scene)
+        sens = sensitivity_kernels(scene)
         rtol, atol_v = _augmented_tolerances(sens.layout, rtol, atol_v,
                                              bool(sensitivity_error))
         common.update(sens=sens, sens_error=bool(sensitivity_error))

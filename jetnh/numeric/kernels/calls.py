@@ -1,6 +1,6 @@
 """Kernels called from Python through their C callbacks.
 
-A scene's kernels are compiled as C callbacks only (``codegen``): the integrators call
+A scene's kernels are compiled as C callbacks only (``numeric.codegen``): the integrators call
 them by address, and an njit function beside each would compile the same body twice.
 From Python, ``Kernel(address)(t, y, p, out)`` calls a callback through a trampoline
 that takes it as a first-class function; the trampolines are compiled once for all
@@ -15,8 +15,8 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from .methods._common import RHS, FunctionAddress, entry_point
-from .methods.radau import JAC, JAC_SIGNATURE
+from ..methods._common import RHS, FunctionAddress, entry_point
+from ..methods.radau import JAC, JAC_SIGNATURE
 
 _f8 = numba.types.float64
 _JIT = dict(cache=True, error_model="numpy", nogil=True)
