@@ -9,11 +9,14 @@ this machine; and the check that every ensemble run is bit-for-bit the single ru
 (default output: benchmarks/results/numeric_ensemble.json).  Best of several
 interleaved repetitions (serial and parallel in the same run: the speed-up is their
 ratio); machine, date, load average, commit and command in the JSON
-(``_common.write``).  ``per_eval_vs_single_run``: the CPU time per rhs evaluation of a
-mode (all its threads) over that of one long ``scene.run`` of the same scene, as many
-evaluations as 64 runs (the cost of a trajectory in an ensemble against a single
-run's; 1.0 is the same cost; CPU time, which the machine's load disturbs less than
-wall time).  Run it on a quiet machine: scaling cannot be measured under load.
+(``_common.write``).
+
+"CPU per evaluation / single run" (``per_eval_vs_single_run``): the CPU time per rhs
+evaluation of a mode (all its threads) over that of one long ``scene.run`` of the same
+scene, as many evaluations as 64 runs: the cost of a trajectory in an ensemble against
+a single run's (1.0 is the same cost; CPU time, which the machine's load disturbs less
+than wall time).  The speed-ups need a quiet machine: under load there is no idle core
+to scale onto.
 """
 
 import time
