@@ -277,13 +277,20 @@ class Ensemble(Frozen):
         kern = self.scene.kernels
         n_runs, n_times, _ = self.y.shape
         out = np.full((n_runs, n_times, self.layout.n_aux), np.nan)
-        for r in range(n_runs):
-            ok = np.isfinite(self.t[r])
-            if ok.any():
-                tmp = np.empty((int(ok.sum()), self.layout.n_aux))
-                kern.aux_rows(np.ascontiguousarray(self.t[r][ok]),
-                              np.ascontiguousarray(self.y[r][ok]), self.params[r].copy(), tmp)
-                out[r][ok] = tmp
+        ok = np.isfinite(self.t)
+        if self._one_p:         # every row in one compiled call (no loop over runs here)
+            tmp = np.empty((int(ok.sum()), self.layout.n_aux))
+            kern.aux_rows(np.ascontiguousarray(self.t[ok]), np.ascontiguousarray(self.y[ok]),
+                          self.params[0].copy() if n_runs else np.zeros(0), tmp)
+            out[ok] = tmp
+        else:
+            for r in range(n_runs):
+                if ok[r].any():
+                    tmp = np.empty((int(ok[r].sum()), self.layout.n_aux))
+                    kern.aux_rows(np.ascontiguousarray(self.t[r][ok[r]]),
+                                  np.ascontiguousarray(self.y[r][ok[r]]),
+                                  self.params[r].copy(), tmp)
+                    out[r][ok[r]] = tmp
         if self._pieces:
             own = atlas.atlas(self.scene).own
             for r, pieces in self._pieces.items():
@@ -295,10 +302,20 @@ class Ensemble(Frozen):
         kern = self.scene.kernels
         out = np.empty((self.n_runs, self.layout.n_aux))
         t0 = self.scene.t_span[0]
-        for r in range(self.n_runs):
+        if self._one_p:
             # compiled code takes writable arrays: copies of the read-only rows
+            kern.aux_rows(np.full(self.n_runs, t0), self.initial.copy(),
+                          self.params[0].copy(), out)
+            return readonly(out)
+        for r in range(self.n_runs):
             kern.aux(t0, self.initial[r].copy(), self.params[r].copy(), out[r])
         return readonly(out)
+
+    @cached_property
+    def _one_p(self) -> bool:
+        """Whether every run has the same run-time parameters (its rows are then
+        evaluated in one call)."""
+        return self.n_runs > 0 and bool((self.params == self.params[0]).all())
 
     @property
     def final(self) -> dict[str, np.ndarray]:
