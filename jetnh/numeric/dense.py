@@ -24,6 +24,7 @@ import numpy as np
 
 from ..errors import ArgumentError, IntegrationError, JetnhError
 from . import arguments
+from .loops import retake
 from .methods import method
 from .methods._common import EVERY_STEP
 
@@ -137,9 +138,7 @@ def _groups(k):
 
 def _retaken_steps(traj, k, tau) -> np.ndarray:
     """dop853/dopri5: re-take step k[i] with the times tau (sorted by step, then time)
-    through the run's own driver (``solve.retake``)."""
-    from .solve import retake
-
+    through the run's own loop (``loops.retake``)."""
     t, y = traj.t, traj._dense.get("y", traj.y)
     out = np.empty((tau.shape[0], y.shape[1]))
     for j, a, b in _groups(k):

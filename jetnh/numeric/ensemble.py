@@ -503,7 +503,8 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
                 continue
             parts, sw = atlas.follow(chart_atlas, method, chart, t0, y, t1, P[r], user,
                                      np.zeros(n_user, np.int64), ctl, budget, te, mode,
-                                     None, checked, singular_tol, plan.newton, limit)
+                                     None, checked, singular_tol, plan.newton, limit,
+                                     solve.trajectory)
             INFO[r, 1:5] = 0
             EV_N[r], EV_T[r], OUT_T[r], OUT_Y[r] = 0, np.nan, np.nan, np.nan
             pieces[r] = _taken_on(chart_atlas.own, r, parts, n_user, mode, P[r], OUT_T,
@@ -515,7 +516,8 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
             parts, sw = atlas.go_on(chart_atlas, method, user, t1, P[r], float(T_LAST[r]),
                                     Y_LAST[r].copy(), EV_N[r, :n_user].copy(), ctl,
                                     budget - INFO[r, 1], te, mode, checked,
-                                    singular_tol, plan.newton, limit, h_fixed)
+                                    singular_tol, plan.newton, limit, h_fixed,
+                                    solve.trajectory)
             pieces[r] = _taken_on(chart_atlas.own, r, parts, n_user, mode, P[r], OUT_T, OUT_Y,
                                   INFO, T_LAST, Y_LAST, EV_N, EV_T)
             reasons[r], switches[r] = parts[-1][1].stop_reason, sw

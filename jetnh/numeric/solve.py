@@ -9,9 +9,9 @@
   arguments.  Plans are kept on the scene (``planned``: a repeated run with the same
   options plans nothing; ``Scene.replace`` hands them on when the kernels stay).
 - ``run`` is one trajectory of a plan from one initial state and parameter vector,
-  ``batch`` the runs of an ensemble (rows of arrays), ``call`` one call of a compiled loop
-  (the atlas of splits and dense output call it too), ``trajectory`` the ``Trajectory``
-  of its result.
+  ``batch`` the runs of an ensemble (rows of arrays), ``trajectory`` the ``Trajectory``
+  of the result of a compiled loop (``loops.call``: one call, which the atlas of splits
+  and dense output make too).
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import JetnhError
-from . import arguments, atlas, diagnosis, discrete, interrupt, methods, scipy_backend
+from . import arguments, atlas, diagnosis, discrete, interrupt, loops, methods, scipy_backend
 from .methods import STATUS_TEXT, Solver
 from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, FINISHED, NONFINITE,
                               SINGULAR, STOPPED, entry_point)
@@ -221,7 +221,8 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
     else:
         ce = scene.compile_events(events)
     watch = _watch(scene, kern, ce, checked, singular_tol)
-    entry, prefix, suffix = _loop(scene, m, kern, ce, sens, ctl, te, mode, watch, newton)
+    entry, prefix, suffix = loops.entry(scene, m, kern, ce, sens, ctl, te, mode, watch,
+                                         newton)
     return Plan(**common, rtol=rtol, atol=atol_v, ce=ce, watch=watch, kern=kern, ctl=ctl,
                 te=te, mode=mode, newton=newton, switch=switch, dense=dense, entry=entry,
                 prefix=prefix, suffix=suffix)
@@ -262,19 +263,6 @@ def _watch(scene, kern, ce, checked, singular_tol) -> Watch:
     return Watch(len(kern.layout.indicators) if checked else 0, float(singular_tol),
                  ce.direction if ce is not None else _NONE,
                  ce.max_events if ce is not None else _NONE)
-
-
-def _loop(scene, method, kern, ce, sens, ctl, te, mode, watch, newton):
-    """The entry of the compiled loop of ``method`` and its arguments before and after
-    ``(t0, t1, y0, p)`` (``halt`` last, per call)."""
-    uev = ce.uev if ce is not None else kern.sing_fp
-    rhs = kern.rhs_fp if sens is None else sens.rhs_fp
-    if method.solver is Solver.IMPLICIT:
-        jac = scene.jacobian.address if sens is None else sens.jac_fp
-        return (kern.implicit(), (rhs, jac, kern.sing_fp, uev, kern.hol_or_none),
-                (ctl, newton, te, mode, watch))
-    return (methods.explicit_solver(method), (rhs, kern.sing_fp, uev, kern.hol_or_none),
-            (ctl, te, mode, watch))
 
 
 def _augmented_tolerances(layout, rtol, atol, controlled):
@@ -323,7 +311,7 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
     if plan.switch:
         return atlas.run(scene, m.name, plan.events, plan.t0, plan.t1, y, p, plan.ctl,
                          plan.te, plan.mode, dense, plan.checked, plan.singular_tol,
-                         plan.newton, plan.limit)
+                         plan.newton, plan.limit, trajectory)
     halt = np.zeros(1, dtype=np.int64)
     entry, prefix, suffix, t0, t1 = plan.entry, plan.prefix, plan.suffix, plan.t0, plan.t1
     tic = time.perf_counter()
@@ -334,37 +322,6 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
         dense["partial_last"] = int(out[0]) in (EVENT, SINGULAR)
     return trajectory(scene, m.name, out, wall, plan.kern, plan.ce, p, t0, y,
                       plan.singular_tol, plan.checked, plan.limit, dense, sens=plan.sens)
-
-
-def call(scene, method, kern, ce, watch, t0, t1, y, p, ctl, te, mode, newton, limit,
-         sens=None):
-    """One call of the compiled loop of ``method`` (a ``Method`` or its name) on the
-    kernels ``kern`` (events ``ce``, ``watch``; with ``sens``, the right-hand side and
-    radau's Jacobian of the state augmented by its sensitivities), stoppable by Ctrl-C
-    and ``limit`` seconds (``numeric.interrupt``); returns its ``Result`` and the
-    wall-clock time."""
-    method = methods.method(method)
-    entry, prefix, suffix = _loop(scene, method, kern, ce, sens, ctl, te, mode, watch,
-                                  newton)
-    halt = np.zeros(1, dtype=np.int64)
-    tic = time.perf_counter()
-    out = interrupt.call(lambda: entry(*prefix, t0, t1, y, p, *suffix, halt), halt, limit)
-    return out, time.perf_counter() - tic
-
-
-def retake(traj, t0, t1, y, tau):
-    """The step of ``traj`` (a dop853 or dopri5 run) from (t0, y) to t1 taken again,
-    its dense output at the times ``tau`` (``numeric.dense``): the ``Result``."""
-    d = traj._dense
-    # |h| one ulp up: t0 + first reaches (or passes, and is cut back to) t1, so the
-    # step is h = t1 - t0, the original run's h to the bit
-    first = float(np.nextafter(abs(t1 - t0), np.inf))
-    ctl = d["ctl"]._replace(first_step=first, max_step=np.inf, max_steps=1, n_steps=0)
-    out, _ = call(traj.scene, traj.method, traj._kernels, None,
-                  Watch(0, 0.0, _NONE, _NONE), t0, t1, y,
-                  np.ascontiguousarray(traj._p, dtype=float), ctl, tau, AT_T_EVAL, None,
-                  None, d.get("rhs"))
-    return out
 
 
 def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, checked,
