@@ -9,7 +9,7 @@ import sys
 import numpy as np
 import pytest
 import sympy as sp
-from hypothesis import assume, given, settings
+from hypothesis import assume, given, settings, strategies as st
 
 import jetnh.strategies as jst
 
@@ -384,3 +384,55 @@ def test_kernels_are_compiled_once_and_called_from_python_through_their_callback
         ck.rhs(0.1, ys[1], p, np.zeros(n - 1))         # out too short
     with pytest.raises(ValueError, match="rows"):
         ck.aux_rows(ts, ys[:3], p, rows)
+
+
+# ---------------------------------------------------------------------- calls from Python
+@pytest.fixture(scope="module")
+def affine_kernel():
+    """A C callback of the kernels' signature, ``out[i] = p[0] y[i] + p[1] + t`` (i < 3),
+    called from Python (sizes (3, 2, 3)) and from compiled code."""
+    import numba
+
+    from jetnh.numeric.kernels.calls import Kernel
+    from jetnh.numeric.layout import SIGNATURE
+
+    @numba.cfunc(SIGNATURE)
+    def affine(t, y, p, out):
+        for i in range(3):
+            out[i] = p[0] * y[i] + p[1] + t
+
+    @numba.njit(SIGNATURE)
+    def direct(t, y, p, out):
+        affine(t, y, p, out)
+
+    return Kernel(affine, (3, 2, 3)), direct
+
+
+@settings(max_examples=25, deadline=None)
+@given(n_y=st.integers(0, 4), n_p=st.integers(0, 3), n_out=st.integers(0, 4),
+       frozen=st.sampled_from(["", "y", "p", "out"]), t=st.floats(-2, 2))
+def test_a_kernel_call_checks_every_array(affine_kernel, n_y, n_p, n_out, frozen, t):
+    """A kernel called from Python runs only when y, p and out hold what it reads and
+    writes, and then computes what the same callback computes called from compiled code;
+    read-only inputs are taken, a read-only output is refused, and a refused call writes
+    nothing."""
+    kernel, direct = affine_kernel
+    rng = np.random.default_rng(n_y * 100 + n_p * 10 + n_out)
+    y, p = rng.uniform(-1, 1, n_y), rng.uniform(-1, 1, n_p)
+    out = np.full(n_out, 7.0)
+    for name, a in (("y", y), ("p", p), ("out", out)):
+        a.flags.writeable = frozen != name
+    fits = n_y >= 3 and n_p >= 2 and n_out >= 3
+    if frozen == "out":
+        with pytest.raises(TypeError, match="read-only"):
+            kernel(t, y, p, out)
+    elif not fits:
+        with pytest.raises(ValueError, match="fewer entries than the kernel needs"):
+            kernel(t, y, p, out)
+        assert np.all(out == 7.0)
+    else:
+        kernel(t, y, p, out)
+        ref = np.full(n_out, 7.0)
+        direct(t, y.copy(), p.copy(), ref)
+        assert np.array_equal(out, ref)
+        assert np.allclose(out[:3], p[0] * y[:3] + p[1] + t, rtol=1e-15, atol=1e-15)

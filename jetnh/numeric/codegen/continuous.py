@@ -14,7 +14,7 @@ import sympy as sp
 
 from ...algebra import dag
 from ...errors import PrincipleError
-from ...mechanics.accelerations import _cached_parts
+from ...mechanics.accelerations import cached_parts
 from ..layout import CODEGEN_VERSION, JAC_SIGNATURE, SIGNATURE, Layout
 from .indicators import label, singular_indicators
 from .llvm import (Unsupported, derivative_program, program, sensitivity_jacobian_program,
@@ -76,9 +76,9 @@ def generate(spec: KernelSpec) -> KernelSource:
     # dL/dqdot and df/dqdot from the derivation's Euler parts (sympy's diff of a long
     # chain's L or constraints is slow)
     Fc = sp.Add(*[lam * f for lam, f in zip(lams, eom.constraints)])
-    dL = _cached_parts(system, system.L).p
+    dL = cached_parts(system, system.L).p
     own = {id(f) for f in system.constraints}
-    df = [_cached_parts(system, f, hessian=not system.is_affine).p if id(f) in own
+    df = [cached_parts(system, f, hessian=not system.is_affine).p if id(f) in own
           else [sp.diff(f, v) for v in J.qd] for f in eom.constraints]
     energy = (sp.Add(*[v * (pv + sp.Add(*[lam * d[s] for lam, d in zip(lams, df)]))
                        for s, (v, pv) in enumerate(zip(J.qd, dL))])
