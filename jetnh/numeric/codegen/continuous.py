@@ -76,12 +76,14 @@ def generate(spec: KernelSpec) -> KernelSource:
 
     # aux: residuals, energy, integrals
     # dL/dqdot and df/dqdot from the derivation's Euler parts (sympy's diff of a long
-    # chain's L or constraints is slow)
+    # chain's L or constraints is slow); of the explicit constraints on their shared
+    # graph (``dag.diff``: sympy's rules, each distinct subexpression once)
     Fc = sp.Add(*[lam * f for lam, f in zip(lams, eom.constraints)])
     dL = cached_parts(system, system.L).p
     own = {id(f) for f in system.constraints}
+    graph: dict = {}
     df = [cached_parts(system, f, hessian=not system.is_affine).p if id(f) in own
-          else [sp.diff(f, v) for v in J.qd] for f in eom.constraints]
+          else [dag.diff(f, v, cache=graph) for v in J.qd] for f in eom.constraints]
     energy = (sp.Add(*[v * (pv + sp.Add(*[lam * d[s] for lam, d in zip(lams, df)]))
                        for s, (v, pv) in enumerate(zip(J.qd, dL))])
               - system.L - Fc)
