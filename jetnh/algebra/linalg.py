@@ -18,6 +18,7 @@ import contextvars
 import random
 
 import mpmath
+import numpy as np
 import sympy as sp
 from sympy.matrices.utilities import dotprodsimp
 
@@ -396,9 +397,32 @@ def mp_rank(M) -> int:
         M = _equilibrate(M)
         if all(M[i, j] == 0 for i in range(M.rows) for j in range(M.cols)):
             return 0
+        if _clearly_full(M):
+            return min(M.rows, M.cols)
         s = mpmath.svd_r(M, compute_uv=False)
         top = max(abs(x) for x in s)
         return sum(1 for x in s if abs(x) > _RANK_TOL * top)
+
+
+_FULL_MARGIN = 1e-8      # float singular values above this times the largest: full rank
+
+
+def _clearly_full(M) -> bool:
+    """Whether the equilibrated mpmath matrix ``M`` (entries at most 1, one of at least
+    1/2 in every non-zero row) has full rank by far, decided in double precision: its
+    singular values differ from those of its rounding by at most about
+    sqrt(rows cols) 2^-53 plus LAPACK's backward error (< 1e-12 here), so a smallest
+    one above ``_FULL_MARGIN`` times the largest is far above ``_RANK_TOL`` in high
+    precision too, and ``svd_r``'s cost (cubic in mpmath arithmetic) is spared.  Any
+    doubt (a small singular value, an entry beyond double range): False."""
+    rows, cols = M.rows, M.cols
+    if rows * cols > 10**6:
+        return False
+    F = np.array([[float(M[i, j]) for j in range(cols)] for i in range(rows)])
+    if not np.all(np.isfinite(F)):
+        return False
+    s = np.linalg.svd(F, compute_uv=False)
+    return len(s) == min(rows, cols) and s[0] > 0 and s[-1] > _FULL_MARGIN * s[0]
 
 
 def _ranks(samples, full: int) -> list[int]:

@@ -426,8 +426,11 @@ class System(Frozen):
     @cached_property
     def jacobian(self) -> sp.Matrix:
         """df^a/dqdot^s (k x n)."""
+        # by a velocity a constraint lacks, zero without a walk (what dag.diff returns)
+        syms = [dag.free_symbols(f) for f in self.constraints]
         return sp.Matrix(self.k, self.J.n,
-                         lambda a, s: dag.diff(self.constraints[a], self.J.qd[s]))
+                         lambda a, s: dag.diff(self.constraints[a], self.J.qd[s])
+                         if self.J.qd[s] in syms[a] else sp.S.Zero)
 
     @cached_property
     def jacobian_dependent(self) -> sp.Matrix:
@@ -451,7 +454,8 @@ class System(Frozen):
             return {}
         fs = sp.Matrix(self.constraints)
         A = self.jacobian_dependent
-        if all(sp.diff(e, v) == 0 for e in A for v in vel):      # affine in qdot^alpha
+        if all(sp.diff(e, v) == 0 for e in A                      # affine in qdot^alpha
+               for v in set(vel) & dag.free_symbols(e)):
             if self._branch is not None:
                 self._affine_branch()
             rest = fs.xreplace({v: 0 for v in vel})
