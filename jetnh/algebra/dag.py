@@ -5,6 +5,8 @@ Solved equations share their subexpressions (the accelerations of a chain of k
 constraints nest k solves), so as trees they are exponentially larger than as graphs.
 sympy's ``free_symbols``, ``atoms``, ``has`` and ``xreplace`` walk the tree; these walk
 the graph once, remembering every node they have seen (by identity).
+
+``sympy_object`` is the one door from a user's value into sympy (never from a string).
 """
 
 from __future__ import annotations
@@ -12,6 +14,21 @@ from __future__ import annotations
 import mpmath
 import sympy as sp
 from sympy.core.function import ArgumentIndexError
+
+from ..errors import JetSpaceError
+
+
+def sympy_object(expr) -> sp.Basic:
+    """A sympy object from a user's value, never from a string (sympify would execute
+    it); anything else that is not one is a ``JetSpaceError``."""
+    if isinstance(expr, str):
+        raise JetSpaceError(
+            f"got the string {expr!r}; jetnh never parses strings here (that would execute "
+            "code). Build expressions from the Symbols of the jet space (J.q, J.qd, ...)")
+    try:
+        return sp.sympify(expr, strict=True)
+    except (sp.SympifyError, TypeError) as exc:
+        raise JetSpaceError(f"{expr!r} is not a sympy expression: {exc}") from None
 
 
 def nodes(expr, cap: int | None = None) -> list:
