@@ -299,7 +299,8 @@ class Form:
         ``sympy.expand`` (rational coefficients: numerator over a common denominator);
         a nonzero value at a random point proves a coefficient nonzero quickly (see
         ``jetnh.algebra.zero.zero_residual``).  Identities that need trigonometric
-        simplification are not proven: use :meth:`is_zero_numeric` or ``form.map(sympy.simplify).is_zero()``.
+        simplification are not proven: use :meth:`is_zero_numeric` or
+        ``form.map(sympy.simplify).is_zero()``.
         """
         return all(expr_is_zero(c) for c in self._terms.values())
 
