@@ -116,14 +116,14 @@ def on_constraints(system, values: dict) -> dict:
         f0 = [f.xreplace({v: sp.S.Zero for v in vel}) for f in system.constraints]
         exprs = list(system.jacobian_dependent) + f0
         if exact:
-            vals = linalg._exact(exprs, free)
+            vals = linalg.exact_values(exprs, free)
             sol = sp.Matrix(k, k, vals[:k * k]).LUsolve(-sp.Matrix(vals[k * k:]))
         else:
             vals = dag.evaluate(exprs, free, dps=mpmath.mp.dps)
             A = mpmath.matrix([vals[i * k:(i + 1) * k] for i in range(k)])
             sol = mpmath.lu_solve(A, -mpmath.matrix(vals[k * k:]))
     elif exact:
-        sol = linalg._exact([system.phi[v] for v in vel], free)
+        sol = linalg.exact_values([system.phi[v] for v in vel], free)
     else:
         sol = dag.evaluate([system.phi[v] for v in vel], free, dps=mpmath.mp.dps)
         if any(isinstance(z, mpmath.mpc) and abs(z.imag) > 1e-12 * (1 + abs(z))
@@ -144,7 +144,7 @@ def _manifold(exprs, system, derived: dict):
     def point(base, dps):
         pt = {s: mpmath.mpf(v.p) / v.q for s, v in base.items()}
         for v, x in zip(vel, dag.evaluate(phi, pt, dps=dps)):
-            pt[v] = linalg._real(x)
+            pt[v] = linalg.real_value(x)
             if pt[v] is None:
                 raise ValueError("no real point on the constraints here")
         pt.update(zip(names, dag.evaluate([derived[s] for s in names], pt, dps=dps)))
@@ -157,7 +157,7 @@ def _manifold(exprs, system, derived: dict):
                 pt = on_constraints(system, pt)
         if any(not isinstance(v, sp.Rational) for v in pt.values()):
             raise linalg.Inexact("irrational point")
-        pt.update({s: linalg._exact([e], pt)[0] for s, e in derived.items()})
+        pt.update({s: linalg.exact_values([e], pt)[0] for s, e in derived.items()})
         return pt
 
     return syms, point, exact_point
@@ -222,12 +222,12 @@ def _zero_exactly(undecided, base, point, exact_point) -> bool:
     """Undecided values ``[(expr, value at 60 digits), ...]``: exactly, those small enough
     when everything is rational (one point, one walk for all), else at 120 digits."""
     small = [(e, hi) for e, hi in undecided
-             if dag.size(e, cap=linalg._EXACT_MAX + 1) <= linalg._EXACT_MAX]
+             if dag.size(e, cap=linalg.EXACT_MAX + 1) <= linalg.EXACT_MAX]
     rest = [u for u in undecided if all(u is not v for v in small)]
     if small:
         try:
             pt = exact_point(base) if exact_point else dict(base)
-            if any(v != 0 for v in linalg._exact([e for e, _ in small], pt)):
+            if any(v != 0 for v in linalg.exact_values([e for e, _ in small], pt)):
                 return False
         except linalg.Inexact:
             rest = undecided
