@@ -10,7 +10,8 @@ space R x Q lies in the distribution::
     Delta = span{ X_rho = d_rho + B^alpha_rho d_alpha },  rho = 0 (time), independent mu,
 
 which is the annihilator of the constraint one-forms
-omega^alpha = dq^alpha - B^alpha_mu dq^mu - B^alpha_0 dt.  The constraints are *integrable*
+omega^alpha = dq^alpha - B^alpha_mu dq^mu - B^alpha_0 dt (``constraint_forms``; B from
+explicit constraints by ``affine_coefficients``).  The constraints are *integrable*
 (holonomic) iff Delta is involutive (Frobenius): then R x Q is foliated by submanifolds
 g^alpha(t, q) = c^alpha whose prolongations are the constraints.  Two independent routes:
 
