@@ -6,7 +6,7 @@ import pytest
 import sympy as sp
 from hypothesis import assume, given, strategies as st
 
-from jetnh import ConstraintError, JetSpace, JetSpaceError
+from jetnh import ConstraintError, JetSpace, JetSpaceError, models
 from jetnh.geometry.forms import d, differential, interior
 from jetnh.geometry.frobenius import (FrobeniusResult, affine_coefficients, constraint_forms,
                                       decide_zero, frobenius, frobenius_from_constraints)
@@ -51,14 +51,14 @@ def test_bead_on_parabola_is_integrable():
 
 
 def test_vertical_rolling_disk_is_not_integrable():
-    J = JetSpace("x y phi psi")
+    disk = models.rolling_disk()
+    J = disk.J
     x, y, phi, psi = J.q
     B = sp.Matrix([[0, R * sp.cos(psi), 0], [0, R * sp.sin(psi), 0]])   # cols t, phi, psi
     r = both(J, B, [x, y], fn=frobenius)
     assert not r.integrable
     assert r.obstructions == {(phi, psi, x): R * sp.sin(psi), (phi, psi, y): -R * sp.cos(psi)}
-    fs = [J.qd[0] - R * sp.cos(psi) * J.qd[2], J.qd[1] - R * sp.sin(psi) * J.qd[2]]
-    r2 = both(J, fs, [x, y])
+    r2 = both(J, list(disk.constraints), [x, y])
     assert r2.obstructions == r.obstructions
 
 
