@@ -7,7 +7,7 @@
 1. ``jn.connect`` against ``scipy.integrate.solve_bvp`` (collocation) on the same
    equations: solve_bvp calls the scene's compiled right-hand side (one call per mesh
    point), with its default finite-difference Jacobian and with jetnh's compiled Jacobian
-   (``codegen.jacobian_kernels``), from a straight-line guess (velocities of the named
+   (``kernels.jacobian_kernels``), from a straight-line guess (velocities of the named
    coordinates, 0.5 for the others, zero multipliers) on 11 nodes, at most 20000 nodes.
    connect runs at rtol 1e-6 .. 1e-10 (its time includes the verdicts: cost, conjugate
    times, Gramian); solve_bvp at tol 1e-3 .. 1e-9.  The error is the largest deviation of the initial
@@ -31,7 +31,7 @@ from _common import best, parser, write
 
 import jetnh as jn
 from jetnh.models import get
-from jetnh.numeric import codegen
+from jetnh.numeric import kernels
 
 ZERO_DISK = {"x": 0.0, "y": 0.0, "phi": 0.0, "psi": 0.0}
 CASES = (
@@ -48,7 +48,7 @@ BVP_TOL = (1e-3, 1e-5, 1e-7, 1e-9)
 def bvp_problem(scene, start, end, T, jacobian):
     kern, p, names = scene.kernels, scene.p, scene.state_names
     n, nq = len(names), len(scene.coordinates)
-    jac = codegen.jacobian_kernels(scene).jac if jacobian else None
+    jac = kernels.jacobian_kernels(scene).jac if jacobian else None
 
     def fun(t, Y):
         out, o = np.empty_like(Y), np.empty(n)

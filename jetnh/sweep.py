@@ -461,11 +461,11 @@ class CompiledScene:
         self.source = kern.source                # the text the cache verified and compiled
 
     def load(self):
-        from .numeric import cache
         from .numeric.codegen import KernelSource
+        from .numeric.kernels import load
 
-        cache.load(self.key, lambda: KernelSource(self.key, self.layout, self.source),
-                   persistent=self.scene.cache)
+        load(self.key, lambda: KernelSource(self.key, self.layout, self.source),
+             persistent=self.scene.cache)
         return self.scene
 
 

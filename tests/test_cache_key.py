@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 
 import jetnh
-from jetnh.numeric import codegen
-from jetnh.numeric.codegen import source_hash
+from jetnh.numeric.codegen import KernelSpec, spec
+from jetnh.numeric.codegen.spec import source_hash
 
 ROOT = Path(jetnh.__file__).resolve().parent
 
@@ -63,6 +63,12 @@ def test_the_kernel_key_carries_the_source_hash(monkeypatch):
     from jetnh import models
 
     system = models.get("knife_edge")
-    key = codegen.symbolic_key(system, "chetaev", {})
-    monkeypatch.setattr(codegen, "_derivation_source_hash", lambda: "0" * 16)
-    assert codegen.symbolic_key(system, "chetaev", {}) != key
+    key = KernelSpec(system, "chetaev", {}).key
+    monkeypatch.setattr(spec, "_derivation_source_hash", lambda: "0" * 16)
+    assert KernelSpec(system, "chetaev", {}).key != key
+
+
+def test_the_key_hashes_the_whole_package():
+    """The hash in the key is the installed package's, all of it (not the directory of
+    the module that computes it)."""
+    assert spec._derivation_source_hash() == source_hash(ROOT)

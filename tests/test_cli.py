@@ -263,7 +263,7 @@ def test_hostile_model_file_is_refused_and_not_executed(tmp_path):
 
 # ---------------------------------------------------------------------- issue 16
 def test_cache_info_and_clear(capsys, tmp_path, monkeypatch):
-    from jetnh.numeric import cache
+    from jetnh.numeric import kernels as cache
 
     root = tmp_path / "c"
     monkeypatch.setenv("JETNH_CACHE", str(root))

@@ -23,6 +23,7 @@ import jetnh as jn
 from jetnh import strategies as jst
 from jetnh.models import get
 from jetnh.numeric import codegen
+from jetnh.numeric.codegen import continuous, llvm
 from jetnh.numeric.scene import Scene
 
 O = {"x": 0.0, "y": 0.0, "z": 0.0}
@@ -42,7 +43,7 @@ def heisenberg_end(v, theta, omega, t):
 
 # ---------------------------------------------------------------------- sensitivities
 def _interpret(ops, t, y, p):
-    """A straight-line program (``codegen.program``) evaluated in Python: the outputs
+    """A straight-line program (``codegen.llvm.program``) evaluated in Python: the outputs
     as a dict slot -> value."""
     vals, out = [], {}
     for op in ops:
@@ -85,14 +86,14 @@ def test_variational_program_is_the_derivative_of_the_rhs(system, principle, dat
         phi, rhs = codegen.kernel_expressions(system, principle, {})
     except jn.JetnhError:
         return                               # singular reduced mass matrix: no equations
-    em, used = codegen._emitter(phi, rhs)
+    em, used = continuous._emitter(phi, rhs)
     try:
-        ops = codegen.program(em, used, list(enumerate(rhs)))
-    except codegen._Unsupported:
+        ops = llvm.program(em, used, list(enumerate(rhs)))
+    except llvm.Unsupported:
         return
     n, n_p = len(rhs), 0
     m = n + n_p
-    sens = codegen._sensitivity_program(ops, n, n_p)
+    sens = llvm.sensitivity_program(ops, n, n_p)
     rnd = np.random.default_rng(data.draw(st.integers(0, 2**32 - 1)))
     y = rnd.uniform(0.2, 0.6, n)
     S = rnd.standard_normal((n, m))

@@ -358,7 +358,7 @@ def test_forces_are_kept_by_every_derived_system_and_shown():
 
 def test_the_kernel_key_and_the_compiled_rhs_carry_the_forces():
     params = {"c": 0.5}
-    keys = {codegen.symbolic_key(s, "chetaev", params) for s in (
+    keys = {codegen.KernelSpec(s, "chetaev", params).key for s in (
         knife(), knife(forces={x: -c * xd}), knife(forces={y: -c * yd}),
         knife(dissipation=c * xd**2 / 2), knife(forces={x: -c * xd}, dissipation=c * xd**2))}
     assert len(keys) == 5

@@ -17,11 +17,17 @@ LAYERS = (
     ("algebra", ("algebra",)),
     ("geometry", ("geometry",)),
     ("mechanics", ("mechanics",)),
+    ("kernel format", ("numeric.layout",)),
+    ("code generation", ("numeric.codegen",)),
     ("numeric", ("numeric",)),
     ("interfaces", ("display", "modelfile", "models", "strategies", "sweep")),
     ("package", ("",)),
     ("command line", ("cli", "__main__")),
 )
+
+#: what the compiled-kernel package (store, loader, record, calls) may import inside
+#: jetnh.numeric: the format, the code generator, and the compiled loops' types
+KERNELS_IMPORT = ("numeric.layout", "numeric.codegen", "numeric.methods", "numeric.kernels")
 
 #: upward imports allowed, (importer or "*", imported, function-level only) -> reason
 ALLOWED_UPWARD = {
@@ -187,3 +193,12 @@ def test_a_violation_names_its_file_and_line():
         "(numeric) inside a function",
         "jetnh/mechanics/system.py:41: jetnh.mechanics.system (mechanics) imports jetnh.display "
         "(interfaces)"]
+
+
+def test_the_kernel_package_imports_only_what_it_stores_and_calls():
+    """jetnh.numeric.kernels sits between code generation and the numeric values: it
+    never imports a scene, a trajectory or a driver."""
+    bad = [f"{where(a, line)}: jetnh.{a} imports jetnh.{b}" for a, b, line, _ in imports()
+           if a.startswith("numeric.kernels") and b.startswith("numeric")
+           and not any(b == p or b.startswith(p + ".") for p in KERNELS_IMPORT)]
+    assert not bad, "\n".join(bad)

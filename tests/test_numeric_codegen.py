@@ -9,13 +9,14 @@ import sys
 import numpy as np
 import pytest
 import sympy as sp
-from hypothesis import assume, given, settings
+from hypothesis import assume, given, settings, strategies as st
 
 import jetnh.strategies as jst
 
 from jetnh import models
 from jetnh.errors import JetnhError
-from jetnh.numeric import Scene, cache, codegen
+from jetnh.numeric import Scene, codegen, kernels
+from jetnh.numeric.codegen import KernelSpec, text
 
 
 def disk_system():
@@ -28,7 +29,7 @@ PARAMS = {"R": 1.5, "I1": 0.5, "I2": 0.25}
 
 def test_printer_is_exact_and_cheap():
     x, y = sp.symbols("x y")
-    p = codegen.print_expr
+    p = text.print_expr
     assert float(p(sp.Float(0.1))) == 0.1
     v = 1 / 3
     assert float(p(sp.Float(v))) == v   # repr round-trips every double
@@ -41,7 +42,7 @@ def test_printer_is_exact_and_cheap():
 
 def test_generated_source_renames_every_symbol():
     s = disk_system()
-    ks = codegen.generate(s, "vakonomic", PARAMS, key="k")
+    ks = codegen.generate(KernelSpec(s, "vakonomic", PARAMS))
     src = ks.source
     for name in ("phi", "psi", "lambda", "R*", "I1", "I2"):
         assert name not in src.split("LAYOUT")[0], name
@@ -53,16 +54,20 @@ def test_generated_source_renames_every_symbol():
 
 def test_missing_parameter_in_codegen():
     with pytest.raises(JetnhError, match="no value: I2"):
-        codegen.generate(disk_system(), "chetaev", {"R": 1.0, "I1": 1.0})
+        codegen.generate(KernelSpec(disk_system(), "chetaev", {"R": 1.0, "I1": 1.0}))
 
 
 def test_key_depends_on_the_symbolic_input():
     s = disk_system()
-    k1 = codegen.symbolic_key(s, "chetaev", PARAMS)
-    assert k1 == codegen.symbolic_key(disk_system(), "chetaev", dict(PARAMS))
-    assert k1 != codegen.symbolic_key(s, "vakonomic", PARAMS)
-    assert k1 != codegen.symbolic_key(s, "chetaev", dict(PARAMS, R=1.5000000000000002))
-    assert k1 != codegen.symbolic_key(s, "chetaev", PARAMS, runtime_params=("R",))
+    k1 = KernelSpec(s, "chetaev", PARAMS).key
+    assert k1 == KernelSpec(disk_system(), "chetaev", dict(PARAMS)).key
+    assert KernelSpec(s, "chetaev", PARAMS) == KernelSpec(disk_system(), "chetaev", PARAMS)
+    assert k1 != KernelSpec(s, "vakonomic", PARAMS).key
+    assert k1 != KernelSpec(s, "chetaev", dict(PARAMS, R=1.5000000000000002)).key
+    assert k1 != KernelSpec(s, "chetaev", PARAMS, runtime_params=("R",)).key
+    keys = {KernelSpec(s, "chetaev", PARAMS, variant=v).key
+            for v in ("", "jacobian", "sensitivities", "discrete")}
+    assert len(keys) == 4                     # each kernel set of a scene has its own key
 
 
 def test_runtime_parameters(tmp_path):
@@ -118,7 +123,7 @@ def test_disk_cache_across_processes(tmp_path):
 
 def test_cache_root_env(tmp_path, monkeypatch):
     monkeypatch.setenv("JETNH_CACHE", str(tmp_path))
-    assert str(cache.cache_root()).startswith(str(tmp_path))
+    assert str(kernels.cache_root()).startswith(str(tmp_path))
 
 
 # ---------------------------------------------------------------------- the emitter
@@ -133,7 +138,7 @@ class _NoNumba:
 
 
 def _interpret(ops):
-    """A straight-line program (``codegen.program``) run by Python: what the LLVM
+    """A straight-line program (``codegen.llvm.program``) run by Python: what the LLVM
     instructions of ``straight_line`` compute, written a second time."""
     import math
 
@@ -171,7 +176,7 @@ def _interpret(ops):
 def _plain(source):
     """The generated module's namespace, executed as Python (numba decorators inert;
     the straight-line programs interpreted)."""
-    source = source.replace("from jetnh.numeric.codegen import straight_line",
+    source = source.replace("from jetnh.numeric.codegen.llvm import straight_line",
                             "straight_line = _interpret")
     ns = {"_interpret": _interpret}
     with pytest.MonkeyPatch.context() as mp:
@@ -197,7 +202,7 @@ def test_emitter_prints_each_shared_node_once():
     sizes = {}
     for depth in (10, 20, 40):
         e = _chain(depth)
-        em = codegen.Emitter([e])
+        em = text.Emitter([e])
         lines = em.emit([("r", e)])
         sizes[depth] = sum(map(len, lines))
         if depth == 10:
@@ -220,9 +225,9 @@ def test_emitter_merges_equal_copies():
     b = _chain(6)                    # built again: equal, distinct objects at every level
     assert a == b and a is not b and a.args[0] is not b.args[0]
     c = sp.cos(x) * y
-    em = codegen.Emitter([a + c, b * c])
+    em = text.Emitter([a + c, b * c])
     lines = em.emit([("out[0]", a + c), ("out[1]", b * c)])
-    single = codegen.Emitter([a]).emit([("r", a)])
+    single = text.Emitter([a]).emit([("r", a)])
     assert len(lines) <= len(single) + 4     # + a named, c, two outputs
 
 
@@ -233,7 +238,7 @@ def test_emitter_prints_exact_numbers_and_fallback_heads():
     exprs = [sp.Rational(1, 3) * x - 2 * y**3 / sp.sqrt(x),
              sp.Piecewise((x, y > 0), (-x, True)) + sp.Abs(y) + sp.atan2(y, x),
              x ** sp.Rational(3, 2) + sp.exp(-x) / (1 + y**2) ** 2]
-    em = codegen.Emitter(exprs)
+    em = text.Emitter(exprs)
     lines = em.emit([(f"r{i}", e) for i, e in enumerate(exprs)])
     for point in ({"s0": 0.7, "s1": -0.4}, {"s0": 1.3, "s1": 0.9}):
         ns = {"math": math, **point}
@@ -267,7 +272,7 @@ def test_jacobian_matches_the_derivative_of_the_expressions(s, principle):
     """jac (forward mode over the graph) against sympy's derivative of the kernel
     expressions at 40 digits, at random states of random systems."""
     try:
-        ks = codegen.generate(s, principle, {}, jacobian=True)
+        ks = codegen.generate(KernelSpec(s, principle, {}, variant="jacobian"))
     except JetnhError:
         assume(False)
     ns = _plain(ks.source)
@@ -293,7 +298,7 @@ def test_compiled_jacobian_against_finite_differences():
     ini = dict(x=0.0, y=0.0, phi=0.3, psi=0.2, phi_t=1.0, psi_t=0.5,
                lambda_x=0.1, lambda_y=-0.2)
     sc = Scene(s, "vakonomic", params=PARAMS, initial=ini, cache=False)
-    ck = codegen.jacobian_kernels(sc)
+    ck = kernels.jacobian_kernels(sc)
     assert ck.jac_c._sig is not None
     n = len(sc.state_names)
     y = sc.y0 + np.linspace(0.1, 0.4, n)
@@ -320,7 +325,7 @@ def test_printed_jacobian_for_heads_the_program_lacks():
     v = sp.Symbol("v0")
     phi = sp.Abs(x) * y + sp.sin(x * y)
     exprs = [v * sp.Piecewise((x**2, y > 0), (sp.cos(x), True)) + sp.atan2(y, x), v / (1 + y**2)]
-    em = codegen.Emitter([phi] + exprs, inline=0)
+    em = text.Emitter([phi] + exprs, inline=0)
     lines = em.emit([("v0", phi)]) + em.emit([(None, e) for e in exprs])
     lines += em.jacobian(list(enumerate(exprs)), {x: 0, y: 1}, {v: phi})
     full = [e.xreplace({v: phi}) for e in exprs]
@@ -371,3 +376,55 @@ def test_kernels_are_compiled_once_and_called_from_python_through_their_callback
         ck.rhs(0.1, ys[1], p, np.zeros(n - 1))         # out too short
     with pytest.raises(ValueError, match="rows"):
         ck.aux_rows(ts, ys[:3], p, rows)
+
+
+# ---------------------------------------------------------------------- calls from Python
+@pytest.fixture(scope="module")
+def affine_kernel():
+    """A C callback of the kernels' signature, ``out[i] = p[0] y[i] + p[1] + t`` (i < 3),
+    called from Python (sizes (3, 2, 3)) and from compiled code."""
+    import numba
+
+    from jetnh.numeric.kernels.calls import Kernel
+    from jetnh.numeric.layout import SIGNATURE
+
+    @numba.cfunc(SIGNATURE)
+    def affine(t, y, p, out):
+        for i in range(3):
+            out[i] = p[0] * y[i] + p[1] + t
+
+    @numba.njit(SIGNATURE)
+    def direct(t, y, p, out):
+        affine(t, y, p, out)
+
+    return Kernel(affine, (3, 2, 3)), direct
+
+
+@settings(max_examples=25, deadline=None)
+@given(n_y=st.integers(0, 4), n_p=st.integers(0, 3), n_out=st.integers(0, 4),
+       frozen=st.sampled_from(["", "y", "p", "out"]), t=st.floats(-2, 2))
+def test_a_kernel_call_checks_every_array(affine_kernel, n_y, n_p, n_out, frozen, t):
+    """A kernel called from Python runs only when y, p and out hold what it reads and
+    writes, and then computes what the same callback computes called from compiled code;
+    read-only inputs are taken, a read-only output is refused, and a refused call writes
+    nothing."""
+    kernel, direct = affine_kernel
+    rng = np.random.default_rng(n_y * 100 + n_p * 10 + n_out)
+    y, p = rng.uniform(-1, 1, n_y), rng.uniform(-1, 1, n_p)
+    out = np.full(n_out, 7.0)
+    for name, a in (("y", y), ("p", p), ("out", out)):
+        a.flags.writeable = frozen != name
+    fits = n_y >= 3 and n_p >= 2 and n_out >= 3
+    if frozen == "out":
+        with pytest.raises(TypeError, match="read-only"):
+            kernel(t, y, p, out)
+    elif not fits:
+        with pytest.raises(ValueError, match="fewer entries than the kernel needs"):
+            kernel(t, y, p, out)
+        assert np.all(out == 7.0)
+    else:
+        kernel(t, y, p, out)
+        ref = np.full(n_out, 7.0)
+        direct(t, y.copy(), p.copy(), ref)
+        assert np.array_equal(out, ref)
+        assert np.allclose(out[:3], p[0] * y[:3] + p[1] + t, rtol=1e-15, atol=1e-15)

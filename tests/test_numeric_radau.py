@@ -80,9 +80,9 @@ def exact_x(t):
 def test_scene_jacobian_is_the_generated_one_and_matches_differences(particle):
     """radau's Jacobian is the kernel generated from the derivation (codegen), checked
     against central differences of the compiled rhs."""
-    from jetnh.numeric import codegen
+    from jetnh.numeric import kernels
 
-    ck = codegen.jacobian_kernels(particle)
+    ck = kernels.jacobian_kernels(particle)
     assert particle.jacobian.address.address == ck.jac_fp.address
     kern = particle.kernels
     y, p = particle.y0 + 0.1, particle.p

@@ -292,9 +292,9 @@ def test_import_is_light_and_jetnh_sweep_is_the_callable_module():
 
 # ---------------------------------------------------------------------- Dask
 def kernels_on_worker(key):
-    from jetnh.numeric import cache
+    from jetnh.numeric.kernels import loader
 
-    kern = cache._LOADED[(key, False)]
+    kern = loader._LOADED[(key, False)]
     return kern.hit, sorted(kern.timings)
 
 

@@ -108,7 +108,7 @@ def test_jetnh_sweep_is_the_module_and_calls_the_function():
 
 
 def test_compiled_kernels_have_no_dead_integrator():
-    from jetnh.numeric.cache import CompiledKernels
+    from jetnh.numeric.kernels import CompiledKernels
 
     assert not hasattr(CompiledKernels, "integrator")
     assert callable(CompiledKernels.implicit)

@@ -117,7 +117,7 @@ def _parts(F, t, q, qd, hessian, zero, add):
     return p, H, rem, v
 
 
-def _cached_parts(system, F, hessian=True) -> EulerParts:
+def cached_parts(system, F, hessian=True) -> EulerParts:
     """``euler_parts`` of the system's Lagrangian or constraints, once per system."""
     key = id(system)
     entry = _PARTS.get(key)
@@ -158,8 +158,8 @@ def _solve(system, kappa, explicit, multipliers, rates):
     ind, dep = list(system.ind_index), list(system.dep_index)
     transform = explicit and system.is_affine
     cons = system.explicit_constraints if explicit and not transform else system.constraints
-    p, H, r, _ = _cached_parts(system, system.L)
-    cparts = [_cached_parts(system, f, hessian=not system.is_affine) for f in cons]
+    p, H, r, _ = cached_parts(system, system.L)
+    cparts = [cached_parts(system, f, hessian=not system.is_affine) for f in cons]
     A = sp.Matrix([c.p for c in cparts]) if k else sp.zeros(0, n)
     b = sp.Matrix([c.v for c in cparts]) if k else sp.zeros(0, 1)
     A_dep = A[:, dep]

@@ -2,7 +2,7 @@
 
 ``Scene(system, principle, params, initial, t_span).run(...)`` derives the equations of
 one principle, generates numba kernels through ``sympy.cse`` (``codegen``), caches them
-on disk keyed by the symbolic input (``cache``), and integrates in compiled loops
+on disk keyed by the symbolic input (``kernels``), and integrates in compiled loops
 (``methods``: dop853, dopri5, rk4, radau, dla, dvi) or with scipy's ``solve_ivp``.
 
 - Singular configurations (``codegen.singular_indicators``): every run stops where the

@@ -130,7 +130,7 @@ class Chart:
 
     def jacobian(self, t, Y, p) -> np.ndarray:
         """df/dqdot at the rows (t, Y) of this chart: [rows, k, n]."""
-        from .calls import Kernel
+        from .kernels.calls import Kernel
 
         ce = self.scene.compile_events(_jacobian_events(self.scene.system))
         kern = Kernel(ce.uev, (Y.shape[1], p.shape[0], self.k * self.n))

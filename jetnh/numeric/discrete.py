@@ -13,8 +13,8 @@ import numpy as np
 
 from ..mechanics import principles
 from ..errors import IntegrationError, PrincipleError
-from . import cache as _cache
 from . import codegen, diagnosis, interrupt
+from .kernels import load as load_kernels
 from .methods import STATUS_TEXT
 from .events import split_records
 from .methods._common import ENDPOINTS, EVENT, EVERY_STEP, NONFINITE, NOT_CONVERGED, SINGULAR, STOPPED
@@ -23,13 +23,9 @@ from .trajectory import Trajectory
 
 def kernels(scene, principle):
     """The kernels of the discrete step of ``principle`` (chetaev: dla, vakonomic: dvi)."""
-    compiled_params = {k: v for k, v in scene.params.items()
-                       if k not in scene.runtime_params}
-    key = codegen.symbolic_key(scene.system, principle, compiled_params,
-                               scene.runtime_params, scene.integrals, extra="discrete")
-    return _cache.load(key, lambda: codegen.generate_dla(
-        scene.system, compiled_params, scene.runtime_params, key=key, kind=principle,
-        integrals=scene.integrals), persistent=scene.cache)
+    spec = scene.spec.but(principle=principle, form=None, convention="paper",
+                          variant="discrete")
+    return load_kernels(spec.key, lambda: codegen.generate_dla(spec), persistent=scene.cache)
 
 
 def run_dla(scene, method, t0, t1, y_init, default_y0, p, n_steps, save, tol, max_iter,

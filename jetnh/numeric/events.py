@@ -40,8 +40,8 @@ import sympy as sp
 
 from ..errors import JetnhError
 from ..frozen import Frozen
-from . import cache as _cache
 from . import codegen
+from .kernels import load as load_kernels
 
 
 class Event(Frozen):
@@ -160,15 +160,10 @@ def compile_events(scene, events: list[Event]) -> CompiledEvents:
         _check_symbols(scene, expr, events[i].name)
     kernel = None
     if exprs:
-        compiled_params = {k: v for k, v in scene.params.items()
-                           if k not in scene.runtime_params}
-        extra = "events:" + repr([(i, sp.srepr(e)) for i, e in exprs])
-        key = codegen.symbolic_key(scene.system, scene.principle, compiled_params,
-                                   scene.runtime_params, extra=extra)
+        spec = scene.spec.but(variant="events", events=tuple(exprs))
         layout = scene.kernels.layout
-        kernel = _cache.load(key, lambda: codegen.generate_events(
-            scene.system, scene.principle, compiled_params, scene.runtime_params, exprs,
-            layout, key=key), persistent=scene.cache)
+        kernel = load_kernels(spec.key, lambda: codegen.generate_events(spec, layout),
+                              persistent=scene.cache)
     jitted = []
     for i, f in calls:
         try:

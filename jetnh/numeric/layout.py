@@ -1,8 +1,9 @@
-"""What a generated kernel module is: the version of its format and its ``Layout``.
+"""What a generated kernel module is: the version of its format, the signatures of its
+kernels and its ``Layout``.
 
-Shared by the code generator (which writes modules) and the disk cache (which keeps them
-under ``v<CODEGEN_VERSION>`` and reads their layout back), so that neither imports the
-other's module for them.
+Shared by the code generator (which writes modules) and the kernel store and loader
+(which keep them under ``v<CODEGEN_VERSION>``, read their layout back and call them), so
+that neither imports the other's package for them.
 """
 
 from __future__ import annotations
@@ -11,7 +12,13 @@ import json
 from dataclasses import dataclass
 
 #: the format of generated kernel modules (the cache keeps each version apart)
-CODEGEN_VERSION = "10"
+CODEGEN_VERSION = "11"
+
+#: the numba signature of the kernels ``rhs``, ``aux``, ``sing``, ``hol``, ``events``
+#: (t, y, p, out)
+SIGNATURE = "void(float64, float64[::1], float64[::1], float64[::1])"
+#: the numba signature of ``jac`` (t, y, p, J)
+JAC_SIGNATURE = "void(float64, float64[::1], float64[::1], float64[:, ::1])"
 
 
 @dataclass(frozen=True)

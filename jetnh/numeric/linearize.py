@@ -15,7 +15,7 @@ dropped or follow from holonomic constraints (below); the dependent velocities f
 from the constraints (qdot^alpha = phi^alpha), so every perturbation stays on the
 constraint manifold.  ``A = dx'/dx`` at the operating point comes from the Jacobian
 kernel generated from the derivation by forward-mode differentiation over the shared
-graph (``codegen.jacobian_kernels``), compiled once per system and principle with every
+graph (``kernels.jacobian_kernels``), compiled once per system and principle with every
 parameter read at run time: a ``replace`` costs a kernel call and an eigenvalue
 problem.  ``Linearization.symbolic()`` is the same matrix in the
 user's symbols, by ``dag.jacobian`` on the graph (never flattened).
@@ -180,13 +180,13 @@ class _Model:
     def kernels(self, params: dict, state: dict, t: float):
         """The compiled kernels (``rhs``, ``aux``, ``jac``), built on first use."""
         if self._kernels is None:
-            from . import codegen
+            from .kernels import jacobian_kernels
             from .scene import Scene
 
             scene = Scene(self.system, self.principle, params=params,
                           initial=state, t_span=(t, t + 1.0), form=self.form,
                           convention=self.convention, runtime_params=self.params)
-            self._kernels = codegen.jacobian_kernels(scene)
+            self._kernels = jacobian_kernels(scene)
         return self._kernels
 
 

@@ -53,8 +53,8 @@ from ..mechanics.system import System
 from ..errors import ConstraintError, JetnhError
 from ..geometry.jet import sympy_object
 from . import arguments, interrupt
-from . import cache as _cache
 from . import codegen
+from .kernels import jacobian_kernels, load as load_kernels, sensitivity_kernels
 from . import atlas, diagnosis, discrete, methods, scipy_backend
 from .methods import STATUS_TEXT, Solver
 from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, FINISHED, NONFINITE, SINGULAR, STOPPED
@@ -277,40 +277,30 @@ class Scene(Frozen):
 
     # ------------------------------------------------------------------ kernels
     @memo
+    def spec(self) -> codegen.KernelSpec:
+        """The identity of the scene's kernels (``codegen.KernelSpec``) and its key."""
+        return codegen.KernelSpec(self.system, self.principle, self.params,
+                                  self.runtime_params, self.integrals, self.form,
+                                  self.convention)
+
+    @memo
     def key(self) -> str:
-        compiled_params = {k: v for k, v in self.params.items()
-                           if k not in self.runtime_params}
-        return codegen.symbolic_key(self.system, self.principle, compiled_params,
-                                    self.runtime_params, self.integrals, self.form,
-                                    self.convention)
+        return self.spec.key
 
     @property
     def kernels(self):
         """The compiled kernels (from memory, the disk cache, or generated now)."""
-        compiled_params = {k: v for k, v in self.params.items()
-                           if k not in self.runtime_params}
-        return _cache.load(self.key, lambda: codegen.generate(
-            self.system, self.principle, compiled_params, self.runtime_params,
-            self.integrals, self.form, self.convention, key=self.key), persistent=self.cache)
-
-    @memo
-    def sensitivity_key(self) -> str:
-        """The key of the kernels of runs with sensitivities
-        (``codegen.sensitivity_kernels``)."""
-        compiled_params = {k: v for k, v in self.params.items()
-                           if k not in self.runtime_params}
-        return codegen.symbolic_key(self.system, self.principle, compiled_params,
-                                    self.runtime_params, self.integrals, self.form,
-                                    self.convention, extra="sensitivities")
+        return load_kernels(self.key, lambda: codegen.generate(self.spec),
+                            persistent=self.cache)
 
     @property
     def jacobian(self):
         """``jac(t, y, p, J)``: writes ``J[i, j] = d rhs_i / d y_j`` (``J`` a C-contiguous
         float64 n_state x n_state array; ``y`` in the order ``state_names``, ``p`` the
         run-time parameters ``self.p``), the kernel generated from the derivation
-        (``codegen.jacobian_kernels``, forward mode over the shared graph) that radau
+        (``kernels.jacobian_kernels``, forward mode over the shared graph) that radau
         uses; ``jacobian.address`` is its C callback for compiled code."""
-        return codegen.jacobian_kernels(self).jac
+        return jacobian_kernels(self).jac
 
     def replace(self, **changes) -> "Scene":
         """A scene equal to this one except for ``changes`` (constructor arguments:
@@ -420,7 +410,7 @@ class Scene(Frozen):
             variational equations ``S' = (df/dy) S + df/dp``, ``S(t0) = (I | 0)``, of
             ``S = dy(t)/d(y(t0), p)`` (the derivatives of the initial state and of the
             runtime parameters), df/dy and df/dp generated from the derivation (forward
-            mode over the graph, compiled: ``codegen.sensitivity_kernels``);
+            mode over the graph, compiled: ``kernels.sensitivity_kernels``);
             ``traj.sensitivity(of, to)`` reads them.  Such a run keeps its split.
         sensitivity_error : bool, default True
             Whether S is under the error control (its entry (i, k) with the tolerance of
@@ -457,7 +447,7 @@ class Scene(Frozen):
         m = methods.method(method, backend)
         sens = None
         if sensitivities:
-            sens = codegen.sensitivity_kernels(self)
+            sens = sensitivity_kernels(self)
             y_init, rtol, atol_v = _augmented(sens.layout, y_init, rtol, atol_v,
                                               bool(sensitivity_error), m)
         elif sensitivity_error is not True:

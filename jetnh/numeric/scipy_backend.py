@@ -20,7 +20,7 @@ def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_st
     """scipy's ``solve_ivp`` on the compiled right-hand side; user events and the
     singularity indicators become scipy events (the indicators terminal, direction -1,
     on ``s_i g_i - singular_tol |g_i(t0)|``).  ``sensitivities``: the kernels of the
-    state augmented by its sensitivities (``codegen.sensitivity_kernels``; ``y_init``
+    state augmented by its sensitivities (``kernels.sensitivity_kernels``; ``y_init``
     and the tolerances augmented too)."""
     from scipy.integrate import solve_ivp
 

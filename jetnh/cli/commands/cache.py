@@ -28,12 +28,12 @@ def _bytes(n: int) -> str:
 
 def run(args, progress) -> int:
     """Where the kernel cache lives and what it holds; or empty it."""
-    from ...numeric import cache
+    from ...numeric.kernels import loader, store as cache
 
     if args.action == "clear":
         root = cache.cache_root()
         mine = cache.owned(root)
-        n = cache.clear()
+        n = loader.clear()
         print(f"removed {n} cached {'entry' if n == 1 else 'entries'} from {root}"
               if mine or not root.exists() else
               f"left {root} alone: it has no {cache.MARKER} file, so jetnh did not make it")

@@ -1,4 +1,7 @@
-"""The disk cache of compiled kernels: private, verified before use, self-repairing.
+"""The disk store of generated kernels: private, verified before use, self-repairing.
+
+This module knows files, keys and signatures only: it hands out the verified bytes of an
+entry (``read``), and the loader (``loader``) compiles them.
 
 Where it lives
 --------------
@@ -9,7 +12,7 @@ or ``$XDG_CACHE_HOME/jetnh`` on Linux, ``~/Library/Caches/jetnh`` on macOS).
 ``jetnh cache info`` and ``jetnh cache clear`` show and empty it (``info()``,
 ``clear()``).  ``Scene(..., cache=False)`` uses a private temporary directory removed at
 exit.  Each scene's kernels are one *entry*, a
-directory named by a hash of the symbolic input (``codegen.symbolic_key``)::
+directory named by a hash of the symbolic input (``codegen.KernelSpec.key``)::
 
     <root>/hmac.key          32 random bytes, this user's secret (mode 0600)
     <root>/k<key>/
@@ -86,22 +89,15 @@ import os
 import secrets
 import shutil
 import stat
-import sys
 import tempfile
-import threading
 import time
-import types
 import warnings
 from pathlib import Path
 
-from ..errors import KernelCacheWarning
-from .layout import CODEGEN_VERSION, Layout
+from ...errors import KernelCacheWarning
+from ..layout import CODEGEN_VERSION
 
-_LOADED: dict[tuple[str, bool], "CompiledKernels"] = {}
 _TEMP_ROOT: Path | None = None
-_LOCK = threading.Lock()            # guards _LOADED and _KEY_LOCKS
-_EXEC_LOCK = threading.RLock()      # one kernel module compiled at a time
-_KEY_LOCKS: dict[tuple[str, bool], threading.Lock] = {}
 _WARNED: set[str] = set()
 
 MANIFEST = "manifest.json"
@@ -119,7 +115,7 @@ _O_NOFOLLOW = getattr(os, "O_NOFOLLOW", 0)
 _O_CLOEXEC = getattr(os, "O_CLOEXEC", 0)
 
 
-class _Untrusted(Exception):
+class Untrusted(Exception):
     """An entry (or file) that must not be used; the message says why."""
 
 
@@ -218,8 +214,6 @@ def clear(root: Path | None = None) -> int:
             continue                    # not provably jetnh's: never deleted
         n += len(_entries(r))
         shutil.rmtree(r)
-    for k in [k for k in _LOADED if k[1]]:
-        del _LOADED[k]
     return n
 
 
@@ -229,15 +223,15 @@ def _uid() -> int:
 
 
 def _check_stat(st, path, want_dir: bool, secret: bool = False):
-    """Raise ``_Untrusted`` unless ``st`` is a regular file (a directory if ``want_dir``)
+    """Raise ``Untrusted`` unless ``st`` is a regular file (a directory if ``want_dir``)
     of this user that group and others cannot write (nor read, for a ``secret``)."""
     kind = stat.S_ISDIR(st.st_mode) if want_dir else stat.S_ISREG(st.st_mode)
     if not kind:
-        raise _Untrusted(f"{path} is not a {'directory' if want_dir else 'regular file'}")
+        raise Untrusted(f"{path} is not a {'directory' if want_dir else 'regular file'}")
     if st.st_uid != _uid():
-        raise _Untrusted(f"{path} belongs to user {st.st_uid}, not {_uid()}")
+        raise Untrusted(f"{path} belongs to user {st.st_uid}, not {_uid()}")
     if st.st_mode & (0o077 if secret else 0o022):
-        raise _Untrusted(f"{path} has mode {stat.S_IMODE(st.st_mode):o}")
+        raise Untrusted(f"{path} has mode {stat.S_IMODE(st.st_mode):o}")
 
 
 def _mkdir_private(path):
@@ -263,7 +257,7 @@ def _makedirs_private(path):
             pass
 
 
-def _write_private(path, data: bytes):
+def write_private(path, data: bytes):
     """A new file of mode 0600 (fails if ``path`` exists; never follows a link)."""
     fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | _O_NOFOLLOW | _O_CLOEXEC,
                  0o600)
@@ -279,7 +273,7 @@ def _write_private(path, data: bytes):
 def _replace_private(path: Path, data: bytes):
     """Atomic write of a 0600 file: readers see the old or the new file, never half."""
     tmp = path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
-    _write_private(tmp, data)
+    write_private(tmp, data)
     try:
         os.replace(tmp, path)
     except OSError:
@@ -288,14 +282,14 @@ def _replace_private(path: Path, data: bytes):
 
 
 def _read_private(path, secret: bool = False) -> tuple[bytes, os.stat_result]:
-    """The bytes of a regular file of this user that others cannot write (``_Untrusted``
+    """The bytes of a regular file of this user that others cannot write (``Untrusted``
     otherwise; ``FileNotFoundError`` if absent); links are not followed."""
     try:
         fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | _O_NOFOLLOW | _O_CLOEXEC)
     except FileNotFoundError:
         raise
     except OSError as exc:          # ELOOP: a symbolic link; EACCES; ...
-        raise _Untrusted(f"{path} cannot be opened ({exc.strerror})") from None
+        raise Untrusted(f"{path} cannot be opened ({exc.strerror})") from None
     try:
         st = os.fstat(fd)
         _check_stat(st, path, want_dir=False, secret=secret)
@@ -317,7 +311,7 @@ def _unlink(path):
         pass
 
 
-def _discard(path: Path):
+def discard(path: Path):
     """Remove an untrusted or damaged entry (or whatever is at its place): moved aside
     first, so a concurrent reader never sees it half removed, then deleted."""
     try:
@@ -373,7 +367,7 @@ def _prepare_root(root: Path, own_base: bool = True) -> Path:
     # the marker: in a root jetnh made now, or one whose key file shows jetnh made it
     if (made or os.path.isfile(root / KEY_FILE)) and not owned(root):
         try:
-            _write_private(root / MARKER, b"jetnh kernel cache: jetnh made this directory\n")
+            write_private(root / MARKER, b"jetnh kernel cache: jetnh made this directory\n")
         except FileExistsError:
             pass
         except OSError as exc:
@@ -382,7 +376,7 @@ def _prepare_root(root: Path, own_base: bool = True) -> Path:
     return root
 
 
-def _temp_root() -> Path:
+def temp_root() -> Path:
     """A private temporary cache (0700), removed at exit."""
     global _TEMP_ROOT
     if _TEMP_ROOT is None or not _TEMP_ROOT.is_dir():
@@ -391,7 +385,7 @@ def _temp_root() -> Path:
     return _TEMP_ROOT
 
 
-def _secret(root: Path) -> bytes:
+def secret_key(root: Path) -> bytes:
     """This user's HMAC key, ``<root>/hmac.key``: 32 random bytes, mode 0600, made once
     and atomically (written aside, then linked into place: the first one stays)."""
     path = root / KEY_FILE
@@ -403,11 +397,11 @@ def _secret(root: Path) -> bytes:
             _unlink(path)           # truncated: entries signed with it cannot be checked
         except FileNotFoundError:
             pass
-        except _Untrusted:
+        except Untrusted:
             _unlink(path)           # readable or writable by others: no longer a secret
         tmp = root / f".{KEY_FILE}.{os.getpid()}.{secrets.token_hex(4)}"
         try:
-            _write_private(tmp, secrets.token_bytes(32))
+            write_private(tmp, secrets.token_bytes(32))
             try:
                 os.link(tmp, path)
             except FileExistsError:
@@ -424,12 +418,12 @@ def _secret(root: Path) -> bytes:
                     f"remove {path} (it is made again)")
 
 
-def _root(persistent: bool) -> tuple[Path, bytes]:
+def open_root(persistent: bool) -> tuple[Path, bytes]:
     """The root to use and its key: the configured one, or the temporary fallback."""
     if persistent:
         root = cache_root()
         try:
-            return root, _secret(_prepare_root(root))
+            return root, secret_key(_prepare_root(root))
         except _Unusable as exc:
             problem, fix = exc.args
             if str(root) + problem not in _WARNED:
@@ -440,13 +434,13 @@ def _root(persistent: bool) -> tuple[Path, bytes]:
                     f"them between runs, {fix}.", KernelCacheWarning, stacklevel=3)
     global _TEMP_ROOT
     for _ in range(2):
-        root = _temp_root()
+        root = temp_root()
         try:
-            return root, _secret(_prepare_root(root, own_base=False))
+            return root, secret_key(_prepare_root(root, own_base=False))
         except _Unusable:           # the temporary root was damaged: a new one
             _TEMP_ROOT = None
-    root = _temp_root()
-    return root, _secret(_prepare_root(root, own_base=False))
+    root = temp_root()
+    return root, secret_key(_prepare_root(root, own_base=False))
 
 
 # ---------------------------------------------------------------------- manifests
@@ -457,7 +451,7 @@ def _mac(secret: bytes, body: dict) -> str:
 
 def _listing(directory: Path) -> dict[str, Path]:
     """Every file of an entry but the manifest, by relative name (``__pycache__/<name>``
-    for numba's); ``_Untrusted`` if a directory is not private or is unexpected."""
+    for numba's); ``Untrusted`` if a directory is not private or is unexpected."""
     _check_stat(os.lstat(directory), directory, want_dir=True)
     out = {}
     for name in os.listdir(directory):
@@ -473,7 +467,7 @@ def _listing(directory: Path) -> dict[str, Path]:
     return out
 
 
-def _seal(directory: Path, key: str, secret: bytes, sources: dict[str, str] | None = None):
+def seal(directory: Path, key: str, secret: bytes, sources: dict[str, str] | None = None):
     """Write the signed manifest of ``directory``: every file, numba's included (made
     0600 first: numba creates them with the umask).  With ``sources`` (name -> sha256),
     only if the sources are still those."""
@@ -489,247 +483,90 @@ def _seal(directory: Path, key: str, secret: bytes, sources: dict[str, str] | No
         data, _st = _read_private(path)
         files[rel] = hashlib.sha256(data).hexdigest()
     if sources is not None and any(files.get(n) != h for n, h in sources.items()):
-        raise _Untrusted(f"{directory} changed while it was loaded")
+        raise Untrusted(f"{directory} changed while it was loaded")
     if any(n not in files for n in SOURCES):
-        raise _Untrusted(f"{directory} is incomplete")
+        raise Untrusted(f"{directory} is incomplete")
     body = {"format": MANIFEST_FORMAT, "key": key, "files": files}
     _replace_private(directory / MANIFEST,
                      json.dumps({"body": body, "mac": _mac(secret, body)}).encode())
 
 
-def _verify(directory: Path, key: str, secret: bytes):
+def verify(directory: Path, key: str, secret: bytes):
     """``(contents, stamps, hashes)`` of a trusted entry -- the bytes of its sources, the
     (size, mtime) of each file, the manifest's hashes -- or ``None`` if there is no
-    entry; ``_Untrusted`` (saying why) if it is not what this user's jetnh wrote."""
+    entry; ``Untrusted`` (saying why) if it is not what this user's jetnh wrote."""
     try:
         os.lstat(directory)
     except FileNotFoundError:
         return None
     except OSError as exc:
-        raise _Untrusted(f"{directory}: {exc.strerror}") from None
+        raise Untrusted(f"{directory}: {exc.strerror}") from None
     try:
         listing = _listing(directory)
         raw, _st = _read_private(directory / MANIFEST)
         doc = json.loads(raw)
         body, mac = doc["body"], doc["mac"]
         if not (isinstance(mac, str) and hmac.compare_digest(mac, _mac(secret, body))):
-            raise _Untrusted(f"{directory / MANIFEST} is not signed with your key")
+            raise Untrusted(f"{directory / MANIFEST} is not signed with your key")
         files = body["files"]
         if body["format"] != MANIFEST_FORMAT or body["key"] != key:
-            raise _Untrusted(f"{directory / MANIFEST} is for another entry")
+            raise Untrusted(f"{directory / MANIFEST} is for another entry")
         if set(listing) != set(files) or any(n not in files for n in SOURCES):
             extra = sorted(set(listing) - set(files))
             missing = sorted(set(files) - set(listing))
-            raise _Untrusted(f"{directory}: files not in the manifest {extra}, "
+            raise Untrusted(f"{directory}: files not in the manifest {extra}, "
                              f"missing {missing}")
         contents, stamps = {}, {}
         for rel, path in sorted(listing.items()):
             data, st = _read_private(path)
             if not hmac.compare_digest(hashlib.sha256(data).hexdigest(), str(files[rel])):
-                raise _Untrusted(f"{path} does not match the manifest")
+                raise Untrusted(f"{path} does not match the manifest")
             stamps[rel] = (st.st_size, st.st_mtime_ns)
             if rel in SOURCES:
                 contents[rel] = data
-    except _Untrusted:
+    except Untrusted:
         raise
     except FileNotFoundError as exc:
-        raise _Untrusted(f"{exc.filename} is missing") from None
+        raise Untrusted(f"{exc.filename} is missing") from None
     except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:
-        raise _Untrusted(f"{directory}: {type(exc).__name__}: {exc}") from None
+        raise Untrusted(f"{directory}: {type(exc).__name__}: {exc}") from None
     return contents, stamps, files
 
 
-def _changed(directory: Path, stamps: dict) -> bool:
+def read(entry: Path, key: str, secret: bytes):
+    """The verified bytes of ``entry``: ``(contents, stamps, hashes)`` as ``verify``, or
+    ``None`` when there is no entry or it is untrusted or damaged (then removed)."""
+    try:
+        return verify(entry, key, secret)
+    except Untrusted:
+        discard(entry)
+        return None
+
+
+def changed(directory: Path, stamps: dict) -> bool:
     """Whether the files of ``directory`` are no longer those ``stamps`` recorded (numba
     added or rewrote machine code while loading)."""
     try:
         now = {rel: os.lstat(p) for rel, p in _listing(directory).items()}
-    except (OSError, _Untrusted):
+    except (OSError, Untrusted):
         return False
     return (set(now) != set(stamps)
             or any((st.st_size, st.st_mtime_ns) != stamps[rel] for rel, st in now.items()))
 
 
-# ---------------------------------------------------------------------- numba's cache
-def _numba_caches_in_tree() -> bool:
-    """Whether numba caches the functions of a module in ``<its directory>/__pycache__``
-    (its default, ``numba.core.caching.InTreeCacheLocator``, for a writable directory):
-    then the only machine code numba may read for kernels is the entry's, which the
-    manifest has just checked.  ``NUMBA_CACHE_DIR`` or ``NUMBA_CACHE_LOCATOR_CLASSES``
-    send it elsewhere, where jetnh checks nothing."""
-    from numba.core import config
-
-    return not (getattr(config, "CACHE_DIR", "") or getattr(config, "CACHE_LOCATOR_CLASSES", ""))
 
 
-def _forget(package: str):
-    for name in (f"{package}.kernels", package):
-        sys.modules.pop(name, None)
-
-
-def _exec_kernels(package: str, directory: Path, source: bytes):
-    """The module ``<package>.kernels`` compiled from ``source`` (bytes already checked)
-    as ``<directory>/kernels.py``, the file those bytes came from (numba's default
-    locator caches next to it: in the entry).  If numba's cache is sent elsewhere
-    (``_numba_caches_in_tree``), the kernels are compiled without it (``JETNH_NUMBA_CACHE``
-    in the module's globals, read by the generated header), with a warning.  The module
-    of the same source already in this process is reused."""
-    digest = hashlib.sha256(source).digest()
-    name = f"{package}.kernels"
-    old = sys.modules.get(name)
-    if old is not None and getattr(old, "__jetnh_sha256__", None) == digest:
-        return old
-    in_tree = _numba_caches_in_tree()
-    if not in_tree and "numba" not in _WARNED:
-        _WARNED.add("numba")
-        warnings.warn(
-            "jetnh: NUMBA_CACHE_DIR (or NUMBA_CACHE_LOCATOR_CLASSES) is set, so numba would "
-            "keep the machine code of jetnh's kernels where jetnh cannot check it; the "
-            "kernels are compiled anew in each process (their derivation and code are still "
-            "cached). Unset it to load compiled kernels from jetnh's cache.",
-            KernelCacheWarning, stacklevel=4)
-    pkg = types.ModuleType(package, "jetnh generated kernel package")
-    pkg.__path__ = [str(directory)]
-    pkg.__file__ = str(directory / "__init__.py")
-    pkg.__package__ = package
-    mod = types.ModuleType(name)
-    mod.__file__ = str(directory / "kernels.py")
-    mod.__package__ = package
-    mod.__jetnh_sha256__ = digest
-    mod.JETNH_NUMBA_CACHE = in_tree
-    code = compile(source, mod.__file__, "exec", dont_inherit=True)
-    with _EXEC_LOCK:
-        sys.modules[package] = pkg
-        sys.modules[name] = mod
-        try:
-            exec(code, mod.__dict__)  # noqa: S102 - bytes checked against the manifest
-        except BaseException:
-            _forget(package)
-            raise
-    for value in list(vars(mod).values()):
-        if hasattr(value, "disable_compile"):
-            # compiled when the module ran (explicit signatures), and cached then, in the
-            # directory that is then sealed: nothing compiles (nor writes) later
-            value.disable_compile()
-    pkg.kernels = mod
-    return mod
-
-
-# ---------------------------------------------------------------------- kernels
-class CompiledKernels:
-    """A loaded kernel package: ``rhs``, ``aux``, ``sing``, ``aux_rows`` (callable from
-    Python, ``calls``), their C callbacks (``rhs_fp``, ...: for the compiled loops), the
-    layout, integrators.
-
-    ``source`` is the text of ``kernels.py`` as it was checked and compiled (read it
-    rather than the file in ``directory``, which may change or go)."""
-
-    def __init__(self, key: str, directory: Path, layout: Layout, hit: bool, timings: dict,
-                 persistent: bool = True, module=None, source: str | None = None):
-        self.key = key
-        self.directory = directory
-        self.layout = layout
-        self.hit = hit                     # found on disk (no derivation, no cse)
-        self.timings = dict(timings)
-        self.package = f"jetnh_kernels_{key}" + ("" if persistent else "_tmp")
-        if module is None:                 # built by hand: the entry must verify
-            found = _verify(Path(directory), key, _secret(Path(directory).parent))
-            if found is None:
-                raise FileNotFoundError(f"no kernel entry at {directory}")
-            module = _exec_kernels(self.package, Path(directory), found[0]["kernels.py"])
-            source = found[0]["kernels.py"].decode("utf-8")
-        self.kernels = module
-        self.source = source
-        for name in ("rhs_c", "aux_c", "sing_c", "hol_c", "jac_c", "events", "events_c", "sing",
-                     "step_residual", "momentum", "legendre", "nodal", "constraint_jac"):
-            if hasattr(self.kernels, name):
-                setattr(self, name, getattr(self.kernels, name))
-        from . import calls
-        from .methods._common import FunctionAddress
-
-        for name in ("rhs_c", "aux_c", "sing_c", "hol_c", "events_c"):
-            if hasattr(self, name):      # rhs_fp, ...: cheap to pass to compiled loops
-                setattr(self, name[:-2] + "_fp", FunctionAddress(getattr(self, name)))
-        lay = layout
-        n_y, n_p = lay.n_state, len(lay.runtime_params)
-        sizes = {"rhs": lay.n_rhs, "aux": lay.n_aux, "sing": len(lay.indicators),
-                 "hol": lay.holonomic * (1 + len(lay.coordinates))}
-        for name, n_out in sizes.items():     # rhs, aux, sing from Python
-            if hasattr(self, f"{name}_fp") and not hasattr(self, name):
-                setattr(self, name, calls.Kernel(getattr(self, f"{name}_fp"),
-                                                 (n_out if name == "rhs" else n_y, n_p,
-                                                  n_out)))
-        #: the holonomic kernel for the compiled loops (``methods.projection``); a stand-in
-        #: of the same type, never called, for systems without holonomic constraints
-        self.hol_or_none = getattr(self, "hol_fp", getattr(self, "sing_fp", None))
-        if hasattr(self, "aux_fp"):
-            self.aux_rows = calls.Rows(self.aux_fp, (n_y, n_p, lay.n_aux))
-        if hasattr(self, "jac_c"):           # the generated Jacobian (radau)
-            self.jac_fp = calls.jacobian_address(self.jac_c)
-            self.jac = calls.Kernel(self.jac_fp, (lay.n_rhs, n_p, lay.n_rhs),
-                                    jacobian=True)
-
-    def implicit(self):
-        """The compiled loop of radau (``methods.radau``), as its entry point."""
-        return _entry_point("radau")
-
-
-_ENTRIES: dict[str, object] = {}
-
-
-def _entry_point(module: str):
-    if module not in _ENTRIES:
-        import importlib
-
-        from .methods._common import entry_point
-
-        mod = importlib.import_module(f"jetnh.numeric.methods.{module}")
-        _ENTRIES[module] = entry_point(mod.solver())
-    return _ENTRIES[module]
-
-
-def _load_entry(entry: Path, key: str, secret: bytes, package: str, persistent: bool):
-    """The kernels of a trusted entry, or ``None`` (absent; or untrusted or damaged, and
-    then removed)."""
-    t0 = time.perf_counter()
-    try:
-        found = _verify(entry, key, secret)
-    except _Untrusted:
-        _discard(entry)
-        return None
-    if found is None:
-        return None
-    contents, stamps, files = found
-    t1 = time.perf_counter()
-    try:
-        layout = Layout.from_json(contents["layout.json"].decode("utf-8"))
-        source = contents["kernels.py"]
-        module = _exec_kernels(package, entry, source)
-        ck = CompiledKernels(key, entry, layout, True, {"verify": t1 - t0}, persistent,
-                             module=module, source=source.decode("utf-8"))
-    except Exception:               # a damaged entry (it verified, yet does not load)
-        _forget(package)
-        _discard(entry)
-        return None
-    if _changed(entry, stamps):     # numba wrote machine code (e.g. another CPU): sign it
-        try:
-            _seal(entry, key, secret, {n: files[n] for n in SOURCES})
-        except (OSError, _Untrusted):
-            pass                    # left as is: the next load finds it untrusted
-    return ck
-
-
-def _stage(root: Path, key: str, source: bytes, layout: bytes) -> Path:
+def stage(root: Path, key: str, source: bytes, layout: bytes) -> Path:
     """A private staging directory ``<root>/.k<key>.*`` holding the sources."""
     tmp = Path(tempfile.mkdtemp(prefix=f".k{key}.", dir=root))
-    _write_private(tmp / "__init__.py", INIT_TEXT)
-    _write_private(tmp / "kernels.py", source)
-    _write_private(tmp / "layout.json", layout)
+    write_private(tmp / "__init__.py", INIT_TEXT)
+    write_private(tmp / "kernels.py", source)
+    write_private(tmp / "layout.json", layout)
     _mkdir_private(tmp / PYCACHE)
     return tmp
 
 
-def _publish(tmp: Path, entry: Path, key: str, secret: bytes) -> bool:
+def publish(tmp: Path, entry: Path, key: str, secret: bytes) -> bool:
     """Rename the sealed ``tmp`` to ``entry``.  If another process put a trusted entry
     there first, that one stays and ``tmp`` is discarded; an untrusted one is replaced."""
     for _ in range(3):
@@ -740,16 +577,16 @@ def _publish(tmp: Path, entry: Path, key: str, secret: bytes) -> bool:
             if exc.errno not in (errno.EEXIST, errno.ENOTEMPTY, errno.ENOTDIR, errno.EISDIR):
                 raise
         try:
-            if _verify(entry, key, secret) is not None:
+            if verify(entry, key, secret) is not None:
                 shutil.rmtree(tmp, ignore_errors=True)
                 return True
-        except _Untrusted:
-            _discard(entry)
+        except Untrusted:
+            discard(entry)
     shutil.rmtree(tmp, ignore_errors=True)
     return False
 
 
-def _remove_stale(root: Path):
+def remove_stale(root: Path):
     """Staging and trash directories, and key files being made, left by processes that
     died."""
     now = time.time()
@@ -770,70 +607,3 @@ def _remove_stale(root: Path):
                 else:
                     _unlink(path)
 
-
-def _build(ks, key: str, package: str, persistent: bool, root: Path, secret: bytes):
-    """Write, compile, seal and publish a new entry; the kernels, in memory whatever
-    happens to the cache meanwhile."""
-    timings = dict(ks.timings)
-    t0 = time.perf_counter()
-    source = ks.source.encode("utf-8")
-    layout = ks.layout.to_json().encode("utf-8")
-    _remove_stale(root)
-    module, entry = None, root / f"k{key}"
-    for attempt in range(2):
-        tmp = None
-        try:
-            if attempt:             # the cache went away (or was damaged): again
-                root, secret = _root(persistent)
-                entry = root / f"k{key}"
-            tmp = _stage(root, key, source, layout)
-            if module is None:
-                module = _exec_kernels(package, tmp, source)   # numba writes its cache
-            _seal(tmp, key, secret)
-            if _publish(tmp, entry, key, secret):
-                break
-        except (OSError, _Untrusted):
-            if tmp is not None:
-                shutil.rmtree(tmp, ignore_errors=True)
-        except Exception:
-            if tmp is not None and not (tmp / "kernels.py").exists():
-                continue            # removed while numba compiled (it caches beside it)
-            if tmp is not None:     # the source does not compile: not the cache's doing
-                shutil.rmtree(tmp, ignore_errors=True)
-            raise
-        except BaseException:
-            if tmp is not None:
-                shutil.rmtree(tmp, ignore_errors=True)
-            raise
-    if module is None:              # never compiled: in a private temporary directory
-        tmp = Path(tempfile.mkdtemp(prefix=f".k{key}.", dir=_temp_root()))
-        _write_private(tmp / "kernels.py", source)
-        module = _exec_kernels(package, tmp, source)
-    module.__file__ = str(entry / "kernels.py")
-    timings["write"] = time.perf_counter() - t0
-    return CompiledKernels(key, entry, ks.layout, False, timings, persistent, module=module,
-                           source=ks.source)
-
-
-def load(key: str, make_source, persistent: bool = True) -> CompiledKernels:
-    """The kernels of ``key``: from memory, from a trusted entry on disk, or generated by
-    ``make_source()`` (a callable returning a ``codegen.KernelSource``) and stored."""
-    memo = (key, persistent)
-    ck = _LOADED.get(memo)
-    if ck is not None:
-        return ck
-    with _LOCK:
-        lock = _KEY_LOCKS.setdefault(memo, threading.Lock())
-    with lock:                      # one thread builds a key; others wait for it
-        if memo in _LOADED:
-            return _LOADED[memo]
-        package = f"jetnh_kernels_{key}" + ("" if persistent else "_tmp")
-        root, secret = _root(persistent)
-        ck = _load_entry(root / f"k{key}", key, secret, package, persistent)
-        if ck is None:
-            ks = make_source()
-            root, secret = _root(persistent)      # again: it may have gone meanwhile
-            ck = _build(ks, key, package, persistent, root, secret)
-        with _LOCK:
-            _LOADED[memo] = ck
-        return ck
