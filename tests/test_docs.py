@@ -53,6 +53,7 @@ def test_gallery_and_howtos_are_executed_notebooks(section):
 def test_the_gallery_has_the_promised_examples():
     listed = toctree_entries(DOCS / "gallery" / "index.md")
     assert {"gallery/rolling_disk", "gallery/appell_hamel", "gallery/heisenberg",
+            "gallery/two_point",
             "gallery/sweep_map", "gallery/from_mechanics", "gallery/from_kane",
             "gallery/conserved"} <= listed
     text = {p.stem: p.read_text(encoding="utf-8") for p in (DOCS / "gallery").glob("*.md")}
@@ -219,7 +220,9 @@ def test_public_contract_documents_its_parameters():
 
     public = [jn.JetSpace, jn.System, jn.System.equations, jn.Scene, jn.Scene.run,
               jn.Trajectory.plot, jn.Trajectory.at, jn.compare, jn.conserved_quantities,
-              jn.noether_symmetries, jn.sweep.sweep, jn.from_mechanics]
+              jn.noether_symmetries, jn.sweep.sweep, jn.from_mechanics, jn.linearize,
+              jn.Linearization.replace, jn.Linearization.steady, jn.Linearization.along,
+              jn.connect]
     for obj in public:
         doc = inspect.getdoc(obj)
         assert "\nParameters\n----------\n" in doc, obj.__qualname__

@@ -263,6 +263,11 @@ def evaluate(expr, point: dict, dps: int = 30) -> list:
         return _values(expr, leaf, mpmath.fsum, mpmath.fprod, mpmath.power, function)
 
 
+#: (function class, number of arguments) -> its numpy function (``evaluate_numpy``):
+#: lambdify of a head costs milliseconds (sympy evaluates e.g. cos of a Dummy)
+_NUMPY_HEADS: dict = {}
+
+
 def evaluate_numpy(expr, point: dict):
     """The values (numpy float arrays, broadcast) of ``expr`` (a Basic or a list) at
     ``point`` (Symbol -> number or array), each distinct subexpression computed once
@@ -271,7 +276,7 @@ def evaluate_numpy(expr, point: dict):
     (a ValueError) for a symbol without a value."""
     import numpy as np
 
-    heads: dict = {}
+    heads = _NUMPY_HEADS
 
     def leaf(e):
         if e in point:

@@ -14,14 +14,16 @@ only some coordinates) by shooting on the initial unknowns:
 
 The shooting map's Jacobian is the sensitivity matrix of the run
 (``scene.run(sensitivities=True)``: the variational equations, compiled from the
-derivation), never finite differences.  The Newton iteration solves each step by the
-singular value decomposition with a rank cut-off (``rcond``): a rank-deficient Jacobian
-(a degenerate endpoint with a whole family of solutions, such as the circles of the
-Heisenberg group through a point of its z-axis) gives the minimum-norm step; a damped
-step (backtracking on the residual) keeps it from diverging.  When Newton fails from the
-guess, continuation in the endpoint follows ``end(s) = q(t1; guess) + s (end - q(t1;
-guess))`` from s = 0 (solved by the guess) to 1 with adaptive steps.  Iterations and
-continuation steps have budgets; where they stop, ``ConnectError`` says so.
+derivation), never finite differences.  The search is Levenberg-Marquardt in unknowns
+scaled by the Jacobian's column norms, each step from the singular value decomposition
+with a rank cut-off (``rcond``): a rank-deficient Jacobian (a degenerate endpoint with a
+whole family of solutions, such as the circles of the Heisenberg group through a point of
+its z-axis) gives the minimum-norm step; the damping adapts to the ratio of the actual to
+the predicted decrease, so the search neither diverges far from the guess nor loses
+Newton's quadratic convergence near a solution.  When it fails from the guess,
+continuation in the endpoint follows ``end(s) = q(t1; guess) + s (end - q(t1; guess))``
+from s = 0 (solved by the guess) to 1 with adaptive steps.  Iterations and continuation
+steps have budgets; where they stop, ``ConnectError`` says so.
 
 Verdicts on the answer:
 
@@ -42,7 +44,8 @@ Verdicts on the answer:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import cached_property
 from types import MappingProxyType
 
 import numpy as np
@@ -55,24 +58,60 @@ from .trajectory import Trajectory
 
 #: the principles whose multipliers are unknowns of the two-point problem
 VARIATIONAL = ("vakonomic", "holder")
+#: Levenberg-Marquardt iterations per continuation step (at most ``max_iter``)
+STEP_ITER = 20
+#: steps a shooting run may take (a run that needs more counts as failed)
+MAX_STEPS = 20_000
 
 
 @dataclass(frozen=True)
 class Connection:
-    """A motion of ``principle`` joining two configurations (``connect``)."""
+    """A motion of ``principle`` joining two configurations (``connect``).
+
+    The verdicts ``cost``, ``normal``, ``gramian_ratio`` and ``conjugate_times`` are
+    computed on first access (one more run, sampled on the dense output) and then kept.
+    """
 
     trajectory: Trajectory           # from start at t0 to (near) end at t1
-    cost: float                      # the action int L dt along it
     initial: MappingProxyType        # the full initial state found (name -> value)
     residual: float                  # max |q(t1) - end| over the named coordinates
-    normal: bool                     # False: an abnormal extremal (module docstring)
-    conjugate_times: tuple           # times in (t0, t1] where dq/du loses rank
     principle: str
     unknowns: tuple                  # names of the shooting unknowns
     rank: int                        # rank of the shooting Jacobian at the answer
     singular_values: tuple           # of the shooting Jacobian at the answer
-    iterations: int                  # Newton iterations (all continuation steps)
-    gramian_ratio: float             # smallest / largest eigenvalue of the Gramian
+    iterations: int                  # Levenberg-Marquardt iterations (all steps)
+    _columns: tuple = field(repr=False, compare=False)     # the unknowns' states
+    _rcond: float = field(repr=False, compare=False)
+    _run: MappingProxyType = field(repr=False, compare=False)   # rtol, atol, method
+
+    @cached_property
+    def _samples(self):
+        tr = self.trajectory
+        return _Samples(tr, self._run["rtol"], self._run["atol"], self._run["method"],
+                        tr.y[0])
+
+    @cached_property
+    def cost(self) -> float:
+        """The action int L dt along the motion (``action``)."""
+        return action(self.trajectory, self._samples)
+
+    @cached_property
+    def gramian_ratio(self) -> float:
+        """Smallest / largest eigenvalue of the constraint system's controllability
+        Gramian along the motion (``gramian_ratio``)."""
+        return gramian_ratio(self.trajectory, self._samples)
+
+    @property
+    def normal(self) -> bool:
+        """False: an abnormal extremal (the constraint system's endpoint map loses rank
+        along the motion: ``gramian_ratio`` below ``GRAMIAN_RCOND``)."""
+        return bool(self.gramian_ratio > GRAMIAN_RCOND)
+
+    @cached_property
+    def conjugate_times(self) -> tuple:
+        """The times in (t0, t1] where dq/du loses rank (``conjugate_times``)."""
+        return conjugate_times(self.trajectory, list(self._columns), self._samples,
+                               self._rcond)
 
     def __repr__(self):
         return (f"Connection({self.principle}: cost {self.cost:.12g}, residual "
@@ -82,19 +121,62 @@ class Connection:
 
 
 def connect(system, principle, start, end, t_span, params=None, guess=None, *,
-            tol=1e-9, rtol=1e-11, atol=1e-12, max_iter=30, max_continuation=64,
+            tol=1e-9, rtol=1e-11, atol=1e-12, max_iter=100, max_continuation=64,
             rcond=1e-9, method="dop853") -> Connection:
     """The motion of ``principle`` from ``start`` (every coordinate) at t0 to ``end``
     (some or all coordinates) at t1, as a ``Connection`` (module docstring).
 
-    ``guess``: the initial unknowns (a dict by name, or a sequence in the order of
-    ``Connection.unknowns``: the independent velocities, then for vakonomic and Hoelder
-    the multipliers; Suslov's multipliers may be given too and are kept); default: the
-    straight-line velocities and zero multipliers.  ``tol``: the largest accepted
-    endpoint error (max norm, relative to 1 + |end|); ``rtol``, ``atol``: the
-    integration's; ``max_iter`` Newton iterations per continuation step,
-    ``max_continuation`` continuation steps; ``rcond`` the relative cut-off of singular
-    values; ``method`` "dop853" or "dopri5".
+    Parameters
+    ----------
+    system : jetnh.System
+        The constrained system.
+    principle : str
+        "vakonomic" or "holder" (the unknowns: independent velocities and multipliers
+        at t0), "chetaev" or "suslov" (the independent velocities alone).
+    start : dict
+        Every coordinate at t0, keyed by Symbol or name.
+    end : dict
+        Some or all coordinates at t1; Chetaev and Suslov reach at most as many as
+        there are independent velocities (otherwise ``ConnectError`` with the
+        least-squares answer in ``.best``).
+    t_span : tuple of float
+        ``(t0, t1)``, of nonzero length (t1 < t0 runs backwards).
+    params : dict, optional
+        Parameter values; the system's defaults otherwise.
+    guess : dict or sequence, optional
+        The initial unknowns: a dict by name, or a sequence in the order of
+        ``Connection.unknowns`` (the independent velocities, then for vakonomic and
+        Hoelder the multipliers; Suslov's multipliers may be given too and are kept).
+        Default: the straight-line velocities and zero multipliers, moved off runs
+        that stop before t1 or start rank-deficient.
+    tol : float, default 1e-9
+        The largest accepted endpoint error (max norm, relative to 1 + |end|).
+    rtol, atol : float, default 1e-11, 1e-12
+        The integration's tolerances.
+    max_iter : int, default 100
+        Levenberg-Marquardt iterations (one run each) from the guess; each
+        continuation step takes at most ``min(max_iter, STEP_ITER)`` (20).
+    max_continuation : int, default 64
+        Steps of the continuation in the endpoint (after a failed first search).
+    rcond : float, default 1e-9
+        The relative cut-off of singular values: the rank of the shooting Jacobian.
+    method : {"dop853", "dopri5"}, default "dop853"
+        The integrator (explicit, with dense output).
+
+    Returns
+    -------
+    Connection
+        The motion, its initial state, residual and rank; its verdicts (``cost``,
+        ``normal``, ``conjugate_times``) on first access.
+
+    Raises
+    ------
+    ConnectError
+        The end is not reached within the budgets (the message says where the search
+        stopped and what the motions reach; ``.best`` is the closest motion found).
+    JetnhError
+        Bad input: an unknown coordinate, a span of zero length, a guess of the wrong
+        shape.
     """
     from .scene import Scene
 
@@ -121,16 +203,42 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     unknowns = velocities + (mults if principle in VARIATIONAL else ())
     fixed = {} if principle in VARIATIONAL else {m: 0.0 for m in mults}
     u0, fixed = _guess(guess, unknowns, fixed, system, q0, q1, t1 - t0)
-    scene = Scene(system, principle, params=params,
-                  initial={**q0, **dict(zip(unknowns, u0)), **fixed}, t_span=(t0, t1))
+    scene = _scene(system, principle, params, {**q0, **dict(zip(unknowns, u0)), **fixed},
+                   (t0, t1))
     shooter = _Shooter(scene, q0, q1, unknowns, fixed, rtol, atol, method, rcond)
     if guess is None:
-        u0 = shooter.regular_start(u0, q0, q1, t1 - t0)
+        u0 = shooter.regular_start(u0, q0, q1, t1 - t0, len(velocities))
     u, iterations = shooter.solve(u0, tol, max_iter, max_continuation)
     return shooter.connection(u, iterations, tol)
 
 
 # ---------------------------------------------------------------------- input
+#: (id(system), principle, params, t_span) -> (system, Scene): a scene's kernel keys
+#: take milliseconds to compute, so repeated problems on one system reuse its scene (the
+#: runs give every initial value; the scene's own are those of the first problem)
+_SCENES: dict = {}
+
+
+def _scene(system, principle, params, initial, t_span):
+    from .scene import Scene
+
+    try:
+        key = (id(system), principle, None if params is None else tuple(sorted(
+            (arguments.name_of(k, "a parameter"), float(v)) for k, v in params.items())),
+            t_span)
+    except (AttributeError, TypeError, ValueError, JetnhError):
+        key = None                       # Scene says what is wrong with params
+    hit = _SCENES.get(key)
+    if hit is not None and hit[0] is system:
+        return hit[1]
+    scene = Scene(system, principle, params=params, initial=initial, t_span=t_span)
+    if key is not None:
+        if len(_SCENES) >= 16:
+            _SCENES.clear()
+        _SCENES[key] = (system, scene)
+    return scene
+
+
 def _configuration(values, coords, what, complete) -> dict[str, float]:
     if not hasattr(values, "items"):
         raise JetnhError(f"{what} must be a dict of coordinate values keyed by Symbol or "
@@ -201,7 +309,8 @@ class _Shooter:
         self.rows = [names.index(c) for c in q1]
         self.target = np.array(list(q1.values()))
         self.cols = [names.index(u) for u in unknowns]
-        self.y0 = np.array([scene.initial[n] for n in names])
+        given = {**q0, **fixed}
+        self.y0 = np.array([given.get(n, 0.0) for n in names])
         self.rtol, self.atol, self.method, self.rcond = rtol, atol, method, rcond
         self.end_names = tuple(q1)
         self.seen: dict = {}
@@ -212,8 +321,8 @@ class _Shooter:
         return y
 
     def endpoint(self, u):
-        """``(q_named(t1), dq_named(t1)/du)``, or None where the run fails (the last
-        few kept: the guess is evaluated more than once)."""
+        """``(q_named(t1), dq_named(t1)/du, the run)``, or None where the run fails
+        (the last few kept: the guess and the answer are evaluated more than once)."""
         key = np.asarray(u, dtype=float).tobytes()
         if key not in self.seen:
             if len(self.seen) > 8:
@@ -222,70 +331,105 @@ class _Shooter:
         return self.seen[key]
 
     def _endpoint(self, u):
-        try:
-            tr = self.scene.run(rtol=self.rtol, atol=self.atol, method=self.method,
-                                y0=self.state(u), save="final", sensitivities=True)
-        except JetnhError:
-            return None
-        if tr.status != 0 or not np.all(np.isfinite(tr.y[-1])):
+        tr = self.run(u)
+        if tr is None:
             return None
         S = tr.sensitivities[-1]
-        return tr.y[-1, self.rows], S[np.ix_(self.rows, self.cols)]
+        return tr.y[-1, self.rows], S[np.ix_(self.rows, self.cols)], tr
 
-    def regular_start(self, u0, q0, q1, T):
-        """The default guess, moved off a point where the shooting Jacobian is
-        rank-deficient (zero velocities, a straight line along an abnormal direction):
-        by a fixed pattern of the size of the straight-line velocities, up to 8 tries."""
+    def run(self, u):
+        """The run from the start with the unknowns ``u`` (every step, with
+        sensitivities), or None where it fails before t1 (or takes more than
+        ``MAX_STEPS`` steps: a wild trial of the search must not take minutes)."""
+        try:
+            tr = self.scene.run(rtol=self.rtol, atol=self.atol, method=self.method,
+                                y0=self.state(u), sensitivities=True, max_steps=MAX_STEPS)
+        except JetnhError:
+            return None
+        return tr if tr.status == 0 and np.all(np.isfinite(tr.y[-1])) else None
+
+    def regular_start(self, u0, q0, q1, T, n_velocities):
+        """The default guess, moved off a point where the run stops before t1 (a speed
+        that falls to a singular zero) or where the shooting Jacobian is rank-deficient
+        (zero velocities, a straight line along an abnormal direction): by a fixed
+        pattern of the size of the straight-line velocities, then with the velocities
+        doubled and quadrupled; 12 tries, the first regular one kept (else the first
+        that reaches t1)."""
         scale = max([abs(q1[c] - q0[c]) for c in q1] + [1.0]) / abs(T)
         pattern = 0.5 * (-0.6) ** np.arange(len(u0))
-        u = u0
-        for k in range(8):
+        speed = np.ones(len(u0))
+        reaching = None
+        for k in range(12):
+            speed[:n_velocities] = 2.0 ** (k // 4)
+            u = speed * u0 + (scale * np.roll(pattern, k) * (k % 4) if k % 4 else 0.0)
             got = self.endpoint(u)
             if got is not None:
                 s = np.linalg.svd(got[1], compute_uv=False)
                 if s.size and s[0] > 0 and s[-1] > 1e-6 * s[0]:
                     return u
-            u = u0 + scale * np.roll(pattern, k) * (1 + k)
-        return u0
+                reaching = u if reaching is None else reaching
+        return u0 if reaching is None else reaching
 
-    def step(self, F, Jm):
-        """The minimum-norm Newton (Gauss-Newton) step of the truncated SVD."""
+    def svd(self, Jm):
+        """The singular value decomposition of the shooting Jacobian with its numerical
+        rank (relative cut-off ``rcond``)."""
         U, s, Vt = np.linalg.svd(Jm, full_matrices=False)
         r = int(np.sum(s > self.rcond * s[0])) if s.size and s[0] > 0 else 0
-        return -(Vt[:r].T @ ((U[:, :r].T @ F) / s[:r]))
+        return U[:, :r], s[:r], Vt[:r]
 
     def newton(self, u, target, tol, max_iter):
-        """Damped Newton on q(t1; u) = target.  Returns ``(u, converged, iterations)``."""
+        """Levenberg-Marquardt on q(t1; u) = target, in unknowns scaled by the largest
+        column norms of the Jacobian seen so far (More's scaling: the multipliers'
+        columns are often orders of magnitude smaller than the velocities'): the step
+        ``-D^-1 V diag(s / (s^2 + mu)) U^T F`` of the truncated SVD of ``J D^-1``
+        (mu -> 0: the minimum-norm Gauss-Newton step, quadratic convergence near a
+        solution; mu large: a short step down the gradient), mu adapted by the ratio of
+        the actual to the predicted decrease (Nielsen's rule), a run that fails before
+        t1 counted as no decrease.  Returns ``(u, converged, iterations)``."""
         got = self.endpoint(u)
         if got is None:
             return u, False, 0
         scale = 1.0 + np.abs(target)
+        q, Jm, _ = got
+        F = q - target
+        d = np.ones(len(u))
+        mu = nu = None
         for it in range(1, max_iter + 1):
-            q, Jm = got
-            F = q - target
             if np.max(np.abs(F) / scale) <= tol:
                 return u, True, it - 1
-            du = self.step(F, Jm)
-            # a step at most the size of the unknowns (and 1): Newton stays on the branch
-            # of solutions it starts near instead of jumping to a far one
-            big = np.linalg.norm(du) / max(1.0, np.linalg.norm(u))
-            if big > 1.0:
-                du = du / big
-            norm = np.linalg.norm(F)
-            alpha = 1.0
-            for _ in range(30):
-                trial = self.endpoint(u + alpha * du)
-                if trial is not None and np.linalg.norm(trial[0] - target) < (
-                        1.0 - 1e-4 * alpha) * norm:
-                    break
-                alpha *= 0.5
+            # a column far below the largest (an unknown the end does not feel) keeps
+            # a floor: its scaled column is then cut by rcond instead of blown up
+            norms = np.linalg.norm(Jm, axis=0)
+            norms = np.maximum(norms, 1e-6 * norms.max()) if norms.max() > 0 else 1.0
+            d = np.maximum(d, norms) if it > 1 else norms
+            U, s, Vt = self.svd(Jm / d)
+            if not s.size:
+                return u, False, it
+            if mu is None:
+                mu, nu = 1e-6 * s[0] ** 2, 2.0
+            du = -(Vt.T @ (s * (U.T @ F) / (s**2 + mu))) / d
+            # at most the size of the unknowns (and 1): stay on the branch of solutions
+            # the search starts near instead of jumping to a far one
+            du /= max(1.0, np.linalg.norm(du) / max(1.0, np.linalg.norm(u)))
+            trial = self.endpoint(u + du)
+            linear = F + Jm @ du
+            predicted = F @ F - linear @ linear
+            rho = -1.0
+            if trial is not None and predicted > 0:
+                F_new = trial[0] - target
+                rho = (F @ F - F_new @ F_new) / predicted
+            if rho > 0:
+                u, (q, Jm, _), F = u + du, trial, F_new
+                mu *= max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
+                nu = 2.0
             else:
                 if self.least_squares_point(F, Jm):
                     raise self.unreachable(u)
-                return u, False, it
-            u, got = u + alpha * du, trial
-        q = got[0]
-        return u, bool(np.max(np.abs(q - target) / scale) <= tol), max_iter
+                mu *= nu
+                nu *= 2.0
+                if mu > 1e20 * s[0] ** 2:          # no step of any length decreases |F|
+                    return u, False, it
+        return u, bool(np.max(np.abs(F) / scale) <= tol), max_iter
 
     def solve(self, u0, tol, max_iter, max_continuation):
         """Newton from ``u0``, else continuation in the endpoint from q(t1; u0)."""
@@ -303,8 +447,10 @@ class _Shooter:
         for _ in range(max_continuation):
             s_try = min(1.0, s + ds)
             target = first + s_try * (self.target - first)
+            # a continuation step starts near its solution: a short budget, so that an
+            # unreachable end fails in seconds
             v, ok, k = self.newton(u, target, tol if s_try == 1.0 else max(tol, 1e-6),
-                                   max_iter)
+                                   min(max_iter, STEP_ITER))
             total += k
             if ok:
                 s, u = s_try, v
@@ -318,7 +464,7 @@ class _Shooter:
         best = self._best(u)
         raise ConnectError(
             f"connect did not reach the end: continuation in the endpoint stopped at "
-            f"s = {s:.6g} of 1 (step {ds:.3g}, {total} Newton iterations); the closest "
+            f"s = {s:.6g} of 1 (step {ds:.3g}, {total} iterations in all); the closest "
             f"motion ends {best.residual:.3g} away from end"
             + self._reachability(u) + "; try another guess, a shorter span or an end "
             "nearer the start (ConnectError.best is that motion)", best)
@@ -360,26 +506,25 @@ class _Shooter:
     # ------------------------------------------------------------------ the answer
     def connection(self, u, iterations, tol) -> Connection:
         scene = self.scene
-        tr = scene.run(rtol=self.rtol, atol=self.atol, method=self.method,
-                       y0=self.state(u), sensitivities=True)
-        if tr.status != 0:
-            raise ConnectError(f"the motion found stops before t1: {tr.stop_reason}")
+        got = self.endpoint(u)
+        if got is None:
+            raise ConnectError(f"the motion found stops before t1: "
+                               f"{scene.run(y0=self.state(u)).stop_reason}")
+        tr = got[2]
         q = tr.y[-1, self.rows]
         residual = float(np.max(np.abs(q - self.target)))
-        Jm = tr.sensitivities[-1][np.ix_(self.rows, self.cols)]
-        s = np.linalg.svd(Jm, compute_uv=False)
-        rank = int(np.sum(s > self.rcond * s[0])) if s.size and s[0] > 0 else 0
-        samples = _Samples(tr, self.rtol, self.atol, self.method, self.state(u))
-        gram = gramian_ratio(tr, samples)
+        _, s, _ = self.svd(tr.sensitivities[-1][np.ix_(self.rows, self.cols)])
+        full = np.linalg.svd(tr.sensitivities[-1][np.ix_(self.rows, self.cols)],
+                             compute_uv=False)
         start = list(tr.y[0]) + [float(tr[d][0]) for d in scene.dependent_velocities]
         best = Connection(
-            trajectory=tr, cost=action(tr, samples),
+            trajectory=tr,
             initial=MappingProxyType({n: float(v) for n, v in zip(
                 scene.state_names + scene.dependent_velocities, start)}),
-            residual=residual, normal=bool(gram > GRAMIAN_RCOND),
-            conjugate_times=conjugate_times(tr, self.cols, samples, self.rcond),
-            principle=scene.principle, unknowns=self.unknowns, rank=rank,
-            singular_values=tuple(s.tolist()), iterations=iterations, gramian_ratio=gram)
+            residual=residual, principle=scene.principle, unknowns=self.unknowns,
+            rank=len(s), singular_values=tuple(full.tolist()), iterations=iterations,
+            _columns=tuple(self.cols), _rcond=self.rcond, _run=MappingProxyType(
+                {"rtol": self.rtol, "atol": self.atol, "method": self.method}))
         if tol is not None and np.max(np.abs(q - self.target)
                                       / (1 + np.abs(self.target))) > tol:
             raise ConnectError(
@@ -392,6 +537,8 @@ class _Shooter:
 #: smallest / largest eigenvalue of the controllability Gramian below which the path is
 #: abnormal
 GRAMIAN_RCOND = 1e-9
+#: |det| of dq/du with normalized columns below which it has no sign (rounding level)
+DET_ZERO = 1e-10
 _GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(5)
 
 
@@ -519,11 +666,11 @@ def gramian_ratio(tr, samples) -> float:
     for j in range(steps):
         Phi[j + 1] = P[j] @ Phi[j]
     G = np.linalg.solve(np.transpose(Phi, (0, 2, 1)), Phi[-1].T).transpose(0, 2, 1)
-    BB = B[::2] @ np.transpose(B[::2], (0, 2, 1))
+    GB = G @ B[::2]                                       # Phi(t1, s_j) B(s_j)
     w = np.full(steps + 1, 2.0)
     w[1::2] = 4.0
     w[0] = w[-1] = 1.0
-    W = np.einsum("j,jab,jbc,jdc->ad", w * h / 3.0, G, BB, G)
+    W = np.einsum("j,jam,jbm->ab", w * h / 3.0, GB, GB)
     ev = np.linalg.eigvalsh(0.5 * (W + W.T))
     return float(max(ev[0], 0.0) / ev[-1]) if ev[-1] > 0 else 0.0
 
@@ -558,8 +705,10 @@ def conjugate_times(tr, cols, samples, rcond=1e-9) -> tuple:
         norms = np.linalg.norm(M, axis=1, keepdims=True)
         d = np.linalg.det(M / np.where(norms > 0, norms, 1.0))
         for i in range(len(grid) - 1):
-            if d[i] == 0.0 or np.sign(d[i]) == np.sign(d[i + 1]) or i + 1 == len(grid) - 1 \
-                    and abs(d[i + 1]) < 1e-8:
+            # |det| of the normalized columns at rounding level: singular there (along a
+            # whole stretch when an unknown has no effect), no sign to follow
+            if max(abs(d[i]), abs(d[i + 1])) < DET_ZERO or np.sign(d[i]) == np.sign(
+                    d[i + 1]):
                 continue
             found.append(float(brentq(det, grid[i], grid[i + 1], xtol=1e-14, rtol=1e-14)))
     s = np.linalg.svd(tr.sensitivities[-1][:nq][:, cols], compute_uv=False)

@@ -278,9 +278,19 @@ class Linearization(Frozen):
 
     # ------------------------------------------------------------------ other points
     def replace(self, params=None, at=None, t=None) -> "Linearization":
-        """The linearization at other parameter values and/or another operating point
-        (``at`` updates the point: names not given keep their values, dependent
-        velocities follow from the constraints again): a kernel call, no derivation."""
+        """The linearization at other parameter values and/or another operating point:
+        a kernel call, no derivation.
+
+        Parameters
+        ----------
+        params : dict, optional
+            Parameter values to change (the others keep theirs).
+        at : dict, optional
+            Values of the point to change: names not given keep their values,
+            dependent velocities follow from the constraints again.
+        t : float, optional
+            Another time of the point.
+        """
         point = {k: v for k, v in self.at.items()
                  if k not in {d.name for d in self._model.dependent}}
         if at is not None:
@@ -292,10 +302,17 @@ class Linearization(Frozen):
                          self.t if t is None else arguments.finite(t, "t"))
 
     def steady(self, unknowns, tol: float = 1e-10) -> "Linearization":
-        """The linearization at a steady motion: the values of ``unknowns`` (names of
-        kept states) that make x' vanish (to ``tol`` times ``max(1, |x'|)`` here), starting
-        from this point's values (the others held).  ``LinearizationError`` when none
-        is found near them."""
+        """The linearization at a steady motion: the values of ``unknowns`` that make
+        x' vanish, starting from this point's values (the others held).
+        ``LinearizationError`` when none is found near them.
+
+        Parameters
+        ----------
+        unknowns : str or list of str
+            Names of kept states (e.g. the multipliers) to solve for.
+        tol : float, default 1e-10
+            The accepted |x'|, relative to ``max(1, |x'|)`` at this point.
+        """
         from scipy.optimize import least_squares
 
         unknowns = [arguments.name_of(u, "unknowns") for u in (
@@ -357,9 +374,17 @@ class Linearization(Frozen):
         return self.replace(at={model.names[i]: float(y[i]) for i in (*idx, *self._chart)})
 
     def along(self, name, values) -> "StabilityScan":
-        """Eigenvalues along a parameter or an operating-point value ``name`` (every
-        other value held, but the ``eliminated`` coordinates, which follow from g = 0):
-        a ``StabilityScan`` with the crossings of Re lambda = 0."""
+        """Eigenvalues along a parameter or an operating-point value (every other value
+        held, but the ``eliminated`` coordinates, which follow from g = 0): a
+        ``StabilityScan`` with the crossings of Re lambda = 0.
+
+        Parameters
+        ----------
+        name : str or Symbol
+            A parameter or a value of the operating point.
+        values : array_like
+            The values of ``name`` to linearize at, in order.
+        """
         name = arguments.name_of(name, "along")
         values = arguments.real_array(values, "values")
         if name not in self.params and name not in self.at:
@@ -541,12 +566,32 @@ def linearize(system, principle="chetaev", at=None, params=None, drop="cyclic", 
     """``x' = A x`` of ``principle``'s reduced system about the point ``at`` (module
     docstring).
 
-    ``at``: coordinates, independent velocities and multipliers keyed by Symbol or name
-    (dependent velocities follow from the constraints; if given they must agree; dropped
-    coordinates that no holonomic constraint uses and inert multipliers may be omitted:
-    their values do not enter A).  The coordinates must satisfy the holonomic
-    constraints g = 0 (module docstring).  ``params`` default to
-    the system's defaults.  ``drop``: ``"cyclic"``, a list of coordinates, or None.
+    Parameters
+    ----------
+    system : jetnh.System
+        The constrained system.
+    principle : str, default "chetaev"
+        "chetaev", "vakonomic", "holder" or "suslov".
+    at : dict
+        The operating point: coordinates, independent velocities and multipliers keyed
+        by Symbol or name.  Dependent velocities follow from the constraints (if given
+        they must agree); dropped coordinates that no holonomic constraint uses and
+        inert multipliers may be omitted (their values do not enter A).  The
+        coordinates must satisfy the holonomic constraints g = 0.
+    params : dict, optional
+        Parameter values keyed by Symbol or name; the system's defaults otherwise.
+    drop : {"cyclic"} or list or None, default "cyclic"
+        The coordinates left out of the state: the cyclic ones (no equation depends on
+        them), a list of names, or None for none.
+    t : float, default 0.0
+        The time of the point (for systems that depend on t).
+    form, convention : optional
+        The equations' form and the multipliers' sign convention, as for ``Scene``.
+
+    Returns
+    -------
+    Linearization
+        A, its eigenvalues, the residual x' at the point and the verdict.
     """
     if not isinstance(system, System):
         raise JetnhError(f"linearize needs a jetnh System, got {type(system).__name__}")
@@ -565,9 +610,24 @@ def linearize(system, principle="chetaev", at=None, params=None, drop="cyclic", 
 def verdicts(system, at, params=None, principles_=None, drop="cyclic", solve_for=None):
     """One operating point under several principles: a pandas DataFrame, one row per
     principle, with its residual, state size, largest real part, verdict and
-    eigenvalues.  Missing multipliers start at 0; ``solve_for`` (names, or a dict
-    principle -> names, e.g. the multipliers) makes each point steady first
-    (``Linearization.steady``)."""
+    eigenvalues (a principle that fails has its error in the verdict column).
+
+    Parameters
+    ----------
+    system : jetnh.System
+        The constrained system.
+    at : dict
+        The operating point as for ``linearize``; missing multipliers start at 0.
+    params : dict, optional
+        Parameter values; the system's defaults otherwise.
+    principles_ : list of str, optional
+        The principles compared; all four by default.
+    drop : {"cyclic"} or list or None, default "cyclic"
+        As for ``linearize``.
+    solve_for : list of str or dict, optional
+        Names (or a dict principle -> names, e.g. the multipliers) solved for first
+        so that each point is steady (``Linearization.steady``).
+    """
     import pandas as pd
 
     rows = []

@@ -7,7 +7,8 @@ from pathlib import Path
 
 from ...errors import JetnhError
 from ..loading import load_model, with_split
-from ..parser import EPILOG_MODEL, model_args, subcommand
+from ..parser import (EPILOG_MODEL, PRINCIPLES, canonical_principle, model_args,
+                      subcommand)
 from ..running import assignments
 from ..usage import UsageError
 
@@ -25,8 +26,10 @@ def add_parser(sub):
                     "initial configuration (coordinates not given start at 0); --to may "
                     "name only some coordinates (chetaev and suslov reach at most as "
                     "many as there are independent velocities).",
-        epilog=EPILOG_MODEL + "\n\nexample: jetnh connect heisenberg --to x=1,y=0.5,z=0.2 "
-                              "--t-end 1 --plot geodesic.png")
+        epilog=EPILOG_MODEL + "\n\nexamples:\n  jetnh connect heisenberg --to x=1,y=0.5,z=0.2 "
+                              "--t-end 1 --plot geodesic.png\n  jetnh connect "
+                              "rolling_disk -p chetaev --to x=0.5,y=0.3 --t-end 1 "
+                              "--compare vakonomic")
     model_args(s)
     s.add_argument("--from", dest="start", action="append", metavar="NAME=VALUE",
                    help="a coordinate at T0 (repeatable, or comma-separated)")
@@ -37,6 +40,12 @@ def add_parser(sub):
                         "(default: the straight line, zero multipliers)")
     s.add_argument("--set", action="append", metavar="NAME=VALUE",
                    help="a parameter value (repeatable, or comma-separated)")
+    s.add_argument("--compare", metavar="PRINCIPLE", type=canonical_principle,
+                   choices=PRINCIPLES,
+                   help="also connect under PRINCIPLE to the configuration the first "
+                        "motion reached (every coordinate, when PRINCIPLE's unknowns "
+                        "allow it; else --to), and print the two side by side: cost, "
+                        "residual, verdicts, initial velocities and multipliers")
     s.add_argument("--plot", metavar="PATH",
                    help="save a plot (png, pdf, svg) of the coordinates against t")
     s.add_argument("--format", choices=("text", "json"), default="text")
@@ -44,7 +53,7 @@ def add_parser(sub):
 
 
 def run(args, progress) -> int:
-    from ...numeric.connect import connect
+    from ...numeric.connect import VARIATIONAL, connect
 
     loaded = with_split(load_model(args.model), args.split)
     system = loaded.system
@@ -67,52 +76,90 @@ def run(args, progress) -> int:
     kw = {"rtol": args.rtol} if args.rtol is not None else {}
     if args.atol is not None:
         kw["atol"] = args.atol
+    params = assignments(args.set, "--set") or None
     with progress.step(f"connecting under {principle} over [{t0:g}, {float(t1):g}] "
                        "(kernels compiled once, then cached)"):
-        c = connect(system, principle, start, end, (t0, float(t1)),
-                    params=assignments(args.set, "--set") or None, guess=guess, **kw)
+        c = connect(system, principle, start, end, (t0, float(t1)), params=params,
+                    guess=guess, **kw)
+    found = [c]
+    if args.compare:
+        other = args.compare
+        reached = {n: float(c.trajectory[n][-1]) for n in coords}
+        full = other in VARIATIONAL
+        with progress.step(f"connecting under {other} to the configuration reached"):
+            found.append(connect(system, other, start, reached if full else end,
+                                 (t0, float(t1)), params=params, **kw))
     if args.format == "json":
-        print(json.dumps({"model": loaded.label, "principle": c.principle,
-                          "start": start, "end": end, "t_span": [t0, float(t1)],
-                          "initial": dict(c.initial), "cost": c.cost,
-                          "residual": c.residual, "normal": c.normal,
-                          "conjugate_times": list(c.conjugate_times), "rank": c.rank,
-                          "iterations": c.iterations}, indent=2))
+        rows = [_record(x) for x in found]
+        print(json.dumps({"model": loaded.label, "start": start, "end": end,
+                          "t_span": [t0, float(t1)], **rows[0],
+                          **({"compared": rows[1]} if len(rows) > 1 else {})}, indent=2))
     else:
-        print(f"{system.name or loaded.label}: {c.principle}, t in [{t0:g}, {float(t1):g}]")
-        print("initial:   " + ", ".join(f"{k} = {v:.10g}" for k, v in c.initial.items()))
-        print(f"cost:      {c.cost:.12g} (the action int L dt)")
-        print(f"residual:  {c.residual:.3e} (max |q(t1) - end|)")
-        print(f"normal:    {'yes' if c.normal else 'no: an abnormal extremal'}")
-        print("conjugate: " + (", ".join(f"t = {t:.10g}" for t in c.conjugate_times)
-                               or "none in (t0, t1]"))
-        if c.rank < len(c.unknowns) and c.rank < len(end):
-            print(f"note:      the endpoint is degenerate (shooting Jacobian of rank "
-                  f"{c.rank}): a family of motions arrives, this is one of them")
+        print(f"{system.name or loaded.label}: t in [{t0:g}, {float(t1):g}]")
+        for x in found:
+            _print(x, end)
+        if len(found) > 1:
+            a, b = found
+            print(f"{b.principle} against {a.principle}: cost {b.cost:.12g} against "
+                  f"{a.cost:.12g} (difference {b.cost - a.cost:.6g}); largest distance "
+                  f"between the paths {_distance(a, b, coords):.6g}")
     if args.plot:
         with progress.step(f"plotting to {args.plot}"):
-            _plot(c, coords, args.plot, f"{system.name or loaded.label} ({c.principle})")
+            _plot(found, coords, args.plot, system.name or loaded.label)
     return 0
 
 
-def _plot(c, coords, path, title):
+def _record(c) -> dict:
+    return {"principle": c.principle, "initial": dict(c.initial), "cost": c.cost,
+            "residual": c.residual, "normal": c.normal,
+            "conjugate_times": list(c.conjugate_times), "rank": c.rank,
+            "iterations": c.iterations}
+
+
+def _print(c, end):
+    print(f"-- {c.principle}")
+    print("initial:   " + ", ".join(f"{k} = {v:.10g}" for k, v in c.initial.items()))
+    print(f"cost:      {c.cost:.12g} (the action int L dt)")
+    print(f"residual:  {c.residual:.3e} (max |q(t1) - end|)")
+    print(f"normal:    {'yes' if c.normal else 'no: an abnormal extremal'}")
+    print("conjugate: " + (", ".join(f"t = {t:.10g}" for t in c.conjugate_times)
+                           or "none in (t0, t1]"))
+    if c.rank < len(c.unknowns) and c.rank < len(end):
+        print(f"note:      the endpoint is degenerate (shooting Jacobian of rank "
+              f"{c.rank}): a family of motions arrives, this is one of them")
+
+
+def _distance(a, b, coords) -> float:
+    import numpy as np
+
+    t = np.linspace(a.trajectory.t[0], a.trajectory.t[-1], 400)
+    qa, qb = a.trajectory.at(t), b.trajectory.at(t)
+    return float(max(np.max(np.abs(qa[n] - qb[n])) for n in coords))
+
+
+def _plot(found, coords, path, title):
     import matplotlib
     import numpy as np
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    tr = c.trajectory
-    t = np.linspace(tr.t[0], tr.t[-1], 400)
-    q = tr.at(t).to_numpy()
     fig, ax = plt.subplots(figsize=(8, 4))
-    for i, name in enumerate(coords):
-        ax.plot(t, q[:, i], label=name)
-    for tc in c.conjugate_times:
-        ax.axvline(tc, color="k", ls=":", lw=1)
+    for k, c in enumerate(found):
+        tr = c.trajectory
+        t = np.linspace(tr.t[0], tr.t[-1], 400)
+        q = tr.at(t)
+        for i, name in enumerate(coords):
+            ax.plot(t, q[name], color=f"C{i}", ls=("-", "--")[k % 2],
+                    label=f"{name} ({c.principle})")
+        for tc in c.conjugate_times:
+            ax.axvline(tc, color="k", ls=":", lw=1)
     ax.set_xlabel("t")
-    ax.legend(fontsize="small", ncol=min(len(coords), 4))
-    ax.set_title(f"{title}: cost {c.cost:.6g}"
+    ax.set_ylabel("coordinates")
+    ax.legend(fontsize="small", ncol=len(found), loc="center left", bbox_to_anchor=(1, 0.5))
+    c = found[0]
+    ax.set_title(f"{title} ({', '.join(x.principle for x in found)}): cost "
+                 + ", ".join(f"{x.cost:.6g}" for x in found)
                  + ("" if c.normal else ", abnormal")
                  + (f", conjugate at {', '.join(f'{x:.4g}' for x in c.conjugate_times)}"
                     if c.conjugate_times else ""))

@@ -33,7 +33,7 @@ def jacobian_kernels(scene) -> CompiledKernels:
     ``layout.JAC_SIGNATURE``) writes ``J[i, j] = d rhs_i / d y_j`` for ``J`` a
     C-contiguous ``(n_state, n_state)`` float64 array.  Stored beside the scene's
     kernels (its own key)."""
-    return of(scene.spec.but(variant="jacobian"), scene.cache)
+    return of(_variant(scene.spec, "jacobian"), scene.cache)
 
 
 def sensitivity_kernels(scene) -> CompiledKernels:
@@ -42,4 +42,18 @@ def sensitivity_kernels(scene) -> CompiledKernels:
     row-major after the state; ``codegen.llvm.sensitivity_program``), ``jac_c`` radau's
     Jacobian of it, and the scene's ``aux_c`` and ``sing_c`` (which read the state
     alone).  Stored beside the scene's kernels (its own key)."""
-    return of(scene.spec.but(variant="sensitivities"), scene.cache)
+    return of(_variant(scene.spec, "sensitivities"), scene.cache)
+
+
+#: (spec, variant) -> the spec of that variant: a new spec computes its key (an srepr
+#: of the system, milliseconds), which a run with sensitivities must not pay each time
+_VARIANTS: dict = {}
+
+
+def _variant(spec: codegen.KernelSpec, variant: str) -> codegen.KernelSpec:
+    found = _VARIANTS.get((spec, variant))
+    if found is None:
+        if len(_VARIANTS) >= 256:
+            _VARIANTS.clear()
+        found = _VARIANTS[(spec, variant)] = spec.but(variant=variant)
+    return found
