@@ -27,6 +27,8 @@ class Shooter:
         self.rtol, self.atol, self.method, self.rcond = rtol, atol, method, rcond
         self.end_names = tuple(q1)
         self.seen: dict = {}
+        self.span = scene.t_span         # the runs' span (continuation in T moves t1)
+        self.n_velocities = len(scene.system.independent_velocities)   # lead unknowns
 
     def state(self, u) -> np.ndarray:
         y = self.y0.copy()
@@ -36,7 +38,7 @@ class Shooter:
     def endpoint(self, u):
         """``(q_named(t1), dq_named(t1)/du, the run)``, or None where the run fails
         (the last few kept: the guess and the answer are evaluated more than once)."""
-        key = np.asarray(u, dtype=float).tobytes()
+        key = (np.asarray(u, dtype=float).tobytes(), self.span)
         if key not in self.seen:
             if len(self.seen) > 8:
                 self.seen.clear()
@@ -56,7 +58,7 @@ class Shooter:
         ``MAX_STEPS`` steps: a wild trial of the search must not take minutes)."""
         try:
             tr = self.scene.run(rtol=self.rtol, atol=self.atol, method=self.method,
-                                y0=self.state(u), sensitivities=True, max_steps=MAX_STEPS)
+                                y0=self.state(u), t_span=self.span, sensitivities=True, max_steps=MAX_STEPS)
         except JetnhError:
             return None
         return tr if tr.status == 0 and np.all(np.isfinite(tr.y[-1])) else None

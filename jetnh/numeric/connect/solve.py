@@ -14,6 +14,8 @@ from .shooting import Segments, Shooter, default_segments
 
 #: Levenberg-Marquardt iterations per continuation step (at most ``max_iter``)
 STEP_ITER = 20
+#: the first span of the continuation in T, as a fraction of T
+FIRST_SPAN = 0.125
 
 
 class Search(Shooter):
@@ -50,10 +52,14 @@ class Search(Shooter):
             return u, its
         got = self.endpoint(u0)
         if got is None:
+            v, ok, k, reached = self.grow(u0, tol, max_iter, max_continuation)
+            if ok:
+                return v, its + k
             raise ConnectError(
                 f"the {self.scene.principle} run from the start with the guess "
                 f"{dict(zip(self.unknowns, u0.tolist()))} fails before t1 (a singular "
-                "configuration or a non-finite state); give another guess")
+                "configuration or a non-finite state), and continuation in T stopped at "
+                f"T = {reached:.6g}; give another guess")
         first = got[0]
         total, s, ds, u = its, 0.0, 0.25, u0
         for _ in range(max_continuation):
@@ -73,13 +79,65 @@ class Search(Shooter):
                 ds *= 0.5
                 if ds < 1e-4:
                     break
+        v, ok, k, reached = self.grow(u0, tol, max_iter, max_continuation)
+        total += k
+        if ok:
+            return v, total
         best = self._best(u)
         raise ConnectError(
             f"connect did not reach the end: continuation in the endpoint stopped at "
-            f"s = {s:.6g} of 1 (step {ds:.3g}, {total} iterations in all); the closest "
+            f"s = {s:.6g} of 1 (step {ds:.3g}), continuation in T at T = {reached:.6g} "
+            f"of {self.span[1] - self.span[0]:.6g} ({total} iterations in all); the closest "
             f"motion ends {best.residual:.3g} away from end"
             + self._reachability(u) + "; try another guess, a shorter span or an end "
             "nearer the start (ConnectError.best is that motion)", best)
+
+    def grow(self, u0, tol, max_iter, max_continuation):
+        """Continuation in T: solve on the span ``FIRST_SPAN`` T from the guess with its
+        velocities and multipliers scaled by 1 / ``FIRST_SPAN`` (for L quadratic in the
+        velocities and linear constraints, an extremal run faster is one of the
+        shorter span: the straight line is a better guess there), then grow the span
+        to T with adaptive steps, each predicted by that rescaling of the last answer.
+        Returns ``(u, converged, iterations, the longest span solved)``."""
+        full = self.span
+        t0, t1 = full
+
+        def solve_on(frac, u, budget, tol_):
+            self.span = (t0, t0 + frac * (t1 - t0))
+            try:
+                return self.newton(u, self.target, tol_, budget)
+            except ConnectError:          # an overdetermined end missed: not this way
+                return u, False, budget
+
+        try:
+            s = FIRST_SPAN
+            self.span = (t0, t0 + s * (t1 - t0))
+            u = np.asarray(u0) / s
+            if self.endpoint(u) is None:        # moved off a run that stops early
+                q0 = {c: self.y0[r] for c, r in zip(self.end_names, self.rows)}
+                u = self.regular_start(u, q0, dict(zip(self.end_names, self.target)),
+                                       self.span[1] - t0, self.n_velocities)
+            u, ok, total = solve_on(s, u, max_iter, max(tol, 1e-6))
+            if not ok:
+                return u0, False, total, 0.0
+            ds = (1.0 - s) / 4.0
+            for _ in range(max_continuation):
+                s_try = min(1.0, s + ds)
+                v, ok, k = solve_on(s_try, u * (s / s_try), min(max_iter, STEP_ITER),
+                                    tol if s_try == 1.0 else max(tol, 1e-6))
+                total += k
+                if ok:
+                    s, u = s_try, v
+                    if s == 1.0:
+                        return u, True, total, s * (t1 - t0)
+                    ds = min(2.0 * ds, 1.0 - s)
+                else:
+                    ds *= 0.5
+                    if ds < 1e-4:
+                        break
+            return u, False, total, s * (t1 - t0)
+        finally:
+            self.span = full
 
     def multiple(self, u0, k, tol, max_iter):
         """Multiple shooting (``Segments``) from ``u0`` and the straight line, then
