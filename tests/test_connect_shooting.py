@@ -94,3 +94,12 @@ def test_knife_edge_vakonomic_by_multiple_shooting_and_by_continuation_in_T():
     grown = jn.connect(knife, "vakonomic", start, end, (0.0, 1.0), segments=1)
     assert multiple.residual < 1e-9 and grown.residual < 1e-9
     _same(multiple, grown, 1e-7)
+
+
+@pytest.mark.parametrize("principle", ["vakonomic", "holder"])
+def test_a_free_end_coordinate_is_refused_for_the_variational_principles(principle):
+    """Fewer named coordinates than unknowns: the answer would need the free
+    coordinates' transversality conditions; connect refuses instead of returning a
+    minimum-norm, non-stationary motion."""
+    with pytest.raises(jn.JetnhError, match="leaves z free"):
+        jn.connect(get("heisenberg"), principle, O, {"x": 1.0, "y": 0.5}, (0.0, 1.0))

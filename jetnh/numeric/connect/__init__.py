@@ -1,8 +1,8 @@
 """The two-point problem of the action principle: which motion joins two configurations?
 
 ``connect(system, principle, start, end, t_span, params, guess)`` finds a motion of
-``principle`` from the configuration ``start`` at t0 to ``end`` at t1 (``end`` may name
-only some coordinates) by shooting on the initial unknowns:
+``principle`` from the configuration ``start`` at t0 to ``end`` at t1 (for Chetaev and
+Suslov ``end`` may name only some coordinates) by shooting on the initial unknowns:
 
 - vakonomic and Hoelder (the stationary composite action with fixed endpoints): the
   independent velocities and the multipliers at t0, n unknowns for the n coordinates
@@ -74,9 +74,10 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     start : dict
         Every coordinate at t0, keyed by Symbol or name.
     end : dict
-        Some or all coordinates at t1; Chetaev and Suslov reach at most as many as
-        there are independent velocities (otherwise ``ConnectError`` with the
-        least-squares answer in ``.best``).
+        Vakonomic and Hoelder: every coordinate at t1 (a free end would need its
+        transversality condition: ``JetnhError``).  Chetaev and Suslov: some or all
+        coordinates at t1, at most as many as there are independent velocities
+        (otherwise ``ConnectError`` with the least-squares answer in ``.best``).
     t_span : tuple of float
         ``(t0, t1)``, of nonzero length (t1 < t0 runs backwards).
     params : dict, optional
@@ -144,6 +145,16 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     coords = tuple(s.name for s in system.J.q)
     q0 = _configuration(start, coords, "start", complete=True)
     q1 = _configuration(end, coords, "end", complete=False)
+    if principle in VARIATIONAL and len(q1) < len(coords):
+        # a free end coordinate needs its transversality condition (the momentum
+        # conjugate to it vanishes at t1); without it the answer would not be stationary
+        free = [c for c in coords if c not in q1]
+        raise JetnhError(
+            f"{principle} connect needs every coordinate at t1 (the action is stationary "
+            f"among paths with fixed endpoints); end leaves {', '.join(free)} free, whose "
+            "transversality conditions connect does not impose: name every coordinate "
+            "in end (e.g. the value a first answer reaches), or use principle='chetaev' "
+            "for a partial end")
     # a scene at the start with placeholder unknowns (the runs replace them)
     velocities = tuple(v.name for v in system.independent_velocities)
     mults = codegen.multiplier_names(system, principle)

@@ -10,6 +10,7 @@ import numpy as np
 
 from ...errors import ConnectError, JetnhError
 from .connection import Connection
+from .problem import VARIATIONAL
 from .shooting import Segments, Shooter, default_segments
 
 #: Levenberg-Marquardt iterations per continuation step (at most ``max_iter``)
@@ -179,7 +180,10 @@ class Search(Shooter):
             return (f" (the {self.scene.principle} motions from the start reach a "
                     f"{r}-dimensional set of the {len(self.rows)} named coordinates near "
                     f"there: {len(self.unknowns)} unknowns "
-                    f"{', '.join(self.unknowns)}; name at most {r} coordinates in end)")
+                    f"{', '.join(self.unknowns)}; "
+                    + ("choose an end on that set or another span)"
+                       if self.scene.principle in VARIATIONAL
+                       else f"name at most {r} coordinates in end)"))
         return ""
 
     def _best(self, u):
