@@ -20,10 +20,19 @@ with a rank cut-off (``rcond``): a rank-deficient Jacobian (a degenerate endpoin
 whole family of solutions, such as the circles of the Heisenberg group through a point of
 its z-axis) gives the minimum-norm step; the damping adapts to the ratio of the actual to
 the predicted decrease, so the search neither diverges far from the guess nor loses
-Newton's quadratic convergence near a solution.  When it fails from the guess,
-continuation in the endpoint follows ``end(s) = q(t1; guess) + s (end - q(t1; guess))``
-from s = 0 (solved by the guess) to 1 with adaptive steps.  Iterations and continuation
-steps have budgets; where they stop, ``ConnectError`` says so.
+Newton's quadratic convergence near a solution.  On long or unstable spans (the guess's
+run stops early or its sensitivities grow past ``GROWTH``), multiple shooting on
+``segments`` equal segments comes first (the inner states are unknowns too, matched
+with the segments' exact transition matrices), polished by single shooting.  When the
+search fails from the guess, continuation in the endpoint follows ``end(s) = q(t1;
+guess) + s (end - q(t1; guess))`` from s = 0 (solved by the guess) to 1 with adaptive
+steps; when that fails too, continuation in T solves on T / 8 (the straight-line guess
+rescaled) and grows the span to T.  Iterations and continuation steps have budgets;
+where they stop, ``ConnectError`` says so.
+
+Vakonomic and Hoelder need every coordinate at t1: a free end coordinate would need its
+transversality condition (its conjugate momentum vanishes at t1), which is not imposed,
+so such an ``end`` is refused rather than answered with a non-stationary motion.
 
 Verdicts on the answer:
 
