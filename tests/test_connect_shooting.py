@@ -103,3 +103,23 @@ def test_a_free_end_coordinate_is_refused_for_the_variational_principles(princip
     minimum-norm, non-stationary motion."""
     with pytest.raises(jn.JetnhError, match="leaves z free"):
         jn.connect(get("heisenberg"), principle, O, {"x": 1.0, "y": 0.5}, (0.0, 1.0))
+
+
+def test_cli_segments_and_free_end(capsys):
+    """``jetnh connect --segments 3`` gives connect's answer; a vakonomic ``--to`` with a
+    free coordinate is refused with the fix (exit code 2 or more, no traceback)."""
+    import json
+
+    from jetnh.cli import main
+
+    code = main(["connect", "heisenberg", "--from", "x=0,y=0,z=0", "--to",
+                 "x=0.6,y=0.8,z=0.2", "--t-end", "1", "--segments", "3", "--format",
+                 "json", "-q"])
+    assert code == 0
+    data = json.loads(capsys.readouterr().out)
+    c = jn.connect(get("heisenberg"), "vakonomic", O, {"x": 0.6, "y": 0.8, "z": 0.2},
+                   (0.0, 1.0))
+    assert abs(data["cost"] - c.cost) < 1e-9
+    code = main(["connect", "heisenberg", "--from", "x=0,y=0,z=0", "--to", "x=0.6",
+                 "--t-end", "1", "-q"])
+    assert code != 0 and "leaves y, z free" in capsys.readouterr().err
