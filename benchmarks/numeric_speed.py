@@ -14,6 +14,11 @@ and the fixed and per-evaluation cost of one run, against the researcher's route
    lambdified rhs and on jetnh's compiled rhs, over spans from one step to ~10^4
    evaluations (rolling disk, Chetaev and vakonomic, T = 1e-6, 10, 100): the fixed cost
    of a call and the cost per rhs evaluation.
+3. The loop's own cost per evaluation: ``scene.run(method="rk4", n_steps=N,
+   save="final", singular="ignore")`` against a bare numba loop of the classical RK4
+   step (the step of the hand-written rk4 loop that preceded the shared one: four rhs
+   calls, the stage sums, a finiteness check and the halt flag) on the same compiled rhs,
+   over runs long enough (N = 10^5 steps) that the fixed cost of a call vanishes.
 
 Wall times are best of several repetitions (``_common.best``); ratios are within this run.
 """
@@ -24,7 +29,7 @@ import numba
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from _common import best, parser, write
+from _common import best, best_of, parser, write
 from workprecision import Case, researcher_rhs, scene_of
 
 CALL_CASES = (Case("rolling_disk", "chetaev", 10.0),
@@ -133,13 +138,77 @@ def run_cost(case, spans, reps):
     return dict(problem=case.label, rtol=1e-9, rows=rows, summary=summary)
 
 
+def bare_rk4():
+    """``bare(rhs, t0, t_end, y, p, n_steps, halt)``: the classical RK4 step, as the
+    hand-written rk4 loop took it, and nothing else (its final state in ``y``)."""
+    from jetnh.numeric.methods._common import RHS, all_finite, entry_point, f8, i8
+
+    @numba.njit((RHS, f8, f8, f8[::1], f8[::1], i8, i8[::1]), error_model="numpy")
+    def bare(rhs, t0, t_end, y, p, n_steps, halt):
+        n = y.shape[0]
+        h = (t_end - t0) / n_steps
+        k1, k2, k3, k4 = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+        ytmp, y_new = np.empty(n), np.empty(n)
+        t = t0
+        for step in range(n_steps):
+            if halt[0] != 0:
+                return -1
+            rhs(t, y, p, k1)
+            for i in range(n):
+                ytmp[i] = y[i] + 0.5 * h * k1[i]
+            rhs(t + 0.5 * h, ytmp, p, k2)
+            for i in range(n):
+                ytmp[i] = y[i] + 0.5 * h * k2[i]
+            rhs(t + 0.5 * h, ytmp, p, k3)
+            for i in range(n):
+                ytmp[i] = y[i] + h * k3[i]
+            rhs(t + h, ytmp, p, k4)
+            for i in range(n):
+                y_new[i] = y[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+            if not all_finite(y_new):
+                return -1
+            for i in range(n):
+                y[i] = y_new[i]
+            t = t0 + (step + 1) * h
+        return 0
+    return entry_point(bare)
+
+
+def rk4_loop_cost(case, n_steps, reps):
+    """ns per rhs evaluation of jetnh's rk4 run and of the bare loop (``bare_rk4``) on
+    the same compiled rhs, interleaved; the final states must agree bit for bit."""
+    scene = scene_of(case).compile()
+    bare = bare_rk4()
+    rhs, p, halt = scene.kernels.rhs_fp, scene.p, np.zeros(1, dtype=np.int64)
+    T = 1.0
+
+    def jet():
+        return scene.run(method="rk4", n_steps=n_steps, save="final", singular="ignore",
+                         t_span=(0.0, T))
+
+    def by_hand():
+        y = scene.y0.copy()
+        bare(rhs, 0.0, T, y, p, n_steps, halt)
+        return y
+    (tj, rj), (tb, yb) = best_of([jet, by_hand], reps)
+    same = bool(np.array_equal(rj.y[-1], yb))
+    evals = 4 * n_steps
+    out = dict(problem=case.label, n_steps=n_steps, jetnh_ns=tj / evals * 1e9,
+               bare_ns=tb / evals * 1e9, ratio=tj / tb, bit_for_bit=same)
+    print(f"rk4 loop, {case.label}: jetnh {out['jetnh_ns']:.1f} ns/eval, bare loop "
+          f"{out['bare_ns']:.1f} ns/eval, ratio {out['ratio']:.3f}, same result: {same}")
+    return out
+
+
 def main(argv=None):
     args = parser(__doc__, "numeric_speed").parse_args(argv)
     n_calls, reps = (200_000, 3) if args.quick else (2_000_000, 7)
     spans = (1e-6, 10.0) if args.quick else (1e-6, 10.0, 100.0)
     write("numeric_speed", dict(
         rhs_call=[rhs_call(c, n_calls, reps) for c in CALL_CASES],
-        run_cost=[run_cost(c, spans, reps) for c in RUN_CASES]),
+        run_cost=[run_cost(c, spans, reps) for c in RUN_CASES],
+        rk4_loop=[rk4_loop_cost(c, 10_000 if args.quick else 100_000, reps)
+                  for c in CALL_CASES]),
         args.out, args.quick)
 
 

@@ -5,7 +5,21 @@ Every message says what is wrong and how to fix it.
 
 
 class JetnhError(Exception):
-    """Base class of every error jetnh raises on purpose."""
+    """Base class of every error jetnh raises on purpose.
+
+    ``argument``: the name of the argument the error refuses, or None.  With one, the
+    message is the argument's name and then ``detail``, the rest (``"rtol must be
+    positive"``: ``argument`` "rtol", ``detail`` "must be positive"); ``named(name)`` is
+    the message with another name for it (the command line's ``--rtol``).
+    """
+
+    def __init__(self, message: str = "", *, argument: str | None = None):
+        self.argument, self.detail = argument, message
+        super().__init__(self.named(argument))
+
+    def named(self, name: str | None) -> str:
+        """The message with ``name`` for the refused argument."""
+        return f"{name} {self.detail}" if self.argument is not None else self.detail
 
 
 class JetSpaceError(JetnhError, ValueError):

@@ -299,7 +299,7 @@ def test_cache_info_names_the_fallback(capsys, tmp_path, monkeypatch):
     (("--atol", "-1"), "--atol must be >= 0"),
     (("--timeout", "0"), "--timeout must be a positive number"),
     (("--method", "rk4", "--steps", "0"), "--steps must be a positive integer"),
-    (("--rtol", "0", "--atol", "0"), "give --rtol > 0 or --atol > 0"),
+    (("--rtol", "0", "--atol", "0"), "--atol is 0 for state 0 while the relative tolerance"),
 ])
 def test_run_argument_errors_name_the_options(capsys, args, words):
     code, out, err = inproc(capsys, "simulate", "knife_edge", "--t-end", "1", "-q", *args)
@@ -313,13 +313,28 @@ def test_sweep_argument_errors_name_the_options(capsys):
     assert code == 1 and "--atol must be >= 0" in err and "Traceback" not in err
 
 
-def test_option_message_translates_whole_names_only():
-    from jetnh.cli import option_message
+def test_errors_name_the_option_that_gave_the_argument():
+    """The command line names a refused argument by the option that gave it, through
+    the error's ``argument`` (the message is never rewritten); a value that no option
+    gave keeps the library's name."""
+    import argparse
+    import pickle
 
-    assert option_message("give n_steps= or h=, not both") == "give --steps or h=, not both"
-    assert option_message("n_steps = 5 is beyond max_steps = 4") == \
-        "--steps = 5 is beyond max_steps = 4"
-    assert option_message("--rtol and my_rtol and rtols") == "--rtol and my_rtol and rtols"
+    from jetnh.cli import option_name
+    from jetnh.errors import ArgumentError
+
+    exc = ArgumentError("= 5 is beyond the budget max_steps = 4", argument="n_steps")
+    assert str(exc) == "n_steps = 5 is beyond the budget max_steps = 4"
+    given = argparse.Namespace(steps=5, rtol=None)
+    assert exc.named(option_name(given, exc.argument)) == \
+        "--steps = 5 is beyond the budget max_steps = 4"
+    rtol = ArgumentError("must be positive", argument="rtol")
+    assert rtol.named(option_name(given, "rtol")) == "rtol must be positive"   # not given
+    assert rtol.named(option_name(argparse.Namespace(), "rtol")) == "rtol must be positive"
+    back = pickle.loads(pickle.dumps(exc))               # as from a Dask worker
+    assert (str(back), back.argument, back.detail) == (str(exc), exc.argument, exc.detail)
+    plain = ArgumentError("give n_steps= or h=, not both")
+    assert plain.argument is None and plain.named(option_name(given, None)) == str(plain)
 
 
 def test_quiet_leaves_only_errors(capsys, tmp_path):

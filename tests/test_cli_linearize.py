@@ -6,6 +6,8 @@ import json
 import numpy as np
 import pytest
 
+from model_texts import PENDULUM_XY
+
 
 def inproc(capsys, *args):
     from jetnh.cli import main
@@ -67,22 +69,11 @@ def test_help(capsys):
     assert code == 0 and "usage: jetnh linearize" in out and "--param" in out
 
 
-PENDULUM_TOML = """
-name = "pendulum in x, y"
-coordinates = ["x", "y"]
-lagrangian = "(x_t**2 + y_t**2)/2 - G*y"
-constraints = ["x**2 + y**2 - l**2"]
-[parameters]
-G = 9.81
-l = 1.0
-"""
-
-
 def test_holonomic_constraint(capsys, tmp_path):
     """A model file with g = x^2 + y^2 - l^2: y follows from g = 0 (no zero eigenvalue);
     a point off g = 0 is refused with the value that would put it there."""
     path = tmp_path / "pendulum.toml"
-    path.write_text(PENDULUM_TOML)
+    path.write_text(PENDULUM_XY)
     code, out, err = inproc(capsys, "linearize", str(path), "-q", "--at", "x=0,y=-1,x_t=0")
     assert code == 0, err
     assert "state:      x, x_t (from g = 0: y)" in out

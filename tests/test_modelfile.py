@@ -323,6 +323,30 @@ def test_catalogue_round_trip(name):
     assert m.simulation == {"t_end": 2.0, "method": "rk4", "points": 11}
 
 
+def test_the_model_record_is_frozen_and_written_whole():
+    """A Model (the record of the catalogue and of model files) is immutable and equal by
+    content; dumps(model) writes it with its defaults, and reading that gives it back."""
+    import dataclasses
+
+    from jetnh.errors import FrozenError
+
+    m = mf.loads(_file(**{"[initial]": "y = 0.2\nx_t = 1.0", "[integrals]": 'p = "x_t*y"',
+                          "[simulation]": 't_end = 3.0\nmethod = "dopri5"'}), "m.toml")
+    back = mf.loads(mf.dumps(m, principle="suslov"), "m.toml")
+    assert back == dataclasses.replace(m, principle="suslov") and back != m
+    assert hash(back) == hash(dataclasses.replace(m, principle="suslov"))
+    assert mf.loads(mf.dumps(back), "m.toml") == back
+    with pytest.raises(FrozenError):
+        m.initial["y"] = 0.0
+    with pytest.raises(FrozenError):
+        m.simulation.update(t_end=1.0)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        m.principle = "vakonomic"
+    other = m.with_split(["x"])
+    assert [q.name for q in other.system.dependent] == ["x"] and other.initial == m.initial
+    assert [q.name for q in m.system.dependent] != ["x"]
+
+
 @pytest.mark.parametrize("name", ["rolling_disk", "appell_hamel", "suslov_rigid_body"])
 def test_round_trip_gives_the_same_equations(name, tmp_path):
     s = models.get(name)
@@ -544,10 +568,10 @@ def test_read_is_bounded_whatever_the_size_claims(tmp_path, monkeypatch):
     class Lying:
         def __init__(self, st):
             self.st_mode, self.st_size = st.st_mode, 0
-    monkeypatch.setattr(mf.os, "fstat", lambda fd: Lying(real_fstat(fd)))
+    monkeypatch.setattr(os, "fstat", lambda fd: Lying(real_fstat(fd)))
     reads = []
     real_read = os.read
-    monkeypatch.setattr(mf.os, "read", lambda fd, n: reads.append(n) or real_read(fd, n))
+    monkeypatch.setattr(os, "read", lambda fd, n: reads.append(n) or real_read(fd, n))
     with pytest.raises(ModelFileError, match="more than 4096 bytes"):
         mf.load(f)
     assert sum(reads) <= 4097
@@ -589,7 +613,7 @@ def test_expression_build_errors_become_model_file_errors(monkeypatch):
                 KeyError("internal")):
         def boom(*a, exc=exc):
             raise exc
-        monkeypatch.setattr(mf.sp, "Mul", boom)
+        monkeypatch.setattr(sp, "Mul", boom)
         with pytest.raises(ModelFileError, match="sympy cannot build the expression|too "
                                                  "deeply nested"):
             mf.parse_expression("x*y", NAMES)

@@ -12,6 +12,7 @@ import pathlib
 import tempfile
 
 import pytest
+import sympy as sp
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -170,5 +171,5 @@ def test_random_data(data):
 
 @pytest.mark.parametrize("text", HOSTILE)
 def test_each_hostile_expression(text):
-    names = {n: mf.sp.Symbol(n) for n in ("x", "x_t", "y", "y_t", "t")}
+    names = {n: sp.Symbol(n) for n in ("x", "x_t", "y", "y_t", "t")}
     _guarded(mf.parse_expression, text, names)

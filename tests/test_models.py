@@ -92,6 +92,25 @@ def test_catalogue_contents():
         assert set(info.initial()) <= {v.name for v in s.J.q + s.J.qd}, name
 
 
+def test_the_catalogue_gives_model_records():
+    """models.model is the record model files give (jetnh.modelfile.Model): the System
+    with its options, the default initial state and span; written as a model file and
+    read back, it keeps them."""
+    for name in ("rolling_disk", "n_trailer"):
+        opts = OPTIONS.get(name, {})
+        m = models.model(name, **opts)
+        assert isinstance(m, mf.Model) and m.source == "catalogue"
+        assert m.name == name + "".join(f":{k}={v}" for k, v in opts.items())
+        assert m.system == models.get(name, **opts)
+        assert m.initial == models.initial(name, **opts)
+        assert m.simulation == {"t_end": models.info(name).t_end}
+        back = mf.loads(mf.dumps(m))
+        assert (back.initial, back.simulation, back.system.L, back.system.dependent) == (
+            m.initial, m.simulation, m.system.L, m.system.dependent)
+    with pytest.raises(ModelFileError, match="no option"):
+        models.model("knife_edge", N=3)
+
+
 def test_catalogue_covers_the_kinds():
     kinds = {name: models.get(name, **OPTIONS.get(name, {})).classify()
              for name in models.CATALOGUE}

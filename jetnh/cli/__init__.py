@@ -14,15 +14,15 @@ import argparse
 import os
 import sys
 
-from ..errors import ArgumentError, JetnhError
+from ..errors import JetnhError
 from .commands import COMMANDS
-from .loading import Loaded, load_model
-from .parser import Formatter
+from .loading import load_model
+from .parser import Formatter, option_name
 from .progress import SIGN_OF_LIFE, Progress
-from .usage import UsageError, option_message
+from .usage import UsageError
 
-__all__ = ["main", "build_parser", "Progress", "SIGN_OF_LIFE", "UsageError", "option_message",
-           "Loaded", "load_model"]
+__all__ = ["main", "build_parser", "Progress", "SIGN_OF_LIFE", "UsageError", "load_model",
+           "option_name"]
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -61,11 +61,8 @@ def main(argv=None) -> int:
     except UsageError as exc:
         print(f"jetnh {args.command}: error: {exc}", file=sys.stderr)
         return 2
-    except JetnhError as exc:
-        msg = str(exc)
-        if isinstance(exc, ArgumentError) and args.command in ("simulate", "sweep"):
-            msg = option_message(msg)
-        print(f"jetnh: error: {msg}", file=sys.stderr)
+    except JetnhError as exc:            # a refused argument by the option that gave it
+        print(f"jetnh: error: {exc.named(option_name(args, exc.argument))}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         print("jetnh: interrupted", file=sys.stderr)

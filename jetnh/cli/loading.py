@@ -1,28 +1,21 @@
-"""A model named on the command line: a catalogue name (with options) or a model file."""
+"""A model named on the command line (a catalogue name with options, or a model file) and
+the settings a command runs it with, resolved once: each the option given, else the
+model's default, else jetnh's (``DEFAULTS``)."""
 
 from __future__ import annotations
 
 import os
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, fields
 from pathlib import Path
 
 from ..errors import ModelFileError
+from ..modelfile import Model
 from .usage import UsageError
 
-
-@dataclass
-class Loaded:
-    """A model from the catalogue or a file, with its defaults for simulation."""
-
-    system: object
-    label: str
-    initial: dict = field(default_factory=dict)
-    principle: str | None = None
-    convention: str | None = None
-    integrals: dict = field(default_factory=dict)
-    simulation: dict = field(default_factory=dict)
-
+#: jetnh's defaults of the settings a model does not give
+DEFAULTS = {"principle": "chetaev", "convention": "paper", "t_start": 0.0,
+            "method": "dop853", "rtol": 1e-9, "atol": 1e-12, "points": 201}
 
 _SPEC = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)(?::(.*))?$")
 
@@ -41,7 +34,7 @@ def _catalogue_options(text: str, model: str) -> dict:
     return opts
 
 
-def load_model(spec: str) -> Loaded:
+def load_model(spec: str) -> Model:
     """A catalogue name (``name`` or ``name:K=V,...``) or a path to a model file."""
     from .. import models
     from ..modelfile import load
@@ -51,23 +44,52 @@ def load_model(spec: str) -> Loaded:
     looks_like_file = spec.endswith(".toml") or os.sep in spec or "/" in spec
     in_catalogue = bool(match) and match.group(1) in models.CATALOGUE
     if looks_like_file or (not in_catalogue and path.exists()):
-        m = load(path)
-        return Loaded(m.system, m.name or path.stem, dict(m.initial), m.principle,
-                      m.convention, dict(m.integrals), dict(m.simulation))
+        return load(path)
     if not in_catalogue:
         raise ModelFileError(
             f"no model named {spec!r} in the catalogue, and no model file of that name; "
             f"the catalogue has {', '.join(models.CATALOGUE)} (see `jetnh models`)")
-    name, rest = match.group(1), match.group(2)
-    opts = _catalogue_options(rest or "", spec)
-    info = models.info(name)
-    system = info.system(**opts)
-    return Loaded(system, spec, info.initial(**opts), None, None, {},
-                  {"t_end": info.t_end})
+    return models.model(match.group(1), **_catalogue_options(match.group(2) or "", spec))
 
 
-def with_split(loaded: Loaded, split: str | None) -> Loaded:
+def with_split(model: Model, split: str | None) -> Model:
+    """``model`` with the dependent coordinates of ``--split Q1,Q2`` (if given)."""
     if split:
-        names = [s.strip() for s in split.split(",") if s.strip()]
-        loaded.system = loaded.system.with_split(names)
-    return loaded
+        return model.with_split([s.strip() for s in split.split(",") if s.strip()])
+    return model
+
+
+@dataclass(frozen=True)
+class Settings:
+    """What a command runs a model with; ``t_end`` None: neither --t-end nor the model
+    gives one (``t_span`` then asks for it)."""
+
+    principle: str
+    convention: str
+    t_start: float
+    t_end: float | None
+    method: str
+    rtol: float
+    atol: float
+    points: int
+
+    @property
+    def t_span(self) -> tuple[float, float]:
+        if self.t_end is None:
+            raise UsageError("give --t-end (the model file has no [simulation] t_end)")
+        return self.t_start, float(self.t_end)
+
+
+def settings(args, model: Model) -> Settings:
+    """The settings of a command: each option of ``args`` given (a command without the
+    option gives none), else ``model``'s default, else ``DEFAULTS``."""
+    given = {"principle": model.principle, "convention": model.convention,
+             **model.simulation}
+
+    def pick(name):
+        value = getattr(args, name, None)
+        if value is not None:
+            return value
+        return given[name] if given.get(name) is not None else DEFAULTS.get(name)
+    values = {f.name: pick(f.name) for f in fields(Settings)}
+    return Settings(**{**values, "t_start": float(values["t_start"])})

@@ -1,6 +1,6 @@
 """The options the subcommands share: parent parsers (``COMMON`` for every command,
-``RUN`` for the commands that integrate a model) and the arguments of a model and of a
-shown result."""
+``PRINCIPLE`` for the commands that derive under a principle, ``RUN`` for those that
+integrate a model) and the arguments of a model and of a shown result."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ import math
 from ..errors import PrincipleError
 from ..mechanics import principles
 from ..mechanics.principles import PRINCIPLES
+from .loading import DEFAULTS
 from .render import SCREEN_BUDGET
 
 EPILOG_MODEL = ("MODEL: a catalogue name (see `jetnh models`; scalable ones take options, "
@@ -87,17 +88,29 @@ def _common() -> argparse.ArgumentParser:
     return common
 
 
+def _principle() -> argparse.ArgumentParser:
+    principle = argparse.ArgumentParser(add_help=False)
+    principle.add_argument("--principle", "-p", choices=PRINCIPLES, type=canonical_principle,
+                           default=None, help="default: the model file's, else chetaev "
+                                              "(Lagrange-d'Alembert); " + ALIASES)
+    principle.add_argument("--convention", choices=("paper", "imposed"), default=None,
+                           help="paper: every variation is independent after the commutator "
+                                "(as the paper); imposed: the variation's own condition is "
+                                "imposed (default: the model file's, else paper)")
+    return principle
+
+
 def _run() -> argparse.ArgumentParser:
-    run = argparse.ArgumentParser(add_help=False)
-    run.add_argument("--principle", "-p", choices=PRINCIPLES, type=canonical_principle, default=None,
-                     help="default: the model file's, else chetaev; " + ALIASES)
-    run.add_argument("--convention", choices=("paper", "imposed"), default=None)
-    run.add_argument("--t-start", type=float, default=None, metavar="T0", help="default 0")
+    run = argparse.ArgumentParser(add_help=False, parents=[PRINCIPLE])
+    run.add_argument("--t-start", type=float, default=None, metavar="T0",
+                     help=f"default: the model's, else {DEFAULTS['t_start']:g}")
     run.add_argument("--t-end", type=float, default=None, metavar="T",
                      help="end time (default: the model's [simulation] t_end or the "
                           "catalogue's)")
-    run.add_argument("--rtol", type=float, default=None, help="default 1e-9")
-    run.add_argument("--atol", type=float, default=None, help="default 1e-12")
+    run.add_argument("--rtol", type=float, default=None,
+                     help=f"default: the model's, else {DEFAULTS['rtol']:g}")
+    run.add_argument("--atol", type=float, default=None,
+                     help=f"default: the model's, else {DEFAULTS['atol']:g}")
     run.add_argument("--steps", type=int, default=1000,
                      help="steps of the fixed-step methods rk4, dla and dvi (default 1000)")
     return run
@@ -105,14 +118,31 @@ def _run() -> argparse.ArgumentParser:
 
 #: options of every subcommand
 COMMON = _common()
-#: options of the subcommands that integrate a model (simulate, sweep)
+#: options of the subcommands that derive under a principle (derive, linearize)
+PRINCIPLE = _principle()
+#: options of the subcommands that integrate a model (simulate, connect, sweep): the
+#: principle's and the run's
 RUN = _run()
 
+#: the library's argument names (``JetnhError.argument``) -> the destination and the
+#: option of a command that sets them
+ARGUMENT_OPTIONS = {"n_steps": ("steps", "--steps"), "rtol": ("rtol", "--rtol"),
+                    "atol": ("atol", "--atol"), "timeout": ("timeout", "--timeout")}
 
-def subcommand(sub, name: str, run: bool = False, **kw) -> argparse.ArgumentParser:
-    """The subparser ``name`` with the common options (and the run options if ``run``)."""
-    return sub.add_parser(name, parents=[COMMON, RUN] if run else [COMMON],
-                          formatter_class=Formatter, **kw)
+
+def option_name(args, argument: str | None) -> str | None:
+    """The option that gave the library's ``argument`` in this command line, else the
+    argument's own name (the value came from elsewhere: a model file, a default)."""
+    dest, option = ARGUMENT_OPTIONS.get(argument, (None, None))
+    return option if dest and getattr(args, dest, None) is not None else argument
+
+
+def subcommand(sub, name: str, run: bool = False, principle: bool = False,
+               **kw) -> argparse.ArgumentParser:
+    """The subparser ``name`` with the common options, and the run options if ``run``
+    (else the principle's if ``principle``)."""
+    parents = [COMMON] + ([RUN] if run else [PRINCIPLE] if principle else [])
+    return sub.add_parser(name, parents=parents, formatter_class=Formatter, **kw)
 
 
 def model_args(sp_, split=True):

@@ -1,5 +1,6 @@
-"""What simulate and sweep share: NAME=VALUE lists, the names a scene may use, the
-integration methods."""
+"""What the commands that run a model share: NAME=VALUE lists, a scene's state (its
+names, its initial values from the model and the options), the first integrals it can
+monitor, the other names it may use, the integration methods."""
 
 from __future__ import annotations
 
@@ -33,6 +34,38 @@ def method_of(name: str):
 METHOD_HELP = ("dop853 (default), dopri5, rk4, radau (implicit, for stiff problems), dla "
                "(discrete Lagrange-d'Alembert, chetaev only), dvi (discrete vakonomic) or "
                "scipy-<RK45|DOP853|Radau|BDF|LSODA>")
+
+
+def state_names(system, principle) -> list:
+    """The names of a scene's state: coordinates, independent velocities, multipliers."""
+    from ..numeric.codegen import multiplier_names
+
+    return ([q.name for q in system.J.q] + [v.name for v in system.independent_velocities]
+            + list(multiplier_names(system, principle)))
+
+
+def initial_values(model, principle, given: dict,
+                   dependent_velocities: bool = False) -> tuple[dict, list]:
+    """The model's initial values of the states (and of the dependent velocities, which
+    are checked against the constraints, if ``dependent_velocities``) updated by
+    ``given``; the states neither gives start at 0, and are returned too."""
+    system = model.system
+    states = state_names(system, principle)
+    keep = set(states) | ({v.name for v in system.dependent_velocities}
+                          if dependent_velocities else set())
+    values = {k: v for k, v in model.initial.items() if k in keep}
+    values.update(given)
+    zeros = [s for s in states if s not in values]
+    return {**values, **dict.fromkeys(zeros, 0.0)}, zeros
+
+
+def monitored_integrals(model, principle) -> tuple[dict, list]:
+    """The model's first integrals that a scene of ``principle`` can monitor, and the
+    names of the others (they use multipliers its state does not have)."""
+    known = set(state_names(model.system, principle)) | scene_names(model.system)
+    kept = {k: v for k, v in model.integrals.items()
+            if not {s.name for s in v.free_symbols} - known}
+    return kept, [k for k in model.integrals if k not in kept]
 
 
 def scene_names(system) -> set:

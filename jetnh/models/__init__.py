@@ -2,9 +2,11 @@
 
 Every model carries its parameters' default values (``system.defaults``) and a docstring
 with its source, its closed-form solutions and its first integrals (each checked in
-``tests/test_models.py``).  ``info(name)`` adds a default initial state and time span
-(what ``jetnh simulate NAME`` uses); scalable families take options, e.g.
-``get("n_trailer", N=4)`` or, on the command line, ``n_trailer:N=4``.
+``tests/test_models.py``).  ``model(name)`` is the ``Model`` (``jetnh.modelfile.Model``,
+the record model files give too): the System with a default initial state and time span
+(what ``jetnh simulate NAME`` uses); ``info(name)`` is the catalogue entry that builds
+it.  Scalable families take options, e.g. ``get("n_trailer", N=4)`` or, on the command
+line, ``n_trailer:N=4``.
 
 =======================  ==============================================================
 rolling_disk             vertical rolling disk (the paper's Example 1)
@@ -28,6 +30,7 @@ damped_chaplygin_sleigh  Chaplygin sleigh with viscous friction (Rayleigh dissip
 =======================  ==============================================================
 """
 
+from ..modelfile.model import Model
 from ._registry import INFO, ModelInfo, register
 from .dissipative import damped_chaplygin_sleigh, damped_knife_edge
 from .families import n_trailer, n_trailer_turning, particle_chain
@@ -68,6 +71,11 @@ def get(name: str, **options):
     return _entry(name).system(**options)
 
 
+def model(name: str, **options) -> Model:
+    """The catalogue model ``name`` with its defaults (a ``Model``); options such as N=4."""
+    return _entry(name).model(**options)
+
+
 def info(name: str) -> ModelInfo:
     """The catalogue entry: factory, options, default initial state and time span."""
     return _entry(name)
@@ -78,5 +86,5 @@ def initial(name: str, **options) -> dict:
     return _entry(name).initial(**options)
 
 
-__all__ = ["CATALOGUE", "INFO", "ModelInfo", "get", "info", "initial", *_ORDER,
+__all__ = ["CATALOGUE", "INFO", "ModelInfo", "get", "model", "info", "initial", *_ORDER,
            "n_trailer_turning"]

@@ -3,13 +3,16 @@
 A factory returns a ``System`` (with its parameters' defaults); scalable families take
 keyword options (``n_trailer(N=2)``).  ``ModelInfo.initial(**options)`` is a state that
 the model's docstring discusses (a good default for ``jetnh simulate``), keyed by name;
-states not in it start at 0.
+states not in it start at 0.  ``ModelInfo.model(**options)`` is the ``Model`` (the
+record model files give too): the System with that state and span.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from typing import Callable
+
+from ..modelfile.model import Model
 
 #: the largest value of a family's size option (N of n_trailer): checked before anything
 #: is built (a derivation grows with it; N = 64 already means 67 coordinates)
@@ -18,7 +21,7 @@ MAX_OPTION = 64
 
 @dataclass(frozen=True)
 class ModelInfo:
-    """One catalogue entry."""
+    """One catalogue entry: how to build its ``Model`` for given options."""
 
     name: str
     factory: Callable
@@ -56,6 +59,15 @@ class ModelInfo:
         """The default initial state (names -> floats) for these options."""
         opts = {**self.options, **self._checked(options)}
         return dict(self.initial_state(**opts)) if self.options else dict(self.initial_state())
+
+    def model(self, **options) -> Model:
+        """The ``Model``: the System with ``options``, its default initial state and
+        ``t_end``; named ``name`` or, with options, ``name:K=V,...`` (as on the command
+        line)."""
+        given = ",".join(f"{k}={v}" for k, v in self._checked(options).items())
+        return Model(self.system(**options), f"{self.name}:{given}" if given else self.name,
+                     initial=self.initial(**options), simulation={"t_end": self.t_end},
+                     source="catalogue")
 
 
 INFO: dict[str, ModelInfo] = {}

@@ -52,20 +52,20 @@ def name_of(key, what) -> str:
 def real(value, what) -> float:
     """A real number as a float (NaN and infinities pass: see ``finite``)."""
     if isinstance(value, (bool, np.bool_)) or isinstance(value, (str, bytes)):
-        raise ArgumentError(f"{what} must be a number, got {value!r}")
+        raise ArgumentError(f"must be a number, got {value!r}", argument=what)
     if isinstance(value, (complex, np.complexfloating)) or (
             isinstance(value, sp.Basic) and value.is_real is False):
-        raise ArgumentError(f"{what} must be a real number, got {value!r}")
+        raise ArgumentError(f"must be a real number, got {value!r}", argument=what)
     try:
         return float(value)
     except (TypeError, ValueError, OverflowError):
-        raise ArgumentError(f"{what} must be a number, got {value!r}") from None
+        raise ArgumentError(f"must be a number, got {value!r}", argument=what) from None
 
 
 def finite(value, what) -> float:
     v = real(value, what)
     if not math.isfinite(v):
-        raise ArgumentError(f"{what} is {v}; give a finite number")
+        raise ArgumentError(f"is {v}; give a finite number", argument=what)
     return v
 
 
@@ -73,24 +73,26 @@ def positive(value, what, allow_inf=False) -> float:
     """A number > 0 (``inf`` too when ``allow_inf``: "no limit")."""
     v = real(value, what)
     if math.isnan(v) or v <= 0.0 or (math.isinf(v) and not allow_inf):
-        raise ArgumentError(f"{what} must be a positive {'number' if allow_inf else 'finite number'}"
-                         f", got {value!r}")
+        raise ArgumentError(f"must be a positive {'number' if allow_inf else 'finite number'}"
+                            f", got {value!r}", argument=what)
     return v
 
 
 def count(value, what, limit=MAX_STEPS_LIMIT) -> int:
     """A positive integer (an integral float such as ``1e4`` is accepted)."""
     if isinstance(value, (bool, np.bool_)):
-        raise ArgumentError(f"{what} must be a positive integer, got {value!r}")
+        raise ArgumentError(f"must be a positive integer, got {value!r}", argument=what)
     try:
         v = operator.index(value)
     except TypeError:
         f = real(value, what)
         if not (math.isfinite(f) and f.is_integer()):
-            raise ArgumentError(f"{what} must be a positive integer, got {value!r}") from None
+            raise ArgumentError(f"must be a positive integer, got {value!r}",
+                                argument=what) from None
         v = int(f)
     if not 1 <= v <= limit:
-        raise ArgumentError(f"{what} must be a positive integer of at most {limit}, got {value!r}")
+        raise ArgumentError(f"must be a positive integer of at most {limit}, got {value!r}",
+                            argument=what)
     return v
 
 
@@ -102,16 +104,18 @@ def real_array(value, what, ndim=1) -> np.ndarray:
         flat = [real(v, what) for v in a.ravel()]
         a = np.asarray(flat, dtype=float).reshape(a.shape)
     elif a.dtype.kind in "bc" or a.dtype.kind not in "iuf":
-        raise ArgumentError(f"{what} must hold real numbers, got an array of {a.dtype}")
+        raise ArgumentError(f"must hold real numbers, got an array of {a.dtype}",
+                            argument=what)
     a = np.array(a, dtype=float, order="C")      # (ascontiguousarray makes 0-d 1-d)
     if a.ndim != ndim:
-        raise ArgumentError(f"{what} must be {'a number' if ndim == 0 else f'{ndim}-d'}, "
-                         f"got shape {a.shape}")
-    if not np.all(np.isfinite(a)):
+        raise ArgumentError(f"must be {'a number' if ndim == 0 else f'{ndim}-d'}, "
+                            f"got shape {a.shape}", argument=what)
+    # a finite sum of squares: all finite, cheaply (else each is looked at)
+    if not (ndim == 1 and math.isfinite(a.dot(a))) and not np.all(np.isfinite(a)):
         bad = tuple(int(i) for i in np.argwhere(~np.isfinite(a))[0])
         where = "" if ndim == 0 else f" at index {bad if ndim > 1 else bad[0]}"
-        raise ArgumentError(f"{what} has a non-finite value ({a[bad]}){where}; give finite "
-                         "numbers")
+        raise ArgumentError(f"has a non-finite value ({a[bad]}){where}; give finite "
+                            "numbers", argument=what)
     return a
 
 
@@ -119,22 +123,24 @@ def tolerances(rtol, atol, n) -> tuple[float, np.ndarray]:
     """``(rtol, atol as one value per state)`` for an error scale atol_i + rtol |y_i|."""
     r = real(rtol, "rtol")
     if not (math.isfinite(r) and (r == 0.0 or r >= RTOL_MIN)):
-        raise ArgumentError(f"rtol must be 0 or a finite number >= {RTOL_MIN:.3g} (float64 cannot "
-                         f"honour a smaller relative error), got {rtol!r}")
+        raise ArgumentError(f"must be 0 or a finite number >= {RTOL_MIN:.3g} (float64 cannot "
+                            f"honour a smaller relative error), got {rtol!r}", argument="rtol")
     if type(atol) is float and atol > 0.0 and atol != math.inf:     # the common case, fast
         return r, np.full(n, atol)
     a = np.asarray(atol)
     if a.ndim > 1 or (a.ndim == 1 and a.shape[0] != n):
-        raise ArgumentError(f"atol must be a number or one value per state ({n}), got shape "
-                         f"{a.shape}")
+        raise ArgumentError(f"must be a number or one value per state ({n}), got shape "
+                            f"{a.shape}", argument="atol")
     a = real_array(a, "atol", a.ndim)
     if np.any(a < 0):
-        raise ArgumentError(f"atol must be >= 0, got {atol!r}")
+        raise ArgumentError(f"must be >= 0, got {atol!r}", argument="atol")
     a = np.ascontiguousarray(np.broadcast_to(a, (n,)), dtype=float)
     if r == 0.0 and np.any(a == 0.0):
         i = int(np.argmax(a == 0.0))
-        raise ArgumentError(f"rtol = 0 and atol[{i}] = 0 leave state {i} without an error scale "
-                         "(no step would ever be accepted); give rtol > 0 or atol > 0")
+        raise ArgumentError(f"is 0 for state {i} while the relative tolerance is 0, which "
+                            "leaves it without an error scale (no step would ever be "
+                            "accepted); give a positive absolute or relative tolerance",
+                            argument="atol")
     return r, a
 
 
@@ -205,8 +211,8 @@ def fixed_steps(n_steps, h, t0, t1, what, max_steps) -> int:
         return int(steps)
     steps = count(n_steps, "n_steps")
     if steps > max_steps:
-        raise ArgumentError(f"n_steps = {steps} is beyond the budget max_steps = {max_steps}; "
-                         "raise max_steps to allow it")
+        raise ArgumentError(f"= {steps} is beyond the budget max_steps = {max_steps}; "
+                            "raise max_steps to allow it", argument="n_steps")
     return steps
 
 

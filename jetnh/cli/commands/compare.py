@@ -33,13 +33,13 @@ def run(args, progress) -> int:
     from ...mechanics.equivalence import comparisons
     from ...algebra.shared import shared_form, tree_size
 
-    loaded = with_split(load_model(args.model), args.split)
-    system = loaded.system
+    model = with_split(load_model(args.model), args.split)
+    system = model.system
     J = system.J
     small = tree_size(list(system.phi.values()), PHI_TREE_MAX) <= PHI_TREE_MAX
     with progress.step("classifying"):
         cls = system.classify()
-    header = [f"{system.name or loaded.label}",
+    header = [f"{system.name or model.label}",
               f"  coordinates: {' '.join(q.name for q in J.q)}; dependent: "
               f"{' '.join(q.name for q in system.dependent)}",
               f"  L = {label(system.L)}"]
@@ -78,7 +78,7 @@ def run(args, progress) -> int:
         for c in comparisons(system, solved):
             verdicts.append(f"  {c}")
     if args.format == "json":
-        data = {"model": loaded.label, "name": system.name,
+        data = {"model": model.label, "name": system.name,
                 "coordinates": [q.name for q in J.q],
                 "dependent": [q.name for q in system.dependent],
                 "classification": str(cls),

@@ -2,31 +2,24 @@
 
 from __future__ import annotations
 
-from ..loading import load_model, with_split
-from ..parser import (ALIASES, EPILOG_MODEL, PRINCIPLES, canonical_principle, model_args,
-                      shown_args, subcommand)
+from ..loading import load_model, settings, with_split
+from ..parser import EPILOG_MODEL, model_args, shown_args, subcommand
 from ..render import forces, label, render, simplified, write
 
 
 def add_parser(sub):
     d = subcommand(
-        sub, "derive",
+        sub, "derive", principle=True,
         help="equations of motion of a model under one principle",
         description="Derive the equations of motion of MODEL under one principle, and the "
                     "accelerations (and multiplier rates) on the constraint manifold.",
         epilog=EPILOG_MODEL + "\n\nexample: jetnh derive appell_hamel --principle suslov "
                               "--format json")
     model_args(d)
-    d.add_argument("--principle", "-p", choices=PRINCIPLES, type=canonical_principle, default=None,
-                   help="chetaev (Lagrange-d'Alembert), vakonomic, holder or suslov "
-                        "(default: the model file's, else chetaev); " + ALIASES)
     d.add_argument("--form", default=None,
                    help="form of the equations: chetaev maggi|multiplier|voronets; "
                         "vakonomic and holder multiplier|explicit|reduced|embedded; suslov "
                         "multiplier|reduced|embedded (default: the first)")
-    d.add_argument("--convention", choices=("paper", "imposed"), default=None,
-                   help="paper: every variation is independent after the commutator (as "
-                        "the paper); imposed: the variation's own condition is imposed")
     shown_args(d)
     d.set_defaults(func=run)
 
@@ -35,12 +28,11 @@ def run(args, progress) -> int:
     from ...algebra import dag
     from ...algebra.shared import shared_form
 
-    loaded = with_split(load_model(args.model), args.split)
-    system = loaded.system
-    principle = args.principle or loaded.principle or "chetaev"
-    convention = args.convention or loaded.convention or "paper"
-    with progress.step(f"deriving the {principle} equations"):
-        eom = system.equations(principle, form=args.form, convention=convention)
+    model = with_split(load_model(args.model), args.split)
+    system = model.system
+    opts = settings(args, model)
+    with progress.step(f"deriving the {opts.principle} equations"):
+        eom = system.equations(opts.principle, form=args.form, convention=opts.convention)
         exprs = eom.expressions
     with progress.step("solving for the accelerations"):
         acc = eom.accelerations()
@@ -57,13 +49,13 @@ def run(args, progress) -> int:
                            + list(acc.items()) + ([heads[2]] if system.phi else [])
                            + list(system.phi.items()))
     form = simplified(form, args.simplify, progress)
-    name = system.name or loaded.label
+    name = system.name or model.label
     header = [f"{name}: dependent {', '.join(q.name for q in system.dependent) or 'none'}"]
     if system.dissipation != 0:
         header.append(f"  dissipation D = {label(system.dissipation)} "
                       "(Q_s = forces - dD/dqdot^s)")
     header += [f"  force Q_{k} = {v}" for k, v in forces(system).items()]
-    data = {"model": loaded.label, "name": system.name, "principle": eom.principle,
+    data = {"model": model.label, "name": system.name, "principle": eom.principle,
             "form": eom.form, "convention": eom.convention, "paper": eom.paper,
             "coordinates": [q.name for q in system.J.q],
             "dependent": [q.name for q in system.dependent],

@@ -6,18 +6,16 @@ from __future__ import annotations
 
 import json
 
-from ..loading import load_model, with_split
+from ..loading import load_model, settings, with_split
 from .. import outputs
-from ..parser import ALIASES, EPILOG_MODEL, canonical_principle, model_args, subcommand
-from ..running import assignments
+from ..parser import EPILOG_MODEL, model_args, subcommand
+from ..running import assignments, initial_values
 from ..usage import UsageError
 
 
 def add_parser(sub):
-    from ...mechanics.principles import PRINCIPLES
-
     s = subcommand(
-        sub, "linearize",
+        sub, "linearize", principle=True,
         help="linearize a model about an operating point: A, eigenvalues, stability",
         description="Linearize MODEL's equations under one principle on the constraint "
                     "manifold about the operating point --at (states not given take the "
@@ -30,8 +28,6 @@ def add_parser(sub):
                               "psi_t=0,theta_t=0,phi_t=3 --param phi_t=0.2:4:39 "
                               "--plot coin.png")
     model_args(s)
-    s.add_argument("--principle", "-p", choices=PRINCIPLES, type=canonical_principle,
-                   default=None, help="default: the model file's, else chetaev; " + ALIASES)
     s.add_argument("--at", action="append", metavar="NAME=VALUE",
                    help="a value of the operating point: coordinate, velocity (x_t) or "
                         "multiplier (repeatable, or comma-separated)")
@@ -68,30 +64,26 @@ def _scan_spec(text: str):
 def run(args, progress) -> int:
     import numpy as np
 
-    from ...numeric.codegen import multiplier_names
     from ...numeric.linearize import linearize
 
-    loaded = with_split(load_model(args.model), args.split)
-    system = loaded.system
-    principle = args.principle or loaded.principle or "chetaev"
+    model = with_split(load_model(args.model), args.split)
+    system = model.system
+    opts = settings(args, model)
+    principle = opts.principle
     params = assignments(args.set, "--set")
     scan = _scan_spec(args.param) if args.param else None
     if args.plot and not scan:
         raise UsageError("--plot draws the stability diagram of a scan: give --param too")
     if args.plot:
         outputs.check(args.plot, outputs.FIGURE, "--plot")
-    states = ([q.name for q in system.J.q] + [v.name for v in system.independent_velocities]
-              + list(multiplier_names(system, principle)))
-    at = {k: v for k, v in loaded.initial.items() if k in states}
-    at.update(assignments(args.at, "--at"))
-    zeros = [s for s in states if s not in at]
-    at.update({s: 0.0 for s in zeros})
+    at, zeros = initial_values(model, principle, assignments(args.at, "--at"))
     drop = {"cyclic": "cyclic", "none": None}.get(args.drop)
     if args.drop not in ("cyclic", "none"):
         drop = [d.strip() for d in args.drop.split(",") if d.strip()]
     with progress.step(f"deriving and compiling the {principle} Jacobian "
                        "(cached for later runs)"):
-        lin = linearize(system, principle, at=at, params=params, drop=drop)
+        lin = linearize(system, principle, at=at, params=params, drop=drop,
+                        convention=opts.convention)
     if args.steady:
         lin = lin.steady([n.strip() for n in args.steady.split(",") if n.strip()])
     result = None
@@ -99,7 +91,7 @@ def run(args, progress) -> int:
         name, a, b, n = scan
         result = lin.along(name, np.linspace(a, b, n))
     if args.format == "json":
-        out = {"model": loaded.label, "principle": principle, "params": dict(lin.params),
+        out = {"model": model.label, "principle": principle, "params": dict(lin.params),
                "at": dict(lin.at), "state": list(lin.state_names),
                "dropped": list(lin.dropped), "eliminated": list(lin.eliminated),
                "A": lin.A.tolist(),
@@ -111,7 +103,7 @@ def run(args, progress) -> int:
                            "stable": result.stable.tolist()}
         print(json.dumps(out, indent=2))
     else:
-        print(f"{system.name or loaded.label}: {principle}")
+        print(f"{system.name or model.label}: {principle}")
         if lin.params:
             print("parameters: " + ", ".join(f"{k} = {v:g}" for k, v in lin.params.items()))
         print("at:         " + ", ".join(f"{k} = {v:.10g}" for k, v in lin.at.items()))
@@ -134,7 +126,7 @@ def run(args, progress) -> int:
             print("crossings of Re lambda = 0: "
                   + (", ".join(f"{c:.12g}" for c in result.crossings) or "none"))
     if args.plot:
-        _plot(result, args.plot, f"{system.name or loaded.label} ({principle})", progress)
+        _plot(result, args.plot, f"{system.name or model.label} ({principle})", progress)
     return 0
 
 

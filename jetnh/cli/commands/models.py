@@ -31,20 +31,18 @@ def run(args, progress) -> int:
         print(f"\n{len(models.CATALOGUE)} models; `jetnh models NAME` shows one, "
               "`jetnh models NAME --toml` prints it as a model file.")
         return 0
-    loaded = load_model(args.name)
+    model = load_model(args.name)
     if args.toml:
-        print(dumps(loaded.system, loaded.initial,
-                    simulation={"t_end": loaded.simulation["t_end"]}
-                    if "t_end" in loaded.simulation else None), end="")
+        print(dumps(model), end="")
         return 0
     name = args.name.split(":")[0]
     doc = models.CATALOGUE[name].__doc__ if name in models.CATALOGUE else ""
-    s = loaded.system
+    s = model.system
     print(f"{name}: {s.name}")
     print(f"  coordinates {', '.join(q.name for q in s.J.q)}; dependent "
           f"{', '.join(q.name for q in s.dependent)}")
     print(f"  parameters {', '.join(f'{k.name} = {v:g}' for k, v in s.defaults.items())}")
-    print(f"  initial {', '.join(f'{k} = {v:g}' for k, v in loaded.initial.items())}")
+    print(f"  initial {', '.join(f'{k} = {v:g}' for k, v in model.initial.items())}")
     if doc:
         import textwrap
         print()

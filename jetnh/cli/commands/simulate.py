@@ -7,10 +7,11 @@ import sys
 from pathlib import Path
 
 from ...errors import JetnhError
-from ..loading import load_model, with_split
+from ..loading import load_model, settings, with_split
 from .. import outputs
 from ..parser import EPILOG_MODEL, count, model_args, subcommand
-from ..running import METHOD_HELP, assignments, method_of, scene_names
+from ..running import (METHOD_HELP, assignments, initial_values, method_of,
+                       monitored_integrals)
 from ..usage import UsageError
 
 
@@ -59,45 +60,23 @@ def run(args, progress) -> int:
     import numpy as np
 
     from ...numeric import Scene
-    from ...numeric import arguments
-    from ...numeric.codegen import multiplier_names
 
-    loaded = with_split(load_model(args.model), args.split)
-    system = loaded.system
-    sim = loaded.simulation
-    principle = args.principle or loaded.principle or "chetaev"
-    convention = args.convention or loaded.convention or "paper"
+    model = with_split(load_model(args.model), args.split)
+    system = model.system
+    opts = settings(args, model)
+    principle, method = opts.principle, opts.method
+    t0, t1 = opts.t_span
     params = assignments(args.set, "--set")
-    init_override = assignments(args.init, "--init")
-    t0 = args.t_start if args.t_start is not None else float(sim.get("t_start", 0.0))
-    t1 = args.t_end if args.t_end is not None else sim.get("t_end")
-    if t1 is None:
-        raise UsageError("give --t-end (the model file has no [simulation] t_end)")
-    method = args.method or sim.get("method", "dop853")
-    rtol = args.rtol if args.rtol is not None else sim.get("rtol", 1e-9)
-    atol = args.atol if args.atol is not None else sim.get("atol", 1e-12)
-    points = (args.points if args.points is not None else
-              arguments.count(sim.get("points", 201), "[simulation] points", limit=10**7))
 
-    # the initial state: the model's, then --init; missing states start at 0
-    lams = multiplier_names(system, principle)
-    states = ([q.name for q in system.J.q] + [v.name for v in system.independent_velocities]
-              + list(lams))
-    # the model's values of dependent velocities are checked against the constraints,
-    # unless --split changed which velocities are dependent (then they follow from them)
-    dep_vel = {v.name for v in system.dependent_velocities}
-    initial = {k: v for k, v in loaded.initial.items()
-               if k in states or (k in dep_vel and not args.split)}
-    initial.update(init_override)
-    zeros = [s for s in states if s not in initial]
-    initial.update({s: 0.0 for s in zeros})
-    integrals = {}
-    for k, v in loaded.integrals.items():
-        if {s.name for s in v.free_symbols} - set(states) - set(scene_names(system)):
-            progress.note(f"jetnh: the integral {k!r} uses multipliers, which the "
-                          f"{principle} state does not have; skipped")
-        else:
-            integrals[k] = v
+    # the initial state: the model's, then --init; missing states start at 0.  The model's
+    # values of dependent velocities are checked against the constraints, unless --split
+    # changed which velocities are dependent (then they follow from them)
+    initial, zeros = initial_values(model, principle, assignments(args.init, "--init"),
+                                    dependent_velocities=not args.split)
+    integrals, skipped = monitored_integrals(model, principle)
+    for k in skipped:
+        progress.note(f"jetnh: the integral {k!r} uses multipliers, which the {principle} "
+                      "state does not have; skipped")
 
     path_names = _path_names(args.path, system)
     for out, kinds, what in ((args.csv, outputs.TEXT, "--csv"),
@@ -105,8 +84,8 @@ def run(args, progress) -> int:
         if out:
             outputs.check(out, kinds, what)
     try:
-        scene = Scene(system, principle, params=params, initial=initial,
-                      t_span=(t0, float(t1)), convention=convention, integrals=integrals,
+        scene = Scene(system, principle, params=params, initial=initial, t_span=(t0, t1),
+                      convention=opts.convention, integrals=integrals,
                       project=args.project, complete=args.complete)
     except JetnhError as exc:
         msg = (str(exc).replace("pass project=True", "pass --project")
@@ -119,19 +98,20 @@ def run(args, progress) -> int:
     kw = {}
     if method_of(method).fixed_step:
         kw["n_steps"] = args.steps
-    elif points >= 2:
-        kw["t_eval"] = np.linspace(t0, float(t1), points)
-    with progress.step(f"integrating with {method} over [{t0:g}, {float(t1):g}]"):
-        traj = scene.run(rtol=rtol, atol=atol, method=method, timeout=args.timeout, **kw)
+    elif opts.points >= 2:
+        kw["t_eval"] = np.linspace(t0, t1, opts.points)
+    with progress.step(f"integrating with {method} over [{t0:g}, {t1:g}]"):
+        traj = scene.run(rtol=opts.rtol, atol=opts.atol, method=method, timeout=args.timeout,
+                         **kw)
     d = traj.diagnostics
     final = traj.final
     if args.format == "json":
-        print(json.dumps({"model": loaded.label, "principle": principle,
+        print(json.dumps({"model": model.label, "principle": principle,
                           "params": scene.params, "initial": scene.initial,
                           "final": final, "diagnostics": d.as_dict(),
                           "zero_initial": zeros}, indent=2, default=float))
     else:
-        print(f"{system.name or loaded.label}: {principle}, t in [{t0:g}, {float(t1):g}]")
+        print(f"{system.name or model.label}: {principle}, t in [{t0:g}, {t1:g}]")
         if scene.params:
             print("parameters: " + ", ".join(f"{k} = {v:g}" for k, v in scene.params.items()))
         print("initial:    " + ", ".join(f"{k} = {v:.10g}" for k, v in scene.initial.items()))
@@ -148,7 +128,7 @@ def run(args, progress) -> int:
     if args.plot:
         with progress.step(f"plotting to {args.plot}"):
             outputs.write(args.plot, lambda tmp: _plot(
-                traj, system, tmp, f"{system.name or loaded.label} ({principle})",
+                traj, system, tmp, f"{system.name or model.label} ({principle})",
                 path_names, Path(args.plot).suffix[1:]))
     if not traj.success:
         print(f"jetnh: error: the integration stopped early: {traj.stop_reason}",

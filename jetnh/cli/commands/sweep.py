@@ -4,10 +4,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..loading import load_model, with_split
+from ..loading import load_model, settings, with_split
 from .. import outputs
 from ..parser import EPILOG_MODEL, model_args, positive_count, seconds, subcommand
-from ..running import METHOD_HELP, assignments, method_of, scene_names
+from ..running import (METHOD_HELP, assignments, initial_values, method_of,
+                       monitored_integrals)
 from ..usage import UsageError
 
 
@@ -103,7 +104,6 @@ def _write_table(df, path: Path):
 
 def run(args, progress) -> int:
     from ...numeric import Scene
-    from ...numeric.codegen import multiplier_names
     from ...sweep import plot_map, sweep
 
     grid = _grid(args.grid)
@@ -115,31 +115,20 @@ def run(args, progress) -> int:
                              (args.plot, outputs.FIGURE, "--plot")):
         if out:
             outputs.check(out, kinds, what)
-    loaded = with_split(load_model(args.model), args.split)
-    system = loaded.system
-    sim = loaded.simulation
-    principle = args.principle or loaded.principle or "chetaev"
-    t0 = args.t_start if args.t_start is not None else float(sim.get("t_start", 0.0))
-    t1 = args.t_end if args.t_end is not None else sim.get("t_end")
-    if t1 is None:
-        raise UsageError("give --t-end (the model file has no [simulation] t_end)")
-    method = args.method or sim.get("method", "dop853")
+    model = with_split(load_model(args.model), args.split)
+    system = model.system
+    opts = settings(args, model)
+    principle, method = opts.principle, opts.method
+    t_span = opts.t_span
     if times is not None and not method_of(method).dense:
         raise UsageError(f"--times needs dense output, which {method} does not have; use "
                          "--method dop853, dopri5, radau or scipy-<M>, or omit --times (final "
                          "values)")
-    states = ([q.name for q in system.J.q] + [v.name for v in system.independent_velocities]
-              + list(multiplier_names(system, principle)))
-    initial = {s: 0.0 for s in states}
-    initial.update({k: v for k, v in loaded.initial.items() if k in states})
-    initial.update(assignments(args.init, "--init"))
-    known = set(states) | set(scene_names(system))
-    integrals = {k: v for k, v in loaded.integrals.items()
-                 if not {s.name for s in v.free_symbols} - known}
+    initial, _ = initial_values(model, principle, assignments(args.init, "--init"))
+    integrals, _ = monitored_integrals(model, principle)
     params = assignments(args.set, "--set")
-    scene = Scene(system, principle, params=params, initial=initial, t_span=(t0, float(t1)),
-                  convention=args.convention or loaded.convention or "paper",
-                  integrals=integrals,
+    scene = Scene(system, principle, params=params, initial=initial, t_span=t_span,
+                  convention=opts.convention, integrals=integrals,
                   runtime_params=[k for k in grid if k in {p.name for p in system.parameters}])
     with progress.step(f"deriving and compiling the {principle} kernels "
                        "(cached for later runs)"):
@@ -150,9 +139,8 @@ def run(args, progress) -> int:
         df = sweep(scene, grid, client=args.scheduler, times=times,
                    outputs=args.outputs.split(",") if args.outputs else None,
                    chunk_size=args.chunk_size, progress=show, timeout=args.timeout,
-                   connect_timeout=args.connect_timeout, method=method,
-                   rtol=args.rtol if args.rtol is not None else sim.get("rtol", 1e-9),
-                   atol=args.atol if args.atol is not None else sim.get("atol", 1e-12),
+                   connect_timeout=args.connect_timeout, method=method, rtol=opts.rtol,
+                   atol=opts.atol,
                    **({"n_steps": args.steps} if method_of(method).fixed_step else {}))
     finally:
         close()
@@ -166,7 +154,7 @@ def run(args, progress) -> int:
         print(df.to_csv(index=False), end="")
     if args.plot:
         x, y = df.attrs["grid"]
-        title = f"{system.name or loaded.label} ({principle}): {args.value}"
+        title = f"{system.name or model.label} ({principle}): {args.value}"
         outputs.write(args.plot, lambda tmp: plot_map(df, x, y, args.value, tmp, title=title))
         progress.note(f"wrote {args.plot}")
     return 0

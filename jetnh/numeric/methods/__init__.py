@@ -135,14 +135,25 @@ def method(name, backend=None) -> Method:
 
 
 def explicit_solver(m):
-    """The compiled loop of the explicit method ``m`` (a ``Method`` or its name) as its
-    machine-code entry point (``loop.solver``; no type dispatch per call:
-    ``_common.entry_point``)."""
+    """The compiled loop of the explicit method ``m`` (a ``Method`` or its name), called
+    as ``solve(rhs, sing, uev, hol, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt)``
+    (``loop.solver``): each call goes to the loop compiled with the parts that run needs
+    (``loop.features``; each compiled on first use) through its machine-code entry point
+    (no type dispatch per call: ``_common.entry_point``)."""
     m = method(m)
     if m.name not in _ENTRIES:
-        from .loop import solver
+        from .loop import features, solver
 
-        _ENTRIES[m.name] = entry_point(solver(m.tableau))
+        loops = {}
+        tableau = m.tableau
+
+        def solve(rhs, sing, uev, hol, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
+            parts = features(ctl, mode, watch)
+            go = loops.get(parts)
+            if go is None:
+                go = loops[parts] = entry_point(solver(tableau, parts))
+            return go(rhs, sing, uev, hol, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt)
+        _ENTRIES[m.name] = solve
     return _ENTRIES[m.name]
 
 

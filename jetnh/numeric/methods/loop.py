@@ -12,9 +12,10 @@ Each method's loop serves every scene (the right-hand side is a first-class func
 and is cached on disk; ensembles run the same loop over the rows of an array
 (``ensemble_solver``).
 
-Arithmetic: a stage is ``y + h * sum_r A[s, r] K[r]`` summed over every earlier stage in
-order, the new state ``y + (h / b_den) * sum_r B[r] K[r]``; with these forms the results
-are those of the hand-written loops of each method that preceded this one, bit for bit
+Arithmetic: a stage is ``y + h * sum_r A[s, r] K[r]`` summed over the earlier stages in
+order, the new state ``y + (h / b_den) * sum_r B[r] K[r]``, written out per method with
+its nonzero coefficients only (``sums``); with these forms the results are those of the
+hand-written loops of each method that preceded this one, bit for bit
 (``tests/test_numeric_reference.py``).
 
 Error estimators (``error``): ``EMBEDDED`` the RMS norm of ``h sum_r E[r] K[r]`` over the
@@ -42,12 +43,12 @@ from ._common import (
     AT_T_EVAL, ENDPOINTS, ENSEMBLE_OUT, EVERY_STEP, FINISHED, MAX_FACTOR, MAX_STEPS,
     MIN_FACTOR, NONFINITE, RHS, SAFETY, SINGULAR, STOPPED, TOO_SMALL_STEP, all_finite,
     collect, compiled, copy_into, f8, i8, inline, jit, min_step, start, store)
-from .projection import project, workspace as projection_workspace
+from . import projection
+from .sums import DOP853, EMBEDDED, NONE, functions as sums  # noqa: F401 (the codes)
 from ._events import (any_user_active, dense_eval, hermite_defect, locate, most_watched,
                       sing_dip, sing_init, sing_violated, sing_watch)
 
-#: error estimators and dense outputs (see the module docstring)
-NONE, EMBEDDED, DOP853 = 0, 1, 2
+#: dense outputs (see the module docstring; the error estimators: ``sums``)
 HERMITE, GIVEN = 1, 3
 #: relative defect of a fixed step's Hermite interpolant that marks a kink (``solve``)
 KINK = 0.25
@@ -56,9 +57,11 @@ KINK = 0.25
 Result = namedtuple("Result", "status ts ys n_out stats t y ev_t ev_i ev_y n_ev sing_index")
 #: the step control of one run: tolerances and limits (``n_steps`` > 0: fixed steps);
 #: ``n_hol`` > 0: project every accepted step onto the ``n_hol`` holonomic constraints of
-#: the first ``n_coord`` states (``projection``)
-Control = namedtuple("Control", "rtol atol first_step max_step max_steps n_steps n_hol n_coord",
-                     defaults=(0, 0))
+#: the first ``n_coord`` states (``projection``); ``n_sens`` > 0: the state is followed by
+#: its sensitivities, ``n_sens`` columns a row, projected with it
+Control = namedtuple("Control",
+                     "rtol atol first_step max_step max_steps n_steps n_hol n_coord n_sens",
+                     defaults=(0, 0, 0))
 #: what to watch: singularity indicators (``n_sing`` of them, threshold ``sing_tol``)
 #: and user events (direction, terminal count)
 Watch = namedtuple("Watch", "n_sing sing_tol ev_dir ev_max")
@@ -139,40 +142,9 @@ def _dense_rows(tab, rhs, t, h, y, y_new, K, F, ytmp, p):
 
 
 @inline
-def _error(kind, ns, E, E3, h, y, y_new, K, rtol, atol):
-    """The scaled error of the step (<= 1: accept) by the estimator ``kind``."""
-    n = y.shape[0]
-    if kind == DOP853:
-        e5 = 0.0
-        e3 = 0.0
-        for i in range(n):
-            a5 = 0.0
-            a3 = 0.0
-            for r in range(ns + 1):
-                a5 += E[r] * K[r, i]
-                a3 += E3[r] * K[r, i]
-            sc = atol[i] + max(abs(y[i]), abs(y_new[i])) * rtol
-            e5 += (a5 / sc) ** 2
-            e3 += (a3 / sc) ** 2
-        if e5 == 0.0 and e3 == 0.0:
-            return 0.0
-        return abs(h) * e5 / math.sqrt((e5 + 0.01 * e3) * n)
-    err = 0.0
-    for i in range(n):
-        e = 0.0
-        for r in range(ns + 1):
-            e += E[r] * K[r, i]
-        sc = atol[i] + max(abs(y[i]), abs(y_new[i])) * rtol
-        err += (h * e / sc) ** 2
-    return math.sqrt(err / n)
-
-
-@inline
 def _stages(first, last, C, A, rhs, t, h, y, K, ytmp, p):
     """Stages ``first .. last - 1``: K[s] = f(t + C[s] h, y + h sum_{r < s} A[s, r] K[r])
-    (the steps' stages and DOP853's extra dense-output stages).  Inlined where the
-    tableau's coefficients are constants; it calls no helper (one called from an inlined
-    helper cost dop853 1.4x per evaluation)."""
+    (DOP853's extra dense-output stages; the steps' stages are ``sums.source``)."""
     for s in range(first, last):
         for i in range(y.shape[0]):
             acc = 0.0
@@ -183,17 +155,6 @@ def _stages(first, last, C, A, rhs, t, h, y, K, ytmp, p):
 
 
 @inline
-def _new_state(ns, B, b_den, h, y, K, y_new):
-    """y_new = y + (h / b_den) sum_r B[r] K[r]."""
-    hb = h / b_den
-    for i in range(y.shape[0]):
-        acc = 0.0
-        for r in range(ns):
-            acc += B[r] * K[r, i]
-        y_new[i] = y[i] + hb * acc
-
-
-@inline
 def workspace(n_sing, n_user):
     """The arrays of the singularity indicators and the user events (``after_step``)."""
     m = max(n_sing, 1)
@@ -201,6 +162,34 @@ def workspace(n_sing, n_user):
     return (np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(u),
             np.empty(u), np.empty(u), np.zeros(u, dtype=np.int64), np.empty(u),
             np.empty(u, dtype=np.int64))
+
+
+@inline
+def outputs(n, mode, t_eval, cap_steps):
+    """The output arrays ``(ts, ys, n_out, j_eval)`` of a run in ``mode``: room for the
+    points of ``t_eval``, the two ends, or ``cap_steps`` steps (grown as needed)."""
+    if mode == AT_T_EVAL:
+        cap = t_eval.shape[0]
+    elif mode == ENDPOINTS:
+        cap = 2
+    else:
+        cap = cap_steps
+    return (np.empty(max(cap, 1)), np.empty((max(cap, 1), n)), np.int64(0),
+            np.int64(0))
+
+
+@inline
+def watch_start(sing, uev, watch, t, y, p):
+    """The watched quantities at the start (t, y): their workspace (``workspace``) and
+    the index of an indicator that is singular there already (-1: none)."""
+    n_sing, sing_tol, ev_dir, _ = watch
+    ws = workspace(n_sing, ev_dir.shape[0])
+    gs, gs_old, gref, sig, eps, gu_old = ws[:6]
+    sing_index = sing_init(sing, n_sing, sing_tol, t, y, p, gs, sig, eps, gref)
+    copy_into(gs_old, gs)
+    if sing_index < 0 and ev_dir.shape[0] > 0:
+        uev(t, y, p, gu_old)
+    return ws, sing_index
 
 
 @inline
@@ -294,8 +283,9 @@ def output(tab, fixed, rhs, p, t, h, t_new, y, y_new, K, F, ytmp, y_stop, stop, 
 
 def _solve(rhs, sing, uev, hol, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
     """Integrate y' = rhs(t, y, p) from t0 to t_end with the method ``TAB``
-    (``ExplicitRK.arrays``; it and ``ADAPTIVE`` are compile-time constants, so the path
-    of the other step kind is not compiled: ``_specialised``) under the step control
+    (``ExplicitRK.arrays``; it, ``ADAPTIVE`` and the parts ``WATCH``, ``PROJECT``,
+    ``DENSE`` are compile-time constants, so the path of the other step kind and the
+    parts the run does not need are not compiled: ``_specialised``) under the step control
     ``ctl`` (``Control``), watching ``watch`` (``Watch``: ``sing`` computes the ``n_sing``
     singularity indicators, ``uev`` the user event functions; see ``_events``); ``hol``
     the holonomic constraints an accepted step is projected onto when ``ctl.n_hol`` > 0
@@ -317,14 +307,10 @@ def _solve(rhs, sing, uev, hol, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt
     exceeds ``KINK``, the run stops at the start of that step as a singular stop.
     """
     tab = TAB
-    C, A, B, E, E3, D, info, b_den = tab
-    ns, kind, _, error_order = SHAPE
+    A, D = tab[1], tab[5]
+    ns, _, _, error_order = SHAPE
     rtol, atol, max_steps, n_steps = ctl.rtol, ctl.atol, ctl.max_steps, ctl.n_steps
     max_step = ctl.max_step
-    n_hol, n_coord = ctl.n_hol, ctl.n_coord
-    hw, hA, hmu = projection_workspace(n_hol, n_coord)
-    n_sing, sing_tol, ev_dir, ev_max = watch
-    watching = n_sing > 0 or ev_dir.shape[0] > 0
     n = y0.shape[0]
     direction = 1.0 if t_end >= t0 else -1.0
     K = np.empty((max(A.shape[0], ns + 1), n))
@@ -336,31 +322,21 @@ def _solve(rhs, sing, uev, hol, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt
     y_stop = np.empty(n)
     scale = np.empty(n)
     stats = np.zeros(3, dtype=np.int64)
-    if mode == AT_T_EVAL:
-        cap = t_eval.shape[0]
-    elif mode == ENDPOINTS:
-        cap = 2
-    else:
-        cap = 64 if ADAPTIVE else n_steps + 1
-    ts = np.empty(max(cap, 1))
-    ys = np.empty((max(cap, 1), n))
-    n_out = np.int64(0)
-    j_eval = np.int64(0)
+    ts, ys, n_out, j_eval = outputs(n, mode, t_eval, 64 if ADAPTIVE else n_steps + 1)
     t = t0
-    ws = workspace(n_sing, ev_dir.shape[0])
-    gs, gs_old, gref, sig, eps, gu_old = ws[:6]
+    if PROJECT:
+        hw = projection.workspace(ctl.n_hol, ctl.n_coord, ctl.n_sens)
     ev_t, ev_i, ev_y, n_ev = no_events(n)
     if not ADAPTIVE:
         ts, ys, n_out = store(ts, ys, n_out, t, y)
-    sing_index = sing_init(sing, n_sing, sing_tol, t, y, p, gs, sig, eps, gref)
-    copy_into(gs_old, gs)
-    if sing_index >= 0:
-        if ADAPTIVE:
-            ts, ys, n_out = store(ts, ys, n_out, t, y)
-        return Result(SINGULAR, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev,
-                      sing_index)
-    if ev_dir.shape[0] > 0:
-        uev(t, y, p, gu_old)
+    sing_index = -1
+    if WATCH:
+        ws, sing_index = watch_start(sing, uev, watch, t, y, p)
+        if sing_index >= 0:
+            if ADAPTIVE:
+                ts, ys, n_out = store(ts, ys, n_out, t, y)
+            return Result(SINGULAR, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev,
+                          sing_index)
     h_abs = 0.0
     h_fixed = (t_end - t0) / max(n_steps, 1)
     exponent = -1.0 / (error_order + 1)
@@ -395,11 +371,11 @@ def _solve(rhs, sing, uev, hol, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt
                     t_new = t_end
                 h = t_new - t
                 h_abs = abs(h)
-                _stages(1, ns, C, A, rhs, t, h, y, K, ytmp, p)
-                _new_state(ns, B, b_den, h, y, K, y_new)
+                step_stages(rhs, t, h, y, K, ytmp, p)
+                new_state(h, y, K, y_new)
                 rhs(t_new, y_new, p, K[ns])
                 stats[2] += ns
-                err = _error(kind, ns, E, E3, h, y, y_new, K, rtol, atol)
+                err = step_error(h, y, y_new, K, rtol, atol)
                 if not math.isfinite(err) or not all_finite(K[ns]):
                     nonfinite = True
                     h_abs *= MIN_FACTOR
@@ -423,32 +399,37 @@ def _solve(rhs, sing, uev, hol, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt
                 break
         else:
             rhs(t, y, p, K[0])
-            _stages(1, ns, C, A, rhs, t, h_fixed, y, K, ytmp, p)
-            _new_state(ns, B, b_den, h_fixed, y, K, y_new)
+            step_stages(rhs, t, h_fixed, y, K, ytmp, p)
+            new_state(h_fixed, y, K, y_new)
             stats[2] += ns
             if not all_finite(y_new):
                 status = NONFINITE
                 break
             t_new = t0 + (step + 1) * h_fixed
             h = t_new - t
-        if n_hol > 0:
-            project(hol, n_hol, n_coord, t_new, y_new, p, hw, hA, hmu)
-            if ADAPTIVE:
-                rhs(t_new, y_new, p, K[ns])
-                stats[2] += 1
+        if PROJECT:
+            if ctl.n_hol > 0:
+                projection.project(hol, ctl, t_new, y_new, p, hw)
+                if ADAPTIVE:
+                    rhs(t_new, y_new, p, K[ns])
+                    stats[2] += 1
         step += 1
         stats[0] += 1
         stop = 0
         t_stop = t_new
         have_dense = False
-        if watching:
+        if WATCH:
             stop, t_stop, sing_index, have_dense, ev_t, ev_i, ev_y, n_ev = after_step(
                 tab, not ADAPTIVE, rhs, sing, uev, p, t, h, t_new, y, y_new, K, F, ytmp, fmid,
                 y_stop, stats, watch, ws, sing_index, ev_t, ev_i, ev_y, n_ev)
-        if mode != ENDPOINTS:
-            ts, ys, n_out, j_eval = output(tab, not ADAPTIVE, rhs, p, t, h, t_new, y, y_new, K,
-                                           F, ytmp, y_stop, stop, t_stop, have_dense, stats,
-                                           mode, t_eval, j_eval, direction, ts, ys, n_out)
+        if WATCH or DENSE:
+            if mode != ENDPOINTS:
+                ts, ys, n_out, j_eval = output(tab, not ADAPTIVE, rhs, p, t, h, t_new, y,
+                                               y_new, K, F, ytmp, y_stop, stop, t_stop,
+                                               have_dense, stats, mode, t_eval, j_eval,
+                                               direction, ts, ys, n_out)
+        elif mode == EVERY_STEP:
+            ts, ys, n_out = store(ts, ys, n_out, t_new, y_new)
         if stop != 0:
             t = t_stop
             copy_into(y, y_stop)
@@ -463,37 +444,66 @@ def _solve(rhs, sing, uev, hol, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt
     return Result(status, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev, sing_index)
 
 
-#: the method a specialised loop runs and that loop (``_specialised``; unbound here)
-TAB = SHAPE = ADAPTIVE = run = None
+#: the method a specialised loop runs, its sums and that loop (``_specialised``; unbound
+#: here)
+TAB = SHAPE = ADAPTIVE = WATCH = PROJECT = DENSE = None
+run = step_stages = new_state = step_error = None
 _SPECIALISED = {}
-CONTROL = numba.typeof(Control(1.0, np.zeros(1), 0.0, 1.0, 1, 0, 0, 0))
-WATCH = numba.typeof(Watch(0, 0.0, np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64)))
-ARGS = (RHS, RHS, RHS, RHS, f8, f8, f8[::1], f8[::1], CONTROL, f8[::1], i8, WATCH,
+CONTROL = numba.typeof(Control(1.0, np.zeros(1), 0.0, 1.0, 1, 0, 0, 0, 0))
+WATCHED = numba.typeof(Watch(0, 0.0, np.zeros(1, dtype=np.int64),
+                             np.zeros(1, dtype=np.int64)))
+ARGS = (RHS, RHS, RHS, RHS, f8, f8, f8[::1], f8[::1], CONTROL, f8[::1], i8, WATCHED,
         i8[::1])
+#: every part of the loop compiled (``features``)
+ALL = (True, True, True)
 
 
-def _specialised(method):
-    """The globals of this module with ``TAB`` bound to ``method.arrays`` and ``run`` to
-    ``_solve`` compiled over them: numba freezes a global tuple of arrays into constants,
-    so each method's loop is compiled with its tableau (stage counts, coefficients) known,
-    as the hand-written loops were, at the per-evaluation cost of theirs.  Each loop has
-    a name of its own (``compiled``: ``_solve_<method>_<sources hash>``): numba links
-    compiled functions by their mangled names, so two loops of one name could resolve to
-    one another's machine code."""
-    if method.name not in _SPECIALISED:
+def features(ctl, mode, watch) -> tuple[bool, bool, bool]:
+    """What a run needs of the loop: ``(watch, project, dense)`` -- singularity
+    indicators or user events, the projection onto holonomic constraints, output at
+    ``t_eval`` (the step's interpolant).  A loop compiled without a part serves only the
+    runs that do not need it (``_specialised``)."""
+    return (watch.n_sing > 0 or watch.ev_dir.shape[0] > 0, ctl.n_hol > 0,
+            mode == AT_T_EVAL)
+
+
+def _specialised(method, parts=ALL):
+    """The globals of this module with ``TAB`` bound to ``method.arrays``, the step's sums
+    to the method's (``sums.functions``: its nonzero coefficients as literals), the parts
+    of the loop a run needs (``WATCH, PROJECT, DENSE = parts``: ``features``) and ``run``
+    to ``_solve`` compiled over them: each method's loop is compiled with its tableau
+    (stage counts, coefficients) known, as the hand-written loops were, at the
+    per-evaluation cost of theirs, and without the parts the run does not use (numba
+    prunes the branches on these constants before typing them: a run without events,
+    indicators, projection and ``t_eval`` compiles none of ``_events``).  Each loop has a
+    name of its own (``compiled``: ``_solve_<method>_<parts>_<sources hash>``): numba
+    links compiled functions by their mangled names, so two loops of one name could
+    resolve to one another's machine code."""
+    parts = tuple(bool(f) for f in parts)
+    key = (method.name, parts)
+    if key not in _SPECIALISED:
         namespace = dict(globals())
         namespace["TAB"] = method.arrays
         namespace["SHAPE"] = tuple(int(k) for k in method.arrays[6])
         namespace["ADAPTIVE"] = method.adaptive
-        namespace["run"] = compiled(_solve, ARGS, namespace=namespace, tag=method.name)
-        _SPECIALISED[method.name] = namespace
-    return _SPECIALISED[method.name]
+        namespace["WATCH"], namespace["PROJECT"], namespace["DENSE"] = parts
+        helpers = sums(method)
+        namespace["step_stages"] = helpers["stages"]
+        namespace["new_state"] = helpers["new_state"]
+        namespace["step_error"] = helpers["error"]
+        tag = method.name + ("" if parts == ALL else
+                             "_" + "".join(c for c, f in zip("wpd", parts) if f))
+        namespace["run"] = compiled(_solve, ARGS, namespace=namespace, tag=tag)
+        _SPECIALISED[key] = namespace
+    return _SPECIALISED[key]
 
 
-def solver(method):
+def solver(method, parts=ALL):
     """The compiled ``solve(rhs, sing, uev, hol, t0, t_end, y0, p, ctl, t_eval, mode, watch,
-    halt)`` of the explicit method ``method`` (``_solve`` over its tableau)."""
-    return _specialised(method)["run"]
+    halt)`` of the explicit method ``method`` (``_solve`` over its tableau) with the
+    ``parts`` of ``features`` (default: all; a run that needs a part the loop lacks is
+    not to be given to it)."""
+    return _specialised(method, parts)["run"]
 
 
 # ---------------------------------------------------------------------- ensembles

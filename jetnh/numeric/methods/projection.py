@@ -17,6 +17,14 @@ state.  The step's dense output (``t_eval``) is the method's interpolant between
 projected states: on g = 0 to the interpolant's error, not to roundoff.  The iteration is
 deterministic: a run is reproducible bit for bit.
 
+A run with sensitivities (the state followed by ``S = dy/d(y0, p)``, ``n_sens`` columns a
+row) projects them with the state, by the derivative of the projection map at the
+projected point: the rows of S of the coordinates become ``(I - G^+ G) S_q`` with ``G^+ =
+G^T (G G^T)^{-1}`` (the orthogonal metric of the projection itself), so that S is the
+derivative of the projected run, as central differences of projected runs measure it.
+Where g depends on a runtime parameter, the projection map does too; its term
+``-G^+ dg/dp`` is not included (``hol`` gives dg/dq only).
+
 ``hol(t, y, p, out)`` is the generated kernel (``codegen``): ``out = (g_1..g_m, dg_i/dq^j
 row by row)``.
 """
@@ -27,7 +35,7 @@ import math
 
 import numpy as np
 
-from ._common import jit
+from ._common import jit, solve_linear
 
 #: Gauss-Newton iterations per step (one or two suffice: the start is within the local
 #: error of g = 0)
@@ -35,59 +43,98 @@ MAX_ITERATIONS = 8
 
 
 @jit
-def workspace(m, nq):
-    """The arrays of ``project``: hol's output, G G^T, the multipliers."""
+def workspace(m, nq, n_sens):
+    """The arrays of ``project``: hol's output, G G^T, a right-hand side and a solution
+    of it (``n_sens``: the columns of the sensitivities, if any)."""
     m1 = max(m, 1)
-    return np.empty(m1 * (1 + nq)), np.empty((m1, m1)), np.empty(m1)
+    return np.empty(m1 * (1 + nq)), np.empty((m1, m1)), np.empty(m1), np.empty(m1)
 
 
 @jit
-def project(hol, m, nq, t, y, p, w, A, mu):
-    """Move the coordinates y[:nq] onto g(t, q) = 0 (module docstring); returns the
-    number of ``hol`` evaluations.  Leaves y as it is where G G^T is singular or a value
-    is not finite (the position-level residual in the diagnostics then shows it)."""
+def _normal(w, m, nq, A):
+    """A = G G^T from hol's output ``w``."""
+    for i in range(m):
+        for k in range(m):
+            acc = 0.0
+            for j in range(nq):
+                acc += w[m + i * nq + j] * w[m + k * nq + j]
+            A[i, k] = acc
+
+
+@jit
+def project(hol, ctl, t, y, p, ws):
+    """Move the coordinates y[:nq] onto g(t, q) = 0 (module docstring; ``ctl`` the run's
+    ``loop.Control``: ``n_hol`` constraints, ``n_coord`` coordinates, ``n_sens``
+    sensitivity columns); returns the number of ``hol`` evaluations.  Leaves y as it is
+    where G G^T is singular or a value is not finite (the position-level residual in
+    the diagnostics then shows it)."""
+    m, nq, n_sens = ctl.n_hol, ctl.n_coord, ctl.n_sens
+    w, A, b, x = ws
     calls = 0
     for _ in range(MAX_ITERATIONS):
         hol(t, y, p, w)
         calls += 1
+        _normal(w, m, nq, A)
         for i in range(m):
-            for k in range(m):
-                acc = 0.0
-                for j in range(nq):
-                    acc += w[m + i * nq + j] * w[m + k * nq + j]
-                A[i, k] = acc
-            mu[i] = w[i]
-        # Gaussian elimination with partial pivoting: (G G^T) mu = g
-        for c in range(m):
-            piv = c
-            for r in range(c + 1, m):
-                if abs(A[r, c]) > abs(A[piv, c]):
-                    piv = r
-            if not (abs(A[piv, c]) > 0.0) or not math.isfinite(A[piv, c]):
-                return calls
-            if piv != c:
-                for k in range(m):
-                    A[c, k], A[piv, k] = A[piv, k], A[c, k]
-                mu[c], mu[piv] = mu[piv], mu[c]
-            for r in range(c + 1, m):
-                f = A[r, c] / A[c, c]
-                for k in range(c, m):
-                    A[r, k] -= f * A[c, k]
-                mu[r] -= f * mu[c]
-        for c in range(m - 1, -1, -1):
-            acc = mu[c]
-            for k in range(c + 1, m):
-                acc -= A[c, k] * mu[k]
-            mu[c] = acc / A[c, c]
+            b[i] = w[i]
+        if not solve_linear(A, b, x):       # (G G^T) x = g
+            return calls
         big = 0.0
         for j in range(nq):
             d = 0.0
             for i in range(m):
-                d += w[m + i * nq + j] * mu[i]
+                d += w[m + i * nq + j] * x[i]
             if not math.isfinite(d):
                 return calls
             y[j] -= d
             big = max(big, abs(d) / max(1.0, abs(y[j])))
         if big <= 4.0 * 2.220446049250313e-16:
             break
+    if n_sens > 0:
+        hol(t, y, p, w)
+        calls += 1
+        _sensitivities(w, m, nq, n_sens, y, A, b, x)
     return calls
+
+
+@jit
+def _sensitivities(w, m, nq, n_sens, y, A, b, x):
+    """S_q <- (I - G^T (G G^T)^{-1} G) S_q, column by column, for the sensitivities
+    stored after the state in ``y`` (row-major, ``n_sens`` columns; G from ``w``)."""
+    n = y.shape[0] // (1 + n_sens)
+    for k in range(n_sens):
+        for i in range(m):
+            acc = 0.0
+            for j in range(nq):
+                acc += w[m + i * nq + j] * y[n + j * n_sens + k]
+            b[i] = acc
+        _normal(w, m, nq, A)
+        if not solve_linear(A, b, x):
+            return
+        for j in range(nq):
+            d = 0.0
+            for i in range(m):
+                d += w[m + i * nq + j] * x[i]
+            y[n + j * n_sens + k] -= d
+
+
+def onto(hol, m, nq, t, y, p) -> np.ndarray:
+    """``project`` of one state from Python (``hol`` the kernel's Python-callable form,
+    ``kernels.hol``): a copy of ``y`` with its coordinates y[:nq] on g(t, q) = 0 (``y``
+    itself where G G^T is singular or a value is not finite)."""
+    y = np.array(y, dtype=float)
+    w = np.empty(m * (1 + nq))
+    p = np.ascontiguousarray(p, dtype=float)
+    for _ in range(MAX_ITERATIONS):
+        hol(float(t), y, p, w)
+        G = w[m:].reshape(m, nq)
+        try:
+            d = G.T @ np.linalg.solve(G @ G.T, w[:m])
+        except np.linalg.LinAlgError:
+            return y
+        if not np.all(np.isfinite(d)):
+            return y
+        y[:nq] -= d
+        if np.max(np.abs(d) / np.maximum(1.0, np.abs(y[:nq]))) <= 4.0 * 2.220446049250313e-16:
+            break
+    return y

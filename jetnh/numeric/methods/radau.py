@@ -37,13 +37,13 @@ import numba
 import numpy as np
 
 from ._common import (
-    AT_T_EVAL, ENDPOINTS, ENSEMBLE_OUT, FINISHED, MAX_STEPS, NONFINITE, RHS,
+    ENDPOINTS, ENSEMBLE_OUT, FINISHED, MAX_STEPS, NONFINITE, RHS,
     SINGULAR, STOPPED, TOO_SMALL_STEP, all_finite, collect, compiled, copy_into, f8, i8,
     jit, min_step, start, store)
-from ._events import dense_eval, sing_init
-from .projection import project, workspace as projection_workspace
-from .loop import (CONTROL, EMBEDDED, GIVEN, WATCH, Result, after_step, no_events, output,
-                   workspace)
+from ._events import dense_eval
+from . import projection
+from .loop import (CONTROL, EMBEDDED, GIVEN, WATCHED, Result, after_step, no_events, output,
+                   outputs, watch_start)
 
 ORDER = 5
 ERROR_ORDER = 3
@@ -260,9 +260,8 @@ def _solve(rhs, jac, sing, uev, hol, t0, t_end, y0, p, ctl, newton, t_eval, mode
     """Integrate y' = rhs(t, y, p) from t0 to t_end with Radau IIA (5); ``jac(t, y, p, J)``
     its Jacobian; the other arguments and the ``Result`` as for ``loop._solve``
     (``newton``: ``Newton``)."""
-    rtol, atol, first_step, max_step, max_steps, n_steps, n_hol, n_coord = ctl
-    hw, hA, hmu = projection_workspace(n_hol, n_coord)
-    n_sing, sing_tol, ev_dir, ev_max = watch
+    rtol, atol, max_step, max_steps = ctl.rtol, ctl.atol, ctl.max_step, ctl.max_steps
+    hw = projection.workspace(ctl.n_hol, ctl.n_coord, ctl.n_sens)
     tol = newton[0]
     max_iter = newton[1]
     if tol <= 0.0:
@@ -293,23 +292,14 @@ def _solve(rhs, jac, sing, uev, hol, t0, t_end, y0, p, ctl, newton, t_eval, mode
     piv1 = np.empty(n, dtype=np.int64)
     piv2 = np.empty(n, dtype=np.int64)
     stats = np.zeros(3, dtype=np.int64)
-    cap = t_eval.shape[0] if mode == AT_T_EVAL else (2 if mode == ENDPOINTS else 64)
-    ts = np.empty(max(cap, 1))
-    ys = np.empty((max(cap, 1), n))
-    n_out = np.int64(0)
-    j_eval = np.int64(0)
+    ts, ys, n_out, j_eval = outputs(n, mode, t_eval, 64)
     t = t0
-    ws = workspace(n_sing, ev_dir.shape[0])
-    gs, gs_old, gref, sig, eps, gu_old = ws[:6]
     ev_t, ev_i, ev_y, n_ev = no_events(n)
-    sing_index = sing_init(sing, n_sing, sing_tol, t, y, p, gs, sig, eps, gref)
-    copy_into(gs_old, gs)
+    ws, sing_index = watch_start(sing, uev, watch, t, y, p)
     if sing_index >= 0:
         ts, ys, n_out = store(ts, ys, n_out, t, y)
         return Result(SINGULAR, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev,
                       sing_index)
-    if ev_dir.shape[0] > 0:
-        uev(t, y, p, gu_old)
     go, h_abs, ts, ys, n_out = start(rhs, t, y, p, f0, K[0], ytmp, scale, ctl, ERROR_ORDER,
                                      t_end, stats, mode, t_eval, ts, ys, n_out)
     if go >= 0:
@@ -405,8 +395,8 @@ def _solve(rhs, jac, sing, uev, hol, t0, t_end, y0, p, ctl, newton, t_eval, mode
             break
         first = False
         stats[0] += 1
-        if n_hol > 0:
-            project(hol, n_hol, n_coord, t_new, y_new, p, hw, hA, hmu)
+        if ctl.n_hol > 0:
+            projection.project(hol, ctl, t_new, y_new, p, hw)
         _dense(y, Z, F)
         rhs(t_new, y_new, p, f1)
         stats[2] += 1
@@ -446,8 +436,8 @@ def _solve(rhs, jac, sing, uev, hol, t0, t_end, y0, p, ctl, newton, t_eval, mode
     return Result(status, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev, sing_index)
 
 
-ARGS = (RHS, JAC, RHS, RHS, RHS, f8, f8, f8[::1], f8[::1], CONTROL, NEWTON, f8[::1], i8, WATCH,
-        i8[::1])
+ARGS = (RHS, JAC, RHS, RHS, RHS, f8, f8, f8[::1], f8[::1], CONTROL, NEWTON, f8[::1], i8,
+        WATCHED, i8[::1])
 
 
 #: the compiled loop in the namespace of the ensemble drivers (``ensemble_solver``)

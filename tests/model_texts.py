@@ -1,0 +1,13 @@
+"""Model files the tests share, as text."""
+
+#: the planar pendulum in Cartesian coordinates: a holonomic constraint
+#: g = x^2 + y^2 - l^2 and gravity along -y (no initial state)
+PENDULUM_XY = """
+name = "pendulum in x, y"
+coordinates = ["x", "y"]
+lagrangian = "(x_t**2 + y_t**2)/2 - G*y"
+constraints = ["x**2 + y**2 - l**2"]
+[parameters]
+G = 9.81
+l = 1.0
+"""

@@ -1,0 +1,102 @@
+"""Sensitivities of runs projected onto holonomic constraints: after every accepted step
+the state is projected onto g = 0 (``methods.projection``) and its sensitivities with it,
+by the derivative of the projection, so that ``traj.sensitivity`` is the derivative of
+the projected run.
+
+Two routes: central differences of projected runs (in the initial values that g does not
+involve, along the constraint and across it for the coordinates it does, and in a runtime
+parameter),
+and the property that the projected sensitivities of the coordinates lie in the tangent
+space of g = 0 (G S_q = 0 after the first step), which the unprojected variational
+equations violate (there G S_q stays G(q0) for the coordinates' columns).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import sympy as sp
+
+import jetnh as jn
+from jetnh.numeric import Scene
+
+a_, k_, I_ = sp.symbols("a k I", positive=True)
+A = 0.4
+
+
+def knife_slider():
+    """A knife edge (x, y, th) with a slider z = a sin(th) on a spring (one nonholonomic,
+    one holonomic constraint)."""
+    J = jn.JetSpace("x y th z")
+    x, y, th, z = J.q
+    xt, yt, tht, zt = J.qd
+    L = (xt**2 + yt**2 + I_ * tht**2 + zt**2) / 2 - k_ * z**2 / 2
+    return jn.System(J, L, [sp.sin(th) * xt - sp.cos(th) * yt, z - a_ * sp.sin(th)],
+                     dependent=["y", "z"])
+
+
+@pytest.fixture(scope="module")
+def scene():
+    ini = {"x": 0.1, "y": -0.2, "th": 0.3, "z": A * np.sin(0.3), "x_t": 1.0, "th_t": 0.7}
+    return Scene(knife_slider(), "chetaev", params={"a": A, "k": 3.0, "I": 0.7},
+                 initial=ini, t_span=(0.0, 1.5), runtime_params=["k"])
+
+
+KW = {"dop853": dict(rtol=1e-12, atol=1e-14), "rk4": dict(n_steps=400),
+      "radau": dict(rtol=1e-10, atol=1e-12)}
+
+
+@pytest.mark.parametrize("method", ["dop853", "rk4"])
+def test_projected_sensitivities_against_central_differences(scene, method):
+    kw = KW[method]
+    tr = scene.run(method=method, sensitivities=True, split="fixed", **kw)
+    names = scene.state_names
+    S = tr.sensitivities[-1]
+    col = {c: i for i, c in enumerate(tr.sensitivity_columns)}
+    base = dict(zip(names, scene.y0.tolist()))
+    h = 1e-6
+
+    def final(y0=None, params=None):
+        return scene.run(method=method, y0=y0, params=params, save="final", split="fixed",
+                         **kw).y[-1]
+
+    def check(fd, s, what):
+        assert np.max(np.abs(fd - s)) < 2e-7 * max(1.0, np.max(np.abs(s))), (what, fd, s)
+
+    # initial values that g does not involve
+    for to in [n for n in names if n not in ("th", "z")]:
+        fd = (final({**base, to: base[to] + h}) - final({**base, to: base[to] - h})) / (2 * h)
+        check(fd, S[:, col[to]], to)
+    # along g = 0: th with z = a sin(th)
+    th = base["th"]
+    up, down = ({**base, "th": th + s * h, "z": A * np.sin(th + s * h)} for s in (1, -1))
+    fd = (final(up) - final(down)) / (2 * h)
+    check(fd, S[:, col["th"]] + A * np.cos(th) * S[:, col["z"]], "th along g = 0")
+    if method == "rk4":
+        # off g = 0 (z alone): the first step projects the start back, and S with it.
+        # Runs accept a start off g by 1e-9 at most, so the difference is over 1e-10:
+        # coarse, and only where the steps do not depend on the start (an adaptive
+        # run's steps move with it, by the global error over 1e-10)
+        e = 1e-10
+        fd = (final({**base, "z": base["z"] + e})
+              - final({**base, "z": base["z"] - e})) / (2 * e)
+        assert np.max(np.abs(fd - S[:, col["z"]])) < 1e-4, ("z", fd, S[:, col["z"]])
+    # the runtime parameter
+    fd = (final(params={"k": 3.0 + h}) - final(params={"k": 3.0 - h})) / (2 * h)
+    check(fd, S[:, col["k"]], "k")
+
+
+@pytest.mark.parametrize("method", ["dop853", "rk4", "radau"])
+def test_projected_sensitivities_are_tangent(scene, method):
+    """G S_q = 0 at every output row after the first (G = dg/dq = (0, 0, -a cos th, 1)),
+    for every column, to roundoff; S(t0) is the identity."""
+    tr = scene.run(method=method, sensitivities=True, split="fixed", **KW[method])
+    names = scene.state_names
+    iq = [names.index(n) for n in ("x", "y", "th", "z")]
+    S = tr.sensitivities
+    assert np.array_equal(S[0], np.eye(len(names), S.shape[2]))
+    th = tr["th"]
+    GS = -A * np.cos(th)[:, None] * S[:, iq[2], :] + S[:, iq[3], :]
+    assert np.max(np.abs(GS[1:])) < 1e-13 * max(1.0, np.max(np.abs(S)))
+    # the state itself on g = 0 at every step
+    assert np.max(np.abs(tr["z"] - A * np.sin(th))) < 1e-15
