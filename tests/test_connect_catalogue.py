@@ -112,7 +112,7 @@ def test_appell_hamel_vakonomic_reaches_the_cone_only():
     assert c.residual < 1e-9 and c.rank == 2 and not c.normal
     assert abs(c.initial["x_t"] - 3 * v0 / d) < 1e-8 and abs(c.cost - cost) < 1e-8
     assert c.conjugate_times == (1.0,)       # rank-deficient throughout: no crossings
-    with pytest.raises(jn.ConnectError, match="name at most 2 coordinates"):
+    with pytest.raises(jn.ConnectError, match="reach a 2-dimensional set"):
         jn.connect(ah, "vakonomic", O, {"x": 3.0, "y": 1.0, "z": k * d + 0.3}, (0, 1),
                    max_iter=20, max_continuation=4)
 
