@@ -22,36 +22,13 @@ from scipy.integrate import solve_bvp
 
 import jetnh as jn
 from jetnh.models import get
-from jetnh.numeric import kernels
+from jetnh.numeric.connect.collocation import problem
 
 DISK0 = {"x": 0.0, "y": 0.0, "phi": 0.0, "psi": 0.0}
 
 
 def _collocation(scene, start, end, T, Y0):
-    kern, p, names = scene.kernels, scene.p, scene.state_names
-    jac = kernels.jacobian_kernels(scene).jac
-    n, nq = len(names), len(scene.coordinates)
-
-    def fun(t, Y):
-        out, o = np.empty_like(Y), np.empty(n)
-        for i in range(Y.shape[1]):
-            kern.rhs(float(t[i]), np.ascontiguousarray(Y[:, i]), p, o)
-            out[:, i] = o
-        return out
-
-    def fun_jac(t, Y):
-        out, Jm = np.empty((n, n, Y.shape[1])), np.empty((n, n))
-        for i in range(Y.shape[1]):
-            jac(float(t[i]), np.ascontiguousarray(Y[:, i]), p, Jm)
-            out[:, :, i] = Jm
-        return out
-
-    rows = [names.index(k) for k in end]
-
-    def bc(ya, yb):
-        return np.concatenate([ya[:nq] - [start[c] for c in names[:nq]],
-                               yb[rows] - [end[k] for k in end]])
-
+    fun, fun_jac, bc, _, _ = problem(scene, start, end, T)
     t = np.linspace(0.0, T, Y0.shape[1])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
