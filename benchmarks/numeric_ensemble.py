@@ -1,14 +1,22 @@
 """Ensemble throughput of jetnh.numeric: right-hand-side evaluations per second over many
 initial conditions, for each way of running them -- a Python loop of ``scene.run``, one
-compiled serial driver, a Python thread pool of compiled drivers (GIL released) and
-numba ``prange`` threads -- on the cores of this machine; and the check that every
-ensemble run is bit-for-bit the single run.
+compiled serial driver, a Python thread pool of compiled drivers (GIL released), numba
+``prange`` threads and ``jn.sweep`` on this machine (the thread pool) -- on the cores of
+this machine; and the check that every ensemble run is bit-for-bit the single run.
 
     .venv/bin/python benchmarks/numeric_ensemble.py [--quick] [--out PATH]
 
 (default output: benchmarks/results/numeric_ensemble.json).  Best of several
-interleaved repetitions; machine, date, load average, commit and command in the JSON
+interleaved repetitions (serial and parallel in the same run: the speed-up is their
+ratio); machine, date, load average, commit and command in the JSON
 (``_common.write``).
+
+"CPU per evaluation / single run" (``per_eval_vs_single_run``): the CPU time per rhs
+evaluation of a mode (all its threads) over that of one long ``scene.run`` of the same
+scene, as many evaluations as 64 runs: the cost of a trajectory in an ensemble against
+a single run's (1.0 is the same cost; CPU time, which the machine's load disturbs less
+than wall time).  The speed-ups need a quiet machine: under load there is no idle core
+to scale onto.
 """
 
 import time
@@ -50,9 +58,30 @@ def disk_scene():
     return "vertical rolling disk (vakonomic)", sc, "phi_t", "psi_t"
 
 
+def single_per_eval(sc, kw, reps):
+    """CPU seconds per rhs evaluation of one long run of ``sc`` (no ensemble driver):
+    64 times the scene's span."""
+    t0, t1 = sc.t_span
+    long = sc.replace(t_span=(t0, t0 + 64 * (t1 - t0)))
+    run = lambda: long.run(**kw)           # noqa: E731
+    run()
+    _, cpu, tr = min((_timed(run) for _ in range(reps)), key=lambda x: x[1])
+    return cpu / tr.diagnostics.rhs_evaluations
+
+
+def _timed(f):
+    """``(wall seconds, CPU seconds of the process, f())``."""
+    tic, cpu = time.perf_counter(), time.process_time()
+    out = f()
+    return time.perf_counter() - tic, time.process_time() - cpu, out
+
+
 def measure(make, n_runs_list, reps, loop_max):
+    import pandas as pd
+
     name, sc, a, b = make()
     sc.compile()
+    single = single_per_eval(sc, dict(rtol=1e-10, atol=1e-12, save="final"), reps)
     rows = []
     for n_runs in n_runs_list:
         ini = {a: np.linspace(0.5, 1.5, n_runs) * sc.initial[a],
@@ -63,40 +92,61 @@ def measure(make, n_runs_list, reps, loop_max):
             "threads x2": lambda: sc.ensemble(ini, parallel="threads", workers=2, **kw),
             "prange x2": lambda: sc.ensemble(ini, parallel="prange", workers=2, **kw),
         }
+        grid = pd.DataFrame(ini)
         for f in modes.values():      # compile / warm up
             f()
         best = {m: (np.inf, None) for m in modes}
+        cpu = {m: np.inf for m in modes}
+        best_sweep = (np.inf, None)
+        cpu_sweep = np.inf
         for _ in range(reps):
             for m, f in modes.items():
-                e = f()
+                _, c, e = _timed(f)
+                cpu[m] = min(cpu[m], c)
                 if e.wall_time < best[m][0]:
                     best[m] = (e.wall_time, e)
+            t, c, df = _timed(lambda: jn.sweep(sc, grid, outputs=list(sc.state_names),
+                                               rtol=1e-10, atol=1e-12))
+            cpu_sweep = min(cpu_sweep, c)
+            if t < best_sweep[0]:
+                best_sweep = (t, df)
         ref = best["serial"][1]
-        row = dict(n_runs=n_runs, rhs_evaluations=int(ref.nfev.sum()), modes={})
+        nfev = int(ref.nfev.sum())
+        row = dict(n_runs=n_runs, rhs_evaluations=nfev, single_run_s_per_eval=single,
+                   modes={})
         for m, (t, e) in best.items():
             row["modes"][m] = dict(wall_s=t, rhs_per_s=float(e.nfev.sum() / t),
                                    speedup_vs_serial=best["serial"][0] / t,
+                                   per_eval_vs_single_run=cpu[m] / nfev / single,
                                    bitwise_equal_to_serial=bool(np.array_equal(e.y, ref.y)))
+        t, df = best_sweep
+        row["modes"]["jn.sweep (threads)"] = dict(
+            wall_s=t, rhs_per_s=nfev / t, speedup_vs_serial=best["serial"][0] / t,
+            per_eval_vs_single_run=cpu_sweep / nfev / single,
+            bitwise_equal_to_serial=bool(np.array_equal(
+                df[list(sc.state_names)].to_numpy(), ref.y[:, -1])))
         if n_runs <= loop_max:
             Y0 = ref.initial
 
             def loop():
                 return [sc.run(y0=Y0[r], **kw) for r in range(n_runs)]
             loop()
-            t_loop = np.inf
+            t_loop = c_loop = np.inf
             for _ in range(max(2, reps // 2)):
-                tic = time.perf_counter()
-                trs = loop()
-                t_loop = min(t_loop, time.perf_counter() - tic)
+                t, c, trs = _timed(loop)
+                t_loop, c_loop = min(t_loop, t), min(c_loop, c)
             same = all(np.array_equal(trs[r].y[-1], ref.y[r, 0]) for r in range(n_runs))
             row["modes"]["python loop of scene.run"] = dict(
                 wall_s=t_loop, rhs_per_s=row["rhs_evaluations"] / t_loop,
-                speedup_vs_serial=best["serial"][0] / t_loop, bitwise_equal_to_serial=same)
+                speedup_vs_serial=best["serial"][0] / t_loop,
+                per_eval_vs_single_run=c_loop / nfev / single, bitwise_equal_to_serial=same)
         rows.append(row)
         for m, d in row["modes"].items():
             print(f"{name:36s} {n_runs:5d} runs  {m:26s} {d['wall_s'] * 1e3:9.2f} ms  "
                   f"{d['rhs_per_s'] / 1e6:7.2f} M rhs/s  x{d['speedup_vs_serial']:.2f}  "
-                  f"bitwise {d['bitwise_equal_to_serial']}")
+                  + (f"per eval / single run {d['per_eval_vs_single_run']:.2f}  "
+                     if "per_eval_vs_single_run" in d else "")
+                  + f"bitwise {d['bitwise_equal_to_serial']}")
     return dict(problem=name, rows=rows)
 
 

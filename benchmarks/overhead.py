@@ -2,9 +2,10 @@
 and the cost per right-hand-side evaluation, on this tree and on earlier ones.
 
     .venv/bin/python benchmarks/overhead.py --tree before=PATH [--tree NAME=PATH ...]
-                                            [--rounds 3] [--quick] [--out PATH]
+                                            [--rounds 3] [--quick] [--fixed] [--out PATH]
 
-(default output: benchmarks/results/overhead.json; a tree is a git worktree, e.g.
+(default output: benchmarks/results/overhead.json, with ``--fixed``
+benchmarks/results/overhead_fixed.json; a tree is a git worktree, e.g.
 ``git worktree add /tmp/before a6430f6``; this tree is "after").  Every figure comes from
 fresh processes with empty numba and kernel caches, the trees alternating within each of
 ``--rounds`` rounds; each figure is the best over the rounds.  On the rolling disk:
@@ -19,6 +20,14 @@ fresh processes with empty numba and kernel caches, the trees alternating within
    no argument checks, no Trajectory): the floor a run's Python side adds to.
 3. Per evaluation: (a run to T = 100 minus the fixed cost) / the extra rhs evaluations
    (rk4: 2000 steps against 1).
+4. Fixed cost against the bare call, in one process (the caches as they are), the calls
+   interleaved (each figure
+   the 5th percentile of single calls, so that the machine's load hits every one alike):
+   the compiled dop853 loop called directly (its entry point, the arguments made once),
+   ``scene.run()``, ``scene.run(y0=...)``, ``scene.replace(initial=...).run()`` (a new
+   initial state each call, as a shooting loop does) and an ensemble of one run, each
+   with one step (T = 1e-6, ``save="final"``); the ratios to the bare call.  ``--fixed``
+   measures this alone (seconds).
 """
 
 import json
@@ -27,7 +36,7 @@ import subprocess
 import sys
 import tempfile
 
-from _common import ROOT, parser, write
+from _common import RESULTS, ROOT, parser, write
 
 METHODS = ("dop853", "dopri5", "rk4")
 
@@ -90,11 +99,46 @@ print(json.dumps(out))
 """
 
 
-def fresh(root, code):
-    """``code`` in a fresh process on the tree ``root`` with empty caches: its JSON line."""
+FIXED = SETUP + r"""
+from jetnh.numeric import interrupt
+from jetnh.numeric.methods import explicit_solver
+from jetnh.numeric.methods.loop import Control, watch_of
+short = sc.replace(t_span=(0.0, 1e-6))
+kern = short.kernels
+solve = explicit_solver("dop853")
+y0 = short.y0.copy()
+ctl = Control(1e-9, np.full(len(y0), 1e-12), 0.0, np.inf, 10**7, 0)
+args = (kern.rhs_fp, kern.sing_fp, kern.sing_fp, kern.hol_or_none, 0.0, 1e-6, y0, short.p,
+        ctl, np.zeros(0), 2, watch_of(kern, None, True, 1e-10), interrupt.flag())
+states = {n: short.initial[n] for n in short.state_names}
+inis = [dict(states, phi_t=states["phi_t"] + 1e-3 * k) for k in range(16)]
+calls = {
+    "bare call": lambda i: solve(*args),
+    "run()": lambda i: short.run(save="final"),
+    "run(y0=...)": lambda i: short.run(y0=y0, save="final"),
+    "replace(initial=...).run()": lambda i: short.replace(initial=inis[i % 16]).run(
+        save="final"),
+    "ensemble of one": lambda i: short.ensemble(y0[None, :], save="final"),
+}
+for f in calls.values():
+    f(0)
+times = {k: [] for k in calls}
+for i in range(REPS_FIXED):
+    for k, f in calls.items():
+        tic = time.perf_counter(); f(i); times[k].append(time.perf_counter() - tic)
+out = {k: float(np.percentile(v, 5)) for k, v in times.items()}
+print(json.dumps(out))
+"""
+
+
+def fresh(root, code, cold=True):
+    """``code`` in a fresh process on the tree ``root`` (``cold``: with empty caches):
+    its JSON line."""
     with tempfile.TemporaryDirectory() as tmp:
-        env = dict(os.environ, PYTHONPATH=str(root), JETNH_CACHE=os.path.join(tmp, "jc"),
-                   NUMBA_CACHE_DIR=os.path.join(tmp, "numba"))
+        env = dict(os.environ, PYTHONPATH=str(root))
+        if cold:
+            env.update(JETNH_CACHE=os.path.join(tmp, "jc"),
+                       NUMBA_CACHE_DIR=os.path.join(tmp, "numba"))
         res = subprocess.run([sys.executable, "-c", code], env=env, cwd=tmp,
                              capture_output=True, text=True, check=True)
     return json.loads(res.stdout.strip().splitlines()[-1])
@@ -104,6 +148,11 @@ def commit(root) -> str:
     r = subprocess.run(["git", "-C", str(root), "rev-parse", "--short", "HEAD"],
                        capture_output=True, text=True)
     return r.stdout.strip() or "?"
+
+
+def fixed(root, reps) -> dict:
+    """The fixed costs against the bare call (section 4) of one tree."""
+    return fresh(root, FIXED.replace("REPS_FIXED", str(reps)), cold=False)
 
 
 def measure(root, reps_short, reps_long) -> dict:
@@ -135,11 +184,42 @@ def main(argv=None):
     ap.add_argument("--tree", action="append", default=[], metavar="NAME=PATH",
                     help="an earlier tree to measure too (a git worktree)")
     ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--fixed", action="store_true",
+                    help="only the fixed costs against the bare call (section 4)")
     args = ap.parse_args(argv)
     trees = dict(t.split("=", 1) for t in args.tree)
     trees["after"] = str(ROOT)
     reps_short, reps_long = (50, 2) if args.quick else (2000, 5)
     rounds = 1 if args.quick else args.rounds
+    reps_fixed = 200 if args.quick else 3000
+    cost = {name: fixed(root, reps_fixed) for name, root in trees.items()}
+    for name, c in cost.items():
+        print(f"{name}: " + ", ".join(f"{k} {v * 1e6:.1f} us ({v / c['bare call']:.2f}x)"
+                                      for k, v in c.items()), flush=True)
+    fixed_table = dict(
+        title="Fixed cost of a one-step dop853 run against the bare call of its compiled "
+              "loop (rolling disk; one process per tree, calls interleaved, 5th "
+              "percentile of single calls)",
+        columns=["", *(f"{n} (us)" for n in trees), *(f"{n} / bare call" for n in trees)],
+        rows=[[k, *(f"{cost[n][k] * 1e6:.3g}" for n in trees),
+               *(f"{cost[n][k] / cost[n]['bare call']:.2f}" for n in trees)]
+              for k in cost["after"]],
+        note="trees (commits): " + ", ".join(f"{n} = {commit(p)}" for n, p in trees.items()))
+    a = cost["after"]
+    fixed_summary = (
+        f"a one-step dop853 run costs {a['run()'] / a['bare call']:.2f}x the bare call of its "
+        f"compiled loop ({a['run()'] * 1e6:.3g} us against {a['bare call'] * 1e6:.3g} us); "
+        f"run(y0=...) {a['run(y0=...)'] / a['bare call']:.2f}x, "
+        f"replace(initial=...).run() {a['replace(initial=...).run()'] / a['bare call']:.2f}x,"
+        f" an ensemble of one {a['ensemble of one'] / a['bare call']:.2f}x")
+    print(fixed_summary)
+    if args.fixed:
+        out = args.out if args.out != RESULTS / "overhead.json" else None
+        write("overhead_fixed", dict(title="Overhead of a run: the fixed cost against the bare "
+                                     "call", summary=[fixed_summary], tables=[fixed_table],
+                               fixed=cost, trees={n: commit(p) for n, p in trees.items()}),
+              out, args.quick)
+        return
     runs = {name: [] for name in trees}
     for r in range(rounds):
         for name, root in trees.items():
@@ -176,14 +256,16 @@ def main(argv=None):
                        f"of which the compiled loop {a['call_s_dop853'] * 1e6:.1f} us")
     for s in summary:
         print(s)
-    tables = [dict(title="First run, fixed cost, cost per evaluation (rolling disk; fresh "
+    summary.append(fixed_summary)
+    tables = [fixed_table,
+              dict(title="First run, fixed cost, cost per evaluation (rolling disk; fresh "
                          "processes, empty caches; best of the rounds)",
                    columns=[""] + names + [f"after / {n}" for n in names[:-1]], rows=rows,
                    note="trees (commits): " + ", ".join(f"{n} = {commit(p)}"
                                                         for n, p in trees.items()))]
     write("overhead", dict(title="Overhead of a run: first run, fixed cost, cost per "
                                  "evaluation", summary=summary, tables=tables, runs=runs,
-                           trees={n: commit(p) for n, p in trees.items()}),
+                           fixed=cost, trees={n: commit(p) for n, p in trees.items()}),
           args.out, args.quick)
 
 

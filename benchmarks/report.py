@@ -415,11 +415,14 @@ class Report:
         for p in d.get("problems", []):
             for r in p["rows"]:
                 for m, v in r["modes"].items():
+                    per = v.get("per_eval_vs_single_run")
                     rows.append([p["problem"], r["n_runs"], m, secs(v["wall_s"]),
                                  f"{v['rhs_per_s'] / 1e6:.3g} M", ratio(v["speedup_vs_serial"]),
+                                 "-" if per is None else f"{per:.2f}",
                                  v["bitwise_equal_to_serial"]])
         out.append(table(["scene", "runs", "mode", "wall", "rhs/s", "speed-up vs serial",
-                          "bitwise = serial"], rows))
+                          "CPU per evaluation / single run", "bitwise = serial"],
+                         rows))
         if d.get("problems"):
             p = d["problems"][0]
             r = p["rows"][-1]

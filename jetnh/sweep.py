@@ -361,14 +361,16 @@ def _run_chunk(scene, Y0, P, run, outputs, parallel) -> dict:
     a ``CompiledScene``, on a worker)."""
     import numpy as np
 
-    from .numeric.ensemble import run_ensemble
+    from .numeric.ensemble import run_resolved
+    from .numeric.options import NAMES, options
 
     if isinstance(scene, CompiledScene):
         scene = scene.load()
     if not _method(run.get("method", "dop853")).ensemble:
         return _run_points(scene, Y0, P, run, outputs)
-    ens = run_ensemble(scene, Y0, dict(zip(scene.runtime_params, P.T)), parallel=parallel,
-                       on_error="record", **run)
+    ens = run_resolved(scene, Y0, P, options(**{k: v for k, v in run.items() if k in NAMES}),
+                       parallel=parallel, on_error="record",
+                       **{k: v for k, v in run.items() if k not in NAMES})
     times = run["t_eval"]
     if times is None:
         final = ens.final_values()

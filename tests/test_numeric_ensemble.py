@@ -8,6 +8,7 @@ import sympy as sp
 import jetnh as jn
 from jetnh.mechanics.system import System
 from jetnh.errors import ConstraintError, IntegrationError, JetnhError
+from jetnh import models
 from jetnh.models import appell_hamel
 from jetnh.numeric import Event, Scene
 from jetnh.numeric.methods._common import EVENT, FINISHED, NONFINITE, SINGULAR
@@ -18,14 +19,9 @@ N = 12
 
 @pytest.fixture(scope="module")
 def disk():
-    """The vertical rolling disk with R a run-time parameter."""
-    J = jn.JetSpace("x y phi psi")
-    x, y, phi, psi = J.q
-    xd, yd, phid, psid = J.qd
-    R, I1, I2 = sp.symbols("R I1 I2")
-    L = (xd**2 + yd**2) / 2 + (I1 * phid**2 + I2 * psid**2) / 2
-    s = System(J, L, [xd - R * sp.cos(psi) * phid, yd - R * sp.sin(psi) * phid],
-               dependent=[x, y])
+    """The catalogue's vertical rolling disk (without its defaults) with R a run-time
+    parameter."""
+    s = models.rolling_disk().replace(defaults=None)
     return Scene(s, "chetaev", params={"R": 1.5, "I1": 0.5, "I2": 0.25}, initial=DISK0,
                  t_span=(0.0, 5.0), runtime_params=["R"], cache=False).compile()
 
@@ -153,3 +149,32 @@ def test_ensemble_errors(disk):
         disk.ensemble(np.zeros((2, 3)))
     with pytest.raises(JetnhError, match="non-finite"):
         disk.ensemble({"phi_t": [np.nan]})
+
+
+@pytest.mark.parametrize("method, kw", [("dop853", dict(t_eval=np.linspace(0.0, 5.0, 6))),
+                                        ("rk4", dict(n_steps=200, save="final"))])
+def test_ensemble_sensitivities_equal_single_runs_bitwise(disk, method, kw):
+    """sensitivities=True: every run's state and S = dy/d(y0, p) are the single run's,
+    to the last bit, in the order of the single run's columns; a run without them is
+    refused its sensitivities."""
+    ini, par = inputs()
+    ini, par = {k: v[:4] for k, v in ini.items()}, {k: v[:4] for k, v in par.items()}
+    ens = disk.ensemble(ini, par, method=method, sensitivities=True, rtol=1e-8,
+                        parallel="threads", workers=2, **kw)
+    assert ens.sensitivity_columns == disk.state_names + ("R",)
+    assert ens.sensitivities.shape == ens.y.shape + (7,)
+    for r in range(4):
+        tr = disk.run(method=method, sensitivities=True, rtol=1e-8, y0=ens.initial[r],
+                      params=ens.params[r], **kw)
+        rows = slice(None) if "t_eval" in kw else slice(-1, None)
+        assert np.array_equal(tr.y[rows], ens.y[r])
+        assert np.array_equal(tr.sensitivities[rows], ens.sensitivities[r])
+        assert np.array_equal(tr.sensitivity("x", "R")[rows], ens.sensitivity("x", "R")[r])
+    # S = dy/dy0 starts as the identity, the parameter column at zero
+    if "t_eval" in kw:
+        np.testing.assert_array_equal(ens.sensitivities[:, 0, :, :6],
+                                      np.broadcast_to(np.eye(6), (4, 6, 6)))
+    with pytest.raises(JetnhError, match="not an initial value"):
+        ens.sensitivity("x", "I1")
+    with pytest.raises(JetnhError, match="no sensitivities"):
+        disk.ensemble(ini, par, rtol=1e-8, save="final").sensitivity("x", "R")

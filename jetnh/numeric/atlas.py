@@ -54,6 +54,7 @@ from ..errors import JetnhError
 from ..mechanics import principles
 from .methods import projection
 from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, SINGULAR, STOPPED
+from . import loops
 from .methods.loop import Watch
 
 #: the event name of a chart's edge (internal: the stitched run does not report it)
@@ -279,10 +280,11 @@ class Atlas:
 
 # ---------------------------------------------------------------------- the driver
 def run(home, method, events, t0, t1, y0, p, ctl, te, mode, dense, checked, singular_tol,
-        newton, limit):
+        newton, limit, build):
     """``Scene.run`` of a scene whose split has an edge (``applies``): the compiled loop
     in one chart until the run ends or reaches the chart's edge, where it goes on in the
-    split of largest measure with the state mapped; one Trajectory of ``home``."""
+    split of largest measure with the state mapped; one Trajectory of ``home``.
+    ``build``: the Trajectory of a piece from its loop's result (``solve.trajectory``)."""
     from .events import as_events
 
     at = atlas(home)
@@ -291,7 +293,7 @@ def run(home, method, events, t0, t1, y0, p, ctl, te, mode, dense, checked, sing
     chart, y, first = begin(at, user, t0, y0, p)
     parts, switches = follow(at, method, chart, t0, y, t1, p, user,
                              np.zeros(len(user), np.int64), ctl, ctl.max_steps, te, mode,
-                             dense, checked, singular_tol, newton, limit)
+                             dense, checked, singular_tol, newton, limit, build)
     return stitch(home, at, method, p, parts, first + switches, user, mode,
                   time.perf_counter() - tic)
 
@@ -316,10 +318,10 @@ def begin(at, user, t0, y0, p):
 
 
 def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mode, dense, checked,
-           singular_tol, newton, limit, first=True, h_fixed=None, edge=True):
+           singular_tol, newton, limit, build, first=True, h_fixed=None, edge=True):
     """Run from (t, y) in ``chart`` to ``t1``, changing chart at every edge; returns the
-    pieces ``[(chart, trajectory of the chart's scene, what re-running it needs)]`` and
-    the switches.  ``counts``: occurrences of the user events so far (terminal counts go
+    pieces ``[(chart, trajectory of the chart's scene made by ``build``, what re-running
+    it needs)]`` and the switches.  ``counts``: occurrences of the user events so far (terminal counts go
     on); ``first``: whether (t, y) starts the run (else the run goes on after a switch);
     ``edge``: whether to watch the chart's edge."""
     user_max = np.array([e.max_events for e in user], dtype=np.int64)
@@ -346,8 +348,8 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
                 seg_te = np.ascontiguousarray(te[direction * (te - t) > 0.0])
         left = None if limit is None else limit - (time.perf_counter() - tic)
         seg_dense = None if dense is None else dict(dense)
-        out, wall = scene._solve(method, kern, ce, watch, t, t1, y, p, seg_ctl, seg_te, mode,
-                                 newton, left)
+        out, wall = loops.call(scene, method, kern, ce, watch, t, t1, y, p, seg_ctl, seg_te,
+                               mode, newton, left)
         if seg_dense is not None:
             seg_dense["partial_last"] = int(out.status) in (EVENT, SINGULAR)
         n_ev = int(out.n_ev)
@@ -355,8 +357,8 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
                and int(out.ev_i[n_ev - 1]) == len(user))
         if hit:
             _project_stop(chart, out, p)
-        seg = scene._trajectory(method, out, wall, kern, ce, p, t, y, singular_tol, checked,
-                                limit, seg_dense, n_events=len(user))
+        seg = build(scene, method, out, wall, kern, ce, p, t, y, singular_tol, checked, limit,
+                    seg_dense, n_events=len(user))
         parts.append((chart, seg, (t, y, t1, seg_ctl, watch, ce)))
         steps_left -= seg._info["steps"]
         for i in range(len(user)):
@@ -550,8 +552,8 @@ def _rerun(chart, seg, rerun, times, p) -> np.ndarray:
     if seg.t[-1] < seg.t[0]:
         order = order[::-1]
     te = np.ascontiguousarray(times[order])
-    out, _ = chart.scene._solve(seg.method, chart.kernels, ce, watch, t0, t1, y0, p, ctl,
-                                te, AT_T_EVAL, None, None)
+    out, _ = loops.call(chart.scene, seg.method, chart.kernels, ce, watch, t0, t1, y0, p,
+                        ctl, te, AT_T_EVAL, None, None)
     rows = np.empty((te.shape[0], seg.y.shape[1]))
     if int(out.n_out) != te.shape[0] or int(out.status) == STOPPED:
         raise JetnhError("running the chart's loop again did not reach the times asked for")
@@ -560,17 +562,17 @@ def _rerun(chart, seg, rerun, times, p) -> np.ndarray:
 
 
 def go_on(at, method, user, t1, p, t, y, counts, ctl, steps_left, te, mode, checked,
-          singular_tol, newton, limit, h_fixed):
+          singular_tol, newton, limit, h_fixed, build):
     """An ensemble's run that stopped at its chart's edge at (t, y) (the scene's own
     chart), taken on as ``Scene.run`` does: ``(parts, switches)`` of ``follow``."""
     own = at.own
     target = switch(at, own, t, y, p)
     if target is None:
         return follow(at, method, own, t, y, t1, p, user, counts, ctl, steps_left, te, mode,
-                      None, checked, singular_tol, newton, limit, first=False,
+                      None, checked, singular_tol, newton, limit, build, first=False,
                       h_fixed=h_fixed, edge=False)
     chart, y_new = target
     parts, switches = follow(at, method, chart, t, y_new, t1, p, user, counts, ctl,
                              steps_left, te, mode, None, checked, singular_tol, newton,
-                             limit, first=False, h_fixed=h_fixed)
+                             limit, build, first=False, h_fixed=h_fixed)
     return parts, [{"t": t, "from": list(own.split), "to": list(chart.split)}] + switches

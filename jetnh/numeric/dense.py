@@ -24,9 +24,9 @@ import numpy as np
 
 from ..errors import ArgumentError, IntegrationError, JetnhError
 from . import arguments
-from .methods import explicit_solver, method
-from .methods._common import AT_T_EVAL, EVERY_STEP
-from .methods.loop import Control, Watch
+from .loops import retake
+from .methods import method
+from .methods._common import EVERY_STEP
 
 
 def _times(times, lo, hi) -> np.ndarray:
@@ -137,25 +137,13 @@ def _groups(k):
 
 
 def _retaken_steps(traj, k, tau) -> np.ndarray:
-    """dop853/dopri5: re-take step k[i] with the times tau (sorted by step, then time)."""
-    kern, d = traj._kernels, traj._dense
-    solve = explicit_solver(traj.method)
-    rhs = d["rhs"].rhs_fp if "rhs" in d else kern.rhs_fp     # with sensitivities: augmented
-    t, y, p = traj.t, d.get("y", traj.y), np.ascontiguousarray(traj._p, dtype=float)
-    none = np.zeros(0, dtype=np.int64)
-    watch = Watch(0, 0.0, none, none)
-    halt = np.zeros(1, dtype=np.int64)
-    n_sens = d["rhs"].layout.sensitivity_columns if "rhs" in d else 0
+    """dop853/dopri5: re-take step k[i] with the times tau (sorted by step, then time)
+    through the run's own loop (``loops.retake``)."""
+    t, y = traj.t, traj._dense.get("y", traj.y)
     out = np.empty((tau.shape[0], y.shape[1]))
     for j, a, b in _groups(k):
         t0, t1 = float(t[j]), float(t[j + 1])
-        # |h| one ulp up: t0 + first reaches (or passes, and is cut back to) t1, so the
-        # step is h = t1 - t0, the original run's h to the bit
-        first = float(np.nextafter(abs(t1 - t0), np.inf))
-        res = solve(rhs, kern.sing_fp, kern.sing_fp, kern.hol_or_none, t0, t1,
-                    np.array(y[j]), p, Control(d["rtol"], d["atol"], first, np.inf,
-                                               1, 0, *traj.scene._projection, n_sens),
-                    np.ascontiguousarray(tau[a:b]), AT_T_EVAL, watch, halt)
+        res = retake(traj, t0, t1, np.array(y[j]), np.ascontiguousarray(tau[a:b]))
         status, _, ys, n_out, stats = res[:5]
         if int(status) != 0 or int(stats[1]) != 0 or int(n_out) != b - a:
             raise IntegrationError(

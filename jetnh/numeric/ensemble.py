@@ -30,6 +30,11 @@ arrays (``Scene.ensemble`` calls it), so a later ``jetnh.sweep`` can hand it chu
   thread pool was as fast as or faster than prange there and needs no extra compiled
   driver, hence the default.  A Python loop of ``scene.run`` pays ~0.1 ms of dispatch
   per run, which the drivers do not.
+- ``sensitivities=True``: every run integrates its variational equations as
+  ``Scene.run(sensitivities=True)`` does; ``ens.sensitivities`` is ``[n_runs, n_times,
+  n_states, n_columns]`` (columns ``ens.sensitivity_columns``: the initial states, then
+  the runtime parameters), ``ens.sensitivity(of, to)`` one entry over runs and times;
+  each run's bits are the single run's.
 - Every array an ensemble holds or hands out is read-only.
 - Output: ``t_eval`` points (runs that stop early are NaN after their stop), or
   ``save="final"`` (one row per run, its final state).  Every accepted step is not
@@ -43,9 +48,9 @@ arrays (``Scene.ensemble`` calls it), so a later ``jetnh.sweep`` can hand it chu
 
 from __future__ import annotations
 
+import math
 import time
 import warnings
-from concurrent.futures import ThreadPoolExecutor
 from functools import cached_property
 
 import numpy as np
@@ -53,14 +58,11 @@ import numpy as np
 from ..errors import ConstraintError, IntegrationError, JetnhError, JetnhWarning
 from ..frozen import Frozen, readonly
 from ..mechanics import holonomic
-from . import arguments, atlas, diagnosis, interrupt
+from . import arguments, atlas, diagnosis, solve
 from .events import as_events
-from . import methods
 from .methods import STATUS_TEXT
-from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, FINISHED, NONFINITE, SINGULAR,
-                              entry_point)
-from .methods.loop import Control, watch_of
-from .options import fields_of, options
+from .methods._common import ENDPOINTS, EVENT, FINISHED, NONFINITE, SINGULAR
+from .options import options
 
 PARALLEL = ("prange", "threads", "serial")
 
@@ -130,7 +132,7 @@ def resolve(scene, initial=None, params=None, project=False):
         if s in columns:
             Y0[:, j] = columns[s]
     P = np.empty((n_runs, len(scene.runtime_params)))
-    P[:] = scene.p
+    P[:] = scene._p
     for j, s in enumerate(scene.runtime_params):
         if s in params:
             P[:, j] = params[s]
@@ -185,36 +187,35 @@ class Ensemble(Frozen):
 
     def __init__(self, scene, method, t, y, info, t_last, y_last, ev_n, ev_t, Y0, P,
                  event_names, wall_time, parallel, workers, save, singular_tol, *,
-                 switching=False, switches=None, pieces=None, reasons=None):
-        self.scene = scene
-        self.method = method
-        self.t = t                      # [n_runs, n_times]
-        self.y = y                      # [n_runs, n_times, n_states]
-        self.status = info[:, 0].copy()
-        self.steps = info[:, 1].copy()
-        self.rejected = info[:, 2].copy()
-        self.nfev = info[:, 3].copy()
-        self.rows = info[:, 4].copy()
-        self._sing_index = info[:, 5].copy()
-        self.t_final = t_last
-        self.y_final = y_last
-        self.event_names = tuple(event_names)
-        self.event_counts = ev_n        # [n_runs, n_events]
-        self.event_first = np.where(ev_n > 0, ev_t, np.nan)
-        self.initial = Y0.view()        # read-only views: the caller's arrays stay as given
-        self.params = P.view()          # [n_runs, n_runtime_params]
-        self.param_names = scene.runtime_params
-        self.wall_time = wall_time
-        self.parallel = parallel
-        self.workers = workers
-        self.save = save
-        self._singular_tol = singular_tol
-        self.layout = scene.kernels.layout
-        #: runs that changed split (``numeric.atlas``): run -> [{"t", "from", "to"}, ...];
-        #: ``switching``: whether the runs watched their chart's edge
-        self.switches = switches or {}
-        self.switching = switching
-        self._pieces, self._reasons = pieces or {}, reasons or {}
+                 switching=False, switches=None, pieces=None, reasons=None,
+                 sensitivities=None):
+        info = info.T.copy()            # (one copy: its rows are the columns below)
+        # read-only views: the caller's arrays stay as given
+        arrays = dict(t=t,              # [n_runs, n_times]
+                      y=y,              # [n_runs, n_times, n_states]
+                      status=info[0], steps=info[1], rejected=info[2], nfev=info[3],
+                      rows=info[4], t_final=t_last, y_final=y_last,
+                      event_counts=ev_n,    # [n_runs, n_events]
+                      event_first=np.where(ev_n > 0, ev_t, np.nan), initial=Y0.view(),
+                      params=P.view())      # [n_runs, n_runtime_params]
+        if sensitivities is not None:
+            arrays["sensitivities"] = sensitivities[1]
+        for a in arrays.values():
+            a.flags.writeable = False
+        # the attributes in one go (``Frozen._set`` without its walk over every value)
+        self.__dict__.update(
+            arrays, scene=scene, method=method, _sing_index=info[5],
+            event_names=tuple(event_names), param_names=scene.runtime_params,
+            wall_time=wall_time, parallel=parallel, workers=workers, save=save,
+            _singular_tol=singular_tol, layout=scene.kernels.layout,
+            #: runs that changed split (``numeric.atlas``): run -> [{"t", "from", "to"},
+            #: ...]; ``switching``: whether the runs watched their chart's edge
+            switches=readonly(switches or {}), switching=switching,
+            _pieces=pieces or {}, _reasons=reasons or {},
+            #: what ``sensitivities`` (``[n_runs, n_times, n_states, n_columns]``, with a
+            #: run with ``sensitivities=True``) differentiate by: the initial states,
+            #: then the runtime parameters
+            sensitivity_columns=() if sensitivities is None else tuple(sensitivities[0]))
 
     # ------------------------------------------------------------------ shape and access
     @property
@@ -235,7 +236,7 @@ class Ensemble(Frozen):
 
     @property
     def success(self) -> np.ndarray:
-        return np.isin(self.status, (FINISHED, EVENT))
+        return (self.status == FINISHED) | (self.status == EVENT)
 
     def __getitem__(self, key) -> np.ndarray:
         """[n_runs, n_times] array of a state, dependent velocity or first integral."""
@@ -250,6 +251,25 @@ class Ensemble(Frozen):
             return self.aux[:, :, 2 * k + 1 + lay.integrals.index(name)]
         raise JetnhError(f"{name!r} is not in this ensemble; it has {', '.join(self.names)}")
 
+    def sensitivity(self, of, to) -> np.ndarray:
+        """``d of(t) / d to`` over the runs and output times (``[n_runs, n_times]``,
+        read-only): ``of`` a state, ``to`` an initial value of a state or a runtime
+        parameter (``Trajectory.sensitivity``; an ensemble run with
+        ``sensitivities=True``)."""
+        if not self.sensitivity_columns:
+            raise JetnhError("this ensemble carries no sensitivities; run it with "
+                             "sensitivities=True")
+        a, b = _name(of), _name(to)
+        if a not in self.layout.states:
+            raise JetnhError(f"sensitivity of {a!r}: not a state of this ensemble; the "
+                             f"states are {', '.join(self.layout.states)}")
+        if b not in self.sensitivity_columns:
+            raise JetnhError(f"sensitivity to {b!r}: not an initial value of a state or a "
+                             f"runtime parameter; choose one of "
+                             f"{', '.join(self.sensitivity_columns)}")
+        return self.sensitivities[:, :, self.layout.states.index(a),
+                                  self.sensitivity_columns.index(b)]
+
     @cached_property
     def aux(self) -> np.ndarray:
         """[n_runs, n_times, n_aux]: dependent velocities, residuals, energy, integrals
@@ -257,13 +277,20 @@ class Ensemble(Frozen):
         kern = self.scene.kernels
         n_runs, n_times, _ = self.y.shape
         out = np.full((n_runs, n_times, self.layout.n_aux), np.nan)
-        for r in range(n_runs):
-            ok = np.isfinite(self.t[r])
-            if ok.any():
-                tmp = np.empty((int(ok.sum()), self.layout.n_aux))
-                kern.aux_rows(np.ascontiguousarray(self.t[r][ok]),
-                              np.ascontiguousarray(self.y[r][ok]), self.params[r].copy(), tmp)
-                out[r][ok] = tmp
+        ok = np.isfinite(self.t)
+        if self._one_p:         # every row in one compiled call (no loop over runs here)
+            tmp = np.empty((int(ok.sum()), self.layout.n_aux))
+            kern.aux_rows(np.ascontiguousarray(self.t[ok]), np.ascontiguousarray(self.y[ok]),
+                          self.params[0].copy() if n_runs else np.zeros(0), tmp)
+            out[ok] = tmp
+        else:
+            for r in range(n_runs):
+                if ok[r].any():
+                    tmp = np.empty((int(ok[r].sum()), self.layout.n_aux))
+                    kern.aux_rows(np.ascontiguousarray(self.t[r][ok[r]]),
+                                  np.ascontiguousarray(self.y[r][ok[r]]),
+                                  self.params[r].copy(), tmp)
+                    out[r][ok[r]] = tmp
         if self._pieces:
             own = atlas.atlas(self.scene).own
             for r, pieces in self._pieces.items():
@@ -275,10 +302,20 @@ class Ensemble(Frozen):
         kern = self.scene.kernels
         out = np.empty((self.n_runs, self.layout.n_aux))
         t0 = self.scene.t_span[0]
-        for r in range(self.n_runs):
+        if self._one_p:
             # compiled code takes writable arrays: copies of the read-only rows
+            kern.aux_rows(np.full(self.n_runs, t0), self.initial.copy(),
+                          self.params[0].copy(), out)
+            return readonly(out)
+        for r in range(self.n_runs):
             kern.aux(t0, self.initial[r].copy(), self.params[r].copy(), out[r])
         return readonly(out)
+
+    @cached_property
+    def _one_p(self) -> bool:
+        """Whether every run has the same run-time parameters (its rows are then
+        evaluated in one call)."""
+        return self.n_runs > 0 and bool((self.params == self.params[0]).all())
 
     @property
     def final(self) -> dict[str, np.ndarray]:
@@ -398,128 +435,64 @@ class Ensemble(Frozen):
 def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
                  method="dop853", events=None, parallel="threads", workers=None,
                  project=False, on_error="raise", timeout=None, step=None, singular="stop",
-                 newton=None, **keywords) -> Ensemble:
+                 newton=None, sensitivities=False, sensitivity_error=True,
+                 **keywords) -> Ensemble:
     """Integrate ``scene`` from many initial states / parameter sets: see the module
     docstring.  The run options as ``Scene.run`` (``numeric.options``: the values
-    ``step``, ``singular``, ``newton`` or their keywords ``rtol``, ``atol``, ...);
+    ``step``, ``singular``, ``newton`` or their keywords ``rtol``, ``atol``, ...;
+    ``sensitivities`` and ``sensitivity_error`` as there);
     ``max_steps`` and ``timeout`` are budgets of each run and of the whole ensemble;
     Ctrl-C stops every run within one step."""
-    import numba
-
     opts = options(step, singular, newton, **keywords)
-    rtol, atol, first_step, max_step, max_steps, n_steps, h = fields_of(opts.step)
-    if max_step is None:
-        max_step = np.inf
-    singular, singular_tol, split = fields_of(opts.singular)
-    newton_tol, max_newton = fields_of(opts.newton)
-
     if parallel not in PARALLEL:
         raise JetnhError(f"parallel must be one of {PARALLEL}, not {parallel!r}")
     if on_error not in ("raise", "record"):
         raise JetnhError(f"on_error must be 'raise' or 'record', not {on_error!r}")
-    singular_tol = arguments.real(singular_tol, "singular_tol")
-    if not 0.0 <= singular_tol < 1.0:
-        raise JetnhError(f"singular_tol must be in [0, 1), not {singular_tol}")
-    budget = arguments.count(max_steps, "max_steps")
-    limit = arguments.timeout(timeout)
-    m = methods.method(method)
-    if not m.ensemble:
-        runnable = [x.name for x in methods.METHODS.values() if x.ensemble]
-        raise JetnhError(f"ensembles run the Runge-Kutta methods {', '.join(runnable)}, not "
-                         f"{m.name!r}")
-    method = m.name
     scene, Y0, P = resolve(scene, initial, params, project)
-    n_runs, n = Y0.shape
-    t0, t1 = scene.t_span
-    if t_eval is not None:
-        te = arguments.times(t_eval, t0, t1)
-        if not m.dense:
-            dense = [x.name for x in methods.METHODS.values() if x.ensemble and x.dense]
-            raise JetnhError(f"t_eval needs dense output: use {', '.join(dense)} ({m.name} "
-                             "gives save='final')")
-        mode, n_times = AT_T_EVAL, te.shape[0]
-    elif save == "final":
-        te, mode, n_times = np.zeros(0), ENDPOINTS, 1
-    else:
-        raise JetnhError("an ensemble stores t_eval points or save='final' (every step "
-                         "differs per run); pass t_eval=... or save='final'")
-    kern = scene.kernels
-    switching = split == "switch" and atlas.applies(scene, events)
-    if switching:       # the chart's edge: the last event (numeric.atlas)
-        chart_atlas = atlas.atlas(scene)
-        user = as_events(events)
-        ce = chart_atlas.events(chart_atlas.own, user, True)
-    else:
-        ce = scene.compile_events(events)
-    watch = watch_of(kern, ce, singular == "stop", singular_tol)
-    uev = ce.uev if ce is not None else kern.sing_fp
-    n_ev = len(watch.ev_dir)
-    OUT_T = np.empty((n_runs, n_times))
-    OUT_Y = np.empty((n_runs, n_times, n))
-    INFO = np.zeros((n_runs, 6), dtype=np.int64)
-    T_LAST = np.empty(n_runs)
-    Y_LAST = np.empty((n_runs, n))
-    EV_N = np.zeros((n_runs, max(n_ev, 1)), dtype=np.int64)
-    EV_T = np.full((n_runs, max(n_ev, 1)), np.nan)
-    rtol, atol_v = arguments.tolerances(rtol, atol, n)
-    if not m.newton and (newton_tol is not None or max_newton is not None):
-        raise JetnhError(f"newton_tol and max_newton are options of radau, not {method}")
-    if m.adaptive:
-        if n_steps is not None or h is not None:
-            raise JetnhError(f"n_steps and h are options of fixed-step methods, not {method}")
-        ctl = Control(rtol, atol_v, *arguments.step_limits(first_step, max_step), budget, 0,
-                      *scene._projection)
-    else:
-        ctl = Control(rtol, atol_v, 0.0, np.inf, budget,
-                      arguments.fixed_steps(n_steps, h, t0, t1, method, budget),
-                      *scene._projection)
-    halt = interrupt.flag()
+    return run_resolved(scene, Y0, P, opts, t_eval=t_eval, save=save, method=method,
+                        events=events, parallel=parallel, workers=workers,
+                        on_error=on_error, timeout=timeout, sensitivities=sensitivities,
+                        sensitivity_error=sensitivity_error)
+
+
+def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop853",
+                 events=None, parallel="threads", workers=None, on_error="raise",
+                 timeout=None, sensitivities=False, sensitivity_error=True) -> Ensemble:
+    """``run_ensemble`` of the runs ``resolve`` gave (``scene``, the rows of ``Y0`` and
+    ``P``) with the run options ``opts`` (``numeric.options.Options``)."""
+    import numba
+
+    key = ("batch", scene.t_span, opts, method, save, solve.hashable(events),
+           solve.hashable(t_eval), timeout, sensitivities, sensitivity_error)
+    plan = solve.planned(scene, (key, tuple(map(type, key))), lambda: solve.plan(
+        scene, method, opts=opts, t_eval=t_eval, save=save, events=events, timeout=timeout,
+        sensitivities=sensitivities, sensitivity_error=sensitivity_error, batch=True))
+    method = plan.method.name
     workers = int(workers or numba.config.NUMBA_NUM_THREADS)
-    if m.solver is methods.Solver.IMPLICIT:
-        from .methods import radau
-
-        head = (kern.rhs_fp, scene.jacobian.address, kern.sing_fp, uev, kern.hol_or_none,
-                t0, t1)
-        newton = radau.newton_options(newton_tol, max_newton)
-        tail = (ctl, newton, te, mode, watch, halt)
-        drive = entry_point(radau.ensemble_solver(parallel=parallel == "prange"))
-    else:
-        from .methods import loop
-
-        newton = None
-        head = (kern.rhs_fp, kern.sing_fp, uev, kern.hol_or_none, t0, t1)
-        tail = (ctl, te, mode, watch, halt)
-        drive = entry_point(loop.ensemble_solver(m.tableau,
-                                                 parallel=parallel == "prange"))
-
-    def block(drive, a, b):
-        drive(*head, Y0[a:b], P[a:b], *tail, OUT_T[a:b], OUT_Y[a:b], INFO[a:b], T_LAST[a:b],
-              Y_LAST[a:b], EV_N[a:b], EV_T[a:b])
-
-    def compute():
-        if parallel == "prange":
-            old = numba.get_num_threads()
-            nt = min(workers, numba.config.NUMBA_NUM_THREADS)
-            numba.set_num_threads(nt)
-            try:
-                # dynamic scheduling in chunks: runs differ in cost (early stops, stiffness)
-                with numba.parallel_chunksize(max(1, n_runs // (8 * nt))):
-                    block(drive, 0, n_runs)
-            finally:
-                numba.set_num_threads(old)
-        elif parallel == "serial" or workers == 1 or n_runs == 1:
-            block(drive, 0, n_runs)
-        else:
-            chunk = max(1, -(-n_runs // (4 * workers)))
-            bounds = [(a, min(a + chunk, n_runs)) for a in range(0, n_runs, chunk)]
-            with ThreadPoolExecutor(workers) as pool:
-                list(pool.map(lambda ab: block(drive, *ab), bounds))
-
-    tic = time.perf_counter()
-    interrupt.call(compute, halt, limit)
+    sens = None
+    if plan.sens is None:
+        (OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T), wall = solve.batch(
+            scene, plan, Y0, P, parallel, workers)
+    else:       # the state augmented by S = dy/d(y0, p): S apart, as in a single run
+        (OUT_T, OUT_A, INFO, T_LAST, Y_A, EV_N, EV_T), wall = solve.batch(
+            scene, plan, solve.augmented(plan.sens.layout, Y0), P, parallel, workers)
+        n = Y0.shape[1]
+        OUT_Y, Y_LAST = np.ascontiguousarray(OUT_A[:, :, :n]), Y_A[:, :n].copy()
+        sens = (scene._sensitivity_columns(), OUT_A[:, :, n:].reshape(
+            OUT_A.shape[0], OUT_A.shape[1], n, plan.sens.layout.sensitivity_columns))
+    n_runs = Y0.shape[0]
+    t0, t1 = plan.t0, plan.t1
+    ce, ctl, te, mode, limit = plan.ce, plan.ctl, plan.te, plan.mode, plan.limit
+    n_ev = len(plan.watch.ev_dir)
+    switching = plan.switch
+    checked, singular_tol = plan.checked, plan.singular_tol
     n_user = n_ev - 1 if switching else n_ev
     pieces, reasons, switches = {}, {}, {}
+    tic = time.perf_counter()
     if switching:
+        chart_atlas = atlas.atlas(scene)
+        user = as_events(events)
+        budget = ctl.max_steps
         h_fixed = (t1 - t0) / ctl.n_steps if ctl.n_steps > 0 else 0.0
         edge = ce.python_funcs[-1]
         for r in range(n_runs):         # runs past the edge at the start: run again
@@ -530,7 +503,8 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
                 continue
             parts, sw = atlas.follow(chart_atlas, method, chart, t0, y, t1, P[r], user,
                                      np.zeros(n_user, np.int64), ctl, budget, te, mode,
-                                     None, singular == "stop", singular_tol, newton, limit)
+                                     None, checked, singular_tol, plan.newton, limit,
+                                     solve.trajectory)
             INFO[r, 1:5] = 0
             EV_N[r], EV_T[r], OUT_T[r], OUT_Y[r] = 0, np.nan, np.nan, np.nan
             pieces[r] = _taken_on(chart_atlas.own, r, parts, n_user, mode, P[r], OUT_T,
@@ -541,26 +515,26 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
                 continue
             parts, sw = atlas.go_on(chart_atlas, method, user, t1, P[r], float(T_LAST[r]),
                                     Y_LAST[r].copy(), EV_N[r, :n_user].copy(), ctl,
-                                    budget - INFO[r, 1], te, mode, singular == "stop",
-                                    singular_tol, newton, limit, h_fixed)
+                                    budget - INFO[r, 1], te, mode, checked,
+                                    singular_tol, plan.newton, limit, h_fixed,
+                                    solve.trajectory)
             pieces[r] = _taken_on(chart_atlas.own, r, parts, n_user, mode, P[r], OUT_T, OUT_Y,
                                   INFO, T_LAST, Y_LAST, EV_N, EV_T)
             reasons[r], switches[r] = parts[-1][1].stop_reason, sw
-    wall = time.perf_counter() - tic
-    # never a success with a NaN or infinite state
-    done = np.isin(INFO[:, 0], (FINISHED, EVENT))
-    INFO[done & ~(np.all(np.isfinite(Y_LAST), axis=1)
-                  & np.all(np.isfinite(OUT_Y) | np.isnan(OUT_T)[:, :, None], axis=(1, 2))),
-         0] = NONFINITE
-    _explain(scene, method, kern, singular == "stop", singular_tol, on_error, INFO, T_LAST,
+    wall += time.perf_counter() - tic
+    # never a success with a NaN or infinite state (a finite sum: all finite, cheaply)
+    if not math.isfinite(OUT_Y.sum() + Y_LAST.sum()):
+        done = (INFO[:, 0] == FINISHED) | (INFO[:, 0] == EVENT)
+        INFO[done & ~(np.all(np.isfinite(Y_LAST), axis=1)
+                      & np.all(np.isfinite(OUT_Y) | np.isnan(OUT_T)[:, :, None],
+                               axis=(1, 2))), 0] = NONFINITE
+    _explain(scene, method, plan.kern, checked, singular_tol, on_error, INFO, T_LAST,
              Y_LAST, P, Y0)
-    ens = Ensemble(scene, method, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N[:, :n_user],
-                   EV_T[:, :n_user], Y0, P, ce.names[:n_user] if ce is not None else (), wall,
-                   parallel, workers if parallel != "serial" else 1, save, singular_tol,
-                   switching=switching, switches=switches, pieces=pieces, reasons=reasons)
-    # what it hands out cannot be changed (private pieces feed compiled code)
-    readonly({k: v for k, v in vars(ens).items() if not k.startswith("_")})
-    return ens
+    return Ensemble(scene, method, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N[:, :n_user],
+                    EV_T[:, :n_user], Y0, P, ce.names[:n_user] if ce is not None else (),
+                    wall, parallel, workers if parallel != "serial" else 1, save,
+                    singular_tol, switching=switching, switches=switches, pieces=pieces,
+                    reasons=reasons, sensitivities=sens)
 
 
 def _taken_on(own, r, parts, n_user, mode, p, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):

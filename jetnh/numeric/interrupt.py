@@ -10,17 +10,20 @@ watchdog thread sets the flag:
   SIGINT handler that was in place (Python's KeyboardInterrupt, or the user's own) runs
   once the compiled call has returned.  The watchdog hears the signal through
   ``signal.set_wakeup_fd``, which CPython's C-level handler writes to even while the main
-  thread runs machine code; the previous wakeup fd (an asyncio loop's, say) is restored
-  after the call and receives every byte meanwhile.  During the call a recording handler
-  stands in for the usual one, because a KeyboardInterrupt raised inside numba's
-  callbacks into Python would surface as a SystemError;
+  thread runs machine code.  A KeyboardInterrupt raised inside numba's callbacks into
+  Python would surface as a SystemError (or worse), so the Python-level SIGINT handler is
+  ``_on_sigint``, installed once (again if it was replaced): during a compiled call it
+  only records the signal, otherwise it calls the handler it stands in for.  The
+  watchdog's socket stays the wakeup fd between runs when no one else had set one (a
+  run then costs one ``set_wakeup_fd`` to confirm it); a previous wakeup fd (an asyncio
+  loop's, say) receives every byte during the call and is restored after it;
 - past ``timeout`` seconds: ``halt[0] = TIMEOUT``; the loop returns what it has, with
   status STOPPED.
 
 The watchdog is one daemon thread, started on demand and ended after ``IDLE`` seconds
-with nothing to watch.  A call costs two registrations (a few microseconds), not a
-thread hand-over.  Signals reach only the main thread, so elsewhere only the timeout is
-watched.
+with nothing to watch (it drops the bytes of signals that came while it was not
+running).  A call costs a registration (a lock and a dict entry), not a thread
+hand-over.  Signals reach only the main thread, so elsewhere only the timeout is watched.
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ import itertools
 import os
 import select
 import signal
+import _signal
 import socket
 import threading
 import time
@@ -68,6 +72,7 @@ class _Watchdog:
             key = next(self.ids)
             self.calls[key] = [halt, deadline, forward]
             if self.thread is None:
+                _drain(self.signals)          # signals from before this watch
                 self.thread = threading.Thread(target=self._loop, name="jetnh-watchdog",
                                                daemon=True)
                 self.thread.start()
@@ -145,40 +150,83 @@ def _watchdog() -> _Watchdog:
 
 def _forget():
     """Close the watchdog's sockets (at exit; in a forked child, whose copy has no
-    thread)."""
+    thread), giving up the wakeup fd first if it is theirs."""
     global _WATCHDOG
     if _WATCHDOG is not None:
+        fd = _WATCHDOG.signal_w.fileno()
+        try:
+            old = signal.set_wakeup_fd(-1)
+            if old != fd:
+                signal.set_wakeup_fd(old)
+        except ValueError:                    # not the main thread
+            pass
         _WATCHDOG.close()
         _WATCHDOG = None
+    _DEPTH[0] = 0
+    _CAUGHT.clear()
 
 
 os.register_at_fork(after_in_child=_forget)
 atexit.register(_forget)
+_MAIN = threading.main_thread().ident
+_SIGINT = int(signal.SIGINT)
+_getsignal = _signal.getsignal       # (signal.getsignal: the same, as an enum, slower)
+#: the SIGINT handler ``_on_sigint`` stands in for, the compiled calls in progress in
+#: the main thread, and the frames of the signals they held back
+_DELEGATE: list = [None]
+_DEPTH = [0]
+_CAUGHT: list = []
+
+
+def _on_sigint(signum, frame):
+    """The Python-level SIGINT handler: recorded during a compiled call (its handler
+    runs once the call has returned), else the handler it stands in for."""
+    if _DEPTH[0]:
+        _CAUGHT.append(frame)
+    else:
+        _DELEGATE[0](signum, frame)
+
+
+def _listening() -> bool:
+    """Whether this thread hears SIGINT through a Python-level handler (the main thread,
+    a callable handler), with ``_on_sigint`` installed in front of it."""
+    if threading.get_ident() != _MAIN:
+        return False
+    handler = _getsignal(_SIGINT)
+    if handler is _on_sigint:
+        return True
+    if not callable(handler):             # SIG_IGN, SIG_DFL, or not set from Python
+        return False
+    _DELEGATE[0] = handler
+    _signal.signal(_SIGINT, _on_sigint)
+    return True
 
 
 def call(fn, halt: np.ndarray, timeout: float | None = None):
     """``fn()``, stoppable by Ctrl-C and by ``timeout`` through ``halt`` (see the module
     docstring)."""
     deadline = None if timeout is None else time.monotonic() + timeout
-    main = threading.current_thread() is threading.main_thread()
-    if not main and deadline is None:
+    listen = _listening()
+    if not listen and deadline is None:
         return fn()
-    wd = _watchdog()
-    old_fd, handler, caught = -1, None, []
-    if main:
-        handler = signal.getsignal(signal.SIGINT)
-        if not callable(handler):             # SIG_IGN, SIG_DFL, or not set from Python
-            handler, main = None, False
-    if main:
-        signal.signal(signal.SIGINT, lambda signum, frame: caught.append(frame))
-        old_fd = signal.set_wakeup_fd(wd.signal_w.fileno(), warn_on_full_buffer=False)
-    key = wd.register(halt, deadline, old_fd)
+    wd = _WATCHDOG or _watchdog()
+    old = -1
+    if listen:
+        own = wd.signal_w.fileno()
+        old = signal.set_wakeup_fd(own, warn_on_full_buffer=False)
+        if old == own:
+            old = -1
+        _DEPTH[0] += 1
+    key = wd.register(halt, deadline, old)
     try:
         return fn()
     finally:
         wd.unregister(key)
-        if main:
-            signal.set_wakeup_fd(old_fd)
-            signal.signal(signal.SIGINT, handler)
-            if caught:
-                handler(signal.SIGINT, caught[0])
+        if listen:
+            _DEPTH[0] -= 1
+            if old >= 0:                      # someone else's: theirs again
+                signal.set_wakeup_fd(old)
+            if _CAUGHT and not _DEPTH[0]:
+                frame = _CAUGHT[0]
+                _CAUGHT.clear()
+                _DELEGATE[0](_SIGINT, frame)

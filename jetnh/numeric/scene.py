@@ -20,7 +20,10 @@ the run goes on in another regular split (``numeric.atlas``; ``split="fixed"`` k
 the scene's split).
 
 A scene does only what it needs: it derives the equations of its own principle, and only
-when its kernels are not in the disk cache; parameters are numbers substituted before
+when its kernels are not in the disk cache; a run's options are checked and planned once
+(``numeric.solve``, the one driver of runs, ensembles and sweeps) and the plan kept for
+the next run with the same options, also by the scenes ``replace`` makes with the same
+kernels (other initial values, time span or run-time parameter values); parameters are numbers substituted before
 code generation (``runtime_params`` keeps some as run-time inputs for ensembles); output
 is every step, the points of ``t_eval``, or only the end (``save="final"``).
 
@@ -41,7 +44,6 @@ compiled explicit and Radau runs project every accepted step back onto g = 0
 
 from __future__ import annotations
 
-import time
 from collections.abc import Mapping
 import mpmath
 import numpy as np
@@ -52,15 +54,12 @@ from ..mechanics import holonomic, principles
 from ..mechanics.system import System
 from ..errors import ConstraintError, JetnhError
 from ..geometry.jet import sympy_object
-from . import arguments, interrupt
+from . import arguments, solve
 from . import codegen
-from .kernels import jacobian_kernels, load as load_kernels, sensitivity_kernels
-from . import atlas, diagnosis, discrete, methods, scipy_backend
-from .methods import STATUS_TEXT, Solver
-from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, FINISHED, NONFINITE, SINGULAR, STOPPED
-from .methods.loop import Control, watch_of
+from . import discrete
+from .kernels import jacobian_kernels, load as load_kernels
 from ..frozen import Frozen, FrozenDict, memo
-from .options import fields_of, options
+from .options import options
 from .trajectory import Trajectory
 
 
@@ -317,7 +316,17 @@ class Scene(Frozen):
         args.update(changes)
         system = args.pop("system")
         principle = args.pop("principle")
-        return Scene(system, principle, **args)
+        new = Scene(system, principle, **args)
+        if new._kernel_identity() == self._kernel_identity():
+            # the same kernels: their key and the plans of runs go with them
+            new._memo.update((k, self._memo[k]) for k in _SHARED if k in self._memo)
+        return new
+
+    def _kernel_identity(self) -> tuple:
+        """What the compiled kernels of this scene are a function of."""
+        return (self.system, self.principle, self.form, self.convention, self.cache,
+                self.runtime_params, self.integrals,
+                {k: v for k, v in self.params.items() if k not in self.runtime_params})
 
     def ensemble(self, initial=None, params=None, **options):
         """Many runs in one call: ``jetnh.numeric.ensemble.run_ensemble(self, initial,
@@ -427,168 +436,21 @@ class Scene(Frozen):
             naming the time and the state instead.  Every argument is checked before it
             reaches compiled code (``numeric.arguments``).
         """
-        opts = options(step, singular, newton, rtol=rtol, atol=atol, **keywords)
-        rtol, atol, first_step, max_step, max_steps, n_steps, h = fields_of(opts.step)
-        singular, singular_tol, split = fields_of(opts.singular)
-        newton_tol, max_newton = fields_of(opts.newton)
-        t0, t1 = self._t_span(t_span) if t_span is not None else self.t_span
+        span = self.t_span if t_span is None else arguments.time_span(t_span)
+        key = (rtol, solve.hashable(atol), method, save, span, timeout, projection,
+               backend, step, singular, newton, sensitivities, sensitivity_error,
+               solve.hashable(events), solve.hashable(t_eval), *keywords.items())
+        plan = solve.planned(self, (key, tuple(map(type, key))), lambda: solve.plan(
+            self, method, opts=options(step, singular, newton, rtol=rtol, atol=atol,
+                                       **keywords),
+            t_span=span, t_eval=t_eval, save=save, events=events, timeout=timeout,
+            projection=projection, backend=backend, sensitivities=sensitivities,
+            sensitivity_error=sensitivity_error))
         p = self._run_params(params)
-        y_init = self._run_state(y0, t0, p)
-        singular_tol = arguments.real(singular_tol, "singular_tol")
-        if not 0.0 <= singular_tol < 1.0:
-            raise JetnhError(f"singular_tol must be in [0, 1) (a fraction of each "
-                             f"indicator's initial size), not {singular_tol}")
-        if save not in ("steps", "final"):
-            raise JetnhError(f"save must be 'steps' or 'final', not {save!r}")
-        budget = arguments.count(max_steps, "max_steps")
-        limit = arguments.timeout(timeout)
-        n = y_init.shape[0]
-        rtol, atol_v = arguments.tolerances(rtol, atol, n)
-        m = methods.method(method, backend)
-        sens = None
-        if sensitivities:
-            sens = sensitivity_kernels(self)
-            y_init, rtol, atol_v = _augmented(sens.layout, y_init, rtol, atol_v,
-                                              bool(sensitivity_error), m)
-        elif sensitivity_error is not True:
-            raise JetnhError("sensitivity_error= is an option of runs with "
-                             "sensitivities=True")
-        if m.solver is Solver.SCIPY:
-            self._unused(m.name, n_steps=n_steps, h=h, newton_tol=newton_tol,
-                         max_newton=max_newton, timeout=timeout,
-                         projection=projection or None)
-            first, mx = arguments.step_limits(first_step, np.inf if max_step is None
-                                              else max_step)
-            te = None if t_eval is None else arguments.times(t_eval, t0, t1)
-            return scipy_backend.run(self, m.scipy, rtol, atol_v, te, t0, t1, y_init, p,
-                                     first or None, mx, events, singular, singular_tol,
-                                     sensitivities=sens)
-        method = m.name
-        if m.solver is Solver.DISCRETE:
-            self._unused(method, t_eval=t_eval, first_step=first_step, max_step=max_step)
-            steps = arguments.fixed_steps(n_steps, h, t0, t1, method, budget)
-            arguments.output_rows(steps, 3 * self.system.J.n + 2 * self.system.k, save)
-            tol = 1e-13 if newton_tol is None else arguments.positive(newton_tol,
-                                                                     "newton_tol")
-            iters = 50 if max_newton is None else arguments.count(max_newton, "max_newton",
-                                                                  limit=10_000)
-            sing = singular_tol if singular == "stop" else None
-            # the scene's initial dependent velocities hold for its own parameters only
-            own = y0 is None and params is None
-            if not m.projection:
-                if projection:
-                    raise JetnhError("projection= is an option of the dla integrator")
-                return discrete.run_dvi(self, m, t0, t1, y_init, own, p, steps, save, tol,
-                                        iters, sing, limit, self.compile_events(events))
-            return discrete.run_dla(self, m, t0, t1, y_init, own, p, steps, save, tol, iters,
-                                    bool(projection), sing, limit,
-                                    self.compile_events(events))
-        if projection:
-            raise JetnhError("projection= is an option of the dla integrator; the "
-                             "Runge-Kutta methods follow the constraints to their tolerance")
-        if not m.newton:
-            self._unused(method, newton_tol=newton_tol, max_newton=max_newton)
-        if m.adaptive:
-            self._unused(method, n_steps=n_steps, h=h)
-            first, mx = arguments.step_limits(first_step, np.inf if max_step is None
-                                              else max_step)
-            mode = EVERY_STEP if save == "steps" else ENDPOINTS
-            te = np.zeros(0)
-            if t_eval is not None:
-                te = arguments.times(t_eval, t0, t1)
-                mode = AT_T_EVAL
-            ctl = Control(rtol, atol_v, first, mx, budget, 0, *self._projection)
-            # radau's steps depend on the steps before (Newton's starting values, the
-            # Jacobian kept): no re-taking of one step (numeric.dense)
-            dense = None if m.solver is Solver.IMPLICIT else {"rtol": rtol, "atol": atol_v,
-                                                              "mode": mode}
-            if dense is not None and sens is not None:
-                dense["rhs"] = sens
-        else:
-            if t_eval is not None:
-                raise JetnhError(f"{method} is a fixed-step method without dense output; pass "
-                                 "n_steps or h and read every step, or use dop853 with t_eval")
-            self._unused(method, first_step=first_step, max_step=max_step)
-            steps = arguments.fixed_steps(n_steps, h, t0, t1, method, budget)
-            arguments.output_rows(steps, n, save)
-            mode = EVERY_STEP if save == "steps" else ENDPOINTS
-            te = np.zeros(0)
-            ctl = Control(rtol, atol_v, 0.0, np.inf, budget, steps, *self._projection)
-            dense = {"mode": mode}
-            if sens is not None:
-                dense["rhs"] = sens
-        if sens is not None:     # the projection moves the sensitivities with the state
-            ctl = ctl._replace(n_sens=sens.layout.sensitivity_columns)
-        kern = self.kernels
-        newton = None
-        if m.solver is Solver.IMPLICIT:
-            from .methods import radau
-
-            newton = radau.newton_options(newton_tol, max_newton)
-        if sens is None and split == "switch" and atlas.applies(self, events):
-            return atlas.run(self, method, events, t0, t1, y_init, p, ctl, te, mode, dense,
-                             singular == "stop", singular_tol, newton, limit)
-        ce = None if events is None else self.compile_events(events)
-        watch = self._watch(kern, ce, singular == "stop", singular_tol)
-        out, wall = self._solve(method, kern, ce, watch, t0, t1, y_init, p, ctl, te, mode,
-                                newton, limit, sens)
-        if dense is not None:    # stopped inside a step
-            dense["partial_last"] = int(out.status) in (EVENT, SINGULAR)
-        return self._trajectory(method, out, wall, kern, ce, p, t0, y_init, singular_tol,
-                                singular == "stop", limit, dense, sens=sens)
-
-    def _solve(self, method, kern, ce, watch, t0, t1, y_init, p, ctl, te, mode, newton,
-               limit, sens=None):
-        """One call of the compiled loop of ``method`` on the kernels ``kern`` (events
-        ``ce``, ``watch``; with ``sens``, the right-hand side and radau's Jacobian of the
-        state augmented by its sensitivities); returns its ``Result`` and the wall-clock
-        time."""
-        uev = ce.uev if ce is not None else kern.sing_fp
-        halt = interrupt.flag()
-        rhs = kern.rhs_fp if sens is None else sens.rhs_fp
-        if methods.method(method).solver is Solver.IMPLICIT:
-            solve = kern.implicit()
-            jac = self.jacobian.address if sens is None else sens.jac_fp
-            tic = time.perf_counter()
-            out = interrupt.call(lambda: solve(rhs, jac, kern.sing_fp, uev,
-                                               kern.hol_or_none, t0, t1, y_init, p, ctl,
-                                               newton, te, mode, watch, halt),
-                                 halt, limit)
-        else:
-            solve = methods.explicit_solver(method)
-            tic = time.perf_counter()
-            out = interrupt.call(lambda: solve(rhs, kern.sing_fp, uev,
-                                               kern.hol_or_none, t0, t1, y_init, p, ctl, te,
-                                               mode, watch, halt),
-                                 halt, limit)
-        return out, time.perf_counter() - tic
+        y = self._run_state(y0, plan.t0, p)
+        return solve.run(self, plan, y, p, own=y0 is None and params is None)
 
     # ------------------------------------------------------------------ run helpers
-    @staticmethod
-    def _unused(method, **options):
-        """Refuse options that ``method`` does not use (rather than ignore them)."""
-        given = [k for k, v in options.items() if v is not None]
-        if given:
-            raise JetnhError(f"{', '.join(given)} {'is' if len(given) == 1 else 'are'} not an "
-                             f"option of the {method} method; remove "
-                             f"{'it' if len(given) == 1 else 'them'}")
-
-    def _watch(self, kern, ce, singular, singular_tol):
-        """``loop.watch_of``, kept per scene for the runs without events."""
-        if ce is not None:
-            return watch_of(kern, ce, singular, singular_tol)
-        store = self._memo.setdefault("watch", {})
-        key = (singular, singular_tol)
-        if key not in store:
-            store[key] = watch_of(kern, None, singular, singular_tol)
-        return store[key]
-
-    @property
-    def _projection(self) -> tuple[int, int]:
-        """``(n_hol, n_coord)`` of ``Control``: the holonomic constraints every accepted
-        step is projected onto (0: none) and the number of coordinates."""
-        return len(self.system.holonomic), self.system.J.n
-
     @memo
     def _p(self) -> np.ndarray:
         """``p``, made once: the run-time parameters the runs read (never written)."""
@@ -674,63 +536,6 @@ class Scene(Frozen):
             store[memo] = compile_events(self, evs)
         return store[memo]
 
-    def _trajectory(self, method, out, wall, kern, ce, p, t0, y_init, singular_tol, checked,
-                    timeout=None, dense=None, n_events=None, sens=None):
-        """A Trajectory from the result tuple of a compiled solve (or an error); with
-        ``n_events``, only the first ``n_events`` events of ``ce`` are reported; with
-        ``sens`` (the kernels of a run with sensitivities) the state's columns, and the
-        sensitivities apart."""
-        from .events import split_records
-
-        (status, ts, ys, n_out, stats, t_last, y_last, ev_t, ev_i, ev_y, n_ev,
-         sing_index) = out
-        status = int(status)
-        extra = {}
-        if sens is not None:
-            n = kern.layout.n_state
-            ys = ys[:n_out]
-            if dense is not None:
-                dense["y"] = ys
-            extra["sensitivities"] = (self._sensitivity_columns(), ys[:, n:].reshape(
-                n_out, n, sens.layout.sensitivity_columns))
-            ys, n_out = np.ascontiguousarray(ys[:, :n]), ys.shape[0]
-            y_last, y_init, ev_y = y_last[:n], y_init[:n], ev_y[:, :n]
-        singularity = None
-        if status in (FINISHED, EVENT) and not (np.all(np.isfinite(y_last))
-                                                 and np.all(np.isfinite(ys[:n_out]))):
-            status = NONFINITE          # never a success with a NaN or infinite state
-        if status == NONFINITE:
-            sing_index = (diagnosis.explain_nonfinite(self, kern, t_last, y_last, p, t0, y_init,
-                                                  singular_tol) if checked else -1)
-            if sing_index < 0:
-                diagnosis.raise_nonfinite(self, method, t_last, y_last, kern, p, t0, y_init,
-                                      checked=checked)
-            status = SINGULAR
-            singularity = diagnosis.singularity(self, kern, int(sing_index), t_last, y_last, p, t0,
-                                            y_init, singular_tol, nonfinite=True)
-        elif status == SINGULAR:
-            singularity = diagnosis.singularity(self, kern, int(sing_index), t_last, y_last, p, t0,
-                                            y_init, singular_tol)
-        if singularity is not None:
-            reason = singularity["reason"]
-        elif status == EVENT:
-            k = int(ev_i[n_ev - 1])
-            reason = (f"terminal event {ce.names[k]!r} at t = {float(ev_t[n_ev - 1]):.17g}")
-        elif status == STOPPED:
-            reason = diagnosis.timeout_reason(timeout, t_last)
-        else:
-            reason = STATUS_TEXT[status]
-        kw = {}
-        if ce is not None:
-            n = len(ce) if n_events is None else n_events
-            t_events, y_events = split_records(n, ev_t[:n_ev], ev_i[:n_ev], ev_y[:n_ev])
-            kw["events"] = (ce.names[:n], t_events, y_events)
-        return Trajectory(self, ts[:n_out], ys[:n_out], p, method=method, status=status,
-                          stop_reason=reason, steps=int(stats[0]), rejected=int(stats[1]),
-                          nfev=int(stats[2]), wall_time=wall, kernels=kern,
-                          projected=self.projected, singularity=singularity, dense=dense,
-                          **kw, **extra)
-
     def _sensitivity_columns(self) -> tuple[str, ...]:
         """The names of the columns of S = dy/d(y0, p): the states, then the runtime
         parameters."""
@@ -761,23 +566,10 @@ class Scene(Frozen):
                 f"t_span={self.t_span})")
 
 
-def _augmented(layout, y0, rtol, atol, controlled, method):
-    """The initial state of a run with sensitivities, ``(y0, S0 = (I | 0))`` flattened,
-    and its tolerances: with ``controlled``, entry (i, k) of S has the tolerance of state
-    i; else S has none (atol = inf) and the state's tolerances are scaled by
-    sqrt(n / N), so that the RMS error norm over all N entries equals the norm over the n
-    states of a run without sensitivities (the same steps)."""
-    if method.solver is Solver.DISCRETE:
-        raise JetnhError(f"sensitivities=True is an option of the continuous methods "
-                         f"(dop853, dopri5, rk4, radau, scipy-*), not of {method.name}")
-    n, m = layout.n_state, layout.sensitivity_columns
-    S0 = np.eye(n, m)
-    y = np.ascontiguousarray(np.concatenate([y0, S0.ravel()]))
-    if controlled:
-        return y, rtol, np.ascontiguousarray(np.concatenate([atol, np.repeat(atol, m)]))
-    r = np.sqrt(n / y.shape[0])
-    return y, rtol * r, np.ascontiguousarray(np.concatenate([atol * r,
-                                                             np.full(n * m, np.inf)]))
+#: what a scene with the same kernels (``Scene.replace``) takes over from the memo: the
+#: kernels' keys, the plans of runs (``solve.planned``), compiled events, whether an
+#: atlas applies
+_SHARED = ("spec", "key", "plans", "events", "atlas_applies")
 
 
 def _real(x) -> float:

@@ -117,25 +117,29 @@ class Trajectory(Frozen):
                  singularity=None, dense=None, segments=None, switches=(),
                  sensitivities=None):
         names, t_ev, y_ev = events if events is not None else ((), [], [])
-        self._set(
-            scene=scene, t=np.ascontiguousarray(t, dtype=float),
-            y=np.ascontiguousarray(y, dtype=float), _p=p, _kernels=kernels, method=method,
+        t, y = np.ascontiguousarray(t, dtype=float), np.ascontiguousarray(y, dtype=float)
+        t.flags.writeable = y.flags.writeable = False
+        # the attributes in one go, each public array read-only (``Frozen._set``, without
+        # its walk over every value: a trajectory is made on every run)
+        self.__dict__.update(
+            scene=scene, t=t, y=y, _p=p, _kernels=kernels, method=method,
             status=status, stop_reason=stop_reason,
             #: the stop at a singular configuration: {"indicator", "kind", "index", "t",
             #: "value", "initial", "reason"}, or None
-            singularity=None if singularity is None else FrozenDict(singularity),
-            event_names=tuple(names), t_events=list(t_ev), y_events=list(y_ev),
+            singularity=None if singularity is None else FrozenDict(readonly(singularity)),
+            event_names=tuple(names), t_events=readonly(list(t_ev)) if t_ev else [],
+            y_events=readonly(list(y_ev)) if y_ev else [],
             # what re-taking a step needs (tolerances, output mode; see numeric.dense)
             _dense=dense,
             _info=dict(steps=steps, rejected=rejected, nfev=nfev, wall_time=wall_time,
-                       projected=dict(projected or {})),
+                       projected=dict(projected) if projected else {}),
             # methods that carry their own velocities, residuals, energy and first
             # integrals (the discrete integrators dla, dvi): {"velocities": {name: col},
             # "residual", "energy", "integrals": {name: col}}
             _own=own or {},
             # a run that changed split: its pieces (``numeric.atlas.Stitched``, which
             # gives its aux rows and dense output) and switches {"t", "from", "to"}
-            _segments=segments, switches=tuple(switches),
+            _segments=segments, switches=readonly(tuple(switches)) if switches else (),
             # a run with sensitivities: (column names, S [n_times, n_states, n_columns])
             _sens=None if sensitivities is None else (
                 tuple(sensitivities[0]), _read_only(sensitivities[1])))

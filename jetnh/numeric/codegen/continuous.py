@@ -20,6 +20,7 @@ from .indicators import label, singular_indicators
 from .llvm import (Unsupported, derivative_program, program, sensitivity_jacobian_program,
                    sensitivity_program)
 from .prepare import Preparer
+from .quick import decorator
 from .spec import KernelSource, KernelSpec
 from .text import Emitter
 
@@ -32,6 +33,7 @@ import numba
 import numpy as np
 
 from jetnh.numeric.codegen.llvm import straight_line
+from jetnh.numeric.codegen.quick import quick_cfunc
 
 # numba caches beside this file unless the loader says not to (jetnh.numeric.kernels.loader)
 _CACHE = globals().get("JETNH_NUMBA_CACHE", True)
@@ -192,6 +194,8 @@ def _function(name, layout: Layout, phi_exprs, out_exprs, indices=None,
     except Unsupported:
         pass
     else:
+        if callback:                   # a huge kernel is compiled quickly (``quick``)
+            lines[0] = decorator(len(ops))
         return (f"_P_{name} = {ops!r}\n_B_{name} = straight_line(_P_{name})\n\n\n"
                 + "\n".join(lines) + f"\n    _B_{name}(t, y, p, out)\n")
     body = _loads(layout)
@@ -253,6 +257,7 @@ def _jacobian_function(layout: Layout, phi_exprs, rhs_exprs) -> str:
     except Unsupported:
         pass
     else:
+        lines[0] = decorator(len(ops), "_JAC_SIG")
         return (f"_P_jac = {ops!r}\n_B_jac = straight_line(_P_jac)\n\n\n"
                 + "\n".join(lines) + "\n    J[:, :] = 0.0\n    _B_jac(t, y, p, J)\n")
     body = _loads(layout)
@@ -284,6 +289,7 @@ def _sensitivity_functions(layout: Layout, phi_exprs, rhs_exprs) -> str:
     except Unsupported:
         pass
     else:
+        rhs[0], jac[0] = decorator(len(sens)), decorator(len(block), "_JAC_SIG")
         return (f"_P_sens = {sens!r}\n_B_sens = straight_line(_P_sens)\n"
                 f"_P_jac = {block!r}\n_B_jac = straight_line(_P_jac)\n\n\n"
                 + "\n".join(rhs) + "\n    _B_sens(t, y, p, out)\n\n\n"

@@ -20,6 +20,7 @@ import sympy as sp
 from ...frozen import FrozenDict
 from ...mechanics import principles
 from ..layout import CODEGEN_VERSION, Layout
+from .quick import quick_ops
 
 #: the kernel sets of one scene: its continuous kernels, with the Jacobian of ``rhs``,
 #: with sensitivities, the discrete step's, and the user events' (``KernelSpec.variant``)
@@ -85,7 +86,7 @@ def symbolic_key(system, principle, params, runtime_params=(), integrals=None, f
         repr(sorted((k, float(v).hex()) for k, v in params.items())),
         repr(tuple(runtime_params)),
         repr(sorted((k, sp.srepr(v)) for k, v in (integrals or {}).items())),
-        extra,
+        extra, f"quick above {quick_ops()}",
     ]
     for part in parts:
         h.update(part.encode())

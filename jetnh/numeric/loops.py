@@ -1,0 +1,67 @@
+"""One call of a compiled loop: the loop of a method (``methods``) with its arguments,
+stoppable by Ctrl-C and a wall-clock budget (``numeric.interrupt``).
+
+``entry`` is the machine-code entry of the loop of a method with the arguments before
+and after ``(t0, t1, y0, p)`` (what ``solve.plan`` keeps in a plan); ``call`` one call
+(the atlas of splits runs its pieces so); ``retake`` one step of a run taken again for
+its dense output (``numeric.dense``).  Nothing here builds a Trajectory
+(``solve.trajectory`` does), so every module that runs a loop can import this one.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from . import interrupt, methods
+from .methods import Solver
+from .methods._common import AT_T_EVAL
+from .methods.loop import Watch
+
+NO_EVENTS = np.zeros(0, dtype=np.int64)
+
+
+def entry(scene, method, kern, ce, sens, ctl, te, mode, watch, newton):
+    """The entry of the compiled loop of ``method`` on the kernels ``kern`` (events
+    ``ce``; with ``sens``, the right-hand side and radau's Jacobian of the state
+    augmented by its sensitivities) and its arguments before and after ``(t0, t1, y0,
+    p)`` (``halt`` last, per call)."""
+    uev = ce.uev if ce is not None else kern.sing_fp
+    rhs = kern.rhs_fp if sens is None else sens.rhs_fp
+    if method.solver is Solver.IMPLICIT:
+        jac = scene.jacobian.address if sens is None else sens.jac_fp
+        return (kern.implicit(), (rhs, jac, kern.sing_fp, uev, kern.hol_or_none),
+                (ctl, newton, te, mode, watch))
+    return (methods.explicit_solver(method), (rhs, kern.sing_fp, uev, kern.hol_or_none),
+            (ctl, te, mode, watch))
+
+
+def call(scene, method, kern, ce, watch, t0, t1, y, p, ctl, te, mode, newton, limit,
+         sens=None):
+    """One call of the compiled loop of ``method`` (a ``Method`` or its name; ``entry``),
+    stoppable by Ctrl-C and ``limit`` seconds; returns its ``Result`` and the
+    wall-clock time."""
+    method = methods.method(method)
+    loop, prefix, suffix = entry(scene, method, kern, ce, sens, ctl, te, mode, watch,
+                                 newton)
+    halt = np.zeros(1, dtype=np.int64)
+    tic = time.perf_counter()
+    out = interrupt.call(lambda: loop(*prefix, t0, t1, y, p, *suffix, halt), halt, limit)
+    return out, time.perf_counter() - tic
+
+
+def retake(traj, t0, t1, y, tau):
+    """The step of ``traj`` (a dop853 or dopri5 run) from (t0, y) to t1 taken again,
+    its dense output at the times ``tau``: the ``Result``.  The step control is the
+    run's (``traj._dense["ctl"]``) with one step of exactly t1 - t0."""
+    d = traj._dense
+    # |h| one ulp up: t0 + first reaches (or passes, and is cut back to) t1, so the
+    # step is h = t1 - t0, the original run's h to the bit
+    first = float(np.nextafter(abs(t1 - t0), np.inf))
+    ctl = d["ctl"]._replace(first_step=first, max_step=np.inf, max_steps=1, n_steps=0)
+    out, _ = call(traj.scene, traj.method, traj._kernels, None,
+                  Watch(0, 0.0, NO_EVENTS, NO_EVENTS), t0, t1, y,
+                  np.ascontiguousarray(traj._p, dtype=float), ctl, tau, AT_T_EVAL, None,
+                  None, d.get("rhs"))
+    return out

@@ -1,0 +1,457 @@
+"""The one driver of every run: ``Scene.run``, ensembles (``run_ensemble``), sweeps and
+``Trajectory.at`` plan here and dispatch here.
+
+- ``plan`` checks the options of a run once, each with one message (``numeric.options``,
+  ``numeric.arguments``), and makes them a frozen ``Plan``: the method (a
+  ``methods.Method``, asked every question about the method), the step control
+  (``Control``), what the loop watches (``Watch``), the compiled events, the output mode
+  and times, the budgets, the kernels and the machine-code entry of the loop with its
+  arguments.  Plans are kept on the scene (``planned``: a repeated run with the same
+  options plans nothing; ``Scene.replace`` hands them on when the kernels stay).
+- ``run`` is one trajectory of a plan from one initial state and parameter vector,
+  ``batch`` the runs of an ensemble (rows of arrays), ``trajectory`` the ``Trajectory``
+  of the result of a compiled loop (``loops.call``: one call, which the atlas of splits
+  and dense output make too).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import JetnhError
+from . import arguments, atlas, diagnosis, discrete, interrupt, loops, methods, scipy_backend
+from .methods import STATUS_TEXT, Solver
+from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, FINISHED, NONFINITE,
+                              SINGULAR, STOPPED, entry_point)
+from .kernels import sensitivity_kernels
+from .methods.loop import Control, Watch
+from .options import fields_of, options
+from .trajectory import Trajectory
+
+#: plans kept per scene (beyond: planned afresh each run)
+MAX_PLANS = 64
+_NONE = np.zeros(0, dtype=np.int64)
+
+
+@dataclass(frozen=True, eq=False)
+class Plan:
+    """A run's checked options and what its compiled loop is called with (``plan``).
+
+    ``entry(*prefix, t0, t1, y0, p, *suffix, halt)`` is the call of the loop of the
+    compiled methods (``loop.solver`` or radau's); ``ctl``, ``te``, ``mode``, ``watch``,
+    ``newton`` are among its arguments.  ``dense``: what re-taking a step needs
+    (``numeric.dense``; None: no dense output).  ``sens``: the kernels of the state
+    augmented by its sensitivities, ``sens_tol`` their tolerances.  ``switch``: the run
+    goes on across its chart's edge (``numeric.atlas``).  The discrete methods read
+    ``steps``, ``newton_tol``, ``max_newton``, ``projection``; scipy's ``first`` and
+    ``max_step``."""
+
+    method: methods.Method
+    t0: float
+    t1: float
+    save: str
+    rtol: float
+    atol: np.ndarray
+    events: object
+    ce: object
+    watch: Watch
+    checked: bool
+    singular_tol: float
+    limit: float | None
+    kern: object = None
+    ctl: Control | None = None
+    te: np.ndarray | None = None
+    mode: int = EVERY_STEP
+    newton: object = None
+    switch: bool = False
+    dense: dict | None = None
+    sens: object = None
+    sens_error: bool = True
+    steps: int = 0
+    newton_tol: float = 0.0
+    max_newton: int = 0
+    projection: bool = False
+    first: float = 0.0
+    max_step: float = np.inf
+    entry: object = None
+    prefix: tuple = ()
+    suffix: tuple = ()
+
+
+def _unused(method, **given):
+    """Refuse options that ``method`` does not use (rather than ignore them)."""
+    named = [k for k, v in given.items() if v is not None]
+    if not named:
+        return
+    one = len(named) == 1
+    hint = ""
+    if {"newton_tol", "max_newton"} & set(named):
+        hint = " (newton_tol and max_newton are options of radau, dla and dvi)"
+    elif {"n_steps", "h"} & set(named):
+        hint = " (n_steps and h are options of the fixed-step methods rk4, dla and dvi)"
+    raise JetnhError(f"{', '.join(named)} {'is' if one else 'are'} not an option of the "
+                     f"{method} method{hint}; remove {'it' if one else 'them'}")
+
+
+def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="steps",
+         events=None, timeout=None, projection=False, backend=None, sensitivities=False,
+         sensitivity_error=True, batch=False) -> Plan:
+    """The ``Plan`` of a run of ``scene`` (``batch``: of the runs of an ensemble, which
+    store ``t_eval`` points or the final state), every option checked.  ``opts``: the
+    ``numeric.options.Options`` of the run."""
+    opts = options() if opts is None else opts
+    rtol, atol, first_step, max_step, max_steps, n_steps, h = fields_of(opts.step)
+    singular, singular_tol, split = fields_of(opts.singular)
+    newton_tol, max_newton = fields_of(opts.newton)
+    t0, t1 = scene.t_span if t_span is None else arguments.time_span(t_span)
+    singular_tol = arguments.real(singular_tol, "singular_tol")
+    if not 0.0 <= singular_tol < 1.0:
+        raise JetnhError(f"singular_tol must be in [0, 1) (a fraction of each "
+                         f"indicator's initial size), not {singular_tol}")
+    if save not in ("steps", "final"):
+        raise JetnhError(f"save must be 'steps' or 'final', not {save!r}")
+    budget = arguments.count(max_steps, "max_steps")
+    limit = arguments.timeout(timeout)
+    n = len(scene.state_names)
+    rtol, atol_v = arguments.tolerances(rtol, atol, n)
+    m = methods.method(method, backend)
+    checked = singular == "stop"
+    if batch:
+        if not m.ensemble:
+            runnable = [x.name for x in methods.METHODS.values() if x.ensemble]
+            raise JetnhError(f"ensembles run the Runge-Kutta methods {', '.join(runnable)}, "
+                             f"not {m.name!r}")
+        if t_eval is not None and not m.dense:
+            dense = [x.name for x in methods.METHODS.values() if x.ensemble and x.dense]
+            raise JetnhError(f"t_eval needs dense output: use {', '.join(dense)} ({m.name} "
+                             "gives save='final')")
+        if t_eval is None and save != "final":
+            raise JetnhError("an ensemble stores t_eval points or save='final' (every step "
+                             "differs per run); pass t_eval=... or save='final'")
+    sens = None
+    common = dict(method=m, t0=t0, t1=t1, save=save, events=events, checked=checked,
+                  singular_tol=singular_tol, limit=limit)
+    if sensitivities:
+        if m.solver is Solver.DISCRETE:
+            raise JetnhError(f"sensitivities=True is an option of the continuous methods "
+                             f"(dop853, dopri5, rk4, radau, scipy-*), not of {m.name}")
+        sens = sensitivity_kernels(scene)
+        rtol, atol_v = _augmented_tolerances(sens.layout, rtol, atol_v,
+                                             bool(sensitivity_error))
+        common.update(sens=sens, sens_error=bool(sensitivity_error))
+    elif sensitivity_error is not True:
+        raise JetnhError("sensitivity_error= is an option of runs with sensitivities=True")
+    none_watch = Watch(0, singular_tol, _NONE, _NONE)
+    if m.solver is Solver.SCIPY:
+        _unused(m.name, n_steps=n_steps, h=h, newton_tol=newton_tol, max_newton=max_newton,
+                timeout=timeout, projection=projection or None)
+        first, mx = arguments.step_limits(first_step, np.inf if max_step is None
+                                          else max_step)
+        te = None if t_eval is None else arguments.times(t_eval, t0, t1)
+        return Plan(**common, rtol=rtol, atol=atol_v, ce=None, watch=none_watch, te=te,
+                    first=first, max_step=mx)
+    if m.solver is Solver.DISCRETE:
+        _unused(m.name, t_eval=t_eval, first_step=first_step, max_step=max_step)
+        steps = arguments.fixed_steps(n_steps, h, t0, t1, m.name, budget)
+        arguments.output_rows(steps, 3 * scene.system.J.n + 2 * scene.system.k, save)
+        tol = 1e-13 if newton_tol is None else arguments.positive(newton_tol, "newton_tol")
+        iters = 50 if max_newton is None else arguments.count(max_newton, "max_newton",
+                                                              limit=10_000)
+        if projection and not m.projection:
+            raise JetnhError("projection= is an option of the dla integrator")
+        return Plan(**common, rtol=rtol, atol=atol_v, ce=scene.compile_events(events),
+                    watch=none_watch, steps=steps, newton_tol=tol, max_newton=iters,
+                    projection=bool(projection))
+    if projection:
+        raise JetnhError("projection= is an option of the dla integrator; the "
+                         "Runge-Kutta methods follow the constraints to their tolerance")
+    if not m.newton:
+        _unused(m.name, newton_tol=newton_tol, max_newton=max_newton)
+    n_hol, n_coord = len(scene.system.holonomic), scene.system.J.n
+    if m.adaptive:
+        _unused(m.name, n_steps=n_steps, h=h)
+        first, mx = arguments.step_limits(first_step, np.inf if max_step is None
+                                          else max_step)
+        mode = EVERY_STEP if save == "steps" else ENDPOINTS
+        te = np.zeros(0)
+        if t_eval is not None:
+            te = arguments.times(t_eval, t0, t1)
+            mode = AT_T_EVAL
+        ctl = Control(rtol, atol_v, first, mx, budget, 0, n_hol, n_coord)
+    else:
+        if t_eval is not None and not batch:
+            raise JetnhError(f"{m.name} is a fixed-step method without dense output; pass "
+                             "n_steps or h and read every step, or use dop853 with t_eval")
+        _unused(m.name, first_step=first_step, max_step=max_step)
+        steps = arguments.fixed_steps(n_steps, h, t0, t1, m.name, budget)
+        if not batch:
+            arguments.output_rows(steps, n, save)
+        mode = EVERY_STEP if save == "steps" else ENDPOINTS
+        te = np.zeros(0)
+        ctl = Control(rtol, atol_v, 0.0, np.inf, budget, steps, n_hol, n_coord)
+    if sens is not None:     # the projection moves the sensitivities with the state
+        ctl = ctl._replace(n_sens=sens.layout.sensitivity_columns)
+    if batch:
+        mode = AT_T_EVAL if t_eval is not None else ENDPOINTS
+    # radau's steps depend on the steps before (Newton's starting values, the Jacobian
+    # kept): no re-taking of one step (numeric.dense)
+    dense = None
+    if m.solver is not Solver.IMPLICIT and not batch:
+        dense = {"rtol": rtol, "atol": atol_v, "mode": mode, "ctl": ctl}
+        if sens is not None:
+            dense["rhs"] = sens
+    newton = None
+    if m.solver is Solver.IMPLICIT:
+        from .methods import radau
+
+        newton = radau.newton_options(newton_tol, max_newton)
+    kern = scene.kernels
+    switch = sens is None and split == "switch" and atlas.applies(scene, events)
+    if switch:
+        # the run goes on across its chart's edge: events per chart (numeric.atlas); an
+        # ensemble watches the edge of the scene's own chart as its last event
+        ce = None
+        if batch:
+            at = atlas.atlas(scene)
+            from .events import as_events
+
+            ce = at.events(at.own, as_events(events), True)
+    else:
+        ce = scene.compile_events(events)
+    watch = _watch(scene, kern, ce, checked, singular_tol)
+    entry, prefix, suffix = loops.entry(scene, m, kern, ce, sens, ctl, te, mode, watch,
+                                         newton)
+    return Plan(**common, rtol=rtol, atol=atol_v, ce=ce, watch=watch, kern=kern, ctl=ctl,
+                te=te, mode=mode, newton=newton, switch=switch, dense=dense, entry=entry,
+                prefix=prefix, suffix=suffix)
+
+
+def planned(scene, key, make) -> Plan:
+    """The plan of ``key`` kept on ``scene`` (``make()`` when there is none; an
+    unhashable key plans afresh).  The key holds every input of the plan but the
+    kernels, the time span too: scenes with the same kernels share their plans
+    (``Scene.replace``)."""
+    store = scene._memo.get("plans")
+    if store is None:
+        store = scene._memo["plans"] = {}
+    try:
+        found = store.get(key)
+    except TypeError:           # an array among the options
+        return make()
+    if found is None:
+        found = make()
+        if len(store) < MAX_PLANS:
+            store[key] = found
+    return found
+
+
+def hashable(value):
+    """``value`` as a part of a plan's key: a list as a tuple, an array as its bytes
+    (with dtype and shape), anything else as it is."""
+    if type(value) is list:
+        return tuple(value)
+    if isinstance(value, np.ndarray):
+        return ("array", value.dtype.str, value.shape, value.tobytes())
+    return value
+
+
+def _watch(scene, kern, ce, checked, singular_tol) -> Watch:
+    """What the loop watches: the singularity indicators (``checked``) and the user
+    events ``ce``."""
+    return Watch(len(kern.layout.indicators) if checked else 0, float(singular_tol),
+                 ce.direction if ce is not None else _NONE,
+                 ce.max_events if ce is not None else _NONE)
+
+
+def _augmented_tolerances(layout, rtol, atol, controlled):
+    """The tolerances of a run with sensitivities: with ``controlled``, entry (i, k) of
+    S has the tolerance of state i; else S has none (atol = inf) and the state's
+    tolerances are scaled by sqrt(n / N), so that the RMS error norm over all N entries
+    equals the norm over the n states of a run without sensitivities (the same steps)."""
+    n, m = layout.n_state, layout.sensitivity_columns
+    if controlled:
+        return rtol, np.ascontiguousarray(np.concatenate([atol, np.repeat(atol, m)]))
+    r = np.sqrt(n / (n + n * m))
+    return rtol * r, np.ascontiguousarray(np.concatenate([atol * r, np.full(n * m, np.inf)]))
+
+
+def augmented(layout, y0) -> np.ndarray:
+    """The initial state of a run with sensitivities: ``(y0, S0 = (I | 0))`` flattened
+    (``y0`` one state or rows of states)."""
+    n, m = layout.n_state, layout.sensitivity_columns
+    y0 = np.asarray(y0, dtype=float)
+    S0 = np.broadcast_to(np.eye(n, m).ravel(), y0.shape[:-1] + (n * m,))
+    return np.ascontiguousarray(np.concatenate([y0, S0], axis=-1))
+
+
+# ---------------------------------------------------------------------- one run
+def run(scene, plan, y, p, own=False) -> Trajectory:
+    """The trajectory of ``plan`` from the state ``y`` (checked, its own array) with the
+    run-time parameters ``p``; ``own``: these are the scene's own initial values."""
+    m = plan.method
+    if plan.sens is not None:
+        y = augmented(plan.sens.layout, y)
+    if m.solver is Solver.SCIPY:
+        return scipy_backend.run(scene, m.scipy, plan.rtol, plan.atol, plan.te, plan.t0,
+                                 plan.t1, y, p, plan.first or None, plan.max_step,
+                                 plan.events, "stop" if plan.checked else "ignore",
+                                 plan.singular_tol, sensitivities=plan.sens)
+    if m.solver is Solver.DISCRETE:
+        sing = plan.singular_tol if plan.checked else None
+        if not m.projection:
+            return discrete.run_dvi(scene, m, plan.t0, plan.t1, y, own, p, plan.steps,
+                                    plan.save, plan.newton_tol, plan.max_newton, sing,
+                                    plan.limit, plan.ce)
+        return discrete.run_dla(scene, m, plan.t0, plan.t1, y, own, p, plan.steps, plan.save,
+                                plan.newton_tol, plan.max_newton, plan.projection, sing,
+                                plan.limit, plan.ce)
+    dense = None if plan.dense is None else dict(plan.dense)
+    if plan.switch:
+        return atlas.run(scene, m.name, plan.events, plan.t0, plan.t1, y, p, plan.ctl,
+                         plan.te, plan.mode, dense, plan.checked, plan.singular_tol,
+                         plan.newton, plan.limit, trajectory)
+    halt = np.zeros(1, dtype=np.int64)
+    entry, prefix, suffix, t0, t1 = plan.entry, plan.prefix, plan.suffix, plan.t0, plan.t1
+    tic = time.perf_counter()
+    out = interrupt.call(lambda: entry(*prefix, t0, t1, y, p, *suffix, halt), halt,
+                         plan.limit)
+    wall = time.perf_counter() - tic
+    if dense is not None:    # stopped inside a step
+        dense["partial_last"] = int(out[0]) in (EVENT, SINGULAR)
+    return trajectory(scene, m.name, out, wall, plan.kern, plan.ce, p, t0, y,
+                      plan.singular_tol, plan.checked, plan.limit, dense, sens=plan.sens)
+
+
+def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, checked,
+               timeout=None, dense=None, n_events=None, sens=None) -> Trajectory:
+    """A Trajectory from the ``Result`` of a compiled loop (or an error); with
+    ``n_events``, only the first ``n_events`` events of ``ce`` are reported; with
+    ``sens`` (the kernels of a run with sensitivities) the state's columns, and the
+    sensitivities apart."""
+    (status, ts, ys, n_out, stats, t_last, y_last, ev_t, ev_i, ev_y, n_ev,
+     sing_index) = out
+    status = int(status)
+    extra = {}
+    if sens is not None:
+        n = kern.layout.n_state
+        ys = ys[:n_out]
+        if dense is not None:
+            dense["y"] = ys
+        extra["sensitivities"] = (scene._sensitivity_columns(), ys[:, n:].reshape(
+            n_out, n, sens.layout.sensitivity_columns))
+        ys, n_out = np.ascontiguousarray(ys[:, :n]), ys.shape[0]
+        y_last, y_init, ev_y = y_last[:n], y_init[:n], ev_y[:, :n]
+    ts, ys = ts[:n_out], ys[:n_out]
+    singularity = None
+    # never a success with a NaN or infinite state (a finite sum of squares: all finite,
+    # cheaply; else each is looked at)
+    flat = ys.reshape(-1)
+    if status in (FINISHED, EVENT) and not math.isfinite(
+            flat.dot(flat) + y_last.dot(y_last)) and not (
+            np.isfinite(y_last).all() and np.isfinite(ys).all()):
+        status = NONFINITE
+    if status == NONFINITE:
+        sing_index = (diagnosis.explain_nonfinite(scene, kern, t_last, y_last, p, t0, y_init,
+                                                  singular_tol) if checked else -1)
+        if sing_index < 0:
+            diagnosis.raise_nonfinite(scene, method, t_last, y_last, kern, p, t0, y_init,
+                                      checked=checked)
+        status = SINGULAR
+        singularity = diagnosis.singularity(scene, kern, int(sing_index), t_last, y_last, p,
+                                            t0, y_init, singular_tol, nonfinite=True)
+    elif status == SINGULAR:
+        singularity = diagnosis.singularity(scene, kern, int(sing_index), t_last, y_last, p,
+                                            t0, y_init, singular_tol)
+    if singularity is not None:
+        reason = singularity["reason"]
+    elif status == EVENT:
+        k = int(ev_i[n_ev - 1])
+        reason = f"terminal event {ce.names[k]!r} at t = {float(ev_t[n_ev - 1]):.17g}"
+    elif status == STOPPED:
+        reason = diagnosis.timeout_reason(timeout, t_last)
+    else:
+        reason = STATUS_TEXT[status]
+    if ce is not None:
+        from .events import split_records
+
+        k = len(ce) if n_events is None else n_events
+        t_events, y_events = split_records(k, ev_t[:n_ev], ev_i[:n_ev], ev_y[:n_ev])
+        extra["events"] = (ce.names[:k], t_events, y_events)
+    return Trajectory(scene, ts, ys, p, method=method, status=status, stop_reason=reason,
+                      steps=int(stats[0]), rejected=int(stats[1]), nfev=int(stats[2]),
+                      wall_time=wall, kernels=kern, projected=scene.projected,
+                      singularity=singularity, dense=dense, **extra)
+
+
+# ---------------------------------------------------------------------- many runs
+def _driver(method, prange):
+    """The entry of the compiled ensemble driver of ``method`` (numba threads over the
+    runs with ``prange``, else one loop), kept."""
+    found = _DRIVERS.get((method.name, prange))
+    if found is None:
+        if method.solver is Solver.IMPLICIT:
+            from .methods import radau
+
+            found = entry_point(radau.ensemble_solver(parallel=prange))
+        else:
+            from .methods import loop
+
+            found = entry_point(loop.ensemble_solver(method.tableau, parallel=prange))
+        _DRIVERS[method.name, prange] = found
+    return found
+
+
+_DRIVERS: dict = {}
+
+
+def batch(scene, plan, Y0, P, parallel="threads", workers=1):
+    """The runs of ``plan`` from the rows of ``Y0`` with the rows of ``P`` (checked,
+    C-contiguous) through the compiled ensemble driver of its method: ``parallel``
+    "threads" (a pool of ``workers`` threads, each running the serial driver on chunks
+    of rows with the GIL released), "prange" (numba threads) or "serial".  Returns the
+    arrays ``(OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)`` (``_common.collect``)
+    and the wall-clock time."""
+    import numba
+
+    n_runs, n = Y0.shape
+    n_times = plan.te.shape[0] if plan.mode == AT_T_EVAL else 1
+    n_ev = len(plan.watch.ev_dir)
+    out = (np.empty((n_runs, n_times)), np.empty((n_runs, n_times, n)),
+           np.zeros((n_runs, 6), dtype=np.int64), np.empty(n_runs), np.empty((n_runs, n)),
+           np.zeros((n_runs, max(n_ev, 1)), dtype=np.int64),
+           np.full((n_runs, max(n_ev, 1)), np.nan))
+    halt = np.zeros(1, dtype=np.int64)
+    prange = parallel == "prange"
+    drive = _driver(plan.method, prange)
+    head, tail = plan.prefix + (plan.t0, plan.t1), plan.suffix + (halt,)
+
+    def block(a, b):
+        drive(*head, Y0[a:b], P[a:b], *tail, *(x[a:b] for x in out))
+
+    def compute():
+        if prange:
+            old = numba.get_num_threads()
+            numba.set_num_threads(min(workers, numba.config.NUMBA_NUM_THREADS))
+            try:
+                # dynamic scheduling in chunks: runs differ in cost (early stops, stiffness)
+                with numba.parallel_chunksize(max(1, n_runs // (8 * workers))):
+                    block(0, n_runs)
+            finally:
+                numba.set_num_threads(old)
+        elif parallel == "serial" or workers == 1 or n_runs == 1:
+            block(0, n_runs)
+        else:
+            from concurrent.futures import ThreadPoolExecutor
+
+            chunk = max(1, -(-n_runs // (4 * workers)))
+            bounds = [(a, min(a + chunk, n_runs)) for a in range(0, n_runs, chunk)]
+            with ThreadPoolExecutor(workers) as pool:
+                list(pool.map(lambda ab: block(*ab), bounds))
+
+    tic = time.perf_counter()
+    interrupt.call(compute, halt, plan.limit)
+    return out, time.perf_counter() - tic

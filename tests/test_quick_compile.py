@@ -1,0 +1,125 @@
+"""Quick compilation of huge kernels (``jetnh.numeric.codegen.quick``): chosen by size,
+part of the kernel cache key, and the same arithmetic as numba's -O3 route (bit-for-bit
+equal outputs, two compilations of one program compared)."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from jetnh import models
+from jetnh.errors import JetnhError
+from jetnh.numeric import Scene
+from jetnh.numeric.codegen import KernelSpec, quick
+from jetnh.numeric.codegen.llvm import straight_line
+from jetnh.numeric.methods._common import FunctionAddress
+
+SIG = "void(float64, float64[::1], float64[::1], float64[::1])"
+
+
+def _callbacks(ops):
+    """The program ``ops`` as a numba -O3 callback and as a quick one (no cache)."""
+    import numba
+
+    body = straight_line(ops)
+
+    def kernel(t, y, p, out):
+        body(t, y, p, out)
+
+    return (numba.cfunc(SIG, error_model="numpy")(kernel),
+            quick.quick_cfunc(SIG, error_model="numpy")(kernel))
+
+
+def _call(cfunc, y, n_out):
+    from jetnh.numeric.kernels.calls import Kernel
+
+    out = np.zeros(n_out)
+    Kernel(FunctionAddress(cfunc), (len(y), 0, n_out))(0.3, y, np.zeros(0), out)
+    return out
+
+
+def test_the_threshold_picks_the_decorator(monkeypatch):
+    monkeypatch.delenv("JETNH_QUICK_OPS", raising=False)
+    assert quick.decorator(quick.QUICK_OPS) == "@numba.cfunc(_SIG, **_CB)"
+    assert quick.decorator(quick.QUICK_OPS + 1, "_JAC_SIG") == "@quick_cfunc(_JAC_SIG, **_CB)"
+    monkeypatch.setenv("JETNH_QUICK_OPS", "10")
+    assert quick.decorator(11) == "@quick_cfunc(_SIG, **_CB)"
+    assert quick.decorator(10) == "@numba.cfunc(_SIG, **_CB)"
+
+
+def test_a_bad_threshold_names_the_variable(monkeypatch):
+    monkeypatch.setenv("JETNH_QUICK_OPS", "lots")
+    with pytest.raises(JetnhError, match="JETNH_QUICK_OPS"):
+        quick.quick_ops()
+
+
+def test_the_threshold_is_part_of_the_cache_key(monkeypatch):
+    system = models.get("knife_edge")
+    monkeypatch.delenv("JETNH_QUICK_OPS", raising=False)
+    default = KernelSpec(system, "chetaev", {}).key
+    monkeypatch.setenv("JETNH_QUICK_OPS", "0")
+    assert KernelSpec(system, "chetaev", {}).key != default
+    monkeypatch.setenv("JETNH_QUICK_OPS", str(quick.QUICK_OPS))
+    assert KernelSpec(system, "chetaev", {}).key == default
+
+
+def test_a_scene_above_the_threshold_compiles_quickly_and_runs_alike(monkeypatch, tmp_path):
+    """Every kernel of the 2-trailer quick (threshold 0) against every kernel at -O3
+    (threshold above their size): the source says which, the trajectories agree bit for
+    bit."""
+    runs = {}
+    for name, threshold in (("quick", "0"), ("full", "1000000")):
+        monkeypatch.setenv("JETNH_QUICK_OPS", threshold)
+        monkeypatch.setenv("JETNH_CACHE", str(tmp_path / name))
+        system = models.get("n_trailer", N=2)
+        sc = Scene(system, "vakonomic",
+                   initial={**models.initial("n_trailer", N=2), "lambda_y": 0.01,
+                            "lambda_theta1": -0.01, "lambda_theta2": 0.01},
+                   t_span=(0.0, 0.5))
+        src = sc.kernels.source
+        marks = src.count("@quick_cfunc("), src.count("@numba.cfunc(")
+        assert marks == ((3, 0) if name == "quick" else (0, 3)), marks
+        tr = sc.run(method="dop853", rtol=1e-10, atol=1e-12)
+        runs[name] = np.column_stack([tr.t, tr.y])
+    np.testing.assert_array_equal(runs["quick"], runs["full"])
+
+
+_leaf = st.sampled_from([("y", 0), ("y", 1), ("y", 2), ("t",), ("c", 0.75), ("c", -1.5)])
+
+
+@st.composite
+def programs(draw):
+    """Random straight-line programs over every instruction kind, outputs at the end."""
+    ops = [("y", 0), ("y", 1), ("y", 2), ("t",)]
+    for _ in range(draw(st.integers(1, 25))):
+        n = len(ops)
+        idx = st.integers(0, n - 1)
+        kind = draw(st.sampled_from(["add", "mul", "div", "powi", "fn", "pow", "leaf"]))
+        if kind in ("add", "mul"):
+            ops.append((kind, *draw(st.lists(idx, min_size=2, max_size=4))))
+        elif kind == "div":
+            ops.append(("div", draw(idx), draw(idx)))
+        elif kind == "powi":
+            ops.append(("powi", draw(idx), draw(st.integers(1, 7))))
+        elif kind == "pow":                  # a positive base: 1 + x*x
+            x = draw(idx)
+            ops += [("c", 1.0), ("mul", x, x)]
+            ops.append(("add", len(ops) - 2, len(ops) - 1))
+            ops.append(("pow", len(ops) - 1, draw(idx)))
+        elif kind == "fn":
+            ops.append(("fn", draw(st.sampled_from(["sin", "cos", "exp", "abs"])), draw(idx)))
+        else:
+            ops.append(draw(_leaf))
+    n = len(ops)
+    outs = draw(st.lists(st.integers(0, n - 1), min_size=1, max_size=5))
+    return tuple(ops) + tuple(("out", k, i) for k, i in enumerate(outs)), len(outs)
+
+
+@settings(max_examples=8, deadline=None)
+@given(programs(), st.lists(st.floats(-2, 2), min_size=3, max_size=3))
+def test_quick_and_full_callbacks_agree_bit_for_bit(prog, y):
+    ops, n_out = prog
+    full, fast = _callbacks(ops)
+    y = np.array(y)
+    a, b = _call(full, y, n_out), _call(fast, y, n_out)
+    np.testing.assert_array_equal(a, b)
