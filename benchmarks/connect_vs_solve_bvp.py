@@ -32,7 +32,7 @@ from _common import best_of, parser, write
 
 import jetnh as jn
 from jetnh.models import get
-from jetnh.numeric import kernels
+from jetnh.numeric.connect.collocation import problem
 
 ZERO_DISK = {"x": 0.0, "y": 0.0, "phi": 0.0, "psi": 0.0}
 CASES = (
@@ -46,43 +46,6 @@ CONNECT_RTOL = (1e-6, 1e-8, 1e-10)
 #: solve_bvp's mesh limit and the seconds each route may spend per tolerance
 MAX_NODES, BUDGET = 20_000, 20.0
 BVP_TOL = (1e-3, 1e-5, 1e-7, 1e-9)
-
-
-def bvp_problem(scene, start, end, T, jacobian):
-    kern, p, names = scene.kernels, scene.p, scene.state_names
-    n, nq = len(names), len(scene.coordinates)
-    jac = kernels.jacobian_kernels(scene).jac if jacobian else None
-
-    def fun(t, Y):
-        out, o = np.empty_like(Y), np.empty(n)
-        for i in range(Y.shape[1]):
-            kern.rhs(float(t[i]), np.ascontiguousarray(Y[:, i]), p, o)
-            out[:, i] = o
-        return out
-
-    def fun_jac(t, Y):
-        out, Jm = np.empty((n, n, Y.shape[1])), np.empty((n, n))
-        for i in range(Y.shape[1]):
-            jac(float(t[i]), np.ascontiguousarray(Y[:, i]), p, Jm)
-            out[:, :, i] = Jm
-        return out
-
-    rows = [names.index(k) for k in end]
-    target = np.array([end[k] for k in end])
-    first = np.array([start[names[i]] for i in range(nq)])
-
-    def bc(ya, yb):
-        return np.concatenate([ya[:nq] - first, yb[rows] - target])
-
-    t = np.linspace(0.0, T, 11)
-    Y = np.full((n, t.size), 0.5)
-    Y[nq + len(scene.velocities):] = 0.0
-    for i, name in enumerate(names[:nq]):
-        rate = (end.get(name, start[name]) - start[name]) / T
-        Y[i] = start[name] + rate * t
-        if name in end and f"{name}_t" in names:
-            Y[names.index(f"{name}_t")] = rate
-    return fun, (fun_jac if jacobian else None), bc, t, Y
 
 
 def connect_case(model, principle, start, end, T, reps, quick):
@@ -107,7 +70,7 @@ def connect_case(model, principle, start, end, T, reps, quick):
 
         routes += [(("connect", rtol), solve), (("connect + verdicts", rtol), judged)]
     for jacobian in (False, True):
-        fun, fjac, bc, t, Y = bvp_problem(scene, start, end, T, jacobian)
+        fun, fjac, bc, t, Y = problem(scene, start, end, T, jacobian)
         for tol in BVP_TOL[:2] if quick else BVP_TOL:
             def go(fun=fun, fjac=fjac, bc=bc, t=t, Y=Y, tol=tol):
                 with warnings.catch_warnings():

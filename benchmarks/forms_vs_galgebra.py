@@ -33,7 +33,8 @@ from sympy.core.cache import clear_cache
 from _common import parser, write
 
 from jetnh import JetSpace
-from jetnh.geometry.forms import Form, d, expr_is_zero
+from jetnh.algebra.zero import expr_is_zero
+from jetnh.geometry.forms import Form, d
 
 BUDGET_S = 120.0          # stop repeating an operation once one call took longer than this
 

@@ -36,16 +36,11 @@ SPEEDS = np.linspace(-2.0, 2.0, 100)
 
 def sympy_route():
     import sympy as sp
-    import sympy.physics.mechanics as me
     from sympy.core.function import AppliedUndef
 
-    x, y, th = me.dynamicsymbols("x y theta")
-    xd, yd, thd = me.dynamicsymbols("x y theta", 1)
-    m, I, a = 1.0, 0.2, 0.5
-    L = (m * ((xd - a * sp.sin(th) * thd)**2 + (yd + a * sp.cos(th) * thd)**2) / 2
-         + I * thd**2 / 2)
-    LM = me.LagrangesMethod(L, [x, y, th], nonhol_coneqs=[-sp.sin(th) * xd + sp.cos(th) * yd])
-    LM.form_lagranges_equations()
+    from jetnh.models.planar import chaplygin_sleigh_lagranges
+
+    LM, (x, y, th), (xd, yd, thd) = chaplygin_sleigh_lagranges()
     lin = LM.to_linearizer(q_ind=[x, y, th], qd_ind=[xd, thd], qd_dep=[yd])
     v = sp.Symbol("v")
     A = lin.linearize(op_point={x: 0, y: 0, th: 0, xd: v, yd: 0, thd: 0}, A_and_B=True)[0]

@@ -12,9 +12,8 @@ the way hypothesis' own do::
         J, L, (constraints, dependent) = case
         ...
 
-    @given(jst.constrained_systems(affine=True))
-    def test_something_else(system):
-        J, L, constraints, dependent = system
+    @given(jst.systems(affine=True))
+    def test_something_else(system):          # a jetnh.System
         ...
 
 The expressions are deliberately *small* (a few terms, shallow nesting) so that sympy

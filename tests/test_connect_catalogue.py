@@ -22,36 +22,13 @@ from scipy.integrate import solve_bvp
 
 import jetnh as jn
 from jetnh.models import get
-from jetnh.numeric import kernels
+from jetnh.numeric.connect.collocation import problem
 
 DISK0 = {"x": 0.0, "y": 0.0, "phi": 0.0, "psi": 0.0}
 
 
 def _collocation(scene, start, end, T, Y0):
-    kern, p, names = scene.kernels, scene.p, scene.state_names
-    jac = kernels.jacobian_kernels(scene).jac
-    n, nq = len(names), len(scene.coordinates)
-
-    def fun(t, Y):
-        out, o = np.empty_like(Y), np.empty(n)
-        for i in range(Y.shape[1]):
-            kern.rhs(float(t[i]), np.ascontiguousarray(Y[:, i]), p, o)
-            out[:, i] = o
-        return out
-
-    def fun_jac(t, Y):
-        out, Jm = np.empty((n, n, Y.shape[1])), np.empty((n, n))
-        for i in range(Y.shape[1]):
-            jac(float(t[i]), np.ascontiguousarray(Y[:, i]), p, Jm)
-            out[:, :, i] = Jm
-        return out
-
-    rows = [names.index(k) for k in end]
-
-    def bc(ya, yb):
-        return np.concatenate([ya[:nq] - [start[c] for c in names[:nq]],
-                               yb[rows] - [end[k] for k in end]])
-
+    fun, fun_jac, bc, _, _ = problem(scene, start, end, T)
     t = np.linspace(0.0, T, Y0.shape[1])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -112,7 +89,7 @@ def test_appell_hamel_vakonomic_reaches_the_cone_only():
     assert c.residual < 1e-9 and c.rank == 2 and not c.normal
     assert abs(c.initial["x_t"] - 3 * v0 / d) < 1e-8 and abs(c.cost - cost) < 1e-8
     assert c.conjugate_times == (1.0,)       # rank-deficient throughout: no crossings
-    with pytest.raises(jn.ConnectError, match="name at most 2 coordinates"):
+    with pytest.raises(jn.ConnectError, match="reach a 2-dimensional set"):
         jn.connect(ah, "vakonomic", O, {"x": 3.0, "y": 1.0, "z": k * d + 0.3}, (0, 1),
                    max_iter=20, max_continuation=4)
 

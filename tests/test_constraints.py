@@ -9,16 +9,13 @@ from jetnh import ConstraintError, JetSpace, JetSpaceError, LagrangianError
 from jetnh.mechanics.system import System
 from jetnh.mechanics.equivalence import frobenius_T
 from jetnh.algebra.zero import vanishes
+from jetnh.models import rolling_disk
 
 R, I1, I2 = sp.symbols("R I1 I2")
 
 
 def disk(dependent=("x", "y")):
-    J = JetSpace("x y phi psi")
-    x, y, phi, psi = J.q
-    xd, yd, phid, psid = J.qd
-    L = (xd**2 + yd**2) / 2 + (I1 * phid**2 + I2 * psid**2) / 2
-    return System(J, L, [xd - R * sp.cos(psi) * phid, yd - R * sp.sin(psi) * phid], dependent)
+    return rolling_disk().with_split(dependent)
 
 
 def test_disk_explicit_affine_forms_and_T():
@@ -70,30 +67,23 @@ def test_nonlinear_constraint_with_two_branches_asks_for_one():
 
 
 @settings(max_examples=15)
-@given(jst.constrained_systems(max_n=4))
-def test_explicit_form_solves_the_constraints(case):
-    J, L, cons, dep = case
-    s = System(J, L, cons, dep)
+@given(jst.systems(max_n=4))
+def test_explicit_form_solves_the_constraints(s):
     for f in s.constraints:
         assert vanishes(s.on_constraints(f))
-    assert s.dependent == tuple(dep)
 
 
 @settings(max_examples=15)
-@given(jst.constrained_systems(max_n=4, affine=True))
-def test_T_is_the_frobenius_curvature_contracted_with_velocities(case):
-    J, L, cons, dep = case
-    s = System(J, L, cons, dep)
+@given(jst.systems(max_n=4, affine=True))
+def test_T_is_the_frobenius_curvature_contracted_with_velocities(s):
     D = s.T() - frobenius_T(s)
     assert all(vanishes(e, s) for e in D)
 
 
 @settings(max_examples=10)
-@given(jst.constrained_systems(max_n=4, affine=True))
-def test_split_choice_keeps_the_constraint_manifold(case):
-    J, L, cons, dep = case
-    s = System(J, L, cons, dep)
-    auto = System(J, L, cons)
+@given(jst.systems(max_n=4, affine=True))
+def test_split_choice_keeps_the_constraint_manifold(s):
+    auto = s.replace(dependent=None)
     for f in s.constraints:
         assert vanishes(auto.on_constraints(f))
 

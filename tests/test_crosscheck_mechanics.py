@@ -21,7 +21,7 @@ from hypothesis import given, settings, strategies as st
 from sympy.physics.mechanics import LagrangesMethod
 
 import jetnh.strategies as jst
-from jetnh import JetSpace
+from jetnh import JetSpace, models
 from jetnh.mechanics.system import System
 from numbers30 import f30, num
 
@@ -73,10 +73,9 @@ def assert_accelerations_match(system: System, ref: dict, rnd: random.Random, po
 
 
 # ------------------------------------------------------------------ random systems
-@given(jst.constrained_systems(min_n=2, max_n=4, affine=True), randoms)
-def test_chetaev_matches_lagranges_method_on_random_affine_systems(case, rnd):
-    J, L, constraints, dependent = case
-    system = System(J, L, constraints, dependent=dependent)
+@given(jst.systems(min_n=2, max_n=4, affine=True), randoms)
+def test_chetaev_matches_lagranges_method_on_random_affine_systems(system, rnd):
+    J, L, constraints = system.J, system.L, system.given_constraints
     ref = lagranges_method_accelerations(J, L, constraints)
     assert_accelerations_match(system, ref, rnd)
 
@@ -106,17 +105,13 @@ def test_chetaev_matches_lagranges_method_with_implicit_constraints(case, rnd):
 
 
 # ------------------------------------------------------------------ rolling disk
-R, I1, I2 = sp.symbols("R I1 I2", positive=True)
+R, I1, I2 = sp.symbols("R I1 I2")     # the parameters of models.rolling_disk
 
 
 def rolling_disk(dependent=("x", "y")):
-    """The paper's Example 1: L and the rolling constraints (40)."""
-    J = JetSpace("x y phi psi")
-    x, y, phi, psi = J.q
-    xd, yd, phid, psid = J.qd
-    L = (xd**2 + yd**2) / 2 + (I1 * phid**2 + I2 * psid**2) / 2
-    cons = [xd - R * sp.cos(psi) * phid, yd - R * sp.sin(psi) * phid]
-    return J, L, cons, System(J, L, cons, dependent=list(dependent))
+    """The paper's Example 1 (the catalogue's): its J, L, constraints (40) and System."""
+    system = models.rolling_disk().with_split(list(dependent))
+    return system.J, system.L, system.given_constraints, system
 
 
 @pytest.mark.parametrize("dependent", [("x", "y"), ("phi", "y")])

@@ -162,3 +162,23 @@ def test_diff_of_nested_expression_stays_shared():
             (u, du), (w, dw) = v[-1], v[-2]
             v.append((c * u + s * w, -s * u + c * du + c * w + s * dw))
         assert abs(dag.evaluate(d, at, dps=40) - v[-1][1]) < 1e-30 * abs(v[-1][1])
+
+
+def test_numbers_among_the_roots_and_missing_symbols():
+    """Plain numbers are roots like any other; a symbol without a value is named, with
+    the fix, by a JetnhError that is still a ValueError."""
+    from jetnh.errors import ArgumentError, JetnhError
+
+    x, y = sp.symbols("x y")
+    assert dag.evaluate([x + 1, 2.5], {x: 1}) == [2, 2.5]
+    assert dag.evaluate(3, {}) == 3
+    assert list(dag.evaluate_numpy([x, 3], {x: [1.0, 2.0]})[0]) == [1.0, 2.0]
+    assert dag.xreplace([x, 2.5], {x: y}) == [y, sp.Float(2.5)]
+    assert dag.tree_size([x + y, 2.5]) == 4
+    for call in (lambda: dag.evaluate([x + y, 2.5], {x: 1}),
+                 lambda: dag.evaluate_numpy(x * y, {x: 1.0})):
+        with pytest.raises(ArgumentError, match=r"no value for y in the point.*give every") as err:
+            call()
+        assert isinstance(err.value, JetnhError) and isinstance(err.value, ValueError)
+    with pytest.raises(ArgumentError, match=r"no value for x, y in the point"):
+        dag.evaluate(sp.sin(x) + y, {})

@@ -306,11 +306,11 @@ def test_an_exponentially_large_tree_is_summarized_quickly():
         assert len(text) < display.BUDGET and "u_{1}" in text
 
 
-@given(jst.constrained_systems(min_n=2, max_n=4),
+@given(jst.systems(min_n=2, max_n=4),
        st.one_of(st.text(max_size=30), st.text(min_size=300, max_size=3000)))
-def test_system_displays_stay_in_budget_and_name_the_coordinates(case, name):
-    J, L, constraints, dependent = case
-    s = jn.System(J, L, constraints, dependent=dependent, name=name)
+def test_system_displays_stay_in_budget_and_name_the_coordinates(s, name):
+    s = s.replace(name=name)
+    J, constraints = s.J, s.given_constraints
     html, tex = s._repr_html_(), s._repr_latex_()
     assert len(html) <= display.BUDGET and len(tex) <= display.BUDGET
     assert ", ".join(q.name for q in J.q) in html

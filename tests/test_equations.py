@@ -21,6 +21,7 @@ import jetnh.strategies as jst
 from jetnh import ConstraintError, JetSpace, LagrangianError, PrincipleError
 from jetnh.mechanics.system import System
 from jetnh.mechanics.equations import FORMS
+from jetnh.models import rolling_disk
 from numbers30 import f30, num
 
 TOL = 1e-18          # residuals that are identically zero, at 30 digits
@@ -28,7 +29,7 @@ RTOL = 1e-10         # agreement between two routes to the same numbers
 
 randoms = st.randoms(use_true_random=False)
 affine_systems = jst.constrained_systems(min_n=2, max_n=4, affine=True)
-any_systems = jst.constrained_systems(min_n=2, max_n=4)
+any_systems = jst.systems(min_n=2, max_n=4)
 
 
 # ------------------------------------------------------------------ numeric helpers
@@ -75,11 +76,6 @@ def time_limit(seconds: float, what: str):
         signal.signal(signal.SIGALRM, old)
 
 
-def build(case) -> System:
-    J, L, constraints, dependent = case
-    return System(J, L, constraints, dependent=dependent)
-
-
 # ------------------------------------------------------------------ vakonomic = EL of L + lambda f
 def _el_of_composite(system: System, constraints, multipliers):
     J2 = system.J.with_fields([m.name for m in multipliers])
@@ -89,8 +85,7 @@ def _el_of_composite(system: System, constraints, multipliers):
 
 @settings(max_examples=10)
 @given(any_systems, randoms)
-def test_vakonomic_equations_are_euler_lagrange_of_composite_lagrangian(case, rnd):
-    system = build(case)
+def test_vakonomic_equations_are_euler_lagrange_of_composite_lagrangian(system, rnd):
     for form, constraints in (("multiplier", system.constraints),
                               ("explicit", system.explicit_constraints)):
         eom = system.equations("vakonomic", form)
@@ -121,8 +116,7 @@ def _multiplier_form_reactions(system, eom, vals):
 
 @settings(max_examples=10)
 @given(any_systems, randoms)
-def test_every_form_vanishes_on_the_accelerations_of_its_principle(case, rnd):
-    system = build(case)
+def test_every_form_vanishes_on_the_accelerations_of_its_principle(system, rnd):
     for principle, forms in FORMS.items():
         eoms = [system.equations(principle, form) for form in forms]
         lams = eoms[0].multipliers
@@ -140,8 +134,7 @@ def test_every_form_vanishes_on_the_accelerations_of_its_principle(case, rnd):
 
 @settings(max_examples=10)
 @given(any_systems, randoms)
-def test_accelerations_satisfy_the_differentiated_constraints(case, rnd):
-    system = build(case)
+def test_accelerations_satisfy_the_differentiated_constraints(system, rnd):
     J = system.J
     Df = [J.D(f) for f in system.constraints]
     for principle in FORMS:
@@ -189,10 +182,9 @@ def test_implicit_constraints_multiplier_form_rescales_the_multipliers(case, rnd
 # ------------------------------------------------------------------ identity (19)
 @settings(max_examples=10)
 @given(any_systems, randoms)
-def test_identity_19_on_the_constraint_manifold(case, rnd):
+def test_identity_19_on_the_constraint_manifold(system, rnd):
     """[L]_mu + Phi^a_mu [L]_a = [L~]_mu + Phi^a_mu dL~/dq^a + p_a T^a_mu, on the manifold
     (q_t^a = phi^a and q_tt^a = D phi^a)."""
-    system = build(case)
     J = system.J
     EL = J.euler(system.L)
     Lt = system.L_tilde
@@ -232,17 +224,16 @@ def _holonomic_systems(draw, polynomial=False):
         c = draw(st.sampled_from([0, sp.Rational(1, 2), -sp.Rational(1, 3)]))
         g = (1 + w**2) * (qa + c * sp.sin(qa)) + h
         constraints.append(J.D(g))
-    return J, L, tuple(constraints), dependent
+    return System(J, L, constraints, dependent=dependent)
 
 
 @settings(max_examples=6, phases=[Phase.explicit, Phase.reuse, Phase.generate])
 @given(_holonomic_systems(), randoms)
-def test_integrable_constraints_make_all_principles_coincide(case, rnd):
+def test_integrable_constraints_make_all_principles_coincide(system, rnd):
     """For f = D g: [f]_s = d(Dg)/dq^s - D(dg/dq^s) = 0, so the vakonomic equations (15)
     reduce to [L]_s = lambda_t dg/dq^s, the holonomic equations with multiplier lambda_t:
     their q-accelerations do not depend on lambda and equal Chetaev's.  Suslov's (31b)
     differs from Chetaev's Voronets form by p_a T^a_mu, and T = 0 on the manifold."""
-    system = build(case)
     J = system.J
     T = system.T()
     with time_limit(60, "deriving the accelerations"):
@@ -288,8 +279,8 @@ def test_accelerations_of_a_holonomic_four_coordinate_system_take_no_minutes():
 
 @settings(max_examples=6)
 @given(_holonomic_systems(polynomial=True))
-def test_time_derivatives_of_holonomic_constraints_are_integrable(case):
-    assert build(case).is_integrable()
+def test_time_derivatives_of_holonomic_constraints_are_integrable(system):
+    assert system.is_integrable()
 
 
 # ------------------------------------------------------------------ the split
@@ -360,11 +351,10 @@ def test_vakonomic_split_change_maps_the_multipliers(case, rnd):
 
 @settings(max_examples=10)
 @given(any_systems, randoms)
-def test_suslov_q_accelerations_are_vakonomic_ones_at_minus_p(case, rnd):
+def test_suslov_q_accelerations_are_vakonomic_ones_at_minus_p(system, rnd):
     """(32): at lambda_a = -p_a the vakonomic embedded equations (20) become Suslov's (31),
     q-accelerations and multiplier rates alike (for the multipliers of the split's explicit
     constraints)."""
-    system = build(case)
     vak = system.equations("vakonomic", "embedded")
     sus = system.equations("suslov", "embedded")
     av, asus = vak.accelerations(), sus.accelerations()
@@ -379,18 +369,8 @@ def test_suslov_q_accelerations_are_vakonomic_ones_at_minus_p(case, rnd):
 
 
 # ------------------------------------------------------------------ Example 1: rolling disk
-R, I1, I2 = sp.symbols("R I1 I2", positive=True)
+R, I1, I2 = sp.symbols("R I1 I2")     # the parameters of models.rolling_disk
 C1, C2 = sp.symbols("C1 C2")
-
-
-def rolling_disk(dependent=("x", "y")) -> System:
-    """Example 1: L = (x'^2 + y'^2)/2 + (I1 phi'^2 + I2 psi'^2)/2 with the constraints (40)."""
-    J = JetSpace("x y phi psi")
-    x, y, phi, psi = J.q
-    xd, yd, phid, psid = J.qd
-    L = (xd**2 + yd**2) / 2 + (I1 * phid**2 + I2 * psid**2) / 2
-    cons = [xd - R * sp.cos(psi) * phid, yd - R * sp.sin(psi) * phid]
-    return System(J, L, cons, dependent=list(dependent))
 
 
 def _zero(expr) -> bool:
@@ -647,7 +627,7 @@ def test_split_dependence_on_the_rolling_disk():
     depend on the split (they are the vakonomic ones at lambda = -p of the split's own
     dependent momenta, (32), and -p_(2) != A2^T (-p_(1))), so (26) is not without loss of
     generality."""
-    s1 = rolling_disk(("x", "y"))
+    s1 = rolling_disk()
     s2 = s1.with_split(["phi", "y"])
     J = s1.J
     rnd = random.Random(26)

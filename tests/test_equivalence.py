@@ -108,14 +108,12 @@ def test_an_empty_singular_set_reads_as_empty():
 
 
 @settings(max_examples=6)
-@given(jst.constrained_systems(max_n=3, affine=False))
-def test_the_singular_set_is_where_the_vakonomic_system_is_singular(case):
+@given(jst.systems(max_n=3, affine=False))
+def test_the_singular_set_is_where_the_vakonomic_system_is_singular(s):
     """Two routes: the factors with multipliers jetnh reports (from its block solve) and
     the determinant of the full system [[H + lambda G, A^T], [A, 0]] (sympy, from L and f):
     on every root lambda_1 of a factor the determinant vanishes, and on every root of the
     determinant some factor vanishes (the other values random)."""
-    J, L, cons, dep = case
-    s = System(J, L, cons, dep)
     lams = s.equations("vakonomic").multipliers
     sing = singular_set(s, "vakonomic")
     M = full_matrix(s, lams)
@@ -131,10 +129,10 @@ def test_the_singular_set_is_where_the_vakonomic_system_is_singular(case):
             return relative_det(M, {**pt, lam: v})
 
         # det M is a polynomial in lambda_1 of degree <= n: its coefficients, then roots
-        xs = [mpmath.mpf(i) / 3 for i in range(J.n + 1)]
+        xs = [mpmath.mpf(i) / 3 for i in range(s.J.n + 1)]
         vals = [mpmath.det(mpmath.matrix([[e for e in row] for row in _rows(M, {**pt, lam: v})]))
                 for v in xs]
-        coeffs = mpmath.lu_solve(mpmath.matrix([[v**j for j in range(J.n, -1, -1)] for v in xs]),
+        coeffs = mpmath.lu_solve(mpmath.matrix([[v**j for j in range(s.J.n, -1, -1)] for v in xs]),
                                  mpmath.matrix(vals))
         coeffs = list(coeffs)
         scale = max(abs(c) for c in coeffs)
@@ -193,10 +191,8 @@ def test_suslov_differs_from_chetaev_when_p_T_is_nonzero():
 
 
 @settings(max_examples=8)
-@given(jst.constrained_systems(max_n=3, affine=True))
-def test_integrable_iff_T_vanishes(case):
-    J, L, cons, dep = case
-    s = System(J, L, cons, dep)
+@given(jst.systems(max_n=3, affine=True))
+def test_integrable_iff_T_vanishes(s):
     T_zero = all(vanishes(e, s) for e in s.T()) and all(vanishes(e, s) for e in frobenius_T(s))
     assert T_zero == s.is_integrable()
 

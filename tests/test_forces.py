@@ -77,14 +77,13 @@ def solve_linear(rows, unknowns, vals) -> dict:
 
 @st.composite
 def forced_systems(draw, affine=None, dissipation=False):
-    J, L, constraints, dependent = draw(jst.constrained_systems(min_n=2, max_n=3,
-                                                                affine=affine))
-    Q = draw(jst.forces(J))
-    D = None
-    if dissipation:
-        c = draw(st.integers(1, 3))
-        D = c * J.qd[0]**2 / 2 + draw(jst.polynomials(J, max_degree=2, max_terms=2))
-    return System(J, L, constraints, dependent, forces=Q, dissipation=D)
+    system = draw(jst.systems(min_n=2, max_n=3, affine=affine, forced=True))
+    if not dissipation:
+        return system
+    J = system.J
+    c = draw(st.integers(1, 3))
+    D = c * J.qd[0]**2 / 2 + draw(jst.polynomials(J, max_degree=2, max_terms=2))
+    return system.replace(dissipation=D)
 
 
 # ------------------------------------------------------------------ the equations, by hand

@@ -1,14 +1,14 @@
 """Tests of jetnh.geometry.forms: Cartan calculus identities on random forms, known values, contact
-and constraint forms, and galgebra's exterior algebra as an independent cross-check."""
+forms, and galgebra's exterior algebra as an independent cross-check."""
 
 import pytest
 import sympy as sp
 from hypothesis import given, strategies as st
 
-from jetnh import ConstraintError, JetSpace, JetSpaceError
-from jetnh.geometry.forms import (Form, affine_coefficients, constraint_forms, contact_forms,
-                         coordinate_key, d, differential, expr_is_zero, interior,
-                         lie_derivative, numeric_is_zero, pullback, wedge)
+from jetnh import JetSpace, JetSpaceError
+from jetnh.algebra.zero import expr_is_zero
+from jetnh.geometry.forms import (Form, basis, contact_forms, coordinate_key, d, differential,
+                                  interior, lie_derivative, pullback, wedge)
 
 J = JetSpace("x y")
 t = J.t
@@ -272,41 +272,16 @@ def test_zero_tests_expand_rational_numeric():
     assert trig.is_zero_numeric()
     assert trig.map(sp.simplify).is_zero()
     assert ((1 / (x + 1) - x / (x * x + x)) * dx).is_zero()          # common denominator
-    assert expr_is_zero(sp.sin(x) ** 2 + sp.cos(x) ** 2 - 1, simplify=True)
-    assert not numeric_is_zero(sp.sqrt(x ** 2) - x, samples=6)      # negative samples too
     assert not (x * dx).is_zero_numeric()
 
 
-# ----------------------------------------------------------------- constraint forms
-def test_constraint_forms_rolling_disk():
-    J4 = JetSpace("x y phi psi")
-    X, Y, phi, psi = J4.q
-    R = sp.Symbol("R")
-    phit = J4.qd[2]
-    om = constraint_forms(J4, {X: R * sp.cos(psi) * phit, Y: R * sp.sin(psi) * phit}, [X, Y])
-    assert om[0] == differential(J4, X) - R * sp.cos(psi) * differential(J4, phi)
-    assert om[1] == differential(J4, Y) - R * sp.sin(psi) * differential(J4, phi)
-    # annihilates the distribution X_rho = d_rho + B^a_rho d_a
-    for V in ({J4.t: 1}, {psi: 1}, {phi: 1, X: R * sp.cos(psi), Y: R * sp.sin(psi)}):
-        assert all(interior(V, w).is_zero() for w in om)
-    # the 3-forms om ^ d om do not vanish: nonintegrable
-    assert not (om[0] ^ om[1] ^ d(om[0])).is_zero()
-
-
-def test_constraint_forms_time_dependent_and_errors():
-    (om,) = constraint_forms(J, [t * yt + sp.exp(t) * x], [x])
-    dt, dx, dy = (differential(J, s) for s in (t, x, y))
-    assert om == dx - t * dy - sp.exp(t) * x * dt
-    B, ind = affine_coefficients(J, [t * yt + sp.exp(t) * x], [x])
-    assert ind == (y,) and B == sp.Matrix([[sp.exp(t) * x, t]])
-    with pytest.raises(ConstraintError, match="not affine"):
-        constraint_forms(J, [yt ** 2], [x])
-    with pytest.raises(ConstraintError, match="dependent velocity"):
-        constraint_forms(J, [xt + yt], [x])
-    with pytest.raises(ConstraintError):
-        constraint_forms(J, [ytt], [x])
-    with pytest.raises(ConstraintError):
-        constraint_forms(J, [yt, yt], [x])
+def test_basis_sorts_with_the_sign_of_the_permutation():
+    assert basis(J, (y, x)) == (-1, (x, y))
+    assert basis(J, (xt, t, y)) == (1, (t, y, xt))
+    assert basis(J, (x, y, x)) is None
+    w = wedge(differential(J, y), differential(J, x))
+    sign, key = basis(J, (y, x))
+    assert w.terms[key] == sign
 
 
 # ----------------------------------------------------------------- galgebra cross-check

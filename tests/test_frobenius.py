@@ -6,9 +6,10 @@ import pytest
 import sympy as sp
 from hypothesis import assume, given, strategies as st
 
-from jetnh import ConstraintError, JetSpace, JetSpaceError
-from jetnh.geometry.frobenius import (FrobeniusResult, decide_zero, frobenius,
-                             frobenius_from_constraints)
+from jetnh import ConstraintError, JetSpace, JetSpaceError, models
+from jetnh.geometry.forms import d, differential, interior
+from jetnh.geometry.frobenius import (FrobeniusResult, affine_coefficients, constraint_forms,
+                                      decide_zero, frobenius, frobenius_from_constraints)
 
 METHODS = ("brackets", "forms")
 R, c = sp.symbols("R c")
@@ -50,14 +51,14 @@ def test_bead_on_parabola_is_integrable():
 
 
 def test_vertical_rolling_disk_is_not_integrable():
-    J = JetSpace("x y phi psi")
+    disk = models.rolling_disk()
+    J = disk.J
     x, y, phi, psi = J.q
     B = sp.Matrix([[0, R * sp.cos(psi), 0], [0, R * sp.sin(psi), 0]])   # cols t, phi, psi
     r = both(J, B, [x, y], fn=frobenius)
     assert not r.integrable
     assert r.obstructions == {(phi, psi, x): R * sp.sin(psi), (phi, psi, y): -R * sp.cos(psi)}
-    fs = [J.qd[0] - R * sp.cos(psi) * J.qd[2], J.qd[1] - R * sp.sin(psi) * J.qd[2]]
-    r2 = both(J, fs, [x, y])
+    r2 = both(J, list(disk.constraints), [x, y])
     assert r2.obstructions == r.obstructions
 
 
@@ -346,3 +347,37 @@ def test_a_zero_of_a_large_expression_is_told_from_a_tiny_offset():
         assert decide_zero(gyz - gzy) is None
         assert decide_zero(gyz - gzy + sp.Rational(1, 10**20)) is not None
     assert len(evaluated) == 2
+
+
+# ----------------------------------------------------------------- constraint forms
+def test_constraint_forms_rolling_disk():
+    J4 = JetSpace("x y phi psi")
+    X, Y, phi, psi = J4.q
+    R = sp.Symbol("R")
+    phit = J4.qd[2]
+    om = constraint_forms(J4, {X: R * sp.cos(psi) * phit, Y: R * sp.sin(psi) * phit}, [X, Y])
+    assert om[0] == differential(J4, X) - R * sp.cos(psi) * differential(J4, phi)
+    assert om[1] == differential(J4, Y) - R * sp.sin(psi) * differential(J4, phi)
+    # annihilates the distribution X_rho = d_rho + B^a_rho d_a
+    for V in ({J4.t: 1}, {psi: 1}, {phi: 1, X: R * sp.cos(psi), Y: R * sp.sin(psi)}):
+        assert all(interior(V, w).is_zero() for w in om)
+    # the 3-forms om ^ d om do not vanish: nonintegrable
+    assert not (om[0] ^ om[1] ^ d(om[0])).is_zero()
+
+
+def test_constraint_forms_time_dependent_and_errors():
+    J = JetSpace("x y")
+    t, (x, y), (xt, yt), ytt = J.t, J.q, J.qd, J.qdd[1]
+    (om,) = constraint_forms(J, [t * yt + sp.exp(t) * x], [x])
+    dt, dx, dy = (differential(J, s) for s in (t, x, y))
+    assert om == dx - t * dy - sp.exp(t) * x * dt
+    B, ind = affine_coefficients(J, [t * yt + sp.exp(t) * x], [x])
+    assert ind == (y,) and B == sp.Matrix([[sp.exp(t) * x, t]])
+    with pytest.raises(ConstraintError, match="not affine"):
+        constraint_forms(J, [yt ** 2], [x])
+    with pytest.raises(ConstraintError, match="dependent velocity"):
+        constraint_forms(J, [xt + yt], [x])
+    with pytest.raises(ConstraintError):
+        constraint_forms(J, [ytt], [x])
+    with pytest.raises(ConstraintError):
+        constraint_forms(J, [yt, yt], [x])

@@ -15,24 +15,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-import sympy as sp
 
-import jetnh as jn
 from jetnh.numeric import Scene
 
-a_, k_, I_ = sp.symbols("a k I", positive=True)
+from holonomic_systems import knife_slider
+
 A = 0.4
-
-
-def knife_slider():
-    """A knife edge (x, y, th) with a slider z = a sin(th) on a spring (one nonholonomic,
-    one holonomic constraint)."""
-    J = jn.JetSpace("x y th z")
-    x, y, th, z = J.q
-    xt, yt, tht, zt = J.qd
-    L = (xt**2 + yt**2 + I_ * tht**2 + zt**2) / 2 - k_ * z**2 / 2
-    return jn.System(J, L, [sp.sin(th) * xt - sp.cos(th) * yt, z - a_ * sp.sin(th)],
-                     dependent=["y", "z"])
 
 
 @pytest.fixture(scope="module")

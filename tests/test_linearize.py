@@ -38,14 +38,13 @@ def _differences(lin, h=1e-6):
 
 
 @settings(max_examples=8, deadline=None, suppress_health_check=list(HealthCheck))
-@given(jst.constrained_systems(min_n=2, max_n=3), st.sampled_from(jn.PRINCIPLES),
+@given(jst.systems(min_n=2, max_n=3), st.sampled_from(jn.PRINCIPLES),
        st.integers(0, 2**16))
-def test_A_against_differences_and_the_graph(case, principle, seed):
+def test_A_against_differences_and_the_graph(s, principle, seed):
     """Random systems (affine and nonlinear constraints), every principle: A equals the
     central differences of the compiled rhs and the symbolic A evaluated on the graph;
     the dropped coordinates' columns vanish."""
-    J, L, constraints, dependent = case
-    s = jn.System(J, L, constraints, dependent)
+    J = s.J
     rng = np.random.default_rng(seed)
     lams = [lam.name for lam in principles.get(principle).multiplier_symbols(s)]
     at = {q.name: rng.uniform(-0.5, 0.5) for q in J.q}
@@ -211,15 +210,9 @@ def test_sympy_linearizer_on_the_sleigh():
     """sympy's LagrangesMethod linearizer (affine constraint, Chetaev dynamics: where it is
     right, once its multiplier and accelerations are given their operating values) gives
     the full-state A of jetnh (drop=None)."""
-    import sympy.physics.mechanics as me
+    from jetnh.models.planar import chaplygin_sleigh_lagranges
 
-    x, y, th = me.dynamicsymbols("x y theta")
-    xd, yd, thd = me.dynamicsymbols("x y theta", 1)
-    m, I, a = 1.0, 0.2, 0.5
-    L = (m * ((xd - a * sp.sin(th) * thd)**2 + (yd + a * sp.cos(th) * thd)**2) / 2
-         + I * thd**2 / 2)
-    LM = me.LagrangesMethod(L, [x, y, th], nonhol_coneqs=[-sp.sin(th) * xd + sp.cos(th) * yd])
-    LM.form_lagranges_equations()
+    LM, (x, y, th), (xd, yd, thd) = chaplygin_sleigh_lagranges()
     linr = LM.to_linearizer(q_ind=[x, y, th], qd_ind=[xd, thd], qd_dep=[yd])
     v = 0.8
     op = {x: 0.1, y: -0.2, th: 0.3, xd: v * np.cos(0.3), yd: v * np.sin(0.3), thd: 0.0}

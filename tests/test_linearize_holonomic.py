@@ -23,43 +23,10 @@ from jetnh.algebra import dag
 from jetnh.errors import ConstraintError, JetnhError, LinearizationError
 from jetnh.mechanics import holonomic, principles
 
-l_, G_ = sp.symbols("l G", positive=True)
+from holonomic_systems import (I_, KNIFE, a_, knife_reduced, knife_slider, pendulum_angle,
+                               pendulum_xy)
+
 PENDULUM = {"l": 1.3, "G": 9.81}
-a_, k_, I_ = sp.symbols("a k I", positive=True)
-KNIFE = {"a": 0.4, "k": 3.0, "I": 0.7}
-
-
-def pendulum_xy():
-    J = jn.JetSpace("x y")
-    x, y = J.q
-    xt, yt = J.qd
-    return jn.System(J, (xt**2 + yt**2) / 2 - G_ * y, [x**2 + y**2 - l_**2])
-
-
-def pendulum_angle():
-    J = jn.JetSpace("th")
-    (th,), (tht,) = J.q, J.qd
-    return jn.System(J, l_**2 * tht**2 / 2 + G_ * l_ * sp.cos(th))
-
-
-def knife_slider():
-    """A knife edge (x, y, th) with a slider z = a sin(th) on a spring: one nonholonomic
-    and one holonomic constraint."""
-    J = jn.JetSpace("x y th z")
-    x, y, th, z = J.q
-    xt, yt, tht, zt = J.qd
-    L = (xt**2 + yt**2 + I_ * tht**2 + zt**2) / 2 - k_ * z**2 / 2
-    return jn.System(J, L, [sp.sin(th) * xt - sp.cos(th) * yt, z - a_ * sp.sin(th)],
-                     dependent=["y", "z"])
-
-
-def knife_reduced():
-    J = jn.JetSpace("x y th")
-    x, y, th = J.q
-    xt, yt, tht = J.qd
-    z, zt = a_ * sp.sin(th), a_ * sp.cos(th) * tht
-    L = (xt**2 + yt**2 + I_ * tht**2 + zt**2) / 2 - k_ * z**2 / 2
-    return jn.System(J, L, [sp.sin(th) * xt - sp.cos(th) * yt], dependent=["y"])
 
 
 def _lams(system, principle, value):

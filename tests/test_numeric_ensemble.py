@@ -8,6 +8,7 @@ import sympy as sp
 import jetnh as jn
 from jetnh.mechanics.system import System
 from jetnh.errors import ConstraintError, IntegrationError, JetnhError
+from jetnh import models
 from jetnh.models import appell_hamel
 from jetnh.numeric import Event, Scene
 from jetnh.numeric.methods._common import EVENT, FINISHED, NONFINITE, SINGULAR
@@ -18,14 +19,9 @@ N = 12
 
 @pytest.fixture(scope="module")
 def disk():
-    """The vertical rolling disk with R a run-time parameter."""
-    J = jn.JetSpace("x y phi psi")
-    x, y, phi, psi = J.q
-    xd, yd, phid, psid = J.qd
-    R, I1, I2 = sp.symbols("R I1 I2")
-    L = (xd**2 + yd**2) / 2 + (I1 * phid**2 + I2 * psid**2) / 2
-    s = System(J, L, [xd - R * sp.cos(psi) * phid, yd - R * sp.sin(psi) * phid],
-               dependent=[x, y])
+    """The catalogue's vertical rolling disk (without its defaults) with R a run-time
+    parameter."""
+    s = models.rolling_disk().replace(defaults=None)
     return Scene(s, "chetaev", params={"R": 1.5, "I1": 0.5, "I2": 0.25}, initial=DISK0,
                  t_span=(0.0, 5.0), runtime_params=["R"], cache=False).compile()
 

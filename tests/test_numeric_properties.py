@@ -1,6 +1,7 @@
 """Numeric properties on random systems, states and principles (``jetnh.strategies``):
 the compiled right-hand side equals the symbolic accelerations evaluated with mpmath,
-and an ensemble equals its single runs to the last bit."""
+an ensemble equals its single runs to the last bit, and run options given as values or
+as keywords give the same run."""
 
 import numpy as np
 from hypothesis import HealthCheck, given, settings
@@ -61,3 +62,56 @@ def test_an_ensemble_equals_its_single_runs_to_the_bit(velocities, method):
         single = _KNIFE.run(method=method, y0=y0, save="final")
         assert np.array_equal(ens.y_final[r], single.y[-1])
         assert ens.t_final[r] == single.t[-1]
+
+
+@st.composite
+def _option_spellings(draw):
+    """A method and its run options, as the values ``StepControl``/``Singular``/``Newton``
+    and as the equivalent keywords."""
+    method = draw(st.sampled_from(["dop853", "dopri5", "rk4", "radau"]))
+    if method == "rk4":
+        step = {"n_steps": draw(st.integers(5, 40))}
+    else:
+        step = {"rtol": draw(st.sampled_from([1e-6, 1e-8, 1e-10])),
+                "atol": draw(st.sampled_from([1e-9, 1e-12])),
+                "max_step": draw(st.sampled_from([None, 0.05, 0.3])),
+                "first_step": draw(st.sampled_from([None, 1e-3])),
+                "max_steps": draw(st.sampled_from([10_000_000, 50]))}
+        step = {k: v for k, v in step.items() if v is not None}
+    singular = {"action": draw(st.sampled_from(["stop", "ignore"])),
+                "tol": draw(st.sampled_from([1e-10, 1e-7]))}
+    newton = {"tol": draw(st.sampled_from([None, 1e-10])),
+              "max_iter": draw(st.sampled_from([None, 4, 12]))} if method == "radau" else {}
+    newton = {k: v for k, v in newton.items() if v is not None}
+    values = dict(step=jn.numeric.StepControl(**step),
+                  singular=jn.numeric.Singular(**singular))
+    keywords = dict(step, singular=singular["action"], singular_tol=singular["tol"])
+    if newton:
+        values["newton"] = jn.numeric.Newton(**newton)
+        keywords.update(newton_tol=newton.get("tol"), max_newton=newton.get("max_iter"))
+    return method, values, keywords
+
+
+def _outcome(scene, **options):
+    """The arrays of a run, or the error it raised (type and message)."""
+    try:
+        tr = scene.run(save="steps", **options)
+    except jn.JetnhError as exc:
+        return type(exc), str(exc)
+    return tr.status, tr.stop_reason, tr.diagnostics.steps, tr.diagnostics.rejected, tr.t, tr.y
+
+
+@FEW
+@given(jst.scenes(jst.systems(max_n=3, affine=True), t_end=0.5), _option_spellings())
+def test_options_as_values_and_as_keywords_give_identical_runs(scene, spellings):
+    """``scene.run(step=StepControl(...), singular=Singular(...), newton=Newton(...))`` and
+    the same options as keywords run the same steps: equal to the last bit."""
+    method, values, keywords = spellings
+    a = _outcome(scene, method=method, **values)
+    b = _outcome(scene, method=method, **{k: v for k, v in keywords.items() if v is not None})
+    assert len(a) == len(b)
+    for x, y in zip(a, b):
+        if isinstance(x, np.ndarray):
+            assert x.dtype == y.dtype and np.array_equal(x, y, equal_nan=True)
+        else:
+            assert x == y

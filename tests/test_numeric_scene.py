@@ -5,6 +5,7 @@ import pytest
 import sympy as sp
 
 import jetnh as jn
+from jetnh import models
 from jetnh.mechanics.system import System
 from jetnh.errors import ConstraintError, IntegrationError, JetnhError
 from jetnh.numeric import Scene
@@ -15,13 +16,9 @@ DISK0 = dict(x=0.1, y=-0.2, phi=0.3, psi=0.4, phi_t=1.0, psi_t=0.7)
 
 @pytest.fixture(scope="module")
 def disk():
-    J = jn.JetSpace("x y phi psi")
-    x, y, phi, psi = J.q
-    xd, yd, phid, psid = J.qd
+    """The catalogue's rolling disk without its default parameters (the tests give them)."""
+    s = models.rolling_disk().replace(defaults=None)
     R, I1, I2 = sp.symbols("R I1 I2")
-    L = (xd**2 + yd**2) / 2 + (I1 * phid**2 + I2 * psid**2) / 2
-    s = System(J, L, [xd - R * sp.cos(psi) * phid, yd - R * sp.sin(psi) * phid],
-               dependent=[x, y])
     return s, {R: R_, I1: I1_, I2: I2_}
 
 

@@ -11,16 +11,8 @@ from jetnh import JetSpace
 from jetnh.mechanics.system import System
 from jetnh.mechanics.equations import action_variation, chetaev_admissible, multiplier_symbols
 from jetnh.algebra.zero import on_manifold_point, value, vanishes
+from jetnh.models import rolling_disk
 from jetnh.mechanics.variations import KINDS, defect, identity_residual, make, printed_identity_residual, reduced_identity_residual
-
-
-def disk():
-    J = JetSpace("x y phi psi")
-    x, y, phi, psi = J.q
-    xd, yd, phid, psid = J.qd
-    R, I1, I2 = sp.symbols("R I1 I2")
-    L = (xd**2 + yd**2) / 2 + (I1 * phid**2 + I2 * psid**2) / 2
-    return System(J, L, [xd - R * sp.cos(psi) * phid, yd - R * sp.sin(psi) * phid], [x, y])
 
 
 def restricted(system, v):
@@ -29,10 +21,8 @@ def restricted(system, v):
 
 
 @settings(max_examples=15)
-@given(jst.constrained_systems(max_n=4))
-def test_identity_holds_for_every_variation(case):
-    J, L, cons, dep = case
-    s = System(J, L, cons, dep)
+@given(jst.systems(max_n=4))
+def test_identity_holds_for_every_variation(s):
     for kind in KINDS:
         v = make(s, kind)
         for r in identity_residual(v):
@@ -40,7 +30,7 @@ def test_identity_holds_for_every_variation(case):
 
 
 def test_printed_identity_3_fails_where_the_commutator_is_nonzero():
-    s = disk()
+    s = rolling_disk()
     v = make(s, "suslov")
     assert any(c != 0 for c in v.c)
     assert all(vanishes(r) for r in identity_residual(v))
@@ -50,10 +40,8 @@ def test_printed_identity_3_fails_where_the_commutator_is_nonzero():
 
 
 @settings(max_examples=10)
-@given(jst.constrained_systems(max_n=4))
-def test_action_variation_13_is_an_identity(case):
-    J, L, cons, dep = case
-    s = System(J, L, cons, dep)
+@given(jst.systems(max_n=4))
+def test_action_variation_13_is_an_identity(s):
     lams = multiplier_symbols(s)
     for kind in ("free", "suslov"):
         v = make(s, kind, extra_fields=[m.name for m in lams])
@@ -61,10 +49,8 @@ def test_action_variation_13_is_an_identity(case):
 
 
 @settings(max_examples=12)
-@given(jst.constrained_systems(max_n=4))
-def test_each_variation_meets_its_own_conditions(case):
-    J, L, cons, dep = case
-    s = System(J, L, cons, dep)
+@given(jst.systems(max_n=4))
+def test_each_variation_meets_its_own_conditions(s):
     for kind in ("holder", "suslov"):
         v = restricted(s, make(s, kind))
         for name, res in v.residuals().items():
@@ -77,12 +63,10 @@ def test_each_variation_meets_its_own_conditions(case):
 
 
 @settings(max_examples=12)
-@given(jst.constrained_systems(max_n=4))
-def test_variations_coincide_exactly_when_the_defect_11_vanishes(case):
+@given(jst.systems(max_n=4))
+def test_variations_coincide_exactly_when_the_defect_11_vanishes(s):
     """On the Chetaev subspace: delta_H f = [f] eta and A_alpha c_S = [f] eta, so the
     Hoelder variation keeps f and the Suslov one commutes with d iff [f]_s eta^s = 0."""
-    J, L, cons, dep = case
-    s = System(J, L, cons, dep)
     h = restricted(s, make(s, "holder"))
     su = restricted(s, make(s, "suslov"))
     dfe = defect(s, h.eta, h.J)
@@ -119,13 +103,13 @@ def test_integrable_constraints_have_zero_defect():
 
 
 def test_defect_of_the_disk_is_nonzero_on_the_chetaev_subspace():
-    s = disk()
+    s = rolling_disk()
     h = restricted(s, make(s, "holder"))
     assert not all(vanishes(d) for d in defect(s, h.eta, h.J))
 
 
 def test_conditions_named_by_each_variation():
-    s = disk()
+    s = rolling_disk()
     assert set(make(s, "free").conditions) == set()
     assert set(make(s, "vakonomic").conditions) == {"delta f = 0"}
     assert set(make(s, "holder").conditions) == {"Chetaev condition"}

@@ -1,4 +1,5 @@
-"""Tests of jetnh.algebra.zero: the one zero test by evaluation at random points."""
+"""Tests of jetnh.algebra.zero: the zero tests, symbolic (expand, a witness, simplify when
+asked) and by evaluation at random points."""
 
 from __future__ import annotations
 
@@ -45,3 +46,18 @@ def test_value_and_manifold_point():
     pt = zero.on_manifold_point(s, s.J.q, random.Random(0))
     assert set(s.dependent_velocities) <= set(pt)
     assert all(abs(zero.value(f, pt)) < 1e-25 for f in s.constraints)
+
+
+def test_symbolic_zero_tests():
+    """expand, a random witness, a common denominator, simplify only when asked; the
+    numeric test samples both signs."""
+    x, y = sp.symbols("x y")
+    trig = sp.sin(x) ** 2 + sp.cos(x) ** 2 - 1
+    assert not zero.expr_is_zero(trig)
+    assert zero.expr_is_zero(trig, simplify=True)
+    assert zero.expr_is_zero(trig, numeric=True)
+    assert zero.expr_is_zero(1 / (x + 1) - x / (x * x + x))          # common denominator
+    assert zero.zero_residual(x * (x + y) - x * y) == x ** 2
+    assert zero.zero_residual((x + y) ** 2 - x ** 2 - 2 * x * y - y ** 2) is None
+    assert not zero.numeric_is_zero(sp.sqrt(x ** 2) - x, samples=6)      # negative samples too
+    assert zero.numeric_is_zero(sp.sqrt(x ** 2) - sp.Abs(x))

@@ -5,6 +5,8 @@ Solved equations share their subexpressions (the accelerations of a chain of k
 constraints nest k solves), so as trees they are exponentially larger than as graphs.
 sympy's ``free_symbols``, ``atoms``, ``has`` and ``xreplace`` walk the tree; these walk
 the graph once, remembering every node they have seen (by identity).
+
+``sympy_object`` is the one door from a user's value into sympy (never from a string).
 """
 
 from __future__ import annotations
@@ -13,12 +15,33 @@ import mpmath
 import sympy as sp
 from sympy.core.function import ArgumentIndexError
 
+from ..errors import ArgumentError, JetSpaceError
+
+
+def sympy_object(expr) -> sp.Basic:
+    """A sympy object from a user's value, never from a string (sympify would execute
+    it); anything else that is not one is a ``JetSpaceError``."""
+    if isinstance(expr, str):
+        raise JetSpaceError(
+            f"got the string {expr!r}; jetnh never parses strings here (that would execute "
+            "code). Build expressions from the Symbols of the jet space (J.q, J.qd, ...)")
+    try:
+        return sp.sympify(expr, strict=True)
+    except (sp.SympifyError, TypeError) as exc:
+        raise JetSpaceError(f"{expr!r} is not a sympy expression: {exc}") from None
+
+
+def _roots(expr) -> list:
+    """``expr`` (a Basic, a number or a list of them) as a list of sympy objects, each
+    converted once: the walks key their results by the identity of these objects."""
+    return [sp.sympify(e, strict=True)
+            for e in (expr if isinstance(expr, (list, tuple)) else [expr])]
+
 
 def nodes(expr, cap: int | None = None) -> list:
     """The distinct subexpressions of ``expr`` (a Basic or a list of them), children
     before parents (at most ``cap``)."""
-    roots = list(expr) if isinstance(expr, (list, tuple)) else [expr]
-    order, seen, stack = [], set(), [(sp.sympify(e, strict=True), False) for e in reversed(roots)]
+    order, seen, stack = [], set(), [(e, False) for e in reversed(_roots(expr))]
     while stack:
         e, expanded = stack.pop()
         if expanded:
@@ -44,11 +67,11 @@ def tree_size(expr, cap: int | None = None) -> int:
     (``sympy.cse``, printing) visits -- counted on the graph; ``cap + 1`` once above
     ``cap``."""
     count: dict = {}
-    for e in nodes(expr):
+    roots = _roots(expr)
+    for e in nodes(roots):
         n = 1 + sum(count[id(a)] for a in e.args)
         count[id(e)] = n if cap is None else min(n, cap + 1)
-    roots = list(expr) if isinstance(expr, (list, tuple)) else [expr]
-    total = sum(count[id(sp.sympify(e, strict=True))] for e in roots)
+    total = sum(count[id(e)] for e in roots)
     return total if cap is None else min(total, cap + 1)
 
 
@@ -82,7 +105,8 @@ def xreplace(expr, rule: dict, canon: dict | None = None):
     done: dict = {}
     canon = {} if canon is None else canon
     changed: set = set()     # ids of the subexpressions the rule reaches
-    for e in nodes(expr):
+    roots = _roots(expr)
+    for e in nodes(roots):
         if e in rule:
             new = rule[e]
             changed.add(id(e))
@@ -100,9 +124,8 @@ def xreplace(expr, rule: dict, canon: dict | None = None):
         else:
             new = e
         done[id(e)] = canon.setdefault(new, new)
-    if isinstance(expr, (list, tuple)):
-        return [done[id(sp.sympify(e, strict=True))] for e in expr]
-    return done[id(sp.sympify(expr, strict=True))]
+    out = [done[id(e)] for e in roots]
+    return out if isinstance(expr, (list, tuple)) else out[0]
 
 
 def diff(expr, *symbols, cache: dict | None = None):
@@ -187,10 +210,17 @@ def _values(expr, leaf, add, mul, power, function):
     once, children first: ``leaf(e)`` is the value of a given symbol or a number (None
     for any other node), the others come from their children's values by ``add(values)``,
     ``mul(values)``, ``power(base, exp)`` or ``function(node, values)``.  Raises
-    ValueError for a symbol without a value."""
-    roots = list(expr) if isinstance(expr, (list, tuple)) else [expr]
+    ArgumentError (a ValueError) naming every symbol without a value."""
+    roots = _roots(expr)
     val: dict = {}
-    for e in nodes(roots):
+    order = nodes(roots)
+    missing = sorted({e for e in order if isinstance(e, sp.Symbol) and leaf(e) is None},
+                     key=str)
+    if missing:
+        raise ArgumentError(
+            f"no value for {', '.join(map(str, missing))} in the point: give every free "
+            "symbol of the expression a value ({Symbol: number})")
+    for e in order:
         v = leaf(e)
         if v is None:
             args = [val[id(a)] for a in e.args]
@@ -205,14 +235,15 @@ def _values(expr, leaf, add, mul, power, function):
             else:
                 raise ValueError(f"cannot evaluate {e!r} numerically (no value given)")
         val[id(e)] = v
-    out = [val[id(sp.sympify(e, strict=True))] for e in roots]
+    out = [val[id(e)] for e in roots]
     return out if isinstance(expr, (list, tuple)) else out[0]
 
 
 def evaluate(expr, point: dict, dps: int = 30) -> list:
     """The values (mpmath numbers, ``dps`` digits) of ``expr`` (a Basic or a list) at
     ``point`` (Symbol -> number), each distinct subexpression computed once (functions
-    mpmath lacks by sympy's evalf).  Raises ValueError for a symbol without a value."""
+    mpmath lacks by sympy's evalf).  Raises ArgumentError (a ValueError) for a symbol
+    without a value."""
     with mpmath.workdps(dps):
         prec = mpmath.mp.prec
         given = {s: mpmath.mpmathify(v) if not isinstance(v, sp.Basic)
@@ -241,8 +272,8 @@ def evaluate_numpy(expr, point: dict):
     """The values (numpy float arrays, broadcast) of ``expr`` (a Basic or a list) at
     ``point`` (Symbol -> number or array), each distinct subexpression computed once
     over all the points; a function node by ``lambdify`` of its head alone (applied to
-    the values of its arguments), so the graph is never flattened.  Raises ValueError
-    for a symbol without a value."""
+    the values of its arguments), so the graph is never flattened.  Raises ArgumentError
+    (a ValueError) for a symbol without a value."""
     import numpy as np
 
     heads = _NUMPY_HEADS

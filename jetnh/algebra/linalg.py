@@ -276,7 +276,7 @@ _DPS = (50, 80)          # the two working precisions (decimal digits)
 _NOISE = 1e-12           # relative disagreement between them that marks an entry as noise
 _RANK_TOL = 1e-30        # singular values below this times the largest are zero
 _POINT_TRIES = 4         # attempts per wanted point (a point may leave the domain)
-_EXACT_MAX = 4000        # distinct subexpressions up to which exact evaluation is tried
+EXACT_MAX = 4000        # distinct subexpressions up to which exact evaluation is tried
 _DEN = 100 * 2**16       # denominator of the rational points
 
 
@@ -284,7 +284,7 @@ class Inexact(ValueError):
     """An exact evaluation met an irrational value (use the numeric one)."""
 
 
-def _exact(exprs, values: dict) -> list:
+def exact_values(exprs, values: dict) -> list:
     """The values of ``exprs`` at the rational point ``values`` as sympy Rationals (floats
     read as the exact binary numbers they are), or Inexact."""
     rule = dict(values)
@@ -297,7 +297,7 @@ def _exact(exprs, values: dict) -> list:
     return out
 
 
-def _real(v):
+def real_value(v):
     """``v`` as a finite mpf, or None (complex beyond noise, infinite, nan)."""
     if isinstance(v, mpmath.mpc):
         if abs(v.imag) > mpmath.mpf(10) ** (-(mpmath.mp.dps // 2)) * max(1, abs(v.real)):
@@ -330,7 +330,7 @@ def _generic_samples(exprs, build, points: int, seed: int, complete=None, symbol
     exprs = list(exprs)
     syms = sorted(set(symbols) | dag.free_symbols(exprs), key=lambda s: s.name)
     rng = random.Random(seed)
-    try_exact = dag.size(exprs, cap=_EXACT_MAX + 1) <= _EXACT_MAX
+    try_exact = dag.size(exprs, cap=EXACT_MAX + 1) <= EXACT_MAX
     got = 0
     for _ in range(_POINT_TRIES * points):
         if got >= points:
@@ -340,7 +340,7 @@ def _generic_samples(exprs, build, points: int, seed: int, complete=None, symbol
         if try_exact:
             try:
                 vals = complete(dict(base)) if complete is not None else base
-                M = build(_exact(exprs, vals))
+                M = build(exact_values(exprs, vals))
             except Inexact:
                 try_exact = False           # irrational entries: numeric from now on
             except (TypeError, ValueError, ZeroDivisionError, ArithmeticError):
@@ -355,7 +355,7 @@ def _generic_samples(exprs, build, points: int, seed: int, complete=None, symbol
                 with mpmath.workdps(dps):
                     mp_base = {s: mpmath.mpf(v.p) / v.q for s, v in base.items()}
                     vals = complete(mp_base) if complete is not None else mp_base
-                    values = [_real(v) for v in dag.evaluate(exprs, vals, dps=dps)]
+                    values = [real_value(v) for v in dag.evaluate(exprs, vals, dps=dps)]
                     if any(v is None for v in values):
                         raise ValueError("not a finite real number")
                     mats.append(build(values))

@@ -1,6 +1,7 @@
-"""Deciding that expressions vanish by evaluation at random points, on their shared
-graph (``dag.evaluate``), never flattened: what every zero test does above its size
-budget, and how ``compare`` decides.
+"""Every zero test of jetnh: symbolic (``expr_is_zero``, ``zero_residual``: expand, a
+random witness, a common denominator, simplify only when asked) and by evaluation at
+random points on the shared graph (``vanishes``; ``dag.evaluate``, never flattened): what
+the symbolic tests do above their size budget, and how ``compare`` decides.
 
 A Schwartz-Zippel style test: a nonzero analytic expression vanishes at a random point
 with probability zero (also on a constraint manifold, the dependent velocities computed
@@ -22,6 +23,7 @@ import random
 
 import mpmath
 import sympy as sp
+from sympy.core.function import AppliedUndef
 
 from . import dag, linalg
 
@@ -114,14 +116,14 @@ def on_constraints(system, values: dict) -> dict:
         f0 = [f.xreplace({v: sp.S.Zero for v in vel}) for f in system.constraints]
         exprs = list(system.jacobian_dependent) + f0
         if exact:
-            vals = linalg._exact(exprs, free)
+            vals = linalg.exact_values(exprs, free)
             sol = sp.Matrix(k, k, vals[:k * k]).LUsolve(-sp.Matrix(vals[k * k:]))
         else:
             vals = dag.evaluate(exprs, free, dps=mpmath.mp.dps)
             A = mpmath.matrix([vals[i * k:(i + 1) * k] for i in range(k)])
             sol = mpmath.lu_solve(A, -mpmath.matrix(vals[k * k:]))
     elif exact:
-        sol = linalg._exact([system.phi[v] for v in vel], free)
+        sol = linalg.exact_values([system.phi[v] for v in vel], free)
     else:
         sol = dag.evaluate([system.phi[v] for v in vel], free, dps=mpmath.mp.dps)
         if any(isinstance(z, mpmath.mpc) and abs(z.imag) > 1e-12 * (1 + abs(z))
@@ -142,7 +144,7 @@ def _manifold(exprs, system, derived: dict):
     def point(base, dps):
         pt = {s: mpmath.mpf(v.p) / v.q for s, v in base.items()}
         for v, x in zip(vel, dag.evaluate(phi, pt, dps=dps)):
-            pt[v] = linalg._real(x)
+            pt[v] = linalg.real_value(x)
             if pt[v] is None:
                 raise ValueError("no real point on the constraints here")
         pt.update(zip(names, dag.evaluate([derived[s] for s in names], pt, dps=dps)))
@@ -155,7 +157,7 @@ def _manifold(exprs, system, derived: dict):
                 pt = on_constraints(system, pt)
         if any(not isinstance(v, sp.Rational) for v in pt.values()):
             raise linalg.Inexact("irrational point")
-        pt.update({s: linalg._exact([e], pt)[0] for s, e in derived.items()})
+        pt.update({s: linalg.exact_values([e], pt)[0] for s, e in derived.items()})
         return pt
 
     return syms, point, exact_point
@@ -220,12 +222,12 @@ def _zero_exactly(undecided, base, point, exact_point) -> bool:
     """Undecided values ``[(expr, value at 60 digits), ...]``: exactly, those small enough
     when everything is rational (one point, one walk for all), else at 120 digits."""
     small = [(e, hi) for e, hi in undecided
-             if dag.size(e, cap=linalg._EXACT_MAX + 1) <= linalg._EXACT_MAX]
+             if dag.size(e, cap=linalg.EXACT_MAX + 1) <= linalg.EXACT_MAX]
     rest = [u for u in undecided if all(u is not v for v in small)]
     if small:
         try:
             pt = exact_point(base) if exact_point else dict(base)
-            if any(v != 0 for v in linalg._exact([e for e, _ in small], pt)):
+            if any(v != 0 for v in linalg.exact_values([e for e, _ in small], pt)):
                 return False
         except linalg.Inexact:
             rest = undecided
@@ -233,3 +235,129 @@ def _zero_exactly(undecided, base, point, exact_point) -> bool:
         return True
     tops = _values([e for e, _ in rest], base, point, 120)
     return all(abs(top) <= _SHRINK * abs(hi) for top, (_, hi) in zip(tops, rest))
+
+
+# ---------------------------------------------------------------------- symbolic zero tests
+def expr_is_zero(expr, *, simplify: bool = False, numeric: bool = False, samples: int = 3,
+                 seed: int = 0, tol: float = 1e-9) -> bool:
+    """Decide expr == 0 without ``simplify`` unless asked (see :func:`zero_residual`).
+
+    expand; a nonzero value at one random point proves non-zero; a rational expression
+    is put over a common denominator (``together`` of the unexpanded expression) and its
+    numerator expanded.  ``simplify=True`` adds ``sympy.simplify`` as a last resort (trig
+    identities); ``numeric=True`` instead decides by evaluation at ``samples`` random
+    points (every free symbol, function application and derivative replaced by random
+    real numbers of both signs, evaluated to 30 digits; points where the expression is
+    undefined are resampled).
+    """
+    return zero_residual(expr, simplify=simplify, numeric=numeric, samples=samples,
+                         seed=seed, tol=tol) is None
+
+
+def zero_residual(expr, *, simplify: bool = False, numeric: bool = False, samples: int = 3,
+                  seed: int = 0, tol: float = 1e-9):
+    """None when ``expr`` is decided zero, else a nonzero form of it (expanded/simplified).
+
+    An expression over ``TREE_MAX`` tree nodes is decided by evaluation at random
+    points on its shared graph (``vanishes``) and returned as it is.  One over
+    ``SIMPLIFY_MAX`` is not expanded (its expansion can still explode): step (2)
+    decides a nonzero one, and one numerically zero that Poly does not prove zero goes
+    to ``vanishes`` too.  Otherwise, steps, cheapest first: (1) ``sympy.expand``
+    (for a rational expression, whose expansion can be huge, instead the numerator of
+    ``together(expr)`` is expanded after step 2); (2) one evaluation at a random point:
+    a clearly nonzero value proves non-zero and ends the test; (3) ``numeric``:
+    evaluation at ``samples`` points decides; otherwise (4) ``simplify`` when asked.  So ``simplify`` only ever runs on expressions
+    that are numerically zero but not algebraically zero after expansion -
+    trigonometric identities, in practice.
+    """
+    raw = dag.sympy_object(expr)
+    if raw == 0:
+        return None
+    if large(raw):                  # expand/simplify would explode: evaluate
+        return _by_evaluation(raw, seed)
+    rational = any(p.exp.is_negative for p in raw.atoms(sp.Pow))
+    small = not large(raw, SIMPLIFY_MAX)
+    e = raw
+    if not rational and small:
+        e = sp.expand(raw)
+        if e == 0:
+            return None
+    try:
+        looks_zero = numeric_is_zero(raw, samples=1, seed=seed, tol=tol)
+    except ValueError:                   # undefined at every sampled point: no witness
+        looks_zero = True
+    if not looks_zero:
+        return e
+    if rational and _polynomial_is_zero(sp.numer(sp.together(raw))):
+        return None
+    if not small and not numeric:
+        return _by_evaluation(raw, seed)
+    if rational and small:
+        e = sp.expand(raw)
+        if e == 0:
+            return None
+    if numeric:
+        try:
+            return None if numeric_is_zero(raw, samples=samples, seed=seed + 1, tol=tol) else e
+        except ValueError:
+            return e
+    if simplify:
+        s_ = sp.simplify(e)
+        return None if s_ == 0 else s_
+    return e
+
+
+def _by_evaluation(raw, seed):
+    """``zero_residual`` of a large expression: ``vanishes`` on its graph (undefined
+    functions and derivatives as independent symbols)."""
+    opaque = [a for a in dag.nodes(raw) if isinstance(a, (sp.Derivative, AppliedUndef))]
+    plain = dag.xreplace(raw, {a: sp.Dummy(f"u{i}") for i, a in enumerate(opaque)})
+    return None if vanishes([plain], seed=seed) else raw
+
+
+def _polynomial_is_zero(expr) -> bool:
+    """Exact zero test of a polynomial expression via sympy.Poly (fast multiplication).
+
+    Non-polynomial subexpressions (sin(x), sqrt(x), f(t), ...) become generators treated
+    as independent, so True is always correct; False may miss relations between them.
+    """
+    if expr == 0:
+        return True
+    try:
+        return sp.Poly(expr).is_zero
+    except sp.polys.polyerrors.GeneratorsNeeded:          # a number
+        return sp.expand(expr) == 0
+    except sp.polys.polyerrors.PolynomialError:
+        return sp.expand(expr) == 0
+
+
+def numeric_is_zero(expr, *, samples: int = 3, seed: int = 0, tol: float = 1e-9) -> bool:
+    """True when ``expr`` vanishes at ``samples`` random points (relative tolerance ``tol``)."""
+    expr = dag.sympy_object(expr)
+    opaque = list(expr.atoms(sp.Derivative)) + list(expr.atoms(AppliedUndef))
+    if opaque:
+        expr = expr.xreplace({a: sp.Dummy(f"u{i}") for i, a in enumerate(opaque)})
+    syms = sorted(expr.free_symbols, key=sp.default_sort_key)
+    terms = sp.Add.make_args(expr)
+    rng = random.Random(seed)
+    done = tries = 0
+    while done < samples:
+        tries += 1
+        if tries > 50 * samples:
+            raise ValueError(f"could not find points where {expr} is defined")
+        vals = {s: sp.Float(rng.choice((-1, 1)) * rng.uniform(0.2, 1.6), 30) for s in syms}
+        try:
+            v = complex(expr.xreplace(vals).evalf(30))
+            scale = max(abs(complex(t.xreplace(vals).evalf(30))) for t in terms)
+        except (TypeError, ValueError, ZeroDivisionError):
+            continue
+        if not all(map(_finite, (v.real, v.imag, scale))):
+            continue
+        if abs(v) > tol * max(1.0, scale):
+            return False
+        done += 1
+    return True
+
+
+def _finite(x: float) -> bool:
+    return x == x and abs(x) != float("inf")

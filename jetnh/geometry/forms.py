@@ -8,8 +8,8 @@ The geometry of constrained mechanics on J^k M (M = R x Q) is written with forms
   that vanish exactly along prolonged curves t -> (t, c(t), c'(t), ...);
 * the **constraint forms** omega^alpha = dq^alpha - B^alpha_mu dq^mu - B^alpha_0 dt of affine
   constraints qdot^alpha = B^alpha_mu(t, q) qdot^mu + B^alpha_0(t, q) (the paper's eqs.
-  (33)-(34), with q^0 = t), whose integrability is decided by Frobenius
-  (``jetnh.geometry.frobenius``);
+  (33)-(34), with q^0 = t), built and decided integrable or not in
+  ``jetnh.geometry.frobenius``;
 * Cartan calculus (``d``, ``interior``, ``lie_derivative``, ``pullback``) for checking the
   identities the rest of the framework relies on.
 
@@ -25,29 +25,28 @@ Coordinates are ``t`` and every Symbol ``J.split`` recognises (coordinates, fiel
 their jets of any order).  Every other Symbol is a constant parameter.  Coefficients are
 never simplified on the hot paths; :meth:`Form.is_zero` decides zero-ness with
 ``sympy.expand`` (rational coefficients over a common denominator; see
-:func:`zero_residual`), :meth:`Form.is_zero_numeric` by evaluation at random points.
+``jetnh.algebra.zero.zero_residual``), :meth:`Form.is_zero_numeric` by evaluation at random
+points.
 
 Python precedence: ``^`` binds more loosely than ``+`` and ``*``; write ``(a ^ b) + c``.
 """
 
 from __future__ import annotations
 
-import random
 from functools import lru_cache
 from types import MappingProxyType
 from typing import Mapping
 
 import sympy as sp
-from sympy.core.function import AppliedUndef
 
-from ..algebra import dag, zero
-from ..errors import ConstraintError, JetSpaceError
+from ..algebra import dag
+from ..algebra.zero import expr_is_zero
+from ..errors import JetSpaceError
 from .jet import JetSpace, sympy_object
 
 __all__ = [
     "Form", "differential", "d", "wedge", "interior", "lie_derivative", "pullback",
-    "contact_forms", "constraint_forms", "affine_coefficients", "expr_is_zero",
-    "zero_residual", "numeric_is_zero", "coordinate_key",
+    "contact_forms", "coordinate_key", "basis",
 ]
 
 
@@ -91,6 +90,12 @@ def _order(J: JetSpace) -> _Order:
 def coordinate_key(J: JetSpace, sym: sp.Symbol) -> tuple:
     """The canonical sort key of a coordinate Symbol: t first, then (jet order, position)."""
     return _order(J).need(sym)
+
+
+def basis(J: JetSpace, syms) -> tuple[int, tuple] | None:
+    """The basis p-form dsyms[0] ^ ... ^ dsyms[p-1] in the canonical order: (sign of the
+    sorting permutation, sorted tuple), or None when a symbol repeats (the wedge is 0)."""
+    return _canon(_order(J), syms)
 
 
 def _canon(order: _Order, syms) -> tuple[int, tuple] | None:
@@ -293,8 +298,9 @@ class Form:
 
         ``sympy.expand`` (rational coefficients: numerator over a common denominator);
         a nonzero value at a random point proves a coefficient nonzero quickly (see
-        :func:`zero_residual`).  Identities that need trigonometric simplification are
-        not proven: use :meth:`is_zero_numeric` or ``form.map(sympy.simplify).is_zero()``.
+        ``jetnh.algebra.zero.zero_residual``).  Identities that need trigonometric
+        simplification are not proven: use :meth:`is_zero_numeric` or
+        ``form.map(sympy.simplify).is_zero()``.
         """
         return all(expr_is_zero(c) for c in self._terms.values())
 
@@ -579,7 +585,7 @@ def pullback(form: Form, subs: Mapping, target: JetSpace | None = None) -> Form:
     return out
 
 
-# ---------------------------------------------------------------------- contact & constraints
+# ---------------------------------------------------------------------- contact forms
 def contact_forms(J: JetSpace, order: int = 1) -> tuple[Form, ...]:
     """Contact forms theta^s_(k) = dq^s_(k) - q^s_(k+1) dt for k = 0 .. order-1.
 
@@ -596,218 +602,3 @@ def contact_forms(J: JetSpace, order: int = 1) -> tuple[Form, ...]:
             o.need(qk)
             out.append(Form._raw(J, 1, {(J.t,): -qk1, (qk,): sp.S.One}, o))
     return tuple(out)
-
-
-def _sym(J: JetSpace, s) -> sp.Symbol:
-    if isinstance(s, str):
-        s = sp.Symbol(s)
-    if s not in J.q:
-        raise ConstraintError(f"{s!r} is not a coordinate of {J!r}; dependent coordinates "
-                              "must be among J.q")
-    return s
-
-
-def affine_coefficients(J: JetSpace, phi, dependent, independent=None):
-    """The matrix B of explicit constraints qdot^alpha = phi^alpha(t, q, qdot^mu) when affine.
-
-    ``phi`` is a mapping {dependent coordinate: phi^alpha} or a sequence aligned with
-    ``dependent``.  Returns ``(B, independent)`` where ``B`` is a sympy Matrix with one row
-    per dependent alpha and columns rho = 0 (time) then the independent mu, such that
-    phi^alpha = B^alpha_0 + B^alpha_mu qdot^mu.  Raises ConstraintError when some phi^alpha
-    is not affine in the independent velocities (checked with expand), depends on a
-    dependent velocity, or on jets of order >= 2.
-    """
-    dep = tuple(_sym(J, s) for s in dependent)
-    if len(set(dep)) != len(dep):
-        raise ConstraintError(f"dependent coordinates repeat: {dep}")
-    if independent is None:
-        ind = tuple(s for s in J.q if s not in dep)
-    else:
-        ind = tuple(_sym(J, s) for s in independent)
-        if set(ind) & set(dep):
-            raise ConstraintError(f"{set(ind) & set(dep)} are both dependent and independent")
-    if isinstance(phi, Mapping):
-        try:
-            phis = [sympy_object(phi[a] if a in phi else phi[a.name]) for a in dep]
-        except KeyError as exc:
-            raise ConstraintError(f"no phi given for the dependent coordinate {exc}") from None
-    else:
-        phis = [sympy_object(f) for f in phi]
-        if len(phis) != len(dep):
-            raise ConstraintError(f"{len(phis)} expressions phi for {len(dep)} dependent coordinates")
-    qd_ind = [J.jet(m, 1) for m in ind]
-    bad_vel = set(J.jet(a, 1) for a in dep)
-    rows = []
-    for a, f in zip(dep, phis):
-        J.check(f)
-        for s in f.free_symbols:
-            info = J.split(s) if isinstance(s, sp.Symbol) else None
-            if info is None:
-                continue
-            if s in bad_vel:
-                raise ConstraintError(
-                    f"phi^{a} = {f} contains the dependent velocity {s}; explicit constraints "
-                    "qdot^alpha = phi^alpha may depend only on t, q and independent velocities")
-            if info[1] >= 2 or (info[1] == 1 and s not in qd_ind) or info[0] in J.fields:
-                raise ConstraintError(
-                    f"phi^{a} = {f} depends on {s}; affine constraints live on J^1 and depend "
-                    "only on t, q and the independent velocities")
-        Bm = [sp.diff(f, v) for v in qd_ind]
-        for v, b in zip(qd_ind, Bm):
-            bx = sp.expand(b)
-            if any(s in bx.free_symbols for s in qd_ind):
-                raise ConstraintError(
-                    f"the constraint qdot^{a} = {f} is not affine in the independent velocities: "
-                    f"d phi/d {v} = {b} still depends on velocities. Frobenius applies to affine "
-                    "constraints qdot^alpha = B^alpha_mu(t,q) qdot^mu + B^alpha_0(t,q) only")
-        B0 = sp.expand(f - sum((b * v for b, v in zip(Bm, qd_ind)), sp.S.Zero))
-        if any(s in B0.free_symbols for s in qd_ind):
-            raise ConstraintError(f"the constraint qdot^{a} = {f} is not affine in the independent "
-                                  "velocities")
-        rows.append([B0] + [sp.expand(b) for b in Bm])
-    return sp.Matrix(rows) if rows else sp.zeros(0, 1 + len(ind)), ind
-
-
-def constraint_forms(J: JetSpace, phi, dependent, independent=None) -> tuple[Form, ...]:
-    """One-forms omega^alpha = dq^alpha - B^alpha_mu dq^mu - B^alpha_0 dt on R x Q.
-
-    For explicit constraints qdot^alpha = phi^alpha(t, q, qdot^mu) affine in the independent
-    velocities (eq. (34) of the paper); see :func:`affine_coefficients` for the accepted
-    ``phi`` and the ConstraintError raised when phi is not affine.  Their annihilator is the
-    constraint distribution; a curve satisfies the constraints iff its tangent lies in it.
-    """
-    B, ind = affine_coefficients(J, phi, dependent, independent)
-    dep = tuple(_sym(J, s) for s in dependent)
-    out = []
-    for i, a in enumerate(dep):
-        terms = {(a,): sp.S.One, (J.t,): -B[i, 0]}
-        for j, m in enumerate(ind):
-            terms[(m,)] = -B[i, j + 1]
-        out.append(Form(J, 1, terms))
-    return tuple(out)
-
-
-# ---------------------------------------------------------------------- zero tests
-def expr_is_zero(expr, *, simplify: bool = False, numeric: bool = False, samples: int = 3,
-                 seed: int = 0, tol: float = 1e-9) -> bool:
-    """Decide expr == 0 without ``simplify`` unless asked (see :func:`zero_residual`).
-
-    expand; a nonzero value at one random point proves non-zero; a rational expression
-    is put over a common denominator (``together`` of the unexpanded expression) and its
-    numerator expanded.  ``simplify=True`` adds ``sympy.simplify`` as a last resort (trig
-    identities); ``numeric=True`` instead decides by evaluation at ``samples`` random
-    points (every free symbol, function application and derivative replaced by random
-    real numbers of both signs, evaluated to 30 digits; points where the expression is
-    undefined are resampled).
-    """
-    return zero_residual(expr, simplify=simplify, numeric=numeric, samples=samples,
-                         seed=seed, tol=tol) is None
-
-
-def zero_residual(expr, *, simplify: bool = False, numeric: bool = False, samples: int = 3,
-                  seed: int = 0, tol: float = 1e-9):
-    """None when ``expr`` is decided zero, else a nonzero form of it (expanded/simplified).
-
-    An expression over ``zero.TREE_MAX`` tree nodes is decided by evaluation at random
-    points on its shared graph (``zero.vanishes``) and returned as it is.  One over
-    ``zero.SIMPLIFY_MAX`` is not expanded (its expansion can still explode): step (2)
-    decides a nonzero one, and one numerically zero that Poly does not prove zero goes
-    to ``zero.vanishes`` too.  Otherwise, steps, cheapest first: (1) ``sympy.expand``
-    (for a rational expression, whose expansion can be huge, instead the numerator of
-    ``together(expr)`` is expanded after step 2); (2) one evaluation at a random point:
-    a clearly nonzero value proves non-zero and ends the test; (3) ``numeric``:
-    evaluation at ``samples`` points decides; otherwise (4) ``simplify`` when asked.  So ``simplify`` only ever runs on expressions
-    that are numerically zero but not algebraically zero after expansion -
-    trigonometric identities, in practice.
-    """
-    raw = sympy_object(expr)
-    if raw == 0:
-        return None
-    if zero.large(raw):                  # expand/simplify would explode: evaluate
-        return _by_evaluation(raw, seed)
-    rational = any(p.exp.is_negative for p in raw.atoms(sp.Pow))
-    small = not zero.large(raw, zero.SIMPLIFY_MAX)
-    e = raw
-    if not rational and small:
-        e = sp.expand(raw)
-        if e == 0:
-            return None
-    try:
-        looks_zero = numeric_is_zero(raw, samples=1, seed=seed, tol=tol)
-    except ValueError:                   # undefined at every sampled point: no witness
-        looks_zero = True
-    if not looks_zero:
-        return e
-    if rational and _polynomial_is_zero(sp.numer(sp.together(raw))):
-        return None
-    if not small and not numeric:
-        return _by_evaluation(raw, seed)
-    if rational and small:
-        e = sp.expand(raw)
-        if e == 0:
-            return None
-    if numeric:
-        try:
-            return None if numeric_is_zero(raw, samples=samples, seed=seed + 1, tol=tol) else e
-        except ValueError:
-            return e
-    if simplify:
-        s_ = sp.simplify(e)
-        return None if s_ == 0 else s_
-    return e
-
-
-def _by_evaluation(raw, seed):
-    """``zero_residual`` of a large expression: ``zero.vanishes`` on its graph (undefined
-    functions and derivatives as independent symbols)."""
-    opaque = [a for a in dag.nodes(raw) if isinstance(a, (sp.Derivative, AppliedUndef))]
-    plain = dag.xreplace(raw, {a: sp.Dummy(f"u{i}") for i, a in enumerate(opaque)})
-    return None if zero.vanishes([plain], seed=seed) else raw
-
-
-def _polynomial_is_zero(expr) -> bool:
-    """Exact zero test of a polynomial expression via sympy.Poly (fast multiplication).
-
-    Non-polynomial subexpressions (sin(x), sqrt(x), f(t), ...) become generators treated
-    as independent, so True is always correct; False may miss relations between them.
-    """
-    if expr == 0:
-        return True
-    try:
-        return sp.Poly(expr).is_zero
-    except sp.polys.polyerrors.GeneratorsNeeded:          # a number
-        return sp.expand(expr) == 0
-    except sp.polys.polyerrors.PolynomialError:
-        return sp.expand(expr) == 0
-
-
-def numeric_is_zero(expr, *, samples: int = 3, seed: int = 0, tol: float = 1e-9) -> bool:
-    """True when ``expr`` vanishes at ``samples`` random points (relative tolerance ``tol``)."""
-    expr = sympy_object(expr)
-    opaque = list(expr.atoms(sp.Derivative)) + list(expr.atoms(AppliedUndef))
-    if opaque:
-        expr = expr.xreplace({a: sp.Dummy(f"u{i}") for i, a in enumerate(opaque)})
-    syms = sorted(expr.free_symbols, key=sp.default_sort_key)
-    terms = sp.Add.make_args(expr)
-    rng = random.Random(seed)
-    done = tries = 0
-    while done < samples:
-        tries += 1
-        if tries > 50 * samples:
-            raise ValueError(f"could not find points where {expr} is defined")
-        vals = {s: sp.Float(rng.choice((-1, 1)) * rng.uniform(0.2, 1.6), 30) for s in syms}
-        try:
-            v = complex(expr.xreplace(vals).evalf(30))
-            scale = max(abs(complex(t.xreplace(vals).evalf(30))) for t in terms)
-        except (TypeError, ValueError, ZeroDivisionError):
-            continue
-        if not all(map(_finite, (v.real, v.imag, scale))):
-            continue
-        if abs(v) > tol * max(1.0, scale):
-            return False
-        done += 1
-    return True
-
-
-def _finite(x: float) -> bool:
-    return x == x and abs(x) != float("inf")

@@ -10,7 +10,8 @@ space R x Q lies in the distribution::
     Delta = span{ X_rho = d_rho + B^alpha_rho d_alpha },  rho = 0 (time), independent mu,
 
 which is the annihilator of the constraint one-forms
-omega^alpha = dq^alpha - B^alpha_mu dq^mu - B^alpha_0 dt.  The constraints are *integrable*
+omega^alpha = dq^alpha - B^alpha_mu dq^mu - B^alpha_0 dt (``constraint_forms``; B from
+explicit constraints by ``affine_coefficients``).  The constraints are *integrable*
 (holonomic) iff Delta is involutive (Frobenius): then R x Q is foliated by submanifolds
 g^alpha(t, q) = c^alpha whose prolongations are the constraints.  Two independent routes:
 
@@ -48,17 +49,18 @@ the coefficients (and denominators) are defined.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from typing import Sequence
+from typing import Mapping, Sequence
 
 import sympy as sp
 
 from ..algebra import dag, zero
+from ..algebra.zero import zero_residual
 from ..errors import ConstraintError
-from .forms import Form, _canon, _order, affine_coefficients, d, wedge, zero_residual
-from .jet import JetSpace
+from .forms import Form, basis, d, wedge
+from .jet import JetSpace, sympy_object
 
 __all__ = ["FrobeniusResult", "frobenius", "frobenius_from_constraints", "decide_zero",
-           "bracket_components"]
+           "bracket_components", "affine_coefficients", "constraint_forms"]
 
 _METHODS = ("brackets", "forms")
 
@@ -101,7 +103,7 @@ def decide_zero(expr, *, numeric: bool = False, simplify: bool = True, samples: 
                 seed: int = 0, tol: float = 1e-9):
     """None when ``expr`` is (decided) zero, else the nonzero expression to report.
 
-    :func:`jetnh.geometry.forms.zero_residual` with ``simplify`` on by default: expand -> one
+    :func:`jetnh.algebra.zero.zero_residual` with ``simplify`` on by default: expand -> one
     numeric evaluation as a witness of non-zeroness -> numerator over a common
     denominator (rational expressions) -> ``sympy.simplify`` (only for terms still
     numerically zero) or, with ``numeric=True``, evaluation at ``samples`` points.
@@ -121,6 +123,18 @@ def _symbols(J: JetSpace, seq, what: str) -> tuple[sp.Symbol, ...]:
     if len(set(out)) != len(out):
         raise ConstraintError(f"the {what} coordinates repeat: {tuple(out)}")
     return tuple(out)
+
+
+def _split(J: JetSpace, dependent, independent) -> tuple[tuple, tuple]:
+    """The dependent and independent coordinates (default: the others, in J.q order)."""
+    dep = _symbols(J, dependent, "dependent")
+    if independent is None:
+        return dep, tuple(s for s in J.q if s not in dep)
+    ind = _symbols(J, independent, "independent")
+    both = set(ind) & set(dep)
+    if both:
+        raise ConstraintError(f"{both} are both dependent and independent")
+    return dep, ind
 
 
 def _check_B(J: JetSpace, B, k: int, m: int) -> sp.Matrix:
@@ -153,14 +167,7 @@ def frobenius(J: JetSpace, B, dependent: Sequence, independent: Sequence | None 
     """
     if method not in _METHODS:
         raise ValueError(f"method must be one of {_METHODS}, got {method!r}")
-    dep = _symbols(J, dependent, "dependent")
-    if independent is None:
-        ind = tuple(s for s in J.q if s not in dep)
-    else:
-        ind = _symbols(J, independent, "independent")
-        both = set(ind) & set(dep)
-        if both:
-            raise ConstraintError(f"{both} are both dependent and independent")
+    dep, ind = _split(J, dependent, independent)
     B = _check_B(J, B, len(dep), len(ind))
     opts = dict(numeric=numeric, simplify=simplify, samples=samples, seed=seed)
     with zero.decisions() as evaluated:
@@ -202,17 +209,10 @@ def _brackets(J, B, dep, ind, opts) -> FrobeniusResult:
 
 def _forms(J, B, dep, ind, opts) -> FrobeniusResult:
     xs = (J.t,) + ind
-    omegas = []
-    for a, qa in enumerate(dep):
-        terms = {(qa,): sp.S.One}
-        for r, x in enumerate(xs):
-            if B[a, r] != 0:
-                terms[(x,)] = -B[a, r]
-        omegas.append(Form(J, 1, terms))
+    omegas = _omegas(J, B, dep, ind)
     if not omegas:
         return FrobeniusResult(True, {}, "forms")
     Omega = wedge(*omegas)
-    order = _order(J)
     obstructions = {}
     whole_zero = True
     for a, qa in enumerate(dep):
@@ -227,7 +227,7 @@ def _forms(J, B, dep, ind, opts) -> FrobeniusResult:
         whole_zero = False
         for r in range(len(xs)):
             for s in range(r + 1, len(xs)):
-                sign, key = _canon(order, dep + (xs[r], xs[s]))
+                sign, key = basis(J, dep + (xs[r], xs[s]))
                 if key in nonzero:
                     obstructions[(xs[r], xs[s], qa)] = -sign * nonzero[key]
     if not whole_zero and not obstructions:       # cannot happen (see module docstring)
@@ -328,3 +328,79 @@ def frobenius_from_constraints(J: JetSpace, constraints: Sequence, dependent: Se
         "velocities over a point of R x Q are a union of several pieces, not one affine "
         "subspace as for the prolongation of holonomic constraints; test each branch with "
         "frobenius()")}, "affinity")
+
+
+# ---------------------------------------------------------------------- constraint forms
+def affine_coefficients(J: JetSpace, phi, dependent, independent=None):
+    """The matrix B of explicit constraints qdot^alpha = phi^alpha(t, q, qdot^mu) when affine.
+
+    ``phi`` is a mapping {dependent coordinate: phi^alpha} or a sequence aligned with
+    ``dependent``.  Returns ``(B, independent)`` where ``B`` is a sympy Matrix with one row
+    per dependent alpha and columns rho = 0 (time) then the independent mu, such that
+    phi^alpha = B^alpha_0 + B^alpha_mu qdot^mu.  Raises ConstraintError when some phi^alpha
+    is not affine in the independent velocities (checked with expand), depends on a
+    dependent velocity, or on jets of order >= 2.
+    """
+    dep, ind = _split(J, dependent, independent)
+    if isinstance(phi, Mapping):
+        try:
+            phis = [sympy_object(phi[a] if a in phi else phi[a.name]) for a in dep]
+        except KeyError as exc:
+            raise ConstraintError(f"no phi given for the dependent coordinate {exc}") from None
+    else:
+        phis = [sympy_object(f) for f in phi]
+        if len(phis) != len(dep):
+            raise ConstraintError(f"{len(phis)} expressions phi for {len(dep)} dependent coordinates")
+    qd_ind = [J.jet(m, 1) for m in ind]
+    bad_vel = set(J.jet(a, 1) for a in dep)
+    rows = []
+    for a, f in zip(dep, phis):
+        J.check(f)
+        for s in f.free_symbols:
+            info = J.split(s) if isinstance(s, sp.Symbol) else None
+            if info is None:
+                continue
+            if s in bad_vel:
+                raise ConstraintError(
+                    f"phi^{a} = {f} contains the dependent velocity {s}; explicit constraints "
+                    "qdot^alpha = phi^alpha may depend only on t, q and independent velocities")
+            if info[1] >= 2 or (info[1] == 1 and s not in qd_ind) or info[0] in J.fields:
+                raise ConstraintError(
+                    f"phi^{a} = {f} depends on {s}; affine constraints live on J^1 and depend "
+                    "only on t, q and the independent velocities")
+        Bm = [sp.diff(f, v) for v in qd_ind]
+        for v, b in zip(qd_ind, Bm):
+            bx = sp.expand(b)
+            if any(s in bx.free_symbols for s in qd_ind):
+                raise ConstraintError(
+                    f"the constraint qdot^{a} = {f} is not affine in the independent velocities: "
+                    f"d phi/d {v} = {b} still depends on velocities. Frobenius applies to affine "
+                    "constraints qdot^alpha = B^alpha_mu(t,q) qdot^mu + B^alpha_0(t,q) only")
+        B0 = sp.expand(f - sum((b * v for b, v in zip(Bm, qd_ind)), sp.S.Zero))
+        if any(s in B0.free_symbols for s in qd_ind):
+            raise ConstraintError(f"the constraint qdot^{a} = {f} is not affine in the independent "
+                                  "velocities")
+        rows.append([B0] + [sp.expand(b) for b in Bm])
+    return sp.Matrix(rows) if rows else sp.zeros(0, 1 + len(ind)), ind
+
+
+def constraint_forms(J: JetSpace, phi, dependent, independent=None) -> tuple[Form, ...]:
+    """One-forms omega^alpha = dq^alpha - B^alpha_mu dq^mu - B^alpha_0 dt on R x Q.
+
+    For explicit constraints qdot^alpha = phi^alpha(t, q, qdot^mu) affine in the independent
+    velocities (eq. (34) of the paper); see :func:`affine_coefficients` for the accepted
+    ``phi`` and the ConstraintError raised when phi is not affine.  Their annihilator is the
+    constraint distribution; a curve satisfies the constraints iff its tangent lies in it.
+    """
+    B, ind = affine_coefficients(J, phi, dependent, independent)
+    return _omegas(J, B, _symbols(J, dependent, "dependent"), ind)
+
+
+def _omegas(J: JetSpace, B, dep, ind) -> tuple[Form, ...]:
+    """omega^alpha = dq^alpha - B^alpha_rho dx^rho, x^0 = t then the independent ``ind``."""
+    xs = (J.t,) + tuple(ind)
+    return tuple(Form(J, 1, {(qa,): sp.S.One,
+                             **{(x,): -B[a, r] for r, x in enumerate(xs) if B[a, r] != 0}})
+                 for a, qa in enumerate(dep))
+
+

@@ -21,6 +21,7 @@ import sympy as sp
 from sympy.core.function import AppliedUndef
 
 from ..algebra import dag
+from ..algebra.dag import sympy_object
 from ..errors import JetSpaceError
 
 _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9]*(?:_[A-Za-z0-9]+)*$")
@@ -67,19 +68,6 @@ def _names(spec) -> tuple[str, ...]:
                 "sympy Symbols")
         out.append(name)
     return tuple(out)
-
-
-def sympy_object(expr) -> sp.Basic:
-    """A sympy object from a user's value, never from a string (sympify would execute
-    it); anything else that is not one is a ``JetSpaceError``."""
-    if isinstance(expr, str):
-        raise JetSpaceError(
-            f"got the string {expr!r}; jetnh never parses strings here (that would execute "
-            "code). Build expressions from the Symbols of the jet space (J.q, J.qd, ...)")
-    try:
-        return sp.sympify(expr, strict=True)
-    except (sp.SympifyError, TypeError) as exc:
-        raise JetSpaceError(f"{expr!r} is not a sympy expression: {exc}") from None
 
 
 def _free(expr) -> set:

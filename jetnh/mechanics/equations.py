@@ -42,7 +42,7 @@ from . import accelerations, principles
 from ..algebra import dag, linalg
 from ..frozen import Frozen
 from ..errors import JetnhWarning, PrincipleError
-from .principles import CONVENTIONS, Form, Principle
+from .principles import CONVENTIONS, EquationForm, Principle
 from .principles import multiplier_symbols  # noqa: F401 -- kept importable from here
 from .variations import Variation, jet_space, make
 
@@ -259,7 +259,7 @@ def _variation(system, kind, explicit, lams=()):
     return base, make(base, kind, extra_fields=[m.name for m in lams])
 
 
-def _composite(system, p: Principle, f: Form, convention):
+def _composite(system, p: Principle, f: EquationForm, convention):
     """Every eta independent: the coefficients of (13) for the composite action, then
     (projected, on L~) the reduced and embedded forms."""
     lams = p.multiplier_symbols(system)
@@ -279,7 +279,7 @@ def _composite(system, p: Principle, f: Form, convention):
                                                         lams, rates))
 
 
-def _restricted(system, p: Principle, f: Form, convention):
+def _restricted(system, p: Principle, f: EquationForm, convention):
     """eta restricted to the Chetaev subspace first: one equation per independent
     coordinate.  Multipliers that act on the motion stay arbitrary (Hoelder imposed);
     the others drop out (Suslov imposed, (30b)); Chetaev's Maggi form has none."""
@@ -294,7 +294,7 @@ def _restricted(system, p: Principle, f: Form, convention):
         solver=lambda: accelerations.solve(system, p.kappa, f.explicit, arbitrary))
 
 
-def _chetaev(system, p: Principle, f: Form, convention):
+def _chetaev(system, p: Principle, f: EquationForm, convention):
     """The action of L alone, eta restricted (Maggi); or the same rows with the reactions
     nu_a df^a/dqdot^s (multiplier form), or on L~ (Voronets)."""
     if f.name == "maggi":

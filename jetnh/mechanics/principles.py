@@ -66,10 +66,10 @@ def multiplier_symbols(system, prefix: str = "lambda") -> tuple[sp.Symbol, ...]:
 
 
 @dataclass(frozen=True)
-class Form:
-    """One form of a principle's equations: its name, the paper's label (and the label of
-    its affine specialization, section 5), and whether it is built on the explicit
-    constraints qdot^alpha - phi^alpha."""
+class EquationForm:
+    """One form of a principle's equations (a way of writing them, not a differential
+    form): its name, the paper's label (and the label of its affine specialization,
+    section 5), and whether it is built on the explicit constraints qdot^alpha - phi^alpha."""
 
     name: str
     paper: str = ""
@@ -89,7 +89,7 @@ class Principle:
     aliases: tuple[str, ...]
     variation: str
     restricted: tuple[str, ...]
-    forms: tuple[Form, ...]
+    forms: tuple[EquationForm, ...]
     multipliers: str = ""
     reactions: str = ""
     kappa: str = "none"
@@ -107,7 +107,7 @@ class Principle:
         """Whether the multipliers enter the accelerations q'' (vakonomic, Hoelder)."""
         return self.kappa == "multipliers"
 
-    def form(self, name: str | None) -> Form:
+    def form(self, name: str | None) -> EquationForm:
         """The form called ``name`` (the first form when None); PrincipleError otherwise."""
         if name is None:
             return self.forms[0]
@@ -142,27 +142,29 @@ class Principle:
                 + (f", discrete {self.discrete}" if self.discrete else "") + ">")
 
 
-_PROJECTED = (Form("multiplier", "(15)"), Form("explicit", "(17)", explicit=True),
-              Form("reduced", "(18)", "(36)", explicit=True),
-              Form("embedded", "(20)", "(37)", explicit=True))
+_PROJECTED = (EquationForm("multiplier", "(15)"),
+              EquationForm("explicit", "(17)", explicit=True),
+              EquationForm("reduced", "(18)", "(36)", explicit=True),
+              EquationForm("embedded", "(20)", "(37)", explicit=True))
 
 CHETAEV = Principle(
     "chetaev", ("lagrange_dalembert", "dalembert", "nonholonomic"),
     variation="holder", restricted=CONVENTIONS,
-    forms=(Form("maggi"), Form("multiplier"), Form("voronets", explicit=True)),
+    forms=(EquationForm("maggi"), EquationForm("multiplier"),
+           EquationForm("voronets", explicit=True)),
     reactions="nu", discrete="dla")
 VAKONOMIC = Principle(
     "vakonomic", ("variational",), variation="vakonomic", restricted=(),
     forms=_PROJECTED, multipliers="lambda", kappa="multipliers", discrete="dvi")
 HOLDER = Principle(
     "holder", ("hoelder", "hölder"), variation="holder", restricted=("imposed",),
-    forms=(Form("multiplier", "(22)"), *_PROJECTED[1:]), multipliers="lambda",
+    forms=(EquationForm("multiplier", "(22)"), *_PROJECTED[1:]), multipliers="lambda",
     kappa="multipliers", discrete="dvi", discrete_conventions=("paper",))
 SUSLOV = Principle(
     "suslov", (), variation="suslov", restricted=("imposed",),
-    forms=(Form("multiplier", "(29)", explicit=True),
-           Form("reduced", "(30)", "(38)", explicit=True),
-           Form("embedded", "(31)", "(38)", explicit=True)),
+    forms=(EquationForm("multiplier", "(29)", explicit=True),
+           EquationForm("reduced", "(30)", "(38)", explicit=True),
+           EquationForm("embedded", "(31)", "(38)", explicit=True)),
     multipliers="lambda", kappa="momenta", restricted_label="(30b)")
 
 REGISTRY = (CHETAEV, VAKONOMIC, HOLDER, SUSLOV)

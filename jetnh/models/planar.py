@@ -79,6 +79,25 @@ def chaplygin_sleigh() -> System:
                   defaults={m: 1.0, I: 0.2, a: 0.5}, name="Chaplygin sleigh")
 
 
+def chaplygin_sleigh_lagranges():
+    """The Chaplygin sleigh written independently in ``sympy.physics.mechanics`` (the
+    Lagrangian of :func:`chaplygin_sleigh` with its default m, I, a), Lagrange's equations
+    formed: ``(LagrangesMethod, (x, y, theta), (xdot, ydot, thetadot))`` as
+    dynamicsymbols; the constraint makes ydot dependent.  A second route to the sleigh's
+    equations, for cross-checks and benchmarks."""
+    import sympy.physics.mechanics as me
+
+    x, y, th = me.dynamicsymbols("x y theta")
+    xd, yd, thd = me.dynamicsymbols("x y theta", 1)
+    d = {s.name: v for s, v in chaplygin_sleigh().defaults.items()}
+    m, I, a = d["m"], d["I"], d["a"]
+    L = (m * ((xd - a * sp.sin(th) * thd)**2 + (yd + a * sp.cos(th) * thd)**2) / 2
+         + I * thd**2 / 2)
+    lm = me.LagrangesMethod(L, [x, y, th], nonhol_coneqs=[-sp.sin(th) * xd + sp.cos(th) * yd])
+    lm.form_lagranges_equations()
+    return lm, (x, y, th), (xd, yd, thd)
+
+
 @model("nonholonomic_particle", initial=dict(x=0.0, y=0.2, z=0.0, x_t=1.0, y_t=0.5),
        t_end=1.0, tags=("affine", "nonholonomic", "sub-Riemannian"))
 def nonholonomic_particle() -> System:

@@ -46,6 +46,10 @@ def add_parser(sub):
                         "motion reached (every coordinate, when PRINCIPLE's unknowns "
                         "allow it; else --to), and print the two side by side: cost, "
                         "residual, verdicts, initial velocities and multipliers")
+    s.add_argument("--segments", type=int, metavar="K",
+                   help="multiple shooting on K segments of the span (default: chosen "
+                        "from the growth of the guess's sensitivities; 1: single "
+                        "shooting)")
     s.add_argument("--plot", metavar="PATH",
                    help="save a plot (png, pdf, svg) of the coordinates against t")
     s.add_argument("--format", choices=("text", "json"), default="text")
@@ -76,6 +80,8 @@ def run(args, progress) -> int:
     kw = {"rtol": args.rtol} if args.rtol is not None else {}
     if args.atol is not None:
         kw["atol"] = args.atol
+    if args.segments is not None:
+        kw["segments"] = args.segments
     params = assignments(args.set, "--set") or None
     with progress.step(f"connecting under {principle} over [{t0:g}, {float(t1):g}] "
                        "(kernels compiled once, then cached)"):

@@ -6,7 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..layout import Layout
-from ..methods._common import FunctionAddress, entry_point
+from ..methods._common import FunctionAddress
 from . import calls
 
 
@@ -55,14 +55,9 @@ class CompiledKernels:
                                     jacobian=True)
 
     def implicit(self):
-        """The compiled loop of radau (``methods.radau``), as its entry point."""
-        global _RADAU
-        if _RADAU is None:
-            from ..methods import radau
+        """The compiled loop of radau (``methods.implicit_solver``: each run goes to the
+        loop compiled with the parts it needs)."""
+        from ..methods import implicit_solver
 
-            _RADAU = entry_point(radau.solver())
-        return _RADAU
-
-
-_RADAU = None
+        return implicit_solver()
 

@@ -157,4 +157,27 @@ def explicit_solver(m):
     return _ENTRIES[m.name]
 
 
+def implicit_solver():
+    """The compiled loop of radau, called as ``solve(rhs, jac, sing, uev, hol, t0, t_end,
+    y0, p, ctl, newton, t_eval, mode, watch, halt)`` (``radau.solver``): as
+    ``explicit_solver``, each call goes to the loop compiled with the parts that run needs
+    (``loop.features``), through its entry point."""
+    if "radau" not in _ENTRIES:
+        from . import radau
+        from .loop import features
+
+        loops = {}
+
+        def solve(rhs, jac, sing, uev, hol, t0, t_end, y0, p, ctl, newton, t_eval, mode,
+                  watch, halt):
+            parts = features(ctl, mode, watch)
+            go = loops.get(parts)
+            if go is None:
+                go = loops[parts] = entry_point(radau.solver(parts))
+            return go(rhs, jac, sing, uev, hol, t0, t_end, y0, p, ctl, newton, t_eval, mode,
+                      watch, halt)
+        _ENTRIES["radau"] = solve
+    return _ENTRIES["radau"]
+
+
 _ENTRIES: dict = {}

@@ -37,13 +37,13 @@ import numba
 import numpy as np
 
 from ._common import (
-    ENDPOINTS, ENSEMBLE_OUT, FINISHED, MAX_STEPS, NONFINITE, RHS,
+    ENDPOINTS, ENSEMBLE_OUT, EVERY_STEP, FINISHED, MAX_STEPS, NONFINITE, RHS,
     SINGULAR, STOPPED, TOO_SMALL_STEP, all_finite, collect, compiled, copy_into, f8, i8,
     jit, min_step, start, store)
 from ._events import dense_eval
 from . import projection
-from .loop import (CONTROL, EMBEDDED, GIVEN, WATCHED, Result, after_step, no_events, output,
-                   outputs, watch_start)
+from .loop import (ALL, CONTROL, EMBEDDED, GIVEN, WATCHED, Result, after_step, no_events,
+                   output, outputs, watch_start)
 
 ORDER = 5
 ERROR_ORDER = 3
@@ -259,9 +259,11 @@ def _solve(rhs, jac, sing, uev, hol, t0, t_end, y0, p, ctl, newton, t_eval, mode
            halt):
     """Integrate y' = rhs(t, y, p) from t0 to t_end with Radau IIA (5); ``jac(t, y, p, J)``
     its Jacobian; the other arguments and the ``Result`` as for ``loop._solve``
-    (``newton``: ``Newton``)."""
+    (``newton``: ``Newton``; the parts ``WATCH``, ``PROJECT``, ``DENSE`` are compile-time
+    constants, as there: ``_specialised``)."""
     rtol, atol, max_step, max_steps = ctl.rtol, ctl.atol, ctl.max_step, ctl.max_steps
-    hw = projection.workspace(ctl.n_hol, ctl.n_coord, ctl.n_sens)
+    if PROJECT:
+        hw = projection.workspace(ctl.n_hol, ctl.n_coord, ctl.n_sens)
     tol = newton[0]
     max_iter = newton[1]
     if tol <= 0.0:
@@ -295,11 +297,13 @@ def _solve(rhs, jac, sing, uev, hol, t0, t_end, y0, p, ctl, newton, t_eval, mode
     ts, ys, n_out, j_eval = outputs(n, mode, t_eval, 64)
     t = t0
     ev_t, ev_i, ev_y, n_ev = no_events(n)
-    ws, sing_index = watch_start(sing, uev, watch, t, y, p)
-    if sing_index >= 0:
-        ts, ys, n_out = store(ts, ys, n_out, t, y)
-        return Result(SINGULAR, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev,
-                      sing_index)
+    sing_index = -1
+    if WATCH:
+        ws, sing_index = watch_start(sing, uev, watch, t, y, p)
+        if sing_index >= 0:
+            ts, ys, n_out = store(ts, ys, n_out, t, y)
+            return Result(SINGULAR, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev,
+                          sing_index)
     go, h_abs, ts, ys, n_out = start(rhs, t, y, p, f0, K[0], ytmp, scale, ctl, ERROR_ORDER,
                                      t_end, stats, mode, t_eval, ts, ys, n_out)
     if go >= 0:
@@ -395,20 +399,27 @@ def _solve(rhs, jac, sing, uev, hol, t0, t_end, y0, p, ctl, newton, t_eval, mode
             break
         first = False
         stats[0] += 1
-        if ctl.n_hol > 0:
-            projection.project(hol, ctl, t_new, y_new, p, hw)
+        if PROJECT:
+            if ctl.n_hol > 0:
+                projection.project(hol, ctl, t_new, y_new, p, hw)
         _dense(y, Z, F)
         rhs(t_new, y_new, p, f1)
         stats[2] += 1
         if not all_finite(f1):
             status = NONFINITE
             break
-        stop, t_stop, sing_index, have_dense, ev_t, ev_i, ev_y, n_ev = after_step(
-            TAB, False, rhs, sing, uev, p, t, h, t_new, y, y_new, K, F, ytmp, fmid, y_stop,
-            stats, watch, ws, sing_index, ev_t, ev_i, ev_y, n_ev)
-        ts, ys, n_out, j_eval = output(TAB, False, rhs, p, t, h, t_new, y, y_new, K, F, ytmp,
-                                       y_stop, stop, t_stop, True, stats, mode, t_eval,
-                                       j_eval, direction, ts, ys, n_out)
+        stop = 0
+        t_stop = t_new
+        if WATCH:
+            stop, t_stop, sing_index, have_dense, ev_t, ev_i, ev_y, n_ev = after_step(
+                TAB, False, rhs, sing, uev, p, t, h, t_new, y, y_new, K, F, ytmp, fmid,
+                y_stop, stats, watch, ws, sing_index, ev_t, ev_i, ev_y, n_ev)
+        if WATCH or DENSE:
+            ts, ys, n_out, j_eval = output(TAB, False, rhs, p, t, h, t_new, y, y_new, K, F,
+                                           ytmp, y_stop, stop, t_stop, True, stats, mode,
+                                           t_eval, j_eval, direction, ts, ys, n_out)
+        elif mode == EVERY_STEP:
+            ts, ys, n_out = store(ts, ys, n_out, t_new, y_new)
         if stop != 0:
             t = t_stop
             copy_into(y, y_stop)
@@ -440,14 +451,33 @@ ARGS = (RHS, JAC, RHS, RHS, RHS, f8, f8, f8[::1], f8[::1], CONTROL, NEWTON, f8[:
         WATCHED, i8[::1])
 
 
-#: the compiled loop in the namespace of the ensemble drivers (``ensemble_solver``)
+#: the parts of a specialised loop and the compiled loop in the namespace of the ensemble
+#: drivers (``_specialised``, ``ensemble_solver``; unbound here)
+WATCH = PROJECT = DENSE = None
 run = None
+_SPECIALISED = {}
 
 
-def solver():
+def _specialised(parts=ALL):
+    """The globals of this module with the parts of the loop a run needs bound (``WATCH,
+    PROJECT, DENSE = parts``: ``loop.features``) and ``run`` to ``_solve`` compiled over
+    them: a run without events, indicators, projection and ``t_eval`` compiles none of
+    their code (``loop._specialised``)."""
+    parts = tuple(bool(f) for f in parts)
+    if parts not in _SPECIALISED:
+        namespace = dict(globals())
+        namespace["WATCH"], namespace["PROJECT"], namespace["DENSE"] = parts
+        tag = "" if parts == ALL else "_" + "".join(c for c, f in zip("wpd", parts) if f)
+        namespace["run"] = compiled(_solve, ARGS, namespace=namespace, tag=tag)
+        _SPECIALISED[parts] = namespace
+    return _SPECIALISED[parts]
+
+
+def solver(parts=ALL):
     """The compiled ``solve(rhs, jac, sing, uev, hol, t0, t_end, y0, p, ctl, newton, t_eval,
-    mode, watch, halt)``."""
-    return compiled(_solve, ARGS)
+    mode, watch, halt)`` with the ``parts`` of ``loop.features`` (default: all; a run that
+    needs a part the loop lacks is not to be given to it)."""
+    return _specialised(parts)["run"]
 
 
 def _ensemble_parallel(rhs, jac, sing, uev, hol, t0, t_end, Y0, P, ctl, newton, t_eval,

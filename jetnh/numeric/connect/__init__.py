@@ -1,0 +1,179 @@
+"""The two-point problem of the action principle: which motion joins two configurations?
+
+``connect(system, principle, start, end, t_span, params, guess)`` finds a motion of
+``principle`` from the configuration ``start`` at t0 to ``end`` at t1 (for Chetaev and
+Suslov ``end`` may name only some coordinates) by shooting on the initial unknowns:
+
+- vakonomic and Hoelder (the stationary composite action with fixed endpoints): the
+  independent velocities and the multipliers at t0, n unknowns for the n coordinates
+  (for L kinetic and f linear the motions are sub-Riemannian geodesics);
+- Chetaev and Suslov: the independent velocities alone (m = n - k unknowns; Suslov's
+  multipliers keep their guessed values), so an ``end`` naming all n coordinates is
+  overdetermined: solved in the least-squares sense, and refused with the best answer
+  and its residual (``ConnectError.best``) when the end is not reached.
+
+The shooting map's Jacobian is the sensitivity matrix of the run
+(``scene.run(sensitivities=True)``: the variational equations, compiled from the
+derivation), never finite differences.  The search is Levenberg-Marquardt in unknowns
+scaled by the Jacobian's column norms, each step from the singular value decomposition
+with a rank cut-off (``rcond``): a rank-deficient Jacobian (a degenerate endpoint with a
+whole family of solutions, such as the circles of the Heisenberg group through a point of
+its z-axis) gives the minimum-norm step; the damping adapts to the ratio of the actual to
+the predicted decrease, so the search neither diverges far from the guess nor loses
+Newton's quadratic convergence near a solution.  On long or unstable spans (the guess's
+run stops early or its sensitivities grow past ``GROWTH``), multiple shooting on
+``segments`` equal segments comes first (the inner states are unknowns too, matched
+with the segments' exact transition matrices), polished by single shooting.  When the
+search fails from the guess, continuation in the endpoint follows ``end(s) = q(t1;
+guess) + s (end - q(t1; guess))`` from s = 0 (solved by the guess) to 1 with adaptive
+steps; when that fails too, continuation in T solves on T / 8 (the straight-line guess
+rescaled) and grows the span to T.  Iterations and continuation steps have budgets;
+where they stop, ``ConnectError`` says so.
+
+Vakonomic and Hoelder need every coordinate at t1: a free end coordinate would need its
+transversality condition (its conjugate momentum vanishes at t1), which is not imposed,
+so such an ``end`` is refused rather than answered with a non-stationary motion.
+
+Verdicts on the answer:
+
+- ``conjugate_times``: the times in (t0, t1] where the map from the initial unknowns to
+  the configuration, ``dq(t)/du`` (a block of the sensitivity matrix: the Jacobi fields
+  of the extremal), loses rank -- sign changes of its determinant located by Brent's
+  method on the dense output, and t1 itself where it is rank-deficient there.  Past the
+  first, the extremal is no longer a local minimizer of the action.
+- ``normal``: False when the endpoint map of the constraint system (the kinematic
+  control system qdot^mu = u^mu, qdot^alpha = phi^alpha(t, q, u)) loses rank along the
+  path, i.e. its controllability Gramian ``W' = A W + W A^T + B B^T`` (A, B the partial
+  derivatives of the constraint system along the path, from the graph) is singular: the
+  path is then an abnormal extremal (the multiplier rule holds with lambda_0 = 0), which
+  a small residual does not make normal.
+- ``cost``: the action ``int L dt`` along the answer, by 5-point Gauss-Legendre on every
+  step of the dense output.
+"""
+
+from __future__ import annotations
+
+from ...errors import JetnhError
+from ...mechanics import principles
+from ...mechanics.system import System
+from .. import arguments, codegen, methods
+from .connection import Connection
+from .problem import VARIATIONAL, _configuration, _guess, _scene
+from .solve import STEP_ITER, Search
+from .shooting import GROWTH, MAX_SEGMENTS, MAX_STEPS
+from .verdicts import GRAMIAN_RCOND, action, conjugate_times, gramian_ratio
+
+__all__ = ["connect", "Connection", "VARIATIONAL", "STEP_ITER", "MAX_STEPS", "GROWTH",
+           "MAX_SEGMENTS", "GRAMIAN_RCOND", "action", "conjugate_times", "gramian_ratio"]
+
+
+def connect(system, principle, start, end, t_span, params=None, guess=None, *,
+            tol=1e-9, rtol=1e-11, atol=1e-12, max_iter=100, max_continuation=64,
+            rcond=1e-9, method="dop853", segments=None) -> Connection:
+    """The motion of ``principle`` from ``start`` (every coordinate) at t0 to ``end``
+    (some or all coordinates) at t1, as a ``Connection`` (module docstring).
+
+    Parameters
+    ----------
+    system : jetnh.System
+        The constrained system.
+    principle : str
+        "vakonomic" or "holder" (the unknowns: independent velocities and multipliers
+        at t0), "chetaev" or "suslov" (the independent velocities alone).
+    start : dict
+        Every coordinate at t0, keyed by Symbol or name.
+    end : dict
+        Vakonomic and Hoelder: every coordinate at t1 (a free end would need its
+        transversality condition: ``JetnhError``).  Chetaev and Suslov: some or all
+        coordinates at t1, at most as many as there are independent velocities
+        (otherwise ``ConnectError`` with the least-squares answer in ``.best``).
+    t_span : tuple of float
+        ``(t0, t1)``, of nonzero length (t1 < t0 runs backwards).
+    params : dict, optional
+        Parameter values; the system's defaults otherwise.
+    guess : dict or sequence, optional
+        The initial unknowns: a dict by name, or a sequence in the order of
+        ``Connection.unknowns`` (the independent velocities, then for vakonomic and
+        Hoelder the multipliers; Suslov's multipliers may be given too and are kept).
+        Default: the straight-line velocities and zero multipliers, moved off runs
+        that stop before t1 or start rank-deficient.
+    tol : float, default 1e-9
+        The largest accepted endpoint error (max norm, relative to 1 + |end|).
+    rtol, atol : float, default 1e-11, 1e-12
+        The integration's tolerances.
+    max_iter : int, default 100
+        Levenberg-Marquardt iterations (one run each) from the guess; each
+        continuation step takes at most ``min(max_iter, STEP_ITER)`` (20).
+    max_continuation : int, default 64
+        Steps of the continuation in the endpoint (after a failed first search).
+    rcond : float, default 1e-9
+        The relative cut-off of singular values: the rank of the shooting Jacobian.
+    method : {"dop853", "dopri5"}, default "dop853"
+        The integrator (explicit, with dense output).
+    segments : int, optional
+        Multiple shooting on this many equal segments of the span (the inner states
+        are unknowns too, matched by their exact sensitivities; then single shooting
+        polishes the answer): for long or unstable spans, where single shooting's
+        sensitivities blow up.  Default: 1 where the guess's run reaches t1 with
+        sensitivities below ``GROWTH`` (1e6), else one segment per factor 100 of the
+        growth (2 to ``MAX_SEGMENTS``, 16); 1 is single shooting only.
+
+    Returns
+    -------
+    Connection
+        The motion, its initial state, residual and rank; its verdicts (``cost``,
+        ``normal``, ``conjugate_times``) on first access.
+
+    Raises
+    ------
+    ConnectError
+        The end is not reached within the budgets (the message says where the search
+        stopped and what the motions reach; ``.best`` is the closest motion found).
+    JetnhError
+        Bad input: an unknown coordinate, a span of zero length, a guess of the wrong
+        shape.
+    """
+    from ..scene import Scene
+
+    if not isinstance(system, System):
+        raise JetnhError(f"connect needs a jetnh System, got {type(system).__name__}")
+    principle = principles.canonical(principle)
+    t0, t1 = Scene._t_span(t_span)
+    if t1 == t0:
+        raise JetnhError(f"t_span {t_span!r} has zero length: no motion joins two "
+                         "configurations in no time; give t1 != t0")
+    m = methods.method(method)
+    if m.solver is not methods.Solver.EXPLICIT or not m.dense:     # dop853, dopri5
+        raise JetnhError(f"connect integrates with 'dop853' or 'dopri5' (dense output), "
+                         f"not {method!r}")
+    tol = arguments.positive(tol, "tol")
+    max_iter = arguments.count(max_iter, "max_iter", limit=10_000)
+    max_continuation = arguments.count(max_continuation, "max_continuation", limit=100_000)
+    if segments is not None:
+        segments = arguments.count(segments, "segments", limit=1000)
+    coords = tuple(s.name for s in system.J.q)
+    q0 = _configuration(start, coords, "start", complete=True)
+    q1 = _configuration(end, coords, "end", complete=False)
+    if principle in VARIATIONAL and len(q1) < len(coords):
+        # a free end coordinate needs its transversality condition (the momentum
+        # conjugate to it vanishes at t1); without it the answer would not be stationary
+        free = [c for c in coords if c not in q1]
+        raise JetnhError(
+            f"{principle} connect needs every coordinate at t1 (the action is stationary "
+            f"among paths with fixed endpoints); end leaves {', '.join(free)} free, whose "
+            "transversality conditions connect does not impose: name every coordinate "
+            "in end (e.g. the value a first answer reaches), or use principle='chetaev' "
+            "for a partial end")
+    # a scene at the start with placeholder unknowns (the runs replace them)
+    velocities = tuple(v.name for v in system.independent_velocities)
+    mults = codegen.multiplier_names(system, principle)
+    unknowns = velocities + (mults if principle in VARIATIONAL else ())
+    fixed = {} if principle in VARIATIONAL else {m: 0.0 for m in mults}
+    u0, fixed = _guess(guess, unknowns, fixed, system, q0, q1, t1 - t0)
+    scene = _scene(system, principle, params, {**q0, **dict(zip(unknowns, u0)), **fixed},
+                   (t0, t1))
+    shooter = Search(scene, q0, q1, unknowns, fixed, rtol, atol, method, rcond)
+    if guess is None:
+        u0 = shooter.regular_start(u0, q0, q1, t1 - t0, len(velocities))
+    u, iterations = shooter.solve(u0, tol, max_iter, max_continuation, segments)
+    return shooter.connection(u, iterations, tol)

@@ -1,0 +1,97 @@
+"""The unknowns and endpoint conditions of the two-point problem per principle: the
+start, the (partial) end, the guess of the initial unknowns, the scene the runs use."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...errors import JetnhError
+from .. import arguments
+
+#: the principles whose multipliers are unknowns of the two-point problem
+VARIATIONAL = ("vakonomic", "holder")
+
+
+#: (id(system), principle, params, t_span) -> (system, Scene): a scene's kernel keys
+#: take milliseconds to compute, so repeated problems on one system reuse its scene (the
+#: runs give every initial value; the scene's own are those of the first problem)
+_SCENES: dict = {}
+
+
+def _scene(system, principle, params, initial, t_span):
+    from ..scene import Scene
+
+    try:
+        key = (id(system), principle, None if params is None else tuple(sorted(
+            (arguments.name_of(k, "a parameter"), float(v)) for k, v in params.items())),
+            t_span)
+    except (AttributeError, TypeError, ValueError, JetnhError):
+        key = None                       # Scene says what is wrong with params
+    hit = _SCENES.get(key)
+    if hit is not None and hit[0] is system:
+        return hit[1]
+    scene = Scene(system, principle, params=params, initial=initial, t_span=t_span)
+    if key is not None:
+        if len(_SCENES) >= 16:
+            _SCENES.clear()
+        _SCENES[key] = (system, scene)
+    return scene
+
+
+def _configuration(values, coords, what, complete) -> dict[str, float]:
+    if not hasattr(values, "items"):
+        raise JetnhError(f"{what} must be a dict of coordinate values keyed by Symbol or "
+                         f"name, got a {type(values).__name__}")
+    out = {}
+    for k, v in values.items():
+        name = arguments.name_of(k, f"a coordinate of {what}")
+        if name not in coords:
+            raise JetnhError(f"{what} has {name!r}, which is not a coordinate of this "
+                             f"system; its coordinates are {', '.join(coords)}")
+        out[name] = arguments.real(v, f"{what}[{name!r}]")
+        if not np.isfinite(out[name]):
+            raise JetnhError(f"{what}[{name!r}] is {out[name]}; give a finite value")
+    missing = [c for c in coords if c not in out]
+    if complete and missing:
+        raise JetnhError(f"start must give every coordinate; missing {', '.join(missing)}")
+    if not out:
+        raise JetnhError(f"{what} names no coordinate; give the end configuration "
+                         f"(some of {', '.join(coords)})")
+    return out
+
+
+def _guess(guess, unknowns, fixed, system, q0, q1, T):
+    """The starting unknowns (and Suslov's fixed multipliers) from ``guess`` or the
+    straight line."""
+    if guess is None:
+        u = []
+        for v in unknowns:
+            base = next((system.J.split(s)[0].name for s in system.independent_velocities
+                         if s.name == v), None)
+            u.append((q1[base] - q0[base]) / T if base in q1 else 0.0)
+        return np.array(u, dtype=float), fixed
+    if hasattr(guess, "items"):
+        u = {}
+        for k, val in guess.items():
+            name = arguments.name_of(k, "a guess")
+            if name in fixed:
+                fixed = {**fixed, name: arguments.real(val, f"guess[{name!r}]")}
+                continue
+            if name not in unknowns:
+                raise JetnhError(f"guess has {name!r}, which is not an unknown of this "
+                                 f"problem; the unknowns are {', '.join(unknowns)}")
+            u[name] = arguments.real(val, f"guess[{name!r}]")
+        missing = [n for n in unknowns if n not in u]
+        if missing:
+            raise JetnhError(f"guess lacks {', '.join(missing)}; give every unknown "
+                             f"({', '.join(unknowns)}) or pass guess=None")
+        vec = np.array([u[n] for n in unknowns], dtype=float)
+    else:
+        vec = np.asarray(guess, dtype=float) if np.ndim(guess) == 1 else None
+        if vec is None or vec.shape != (len(unknowns),):
+            raise JetnhError(f"guess must hold {len(unknowns)} values (the unknowns "
+                             f"{', '.join(unknowns)}), got shape {np.shape(guess)}; pass a "
+                             "dict by name, a sequence of that length, or None")
+    if not np.all(np.isfinite(vec)):
+        raise JetnhError(f"guess has a non-finite value: {vec.tolist()}")
+    return vec, fixed

@@ -1,0 +1,191 @@
+"""Verdicts on a motion found: its action (``action``), whether it is an abnormal
+extremal (``gramian_ratio``) and where its Jacobi fields lose rank
+(``conjugate_times``)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...errors import ConnectError
+
+#: smallest / largest eigenvalue of the controllability Gramian below which the path is
+#: abnormal
+GRAMIAN_RCOND = 1e-9
+#: |det| of dq/du with normalized columns below which it has no sign (rounding level)
+DET_ZERO = 1e-10
+_GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(5)
+
+
+def _dense_states(tr, times, full=False):
+    from ..dense import evaluate
+
+    return evaluate(tr, times, full=full)
+
+
+class _Samples:
+    """The states and sensitivities of a trajectory at the times its verdicts need --
+    the 5 Gauss-Legendre nodes of every step (``gauss``) and ``GRID`` + 1 equal-spaced
+    times (``grid``) -- from one run with these times as ``t_eval`` (dense output: the
+    values ``Trajectory.at`` gives, without re-taking each step from Python)."""
+
+    GRID = 400
+
+    def __init__(self, tr, rtol, atol, method, y0):
+        t = tr.t
+        a, b = t[:-1], t[1:]
+        self.half = 0.5 * (b - a)
+        self.gauss = ((0.5 * (a + b))[:, None] + self.half[:, None] * _GAUSS_X[None, :])
+        self.grid = np.linspace(t[0], t[-1], self.GRID + 1)
+        times = np.concatenate([self.gauss.ravel(), self.grid])
+        order = np.argsort(times, kind="stable")
+        run = tr.scene.run(rtol=rtol, atol=atol, method=method, y0=y0, t_eval=times[order],
+                           sensitivities=True)
+        if run.status != 0 or len(run.t) != times.size:
+            raise ConnectError(f"the motion found could not be sampled: {run.stop_reason}")
+        ys = np.empty_like(run.y)
+        S = np.empty_like(run.sensitivities)
+        ys[order], S[order] = run.y, run.sensitivities
+        k = self.gauss.size
+        self.gauss_y, self.grid_y, self.grid_S = ys[:k], ys[k:], S[k:]
+
+
+def action(tr, samples) -> float:
+    """``int L dt`` along the trajectory: 5-point Gauss-Legendre on every step of its
+    dense output (``_Samples``), L evaluated on the graph (dependent velocities by the
+    aux kernel)."""
+    times = samples.gauss
+    L = _lagrangian(tr.scene, times.ravel(), samples.gauss_y).reshape(times.shape)
+    return float(np.sum(L * _GAUSS_W[None, :] * samples.half[:, None]))
+
+
+def _point(scene, times, ys) -> dict:
+    """Symbol -> values of t, q, every velocity and the parameters at the rows ``ys``."""
+    system = scene.system
+    J = system.J
+    kern = scene.kernels
+    aux = np.empty((ys.shape[0], kern.layout.n_aux))
+    kern.aux_rows(np.ascontiguousarray(times), np.ascontiguousarray(ys), scene.p, aux)
+    col = {n: i for i, n in enumerate(scene.state_names)}
+    point = {J.t: times}
+    for s in J.q:
+        point[s] = ys[:, col[s.name]]
+    for v in system.independent_velocities:
+        point[v] = ys[:, col[v.name]]
+    for a, v in enumerate(system.dependent_velocities):
+        point[v] = aux[:, a]
+    for s in system.parameters:
+        point[s] = scene.params[s.name]
+    return point
+
+
+def _lagrangian(scene, times, ys) -> np.ndarray:
+    from ...algebra import dag
+
+    (L,) = dag.evaluate_numpy([scene.system.L], _point(scene, times, ys))
+    return np.broadcast_to(L, times.shape)
+
+
+#: system id -> (system, [d phi/dq..., d phi/du...]) for ``gramian_ratio``
+_DERIVATIVES: dict = {}
+
+
+def gramian_ratio(tr, samples) -> float:
+    """Smallest over largest eigenvalue of the controllability Gramian of the constraint
+    system (qdot^mu = u^mu, qdot^alpha = phi^alpha(t, q, u)) linearized along ``tr``,
+    ``W = int Phi(t1, s) B B^T Phi(t1, s)^T ds`` (A = d qdot/dq, B = d qdot/du from the
+    graph on the dense output; the transition matrix Phi by RK4 propagators of ``steps``
+    equal steps, ``_Samples.GRID / 2`` of them, the integral by Simpson's rule on their
+    nodes).  Zero: the endpoint
+    map loses rank along the path (an abnormal extremal)."""
+    from ...algebra import dag
+
+    scene = tr.scene
+    system = scene.system
+    J = system.J
+    n, us = len(J.q), system.independent_velocities
+    if not system.k:
+        return 1.0
+    steps = samples.GRID // 2
+    phis = [system.phi[v] for v in system.dependent_velocities]
+    derivatives = _DERIVATIVES.get(id(system))
+    if derivatives is None or derivatives[0] is not system:
+        derivatives = _DERIVATIVES[id(system)] = (
+            system, list(dag.jacobian(phis, list(J.q))) + list(dag.jacobian(phis, list(us))))
+    t0, t1 = float(tr.t[0]), float(tr.t[-1])
+    times = samples.grid
+    vals = dag.evaluate_numpy(derivatives[1], _point(scene, times, samples.grid_y))
+    k = len(phis)
+    A = np.zeros((times.size, n, n))
+    B = np.zeros((times.size, n, len(us)))
+    index = {s: i for i, s in enumerate(J.q)}
+    dep_rows = [index[J.split(v)[0]] for v in system.dependent_velocities]
+    for j, v in enumerate(us):
+        B[:, index[J.split(v)[0]], j] = 1.0
+    for a in range(k):
+        for c in range(n):
+            A[:, dep_rows[a], c] = np.broadcast_to(vals[a * n + c], times.shape)
+        for c in range(len(us)):
+            B[:, dep_rows[a], c] = np.broadcast_to(vals[k * n + a * len(us) + c],
+                                                   times.shape)
+    h = (t1 - t0) / steps
+    I = np.eye(n)
+    A0, Am, A1 = A[0:-1:2], A[1::2], A[2::2]
+    K1 = A0
+    K2 = Am @ (I + 0.5 * h * K1)
+    K3 = Am @ (I + 0.5 * h * K2)
+    K4 = A1 @ (I + h * K3)
+    P = I + h / 6.0 * (K1 + 2 * K2 + 2 * K3 + K4)        # Phi(t_{j+1}, t_j)
+    Phi = np.empty((steps + 1, n, n))                     # Phi(t_j, t0)
+    Phi[0] = I
+    for j in range(steps):
+        Phi[j + 1] = P[j] @ Phi[j]
+    G = np.linalg.solve(np.transpose(Phi, (0, 2, 1)), Phi[-1].T).transpose(0, 2, 1)
+    GB = G @ B[::2]                                       # Phi(t1, s_j) B(s_j)
+    w = np.full(steps + 1, 2.0)
+    w[1::2] = 4.0
+    w[0] = w[-1] = 1.0
+    W = np.einsum("j,jam,jbm->ab", w * h / 3.0, GB, GB)
+    ev = np.linalg.eigvalsh(0.5 * (W + W.T))
+    return float(max(ev[0], 0.0) / ev[-1]) if ev[-1] > 0 else 0.0
+
+
+def conjugate_times(tr, cols, samples, rcond=1e-9) -> tuple:
+    """The times in (t0, t1] where dq(t)/du (rows: every coordinate; columns ``cols``,
+    the unknowns' states) loses rank: the sign changes of its determinant (square case)
+    on the equal-spaced times of ``samples``, located by Brent's method on the dense
+    output; and t1 when the matrix is rank-deficient there (relative cut-off
+    ``rcond``)."""
+    from scipy.optimize import brentq
+
+    n = tr.layout.n_state
+    nq = len(tr.layout.coordinates)
+    m = tr.sensitivities.shape[2]
+    t0, t1 = float(tr.t[0]), float(tr.t[-1])
+    found = []
+
+    def block(times):
+        Y = _dense_states(tr, np.atleast_1d(times), full=True)
+        S = Y[:, n:].reshape(-1, n, m)
+        return S[:, :nq][:, :, cols]
+
+    if len(cols) == nq:
+        def det(t):
+            M = block(t)[0]
+            norms = np.linalg.norm(M, axis=0)
+            return np.linalg.det(M / np.where(norms > 0, norms, 1.0))
+
+        grid = samples.grid[1:]
+        M = samples.grid_S[1:, :nq][:, :, cols]
+        norms = np.linalg.norm(M, axis=1, keepdims=True)
+        d = np.linalg.det(M / np.where(norms > 0, norms, 1.0))
+        for i in range(len(grid) - 1):
+            # |det| of the normalized columns at rounding level: singular there (along a
+            # whole stretch when an unknown has no effect), no sign to follow
+            if max(abs(d[i]), abs(d[i + 1])) < DET_ZERO or np.sign(d[i]) == np.sign(
+                    d[i + 1]):
+                continue
+            found.append(float(brentq(det, grid[i], grid[i + 1], xtol=1e-14, rtol=1e-14)))
+    s = np.linalg.svd(tr.sensitivities[-1][:nq][:, cols], compute_uv=False)
+    if s.size and (s[0] == 0 or s[-1] <= rcond * s[0] * 1e2) and len(cols) >= nq:
+        found.append(t1)
+    return tuple(found)

@@ -1,0 +1,125 @@
+"""Multiple shooting in connect (``segments``): the same answers as single shooting,
+and a long unstable span that single shooting cannot solve; continuation in T where the
+guess's run fails (the knife edge's vakonomic motion to where its Chetaev motion goes in
+1 s): the same answer by both routes.
+
+The unstable system: the Heisenberg constraint zdot = x ydot - y xdot with the
+inverted potential L = (xdot^2 + ydot^2)/2 + a^2 (x^2 + y^2)/2.  Its vakonomic equations
+(the Heisenberg ones plus the potential's force) are linear in (x, y, xdot, ydot) for
+the constant multiplier lambda: xddot = a^2 x - 2 lambda ydot, yddot = a^2 y +
+2 lambda xdot, so (x, y)(T) is exp(M T) applied to the initial state -- an independent
+route to the end the answer reaches.  Its sensitivities grow like e^{a T}: e^22 for
+a = 2, T = 11.
+"""
+
+import numpy as np
+import pytest
+import sympy as sp
+from scipy.linalg import expm
+
+import jetnh as jn
+from jetnh.geometry.jet import JetSpace
+from jetnh.models import get
+
+O = {"x": 0.0, "y": 0.0, "z": 0.0}
+
+
+def _inverted(a):
+    J = JetSpace("x y z")
+    x, y, z = J.q
+    xd, yd, zd = J.qd
+    s = sp.Symbol("a")
+    L = (xd**2 + yd**2) / 2 + s**2 * (x**2 + y**2) / 2
+    return jn.System(J, L, [zd - (x * yd - y * xd)], [z], defaults={s: a})
+
+
+def _same(c, d, tol):
+    assert set(c.initial) == set(d.initial)
+    assert max(abs(c.initial[k] - d.initial[k]) for k in c.initial) < tol
+    assert abs(c.cost - d.cost) < tol
+
+
+def test_multiple_shooting_agrees_on_heisenberg():
+    heis = get("heisenberg")
+    end = {"x": 0.6, "y": 0.8, "z": 0.2}
+    one = jn.connect(heis, "vakonomic", O, end, (0.0, 1.0), segments=1)
+    three = jn.connect(heis, "vakonomic", O, end, (0.0, 1.0), segments=3)
+    assert one.residual < 1e-9 and three.residual < 1e-9
+    _same(one, three, 1e-8)
+
+
+def test_multiple_shooting_agrees_on_the_rolling_disk():
+    disk = get("rolling_disk")
+    D0 = {"x": 0.0, "y": 0.0, "phi": 0.0, "psi": 0.0}
+    end = {"x": 0.5, "y": 0.5, "phi": 0.5, "psi": 0.5}
+    one = jn.connect(disk, "vakonomic", D0, end, (0.0, 1.0), segments=1)
+    four = jn.connect(disk, "vakonomic", D0, end, (0.0, 1.0), segments=4)
+    _same(one, four, 1e-8)
+
+
+def test_long_unstable_span_needs_multiple_shooting():
+    a, T = 2.0, 11.0
+    sysm = _inverted(a)
+    end = {"x": 1.0, "y": 0.5, "z": 0.3}
+    with pytest.raises(jn.ConnectError, match="did not reach the end"):
+        jn.connect(sysm, "vakonomic", O, end, (0.0, T), segments=1, max_iter=40,
+                   max_continuation=4)
+    c = jn.connect(sysm, "vakonomic", O, end, (0.0, T))      # segments from the growth
+    assert c.residual < 1e-8
+    lam = c.initial["lambda_z"]
+    M = np.array([[0, 0, 1, 0], [0, 0, 0, 1], [a * a, 0, 0, -2 * lam],
+                  [0, a * a, 2 * lam, 0]])
+    xy = expm(M * T) @ np.array([0.0, 0.0, c.initial["x_t"], c.initial["y_t"]])
+    # the flow's error grows like e^{a T} ~ 4e9 times the local error
+    assert np.max(np.abs(xy[:2] - [1.0, 0.5])) < 1e-3
+    # the same motion from 8 segments
+    _same(c, jn.connect(sysm, "vakonomic", O, end, (0.0, T), segments=8), 1e-7)
+
+
+def test_segments_must_be_a_positive_integer():
+    with pytest.raises(jn.JetnhError, match="segments"):
+        jn.connect(get("heisenberg"), "vakonomic", O, {"x": 1.0}, (0.0, 1.0), segments=0)
+
+
+def test_knife_edge_vakonomic_by_multiple_shooting_and_by_continuation_in_T():
+    """The straight-line guess's run stops before t1; the default (multiple shooting,
+    its runs from the line's inner states) and single shooting (continuation in T from
+    T / 8) find the same motion."""
+    knife = get("knife_edge")
+    ini = jn.models.initial("knife_edge")
+    chetaev = jn.Scene(knife, "chetaev", initial=ini, t_span=(0.0, 1.0)).run()
+    start = {c: float(chetaev[c][0]) for c in ("x", "y", "phi")}
+    end = {c: float(chetaev[c][-1]) for c in ("x", "y", "phi")}
+    multiple = jn.connect(knife, "vakonomic", start, end, (0.0, 1.0))
+    grown = jn.connect(knife, "vakonomic", start, end, (0.0, 1.0), segments=1)
+    assert multiple.residual < 1e-9 and grown.residual < 1e-9
+    _same(multiple, grown, 1e-7)
+
+
+@pytest.mark.parametrize("principle", ["vakonomic", "holder"])
+def test_a_free_end_coordinate_is_refused_for_the_variational_principles(principle):
+    """Fewer named coordinates than unknowns: the answer would need the free
+    coordinates' transversality conditions; connect refuses instead of returning a
+    minimum-norm, non-stationary motion."""
+    with pytest.raises(jn.JetnhError, match="leaves z free"):
+        jn.connect(get("heisenberg"), principle, O, {"x": 1.0, "y": 0.5}, (0.0, 1.0))
+
+
+def test_cli_segments_and_free_end(capsys):
+    """``jetnh connect --segments 3`` gives connect's answer; a vakonomic ``--to`` with a
+    free coordinate is refused with the fix (exit code 2 or more, no traceback)."""
+    import json
+
+    from jetnh.cli import main
+
+    code = main(["connect", "heisenberg", "--from", "x=0,y=0,z=0", "--to",
+                 "x=0.6,y=0.8,z=0.2", "--t-end", "1", "--segments", "3", "--format",
+                 "json", "-q"])
+    assert code == 0
+    data = json.loads(capsys.readouterr().out)
+    c = jn.connect(get("heisenberg"), "vakonomic", O, {"x": 0.6, "y": 0.8, "z": 0.2},
+                   (0.0, 1.0))
+    assert abs(data["cost"] - c.cost) < 1e-9
+    code = main(["connect", "heisenberg", "--from", "x=0,y=0,z=0", "--to", "x=0.6",
+                 "--t-end", "1", "-q"])
+    assert code != 0 and "leaves y, z free" in capsys.readouterr().err
