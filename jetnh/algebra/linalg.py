@@ -409,7 +409,7 @@ _FULL_MARGIN = 1e-8      # float singular values above this times the largest: f
 
 def _clearly_full(M) -> bool:
     """Whether the equilibrated mpmath matrix ``M`` (entries at most 1, one of at least
-    1/2 in every non-zero row) has full rank by far, decided in double precision: its
+    1/2 in every non-zero column) has full rank by far, decided in double precision: its
     singular values differ from those of its rounding by at most about
     sqrt(rows cols) 2^-53 plus LAPACK's backward error (< 1e-12 here), so a smallest
     one above ``_FULL_MARGIN`` times the largest is far above ``_RANK_TOL`` in high
