@@ -227,3 +227,22 @@ def test_lu_keeps_a_triangular_block_sparse(k):
     got = values(X, pt)
     assert max(abs(got[i] - complex(ref[i])) for i in range(k)) < 1e-12 * (
         1 + max(abs(complex(ref[i])) for i in range(k)))
+
+
+def test_mp_rank_decides_in_double_only_what_double_can_see():
+    """A full rank far from singular is decided in double precision (``_clearly_full``);
+    a smallest singular value below double's reach (1e-20 of the largest) is left to the
+    high-precision SVD, which finds it above its tolerance (full) -- and an exact rank
+    deficiency stays deficient.  Same answers as ``mpmath.svd_r`` alone."""
+    with mpmath.workdps(80):
+        Q = mpmath.matrix([[1, 2, 0], [0, 1, 3], [2, 0, 1]])
+        dependent = mpmath.matrix([[1, 2, 3], [2, 4, 6], [0, 1, 1]])
+        # rows that differ by 1e-20 (no scaling of rows or columns separates them)
+        hidden = mpmath.matrix([[1, 1, 0], [1, 1 + mpmath.mpf("1e-20"), 0], [0, 1, 1]])
+        assert linalg._clearly_full(linalg._equilibrate(Q))
+        assert not linalg._clearly_full(linalg._equilibrate(hidden))
+        assert linalg.mp_rank(Q) == 3
+        assert linalg.mp_rank(hidden) == 3
+        assert linalg.mp_rank(dependent) == 2
+        s = mpmath.svd_r(linalg._equilibrate(hidden), compute_uv=False)
+        assert min(abs(x) for x in s) > linalg._RANK_TOL * max(abs(x) for x in s)
