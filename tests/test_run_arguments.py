@@ -2,6 +2,7 @@
 it; Ctrl-C and the wall-clock budget stop compiled loops."""
 
 import os
+import select
 import signal
 import subprocess
 import sys
@@ -236,6 +237,10 @@ def test_timeout_stops_an_ensemble(disk):
 
 
 CHILD = textwrap.dedent("""
+    import signal
+    # Ctrl-C as in a terminal: a child of a background job inherits SIGINT ignored, and
+    # jetnh leaves an ignored SIGINT ignored
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     import jetnh as jn
     from jetnh import models
     sc = jn.Scene(models.get("rolling_disk"), "chetaev",
@@ -258,23 +263,34 @@ CHILD = textwrap.dedent("""
 """)
 
 
+def _line(child, seconds):
+    """The child's next line of output, or its stderr once it has been killed after
+    ``seconds`` without one (the test fails; it never hangs)."""
+    ready, _, _ = select.select([child.stdout], [], [], seconds)
+    if ready:
+        return child.stdout.readline().decode()
+    child.kill()
+    return f"no line within {seconds} s; stderr: {child.stderr.read()[-2000:].decode()}"
+
+
 def test_ctrl_c_stops_compiled_runs(tmp_path):
     """SIGINT to a long compiled run (dop853, dla, an ensemble) in a child process: each
     stops within a few seconds with a KeyboardInterrupt."""
     script = tmp_path / "child.py"
     script.write_text(CHILD)
     env = dict(os.environ, JETNH_CACHE=str(tmp_path / "cache"))
+    # unbuffered: a line read leaves the next one in the pipe, where select sees it
     child = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE,
-                             stderr=subprocess.PIPE, text=True, env=env)
+                             stderr=subprocess.PIPE, bufsize=0, env=env)
     try:
         for i in range(3):
-            line = child.stdout.readline()
-            assert line.split() == ["ready", str(i)], line + child.stderr.read()
+            line = _line(child, 900.0)           # (compiling under load: minutes)
+            assert line.split() == ["ready", str(i)], line
             time.sleep(1.0)                      # well inside the compiled loop
             tic = time.perf_counter()
             child.send_signal(signal.SIGINT)
-            line = child.stdout.readline()
-            assert line.split() == ["interrupted", str(i)], line + child.stderr.read()
+            line = _line(child, 30.0)
+            assert line.split() == ["interrupted", str(i)], line
             assert time.perf_counter() - tic < 3.0
         assert child.wait(timeout=30) == 0
     finally:
