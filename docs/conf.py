@@ -59,7 +59,7 @@ autodoc_default_options = {"members": True, "undoc-members": False}
 nitpicky = True
 nitpick_ignore_regex = [
     (r"py:.*", r"(sympy|sp|numpy|np|pandas|pd|matplotlib|xarray|dask|distributed|scipy|numba"
-               r"|mpmath|hypothesis|collections|typing|pathlib|concurrent|dataclasses)\b.*"),
+               r"|mpmath|hypothesis|collections|typing|pathlib|concurrent|dataclasses|random)\b.*"),
     (r"py:.*", r"(int|float|str|bool|dict|list|tuple|set|frozenset|object|callable|None"
                r"|Exception|ValueError|RuntimeError|UserWarning|bytes|type|Path|Mapping"
                r"|Sequence|Iterable|Callable|Any|Expr|Symbol|Matrix|ndarray|DataFrame|Series"

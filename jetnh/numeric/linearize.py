@@ -311,7 +311,7 @@ class Linearization(Frozen):
         unknowns : str or list of str
             Names of kept states (e.g. the multipliers) to solve for.
         tol : float, default 1e-10
-            The accepted |x'|, relative to ``max(1, |x'|)`` at this point.
+            The accepted ``|x'|``, relative to ``max(1, |x'|)`` at this point.
         """
         from scipy.optimize import least_squares
 
