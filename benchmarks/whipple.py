@@ -38,7 +38,7 @@ def reference_eigenvalues(v: float) -> np.ndarray:
 
 def main():
     import jetnh as jn
-    from jetnh.models.whipple import benchmark_parameters, whipple_kane
+    from jetnh.models.whipple import DEPENDENT, benchmark_parameters, upright, whipple_kane
 
     args = parser(__doc__, "whipple").parse_args()
     speeds = [5.0] if args.quick else [1.0, 3.0, 4.5, 5.0, 6.0, 8.0, 10.0]
@@ -47,15 +47,13 @@ def main():
     km = whipple_kane()
     stages["kane_equations_s"] = time.perf_counter() - tic
     tic = time.perf_counter()
-    bike = jn.from_mechanics(km, dependent=["x", "y", "q1", "q4", "q6"])
+    bike = jn.from_mechanics(km, dependent=DEPENDENT)
     stages["import_s"] = time.perf_counter() - tic
     params = benchmark_parameters()
-    at = {q.name: 0.0 for q in bike.J.q}            # upright: the pitch q4 = 0 is on g = 0
-    at.update(q2_t=0.0, q5_t=0.0)
     rows, worst = [], 0.0
     lin = None
     for v in speeds:
-        at["q3_t"] = v / params["WRrad"]
+        at = upright(bike, v, params)
         tic = time.perf_counter()
         lin = (jn.linearize(bike, "chetaev", at=at, params=params) if lin is None
                else lin.replace(at=at))

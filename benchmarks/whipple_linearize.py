@@ -33,17 +33,15 @@ PUBLISHED = {"weave": 4.29238253634111, "capsize": 6.02426201538837}
 
 def jetnh_route():
     import jetnh as jn
-    from jetnh.models.whipple import benchmark_parameters, whipple_kane
+    from jetnh.models.whipple import DEPENDENT, benchmark_parameters, upright, whipple_kane
 
     tic = time.perf_counter()
     km = whipple_kane()
     kane = time.perf_counter() - tic
-    bike = jn.from_mechanics(km, dependent=["x", "y", "q1", "q4", "q6"])
+    bike = jn.from_mechanics(km, dependent=DEPENDENT)
     params = benchmark_parameters()
     rR = params["WRrad"]
-    at = {q.name: 0.0 for q in bike.J.q}
-    at.update(q2_t=0.0, q5_t=0.0, q3_t=5.0 / rR)
-    lin = jn.linearize(bike, "chetaev", at=at, params=params)
+    lin = jn.linearize(bike, "chetaev", at=upright(bike, 5.0, params), params=params)
     scan = lin.along("q3_t", SPEEDS / rR)
     return kane, list(scan.eigenvalues), [c * rR for c in scan.crossings]
 
@@ -52,7 +50,7 @@ def sympy_route():
     import sympy as sp
     from sympy.physics.mechanics import dynamicsymbols
 
-    from jetnh.models.whipple import benchmark_parameters, whipple_kane
+    from jetnh.models.whipple import DEPENDENT, benchmark_parameters, upright, whipple_kane
 
     tic = time.perf_counter()
     km = whipple_kane()

@@ -12,7 +12,7 @@ import sympy as sp
 
 import jetnh as jn
 from jetnh.algebra import dag
-from jetnh.models.whipple import benchmark_parameters, whipple_kane
+from jetnh.models.whipple import DEPENDENT, benchmark_parameters, upright, whipple_kane
 from test_kane import RTOL, agreement
 
 pytestmark = pytest.mark.slow
@@ -57,12 +57,10 @@ def test_weave_and_capsize_speeds():
     capsize v_c = 6.02426201538837 m/s, the crossings of Re lambda = 0 along the speed of
     jetnh's own linearization of upright straight running."""
     km = whipple_kane()
-    bike = jn.from_mechanics(km, dependent=["x", "y", "q1", "q4", "q6"])
+    bike = jn.from_mechanics(km, dependent=DEPENDENT)
     params = benchmark_parameters()
     rR = params["WRrad"]
-    at = {q.name: 0.0 for q in bike.J.q}
-    at.update(q2_t=0.0, q5_t=0.0, q3_t=5.0 / rR)
-    lin = jn.linearize(bike, "chetaev", at=at, params=params)
+    lin = jn.linearize(bike, "chetaev", at=upright(bike, 5.0, params), params=params)
     scan = lin.along("q3_t", np.linspace(0.0, 10.0, 21) / rR)
     speeds = [c * rR for c in scan.crossings]
     assert speeds == pytest.approx([4.29238253634111, 6.02426201538837], abs=1e-10)

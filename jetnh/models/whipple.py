@@ -17,8 +17,8 @@ with speeds u_i = q_i' (ux, uy, u1..u6), rolling without slip at both contacts (
 nonholonomic constraints) and the front contact on the ground (the configuration
 constraint, which fixes the pitch q4).  ``whipple_kane()`` returns the ``KanesMethod``
 (Kane's equations formed); ``benchmark_parameters()`` the benchmark's values in these
-parameters; ``benchmark_configuration()`` the upright configuration (pitch solved from
-the configuration constraint).
+parameters; ``DEPENDENT`` the split of the benchmark's linearization; ``upright(system,
+speed, params)`` the state of upright straight running.
 """
 
 from __future__ import annotations
@@ -29,6 +29,9 @@ import sympy as sp
 PARAMETER_NAMES = ("WFrad WRrad htangle forkoffset forklength framelength forkcg1 forkcg3 "
                    "framecg1 framecg3 Iwr11 Iwr22 Iwf11 Iwf22 Iframe11 Iframe22 Iframe33 "
                    "Iframe31 Ifork11 Ifork22 Ifork33 Ifork31 g mframe mfork mwf mwr").split()
+#: the dependent coordinates of the benchmark's split (``from_mechanics(..., dependent=)``):
+#: roll, rear wheel and steer rates independent
+DEPENDENT = ("x", "y", "q1", "q4", "q6")
 
 
 def whipple_kane():
@@ -125,3 +128,13 @@ def benchmark_parameters() -> dict[str, float]:
                   Ifork22=0.06, Ifork33=0.00708, Ifork31=0.00756, Iframe11=9.2, Iframe22=11,
                   Iframe33=2.8, Iframe31=-2.4, mfork=4, mframe=85, mwf=3, mwr=2, g=9.81)
     return {k: float(sp.N(v, 30)) for k, v in values.items()}
+
+
+def upright(system, speed: float, params: dict) -> dict[str, float]:
+    """Upright straight running at forward speed ``speed`` (m/s) of ``system`` (the bicycle
+    from ``from_mechanics(whipple_kane(), dependent=DEPENDENT)``): every coordinate 0 (the
+    pitch q4 = 0 is on the ground for the benchmark's geometry), roll and steer rates 0,
+    the rear wheel's rate speed / WRrad."""
+    at = {q.name: 0.0 for q in system.J.q}
+    at.update(q2_t=0.0, q5_t=0.0, q3_t=speed / params["WRrad"])
+    return at
