@@ -23,16 +23,23 @@ the predicted decrease, so the search neither diverges far from the guess nor lo
 Newton's quadratic convergence near a solution.  On long or unstable spans (the guess's
 run stops early or its sensitivities grow past ``GROWTH``), multiple shooting on
 ``segments`` equal segments comes first (the inner states are unknowns too, matched
-with the segments' exact transition matrices), polished by single shooting.  When the
-search fails from the guess, continuation in the endpoint follows ``end(s) = q(t1;
-guess) + s (end - q(t1; guess))`` from s = 0 (solved by the guess) to 1 with adaptive
-steps; when that fails too, continuation in T solves on T / 8 (the straight-line guess
-rescaled) and grows the span to T.  Iterations and continuation steps have budgets;
-where they stop, ``ConnectError`` says so.
+with the segments' exact transition matrices), polished by single shooting -- or, where
+single shooting cannot reach the tolerance, its segments stitched into one trajectory
+(``connection.Stitched``: their sensitivities chained).  When the search fails from the
+guess, the routes follow in turn (``Search.solve``): continuation in the endpoint
+``end(s) = q(t1; guess) + s (end - q(t1; guess))`` from s = 0 to 1 with adaptive steps;
+a collocation warm start (``collocation.warm_start``: scipy's solve_bvp on the compiled
+equations and Jacobian, from the guess's run bent onto the end) polished by Newton;
+continuation in T, from T / 8 (the straight-line guess rescaled) to T.  An end with
+more conditions than the rank of the shooting Jacobian (overdetermined, or
+rank-deficient) is continued on its best-determined conditions and checked on all at
+the end, so the continuation's path never leaves the reachable set.  Iterations and
+continuation steps have budgets; where they stop, ``ConnectError`` says so.
 
-Vakonomic and Hoelder need every coordinate at t1: a free end coordinate would need its
-transversality condition (its conjugate momentum vanishes at t1), which is not imposed,
-so such an ``end`` is refused rather than answered with a non-stationary motion.
+Vakonomic and Hoelder ends may leave coordinates free: their transversality conditions
+close the problem -- the coefficient of each free eta^i in the boundary term of the
+composite action's variation (13), the momentum P_i = d(L + lambda f)/dqdot^i, vanishes
+at t1 (``problem.transversality``, from the derivation).
 
 Verdicts on the answer:
 
@@ -58,7 +65,7 @@ from ...mechanics import principles
 from ...mechanics.system import System
 from .. import arguments, codegen, methods
 from .connection import Connection
-from .problem import VARIATIONAL, _configuration, _guess, _scene
+from .problem import VARIATIONAL, Momenta, _configuration, _guess, _scene
 from .solve import STEP_ITER, Search
 from .shooting import GROWTH, MAX_SEGMENTS, MAX_STEPS
 from .verdicts import GRAMIAN_RCOND, action, conjugate_times, gramian_ratio
@@ -83,10 +90,11 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     start : dict
         Every coordinate at t0, keyed by Symbol or name.
     end : dict
-        Vakonomic and Hoelder: every coordinate at t1 (a free end would need its
-        transversality condition: ``JetnhError``).  Chetaev and Suslov: some or all
-        coordinates at t1, at most as many as there are independent velocities
-        (otherwise ``ConnectError`` with the least-squares answer in ``.best``).
+        Vakonomic and Hoelder: some or all coordinates at t1 (the momenta of the
+        free ones vanish there: their transversality conditions).  Chetaev and
+        Suslov: some or all coordinates at t1; more than there are independent
+        velocities only where the end is reachable (otherwise ``ConnectError`` with
+        the least-squares answer in ``.best``).
     t_span : tuple of float
         ``(t0, t1)``, of nonzero length (t1 < t0 runs backwards).
     params : dict, optional
@@ -121,8 +129,9 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     Returns
     -------
     Connection
-        The motion, its initial state, residual and rank; its verdicts (``cost``,
-        ``normal``, ``conjugate_times``) on first access.
+        The motion, its initial state, residual and rank, its end ``conditions`` and the
+        ``route`` that found it; its verdicts (``cost``, ``normal``,
+        ``conjugate_times``) on first access.
 
     Raises
     ------
@@ -154,16 +163,6 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     coords = tuple(s.name for s in system.J.q)
     q0 = _configuration(start, coords, "start", complete=True)
     q1 = _configuration(end, coords, "end", complete=False)
-    if principle in VARIATIONAL and len(q1) < len(coords):
-        # a free end coordinate needs its transversality condition (the momentum
-        # conjugate to it vanishes at t1); without it the answer would not be stationary
-        free = [c for c in coords if c not in q1]
-        raise JetnhError(
-            f"{principle} connect needs every coordinate at t1 (the action is stationary "
-            f"among paths with fixed endpoints); end leaves {', '.join(free)} free, whose "
-            "transversality conditions connect does not impose: name every coordinate "
-            "in end (e.g. the value a first answer reaches), or use principle='chetaev' "
-            "for a partial end")
     # a scene at the start with placeholder unknowns (the runs replace them)
     velocities = tuple(v.name for v in system.independent_velocities)
     mults = codegen.multiplier_names(system, principle)
@@ -172,8 +171,11 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     u0, fixed = _guess(guess, unknowns, fixed, system, q0, q1, t1 - t0)
     scene = _scene(system, principle, params, {**q0, **dict(zip(unknowns, u0)), **fixed},
                    (t0, t1))
-    shooter = Search(scene, q0, q1, unknowns, fixed, rtol, atol, method, rcond)
+    free = [c for c in coords if c not in q1] if principle in VARIATIONAL else []
+    shooter = Search(scene, q0, q1, unknowns, fixed, rtol, atol, method, rcond,
+                     momenta=Momenta(scene, free) if free else None)
     if guess is None:
         u0 = shooter.regular_start(u0, q0, q1, t1 - t0, len(velocities))
-    u, iterations = shooter.solve(u0, tol, max_iter, max_continuation, segments)
-    return shooter.connection(u, iterations, tol)
+    u, iterations, stitched, route = shooter.solve(u0, tol, max_iter, max_continuation,
+                                                   segments)
+    return shooter.connection(u, iterations, tol, stitched, route)

@@ -54,3 +54,82 @@ def problem(scene, start, end, t1, jacobian=True, nodes=11):
         if name in end and f"{name}_t" in names:
             Y[names.index(f"{name}_t")] = rate
     return fun, (fun_jac if jacobian else None), bc, t, Y
+
+
+#: the warm start's mesh: its first nodes, its largest size and its tolerance (a start
+#: for Newton, not the answer)
+WARM_NODES, WARM_MAX_NODES, WARM_TOL = 21, 5000, 1e-5
+
+
+def warm_start(shooter, rows=None, u=None):
+    """The initial unknowns of ``shooter``'s problem (``solve.Search``) from direct
+    collocation: ``solve_bvp`` on the scene's compiled equations and Jacobian, every
+    coordinate and the fixed initial values (Suslov's multipliers) at t0, the end
+    conditions ``rows`` (all when None: the named coordinates and the free ones'
+    transversality conditions) at t1, on ``WARM_NODES`` nodes from the run with the
+    unknowns ``u`` (a motion that misses the end), its named coordinates bent
+    linearly in t onto the end; where that run fails (or without ``u``), from the
+    straight line between the configurations (the velocities its rates, the
+    multipliers 0).  None where the boundary conditions do not square with the states
+    or solve_bvp finds no solution within ``WARM_MAX_NODES`` nodes."""
+    import warnings
+
+    from scipy.integrate import solve_bvp
+
+    scene = shooter.scene
+    names = scene.state_names
+    nq = len(scene.coordinates)
+    conds = list(range(len(shooter.target))) if rows is None else list(rows)
+    fixed = [names.index(f) for f in shooter.fixed]
+    if nq + len(fixed) + len(conds) != len(names):
+        return None
+    kern, p = scene.kernels, scene.p
+    jac = kernels.jacobian_kernels(scene).jac
+    y0, target = shooter.y0, shooter.target[conds]
+    t0, t1 = shooter.span
+    n = len(names)
+
+    def fun(t, Y):
+        out, o = np.empty_like(Y), np.empty(n)
+        for i in range(Y.shape[1]):
+            kern.rhs(float(t[i]), np.ascontiguousarray(Y[:, i]), p, o)
+            out[:, i] = o
+        return out
+
+    def fun_jac(t, Y):
+        out, Jm = np.empty((n, n, Y.shape[1])), np.empty((n, n))
+        for i in range(Y.shape[1]):
+            jac(float(t[i]), np.ascontiguousarray(Y[:, i]), p, Jm)
+            out[:, :, i] = Jm
+        return out
+
+    def bc(ya, yb):
+        values, _ = shooter.conditions_at(t1, yb)
+        return np.concatenate([ya[:nq] - y0[:nq], ya[fixed] - y0[fixed],
+                               values[conds] - target])
+
+    t = np.linspace(t0, t1, WARM_NODES)
+    ends = dict(zip(shooter.end_names, shooter.target))
+    got = None if u is None else shooter.endpoint(u)
+    if got is not None:
+        Y = got[2].at(t).to_numpy().T.copy()
+        miss = shooter.target[:len(shooter.rows)] - Y[shooter.rows, -1]
+        Y[shooter.rows] += np.outer(miss, (t - t0) / (t1 - t0))
+    else:
+        Y = np.zeros((n, t.size))
+        Y[fixed] = y0[fixed][:, None]
+        for i, name in enumerate(names[:nq]):
+            rate = (ends.get(name, y0[i]) - y0[i]) / (t1 - t0)
+            Y[i] = y0[i] + rate * (t - t0)
+            if f"{name}_t" in names:
+                Y[names.index(f"{name}_t")] = rate
+    with warnings.catch_warnings(), np.errstate(all="ignore"):
+        warnings.simplefilter("ignore")
+        try:
+            sol = solve_bvp(fun, bc, t, Y, fun_jac=fun_jac, tol=WARM_TOL,
+                            max_nodes=WARM_MAX_NODES)
+        except (ValueError, np.linalg.LinAlgError, ZeroDivisionError):
+            return None
+    if sol.status != 0 or not np.all(np.isfinite(sol.y[:, 0])):
+        return None
+    return sol.y[shooter.cols, 0]

@@ -6,8 +6,12 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from types import MappingProxyType
 
+import numpy as np
+
+from ...errors import JetnhError
 from ..trajectory import Trajectory
-from .verdicts import GRAMIAN_RCOND, _Samples, action, conjugate_times, gramian_ratio
+from .verdicts import (_GAUSS_X, GRAMIAN_RCOND, _Samples, action, conjugate_times,
+                       gramian_ratio)
 
 
 @dataclass(frozen=True)
@@ -29,10 +33,18 @@ class Connection:
     _columns: tuple = field(repr=False, compare=False)     # the unknowns' states
     _rcond: float = field(repr=False, compare=False)
     _run: MappingProxyType = field(repr=False, compare=False)   # rtol, atol, method
+    #: the end conditions: the named coordinates, then p_<q> for each free coordinate q
+    #: (its transversality condition)
+    conditions: tuple = ()
+    #: how it was found: "Newton from the guess", "continuation in the endpoint",
+    #: "collocation", "continuation in T" or "multiple shooting (k segments)"
+    route: str = ""
 
     @cached_property
     def _samples(self):
         tr = self.trajectory
+        if isinstance(tr._segments, Stitched):
+            return _StitchedSamples(tr)
         return _Samples(tr, self._run["rtol"], self._run["atol"], self._run["method"],
                         tr.y[0])
 
@@ -64,3 +76,111 @@ class Connection:
                 f"{self.residual:.2e}, normal={self.normal}, conjugate_times="
                 f"{tuple(round(t, 10) for t in self.conjugate_times)}, initial="
                 f"{dict(self.initial)})")
+
+
+class Stitched:
+    """The runs of multiple shooting's segments as one motion (``Trajectory._segments``):
+    its rows are the segments' steps (each inner node once, as the end of the segment
+    before it), its sensitivities those of each segment chained by the transition
+    matrices of the ones before (dy(t)/dy(t0) = S_i(t) S_{i-1}(t_i) ... S_0(t_1)), its
+    values between rows each segment's dense output (``evaluate``, ``at``)."""
+
+    def __init__(self, pieces, chains):
+        self.pieces, self.chains = tuple(pieces), tuple(chains)
+        self.nodes = np.array([float(p.t[0]) for p in pieces] + [float(pieces[-1].t[-1])])
+
+    @classmethod
+    def join(cls, segments, U):
+        """The stitched Trajectory of ``segments`` (``shooting.Segments``) at their
+        unknowns ``U``, or None where a segment's run fails."""
+        sh = segments.shooter
+        pieces = []
+        for i, y in enumerate(segments.split(U)):
+            try:
+                tr = sh.scene.run(rtol=sh.rtol, atol=sh.atol, method=sh.method, y0=y,
+                                  t_span=(segments.nodes[i], segments.nodes[i + 1]),
+                                  sensitivities=True)
+            except JetnhError:
+                return None
+            if tr.status != 0:
+                return None
+            pieces.append(tr)
+        first = pieces[0]
+        n, cols = len(sh.y0), first.sensitivity_columns
+        P = np.zeros((n, len(cols)))
+        P[:, :n] = np.eye(n)
+        chains, ts, ys, Ss = [], [], [], []
+        for i, tr in enumerate(pieces):
+            chains.append(P)
+            rows = slice(0 if i == 0 else 1, None)
+            S = cls._chain(tr.sensitivities[rows], P, n)
+            ts.append(tr.t[rows]), ys.append(tr.y[rows]), Ss.append(S)
+            P = S[-1]
+        joined = cls(pieces, chains)
+        info = [tr.diagnostics for tr in pieces]
+        return Trajectory(
+            first.scene, np.concatenate(ts), np.concatenate(ys), first._p,
+            method=first.method, status=0,
+            stop_reason=f"reached t1 ({len(pieces)} segments of multiple shooting, "
+                        "stitched)",
+            steps=sum(d.steps or 0 for d in info),
+            rejected=sum(d.rejected or 0 for d in info),
+            nfev=sum(d.rhs_evaluations for d in info),
+            wall_time=sum(d.wall_time for d in info), kernels=first._kernels,
+            segments=joined, sensitivities=(cols, np.concatenate(Ss)))
+
+    @staticmethod
+    def _chain(S, P, n):
+        """Segment sensitivities S (to its own start) chained by P = dy(t_i)/d(y0, p)."""
+        out = S[:, :, :n] @ P
+        out[:, :, n:] += S[:, :, n:]
+        return out
+
+    def _rows(self, traj):
+        return [slice(0 if i == 0 else 1, None) for i in range(len(self.pieces))]
+
+    def aux(self, traj) -> np.ndarray:
+        return np.concatenate([p.aux[r] for p, r in zip(self.pieces, self._rows(traj))])
+
+    def at(self, traj, times) -> np.ndarray:
+        return self.evaluate(traj, times)
+
+    def evaluate(self, traj, times, full=False) -> np.ndarray:
+        """The states at ``times`` (with ``full``: and the chained sensitivities,
+        row-major), each from its segment's dense output."""
+        from ..dense import evaluate
+
+        tau = np.atleast_1d(np.asarray(times, dtype=float))
+        n = traj.layout.n_state
+        m = len(traj.sensitivity_columns)
+        out = np.empty((tau.size, n + (n * m if full else 0)))
+        sgn = 1.0 if self.nodes[-1] >= self.nodes[0] else -1.0
+        which = np.minimum(np.searchsorted(sgn * self.nodes[1:-1], sgn * tau,
+                                           side="left"), len(self.pieces) - 1)
+        for i, piece in enumerate(self.pieces):
+            idx = np.nonzero(which == i)[0]
+            if not idx.size:
+                continue
+            Y = evaluate(piece, tau[idx], full=full)
+            out[idx, :n] = Y[:, :n]
+            if full:
+                S = Y[:, n:].reshape(-1, n, m)
+                out[idx, n:] = self._chain(S, self.chains[i], n).reshape(idx.size, -1)
+        return out
+
+
+class _StitchedSamples(_Samples):
+    """``_Samples`` of a stitched motion: from its segments' dense output."""
+
+    def __init__(self, tr):
+        t = tr.t
+        a, b = t[:-1], t[1:]
+        self.half = 0.5 * (b - a)
+        self.gauss = ((0.5 * (a + b))[:, None] + self.half[:, None] * _GAUSS_X[None, :])
+        self.grid = np.linspace(t[0], t[-1], self.GRID + 1)
+        times = np.concatenate([self.gauss.ravel(), self.grid])
+        n, m = tr.layout.n_state, len(tr.sensitivity_columns)
+        Y = tr._segments.evaluate(tr, times, full=True)
+        k = self.gauss.size
+        self.gauss_y, self.grid_y = Y[:k, :n], Y[k:, :n]
+        self.grid_S = Y[k:, n:].reshape(-1, n, m)

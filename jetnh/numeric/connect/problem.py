@@ -7,6 +7,7 @@ import numpy as np
 
 from ...errors import JetnhError
 from .. import arguments
+from ...algebra import dag
 
 #: the principles whose multipliers are unknowns of the two-point problem
 VARIATIONAL = ("vakonomic", "holder")
@@ -95,3 +96,52 @@ def _guess(guess, unknowns, fixed, system, q0, q1, T):
     if not np.all(np.isfinite(vec)):
         raise JetnhError(f"guess has a non-finite value: {vec.tolist()}")
     return vec, fixed
+
+
+def transversality(system, principle, free) -> tuple:
+    """The end conditions of the free coordinates ``free`` (names): the coefficient of
+    eta^i in the boundary term P_s eta^s of the composite action's variation (13)
+    (``mechanics.equations.action_variation`` under the principle's variation, every eta
+    independent), i.e. the momentum P_i = d(L + lambda f)/dqdot^i, which must vanish at
+    t1 where q^i(t1) is free; the dependent velocities replaced by phi (the state's
+    functions).  Expressions in t, q, the independent velocities, the multipliers and
+    the parameters."""
+    from ...mechanics import equations, principles, variations
+
+    p = principles.get(principle)
+    mults = p.multiplier_symbols(system)
+    variation = variations.make(system, p.variation, extra_fields=mults)
+    boundary = equations.action_variation(system, variation, mults).boundary
+    eta = {q.name: e for q, e in zip(system.J.q, variation.eta)}
+    phi = dict(system.phi)
+    return tuple(dag.xreplace(dag.diff(boundary, eta[c]), phi) for c in free)
+
+
+class Momenta:
+    """The transversality conditions (``transversality``) of a scene as numbers: their
+    values at a state and their derivatives by the state (from the graph)."""
+
+    def __init__(self, scene, free):
+        system = scene.system
+        exprs = transversality(system, scene.principle, free)
+        names = scene.state_names
+        by_name = {s.name: s for s in (*system.J.q, *system.independent_velocities)}
+        from ...mechanics import principles
+        by_name.update({s.name: s for s in
+                        principles.get(scene.principle).multiplier_symbols(system)})
+        self.states = [by_name[n] for n in names]
+        self.free = tuple(free)
+        self.exprs = list(exprs)
+        self.jacobian = list(dag.jacobian(self.exprs, self.states))
+        self.t = system.J.t
+        self.params = {s: scene.params[s.name] for s in system.parameters}
+
+    def __call__(self, t, y):
+        """``(P_free(t, y), dP_free/dy)``."""
+        point = {self.t: float(t), **self.params,
+                 **{s: float(v) for s, v in zip(self.states, y)}}
+        k, n = len(self.exprs), len(self.states)
+        vals = dag.evaluate_numpy(self.exprs + self.jacobian, point)
+        values = np.array([float(v) for v in vals[:k]])
+        G = np.array([float(v) for v in vals[k:]]).reshape(k, n)
+        return values, G

@@ -9,7 +9,7 @@ from types import MappingProxyType
 import numpy as np
 
 from ...errors import ConnectError, JetnhError
-from .connection import Connection
+from .connection import Connection, Stitched
 from .problem import VARIATIONAL
 from .shooting import Segments, Shooter, default_segments
 
@@ -20,93 +20,208 @@ FIRST_SPAN = 0.125
 
 
 class Search(Shooter):
-    """A ``Shooter`` that solves q(t1; u) = end."""
+    """A ``Shooter`` that solves the end conditions: q(t1; u) = end for the named
+    coordinates and, with ``momenta`` (``problem.Momenta``), the transversality
+    conditions P_i(t1; u) = 0 of the free ones."""
 
-    def newton(self, u, target, tol, max_iter):
-        """Levenberg-Marquardt (``levenberg_marquardt``) on q(t1; u) = target; a
-        least-squares point with the end missed raises ``unreachable``.  Returns
-        ``(u, converged, iterations)``."""
+    def __init__(self, *args, momenta=None):
+        super().__init__(*args)
+        self.momenta = momenta
+        if momenta is not None:
+            self.target = np.concatenate([self.target, np.zeros(len(momenta.free))])
+
+    def _endpoint(self, u):
+        tr = self.run(u)
+        return None if tr is None else (*self.end_conditions(tr), tr)
+
+    def end_conditions(self, tr):
+        """The end conditions' values at the end of ``tr`` (a run from the start with
+        sensitivities) and their derivatives by the unknowns."""
+        y, S = tr.y[-1], tr.sensitivities[-1][:, :len(self.y0)]
+        values, D = self.conditions_at(tr.t[-1], y)
+        return values, D @ S[:, self.cols]
+
+    def conditions_at(self, t, y):
+        """The end conditions' values at the state ``y`` at t1 and their derivatives by
+        the state."""
+        D = np.eye(len(y))[self.rows]
+        if self.momenta is None:
+            return y[self.rows], D
+        g, G = self.momenta(t, y)
+        return np.concatenate([y[self.rows], g]), np.vstack([D, G])
+
+    @property
+    def conditions(self) -> tuple:
+        """The names of the end conditions: the named coordinates, then p_<free>."""
+        return self.end_names + tuple(f"p_{c}" for c in (
+            self.momenta.free if self.momenta is not None else ()))
+
+    def newton(self, u, target, tol, max_iter, rows=None):
+        """Levenberg-Marquardt (``levenberg_marquardt``) on the end conditions = target
+        (only those of ``rows`` when given); a least-squares point with the end missed
+        raises ``unreachable``.  Returns ``(u, converged, iterations)``."""
+        pick = slice(None) if rows is None else list(rows)
+
         def evaluate(v):
             got = self.endpoint(v)
-            return None if got is None else (got[0] - target, got[1])
+            return None if got is None else ((got[0] - target)[pick], got[1][pick])
 
         def stuck(v, F, Jm):
             if self.least_squares_point(F, Jm):
                 raise self.unreachable(v)
 
-        return levenberg_marquardt(evaluate, u, 1.0 + np.abs(target), tol, max_iter,
-                                   self.svd, stuck)
+        return levenberg_marquardt(evaluate, u, (1.0 + np.abs(target))[pick], tol,
+                                   max_iter, self.svd, stuck)
 
     def solve(self, u0, tol, max_iter, max_continuation, segments=None):
-        """Multiple shooting on ``segments`` segments (``default_segments`` when None)
-        when there are more than one, polished by single shooting; else (or when it
-        fails) Newton from ``u0``, else continuation in the endpoint from q(t1; u0)."""
+        """The routes in turn, each from what the last left: multiple shooting on
+        ``segments`` segments (``default_segments`` when None) when there are more than
+        one, polished by single shooting (or stitched, ``Stitched``, where single shooting
+        cannot reach the tolerance); Newton from ``u0``; continuation in the endpoint
+        from q(t1; u0); a direct collocation warm start (``collocation.warm_start``)
+        polished by Newton; continuation in T.  An overdetermined or rank-deficient end
+        (more conditions than the rank of the shooting Jacobian) is continued on its
+        best-determined conditions (``leading``) and checked on all at the end.
+        Returns ``(u, iterations, stitched or None, the route that found it)``."""
         k = default_segments(self, u0) if segments is None else segments
-        its = 0
+        if self.momenta is not None and segments is None:
+            k = 1 if self.endpoint(u0) is not None else k
+        its, notes, closest = 0, [], None
         if k > 1:
-            u, ok, its = self.multiple(u0, k, tol, max_iter)
+            u, ok, its, stitched = self.multiple(u0, k, tol, max_iter)
             if ok:
-                return u, its
-        u, ok, more = self.newton(u0, self.target, tol, max_iter)
+                return u, its, stitched, (f"multiple shooting ({k} segments"
+                                          + (", stitched)" if stitched else ")"))
+            notes.append(f"multiple shooting on {k} segments did not converge")
+        try:
+            u, ok, more = self.newton(u0, self.target, tol, max_iter)
+        except ConnectError as e:           # a least-squares point near the guess
+            closest, ok, more = e, False, max_iter
         its += more
         if ok:
-            return u, its
+            return u, its, None, "Newton from the guess"
+        rows = self.leading(u0)
+        routes = [("continuation in the endpoint", self.continuation),
+                  ("collocation", self.collocation), ("continuation in T", self.grow)]
+        for name, route in routes:
+            try:
+                v, ok, k, where = route(u0, tol, max_iter, max_continuation, rows)
+            except ConnectError as e:
+                closest = _closer(closest, e)
+                notes.append(f"{name}: {e.args[0].split(':')[0]}")
+                continue
+            its += k
+            if ok and rows is not None:
+                # the leading conditions met: all of them from there
+                try:
+                    v, ok, k = self.newton(v, self.target, tol, max_iter)
+                except ConnectError as e:
+                    # the leading conditions met exactly and the others then missed at
+                    # a least-squares point: the end is off the reachable set here
+                    closest = _closer(closest, e)
+                    notes.append(f"{name} met {', '.join(self.conditions[r] for r in rows)}"
+                                 " exactly; the others then missed at a least-squares "
+                                 "point")
+                    break
+                its += k
+            if ok:
+                return v, its, None, name + ("" if rows is None else " (on " + ", ".join(
+                    self.conditions[r] for r in rows) + " first)")
+            notes.append(f"{name} stopped at {where}")
+        if closest is not None:
+            raise ConnectError(closest.args[0] + "; also tried: " + "; ".join(notes),
+                               closest.best)
+        best = self._best(u)
+        raise ConnectError(
+            f"connect did not reach the end ({its} iterations in all): "
+            + "; ".join(notes) + f"; the closest motion ends "
+            f"{'?' if best is None else format(best.residual, '.3g')} away from end"
+            + self._reachability(u) + "; try another guess, a shorter span or an end "
+            "nearer the start (ConnectError.best is that motion)", best)
+
+    def leading(self, u):
+        """The end conditions to continue on when the shooting Jacobian at ``u`` has
+        lower rank r than there are conditions (an overdetermined Chetaev or Suslov end,
+        or a rank-deficient one): the r best determined (column-pivoted QR of the
+        scaled Jacobian's transpose); where the run fails, the named coordinates of the
+        independent velocities first.  None when the rank is full."""
+        got = self.endpoint(u)
+        n_cond = len(self.target)
+        if got is None:
+            ind = [self.conditions.index(v[:-2]) for v in self.unknowns[:self.n_velocities]
+                   if v.endswith("_t") and v[:-2] in self.conditions]
+            if n_cond <= len(self.unknowns) or not ind:
+                return None
+            rest = [r for r in range(n_cond) if r not in ind]
+            return (ind + rest)[:len(self.unknowns)]
+        from scipy.linalg import qr
+
+        Jm = got[1] / (1.0 + np.abs(self.target))[:, None]
+        norms = np.linalg.norm(Jm, axis=0)
+        Jm = Jm / np.where(norms > 0, norms, 1.0)
+        _, s, _ = self.svd(Jm)
+        if len(s) >= n_cond:
+            return None
+        _, _, piv = qr(Jm.T, pivoting=True)
+        return sorted(int(r) for r in piv[:max(len(s), 1)])
+
+    def continuation(self, u0, tol, max_iter, max_continuation, rows=None):
+        """Continuation in the endpoint: the conditions ``rows`` (all when None) follow
+        ``first + s (target - first)`` from s = 0 (q(t1; u0)) to 1 with adaptive steps.
+        Returns ``(u, reached s = 1, iterations, where it stopped)``."""
         got = self.endpoint(u0)
         if got is None:
-            v, ok, k, reached = self.grow(u0, tol, max_iter, max_continuation)
-            if ok:
-                return v, its + k
-            raise ConnectError(
-                f"the {self.scene.principle} run from the start with the guess "
-                f"{dict(zip(self.unknowns, u0.tolist()))} fails before t1 (a singular "
-                "configuration or a non-finite state), and continuation in T stopped at "
-                f"T = {reached:.6g}; give another guess")
+            return u0, False, 0, "s = 0 (the guess's run fails before t1)"
         first = got[0]
-        total, s, ds, u = its, 0.0, 0.25, u0
+        total, s, ds, u = 0, 0.0, 0.25, u0
         for _ in range(max_continuation):
             s_try = min(1.0, s + ds)
             target = first + s_try * (self.target - first)
             # a continuation step starts near its solution: a short budget, so that an
             # unreachable end fails in seconds
-            v, ok, k = self.newton(u, target, tol if s_try == 1.0 else max(tol, 1e-6),
-                                   min(max_iter, STEP_ITER))
+            try:
+                v, ok, k = self.newton(u, target, tol if s_try == 1.0 else max(tol, 1e-6),
+                                       min(max_iter, STEP_ITER), rows)
+            except ConnectError:
+                v, ok, k = u, False, min(max_iter, STEP_ITER)
             total += k
             if ok:
                 s, u = s_try, v
                 if s == 1.0:
-                    return u, total
+                    return u, True, total, "s = 1"
                 ds = min(2.0 * ds, 1.0 - s)
             else:
                 ds *= 0.5
                 if ds < 1e-4:
                     break
-        v, ok, k, reached = self.grow(u0, tol, max_iter, max_continuation)
-        total += k
-        if ok:
-            return v, total
-        best = self._best(u)
-        raise ConnectError(
-            f"connect did not reach the end: continuation in the endpoint stopped at "
-            f"s = {s:.6g} of 1 (step {ds:.3g}), continuation in T at T = {reached:.6g} "
-            f"of {self.span[1] - self.span[0]:.6g} ({total} iterations in all); the closest "
-            f"motion ends {best.residual:.3g} away from end"
-            + self._reachability(u) + "; try another guess, a shorter span or an end "
-            "nearer the start (ConnectError.best is that motion)", best)
+        return u, False, total, f"s = {s:.6g} of 1 (step {ds:.3g})"
 
-    def grow(self, u0, tol, max_iter, max_continuation):
+    def collocation(self, u0, tol, max_iter, max_continuation, rows=None):
+        """A direct collocation warm start (``collocation.warm_start``: scipy's solve_bvp
+        on the scene's equations from the straight line, the conditions ``rows``),
+        polished by Newton on them.  Returns ``(u, converged, iterations, where)``."""
+        from .collocation import warm_start
+
+        u = warm_start(self, rows, u0)
+        if u is None:
+            return u0, False, 0, "its mesh limit without a solution"
+        v, ok, k = self.newton(u, self.target, tol, max_iter, rows)
+        return v, ok, k, "Newton from its answer" if not ok else "its answer"
+
+    def grow(self, u0, tol, max_iter, max_continuation, rows=None):
         """Continuation in T: solve on the span ``FIRST_SPAN`` T from the guess with its
         velocities and multipliers scaled by 1 / ``FIRST_SPAN`` (for L quadratic in the
         velocities and linear constraints, an extremal run faster is one of the
         shorter span: the straight line is a better guess there), then grow the span
         to T with adaptive steps, each predicted by that rescaling of the last answer.
-        Returns ``(u, converged, iterations, the longest span solved)``."""
+        Returns ``(u, converged, iterations, where it stopped)``."""
         full = self.span
         t0, t1 = full
 
         def solve_on(frac, u, budget, tol_):
             self.span = (t0, t0 + frac * (t1 - t0))
             try:
-                return self.newton(u, self.target, tol_, budget)
+                return self.newton(u, self.target, tol_, budget, rows)
             except ConnectError:          # an overdetermined end missed: not this way
                 return u, False, budget
 
@@ -120,7 +235,7 @@ class Search(Shooter):
                                        self.span[1] - t0, self.n_velocities)
             u, ok, total = solve_on(s, u, max_iter, max(tol, 1e-6))
             if not ok:
-                return u0, False, total, 0.0
+                return u0, False, total, f"T = {s * (t1 - t0):.6g} (its first span)"
             ds = (1.0 - s) / 4.0
             for _ in range(max_continuation):
                 s_try = min(1.0, s + ds)
@@ -130,30 +245,39 @@ class Search(Shooter):
                 if ok:
                     s, u = s_try, v
                     if s == 1.0:
-                        return u, True, total, s * (t1 - t0)
+                        return u, True, total, "T"
                     ds = min(2.0 * ds, 1.0 - s)
                 else:
                     ds *= 0.5
                     if ds < 1e-4:
                         break
-            return u, False, total, s * (t1 - t0)
+            return u, False, total, f"T = {s * (t1 - t0):.6g} of {t1 - t0:.6g}"
         finally:
             self.span = full
 
     def multiple(self, u0, k, tol, max_iter):
         """Multiple shooting (``Segments``) from ``u0`` and the straight line, then
         single shooting from its ``u`` (at most ``STEP_ITER`` iterations: it starts at
-        the answer up to the amplification of the matching error).  Returns ``(u,
-        converged, iterations)``."""
-        seg = Segments(self, k)
+        the answer up to the amplification of the matching error).  Where single
+        shooting cannot get there (sensitivities so large that the run's own error
+        exceeds the tolerance), the segments' answer is the motion: ``Stitched``.
+        Returns ``(u, converged, iterations, stitched or None)``."""
+        seg = _Segments(self, k)
         U0 = seg.guess(u0)
         U, ok, its = levenberg_marquardt(lambda U: seg.evaluate(U, self.target), U0,
                                          seg.scale(U0, self.target), tol, max_iter,
                                          self.svd)
         if not ok:
-            return u0, False, its
-        u, ok, more = self.newton(U[:seg.m], self.target, tol, min(max_iter, STEP_ITER))
-        return u, ok, its + more
+            return u0, False, its, None
+        try:
+            u, ok, more = self.newton(U[:seg.m], self.target, tol,
+                                      min(max_iter, STEP_ITER))
+        except ConnectError:
+            ok, more = False, min(max_iter, STEP_ITER)
+        if ok:
+            return u, True, its + more, None
+        stitched = Stitched.join(seg, U)
+        return U[:seg.m], stitched is not None, its + more, stitched
 
     def least_squares_point(self, F, Jm) -> bool:
         """Whether ``u`` is a stationary point of |F|^2 with F != 0 (J^T F = 0): more
@@ -176,9 +300,9 @@ class Search(Shooter):
             return ""
         s = np.linalg.svd(got[1], compute_uv=False)
         r = int(np.sum(s > self.rcond * s[0])) if s.size and s[0] > 0 else 0
-        if len(self.rows) > r:
+        if len(self.target) > r:
             return (f" (the {self.scene.principle} motions from the start reach a "
-                    f"{r}-dimensional set of the {len(self.rows)} named coordinates near "
+                    f"{r}-dimensional set of the {len(self.target)} end conditions near "
                     f"there: {len(self.unknowns)} unknowns "
                     f"{', '.join(self.unknowns)}; "
                     + ("choose an end on that set or another span)"
@@ -193,18 +317,20 @@ class Search(Shooter):
             return None
 
     # ------------------------------------------------------------------ the answer
-    def connection(self, u, iterations, tol) -> Connection:
+    def connection(self, u, iterations, tol, stitched=None, route="") -> Connection:
         scene = self.scene
-        got = self.endpoint(u)
+        if stitched is not None:
+            tr = stitched
+            got = (*self.end_conditions(tr), tr)
+        else:
+            got = self.endpoint(u)
         if got is None:
             raise ConnectError(f"the motion found stops before t1: "
                                f"{scene.run(y0=self.state(u)).stop_reason}")
-        tr = got[2]
-        q = tr.y[-1, self.rows]
+        q, Jm, tr = got
         residual = float(np.max(np.abs(q - self.target)))
-        _, s, _ = self.svd(tr.sensitivities[-1][np.ix_(self.rows, self.cols)])
-        full = np.linalg.svd(tr.sensitivities[-1][np.ix_(self.rows, self.cols)],
-                             compute_uv=False)
+        _, s, _ = self.svd(Jm)
+        full = np.linalg.svd(Jm, compute_uv=False)
         start = list(tr.y[0]) + [float(tr[d][0]) for d in scene.dependent_velocities]
         best = Connection(
             trajectory=tr,
@@ -213,7 +339,8 @@ class Search(Shooter):
             residual=residual, principle=scene.principle, unknowns=self.unknowns,
             rank=len(s), singular_values=tuple(full.tolist()), iterations=iterations,
             _columns=tuple(self.cols), _rcond=self.rcond, _run=MappingProxyType(
-                {"rtol": self.rtol, "atol": self.atol, "method": self.method}))
+                {"rtol": self.rtol, "atol": self.atol, "method": self.method}),
+            conditions=self.conditions, route=route)
         if tol is not None and np.max(np.abs(q - self.target)
                                       / (1 + np.abs(self.target))) > tol:
             raise ConnectError(
@@ -275,3 +402,42 @@ def levenberg_marquardt(evaluate, u, scale, tol, max_iter, svd, stuck=None):
             if mu > 1e20 * s[0] ** 2:          # no step of any length decreases |F|
                 return u, False, it
     return u, bool(np.max(np.abs(F) / scale) <= tol), max_iter
+
+
+def _closer(a, b):
+    """Of two ``ConnectError`` (or None), the one whose ``best`` ends nearer the end."""
+    if a is None or (b.best is not None and (a.best is None
+                                             or b.best.residual < a.best.residual)):
+        return b
+    return a
+
+
+class _Segments(Segments):
+    """``Segments`` whose last block is every end condition of the search (the named
+    coordinates and the free ones' transversality conditions)."""
+
+    def guess(self, u):
+        sh = self.shooter
+        full, sh.target = sh.target, sh.target[:len(sh.rows)]     # the named coordinates
+        try:
+            return super().guess(u)
+        finally:
+            sh.target = full
+
+    def run(self, i, y):
+        tr = super().run(i, y)
+        if i == self.k - 1:
+            self.last = tr
+        return tr
+
+    def evaluate(self, U, target):
+        sh = self.shooter
+        got = super().evaluate(U, target[:len(sh.rows)])
+        if got is None or sh.momenta is None:
+            return got
+        F, Jm = got
+        tr, n = self.last, self.n
+        g, G = sh.momenta(tr.t[-1], tr.y[-1])
+        block = np.zeros((len(g), U.size))
+        block[:, self.m + (self.k - 2) * n:] = G @ tr.sensitivities[-1][:, :n]
+        return np.concatenate([F, g - target[len(sh.rows):]]), np.vstack([Jm, block])

@@ -19,7 +19,8 @@ _GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(5)
 def _dense_states(tr, times, full=False):
     from ..dense import evaluate
 
-    return evaluate(tr, times, full=full)
+    stitched = getattr(tr._segments, "evaluate", None)      # multiple shooting's motion
+    return stitched(tr, times, full) if stitched else evaluate(tr, times, full=full)
 
 
 class _Samples:
