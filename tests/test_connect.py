@@ -288,9 +288,25 @@ def test_bad_input(heis, args, match):
 
 
 def test_unreachable_in_budget_says_where_it_stopped(heis):
-    with pytest.raises(jn.ConnectError, match="stopped at s ="):
-        jn.connect(heis, "vakonomic", O, {"x": 1.0, "y": 0.5, "z": 40.0}, (0.0, 1.0),
+    with pytest.raises(jn.ConnectError, match="stopped at s =") as e:
+        jn.connect(heis, "vakonomic", O, {"x": 1.0, "y": 0.5, "z": 4000.0}, (0.0, 1.0),
+                   max_iter=2, max_continuation=2)
+    assert "collocation stopped" in str(e.value) and "continuation in T" in str(e.value)
+
+
+def test_collocation_route_where_the_budget_stops_shooting(heis):
+    """z = 40 with two iterations and three continuation steps: the collocation warm
+    start finds a geodesic (the closed form from its initial state) that winds round
+    more than once -- its conjugate times say it is no minimizer."""
+    c = jn.connect(heis, "vakonomic", O, {"x": 1.0, "y": 0.5, "z": 40.0}, (0.0, 1.0),
                    max_iter=2, max_continuation=3)
+    assert c.route == "collocation" and c.residual < 1e-8
+    xt, yt, lam = c.initial["x_t"], c.initial["y_t"], c.initial["lambda_z"]
+    v, theta, omega = math.hypot(xt, yt), math.atan2(yt, xt), 2 * lam
+    assert np.max(np.abs(np.array(heisenberg_end(v, theta, omega, 1.0))
+                         - [1.0, 0.5, 40.0])) < 1e-8
+    assert abs(c.cost - v**2 / 2) < 1e-8
+    assert abs(c.conjugate_times[0] - 2 * math.pi / abs(omega)) < 1e-9
 
 
 def test_cli_connect(tmp_path):

@@ -87,10 +87,13 @@ def test_free_end_by_multiple_shooting_and_collocation():
     three = jn.connect(disk, "vakonomic", DISK0, end, (0.0, 1.0), segments=3)
     assert three.residual < 1e-9
     assert max(abs(one.initial[k] - three.initial[k]) for k in one.initial) < 1e-7
+    # solve_bvp on the same equations with the transversality condition at t1, from
+    # the run of unknowns 20 % off bent onto the end
     shooter = _search(disk, end)
-    u = collocation.warm_start(shooter, u=np.array([1.0, 0.5, 0.0, 0.0]))
+    u = collocation.warm_start(shooter, u=1.2 * np.array([one.initial[k]
+                                                          for k in one.unknowns]))
     assert u is not None
-    assert max(abs(u[i] - one.initial[k]) for i, k in enumerate(one.unknowns)) < 1e-3
+    assert max(abs(u[i] - one.initial[k]) for i, k in enumerate(one.unknowns)) < 1e-4
 
 
 def _search(system, end):

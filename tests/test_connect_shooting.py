@@ -1,8 +1,8 @@
 """Multiple shooting in connect (``segments``): the same answers as single shooting,
 and a long unstable span that single shooting cannot solve (and, where it cannot even
-polish multiple shooting's answer, the segments stitched into one motion);
-continuation in T where the guess's run fails (the knife edge's vakonomic motion to where its Chetaev motion goes in
-1 s): the same answer by both routes.
+polish multiple shooting's answer, the segments stitched into one motion); the knife
+edge's vakonomic motion to where its Chetaev motion goes in 1 s (the guess's run stops
+before t1) by the collocation warm start and by multiple shooting: the same answer.
 
 The unstable system: the Heisenberg constraint zdot = x ydot - y xdot with the
 inverted potential L = (xdot^2 + ydot^2)/2 + a^2 (x^2 + y^2)/2.  Its vakonomic equations
@@ -82,19 +82,24 @@ def test_segments_must_be_a_positive_integer():
         jn.connect(get("heisenberg"), "vakonomic", O, {"x": 1.0}, (0.0, 1.0), segments=0)
 
 
-def test_knife_edge_vakonomic_by_multiple_shooting_and_by_continuation_in_T():
-    """The straight-line guess's run stops before t1; the default (multiple shooting,
-    its runs from the line's inner states) and single shooting (continuation in T from
-    T / 8) find the same motion."""
+def test_knife_edge_vakonomic_by_collocation_and_by_multiple_shooting():
+    """The straight-line guess's run stops before t1: the default guess is then the
+    collocation warm start (solve_bvp on the same equations), polished by Newton; the
+    straight line given as the guess goes to multiple shooting (its runs from the
+    line's inner states).  The same motion."""
     knife = get("knife_edge")
     ini = jn.models.initial("knife_edge")
     chetaev = jn.Scene(knife, "chetaev", initial=ini, t_span=(0.0, 1.0)).run()
     start = {c: float(chetaev[c][0]) for c in ("x", "y", "phi")}
     end = {c: float(chetaev[c][-1]) for c in ("x", "y", "phi")}
-    multiple = jn.connect(knife, "vakonomic", start, end, (0.0, 1.0))
-    grown = jn.connect(knife, "vakonomic", start, end, (0.0, 1.0), segments=1)
-    assert multiple.residual < 1e-9 and grown.residual < 1e-9
-    _same(multiple, grown, 1e-7)
+    warm = jn.connect(knife, "vakonomic", start, end, (0.0, 1.0))
+    assert warm.route == "Newton from the guess (the collocation warm start)"
+    line = {"x_t": end["x"] - start["x"], "phi_t": end["phi"] - start["phi"],
+            "lambda_y": 0.0}
+    multiple = jn.connect(knife, "vakonomic", start, end, (0.0, 1.0), guess=line)
+    assert multiple.route.startswith("multiple shooting")
+    assert multiple.residual < 1e-9 and warm.residual < 1e-9
+    _same(multiple, warm, 1e-7)
 
 
 def test_cli_segments_and_free_end(capsys):

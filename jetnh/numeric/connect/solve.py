@@ -50,6 +50,22 @@ class Search(Shooter):
         g, G = self.momenta(t, y)
         return np.concatenate([y[self.rows], g]), np.vstack([D, G])
 
+    #: where the default guess came from ("": the straight line)
+    origin = ""
+
+    def start(self, u0, q0, q1, T):
+        """The default guess made usable: where its run fails before t1, the
+        collocation warm start (``collocation.warm_start`` from the straight line,
+        milliseconds) when its run reaches t1; else ``regular_start``."""
+        from .collocation import warm_start
+
+        if self.endpoint(u0) is None:
+            u = warm_start(self, self.leading(u0))
+            if u is not None and self.endpoint(u) is not None:
+                self.origin = " (the collocation warm start)"
+                return u
+        return self.regular_start(u0, q0, q1, T, self.n_velocities)
+
     @property
     def conditions(self) -> tuple:
         """The names of the end conditions: the named coordinates, then p_<free>."""
@@ -99,7 +115,7 @@ class Search(Shooter):
             closest, ok, more = e, False, max_iter
         its += more
         if ok:
-            return u, its, None, "Newton from the guess"
+            return u, its, None, "Newton from the guess" + self.origin
         rows = self.leading(u0)
         routes = [("continuation in the endpoint", self.continuation),
                   ("collocation", self.collocation), ("continuation in T", self.grow)]
