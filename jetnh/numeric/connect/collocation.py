@@ -66,12 +66,12 @@ def warm_start(shooter, rows=None, u=None):
     collocation: ``solve_bvp`` on the scene's compiled equations and Jacobian, every
     coordinate and the fixed initial values (Suslov's multipliers) at t0, the end
     conditions ``rows`` (all when None: the named coordinates and the free ones'
-    transversality conditions) at t1, on ``WARM_NODES`` nodes from the run with the
-    unknowns ``u`` (a motion that misses the end), its named coordinates bent
-    linearly in t onto the end; where that run fails (or without ``u``), from the
-    straight line between the configurations (the velocities its rates, the
-    multipliers 0).  None where the boundary conditions do not square with the states
-    or solve_bvp finds no solution within ``WARM_MAX_NODES`` nodes."""
+    transversality conditions) at t1, on ``WARM_NODES`` nodes: first from the run with
+    the unknowns ``u`` (a motion that misses the end), its named coordinates bent
+    linearly in t onto the end, then from the straight line between the
+    configurations (the velocities its rates, the multipliers 0).  None where the
+    boundary conditions do not square with the states or solve_bvp finds no solution
+    within ``WARM_MAX_NODES`` nodes from either."""
     import warnings
 
     from scipy.integrate import solve_bvp
@@ -110,26 +110,29 @@ def warm_start(shooter, rows=None, u=None):
 
     t = np.linspace(t0, t1, WARM_NODES)
     ends = dict(zip(shooter.end_names, shooter.target))
+    meshes = []
     got = None if u is None else shooter.endpoint(u)
     if got is not None:
         Y = got[2].at(t).to_numpy().T.copy()
         miss = shooter.target[:len(shooter.rows)] - Y[shooter.rows, -1]
         Y[shooter.rows] += np.outer(miss, (t - t0) / (t1 - t0))
-    else:
-        Y = np.zeros((n, t.size))
-        Y[fixed] = y0[fixed][:, None]
-        for i, name in enumerate(names[:nq]):
-            rate = (ends.get(name, y0[i]) - y0[i]) / (t1 - t0)
-            Y[i] = y0[i] + rate * (t - t0)
-            if f"{name}_t" in names:
-                Y[names.index(f"{name}_t")] = rate
-    with warnings.catch_warnings(), np.errstate(all="ignore"):
-        warnings.simplefilter("ignore")
-        try:
-            sol = solve_bvp(fun, bc, t, Y, fun_jac=fun_jac, tol=WARM_TOL,
-                            max_nodes=WARM_MAX_NODES)
-        except (ValueError, np.linalg.LinAlgError, ZeroDivisionError):
-            return None
-    if sol.status != 0 or not np.all(np.isfinite(sol.y[:, 0])):
-        return None
-    return sol.y[shooter.cols, 0]
+        meshes.append(Y)
+    Y = np.zeros((n, t.size))
+    Y[fixed] = y0[fixed][:, None]
+    for i, name in enumerate(names[:nq]):
+        rate = (ends.get(name, y0[i]) - y0[i]) / (t1 - t0)
+        Y[i] = y0[i] + rate * (t - t0)
+        if f"{name}_t" in names:
+            Y[names.index(f"{name}_t")] = rate
+    meshes.append(Y)
+    for Y in meshes:
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.simplefilter("ignore")
+            try:
+                sol = solve_bvp(fun, bc, t, Y, fun_jac=fun_jac, tol=WARM_TOL,
+                                max_nodes=WARM_MAX_NODES)
+            except (ValueError, np.linalg.LinAlgError, ZeroDivisionError):
+                continue
+        if sol.status == 0 and np.all(np.isfinite(sol.y[:, 0])):
+            return sol.y[shooter.cols, 0]
+    return None

@@ -25,6 +25,7 @@ class Connection:
     trajectory: Trajectory           # from start at t0 to (near) end at t1
     initial: MappingProxyType        # the full initial state found (name -> value)
     residual: float                  # max |q(t1) - end| over the named coordinates
+    #                                  and |P_i(t1)| over the free ones
     principle: str
     unknowns: tuple                  # names of the shooting unknowns
     rank: int                        # rank of the shooting Jacobian at the answer
