@@ -100,8 +100,6 @@ class Search(Shooter):
         best-determined conditions (``leading``) and checked on all at the end.
         Returns ``(u, iterations, stitched or None, the route that found it)``."""
         k = default_segments(self, u0) if segments is None else segments
-        if self.momenta is not None and segments is None:
-            k = 1 if self.endpoint(u0) is not None else k
         its, notes, closest = 0, [], None
         if k > 1:
             u, ok, its, stitched = self.multiple(u0, k, tol, max_iter)
