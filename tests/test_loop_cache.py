@@ -126,3 +126,36 @@ def test_the_integrator_loops_use_the_signed_store(tmp_path, monkeypatch):
     assert isinstance(cache, loop_cache.SignedFunctionCache)
     assert cache.cache_path == str(store.cache_root() / loop_cache.LOOPS)
     assert not (tmp_path / "numba").exists()
+
+
+def test_warm_compiles_loops_that_the_next_process_loads(tmp_path):
+    """``jetnh cache warm``'s work (``precompile.warm``) in one process; a later process
+    loads the loop instead of compiling it."""
+    import json
+    import subprocess
+    import sys
+
+    env = dict(os.environ, JETNH_CACHE=str(tmp_path / "cache"))
+    code = ("import json, sys; from jetnh.numeric import precompile as p; "
+            "print(json.dumps(p.{}))")
+
+    def child(call):
+        out = subprocess.run([sys.executable, "-c", code.format(call)], env=env,
+                             capture_output=True, text=True, timeout=600)
+        assert out.returncode == 0, out.stderr[-3000:]
+        return json.loads(out.stdout.strip().splitlines()[-1])
+
+    first = child('warm(["rk4:plain"], jobs=1)')
+    assert list(first) == ["rk4:plain"] and first["rk4:plain"][1] is False   # compiled
+    name, _seconds, loaded = child('compile_loop("rk4:plain")')
+    assert name == "rk4:plain" and loaded is True
+    assert list((tmp_path / "cache").glob("v*/loops/loop._solve_rk4__*.nbc"))
+
+
+def test_warm_refuses_unknown_loops():
+    from jetnh.errors import JetnhError
+    from jetnh.numeric import precompile
+
+    with pytest.raises(JetnhError, match="unknown loops.*dop853:plain"):
+        precompile.warm(["dop853:fast"])
+    assert set(precompile.DEFAULT) <= set(precompile.LOOPS)

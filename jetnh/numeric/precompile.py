@@ -6,12 +6,13 @@ milliseconds).  ``warm()`` compiles ahead of time the loops a first run needs, i
 same store under the same trust rules, so that the first trajectory on a machine loads
 its loop instead of compiling it; ``make`` runs it once after installing.
 
-``LOOPS`` names the loops ``warm`` can compile: per compiled method the loop of a run
-without events, singularity indicators, projection or ``t_eval`` (``<method>:plain``),
-the loop with every part (``<method>:all``; ``loop.features``) and the loops of dla and
-dvi.  ``DEFAULT``, what ``make`` compiles (about 15 CPU seconds), is the plain loop of
-each continuous method: the first run of each on a machine loads its loop.  Each loop
-compiles in a process of its own, as many at a time as there are cores.
+``LOOPS`` names the loops ``warm`` can compile, ``<method>:<parts>`` (``loop.features``):
+``plain`` the loop of a run without events, singularity indicators, projection or
+``t_eval`` (the most common run), ``t_eval`` with output at ``t_eval`` only, ``all``
+with every part; and the loops of dla and dvi.  ``DEFAULT``, what ``make`` compiles
+(about 20 CPU seconds), is the plain loop of each continuous method and the default
+method's loop with ``t_eval``: the first run of each on a machine loads its loop.  Each
+loop compiles in a process of its own, as many at a time as there are cores.
 """
 
 from __future__ import annotations
@@ -22,11 +23,12 @@ import os
 import time
 
 #: name -> (method, parts): the loops ``warm`` compiles (``loop.features`` gives parts)
-NONE, ALL = (False, False, False), (True, True, True)
-LOOPS = {f"{m}:{'all' if parts == ALL else 'plain'}": (m, parts)
-         for m in ("dop853", "dopri5", "rk4", "radau") for parts in (NONE, ALL)}
+PARTS = {"plain": (False, False, False), "t_eval": (False, False, True),
+         "all": (True, True, True)}
+LOOPS = {f"{m}:{name}": (m, parts) for m in ("dop853", "dopri5", "rk4", "radau")
+         for name, parts in PARTS.items() if not (m == "rk4" and name == "t_eval")}
 LOOPS.update(dla=("dla", None), dvi=("dvi", None))
-DEFAULT = tuple(n for n in LOOPS if n.endswith(":plain"))
+DEFAULT = (*(n for n in LOOPS if n.endswith(":plain")), "dop853:t_eval")
 
 
 def compile_loop(name: str) -> tuple[str, float, bool]:

@@ -95,7 +95,8 @@ class _Impl(CompileResultCacheImpl):
 
 class _SignedFile(IndexDataCacheFile):
     """numba's index and data files, each stored as ``MAC + bytes`` and read through the
-    store's checks; a file that fails them is removed and counts as absent."""
+    store's checks; a file that fails them is removed and counts as absent, one that
+    cannot be read or written is left to the next process."""
 
     def __init__(self, directory: Path, filename_base: str, stamp: str, secret: bytes):
         super().__init__(str(directory), filename_base, stamp)
@@ -105,10 +106,10 @@ class _SignedFile(IndexDataCacheFile):
         name = os.path.basename(path)
         try:
             data, _st = store._read_private(path)
-        except FileNotFoundError:
-            return None
         except store.Untrusted:
             store.discard(Path(path))
+            return None
+        except OSError:                     # absent, or unreadable: compiled anew
             return None
         mac, payload = data[:_MAC_SIZE], data[_MAC_SIZE:]
         if not hmac.compare_digest(mac, _mac(self._secret, name, payload)):
@@ -117,8 +118,13 @@ class _SignedFile(IndexDataCacheFile):
         return payload
 
     def _write(self, path: str, payload: bytes):
+        """Signed and written atomically; if it cannot be written (the cache removed
+        meanwhile, a full disk), the loop stays in this process's memory only."""
         name = os.path.basename(path)
-        store._replace_private(Path(path), _mac(self._secret, name, payload) + payload)
+        try:
+            store._replace_private(Path(path), _mac(self._secret, name, payload) + payload)
+        except OSError:
+            pass
 
     def _load_index(self):
         payload = self._read(self._index_path)
