@@ -8,11 +8,12 @@ its loop instead of compiling it; ``make`` runs it once after installing.
 
 ``LOOPS`` names the loops ``warm`` can compile, ``<method>:<parts>`` (``loop.features``):
 ``plain`` the loop of a run without events, singularity indicators, projection or
-``t_eval`` (the most common run), ``t_eval`` with output at ``t_eval`` only, ``all``
-with every part; and the loops of dla and dvi.  ``DEFAULT``, what ``make`` compiles
-(about 20 CPU seconds), is the plain loop of each continuous method and the default
-method's loop with ``t_eval``: the first run of each on a machine loads its loop.  Each
-loop compiles in a process of its own, as many at a time as there are cores.
+``t_eval`` (the most common run), ``t_eval`` with output at ``t_eval``, ``watch+t_eval``
+with that and indicators or events watched, ``all`` with every part; and the loops of
+dla and dvi.  ``DEFAULT``, what ``make`` compiles (about 35 CPU seconds), is the plain
+loop of each continuous method and the default method's loops with ``t_eval`` (those of
+``make run``): the first run of each on a machine loads its loop.  Each loop compiles
+in a process of its own, as many at a time as there are cores.
 """
 
 from __future__ import annotations
@@ -24,11 +25,12 @@ import time
 
 #: name -> (method, parts): the loops ``warm`` compiles (``loop.features`` gives parts)
 PARTS = {"plain": (False, False, False), "t_eval": (False, False, True),
-         "all": (True, True, True)}
+         "watch+t_eval": (True, False, True), "all": (True, True, True)}
 LOOPS = {f"{m}:{name}": (m, parts) for m in ("dop853", "dopri5", "rk4", "radau")
-         for name, parts in PARTS.items() if not (m == "rk4" and name == "t_eval")}
+         for name, parts in PARTS.items() if not (m == "rk4" and "t_eval" in name)}
 LOOPS.update(dla=("dla", None), dvi=("dvi", None))
-DEFAULT = (*(n for n in LOOPS if n.endswith(":plain")), "dop853:t_eval")
+DEFAULT = (*(n for n in LOOPS if n.endswith(":plain")), "dop853:t_eval",
+           "dop853:watch+t_eval")
 
 
 def compile_loop(name: str) -> tuple[str, float, bool]:

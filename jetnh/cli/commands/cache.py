@@ -42,7 +42,7 @@ def run(args, progress) -> int:
         from ...numeric import precompile
 
         def report(name, seconds, loaded):
-            progress.note(f"  {name:14s} {'loaded' if loaded else 'compiled'} in "
+            progress.note(f"  {name:20s} {'loaded' if loaded else 'compiled'} in "
                           f"{seconds:.1f} s")
 
         tic = time.perf_counter()
