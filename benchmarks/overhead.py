@@ -100,16 +100,16 @@ print(json.dumps(out))
 
 
 FIXED = SETUP + r"""
-from jetnh.numeric import interrupt
-from jetnh.numeric.methods import explicit_solver
+from jetnh.numeric import interrupt, loops, methods
 from jetnh.numeric.methods.loop import Control, watch_of
 short = sc.replace(t_span=(0.0, 1e-6))
 kern = short.kernels
-solve = explicit_solver("dop853")
 y0 = short.y0.copy()
 ctl = Control(1e-9, np.full(len(y0), 1e-12), 0.0, np.inf, 10**7, 0)
-args = (kern.rhs_fp, kern.sing_fp, kern.sing_fp, kern.hol_or_none, 0.0, 1e-6, y0, short.p,
-        ctl, np.zeros(0), 2, watch_of(kern, None, True, 1e-10), interrupt.flag())
+entry, prefix, suffix = loops.entry(short, methods.method("dop853"), kern, None, None, ctl,
+                                    np.zeros(0), 2, watch_of(kern, None, True, 1e-10), None)
+args = (*prefix, 0.0, 1e-6, y0, short.p, *suffix, interrupt.flag())
+solve = entry
 states = {n: short.initial[n] for n in short.state_names}
 inis = [dict(states, phi_t=states["phi_t"] + 1e-3 * k) for k in range(16)]
 calls = {

@@ -41,8 +41,8 @@ import numpy as np
 
 from ._common import (
     AT_T_EVAL, ENDPOINTS, ENSEMBLE_OUT, EVERY_STEP, FINISHED, MAX_FACTOR, MAX_STEPS,
-    MIN_FACTOR, NONFINITE, RHS, SAFETY, SINGULAR, STOPPED, TOO_SMALL_STEP, all_finite,
-    collect, compiled, copy_into, f8, i8, inline, jit, min_step, start, store)
+    MIN_FACTOR, NONFINITE, SAFETY, SINGULAR, STOPPED, TOO_SMALL_STEP, all_finite,
+    collect, compiled, copy_into, f8, function_at, i8, inline, jit, min_step, start, store)
 from . import projection
 from .sums import DOP853, EMBEDDED, NONE, functions as sums  # noqa: F401 (the codes)
 from ._events import (any_user_active, dense_eval, hermite_defect, locate, most_watched,
@@ -281,7 +281,8 @@ def output(tab, fixed, rhs, p, t, h, t_new, y, y_new, K, F, ytmp, y_stop, stop, 
     return ts, ys, n_out, j_eval
 
 
-def _solve(rhs, sing, uev, hol, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
+def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode, watch,
+           halt):
     """Integrate y' = rhs(t, y, p) from t0 to t_end with the method ``TAB``
     (``ExplicitRK.arrays``; it, ``ADAPTIVE`` and the parts ``WATCH``, ``PROJECT``,
     ``DENSE`` are compile-time constants, so the path of the other step kind and the
@@ -290,7 +291,8 @@ def _solve(rhs, sing, uev, hol, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt
     singularity indicators, ``uev`` the user event functions; see ``_events``); ``hol``
     the holonomic constraints an accepted step is projected onto when ``ctl.n_hol`` > 0
     (``projection``; the step's last stage is then evaluated again at the projected
-    state).  ``mode``:
+    state); the four are the addresses of their C callbacks (``_common.function_at``).
+    ``mode``:
     EVERY_STEP, AT_T_EVAL or ENDPOINTS.  The loop stops with status STOPPED before a step
     when ``halt[0]`` is nonzero.
 
@@ -306,6 +308,8 @@ def _solve(rhs, sing, uev, hol, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt
     1 % of its initial size) and the interpolant's defect at the middle of the step
     exceeds ``KINK``, the run stops at the start of that step as a singular stop.
     """
+    rhs, sing, uev, hol = (function_at(rhs_at), function_at(sing_at), function_at(uev_at),
+                           function_at(hol_at))
     tab = TAB
     A, D = tab[1], tab[5]
     ns, _, _, error_order = SHAPE
@@ -452,7 +456,7 @@ _SPECIALISED = {}
 CONTROL = numba.typeof(Control(1.0, np.zeros(1), 0.0, 1.0, 1, 0, 0, 0, 0))
 WATCHED = numba.typeof(Watch(0, 0.0, np.zeros(1, dtype=np.int64),
                              np.zeros(1, dtype=np.int64)))
-ARGS = (RHS, RHS, RHS, RHS, f8, f8, f8[::1], f8[::1], CONTROL, f8[::1], i8, WATCHED,
+ARGS = (i8, i8, i8, i8, f8, f8, f8[::1], f8[::1], CONTROL, f8[::1], i8, WATCHED,
         i8[::1])
 #: every part of the loop compiled (``features``)
 ALL = (True, True, True)
