@@ -44,6 +44,7 @@ compiled explicit and Radau runs project every accepted step back onto g = 0
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 import mpmath
 import numpy as np
@@ -176,7 +177,9 @@ class Scene(Frozen):
                              "params={...} (or as the system's defaults)")
         return out
 
-    def _initial(self, initial, project, complete=False) -> dict[str, float]:
+    def _initial(self, initial, project, complete=False, kernels=None) -> dict[str, float]:
+        """The initial values (states and dependent velocities), checked; ``kernels``:
+        the scene's compiled kernels if they are loaded (``_dependent_velocity_floats``)."""
         given = {}
         allowed = set(self.state_names) | set(self.dependent_velocities)
         for k, v in initial.items():
@@ -198,7 +201,11 @@ class Scene(Frozen):
                    f"{', '.join(self.multipliers)})")
                 + "; give them in initial={...}")
         given = self._on_holonomic(given, complete)
-        required = self._dependent_velocity_values(given)
+        required = None
+        if kernels is not None and not any(n in given for n in self.dependent_velocities):
+            required = self._dependent_velocity_floats(given, kernels)
+        if required is None:
+            required = self._dependent_velocity_values(given)
         bad = []
         for name, value in required.items():
             if not np.isfinite(value):
@@ -274,6 +281,31 @@ class Scene(Frozen):
                     found.append(None)
         return {v.name: _real(x) for v, x in zip(vs, found)}
 
+    def _dependent_velocity_floats(self, given, kern) -> dict[str, float] | None:
+        """qdot^alpha = phi^alpha at the initial state ``given`` by the compiled ``aux``
+        kernel ``kern.aux`` (floats; microseconds where ``_dependent_velocity_values``
+        takes a tenth of a millisecond), or None where its values could differ from
+        those in kind: unless every singularity indicator of ``kern.sing`` (among them
+        the denominators and square-root arguments of phi) is finite and at least
+        ``FLOAT_MARGIN`` from zero, and every value finite.  There, phi is undefined at
+        no point rounding could reach, so the 30-digit evaluation would be finite too,
+        and the two agree to rounding; elsewhere the caller evaluates at 30 digits."""
+        lay = kern.layout
+        if lay.dependent_velocities != self.dependent_velocities:
+            return None
+        y = np.array([given[n] for n in self.state_names], dtype=float)
+        p, t0 = self.p, self.t_span[0]
+        g = np.empty(len(lay.indicators))
+        kern.sing(t0, y, p, g)
+        if not all(math.isfinite(x) and abs(x) >= FLOAT_MARGIN for x in g.tolist()):
+            return None
+        aux = np.empty(lay.n_aux)
+        kern.aux(t0, y, p, aux)
+        values = aux[:len(lay.dependent_velocities)].tolist()
+        if not all(map(math.isfinite, values)):
+            return None
+        return dict(zip(self.dependent_velocities, values))
+
     # ------------------------------------------------------------------ kernels
     @memo
     def spec(self) -> codegen.KernelSpec:
@@ -313,6 +345,10 @@ class Scene(Frozen):
         unknown = set(changes) - set(args) - {"project", "complete"}
         if unknown:
             raise JetnhError(f"Scene.replace: unknown arguments {sorted(unknown)}")
+        if changes.keys() <= {"initial", "t_span"}:
+            return self._moved(args["initial"] if changes.get("initial", ()) is None
+                               else changes.get("initial", args["initial"]),
+                               changes.get("t_span", self.t_span))
         args.update(changes)
         system = args.pop("system")
         principle = args.pop("principle")
@@ -320,6 +356,26 @@ class Scene(Frozen):
         if new._kernel_identity() == self._kernel_identity():
             # the same kernels: their key and the plans of runs go with them
             new._memo.update((k, self._memo[k]) for k in _SHARED if k in self._memo)
+        return new
+
+    def _moved(self, initial, t_span) -> "Scene":
+        """``replace(initial=..., t_span=...)``: this scene with other initial values and
+        time span, its other attributes (checked once) and its memo's shared values
+        (``_SHARED``, and ``_p``) taken over rather than made anew; the dependent
+        velocities by the compiled kernels where they are loaded and apply
+        (``_dependent_velocity_floats``)."""
+        if not isinstance(initial, Mapping):
+            raise JetnhError(f"initial must be a dict keyed by Symbol or name, got a "
+                             f"{type(initial).__name__}")
+        new = object.__new__(Scene)
+        new.__dict__.update(self.__dict__)
+        del new.__dict__["_memo"]
+        new._set(t_span=self._t_span(t_span), projected={}, completed={})
+        kern = _loaded_kernels(self.key, self.cache) if "key" in self._memo else None
+        ini = FrozenDict(new._initial(initial, False, False, kern))
+        new._set(initial=ini, y0=np.array([ini[n] for n in self.state_names], dtype=float))
+        object.__setattr__(new, "_memo", {k: self._memo[k] for k in _SHARED + ("_p",)
+                                          if k in self._memo})
         return new
 
     def _kernel_identity(self) -> tuple:
@@ -570,6 +626,19 @@ class Scene(Frozen):
 #: kernels' keys, the plans of runs (``solve.planned``), compiled events, whether an
 #: atlas applies
 _SHARED = ("spec", "key", "plans", "events", "atlas_applies")
+
+
+#: the least |indicator| at which the initial dependent velocities are taken from the
+#: compiled kernels (``Scene._dependent_velocity_floats``)
+FLOAT_MARGIN = 1e-6
+
+
+def _loaded_kernels(key, persistent):
+    """The kernels of ``key`` if this process has loaded them, else None (to use them
+    where they are at hand, never to compile them)."""
+    from .kernels import loader
+
+    return loader._LOADED.get((key, persistent))
 
 
 def _real(x) -> float:
