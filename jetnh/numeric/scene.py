@@ -58,7 +58,7 @@ from ..geometry.jet import sympy_object
 from . import arguments, solve
 from . import codegen
 from . import discrete
-from .kernels import jacobian_kernels, load as load_kernels
+from .kernels import jacobian_kernels, load as load_kernels, loader
 from ..frozen import Frozen, FrozenDict, memo
 from .options import options
 from .trajectory import Trajectory
@@ -177,20 +177,23 @@ class Scene(Frozen):
                              "params={...} (or as the system's defaults)")
         return out
 
-    def _initial(self, initial, project, complete=False, kernels=None) -> dict[str, float]:
+    def _initial(self, initial, project, complete=False, kernels=None, p=None
+                 ) -> dict[str, float]:
         """The initial values (states and dependent velocities), checked; ``kernels``:
-        the scene's compiled kernels if they are loaded (``_dependent_velocity_floats``)."""
+        the scene's compiled kernels if they are loaded, ``p`` its run-time parameters
+        (``_dependent_velocity_floats``)."""
         given = {}
         allowed = set(self.state_names) | set(self.dependent_velocities)
         for k, v in initial.items():
-            name = arguments.name_of(k, "an initial value")
+            name = k if type(k) is str else arguments.name_of(k, "an initial value")
             if name not in allowed:
                 raise JetnhError(
                     f"initial has {name!r}, which is not a state of this {self.principle} "
                     f"scene; the states are {', '.join(self.state_names)} (and the dependent "
                     f"velocities {', '.join(self.dependent_velocities) or 'none'})")
-            given[name] = arguments.real(v, f"initial value of {name!r}")
-            if not np.isfinite(given[name]):
+            given[name] = v if type(v) is float else arguments.real(
+                v, f"initial value of {name!r}")
+            if not math.isfinite(given[name]):
                 raise JetnhError(f"initial value of {name!r} is {given[name]}")
         missing = [n for n in self.state_names if n not in given]
         if missing:
@@ -203,12 +206,12 @@ class Scene(Frozen):
         given = self._on_holonomic(given, complete)
         required = None
         if kernels is not None and not any(n in given for n in self.dependent_velocities):
-            required = self._dependent_velocity_floats(given, kernels)
+            required = self._dependent_velocity_floats(given, kernels, p)
         if required is None:
             required = self._dependent_velocity_values(given)
         bad = []
         for name, value in required.items():
-            if not np.isfinite(value):
+            if not math.isfinite(value):
                 raise ConstraintError(
                     f"the constraints give no finite value for {name} at the initial state "
                     f"({value}): the initial configuration is singular for the split "
@@ -281,9 +284,9 @@ class Scene(Frozen):
                     found.append(None)
         return {v.name: _real(x) for v, x in zip(vs, found)}
 
-    def _dependent_velocity_floats(self, given, kern) -> dict[str, float] | None:
-        """qdot^alpha = phi^alpha at the initial state ``given`` by the compiled ``aux``
-        kernel ``kern.aux`` (floats; microseconds where ``_dependent_velocity_values``
+    def _dependent_velocity_floats(self, given, kern, p) -> dict[str, float] | None:
+        """qdot^alpha = phi^alpha at the initial state ``given`` (run-time parameters
+        ``p``) by the compiled ``aux`` kernel ``kern.aux`` (floats; microseconds where ``_dependent_velocity_values``
         takes a tenth of a millisecond), or None where its values could differ from
         those in kind: unless every singularity indicator of ``kern.sing`` (among them
         the denominators and square-root arguments of phi) is finite and at least
@@ -294,7 +297,7 @@ class Scene(Frozen):
         if lay.dependent_velocities != self.dependent_velocities:
             return None
         y = np.array([given[n] for n in self.state_names], dtype=float)
-        p, t0 = self.p, self.t_span[0]
+        t0 = self.t_span[0]
         g = np.empty(len(lay.indicators))
         kern.sing(t0, y, p, g)
         if not all(math.isfinite(x) and abs(x) >= FLOAT_MARGIN for x in g.tolist()):
@@ -337,6 +340,12 @@ class Scene(Frozen):
         """A scene equal to this one except for ``changes`` (constructor arguments:
         params, initial, t_span, runtime_params, integrals, ...).  The initial values
         are the states' (dependent velocities follow from the constraints again)."""
+        if changes.keys() <= {"initial", "t_span"}:
+            initial = changes.get("initial", self.initial)
+            return self._moved({n: self.initial[n] for n in self.state_names}
+                               if initial is self.initial else {} if initial is None
+                               else initial,
+                               changes.get("t_span", self.t_span))
         args = dict(system=self.system, principle=self.principle, params=self.params,
                     initial={n: self.initial[n] for n in self.state_names},
                     t_span=self.t_span, form=self.form, convention=self.convention,
@@ -345,10 +354,6 @@ class Scene(Frozen):
         unknown = set(changes) - set(args) - {"project", "complete"}
         if unknown:
             raise JetnhError(f"Scene.replace: unknown arguments {sorted(unknown)}")
-        if changes.keys() <= {"initial", "t_span"}:
-            return self._moved(args["initial"] if changes.get("initial", ()) is None
-                               else changes.get("initial", args["initial"]),
-                               changes.get("t_span", self.t_span))
         args.update(changes)
         system = args.pop("system")
         principle = args.pop("principle")
@@ -370,9 +375,10 @@ class Scene(Frozen):
         new = object.__new__(Scene)
         new.__dict__.update(self.__dict__)
         del new.__dict__["_memo"]
-        new._set(t_span=self._t_span(t_span), projected={}, completed={})
+        new._set(t_span=self.t_span if t_span is self.t_span else self._t_span(t_span),
+                 projected={}, completed={})
         kern = _loaded_kernels(self.key, self.cache) if "key" in self._memo else None
-        ini = FrozenDict(new._initial(initial, False, False, kern))
+        ini = FrozenDict(new._initial(initial, False, False, kern, self._p))
         new._set(initial=ini, y0=np.array([ini[n] for n in self.state_names], dtype=float))
         object.__setattr__(new, "_memo", {k: self._memo[k] for k in _SHARED + ("_p",)
                                           if k in self._memo})
@@ -636,8 +642,6 @@ FLOAT_MARGIN = 1e-6
 def _loaded_kernels(key, persistent):
     """The kernels of ``key`` if this process has loaded them, else None (to use them
     where they are at hand, never to compile them)."""
-    from .kernels import loader
-
     return loader._LOADED.get((key, persistent))
 
 
