@@ -125,13 +125,13 @@ states = {n: short.initial[n] for n in short.state_names}
 inis = [dict(states, phi_t=states["phi_t"] + 1e-3 * k) for k in range(16)]
 calls = {
     "bare call": bare(1e-6, ctl),
+    "3-step call": three,
     "run()": lambda i: short.run(save="final"),
     "run(y0=...)": lambda i: short.run(y0=y0, save="final"),
     "replace(initial=...).run()": lambda i: short.replace(initial=inis[i % 16]).run(
         save="final"),
     "ensemble of one": lambda i: short.ensemble(y0[None, :], save="final"),
 }
-calls["3-step call"] = three
 nfev["bare call"] = int(calls["bare call"](0)[4][2])
 for f in calls.values():
     f(0)

@@ -17,7 +17,7 @@ import numpy as np
 from . import interrupt, methods
 from .methods import Solver
 from .methods._common import AT_T_EVAL
-from .methods.loop import Watch
+from .methods.loop import Result, Watch
 
 NO_EVENTS = np.zeros(0, dtype=np.int64)
 
@@ -42,15 +42,15 @@ def entry(scene, method, kern, ce, sens, ctl, te, mode, watch, newton):
 def call(scene, method, kern, ce, watch, t0, t1, y, p, ctl, te, mode, newton, limit,
          sens=None):
     """One call of the compiled loop of ``method`` (a ``Method`` or its name; ``entry``),
-    stoppable by Ctrl-C and ``limit`` seconds; returns its ``Result`` and the
-    wall-clock time."""
+    stoppable by Ctrl-C and ``limit`` seconds; returns its ``Result`` (the loops return
+    its fields as a tuple) and the wall-clock time."""
     method = methods.method(method)
     loop, prefix, suffix = entry(scene, method, kern, ce, sens, ctl, te, mode, watch,
                                  newton)
     halt = np.zeros(1, dtype=np.int64)
     tic = time.perf_counter()
     out = interrupt.call(lambda: loop(*prefix, t0, t1, y, p, *suffix, halt), halt, limit)
-    return out, time.perf_counter() - tic
+    return Result._make(out), time.perf_counter() - tic
 
 
 def retake(traj, t0, t1, y, tau):

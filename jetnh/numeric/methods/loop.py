@@ -304,9 +304,11 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
     EVERY_STEP, AT_T_EVAL or ENDPOINTS.  The loop stops with status STOPPED before a step
     when ``halt[0]`` is nonzero.
 
-    Returns a ``Result``: the output rows ``ts[:n_out]``, ``ys[:n_out]``, ``stats =
-    (accepted, rejected, rhs evaluations)`` (``counts``), the last state, the event records (time,
-    index, state) and the index of the indicator that stopped the run (-1 if none).
+    Returns the fields of a ``Result`` as a plain tuple (numba boxes a namedtuple by
+    unpickling its class on every call; ``numeric.loops.call`` makes it a ``Result``):
+    the output rows ``ts[:n_out]``, ``ys[:n_out]``, ``stats = (accepted, rejected, rhs
+    evaluations)`` (``counts``), the last state, the event records (time, index, state)
+    and the index of the indicator that stopped the run (-1 if none).
 
     Fixed steps (``ctl.n_steps > 0``, methods without an error estimate): equal steps
     ``(t_end - t0) / n_steps``; events and indicators are located on the cubic Hermite
@@ -347,7 +349,7 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
         if sing_index >= 0:
             if ADAPTIVE:
                 ts, ys, n_out = store(ts, ys, n_out, t, y)
-            return Result(SINGULAR, ts, ys, n_out, counts(stats), t, y, ev_t, ev_i, ev_y,
+            return (SINGULAR, ts, ys, n_out, counts(stats), t, y, ev_t, ev_i, ev_y,
                           n_ev, sing_index)
     h_abs = 0.0
     h_fixed = (t_end - t0) / max(n_steps, 1)
@@ -356,7 +358,7 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
         go, h_abs, ts, ys, n_out = start(rhs, t, y, p, K[0], K[1], ytmp, scale, ctl,
                                          error_order, t_end, stats, mode, t_eval, ts, ys, n_out)
         if go >= 0:
-            return Result(go, ts, ys, n_out, counts(stats), t, y, ev_t, ev_i, ev_y, n_ev,
+            return (go, ts, ys, n_out, counts(stats), t, y, ev_t, ev_i, ev_y, n_ev,
                           sing_index)
     status = FINISHED
     step = 0
@@ -454,7 +456,7 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
             copy_into(K[0], K[ns])
     if mode == ENDPOINTS:
         ts, ys, n_out = store(ts, ys, n_out, t, y)
-    return Result(status, ts, ys, n_out, counts(stats), t, y, ev_t, ev_i, ev_y, n_ev,
+    return (status, ts, ys, n_out, counts(stats), t, y, ev_t, ev_i, ev_y, n_ev,
                   sing_index)
 
 
