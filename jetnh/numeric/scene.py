@@ -286,22 +286,25 @@ class Scene(Frozen):
 
     def _dependent_velocity_floats(self, given, kern, p) -> dict[str, float] | None:
         """qdot^alpha = phi^alpha at the initial state ``given`` (run-time parameters
-        ``p``) by the compiled ``aux`` kernel ``kern.aux`` (floats; microseconds where ``_dependent_velocity_values``
-        takes a tenth of a millisecond), or None where its values could differ from
-        those in kind: unless every singularity indicator of ``kern.sing`` (among them
-        the denominators and square-root arguments of phi) is finite and at least
-        ``FLOAT_MARGIN`` from zero, and every value finite.  There, phi is undefined at
-        no point rounding could reach, so the 30-digit evaluation would be finite too,
-        and the two agree to rounding; elsewhere the caller evaluates at 30 digits."""
+        ``p``) by the compiled kernel ``kern.aux``: floats, in microseconds where the
+        30-digit evaluation (``_dependent_velocity_values``) takes a tenth of a
+        millisecond.  None unless every singularity indicator of ``kern.sing`` (among
+        them the denominators and square-root arguments of phi) is finite and at least
+        ``FLOAT_MARGIN`` from zero and every value is finite: there, the 30-digit
+        evaluation is finite too and the two differ by rounding only; elsewhere (a
+        configuration near or at a singular one) the caller evaluates at 30 digits."""
         lay = kern.layout
         if lay.dependent_velocities != self.dependent_velocities:
             return None
         y = np.array([given[n] for n in self.state_names], dtype=float)
         t0 = self.t_span[0]
-        g = np.empty(len(lay.indicators))
-        kern.sing(t0, y, p, g)
-        if not all(math.isfinite(x) and abs(x) >= FLOAT_MARGIN for x in g.tolist()):
-            return None
+        if lay.indicators:
+            if not hasattr(kern, "sing"):
+                return None
+            g = np.empty(len(lay.indicators))
+            kern.sing(t0, y, p, g)
+            if not all(math.isfinite(x) and abs(x) >= FLOAT_MARGIN for x in g.tolist()):
+                return None
         aux = np.empty(lay.n_aux)
         kern.aux(t0, y, p, aux)
         values = aux[:len(lay.dependent_velocities)].tolist()
