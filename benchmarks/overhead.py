@@ -21,8 +21,8 @@ fresh processes with empty numba and kernel caches, the trees alternating within
 3. Per evaluation: (a run to T = 100 minus the fixed cost) / the extra rhs evaluations
    (rk4: 2000 steps against 1).
 4. Fixed cost against the bare call, in one process (the caches as they are), the calls
-   interleaved (each figure
-   the 5th percentile of single calls, so that the machine's load hits every one alike):
+   interleaved in a random order each round (each figure the 5th percentile of single
+   calls, so that the machine's load and the caches hit every one alike):
    the compiled dop853 loop called directly (its entry point, the arguments made once),
    ``scene.run()``, ``scene.run(y0=...)``, ``scene.replace(initial=...).run()`` (a new
    initial state each call, as a shooting loop does) and an ensemble of one run, each
@@ -137,8 +137,10 @@ for f in calls.values():
     f(0)
 times = {k: [] for k in calls}
 times["long call"] = []
+order = np.random.default_rng(0)
 for i in range(REPS_FIXED):
-    for k, f in calls.items():
+    for k in order.permutation(list(calls)):    # no call always after the same one
+        f = calls[k]
         tic = time.perf_counter(); f(i); times[k].append(time.perf_counter() - tic)
     if i % 20 == 0:
         tic = time.perf_counter(); long(i); times["long call"].append(time.perf_counter() - tic)

@@ -546,8 +546,12 @@ class Scene(Frozen):
         if y0 is None:
             return self.y0.copy()        # the compiled loop gets its own array
         if not isinstance(y0, dict):
-            y, _ = arguments.keyed_or_sequence(y0, self.state_names, self.y0, "y0",
-                                               "scene.state_names")
+            if (type(y0) is np.ndarray and y0.dtype == np.float64
+                    and y0.shape == self.y0.shape and math.isfinite(y0.dot(y0))):
+                y = y0.copy()           # (what the general route makes of it, sooner)
+            else:
+                y, _ = arguments.keyed_or_sequence(y0, self.state_names, self.y0, "y0",
+                                                   "scene.state_names")
             self._check_holonomic(y, t0, p)
             return y
         allowed = self.state_names + self.dependent_velocities
