@@ -138,6 +138,12 @@ class Search(Shooter):
                                  "point")
                     break
                 its += k
+                if not ok:
+                    notes.append(f"{name} met {', '.join(self.conditions[r] for r in rows)}"
+                                 " exactly; Newton on every condition from there did not "
+                                 "converge")
+                    u = v
+                    continue
             if ok:
                 return v, its, None, name + ("" if rows is None else " (on " + ", ".join(
                     self.conditions[r] for r in rows) + " first)")
