@@ -135,10 +135,7 @@ def gramian_ratio(tr, samples) -> float:
     K3 = Am @ (I + 0.5 * h * K2)
     K4 = A1 @ (I + h * K3)
     P = I + h / 6.0 * (K1 + 2 * K2 + 2 * K3 + K4)        # Phi(t_{j+1}, t_j)
-    Phi = np.empty((steps + 1, n, n))                     # Phi(t_j, t0)
-    Phi[0] = I
-    for j in range(steps):
-        Phi[j + 1] = P[j] @ Phi[j]
+    Phi = np.concatenate([I[None], _products(P)])         # Phi(t_j, t0)
     G = np.linalg.solve(np.transpose(Phi, (0, 2, 1)), Phi[-1].T).transpose(0, 2, 1)
     GB = G @ B[::2]                                       # Phi(t1, s_j) B(s_j)
     w = np.full(steps + 1, 2.0)
@@ -147,6 +144,17 @@ def gramian_ratio(tr, samples) -> float:
     W = np.einsum("j,jam,jbm->ab", w * h / 3.0, GB, GB)
     ev = np.linalg.eigvalsh(0.5 * (W + W.T))
     return float(max(ev[0], 0.0) / ev[-1]) if ev[-1] > 0 else 0.0
+
+
+def _products(P) -> np.ndarray:
+    """The running products ``P[j] @ ... @ P[0]`` of the matrices ``P[j]``, in log2(len)
+    batched multiplications (a doubling scan)."""
+    out = P.copy()
+    d = 1
+    while d < len(out):
+        out[d:] = out[d:] @ out[:-d]
+        d *= 2
+    return out
 
 
 def conjugate_times(tr, cols, samples, rcond=1e-9) -> tuple:
@@ -178,12 +186,11 @@ def conjugate_times(tr, cols, samples, rcond=1e-9) -> tuple:
         M = samples.grid_S[1:, :nq][:, :, cols]
         norms = np.linalg.norm(M, axis=1, keepdims=True)
         d = np.linalg.det(M / np.where(norms > 0, norms, 1.0))
-        for i in range(len(grid) - 1):
-            # |det| of the normalized columns at rounding level: singular there (along a
-            # whole stretch when an unknown has no effect), no sign to follow
-            if max(abs(d[i]), abs(d[i + 1])) < DET_ZERO or np.sign(d[i]) == np.sign(
-                    d[i + 1]):
-                continue
+        # |det| of the normalized columns at rounding level: singular there (along a
+        # whole stretch when an unknown has no effect), no sign to follow
+        change = (np.sign(d[:-1]) != np.sign(d[1:])) & (
+            np.maximum(np.abs(d[:-1]), np.abs(d[1:])) >= DET_ZERO)
+        for i in np.nonzero(change)[0]:
             found.append(float(brentq(det, grid[i], grid[i + 1], xtol=1e-14, rtol=1e-14)))
     s = np.linalg.svd(tr.sensitivities[-1][:nq][:, cols], compute_uv=False)
     if s.size and (s[0] == 0 or s[-1] <= rcond * s[0] * 1e2) and len(cols) >= nq:
