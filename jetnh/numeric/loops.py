@@ -29,11 +29,12 @@ def entry(scene, method, kern, ce, sens, ctl, te, mode, watch, newton):
     p)`` (``halt`` last, per call)."""
     uev = ce.uev if ce is not None else kern.sing_fp
     rhs = kern.rhs_fp if sens is None else sens.rhs_fp
+    hol = kern.hol_or_none if sens is None else sens.hol_or_none   # (with dg/dp)
     if method.solver is Solver.IMPLICIT:
         jac = scene.jacobian.address if sens is None else sens.jac_fp
-        return (kern.implicit(), (rhs, jac, kern.sing_fp, uev, kern.hol_or_none),
+        return (kern.implicit(), (rhs, jac, kern.sing_fp, uev, hol),
                 (ctl, newton, te, mode, watch))
-    return (methods.explicit_solver(method), (rhs, kern.sing_fp, uev, kern.hol_or_none),
+    return (methods.explicit_solver(method), (rhs, kern.sing_fp, uev, hol),
             (ctl, te, mode, watch))
 
 
