@@ -26,8 +26,8 @@
    same equations in the same chart); the default plain run, which may go on in
    another chart (``numeric.atlas``), is listed apart ("plain_switch_ms").
 
-Wall times are the best of several repetitions (``_common.best``); ratios are within this
-run; kernels compiled beforehand.
+Wall times are the best of several repetitions (``_common.best``) after one call of
+every route (kernels and compiled loops built); ratios are within this run.
 """
 
 import warnings
@@ -99,6 +99,8 @@ def connect_case(model, principle, start, end, T, reps, quick):
                     return solve_bvp(fun, bc, t, Y, fun_jac=fjac, tol=tol,
                                      max_nodes=MAX_NODES)
             routes.append((("solve_bvp" + (" + jetnh jac" if jacobian else ""), tol), go))
+    for _, f in routes:          # compiled loops and kernels of every route built first
+        f()
     rows = []
     for ((route, tol), _), (sec, out) in zip(routes, best_of([f for _, f in routes], reps,
                                                               BUDGET)):
