@@ -113,10 +113,10 @@ def gramian_ratio(tr, samples) -> float:
     """Smallest over largest eigenvalue of the controllability Gramian of the constraint
     system (qdot^mu = u^mu, qdot^alpha = phi^alpha(t, q, u)) linearized along ``tr``,
     ``W = int Phi(t1, s) B B^T Phi(t1, s)^T ds`` (A = d qdot/dq, B = d qdot/du from the
-    graph on the dense output; the transition matrix Phi by RK4 propagators of ``steps``
-    equal steps, ``_Samples.GRID / 2`` of them, the integral by Simpson's rule on their
-    nodes).  Zero: the endpoint
-    map loses rank along the path (an abnormal extremal)."""
+    graph on the dense output; Phi(t1, s) the products of the RK4 propagators of
+    ``_Samples.GRID / 2`` equal steps from s to t1, the integral by Simpson's rule on
+    their nodes).  Zero: the endpoint map loses rank along the path (an abnormal
+    extremal)."""
     from ...algebra import dag
 
     scene = tr.scene
