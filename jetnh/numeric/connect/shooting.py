@@ -24,6 +24,7 @@ class Shooter:
         self.rows = [names.index(c) for c in q1]
         self.target = np.array(list(q1.values()))
         self.cols = [names.index(u) for u in unknowns]
+        self.block = np.ix_(self.rows, self.cols)      # dq_named(t1)/du in S
         given = {**q0, **fixed}
         self.y0 = np.array([given.get(n, 0.0) for n in names])
         self.rtol, self.atol, self.method, self.rcond = rtol, atol, method, rcond
@@ -80,7 +81,7 @@ class Shooter:
         if tr is None:
             return None
         S = tr.sensitivities[-1]
-        return tr.y[-1, self.rows], S[np.ix_(self.rows, self.cols)], tr
+        return tr.y[-1, self.rows], S[self.block], tr
 
     def run(self, u):
         """The run from the start with the unknowns ``u`` (every step, with
