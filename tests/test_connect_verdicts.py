@@ -59,3 +59,30 @@ def test_rank_deficient_guess_moves_to_its_gauss_newton_point(x1, T):
     expected = min(x1 / (R * T), 1.0)         # a step of at most max(1, |u|)
     assert np.allclose(u, [expected, 0.0], atol=1e-9), u
     assert search.regular(search.endpoint(u))
+
+
+def test_gramian_along_a_heisenberg_geodesic_against_the_lyapunov_equation():
+    """Along a curved geodesic A(t) varies (dz'/dx = y', dz'/dy = -x'), so the order of
+    the propagators matters: W(T) from W' = A W + W A^T + B B^T, W(0) = 0, integrated
+    by scipy on the trajectory's dense output, has the same eigenvalue ratio."""
+    from scipy.integrate import solve_ivp
+
+    from jetnh.numeric.connect.verdicts import _dense_states
+
+    c = jn.connect(get("heisenberg"), "vakonomic", {"x": 0.0, "y": 0.0, "z": 0.0},
+                   {"x": 1.0, "y": 0.5, "z": 0.2}, (0.0, 1.0))
+    tr = c.trajectory
+    col = {n: i for i, n in enumerate(tr.scene.state_names)}
+
+    def rhs(t, w):
+        s = _dense_states(tr, [min(max(t, 0.0), 1.0)])[0]
+        x, y, xt, yt = (s[col[k]] for k in ("x", "y", "x_t", "y_t"))
+        A = np.array([[0.0, 0, 0], [0, 0, 0], [yt, -xt, 0]])
+        B = np.array([[1.0, 0], [0, 1], [-y, x]])
+        W = w.reshape(3, 3)
+        return (A @ W + W @ A.T + B @ B.T).ravel()
+
+    W = solve_ivp(rhs, (0.0, 1.0), np.zeros(9), rtol=1e-11, atol=1e-13).y[:, -1]
+    ev = np.linalg.eigvalsh(W.reshape(3, 3))
+    assert abs(c.gramian_ratio - ev[0] / ev[-1]) < 1e-7 * ev[0] / ev[-1] + 1e-10
+    assert 1e-3 < c.gramian_ratio < 0.99            # curved: not the straight line's
