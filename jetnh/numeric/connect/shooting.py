@@ -102,14 +102,12 @@ class Shooter:
         pattern = 0.5 * (-0.6) ** np.arange(len(u0))
         speed = np.ones(len(u0))
         reaching = None
-        tries = [u0] + [None] * 11
-        for k, u in enumerate(tries):
-            if u is None:
-                speed[:n_velocities] = 2.0 ** (k // 4)
-                u = speed * u0 + (scale * np.roll(pattern, k) * (k % 4) if k % 4 else 0.0)
+        for k in range(12):                 # k = 0: u0 itself
+            speed[:n_velocities] = 2.0 ** (k // 4)
+            u = speed * u0 + (scale * np.roll(pattern, k) * (k % 4) if k % 4 else 0.0)
             got = self.endpoint(u)
             if got is not None:
-                if self.regular(got[1]):
+                if self.regular(got):
                     return u
                 if k == 0:
                     newton = self.newton_point(u, got)
@@ -119,14 +117,13 @@ class Shooter:
         return u0 if reaching is None else reaching
 
     @staticmethod
-    def regular(J) -> bool:
-        """Whether the shooting Jacobian ``J`` (or the ``endpoint`` holding it) has full
-        rank by a margin (smallest singular value above 1e-6 of the largest)."""
-        if J is None:
+    def regular(got) -> bool:
+        """Whether the ``endpoint`` ``got`` exists (the run reached t1) and its shooting
+        Jacobian has full rank by a margin (smallest singular value above 1e-6 of the
+        largest)."""
+        if got is None:
             return False
-        if isinstance(J, tuple):
-            J = J[1]
-        s = np.linalg.svd(J, compute_uv=False)
+        s = np.linalg.svd(got[1], compute_uv=False)
         return bool(s.size and s[0] > 0 and s[-1] > 1e-6 * s[0])
 
     def newton_point(self, u, got):
