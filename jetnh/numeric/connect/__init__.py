@@ -175,7 +175,7 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     shooter = Search(scene, q0, q1, unknowns, fixed, rtol, atol, method, rcond,
                      momenta=Momenta(scene, free) if free else None)
     if guess is None:
-        u0 = shooter.start(u0, q0, q1, t1 - t0)
+        u0 = shooter.first_guess(u0, q0, q1, t1 - t0)
     u, iterations, stitched, route = shooter.solve(u0, tol, max_iter, max_continuation,
                                                    segments)
     return shooter.connection(u, iterations, tol, stitched, route)

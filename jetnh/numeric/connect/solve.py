@@ -53,7 +53,7 @@ class Search(Shooter):
     #: where the default guess came from ("": the straight line)
     origin = ""
 
-    def start(self, u0, q0, q1, T):
+    def first_guess(self, u0, q0, q1, T):
         """The default guess made usable: where its run fails before t1, the
         collocation warm start (``collocation.warm_start`` from the straight line,
         milliseconds) when its run reaches t1; else ``regular_start``."""
