@@ -60,7 +60,7 @@ Verdicts on the answer:
 
 from __future__ import annotations
 
-from ...errors import JetnhError
+from ...errors import ConnectError, JetnhError
 from ...mechanics import principles
 from ...mechanics.system import System
 from .. import arguments, codegen, methods
@@ -174,8 +174,16 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     free = [c for c in coords if c not in q1] if principle in VARIATIONAL else []
     shooter = Search(scene, q0, q1, unknowns, fixed, rtol, atol, method, rcond,
                      momenta=Momenta(scene, free) if free else None)
-    if guess is None:
-        u0 = shooter.first_guess(u0, q0, q1, t1 - t0)
-    u, iterations, stitched, route = shooter.solve(u0, tol, max_iter, max_continuation,
-                                                   segments)
-    return shooter.connection(u, iterations, tol, stitched, route)
+    starts = [u0] if guess is not None else [shooter.first_guess(u0, q0, q1, t1 - t0)]
+    if guess is None and not shooter.origin:
+        starts.append(shooter.second_guess(u0, q0, q1, t1 - t0))
+    failed = None
+    for start in starts:
+        try:
+            u, iterations, stitched, route = shooter.solve(start, tol, max_iter,
+                                                           max_continuation, segments)
+        except ConnectError as e:
+            failed = failed or e          # the first start's reasons are reported
+            continue
+        return shooter.connection(u, iterations, tol, stitched, route)
+    raise failed

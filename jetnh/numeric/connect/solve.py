@@ -19,6 +19,7 @@ STEP_ITER = 20
 FIRST_SPAN = 0.125
 
 
+
 class Search(Shooter):
     """A ``Shooter`` that solves the end conditions: q(t1; u) = end for the named
     coordinates and, with ``momenta`` (``problem.Momenta``), the transversality
@@ -65,6 +66,14 @@ class Search(Shooter):
                 self.origin = " (the collocation warm start)"
                 return u
         return self.regular_start(u0, q0, q1, T, self.n_velocities)
+
+    def second_guess(self, u0, q0, q1, T):
+        """Where the search from ``first_guess`` fails: the straight line ``u0`` moved
+        by the first step of ``regular_start``'s pattern (the velocities' scale times
+        0.5 (-0.6)^i, rolled once), a start on another side of a fold of the endpoint
+        map than its Gauss-Newton point."""
+        scale = max([abs(q1[c] - q0[c]) for c in q1] + [1.0]) / abs(T)
+        return u0 + scale * np.roll(0.5 * (-0.6) ** np.arange(len(u0)), 1)
 
     @property
     def conditions(self) -> tuple:
