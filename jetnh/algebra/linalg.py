@@ -487,7 +487,9 @@ def reduced_rank(H: sp.Matrix, A: sp.Matrix, ind, dep, points: int = 3, seed: in
                 [[An[r, j] for j in ind] for r in range(An.rows)])
             if mp_rank(Ad) < len(dep):
                 raise ZeroDivisionError("singular A_dep at this point")
-            X = -(Ad.inv() * Ai) if exact else -(mpmath.inverse(Ad) * Ai)
+            # two LU solves (mpmath keeps Ad's factors), not the inverse: k^3/3, not k^3
+            X = -(Ad.inv() * Ai) if exact else -mpmath.matrix(
+                [list(mpmath.lu_solve(Ad, Ai[:, c])) for c in range(m)]).T
             for r, i in enumerate(dep):
                 for c in range(m):
                     P[i, c] = X[r, c]
