@@ -462,6 +462,37 @@ def numeric_rank(M: sp.Matrix, points: int = 3, seed: int = 0) -> int:
     return max(ranks)
 
 
+def mp_solve(A, B):
+    """A^-1 B for mpmath matrices (A square and regular) by Gaussian elimination with
+    partial pivoting on lists, skipping zero multipliers and entries: a banded or
+    triangular A (a chain's A_dep) costs O(k w^2), not mpmath's dense O(k^3) inverse."""
+    k, m = A.rows, B.cols
+    rows = [[A[i, j] for j in range(k)] + [B[i, c] for c in range(m)] for i in range(k)]
+    for col in range(k):
+        best = max(range(col, k), key=lambda r: abs(rows[r][col]))
+        if rows[best][col] == 0:
+            raise ZeroDivisionError("singular matrix")
+        rows[col], rows[best] = rows[best], rows[col]
+        top = rows[col]
+        live = [j for j in range(col + 1, k + m) if top[j] != 0]
+        for r in range(col + 1, k):
+            row = rows[r]
+            if row[col] != 0:
+                f = row[col] / top[col]
+                for j in live:
+                    row[j] -= f * top[j]
+    X = mpmath.matrix(k, m)
+    for i in range(k - 1, -1, -1):
+        row = rows[i]
+        for c in range(m):
+            acc = row[k + c]
+            for j in range(i + 1, k):
+                if row[j] != 0:
+                    acc -= row[j] * X[j, c]
+            X[i, c] = acc / row[i]
+    return X
+
+
 def reduced_rank(H: sp.Matrix, A: sp.Matrix, ind, dep, points: int = 3, seed: int = 0,
                  complete=None, symbols=()) -> int:
     """The generic rank of P^T H P, P = [I; -A_dep^-1 A_ind] spanning ker A (rows of
@@ -487,9 +518,7 @@ def reduced_rank(H: sp.Matrix, A: sp.Matrix, ind, dep, points: int = 3, seed: in
                 [[An[r, j] for j in ind] for r in range(An.rows)])
             if mp_rank(Ad) < len(dep):
                 raise ZeroDivisionError("singular A_dep at this point")
-            # two LU solves (mpmath keeps Ad's factors), not the inverse: k^3/3, not k^3
-            X = -(Ad.inv() * Ai) if exact else -mpmath.matrix(
-                [list(mpmath.lu_solve(Ad, Ai[:, c])) for c in range(m)]).T
+            X = -(Ad.inv() * Ai) if exact else -mp_solve(Ad, Ai)
             for r, i in enumerate(dep):
                 for c in range(m):
                     P[i, c] = X[r, c]
