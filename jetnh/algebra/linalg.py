@@ -201,9 +201,9 @@ def _choose(A, Ns, col, scales):
         return min(range(col, A.rows), key=lambda r: _pivot_cost(A[r, col]))
     score = {r: mpmath.inf for r in rows}
     for N, scale in zip(Ns, scales):
-        top = max(abs(N[r, col]) for r in rows)
+        top = max(abs(N[r][col]) for r in rows)
         for r in rows:
-            v = abs(N[r, col])
+            v = abs(N[r][col])
             score[r] = min(score[r], v / top if v > _PIVOT_ZERO * scale else 0)
     best = max(score.values())
     if best == 0:                            # zero at a point: fall back to the form
@@ -227,9 +227,10 @@ def _lu_solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
     A = M.copy().as_mutable()
     B = rhs.copy().as_mutable()
     k = A.rows
-    Ns = _pivot_values(A)
+    # the values as lists of rows (mpmath's matrix indexing was most of the elimination)
+    Ns = [[[N[i, j] for j in range(k)] for i in range(k)] for N in _pivot_values(A)]
     with mpmath.workdps(_PIVOT_DPS):
-        scales = [max(abs(N[i, j]) for i in range(k) for j in range(k)) for N in Ns]
+        scales = [max(abs(x) for row in N for x in row) for N in Ns]
         for col in range(k):
             best = _choose(A, Ns, col, scales)
             if A[best, col] == 0:
@@ -238,8 +239,7 @@ def _lu_solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
                 A.row_swap(best, col)
                 B.row_swap(best, col)
                 for N in Ns:
-                    for j in range(k):
-                        N[best, j], N[col, j] = N[col, j], N[best, j]
+                    N[best], N[col] = N[col], N[best]
             piv = A[col, col]
             _divides(piv)
             for r in range(col + 1, k):
@@ -249,11 +249,13 @@ def _lu_solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
                         for j in range(j0, R.cols):
                             if R[col, j] != 0:
                                 R[r, j] = R[r, j] - fac * R[col, j]
-                for N in Ns:
-                    if N[col, col] != 0:
-                        nf = N[r, col] / N[col, col]
+                for N in Ns:         # zero multipliers and entries change nothing: skipped
+                    top, row = N[col], N[r]
+                    if top[col] != 0 and row[col] != 0:
+                        nf = row[col] / top[col]
                         for j in range(col, k):
-                            N[r, j] -= nf * N[col, j]
+                            if top[j] != 0:
+                                row[j] -= nf * top[j]
     X = sp.zeros(k, B.cols)
     for r in range(k - 1, -1, -1):
         acc = B[r, :] - matmul(A[r, r + 1:], X[r + 1:, :])
