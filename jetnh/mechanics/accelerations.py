@@ -119,8 +119,8 @@ def _to_sympy(exprs, originals: dict) -> list:
                 head = (sp.Add if isinstance(e, se.Add) else sp.Mul if isinstance(e, se.Mul)
                         else sp.Pow if isinstance(e, se.Pow) else None)
                 if head is None:        # a function: symengine's conversion, one level
-                    head = sp.sympify(e.func(*[se.Symbol(f"_{i}")
-                                               for i in range(len(args))])).func
+                    dummies = [se.Symbol(f"_{i}") for i in range(len(args))]
+                    head = sp.sympify(e.func(*dummies), strict=True).func
                 done[e] = head(*[done[a] for a in args])
     return [done[e] for e in exprs]
 
