@@ -21,13 +21,15 @@ fresh processes with empty numba and kernel caches, the trees alternating within
 3. Per evaluation: (a run to T = 100 minus the fixed cost) / the extra rhs evaluations
    (rk4: 2000 steps against 1).
 4. Fixed cost against the bare call, in one process (the caches as they are), the calls
-   interleaved (each figure
-   the 5th percentile of single calls, so that the machine's load hits every one alike):
+   interleaved in a random order each round (each figure the 5th percentile of single
+   calls, so that the machine's load and the caches hit every one alike):
    the compiled dop853 loop called directly (its entry point, the arguments made once),
    ``scene.run()``, ``scene.run(y0=...)``, ``scene.replace(initial=...).run()`` (a new
    initial state each call, as a shooting loop does) and an ensemble of one run, each
-   with one step (T = 1e-6, ``save="final"``); the ratios to the bare call.  ``--fixed``
-   measures this alone (seconds).
+   with one step (T = 1e-6, ``save="final"``); the ratios to the bare call.  Also the
+   bare call of a run of three steps and its arithmetic: its rhs evaluations at the cost
+   of one in a long run (T = 100: the difference of the long and the one-step call over
+   their difference in evaluations).  ``--fixed`` measures this alone (seconds).
 """
 
 import json
@@ -83,16 +85,15 @@ for m in ("dop853", "dopri5", "rk4"):
     out["fixed_s_" + m] = min(fs)
     out["per_eval_s_" + m] = (min(gs) - min(fs)) / (n1 - n0)
 try:            # the compiled loop alone (this tree's API)
-    from jetnh.numeric import interrupt
-    from jetnh.numeric.methods import explicit_solver
+    from jetnh.numeric import interrupt, loops, methods
     from jetnh.numeric.methods.loop import Control, watch_of
     kern = sc.kernels
-    solve = explicit_solver("dop853")
     ctl = Control(1e-9, np.full(len(sc.y0), 1e-12), 0.0, np.inf, 10**7, 0)
-    args = (kern.rhs_fp, kern.sing_fp, kern.sing_fp, kern.hol_or_none, 0.0, 1e-6, sc.y0, sc.p,
-            ctl,
-            np.zeros(0), 2, watch_of(kern, None, True, 1e-10), interrupt.flag())
-    out["call_s_dop853"] = min(best(lambda: solve(*args), REPS_SHORT) for _ in range(3))
+    entry, prefix, suffix = loops.entry(sc, methods.method("dop853"), kern, None, None, ctl,
+                                        np.zeros(0), 2, watch_of(kern, None, True, 1e-10),
+                                        None)
+    args = (*prefix, 0.0, 1e-6, sc.y0.copy(), sc.p, *suffix, interrupt.flag())
+    out["call_s_dop853"] = min(best(lambda: entry(*args), REPS_SHORT) for _ in range(3))
 except ImportError:
     pass
 print(json.dumps(out))
@@ -100,33 +101,54 @@ print(json.dumps(out))
 
 
 FIXED = SETUP + r"""
-from jetnh.numeric import interrupt
-from jetnh.numeric.methods import explicit_solver
+from jetnh.numeric import interrupt, loops, methods
 from jetnh.numeric.methods.loop import Control, watch_of
 short = sc.replace(t_span=(0.0, 1e-6))
 kern = short.kernels
-solve = explicit_solver("dop853")
 y0 = short.y0.copy()
 ctl = Control(1e-9, np.full(len(y0), 1e-12), 0.0, np.inf, 10**7, 0)
-args = (kern.rhs_fp, kern.sing_fp, kern.sing_fp, kern.hol_or_none, 0.0, 1e-6, y0, short.p,
-        ctl, np.zeros(0), 2, watch_of(kern, None, True, 1e-10), interrupt.flag())
+watch = watch_of(kern, None, True, 1e-10)
+
+
+def bare(t1, ctl):      # the compiled dop853 loop called directly on (0, t1)
+    entry, prefix, suffix = loops.entry(short, methods.method("dop853"), kern, None, None,
+                                        ctl, np.zeros(0), 2, watch, None)
+    args = (*prefix, 0.0, t1, y0, short.p, *suffix, interrupt.flag())
+    return lambda i: entry(*args)
+
+
+h3 = float(np.nextafter(1e-3, np.inf))      # three steps of 1e-3 exactly
+three = bare(3e-3, Control(1e-3, np.full(len(y0), 1e-3), h3, h3, 10**7, 0))
+long = bare(100.0, ctl)
+nfev = {"3-step call": int(three(0)[4][2]), "long call": int(long(0)[4][2])}
 states = {n: short.initial[n] for n in short.state_names}
 inis = [dict(states, phi_t=states["phi_t"] + 1e-3 * k) for k in range(16)]
 calls = {
-    "bare call": lambda i: solve(*args),
+    "bare call": bare(1e-6, ctl),
+    "3-step call": three,
     "run()": lambda i: short.run(save="final"),
     "run(y0=...)": lambda i: short.run(y0=y0, save="final"),
     "replace(initial=...).run()": lambda i: short.replace(initial=inis[i % 16]).run(
         save="final"),
     "ensemble of one": lambda i: short.ensemble(y0[None, :], save="final"),
 }
+nfev["bare call"] = int(calls["bare call"](0)[4][2])
 for f in calls.values():
     f(0)
 times = {k: [] for k in calls}
+times["long call"] = []
+order = np.random.default_rng(0)
 for i in range(REPS_FIXED):
-    for k, f in calls.items():
+    for k in order.permutation(list(calls)):    # no call always after the same one
+        f = calls[k]
         tic = time.perf_counter(); f(i); times[k].append(time.perf_counter() - tic)
+    if i % 20 == 0:
+        tic = time.perf_counter(); long(i); times["long call"].append(time.perf_counter() - tic)
 out = {k: float(np.percentile(v, 5)) for k, v in times.items()}
+# the arithmetic of a call: its evaluations at the cost of one in a long run (the long
+# and the one-step call's difference over their difference in evaluations)
+per = (out["long call"] - out["bare call"]) / (nfev["long call"] - nfev["bare call"])
+out["3-step arithmetic"] = nfev["3-step call"] * per
 print(json.dumps(out))
 """
 
@@ -207,6 +229,9 @@ def main(argv=None):
         note="trees (commits): " + ", ".join(f"{n} = {commit(p)}" for n, p in trees.items()))
     a = cost["after"]
     fixed_summary = (
+        f"the bare call of a 3-step dop853 run costs {a['3-step call'] * 1e6:.3g} us, "
+        f"{(a['3-step call'] - a['3-step arithmetic']) * 1e6:.2f} us more than its "
+        f"arithmetic ({a['3-step arithmetic'] * 1e6:.2f} us); "
         f"a one-step dop853 run costs {a['run()'] / a['bare call']:.2f}x the bare call of its "
         f"compiled loop ({a['run()'] * 1e6:.3g} us against {a['bare call'] * 1e6:.3g} us); "
         f"run(y0=...) {a['run(y0=...)'] / a['bare call']:.2f}x, "

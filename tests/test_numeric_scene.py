@@ -2,12 +2,13 @@
 
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 import sympy as sp
 
 import jetnh as jn
 from jetnh import models
 from jetnh.mechanics.system import System
-from jetnh.errors import ConstraintError, IntegrationError, JetnhError
+from jetnh.errors import ConstraintError, FrozenError, IntegrationError, JetnhError
 from jetnh.numeric import Scene
 
 R_, I1_, I2_ = 1.5, 0.5, 0.25
@@ -245,3 +246,60 @@ def test_parameters_default_to_the_system_defaults():
     scene2 = Scene(s, "chetaev", params={"R": 2.0}, initial=scene.initial, t_span=(0, 1),
                    project=True)
     assert scene2.params["R"] == 2.0 and scene2.params["I1"] == 0.5
+
+
+@settings(deadline=None)
+@given(st.floats(-3.0, 3.0), st.floats(-3.0, 3.0), st.floats(-10.0, 10.0),
+       st.floats(-2.0, 2.0))
+def test_replace_initial_is_the_new_scene(disk_scene, psi, phi_t, x, psi_t):
+    """``replace(initial=...)`` takes the scene over, its dependent velocities from the
+    compiled kernels: the same states bit for bit, the dependent velocities to rounding,
+    the same run bit for bit, frozen, with the kernels' plans handed on."""
+    ini = dict(DISK0, psi=psi, phi_t=phi_t, x=x, psi_t=psi_t)
+    moved = disk_scene.replace(initial=ini, t_span=(0.0, 0.5))
+    new = Scene(disk_scene.system, "chetaev", params=disk_scene.params, initial=ini,
+                t_span=(0.0, 0.5), cache=False)
+    assert np.array_equal(moved.y0, new.y0) and moved.t_span == new.t_span
+    assert moved.initial.keys() == new.initial.keys()
+    for name in moved.dependent_velocities:
+        assert abs(moved.initial[name] - new.initial[name]) <= 4e-16 * max(
+            1.0, abs(new.initial[name]))
+    assert np.array_equal(moved.run(rtol=1e-6, atol=1e-9).y, new.run(rtol=1e-6, atol=1e-9).y)
+    assert moved.kernels is disk_scene.kernels
+    assert moved._memo["plans"] is disk_scene._memo.get("plans", moved._memo["plans"])
+    with pytest.raises(FrozenError):
+        moved.initial = {}
+    with pytest.raises(FrozenError):
+        moved.t_span = (0.0, 1.0)
+
+
+def test_replace_initial_near_a_singular_configuration(monkeypatch):
+    """The kernels' floats serve only where every indicator is away from zero; nearer, and
+    where a dependent velocity is given, the 30-digit evaluation decides (as a new Scene
+    does): a singular configuration is refused, an inconsistent velocity too."""
+    J = jn.JetSpace("x y")
+    x, y = J.q
+    xd, yd = J.qd
+    s = System(J, (xd**2 + yd**2) / 2, [x * xd - yd], dependent=[x])    # x_t = y_t / x
+    sc = Scene(s, "chetaev", initial=dict(x=1.0, y=0.0, y_t=1.0), cache=False).compile()
+    exact = []
+    original = Scene._dependent_velocity_values
+
+    def counted(self, *args, **kw):
+        exact.append(args[0]["x"])
+        return original(self, *args, **kw)
+    monkeypatch.setattr(Scene, "_dependent_velocity_values", counted)
+    assert sc.replace(initial=dict(x=0.5, y=0.0, y_t=1.0)).initial["x_t"] == 2.0
+    assert exact == []
+    near = sc.replace(initial=dict(x=1e-9, y=0.0, y_t=1.0))
+    assert exact == [1e-9]
+    assert near.initial["x_t"] == Scene(s, "chetaev", initial=dict(x=1e-9, y=0.0, y_t=1.0)
+                                        ).initial["x_t"]
+    with pytest.raises(ConstraintError, match="no finite value for x_t"):
+        sc.replace(initial=dict(x=0.0, y=0.0, y_t=1.0))
+    with pytest.raises(ConstraintError, match="x_t = 3.0 but the constraints give"):
+        sc.replace(initial=dict(x=0.5, y=0.0, y_t=1.0, x_t=3.0))
+    with pytest.raises(JetnhError, match="missing initial values"):
+        sc.replace(initial=None)
+    with pytest.raises(JetnhError, match="initial must be a dict"):
+        sc.replace(initial=[0.5, 0.0, 1.0])

@@ -196,7 +196,9 @@ class Ensemble(Frozen):
                       status=info[0], steps=info[1], rejected=info[2], nfev=info[3],
                       rows=info[4], t_final=t_last, y_final=y_last,
                       event_counts=ev_n,    # [n_runs, n_events]
-                      event_first=np.where(ev_n > 0, ev_t, np.nan), initial=Y0.view(),
+                      event_first=(np.where(ev_n > 0, ev_t, np.nan) if ev_t.size
+                                   else ev_t),
+                      initial=Y0.view(),
                       params=P.view())      # [n_runs, n_runtime_params]
         if sensitivities is not None:
             arrays["sensitivities"] = sensitivities[1]

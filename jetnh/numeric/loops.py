@@ -17,7 +17,7 @@ import numpy as np
 from . import interrupt, methods
 from .methods import Solver
 from .methods._common import AT_T_EVAL
-from .methods.loop import Watch
+from .methods.loop import Result, Watch
 
 NO_EVENTS = np.zeros(0, dtype=np.int64)
 
@@ -26,29 +26,32 @@ def entry(scene, method, kern, ce, sens, ctl, te, mode, watch, newton):
     """The entry of the compiled loop of ``method`` on the kernels ``kern`` (events
     ``ce``; with ``sens``, the right-hand side and radau's Jacobian of the state
     augmented by its sensitivities) and its arguments before and after ``(t0, t1, y0,
-    p)`` (``halt`` last, per call)."""
+    p)`` (``halt`` last, per call).  The explicit loops take the kernels' callbacks as
+    their addresses (``methods._common.function_at``): ``kern`` keeps them alive."""
     uev = ce.uev if ce is not None else kern.sing_fp
     rhs = kern.rhs_fp if sens is None else sens.rhs_fp
+    hol = kern.hol_or_none if sens is None else sens.hol_or_none   # (with dg/dp)
     if method.solver is Solver.IMPLICIT:
         jac = scene.jacobian.address if sens is None else sens.jac_fp
-        return (kern.implicit(), (rhs, jac, kern.sing_fp, uev, kern.hol_or_none),
+        return (kern.implicit(), (rhs, jac, kern.sing_fp, uev, hol),
                 (ctl, newton, te, mode, watch))
-    return (methods.explicit_solver(method), (rhs, kern.sing_fp, uev, kern.hol_or_none),
+    return (methods.explicit_solver(method), tuple(f.address for f in (rhs, kern.sing_fp, uev,
+                                                                      hol)),
             (ctl, te, mode, watch))
 
 
 def call(scene, method, kern, ce, watch, t0, t1, y, p, ctl, te, mode, newton, limit,
          sens=None):
     """One call of the compiled loop of ``method`` (a ``Method`` or its name; ``entry``),
-    stoppable by Ctrl-C and ``limit`` seconds; returns its ``Result`` and the
-    wall-clock time."""
+    stoppable by Ctrl-C and ``limit`` seconds; returns its ``Result`` (the loops return
+    its fields as a tuple) and the wall-clock time."""
     method = methods.method(method)
     loop, prefix, suffix = entry(scene, method, kern, ce, sens, ctl, te, mode, watch,
                                  newton)
     halt = np.zeros(1, dtype=np.int64)
     tic = time.perf_counter()
     out = interrupt.call(lambda: loop(*prefix, t0, t1, y, p, *suffix, halt), halt, limit)
-    return out, time.perf_counter() - tic
+    return Result._make(out), time.perf_counter() - tic
 
 
 def retake(traj, t0, t1, y, tau):

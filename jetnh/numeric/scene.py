@@ -44,6 +44,7 @@ compiled explicit and Radau runs project every accepted step back onto g = 0
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 import mpmath
 import numpy as np
@@ -57,7 +58,7 @@ from ..geometry.jet import sympy_object
 from . import arguments, solve
 from . import codegen
 from . import discrete
-from .kernels import jacobian_kernels, load as load_kernels
+from .kernels import jacobian_kernels, load as load_kernels, loader
 from ..frozen import Frozen, FrozenDict, memo
 from .options import options
 from .trajectory import Trajectory
@@ -176,18 +177,23 @@ class Scene(Frozen):
                              "params={...} (or as the system's defaults)")
         return out
 
-    def _initial(self, initial, project, complete=False) -> dict[str, float]:
+    def _initial(self, initial, project, complete=False, kernels=None, p=None
+                 ) -> dict[str, float]:
+        """The initial values (states and dependent velocities), checked; ``kernels``:
+        the scene's compiled kernels if they are loaded, ``p`` its run-time parameters
+        (``_dependent_velocity_floats``)."""
         given = {}
         allowed = set(self.state_names) | set(self.dependent_velocities)
         for k, v in initial.items():
-            name = arguments.name_of(k, "an initial value")
+            name = k if type(k) is str else arguments.name_of(k, "an initial value")
             if name not in allowed:
                 raise JetnhError(
                     f"initial has {name!r}, which is not a state of this {self.principle} "
                     f"scene; the states are {', '.join(self.state_names)} (and the dependent "
                     f"velocities {', '.join(self.dependent_velocities) or 'none'})")
-            given[name] = arguments.real(v, f"initial value of {name!r}")
-            if not np.isfinite(given[name]):
+            given[name] = v if type(v) is float else arguments.real(
+                v, f"initial value of {name!r}")
+            if not math.isfinite(given[name]):
                 raise JetnhError(f"initial value of {name!r} is {given[name]}")
         missing = [n for n in self.state_names if n not in given]
         if missing:
@@ -198,10 +204,14 @@ class Scene(Frozen):
                    f"{', '.join(self.multipliers)})")
                 + "; give them in initial={...}")
         given = self._on_holonomic(given, complete)
-        required = self._dependent_velocity_values(given)
+        required = None
+        if kernels is not None and not any(n in given for n in self.dependent_velocities):
+            required = self._dependent_velocity_floats(given, kernels, p)
+        if required is None:
+            required = self._dependent_velocity_values(given)
         bad = []
         for name, value in required.items():
-            if not np.isfinite(value):
+            if not math.isfinite(value):
                 raise ConstraintError(
                     f"the constraints give no finite value for {name} at the initial state "
                     f"({value}): the initial configuration is singular for the split "
@@ -274,6 +284,34 @@ class Scene(Frozen):
                     found.append(None)
         return {v.name: _real(x) for v, x in zip(vs, found)}
 
+    def _dependent_velocity_floats(self, given, kern, p) -> dict[str, float] | None:
+        """qdot^alpha = phi^alpha at the initial state ``given`` (run-time parameters
+        ``p``) by the compiled kernel ``kern.aux``: floats, in microseconds where the
+        30-digit evaluation (``_dependent_velocity_values``) takes a tenth of a
+        millisecond.  None unless every singularity indicator of ``kern.sing`` (among
+        them the denominators and square-root arguments of phi) is finite and at least
+        ``FLOAT_MARGIN`` from zero and every value is finite: there, the 30-digit
+        evaluation is finite too and the two differ by rounding only; elsewhere (a
+        configuration near or at a singular one) the caller evaluates at 30 digits."""
+        lay = kern.layout
+        if lay.dependent_velocities != self.dependent_velocities:
+            return None
+        y = np.array([given[n] for n in self.state_names], dtype=float)
+        t0 = self.t_span[0]
+        if lay.indicators:
+            if not hasattr(kern, "sing"):
+                return None
+            g = np.empty(len(lay.indicators))
+            kern.sing(t0, y, p, g)
+            if not all(math.isfinite(x) and abs(x) >= FLOAT_MARGIN for x in g.tolist()):
+                return None
+        aux = np.empty(lay.n_aux)
+        kern.aux(t0, y, p, aux)
+        values = aux[:len(lay.dependent_velocities)].tolist()
+        if not all(map(math.isfinite, values)):
+            return None
+        return dict(zip(self.dependent_velocities, values))
+
     # ------------------------------------------------------------------ kernels
     @memo
     def spec(self) -> codegen.KernelSpec:
@@ -305,6 +343,12 @@ class Scene(Frozen):
         """A scene equal to this one except for ``changes`` (constructor arguments:
         params, initial, t_span, runtime_params, integrals, ...).  The initial values
         are the states' (dependent velocities follow from the constraints again)."""
+        if changes.keys() <= {"initial", "t_span"}:
+            initial = changes.get("initial", self.initial)
+            return self._moved({n: self.initial[n] for n in self.state_names}
+                               if initial is self.initial else {} if initial is None
+                               else initial,
+                               changes.get("t_span", self.t_span))
         args = dict(system=self.system, principle=self.principle, params=self.params,
                     initial={n: self.initial[n] for n in self.state_names},
                     t_span=self.t_span, form=self.form, convention=self.convention,
@@ -320,6 +364,27 @@ class Scene(Frozen):
         if new._kernel_identity() == self._kernel_identity():
             # the same kernels: their key and the plans of runs go with them
             new._memo.update((k, self._memo[k]) for k in _SHARED if k in self._memo)
+        return new
+
+    def _moved(self, initial, t_span) -> "Scene":
+        """``replace(initial=..., t_span=...)``: this scene with other initial values and
+        time span, its other attributes (checked once) and its memo's shared values
+        (``_SHARED``, and ``_p``) taken over rather than made anew; the dependent
+        velocities by the compiled kernels where they are loaded and apply
+        (``_dependent_velocity_floats``)."""
+        if not isinstance(initial, Mapping):
+            raise JetnhError(f"initial must be a dict keyed by Symbol or name, got a "
+                             f"{type(initial).__name__}")
+        new = object.__new__(Scene)
+        new.__dict__.update(self.__dict__)
+        del new.__dict__["_memo"]
+        new._set(t_span=self.t_span if t_span is self.t_span else self._t_span(t_span),
+                 projected={}, completed={})
+        kern = _loaded_kernels(self.key, self.cache) if "key" in self._memo else None
+        ini = FrozenDict(new._initial(initial, False, False, kern, self._p))
+        new._set(initial=ini, y0=np.array([ini[n] for n in self.state_names], dtype=float))
+        object.__setattr__(new, "_memo", {k: self._memo[k] for k in _SHARED + ("_p",)
+                                          if k in self._memo})
         return new
 
     def _kernel_identity(self) -> tuple:
@@ -481,8 +546,12 @@ class Scene(Frozen):
         if y0 is None:
             return self.y0.copy()        # the compiled loop gets its own array
         if not isinstance(y0, dict):
-            y, _ = arguments.keyed_or_sequence(y0, self.state_names, self.y0, "y0",
-                                               "scene.state_names")
+            if (type(y0) is np.ndarray and y0.dtype == np.float64
+                    and y0.shape == self.y0.shape and math.isfinite(y0.dot(y0))):
+                y = y0.copy()           # (what the general route makes of it, sooner)
+            else:
+                y, _ = arguments.keyed_or_sequence(y0, self.state_names, self.y0, "y0",
+                                                   "scene.state_names")
             self._check_holonomic(y, t0, p)
             return y
         allowed = self.state_names + self.dependent_velocities
@@ -570,6 +639,17 @@ class Scene(Frozen):
 #: kernels' keys, the plans of runs (``solve.planned``), compiled events, whether an
 #: atlas applies
 _SHARED = ("spec", "key", "plans", "events", "atlas_applies")
+
+
+#: the least |indicator| at which the initial dependent velocities are taken from the
+#: compiled kernels (``Scene._dependent_velocity_floats``)
+FLOAT_MARGIN = 1e-6
+
+
+def _loaded_kernels(key, persistent):
+    """The kernels of ``key`` if this process has loaded them, else None (to use them
+    where they are at hand, never to compile them)."""
+    return loader._LOADED.get((key, persistent))
 
 
 def _real(x) -> float:

@@ -430,7 +430,10 @@ def batch(scene, plan, Y0, P, parallel="threads", workers=1):
     head, tail = plan.prefix + (plan.t0, plan.t1), plan.suffix + (halt,)
 
     def block(a, b):
-        drive(*head, Y0[a:b], P[a:b], *tail, *(x[a:b] for x in out))
+        if a == 0 and b == n_runs:      # all of them (no slices: each costs)
+            drive(*head, Y0, P, *tail, *out)
+        else:
+            drive(*head, Y0[a:b], P[a:b], *tail, *(x[a:b] for x in out))
 
     def compute():
         if prange:

@@ -41,8 +41,8 @@ import numpy as np
 
 from ._common import (
     AT_T_EVAL, ENDPOINTS, ENSEMBLE_OUT, EVERY_STEP, FINISHED, MAX_FACTOR, MAX_STEPS,
-    MIN_FACTOR, NONFINITE, RHS, SAFETY, SINGULAR, STOPPED, TOO_SMALL_STEP, all_finite,
-    collect, compiled, copy_into, f8, i8, inline, jit, min_step, start, store)
+    MIN_FACTOR, NONFINITE, SAFETY, SINGULAR, STOPPED, TOO_SMALL_STEP, all_finite,
+    collect, compiled, copy_into, f8, function_at, i8, inline, jit, min_step, start, store)
 from . import projection
 from .sums import DOP853, EMBEDDED, NONE, functions as sums  # noqa: F401 (the codes)
 from ._events import (any_user_active, dense_eval, hermite_defect, locate, most_watched,
@@ -193,6 +193,14 @@ def watch_start(sing, uev, watch, t, y, p):
 
 
 @inline
+def counts(stats):
+    """``stats`` (accepted, rejected, evaluations) as the tuple a run returns: three
+    integers box cheaply where an array, like every array a compiled call returns to
+    Python, costs a fraction of a microsecond."""
+    return stats[0], stats[1], stats[2]
+
+
+@inline
 def no_events(n):
     """Empty event records (time, index, state) and their count."""
     return np.empty(0), np.empty(0, dtype=np.int64), np.empty((0, n)), np.int64(0)
@@ -281,7 +289,8 @@ def output(tab, fixed, rhs, p, t, h, t_new, y, y_new, K, F, ytmp, y_stop, stop, 
     return ts, ys, n_out, j_eval
 
 
-def _solve(rhs, sing, uev, hol, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
+def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode, watch,
+           halt):
     """Integrate y' = rhs(t, y, p) from t0 to t_end with the method ``TAB``
     (``ExplicitRK.arrays``; it, ``ADAPTIVE`` and the parts ``WATCH``, ``PROJECT``,
     ``DENSE`` are compile-time constants, so the path of the other step kind and the
@@ -290,13 +299,16 @@ def _solve(rhs, sing, uev, hol, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt
     singularity indicators, ``uev`` the user event functions; see ``_events``); ``hol``
     the holonomic constraints an accepted step is projected onto when ``ctl.n_hol`` > 0
     (``projection``; the step's last stage is then evaluated again at the projected
-    state).  ``mode``:
+    state); the four are the addresses of their C callbacks (``_common.function_at``).
+    ``mode``:
     EVERY_STEP, AT_T_EVAL or ENDPOINTS.  The loop stops with status STOPPED before a step
     when ``halt[0]`` is nonzero.
 
-    Returns a ``Result``: the output rows ``ts[:n_out]``, ``ys[:n_out]``, ``stats =
-    [accepted, rejected, rhs evaluations]``, the last state, the event records (time,
-    index, state) and the index of the indicator that stopped the run (-1 if none).
+    Returns the fields of a ``Result`` as a plain tuple (numba boxes a namedtuple by
+    unpickling its class on every call; ``numeric.loops.call`` makes it a ``Result``):
+    the output rows ``ts[:n_out]``, ``ys[:n_out]``, ``stats = (accepted, rejected, rhs
+    evaluations)`` (``counts``), the last state, the event records (time, index, state)
+    and the index of the indicator that stopped the run (-1 if none).
 
     Fixed steps (``ctl.n_steps > 0``, methods without an error estimate): equal steps
     ``(t_end - t0) / n_steps``; events and indicators are located on the cubic Hermite
@@ -306,6 +318,8 @@ def _solve(rhs, sing, uev, hol, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt
     1 % of its initial size) and the interpolant's defect at the middle of the step
     exceeds ``KINK``, the run stops at the start of that step as a singular stop.
     """
+    rhs, sing, uev, hol = (function_at(rhs_at), function_at(sing_at), function_at(uev_at),
+                           function_at(hol_at))
     tab = TAB
     A, D = tab[1], tab[5]
     ns, _, _, error_order = SHAPE
@@ -335,8 +349,8 @@ def _solve(rhs, sing, uev, hol, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt
         if sing_index >= 0:
             if ADAPTIVE:
                 ts, ys, n_out = store(ts, ys, n_out, t, y)
-            return Result(SINGULAR, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev,
-                          sing_index)
+            return (SINGULAR, ts, ys, n_out, counts(stats), t, y, ev_t, ev_i, ev_y,
+                          n_ev, sing_index)
     h_abs = 0.0
     h_fixed = (t_end - t0) / max(n_steps, 1)
     exponent = -1.0 / (error_order + 1)
@@ -344,7 +358,8 @@ def _solve(rhs, sing, uev, hol, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt
         go, h_abs, ts, ys, n_out = start(rhs, t, y, p, K[0], K[1], ytmp, scale, ctl,
                                          error_order, t_end, stats, mode, t_eval, ts, ys, n_out)
         if go >= 0:
-            return Result(go, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev, sing_index)
+            return (go, ts, ys, n_out, counts(stats), t, y, ev_t, ev_i, ev_y, n_ev,
+                          sing_index)
     status = FINISHED
     step = 0
     while (direction * (t_end - t) > 0.0) if ADAPTIVE else (step < n_steps):
@@ -441,7 +456,8 @@ def _solve(rhs, sing, uev, hol, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt
             copy_into(K[0], K[ns])
     if mode == ENDPOINTS:
         ts, ys, n_out = store(ts, ys, n_out, t, y)
-    return Result(status, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev, sing_index)
+    return (status, ts, ys, n_out, counts(stats), t, y, ev_t, ev_i, ev_y, n_ev,
+                  sing_index)
 
 
 #: the method a specialised loop runs, its sums and that loop (``_specialised``; unbound
@@ -452,7 +468,7 @@ _SPECIALISED = {}
 CONTROL = numba.typeof(Control(1.0, np.zeros(1), 0.0, 1.0, 1, 0, 0, 0, 0))
 WATCHED = numba.typeof(Watch(0, 0.0, np.zeros(1, dtype=np.int64),
                              np.zeros(1, dtype=np.int64)))
-ARGS = (RHS, RHS, RHS, RHS, f8, f8, f8[::1], f8[::1], CONTROL, f8[::1], i8, WATCHED,
+ARGS = (i8, i8, i8, i8, f8, f8, f8[::1], f8[::1], CONTROL, f8[::1], i8, WATCHED,
         i8[::1])
 #: every part of the loop compiled (``features``)
 ALL = (True, True, True)
