@@ -501,11 +501,22 @@ class Scene(Frozen):
             naming the time and the state instead.  Every argument is checked before it
             reaches compiled code (``numeric.arguments``).
         """
-        span = self.t_span if t_span is None else arguments.time_span(t_span)
-        key = (rtol, solve.hashable(atol), method, save, span, timeout, projection,
-               backend, step, singular, newton, sensitivities, sensitivity_error,
-               solve.hashable(events), solve.hashable(t_eval), *keywords.items())
-        plan = solve.planned(self, (key, tuple(map(type, key))), lambda: solve.plan(
+        if (rtol is None and atol is None and t_eval is None and method == "dop853"
+                and events is None and t_span is None and timeout is None
+                and projection is False and backend is None and step is None
+                and singular == "stop" and newton is None and sensitivities is False
+                and sensitivity_error is True and not keywords
+                and (save == "steps" or save == "final")):
+            # every option as its default but save (a str): the key, sooner
+            span = self.t_span
+            key = ("defaults", save, span)
+        else:
+            span = self.t_span if t_span is None else arguments.time_span(t_span)
+            key = (rtol, solve.hashable(atol), method, save, span, timeout, projection,
+                   backend, step, singular, newton, sensitivities, sensitivity_error,
+                   solve.hashable(events), solve.hashable(t_eval), *keywords.items())
+            key = (key, tuple(map(type, key)))
+        plan = solve.planned(self, key, lambda: solve.plan(
             self, method, opts=options(step, singular, newton, rtol=rtol, atol=atol,
                                        **keywords),
             t_span=span, t_eval=t_eval, save=save, events=events, timeout=timeout,

@@ -30,7 +30,7 @@ from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, FINISHED,
 from .kernels import sensitivity_kernels
 from .methods.loop import Control, Watch
 from .options import fields_of, options
-from .trajectory import Trajectory
+from .trajectory import Trajectory, _info
 
 #: plans kept per scene (beyond: planned afresh each run)
 MAX_PLANS = 64
@@ -317,8 +317,7 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
     halt = np.zeros(1, dtype=np.int64)
     entry, prefix, suffix, t0, t1 = plan.entry, plan.prefix, plan.suffix, plan.t0, plan.t1
     tic = time.perf_counter()
-    out = interrupt.call(lambda: entry(*prefix, t0, t1, y, p, *suffix, halt), halt,
-                         plan.limit)
+    out = interrupt.call(entry, halt, plan.limit, (*prefix, t0, t1, y, p, *suffix, halt))
     wall = time.perf_counter() - tic
     if dense is not None:    # stopped inside a step
         dense["partial_last"] = int(out[0]) in (EVENT, SINGULAR)
@@ -381,10 +380,12 @@ def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, 
         k = len(ce) if n_events is None else n_events
         t_events, y_events = split_records(k, ev_t[:n_ev], ev_i[:n_ev], ev_y[:n_ev])
         extra["events"] = (ce.names[:k], t_events, y_events)
-    return Trajectory(scene, ts, ys, p, method=method, status=status, stop_reason=reason,
-                      steps=int(stats[0]), rejected=int(stats[1]), nfev=int(stats[2]),
-                      wall_time=wall, kernels=kern, projected=scene.projected,
-                      singularity=singularity, dense=dense, **extra)
+    # the loop's own float64, C-contiguous rows: taken as they are
+    return Trajectory._of_run(scene, ts, ys, p, method, status, reason,
+                              _info(int(stats[0]), int(stats[1]), int(stats[2]), wall,
+                                    scene.projected),
+                              kern, extra.get("events"), singularity, dense,
+                              extra.get("sensitivities"))
 
 
 # ---------------------------------------------------------------------- many runs
