@@ -56,7 +56,7 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import ConstraintError, IntegrationError, JetnhError, JetnhWarning
-from ..frozen import Frozen, readonly
+from ..frozen import Frozen, memo, readonly
 from ..mechanics import holonomic
 from . import arguments, atlas, diagnosis, solve
 from .events import as_events
@@ -189,24 +189,17 @@ class Ensemble(Frozen):
                  event_names, wall_time, parallel, workers, save, singular_tol, *,
                  switching=False, switches=None, pieces=None, reasons=None,
                  sensitivities=None):
-        info = info.T.copy()            # (one copy: its rows are the columns below)
-        # read-only views: the caller's arrays stay as given
-        arrays = dict(t=t,              # [n_runs, n_times]
-                      y=y,              # [n_runs, n_times, n_states]
-                      status=info[0], steps=info[1], rejected=info[2], nfev=info[3],
-                      rows=info[4], t_final=t_last, y_final=y_last,
-                      event_counts=ev_n,    # [n_runs, n_events]
-                      event_first=(np.where(ev_n > 0, ev_t, np.nan) if ev_t.size
-                                   else ev_t),
-                      initial=Y0.view(),
-                      params=P.view())      # [n_runs, n_runtime_params]
-        if sensitivities is not None:
-            arrays["sensitivities"] = sensitivities[1]
-        for a in arrays.values():
-            a.flags.writeable = False
+        # t and y read-only now, the other arrays on first read (``_lazy``): read-only
+        # views, the caller's arrays stay as given
+        t, y = t.view(), y.view()
+        t.flags.writeable = y.flags.writeable = False
         # the attributes in one go (``Frozen._set`` without its walk over every value)
         self.__dict__.update(
-            arrays, scene=scene, method=method, _sing_index=info[5],
+            t=t,                # [n_runs, n_times]
+            y=y,                # [n_runs, n_times, n_states]
+            _arrays=(info, t_last, y_last, ev_n, ev_t, Y0, P,
+                     None if sensitivities is None else sensitivities[1]),
+            scene=scene, method=method,
             event_names=tuple(event_names), param_names=scene.runtime_params,
             wall_time=wall_time, parallel=parallel, workers=workers, save=save,
             _singular_tol=singular_tol, layout=scene.kernels.layout,
@@ -218,6 +211,70 @@ class Ensemble(Frozen):
             #: run with ``sensitivities=True``) differentiate by: the initial states,
             #: then the runtime parameters
             sensitivity_columns=() if sensitivities is None else tuple(sensitivities[0]))
+
+    @memo
+    def _info(self) -> np.ndarray:
+        """The runs' (status, steps, rejected, nfev, rows, indicator) as rows (one copy
+        of the driver's columns)."""
+        return self._arrays[0].T.copy()
+
+    @memo
+    def status(self) -> np.ndarray:
+        return self._info[0].view()
+
+    @memo
+    def steps(self) -> np.ndarray:
+        return self._info[1].view()
+
+    @memo
+    def rejected(self) -> np.ndarray:
+        return self._info[2].view()
+
+    @memo
+    def nfev(self) -> np.ndarray:
+        return self._info[3].view()
+
+    @memo
+    def rows(self) -> np.ndarray:
+        return self._info[4].view()
+
+    @property
+    def _sing_index(self) -> np.ndarray:
+        return self._info[5]
+
+    @memo
+    def t_final(self) -> np.ndarray:
+        return self._arrays[1].view()
+
+    @memo
+    def y_final(self) -> np.ndarray:
+        return self._arrays[2].view()
+
+    @memo
+    def event_counts(self) -> np.ndarray:
+        """[n_runs, n_events]"""
+        return self._arrays[3].view()
+
+    @memo
+    def event_first(self) -> np.ndarray:
+        ev_n, ev_t = self._arrays[3], self._arrays[4]
+        return np.where(ev_n > 0, ev_t, np.nan) if ev_t.size else ev_t.view()
+
+    @memo
+    def initial(self) -> np.ndarray:
+        return self._arrays[5].view()
+
+    @memo
+    def params(self) -> np.ndarray:
+        """[n_runs, n_runtime_params]"""
+        return self._arrays[6].view()
+
+    @memo
+    def sensitivities(self) -> np.ndarray:
+        S = self._arrays[7]
+        if S is None:
+            raise AttributeError("sensitivities")
+        return S.view()
 
     # ------------------------------------------------------------------ shape and access
     @property

@@ -376,15 +376,20 @@ class Scene(Frozen):
             raise JetnhError(f"initial must be a dict keyed by Symbol or name, got a "
                              f"{type(initial).__name__}")
         new = object.__new__(Scene)
-        new.__dict__.update(self.__dict__)
-        del new.__dict__["_memo"]
-        new._set(t_span=self.t_span if t_span is self.t_span else self._t_span(t_span),
+        d = new.__dict__
+        d.update(self.__dict__)
+        del d["_memo"]
+        # (the attributes set directly, not by ``_set``: a time span is a tuple of
+        # floats, the initial values floats, y0 made read-only here)
+        d.update(t_span=self.t_span if t_span is self.t_span else self._t_span(t_span),
                  projected={}, completed={})
         kern = _loaded_kernels(self.key, self.cache) if "key" in self._memo else None
         ini = FrozenDict(new._initial(initial, False, False, kern, self._p))
-        new._set(initial=ini, y0=np.array([ini[n] for n in self.state_names], dtype=float))
-        object.__setattr__(new, "_memo", {k: self._memo[k] for k in _SHARED + ("_p",)
-                                          if k in self._memo})
+        y0 = np.array([ini[n] for n in self.state_names], dtype=float)
+        y0.flags.writeable = False
+        d.update(initial=ini, y0=y0)
+        memo = self._memo
+        d["_memo"] = {k: memo[k] for k in _SHARED + ("_p",) if k in memo}
         return new
 
     def _kernel_identity(self) -> tuple:
