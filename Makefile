@@ -1,6 +1,7 @@
 # Two commands do all the set-up on a fresh machine:
 #   make run    the machine-checked reproduction of the seed paper (papers/zhao2008)
 #   make test   run the whole test suite (hypothesis profile "ci"; HYPOTHESIS_PROFILE=dev for more)
+# (installing compiles the integrator loops of a first run into jetnh's cache: jetnh cache warm)
 # and one builds the documentation:
 #   make docs   the site (Sphinx, notebooks executed) in docs/_build/html; warnings are errors,
 #               and the built pages are checked to load nothing from the network
@@ -16,6 +17,7 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[test]'
+	$(BIN)/jetnh --quiet cache warm
 	touch $(STAMP)
 
 $(DOCS_STAMP): $(STAMP)

@@ -281,8 +281,9 @@ def test_two_processes_compile_one_new_scene(fresh, tmp_path):
         r = json.loads(out.strip().splitlines()[-1])
         assert not r["hit"] and r["err"] < 1e-6
     root = cache.cache_root()
-    entries = [p for p in root.iterdir() if p.is_dir()]
+    entries = [p for p in root.iterdir() if p.is_dir() and p.name != "loops"]
     assert len(entries) == 1 and entries[0].name.startswith("k")   # no staging left over
+    assert (root / "loops").is_dir()                # the integrator loop, signed beside
     sc = scene(3.75)
     assert trusted(entries[0], sc.key)
     assert reload(sc).hit
@@ -510,6 +511,10 @@ def test_numba_reads_kernel_machine_code_only_from_the_checked_entry(tmp_path, r
     pycache = sorted(p.name for p in (entry / "__pycache__").iterdir())
     listed = json.loads((entry / "manifest.json").read_text())["body"]["files"]
     assert all(f"__pycache__/{name}" in listed for name in pycache)
+    # the integrator loop is in the signed store either way (kernels.loop_cache), never
+    # where NUMBA_CACHE_DIR points
+    assert list((tmp_path / "cache").glob("v*/loops/loop._solve_dop853_*.nbc"))
+    assert not any("_solve" in p.name for p in elsewhere.rglob("*"))
     if redirect:
         assert warm["code_hits"] == 0 and warm["warned"] and cold["warned"]
         assert "NUMBA_CACHE_DIR" in warm["warned"][0]

@@ -1,6 +1,8 @@
 """Observed order of each compiled method under step refinement, on the nonholonomic
 particle (zdot = y xdot, Chetaev), whose solution is known in closed form."""
 
+import os
+
 import numpy as np
 import pytest
 
@@ -145,14 +147,17 @@ def test_dla_rejects_other_principles(oscillator):
 
 
 def test_integrator_cache_key_carries_the_helpers():
-    """numba checks only a cached function's own file; the compiled loops are cached under
+    """numba's cache keys a function by its own code; the compiled loops are cached under
     a name that carries the hash of every integrator module (the helpers compiled into
-    them), and the helpers themselves are not cached on their own."""
+    them), in jetnh's signed store (``kernels.loop_cache``), and the helpers themselves
+    are not cached on their own."""
+    from jetnh.numeric.kernels.loop_cache import LOOPS, SignedFunctionCache
     from jetnh.numeric.methods import _common, radau
 
     h = _common.sources_hash()
     assert len(h) == 16
     for d in (loop.solver(DOPRI5), radau.solver()):
         assert d.py_func.__qualname__.endswith("_" + h)
-        assert d._cache._impl.locator.__class__.__module__.startswith("numba")
+        assert isinstance(d._cache, SignedFunctionCache)
+        assert os.path.basename(d._cache.cache_path) == LOOPS
     assert type(_common.collect._cache).__name__ == "NullCache"

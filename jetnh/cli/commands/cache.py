@@ -1,6 +1,9 @@
-"""``jetnh cache``: where the compiled-kernel cache lives and what it holds, or empty it."""
+"""``jetnh cache``: where the compiled-kernel cache lives and what it holds, empty it, or
+compile the integrator loops into it ahead of the first run."""
 
 from __future__ import annotations
+
+import time
 
 from ..parser import subcommand
 
@@ -13,9 +16,14 @@ def add_parser(sub):
                     "cache directory), its entries and their size, and whether runs can "
                     "use it or fall back to a private temporary cache.  clear: remove "
                     "every cached kernel (they are compiled again when needed): only "
-                    "directories jetnh made (they hold its marker file) are deleted.")
-    k.add_argument("action", choices=("info", "clear"), nargs="?", default="info",
+                    "directories jetnh made (they hold its marker file) are deleted.  "
+                    "warm: compile the integrator loops a first run needs into it (make "
+                    "does this once after installing), so that the first run loads them.")
+    k.add_argument("action", choices=("info", "clear", "warm"), nargs="?", default="info",
                    help="default: info")
+    k.add_argument("--all", action="store_true",
+                   help="warm: every loop jetnh compiles ahead (with events, t_eval, dla, "
+                        "dvi; a minute or more), not only those of a plain first run")
     k.set_defaults(func=run)
 
 
@@ -27,9 +35,22 @@ def _bytes(n: int) -> str:
 
 
 def run(args, progress) -> int:
-    """Where the kernel cache lives and what it holds; or empty it."""
+    """Where the kernel cache lives and what it holds; empty it; or warm it."""
     from ...numeric.kernels import loader, store as cache
 
+    if args.action == "warm":
+        from ...numeric import precompile
+
+        def report(name, seconds, loaded):
+            progress.note(f"  {name:20s} {'loaded' if loaded else 'compiled'} in "
+                          f"{seconds:.1f} s")
+
+        tic = time.perf_counter()
+        done = precompile.warm(list(precompile.LOOPS) if args.all else None,
+                               report=report)
+        print(f"{len(done)} integrator loops in {cache.cache_root()} "
+              f"({time.perf_counter() - tic:.0f} s)")
+        return 0
     if args.action == "clear":
         root = cache.cache_root()
         mine = cache.owned(root)

@@ -3,7 +3,8 @@
 ``store`` is the private signed disk store (it hands out verified bytes, never code);
 ``loader`` compiles them, or generates, compiles and stores new kernels
 (``load(key, make_source)``); ``compiled`` is the record of a loaded module
-(``CompiledKernels``); ``calls`` calls its C callbacks from Python.
+(``CompiledKernels``); ``calls`` calls its C callbacks from Python; ``loop_cache`` keeps the
+compiled integrator loops in the store (numba's cache files, signed).
 
 ``of(spec, persistent)`` is the kernels of a ``codegen.KernelSpec`` of the continuous
 kinds; ``jacobian_kernels`` and ``sensitivity_kernels`` those of a scene with the

@@ -15,6 +15,8 @@ exit.  Each scene's kernels are one *entry*, a
 directory named by a hash of the symbolic input (``codegen.KernelSpec.key``)::
 
     <root>/hmac.key          32 random bytes, this user's secret (mode 0600)
+    <root>/loops/            the compiled integrator loops (``loop_cache``), each file
+                             signed with the same key
     <root>/k<key>/
         __init__.py          a comment: the entry is a package (never executed)
         kernels.py           rhs_c, aux_c, sing_c (numba cfuncs, cache=True); or the
@@ -26,8 +28,9 @@ directory named by a hash of the symbolic input (``codegen.KernelSpec.key``)::
 A second process that builds the same scene finds the entry, skips the derivation, ``cse``
 and code generation, and numba loads the machine code instead of compiling.  The
 integrators take ``rhs`` as a first-class function (``methods._common.RHS``), so their
-loops are compiled once for all scenes and cached by numba next to their own source; per
-scene only ``kernels.py`` is compiled.
+loops are compiled once for all scenes and kept in ``<root>/loops`` (``loop_cache``,
+under the same trust rules; ``jetnh cache warm`` compiles them ahead); per scene only
+``kernels.py`` is compiled.
 
 Privacy
 -------

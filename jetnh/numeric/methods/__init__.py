@@ -4,7 +4,8 @@ compiled loop of ``loop``; radau has its own loop over the same helpers (``_comm
 ``_events``); dla and dvi are discrete variational steps sharing one Newton solver
 (``newton``).  Every right-hand side is a first-class function (a cfunc of the scene's
 generated kernels), so each loop runs as machine code, is compiled once for all scenes
-and is cached on disk by numba.
+and is kept on disk in jetnh's signed store (``kernels.loop_cache``; ``jetnh cache warm``
+compiles the common ones ahead, ``numeric.precompile``).
 
 ==========  ======  ================================  ==========================================
 method      order   error estimate / step control     reference

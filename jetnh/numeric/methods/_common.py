@@ -191,40 +191,53 @@ RHS_SIGNATURE = numba.types.void(f8, f8[::1], f8[::1], f8[::1])
 RHS = numba.types.FunctionType(RHS_SIGNATURE)
 
 _COMPILED = {}
+_SOURCES_HASH = None
 HERE = os.path.dirname(os.path.abspath(__file__))
 
 
 def sources_hash() -> str:
-    """A hash of every module of this package: what the compiled loops are made of."""
+    """A hash of every module of this package: what the compiled loops are made of
+    (computed once a process)."""
+    global _SOURCES_HASH
+    if _SOURCES_HASH is not None:
+        return _SOURCES_HASH
     h = hashlib.sha256()
     for name in sorted(os.listdir(HERE)):
         if name.endswith(".py"):
             with open(os.path.join(HERE, name), "rb") as f:
                 h.update(name.encode() + b"\0" + f.read())
-    return h.hexdigest()[:16]
+    _SOURCES_HASH = h.hexdigest()[:16]
+    return _SOURCES_HASH
 
 
 def compiled(pyfunc, argtypes, parallel=False, namespace=None, tag=""):
-    """``pyfunc`` compiled for ``argtypes`` on first use and cached on disk by numba;
-    with ``namespace``, over those globals instead of its module's (a specialisation,
-    cached under the name suffixed with ``tag``).
+    """``pyfunc`` compiled for ``argtypes`` on first use and kept on disk in jetnh's
+    signed store (``kernels.loop_cache``: numba's cache format, read only after its HMAC
+    is checked; never numba's own cache directories); with ``namespace``, over those
+    globals instead of its module's (a specialisation, named with ``tag``).
 
     The right-hand side is an argument of type ``RHS`` (a first-class function), so the
     compiled loop does not depend on which scene calls it: one compilation serves all.
-    numba checks only the file of the function it caches, not the helpers compiled into
-    it (``jit``, from other modules), so the cache key carries what the loop depends on:
-    the function is cached under its name suffixed with ``sources_hash()``, and an edit
-    of any module here compiles it anew.  (numba's disk cache does not key on
+    The disk cache keys a function by its own code only, not the helpers compiled into it
+    (``jit``, from other modules), so the key carries what the loop depends on: the
+    function is stored under its name suffixed with ``sources_hash()`` (and stamped with
+    it), and an edit of any module here compiles it anew.  (The cache does not key on
     ``parallel``: a function compiled both ways must be two Python functions.)
     """
     key = (pyfunc.__module__, pyfunc.__qualname__, tag)
     if key not in _COMPILED:
+        from ..kernels.loop_cache import cache_for
+
+        stamp = sources_hash()
         func = rebound(pyfunc, namespace)
-        func.__qualname__ = "_".join(filter(None, (pyfunc.__qualname__, tag, sources_hash())))
+        func.__qualname__ = "_".join(filter(None, (pyfunc.__qualname__, tag, stamp)))
         func.__module__ = pyfunc.__module__
         func.__doc__ = pyfunc.__doc__
-        _COMPILED[key] = numba.njit(argtypes, cache=True, error_model="numpy",
-                                    nogil=True, parallel=parallel)(func)
+        dispatcher = numba.njit(error_model="numpy", nogil=True, parallel=parallel)(func)
+        dispatcher._cache = cache_for(func, stamp)
+        dispatcher.compile(tuple(argtypes))
+        dispatcher.disable_compile()
+        _COMPILED[key] = dispatcher
     return _COMPILED[key]
 
 

@@ -1,0 +1,86 @@
+"""The integrator loops compiled ahead of the first run (``jetnh cache warm``).
+
+A loop is compiled on its first use (seconds: numba's typing and LLVM) and kept in the
+signed store (``kernels.loop_cache``), from which every later process loads it (tens of
+milliseconds).  ``warm()`` compiles ahead of time the loops a first run needs, into the
+same store under the same trust rules, so that the first trajectory on a machine loads
+its loop instead of compiling it; ``make`` runs it once after installing.
+
+``LOOPS`` names the loops ``warm`` can compile, ``<method>:<parts>`` (``loop.features``):
+``plain`` the loop of a run without events, singularity indicators, projection or
+``t_eval`` (the most common run), ``t_eval`` with output at ``t_eval``, ``watch+t_eval``
+with that and indicators or events watched, ``all`` with every part; and the loops of
+dla and dvi.  ``DEFAULT``, what ``make`` compiles (about 35 CPU seconds), is the plain
+loop of each continuous method and the default method's loops with ``t_eval`` (those of
+``make run``): the first run of each on a machine loads its loop.  Each loop compiles
+in a process of its own, as many at a time as there are cores.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures
+import multiprocessing
+import os
+import time
+
+#: name -> (method, parts): the loops ``warm`` compiles (``loop.features`` gives parts)
+PARTS = {"plain": (False, False, False), "t_eval": (False, False, True),
+         "watch+t_eval": (True, False, True), "all": (True, True, True)}
+LOOPS = {f"{m}:{name}": (m, parts) for m in ("dop853", "dopri5", "rk4", "radau")
+         for name, parts in PARTS.items() if not (m == "rk4" and "t_eval" in name)}
+LOOPS.update(dla=("dla", None), dvi=("dvi", None))
+DEFAULT = (*(n for n in LOOPS if n.endswith(":plain")), "dop853:t_eval",
+           "dop853:watch+t_eval")
+
+
+def compile_loop(name: str) -> tuple[str, float, bool]:
+    """Compile (or load) the loop ``name`` of ``LOOPS`` in this process: ``(name,
+    seconds, loaded)``, loaded meaning that it was on disk already."""
+    from .methods import METHODS, dla, dvi, loop, radau
+
+    method, parts = LOOPS[name]
+    tic = time.perf_counter()
+    if method == "radau":
+        d = radau.solver(parts)
+    elif method == "dla":
+        d = dla.solver()
+    elif method == "dvi":
+        d = dvi.solver()
+    else:
+        d = loop.solver(METHODS[method].tableau, parts)
+    return name, time.perf_counter() - tic, sum(d._cache_hits.values()) > 0
+
+
+def warm(names=None, jobs: int | None = None, report=None) -> dict[str, tuple[float, bool]]:
+    """Compile the loops ``names`` (default: ``DEFAULT``) into the store, ``jobs``
+    processes at a time (default: the number of cores); returns name -> (seconds,
+    loaded).  ``report(name, seconds, loaded)`` is called as each one is done."""
+    names = list(DEFAULT if names is None else names)
+    unknown = [n for n in names if n not in LOOPS]
+    if unknown:
+        from ..errors import JetnhError
+
+        raise JetnhError(f"unknown loops {unknown}; choose among {', '.join(LOOPS)}")
+    jobs = max(1, min(jobs or os.cpu_count() or 1, len(names)))
+    done = {}
+
+    def record(name, seconds, loaded):
+        done[name] = (seconds, loaded)
+        if report is not None:
+            report(name, seconds, loaded)
+
+    if jobs > 1:
+        # spawned processes: each imports jetnh afresh (numba and forked threads do not
+        # mix); where no process pool can start (no semaphores), this process does it all
+        context = multiprocessing.get_context("spawn")
+        try:
+            with concurrent.futures.ProcessPoolExecutor(jobs, mp_context=context) as pool:
+                for future in concurrent.futures.as_completed(
+                        [pool.submit(compile_loop, n) for n in names]):
+                    record(*future.result())
+        except (OSError, concurrent.futures.process.BrokenProcessPool):
+            pass
+    for name in names:
+        if name not in done:
+            record(*compile_loop(name))
+    return done
