@@ -446,8 +446,6 @@ def batch(scene, plan, Y0, P, parallel="threads", workers=1):
                     block(0, n_runs)
             finally:
                 numba.set_num_threads(old)
-        elif parallel == "serial" or workers == 1 or n_runs == 1:
-            block(0, n_runs)
         else:
             from concurrent.futures import ThreadPoolExecutor
 
@@ -457,5 +455,9 @@ def batch(scene, plan, Y0, P, parallel="threads", workers=1):
                 list(pool.map(lambda ab: block(*ab), bounds))
 
     tic = time.perf_counter()
-    interrupt.call(compute, halt, plan.limit)
+    if not prange and (parallel == "serial" or workers == 1 or n_runs == 1):
+        # one block: the driver itself is the call (no closures)
+        interrupt.call(drive, halt, plan.limit, (*head, Y0, P, *tail, *out))
+    else:
+        interrupt.call(compute, halt, plan.limit)
     return out, time.perf_counter() - tic
