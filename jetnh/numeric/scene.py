@@ -527,9 +527,11 @@ class Scene(Frozen):
             t_span=span, t_eval=t_eval, save=save, events=events, timeout=timeout,
             projection=projection, backend=backend, sensitivities=sensitivities,
             sensitivity_error=sensitivity_error))
+        if y0 is None and params is None:       # the scene's own (the loop's own copy)
+            return solve.run(self, plan, self.y0.copy(), self._p, own=True)
         p = self._run_params(params)
         y = self._run_state(y0, plan.t0, p)
-        return solve.run(self, plan, y, p, own=y0 is None and params is None)
+        return solve.run(self, plan, y, p, own=False)
 
     # ------------------------------------------------------------------ run helpers
     @memo

@@ -309,18 +309,19 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
         return discrete.run_dla(scene, m, plan.t0, plan.t1, y, own, p, plan.steps, plan.save,
                                 plan.newton_tol, plan.max_newton, plan.projection, sing,
                                 plan.limit, plan.ce)
-    dense = None if plan.dense is None else dict(plan.dense)
+    dense = plan.dense
     if plan.switch:
         return atlas.run(scene, m.name, plan.events, plan.t0, plan.t1, y, p, plan.ctl,
-                         plan.te, plan.mode, dense, plan.checked, plan.singular_tol,
-                         plan.newton, plan.limit, trajectory)
+                         plan.te, plan.mode, None if dense is None else dict(dense),
+                         plan.checked, plan.singular_tol, plan.newton, plan.limit,
+                         trajectory)
     halt = np.zeros(1, dtype=np.int64)
     entry, prefix, suffix, t0, t1 = plan.entry, plan.prefix, plan.suffix, plan.t0, plan.t1
     tic = time.perf_counter()
     out = interrupt.call(entry, halt, plan.limit, (*prefix, t0, t1, y, p, *suffix, halt))
     wall = time.perf_counter() - tic
-    if dense is not None:    # stopped inside a step
-        dense["partial_last"] = int(out[0]) in (EVENT, SINGULAR)
+    if dense is not None:    # the run's own copy; stopped inside a step
+        dense = {**dense, "partial_last": int(out[0]) in (EVENT, SINGULAR)}
     return trajectory(scene, m.name, out, wall, plan.kern, plan.ce, p, t0, y,
                       plan.singular_tol, plan.checked, plan.limit, dense, sens=plan.sens)
 

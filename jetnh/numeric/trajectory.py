@@ -118,6 +118,22 @@ class Trajectory(Frozen):
     derived columns are computed on first access.
     """
 
+    #: the stop at a singular configuration: {"indicator", "kind", "index", "t", "value",
+    #: "initial", "reason"}, or None
+    singularity = None
+    event_names: tuple = ()
+    #: methods that carry their own velocities, residuals, energy and first integrals (the
+    #: discrete integrators dla, dvi): {"velocities": {name: col}, "residual", "energy",
+    #: "integrals": {name: col}}
+    _own = FrozenDict()
+    #: a run that changed split: its pieces (``numeric.atlas.Stitched``, which gives its aux
+    #: rows and dense output) and switches {"t", "from", "to"}
+    _segments = None
+    switches: tuple = ()
+    #: a run with sensitivities: (column names, S [n_times, n_states, n_columns])
+    _sens = None
+    #: ``_dense``: what re-taking a step needs (tolerances, output mode; numeric.dense)
+
     def __init__(self, scene, t, y, p, *, method, status, stop_reason, steps, rejected,
                  nfev, wall_time, kernels, projected=None, own=None, events=None,
                  singularity=None, dense=None, segments=None, switches=(),
@@ -143,25 +159,19 @@ class Trajectory(Frozen):
               singularity, dense, sensitivities, own=None, segments=None, switches=()):
         """The attributes, each public array read-only (``Frozen._set``, without its walk
         over every value)."""
-        t.flags.writeable = y.flags.writeable = False
+        t.setflags(write=False)
+        y.setflags(write=False)
         d = self.__dict__
-        d.update(
-            scene=scene, t=t, y=y, _p=p, _kernels=kernels, method=method,
-            status=status, stop_reason=stop_reason,
-            #: the stop at a singular configuration: {"indicator", "kind", "index", "t",
-            #: "value", "initial", "reason"}, or None
-            singularity=None, event_names=(), t_events=[], y_events=[],
-            # what re-taking a step needs (tolerances, output mode; see numeric.dense)
-            _dense=dense, _info=info,
-            # methods that carry their own velocities, residuals, energy and first
-            # integrals (the discrete integrators dla, dvi): {"velocities": {name: col},
-            # "residual", "energy", "integrals": {name: col}}
-            _own=own or {},
-            # a run that changed split: its pieces (``numeric.atlas.Stitched``, which
-            # gives its aux rows and dense output) and switches {"t", "from", "to"}
-            _segments=segments, switches=readonly(tuple(switches)) if switches else (),
-            # a run with sensitivities: (column names, S [n_times, n_states, n_columns])
-            _sens=None)
+        d.update(scene=scene, t=t, y=y, _p=p, _kernels=kernels, method=method,
+                 status=status, stop_reason=stop_reason, t_events=[], y_events=[],
+                 _dense=dense, _info=info)
+        # the others where they differ from their defaults (the class attributes)
+        if own:
+            d["_own"] = own
+        if segments is not None:
+            d["_segments"] = segments
+        if switches:
+            d["switches"] = readonly(tuple(switches))
         if singularity is not None:
             d["singularity"] = FrozenDict(readonly(singularity))
         if events is not None:
