@@ -111,7 +111,8 @@ def real_array(value, what, ndim=1) -> np.ndarray:
         raise ArgumentError(f"must be {'a number' if ndim == 0 else f'{ndim}-d'}, "
                             f"got shape {a.shape}", argument=what)
     # a finite sum of squares: all finite, cheaply (else each is looked at)
-    if not (ndim == 1 and math.isfinite(a.dot(a))) and not np.all(np.isfinite(a)):
+    flat = a.reshape(-1)
+    if not (ndim and math.isfinite(flat.dot(flat))) and not np.all(np.isfinite(a)):
         bad = tuple(int(i) for i in np.argwhere(~np.isfinite(a))[0])
         where = "" if ndim == 0 else f" at index {bad if ndim > 1 else bad[0]}"
         raise ArgumentError(f"has a non-finite value ({a[bad]}){where}; give finite "

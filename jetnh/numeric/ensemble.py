@@ -56,7 +56,7 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import ConstraintError, IntegrationError, JetnhError, JetnhWarning
-from ..frozen import Frozen, readonly
+from ..frozen import Frozen, memo, readonly
 from ..mechanics import holonomic
 from . import arguments, atlas, diagnosis, solve
 from .events import as_events
@@ -96,7 +96,7 @@ def resolve(scene, initial=None, params=None, project=False):
     """The scene to run (with the varying parameters as run-time inputs), the initial
     states Y0 [n_runs, n_states] and the run-time parameters P [n_runs, n_p]."""
     params = {_name(k): _column(v, f"params[{_name(k)!r}]") for k, v in (params or {}).items()}
-    unknown = sorted(set(params) - set(scene.params))
+    unknown = sorted(set(params) - set(scene.params)) if params else ()
     if unknown:
         raise JetnhError(f"params has {', '.join(map(repr, unknown))}, not parameters of this "
                          f"system; its parameters are {sorted(scene.params) or 'none'}")
@@ -128,20 +128,22 @@ def resolve(scene, initial=None, params=None, project=False):
     n_runs = _n_runs({**columns, **params}, n_arr)
     Y0 = np.empty((n_runs, len(scene.state_names)))
     Y0[:] = scene.y0 if arr is None else arr
-    for j, s in enumerate(scene.state_names):
-        if s in columns:
-            Y0[:, j] = columns[s]
+    if columns:
+        for j, s in enumerate(scene.state_names):
+            if s in columns:
+                Y0[:, j] = columns[s]
     P = np.empty((n_runs, len(scene.runtime_params)))
     P[:] = scene._p
-    for j, s in enumerate(scene.runtime_params):
-        if s in params:
-            P[:, j] = params[s]
+    if params:
+        for j, s in enumerate(scene.runtime_params):
+            if s in params:
+                P[:, j] = params[s]
     dep = {k: v for k, v in columns.items() if k in scene.dependent_velocities}
     if dep:
         _check_dependent(scene, Y0, P, dep, project)
     if scene.system.holonomic:
         _check_holonomic(scene, Y0, P)
-    return scene, np.ascontiguousarray(Y0), np.ascontiguousarray(P)
+    return scene, Y0, P          # (C-contiguous: made so here)
 
 
 def _check_holonomic(scene, Y0, P):
@@ -188,28 +190,22 @@ class Ensemble(Frozen):
     def __init__(self, scene, method, t, y, info, t_last, y_last, ev_n, ev_t, Y0, P,
                  event_names, wall_time, parallel, workers, save, singular_tol, *,
                  switching=False, switches=None, pieces=None, reasons=None,
-                 sensitivities=None):
-        info = info.T.copy()            # (one copy: its rows are the columns below)
-        # read-only views: the caller's arrays stay as given
-        arrays = dict(t=t,              # [n_runs, n_times]
-                      y=y,              # [n_runs, n_times, n_states]
-                      status=info[0], steps=info[1], rejected=info[2], nfev=info[3],
-                      rows=info[4], t_final=t_last, y_final=y_last,
-                      event_counts=ev_n,    # [n_runs, n_events]
-                      event_first=(np.where(ev_n > 0, ev_t, np.nan) if ev_t.size
-                                   else ev_t),
-                      initial=Y0.view(),
-                      params=P.view())      # [n_runs, n_runtime_params]
-        if sensitivities is not None:
-            arrays["sensitivities"] = sensitivities[1]
-        for a in arrays.values():
-            a.flags.writeable = False
+                 sensitivities=None, layout=None):
+        # t and y read-only now, the other arrays on first read (the memos below):
+        # read-only views, the caller's arrays stay as given
+        t, y = t.view(), y.view()
+        t.flags.writeable = y.flags.writeable = False
         # the attributes in one go (``Frozen._set`` without its walk over every value)
         self.__dict__.update(
-            arrays, scene=scene, method=method, _sing_index=info[5],
+            t=t,                # [n_runs, n_times]
+            y=y,                # [n_runs, n_times, n_states]
+            _arrays=(info, t_last, y_last, ev_n, ev_t, Y0, P,
+                     None if sensitivities is None else sensitivities[1]),
+            scene=scene, method=method,
             event_names=tuple(event_names), param_names=scene.runtime_params,
             wall_time=wall_time, parallel=parallel, workers=workers, save=save,
-            _singular_tol=singular_tol, layout=scene.kernels.layout,
+            _singular_tol=singular_tol,
+            layout=scene.kernels.layout if layout is None else layout,
             #: runs that changed split (``numeric.atlas``): run -> [{"t", "from", "to"},
             #: ...]; ``switching``: whether the runs watched their chart's edge
             switches=readonly(switches or {}), switching=switching,
@@ -218,6 +214,70 @@ class Ensemble(Frozen):
             #: run with ``sensitivities=True``) differentiate by: the initial states,
             #: then the runtime parameters
             sensitivity_columns=() if sensitivities is None else tuple(sensitivities[0]))
+
+    @memo
+    def _info(self) -> np.ndarray:
+        """The runs' (status, steps, rejected, nfev, rows, indicator) as rows (one copy
+        of the driver's columns)."""
+        return self._arrays[0].T.copy()
+
+    @memo
+    def status(self) -> np.ndarray:
+        return self._info[0].view()
+
+    @memo
+    def steps(self) -> np.ndarray:
+        return self._info[1].view()
+
+    @memo
+    def rejected(self) -> np.ndarray:
+        return self._info[2].view()
+
+    @memo
+    def nfev(self) -> np.ndarray:
+        return self._info[3].view()
+
+    @memo
+    def rows(self) -> np.ndarray:
+        return self._info[4].view()
+
+    @property
+    def _sing_index(self) -> np.ndarray:
+        return self._info[5]
+
+    @memo
+    def t_final(self) -> np.ndarray:
+        return self._arrays[1].view()
+
+    @memo
+    def y_final(self) -> np.ndarray:
+        return self._arrays[2].view()
+
+    @memo
+    def event_counts(self) -> np.ndarray:
+        """[n_runs, n_events]"""
+        return self._arrays[3].view()
+
+    @memo
+    def event_first(self) -> np.ndarray:
+        ev_n, ev_t = self._arrays[3], self._arrays[4]
+        return np.where(ev_n > 0, ev_t, np.nan) if ev_t.size else ev_t.view()
+
+    @memo
+    def initial(self) -> np.ndarray:
+        return self._arrays[5].view()
+
+    @memo
+    def params(self) -> np.ndarray:
+        """[n_runs, n_runtime_params]"""
+        return self._arrays[6].view()
+
+    @memo
+    def sensitivities(self) -> np.ndarray:
+        S = self._arrays[7]
+        if S is None:
+            raise AttributeError("sensitivities")
+        return S.view()
 
     # ------------------------------------------------------------------ shape and access
     @property
@@ -464,9 +524,14 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
     ``P``) with the run options ``opts`` (``numeric.options.Options``)."""
     import numba
 
-    key = ("batch", scene.t_span, opts, method, save, solve.hashable(events),
-           solve.hashable(t_eval), timeout, sensitivities, sensitivity_error)
-    plan = solve.planned(scene, (key, tuple(map(type, key))), lambda: solve.plan(
+    if (events is None and t_eval is None and timeout is None and sensitivities is False
+            and sensitivity_error is True and type(method) is str and type(save) is str):
+        key = ("batch", scene.t_span, opts, method, save)     # the defaults, sooner
+    else:
+        key = ("batch", scene.t_span, opts, method, save, solve.hashable(events),
+               solve.hashable(t_eval), timeout, sensitivities, sensitivity_error)
+        key = (key, tuple(map(type, key)))
+    plan = solve.planned(scene, key, lambda: solve.plan(
         scene, method, opts=opts, t_eval=t_eval, save=save, events=events, timeout=timeout,
         sensitivities=sensitivities, sensitivity_error=sensitivity_error, batch=True))
     method = plan.method.name
@@ -524,8 +589,10 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
                                   INFO, T_LAST, Y_LAST, EV_N, EV_T)
             reasons[r], switches[r] = parts[-1][1].stop_reason, sw
     wall += time.perf_counter() - tic
-    # never a success with a NaN or infinite state (a finite sum: all finite, cheaply)
-    if not math.isfinite(OUT_Y.sum() + Y_LAST.sum()):
+    # never a success with a NaN or infinite state (a finite sum of squares: all finite,
+    # cheaply)
+    fy, fl = OUT_Y.reshape(-1), Y_LAST.reshape(-1)
+    if not math.isfinite(fy.dot(fy) + fl.dot(fl)):
         done = (INFO[:, 0] == FINISHED) | (INFO[:, 0] == EVENT)
         INFO[done & ~(np.all(np.isfinite(Y_LAST), axis=1)
                       & np.all(np.isfinite(OUT_Y) | np.isnan(OUT_T)[:, :, None],
@@ -536,7 +603,7 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
                     EV_T[:, :n_user], Y0, P, ce.names[:n_user] if ce is not None else (),
                     wall, parallel, workers if parallel != "serial" else 1, save,
                     singular_tol, switching=switching, switches=switches, pieces=pieces,
-                    reasons=reasons, sensitivities=sens)
+                    reasons=reasons, sensitivities=sens, layout=plan.kern.layout)
 
 
 def _taken_on(own, r, parts, n_user, mode, p, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):

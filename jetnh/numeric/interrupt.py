@@ -62,6 +62,7 @@ class _Watchdog:
         for s in (self.signals, self.signal_w, self.control, self.control_w):
             s.setblocking(False)
         self.thread = None
+        self.own = self.signal_w.fileno()      # the wakeup fd the watchdog hears
 
     def close(self):
         for s in (self.signals, self.signal_w, self.control, self.control_w):
@@ -79,10 +80,6 @@ class _Watchdog:
         if deadline is not None:
             self._poke()
         return key
-
-    def unregister(self, key):
-        with self.lock:
-            self.calls.pop(key, None)
 
     def _poke(self):
         try:
@@ -171,6 +168,8 @@ atexit.register(_forget)
 _MAIN = threading.main_thread().ident
 _SIGINT = int(signal.SIGINT)
 _getsignal = _signal.getsignal       # (signal.getsignal: the same, as an enum, slower)
+_get_ident = threading.get_ident
+_set_wakeup_fd = _signal.set_wakeup_fd
 #: the SIGINT handler ``_on_sigint`` stands in for, the compiled calls in progress in
 #: the main thread, and the frames of the signals they held back
 _DELEGATE: list = [None]
@@ -190,7 +189,7 @@ def _on_sigint(signum, frame):
 def _listening() -> bool:
     """Whether this thread hears SIGINT through a Python-level handler (the main thread,
     a callable handler), with ``_on_sigint`` installed in front of it."""
-    if threading.get_ident() != _MAIN:
+    if _get_ident() != _MAIN:
         return False
     handler = _getsignal(_SIGINT)
     if handler is _on_sigint:
@@ -202,30 +201,36 @@ def _listening() -> bool:
     return True
 
 
-def call(fn, halt: np.ndarray, timeout: float | None = None):
-    """``fn()``, stoppable by Ctrl-C and by ``timeout`` through ``halt`` (see the module
-    docstring)."""
+def call(fn, halt: np.ndarray, timeout: float | None = None, args: tuple = ()):
+    """``fn(*args)``, stoppable by Ctrl-C and by ``timeout`` through ``halt`` (see the
+    module docstring)."""
+    # (_listening inlined where it is cheap: the main thread, _on_sigint in place)
+    if not ((_get_ident() == _MAIN and _getsignal(_SIGINT) is _on_sigint)
+            or _listening()):
+        if timeout is None:
+            return fn(*args)
+        listen = False
+    else:
+        listen = True
     deadline = None if timeout is None else time.monotonic() + timeout
-    listen = _listening()
-    if not listen and deadline is None:
-        return fn()
     wd = _WATCHDOG or _watchdog()
     old = -1
     if listen:
-        own = wd.signal_w.fileno()
-        old = signal.set_wakeup_fd(own, warn_on_full_buffer=False)
+        own = wd.own
+        old = _set_wakeup_fd(own, warn_on_full_buffer=False)
         if old == own:
             old = -1
         _DEPTH[0] += 1
     key = wd.register(halt, deadline, old)
     try:
-        return fn()
+        return fn(*args)
     finally:
-        wd.unregister(key)
+        with wd.lock:
+            del wd.calls[key]
         if listen:
             _DEPTH[0] -= 1
             if old >= 0:                      # someone else's: theirs again
-                signal.set_wakeup_fd(old)
+                _set_wakeup_fd(old)
             if _CAUGHT and not _DEPTH[0]:
                 frame = _CAUGHT[0]
                 _CAUGHT.clear()

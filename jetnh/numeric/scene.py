@@ -376,15 +376,20 @@ class Scene(Frozen):
             raise JetnhError(f"initial must be a dict keyed by Symbol or name, got a "
                              f"{type(initial).__name__}")
         new = object.__new__(Scene)
-        new.__dict__.update(self.__dict__)
-        del new.__dict__["_memo"]
-        new._set(t_span=self.t_span if t_span is self.t_span else self._t_span(t_span),
+        d = new.__dict__
+        d.update(self.__dict__)
+        del d["_memo"]
+        # (the attributes set directly, not by ``_set``: a time span is a tuple of
+        # floats, the initial values floats, y0 made read-only here)
+        d.update(t_span=self.t_span if t_span is self.t_span else self._t_span(t_span),
                  projected={}, completed={})
         kern = _loaded_kernels(self.key, self.cache) if "key" in self._memo else None
         ini = FrozenDict(new._initial(initial, False, False, kern, self._p))
-        new._set(initial=ini, y0=np.array([ini[n] for n in self.state_names], dtype=float))
-        object.__setattr__(new, "_memo", {k: self._memo[k] for k in _SHARED + ("_p",)
-                                          if k in self._memo})
+        y0 = np.array([ini[n] for n in self.state_names], dtype=float)
+        y0.flags.writeable = False
+        d.update(initial=ini, y0=y0)
+        memo = self._memo
+        d["_memo"] = {k: memo[k] for k in _SHARED + ("_p",) if k in memo}
         return new
 
     def _kernel_identity(self) -> tuple:
@@ -501,19 +506,32 @@ class Scene(Frozen):
             naming the time and the state instead.  Every argument is checked before it
             reaches compiled code (``numeric.arguments``).
         """
-        span = self.t_span if t_span is None else arguments.time_span(t_span)
-        key = (rtol, solve.hashable(atol), method, save, span, timeout, projection,
-               backend, step, singular, newton, sensitivities, sensitivity_error,
-               solve.hashable(events), solve.hashable(t_eval), *keywords.items())
-        plan = solve.planned(self, (key, tuple(map(type, key))), lambda: solve.plan(
+        if (rtol is None and atol is None and t_eval is None and method == "dop853"
+                and events is None and t_span is None and timeout is None
+                and projection is False and backend is None and step is None
+                and singular == "stop" and newton is None and sensitivities is False
+                and sensitivity_error is True and not keywords
+                and (save == "steps" or save == "final")):
+            # every option as its default but save (a str): the key, sooner
+            span = self.t_span
+            key = ("defaults", save, span)
+        else:
+            span = self.t_span if t_span is None else arguments.time_span(t_span)
+            key = (rtol, solve.hashable(atol), method, save, span, timeout, projection,
+                   backend, step, singular, newton, sensitivities, sensitivity_error,
+                   solve.hashable(events), solve.hashable(t_eval), *keywords.items())
+            key = (key, tuple(map(type, key)))
+        plan = solve.planned(self, key, lambda: solve.plan(
             self, method, opts=options(step, singular, newton, rtol=rtol, atol=atol,
                                        **keywords),
             t_span=span, t_eval=t_eval, save=save, events=events, timeout=timeout,
             projection=projection, backend=backend, sensitivities=sensitivities,
             sensitivity_error=sensitivity_error))
+        if y0 is None and params is None:       # the scene's own (the loop's own copy)
+            return solve.run(self, plan, self.y0.copy(), self._p, own=True)
         p = self._run_params(params)
         y = self._run_state(y0, plan.t0, p)
-        return solve.run(self, plan, y, p, own=y0 is None and params is None)
+        return solve.run(self, plan, y, p, own=False)
 
     # ------------------------------------------------------------------ run helpers
     @memo

@@ -30,7 +30,7 @@ from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, FINISHED,
 from .kernels import sensitivity_kernels
 from .methods.loop import Control, Watch
 from .options import fields_of, options
-from .trajectory import Trajectory
+from .trajectory import Trajectory, _info
 
 #: plans kept per scene (beyond: planned afresh each run)
 MAX_PLANS = 64
@@ -309,19 +309,19 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
         return discrete.run_dla(scene, m, plan.t0, plan.t1, y, own, p, plan.steps, plan.save,
                                 plan.newton_tol, plan.max_newton, plan.projection, sing,
                                 plan.limit, plan.ce)
-    dense = None if plan.dense is None else dict(plan.dense)
+    dense = plan.dense
     if plan.switch:
         return atlas.run(scene, m.name, plan.events, plan.t0, plan.t1, y, p, plan.ctl,
-                         plan.te, plan.mode, dense, plan.checked, plan.singular_tol,
-                         plan.newton, plan.limit, trajectory)
+                         plan.te, plan.mode, None if dense is None else dict(dense),
+                         plan.checked, plan.singular_tol, plan.newton, plan.limit,
+                         trajectory)
     halt = np.zeros(1, dtype=np.int64)
     entry, prefix, suffix, t0, t1 = plan.entry, plan.prefix, plan.suffix, plan.t0, plan.t1
     tic = time.perf_counter()
-    out = interrupt.call(lambda: entry(*prefix, t0, t1, y, p, *suffix, halt), halt,
-                         plan.limit)
+    out = interrupt.call(entry, halt, plan.limit, (*prefix, t0, t1, y, p, *suffix, halt))
     wall = time.perf_counter() - tic
-    if dense is not None:    # stopped inside a step
-        dense["partial_last"] = int(out[0]) in (EVENT, SINGULAR)
+    if dense is not None:    # the run's own copy; stopped inside a step
+        dense = {**dense, "partial_last": int(out[0]) in (EVENT, SINGULAR)}
     return trajectory(scene, m.name, out, wall, plan.kern, plan.ce, p, t0, y,
                       plan.singular_tol, plan.checked, plan.limit, dense, sens=plan.sens)
 
@@ -381,10 +381,12 @@ def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, 
         k = len(ce) if n_events is None else n_events
         t_events, y_events = split_records(k, ev_t[:n_ev], ev_i[:n_ev], ev_y[:n_ev])
         extra["events"] = (ce.names[:k], t_events, y_events)
-    return Trajectory(scene, ts, ys, p, method=method, status=status, stop_reason=reason,
-                      steps=int(stats[0]), rejected=int(stats[1]), nfev=int(stats[2]),
-                      wall_time=wall, kernels=kern, projected=scene.projected,
-                      singularity=singularity, dense=dense, **extra)
+    # the loop's own float64, C-contiguous rows: taken as they are
+    return Trajectory._of_run(scene, ts, ys, p, method, status, reason,
+                              _info(int(stats[0]), int(stats[1]), int(stats[2]), wall,
+                                    scene.projected),
+                              kern, extra.get("events"), singularity, dense,
+                              extra.get("sensitivities"))
 
 
 # ---------------------------------------------------------------------- many runs
@@ -445,8 +447,6 @@ def batch(scene, plan, Y0, P, parallel="threads", workers=1):
                     block(0, n_runs)
             finally:
                 numba.set_num_threads(old)
-        elif parallel == "serial" or workers == 1 or n_runs == 1:
-            block(0, n_runs)
         else:
             from concurrent.futures import ThreadPoolExecutor
 
@@ -456,5 +456,9 @@ def batch(scene, plan, Y0, P, parallel="threads", workers=1):
                 list(pool.map(lambda ab: block(*ab), bounds))
 
     tic = time.perf_counter()
-    interrupt.call(compute, halt, plan.limit)
+    if not prange and (parallel == "serial" or workers == 1 or n_runs == 1):
+        # one block: the driver itself is the call (no closures)
+        interrupt.call(drive, halt, plan.limit, (*head, Y0, P, *tail, *out))
+    else:
+        interrupt.call(compute, halt, plan.limit)
     return out, time.perf_counter() - tic

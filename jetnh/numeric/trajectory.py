@@ -84,6 +84,12 @@ def _read_only(a) -> np.ndarray:
     return a
 
 
+def _info(steps, rejected, nfev, wall_time, projected) -> dict:
+    """A run's counts, wall-clock time and projected initial values (``diagnostics``)."""
+    return {"steps": steps, "rejected": rejected, "nfev": nfev, "wall_time": wall_time,
+            "projected": dict(projected) if projected else {}}
+
+
 def _columns(layout) -> tuple[dict, dict]:
     """Name -> column of the states and of the aux rows (dependent velocities, first
     integrals) of ``layout``; built once per layout."""
@@ -112,37 +118,71 @@ class Trajectory(Frozen):
     derived columns are computed on first access.
     """
 
+    #: the stop at a singular configuration: {"indicator", "kind", "index", "t", "value",
+    #: "initial", "reason"}, or None
+    singularity = None
+    event_names: tuple = ()
+    #: methods that carry their own velocities, residuals, energy and first integrals (the
+    #: discrete integrators dla, dvi): {"velocities": {name: col}, "residual", "energy",
+    #: "integrals": {name: col}}
+    _own = FrozenDict()
+    #: a run that changed split: its pieces (``numeric.atlas.Stitched``, which gives its aux
+    #: rows and dense output) and switches {"t", "from", "to"}
+    _segments = None
+    switches: tuple = ()
+    #: a run with sensitivities: (column names, S [n_times, n_states, n_columns])
+    _sens = None
+    #: ``_dense``: what re-taking a step needs (tolerances, output mode; numeric.dense)
+
     def __init__(self, scene, t, y, p, *, method, status, stop_reason, steps, rejected,
                  nfev, wall_time, kernels, projected=None, own=None, events=None,
                  singularity=None, dense=None, segments=None, switches=(),
                  sensitivities=None):
-        names, t_ev, y_ev = events if events is not None else ((), [], [])
-        t, y = np.ascontiguousarray(t, dtype=float), np.ascontiguousarray(y, dtype=float)
-        t.flags.writeable = y.flags.writeable = False
-        # the attributes in one go, each public array read-only (``Frozen._set``, without
-        # its walk over every value: a trajectory is made on every run)
-        self.__dict__.update(
-            scene=scene, t=t, y=y, _p=p, _kernels=kernels, method=method,
-            status=status, stop_reason=stop_reason,
-            #: the stop at a singular configuration: {"indicator", "kind", "index", "t",
-            #: "value", "initial", "reason"}, or None
-            singularity=None if singularity is None else FrozenDict(readonly(singularity)),
-            event_names=tuple(names), t_events=readonly(list(t_ev)) if t_ev else [],
-            y_events=readonly(list(y_ev)) if y_ev else [],
-            # what re-taking a step needs (tolerances, output mode; see numeric.dense)
-            _dense=dense,
-            _info=dict(steps=steps, rejected=rejected, nfev=nfev, wall_time=wall_time,
-                       projected=dict(projected) if projected else {}),
-            # methods that carry their own velocities, residuals, energy and first
-            # integrals (the discrete integrators dla, dvi): {"velocities": {name: col},
-            # "residual", "energy", "integrals": {name: col}}
-            _own=own or {},
-            # a run that changed split: its pieces (``numeric.atlas.Stitched``, which
-            # gives its aux rows and dense output) and switches {"t", "from", "to"}
-            _segments=segments, switches=readonly(tuple(switches)) if switches else (),
-            # a run with sensitivities: (column names, S [n_times, n_states, n_columns])
-            _sens=None if sensitivities is None else (
-                tuple(sensitivities[0]), _read_only(sensitivities[1])))
+        self._fill(scene, np.ascontiguousarray(t, dtype=float),
+                   np.ascontiguousarray(y, dtype=float), p, method, status, stop_reason,
+                   _info(steps, rejected, nfev, wall_time, projected), kernels, events,
+                   singularity, dense, sensitivities, own, segments, switches)
+
+    @classmethod
+    def _of_run(cls, scene, t, y, p, method, status, stop_reason, info, kernels, events,
+                singularity, dense, sensitivities) -> "Trajectory":
+        """What ``Trajectory(...)`` makes of ``t``, ``y`` (float64, C-contiguous and
+        nobody else's: the rows a compiled loop returned) and ``info`` (``_info``),
+        without converting them: a trajectory is made on every run."""
+        self = object.__new__(cls)
+        self._fill(scene, t, y, p, method, status, stop_reason, info, kernels, events,
+                   singularity, dense, sensitivities)
+        self.__dict__["_memo"] = {}
+        return self
+
+    def _fill(self, scene, t, y, p, method, status, stop_reason, info, kernels, events,
+              singularity, dense, sensitivities, own=None, segments=None, switches=()):
+        """The attributes, each public array read-only (``Frozen._set``, without its walk
+        over every value)."""
+        t.setflags(write=False)
+        y.setflags(write=False)
+        d = self.__dict__
+        d.update(scene=scene, t=t, y=y, _p=p, _kernels=kernels, method=method,
+                 status=status, stop_reason=stop_reason, t_events=[], y_events=[],
+                 _dense=dense, _info=info)
+        # the others where they differ from their defaults (the class attributes)
+        if own:
+            d["_own"] = own
+        if segments is not None:
+            d["_segments"] = segments
+        if switches:
+            d["switches"] = readonly(tuple(switches))
+        if singularity is not None:
+            d["singularity"] = FrozenDict(readonly(singularity))
+        if events is not None:
+            names, t_ev, y_ev = events
+            d["event_names"] = tuple(names)
+            if t_ev:
+                d["t_events"] = readonly(list(t_ev))
+            if y_ev:
+                d["y_events"] = readonly(list(y_ev))
+        if sensitivities is not None:
+            d["_sens"] = (tuple(sensitivities[0]), _read_only(sensitivities[1]))
 
     @property
     def layout(self):
