@@ -195,3 +195,32 @@ def test_the_no_event_callback_is_in_the_signed_store(loops):
     out = np.full(1, 5.0)
     calls.Kernel(again, (1, 0, 1))(0.0, np.zeros(1), np.zeros(0), out)
     assert out[0] == 5.0                                    # a no-op: out untouched
+
+
+# ---------------------------------------------------------------------- generated kernels
+def test_kernels_compile_uncached_where_numba_would_cache_unchecked(tmp_path, monkeypatch):
+    """A kernel module uses numba's cache only where numba keeps it in the entry's own
+    ``__pycache__`` (which the manifest covers): not when ``NUMBA_CACHE_DIR`` is set, nor
+    when ``__pycache__`` cannot be made there (numba would fall back to its user-wide
+    cache)."""
+    from jetnh.errors import KernelCacheWarning
+    from jetnh.numeric.kernels import loader
+
+    monkeypatch.setattr(loader, "_WARNED", set())
+    monkeypatch.setattr(numba.core.config, "CACHE_DIR", "")
+    source = b"CACHED = JETNH_NUMBA_CACHE\n"
+    good, blocked = tmp_path / "good", tmp_path / "blocked"
+    for d in (good, blocked):
+        d.mkdir()
+        (d / "kernels.py").write_bytes(source)
+    (blocked / "__pycache__").write_bytes(b"not a directory")
+    assert loader._exec_kernels("jetnh_probe_good", good, source).CACHED is True
+    with pytest.warns(KernelCacheWarning, match="numba cannot write .*__pycache__"):
+        mod = loader._exec_kernels("jetnh_probe_blocked", blocked, source + b"#\n")
+    assert mod.CACHED is False
+    monkeypatch.setattr(numba.core.config, "CACHE_DIR", str(tmp_path / "numba"))
+    with pytest.warns(KernelCacheWarning, match="NUMBA_CACHE_DIR"):
+        mod = loader._exec_kernels("jetnh_probe_env", good, source + b"##\n")
+    assert mod.CACHED is False
+    for package in ("jetnh_probe_good", "jetnh_probe_blocked", "jetnh_probe_env"):
+        loader._forget(package)
