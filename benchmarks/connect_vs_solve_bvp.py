@@ -5,22 +5,29 @@
 (default output: benchmarks/results/connect_vs_solve_bvp.json)
 
 1. ``jn.connect`` against ``scipy.integrate.solve_bvp`` (collocation) on the same
-   equations: solve_bvp calls the scene's compiled right-hand side (one call per mesh
-   point), with its default finite-difference Jacobian and with jetnh's compiled Jacobian
-   (``kernels.jacobian_kernels``), from a straight-line guess (velocities of the named
-   coordinates, 0.5 for the others, zero multipliers) on 11 nodes, at most 20000 nodes.
-   connect runs at rtol 1e-6 .. 1e-10, timed alone ("connect": the shooting to the
-   answer) and with its verdicts ("connect + verdicts": cost, conjugate times, Gramian,
-   computed on first access); solve_bvp at tol 1e-3 .. 1e-9.  The error is the largest deviation of the initial
-   state found (velocities, multipliers) from a reference (connect at rtol 1e-13).
-   "Speed-up at equal error": the time of the fastest solve_bvp run at least as accurate
-   as connect's, divided by connect's (">" when no solve_bvp run was as accurate: its
-   slowest time).
+   equations: solve_bvp calls the scene's compiled right-hand side over the whole mesh in
+   one call (``kernels.calls.Rows``: no Python loop per mesh point, the fastest form of
+   the same equations it can be given), with its default finite-difference Jacobian and
+   with jetnh's compiled Jacobian (``kernels.jacobian_kernels``, one call per mesh
+   point), from a straight-line guess (velocities of the named coordinates, 0.5 for the
+   others, zero multipliers) on 11 nodes, at most 20000 nodes, at tol 1e-3 .. 1e-10 (one
+   run per decade).  connect runs at rtol 1e-6 .. 1e-10 with its endpoint tolerance
+   ``tol`` = rtol (the Newton iteration stops where the integration's accuracy is),
+   timed alone ("connect": the shooting to the answer) and with its verdicts ("connect +
+   verdicts": cost, conjugate times, Gramian, computed on first access).  The error of
+   every route is measured alike: the largest deviation of the initial state found
+   (velocities, multipliers) from a reference (connect at rtol 1e-13, which solve_bvp
+   at tol 1e-9 matches to ~1e-12).  "Speed-up at equal error": the time of the fastest
+   solve_bvp run at least as accurate as connect's, divided by connect's (">" when no
+   solve_bvp run was as accurate: its slowest time).
 2. What sensitivities cost: one run to t1 (save="final", dop853, rtol 1e-10) without
-   them, with them under the error control and with them outside it.
+   them, with them under the error control and with them outside it.  A run with
+   sensitivities keeps its split, so the plain run is timed with split="fixed" (the
+   same equations in the same chart); the default plain run, which may go on in
+   another chart (``numeric.atlas``), is listed apart ("plain_switch_ms").
 
-Wall times are the best of several repetitions (``_common.best``); ratios are within this
-run; kernels compiled beforehand.
+Wall times are the best of several repetitions (``_common.best``) after one call of
+every route (kernels and compiled loops built); ratios are within this run.
 """
 
 import warnings
@@ -33,6 +40,7 @@ from _common import best_of, parser, write
 import jetnh as jn
 from jetnh.models import get
 from jetnh.numeric.connect.collocation import problem
+from jetnh.numeric.kernels import calls
 
 ZERO_DISK = {"x": 0.0, "y": 0.0, "phi": 0.0, "psi": 0.0}
 CASES = (
@@ -45,7 +53,19 @@ CASES = (
 CONNECT_RTOL = (1e-6, 1e-8, 1e-10)
 #: solve_bvp's mesh limit and the seconds each route may spend per tolerance
 MAX_NODES, BUDGET = 20_000, 20.0
-BVP_TOL = (1e-3, 1e-5, 1e-7, 1e-9)
+BVP_TOL = tuple(10.0 ** -k for k in range(3, 11))
+
+
+def mesh_rhs(scene):
+    """solve_bvp's ``fun``: the compiled right-hand side at every mesh point, one call."""
+    kern, p, n = scene.kernels, scene.p, len(scene.state_names)
+    rows = calls.Rows(kern.rhs_fp, (n, len(p), kern.layout.n_rhs))
+
+    def fun(t, Y):
+        out = np.empty((Y.shape[1], n))
+        rows(np.ascontiguousarray(t, dtype=float), np.ascontiguousarray(Y.T), p, out)
+        return out.T
+    return fun
 
 
 def connect_case(model, principle, start, end, T, reps, quick):
@@ -61,7 +81,7 @@ def connect_case(model, principle, start, end, T, reps, quick):
     for rtol in CONNECT_RTOL[:2] if quick else CONNECT_RTOL:
         def solve(rtol=rtol):
             return jn.connect(system, principle, start, end, (0.0, T), rtol=rtol,
-                              atol=rtol * 1e-2, tol=max(1e-10, rtol * 10))
+                              atol=rtol * 1e-2, tol=rtol)
 
         def judged(solve=solve):
             c = solve()
@@ -70,14 +90,17 @@ def connect_case(model, principle, start, end, T, reps, quick):
 
         routes += [(("connect", rtol), solve), (("connect + verdicts", rtol), judged)]
     for jacobian in (False, True):
-        fun, fjac, bc, t, Y = problem(scene, start, end, T, jacobian)
-        for tol in BVP_TOL[:2] if quick else BVP_TOL:
+        _, fjac, bc, t, Y = problem(scene, start, end, T, jacobian)
+        fun = mesh_rhs(scene)
+        for tol in BVP_TOL[:4] if quick else BVP_TOL:
             def go(fun=fun, fjac=fjac, bc=bc, t=t, Y=Y, tol=tol):
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")
                     return solve_bvp(fun, bc, t, Y, fun_jac=fjac, tol=tol,
                                      max_nodes=MAX_NODES)
             routes.append((("solve_bvp" + (" + jetnh jac" if jacobian else ""), tol), go))
+    for _, f in routes:          # compiled loops and kernels of every route built first
+        f()
     rows = []
     for ((route, tol), _), (sec, out) in zip(routes, best_of([f for _, f in routes], reps,
                                                               BUDGET)):
@@ -113,17 +136,21 @@ def speedups(rows):
 def sensitivity_cost(model, principle, initial, T, reps):
     sc = jn.Scene(get(model), principle, initial=initial, t_span=(0.0, T))
     kw = dict(rtol=1e-10, atol=1e-12, save="final")
-    sc.run(**kw), sc.run(sensitivities=True, **kw)
-    plain, ctl, free = best_of([
-        lambda: sc.run(**kw), lambda: sc.run(sensitivities=True, **kw),
-        lambda: sc.run(sensitivities=True, sensitivity_error=False, **kw)], 5 * reps)
+    # the run with sensitivities keeps its split: the plain run in the same chart
+    fs = [lambda: sc.run(split="fixed", **kw), lambda: sc.run(sensitivities=True, **kw),
+          lambda: sc.run(sensitivities=True, sensitivity_error=False, **kw),
+          lambda: sc.run(**kw)]
+    for f in fs:
+        assert f().status == 0
+    plain, ctl, free, switch = best_of(fs, 5 * reps)
     return dict(model=model, principle=principle, n_state=len(sc.state_names),
                 plain_ms=plain[0] * 1e3, plain_nfev=plain[1].diagnostics.rhs_evaluations,
                 controlled_ms=ctl[0] * 1e3,
                 controlled_nfev=ctl[1].diagnostics.rhs_evaluations,
                 uncontrolled_ms=free[0] * 1e3,
                 uncontrolled_nfev=free[1].diagnostics.rhs_evaluations,
-                ratio_controlled=ctl[0] / plain[0], ratio_uncontrolled=free[0] / plain[0])
+                ratio_controlled=ctl[0] / plain[0], ratio_uncontrolled=free[0] / plain[0],
+                plain_switch_ms=switch[0] * 1e3, switches=len(switch[1].switches))
 
 
 def main():
@@ -138,21 +165,21 @@ def main():
                       or "none", str(ref.iterations)])
     sens = [sensitivity_cost("heisenberg", "vakonomic",
                              {"x": 0.1, "y": 0.2, "z": 0.0, "x_t": 1.0, "y_t": 0.3,
-                              "lambda_z": 0.7}, 10.0, reps)]
+                              "lambda_z": 0.7}, 10.0, reps),
+            sensitivity_cost("chaplygin_sleigh", "chetaev",
+                             {"x": 0.0, "y": 0.0, "theta": 0.0, "x_t": 0.5,
+                              "theta_t": 1.0}, 10.0, reps)]
     if not args.quick:
         sens.append(sensitivity_cost("rolling_disk", "vakonomic",
                                      {**ZERO_DISK, "phi_t": 1.0, "psi_t": 0.7,
                                       "lambda_x": 0.1, "lambda_y": -0.2}, 10.0, reps))
-        sens.append(sensitivity_cost("chaplygin_sleigh", "chetaev",
-                                     {"x": 0.0, "y": 0.0, "theta": 0.0, "x_t": 0.5,
-                                      "theta_t": 1.0}, 10.0, reps))
     sp = speedups(rows)
     best_ratio = {}
     for m, p, mine, tol, err, ms, route, text in sp:
         if route == "solve_bvp":
             best_ratio.setdefault((m, p, mine), []).append(text)
     summary = [f"{m} {p}: {mine} against solve_bvp (its finite-difference Jacobian) at "
-               f"equal error: {', '.join(v)} times faster (connect rtol "
+               f"equal error: {', '.join(v)} times faster (connect rtol = tol "
                f"{', '.join(f'{t:.0e}' for t in CONNECT_RTOL[:len(v)])})"
                for (m, p, mine), v in best_ratio.items()]
     summary += [f"sensitivities on {s['model']} {s['principle']} ({s['n_state']} states): "
@@ -165,7 +192,7 @@ def main():
         "rows": rows,
         "tables": [
             {"title": "Speed-up at equal error", "columns": [
-                "model", "principle", "connect", "connect rtol", "connect error",
+                "model", "principle", "connect", "connect rtol = tol", "connect error",
                 "connect ms",
                 "against", "speed-up"], "rows": sp,
              "note": "the fastest solve_bvp run at least as accurate as connect, over "

@@ -47,6 +47,44 @@ def test_parts_keep_the_symbols_assumptions_and_undefined_functions():
     assert parts.p[0] == sp.diff(g(x, xd), xd)
 
 
+@given(expressions())
+def test_parts_are_symengines_own_conversion_shared(case):
+    """The Euler parts converted once per distinct subexpression are, entry by entry,
+    the same expressions as symengine's own (tree-walking) conversion; without ``rest``
+    r is left out and p, H, v are unchanged."""
+    import symengine as se
+
+    from jetnh.mechanics.accelerations import _parts
+
+    J, F = case
+    if F.has(sp.Function("f")) or not F.free_symbols:
+        return
+    n = J.n
+    syms = [se.Symbol(v.name) for v in (J.t, *J.q, *J.qd)]
+    p, H, r, v = _parts(se.sympify(F), syms[0], syms[1:n + 1], syms[n + 1:], True, True,
+                        se.Integer(0), se.Add)
+    fix = {sp.Symbol(s.name): s for s in F.free_symbols | {J.t, *J.q, *J.qd}}
+    own = [sp.sympify(e).xreplace(fix) for e in [*p, *[x for row in H for x in row], *r, v]]
+    parts = euler_parts(J, F)
+    got = [*parts.p, *parts.H, *parts.r, parts.v]
+    assert got == own and all(a.args == b.args for a, b in zip(got, own))
+    lean = euler_parts(J, F, rest=False)
+    assert lean.r is None and lean.p == parts.p and lean.H == parts.H and lean.v == parts.v
+
+
+def test_shared_parts_of_a_chain_are_converted_once():
+    """The 6-trailer's Lagrangian: its parts are symengine's own conversion's, with no
+    more distinct objects (that conversion walks the tree, meeting shared parts again)."""
+    import symengine as se
+
+    system = models.get("n_trailer", N=6)
+    parts = euler_parts(system.J, system.L)
+    roots = [*parts.p, *parts.H, *parts.r, parts.v]
+    own = [sp.sympify(se.sympify(e)) for e in roots]
+    assert own == roots
+    assert dag.size(roots) <= dag.size(own)
+
+
 def test_chain_accelerations_match_lagranges_method_and_stay_shared():
     """The car with 5 trailers: every principle's q'' through the block solve; Chetaev's
     against LagrangesMethod at a random state on the constraints; the solved

@@ -79,6 +79,20 @@ def test_substitution_makes_equal_results_one_object():
     assert dag.free_symbols(first) == {t, c, b}
 
 
+@given(expressions(), st.integers(0, 3))
+def test_a_memo_carries_a_substitution_over_calls(case, split):
+    """xreplace over several calls sharing a memo (and canon) gives what one call over
+    all of them gives, and what sympy gives; parts met again are the same objects."""
+    J, e = case
+    parts = [e, *e.args[:split], e + J.t]
+    rule = {s: sp.Symbol(f"r_{s}") for s in e.free_symbols}
+    rule.update({J.t: sp.Integer(2)})
+    memo, canon = {}, {}
+    one_by_one = [dag.xreplace(x, rule, canon, memo) for x in parts]
+    assert one_by_one == dag.xreplace(parts, rule) == [x.xreplace(rule) for x in parts]
+    assert dag.xreplace(e, rule, canon, memo) is one_by_one[0]
+
+
 def test_tree_size_counts_the_tree_on_the_graph():
     """tree_size is what a tree walk visits (sympy's preorder_traversal), counted in time
     linear in the graph, and capped."""

@@ -88,3 +88,41 @@ def test_projected_sensitivities_are_tangent(scene, method):
     assert np.max(np.abs(GS[1:])) < 1e-13 * max(1.0, np.max(np.abs(S)))
     # the state itself on g = 0 at every step
     assert np.max(np.abs(tr["z"] - A * np.sin(th))) < 1e-15
+
+
+@pytest.fixture(scope="module")
+def scene_a():
+    """The knife slider with the constraint's own parameter a (z = a sin th) at run
+    time: the projection map depends on a."""
+    ini = {"x": 0.1, "y": -0.2, "th": 0.3, "z": A * np.sin(0.3), "x_t": 1.0, "th_t": 0.7}
+    return Scene(knife_slider(), "chetaev", params={"a": A, "k": 3.0, "I": 0.7},
+                 initial=ini, t_span=(0.0, 1.5), runtime_params=["a", "k"])
+
+
+@pytest.mark.parametrize("method", ["dop853", "rk4"])
+def test_projected_sensitivities_in_a_parameter_of_g(scene_a, method):
+    """dy/da where g = z - a sin th: central differences of projected runs, each from
+    its own start on g = 0 (z0 = a sin th0, so they measure S_a + sin(th0) S_z0), and
+    the derivative of g(q(t; a), a) = 0 along the run: G S_q,a = sin th at every row
+    after the first (without the projection's -G^+ dg/da term it is 0)."""
+    kw = KW[method]
+    tr = scene_a.run(method=method, sensitivities=True, split="fixed", **kw)
+    S = tr.sensitivities
+    col = {c: i for i, c in enumerate(tr.sensitivity_columns)}
+    base = dict(zip(scene_a.state_names, scene_a.y0.tolist()))
+    th0, h = base["th"], 1e-6
+
+    def final(a):
+        return scene_a.run(method=method, y0={**base, "z": a * np.sin(th0)},
+                           params={"a": a, "k": 3.0}, save="final", split="fixed",
+                           **kw).y[-1]
+
+    fd = (final(A + h) - final(A - h)) / (2 * h)
+    want = S[-1][:, col["a"]] + np.sin(th0) * S[-1][:, col["z"]]
+    assert np.max(np.abs(fd - want)) < 2e-7 * max(1.0, np.max(np.abs(want))), (fd, want)
+    names = scene_a.state_names
+    th = tr["th"]
+    GS = -A * np.cos(th) * S[:, names.index("th"), col["a"]] + S[:, names.index("z"),
+                                                                col["a"]]
+    assert np.max(np.abs(GS[1:] - np.sin(th[1:]))) < 1e-13 * max(1.0, np.max(np.abs(S)))
+    assert np.max(np.abs(GS[1:])) > 0.1          # the term matters here

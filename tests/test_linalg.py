@@ -246,3 +246,25 @@ def test_mp_rank_decides_in_double_only_what_double_can_see():
         assert linalg.mp_rank(dependent) == 2
         s = mpmath.svd_r(linalg._equilibrate(hidden), compute_uv=False)
         assert min(abs(x) for x in s) > linalg._RANK_TOL * max(abs(x) for x in s)
+
+
+@settings(max_examples=15, deadline=None)
+@given(st.integers(1, 9), st.integers(1, 3), st.integers(0, 2**32 - 1), st.booleans())
+def test_mp_solve_agrees_with_mpmath(k, m, seed, triangular):
+    """linalg.mp_solve (elimination skipping zeros) against mpmath's inverse, dense and
+    lower triangular (a chain's A_dep), with a zero on the diagonal's first entry."""
+    rng = random.Random(seed)
+    with mpmath.workdps(50):
+        A = mpmath.matrix([[mpmath.mpf(rng.uniform(-1, 1)) if (j <= i or not triangular)
+                            else 0 for j in range(k)] for i in range(k)])
+        if k > 1 and not triangular:
+            A[0, 0] = 0
+        B = mpmath.matrix([[mpmath.mpf(rng.uniform(-1, 1)) for _ in range(m)]
+                           for _ in range(k)])
+        try:
+            ref = mpmath.inverse(A) * B
+        except ZeroDivisionError:
+            return
+        X = linalg.mp_solve(A, B)
+        assert (X.rows, X.cols) == (k, m)
+        assert mpmath.mnorm(X - ref, 1) <= mpmath.mpf(10) ** -35 * (1 + mpmath.mnorm(ref, 1))

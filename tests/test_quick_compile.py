@@ -123,3 +123,38 @@ def test_quick_and_full_callbacks_agree_bit_for_bit(prog, y):
     y = np.array(y)
     a, b = _call(full, y, n_out), _call(fast, y, n_out)
     np.testing.assert_array_equal(a, b)
+
+
+@settings(max_examples=8, deadline=None)
+@given(programs(), st.lists(st.floats(-2, 2), min_size=3, max_size=3))
+def test_assembly_text_and_instruction_builder_agree_bit_for_bit(prog, y):
+    """A program above the threshold is written as LLVM assembly (``llvm.ir_text``); the
+    same program built instruction by instruction computes the same bits (both at -O3
+    and quick)."""
+    import os
+
+    import numba
+
+    ops, n_out = prog
+    ops = ops + (("fn", "atan2", 0, 1), ("out", n_out, len(ops)))
+    old = os.environ.get("JETNH_QUICK_OPS")
+    try:
+        os.environ["JETNH_QUICK_OPS"] = "0"
+        text = straight_line(ops)
+    finally:
+        if old is None:
+            del os.environ["JETNH_QUICK_OPS"]
+        else:
+            os.environ["JETNH_QUICK_OPS"] = old
+    builder = straight_line(ops) if len(ops) <= quick.quick_ops() else None
+    assert builder is not None
+
+    def make(body, compiler):
+        def kernel(t, y, p, out):
+            body(t, y, p, out)
+        return compiler(SIG, error_model="numpy")(kernel)
+
+    y = np.array(y)
+    ref = _call(make(builder, numba.cfunc), y, n_out + 1)
+    for compiler in (numba.cfunc, quick.quick_cfunc):
+        np.testing.assert_array_equal(_call(make(text, compiler), y, n_out + 1), ref)

@@ -92,7 +92,7 @@ def has(expr, *what) -> bool:
     return any(isinstance(e, types) or e in objs for e in nodes(expr))
 
 
-def xreplace(expr, rule: dict, canon: dict | None = None):
+def xreplace(expr, rule: dict, canon: dict | None = None, memo: dict | None = None):
     """``expr.xreplace(rule)``, rebuilding each distinct subexpression once; ``expr``
     may be a list, whose shared parts are then rebuilt once for all (a list returned).
 
@@ -101,20 +101,30 @@ def xreplace(expr, rule: dict, canon: dict | None = None):
     sympy compares equal, non-identical objects by walking their trees -- exponentially
     long for nested solves -- whenever it meets them in a cache or a sum's terms.
     ``canon`` (object -> itself) carries the one objects over several calls (results of
-    one call equal to those of another are then the same object too)."""
-    done: dict = {}
+    one call equal to those of another are then the same object too).  ``memo`` (a dict,
+    filled here) carries the results themselves over several calls by the same rule
+    (or rules that agree on every symbol both reach): a subexpression met again is not
+    walked or rebuilt again."""
     canon = {} if canon is None else canon
-    changed: set = set()     # ids of the subexpressions the rule reaches
+    memo = {} if memo is None else memo     # id(node) -> (node, result, rule reaches it)
     roots = _roots(expr)
-    for e in nodes(roots):
+    stack = [(e, False) for e in reversed(roots)]
+    while stack:
+        e, expanded = stack.pop()
+        if id(e) in memo:
+            continue
+        if not expanded and e.args and e not in rule:
+            stack.append((e, True))
+            stack.extend((a, False) for a in e.args if id(a) not in memo)
+            continue
+        reached = False
         if e in rule:
-            new = rule[e]
-            changed.add(id(e))
+            new, reached = rule[e], True
         elif e.args:
-            args = tuple(done[id(a)] for a in e.args)
-            if any(id(a) in changed for a in e.args):
-                new = e.func(*args)
-                changed.add(id(e))
+            done = [memo[id(a)] for a in e.args]
+            args = tuple(d[1] for d in done)
+            if any(d[2] for d in done):
+                new, reached = e.func(*args), True
             elif all(a is b for a, b in zip(args, e.args)):
                 new = e
             elif isinstance(e, (sp.Add, sp.Mul)):   # equal children made one: no rewrite
@@ -123,8 +133,8 @@ def xreplace(expr, rule: dict, canon: dict | None = None):
                 new = e.func(*args)
         else:
             new = e
-        done[id(e)] = canon.setdefault(new, new)
-    out = [done[id(e)] for e in roots]
+        memo[id(e)] = (e, canon.setdefault(new, new), reached)
+    out = [memo[id(e)][1] for e in roots]
     return out if isinstance(expr, (list, tuple)) else out[0]
 
 

@@ -201,9 +201,9 @@ def _choose(A, Ns, col, scales):
         return min(range(col, A.rows), key=lambda r: _pivot_cost(A[r, col]))
     score = {r: mpmath.inf for r in rows}
     for N, scale in zip(Ns, scales):
-        top = max(abs(N[r, col]) for r in rows)
+        top = max(abs(N[r][col]) for r in rows)
         for r in rows:
-            v = abs(N[r, col])
+            v = abs(N[r][col])
             score[r] = min(score[r], v / top if v > _PIVOT_ZERO * scale else 0)
     best = max(score.values())
     if best == 0:                            # zero at a point: fall back to the form
@@ -227,9 +227,10 @@ def _lu_solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
     A = M.copy().as_mutable()
     B = rhs.copy().as_mutable()
     k = A.rows
-    Ns = _pivot_values(A)
+    # the values as lists of rows (mpmath's matrix indexing was most of the elimination)
+    Ns = [[[N[i, j] for j in range(k)] for i in range(k)] for N in _pivot_values(A)]
     with mpmath.workdps(_PIVOT_DPS):
-        scales = [max(abs(N[i, j]) for i in range(k) for j in range(k)) for N in Ns]
+        scales = [max(abs(x) for row in N for x in row) for N in Ns]
         for col in range(k):
             best = _choose(A, Ns, col, scales)
             if A[best, col] == 0:
@@ -238,8 +239,7 @@ def _lu_solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
                 A.row_swap(best, col)
                 B.row_swap(best, col)
                 for N in Ns:
-                    for j in range(k):
-                        N[best, j], N[col, j] = N[col, j], N[best, j]
+                    N[best], N[col] = N[col], N[best]
             piv = A[col, col]
             _divides(piv)
             for r in range(col + 1, k):
@@ -249,11 +249,13 @@ def _lu_solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
                         for j in range(j0, R.cols):
                             if R[col, j] != 0:
                                 R[r, j] = R[r, j] - fac * R[col, j]
-                for N in Ns:
-                    if N[col, col] != 0:
-                        nf = N[r, col] / N[col, col]
+                for N in Ns:         # zero multipliers and entries change nothing: skipped
+                    top, row = N[col], N[r]
+                    if top[col] != 0 and row[col] != 0:
+                        nf = row[col] / top[col]
                         for j in range(col, k):
-                            N[r, j] -= nf * N[col, j]
+                            if top[j] != 0:
+                                row[j] -= nf * top[j]
     X = sp.zeros(k, B.cols)
     for r in range(k - 1, -1, -1):
         acc = B[r, :] - matmul(A[r, r + 1:], X[r + 1:, :])
@@ -462,6 +464,37 @@ def numeric_rank(M: sp.Matrix, points: int = 3, seed: int = 0) -> int:
     return max(ranks)
 
 
+def mp_solve(A, B):
+    """A^-1 B for mpmath matrices (A square and regular) by Gaussian elimination with
+    partial pivoting on lists, skipping zero multipliers and entries: a banded or
+    triangular A (a chain's A_dep) costs O(k w^2), not mpmath's dense O(k^3) inverse."""
+    k, m = A.rows, B.cols
+    rows = [[A[i, j] for j in range(k)] + [B[i, c] for c in range(m)] for i in range(k)]
+    for col in range(k):
+        best = max(range(col, k), key=lambda r: abs(rows[r][col]))
+        if rows[best][col] == 0:
+            raise ZeroDivisionError("singular matrix")
+        rows[col], rows[best] = rows[best], rows[col]
+        top = rows[col]
+        live = [j for j in range(col + 1, k + m) if top[j] != 0]
+        for r in range(col + 1, k):
+            row = rows[r]
+            if row[col] != 0:
+                f = row[col] / top[col]
+                for j in live:
+                    row[j] -= f * top[j]
+    X = mpmath.matrix(k, m)
+    for i in range(k - 1, -1, -1):
+        row = rows[i]
+        for c in range(m):
+            acc = row[k + c]
+            for j in range(i + 1, k):
+                if row[j] != 0:
+                    acc -= row[j] * X[j, c]
+            X[i, c] = acc / row[i]
+    return X
+
+
 def reduced_rank(H: sp.Matrix, A: sp.Matrix, ind, dep, points: int = 3, seed: int = 0,
                  complete=None, symbols=()) -> int:
     """The generic rank of P^T H P, P = [I; -A_dep^-1 A_ind] spanning ker A (rows of
@@ -487,7 +520,7 @@ def reduced_rank(H: sp.Matrix, A: sp.Matrix, ind, dep, points: int = 3, seed: in
                 [[An[r, j] for j in ind] for r in range(An.rows)])
             if mp_rank(Ad) < len(dep):
                 raise ZeroDivisionError("singular A_dep at this point")
-            X = -(Ad.inv() * Ai) if exact else -(mpmath.inverse(Ad) * Ai)
+            X = -(Ad.inv() * Ai) if exact else -mp_solve(Ad, Ai)
             for r, i in enumerate(dep):
                 for c in range(m):
                     P[i, c] = X[r, c]

@@ -121,7 +121,7 @@ def on_constraints(system, values: dict) -> dict:
         else:
             vals = dag.evaluate(exprs, free, dps=mpmath.mp.dps)
             A = mpmath.matrix([vals[i * k:(i + 1) * k] for i in range(k)])
-            sol = mpmath.lu_solve(A, -mpmath.matrix(vals[k * k:]))
+            sol = linalg.mp_solve(A, -mpmath.matrix(vals[k * k:]))
     elif exact:
         sol = linalg.exact_values([system.phi[v] for v in vel], free)
     else:

@@ -61,40 +61,71 @@ class EulerParts(NamedTuple):
 
     p: list                      # dF/dqdot^s
     H: sp.Matrix | None          # dp_s/dqdot^r (None when not asked for)
-    r: sp.Matrix                 # dF/dq^s - dp_s/dt - dp_s/dq^r qdot^r
+    r: sp.Matrix | None          # dF/dq^s - dp_s/dt - dp_s/dq^r qdot^r (None: not asked for)
     v: sp.Expr                   # dF/dt + dF/dq^s qdot^s
 
 
-def euler_parts(J, F, hessian: bool = True) -> EulerParts:
-    """The parts of [F] and D F for first-order F (``EulerParts``).
+def euler_parts(J, F, hessian: bool = True, rest: bool = True) -> EulerParts:
+    """The parts of [F] and D F for first-order F (``EulerParts``; without ``rest``, r
+    is not computed: the principles whose multipliers do not weigh [f] need only p, v).
 
     The derivatives are taken by symengine (tens of times faster than sympy's diff on
     a long chain's Lagrangian) and returned as sympy expressions in the original
-    symbols; expressions of undefined functions (``jetnh.mechanics.proof``) stay with sympy.
+    symbols, each distinct subexpression converted once (``_to_sympy``); expressions of
+    undefined functions (``jetnh.mechanics.proof``) stay with sympy.
     """
     n = J.n
     if F.has(AppliedUndef, sp.Derivative, sp.Subs):
-        parts = _parts(F, J.t, J.q, J.qd, hessian, sp.S.Zero, sp.Add)
-
-        def back(e):
-            return e
+        p, H, r, v = _parts(F, J.t, J.q, J.qd, hessian, rest, sp.S.Zero, sp.Add)
     else:
         syms = [se.Symbol(v.name) for v in (J.t, *J.q, *J.qd)]
-        parts = _parts(se.sympify(F), syms[0], syms[1:n + 1], syms[n + 1:], hessian,
+        parts = _parts(se.sympify(F), syms[0], syms[1:n + 1], syms[n + 1:], hessian, rest,
                        se.Integer(0), se.Add)
         originals = {v.name: v for v in F.free_symbols | {J.t, *J.q, *J.qd}}
-        fix = {sp.Symbol(name): v for name, v in originals.items() if sp.Symbol(name) != v}
+        flat = []
+        for x in parts:
+            if isinstance(x, list):
+                flat += [e for row in x for e in (row if isinstance(row, list) else [row])]
+            elif x is not None:
+                flat.append(x)
+        out = iter(_to_sympy(flat, originals))
+        p = [next(out) for _ in range(n)]
+        H = [[next(out) for _ in range(n)] for _ in range(n)] if hessian else None
+        r = [next(out) for _ in range(n)] if rest else None
+        v = next(out)
+    return EulerParts(list(p), None if H is None else sp.Matrix(n, n, lambda a, b: H[a][b]),
+                      None if r is None else sp.Matrix(r), v)
 
-        def back(e):
-            e = sp.sympify(e, strict=True)
-            return e.xreplace(fix) if fix else e
-    p, H, r, v = parts
-    return EulerParts([back(e) for e in p],
-                      None if H is None else sp.Matrix(n, n, lambda a, b: back(H[a][b])),
-                      sp.Matrix([back(e) for e in r]), back(v))
+
+def _to_sympy(exprs, originals: dict) -> list:
+    """symengine expressions as sympy ones, each distinct subexpression converted once
+    (symengine's own conversion walks the tree) by the constructor symengine's would
+    call; symbols become ``originals[name]`` (the user's, with their assumptions)."""
+    done: dict = {}
+    for root in exprs:
+        stack = [(root, False)]
+        while stack:
+            e, expanded = stack.pop()
+            if e in done:
+                continue
+            args = e.args
+            if not args:
+                x = sp.sympify(e, strict=True)
+                done[e] = originals.get(x.name, x) if isinstance(x, sp.Symbol) else x
+            elif not expanded:
+                stack.append((e, True))
+                stack.extend((a, False) for a in args if a not in done)
+            else:
+                head = (sp.Add if isinstance(e, se.Add) else sp.Mul if isinstance(e, se.Mul)
+                        else sp.Pow if isinstance(e, se.Pow) else None)
+                if head is None:        # a function: symengine's conversion, one level
+                    dummies = [se.Symbol(f"_{i}") for i in range(len(args))]
+                    head = sp.sympify(e.func(*dummies), strict=True).func
+                done[e] = head(*[done[a] for a in args])
+    return [done[e] for e in exprs]
 
 
-def _parts(F, t, q, qd, hessian, zero, add):
+def _parts(F, t, q, qd, hessian, rest, zero, add):
     """``euler_parts`` on sympy or symengine expressions (``zero`` and ``add`` of the
     library); only derivatives by symbols that occur are taken."""
     n = len(q)
@@ -111,14 +142,17 @@ def _parts(F, t, q, qd, hessian, zero, add):
         for s in range(n):
             for r in range(s, n):
                 H[s][r] = H[r][s] = d(p[s], qd[r], ps[s])
-    rem = [d(F, q[s], fs) - d(p[s], t, ps[s])
-           - add(*[d(p[s], x, ps[s]) * v for x, v in zip(q, qd)]) for s in range(n)]
+    rem = None
+    if rest:
+        rem = [d(F, q[s], fs) - d(p[s], t, ps[s])
+               - add(*[d(p[s], x, ps[s]) * v for x, v in zip(q, qd)]) for s in range(n)]
     v = d(F, t, fs) + add(*[d(F, x, fs) * xd for x, xd in zip(q, qd)])
     return p, H, rem, v
 
 
-def cached_parts(system, F, hessian=True) -> EulerParts:
-    """``euler_parts`` of the system's Lagrangian or constraints, once per system."""
+def cached_parts(system, F, hessian=True, rest=True) -> EulerParts:
+    """``euler_parts`` of the system's Lagrangian or constraints, once per system (the
+    parts with r serve a later call without)."""
     key = id(system)
     entry = _PARTS.get(key)
     if entry is None or entry[0]() is not system:
@@ -127,9 +161,10 @@ def cached_parts(system, F, hessian=True) -> EulerParts:
                 del _PARTS[key]
         entry = _PARTS[key] = (weakref.ref(system, forget), {})
     cache = entry[1]
-    if (F, hessian) not in cache:
-        cache[F, hessian] = euler_parts(system.J, F, hessian)
-    return cache[F, hessian]
+    found = cache.get((F, hessian))
+    if found is None or (rest and found.r is None):
+        cache[F, hessian] = found = euler_parts(system.J, F, hessian, rest)
+    return found
 
 
 def solve(system, kappa: str = "none", explicit: bool = False, multipliers=(),
@@ -159,7 +194,9 @@ def _solve(system, kappa, explicit, multipliers, rates):
     transform = explicit and system.is_affine
     cons = system.explicit_constraints if explicit and not transform else system.constraints
     p, H, r, _ = cached_parts(system, system.L)
-    cparts = [cached_parts(system, f, hessian=not system.is_affine) for f in cons]
+    # the constraints' r only where the multipliers weigh [f] (kappa)
+    cparts = [cached_parts(system, f, hessian=not system.is_affine, rest=kappa != "none")
+              for f in cons]
     A = sp.Matrix([c.p for c in cparts]) if k else sp.zeros(0, n)
     b = sp.Matrix([c.v for c in cparts]) if k else sp.zeros(0, 1)
     A_dep = A[:, dep]

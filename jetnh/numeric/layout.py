@@ -12,7 +12,7 @@ import json
 from dataclasses import dataclass
 
 #: the format of generated kernel modules (the cache keeps each version apart)
-CODEGEN_VERSION = "11"
+CODEGEN_VERSION = "13"
 
 #: the numba signature of the kernels ``rhs``, ``aux``, ``sing``, ``hol``, ``events``
 #: (t, y, p, out)

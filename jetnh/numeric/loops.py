@@ -30,13 +30,13 @@ def entry(scene, method, kern, ce, sens, ctl, te, mode, watch, newton):
     addresses (``methods._common.function_at``): ``kern`` keeps them alive."""
     uev = ce.uev if ce is not None else kern.sing_fp
     rhs = kern.rhs_fp if sens is None else sens.rhs_fp
+    hol = kern.hol_or_none if sens is None else sens.hol_or_none   # (with dg/dp)
     if method.solver is Solver.IMPLICIT:
         jac = scene.jacobian.address if sens is None else sens.jac_fp
-        return (kern.implicit(), tuple(f.address for f in (rhs, jac, kern.sing_fp, uev,
-                                                           kern.hol_or_none)),
+        return (kern.implicit(), tuple(f.address for f in (rhs, jac, kern.sing_fp, uev, hol)),
                 (ctl, newton, te, mode, watch))
     return (methods.explicit_solver(method), tuple(f.address for f in (rhs, kern.sing_fp, uev,
-                                                                      kern.hol_or_none)),
+                                                                      hol)),
             (ctl, te, mode, watch))
 
 

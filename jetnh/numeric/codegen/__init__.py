@@ -27,8 +27,10 @@ its callback would compile it a second time.
     matrix's determinant is one of them).  The integrators stop where one of them
     crosses zero or falls below ``singular_tol`` times its initial size.
 ``hol(t, y, p, out)`` (systems with holonomic constraints g = 0 only)
-    ``out = (g_1..g_m, dg_i/dq^j row by row)``: what the projection of an accepted step
-    onto g = 0 evaluates (``methods.projection``).  ``aux`` then ends with g_1..g_m.
+    ``out = (g_1..g_m, dg_i/dq^j row by row)``, in the "sensitivities" variant followed
+    by ``dg_i/dp_k`` (the runtime parameters) row by row: what the projection of an
+    accepted step onto g = 0 evaluates (``methods.projection``).  ``aux`` then ends with
+    g_1..g_m.
 ``jac(t, y, p, J)`` (the "jacobian" variant, ``kernels.jacobian_kernels(scene)``)
     ``J[i, j] = d rhs_i / d y_j`` (an n_state x n_state C-contiguous array), by forward
     mode over the graph (signature ``layout.JAC_SIGNATURE``).

@@ -134,6 +134,10 @@ def generate(spec: KernelSpec) -> KernelSource:
         hol_pairs = [(g, f"the holonomic constraint {g}") for g in hol]
         hol_pairs += [(dag.diff(g, q), f"the derivative of {g} by {q}")
                       for g in hol for q in J.q]
+        if sensitivities:        # and by the runtime parameters (projected sensitivities)
+            by_name = {s.name: s for s in system.parameters}
+            hol_pairs += [(dag.diff(g, by_name[k]), f"the derivative of {g} by {k}")
+                          for g in hol for k in runtime_params]
         src.append(_function("hol", layout, phi_exprs, prepare.many(hol_pairs)))
     src.append(f"LAYOUT = {layout.to_json()!r}\n")
     timings["print"] = time.perf_counter() - t1

@@ -99,14 +99,21 @@ def program(em: Emitter, phi, outputs) -> tuple:
 def straight_line(ops: tuple):
     """A numba intrinsic ``body(t, y, p, out)`` that emits ``ops`` (``program``) as LLVM
     instructions: numba types one call instead of every operation (its type inference
-    costs about a millisecond per operation), and LLVM compiles the block."""
+    costs about a millisecond per operation), and LLVM compiles the block.  A program
+    above the quick threshold (``quick.quick_ops``) is written as LLVM assembly text and
+    parsed by LLVM (``ir_text``: the same instructions in the same order, a function the
+    intrinsic calls), skipping llvmlite's instruction objects and their printing, most of
+    the compile time left at ``-O0``."""
     from llvmlite import ir
     from numba import types
     from numba.core import cgutils
     from numba.extending import intrinsic
 
+    from .quick import quick_ops
+
     dbl = ir.DoubleType()
     i64 = ir.IntType(64)
+    as_text = len(ops) > quick_ops()
 
     @intrinsic
     def body(typingctx, t, y, p, out):
@@ -114,6 +121,17 @@ def straight_line(ops: tuple):
             mod = builder.module
             ptr = {name: context.make_array(ty)(context, builder, v).data
                    for name, ty, v in zip("ypo", signature.args[1:], args[1:])}
+            if as_text:
+                import llvmlite.binding as llvm
+
+                name, text = ir_text(ops)
+                module = llvm.parse_assembly(text)
+                module.triple, module.data_layout = mod.triple, str(mod.data_layout)
+                context.active_code_library.add_llvm_module(module)
+                fn = cgutils.get_or_insert_function(
+                    mod, ir.FunctionType(ir.VoidType(), [dbl] + [ptr["y"].type] * 3), name)
+                builder.call(fn, [args[0], ptr["y"], ptr["p"], ptr["o"]])
+                return context.get_dummy_value()
 
             def fn(name, n=1):
                 return cgutils.get_or_insert_function(
@@ -162,6 +180,81 @@ def straight_line(ops: tuple):
         return types.void(t, y, p, out), codegen
 
     return body
+
+
+def ir_text(ops: tuple) -> tuple[str, str]:
+    """``(name, module)``: LLVM assembly of ``void name(double t, ptr y, ptr p, ptr out)``
+    computing ``ops`` with the instructions ``straight_line`` builds, in its order (the
+    same arithmetic: bit-for-bit the same results); ``name`` is new in every call (each
+    compilation defines its own external function, also beside a cached one)."""
+    import struct
+    import uuid
+
+    def const(x):
+        return "0x%016X" % struct.unpack("<Q", struct.pack("<d", float(x)))[0]
+
+    lines, declared = [], {}
+    val: list = []
+    tmp = [0]
+
+    def fresh():
+        tmp[0] += 1
+        return f"%u{tmp[0]}"
+
+    def chain(opcode, xs):
+        acc = xs[0]
+        for x in xs[1:]:
+            r = fresh()
+            lines.append(f"  {r} = {opcode} double {acc}, {x}")
+            acc = r
+        return acc
+
+    def call(name, xs):
+        callee = _LLVM_UNARY.get(name, name)
+        declared[callee] = len(xs)
+        r = fresh()
+        lines.append(f"  {r} = call double @{callee}("
+                     + ", ".join(f"double {x}" for x in xs) + ")")
+        return r
+
+    for op in ops:
+        kind = op[0]
+        if kind == "y" or kind == "p":
+            g, r = fresh(), fresh()
+            lines.append(f"  {g} = getelementptr double, ptr %{kind}, i64 {op[1]}")
+            lines.append(f"  {r} = load double, ptr {g}")
+            v = r
+        elif kind == "t":
+            v = "%t"
+        elif kind == "c":
+            v = const(op[1])
+        elif kind == "add":
+            v = chain("fadd", [val[a] for a in op[1:]])
+        elif kind == "mul":
+            v = chain("fmul", [val[a] for a in op[1:]])
+        elif kind == "div":
+            v = fresh()
+            lines.append(f"  {v} = fdiv double {val[op[1]]}, {val[op[2]]}")
+        elif kind == "powi":
+            k = op[2]
+            v = (chain("fmul", [val[op[1]]] * k) if k <= 4
+                 else call("llvm.pow.f64", [val[op[1]], const(k)]))
+        elif kind == "pow":
+            v = call("llvm.pow.f64", [val[op[1]], val[op[2]]])
+        elif kind == "fn":
+            v = call(op[1], [val[a] for a in op[2:]])
+        else:       # "out"
+            g = fresh()
+            lines.append(f"  {g} = getelementptr double, ptr %o, i64 {op[1]}")
+            lines.append(f"  store double {val[op[2]]}, ptr {g}")
+            v = None
+        val.append(v)
+    body = "\n".join(lines)
+    name = "jetnh_straight_line_" + uuid.uuid4().hex
+    decls = "".join(f"declare double @{f}({', '.join(['double'] * n)})\n"
+                    for f, n in sorted(declared.items()))
+    return name, (f"{decls}\ndefine void @{name}(double %t, ptr %y, ptr %p, "
+                  f"ptr %o) {{\nentry:\n{body}\n  ret void\n}}\n")
 
 
 def derivative_program(ops: tuple, n: int) -> tuple:

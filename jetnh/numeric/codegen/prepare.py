@@ -36,6 +36,9 @@ class Preparer:
         self.names = {s.name: s for s in self.rename}
         #: the results of every call, one object per value (``dag.xreplace``)
         self.canon: dict = {}
+        #: every subexpression substituted so far (the rule is the same in every call):
+        #: the parts the rhs, aux and sing kernels share are rebuilt once
+        self.memo: dict = {}
 
     def many(self, pairs) -> list:
         """``[self(expr, what) for expr, what in pairs]`` by one substitution over the
@@ -43,7 +46,7 @@ class Preparer:
         on the first expression that has it."""
         exprs = [sp.sympify(e, strict=True) for e, _ in pairs]
         sub, bad = self._rule(exprs)
-        out = None if bad or dag.atoms(exprs, AppliedUndef) else dag.xreplace(exprs, sub, self.canon)
+        out = None if bad or dag.atoms(exprs, AppliedUndef) else dag.xreplace(exprs, sub, self.canon, self.memo)
         if out is None or dag.atoms(out, type(sp.nan), type(sp.zoo), type(sp.oo),
                                     type(sp.S.NegativeInfinity)):
             return [self(e, what) for e, what in pairs]
@@ -73,7 +76,7 @@ class Preparer:
         if undefined:
             raise JetnhError(f"{what} contains undefined functions {undefined}; "
                              "jetnh compiles explicit expressions only")
-        out = dag.xreplace(e, sub, self.canon)
+        out = dag.xreplace(e, sub, self.canon, self.memo)
         if dag.atoms(out, type(sp.nan), type(sp.zoo), type(sp.oo), type(sp.S.NegativeInfinity)):
             values = ", ".join(f"{k} = {v}" for k, v in sorted(self.numbers.items()))
             raise JetnhError(

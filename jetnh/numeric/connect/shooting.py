@@ -7,6 +7,8 @@ from __future__ import annotations
 import numpy as np
 
 from ...errors import JetnhError
+from .. import solve
+from ..options import options
 
 #: steps a shooting run may take (a run that needs more counts as failed)
 MAX_STEPS = 20_000
@@ -22,6 +24,7 @@ class Shooter:
         self.rows = [names.index(c) for c in q1]
         self.target = np.array(list(q1.values()))
         self.cols = [names.index(u) for u in unknowns]
+        self.block = np.ix_(self.rows, self.cols)      # dq_named(t1)/du in S
         given = {**q0, **fixed}
         self.y0 = np.array([given.get(n, 0.0) for n in names])
         self.rtol, self.atol, self.method, self.rcond = rtol, atol, method, rcond
@@ -29,6 +32,34 @@ class Shooter:
         self.seen: dict = {}
         self.span = scene.t_span         # the runs' span (continuation in T moves t1)
         self.n_velocities = len(scene.system.independent_velocities)   # lead unknowns
+        self.plans: dict = {}            # the driver's plans of the runs
+
+    def plan(self, span, save="steps"):
+        """The driver's plan of a shooting run on ``span`` (with sensitivities; every
+        step or the ends), made once: each run then only calls the compiled loop."""
+        key = ("shooting", self.method, self.rtol, solve.hashable(self.atol), span, save,
+               MAX_STEPS)
+        found = self.plans.get(key)
+        if found is None:
+            # kept on the scene too: repeated problems on one scene plan nothing
+            found = self.plans[key] = solve.planned(self.scene, key, lambda: solve.plan(
+                self.scene, self.method, t_span=span, save=save, sensitivities=True,
+                opts=options(rtol=self.rtol, atol=self.atol, max_steps=MAX_STEPS)))
+        return found
+
+    def start(self, y, span, save="steps"):
+        """The run of the plan of ``span`` from the state ``y`` (its own array), or
+        None where it fails before the end of the span or ends in a non-finite
+        state."""
+        scene = self.scene
+        if not np.isfinite(y).all():
+            return None
+        try:
+            scene._check_holonomic(y, span[0], scene._p)
+            tr = solve.run(scene, self.plan(span, save), y, scene._p)
+        except JetnhError:
+            return None
+        return tr if tr.status == 0 and np.isfinite(tr.y[-1]).all() else None
 
     def state(self, u) -> np.ndarray:
         y = self.y0.copy()
@@ -50,40 +81,61 @@ class Shooter:
         if tr is None:
             return None
         S = tr.sensitivities[-1]
-        return tr.y[-1, self.rows], S[np.ix_(self.rows, self.cols)], tr
+        return tr.y[-1, self.rows], S[self.block], tr
 
     def run(self, u):
         """The run from the start with the unknowns ``u`` (every step, with
         sensitivities), or None where it fails before t1 (or takes more than
         ``MAX_STEPS`` steps: a wild trial of the search must not take minutes)."""
-        try:
-            tr = self.scene.run(rtol=self.rtol, atol=self.atol, method=self.method,
-                                y0=self.state(u), t_span=self.span, sensitivities=True, max_steps=MAX_STEPS)
-        except JetnhError:
-            return None
-        return tr if tr.status == 0 and np.all(np.isfinite(tr.y[-1])) else None
+        return self.start(self.state(u), self.span)
 
     def regular_start(self, u0, q0, q1, T, n_velocities):
         """The default guess, moved off a point where the run stops before t1 (a speed
         that falls to a singular zero) or where the shooting Jacobian is rank-deficient
-        (zero velocities, a straight line along an abnormal direction): by a fixed
-        pattern of the size of the straight-line velocities, then with the velocities
+        (zero velocities, a straight line along an abnormal direction): first to the
+        minimum-norm Gauss-Newton point of its run's sensitivities (``newton_point``:
+        the motion the guess's linearisation says reaches the end), then by a fixed
+        pattern of the size of the straight-line velocities, with the velocities
         doubled and quadrupled; 12 tries, the first regular one kept (else the first
         that reaches t1)."""
         scale = max([abs(q1[c] - q0[c]) for c in q1] + [1.0]) / abs(T)
         pattern = 0.5 * (-0.6) ** np.arange(len(u0))
         speed = np.ones(len(u0))
         reaching = None
-        for k in range(12):
+        for k in range(12):                 # k = 0: u0 itself
             speed[:n_velocities] = 2.0 ** (k // 4)
             u = speed * u0 + (scale * np.roll(pattern, k) * (k % 4) if k % 4 else 0.0)
             got = self.endpoint(u)
             if got is not None:
-                s = np.linalg.svd(got[1], compute_uv=False)
-                if s.size and s[0] > 0 and s[-1] > 1e-6 * s[0]:
+                if self.regular(got):
                     return u
+                if k == 0:
+                    newton = self.newton_point(u, got)
+                    if newton is not None and self.regular(self.endpoint(newton)):
+                        return newton
                 reaching = u if reaching is None else reaching
         return u0 if reaching is None else reaching
+
+    @staticmethod
+    def regular(got) -> bool:
+        """Whether the ``endpoint`` ``got`` exists (the run reached t1) and its shooting
+        Jacobian has full rank by a margin (smallest singular value above 1e-6 of the
+        largest)."""
+        if got is None:
+            return False
+        s = np.linalg.svd(got[1], compute_uv=False)
+        return bool(s.size and s[0] > 0 and s[-1] > 1e-6 * s[0])
+
+    def newton_point(self, u, got):
+        """``u`` plus the minimum-norm Gauss-Newton step of its endpoint ``got`` (the
+        truncated SVD, at most the size of ``u`` and 1), or None where it does not
+        move."""
+        U, s, Vt = self.svd(got[1])
+        if not s.size:
+            return None
+        du = -(Vt.T @ ((U.T @ (got[0] - self.target)) / s))
+        du /= max(1.0, np.linalg.norm(du) / max(1.0, np.linalg.norm(u)))
+        return u + du if np.any(du) else None
 
     def svd(self, Jm):
         """The singular value decomposition of the shooting Jacobian with its numerical
@@ -148,14 +200,8 @@ class Segments:
         return [sh.state(U[:m])] + [U[m + i * n:m + (i + 1) * n] for i in range(self.k - 1)]
 
     def run(self, i, y):
-        sh = self.shooter
-        try:
-            tr = sh.scene.run(rtol=sh.rtol, atol=sh.atol, method=sh.method, y0=y,
-                              t_span=(self.nodes[i], self.nodes[i + 1]), save="final",
-                              sensitivities=True, max_steps=MAX_STEPS)
-        except JetnhError:
-            return None
-        return tr if tr.status == 0 and np.all(np.isfinite(tr.y[-1])) else None
+        return self.shooter.start(np.array(y, dtype=float),
+                                  (float(self.nodes[i]), float(self.nodes[i + 1])), "final")
 
     def evaluate(self, U, target):
         """``(F, dF/dU)`` of the matching and end conditions, or None where a segment's

@@ -4,6 +4,8 @@ extremal (``gramian_ratio``) and where its Jacobi fields lose rank
 
 from __future__ import annotations
 
+from functools import cached_property
+
 import numpy as np
 
 from ...errors import ConnectError
@@ -23,10 +25,14 @@ def _dense_states(tr, times, full=False):
 
 
 class _Samples:
-    """The states and sensitivities of a trajectory at the times its verdicts need --
+    """The states (and sensitivities) of a trajectory at the times its verdicts need --
     the 5 Gauss-Legendre nodes of every step (``gauss``) and ``GRID`` + 1 equal-spaced
     times (``grid``) -- from one run with these times as ``t_eval`` (dense output: the
-    values ``Trajectory.at`` gives, without re-taking each step from Python)."""
+    values ``Trajectory.at`` gives, without re-taking each step from Python).  The
+    sensitivities on the grid (``grid_S``, for the Jacobi determinant of
+    ``conjugate_times``) come with that run where the state has twice as many entries as
+    there are coordinates (as many unknowns as coordinates: vakonomic, Hoelder), else
+    from a run of their own when asked for."""
 
     GRID = 400
 
@@ -36,17 +42,29 @@ class _Samples:
         self.half = 0.5 * (b - a)
         self.gauss = ((0.5 * (a + b))[:, None] + self.half[:, None] * _GAUSS_X[None, :])
         self.grid = np.linspace(t[0], t[-1], self.GRID + 1)
+        self._tr, self._run = tr, dict(rtol=rtol, atol=atol, method=method, y0=y0)
         times = np.concatenate([self.gauss.ravel(), self.grid])
         order = np.argsort(times, kind="stable")
-        run = tr.scene.run(rtol=rtol, atol=atol, method=method, y0=y0, t_eval=times[order],
-                           sensitivities=True)
+        square = tr.layout.n_state == 2 * len(tr.layout.coordinates)
+        run = self._sample(times[order], square)
+        ys = np.empty_like(run.y)
+        ys[order] = run.y
+        k = self.gauss.size
+        self.gauss_y, self.grid_y = ys[:k], ys[k:]
+        if square:
+            S = np.empty_like(run.sensitivities)
+            S[order] = run.sensitivities
+            self.grid_S = S[k:]
+
+    def _sample(self, times, sensitivities):
+        run = self._tr.scene.run(t_eval=times, sensitivities=sensitivities, **self._run)
         if run.status != 0 or len(run.t) != times.size:
             raise ConnectError(f"the motion found could not be sampled: {run.stop_reason}")
-        ys = np.empty_like(run.y)
-        S = np.empty_like(run.sensitivities)
-        ys[order], S[order] = run.y, run.sensitivities
-        k = self.gauss.size
-        self.gauss_y, self.grid_y, self.grid_S = ys[:k], ys[k:], S[k:]
+        return run
+
+    @cached_property
+    def grid_S(self):
+        return self._sample(self.grid, True).sensitivities
 
 
 def action(tr, samples) -> float:
@@ -54,17 +72,18 @@ def action(tr, samples) -> float:
     dense output (``_Samples``), L evaluated on the graph (dependent velocities by the
     aux kernel)."""
     times = samples.gauss
-    L = _lagrangian(tr.scene, times.ravel(), samples.gauss_y).reshape(times.shape)
+    L = _lagrangian(tr, times.ravel(), samples.gauss_y).reshape(times.shape)
     return float(np.sum(L * _GAUSS_W[None, :] * samples.half[:, None]))
 
 
-def _point(scene, times, ys) -> dict:
+def _point(tr, times, ys) -> dict:
     """Symbol -> values of t, q, every velocity and the parameters at the rows ``ys``."""
+    scene, kern = tr.scene, tr._kernels
     system = scene.system
     J = system.J
-    kern = scene.kernels
     aux = np.empty((ys.shape[0], kern.layout.n_aux))
-    kern.aux_rows(np.ascontiguousarray(times), np.ascontiguousarray(ys), scene.p, aux)
+    kern.aux_rows(np.ascontiguousarray(times), np.ascontiguousarray(ys),
+                  np.ascontiguousarray(tr._p, dtype=float), aux)
     col = {n: i for i, n in enumerate(scene.state_names)}
     point = {J.t: times}
     for s in J.q:
@@ -78,14 +97,15 @@ def _point(scene, times, ys) -> dict:
     return point
 
 
-def _lagrangian(scene, times, ys) -> np.ndarray:
+def _lagrangian(tr, times, ys) -> np.ndarray:
     from ...algebra import dag
 
-    (L,) = dag.evaluate_numpy([scene.system.L], _point(scene, times, ys))
+    (L,) = dag.evaluate_numpy([tr.scene.system.L], _point(tr, times, ys))
     return np.broadcast_to(L, times.shape)
 
 
-#: system id -> (system, [d phi/dq..., d phi/du...]) for ``gramian_ratio``
+#: system id -> (system, [d phi/dq..., d phi/du...], the rows of the dependent and of the
+#: independent velocities' coordinates) for ``gramian_ratio``
 _DERIVATIVES: dict = {}
 
 
@@ -93,10 +113,10 @@ def gramian_ratio(tr, samples) -> float:
     """Smallest over largest eigenvalue of the controllability Gramian of the constraint
     system (qdot^mu = u^mu, qdot^alpha = phi^alpha(t, q, u)) linearized along ``tr``,
     ``W = int Phi(t1, s) B B^T Phi(t1, s)^T ds`` (A = d qdot/dq, B = d qdot/du from the
-    graph on the dense output; the transition matrix Phi by RK4 propagators of ``steps``
-    equal steps, ``_Samples.GRID / 2`` of them, the integral by Simpson's rule on their
-    nodes).  Zero: the endpoint
-    map loses rank along the path (an abnormal extremal)."""
+    graph on the dense output; Phi(t1, s) the products of the RK4 propagators of
+    ``_Samples.GRID / 2`` equal steps from s to t1, the integral by Simpson's rule on
+    their nodes).  Zero: the endpoint map loses rank along the path (an abnormal
+    extremal)."""
     from ...algebra import dag
 
     scene = tr.scene
@@ -106,27 +126,27 @@ def gramian_ratio(tr, samples) -> float:
     if not system.k:
         return 1.0
     steps = samples.GRID // 2
-    phis = [system.phi[v] for v in system.dependent_velocities]
-    derivatives = _DERIVATIVES.get(id(system))
-    if derivatives is None or derivatives[0] is not system:
-        derivatives = _DERIVATIVES[id(system)] = (
-            system, list(dag.jacobian(phis, list(J.q))) + list(dag.jacobian(phis, list(us))))
+    found = _DERIVATIVES.get(id(system))
+    if found is None or found[0] is not system:
+        phis = [system.phi[v] for v in system.dependent_velocities]
+        index = {s: i for i, s in enumerate(J.q)}
+        found = _DERIVATIVES[id(system)] = (
+            system, list(dag.jacobian(phis, list(J.q))) + list(dag.jacobian(phis, list(us))),
+            [index[J.split(v)[0]] for v in system.dependent_velocities],
+            [index[J.split(v)[0]] for v in us])
+    _, derivatives, dep_rows, input_rows = found
     t0, t1 = float(tr.t[0]), float(tr.t[-1])
     times = samples.grid
-    vals = dag.evaluate_numpy(derivatives[1], _point(scene, times, samples.grid_y))
-    k = len(phis)
+    vals = dag.evaluate_numpy(derivatives, _point(tr, times, samples.grid_y))
+    k, m = len(dep_rows), len(us)
     A = np.zeros((times.size, n, n))
-    B = np.zeros((times.size, n, len(us)))
-    index = {s: i for i, s in enumerate(J.q)}
-    dep_rows = [index[J.split(v)[0]] for v in system.dependent_velocities]
-    for j, v in enumerate(us):
-        B[:, index[J.split(v)[0]], j] = 1.0
+    B = np.zeros((times.size, n, m))
+    B[:, input_rows, np.arange(m)] = 1.0
     for a in range(k):
         for c in range(n):
-            A[:, dep_rows[a], c] = np.broadcast_to(vals[a * n + c], times.shape)
-        for c in range(len(us)):
-            B[:, dep_rows[a], c] = np.broadcast_to(vals[k * n + a * len(us) + c],
-                                                   times.shape)
+            A[:, dep_rows[a], c] = vals[a * n + c]
+        for c in range(m):
+            B[:, dep_rows[a], c] = vals[k * n + a * m + c]
     h = (t1 - t0) / steps
     I = np.eye(n)
     A0, Am, A1 = A[0:-1:2], A[1::2], A[2::2]
@@ -135,18 +155,26 @@ def gramian_ratio(tr, samples) -> float:
     K3 = Am @ (I + 0.5 * h * K2)
     K4 = A1 @ (I + h * K3)
     P = I + h / 6.0 * (K1 + 2 * K2 + 2 * K3 + K4)        # Phi(t_{j+1}, t_j)
-    Phi = np.empty((steps + 1, n, n))                     # Phi(t_j, t0)
-    Phi[0] = I
-    for j in range(steps):
-        Phi[j + 1] = P[j] @ Phi[j]
-    G = np.linalg.solve(np.transpose(Phi, (0, 2, 1)), Phi[-1].T).transpose(0, 2, 1)
+    G = np.concatenate([_products(P[::-1])[::-1], I[None]])   # Phi(t1, t_j)
     GB = G @ B[::2]                                       # Phi(t1, s_j) B(s_j)
     w = np.full(steps + 1, 2.0)
     w[1::2] = 4.0
     w[0] = w[-1] = 1.0
-    W = np.einsum("j,jam,jbm->ab", w * h / 3.0, GB, GB)
+    wGB = (GB * (w * h / 3.0)[:, None, None]).transpose(1, 0, 2).reshape(n, -1)
+    W = wGB @ GB.transpose(1, 0, 2).reshape(n, -1).T    # sum_j w_j GB_j GB_j^T
     ev = np.linalg.eigvalsh(0.5 * (W + W.T))
     return float(max(ev[0], 0.0) / ev[-1]) if ev[-1] > 0 else 0.0
+
+
+def _products(P) -> np.ndarray:
+    """The running products ``P[0] @ ... @ P[j]`` of the matrices ``P[j]``, in log2(len)
+    batched multiplications (a doubling scan)."""
+    out = P.copy()
+    d = 1
+    while d < len(out):
+        out[d:] = out[:-d] @ out[d:]
+        d *= 2
+    return out
 
 
 def conjugate_times(tr, cols, samples, rcond=1e-9) -> tuple:
@@ -178,12 +206,11 @@ def conjugate_times(tr, cols, samples, rcond=1e-9) -> tuple:
         M = samples.grid_S[1:, :nq][:, :, cols]
         norms = np.linalg.norm(M, axis=1, keepdims=True)
         d = np.linalg.det(M / np.where(norms > 0, norms, 1.0))
-        for i in range(len(grid) - 1):
-            # |det| of the normalized columns at rounding level: singular there (along a
-            # whole stretch when an unknown has no effect), no sign to follow
-            if max(abs(d[i]), abs(d[i + 1])) < DET_ZERO or np.sign(d[i]) == np.sign(
-                    d[i + 1]):
-                continue
+        # |det| of the normalized columns at rounding level: singular there (along a
+        # whole stretch when an unknown has no effect), no sign to follow
+        change = (np.sign(d[:-1]) != np.sign(d[1:])) & (
+            np.maximum(np.abs(d[:-1]), np.abs(d[1:])) >= DET_ZERO)
+        for i in np.nonzero(change)[0]:
             found.append(float(brentq(det, grid[i], grid[i + 1], xtol=1e-14, rtol=1e-14)))
     s = np.linalg.svd(tr.sensitivities[-1][:nq][:, cols], compute_uv=False)
     if s.size and (s[0] == 0 or s[-1] <= rcond * s[0] * 1e2) and len(cols) >= nq:

@@ -38,7 +38,8 @@ class CompiledKernels:
         lay = layout
         n_y, n_p = lay.n_state, len(lay.runtime_params)
         sizes = {"rhs": lay.n_rhs, "aux": lay.n_aux, "sing": len(lay.indicators),
-                 "hol": lay.holonomic * (1 + len(lay.coordinates))}
+                 "hol": lay.holonomic * (1 + len(lay.coordinates)
+                                         + (n_p if lay.sensitivity_columns else 0))}
         for name, n_out in sizes.items():     # rhs, aux, sing from Python
             if hasattr(self, f"{name}_fp") and not hasattr(self, name):
                 setattr(self, name, calls.Kernel(getattr(self, f"{name}_fp"),

@@ -18,15 +18,16 @@ projected states: on g = 0 to the interpolant's error, not to roundoff.  The ite
 deterministic: a run is reproducible bit for bit.
 
 A run with sensitivities (the state followed by ``S = dy/d(y0, p)``, ``n_sens`` columns a
-row) projects them with the state, by the derivative of the projection map at the
-projected point: the rows of S of the coordinates become ``(I - G^+ G) S_q`` with ``G^+ =
-G^T (G G^T)^{-1}`` (the orthogonal metric of the projection itself), so that S is the
-derivative of the projected run, as central differences of projected runs measure it.
-Where g depends on a runtime parameter, the projection map does too; its term
-``-G^+ dg/dp`` is not included (``hol`` gives dg/dq only).
+row, the runtime parameters' last) projects them with the state, by the derivative of
+the projection map at the projected point: the rows of S of the coordinates become
+``(I - G^+ G) S_q - G^+ dg/dp`` with ``G^+ = G^T (G G^T)^{-1}`` (the orthogonal metric
+of the projection itself; the last term in the parameters' columns only, where g
+depends on them), so that S is the derivative of the projected run, as central
+differences of projected runs measure it.
 
 ``hol(t, y, p, out)`` is the generated kernel (``codegen``): ``out = (g_1..g_m, dg_i/dq^j
-row by row)``.
+row by row)``, and for a run with sensitivities then ``dg_i/dp_k`` row by row (the
+kernels of the "sensitivities" variant).
 """
 
 from __future__ import annotations
@@ -44,10 +45,12 @@ MAX_ITERATIONS = 8
 
 @jit
 def workspace(m, nq, n_sens):
-    """The arrays of ``project``: hol's output, G G^T, a right-hand side and a solution
-    of it (``n_sens``: the columns of the sensitivities, if any)."""
+    """The arrays of ``project``: hol's output (with dg/dp where there are
+    sensitivities: ``n_sens`` columns, the parameters among them), G G^T, a right-hand
+    side and a solution of it."""
     m1 = max(m, 1)
-    return np.empty(m1 * (1 + nq)), np.empty((m1, m1)), np.empty(m1), np.empty(m1)
+    return (np.empty(m1 * (1 + nq + n_sens)), np.empty((m1, m1)), np.empty(m1),
+            np.empty(m1))
 
 
 @jit
@@ -93,20 +96,24 @@ def project(hol, ctl, t, y, p, ws):
     if n_sens > 0:
         hol(t, y, p, w)
         calls += 1
-        _sensitivities(w, m, nq, n_sens, y, A, b, x)
+        _sensitivities(w, m, nq, n_sens, p.shape[0], y, A, b, x)
     return calls
 
 
 @jit
-def _sensitivities(w, m, nq, n_sens, y, A, b, x):
-    """S_q <- (I - G^T (G G^T)^{-1} G) S_q, column by column, for the sensitivities
-    stored after the state in ``y`` (row-major, ``n_sens`` columns; G from ``w``)."""
+def _sensitivities(w, m, nq, n_sens, n_p, y, A, b, x):
+    """S_q <- S_q - G^T (G G^T)^{-1} (G S_q + dg/dp), column by column, for the
+    sensitivities stored after the state in ``y`` (row-major, ``n_sens`` columns, the
+    ``n_p`` parameters' last; G and dg/dp from ``w``)."""
     n = y.shape[0] // (1 + n_sens)
+    first_p = n_sens - n_p
     for k in range(n_sens):
         for i in range(m):
             acc = 0.0
             for j in range(nq):
                 acc += w[m + i * nq + j] * y[n + j * n_sens + k]
+            if k >= first_p:
+                acc += w[m + m * nq + i * n_p + k - first_p]
             b[i] = acc
         _normal(w, m, nq, A)
         if not solve_linear(A, b, x):
@@ -123,8 +130,8 @@ def onto(hol, m, nq, t, y, p) -> np.ndarray:
     ``kernels.hol``): a copy of ``y`` with its coordinates y[:nq] on g(t, q) = 0 (``y``
     itself where G G^T is singular or a value is not finite)."""
     y = np.array(y, dtype=float)
-    w = np.empty(m * (1 + nq))
     p = np.ascontiguousarray(p, dtype=float)
+    w = np.empty(m * (1 + nq + p.shape[0]))       # (room for dg/dp)
     for _ in range(MAX_ITERATIONS):
         hol(float(t), y, p, w)
         G = w[m:].reshape(m, nq)
