@@ -116,12 +116,12 @@ def watched_events(scene, ce, k_lam):
 
 @functools.cache
 def _no_events():
-    """The event function of a run without events (never called): a compiled no-op."""
-    import numba
-
+    """The event function of a run without events (never called): a compiled no-op, kept
+    in jetnh's signed store (``kernels.loop_cache``; never numba's own cache)."""
+    from .kernels.loop_cache import file_stamp, signed_cfunc
     from .methods._common import RHS_SIGNATURE
 
-    return numba.cfunc(RHS_SIGNATURE, cache=True)(_nothing)
+    return signed_cfunc(_nothing, RHS_SIGNATURE, file_stamp(__file__))
 
 
 def _nothing(t, y, p, out):

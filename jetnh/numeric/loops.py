@@ -26,14 +26,14 @@ def entry(scene, method, kern, ce, sens, ctl, te, mode, watch, newton):
     """The entry of the compiled loop of ``method`` on the kernels ``kern`` (events
     ``ce``; with ``sens``, the right-hand side and radau's Jacobian of the state
     augmented by its sensitivities) and its arguments before and after ``(t0, t1, y0,
-    p)`` (``halt`` last, per call).  The explicit loops take the kernels' callbacks as
-    their addresses (``methods._common.function_at``): ``kern`` keeps them alive."""
+    p)`` (``halt`` last, per call).  The loops take the kernels' callbacks as their
+    addresses (``methods._common.function_at``): ``kern`` keeps them alive."""
     uev = ce.uev if ce is not None else kern.sing_fp
     rhs = kern.rhs_fp if sens is None else sens.rhs_fp
     hol = kern.hol_or_none if sens is None else sens.hol_or_none   # (with dg/dp)
     if method.solver is Solver.IMPLICIT:
         jac = scene.jacobian.address if sens is None else sens.jac_fp
-        return (kern.implicit(), (rhs, jac, kern.sing_fp, uev, hol),
+        return (kern.implicit(), tuple(f.address for f in (rhs, jac, kern.sing_fp, uev, hol)),
                 (ctl, newton, te, mode, watch))
     return (methods.explicit_solver(method), tuple(f.address for f in (rhs, kern.sing_fp, uev,
                                                                       hol)),

@@ -5,7 +5,8 @@ call them by address, and an njit function beside each would compile the same bo
 From Python, ``Kernel(address, sizes)(t, y, p, out)`` calls a callback through a
 trampoline that takes its address as an integer (``_call_at``, an intrinsic that calls
 the address with the C signature of the kernels): the trampolines are compiled once for
-all scenes (and cached on disk by numba), and a call costs less than twice a call of an
+all scenes, on first use, and kept in jetnh's signed store (``loop_cache``, never numba's
+own cache, whose files are read unchecked), and a call costs less than twice a call of an
 njit function computing the same kernel (``benchmarks/kernel_call.py``; passing the
 callback as a first-class function instead, numba unboxed it on every call, ten times
 that).
@@ -26,6 +27,7 @@ import numpy as np
 from numba import types
 from numba.extending import intrinsic
 
+from . import loop_cache
 from ..methods._common import RHS_SIGNATURE, FunctionAddress
 from ..methods.radau import JAC_SIGNATURE
 
@@ -33,7 +35,7 @@ _f8, _i8 = types.float64, types.int64
 #: what a kernel reads (read-only arrays too: a frozen trajectory's) and what it writes
 _IN1, _IN2 = (types.Array(_f8, n, "C", readonly=True) for n in (1, 2))
 _OUT1, _OUT2 = _f8[::1], _f8[:, ::1]
-_JIT = dict(cache=True, error_model="numpy", nogil=True)
+_JIT = dict(error_model="numpy", nogil=True)
 
 
 @intrinsic
@@ -80,19 +82,16 @@ def _fits(y_n, p_n, out_n, sizes):
                          "needs (given, needed)", out_n, n_out)
 
 
-@numba.njit(types.void(_i8, _i8, _f8, _IN1, _IN1, _OUT1), **_JIT)
 def _call(address, sizes, t, y, p, out):
     _fits(y.shape[0], p.shape[0], out.shape[0], sizes)
     _call_at(address, t, y, p, out)
 
 
-@numba.njit(types.void(_i8, _i8, _f8, _IN1, _IN1, _OUT2), **_JIT)
 def _call_jac(address, sizes, t, y, p, J):
     _fits(y.shape[0], p.shape[0], min(J.shape[0], J.shape[1]), sizes)
     _call_at(address, t, y, p, J)
 
 
-@numba.njit(types.void(_i8, _i8, _IN1, _IN2, _IN1, _OUT2), **_JIT)
 def _rows(address, sizes, ts, ys, p, out):
     _fits(ys.shape[1], p.shape[0], out.shape[1], sizes)
     if ys.shape[0] != ts.shape[0] or out.shape[0] < ts.shape[0]:
@@ -137,9 +136,24 @@ def _only_declared(dispatcher, names: str, dims):
     dispatcher._explain_matching_error = _explain(names.split(), dims)
 
 
-_only_declared(_call, "t y p out", (0, 1, 1, 1))
-_only_declared(_call_jac, "t y p J", (0, 1, 1, 2))
-_only_declared(_rows, "ts ys p out", (1, 2, 1, 2))
+#: each trampoline: its signature and its arguments for ``_explain``
+_TRAMPOLINES = {
+    _call: (types.void(_i8, _i8, _f8, _IN1, _IN1, _OUT1), "t y p out", (0, 1, 1, 1)),
+    _call_jac: (types.void(_i8, _i8, _f8, _IN1, _IN1, _OUT2), "t y p J", (0, 1, 1, 2)),
+    _rows: (types.void(_i8, _i8, _IN1, _IN2, _IN1, _OUT2), "ts ys p out", (1, 2, 1, 2)),
+}
+
+
+@functools.cache
+def trampoline(py_func):
+    """The compiled trampoline ``py_func`` (``_call``, ``_call_jac`` or ``_rows``):
+    compiled, or loaded from the signed store, on first use; taking its declared
+    argument types only (``_only_declared``)."""
+    signature, names, dims = _TRAMPOLINES[py_func]
+    dispatcher = loop_cache.signed_njit(py_func, signature, loop_cache.file_stamp(__file__),
+                                        **_JIT)
+    _only_declared(dispatcher, names, dims)
+    return dispatcher
 
 
 class Kernel(functools.partial):
@@ -153,8 +167,8 @@ class Kernel(functools.partial):
 
     def __new__(cls, address, sizes, jacobian: bool = False):
         address = FunctionAddress(address, JAC_SIGNATURE if jacobian else RHS_SIGNATURE)
-        self = super().__new__(cls, _call_jac if jacobian else _call, address.address,
-                               _pack(sizes))
+        self = super().__new__(cls, trampoline(_call_jac if jacobian else _call),
+                               address.address, _pack(sizes))
         self.__dict__.update(address=address, sizes=tuple(sizes))
         return self
 
@@ -167,7 +181,7 @@ class Rows(functools.partial):
 
     def __new__(cls, address, sizes):
         address = FunctionAddress(address)
-        self = super().__new__(cls, _rows, address.address, _pack(sizes))
+        self = super().__new__(cls, trampoline(_rows), address.address, _pack(sizes))
         self.__dict__.update(address=address, sizes=tuple(sizes))
         return self
 

@@ -28,7 +28,7 @@ _LOADED: dict[tuple[str, bool], CompiledKernels] = {}
 _LOCK = threading.Lock()            # guards _LOADED and _KEY_LOCKS
 _EXEC_LOCK = threading.RLock()      # one kernel module compiled at a time
 _KEY_LOCKS: dict[tuple[str, bool], threading.Lock] = {}
-_WARNED: set[str] = set()
+_WARNED: set = set()
 
 
 def clear(root: Path | None = None) -> int:
@@ -40,15 +40,25 @@ def clear(root: Path | None = None) -> int:
     return n
 
 
-def _numba_caches_in_tree() -> bool:
-    """Whether numba caches the functions of a module in ``<its directory>/__pycache__``
-    (its default, ``numba.core.caching.InTreeCacheLocator``, for a writable directory):
+def _numba_caches_in_tree(directory: Path) -> str | None:
+    """``None`` if numba caches the functions of ``<directory>/kernels.py`` in
+    ``<directory>/__pycache__`` (its default, ``numba.core.caching.InTreeCacheLocator``):
     then the only machine code numba may read for kernels is the entry's, which the
-    manifest has just checked.  ``NUMBA_CACHE_DIR`` or ``NUMBA_CACHE_LOCATOR_CLASSES``
-    send it elsewhere, where jetnh checks nothing."""
-    from numba.core import config
+    manifest has just checked.  Else why not: ``NUMBA_CACHE_DIR`` or
+    ``NUMBA_CACHE_LOCATOR_CLASSES`` send it elsewhere, or ``__pycache__`` cannot be made
+    or written there (a full disk, a read-only file system), and numba would fall back to
+    its user-wide cache; jetnh checks nothing in either place."""
+    from numba.core import caching, config
 
-    return not (getattr(config, "CACHE_DIR", "") or getattr(config, "CACHE_LOCATOR_CLASSES", ""))
+    if getattr(config, "CACHE_DIR", "") or getattr(config, "CACHE_LOCATOR_CLASSES", ""):
+        return ("NUMBA_CACHE_DIR (or NUMBA_CACHE_LOCATOR_CLASSES) is set, so numba would "
+                "keep the machine code of jetnh's kernels where jetnh cannot check it")
+    if caching.InTreeCacheLocator.from_function(_forget, str(directory / "kernels.py")) \
+            is None:                # numba's own test of the place, as it will make it
+        return (f"numba cannot write {directory / '__pycache__'}, so it would keep the "
+                "machine code of jetnh's kernels in its user-wide cache, where jetnh "
+                "cannot check it")
+    return None
 
 
 def _forget(package: str):
@@ -59,7 +69,7 @@ def _forget(package: str):
 def _exec_kernels(package: str, directory: Path, source: bytes):
     """The module ``<package>.kernels`` compiled from ``source`` (bytes already checked)
     as ``<directory>/kernels.py``, the file those bytes came from (numba's default
-    locator caches next to it: in the entry).  If numba's cache is sent elsewhere
+    locator caches next to it: in the entry).  If numba would cache elsewhere
     (``_numba_caches_in_tree``), the kernels are compiled without it (``JETNH_NUMBA_CACHE``
     in the module's globals, read by the generated header), with a warning.  The module
     of the same source already in this process is reused."""
@@ -68,14 +78,16 @@ def _exec_kernels(package: str, directory: Path, source: bytes):
     old = sys.modules.get(name)
     if old is not None and getattr(old, "__jetnh_sha256__", None) == digest:
         return old
-    in_tree = _numba_caches_in_tree()
-    if not in_tree and "numba" not in _WARNED:
-        _WARNED.add("numba")
+    elsewhere = _numba_caches_in_tree(directory)
+    in_tree = elsewhere is None
+    configured = not in_tree and elsewhere.startswith("NUMBA")
+    if not in_tree and ("numba", configured) not in _WARNED:
+        _WARNED.add(("numba", configured))
         warnings.warn(
-            "jetnh: NUMBA_CACHE_DIR (or NUMBA_CACHE_LOCATOR_CLASSES) is set, so numba would "
-            "keep the machine code of jetnh's kernels where jetnh cannot check it; the "
-            "kernels are compiled anew in each process (their derivation and code are still "
-            "cached). Unset it to load compiled kernels from jetnh's cache.",
+            f"jetnh: {elsewhere}; the kernels are compiled anew in each process (their "
+            "derivation and code are still cached). "
+            + ("Unset it to load compiled kernels from jetnh's cache." if configured else
+               "Free space there, or set JETNH_CACHE to a writable directory of yours."),
             KernelCacheWarning, stacklevel=4)
     pkg = types.ModuleType(package, "jetnh generated kernel package")
     pkg.__path__ = [str(directory)]

@@ -1,9 +1,12 @@
-"""The compiled integrator loops on disk: numba's own cache format, kept in the private
+"""jetnh's own compiled functions on disk: numba's cache format, kept in the private
 store of the kernels (``store``) and read only after its signature is checked.
 
-The loops (``methods._common.compiled``) do not depend on the scene, so each is compiled
-once and kept in ``<root>/loops/`` (``store.cache_root()``, the root of the kernel
-entries, or the private temporary root when that cannot be used)::
+The integrator loops (``methods._common.compiled``), the trampolines that call a kernel
+from Python (``calls``) and the no-op event callback of the discrete methods
+(``discrete``) do not depend on the scene, so each is compiled once and kept in
+``<root>/loops/`` (``store.cache_root()``, the root of the kernel entries, or the private
+temporary root when that cannot be used; ``signed_njit`` and ``signed_cfunc`` compile a
+function so)::
 
     <root>/loops/<module>.<loop>-<line>.py<XY>.nbi       numba's index of the loop
     <root>/loops/<module>.<loop>-<line>.py<XY>.<k>.nbc   its compiled code (one a CPU)
@@ -45,6 +48,7 @@ import pickle
 import sys
 from pathlib import Path
 
+import numba
 from numba.core.caching import (
     CompileResultCacheImpl, FunctionCache, IndexDataCacheFile, NullCache, _CacheLocator)
 
@@ -85,12 +89,12 @@ class _Locator(_CacheLocator):
 class _Impl(CompileResultCacheImpl):
     """numba's serialisation of a compiled function, located by ``_Locator``."""
 
-    def __init__(self, py_func, locator: _Locator):   # no search of numba's locators
+    def __init__(self, py_func, locator: _Locator, name: str):   # no numba locator searched
         self._lineno = py_func.__code__.co_firstlineno
         self._locator = locator
         modname = os.path.splitext(os.path.basename(inspect.getfile(py_func)))[0]
-        self._filename_base = self.get_filename_base(
-            f"{modname}.{py_func.__qualname__}", getattr(sys, "abiflags", ""))
+        self._filename_base = self.get_filename_base(f"{modname}.{name}",
+                                                     getattr(sys, "abiflags", ""))
 
 
 class _SignedFile(IndexDataCacheFile):
@@ -153,14 +157,16 @@ class _SignedFile(IndexDataCacheFile):
 
 class SignedFunctionCache(FunctionCache):
     """numba's ``FunctionCache`` of ``py_func`` in ``directory``, its files signed with
-    ``secret`` (``_SignedFile``); ``stamp`` says which sources it was compiled from."""
+    ``secret`` (``_SignedFile``); ``stamp`` says which sources it was compiled from;
+    ``name`` names its files (default: the function's qualified name)."""
 
-    def __init__(self, py_func, directory: Path, secret: bytes, stamp: str):
+    def __init__(self, py_func, directory: Path, secret: bytes, stamp: str,
+                 name: str | None = None):
         self._name = repr(py_func)
         self._py_func = py_func
         locator = _Locator(directory, stamp, py_func.__code__.co_firstlineno,
                            inspect.getfile(py_func))
-        self._impl = _Impl(py_func, locator)
+        self._impl = _Impl(py_func, locator, name or py_func.__qualname__)
         self._cache_path = locator.get_cache_path()
         self._cache_file = _SignedFile(directory, self._impl.filename_base, stamp, secret)
         self.enable()
@@ -184,7 +190,7 @@ def _private_directory(path: Path):
             store.discard(path)
 
 
-def cache_for(py_func, stamp: str):
+def cache_for(py_func, stamp: str, name: str | None = None):
     """The disk cache of a loop: a ``SignedFunctionCache`` in ``<root>/loops`` of the
     store (``store.open_root``: the persistent root, else the private temporary one), or
     numba's ``NullCache`` (compiled in this process only) if no directory can be used."""
@@ -195,5 +201,37 @@ def cache_for(py_func, stamp: str):
             _private_directory(directory)
         except (OSError, store.Untrusted):
             continue
-        return SignedFunctionCache(py_func, directory, secret, stamp)
+        return SignedFunctionCache(py_func, directory, secret, stamp, name)
     return NullCache()
+
+
+def file_stamp(path) -> str:
+    """A hash of the file ``path``: the stamp of what a function compiled from it and the
+    helpers of the same file is made of."""
+    with open(path, "rb") as f:
+        return hashlib.sha256(f.read()).hexdigest()[:16]
+
+
+def signed_njit(py_func, signature, stamp: str, **options):
+    """``numba.njit(signature, **options)(py_func)`` with its machine code in the signed
+    store (``cache_for``; its files named with ``stamp``, so that other sources never
+    share them) instead of numba's cache; compiled for ``signature`` only."""
+    dispatcher = numba.njit(**options)(py_func)
+    dispatcher._cache = cache_for(py_func, stamp, f"{py_func.__qualname__}_{stamp}")
+    dispatcher.compile(signature)
+    dispatcher.disable_compile()
+    return dispatcher
+
+
+def signed_cfunc(py_func, signature, stamp: str, **options):
+    """``numba.cfunc(signature, **options)(py_func)`` with its machine code in the signed
+    store (as ``signed_njit``): numba's ``CFunc`` loads and saves through its ``_cache``
+    like a dispatcher."""
+    from numba.core import sigutils
+    from numba.core.ccallback import CFunc
+
+    callback = CFunc(py_func, sigutils.normalize_signature(signature), locals={},
+                     options=options)
+    callback._cache = cache_for(py_func, stamp, f"{py_func.__qualname__}_{stamp}")
+    callback.compile()
+    return callback

@@ -15,7 +15,8 @@ exit.  Each scene's kernels are one *entry*, a
 directory named by a hash of the symbolic input (``codegen.KernelSpec.key``)::
 
     <root>/hmac.key          32 random bytes, this user's secret (mode 0600)
-    <root>/loops/            the compiled integrator loops (``loop_cache``), each file
+    <root>/loops/            jetnh's own compiled functions (``loop_cache``): the
+                             integrator loops, the trampolines of ``calls``; each file
                              signed with the same key
     <root>/k<key>/
         __init__.py          a comment: the entry is a package (never executed)

@@ -35,14 +35,16 @@ from collections import namedtuple
 
 import numba
 import numpy as np
+from numba.core import cgutils
+from numba.extending import intrinsic
 
 from ._common import (
-    ENDPOINTS, ENSEMBLE_OUT, EVERY_STEP, FINISHED, MAX_STEPS, NONFINITE, RHS,
-    SINGULAR, STOPPED, TOO_SMALL_STEP, all_finite, collect, compiled, copy_into, f8, i8,
-    jit, min_step, start, store)
+    ENDPOINTS, ENSEMBLE_OUT, EVERY_STEP, FINISHED, MAX_STEPS, NONFINITE,
+    SINGULAR, STOPPED, TOO_SMALL_STEP, all_finite, collect, compiled, copy_into, f8,
+    function_at, i8, jit, min_step, start, store)
 from ._events import dense_eval
 from . import projection
-from .loop import (ALL, CONTROL, EMBEDDED, GIVEN, WATCHED, Result, after_step, no_events,
+from .loop import (ALL, CONTROL, EMBEDDED, GIVEN, WATCHED, after_step, counts, no_events,
                    output, outputs, watch_start)
 
 ORDER = 5
@@ -50,6 +52,22 @@ ERROR_ORDER = 3
 #: the Jacobian callback: jac(t, y, p, J) fills J[i, j] = d rhs_i / d y_j
 JAC_SIGNATURE = numba.types.void(f8, f8[::1], f8[::1], f8[:, ::1])
 JAC = numba.types.FunctionType(JAC_SIGNATURE)
+
+
+@intrinsic
+def jacobian_at(typingctx, address):
+    """The Jacobian (type ``JAC``) whose C callback is at ``address``, an integer: as
+    ``_common.function_at`` for the right-hand side (the loop takes its callbacks as
+    integers, which cost nothing to pass from Python)."""
+    if not isinstance(address, numba.types.Integer):
+        return None
+
+    def codegen(context, builder, signature, args):
+        value = cgutils.get_null_value(context.get_value_type(JAC))
+        return builder.insert_value(value, builder.inttoptr(args[0], cgutils.voidptr_t), 0)
+
+    return JAC(address), codegen
+
 #: Newton options of one run (``tol`` 0: automatic)
 Newton = namedtuple("Newton", "tol max_iter")
 NEWTON = numba.typeof(Newton(0.0, 7))
@@ -255,12 +273,15 @@ def _dense(y, Z, F):
         F[1, i] = g1 - c1 * F[2, i]
 
 
-def _solve(rhs, jac, sing, uev, hol, t0, t_end, y0, p, ctl, newton, t_eval, mode, watch,
-           halt):
+def _solve(rhs_at, jac_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, newton, t_eval,
+           mode, watch, halt):
     """Integrate y' = rhs(t, y, p) from t0 to t_end with Radau IIA (5); ``jac(t, y, p, J)``
-    its Jacobian; the other arguments and the ``Result`` as for ``loop._solve``
+    its Jacobian; the five callbacks given by their addresses (``_common.function_at``,
+    ``jacobian_at``); the other arguments and the ``Result`` fields as for ``loop._solve``
     (``newton``: ``Newton``; the parts ``WATCH``, ``PROJECT``, ``DENSE`` are compile-time
     constants, as there: ``_specialised``)."""
+    rhs, jac = function_at(rhs_at), jacobian_at(jac_at)
+    sing, uev, hol = function_at(sing_at), function_at(uev_at), function_at(hol_at)
     rtol, atol, max_step, max_steps = ctl.rtol, ctl.atol, ctl.max_step, ctl.max_steps
     if PROJECT:
         hw = projection.workspace(ctl.n_hol, ctl.n_coord, ctl.n_sens)
@@ -302,12 +323,12 @@ def _solve(rhs, jac, sing, uev, hol, t0, t_end, y0, p, ctl, newton, t_eval, mode
         ws, sing_index = watch_start(sing, uev, watch, t, y, p)
         if sing_index >= 0:
             ts, ys, n_out = store(ts, ys, n_out, t, y)
-            return Result(SINGULAR, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev,
+            return (SINGULAR, ts, ys, n_out, counts(stats), t, y, ev_t, ev_i, ev_y, n_ev,
                           sing_index)
     go, h_abs, ts, ys, n_out = start(rhs, t, y, p, f0, K[0], ytmp, scale, ctl, ERROR_ORDER,
                                      t_end, stats, mode, t_eval, ts, ys, n_out)
     if go >= 0:
-        return Result(go, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev, sing_index)
+        return (go, ts, ys, n_out, counts(stats), t, y, ev_t, ev_i, ev_y, n_ev, sing_index)
     jac(t, y, p, Jm)
     jac_fresh = True
     h_lu = 0.0                  # the h of the current LU factors (0: none)
@@ -444,10 +465,10 @@ def _solve(rhs, jac, sing, uev, hol, t0, t_end, y0, p, ctl, newton, t_eval, mode
         h_abs = h_new_abs
     if mode == ENDPOINTS:
         ts, ys, n_out = store(ts, ys, n_out, t, y)
-    return Result(status, ts, ys, n_out, stats, t, y, ev_t, ev_i, ev_y, n_ev, sing_index)
+    return (status, ts, ys, n_out, counts(stats), t, y, ev_t, ev_i, ev_y, n_ev, sing_index)
 
 
-ARGS = (RHS, JAC, RHS, RHS, RHS, f8, f8, f8[::1], f8[::1], CONTROL, NEWTON, f8[::1], i8,
+ARGS = (i8, i8, i8, i8, i8, f8, f8, f8[::1], f8[::1], CONTROL, NEWTON, f8[::1], i8,
         WATCHED, i8[::1])
 
 
