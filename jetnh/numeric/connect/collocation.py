@@ -17,11 +17,10 @@ import numpy as np
 from .. import kernels
 
 
-def problem(scene, start, end, t1, jacobian=True, nodes=11):
-    """``(fun, fun_jac, bc, t, Y)`` for ``solve_bvp`` on ``scene``'s equations from
-    ``start`` (every coordinate) at 0 to ``end`` (a dict of coordinates) at ``t1``."""
-    kern, p, names = scene.kernels, scene.p, scene.state_names
-    n, nq = len(names), len(scene.coordinates)
+def mesh_functions(scene, jacobian=True):
+    """``(fun, fun_jac)`` for ``solve_bvp``: ``scene``'s compiled right-hand side and its
+    Jacobian (None without ``jacobian``) at every node of a mesh."""
+    kern, p, n = scene.kernels, scene.p, len(scene.state_names)
     jac = kernels.jacobian_kernels(scene).jac if jacobian else None
 
     def fun(t, Y):
@@ -38,6 +37,15 @@ def problem(scene, start, end, t1, jacobian=True, nodes=11):
             out[:, :, i] = Jm
         return out
 
+    return fun, (fun_jac if jacobian else None)
+
+
+def problem(scene, start, end, t1, jacobian=True, nodes=11):
+    """``(fun, fun_jac, bc, t, Y)`` for ``solve_bvp`` on ``scene``'s equations from
+    ``start`` (every coordinate) at 0 to ``end`` (a dict of coordinates) at ``t1``."""
+    names, nq = scene.state_names, len(scene.coordinates)
+    fun, fun_jac = mesh_functions(scene, jacobian)
+
     rows = [names.index(k) for k in end]
     target = np.array([end[k] for k in end], dtype=float)
     first = np.array([start[names[i]] for i in range(nq)], dtype=float)
@@ -53,7 +61,7 @@ def problem(scene, start, end, t1, jacobian=True, nodes=11):
         Y[i] = start[name] + rate * t
         if name in end and f"{name}_t" in names:
             Y[names.index(f"{name}_t")] = rate
-    return fun, (fun_jac if jacobian else None), bc, t, Y
+    return fun, fun_jac, bc, t, Y
 
 
 #: the warm start's mesh: its first nodes, its largest size and its tolerance (a start
@@ -83,25 +91,9 @@ def warm_start(shooter, rows=None, u=None):
     fixed = [names.index(f) for f in shooter.fixed]
     if nq + len(fixed) + len(conds) != len(names):
         return None
-    kern, p = scene.kernels, scene.p
-    jac = kernels.jacobian_kernels(scene).jac
+    fun, fun_jac = mesh_functions(scene)
     y0, target = shooter.y0, shooter.target[conds]
     t0, t1 = shooter.span
-    n = len(names)
-
-    def fun(t, Y):
-        out, o = np.empty_like(Y), np.empty(n)
-        for i in range(Y.shape[1]):
-            kern.rhs(float(t[i]), np.ascontiguousarray(Y[:, i]), p, o)
-            out[:, i] = o
-        return out
-
-    def fun_jac(t, Y):
-        out, Jm = np.empty((n, n, Y.shape[1])), np.empty((n, n))
-        for i in range(Y.shape[1]):
-            jac(float(t[i]), np.ascontiguousarray(Y[:, i]), p, Jm)
-            out[:, :, i] = Jm
-        return out
 
     def bc(ya, yb):
         values, _ = shooter.conditions_at(t1, yb)
@@ -117,7 +109,7 @@ def warm_start(shooter, rows=None, u=None):
         miss = shooter.target[:len(shooter.rows)] - Y[shooter.rows, -1]
         Y[shooter.rows] += np.outer(miss, (t - t0) / (t1 - t0))
         meshes.append(Y)
-    Y = np.zeros((n, t.size))
+    Y = np.zeros((len(names), t.size))
     Y[fixed] = y0[fixed][:, None]
     for i, name in enumerate(names[:nq]):
         rate = (ends.get(name, y0[i]) - y0[i]) / (t1 - t0)

@@ -269,22 +269,30 @@ class FunctionAddress:
         return self.address
 
 
-@intrinsic
-def function_at(typingctx, address):
-    """The right-hand side (type ``RHS``) whose C callback is at ``address``, an integer
-    (``FunctionAddress.address``): the compiled loops take their callbacks as integers,
-    which cost nothing to pass from Python, where numba unboxes a first-class function
-    by two calls into Python (~2.3 us per argument and call).  Calling the result calls
-    the address with the C signature ``RHS_SIGNATURE``; the caller keeps the callback
-    alive (its ``FunctionAddress``) while the loop runs."""
-    if not isinstance(address, numba.types.Integer):
-        return None
+def callback_at(kind):
+    """An intrinsic turning an integer address into the first-class function of type
+    ``kind`` (a numba ``FunctionType``) whose C callback is there: the compiled loops take
+    their callbacks as integers, which cost nothing to pass from Python, where numba
+    unboxes a first-class function by two calls into Python (~2.3 us per argument and
+    call).  Calling the result calls the address with ``kind``'s C signature; the caller
+    keeps the callback alive (its ``FunctionAddress``) while the loop runs."""
 
-    def codegen(context, builder, signature, args):
-        value = cgutils.get_null_value(context.get_value_type(RHS))
-        return builder.insert_value(value, builder.inttoptr(args[0], cgutils.voidptr_t), 0)
+    @intrinsic
+    def at(typingctx, address):
+        if not isinstance(address, numba.types.Integer):
+            return None
 
-    return RHS(address), codegen
+        def codegen(context, builder, signature, args):
+            value = cgutils.get_null_value(context.get_value_type(kind))
+            return builder.insert_value(value, builder.inttoptr(args[0], cgutils.voidptr_t), 0)
+
+        return kind(address), codegen
+
+    return at
+
+
+#: the right-hand side (type ``RHS``) at an address (``FunctionAddress.address``)
+function_at = callback_at(RHS)
 
 
 def entry_point(dispatcher):

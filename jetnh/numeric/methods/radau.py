@@ -35,13 +35,11 @@ from collections import namedtuple
 
 import numba
 import numpy as np
-from numba.core import cgutils
-from numba.extending import intrinsic
 
 from ._common import (
     ENDPOINTS, ENSEMBLE_OUT, EVERY_STEP, FINISHED, MAX_STEPS, NONFINITE,
-    SINGULAR, STOPPED, TOO_SMALL_STEP, all_finite, collect, compiled, copy_into, f8,
-    function_at, i8, jit, min_step, start, store)
+    SINGULAR, STOPPED, TOO_SMALL_STEP, all_finite, callback_at, collect, compiled,
+    copy_into, f8, function_at, i8, jit, min_step, start, store)
 from ._events import dense_eval
 from . import projection
 from .loop import (ALL, CONTROL, EMBEDDED, GIVEN, WATCHED, after_step, counts, no_events,
@@ -54,19 +52,8 @@ JAC_SIGNATURE = numba.types.void(f8, f8[::1], f8[::1], f8[:, ::1])
 JAC = numba.types.FunctionType(JAC_SIGNATURE)
 
 
-@intrinsic
-def jacobian_at(typingctx, address):
-    """The Jacobian (type ``JAC``) whose C callback is at ``address``, an integer: as
-    ``_common.function_at`` for the right-hand side (the loop takes its callbacks as
-    integers, which cost nothing to pass from Python)."""
-    if not isinstance(address, numba.types.Integer):
-        return None
-
-    def codegen(context, builder, signature, args):
-        value = cgutils.get_null_value(context.get_value_type(JAC))
-        return builder.insert_value(value, builder.inttoptr(args[0], cgutils.voidptr_t), 0)
-
-    return JAC(address), codegen
+#: the Jacobian (type ``JAC``) at an address, as ``function_at`` for the right-hand side
+jacobian_at = callback_at(JAC)
 
 #: Newton options of one run (``tol`` 0: automatic)
 Newton = namedtuple("Newton", "tol max_iter")
