@@ -54,7 +54,7 @@ def problem(scene, start, end, t1, jacobian=True, nodes=11):
         return np.concatenate([ya[:nq] - first, yb[rows] - target])
 
     t = np.linspace(0.0, t1, nodes)
-    Y = np.full((n, t.size), 0.5)
+    Y = np.full((len(names), t.size), 0.5)
     Y[nq + len(scene.velocities):] = 0.0
     for i, name in enumerate(names[:nq]):
         rate = (end.get(name, start[name]) - start[name]) / t1
