@@ -26,18 +26,19 @@ def entry(scene, method, kern, ce, sens, ctl, te, mode, watch, newton):
     """The entry of the compiled loop of ``method`` on the kernels ``kern`` (events
     ``ce``; with ``sens``, the right-hand side and radau's Jacobian of the state
     augmented by its sensitivities) and its arguments before and after ``(t0, t1, y0,
-    p)`` (``halt`` last, per call).  The loops take the kernels' callbacks as their
-    addresses (``methods._common.function_at``): ``kern`` keeps them alive."""
+    p)`` (``halt`` last, per call), and the callbacks whose addresses the loop takes
+    (``methods._common.function_at``): whoever calls the loop keeps them alive."""
     uev = ce.uev if ce is not None else kern.sing_fp
     rhs = kern.rhs_fp if sens is None else sens.rhs_fp
     hol = kern.hol_or_none if sens is None else sens.hol_or_none   # (with dg/dp)
     if method.solver is Solver.IMPLICIT:
         jac = scene.jacobian.address if sens is None else sens.jac_fp
-        return (kern.implicit(), tuple(f.address for f in (rhs, jac, kern.sing_fp, uev, hol)),
-                (ctl, newton, te, mode, watch))
-    return (methods.explicit_solver(method), tuple(f.address for f in (rhs, kern.sing_fp, uev,
-                                                                      hol)),
-            (ctl, te, mode, watch))
+        callbacks = (rhs, jac, kern.sing_fp, uev, hol)
+        return (kern.implicit(), tuple(f.address for f in callbacks),
+                (ctl, newton, te, mode, watch), callbacks)
+    callbacks = (rhs, kern.sing_fp, uev, hol)
+    return (methods.explicit_solver(method), tuple(f.address for f in callbacks),
+            (ctl, te, mode, watch), callbacks)
 
 
 def call(scene, method, kern, ce, watch, t0, t1, y, p, ctl, te, mode, newton, limit,
@@ -46,8 +47,9 @@ def call(scene, method, kern, ce, watch, t0, t1, y, p, ctl, te, mode, newton, li
     stoppable by Ctrl-C and ``limit`` seconds; returns its ``Result`` (the loops return
     its fields as a tuple) and the wall-clock time."""
     method = methods.method(method)
-    loop, prefix, suffix = entry(scene, method, kern, ce, sens, ctl, te, mode, watch,
-                                 newton)
+    # the callbacks: a local, alive until the loop has returned
+    loop, prefix, suffix, _callbacks = entry(scene, method, kern, ce, sens, ctl, te, mode,
+                                             watch, newton)
     halt = np.zeros(1, dtype=np.int64)
     tic = time.perf_counter()
     out = interrupt.call(lambda: loop(*prefix, t0, t1, y, p, *suffix, halt), halt, limit)

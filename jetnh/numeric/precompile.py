@@ -48,7 +48,8 @@ def compile_loop(name: str) -> tuple[str, float, bool]:
         d = dvi.solver()
     else:
         d = loop.solver(METHODS[method].tableau, parts)
-    return name, time.perf_counter() - tic, sum(d._cache_hits.values()) > 0
+    hits = getattr(d, "_cache_hits", {})        # numba's (private): loaded, not compiled
+    return name, time.perf_counter() - tic, sum(hits.values()) > 0
 
 
 def warm(names=None, jobs: int | None = None, report=None) -> dict[str, tuple[float, bool]]:

@@ -80,6 +80,7 @@ class Plan:
     entry: object = None
     prefix: tuple = ()
     suffix: tuple = ()
+    callbacks: tuple = ()           # what the addresses in prefix point into, kept alive
 
 
 def _unused(method, **given):
@@ -223,11 +224,11 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
     else:
         ce = scene.compile_events(events)
     watch = _watch(scene, kern, ce, checked, singular_tol)
-    entry, prefix, suffix = loops.entry(scene, m, kern, ce, sens, ctl, te, mode, watch,
-                                         newton)
+    entry, prefix, suffix, callbacks = loops.entry(scene, m, kern, ce, sens, ctl, te, mode,
+                                                    watch, newton)
     return Plan(**common, rtol=rtol, atol=atol_v, ce=ce, watch=watch, kern=kern, ctl=ctl,
                 te=te, mode=mode, newton=newton, switch=switch, dense=dense, entry=entry,
-                prefix=prefix, suffix=suffix)
+                prefix=prefix, suffix=suffix, callbacks=callbacks)
 
 
 def planned(scene, key, make) -> Plan:

@@ -9,6 +9,7 @@ from types import MappingProxyType
 import numpy as np
 
 from ...errors import JetnhError
+from ...frozen import readonly
 from ..trajectory import Trajectory
 from .verdicts import (_GAUSS_X, GRAMIAN_RCOND, _Samples, action, conjugate_times,
                        gramian_ratio)
@@ -87,8 +88,10 @@ class Stitched:
     values between rows each segment's dense output (``evaluate``, ``at``)."""
 
     def __init__(self, pieces, chains):
-        self.pieces, self.chains = tuple(pieces), tuple(chains)
-        self.nodes = np.array([float(p.t[0]) for p in pieces] + [float(pieces[-1].t[-1])])
+        self.pieces = tuple(pieces)
+        self.chains = tuple(readonly(np.array(P, dtype=float)) for P in chains)
+        self.nodes = readonly(np.array(
+            [float(p.t[0]) for p in pieces] + [float(pieces[-1].t[-1])]))
 
     @classmethod
     def join(cls, segments, U):

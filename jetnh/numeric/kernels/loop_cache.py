@@ -74,7 +74,12 @@ class _Locator(_CacheLocator):
         self._py_file = py_file          # numba names the function's file in its warnings
 
     def ensure_cache_path(self):
-        _private_directory(self._directory)
+        # numba calls this unguarded before saving: a store removed meanwhile (``jetnh
+        # cache clear`` in another process) must not fail the run; the save is skipped
+        try:
+            _private_directory(self._directory)
+        except (OSError, store.Untrusted):
+            pass
 
     def get_cache_path(self):
         return str(self._directory)
@@ -201,6 +206,7 @@ def cache_for(py_func, stamp: str, name: str | None = None):
             _private_directory(directory)
         except (OSError, store.Untrusted):
             continue
+        store.remove_stale(directory)
         return SignedFunctionCache(py_func, directory, secret, stamp, name)
     return NullCache()
 

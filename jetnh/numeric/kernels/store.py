@@ -28,8 +28,8 @@ directory named by a hash of the symbolic input (``codegen.KernelSpec.key``)::
 
 A second process that builds the same scene finds the entry, skips the derivation, ``cse``
 and code generation, and numba loads the machine code instead of compiling.  The
-integrators take ``rhs`` as a first-class function (``methods._common.RHS``), so their
-loops are compiled once for all scenes and kept in ``<root>/loops`` (``loop_cache``,
+integrators take ``rhs`` as a callback at its address (``methods._common.function_at``),
+so their loops are compiled once for all scenes and kept in ``<root>/loops`` (``loop_cache``,
 under the same trust rules; ``jetnh cache warm`` compiles them ahead); per scene only
 ``kernels.py`` is compiled.
 
@@ -591,15 +591,16 @@ def publish(tmp: Path, entry: Path, key: str, secret: bytes) -> bool:
 
 
 def remove_stale(root: Path):
-    """Staging and trash directories, and key files being made, left by processes that
-    died."""
+    """Staging and trash directories, key files and other files being made
+    (``_replace_private``'s ``.tmp``), left by processes that died."""
     now = time.time()
     try:
         names = os.listdir(root)
     except OSError:
         return
     for name in names:
-        if name.startswith((".k", ".trash-", f".{KEY_FILE}.")):
+        if name.startswith((".k", ".trash-", f".{KEY_FILE}.")) or (
+                name.startswith(".") and name.endswith(".tmp")):
             path = root / name
             try:
                 st = os.lstat(path)

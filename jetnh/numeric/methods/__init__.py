@@ -2,8 +2,9 @@
 tableau, order, error estimator, dense output; one short module each) run by the one
 compiled loop of ``loop``; radau has its own loop over the same helpers (``_common``,
 ``_events``); dla and dvi are discrete variational steps sharing one Newton solver
-(``newton``).  Every right-hand side is a first-class function (a cfunc of the scene's
-generated kernels), so each loop runs as machine code, is compiled once for all scenes
+(``newton``).  Every right-hand side is a C callback of the scene's generated kernels,
+passed by its address (``_common.function_at``), so each loop runs as machine code, is
+compiled once for all scenes
 and is kept on disk in jetnh's signed store (``kernels.loop_cache``; ``jetnh cache warm``
 compiles the common ones ahead, ``numeric.precompile``).
 
@@ -22,7 +23,7 @@ dvi         2       none (fixed step), symmetric,     Benito & Martin de Diego (
 ==========  ======  ================================  ==========================================
 
 The Runge-Kutta methods take the singularity indicators and the user events of the scene
-as first-class functions and locate them on their dense output (``_events``); dla and dvi
+as callbacks at their addresses and locate them on their dense output (``_events``); dla and dvi
 check the indicators of the constraints and the Lagrangian and the user events at their
 nodes (a terminal event ends the run at the node after it).
 
@@ -137,7 +138,8 @@ def method(name, backend=None) -> Method:
 
 def explicit_solver(m):
     """The compiled loop of the explicit method ``m`` (a ``Method`` or its name), called
-    as ``solve(rhs, sing, uev, hol, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt)``
+    as ``solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
+    watch, halt)`` (the callbacks' addresses)
     (``loop.solver``): each call goes to the loop compiled with the parts that run needs
     (``loop.features``; each compiled on first use) through its machine-code entry point
     (no type dispatch per call: ``_common.entry_point``)."""

@@ -216,7 +216,7 @@ def compiled(pyfunc, argtypes, parallel=False, namespace=None, tag=""):
     is checked; never numba's own cache directories); with ``namespace``, over those
     globals instead of its module's (a specialisation, named with ``tag``).
 
-    The right-hand side is an argument of type ``RHS`` (a first-class function), so the
+    The right-hand side is an argument given by its address (``function_at``), so the
     compiled loop does not depend on which scene calls it: one compilation serves all.
     The disk cache keys a function by its own code only, not the helpers compiled into it
     (``jit``, from other modules), so the key carries what the loop depends on: the

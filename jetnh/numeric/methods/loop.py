@@ -8,7 +8,7 @@ everything else: the first step, adaptive step control (Hairer-Norsett-Wanner I,
 with scipy's constants) or equal fixed steps, the budgets (``max_steps``, the ``halt``
 flag of ``interrupt``), singularity stops and user events on the dense output
 (``_events``), and the output (every step, the points of ``t_eval``, or the two ends).
-Each method's loop serves every scene (the right-hand side is a first-class function)
+Each method's loop serves every scene (the right-hand side is a callback at an address)
 and is cached on disk; ensembles run the same loop over the rows of an array
 (``ensemble_solver``).
 
@@ -515,10 +515,10 @@ def _specialised(method, parts=ALL):
 
 
 def solver(method, parts=ALL):
-    """The compiled ``solve(rhs, sing, uev, hol, t0, t_end, y0, p, ctl, t_eval, mode, watch,
-    halt)`` of the explicit method ``method`` (``_solve`` over its tableau) with the
-    ``parts`` of ``features`` (default: all; a run that needs a part the loop lacks is
-    not to be given to it)."""
+    """The compiled ``solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval,
+    mode, watch, halt)`` (the callbacks' addresses) of the explicit method ``method``
+    (``_solve`` over its tableau) with the ``parts`` of ``features`` (default: all; a run
+    that needs a part the loop lacks is not to be given to it)."""
     return _specialised(method, parts)["run"]
 
 
