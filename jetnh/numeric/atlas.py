@@ -239,13 +239,15 @@ class Atlas:
                 - sp.Float(self.eps) * gram.det(method="berkowitz"))
 
     def jacobian_at(self, t, q, qd, p) -> np.ndarray:
-        """df/dqdot (k x n) at one point, from the shared graph (no kernel to compile)."""
+        """df/dqdot (k x n) at one point, from the shared graph in double precision (no
+        kernel to compile): it only ranks the splits (``measures``), which rounding
+        cannot mislead beyond a choice between two usable charts."""
         sys_ = self.home.system
         J = sys_.J
         values = {**self.home.params, **dict(zip(self.home.runtime_params, p.tolist()))}
         point = {J.t: float(t), **dict(zip(J.q, q.tolist())), **dict(zip(J.qd, qd.tolist())),
-                 **{s: values[s.name] for s in sys_.parameters}}
-        found = dag.evaluate(list(sys_.jacobian), point, dps=20)
+                 **{s: float(values[s.name]) for s in sys_.parameters}}
+        found = dag.evaluate_numpy(list(sys_.jacobian), point)
         return np.array([float(v) for v in found]).reshape(sys_.k, J.n)
 
     def measures(self, A) -> dict:
