@@ -159,3 +159,20 @@ def test_warm_refuses_unknown_loops():
     with pytest.raises(JetnhError, match="unknown loops.*dop853:plain"):
         precompile.warm(["dop853:fast"])
     assert set(precompile.DEFAULT) <= set(precompile.LOOPS)
+
+
+def test_a_data_file_answers_only_for_its_own_key(tmp_path):
+    """Two keys whose index entries got crossed (two processes that picked the same new
+    data file name): each load refuses the other's code instead of returning it."""
+    f = loop_cache._SignedFile(tmp_path, "probe", "sources", b"k" * 32)
+    f.save(("sig", "cpu-a"), "code for a")
+    f.save(("sig", "cpu-b"), "code for b")
+    assert f.load(("sig", "cpu-a")) == "code for a"
+    index = f._load_index()
+    index[("sig", "cpu-a")], index[("sig", "cpu-b")] = (index[("sig", "cpu-b")],
+                                                        index[("sig", "cpu-a")])
+    f._save_index(index)
+    assert f.load(("sig", "cpu-a")) is None
+    assert f.load(("sig", "cpu-b")) is None
+    f.save(("sig", "cpu-a"), "code for a")           # compiled anew, stored for its key
+    assert f.load(("sig", "cpu-a")) == "code for a"

@@ -135,6 +135,18 @@ class _SignedFile(IndexDataCacheFile):
         except OSError:
             pass
 
+    def save(self, key, data):
+        # the data file carries its key (under the MAC): an index that points a key at a
+        # file holding another key's code (two processes that picked the same new name,
+        # e.g. two hosts sharing one store) is not believed
+        super().save(key, (key, data))
+
+    def load(self, key):
+        found = super().load(key)
+        if not (isinstance(found, tuple) and len(found) == 2 and found[0] == key):
+            return None
+        return found[1]
+
     def _load_index(self):
         payload = self._read(self._index_path)
         if payload is None:
