@@ -202,27 +202,20 @@ class Search(Shooter):
         if got is None:
             return u0, False, 0, "s = 0 (the guess's run fails before t1)"
         first = got[0]
-        total, s, ds, u = 0, 0.0, 0.25, u0
-        for _ in range(max_continuation):
-            s_try = min(1.0, s + ds)
+
+        def step(s_try, s, u):
             target = first + s_try * (self.target - first)
             # a continuation step starts near its solution: a short budget, so that an
             # unreachable end fails in seconds
             try:
-                v, ok, k = self.newton(u, target, tol if s_try == 1.0 else max(tol, 1e-6),
-                                       min(max_iter, STEP_ITER), rows)
+                return self.newton(u, target, tol if s_try == 1.0 else max(tol, 1e-6),
+                                   min(max_iter, STEP_ITER), rows)
             except ConnectError:
-                v, ok, k = u, False, min(max_iter, STEP_ITER)
-            total += k
-            if ok:
-                s, u = s_try, v
-                if s == 1.0:
-                    return u, True, total, "s = 1"
-                ds = min(2.0 * ds, 1.0 - s)
-            else:
-                ds *= 0.5
-                if ds < 1e-4:
-                    break
+                return u, False, min(max_iter, STEP_ITER)
+
+        u, s, ds, total = march(u0, 0.0, 0.25, step, max_continuation)
+        if s == 1.0:
+            return u, True, total, "s = 1"
         return u, False, total, f"s = {s:.6g} of 1 (step {ds:.3g})"
 
     def collocation(self, u0, tol, max_iter, max_continuation, rows=None):
@@ -265,21 +258,15 @@ class Search(Shooter):
             u, ok, total = solve_on(s, u, max_iter, max(tol, 1e-6))
             if not ok:
                 return u0, False, total, f"T = {s * (t1 - t0):.6g} (its first span)"
-            ds = (1.0 - s) / 4.0
-            for _ in range(max_continuation):
-                s_try = min(1.0, s + ds)
-                v, ok, k = solve_on(s_try, u * (s / s_try), min(max_iter, STEP_ITER),
-                                    tol if s_try == 1.0 else max(tol, 1e-6))
-                total += k
-                if ok:
-                    s, u = s_try, v
-                    if s == 1.0:
-                        return u, True, total, "T"
-                    ds = min(2.0 * ds, 1.0 - s)
-                else:
-                    ds *= 0.5
-                    if ds < 1e-4:
-                        break
+
+            def step(s_try, s, u):
+                return solve_on(s_try, u * (s / s_try), min(max_iter, STEP_ITER),
+                                tol if s_try == 1.0 else max(tol, 1e-6))
+
+            u, s, _, k = march(u, s, (1.0 - s) / 4.0, step, max_continuation)
+            total += k
+            if s == 1.0:
+                return u, True, total, "T"
             return u, False, total, f"T = {s * (t1 - t0):.6g} of {t1 - t0:.6g}"
         finally:
             self.span = full
@@ -376,6 +363,28 @@ class Search(Shooter):
                 f"the {scene.principle} motion found ends {residual:.3g} away from end"
                 + self._reachability(u), best)
         return best
+
+
+def march(u, s, ds, step, max_steps):
+    """Adaptive continuation in s from ``s`` to 1: ``step(s_try, s, u)`` -> ``(v, ok,
+    iterations)`` solves at ``s_try`` from the answer ``u`` at ``s``; the step doubles
+    after a success and halves after a failure, giving up below 1e-4 or after
+    ``max_steps`` tries.  Returns ``(u, s, ds, iterations)``: s == 1.0 where it arrived."""
+    total = 0
+    for _ in range(max_steps):
+        s_try = min(1.0, s + ds)
+        v, ok, k = step(s_try, s, u)
+        total += k
+        if ok:
+            s, u = s_try, v
+            if s == 1.0:
+                break
+            ds = min(2.0 * ds, 1.0 - s)
+        else:
+            ds *= 0.5
+            if ds < 1e-4:
+                break
+    return u, s, ds, total
 
 
 def levenberg_marquardt(evaluate, u, scale, tol, max_iter, svd, stuck=None):
