@@ -96,6 +96,19 @@ def count(value, what, limit=MAX_STEPS_LIMIT) -> int:
     return v
 
 
+def all_finite(a: np.ndarray, b: np.ndarray | None = None) -> bool:
+    """Whether every entry of the float arrays ``a`` (and ``b``) is finite: a finite sum
+    of squares says so cheaply; where it is not (a NaN, an infinity or an overflow),
+    each entry is looked at."""
+    flat = a.reshape(-1)
+    total = flat.dot(flat)
+    if b is not None:
+        flat = b.reshape(-1)
+        total += flat.dot(flat)
+    return math.isfinite(total) or bool(
+        np.isfinite(a).all() and (b is None or np.isfinite(b).all()))
+
+
 def real_array(value, what, ndim=1) -> np.ndarray:
     """A C-contiguous float64 array of ``ndim`` dimensions from numbers only (no strings,
     booleans, complex values or symbols), all finite."""
@@ -110,9 +123,7 @@ def real_array(value, what, ndim=1) -> np.ndarray:
     if a.ndim != ndim:
         raise ArgumentError(f"must be {'a number' if ndim == 0 else f'{ndim}-d'}, "
                             f"got shape {a.shape}", argument=what)
-    # a finite sum of squares: all finite, cheaply (else each is looked at)
-    flat = a.reshape(-1)
-    if not (ndim and math.isfinite(flat.dot(flat))) and not np.all(np.isfinite(a)):
+    if not all_finite(a):
         bad = tuple(int(i) for i in np.argwhere(~np.isfinite(a))[0])
         where = "" if ndim == 0 else f" at index {bad if ndim > 1 else bad[0]}"
         raise ArgumentError(f"has a non-finite value ({a[bad]}){where}; give finite "

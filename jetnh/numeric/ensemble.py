@@ -48,7 +48,6 @@ arrays (``Scene.ensemble`` calls it), so a later ``jetnh.sweep`` can hand it chu
 
 from __future__ import annotations
 
-import math
 import time
 import warnings
 from functools import cached_property
@@ -589,10 +588,8 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
                                   INFO, T_LAST, Y_LAST, EV_N, EV_T)
             reasons[r], switches[r] = parts[-1][1].stop_reason, sw
     wall += time.perf_counter() - tic
-    # never a success with a NaN or infinite state (a finite sum of squares: all finite,
-    # cheaply)
-    fy, fl = OUT_Y.reshape(-1), Y_LAST.reshape(-1)
-    if not math.isfinite(fy.dot(fy) + fl.dot(fl)):
+    # never a success with a NaN or infinite state
+    if not arguments.all_finite(OUT_Y, Y_LAST):
         done = (INFO[:, 0] == FINISHED) | (INFO[:, 0] == EVENT)
         INFO[done & ~(np.all(np.isfinite(Y_LAST), axis=1)
                       & np.all(np.isfinite(OUT_Y) | np.isnan(OUT_T)[:, :, None],

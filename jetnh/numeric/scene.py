@@ -565,7 +565,7 @@ class Scene(Frozen):
             return self.y0.copy()        # the compiled loop gets its own array
         if not isinstance(y0, dict):
             if (type(y0) is np.ndarray and y0.dtype == np.float64
-                    and y0.shape == self.y0.shape and math.isfinite(y0.dot(y0))):
+                    and y0.shape == self.y0.shape and arguments.all_finite(y0)):
                 y = y0.copy()           # (what the general route makes of it, sooner)
             else:
                 y, _ = arguments.keyed_or_sequence(y0, self.state_names, self.y0, "y0",

@@ -16,7 +16,6 @@
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass
 
@@ -348,12 +347,8 @@ def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, 
         y_last, y_init, ev_y = y_last[:n], y_init[:n], ev_y[:, :n]
     ts, ys = ts[:n_out], ys[:n_out]
     singularity = None
-    # never a success with a NaN or infinite state (a finite sum of squares: all finite,
-    # cheaply; else each is looked at)
-    flat = ys.reshape(-1)
-    if status in (FINISHED, EVENT) and not math.isfinite(
-            flat.dot(flat) + y_last.dot(y_last)) and not (
-            np.isfinite(y_last).all() and np.isfinite(ys).all()):
+    # never a success with a NaN or infinite state
+    if status in (FINISHED, EVENT) and not arguments.all_finite(ys, y_last):
         status = NONFINITE
     if status == NONFINITE:
         sing_index = (diagnosis.explain_nonfinite(scene, kern, t_last, y_last, p, t0, y_init,
