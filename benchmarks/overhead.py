@@ -89,9 +89,10 @@ try:            # the compiled loop alone (this tree's API)
     from jetnh.numeric.methods.loop import Control, watch_of
     kern = sc.kernels
     ctl = Control(1e-9, np.full(len(sc.y0), 1e-12), 0.0, np.inf, 10**7, 0)
-    entry, prefix, suffix = loops.entry(sc, methods.method("dop853"), kern, None, None, ctl,
-                                        np.zeros(0), 2, watch_of(kern, None, True, 1e-10),
-                                        None)
+    # (newer trees also return the callbacks behind the addresses: kept alive in `got`)
+    got = loops.entry(sc, methods.method("dop853"), kern, None, None, ctl, np.zeros(0), 2,
+                      watch_of(kern, None, True, 1e-10), None)
+    entry, prefix, suffix = got[:3]
     args = (*prefix, 0.0, 1e-6, sc.y0.copy(), sc.p, *suffix, interrupt.flag())
     out["call_s_dop853"] = min(best(lambda: entry(*args), REPS_SHORT) for _ in range(3))
 except ImportError:
@@ -111,10 +112,11 @@ watch = watch_of(kern, None, True, 1e-10)
 
 
 def bare(t1, ctl):      # the compiled dop853 loop called directly on (0, t1)
-    entry, prefix, suffix = loops.entry(short, methods.method("dop853"), kern, None, None,
-                                        ctl, np.zeros(0), 2, watch, None)
+    got = loops.entry(short, methods.method("dop853"), kern, None, None, ctl, np.zeros(0),
+                      2, watch, None)           # newer trees: and the callbacks, kept
+    entry, prefix, suffix = got[:3]
     args = (*prefix, 0.0, t1, y0, short.p, *suffix, interrupt.flag())
-    return lambda i: entry(*args)
+    return lambda i, keep=got: entry(*args)
 
 
 h3 = float(np.nextafter(1e-3, np.inf))      # three steps of 1e-3 exactly
