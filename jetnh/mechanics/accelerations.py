@@ -150,9 +150,9 @@ def _parts(F, t, q, qd, hessian, rest, zero, add):
     return p, H, rem, v
 
 
-def cached_parts(system, F, hessian=True, rest=True) -> EulerParts:
-    """``euler_parts`` of the system's Lagrangian or constraints, once per system (the
-    parts with r serve a later call without)."""
+def cached_parts(system, F, hessian=True, rest=False) -> EulerParts:
+    """``euler_parts`` of the system's Lagrangian or constraints, once per system; r only
+    with ``rest`` (the parts with r serve a later call without)."""
     key = id(system)
     entry = _PARTS.get(key)
     if entry is None or entry[0]() is not system:
@@ -165,6 +165,14 @@ def cached_parts(system, F, hessian=True, rest=True) -> EulerParts:
     if found is None or (rest and found.r is None):
         cache[F, hessian] = found = euler_parts(system.J, F, hessian, rest)
     return found
+
+
+def _weighted(M: sp.Matrix, weights, parts) -> sp.Matrix:
+    """M + sum_a weights[a] parts[a] (parts None skipped), each entry one Add of its terms
+    (adding the matrices one by one re-flattens every partial sum: quadratic in the
+    number of constraints)."""
+    return sp.Matrix(M.rows, M.cols, lambda i, j: sp.Add(
+        M[i, j], *[w * X[i, j] for w, X in zip(weights, parts) if X is not None]))
 
 
 def solve(system, kappa: str = "none", explicit: bool = False, multipliers=(),
@@ -193,7 +201,7 @@ def _solve(system, kappa, explicit, multipliers, rates):
     ind, dep = list(system.ind_index), list(system.dep_index)
     transform = explicit and system.is_affine
     cons = system.explicit_constraints if explicit and not transform else system.constraints
-    p, H, r, _ = cached_parts(system, system.L)
+    p, H, r, _ = cached_parts(system, system.L, rest=True)
     # the constraints' r only where the multipliers weigh [f] (kappa)
     cparts = [cached_parts(system, f, hessian=not system.is_affine, rest=kappa != "none")
               for f in cons]
@@ -213,10 +221,9 @@ def _solve(system, kappa, explicit, multipliers, rates):
     if system.forced:                 # Q_s stands beside [L]_s in every row
         r1 = r1 + sp.Matrix(system.Q)
     if any(c != 0 for c in kap):
-        for a, c in enumerate(cparts):
-            r1 = r1 + kap[a] * c.r
-            if c.H is not None:
-                H1 = H1 + kap[a] * c.H
+        r1 = _weighted(r1, kap, [c.r for c in cparts])
+        if any(c.H is not None for c in cparts):
+            H1 = _weighted(H1, kap, [c.H for c in cparts])
 
     if not (system.L.free_symbols & set(J.qd)):
         raise LagrangianError(
