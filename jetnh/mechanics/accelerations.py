@@ -170,9 +170,11 @@ def cached_parts(system, F, hessian=True, rest=False) -> EulerParts:
 def _weighted(M: sp.Matrix, weights, parts) -> sp.Matrix:
     """M + sum_a weights[a] parts[a] (parts None skipped), each entry one Add of its terms
     (adding the matrices one by one re-flattens every partial sum: quadratic in the
-    number of constraints)."""
+    number of constraints); zero products left out (sympy's w * 0 asks whether w is
+    finite, walking its tree)."""
     return sp.Matrix(M.rows, M.cols, lambda i, j: sp.Add(
-        M[i, j], *[w * X[i, j] for w, X in zip(weights, parts) if X is not None]))
+        M[i, j], *[w * X[i, j] for w, X in zip(weights, parts)
+                   if X is not None and w != 0 and X[i, j] != 0]))
 
 
 def solve(system, kappa: str = "none", explicit: bool = False, multipliers=(),
