@@ -232,9 +232,10 @@ def _rule(e, x, cache):
         args = list(e.args)
         return sp.Add(*[sp.Mul(*args[:i], d, *args[i + 1:])
                         for i, d in enumerate(ds) if d is not sp.S.Zero])
-    if isinstance(e, sp.Pow):
-        (b, p), (db, dp) = e.args, ds
-        return e * (dp * sp.log(b) + db * p / b)
+    if isinstance(e, sp.Pow):         # a zero part is left out (0 * log(b) would ask
+        (b, p), (db, dp) = e.args, ds  # whether log(b) is finite, walking b's tree)
+        return e * sp.Add(*([dp * sp.log(b)] if dp is not sp.S.Zero else []),
+                          *([db * p / b] if db is not sp.S.Zero else []))
     if isinstance(e, sp.Function) and type(e)._eval_derivative is sp.Function._eval_derivative:
         out = []
         for i, d in enumerate(ds, 1):

@@ -258,7 +258,9 @@ def _solve(system, kappa, explicit, multipliers, rates):
     if rates:
         R = (r1 - linalg.matmul(H1, q2)).extract(dep, [0])
         if transform:
-            mu = R + linalg.matmul(A_dep.applyfunc(J.D).T, sp.Matrix(kap))
+            graph: dict = {}          # the entries' shared parts differentiated once
+            DA = A_dep.applyfunc(lambda e: J.D(e, graph))
+            mu = R + linalg.matmul(DA.T, sp.Matrix(kap))
         else:
             mu = linalg.solve(A_dep.T, R)
         acc.update({rate: mu[a] for a, rate in enumerate(rates)})
