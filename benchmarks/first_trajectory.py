@@ -14,9 +14,11 @@ before.  The model is ``models.get("n_trailer", N=N)``, initial state the steadi
 turning rig (multipliers 0), t in [0, 1], dop853 with rtol 1e-8, atol 1e-10.  Timed,
 wall and CPU seconds (the CPU seconds are what a loaded machine does not inflate):
 
-- ``scene``: the ``Scene`` constructor; ``kernels``: ``scene.kernels``, i.e. the
-  derivation (``derive``), the source (``print``) and numba's compilation of the kernels
-  with the cache written (``compile``); ``run``: the integration; ``total`` the sum.
+- ``scene``: the model and the ``Scene`` constructor; ``kernels``: ``scene.kernels``,
+  i.e. the derivation (``derive``), the source (``print``) and numba's compilation of the
+  kernels with the cache written (``compile``); ``run``: the integration; ``total`` the
+  sum.  CPU seconds: ``scene_cpu``, ``kernels_cpu``, ``generate_cpu`` (derivation and
+  source), ``compile_cpu``, ``run_cpu``, ``cpu`` (total).
 - per kernel (rhs, aux, sing): its straight-line instructions and how it was compiled
   (``quick``: LLVM -O1 passes and -O0 code generation, above
   ``jetnh.numeric.codegen.quick.QUICK_OPS`` instructions; ``full``: numba's -O3).
@@ -120,12 +122,31 @@ def _time_compilation() -> list:
     return spent
 
 
+def _time_generation() -> list:
+    """``[CPU seconds]`` spent in ``codegen.generate`` (derivation and source, what
+    ``derive`` and ``print`` time by the wall clock), accumulated from now on."""
+    from jetnh.numeric import codegen
+
+    spent, run = [0.0], codegen.generate
+
+    def timed(*args, **kwargs):
+        tic = time.process_time()
+        try:
+            return run(*args, **kwargs)
+        finally:
+            spent[0] += time.process_time() - tic
+
+    codegen.generate = timed
+    return spent
+
+
 def work(N: int, principle: str, baseline: bool) -> dict:
     from jetnh import models
     from jetnh.numeric import Scene
     from jetnh.numeric.codegen import multiplier_names
 
     compile_cpu = _time_compilation()
+    generate_cpu = _time_generation()
     warm = models.get("knife_edge")
     Scene(warm, "chetaev", initial=models.initial("knife_edge"), t_span=(0, 0.1)).run()
     start = _clock()
@@ -148,6 +169,7 @@ def work(N: int, principle: str, baseline: bool) -> dict:
            "run": run[0], "run_cpu": run[1], "steps": int(len(tr.t)),
            "x_end": float(tr["x"][-1])}
     out["compile_cpu"] = compile_cpu[0]
+    out["generate_cpu"] = generate_cpu[0]
     src = ck.source
     for k in KERNELS:
         ops = getattr(ck.kernels, f"_P_{k}", None)
@@ -215,8 +237,8 @@ def summarize(rows) -> dict:
                      f"({r['compile_ratio']:.1f}x), rhs call {r['rhs_ns']:.0f} ns against "
                      f"{r['rhs_ns_full']:.0f} ns ({r['rhs_cost_ratio']:.2f}x)")
         summary.append(line)
-    columns = ["N", "principle", "load", "seconds", "cpu", "scene", "derive", "print",
-               "compile_cpu", "compile_again_cpu", "compile_full_cpu", "run", "rhs_ops",
+    columns = ["N", "principle", "load", "seconds", "cpu", "scene", "scene_cpu", "derive",
+               "print", "generate_cpu", "compile_cpu", "compile_again_cpu", "compile_full_cpu", "run", "rhs_ops",
                "rhs_level", "aux_ops", "aux_level", "sing_ops", "sing_level", "rhs_ns",
                "rhs_ns_full", "before_seconds_est"]
     return {"title": "Model to first trajectory (N-trailer, every principle, empty kernel "
