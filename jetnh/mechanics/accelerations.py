@@ -127,7 +127,8 @@ def _to_sympy(exprs, originals: dict) -> list:
 
 def _parts(F, t, q, qd, hessian, rest, zero, add):
     """``euler_parts`` on sympy or symengine expressions (``zero`` and ``add`` of the
-    library); only derivatives by symbols that occur are taken."""
+    library); only derivatives by symbols that occur are taken, those of the momenta
+    on symengine by one walk per symbol (``_together``)."""
     n = len(q)
 
     def d(e, x, syms):
@@ -136,18 +137,45 @@ def _parts(F, t, q, qd, hessian, rest, zero, add):
     fs = F.free_symbols
     p = [d(F, x, fs) for x in qd]
     ps = [e.free_symbols for e in p]
+    if add is se.Add:
+        def by(x, upto=n):          # [d(p[s], x, ps[s]) for s < upto]
+            return _together(p[:upto], x)
+    else:
+        def by(x, upto=n):
+            return [d(p[s], x, ps[s]) for s in range(upto)]
     H = None
     if hessian:
         H = [[zero] * n for _ in range(n)]
-        for s in range(n):
-            for r in range(s, n):
-                H[s][r] = H[r][s] = d(p[s], qd[r], ps[s])
+        for r in range(n):
+            for s, h in enumerate(by(qd[r], r + 1)):
+                H[s][r] = H[r][s] = h
     rem = None
     if rest:
+        dq = [by(x) for x in q]
         rem = [d(F, q[s], fs) - d(p[s], t, ps[s])
-               - add(*[d(p[s], x, ps[s]) * v for x, v in zip(q, qd)]) for s in range(n)]
+               - add(*[dq[j][s] * v for j, v in enumerate(qd)]) for s in range(n)]
     v = d(F, t, fs) + add(*[d(F, x, fs) * xd for x, xd in zip(q, qd)])
     return p, H, rem, v
+
+
+def _together(exprs, x) -> list:
+    """``[e.diff(x) for e in exprs]`` for symengine expressions, by one derivative of
+    sum_i m_i e_i (fresh symbols m_i, read off the terms): symengine remembers the
+    derivatives of the subexpressions within one call only, and the momenta of a
+    chain share most of theirs."""
+    marks = [se.Dummy() for _ in exprs]
+    index = {m: i for i, m in enumerate(marks)}
+    terms: list = [[] for _ in exprs]
+    total = se.Add(*[m * e for m, e in zip(marks, exprs)]).diff(x)
+    for term in (total.args if isinstance(total, se.Add) else (total,)):
+        if term in index:
+            terms[index[term]].append(se.Integer(1))
+            continue
+        for m in term.args:
+            if m in index:
+                terms[index[m]].append(term / m)
+                break
+    return [se.Add(*t) for t in terms]
 
 
 def cached_parts(system, F, hessian=True, rest=False) -> EulerParts:
