@@ -55,7 +55,10 @@ from ..mechanics import principles
 from .methods import projection
 from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, SINGULAR, STOPPED
 from . import loops
+from .events import Event, as_events
+from .kernels.calls import Kernel
 from .methods.loop import Watch
+from .trajectory import Trajectory
 
 #: the event name of a chart's edge (internal: the stitched run does not report it)
 EDGE = "chart edge"
@@ -98,8 +101,6 @@ def applies(scene, events) -> bool:
         scene._memo["atlas_applies"] = static
     if not static or events is None:
         return static
-    from .events import as_events
-
     return all(e.is_expression for e in as_events(events))
 
 
@@ -141,8 +142,6 @@ class Chart:
         compiled once (an events kernel of the entries: expressions in t, q and every
         velocity, cached on disk with the scene's kernels)."""
         if self._jacobian is None:
-            from .kernels.calls import Kernel
-
             ce = self.scene.compile_events(_jacobian_events(self.scene.system))
             self._jacobian = Kernel(ce.uev, (len(self.scene.state_names),
                                              len(self.scene.runtime_params),
@@ -244,8 +243,6 @@ def _det(M) -> float:
 
 
 def _jacobian_events(system):
-    from .events import Event
-
     return [Event(e, name=f"A{i}") for i, e in enumerate(system.jacobian)]
 
 
@@ -339,8 +336,6 @@ class Atlas:
         return found[0]
 
     def _compile_events(self, chart, user, edge):
-        from .events import Event
-
         sys_ = chart.scene.system
         evs = [Event(e2, terminal=e.max_events, direction=e.direction, name=e.name)
                for e, e2 in zip(user, self.rewrite({i: e.fun for i, e in enumerate(user)},
@@ -357,8 +352,6 @@ def run(home, method, events, t0, t1, y0, p, ctl, te, mode, dense, checked, sing
     in one chart until the run ends or reaches the chart's edge, where it goes on in the
     split of largest measure with the state mapped; one Trajectory of ``home``.
     ``build``: the Trajectory of a piece from its loop's result (``solve.trajectory``)."""
-    from .events import as_events
-
     at = atlas(home)
     user = as_events(events)
     tic = time.perf_counter()
@@ -497,8 +490,6 @@ def _target(at, chart, t, p, q, qd, lam, A):
 
 def stitch(home, at, method, p, parts, switches, user, mode, wall):
     """One Trajectory of ``home`` from the runs in the charts ``parts``."""
-    from .trajectory import Trajectory
-
     own = at.own
     last = parts[-1][1]
     if len(parts) == 1 and not switches:
