@@ -384,9 +384,9 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
            singular_tol, newton, limit, build, first=True, h_fixed=None, edge=True):
     """Run from (t, y) in ``chart`` to ``t1``, changing chart at every edge; returns the
     pieces ``[(chart, trajectory of the chart's scene made by ``build``, what re-running
-    it needs)]`` and the switches.  ``counts``: occurrences of the user events so far (terminal counts go
-    on); ``first``: whether (t, y) starts the run (else the run goes on after a switch);
-    ``edge``: whether to watch the chart's edge."""
+    it needs)]`` and the switches.  ``counts``: occurrences of the user events so far
+    (terminal counts go on); ``first``: whether (t, y) starts the run (else the run goes
+    on after a switch); ``edge``: whether to watch the chart's edge."""
     user_max = [e.max_events for e in user]
     parts, switches = [], []
     direction = 1.0 if t1 >= t else -1.0
