@@ -327,8 +327,9 @@ class Atlas:
     def events(self, chart, user, edge: bool):
         """The compiled events of a run in ``chart``: the user's (rewritten in its
         multipliers) and, with ``edge``, its edge last; or None.  Kept per chart, user
-        events and edge, so that repeated runs build nothing."""
-        key = (chart.split, edge, tuple((sp.srepr(e.fun), e.direction, e.max_events, e.name)
+        events and edge, so that repeated runs build nothing (the key holds the
+        expressions themselves: hashed once by sympy, compared by identity first)."""
+        key = (chart.split, edge, tuple((e.fun, e.direction, e.max_events, e.name)
                                         for e in user))
         found = self._events.get(key)
         if found is None:
