@@ -134,6 +134,7 @@ class Chart:
     def kernels(self):
         if self._kernels is None:
             self._kernels = self.scene.kernels
+            self._n_aux = self._kernels.layout.n_aux
         return self._kernels
 
     @property
@@ -183,8 +184,9 @@ class Chart:
         """Every velocity at one state ``y`` of this chart (the dependent ones from its
         aux kernel)."""
         n, k = self.n, self.k
-        aux = np.empty(self.kernels.layout.n_aux)
-        self.kernels.aux(t, y, p, aux)
+        kern = self.kernels
+        aux = np.empty(self._n_aux)
+        kern.aux(t, y, p, aux)
         qd = np.empty(n)
         qd[self.ind] = y[n:2 * n - k]
         qd[self.dep] = aux[:k]
@@ -223,7 +225,7 @@ class Chart:
         """Rows of this chart's state from ``(q, qdot, lam, A)`` (``universal``)."""
         if self.explicit and lam.shape[1]:
             lam = np.einsum("rai,ra->ri", A[:, :, self.dep], lam)
-        return np.ascontiguousarray(np.hstack([q, qd[:, self.ind], lam]))
+        return np.concatenate((q, qd[:, self.ind], lam), axis=1)
 
     def state_at(self, q, qd, lam, A) -> np.ndarray:
         """``state`` of one point (``point``)."""
@@ -516,12 +518,12 @@ def stitch(home, at, method, p, parts, switches, user, mode, wall):
                 -1, len(chart.scene.state_names)), p).ravel()
             for chart, seg, _ in parts]))
     info = [seg._info for _, seg, _ in parts]
-    return Trajectory(home, np.concatenate(ts), np.vstack(ys), p, method=method,
+    return Trajectory(home, np.concatenate(ts), np.concatenate(ys), p, method=method,
                       status=last.status, stop_reason=last.stop_reason,
                       steps=sum(i["steps"] for i in info),
                       rejected=sum(i["rejected"] for i in info),
                       nfev=sum(i["nfev"] for i in info), wall_time=wall,
-                      kernels=home.kernels, projected=home.projected,
+                      kernels=own.kernels, projected=home.projected,
                       singularity=last.singularity, dense=parts[0][1]._dense,
                       events=(tuple(e.name for e in user), t_ev, y_ev),
                       segments=Stitched(own, tuple(pieces)), switches=tuple(switches))
