@@ -25,6 +25,12 @@ from the same point, with the state mapped exactly:
   lambda_beta = A_beta^T A_alpha^-T lambda_alpha.  Chetaev's equations have no multiplier
   states.
 
+The switch costs microseconds, not a walk of the expressions: df/dqdot comes from a
+compiled kernel of each chart (its entries as an events kernel, cached on disk with the
+scene's kernels; ``Chart.point``), the measures from the k x k determinants on floats,
+the new state and the rows mapped home by index maps (the multipliers by A where they
+map).
+
 Suslov's equations in the paper's convention (29)-(31) are no chart change away from
 each other: the commutator term P_alpha c^alpha weighs the momenta of the dependent
 coordinates, and the motions of two splits differ (``split_invariant``).  Such runs, runs
