@@ -186,6 +186,7 @@ def main(argv=None):
             print(" | ".join(row))
     a = best["after"]
     write("chart_switch", dict(
+        title="A run that changes chart: against the same run kept in its split",
         summary=[f"{c}: the switching run costs {a[c]['run'] / a[c]['fixed']:.2f}x the run "
                  f"kept in its split ({a[c]['run'] * 1e6:.0f} against "
                  f"{a[c]['fixed'] * 1e6:.0f} us), the switch alone "
