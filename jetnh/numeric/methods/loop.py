@@ -525,15 +525,17 @@ def solver(method, parts=ALL):
 
 # ---------------------------------------------------------------------- ensembles
 # Two copies of one driver (numba's cache cannot hold a function compiled both with and
-# without ``parallel``): run r of the ensemble is the loop on Y0[r], P[r].  The parallel
-# one gives each of numba's threads one iteration of ``prange``, in which it takes the
-# next run (``take_next``) until none is left: runs differ in cost (their spans, steps,
-# early stops), and prange alone splits the runs into one fixed block a thread.
+# without ``parallel``): run r of the ensemble is the loop on Y0[r], P[r].  In the parallel
+# one, an iteration of ``prange`` takes the next run (``take_next``) until none is left:
+# each thread's first iteration shares out the runs with the others, its later ones find
+# none.  Runs differ in cost (their steps, early stops), and prange alone hands each
+# thread a fixed block of them.  (No ``numba.get_num_threads()`` here: it would make the
+# driver uncacheable.)
 def _ensemble_parallel(rhs_at, sing_at, uev_at, hol_at, t0, t_end, Y0, P, ctl, t_eval, mode,
                        watch, halt, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
     n_runs = Y0.shape[0]
     taken = np.zeros(1, dtype=np.int64)
-    for _ in numba.prange(min(numba.get_num_threads(), n_runs)):
+    for _ in numba.prange(n_runs):
         r = take_next(taken)
         while r < n_runs:
             res = run(rhs_at, sing_at, uev_at, hol_at, t0, t_end, Y0[r], P[r], ctl, t_eval,
