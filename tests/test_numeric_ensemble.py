@@ -53,15 +53,17 @@ def test_ensemble_equals_single_runs_bitwise(disk, parallel):
     assert np.array_equal(ens.params[:, 0], par["R"])
 
 
-@pytest.mark.parametrize("n", [1, 3, 40])
-def test_prange_takes_every_run_once(disk, n):
+@pytest.mark.parametrize("n, method", [(1, "dop853"), (3, "dop853"), (40, "dop853"),
+                                       (5, "radau")])
+def test_prange_takes_every_run_once(disk, n, method):
     """The parallel driver's threads take the runs one by one (fewer runs than threads,
-    one, many of uneven cost): every run is done once, as the serial driver does it,
-    with the array of one run or its row as ``initial``."""
+    one, many of uneven cost; the explicit methods' driver and radau's): every run is
+    done once, as the serial driver does it, with the array of one run or its row as
+    ``initial``."""
     rng = np.random.default_rng(n)
     Y0 = np.tile(disk.y0, (n, 1))
     Y0[:, 4] = rng.uniform(0.2, 3.0, n)         # phi_t: uneven step counts
-    kw = dict(rtol=1e-10, atol=1e-12, save="final")
+    kw = dict(rtol=1e-10, atol=1e-12, save="final", method=method)
     ser = disk.ensemble(Y0, parallel="serial", **kw)
     par = disk.ensemble(Y0, parallel="prange", workers=2, **kw)
     assert np.array_equal(par.y, ser.y) and np.array_equal(par.nfev, ser.nfev)
