@@ -101,7 +101,11 @@ def main(argv=None):
     args = parser(__doc__, "rk4_loop").parse_args(argv)
     n_steps, reps = (20_000, 15) if args.quick else (100_000, 41)
     rows = [measure(name, sc, n_steps, reps) for name, sc in scenes()]
-    write("rk4_loop", dict(rows=rows), args.out, args.quick)
+    summary = ("jetnh rk4 per evaluation / bare RK4 loop: "
+               + ", ".join(f"{r['problem']} {r['ratio']:.3f}" for r in rows)
+               + f"; same final bits: {all(r['bitwise_equal'] for r in rows)}")
+    write("rk4_loop", dict(title="rk4 against a bare RK4 loop", summary=summary, rows=rows),
+          args.out, args.quick)
 
 
 if __name__ == "__main__":
