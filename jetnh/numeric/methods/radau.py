@@ -493,7 +493,7 @@ def _ensemble_parallel(rhs_at, jac_at, sing_at, uev_at, hol_at, t0, t_end, Y0, P
                        EV_T):
     n_runs = Y0.shape[0]
     taken = np.zeros(1, dtype=np.int64)
-    for _ in numba.prange(n_runs):   # (loop's drivers)
+    for _ in numba.prange(n_runs):       # (as loop._ensemble_parallel)
         r = take_next(taken)
         while r < n_runs:
             res = run(rhs_at, jac_at, sing_at, uev_at, hol_at, t0, t_end, Y0[r], P[r], ctl,
