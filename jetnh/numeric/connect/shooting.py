@@ -93,17 +93,18 @@ class Shooter:
         self.seen: dict = {}
         self.span = scene.t_span         # the runs' span (continuation in T moves t1)
         self.n_velocities = len(scene.system.independent_velocities)   # lead unknowns
-        self.plans: dict = {}            # the driver's plans of the runs
+        self.plans: dict = {}            # (span, save) -> the driver's plan of the runs
+        self.holonomic = bool(scene.system.holonomic)
 
     def plan(self, span, save="steps"):
         """The driver's plan of a shooting run on ``span`` (with sensitivities; every
         step or the ends), made once: each run then only calls the compiled loop."""
-        key = ("shooting", self.method, self.rtol, solve.hashable(self.atol), span, save,
-               MAX_STEPS)
-        found = self.plans.get(key)
+        found = self.plans.get((span, save))
         if found is None:
+            key = ("shooting", self.method, self.rtol, solve.hashable(self.atol), span,
+                   save, MAX_STEPS)
             # kept on the scene too: repeated problems on one scene plan nothing
-            found = self.plans[key] = solve.planned(self.scene, key, lambda: solve.plan(
+            found = self.plans[span, save] = solve.planned(self.scene, key, lambda: solve.plan(
                 self.scene, self.method, t_span=span, save=save, sensitivities=True,
                 opts=options(rtol=self.rtol, atol=self.atol, max_steps=MAX_STEPS)))
         return found
@@ -113,12 +114,13 @@ class Shooter:
         None where it fails before the end of the span or ends in a non-finite
         state."""
         scene = self.scene
-        if not np.isfinite(y).all():
+        if not arguments.all_finite(y):
             return None
-        try:
-            scene._check_holonomic(y, span[0], scene._p)
-        except JetnhError:
-            return None
+        if self.holonomic:
+            try:
+                scene._check_holonomic(y, span[0], scene._p)
+            except JetnhError:
+                return None
         return Shot.of(scene, self.plan(span, save), y, scene._p)
 
     def state(self, u) -> np.ndarray:

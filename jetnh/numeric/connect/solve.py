@@ -71,6 +71,17 @@ class Search(Shooter):
                 return u
         return self.regular_start(u0, q0, q1, T, self.n_velocities)
 
+    def starts(self, u0, default, q0, q1, T):
+        """The starts of the search, each made when the one before has failed: the
+        guess ``u0`` as given; or (``default``: the straight line) ``first_guess`` and,
+        unless that is the collocation warm start, ``second_guess``."""
+        if not default:
+            yield u0
+            return
+        yield self.first_guess(u0, q0, q1, T)
+        if not self.origin:
+            yield self.second_guess(u0, q0, q1, T)
+
     def second_guess(self, u0, q0, q1, T):
         """Where the search from ``first_guess`` fails: the straight line ``u0`` moved
         by the first step of ``regular_start``'s pattern (the velocities' scale times
@@ -419,37 +430,40 @@ def levenberg_marquardt(evaluate, u, scale, tol, max_iter, rcond, stuck=None):
     limit = tol * scale          # converged: |F| <= limit, entry by entry
     mu = nu = d = None
     for it in range(1, max_iter + 1):
-        if (np.abs(F) <= limit).all():
+        if (abs(F) <= limit).all():
             return u, True, it - 1
         # a column far below the largest (an unknown the end does not feel) keeps
         # a floor: its scaled column is then cut by rcond instead of blown up
-        norms = np.sqrt(np.einsum("ij,ij->j", Jm, Jm))
-        top = norms.max() if norms.size else 0.0
+        norms = np.hypot.reduce(Jm, axis=0)
+        top = norms.max()
         norms = np.maximum(norms, 1e-6 * top) if top > 0 else np.ones(len(u))
         d = norms if d is None else np.maximum(d, norms)
         U, s, Vt = svd(Jm / d)
         r = rank(s, rcond)
         if not r:
             return u, False, it
-        U, s, Vt = U[:, :r], s[:r], Vt[:r]
+        if r < len(s):
+            U, s, Vt = U[:, :r], s[:r], Vt[:r]
         if mu is None:
             mu, nu = 1e-6 * s[0] ** 2, 2.0
-        du = -((s * (F @ U) / (s * s + mu)) @ Vt) / d
+        du = (s * (F @ U) / (s * s + mu)) @ Vt
+        du /= -d
         # at most the size of the unknowns (and 1): stay on the branch of solutions
         # the search starts near instead of jumping to a far one
-        size = math.sqrt(du @ du) / max(1.0, math.sqrt(u @ u))
+        size = math.sqrt(du.dot(du) / max(1.0, u.dot(u)))
         if size > 1.0:
             du /= size
-        trial = evaluate(u + du)
+        v = u + du
+        trial = evaluate(v)
         linear = F + Jm @ du
-        FF = F @ F
-        predicted = FF - linear @ linear
+        FF = F.dot(F)
+        predicted = FF - linear.dot(linear)
         rho = -1.0
         if trial is not None and predicted > 0:
             F_new = trial[0]
-            rho = (FF - F_new @ F_new) / predicted
+            rho = (FF - F_new.dot(F_new)) / predicted
         if rho > 0:
-            u, (F, Jm) = u + du, trial
+            u, (F, Jm) = v, trial
             mu *= max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
             nu = 2.0
         else:
@@ -459,7 +473,7 @@ def levenberg_marquardt(evaluate, u, scale, tol, max_iter, rcond, stuck=None):
             nu *= 2.0
             if mu > 1e20 * s[0] ** 2:          # no step of any length decreases |F|
                 return u, False, it
-    return u, bool((np.abs(F) <= limit).all()), max_iter
+    return u, bool((abs(F) <= limit).all()), max_iter
 
 
 def _closer(a, b):
