@@ -4,6 +4,7 @@ the endpoint residual and its Jacobian from the exact sensitivities
 
 from __future__ import annotations
 
+import math
 import time
 
 import numpy as np
@@ -85,7 +86,8 @@ class Shooter:
         self.rows = [names.index(c) for c in q1]
         self.target = np.array(list(q1.values()))
         self.cols = [names.index(u) for u in unknowns]
-        self.block = np.ix_(self.rows, self.cols)      # dq_named(t1)/du in S
+        # dq_named(t1)/du in S
+        self.block = (np.array(self.rows)[:, None], np.array(self.cols, dtype=np.intp))
         given = {**q0, **fixed}
         self.y0 = np.array([given.get(n, 0.0) for n in names])
         self.rtol, self.atol, self.method, self.rcond = rtol, atol, method, rcond
@@ -196,7 +198,7 @@ class Shooter:
             return None
         du = -(Vt.T @ ((U.T @ (got[0] - self.target)) / s))
         du /= max(1.0, np.linalg.norm(du) / max(1.0, np.linalg.norm(u)))
-        return u + du if np.any(du) else None
+        return u + du if du.any() else None
 
     def svd(self, Jm):
         """The singular value decomposition of the shooting Jacobian with its numerical
@@ -245,8 +247,8 @@ def default_segments(shooter, u) -> int:
     if got is None:
         return MAX_SEGMENTS
     n = len(shooter.y0)
-    growth = float(np.max(np.abs(got[2].S[:, :n])))
-    if not np.isfinite(growth):
+    growth = float(abs(got[2].S[:, :n]).max())
+    if not math.isfinite(growth):
         return MAX_SEGMENTS
     if growth <= GROWTH:
         return 1

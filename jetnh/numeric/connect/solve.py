@@ -4,16 +4,15 @@ found (``ConnectError`` with the closest motion)."""
 
 from __future__ import annotations
 
-import math
 from types import MappingProxyType
 
 import numpy as np
 
 from ...errors import ConnectError, JetnhError
 from .connection import Connection, Stitched
+from .levenberg import levenberg_marquardt
 from .problem import VARIATIONAL
-from .shooting import (Segments, Shooter, default_segments, rank, singular_values,
-                       svd)
+from .shooting import Segments, Shooter, default_segments, rank, singular_values
 
 #: Levenberg-Marquardt iterations per continuation step (at most ``max_iter``)
 STEP_ITER = 20
@@ -365,7 +364,8 @@ class Search(Shooter):
                 raise ConnectError(f"the motion found stops before t1: "
                                    f"{scene.run(y0=self.state(u)).stop_reason}")
             q, Jm, tr = got[0], got[1], got[2].trajectory
-        residual = float(np.max(np.abs(q - self.target)))
+        miss = abs(q - self.target)
+        residual = float(miss.max())
         full = singular_values(Jm)
         # the dependent velocities at t0: the aux kernel on the first row alone
         aux = np.empty((1, tr.layout.n_aux))
@@ -381,8 +381,7 @@ class Search(Shooter):
             _columns=tuple(self.cols), _rcond=self.rcond, _run=MappingProxyType(
                 {"rtol": self.rtol, "atol": self.atol, "method": self.method}),
             conditions=self.conditions, route=route)
-        if tol is not None and np.max(np.abs(q - self.target)
-                                      / (1 + np.abs(self.target))) > tol:
+        if tol is not None and (miss / (1 + abs(self.target))).max() > tol:
             raise ConnectError(
                 f"the {scene.principle} motion found ends {residual:.3g} away from end"
                 + self._reachability(u), best)
@@ -409,71 +408,6 @@ def march(u, s, ds, step, max_steps):
             if ds < 1e-4:
                 break
     return u, s, ds, total
-
-
-def levenberg_marquardt(evaluate, u, scale, tol, max_iter, rcond, stuck=None):
-    """Levenberg-Marquardt on F(u) = 0 (``evaluate(u)`` is ``(F, dF/du)``, or None
-    where the runs fail), in unknowns scaled by the largest
-    column norms of the Jacobian seen so far (More's scaling: the multipliers'
-    columns are often orders of magnitude smaller than the velocities'): the step
-    ``-D^-1 V diag(s / (s^2 + mu)) U^T F`` of the SVD of ``J D^-1`` truncated at
-    ``rcond`` times its largest singular value
-    (mu -> 0: the minimum-norm Gauss-Newton step, quadratic convergence near a
-    solution; mu large: a short step down the gradient), mu adapted by the ratio of
-    the actual to the predicted decrease (Nielsen's rule), a failed run counted as no
-    decrease; ``stuck(u, F, J)`` is told of every rejected step.  Converged: max
-    |F| / ``scale`` <= ``tol``.  Returns ``(u, converged, iterations)``."""
-    got = evaluate(u)
-    if got is None:
-        return u, False, 0
-    F, Jm = got
-    limit = tol * scale          # converged: |F| <= limit, entry by entry
-    mu = nu = d = None
-    for it in range(1, max_iter + 1):
-        if (abs(F) <= limit).all():
-            return u, True, it - 1
-        # a column far below the largest (an unknown the end does not feel) keeps
-        # a floor: its scaled column is then cut by rcond instead of blown up
-        norms = np.hypot.reduce(Jm, axis=0)
-        top = norms.max()
-        norms = np.maximum(norms, 1e-6 * top) if top > 0 else np.ones(len(u))
-        d = norms if d is None else np.maximum(d, norms)
-        U, s, Vt = svd(Jm / d)
-        r = rank(s, rcond)
-        if not r:
-            return u, False, it
-        if r < len(s):
-            U, s, Vt = U[:, :r], s[:r], Vt[:r]
-        if mu is None:
-            mu, nu = 1e-6 * s[0] ** 2, 2.0
-        du = (s * (F @ U) / (s * s + mu)) @ Vt
-        du /= -d
-        # at most the size of the unknowns (and 1): stay on the branch of solutions
-        # the search starts near instead of jumping to a far one
-        size = math.sqrt(du.dot(du) / max(1.0, u.dot(u)))
-        if size > 1.0:
-            du /= size
-        v = u + du
-        trial = evaluate(v)
-        linear = F + Jm @ du
-        FF = F.dot(F)
-        predicted = FF - linear.dot(linear)
-        rho = -1.0
-        if trial is not None and predicted > 0:
-            F_new = trial[0]
-            rho = (FF - F_new.dot(F_new)) / predicted
-        if rho > 0:
-            u, (F, Jm) = v, trial
-            mu *= max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
-            nu = 2.0
-        else:
-            if stuck is not None:
-                stuck(u, F, Jm)
-            mu *= nu
-            nu *= 2.0
-            if mu > 1e20 * s[0] ** 2:          # no step of any length decreases |F|
-                return u, False, it
-    return u, bool((abs(F) <= limit).all()), max_iter
 
 
 def _closer(a, b):
