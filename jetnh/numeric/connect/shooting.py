@@ -106,9 +106,10 @@ class Shooter:
             key = ("shooting", self.method, self.rtol, solve.hashable(self.atol), span,
                    save, MAX_STEPS)
             # kept on the scene too: repeated problems on one scene plan nothing
-            found = self.plans[span, save] = solve.planned(self.scene, key, lambda: solve.plan(
-                self.scene, self.method, t_span=span, save=save, sensitivities=True,
-                opts=options(rtol=self.rtol, atol=self.atol, max_steps=MAX_STEPS)))
+            found = self.plans[span, save] = solve.planned(
+                self.scene, key, lambda: solve.plan(
+                    self.scene, self.method, t_span=span, save=save, sensitivities=True,
+                    opts=options(rtol=self.rtol, atol=self.atol, max_steps=MAX_STEPS)))
         return found
 
     def start(self, y, span, save="steps"):
