@@ -162,21 +162,26 @@ class Shooter:
         pattern of the size of the straight-line velocities, with the velocities
         doubled and quadrupled; 12 tries, the first regular one kept (else the first
         that reaches t1)."""
+        u = u0 + 0.0                        # the first try: u0 itself
+        got = self.endpoint(u)
+        reaching = None
+        if got is not None:
+            if self.regular(got):
+                return u
+            newton = self.newton_point(u, got)
+            if newton is not None and self.regular(self.endpoint(newton)):
+                return newton
+            reaching = u
         scale = max([abs(q1[c] - q0[c]) for c in q1] + [1.0]) / abs(T)
         pattern = 0.5 * (-0.6) ** np.arange(len(u0))
         speed = np.ones(len(u0))
-        reaching = None
-        for k in range(12):                 # k = 0: u0 itself
+        for k in range(1, 12):
             speed[:n_velocities] = 2.0 ** (k // 4)
             u = speed * u0 + (scale * np.roll(pattern, k) * (k % 4) if k % 4 else 0.0)
             got = self.endpoint(u)
             if got is not None:
                 if self.regular(got):
                     return u
-                if k == 0:
-                    newton = self.newton_point(u, got)
-                    if newton is not None and self.regular(self.endpoint(newton)):
-                        return newton
                 reaching = u if reaching is None else reaching
         return u0 if reaching is None else reaching
 
