@@ -86,8 +86,10 @@ class Shooter:
         self.rows = [names.index(c) for c in q1]
         self.target = np.array(list(q1.values()))
         self.cols = [names.index(u) for u in unknowns]
-        # dq_named(t1)/du in S
-        self.block = (np.array(self.rows)[:, None], np.array(self.cols, dtype=np.intp))
+        # as index arrays (a list is converted on every use)
+        self._rows = np.array(self.rows, dtype=np.intp)
+        self._cols = np.array(self.cols, dtype=np.intp)
+        self._block = None           # the entries of dq_named(t1)/du in S, flattened
         given = {**q0, **fixed}
         self.y0 = np.array([given.get(n, 0.0) for n in names])
         self.rtol, self.atol, self.method, self.rcond = rtol, atol, method, rcond
@@ -128,8 +130,14 @@ class Shooter:
 
     def state(self, u) -> np.ndarray:
         y = self.y0.copy()
-        y[self.cols] = u
+        y[self._cols] = u
         return y
+
+    def named(self, S) -> np.ndarray:
+        """dq_named/du, the block of the sensitivities ``S`` (n x columns)."""
+        if self._block is None:
+            self._block = (self._rows[:, None] * S.shape[1] + self._cols).ravel()
+        return S.reshape(-1)[self._block].reshape(len(self._rows), len(self._cols))
 
     def endpoint(self, u):
         """``(q_named(t1), dq_named(t1)/du, its Shot)``, or None where the run fails
@@ -145,7 +153,7 @@ class Shooter:
         shot = self.run(u)
         if shot is None:
             return None
-        return shot.y[self.rows], shot.S[self.block], shot
+        return shot.y[self._rows], self.named(shot.S), shot
 
     def run(self, u):
         """The ``Shot`` from the start with the unknowns ``u`` (every step, with

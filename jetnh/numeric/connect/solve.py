@@ -41,9 +41,9 @@ class Search(Shooter):
         """The end conditions' values at the end ``(t, y)`` of a run from the start with
         the sensitivities ``S`` there, and their derivatives by the unknowns."""
         if self.momenta is None:
-            return y[self.rows], S[self.block]
+            return y[self._rows], self.named(S)
         values, D = self.conditions_at(t, y)
-        return values, D @ S[:, self.cols]
+        return values, D @ S[:, self._cols]
 
     def conditions_at(self, t, y):
         """The end conditions' values at the state ``y`` at t1 and their derivatives by
