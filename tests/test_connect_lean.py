@@ -8,6 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+import jetnh as jn
 from jetnh.models import get
 from jetnh.numeric import solve
 from jetnh.numeric.connect import levenberg
@@ -61,8 +62,7 @@ def test_shot_of_a_run_that_stops_early_is_none(heis_search):
 
 
 def _numpy_step(F, Jm, d, u, limit, mu, rcond, first):
-    """``levenberg._step`` in numpy (the iteration as it was written before it was
-    compiled)."""
+    """``levenberg._step`` in numpy, an independent transcription of its formula."""
     if np.all(np.abs(F) <= limit):
         return levenberg.CONVERGED, None, None, mu, None, None, None
     norms = np.linalg.norm(Jm, axis=0)
@@ -118,3 +118,13 @@ def test_converged_step():
     got = levenberg.step()(F, np.eye(2), np.ones(2), np.zeros(2), np.full(2, 1e-9), -1.0,
                            1e-9, True)
     assert got[0] == levenberg.CONVERGED
+
+
+@pytest.mark.parametrize("bad, match", [(dict(atol=-1.0), "atol must be"),
+                                        (dict(rtol=float("nan")), "rtol must be")])
+def test_a_bad_tolerance_is_named_at_once(bad, match):
+    """The runs' plan checks the tolerances and says what is wrong, at once: not a
+    failed run of the search (which would go through every route to a ConnectError)."""
+    with pytest.raises(jn.JetnhError, match=match):
+        jn.connect(get("heisenberg"), "vakonomic", O, {"x": 1.0, "y": 0.5, "z": 0.2},
+                   (0.0, 1.0), **bad)

@@ -1,6 +1,7 @@
 """Single shooting: runs of one scene from the start with the initial unknowns ``u``,
-the endpoint residual and its Jacobian from the exact sensitivities
-(``scene.run(sensitivities=True)``), never finite differences."""
+the endpoint residual and its Jacobian from the exact sensitivities (the runs of
+``scene.run(sensitivities=True)``'s plan, never finite differences), each read off its
+compiled loop's last row (``Shot``: a trial of the search makes no Trajectory)."""
 
 from __future__ import annotations
 
