@@ -26,6 +26,7 @@ def _identity(n, m):
     found = _IDENTITY.get((n, m))
     if found is None:
         found = _IDENTITY[n, m] = np.eye(n, m).ravel()
+        found.setflags(write=False)
     return found
 
 
