@@ -101,22 +101,24 @@ def test_compiled_step_is_the_numpy_step(k, m, seed, kind, first, log_mu):
     limit = np.full(k, 1e-9)
     mu = -1.0 if first else 10.0 ** (6 * log_mu)
     want = _numpy_step(F, Jm, d, u, limit, mu, 1e-9, first)
-    got = levenberg.step()(F, Jm, d, u, limit, mu, 1e-9, first)
-    assert got[0] == want[0]
-    if want[0] != levenberg.STEP:
+    scales, du = d.copy(), np.empty(m)                   # written by the step
+    status, mu_, s0, FF, predicted = levenberg.step()(F, Jm, scales, u, limit, mu, 1e-9,
+                                                      first, du)
+    assert status == want[0]
+    if status != levenberg.STEP:
         return
-    assert np.allclose(got[1], want[1], rtol=1e-9, atol=1e-12 * np.abs(want[1]).max())
-    assert np.allclose(got[2], want[2], rtol=1e-14)
-    assert abs(got[3] - want[3]) <= 1e-14 * abs(want[3])
-    assert abs(got[4] - want[4]) <= 1e-12 * want[4]
-    assert abs(got[5] - want[5]) <= 1e-13 * want[5]
-    assert abs(got[6] - want[6]) <= 1e-8 * want[5]
+    assert np.allclose(du, want[1], rtol=1e-9, atol=1e-12 * np.abs(want[1]).max())
+    assert np.allclose(scales, want[2], rtol=1e-14)
+    assert abs(mu_ - want[3]) <= 1e-14 * abs(want[3])
+    assert abs(s0 - want[4]) <= 1e-12 * want[4]
+    assert abs(FF - want[5]) <= 1e-13 * want[5]
+    assert abs(predicted - want[6]) <= 1e-8 * want[5]
 
 
 def test_converged_step():
     F = np.array([1e-10, -2e-10])
     got = levenberg.step()(F, np.eye(2), np.ones(2), np.zeros(2), np.full(2, 1e-9), -1.0,
-                           1e-9, True)
+                           1e-9, True, np.empty(2))
     assert got[0] == levenberg.CONVERGED
 
 

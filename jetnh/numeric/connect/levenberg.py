@@ -18,39 +18,35 @@ from ..kernels import loop_cache
 STEP, CONVERGED, NO_RANK = 0, 1, 2
 
 
-def _step(F, Jm, d, u, limit, mu, rcond, first):
-    """One step of ``levenberg_marquardt`` from ``u`` with ``F = F(u)``, ``Jm = dF/du``:
-    ``(status, du, d, mu, s0, |F|^2, predicted decrease |F|^2 - |F + Jm du|^2)``.
-    ``d``: the column scales (the largest column norms of the Jacobians seen; ``first``:
-    this one's), each at least 1e-6 of the largest; ``mu`` < 0: 1e-6 s0^2, s0 the
-    largest singular value of ``Jm / d``; the step is
-    ``-D^-1 V diag(s / (s^2 + mu)) U^T F`` over the singular values above ``rcond`` s0,
-    shortened to at most max(1, |u|)."""
+def _step(F, Jm, d, u, limit, mu, rcond, first, du):
+    """One step of ``levenberg_marquardt`` from ``u`` with ``F = F(u)``, ``Jm = dF/du``,
+    written into ``du``; returns ``(status, mu, s0, |F|^2, predicted decrease |F|^2 -
+    |F + Jm du|^2)``.  ``d``: the column scales (the largest column norms of the
+    Jacobians seen; ``first``: this one's), each at least 1e-6 of the largest, updated in
+    place; ``mu`` < 0: 1e-6 s0^2, s0 the largest singular value of ``Jm / d``; the step
+    is ``-D^-1 V diag(s / (s^2 + mu)) U^T F`` over the singular values above ``rcond``
+    s0, shortened to at most max(1, |u|).  (Arrays are written, not returned: numba
+    boxes a returned array through a pickle.)"""
     k, m = Jm.shape
-    none = np.empty(0)
-    done = True
     for i in range(k):
         if not abs(F[i]) <= limit[i]:
-            done = False
             break
-    if done:
-        return CONVERGED, none, none, mu, 0.0, 0.0, 0.0
-    norms = np.empty(m)
+    else:
+        return CONVERGED, mu, 0.0, 0.0, 0.0
     top = 0.0
     for j in range(m):
         c = 0.0
         for i in range(k):
             c = math.hypot(c, Jm[i, j])
-        norms[j] = c
+        du[j] = c                       # (the column norms, for now)
         top = max(top, c)
     for j in range(m):
-        norms[j] = max(norms[j], 1e-6 * top) if top > 0 else 1.0
-        if not first:
-            norms[j] = max(norms[j], d[j])
+        c = max(du[j], 1e-6 * top) if top > 0 else 1.0
+        d[j] = c if first else max(c, d[j])
     A = np.empty((k, m))
     for i in range(k):
         for j in range(m):
-            A[i, j] = Jm[i, j] / norms[j]
+            A[i, j] = Jm[i, j] / d[j]
     U, s, Vt = np.linalg.svd(A, full_matrices=False)
     r = 0
     if s.size and s[0] > 0:
@@ -58,10 +54,11 @@ def _step(F, Jm, d, u, limit, mu, rcond, first):
             if s[a] > rcond * s[0]:
                 r += 1
     if r == 0:
-        return NO_RANK, none, norms, mu, 0.0, 0.0, 0.0
+        return NO_RANK, mu, 0.0, 0.0, 0.0
     if mu < 0:
         mu = 1e-6 * s[0] ** 2
-    du = np.zeros(m)
+    for j in range(m):
+        du[j] = 0.0
     for a in range(r):
         c = 0.0
         for i in range(k):
@@ -71,7 +68,7 @@ def _step(F, Jm, d, u, limit, mu, rcond, first):
             du[j] += c * Vt[a, j]
     size, uu = 0.0, 0.0
     for j in range(m):
-        du[j] = -du[j] / norms[j]
+        du[j] = -du[j] / d[j]
         size += du[j] * du[j]
         uu += u[j] * u[j]
     # at most the size of the unknowns (and 1): stay on the branch of solutions the
@@ -87,15 +84,14 @@ def _step(F, Jm, d, u, limit, mu, rcond, first):
             lin += Jm[i, j] * du[j]
         FF += F[i] * F[i]
         LL += lin * lin
-    return STEP, du, norms, mu, s[0], FF, FF - LL
+    return STEP, mu, s[0], FF, FF - LL
 
 
 _VEC = types.Array(types.float64, 1, "A")
-_SIGNATURE = types.Tuple((types.int64, types.Array(types.float64, 1, "C"),
-                          types.Array(types.float64, 1, "C"), types.float64, types.float64,
-                          types.float64, types.float64))(
+_SIGNATURE = types.Tuple((types.int64, types.float64, types.float64, types.float64,
+                          types.float64))(
     _VEC, types.Array(types.float64, 2, "A"), _VEC, _VEC, _VEC, types.float64,
-    types.float64, types.boolean)
+    types.float64, types.boolean, _VEC)
 
 
 @functools.cache
@@ -125,10 +121,10 @@ def levenberg_marquardt(evaluate, u, scale, tol, max_iter, rcond, stuck=None):
     u = np.asarray(u, dtype=float)
     limit = tol * np.asarray(scale, dtype=float)    # converged: |F| <= limit, entrywise
     compiled = step()
-    d, mu, nu = np.ones(len(u)), -1.0, 2.0
+    d, du, mu, nu = np.ones(len(u)), np.empty(len(u)), -1.0, 2.0
     for it in range(1, max_iter + 1):
-        status, du, d, mu, s0, FF, predicted = compiled(F, Jm, d, u, limit, mu, rcond,
-                                                        it == 1)
+        status, mu, s0, FF, predicted = compiled(F, Jm, d, u, limit, mu, rcond, it == 1,
+                                                 du)
         if status == CONVERGED:
             return u, True, it - 1
         if status == NO_RANK:
