@@ -213,7 +213,7 @@ class Shooter:
         if not s.size:
             return None
         du = -(Vt.T @ ((U.T @ (got[0] - self.target)) / s))
-        du /= max(1.0, np.linalg.norm(du) / max(1.0, np.linalg.norm(u)))
+        du /= max(1.0, math.sqrt(du.dot(du)) / max(1.0, math.sqrt(u.dot(u))))
         return u + du if du.any() else None
 
     def svd(self, Jm):
