@@ -8,7 +8,6 @@ from __future__ import annotations
 import functools
 import math
 
-import numba
 import numpy as np
 from numba import types
 
