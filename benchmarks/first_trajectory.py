@@ -104,12 +104,10 @@ def _compile(source: str, full: bool) -> tuple[float, object]:
         return time.process_time() - tic, mod
 
 
-def _time_compilation() -> list:
-    """``[CPU seconds]`` that the kernel loader spends executing kernel modules (numba
-    compiling them), accumulated from now on."""
-    from jetnh.numeric.kernels import loader
-
-    spent, run = [0.0], loader._exec_kernels
+def _cpu_spent(module, name: str) -> list:
+    """``[CPU seconds]`` spent in ``module.name`` (replaced by a timed wrapper),
+    accumulated from now on."""
+    spent, run = [0.0], getattr(module, name)
 
     def timed(*args, **kwargs):
         tic = time.process_time()
@@ -118,35 +116,19 @@ def _time_compilation() -> list:
         finally:
             spent[0] += time.process_time() - tic
 
-    loader._exec_kernels = timed
-    return spent
-
-
-def _time_generation() -> list:
-    """``[CPU seconds]`` spent in ``codegen.generate`` (derivation and source, what
-    ``derive`` and ``print`` time by the wall clock), accumulated from now on."""
-    from jetnh.numeric import codegen
-
-    spent, run = [0.0], codegen.generate
-
-    def timed(*args, **kwargs):
-        tic = time.process_time()
-        try:
-            return run(*args, **kwargs)
-        finally:
-            spent[0] += time.process_time() - tic
-
-    codegen.generate = timed
+    setattr(module, name, timed)
     return spent
 
 
 def work(N: int, principle: str, baseline: bool) -> dict:
     from jetnh import models
-    from jetnh.numeric import Scene
+    from jetnh.numeric import Scene, codegen
     from jetnh.numeric.codegen import multiplier_names
+    from jetnh.numeric.kernels import loader
 
-    compile_cpu = _time_compilation()
-    generate_cpu = _time_generation()
+    # numba compiling the kernel modules; derivation and source (derive and print)
+    compile_cpu = _cpu_spent(loader, "_exec_kernels")
+    generate_cpu = _cpu_spent(codegen, "generate")
     warm = models.get("knife_edge")
     Scene(warm, "chetaev", initial=models.initial("knife_edge"), t_span=(0, 0.1)).run()
     compile_cpu[0] = generate_cpu[0] = 0.0     # the warm-up's kernels are not counted
@@ -239,9 +221,9 @@ def summarize(rows) -> dict:
                      f"{r['rhs_ns_full']:.0f} ns ({r['rhs_cost_ratio']:.2f}x)")
         summary.append(line)
     columns = ["N", "principle", "load", "seconds", "cpu", "scene", "scene_cpu", "derive",
-               "print", "generate_cpu", "compile_cpu", "compile_again_cpu", "compile_full_cpu", "run", "rhs_ops",
-               "rhs_level", "aux_ops", "aux_level", "sing_ops", "sing_level", "rhs_ns",
-               "rhs_ns_full", "before_seconds_est"]
+               "print", "generate_cpu", "compile_cpu", "compile_again_cpu",
+               "compile_full_cpu", "run", "rhs_ops", "rhs_level", "aux_ops", "aux_level",
+               "sing_ops", "sing_level", "rhs_ns", "rhs_ns_full", "before_seconds_est"]
     return {"title": "Model to first trajectory (N-trailer, every principle, empty kernel "
                      "cache): quick compilation of huge kernels",
             "summary": summary, "columns": columns, "rows": rows}
