@@ -137,12 +137,14 @@ def _parts(F, t, q, qd, hessian, rest, zero, add):
     fs = F.free_symbols
     p = [d(F, x, fs) for x in qd]
     ps = [e.free_symbols for e in p]
-    if add is se.Add:
-        def by(x, upto=n):          # [d(p[s], x, ps[s]) for s < upto]
-            return _together(p[:upto], x)
-    else:
-        def by(x, upto=n):
-            return [d(p[s], x, ps[s]) for s in range(upto)]
+    def by(x, upto=n):              # [d(p[s], x, ps[s]) for s < upto]
+        live = [s for s in range(upto) if x in ps[s]]
+        out = [zero] * upto
+        got = (_together([p[s] for s in live], x) if add is se.Add and len(live) > 1
+               else [p[s].diff(x) for s in live])
+        for s, e in zip(live, got):
+            out[s] = e
+        return out
     H = None
     if hessian:
         H = [[zero] * n for _ in range(n)]
