@@ -328,12 +328,17 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
 
 def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, checked,
                timeout=None, dense=None, n_events=None, sens=None) -> Trajectory:
-    """A Trajectory from the ``Result`` of a compiled loop (or an error); with
-    ``n_events``, only the first ``n_events`` events of ``ce`` are reported; with
-    ``sens`` (the kernels of a run with sensitivities) the state's columns, and the
-    sensitivities apart."""
-    (status, ts, ys, n_out, stats, t_last, y_last, ev_t, ev_i, ev_y, n_ev,
-     sing_index) = out
+    """A Trajectory from the ``Result`` of a compiled loop, or the tuple it returned
+    (``loop._solve``), or an error; with ``n_events``, only the first ``n_events`` events
+    of ``ce`` are reported; with ``sens`` (the kernels of a run with sensitivities) the
+    state's columns, and the sensitivities apart."""
+    if len(out) == 8:      # a loop that watched nothing: no events, its status checked
+        status, ts, ys, n_out, stats, t_last, y_last, sing_index = out
+        finite = True
+    else:
+        (status, ts, ys, n_out, stats, t_last, y_last, ev_t, ev_i, ev_y, n_ev,
+         sing_index) = out
+        finite = False
     status = int(status)
     extra = {}
     if sens is not None:
@@ -344,11 +349,14 @@ def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, 
         extra["sensitivities"] = (scene._sensitivity_columns(), ys[:, n:].reshape(
             n_out, n, sens.layout.sensitivity_columns))
         ys, n_out = np.ascontiguousarray(ys[:, :n]), ys.shape[0]
-        y_last, y_init, ev_y = y_last[:n], y_init[:n], ev_y[:, :n]
-    ts, ys = ts[:n_out], ys[:n_out]
+        y_last, y_init = y_last[:n], y_init[:n]
+        if not finite:
+            ev_y = ev_y[:, :n]
+    if n_out != ts.shape[0]:
+        ts, ys = ts[:n_out], ys[:n_out]
     singularity = None
     # never a success with a NaN or infinite state
-    if status in (FINISHED, EVENT) and not arguments.all_finite(ys, y_last):
+    if not finite and status in (FINISHED, EVENT) and not arguments.all_finite(ys, y_last):
         status = NONFINITE
     if status == NONFINITE:
         sing_index = (diagnosis.explain_nonfinite(scene, kern, t_last, y_last, p, t0, y_init,
