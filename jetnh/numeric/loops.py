@@ -43,12 +43,13 @@ def entry(scene, method, kern, ce, sens, ctl, te, mode, watch, newton):
 
 def result(out) -> Result:
     """The ``Result`` of the tuple a loop returned (a loop that watched nothing returns
-    no event records: ``loop._solve``; here empty ones)."""
+    no event records and its last time and state as row ``n_out`` of its output:
+    ``loop._solve``)."""
     if len(out) == len(Result._fields):
         return Result._make(out)
-    status, ts, ys, n_out, stats, t, y, sing_index = out
-    return Result(status, ts, ys, n_out, stats, t, y, np.empty(0), np.empty(0, dtype=np.int64),
-                  np.empty((0, y.shape[0])), 0, sing_index)
+    status, ts, ys, n_out, stats, sing_index = out
+    return Result(status, ts, ys, n_out, stats, float(ts[n_out]), ys[n_out], np.empty(0),
+                  np.empty(0, dtype=np.int64), np.empty((0, ys.shape[1])), 0, sing_index)
 
 
 def call(scene, method, kern, ce, watch, t0, t1, y, p, ctl, te, mode, newton, limit,

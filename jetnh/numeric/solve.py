@@ -43,7 +43,8 @@ class Plan:
     ``entry(*prefix, t0, t1, y0, p, *suffix, halt)`` is the call of the loop of the
     compiled methods (``loop.solver`` or radau's); ``ctl``, ``te``, ``mode``, ``watch``,
     ``newton`` are among its arguments.  ``dense``: what re-taking a step needs
-    (``numeric.dense``; None: no dense output).  ``sens``: the kernels of the state
+    (``numeric.dense``), as the two dicts of a run whose last step is whole and of one
+    stopped inside its last step (None: no dense output).  ``sens``: the kernels of the state
     augmented by its sensitivities, ``sens_tol`` their tolerances.  ``switch``: the run
     goes on across its chart's edge (``numeric.atlas``).  The discrete methods read
     ``steps``, ``newton_tol``, ``max_newton``, ``projection``; scipy's ``first`` and
@@ -201,9 +202,10 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
     # kept): no re-taking of one step (numeric.dense)
     dense = None
     if m.solver is not Solver.IMPLICIT and not batch:
-        dense = {"rtol": rtol, "atol": atol_v, "mode": mode, "ctl": ctl}
+        base = {"rtol": rtol, "atol": atol_v, "mode": mode, "ctl": ctl}
         if sens is not None:
-            dense["rhs"] = sens
+            base["rhs"] = sens
+        dense = tuple({**base, "partial_last": bool(cut)} for cut in (False, True))
     newton = None
     if m.solver is Solver.IMPLICIT:
         from .methods import radau
@@ -312,16 +314,19 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
     dense = plan.dense
     if plan.switch:
         return atlas.run(scene, m.name, plan.events, plan.t0, plan.t1, y, p, plan.ctl,
-                         plan.te, plan.mode, None if dense is None else dict(dense),
+                         plan.te, plan.mode, None if dense is None else dict(dense[0]),
                          plan.checked, plan.singular_tol, plan.newton, plan.limit,
                          trajectory)
     halt = np.zeros(1, dtype=np.int64)
-    entry, prefix, suffix, t0, t1 = plan.entry, plan.prefix, plan.suffix, plan.t0, plan.t1
+    t0 = plan.t0
     tic = time.perf_counter()
-    out = interrupt.call(entry, halt, plan.limit, (*prefix, t0, t1, y, p, *suffix, halt))
+    out = interrupt.call(plan.entry, halt, plan.limit,
+                         (*plan.prefix, t0, plan.t1, y, p, *plan.suffix, halt))
     wall = time.perf_counter() - tic
-    if dense is not None:    # the run's own copy; stopped inside a step
-        dense = {**dense, "partial_last": int(out[0]) in (EVENT, SINGULAR)}
+    if dense is not None:    # stopped inside a step or not
+        dense = dense[out[0] in (EVENT, SINGULAR)]
+        if plan.sens is not None:           # the run's own (``trajectory`` adds its rows)
+            dense = dict(dense)
     return trajectory(scene, m.name, out, wall, plan.kern, plan.ce, p, t0, y,
                       plan.singular_tol, plan.checked, plan.limit, dense, sens=plan.sens)
 
@@ -332,8 +337,9 @@ def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, 
     (``loop._solve``), or an error; with ``n_events``, only the first ``n_events`` events
     of ``ce`` are reported; with ``sens`` (the kernels of a run with sensitivities) the
     state's columns, and the sensitivities apart."""
-    if len(out) == 8:      # a loop that watched nothing: no events, its status checked
-        status, ts, ys, n_out, stats, t_last, y_last, sing_index = out
+    if len(out) == 6:      # a loop that watched nothing: no events, its status checked
+        status, ts, ys, n_out, stats, sing_index = out
+        t_last, y_last = float(ts[n_out]), ys[n_out]
         finite = True
     else:
         (status, ts, ys, n_out, stats, t_last, y_last, ev_t, ev_i, ev_y, n_ev,

@@ -207,17 +207,21 @@ def no_events(n):
 
 
 @inline
-def finite_status(status, ys, n_out, y):
+def finite_status(status, ys, n_out, y, n_sens):
     """``status``, or NONFINITE where it is a success (FINISHED, EVENT) with a NaN or an
-    infinity among the output rows ``ys[:n_out]`` or the last state ``y``: never a success
-    with such a state."""
+    infinity in the states of the output rows ``ys[:n_out]`` or of the last state ``y``
+    (each state followed by ``n_sens`` columns of sensitivities, not looked at): never a
+    success with such a state."""
     if status != FINISHED and status != EVENT:
         return status
-    if not all_finite(y):
-        return NONFINITE
-    for k in range(n_out):
-        if not all_finite(ys[k]):
+    n = y.shape[0] // (1 + n_sens)
+    for i in range(n):
+        if not math.isfinite(y[i]):
             return NONFINITE
+    for k in range(n_out):
+        for i in range(n):
+            if not math.isfinite(ys[k, i]):
+                return NONFINITE
     return status
 
 
@@ -326,8 +330,9 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
     (accepted, rejected, rhs evaluations)`` (``counts``), the last time and state, the
     event records (time, index, state) and the index of the indicator that stopped the
     run (-1 if none).  A loop that watches nothing (``WATCH`` false) records no events
-    and returns ``(status, ts, ys, n_out, stats, t, y, sing_index)``: every array a
-    compiled call returns is boxed at ~0.4 us, more than a short run's arithmetic.
+    and returns ``(status, ts, ys, n_out, stats, sing_index)`` with the last time and
+    state in row ``n_out`` of ``ts``, ``ys``: every array a compiled call returns is boxed
+    at ~0.4 us, more than a short run's arithmetic.
 
     Fixed steps (``ctl.n_steps > 0``, methods without an error estimate): equal steps
     ``(t_end - t0) / n_steps``; events and indicators are located on the cubic Hermite
@@ -377,11 +382,12 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
         go, h_abs, ts, ys, n_out = start(rhs, t, y, p, K[0], K[1], ytmp, scale, ctl,
                                          error_order, t_end, stats, mode, t_eval, ts, ys, n_out)
         if go >= 0:
-            go = finite_status(go, ys, n_out, y)
+            go = finite_status(go, ys, n_out, y, ctl.n_sens)
             if WATCH:
                 return (go, ts, ys, n_out, counts(stats), t, y, ev_t, ev_i, ev_y, n_ev,
                         sing_index)
-            return go, ts, ys, n_out, counts(stats), t, y, sing_index
+            ts, ys, _ = store(ts, ys, n_out, t, y)
+            return go, ts, ys, n_out, counts(stats), sing_index
     status = FINISHED
     step = 0
     while (direction * (t_end - t) > 0.0) if ADAPTIVE else (step < n_steps):
@@ -478,11 +484,12 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
             copy_into(K[0], K[ns])
     if mode == ENDPOINTS:
         ts, ys, n_out = store(ts, ys, n_out, t, y)
-    status = finite_status(status, ys, n_out, y)
+    status = finite_status(status, ys, n_out, y, ctl.n_sens)
     if WATCH:
         return (status, ts, ys, n_out, counts(stats), t, y, ev_t, ev_i, ev_y, n_ev,
                 sing_index)
-    return status, ts, ys, n_out, counts(stats), t, y, sing_index
+    ts, ys, _ = store(ts, ys, n_out, t, y)       # the last time and state: row n_out
+    return status, ts, ys, n_out, counts(stats), sing_index
 
 
 #: the method a specialised loop runs, its sums and that loop (``_specialised``; unbound
