@@ -27,7 +27,7 @@ from .methods import STATUS_TEXT, Solver
 from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, FINISHED, NONFINITE,
                               SINGULAR, STOPPED, entry_point)
 from .kernels import sensitivity_kernels
-from .methods.loop import Control, Watch
+from .methods.loop import Control, Result, Watch
 from .options import fields_of, options
 from .trajectory import Trajectory, _info
 
@@ -337,34 +337,36 @@ def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, 
     (``loop._solve``), or an error; with ``n_events``, only the first ``n_events`` events
     of ``ce`` are reported; with ``sens`` (the kernels of a run with sensitivities) the
     state's columns, and the sensitivities apart."""
-    if len(out) == 6:      # a loop that watched nothing: no events, its status checked
+    if len(out) == 6:      # a loop that watched nothing: no events
         status, ts, ys, n_out, stats, sing_index = out
         t_last, y_last = float(ts[n_out]), ys[n_out]
-        finite = True
     else:
         (status, ts, ys, n_out, stats, t_last, y_last, ev_t, ev_i, ev_y, n_ev,
          sing_index) = out
-        finite = False
+    # a loop's status is never a success with a NaN or an infinity in the states
+    # (``loop.finite_status``); a ``Result`` (``loops.call``) is checked again: the
+    # atlas moves its last state onto the constraints
+    finite = not isinstance(out, Result)
     status = int(status)
-    extra = {}
+    sensitivities = events = singularity = None
     if sens is not None:
         n = kern.layout.n_state
         ys = ys[:n_out]
         if dense is not None:
             dense["y"] = ys
-        extra["sensitivities"] = (scene._sensitivity_columns(), ys[:, n:].reshape(
+        sensitivities = (scene._sensitivity_columns(), ys[:, n:].reshape(
             n_out, n, sens.layout.sensitivity_columns))
         ys, n_out = np.ascontiguousarray(ys[:, :n]), ys.shape[0]
         y_last, y_init = y_last[:n], y_init[:n]
-        if not finite:
+        if ce is not None:
             ev_y = ev_y[:, :n]
     if n_out != ts.shape[0]:
         ts, ys = ts[:n_out], ys[:n_out]
-    singularity = None
-    # never a success with a NaN or infinite state
     if not finite and status in (FINISHED, EVENT) and not arguments.all_finite(ys, y_last):
         status = NONFINITE
-    if status == NONFINITE:
+    if status == FINISHED:
+        reason = STATUS_TEXT[FINISHED]
+    elif status == NONFINITE:
         sing_index = (diagnosis.explain_nonfinite(scene, kern, t_last, y_last, p, t0, y_init,
                                                   singular_tol) if checked else -1)
         if sing_index < 0:
@@ -373,10 +375,10 @@ def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, 
         status = SINGULAR
         singularity = diagnosis.singularity(scene, kern, int(sing_index), t_last, y_last, p,
                                             t0, y_init, singular_tol, nonfinite=True)
+        reason = singularity["reason"]
     elif status == SINGULAR:
         singularity = diagnosis.singularity(scene, kern, int(sing_index), t_last, y_last, p,
                                             t0, y_init, singular_tol)
-    if singularity is not None:
         reason = singularity["reason"]
     elif status == EVENT:
         k = int(ev_i[n_ev - 1])
@@ -390,13 +392,11 @@ def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, 
 
         k = len(ce) if n_events is None else n_events
         t_events, y_events = split_records(k, ev_t[:n_ev], ev_i[:n_ev], ev_y[:n_ev])
-        extra["events"] = (ce.names[:k], t_events, y_events)
+        events = (ce.names[:k], t_events, y_events)
     # the loop's own float64, C-contiguous rows: taken as they are
     return Trajectory._of_run(scene, ts, ys, p, method, status, reason,
-                              _info(int(stats[0]), int(stats[1]), int(stats[2]), wall,
-                                    scene.projected),
-                              kern, extra.get("events"), singularity, dense,
-                              extra.get("sensitivities"))
+                              _info(stats[0], stats[1], stats[2], wall, scene.projected),
+                              kern, events, singularity, dense, sensitivities)
 
 
 # ---------------------------------------------------------------------- many runs
