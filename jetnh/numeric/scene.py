@@ -506,15 +506,18 @@ class Scene(Frozen):
             naming the time and the state instead.  Every argument is checked before it
             reaches compiled code (``numeric.arguments``).
         """
-        if (rtol is None and atol is None and t_eval is None and method == "dop853"
-                and events is None and t_span is None and timeout is None
+        if (t_eval is None and events is None and t_span is None and timeout is None
                 and projection is False and backend is None and step is None
                 and singular == "stop" and newton is None and sensitivities is False
-                and sensitivity_error is True and not keywords
-                and (save == "steps" or save == "final")):
-            # every option as its default but save (a str): the key, sooner
+                and sensitivity_error is True and not keywords and type(method) is str
+                and (save == "steps" or save == "final")
+                and (rtol is None or type(rtol) is float)
+                and (atol is None or type(atol) is float)):
+            # every option as its default but the method (a str), save and the
+            # tolerances (floats): a short key, sooner (a run interleaved with other work
+            # finds little of the longer key's work in the caches)
             span = self.t_span
-            key = ("defaults", save, span)
+            key = ("common", method, save, rtol, atol, span)
         else:
             span = self.t_span if t_span is None else arguments.time_span(t_span)
             key = (rtol, solve.hashable(atol), method, save, span, timeout, projection,
