@@ -363,7 +363,7 @@ class Scene(Frozen):
         new = Scene(system, principle, **args)
         if new._kernel_identity() == self._kernel_identity():
             # the same kernels: their key and the plans of runs go with them
-            new._memo.update((k, self._memo[k]) for k in _SHARED if k in self._memo)
+            new._memo.update(self._shared_memo())
         return new
 
     def _moved(self, initial, t_span) -> "Scene":
@@ -388,9 +388,20 @@ class Scene(Frozen):
         y0 = np.array([ini[n] for n in self.state_names], dtype=float)
         y0.flags.writeable = False
         d.update(initial=ini, y0=y0)
-        memo = self._memo
-        d["_memo"] = {k: memo[k] for k in _SHARED + ("_p",) if k in memo}
+        d["_memo"] = self._shared_memo()
+        if "_p" in self._memo:
+            d["_memo"]["_p"] = self._memo["_p"]
         return new
+
+    def _shared_memo(self) -> dict:
+        """What a scene with the same kernels takes over from this one's memo
+        (``_SHARED``), the stores of plans and compiled events made here first, so that
+        this scene, its copies and theirs fill one store (a copy made before this scene's
+        first run plans nothing its siblings planned)."""
+        memo = self._memo
+        memo.setdefault("plans", {})
+        memo.setdefault("events", {})
+        return {k: memo[k] for k in _SHARED if k in memo}
 
     def _kernel_identity(self) -> tuple:
         """What the compiled kernels of this scene are a function of."""
