@@ -339,7 +339,8 @@ def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, 
     state's columns, and the sensitivities apart."""
     if len(out) == 6:      # a loop that watched nothing: no events
         status, ts, ys, n_out, stats, sing_index = out
-        t_last, y_last = float(ts[n_out]), ys[n_out]
+        if status != FINISHED:      # its last time and state (row n_out), for diagnosis
+            t_last, y_last = float(ts[n_out]), ys[n_out]
     else:
         (status, ts, ys, n_out, stats, t_last, y_last, ev_t, ev_i, ev_y, n_ev,
          sing_index) = out
@@ -357,7 +358,9 @@ def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, 
         sensitivities = (scene._sensitivity_columns(), ys[:, n:].reshape(
             n_out, n, sens.layout.sensitivity_columns))
         ys, n_out = np.ascontiguousarray(ys[:, :n]), ys.shape[0]
-        y_last, y_init = y_last[:n], y_init[:n]
+        y_init = y_init[:n]
+        if len(out) != 6 or status != FINISHED:
+            y_last = y_last[:n]
         if ce is not None:
             ev_y = ev_y[:, :n]
     if n_out != ts.shape[0]:

@@ -167,15 +167,15 @@ def workspace(n_sing, n_user):
 @inline
 def outputs(n, mode, t_eval, cap_steps):
     """The output arrays ``(ts, ys, n_out, j_eval)`` of a run in ``mode``: room for the
-    points of ``t_eval``, the two ends, or ``cap_steps`` steps (grown as needed)."""
+    points of ``t_eval``, the two ends, or ``cap_steps`` steps (grown as needed), and a
+    row for the last time and state (``_solve``)."""
     if mode == AT_T_EVAL:
         cap = t_eval.shape[0]
     elif mode == ENDPOINTS:
         cap = 2
     else:
         cap = cap_steps
-    return (np.empty(max(cap, 1)), np.empty((max(cap, 1), n)), np.int64(0),
-            np.int64(0))
+    return np.empty(cap + 1), np.empty((cap + 1, n)), np.int64(0), np.int64(0)
 
 
 @inline
