@@ -372,7 +372,7 @@ class Scene(Frozen):
         (``_SHARED``, and ``_p``) taken over rather than made anew; the dependent
         velocities by the compiled kernels where they are loaded and apply
         (``_dependent_velocity_floats``)."""
-        if not isinstance(initial, Mapping):
+        if type(initial) is not dict and not isinstance(initial, Mapping):
             raise JetnhError(f"initial must be a dict keyed by Symbol or name, got a "
                              f"{type(initial).__name__}")
         new = object.__new__(Scene)
