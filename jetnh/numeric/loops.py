@@ -34,7 +34,8 @@ def entry(scene, method, kern, ce, sens, ctl, te, mode, watch, newton):
     if method.solver is Solver.IMPLICIT:
         jac = scene.jacobian.address if sens is None else sens.jac_fp
         callbacks = (rhs, jac, kern.sing_fp, uev, hol)
-        return (kern.implicit(), tuple(f.address for f in callbacks),
+        return (methods.implicit_solver(features(ctl, mode, watch)),
+                tuple(f.address for f in callbacks),
                 (ctl, newton, te, mode, watch), callbacks)
     callbacks = (rhs, kern.sing_fp, uev, hol)
     return (methods.explicit_solver(method, features(ctl, mode, watch)),

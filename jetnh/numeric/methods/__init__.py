@@ -151,27 +151,16 @@ def explicit_solver(m, parts):
     return _ENTRIES[key]
 
 
-def implicit_solver():
-    """The compiled loop of radau, called as ``solve(rhs, jac, sing, uev, hol, t0, t_end,
-    y0, p, ctl, newton, t_eval, mode, watch, halt)`` (``radau.solver``): as
-    ``explicit_solver``, each call goes to the loop compiled with the parts that run needs
-    (``loop.features``), through its entry point."""
-    if "radau" not in _ENTRIES:
+def implicit_solver(parts):
+    """The compiled loop of radau with the ``parts`` a run needs, called as ``solve(rhs,
+    jac, sing, uev, hol, t0, t_end, y0, p, ctl, newton, t_eval, mode, watch, halt)``
+    (``radau.solver``): its entry point, as ``explicit_solver``."""
+    key = ("radau", tuple(parts))
+    if key not in _ENTRIES:
         from . import radau
-        from .loop import features
 
-        loops = {}
-
-        def solve(rhs, jac, sing, uev, hol, t0, t_end, y0, p, ctl, newton, t_eval, mode,
-                  watch, halt):
-            parts = features(ctl, mode, watch)
-            go = loops.get(parts)
-            if go is None:
-                go = loops[parts] = entry_point(radau.solver(parts))
-            return go(rhs, jac, sing, uev, hol, t0, t_end, y0, p, ctl, newton, t_eval, mode,
-                      watch, halt)
-        _ENTRIES["radau"] = solve
-    return _ENTRIES["radau"]
+        _ENTRIES[key] = entry_point(radau.solver(key[1]))
+    return _ENTRIES[key]
 
 
 _ENTRIES: dict = {}
