@@ -225,7 +225,7 @@ def fixed(root, reps) -> dict:
 
 def interleaved(root, quick) -> dict:
     """A single run among other work (section 5) on one tree."""
-    reps = (50, 5, 3) if quick else (400, 20, 8)
+    reps = (50, 5, 3) if quick else (1000, 60, 8)
     code = COLD
     for name, n in zip(("REPS_HOT", "REPS_OTHER", "REPS_PAUSE"), reps):
         code = code.replace(name, str(n))
