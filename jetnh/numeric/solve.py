@@ -43,8 +43,8 @@ class Plan:
     ``entry(*prefix, t0, t1, y0, p, *suffix, halt)`` is the call of the loop of the
     compiled methods (``loop.solver`` or radau's); ``ctl``, ``te``, ``mode``, ``watch``,
     ``newton`` are among its arguments.  ``dense``: what re-taking a step needs
-    (``numeric.dense``), as the two dicts of a run whose last step is whole and of one
-    stopped inside its last step (None: no dense output).  ``sens``: the kernels of the state
+    (``numeric.dense``; None: no dense output), ``dense_ends`` it completed for a run
+    whose last step is whole and for one stopped inside its last step (made once).  ``sens``: the kernels of the state
     augmented by its sensitivities, ``sens_tol`` their tolerances.  ``switch``: the run
     goes on across its chart's edge (``numeric.atlas``).  The discrete methods read
     ``steps``, ``newton_tol``, ``max_newton``, ``projection``; scipy's ``first`` and
@@ -69,6 +69,7 @@ class Plan:
     newton: object = None
     switch: bool = False
     dense: dict | None = None
+    dense_ends: tuple | None = None
     sens: object = None
     sens_error: bool = True
     steps: int = 0
@@ -200,12 +201,12 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
         mode = AT_T_EVAL if t_eval is not None else ENDPOINTS
     # radau's steps depend on the steps before (Newton's starting values, the Jacobian
     # kept): no re-taking of one step (numeric.dense)
-    dense = None
+    dense = ends = None
     if m.solver is not Solver.IMPLICIT and not batch:
-        base = {"rtol": rtol, "atol": atol_v, "mode": mode, "ctl": ctl}
+        dense = {"rtol": rtol, "atol": atol_v, "mode": mode, "ctl": ctl}
         if sens is not None:
-            base["rhs"] = sens
-        dense = tuple({**base, "partial_last": bool(cut)} for cut in (False, True))
+            dense["rhs"] = sens
+        ends = tuple({**dense, "partial_last": cut} for cut in (False, True))
     newton = None
     if m.solver is Solver.IMPLICIT:
         from .methods import radau
@@ -228,7 +229,8 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
     entry, prefix, suffix, callbacks = loops.entry(scene, m, kern, ce, sens, ctl, te, mode,
                                                     watch, newton)
     return Plan(**common, rtol=rtol, atol=atol_v, ce=ce, watch=watch, kern=kern, ctl=ctl,
-                te=te, mode=mode, newton=newton, switch=switch, dense=dense, entry=entry,
+                te=te, mode=mode, newton=newton, switch=switch, dense=dense,
+                dense_ends=ends, entry=entry,
                 prefix=prefix, suffix=suffix, callbacks=callbacks)
 
 
@@ -314,7 +316,7 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
     dense = plan.dense
     if plan.switch:
         return atlas.run(scene, m.name, plan.events, plan.t0, plan.t1, y, p, plan.ctl,
-                         plan.te, plan.mode, None if dense is None else dict(dense[0]),
+                         plan.te, plan.mode, None if dense is None else dict(dense),
                          plan.checked, plan.singular_tol, plan.newton, plan.limit,
                          trajectory)
     halt = np.zeros(1, dtype=np.int64)
@@ -324,7 +326,7 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
                          (*plan.prefix, t0, plan.t1, y, p, *plan.suffix, halt))
     wall = time.perf_counter() - tic
     if dense is not None:    # stopped inside a step or not
-        dense = dense[out[0] in (EVENT, SINGULAR)]
+        dense = plan.dense_ends[out[0] in (EVENT, SINGULAR)]
         if plan.sens is not None:           # the run's own (``trajectory`` adds its rows)
             dense = dict(dense)
     return trajectory(scene, m.name, out, wall, plan.kern, plan.ce, p, t0, y,
