@@ -13,7 +13,7 @@ from ...errors import ConnectError
 #: smallest / largest eigenvalue of the controllability Gramian below which the path is
 #: abnormal
 GRAMIAN_RCOND = 1e-9
-#: |det| of the Jacobi fields' configuration rows, normalised as a subspace
+#: |det| of the Jacobi fields' configuration rows, scaled both ways
 #: (``jacobi_measure``), below which it has no sign (rounding level)
 DET_ZERO = 1e-10
 _GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(5)
@@ -180,30 +180,44 @@ def _products(P) -> np.ndarray:
 
 
 def jacobi_measure(X, nq):
-    """Scale-free measures of how near the Jacobi fields ``X`` (``[..., n_state, m]``:
-    dy(t)/du, the whole state's response to the unknowns) come to a field that vanishes
-    in the configuration (its first ``nq`` rows): with ``Q`` an orthonormal basis of
-    their span, ``(det Q_q signed as det X_q, smallest singular value of Q_q)`` -- the
-    product and the least of the cosines of the angles between the fields and the
-    configuration space.  Both are unchanged by any recombination or rescaling of the
-    unknowns (X -> X C) and by the fields' growth along an unstable extremal; both are
-    zero exactly where dq/du loses rank (a conjugate time)."""
+    """How near the Jacobi fields ``X`` (``[..., n_state, m]``: dy(t)/du, the whole
+    state's response to the unknowns) come to losing rank in the configuration (their
+    first ``nq`` rows, dq/du), scaled two ways, each blind where the other sees:
+
+    - as a subspace: ``Q`` an orthonormal basis of the fields' span, the cosines of the
+      angles between the fields and the configuration space (the singular values of
+      ``Q_q``).  Unchanged by any recombination of the unknowns and by the fields'
+      growth along an unstable extremal; small too where the multipliers' rows outweigh
+      their slight effect on the configuration (short spans);
+    - by columns: dq/du with each column scaled to unit length (the unknowns' units
+      removed).  Small too where growth turns every column towards the few most
+      unstable directions.
+
+    Returns ``(d, s)``: the determinant (square case, else None; the sign of det dq/du)
+    and the smallest singular value, each the larger in magnitude of the two scalings.
+    Both are zero exactly where dq/du loses rank (a conjugate time)."""
     Q, R = np.linalg.qr(X)
     sign = np.sign(np.prod(np.diagonal(R, axis1=-2, axis2=-1), axis=-1))
     Qq = Q[..., :nq, :]
-    return (np.linalg.det(Qq) * sign if Qq.shape[-1] == nq else None,
-            np.linalg.svd(Qq, compute_uv=False)[..., -1])
+    M = X[..., :nq, :]
+    norms = np.linalg.norm(M, axis=-2, keepdims=True)
+    M = M / np.where(norms > 0, norms, 1.0)
+    s = np.maximum(np.linalg.svd(Qq, compute_uv=False)[..., -1],
+                   np.linalg.svd(M, compute_uv=False)[..., -1])
+    if X.shape[-1] != nq:
+        return None, s
+    d_sub, d_col = np.linalg.det(Qq) * sign, np.linalg.det(M)
+    return np.where(np.abs(d_sub) >= np.abs(d_col), d_sub, d_col), s
 
 
 def conjugate_times(tr, cols, samples, rcond=1e-9) -> tuple:
     """The times in (t0, t1] where dq(t)/du (columns ``cols``, the unknowns' states)
-    loses rank, judged on the Jacobi fields normalised as a subspace
+    loses rank, judged on the Jacobi fields scaled as a subspace and by columns
     (``jacobi_measure``): the sign changes of the scaled determinant (square case) on
     the equal-spaced times of ``samples``, located by Brent's method on the dense
-    output; and t1 where the least cosine there is at most ``100 rcond`` (a Jacobi
-    field vanishing in the configuration to that accuracy).  Not relative to the
-    sensitivities' size: on a long unstable span they grow by orders of magnitude
-    while the map keeps its rank."""
+    output; and t1 where its smallest scaled singular value there is at most ``100
+    rcond`` both ways.  Not relative to the sensitivities' size: on a long unstable
+    span they grow by orders of magnitude while the map keeps its rank."""
     from scipy.optimize import brentq
 
     n = tr.layout.n_state
