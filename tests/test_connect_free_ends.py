@@ -50,10 +50,12 @@ def _value(expr, args, state, params):
 
 
 @settings(max_examples=6)
-@given(jst.systems(min_n=2, max_n=3, affine=True), st.sampled_from(["vakonomic", "holder"]),
+@given(jst.systems(min_n=3, max_n=3, affine=True), st.sampled_from(["vakonomic", "holder"]),
        st.data())
 def test_free_end_meets_transversality_and_is_stationary(system, principle, data):
     n = len(system.J.q)
+    # a distribution of rank one is integrable (the end fixed on a curve)
+    assume(len(system.independent_velocities) >= 2)
     # every constraint with the independent velocities and the configuration: one
     # without the velocities (qdot^a = phi(t, q)) or without q (integrable, as qdot^a =
     # c qdot^mu + g(t)) fixes a combination of the coordinates' ends, so there are no

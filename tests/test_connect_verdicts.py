@@ -187,3 +187,32 @@ def test_jacobi_measure_is_free_of_the_unknowns_scale(data):
     assume(np.linalg.cond(Y) < 1e8)
     d0, least0 = jacobi_measure(Y, n)
     assert abs(d0) < 1e-12 and least0 < 1e-12
+
+
+def test_restarts_leave_a_geodesic_past_its_conjugate_point():
+    """The geodesic of angular rate omega = 2 pi / 0.6 run for T = 1 passes its first
+    conjugate time 0.6: no minimizer (``minimizer`` False).  With restarts the search
+    keeps another geodesic to the same end -- the closed form from its initial state,
+    with |omega'| T < 2 pi (no conjugate time), of action v'^2 T / 2 below the first's."""
+    from test_connect import heisenberg_end
+
+    v, theta, omega = 1.0, -0.7, 2 * math.pi / 0.6
+    end = dict(zip("xyz", heisenberg_end(v, theta, omega, 1.0)))
+    guess = {"x_t": 0.9 * v * math.cos(theta), "y_t": v * math.sin(theta),
+             "lambda_z": 0.95 * omega / 2}
+    heis = get("heisenberg")
+    first = jn.connect(heis, "vakonomic", O, end, (0.0, 1.0), guess=guess)
+    assert first.minimizer is False and first.search == ""
+    assert abs(first.cost - v**2 / 2) < 1e-9
+    c = jn.connect(heis, "vakonomic", O, end, (0.0, 1.0), guess=guess, restarts=4)
+    assert c.minimizer is True and c.conjugate_times == () and c.residual < 1e-9
+    assert "the cheapest without a conjugate time kept" in c.search
+    xt, yt, lam = c.initial["x_t"], c.initial["y_t"], c.initial["lambda_z"]
+    v2, w2 = math.hypot(xt, yt), 2 * lam
+    assert abs(w2) < 2 * math.pi
+    assert np.max(np.abs(np.array(heisenberg_end(v2, math.atan2(yt, xt), w2, 1.0))
+                         - [end["x"], end["y"], end["z"]])) < 1e-8
+    assert abs(c.cost - v2**2 / 2) < 1e-9 and c.cost < first.cost - 0.1
+    assert jn.connect(heis, "chetaev", O, {"x": 1.0}, (0.0, 1.0)).minimizer is None
+    with pytest.raises(jn.JetnhError, match="restarts"):
+        jn.connect(heis, "vakonomic", O, end, (0.0, 1.0), restarts=-1)

@@ -479,3 +479,51 @@ class _Segments(Segments):
         block = np.zeros((len(g), U.size))
         block[:, self.m + (self.k - 2) * n:] = G @ tr.sensitivities[-1][:, :n]
         return np.concatenate([F, g - target[len(sh.rows):]]), np.vstack([Jm, block])
+
+
+def least_action(search, found, tol, max_iter, restarts):
+    """The least-action answer among ``found`` (a ``Connection`` of a vakonomic or
+    Hoelder problem) and the extremals reached from ``restarts`` restarts, where
+    ``found`` is no minimizer (a conjugate time inside the span: ``Connection.minimizer``
+    False).  Restart k moves ``found``'s unknowns by a fixed pseudo-random direction
+    (seeded by k) of growing size (a quarter, a half, one, two times each unknown's
+    scale, max(|u_i|, 1)), then Newton with at most ``min(max_iter, STEP_ITER)``
+    iterations; no other route, so each restart costs at most that many runs.  Kept: the
+    cheapest extremal without a conjugate time inside the span, else the cheapest.
+    Returns that ``Connection`` with ``search`` saying what was tried and where it
+    stopped."""
+    import dataclasses
+
+    if not restarts or found.minimizer is not False:
+        return found
+    u = np.array([found.initial[k] for k in found.unknowns])
+    scale = np.maximum(np.abs(u), 1.0)
+    seen = [u]
+    answers = [found]
+    budget = min(max_iter, STEP_ITER)
+    for k in range(restarts):
+        step = np.random.default_rng(k).standard_normal(len(u))
+        start = u + 0.25 * 2.0 ** (k % 4) * scale * step / np.linalg.norm(step)
+        try:
+            v, ok, _ = search.newton(start, search.target, tol, budget)
+        except ConnectError:
+            continue
+        if not ok or any(np.max(np.abs(v - w) / scale) < 1e-6 for w in seen):
+            continue
+        seen.append(v)
+        try:
+            answers.append(search.connection(v, budget, tol, route=found.route
+                                             + f", restart {k + 1}"))
+        except JetnhError:
+            continue
+    minimizers = [c for c in answers if c.minimizer]
+    best = min(minimizers or answers, key=lambda c: c.cost)
+    costs = ", ".join(f"{c.cost:.8g}{'' if c.minimizer else ' (conjugate)'}"
+                      for c in sorted(answers, key=lambda c: c.cost))
+    verdict = ("the cheapest without a conjugate time kept" if minimizers else
+               "none without a conjugate time inside the span: the cheapest kept, not "
+               "a minimizer; try a guess near the least-action motion, or more restarts")
+    return dataclasses.replace(best, search=(
+        f"{restarts} restarts (at most {budget} iterations each) from the first answer, "
+        f"which has conjugate times inside the span; {len(answers)} extremals (costs "
+        f"{costs}); {verdict}"))
