@@ -46,8 +46,13 @@ Verdicts on the answer:
 - ``conjugate_times``: the times in (t0, t1] where the map from the initial unknowns to
   the configuration, ``dq(t)/du`` (a block of the sensitivity matrix: the Jacobi fields
   of the extremal), loses rank -- sign changes of its determinant located by Brent's
-  method on the dense output, and t1 itself where it is rank-deficient there.  Past the
-  first, the extremal is no longer a local minimizer of the action.
+  method on the dense output, and t1 itself where it is rank-deficient there.  Rank is
+  judged on the fields scaled as a subspace and by columns (``verdicts.jacobi_measure``),
+  never relative to the sensitivities' size, which grows by orders of magnitude on long
+  unstable spans.  Past the first, the extremal is no longer a local minimizer of the
+  action: ``minimizer`` is False, and ``restarts`` look for a cheaper extremal without
+  a conjugate time inside the span (``solve.least_action``; ``Connection.search`` says
+  what they found).
 - ``normal``: False when the endpoint map of the constraint system (the kinematic
   control system qdot^mu = u^mu, qdot^alpha = phi^alpha(t, q, u)) loses rank along the
   path, i.e. its controllability Gramian ``W' = A W + W A^T + B B^T`` (A, B the partial
