@@ -17,6 +17,14 @@ scene, as many evaluations as 64 runs: the cost of a trajectory in an ensemble a
 a single run's (1.0 is the same cost; CPU time, which the machine's load disturbs less
 than wall time).  The speed-ups need a quiet machine: under load there is no idle core
 to scale onto.
+
+"Two fixed blocks" (``two_blocks_bound``): the speed-up two threads could reach at best
+if each ran one fixed half of the runs (numba's ``prange`` over the runs, which the
+OpenMP layer schedules statically whatever ``parallel_chunksize`` says): the runs'
+evaluations over those of the costlier half.  The drivers hand out runs one by one
+instead (``prange``: each thread takes the next run; the thread pool: the next chunk), so
+their bound is set by the largest run (``largest_run_share``).  Both come from the
+evaluation counts, not the clock, so they hold on a loaded machine too.
 """
 
 import time
@@ -112,8 +120,10 @@ def measure(make, n_runs_list, reps, loop_max):
                 best_sweep = (t, df)
         ref = best["serial"][1]
         nfev = int(ref.nfev.sum())
+        half = int(ref.nfev[:n_runs // 2].sum())
         row = dict(n_runs=n_runs, rhs_evaluations=nfev, single_run_s_per_eval=single,
-                   modes={})
+                   two_blocks_bound=nfev / max(half, nfev - half),
+                   largest_run_share=float(ref.nfev.max() / nfev), modes={})
         for m, (t, e) in best.items():
             row["modes"][m] = dict(wall_s=t, rhs_per_s=float(e.nfev.sum() / t),
                                    speedup_vs_serial=best["serial"][0] / t,
@@ -141,6 +151,8 @@ def measure(make, n_runs_list, reps, loop_max):
                 speedup_vs_serial=best["serial"][0] / t_loop,
                 per_eval_vs_single_run=c_loop / nfev / single, bitwise_equal_to_serial=same)
         rows.append(row)
+        print(f"{name:36s} {n_runs:5d} runs  two fixed blocks could reach "
+              f"x{row['two_blocks_bound']:.2f} at best (evaluations per half)")
         for m, d in row["modes"].items():
             print(f"{name:36s} {n_runs:5d} runs  {m:26s} {d['wall_s'] * 1e3:9.2f} ms  "
                   f"{d['rhs_per_s'] / 1e6:7.2f} M rhs/s  x{d['speedup_vs_serial']:.2f}  "

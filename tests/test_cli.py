@@ -290,6 +290,8 @@ def test_cache_info_names_the_fallback(capsys, tmp_path, monkeypatch):
     code, out, _ = inproc(capsys, "cache", "info")
     assert code == 0 and "not usable" in out and "writable by group or others" in out
     assert "temporary cache" in out
+    code, out, _ = inproc(capsys, "cache", "warm")      # nothing compiled for nothing
+    assert code == 0 and out.startswith("not warmed") and "writable by group" in out
     code, _, err = inproc(capsys, "cache", "frobnicate")
     assert code == 2 and "invalid choice" in err
 

@@ -53,6 +53,51 @@ def test_ensemble_equals_single_runs_bitwise(disk, parallel):
     assert np.array_equal(ens.params[:, 0], par["R"])
 
 
+@pytest.mark.parametrize("n, method", [(1, "dop853"), (3, "dop853"), (40, "dop853"),
+                                       (5, "radau")])
+def test_prange_takes_every_run_once(disk, n, method):
+    """The parallel driver's threads take the runs one by one (fewer runs than threads,
+    one, many of uneven cost; the explicit methods' driver and radau's): every run is
+    done once, as the serial driver does it, with the array of one run or its row as
+    ``initial``."""
+    rng = np.random.default_rng(n)
+    Y0 = np.tile(disk.y0, (n, 1))
+    Y0[:, 4] = rng.uniform(0.2, 3.0, n)         # phi_t: uneven step counts
+    kw = dict(rtol=1e-10, atol=1e-12, save="final", method=method)
+    ser = disk.ensemble(Y0, parallel="serial", **kw)
+    par = disk.ensemble(Y0, parallel="prange", workers=2, **kw)
+    assert np.array_equal(par.y, ser.y) and np.array_equal(par.nfev, ser.nfev)
+    assert np.all(par.status == FINISHED)
+    one = disk.ensemble(Y0[0], parallel="prange", workers=2, **kw)
+    assert np.array_equal(one.y[0], ser.y[0]) and np.array_equal(one.initial[0], Y0[0])
+
+
+def test_take_next_hands_out_every_index_once():
+    """The atomic counter of the parallel drivers over numba's threads: each index taken
+    exactly once (a plain read and write of the counter, tried in its place, handed some
+    out twice in every one of five tries)."""
+    import numba
+
+    from jetnh.numeric.methods._common import take_next
+
+    @numba.njit(parallel=True)
+    def share(n):
+        taken = np.zeros(1, dtype=np.int64)
+        seen = np.zeros(n)
+        for _ in numba.prange(n):
+            r = take_next(taken)
+            while r < n:
+                acc = 0.0
+                for k in range(100):    # some work: the threads take runs side by side
+                    acc += np.sin(r + k)
+                seen[r] += 1.0 + 0.0 * acc
+                r = take_next(taken)
+        return seen
+
+    for n in (1, 20_000):
+        assert np.array_equal(share(n), np.ones(n))
+
+
 def test_ensemble_final_and_closed_form(disk):
     ini, par = inputs()
     ens = disk.ensemble(ini, par, rtol=1e-11, atol=1e-13, save="final")

@@ -24,12 +24,12 @@ arrays (``Scene.ensemble`` calls it), so a later ``jetnh.sweep`` can hand it chu
   trajectory is bit-for-bit the one ``scene.run`` gives for the same input.
 - ``parallel``: "threads" (default: a Python thread pool of ``workers`` threads, each
   running the compiled serial driver on chunks of runs with the GIL released), "prange"
-  (numba threads over the runs in one compiled driver, dynamic chunks), or "serial" (one
-  compiled loop).  ``workers`` defaults to the number of cores numba sees.  Measured in
+  (numba threads in one compiled driver, each taking the next run until none is left:
+  runs of uneven cost keep every thread busy), or "serial" (one compiled loop).
+  ``workers`` defaults to the number of cores numba sees.  Measured in
   ``benchmarks/numeric_ensemble.py``: both parallel modes give the same bits; the
-  thread pool was as fast as or faster than prange there and needs no extra compiled
-  driver, hence the default.  A Python loop of ``scene.run`` pays ~0.1 ms of dispatch
-  per run, which the drivers do not.
+  thread pool needs no extra compiled driver, hence the default.  A Python loop of
+  ``scene.run`` pays ~0.1 ms of dispatch per run, which the drivers do not.
 - ``sensitivities=True``: every run integrates its variational equations as
   ``Scene.run(sensitivities=True)`` does; ``ens.sensitivities`` is ``[n_runs, n_times,
   n_states, n_columns]`` (columns ``ens.sensitivity_columns``: the initial states, then
@@ -95,16 +95,17 @@ def resolve(scene, initial=None, params=None, project=False):
     """The scene to run (with the varying parameters as run-time inputs), the initial
     states Y0 [n_runs, n_states] and the run-time parameters P [n_runs, n_p]."""
     params = {_name(k): _column(v, f"params[{_name(k)!r}]") for k, v in (params or {}).items()}
-    unknown = sorted(set(params) - set(scene.params)) if params else ()
-    if unknown:
-        raise JetnhError(f"params has {', '.join(map(repr, unknown))}, not parameters of this "
-                         f"system; its parameters are {sorted(scene.params) or 'none'}")
-    varying = [k for k, v in params.items() if v.ndim == 1 or k in scene.runtime_params]
-    fixed = {k: float(v) for k, v in params.items() if k not in varying}
-    need = [k for k in varying if k not in scene.runtime_params]
-    if need or fixed:
-        scene = scene.replace(params={**scene.params, **fixed},
-                              runtime_params=tuple(scene.runtime_params) + tuple(need))
+    if params:
+        unknown = sorted(set(params) - set(scene.params))
+        if unknown:
+            raise JetnhError(f"params has {', '.join(map(repr, unknown))}, not parameters of "
+                             f"this system; its parameters are {sorted(scene.params) or 'none'}")
+        varying = [k for k, v in params.items() if v.ndim == 1 or k in scene.runtime_params]
+        fixed = {k: float(v) for k, v in params.items() if k not in varying}
+        need = [k for k in varying if k not in scene.runtime_params]
+        if need or fixed:
+            scene = scene.replace(params={**scene.params, **fixed},
+                                  runtime_params=tuple(scene.runtime_params) + tuple(need))
     columns, arr, n_arr = {}, None, None
     if isinstance(initial, dict):
         columns = {_name(k): _column(v, f"initial[{_name(k)!r}]") for k, v in initial.items()}
@@ -124,9 +125,13 @@ def resolve(scene, initial=None, params=None, project=False):
                              f", got {np.shape(initial)}")
         arr = arguments.real_array(arr, "initial", 2)
         n_arr = arr.shape[0]
-    n_runs = _n_runs({**columns, **params}, n_arr)
-    Y0 = np.empty((n_runs, len(scene.state_names)))
-    Y0[:] = scene.y0 if arr is None else arr
+    n_runs = (_n_runs({**columns, **params}, n_arr) if columns or params
+              else 1 if n_arr is None else n_arr)
+    if arr is not None and n_runs == n_arr:
+        Y0 = arr                    # (real_array's own copy)
+    else:
+        Y0 = np.empty((n_runs, len(scene.state_names)))
+        Y0[:] = scene.y0 if arr is None else arr
     if columns:
         for j, s in enumerate(scene.state_names):
             if s in columns:
@@ -547,15 +552,13 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
         sens = (scene._sensitivity_columns(), OUT_A[:, :, n:].reshape(
             OUT_A.shape[0], OUT_A.shape[1], n, plan.sens.layout.sensitivity_columns))
     n_runs = Y0.shape[0]
-    t0, t1 = plan.t0, plan.t1
-    ce, ctl, te, mode, limit = plan.ce, plan.ctl, plan.te, plan.mode, plan.limit
-    n_ev = len(plan.watch.ev_dir)
-    switching = plan.switch
-    checked, singular_tol = plan.checked, plan.singular_tol
-    n_user = n_ev - 1 if switching else n_ev
+    ce, switching, checked, singular_tol = plan.ce, plan.switch, plan.checked, plan.singular_tol
+    n_user = len(plan.watch.ev_dir) - (1 if switching else 0)
     pieces, reasons, switches = {}, {}, {}
-    tic = time.perf_counter()
     if switching:
+        tic = time.perf_counter()
+        t0, t1 = plan.t0, plan.t1
+        ctl, te, mode, limit = plan.ctl, plan.te, plan.mode, plan.limit
         chart_atlas = atlas.atlas(scene)
         user = as_events(events)
         budget = ctl.max_steps
@@ -587,7 +590,7 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
             pieces[r] = _taken_on(chart_atlas.own, r, parts, n_user, mode, P[r], OUT_T, OUT_Y,
                                   INFO, T_LAST, Y_LAST, EV_N, EV_T)
             reasons[r], switches[r] = parts[-1][1].stop_reason, sw
-    wall += time.perf_counter() - tic
+        wall += time.perf_counter() - tic
     # never a success with a NaN or infinite state
     if not arguments.all_finite(OUT_Y, Y_LAST):
         done = (INFO[:, 0] == FINISHED) | (INFO[:, 0] == EVENT)
@@ -644,8 +647,13 @@ def _explain(scene, method, kern, checked, tol, on_error, INFO, T_LAST, Y_LAST, 
     error (or status 3 with ``on_error="record"``).  Works on the run's own arrays
     (``INFO[:, 0]`` status, ``INFO[:, 5]`` the indicator), before the Ensemble freezes
     them."""
+    status = INFO[:, 0]
+    if status.shape[0] == 1:        # (an ensemble of one: no array test)
+        bad = () if status[0] != NONFINITE else (0,)
+    else:
+        bad = np.flatnonzero(status == NONFINITE)
     t0 = scene.t_span[0]
-    for r in np.nonzero(INFO[:, 0] == NONFINITE)[0]:
+    for r in bad:
         idx = (diagnosis.explain_nonfinite(scene, kern, T_LAST[r], Y_LAST[r], P[r], t0,
                                            Y0[r], tol)
                if checked else -1)

@@ -437,10 +437,8 @@ def batch(scene, plan, Y0, P, parallel="threads", workers=1):
         if prange:
             old = numba.get_num_threads()
             numba.set_num_threads(min(workers, numba.config.NUMBA_NUM_THREADS))
-            try:
-                # dynamic scheduling in chunks: runs differ in cost (early stops, stiffness)
-                with numba.parallel_chunksize(max(1, n_runs // (8 * workers))):
-                    block(0, n_runs)
+            try:        # (each thread takes the next run: the driver balances the load)
+                block(0, n_runs)
             finally:
                 numba.set_num_threads(old)
         else:

@@ -41,6 +41,11 @@ def run(args, progress) -> int:
     if args.action == "warm":
         from ...numeric import precompile
 
+        fallback = cache.info()["fallback"]
+        if fallback:            # a temporary cache dies with its process: nothing to warm
+            print(f"not warmed: the kernel cache {cache.cache_root()} cannot be used "
+                  f"({fallback}); each run compiles its loop on first use")
+            return 0
         def report(name, seconds, loaded):
             progress.note(f"  {name:20s} {'loaded' if loaded else 'compiled'} in "
                           f"{seconds:.1f} s")

@@ -345,6 +345,22 @@ def collect(r, res, mode, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
         EV_N[r, k] += 1
 
 
+@intrinsic
+def take_next(typingctx, counter):
+    """``counter[0]`` before adding 1 to it, atomically (an int64 array): the threads of
+    an ensemble driver each take the next run so, until the runs are out (dynamic
+    scheduling; numba's ``prange`` hands each thread a fixed block of iterations)."""
+    if not (isinstance(counter, numba.types.Array) and counter.dtype == numba.types.int64):
+        return None
+
+    def codegen(context, builder, signature, args):
+        data = context.make_array(signature.args[0])(context, builder, args[0]).data
+        one = context.get_constant(numba.types.int64, 1)
+        return builder.atomic_rmw("add", data, one, "monotonic")
+
+    return numba.types.int64(counter), codegen
+
+
 #: argument types of the ensemble drivers after the solver's own arguments
 ENSEMBLE_OUT = (numba.types.float64[:, ::1], numba.types.float64[:, :, ::1],
                 numba.types.int64[:, ::1], numba.types.float64[::1],

@@ -42,7 +42,8 @@ import numpy as np
 from ._common import (
     AT_T_EVAL, ENDPOINTS, ENSEMBLE_OUT, EVERY_STEP, FINISHED, MAX_FACTOR, MAX_STEPS,
     MIN_FACTOR, NONFINITE, SAFETY, SINGULAR, STOPPED, TOO_SMALL_STEP, all_finite,
-    collect, compiled, copy_into, f8, function_at, i8, inline, jit, min_step, start, store)
+    collect, compiled, copy_into, f8, function_at, i8, inline, jit, min_step, start, store,
+    take_next)
 from . import projection
 from .sums import DOP853, EMBEDDED, NONE, functions as sums  # noqa: F401 (the codes)
 from ._events import (any_user_active, dense_eval, hermite_defect, locate, most_watched,
@@ -524,18 +525,30 @@ def solver(method, parts=ALL):
 
 # ---------------------------------------------------------------------- ensembles
 # Two copies of one driver (numba's cache cannot hold a function compiled both with and
-# without ``parallel``): run r of the ensemble is the loop on Y0[r], P[r].
-def _ensemble_parallel(rhs, sing, uev, hol, t0, t_end, Y0, P, ctl, t_eval, mode, watch, halt,
-                       OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
-    for r in numba.prange(Y0.shape[0]):
-        res = run(rhs, sing, uev, hol, t0, t_end, Y0[r], P[r], ctl, t_eval, mode, watch, halt)
-        collect(r, res, mode, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)
+# without ``parallel``): run r of the ensemble is the loop on Y0[r], P[r].  In the parallel
+# one, an iteration of ``prange`` takes the next run (``take_next``) until none is left:
+# each thread's first iteration shares out the runs with the others, its later ones find
+# none.  Runs differ in cost (their steps, early stops), and prange alone hands each
+# thread a fixed block of them.  (No ``numba.get_num_threads()`` here: it would make the
+# driver uncacheable.)
+def _ensemble_parallel(rhs_at, sing_at, uev_at, hol_at, t0, t_end, Y0, P, ctl, t_eval, mode,
+                       watch, halt, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
+    n_runs = Y0.shape[0]
+    taken = np.zeros(1, dtype=np.int64)
+    for _ in numba.prange(n_runs):
+        r = take_next(taken)
+        while r < n_runs:
+            res = run(rhs_at, sing_at, uev_at, hol_at, t0, t_end, Y0[r], P[r], ctl, t_eval,
+                      mode, watch, halt)
+            collect(r, res, mode, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)
+            r = take_next(taken)
 
 
-def _ensemble_serial(rhs, sing, uev, hol, t0, t_end, Y0, P, ctl, t_eval, mode, watch, halt,
-                     OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
+def _ensemble_serial(rhs_at, sing_at, uev_at, hol_at, t0, t_end, Y0, P, ctl, t_eval, mode,
+                     watch, halt, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
     for r in range(Y0.shape[0]):
-        res = run(rhs, sing, uev, hol, t0, t_end, Y0[r], P[r], ctl, t_eval, mode, watch, halt)
+        res = run(rhs_at, sing_at, uev_at, hol_at, t0, t_end, Y0[r], P[r], ctl, t_eval, mode,
+                  watch, halt)
         collect(r, res, mode, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)
 
 
@@ -543,10 +556,10 @@ ENSEMBLE_ARGS = ARGS[:6] + (f8[:, ::1], f8[:, ::1]) + ARGS[8:] + ENSEMBLE_OUT
 
 
 def ensemble_solver(method, parallel=True):
-    """The compiled ensemble driver ``drive(rhs, sing, uev, hol, t0, t_end, Y0, P, ctl, t_eval,
-    mode, watch, halt, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)`` of the method
-    ``method``: numba threads over the runs (``parallel``) or one loop (for a Python
-    thread pool)."""
+    """The compiled ensemble driver ``drive(rhs_at, sing_at, uev_at, hol_at, t0, t_end, Y0, P,
+    ctl, t_eval, mode, watch, halt, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)`` (the
+    callbacks' addresses first) of the method ``method``: numba threads taking the runs
+    one by one (``parallel``) or one loop (for a Python thread pool)."""
     return compiled(_ensemble_parallel if parallel else _ensemble_serial, ENSEMBLE_ARGS,
                     parallel=parallel, namespace=_specialised(method), tag=method.name)
 

@@ -39,7 +39,7 @@ import numpy as np
 from ._common import (
     ENDPOINTS, ENSEMBLE_OUT, EVERY_STEP, FINISHED, MAX_STEPS, NONFINITE,
     SINGULAR, STOPPED, TOO_SMALL_STEP, all_finite, callback_at, collect, compiled,
-    copy_into, f8, function_at, i8, jit, min_step, start, store)
+    copy_into, f8, function_at, i8, jit, min_step, start, store, take_next)
 from ._events import dense_eval
 from . import projection
 from .loop import (ALL, CONTROL, EMBEDDED, GIVEN, WATCHED, after_step, counts, no_events,
@@ -488,19 +488,26 @@ def solver(parts=ALL):
     return _specialised(parts)["run"]
 
 
-def _ensemble_parallel(rhs, jac, sing, uev, hol, t0, t_end, Y0, P, ctl, newton, t_eval,
-                       mode, watch, halt, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
-    for r in numba.prange(Y0.shape[0]):
-        res = run(rhs, jac, sing, uev, hol, t0, t_end, Y0[r], P[r], ctl, newton, t_eval, mode,
-                  watch, halt)
-        collect(r, res, mode, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)
+def _ensemble_parallel(rhs_at, jac_at, sing_at, uev_at, hol_at, t0, t_end, Y0, P, ctl, newton,
+                       t_eval, mode, watch, halt, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N,
+                       EV_T):
+    n_runs = Y0.shape[0]
+    taken = np.zeros(1, dtype=np.int64)
+    for _ in numba.prange(n_runs):       # (as loop._ensemble_parallel)
+        r = take_next(taken)
+        while r < n_runs:
+            res = run(rhs_at, jac_at, sing_at, uev_at, hol_at, t0, t_end, Y0[r], P[r], ctl,
+                      newton, t_eval, mode, watch, halt)
+            collect(r, res, mode, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)
+            r = take_next(taken)
 
 
-def _ensemble_serial(rhs, jac, sing, uev, hol, t0, t_end, Y0, P, ctl, newton, t_eval,
-                     mode, watch, halt, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
+def _ensemble_serial(rhs_at, jac_at, sing_at, uev_at, hol_at, t0, t_end, Y0, P, ctl, newton,
+                     t_eval, mode, watch, halt, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N,
+                     EV_T):
     for r in range(Y0.shape[0]):
-        res = run(rhs, jac, sing, uev, hol, t0, t_end, Y0[r], P[r], ctl, newton, t_eval, mode,
-                  watch, halt)
+        res = run(rhs_at, jac_at, sing_at, uev_at, hol_at, t0, t_end, Y0[r], P[r], ctl,
+                  newton, t_eval, mode, watch, halt)
         collect(r, res, mode, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)
 
 
