@@ -207,6 +207,7 @@ def test_restarts_leave_a_geodesic_past_its_conjugate_point():
     c = jn.connect(heis, "vakonomic", O, end, (0.0, 1.0), guess=guess, restarts=4)
     assert c.minimizer is True and c.conjugate_times == () and c.residual < 1e-9
     assert "the cheapest without a conjugate time kept" in c.search
+    assert "restart" in c.route
     xt, yt, lam = c.initial["x_t"], c.initial["y_t"], c.initial["lambda_z"]
     v2, w2 = math.hypot(xt, yt), 2 * lam
     assert abs(w2) < 2 * math.pi
@@ -216,3 +217,34 @@ def test_restarts_leave_a_geodesic_past_its_conjugate_point():
     assert jn.connect(heis, "chetaev", O, {"x": 1.0}, (0.0, 1.0)).minimizer is None
     with pytest.raises(jn.JetnhError, match="restarts"):
         jn.connect(heis, "vakonomic", O, end, (0.0, 1.0), restarts=-1)
+
+
+def test_direct_route_guess_is_near_the_minimizing_geodesic():
+    """The direct route (the action minimised over admissible paths: x, y lines plus
+    sine modes, z integrated from the constraint) to the end of the geodesic above:
+    its velocities and multiplier at t0 (from SLSQP's multiplier of the z end, P_z =
+    lambda_z: z is cyclic) are near the minimizing geodesic's, which shooting from them
+    reaches (closed form: |omega| T < 2 pi)."""
+    from test_connect import heisenberg_end
+
+    from jetnh.numeric.connect import direct
+
+    v, theta, omega = 1.0, -0.7, 2 * math.pi / 0.6
+    end = dict(zip("xyz", heisenberg_end(v, theta, omega, 1.0)))
+    heis = get("heisenberg")
+    unknowns = ("x_t", "y_t", "lambda_z")
+    scene = _scene(heis, "vakonomic", None, {**O, **{u: 0.0 for u in unknowns}},
+                   (0.0, 1.0))
+    search = Search(scene, O, end, unknowns, {}, 1e-11, 1e-12, "dop853", 1e-9)
+    u = direct.guess(search)
+    c = jn.connect(heis, "vakonomic", O, end, (0.0, 1.0), guess=u)
+    assert c.residual < 1e-9 and c.minimizer and abs(2 * c.initial["lambda_z"]) < 2 * math.pi
+    xt, yt, lam = (c.initial[k] for k in unknowns)
+    assert np.max(np.abs(np.array(heisenberg_end(math.hypot(xt, yt), math.atan2(yt, xt),
+                                                 2 * lam, 1.0))
+                         - [end["x"], end["y"], end["z"]])) < 1e-8
+    assert np.max(np.abs(u - [xt, yt, lam])) < 1e-2 * (1 + np.max(np.abs(u)))
+    # a free end is not the direct route's problem
+    free = Search(scene, O, {"x": 1.0, "y": 0.5}, unknowns, {}, 1e-11, 1e-12, "dop853",
+                  1e-9)
+    assert direct.guess(free) is None

@@ -9,6 +9,7 @@ from types import MappingProxyType
 import numpy as np
 
 from ...errors import ConnectError, JetnhError
+from . import direct
 from .connection import Connection, Stitched
 from .problem import VARIATIONAL
 from .shooting import Segments, Shooter, default_segments
@@ -17,6 +18,8 @@ from .shooting import Segments, Shooter, default_segments
 STEP_ITER = 20
 #: the first span of the continuation in T, as a fraction of T
 FIRST_SPAN = 0.125
+#: multiple shooting segments from the direct route's guess (``least_action``)
+DIRECT_SEGMENTS = 4
 
 
 
@@ -485,11 +488,14 @@ def least_action(search, found, tol, max_iter, restarts):
     """The least-action answer among ``found`` (a ``Connection`` of a vakonomic or
     Hoelder problem) and the extremals reached from ``restarts`` restarts, where
     ``found`` is no minimizer (a conjugate time inside the span: ``Connection.minimizer``
-    False).  Restart k moves ``found``'s unknowns by a fixed pseudo-random direction
-    (seeded by k) of growing size (a quarter, a half, one, two times each unknown's
-    scale, max(|u_i|, 1)), then Newton with at most ``min(max_iter, STEP_ITER)``
-    iterations; no other route, so each restart costs at most that many runs.  Kept: the
-    cheapest extremal without a conjugate time inside the span, else the cheapest.
+    False).  The first restart starts from the direct route's guess
+    (``direct.guess``: the action minimised over a family of admissible paths, where the
+    problem allows it), solved by multiple shooting on ``DIRECT_SEGMENTS`` segments;
+    restart k moves ``found``'s unknowns by a fixed pseudo-random direction (seeded by
+    k) of growing size (a quarter, a half, one, two times each unknown's scale,
+    max(|u_i|, 1)), then Newton with at most ``min(max_iter, STEP_ITER)`` iterations;
+    no other route, so each restart costs at most that many runs.  Kept: the cheapest
+    extremal without a conjugate time inside the span, else the cheapest.
     Returns that ``Connection`` with ``search`` saying what was tried and where it
     stopped."""
     import dataclasses
@@ -501,19 +507,33 @@ def least_action(search, found, tol, max_iter, restarts):
     seen = [u]
     answers = [found]
     budget = min(max_iter, STEP_ITER)
+    direct_note = ""
     for k in range(restarts):
-        step = np.random.default_rng(k).standard_normal(len(u))
-        start = u + 0.25 * 2.0 ** (k % 4) * scale * step / np.linalg.norm(step)
+        stitched, route = None, found.route + f", restart {k + 1}"
         try:
-            v, ok, _ = search.newton(start, search.target, tol, budget)
+            if k == 0:
+                start = direct.guess(search)
+                if start is None:
+                    direct_note = "; the direct route does not apply"
+                    continue
+                v, ok, _, stitched = search.multiple(start, DIRECT_SEGMENTS, tol, max_iter)
+                if ok and stitched is None:     # polished just inside tol: once more
+                    w, better, _ = search.newton(v, search.target, 1e-3 * tol, budget)
+                    v = w if better else v
+                route += (f": multiple shooting ({DIRECT_SEGMENTS} segments) from the "
+                          "direct route")
+                direct_note = "" if ok else "; shooting from the direct route failed"
+            else:
+                step = np.random.default_rng(k).standard_normal(len(u))
+                start = u + 0.25 * 2.0 ** (k % 4) * scale * step / np.linalg.norm(step)
+                v, ok, _ = search.newton(start, search.target, tol, budget)
         except ConnectError:
             continue
         if not ok or any(np.max(np.abs(v - w) / scale) < 1e-6 for w in seen):
             continue
         seen.append(v)
         try:
-            answers.append(search.connection(v, budget, tol, route=found.route
-                                             + f", restart {k + 1}"))
+            answers.append(search.connection(v, budget, tol, stitched, route))
         except JetnhError:
             continue
     minimizers = [c for c in answers if c.minimizer]
@@ -524,6 +544,5 @@ def least_action(search, found, tol, max_iter, restarts):
                "none without a conjugate time inside the span: the cheapest kept, not "
                "a minimizer; try a guess near the least-action motion, or more restarts")
     return dataclasses.replace(best, search=(
-        f"{restarts} restarts (at most {budget} iterations each) from the first answer, "
-        f"which has conjugate times inside the span; {len(answers)} extremals (costs "
-        f"{costs}); {verdict}"))
+        f"{restarts} restarts from the first answer, which has conjugate times inside "
+        f"the span{direct_note}; {len(answers)} extremals (costs {costs}); {verdict}"))
