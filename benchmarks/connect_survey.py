@@ -15,16 +15,9 @@ Suslov.  The end is reachable under Chetaev by construction; under the other pri
 it may not be (Suslov's motions with zero multipliers are another family; a vakonomic
 end may lie where the endpoint map is singular).  Vakonomic and Hoelder take
 ``restarts=RESTARTS``: where the first answer has a conjugate time inside the span (no
-minimizer of the action), the restarts look for a cheaper extremal without one.  Where the
-answer is still no minimizer, an independent route bounds the least action from above
-(``direct``): the action minimised over paths that meet the constraints (the independent
-coordinates a line plus ``MODES`` sine modes each, the dependent ones integrated from
-the constraints by the trapezoid rule -- where they do not depend on the dependent
-coordinates --, the dependent ends as equality constraints; scipy's SLSQP), and
-where L and the constraints do not depend on the dependent coordinates (so P_a = dL/dqdot^a
-+ lambda_a is constant along an extremal and equals the SLSQP multiplier of that end),
-connect from its initial velocities and multipliers lambda_a(t0) = P_a - dL/dqdot^a(t0),
-on ``SEGMENTS`` segments.  Each case runs in a fresh interpreter with a time-out.  The
+minimizer of the action), the restarts (``connect.solve.least_action``: the direct
+route's guess, then moves around the answer) look for a cheaper extremal without one.
+Each case runs in a fresh interpreter with a time-out.  The
 table gives the cost, the verdicts (normal, conjugate times, minimizer), the residual and
 the wall time; or the failure's class and message.  ``--quick``: the four smallest
 models.
@@ -52,10 +45,6 @@ QUICK = ("heisenberg", "nonholonomic_particle", "chaplygin_sleigh", "knife_edge"
 TIMEOUT = 600.0
 #: restarts of the least-action search (``connect(restarts=)``, vakonomic and Hoelder)
 RESTARTS = 8
-#: sine modes per independent coordinate and quadrature steps of the direct route
-MODES, STEPS = 10, 400
-#: multiple shooting segments for connect from the direct route's answer
-SEGMENTS = 4
 
 
 def span(name) -> float:
@@ -104,92 +93,6 @@ def case(name, principle):
            "conjugate_times": list(c.conjugate_times), "minimizer": c.minimizer,
            "residual": c.residual, "rank": c.rank, "iterations": c.iterations,
            "route": c.route, "search": c.search, "initial": dict(c.initial)}
-    if c.minimizer is False:
-        out["direct"] = direct(system, principle, start, end, span(name))
-    return out
-
-
-def direct(system, principle, start, end, T):
-    """The independent route (module docstring): the least action over the path family
-    by SLSQP, and connect from it where the multipliers follow from its end
-    multipliers."""
-    import numpy as np
-    import sympy as sp
-    from scipy.optimize import approx_fprime, minimize
-
-    import jetnh as jn
-    from jetnh.algebra import dag
-
-    J = system.J
-    par = {s: float(system.defaults[s]) for s in system.parameters}
-    ind = [J.split(v)[0] for v in system.independent_velocities]
-    dep = list(system.dependent)
-    phi = [system.phi[v] for v in system.dependent_velocities]
-    if any(q in e.free_symbols for q in dep for e in phi):
-        return {"failure": "not attempted: the constraints depend on the dependent "
-                           "coordinates"}
-    t = np.linspace(0.0, T, STEPS + 1)
-    k = np.arange(1, MODES + 1)
-    sine = np.sin(np.pi * np.outer(t / T, k))
-    dsine = np.pi / T * k * np.cos(np.pi * np.outer(t / T, k))
-
-    def path(z):
-        Z = z.reshape(len(ind), MODES)
-        point = {J.t: t, **par}
-        for j, q in enumerate(ind):
-            a, b = start[q.name], end[q.name]
-            point[q] = a + (b - a) * t / T + sine @ Z[j]
-            point[J.jet(q, 1)] = (b - a) / T + dsine @ Z[j]
-        for q, v, e in zip(dep, system.dependent_velocities,
-                           dag.evaluate_numpy(phi, point)):
-            e = np.broadcast_to(e, t.shape)
-            point[v] = e                            # the trapezoid rule's integral
-            point[q] = start[q.name] + np.concatenate(
-                [[0.0], np.cumsum(0.5 * (e[1:] + e[:-1]) * np.diff(t))])
-        return point
-
-    w = np.full(STEPS + 1, 2.0)
-    w[1::2], w[0], w[-1] = 4.0, 1.0, 1.0
-    w *= T / STEPS / 3.0                             # Simpson on the nodes
-
-    def action(z):
-        (L,) = dag.evaluate_numpy([system.L], path(z))
-        return float(w @ np.broadcast_to(L, w.shape))
-
-    def ends(z):
-        p = path(z)
-        return np.array([p[q][-1] - end[q.name] for q in dep])
-
-    tic = time.perf_counter()
-    r = minimize(action, np.zeros(len(ind) * MODES), method="SLSQP",
-                 constraints=[{"type": "eq", "fun": ends}],
-                 options={"maxiter": 300, "ftol": 1e-12})
-    out = {"cost": float(r.fun), "success": bool(r.success), "iterations": int(r.nit),
-           "end_error": float(np.max(np.abs(ends(r.x)))),
-           "seconds": time.perf_counter() - tic}
-    cyclic = not any(q in e.free_symbols for q in dep
-                     for e in [system.L, *system.constraints])
-    if not cyclic:
-        return out
-    # the end multipliers mu (grad action = mu . grad ends) are P_a
-    grad = approx_fprime(r.x, action, 1e-7)
-    G = np.array([approx_fprime(r.x, lambda z, i=i: ends(z)[i], 1e-7)
-                  for i in range(len(dep))])
-    mu = np.linalg.lstsq(G.T, grad, rcond=None)[0]
-    p0 = path(r.x)
-    p0 = {s: (v[0] if np.ndim(v) else v) for s, v in p0.items()}
-    dL = dag.evaluate_numpy([sp.diff(system.L, J.jet(q, 1)) for q in dep], p0)
-    guess = [float(p0[v]) for v in system.independent_velocities] + [
-        float(m - d) for m, d in zip(mu, dL)]
-    try:
-        c = jn.connect(system, principle, start, end, (0.0, T), guess=guess,
-                       segments=SEGMENTS)
-    except jn.JetnhError as e:
-        out["connect"] = {"failure": type(e).__name__, "message": str(e)[:300]}
-        return out
-    out["connect"] = {"cost": c.cost, "minimizer": c.minimizer,
-                      "conjugate_times": list(c.conjugate_times), "residual": c.residual,
-                      "route": c.route, "initial": dict(c.initial)}
     return out
 
 
@@ -209,13 +112,6 @@ def row(name, principle, r):
             + (", NOT A MINIMIZER" if r.get("minimizer") is False else "")
             + f", residual {r['residual']:.1e}, rank {r['rank']}, {r['iterations']} it, "
             f"{r['seconds']:.1f} s, by {r['route']}")
-    d = r.get("direct")
-    if d and "cost" in d:
-        text += f"; direct route: action <= {d['cost']:.6g}"
-        got = d.get("connect", {})
-        if "cost" in got:
-            text += (f", connect from it: cost {got['cost']:.6g}, "
-                     f"{'minimizer' if got['minimizer'] else 'no minimizer'}")
     return text + " |"
 
 
