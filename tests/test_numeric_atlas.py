@@ -334,3 +334,58 @@ def test_where_no_split_is_regular_the_run_stops():
 def test_bad_split_option(knife):
     with pytest.raises(jn.JetnhError, match="split must be 'switch' or 'fixed'"):
         knife.run(split="other")
+
+
+# ---------------------------------------------------------------------- the switch's parts
+@settings(max_examples=25, deadline=None)
+@given(k=st.integers(1, 3), entries=st.lists(st.floats(-10.0, 10.0), min_size=9, max_size=9))
+def test_the_small_determinant_is_lapacks(k, entries):
+    M = np.array(entries[:k * k]).reshape(k, k)
+    assert atlas._det(M.tolist()) == pytest.approx(np.linalg.det(M), rel=1e-9, abs=1e-9)
+
+
+def test_measures_of_three_constraints_against_numpy_and_cauchy_binet():
+    """The 2-trailer (k = 3 of n = 5): m_beta = det(A_beta)^2 / det(A A^T) from the
+    small determinants equals LAPACK's, and the measures of the splits sum to 1 (the
+    minors left out are identically zero)."""
+    from jetnh.models import initial, n_trailer
+
+    sys_ = n_trailer()
+    at = atlas.Atlas(jn.Scene(sys_, "chetaev", initial=initial("n_trailer"), t_span=(0.0, 1.0)))
+    J = sys_.J
+    rng = np.random.default_rng(3)
+    for _ in range(5):
+        point = {s: v for s, v in zip([*J.q, *J.qd], rng.uniform(-2, 2, 2 * J.n))}
+        point.update({s: float(v) for s, v in sys_.defaults.items()})
+        A = np.array([float(v) for v in dag.evaluate_numpy(list(sys_.jacobian), point)]
+                     ).reshape(sys_.k, J.n)
+        m = at.measures(A)
+        gram = np.linalg.det(A @ A.T)
+        want = [np.linalg.det(A[:, cols]) ** 2 / gram for cols in at.columns]
+        assert np.allclose(m, want, rtol=1e-10, atol=1e-14)
+        assert sum(m) == pytest.approx(1.0, abs=1e-12)
+    assert at.measures(np.zeros((sys_.k, J.n))) == [0.0] * len(at.splits)  # no split
+
+
+def test_a_state_at_the_edge_in_each_chart(knife, knife_run):
+    """``Chart.point`` (the compiled df/dqdot) at states of both charts: the knife's
+    A = (sin phi, -cos phi, 0), the velocities and multipliers of ``universal`` to the
+    bit, and the measures cos^2, sin^2; rows of the other chart mapped home equal the
+    general route (``universal`` then ``state``) to the bit."""
+    at = atlas.atlas(knife)
+    p = np.ascontiguousarray(knife.p, dtype=float)
+    for lo, hi, chart, seg, a, _ in knife_run._segments.pieces[:3]:
+        t, Y = seg.t[a:a + hi - lo], seg.y[a:a + hi - lo]
+        for i in (0, len(t) // 2, len(t) - 1):
+            q, qd, lam, A = chart.point(float(t[i]), np.ascontiguousarray(Y[i]), p)
+            q2, qd2, lam2, A2, _ = chart.universal(t[i:i + 1], Y[i:i + 1], p, jacobian=True)
+            assert np.array_equal(qd, qd2[0]) and np.array_equal(A, A2[0])
+            assert np.array_equal(q, q2[0]) and np.array_equal(lam, lam2[0])
+            phi = float(q[2])
+            assert np.allclose(A, [[math.sin(phi), -math.cos(phi), 0.0]], rtol=0, atol=1e-15)
+            m = at.measures(A)
+            assert m == pytest.approx([math.cos(phi)**2, math.sin(phi)**2], abs=1e-14)
+        if chart is not at.own:
+            q, qd, lam, A, _ = chart.universal(t, Y, p)
+            assert np.array_equal(atlas.to_home(at.own, chart, t, Y, p),
+                                  at.own.state(q, qd, lam, A))

@@ -25,6 +25,12 @@ from the same point, with the state mapped exactly:
   lambda_beta = A_beta^T A_alpha^-T lambda_alpha.  Chetaev's equations have no multiplier
   states.
 
+The switch costs microseconds, not a walk of the expressions: df/dqdot comes from a
+compiled kernel of each chart (its entries as an events kernel, cached on disk with the
+scene's kernels; ``Chart.point``), the measures from the k x k determinants on floats,
+the new state and the rows mapped home by index maps (the multipliers by A where they
+map).
+
 Suslov's equations in the paper's convention (29)-(31) are no chart change away from
 each other: the commutator term P_alpha c^alpha weighs the momenta of the dependent
 coordinates, and the motions of two splits differ (``split_invariant``).  Such runs, runs
@@ -49,13 +55,16 @@ from itertools import combinations
 import numpy as np
 import sympy as sp
 
-from ..algebra import dag, linalg
+from ..algebra import linalg
 from ..errors import JetnhError
 from ..mechanics import principles
 from .methods import projection
 from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, SINGULAR, STOPPED
 from . import loops
+from .events import Event, as_events
+from .kernels.calls import Kernel
 from .methods.loop import Watch
+from .trajectory import Trajectory
 
 #: the event name of a chart's edge (internal: the stitched run does not report it)
 EDGE = "chart edge"
@@ -98,8 +107,6 @@ def applies(scene, events) -> bool:
         scene._memo["atlas_applies"] = static
     if not static or events is None:
         return static
-    from .events import as_events
-
     return all(e.is_expression for e in as_events(events))
 
 
@@ -114,7 +121,8 @@ def atlas(scene) -> "Atlas":
 class Chart:
     """One split of an atlas: the positions of its dependent and independent coordinates,
     whether its multipliers weigh the explicit constraints, and its scene (``None`` for a
-    chart used only to map a state)."""
+    chart used only to map a state).  Its kernels, and the compiled df/dqdot, are looked
+    up once (a chart switch calls them and nothing else)."""
 
     def __init__(self, system, split, explicit, scene=None):
         names = [s.name for s in system.J.q]
@@ -125,26 +133,40 @@ class Chart:
         self.explicit = explicit
         self.n, self.k = len(names), len(split)
         self.scene = scene
+        self._kernels = self._jacobian = None
+        self._columns: dict = {}
 
     @property
     def kernels(self):
-        return self.scene.kernels
+        if self._kernels is None:
+            self._kernels = self.scene.kernels
+            self._n_aux = self._kernels.layout.n_aux
+        return self._kernels
+
+    @property
+    def jacobian_kernel(self):
+        """``kernel(t, y, p, out)``: df/dqdot (k x n, row-major) at a state of this chart,
+        compiled once (an events kernel of the entries: expressions in t, q and every
+        velocity, cached on disk with the scene's kernels)."""
+        if self._jacobian is None:
+            ce = self.scene.compile_events(_jacobian_events(self.scene.system))
+            self._jacobian = Kernel(ce.uev, (len(self.scene.state_names),
+                                             len(self.scene.runtime_params),
+                                             self.k * self.n))
+        return self._jacobian
 
     def jacobian(self, t, Y, p) -> np.ndarray:
         """df/dqdot at the rows (t, Y) of this chart: [rows, k, n]."""
-        from .kernels.calls import Kernel
-
-        ce = self.scene.compile_events(_jacobian_events(self.scene.system))
-        kern = Kernel(ce.uev, (Y.shape[1], p.shape[0], self.k * self.n))
+        kern = self.jacobian_kernel
         out = np.empty((Y.shape[0], self.k * self.n))
         for r in range(Y.shape[0]):
-            kern(float(t[r]), np.ascontiguousarray(Y[r]), p, out[r])
+            kern(float(t[r]), Y[r], p, out[r])
         return out.reshape(-1, self.k, self.n)
 
-    def universal(self, t, Y, p):
+    def universal(self, t, Y, p, jacobian=False):
         """``(q, qdot, lam, A, aux)`` of rows of this chart: every velocity, the
-        multipliers of the constraints as written, df/dqdot (explicit forms with
-        multipliers, else None) and the aux rows."""
+        multipliers of the constraints as written, df/dqdot (with ``jacobian``, or for
+        explicit forms with multipliers; else None) and the aux rows."""
         Y = np.ascontiguousarray(np.atleast_2d(Y), dtype=float)
         t = np.ascontiguousarray(np.atleast_1d(np.asarray(t, dtype=float)))
         n, k = self.n, self.k
@@ -155,23 +177,80 @@ class Chart:
         qd[:, self.ind] = Y[:, n:2 * n - k]
         qd[:, self.dep] = aux[:, :k]
         lam = Y[:, 2 * n - k:]
+        explicit = self.explicit and lam.shape[1]
         A = None
-        if self.explicit and lam.shape[1] and Y.shape[0]:
+        if (jacobian or explicit) and Y.shape[0]:
             A = self.jacobian(t, Y, p)
+        if explicit and Y.shape[0]:
             lam = np.linalg.solve(np.transpose(A[:, :, self.dep], (0, 2, 1)),
                                   lam[:, :, None])[:, :, 0]
         return Y[:, :n], qd, lam, A, aux
+
+    def velocities(self, t, y, p) -> np.ndarray:
+        """Every velocity at one state ``y`` of this chart (the dependent ones from its
+        aux kernel)."""
+        n, k = self.n, self.k
+        kern = self.kernels
+        aux = np.empty(self._n_aux)
+        kern.aux(t, y, p, aux)
+        qd = np.empty(n)
+        qd[self.ind] = y[n:2 * n - k]
+        qd[self.dep] = aux[:k]
+        return qd
+
+    def point(self, t, y, p):
+        """``universal`` of one state ``y`` (C-contiguous floats) with df/dqdot:
+        ``(q, qdot, lam, A)``, A k x n; the same numbers, without the rows."""
+        n, k = self.n, self.k
+        qd = self.velocities(t, y, p)
+        A = np.empty(k * n)
+        self.jacobian_kernel(t, y, p, A)
+        A = A.reshape(k, n)
+        lam = y[2 * n - k:]
+        if self.explicit and lam.shape[0]:
+            lam = np.linalg.solve(A[:, self.dep].T[None], lam[None, :, None])[0, :, 0]
+        return y[:n], qd, lam, A
+
+    def columns_of(self, other) -> np.ndarray:
+        """Where the columns of ``other``'s state are in a row of this chart's state
+        followed by its aux row, when the multipliers keep their values (not
+        ``explicit``): coordinates, ``other``'s independent velocities (independent
+        velocities here or dependent ones, the first of aux), multipliers."""
+        found = self._columns.get(other.split)
+        if found is None:
+            n, k = self.n, self.k
+            n_y = len(self.scene.state_names)
+            where = {int(j): n + i for i, j in enumerate(self.ind)}
+            where.update({int(j): n_y + i for i, j in enumerate(self.dep)})
+            found = self._columns[other.split] = np.array(
+                [*range(n), *(where[int(j)] for j in other.ind), *range(2 * n - k, n_y)],
+                dtype=np.int64)
+        return found
 
     def state(self, q, qd, lam, A) -> np.ndarray:
         """Rows of this chart's state from ``(q, qdot, lam, A)`` (``universal``)."""
         if self.explicit and lam.shape[1]:
             lam = np.einsum("rai,ra->ri", A[:, :, self.dep], lam)
-        return np.ascontiguousarray(np.hstack([q, qd[:, self.ind], lam]))
+        return np.concatenate((q, qd[:, self.ind], lam), axis=1)
+
+    def state_at(self, q, qd, lam, A) -> np.ndarray:
+        """``state`` of one point (``point``)."""
+        if self.explicit and lam.shape[0]:
+            return self.state(q[None], qd[None], lam[None], A[None])[0]
+        return np.concatenate((q, qd[self.ind], lam))
+
+
+def _det(M) -> float:
+    """The determinant of a k x k matrix, k <= 3 (``MAX_K``; rows of floats)."""
+    if len(M) == 1:
+        return M[0][0]
+    if len(M) == 2:
+        return M[0][0] * M[1][1] - M[0][1] * M[1][0]
+    (a, b, c), (d, e, f), (g, h, i) = M
+    return a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
 
 
 def _jacobian_events(system):
-    from .events import Event
-
     return [Event(e, name=f"A{i}") for i, e in enumerate(system.jacobian)]
 
 
@@ -188,6 +267,10 @@ class Atlas:
         self.explicit = bool(p.multipliers) and p.form(home.form).explicit
         self.charts = {self.splits[0]: Chart(home.system, self.splits[0], self.explicit,
                                              home)}
+        #: each split as a chart that only maps states (``Chart.state``)
+        self.maps = {s: Chart(home.system, s, self.explicit) for s in self.splits}
+        #: the columns of each split's minor of df/dqdot
+        self.columns = [m.dep.tolist() for m in self.maps.values()]
         self._events: dict = {}
 
     @property
@@ -238,30 +321,23 @@ class Atlas:
         return (Ad.det(method="berkowitz")**2
                 - sp.Float(self.eps) * gram.det(method="berkowitz"))
 
-    def jacobian_at(self, t, q, qd, p) -> np.ndarray:
-        """df/dqdot (k x n) at one point, from the shared graph in double precision (no
-        kernel to compile): it only ranks the splits (``measures``), which rounding
-        cannot mislead beyond a choice between two usable charts."""
-        sys_ = self.home.system
-        J = sys_.J
-        values = {**self.home.params, **dict(zip(self.home.runtime_params, p.tolist()))}
-        point = {J.t: float(t), **dict(zip(J.q, q.tolist())), **dict(zip(J.qd, qd.tolist())),
-                 **{s: float(values[s.name]) for s in sys_.parameters}}
-        found = dag.evaluate_numpy(list(sys_.jacobian), point)
-        return np.array([float(v) for v in found]).reshape(sys_.k, J.n)
-
-    def measures(self, A) -> dict:
-        """m_beta = det(A_beta)^2 / det(A A^T) of every split at one point (A: k x n)."""
-        gram = np.linalg.det(A @ A.T)
-        names = [s.name for s in self.home.system.J.q]
-        return {s: float(np.linalg.det(A[:, [names.index(c) for c in s]]) ** 2 / gram)
-                for s in self.splits}
+    def measures(self, A) -> list[float]:
+        """m_beta = det(A_beta)^2 / det(A A^T) of every split (in the order of
+        ``splits``) at one point (A: k x n); all 0 where A has rank < k (no split is
+        regular)."""
+        rows = A.tolist()
+        gram = _det([[sum(a * b for a, b in zip(r, s)) for s in rows] for r in rows])
+        if not gram > 0.0:
+            return [0.0] * len(self.columns)
+        return [_det([[r[c] for c in cols] for r in rows]) ** 2 / gram
+                for cols in self.columns]
 
     def events(self, chart, user, edge: bool):
         """The compiled events of a run in ``chart``: the user's (rewritten in its
         multipliers) and, with ``edge``, its edge last; or None.  Kept per chart, user
-        events and edge, so that repeated runs build nothing."""
-        key = (chart.split, edge, tuple((sp.srepr(e.fun), e.direction, e.max_events, e.name)
+        events and edge, so that repeated runs build nothing (the key holds the
+        expressions themselves: hashed once by sympy, compared by identity first)."""
+        key = (chart.split, edge, tuple((e.fun, e.direction, e.max_events, e.name)
                                         for e in user))
         found = self._events.get(key)
         if found is None:
@@ -269,8 +345,6 @@ class Atlas:
         return found[0]
 
     def _compile_events(self, chart, user, edge):
-        from .events import Event
-
         sys_ = chart.scene.system
         evs = [Event(e2, terminal=e.max_events, direction=e.direction, name=e.name)
                for e, e2 in zip(user, self.rewrite({i: e.fun for i, e in enumerate(user)},
@@ -287,8 +361,6 @@ def run(home, method, events, t0, t1, y0, p, ctl, te, mode, dense, checked, sing
     in one chart until the run ends or reaches the chart's edge, where it goes on in the
     split of largest measure with the state mapped; one Trajectory of ``home``.
     ``build``: the Trajectory of a piece from its loop's result (``solve.trajectory``)."""
-    from .events import as_events
-
     at = atlas(home)
     user = as_events(events)
     tic = time.perf_counter()
@@ -307,12 +379,10 @@ def begin(at, user, t0, y0, p):
     own = at.own
     if not at.events(own, user, True).python_funcs[-1](t0, y0, p) < 0.0:
         return own, y0, []
-    q, qd, lam, A, _ = own.universal([t0], y0, p)
-    if A is None:
-        A = at.jacobian_at(t0, q[0], qd[0], p)[None]
-    if not at.measures(A[0])[own.split] < at.eps:
+    point = own.point(float(t0), np.ascontiguousarray(y0, dtype=float), p)
+    if not at.measures(point[3])[0] < at.eps:
         return own, y0, []
-    target = _target(at, own, A[0], q, qd, lam, A, t0, p)
+    target = _target(at, own, float(t0), p, *point)
     if target is None:
         return own, y0, []
     chart, y = target
@@ -323,10 +393,10 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
            singular_tol, newton, limit, build, first=True, h_fixed=None, edge=True):
     """Run from (t, y) in ``chart`` to ``t1``, changing chart at every edge; returns the
     pieces ``[(chart, trajectory of the chart's scene made by ``build``, what re-running
-    it needs)]`` and the switches.  ``counts``: occurrences of the user events so far (terminal counts go
-    on); ``first``: whether (t, y) starts the run (else the run goes on after a switch);
-    ``edge``: whether to watch the chart's edge."""
-    user_max = np.array([e.max_events for e in user], dtype=np.int64)
+    it needs)]`` and the switches.  ``counts``: occurrences of the user events so far
+    (terminal counts go on); ``first``: whether (t, y) starts the run (else the run goes
+    on after a switch); ``edge``: whether to watch the chart's edge."""
+    user_max = [e.max_events for e in user]
     parts, switches = [], []
     direction = 1.0 if t1 >= t else -1.0
     if h_fixed is None:
@@ -335,12 +405,12 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
     while True:
         scene, kern = chart.scene, chart.kernels
         ce = at.events(chart, user, edge)
-        remaining = np.where(user_max > 0, user_max - counts, 0)
-        none = np.zeros(0, dtype=np.int64)
+        # the terminal counts left to each user event, then the edge's one
+        left_max = np.array([m - c if m > 0 else 0 for m, c in zip(user_max, counts)]
+                            + [1] * edge, dtype=np.int64)
         watch = Watch(len(kern.layout.indicators) if checked else 0, float(singular_tol),
-                      ce.direction if ce is not None else none,
-                      np.concatenate([remaining, [1] * edge]).astype(np.int64)
-                      if ce is not None else none)
+                      ce.direction if ce is not None else loops.NO_EVENTS,
+                      left_max if ce is not None else loops.NO_EVENTS)
         seg_ctl, seg_te = ctl, te
         if parts or not first:
             n_steps = (max(1, round(abs(t1 - t) / abs(h_fixed))) if ctl.n_steps > 0 else 0)
@@ -406,34 +476,29 @@ def _project_stop(chart, out, p):
 def switch(at, chart, t, y, p):
     """The chart to go on in at the edge of ``chart`` (reached at (t, y), moved onto the
     holonomic constraints) and the state there, or None (``_target``)."""
-    y = _on_constraints(chart, t, y, p)
-    q, qd, lam, A, _ = chart.universal([t], y, p)
-    if A is None:
-        A = at.jacobian_at(t, q[0], qd[0], p)[None]
-    return _target(at, chart, A[0], q, qd, lam, A, t, p)
+    t = float(t)
+    return _target(at, chart, t, p, *chart.point(t, _on_constraints(chart, t, y, p), p))
 
 
-def _target(at, chart, A, q, qd, lam, A_rows, t, p):
+def _target(at, chart, t, p, q, qd, lam, A):
     """The chart to go on in at the edge of ``chart`` and the state there: the split of
     largest measure (at least twice the edge) whose constraints give back the
-    velocities (the same branch), or None."""
+    velocities (the same branch), or None.  ``(q, qd, lam, A)``: ``Chart.point`` there."""
     m = at.measures(A)
-    for split in sorted(m, key=lambda s: -m[s]):
-        if split == chart.split or m[split] < 2 * at.eps:
+    for i in sorted(range(len(m)), key=lambda i: -m[i]):
+        split = at.splits[i]
+        if split == chart.split or m[i] < 2 * at.eps:
             continue
-        draft = Chart(at.home.system, split, at.explicit)
-        y = draft.state(q, qd, lam, A_rows)[0]
+        y = at.maps[split].state_at(q, qd, lam, A)
         new = at.chart(split, t, y)
-        _, qd2, _, _, _ = new.universal([t], y, p)
-        if np.all(np.abs(qd2 - qd) <= 1e-8 * np.maximum(1.0, np.abs(qd))):
+        if all(abs(a - b) <= 1e-8 * max(1.0, abs(b))
+               for a, b in zip(new.velocities(t, y, p).tolist(), qd.tolist())):
             return new, y
     return None
 
 
 def stitch(home, at, method, p, parts, switches, user, mode, wall):
     """One Trajectory of ``home`` from the runs in the charts ``parts``."""
-    from .trajectory import Trajectory
-
     own = at.own
     last = parts[-1][1]
     if len(parts) == 1 and not switches:
@@ -459,12 +524,12 @@ def stitch(home, at, method, p, parts, switches, user, mode, wall):
                 -1, len(chart.scene.state_names)), p).ravel()
             for chart, seg, _ in parts]))
     info = [seg._info for _, seg, _ in parts]
-    return Trajectory(home, np.concatenate(ts), np.vstack(ys), p, method=method,
+    return Trajectory(home, np.concatenate(ts), np.concatenate(ys), p, method=method,
                       status=last.status, stop_reason=last.stop_reason,
                       steps=sum(i["steps"] for i in info),
                       rejected=sum(i["rejected"] for i in info),
                       nfev=sum(i["nfev"] for i in info), wall_time=wall,
-                      kernels=home.kernels, projected=home.projected,
+                      kernels=own.kernels, projected=home.projected,
                       singularity=last.singularity, dense=parts[0][1]._dense,
                       events=(tuple(e.name for e in user), t_ev, y_ev),
                       segments=Stitched(own, tuple(pieces)), switches=tuple(switches))
@@ -475,8 +540,13 @@ def to_home(own, chart, t, Y, p) -> np.ndarray:
     Y = np.ascontiguousarray(np.atleast_2d(Y), dtype=float)
     if chart is own or not Y.shape[0]:
         return Y.reshape(Y.shape[0], len(own.scene.state_names))
-    q, qd, lam, A, _ = chart.universal(t, Y, p)
-    return own.state(q, qd, lam, A)
+    if chart.explicit:
+        q, qd, lam, A, _ = chart.universal(t, Y, p)
+        return own.state(q, qd, lam, A)
+    # the same numbers copied: every column of own's rows is a column of Y or of aux
+    aux = np.empty((Y.shape[0], chart.kernels.layout.n_aux))
+    chart.kernels.aux_rows(np.ascontiguousarray(t, dtype=float), Y, p, aux)
+    return np.concatenate((Y, aux), axis=1).take(chart.columns_of(own), axis=1)
 
 
 # ---------------------------------------------------------------------- stitched views

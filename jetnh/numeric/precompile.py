@@ -9,10 +9,12 @@ its loop instead of compiling it; ``make`` runs it once after installing.
 ``LOOPS`` names the loops ``warm`` can compile, ``<method>:<parts>`` (``loop.features``):
 ``plain`` the loop of a run without events, singularity indicators, projection or
 ``t_eval`` (the most common run), ``t_eval`` with output at ``t_eval``, ``watch+t_eval``
-with that and indicators or events watched, ``all`` with every part; and the loops of
-dla and dvi.  ``DEFAULT``, what ``make`` compiles (about 35 CPU seconds), is the plain
-loop of each continuous method and the default method's loops with ``t_eval`` (those of
-``make run``): the first run of each on a machine loads its loop.  Each loop compiles
+with that and indicators or events watched, ``all`` with every part; the loops of dla
+and dvi; and ``connect:step``, the compiled step of connect's Levenberg-Marquardt search
+(``connect.levenberg``).  ``DEFAULT``, what ``make`` compiles (about 40 CPU seconds), is
+the plain loop of each continuous method, the default method's loops with ``t_eval``
+(those of ``make run``) and connect's step: the first run of each on a machine loads
+its loop.  Each loop compiles
 in a process of its own, as many at a time as there are cores.
 """
 
@@ -28,9 +30,10 @@ PARTS = {"plain": (False, False, False), "t_eval": (False, False, True),
          "watch+t_eval": (True, False, True), "all": (True, True, True)}
 LOOPS = {f"{m}:{name}": (m, parts) for m in ("dop853", "dopri5", "rk4", "radau")
          for name, parts in PARTS.items() if not (m == "rk4" and "t_eval" in name)}
-LOOPS.update(dla=("dla", None), dvi=("dvi", None))
+LOOPS.update({"dla": ("dla", None), "dvi": ("dvi", None),
+              "connect:step": ("connect", None)})
 DEFAULT = (*(n for n in LOOPS if n.endswith(":plain")), "dop853:t_eval",
-           "dop853:watch+t_eval")
+           "dop853:watch+t_eval", "connect:step")
 
 
 def compile_loop(name: str) -> tuple[str, float, bool]:
@@ -46,6 +49,10 @@ def compile_loop(name: str) -> tuple[str, float, bool]:
         d = dla.solver()
     elif method == "dvi":
         d = dvi.solver()
+    elif method == "connect":
+        from .connect import levenberg
+
+        d = levenberg.step()
     else:
         d = loop.solver(METHODS[method].tableau, parts)
     hits = getattr(d, "_cache_hits", {})        # numba's (private): loaded, not compiled

@@ -187,11 +187,8 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     free = [c for c in coords if c not in q1] if principle in VARIATIONAL else []
     shooter = Search(scene, q0, q1, unknowns, fixed, rtol, atol, method, rcond,
                      momenta=Momenta(scene, free) if free else None)
-    starts = [u0] if guess is not None else [shooter.first_guess(u0, q0, q1, t1 - t0)]
-    if guess is None and not shooter.origin:
-        starts.append(shooter.second_guess(u0, q0, q1, t1 - t0))
     failed = None
-    for start in starts:
+    for start in shooter.starts(u0, guess is None, q0, q1, t1 - t0):
         try:
             u, iterations, stitched, route = shooter.solve(start, tol, max_iter,
                                                            max_continuation, segments)

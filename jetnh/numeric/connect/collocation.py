@@ -105,7 +105,7 @@ def warm_start(shooter, rows=None, u=None):
     meshes = []
     got = None if u is None else shooter.endpoint(u)
     if got is not None:
-        Y = got[2].at(t).to_numpy().T.copy()
+        Y = got[2].trajectory.at(t).to_numpy().T.copy()
         miss = shooter.target[:len(shooter.rows)] - Y[shooter.rows, -1]
         Y[shooter.rows] += np.outer(miss, (t - t0) / (t1 - t0))
         meshes.append(Y)

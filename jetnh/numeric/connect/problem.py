@@ -3,6 +3,8 @@ start, the (partial) end, the guess of the initial unknowns, the scene the runs 
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ...errors import JetnhError
@@ -45,15 +47,16 @@ def _configuration(values, coords, what, complete) -> dict[str, float]:
                          f"name, got a {type(values).__name__}")
     out = {}
     for k, v in values.items():
-        name = arguments.name_of(k, f"a coordinate of {what}")
+        # (names and plain floats, the common case, taken as they are)
+        name = k if type(k) is str else arguments.name_of(k, f"a coordinate of {what}")
         if name not in coords:
             raise JetnhError(f"{what} has {name!r}, which is not a coordinate of this "
                              f"system; its coordinates are {', '.join(coords)}")
-        out[name] = arguments.real(v, f"{what}[{name!r}]")
-        if not np.isfinite(out[name]):
+        out[name] = v if type(v) is float else arguments.real(v, f"{what}[{name!r}]")
+        if not math.isfinite(out[name]):
             raise JetnhError(f"{what}[{name!r}] is {out[name]}; give a finite value")
-    missing = [c for c in coords if c not in out]
-    if complete and missing:
+    missing = [c for c in coords if c not in out] if complete else ()
+    if missing:
         raise JetnhError(f"start must give every coordinate; missing {', '.join(missing)}")
     if not out:
         raise JetnhError(f"{what} names no coordinate; give the end configuration "

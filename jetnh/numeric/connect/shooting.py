@@ -1,17 +1,81 @@
 """Single shooting: runs of one scene from the start with the initial unknowns ``u``,
-the endpoint residual and its Jacobian from the exact sensitivities
-(``scene.run(sensitivities=True)``), never finite differences."""
+the endpoint residual and its Jacobian from the exact sensitivities (the runs of
+``scene.run(sensitivities=True)``'s plan, never finite differences), each read off its
+compiled loop's last row (``Shot``: a trial of the search makes no Trajectory)."""
 
 from __future__ import annotations
 
+import math
+import time
+
 import numpy as np
+from scipy.linalg.lapack import dgesdd as _gesdd
 
 from ...errors import JetnhError
-from .. import solve
+from .. import arguments, interrupt, solve
+from ..methods._common import FINISHED
 from ..options import options
 
 #: steps a shooting run may take (a run that needs more counts as failed)
 MAX_STEPS = 20_000
+
+
+def _identity(n, m):
+    """The initial sensitivities of a run, S0 = (I | 0) (n x m), flattened
+    (``solve.augmented``'s), kept per shape."""
+    found = _IDENTITY.get((n, m))
+    if found is None:
+        found = _IDENTITY[n, m] = np.eye(n, m).ravel()
+        found.setflags(write=False)
+    return found
+
+
+_IDENTITY: dict = {}
+
+
+class Shot:
+    """One shooting run as its compiled loop left it: the end time ``t``, the final
+    state ``y`` and its sensitivities ``S`` (n x columns), read off the loop's last row;
+    the ``Trajectory`` (``solve.trajectory``, what ``solve.run`` would have made) only
+    when asked for -- the trials of the search need the end alone."""
+
+    __slots__ = ("t", "y", "S", "_made", "_trajectory")
+
+    @classmethod
+    def of(cls, scene, plan, y, p):
+        """The run of ``plan`` (with sensitivities, a compiled explicit loop) from the
+        state ``y`` with the run-time parameters ``p``, or None where it does not reach
+        the end of its span or ends in a non-finite state."""
+        lay = plan.sens.layout
+        y = np.concatenate((y, _identity(lay.n_state, lay.sensitivity_columns)))
+        halt = np.zeros(1, dtype=np.int64)
+        tic = time.perf_counter()
+        out = interrupt.call(plan.entry, halt, plan.limit,
+                             (*plan.prefix, plan.t0, plan.t1, y, p, *plan.suffix, halt))
+        wall = time.perf_counter() - tic
+        n_out = int(out[3])
+        if int(out[0]) != FINISHED or n_out < 1:
+            return None
+        last = out[2][n_out - 1]
+        if not arguments.all_finite(last):
+            return None
+        self = object.__new__(cls)
+        n = lay.n_state
+        self.t, self.y = float(out[1][n_out - 1]), last[:n]
+        self.S = last[n:].reshape(n, lay.sensitivity_columns)
+        self._made, self._trajectory = (scene, plan, out, wall, y, p), None
+        return self
+
+    @property
+    def trajectory(self):
+        """The run's ``Trajectory`` (made on first access, then kept)."""
+        if self._trajectory is None:
+            scene, plan, out, wall, y, p = self._made
+            self._trajectory = solve.trajectory(
+                scene, plan.method.name, out, wall, plan.kern, plan.ce, p, plan.t0, y,
+                plan.singular_tol, plan.checked, plan.limit,
+                {**plan.dense, "partial_last": False}, sens=plan.sens)
+        return self._trajectory
 
 
 class Shooter:
@@ -24,7 +88,10 @@ class Shooter:
         self.rows = [names.index(c) for c in q1]
         self.target = np.array(list(q1.values()))
         self.cols = [names.index(u) for u in unknowns]
-        self.block = np.ix_(self.rows, self.cols)      # dq_named(t1)/du in S
+        # as index arrays (a list is converted on every use)
+        self._rows = np.array(self.rows, dtype=np.intp)
+        self._cols = np.array(self.cols, dtype=np.intp)
+        self._block = None           # the entries of dq_named(t1)/du in S, flattened
         given = {**q0, **fixed}
         self.y0 = np.array([given.get(n, 0.0) for n in names])
         self.rtol, self.atol, self.method, self.rcond = rtol, atol, method, rcond
@@ -32,42 +99,50 @@ class Shooter:
         self.seen: dict = {}
         self.span = scene.t_span         # the runs' span (continuation in T moves t1)
         self.n_velocities = len(scene.system.independent_velocities)   # lead unknowns
-        self.plans: dict = {}            # the driver's plans of the runs
+        self.plans: dict = {}            # (span, save) -> the driver's plan of the runs
+        self.holonomic = bool(scene.system.holonomic)
 
     def plan(self, span, save="steps"):
         """The driver's plan of a shooting run on ``span`` (with sensitivities; every
         step or the ends), made once: each run then only calls the compiled loop."""
-        key = ("shooting", self.method, self.rtol, solve.hashable(self.atol), span, save,
-               MAX_STEPS)
-        found = self.plans.get(key)
+        found = self.plans.get((span, save))
         if found is None:
+            key = ("shooting", self.method, self.rtol, solve.hashable(self.atol), span,
+                   save, MAX_STEPS)
             # kept on the scene too: repeated problems on one scene plan nothing
-            found = self.plans[key] = solve.planned(self.scene, key, lambda: solve.plan(
-                self.scene, self.method, t_span=span, save=save, sensitivities=True,
-                opts=options(rtol=self.rtol, atol=self.atol, max_steps=MAX_STEPS)))
+            found = self.plans[span, save] = solve.planned(
+                self.scene, key, lambda: solve.plan(
+                    self.scene, self.method, t_span=span, save=save, sensitivities=True,
+                    opts=options(rtol=self.rtol, atol=self.atol, max_steps=MAX_STEPS)))
         return found
 
     def start(self, y, span, save="steps"):
-        """The run of the plan of ``span`` from the state ``y`` (its own array), or
+        """The ``Shot`` of the plan of ``span`` from the state ``y`` (its own array), or
         None where it fails before the end of the span or ends in a non-finite
         state."""
         scene = self.scene
-        if not np.isfinite(y).all():
+        if not arguments.all_finite(y):
             return None
-        try:
-            scene._check_holonomic(y, span[0], scene._p)
-            tr = solve.run(scene, self.plan(span, save), y, scene._p)
-        except JetnhError:
-            return None
-        return tr if tr.status == 0 and np.isfinite(tr.y[-1]).all() else None
+        if self.holonomic:
+            try:
+                scene._check_holonomic(y, span[0], scene._p)
+            except JetnhError:
+                return None
+        return Shot.of(scene, self.plan(span, save), y, scene._p)
 
     def state(self, u) -> np.ndarray:
         y = self.y0.copy()
-        y[self.cols] = u
+        y[self._cols] = u
         return y
 
+    def named(self, S) -> np.ndarray:
+        """dq_named/du, the block of the sensitivities ``S`` (n x columns)."""
+        if self._block is None:
+            self._block = (self._rows[:, None] * S.shape[1] + self._cols).ravel()
+        return S.reshape(-1)[self._block].reshape(len(self._rows), len(self._cols))
+
     def endpoint(self, u):
-        """``(q_named(t1), dq_named(t1)/du, the run)``, or None where the run fails
+        """``(q_named(t1), dq_named(t1)/du, its Shot)``, or None where the run fails
         (the last few kept: the guess and the answer are evaluated more than once)."""
         key = (np.asarray(u, dtype=float).tobytes(), self.span)
         if key not in self.seen:
@@ -77,14 +152,13 @@ class Shooter:
         return self.seen[key]
 
     def _endpoint(self, u):
-        tr = self.run(u)
-        if tr is None:
+        shot = self.run(u)
+        if shot is None:
             return None
-        S = tr.sensitivities[-1]
-        return tr.y[-1, self.rows], S[self.block], tr
+        return shot.y[self._rows], self.named(shot.S), shot
 
     def run(self, u):
-        """The run from the start with the unknowns ``u`` (every step, with
+        """The ``Shot`` from the start with the unknowns ``u`` (every step, with
         sensitivities), or None where it fails before t1 (or takes more than
         ``MAX_STEPS`` steps: a wild trial of the search must not take minutes)."""
         return self.start(self.state(u), self.span)
@@ -98,21 +172,26 @@ class Shooter:
         pattern of the size of the straight-line velocities, with the velocities
         doubled and quadrupled; 12 tries, the first regular one kept (else the first
         that reaches t1)."""
+        u = u0 + 0.0                        # the first try: u0 itself
+        got = self.endpoint(u)
+        reaching = None
+        if got is not None:
+            if self.regular(got):
+                return u
+            newton = self.newton_point(u, got)
+            if newton is not None and self.regular(self.endpoint(newton)):
+                return newton
+            reaching = u
         scale = max([abs(q1[c] - q0[c]) for c in q1] + [1.0]) / abs(T)
         pattern = 0.5 * (-0.6) ** np.arange(len(u0))
         speed = np.ones(len(u0))
-        reaching = None
-        for k in range(12):                 # k = 0: u0 itself
+        for k in range(1, 12):
             speed[:n_velocities] = 2.0 ** (k // 4)
             u = speed * u0 + (scale * np.roll(pattern, k) * (k % 4) if k % 4 else 0.0)
             got = self.endpoint(u)
             if got is not None:
                 if self.regular(got):
                     return u
-                if k == 0:
-                    newton = self.newton_point(u, got)
-                    if newton is not None and self.regular(self.endpoint(newton)):
-                        return newton
                 reaching = u if reaching is None else reaching
         return u0 if reaching is None else reaching
 
@@ -123,7 +202,7 @@ class Shooter:
         largest)."""
         if got is None:
             return False
-        s = np.linalg.svd(got[1], compute_uv=False)
+        s = singular_values(got[1])
         return bool(s.size and s[0] > 0 and s[-1] > 1e-6 * s[0])
 
     def newton_point(self, u, got):
@@ -134,15 +213,40 @@ class Shooter:
         if not s.size:
             return None
         du = -(Vt.T @ ((U.T @ (got[0] - self.target)) / s))
-        du /= max(1.0, np.linalg.norm(du) / max(1.0, np.linalg.norm(u)))
-        return u + du if np.any(du) else None
+        du /= max(1.0, math.sqrt(du.dot(du)) / max(1.0, math.sqrt(u.dot(u))))
+        return u + du if du.any() else None
 
     def svd(self, Jm):
         """The singular value decomposition of the shooting Jacobian with its numerical
         rank (relative cut-off ``rcond``)."""
-        U, s, Vt = np.linalg.svd(Jm, full_matrices=False)
-        r = int(np.sum(s > self.rcond * s[0])) if s.size and s[0] > 0 else 0
+        U, s, Vt = svd(Jm)
+        r = rank(s, self.rcond)
         return U[:, :r], s[:r], Vt[:r]
+
+
+def svd(Jm):
+    """The thin singular value decomposition ``(U, s, Vt)`` of ``Jm`` (LAPACK's gesdd
+    called directly: a small matrix costs a third of ``np.linalg.svd``'s checks)."""
+    if Jm.size:
+        U, s, Vt, info = _gesdd(Jm, compute_uv=1, full_matrices=0)
+        if info == 0:
+            return U, s, Vt
+    return np.linalg.svd(Jm, full_matrices=False)
+
+
+def singular_values(Jm):
+    """The singular values of ``Jm``, largest first."""
+    if Jm.size:
+        _, s, _, info = _gesdd(Jm, compute_uv=0)
+        if info == 0:
+            return s
+    return np.linalg.svd(Jm, compute_uv=False)
+
+
+def rank(s, rcond) -> int:
+    """The numerical rank of singular values ``s`` (largest first): those above
+    ``rcond`` times the largest."""
+    return int(np.count_nonzero(s > rcond * s[0])) if s.size and s[0] > 0 else 0
 
 
 #: growth max |dy(t1)/dy(t0)| of the guess's run above which the default splits the span
@@ -158,10 +262,9 @@ def default_segments(shooter, u) -> int:
     got = shooter.endpoint(u)
     if got is None:
         return MAX_SEGMENTS
-    tr = got[2]
     n = len(shooter.y0)
-    growth = float(np.max(np.abs(tr.sensitivities[-1][:, :n])))
-    if not np.isfinite(growth):
+    growth = float(abs(got[2].S[:, :n]).max())
+    if not math.isfinite(growth):
         return MAX_SEGMENTS
     if growth <= GROWTH:
         return 1
@@ -211,10 +314,10 @@ class Segments:
         F = np.empty((k - 1) * n + len(sh.rows))
         Jm = np.zeros((F.size, U.size))
         for i, y in enumerate(starts):
-            tr = self.run(i, y)
-            if tr is None:
+            shot = self.run(i, y)
+            if shot is None:
                 return None
-            end, S = tr.y[-1], tr.sensitivities[-1][:, :n]
+            end, S = shot.y, shot.S[:, :n]
             # columns: segment 0 depends on u (its unknowns' states), the others on Y_i
             cols = (slice(0, m), sh.cols) if i == 0 else (slice(m + (i - 1) * n,
                                                                   m + i * n), slice(None))

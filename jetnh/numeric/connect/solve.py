@@ -11,8 +11,9 @@ import numpy as np
 from ...errors import ConnectError, JetnhError
 from . import direct
 from .connection import Connection, Stitched
+from .levenberg import levenberg_marquardt
 from .problem import VARIATIONAL
-from .shooting import Segments, Shooter, default_segments
+from .shooting import Segments, Shooter, default_segments, rank, singular_values
 
 #: Levenberg-Marquardt iterations per continuation step (at most ``max_iter``)
 STEP_ITER = 20
@@ -35,15 +36,17 @@ class Search(Shooter):
             self.target = np.concatenate([self.target, np.zeros(len(momenta.free))])
 
     def _endpoint(self, u):
-        tr = self.run(u)
-        return None if tr is None else (*self.end_conditions(tr), tr)
+        shot = self.run(u)
+        return None if shot is None else (*self.end_conditions(shot.t, shot.y, shot.S),
+                                           shot)
 
-    def end_conditions(self, tr):
-        """The end conditions' values at the end of ``tr`` (a run from the start with
-        sensitivities) and their derivatives by the unknowns."""
-        y, S = tr.y[-1], tr.sensitivities[-1][:, :len(self.y0)]
-        values, D = self.conditions_at(tr.t[-1], y)
-        return values, D @ S[:, self.cols]
+    def end_conditions(self, t, y, S):
+        """The end conditions' values at the end ``(t, y)`` of a run from the start with
+        the sensitivities ``S`` there, and their derivatives by the unknowns."""
+        if self.momenta is None:
+            return y[self._rows], self.named(S)
+        values, D = self.conditions_at(t, y)
+        return values, D @ S[:, self._cols]
 
     def conditions_at(self, t, y):
         """The end conditions' values at the state ``y`` at t1 and their derivatives by
@@ -70,6 +73,17 @@ class Search(Shooter):
                 return u
         return self.regular_start(u0, q0, q1, T, self.n_velocities)
 
+    def starts(self, u0, default, q0, q1, T):
+        """The starts of the search, each made when the one before has failed: the
+        guess ``u0`` as given; or (``default``: the straight line) ``first_guess`` and,
+        unless that is the collocation warm start, ``second_guess``."""
+        if not default:
+            yield u0
+            return
+        yield self.first_guess(u0, q0, q1, T)
+        if not self.origin:
+            yield self.second_guess(u0, q0, q1, T)
+
     def second_guess(self, u0, q0, q1, T):
         """Where the search from ``first_guess`` fails: the straight line ``u0`` moved
         by the first step of ``regular_start``'s pattern (the velocities' scale times
@@ -88,18 +102,25 @@ class Search(Shooter):
         """Levenberg-Marquardt (``levenberg_marquardt``) on the end conditions = target
         (only those of ``rows`` when given); a least-squares point with the end missed
         raises ``unreachable``.  Returns ``(u, converged, iterations)``."""
-        pick = slice(None) if rows is None else list(rows)
+        endpoint = self.endpoint
+        if rows is None:
+            def evaluate(v):
+                got = endpoint(v)
+                return None if got is None else (got[0] - target, got[1])
+            scale = 1.0 + np.abs(target)
+        else:
+            pick = list(rows)
 
-        def evaluate(v):
-            got = self.endpoint(v)
-            return None if got is None else ((got[0] - target)[pick], got[1][pick])
+            def evaluate(v):
+                got = endpoint(v)
+                return None if got is None else ((got[0] - target)[pick], got[1][pick])
+            scale = (1.0 + np.abs(target))[pick]
 
         def stuck(v, F, Jm):
             if self.least_squares_point(F, Jm):
                 raise self.unreachable(v)
 
-        return levenberg_marquardt(evaluate, u, (1.0 + np.abs(target))[pick], tol,
-                                   max_iter, self.svd, stuck)
+        return levenberg_marquardt(evaluate, u, scale, tol, max_iter, self.rcond, stuck)
 
     def solve(self, u0, tol, max_iter, max_continuation, segments=None):
         """The routes in turn, each from what the last left: multiple shooting on
@@ -191,11 +212,11 @@ class Search(Shooter):
         Jm = got[1] / (1.0 + np.abs(self.target))[:, None]
         norms = np.linalg.norm(Jm, axis=0)
         Jm = Jm / np.where(norms > 0, norms, 1.0)
-        _, s, _ = self.svd(Jm)
-        if len(s) >= n_cond:
+        r = rank(singular_values(Jm), self.rcond)
+        if r >= n_cond:
             return None
         _, _, piv = qr(Jm.T, pivoting=True)
-        return sorted(int(r) for r in piv[:max(len(s), 1)])
+        return sorted(int(i) for i in piv[:max(r, 1)])
 
     def continuation(self, u0, tol, max_iter, max_continuation, rows=None):
         """Continuation in the endpoint: the conditions ``rows`` (all when None) follow
@@ -285,7 +306,7 @@ class Search(Shooter):
         U0 = seg.guess(u0)
         U, ok, its = levenberg_marquardt(lambda U: seg.evaluate(U, self.target), U0,
                                          seg.scale(U0, self.target), tol, max_iter,
-                                         self.svd)
+                                         self.rcond)
         if not ok:
             return u0, False, its, None
         try:
@@ -317,8 +338,7 @@ class Search(Shooter):
         got = self.endpoint(u)
         if got is None:
             return ""
-        s = np.linalg.svd(got[1], compute_uv=False)
-        r = int(np.sum(s > self.rcond * s[0])) if s.size and s[0] > 0 else 0
+        r = rank(singular_values(got[1]), self.rcond)
         if len(self.target) > r:
             return (f" (the {self.scene.principle} motions from the start reach a "
                     f"{r}-dimensional set of the {len(self.target)} end conditions near "
@@ -340,28 +360,31 @@ class Search(Shooter):
         scene = self.scene
         if stitched is not None:
             tr = stitched
-            got = (*self.end_conditions(tr), tr)
+            q, Jm = self.end_conditions(tr.t[-1], tr.y[-1], tr.sensitivities[-1])
         else:
             got = self.endpoint(u)
-        if got is None:
-            raise ConnectError(f"the motion found stops before t1: "
-                               f"{scene.run(y0=self.state(u)).stop_reason}")
-        q, Jm, tr = got
-        residual = float(np.max(np.abs(q - self.target)))
-        _, s, _ = self.svd(Jm)
-        full = np.linalg.svd(Jm, compute_uv=False)
-        start = list(tr.y[0]) + [float(tr[d][0]) for d in scene.dependent_velocities]
+            if got is None:
+                raise ConnectError(f"the motion found stops before t1: "
+                                   f"{scene.run(y0=self.state(u)).stop_reason}")
+            q, Jm, tr = got[0], got[1], got[2].trajectory
+        miss = abs(q - self.target)
+        residual = float(miss.max())
+        full = singular_values(Jm)
+        # the dependent velocities at t0: the aux kernel on the first row alone
+        aux = np.empty((1, tr.layout.n_aux))
+        tr._kernels.aux_rows(tr.t[:1], tr.y[:1], tr._p, aux)
+        start = list(tr.y[0]) + list(aux[0, :len(scene.dependent_velocities)])
         best = Connection(
             trajectory=tr,
             initial=MappingProxyType({n: float(v) for n, v in zip(
                 scene.state_names + scene.dependent_velocities, start)}),
             residual=residual, principle=scene.principle, unknowns=self.unknowns,
-            rank=len(s), singular_values=tuple(full.tolist()), iterations=iterations,
+            rank=rank(full, self.rcond), singular_values=tuple(full.tolist()),
+            iterations=iterations,
             _columns=tuple(self.cols), _rcond=self.rcond, _run=MappingProxyType(
                 {"rtol": self.rtol, "atol": self.atol, "method": self.method}),
             conditions=self.conditions, route=route)
-        if tol is not None and np.max(np.abs(q - self.target)
-                                      / (1 + np.abs(self.target))) > tol:
+        if tol is not None and (miss / (1 + abs(self.target))).max() > tol:
             raise ConnectError(
                 f"the {scene.principle} motion found ends {residual:.3g} away from end"
                 + self._reachability(u), best)
@@ -390,61 +413,6 @@ def march(u, s, ds, step, max_steps):
     return u, s, ds, total
 
 
-def levenberg_marquardt(evaluate, u, scale, tol, max_iter, svd, stuck=None):
-    """Levenberg-Marquardt on F(u) = 0 (``evaluate(u)`` is ``(F, dF/du)``, or None
-    where the runs fail), in unknowns scaled by the largest
-    column norms of the Jacobian seen so far (More's scaling: the multipliers'
-    columns are often orders of magnitude smaller than the velocities'): the step
-    ``-D^-1 V diag(s / (s^2 + mu)) U^T F`` of the truncated SVD of ``J D^-1`` (``svd``)
-    (mu -> 0: the minimum-norm Gauss-Newton step, quadratic convergence near a
-    solution; mu large: a short step down the gradient), mu adapted by the ratio of
-    the actual to the predicted decrease (Nielsen's rule), a failed run counted as no
-    decrease; ``stuck(u, F, J)`` is told of every rejected step.  Converged: max
-    |F| / ``scale`` <= ``tol``.  Returns ``(u, converged, iterations)``."""
-    got = evaluate(u)
-    if got is None:
-        return u, False, 0
-    F, Jm = got
-    d = np.ones(len(u))
-    mu = nu = None
-    for it in range(1, max_iter + 1):
-        if np.max(np.abs(F) / scale) <= tol:
-            return u, True, it - 1
-        # a column far below the largest (an unknown the end does not feel) keeps
-        # a floor: its scaled column is then cut by rcond instead of blown up
-        norms = np.linalg.norm(Jm, axis=0)
-        norms = np.maximum(norms, 1e-6 * norms.max()) if norms.max() > 0 else 1.0
-        d = np.maximum(d, norms) if it > 1 else norms
-        U, s, Vt = svd(Jm / d)
-        if not s.size:
-            return u, False, it
-        if mu is None:
-            mu, nu = 1e-6 * s[0] ** 2, 2.0
-        du = -(Vt.T @ (s * (U.T @ F) / (s**2 + mu))) / d
-        # at most the size of the unknowns (and 1): stay on the branch of solutions
-        # the search starts near instead of jumping to a far one
-        du /= max(1.0, np.linalg.norm(du) / max(1.0, np.linalg.norm(u)))
-        trial = evaluate(u + du)
-        linear = F + Jm @ du
-        predicted = F @ F - linear @ linear
-        rho = -1.0
-        if trial is not None and predicted > 0:
-            F_new = trial[0]
-            rho = (F @ F - F_new @ F_new) / predicted
-        if rho > 0:
-            u, (F, Jm) = u + du, trial
-            mu *= max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
-            nu = 2.0
-        else:
-            if stuck is not None:
-                stuck(u, F, Jm)
-            mu *= nu
-            nu *= 2.0
-            if mu > 1e20 * s[0] ** 2:          # no step of any length decreases |F|
-                return u, False, it
-    return u, bool(np.max(np.abs(F) / scale) <= tol), max_iter
-
-
 def _closer(a, b):
     """Of two ``ConnectError`` (or None), the one whose ``best`` ends nearer the end."""
     if a is None or (b.best is not None and (a.best is None
@@ -466,10 +434,10 @@ class _Segments(Segments):
             sh.target = full
 
     def run(self, i, y):
-        tr = super().run(i, y)
+        shot = super().run(i, y)
         if i == self.k - 1:
-            self.last = tr
-        return tr
+            self.last = shot
+        return shot
 
     def evaluate(self, U, target):
         sh = self.shooter
@@ -477,10 +445,10 @@ class _Segments(Segments):
         if got is None or sh.momenta is None:
             return got
         F, Jm = got
-        tr, n = self.last, self.n
-        g, G = sh.momenta(tr.t[-1], tr.y[-1])
+        shot, n = self.last, self.n
+        g, G = sh.momenta(shot.t, shot.y)
         block = np.zeros((len(g), U.size))
-        block[:, self.m + (self.k - 2) * n:] = G @ tr.sensitivities[-1][:, :n]
+        block[:, self.m + (self.k - 2) * n:] = G @ shot.S[:, :n]
         return np.concatenate([F, g - target[len(sh.rows):]]), np.vstack([Jm, block])
 
 

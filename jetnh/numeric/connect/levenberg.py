@@ -1,0 +1,148 @@
+"""Levenberg-Marquardt on F(u) = 0: the iteration (``levenberg_marquardt``, in Python: it
+calls the shooting runs) and its step (``step``: the scaling, the SVD, the damped step and
+its predicted decrease in one compiled call, kept in the signed store like the
+integrator loops: a step costs a few microseconds instead of some thirty array calls)."""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import numpy as np
+from numba import types
+
+from ..kernels import loop_cache
+
+#: step() status: a step was made, F already met the tolerance, J has rank 0
+STEP, CONVERGED, NO_RANK = 0, 1, 2
+
+
+def _step(F, Jm, d, u, limit, mu, rcond, first, du):
+    """One step of ``levenberg_marquardt`` from ``u`` with ``F = F(u)``, ``Jm = dF/du``,
+    written into ``du``; returns ``(status, mu, s0, |F|^2, predicted decrease |F|^2 -
+    |F + Jm du|^2)``.  ``d``: the column scales (the largest column norms of the
+    Jacobians seen; ``first``: this one's), each at least 1e-6 of the largest, updated in
+    place; ``mu`` < 0: 1e-6 s0^2, s0 the largest singular value of ``Jm / d``; the step
+    is ``-D^-1 V diag(s / (s^2 + mu)) U^T F`` over the singular values above ``rcond``
+    s0, shortened to at most max(1, |u|).  (Arrays are written, not returned: numba
+    boxes a returned array through a pickle.)"""
+    k, m = Jm.shape
+    for i in range(k):
+        if not abs(F[i]) <= limit[i]:
+            break
+    else:
+        return CONVERGED, mu, 0.0, 0.0, 0.0
+    top = 0.0
+    for j in range(m):
+        c = 0.0
+        for i in range(k):
+            c = math.hypot(c, Jm[i, j])
+        du[j] = c                       # (the column norms, for now)
+        top = max(top, c)
+    for j in range(m):
+        c = max(du[j], 1e-6 * top) if top > 0 else 1.0
+        d[j] = c if first else max(c, d[j])
+    A = np.empty((k, m))
+    for i in range(k):
+        for j in range(m):
+            A[i, j] = Jm[i, j] / d[j]
+    U, s, Vt = np.linalg.svd(A, full_matrices=False)
+    r = 0
+    if s.size and s[0] > 0:
+        for a in range(s.size):
+            if s[a] > rcond * s[0]:
+                r += 1
+    if r == 0:
+        return NO_RANK, mu, 0.0, 0.0, 0.0
+    if mu < 0:
+        mu = 1e-6 * s[0] ** 2
+    for j in range(m):
+        du[j] = 0.0
+    for a in range(r):
+        c = 0.0
+        for i in range(k):
+            c += U[i, a] * F[i]
+        c *= s[a] / (s[a] * s[a] + mu)
+        for j in range(m):
+            du[j] += c * Vt[a, j]
+    size, uu = 0.0, 0.0
+    for j in range(m):
+        du[j] = -du[j] / d[j]
+        size += du[j] * du[j]
+        uu += u[j] * u[j]
+    # at most the size of the unknowns (and 1): stay on the branch of solutions the
+    # search starts near instead of jumping to a far one
+    size = math.sqrt(size / max(1.0, uu))
+    if size > 1.0:
+        for j in range(m):
+            du[j] /= size
+    FF, LL = 0.0, 0.0
+    for i in range(k):
+        lin = F[i]
+        for j in range(m):
+            lin += Jm[i, j] * du[j]
+        FF += F[i] * F[i]
+        LL += lin * lin
+    return STEP, mu, s[0], FF, FF - LL
+
+
+_VEC = types.Array(types.float64, 1, "A")
+_SIGNATURE = types.Tuple((types.int64, types.float64, types.float64, types.float64,
+                          types.float64))(
+    _VEC, types.Array(types.float64, 2, "A"), _VEC, _VEC, _VEC, types.float64,
+    types.float64, types.boolean, _VEC)
+
+
+@functools.cache
+def step():
+    """The compiled ``_step`` (compiled, or loaded from the signed store, on first
+    use)."""
+    return loop_cache.signed_njit(_step, _SIGNATURE, loop_cache.file_stamp(__file__),
+                                  error_model="numpy", nogil=True)
+
+
+def levenberg_marquardt(evaluate, u, scale, tol, max_iter, rcond, stuck=None):
+    """Levenberg-Marquardt on F(u) = 0 (``evaluate(u)`` is ``(F, dF/du)``, or None
+    where the runs fail), in unknowns scaled by the largest
+    column norms of the Jacobian seen so far (More's scaling: the multipliers'
+    columns are often orders of magnitude smaller than the velocities'): the step
+    ``-D^-1 V diag(s / (s^2 + mu)) U^T F`` of the SVD of ``J D^-1`` truncated at
+    ``rcond`` times its largest singular value (``step``)
+    (mu -> 0: the minimum-norm Gauss-Newton step, quadratic convergence near a
+    solution; mu large: a short step down the gradient), mu adapted by the ratio of
+    the actual to the predicted decrease (Nielsen's rule), a failed run counted as no
+    decrease; ``stuck(u, F, J)`` is told of every rejected step.  Converged: max
+    |F| / ``scale`` <= ``tol``.  Returns ``(u, converged, iterations)``."""
+    got = evaluate(u)
+    if got is None:
+        return u, False, 0
+    F, Jm = got
+    u = np.asarray(u, dtype=float)
+    limit = tol * np.asarray(scale, dtype=float)    # converged: |F| <= limit, entrywise
+    compiled = step()
+    d, du, mu, nu = np.ones(len(u)), np.empty(len(u)), -1.0, 2.0
+    for it in range(1, max_iter + 1):
+        status, mu, s0, FF, predicted = compiled(F, Jm, d, u, limit, mu, rcond, it == 1,
+                                                 du)
+        if status == CONVERGED:
+            return u, True, it - 1
+        if status == NO_RANK:
+            return u, False, it
+        v = u + du
+        trial = evaluate(v)
+        rho = -1.0
+        if trial is not None and predicted > 0:
+            F_new = trial[0]
+            rho = (FF - F_new.dot(F_new)) / predicted
+        if rho > 0:
+            u, (F, Jm) = v, trial
+            mu *= max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
+            nu = 2.0
+        else:
+            if stuck is not None:
+                stuck(u, F, Jm)
+            mu *= nu
+            nu *= 2.0
+            if mu > 1e20 * s0 ** 2:          # no step of any length decreases |F|
+                return u, False, it
+    return u, bool((abs(F) <= limit).all()), max_iter
