@@ -3,18 +3,24 @@ catalogue start to where its Chetaev motion is after ``T`` (1 s, or the catalogu
 span where that is shorter).
 
     PYTHONPATH=. python benchmarks/connect_survey.py [--quick] [--models a,b] [--out PATH]
+        [--update]
 
-(default output: benchmarks/results/connect_survey.json)
+(default output: benchmarks/results/connect_survey.json; ``--update`` replaces only the
+rows run in that file, keeping the others)
 
 For each model: the Chetaev run of ``T`` from the catalogue initial state gives ``start``
 (its configuration at 0) and ``end`` (every coordinate at T); then ``jn.connect(model, P,
 start, end, (0, T))`` from the default guess for P in vakonomic, Hoelder, Chetaev,
 Suslov.  The end is reachable under Chetaev by construction; under the other principles
 it may not be (Suslov's motions with zero multipliers are another family; a vakonomic
-end may lie where the endpoint map is singular).  Each case runs in a fresh interpreter
-with a time-out.  The table gives the cost, the verdicts (normal, conjugate times), the
-residual and the wall time; or the failure's class and message.  ``--quick``: the four
-smallest models.
+end may lie where the endpoint map is singular).  Vakonomic and Hoelder take
+``restarts=RESTARTS``: where the first answer has a conjugate time inside the span (no
+minimizer of the action), the restarts (``connect.solve.least_action``: the direct
+route's guess, then moves around the answer) look for a cheaper extremal without one.
+Each case runs in a fresh interpreter with a time-out.  The
+table gives the cost, the verdicts (normal, conjugate times, minimizer), the residual and
+the wall time; or the failure's class and message.  ``--quick``: the four smallest
+models.
 """
 
 from __future__ import annotations
@@ -37,6 +43,8 @@ MODELS = ("heisenberg", "nonholonomic_particle", "chaplygin_sleigh", "knife_edge
           "damped_knife_edge", "damped_chaplygin_sleigh")
 QUICK = ("heisenberg", "nonholonomic_particle", "chaplygin_sleigh", "knife_edge")
 TIMEOUT = 600.0
+#: restarts of the least-action search (``connect(restarts=)``, vakonomic and Hoelder)
+RESTARTS = 8
 
 
 def span(name) -> float:
@@ -69,8 +77,10 @@ def case(name, principle):
     if status != 0:
         return {"failure": "the Chetaev run fails before T"}
     tic = time.perf_counter()
+    variational = principle in ("vakonomic", "holder")
     try:
-        c = jn.connect(system, principle, start, end, (0.0, span(name)))
+        c = jn.connect(system, principle, start, end, (0.0, span(name)),
+                       restarts=RESTARTS if variational else 0)
     except jn.ConnectError as e:
         best = e.best
         return {"seconds": time.perf_counter() - tic, "failure": "ConnectError",
@@ -79,10 +89,11 @@ def case(name, principle):
         return {"seconds": time.perf_counter() - tic, "failure": type(e).__name__,
                 "message": str(e)}
     seconds = time.perf_counter() - tic
-    return {"seconds": seconds, "T": span(name), "cost": c.cost, "normal": c.normal,
-            "conjugate_times": list(c.conjugate_times), "residual": c.residual,
-            "rank": c.rank, "iterations": c.iterations, "route": c.route,
-            "initial": dict(c.initial)}
+    out = {"seconds": seconds, "T": span(name), "cost": c.cost, "normal": c.normal,
+           "conjugate_times": list(c.conjugate_times), "minimizer": c.minimizer,
+           "residual": c.residual, "rank": c.rank, "iterations": c.iterations,
+           "route": c.route, "search": c.search, "initial": dict(c.initial)}
+    return out
 
 
 def row(name, principle, r):
@@ -96,10 +107,12 @@ def row(name, principle, r):
         msg = r["message"].replace("|", "/")
         return f"| {name} | {principle} | {r['failure']} ({r['seconds']:.1f} s): {msg} |"
     ct = ", ".join(f"{t:.4g}" for t in r["conjugate_times"]) or "none"
-    return (f"| {name} | {principle} | cost {r['cost']:.6g}, "
-            f"{'normal' if r['normal'] else 'ABNORMAL'}, conjugate times {ct}, residual "
-            f"{r['residual']:.1e}, rank {r['rank']}, {r['iterations']} it, "
-            f"{r['seconds']:.1f} s, by {r['route']} |")
+    text = (f"| {name} | {principle} | cost {r['cost']:.6g}, "
+            f"{'normal' if r['normal'] else 'ABNORMAL'}, conjugate times {ct}"
+            + (", NOT A MINIMIZER" if r.get("minimizer") is False else "")
+            + f", residual {r['residual']:.1e}, rank {r['rank']}, {r['iterations']} it, "
+            f"{r['seconds']:.1f} s, by {r['route']}")
+    return text + " |"
 
 
 def main():
@@ -110,6 +123,8 @@ def main():
     ap = parser(__doc__, "connect_survey")
     ap.add_argument("--models", help="comma-separated catalogue names (default: all)")
     ap.add_argument("--principles", default=",".join(PRINCIPLES))
+    ap.add_argument("--update", action="store_true",
+                    help="replace only these rows in the results file, keep the others")
     args = ap.parse_args()
     names = args.models.split(",") if args.models else (QUICK if args.quick else MODELS)
     results = {}
@@ -119,6 +134,8 @@ def main():
             r = run_worker(__file__, {"model": name, "principle": p}, TIMEOUT)
             results[f"{name}/{p}"] = r
             print(row(name, p, r), flush=True)
+    if args.update and args.out.exists():
+        results = {**json.loads(args.out.read_text())["results"], **results}
     write("connect_survey", {"T": T, "results": results}, args.out, args.quick)
 
 

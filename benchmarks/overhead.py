@@ -29,7 +29,12 @@ fresh processes with empty numba and kernel caches, the trees alternating within
    with one step (T = 1e-6, ``save="final"``); the ratios to the bare call.  Also the
    bare call of a run of three steps and its arithmetic: its rhs evaluations at the cost
    of one in a long run (T = 100: the difference of the long and the one-step call over
-   their difference in evaluations).  ``--fixed`` measures this alone (seconds).
+   their difference in evaluations).  ``--fixed`` measures this alone (seconds), and 5.
+5. A run interleaved with other work (as the work-precision benchmark's panels run it):
+   a dop853 run of isokinetic_particle (Chetaev, T = 2, rtol 1e-8, ``save="final"``) and
+   the bare call of its compiled loop, each hot (5th percentile of calls in a row), right
+   after a scipy RK45 run of the same problem (median) and after a pause of 1.2 s
+   (median): what caches that other work emptied cost a single call.
 """
 
 import json
@@ -155,6 +160,45 @@ print(json.dumps(out))
 """
 
 
+COLD = r"""
+import json, time
+import numpy as np
+import jetnh.models as models
+from jetnh.numeric import Scene, interrupt
+sc = Scene(models.get("isokinetic_particle"), "chetaev",
+           initial=models.initial("isokinetic_particle"), t_span=(0.0, 2.0)).compile()
+kw = dict(method="dop853", save="final", rtol=1e-8, atol=1e-11)
+run = lambda: sc.run(**kw)
+other = lambda: sc.run(method="scipy-RK45", save="final", rtol=1e-8, atol=1e-11)
+run(); other()
+plan = [v for v in sc._memo["plans"].values() if v.rtol == 1e-8 and v.entry is not None][0]
+p = sc._p
+
+
+def bare():
+    halt = interrupt.flag()
+    return plan.entry(*plan.prefix, plan.t0, plan.t1, sc.y0.copy(), p, *plan.suffix, halt)
+
+
+def timed(f):
+    tic = time.perf_counter(); f(); return time.perf_counter() - tic
+
+
+out = {}
+for name, f in (("run", run), ("bare call", bare)):
+    out[name + ", hot"] = float(np.percentile([timed(f) for _ in range(REPS_HOT)], 5))
+    after = []
+    for _ in range(REPS_OTHER):
+        other(); after.append(timed(f))
+    out[name + ", after a scipy run"] = float(np.median(after))
+    paused = []
+    for _ in range(REPS_PAUSE):
+        time.sleep(1.2); paused.append(timed(f))
+    out[name + ", after a pause"] = float(np.median(paused))
+print(json.dumps(out))
+"""
+
+
 def fresh(root, code, cold=True):
     """``code`` in a fresh process on the tree ``root`` (``cold``: with empty caches):
     its JSON line."""
@@ -177,6 +221,15 @@ def commit(root) -> str:
 def fixed(root, reps) -> dict:
     """The fixed costs against the bare call (section 4) of one tree."""
     return fresh(root, FIXED.replace("REPS_FIXED", str(reps)), cold=False)
+
+
+def interleaved(root, quick) -> dict:
+    """A single run among other work (section 5) on one tree."""
+    reps = (50, 5, 3) if quick else (1000, 60, 8)
+    code = COLD
+    for name, n in zip(("REPS_HOT", "REPS_OTHER", "REPS_PAUSE"), reps):
+        code = code.replace(name, str(n))
+    return fresh(root, code, cold=False)
 
 
 def measure(root, reps_short, reps_long) -> dict:
@@ -240,11 +293,32 @@ def main(argv=None):
         f"replace(initial=...).run() {a['replace(initial=...).run()'] / a['bare call']:.2f}x,"
         f" an ensemble of one {a['ensemble of one'] / a['bare call']:.2f}x")
     print(fixed_summary)
+    among = {name: interleaved(root, args.quick) for name, root in trees.items()}
+    for name, c in among.items():
+        print(f"{name}: " + ", ".join(f"{k} {v * 1e6:.1f} us" for k, v in c.items()),
+              flush=True)
+    cold_table = dict(
+        title="A dop853 run of isokinetic_particle (rtol 1e-8) among other work: hot, right "
+              "after a scipy run, after a pause of 1.2 s (one process per tree)",
+        columns=["", *(f"{n} (us)" for n in trees)],
+        rows=[[k, *(f"{among[n][k] * 1e6:.3g}" for n in trees)] for k in among["after"]],
+        note="trees (commits): " + ", ".join(f"{n} = {commit(p)}" for n, p in trees.items()))
+    c = among["after"]
+    cold_summary = (
+        f"a single dop853 run of isokinetic_particle at rtol 1e-8 costs "
+        f"{c['run, hot'] * 1e6:.3g} us hot, {c['run, after a scipy run'] * 1e6:.3g} us right "
+        f"after a scipy run and {c['run, after a pause'] * 1e6:.3g} us after a pause of 1.2 s "
+        f"(its bare compiled call {c['bare call, hot'] * 1e6:.3g}, "
+        f"{c['bare call, after a scipy run'] * 1e6:.3g} and "
+        f"{c['bare call, after a pause'] * 1e6:.3g} us)")
+    print(cold_summary)
     if args.fixed:
         out = args.out if args.out != RESULTS / "overhead.json" else None
         write("overhead_fixed", dict(title="Overhead of a run: the fixed cost against the bare "
-                                     "call", summary=[fixed_summary], tables=[fixed_table],
-                               fixed=cost, trees={n: commit(p) for n, p in trees.items()}),
+                                     "call", summary=[fixed_summary, cold_summary],
+                                     tables=[fixed_table, cold_table], fixed=cost,
+                                     interleaved=among,
+                                     trees={n: commit(p) for n, p in trees.items()}),
               out, args.quick)
         return
     runs = {name: [] for name in trees}
@@ -283,8 +357,8 @@ def main(argv=None):
                        f"of which the compiled loop {a['call_s_dop853'] * 1e6:.1f} us")
     for s in summary:
         print(s)
-    summary.append(fixed_summary)
-    tables = [fixed_table,
+    summary += [fixed_summary, cold_summary]
+    tables = [fixed_table, cold_table,
               dict(title="First run, fixed cost, cost per evaluation (rolling disk; fresh "
                          "processes, empty caches; best of the rounds)",
                    columns=[""] + names + [f"after / {n}" for n in names[:-1]], rows=rows,
@@ -292,7 +366,7 @@ def main(argv=None):
                                                         for n, p in trees.items()))]
     write("overhead", dict(title="Overhead of a run: first run, fixed cost, cost per "
                                  "evaluation", summary=summary, tables=tables, runs=runs,
-                           fixed=cost, trees={n: commit(p) for n, p in trees.items()}),
+                           fixed=cost, interleaved=among, trees={n: commit(p) for n, p in trees.items()}),
           args.out, args.quick)
 
 

@@ -124,6 +124,33 @@ def test_cli_segments_and_free_end(capsys):
     assert abs(data["cost"] - 0.6**2 / 2) < 1e-9
 
 
+def test_cli_restarts_replace_a_geodesic_past_its_conjugate_point(capsys):
+    """The geodesic with omega = 2 pi / 0.6 over [0, 1] is no minimizer (conjugate at
+    0.6); ``--restarts`` finds the minimizing circle to the same end: one turn of a
+    circle with |omega| < 2 pi, whose action is smaller and which has no conjugate time."""
+    import json
+    import math
+
+    from jetnh.cli import main
+
+    omega, theta = 2 * math.pi / 0.6, -0.7
+    w = 1 / (1j * omega) * np.exp(1j * theta) * (np.exp(1j * omega) - 1)
+    z = (1 - math.sin(omega) / omega) / omega
+    to = f"x={float(w.real)!r},y={float(w.imag)!r},z={z!r}"
+    base = ["connect", "heisenberg", "--from", "x=0,y=0,z=0", "--to", to, "--t-end", "1",
+            "--guess", "x_t=0.7,y_t=-0.6,lambda_z=5", "-q"]
+    assert main(base + ["--format", "json"]) == 0
+    first = json.loads(capsys.readouterr().out)
+    assert first["minimizer"] is False and abs(first["cost"] - 0.5) < 1e-7
+    assert main(base + ["--restarts", "4"]) == 0
+    out = capsys.readouterr().out
+    assert "minimizer: no" not in out and "search:" in out
+    assert main(base + ["--restarts", "4", "--format", "json"]) == 0
+    best = json.loads(capsys.readouterr().out)
+    assert best["minimizer"] is True and best["conjugate_times"] == []
+    assert abs(best["cost"] - 0.21287016487) < 1e-7 and best["residual"] < 1e-9
+
+
 def test_stitched_segments_where_single_shooting_cannot_polish():
     """a = 4, T = 10: sensitivities ~ e^40, past what single shooting can hold at rtol
     1e-11, so the answer is the segments' runs stitched into one motion; its end, its

@@ -20,9 +20,11 @@ watchdog thread sets the flag:
 - past ``timeout`` seconds: ``halt[0] = TIMEOUT``; the loop returns what it has, with
   status STOPPED.
 
-The watchdog is one daemon thread, started on demand and ended after ``IDLE`` seconds
-with nothing to watch (it drops the bytes of signals that came while it was not
-running).  A call costs a registration (a lock and a dict entry), not a thread
+The watchdog is one daemon thread, started on demand (without waiting for it to run:
+``threading.Thread.start`` waits for a hand-over that costs a short run's time several
+times) and ended after ``IDLE`` seconds with nothing to watch (it drops the bytes of
+signals that came while it was not running), so that runs interleaved with other work
+find it running.  A call costs a registration (a lock and a dict entry), not a thread
 hand-over.  Signals reach only the main thread, so elsewhere only the timeout is watched.
 """
 
@@ -34,6 +36,7 @@ import os
 import select
 import signal
 import _signal
+import _thread
 import socket
 import threading
 import time
@@ -42,7 +45,7 @@ import numpy as np
 
 INTERRUPT, TIMEOUT = 1, 2
 #: seconds the watchdog waits with nothing to watch before it ends
-IDLE = 1.0
+IDLE = 60.0
 
 
 def flag() -> np.ndarray:
@@ -61,7 +64,7 @@ class _Watchdog:
         self.control, self.control_w = socket.socketpair()
         for s in (self.signals, self.signal_w, self.control, self.control_w):
             s.setblocking(False)
-        self.thread = None
+        self.thread = None                     # its ident while it runs
         self.own = self.signal_w.fileno()      # the wakeup fd the watchdog hears
 
     def close(self):
@@ -74,9 +77,7 @@ class _Watchdog:
             self.calls[key] = [halt, deadline, forward]
             if self.thread is None:
                 _drain(self.signals)          # signals from before this watch
-                self.thread = threading.Thread(target=self._loop, name="jetnh-watchdog",
-                                               daemon=True)
-                self.thread.start()
+                self.thread = _thread.start_new_thread(self._loop, ())
         if deadline is not None:
             self._poke()
         return key

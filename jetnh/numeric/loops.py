@@ -17,7 +17,7 @@ import numpy as np
 from . import interrupt, methods
 from .methods import Solver
 from .methods._common import AT_T_EVAL
-from .methods.loop import Result, Watch
+from .methods.loop import Result, Watch, features
 
 NO_EVENTS = np.zeros(0, dtype=np.int64)
 
@@ -34,11 +34,23 @@ def entry(scene, method, kern, ce, sens, ctl, te, mode, watch, newton):
     if method.solver is Solver.IMPLICIT:
         jac = scene.jacobian.address if sens is None else sens.jac_fp
         callbacks = (rhs, jac, kern.sing_fp, uev, hol)
-        return (kern.implicit(), tuple(f.address for f in callbacks),
+        return (methods.implicit_solver(features(ctl, mode, watch)),
+                tuple(f.address for f in callbacks),
                 (ctl, newton, te, mode, watch), callbacks)
     callbacks = (rhs, kern.sing_fp, uev, hol)
-    return (methods.explicit_solver(method), tuple(f.address for f in callbacks),
-            (ctl, te, mode, watch), callbacks)
+    return (methods.explicit_solver(method, features(ctl, mode, watch)),
+            tuple(f.address for f in callbacks), (ctl, te, mode, watch), callbacks)
+
+
+def result(out) -> Result:
+    """The ``Result`` of the tuple a loop returned (a loop that watched nothing returns
+    no event records and its last time and state as row ``n_out`` of its output:
+    ``loop._solve``)."""
+    if len(out) == len(Result._fields):
+        return Result._make(out)
+    status, ts, ys, n_out, stats, sing_index = out
+    return Result(status, ts, ys, n_out, stats, float(ts[n_out]), ys[n_out], np.empty(0),
+                  np.empty(0, dtype=np.int64), np.empty((0, ys.shape[1])), 0, sing_index)
 
 
 def call(scene, method, kern, ce, watch, t0, t1, y, p, ctl, te, mode, newton, limit,
@@ -53,7 +65,7 @@ def call(scene, method, kern, ce, watch, t0, t1, y, p, ctl, te, mode, newton, li
     halt = np.zeros(1, dtype=np.int64)
     tic = time.perf_counter()
     out = interrupt.call(lambda: loop(*prefix, t0, t1, y, p, *suffix, halt), halt, limit)
-    return Result._make(out), time.perf_counter() - tic
+    return result(out), time.perf_counter() - tic
 
 
 def retake(traj, t0, t1, y, tau):

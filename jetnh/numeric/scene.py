@@ -363,7 +363,7 @@ class Scene(Frozen):
         new = Scene(system, principle, **args)
         if new._kernel_identity() == self._kernel_identity():
             # the same kernels: their key and the plans of runs go with them
-            new._memo.update((k, self._memo[k]) for k in _SHARED if k in self._memo)
+            new._memo.update(self._shared_memo())
         return new
 
     def _moved(self, initial, t_span) -> "Scene":
@@ -372,7 +372,7 @@ class Scene(Frozen):
         (``_SHARED``, and ``_p``) taken over rather than made anew; the dependent
         velocities by the compiled kernels where they are loaded and apply
         (``_dependent_velocity_floats``)."""
-        if not isinstance(initial, Mapping):
+        if type(initial) is not dict and not isinstance(initial, Mapping):
             raise JetnhError(f"initial must be a dict keyed by Symbol or name, got a "
                              f"{type(initial).__name__}")
         new = object.__new__(Scene)
@@ -388,9 +388,20 @@ class Scene(Frozen):
         y0 = np.array([ini[n] for n in self.state_names], dtype=float)
         y0.flags.writeable = False
         d.update(initial=ini, y0=y0)
-        memo = self._memo
-        d["_memo"] = {k: memo[k] for k in _SHARED + ("_p",) if k in memo}
+        d["_memo"] = self._shared_memo()
+        if "_p" in self._memo:
+            d["_memo"]["_p"] = self._memo["_p"]
         return new
+
+    def _shared_memo(self) -> dict:
+        """What a scene with the same kernels takes over from this one's memo
+        (``_SHARED``), the stores of plans and compiled events made here first, so that
+        this scene, its copies and theirs fill one store (a copy made before this scene's
+        first run plans nothing its siblings planned)."""
+        memo = self._memo
+        memo.setdefault("plans", {})
+        memo.setdefault("events", {})
+        return {k: memo[k] for k in _SHARED if k in memo}
 
     def _kernel_identity(self) -> tuple:
         """What the compiled kernels of this scene are a function of."""
@@ -506,15 +517,18 @@ class Scene(Frozen):
             naming the time and the state instead.  Every argument is checked before it
             reaches compiled code (``numeric.arguments``).
         """
-        if (rtol is None and atol is None and t_eval is None and method == "dop853"
-                and events is None and t_span is None and timeout is None
+        if (t_eval is None and events is None and t_span is None and timeout is None
                 and projection is False and backend is None and step is None
                 and singular == "stop" and newton is None and sensitivities is False
-                and sensitivity_error is True and not keywords
-                and (save == "steps" or save == "final")):
-            # every option as its default but save (a str): the key, sooner
+                and sensitivity_error is True and not keywords and type(method) is str
+                and (save == "steps" or save == "final")
+                and (rtol is None or type(rtol) is float)
+                and (atol is None or type(atol) is float)):
+            # every option as its default but the method (a str), save and the
+            # tolerances (floats): a short key, sooner (a run interleaved with other work
+            # finds little of the longer key's work in the caches)
             span = self.t_span
-            key = ("defaults", save, span)
+            key = ("common", method, save, rtol, atol, span)
         else:
             span = self.t_span if t_span is None else arguments.time_span(t_span)
             key = (rtol, solve.hashable(atol), method, save, span, timeout, projection,

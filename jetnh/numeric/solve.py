@@ -27,7 +27,7 @@ from .methods import STATUS_TEXT, Solver
 from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, FINISHED, NONFINITE,
                               SINGULAR, STOPPED, entry_point)
 from .kernels import sensitivity_kernels
-from .methods.loop import Control, Watch
+from .methods.loop import Control, Result, Watch
 from .options import fields_of, options
 from .trajectory import Trajectory, _info
 
@@ -43,7 +43,8 @@ class Plan:
     ``entry(*prefix, t0, t1, y0, p, *suffix, halt)`` is the call of the loop of the
     compiled methods (``loop.solver`` or radau's); ``ctl``, ``te``, ``mode``, ``watch``,
     ``newton`` are among its arguments.  ``dense``: what re-taking a step needs
-    (``numeric.dense``; None: no dense output).  ``sens``: the kernels of the state
+    (``numeric.dense``; None: no dense output), ``dense_ends`` it completed for a run
+    whose last step is whole and for one stopped inside its last step (made once).  ``sens``: the kernels of the state
     augmented by its sensitivities, ``sens_tol`` their tolerances.  ``switch``: the run
     goes on across its chart's edge (``numeric.atlas``).  The discrete methods read
     ``steps``, ``newton_tol``, ``max_newton``, ``projection``; scipy's ``first`` and
@@ -68,6 +69,7 @@ class Plan:
     newton: object = None
     switch: bool = False
     dense: dict | None = None
+    dense_ends: tuple | None = None
     sens: object = None
     sens_error: bool = True
     steps: int = 0
@@ -199,11 +201,12 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
         mode = AT_T_EVAL if t_eval is not None else ENDPOINTS
     # radau's steps depend on the steps before (Newton's starting values, the Jacobian
     # kept): no re-taking of one step (numeric.dense)
-    dense = None
+    dense = ends = None
     if m.solver is not Solver.IMPLICIT and not batch:
         dense = {"rtol": rtol, "atol": atol_v, "mode": mode, "ctl": ctl}
         if sens is not None:
             dense["rhs"] = sens
+        ends = tuple({**dense, "partial_last": cut} for cut in (False, True))
     newton = None
     if m.solver is Solver.IMPLICIT:
         from .methods import radau
@@ -226,7 +229,8 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
     entry, prefix, suffix, callbacks = loops.entry(scene, m, kern, ce, sens, ctl, te, mode,
                                                     watch, newton)
     return Plan(**common, rtol=rtol, atol=atol_v, ce=ce, watch=watch, kern=kern, ctl=ctl,
-                te=te, mode=mode, newton=newton, switch=switch, dense=dense, entry=entry,
+                te=te, mode=mode, newton=newton, switch=switch, dense=dense,
+                dense_ends=ends, entry=entry,
                 prefix=prefix, suffix=suffix, callbacks=callbacks)
 
 
@@ -316,41 +320,58 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
                          plan.checked, plan.singular_tol, plan.newton, plan.limit,
                          trajectory)
     halt = np.zeros(1, dtype=np.int64)
-    entry, prefix, suffix, t0, t1 = plan.entry, plan.prefix, plan.suffix, plan.t0, plan.t1
+    t0 = plan.t0
     tic = time.perf_counter()
-    out = interrupt.call(entry, halt, plan.limit, (*prefix, t0, t1, y, p, *suffix, halt))
+    out = interrupt.call(plan.entry, halt, plan.limit,
+                         (*plan.prefix, t0, plan.t1, y, p, *plan.suffix, halt))
     wall = time.perf_counter() - tic
-    if dense is not None:    # the run's own copy; stopped inside a step
-        dense = {**dense, "partial_last": int(out[0]) in (EVENT, SINGULAR)}
+    if dense is not None:    # stopped inside a step or not
+        dense = plan.dense_ends[out[0] in (EVENT, SINGULAR)]
+        if plan.sens is not None:           # the run's own (``trajectory`` adds its rows)
+            dense = dict(dense)
     return trajectory(scene, m.name, out, wall, plan.kern, plan.ce, p, t0, y,
                       plan.singular_tol, plan.checked, plan.limit, dense, sens=plan.sens)
 
 
 def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, checked,
                timeout=None, dense=None, n_events=None, sens=None) -> Trajectory:
-    """A Trajectory from the ``Result`` of a compiled loop (or an error); with
-    ``n_events``, only the first ``n_events`` events of ``ce`` are reported; with
-    ``sens`` (the kernels of a run with sensitivities) the state's columns, and the
-    sensitivities apart."""
-    (status, ts, ys, n_out, stats, t_last, y_last, ev_t, ev_i, ev_y, n_ev,
-     sing_index) = out
+    """A Trajectory from the ``Result`` of a compiled loop, or the tuple it returned
+    (``loop._solve``), or an error; with ``n_events``, only the first ``n_events`` events
+    of ``ce`` are reported; with ``sens`` (the kernels of a run with sensitivities) the
+    state's columns, and the sensitivities apart."""
+    if len(out) == 6:      # a loop that watched nothing: no events
+        status, ts, ys, n_out, stats, sing_index = out
+        if status != FINISHED:      # its last time and state (row n_out), for diagnosis
+            t_last, y_last = float(ts[n_out]), ys[n_out]
+    else:
+        (status, ts, ys, n_out, stats, t_last, y_last, ev_t, ev_i, ev_y, n_ev,
+         sing_index) = out
+    # a loop's status is never a success with a NaN or an infinity in the states
+    # (``loop.finite_status``); a ``Result`` (``loops.call``) is checked again: the
+    # atlas moves its last state onto the constraints
+    finite = not isinstance(out, Result)
     status = int(status)
-    extra = {}
+    sensitivities = events = singularity = None
     if sens is not None:
         n = kern.layout.n_state
         ys = ys[:n_out]
         if dense is not None:
             dense["y"] = ys
-        extra["sensitivities"] = (scene._sensitivity_columns(), ys[:, n:].reshape(
+        sensitivities = (scene._sensitivity_columns(), ys[:, n:].reshape(
             n_out, n, sens.layout.sensitivity_columns))
         ys, n_out = np.ascontiguousarray(ys[:, :n]), ys.shape[0]
-        y_last, y_init, ev_y = y_last[:n], y_init[:n], ev_y[:, :n]
-    ts, ys = ts[:n_out], ys[:n_out]
-    singularity = None
-    # never a success with a NaN or infinite state
-    if status in (FINISHED, EVENT) and not arguments.all_finite(ys, y_last):
+        y_init = y_init[:n]
+        if len(out) != 6 or status != FINISHED:
+            y_last = y_last[:n]
+        if ce is not None:
+            ev_y = ev_y[:, :n]
+    if n_out != ts.shape[0]:
+        ts, ys = ts[:n_out], ys[:n_out]
+    if not finite and status in (FINISHED, EVENT) and not arguments.all_finite(ys, y_last):
         status = NONFINITE
-    if status == NONFINITE:
+    if status == FINISHED:
+        reason = STATUS_TEXT[FINISHED]
+    elif status == NONFINITE:
         sing_index = (diagnosis.explain_nonfinite(scene, kern, t_last, y_last, p, t0, y_init,
                                                   singular_tol) if checked else -1)
         if sing_index < 0:
@@ -359,10 +380,10 @@ def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, 
         status = SINGULAR
         singularity = diagnosis.singularity(scene, kern, int(sing_index), t_last, y_last, p,
                                             t0, y_init, singular_tol, nonfinite=True)
+        reason = singularity["reason"]
     elif status == SINGULAR:
         singularity = diagnosis.singularity(scene, kern, int(sing_index), t_last, y_last, p,
                                             t0, y_init, singular_tol)
-    if singularity is not None:
         reason = singularity["reason"]
     elif status == EVENT:
         k = int(ev_i[n_ev - 1])
@@ -376,13 +397,11 @@ def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, 
 
         k = len(ce) if n_events is None else n_events
         t_events, y_events = split_records(k, ev_t[:n_ev], ev_i[:n_ev], ev_y[:n_ev])
-        extra["events"] = (ce.names[:k], t_events, y_events)
+        events = (ce.names[:k], t_events, y_events)
     # the loop's own float64, C-contiguous rows: taken as they are
     return Trajectory._of_run(scene, ts, ys, p, method, status, reason,
-                              _info(int(stats[0]), int(stats[1]), int(stats[2]), wall,
-                                    scene.projected),
-                              kern, extra.get("events"), singularity, dense,
-                              extra.get("sensitivities"))
+                              _info(stats[0], stats[1], stats[2], wall, scene.projected),
+                              kern, events, singularity, dense, sensitivities)
 
 
 # ---------------------------------------------------------------------- many runs

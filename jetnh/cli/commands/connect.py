@@ -50,6 +50,10 @@ def add_parser(sub):
                    help="multiple shooting on K segments of the span (default: chosen "
                         "from the growth of the guess's sensitivities; 1: single "
                         "shooting)")
+    s.add_argument("--restarts", type=int, metavar="K",
+                   help="vakonomic, hoelder: where the motion found has a conjugate time "
+                        "inside the span (no minimizer of the action), look for a cheaper "
+                        "one from K restarts (default 0)")
     s.add_argument("--plot", metavar="PATH",
                    help="save a plot (png, pdf, svg) of the coordinates against t")
     s.add_argument("--format", choices=("text", "json"), default="text")
@@ -82,6 +86,8 @@ def run(args, progress) -> int:
         kw["atol"] = args.atol
     if args.segments is not None:
         kw["segments"] = args.segments
+    if args.restarts is not None:
+        kw["restarts"] = args.restarts
     params = assignments(args.set, "--set") or None
     with progress.step(f"connecting under {principle} over [{t0:g}, {float(t1):g}] "
                        "(kernels compiled once, then cached)"):
@@ -118,8 +124,8 @@ def run(args, progress) -> int:
 def _record(c) -> dict:
     return {"principle": c.principle, "initial": dict(c.initial), "cost": c.cost,
             "residual": c.residual, "normal": c.normal,
-            "conjugate_times": list(c.conjugate_times), "rank": c.rank,
-            "iterations": c.iterations}
+            "conjugate_times": list(c.conjugate_times), "minimizer": c.minimizer,
+            "search": c.search, "rank": c.rank, "iterations": c.iterations}
 
 
 def _print(c, end):
@@ -130,6 +136,11 @@ def _print(c, end):
     print(f"normal:    {'yes' if c.normal else 'no: an abnormal extremal'}")
     print("conjugate: " + (", ".join(f"t = {t:.10g}" for t in c.conjugate_times)
                            or "none in (t0, t1]"))
+    if c.minimizer is False:
+        print("minimizer: no (a conjugate time inside the span; --restarts looks for a "
+              "cheaper motion)")
+    if c.search:
+        print(f"search:    {c.search}")
     if c.rank < len(c.unknowns) and c.rank < len(end):
         print(f"note:      the endpoint is degenerate (shooting Jacobian of rank "
               f"{c.rank}): a family of motions arrives, this is one of them")

@@ -46,8 +46,13 @@ Verdicts on the answer:
 - ``conjugate_times``: the times in (t0, t1] where the map from the initial unknowns to
   the configuration, ``dq(t)/du`` (a block of the sensitivity matrix: the Jacobi fields
   of the extremal), loses rank -- sign changes of its determinant located by Brent's
-  method on the dense output, and t1 itself where it is rank-deficient there.  Past the
-  first, the extremal is no longer a local minimizer of the action.
+  method on the dense output, and t1 itself where it is rank-deficient there.  Rank is
+  judged on the fields scaled as a subspace and by columns (``verdicts.jacobi_measure``),
+  never relative to the sensitivities' size, which grows by orders of magnitude on long
+  unstable spans.  Past the first, the extremal is no longer a local minimizer of the
+  action: ``minimizer`` is False, and ``restarts`` look for a cheaper extremal without
+  a conjugate time inside the span (``solve.least_action``; ``Connection.search`` says
+  what they found).
 - ``normal``: False when the endpoint map of the constraint system (the kinematic
   control system qdot^mu = u^mu, qdot^alpha = phi^alpha(t, q, u)) loses rank along the
   path, i.e. its controllability Gramian ``W' = A W + W A^T + B B^T`` (A, B the partial
@@ -66,7 +71,7 @@ from ...mechanics.system import System
 from .. import arguments, codegen, methods
 from .connection import Connection
 from .problem import VARIATIONAL, Momenta, _configuration, _guess, _scene
-from .solve import STEP_ITER, Search
+from .solve import STEP_ITER, Search, least_action
 from .shooting import GROWTH, MAX_SEGMENTS, MAX_STEPS
 from .verdicts import GRAMIAN_RCOND, action, conjugate_times, gramian_ratio
 
@@ -76,7 +81,7 @@ __all__ = ["connect", "Connection", "VARIATIONAL", "STEP_ITER", "MAX_STEPS", "GR
 
 def connect(system, principle, start, end, t_span, params=None, guess=None, *,
             tol=1e-9, rtol=1e-11, atol=1e-12, max_iter=100, max_continuation=64,
-            rcond=1e-9, method="dop853", segments=None) -> Connection:
+            rcond=1e-9, method="dop853", segments=None, restarts=0) -> Connection:
     """The motion of ``principle`` from ``start`` (every coordinate) at t0 to ``end``
     (some or all coordinates) at t1, as a ``Connection`` (module docstring).
 
@@ -118,6 +123,12 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
         The relative cut-off of singular values: the rank of the shooting Jacobian.
     method : {"dop853", "dopri5"}, default "dop853"
         The integrator (explicit, with dense output).
+    restarts : int, default 0
+        Vakonomic and Hoelder: where the answer has a conjugate time inside the span
+        (no minimizer of the action), this many restarts from around it
+        (``solve.least_action``); the cheapest extremal without a conjugate time
+        inside the span is returned, else the cheapest, with ``Connection.search``
+        saying what was tried.  0: the first answer as found.
     segments : int, optional
         Multiple shooting on this many equal segments of the span (the inner states
         are unknowns too, matched by their exact sensitivities; then single shooting
@@ -160,6 +171,8 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     max_continuation = arguments.count(max_continuation, "max_continuation", limit=100_000)
     if segments is not None:
         segments = arguments.count(segments, "segments", limit=1000)
+    if restarts is not False and restarts != 0:
+        restarts = arguments.count(restarts, "restarts", limit=10_000)
     coords = tuple(s.name for s in system.J.q)
     q0 = _configuration(start, coords, "start", complete=True)
     q1 = _configuration(end, coords, "end", complete=False)
@@ -182,5 +195,7 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
         except ConnectError as e:
             failed = failed or e          # the first start's reasons are reported
             continue
-        return shooter.connection(u, iterations, tol, stitched, route)
+        found = shooter.connection(u, iterations, tol, stitched, route)
+        return least_action(shooter, found, tol, max_iter, restarts) if (
+            restarts and principle in VARIATIONAL) else found
     raise failed

@@ -11,6 +11,7 @@ import numpy as np
 from ...errors import JetnhError
 from ...frozen import readonly
 from ..trajectory import Trajectory
+from .problem import VARIATIONAL
 from .verdicts import (_GAUSS_X, GRAMIAN_RCOND, _Samples, action, conjugate_times,
                        gramian_ratio)
 
@@ -41,6 +42,9 @@ class Connection:
     #: how it was found: "Newton from the guess", "continuation in the endpoint",
     #: "collocation", "continuation in T" or "multiple shooting (k segments)"
     route: str = ""
+    #: what the least-action search (``connect(restarts=)``) tried and where it stopped;
+    #: "" where it did not run
+    search: str = ""
 
     @cached_property
     def _samples(self):
@@ -73,10 +77,23 @@ class Connection:
         return conjugate_times(self.trajectory, list(self._columns), self._samples,
                                self._rcond)
 
+    @property
+    def minimizer(self):
+        """Vakonomic and Hoelder: False where a conjugate time lies inside (t0, t1) --
+        the extremal is then no local minimizer of the action (Jacobi's necessary
+        condition); True where none does (necessary, not sufficient, for a minimum).
+        None for Chetaev and Suslov, whose motions are not extremals of the action."""
+        if self.principle not in VARIATIONAL:
+            return None
+        t0, t1 = float(self.trajectory.t[0]), float(self.trajectory.t[-1])
+        return not any(abs(t - t1) > 1e-9 * abs(t1 - t0) for t in self.conjugate_times)
+
     def __repr__(self):
         return (f"Connection({self.principle}: cost {self.cost:.12g}, residual "
                 f"{self.residual:.2e}, normal={self.normal}, conjugate_times="
-                f"{tuple(round(t, 10) for t in self.conjugate_times)}, initial="
+                f"{tuple(round(t, 10) for t in self.conjugate_times)}"
+                + ("" if self.minimizer is not False else " (not a minimizer)")
+                + ", initial="
                 f"{dict(self.initial)})")
 
 

@@ -9,6 +9,7 @@ from types import MappingProxyType
 import numpy as np
 
 from ...errors import ConnectError, JetnhError
+from . import direct
 from .connection import Connection, Stitched
 from .levenberg import levenberg_marquardt
 from .problem import VARIATIONAL
@@ -18,6 +19,8 @@ from .shooting import Segments, Shooter, default_segments, rank, singular_values
 STEP_ITER = 20
 #: the first span of the continuation in T, as a fraction of T
 FIRST_SPAN = 0.125
+#: multiple shooting segments from the direct route's guess (``least_action``)
+DIRECT_SEGMENTS = 4
 
 
 
@@ -447,3 +450,67 @@ class _Segments(Segments):
         block = np.zeros((len(g), U.size))
         block[:, self.m + (self.k - 2) * n:] = G @ shot.S[:, :n]
         return np.concatenate([F, g - target[len(sh.rows):]]), np.vstack([Jm, block])
+
+
+def least_action(search, found, tol, max_iter, restarts):
+    """The least-action answer among ``found`` (a ``Connection`` of a vakonomic or
+    Hoelder problem) and the extremals reached from ``restarts`` restarts, where
+    ``found`` is no minimizer (a conjugate time inside the span: ``Connection.minimizer``
+    False).  The first restart starts from the direct route's guess
+    (``direct.guess``: the action minimised over a family of admissible paths, where the
+    problem allows it), solved by multiple shooting on ``DIRECT_SEGMENTS`` segments;
+    restart k moves ``found``'s unknowns by a fixed pseudo-random direction (seeded by
+    k) of growing size (a quarter, a half, one, two times each unknown's scale,
+    max(|u_i|, 1)), then Newton with at most ``min(max_iter, STEP_ITER)`` iterations;
+    no other route, so each restart costs at most that many runs.  Kept: the cheapest
+    extremal without a conjugate time inside the span, else the cheapest.
+    Returns that ``Connection`` with ``search`` saying what was tried and where it
+    stopped."""
+    import dataclasses
+
+    if not restarts or found.minimizer is not False:
+        return found
+    u = np.array([found.initial[k] for k in found.unknowns])
+    scale = np.maximum(np.abs(u), 1.0)
+    seen = [u]
+    answers = [found]
+    budget = min(max_iter, STEP_ITER)
+    direct_note = ""
+    for k in range(restarts):
+        stitched, route = None, found.route + f", restart {k + 1}"
+        try:
+            if k == 0:
+                start = direct.guess(search)
+                if start is None:
+                    direct_note = "; the direct route does not apply"
+                    continue
+                v, ok, _, stitched = search.multiple(start, DIRECT_SEGMENTS, tol, max_iter)
+                if ok and stitched is None:     # polished just inside tol: once more
+                    w, better, _ = search.newton(v, search.target, 1e-3 * tol, budget)
+                    v = w if better else v
+                route += (f": multiple shooting ({DIRECT_SEGMENTS} segments) from the "
+                          "direct route")
+                direct_note = "" if ok else "; shooting from the direct route failed"
+            else:
+                step = np.random.default_rng(k).standard_normal(len(u))
+                start = u + 0.25 * 2.0 ** (k % 4) * scale * step / np.linalg.norm(step)
+                v, ok, _ = search.newton(start, search.target, tol, budget)
+        except ConnectError:
+            continue
+        if not ok or any(np.max(np.abs(v - w) / scale) < 1e-6 for w in seen):
+            continue
+        seen.append(v)
+        try:
+            answers.append(search.connection(v, budget, tol, stitched, route))
+        except JetnhError:
+            continue
+    minimizers = [c for c in answers if c.minimizer]
+    best = min(minimizers or answers, key=lambda c: c.cost)
+    costs = ", ".join(f"{c.cost:.8g}{'' if c.minimizer else ' (conjugate)'}"
+                      for c in sorted(answers, key=lambda c: c.cost))
+    verdict = ("the cheapest without a conjugate time kept" if minimizers else
+               "none without a conjugate time inside the span: the cheapest kept, not "
+               "a minimizer; try a guess near the least-action motion, or more restarts")
+    return dataclasses.replace(best, search=(
+        f"{restarts} restarts from the first answer, which has conjugate times inside "
+        f"the span{direct_note}; {len(answers)} extremals (costs {costs}); {verdict}"))

@@ -13,7 +13,8 @@ from ...errors import ConnectError
 #: smallest / largest eigenvalue of the controllability Gramian below which the path is
 #: abnormal
 GRAMIAN_RCOND = 1e-9
-#: |det| of dq/du with normalized columns below which it has no sign (rounding level)
+#: |det| of the Jacobi fields' configuration rows, scaled both ways
+#: (``jacobi_measure``), below which it has no sign (rounding level)
 DET_ZERO = 1e-10
 _GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(5)
 
@@ -178,12 +179,45 @@ def _products(P) -> np.ndarray:
     return out
 
 
+def jacobi_measure(X, nq):
+    """How near the Jacobi fields ``X`` (``[..., n_state, m]``: dy(t)/du, the whole
+    state's response to the unknowns) come to losing rank in the configuration (their
+    first ``nq`` rows, dq/du), scaled two ways, each blind where the other sees:
+
+    - as a subspace: ``Q`` an orthonormal basis of the fields' span, the cosines of the
+      angles between the fields and the configuration space (the singular values of
+      ``Q_q``).  Unchanged by any recombination of the unknowns and by the fields'
+      growth along an unstable extremal; small too where the multipliers' rows outweigh
+      their slight effect on the configuration (short spans);
+    - by columns: dq/du with each column scaled to unit length (the unknowns' units
+      removed).  Small too where growth turns every column towards the few most
+      unstable directions.
+
+    Returns ``(d, s)``: the determinant (square case, else None; the sign of det dq/du)
+    and the smallest singular value, each the larger in magnitude of the two scalings.
+    Both are zero exactly where dq/du loses rank (a conjugate time)."""
+    Q, R = np.linalg.qr(X)
+    sign = np.sign(np.prod(np.diagonal(R, axis1=-2, axis2=-1), axis=-1))
+    Qq = Q[..., :nq, :]
+    M = X[..., :nq, :]
+    norms = np.linalg.norm(M, axis=-2, keepdims=True)
+    M = M / np.where(norms > 0, norms, 1.0)
+    s = np.maximum(np.linalg.svd(Qq, compute_uv=False)[..., -1],
+                   np.linalg.svd(M, compute_uv=False)[..., -1])
+    if X.shape[-1] != nq:
+        return None, s
+    d_sub, d_col = np.linalg.det(Qq) * sign, np.linalg.det(M)
+    return np.where(np.abs(d_sub) >= np.abs(d_col), d_sub, d_col), s
+
+
 def conjugate_times(tr, cols, samples, rcond=1e-9) -> tuple:
-    """The times in (t0, t1] where dq(t)/du (rows: every coordinate; columns ``cols``,
-    the unknowns' states) loses rank: the sign changes of its determinant (square case)
-    on the equal-spaced times of ``samples``, located by Brent's method on the dense
-    output; and t1 when the matrix is rank-deficient there (relative cut-off
-    ``rcond``)."""
+    """The times in (t0, t1] where dq(t)/du (columns ``cols``, the unknowns' states)
+    loses rank, judged on the Jacobi fields scaled as a subspace and by columns
+    (``jacobi_measure``): the sign changes of the scaled determinant (square case) on
+    the equal-spaced times of ``samples``, located by Brent's method on the dense
+    output; and t1 where its smallest scaled singular value there is at most ``100
+    rcond`` both ways.  Not relative to the sensitivities' size: on a long unstable
+    span they grow by orders of magnitude while the map keeps its rank."""
     from scipy.optimize import brentq
 
     n = tr.layout.n_state
@@ -192,28 +226,23 @@ def conjugate_times(tr, cols, samples, rcond=1e-9) -> tuple:
     t0, t1 = float(tr.t[0]), float(tr.t[-1])
     found = []
 
-    def block(times):
+    def fields(times):
         Y = _dense_states(tr, np.atleast_1d(times), full=True)
-        S = Y[:, n:].reshape(-1, n, m)
-        return S[:, :nq][:, :, cols]
+        return Y[:, n:].reshape(-1, n, m)[:, :, cols]
 
     if len(cols) == nq:
-        def det(t):
-            M = block(t)[0]
-            norms = np.linalg.norm(M, axis=0)
-            return np.linalg.det(M / np.where(norms > 0, norms, 1.0))
-
         grid = samples.grid[1:]
-        M = samples.grid_S[1:, :nq][:, :, cols]
-        norms = np.linalg.norm(M, axis=1, keepdims=True)
-        d = np.linalg.det(M / np.where(norms > 0, norms, 1.0))
-        # |det| of the normalized columns at rounding level: singular there (along a
-        # whole stretch when an unknown has no effect), no sign to follow
+        d, _ = jacobi_measure(samples.grid_S[1:][:, :, cols], nq)
+        # |det| at rounding level: singular there (along a whole stretch when an
+        # unknown has no effect), no sign to follow
         change = (np.sign(d[:-1]) != np.sign(d[1:])) & (
             np.maximum(np.abs(d[:-1]), np.abs(d[1:])) >= DET_ZERO)
         for i in np.nonzero(change)[0]:
-            found.append(float(brentq(det, grid[i], grid[i + 1], xtol=1e-14, rtol=1e-14)))
-    s = np.linalg.svd(tr.sensitivities[-1][:nq][:, cols], compute_uv=False)
-    if s.size and (s[0] == 0 or s[-1] <= rcond * s[0] * 1e2) and len(cols) >= nq:
-        found.append(t1)
+            found.append(float(brentq(lambda t: jacobi_measure(fields(t), nq)[0][0],
+                                      grid[i], grid[i + 1], xtol=1e-14, rtol=1e-14)))
+    if len(cols) >= nq:
+        _, least = jacobi_measure(tr.sensitivities[-1][:, cols], nq)
+        if least <= 1e2 * rcond:
+            # a crossing found within rounding of t1 is t1 itself
+            found = [t for t in found if abs(t - t1) > 1e-9 * abs(t1 - t0)] + [t1]
     return tuple(found)

@@ -55,10 +55,3 @@ class CompiledKernels:
             self.jac = calls.Kernel(self.jac_fp, (lay.n_rhs, n_p, lay.n_rhs),
                                     jacobian=True)
 
-    def implicit(self):
-        """The compiled loop of radau (``methods.implicit_solver``: each run goes to the
-        loop compiled with the parts it needs)."""
-        from ..methods import implicit_solver
-
-        return implicit_solver()
-

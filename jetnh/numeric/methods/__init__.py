@@ -136,51 +136,31 @@ def method(name, backend=None) -> Method:
     return found
 
 
-def explicit_solver(m):
-    """The compiled loop of the explicit method ``m`` (a ``Method`` or its name), called
-    as ``solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
-    watch, halt)`` (the callbacks' addresses)
-    (``loop.solver``): each call goes to the loop compiled with the parts that run needs
-    (``loop.features``; each compiled on first use) through its machine-code entry point
-    (no type dispatch per call: ``_common.entry_point``)."""
+def explicit_solver(m, parts):
+    """The compiled loop of the explicit method ``m`` (a ``Method`` or its name) with the
+    ``parts`` a run needs (``loop.features``; each compiled on first use), called as
+    ``solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode, watch,
+    halt)`` (the callbacks' addresses; ``loop.solver``): its machine-code entry point (no
+    type dispatch per call: ``_common.entry_point``), which a plan keeps."""
     m = method(m)
-    if m.name not in _ENTRIES:
-        from .loop import features, solver
+    key = (m.name, tuple(parts))
+    if key not in _ENTRIES:
+        from .loop import solver
 
-        loops = {}
-        tableau = m.tableau
-
-        def solve(rhs, sing, uev, hol, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt):
-            parts = features(ctl, mode, watch)
-            go = loops.get(parts)
-            if go is None:
-                go = loops[parts] = entry_point(solver(tableau, parts))
-            return go(rhs, sing, uev, hol, t0, t_end, y0, p, ctl, t_eval, mode, watch, halt)
-        _ENTRIES[m.name] = solve
-    return _ENTRIES[m.name]
+        _ENTRIES[key] = entry_point(solver(m.tableau, key[1]))
+    return _ENTRIES[key]
 
 
-def implicit_solver():
-    """The compiled loop of radau, called as ``solve(rhs, jac, sing, uev, hol, t0, t_end,
-    y0, p, ctl, newton, t_eval, mode, watch, halt)`` (``radau.solver``): as
-    ``explicit_solver``, each call goes to the loop compiled with the parts that run needs
-    (``loop.features``), through its entry point."""
-    if "radau" not in _ENTRIES:
+def implicit_solver(parts):
+    """The compiled loop of radau with the ``parts`` a run needs, called as ``solve(rhs,
+    jac, sing, uev, hol, t0, t_end, y0, p, ctl, newton, t_eval, mode, watch, halt)``
+    (``radau.solver``): its entry point, as ``explicit_solver``."""
+    key = ("radau", tuple(parts))
+    if key not in _ENTRIES:
         from . import radau
-        from .loop import features
 
-        loops = {}
-
-        def solve(rhs, jac, sing, uev, hol, t0, t_end, y0, p, ctl, newton, t_eval, mode,
-                  watch, halt):
-            parts = features(ctl, mode, watch)
-            go = loops.get(parts)
-            if go is None:
-                go = loops[parts] = entry_point(radau.solver(parts))
-            return go(rhs, jac, sing, uev, hol, t0, t_end, y0, p, ctl, newton, t_eval, mode,
-                      watch, halt)
-        _ENTRIES["radau"] = solve
-    return _ENTRIES["radau"]
+        _ENTRIES[key] = entry_point(radau.solver(key[1]))
+    return _ENTRIES[key]
 
 
 _ENTRIES: dict = {}

@@ -40,7 +40,7 @@ import numba
 import numpy as np
 
 from ._common import (
-    AT_T_EVAL, ENDPOINTS, ENSEMBLE_OUT, EVERY_STEP, FINISHED, MAX_FACTOR, MAX_STEPS,
+    AT_T_EVAL, ENDPOINTS, ENSEMBLE_OUT, EVENT, EVERY_STEP, FINISHED, MAX_FACTOR, MAX_STEPS,
     MIN_FACTOR, NONFINITE, SAFETY, SINGULAR, STOPPED, TOO_SMALL_STEP, all_finite,
     collect, compiled, copy_into, f8, function_at, i8, inline, jit, min_step, start, store,
     take_next)
@@ -168,15 +168,15 @@ def workspace(n_sing, n_user):
 @inline
 def outputs(n, mode, t_eval, cap_steps):
     """The output arrays ``(ts, ys, n_out, j_eval)`` of a run in ``mode``: room for the
-    points of ``t_eval``, the two ends, or ``cap_steps`` steps (grown as needed)."""
+    points of ``t_eval``, the two ends, or ``cap_steps`` steps (grown as needed), and a
+    row for the last time and state (``_solve``)."""
     if mode == AT_T_EVAL:
         cap = t_eval.shape[0]
     elif mode == ENDPOINTS:
         cap = 2
     else:
         cap = cap_steps
-    return (np.empty(max(cap, 1)), np.empty((max(cap, 1), n)), np.int64(0),
-            np.int64(0))
+    return np.empty(cap + 1), np.empty((cap + 1, n)), np.int64(0), np.int64(0)
 
 
 @inline
@@ -205,6 +205,25 @@ def counts(stats):
 def no_events(n):
     """Empty event records (time, index, state) and their count."""
     return np.empty(0), np.empty(0, dtype=np.int64), np.empty((0, n)), np.int64(0)
+
+
+@inline
+def finite_status(status, ys, n_out, y, n_sens):
+    """``status``, or NONFINITE where it is a success (FINISHED, EVENT) with a NaN or an
+    infinity in the states of the output rows ``ys[:n_out]`` or of the last state ``y``
+    (each state followed by ``n_sens`` columns of sensitivities, not looked at): never a
+    success with such a state."""
+    if status != FINISHED and status != EVENT:
+        return status
+    n = y.shape[0] // (1 + n_sens)
+    for i in range(n):
+        if not math.isfinite(y[i]):
+            return NONFINITE
+    for k in range(n_out):
+        for i in range(n):
+            if not math.isfinite(ys[k, i]):
+                return NONFINITE
+    return status
 
 
 @jit
@@ -307,9 +326,14 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
 
     Returns the fields of a ``Result`` as a plain tuple (numba boxes a namedtuple by
     unpickling its class on every call; ``numeric.loops.call`` makes it a ``Result``):
-    the output rows ``ts[:n_out]``, ``ys[:n_out]``, ``stats = (accepted, rejected, rhs
-    evaluations)`` (``counts``), the last state, the event records (time, index, state)
-    and the index of the indicator that stopped the run (-1 if none).
+    the status (never a success with a NaN or an infinity in the rows or the last state:
+    ``finite_status``), the output rows ``ts[:n_out]``, ``ys[:n_out]``, ``stats =
+    (accepted, rejected, rhs evaluations)`` (``counts``), the last time and state, the
+    event records (time, index, state) and the index of the indicator that stopped the
+    run (-1 if none).  A loop that watches nothing (``WATCH`` false) records no events
+    and returns ``(status, ts, ys, n_out, stats, sing_index)`` with the last time and
+    state in row ``n_out`` of ``ts``, ``ys``: every array a compiled call returns is boxed
+    at ~0.4 us, more than a short run's arithmetic.
 
     Fixed steps (``ctl.n_steps > 0``, methods without an error estimate): equal steps
     ``(t_end - t0) / n_steps``; events and indicators are located on the cubic Hermite
@@ -341,11 +365,11 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
     t = t0
     if PROJECT:
         hw = projection.workspace(ctl.n_hol, ctl.n_coord, ctl.n_sens)
-    ev_t, ev_i, ev_y, n_ev = no_events(n)
     if not ADAPTIVE:
         ts, ys, n_out = store(ts, ys, n_out, t, y)
     sing_index = -1
     if WATCH:
+        ev_t, ev_i, ev_y, n_ev = no_events(n)
         ws, sing_index = watch_start(sing, uev, watch, t, y, p)
         if sing_index >= 0:
             if ADAPTIVE:
@@ -359,8 +383,12 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
         go, h_abs, ts, ys, n_out = start(rhs, t, y, p, K[0], K[1], ytmp, scale, ctl,
                                          error_order, t_end, stats, mode, t_eval, ts, ys, n_out)
         if go >= 0:
-            return (go, ts, ys, n_out, counts(stats), t, y, ev_t, ev_i, ev_y, n_ev,
-                          sing_index)
+            go = finite_status(go, ys, n_out, y, ctl.n_sens)
+            if WATCH:
+                return (go, ts, ys, n_out, counts(stats), t, y, ev_t, ev_i, ev_y, n_ev,
+                        sing_index)
+            ts, ys, _ = store(ts, ys, n_out, t, y)
+            return go, ts, ys, n_out, counts(stats), sing_index
     status = FINISHED
     step = 0
     while (direction * (t_end - t) > 0.0) if ADAPTIVE else (step < n_steps):
@@ -457,8 +485,12 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
             copy_into(K[0], K[ns])
     if mode == ENDPOINTS:
         ts, ys, n_out = store(ts, ys, n_out, t, y)
-    return (status, ts, ys, n_out, counts(stats), t, y, ev_t, ev_i, ev_y, n_ev,
-                  sing_index)
+    status = finite_status(status, ys, n_out, y, ctl.n_sens)
+    if WATCH:
+        return (status, ts, ys, n_out, counts(stats), t, y, ev_t, ev_i, ev_y, n_ev,
+                sing_index)
+    ts, ys, _ = store(ts, ys, n_out, t, y)       # the last time and state: row n_out
+    return status, ts, ys, n_out, counts(stats), sing_index
 
 
 #: the method a specialised loop runs, its sums and that loop (``_specialised``; unbound

@@ -42,8 +42,8 @@ from ._common import (
     copy_into, f8, function_at, i8, jit, min_step, start, store, take_next)
 from ._events import dense_eval
 from . import projection
-from .loop import (ALL, CONTROL, EMBEDDED, GIVEN, WATCHED, after_step, counts, no_events,
-                   output, outputs, watch_start)
+from .loop import (ALL, CONTROL, EMBEDDED, GIVEN, WATCHED, after_step, counts,
+                   finite_status, no_events, output, outputs, watch_start)
 
 ORDER = 5
 ERROR_ORDER = 3
@@ -315,6 +315,7 @@ def _solve(rhs_at, jac_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, newto
     go, h_abs, ts, ys, n_out = start(rhs, t, y, p, f0, K[0], ytmp, scale, ctl, ERROR_ORDER,
                                      t_end, stats, mode, t_eval, ts, ys, n_out)
     if go >= 0:
+        go = finite_status(go, ys, n_out, y, ctl.n_sens)
         return (go, ts, ys, n_out, counts(stats), t, y, ev_t, ev_i, ev_y, n_ev, sing_index)
     jac(t, y, p, Jm)
     jac_fresh = True
@@ -452,6 +453,7 @@ def _solve(rhs_at, jac_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, newto
         h_abs = h_new_abs
     if mode == ENDPOINTS:
         ts, ys, n_out = store(ts, ys, n_out, t, y)
+    status = finite_status(status, ys, n_out, y, ctl.n_sens)
     return (status, ts, ys, n_out, counts(stats), t, y, ev_t, ev_i, ev_y, n_ev, sing_index)
 
 
