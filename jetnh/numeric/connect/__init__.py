@@ -70,18 +70,21 @@ from ...mechanics import principles
 from ...mechanics.system import System
 from .. import arguments, codegen, methods
 from .connection import Connection
-from .problem import VARIATIONAL, Momenta, _configuration, _guess, _scene
+from .problem import (MAX_TOL, VARIATIONAL, Momenta, _configuration, _guess,
+                      _holonomic_free, _scene, on_manifold)
 from .solve import STEP_ITER, Search, least_action
 from .shooting import GROWTH, MAX_SEGMENTS, MAX_STEPS
 from .verdicts import GRAMIAN_RCOND, action, conjugate_times, gramian_ratio
 
-__all__ = ["connect", "Connection", "VARIATIONAL", "STEP_ITER", "MAX_STEPS", "GROWTH",
-           "MAX_SEGMENTS", "GRAMIAN_RCOND", "action", "conjugate_times", "gramian_ratio"]
+__all__ = ["connect", "Connection", "VARIATIONAL", "MAX_TOL", "STEP_ITER", "MAX_STEPS",
+           "GROWTH", "MAX_SEGMENTS", "GRAMIAN_RCOND", "action", "conjugate_times",
+           "gramian_ratio"]
 
 
 def connect(system, principle, start, end, t_span, params=None, guess=None, *,
             tol=1e-9, rtol=1e-11, atol=1e-12, max_iter=100, max_continuation=64,
-            rcond=1e-9, method="dop853", segments=None, restarts=0) -> Connection:
+            rcond=1e-9, method="dop853", segments=None, restarts=0,
+            complete=False) -> Connection:
     """The motion of ``principle`` from ``start`` (every coordinate) at t0 to ``end``
     (some or all coordinates) at t1, as a ``Connection`` (module docstring).
 
@@ -93,15 +96,19 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
         "vakonomic" or "holder" (the unknowns: independent velocities and multipliers
         at t0), "chetaev" or "suslov" (the independent velocities alone).
     start : dict
-        Every coordinate at t0, keyed by Symbol or name.
+        Every coordinate at t0, keyed by Symbol or name; on the holonomic constraints
+        g = 0 where the system has any (else ``ConstraintError``, or ``complete``).
     end : dict
         Vakonomic and Hoelder: some or all coordinates at t1 (the momenta of the
         free ones vanish there: their transversality conditions).  Chetaev and
         Suslov: some or all coordinates at t1; more than there are independent
         velocities only where the end is reachable (otherwise ``ConnectError`` with
-        the least-squares answer in ``.best``).
+        the least-squares answer in ``.best``).  With holonomic constraints g = 0: an
+        end naming every coordinate must lie on g = 0; vakonomic and Hoelder ends
+        must name as many coordinates as g = 0 has dimensions (free ends on it are
+        not posed).
     t_span : tuple of float
-        ``(t0, t1)``, of nonzero length (t1 < t0 runs backwards).
+        ``(t0, t1)`` with t1 > t0 (connect solves forwards in time).
     params : dict, optional
         Parameter values; the system's defaults otherwise.
     guess : dict or sequence, optional
@@ -111,7 +118,8 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
         Default: the straight-line velocities and zero multipliers, moved off runs
         that stop before t1 or start rank-deficient.
     tol : float, default 1e-9
-        The largest accepted endpoint error (max norm, relative to 1 + |end|).
+        The largest accepted endpoint error (max norm, relative to 1 + |end|); below
+        ``MAX_TOL`` (1e-3): a looser miss is no connection.
     rtol, atol : float, default 1e-11, 1e-12
         The integration's tolerances.
     max_iter : int, default 100
@@ -136,6 +144,9 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
         sensitivities blow up.  Default: 1 where the guess's run reaches t1 with
         sensitivities below ``GROWTH`` (1e6), else one segment per factor 100 of the
         growth (2 to ``MAX_SEGMENTS``, 16); 1 is single shooting only.
+    complete : bool, default False
+        With holonomic constraints: solve ``start``'s dependent coordinates from g = 0
+        (as ``Scene(complete=True)``) instead of refusing a start off it.
 
     Returns
     -------
@@ -161,12 +172,18 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     t0, t1 = Scene._t_span(t_span)
     if t1 == t0:
         raise JetnhError(f"t_span {t_span!r} has zero length: no motion joins two "
-                         "configurations in no time; give t1 != t0")
+                         "configurations in no time; give t1 > t0")
+    if t1 < t0:
+        raise JetnhError(f"t_span {t_span!r} runs backwards: connect solves forwards in "
+                         "time; give (t0, t1) with t1 > t0")
     m = methods.method(method)
     if m.solver is not methods.Solver.EXPLICIT or not m.dense:     # dop853, dopri5
         raise JetnhError(f"connect integrates with 'dop853' or 'dopri5' (dense output), "
                          f"not {method!r}")
     tol = arguments.positive(tol, "tol")
+    if tol >= MAX_TOL:
+        raise JetnhError(f"tol={tol!r} accepts an end missed by {tol:g} (1 + |end|): "
+                         f"no connection; give tol < {MAX_TOL:g} (default 1e-9)")
     max_iter = arguments.count(max_iter, "max_iter", limit=10_000)
     max_continuation = arguments.count(max_continuation, "max_continuation", limit=100_000)
     if segments is not None:
@@ -176,15 +193,24 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     coords = tuple(s.name for s in system.J.q)
     q0 = _configuration(start, coords, "start", complete=True)
     q1 = _configuration(end, coords, "end", complete=False)
+    if system.holonomic:
+        q0 = on_manifold(system, params, q0, q1, t0, t1, complete)
     # a scene at the start with placeholder unknowns (the runs replace them)
     velocities = tuple(v.name for v in system.independent_velocities)
     mults = codegen.multiplier_names(system, principle)
-    unknowns = velocities + (mults if principle in VARIATIONAL else ())
-    fixed = {} if principle in VARIATIONAL else {m: 0.0 for m in mults}
+    # the multipliers of g = 0 enter the equations only through their rates: inert
+    # (no effect on the motion), kept at 0 rather than unknowns
+    inert = {mults[a] for a in system.holonomic_rows if a < len(mults)}
+    unknowns = velocities + (tuple(m for m in mults if m not in inert)
+                             if principle in VARIATIONAL else ())
+    fixed = ({m: 0.0 for m in mults if m in inert} if principle in VARIATIONAL
+             else {m: 0.0 for m in mults})
     u0, fixed = _guess(guess, unknowns, fixed, system, q0, q1, t1 - t0)
     scene = _scene(system, principle, params, {**q0, **dict(zip(unknowns, u0)), **fixed},
                    (t0, t1))
     free = [c for c in coords if c not in q1] if principle in VARIATIONAL else []
+    if free and system.holonomic:
+        free = _holonomic_free(system, q1, free)
     shooter = Search(scene, q0, q1, unknowns, fixed, rtol, atol, method, rcond,
                      momenta=Momenta(scene, free) if free else None)
     failed = None

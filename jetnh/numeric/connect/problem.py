@@ -13,6 +13,9 @@ from ...algebra import dag
 
 #: the principles whose multipliers are unknowns of the two-point problem
 VARIATIONAL = ("vakonomic", "holder")
+#: ``tol`` must be below this: an end missed by more (relative to 1 + |end|) is no
+#: connection
+MAX_TOL = 1e-3
 
 
 #: (id(system), principle, params, t_span) -> (system, Scene): a scene's kernel keys
@@ -62,6 +65,59 @@ def _configuration(values, coords, what, complete) -> dict[str, float]:
         raise JetnhError(f"{what} names no coordinate; give the end configuration "
                          f"(some of {', '.join(coords)})")
     return out
+
+
+def on_manifold(system, params, q0, q1, t0, t1, complete) -> dict[str, float]:
+    """``q0`` checked on the holonomic constraints g = 0 (or completed onto them with
+    ``complete``, as ``Scene(complete=True)``), and ``q1`` too where it names every
+    coordinate; else a ``ConstraintError`` naming g and the fix.  Unchecked where a
+    parameter has no value (the scene then says so)."""
+    from ...errors import ConstraintError
+    from ...mechanics import holonomic
+
+    given = {**{s.name: v for s, v in system.defaults.items()},
+             **{arguments.name_of(k, "a parameter"): v for k, v in (params or {}).items()}}
+    numbers = {}
+    for s in system.parameters:
+        if s.name not in given:
+            return q0
+        numbers[s] = arguments.real(given[s.name], f"parameter {s.name!r}")
+    J = system.J
+
+    def point(q, t):
+        return {J.t: t, **numbers, **{c: q[c.name] for c in J.q}}
+
+    try:
+        done, changed = holonomic.check(system, point(q0, t0), complete=bool(complete))
+    except ConstraintError as exc:
+        raise ConstraintError(f"start: {exc}" + (
+            "" if complete else " (connect(..., complete=True) completes the start)")
+                              ) from None
+    if changed:
+        q0 = {**q0, **{c.name: float(done[c]) for c in J.q}}
+    if all(c.name in q1 for c in J.q):
+        try:
+            holonomic.check(system, point(q1, t1))
+        except ConstraintError as exc:
+            raise ConstraintError(
+                f"end: {exc}; the motions stay on the holonomic constraints, so give an "
+                "end on g = 0, or name only the independent coordinates") from None
+    return q0
+
+
+def _holonomic_free(system, q1, free) -> list:
+    """The free coordinates whose transversality conditions close a vakonomic or
+    Hoelder end on a system with holonomic constraints: none where ``q1`` names as many
+    coordinates as g = 0 has dimensions (the end is then a point of it); otherwise a
+    ``JetnhError`` (free ends on g = 0 would need the momenta projected on its tangent
+    space, not posed here)."""
+    dim = system.J.n - len(system.holonomic)
+    if len(q1) >= dim:
+        return []
+    raise JetnhError(
+        f"end names {len(q1)} coordinate(s) of a system whose holonomic constraints leave "
+        f"{dim} degree(s) of freedom: free ends on g = 0 are not posed for the "
+        f"vakonomic and Hoelder principles; name {dim} independent coordinates of end")
 
 
 def _guess(guess, unknowns, fixed, system, q0, q1, T):

@@ -117,8 +117,9 @@ def gramian_ratio(tr, samples) -> float:
     ``W = int Phi(t1, s) B B^T Phi(t1, s)^T ds`` (A = d qdot/dq, B = d qdot/du from the
     graph on the dense output; Phi(t1, s) the products of the RK4 propagators of
     ``_Samples.GRID / 2`` equal steps from s to t1, the integral by Simpson's rule on
-    their nodes).  Zero: the endpoint map loses rank along the path (an abnormal
-    extremal)."""
+    their nodes).  With holonomic constraints g = 0 the motions stay on them, so W is
+    measured on the tangent space of g = 0 at q(t1) (``tangent_frames``), not in R^n.
+    Zero: the endpoint map loses rank along the path (an abnormal extremal)."""
     from ...algebra import dag
 
     scene = tr.scene
@@ -164,8 +165,44 @@ def gramian_ratio(tr, samples) -> float:
     w[0] = w[-1] = 1.0
     wGB = (GB * (w * h / 3.0)[:, None, None]).transpose(1, 0, 2).reshape(n, -1)
     W = wGB @ GB.transpose(1, 0, 2).reshape(n, -1).T    # sum_j w_j GB_j GB_j^T
+    T1 = tangent_frames(tr, times[-1:], samples.grid_y[-1:])
+    if T1 is not None:           # the reachable directions: the tangent space of g = 0
+        W = T1[0].T @ W @ T1[0]
     ev = np.linalg.eigvalsh(0.5 * (W + W.T))
     return float(max(ev[0], 0.0) / ev[-1]) if ev[-1] > 0 else 0.0
+
+
+#: system id -> (system, dg/dq on the graph) for ``tangent_frames``
+_CONSTRAINT_JACOBIANS: dict = {}
+
+
+def tangent_frames(tr, times, ys):
+    """Orthonormal bases ``T`` (``[len(times), n, n - h]``) of the tangent space ker
+    dg/dq of the holonomic constraints g = 0 at the configurations of the rows ``ys``,
+    oriented continuously (det [dg/dq^T | T] > 0); None without holonomic constraints."""
+    from ...algebra import dag
+
+    system = tr.scene.system
+    if not system.holonomic:
+        return None
+    J = system.J
+    n, h = len(J.q), len(system.holonomic)
+    found = _CONSTRAINT_JACOBIANS.get(id(system))
+    if found is None or found[0] is not system:
+        found = _CONSTRAINT_JACOBIANS[id(system)] = (
+            system, list(dag.jacobian(list(system.holonomic), list(J.q))))
+    col = {nm: i for i, nm in enumerate(tr.scene.state_names)}
+    times = np.atleast_1d(np.asarray(times, dtype=float))
+    point = {J.t: times, **{q: ys[:, col[q.name]] for q in J.q},
+             **{s: tr.scene.params[s.name] for s in system.parameters}}
+    vals = dag.evaluate_numpy(found[1], point)
+    G = np.stack([np.broadcast_to(v, times.shape) for v in vals], axis=-1)
+    G = G.reshape(times.size, h, n)
+    _, _, vt = np.linalg.svd(G)
+    T = vt[:, h:, :].transpose(0, 2, 1).copy()
+    flip = np.linalg.det(np.concatenate([G.transpose(0, 2, 1), T], axis=2)) < 0
+    T[flip, :, -1] *= -1.0
+    return T
 
 
 def _products(P) -> np.ndarray:
@@ -179,7 +216,7 @@ def _products(P) -> np.ndarray:
     return out
 
 
-def jacobi_measure(X, nq):
+def jacobi_measure(X, nq, frames=None):
     """How near the Jacobi fields ``X`` (``[..., n_state, m]``: dy(t)/du, the whole
     state's response to the unknowns) come to losing rank in the configuration (their
     first ``nq`` rows, dq/du), scaled two ways, each blind where the other sees:
@@ -193,6 +230,9 @@ def jacobi_measure(X, nq):
       removed).  Small too where growth turns every column towards the few most
       unstable directions.
 
+    With ``frames`` (``tangent_frames`` at the same points) dq/du is measured in them:
+    the configurations of g = 0, whose dimension n - h is what the fields must span.
+
     Returns ``(d, s)``: the determinant (square case, else None; the sign of det dq/du)
     and the smallest singular value, each the larger in magnitude of the two scalings.
     Both are zero exactly where dq/du loses rank (a conjugate time)."""
@@ -200,6 +240,10 @@ def jacobi_measure(X, nq):
     sign = np.sign(np.prod(np.diagonal(R, axis1=-2, axis2=-1), axis=-1))
     Qq = Q[..., :nq, :]
     M = X[..., :nq, :]
+    if frames is not None:
+        Tt = np.swapaxes(frames, -1, -2)
+        Qq, M = Tt @ Qq, Tt @ M
+        nq = frames.shape[-1]
     norms = np.linalg.norm(M, axis=-2, keepdims=True)
     M = M / np.where(norms > 0, norms, 1.0)
     s = np.maximum(np.linalg.svd(Qq, compute_uv=False)[..., -1],
@@ -225,23 +269,30 @@ def conjugate_times(tr, cols, samples, rcond=1e-9) -> tuple:
     m = tr.sensitivities.shape[2]
     t0, t1 = float(tr.t[0]), float(tr.t[-1])
     found = []
+    # with holonomic constraints: measured on g = 0, of dimension nq - h
+    dim = nq - len(tr.scene.system.holonomic)
 
-    def fields(times):
-        Y = _dense_states(tr, np.atleast_1d(times), full=True)
-        return Y[:, n:].reshape(-1, n, m)[:, :, cols]
+    def det_at(t):
+        times = np.atleast_1d(t)
+        Y = _dense_states(tr, times, full=True)
+        X = Y[:, n:].reshape(-1, n, m)[:, :, cols]
+        return jacobi_measure(X, nq, tangent_frames(tr, times, Y[:, :n]))[0][0]
 
-    if len(cols) == nq:
+    if len(cols) == dim:
         grid = samples.grid[1:]
-        d, _ = jacobi_measure(samples.grid_S[1:][:, :, cols], nq)
+        d, _ = jacobi_measure(samples.grid_S[1:][:, :, cols], nq,
+                              tangent_frames(tr, grid, samples.grid_y[1:]))
         # |det| at rounding level: singular there (along a whole stretch when an
         # unknown has no effect), no sign to follow
         change = (np.sign(d[:-1]) != np.sign(d[1:])) & (
             np.maximum(np.abs(d[:-1]), np.abs(d[1:])) >= DET_ZERO)
         for i in np.nonzero(change)[0]:
-            found.append(float(brentq(lambda t: jacobi_measure(fields(t), nq)[0][0],
-                                      grid[i], grid[i + 1], xtol=1e-14, rtol=1e-14)))
-    if len(cols) >= nq:
-        _, least = jacobi_measure(tr.sensitivities[-1][:, cols], nq)
+            found.append(float(brentq(det_at, grid[i], grid[i + 1], xtol=1e-14,
+                                      rtol=1e-14)))
+    if len(cols) >= dim:
+        frames = tangent_frames(tr, tr.t[-1:], tr.y[-1:])
+        _, least = jacobi_measure(tr.sensitivities[-1][:, cols], nq,
+                                  None if frames is None else frames[0])
         if least <= 1e2 * rcond:
             # a crossing found within rounding of t1 is t1 itself
             found = [t for t in found if abs(t - t1) > 1e-9 * abs(t1 - t0)] + [t1]

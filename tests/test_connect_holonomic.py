@@ -1,0 +1,138 @@
+"""connect on systems with holonomic constraints (a Kane four-bar): the verdicts on the
+constraint manifold g = 0, its multipliers out of the unknowns, the ends checked on it;
+and the small refusals of bad spans and tolerances."""
+
+import math
+
+import numpy as np
+import pytest
+import sympy as sp
+
+import jetnh as jn
+from jetnh.errors import ConnectError, ConstraintError, JetnhError
+
+
+@pytest.fixture(scope="module")
+def fourbar():
+    """Three links l1, l2, l3 from the origin closing on (l4, 0): one degree of freedom,
+    two loop-closure constraints (``configuration_constraints``)."""
+    me = pytest.importorskip("sympy.physics.mechanics")
+    q1, q2, q3 = me.dynamicsymbols("q1 q2 q3")
+    u1, u2, u3 = me.dynamicsymbols("u1 u2 u3")
+    l1, l2, l3, l4, m, g = sp.symbols("l1 l2 l3 l4 m g", positive=True)
+    N = me.ReferenceFrame("N")
+    A, B, C = (N.orientnew(n, "Axis", [q, N.z]) for n, q in zip("ABC", (q1, q2, q3)))
+    for F, u in zip((A, B, C), (u1, u2, u3)):
+        F.set_ang_vel(N, u * N.z)
+    P1 = me.Point("P1")
+    P1.set_vel(N, 0)
+    P2 = P1.locatenew("P2", l1 * A.x)
+    P2.v2pt_theory(P1, N, A)
+    P3 = P2.locatenew("P3", l2 * B.x)
+    P3.v2pt_theory(P2, N, B)
+    P4 = P3.locatenew("P4", l3 * C.x)
+    P4.v2pt_theory(P3, N, C)
+    loop = P4.pos_from(P1) - l4 * N.x
+    conf = [loop.dot(N.x), loop.dot(N.y)]
+    t = me.dynamicsymbols._t
+    vel = [sp.diff(e, t).subs({q1.diff(): u1, q2.diff(): u2, q3.diff(): u3}) for e in conf]
+    km = me.KanesMethod(N, q_ind=[q1], u_ind=[u1],
+                        kd_eqs=[q1.diff() - u1, q2.diff() - u2, q3.diff() - u3],
+                        q_dependent=[q2, q3], configuration_constraints=conf,
+                        u_dependent=[u2, u3], velocity_constraints=vel)
+    km.kanes_equations([me.Particle("pa", P2, m), me.Particle("pb", P3, m)],
+                       [(P2, -m * g * N.y), (P3, -m * g * N.y)])
+    s = jn.from_mechanics(km)
+    P = {"l1": 1.0, "l2": 3.0, "l3": 2.0, "l4": 3.0, "m": 1.0, "g": 9.81}
+    sc = jn.Scene(s, "chetaev", params=P, initial={"q1": 1.2, "q2": 0.3, "q3": -1.5,
+                                                   "q1_t": 2.0},
+                  complete=True, t_span=(0.0, 0.5))
+    y0 = dict(zip(sc.state_names, map(float, sc.y0)))
+    q0 = {k: y0[k] for k in ("q1", "q2", "q3")}
+    return s, P, q0, sc
+
+
+def _fd_end(sc, q0, u, h=1e-6):
+    """dq(t1)/dq1_t by central differences of scene.run (the independent route)."""
+    def end(v):
+        tr = sc.run(y0={**q0, "q1_t": v}, rtol=1e-12, atol=1e-13)
+        return np.array([tr[c][-1] for c in ("q1", "q2", "q3")])
+    return (end(u + h) - end(u - h)) / (2 * h)
+
+
+def test_chetaev_fourbar_is_normal_on_the_manifold(fourbar):
+    s, P, q0, sc = fourbar
+    c = jn.connect(s, "chetaev", q0, {"q1": 1.5}, (0.0, 0.5), params=P)
+    assert c.trajectory["q1"][-1] == pytest.approx(1.5, abs=1e-8)
+    d = _fd_end(sc, q0, c.initial["q1_t"])
+    assert np.linalg.norm(d) > 0.5                     # full rank on the 1-d manifold
+    assert d == pytest.approx([0.633, -0.0266, 0.3028], abs=2e-3)
+    assert c.normal is True
+    assert c.gramian_ratio == pytest.approx(1.0)       # a 1 x 1 Gramian on g = 0
+
+
+def test_vakonomic_fourbar_no_conjugate_time_and_no_holonomic_unknowns(fourbar):
+    s, P, q0, sc = fourbar
+    c = jn.connect(s, "vakonomic", q0, {"q1": 1.5}, (0.0, 0.5), params=P)
+    assert c.unknowns == ("q1_t",)            # the multipliers of g = 0 are inert
+    assert c.trajectory["q1"][-1] == pytest.approx(1.5, abs=1e-8)
+    assert c.conjugate_times == ()
+    assert c.normal is True
+    # the same motion as Chetaev's (holonomic constraints: the principles agree)
+    ch = jn.connect(s, "chetaev", q0, {"q1": 1.5}, (0.0, 0.5), params=P)
+    assert c.initial["q1_t"] == pytest.approx(ch.initial["q1_t"], rel=1e-7)
+
+
+def test_start_and_end_off_the_manifold_are_refused(fourbar):
+    s, P, q0, _ = fourbar
+    off = {"q1": 1.2, "q2": 0.3, "q3": -1.5}
+    with pytest.raises(ConstraintError, match=r"start.*complete=True"):
+        jn.connect(s, "chetaev", off, {"q1": 1.5}, (0.0, 0.5), params=P)
+    with pytest.raises(ConstraintError, match=r"end.*holonomic"):
+        jn.connect(s, "chetaev", q0, {"q1": 1.5, "q2": 0.0, "q3": 0.0}, (0.0, 0.5),
+                   params=P)
+    # complete=True completes the start as Scene does
+    c = jn.connect(s, "chetaev", off, {"q1": 1.5}, (0.0, 0.5), params=P, complete=True)
+    assert c.initial["q2"] == pytest.approx(q0["q2"], abs=1e-10)
+    assert c.initial["q3"] == pytest.approx(q0["q3"], abs=1e-10)
+
+
+# ------------------------------------------------------------------ the sleigh's small ones
+@pytest.fixture(scope="module")
+def sleigh():
+    J = jn.JetSpace("x y th")
+    x, y, th = J.q
+    xd, yd, thd = J.qd
+    m, a, I, c = sp.symbols("m a I c", positive=True)
+    L = (m / 2 * ((xd - a * sp.sin(th) * thd) ** 2 + (yd + a * sp.cos(th) * thd) ** 2)
+         + I / 2 * thd ** 2)
+    s = jn.System(J, L, constraints=[-sp.sin(th) * xd + sp.cos(th) * yd],
+                  forces={th: -c * thd})
+    return s, {"m": 2.0, "a": 0.3, "I": 0.5, "c": 0.1}, {"x": 0.0, "y": 0.0, "th": 0.0}
+
+
+def test_backward_span_refused_clearly(sleigh):
+    s, P, O = sleigh
+    with pytest.raises(JetnhError, match=r"t1 > t0"):
+        jn.connect(s, "chetaev", O, {"x": 0.2, "th": 0.3}, (1.0, 0.0), params=P)
+
+
+@pytest.mark.parametrize("tol", [1e-2, 1e3])
+def test_loose_tolerance_refused(sleigh, tol):
+    s, P, O = sleigh
+    with pytest.raises(JetnhError, match=r"tol"):
+        jn.connect(s, "vakonomic", O, {"x": 1.0, "y": 0.3, "th": 0.4}, (0.0, 1.0),
+                   params=P, tol=tol)
+
+
+def test_no_best_motion_message_is_truthful(sleigh):
+    s, P, O = sleigh
+    with pytest.raises(ConnectError) as info:
+        jn.connect(s, "vakonomic", O, {"x": -20.0, "y": 15.0, "th": 3.0}, (0.0, 50.0),
+                   params=P, max_iter=3, max_continuation=2)
+    e = info.value
+    text = e.args[0]
+    if e.best is None:
+        assert "?" not in text and "ConnectError.best is that" not in text
+    else:
+        assert f"{e.best.residual:.3g}" in text
