@@ -185,12 +185,18 @@ class Search(Shooter):
             raise ConnectError(closest.args[0] + "; also tried: " + "; ".join(notes),
                                closest.best)
         best = self._best(u)
+        if best is None:
+            raise ConnectError(
+                f"connect did not reach the end ({its} iterations in all): "
+                + "; ".join(notes) + "; no motion from where the search stopped reaches "
+                "t1 (its run stops before), so there is no closest motion "
+                "(ConnectError.best is None); try a guess whose run reaches t1, a "
+                "shorter span or an end nearer the start", None)
         raise ConnectError(
             f"connect did not reach the end ({its} iterations in all): "
-            + "; ".join(notes) + f"; the closest motion ends "
-            f"{'?' if best is None else format(best.residual, '.3g')} away from end"
-            + self._reachability(u) + "; try another guess, a shorter span or an end "
-            "nearer the start (ConnectError.best is that motion)", best)
+            + "; ".join(notes) + f"; the closest motion ends {best.residual:.3g} away "
+            "from end" + self._reachability(u) + "; try another guess, a shorter span "
+            "or an end nearer the start (ConnectError.best is that motion)", best)
 
     def leading(self, u):
         """The end conditions to continue on when the shooting Jacobian at ``u`` has
@@ -330,9 +336,11 @@ class Search(Shooter):
         best = self._best(u)
         return ConnectError(
             f"the {self.scene.principle} motions from the start do not reach end in this "
-            f"time: the least-squares answer ends "
-            f"{'?' if best is None else format(best.residual, '.3g')} away"
-            + self._reachability(u) + " (ConnectError.best is that answer)", best)
+            f"time: " + ("the least-squares answer's run stops before t1 (ConnectError."
+                         "best is None)" if best is None else
+                         f"the least-squares answer ends {best.residual:.3g} away"
+                         + self._reachability(u) + " (ConnectError.best is that answer)"),
+            best)
 
     def _reachability(self, u) -> str:
         got = self.endpoint(u)
