@@ -107,49 +107,84 @@ def _lagrangian(tr, times, ys) -> np.ndarray:
 
 
 #: system id -> (system, [d phi/dq..., d phi/du...], the rows of the dependent and of the
-#: independent velocities' coordinates) for ``gramian_ratio``
+#: independent velocities' coordinates, [df/dq..., df/dqdot...]) for ``gramian_ratio``
 _DERIVATIVES: dict = {}
+#: the measure det(A_alpha)^2 / det(A A^T) of the scene's split (``atlas``) below which,
+#: somewhere on the path, ``gramian_ratio`` linearizes without a split
+EDGE = 1e-2
+
+
+def _derivatives(system):
+    from ...algebra import dag
+
+    J = system.J
+    found = _DERIVATIVES.get(id(system))
+    if found is None or found[0] is not system:
+        us = system.independent_velocities
+        phis = [system.phi[v] for v in system.dependent_velocities]
+        index = {s: i for i, s in enumerate(J.q)}
+        fs = list(system.constraints)
+        found = _DERIVATIVES[id(system)] = (
+            system, list(dag.jacobian(phis, list(J.q))) + list(dag.jacobian(phis, list(us))),
+            [index[J.split(v)[0]] for v in system.dependent_velocities],
+            [index[J.split(v)[0]] for v in us],
+            list(dag.jacobian(fs, list(J.q))) + list(dag.jacobian(fs, list(J.qd))))
+    return found[1:]
+
+
+def _linearized(tr, times, ys):
+    """``(A, B)`` of the constraint system linearized along the rows ``ys``: in the
+    scene's split (qdot^mu = u^mu, qdot^alpha = phi^alpha: A = d qdot/dq, B = d qdot/du)
+    where its measure stays above ``EDGE``; else without a split (near a chart edge
+    phi's derivatives blow up): from f_q dq + f_qdot dqdot = 0, A = -f_qdot^+ f_q and B
+    an orthonormal basis of ker f_qdot.  The two differ by a feedback and an input
+    transformation, which keep the rank of the Gramian."""
+    from ...algebra import dag
+
+    system = tr.scene.system
+    n, m, k = system.J.n, len(system.independent_velocities), system.k
+    derivatives, dep_rows, input_rows, fderivs = _derivatives(system)
+    point = _point(tr, times, ys)
+    F = np.stack([np.broadcast_to(np.asarray(v, dtype=float), times.shape)
+                  for v in dag.evaluate_numpy(fderivs, point)], axis=-1)
+    Fq, Fv = F[:, :k * n].reshape(-1, k, n), F[:, k * n:].reshape(-1, k, n)
+    gram = np.linalg.det(Fv @ Fv.transpose(0, 2, 1))
+    minor = np.linalg.det(Fv[:, :, dep_rows])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        measure = np.where(gram > 0, minor ** 2 / gram, 0.0)
+    if np.all(np.isfinite(measure)) and measure.min() >= EDGE:
+        vals = dag.evaluate_numpy(derivatives, point)
+        A = np.zeros((times.size, n, n))
+        B = np.zeros((times.size, n, m))
+        B[:, input_rows, np.arange(m)] = 1.0
+        for a in range(k):
+            for c in range(n):
+                A[:, dep_rows[a], c] = vals[a * n + c]
+            for c in range(m):
+                B[:, dep_rows[a], c] = vals[k * n + a * m + c]
+        return A, B
+    _, _, vt = np.linalg.svd(Fv)
+    return -np.linalg.pinv(Fv) @ Fq, vt[:, k:, :].transpose(0, 2, 1)
 
 
 def gramian_ratio(tr, samples) -> float:
     """Smallest over largest eigenvalue of the controllability Gramian of the constraint
     system (qdot^mu = u^mu, qdot^alpha = phi^alpha(t, q, u)) linearized along ``tr``,
-    ``W = int Phi(t1, s) B B^T Phi(t1, s)^T ds`` (A = d qdot/dq, B = d qdot/du from the
-    graph on the dense output; Phi(t1, s) the products of the RK4 propagators of
-    ``_Samples.GRID / 2`` equal steps from s to t1, the integral by Simpson's rule on
+    ``W = int Phi(t1, s) B B^T Phi(t1, s)^T ds`` (``_linearized``: A = d qdot/dq, B =
+    d qdot/du from the graph on the dense output, or without a split where the path
+    comes near the edge of the scene's; Phi(t1, s) the products of the RK4 propagators
+    of ``_Samples.GRID / 2`` equal steps from s to t1, the integral by Simpson's rule on
     their nodes).  With holonomic constraints g = 0 the motions stay on them, so W is
     measured on the tangent space of g = 0 at q(t1) (``tangent_frames``), not in R^n.
     Zero: the endpoint map loses rank along the path (an abnormal extremal)."""
-    from ...algebra import dag
-
-    scene = tr.scene
-    system = scene.system
-    J = system.J
-    n, us = len(J.q), system.independent_velocities
+    system = tr.scene.system
+    n = len(system.J.q)
     if not system.k:
         return 1.0
     steps = samples.GRID // 2
-    found = _DERIVATIVES.get(id(system))
-    if found is None or found[0] is not system:
-        phis = [system.phi[v] for v in system.dependent_velocities]
-        index = {s: i for i, s in enumerate(J.q)}
-        found = _DERIVATIVES[id(system)] = (
-            system, list(dag.jacobian(phis, list(J.q))) + list(dag.jacobian(phis, list(us))),
-            [index[J.split(v)[0]] for v in system.dependent_velocities],
-            [index[J.split(v)[0]] for v in us])
-    _, derivatives, dep_rows, input_rows = found
     t0, t1 = float(tr.t[0]), float(tr.t[-1])
     times = samples.grid
-    vals = dag.evaluate_numpy(derivatives, _point(tr, times, samples.grid_y))
-    k, m = len(dep_rows), len(us)
-    A = np.zeros((times.size, n, n))
-    B = np.zeros((times.size, n, m))
-    B[:, input_rows, np.arange(m)] = 1.0
-    for a in range(k):
-        for c in range(n):
-            A[:, dep_rows[a], c] = vals[a * n + c]
-        for c in range(m):
-            B[:, dep_rows[a], c] = vals[k * n + a * m + c]
+    A, B = _linearized(tr, times, samples.grid_y)
     h = (t1 - t0) / steps
     I = np.eye(n)
     A0, Am, A1 = A[0:-1:2], A[1::2], A[2::2]
