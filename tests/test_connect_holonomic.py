@@ -136,3 +136,42 @@ def test_no_best_motion_message_is_truthful(sleigh):
         assert "?" not in text and "ConnectError.best is that" not in text
     else:
         assert f"{e.best.residual:.3g}" in text
+
+
+def test_timeout_stops_the_search_with_the_closest_motion(sleigh):
+    """The audit's end beyond the edge of the split (th = 2 from th = 0 with y
+    dependent): a search of minutes without a budget; with one, a ConnectError saying
+    so, its closest motion a real run to t1."""
+    s, P, O = sleigh
+    with pytest.raises(ConnectError, match=r"timeout of 0\.5 s") as info:
+        jn.connect(s, "chetaev", O, {"x": 0.2, "th": 2.0}, (0.0, 1.0), params=P,
+                   timeout=0.5)
+    best = info.value.best
+    if best is not None:
+        assert best.residual > 1e-3
+        assert best.trajectory.t[-1] == pytest.approx(1.0)
+    with pytest.raises(JetnhError, match="timeout"):
+        jn.connect(s, "chetaev", O, {"x": 0.2, "th": 2.0}, (0.0, 1.0), params=P,
+                   timeout=-1.0)
+
+
+def test_end_at_the_edge_of_the_split_is_normal(sleigh):
+    """At th = pi/2 the split with y dependent is singular (cos th = 0); the Gramian is
+    measured without it there: the endpoint map has full rank (central differences of
+    scene.run: singular values 1.00 and 0.71), so the motion is normal."""
+    s, P, O = sleigh
+    end = {"x": 0.2, "th": math.pi / 2}
+    c = jn.connect(s, "chetaev", O, end, (0.0, 1.0), params=P, guess=GUESS_EDGE)
+    assert c.residual < 1e-8
+    sc = jn.Scene(s, "chetaev", params=P, initial={**O, "x_t": 0.1, "th_t": 1.0},
+                  t_span=(0.0, 1.0))
+    u, h = np.array([c.initial["x_t"], c.initial["th_t"]]), 1e-6
+
+    def F(v):
+        tr = sc.run(y0={**O, "x_t": v[0], "th_t": v[1]}, rtol=1e-12, atol=1e-13)
+        return np.array([tr[k][-1] for k in ("x", "y", "th")])
+
+    D = np.array([(F(u + h * e) - F(u - h * e)) / (2 * h) for e in np.eye(2)]).T
+    sv = np.linalg.svd(D, compute_uv=False)
+    assert sv == pytest.approx([0.999, 0.708], abs=5e-3)
+    assert c.normal is True and c.gramian_ratio > 1e-3

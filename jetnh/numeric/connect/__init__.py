@@ -65,6 +65,8 @@ Verdicts on the answer:
 
 from __future__ import annotations
 
+import time
+
 from ...errors import ConnectError, JetnhError
 from ...mechanics import principles
 from ...mechanics.system import System
@@ -73,7 +75,7 @@ from .connection import Connection
 from .problem import (MAX_TOL, VARIATIONAL, Momenta, _configuration, _guess,
                       _holonomic_free, _scene, on_manifold)
 from .solve import STEP_ITER, Search, least_action
-from .shooting import GROWTH, MAX_SEGMENTS, MAX_STEPS
+from .shooting import GROWTH, MAX_SEGMENTS, MAX_STEPS, OutOfTime
 from .verdicts import GRAMIAN_RCOND, action, conjugate_times, gramian_ratio
 
 __all__ = ["connect", "Connection", "VARIATIONAL", "MAX_TOL", "STEP_ITER", "MAX_STEPS",
@@ -84,7 +86,7 @@ __all__ = ["connect", "Connection", "VARIATIONAL", "MAX_TOL", "STEP_ITER", "MAX_
 def connect(system, principle, start, end, t_span, params=None, guess=None, *,
             tol=1e-9, rtol=1e-11, atol=1e-12, max_iter=100, max_continuation=64,
             rcond=1e-9, method="dop853", segments=None, restarts=0,
-            complete=False) -> Connection:
+            complete=False, timeout=None) -> Connection:
     """The motion of ``principle`` from ``start`` (every coordinate) at t0 to ``end``
     (some or all coordinates) at t1, as a ``Connection`` (module docstring).
 
@@ -147,6 +149,10 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     complete : bool, default False
         With holonomic constraints: solve ``start``'s dependent coordinates from g = 0
         (as ``Scene(complete=True)``) instead of refusing a start off it.
+    timeout : float, optional
+        Seconds of wall-clock time for the search: no run starts after them, and
+        ``ConnectError`` says where the search was (``.best``: the closest motion
+        seen).  Default: no limit but the iteration budgets.
 
     Returns
     -------
@@ -158,8 +164,9 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     Raises
     ------
     ConnectError
-        The end is not reached within the budgets (the message says where the search
-        stopped and what the motions reach; ``.best`` is the closest motion found).
+        The end is not reached within the budgets or ``timeout`` (the message says
+        where the search stopped and what the motions reach; ``.best`` is the closest
+        motion found, None where no run reached t1).
     JetnhError
         Bad input: an unknown coordinate, a span of zero length, a guess of the wrong
         shape.
@@ -188,6 +195,8 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     max_continuation = arguments.count(max_continuation, "max_continuation", limit=100_000)
     if segments is not None:
         segments = arguments.count(segments, "segments", limit=1000)
+    if timeout is not None:
+        timeout = arguments.positive(timeout, "timeout")
     if restarts is not False and restarts != 0:
         restarts = arguments.count(restarts, "restarts", limit=10_000)
     coords = tuple(s.name for s in system.J.q)
@@ -214,14 +223,20 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     shooter = Search(scene, q0, q1, unknowns, fixed, rtol, atol, method, rcond,
                      momenta=Momenta(scene, free) if free else None)
     failed = None
-    for start in shooter.starts(u0, guess is None, q0, q1, t1 - t0):
-        try:
-            u, iterations, stitched, route = shooter.solve(start, tol, max_iter,
-                                                           max_continuation, segments)
-        except ConnectError as e:
-            failed = failed or e          # the first start's reasons are reported
-            continue
-        found = shooter.connection(u, iterations, tol, stitched, route)
-        return least_action(shooter, found, tol, max_iter, restarts) if (
-            restarts and principle in VARIATIONAL) else found
+    if timeout is not None:
+        shooter.deadline = time.monotonic() + timeout
+    try:
+        for start in shooter.starts(u0, guess is None, q0, q1, t1 - t0):
+            try:
+                u, iterations, stitched, route = shooter.solve(start, tol, max_iter,
+                                                               max_continuation, segments)
+            except ConnectError as e:
+                failed = failed or e          # the first start's reasons are reported
+                continue
+            found = shooter.connection(u, iterations, tol, stitched, route)
+            return least_action(shooter, found, tol, max_iter, restarts) if (
+                restarts and principle in VARIATIONAL) else found
+    except OutOfTime:
+        shooter.deadline = None
+        raise shooter.out_of_time(timeout) from None
     raise failed

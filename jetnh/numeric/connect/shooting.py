@@ -13,7 +13,7 @@ from scipy.linalg.lapack import dgesdd as _gesdd
 
 from ...errors import JetnhError
 from .. import arguments, interrupt, solve
-from ..methods._common import FINISHED
+from ..methods._common import FINISHED, SINGULAR
 from ..options import options
 
 #: steps a shooting run may take (a run that needs more counts as failed)
@@ -42,10 +42,11 @@ class Shot:
     __slots__ = ("t", "y", "S", "_made", "_trajectory")
 
     @classmethod
-    def of(cls, scene, plan, y, p):
+    def of(cls, scene, plan, y, p, stops=None):
         """The run of ``plan`` (with sensitivities, a compiled explicit loop) from the
         state ``y`` with the run-time parameters ``p``, or None where it does not reach
-        the end of its span or ends in a non-finite state."""
+        the end of its span or ends in a non-finite state (``stops``, a dict: its status
+        counted there)."""
         lay = plan.sens.layout
         y = np.concatenate((y, _identity(lay.n_state, lay.sensitivity_columns)))
         halt = np.zeros(1, dtype=np.int64)
@@ -55,6 +56,8 @@ class Shot:
         wall = time.perf_counter() - tic
         n_out = int(out[3])
         if int(out[0]) != FINISHED or n_out < 1:
+            if stops is not None:
+                stops[int(out[0])] = stops.get(int(out[0]), 0) + 1
             return None
         last = out[2][n_out - 1]
         if not arguments.all_finite(last):
@@ -78,9 +81,19 @@ class Shot:
         return self._trajectory
 
 
+class OutOfTime(Exception):
+    """The wall-clock budget of ``connect(timeout=)`` has passed (raised by a run of the
+    search, past every route's handling: not a ``JetnhError``)."""
+
+
 class Shooter:
     """Runs of one scene from the start with the unknowns ``u``: the endpoint residual
-    and its Jacobian from the sensitivities."""
+    and its Jacobian from the sensitivities.  ``deadline`` (``time.monotonic()``, or
+    None): no run starts after it (``OutOfTime``); ``stops``: the runs that stopped
+    early, by status (``SINGULAR``: at the edge of the scene's split, which a run with
+    sensitivities does not leave)."""
+
+    deadline = None
 
     def __init__(self, scene, q0, q1, unknowns, fixed, rtol, atol, method, rcond):
         self.scene, self.unknowns, self.fixed = scene, unknowns, fixed
@@ -101,6 +114,8 @@ class Shooter:
         self.n_velocities = len(scene.system.independent_velocities)   # lead unknowns
         self.plans: dict = {}            # (span, save) -> the driver's plan of the runs
         self.holonomic = bool(scene.system.holonomic)
+        self.stops: dict = {}
+        self.runs = 0
 
     def plan(self, span, save="steps"):
         """The driver's plan of a shooting run on ``span`` (with sensitivities; every
@@ -121,6 +136,9 @@ class Shooter:
         None where it fails before the end of the span or ends in a non-finite
         state."""
         scene = self.scene
+        if self.deadline is not None and time.monotonic() > self.deadline:
+            raise OutOfTime
+        self.runs += 1
         if not arguments.all_finite(y):
             return None
         if self.holonomic:
@@ -128,7 +146,21 @@ class Shooter:
                 scene._check_holonomic(y, span[0], scene._p)
             except JetnhError:
                 return None
-        return Shot.of(scene, self.plan(span, save), y, scene._p)
+        return Shot.of(scene, self.plan(span, save), y, scene._p, self.stops)
+
+    def edge_note(self) -> str:
+        """Where runs stopped at the edge of the scene's split: what that means and the
+        fix ("" where none did)."""
+        k = self.stops.get(SINGULAR, 0)
+        if not k:
+            return ""
+        dep = ", ".join(self.scene.dependent_velocities) or "none"
+        return (f"{k} of the {self.runs} runs stopped at the edge of the scene's split "
+                f"(dependent velocities {dep}: the constraints cannot be solved for them "
+                "there); connect's runs carry sensitivities and keep one split, so they "
+                "cannot cross that edge: where the end lies beyond it, connect from a "
+                "System with other dependent coordinates (System(..., dependent=[...])) "
+                "or in two legs, or shoot on scene.run, which changes split")
 
     def state(self, u) -> np.ndarray:
         y = self.y0.copy()

@@ -35,10 +35,32 @@ class Search(Shooter):
         if momenta is not None:
             self.target = np.concatenate([self.target, np.zeros(len(momenta.free))])
 
+    #: (scaled miss, u) of the run over the whole span that came nearest the end
+    closest = None
+
     def _endpoint(self, u):
         shot = self.run(u)
-        return None if shot is None else (*self.end_conditions(shot.t, shot.y, shot.S),
-                                           shot)
+        if shot is None:
+            return None
+        got = (*self.end_conditions(shot.t, shot.y, shot.S), shot)
+        if self.span == self.scene.t_span and len(got[0]) == len(self.target):
+            miss = float(np.max(np.abs(got[0] - self.target) / (1.0 + np.abs(self.target))))
+            if self.closest is None or miss < self.closest[0]:
+                self.closest = (miss, np.array(u, dtype=float))
+        return got
+
+    def out_of_time(self, timeout) -> ConnectError:
+        """The ``ConnectError`` of a search stopped by ``connect(timeout=)``, with the
+        closest motion its runs over the whole span reached."""
+        best = None if self.closest is None else self._best(self.closest[1])
+        edge = self.edge_note()
+        return ConnectError(
+            f"connect stopped at its timeout of {timeout:g} s after {self.runs} runs: "
+            + ("no run reached t1, so there is no closest motion (ConnectError.best is "
+               "None)" if best is None else f"the closest motion ends {best.residual:.3g} "
+               "away from end (ConnectError.best is that motion)")
+            + (f"; {edge}" if edge else "") + "; give more time, a guess nearer the "
+            "answer, or an end nearer the start", best)
 
     def end_conditions(self, t, y, S):
         """The end conditions' values at the end ``(t, y)`` of a run from the start with
@@ -181,6 +203,9 @@ class Search(Shooter):
                 return v, its, None, name + ("" if rows is None else " (on " + ", ".join(
                     self.conditions[r] for r in rows) + " first)")
             notes.append(f"{name} stopped at {where}")
+        edge = self.edge_note()
+        if edge:
+            notes.append(edge)
         if closest is not None:
             raise ConnectError(closest.args[0] + "; also tried: " + "; ".join(notes),
                                closest.best)
