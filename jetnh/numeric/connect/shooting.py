@@ -13,9 +13,12 @@ from scipy.linalg.lapack import dgesdd as _gesdd
 
 from ...errors import JetnhError
 from .. import arguments, interrupt, solve
-from ..methods._common import FINISHED, SINGULAR
+from ..methods._common import FINISHED
 from ..options import options
 
+#: the measure of the scene's split (``verdicts.split_measure``) below which a run that
+#: stopped early stopped at the edge of its chart
+EDGE = 1e-2
 #: steps a shooting run may take (a run that needs more counts as failed)
 MAX_STEPS = 20_000
 
@@ -58,6 +61,8 @@ class Shot:
         if int(out[0]) != FINISHED or n_out < 1:
             if stops is not None:
                 stops[int(out[0])] = stops.get(int(out[0]), 0) + 1
+                stops["y"] = (float(out[1][n_out - 1]),
+                              np.array(out[2][n_out - 1][:lay.n_state])) if n_out else None
             return None
         last = out[2][n_out - 1]
         if not arguments.all_finite(last):
@@ -90,8 +95,9 @@ class Shooter:
     """Runs of one scene from the start with the unknowns ``u``: the endpoint residual
     and its Jacobian from the sensitivities.  ``deadline`` (``time.monotonic()``, or
     None): no run starts after it (``OutOfTime``); ``stops``: the runs that stopped
-    early, by status (``SINGULAR``: at the edge of the scene's split, which a run with
-    sensitivities does not leave)."""
+    early, by status, and as "edge" those that stopped near the edge of the scene's
+    split (its measure below ``verdicts.EDGE``), which a run with sensitivities does not
+    leave."""
 
     deadline = None
 
@@ -146,12 +152,19 @@ class Shooter:
                 scene._check_holonomic(y, span[0], scene._p)
             except JetnhError:
                 return None
-        return Shot.of(scene, self.plan(span, save), y, scene._p, self.stops)
+        shot = Shot.of(scene, self.plan(span, save), y, scene._p, self.stops)
+        last = self.stops.pop("y", None)
+        if shot is None and last is not None and arguments.all_finite(last[1]):
+            from .verdicts import split_measure
+
+            if split_measure(scene, last[0], last[1]) < EDGE:
+                self.stops["edge"] = self.stops.get("edge", 0) + 1
+        return shot
 
     def edge_note(self) -> str:
         """Where runs stopped at the edge of the scene's split: what that means and the
         fix ("" where none did)."""
-        k = self.stops.get(SINGULAR, 0)
+        k = self.stops.get("edge", 0)
         if not k:
             return ""
         dep = ", ".join(self.scene.dependent_velocities) or "none"

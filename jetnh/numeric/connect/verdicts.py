@@ -80,12 +80,19 @@ def action(tr, samples) -> float:
 
 def _point(tr, times, ys) -> dict:
     """Symbol -> values of t, q, every velocity and the parameters at the rows ``ys``."""
-    scene, kern = tr.scene, tr._kernels
+    return _state_point(tr.scene, times, ys, tr._kernels, tr._p)
+
+
+def _state_point(scene, times, ys, kern=None, p=None) -> dict:
+    """``_point`` of ``scene``'s rows ``ys`` (its own kernels and run-time parameters
+    unless given)."""
+    kern = scene.kernels if kern is None else kern
+    p = scene._p if p is None else p
     system = scene.system
     J = system.J
     aux = np.empty((ys.shape[0], kern.layout.n_aux))
     kern.aux_rows(np.ascontiguousarray(times), np.ascontiguousarray(ys),
-                  np.ascontiguousarray(tr._p, dtype=float), aux)
+                  np.ascontiguousarray(p, dtype=float), aux)
     col = {n: i for i, n in enumerate(scene.state_names)}
     point = {J.t: times}
     for s in J.q:
@@ -112,6 +119,32 @@ _DERIVATIVES: dict = {}
 #: the measure det(A_alpha)^2 / det(A A^T) of the scene's split (``atlas``) below which,
 #: somewhere on the path, ``gramian_ratio`` linearizes without a split
 EDGE = 1e-2
+
+
+def _measures(Fv, dep_rows):
+    """det(A_alpha)^2 / det(A A^T) of the split ``dep_rows`` for each A of ``Fv``
+    (``[..., k, n]``), 0 where A has rank < k (``atlas``)."""
+    gram = np.linalg.det(Fv @ np.swapaxes(Fv, -1, -2))
+    minor = np.linalg.det(Fv[..., dep_rows])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out = np.where(gram > 0, minor ** 2 / gram, 0.0)
+    return np.where(np.isfinite(out), out, 0.0)
+
+
+def split_measure(scene, t, y) -> float:
+    """The measure of ``scene``'s split at the state ``y`` at time ``t`` (1 without
+    constraints)."""
+    from ...algebra import dag
+
+    system = scene.system
+    if not system.k:
+        return 1.0
+    n, k = system.J.n, system.k
+    _, dep_rows, _, fderivs = _derivatives(system)
+    point = _state_point(scene, np.array([float(t)]), np.asarray(y, dtype=float)[None, :])
+    vals = dag.evaluate_numpy(fderivs[k * n:], point)
+    Fv = np.array([float(np.ravel(v)[0]) for v in vals]).reshape(k, n)
+    return float(_measures(Fv, dep_rows))
 
 
 def _derivatives(system):
@@ -148,11 +181,7 @@ def _linearized(tr, times, ys):
     F = np.stack([np.broadcast_to(np.asarray(v, dtype=float), times.shape)
                   for v in dag.evaluate_numpy(fderivs, point)], axis=-1)
     Fq, Fv = F[:, :k * n].reshape(-1, k, n), F[:, k * n:].reshape(-1, k, n)
-    gram = np.linalg.det(Fv @ Fv.transpose(0, 2, 1))
-    minor = np.linalg.det(Fv[:, :, dep_rows])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        measure = np.where(gram > 0, minor ** 2 / gram, 0.0)
-    if np.all(np.isfinite(measure)) and measure.min() >= EDGE:
+    if _measures(Fv, dep_rows).min() >= EDGE:
         vals = dag.evaluate_numpy(derivatives, point)
         A = np.zeros((times.size, n, n))
         B = np.zeros((times.size, n, m))
