@@ -36,6 +36,14 @@ rank-deficient) is continued on its best-determined conditions and checked on al
 the end, so the continuation's path never leaves the reachable set.  Iterations and
 continuation steps have budgets; where they stop, ``ConnectError`` says so.
 
+With holonomic constraints g = 0 the start (and an end naming every coordinate) must lie
+on g = 0 (``complete=True`` completes the start, as ``Scene`` does); the multipliers of
+g = 0 enter the equations only through their rates (inert), so they stay at 0 and are no
+unknowns; the verdicts are measured on the tangent space of g = 0.  The runs carry
+sensitivities and keep the scene's split: an end whose motion must cross the edge of
+that chart is not reached (the error says so, with the fix); ``timeout`` bounds the
+search's wall-clock time.
+
 Vakonomic and Hoelder ends may leave coordinates free: their transversality conditions
 close the problem -- the coefficient of each free eta^i in the boundary term of the
 composite action's variation (13), the momentum P_i = d(L + lambda f)/dqdot^i, vanishes
