@@ -481,7 +481,7 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
             status = stop
             break
         t = t_new
-        copy_into(y, y_new)
+        y, y_new = y_new, y
         if ADAPTIVE:
             copy_into(K[0], K[ns])
     if mode == ENDPOINTS:
