@@ -522,9 +522,9 @@ def features(ctl, mode, watch) -> tuple[bool, bool, bool, bool]:
 def _specialised(method, parts=ALL):
     """The globals of this module with ``TAB`` bound to ``method.arrays``, the step's sums
     to the method's (``sums.functions``: its nonzero coefficients as literals), the parts
-    of the loop a run needs (``WATCH, PROJECT, DENSE, STEPS = parts``: ``features``) and ``run``
-    to ``_solve`` compiled over them: each method's loop is compiled with its tableau
-    (stage counts, coefficients) known, as the hand-written loops were, at the
+    of the loop a run needs (``WATCH, PROJECT, DENSE, STEPS = parts``: ``features``) and
+    ``run`` to ``_solve`` compiled over them: each method's loop is compiled with its
+    tableau (stage counts, coefficients) known, as the hand-written loops were, at the
     per-evaluation cost of theirs, and without the parts the run does not use (numba
     prunes the branches on these constants before typing them: a run without events,
     indicators, projection and ``t_eval`` compiles none of ``_events``, one that keeps
