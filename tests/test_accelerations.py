@@ -72,6 +72,24 @@ def test_parts_are_symengines_own_conversion_shared(case):
     assert lean.r is None and lean.p == parts.p and lean.H == parts.H and lean.v == parts.v
 
 
+@given(expressions())
+def test_derivatives_taken_together_are_symengines_one_by_one(case):
+    """The momenta's derivatives by one symbol in one walk (``_together``) are the very
+    symengine expressions of one diff per momentum, by every symbol."""
+    import symengine as se
+
+    from jetnh.mechanics.accelerations import _together
+
+    J, F = case
+    if F.has(sp.Function("f")):
+        return
+    syms = [se.Symbol(v.name) for v in (J.t, *J.q, *J.qd)]
+    Fs = se.sympify(F)
+    p = [Fs.diff(v) for v in syms[J.n + 1:]] + [Fs, se.Integer(0), syms[0]]
+    for x in syms:
+        assert _together(p, x) == [e.diff(x) for e in p]
+
+
 def test_shared_parts_of_a_chain_are_converted_once():
     """The 6-trailer's Lagrangian: its parts are symengine's own conversion's, with no
     more distinct objects (that conversion walks the tree, meeting shared parts again)."""

@@ -144,6 +144,20 @@ def test_diff_agrees_with_sympy_at_random_points(case, data):
     assert _close(jac[1, 0], e + x * d1, point)
 
 
+@given(nested())
+def test_a_shared_cache_gives_the_same_derivatives(case):
+    """With a cache shared by every symbol, subexpressions without the symbol are not
+    walked: the derivatives are the very expressions of separate calls, zero where the
+    symbol is absent."""
+    J, e = case
+    cache: dict = {}
+    for x in (J.t, *J.q, *J.qd, sp.Symbol("absent")):
+        d = dag.diff(e, x, cache=cache)
+        assert d == dag.diff(e, x) and d.args == dag.diff(e, x).args
+        if x not in dag.free_symbols(e):
+            assert d is sp.S.Zero
+
+
 def test_diff_is_sympy_diff_on_small_expressions():
     """The same rules as sympy: on tree-shaped input the very same expressions."""
     x, y = sp.symbols("x y")

@@ -147,13 +147,16 @@ def diff(expr, *symbols, cache: dict | None = None):
     ``Piecewise``, ``Derivative``, ...) are passed to ``sympy.diff``.
 
     ``cache`` (a dict, filled here) carries the derivatives of subexpressions over several
-    calls, e.g. by every symbol of one expression (``jacobian``, the total derivative)."""
+    calls, e.g. by every symbol of one expression (``jacobian``, the total derivative);
+    with it (or several symbols) the symbols below each subexpression are remembered
+    too, and a subexpression without the symbol is not walked."""
+    prune = cache is not None or len(symbols) > 1
     cache = {} if cache is None else cache
     expr = sp.sympify(expr, strict=True)
     for x in symbols:
         if not isinstance(x, sp.Symbol):
             raise TypeError(f"dag.diff differentiates by Symbols, not {x!r}")
-        expr = _diff(expr, x, cache)
+        expr = _diff(expr, x, cache, prune)
     return expr
 
 
@@ -162,17 +165,51 @@ def jacobian(exprs, symbols, cache: dict | None = None) -> sp.Matrix:
     cache = {} if cache is None else cache
     exprs = [sp.sympify(e, strict=True) for e in exprs]
     return sp.Matrix(len(exprs), len(symbols),
-                     lambda i, j: _diff(exprs[i], symbols[j], cache))
+                     lambda i, j: _diff(exprs[i], symbols[j], cache, True))
 
 
-def _diff(expr, x, cache: dict):
+#: the key, beside a node's id, of its free symbols in ``diff``'s cache
+_FREE = object()
+
+
+def _symbols_below(expr, cache: dict) -> frozenset:
+    """The Symbols in ``expr``, remembered for every subexpression in ``cache`` under
+    (id(node), _FREE) -> (node, symbols)."""
+    stack = [(expr, False)]
+    while stack:
+        e, expanded = stack.pop()
+        key = (id(e), _FREE)
+        if key in cache:
+            continue
+        if not expanded and e.args:
+            stack.append((e, True))
+            stack.extend((a, False) for a in e.args if (id(a), _FREE) not in cache)
+            continue
+        if isinstance(e, sp.Symbol) or not e.args:
+            below = frozenset((e,)) if isinstance(e, sp.Symbol) else frozenset()
+        else:                    # the largest child's set itself where it holds them all
+            sets = [cache[(id(a), _FREE)][1] for a in e.args]
+            big = max(sets, key=len)
+            below = big if all(s <= big for s in sets) else big.union(*sets)
+        cache[key] = (e, below)
+    return cache[(id(expr), _FREE)][1]
+
+
+def _diff(expr, x, cache: dict, prune: bool):
     """d expr / dx; ``cache``: (id(node), x) -> (node, derivative), the node kept alive
-    so that its id is not reused."""
+    so that its id is not reused.  With ``prune``, a subexpression without x is zero,
+    not walked (``_symbols_below``: one walk, worth it when the cache serves several
+    symbols)."""
+    if prune:
+        _symbols_below(expr, cache)
     stack = [(expr, False)]
     while stack:
         e, expanded = stack.pop()
         key = (id(e), x)
         if key in cache:
+            continue
+        if prune and x not in cache[(id(e), _FREE)][1]:
+            cache[key] = (e, sp.S.Zero)
             continue
         if not expanded and e.args:
             stack.append((e, True))
@@ -195,9 +232,10 @@ def _rule(e, x, cache):
         args = list(e.args)
         return sp.Add(*[sp.Mul(*args[:i], d, *args[i + 1:])
                         for i, d in enumerate(ds) if d is not sp.S.Zero])
-    if isinstance(e, sp.Pow):
-        (b, p), (db, dp) = e.args, ds
-        return e * (dp * sp.log(b) + db * p / b)
+    if isinstance(e, sp.Pow):         # a zero part is left out (0 * log(b) would ask
+        (b, p), (db, dp) = e.args, ds  # whether log(b) is finite, walking b's tree)
+        return e * sp.Add(*([dp * sp.log(b)] if dp is not sp.S.Zero else []),
+                          *([db * p / b] if db is not sp.S.Zero else []))
     if isinstance(e, sp.Function) and type(e)._eval_derivative is sp.Function._eval_derivative:
         out = []
         for i, d in enumerate(ds, 1):

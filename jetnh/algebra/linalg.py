@@ -23,6 +23,7 @@ import sympy as sp
 from sympy.matrices.utilities import dotprodsimp
 
 from . import dag
+from ..errors import ArgumentError
 
 _ADJUGATE_MAX = 3
 _CRAMER_MAX = 6           # larger systems: LU with pivots chosen by value
@@ -165,7 +166,9 @@ def completing(complete):
 
 def _pivot_values(M: sp.Matrix) -> list:
     """M's entries at up to ``_PIVOT_POINTS`` random points (mpmath matrices, complex
-    where the entries are); points outside their domain are skipped."""
+    where the entries are); points outside their domain are skipped, and none is drawn
+    once one lacks a symbol's value (``completing`` may need symbols M does not have:
+    every point draws the same ones)."""
     syms = sorted(dag.free_symbols(list(M)), key=lambda s: s.name)
     rng = random.Random(_PIVOT_SEED)
     complete = _COMPLETE.get()
@@ -180,6 +183,8 @@ def _pivot_values(M: sp.Matrix) -> list:
                 if complete is not None:
                     pt = complete(pt)
                 vals = dag.evaluate(list(M), pt, dps=_PIVOT_DPS)
+            except ArgumentError:    # a symbol without a value: so at every point
+                break
             except (TypeError, ValueError, ZeroDivisionError, ArithmeticError, Inexact):
                 continue
             if all(mpmath.isfinite(v) for v in vals):
@@ -227,6 +232,9 @@ def _lu_solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
     A = M.copy().as_mutable()
     B = rhs.copy().as_mutable()
     k = A.rows
+    # the terms subtracted from B's entries, added up once when the row is the pivot's
+    # (subtracting them one by one re-flattens every partial sum: cubic in k)
+    pending = [[[] for _ in range(B.cols)] for _ in range(k)]
     # the values as lists of rows (mpmath's matrix indexing was most of the elimination)
     Ns = [[[N[i, j] for j in range(k)] for i in range(k)] for N in _pivot_values(A)]
     with mpmath.workdps(_PIVOT_DPS):
@@ -238,17 +246,23 @@ def _lu_solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
             if best != col:
                 A.row_swap(best, col)
                 B.row_swap(best, col)
+                pending[best], pending[col] = pending[col], pending[best]
                 for N in Ns:
                     N[best], N[col] = N[col], N[best]
+            for j, terms in enumerate(pending[col]):
+                if terms:
+                    B[col, j] = sp.Add(B[col, j], *terms)
             piv = A[col, col]
             _divides(piv)
             for r in range(col + 1, k):
                 if A[r, col] != 0:
                     fac = A[r, col] / piv
-                    for R, j0 in ((A, col), (B, 0)):        # zero entries stay untouched
-                        for j in range(j0, R.cols):
-                            if R[col, j] != 0:
-                                R[r, j] = R[r, j] - fac * R[col, j]
+                    for j in range(col, k):                 # zero entries stay untouched
+                        if A[col, j] != 0:
+                            A[r, j] = A[r, j] - fac * A[col, j]
+                    for j in range(B.cols):
+                        if B[col, j] != 0:
+                            pending[r][j].append(-(fac * B[col, j]))
                 for N in Ns:         # zero multipliers and entries change nothing: skipped
                     top, row = N[col], N[r]
                     if top[col] != 0 and row[col] != 0:

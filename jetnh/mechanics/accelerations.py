@@ -127,7 +127,8 @@ def _to_sympy(exprs, originals: dict) -> list:
 
 def _parts(F, t, q, qd, hessian, rest, zero, add):
     """``euler_parts`` on sympy or symengine expressions (``zero`` and ``add`` of the
-    library); only derivatives by symbols that occur are taken."""
+    library); only derivatives by symbols that occur are taken, those of the momenta
+    on symengine by one walk per symbol (``_together``)."""
     n = len(q)
 
     def d(e, x, syms):
@@ -136,23 +137,52 @@ def _parts(F, t, q, qd, hessian, rest, zero, add):
     fs = F.free_symbols
     p = [d(F, x, fs) for x in qd]
     ps = [e.free_symbols for e in p]
+    def by(x, upto=n):              # [d(p[s], x, ps[s]) for s < upto]
+        live = [s for s in range(upto) if x in ps[s]]
+        out = [zero] * upto
+        got = (_together([p[s] for s in live], x) if add is se.Add and len(live) > 1
+               else [p[s].diff(x) for s in live])
+        for s, e in zip(live, got):
+            out[s] = e
+        return out
     H = None
     if hessian:
         H = [[zero] * n for _ in range(n)]
-        for s in range(n):
-            for r in range(s, n):
-                H[s][r] = H[r][s] = d(p[s], qd[r], ps[s])
+        for r in range(n):
+            for s, h in enumerate(by(qd[r], r + 1)):
+                H[s][r] = H[r][s] = h
     rem = None
     if rest:
+        dq = [by(x) for x in q]
         rem = [d(F, q[s], fs) - d(p[s], t, ps[s])
-               - add(*[d(p[s], x, ps[s]) * v for x, v in zip(q, qd)]) for s in range(n)]
+               - add(*[dq[j][s] * v for j, v in enumerate(qd)]) for s in range(n)]
     v = d(F, t, fs) + add(*[d(F, x, fs) * xd for x, xd in zip(q, qd)])
     return p, H, rem, v
 
 
-def cached_parts(system, F, hessian=True, rest=True) -> EulerParts:
-    """``euler_parts`` of the system's Lagrangian or constraints, once per system (the
-    parts with r serve a later call without)."""
+def _together(exprs, x) -> list:
+    """``[e.diff(x) for e in exprs]`` for symengine expressions, by one derivative of
+    sum_i m_i e_i (fresh symbols m_i, read off the terms): symengine remembers the
+    derivatives of the subexpressions within one call only, and the momenta of a
+    chain share most of theirs."""
+    marks = [se.Dummy() for _ in exprs]
+    index = {m: i for i, m in enumerate(marks)}
+    terms: list = [[] for _ in exprs]
+    total = se.Add(*[m * e for m, e in zip(marks, exprs)]).diff(x)
+    for term in (total.args if isinstance(total, se.Add) else (total,)):
+        if term in index:
+            terms[index[term]].append(se.Integer(1))
+            continue
+        for m in term.args:
+            if m in index:
+                terms[index[m]].append(term / m)
+                break
+    return [se.Add(*t) for t in terms]
+
+
+def cached_parts(system, F, hessian=True, rest=False) -> EulerParts:
+    """``euler_parts`` of the system's Lagrangian or constraints, once per system; r only
+    with ``rest`` (the parts with r serve a later call without)."""
     key = id(system)
     entry = _PARTS.get(key)
     if entry is None or entry[0]() is not system:
@@ -165,6 +195,16 @@ def cached_parts(system, F, hessian=True, rest=True) -> EulerParts:
     if found is None or (rest and found.r is None):
         cache[F, hessian] = found = euler_parts(system.J, F, hessian, rest)
     return found
+
+
+def _weighted(M: sp.Matrix, weights, parts) -> sp.Matrix:
+    """M + sum_a weights[a] parts[a] (parts None skipped), each entry one Add of its terms
+    (adding the matrices one by one re-flattens every partial sum: quadratic in the
+    number of constraints); zero products left out (sympy's w * 0 asks whether w is
+    finite, walking its tree)."""
+    return sp.Matrix(M.rows, M.cols, lambda i, j: sp.Add(
+        M[i, j], *[w * X[i, j] for w, X in zip(weights, parts)
+                   if X is not None and w != 0 and X[i, j] != 0]))
 
 
 def solve(system, kappa: str = "none", explicit: bool = False, multipliers=(),
@@ -193,7 +233,7 @@ def _solve(system, kappa, explicit, multipliers, rates):
     ind, dep = list(system.ind_index), list(system.dep_index)
     transform = explicit and system.is_affine
     cons = system.explicit_constraints if explicit and not transform else system.constraints
-    p, H, r, _ = cached_parts(system, system.L)
+    p, H, r, _ = cached_parts(system, system.L, rest=True)
     # the constraints' r only where the multipliers weigh [f] (kappa)
     cparts = [cached_parts(system, f, hessian=not system.is_affine, rest=kappa != "none")
               for f in cons]
@@ -213,10 +253,9 @@ def _solve(system, kappa, explicit, multipliers, rates):
     if system.forced:                 # Q_s stands beside [L]_s in every row
         r1 = r1 + sp.Matrix(system.Q)
     if any(c != 0 for c in kap):
-        for a, c in enumerate(cparts):
-            r1 = r1 + kap[a] * c.r
-            if c.H is not None:
-                H1 = H1 + kap[a] * c.H
+        r1 = _weighted(r1, kap, [c.r for c in cparts])
+        if any(c.H is not None for c in cparts):
+            H1 = _weighted(H1, kap, [c.H for c in cparts])
 
     if not (system.L.free_symbols & set(J.qd)):
         raise LagrangianError(
@@ -249,7 +288,9 @@ def _solve(system, kappa, explicit, multipliers, rates):
     if rates:
         R = (r1 - linalg.matmul(H1, q2)).extract(dep, [0])
         if transform:
-            mu = R + linalg.matmul(A_dep.applyfunc(J.D).T, sp.Matrix(kap))
+            graph: dict = {}          # the entries' shared parts differentiated once
+            DA = A_dep.applyfunc(lambda e: J.D(e, graph))
+            mu = R + linalg.matmul(DA.T, sp.Matrix(kap))
         else:
             mu = linalg.solve(A_dep.T, R)
         acc.update({rate: mu[a] for a, rate in enumerate(rates)})

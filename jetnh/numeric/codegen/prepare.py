@@ -45,16 +45,19 @@ class Preparer:
         graph of them all (shared parts rebuilt once); any error is reported by ``self``
         on the first expression that has it."""
         exprs = [sp.sympify(e, strict=True) for e, _ in pairs]
-        sub, bad = self._rule(exprs)
-        out = None if bad or dag.atoms(exprs, AppliedUndef) else dag.xreplace(exprs, sub, self.canon, self.memo)
+        sub, bad, undefined = self._rule(exprs)
+        out = None if bad or undefined else dag.xreplace(exprs, sub, self.canon, self.memo)
         if out is None or dag.atoms(out, type(sp.nan), type(sp.zoo), type(sp.oo),
                                     type(sp.S.NegativeInfinity)):
             return [self(e, what) for e, what in pairs]
         return out
 
     def _rule(self, e):
+        """The substitution for the symbols of ``e``, the names without a value, and the
+        undefined functions (one walk of the graph)."""
+        found = dag.nodes(e)
         sub, bad = {}, set()
-        for s in dag.free_symbols(e):
+        for s in {x for x in found if isinstance(x, sp.Symbol)}:
             if s in self.rename:
                 sub[s] = self.rename[s]
             elif s.name in self.by_name:
@@ -63,16 +66,15 @@ class Preparer:
                 sub[s] = self.rename[self.names[s.name]]
             else:
                 bad.add(s.name)
-        return sub, bad
+        return sub, bad, [x for x in found if isinstance(x, AppliedUndef)]
 
     def __call__(self, expr, what):
         e = sp.sympify(expr, strict=True)
-        sub, bad = self._rule(e)
+        sub, bad, undefined = self._rule(e)
         if bad:
             raise JetnhError(
                 f"{what} contains symbols with no value: {', '.join(sorted(bad))}; "
                 "give them in params=")
-        undefined = list(dag.atoms(e, AppliedUndef))
         if undefined:
             raise JetnhError(f"{what} contains undefined functions {undefined}; "
                              "jetnh compiles explicit expressions only")
