@@ -481,9 +481,11 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
             status = stop
             break
         t = t_new
-        y, y_new = y_new, y
         if ADAPTIVE:
+            copy_into(y, y_new)
             copy_into(K[0], K[ns])
+        else:           # (swapped: cheaper on rk4; on dop853 it costs more than the copy)
+            y, y_new = y_new, y
     if mode == ENDPOINTS:
         ts, ys, n_out = store(ts, ys, n_out, t, y)
     status = finite_status(status, ys, n_out, y, ctl.n_sens)
