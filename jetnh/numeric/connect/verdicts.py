@@ -222,12 +222,12 @@ def conjugate_times(tr, cols, samples, rcond=1e-9) -> tuple:
     (``jacobi_measure``, each column by the largest length its configuration part
     reaches on the equal-spaced times of ``samples``): the sign changes of the scaled
     determinant (square case), located by Brent's method on the dense output; the local
-    minima of the smallest scaled singular value there, refined on the dense output and
-    kept where it falls to ``100 rcond`` (a conjugate point of even multiplicity -- the
-    antipode of a great circle on a 3-sphere -- changes no sign); and t1 where that
-    value is at most ``100 rcond`` there.  Not relative to the sensitivities' size: on
-    a long unstable span they grow by orders of magnitude while the map keeps its
-    rank."""
+    minima of the smallest scaled singular value there (where the map has its rank on
+    both sides), refined on the dense output and kept where it falls to ``100 rcond``
+    (a conjugate point of even multiplicity -- the antipode of a great circle on a
+    3-sphere -- changes no sign); and t1 where that value is at most ``100 rcond``
+    there.  Not relative to the sensitivities' size: on a long unstable span they grow
+    by orders of magnitude while the map keeps its rank."""
     from scipy.optimize import brentq, minimize_scalar
 
     n = tr.layout.n_state
@@ -256,8 +256,11 @@ def conjugate_times(tr, cols, samples, rcond=1e-9) -> tuple:
         for i in np.nonzero(change)[0]:
             found.append(float(brentq(lambda t: jacobi_measure(fields(t), nq)[0][0],
                                       grid[i], grid[i + 1], xtol=1e-14, rtol=1e-14)))
+        # isolated dips: where the map keeps its rank on both sides (not rank-deficient
+        # along a stretch, where the measure is rounding noise)
         dips = np.nonzero((least[1:-1] < least[:-2]) & (least[1:-1] <= least[2:])
-                          & (least[1:-1] < DIP))[0] + 1
+                          & (least[1:-1] < DIP)
+                          & (np.minimum(least[:-2], least[2:]) > 1e4 * rcond))[0] + 1
         for i in dips:
             if any(grid[i - 1] <= t <= grid[i + 1] for t in found):
                 continue                    # a sign change found there already
@@ -265,7 +268,8 @@ def conjugate_times(tr, cols, samples, rcond=1e-9) -> tuple:
                 lambda t: jacobi_measure(fields(t), nq, scale)[1][0],
                 bounds=(grid[i - 1], grid[i + 1]), method="bounded",
                 options={"xatol": 1e-12 * span})
-            if low.fun <= 1e2 * rcond:
+            if low.fun <= 1e2 * rcond and all(abs(low.x - t) > 1e-9 * span
+                                               for t in found):
                 found.append(float(low.x))
     if len(cols) >= nq:
         _, least_t1 = jacobi_measure(last, nq, scale)
