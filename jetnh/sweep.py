@@ -223,6 +223,7 @@ def _numbers(value, what):
     complex values are refused (never parsed), as are non-finite values."""
     import numpy as np
 
+    _no_strings(list(value) if isinstance(value, (list, tuple)) else [value], what)
     try:
         a = np.asarray(value)
     except ValueError:                          # ragged nesting
@@ -232,10 +233,7 @@ def _numbers(value, what):
         raise ArgumentError(f"{what} must be a number or a 1-d sequence, got shape "
                             f"{a.shape}")
     items = a.reshape(-1).tolist() if a.dtype.kind in "OUSb" else []
-    text = [v for v in items if isinstance(v, (str, bytes))]
-    if text:
-        raise ArgumentError(f"{what} holds the string {text[0]!r}; strings are never "
-                            "parsed: give numbers, e.g. 12.0, not '12'")
+    _no_strings(items, what)
     if a.dtype.kind in "bc" or any(isinstance(v, (bool, complex)) for v in items):
         raise ArgumentError(f"{what} must be real numbers, got {value!r}")
     try:
@@ -246,6 +244,16 @@ def _numbers(value, what):
         raise ArgumentError(f"{what} has non-finite values ({a[~np.isfinite(a)][0]}); give "
                             "finite numbers")
     return a
+
+
+def _no_strings(items, what):
+    import numpy as np
+
+    text = [v for v in items if isinstance(v, (str, bytes, np.str_, np.bytes_))
+            or (isinstance(v, np.ndarray) and v.dtype.kind in "US")]
+    if text:
+        raise ArgumentError(f"{what} holds the string {text[0]!r}; strings are never "
+                            "parsed: give numbers (e.g. 12.0, not '12')")
 
 
 def _unique(keys) -> list[str]:
