@@ -252,8 +252,8 @@ def _no_strings(items, what):
     text = [v for v in items if isinstance(v, (str, bytes, np.str_, np.bytes_))
             or (isinstance(v, np.ndarray) and v.dtype.kind in "US")]
     if text:
-        raise ArgumentError(f"{what} holds the string {text[0]!r}; strings are never "
-                            "parsed: give numbers (e.g. 12.0, not '12')")
+        raise ArgumentError(f"{what} must be numbers: it holds the string {text[0]!r}, "
+                            "and strings are never parsed; give numbers (12.0, not '12')")
 
 
 def _unique(keys) -> list[str]:

@@ -121,11 +121,11 @@ def scene(sleigh):
 
 
 @pytest.mark.parametrize("grid,words", [
-    ({"m": "12"}, "grid values of 'm' holds the string '12'"),
+    ({"m": "12"}, "grid values of 'm' must be numbers: it holds the string '12'"),
     ({"m": ["1", "2"]}, "holds the string '1'"),
     ({"m": [1.0, "2"]}, "holds the string '2'"),
     ({"m": np.array(["1", "2"])}, "holds the string"),
-    ([{"m": 1.0}, {"m": "2"}], "grid point 1 holds the string '2'"),
+    ([{"m": 1.0}, {"m": "2"}], "grid point 1 must be numbers: it holds the string '2'"),
     ({"m": [True, False]}, "must be real numbers"),
     ({"m": [1.0, np.nan]}, "non-finite"),
     ({"m": []}, "empty"),
