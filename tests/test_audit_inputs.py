@@ -104,6 +104,8 @@ def test_bad_linearize_arguments_are_argument_errors(sleigh, straight):
         straight.along("x_t", [])
     with pytest.raises(ArgumentError, match="cannot solve for"):
         straight.steady(["x"])
+    with pytest.raises(ArgumentError, match="tol must be a positive"):
+        straight.steady(["th_t"], tol=-1.0)
 
 
 def test_a_lagrangian_with_accelerations_is_a_lagrangian_error():

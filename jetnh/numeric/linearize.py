@@ -337,6 +337,7 @@ class Linearization(Frozen):
         """
         from scipy.optimize import least_squares
 
+        tol = arguments.positive(tol, "tol")
         unknowns = [arguments.name_of(u, "unknowns") for u in (
             [unknowns] if isinstance(unknowns, (str, sp.Symbol)) else unknowns)]
         model = self._model
@@ -645,7 +646,8 @@ def linearize(system, principle="chetaev", at=None, params=None, drop="cyclic", 
 def verdicts(system, at, params=None, principles_=None, drop="cyclic", solve_for=None):
     """One operating point under several principles: a pandas DataFrame, one row per
     principle, with its residual, state size, largest real part, verdict and
-    eigenvalues (a principle that fails has its error in the verdict column).
+    eigenvalues (a principle that fails has its error in the verdict column; one for
+    which the point is no steady motion has the verdict "not a steady motion").
 
     Parameters
     ----------
