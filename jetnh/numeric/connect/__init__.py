@@ -75,7 +75,7 @@ from __future__ import annotations
 
 import time
 
-from ...errors import ConnectError, JetnhError
+from ...errors import ArgumentError, ConnectError, JetnhError
 from ...mechanics import principles
 from ...mechanics.system import System
 from .. import arguments, codegen, methods
@@ -189,24 +189,29 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
         raise JetnhError(f"t_span {t_span!r} has zero length: no motion joins two "
                          "configurations in no time; give t1 > t0")
     if t1 < t0:
-        raise JetnhError(f"t_span {t_span!r} runs backwards: connect solves forwards in "
-                         "time; give (t0, t1) with t1 > t0")
+        raise ArgumentError(f"t_span {t_span!r} runs backwards: connect solves forwards "
+                            "in time; give (t0, t1) with t1 > t0", argument="t_span")
     m = methods.method(method)
     if m.solver is not methods.Solver.EXPLICIT or not m.dense:     # dop853, dopri5
         raise JetnhError(f"connect integrates with 'dop853' or 'dopri5' (dense output), "
                          f"not {method!r}")
     tol = arguments.positive(tol, "tol")
     if tol >= MAX_TOL:
-        raise JetnhError(f"tol={tol!r} accepts an end missed by {tol:g} (1 + |end|): "
-                         f"no connection; give tol < {MAX_TOL:g} (default 1e-9)")
+        raise ArgumentError(f"tol={tol!r} accepts an end missed by {tol:g} (1 + |end|): "
+                            f"no connection; give tol < {MAX_TOL:g} (default 1e-9)",
+                            argument="tol")
     max_iter = arguments.count(max_iter, "max_iter", limit=10_000)
     max_continuation = arguments.count(max_continuation, "max_continuation", limit=100_000)
     if segments is not None:
         segments = arguments.count(segments, "segments", limit=1000)
     if timeout is not None:
         timeout = arguments.positive(timeout, "timeout")
-    if restarts is not False and restarts != 0:
+    if not (type(restarts) is int and restarts == 0):
         restarts = arguments.count(restarts, "restarts", limit=10_000)
+        if principle not in VARIATIONAL:
+            raise ArgumentError(f"restarts look for the least-action extremal; {principle}"
+                                " motions do not make an action stationary: leave "
+                                "restarts at 0", argument="restarts")
     coords = tuple(s.name for s in system.J.q)
     q0 = _configuration(start, coords, "start", complete=True)
     q1 = _configuration(end, coords, "end", complete=False)
@@ -242,8 +247,7 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
                 failed = failed or e          # the first start's reasons are reported
                 continue
             found = shooter.connection(u, iterations, tol, stitched, route)
-            return least_action(shooter, found, tol, max_iter, restarts) if (
-                restarts and principle in VARIATIONAL) else found
+            return least_action(shooter, found, tol, max_iter, restarts)
     except OutOfTime:
         shooter.deadline = None
         raise shooter.out_of_time(timeout) from None
