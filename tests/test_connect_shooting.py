@@ -200,3 +200,13 @@ def test_cli_names_the_start_coordinates_it_set_to_zero(capsys, tmp_path):
     assert main(args + ["--format", "json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["zero_start"] == ["th"] and data["start"]["th"] == 0.0
+
+
+def test_cli_timeout_reports_where_the_search_stopped(capsys):
+    from jetnh.cli import main
+
+    code = main(["connect", "heisenberg", "--from", "x=0,y=0,z=0", "--to", "x=1,y=0.5,z=3",
+                 "--t-end", "1", "--timeout", "1e-6", "-q"])
+    err = capsys.readouterr().err
+    assert code == 1 and "connect stopped at its timeout of 1e-06 s" in err
+    assert "Traceback" not in err

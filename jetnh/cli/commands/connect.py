@@ -56,6 +56,12 @@ def add_parser(sub):
                    help="vakonomic, hoelder: where the motion found has a conjugate time "
                         "inside the span (no minimizer of the action), look for a cheaper "
                         "one from K restarts (default 0)")
+    s.add_argument("--timeout", type=float, default=None,
+                   help="wall-clock budget in seconds for each search: it stops there "
+                        "and says how close it came (default: none)")
+    s.add_argument("--complete", action="store_true",
+                   help="with holonomic constraints: solve the start's dependent "
+                        "coordinates from g = 0 instead of refusing a start off it")
     s.add_argument("--plot", metavar="PATH",
                    help="save a plot (png, pdf, svg) of the coordinates against t")
     s.add_argument("--format", choices=("text", "json"), default="text")
@@ -92,6 +98,10 @@ def run(args, progress) -> int:
         kw["segments"] = args.segments
     if args.restarts is not None:
         kw["restarts"] = args.restarts
+    if args.timeout is not None:
+        kw["timeout"] = args.timeout
+    if args.complete:
+        kw["complete"] = True
     params = assignments(args.set, "--set") or None
     with progress.step(f"connecting under {principle} over [{t0:g}, {float(t1):g}] "
                        "(kernels compiled once, then cached)"):
