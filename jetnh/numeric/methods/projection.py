@@ -133,7 +133,19 @@ def onto(hol, m, nq, t, y, p) -> np.ndarray:
     itself where G G^T is singular or a value is not finite)."""
     y = np.array(y, dtype=float)
     p = np.ascontiguousarray(p, dtype=float)
-    _onto(hol, m, nq, float(t), y, p, np.empty(m * (1 + nq + p.shape[0])))  # (room: dg/dp)
+    w = np.empty(m * (1 + nq + p.shape[0]))       # (room for dg/dp)
+    for _ in range(MAX_ITERATIONS):
+        hol(float(t), y, p, w)
+        G = w[m:m + m * nq].reshape(m, nq)
+        try:
+            d = G.T @ np.linalg.solve(G @ G.T, w[:m])
+        except np.linalg.LinAlgError:
+            return y
+        if not np.all(np.isfinite(d)):
+            return y
+        y[:nq] -= d
+        if np.max(np.abs(d) / np.maximum(1.0, np.abs(y[:nq]))) <= 4.0 * 2.220446049250313e-16:
+            break
     return y
 
 
@@ -165,19 +177,3 @@ def rows(hol_rows, m, nq, ts, ys, p):
         ys[left[go]] = y[go]
         big = np.max(np.abs(d) / np.maximum(1.0, np.abs(y[:, :nq])), axis=1)
         left = left[go & (big > 4.0 * 2.220446049250313e-16)]
-
-
-def _onto(hol, m, nq, t, y, p, w):
-    """The iteration of ``project`` on ``y`` in place (``w``: hol's output)."""
-    for _ in range(MAX_ITERATIONS):
-        hol(t, y, p, w)
-        G = w[m:m + m * nq].reshape(m, nq)
-        try:
-            d = G.T @ np.linalg.solve(G @ G.T, w[:m])
-        except np.linalg.LinAlgError:
-            return
-        if not np.all(np.isfinite(d)):
-            return
-        y[:nq] -= d
-        if np.max(np.abs(d) / np.maximum(1.0, np.abs(y[:nq]))) <= 4.0 * 2.220446049250313e-16:
-            return
