@@ -93,14 +93,15 @@ def measure(name, sc, n_steps, pairs):
             tic = time.perf_counter()
             f()
             times[i, k] = time.perf_counter() - tic
-    nfev = int(out[4][2])
+    res = loops.result(out)
+    nfev = int(res.stats[2])
     assert nfev == 4 * n_steps
     row = dict(problem=name, n_steps=n_steps, pairs=pairs,
                bare_ns_per_eval=times[:, 0].min() / nfev * 1e9,
                jetnh_ns_per_eval=times[:, 1].min() / nfev * 1e9,
                ratio=float(np.median(times[:, 1] / times[:, 0])),
                ratio_of_best=float(times[:, 1].min() / times[:, 0].min()),
-               bitwise_equal=bool(np.array_equal(out[6], y_bare)))
+               bitwise_equal=bool(np.array_equal(res.y, y_bare)))
     print(f"{name:18s} {n_steps} steps x {pairs}  bare {row['bare_ns_per_eval']:7.2f} "
           f"ns/eval  jetnh rk4 {row['jetnh_ns_per_eval']:7.2f} ns/eval  ratio "
           f"{row['ratio']:.3f} (of the best {row['ratio_of_best']:.3f})  bitwise "

@@ -141,17 +141,17 @@ def sweep(scene, grid, client=None, *, times=None, outputs=None, chunk_size=None
     known = _options() + POINT_OPTIONS
     bad = sorted(set(options) - set(known))
     if bad:
-        raise JetnhError(f"sweep has no option {', '.join(map(repr, bad))}; its options are "
+        raise ArgumentError(f"sweep has no option {', '.join(map(repr, bad))}; its options are "
                          f"{', '.join(known)} (output times: "
                          "times=[...])")
     method = _method(options.get("method", "dop853"))
     if not method.ensemble:
         if times is not None and not method.dense:
-            raise JetnhError(f"times needs dense output, which {options['method']} does not "
+            raise ArgumentError(f"times needs dense output, which {options['method']} does not "
                              "have; use dop853, dopri5, radau or scipy-<M>, or omit times for the "
                              "final values")
     elif set(options) & set(POINT_OPTIONS):
-        raise JetnhError(f"{', '.join(sorted(set(options) & set(POINT_OPTIONS)))}: an option "
+        raise ArgumentError(f"{', '.join(sorted(set(options) & set(POINT_OPTIONS)))}: an option "
                          "of the dla method")
     if chunk_size is not None:
         chunk_size = _positive_int(chunk_size, "chunk_size")
@@ -166,11 +166,11 @@ def sweep(scene, grid, client=None, *, times=None, outputs=None, chunk_size=None
 
         times = arguments.times(times, *scene.t_span)
         if times.size == 0:
-            raise JetnhError("times is empty; give output times, or omit it for the final "
+            raise ArgumentError("times is empty; give output times, or omit it for the final "
                              "time")
         labels = {f"{t:.12g}" for t in times}
         if len(labels) != len(times):
-            raise JetnhError("times has values equal to 12 significant digits (their "
+            raise ArgumentError("times has values equal to 12 significant digits (their "
                              "column labels would clash); give distinct times")
     run = dict(options, t_eval=times, save="final")
     n = len(values)
@@ -214,31 +214,53 @@ def _key(k) -> str:
     name = key_name(k)
     if name is not None:
         return name
-    raise JetnhError(f"grid keys are parameter or state names, Symbols or dynamicsymbols, not "
+    raise ArgumentError(f"grid keys are parameter or state names, Symbols or dynamicsymbols, not "
                      f"{type(k).__name__} ({k!r})")
 
 
 def _numbers(value, what):
+    """A number or a 1-d sequence of numbers as a float array: strings, booleans and
+    complex values are refused (never parsed), as are non-finite values."""
     import numpy as np
 
+    _no_strings(list(value) if isinstance(value, (list, tuple)) else [value], what)
     try:
-        a = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise JetnhError(f"{what} must be numbers, got {value!r}") from None
+        a = np.asarray(value)
+    except ValueError:                          # ragged nesting
+        raise ArgumentError(f"{what} must be a number or a 1-d sequence of numbers, got "
+                            f"{value!r}") from None
     if a.ndim > 1:
-        raise JetnhError(f"{what} must be a number or a 1-d sequence, got shape {a.shape}")
-    a = a.reshape(-1)
+        raise ArgumentError(f"{what} must be a number or a 1-d sequence, got shape "
+                            f"{a.shape}")
+    items = a.reshape(-1).tolist() if a.dtype.kind in "OUSb" else []
+    _no_strings(items, what)
+    if a.dtype.kind in "bc" or any(isinstance(v, (bool, complex)) for v in items):
+        raise ArgumentError(f"{what} must be real numbers, got {value!r}")
+    try:
+        a = np.asarray(a, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise ArgumentError(f"{what} must be numbers, got {value!r}") from None
     if not np.all(np.isfinite(a)):
-        raise JetnhError(f"{what} has non-finite values ({a[~np.isfinite(a)][0]}); give "
-                         "finite numbers")
+        raise ArgumentError(f"{what} has non-finite values ({a[~np.isfinite(a)][0]}); give "
+                            "finite numbers")
     return a
+
+
+def _no_strings(items, what):
+    import numpy as np
+
+    text = [v for v in items if isinstance(v, (str, bytes, np.str_, np.bytes_))
+            or (isinstance(v, np.ndarray) and v.dtype.kind in "US")]
+    if text:
+        raise ArgumentError(f"{what} must be numbers: it holds the string {text[0]!r}, "
+                            "and strings are never parsed; give numbers (12.0, not '12')")
 
 
 def _unique(keys) -> list[str]:
     names = [_key(k) for k in keys]
     twice = sorted({n for n in names if names.count(n) > 1})
     if twice:
-        raise JetnhError(f"the grid gives {', '.join(twice)} twice (as a Symbol and as a "
+        raise ArgumentError(f"the grid gives {', '.join(twice)} twice (as a Symbol and as a "
                          "name?); give each once")
     return names
 
@@ -255,34 +277,34 @@ def _points(grid):
     if isinstance(grid, Mapping):
         names = _unique(grid)
         if not names:
-            raise JetnhError("the grid is empty; give at least one parameter or initial "
+            raise ArgumentError("the grid is empty; give at least one parameter or initial "
                              "value with its values, e.g. {'R': [0.5, 1.0]}")
         axes = []
         for name, v in zip(names, grid.values()):
             a = _numbers(v, f"grid values of {name!r}")
             if a.size == 0:
-                raise JetnhError(f"grid values of {name!r} are empty; give at least one")
+                raise ArgumentError(f"grid values of {name!r} are empty; give at least one")
             axes.append(a)
         return names, np.array(list(itertools.product(*axes)), dtype=float)
     if isinstance(grid, (list, tuple)):
         if not grid:
-            raise JetnhError("the grid has no points; give a list of points such as "
+            raise ArgumentError("the grid has no points; give a list of points such as "
                              "[{'R': 1.0, 'phi_t': 0.5}, ...]")
         if not all(isinstance(p, Mapping) for p in grid):
-            raise JetnhError("a grid given as a list holds points: mappings name -> value")
+            raise ArgumentError("a grid given as a list holds points: mappings name -> value")
         names = _unique(grid[0])
         if not names:
-            raise JetnhError("the grid's points are empty; give each point its values")
+            raise ArgumentError("the grid's points are empty; give each point its values")
         rows = []
         for i, point in enumerate(grid):
             have = _unique(point)
             if set(have) != set(names):
-                raise JetnhError(f"grid point {i} has keys {sorted(have)} but point 0 has "
+                raise ArgumentError(f"grid point {i} has keys {sorted(have)} but point 0 has "
                                  f"{sorted(names)}; give every point the same keys")
             row = dict(zip(have, point.values()))
             rows.append(_numbers([row[k] for k in names], f"grid point {i}"))
         return names, np.array(rows, dtype=float)
-    raise JetnhError(f"the grid is a mapping name -> values, a list of points or a "
+    raise ArgumentError(f"the grid is a mapping name -> values, a list of points or a "
                      f"DataFrame, not {type(grid).__name__}")
 
 
@@ -292,11 +314,11 @@ def _classify(scene, names):
     states = [k for k in names if k in scene.state_names]
     for k in names:
         if k in scene.dependent_velocities:
-            raise JetnhError(
+            raise ArgumentError(
                 f"the grid has {k!r}, a dependent velocity: it follows from the constraints. "
                 f"Sweep the states instead ({', '.join(scene.state_names)})")
         if k not in params and k not in states:
-            raise JetnhError(
+            raise ArgumentError(
                 f"the grid has {k!r}, which is neither a parameter "
                 f"({', '.join(scene.params) or 'none'}) nor a state "
                 f"({', '.join(scene.state_names)}) of this {scene.principle} scene")
@@ -310,7 +332,7 @@ def _outputs(layout, outputs):
     out = tuple(_key(k) for k in outputs)
     bad = [k for k in out if k not in names]
     if bad or not out:
-        raise JetnhError(f"outputs {bad or 'empty'}: choose among {', '.join(names)}")
+        raise ArgumentError(f"outputs {bad or 'empty'}: choose among {', '.join(names)}")
     return out
 
 
@@ -320,7 +342,7 @@ def _positive_int(value, what) -> int:
     except TypeError:
         v = 0
     if v < 1:
-        raise JetnhError(f"{what} must be a positive integer, not {value!r}")
+        raise ArgumentError(f"{what} must be a positive integer, not {value!r}")
     return v
 
 
@@ -335,7 +357,7 @@ def _progress(progress, total):
         return None, lambda: None
     if progress is not True:
         if not callable(progress):
-            raise JetnhError(f"progress is None, True or a callable progress(done, total), "
+            raise ArgumentError(f"progress is None, True or a callable progress(done, total), "
                              f"not {type(progress).__name__}")
         return progress, lambda: None
     from tqdm import tqdm
@@ -525,7 +547,7 @@ def _on_dask(client, shipped, Y0, P, run, outputs, chunk_size, progress, timeout
     own = not isinstance(client, Client)
     if own:
         if not isinstance(client, str):
-            raise JetnhError(f"client is None, a dask.distributed Client or a scheduler "
+            raise ArgumentError(f"client is None, a dask.distributed Client or a scheduler "
                              f"address, not {type(client).__name__}")
         client = _connect(client, connect_timeout)
     shipped_future, futures = None, []
@@ -573,12 +595,12 @@ def separation(a, b, names):
 
     grid = a.attrs.get("grid", [])
     if len(a) != len(b) or any(not np.array_equal(a[c], b[c]) for c in grid if c in b):
-        raise JetnhError("separation compares two sweeps of the same grid; these differ "
+        raise ArgumentError("separation compares two sweeps of the same grid; these differ "
                          f"({len(a)} and {len(b)} rows, grid columns {grid})")
     names = [_key(k) for k in names]
     missing = [k for k in names if k not in a or k not in b]
     if missing:
-        raise JetnhError(f"separation: no column {', '.join(missing)} in both sweeps")
+        raise ArgumentError(f"separation: no column {', '.join(missing)} in both sweeps")
     return np.sqrt(sum((a[k] - b[k]) ** 2 for k in names)).rename("separation")
 
 
@@ -596,24 +618,24 @@ def plot_map(df, x, y, value, path=None, *, log=False, title=None, mask_failed=T
 
     for c in (x, y):
         if c not in df:
-            raise JetnhError(f"plot_map: no column {c!r}; the grid columns are "
+            raise ArgumentError(f"plot_map: no column {c!r}; the grid columns are "
                              f"{df.attrs.get('grid', list(df.columns))}")
     label = value if isinstance(value, str) else getattr(value, "name", None) or "value"
     if isinstance(value, str):
         if value not in df:
-            raise JetnhError(f"plot_map: no column {value!r}; choose among "
+            raise ArgumentError(f"plot_map: no column {value!r}; choose among "
                              f"{', '.join(df.columns)}")
         value = df[value]
     v = np.array(value, dtype=float)
     if v.shape != (len(df),):
-        raise JetnhError(f"plot_map: value has shape {v.shape}, the sweep {len(df)} rows")
+        raise ArgumentError(f"plot_map: value has shape {v.shape}, the sweep {len(df)} rows")
     if mask_failed and "success" in df:
         v[~df["success"].to_numpy(dtype=bool)] = np.nan
     if log:
         v[v <= 0] = np.nan
     table = pd.DataFrame({"x": df[x].to_numpy(), "y": df[y].to_numpy(), "v": v})
     if table.duplicated(["x", "y"]).any():
-        raise JetnhError(f"plot_map: several rows share a point ({x}, {y}); the map needs "
+        raise ArgumentError(f"plot_map: several rows share a point ({x}, {y}); the map needs "
                          "a grid over exactly these two columns (fix the others)")
     grid = table.pivot(index="y", columns="x", values="v")
     fig = Figure(figsize=(6.4, 4.8), layout="constrained")

@@ -179,3 +179,24 @@ def test_stitched_segments_where_single_shooting_cannot_polish():
     w[1::2], w[0], w[-1] = 4.0, 1.0, 1.0
     assert abs(np.sum(w * L) * (t[1] - t[0]) / 3 - c.cost) < 1e-6 * c.cost
     assert np.max(np.abs(np.diff(Y["x"].to_numpy()))) < 1e-2
+
+
+def test_cli_names_the_start_coordinates_it_set_to_zero(capsys, tmp_path):
+    """A model file without initial coordinates and a partial ``--from``: the coordinate
+    not given starts at 0, and the output says so (text and json)."""
+    import json
+
+    from jetnh.cli import main
+
+    model = tmp_path / "sleigh.toml"
+    model.write_text('coordinates = ["x", "y", "th"]\ndependent = ["y"]\n'
+                     'lagrangian = "(x_t**2 + y_t**2 + th_t**2) / 2"\n'
+                     'constraints = ["-sin(th)*x_t + cos(th)*y_t"]\n')
+    args = ["connect", str(model), "-p", "chetaev", "--from", "x=0,y=0", "--to", "x=0.5",
+            "--t-end", "1", "-q"]
+    assert main(args) == 0
+    out = capsys.readouterr().out
+    assert "from:      x = 0, y = 0, th = 0" in out and "(not given, set to 0: th)" in out
+    assert main(args + ["--format", "json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["zero_start"] == ["th"] and data["start"]["th"] == 0.0

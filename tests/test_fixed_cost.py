@@ -53,6 +53,35 @@ def test_unwatched_loop_equals_the_watched_one(particle, shift, method, save):
         assert np.array_equal(at.to_numpy(), ref.to_numpy())
 
 
+@settings(max_examples=6, deadline=None)
+@given(st.floats(-0.5, 0.5), st.sampled_from(["dop853", "dopri5", "rk4"]),
+       st.booleans())
+def test_a_run_that_keeps_its_end_ends_where_every_step_does(particle, shift, method,
+                                                             watched):
+    """``save="final"`` runs a loop compiled without the per-step store
+    (``loop.features``); its end and its counts are bit for bit those of the last row of
+    ``save="steps"``, whose loop stores every step."""
+    from jetnh.numeric.methods import _common, explicit_solver, loop
+
+    y0 = particle.y0.copy()
+    y0[0] += shift
+    kw = dict(y0=y0, method=method, singular="stop" if watched else "ignore",
+              **({"n_steps": 40} if method == "rk4" else {}))
+    steps, final = particle.run(save="steps", **kw), particle.run(save="final", **kw)
+    assert final.t.shape[0] == 2 and steps.t.shape[0] > 2
+    last = steps.t.shape[0] - 1
+    assert final.t[-1] == steps.t[-1] and final.y[-1].tobytes() == steps.y[last].tobytes()
+    ds, df = steps.diagnostics, final.diagnostics
+    assert (ds.steps, ds.rejected, ds.rhs_evaluations) == (df.steps, df.rejected,
+                                                           df.rhs_evaluations)
+    ctl = loop.Control(1e-6, np.ones(1), 0.0, 1.0, 1, 0)
+    none = np.zeros(0, dtype=np.int64)
+    w = loop.Watch(0, 0.0, none, none)
+    parts = [loop.features(ctl, mode, w) for mode in (_common.EVERY_STEP, _common.ENDPOINTS)]
+    assert parts == [(False, False, False, True), (False, False, False, False)]
+    assert explicit_solver(method, parts[0]) is not explicit_solver(method, parts[1])
+
+
 def test_copies_made_before_the_first_run_share_its_plans(particle):
     origin = particle.replace(t_span=(0.0, 0.25))
     a = origin.replace(initial={**dict(origin.initial), "x": 0.1})

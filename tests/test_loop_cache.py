@@ -149,7 +149,7 @@ def test_warm_compiles_loops_that_the_next_process_loads(tmp_path):
     assert list(first) == ["rk4:plain"] and first["rk4:plain"][1] is False   # compiled
     name, _seconds, loaded = child('compile_loop("rk4:plain")')
     assert name == "rk4:plain" and loaded is True
-    assert list((tmp_path / "cache").glob("v*/loops/loop._solve_rk4__*.nbc"))
+    assert list((tmp_path / "cache").glob("v*/loops/loop._solve_rk4_s_*.nbc"))
 
 
 def test_warm_refuses_unknown_loops():

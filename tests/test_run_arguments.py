@@ -328,3 +328,35 @@ def test_scene_arguments(kw, match):
     else:
         with pytest.raises(JetnhError, match=match):
             Scene(models.get("rolling_disk"), "chetaev", **args)
+
+
+def test_a_watch_whose_thread_cannot_start_leaves_nothing_behind(monkeypatch):
+    """Where no thread can start (process limits), the call fails with that error and
+    leaves no watch registered and no SIGINT deferred: the next call runs normally."""
+    import signal
+
+    import numpy as np
+
+    from jetnh.numeric import interrupt
+
+    wd = interrupt._Watchdog()
+    monkeypatch.setattr(interrupt, "_WATCHDOG", wd)
+
+    def refuse(*args):
+        raise RuntimeError("can't start new thread")
+
+    monkeypatch.setattr(interrupt._thread, "start_new_thread", refuse)
+    halt = np.zeros(1, dtype=np.int64)
+    before = signal.set_wakeup_fd(-1)
+    signal.set_wakeup_fd(before)
+    with pytest.raises(RuntimeError, match="can't start new thread"):
+        interrupt.call(lambda: 1, halt, timeout=5.0)
+    assert wd.calls == {} and interrupt._DEPTH[0] == 0
+    monkeypatch.undo()
+    monkeypatch.setattr(interrupt, "_WATCHDOG", wd)
+    try:
+        assert interrupt.call(lambda x: x + 1, halt, timeout=5.0, args=(1,)) == 2
+        assert wd.calls == {} and interrupt._DEPTH[0] == 0
+    finally:
+        signal.set_wakeup_fd(before)       # not this test's watchdog's socket
+        monkeypatch.undo()

@@ -186,7 +186,8 @@ class Equations(Frozen):
         return len(self.expressions)
 
     def __repr__(self):
-        return f"<Equations {self.principle} ({self.form}, {self.convention} convention) {self.paper}>"
+        paper = f" {self.paper}" if self.paper else ""
+        return f"<Equations {self.principle} ({self.form}, {self.convention} convention){paper}>"
 
     def shared_form(self):
         """The expressions in shared form (``jetnh.algebra.shared``): named intermediate

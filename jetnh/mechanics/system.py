@@ -215,13 +215,13 @@ class System(Frozen):
         inputs.refuse_specials(expr, J, what, err)
         expr = inputs.smooth_kinks(expr, J, what, err)
         if J.order(expr) > 1:
-            raise ConstraintError(
+            raise err(
                 f"{what} contains accelerations or higher jets ({expr}); jetnh treats "
                 "first-order Lagrangians, constraints and forces, functions of (t, q, qdot) "
                 "only")
         if any(J.split(s) and J.split(s)[0] in J.fields
                for s in dag.free_symbols(expr)):
-            raise ConstraintError(f"{what} contains a field of the jet space; use coordinates only")
+            raise err(f"{what} contains a field of the jet space; use coordinates only")
         return expr
 
     def _check_dissipation(self):

@@ -139,8 +139,9 @@ class Chart:
     @property
     def kernels(self):
         if self._kernels is None:
-            self._kernels = self.scene.kernels
-            self._n_aux = self._kernels.layout.n_aux
+            kernels = self.scene.kernels
+            self._n_aux = kernels.layout.n_aux      # before _kernels: another thread
+            self._kernels = kernels                 # reading it finds _n_aux set
         return self._kernels
 
     @property

@@ -77,7 +77,11 @@ class _Watchdog:
             self.calls[key] = [halt, deadline, forward]
             if self.thread is None:
                 _drain(self.signals)          # signals from before this watch
-                self.thread = _thread.start_new_thread(self._loop, ())
+                try:
+                    self.thread = _thread.start_new_thread(self._loop, ())
+                except BaseException:         # no thread (limits): no watch left behind
+                    del self.calls[key]
+                    raise
         if deadline is not None:
             self._poke()
         return key
@@ -222,12 +226,14 @@ def call(fn, halt: np.ndarray, timeout: float | None = None, args: tuple = ()):
         if old == own:
             old = -1
         _DEPTH[0] += 1
-    key = wd.register(halt, deadline, old)
+    key = None
     try:
+        key = wd.register(halt, deadline, old)
         return fn(*args)
     finally:
-        with wd.lock:
-            del wd.calls[key]
+        if key is not None:
+            with wd.lock:
+                del wd.calls[key]
         if listen:
             _DEPTH[0] -= 1
             if old >= 0:                      # someone else's: theirs again

@@ -44,7 +44,12 @@ holonomic constraint with a kept coordinate.  Their rows (their drift, such as t
 position of a rolling body) do not feed back, so ``A`` is the Jacobian restricted to the
 kept states.
 
-Stability is spectral: ``unstable`` when an eigenvalue has a positive real part,
+Stability is spectral, and decided only at a steady motion (a relative equilibrium of
+the kept states: x' = 0 there).  The point is one when ``residual`` <= ``STEADY`` times
+the scale of the rates, max(1, |A| |x|) over the kept states; elsewhere the eigenvalues
+of A are still computed but say nothing about stability: the verdict is ``"not a steady
+motion"``, ``stable`` is None (``steady(unknowns)`` finds a steady motion nearby).  At a
+steady motion: ``unstable`` when an eigenvalue has a positive real part,
 ``asymptotically stable`` when every one has a negative real part, ``marginal`` when some
 lie on the imaginary axis (conservative systems, families of steady motions: the
 linearization does not decide).  Eigenvalues of modulus below ``ZERO`` times the size of
@@ -60,7 +65,8 @@ import numpy as np
 import sympy as sp
 
 from ..algebra import dag, linalg, zero
-from ..errors import ConstraintError, JetnhError, LinearizationError, PrincipleError
+from ..errors import (ArgumentError, ConstraintError, JetnhError, LinearizationError,
+                      PrincipleError)
 from ..mechanics import holonomic, principles
 from ..mechanics.system import System
 from . import arguments
@@ -70,6 +76,10 @@ from ..frozen import Frozen, FrozenDict
 ZERO = 1e-6
 #: real parts within REAL * max(1, |A|) of zero count as on the imaginary axis
 REAL = 1e-12
+#: a point is a steady motion when |x'| <= STEADY * max(1, |A| |x|) (kept states)
+STEADY = 1e-8
+#: the verdict off a steady motion
+NOT_STEADY = "not a steady motion"
 
 _MODELS: dict = {}
 
@@ -214,7 +224,8 @@ class Linearization(Frozen):
     ``at`` (every coordinate, velocity and multiplier at the point), ``params``,
     ``dropped`` (cyclic coordinate names left out), ``eliminated`` (coordinates that
     follow from the holonomic constraints), ``inert`` (holonomic multipliers left out),
-    ``verdict``, ``stable``.
+    ``steady_motion`` (whether ``residual`` is zero to ``STEADY``), ``verdict``,
+    ``stable`` (the last two only at a steady motion).
     """
 
     def __init__(self, model: _Model, at: dict, params: dict, keep: tuple, chart: tuple,
@@ -247,6 +258,9 @@ class Linearization(Frozen):
         self.eigenvalues = ev
         #: True when A is the limit at a point where the kernel itself is undefined
         self.limit = limit
+        size = float(np.abs(y[list(keep)]).max()) if keep else 0.0
+        #: whether the point is a steady motion: |x'| <= STEADY * max(1, |A| |x|)
+        self.steady_motion = bool(self.residual <= STEADY * max(1.0, self._scale * size))
 
     # ------------------------------------------------------------------ verdicts
     @property
@@ -256,20 +270,28 @@ class Linearization(Frozen):
     @property
     def margin(self) -> float:
         """The largest real part among the eigenvalues not counted as zero (``ZERO``),
-        less ``REAL`` times the size of A: > 0 unstable, <= 0 not."""
+        less ``REAL`` times the size of A: > 0 unstable, <= 0 not; NaN off a steady
+        motion."""
+        if not self.steady_motion:
+            return float("nan")
         return _margin(self.eigenvalues, self._scale)
 
     @property
-    def stable(self) -> bool:
-        """No eigenvalue with a positive real part (spectral stability)."""
+    def stable(self) -> bool | None:
+        """No eigenvalue with a positive real part (spectral stability); None off a
+        steady motion, where the eigenvalues do not decide stability."""
+        if not self.steady_motion:
+            return None
         return self.margin <= 0
 
     @property
     def verdict(self) -> str:
-        """``"unstable"``, ``"asymptotically stable"`` or ``"marginal"`` (module
-        docstring)."""
+        """``"unstable"``, ``"asymptotically stable"`` or ``"marginal"`` at a steady
+        motion, ``"not a steady motion"`` elsewhere (module docstring)."""
         s = self._scale
         ev = self.eigenvalues
+        if not self.steady_motion:
+            return NOT_STEADY
         if self.margin > 0:
             return "unstable"
         if ev.size and np.all(ev.real < -REAL * s) and np.all(np.abs(ev) > ZERO * s):
@@ -315,13 +337,14 @@ class Linearization(Frozen):
         """
         from scipy.optimize import least_squares
 
+        tol = arguments.positive(tol, "tol")
         unknowns = [arguments.name_of(u, "unknowns") for u in (
             [unknowns] if isinstance(unknowns, (str, sp.Symbol)) else unknowns)]
         model = self._model
         idx = []
         for u in unknowns:
             if u not in self.state_names:
-                raise JetnhError(
+                raise ArgumentError(
                     f"cannot solve for {u!r}: the unknowns of a steady motion are kept "
                     f"states ({', '.join(self.state_names)})")
             idx.append(model.names.index(u))
@@ -376,7 +399,8 @@ class Linearization(Frozen):
     def along(self, name, values) -> "StabilityScan":
         """Eigenvalues along a parameter or an operating-point value (every other value
         held, but the ``eliminated`` coordinates, which follow from g = 0): a
-        ``StabilityScan`` with the crossings of Re lambda = 0.
+        ``StabilityScan`` with the crossings of Re lambda = 0 (between neighbouring
+        values that are both steady motions).
 
         Parameters
         ----------
@@ -387,8 +411,11 @@ class Linearization(Frozen):
         """
         name = arguments.name_of(name, "along")
         values = arguments.real_array(values, "values")
+        if values.size == 0:
+            raise ArgumentError("along needs at least one value to linearize at, got none; "
+                                "give values, e.g. np.linspace(0.5, 5, 50)")
         if name not in self.params and name not in self.at:
-            raise JetnhError(f"{name!r} is neither a parameter ({', '.join(self.params)}) "
+            raise ArgumentError(f"{name!r} is neither a parameter ({', '.join(self.params)}) "
                              f"nor a value of the operating point ({', '.join(self.at)})")
 
         def move(v):
@@ -398,13 +425,15 @@ class Linearization(Frozen):
         lins = [move(float(v)) for v in values]
         ev = np.array([lin.eigenvalues for lin in lins])
         margins = np.array([lin.margin for lin in lins])
+        steady = np.array([lin.steady_motion for lin in lins])
         crossings = []
         for i in range(len(values) - 1):
             a, b = margins[i], margins[i + 1]
             if np.isfinite(a) and np.isfinite(b) and (a > 0) != (b > 0):
                 crossings.append(_crossing(move, float(values[i]), float(values[i + 1]),
                                             lins[i], lins[i + 1]))
-        return StabilityScan(name, values, ev, margins, tuple(crossings), self.state_names)
+        return StabilityScan(name, values, ev, margins, tuple(crossings), self.state_names,
+                             steady)
 
     def _on_g(self, at: dict, params: dict) -> dict:
         """The eliminated coordinates solved from g = 0 (Newton's method from their
@@ -493,26 +522,32 @@ def _root(f, a: float, b: float) -> float:
 
 class StabilityScan(Frozen):
     """Eigenvalues along one value: ``values``, ``eigenvalues`` (one row per value, each
-    by decreasing real part), ``margins`` (``Linearization.margin``), ``crossings`` (the
-    values where the motion gains or loses stability, to 1e-13 relative), ``frame``
-    and ``plot``."""
+    by decreasing real part), ``margins`` (``Linearization.margin``: NaN off a steady
+    motion), ``steady_motion`` (``Linearization.steady_motion`` at each value),
+    ``crossings`` (the values where the motion gains or loses stability, to 1e-13
+    relative), ``frame`` and ``plot``."""
 
-    def __init__(self, name, values, eigenvalues, margins, crossings, state_names):
+    def __init__(self, name, values, eigenvalues, margins, crossings, state_names,
+                 steady_motion):
         self.name = name
-        for a in (values, eigenvalues, margins):
+        for a in (values, eigenvalues, margins, steady_motion):
             a.setflags(write=False)
         self.values, self.eigenvalues, self.margins = values, eigenvalues, margins
+        self.steady_motion = steady_motion
         self.crossings = crossings
         self.state_names = state_names
 
     @property
     def stable(self) -> np.ndarray:
+        """True where the value gives a steady motion without an eigenvalue of positive
+        real part; False elsewhere, off steady motions too (see ``steady_motion``)."""
         return self.margins <= 0
 
     @property
     def frame(self):
         """pandas DataFrame: one row per value, the value, ``re_i`` and ``im_i`` of each
-        eigenvalue (i = 1..k by decreasing real part) and ``stable``."""
+        eigenvalue (i = 1..k by decreasing real part), ``steady_motion`` and
+        ``stable``."""
         import pandas as pd
 
         k = self.eigenvalues.shape[1] if self.eigenvalues.ndim == 2 else 0
@@ -521,6 +556,7 @@ class StabilityScan(Frozen):
             data[f"re_{i + 1}"] = self.eigenvalues[:, i].real
         for i in range(k):
             data[f"im_{i + 1}"] = self.eigenvalues[:, i].imag
+        data["steady_motion"] = self.steady_motion
         data["stable"] = self.stable
         return pd.DataFrame(data)
 
@@ -594,11 +630,11 @@ def linearize(system, principle="chetaev", at=None, params=None, drop="cyclic", 
         A, its eigenvalues, the residual x' at the point and the verdict.
     """
     if not isinstance(system, System):
-        raise JetnhError(f"linearize needs a jetnh System, got {type(system).__name__}")
+        raise ArgumentError(f"linearize needs a jetnh System, got {type(system).__name__}")
     principle = principles.canonical(principle)
     model = _model(system, principle, form, convention)
     if not isinstance(at, Mapping):
-        raise JetnhError("at must be a dict of the operating point's values keyed by "
+        raise ArgumentError("at must be a dict of the operating point's values keyed by "
                          f"Symbol or name ({', '.join(model.names)}), got "
                          f"{type(at).__name__}")
     point = _keyed(at, "at")
@@ -610,7 +646,8 @@ def linearize(system, principle="chetaev", at=None, params=None, drop="cyclic", 
 def verdicts(system, at, params=None, principles_=None, drop="cyclic", solve_for=None):
     """One operating point under several principles: a pandas DataFrame, one row per
     principle, with its residual, state size, largest real part, verdict and
-    eigenvalues (a principle that fails has its error in the verdict column).
+    eigenvalues (a principle that fails has its error in the verdict column; one for
+    which the point is no steady motion has the verdict "not a steady motion").
 
     Parameters
     ----------
@@ -657,14 +694,14 @@ def verdicts(system, at, params=None, principles_=None, drop="cyclic", solve_for
 # ---------------------------------------------------------------------- helpers
 def _keyed(values, what) -> dict[str, float]:
     if not isinstance(values, Mapping):
-        raise JetnhError(f"{what} must be a dict keyed by Symbol or name, got "
+        raise ArgumentError(f"{what} must be a dict keyed by Symbol or name, got "
                          f"{type(values).__name__}")
     out = {}
     for k, v in values.items():
         name = arguments.name_of(k, what)
         out[name] = arguments.real(v, f"{what}[{name!r}]")
         if not np.isfinite(out[name]):
-            raise JetnhError(f"{what}[{name!r}] is {out[name]}; give a finite value")
+            raise ArgumentError(f"{what}[{name!r}] is {out[name]}; give a finite value")
     return out
 
 
@@ -672,12 +709,12 @@ def _params(model: _Model, params, defaults) -> dict[str, float]:
     out = {s.name: float(v) for s, v in defaults.items()}
     for name, v in _keyed(params, "params").items():
         if name not in model.params:
-            raise JetnhError(f"params has {name!r}, which is not a parameter of this "
+            raise ArgumentError(f"params has {name!r}, which is not a parameter of this "
                              f"system; its parameters are {list(model.params) or 'none'}")
         out[name] = v
     missing = [n for n in model.params if n not in out]
     if missing:
-        raise JetnhError(f"missing parameter values: {', '.join(missing)}; give them in "
+        raise ArgumentError(f"missing parameter values: {', '.join(missing)}; give them in "
                          "params={...}")
     return {n: out[n] for n in model.params}
 
@@ -696,7 +733,7 @@ def _kept(model: _Model, drop) -> tuple[int, ...]:
         for d in drop:
             name = arguments.name_of(d, "drop")
             if name not in names:
-                raise JetnhError(f"drop has {name!r}, which is not a coordinate; the "
+                raise ArgumentError(f"drop has {name!r}, which is not a coordinate; the "
                                  f"coordinates are {', '.join(names)}")
             gone.append(names.index(name))
         gone = tuple(sorted(set(gone)))
@@ -706,17 +743,17 @@ def _kept(model: _Model, drop) -> tuple[int, ...]:
         for c in gone:
             users = [model.names[i] for i in kept_rows if model.uses(i, c)]
             if users:
-                raise JetnhError(
+                raise ArgumentError(
                     f"cannot drop {names[c]!r}: the equations of {', '.join(users)} depend "
                     f"on it; keep it, or use drop='cyclic' (drops {cyclic})")
             tied = [names[j] for j in sorted(model.tied[c]) if j not in gone]
             if tied:
-                raise JetnhError(
+                raise ArgumentError(
                     f"cannot drop {names[c]!r}: a holonomic constraint ties it to "
                     f"{', '.join(tied)}, which is kept; keep it, drop those too, or use "
                     f"drop='cyclic' (drops {cyclic})")
     else:
-        raise JetnhError(f"drop must be 'cyclic', a list of coordinates or None, not "
+        raise ArgumentError(f"drop must be 'cyclic', a list of coordinates or None, not "
                          f"{drop!r}")
     return tuple(i for i in range(len(model.states))
                  if not (i < n and i in gone) and i not in model.inert)
@@ -729,7 +766,7 @@ def _evaluate(model: _Model, point: dict, values: dict, keep, t: float) -> Linea
     allowed = set(names) | set(dep)
     for k in point:
         if k not in allowed:
-            raise JetnhError(
+            raise ArgumentError(
                 f"at has {k!r}, which is not a state of the {model.principle} system; the "
                 f"states are {', '.join(names)} (and the dependent velocities "
                 f"{', '.join(dep) or 'none'})")
@@ -740,7 +777,7 @@ def _evaluate(model: _Model, point: dict, values: dict, keep, t: float) -> Linea
                if nm not in point and (i >= n or i in keep or nm in on_g)]
     if missing:
         lams = [s.name for s in model.lams]
-        raise JetnhError(
+        raise ArgumentError(
             f"missing operating-point values: {', '.join(missing)}"
             + (f" (the {model.principle} state includes the multipliers {', '.join(lams)})"
                if set(missing) & set(lams) else "")

@@ -8,13 +8,14 @@ its loop instead of compiling it; ``make`` runs it once after installing.
 
 ``LOOPS`` names the loops ``warm`` can compile, ``<method>:<parts>`` (``loop.features``):
 ``plain`` the loop of a run without events, singularity indicators, projection or
-``t_eval`` (the most common run), ``t_eval`` with output at ``t_eval``, ``watch+t_eval``
-with that and indicators or events watched, ``all`` with every part; the loops of dla
-and dvi; and ``connect:step``, the compiled step of connect's Levenberg-Marquardt search
-(``connect.levenberg``).  ``DEFAULT``, what ``make`` compiles (about 40 CPU seconds), is
-the plain loop of each continuous method, the default method's loops with ``t_eval``
-(those of ``make run``) and connect's step: the first run of each on a machine loads
-its loop.  Each loop compiles
+``t_eval`` that keeps every step (the most common run), ``final`` the same keeping only
+its end (``save="final"``; radau's plain loop serves it), ``t_eval`` with output at
+``t_eval``, ``watch+t_eval`` with that and indicators or events watched, ``all`` with
+every part; the loops of dla and dvi; and ``connect:step``, the compiled step of
+connect's Levenberg-Marquardt search (``connect.levenberg``).  ``DEFAULT``, what ``make``
+compiles (about 45 CPU seconds), is the plain loop of each continuous method, the default
+method's loops with ``t_eval`` (those of ``make run``) and with ``save="final"``, and
+connect's step: the first run of each on a machine loads its loop.  Each loop compiles
 in a process of its own, as many at a time as there are cores.
 """
 
@@ -26,13 +27,15 @@ import os
 import time
 
 #: name -> (method, parts): the loops ``warm`` compiles (``loop.features`` gives parts)
-PARTS = {"plain": (False, False, False), "t_eval": (False, False, True),
-         "watch+t_eval": (True, False, True), "all": (True, True, True)}
+PARTS = {"plain": (False, False, False, True), "final": (False, False, False, False),
+         "t_eval": (False, False, True, False), "watch+t_eval": (True, False, True, False),
+         "all": (True, True, True, True)}
 LOOPS = {f"{m}:{name}": (m, parts) for m in ("dop853", "dopri5", "rk4", "radau")
-         for name, parts in PARTS.items() if not (m == "rk4" and "t_eval" in name)}
+         for name, parts in PARTS.items()
+         if not (m == "rk4" and "t_eval" in name or m == "radau" and name == "final")}
 LOOPS.update({"dla": ("dla", None), "dvi": ("dvi", None),
               "connect:step": ("connect", None)})
-DEFAULT = (*(n for n in LOOPS if n.endswith(":plain")), "dop853:t_eval",
+DEFAULT = (*(n for n in LOOPS if n.endswith(":plain")), "dop853:final", "dop853:t_eval",
            "dop853:watch+t_eval", "connect:step")
 
 

@@ -32,7 +32,9 @@ def add_parser(sub):
                               "--compare vakonomic")
     model_args(s)
     s.add_argument("--from", dest="start", action="append", metavar="NAME=VALUE",
-                   help="a coordinate at T0 (repeatable, or comma-separated)")
+                   help="a coordinate at T0 (repeatable, or comma-separated); the "
+                        "others: the model's initial values, else 0 (the output says "
+                        "which)")
     s.add_argument("--to", dest="end", action="append", metavar="NAME=VALUE",
                    help="a coordinate at T (repeatable, or comma-separated); required")
     s.add_argument("--guess", action="append", metavar="NAME=VALUE",
@@ -71,8 +73,10 @@ def run(args, progress) -> int:
     if not end:
         raise UsageError("give the end configuration: --to NAME=VALUE[,NAME=VALUE...]")
     coords = [q.name for q in system.J.q]
+    given = assignments(args.start, "--from")
+    zeros = [c for c in coords if c not in given and c not in loaded.initial]
     start = {c: float(loaded.initial.get(c, 0.0)) for c in coords}
-    start.update(assignments(args.start, "--from"))
+    start.update(given)
     t0 = args.t_start if args.t_start is not None else float(sim.get("t_start", 0.0))
     t1 = args.t_end if args.t_end is not None else sim.get("t_end")
     if t1 is None:
@@ -103,11 +107,14 @@ def run(args, progress) -> int:
                                  (t0, float(t1)), params=params, **kw))
     if args.format == "json":
         rows = [_record(x) for x in found]
-        print(json.dumps({"model": loaded.label, "start": start, "end": end,
-                          "t_span": [t0, float(t1)], **rows[0],
+        print(json.dumps({"model": loaded.label, "start": start, "zero_start": zeros,
+                          "end": end, "t_span": [t0, float(t1)], **rows[0],
                           **({"compared": rows[1]} if len(rows) > 1 else {})}, indent=2))
     else:
         print(f"{system.name or loaded.label}: t in [{t0:g}, {float(t1):g}]")
+        print("from:      " + ", ".join(f"{k} = {v:.10g}" for k, v in start.items()))
+        if zeros:
+            print(f"           (not given, set to 0: {', '.join(zeros)})")
         for x in found:
             _print(x, end)
         if len(found) > 1:

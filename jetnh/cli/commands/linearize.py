@@ -47,6 +47,8 @@ def add_parser(sub):
 
 
 def _scan_spec(text: str):
+    import numpy as np
+
     name, sep, rng = (text or "").partition("=")
     parts = rng.split(":")
     if not sep or not name.strip() or len(parts) != 3:
@@ -58,6 +60,10 @@ def _scan_spec(text: str):
                          f"{rng!r}") from None
     if not 2 <= n <= 100_000:
         raise UsageError(f"--param {name}: N must be between 2 and 100000, got {n}")
+    if not (np.isfinite(a) and np.isfinite(b)) or a == b:
+        raise UsageError(f"--param {name}: A and B must be finite and differ (a scan over "
+                         f"a range), got {rng!r}; to linearize at one value give --at "
+                         f"{name}={parts[0]} or --set {name}={parts[0]}")
     return name.strip(), a, b, n
 
 
@@ -96,10 +102,12 @@ def run(args, progress) -> int:
                "dropped": list(lin.dropped), "eliminated": list(lin.eliminated),
                "A": lin.A.tolist(),
                "eigenvalues": [[z.real, z.imag] for z in lin.eigenvalues.tolist()],
-               "residual": lin.residual, "verdict": lin.verdict, "zero_at": zeros}
+               "residual": lin.residual, "steady_motion": lin.steady_motion,
+               "verdict": lin.verdict, "zero_at": zeros}
         if result is not None:
             out["scan"] = {"name": result.name, "crossings": list(result.crossings),
                            "values": result.values.tolist(),
+                           "steady_motion": result.steady_motion.tolist(),
                            "stable": result.stable.tolist()}
         print(json.dumps(out, indent=2))
     else:
@@ -117,12 +125,15 @@ def run(args, progress) -> int:
             print(lin.A)
             print(f"eigenvalues: {lin.eigenvalues}")
         print(f"residual |x'| = {lin.residual:.3g}"
-              + ("  (a steady motion)" if lin.residual < 1e-10 else "  (not steady)"))
+              + ("  (a steady motion)" if lin.steady_motion else
+                 "  (not a steady motion: no stability verdict; --steady NAME,... solves "
+                 "for one)"))
         print(f"verdict: {lin.verdict}")
         if result is not None:
-            stable = result.stable
+            stable, off = result.stable, int((~result.steady_motion).sum())
             print(f"scan of {result.name} over [{scan[1]:g}, {scan[2]:g}] ({scan[3]} values): "
-                  f"stable at {int(stable.sum())} of them")
+                  f"stable at {int(stable.sum())} of them"
+                  + (f" ({off} not steady motions)" if off else ""))
             print("crossings of Re lambda = 0: "
                   + (", ".join(f"{c:.12g}" for c in result.crossings) or "none"))
     if args.plot:

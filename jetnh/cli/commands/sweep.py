@@ -73,13 +73,21 @@ def _values(text: str, what: str) -> list:
     try:
         if ":" in text:
             a, b, n = text.split(":")
-            if int(n) < 1:
+            a, b, n = float(a), float(b), int(n)
+            if n < 1 or not (np.isfinite(a) and np.isfinite(b)):
                 raise ValueError
-            return list(np.linspace(float(a), float(b), int(n)))
-        return [float(v) for v in text.split(",")]
+        else:
+            values = [float(v) for v in text.split(",")]
+            if not np.all(np.isfinite(values)):
+                raise ValueError
+            return values
     except ValueError:
-        raise UsageError(f"{what}: {text!r} is neither START:STOP:N (N an integer >= 1) nor "
-                         "a comma-separated list of numbers") from None
+        raise UsageError(f"{what}: {text!r} is neither START:STOP:N (finite numbers, N an "
+                         "integer >= 1) nor a comma-separated list of finite numbers") from None
+    if a == b and n > 1:
+        raise UsageError(f"{what}: {text!r} is a range of zero width ({n} equal values); give "
+                         f"START != STOP, or the one value {a:g}")
+    return list(np.linspace(a, b, n))
 
 
 def _grid(items) -> dict:

@@ -65,7 +65,7 @@ Verdicts on the answer:
 
 from __future__ import annotations
 
-from ...errors import ConnectError, JetnhError
+from ...errors import ArgumentError, ConnectError, JetnhError
 from ...mechanics import principles
 from ...mechanics.system import System
 from .. import arguments, codegen, methods
@@ -171,8 +171,12 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     max_continuation = arguments.count(max_continuation, "max_continuation", limit=100_000)
     if segments is not None:
         segments = arguments.count(segments, "segments", limit=1000)
-    if restarts is not False and restarts != 0:
+    if not (type(restarts) is int and restarts == 0):
         restarts = arguments.count(restarts, "restarts", limit=10_000)
+        if principle not in VARIATIONAL:
+            raise ArgumentError(f"restarts look for the least-action extremal; {principle}"
+                                " motions do not make an action stationary: leave "
+                                "restarts at 0", argument="restarts")
     coords = tuple(s.name for s in system.J.q)
     q0 = _configuration(start, coords, "start", complete=True)
     q1 = _configuration(end, coords, "end", complete=False)
@@ -196,6 +200,5 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
             failed = failed or e          # the first start's reasons are reported
             continue
         found = shooter.connection(u, iterations, tol, stitched, route)
-        return least_action(shooter, found, tol, max_iter, restarts) if (
-            restarts and principle in VARIATIONAL) else found
+        return least_action(shooter, found, tol, max_iter, restarts)
     raise failed

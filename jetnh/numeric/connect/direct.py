@@ -28,7 +28,6 @@ def guess(search):
     """The unknowns (independent velocities, multipliers at t0) of the best path of the
     family for ``search``'s problem (every coordinate named in its end), or None where
     the problem is not of the kind above or SLSQP does not converge."""
-    import sympy as sp
     from scipy.optimize import approx_fprime, minimize
 
     from ...algebra import dag
@@ -89,18 +88,21 @@ def guess(search):
             return None
         grad = approx_fprime(r.x, action, 1e-7)
         G = np.array([approx_fprime(r.x, lambda z, i=i: ends(z)[i], 1e-7)
-                      for i in range(len(dep))])
-    P = np.linalg.lstsq(G.T, grad, rcond=None)[0]
+                      for i in range(len(dep))]).reshape(len(dep), r.x.size)
     first = {s: (v[0] if np.ndim(v) else v) for s, v in path(r.x).items()}
-    qd_dep = [J.jet(q, 1) for q in dep]
-    vals = dag.evaluate_numpy([sp.diff(system.L, v) for v in qd_dep]
-                              + [sp.diff(f, v) for f in system.constraints
-                                 for v in qd_dep], first)
-    dL = np.array([float(v) for v in vals[:len(dep)]])
-    A = np.array([float(v) for v in vals[len(dep):]]).reshape(len(dep), len(dep))
-    try:
-        lam = np.linalg.solve(A.T, P - dL)
-    except np.linalg.LinAlgError:
-        return None
+    lam = []
+    if dep:                                 # else no constraints, no multipliers
+        P = np.linalg.lstsq(G.T, grad, rcond=None)[0]
+        qd_dep = [J.jet(q, 1) for q in dep]
+        cache = {}
+        vals = dag.evaluate_numpy(
+            [dag.diff(e, v, cache=cache) for e in (system.L, *system.constraints)
+             for v in qd_dep], first)
+        vals = np.array([float(v) for v in vals]).reshape(-1, len(dep))
+        dL, A = vals[0], vals[1:]
+        try:
+            lam = np.linalg.solve(A.T, P - dL)
+        except np.linalg.LinAlgError:
+            return None
     u = np.array([float(first[v]) for v in system.independent_velocities] + list(lam))
     return u if len(u) == len(search.unknowns) and np.all(np.isfinite(u)) else None

@@ -11,6 +11,7 @@ import math
 import numpy as np
 from numba import types
 
+from ...errors import ConnectError
 from ..kernels import loop_cache
 
 #: step() status: a step was made, F already met the tolerance, J has rank 0
@@ -101,6 +102,17 @@ def step():
                                   error_model="numpy", nogil=True)
 
 
+def _fitted(got, n):
+    """``(F, dF/du)`` as the compiled step reads them (float64, contiguous), checked to
+    fit ``n`` unknowns: it indexes them without bounds checks."""
+    F = np.ascontiguousarray(got[0], dtype=float)
+    Jm = np.ascontiguousarray(got[1], dtype=float)
+    if F.ndim != 1 or Jm.shape != (F.size, n):
+        raise ConnectError(f"internal: residuals of shape {F.shape} and a Jacobian of "
+                           f"shape {Jm.shape} for {n} unknowns (please report this)")
+    return F, Jm
+
+
 def levenberg_marquardt(evaluate, u, scale, tol, max_iter, rcond, stuck=None):
     """Levenberg-Marquardt on F(u) = 0 (``evaluate(u)`` is ``(F, dF/du)``, or None
     where the runs fail), in unknowns scaled by the largest
@@ -116,9 +128,10 @@ def levenberg_marquardt(evaluate, u, scale, tol, max_iter, rcond, stuck=None):
     got = evaluate(u)
     if got is None:
         return u, False, 0
-    F, Jm = got
-    u = np.asarray(u, dtype=float)
-    limit = tol * np.asarray(scale, dtype=float)    # converged: |F| <= limit, entrywise
+    u = np.ascontiguousarray(u, dtype=float)
+    F, Jm = _fitted(got, u.size)
+    # converged: |F| <= limit, entrywise
+    limit = np.broadcast_to(tol * np.asarray(scale, dtype=float), F.shape).copy()
     compiled = step()
     d, du, mu, nu = np.ones(len(u)), np.empty(len(u)), -1.0, 2.0
     for it in range(1, max_iter + 1):
@@ -135,7 +148,7 @@ def levenberg_marquardt(evaluate, u, scale, tol, max_iter, rcond, stuck=None):
             F_new = trial[0]
             rho = (FF - F_new.dot(F_new)) / predicted
         if rho > 0:
-            u, (F, Jm) = v, trial
+            u, (F, Jm) = v, _fitted(trial, u.size)
             mu *= max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
             nu = 2.0
         else:

@@ -461,9 +461,9 @@ def least_action(search, found, tol, max_iter, restarts):
     problem allows it), solved by multiple shooting on ``DIRECT_SEGMENTS`` segments;
     restart k moves ``found``'s unknowns by a fixed pseudo-random direction (seeded by
     k) of growing size (a quarter, a half, one, two times each unknown's scale,
-    max(|u_i|, 1)), then Newton with at most ``min(max_iter, STEP_ITER)`` iterations;
-    no other route, so each restart costs at most that many runs.  Kept: the cheapest
-    extremal without a conjugate time inside the span, else the cheapest.
+    max(|u_i|, 1)), then Newton with at most ``min(max_iter, STEP_ITER)`` iterations
+    (no other route).  Each answer's ``iterations`` are those of its restart.  Kept:
+    the cheapest extremal without a conjugate time inside the span, else the cheapest.
     Returns that ``Connection`` with ``search`` saying what was tried and where it
     stopped."""
     import dataclasses
@@ -484,24 +484,25 @@ def least_action(search, found, tol, max_iter, restarts):
                 if start is None:
                     direct_note = "; the direct route does not apply"
                     continue
-                v, ok, _, stitched = search.multiple(start, DIRECT_SEGMENTS, tol, max_iter)
+                v, ok, iters, stitched = search.multiple(start, DIRECT_SEGMENTS, tol,
+                                                         max_iter)
                 if ok and stitched is None:     # polished just inside tol: once more
-                    w, better, _ = search.newton(v, search.target, 1e-3 * tol, budget)
-                    v = w if better else v
+                    w, better, more = search.newton(v, search.target, 1e-3 * tol, budget)
+                    v, iters = (w, iters + more) if better else (v, iters)
                 route += (f": multiple shooting ({DIRECT_SEGMENTS} segments) from the "
                           "direct route")
                 direct_note = "" if ok else "; shooting from the direct route failed"
             else:
                 step = np.random.default_rng(k).standard_normal(len(u))
                 start = u + 0.25 * 2.0 ** (k % 4) * scale * step / np.linalg.norm(step)
-                v, ok, _ = search.newton(start, search.target, tol, budget)
+                v, ok, iters = search.newton(start, search.target, tol, budget)
         except ConnectError:
             continue
         if not ok or any(np.max(np.abs(v - w) / scale) < 1e-6 for w in seen):
             continue
         seen.append(v)
         try:
-            answers.append(search.connection(v, budget, tol, stitched, route))
+            answers.append(search.connection(v, iters, tol, stitched, route))
         except JetnhError:
             continue
     minimizers = [c for c in answers if c.minimizer]

@@ -16,6 +16,9 @@ GRAMIAN_RCOND = 1e-9
 #: |det| of the Jacobi fields' configuration rows, scaled both ways
 #: (``jacobi_measure``), below which it has no sign (rounding level)
 DET_ZERO = 1e-10
+#: local minima of the smallest scaled singular value of the Jacobi fields below which
+#: ``conjugate_times`` refines them (a conjugate point where no sign changes)
+DIP = 0.05
 _GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(5)
 
 
@@ -179,7 +182,7 @@ def _products(P) -> np.ndarray:
     return out
 
 
-def jacobi_measure(X, nq):
+def jacobi_measure(X, nq, scale=None):
     """How near the Jacobi fields ``X`` (``[..., n_state, m]``: dy(t)/du, the whole
     state's response to the unknowns) come to losing rank in the configuration (their
     first ``nq`` rows, dq/du), scaled two ways, each blind where the other sees:
@@ -189,18 +192,21 @@ def jacobi_measure(X, nq):
       ``Q_q``).  Unchanged by any recombination of the unknowns and by the fields'
       growth along an unstable extremal; small too where the multipliers' rows outweigh
       their slight effect on the configuration (short spans);
-    - by columns: dq/du with each column scaled to unit length (the unknowns' units
-      removed).  Small too where growth turns every column towards the few most
-      unstable directions.
+    - by columns: dq/du with each column divided by ``scale`` (one positive number per
+      unknown: the largest length that column's configuration part reaches along the
+      extremal, so that a field whose configuration part returns to zero stays small;
+      default: its length at each time, which sees every loss of rank except a column
+      that vanishes as a whole).  The unknowns' units removed; small too where growth
+      turns every column towards the few most unstable directions.
 
     Returns ``(d, s)``: the determinant (square case, else None; the sign of det dq/du)
     and the smallest singular value, each the larger in magnitude of the two scalings.
-    Both are zero exactly where dq/du loses rank (a conjugate time)."""
+    Where dq/du loses rank both are zero (with ``scale`` given)."""
     Q, R = np.linalg.qr(X)
     sign = np.sign(np.prod(np.diagonal(R, axis1=-2, axis2=-1), axis=-1))
     Qq = Q[..., :nq, :]
     M = X[..., :nq, :]
-    norms = np.linalg.norm(M, axis=-2, keepdims=True)
+    norms = np.linalg.norm(M, axis=-2, keepdims=True) if scale is None else scale
     M = M / np.where(norms > 0, norms, 1.0)
     s = np.maximum(np.linalg.svd(Qq, compute_uv=False)[..., -1],
                    np.linalg.svd(M, compute_uv=False)[..., -1])
@@ -213,26 +219,36 @@ def jacobi_measure(X, nq):
 def conjugate_times(tr, cols, samples, rcond=1e-9) -> tuple:
     """The times in (t0, t1] where dq(t)/du (columns ``cols``, the unknowns' states)
     loses rank, judged on the Jacobi fields scaled as a subspace and by columns
-    (``jacobi_measure``): the sign changes of the scaled determinant (square case) on
-    the equal-spaced times of ``samples``, located by Brent's method on the dense
-    output; and t1 where its smallest scaled singular value there is at most ``100
-    rcond`` both ways.  Not relative to the sensitivities' size: on a long unstable
-    span they grow by orders of magnitude while the map keeps its rank."""
-    from scipy.optimize import brentq
+    (``jacobi_measure``, each column by the largest length its configuration part
+    reaches on the equal-spaced times of ``samples``): the sign changes of the scaled
+    determinant (square case), located by Brent's method on the dense output; the local
+    minima of the smallest scaled singular value there (where the map has its rank on
+    both sides), refined on the dense output and kept where it falls to ``100 rcond``
+    (a conjugate point of even multiplicity -- the antipode of a great circle on a
+    3-sphere -- changes no sign); and t1 where that value is at most ``100 rcond``
+    there.  Not relative to the sensitivities' size: on a long unstable span they grow
+    by orders of magnitude while the map keeps its rank."""
+    from scipy.optimize import brentq, minimize_scalar
 
     n = tr.layout.n_state
     nq = len(tr.layout.coordinates)
     m = tr.sensitivities.shape[2]
     t0, t1 = float(tr.t[0]), float(tr.t[-1])
+    span = abs(t1 - t0)
     found = []
 
     def fields(times):
         Y = _dense_states(tr, np.atleast_1d(times), full=True)
         return Y[:, n:].reshape(-1, n, m)[:, :, cols]
 
+    last = tr.sensitivities[-1][:, cols]
+    scale = None
     if len(cols) == nq:
         grid = samples.grid[1:]
-        d, _ = jacobi_measure(samples.grid_S[1:][:, :, cols], nq)
+        X = samples.grid_S[1:][:, :, cols]
+        scale = np.maximum(np.linalg.norm(X[:, :nq, :], axis=-2).max(axis=0),
+                           np.linalg.norm(last[:nq], axis=0))[None, :]
+        d, least = jacobi_measure(X, nq, scale)
         # |det| at rounding level: singular there (along a whole stretch when an
         # unknown has no effect), no sign to follow
         change = (np.sign(d[:-1]) != np.sign(d[1:])) & (
@@ -240,9 +256,24 @@ def conjugate_times(tr, cols, samples, rcond=1e-9) -> tuple:
         for i in np.nonzero(change)[0]:
             found.append(float(brentq(lambda t: jacobi_measure(fields(t), nq)[0][0],
                                       grid[i], grid[i + 1], xtol=1e-14, rtol=1e-14)))
+        # isolated dips: where the map keeps its rank on both sides (not rank-deficient
+        # along a stretch, where the measure is rounding noise)
+        dips = np.nonzero((least[1:-1] < least[:-2]) & (least[1:-1] <= least[2:])
+                          & (least[1:-1] < DIP)
+                          & (np.minimum(least[:-2], least[2:]) > 1e4 * rcond))[0] + 1
+        for i in dips:
+            if any(grid[i - 1] <= t <= grid[i + 1] for t in found):
+                continue                    # a sign change found there already
+            low = minimize_scalar(
+                lambda t: jacobi_measure(fields(t), nq, scale)[1][0],
+                bounds=(grid[i - 1], grid[i + 1]), method="bounded",
+                options={"xatol": 1e-12 * span})
+            if low.fun <= 1e2 * rcond and all(abs(low.x - t) > 1e-9 * span
+                                               for t in found):
+                found.append(float(low.x))
     if len(cols) >= nq:
-        _, least = jacobi_measure(tr.sensitivities[-1][:, cols], nq)
-        if least <= 1e2 * rcond:
+        _, least_t1 = jacobi_measure(last, nq, scale)
+        if least_t1 <= 1e2 * rcond:
             # a crossing found within rounding of t1 is t1 itself
-            found = [t for t in found if abs(t - t1) > 1e-9 * abs(t1 - t0)] + [t1]
-    return tuple(found)
+            found = [t for t in found if abs(t - t1) > 1e-9 * span] + [t1]
+    return tuple(sorted(found))

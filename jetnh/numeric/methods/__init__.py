@@ -155,7 +155,7 @@ def implicit_solver(parts):
     """The compiled loop of radau with the ``parts`` a run needs, called as ``solve(rhs,
     jac, sing, uev, hol, t0, t_end, y0, p, ctl, newton, t_eval, mode, watch, halt)``
     (``radau.solver``): its entry point, as ``explicit_solver``."""
-    key = ("radau", tuple(parts))
+    key = ("radau", tuple(parts)[:3])         # (every radau loop stores each step)
     if key not in _ENTRIES:
         from . import radau
 

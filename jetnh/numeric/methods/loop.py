@@ -313,7 +313,7 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
            halt):
     """Integrate y' = rhs(t, y, p) from t0 to t_end with the method ``TAB``
     (``ExplicitRK.arrays``; it, ``ADAPTIVE`` and the parts ``WATCH``, ``PROJECT``,
-    ``DENSE`` are compile-time constants, so the path of the other step kind and the
+    ``DENSE``, ``STEPS`` are compile-time constants, so the path of the other step kind and the
     parts the run does not need are not compiled: ``_specialised``) under the step control
     ``ctl`` (``Control``), watching ``watch`` (``Watch``: ``sing`` computes the ``n_sing``
     singularity indicators, ``uev`` the user event functions; see ``_events``); ``hol``
@@ -472,17 +472,20 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
                                                y_new, K, F, ytmp, y_stop, stop, t_stop,
                                                have_dense, stats, mode, t_eval, j_eval,
                                                direction, ts, ys, n_out)
-        elif mode == EVERY_STEP:
-            ts, ys, n_out = store(ts, ys, n_out, t_new, y_new)
+        elif STEPS:
+            if mode == EVERY_STEP:
+                ts, ys, n_out = store(ts, ys, n_out, t_new, y_new)
         if stop != 0:
             t = t_stop
             copy_into(y, y_stop)
             status = stop
             break
         t = t_new
-        copy_into(y, y_new)
         if ADAPTIVE:
+            copy_into(y, y_new)
             copy_into(K[0], K[ns])
+        else:           # (swapped: cheaper on rk4; on dop853 it costs more than the copy)
+            y, y_new = y_new, y
     if mode == ENDPOINTS:
         ts, ys, n_out = store(ts, ys, n_out, t, y)
     status = finite_status(status, ys, n_out, y, ctl.n_sens)
@@ -495,7 +498,7 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
 
 #: the method a specialised loop runs, its sums and that loop (``_specialised``; unbound
 #: here)
-TAB = SHAPE = ADAPTIVE = WATCH = PROJECT = DENSE = None
+TAB = SHAPE = ADAPTIVE = WATCH = PROJECT = DENSE = STEPS = None
 run = step_stages = new_state = step_error = None
 _SPECIALISED = {}
 CONTROL = numba.typeof(Control(1.0, np.zeros(1), 0.0, 1.0, 1, 0, 0, 0, 0))
@@ -504,28 +507,31 @@ WATCHED = numba.typeof(Watch(0, 0.0, np.zeros(1, dtype=np.int64),
 ARGS = (i8, i8, i8, i8, f8, f8, f8[::1], f8[::1], CONTROL, f8[::1], i8, WATCHED,
         i8[::1])
 #: every part of the loop compiled (``features``)
-ALL = (True, True, True)
+ALL = (True, True, True, True)
 
 
-def features(ctl, mode, watch) -> tuple[bool, bool, bool]:
-    """What a run needs of the loop: ``(watch, project, dense)`` -- singularity
+def features(ctl, mode, watch) -> tuple[bool, bool, bool, bool]:
+    """What a run needs of the loop: ``(watch, project, dense, steps)`` -- singularity
     indicators or user events, the projection onto holonomic constraints, output at
-    ``t_eval`` (the step's interpolant).  A loop compiled without a part serves only the
-    runs that do not need it (``_specialised``)."""
+    ``t_eval`` (the step's interpolant), output of every step.  A loop compiled without a
+    part serves only the runs that do not need it (``_specialised``): a run that keeps
+    only its end or the points of ``t_eval`` runs a loop without the per-step store in
+    its body (on rk4 that store costs ~5 % of a step even where it never runs)."""
     return (watch.n_sing > 0 or watch.ev_dir.shape[0] > 0, ctl.n_hol > 0,
-            mode == AT_T_EVAL)
+            mode == AT_T_EVAL, mode == EVERY_STEP)
 
 
 def _specialised(method, parts=ALL):
     """The globals of this module with ``TAB`` bound to ``method.arrays``, the step's sums
     to the method's (``sums.functions``: its nonzero coefficients as literals), the parts
-    of the loop a run needs (``WATCH, PROJECT, DENSE = parts``: ``features``) and ``run``
-    to ``_solve`` compiled over them: each method's loop is compiled with its tableau
-    (stage counts, coefficients) known, as the hand-written loops were, at the
+    of the loop a run needs (``WATCH, PROJECT, DENSE, STEPS = parts``: ``features``) and
+    ``run`` to ``_solve`` compiled over them: each method's loop is compiled with its
+    tableau (stage counts, coefficients) known, as the hand-written loops were, at the
     per-evaluation cost of theirs, and without the parts the run does not use (numba
     prunes the branches on these constants before typing them: a run without events,
-    indicators, projection and ``t_eval`` compiles none of ``_events``).  Each loop has a
-    name of its own (``compiled``: ``_solve_<method>_<parts>_<sources hash>``): numba
+    indicators, projection and ``t_eval`` compiles none of ``_events``, one that keeps
+    only its end no per-step store).  Each loop has a name of its own (``compiled``:
+    ``_solve_<method>_<parts>_<sources hash>``, the parts as the letters ``wpds``): numba
     links compiled functions by their mangled names, so two loops of one name could
     resolve to one another's machine code."""
     parts = tuple(bool(f) for f in parts)
@@ -535,13 +541,14 @@ def _specialised(method, parts=ALL):
         namespace["TAB"] = method.arrays
         namespace["SHAPE"] = tuple(int(k) for k in method.arrays[6])
         namespace["ADAPTIVE"] = method.adaptive
-        namespace["WATCH"], namespace["PROJECT"], namespace["DENSE"] = parts
+        (namespace["WATCH"], namespace["PROJECT"], namespace["DENSE"],
+         namespace["STEPS"]) = parts
         helpers = sums(method)
         namespace["step_stages"] = helpers["stages"]
         namespace["new_state"] = helpers["new_state"]
         namespace["step_error"] = helpers["error"]
         tag = method.name + ("" if parts == ALL else
-                             "_" + "".join(c for c, f in zip("wpd", parts) if f))
+                             "_" + "".join(c for c, f in zip("wpds", parts) if f))
         namespace["run"] = compiled(_solve, ARGS, namespace=namespace, tag=tag)
         _SPECIALISED[key] = namespace
     return _SPECIALISED[key]

@@ -470,14 +470,17 @@ _SPECIALISED = {}
 
 def _specialised(parts=ALL):
     """The globals of this module with the parts of the loop a run needs bound (``WATCH,
-    PROJECT, DENSE = parts``: ``loop.features``) and ``run`` to ``_solve`` compiled over
+    PROJECT, DENSE = parts[:3]``: ``loop.features``) and ``run`` to ``_solve`` compiled over
     them: a run without events, indicators, projection and ``t_eval`` compiles none of
-    their code (``loop._specialised``)."""
-    parts = tuple(bool(f) for f in parts)
+    their code (``loop._specialised``).  The per-step store is in every radau loop (the
+    fourth part of ``loop.features`` is ignored): next to a step's linear algebra it
+    costs nothing, and without it a run that keeps only its end would need a loop of its
+    own."""
+    parts = tuple(bool(f) for f in parts[:3])
     if parts not in _SPECIALISED:
         namespace = dict(globals())
         namespace["WATCH"], namespace["PROJECT"], namespace["DENSE"] = parts
-        tag = "" if parts == ALL else "_" + "".join(c for c, f in zip("wpd", parts) if f)
+        tag = "" if parts == ALL[:3] else "_" + "".join(c for c, f in zip("wpd", parts) if f)
         namespace["run"] = compiled(_solve, ARGS, namespace=namespace, tag=tag)
         _SPECIALISED[parts] = namespace
     return _SPECIALISED[parts]
