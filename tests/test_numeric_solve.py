@@ -42,13 +42,13 @@ def test_one_message_per_option_everywhere(disk, options, match):
 
 
 def test_kept_plans_still_check_types(disk):
-    """A plan kept for rtol=1 is not handed to rtol=True (the options' types are part of
+    """A plan kept for atol=1 is not handed to atol=True (the options' types are part of
     the key), and an unhashable option (an array) is planned afresh."""
     one = disk.run(rtol=1e-8, save="final")
     assert np.array_equal(disk.run(rtol=1e-8, save="final").y, one.y)
-    disk.run(rtol=1, atol=1.0, save="final")
-    with pytest.raises(JetnhError, match="rtol must be"):
-        disk.run(rtol=True, atol=1.0, save="final")
+    disk.run(rtol=1e-3, atol=1, save="final")
+    with pytest.raises(JetnhError, match="atol must hold real numbers"):
+        disk.run(rtol=1e-3, atol=True, save="final")
     again = disk.run(rtol=1e-8, atol=np.full(6, 1e-12), save="final")
     assert np.array_equal(again.y, one.y)
 

@@ -30,7 +30,10 @@ read as its canonical name), ``convention`` ("paper" | "imposed"), ``[multiplier
 Suslov principles; they may also stand in ``[initial]``), ``[integrals]`` (name =
 expression: first integrals for ``jetnh simulate`` to monitor; they may use the
 multipliers) and ``[simulation]`` (``t_start``, ``t_end``, ``method``, ``rtol``,
-``atol``, ``points``).  Any other key is an error.
+``atol``, ``points``).  Any other key is an error.  The ``[simulation]`` values are
+checked when the file is read, as a run checks them (before any derivation): a known
+method, ``rtol`` below 1, a span of nonzero length that floating point resolves;
+``t_end`` below ``t_start`` integrates backwards in time.
 
 What ``load``, ``loads`` and ``from_dict`` guarantee
 ----------------------------------------------------

@@ -325,6 +325,28 @@ def _from_dict(data: dict, source: str) -> Model:
     for k in ("rtol", "atol"):
         if k in sim and not sim[k] > 0:
             raise ModelFileError(f"{S}: [simulation] {k} must be positive")
+    _check_run_settings(S, sim)
 
     return Model(system, name, description, initial, principle, convention, integrals,
                  dict(sim), S)
+
+
+def _check_run_settings(S, sim):
+    """The ``[simulation]`` values as a run checks them (``jetnh.numeric.arguments``,
+    ``jetnh.numeric.methods.method``), so that a bad one is refused when the file is read,
+    not after the kernels are derived and compiled."""
+    from ..numeric import arguments
+    from ..numeric.methods import method
+
+    get = sim.get
+    checks = (("method", ("method",), lambda: method(sim["method"])),
+              ("rtol, atol", ("rtol", "atol"), lambda: arguments.tolerances(
+                  float(get("rtol", 1e-9)), float(get("atol", 1e-12)), 1)),
+              ("t_start, t_end", ("t_end",),
+               lambda: arguments.time_span((get("t_start", 0.0), sim["t_end"]))))
+    for what, keys, check in checks:
+        if any(k in sim for k in keys):
+            try:
+                check()
+            except JetnhError as exc:
+                raise ModelFileError(f"{S}: [simulation] {what}: {exc}") from None

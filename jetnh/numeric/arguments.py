@@ -7,7 +7,8 @@ types the compiled loops declare (contiguous float64 arrays, Python floats and i
 
 - numbers: real, finite (``inf`` only where it means "no limit"), of the right sign;
   integers are integers (``100.0`` is accepted, ``100.5``, ``True`` and ``nan`` are not);
-- tolerances: ``rtol`` 0 or at least 100 eps (finite), ``atol`` >= 0, a scalar or one value per
+- tolerances: ``rtol`` 0 or in [100 eps, 1) (a relative error of 100 % accepts any step),
+  ``atol`` >= 0, a scalar or one value per
   state, and every state with a nonzero error scale (``rtol > 0`` or its ``atol > 0``);
 - the state ``y0`` and the run-time parameters ``params``: a dict keyed by Symbol, name or
   dynamicsymbol (``jetnh.geometry.jet.key_name``; missing entries keep the scene's
@@ -101,10 +102,11 @@ def all_finite(a: np.ndarray, b: np.ndarray | None = None) -> bool:
     of squares says so cheaply; where it is not (a NaN, an infinity or an overflow),
     each entry is looked at."""
     flat = a.reshape(-1)
-    total = flat.dot(flat)
-    if b is not None:
-        flat = b.reshape(-1)
-        total += flat.dot(flat)
+    with np.errstate(over="ignore", invalid="ignore"):     # an overflow is looked at below
+        total = flat.dot(flat)
+        if b is not None:
+            flat = b.reshape(-1)
+            total += flat.dot(flat)
     return math.isfinite(total) or bool(
         np.isfinite(a).all() and (b is None or np.isfinite(b).all()))
 
@@ -137,6 +139,11 @@ def tolerances(rtol, atol, n) -> tuple[float, np.ndarray]:
     if not (math.isfinite(r) and (r == 0.0 or r >= RTOL_MIN)):
         raise ArgumentError(f"must be 0 or a finite number >= {RTOL_MIN:.3g} (float64 cannot "
                             f"honour a smaller relative error), got {rtol!r}", argument="rtol")
+    if r >= 1.0:
+        raise ArgumentError(f"must be below 1, got {rtol!r}: a relative error of 100 % or more "
+                            "accepts any step, so the run would succeed with a meaningless "
+                            "answer; give e.g. rtol=1e-6 (loose) to 1e-12 (tight)",
+                            argument="rtol")
     if type(atol) is float and atol > 0.0 and atol != math.inf:     # the common case, fast
         return r, np.full(n, atol)
     a = np.asarray(atol)
@@ -162,9 +169,10 @@ MIN_TIME_RESOLUTION = 2**16
 
 
 def time_span(t_span) -> tuple[float, float]:
-    """``(t0, t1)``: real, finite, with a finite length, and either equal or holding at
-    least ``MIN_TIME_RESOLUTION`` representable times (else steps cannot be resolved:
-    ``t + h == t``)."""
+    """``(t0, t1)``: real, finite, of nonzero finite length holding at least
+    ``MIN_TIME_RESOLUTION`` representable times (else steps cannot be resolved:
+    ``t + h == t``).  A zero length is refused too: there is nothing to integrate, and
+    ``(1e20, 1e20 + 1)`` is such a span once ``1e20 + 1`` rounds to ``1e20``."""
     try:
         t0, t1 = t_span
     except (TypeError, ValueError):
@@ -172,17 +180,21 @@ def time_span(t_span) -> tuple[float, float]:
     t0, t1 = real(t0, "t_span[0]"), real(t1, "t_span[1]")
     if not (math.isfinite(t0) and math.isfinite(t1)):
         raise ArgumentError(f"t_span must be finite, got {t_span!r}")
-    if t0 != t1:
-        length = abs(t1 - t0)
-        ulp = math.ulp(max(abs(t0), abs(t1)))
-        if not math.isfinite(length) or length < MIN_TIME_RESOLUTION * ulp:
-            raise ArgumentError(
-                f"t_span = ({t0!r}, {t1!r}) cannot be resolved in floating point: "
-                + (f"its length overflows" if not math.isfinite(length) else
-                   f"it holds only {length / ulp:.3g} representable times (at least "
-                   f"{MIN_TIME_RESOLUTION} are needed, or t + h == t for the steps)")
-                + "; shift the time origin (for an autonomous system t_span=(0, "
-                "t1 - t0) gives the same motion) or shorten the span")
+    if t0 == t1:
+        raise ArgumentError(
+            f"t_span = ({t0!r}, {t1!r}) has zero length: there is nothing to integrate; give "
+            "t1 != t0 (if t1 was written as t0 plus a small length, it rounded to t0 in "
+            "floating point: shift the time origin, e.g. t_span=(0, length))")
+    length = abs(t1 - t0)
+    ulp = math.ulp(max(abs(t0), abs(t1)))
+    if not math.isfinite(length) or length < MIN_TIME_RESOLUTION * ulp:
+        raise ArgumentError(
+            f"t_span = ({t0!r}, {t1!r}) cannot be resolved in floating point: "
+            + (f"its length overflows" if not math.isfinite(length) else
+               f"it holds only {length / ulp:.3g} representable times (at least "
+               f"{MIN_TIME_RESOLUTION} are needed, or t + h == t for the steps)")
+            + "; shift the time origin (for an autonomous system t_span=(0, "
+            "t1 - t0) gives the same motion) or shorten the span")
     return t0, t1
 
 
@@ -205,10 +217,8 @@ def times(t_eval, t0, t1) -> np.ndarray:
 
 
 def fixed_steps(n_steps, h, t0, t1, what, max_steps) -> int:
-    """The number of steps of a fixed-step method from ``n_steps`` or ``h``."""
-    if t0 == t1:
-        raise ArgumentError(f"{what}: t_span = ({t0!r}, {t1!r}) has zero length, so its "
-                            "steps would have h = 0; give t1 != t0")
+    """The number of steps of a fixed-step method from ``n_steps`` or ``h`` over the
+    checked span ``(t0, t1)`` (``time_span``: of nonzero length)."""
     if n_steps is not None and h is not None:
         raise ArgumentError(f"{what}: give n_steps= or h=, not both")
     if n_steps is None:

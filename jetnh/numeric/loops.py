@@ -15,7 +15,8 @@ import time
 import numpy as np
 
 from . import interrupt, methods
-from .methods import Solver
+from .kernels import calls
+from .methods import Solver, projection
 from .methods._common import AT_T_EVAL
 from .methods.loop import Result, Watch, features
 
@@ -65,7 +66,19 @@ def call(scene, method, kern, ce, watch, t0, t1, y, p, ctl, te, mode, newton, li
     halt = np.zeros(1, dtype=np.int64)
     tic = time.perf_counter()
     out = interrupt.call(lambda: loop(*prefix, t0, t1, y, p, *suffix, halt), halt, limit)
-    return result(out), time.perf_counter() - tic
+    wall = time.perf_counter() - tic
+    on_constraints(kern, ctl, mode, sens, out, p)
+    return result(out), wall
+
+
+def on_constraints(kern, ctl, mode, sens, out, p):
+    """The rows of a loop's tuple ``out`` at output times (``t_eval``: the dense output,
+    off the holonomic constraints g = 0 by its error) moved onto g = 0 in place, as every
+    step is (``methods.projection``); the rows of a run with sensitivities are left."""
+    if mode == AT_T_EVAL and ctl.n_hol and sens is None:
+        n, m, nq = int(out[3]), ctl.n_hol, ctl.n_coord
+        hol_rows = calls.Rows(kern.hol_fp, (kern.layout.n_state, p.shape[0], m * (1 + nq)))
+        projection.rows(hol_rows, m, nq, out[1][:n], out[2][:n], p)
 
 
 def retake(traj, t0, t1, y, tau):

@@ -59,13 +59,16 @@ def add_parser(sub):
 def run(args, progress) -> int:
     import numpy as np
 
-    from ...numeric import Scene
+    from ...numeric import Scene, arguments
 
     model = with_split(load_model(args.model), args.split)
     system = model.system
     opts = settings(args, model)
     principle, method = opts.principle, opts.method
-    t0, t1 = opts.t_span
+    # the run's options, checked before the kernels are derived and compiled
+    fixed_step = method_of(method).fixed_step
+    arguments.tolerances(opts.rtol, opts.atol, 1)
+    t0, t1 = arguments.time_span(opts.t_span)
     params = assignments(args.set, "--set")
 
     # the initial state: the model's, then --init; missing states start at 0.  The model's
@@ -96,7 +99,7 @@ def run(args, progress) -> int:
                        "(cached for later runs)"):
         scene.compile()
     kw = {}
-    if method_of(method).fixed_step:
+    if fixed_step:
         kw["n_steps"] = args.steps
     elif opts.points >= 2:
         kw["t_eval"] = np.linspace(t0, t1, opts.points)

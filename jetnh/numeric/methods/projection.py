@@ -13,9 +13,11 @@ until the correction is below the spacing of the floating-point numbers (at most
 ``MAX_ITERATIONS``).  The correction is of the size of the local error, so the method's
 order is kept (HLW IV.4, Theorem 4.2).  Velocities need no projection: the dependent
 velocities are no states but phi(t, q, qdot^mu), which solves D g = 0 exactly at every
-state.  The step's dense output (``t_eval``) is the method's interpolant between two
-projected states: on g = 0 to the interpolant's error, not to roundoff.  The iteration is
-deterministic: a run is reproducible bit for bit.
+state.  The step's dense output (``t_eval``, ``Trajectory.at``) is the method's
+interpolant between two projected states, on g = 0 only to the interpolant's error, so
+its rows are projected the same way (``rows``) before a trajectory holds them (a run
+with sensitivities keeps its interpolated rows: their S would need the projection's
+derivative too).  The iteration is deterministic: a run is reproducible bit for bit.
 
 A run with sensitivities (the state followed by ``S = dy/d(y0, p)``, ``n_sens`` columns a
 row, the runtime parameters' last) projects them with the state, by the derivative of
@@ -134,7 +136,7 @@ def onto(hol, m, nq, t, y, p) -> np.ndarray:
     w = np.empty(m * (1 + nq + p.shape[0]))       # (room for dg/dp)
     for _ in range(MAX_ITERATIONS):
         hol(float(t), y, p, w)
-        G = w[m:].reshape(m, nq)
+        G = w[m:m + m * nq].reshape(m, nq)
         try:
             d = G.T @ np.linalg.solve(G @ G.T, w[:m])
         except np.linalg.LinAlgError:
@@ -145,3 +147,33 @@ def onto(hol, m, nq, t, y, p) -> np.ndarray:
         if np.max(np.abs(d) / np.maximum(1.0, np.abs(y[:nq]))) <= 4.0 * 2.220446049250313e-16:
             break
     return y
+
+
+def rows(hol_rows, m, nq, ts, ys, p):
+    """The iteration of ``onto`` on every row ``ys[i]`` (at ``ts[i]``) in place, the rows
+    together (``hol_rows(ts, ys, p, out)``: the kernel at every row, ``kernels.calls.Rows``);
+    each row's iterates depend on that row only.  The dense output's rows moved onto
+    g = 0 as the steps are."""
+    p = np.ascontiguousarray(p, dtype=float)
+    left = np.arange(ys.shape[0])
+    w = np.empty((ys.shape[0], m * (1 + nq)))
+    for _ in range(MAX_ITERATIONS):
+        if left.size == 0:
+            return
+        y = np.ascontiguousarray(ys[left])
+        out = w[:left.size]
+        hol_rows(np.ascontiguousarray(ts[left]), y, p, out)
+        G = out[:, m:].reshape(-1, m, nq)
+        Gt = G.transpose(0, 2, 1)
+        try:
+            d = (Gt @ np.linalg.solve(G @ Gt, out[:, :m, None]))[:, :, 0]
+        except np.linalg.LinAlgError:   # G G^T singular at some row: each row alone (a
+            if left.size > 1:            # singular one is left as it is, as in ``onto``)
+                for i in left:
+                    rows(hol_rows, m, nq, ts[i:i + 1], ys[i:i + 1], p)
+            return
+        go = np.isfinite(d).all(axis=1)   # (rows with a non-finite correction are left)
+        y[go, :nq] -= d[go]
+        ys[left[go]] = y[go]
+        big = np.max(np.abs(d) / np.maximum(1.0, np.abs(y[:, :nq])), axis=1)
+        left = left[go & (big > 4.0 * 2.220446049250313e-16)]
