@@ -11,3 +11,11 @@ constraints = ["x**2 + y**2 - l**2"]
 G = 9.81
 l = 1.0
 """
+
+
+#: PENDULUM_XY with an initial state on the circle
+PENDULUM_XY_STARTED = PENDULUM_XY + """[initial]
+x = 0.6
+y = -0.8
+x_t = 1.0
+"""

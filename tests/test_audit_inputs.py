@@ -4,28 +4,20 @@ Lagrangian with accelerations, empty and zero-width scans, the Equations repr.""
 
 import numpy as np
 import pytest
-import sympy as sp
 
 import jetnh as jn
 from jetnh.errors import ArgumentError, LagrangianError
 from jetnh.numeric import linearize as linmod
 from jetnh.sweep import sweep
 
+from damped_sleigh import damped_sleigh
+
 PARAMS = {"m": 2.0, "a": 0.3, "I": 0.5, "c": 0.1}
 
 
 @pytest.fixture(scope="module")
 def sleigh():
-    """A Chaplygin sleigh with its mass offset by a from the blade and a viscous torque
-    -c theta_t on the heading."""
-    J = jn.JetSpace("x y th")
-    x, y, th = J.q
-    xd, yd, thd = J.qd
-    m, a, I, c = sp.symbols("m a I c", positive=True)
-    L = (m / 2 * ((xd - a * sp.sin(th) * thd) ** 2 + (yd + a * sp.cos(th) * thd) ** 2)
-         + I / 2 * thd ** 2)
-    return jn.System(J, L, constraints=[-sp.sin(th) * xd + sp.cos(th) * yd],
-                     forces={th: -c * thd})
+    return damped_sleigh()
 
 
 @pytest.fixture(scope="module")

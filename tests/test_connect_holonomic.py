@@ -11,6 +11,8 @@ import sympy as sp
 import jetnh as jn
 from jetnh.errors import ConnectError, ConstraintError, JetnhError
 
+from damped_sleigh import ORIGIN, PARAMS, damped_sleigh
+
 
 @pytest.fixture(scope="module")
 def fourbar():
@@ -100,15 +102,7 @@ def test_start_and_end_off_the_manifold_are_refused(fourbar):
 # ------------------------------------------------------------------ the sleigh's small ones
 @pytest.fixture(scope="module")
 def sleigh():
-    J = jn.JetSpace("x y th")
-    x, y, th = J.q
-    xd, yd, thd = J.qd
-    m, a, I, c = sp.symbols("m a I c", positive=True)
-    L = (m / 2 * ((xd - a * sp.sin(th) * thd) ** 2 + (yd + a * sp.cos(th) * thd) ** 2)
-         + I / 2 * thd ** 2)
-    s = jn.System(J, L, constraints=[-sp.sin(th) * xd + sp.cos(th) * yd],
-                  forces={th: -c * thd})
-    return s, {"m": 2.0, "a": 0.3, "I": 0.5, "c": 0.1}, {"x": 0.0, "y": 0.0, "th": 0.0}
+    return damped_sleigh(), dict(PARAMS), dict(ORIGIN)
 
 
 def test_backward_span_refused_clearly(sleigh):

@@ -10,7 +10,6 @@ import warnings
 
 import numpy as np
 import pytest
-import sympy as sp
 
 import jetnh as jn
 from jetnh.errors import ArgumentError, ModelFileError
@@ -18,8 +17,10 @@ from jetnh.modelfile import loads
 from jetnh.numeric import arguments
 from jetnh.numeric.options import StepControl
 
-P = {"m": 2.0, "a": 0.3, "I": 0.5, "c": 0.1}
-O = {"x": 0.0, "y": 0.0, "th": 0.0}
+from damped_sleigh import ORIGIN, PARAMS, damped_sleigh
+from model_texts import PENDULUM_XY_STARTED
+
+P, O = PARAMS, ORIGIN
 
 SLEIGH = """
 name = "damped sleigh"
@@ -40,38 +41,17 @@ th_t = 0.4
 [simulation]
 """
 
-PENDULUM = """
-name = "pendulum"
-coordinates = ["x", "y"]
-lagrangian = "(x_t**2 + y_t**2)/2 - G*y"
-constraints = ["x**2 + y**2 - l**2"]
-[parameters]
-G = 9.81
-l = 1.0
-[initial]
-x = 0.6
-y = -0.8
-x_t = 1.0
-"""
 
 
 @pytest.fixture(scope="module")
 def sleigh():
-    J = jn.JetSpace("x y th")
-    x, y, th = J.q
-    xd, yd, thd = J.qd
-    m, a, I, c = sp.symbols("m a I c", positive=True)
-    L = m / 2 * ((xd - a * sp.sin(th) * thd)**2 + (yd + a * sp.cos(th) * thd)**2) \
-        + I / 2 * thd**2
-    s = jn.System(J, L, constraints=[-sp.sin(th) * xd + sp.cos(th) * yd],
-                  forces={th: -c * thd})
-    return jn.Scene(s, "chetaev", params=P, initial={**O, "x_t": 1, "th_t": .4},
+    return jn.Scene(damped_sleigh(), "chetaev", params=P, initial={**O, "x_t": 1, "th_t": .4},
                     t_span=(0.0, 1.0))
 
 
 @pytest.fixture(scope="module")
 def pendulum():
-    model = loads(PENDULUM)
+    model = loads(PENDULUM_XY_STARTED)
     return jn.Scene(model.system, "chetaev", params={"G": 9.81, "l": 1.0},
                     initial=dict(model.initial), t_span=(0.0, 100.0))
 
