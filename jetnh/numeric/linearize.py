@@ -76,7 +76,7 @@ from ..frozen import Frozen, FrozenDict
 ZERO = 1e-6
 #: real parts within REAL * max(1, |A|) of zero count as on the imaginary axis
 REAL = 1e-12
-#: a point is a steady motion when |x'| <= STEADY * max(1, |A| |x|) (kept states)
+#: a point is a steady motion when ``|x'| <= STEADY * max(1, |A| |x|)`` (kept states)
 STEADY = 1e-8
 #: the verdict off a steady motion
 NOT_STEADY = "not a steady motion"
@@ -259,7 +259,7 @@ class Linearization(Frozen):
         #: True when A is the limit at a point where the kernel itself is undefined
         self.limit = limit
         size = float(np.abs(y[list(keep)]).max()) if keep else 0.0
-        #: whether the point is a steady motion: |x'| <= STEADY * max(1, |A| |x|)
+        #: whether the point is a steady motion: ``|x'| <= STEADY * max(1, |A| |x|)``
         self.steady_motion = bool(self.residual <= STEADY * max(1.0, self._scale * size))
 
     # ------------------------------------------------------------------ verdicts
