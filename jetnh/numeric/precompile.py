@@ -13,8 +13,8 @@ its end (``save="final"``; radau's plain loop serves it), ``t_eval`` with output
 ``t_eval``, ``watch+t_eval`` with that and indicators or events watched, ``all`` with
 every part; the loops of dla and dvi; and ``connect:step``, the compiled step of
 connect's Levenberg-Marquardt search (``connect.levenberg``).  ``DEFAULT``, what ``make``
-compiles (about 45 CPU seconds), is the plain loop of each continuous method, the default
-method's loops with ``t_eval`` (those of ``make run``) and with ``save="final"``, and
+compiles (about a minute of CPU), is the plain and the ``final`` loop of each continuous
+method, the default method's loops with ``t_eval`` (those of ``make run``), and
 connect's step: the first run of each on a machine loads its loop.  Each loop compiles
 in a process of its own, as many at a time as there are cores.
 """
@@ -35,7 +35,7 @@ LOOPS = {f"{m}:{name}": (m, parts) for m in ("dop853", "dopri5", "rk4", "radau")
          if not (m == "rk4" and "t_eval" in name or m == "radau" and name == "final")}
 LOOPS.update({"dla": ("dla", None), "dvi": ("dvi", None),
               "connect:step": ("connect", None)})
-DEFAULT = (*(n for n in LOOPS if n.endswith(":plain")), "dop853:final", "dop853:t_eval",
+DEFAULT = (*(n for n in LOOPS if n.endswith((":plain", ":final"))), "dop853:t_eval",
            "dop853:watch+t_eval", "connect:step")
 
 
