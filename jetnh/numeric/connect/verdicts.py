@@ -4,6 +4,7 @@ extremal (``gramian_ratio``) and where its Jacobi fields lose rank
 
 from __future__ import annotations
 
+import weakref
 from functools import cached_property
 
 import numpy as np
@@ -116,9 +117,9 @@ def _lagrangian(tr, times, ys) -> np.ndarray:
     return np.broadcast_to(L, times.shape)
 
 
-#: system id -> (system, [d phi/dq..., d phi/du...], the rows of the dependent and of the
-#: independent velocities' coordinates, [df/dq..., df/dqdot...]) for ``gramian_ratio``
-_DERIVATIVES: dict = {}
+#: (what, id(system)) -> (weak reference to the system, its derivatives): by identity
+#: (``_kept``), forgotten with the system
+_KEPT: dict = {}
 #: the measure det(A_alpha)^2 / det(A A^T) of the scene's split (``atlas``) below which,
 #: somewhere on the path, ``gramian_ratio`` linearizes without a split
 EDGE = 1e-2
@@ -150,22 +151,35 @@ def split_measure(scene, t, y) -> float:
     return float(_measures(Fv, dep_rows))
 
 
+def _kept(what, system, build):
+    """``build(system)``, made once per system (by identity, as
+    ``accelerations.cached_parts`` keeps its parts) and forgotten with it."""
+    key = (what, id(system))
+    entry = _KEPT.get(key)
+    if entry is None or entry[0]() is not system:
+        def forget(ref, key=key):
+            if _KEPT.get(key, (None,))[0] is ref:
+                del _KEPT[key]
+        entry = _KEPT[key] = (weakref.ref(system, forget), build(system))
+    return entry[1]
+
+
 def _derivatives(system):
+    """([d phi/dq..., d phi/du...], the rows of the dependent and of the independent
+    velocities' coordinates, [df/dq..., df/dqdot...]) for ``gramian_ratio``."""
     from ...algebra import dag
 
-    J = system.J
-    found = _DERIVATIVES.get(id(system))
-    if found is None or found[0] is not system:
+    def build(system):
+        J = system.J
         us = system.independent_velocities
         phis = [system.phi[v] for v in system.dependent_velocities]
         index = {s: i for i, s in enumerate(J.q)}
-        fs = list(system.constraints)
-        found = _DERIVATIVES[id(system)] = (
-            system, list(dag.jacobian(phis, list(J.q))) + list(dag.jacobian(phis, list(us))),
-            [index[J.split(v)[0]] for v in system.dependent_velocities],
-            [index[J.split(v)[0]] for v in us],
-            list(dag.jacobian(fs, list(J.q))) + list(dag.jacobian(fs, list(J.qd))))
-    return found[1:]
+        return (list(dag.jacobian(phis, list(J.q))) + list(dag.jacobian(phis, list(us))),
+                [index[J.split(v)[0]] for v in system.dependent_velocities],
+                [index[J.split(v)[0]] for v in us],
+                list(dag.jacobian(list(system.constraints), list(J.q)))
+                + list(system.jacobian))
+    return _kept("derivatives", system, build)
 
 
 def _linearized(tr, times, ys):
@@ -239,10 +253,6 @@ def gramian_ratio(tr, samples) -> float:
     return float(max(ev[0], 0.0) / ev[-1]) if ev[-1] > 0 else 0.0
 
 
-#: system id -> (system, dg/dq on the graph) for ``tangent_frames``
-_CONSTRAINT_JACOBIANS: dict = {}
-
-
 def tangent_frames(tr, times, ys):
     """Orthonormal bases ``T`` (``[len(times), n, n - h]``) of the tangent space ker
     dg/dq of the holonomic constraints g = 0 at the configurations of the rows ``ys``,
@@ -254,15 +264,13 @@ def tangent_frames(tr, times, ys):
         return None
     J = system.J
     n, h = len(J.q), len(system.holonomic)
-    found = _CONSTRAINT_JACOBIANS.get(id(system))
-    if found is None or found[0] is not system:
-        found = _CONSTRAINT_JACOBIANS[id(system)] = (
-            system, list(dag.jacobian(list(system.holonomic), list(J.q))))
+    dg = _kept("holonomic", system,
+               lambda s: list(dag.jacobian(list(s.holonomic), list(s.J.q))))
     col = {nm: i for i, nm in enumerate(tr.scene.state_names)}
     times = np.atleast_1d(np.asarray(times, dtype=float))
     point = {J.t: times, **{q: ys[:, col[q.name]] for q in J.q},
              **{s: tr.scene.params[s.name] for s in system.parameters}}
-    vals = dag.evaluate_numpy(found[1], point)
+    vals = dag.evaluate_numpy(dg, point)
     G = np.stack([np.broadcast_to(v, times.shape) for v in vals], axis=-1)
     G = G.reshape(times.size, h, n)
     _, _, vt = np.linalg.svd(G)
