@@ -251,6 +251,17 @@ def _det(M) -> float:
     return a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
 
 
+def split_measure_of(A, columns) -> np.ndarray:
+    """det(A_columns)^2 / det(A A^T), the measure of one split, for each k x n matrix of
+    the stack ``A`` (``[..., k, n]``, in numpy); 0 where A has rank < k.  One point and
+    every split: ``Atlas.measures``."""
+    gram = np.linalg.det(A @ np.swapaxes(A, -1, -2))
+    minor = np.linalg.det(A[..., columns])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out = np.where(gram > 0, minor ** 2 / gram, 0.0)
+    return np.where(np.isfinite(out), out, 0.0)
+
+
 def _jacobian_events(system):
     return [Event(e, name=f"A{i}") for i, e in enumerate(system.jacobian)]
 

@@ -10,6 +10,7 @@ from functools import cached_property
 import numpy as np
 
 from ...errors import ConnectError
+from ..atlas import split_measure_of
 
 #: smallest / largest eigenvalue of the controllability Gramian below which the path is
 #: abnormal
@@ -125,16 +126,6 @@ _KEPT: dict = {}
 EDGE = 1e-2
 
 
-def _measures(Fv, dep_rows):
-    """det(A_alpha)^2 / det(A A^T) of the split ``dep_rows`` for each A of ``Fv``
-    (``[..., k, n]``), 0 where A has rank < k (``atlas``)."""
-    gram = np.linalg.det(Fv @ np.swapaxes(Fv, -1, -2))
-    minor = np.linalg.det(Fv[..., dep_rows])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        out = np.where(gram > 0, minor ** 2 / gram, 0.0)
-    return np.where(np.isfinite(out), out, 0.0)
-
-
 def split_measure(scene, t, y) -> float:
     """The measure of ``scene``'s split at the state ``y`` at time ``t`` (1 without
     constraints)."""
@@ -148,7 +139,7 @@ def split_measure(scene, t, y) -> float:
     point = _state_point(scene, np.array([float(t)]), np.asarray(y, dtype=float)[None, :])
     vals = dag.evaluate_numpy(fderivs[k * n:], point)
     Fv = np.array([float(np.ravel(v)[0]) for v in vals]).reshape(k, n)
-    return float(_measures(Fv, dep_rows))
+    return float(split_measure_of(Fv, dep_rows))
 
 
 def _kept(what, system, build):
@@ -198,7 +189,7 @@ def _linearized(tr, times, ys):
     F = np.stack([np.broadcast_to(np.asarray(v, dtype=float), times.shape)
                   for v in dag.evaluate_numpy(fderivs, point)], axis=-1)
     Fq, Fv = F[:, :k * n].reshape(-1, k, n), F[:, k * n:].reshape(-1, k, n)
-    if _measures(Fv, dep_rows).min() >= EDGE:
+    if split_measure_of(Fv, dep_rows).min() >= EDGE:
         vals = dag.evaluate_numpy(derivatives, point)
         A = np.zeros((times.size, n, n))
         B = np.zeros((times.size, n, m))
