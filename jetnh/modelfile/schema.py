@@ -337,11 +337,13 @@ def _check_run_settings(S, sim):
     not after the kernels are derived and compiled."""
     from ..numeric import arguments
     from ..numeric.methods import method
+    from ..numeric.options import StepControl
 
     get = sim.get
+    rtol, atol = get("rtol", StepControl.rtol), get("atol", StepControl.atol)
     checks = (("method", ("method",), lambda: method(sim["method"])),
-              ("rtol, atol", ("rtol", "atol"), lambda: arguments.tolerances(
-                  float(get("rtol", 1e-9)), float(get("atol", 1e-12)), 1)),
+              ("rtol, atol", ("rtol", "atol"),
+               lambda: arguments.tolerances(float(rtol), float(atol), 1)),
               ("t_start, t_end", ("t_end",),
                lambda: arguments.time_span((get("t_start", 0.0), sim["t_end"]))))
     for what, keys, check in checks:
