@@ -142,6 +142,8 @@ class Scene(Frozen):
         self.velocities = tuple(v.name for v in system.independent_velocities)
         self.dependent_velocities = tuple(v.name for v in system.dependent_velocities)
         self.state_names = self.coordinates + self.velocities + self.multipliers
+        #: the names an initial value may have
+        self._initial_names = frozenset(self.state_names + self.dependent_velocities)
         self.consistency_tol = arguments.positive(consistency_tol, "consistency_tol")
         self.projected: dict[str, tuple[float, float]] = {}
         #: coordinates moved onto the holonomic constraints: name -> (given, completed)
@@ -183,7 +185,7 @@ class Scene(Frozen):
         the scene's compiled kernels if they are loaded, ``p`` its run-time parameters
         (``_dependent_velocity_floats``)."""
         given = {}
-        allowed = set(self.state_names) | set(self.dependent_velocities)
+        allowed = self._initial_names
         for k, v in initial.items():
             name = k if type(k) is str else arguments.name_of(k, "an initial value")
             if name not in allowed:
@@ -191,10 +193,10 @@ class Scene(Frozen):
                     f"initial has {name!r}, which is not a state of this {self.principle} "
                     f"scene; the states are {', '.join(self.state_names)} (and the dependent "
                     f"velocities {', '.join(self.dependent_velocities) or 'none'})")
-            given[name] = v if type(v) is float else arguments.real(
+            v = given[name] = v if type(v) is float else arguments.real(
                 v, f"initial value of {name!r}")
-            if not math.isfinite(given[name]):
-                raise JetnhError(f"initial value of {name!r} is {given[name]}")
+            if not math.isfinite(v):
+                raise JetnhError(f"initial value of {name!r} is {v}")
         missing = [n for n in self.state_names if n not in given]
         if missing:
             raise JetnhError(
@@ -205,7 +207,7 @@ class Scene(Frozen):
                 + "; give them in initial={...}")
         given = self._on_holonomic(given, complete)
         required = None
-        if kernels is not None and not any(n in given for n in self.dependent_velocities):
+        if kernels is not None and given.keys().isdisjoint(self.dependent_velocities):
             required = self._dependent_velocity_floats(given, kernels, p)
         if required is None:
             required = self._dependent_velocity_values(given)
@@ -303,7 +305,8 @@ class Scene(Frozen):
                 return None
             g = np.empty(len(lay.indicators))
             kern.sing(t0, y, p, g)
-            if not all(math.isfinite(x) and abs(x) >= FLOAT_MARGIN for x in g.tolist()):
+            g = g.tolist()      # (a NaN or an infinity makes the sum not finite)
+            if not (math.isfinite(sum(g)) and all(map(FLOAT_MARGIN.__le__, map(abs, g)))):
                 return None
         aux = np.empty(lay.n_aux)
         kern.aux(t0, y, p, aux)
@@ -384,13 +387,17 @@ class Scene(Frozen):
         d.update(t_span=self.t_span if t_span is self.t_span else self._t_span(t_span),
                  projected={}, completed={})
         kern = _loaded_kernels(self.key, self.cache) if "key" in self._memo else None
-        ini = FrozenDict(new._initial(initial, False, False, kern, self._p))
+        p = self._p
+        memo = self._shared_memo()
+        for k in ("_p", "quick") if t_span is self.t_span else ("_p",):
+            if k in self._memo:     # (the quick plans: of this time span)
+                memo[k] = self._memo[k]
+        d["_memo"] = memo      # (frozen from here: ``_initial`` sets nothing when it
+        #                        neither projects nor completes)
+        ini = FrozenDict(new._initial(initial, False, False, kern, p))
         y0 = np.array([ini[n] for n in self.state_names], dtype=float)
-        y0.flags.writeable = False
+        y0.setflags(write=False)
         d.update(initial=ini, y0=y0)
-        d["_memo"] = self._shared_memo()
-        if "_p" in self._memo:
-            d["_memo"]["_p"] = self._memo["_p"]
         return new
 
     def _shared_memo(self) -> dict:
@@ -525,27 +532,54 @@ class Scene(Frozen):
                 and (rtol is None or type(rtol) is float)
                 and (atol is None or type(atol) is float)):
             # every option as its default but the method (a str), save and the
-            # tolerances (floats): a short key, sooner (a run interleaved with other work
-            # finds little of the longer key's work in the caches)
-            span = self.t_span
-            key = ("common", method, save, rtol, atol, span)
+            # tolerances (floats): this scene's plan of them, at once
+            quick = self._memo.get("quick")
+            plan = None if quick is None else quick.get((method, save, rtol, atol))
+            if plan is None:
+                plan = self._quick_plan(method, save, rtol, atol)
         else:
-            span = self.t_span if t_span is None else arguments.time_span(t_span)
-            key = (rtol, solve.hashable(atol), method, save, span, timeout, projection,
-                   backend, step, singular, newton, sensitivities, sensitivity_error,
-                   solve.hashable(events), solve.hashable(t_eval), *keywords.items())
-            key = (key, tuple(map(type, key)))
-        plan = solve.planned(self, key, lambda: solve.plan(
+            plan = self._plan(rtol, atol, t_eval, method, save, events, t_span, timeout,
+                              projection, backend, step, singular, newton, sensitivities,
+                              sensitivity_error, keywords)
+        if y0 is None and params is None:       # the scene's own (the loop's own copy)
+            p = self._memo.get("_p")
+            return solve.run(self, plan, self.y0.copy(), self._p if p is None else p,
+                             own=True)
+        p = self._run_params(params)
+        y = self._run_state(y0, plan.t0, p)
+        return solve.run(self, plan, y, p, own=False)
+
+    def _quick_plan(self, method, save, rtol, atol) -> solve.Plan:
+        """The plan of a run with every option as its default but ``method`` (a str),
+        ``save`` and the tolerances (floats or None), under a short key (shared with
+        the scenes ``replace`` makes: ``solve.planned``) and kept in this scene's memo
+        under a shorter one (its time span is the scene's)."""
+        span = self.t_span
+        plan = solve.planned(self, ("common", method, save, rtol, atol, span),
+                             lambda: solve.plan(self, method, opts=options(rtol=rtol,
+                                                                           atol=atol),
+                                                t_span=span, save=save))
+        quick = self._memo.setdefault("quick", {})
+        if len(quick) < solve.MAX_PLANS:
+            quick[method, save, rtol, atol] = plan
+        return plan
+
+    def _plan(self, rtol, atol, t_eval, method, save, events, t_span, timeout, projection,
+              backend, step, singular, newton, sensitivities, sensitivity_error,
+              keywords) -> solve.Plan:
+        """The plan of a run with these options (``run``), kept under a key of every
+        option (``solve.planned``)."""
+        span = self.t_span if t_span is None else arguments.time_span(t_span)
+        key = (rtol, solve.hashable(atol), method, save, span, timeout, projection,
+               backend, step, singular, newton, sensitivities, sensitivity_error,
+               solve.hashable(events), solve.hashable(t_eval), *keywords.items())
+        key = (key, tuple(map(type, key)))
+        return solve.planned(self, key, lambda: solve.plan(
             self, method, opts=options(step, singular, newton, rtol=rtol, atol=atol,
                                        **keywords),
             t_span=span, t_eval=t_eval, save=save, events=events, timeout=timeout,
             projection=projection, backend=backend, sensitivities=sensitivities,
             sensitivity_error=sensitivity_error))
-        if y0 is None and params is None:       # the scene's own (the loop's own copy)
-            return solve.run(self, plan, self.y0.copy(), self._p, own=True)
-        p = self._run_params(params)
-        y = self._run_state(y0, plan.t0, p)
-        return solve.run(self, plan, y, p, own=False)
 
     # ------------------------------------------------------------------ run helpers
     @memo

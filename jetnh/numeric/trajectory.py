@@ -90,6 +90,24 @@ def _info(steps, rejected, nfev, wall_time, projected) -> dict:
             "projected": dict(projected) if projected else {}}
 
 
+class _kept:
+    """A value made from a trajectory's private fields on first access and then kept in
+    its ``__dict__``, where later reads find it first (a non-data descriptor, as
+    ``functools.cached_property``): a run whose output is never read pays nothing for
+    it.  Assignment is still refused (``Frozen.__setattr__``)."""
+
+    def __init__(self, make):
+        self.make = make
+        self.name = make.__name__
+        self.__doc__ = make.__doc__
+
+    def __get__(self, obj, cls=None):
+        if obj is None:
+            return self
+        value = obj.__dict__[self.name] = self.make(obj)
+        return value
+
+
 def _columns(layout) -> tuple[dict, dict]:
     """Name -> column of the states and of the aux rows (dependent velocities, first
     integrals) of ``layout``; built once per layout."""
@@ -104,6 +122,14 @@ def _columns(layout) -> tuple[dict, dict]:
 
 
 _COLUMNS: dict = {}
+
+
+def _output(a, n) -> np.ndarray:
+    """The first ``n`` rows of ``a``, read-only."""
+    if a.shape[0] != n:
+        a = a[:n]
+    a.setflags(write=False)
+    return a
 
 
 class Trajectory(Frozen):
@@ -138,33 +164,33 @@ class Trajectory(Frozen):
                  nfev, wall_time, kernels, projected=None, own=None, events=None,
                  singularity=None, dense=None, segments=None, switches=(),
                  sensitivities=None):
-        self._fill(scene, np.ascontiguousarray(t, dtype=float),
-                   np.ascontiguousarray(y, dtype=float), p, method, status, stop_reason,
-                   _info(steps, rejected, nfev, wall_time, projected), kernels, events,
-                   singularity, dense, sensitivities, own, segments, switches)
+        t = np.ascontiguousarray(t, dtype=float)
+        self._fill(scene, (t, np.ascontiguousarray(y, dtype=float), t.shape[0]), p, method,
+                   status, stop_reason, ((steps, rejected, nfev), wall_time, projected),
+                   kernels, events, singularity, dense, sensitivities, own, segments,
+                   switches)
 
     @classmethod
-    def _of_run(cls, scene, t, y, p, method, status, stop_reason, info, kernels, events,
+    def _of_run(cls, scene, rows, p, method, status, stop_reason, counts, kernels, events,
                 singularity, dense, sensitivities) -> "Trajectory":
-        """What ``Trajectory(...)`` makes of ``t``, ``y`` (float64, C-contiguous and
-        nobody else's: the rows a compiled loop returned) and ``info`` (``_info``),
-        without converting them: a trajectory is made on every run."""
+        """What ``Trajectory(...)`` makes of ``rows = (t, y, n)`` (float64, C-contiguous
+        and nobody else's: the arrays a compiled loop returned, of which the first ``n``
+        rows are the output) and ``counts = ((steps, rejected, nfev), wall_time,
+        projected)``, without converting them: a trajectory is made on every run."""
         self = object.__new__(cls)
-        self._fill(scene, t, y, p, method, status, stop_reason, info, kernels, events,
+        self._fill(scene, rows, p, method, status, stop_reason, counts, kernels, events,
                    singularity, dense, sensitivities)
         self.__dict__["_memo"] = {}
         return self
 
-    def _fill(self, scene, t, y, p, method, status, stop_reason, info, kernels, events,
+    def _fill(self, scene, rows, p, method, status, stop_reason, counts, kernels, events,
               singularity, dense, sensitivities, own=None, segments=None, switches=()):
         """The attributes, each public array read-only (``Frozen._set``, without its walk
-        over every value)."""
-        t.setflags(write=False)
-        y.setflags(write=False)
+        over every value); ``t``, ``y`` and ``_info`` made on first access (``_kept``)."""
         d = self.__dict__
-        d.update(scene=scene, t=t, y=y, _p=p, _kernels=kernels, method=method,
+        d.update(scene=scene, _rows=rows, _p=p, _kernels=kernels, method=method,
                  status=status, stop_reason=stop_reason, t_events=[], y_events=[],
-                 _dense=dense, _info=info)
+                 _dense=dense, _counts=counts)
         # the others where they differ from their defaults (the class attributes)
         if own:
             d["_own"] = own
@@ -183,6 +209,21 @@ class Trajectory(Frozen):
                 d["y_events"] = readonly(list(y_ev))
         if sensitivities is not None:
             d["_sens"] = (tuple(sensitivities[0]), _read_only(sensitivities[1]))
+
+    @_kept
+    def t(self) -> np.ndarray:
+        """The output times (read-only)."""
+        return _output(self._rows[0], self._rows[2])
+
+    @_kept
+    def y(self) -> np.ndarray:
+        """The states at the output times, ``[n_times, n_states]`` (read-only)."""
+        return _output(self._rows[1], self._rows[2])
+
+    @_kept
+    def _info(self) -> dict:
+        counts, wall_time, projected = self._counts
+        return _info(counts[0], counts[1], counts[2], wall_time, projected)
 
     @property
     def layout(self):
