@@ -444,7 +444,7 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
         seg = build(scene, method, out, wall, kern, ce, p, t, y, singular_tol, checked, limit,
                     seg_dense, n_events=len(user))
         parts.append((chart, seg, (t, y, t1, seg_ctl, watch, ce)))
-        steps_left -= seg._info["steps"]
+        steps_left -= seg._counts[0][0]       # (the steps taken)
         for i in range(len(user)):
             counts[i] += len(seg.t_events[i])
         if not hit:
@@ -535,16 +535,18 @@ def stitch(home, at, method, p, parts, switches, user, mode, wall):
             to_home(own, chart, seg.t_events[i], seg.y_events[i].reshape(
                 -1, len(chart.scene.state_names)), p).ravel()
             for chart, seg, _ in parts]))
-    info = [seg._info for _, seg, _ in parts]
-    return Trajectory(home, np.concatenate(ts), np.concatenate(ys), p, method=method,
-                      status=last.status, stop_reason=last.stop_reason,
-                      steps=sum(i["steps"] for i in info),
-                      rejected=sum(i["rejected"] for i in info),
-                      nfev=sum(i["nfev"] for i in info), wall_time=wall,
-                      kernels=own.kernels, projected=home.projected,
-                      singularity=last.singularity, dense=parts[0][1]._dense,
-                      events=(tuple(e.name for e in user), t_ev, y_ev),
-                      segments=Stitched(own, tuple(pieces)), switches=tuple(switches))
+    steps = rejected = nfev = 0
+    for _, seg, _ in parts:
+        c = seg._counts[0]            # (steps, rejected, nfev, ...)
+        steps, rejected, nfev = steps + c[0], rejected + c[1], nfev + c[2]
+    t = np.concatenate(ts)          # (new float64 C-contiguous arrays: taken as they are)
+    return Trajectory._of_run(home, (t, np.concatenate(ys), t.shape[0]), p, method,
+                              last.status, last.stop_reason,
+                              ((steps, rejected, nfev), wall, home.projected),
+                              own.kernels, (tuple(e.name for e in user), t_ev, y_ev),
+                              last.singularity, parts[0][1]._dense, None,
+                              segments=Stitched(own, tuple(pieces)),
+                              switches=tuple(switches))
 
 
 def to_home(own, chart, t, Y, p) -> np.ndarray:

@@ -26,6 +26,7 @@ from . import arguments, atlas, diagnosis, discrete, interrupt, loops, methods, 
 from .methods import STATUS_TEXT, Solver
 from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, FINISHED, NONFINITE,
                               SINGULAR, STOPPED, entry_point)
+from .events import split_records
 from .kernels import sensitivity_kernels
 from .methods.loop import Control, Result, Watch
 from .options import fields_of, options
@@ -417,8 +418,6 @@ def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, 
     else:
         reason = STATUS_TEXT[status]
     if ce is not None:
-        from .events import split_records
-
         k = len(ce) if n_events is None else n_events
         t_events, y_events = split_records(k, ev_t[:n_ev], ev_i[:n_ev], ev_y[:n_ev])
         events = (ce.names[:k], t_events, y_events)

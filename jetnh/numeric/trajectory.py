@@ -172,14 +172,16 @@ class Trajectory(Frozen):
 
     @classmethod
     def _of_run(cls, scene, rows, p, method, status, stop_reason, counts, kernels, events,
-                singularity, dense, sensitivities) -> "Trajectory":
+                singularity, dense, sensitivities, segments=None, switches=()
+                ) -> "Trajectory":
         """What ``Trajectory(...)`` makes of ``rows = (t, y, n)`` (float64, C-contiguous
         and nobody else's: the arrays a compiled loop returned, of which the first ``n``
         rows are the output) and ``counts = ((steps, rejected, nfev), wall_time,
-        projected)``, without converting them: a trajectory is made on every run."""
+        projected)``, without converting them: a trajectory is made on every run
+        (``segments``, ``switches``: a run that changed split, ``numeric.atlas``)."""
         self = object.__new__(cls)
         self._fill(scene, rows, p, method, status, stop_reason, counts, kernels, events,
-                   singularity, dense, sensitivities)
+                   singularity, dense, sensitivities, None, segments, switches)
         self.__dict__["_memo"] = {}
         return self
 
