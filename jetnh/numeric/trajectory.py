@@ -90,24 +90,6 @@ def _info(steps, rejected, nfev, wall_time, projected) -> dict:
             "projected": dict(projected) if projected else {}}
 
 
-class _kept:
-    """A value made from a trajectory's private fields on first access and then kept in
-    its ``__dict__``, where later reads find it first (a non-data descriptor, as
-    ``functools.cached_property``): a run whose output is never read pays nothing for
-    it.  Assignment is still refused (``Frozen.__setattr__``)."""
-
-    def __init__(self, make):
-        self.make = make
-        self.name = make.__name__
-        self.__doc__ = make.__doc__
-
-    def __get__(self, obj, cls=None):
-        if obj is None:
-            return self
-        value = obj.__dict__[self.name] = self.make(obj)
-        return value
-
-
 def _columns(layout) -> tuple[dict, dict]:
     """Name -> column of the states and of the aux rows (dependent velocities, first
     integrals) of ``layout``; built once per layout."""
@@ -125,11 +107,8 @@ _COLUMNS: dict = {}
 
 
 def _output(a, n) -> np.ndarray:
-    """The first ``n`` rows of ``a``, read-only."""
-    if a.shape[0] != n:
-        a = a[:n]
-    a.setflags(write=False)
-    return a
+    """The first ``n`` rows of ``a`` (``memo`` makes them read-only)."""
+    return a if a.shape[0] == n else a[:n]
 
 
 class Trajectory(Frozen):
@@ -188,7 +167,8 @@ class Trajectory(Frozen):
     def _fill(self, scene, rows, p, method, status, stop_reason, counts, kernels, events,
               singularity, dense, sensitivities, own=None, segments=None, switches=()):
         """The attributes, each public array read-only (``Frozen._set``, without its walk
-        over every value); ``t``, ``y`` and ``_info`` made on first access (``_kept``)."""
+        over every value); ``t``, ``y`` and ``_info`` made on first access (``memo``: a
+        run whose output is never read pays neither the slices nor the flags)."""
         d = self.__dict__
         d.update(scene=scene, _rows=rows, _p=p, _kernels=kernels, method=method,
                  status=status, stop_reason=stop_reason, t_events=[], y_events=[],
@@ -212,17 +192,17 @@ class Trajectory(Frozen):
         if sensitivities is not None:
             d["_sens"] = (tuple(sensitivities[0]), _read_only(sensitivities[1]))
 
-    @_kept
+    @memo
     def t(self) -> np.ndarray:
         """The output times (read-only)."""
         return _output(self._rows[0], self._rows[2])
 
-    @_kept
+    @memo
     def y(self) -> np.ndarray:
         """The states at the output times, ``[n_times, n_states]`` (read-only)."""
         return _output(self._rows[1], self._rows[2])
 
-    @_kept
+    @memo
     def _info(self) -> dict:
         counts, wall_time, projected = self._counts
         return _info(counts[0], counts[1], counts[2], wall_time, projected)
