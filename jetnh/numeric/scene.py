@@ -148,7 +148,7 @@ class Scene(Frozen):
         self.projected: dict[str, tuple[float, float]] = {}
         #: coordinates moved onto the holonomic constraints: name -> (given, completed)
         self.completed: dict[str, tuple[float, float]] = {}
-        self.initial = FrozenDict(self._initial(initial or {}, project, complete))
+        self.initial = FrozenDict(self._initial(initial or {}, project, complete)[0])
         self.y0 = np.array([self.initial[n] for n in self.state_names], dtype=float)
 
     # ------------------------------------------------------------------ input checks
@@ -180,10 +180,11 @@ class Scene(Frozen):
         return out
 
     def _initial(self, initial, project, complete=False, kernels=None, p=None
-                 ) -> dict[str, float]:
-        """The initial values (states and dependent velocities), checked; ``kernels``:
-        the scene's compiled kernels if they are loaded, ``p`` its run-time parameters
-        (``_dependent_velocity_floats``)."""
+                 ) -> tuple[dict[str, float], np.ndarray | None]:
+        """The initial values (states and dependent velocities), checked, and the states
+        as an array where the kernels gave the dependent velocities (else None);
+        ``kernels``: the scene's compiled kernels if they are loaded, ``p`` its run-time
+        parameters (``_dependent_velocity_floats``)."""
         given = {}
         allowed = self._initial_names
         for k, v in initial.items():
@@ -206,10 +207,12 @@ class Scene(Frozen):
                    f"{', '.join(self.multipliers)})")
                 + "; give them in initial={...}")
         given = self._on_holonomic(given, complete)
-        required = None
+        required = y = None
         if kernels is not None and given.keys().isdisjoint(self.dependent_velocities):
-            required = self._dependent_velocity_floats(given, kernels, p)
+            y = np.array([given[n] for n in self.state_names], dtype=float)
+            required = self._dependent_velocity_floats(y, kernels, p)
         if required is None:
+            y = None
             required = self._dependent_velocity_values(given)
         bad = []
         for name, value in required.items():
@@ -233,7 +236,7 @@ class Scene(Frozen):
             self.projected = {n: (g, v) for n, g, v in bad}
         out = dict(given)
         out.update(required)
-        return out
+        return out, y
 
     def _holonomic_point(self, values, t0=None, params=None) -> dict:
         """t, the coordinates (from ``values``, by name) and the parameters, keyed by
@@ -286,8 +289,8 @@ class Scene(Frozen):
                     found.append(None)
         return {v.name: _real(x) for v, x in zip(vs, found)}
 
-    def _dependent_velocity_floats(self, given, kern, p) -> dict[str, float] | None:
-        """qdot^alpha = phi^alpha at the initial state ``given`` (run-time parameters
+    def _dependent_velocity_floats(self, y, kern, p) -> dict[str, float] | None:
+        """qdot^alpha = phi^alpha at the initial state ``y`` (run-time parameters
         ``p``) by the compiled kernel ``kern.aux``: floats, in microseconds where the
         30-digit evaluation (``_dependent_velocity_values``) takes a tenth of a
         millisecond.  None unless every singularity indicator of ``kern.sing`` (among
@@ -298,7 +301,6 @@ class Scene(Frozen):
         lay = kern.layout
         if lay.dependent_velocities != self.dependent_velocities:
             return None
-        y = np.array([given[n] for n in self.state_names], dtype=float)
         t0 = self.t_span[0]
         if lay.indicators:
             if not hasattr(kern, "sing"):
@@ -394,8 +396,10 @@ class Scene(Frozen):
                 memo[k] = self._memo[k]
         d["_memo"] = memo      # (frozen from here: ``_initial`` sets nothing when it
         #                        neither projects nor completes)
-        ini = FrozenDict(new._initial(initial, False, False, kern, p))
-        y0 = np.array([ini[n] for n in self.state_names], dtype=float)
+        ini, y0 = new._initial(initial, False, False, kern, p)
+        ini = FrozenDict(ini)
+        if y0 is None:
+            y0 = np.array([ini[n] for n in self.state_names], dtype=float)
         y0.setflags(write=False)
         d.update(initial=ini, y0=y0)
         return new
@@ -612,8 +616,10 @@ class Scene(Frozen):
         if y0 is None:
             return self.y0.copy()        # the compiled loop gets its own array
         if not isinstance(y0, dict):
-            if (type(y0) is np.ndarray and y0.dtype == np.float64
-                    and y0.shape == self.y0.shape and arguments.all_finite(y0)):
+            if (type(y0) is np.ndarray and y0.shape == self.y0.shape
+                    and y0.dtype == np.float64 and math.isfinite(sum(y0.tolist()))):
+                # (a NaN or an infinity makes the sum of the floats not finite; an
+                # overflow of finite values takes the general route, which says so)
                 y = y0.copy()           # (what the general route makes of it, sooner)
             else:
                 y, _ = arguments.keyed_or_sequence(y0, self.state_names, self.y0, "y0",
