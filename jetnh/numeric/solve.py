@@ -361,9 +361,9 @@ def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, 
     of ``ce`` are reported; with ``sens`` (the kernels of a run with sensitivities) the
     state's columns, and the sensitivities apart."""
     if len(out) == 6 and out[0] == FINISHED and sens is None:    # most runs: at once
-        return Trajectory._of_run(scene, (out[1], out[2], out[3]), p, method, FINISHED,
-                                  _FINISHED_TEXT, (out[4], wall, scene.projected), kern,
-                                  None, None, dense, None)
+        return Trajectory._finished(scene, (out[1], out[2], out[3]), p, method,
+                                    _FINISHED_TEXT, (out[4], wall, scene.projected), kern,
+                                    dense)
     if len(out) == 6:      # a loop that watched nothing: no events
         status, ts, ys, n_out, stats, sing_index = out
         if status != FINISHED:      # its last time and state (row n_out), for diagnosis

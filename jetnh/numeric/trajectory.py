@@ -164,6 +164,17 @@ class Trajectory(Frozen):
         self.__dict__["_memo"] = {}
         return self
 
+    @classmethod
+    def _finished(cls, scene, rows, p, method, stop_reason, counts, kernels, dense
+                  ) -> "Trajectory":
+        """``_of_run`` of a run that finished (status 0) without events, singularity or
+        sensitivities (most runs), in one step."""
+        self = object.__new__(cls)
+        self.__dict__.update(scene=scene, _rows=rows, _p=p, _kernels=kernels, method=method,
+                             status=0, stop_reason=stop_reason, t_events=[], y_events=[],
+                             _dense=dense, _counts=counts, _memo={})
+        return self
+
     def _fill(self, scene, rows, p, method, status, stop_reason, counts, kernels, events,
               singularity, dense, sensitivities, own=None, segments=None, switches=()):
         """The attributes, each public array read-only (``Frozen._set``, without its walk
