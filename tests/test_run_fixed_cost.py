@@ -126,3 +126,25 @@ def test_a_timeout_still_stops_a_compiled_run(disk):
     traj = disk.run(t_span=(0.0, 1e9), max_step=1e-6, max_steps=10**12, save="final",
                     timeout=0.2)
     assert traj.status == STOPPED and traj.t[-1] > 0.0
+
+
+@pytest.mark.parametrize("options", [
+    dict(save="final"), dict(method="dopri5", save="final", rtol=1e-6),
+    dict(t_eval=np.linspace(0.0, 0.5, 6)), dict(t_eval=np.linspace(0.0, 0.5, 6), max_steps=4),
+    dict(save="final", max_steps=3), dict(save="final", params={"R": [1.3]}),
+])
+def test_an_ensemble_of_one_is_its_row_of_a_larger_ensemble(disk, options):
+    """An ensemble of one runs the single-run loop; the ensemble's driver runs two: the
+    same rows, counts, status and last state, bit for bit (also stopped by its budget,
+    and with a run-time parameter)."""
+    options = dict(options)
+    params = options.pop("params", None)
+    one = disk.ensemble(initial={"phi_t": [0.9]}, params=params, **options)
+    two = disk.ensemble(initial={"phi_t": [0.9, 0.9]},
+                        params=None if params is None else {"R": params["R"] * 2},
+                        parallel="serial", **options)
+    assert np.array_equal(one.t, two.t[:1], equal_nan=True)
+    assert np.array_equal(one.y, two.y[:1], equal_nan=True)
+    for a, b in zip(one._arrays[:7], two._arrays[:7]):
+        assert np.array_equal(a, b[:1], equal_nan=True)
+    assert one.status.tolist() == two.status[:1].tolist()

@@ -25,7 +25,8 @@ The watchdog is one daemon thread, started on demand (without waiting for it to 
 times) and ended after ``IDLE`` seconds with nothing to watch (it drops the bytes of
 signals that came while it was not running), so that runs interleaved with other work
 find it running.  A call costs a registration (a dict entry, without a lock: the lock
-only starts and ends the thread), not a thread hand-over.  Signals reach only the main thread, so elsewhere only the timeout is watched.
+only starts and ends the thread), not a thread hand-over.  Signals reach only the main
+thread, so elsewhere only the timeout is watched.
 """
 
 from __future__ import annotations
@@ -127,7 +128,7 @@ class _Watchdog:
                 if c[1] is not None and now >= c[1]:
                     c[0][0] = TIMEOUT
                     c[1] = None
-            for fd in {c[2] for c in calls if c[2] >= 0}:   # the wakeup fd's previous owner
+            for fd in {c[2] for c in calls if c[2] >= 0}:   # the wakeup fd's owner before
                 try:
                     os.write(fd, got)
                 except OSError:
