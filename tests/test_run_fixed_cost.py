@@ -148,3 +148,29 @@ def test_an_ensemble_of_one_is_its_row_of_a_larger_ensemble(disk, options):
     for a, b in zip(one._arrays[:7], two._arrays[:7]):
         assert np.array_equal(a, b[:1], equal_nan=True)
     assert one.status.tolist() == two.status[:1].tolist()
+
+
+def test_a_replace_copy_of_a_switching_scene_shares_its_charts():
+    """A copy with other initial values (a shooting loop's run) takes over the atlas's
+    charts of its original rather than building its own (each chart a scene compiled
+    once), and switches as ``run(y0=...)`` of the original does, bit for bit, in a
+    trajectory of the copy."""
+    from jetnh.models import knife_edge
+    from jetnh.numeric import atlas
+
+    knife = Scene(knife_edge(), "chetaev", initial=dict(x=0, y=0, phi=0, x_t=0.5, phi_t=3.0),
+                  t_span=(0.0, 2.0))
+    first = knife.run(rtol=1e-8)
+    moved = knife.replace(initial=dict(x=0, y=0, phi=0.1, x_t=0.5, phi_t=3.0))
+    traj = moved.run(rtol=1e-8)
+    by_y0 = knife.run(y0=moved.y0, rtol=1e-8)
+    assert len(traj.switches) == len(first.switches) >= 2
+    assert traj.switches == by_y0.switches
+    assert np.array_equal(traj.y, by_y0.y) and np.array_equal(traj.t, by_y0.t)
+    assert traj.scene is moved and by_y0.scene is knife
+    mine, theirs = atlas.atlas(moved), atlas.atlas(knife)
+    assert mine is not theirs and mine.charts is theirs.charts
+    assert mine.own.scene is moved and theirs.own.scene is knife
+    # a run that stays in its chart is the copy's too
+    short = moved.replace(t_span=(0.0, 0.1)).run(rtol=1e-8)
+    assert not short.switches and short.scene.t_span == (0.0, 0.1)

@@ -49,6 +49,7 @@ own steps, and ``traj.switches`` (also in the diagnostics) lists (time, from, to
 
 from __future__ import annotations
 
+import copy
 import time
 from itertools import combinations
 
@@ -111,10 +112,15 @@ def applies(scene, events) -> bool:
 
 
 def atlas(scene) -> "Atlas":
-    """The atlas of ``scene`` (built once, kept in its memo)."""
+    """The atlas of ``scene`` (built once, kept in its memo; a copy of the scene with the
+    same kernels, ``Scene.replace``, takes the first one's charts: ``Atlas.moved``)."""
     found = scene._memo.get("atlas")
     if found is None:
-        found = scene._memo["atlas"] = Atlas(scene)
+        first = scene._memo.setdefault("atlases", [])      # (shared by the copies)
+        found = Atlas(scene) if not first else first[0].moved(scene)
+        if not first:
+            first.append(found)
+        scene._memo["atlas"] = found
     return found
 
 
@@ -277,8 +283,9 @@ class Atlas:
         self.eps = 1.0 / (4 * len(self.splits))
         p = principles.get(home.principle)
         self.explicit = bool(p.multipliers) and p.form(home.form).explicit
-        self.charts = {self.splits[0]: Chart(home.system, self.splits[0], self.explicit,
-                                             home)}
+        self._own = Chart(home.system, self.splits[0], self.explicit, home)
+        #: the charts of the other splits, built when a run first enters them
+        self.charts: dict = {}
         #: each split as a chart that only maps states (``Chart.state``)
         self.maps = {s: Chart(home.system, s, self.explicit) for s in self.splits}
         #: the columns of each split's minor of df/dqdot
@@ -287,11 +294,25 @@ class Atlas:
 
     @property
     def own(self) -> Chart:
-        return self.charts[self.splits[0]]
+        return self._own
+
+    def moved(self, home) -> "Atlas":
+        """This atlas for ``home``, a copy of its home with the same kernels (other
+        initial values, time span or run-time parameter values: ``Scene.replace``): its
+        own chart ``home``'s, the other charts (each a scene of its split, compiled
+        once), maps and compiled events shared."""
+        new = object.__new__(Atlas)
+        new.__dict__.update(self.__dict__)
+        new.home = home
+        new._own = copy.copy(self._own)         # (its kernels and df/dqdot: the same)
+        new._own.scene = home
+        return new
 
     def chart(self, split, t0, y) -> Chart:
         """The chart of ``split`` (its scene built at the state ``y`` of it at ``t0``
         the first time)."""
+        if split == self.splits[0]:
+            return self._own
         found = self.charts.get(split)
         if found is None:
             home = self.home

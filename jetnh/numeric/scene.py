@@ -412,6 +412,7 @@ class Scene(Frozen):
         memo = self._memo
         memo.setdefault("plans", {})
         memo.setdefault("events", {})
+        memo.setdefault("atlases", [])
         return {k: memo[k] for k in _SHARED if k in memo}
 
     def _kernel_identity(self) -> tuple:
@@ -709,8 +710,8 @@ class Scene(Frozen):
 
 #: what a scene with the same kernels (``Scene.replace``) takes over from the memo: the
 #: kernels' keys, the plans of runs (``solve.planned``), compiled events, whether an
-#: atlas applies
-_SHARED = ("spec", "key", "plans", "events", "atlas_applies")
+#: atlas applies and the first atlas (whose charts the others share: ``atlas.atlas``)
+_SHARED = ("spec", "key", "plans", "events", "atlas_applies", "atlases")
 
 
 #: the least |indicator| at which the initial dependent velocities are taken from the
