@@ -23,9 +23,10 @@ A scene does only what it needs: it derives the equations of its own principle, 
 when its kernels are not in the disk cache; a run's options are checked and planned once
 (``numeric.solve``, the one driver of runs, ensembles and sweeps) and the plan kept for
 the next run with the same options, also by the scenes ``replace`` makes with the same
-kernels (other initial values, time span or run-time parameter values); parameters are numbers substituted before
-code generation (``runtime_params`` keeps some as run-time inputs for ensembles); output
-is every step, the points of ``t_eval``, or only the end (``save="final"``).
+kernels (other initial values, time span or run-time parameter values), which share the
+charts of the split's edge too (``atlas.atlas``); parameters are numbers substituted
+before code generation (``runtime_params`` keeps some as run-time inputs for ensembles);
+output is every step, the points of ``t_eval``, or only the end (``save="final"``).
 
 State: every coordinate q^s, the independent velocities qdot^mu and the multipliers of
 the principles that have them (vakonomic, Hoelder, Suslov).  Initial values are keyed by
