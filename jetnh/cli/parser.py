@@ -12,6 +12,7 @@ from ..mechanics import principles
 from ..mechanics.principles import PRINCIPLES
 from .loading import DEFAULTS
 from .render import SCREEN_BUDGET
+from .usage import UsageError
 
 EPILOG_MODEL = ("MODEL: a catalogue name (see `jetnh models`; scalable ones take options, "
                 "e.g. n_trailer:N=4) or a model file (TOML, e.g. examples/rolling_disk.toml).")
@@ -65,6 +66,38 @@ def count(text: str, low: int = 0) -> int:
 
 def positive_count(text: str) -> int:
     return count(text, 1)
+
+
+#: the most values an ``A:B:N`` range gives
+MAX_RANGE = 100_000
+
+
+def evenly_spaced(text: str, what: str, least: int, one: str = "",
+                  otherwise: str = "") -> tuple[float, float, int]:
+    """``A:B:N``, N evenly spaced values from A to B, as ``(A, B, N)``: A and B finite
+    numbers (read by float(), never evaluated), N an integer from ``least`` (the command's
+    rule: a scan needs 2 values, a grid axis 1) to ``MAX_RANGE``; A = B only for N = 1.
+    ``what`` names the option in the messages, ``one`` says how to give the single value
+    instead (``{a}`` standing for it), ``otherwise`` names the other form the option
+    takes."""
+    parts = text.split(":")
+    try:
+        if len(parts) != 3:
+            raise ValueError
+        a, b, n = float(parts[0]), float(parts[1]), int(parts[2])
+    except ValueError:
+        form = "A:B:N (N evenly spaced values from A to B; A and B numbers, N an integer)"
+        raise UsageError(f"{what}: {text!r} is "
+                         + (f"neither {form} nor {otherwise}" if otherwise else f"not {form}")
+                         ) from None
+    if not least <= n <= MAX_RANGE:
+        raise UsageError(f"{what}: N must be from {least} to {MAX_RANGE}, got {n}")
+    if not (math.isfinite(a) and math.isfinite(b)):
+        raise UsageError(f"{what}: A and B must be finite numbers, got {text!r}")
+    if a == b and n > 1:
+        raise UsageError(f"{what}: {text!r} is a range of zero width ({n} equal values); "
+                         "give A != B" + (", or " + one.format(a=f"{a:g}") if one else ""))
+    return a, b, n
 
 
 ALIASES = "aliases: " + "; ".join(f"{', '.join(p.aliases)} (= {p.name})"

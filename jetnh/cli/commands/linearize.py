@@ -8,7 +8,7 @@ import json
 
 from ..loading import load_model, settings, with_split
 from .. import outputs
-from ..parser import EPILOG_MODEL, model_args, subcommand
+from ..parser import EPILOG_MODEL, evenly_spaced, model_args, subcommand
 from ..running import assignments, initial_values
 from ..usage import UsageError
 
@@ -47,24 +47,13 @@ def add_parser(sub):
 
 
 def _scan_spec(text: str):
-    import numpy as np
-
     name, sep, rng = (text or "").partition("=")
-    parts = rng.split(":")
-    if not sep or not name.strip() or len(parts) != 3:
+    name = name.strip()
+    if not sep or not name:
         raise UsageError(f"--param takes NAME=A:B:N, got {text!r} (e.g. phi_t=0.5:4:50)")
-    try:
-        a, b, n = float(parts[0]), float(parts[1]), int(parts[2])
-    except ValueError:
-        raise UsageError(f"--param {name}: A and B must be numbers and N an integer, got "
-                         f"{rng!r}") from None
-    if not 2 <= n <= 100_000:
-        raise UsageError(f"--param {name}: N must be between 2 and 100000, got {n}")
-    if not (np.isfinite(a) and np.isfinite(b)) or a == b:
-        raise UsageError(f"--param {name}: A and B must be finite and differ (a scan over "
-                         f"a range), got {rng!r}; to linearize at one value give --at "
-                         f"{name}={parts[0]} or --set {name}={parts[0]}")
-    return name.strip(), a, b, n
+    return (name, *evenly_spaced(rng, f"--param {name}", least=2,
+                                 one=f"--at {name}={{a}} or --set {name}={{a}} to linearize "
+                                     "at that one value"))
 
 
 def run(args, progress) -> int:
