@@ -484,3 +484,23 @@ def test_simulate_plot_has_the_path_panel():
     assert (plane.get_xlabel(), plane.get_ylabel()) == ("x", "y") and len(fig.axes) == 4
     assert plane.get_aspect() == 1.0
     assert len(_figure(traj, disk, "disk").axes) == 3
+
+
+def test_the_default_tolerances_are_step_controls(capsys, monkeypatch):
+    """Settings a model does not give fall back on StepControl's tolerances, which the
+    help shows (read when the help is printed)."""
+    import argparse
+
+    from jetnh.cli.loading import load_model, settings
+    from jetnh.numeric.options import StepControl
+
+    monkeypatch.setattr(StepControl, "rtol", 2.5e-7)
+    monkeypatch.setattr(StepControl, "atol", 3.5e-11)
+    opts = settings(argparse.Namespace(), load_model("chaplygin_sleigh"))
+    assert (opts.rtol, opts.atol, opts.points, opts.t_start) == (2.5e-7, 3.5e-11, 201, 0.0)
+    code, out, _ = inproc(capsys, "simulate", "--help")
+    out = " ".join(out.split())
+    assert code == 0 and "--rtol RTOL default: the model's, else 2.5e-07" in out
+    assert "--atol ATOL default: the model's, else 3.5e-11" in out
+    assert "default: the model's, else 201; 0: every step" in out
+    assert "--t-start T0 default: the model's, else 0" in out

@@ -10,7 +10,7 @@ import math
 from ..errors import PrincipleError
 from ..mechanics import principles
 from ..mechanics.principles import PRINCIPLES
-from .loading import DEFAULTS
+from .loading import defaults
 from .render import SCREEN_BUDGET
 from .usage import UsageError
 
@@ -18,8 +18,20 @@ EPILOG_MODEL = ("MODEL: a catalogue name (see `jetnh models`; scalable ones take
                 "e.g. n_trailer:N=4) or a model file (TOML, e.g. examples/rolling_disk.toml).")
 
 
+#: stands in an option's help for jetnh's default of its setting (``loading.defaults()``)
+FALLBACK = "{jetnh's default}"
+
+
 class Formatter(argparse.RawDescriptionHelpFormatter):
-    pass
+    """Descriptions as written; ``FALLBACK`` in an option's help becomes jetnh's default
+    of that setting, read only when the help is shown (the tolerances come from the
+    numerics, which a command imports only when it runs)."""
+
+    def _get_help_string(self, action):
+        text = super()._get_help_string(action)
+        if FALLBACK in text:
+            text = text.replace(FALLBACK, f"{defaults()[action.dest]:g}")
+        return text
 
 
 # ---------------------------------------------------------------------- value types
@@ -136,14 +148,14 @@ def _principle() -> argparse.ArgumentParser:
 def _run() -> argparse.ArgumentParser:
     run = argparse.ArgumentParser(add_help=False, parents=[PRINCIPLE])
     run.add_argument("--t-start", type=float, default=None, metavar="T0",
-                     help=f"default: the model's, else {DEFAULTS['t_start']:g}")
+                     help="default: the model's, else " + FALLBACK)
     run.add_argument("--t-end", type=float, default=None, metavar="T",
                      help="end time (default: the model's [simulation] t_end or the "
                           "catalogue's)")
     run.add_argument("--rtol", type=float, default=None,
-                     help=f"default: the model's, else {DEFAULTS['rtol']:g}")
+                     help="default: the model's, else " + FALLBACK)
     run.add_argument("--atol", type=float, default=None,
-                     help=f"default: the model's, else {DEFAULTS['atol']:g}")
+                     help="default: the model's, else " + FALLBACK)
     run.add_argument("--steps", type=int, default=1000,
                      help="steps of the fixed-step methods rk4, dla and dvi (default 1000)")
     return run

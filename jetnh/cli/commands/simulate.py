@@ -9,7 +9,7 @@ from pathlib import Path
 from ...errors import JetnhError
 from ..loading import load_model, settings, with_split
 from .. import outputs
-from ..parser import EPILOG_MODEL, count, model_args, subcommand
+from ..parser import EPILOG_MODEL, FALLBACK, count, model_args, subcommand
 from ..running import (METHOD_HELP, assignments, initial_values, method_of,
                        monitored_integrals)
 from ..usage import UsageError
@@ -39,7 +39,8 @@ def add_parser(sub):
                    help="wall-clock budget in seconds: the run stops there and reports "
                         "what it has (default: none)")
     s.add_argument("--points", type=count, default=None,
-                   help="output points of the adaptive methods (default 201; 0: every step)")
+                   help=f"output points of the adaptive methods (default: the model's, else "
+                        f"{FALLBACK}; 0: every step)")
     s.add_argument("--project", action="store_true",
                    help="replace initial dependent velocities that contradict the "
                         "constraints by the values the constraints give")
