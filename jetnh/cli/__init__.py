@@ -4,7 +4,8 @@ catalogue; run the benchmarks and the seed paper's reproduction.
 MODEL is a catalogue name (``jetnh models`` lists them; options as in ``n_trailer:N=4``)
 or the path of a model file (TOML; see ``jetnh.modelfile`` and ``examples/*.toml``).
 
-Exit codes: 0 ok, 2 usage, 1 model or numerical error.  Errors print a message on
+Exit codes: 0 ok, 2 usage, 1 model or numerical error, 3 `cache warm` found the kernel
+cache unusable (nothing warmed; runs still work), 130 interrupted.  Errors print a message on
 stderr, never a traceback (``--debug`` shows one for errors that are jetnh's own bugs).
 """
 
