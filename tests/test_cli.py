@@ -543,3 +543,72 @@ def test_make_installs_with_an_unusable_cache(tmp_path):
     for code in (1, 2):                                   # any other failure stops make
         r = install(f"sh -c 'exit {code}'")
         assert r.returncode != 0 and "installed without" not in r.stdout
+
+
+# ---------------------------------------------------------------------- help as read
+def test_help_is_filled_to_the_terminal(capsys, monkeypatch):
+    """Descriptions and epilogs wrap at the terminal's width (examples, indented, stay
+    whole); every command has a description and helps its positional arguments."""
+    monkeypatch.setenv("COLUMNS", "80")
+    for command in ("", "models", "derive", "compare", "simulate", "connect", "sweep",
+                    "linearize", "bench", "cache", "reproduce"):
+        code, out, _ = inproc(capsys, *command.split(), "--help")
+        assert code == 0
+        long = [line for line in out.splitlines()
+                if len(line) > 80 and not line.startswith("  jetnh ")]
+        assert not long, (command, long)
+        usage, description = out.split("\n\n")[:2]
+        assert not description.startswith(("positional", "options")), command
+    code, out, _ = inproc(capsys, "bench", "--help")
+    assert "a benchmark script of benchmarks/" in out and "the script's own options" in out
+    code, out, _ = inproc(capsys, "models", "--help")
+    assert "a catalogue name, with options" in " ".join(out.split())
+    code, out, _ = inproc(capsys, "--help")
+    assert "derive, compare, simulate, connect, sweep and linearize" in " ".join(out.split())
+
+
+def test_connect_offers_only_what_it_uses(capsys, monkeypatch, tmp_path):
+    """connect's help states its own defaults (vakonomic, jetnh.connect's tolerances); it
+    has no --convention or --steps, which it would ignore; a model file's principle is
+    its default, as for the other commands."""
+    import inspect
+    from pathlib import Path
+
+    from jetnh.errors import ConnectError
+    from jetnh.numeric import connect as connecting
+
+    code, out, _ = inproc(capsys, "connect", "--help")
+    out = " ".join(out.split())
+    rtol = inspect.signature(connecting.connect).parameters["rtol"].default
+    assert code == 0 and f"(default: jetnh.connect's, {rtol:g})" in out
+    assert "(default: the model's, else vakonomic);" in out
+    for option in (("--convention", "imposed"), ("--steps", "5")):
+        code, _, err = inproc(capsys, "connect", "heisenberg", "--to", "x=1", *option)
+        assert code == 2 and f"unrecognized arguments: {' '.join(option)}" in err
+
+    used = []
+
+    def connect(system, principle, *args, **kw):
+        used.append(principle)
+        raise ConnectError("stopped by the test")
+    monkeypatch.setattr(connecting, "connect", connect)
+    vakonomic = Path(__file__).resolve().parents[1] / "examples" / "heisenberg_vakonomic.toml"
+    holder = tmp_path / "heisenberg_holder.toml"
+    holder.write_text(vakonomic.read_text().replace('principle = "vakonomic"',
+                                                    'principle = "holder"'))
+    for args in (("heisenberg",), ("heisenberg", "-p", "chetaev"), (str(holder),),
+                 (str(holder), "-p", "vakonomic")):
+        code, _, err = inproc(capsys, "connect", *args, "--to", "x=1", "--t-end", "1", "-q")
+        assert code == 1 and "stopped by the test" in err
+    assert used == ["vakonomic", "chetaev", "holder", "vakonomic"]
+
+
+def test_models_toml_needs_a_name(capsys):
+    code, out, err = inproc(capsys, "models", "--toml")
+    assert code == 2 and not out and "--toml prints one model as a model file" in err
+
+
+def test_method_default_is_the_models(capsys):
+    for command in ("simulate", "sweep"):
+        code, out, _ = inproc(capsys, command, "--help")
+        assert "(default: the model's, else dop853)" in " ".join(out.split()), command

@@ -17,7 +17,8 @@ UNUSABLE = 3
 def add_parser(sub):
     k = subcommand(
         sub, "cache",
-        help="show where the compiled-kernel cache lives and what it holds, or empty it",
+        help="show where the compiled-kernel cache lives and what it holds, empty it, "
+             "or warm it",
         description="info: the cache directory (JETNH_CACHE, else the platform's user "
                     "cache directory), its entries and their size, and whether runs can "
                     "use it or fall back to a private temporary cache.  clear: remove "

@@ -24,7 +24,7 @@ def add_parser(sub):
                     "|x'| (0: a steady motion) and the verdict.  --steady solves for some "
                     "states so that the point is a steady motion; --param scans a "
                     "parameter or a state and locates where Re lambda crosses 0.",
-        epilog=EPILOG_MODEL + "\n\nexample: jetnh linearize rolling_coin --at theta=0,"
+        epilog=EPILOG_MODEL + "\n\nexample:\n  jetnh linearize rolling_coin --at theta=0,"
                               "psi_t=0,theta_t=0,phi_t=3 --param phi_t=0.2:4:39 "
                               "--plot coin.png")
     model_args(s)
@@ -39,10 +39,12 @@ def add_parser(sub):
     s.add_argument("--steady", metavar="NAME,...",
                    help="states to solve for so that the point is a steady motion")
     s.add_argument("--param", metavar="NAME=A:B:N",
-                   help="scan NAME (a parameter or a state) over N values from A to B")
+                   help="scan NAME (a parameter or a state) over N evenly spaced values "
+                        "from A to B (N >= 2)")
     s.add_argument("--plot", metavar="PATH", help="with --param: save the stability "
                                                   "diagram (png, pdf, svg)")
-    s.add_argument("--format", choices=("text", "json"), default="text")
+    s.add_argument("--format", choices=("text", "json"), default="text",
+                   help="text (default) or json")
     s.set_defaults(func=run)
 
 

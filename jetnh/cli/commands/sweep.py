@@ -35,8 +35,8 @@ def add_parser(sub):
                "map.png --value x --out map.csv")
     model_args(w)
     w.add_argument("--grid", action="append", required=True, metavar="NAME=A:B:N",
-                   help="an axis: N values from A to B, or NAME=V1,V2,... (repeatable; "
-                        "NAME a parameter or a state)")
+                   help="an axis: N evenly spaced values from A to B (N >= 1), or "
+                        "NAME=V1,V2,... (repeatable; NAME a parameter or a state)")
     w.add_argument("--set", action="append", metavar="NAME=VALUE",
                    help="a parameter value for every point (repeatable, or comma-separated)")
     w.add_argument("--init", action="append", metavar="NAME=VALUE",
@@ -47,9 +47,7 @@ def add_parser(sub):
                    help="output columns (default: every state, dependent velocity and "
                         "integral)")
     w.add_argument("--method", default=None,
-                   help=METHOD_HELP.replace("(default)", "(default: the model file's, else "
-                                                         "dop853)")
-                        + "; dla, dvi and scipy run point by point")
+                   help=METHOD_HELP + "; dla, dvi and scipy run point by point")
     w.add_argument("--scheduler", metavar="ADDRESS",
                    help="a Dask scheduler, e.g. tcp://10.0.0.5:8786 (needs pip install "
                         "'jetnh[cluster]'; default: this machine, every core, no Dask)")
