@@ -502,10 +502,12 @@ def test_the_default_tolerances_are_step_controls(capsys, monkeypatch):
     assert (opts.rtol, opts.atol, opts.points, opts.t_start) == (2.5e-7, 3.5e-11, 201, 0.0)
     code, out, _ = inproc(capsys, "simulate", "--help")
     out = " ".join(out.split())
-    assert code == 0 and "--rtol RTOL default: the model's, else 2.5e-07" in out
-    assert "--atol ATOL default: the model's, else 3.5e-11" in out
-    assert "default: the model's, else 201; 0: every step" in out
-    assert "--t-start T0 default: the model's, else 0" in out
+    assert code == 0 and "--rtol RTOL relative tolerance of the adaptive methods (default: " \
+                         "the model's, else 2.5e-07)" in out
+    assert "--atol ATOL absolute tolerance of the adaptive methods (default: the model's, " \
+           "else 3.5e-11)" in out
+    assert "(default: the model's, else 201; 0: every step)" in out
+    assert "--t-start T0 start time (default: the model's, else 0)" in out
 
 
 def test_make_installs_with_an_unusable_cache(tmp_path):
