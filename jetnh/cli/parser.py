@@ -26,9 +26,10 @@ FALLBACK = "{default}"
 
 class Formatter(argparse.HelpFormatter):
     """Each paragraph of a description or epilog (lines up to a blank or indented one)
-    filled to the terminal's width, indented lines (examples) kept as written; ``FALLBACK`` in an option's help
-    becomes its default, looked up only when the help is shown (the tolerances come from
-    the numerics, which a command imports only when it runs)."""
+    filled to the terminal's width, indented lines (examples) kept as written;
+    ``FALLBACK`` in an option's help becomes its default, looked up only when the help is
+    shown (the tolerances come from the numerics, which a command imports only when it
+    runs)."""
 
     def _fill_text(self, text, width, indent):
         out, paragraph = [], []
@@ -184,8 +185,8 @@ def span_options(parser):
         help="start time (default: the model's, else " + FALLBACK + ")"),
         jetnh_default("t_start"))
     parser.add_argument("--t-end", type=float, default=None, metavar="T",
-                        help="end time (default: the model's: a model file's [simulation] "
-                             "t_end, a catalogue model's own)")
+                        help="end time (default: the model's: its [simulation] t_end; "
+                             "every catalogue model has one)")
 
 
 def tolerance_options(parser, default: str, rtol, atol, of="the adaptive methods"):

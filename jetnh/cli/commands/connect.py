@@ -20,8 +20,7 @@ def add_parser(sub):
         help="the motion of a principle joining two configurations (two-point problem)",
         description="Find a motion of MODEL under --principle (default: the model's, "
                     "else vakonomic: the stationary action with fixed endpoints) from the "
-                    "configuration "
-                    "--from at T0 to --to at --t-end, by shooting with the exact "
+                    "configuration --from at T0 to --to at --t-end, by shooting with the exact "
                     "sensitivities (jetnh.connect).  Prints the initial state found, the "
                     "action int L dt, the endpoint residual, whether the extremal is "
                     "normal, and its conjugate times.  --from defaults to the model's "
