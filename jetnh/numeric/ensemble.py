@@ -57,7 +57,7 @@ import numpy as np
 from ..errors import ConstraintError, IntegrationError, JetnhError, JetnhWarning
 from ..frozen import Frozen, memo, readonly
 from ..mechanics import holonomic
-from . import arguments, atlas, diagnosis, interrupt, loops, solve
+from . import arguments, atlas, diagnosis, interrupt, solve
 from .events import as_events
 from .methods import STATUS_TEXT, Solver
 from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, FINISHED, NONFINITE, SINGULAR
