@@ -143,11 +143,12 @@ class Trajectory(Frozen):
                  nfev, wall_time, kernels, projected=None, own=None, events=None,
                  singularity=None, dense=None, segments=None, switches=(),
                  sensitivities=None):
-        t = np.ascontiguousarray(t, dtype=float)
-        self._fill(scene, (t, np.ascontiguousarray(y, dtype=float), t.shape[0]), p, method,
-                   status, stop_reason, ((steps, rejected, nfev), wall_time, projected),
-                   kernels, events, singularity, dense, sensitivities, own, segments,
-                   switches)
+        t, y = np.ascontiguousarray(t, dtype=float), np.ascontiguousarray(y, dtype=float)
+        t.setflags(write=False)         # (now: the caller's arrays may be these)
+        y.setflags(write=False)
+        self._fill(scene, (t, y, t.shape[0]), p, method, status, stop_reason,
+                   ((steps, rejected, nfev), wall_time, projected), kernels, events,
+                   singularity, dense, sensitivities, own, segments, switches)
 
     @classmethod
     def _of_run(cls, scene, rows, p, method, status, stop_reason, counts, kernels, events,
