@@ -213,12 +213,15 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
 
         newton = radau.newton_options(newton_tol, max_newton)
     kern = scene.kernels
-    switch = sens is None and split == "switch" and atlas.applies(scene, events)
+    # (an ensemble with sensitivities keeps its split)
+    switch = (split == "switch" and not (batch and sens is not None)
+              and atlas.applies(scene, events))
     if switch:
         # the run goes on across its chart's edge: events per chart (numeric.atlas); an
-        # ensemble watches the edge of the scene's own chart as its last event
+        # ensemble, and a run with sensitivities (whose loop ``connect`` calls directly:
+        # ``shooting.Shot``), watch the edge of the scene's own chart as their last event
         ce = None
-        if batch:
+        if batch or sens is not None:
             at = atlas.atlas(scene)
             from .events import as_events
 
@@ -318,7 +321,7 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
         return atlas.run(scene, m.name, plan.events, plan.t0, plan.t1, y, p, plan.ctl,
                          plan.te, plan.mode, None if dense is None else dict(dense),
                          plan.checked, plan.singular_tol, plan.newton, plan.limit,
-                         trajectory)
+                         trajectory, sens=plan.sens)
     halt = np.zeros(1, dtype=np.int64)
     t0 = plan.t0
     tic = time.perf_counter()
