@@ -13,7 +13,7 @@ from scipy.linalg.lapack import dgesdd as _gesdd
 
 from ...errors import JetnhError
 from .. import arguments, interrupt, solve
-from ..methods._common import FINISHED
+from ..methods._common import EVENT, FINISHED
 from ..options import options
 
 #: the measure of the scene's split (``verdicts.split_measure``) below which a run that
@@ -58,6 +58,10 @@ class Shot:
                              (*plan.prefix, plan.t0, plan.t1, y, p, *plan.suffix, halt))
         wall = time.perf_counter() - tic
         n_out = int(out[3])
+        if int(out[0]) == EVENT and plan.switch:
+            # at the edge of the scene's split (connect's runs watch no other event): the
+            # run taken across it as Scene.run does
+            return cls._across(scene, plan, y[:lay.n_state], p, stops)
         if int(out[0]) != FINISHED or n_out < 1:
             if stops is not None:
                 stops[int(out[0])] = stops.get(int(out[0]), 0) + 1
@@ -74,6 +78,23 @@ class Shot:
         self._made, self._trajectory = (scene, plan, out, wall, y, p), None
         return self
 
+    @classmethod
+    def _across(cls, scene, plan, y, p, stops):
+        """``of`` for a run that reached the edge of the scene's split: the whole run
+        again through the atlas (``solve.run``: it changes split, its sensitivities
+        carried across each switch and given in the scene's states), or None."""
+        tr = solve.run(scene, plan, y, p)
+        if tr.status != FINISHED or not len(tr.t) or not arguments.all_finite(
+                tr.y[-1]) or not arguments.all_finite(tr.sensitivities[-1]):
+            if stops is not None:
+                stops[tr.status] = stops.get(tr.status, 0) + 1
+                stops["y"] = (float(tr.t[-1]), np.array(tr.y[-1])) if len(tr.t) else None
+            return None
+        self = object.__new__(cls)
+        self.t, self.y, self.S = float(tr.t[-1]), tr.y[-1], tr.sensitivities[-1]
+        self._made, self._trajectory = None, tr
+        return self
+
     @property
     def trajectory(self):
         """The run's ``Trajectory`` (made on first access, then kept)."""
@@ -82,7 +103,8 @@ class Shot:
             self._trajectory = solve.trajectory(
                 scene, plan.method.name, out, wall, plan.kern, plan.ce, p, plan.t0, y,
                 plan.singular_tol, plan.checked, plan.limit,
-                {**plan.dense, "partial_last": False}, sens=plan.sens)
+                {**plan.dense, "partial_last": False},
+                n_events=len(plan.ce) - 1 if plan.switch else None, sens=plan.sens)
         return self._trajectory
 
 
