@@ -91,3 +91,28 @@ def test_the_answers_sensitivities_are_central_differences(sleigh):
     assert np.abs(S - fd).max() < 1e-7
     assert np.allclose(sorted(c.singular_values), sorted(np.linalg.svd(
         S[[0, 2]], compute_uv=False)), rtol=1e-6)
+
+
+@pytest.mark.parametrize("th0", [0.0, 1.45], ids=["crossing", "past-the-edge-at-t0"])
+def test_a_shot_across_the_edge_is_the_scenes_run(sleigh, th0):
+    """A shooting run that reaches the edge of the scene's split (or starts past it)
+    goes on as scene.run does: the Shot's end and sensitivities are the stitched run's,
+    bit for bit, and its Trajectory is that run."""
+    from jetnh.numeric import solve
+    from jetnh.numeric.connect.problem import _scene
+    from jetnh.numeric.connect.solve import Search
+
+    start = {**ORIGIN, "th": th0}
+    scene = _scene(sleigh, "chetaev", PARAMS, {**start, "x_t": 0.0, "th_t": 0.0},
+                   (0.0, 1.0))
+    sh = Search(scene, start, {"x": 0.2, "th": 2.0}, ("x_t", "th_t"), {}, 1e-10, 1e-12,
+                "dop853", 1e-9)
+    for save in ("steps", "final"):
+        y = sh.state(np.array([0.3, 2.5]))
+        shot = sh.start(y.copy(), sh.span, save)
+        tr = solve.run(scene, sh.plan(sh.span, save), y.copy(), scene._p)
+        assert tr.status == 0 and tr.switches and shot is not None
+        assert shot.t == tr.t[-1] and np.array_equal(shot.y, tr.y[-1])
+        assert np.array_equal(shot.S, tr.sensitivities[-1])
+        assert np.array_equal(shot.trajectory.y, tr.y)
+        assert shot.trajectory.switches == tr.switches

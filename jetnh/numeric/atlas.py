@@ -45,6 +45,15 @@ A switched run is one ``Trajectory`` of the scene: its rows are in the scene's s
 layout (the other charts' rows mapped), its dependent velocities, residuals, energy and
 first integrals come from each chart's own kernels, dense output re-takes each chart's
 own steps, and ``traj.switches`` (also in the diagnostics) lists (time, from, to).
+
+A run with sensitivities (S = dy(t)/d(y0, p)) switches too, each chart with its own
+sensitivity kernels.  The flow on the constraint manifold is one flow: written in two
+charts, y_beta = Phi(t, y_alpha, p) (``change_map``) carries the motions of one onto
+those of the other, so the switch time's dependence on y0 drops out and S goes across
+as S_beta = D_y S_alpha + (0 | D_p), D the derivative of the chart change at the switch
+point (``Chart.carry``; from the graph, compiled once per pair of charts).  The rows
+of other charts, S too, are mapped home the same way.  Ensembles with sensitivities
+keep their split.
 """
 
 from __future__ import annotations

@@ -46,7 +46,8 @@ class Plan:
     (``numeric.dense``; None: no dense output), ``dense_ends`` it completed for a run
     whose last step is whole and for one stopped inside its last step (made once).  ``sens``: the kernels of the state
     augmented by its sensitivities, ``sens_tol`` their tolerances.  ``switch``: the run
-    goes on across its chart's edge (``numeric.atlas``).  The discrete methods read
+    goes on across its chart's edge (``numeric.atlas``); the loop of a run with
+    sensitivities then watches the edge as its last event (``ce``: it stops there).  The discrete methods read
     ``steps``, ``newton_tol``, ``max_newton``, ``projection``; scipy's ``first`` and
     ``max_step``."""
 

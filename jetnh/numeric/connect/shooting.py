@@ -1,7 +1,10 @@
 """Single shooting: runs of one scene from the start with the initial unknowns ``u``,
 the endpoint residual and its Jacobian from the exact sensitivities (the runs of
 ``scene.run(sensitivities=True)``'s plan, never finite differences), each read off its
-compiled loop's last row (``Shot``: a trial of the search makes no Trajectory)."""
+compiled loop's last row (``Shot``: a trial of the search makes no Trajectory).  A run
+that reaches the edge of the scene's split stops there (the plan watches it) and goes
+on across it as ``scene.run`` does (``Shot``: its sensitivities carried through each
+change of split, ``numeric.atlas``)."""
 
 from __future__ import annotations
 
@@ -51,6 +54,9 @@ class Shot:
         the end of its span or ends in a non-finite state (``stops``, a dict: its status
         counted there)."""
         lay = plan.sens.layout
+        if plan.switch and not plan.ce.python_funcs[-1](plan.t0, y, p) >= 0.0:
+            # past the edge of the scene's split at t0: the run starts in another
+            return cls._across(scene, plan, y, p, stops)
         y = np.concatenate((y, _identity(lay.n_state, lay.sensitivity_columns)))
         halt = np.zeros(1, dtype=np.int64)
         tic = time.perf_counter()
@@ -118,8 +124,9 @@ class Shooter:
     and its Jacobian from the sensitivities.  ``deadline`` (``time.monotonic()``, or
     None): no run starts after it (``OutOfTime``); ``stops``: the runs that stopped
     early, by status, and as "edge" those that stopped near the edge of the scene's
-    split (its measure below ``verdicts.EDGE``), which a run with sensitivities does not
-    leave."""
+    split (its measure below ``verdicts.EDGE``): where the runs cannot change split
+    (``atlas.applies``: Suslov's equations in the paper's convention, more than 3
+    constraints), or no other split is regular there."""
 
     deadline = None
 
@@ -192,10 +199,10 @@ class Shooter:
         dep = ", ".join(self.scene.dependent_velocities) or "none"
         return (f"{k} of the {self.runs} runs stopped at the edge of the scene's split "
                 f"(dependent velocities {dep}: the constraints cannot be solved for them "
-                "there); connect's runs carry sensitivities and keep one split, so they "
-                "cannot cross that edge: where the end lies beyond it, connect from a "
-                "System with other dependent coordinates (System(..., dependent=[...])) "
-                "or in two legs, or shoot on scene.run, which changes split")
+                "there) and could not go on in another split (the motions of this "
+                "principle depend on the split, or no other split is regular there): "
+                "where the end lies beyond it, connect from a System with other "
+                "dependent coordinates (System(..., dependent=[...])) or in two legs")
 
     def state(self, u) -> np.ndarray:
         y = self.y0.copy()
