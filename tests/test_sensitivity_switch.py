@@ -12,6 +12,9 @@ the chart's measure is cos(th)^2 / (1 + b^2): its edge (1/12, three splits) lies
 th = 1.27; the run goes on with x dependent.
 """
 
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 import sympy as sp
@@ -169,3 +172,41 @@ def test_an_edge_stopped_run_stops_in_a_few_steps(scene):
                                                                       rel=1e-6)
     tr = scene.run(sensitivities=True)
     assert tr.status == 0 and tr.switches and tr.diagnostics.steps < 100
+
+
+def test_holonomic_sensitivities_across_two_switches():
+    """The knife edge with a slider on g = z - a sin(th) = 0 (``holonomic_systems``):
+    y dependent until cos(th) is small, then x, then y again; the projected
+    sensitivities (``methods.projection``, also where the run reaches an edge) against
+    central differences of plain runs, in initial values g does not involve, along
+    g = 0 (th with z = a sin th) and in the runtime parameter k."""
+    sys.path.insert(0, str(Path(__file__).parent))
+    from holonomic_systems import KNIFE, knife_slider
+
+    a = KNIFE["a"]
+    ini = {"x": 0.1, "y": -0.2, "th": 0.3, "z": a * np.sin(0.3), "x_t": 1.0, "th_t": 2.0}
+    sc = jn.Scene(knife_slider(), "chetaev", params=KNIFE, initial=ini, t_span=(0.0, 1.5),
+                  runtime_params=["k"])
+    kw = dict(rtol=1e-12, atol=1e-14)
+    tr = sc.run(sensitivities=True, **kw)
+    assert [s["to"] for s in tr.switches] == [["x", "z"], ["y", "z"]]
+    names, y0, p, h = sc.state_names, sc.y0.copy(), sc.p.copy(), 1e-6
+
+    def end(col, d):
+        y, q = y0.copy(), p.copy()
+        if col == "k":
+            q[0] += d
+        else:
+            y[names.index(col)] += d
+            if col == "th":                 # along g = 0
+                y[names.index("z")] = a * np.sin(y[names.index("th")])
+        run = sc.run(y0=y, params=q, save="final", **kw)
+        assert len(run.switches) == 2
+        return run.y[-1]
+
+    S = tr.sensitivities[-1]
+    col = {c: S[:, tr.sensitivity_columns.index(c)] for c in tr.sensitivity_columns}
+    col["th"] = col["th"] + col["z"] * a * np.cos(ini["th"])
+    for c in ("x", "y", "x_t", "th_t", "th", "k"):
+        fd = (end(c, h) - end(c, -h)) / (2 * h)
+        assert np.abs(col[c] - fd).max() < 1e-7, c
