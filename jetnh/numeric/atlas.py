@@ -539,30 +539,42 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
                and int(out.ev_i[n_ev - 1]) == len(user))
         if hit:
             _project_stop(chart, out, p, ksens)
-        seg = build(scene, method, out, wall, kern, ce, p, t, y, singular_tol, checked, limit,
-                    seg_dense, n_events=len(user), sens=ksens)
+        if build is None:
+            seg = out
+        else:
+            seg = build(scene, method, out, wall, kern, ce, p, t, y, singular_tol, checked,
+                        limit, seg_dense, n_events=len(user), sens=ksens)
+            for i in range(len(user)):
+                counts[i] += len(seg.t_events[i])
         parts.append((chart, seg, (t, y, t1, seg_ctl, watch, ce, ksens)))
-        steps_left -= seg._info["steps"]
-        for i in range(len(user)):
-            counts[i] += len(seg.t_events[i])
+        steps_left -= int(out.stats[0])
         if not hit:
             break
         t = float(out.ev_t[n_ev - 1])
         ys = np.ascontiguousarray(out.ev_y[n_ev - 1])
         if limit is not None and time.perf_counter() - tic >= limit:
             break
-        n = len(scene.state_names)
-        target = switch(at, chart, t, ys[:n], p)
+        target = _switched(at, chart, t, ys, p, sens)
         if target is None:          # no better split here: go on without the edge
             edge, y = False, ys
             continue
         new, y = target
-        if sens:        # the sensitivities in the new chart's coordinates
-            S = chart.carry(new, t, ys[:n], ys[n:].reshape(1, n, -1), p)
-            y = np.concatenate((y, S.ravel()))
         switches.append({"t": t, "from": list(chart.split), "to": list(new.split)})
         chart = new
     return parts, switches
+
+
+def _switched(at, chart, t, y, p, sens):
+    """``switch`` of a state ``y`` of ``chart``, with ``sens`` followed by its
+    sensitivities, which go across in the new chart's coordinates (``Chart.carry``):
+    ``(new chart, its state)`` or None."""
+    n = len(chart.scene.state_names)
+    target = switch(at, chart, t, y[:n], p)
+    if target is None or not sens:
+        return target
+    new, y_new = target
+    S = chart.carry(new, t, y[:n], y[n:].reshape(1, n, -1), p)
+    return new, np.concatenate((y_new, S.ravel()))
 
 
 def _on_constraints(chart, t, y, p) -> np.ndarray:
@@ -797,17 +809,43 @@ def _rerun(chart, seg, rerun, times, p) -> np.ndarray:
 
 
 def go_on(at, method, user, t1, p, t, y, counts, ctl, steps_left, te, mode, checked,
-          singular_tol, newton, limit, h_fixed, build):
+          singular_tol, newton, limit, h_fixed, build, sens=False):
     """An ensemble's run that stopped at its chart's edge at (t, y) (the scene's own
-    chart), taken on as ``Scene.run`` does: ``(parts, switches)`` of ``follow``."""
+    chart), taken on as ``Scene.run`` does: ``(parts, switches)`` of ``follow``
+    (``sens``: ``y`` followed by its sensitivities)."""
     own = at.own
-    target = switch(at, own, t, y, p)
+    target = _switched(at, own, t, y, p, sens)
     if target is None:
         return follow(at, method, own, t, y, t1, p, user, counts, ctl, steps_left, te, mode,
                       None, checked, singular_tol, newton, limit, build, first=False,
-                      h_fixed=h_fixed, edge=False)
+                      h_fixed=h_fixed, edge=False, sens=sens)
     chart, y_new = target
     parts, switches = follow(at, method, chart, t, y_new, t1, p, user, counts, ctl,
                              steps_left, te, mode, None, checked, singular_tol, newton,
-                             limit, build, first=False, h_fixed=h_fixed)
+                             limit, build, first=False, h_fixed=h_fixed, sens=sens)
     return parts, [{"t": t, "from": list(own.split), "to": list(chart.split)}] + switches
+
+
+def end_across(home, method, out, t0, t1, p, ctl, mode, checked, singular_tol, newton,
+               limit):
+    """The end of a run with sensitivities of ``home`` whose loop, from t0 in the scene's
+    own chart, stopped at the chart's edge (``out``, the loop's tuple): taken on chart by
+    chart as ``run`` takes it (the same pieces, bit for bit), each loop called without
+    making a Trajectory.  Returns ``(status, t, y, S)`` at its last state, y and S in
+    ``home``'s states."""
+    at = atlas(home)
+    own = at.own
+    first = loops.result(out)
+    _project_stop(own, first, p, own.sensitivity_kernels)
+    k = int(first.n_ev) - 1
+    parts, _ = go_on(at, method, (), t1, p, float(first.ev_t[k]), first.ev_y[k].copy(),
+                     loops.NO_EVENTS, ctl, ctl.max_steps - int(first.stats[0]),
+                     np.zeros(0), mode, checked, singular_tol, newton, limit,
+                     (t1 - t0) / ctl.n_steps if ctl.n_steps > 0 else 0.0, None, True)
+    chart, last, _ = parts[-1]
+    t, n = float(last.t), len(chart.scene.state_names)
+    y, S = last.y[:n].reshape(1, n), last.y[n:].reshape(1, n, -1)
+    if chart is not own:
+        S = chart.carry(own, t, y, S, p)
+        y = to_home(own, chart, np.array([t]), y, p)
+    return int(last.status), t, y[0], S[0]

@@ -15,7 +15,7 @@ import numpy as np
 from scipy.linalg.lapack import dgesdd as _gesdd
 
 from ...errors import JetnhError
-from .. import arguments, interrupt, solve
+from .. import arguments, atlas, interrupt, solve
 from ..methods._common import EVENT, FINISHED
 from ..options import options
 
@@ -67,7 +67,7 @@ class Shot:
         if int(out[0]) == EVENT and plan.switch:
             # at the edge of the scene's split (connect's runs watch no other event): the
             # run taken across it as Scene.run does
-            return cls._across(scene, plan, y[:lay.n_state], p, stops)
+            return cls._across(scene, plan, y[:lay.n_state], p, stops, out)
         if int(out[0]) != FINISHED or n_out < 1:
             if stops is not None:
                 stops[int(out[0])] = stops.get(int(out[0]), 0) + 1
@@ -85,25 +85,39 @@ class Shot:
         return self
 
     @classmethod
-    def _across(cls, scene, plan, y, p, stops):
-        """``of`` for a run that reached the edge of the scene's split: the whole run
-        again through the atlas (``solve.run``: it changes split, its sensitivities
-        carried across each switch and given in the scene's states), or None."""
-        tr = solve.run(scene, plan, y, p)
-        if tr.status != FINISHED or not len(tr.t) or not arguments.all_finite(
-                tr.y[-1]) or not arguments.all_finite(tr.sensitivities[-1]):
+    def _across(cls, scene, plan, y, p, stops, out=None):
+        """``of`` for a run that reached the edge of the scene's split (its loop's
+        tuple ``out``; None: the start is past it): taken on across it as
+        ``solve.run`` takes it (``atlas.end_across``; its sensitivities carried across
+        each switch, its end in the scene's states), or None.  Its Trajectory is
+        ``solve.run``'s, made when asked for."""
+        if out is None:
+            tr = solve.run(scene, plan, y.copy(), p)
+            status = tr.status
+            t, y_end = float(tr.t[-1]), tr.y[-1]
+            S = tr.sensitivities[-1] if status == FINISHED else None
+        else:
+            tr = None
+            status, t, y_end, S = atlas.end_across(
+                scene, plan.method.name, out, plan.t0, plan.t1, p, plan.ctl, plan.mode,
+                plan.checked, plan.singular_tol, plan.newton, plan.limit)
+        if status != FINISHED or not arguments.all_finite(y_end) or not \
+                arguments.all_finite(S):
             if stops is not None:
-                stops[tr.status] = stops.get(tr.status, 0) + 1
-                stops["y"] = (float(tr.t[-1]), np.array(tr.y[-1])) if len(tr.t) else None
+                stops[status] = stops.get(status, 0) + 1
+                stops["y"] = (t, np.array(y_end))
             return None
         self = object.__new__(cls)
-        self.t, self.y, self.S = float(tr.t[-1]), tr.y[-1], tr.sensitivities[-1]
-        self._made, self._trajectory = None, tr
+        self.t, self.y, self.S = t, y_end, S
+        self._made, self._trajectory = (scene, plan, y.copy(), p), tr
         return self
 
     @property
     def trajectory(self):
         """The run's ``Trajectory`` (made on first access, then kept)."""
+        if self._trajectory is None and len(self._made) == 4:     # across an edge
+            scene, plan, y, p = self._made
+            self._trajectory = solve.run(scene, plan, y.copy(), p)
         if self._trajectory is None:
             scene, plan, out, wall, y, p = self._made
             self._trajectory = solve.trajectory(
