@@ -49,6 +49,7 @@ own steps, and ``traj.switches`` (also in the diagnostics) lists (time, from, to
 
 from __future__ import annotations
 
+import math
 import time
 from itertools import combinations
 
@@ -60,7 +61,7 @@ from ..errors import JetnhError
 from ..mechanics import principles
 from .methods import projection
 from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, SINGULAR, STOPPED
-from . import loops
+from . import arguments, loops
 from .events import Event, as_events
 from .kernels.calls import Kernel
 from .methods.loop import Watch
@@ -439,8 +440,6 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
         n_ev = int(out.n_ev)
         hit = (edge and int(out.status) == EVENT and n_ev > 0
                and int(out.ev_i[n_ev - 1]) == len(user))
-        if hit:
-            _project_stop(chart, out, p)
         seg = build(scene, method, out, wall, kern, ce, p, t, y, singular_tol, checked, limit,
                     seg_dense, n_events=len(user))
         parts.append((chart, seg, (t, y, t1, seg_ctl, watch, ce)))
@@ -453,7 +452,7 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
         ys = np.ascontiguousarray(out.ev_y[n_ev - 1])
         if limit is not None and time.perf_counter() - tic >= limit:
             break
-        target = switch(at, chart, t, ys, p)
+        target = None if _at_end(t, t1) else switch(at, chart, t, ys, p)
         if target is None:          # no better split here: go on without the edge
             edge, y = False, ys
             continue
@@ -463,6 +462,14 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
     return parts, switches
 
 
+def _at_end(t, t1) -> bool:
+    """Whether an edge at ``t`` lies within the time resolution of a span of the run's
+    end ``t1`` (``arguments.MIN_TIME_RESOLUTION`` units in the last place, or at
+    ``t1``): no chart is entered there (its scene could not span the rest); the run
+    ends in the chart it is in, whose split is still regular at its edge."""
+    return abs(t1 - t) < arguments.MIN_TIME_RESOLUTION * math.ulp(max(abs(t), abs(t1)))
+
+
 def _on_constraints(chart, t, y, p) -> np.ndarray:
     """``y`` (a state of ``chart``) with its coordinates moved onto the holonomic
     constraints g = 0, as the loops move every accepted step (``methods.projection``)."""
@@ -470,19 +477,6 @@ def _on_constraints(chart, t, y, p) -> np.ndarray:
     if not system.holonomic:
         return np.ascontiguousarray(y, dtype=float)
     return projection.onto(chart.kernels.hol, len(system.holonomic), system.J.n, t, y, p)
-
-
-def _project_stop(chart, out, p):
-    """Project the state where a run reached its chart's edge, in the run's ``Result``
-    (the event record, the last state, and the last output row where it is that state):
-    the edge is located on the step's dense output, off g = 0 by its error."""
-    k = int(out.n_ev) - 1
-    t = float(out.ev_t[k])
-    y = _on_constraints(chart, t, out.ev_y[k], p)
-    out.ev_y[k] = y
-    out.y[:] = y
-    if int(out.n_out) > 0 and out.ts[int(out.n_out) - 1] == t:
-        out.ys[int(out.n_out) - 1] = y
 
 
 def switch(at, chart, t, y, p):
@@ -650,7 +644,7 @@ def go_on(at, method, user, t1, p, t, y, counts, ctl, steps_left, te, mode, chec
     """An ensemble's run that stopped at its chart's edge at (t, y) (the scene's own
     chart), taken on as ``Scene.run`` does: ``(parts, switches)`` of ``follow``."""
     own = at.own
-    target = switch(at, own, t, y, p)
+    target = None if _at_end(t, t1) else switch(at, own, t, y, p)
     if target is None:
         return follow(at, method, own, t, y, t1, p, user, counts, ctl, steps_left, te, mode,
                       None, checked, singular_tol, newton, limit, build, first=False,
