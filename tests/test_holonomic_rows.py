@@ -86,19 +86,23 @@ def test_ensemble_stopped_inside_a_step_ends_on_g(pendulum):
 
 
 # ------------------------------------------------------------------ events
-def test_event_states_lie_on_g_and_are_the_rows_at_their_times(pendulum):
+@pytest.mark.parametrize("method", ["dop853", "rk4"])
+def test_event_states_lie_on_g_and_are_the_rows_at_their_times(pendulum, method):
+    """(rk4 locates events on its Hermite interpolant: 8.0e-10 off g = 0 before.)"""
+    kw = {"n_steps": 20000} if method == "rk4" else {}
     x = pendulum.system.J.q[0]
-    tr = pendulum.run(events=[x])
+    tr = pendulum.run(events=[x], method=method, **kw)
     t_ev, y_ev = tr.t_events[0], tr.y_events[0]
     assert len(t_ev) > 50
     assert residual(y_ev[:, 0], y_ev[:, 1]).max() < 1e-14           # was 3.6e-10
     # on g's gradient (0, 2y) at x = 0 the projection hardly moves x: still a root
     assert np.abs(y_ev[:, 0]).max() < 1e-13
-    # the same interpolant at the same times, projected the same way
-    rows = pendulum.run(t_eval=t_ev)
-    assert np.array_equal(rows.y, y_ev)
+    if method == "dop853":
+        # the same interpolant at the same times, projected the same way
+        rows = pendulum.run(t_eval=t_ev)
+        assert np.array_equal(rows.y, y_ev)
     # a terminal one: the run's last row and last state
-    stop = pendulum.run(events=[Event(x, terminal=5)])
+    stop = pendulum.run(events=[Event(x, terminal=5)], method=method, **kw)
     assert stop.status == 5 and np.array_equal(stop.t[-1], t_ev[4])
     assert np.array_equal(stop.y[-1], y_ev[4]) and np.array_equal(stop.y_events[0][-1],
                                                                   y_ev[4])

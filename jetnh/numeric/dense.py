@@ -176,11 +176,11 @@ def _hermite_steps(traj, k, tau) -> np.ndarray:
     F1 = h * f0 - d
     F2 = d - h * f1 - F1
     out = y[k] + th * (d + (1.0 - th) * (F1 + th * F2))
-    start, end = tau == t[k], tau == t[k + 1]
-    out[start], out[end] = y[k[start]], y[k[end] + 1]      # the steps' own rows
     if traj._kernels.layout.holonomic:
-        # inside a step: off g = 0 by the interpolant's error; moved onto it as the
-        # steps are
+        # inside a step: off g = 0 by the interpolant's error, moved onto it as the
+        # steps are; at a step's ends the step's own (projected) row
+        start, end = tau == t[k], tau == t[k + 1]
+        out[start], out[end] = y[k[start]], y[k[end] + 1]
         inner = np.flatnonzero(~start & ~end)
         rows = out[inner]
         onto_constraints(kern, tau[inner], rows, p, n // traj._kernels.layout.n_state - 1)
