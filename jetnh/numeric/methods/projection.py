@@ -138,8 +138,12 @@ def onto(hol, m, nq, t, y, p) -> np.ndarray:
     """``rows`` of one state from Python (``hol`` the kernel's Python-callable form,
     ``kernels.hol``): a copy of ``y`` with its coordinates y[:nq] on g(t, q) = 0 (``y``
     itself where G G^T is singular or a value is not finite)."""
+    p = np.ascontiguousarray(p, dtype=float)
+    room = np.empty(m * (1 + nq + p.shape[0]))     # (a kernel with dg/dp writes them too)
+
     def hol_rows(ts, ys, p, out):
-        hol(ts[0], ys[0], p, out[0])
+        hol(ts[0], ys[0], p, room)
+        out[0] = room[:out.shape[1]]
 
     ys = np.array(y, dtype=float).reshape(1, -1)
     rows(hol_rows, m, nq, np.array([float(t)]), ys, p)
