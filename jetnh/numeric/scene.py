@@ -39,9 +39,7 @@ satisfy them (else ``ConstraintError`` with the residual), or ``complete=True`` 
 them by Newton's method for the split's dependent coordinates (those making dg/dq over
 them regular; ``complete=[z, ...]`` names others), recorded in ``scene.completed``.  The
 compiled explicit and Radau runs project every accepted step back onto g = 0
-(``methods.projection``), and every value between steps (``t_eval`` rows, event states,
-``Trajectory.at``, ensembles' rows); ``traj.diagnostics.holonomic_residual_max`` reports
-``max |g|``.
+(``methods.projection``); ``traj.diagnostics.holonomic_residual_max`` reports ``max |g|``.
 """
 
 from __future__ import annotations
