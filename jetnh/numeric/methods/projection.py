@@ -223,24 +223,17 @@ def _solve(A, b):
 
 def _kernel_rows(hol_rows, p):
     """``at(ts, ys, which, out)``: ``hol_rows`` at the rows ``ys`` (rows ``which`` of the
-    caller's), with the parameters ``p`` or, where ``p`` has a row per row, with each
-    row's own (one call per distinct row of parameters)."""
-    if p.ndim == 1 or p.shape[1] == 0:
-        one = p if p.ndim == 1 else np.zeros(0)
-        return lambda ts, ys, which, out: hol_rows(np.ascontiguousarray(ts), ys, one, out)
-    distinct, label = np.unique(p, axis=0, return_inverse=True)
-    label = label.ravel()
-    if distinct.shape[0] == 1:
-        one = np.ascontiguousarray(distinct[0])
-        return lambda ts, ys, which, out: hol_rows(np.ascontiguousarray(ts), ys, one, out)
-
-    def at(ts, ys, which, out):
-        mine = label[which]
-        order = np.argsort(mine, kind="stable")
-        cut = np.flatnonzero(np.diff(mine[order])) + 1
-        for part in np.split(order, cut):
-            sub = np.empty((part.size, out.shape[1]))
-            hol_rows(np.ascontiguousarray(ts[part]), np.ascontiguousarray(ys[part]),
-                     np.ascontiguousarray(distinct[mine[part[0]]]), sub)
-            out[part] = sub
-    return at
+    caller's, in increasing order), with the parameters ``p`` or, where ``p`` has a row
+    per row, with each row's own: one call per run of equal rows (an ensemble's rows come
+    run by run)."""
+    if p.ndim == 2:
+        run = np.concatenate([[0], np.cumsum(np.any(p[1:] != p[:-1], axis=1))])
+        if run[-1] > 0:
+            def at(ts, ys, which, out):
+                cut = np.flatnonzero(np.diff(run[which])) + 1
+                for a, b in zip([0, *cut], [*cut, which.size]):
+                    hol_rows(np.ascontiguousarray(ts[a:b]), ys[a:b], p[which[a]],
+                             out[a:b])
+            return at
+        p = p[0] if p.shape[0] else np.zeros(p.shape[1])
+    return lambda ts, ys, which, out: hol_rows(np.ascontiguousarray(ts), ys, p, out)
