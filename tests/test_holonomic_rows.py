@@ -20,6 +20,8 @@ import math
 import numpy as np
 import pytest
 import sympy as sp
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import jetnh as jn
 from jetnh.models import knife_edge
@@ -300,3 +302,42 @@ def test_fourbar_ensemble_and_event_rows_close_the_loop(fourbar):
     tr = fourbar.run(events=[sp.sin(q1)])
     assert len(tr.t_events[0]) > 10
     assert loop_closure(tr.y_events[0], names).max() < 1e-13
+
+
+@settings(deadline=None)
+@given(m=st.integers(1, 2), extra=st.integers(1, 2), n_rows=st.integers(1, 6),
+       seed=st.integers(0, 2**32 - 1))
+def test_rows_and_their_sensitivities_against_the_linear_closed_form(m, extra, n_rows,
+                                                                     seed):
+    """g = A q - B p - c t (linear): the projection is the orthogonal one,
+    q - A^+ g (A^+ = A^T (A A^T)^{-1}, numpy's pinv), reached in one step; the
+    sensitivities' coordinate rows become S_q - A^+ (A S_q + dg/dp), dg/dp = -B in the
+    parameters' columns, so that A S_q = B there and 0 elsewhere."""
+    rng = np.random.default_rng(seed)
+    nq, n_p = m + extra, 2
+    n = nq + 1                                        # one velocity besides
+    n_sens = n + n_p
+    A, B, c = rng.normal(size=(m, nq)), rng.normal(size=(m, n_p)), rng.normal(size=m)
+
+    def hol_rows(ts, ys, p, out):
+        for i in range(ts.shape[0]):
+            out[i, :m] = A @ ys[i, :nq] - B @ p - c * ts[i]
+            out[i, m:m + m * nq] = A.ravel()
+            out[i, m + m * nq:] = -B.ravel()
+
+    ts = rng.uniform(0, 1, n_rows)
+    p = rng.normal(size=n_p)
+    ys = rng.normal(size=(n_rows, n * (1 + n_sens)))
+    got = ys.copy()
+    projection.rows(hol_rows, m, nq, ts, got, p, n_sens)
+    pinv = np.linalg.pinv(A)
+    g = ys[:, :nq] @ A.T - B @ p - ts[:, None] * c
+    assert np.allclose(got[:, :nq], ys[:, :nq] - g @ pinv.T, rtol=0, atol=1e-12)
+    assert np.array_equal(got[:, nq:n], ys[:, nq:n])             # velocities as they were
+    S, T = ys[:, n:].reshape(-1, n, n_sens), got[:, n:].reshape(-1, n, n_sens)
+    dgdp = np.zeros((m, n_sens))
+    dgdp[:, n_sens - n_p:] = -B
+    want = S[:, :nq] - pinv @ (A @ S[:, :nq] + dgdp)
+    assert np.allclose(T[:, :nq], want, rtol=0, atol=1e-12)
+    assert np.allclose(A @ T[:, :nq] + dgdp, 0.0, atol=1e-12)
+    assert np.array_equal(T[:, nq:], S[:, nq:])
