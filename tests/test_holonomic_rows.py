@@ -29,7 +29,7 @@ from jetnh.modelfile import loads
 from jetnh.numeric import Event
 from jetnh.numeric.methods import projection
 
-from holonomic_systems import knife_slider
+from holonomic_systems import FOURBAR, kane_fourbar, knife_slider
 from model_texts import PENDULUM_XY_STARTED
 
 T1 = 100.0
@@ -252,33 +252,8 @@ def test_a_chart_edge_within_the_resolution_of_t1_ends_the_run_in_its_chart(ulps
 def fourbar():
     """A Kane four-bar (links 1, 3, 2 from the origin closing on (3, 0)): two
     loop-closure constraints, one degree of freedom."""
-    me = pytest.importorskip("sympy.physics.mechanics")
-    q1, q2, q3 = me.dynamicsymbols("q1 q2 q3")
-    u1, u2, u3 = me.dynamicsymbols("u1 u2 u3")
-    l1, l2, l3, l4, m, g = sp.symbols("l1 l2 l3 l4 m g", positive=True)
-    N = me.ReferenceFrame("N")
-    frames = [N.orientnew(n, "Axis", [q, N.z]) for n, q in zip("ABC", (q1, q2, q3))]
-    for F, u in zip(frames, (u1, u2, u3)):
-        F.set_ang_vel(N, u * N.z)
-    P1 = me.Point("P1")
-    P1.set_vel(N, 0)
-    points = [P1]
-    for F, length, name in zip(frames, (l1, l2, l3), ("P2", "P3", "P4")):
-        P = points[-1].locatenew(name, length * F.x)
-        P.v2pt_theory(points[-1], N, F)
-        points.append(P)
-    loop = points[3].pos_from(P1) - l4 * N.x
-    conf = [loop.dot(N.x), loop.dot(N.y)]
-    t = me.dynamicsymbols._t
-    vel = [sp.diff(e, t).subs({q1.diff(): u1, q2.diff(): u2, q3.diff(): u3}) for e in conf]
-    km = me.KanesMethod(N, q_ind=[q1], u_ind=[u1],
-                        kd_eqs=[q1.diff() - u1, q2.diff() - u2, q3.diff() - u3],
-                        q_dependent=[q2, q3], configuration_constraints=conf,
-                        u_dependent=[u2, u3], velocity_constraints=vel)
-    km.kanes_equations([me.Particle("pa", points[1], m), me.Particle("pb", points[2], m)],
-                       [(points[1], -m * g * N.y), (points[2], -m * g * N.y)])
-    P = {"l1": 1.0, "l2": 3.0, "l3": 2.0, "l4": 3.0, "m": 1.0, "g": 9.81}
-    return jn.Scene(jn.from_mechanics(km), "chetaev", params=P,
+    pytest.importorskip("sympy.physics.mechanics")
+    return jn.Scene(kane_fourbar(), "chetaev", params=FOURBAR,
                     initial={"q1": 1.2, "q2": 0.3, "q3": -1.5, "q1_t": 2.0},
                     complete=True, t_span=(0.0, 30.0))
 
