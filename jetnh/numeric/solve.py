@@ -309,8 +309,8 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
         out = interrupt.call(plan.entry, halt, plan.limit,
                              (*plan.prefix, plan.t0, plan.t1, y, p, *plan.suffix, halt))
         wall = _clock() - tic
-        if plan.mode == AT_T_EVAL:
-            loops.on_constraints(plan.kern, plan.ctl, plan.mode, None, out, p)
+        if plan.ctl.n_hol:          # rows of the dense output onto g = 0
+            loops.on_constraints(plan.kern, plan.ctl, plan.mode, None, out, p, plan.t0)
         dense = plan.dense_ends
         if dense is not None:    # stopped inside a step or not
             dense = dense[out[0] in (EVENT, SINGULAR)]
@@ -345,7 +345,7 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
     out = interrupt.call(plan.entry, halt, plan.limit,
                          (*plan.prefix, t0, plan.t1, y, p, *plan.suffix, halt))
     wall = _clock() - tic
-    loops.on_constraints(plan.kern, plan.ctl, plan.mode, plan.sens, out, p)
+    loops.on_constraints(plan.kern, plan.ctl, plan.mode, plan.sens, out, p, t0)
     if dense is not None:    # stopped inside a step or not
         dense = plan.dense_ends[out[0] in (EVENT, SINGULAR)]
         if plan.sens is not None:           # the run's own (``trajectory`` adds its rows)
