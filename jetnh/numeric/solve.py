@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import JetnhError
+from ..errors import ArgumentError, JetnhError
 from . import arguments, atlas, diagnosis, discrete, interrupt, loops, methods, scipy_backend
 from .methods import STATUS_TEXT, Solver
 from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, FINISHED, NONFINITE,
@@ -140,6 +140,10 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
     sens = None
     common = dict(method=m, t0=t0, t1=t1, save=save, events=events, checked=checked,
                   singular_tol=singular_tol, limit=limit)
+    for flag, value in (("sensitivities", sensitivities),
+                        ("sensitivity_error", sensitivity_error)):
+        if not isinstance(value, (bool, np.bool_)):
+            raise ArgumentError(f"{flag} must be True or False, not {value!r}")
     if sensitivities:
         if m.solver is Solver.DISCRETE:
             raise JetnhError(f"sensitivities=True is an option of the continuous methods "
