@@ -36,6 +36,12 @@ def _identity(n, m):
 _IDENTITY: dict = {}
 
 
+def _finite(a) -> bool:
+    """Whether every entry of the float array ``a`` is finite (without
+    ``arguments.all_finite``'s floating-point state switch: no sum that may overflow)."""
+    return bool(np.isfinite(a).all())
+
+
 class Shot:
     """One shooting run as its compiled loop left it: the end time ``t``, the final
     state ``y`` and its sensitivities ``S`` (n x columns), read off the loop's last row;
@@ -51,26 +57,27 @@ class Shot:
         the end of its span or ends in a non-finite state (``stops``, a dict: its status
         counted there)."""
         lay = plan.sens.layout
-        y = np.concatenate((y, _identity(lay.n_state, lay.sensitivity_columns)))
+        n, m = lay.n_state, lay.sensitivity_columns
+        y = np.concatenate((y, _identity(n, m)))
         halt = np.zeros(1, dtype=np.int64)
         tic = time.perf_counter()
         out = interrupt.call(plan.entry, halt, plan.limit,
                              (*plan.prefix, plan.t0, plan.t1, y, p, *plan.suffix, halt))
         wall = time.perf_counter() - tic
         n_out = int(out[3])
-        if int(out[0]) != FINISHED or n_out < 1:
+        if out[0] != FINISHED or n_out < 1:
             if stops is not None:
                 stops[int(out[0])] = stops.get(int(out[0]), 0) + 1
                 stops["y"] = (float(out[1][n_out - 1]),
-                              np.array(out[2][n_out - 1][:lay.n_state])) if n_out else None
+                              np.array(out[2][n_out - 1][:n])) if n_out else None
             return None
         last = out[2][n_out - 1]
-        if not arguments.all_finite(last):
+        # the loop has checked the state (``loop.finite_status``), not its sensitivities
+        if not _finite(last[n:]):
             return None
         self = object.__new__(cls)
-        n = lay.n_state
         self.t, self.y = float(out[1][n_out - 1]), last[:n]
-        self.S = last[n:].reshape(n, lay.sensitivity_columns)
+        self.S = last[n:].reshape(n, m)
         self._made, self._trajectory = (scene, plan, out, wall, y, p), None
         return self
 
@@ -145,7 +152,7 @@ class Shooter:
         if self.deadline is not None and time.monotonic() > self.deadline:
             raise OutOfTime
         self.runs += 1
-        if not arguments.all_finite(y):
+        if not _finite(y):
             return None
         if self.holonomic:
             try:
