@@ -14,6 +14,7 @@ from numba import types
 from ...errors import ConnectError
 from ..kernels import loop_cache
 from ..methods._common import entry_point
+from . import small
 
 #: step() status: a step was made, F already met the tolerance, J has rank 0
 STEP, CONVERGED, NO_RANK = 0, 1, 2
@@ -48,7 +49,9 @@ def _step(F, Jm, d, u, limit, mu, rcond, first, du):
     for i in range(k):
         for j in range(m):
             A[i, j] = Jm[i, j] / d[j]
-    U, s, Vt = np.linalg.svd(A, full_matrices=False)
+    n_s = min(k, m)
+    U, s, V = np.empty((k, n_s)), np.empty(n_s), np.empty((m, n_s))
+    small.svd(A, U, s, V)
     r = 0
     if s.size and s[0] > 0:
         for a in range(s.size):
@@ -66,7 +69,7 @@ def _step(F, Jm, d, u, limit, mu, rcond, first, du):
             c += U[i, a] * F[i]
         c *= s[a] / (s[a] * s[a] + mu)
         for j in range(m):
-            du[j] += c * Vt[a, j]
+            du[j] += c * V[j, a]
     size, uu = 0.0, 0.0
     for j in range(m):
         du[j] = -du[j] / d[j]
@@ -100,8 +103,9 @@ _SIGNATURE = types.Tuple((types.int64, types.float64, types.float64, types.float
 def step():
     """The compiled ``_step`` (compiled, or loaded from the signed store, on first
     use)."""
-    return loop_cache.signed_njit(_step, _SIGNATURE, loop_cache.file_stamp(__file__),
-                                  error_model="numpy", nogil=True)
+    stamp = loop_cache.file_stamp(__file__) + loop_cache.file_stamp(small.__file__)
+    return loop_cache.signed_njit(_step, _SIGNATURE, stamp, error_model="numpy",
+                                  nogil=True)
 
 
 @functools.cache

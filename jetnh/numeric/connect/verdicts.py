@@ -4,6 +4,8 @@ extremal (``gramian_ratio``) and where its Jacobi fields lose rank
 
 from __future__ import annotations
 
+import functools
+import math
 import weakref
 from functools import cached_property
 
@@ -11,6 +13,7 @@ import numpy as np
 
 from ...errors import ConnectError
 from ..atlas import split_measure_of
+from . import small
 
 #: smallest / largest eigenvalue of the controllability Gramian below which the path is
 #: abnormal
@@ -305,22 +308,87 @@ def jacobi_measure(X, nq, scale=None, frames=None):
     Returns ``(d, s)``: the determinant (square case, else None; the sign of det dq/du)
     and the smallest singular value, each the larger in magnitude of the two scalings.
     Where dq/du loses rank both are zero (with ``scale`` given)."""
-    Q, R = np.linalg.qr(X)
-    sign = np.sign(np.prod(np.diagonal(R, axis1=-2, axis2=-1), axis=-1))
-    Qq = Q[..., :nq, :]
-    M = X[..., :nq, :]
-    if frames is not None:
-        Tt = np.swapaxes(frames, -1, -2)
-        Qq, M = Tt @ Qq, Tt @ M
-        nq = frames.shape[-1]
-    norms = np.linalg.norm(M, axis=-2, keepdims=True) if scale is None else scale
-    M = M / np.where(norms > 0, norms, 1.0)
-    s = np.maximum(np.linalg.svd(Qq, compute_uv=False)[..., -1],
-                   np.linalg.svd(M, compute_uv=False)[..., -1])
-    if X.shape[-1] != nq:
-        return None, s
-    d_sub, d_col = np.linalg.det(Qq) * sign, np.linalg.det(M)
-    return np.where(np.abs(d_sub) >= np.abs(d_col), d_sub, d_col), s
+    X = np.asarray(X, dtype=float)
+    batch, (ns, m) = X.shape[:-2], X.shape[-2:]
+    rows = int(np.prod(batch, dtype=np.int64))
+    Xr = np.ascontiguousarray(X.reshape(rows, ns, m))
+    if frames is None:
+        F, framed = _NO_FRAMES, False
+    else:
+        F = np.array(np.broadcast_to(frames, batch + frames.shape[-2:]).reshape(
+            rows, *frames.shape[-2:]), dtype=float)
+        framed = True
+    dim = F.shape[2] if framed else nq
+    by_norms = scale is None
+    sc = np.ones(m)
+    if not by_norms:
+        sc[:] = np.asarray(scale, dtype=float).reshape(-1)
+    d, s = np.empty(rows), np.empty(rows)
+    _measures()(Xr, int(nq), sc, by_norms, F, framed, d, s)
+    if m != dim:
+        return None, s.reshape(batch)[()]
+    return d.reshape(batch)[()], s.reshape(batch)[()]
+
+
+def _jacobi_rows(X, nq, scale, by_norms, frames, framed, d, s):
+    """``jacobi_measure`` of each of the fields ``X[r]`` (ns x m), into ``d[r]`` (the
+    determinant where the measured block is square) and ``s[r]`` (compiled:
+    ``small``'s QR, SVD and determinant on each row's few columns)."""
+    rows, ns, m = X.shape
+    dim = frames.shape[2] if framed else nq
+    Q, R = np.empty((ns, m)), np.empty((m, m))
+    Qq, M = np.empty((dim, m)), np.empty((dim, m))
+    W = np.empty((max(dim, m), min(dim, m)))
+    for r in range(rows):
+        Xr = X[r]
+        small.qr(Xr, Q, R)
+        sign = 1.0
+        for j in range(m):
+            sign = sign * (1.0 if R[j, j] > 0 else (-1.0 if R[j, j] < 0 else 0.0))
+        for a in range(dim):
+            for j in range(m):
+                if framed:
+                    qa, xa = 0.0, 0.0
+                    for i in range(nq):
+                        qa += frames[r, i, a] * Q[i, j]
+                        xa += frames[r, i, a] * Xr[i, j]
+                    Qq[a, j], M[a, j] = qa, xa
+                else:
+                    Qq[a, j], M[a, j] = Q[a, j], Xr[a, j]
+        for j in range(m):
+            c = scale[j]
+            if by_norms:
+                c = 0.0
+                for a in range(dim):
+                    c = math.hypot(c, M[a, j])
+            if c > 0:
+                for a in range(dim):
+                    M[a, j] /= c
+        s[r] = max(small.smallest_singular_value(Qq, W),
+                   small.smallest_singular_value(M, W))
+        if m == dim:
+            d_sub, d_col = small.det(Qq) * sign, small.det(M)
+            d[r] = d_sub if abs(d_sub) >= abs(d_col) else d_col
+        else:
+            d[r] = 0.0
+
+
+_NO_FRAMES = np.zeros((1, 1, 1))
+
+
+@functools.cache
+def _measures():
+    """The compiled ``_jacobi_rows`` (compiled, or loaded from the signed store, on first
+    use)."""
+    from numba import types
+
+    from ..kernels import loop_cache
+
+    a3, a1 = types.Array(types.float64, 3, "C"), types.Array(types.float64, 1, "C")
+    stamp = loop_cache.file_stamp(__file__) + loop_cache.file_stamp(small.__file__)
+    return loop_cache.signed_njit(
+        _jacobi_rows, types.void(a3, types.int64, a1, types.boolean, a3, types.boolean,
+                                 a1, a1), stamp, error_model="numpy", nogil=True)
 
 
 def conjugate_times(tr, cols, samples, rcond=1e-9) -> tuple:
