@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import functools
 import math
-import weakref
 from functools import cached_property
 
 import numpy as np
@@ -79,51 +78,52 @@ class _Samples:
 
 def action(tr, samples) -> float:
     """``int L dt`` along the trajectory: 5-point Gauss-Legendre on every step of its
-    dense output (``_Samples``), L evaluated on the graph (dependent velocities by the
-    aux kernel)."""
+    dense output (``_Samples``), L by the verdicts kernel (``_entries``)."""
     times = samples.gauss
-    L = _lagrangian(tr, times.ravel(), samples.gauss_y).reshape(times.shape)
-    return float(np.sum(L * _GAUSS_W[None, :] * samples.half[:, None]))
+    L = _entries(tr.scene, times.ravel(), samples.gauss_y, tr._p)[:, 0]
+    return float(np.sum(L.reshape(times.shape) * _GAUSS_W[None, :]
+                        * samples.half[:, None]))
 
 
-def _point(tr, times, ys) -> dict:
-    """Symbol -> values of t, q, every velocity and the parameters at the rows ``ys``."""
-    return _state_point(tr.scene, times, ys, tr._kernels, tr._p)
+def _kernel(scene):
+    """``(rows, blocks)``: the verdicts kernel of ``scene`` at many rows
+    (``rows(ts, ys, p, out)``, compiled with its kernels: ``codegen.verdicts``) and the
+    slices of its output (``verdict_blocks``); made once per scene."""
+    found = scene._memo.get("verdicts")
+    if found is None:
+        from .. import kernels
+        from ..codegen.verdicts import generate_verdicts, verdict_blocks
+        from ..kernels import calls
+
+        spec = scene.spec.but(variant="verdicts")
+        layout = scene.kernels.layout
+        ck = kernels.load(spec.key, lambda: generate_verdicts(spec, layout),
+                          persistent=scene.cache)
+        blocks = verdict_blocks(scene.system)
+        n_out = max(b.stop for b in blocks.values())
+        rows = calls.Rows(ck.kernels.verdicts_c, (layout.n_state,
+                                                  len(layout.runtime_params), n_out))
+        found = scene._memo["verdicts"] = (rows, blocks)
+    return found
 
 
-def _state_point(scene, times, ys, kern=None, p=None) -> dict:
-    """``_point`` of ``scene``'s rows ``ys`` (its own kernels and run-time parameters
-    unless given)."""
-    kern = scene.kernels if kern is None else kern
-    p = scene._p if p is None else p
-    system = scene.system
-    J = system.J
-    aux = np.empty((ys.shape[0], kern.layout.n_aux))
-    kern.aux_rows(np.ascontiguousarray(times), np.ascontiguousarray(ys),
-                  np.ascontiguousarray(p, dtype=float), aux)
-    col = {n: i for i, n in enumerate(scene.state_names)}
-    point = {J.t: times}
-    for s in J.q:
-        point[s] = ys[:, col[s.name]]
-    for v in system.independent_velocities:
-        point[v] = ys[:, col[v.name]]
-    for a, v in enumerate(system.dependent_velocities):
-        point[v] = aux[:, a]
-    for s in system.parameters:
-        point[s] = scene.params[s.name]
-    return point
+def _entries(scene, times, ys, p=None) -> np.ndarray:
+    """The verdicts kernel of ``scene`` at the rows ``ys`` (states) at ``times``:
+    ``[rows, entries]`` (``codegen.verdicts.verdict_blocks``); the scene's run-time
+    parameters unless ``p`` is given."""
+    rows, blocks = _kernel(scene)
+    ys = np.ascontiguousarray(ys, dtype=float)
+    out = np.empty((ys.shape[0], rows.sizes[2]))
+    rows(np.ascontiguousarray(times, dtype=float), ys,
+         np.ascontiguousarray(scene._p if p is None else p, dtype=float), out)
+    return out
 
 
-def _lagrangian(tr, times, ys) -> np.ndarray:
-    from ...algebra import dag
-
-    (L,) = dag.evaluate_numpy([tr.scene.system.L], _point(tr, times, ys))
-    return np.broadcast_to(L, times.shape)
+def _block(scene, values, name, shape) -> np.ndarray:
+    """The block ``name`` of the verdicts kernel's ``values``, as ``[rows, *shape]``."""
+    return values[:, _kernel(scene)[1][name]].reshape(-1, *shape)
 
 
-#: (what, id(system)) -> (weak reference to the system, its derivatives): by identity
-#: (``_kept``), forgotten with the system
-_KEPT: dict = {}
 #: the measure det(A_alpha)^2 / det(A A^T) of the scene's split (``atlas``) below which,
 #: somewhere on the path, ``gramian_ratio`` linearizes without a split
 EDGE = 1e-2
@@ -132,48 +132,20 @@ EDGE = 1e-2
 def split_measure(scene, t, y) -> float:
     """The measure of ``scene``'s split at the state ``y`` at time ``t`` (1 without
     constraints)."""
-    from ...algebra import dag
-
     system = scene.system
     if not system.k:
         return 1.0
-    n, k = system.J.n, system.k
-    _, dep_rows, _, fderivs = _derivatives(system)
-    point = _state_point(scene, np.array([float(t)]), np.asarray(y, dtype=float)[None, :])
-    vals = dag.evaluate_numpy(fderivs[k * n:], point)
-    Fv = np.array([float(np.ravel(v)[0]) for v in vals]).reshape(k, n)
-    return float(split_measure_of(Fv, dep_rows))
+    values = _entries(scene, np.array([float(t)]), np.asarray(y, dtype=float)[None, :])
+    Fv = _block(scene, values, "f_qdot", (system.k, system.J.n))
+    return float(split_measure_of(Fv[0], _coordinate_rows(system)[0]))
 
 
-def _kept(what, system, build):
-    """``build(system)``, made once per system (by identity, as
-    ``accelerations.cached_parts`` keeps its parts) and forgotten with it."""
-    key = (what, id(system))
-    entry = _KEPT.get(key)
-    if entry is None or entry[0]() is not system:
-        def forget(ref, key=key):
-            if _KEPT.get(key, (None,))[0] is ref:
-                del _KEPT[key]
-        entry = _KEPT[key] = (weakref.ref(system, forget), build(system))
-    return entry[1]
-
-
-def _derivatives(system):
-    """([d phi/dq..., d phi/du...], the rows of the dependent and of the independent
-    velocities' coordinates, [df/dq..., df/dqdot...]) for ``gramian_ratio``."""
-    from ...algebra import dag
-
-    def build(system):
-        J = system.J
-        us = system.independent_velocities
-        phis = [system.phi[v] for v in system.dependent_velocities]
-        index = {s: i for i, s in enumerate(J.q)}
-        return (list(dag.jacobian(phis, list(J.q))) + list(dag.jacobian(phis, list(us))),
-                [index[J.split(v)[0]] for v in system.dependent_velocities],
-                [index[J.split(v)[0]] for v in us],
-                list(dag.jacobian(list(system.constraints), list(J.q)))
-                + list(system.jacobian))
-    return _kept("derivatives", system, build)
+def _coordinate_rows(system):
+    """The rows of the dependent and of the independent velocities' coordinates."""
+    J = system.J
+    index = {s: i for i, s in enumerate(J.q)}
+    return ([index[J.split(v)[0]] for v in system.dependent_velocities],
+            [index[J.split(v)[0]] for v in system.independent_velocities])
 
 
 def _linearized(tr, times, ys):
@@ -182,26 +154,21 @@ def _linearized(tr, times, ys):
     where its measure stays above ``EDGE``; else without a split (near a chart edge
     phi's derivatives blow up): from f_q dq + f_qdot dqdot = 0, A = -f_qdot^+ f_q and B
     an orthonormal basis of ker f_qdot.  The two differ by a feedback and an input
-    transformation, which keep the rank of the Gramian."""
-    from ...algebra import dag
-
-    system = tr.scene.system
+    transformation, which keep the rank of the Gramian.  All from the verdicts kernel
+    (``_entries``)."""
+    scene = tr.scene
+    system = scene.system
     n, m, k = system.J.n, len(system.independent_velocities), system.k
-    derivatives, dep_rows, input_rows, fderivs = _derivatives(system)
-    point = _point(tr, times, ys)
-    F = np.stack([np.broadcast_to(np.asarray(v, dtype=float), times.shape)
-                  for v in dag.evaluate_numpy(fderivs, point)], axis=-1)
-    Fq, Fv = F[:, :k * n].reshape(-1, k, n), F[:, k * n:].reshape(-1, k, n)
+    dep_rows, input_rows = _coordinate_rows(system)
+    values = _entries(scene, times, ys, tr._p)
+    Fq = _block(scene, values, "f_q", (k, n))
+    Fv = _block(scene, values, "f_qdot", (k, n))
     if split_measure_of(Fv, dep_rows).min() >= EDGE:
-        vals = dag.evaluate_numpy(derivatives, point)
         A = np.zeros((times.size, n, n))
         B = np.zeros((times.size, n, m))
         B[:, input_rows, np.arange(m)] = 1.0
-        for a in range(k):
-            for c in range(n):
-                A[:, dep_rows[a], c] = vals[a * n + c]
-            for c in range(m):
-                B[:, dep_rows[a], c] = vals[k * n + a * m + c]
+        A[:, dep_rows, :] = _block(scene, values, "phi_q", (k, n))
+        B[:, dep_rows, :] = _block(scene, values, "phi_u", (k, m))
         return A, B
     _, _, vt = np.linalg.svd(Fv)
     return -np.linalg.pinv(Fv) @ Fq, vt[:, k:, :].transpose(0, 2, 1)
@@ -251,22 +218,13 @@ def tangent_frames(tr, times, ys):
     """Orthonormal bases ``T`` (``[len(times), n, n - h]``) of the tangent space ker
     dg/dq of the holonomic constraints g = 0 at the configurations of the rows ``ys``,
     oriented continuously (det [dg/dq^T | T] > 0); None without holonomic constraints."""
-    from ...algebra import dag
-
     system = tr.scene.system
     if not system.holonomic:
         return None
-    J = system.J
-    n, h = len(J.q), len(system.holonomic)
-    dg = _kept("holonomic", system,
-               lambda s: list(dag.jacobian(list(s.holonomic), list(s.J.q))))
-    col = {nm: i for i, nm in enumerate(tr.scene.state_names)}
+    n, h = len(system.J.q), len(system.holonomic)
     times = np.atleast_1d(np.asarray(times, dtype=float))
-    point = {J.t: times, **{q: ys[:, col[q.name]] for q in J.q},
-             **{s: tr.scene.params[s.name] for s in system.parameters}}
-    vals = dag.evaluate_numpy(dg, point)
-    G = np.stack([np.broadcast_to(v, times.shape) for v in vals], axis=-1)
-    G = G.reshape(times.size, h, n)
+    values = _entries(tr.scene, times, ys[:, :len(tr.scene.state_names)], tr._p)
+    G = _block(tr.scene, values, "g_q", (h, n))
     _, _, vt = np.linalg.svd(G)
     T = vt[:, h:, :].transpose(0, 2, 1).copy()
     flip = np.linalg.det(np.concatenate([G.transpose(0, 2, 1), T], axis=2)) < 0
