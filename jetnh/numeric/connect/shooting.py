@@ -9,12 +9,12 @@ import math
 import time
 
 import numpy as np
-from scipy.linalg.lapack import dgesdd as _gesdd
 
 from ...errors import JetnhError
 from .. import arguments, interrupt, solve
 from ..methods._common import FINISHED
 from ..options import options
+from .small import thin_svd
 
 #: the measure of the scene's split (``verdicts.split_measure``) below which a run that
 #: stopped early stopped at the edge of its chart
@@ -23,17 +23,18 @@ EDGE = 1e-2
 MAX_STEPS = 20_000
 
 
-def _identity(n, m):
-    """The initial sensitivities of a run, S0 = (I | 0) (n x m), flattened
-    (``solve.augmented``'s), kept per shape."""
-    found = _IDENTITY.get((n, m))
+def _start_row(n, m):
+    """The first row of a run with sensitivities but for its state: zeros, then the
+    initial sensitivities S0 = (I | 0) (n x m) flattened (``solve.augmented``'s), kept
+    per shape; a run's row is a copy with the state written in."""
+    found = _START.get((n, m))
     if found is None:
-        found = _IDENTITY[n, m] = np.eye(n, m).ravel()
+        found = _START[n, m] = np.concatenate((np.zeros(n), np.eye(n, m).ravel()))
         found.setflags(write=False)
     return found
 
 
-_IDENTITY: dict = {}
+_START: dict = {}
 
 
 def _finite(a) -> bool:
@@ -58,7 +59,8 @@ class Shot:
         counted there)."""
         lay = plan.sens.layout
         n, m = lay.n_state, lay.sensitivity_columns
-        y = np.concatenate((y, _identity(n, m)))
+        y0, y = y, _start_row(n, m).copy()
+        y[:n] = y0
         halt = np.zeros(1, dtype=np.int64)
         tic = time.perf_counter()
         out = interrupt.call(plan.entry, halt, plan.limit,
@@ -277,22 +279,14 @@ class Shooter:
 
 
 def svd(Jm):
-    """The thin singular value decomposition ``(U, s, Vt)`` of ``Jm`` (LAPACK's gesdd
-    called directly: a small matrix costs a third of ``np.linalg.svd``'s checks)."""
-    if Jm.size:
-        U, s, Vt, info = _gesdd(Jm, compute_uv=1, full_matrices=0)
-        if info == 0:
-            return U, s, Vt
-    return np.linalg.svd(Jm, full_matrices=False)
+    """The thin singular value decomposition ``(U, s, Vt)`` of ``Jm`` (compiled,
+    ``small.thin_svd``: a small matrix costs a fraction of a LAPACK call's set-up)."""
+    return thin_svd(Jm)
 
 
 def singular_values(Jm):
     """The singular values of ``Jm``, largest first."""
-    if Jm.size:
-        _, s, _, info = _gesdd(Jm, compute_uv=0)
-        if info == 0:
-            return s
-    return np.linalg.svd(Jm, compute_uv=False)
+    return thin_svd(Jm)[1]
 
 
 def rank(s, rcond) -> int:
