@@ -12,6 +12,7 @@ import numpy as np
 
 from ...errors import ConnectError
 from ..atlas import split_measure_of
+from ..methods._common import jit
 from . import small
 
 #: smallest / largest eigenvalue of the controllability Gramian below which the path is
@@ -178,10 +179,10 @@ def gramian_ratio(tr, samples) -> float:
     """Smallest over largest eigenvalue of the controllability Gramian of the constraint
     system (qdot^mu = u^mu, qdot^alpha = phi^alpha(t, q, u)) linearized along ``tr``,
     ``W = int Phi(t1, s) B B^T Phi(t1, s)^T ds`` (``_linearized``: A = d qdot/dq, B =
-    d qdot/du from the graph on the dense output, or without a split where the path
+    d qdot/du from the verdicts kernel on the dense output, or without a split where the path
     comes near the edge of the scene's; Phi(t1, s) the products of the RK4 propagators
     of ``_Samples.GRID / 2`` equal steps from s to t1, the integral by Simpson's rule on
-    their nodes).  With holonomic constraints g = 0 the motions stay on them, so W is
+    their nodes: ``_gramian_sum``, compiled).  With holonomic constraints g = 0 the motions stay on them, so W is
     measured on the tangent space of g = 0 at q(t1) (``tangent_frames``), not in R^n.
     Zero: the endpoint map loses rank along the path (an abnormal extremal)."""
     system = tr.scene.system
@@ -193,20 +194,8 @@ def gramian_ratio(tr, samples) -> float:
     times = samples.grid
     A, B = _linearized(tr, times, samples.grid_y)
     h = (t1 - t0) / steps
-    I = np.eye(n)
-    A0, Am, A1 = A[0:-1:2], A[1::2], A[2::2]
-    K1 = A0
-    K2 = Am @ (I + 0.5 * h * K1)
-    K3 = Am @ (I + 0.5 * h * K2)
-    K4 = A1 @ (I + h * K3)
-    P = I + h / 6.0 * (K1 + 2 * K2 + 2 * K3 + K4)        # Phi(t_{j+1}, t_j)
-    G = np.concatenate([_products(P[::-1])[::-1], I[None]])   # Phi(t1, t_j)
-    GB = G @ B[::2]                                       # Phi(t1, s_j) B(s_j)
-    w = np.full(steps + 1, 2.0)
-    w[1::2] = 4.0
-    w[0] = w[-1] = 1.0
-    wGB = (GB * (w * h / 3.0)[:, None, None]).transpose(1, 0, 2).reshape(n, -1)
-    W = wGB @ GB.transpose(1, 0, 2).reshape(n, -1).T    # sum_j w_j GB_j GB_j^T
+    W = np.empty((n, n))
+    _compiled("gramian")(np.ascontiguousarray(A), np.ascontiguousarray(B), h, W)
     T1 = tangent_frames(tr, times[-1:], samples.grid_y[-1:])
     if T1 is not None:           # the reachable directions: the tangent space of g = 0
         W = T1[0].T @ W @ T1[0]
@@ -230,17 +219,6 @@ def tangent_frames(tr, times, ys):
     flip = np.linalg.det(np.concatenate([G.transpose(0, 2, 1), T], axis=2)) < 0
     T[flip, :, -1] *= -1.0
     return T
-
-
-def _products(P) -> np.ndarray:
-    """The running products ``P[0] @ ... @ P[j]`` of the matrices ``P[j]``, in log2(len)
-    batched multiplications (a doubling scan)."""
-    out = P.copy()
-    d = 1
-    while d < len(out):
-        out[d:] = out[:-d] @ out[d:]
-        d *= 2
-    return out
 
 
 def jacobi_measure(X, nq, scale=None, frames=None):
@@ -282,7 +260,7 @@ def jacobi_measure(X, nq, scale=None, frames=None):
     if not by_norms:
         sc[:] = np.asarray(scale, dtype=float).reshape(-1)
     d, s = np.empty(rows), np.empty(rows)
-    _measures()(Xr, int(nq), sc, by_norms, F, framed, d, s)
+    _compiled("measures")(Xr, int(nq), sc, by_norms, F, framed, d, s)
     if m != dim:
         return None, s.reshape(batch)[()]
     return d.reshape(batch)[()], s.reshape(batch)[()]
@@ -334,19 +312,80 @@ def _jacobi_rows(X, nq, scale, by_norms, frames, framed, d, s):
 _NO_FRAMES = np.zeros((1, 1, 1))
 
 
+@jit
+def _matmul(X, Y, out):
+    """``out = X @ Y`` (small matrices, compiled)."""
+    for i in range(X.shape[0]):
+        for c in range(Y.shape[1]):
+            acc = 0.0
+            for j in range(X.shape[1]):
+                acc += X[i, j] * Y[j, c]
+            out[i, c] = acc
+
+
+@jit
+def _rk4_stage(Ak, K, f, E, out):
+    """``out = Ak @ (I + f K)`` (``E`` a workspace; compiled)."""
+    n = K.shape[0]
+    for a in range(n):
+        for b in range(n):
+            E[a, b] = (1.0 if a == b else 0.0) + f * K[a, b]
+    _matmul(Ak, E, out)
+
+
+def _gramian_sum(A, B, h, W):
+    """``W = sum_j w_j Phi(t1, s_j) B(s_j) B(s_j)^T Phi(t1, s_j)^T`` over the nodes s_j
+    = ``A``'s rows 0, 2, 4, ... (Simpson's weights w_j, step ``h``), Phi(t1, s_j) the
+    product of the RK4 propagators Phi(s_{i+1}, s_i) = I + h/6 (K1 + 2 K2 + 2 K3 + K4)
+    (A at s_i, at the midpoint and at s_{i+1}) from s_j to t1 (compiled)."""
+    N, n, _ = A.shape
+    m = B.shape[2]
+    steps = (N - 1) // 2
+    G, P, GB = np.eye(n), np.empty((n, n)), np.empty((n, m))
+    K1, K2, K3, K4 = np.empty((n, n)), np.empty((n, n)), np.empty((n, n)), np.empty((n, n))
+    E, Gn = np.empty((n, n)), np.empty((n, n))
+    W[:, :] = 0.0
+    for j in range(steps, -1, -1):
+        if j < steps:               # G = Phi(t1, s_{j+1}) Phi(s_{j+1}, s_j)
+            A0, Am, A1 = A[2 * j], A[2 * j + 1], A[2 * j + 2]
+            K1[:, :] = A0
+            _rk4_stage(Am, K1, 0.5 * h, E, K2)
+            _rk4_stage(Am, K2, 0.5 * h, E, K3)
+            _rk4_stage(A1, K3, h, E, K4)
+            for a in range(n):
+                for b in range(n):
+                    P[a, b] = ((1.0 if a == b else 0.0)
+                               + h / 6.0 * (K1[a, b] + 2.0 * K2[a, b] + 2.0 * K3[a, b]
+                                            + K4[a, b]))
+            _matmul(G, P, Gn)
+            G[:, :] = Gn
+        _matmul(G, B[2 * j], GB)
+        w = (1.0 if j == 0 or j == steps else (4.0 if j % 2 else 2.0)) * h / 3.0
+        for a in range(n):
+            for b in range(n):
+                acc = 0.0
+                for c in range(m):
+                    acc += GB[a, c] * GB[b, c]
+                W[a, b] += w * acc
+
+
 @functools.cache
-def _measures():
-    """The compiled ``_jacobi_rows`` (compiled, or loaded from the signed store, on first
-    use)."""
+def _compiled(name):
+    """The compiled ``_jacobi_rows`` ("measures") or ``_gramian_sum`` ("gramian"):
+    compiled, or loaded from the signed store, on first use."""
     from numba import types
 
     from ..kernels import loop_cache
 
-    a3, a1 = types.Array(types.float64, 3, "C"), types.Array(types.float64, 1, "C")
+    a3, a2 = types.Array(types.float64, 3, "C"), types.Array(types.float64, 2, "C")
+    a1 = types.Array(types.float64, 1, "C")
+    py_func, signature = {
+        "measures": (_jacobi_rows, types.void(a3, types.int64, a1, types.boolean, a3,
+                                              types.boolean, a1, a1)),
+        "gramian": (_gramian_sum, types.void(a3, a3, types.float64, a2))}[name]
     stamp = loop_cache.file_stamp(__file__) + loop_cache.file_stamp(small.__file__)
-    return loop_cache.signed_njit(
-        _jacobi_rows, types.void(a3, types.int64, a1, types.boolean, a3, types.boolean,
-                                 a1, a1), stamp, error_model="numpy", nogil=True)
+    return loop_cache.signed_njit(py_func, signature, stamp, error_model="numpy",
+                                  nogil=True)
 
 
 def conjugate_times(tr, cols, samples, rcond=1e-9) -> tuple:
