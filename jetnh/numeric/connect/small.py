@@ -130,9 +130,10 @@ def smallest_singular_value(A, W) -> float:
 @jit
 def qr(X, Q, R):
     """The thin QR decomposition of ``X`` (rows >= columns) by Householder reflections,
-    with LAPACK's signs (R[j, j] = -sign(x_jj) |x_j|): writes ``Q`` (rows x columns,
-    orthonormal columns) and ``R`` (columns x columns, upper triangular).  Entries far
-    from overflow (below 1e150): the norms are plain sums of squares."""
+    with LAPACK's signs (R[j, j] = -sign(x_jj) |x_j|, x_jj itself where nothing is below
+    it): writes ``Q`` (rows x columns, orthonormal columns) and ``R`` (columns x columns,
+    upper triangular).  Entries far from overflow (below 1e150): the norms are plain
+    sums of squares."""
     rows, cols = X.shape
     H = X.copy()                   # the reflectors' vectors below the diagonal
     beta = np.zeros(cols)
@@ -140,12 +141,16 @@ def qr(X, Q, R):
         for j in range(cols):
             R[i, j] = 0.0
     for j in range(cols):
-        norm = 0.0
-        for i in range(j, rows):
-            norm += H[i, j] * H[i, j]
-        norm = math.sqrt(norm)
-        if norm == 0.0:
-            continue                   # a zero column: no reflection, R[j, j] = 0
+        below = 0.0
+        for i in range(j + 1, rows):
+            below += H[i, j] * H[i, j]
+        if below == 0.0:
+            # nothing below the diagonal: no reflection (LAPACK's dlarfg), R[j, j] keeps
+            # its sign; a zero column gives R[j, j] = 0
+            for c in range(j, cols):
+                R[j, c] = H[j, c]
+            continue
+        norm = math.sqrt(H[j, j] * H[j, j] + below)
         alpha = -math.copysign(norm, H[j, j])
         H[j, j] -= alpha
         vv = 0.0
@@ -208,9 +213,9 @@ def _svd_into(A, U, s, V):
 
 
 @functools.cache
-def _svd_entry():
-    """The machine-code entry of ``_svd_into`` (compiled, or loaded from the signed
-    store, on first use; no type dispatch per call)."""
+def compiled_svd():
+    """The compiled ``_svd_into`` (compiled, or loaded from the signed store, on first
+    use; ``precompile`` warms it as ``connect:svd``)."""
     from numba import types
 
     from ..kernels import loop_cache
@@ -218,9 +223,14 @@ def _svd_entry():
     out2 = types.Array(types.float64, 2, "C")
     signature = types.void(types.Array(types.float64, 2, "A", readonly=True), out2,
                            types.Array(types.float64, 1, "C"), out2)
-    return entry_point(loop_cache.signed_njit(
-        _svd_into, signature, loop_cache.file_stamp(__file__), error_model="numpy",
-        nogil=True))
+    return loop_cache.signed_njit(_svd_into, signature, loop_cache.file_stamp(__file__),
+                                  error_model="numpy", nogil=True)
+
+
+@functools.cache
+def _svd_entry():
+    """The machine-code entry of ``compiled_svd`` (no type dispatch per call)."""
+    return entry_point(compiled_svd())
 
 
 def thin_svd(A):
