@@ -14,7 +14,7 @@ from ...errors import JetnhError
 from .. import arguments, interrupt, solve
 from ..methods._common import FINISHED
 from ..options import options
-from .small import thin_svd
+from .small import all_finite, thin_svd
 
 #: the measure of the scene's split (``verdicts.split_measure``) below which a run that
 #: stopped early stopped at the edge of its chart
@@ -35,12 +35,6 @@ def _start_row(n, m):
 
 
 _START: dict = {}
-
-
-def _finite(a) -> bool:
-    """Whether every entry of the float array ``a`` is finite (without
-    ``arguments.all_finite``'s floating-point state switch: no sum that may overflow)."""
-    return bool(np.isfinite(a).all())
 
 
 class Shot:
@@ -75,7 +69,7 @@ class Shot:
             return None
         last = out[2][n_out - 1]
         # the loop has checked the state (``loop.finite_status``), not its sensitivities
-        if not _finite(last[n:]):
+        if not all_finite(last[n:]):
             return None
         self = object.__new__(cls)
         self.t, self.y = float(out[1][n_out - 1]), last[:n]
@@ -154,7 +148,7 @@ class Shooter:
         if self.deadline is not None and time.monotonic() > self.deadline:
             raise OutOfTime
         self.runs += 1
-        if not _finite(y):
+        if not all_finite(y):
             return None
         if self.holonomic:
             try:

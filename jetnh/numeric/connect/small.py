@@ -212,25 +212,48 @@ def _svd_into(A, U, s, V):
     svd(A, U, s, V)
 
 
+def _all_finite(a):
+    for i in range(a.shape[0]):
+        if not math.isfinite(a[i]):
+            return False
+    return True
+
+
 @functools.cache
-def compiled_svd():
-    """The compiled ``_svd_into`` (compiled, or loaded from the signed store, on first
-    use; ``precompile`` warms it as ``connect:svd``)."""
+def compiled_parts():
+    """``(svd, all_finite)``: ``_svd_into`` and ``_all_finite`` compiled (or loaded from
+    the signed store) on first use; ``precompile`` warms them as ``connect:small``."""
     from numba import types
 
     from ..kernels import loop_cache
 
     out2 = types.Array(types.float64, 2, "C")
-    signature = types.void(types.Array(types.float64, 2, "A", readonly=True), out2,
-                           types.Array(types.float64, 1, "C"), out2)
-    return loop_cache.signed_njit(_svd_into, signature, loop_cache.file_stamp(__file__),
-                                  error_model="numpy", nogil=True)
+    stamp = loop_cache.file_stamp(__file__)
+    svd_ = loop_cache.signed_njit(
+        _svd_into, types.void(types.Array(types.float64, 2, "A", readonly=True), out2,
+                              types.Array(types.float64, 1, "C"), out2),
+        stamp, error_model="numpy", nogil=True)
+    finite = loop_cache.signed_njit(
+        _all_finite, types.boolean(types.Array(types.float64, 1, "A", readonly=True)),
+        stamp, error_model="numpy", nogil=True)
+    return svd_, finite
 
 
 @functools.cache
-def _svd_entry():
-    """The machine-code entry of ``compiled_svd`` (no type dispatch per call)."""
-    return entry_point(compiled_svd())
+def _entries():
+    """The machine-code entries of ``compiled_parts`` (no type dispatch per call)."""
+    return tuple(entry_point(d) for d in compiled_parts())
+
+
+def all_finite(a) -> bool:
+    """Whether every entry of the float64 vector ``a`` is finite (compiled: a third of
+    ``np.isfinite(a).all()``, and no floating-point state switch)."""
+    if type(a) is not np.ndarray or a.dtype != _FLOAT or a.ndim != 1:
+        a = np.asarray(a, dtype=float).reshape(-1)
+    return _entries()[1](a)
+
+
+_FLOAT = np.dtype(float)
 
 
 def thin_svd(A):
@@ -244,5 +267,5 @@ def thin_svd(A):
     r = min(k, m)
     U, s, V = np.empty((k, r)), np.empty(r), np.empty((m, r))
     if r:
-        _svd_entry()(A, U, s, V)
+        _entries()[0](A, U, s, V)
     return U, s, V.T
