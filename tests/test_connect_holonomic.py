@@ -134,12 +134,12 @@ def test_no_best_motion_message_is_truthful(sleigh):
 
 
 def test_timeout_stops_the_search_with_the_closest_motion(sleigh):
-    """The audit's end beyond the edge of the split (th = 2 from th = 0 with y
-    dependent): a search of minutes without a budget; with one, a ConnectError saying
-    so, its closest motion a real run to t1."""
+    """An end the search does not reach (th = 20 from th = 0 in 1 s, through many
+    edges of the split): a search of 20 s without a budget; with one, a ConnectError
+    saying so, its closest motion a real run to t1."""
     s, P, O = sleigh
     with pytest.raises(ConnectError, match=r"timeout of 0\.5 s") as info:
-        jn.connect(s, "chetaev", O, {"x": 0.2, "th": 2.0}, (0.0, 1.0), params=P,
+        jn.connect(s, "chetaev", O, {"x": 3.0, "th": 20.0}, (0.0, 1.0), params=P,
                    timeout=0.5)
     best = info.value.best
     if best is not None:

@@ -56,7 +56,10 @@ def _refusal(traj) -> str | None:
 def evaluate(traj, times, full=False) -> np.ndarray:
     """The states at ``times`` (any order, inside the span): ``[len(times), n_states]``;
     with ``full``, a run with sensitivities gives its whole integrated state (the
-    state, then S row-major: ``Layout.n_rhs`` columns)."""
+    state, then S row-major: ``Layout.n_rhs`` columns).  A run made of pieces (a change
+    of split, multiple shooting's segments) is evaluated by its pieces."""
+    if traj._segments is not None:
+        return traj._segments.evaluate(traj, times, full)
     why = _refusal(traj)
     if why:
         raise JetnhError(why)

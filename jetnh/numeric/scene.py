@@ -501,7 +501,8 @@ class Scene(Frozen):
             ``S = dy(t)/d(y(t0), p)`` (the derivatives of the initial state and of the
             runtime parameters), df/dy and df/dp generated from the derivation (forward
             mode over the graph, compiled: ``kernels.sensitivity_kernels``);
-            ``traj.sensitivity(of, to)`` reads them.  Such a run keeps its split.
+            ``traj.sensitivity(of, to)`` reads them.  Such a run changes split as
+            others do (``split``), S carried across (``numeric.atlas``).
         sensitivity_error : bool, default True
             Whether S is under the error control (its entry (i, k) with the tolerance of
             state i, so S is as accurate as the state); with False only the state is

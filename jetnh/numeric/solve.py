@@ -46,7 +46,8 @@ class Plan:
     (``numeric.dense``; None: no dense output), ``dense_ends`` it completed for a run
     whose last step is whole and for one stopped inside its last step (made once).  ``sens``: the kernels of the state
     augmented by its sensitivities, ``sens_tol`` their tolerances.  ``switch``: the run
-    goes on across its chart's edge (``numeric.atlas``).  The discrete methods read
+    goes on across its chart's edge (``numeric.atlas``); the loop of a run with
+    sensitivities then watches the edge as its last event (``ce``: it stops there).  The discrete methods read
     ``steps``, ``newton_tol``, ``max_newton``, ``projection``; scipy's ``first`` and
     ``max_step``."""
 
@@ -213,12 +214,15 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
 
         newton = radau.newton_options(newton_tol, max_newton)
     kern = scene.kernels
-    switch = sens is None and split == "switch" and atlas.applies(scene, events)
+    # (an ensemble with sensitivities keeps its split)
+    switch = (split == "switch" and not (batch and sens is not None)
+              and atlas.applies(scene, events))
     if switch:
         # the run goes on across its chart's edge: events per chart (numeric.atlas); an
-        # ensemble watches the edge of the scene's own chart as its last event
+        # ensemble, and a run with sensitivities (whose loop ``connect`` calls directly:
+        # ``shooting.Shot``), watch the edge of the scene's own chart as their last event
         ce = None
-        if batch:
+        if batch or sens is not None:
             at = atlas.atlas(scene)
             from .events import as_events
 
@@ -318,7 +322,7 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
         return atlas.run(scene, m.name, plan.events, plan.t0, plan.t1, y, p, plan.ctl,
                          plan.te, plan.mode, None if dense is None else dict(dense),
                          plan.checked, plan.singular_tol, plan.newton, plan.limit,
-                         trajectory)
+                         trajectory, sens=plan.sens)
     halt = np.zeros(1, dtype=np.int64)
     t0 = plan.t0
     tic = time.perf_counter()

@@ -40,14 +40,16 @@ With holonomic constraints g = 0 the start (and an end naming every coordinate) 
 on g = 0 (``complete=True`` completes the start, as ``Scene`` does); the multipliers of
 g = 0 enter the equations only through their rates (inert), so they stay at 0 and are no
 unknowns; the verdicts are measured on the tangent space of g = 0.  The runs carry
-sensitivities and keep the scene's split: an end whose motion must cross the edge of
-that chart is not reached (the error says so, with the fix); ``timeout`` bounds the
-search's wall-clock time.
+sensitivities and change split as ``Scene.run`` does (``numeric.atlas``), so an end
+whose motion crosses the edge of the scene's chart is reached like any other;
+``timeout`` bounds the search's wall-clock time.
 
 Vakonomic and Hoelder ends may leave coordinates free: their transversality conditions
 close the problem -- the coefficient of each free eta^i in the boundary term of the
 composite action's variation (13), the momentum P_i = d(L + lambda f)/dqdot^i, vanishes
-at t1 (``problem.transversality``, from the derivation).
+at t1 (``problem.transversality``, from the derivation); with holonomic constraints
+g = 0, for the variations tangent to g = 0 (``problem.tangent_transversality``: the
+reduced momenta P_R - G_R^T G_D^-T P_D vanish).
 
 Verdicts on the answer:
 
@@ -116,8 +118,8 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
         velocities only where the end is reachable (otherwise ``ConnectError`` with
         the least-squares answer in ``.best``).  With holonomic constraints g = 0: an
         end naming every coordinate must lie on g = 0; vakonomic and Hoelder ends
-        must name as many coordinates as g = 0 has dimensions (free ends on it are
-        not posed).
+        that name fewer coordinates than g = 0 has dimensions close with the free
+        ones' momenta projected onto its tangent space.
     t_span : tuple of float
         ``(t0, t1)`` with t1 > t0 (connect solves forwards in time).
     params : dict, optional
