@@ -58,6 +58,7 @@ keep their split.
 
 from __future__ import annotations
 
+import math
 import time
 from itertools import combinations
 
@@ -69,7 +70,7 @@ from ..errors import JetnhError
 from ..mechanics import principles
 from .methods import projection
 from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, SINGULAR, STOPPED
-from . import loops
+from . import arguments, loops
 from .events import Event, as_events
 from .kernels.calls import Kernel, Rows
 from .methods.loop import Watch
@@ -537,8 +538,6 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
         n_ev = int(out.n_ev)
         hit = (edge and int(out.status) == EVENT and n_ev > 0
                and int(out.ev_i[n_ev - 1]) == len(user))
-        if hit:
-            _project_stop(chart, out, p, ksens)
         if build is None:
             seg = out
         else:
@@ -554,7 +553,7 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
         ys = np.ascontiguousarray(out.ev_y[n_ev - 1])
         if limit is not None and time.perf_counter() - tic >= limit:
             break
-        target = _switched(at, chart, t, ys, p, sens)
+        target = None if _at_end(t, t1) else _switched(at, chart, t, ys, p, sens)
         if target is None:          # no better split here: go on without the edge
             edge, y = False, ys
             continue
@@ -562,6 +561,14 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
         switches.append({"t": t, "from": list(chart.split), "to": list(new.split)})
         chart = new
     return parts, switches
+
+
+def _at_end(t, t1) -> bool:
+    """Whether an edge at ``t`` lies within the time resolution of a span of the run's
+    end ``t1`` (``arguments.MIN_TIME_RESOLUTION`` units in the last place, or at
+    ``t1``): no chart is entered there (its scene could not span the rest); the run
+    ends in the chart it is in, whose split is still regular at its edge."""
+    return abs(t1 - t) < arguments.MIN_TIME_RESOLUTION * math.ulp(max(abs(t), abs(t1)))
 
 
 def _switched(at, chart, t, y, p, sens):
@@ -584,45 +591,6 @@ def _on_constraints(chart, t, y, p) -> np.ndarray:
     if not system.holonomic:
         return np.ascontiguousarray(y, dtype=float)
     return projection.onto(chart.kernels.hol, len(system.holonomic), system.J.n, t, y, p)
-
-
-def _project_stop(chart, out, p, sens=None):
-    """Project the state where a run reached its chart's edge, in the run's ``Result``
-    (the event record, the last state, and the last output row where it is that state):
-    the edge is located on the step's dense output, off g = 0 by its error.  With
-    ``sens`` (the chart's sensitivity kernels) the sensitivities after the state are
-    projected with it (``_project_sensitivities``)."""
-    k = int(out.n_ev) - 1
-    t = float(out.ev_t[k])
-    y = _on_constraints(chart, t, out.ev_y[k], p)
-    if sens is not None and chart.scene.system.holonomic:
-        _project_sensitivities(chart, sens, t, y, p)
-    out.ev_y[k] = y
-    out.y[:] = y
-    if int(out.n_out) > 0 and out.ts[int(out.n_out) - 1] == t:
-        out.ys[int(out.n_out) - 1] = y
-
-
-def _project_sensitivities(chart, sens, t, y, p):
-    """The sensitivities after the state ``y`` (on g = 0) moved in place by the
-    derivative of the projection, as the loops move them after every step
-    (``methods.projection``): S_q <- S_q - G^+ (G S_q + dg/dp)."""
-    system = chart.scene.system
-    m, nq = len(system.holonomic), system.J.n
-    n = len(chart.scene.state_names)
-    p = np.ascontiguousarray(p, dtype=float)
-    n_p = p.shape[0]
-    w = np.empty(m * (1 + nq + n_p))
-    sens.hol(float(t), np.ascontiguousarray(y[:n]), p, w)
-    G = w[m:m + m * nq].reshape(m, nq)
-    S = y[n:].reshape(n, -1)
-    B = G @ S[:nq]
-    if n_p:
-        B[:, S.shape[1] - n_p:] += w[m + m * nq:].reshape(m, n_p)
-    try:
-        S[:nq] -= G.T @ np.linalg.solve(G @ G.T, B)
-    except np.linalg.LinAlgError:
-        pass
 
 
 def switch(at, chart, t, y, p):
@@ -814,7 +782,7 @@ def go_on(at, method, user, t1, p, t, y, counts, ctl, steps_left, te, mode, chec
     chart), taken on as ``Scene.run`` does: ``(parts, switches)`` of ``follow``
     (``sens``: ``y`` followed by its sensitivities)."""
     own = at.own
-    target = _switched(at, own, t, y, p, sens)
+    target = None if _at_end(t, t1) else _switched(at, own, t, y, p, sens)
     if target is None:
         return follow(at, method, own, t, y, t1, p, user, counts, ctl, steps_left, te, mode,
                       None, checked, singular_tol, newton, limit, build, first=False,
@@ -835,8 +803,8 @@ def end_across(home, method, out, t0, t1, p, ctl, mode, checked, singular_tol, n
     ``home``'s states."""
     at = atlas(home)
     own = at.own
+    loops.on_constraints(own.kernels, ctl, mode, own.sensitivity_kernels, out, p, t0)
     first = loops.result(out)
-    _project_stop(own, first, p, own.sensitivity_kernels)
     k = int(first.n_ev) - 1
     parts, _ = go_on(at, method, (), t1, p, float(first.ev_t[k]), first.ev_y[k].copy(),
                      loops.NO_EVENTS, ctl, ctl.max_steps - int(first.stats[0]),

@@ -57,10 +57,10 @@ import numpy as np
 from ..errors import ConstraintError, IntegrationError, JetnhError, JetnhWarning
 from ..frozen import Frozen, memo, readonly
 from ..mechanics import holonomic
-from . import arguments, atlas, diagnosis, solve
+from . import arguments, atlas, diagnosis, loops, solve
 from .events import as_events
 from .methods import STATUS_TEXT
-from .methods._common import ENDPOINTS, EVENT, FINISHED, NONFINITE, SINGULAR
+from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, FINISHED, NONFINITE, SINGULAR
 from .options import options
 
 PARALLEL = ("prange", "threads", "serial")
@@ -544,9 +544,11 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
     if plan.sens is None:
         (OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T), wall = solve.batch(
             scene, plan, Y0, P, parallel, workers)
+        _on_constraints(plan, P, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST)
     else:       # the state augmented by S = dy/d(y0, p): S apart, as in a single run
         (OUT_T, OUT_A, INFO, T_LAST, Y_A, EV_N, EV_T), wall = solve.batch(
             scene, plan, solve.augmented(plan.sens.layout, Y0), P, parallel, workers)
+        _on_constraints(plan, P, OUT_T, OUT_A, INFO, T_LAST, Y_A)
         n = Y0.shape[1]
         OUT_Y, Y_LAST = np.ascontiguousarray(OUT_A[:, :, :n]), Y_A[:, :n].copy()
         sens = (scene._sensitivity_columns(), OUT_A[:, :, n:].reshape(
@@ -604,6 +606,35 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
                     wall, parallel, workers if parallel != "serial" else 1, save,
                     singular_tol, switching=switching, switches=switches, pieces=pieces,
                     reasons=reasons, sensitivities=sens, layout=plan.kern.layout)
+
+
+def _on_constraints(plan, P, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST):
+    """The rows of an ensemble's runs that the dense output gave, moved onto the
+    holonomic constraints g = 0 in place as a single run's are (``loops.on_constraints``,
+    the same rows and the same bits): the rows at ``t_eval`` and the last state of a run
+    stopped inside a step (a terminal event, a singular stop) with its row; with
+    sensitivities (``OUT_Y``, ``Y_LAST`` the augmented states) S with them, rows at the
+    start left."""
+    ctl = plan.ctl
+    if not ctl.n_hol:
+        return
+    kern, n_sens = (plan.kern, 0) if plan.sens is None else (plan.sens, ctl.n_sens)
+    n_runs, n_times = OUT_T.shape
+    t0 = plan.t0
+    if plan.mode == AT_T_EVAL:
+        ts, ys = OUT_T.reshape(-1), OUT_Y.reshape(n_runs * n_times, -1)
+        pick = np.flatnonzero(np.isfinite(ts) & (ts != t0) if n_sens else np.isfinite(ts))
+        rows = ys[pick]           # (the times are NaN after a run's stop)
+        loops.onto_constraints(kern, ts[pick], rows, P[pick // n_times], n_sens)
+        ys[pick] = rows
+    stop = np.flatnonzero(((INFO[:, 0] == EVENT) | (INFO[:, 0] == SINGULAR))
+                          & (T_LAST != t0))
+    if stop.size:
+        rows = Y_LAST[stop]
+        loops.onto_constraints(kern, T_LAST[stop], rows, P[stop], n_sens)
+        Y_LAST[stop] = rows
+        if plan.mode == ENDPOINTS:          # the run's one row is its last state
+            OUT_Y[stop, 0] = rows
 
 
 def _taken_on(own, r, parts, n_user, mode, p, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):

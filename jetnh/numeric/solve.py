@@ -329,7 +329,7 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
     out = interrupt.call(plan.entry, halt, plan.limit,
                          (*plan.prefix, t0, plan.t1, y, p, *plan.suffix, halt))
     wall = time.perf_counter() - tic
-    loops.on_constraints(plan.kern, plan.ctl, plan.mode, plan.sens, out, p)
+    loops.on_constraints(plan.kern, plan.ctl, plan.mode, plan.sens, out, p, t0)
     if dense is not None:    # stopped inside a step or not
         dense = plan.dense_ends[out[0] in (EVENT, SINGULAR)]
         if plan.sens is not None:           # the run's own (``trajectory`` adds its rows)
