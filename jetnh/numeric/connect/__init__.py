@@ -66,9 +66,10 @@ Verdicts on the answer:
 - ``normal``: False when the endpoint map of the constraint system (the kinematic
   control system qdot^mu = u^mu, qdot^alpha = phi^alpha(t, q, u)) loses rank along the
   path, i.e. its controllability Gramian ``W' = A W + W A^T + B B^T`` (A, B the partial
-  derivatives of the constraint system along the path, from the graph) is singular: the
-  path is then an abnormal extremal (the multiplier rule holds with lambda_0 = 0), which
-  a small residual does not make normal.
+  derivatives of the constraint system along the path, compiled from the derivation:
+  ``codegen.verdicts``) is singular: the path is then an abnormal extremal (the
+  multiplier rule holds with lambda_0 = 0), which a small residual does not make
+  normal.
 - ``cost``: the action ``int L dt`` along the answer, by 5-point Gauss-Legendre on every
   step of the dense output.
 """
