@@ -81,10 +81,11 @@ import time
 from ...errors import ArgumentError, ConnectError, JetnhError
 from ...mechanics import principles
 from ...mechanics.system import System
-from .. import arguments, codegen, methods
+from .. import arguments, methods
+from ..scene import Scene
 from .connection import Connection
-from .problem import (MAX_TOL, VARIATIONAL, Momenta, _configuration, _guess,
-                      _holonomic_free, _scene, on_manifold)
+from .problem import (MAX_TOL, VARIATIONAL, Momenta, Unknowns, _configuration,
+                      _guess, _holonomic_free, _scene, on_manifold)
 from .solve import STEP_ITER, Search, least_action
 from .shooting import GROWTH, MAX_SEGMENTS, MAX_STEPS, OutOfTime
 from .verdicts import GRAMIAN_RCOND, action, conjugate_times, gramian_ratio
@@ -188,8 +189,6 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
         Bad input: an unknown coordinate, a span of zero length, a guess of the wrong
         shape.
     """
-    from ..scene import Scene
-
     if not isinstance(system, System):
         raise JetnhError(f"connect needs a jetnh System, got {type(system).__name__}")
     principle = principles.canonical(principle)
@@ -227,22 +226,15 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
             raise ArgumentError(f"restarts look for the least-action extremal; {principle}"
                                 " motions do not make an action stationary: leave "
                                 "restarts at 0", argument="restarts")
-    coords = tuple(s.name for s in system.J.q)
+    shape = Unknowns.of(system, principle)
+    coords = shape.coords
     q0 = _configuration(start, coords, "start", complete=True)
     q1 = _configuration(end, coords, "end", complete=False)
     if system.holonomic:
         q0 = on_manifold(system, params, q0, q1, t0, t1, complete)
+    unknowns = shape.unknowns
+    u0, fixed = _guess(guess, unknowns, shape.fixed, shape.bases, q0, q1, t1 - t0)
     # a scene at the start with placeholder unknowns (the runs replace them)
-    velocities = tuple(v.name for v in system.independent_velocities)
-    mults = codegen.multiplier_names(system, principle)
-    # the multipliers of g = 0 enter the equations only through their rates: inert
-    # (no effect on the motion), kept at 0 rather than unknowns
-    inert = {mults[a] for a in system.holonomic_rows if a < len(mults)}
-    unknowns = velocities + (tuple(m for m in mults if m not in inert)
-                             if principle in VARIATIONAL else ())
-    fixed = ({m: 0.0 for m in mults if m in inert} if principle in VARIATIONAL
-             else {m: 0.0 for m in mults})
-    u0, fixed = _guess(guess, unknowns, fixed, system, q0, q1, t1 - t0)
     scene = _scene(system, principle, params, {**q0, **dict(zip(unknowns, u0)), **fixed},
                    (t0, t1))
     free = [c for c in coords if c not in q1] if principle in VARIATIONAL else []

@@ -4,6 +4,7 @@ start, the (partial) end, the guess of the initial unknowns, the scene the runs 
 from __future__ import annotations
 
 import math
+from types import MappingProxyType
 
 import numpy as np
 
@@ -42,6 +43,49 @@ def _scene(system, principle, params, initial, t_span):
             _SCENES.clear()
         _SCENES[key] = (system, scene)
     return scene
+
+
+class Unknowns:
+    """The shape of a system's two-point problem under a principle: the coordinates'
+    names, the unknowns (the independent velocities, then for vakonomic and Hoelder
+    the multipliers but those of g = 0, which enter the equations only through their
+    rates: inert, kept at 0), the multipliers kept fixed at 0, and each unknown's
+    coordinate (for the straight-line guess; None for a multiplier)."""
+
+    __slots__ = ("system", "coords", "unknowns", "fixed", "bases")
+
+    def __init__(self, system, principle):
+        from .. import codegen
+
+        self.system = system
+        self.coords = tuple(s.name for s in system.J.q)
+        velocities = tuple(v.name for v in system.independent_velocities)
+        mults = codegen.multiplier_names(system, principle)
+        inert = {mults[a] for a in system.holonomic_rows if a < len(mults)}
+        self.unknowns = velocities + (tuple(m for m in mults if m not in inert)
+                                      if principle in VARIATIONAL else ())
+        self.fixed = MappingProxyType({m: 0.0 for m in mults if m in inert}
+                                      if principle in VARIATIONAL
+                                      else {m: 0.0 for m in mults})
+        self.bases = tuple(
+            next((system.J.split(s)[0].name for s in system.independent_velocities
+                  if s.name == v), None) for v in self.unknowns)
+
+    @classmethod
+    def of(cls, system, principle) -> "Unknowns":
+        """The shape of ``system``'s problem under ``principle`` (made once, kept
+        for the last 16 pairs: repeated problems on one system derive nothing)."""
+        hit = _UNKNOWNS.get((id(system), principle))
+        if hit is not None and hit.system is system:
+            return hit
+        found = cls(system, principle)
+        if len(_UNKNOWNS) >= 16:
+            _UNKNOWNS.clear()
+        _UNKNOWNS[id(system), principle] = found
+        return found
+
+
+_UNKNOWNS: dict = {}
 
 
 def _configuration(values, coords, what, complete) -> dict[str, float]:
@@ -142,16 +186,12 @@ def tangent_split(system, free) -> tuple[list, list]:
         "named coordinates already fix g; name other coordinates of end")
 
 
-def _guess(guess, unknowns, fixed, system, q0, q1, T):
+def _guess(guess, unknowns, fixed, bases, q0, q1, T):
     """The starting unknowns (and Suslov's fixed multipliers) from ``guess`` or the
-    straight line."""
+    straight line (``bases``: each unknown's coordinate, ``Unknowns.bases``)."""
     if guess is None:
-        u = []
-        for v in unknowns:
-            base = next((system.J.split(s)[0].name for s in system.independent_velocities
-                         if s.name == v), None)
-            u.append((q1[base] - q0[base]) / T if base in q1 else 0.0)
-        return np.array(u, dtype=float), fixed
+        return np.array([(q1[base] - q0[base]) / T if base in q1 else 0.0
+                         for base in bases], dtype=float), fixed
     if hasattr(guess, "items"):
         u = {}
         for k, val in guess.items():
