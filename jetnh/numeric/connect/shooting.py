@@ -163,7 +163,7 @@ class Shooter:
         self.end_names = tuple(q1)
         self.seen: dict = {}
         self.span = scene.t_span         # the runs' span (continuation in T moves t1)
-        self.n_velocities = len(scene.system.independent_velocities)   # lead unknowns
+        self.n_velocities = len(scene.velocities)       # the independent: lead unknowns
         self.plans: dict = {}            # (span, save) -> the driver's plan of the runs
         self.holonomic = bool(scene.system.holonomic)
         self.stops: dict = {}

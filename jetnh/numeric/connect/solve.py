@@ -411,11 +411,12 @@ class Search(Shooter):
         # the dependent velocities at t0: the aux kernel on the first row alone
         aux = np.empty((1, tr.layout.n_aux))
         tr._kernels.aux_rows(tr.t[:1], tr.y[:1], tr._p, aux)
-        start = list(tr.y[0]) + list(aux[0, :len(scene.dependent_velocities)])
+        dependent = scene.dependent_velocities
         best = Connection(
             trajectory=tr,
-            initial=MappingProxyType({n: float(v) for n, v in zip(
-                scene.state_names + scene.dependent_velocities, start)}),
+            initial=MappingProxyType(dict(zip(
+                scene.state_names + dependent,
+                tr.y[0].tolist() + aux[0, :len(dependent)].tolist()))),
             residual=residual, principle=scene.principle, unknowns=self.unknowns,
             rank=rank(full, self.rcond), singular_values=tuple(full.tolist()),
             iterations=iterations,
