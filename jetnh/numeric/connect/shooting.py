@@ -66,24 +66,24 @@ class Shot:
         out = interrupt.call(plan.entry, halt, plan.limit,
                              (*plan.prefix, plan.t0, plan.t1, y, p, *plan.suffix, halt))
         wall = time.perf_counter() - tic
-        n_out = int(out[3])
-        if out[0] == EVENT and plan.switch:
+        status, n_out = out[0], int(out[3])
+        if status == EVENT and plan.switch:
             # at the edge of the scene's split (connect's runs watch no other event): the
             # run taken across it as Scene.run does
             return cls._across(scene, plan, y[:n], p, stops, out)
-        if out[0] != FINISHED or n_out < 1:
+        if status != FINISHED or n_out < 1:
             if stops is not None:
-                stops[int(out[0])] = stops.get(int(out[0]), 0) + 1
+                stops[int(status)] = stops.get(int(status), 0) + 1
                 stops["y"] = (float(out[1][n_out - 1]),
                               np.array(out[2][n_out - 1][:n])) if n_out else None
             return None
         last = out[2][n_out - 1]
+        S = last[n:]
         # the loop has checked the state (``loop.finite_status``), not its sensitivities
-        if not all_finite(last[n:]):
+        if not all_finite(S):
             return None
         self = object.__new__(cls)
-        self.t, self.y = float(out[1][n_out - 1]), last[:n]
-        self.S = last[n:].reshape(n, m)
+        self.t, self.y, self.S = float(out[1][n_out - 1]), last[:n], S.reshape(n, m)
         self._made, self._trajectory = (scene, plan, out, wall, y, p), None
         return self
 
@@ -198,7 +198,10 @@ class Shooter:
                 scene._check_holonomic(y, span[0], scene._p)
             except JetnhError:
                 return None
-        shot = Shot.of(scene, self.plan(span, save), y, scene._p, self.stops)
+        plan = self.plans.get((span, save))
+        if plan is None:
+            plan = self.plan(span, save)
+        shot = Shot.of(scene, plan, y, scene._p, self.stops)
         last = self.stops.pop("y", None)
         if shot is None and last is not None and arguments.all_finite(last[1]):
             from .verdicts import split_measure
@@ -236,11 +239,13 @@ class Shooter:
         """``(q_named(t1), dq_named(t1)/du, its Shot)``, or None where the run fails
         (the last few kept: the guess and the answer are evaluated more than once)."""
         key = (np.asarray(u, dtype=float).tobytes(), self.span)
-        if key not in self.seen:
-            if len(self.seen) > 8:
-                self.seen.clear()
-            self.seen[key] = self._endpoint(u)
-        return self.seen[key]
+        seen = self.seen
+        got = seen.get(key, seen)           # (the dict itself: not seen)
+        if got is seen:
+            if len(seen) > 8:
+                seen.clear()
+            got = seen[key] = self._endpoint(u)
+        return got
 
     def _endpoint(self, u):
         shot = self.run(u)

@@ -10,6 +10,7 @@ import numpy as np
 
 from ...errors import ConnectError, JetnhError
 from . import direct
+from .collocation import warm_start
 from .connection import Connection, Stitched
 from .levenberg import levenberg_marquardt
 from .problem import VARIATIONAL
@@ -91,8 +92,6 @@ class Search(Shooter):
         """The default guess made usable: where its run fails before t1, the
         collocation warm start (``collocation.warm_start`` from the straight line,
         milliseconds) when its run reaches t1; else ``regular_start``."""
-        from .collocation import warm_start
-
         if self.endpoint(u0) is None:
             u = warm_start(self, self.leading(u0))
             if u is not None and self.endpoint(u) is not None:
@@ -282,8 +281,6 @@ class Search(Shooter):
         """A direct collocation warm start (``collocation.warm_start``: scipy's solve_bvp
         on the scene's equations from the straight line, the conditions ``rows``),
         polished by Newton on them.  Returns ``(u, converged, iterations, where)``."""
-        from .collocation import warm_start
-
         u = warm_start(self, rows, u0)
         if u is None:
             return u0, False, 0, "its mesh limit without a solution"
