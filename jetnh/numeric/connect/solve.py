@@ -402,9 +402,12 @@ class Search(Shooter):
                 raise ConnectError(f"the motion found stops before t1: "
                                    f"{scene.run(y0=self.state(u)).stop_reason}")
             q, Jm, tr = got[0], got[1], got[2].trajectory
-        miss = abs(q - self.target)
-        residual = float(miss.max())
-        full = singular_values(Jm)
+        # a few entries: as Python floats (the same IEEE operations as numpy's, without
+        # an array call each)
+        target = self.target.tolist()
+        miss = [abs(a - b) for a, b in zip(q.tolist(), target)]
+        residual = max(miss)
+        full = singular_values(Jm).tolist()
         # the dependent velocities at t0: the aux kernel on the first row alone
         aux = np.empty((1, tr.layout.n_aux))
         tr._kernels.aux_rows(tr.t[:1], tr.y[:1], tr._p, aux)
@@ -415,12 +418,13 @@ class Search(Shooter):
                 scene.state_names + dependent,
                 tr.y[0].tolist() + aux[0, :len(dependent)].tolist()))),
             residual=residual, principle=scene.principle, unknowns=self.unknowns,
-            rank=rank(full, self.rcond), singular_values=tuple(full.tolist()),
+            rank=sum(1 for s in full if s > self.rcond * full[0]) if full and full[0] > 0
+            else 0, singular_values=tuple(full),
             iterations=iterations,
             _columns=tuple(self.cols), _rcond=self.rcond, _run=MappingProxyType(
                 {"rtol": self.rtol, "atol": self.atol, "method": self.method}),
             conditions=self.conditions, route=route)
-        if tol is not None and (miss / (1 + abs(self.target))).max() > tol:
+        if tol is not None and max(m / (1 + abs(b)) for m, b in zip(miss, target)) > tol:
             raise ConnectError(
                 f"the {scene.principle} motion found ends {residual:.3g} away from end"
                 + self._reachability(u), best)
