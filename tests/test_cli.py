@@ -290,8 +290,10 @@ def test_cache_info_names_the_fallback(capsys, tmp_path, monkeypatch):
     code, out, _ = inproc(capsys, "cache", "info")
     assert code == 0 and "not usable" in out and "writable by group or others" in out
     assert "temporary cache" in out
-    code, out, _ = inproc(capsys, "cache", "warm")      # nothing compiled for nothing
-    assert code == 0 and out.startswith("not warmed") and "writable by group" in out
+    code, out, err = inproc(capsys, "cache", "warm")    # nothing compiled for nothing
+    assert code == 3 and not out
+    assert err.startswith("jetnh cache warm: error: nothing warmed: the kernel cache")
+    assert "writable by group" in err and "each run compiles its loops on first use" in err
     code, _, err = inproc(capsys, "cache", "frobnicate")
     assert code == 2 and "invalid choice" in err
 
@@ -484,3 +486,131 @@ def test_simulate_plot_has_the_path_panel():
     assert (plane.get_xlabel(), plane.get_ylabel()) == ("x", "y") and len(fig.axes) == 4
     assert plane.get_aspect() == 1.0
     assert len(_figure(traj, disk, "disk").axes) == 3
+
+
+def test_the_default_tolerances_are_step_controls(capsys, monkeypatch):
+    """Settings a model does not give fall back on StepControl's tolerances, which the
+    help shows (read when the help is printed)."""
+    import argparse
+
+    from jetnh.cli.loading import load_model, settings
+    from jetnh.numeric.options import StepControl
+
+    monkeypatch.setattr(StepControl, "rtol", 2.5e-7)
+    monkeypatch.setattr(StepControl, "atol", 3.5e-11)
+    opts = settings(argparse.Namespace(), load_model("chaplygin_sleigh"))
+    assert (opts.rtol, opts.atol, opts.points, opts.t_start) == (2.5e-7, 3.5e-11, 201, 0.0)
+    code, out, _ = inproc(capsys, "simulate", "--help")
+    out = " ".join(out.split())
+    assert code == 0 and "--rtol RTOL relative tolerance of the adaptive methods (default: " \
+                         "the model's, else 2.5e-07)" in out
+    assert "--atol ATOL absolute tolerance of the adaptive methods (default: the model's, " \
+           "else 3.5e-11)" in out
+    assert "(default: the model's, else 201; 0: every step)" in out
+    assert "--t-start T0 start time (default: the model's, else 0)" in out
+
+
+def test_make_installs_with_an_unusable_cache(tmp_path):
+    """make's install step runs `jetnh cache warm` and accepts its exit code 3 (the
+    cache cannot be used; runs still work) with a note, but stops on any other failure:
+    the step as `make -n` prints it, run by sh with jetnh in place of the venv's."""
+    import os
+    import shutil
+    from pathlib import Path
+
+    import pytest
+
+    if shutil.which("make") is None:
+        pytest.skip("no make")
+    root = Path(__file__).resolve().parents[1]
+    venv = tmp_path / "venv"
+    printed = subprocess.run(["make", "-n", "-C", str(root), f"VENV={venv}",
+                              f"{venv}/.installed"], capture_output=True, text=True,
+                             timeout=60)
+    assert printed.returncode == 0, printed.stderr
+    script = printed.stdout
+    step = script[script.index(f"{venv}/bin/jetnh"):script.index(f"touch {venv}")]
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    shared.chmod(0o777)
+    env = {**os.environ, "JETNH_CACHE": str(shared)}
+
+    def install(jetnh):
+        return subprocess.run(["sh", "-c", step.replace(f"{venv}/bin/jetnh", jetnh)],
+                              capture_output=True, text=True, env=env, timeout=300)
+    r = install(f"{sys.executable} -m jetnh")
+    assert r.returncode == 0, r.stderr
+    assert "jetnh cache warm: error: nothing warmed" in r.stderr
+    assert "make: installed without warming the cache (see above)" in r.stdout
+    for code in (1, 2):                                   # any other failure stops make
+        r = install(f"sh -c 'exit {code}'")
+        assert r.returncode != 0 and "installed without" not in r.stdout
+
+
+# ---------------------------------------------------------------------- help as read
+def test_help_is_filled_to_the_terminal(capsys, monkeypatch):
+    """Descriptions and epilogs wrap at the terminal's width (examples, indented, stay
+    whole); every command has a description and helps its positional arguments."""
+    monkeypatch.setenv("COLUMNS", "80")
+    for command in ("", "models", "derive", "compare", "simulate", "connect", "sweep",
+                    "linearize", "bench", "cache", "reproduce"):
+        code, out, _ = inproc(capsys, *command.split(), "--help")
+        assert code == 0
+        long = [line for line in out.splitlines()
+                if len(line) > 80 and not line.startswith("  jetnh ")]
+        assert not long, (command, long)
+        usage, description = out.split("\n\n")[:2]
+        assert not description.startswith(("positional", "options")), command
+    code, out, _ = inproc(capsys, "bench", "--help")
+    assert "a benchmark script of benchmarks/" in out and "the script's own options" in out
+    code, out, _ = inproc(capsys, "models", "--help")
+    assert "a catalogue name, with options" in " ".join(out.split())
+    code, out, _ = inproc(capsys, "--help")
+    assert "derive, compare, simulate, connect, sweep and linearize" in " ".join(out.split())
+
+
+def test_connect_offers_only_what_it_uses(capsys, monkeypatch, tmp_path):
+    """connect's help states its own defaults (vakonomic, jetnh.connect's tolerances); it
+    has no --convention or --steps, which it would ignore; a model file's principle is
+    its default, as for the other commands."""
+    import inspect
+    from pathlib import Path
+
+    from jetnh.errors import ConnectError
+    from jetnh.numeric import connect as connecting
+
+    code, out, _ = inproc(capsys, "connect", "--help")
+    out = " ".join(out.split())
+    rtol = inspect.signature(connecting.connect).parameters["rtol"].default
+    assert code == 0 and f"(default: jetnh.connect's, {rtol:g})" in out
+    assert "(default: the model's, else vakonomic);" in out
+    for option in (("--convention", "imposed"), ("--steps", "5")):
+        code, _, err = inproc(capsys, "connect", "heisenberg", "--to", "x=1", *option)
+        assert code == 2 and f"unrecognized arguments: {' '.join(option)}" in err
+
+    used = []
+
+    def connect(system, principle, *args, **kw):
+        used.append(principle)
+        raise ConnectError("stopped by the test")
+    monkeypatch.setattr(connecting, "connect", connect)
+    vakonomic = Path(__file__).resolve().parents[1] / "examples" / "heisenberg_vakonomic.toml"
+    holder = tmp_path / "heisenberg_holder.toml"
+    holder.write_text(vakonomic.read_text().replace('principle = "vakonomic"',
+                                                    'principle = "holder"'))
+    for args in (("heisenberg",), ("heisenberg", "-p", "chetaev"), (str(holder),),
+                 (str(holder), "-p", "vakonomic")):
+        code, _, err = inproc(capsys, "connect", *args, "--to", "x=1", "--t-end", "1", "-q")
+        assert code == 1 and "stopped by the test" in err
+    assert used == ["vakonomic", "chetaev", "holder", "vakonomic"]
+
+
+def test_models_toml_needs_a_name(capsys):
+    code, out, err = inproc(capsys, "models", "--toml")
+    assert code == 2 and not out and "--toml prints one model as a model file" in err
+
+
+def test_method_default_is_the_models(capsys):
+    for command in ("simulate", "sweep"):
+        code, out, _ = inproc(capsys, command, "--help")
+        assert "(default: the model's, else dop853)" in " ".join(out.split()), command

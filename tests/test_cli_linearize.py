@@ -53,7 +53,8 @@ def test_steady_turning(capsys):
 
 
 @pytest.mark.parametrize("args,words", [
-    (["--param", "phi_t=1:2"], "NAME=A:B:N"),
+    (["--param", "phi_t=1:2"], "--param phi_t: '1:2' is not A:B:N"),
+    (["--param", "1:2:3"], "--param takes NAME=A:B:N"),
     (["--plot", "x.png"], "give --param"),
     (["--drop", "theta"], "cannot drop 'theta'"),
     (["--at", "zeta=1"], "not a state"),

@@ -6,46 +6,20 @@ import math
 
 import numpy as np
 import pytest
-import sympy as sp
 
 import jetnh as jn
 from jetnh.errors import ConnectError, ConstraintError, JetnhError
 
 from damped_sleigh import ORIGIN, PARAMS, damped_sleigh
+from holonomic_systems import FOURBAR, kane_fourbar
 
 
 @pytest.fixture(scope="module")
 def fourbar():
     """Three links l1, l2, l3 from the origin closing on (l4, 0): one degree of freedom,
     two loop-closure constraints (``configuration_constraints``)."""
-    me = pytest.importorskip("sympy.physics.mechanics")
-    q1, q2, q3 = me.dynamicsymbols("q1 q2 q3")
-    u1, u2, u3 = me.dynamicsymbols("u1 u2 u3")
-    l1, l2, l3, l4, m, g = sp.symbols("l1 l2 l3 l4 m g", positive=True)
-    N = me.ReferenceFrame("N")
-    A, B, C = (N.orientnew(n, "Axis", [q, N.z]) for n, q in zip("ABC", (q1, q2, q3)))
-    for F, u in zip((A, B, C), (u1, u2, u3)):
-        F.set_ang_vel(N, u * N.z)
-    P1 = me.Point("P1")
-    P1.set_vel(N, 0)
-    P2 = P1.locatenew("P2", l1 * A.x)
-    P2.v2pt_theory(P1, N, A)
-    P3 = P2.locatenew("P3", l2 * B.x)
-    P3.v2pt_theory(P2, N, B)
-    P4 = P3.locatenew("P4", l3 * C.x)
-    P4.v2pt_theory(P3, N, C)
-    loop = P4.pos_from(P1) - l4 * N.x
-    conf = [loop.dot(N.x), loop.dot(N.y)]
-    t = me.dynamicsymbols._t
-    vel = [sp.diff(e, t).subs({q1.diff(): u1, q2.diff(): u2, q3.diff(): u3}) for e in conf]
-    km = me.KanesMethod(N, q_ind=[q1], u_ind=[u1],
-                        kd_eqs=[q1.diff() - u1, q2.diff() - u2, q3.diff() - u3],
-                        q_dependent=[q2, q3], configuration_constraints=conf,
-                        u_dependent=[u2, u3], velocity_constraints=vel)
-    km.kanes_equations([me.Particle("pa", P2, m), me.Particle("pb", P3, m)],
-                       [(P2, -m * g * N.y), (P3, -m * g * N.y)])
-    s = jn.from_mechanics(km)
-    P = {"l1": 1.0, "l2": 3.0, "l3": 2.0, "l4": 3.0, "m": 1.0, "g": 9.81}
+    pytest.importorskip("sympy.physics.mechanics")
+    s, P = kane_fourbar(), FOURBAR
     sc = jn.Scene(s, "chetaev", params=P, initial={"q1": 1.2, "q2": 0.3, "q3": -1.5,
                                                    "q1_t": 2.0},
                   complete=True, t_span=(0.0, 0.5))
@@ -134,12 +108,12 @@ def test_no_best_motion_message_is_truthful(sleigh):
 
 
 def test_timeout_stops_the_search_with_the_closest_motion(sleigh):
-    """The audit's end beyond the edge of the split (th = 2 from th = 0 with y
-    dependent): a search of minutes without a budget; with one, a ConnectError saying
-    so, its closest motion a real run to t1."""
+    """An end the search does not reach (th = 20 from th = 0 in 1 s, through many
+    edges of the split): a search of 20 s without a budget; with one, a ConnectError
+    saying so, its closest motion a real run to t1."""
     s, P, O = sleigh
     with pytest.raises(ConnectError, match=r"timeout of 0\.5 s") as info:
-        jn.connect(s, "chetaev", O, {"x": 0.2, "th": 2.0}, (0.0, 1.0), params=P,
+        jn.connect(s, "chetaev", O, {"x": 3.0, "th": 20.0}, (0.0, 1.0), params=P,
                    timeout=0.5)
     best = info.value.best
     if best is not None:

@@ -1,8 +1,9 @@
 """Multiple shooting in connect (``segments``): the same answers as single shooting,
 and a long unstable span that single shooting cannot solve (and, where it cannot even
 polish multiple shooting's answer, the segments stitched into one motion); the knife
-edge's vakonomic motion to where its Chetaev motion goes in 1 s (the guess's run stops
-before t1) by the collocation warm start and by multiple shooting: the same answer.
+edge's vakonomic motion to where its Chetaev motion goes in 1 s (the guess's run crosses
+the edge of its split) by Newton, the collocation warm start and multiple shooting: the
+same answer.
 
 The unstable system: the Heisenberg constraint zdot = x ydot - y xdot with the
 inverted potential L = (xdot^2 + ydot^2)/2 + a^2 (x^2 + y^2)/2.  Its vakonomic equations
@@ -82,24 +83,37 @@ def test_segments_must_be_a_positive_integer():
         jn.connect(get("heisenberg"), "vakonomic", O, {"x": 1.0}, (0.0, 1.0), segments=0)
 
 
-def test_knife_edge_vakonomic_by_collocation_and_by_multiple_shooting():
-    """The straight-line guess's run stops before t1: the default guess is then the
-    collocation warm start (solve_bvp on the same equations), polished by Newton; the
-    straight line given as the guess goes to multiple shooting (its runs from the
-    line's inner states).  The same motion."""
+def test_knife_edge_vakonomic_by_newton_collocation_and_multiple_shooting():
+    """The straight-line guess's run crosses the edge of the split (y dependent, cos phi
+    small) and goes on in another (runs with sensitivities change split), so Newton
+    goes from it; the collocation warm start (solve_bvp on the same equations) from the
+    straight line, and multiple shooting on 3 segments from the line's inner states,
+    reach the same motion."""
+    from jetnh.numeric.connect import collocation
+    from jetnh.numeric.connect.problem import _scene
+    from jetnh.numeric.connect.solve import Search
+
     knife = get("knife_edge")
     ini = jn.models.initial("knife_edge")
     chetaev = jn.Scene(knife, "chetaev", initial=ini, t_span=(0.0, 1.0)).run()
     start = {c: float(chetaev[c][0]) for c in ("x", "y", "phi")}
     end = {c: float(chetaev[c][-1]) for c in ("x", "y", "phi")}
     warm = jn.connect(knife, "vakonomic", start, end, (0.0, 1.0))
-    assert warm.route == "Newton from the guess (the collocation warm start)"
+    assert warm.route == "Newton from the guess"
     line = {"x_t": end["x"] - start["x"], "phi_t": end["phi"] - start["phi"],
             "lambda_y": 0.0}
-    multiple = jn.connect(knife, "vakonomic", start, end, (0.0, 1.0), guess=line)
+    scene = _scene(knife, "vakonomic", None, {**start, **line}, (0.0, 1.0))
+    guess_run = scene.run(sensitivities=True, y0={**start, **line})
+    assert guess_run.status == 0 and guess_run.switches
+    multiple = jn.connect(knife, "vakonomic", start, end, (0.0, 1.0), guess=line,
+                          segments=3)
     assert multiple.route.startswith("multiple shooting")
     assert multiple.residual < 1e-9 and warm.residual < 1e-9
     _same(multiple, warm, 1e-7)
+    search = Search(scene, start, end, tuple(line), {}, 1e-10, 1e-12, "dop853", 1e-9)
+    u = collocation.warm_start(search, u=np.array(list(line.values())))
+    assert u is not None
+    assert max(abs(u[i] - warm.initial[k]) for i, k in enumerate(line)) < 1e-3
 
 
 def test_cli_segments_and_free_end(capsys):

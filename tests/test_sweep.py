@@ -395,10 +395,10 @@ def test_cli_point_methods(capsys):
 
 
 @pytest.mark.parametrize("args, code, words", [
-    (("--grid", "R=0.5:2"), 2, "neither START:STOP:N"),
-    (("--grid", "R=0.5:2:x"), 2, "neither START:STOP:N"),
-    (("--grid", "R=1,two"), 2, "neither START:STOP:N"),
-    (("--grid", "R"), 2, "--grid takes NAME=START:STOP:N"),
+    (("--grid", "R=0.5:2"), 2, "neither A:B:N"),
+    (("--grid", "R=0.5:2:x"), 2, "neither A:B:N"),
+    (("--grid", "R=1,two"), 2, "neither A:B:N"),
+    (("--grid", "R"), 2, "--grid takes NAME=A:B:N"),
     (("--grid", "R=1", "--grid", "R=2"), 2, "gives R twice"),
     (("--grid", "R=1", "--plot", "m.png"), 2, "exactly two --grid and a --value"),
     (("--grid", "Q=1"), 1, "neither a parameter"),

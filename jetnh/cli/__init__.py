@@ -1,11 +1,14 @@
-"""The ``jetnh`` command: derive, compare, simulate and sweep constrained systems; list the
-catalogue; run the benchmarks and the seed paper's reproduction.
+"""The ``jetnh`` command: derive, compare, simulate, connect, sweep and linearize
+constrained systems; list the catalogue; run the benchmarks and the seed paper's
+reproduction.
 
 MODEL is a catalogue name (``jetnh models`` lists them; options as in ``n_trailer:N=4``)
 or the path of a model file (TOML; see ``jetnh.modelfile`` and ``examples/*.toml``).
 
-Exit codes: 0 ok, 2 usage, 1 model or numerical error.  Errors print a message on
-stderr, never a traceback (``--debug`` shows one for errors that are jetnh's own bugs).
+Exit codes: 0 ok, 1 model or numerical error, 2 usage, 3 the kernel cache cannot be
+used (by ``jetnh cache warm``: nothing warmed; runs still work), 130 interrupted.  Errors print
+a message on stderr, never a traceback (``--debug`` shows one for errors that are
+jetnh's own bugs).
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """A model named on the command line (a catalogue name with options, or a model file) and
 the settings a command runs it with, resolved once: each the option given, else the
-model's default, else jetnh's (``DEFAULTS``)."""
+model's default, else jetnh's (``defaults()``)."""
 
 from __future__ import annotations
 
@@ -13,9 +13,18 @@ from ..errors import ModelFileError
 from ..modelfile import Model
 from .usage import UsageError
 
-#: jetnh's defaults of the settings a model does not give
-DEFAULTS = {"principle": "chetaev", "convention": "paper", "t_start": 0.0,
-            "method": "dop853", "rtol": 1e-9, "atol": 1e-12, "points": 201}
+#: jetnh's defaults of the settings a model does not give, but the tolerances
+_OWN = {"principle": "chetaev", "convention": "paper", "t_start": 0.0, "method": "dop853",
+        "points": 201}
+
+
+def defaults() -> dict:
+    """jetnh's defaults of the settings a model does not give; the tolerances are
+    ``StepControl``'s (imported here, when a command needs them: the numerics take
+    seconds to import, which a command that runs nothing should not pay)."""
+    from ..numeric.options import StepControl
+
+    return {**_OWN, "rtol": StepControl.rtol, "atol": StepControl.atol}
 
 _SPEC = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)(?::(.*))?$")
 
@@ -82,14 +91,15 @@ class Settings:
 
 def settings(args, model: Model) -> Settings:
     """The settings of a command: each option of ``args`` given (a command without the
-    option gives none), else ``model``'s default, else ``DEFAULTS``."""
+    option gives none), else ``model``'s default, else ``defaults()``."""
     given = {"principle": model.principle, "convention": model.convention,
              **model.simulation}
+    fallback = defaults()
 
     def pick(name):
         value = getattr(args, name, None)
         if value is not None:
             return value
-        return given[name] if given.get(name) is not None else DEFAULTS.get(name)
+        return given[name] if given.get(name) is not None else fallback.get(name)
     values = {f.name: pick(f.name) for f in fields(Settings)}
     return Settings(**{**values, "t_start": float(values["t_start"])})

@@ -6,19 +6,59 @@ from __future__ import annotations
 
 import argparse
 import math
+import textwrap
 
 from ..errors import PrincipleError
 from ..mechanics import principles
 from ..mechanics.principles import PRINCIPLES
-from .loading import DEFAULTS
+from .loading import defaults
 from .render import SCREEN_BUDGET
+from .usage import UsageError
 
 EPILOG_MODEL = ("MODEL: a catalogue name (see `jetnh models`; scalable ones take options, "
                 "e.g. n_trailer:N=4) or a model file (TOML, e.g. examples/rolling_disk.toml).")
 
 
-class Formatter(argparse.RawDescriptionHelpFormatter):
-    pass
+#: stands in an option's help for the default of its setting, looked up when the help is
+#: shown (``shown_default``)
+FALLBACK = "{default}"
+
+
+class Formatter(argparse.HelpFormatter):
+    """Each paragraph of a description or epilog (lines up to a blank or indented one)
+    filled to the terminal's width, indented lines (examples) kept as written;
+    ``FALLBACK`` in an option's help becomes its default, looked up only when the help is
+    shown (the tolerances come from the numerics, which a command imports only when it
+    runs)."""
+
+    def _fill_text(self, text, width, indent):
+        out, paragraph = [], []
+        for line in text.splitlines() + [""]:
+            if line and not line[0].isspace():
+                paragraph.append(line.strip())
+                continue
+            if paragraph:
+                out.append(textwrap.fill(" ".join(paragraph), width, initial_indent=indent,
+                                         subsequent_indent=indent))
+                paragraph = []
+            out.append(indent + line if line else line)
+        return "\n".join(out[:-1])
+
+    def _get_help_string(self, action):
+        text = super()._get_help_string(action)
+        default = getattr(action, "default_shown", None)
+        return text.replace(FALLBACK, f"{default():g}") if default else text
+
+
+def shown_default(action: argparse.Action, default) -> argparse.Action:
+    """``action`` whose help shows ``default()`` in place of ``FALLBACK``."""
+    action.default_shown = default
+    return action
+
+
+def jetnh_default(name):
+    """The lookup of jetnh's default of the setting ``name`` (``loading.defaults``)."""
+    return lambda: defaults()[name]
 
 
 # ---------------------------------------------------------------------- value types
@@ -67,6 +107,38 @@ def positive_count(text: str) -> int:
     return count(text, 1)
 
 
+#: the most values an ``A:B:N`` range gives
+MAX_RANGE = 100_000
+
+
+def evenly_spaced(text: str, what: str, least: int, one: str = "",
+                  otherwise: str = "") -> tuple[float, float, int]:
+    """``A:B:N``, N evenly spaced values from A to B, as ``(A, B, N)``: A and B finite
+    numbers (read by float(), never evaluated), N an integer from ``least`` (the command's
+    rule: a scan needs 2 values, a grid axis 1) to ``MAX_RANGE``; A = B only for N = 1.
+    ``what`` names the option in the messages, ``one`` says how to give the single value
+    instead (``{a}`` standing for it), ``otherwise`` names the other form the option
+    takes."""
+    parts = text.split(":")
+    try:
+        if len(parts) != 3:
+            raise ValueError
+        a, b, n = float(parts[0]), float(parts[1]), int(parts[2])
+    except ValueError:
+        form = "A:B:N (N evenly spaced values from A to B; A and B numbers, N an integer)"
+        raise UsageError(f"{what}: {text!r} is "
+                         + (f"neither {form} nor {otherwise}" if otherwise else f"not {form}")
+                         ) from None
+    if not least <= n <= MAX_RANGE:
+        raise UsageError(f"{what}: N must be from {least} to {MAX_RANGE}, got {n}")
+    if not (math.isfinite(a) and math.isfinite(b)):
+        raise UsageError(f"{what}: A and B must be finite numbers, got {text!r}")
+    if a == b and n > 1:
+        raise UsageError(f"{what}: {text!r} is a range of zero width ({n} equal values); "
+                         "give A != B" + (", or " + one.format(a=f"{a:g}") if one else ""))
+    return a, b, n
+
+
 ALIASES = "aliases: " + "; ".join(f"{', '.join(p.aliases)} (= {p.name})"
                                   for p in principles.REGISTRY if p.aliases)
 
@@ -88,30 +160,50 @@ def _common() -> argparse.ArgumentParser:
     return common
 
 
+def principle_option(parser, default: str):
+    """--principle (-p), its default described by ``default``."""
+    parser.add_argument("--principle", "-p", choices=PRINCIPLES, type=canonical_principle,
+                        default=None, metavar="NAME",
+                        help=f"{', '.join(PRINCIPLES[:-1])} or {PRINCIPLES[-1]} (default: "
+                             f"{default}); {ALIASES}")
+
+
 def _principle() -> argparse.ArgumentParser:
     principle = argparse.ArgumentParser(add_help=False)
-    principle.add_argument("--principle", "-p", choices=PRINCIPLES, type=canonical_principle,
-                           default=None, help="default: the model file's, else chetaev "
-                                              "(Lagrange-d'Alembert); " + ALIASES)
+    principle_option(principle, "the model's, else chetaev: Lagrange-d'Alembert")
     principle.add_argument("--convention", choices=("paper", "imposed"), default=None,
                            help="paper: every variation is independent after the commutator "
                                 "(as the paper); imposed: the variation's own condition is "
-                                "imposed (default: the model file's, else paper)")
+                                "imposed (default: the model's, else paper)")
     return principle
+
+
+def span_options(parser):
+    """--t-start and --t-end."""
+    shown_default(parser.add_argument(
+        "--t-start", type=float, default=None, metavar="T0",
+        help="start time (default: the model's, else " + FALLBACK + ")"),
+        jetnh_default("t_start"))
+    parser.add_argument("--t-end", type=float, default=None, metavar="T",
+                        help="end time (default: the model's: its [simulation] t_end; "
+                             "every catalogue model has one)")
+
+
+def tolerance_options(parser, default: str, rtol, atol, of="the adaptive methods"):
+    """--rtol and --atol of the integration, their defaults described by ``default`` and
+    looked up by ``rtol()`` and ``atol()`` (when the help is shown)."""
+    for name, what, get in (("rtol", "relative", rtol), ("atol", "absolute", atol)):
+        shown_default(parser.add_argument(
+            f"--{name}", type=float, default=None, metavar=name.upper(),
+            help=f"{what} tolerance of {of} (default: {default}" + FALLBACK + ")"), get)
 
 
 def _run() -> argparse.ArgumentParser:
     run = argparse.ArgumentParser(add_help=False, parents=[PRINCIPLE])
-    run.add_argument("--t-start", type=float, default=None, metavar="T0",
-                     help=f"default: the model's, else {DEFAULTS['t_start']:g}")
-    run.add_argument("--t-end", type=float, default=None, metavar="T",
-                     help="end time (default: the model's [simulation] t_end or the "
-                          "catalogue's)")
-    run.add_argument("--rtol", type=float, default=None,
-                     help=f"default: the model's, else {DEFAULTS['rtol']:g}")
-    run.add_argument("--atol", type=float, default=None,
-                     help=f"default: the model's, else {DEFAULTS['atol']:g}")
-    run.add_argument("--steps", type=int, default=1000,
+    span_options(run)
+    tolerance_options(run, "the model's, else ", jetnh_default("rtol"),
+                      jetnh_default("atol"))
+    run.add_argument("--steps", type=int, default=1000, metavar="N",
                      help="steps of the fixed-step methods rk4, dla and dvi (default 1000)")
     return run
 
@@ -120,8 +212,8 @@ def _run() -> argparse.ArgumentParser:
 COMMON = _common()
 #: options of the subcommands that derive under a principle (derive, linearize)
 PRINCIPLE = _principle()
-#: options of the subcommands that integrate a model (simulate, connect, sweep): the
-#: principle's and the run's
+#: options of the subcommands that integrate a model (simulate, sweep): the principle's
+#: and the run's
 RUN = _run()
 
 #: the library's argument names (``JetnhError.argument``) -> the destination and the

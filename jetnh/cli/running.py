@@ -31,9 +31,9 @@ def method_of(name: str):
     return method(name)
 
 
-METHOD_HELP = ("dop853 (default), dopri5, rk4, radau (implicit, for stiff problems), dla "
+METHOD_HELP = ("dop853, dopri5, rk4, radau (implicit, for stiff problems), dla "
                "(discrete Lagrange-d'Alembert, chetaev only), dvi (discrete vakonomic) or "
-               "scipy-<RK45|DOP853|Radau|BDF|LSODA>")
+               "scipy-<RK45|DOP853|Radau|BDF|LSODA> (default: the model's, else dop853)")
 
 
 def state_names(system, principle) -> list:

@@ -29,8 +29,14 @@ read as its canonical name), ``convention`` ("paper" | "imposed"), ``[multiplier
 (initial values of the multipliers lambda_<dependent> of the vakonomic, Hoelder and
 Suslov principles; they may also stand in ``[initial]``), ``[integrals]`` (name =
 expression: first integrals for ``jetnh simulate`` to monitor; they may use the
-multipliers) and ``[simulation]`` (``t_start``, ``t_end``, ``method``, ``rtol``,
-``atol``, ``points``).  Any other key is an error.  The ``[simulation]`` values are
+multipliers), ``[simulation]`` (``t_start``, ``t_end``, ``method``, ``rtol``,
+``atol``, ``points``) and ``[assumptions]`` (parameter = a table of booleans, e.g.
+``m = { positive = true }``: what sympy may take as known about the parameter, as
+``sp.Symbol("m", positive=True)``; the facts are ``real``, ``nonzero``, ``nonnegative``,
+``nonpositive``, ``integer``, ``positive`` and ``negative``, and the parameter's value
+must satisfy them; without it a parameter is a plain symbol, and ``jetnh.compare``'s
+singular sets keep branches such as ``m = 0``).  Any other key is an error (so jetnh
+before ``[assumptions]`` refuses a file that has it, rather than drop the assumptions).  The ``[simulation]`` values are
 checked when the file is read, as a run checks them (before any derivation): a known
 method, ``rtol`` below 1, a span of nonzero length that floating point resolves;
 ``t_end`` below ``t_start`` integrates backwards in time.
@@ -118,8 +124,8 @@ time).  The limits are module attributes (``jetnh.modelfile.limits``): a trusted
 may raise them, e.g. ``jetnh.modelfile.MAX_CONSTRAINTS = 32``.
 
 The modules: ``read`` (files and text), ``schema`` (keys, names, building the ``System``),
-``expression`` (the expression language, both ways), ``write``, ``model`` (the ``Model``
-record, shared with the catalogue) and ``limits``.
+``expression`` (the expression language, both ways), ``assumptions`` (of parameters),
+``write``, ``model`` (the ``Model`` record, shared with the catalogue) and ``limits``.
 """
 
 import sys

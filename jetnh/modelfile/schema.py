@@ -20,7 +20,7 @@ from ..errors import JetnhError, ModelFileError, PrincipleError
 from ..geometry.jet import JetSpace
 from ..mechanics import principles
 from ..mechanics.system import System
-from . import limits
+from . import assumptions, limits
 from .expression import CONSTANTS, FUNCTIONS, Budget, parse_expression, real_somewhere
 from .model import Model
 from .text import refuse_non_ascii, shorten
@@ -29,7 +29,7 @@ TIME = "t"
 
 TOP_KEYS = {"name", "description", "coordinates", "dependent", "lagrangian", "constraints",
             "forces", "dissipation", "branch", "principle", "convention", "parameters",
-            "initial", "multipliers", "integrals", "simulation"}
+            "initial", "multipliers", "integrals", "simulation", "assumptions"}
 REQUIRED_KEYS = ("coordinates", "lagrangian")
 SIMULATION_KEYS = {"t_start": "number", "t_end": "number", "method": "string",
                    "rtol": "number", "atol": "number", "points": "integer"}
@@ -47,6 +47,7 @@ def _expect(where, value, kind):
     ok = {"string": lambda v: isinstance(v, str),
           "number": lambda v: isinstance(v, (int, float)) and not isinstance(v, bool),
           "integer": lambda v: isinstance(v, int) and not isinstance(v, bool),
+          "boolean": lambda v: isinstance(v, bool),
           "table": lambda v: isinstance(v, dict),
           "list of strings": lambda v: isinstance(v, list) and all(isinstance(x, str) for x in v),
           }[kind](value)
@@ -176,7 +177,8 @@ def _from_dict(data: dict, source: str) -> Model:
             raise ModelFileError(f"{S}: [parameters]: {k!r} ends in '_t...', which marks "
                                  "velocities; rename the parameter")
         params[k] = float(_expect(f"{S}: [parameters] {k}", v, "number"))
-    names.update({k: sp.Symbol(k) for k in params})
+    names.update(_parameter_symbols(S, params, _expect(f"{S}: [assumptions]",
+                                                       data.get("assumptions", {}), "table")))
     hint = {}
     for q in J.q:
         for order in (2, 3, 4):
@@ -228,7 +230,7 @@ def _from_dict(data: dict, source: str) -> Model:
     used = set().union(L.free_symbols, *(c.free_symbols for c in cons),
                        *(f.free_symbols for f in forces.values()),
                        dissipation.free_symbols if dissipation is not None else set())
-    unused = sorted(k for k in params if sp.Symbol(k) not in used)
+    unused = sorted(k for k in params if names[k] not in used)
     if unused:
         raise ModelFileError(f"{S}: [parameters]: {', '.join(unused)} "
                              f"{'is' if len(unused) == 1 else 'are'} used neither in the "
@@ -277,7 +279,7 @@ def _from_dict(data: dict, source: str) -> Model:
         # takes sympy unbounded time (a general quartic, two coupled quadratics); reading
         # never solves, the branch is checked when the equations are first derived
         system = System(J, L, cons, dependent,
-                        defaults={sp.Symbol(k): v for k, v in params.items()}, name=name,
+                        defaults={names[k]: v for k, v in params.items()}, name=name,
                         forces=forces, dissipation=dissipation, branch=branch,
                         check_branch=False)
     except JetnhError as exc:
@@ -329,6 +331,26 @@ def _from_dict(data: dict, source: str) -> Model:
 
     return Model(system, name, description, initial, principle, convention, integrals,
                  dict(sim), S)
+
+
+def _parameter_symbols(S, params: dict, given: dict) -> dict:
+    """The parameters' symbols by name, with the ``[assumptions]`` given for them (a
+    table of booleans per parameter, ``jetnh.modelfile.assumptions``), their values
+    checked against them."""
+    for k in given:
+        if k not in params:
+            raise ModelFileError(f"{S}: [assumptions]: {k!r} is not one of the parameters "
+                                 f"({', '.join(sorted(params)) or 'none'}); only parameters "
+                                 "carry assumptions")
+    symbols = {}
+    for k, v in params.items():
+        where = f"{S}: [assumptions] {k}"
+        facts = _expect(where, given.get(k, {}), "table")
+        for fact, holds in facts.items():
+            _expect(f"{where}: {fact}", holds, "boolean")
+        symbols[k] = assumptions.symbol(k, facts, where)
+        assumptions.check_value(symbols[k], v, f"{S}: [parameters]")
+    return symbols
 
 
 def _check_run_settings(S, sim):

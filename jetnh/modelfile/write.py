@@ -11,6 +11,7 @@ import sympy as sp
 from ..errors import ModelFileError
 from ..mechanics import principles
 from ..mechanics.system import System
+from . import assumptions
 from .expression import expression_text
 from .model import Model
 from .read import loads
@@ -67,6 +68,12 @@ def dumps(system: System | Model, initial=None, *, params=None, principle=None,
     if unknown:
         raise ModelFileError(f"params has {', '.join(unknown)}, which the system does not "
                              "use")
+    names = [p.name for p in system.parameters]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise ModelFileError(f"the system has two parameters named {', '.join(twice)} "
+                             "(with different assumptions); a model file names each once")
+    facts = {p.name: assumptions.facts(p, "dumps") for p in system.parameters}
     missing = [p.name for p in system.parameters if p.name not in values]
     if missing:
         raise ModelFileError(f"the parameters {', '.join(missing)} have no values; give "
@@ -95,6 +102,10 @@ def dumps(system: System | Model, initial=None, *, params=None, principle=None,
         lines.append("\n[parameters]")
         lines += [f"{k} = {_toml_number(v)}" for k, v in sorted(values.items())
                   if k in {p.name for p in system.parameters}]
+    if any(facts.values()):
+        lines.append("\n[assumptions]")
+        lines += [f"{k} = {{ " + ", ".join(f"{f} = {str(v).lower()}" for f, v in held.items())
+                  + " }" for k, held in sorted(facts.items()) if held]
     if system.forces:
         lines.append("\n[forces]")
         lines += [f"{q.name} = {_toml_string(expression_text(Q))}"

@@ -45,24 +45,35 @@ A switched run is one ``Trajectory`` of the scene: its rows are in the scene's s
 layout (the other charts' rows mapped), its dependent velocities, residuals, energy and
 first integrals come from each chart's own kernels, dense output re-takes each chart's
 own steps, and ``traj.switches`` (also in the diagnostics) lists (time, from, to).
+
+A run with sensitivities (S = dy(t)/d(y0, p)) switches too, each chart with its own
+sensitivity kernels.  The flow on the constraint manifold is one flow: written in two
+charts, y_beta = Phi(t, y_alpha, p) (``change_map``) carries the motions of one onto
+those of the other, so the switch time's dependence on y0 drops out and S goes across
+as S_beta = D_y S_alpha + (0 | D_p), D the derivative of the chart change at the switch
+point (``Chart.carry``; from the graph, compiled once per pair of charts).  The rows
+of other charts, S too, are mapped home the same way.  Ensembles with sensitivities
+keep their split.
 """
 
 from __future__ import annotations
 
+import copy
+import math
 import time
 from itertools import combinations
 
 import numpy as np
 import sympy as sp
 
-from ..algebra import linalg
+from ..algebra import dag, linalg
 from ..errors import JetnhError
 from ..mechanics import principles
 from .methods import projection
 from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, SINGULAR, STOPPED
-from . import loops
+from . import arguments, loops
 from .events import Event, as_events
-from .kernels.calls import Kernel
+from .kernels.calls import Kernel, Rows
 from .methods.loop import Watch
 from .trajectory import Trajectory
 
@@ -111,10 +122,15 @@ def applies(scene, events) -> bool:
 
 
 def atlas(scene) -> "Atlas":
-    """The atlas of ``scene`` (built once, kept in its memo)."""
+    """The atlas of ``scene`` (built once, kept in its memo; a copy of the scene with the
+    same kernels, ``Scene.replace``, takes the first one's charts: ``Atlas.moved``)."""
     found = scene._memo.get("atlas")
     if found is None:
-        found = scene._memo["atlas"] = Atlas(scene)
+        first = scene._memo.setdefault("atlases", [])      # (shared by the copies)
+        found = Atlas(scene) if not first else first[0].moved(scene)
+        if not first:
+            first.append(found)
+        scene._memo["atlas"] = found
     return found
 
 
@@ -133,8 +149,9 @@ class Chart:
         self.explicit = explicit
         self.n, self.k = len(names), len(split)
         self.scene = scene
-        self._kernels = self._jacobian = None
+        self._kernels = self._jacobian = self._sens = None
         self._columns: dict = {}
+        self._changes: dict = {}
 
     @property
     def kernels(self):
@@ -155,6 +172,47 @@ class Chart:
                                              len(self.scene.runtime_params),
                                              self.k * self.n))
         return self._jacobian
+
+    @property
+    def sensitivity_kernels(self):
+        """The kernels of this chart's state augmented by its sensitivities
+        (``kernels.sensitivity_kernels`` of its scene), looked up once."""
+        if self._sens is None:
+            from .kernels import sensitivity_kernels
+
+            self._sens = sensitivity_kernels(self.scene)
+        return self._sens
+
+    def change(self, other) -> "Rows":
+        """``rows(ts, Y, p, out)``: D = d(state of ``other``)/d(state here, p) at rows
+        of this chart's states, each row n_state x (n_state + runtime parameters)
+        row-major: the derivative of the chart change (``change_map``) by the state
+        and the runtime parameters, from the graph, compiled once per target (an events
+        kernel of its entries, cached on disk with the scene's kernels)."""
+        found = self._changes.get(other.split)
+        if found is None:
+            scene = self.scene
+            D = change_map_jacobian(scene, other.split, self.explicit)
+            ce = scene.compile_events([Event(e, name=f"D{i}") for i, e in enumerate(D)])
+            found = self._changes[other.split] = Rows(
+                ce.uev, (len(scene.state_names), len(scene.runtime_params), len(D)))
+        return found
+
+    def carry(self, other, t, Y, S, p) -> np.ndarray:
+        """The sensitivities ``S`` (``[rows, n_state, n_state + runtime parameters]``)
+        of the rows ``(t, Y)`` of this chart in the chart ``other``: D S, plus D's
+        parameter columns in S's (the chart change depends on the parameters too)."""
+        Y = np.ascontiguousarray(np.atleast_2d(Y), dtype=float)
+        t = np.ascontiguousarray(np.broadcast_to(np.asarray(t, dtype=float),
+                                                 (Y.shape[0],)))
+        n, m = S.shape[-2:]
+        D = np.empty((Y.shape[0], n * m))
+        if Y.shape[0]:
+            self.change(other)(t, Y, np.ascontiguousarray(p, dtype=float), D)
+        D = D.reshape(-1, n, m)
+        out = D[:, :, :n] @ S
+        out[:, :, n:] += D[:, :, n:]
+        return out
 
     def jacobian(self, t, Y, p) -> np.ndarray:
         """df/dqdot at the rows (t, Y) of this chart: [rows, k, n]."""
@@ -266,6 +324,37 @@ def _jacobian_events(system):
     return [Event(e, name=f"A{i}") for i, e in enumerate(system.jacobian)]
 
 
+def change_map(scene, split, explicit) -> list:
+    """The state of the chart of ``split`` as expressions in the state of ``scene``'s
+    split (and t and the parameters): the coordinates kept, the velocities independent
+    there, each its symbol or phi^alpha of ``scene``'s split where it is dependent here,
+    the multipliers kept, or with ``explicit`` mapped as lambda_beta = A_beta^T
+    A_alpha^-T lambda_alpha (the module docstring)."""
+    sys_ = scene.system
+    J = sys_.J
+    phi = dict(sys_.phi)
+    names = [s.name for s in J.q]
+    dep = [names.index(c) for c in split]
+    vel = [phi.get(J.qd[i], J.qd[i]) for i in range(J.n) if i not in dep]
+    lam = list(principles.get(scene.principle).multiplier_symbols(sys_))
+    if explicit and lam:
+        A = sp.Matrix(sys_.k, J.n, [dag.xreplace(e, phi) for e in sys_.jacobian])
+        univ = linalg.solve(A[:, list(sys_.dep_index)].T, sp.Matrix(lam))
+        lam = list(A[:, dep].T * univ)
+    return [*J.q, *vel, *lam]
+
+
+def change_map_jacobian(scene, split, explicit) -> list:
+    """The entries of d(``change_map``)/d(state of ``scene``, runtime parameters),
+    row-major (``dag.jacobian``: the graph's derivatives, shared subexpressions)."""
+    sys_ = scene.system
+    by_name = {s.name: s for s in (*sys_.J.q, *sys_.independent_velocities,
+                                   *principles.get(scene.principle).multiplier_symbols(sys_),
+                                   *sys_.parameters)}
+    by = [by_name[n] for n in (*scene.state_names, *scene.runtime_params)]
+    return list(dag.jacobian(change_map(scene, split, explicit), by))
+
+
 class Atlas:
     """The charts of a scene's system (``splits``), each a ``Scene`` of
     ``system.with_split`` built when a run first enters it; ``eps`` the edge of every
@@ -277,8 +366,9 @@ class Atlas:
         self.eps = 1.0 / (4 * len(self.splits))
         p = principles.get(home.principle)
         self.explicit = bool(p.multipliers) and p.form(home.form).explicit
-        self.charts = {self.splits[0]: Chart(home.system, self.splits[0], self.explicit,
-                                             home)}
+        self._own = Chart(home.system, self.splits[0], self.explicit, home)
+        #: the charts of the other splits, built when a run first enters them
+        self.charts: dict = {}
         #: each split as a chart that only maps states (``Chart.state``)
         self.maps = {s: Chart(home.system, s, self.explicit) for s in self.splits}
         #: the columns of each split's minor of df/dqdot
@@ -287,11 +377,25 @@ class Atlas:
 
     @property
     def own(self) -> Chart:
-        return self.charts[self.splits[0]]
+        return self._own
+
+    def moved(self, home) -> "Atlas":
+        """This atlas for ``home``, a copy of its home with the same kernels (other
+        initial values, time span or run-time parameter values: ``Scene.replace``): its
+        own chart ``home``'s, the other charts (each a scene of its split, compiled
+        once), maps and compiled events shared."""
+        new = object.__new__(Atlas)
+        new.__dict__.update(self.__dict__)
+        new.home = home
+        new._own = copy.copy(self._own)         # (its kernels and df/dqdot: the same)
+        new._own.scene = home
+        return new
 
     def chart(self, split, t0, y) -> Chart:
         """The chart of ``split`` (its scene built at the state ``y`` of it at ``t0``
         the first time)."""
+        if split == self.splits[0]:
+            return self._own
         found = self.charts.get(split)
         if found is None:
             home = self.home
@@ -368,18 +472,28 @@ class Atlas:
 
 # ---------------------------------------------------------------------- the driver
 def run(home, method, events, t0, t1, y0, p, ctl, te, mode, dense, checked, singular_tol,
-        newton, limit, build):
+        newton, limit, build, sens=None):
     """``Scene.run`` of a scene whose split has an edge (``applies``): the compiled loop
     in one chart until the run ends or reaches the chart's edge, where it goes on in the
     split of largest measure with the state mapped; one Trajectory of ``home``.
-    ``build``: the Trajectory of a piece from its loop's result (``solve.trajectory``)."""
+    ``build``: the Trajectory of a piece from its loop's result (``solve.trajectory``).
+    ``sens``: the scene's kernels of a run with sensitivities (``y0`` then holds the
+    state and S(t0) after it): each chart runs with its own, S carried across every
+    switch (``Chart.carry``)."""
     at = atlas(home)
     user = as_events(events)
     tic = time.perf_counter()
-    chart, y, first = begin(at, user, t0, y0, p)
+    n = len(home.state_names)
+    chart, y, first = begin(at, user, t0, y0[:n], p)
+    if sens is not None:
+        S = y0[n:].reshape(1, n, -1)
+        if first:           # past the edge at t0: S(t0) in the chart the run starts in
+            S = at.own.carry(chart, t0, y0[:n], S, p)
+        y = np.concatenate((y, S.ravel()))
     parts, switches = follow(at, method, chart, t0, y, t1, p, user,
                              np.zeros(len(user), np.int64), ctl, ctl.max_steps, te, mode,
-                             dense, checked, singular_tol, newton, limit, build)
+                             dense, checked, singular_tol, newton, limit, build,
+                             sens=sens is not None)
     return stitch(home, at, method, p, parts, first + switches, user, mode,
                   time.perf_counter() - tic)
 
@@ -402,12 +516,15 @@ def begin(at, user, t0, y0, p):
 
 
 def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mode, dense, checked,
-           singular_tol, newton, limit, build, first=True, h_fixed=None, edge=True):
+           singular_tol, newton, limit, build, first=True, h_fixed=None, edge=True,
+           sens=False):
     """Run from (t, y) in ``chart`` to ``t1``, changing chart at every edge; returns the
     pieces ``[(chart, trajectory of the chart's scene made by ``build``, what re-running
     it needs)]`` and the switches.  ``counts``: occurrences of the user events so far
     (terminal counts go on); ``first``: whether (t, y) starts the run (else the run goes
-    on after a switch); ``edge``: whether to watch the chart's edge."""
+    on after a switch); ``edge``: whether to watch the chart's edge; ``sens``: ``y``
+    holds the state and its sensitivities after it (each chart runs with its
+    ``sensitivity_kernels``, S carried across a switch by ``Chart.carry``)."""
     user_max = [e.max_events for e in user]
     parts, switches = [], []
     direction = 1.0 if t1 >= t else -1.0
@@ -432,28 +549,32 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
                 seg_te = np.ascontiguousarray(te[direction * (te - t) > 0.0])
         left = None if limit is None else limit - (time.perf_counter() - tic)
         seg_dense = None if dense is None else dict(dense)
+        ksens = chart.sensitivity_kernels if sens else None
+        if seg_dense is not None and sens:
+            seg_dense["rhs"] = ksens
         out, wall = loops.call(scene, method, kern, ce, watch, t, t1, y, p, seg_ctl, seg_te,
-                               mode, newton, left)
+                               mode, newton, left, ksens)
         if seg_dense is not None:
             seg_dense["partial_last"] = int(out.status) in (EVENT, SINGULAR)
         n_ev = int(out.n_ev)
         hit = (edge and int(out.status) == EVENT and n_ev > 0
                and int(out.ev_i[n_ev - 1]) == len(user))
-        if hit:
-            _project_stop(chart, out, p)
-        seg = build(scene, method, out, wall, kern, ce, p, t, y, singular_tol, checked, limit,
-                    seg_dense, n_events=len(user))
-        parts.append((chart, seg, (t, y, t1, seg_ctl, watch, ce)))
-        steps_left -= seg._info["steps"]
-        for i in range(len(user)):
-            counts[i] += len(seg.t_events[i])
+        if build is None:
+            seg = out
+        else:
+            seg = build(scene, method, out, wall, kern, ce, p, t, y, singular_tol, checked,
+                        limit, seg_dense, n_events=len(user), sens=ksens)
+            for i in range(len(user)):
+                counts[i] += len(seg.t_events[i])
+        parts.append((chart, seg, (t, y, t1, seg_ctl, watch, ce, ksens)))
+        steps_left -= int(out.stats[0])
         if not hit:
             break
         t = float(out.ev_t[n_ev - 1])
         ys = np.ascontiguousarray(out.ev_y[n_ev - 1])
         if limit is not None and time.perf_counter() - tic >= limit:
             break
-        target = switch(at, chart, t, ys, p)
+        target = None if _at_end(t, t1) else _switched(at, chart, t, ys, p, sens)
         if target is None:          # no better split here: go on without the edge
             edge, y = False, ys
             continue
@@ -463,6 +584,27 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
     return parts, switches
 
 
+def _at_end(t, t1) -> bool:
+    """Whether an edge at ``t`` lies within the time resolution of a span of the run's
+    end ``t1`` (``arguments.MIN_TIME_RESOLUTION`` units in the last place, or at
+    ``t1``): no chart is entered there (its scene could not span the rest); the run
+    ends in the chart it is in, whose split is still regular at its edge."""
+    return abs(t1 - t) < arguments.MIN_TIME_RESOLUTION * math.ulp(max(abs(t), abs(t1)))
+
+
+def _switched(at, chart, t, y, p, sens):
+    """``switch`` of a state ``y`` of ``chart``, with ``sens`` followed by its
+    sensitivities, which go across in the new chart's coordinates (``Chart.carry``):
+    ``(new chart, its state)`` or None."""
+    n = len(chart.scene.state_names)
+    target = switch(at, chart, t, y[:n], p)
+    if target is None or not sens:
+        return target
+    new, y_new = target
+    S = chart.carry(new, t, y[:n], y[n:].reshape(1, n, -1), p)
+    return new, np.concatenate((y_new, S.ravel()))
+
+
 def _on_constraints(chart, t, y, p) -> np.ndarray:
     """``y`` (a state of ``chart``) with its coordinates moved onto the holonomic
     constraints g = 0, as the loops move every accepted step (``methods.projection``)."""
@@ -470,19 +612,6 @@ def _on_constraints(chart, t, y, p) -> np.ndarray:
     if not system.holonomic:
         return np.ascontiguousarray(y, dtype=float)
     return projection.onto(chart.kernels.hol, len(system.holonomic), system.J.n, t, y, p)
-
-
-def _project_stop(chart, out, p):
-    """Project the state where a run reached its chart's edge, in the run's ``Result``
-    (the event record, the last state, and the last output row where it is that state):
-    the edge is located on the step's dense output, off g = 0 by its error."""
-    k = int(out.n_ev) - 1
-    t = float(out.ev_t[k])
-    y = _on_constraints(chart, t, out.ev_y[k], p)
-    out.ev_y[k] = y
-    out.y[:] = y
-    if int(out.n_out) > 0 and out.ts[int(out.n_out) - 1] == t:
-        out.ys[int(out.n_out) - 1] = y
 
 
 def switch(at, chart, t, y, p):
@@ -516,6 +645,7 @@ def stitch(home, at, method, p, parts, switches, user, mode, wall):
     if len(parts) == 1 and not switches:
         return parts[0][1]
     ts, ys, pieces = [], [], []
+    sens = [] if last._sens is not None else None
     row = 0
     for i, (chart, seg, rerun) in enumerate(parts):
         a, b = 0, len(seg.t)
@@ -526,6 +656,10 @@ def stitch(home, at, method, p, parts, switches, user, mode, wall):
         Y = to_home(own, chart, seg.t[a:b], seg.y[a:b], p)
         ts.append(seg.t[a:b])
         ys.append(Y)
+        if sens is not None:        # S of the scene's states: D S of each row
+            S = seg.sensitivities[a:b]
+            sens.append(S if chart is own else
+                        chart.carry(own, seg.t[a:b], seg.y[a:b], S, p))
         pieces.append((row, row + b - a, chart, seg, a, rerun))
         row += b - a
     t_ev, y_ev = [], []
@@ -535,16 +669,20 @@ def stitch(home, at, method, p, parts, switches, user, mode, wall):
             to_home(own, chart, seg.t_events[i], seg.y_events[i].reshape(
                 -1, len(chart.scene.state_names)), p).ravel()
             for chart, seg, _ in parts]))
-    info = [seg._info for _, seg, _ in parts]
-    return Trajectory(home, np.concatenate(ts), np.concatenate(ys), p, method=method,
-                      status=last.status, stop_reason=last.stop_reason,
-                      steps=sum(i["steps"] for i in info),
-                      rejected=sum(i["rejected"] for i in info),
-                      nfev=sum(i["nfev"] for i in info), wall_time=wall,
-                      kernels=own.kernels, projected=home.projected,
-                      singularity=last.singularity, dense=parts[0][1]._dense,
-                      events=(tuple(e.name for e in user), t_ev, y_ev),
-                      segments=Stitched(own, tuple(pieces)), switches=tuple(switches))
+    steps = rejected = nfev = 0
+    for _, seg, _ in parts:
+        c = seg._counts[0]            # (steps, rejected, nfev, ...)
+        steps, rejected, nfev = steps + c[0], rejected + c[1], nfev + c[2]
+    t = np.concatenate(ts)          # (new float64 C-contiguous arrays: taken as they are)
+    return Trajectory._of_run(home, (t, np.concatenate(ys), t.shape[0]), p, method,
+                              last.status, last.stop_reason,
+                              ((steps, rejected, nfev), wall, home.projected),
+                              own.kernels, (tuple(e.name for e in user), t_ev, y_ev),
+                              last.singularity, parts[0][1]._dense,
+                              None if sens is None else (home._sensitivity_columns(),
+                                                         np.concatenate(sens)),
+                              segments=Stitched(own, tuple(pieces)),
+                              switches=tuple(switches))
 
 
 def to_home(own, chart, t, Y, p) -> np.ndarray:
@@ -582,6 +720,11 @@ class Stitched:
         again to it), mapped to the scene's layout."""
         return _at(self, traj, times)
 
+    def evaluate(self, traj, times, full=False) -> np.ndarray:
+        """``at``; with ``full`` (a run with sensitivities) each row followed by S of
+        the scene's states, row-major (``dense.evaluate``'s ``full``)."""
+        return _at(self, traj, times, full)
+
 
 def fill_aux(out, own, pieces, p):
     """``out[lo:hi]``: the aux rows of the scene (dependent velocities of its split,
@@ -598,14 +741,17 @@ def fill_aux(out, own, pieces, p):
         out[lo:hi, k:] = rows[:, k:]
 
 
-def _at(stitched, traj, times) -> np.ndarray:
-    from .dense import _refusal, _times
+def _at(stitched, traj, times, full=False) -> np.ndarray:
+    from .dense import _refusal, _times, evaluate
 
     why = _refusal(traj)
     if why:
         raise JetnhError(why)
     tau = _times(times, float(traj.t.min()), float(traj.t.max()))
-    out = np.full((tau.shape[0], traj.y.shape[1]), np.nan)
+    n = traj.y.shape[1]
+    full = full and traj._sens is not None
+    m = len(traj.sensitivity_columns) if full else 0
+    out = np.full((tau.shape[0], n + n * m), np.nan)
     own = stitched.own
     sgn = 1.0 if traj.t[-1] >= traj.t[0] else -1.0
     done = np.zeros(tau.shape[0], dtype=bool)
@@ -618,27 +764,35 @@ def _at(stitched, traj, times) -> np.ndarray:
         idx = np.nonzero(mine)[0]
         cut = seg._dense["partial_last"] and len(seg.t) > 1
         inner = sgn * (tau[idx] - float(seg.t[-2])) > 0 if cut else np.zeros(idx.size, bool)
-        rows = np.empty((idx.size, len(chart.scene.state_names)))
+        n_c = len(chart.scene.state_names)
+        rows = np.empty((idx.size, n_c + n_c * m))
         if (~inner).any():
-            rows[~inner] = seg.at(tau[idx[~inner]]).to_numpy()
+            rows[~inner] = evaluate(seg, tau[idx[~inner]], full=full)
         if inner.any():
-            rows[inner] = _rerun(chart, seg, rerun, tau[idx[inner]], traj._p)
-        out[idx] = to_home(own, chart, tau[idx], rows, traj._p)
+            rows[inner] = _rerun(chart, seg, rerun, tau[idx[inner]], traj._p)[:, :rows.shape[1]]
+        Y = np.ascontiguousarray(rows[:, :n_c])
+        out[idx, :n] = to_home(own, chart, tau[idx], Y, traj._p)
+        if full:
+            S = rows[:, n_c:].reshape(-1, n_c, m)
+            if chart is not own:
+                S = chart.carry(own, tau[idx], Y, S, traj._p)
+            out[idx, n:] = S.reshape(idx.size, -1)
     return out
 
 
 def _rerun(chart, seg, rerun, times, p) -> np.ndarray:
     """The states at ``times`` inside the last, cut step of a segment: the segment's
     loop run again from its start with these times as t_eval (the same steps, the same
-    dense output: what t_eval gives)."""
-    t0, y0, t1, ctl, watch, ce = rerun
+    dense output: what t_eval gives); a run with sensitivities gives them after the
+    state."""
+    t0, y0, t1, ctl, watch, ce, sens = rerun
     order = np.argsort(times, kind="stable")
     if seg.t[-1] < seg.t[0]:
         order = order[::-1]
     te = np.ascontiguousarray(times[order])
     out, _ = loops.call(chart.scene, seg.method, chart.kernels, ce, watch, t0, t1, y0, p,
-                        ctl, te, AT_T_EVAL, None, None)
-    rows = np.empty((te.shape[0], seg.y.shape[1]))
+                        ctl, te, AT_T_EVAL, None, None, sens)
+    rows = np.empty((te.shape[0], out.ys.shape[1]))
     if int(out.n_out) != te.shape[0] or int(out.status) == STOPPED:
         raise JetnhError("running the chart's loop again did not reach the times asked for")
     rows[order] = out.ys[:te.shape[0]]
@@ -646,17 +800,43 @@ def _rerun(chart, seg, rerun, times, p) -> np.ndarray:
 
 
 def go_on(at, method, user, t1, p, t, y, counts, ctl, steps_left, te, mode, checked,
-          singular_tol, newton, limit, h_fixed, build):
+          singular_tol, newton, limit, h_fixed, build, sens=False):
     """An ensemble's run that stopped at its chart's edge at (t, y) (the scene's own
-    chart), taken on as ``Scene.run`` does: ``(parts, switches)`` of ``follow``."""
+    chart), taken on as ``Scene.run`` does: ``(parts, switches)`` of ``follow``
+    (``sens``: ``y`` followed by its sensitivities)."""
     own = at.own
-    target = switch(at, own, t, y, p)
+    target = None if _at_end(t, t1) else _switched(at, own, t, y, p, sens)
     if target is None:
         return follow(at, method, own, t, y, t1, p, user, counts, ctl, steps_left, te, mode,
                       None, checked, singular_tol, newton, limit, build, first=False,
-                      h_fixed=h_fixed, edge=False)
+                      h_fixed=h_fixed, edge=False, sens=sens)
     chart, y_new = target
     parts, switches = follow(at, method, chart, t, y_new, t1, p, user, counts, ctl,
                              steps_left, te, mode, None, checked, singular_tol, newton,
-                             limit, build, first=False, h_fixed=h_fixed)
+                             limit, build, first=False, h_fixed=h_fixed, sens=sens)
     return parts, [{"t": t, "from": list(own.split), "to": list(chart.split)}] + switches
+
+
+def end_across(home, method, out, t0, t1, p, ctl, mode, checked, singular_tol, newton,
+               limit):
+    """The end of a run with sensitivities of ``home`` whose loop, from t0 in the scene's
+    own chart, stopped at the chart's edge (``out``, the loop's tuple): taken on chart by
+    chart as ``run`` takes it (the same pieces, bit for bit), each loop called without
+    making a Trajectory.  Returns ``(status, t, y, S)`` at its last state, y and S in
+    ``home``'s states."""
+    at = atlas(home)
+    own = at.own
+    loops.on_constraints(own.kernels, ctl, mode, own.sensitivity_kernels, out, p, t0)
+    first = loops.result(out)
+    k = int(first.n_ev) - 1
+    parts, _ = go_on(at, method, (), t1, p, float(first.ev_t[k]), first.ev_y[k].copy(),
+                     loops.NO_EVENTS, ctl, ctl.max_steps - int(first.stats[0]),
+                     np.zeros(0), mode, checked, singular_tol, newton, limit,
+                     (t1 - t0) / ctl.n_steps if ctl.n_steps > 0 else 0.0, None, True)
+    chart, last, _ = parts[-1]
+    t, n = float(last.t), len(chart.scene.state_names)
+    y, S = last.y[:n].reshape(1, n), last.y[n:].reshape(1, n, -1)
+    if chart is not own:
+        S = chart.carry(own, t, y, S, p)
+        y = to_home(own, chart, np.array([t]), y, p)
+    return int(last.status), t, y[0], S[0]

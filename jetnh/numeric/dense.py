@@ -7,6 +7,9 @@
   one the original run gives with those times as ``t_eval``: the same bits.
 - rk4: the cubic Hermite interpolant of each step through y and f(t, y) at its ends,
   the one rk4 locates events on; its error is O(h^4), the order of the method.
+- On a system with holonomic constraints g = 0 the values inside a step are moved onto
+  g = 0 as the steps are (``methods.projection.rows``; the re-taken steps of dop853 and
+  dopri5 do so in their loop, ``loops.on_constraints``), with their sensitivities.
 - dla, dvi and scipy's methods: no interpolant (the discrete integrators have none that
   matches their nodes and multipliers) and an error that says what to do.
 
@@ -24,7 +27,7 @@ import numpy as np
 
 from ..errors import ArgumentError, IntegrationError, JetnhError
 from . import arguments
-from .loops import retake
+from .loops import onto_constraints, retake
 from .methods import method
 from .methods._common import EVERY_STEP
 
@@ -56,7 +59,10 @@ def _refusal(traj) -> str | None:
 def evaluate(traj, times, full=False) -> np.ndarray:
     """The states at ``times`` (any order, inside the span): ``[len(times), n_states]``;
     with ``full``, a run with sensitivities gives its whole integrated state (the
-    state, then S row-major: ``Layout.n_rhs`` columns)."""
+    state, then S row-major: ``Layout.n_rhs`` columns).  A run made of pieces (a change
+    of split, multiple shooting's segments) is evaluated by its pieces."""
+    if traj._segments is not None:
+        return traj._segments.evaluate(traj, times, full)
     why = _refusal(traj)
     if why:
         raise JetnhError(why)
@@ -172,4 +178,14 @@ def _hermite_steps(traj, k, tau) -> np.ndarray:
     d = y[k + 1] - y[k]
     F1 = h * f0 - d
     F2 = d - h * f1 - F1
-    return y[k] + th * (d + (1.0 - th) * (F1 + th * F2))
+    out = y[k] + th * (d + (1.0 - th) * (F1 + th * F2))
+    if traj._kernels.layout.holonomic:
+        # inside a step: off g = 0 by the interpolant's error, moved onto it as the
+        # steps are; at a step's ends the step's own (projected) row
+        start, end = tau == t[k], tau == t[k + 1]
+        out[start], out[end] = y[k[start]], y[k[end] + 1]
+        inner = np.flatnonzero(~start & ~end)
+        rows = out[inner]
+        onto_constraints(kern, tau[inner], rows, p, n // traj._kernels.layout.n_state - 1)
+        out[inner] = rows
+    return out

@@ -17,7 +17,7 @@ import numpy as np
 from . import interrupt, methods
 from .kernels import calls
 from .methods import Solver, projection
-from .methods._common import AT_T_EVAL
+from .methods._common import AT_T_EVAL, EVENT, SINGULAR
 from .methods.loop import Result, Watch, features
 
 NO_EVENTS = np.zeros(0, dtype=np.int64)
@@ -67,18 +67,47 @@ def call(scene, method, kern, ce, watch, t0, t1, y, p, ctl, te, mode, newton, li
     tic = time.perf_counter()
     out = interrupt.call(lambda: loop(*prefix, t0, t1, y, p, *suffix, halt), halt, limit)
     wall = time.perf_counter() - tic
-    on_constraints(kern, ctl, mode, sens, out, p)
+    on_constraints(kern, ctl, mode, sens, out, p, t0)
     return result(out), wall
 
 
-def on_constraints(kern, ctl, mode, sens, out, p):
-    """The rows of a loop's tuple ``out`` at output times (``t_eval``: the dense output,
-    off the holonomic constraints g = 0 by its error) moved onto g = 0 in place, as every
-    step is (``methods.projection``); the rows of a run with sensitivities are left."""
-    if mode == AT_T_EVAL and ctl.n_hol and sens is None:
-        n, m, nq = int(out[3]), ctl.n_hol, ctl.n_coord
-        hol_rows = calls.Rows(kern.hol_fp, (kern.layout.n_state, p.shape[0], m * (1 + nq)))
-        projection.rows(hol_rows, m, nq, out[1][:n], out[2][:n], p)
+def on_constraints(kern, ctl, mode, sens, out, p, t0=None):
+    """The rows of a loop's tuple ``out`` that the dense output gave (off the holonomic
+    constraints g = 0 by its error: the rows at ``t_eval``, the events' states, the state
+    of a stop inside a step) moved onto g = 0 in place, as every step is
+    (``methods.projection``), the sensitivities of a run with ``sens`` with them; rows at
+    the call's start ``t0`` (its initial state as given, S the identity) are left."""
+    if not ctl.n_hol:
+        return
+    k, n_sens = (kern, 0) if sens is None else (sens, ctl.n_sens)
+    status, ts, ys, n = int(out[0]), out[1], out[2], int(out[3])
+    if mode == AT_T_EVAL and n:
+        if n_sens and t0 is not None:
+            inner = np.flatnonzero(ts[:n] != t0)
+            rows = ys[inner]
+            onto_constraints(k, ts[inner], rows, p, n_sens)
+            ys[inner] = rows
+        else:
+            onto_constraints(k, ts[:n], ys[:n], p, n_sens)
+    if len(out) == len(Result._fields):     # a loop that watched: events, stops
+        t_last, y_last, ev_t, ev_y, n_ev = out[5], out[6], out[7], out[9], int(out[10])
+        if n_ev:
+            onto_constraints(k, ev_t[:n_ev], ev_y[:n_ev], p, n_sens)
+        if status in (EVENT, SINGULAR) and t_last != t0:
+            onto_constraints(k, np.array([t_last]), y_last[None, :], p, n_sens)
+            if mode != AT_T_EVAL and n and ts[n - 1] == t_last:
+                ys[n - 1] = y_last
+
+
+def onto_constraints(kern, ts, ys, p, n_sens=0):
+    """The rows ``ys`` (at the times ``ts``) moved onto the holonomic constraints of the
+    kernels ``kern`` in place (``methods.projection.rows``: ``p`` one row of parameters
+    or one per row; with ``n_sens`` sensitivity columns, ``kern`` the kernels of the
+    augmented state, whose hol gives dg/dp too)."""
+    lay = kern.layout
+    m, nq, n_p = lay.holonomic, len(lay.coordinates), np.shape(p)[-1]
+    hol_rows = calls.Rows(kern.hol_fp, (lay.n_state, n_p, m * (1 + nq + (n_p if n_sens else 0))))
+    projection.rows(hol_rows, m, nq, ts, ys, p, n_sens)
 
 
 def retake(traj, t0, t1, y, tau):

@@ -26,8 +26,10 @@ def add_parser(sub):
     b.add_argument("--all", action="store_true",
                    help="run every benchmark, then the report")
     b.add_argument("--quick", action="store_true", help="with --all: the quick profiles")
-    b.add_argument("name", nargs="?", metavar="NAME")
-    b.add_argument("args", nargs=argparse.REMAINDER, metavar="ARGS")
+    b.add_argument("name", nargs="?", metavar="NAME",
+                   help="a benchmark script of benchmarks/, without .py")
+    b.add_argument("args", nargs=argparse.REMAINDER, metavar="ARGS",
+                   help="the script's own options")
     b.set_defaults(func=run)
 
 

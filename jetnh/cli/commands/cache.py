@@ -3,22 +3,31 @@ compile the integrator loops into it ahead of the first run."""
 
 from __future__ import annotations
 
+import sys
 import time
 
 from ..parser import subcommand
+
+#: the exit code of ``cache warm`` when the cache cannot be used: nothing is warmed, and
+#: runs work all the same (each compiles its loop on first use); make's install step
+#: accepts this code
+UNUSABLE = 3
 
 
 def add_parser(sub):
     k = subcommand(
         sub, "cache",
-        help="show where the compiled-kernel cache lives and what it holds, or empty it",
+        help="show where the compiled-kernel cache lives and what it holds, empty it, "
+             "or warm it",
         description="info: the cache directory (JETNH_CACHE, else the platform's user "
                     "cache directory), its entries and their size, and whether runs can "
                     "use it or fall back to a private temporary cache.  clear: remove "
                     "every cached kernel (they are compiled again when needed): only "
                     "directories jetnh made (they hold its marker file) are deleted.  "
                     "warm: compile the integrator loops a first run needs into it (make "
-                    "does this once after installing), so that the first run loads them.")
+                    "does this once after installing), so that the first run loads them; "
+                    f"exit code {UNUSABLE} when the cache cannot be used (nothing warmed; "
+                    "runs still work, each compiling its loop on first use).")
     k.add_argument("action", choices=("info", "clear", "warm"), nargs="?", default="info",
                    help="default: info")
     k.add_argument("--all", action="store_true",
@@ -43,9 +52,10 @@ def run(args, progress) -> int:
 
         fallback = cache.info()["fallback"]
         if fallback:            # a temporary cache dies with its process: nothing to warm
-            print(f"not warmed: the kernel cache {cache.cache_root()} cannot be used "
-                  f"({fallback}); each run compiles its loop on first use")
-            return 0
+            print(f"jetnh cache warm: error: nothing warmed: the kernel cache "
+                  f"{cache.cache_root()} cannot be used ({fallback}); until it can, each "
+                  "run compiles its loops on first use", file=sys.stderr)
+            return UNUSABLE
         def report(name, seconds, loaded):
             progress.note(f"  {name:20s} {'loaded' if loaded else 'compiled'} in "
                           f"{seconds:.1f} s")

@@ -8,18 +8,19 @@ from pathlib import Path
 from ...errors import JetnhError
 from ..loading import load_model, with_split
 from ..parser import (EPILOG_MODEL, PRINCIPLES, canonical_principle, model_args,
-                      subcommand)
+                      principle_option, span_options, subcommand,
+                      tolerance_options)
 from ..running import assignments
 from ..usage import UsageError
 
 
 def add_parser(sub):
     s = subcommand(
-        sub, "connect", run=True,
+        sub, "connect",
         help="the motion of a principle joining two configurations (two-point problem)",
-        description="Find a motion of MODEL under --principle (default vakonomic: the "
-                    "stationary action with fixed endpoints) from the configuration "
-                    "--from at T0 to --to at --t-end, by shooting with the exact "
+        description="Find a motion of MODEL under --principle (default: the model's, "
+                    "else vakonomic: the stationary action with fixed endpoints) from the "
+                    "configuration --from at T0 to --to at --t-end, by shooting with the exact "
                     "sensitivities (jetnh.connect).  Prints the initial state found, the "
                     "action int L dt, the endpoint residual, whether the extremal is "
                     "normal, and its conjugate times.  --from defaults to the model's "
@@ -31,6 +32,10 @@ def add_parser(sub):
                               "rolling_disk -p chetaev --to x=0.5,y=0.3 --t-end 1 "
                               "--compare vakonomic")
     model_args(s)
+    principle_option(s, "the model's, else vakonomic")
+    span_options(s)
+    tolerance_options(s, "jetnh.connect's, ", lambda: _connect_default("rtol"),
+                      lambda: _connect_default("atol"), of="the shooting runs")
     s.add_argument("--from", dest="start", action="append", metavar="NAME=VALUE",
                    help="a coordinate at T0 (repeatable, or comma-separated); the "
                         "others: the model's initial values, else 0 (the output says "
@@ -53,19 +58,29 @@ def add_parser(sub):
                         "from the growth of the guess's sensitivities; 1: single "
                         "shooting)")
     s.add_argument("--restarts", type=int, metavar="K",
-                   help="vakonomic, hoelder: where the motion found has a conjugate time "
+                   help="vakonomic, holder: where the motion found has a conjugate time "
                         "inside the span (no minimizer of the action), look for a cheaper "
                         "one from K restarts (default 0)")
-    s.add_argument("--timeout", type=float, default=None,
-                   help="wall-clock budget in seconds for each search: it stops there "
+    s.add_argument("--timeout", type=float, default=None, metavar="SECONDS",
+                   help="wall-clock budget for each search: it stops there "
                         "and says how close it came (default: none)")
     s.add_argument("--complete", action="store_true",
                    help="with holonomic constraints: solve the start's dependent "
                         "coordinates from g = 0 instead of refusing a start off it")
     s.add_argument("--plot", metavar="PATH",
                    help="save a plot (png, pdf, svg) of the coordinates against t")
-    s.add_argument("--format", choices=("text", "json"), default="text")
+    s.add_argument("--format", choices=("text", "json"), default="text",
+                   help="text (default) or json")
     s.set_defaults(func=run)
+
+
+def _connect_default(name):
+    """The default of ``jetnh.connect``'s keyword ``name``."""
+    import inspect
+
+    from ...numeric.connect import connect
+
+    return inspect.signature(connect).parameters[name].default
 
 
 def run(args, progress) -> int:
@@ -74,7 +89,7 @@ def run(args, progress) -> int:
     loaded = with_split(load_model(args.model), args.split)
     system = loaded.system
     sim = loaded.simulation
-    principle = args.principle or "vakonomic"
+    principle = args.principle or loaded.principle or "vakonomic"
     end = assignments(args.end, "--to")
     if not end:
         raise UsageError("give the end configuration: --to NAME=VALUE[,NAME=VALUE...]")

@@ -13,7 +13,7 @@ def add_parser(sub):
         help="equations of motion of a model under one principle",
         description="Derive the equations of motion of MODEL under one principle, and the "
                     "accelerations (and multiplier rates) on the constraint manifold.",
-        epilog=EPILOG_MODEL + "\n\nexample: jetnh derive appell_hamel --principle suslov "
+        epilog=EPILOG_MODEL + "\n\nexample:\n  jetnh derive appell_hamel --principle suslov "
                               "--format json")
     model_args(d)
     d.add_argument("--form", default=None,

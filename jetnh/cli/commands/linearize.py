@@ -8,7 +8,7 @@ import json
 
 from ..loading import load_model, settings, with_split
 from .. import outputs
-from ..parser import EPILOG_MODEL, model_args, subcommand
+from ..parser import EPILOG_MODEL, evenly_spaced, model_args, subcommand
 from ..running import assignments, initial_values
 from ..usage import UsageError
 
@@ -24,7 +24,7 @@ def add_parser(sub):
                     "|x'| (0: a steady motion) and the verdict.  --steady solves for some "
                     "states so that the point is a steady motion; --param scans a "
                     "parameter or a state and locates where Re lambda crosses 0.",
-        epilog=EPILOG_MODEL + "\n\nexample: jetnh linearize rolling_coin --at theta=0,"
+        epilog=EPILOG_MODEL + "\n\nexample:\n  jetnh linearize rolling_coin --at theta=0,"
                               "psi_t=0,theta_t=0,phi_t=3 --param phi_t=0.2:4:39 "
                               "--plot coin.png")
     model_args(s)
@@ -39,32 +39,23 @@ def add_parser(sub):
     s.add_argument("--steady", metavar="NAME,...",
                    help="states to solve for so that the point is a steady motion")
     s.add_argument("--param", metavar="NAME=A:B:N",
-                   help="scan NAME (a parameter or a state) over N values from A to B")
+                   help="scan NAME (a parameter or a state) over N evenly spaced values "
+                        "from A to B (N >= 2)")
     s.add_argument("--plot", metavar="PATH", help="with --param: save the stability "
                                                   "diagram (png, pdf, svg)")
-    s.add_argument("--format", choices=("text", "json"), default="text")
+    s.add_argument("--format", choices=("text", "json"), default="text",
+                   help="text (default) or json")
     s.set_defaults(func=run)
 
 
 def _scan_spec(text: str):
-    import numpy as np
-
     name, sep, rng = (text or "").partition("=")
-    parts = rng.split(":")
-    if not sep or not name.strip() or len(parts) != 3:
+    name = name.strip()
+    if not sep or not name:
         raise UsageError(f"--param takes NAME=A:B:N, got {text!r} (e.g. phi_t=0.5:4:50)")
-    try:
-        a, b, n = float(parts[0]), float(parts[1]), int(parts[2])
-    except ValueError:
-        raise UsageError(f"--param {name}: A and B must be numbers and N an integer, got "
-                         f"{rng!r}") from None
-    if not 2 <= n <= 100_000:
-        raise UsageError(f"--param {name}: N must be between 2 and 100000, got {n}")
-    if not (np.isfinite(a) and np.isfinite(b)) or a == b:
-        raise UsageError(f"--param {name}: A and B must be finite and differ (a scan over "
-                         f"a range), got {rng!r}; to linearize at one value give --at "
-                         f"{name}={parts[0]} or --set {name}={parts[0]}")
-    return name.strip(), a, b, n
+    return (name, *evenly_spaced(rng, f"--param {name}", least=2,
+                                 one=f"--at {name}={{a}} or --set {name}={{a}} to linearize "
+                                     "at that one value"))
 
 
 def run(args, progress) -> int:

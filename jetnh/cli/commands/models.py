@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from ..loading import load_model
 from ..parser import subcommand
+from ..usage import UsageError
 
 
 def add_parser(sub):
@@ -13,7 +14,9 @@ def add_parser(sub):
         description="Without NAME: list the catalogue.  With NAME: its coordinates, "
                     "parameters, default initial state and docstring (source, closed forms, "
                     "first integrals); with --toml: the model as a model file to edit.")
-    m.add_argument("name", nargs="?", metavar="NAME")
+    m.add_argument("name", nargs="?", metavar="NAME",
+                   help="a catalogue name, with options for the scalable ones (e.g. "
+                        "n_trailer:N=4)")
     m.add_argument("--toml", action="store_true", help="print NAME as a model file")
     m.set_defaults(func=run)
 
@@ -22,6 +25,9 @@ def run(args, progress) -> int:
     from ... import models
     from ...modelfile import dumps
 
+    if args.toml and not args.name:
+        raise UsageError("--toml prints one model as a model file: give its NAME (e.g. "
+                         "jetnh models rolling_disk --toml)")
     if not args.name:
         width = max(map(len, models.CATALOGUE))
         for name in models.CATALOGUE:

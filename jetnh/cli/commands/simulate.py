@@ -9,7 +9,8 @@ from pathlib import Path
 from ...errors import JetnhError
 from ..loading import load_model, settings, with_split
 from .. import outputs
-from ..parser import EPILOG_MODEL, count, model_args, subcommand
+from ..parser import (EPILOG_MODEL, FALLBACK, count, jetnh_default, model_args,
+                      shown_default, subcommand)
 from ..running import (METHOD_HELP, assignments, initial_values, method_of,
                        monitored_integrals)
 from ..usage import UsageError
@@ -26,7 +27,7 @@ def add_parser(sub):
                     "named lambda_<dependent>).  Prints the final state and the "
                     "diagnostics: constraint residual, energy drift, first integrals "
                     "([integrals] of a model file), steps.",
-        epilog=EPILOG_MODEL + "\n\nexample: jetnh simulate examples/rolling_disk.toml "
+        epilog=EPILOG_MODEL + "\n\nexample:\n  jetnh simulate examples/rolling_disk.toml "
                               "--t-end 10 --init psi_t=0.3 --csv disk.csv --plot disk.png")
     model_args(s)
     s.add_argument("--set", action="append", metavar="NAME=VALUE",
@@ -35,11 +36,13 @@ def add_parser(sub):
                    help="an initial value of a coordinate, velocity (x_t) or multiplier "
                         "(repeatable, or comma-separated)")
     s.add_argument("--method", default=None, help=METHOD_HELP)
-    s.add_argument("--timeout", type=float, default=None,
-                   help="wall-clock budget in seconds: the run stops there and reports "
+    s.add_argument("--timeout", type=float, default=None, metavar="SECONDS",
+                   help="wall-clock budget: the run stops there and reports "
                         "what it has (default: none)")
-    s.add_argument("--points", type=count, default=None,
-                   help="output points of the adaptive methods (default 201; 0: every step)")
+    shown_default(s.add_argument(
+        "--points", type=count, default=None, metavar="N",
+        help=f"output points of the adaptive methods (default: the model's, else "
+             f"{FALLBACK}; 0: every step)"), jetnh_default("points"))
     s.add_argument("--project", action="store_true",
                    help="replace initial dependent velocities that contradict the "
                         "constraints by the values the constraints give")
@@ -52,7 +55,8 @@ def add_parser(sub):
                    help="with --plot: a panel of the path in the plane of these two series "
                         "(default: x,y when the model has coordinates x and y; 'none': no "
                         "path panel)")
-    s.add_argument("--format", choices=("text", "json"), default="text")
+    s.add_argument("--format", choices=("text", "json"), default="text",
+                   help="text (default) or json")
     s.set_defaults(func=run)
 
 

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from ..loading import load_model, settings, with_split
 from .. import outputs
-from ..parser import EPILOG_MODEL, model_args, positive_count, seconds, subcommand
+from ..parser import (EPILOG_MODEL, evenly_spaced, model_args, positive_count, seconds,
+                      subcommand)
 from ..running import (METHOD_HELP, assignments, initial_values, method_of,
                        monitored_integrals)
 from ..usage import UsageError
@@ -33,8 +35,8 @@ def add_parser(sub):
                "map.png --value x --out map.csv")
     model_args(w)
     w.add_argument("--grid", action="append", required=True, metavar="NAME=A:B:N",
-                   help="an axis: N values from A to B, or NAME=V1,V2,... (repeatable; "
-                        "NAME a parameter or a state)")
+                   help="an axis: N evenly spaced values from A to B (N >= 1), or "
+                        "NAME=V1,V2,... (repeatable; NAME a parameter or a state)")
     w.add_argument("--set", action="append", metavar="NAME=VALUE",
                    help="a parameter value for every point (repeatable, or comma-separated)")
     w.add_argument("--init", action="append", metavar="NAME=VALUE",
@@ -45,9 +47,7 @@ def add_parser(sub):
                    help="output columns (default: every state, dependent velocity and "
                         "integral)")
     w.add_argument("--method", default=None,
-                   help=METHOD_HELP.replace("(default)", "(default: the model file's, else "
-                                                         "dop853)")
-                        + "; dla, dvi and scipy run point by point")
+                   help=METHOD_HELP + "; dla, dvi and scipy run point by point")
     w.add_argument("--scheduler", metavar="ADDRESS",
                    help="a Dask scheduler, e.g. tcp://10.0.0.5:8786 (needs pip install "
                         "'jetnh[cluster]'; default: this machine, every core, no Dask)")
@@ -65,29 +65,22 @@ def add_parser(sub):
     w.set_defaults(func=run)
 
 
-def _values(text: str, what: str) -> list:
-    """``A:B:N`` (N evenly spaced values from A to B) or ``V1,V2,...``: numbers, parsed
-    by float() (never evaluated)."""
+def _values(text: str, what: str, one: str = "") -> list:
+    """``A:B:N`` (``parser.evenly_spaced``: one value or more) or ``V1,V2,...``: finite
+    numbers, read by float() (never evaluated)."""
     import numpy as np
 
+    listed = "a comma-separated list of finite numbers"
+    if ":" in text:
+        return list(np.linspace(*evenly_spaced(text, what, least=1, one=one,
+                                               otherwise=listed)))
     try:
-        if ":" in text:
-            a, b, n = text.split(":")
-            a, b, n = float(a), float(b), int(n)
-            if n < 1 or not (np.isfinite(a) and np.isfinite(b)):
-                raise ValueError
-        else:
-            values = [float(v) for v in text.split(",")]
-            if not np.all(np.isfinite(values)):
-                raise ValueError
-            return values
+        values = [float(v) for v in text.split(",")]
     except ValueError:
-        raise UsageError(f"{what}: {text!r} is neither START:STOP:N (finite numbers, N an "
-                         "integer >= 1) nor a comma-separated list of finite numbers") from None
-    if a == b and n > 1:
-        raise UsageError(f"{what}: {text!r} is a range of zero width ({n} equal values); give "
-                         f"START != STOP, or the one value {a:g}")
-    return list(np.linspace(a, b, n))
+        values = [math.nan]
+    if not all(map(math.isfinite, values)):
+        raise UsageError(f"{what}: {text!r} is neither A:B:N nor {listed}")
+    return values
 
 
 def _grid(items) -> dict:
@@ -96,10 +89,10 @@ def _grid(items) -> dict:
         name, sep, text = item.partition("=")
         name = name.strip()
         if not sep or not name:
-            raise UsageError(f"--grid takes NAME=START:STOP:N or NAME=V1,V2,..., got {item!r}")
+            raise UsageError(f"--grid takes NAME=A:B:N or NAME=V1,V2,..., got {item!r}")
         if name in grid:
             raise UsageError(f"--grid gives {name} twice; give each name once")
-        grid[name] = _values(text, f"--grid {name}")
+        grid[name] = _values(text, f"--grid {name}", one=f"--grid {name}={{a}}")
     return grid
 
 
@@ -115,7 +108,7 @@ def run(args, progress) -> int:
     from ...sweep import plot_map, sweep
 
     grid = _grid(args.grid)
-    times = _values(args.times, "--times") if args.times else None
+    times = _values(args.times, "--times", one="--times {a}") if args.times else None
     if args.plot and (len(grid) != 2 or not args.value):
         raise UsageError("--plot draws a map over two --grid axes of the column --value; "
                          "give exactly two --grid and a --value")

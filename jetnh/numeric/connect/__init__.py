@@ -40,14 +40,16 @@ With holonomic constraints g = 0 the start (and an end naming every coordinate) 
 on g = 0 (``complete=True`` completes the start, as ``Scene`` does); the multipliers of
 g = 0 enter the equations only through their rates (inert), so they stay at 0 and are no
 unknowns; the verdicts are measured on the tangent space of g = 0.  The runs carry
-sensitivities and keep the scene's split: an end whose motion must cross the edge of
-that chart is not reached (the error says so, with the fix); ``timeout`` bounds the
-search's wall-clock time.
+sensitivities and change split as ``Scene.run`` does (``numeric.atlas``), so an end
+whose motion crosses the edge of the scene's chart is reached like any other;
+``timeout`` bounds the search's wall-clock time.
 
 Vakonomic and Hoelder ends may leave coordinates free: their transversality conditions
 close the problem -- the coefficient of each free eta^i in the boundary term of the
 composite action's variation (13), the momentum P_i = d(L + lambda f)/dqdot^i, vanishes
-at t1 (``problem.transversality``, from the derivation).
+at t1 (``problem.transversality``, from the derivation); with holonomic constraints
+g = 0, for the variations tangent to g = 0 (``problem.tangent_transversality``: the
+reduced momenta P_R - G_R^T G_D^-T P_D vanish).
 
 Verdicts on the answer:
 
@@ -64,9 +66,10 @@ Verdicts on the answer:
 - ``normal``: False when the endpoint map of the constraint system (the kinematic
   control system qdot^mu = u^mu, qdot^alpha = phi^alpha(t, q, u)) loses rank along the
   path, i.e. its controllability Gramian ``W' = A W + W A^T + B B^T`` (A, B the partial
-  derivatives of the constraint system along the path, from the graph) is singular: the
-  path is then an abnormal extremal (the multiplier rule holds with lambda_0 = 0), which
-  a small residual does not make normal.
+  derivatives of the constraint system along the path, compiled from the derivation:
+  ``codegen.verdicts``) is singular: the path is then an abnormal extremal (the
+  multiplier rule holds with lambda_0 = 0), which a small residual does not make
+  normal.
 - ``cost``: the action ``int L dt`` along the answer, by 5-point Gauss-Legendre on every
   step of the dense output.
 """
@@ -86,9 +89,14 @@ from .solve import STEP_ITER, Search, least_action
 from .shooting import GROWTH, MAX_SEGMENTS, MAX_STEPS, OutOfTime
 from .verdicts import GRAMIAN_RCOND, action, conjugate_times, gramian_ratio
 
+#: the most segments ``connect(segments=)`` takes: a Newton step of multiple shooting
+#: solves for every segment's state at once (dense: 64 segments of a 6-state system
+#: take seconds a connect)
+MAX_SEGMENTS_GIVEN = 64
+
 __all__ = ["connect", "Connection", "VARIATIONAL", "MAX_TOL", "STEP_ITER", "MAX_STEPS",
-           "GROWTH", "MAX_SEGMENTS", "GRAMIAN_RCOND", "action", "conjugate_times",
-           "gramian_ratio"]
+           "GROWTH", "MAX_SEGMENTS", "MAX_SEGMENTS_GIVEN", "GRAMIAN_RCOND", "action",
+           "conjugate_times", "gramian_ratio"]
 
 
 def connect(system, principle, start, end, t_span, params=None, guess=None, *,
@@ -115,8 +123,8 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
         velocities only where the end is reachable (otherwise ``ConnectError`` with
         the least-squares answer in ``.best``).  With holonomic constraints g = 0: an
         end naming every coordinate must lie on g = 0; vakonomic and Hoelder ends
-        must name as many coordinates as g = 0 has dimensions (free ends on it are
-        not posed).
+        that name fewer coordinates than g = 0 has dimensions close with the free
+        ones' momenta projected onto its tangent space.
     t_span : tuple of float
         ``(t0, t1)`` with t1 > t0 (connect solves forwards in time).
     params : dict, optional
@@ -153,7 +161,8 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
         polishes the answer): for long or unstable spans, where single shooting's
         sensitivities blow up.  Default: 1 where the guess's run reaches t1 with
         sensitivities below ``GROWTH`` (1e6), else one segment per factor 100 of the
-        growth (2 to ``MAX_SEGMENTS``, 16); 1 is single shooting only.
+        growth (2 to ``MAX_SEGMENTS``, 16); 1 is single shooting only; at most
+        ``MAX_SEGMENTS_GIVEN`` (64: each Newton step is dense in the segments' unknowns).
     complete : bool, default False
         With holonomic constraints: solve ``start``'s dependent coordinates from g = 0
         (as ``Scene(complete=True)``) instead of refusing a start off it.
@@ -189,7 +198,7 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
         raise JetnhError(f"t_span {t_span!r} has zero length: no motion joins two "
                          "configurations in no time; give t1 > t0")
     if t1 < t0:
-        raise ArgumentError(f"t_span {t_span!r} runs backwards: connect solves forwards "
+        raise ArgumentError(f"{t_span!r} runs backwards: connect solves forwards "
                             "in time; give (t0, t1) with t1 > t0", argument="t_span")
     m = methods.method(method)
     if m.solver is not methods.Solver.EXPLICIT or not m.dense:     # dop853, dopri5
@@ -203,7 +212,13 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     max_iter = arguments.count(max_iter, "max_iter", limit=10_000)
     max_continuation = arguments.count(max_continuation, "max_continuation", limit=100_000)
     if segments is not None:
-        segments = arguments.count(segments, "segments", limit=1000)
+        segments = arguments.count(segments, "segments", limit=MAX_SEGMENTS_GIVEN)
+    rcond = arguments.positive(rcond, "rcond")
+    if rcond >= 1.0:
+        raise ArgumentError(f"must be below 1, got {rcond!r}: a cut-off on the singular "
+                            "values relative to the largest that calls every Jacobian "
+                            "rank-deficient; give 0 < rcond < 1 (default 1e-9)",
+                            argument="rcond")
     if timeout is not None:
         timeout = arguments.positive(timeout, "timeout")
     if not (type(restarts) is int and restarts == 0):

@@ -107,17 +107,39 @@ def on_manifold(system, params, q0, q1, t0, t1, complete) -> dict[str, float]:
 
 def _holonomic_free(system, q1, free) -> list:
     """The free coordinates whose transversality conditions close a vakonomic or
-    Hoelder end on a system with holonomic constraints: none where ``q1`` names as many
-    coordinates as g = 0 has dimensions (the end is then a point of it); otherwise a
-    ``JetnhError`` (free ends on g = 0 would need the momenta projected on its tangent
-    space, not posed here)."""
+    Hoelder end on a system with holonomic constraints g = 0: none where ``q1`` names
+    as many coordinates as g = 0 has dimensions (the end is then a point of it), else
+    ``free`` (``Momenta`` projects their momenta onto the tangent space of g = 0); a
+    ``JetnhError`` where g does not let the free coordinates follow it (``tangent_split``
+    finds none)."""
     dim = system.J.n - len(system.holonomic)
     if len(q1) >= dim:
         return []
+    tangent_split(system, free)
+    return list(free)
+
+
+def tangent_split(system, free) -> tuple[list, list]:
+    """The free coordinates split as ``(dependent, rest)``: g's h dependent ones (the
+    system's own dependent coordinates first, then in order), whose minor of dg/dq is
+    not identically singular, so that a variation of the rest moves them along g = 0;
+    else a ``JetnhError``."""
+    from itertools import combinations
+
+    from ...algebra import linalg
+
+    J, h = system.J, len(system.holonomic)
+    names = [q.name for q in J.q]
+    G = dag.jacobian(system.holonomic, list(J.q))
+    own = [d.name for d in system.dependent]
+    ordered = sorted(free, key=lambda c: (c not in own, names.index(c)))
+    for dep in combinations(ordered, h):
+        if linalg.numeric_rank(G[:, [names.index(c) for c in dep]]) == h:
+            return list(dep), [c for c in free if c not in dep]
     raise JetnhError(
-        f"end names {len(q1)} coordinate(s) of a system whose holonomic constraints leave "
-        f"{dim} degree(s) of freedom: free ends on g = 0 are not posed for the "
-        f"vakonomic and Hoelder principles; name {dim} independent coordinates of end")
+        f"end leaves {', '.join(free)} free, but the holonomic constraints g = 0 cannot be "
+        "solved for any of them (dg/dq has no regular minor in their columns), so the "
+        "named coordinates already fix g; name other coordinates of end")
 
 
 def _guess(guess, unknowns, fixed, system, q0, q1, T):
@@ -176,13 +198,39 @@ def transversality(system, principle, free) -> tuple:
     return tuple(dag.xreplace(dag.diff(boundary, eta[c]), phi) for c in free)
 
 
+def tangent_transversality(system, principle, free) -> tuple:
+    """The transversality conditions of the free coordinates ``free`` on a system with
+    holonomic constraints g = 0, and the coordinates they belong to: the boundary term
+    P_s eta^s vanishes for every variation eta tangent to g = 0 (G eta = 0, G = dg/dq)
+    that leaves the named coordinates fixed.  With ``free`` split into g's dependent
+    coordinates D and the rest R (``tangent_split``), eta_D = -G_D^-1 G_R eta_R, so the
+    conditions are the reduced momenta P_R - G_R^T G_D^-T P_D = 0 (the multipliers of g,
+    which weigh G, drop out).  Returns ``(conditions, R)``."""
+    from ...algebra import linalg
+    import sympy as sp
+
+    dep, rest = tangent_split(system, free)
+    P = dict(zip(dep + rest, transversality(system, principle, dep + rest)))
+    names = [q.name for q in system.J.q]
+    G = dag.jacobian(system.holonomic, list(system.J.q))
+    mu = linalg.solve(G[:, [names.index(c) for c in dep]].T,
+                      sp.Matrix([P[c] for c in dep]))
+    return tuple(P[c] - sum((G[a, names.index(c)] * mu[a] for a in range(len(dep))),
+                            sp.S.Zero) for c in rest), rest
+
+
 class Momenta:
-    """The transversality conditions (``transversality``) of a scene as numbers: their
-    values at a state and their derivatives by the state (from the graph)."""
+    """The transversality conditions (``transversality``; on a system with holonomic
+    constraints, ``tangent_transversality``) of a scene as numbers: their values at a
+    state and their derivatives by the state (from the graph).  ``free``: the
+    coordinates they belong to."""
 
     def __init__(self, scene, free):
         system = scene.system
-        exprs = transversality(system, scene.principle, free)
+        if system.holonomic:
+            exprs, free = tangent_transversality(system, scene.principle, free)
+        else:
+            exprs = transversality(system, scene.principle, free)
         names = scene.state_names
         by_name = {s.name: s for s in (*system.J.q, *system.independent_velocities)}
         from ...mechanics import principles

@@ -1,7 +1,10 @@
 """Single shooting: runs of one scene from the start with the initial unknowns ``u``,
 the endpoint residual and its Jacobian from the exact sensitivities (the runs of
 ``scene.run(sensitivities=True)``'s plan, never finite differences), each read off its
-compiled loop's last row (``Shot``: a trial of the search makes no Trajectory)."""
+compiled loop's last row (``Shot``: a trial of the search makes no Trajectory).  A run
+that reaches the edge of the scene's split stops there (the plan watches it) and goes
+on across it as ``scene.run`` does (``Shot``: its sensitivities carried through each
+change of split, ``numeric.atlas``)."""
 
 from __future__ import annotations
 
@@ -9,12 +12,12 @@ import math
 import time
 
 import numpy as np
-from scipy.linalg.lapack import dgesdd as _gesdd
 
 from ...errors import JetnhError
-from .. import arguments, interrupt, solve
-from ..methods._common import FINISHED
+from .. import arguments, atlas, interrupt, solve
+from ..methods._common import EVENT, FINISHED
 from ..options import options
+from .small import all_finite, thin_svd
 
 #: the measure of the scene's split (``verdicts.split_measure``) below which a run that
 #: stopped early stopped at the edge of its chart
@@ -23,17 +26,18 @@ EDGE = 1e-2
 MAX_STEPS = 20_000
 
 
-def _identity(n, m):
-    """The initial sensitivities of a run, S0 = (I | 0) (n x m), flattened
-    (``solve.augmented``'s), kept per shape."""
-    found = _IDENTITY.get((n, m))
+def _start_row(n, m):
+    """The first row of a run with sensitivities but for its state: zeros, then the
+    initial sensitivities S0 = (I | 0) (n x m) flattened (``solve.augmented``'s), kept
+    per shape; a run's row is a copy with the state written in."""
+    found = _START.get((n, m))
     if found is None:
-        found = _IDENTITY[n, m] = np.eye(n, m).ravel()
+        found = _START[n, m] = np.concatenate((np.zeros(n), np.eye(n, m).ravel()))
         found.setflags(write=False)
     return found
 
 
-_IDENTITY: dict = {}
+_START: dict = {}
 
 
 class Shot:
@@ -51,38 +55,79 @@ class Shot:
         the end of its span or ends in a non-finite state (``stops``, a dict: its status
         counted there)."""
         lay = plan.sens.layout
-        y = np.concatenate((y, _identity(lay.n_state, lay.sensitivity_columns)))
+        if plan.switch and not plan.ce.python_funcs[-1](plan.t0, y, p) >= 0.0:
+            # past the edge of the scene's split at t0: the run starts in another
+            return cls._across(scene, plan, y, p, stops)
+        n, m = lay.n_state, lay.sensitivity_columns
+        y0, y = y, _start_row(n, m).copy()
+        y[:n] = y0
         halt = np.zeros(1, dtype=np.int64)
         tic = time.perf_counter()
         out = interrupt.call(plan.entry, halt, plan.limit,
                              (*plan.prefix, plan.t0, plan.t1, y, p, *plan.suffix, halt))
         wall = time.perf_counter() - tic
         n_out = int(out[3])
-        if int(out[0]) != FINISHED or n_out < 1:
+        if out[0] == EVENT and plan.switch:
+            # at the edge of the scene's split (connect's runs watch no other event): the
+            # run taken across it as Scene.run does
+            return cls._across(scene, plan, y[:n], p, stops, out)
+        if out[0] != FINISHED or n_out < 1:
             if stops is not None:
                 stops[int(out[0])] = stops.get(int(out[0]), 0) + 1
                 stops["y"] = (float(out[1][n_out - 1]),
-                              np.array(out[2][n_out - 1][:lay.n_state])) if n_out else None
+                              np.array(out[2][n_out - 1][:n])) if n_out else None
             return None
         last = out[2][n_out - 1]
-        if not arguments.all_finite(last):
+        # the loop has checked the state (``loop.finite_status``), not its sensitivities
+        if not all_finite(last[n:]):
             return None
         self = object.__new__(cls)
-        n = lay.n_state
         self.t, self.y = float(out[1][n_out - 1]), last[:n]
-        self.S = last[n:].reshape(n, lay.sensitivity_columns)
+        self.S = last[n:].reshape(n, m)
         self._made, self._trajectory = (scene, plan, out, wall, y, p), None
+        return self
+
+    @classmethod
+    def _across(cls, scene, plan, y, p, stops, out=None):
+        """``of`` for a run that reached the edge of the scene's split (its loop's
+        tuple ``out``; None: the start is past it): taken on across it as
+        ``solve.run`` takes it (``atlas.end_across``; its sensitivities carried across
+        each switch, its end in the scene's states), or None.  Its Trajectory is
+        ``solve.run``'s, made when asked for."""
+        if out is None:
+            tr = solve.run(scene, plan, y.copy(), p)
+            status = tr.status
+            t, y_end = float(tr.t[-1]), tr.y[-1]
+            S = tr.sensitivities[-1] if status == FINISHED else None
+        else:
+            tr = None
+            status, t, y_end, S = atlas.end_across(
+                scene, plan.method.name, out, plan.t0, plan.t1, p, plan.ctl, plan.mode,
+                plan.checked, plan.singular_tol, plan.newton, plan.limit)
+        if status != FINISHED or not arguments.all_finite(y_end) or not \
+                arguments.all_finite(S):
+            if stops is not None:
+                stops[status] = stops.get(status, 0) + 1
+                stops["y"] = (t, np.array(y_end))
+            return None
+        self = object.__new__(cls)
+        self.t, self.y, self.S = t, y_end, S
+        self._made, self._trajectory = (scene, plan, y.copy(), p), tr
         return self
 
     @property
     def trajectory(self):
         """The run's ``Trajectory`` (made on first access, then kept)."""
+        if self._trajectory is None and len(self._made) == 4:     # across an edge
+            scene, plan, y, p = self._made
+            self._trajectory = solve.run(scene, plan, y.copy(), p)
         if self._trajectory is None:
             scene, plan, out, wall, y, p = self._made
             self._trajectory = solve.trajectory(
                 scene, plan.method.name, out, wall, plan.kern, plan.ce, p, plan.t0, y,
                 plan.singular_tol, plan.checked, plan.limit,
-                {**plan.dense, "partial_last": False}, sens=plan.sens)
+                {**plan.dense, "partial_last": False},
+                n_events=len(plan.ce) - 1 if plan.switch else None, sens=plan.sens)
         return self._trajectory
 
 
@@ -96,8 +141,9 @@ class Shooter:
     and its Jacobian from the sensitivities.  ``deadline`` (``time.monotonic()``, or
     None): no run starts after it (``OutOfTime``); ``stops``: the runs that stopped
     early, by status, and as "edge" those that stopped near the edge of the scene's
-    split (its measure below ``verdicts.EDGE``), which a run with sensitivities does not
-    leave."""
+    split (its measure below ``verdicts.EDGE``): where the runs cannot change split
+    (``atlas.applies``: Suslov's equations in the paper's convention, more than 3
+    constraints), or no other split is regular there."""
 
     deadline = None
 
@@ -145,7 +191,7 @@ class Shooter:
         if self.deadline is not None and time.monotonic() > self.deadline:
             raise OutOfTime
         self.runs += 1
-        if not arguments.all_finite(y):
+        if not all_finite(y):
             return None
         if self.holonomic:
             try:
@@ -170,10 +216,10 @@ class Shooter:
         dep = ", ".join(self.scene.dependent_velocities) or "none"
         return (f"{k} of the {self.runs} runs stopped at the edge of the scene's split "
                 f"(dependent velocities {dep}: the constraints cannot be solved for them "
-                "there); connect's runs carry sensitivities and keep one split, so they "
-                "cannot cross that edge: where the end lies beyond it, connect from a "
-                "System with other dependent coordinates (System(..., dependent=[...])) "
-                "or in two legs, or shoot on scene.run, which changes split")
+                "there) and could not go on in another split (the motions of this "
+                "principle depend on the split, or no other split is regular there): "
+                "where the end lies beyond it, connect from a System with other "
+                "dependent coordinates (System(..., dependent=[...])) or in two legs")
 
     def state(self, u) -> np.ndarray:
         y = self.y0.copy()
@@ -270,22 +316,14 @@ class Shooter:
 
 
 def svd(Jm):
-    """The thin singular value decomposition ``(U, s, Vt)`` of ``Jm`` (LAPACK's gesdd
-    called directly: a small matrix costs a third of ``np.linalg.svd``'s checks)."""
-    if Jm.size:
-        U, s, Vt, info = _gesdd(Jm, compute_uv=1, full_matrices=0)
-        if info == 0:
-            return U, s, Vt
-    return np.linalg.svd(Jm, full_matrices=False)
+    """The thin singular value decomposition ``(U, s, Vt)`` of ``Jm`` (compiled,
+    ``small.thin_svd``: a small matrix costs a fraction of a LAPACK call's set-up)."""
+    return thin_svd(Jm)
 
 
 def singular_values(Jm):
     """The singular values of ``Jm``, largest first."""
-    if Jm.size:
-        _, s, _, info = _gesdd(Jm, compute_uv=0)
-        if info == 0:
-            return s
-    return np.linalg.svd(Jm, compute_uv=False)
+    return thin_svd(Jm)[1]
 
 
 def rank(s, rcond) -> int:
