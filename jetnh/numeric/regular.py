@@ -105,9 +105,10 @@ def on_constraints(A, f, qd, tol: float) -> np.ndarray:
         return np.all(np.abs(f) <= tol * scale, axis=-1) & np.all(np.isfinite(f), axis=-1)
 
 
-def singular(system, m: float, A, where: str, tol: float) -> ConstraintError:
+def singular(system, m: float, A, where: str, tol: float, give=True) -> ConstraintError:
     """The error for a point without its dependent velocities where the split is
-    singular (m below ``singular_measure(tol)``): the split, its measure and the fix."""
+    singular (m below ``singular_measure(tol)``): the split, its measure and the fix
+    (with ``give``: giving them too is one)."""
     own = [s.name for s in system.dependent]
     dep = ", ".join(v.name for v in system.dependent_velocities)
     split, mb = best(system, A) if np.all(np.isfinite(A)) else (None, 0.0)
@@ -117,7 +118,8 @@ def singular(system, m: float, A, where: str, tol: float) -> ConstraintError:
         f"{where}: the split dependent={own} is singular at this configuration (its "
         f"measure det(A_alpha)^2/det(A A^T), A = df/dqdot, is {m:.3g}, below "
         f"{singular_measure(tol):.3g}): the constraints do not determine {dep} there. "
-        f"Give {dep} too (every velocity, on the constraints), or {other}")
+        + (f"Give {dep} too (every velocity, on the constraints), or {other}" if give
+           else f"{other[0].upper()}{other[1:]} (system.with_split), where they do"))
 
 
 def off(system, f, where: str) -> ConstraintError:
