@@ -49,8 +49,9 @@ det(A_alpha)^2 / det(A A^T) below the atlas's edge) a point given with every vel
 checked against the constraints f = 0 themselves and linearized in the split of largest
 measure, as a run from it would go on there (its rows, states and ``at`` are those of
 ``system.with_split(...)``; the multipliers keep their values, renamed; principles whose
-motions depend on the split keep theirs); where the split is singular (the measure below
-``regular.singular_measure``) a point without its dependent velocities is a
+motions depend on the split keep theirs); where the split is singular (one rounding unit
+in an input moves phi by more than 1e-9 relative: ``regular.determined``) a point
+without its dependent velocities is a
 ``ConstraintError`` naming the split, its measure and a regular one.
 
 Stability is spectral, and decided only at a steady motion (a relative equilibrium of
@@ -801,6 +802,9 @@ def _evaluate(model: _Model, point: dict, values: dict, keep, t: float) -> Linea
                if set(missing) & set(lams) else "")
             + "; give them in at={...}")
     state = {nm: point.get(nm, 0.0) for nm in names}
+    other = _split(model, point, state, values, keep, t)
+    if other is not None:
+        return _evaluate(*other)
     y = np.array([state[nm] for nm in names], dtype=float)
     chart, G = _chart(model, y, values, t)
     rows = tuple(i for i in keep if i not in chart)
@@ -809,9 +813,6 @@ def _evaluate(model: _Model, point: dict, values: dict, keep, t: float) -> Linea
     p = np.array([values[nm] for nm in model.params], dtype=float)
     aux = np.empty(ck.layout.n_aux)
     ck.aux(t, y, p, aux)
-    other = _split(model, point, state, aux[:len(dep)].tolist(), values, keep, t)
-    if other is not None:
-        return _evaluate(*other)
     at = dict(state)
     k = len(dep)
     for a, nm in enumerate(dep):
@@ -833,8 +834,7 @@ def _evaluate(model: _Model, point: dict, values: dict, keep, t: float) -> Linea
     return Linearization(model, at, values, rows, chart, E, t, y, p, A, rates, limit)
 
 
-def _split(model: _Model, point: dict, state: dict, phi: list, values: dict, keep,
-           t: float):
+def _split(model: _Model, point: dict, state: dict, values: dict, keep, t: float):
     """None to linearize in the model's own split; ``(model, point, values, keep, t)``
     of the split of largest measure where the own one is past the edge of its chart and
     the point, given with every velocity, is on the constraints (module docstring).  A
@@ -846,14 +846,17 @@ def _split(model: _Model, point: dict, state: dict, phi: list, values: dict, kee
         return None
     given = all(nm in point for nm in dep)
     qd = {v.name: state[v.name] for v in model.velocities}
+    found = regular.phi(sysm, t, state, qd, values)
+    phi = [found[nm] for nm in dep]
     qd.update((nm, point[nm] if given else phi[a]) for a, nm in enumerate(dep))
     A, f = regular.at_point(sysm, t, state, qd, values)
     m = float(regular.measure(sysm, A))
     if m >= regular.edge(sysm):
         return None
+    ok, why, finite = regular.determined(sysm, t, state, qd, values, CONSISTENT)
     if not given:
-        if m < regular.singular_measure(CONSISTENT):
-            raise regular.singular(sysm, m, A, "linearize", CONSISTENT)
+        if not ok:
+            raise regular.singular(sysm, m, A, "linearize", why, finite)
         return None
     if not regular.on_constraints(A, f, [qd[v.name] for v in sysm.J.qd], CONSISTENT):
         raise regular.off(sysm, f, "linearize")
@@ -865,7 +868,7 @@ def _split(model: _Model, point: dict, state: dict, phi: list, values: dict, kee
     if split == own:
         return None
     if not split_invariant(model.principle, model.convention) or explicit:
-        if m >= regular.singular_measure(CONSISTENT) and all(
+        if ok and all(
                 abs(point[nm] - v) <= CONSISTENT * max(1.0, abs(v)) for nm, v in zip(dep, phi)):
             return None         # the own split still determines the point
         why = ("the multipliers of the explicit form weigh the singular split"

@@ -9,15 +9,19 @@ starts in the split of largest measure.  Two thresholds decide how a given point
 - past the edge (m < eps) the dependent velocities given with the point are checked
   against f = 0 itself (``on_constraints``), not against phi^alpha = A_alpha^-1 (...),
   whose conditioning is about 1/sqrt(m);
-- below ``singular_measure(tol)`` the constraints no longer determine the dependent
-  velocities: phi^alpha carries a rounding error of about u / sqrt(m) relative (u the
-  unit roundoff; a coordinate rounded by u moves A_alpha by u, relative u / sqrt(m)), more
-  than the consistency tolerance ``tol``.  A point there without its dependent velocities
-  is refused (``singular``): give them too, or choose another split.
+- there, the split is singular where the constraints no longer determine the dependent
+  velocities in floats: a change of one rounding unit in a coordinate, an independent
+  velocity or a parameter moves phi^alpha by more than the consistency tolerance ``tol``
+  (relative, as max(1, |phi|)) -- ``determined``.  That is the conditioning of phi at
+  the point in the numbers given (near th = pi/2, cos th is known only to about 1e-16
+  absolute; near x = 0, x itself is known to 1e-16 relative, and y/x is fine).  A point
+  there without its dependent velocities is refused (``singular``): give them too, or
+  choose another split.
 """
 
 from __future__ import annotations
 
+import math
 from itertools import combinations
 
 import numpy as np
@@ -29,12 +33,6 @@ from ..errors import ConstraintError
 ROUNDOFF = float(np.finfo(float).eps) / 2
 
 _EDGES: dict = {}
-
-
-def singular_measure(tol: float) -> float:
-    """The measure below which phi^alpha's rounding error (u / sqrt(m) relative) exceeds
-    ``tol``: (u / tol)^2."""
-    return (ROUNDOFF / tol) ** 2
 
 
 def edge(system) -> float:
@@ -50,15 +48,66 @@ def edge(system) -> float:
     return found
 
 
-def at_point(system, t, coordinates: dict, velocities: dict, params: dict):
-    """``(A, f)``: df/dqdot ([..., k, n]) and f ([..., k]) at the points given by name
-    (numbers, or arrays of one length for several points; a missing or NaN velocity
-    gives NaN), evaluated on the shared graph in floats."""
+def _point(system, t, coordinates: dict, velocities: dict, params: dict) -> dict:
     J = system.J
     point = {J.t: t}
     point.update((q, coordinates[q.name]) for q in J.q)
     point.update((v, velocities.get(v.name, np.nan)) for v in J.qd)
     point.update((s, params[s.name]) for s in system.parameters)
+    return point
+
+
+def phi(system, t, coordinates: dict, velocities: dict, params: dict) -> dict:
+    """The dependent velocities phi^alpha at a point given by name (floats, on the
+    shared graph; NaN or infinite where phi is undefined)."""
+    vs = system.dependent_velocities
+    values = dag.evaluate_numpy([system.phi[v] for v in vs],
+                                _point(system, t, coordinates, velocities, params))
+    return {v.name: float(x) for v, x in zip(vs, values)}
+
+
+def determined(system, t, coordinates: dict, velocities: dict, params: dict, tol: float):
+    """``(ok, why, finite)``: whether phi^alpha at the point moves by at most ``tol`` max(1,
+    |phi|) when any one coordinate, independent velocity or parameter changes by one
+    rounding unit (``np.spacing``), all the changes evaluated at once on the graph; ``why``
+    names the input that moves it most, and by how much; ``finite``: phi^alpha is."""
+    inputs = ([(q.name, coordinates) for q in system.J.q]
+              + [(v.name, velocities) for v in system.independent_velocities]
+              + [(s.name, params) for s in system.parameters])
+    rows = len(inputs) + 1
+    columns = {"c": dict(coordinates), "v": dict(velocities), "p": dict(params)}
+    kinds = {id(coordinates): "c", id(velocities): "v", id(params): "p"}
+    for kind in columns.values():
+        for name, x in kind.items():
+            kind[name] = np.full(rows, float(x))
+    for i, (name, where) in enumerate(inputs):
+        col = columns[kinds[id(where)]][name]
+        col[i + 1] += np.spacing(col[i + 1])
+    vs = system.dependent_velocities
+    values = dag.evaluate_numpy([system.phi[v] for v in vs], _point(
+        system, t, columns["c"], columns["v"], columns["p"]))
+    worst, why = 0.0, ""
+    for v, x in zip(vs, values):
+        x = np.broadcast_to(np.asarray(x, dtype=float), (rows,))
+        with np.errstate(invalid="ignore"):
+            moved = np.abs(x[1:] - x[0]) / max(1.0, abs(x[0]))
+        moved = np.where(np.isfinite(moved), moved, np.inf)
+        if not math.isfinite(x[0]):
+            return False, f"{v.name} is {x[0]}", False
+        if moved.size and moved.max() > worst:
+            i = int(np.argmax(moved))
+            worst = float(moved.max())
+            why = (f"one rounding unit in {inputs[i][0]} moves {v.name} = {x[0]:.6g} by "
+                   f"{abs(x[i + 1] - x[0]):.3g}")
+    return worst <= tol, why, True
+
+
+def at_point(system, t, coordinates: dict, velocities: dict, params: dict):
+    """``(A, f)``: df/dqdot ([..., k, n]) and f ([..., k]) at the points given by name
+    (numbers, or arrays of one length for several points; a missing or NaN velocity
+    gives NaN), evaluated on the shared graph in floats."""
+    J = system.J
+    point = _point(system, t, coordinates, velocities, params)
     k, n = system.k, J.n
     values = dag.evaluate_numpy(list(system.jacobian) + list(system.constraints), point)
     shape = np.broadcast_shapes(*(np.shape(v) for v in point.values()))
@@ -105,19 +154,21 @@ def on_constraints(A, f, qd, tol: float) -> np.ndarray:
         return np.all(np.abs(f) <= tol * scale, axis=-1) & np.all(np.isfinite(f), axis=-1)
 
 
-def singular(system, m: float, A, where: str, tol: float, give=True) -> ConstraintError:
+def singular(system, m: float, A, where: str, why: str, finite=True, give=True
+             ) -> ConstraintError:
     """The error for a point without its dependent velocities where the split is
-    singular (m below ``singular_measure(tol)``): the split, its measure and the fix
-    (with ``give``: giving them too is one)."""
+    singular (``determined`` fails: ``why`` and ``finite`` from it): the split, its
+    measure and the fix (with ``give``: giving them too is one)."""
     own = [s.name for s in system.dependent]
     dep = ", ".join(v.name for v in system.dependent_velocities)
     split, mb = best(system, A) if np.all(np.isfinite(A)) else (None, 0.0)
     other = (f"choose dependent={split} (measure {mb:.3g} here)" if split and split != own
-             and mb > singular_measure(tol) else "choose another split with dependent=[...]")
+             else "choose another split with dependent=[...]")
+    told = "do not determine" if finite else "give no finite value for"
     return ConstraintError(
         f"{where}: the split dependent={own} is singular at this configuration (its "
-        f"measure det(A_alpha)^2/det(A A^T), A = df/dqdot, is {m:.3g}, below "
-        f"{singular_measure(tol):.3g}): the constraints do not determine {dep} there. "
+        f"measure det(A_alpha)^2/det(A A^T), A = df/dqdot, is {m:.3g}; {why}): the "
+        f"constraints {told} {dep} there. "
         + (f"Give {dep} too (every velocity, on the constraints), or {other}" if give
            else f"{other[0].upper()}{other[1:]} (system.with_split), where they do"))
 

@@ -308,10 +308,12 @@ class Scene(Frozen):
         if m >= regular.edge(sys_):
             return
         tol = self.consistency_tol
-        singular = m < regular.singular_measure(tol)
+        ok, why, finite = regular.determined(
+            sys_, self.t_span[0] if t0 is None else t0, given, qd, values, tol)
+        singular = not ok
         if not complete:
             if singular:
-                raise regular.singular(sys_, m, A, where, tol, give=False)
+                raise regular.singular(sys_, m, A, where, why, finite, give=False)
             return
         if not regular.on_constraints(A, f, [qd[v.name] for v in sys_.J.qd], tol):
             if project and not singular:
