@@ -125,7 +125,8 @@ def measure(system, A) -> np.ndarray:
     A is not finite or has rank < k."""
     from .atlas import split_measure_of
 
-    return split_measure_of(A, list(system.dep_index))
+    with np.errstate(all="ignore"):
+        return split_measure_of(A, list(system.dep_index))
 
 
 def best(system, A) -> tuple[list[str], float]:
