@@ -45,13 +45,13 @@ position of a rolling body) do not feed back, so ``A`` is the Jacobian restricte
 kept states.
 
 The split at the point (``numeric.regular``): past the edge of its chart (the measure
-det(A_alpha)^2 / det(A A^T) below the atlas's edge) a point given with every velocity is
-checked against the constraints f = 0 themselves and linearized in the split of largest
-measure, as a run from it would go on there (its rows, states and ``at`` are those of
-``system.with_split(...)``; the multipliers keep their values, renamed; principles whose
-motions depend on the split keep theirs); where the split is singular (one rounding unit
-in an input moves phi by more than 1e-9 relative: ``regular.determined``) a point
-without its dependent velocities is a
+det(A_alpha)^2 / det(A A^T) below the atlas's edge) dependent velocities given with the
+point are checked against the constraints f = 0 themselves, and the point is linearized
+in the split of largest measure, as a run from it would go on there (its rows, states
+and ``at`` are those of ``system.with_split(...)``; the multipliers keep their values,
+renamed; principles whose motions depend on the split keep theirs).  Where the split is
+singular (one rounding unit in an input moves phi by more than 1e-9 relative:
+``regular.determined``) a point without its dependent velocities is a
 ``ConstraintError`` naming the split, its measure and a regular one.
 
 Stability is spectral, and decided only at a steady motion (a relative equilibrium of
@@ -836,10 +836,11 @@ def _evaluate(model: _Model, point: dict, values: dict, keep, t: float) -> Linea
 
 def _split(model: _Model, point: dict, state: dict, values: dict, keep, t: float):
     """None to linearize in the model's own split; ``(model, point, values, keep, t)``
-    of the split of largest measure where the own one is past the edge of its chart and
-    the point, given with every velocity, is on the constraints (module docstring).  A
-    ConstraintError for a point off them, or one without its dependent velocities where
-    the split is singular."""
+    of the split of largest measure where the own one is past the edge of its chart
+    (module docstring): the point's velocities are those given, on the constraints, or
+    the dependent ones from phi where the split determines them.  A ConstraintError for
+    a point off the constraints, or one without its dependent velocities where the split
+    is singular."""
     sysm = model.system
     dep = [v.name for v in model.dependent]
     if not dep:
@@ -854,11 +855,10 @@ def _split(model: _Model, point: dict, state: dict, values: dict, keep, t: float
     if m >= regular.edge(sysm):
         return None
     ok, why, finite = regular.determined(sysm, t, state, qd, values, CONSISTENT)
-    if not given:
-        if not ok:
-            raise regular.singular(sysm, m, A, "linearize", why, finite)
-        return None
-    if not regular.on_constraints(A, f, [qd[v.name] for v in sysm.J.qd], CONSISTENT):
+    if not given and not ok:
+        raise regular.singular(sysm, m, A, "linearize", why, finite)
+    if given and not regular.on_constraints(A, f, [qd[v.name] for v in sysm.J.qd],
+                                            CONSISTENT):
         raise regular.off(sysm, f, "linearize")
     from .atlas import split_invariant
 
@@ -868,7 +868,7 @@ def _split(model: _Model, point: dict, state: dict, values: dict, keep, t: float
     if split == own:
         return None
     if not split_invariant(model.principle, model.convention) or explicit:
-        if ok and all(
+        if not given or ok and all(
                 abs(point[nm] - v) <= CONSISTENT * max(1.0, abs(v)) for nm, v in zip(dep, phi)):
             return None         # the own split still determines the point
         why = ("the multipliers of the explicit form weigh the singular split"
