@@ -114,6 +114,28 @@ def test_d_on_the_constraints_with_every_velocity():
         jn.Scene(S, params=P, initial=at)
 
 
+def test_past_the_edge_linearized_in_the_best_split():
+    """Past the edge of the chart (measure below 1/(4N)), a point without its dependent
+    velocities is linearized where a run from it would go on: at cos th = 3e-7 the
+    sleigh running straight has the closed-form eigenvalue -m a v / (I + m a^2) to the
+    rounding of v = 1 / cos th (in the split Y itself A would hold 1/cos^2 and lose three
+    digits); the catalogue sleigh with x dependent at heading 0.3 (sin^2 = 0.087 < 1/8)
+    is the one with y dependent."""
+    d = 3e-7
+    at = {"X": 0.0, "Y": 0.0, "th": math.pi / 2 - d, "X_t": 1.0, "th_t": 0.0}
+    lin = jn.linearize(S, at=at, params=P)
+    assert lin.state_names == ("th", "Y_t", "th_t") and lin.steady_motion
+    v = 1.0 / math.cos(math.pi / 2 - d)
+    assert lin.eigenvalues.real.min() == pytest.approx(-0.8 * v / 1.02, rel=1e-9)
+    sleigh = jn.models.get("chaplygin_sleigh")
+    J = sleigh.J
+    in_x = jn.System(J, sleigh.L, sleigh.constraints, [J.q[0]], defaults=sleigh.defaults)
+    a = jn.linearize(sleigh, at={"theta": 0.3, "x_t": 1.3 * math.cos(0.3), "theta_t": 0.0})
+    b = jn.linearize(in_x, at={"theta": 0.3, "y_t": 1.3 * math.sin(0.3), "theta_t": 0.0})
+    assert a.state_names == b.state_names == ("theta", "x_t", "theta_t")
+    assert np.allclose(a.A, b.A, rtol=1e-12, atol=1e-12)
+
+
 def test_a_large_residual_is_no_steady_motion():
     """x'' = -K x + K + 1 at x = 1 (K = 1e9): x'' = 1, however large |A| is."""
     Jx = jn.JetSpace("x")
