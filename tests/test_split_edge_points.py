@@ -13,6 +13,7 @@ import sympy as sp
 from hypothesis import HealthCheck, event, given, settings, strategies as st
 
 import jetnh as jn
+from jetnh import models
 from jetnh.errors import ConstraintError
 
 J = jn.JetSpace("X Y th")
@@ -127,7 +128,7 @@ def test_past_the_edge_linearized_in_the_best_split():
     assert lin.state_names == ("th", "Y_t", "th_t") and lin.steady_motion
     v = 1.0 / math.cos(math.pi / 2 - d)
     assert lin.eigenvalues.real.min() == pytest.approx(-0.8 * v / 1.02, rel=1e-9)
-    sleigh = jn.models.get("chaplygin_sleigh")
+    sleigh = models.get("chaplygin_sleigh")
     J = sleigh.J
     in_x = jn.System(J, sleigh.L, sleigh.constraints, [J.q[0]], defaults=sleigh.defaults)
     a = jn.linearize(sleigh, at={"theta": 0.3, "x_t": 1.3 * math.cos(0.3), "theta_t": 0.0})
