@@ -19,7 +19,10 @@ rounds; each figure the best over the rounds), the calls interleaved, each figur
   1/8, is not singular), takes the same steps up to the edge and about as many after:
   the floor a switching run adds to;
 - ``switch``: ``atlas.switch`` alone at the state where the run reached the edge (the
-  new chart, its state), what the run pays to change chart beyond running two pieces.
+  new chart, its state), what the run pays to change chart beyond running two pieces;
+- ``replace``: ``scene.replace(initial=...).run()``, the switching run of a copy of the
+  scene with its initial values given again (a shooting loop's run; sampled every
+  ``REPLACE_EVERY``-th round of calls).
 
 With ``--panels`` each tree also runs ``workprecision.panel`` of the three panels (the
 quick tolerances 1e-3, 1e-6, 1e-9 with ``--quick``, else 1e-3 ... 1e-12): the time jetnh's
@@ -43,10 +46,13 @@ from _common import ROOT, parser, run_worker, write
 CASES = ("chaplygin_sleigh / chetaev", "chaplygin_sleigh / vakonomic",
          "knife_edge / vakonomic")
 RUN = dict(method="dopri5", save="final", rtol=1e-6, atol=1e-9)
+REPLACE_EVERY = 20
+FIGURES = ("run", "fixed", "switch", "replace")
 
 
 def costs(calls: int) -> dict:
-    """case -> {"run", "fixed", "switch"} seconds, and the run's switches (this tree)."""
+    """case -> {"run", "fixed", "switch", "replace"} seconds, and the run's switches (this
+    tree)."""
     from workprecision import cases, scene_of
 
     from jetnh.numeric import atlas
@@ -59,9 +65,11 @@ def costs(calls: int) -> dict:
         *_, seg, _, _ = tr._segments.pieces[0]           # the piece up to the edge
         at, p = atlas.atlas(scene), np.ascontiguousarray(scene.p, dtype=float)
         t, y = float(seg.t[-1]), np.ascontiguousarray(seg.y[-1])
+        ini = {n: scene.initial[n] for n in scene.state_names}
         fs = {"run": lambda s=scene: s.run(**RUN),
               "fixed": lambda s=scene: s.run(**RUN, split="fixed"),
-              "switch": lambda at=at, t=t, y=y, p=p: atlas.switch(at, at.own, t, y, p)}
+              "switch": lambda at=at, t=t, y=y, p=p: atlas.switch(at, at.own, t, y, p),
+              "replace": lambda s=scene, ini=ini: s.replace(initial=ini).run(**RUN)}
         for f in fs.values():
             for _ in range(20):
                 f()
@@ -69,8 +77,10 @@ def costs(calls: int) -> dict:
                       "to": tr.switches[0]["to"]}
         timed += [(label, name, f) for name, f in fs.items()]
     samples = {(label, name): [] for label, name, _ in timed}
-    for _ in range(calls):
+    for i in range(calls):
         for label, name, f in timed:
+            if name == "replace" and i % REPLACE_EVERY:
+                continue
             tic = time.perf_counter()
             f()
             samples[label, name].append(time.perf_counter() - tic)
@@ -143,21 +153,22 @@ def main(argv=None):
             print(f"round {r + 1}, {name}: " + ", ".join(
                 f"{c.split(' / ')[0][:8]}/{c.split(' / ')[1][:4]} run "
                 f"{v['run'] * 1e6:.0f} us, fixed {v['fixed'] * 1e6:.0f} us, switch "
-                f"{v['switch'] * 1e6:.1f} us" for c, v in res["costs"].items()), flush=True)
-    best = {name: {c: {k: min(r["costs"][c][k] for r in runs) for k in ("run", "fixed",
-                                                                          "switch")}
+                f"{v['switch'] * 1e6:.1f} us, replace {v['replace'] * 1e6:.0f} us"
+                for c, v in res["costs"].items()), flush=True)
+    best = {name: {c: {k: min(r["costs"][c][k] for r in runs) for k in FIGURES}
                    for c in CASES} for name, runs in got.items()}
     names = list(trees)
-    rows = [[c, *(f"{best[n][c][k] * 1e6:.3g}" for n in names for k in ("run", "fixed",
-                                                                          "switch")),
-             *(f"{best[n][c]['run'] / best[n][c]['fixed']:.2f}" for n in names)]
+    rows = [[c, *(f"{best[n][c][k] * 1e6:.3g}" for n in names for k in FIGURES),
+             *(f"{best[n][c]['run'] / best[n][c]['fixed']:.2f}" for n in names),
+             *(f"{best[n][c]['replace'] / best[n][c]['run']:.2f}" for n in names)]
             for c in CASES]
     tables = [dict(
         title="A run that changes chart once, against the same run kept in its split "
               "(dopri5, rtol 1e-6, save='final'; us, 10th percentile of interleaved calls, "
               "best of the rounds; one process per tree)",
-        columns=["", *(f"{n} {k}" for n in names for k in ("run", "fixed", "switch")),
-                 *(f"{n} run / fixed" for n in names)],
+        columns=["", *(f"{n} {k}" for n in names for k in FIGURES),
+                 *(f"{n} run / fixed" for n in names),
+                 *(f"{n} replace / run" for n in names)],
         rows=rows, note="trees (commits): " + ", ".join(f"{n} = {commit(p)}"
                                                        for n, p in trees.items()))]
     if args.panels:
@@ -190,7 +201,8 @@ def main(argv=None):
         summary=[f"{c}: the switching run costs {a[c]['run'] / a[c]['fixed']:.2f}x the run "
                  f"kept in its split ({a[c]['run'] * 1e6:.0f} against "
                  f"{a[c]['fixed'] * 1e6:.0f} us), the switch alone "
-                 f"{a[c]['switch'] * 1e6:.1f} us" for c in CASES],
+                 f"{a[c]['switch'] * 1e6:.1f} us, a replace(initial=...) copy's run "
+                 f"{a[c]['replace'] / a[c]['run']:.2f}x the run" for c in CASES],
         tables=tables, trees={n: commit(p) for n, p in trees.items()}, rounds=got),
         args.out, args.quick)
 

@@ -277,6 +277,10 @@ def test_chetaev_reach_and_refusal(heis):
     (dict(guess={"x_t": 1.0}), "guess lacks"),
     (dict(guess={"z_t": 1.0}), "not an unknown"),
     (dict(principle="newton"), "principle"),
+    (dict(t_span=(1.0, 0.0)), r"^t_span \(1\.0, 0\.0\) runs backwards"),
+    (dict(segments=1000), "segments"),
+    (dict(rcond=2.0), "rcond must be below 1, got 2.0"),
+    (dict(rcond=0.0), "rcond must be a positive"),
 ])
 def test_bad_input(heis, args, match):
     kw = dict(principle="vakonomic", start=O, end={"x": 1.0, "y": 0.5, "z": 0.2},

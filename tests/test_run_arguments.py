@@ -142,6 +142,8 @@ def test_runtime_parameters_by_name_symbol_or_sequence(disk):
     (dict(method="scipy-RK45", n_steps=3), "not an option"),
     (dict(singular_tol=np.nan), "singular_tol"),
     (dict(save="all"), "save"),
+    (dict(sensitivities="yes"), "sensitivities must be True or False"),
+    (dict(sensitivities=True, sensitivity_error=1), "sensitivity_error must be True"),
 ])
 def test_arguments_that_would_hang_or_crash_are_refused(disk, kw, match):
     tic = time.perf_counter()

@@ -99,16 +99,27 @@ def count(value, what, limit=MAX_STEPS_LIMIT) -> int:
 
 def all_finite(a: np.ndarray, b: np.ndarray | None = None) -> bool:
     """Whether every entry of the float arrays ``a`` (and ``b``) is finite: a finite sum
-    of squares says so cheaply; where it is not (a NaN, an infinity or an overflow),
-    each entry is looked at."""
-    flat = a.reshape(-1)
-    with np.errstate(over="ignore", invalid="ignore"):     # an overflow is looked at below
-        total = flat.dot(flat)
+    says so cheaply (of the entries as Python floats for a few, which never warns; else of
+    squares); where it is not (a NaN, an infinity or an overflow), each entry is looked
+    at."""
+    if a.size + (0 if b is None else b.size) <= _FEW:
+        total = sum(a.reshape(-1).tolist())
         if b is not None:
-            flat = b.reshape(-1)
-            total += flat.dot(flat)
+            total += sum(b.reshape(-1).tolist())
+    else:
+        flat = a.reshape(-1)
+        with np.errstate(over="ignore", invalid="ignore"):   # an overflow: looked at below
+            total = flat.dot(flat)
+            if b is not None:
+                flat = b.reshape(-1)
+                total += flat.dot(flat)
     return math.isfinite(total) or bool(
         np.isfinite(a).all() and (b is None or np.isfinite(b).all()))
+
+
+#: up to this many entries ``all_finite`` sums Python floats (no ``np.errstate``, which
+#: costs more than the sum)
+_FEW = 256
 
 
 def real_array(value, what, ndim=1) -> np.ndarray:

@@ -58,6 +58,7 @@ keep their split.
 
 from __future__ import annotations
 
+import copy
 import math
 import time
 from itertools import combinations
@@ -121,10 +122,15 @@ def applies(scene, events) -> bool:
 
 
 def atlas(scene) -> "Atlas":
-    """The atlas of ``scene`` (built once, kept in its memo)."""
+    """The atlas of ``scene`` (built once, kept in its memo; a copy of the scene with the
+    same kernels, ``Scene.replace``, takes the first one's charts: ``Atlas.moved``)."""
     found = scene._memo.get("atlas")
     if found is None:
-        found = scene._memo["atlas"] = Atlas(scene)
+        first = scene._memo.setdefault("atlases", [])      # (shared by the copies)
+        found = Atlas(scene) if not first else first[0].moved(scene)
+        if not first:
+            first.append(found)
+        scene._memo["atlas"] = found
     return found
 
 
@@ -360,8 +366,9 @@ class Atlas:
         self.eps = 1.0 / (4 * len(self.splits))
         p = principles.get(home.principle)
         self.explicit = bool(p.multipliers) and p.form(home.form).explicit
-        self.charts = {self.splits[0]: Chart(home.system, self.splits[0], self.explicit,
-                                             home)}
+        self._own = Chart(home.system, self.splits[0], self.explicit, home)
+        #: the charts of the other splits, built when a run first enters them
+        self.charts: dict = {}
         #: each split as a chart that only maps states (``Chart.state``)
         self.maps = {s: Chart(home.system, s, self.explicit) for s in self.splits}
         #: the columns of each split's minor of df/dqdot
@@ -370,11 +377,25 @@ class Atlas:
 
     @property
     def own(self) -> Chart:
-        return self.charts[self.splits[0]]
+        return self._own
+
+    def moved(self, home) -> "Atlas":
+        """This atlas for ``home``, a copy of its home with the same kernels (other
+        initial values, time span or run-time parameter values: ``Scene.replace``): its
+        own chart ``home``'s, the other charts (each a scene of its split, compiled
+        once), maps and compiled events shared."""
+        new = object.__new__(Atlas)
+        new.__dict__.update(self.__dict__)
+        new.home = home
+        new._own = copy.copy(self._own)         # (its kernels and df/dqdot: the same)
+        new._own.scene = home
+        return new
 
     def chart(self, split, t0, y) -> Chart:
         """The chart of ``split`` (its scene built at the state ``y`` of it at ``t0``
         the first time)."""
+        if split == self.splits[0]:
+            return self._own
         found = self.charts.get(split)
         if found is None:
             home = self.home
@@ -648,18 +669,20 @@ def stitch(home, at, method, p, parts, switches, user, mode, wall):
             to_home(own, chart, seg.t_events[i], seg.y_events[i].reshape(
                 -1, len(chart.scene.state_names)), p).ravel()
             for chart, seg, _ in parts]))
-    info = [seg._info for _, seg, _ in parts]
-    return Trajectory(home, np.concatenate(ts), np.concatenate(ys), p, method=method,
-                      status=last.status, stop_reason=last.stop_reason,
-                      steps=sum(i["steps"] for i in info),
-                      rejected=sum(i["rejected"] for i in info),
-                      nfev=sum(i["nfev"] for i in info), wall_time=wall,
-                      kernels=own.kernels, projected=home.projected,
-                      singularity=last.singularity, dense=parts[0][1]._dense,
-                      events=(tuple(e.name for e in user), t_ev, y_ev),
-                      segments=Stitched(own, tuple(pieces)), switches=tuple(switches),
-                      sensitivities=None if sens is None else (
-                          home._sensitivity_columns(), np.concatenate(sens)))
+    steps = rejected = nfev = 0
+    for _, seg, _ in parts:
+        c = seg._counts[0]            # (steps, rejected, nfev, ...)
+        steps, rejected, nfev = steps + c[0], rejected + c[1], nfev + c[2]
+    t = np.concatenate(ts)          # (new float64 C-contiguous arrays: taken as they are)
+    return Trajectory._of_run(home, (t, np.concatenate(ys), t.shape[0]), p, method,
+                              last.status, last.stop_reason,
+                              ((steps, rejected, nfev), wall, home.projected),
+                              own.kernels, (tuple(e.name for e in user), t_ev, y_ev),
+                              last.singularity, parts[0][1]._dense,
+                              None if sens is None else (home._sensitivity_columns(),
+                                                         np.concatenate(sens)),
+                              segments=Stitched(own, tuple(pieces)),
+                              switches=tuple(switches))
 
 
 def to_home(own, chart, t, Y, p) -> np.ndarray:

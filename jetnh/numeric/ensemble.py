@@ -57,9 +57,9 @@ import numpy as np
 from ..errors import ConstraintError, IntegrationError, JetnhError, JetnhWarning
 from ..frozen import Frozen, memo, readonly
 from ..mechanics import holonomic
-from . import arguments, atlas, diagnosis, loops, solve
+from . import arguments, atlas, diagnosis, interrupt, loops, solve
 from .events import as_events
-from .methods import STATUS_TEXT
+from .methods import STATUS_TEXT, Solver
 from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, FINISHED, NONFINITE, SINGULAR
 from .options import options
 
@@ -560,7 +560,10 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
     method = plan.method.name
     workers = int(workers or numba.config.NUMBA_NUM_THREADS)
     sens = None
-    if plan.sens is None:
+    one = None if Y0.shape[0] != 1 else _single(scene, plan, opts, t_eval, save, timeout)
+    if one is not None:         # an ensemble of one: a run
+        (OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T), wall = _one(one, Y0, P)
+    elif plan.sens is None:
         (OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T), wall = solve.batch(
             scene, plan, Y0, P, parallel, workers)
         _on_constraints(plan, P, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST)
@@ -625,6 +628,51 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
                     wall, parallel, workers if parallel != "serial" else 1, save,
                     singular_tol, switching=switching, switches=switches, pieces=pieces,
                     reasons=reasons, sensitivities=sens, layout=plan.kern.layout)
+
+
+def _single(scene, plan, opts, t_eval, save, timeout):
+    """The plan of a single run (``Scene.run``) that gives an ensemble of one of the
+    ensemble's plan ``plan`` (kept with the plans, under ``plan`` itself), or None where
+    the ensemble's driver must run it: with events, sensitivities or a chart's edge to
+    watch, an implicit or fixed-step method, or holonomic constraints (whose rows
+    ``_on_constraints`` moves)."""
+    m = plan.method
+    if (plan.ce is not None or plan.sens is not None or plan.switch or not m.adaptive
+            or m.solver is not Solver.EXPLICIT or plan.ctl.n_hol):
+        return None
+    return solve.planned(scene, plan, lambda: solve.plan(
+        scene, m, opts=opts, t_eval=t_eval, save=save, timeout=timeout))
+
+
+def _one(plan, Y0, P):
+    """The arrays of ``solve.batch`` for the one run of ``Y0``, ``P`` by the single-run
+    loop of ``plan`` (``_single``): what the ensemble's driver stores of its run
+    (``methods._common.collect``), the same steps; and the wall-clock time."""
+    halt = np.zeros(1, dtype=np.int64)
+    tic = time.perf_counter()
+    out = interrupt.call(plan.entry, halt, plan.limit,
+                         (*plan.prefix, plan.t0, plan.t1, Y0[0].copy(), P[0], *plan.suffix,
+                          halt))
+    wall = time.perf_counter() - tic
+    status, ts, ys, n_out, stats = out[:5]
+    # (a loop that watched nothing keeps its last time and state in row n_out)
+    t_last, y_last = (ts[n_out], ys[n_out]) if len(out) == 6 else (out[5], out[6])
+    n = Y0.shape[1]
+    if plan.mode == ENDPOINTS:
+        n_times, first, filled = 1, n_out - 1, 1 if n_out > 0 else 0
+    else:
+        n_times, first = plan.te.shape[0], 0
+        filled = min(n_out, n_times)
+    OUT_T, OUT_Y = np.empty((1, n_times)), np.empty((1, n_times, n))
+    OUT_T[0, :filled] = ts[first:first + filled]
+    OUT_Y[0, :filled] = ys[first:first + filled, :n]
+    if filled < n_times:
+        OUT_T[0, filled:] = OUT_Y[0, filled:] = np.nan
+    INFO = np.array([[status, stats[0], stats[1], stats[2], n_out, out[-1]]],
+                    dtype=np.int64)
+    T_LAST, Y_LAST, EV_T = np.empty(1), np.empty((1, n)), np.empty((1, 1))
+    T_LAST[0], Y_LAST[0], EV_T[0, 0] = t_last, y_last[:n], np.nan
+    return (OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, np.zeros((1, 1), dtype=np.int64), EV_T), wall
 
 
 def _on_constraints(plan, P, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST):

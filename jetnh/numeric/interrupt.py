@@ -24,8 +24,9 @@ The watchdog is one daemon thread, started on demand (without waiting for it to 
 ``threading.Thread.start`` waits for a hand-over that costs a short run's time several
 times) and ended after ``IDLE`` seconds with nothing to watch (it drops the bytes of
 signals that came while it was not running), so that runs interleaved with other work
-find it running.  A call costs a registration (a lock and a dict entry), not a thread
-hand-over.  Signals reach only the main thread, so elsewhere only the timeout is watched.
+find it running.  A call costs a registration (a dict entry, without a lock: the lock
+only starts and ends the thread), not a thread hand-over.  Signals reach only the main
+thread, so elsewhere only the timeout is watched.
 """
 
 from __future__ import annotations
@@ -72,16 +73,19 @@ class _Watchdog:
             s.close()
 
     def register(self, halt, deadline, forward) -> int:
-        with self.lock:
-            key = next(self.ids)
-            self.calls[key] = [halt, deadline, forward]
-            if self.thread is None:
-                _drain(self.signals)          # signals from before this watch
-                try:
-                    self.thread = _thread.start_new_thread(self._loop, ())
-                except BaseException:         # no thread (limits): no watch left behind
-                    del self.calls[key]
-                    raise
+        """Watch ``halt`` (until its key leaves ``calls``): a dict entry, made without
+        the lock (one store, atomic under the GIL); the lock only starts the thread."""
+        key = next(self.ids)
+        self.calls[key] = [halt, deadline, forward]
+        if self.thread is None:
+            with self.lock:
+                if self.thread is None:
+                    _drain(self.signals)          # signals from before this watch
+                    try:
+                        self.thread = _thread.start_new_thread(self._loop, ())
+                    except BaseException:     # no thread (limits): no watch left behind
+                        del self.calls[key]
+                        raise
         if deadline is not None:
             self._poke()
         return key
@@ -95,13 +99,17 @@ class _Watchdog:
     def _loop(self):
         idle_since = time.monotonic()
         while True:
-            with self.lock:
-                deadlines = [c[1] for c in self.calls.values() if c[1] is not None]
-                if self.calls:
-                    idle_since = time.monotonic()
-                elif time.monotonic() - idle_since > IDLE:
+            # a snapshot (calls come and go without the lock)
+            deadlines = [c[1] for c in list(self.calls.values()) if c[1] is not None]
+            if self.calls:
+                idle_since = time.monotonic()
+            elif time.monotonic() - idle_since > IDLE:
+                with self.lock:
                     self.thread = None
-                    return
+                    if not self.calls:        # (a call registered from now on starts one)
+                        return
+                    self.thread = _thread.get_ident()     # one registered meanwhile
+                continue
             wait = IDLE if not deadlines else max(0.0, min(deadlines) - time.monotonic())
             try:
                 ready, _, _ = select.select([self.signals, self.control], [], [], wait)
@@ -113,15 +121,14 @@ class _Watchdog:
                     self.thread = None
                 return
             now = time.monotonic()
-            with self.lock:
-                for c in self.calls.values():
-                    if signal.SIGINT in got:
-                        c[0][0] = INTERRUPT
-                    if c[1] is not None and now >= c[1]:
-                        c[0][0] = TIMEOUT
-                        c[1] = None
-                forward = {c[2] for c in self.calls.values() if c[2] >= 0}
-            for fd in forward:                # the previous owner of the wakeup fd
+            calls = list(self.calls.values())
+            for c in calls:
+                if signal.SIGINT in got:
+                    c[0][0] = INTERRUPT
+                if c[1] is not None and now >= c[1]:
+                    c[0][0] = TIMEOUT
+                    c[1] = None
+            for fd in {c[2] for c in calls if c[2] >= 0}:   # the wakeup fd's owner before
                 try:
                     os.write(fd, got)
                 except OSError:
@@ -232,8 +239,7 @@ def call(fn, halt: np.ndarray, timeout: float | None = None, args: tuple = ()):
         return fn(*args)
     finally:
         if key is not None:
-            with wd.lock:
-                del wd.calls[key]
+            del wd.calls[key]
         if listen:
             _DEPTH[0] -= 1
             if old >= 0:                      # someone else's: theirs again

@@ -11,12 +11,14 @@ its loop instead of compiling it; ``make`` runs it once after installing.
 ``t_eval`` that keeps every step (the most common run), ``final`` the same keeping only
 its end (``save="final"``; radau's plain loop serves it), ``t_eval`` with output at
 ``t_eval``, ``watch+t_eval`` with that and indicators or events watched, ``all`` with
-every part; the loops of dla and dvi; and ``connect:step``, the compiled step of
-connect's Levenberg-Marquardt search (``connect.levenberg``).  ``DEFAULT``, what ``make``
+every part; the loops of dla and dvi; ``connect:step``, the compiled step of connect's
+Levenberg-Marquardt search (``connect.levenberg``), ``connect:small`` its shooting's
+small-matrix SVD and finiteness check (``connect.small``) and ``connect:verdicts`` the
+compiled parts of its verdicts (``connect.verdicts``).  ``DEFAULT``, what ``make``
 compiles (about a minute of CPU), is the plain and the ``final`` loop of each continuous
 method, the default method's loops with ``t_eval`` (those of ``make run``), and
-connect's step: the first run of each on a machine loads its loop.  Each loop compiles
-in a process of its own, as many at a time as there are cores.
+connect's: the first run of each on a machine loads its loop.  Each loop compiles in a
+process of its own, as many at a time as there are cores.
 """
 
 from __future__ import annotations
@@ -34,9 +36,10 @@ LOOPS = {f"{m}:{name}": (m, parts) for m in ("dop853", "dopri5", "rk4", "radau")
          for name, parts in PARTS.items()
          if not (m == "rk4" and "t_eval" in name or m == "radau" and name == "final")}
 LOOPS.update({"dla": ("dla", None), "dvi": ("dvi", None),
-              "connect:step": ("connect", None)})
+              **{f"connect:{part}": ("connect", part)
+                 for part in ("step", "small", "verdicts")}})
 DEFAULT = (*(n for n in LOOPS if n.endswith((":plain", ":final"))), "dop853:t_eval",
-           "dop853:watch+t_eval", "connect:step")
+           "dop853:watch+t_eval", "connect:step", "connect:small", "connect:verdicts")
 
 
 def compile_loop(name: str) -> tuple[str, float, bool]:
@@ -53,9 +56,10 @@ def compile_loop(name: str) -> tuple[str, float, bool]:
     elif method == "dvi":
         d = dvi.solver()
     elif method == "connect":
-        from .connect import levenberg
+        from .connect import levenberg, small, verdicts
 
-        d = levenberg.step()
+        d = {"step": levenberg.step, "small": lambda: small.compiled_parts()[0],
+             "verdicts": verdicts.compiled_parts}[parts]()
     else:
         d = loop.solver(METHODS[method].tableau, parts)
     hits = getattr(d, "_cache_hits", {})        # numba's (private): loaded, not compiled

@@ -23,9 +23,10 @@ A scene does only what it needs: it derives the equations of its own principle, 
 when its kernels are not in the disk cache; a run's options are checked and planned once
 (``numeric.solve``, the one driver of runs, ensembles and sweeps) and the plan kept for
 the next run with the same options, also by the scenes ``replace`` makes with the same
-kernels (other initial values, time span or run-time parameter values); parameters are numbers substituted before
-code generation (``runtime_params`` keeps some as run-time inputs for ensembles); output
-is every step, the points of ``t_eval``, or only the end (``save="final"``).
+kernels (other initial values, time span or run-time parameter values), which share the
+charts of the split's edge too (``atlas.atlas``); parameters are numbers substituted
+before code generation (``runtime_params`` keeps some as run-time inputs for ensembles);
+output is every step, the points of ``t_eval``, or only the end (``save="final"``).
 
 State: every coordinate q^s, the independent velocities qdot^mu and the multipliers of
 the principles that have them (vakonomic, Hoelder, Suslov).  Initial values are keyed by
@@ -142,11 +143,13 @@ class Scene(Frozen):
         self.velocities = tuple(v.name for v in system.independent_velocities)
         self.dependent_velocities = tuple(v.name for v in system.dependent_velocities)
         self.state_names = self.coordinates + self.velocities + self.multipliers
+        #: the names an initial value may have
+        self._initial_names = frozenset(self.state_names + self.dependent_velocities)
         self.consistency_tol = arguments.positive(consistency_tol, "consistency_tol")
         self.projected: dict[str, tuple[float, float]] = {}
         #: coordinates moved onto the holonomic constraints: name -> (given, completed)
         self.completed: dict[str, tuple[float, float]] = {}
-        self.initial = FrozenDict(self._initial(initial or {}, project, complete))
+        self.initial = FrozenDict(self._initial(initial or {}, project, complete)[0])
         self.y0 = np.array([self.initial[n] for n in self.state_names], dtype=float)
 
     # ------------------------------------------------------------------ input checks
@@ -178,12 +181,13 @@ class Scene(Frozen):
         return out
 
     def _initial(self, initial, project, complete=False, kernels=None, p=None
-                 ) -> dict[str, float]:
-        """The initial values (states and dependent velocities), checked; ``kernels``:
-        the scene's compiled kernels if they are loaded, ``p`` its run-time parameters
-        (``_dependent_velocity_floats``)."""
+                 ) -> tuple[dict[str, float], np.ndarray | None]:
+        """The initial values (states and dependent velocities), checked, and the states
+        as an array where the kernels gave the dependent velocities (else None);
+        ``kernels``: the scene's compiled kernels if they are loaded, ``p`` its run-time
+        parameters (``_dependent_velocity_floats``)."""
         given = {}
-        allowed = set(self.state_names) | set(self.dependent_velocities)
+        allowed = self._initial_names
         for k, v in initial.items():
             name = k if type(k) is str else arguments.name_of(k, "an initial value")
             if name not in allowed:
@@ -191,10 +195,10 @@ class Scene(Frozen):
                     f"initial has {name!r}, which is not a state of this {self.principle} "
                     f"scene; the states are {', '.join(self.state_names)} (and the dependent "
                     f"velocities {', '.join(self.dependent_velocities) or 'none'})")
-            given[name] = v if type(v) is float else arguments.real(
+            v = given[name] = v if type(v) is float else arguments.real(
                 v, f"initial value of {name!r}")
-            if not math.isfinite(given[name]):
-                raise JetnhError(f"initial value of {name!r} is {given[name]}")
+            if not math.isfinite(v):
+                raise JetnhError(f"initial value of {name!r} is {v}")
         missing = [n for n in self.state_names if n not in given]
         if missing:
             raise JetnhError(
@@ -204,10 +208,12 @@ class Scene(Frozen):
                    f"{', '.join(self.multipliers)})")
                 + "; give them in initial={...}")
         given = self._on_holonomic(given, complete)
-        required = None
-        if kernels is not None and not any(n in given for n in self.dependent_velocities):
-            required = self._dependent_velocity_floats(given, kernels, p)
+        required = y = None
+        if kernels is not None and given.keys().isdisjoint(self.dependent_velocities):
+            y = np.array([given[n] for n in self.state_names], dtype=float)
+            required = self._dependent_velocity_floats(y, kernels, p)
         if required is None:
+            y = None
             required = self._dependent_velocity_values(given)
             self._dependent_velocity_split(given, required, project=project)
         bad = []
@@ -232,7 +238,7 @@ class Scene(Frozen):
             self.projected = {n: (g, v) for n, g, v in bad}
         out = dict(given)
         out.update(required)
-        return out
+        return out, y
 
     def _holonomic_point(self, values, t0=None, params=None) -> dict:
         """t, the coordinates (from ``values``, by name) and the parameters, keyed by
@@ -331,8 +337,8 @@ class Scene(Frozen):
             f"(a scene's state holds only the independent ones): build the scene for "
             f"system.with_split({split}) (measure {mb:.3g} here), where the point is regular")
 
-    def _dependent_velocity_floats(self, given, kern, p) -> dict[str, float] | None:
-        """qdot^alpha = phi^alpha at the initial state ``given`` (run-time parameters
+    def _dependent_velocity_floats(self, y, kern, p) -> dict[str, float] | None:
+        """qdot^alpha = phi^alpha at the initial state ``y`` (run-time parameters
         ``p``) by the compiled kernel ``kern.aux``: floats, in microseconds where the
         30-digit evaluation (``_dependent_velocity_values``) takes a tenth of a
         millisecond.  None unless every singularity indicator of ``kern.sing`` (among
@@ -343,14 +349,14 @@ class Scene(Frozen):
         lay = kern.layout
         if lay.dependent_velocities != self.dependent_velocities:
             return None
-        y = np.array([given[n] for n in self.state_names], dtype=float)
         t0 = self.t_span[0]
         if lay.indicators:
             if not hasattr(kern, "sing"):
                 return None
             g = np.empty(len(lay.indicators))
             kern.sing(t0, y, p, g)
-            if not all(math.isfinite(x) and abs(x) >= FLOAT_MARGIN for x in g.tolist()):
+            g = g.tolist()      # (a NaN or an infinity makes the sum not finite)
+            if not (math.isfinite(sum(g)) and all(map(FLOAT_MARGIN.__le__, map(abs, g)))):
                 return None
         aux = np.empty(lay.n_aux)
         kern.aux(t0, y, p, aux)
@@ -431,13 +437,19 @@ class Scene(Frozen):
         d.update(t_span=self.t_span if t_span is self.t_span else self._t_span(t_span),
                  projected={}, completed={})
         kern = _loaded_kernels(self.key, self.cache) if "key" in self._memo else None
-        ini = FrozenDict(new._initial(initial, False, False, kern, self._p))
-        y0 = np.array([ini[n] for n in self.state_names], dtype=float)
-        y0.flags.writeable = False
+        p = self._p
+        memo = self._shared_memo()
+        for k in ("_p", "quick") if t_span is self.t_span else ("_p",):
+            if k in self._memo:     # (the quick plans: of this time span)
+                memo[k] = self._memo[k]
+        d["_memo"] = memo      # (frozen from here: ``_initial`` sets nothing when it
+        #                        neither projects nor completes)
+        ini, y0 = new._initial(initial, False, False, kern, p)
+        ini = FrozenDict(ini)
+        if y0 is None:
+            y0 = np.array([ini[n] for n in self.state_names], dtype=float)
+        y0.setflags(write=False)
         d.update(initial=ini, y0=y0)
-        d["_memo"] = self._shared_memo()
-        if "_p" in self._memo:
-            d["_memo"]["_p"] = self._memo["_p"]
         return new
 
     def _shared_memo(self) -> dict:
@@ -448,6 +460,7 @@ class Scene(Frozen):
         memo = self._memo
         memo.setdefault("plans", {})
         memo.setdefault("events", {})
+        memo.setdefault("atlases", [])
         return {k: memo[k] for k in _SHARED if k in memo}
 
     def _kernel_identity(self) -> tuple:
@@ -573,27 +586,54 @@ class Scene(Frozen):
                 and (rtol is None or type(rtol) is float)
                 and (atol is None or type(atol) is float)):
             # every option as its default but the method (a str), save and the
-            # tolerances (floats): a short key, sooner (a run interleaved with other work
-            # finds little of the longer key's work in the caches)
-            span = self.t_span
-            key = ("common", method, save, rtol, atol, span)
+            # tolerances (floats): this scene's plan of them, at once
+            quick = self._memo.get("quick")
+            plan = None if quick is None else quick.get((method, save, rtol, atol))
+            if plan is None:
+                plan = self._quick_plan(method, save, rtol, atol)
         else:
-            span = self.t_span if t_span is None else arguments.time_span(t_span)
-            key = (rtol, solve.hashable(atol), method, save, span, timeout, projection,
-                   backend, step, singular, newton, sensitivities, sensitivity_error,
-                   solve.hashable(events), solve.hashable(t_eval), *keywords.items())
-            key = (key, tuple(map(type, key)))
-        plan = solve.planned(self, key, lambda: solve.plan(
+            plan = self._plan(rtol, atol, t_eval, method, save, events, t_span, timeout,
+                              projection, backend, step, singular, newton, sensitivities,
+                              sensitivity_error, keywords)
+        if y0 is None and params is None:       # the scene's own (the loop's own copy)
+            p = self._memo.get("_p")
+            return solve.run(self, plan, self.y0.copy(), self._p if p is None else p,
+                             own=True)
+        p = self._run_params(params)
+        y = self._run_state(y0, plan.t0, p)
+        return solve.run(self, plan, y, p, own=False)
+
+    def _quick_plan(self, method, save, rtol, atol) -> solve.Plan:
+        """The plan of a run with every option as its default but ``method`` (a str),
+        ``save`` and the tolerances (floats or None), under a short key (shared with
+        the scenes ``replace`` makes: ``solve.planned``) and kept in this scene's memo
+        under a shorter one (its time span is the scene's)."""
+        span = self.t_span
+        plan = solve.planned(self, ("common", method, save, rtol, atol, span),
+                             lambda: solve.plan(self, method, opts=options(rtol=rtol,
+                                                                           atol=atol),
+                                                t_span=span, save=save))
+        quick = self._memo.setdefault("quick", {})
+        if len(quick) < solve.MAX_PLANS:
+            quick[method, save, rtol, atol] = plan
+        return plan
+
+    def _plan(self, rtol, atol, t_eval, method, save, events, t_span, timeout, projection,
+              backend, step, singular, newton, sensitivities, sensitivity_error,
+              keywords) -> solve.Plan:
+        """The plan of a run with these options (``run``), kept under a key of every
+        option (``solve.planned``)."""
+        span = self.t_span if t_span is None else arguments.time_span(t_span)
+        key = (rtol, solve.hashable(atol), method, save, span, timeout, projection,
+               backend, step, singular, newton, sensitivities, sensitivity_error,
+               solve.hashable(events), solve.hashable(t_eval), *keywords.items())
+        key = (key, tuple(map(type, key)))
+        return solve.planned(self, key, lambda: solve.plan(
             self, method, opts=options(step, singular, newton, rtol=rtol, atol=atol,
                                        **keywords),
             t_span=span, t_eval=t_eval, save=save, events=events, timeout=timeout,
             projection=projection, backend=backend, sensitivities=sensitivities,
             sensitivity_error=sensitivity_error))
-        if y0 is None and params is None:       # the scene's own (the loop's own copy)
-            return solve.run(self, plan, self.y0.copy(), self._p, own=True)
-        p = self._run_params(params)
-        y = self._run_state(y0, plan.t0, p)
-        return solve.run(self, plan, y, p, own=False)
 
     # ------------------------------------------------------------------ run helpers
     @memo
@@ -626,8 +666,10 @@ class Scene(Frozen):
         if y0 is None:
             return self.y0.copy()        # the compiled loop gets its own array
         if not isinstance(y0, dict):
-            if (type(y0) is np.ndarray and y0.dtype == np.float64
-                    and y0.shape == self.y0.shape and arguments.all_finite(y0)):
+            if (type(y0) is np.ndarray and y0.shape == self.y0.shape
+                    and y0.dtype == np.float64 and math.isfinite(sum(y0.tolist()))):
+                # (a NaN or an infinity makes the sum of the floats not finite; an
+                # overflow of finite values takes the general route, which says so)
                 y = y0.copy()           # (what the general route makes of it, sooner)
             else:
                 y, _ = arguments.keyed_or_sequence(y0, self.state_names, self.y0, "y0",
@@ -740,8 +782,8 @@ class Scene(Frozen):
 
 #: what a scene with the same kernels (``Scene.replace``) takes over from the memo: the
 #: kernels' keys, the plans of runs (``solve.planned``), compiled events, whether an
-#: atlas applies
-_SHARED = ("spec", "key", "plans", "events", "atlas_applies")
+#: atlas applies and the first atlas (whose charts the others share: ``atlas.atlas``)
+_SHARED = ("spec", "key", "plans", "events", "atlas_applies", "atlases")
 
 
 #: the least |indicator| at which the initial dependent velocities are taken from the

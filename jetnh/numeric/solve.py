@@ -21,15 +21,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import JetnhError
+from ..errors import ArgumentError, JetnhError
 from . import arguments, atlas, diagnosis, discrete, interrupt, loops, methods, scipy_backend
 from .methods import STATUS_TEXT, Solver
 from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, FINISHED, NONFINITE,
                               SINGULAR, STOPPED, entry_point)
+from .events import split_records
 from .kernels import sensitivity_kernels
 from .methods.loop import Control, Result, Watch
 from .options import fields_of, options
-from .trajectory import Trajectory, _info
+from .trajectory import Trajectory
 
 #: plans kept per scene (beyond: planned afresh each run)
 MAX_PLANS = 64
@@ -83,6 +84,7 @@ class Plan:
     prefix: tuple = ()
     suffix: tuple = ()
     callbacks: tuple = ()           # what the addresses in prefix point into, kept alive
+    direct: bool = False            # a run is one call of ``entry`` (``run``)
 
 
 def _unused(method, **given):
@@ -138,6 +140,10 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
     sens = None
     common = dict(method=m, t0=t0, t1=t1, save=save, events=events, checked=checked,
                   singular_tol=singular_tol, limit=limit)
+    for flag, value in (("sensitivities", sensitivities),
+                        ("sensitivity_error", sensitivity_error)):
+        if not isinstance(value, (bool, np.bool_)):
+            raise ArgumentError(f"{flag} must be True or False, not {value!r}")
     if sensitivities:
         if m.solver is Solver.DISCRETE:
             raise JetnhError(f"sensitivities=True is an option of the continuous methods "
@@ -235,7 +241,8 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
     return Plan(**common, rtol=rtol, atol=atol_v, ce=ce, watch=watch, kern=kern, ctl=ctl,
                 te=te, mode=mode, newton=newton, switch=switch, dense=dense,
                 dense_ends=ends, entry=entry,
-                prefix=prefix, suffix=suffix, callbacks=callbacks)
+                prefix=prefix, suffix=suffix, callbacks=callbacks,
+                direct=sens is None and not switch and not batch)
 
 
 def planned(scene, key, make) -> Plan:
@@ -300,6 +307,19 @@ def augmented(layout, y0) -> np.ndarray:
 def run(scene, plan, y, p, own=False) -> Trajectory:
     """The trajectory of ``plan`` from the state ``y`` (checked, its own array) with the
     run-time parameters ``p``; ``own``: these are the scene's own initial values."""
+    if plan.direct:             # one call of the compiled loop, first: most runs are
+        halt = np.zeros(1, dtype=np.int64)
+        tic = _clock()
+        out = interrupt.call(plan.entry, halt, plan.limit,
+                             (*plan.prefix, plan.t0, plan.t1, y, p, *plan.suffix, halt))
+        wall = _clock() - tic
+        if plan.ctl.n_hol:          # rows of the dense output onto g = 0
+            loops.on_constraints(plan.kern, plan.ctl, plan.mode, None, out, p, plan.t0)
+        dense = plan.dense_ends
+        if dense is not None:    # stopped inside a step or not
+            dense = dense[out[0] in (EVENT, SINGULAR)]
+        return trajectory(scene, plan.method.name, out, wall, plan.kern, plan.ce, p,
+                          plan.t0, y, plan.singular_tol, plan.checked, plan.limit, dense)
     m = plan.method
     if plan.sens is not None:
         y = augmented(plan.sens.layout, y)
@@ -325,10 +345,10 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
                          trajectory, sens=plan.sens)
     halt = np.zeros(1, dtype=np.int64)
     t0 = plan.t0
-    tic = time.perf_counter()
+    tic = _clock()
     out = interrupt.call(plan.entry, halt, plan.limit,
                          (*plan.prefix, t0, plan.t1, y, p, *plan.suffix, halt))
-    wall = time.perf_counter() - tic
+    wall = _clock() - tic
     loops.on_constraints(plan.kern, plan.ctl, plan.mode, plan.sens, out, p, t0)
     if dense is not None:    # stopped inside a step or not
         dense = plan.dense_ends[out[0] in (EVENT, SINGULAR)]
@@ -338,12 +358,20 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
                       plan.singular_tol, plan.checked, plan.limit, dense, sens=plan.sens)
 
 
+_clock = time.perf_counter
+_FINISHED_TEXT = STATUS_TEXT[FINISHED]
+
+
 def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, checked,
                timeout=None, dense=None, n_events=None, sens=None) -> Trajectory:
     """A Trajectory from the ``Result`` of a compiled loop, or the tuple it returned
     (``loop._solve``), or an error; with ``n_events``, only the first ``n_events`` events
     of ``ce`` are reported; with ``sens`` (the kernels of a run with sensitivities) the
     state's columns, and the sensitivities apart."""
+    if len(out) == 6 and out[0] == FINISHED and sens is None:    # most runs: at once
+        return Trajectory._finished(scene, (out[1], out[2], out[3]), p, method,
+                                    _FINISHED_TEXT, (out[4], wall, scene.projected), kern,
+                                    dense)
     if len(out) == 6:      # a loop that watched nothing: no events
         status, ts, ys, n_out, stats, sing_index = out
         if status != FINISHED:      # its last time and state (row n_out), for diagnosis
@@ -398,15 +426,13 @@ def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, 
     else:
         reason = STATUS_TEXT[status]
     if ce is not None:
-        from .events import split_records
-
         k = len(ce) if n_events is None else n_events
         t_events, y_events = split_records(k, ev_t[:n_ev], ev_i[:n_ev], ev_y[:n_ev])
         events = (ce.names[:k], t_events, y_events)
     # the loop's own float64, C-contiguous rows: taken as they are
-    return Trajectory._of_run(scene, ts, ys, p, method, status, reason,
-                              _info(stats[0], stats[1], stats[2], wall, scene.projected),
-                              kern, events, singularity, dense, sensitivities)
+    return Trajectory._of_run(scene, (ts, ys, n_out), p, method, status, reason,
+                              (stats, wall, scene.projected), kern, events, singularity,
+                              dense, sensitivities)
 
 
 # ---------------------------------------------------------------------- many runs

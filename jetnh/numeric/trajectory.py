@@ -106,6 +106,11 @@ def _columns(layout) -> tuple[dict, dict]:
 _COLUMNS: dict = {}
 
 
+def _output(a, n) -> np.ndarray:
+    """The first ``n`` rows of ``a`` (``memo`` makes them read-only)."""
+    return a if a.shape[0] == n else a[:n]
+
+
 class Trajectory(Frozen):
     """Output times ``t`` and states ``y`` (rows) of one run, with named access.
 
@@ -138,33 +143,48 @@ class Trajectory(Frozen):
                  nfev, wall_time, kernels, projected=None, own=None, events=None,
                  singularity=None, dense=None, segments=None, switches=(),
                  sensitivities=None):
-        self._fill(scene, np.ascontiguousarray(t, dtype=float),
-                   np.ascontiguousarray(y, dtype=float), p, method, status, stop_reason,
-                   _info(steps, rejected, nfev, wall_time, projected), kernels, events,
+        t, y = np.ascontiguousarray(t, dtype=float), np.ascontiguousarray(y, dtype=float)
+        t.setflags(write=False)         # (now: the caller's arrays may be these)
+        y.setflags(write=False)
+        self._fill(scene, (t, y, t.shape[0]), p, method, status, stop_reason,
+                   ((steps, rejected, nfev), wall_time, projected), kernels, events,
                    singularity, dense, sensitivities, own, segments, switches)
 
     @classmethod
-    def _of_run(cls, scene, t, y, p, method, status, stop_reason, info, kernels, events,
-                singularity, dense, sensitivities) -> "Trajectory":
-        """What ``Trajectory(...)`` makes of ``t``, ``y`` (float64, C-contiguous and
-        nobody else's: the rows a compiled loop returned) and ``info`` (``_info``),
-        without converting them: a trajectory is made on every run."""
+    def _of_run(cls, scene, rows, p, method, status, stop_reason, counts, kernels, events,
+                singularity, dense, sensitivities, segments=None, switches=()
+                ) -> "Trajectory":
+        """What ``Trajectory(...)`` makes of ``rows = (t, y, n)`` (float64, C-contiguous
+        and nobody else's: the arrays a compiled loop returned, of which the first ``n``
+        rows are the output) and ``counts = ((steps, rejected, nfev), wall_time,
+        projected)``, without converting them: a trajectory is made on every run
+        (``segments``, ``switches``: a run that changed split, ``numeric.atlas``)."""
         self = object.__new__(cls)
-        self._fill(scene, t, y, p, method, status, stop_reason, info, kernels, events,
-                   singularity, dense, sensitivities)
+        self._fill(scene, rows, p, method, status, stop_reason, counts, kernels, events,
+                   singularity, dense, sensitivities, None, segments, switches)
         self.__dict__["_memo"] = {}
         return self
 
-    def _fill(self, scene, t, y, p, method, status, stop_reason, info, kernels, events,
+    @classmethod
+    def _finished(cls, scene, rows, p, method, stop_reason, counts, kernels, dense
+                  ) -> "Trajectory":
+        """``_of_run`` of a run that finished (status 0) without events, singularity or
+        sensitivities (most runs), in one step."""
+        self = object.__new__(cls)
+        self.__dict__.update(scene=scene, _rows=rows, _p=p, _kernels=kernels, method=method,
+                             status=0, stop_reason=stop_reason, t_events=[], y_events=[],
+                             _dense=dense, _counts=counts, _memo={})
+        return self
+
+    def _fill(self, scene, rows, p, method, status, stop_reason, counts, kernels, events,
               singularity, dense, sensitivities, own=None, segments=None, switches=()):
         """The attributes, each public array read-only (``Frozen._set``, without its walk
-        over every value)."""
-        t.setflags(write=False)
-        y.setflags(write=False)
+        over every value); ``t``, ``y`` and ``_info`` made on first access (``memo``: a
+        run whose output is never read pays neither the slices nor the flags)."""
         d = self.__dict__
-        d.update(scene=scene, t=t, y=y, _p=p, _kernels=kernels, method=method,
+        d.update(scene=scene, _rows=rows, _p=p, _kernels=kernels, method=method,
                  status=status, stop_reason=stop_reason, t_events=[], y_events=[],
-                 _dense=dense, _info=info)
+                 _dense=dense, _counts=counts)
         # the others where they differ from their defaults (the class attributes)
         if own:
             d["_own"] = own
@@ -183,6 +203,21 @@ class Trajectory(Frozen):
                 d["y_events"] = readonly(list(y_ev))
         if sensitivities is not None:
             d["_sens"] = (tuple(sensitivities[0]), _read_only(sensitivities[1]))
+
+    @memo
+    def t(self) -> np.ndarray:
+        """The output times (read-only)."""
+        return _output(self._rows[0], self._rows[2])
+
+    @memo
+    def y(self) -> np.ndarray:
+        """The states at the output times, ``[n_times, n_states]`` (read-only)."""
+        return _output(self._rows[1], self._rows[2])
+
+    @memo
+    def _info(self) -> dict:
+        counts, wall_time, projected = self._counts
+        return _info(counts[0], counts[1], counts[2], wall_time, projected)
 
     @property
     def layout(self):

@@ -37,6 +37,9 @@ its callback would compile it a second time.
 ``events(t, y, p, out)`` (``generate_events``, a separate small module)
     user event functions given as sympy expressions (an njit function, which compiled
     event callables call, and its callback ``events_c``).
+``verdicts_c(t, y, p, out)`` (the "verdicts" variant, ``verdicts.generate_verdicts``, a
+    separate small module) L and the first derivatives of the constraints that
+    connect's verdicts read along a motion.
 
 The module defines ``rhs_c``, ``aux_c``, ``sing_c`` (and ``jac_c``), the callbacks of the
 kernels above.

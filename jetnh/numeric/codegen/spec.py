@@ -23,8 +23,9 @@ from ..layout import CODEGEN_VERSION, Layout
 from .quick import quick_ops
 
 #: the kernel sets of one scene: its continuous kernels, with the Jacobian of ``rhs``,
-#: with sensitivities, the discrete step's, and the user events' (``KernelSpec.variant``)
-VARIANTS = ("", "jacobian", "sensitivities", "discrete", "events")
+#: with sensitivities, the discrete step's, the user events' and connect's verdicts'
+#: (``KernelSpec.variant``)
+VARIANTS = ("", "jacobian", "sensitivities", "discrete", "events", "verdicts")
 
 
 @dataclass
@@ -104,7 +105,8 @@ class KernelSpec:
     ``variant``: one of ``VARIANTS`` -- "" the scene's ``rhs``, ``aux``, ``sing`` (and
     ``hol``); "jacobian" with ``jac``; "sensitivities" the state augmented by its
     sensitivities; "discrete" the discrete step of ``principle`` ("chetaev": dla,
-    "vakonomic": dvi); "events" the user events ``events`` (``(index, expr)`` pairs).
+    "vakonomic": dvi); "events" the user events ``events`` (``(index, expr)`` pairs);
+    "verdicts" what connect's verdicts read along a motion (``codegen.verdicts``).
     Two specs are equal when their keys are.
     """
 

@@ -66,9 +66,10 @@ Verdicts on the answer:
 - ``normal``: False when the endpoint map of the constraint system (the kinematic
   control system qdot^mu = u^mu, qdot^alpha = phi^alpha(t, q, u)) loses rank along the
   path, i.e. its controllability Gramian ``W' = A W + W A^T + B B^T`` (A, B the partial
-  derivatives of the constraint system along the path, from the graph) is singular: the
-  path is then an abnormal extremal (the multiplier rule holds with lambda_0 = 0), which
-  a small residual does not make normal.
+  derivatives of the constraint system along the path, compiled from the derivation:
+  ``codegen.verdicts``) is singular: the path is then an abnormal extremal (the
+  multiplier rule holds with lambda_0 = 0), which a small residual does not make
+  normal.
 - ``cost``: the action ``int L dt`` along the answer, by 5-point Gauss-Legendre on every
   step of the dense output.
 """
@@ -88,9 +89,14 @@ from .solve import STEP_ITER, Search, least_action
 from .shooting import GROWTH, MAX_SEGMENTS, MAX_STEPS, OutOfTime
 from .verdicts import GRAMIAN_RCOND, action, conjugate_times, gramian_ratio
 
+#: the most segments ``connect(segments=)`` takes: a Newton step of multiple shooting
+#: solves for every segment's state at once (dense: 64 segments of a 6-state system
+#: take seconds a connect)
+MAX_SEGMENTS_GIVEN = 64
+
 __all__ = ["connect", "Connection", "VARIATIONAL", "MAX_TOL", "STEP_ITER", "MAX_STEPS",
-           "GROWTH", "MAX_SEGMENTS", "GRAMIAN_RCOND", "action", "conjugate_times",
-           "gramian_ratio"]
+           "GROWTH", "MAX_SEGMENTS", "MAX_SEGMENTS_GIVEN", "GRAMIAN_RCOND", "action",
+           "conjugate_times", "gramian_ratio"]
 
 
 def connect(system, principle, start, end, t_span, params=None, guess=None, *,
@@ -155,7 +161,8 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
         polishes the answer): for long or unstable spans, where single shooting's
         sensitivities blow up.  Default: 1 where the guess's run reaches t1 with
         sensitivities below ``GROWTH`` (1e6), else one segment per factor 100 of the
-        growth (2 to ``MAX_SEGMENTS``, 16); 1 is single shooting only.
+        growth (2 to ``MAX_SEGMENTS``, 16); 1 is single shooting only; at most
+        ``MAX_SEGMENTS_GIVEN`` (64: each Newton step is dense in the segments' unknowns).
     complete : bool, default False
         With holonomic constraints: solve ``start``'s dependent coordinates from g = 0
         (as ``Scene(complete=True)``) instead of refusing a start off it.
@@ -191,7 +198,7 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
         raise JetnhError(f"t_span {t_span!r} has zero length: no motion joins two "
                          "configurations in no time; give t1 > t0")
     if t1 < t0:
-        raise ArgumentError(f"t_span {t_span!r} runs backwards: connect solves forwards "
+        raise ArgumentError(f"{t_span!r} runs backwards: connect solves forwards "
                             "in time; give (t0, t1) with t1 > t0", argument="t_span")
     m = methods.method(method)
     if m.solver is not methods.Solver.EXPLICIT or not m.dense:     # dop853, dopri5
@@ -205,7 +212,13 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     max_iter = arguments.count(max_iter, "max_iter", limit=10_000)
     max_continuation = arguments.count(max_continuation, "max_continuation", limit=100_000)
     if segments is not None:
-        segments = arguments.count(segments, "segments", limit=1000)
+        segments = arguments.count(segments, "segments", limit=MAX_SEGMENTS_GIVEN)
+    rcond = arguments.positive(rcond, "rcond")
+    if rcond >= 1.0:
+        raise ArgumentError(f"must be below 1, got {rcond!r}: a cut-off on the singular "
+                            "values relative to the largest that calls every Jacobian "
+                            "rank-deficient; give 0 < rcond < 1 (default 1e-9)",
+                            argument="rcond")
     if timeout is not None:
         timeout = arguments.positive(timeout, "timeout")
     if not (type(restarts) is int and restarts == 0):

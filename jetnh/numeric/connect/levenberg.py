@@ -13,6 +13,8 @@ from numba import types
 
 from ...errors import ConnectError
 from ..kernels import loop_cache
+from ..methods._common import entry_point
+from . import small
 
 #: step() status: a step was made, F already met the tolerance, J has rank 0
 STEP, CONVERGED, NO_RANK = 0, 1, 2
@@ -47,7 +49,9 @@ def _step(F, Jm, d, u, limit, mu, rcond, first, du):
     for i in range(k):
         for j in range(m):
             A[i, j] = Jm[i, j] / d[j]
-    U, s, Vt = np.linalg.svd(A, full_matrices=False)
+    n_s = min(k, m)
+    U, s, V = np.empty((k, n_s)), np.empty(n_s), np.empty((m, n_s))
+    small.svd(A, U, s, V)
     r = 0
     if s.size and s[0] > 0:
         for a in range(s.size):
@@ -65,7 +69,7 @@ def _step(F, Jm, d, u, limit, mu, rcond, first, du):
             c += U[i, a] * F[i]
         c *= s[a] / (s[a] * s[a] + mu)
         for j in range(m):
-            du[j] += c * Vt[a, j]
+            du[j] += c * V[j, a]
     size, uu = 0.0, 0.0
     for j in range(m):
         du[j] = -du[j] / d[j]
@@ -87,6 +91,7 @@ def _step(F, Jm, d, u, limit, mu, rcond, first, du):
     return STEP, mu, s[0], FF, FF - LL
 
 
+_FLOAT = np.dtype(float)
 _VEC = types.Array(types.float64, 1, "A")
 _SIGNATURE = types.Tuple((types.int64, types.float64, types.float64, types.float64,
                           types.float64))(
@@ -98,15 +103,26 @@ _SIGNATURE = types.Tuple((types.int64, types.float64, types.float64, types.float
 def step():
     """The compiled ``_step`` (compiled, or loaded from the signed store, on first
     use)."""
-    return loop_cache.signed_njit(_step, _SIGNATURE, loop_cache.file_stamp(__file__),
-                                  error_model="numpy", nogil=True)
+    stamp = loop_cache.file_stamp(__file__) + loop_cache.file_stamp(small.__file__)
+    return loop_cache.signed_njit(_step, _SIGNATURE, stamp, error_model="numpy",
+                                  nogil=True)
+
+
+@functools.cache
+def _step_entry():
+    """The machine-code entry of ``step()`` (no type dispatch per call): called only
+    with the declared types (``_fitted``'s arrays, floats and a bool)."""
+    return entry_point(step())
 
 
 def _fitted(got, n):
-    """``(F, dF/du)`` as the compiled step reads them (float64, contiguous), checked to
+    """``(F, dF/du)`` as the compiled step reads them (float64 arrays), checked to
     fit ``n`` unknowns: it indexes them without bounds checks."""
-    F = np.ascontiguousarray(got[0], dtype=float)
-    Jm = np.ascontiguousarray(got[1], dtype=float)
+    F, Jm = got[0], got[1]
+    if type(F) is not np.ndarray or F.dtype != _FLOAT:
+        F = np.asarray(F, dtype=float)
+    if type(Jm) is not np.ndarray or Jm.dtype != _FLOAT:
+        Jm = np.asarray(Jm, dtype=float)
     if F.ndim != 1 or Jm.shape != (F.size, n):
         raise ConnectError(f"internal: residuals of shape {F.shape} and a Jacobian of "
                            f"shape {Jm.shape} for {n} unknowns (please report this)")
@@ -131,8 +147,10 @@ def levenberg_marquardt(evaluate, u, scale, tol, max_iter, rcond, stuck=None):
     u = np.ascontiguousarray(u, dtype=float)
     F, Jm = _fitted(got, u.size)
     # converged: |F| <= limit, entrywise
-    limit = np.broadcast_to(tol * np.asarray(scale, dtype=float), F.shape).copy()
-    compiled = step()
+    limit = np.empty(F.shape)
+    limit[:] = tol * np.asarray(scale, dtype=float)
+    compiled = _step_entry()
+    rcond = float(rcond)
     d, du, mu, nu = np.ones(len(u)), np.empty(len(u)), -1.0, 2.0
     for it in range(1, max_iter + 1):
         status, mu, s0, FF, predicted = compiled(F, Jm, d, u, limit, mu, rcond, it == 1,

@@ -12,12 +12,12 @@ import math
 import time
 
 import numpy as np
-from scipy.linalg.lapack import dgesdd as _gesdd
 
 from ...errors import JetnhError
 from .. import arguments, atlas, interrupt, solve
 from ..methods._common import EVENT, FINISHED
 from ..options import options
+from .small import all_finite, thin_svd
 
 #: the measure of the scene's split (``verdicts.split_measure``) below which a run that
 #: stopped early stopped at the edge of its chart
@@ -26,17 +26,18 @@ EDGE = 1e-2
 MAX_STEPS = 20_000
 
 
-def _identity(n, m):
-    """The initial sensitivities of a run, S0 = (I | 0) (n x m), flattened
-    (``solve.augmented``'s), kept per shape."""
-    found = _IDENTITY.get((n, m))
+def _start_row(n, m):
+    """The first row of a run with sensitivities but for its state: zeros, then the
+    initial sensitivities S0 = (I | 0) (n x m) flattened (``solve.augmented``'s), kept
+    per shape; a run's row is a copy with the state written in."""
+    found = _START.get((n, m))
     if found is None:
-        found = _IDENTITY[n, m] = np.eye(n, m).ravel()
+        found = _START[n, m] = np.concatenate((np.zeros(n), np.eye(n, m).ravel()))
         found.setflags(write=False)
     return found
 
 
-_IDENTITY: dict = {}
+_START: dict = {}
 
 
 class Shot:
@@ -57,30 +58,32 @@ class Shot:
         if plan.switch and not plan.ce.python_funcs[-1](plan.t0, y, p) >= 0.0:
             # past the edge of the scene's split at t0: the run starts in another
             return cls._across(scene, plan, y, p, stops)
-        y = np.concatenate((y, _identity(lay.n_state, lay.sensitivity_columns)))
+        n, m = lay.n_state, lay.sensitivity_columns
+        y0, y = y, _start_row(n, m).copy()
+        y[:n] = y0
         halt = np.zeros(1, dtype=np.int64)
         tic = time.perf_counter()
         out = interrupt.call(plan.entry, halt, plan.limit,
                              (*plan.prefix, plan.t0, plan.t1, y, p, *plan.suffix, halt))
         wall = time.perf_counter() - tic
         n_out = int(out[3])
-        if int(out[0]) == EVENT and plan.switch:
+        if out[0] == EVENT and plan.switch:
             # at the edge of the scene's split (connect's runs watch no other event): the
             # run taken across it as Scene.run does
-            return cls._across(scene, plan, y[:lay.n_state], p, stops, out)
-        if int(out[0]) != FINISHED or n_out < 1:
+            return cls._across(scene, plan, y[:n], p, stops, out)
+        if out[0] != FINISHED or n_out < 1:
             if stops is not None:
                 stops[int(out[0])] = stops.get(int(out[0]), 0) + 1
                 stops["y"] = (float(out[1][n_out - 1]),
-                              np.array(out[2][n_out - 1][:lay.n_state])) if n_out else None
+                              np.array(out[2][n_out - 1][:n])) if n_out else None
             return None
         last = out[2][n_out - 1]
-        if not arguments.all_finite(last):
+        # the loop has checked the state (``loop.finite_status``), not its sensitivities
+        if not all_finite(last[n:]):
             return None
         self = object.__new__(cls)
-        n = lay.n_state
         self.t, self.y = float(out[1][n_out - 1]), last[:n]
-        self.S = last[n:].reshape(n, lay.sensitivity_columns)
+        self.S = last[n:].reshape(n, m)
         self._made, self._trajectory = (scene, plan, out, wall, y, p), None
         return self
 
@@ -188,7 +191,7 @@ class Shooter:
         if self.deadline is not None and time.monotonic() > self.deadline:
             raise OutOfTime
         self.runs += 1
-        if not arguments.all_finite(y):
+        if not all_finite(y):
             return None
         if self.holonomic:
             try:
@@ -313,22 +316,14 @@ class Shooter:
 
 
 def svd(Jm):
-    """The thin singular value decomposition ``(U, s, Vt)`` of ``Jm`` (LAPACK's gesdd
-    called directly: a small matrix costs a third of ``np.linalg.svd``'s checks)."""
-    if Jm.size:
-        U, s, Vt, info = _gesdd(Jm, compute_uv=1, full_matrices=0)
-        if info == 0:
-            return U, s, Vt
-    return np.linalg.svd(Jm, full_matrices=False)
+    """The thin singular value decomposition ``(U, s, Vt)`` of ``Jm`` (compiled,
+    ``small.thin_svd``: a small matrix costs a fraction of a LAPACK call's set-up)."""
+    return thin_svd(Jm)
 
 
 def singular_values(Jm):
     """The singular values of ``Jm``, largest first."""
-    if Jm.size:
-        _, s, _, info = _gesdd(Jm, compute_uv=0)
-        if info == 0:
-            return s
-    return np.linalg.svd(Jm, compute_uv=False)
+    return thin_svd(Jm)[1]
 
 
 def rank(s, rcond) -> int:

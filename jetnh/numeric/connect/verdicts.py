@@ -4,13 +4,16 @@ extremal (``gramian_ratio``) and where its Jacobi fields lose rank
 
 from __future__ import annotations
 
-import weakref
+import functools
+import math
 from functools import cached_property
 
 import numpy as np
 
 from ...errors import ConnectError
 from ..atlas import split_measure_of
+from ..methods._common import jit
+from . import small
 
 #: smallest / largest eigenvalue of the controllability Gramian below which the path is
 #: abnormal
@@ -76,51 +79,52 @@ class _Samples:
 
 def action(tr, samples) -> float:
     """``int L dt`` along the trajectory: 5-point Gauss-Legendre on every step of its
-    dense output (``_Samples``), L evaluated on the graph (dependent velocities by the
-    aux kernel)."""
+    dense output (``_Samples``), L by the verdicts kernel (``_entries``)."""
     times = samples.gauss
-    L = _lagrangian(tr, times.ravel(), samples.gauss_y).reshape(times.shape)
-    return float(np.sum(L * _GAUSS_W[None, :] * samples.half[:, None]))
+    L = _entries(tr.scene, times.ravel(), samples.gauss_y, tr._p)[:, 0]
+    return float(np.sum(L.reshape(times.shape) * _GAUSS_W[None, :]
+                        * samples.half[:, None]))
 
 
-def _point(tr, times, ys) -> dict:
-    """Symbol -> values of t, q, every velocity and the parameters at the rows ``ys``."""
-    return _state_point(tr.scene, times, ys, tr._kernels, tr._p)
+def _kernel(scene):
+    """``(rows, blocks)``: the verdicts kernel of ``scene`` at many rows
+    (``rows(ts, ys, p, out)``, compiled with its kernels: ``codegen.verdicts``) and the
+    slices of its output (``verdict_blocks``); made once per scene."""
+    found = scene._memo.get("verdicts")
+    if found is None:
+        from .. import kernels
+        from ..codegen.verdicts import generate_verdicts, verdict_blocks
+        from ..kernels import calls
+
+        spec = scene.spec.but(variant="verdicts")
+        layout = scene.kernels.layout
+        ck = kernels.load(spec.key, lambda: generate_verdicts(spec, layout),
+                          persistent=scene.cache)
+        blocks = verdict_blocks(scene.system)
+        n_out = max(b.stop for b in blocks.values())
+        rows = calls.Rows(ck.kernels.verdicts_c, (layout.n_state,
+                                                  len(layout.runtime_params), n_out))
+        found = scene._memo["verdicts"] = (rows, blocks)
+    return found
 
 
-def _state_point(scene, times, ys, kern=None, p=None) -> dict:
-    """``_point`` of ``scene``'s rows ``ys`` (its own kernels and run-time parameters
-    unless given)."""
-    kern = scene.kernels if kern is None else kern
-    p = scene._p if p is None else p
-    system = scene.system
-    J = system.J
-    aux = np.empty((ys.shape[0], kern.layout.n_aux))
-    kern.aux_rows(np.ascontiguousarray(times), np.ascontiguousarray(ys),
-                  np.ascontiguousarray(p, dtype=float), aux)
-    col = {n: i for i, n in enumerate(scene.state_names)}
-    point = {J.t: times}
-    for s in J.q:
-        point[s] = ys[:, col[s.name]]
-    for v in system.independent_velocities:
-        point[v] = ys[:, col[v.name]]
-    for a, v in enumerate(system.dependent_velocities):
-        point[v] = aux[:, a]
-    for s in system.parameters:
-        point[s] = scene.params[s.name]
-    return point
+def _entries(scene, times, ys, p=None) -> np.ndarray:
+    """The verdicts kernel of ``scene`` at the rows ``ys`` (states) at ``times``:
+    ``[rows, entries]`` (``codegen.verdicts.verdict_blocks``); the scene's run-time
+    parameters unless ``p`` is given."""
+    rows, blocks = _kernel(scene)
+    ys = np.ascontiguousarray(ys, dtype=float)
+    out = np.empty((ys.shape[0], rows.sizes[2]))
+    rows(np.ascontiguousarray(times, dtype=float), ys,
+         np.ascontiguousarray(scene._p if p is None else p, dtype=float), out)
+    return out
 
 
-def _lagrangian(tr, times, ys) -> np.ndarray:
-    from ...algebra import dag
-
-    (L,) = dag.evaluate_numpy([tr.scene.system.L], _point(tr, times, ys))
-    return np.broadcast_to(L, times.shape)
+def _block(scene, values, name, shape) -> np.ndarray:
+    """The block ``name`` of the verdicts kernel's ``values``, as ``[rows, *shape]``."""
+    return values[:, _kernel(scene)[1][name]].reshape(-1, *shape)
 
 
-#: (what, id(system)) -> (weak reference to the system, its derivatives): by identity
-#: (``_kept``), forgotten with the system
-_KEPT: dict = {}
 #: the measure det(A_alpha)^2 / det(A A^T) of the scene's split (``atlas``) below which,
 #: somewhere on the path, ``gramian_ratio`` linearizes without a split
 EDGE = 1e-2
@@ -129,48 +133,20 @@ EDGE = 1e-2
 def split_measure(scene, t, y) -> float:
     """The measure of ``scene``'s split at the state ``y`` at time ``t`` (1 without
     constraints)."""
-    from ...algebra import dag
-
     system = scene.system
     if not system.k:
         return 1.0
-    n, k = system.J.n, system.k
-    _, dep_rows, _, fderivs = _derivatives(system)
-    point = _state_point(scene, np.array([float(t)]), np.asarray(y, dtype=float)[None, :])
-    vals = dag.evaluate_numpy(fderivs[k * n:], point)
-    Fv = np.array([float(np.ravel(v)[0]) for v in vals]).reshape(k, n)
-    return float(split_measure_of(Fv, dep_rows))
+    values = _entries(scene, np.array([float(t)]), np.asarray(y, dtype=float)[None, :])
+    Fv = _block(scene, values, "f_qdot", (system.k, system.J.n))
+    return float(split_measure_of(Fv[0], _coordinate_rows(system)[0]))
 
 
-def _kept(what, system, build):
-    """``build(system)``, made once per system (by identity, as
-    ``accelerations.cached_parts`` keeps its parts) and forgotten with it."""
-    key = (what, id(system))
-    entry = _KEPT.get(key)
-    if entry is None or entry[0]() is not system:
-        def forget(ref, key=key):
-            if _KEPT.get(key, (None,))[0] is ref:
-                del _KEPT[key]
-        entry = _KEPT[key] = (weakref.ref(system, forget), build(system))
-    return entry[1]
-
-
-def _derivatives(system):
-    """([d phi/dq..., d phi/du...], the rows of the dependent and of the independent
-    velocities' coordinates, [df/dq..., df/dqdot...]) for ``gramian_ratio``."""
-    from ...algebra import dag
-
-    def build(system):
-        J = system.J
-        us = system.independent_velocities
-        phis = [system.phi[v] for v in system.dependent_velocities]
-        index = {s: i for i, s in enumerate(J.q)}
-        return (list(dag.jacobian(phis, list(J.q))) + list(dag.jacobian(phis, list(us))),
-                [index[J.split(v)[0]] for v in system.dependent_velocities],
-                [index[J.split(v)[0]] for v in us],
-                list(dag.jacobian(list(system.constraints), list(J.q)))
-                + list(system.jacobian))
-    return _kept("derivatives", system, build)
+def _coordinate_rows(system):
+    """The rows of the dependent and of the independent velocities' coordinates."""
+    J = system.J
+    index = {s: i for i, s in enumerate(J.q)}
+    return ([index[J.split(v)[0]] for v in system.dependent_velocities],
+            [index[J.split(v)[0]] for v in system.independent_velocities])
 
 
 def _linearized(tr, times, ys):
@@ -179,26 +155,21 @@ def _linearized(tr, times, ys):
     where its measure stays above ``EDGE``; else without a split (near a chart edge
     phi's derivatives blow up): from f_q dq + f_qdot dqdot = 0, A = -f_qdot^+ f_q and B
     an orthonormal basis of ker f_qdot.  The two differ by a feedback and an input
-    transformation, which keep the rank of the Gramian."""
-    from ...algebra import dag
-
-    system = tr.scene.system
+    transformation, which keep the rank of the Gramian.  All from the verdicts kernel
+    (``_entries``)."""
+    scene = tr.scene
+    system = scene.system
     n, m, k = system.J.n, len(system.independent_velocities), system.k
-    derivatives, dep_rows, input_rows, fderivs = _derivatives(system)
-    point = _point(tr, times, ys)
-    F = np.stack([np.broadcast_to(np.asarray(v, dtype=float), times.shape)
-                  for v in dag.evaluate_numpy(fderivs, point)], axis=-1)
-    Fq, Fv = F[:, :k * n].reshape(-1, k, n), F[:, k * n:].reshape(-1, k, n)
+    dep_rows, input_rows = _coordinate_rows(system)
+    values = _entries(scene, times, ys, tr._p)
+    Fq = _block(scene, values, "f_q", (k, n))
+    Fv = _block(scene, values, "f_qdot", (k, n))
     if split_measure_of(Fv, dep_rows).min() >= EDGE:
-        vals = dag.evaluate_numpy(derivatives, point)
         A = np.zeros((times.size, n, n))
         B = np.zeros((times.size, n, m))
         B[:, input_rows, np.arange(m)] = 1.0
-        for a in range(k):
-            for c in range(n):
-                A[:, dep_rows[a], c] = vals[a * n + c]
-            for c in range(m):
-                B[:, dep_rows[a], c] = vals[k * n + a * m + c]
+        A[:, dep_rows, :] = _block(scene, values, "phi_q", (k, n))
+        B[:, dep_rows, :] = _block(scene, values, "phi_u", (k, m))
         return A, B
     _, _, vt = np.linalg.svd(Fv)
     return -np.linalg.pinv(Fv) @ Fq, vt[:, k:, :].transpose(0, 2, 1)
@@ -208,10 +179,10 @@ def gramian_ratio(tr, samples) -> float:
     """Smallest over largest eigenvalue of the controllability Gramian of the constraint
     system (qdot^mu = u^mu, qdot^alpha = phi^alpha(t, q, u)) linearized along ``tr``,
     ``W = int Phi(t1, s) B B^T Phi(t1, s)^T ds`` (``_linearized``: A = d qdot/dq, B =
-    d qdot/du from the graph on the dense output, or without a split where the path
+    d qdot/du from the verdicts kernel on the dense output, or without a split where the path
     comes near the edge of the scene's; Phi(t1, s) the products of the RK4 propagators
     of ``_Samples.GRID / 2`` equal steps from s to t1, the integral by Simpson's rule on
-    their nodes).  With holonomic constraints g = 0 the motions stay on them, so W is
+    their nodes: ``_gramian_sum``, compiled).  With holonomic constraints g = 0 the motions stay on them, so W is
     measured on the tangent space of g = 0 at q(t1) (``tangent_frames``), not in R^n.
     Zero: the endpoint map loses rank along the path (an abnormal extremal)."""
     system = tr.scene.system
@@ -223,20 +194,8 @@ def gramian_ratio(tr, samples) -> float:
     times = samples.grid
     A, B = _linearized(tr, times, samples.grid_y)
     h = (t1 - t0) / steps
-    I = np.eye(n)
-    A0, Am, A1 = A[0:-1:2], A[1::2], A[2::2]
-    K1 = A0
-    K2 = Am @ (I + 0.5 * h * K1)
-    K3 = Am @ (I + 0.5 * h * K2)
-    K4 = A1 @ (I + h * K3)
-    P = I + h / 6.0 * (K1 + 2 * K2 + 2 * K3 + K4)        # Phi(t_{j+1}, t_j)
-    G = np.concatenate([_products(P[::-1])[::-1], I[None]])   # Phi(t1, t_j)
-    GB = G @ B[::2]                                       # Phi(t1, s_j) B(s_j)
-    w = np.full(steps + 1, 2.0)
-    w[1::2] = 4.0
-    w[0] = w[-1] = 1.0
-    wGB = (GB * (w * h / 3.0)[:, None, None]).transpose(1, 0, 2).reshape(n, -1)
-    W = wGB @ GB.transpose(1, 0, 2).reshape(n, -1).T    # sum_j w_j GB_j GB_j^T
+    W = np.empty((n, n))
+    _compiled("gramian")(np.ascontiguousarray(A), np.ascontiguousarray(B), h, W)
     T1 = tangent_frames(tr, times[-1:], samples.grid_y[-1:])
     if T1 is not None:           # the reachable directions: the tangent space of g = 0
         W = T1[0].T @ W @ T1[0]
@@ -248,38 +207,18 @@ def tangent_frames(tr, times, ys):
     """Orthonormal bases ``T`` (``[len(times), n, n - h]``) of the tangent space ker
     dg/dq of the holonomic constraints g = 0 at the configurations of the rows ``ys``,
     oriented continuously (det [dg/dq^T | T] > 0); None without holonomic constraints."""
-    from ...algebra import dag
-
     system = tr.scene.system
     if not system.holonomic:
         return None
-    J = system.J
-    n, h = len(J.q), len(system.holonomic)
-    dg = _kept("holonomic", system,
-               lambda s: list(dag.jacobian(list(s.holonomic), list(s.J.q))))
-    col = {nm: i for i, nm in enumerate(tr.scene.state_names)}
+    n, h = len(system.J.q), len(system.holonomic)
     times = np.atleast_1d(np.asarray(times, dtype=float))
-    point = {J.t: times, **{q: ys[:, col[q.name]] for q in J.q},
-             **{s: tr.scene.params[s.name] for s in system.parameters}}
-    vals = dag.evaluate_numpy(dg, point)
-    G = np.stack([np.broadcast_to(v, times.shape) for v in vals], axis=-1)
-    G = G.reshape(times.size, h, n)
+    values = _entries(tr.scene, times, ys[:, :len(tr.scene.state_names)], tr._p)
+    G = _block(tr.scene, values, "g_q", (h, n))
     _, _, vt = np.linalg.svd(G)
     T = vt[:, h:, :].transpose(0, 2, 1).copy()
     flip = np.linalg.det(np.concatenate([G.transpose(0, 2, 1), T], axis=2)) < 0
     T[flip, :, -1] *= -1.0
     return T
-
-
-def _products(P) -> np.ndarray:
-    """The running products ``P[0] @ ... @ P[j]`` of the matrices ``P[j]``, in log2(len)
-    batched multiplications (a doubling scan)."""
-    out = P.copy()
-    d = 1
-    while d < len(out):
-        out[d:] = out[:-d] @ out[d:]
-        d *= 2
-    return out
 
 
 def jacobi_measure(X, nq, scale=None, frames=None):
@@ -305,22 +244,156 @@ def jacobi_measure(X, nq, scale=None, frames=None):
     Returns ``(d, s)``: the determinant (square case, else None; the sign of det dq/du)
     and the smallest singular value, each the larger in magnitude of the two scalings.
     Where dq/du loses rank both are zero (with ``scale`` given)."""
-    Q, R = np.linalg.qr(X)
-    sign = np.sign(np.prod(np.diagonal(R, axis1=-2, axis2=-1), axis=-1))
-    Qq = Q[..., :nq, :]
-    M = X[..., :nq, :]
-    if frames is not None:
-        Tt = np.swapaxes(frames, -1, -2)
-        Qq, M = Tt @ Qq, Tt @ M
-        nq = frames.shape[-1]
-    norms = np.linalg.norm(M, axis=-2, keepdims=True) if scale is None else scale
-    M = M / np.where(norms > 0, norms, 1.0)
-    s = np.maximum(np.linalg.svd(Qq, compute_uv=False)[..., -1],
-                   np.linalg.svd(M, compute_uv=False)[..., -1])
-    if X.shape[-1] != nq:
-        return None, s
-    d_sub, d_col = np.linalg.det(Qq) * sign, np.linalg.det(M)
-    return np.where(np.abs(d_sub) >= np.abs(d_col), d_sub, d_col), s
+    X = np.asarray(X, dtype=float)
+    batch, (ns, m) = X.shape[:-2], X.shape[-2:]
+    rows = int(np.prod(batch, dtype=np.int64))
+    Xr = np.ascontiguousarray(X.reshape(rows, ns, m))
+    if frames is None:
+        F, framed = _NO_FRAMES, False
+    else:
+        F = np.array(np.broadcast_to(frames, batch + frames.shape[-2:]).reshape(
+            rows, *frames.shape[-2:]), dtype=float)
+        framed = True
+    dim = F.shape[2] if framed else nq
+    by_norms = scale is None
+    sc = np.ones(m)
+    if not by_norms:
+        sc[:] = np.asarray(scale, dtype=float).reshape(-1)
+    d, s = np.empty(rows), np.empty(rows)
+    _compiled("measures")(Xr, int(nq), sc, by_norms, F, framed, d, s)
+    if m != dim:
+        return None, s.reshape(batch)[()]
+    return d.reshape(batch)[()], s.reshape(batch)[()]
+
+
+def _jacobi_rows(X, nq, scale, by_norms, frames, framed, d, s):
+    """``jacobi_measure`` of each of the fields ``X[r]`` (ns x m), into ``d[r]`` (the
+    determinant where the measured block is square) and ``s[r]`` (compiled:
+    ``small``'s QR, SVD and determinant on each row's few columns)."""
+    rows, ns, m = X.shape
+    dim = frames.shape[2] if framed else nq
+    Q, R = np.empty((ns, m)), np.empty((m, m))
+    Qq, M = np.empty((dim, m)), np.empty((dim, m))
+    W = np.empty((max(dim, m), min(dim, m)))
+    for r in range(rows):
+        Xr = X[r]
+        small.qr(Xr, Q, R)
+        sign = 1.0
+        for j in range(m):
+            sign = sign * (1.0 if R[j, j] > 0 else (-1.0 if R[j, j] < 0 else 0.0))
+        for a in range(dim):
+            for j in range(m):
+                if framed:
+                    qa, xa = 0.0, 0.0
+                    for i in range(nq):
+                        qa += frames[r, i, a] * Q[i, j]
+                        xa += frames[r, i, a] * Xr[i, j]
+                    Qq[a, j], M[a, j] = qa, xa
+                else:
+                    Qq[a, j], M[a, j] = Q[a, j], Xr[a, j]
+        for j in range(m):
+            c = scale[j]
+            if by_norms:
+                c = 0.0
+                for a in range(dim):
+                    c = math.hypot(c, M[a, j])
+            if c > 0:
+                for a in range(dim):
+                    M[a, j] /= c
+        s[r] = max(small.smallest_singular_value(Qq, W),
+                   small.smallest_singular_value(M, W))
+        if m == dim:
+            d_sub, d_col = small.det(Qq) * sign, small.det(M)
+            d[r] = d_sub if abs(d_sub) >= abs(d_col) else d_col
+        else:
+            d[r] = 0.0
+
+
+_NO_FRAMES = np.zeros((1, 1, 1))
+
+
+@jit
+def _matmul(X, Y, out):
+    """``out = X @ Y`` (small matrices, compiled)."""
+    for i in range(X.shape[0]):
+        for c in range(Y.shape[1]):
+            acc = 0.0
+            for j in range(X.shape[1]):
+                acc += X[i, j] * Y[j, c]
+            out[i, c] = acc
+
+
+@jit
+def _rk4_stage(Ak, K, f, E, out):
+    """``out = Ak @ (I + f K)`` (``E`` a workspace; compiled)."""
+    n = K.shape[0]
+    for a in range(n):
+        for b in range(n):
+            E[a, b] = (1.0 if a == b else 0.0) + f * K[a, b]
+    _matmul(Ak, E, out)
+
+
+def _gramian_sum(A, B, h, W):
+    """``W = sum_j w_j Phi(t1, s_j) B(s_j) B(s_j)^T Phi(t1, s_j)^T`` over the nodes s_j
+    = ``A``'s rows 0, 2, 4, ... (Simpson's weights w_j, step ``h``), Phi(t1, s_j) the
+    product of the RK4 propagators Phi(s_{i+1}, s_i) = I + h/6 (K1 + 2 K2 + 2 K3 + K4)
+    (A at s_i, at the midpoint and at s_{i+1}) from s_j to t1 (compiled)."""
+    N, n, _ = A.shape
+    m = B.shape[2]
+    steps = (N - 1) // 2
+    G, P, GB = np.eye(n), np.empty((n, n)), np.empty((n, m))
+    K1, K2, K3, K4 = np.empty((n, n)), np.empty((n, n)), np.empty((n, n)), np.empty((n, n))
+    E, Gn = np.empty((n, n)), np.empty((n, n))
+    W[:, :] = 0.0
+    for j in range(steps, -1, -1):
+        if j < steps:               # G = Phi(t1, s_{j+1}) Phi(s_{j+1}, s_j)
+            A0, Am, A1 = A[2 * j], A[2 * j + 1], A[2 * j + 2]
+            K1[:, :] = A0
+            _rk4_stage(Am, K1, 0.5 * h, E, K2)
+            _rk4_stage(Am, K2, 0.5 * h, E, K3)
+            _rk4_stage(A1, K3, h, E, K4)
+            for a in range(n):
+                for b in range(n):
+                    P[a, b] = ((1.0 if a == b else 0.0)
+                               + h / 6.0 * (K1[a, b] + 2.0 * K2[a, b] + 2.0 * K3[a, b]
+                                            + K4[a, b]))
+            _matmul(G, P, Gn)
+            G[:, :] = Gn
+        _matmul(G, B[2 * j], GB)
+        w = (1.0 if j == 0 or j == steps else (4.0 if j % 2 else 2.0)) * h / 3.0
+        for a in range(n):
+            for b in range(n):
+                acc = 0.0
+                for c in range(m):
+                    acc += GB[a, c] * GB[b, c]
+                W[a, b] += w * acc
+
+
+def compiled_parts():
+    """Both compiled parts of the verdicts (``precompile`` warms them as
+    ``connect:verdicts``); returns the first, whose cache record ``precompile`` reads."""
+    first = _compiled("measures")
+    _compiled("gramian")
+    return first
+
+
+@functools.cache
+def _compiled(name):
+    """The compiled ``_jacobi_rows`` ("measures") or ``_gramian_sum`` ("gramian"):
+    compiled, or loaded from the signed store, on first use."""
+    from numba import types
+
+    from ..kernels import loop_cache
+
+    a3, a2 = types.Array(types.float64, 3, "C"), types.Array(types.float64, 2, "C")
+    a1 = types.Array(types.float64, 1, "C")
+    py_func, signature = {
+        "measures": (_jacobi_rows, types.void(a3, types.int64, a1, types.boolean, a3,
+                                              types.boolean, a1, a1)),
+        "gramian": (_gramian_sum, types.void(a3, a3, types.float64, a2))}[name]
+    stamp = loop_cache.file_stamp(__file__) + loop_cache.file_stamp(small.__file__)
+    return loop_cache.signed_njit(py_func, signature, stamp, error_model="numpy",
+                                  nogil=True)
 
 
 def conjugate_times(tr, cols, samples, rcond=1e-9) -> tuple:

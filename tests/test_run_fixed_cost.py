@@ -1,0 +1,176 @@
+"""What the short-run path shares and skips keeps every result and guarantee: plans kept
+per scene and handed to ``replace`` copies, a trajectory whose rows are read-only views
+made on first read, the finiteness check of few entries, the lock-free watch of
+``interrupt.call``."""
+
+import threading
+import time
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from jetnh import models
+from jetnh.errors import JetnhError
+from jetnh.numeric import STOPPED, Scene, arguments, interrupt
+
+DISK0 = dict(x=0.1, y=-0.2, phi=0.3, psi=0.4, phi_t=1.0, psi_t=0.7)
+
+
+@pytest.fixture(scope="module")
+def disk():
+    return Scene(models.get("rolling_disk"), "chetaev", initial=DISK0, t_span=(0.0, 0.5),
+                 cache=False).compile()
+
+
+def test_replace_copies_share_the_quick_plans_of_their_span_only(disk):
+    """A copy with other initial values takes over the scene's plans of its span (the
+    same plan object), runs bit for bit as ``run(y0=...)`` from the same state, and a
+    copy with another span plans its own and ends at its own span."""
+    first = disk.run(save="final")
+    moved = disk.replace(initial={**DISK0, "phi_t": 1.3})
+    assert moved._memo["quick"] is disk._memo["quick"]
+    again = moved.run(save="final")
+    by_y0 = disk.run(y0=moved.y0, save="final")
+    assert np.array_equal(again.y, by_y0.y) and np.array_equal(again.t, by_y0.t)
+    assert not np.array_equal(again.y, first.y)
+    longer = moved.replace(t_span=(0.0, 1.0))
+    assert "quick" not in longer._memo
+    assert longer.run(save="final").t[-1] == 1.0 and again.t[-1] == 0.5
+
+
+def test_a_run_of_the_quick_path_equals_the_general_path(disk):
+    """The quick plan (every option as its default) and the general one (an option given
+    as its default value, so the long key) give the same rows, counts and reason."""
+    quick = disk.run(rtol=1e-8)
+    general = disk.run(rtol=1e-8, singular_tol=1e-10)
+    assert np.array_equal(quick.t, general.t) and np.array_equal(quick.y, general.y)
+    assert quick.stop_reason == general.stop_reason
+    for name in ("steps", "rejected", "rhs_evaluations"):
+        assert getattr(quick.diagnostics, name) == getattr(general.diagnostics, name)
+
+
+def test_trajectory_rows_are_read_only_views_of_the_output_rows(disk):
+    """``t`` and ``y`` hold exactly the output rows (a final-only run: its two ends),
+    read-only, the same object on every read."""
+    traj = disk.run(save="final")
+    assert traj.t.shape == (2,) and traj.y.shape == (2, len(disk.state_names))
+    assert traj.t[0] == 0.0 and traj.t[-1] == 0.5
+    assert traj.t is traj.t and traj.y is traj.y
+    assert not traj.t.flags.writeable and not traj.y.flags.writeable
+    with pytest.raises(ValueError):
+        traj.y[0, 0] = 1.0
+    assert traj.diagnostics.steps > 0 and traj.diagnostics.rhs_evaluations > 0
+    every = disk.run()
+    assert np.array_equal(every.y[-1], traj.y[-1]) and len(every) > 2
+
+
+@given(st.lists(st.floats(allow_nan=True, allow_infinity=True, width=64), max_size=300),
+       st.lists(st.floats(allow_nan=True, allow_infinity=True, width=64), max_size=300))
+def test_all_finite_agrees_with_numpy(a, b):
+    """Few entries (summed as Python floats) or many (a sum of squares): the answer is
+    numpy's, overflowing sums included."""
+    a, b = np.array(a, dtype=float), np.array(b, dtype=float)
+    assert arguments.all_finite(a) == bool(np.isfinite(a).all())
+    assert arguments.all_finite(a, b) == bool(np.isfinite(a).all() and np.isfinite(b).all())
+
+
+def test_run_y0_refuses_a_state_that_is_not_finite(disk):
+    for bad in (np.nan, np.inf, -np.inf):
+        y = disk.y0.copy()
+        y[2] = bad
+        with pytest.raises(JetnhError):
+            disk.run(y0=y)
+
+
+def _spin(halt, cap):
+    """Python stand-in for a compiled loop: returns when ``halt`` is set (its value) or
+    after ``cap`` seconds (0)."""
+    end = time.monotonic() + cap
+    while time.monotonic() < end:
+        if halt[0]:
+            return int(halt[0])
+    return 0
+
+
+def test_every_call_is_watched_while_the_watchdog_comes_and_goes(monkeypatch):
+    """With the watchdog ending after 5 ms idle, calls made just as it ends, from two
+    threads at once, are each stopped by their timeout (no watch lost between the
+    lock-free registration and the thread's end), and none stays registered."""
+    wd = interrupt._Watchdog()
+    monkeypatch.setattr(interrupt, "_WATCHDOG", wd)
+    monkeypatch.setattr(interrupt, "IDLE", 0.005)
+    stopped = []
+
+    def calls(seed):
+        rng = np.random.default_rng(seed)
+        for _ in range(15):
+            time.sleep(float(rng.uniform(0.0, 0.012)))      # around the idle end
+            halt = interrupt.flag()
+            stopped.append(interrupt.call(_spin, halt, 0.02, (halt, 5.0)))
+
+    try:
+        threads = [threading.Thread(target=calls, args=(s,)) for s in range(2)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        assert stopped == [interrupt.TIMEOUT] * 30
+        assert wd.calls == {}
+    finally:
+        wd.close()
+
+
+def test_a_timeout_still_stops_a_compiled_run(disk):
+    traj = disk.run(t_span=(0.0, 1e9), max_step=1e-6, max_steps=10**12, save="final",
+                    timeout=0.2)
+    assert traj.status == STOPPED and traj.t[-1] > 0.0
+
+
+@pytest.mark.parametrize("options", [
+    dict(save="final"), dict(method="dopri5", save="final", rtol=1e-6),
+    dict(t_eval=np.linspace(0.0, 0.5, 6)), dict(t_eval=np.linspace(0.0, 0.5, 6), max_steps=4),
+    dict(save="final", max_steps=3), dict(save="final", params={"R": [1.3]}),
+])
+def test_an_ensemble_of_one_is_its_row_of_a_larger_ensemble(disk, options):
+    """An ensemble of one runs the single-run loop; the ensemble's driver runs two: the
+    same rows, counts, status and last state, bit for bit (also stopped by its budget,
+    and with a run-time parameter)."""
+    options = dict(options)
+    params = options.pop("params", None)
+    one = disk.ensemble(initial={"phi_t": [0.9]}, params=params, **options)
+    two = disk.ensemble(initial={"phi_t": [0.9, 0.9]},
+                        params=None if params is None else {"R": params["R"] * 2},
+                        parallel="serial", **options)
+    assert np.array_equal(one.t, two.t[:1], equal_nan=True)
+    assert np.array_equal(one.y, two.y[:1], equal_nan=True)
+    for a, b in zip(one._arrays[:7], two._arrays[:7]):
+        assert np.array_equal(a, b[:1], equal_nan=True)
+    assert one.status.tolist() == two.status[:1].tolist()
+
+
+def test_a_replace_copy_of_a_switching_scene_shares_its_charts():
+    """A copy with other initial values (a shooting loop's run) takes over the atlas's
+    charts of its original rather than building its own (each chart a scene compiled
+    once), and switches as ``run(y0=...)`` of the original does, bit for bit, in a
+    trajectory of the copy."""
+    from jetnh.models import knife_edge
+    from jetnh.numeric import atlas
+
+    knife = Scene(knife_edge(), "chetaev", initial=dict(x=0, y=0, phi=0, x_t=0.5, phi_t=3.0),
+                  t_span=(0.0, 2.0))
+    first = knife.run(rtol=1e-8)
+    moved = knife.replace(initial=dict(x=0, y=0, phi=0.1, x_t=0.5, phi_t=3.0))
+    traj = moved.run(rtol=1e-8)
+    by_y0 = knife.run(y0=moved.y0, rtol=1e-8)
+    assert len(traj.switches) == len(first.switches) >= 2
+    assert traj.switches == by_y0.switches
+    assert np.array_equal(traj.y, by_y0.y) and np.array_equal(traj.t, by_y0.t)
+    assert traj.scene is moved and by_y0.scene is knife
+    mine, theirs = atlas.atlas(moved), atlas.atlas(knife)
+    assert mine is not theirs and mine.charts is theirs.charts
+    assert mine.own.scene is moved and theirs.own.scene is knife
+    # a run that stays in its chart is the copy's too
+    short = moved.replace(t_span=(0.0, 0.1)).run(rtol=1e-8)
+    assert not short.switches and short.scene.t_span == (0.0, 0.1)
