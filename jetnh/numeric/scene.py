@@ -715,12 +715,22 @@ class Scene(Frozen):
         """Whether every singularity indicator of the kernels (among them det
         df/dqdot^alpha and the denominators of phi) is finite and at least
         ``FLOAT_MARGIN`` from zero at the state ``y``."""
-        kern = self.kernels
-        if not hasattr(kern, "sing"):
+        found = self._memo.get("sing")
+        if found is None:       # (looked up once: a run's fixed cost)
+            kern = self.kernels
+            found = self._memo["sing"] = (getattr(kern, "sing", None),
+                                          len(kern.layout.indicators))
+        sing, n = found
+        if sing is None:
             return False
-        g = np.empty(len(kern.layout.indicators))
-        kern.sing(float(t0), y, p, g)
-        return all(math.isfinite(x) and abs(x) >= FLOAT_MARGIN for x in g.tolist())
+        if not n:
+            return True
+        g = np.empty(n)
+        sing(float(t0), y, p, g)
+        for x in g.tolist():
+            if not FLOAT_MARGIN <= abs(x) < math.inf:         # (False at a NaN)
+                return False
+        return True
 
     def _check_holonomic(self, y, t0, p):
         """Refuse a run's initial state off the holonomic constraints."""
