@@ -33,7 +33,12 @@ the principles that have them (vakonomic, Hoelder, Suslov).  Initial values are 
 Symbol, by name or by sympy.physics.mechanics dynamicsymbol (``x(t)`` for x, ``x(t).diff()``
 for x_t); the dependent velocities follow from the constraints.  If given, they
 must agree with the constraints (else ``ConstraintError``), or ``project=True`` replaces
-them by the values the constraints require.
+them by the values the constraints require.  A point the split cannot hold is refused
+with the split, its measure and a regular split to build the scene in
+(``numeric.regular``): where the split is singular (the constraints do not determine the
+dependent velocities in the numbers given), or past the edge of its chart with dependent
+velocities off f = 0 or not given back by phi; ``run(y0=...)`` and ensembles check
+their initial states the same way.
 
 Holonomic constraints g(t, q) = 0 (``system.holonomic``): the initial configuration must
 satisfy them (else ``ConstraintError`` with the residual), or ``complete=True`` solves
