@@ -164,3 +164,25 @@ def test_a_derivation_does_no_more_work_after_another_one(monkeypatch):
         system.equations(principle).accelerations()
         work.append(calls[0])
     assert work[2] <= 1.2 * work[0], work
+
+
+def test_accelerations_are_read_only_and_their_repr_keeps_to_the_budget():
+    """A small system's accelerations print in full; a long chain's (exponentially large
+    as trees) print as sizes within the text budget, without walking a tree."""
+    from jetnh.display import TEXT_BUDGET
+    from jetnh.errors import FrozenError
+
+    knife = models.get("knife_edge")
+    acc = knife.equations("chetaev").accelerations()
+    x_tt = knife.J.qdd[0]
+    assert f"x_tt: {acc[x_tt]}" in repr(acc) and str(acc) == repr(acc)
+    assert acc == dict(acc)
+    with pytest.raises(FrozenError):
+        acc[x_tt] = 0
+    chain = models.get("n_trailer", N=6).equations("suslov").accelerations()
+    text = repr(chain)
+    assert len(text) <= TEXT_BUDGET and "distinct parts in" in text
+    assert text.count(": <expression of ") + text.count("_tt: ") >= len(chain) - 1
+    import pickle
+
+    assert pickle.loads(pickle.dumps(acc)) == acc

@@ -3,6 +3,8 @@ expressions whose tree is exponential."""
 
 from __future__ import annotations
 
+import pickle
+
 import numpy as np
 import pytest
 import sympy as sp
@@ -210,3 +212,26 @@ def test_numbers_among_the_roots_and_missing_symbols():
         assert isinstance(err.value, JetnhError) and isinstance(err.value, ValueError)
     with pytest.raises(ArgumentError, match=r"no value for x, y in the point"):
         dag.evaluate(sp.sin(x) + y, {})
+
+
+@given(expressions(), expressions())
+def test_fingerprint_is_structural_equality(a, b):
+    """Equal expressions (however shared) have one fingerprint; different ones differ
+    (sympy's canonical trees decide what is equal, as srepr did)."""
+    (_, ea), (_, eb) = a, b
+    rebuilt = pickle.loads(pickle.dumps(ea))       # new objects, other sharing
+    assert dag.fingerprint(ea) == dag.fingerprint(rebuilt)
+    assert (dag.fingerprint(ea) == dag.fingerprint(eb)) == (sp.srepr(ea) == sp.srepr(eb))
+    assert dag.fingerprint([ea, eb]) != dag.fingerprint([eb, ea]) or \
+        sp.srepr(ea) == sp.srepr(eb)
+
+
+def test_fingerprint_sees_assumptions_sharing_and_order():
+    x, y = sp.symbols("x y")
+    xp = sp.Symbol("x", positive=True)
+    assert dag.fingerprint(sp.cos(x) + y) != dag.fingerprint(sp.cos(xp) + y)
+    shared = sp.cos(x) ** 2
+    assert dag.fingerprint(shared * shared + 1) == dag.fingerprint(
+        sp.cos(x) ** 2 * sp.cos(x) ** 2 + 1)
+    assert dag.fingerprint([x, y]) != dag.fingerprint([y, x])
+    assert dag.fingerprint([x - y]) != dag.fingerprint([y - x])

@@ -11,6 +11,8 @@ the graph once, remembering every node they have seen (by identity).
 
 from __future__ import annotations
 
+import hashlib
+
 import mpmath
 import sympy as sp
 from sympy.core.function import ArgumentIndexError
@@ -55,6 +57,26 @@ def nodes(expr, cap: int | None = None) -> list:
         stack.append((e, True))
         stack.extend((a, False) for a in e.args if id(a) not in seen)
     return order
+
+
+def fingerprint(expr) -> str:
+    """A hash (hex) of the structure of ``expr`` (a Basic or a list of them): each distinct
+    subtree numbered once, by its head and its children's numbers, symbols by their
+    names and assumptions -- equal expressions give equal fingerprints whatever their
+    sharing, and the tree is never flattened (``srepr`` would be)."""
+    roots = _roots(expr)
+    number: dict = {}           # token -> its number, in the order first met
+    of: dict = {}               # id(node) -> its number
+    h = hashlib.sha256()
+    for e in nodes(roots):
+        token = (("atom", sp.srepr(e)) if not e.args else
+                 (type(e).__name__, tuple(of[id(a)] for a in e.args)))
+        if token not in number:
+            number[token] = len(number)
+            h.update(repr(token).encode() + b"\0")
+        of[id(e)] = number[token]
+    h.update(repr(tuple(of[id(e)] for e in roots)).encode())
+    return h.hexdigest()
 
 
 def size(expr, cap: int | None = None) -> int:

@@ -47,13 +47,46 @@ from sympy.core.cache import clear_cache
 from sympy.core.function import AppliedUndef
 from sympy.matrices.utilities import dotprodsimp
 
-from ..algebra import linalg, zero
+from ..algebra import dag, linalg, zero
 from ..errors import LagrangianError
+from ..frozen import FrozenDict
 
 KAPPA = ("none", "multipliers", "momenta")
 #: id(system) -> (weak reference, {(F, hessian): parts}): by identity, never by equality
 #: (equal systems built apart must not share nodes: comparing them walks trees)
 _PARTS: dict = {}
+
+
+class Accelerations(FrozenDict):
+    """What ``Equations.accelerations()`` returns: a read-only dict, q''^s and the
+    multiplier rates (Symbols) -> sympy expressions, whose repr keeps to the text budget:
+    an expression whose printed tree would be large (counted on its shared graph, never
+    printed) shows as its size and symbols, and entries past the budget are counted."""
+
+    __slots__ = ()
+
+    def __repr__(self):
+        from ..display import TEXT_BUDGET, TREE_CAP, tree_size
+
+        parts, used = [], 0
+        for i, (s, e) in enumerate(self.items()):
+            if tree_size(e) <= TREE_CAP:
+                text = f"{s}: {e}"
+            else:
+                syms = sorted(x.name for x in dag.free_symbols(e))
+                text = (f"{s}: <expression of {dag.size(e)} distinct parts in "
+                        f"{', '.join(syms[:8])}{', ...' if len(syms) > 8 else ''}>")
+            if used + len(text) > TEXT_BUDGET - 100:
+                parts.append(f"... ({len(self) - i} more)")
+                break
+            parts.append(text)
+            used += len(text) + 2
+        return "{" + ", ".join(parts) + "}"
+
+    __str__ = __repr__
+
+    def __reduce__(self):
+        return Accelerations, (dict(self),)
 
 
 class EulerParts(NamedTuple):

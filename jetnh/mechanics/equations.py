@@ -159,7 +159,7 @@ class Equations(Frozen):
     def multiplier_rates(self) -> tuple[sp.Symbol, ...]:
         return tuple(self.J.jet(m, 1) for m in self.multipliers)
 
-    def accelerations(self) -> dict:
+    def accelerations(self) -> accelerations.Accelerations:
         """Every J.qdd[s] and multiplier rate -> expression in t, q, qdot, multipliers, parameters.
 
         Valid on the constraint manifold: the dependent velocities qdot^alpha stand for
@@ -170,10 +170,11 @@ class Equations(Frozen):
 
         Returns
         -------
-        dict
-            Symbol (``x_tt``, ``lambda_x_t``, ...) -> sympy expression.
+        Accelerations
+            a read-only dict, Symbol (``x_tt``, ``lambda_x_t``, ...) -> sympy
+            expression, whose repr keeps to the text budget.
         """
-        return dict(self._accelerations)
+        return accelerations.Accelerations(self._accelerations)
 
     @cached_property
     def _accelerations(self):

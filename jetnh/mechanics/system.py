@@ -426,11 +426,9 @@ class System(Frozen):
     @cached_property
     def jacobian(self) -> sp.Matrix:
         """df^a/dqdot^s (k x n)."""
-        # by a velocity a constraint lacks, zero without a walk (what dag.diff returns)
-        syms = [dag.free_symbols(f) for f in self.constraints]
-        return sp.Matrix(self.k, self.J.n,
-                         lambda a, s: dag.diff(self.constraints[a], self.J.qd[s])
-                         if self.J.qd[s] in syms[a] else sp.S.Zero)
+        # one cache for every entry: the constraints of a chain share their parts, each
+        # differentiated once by each velocity (a velocity a part lacks: zero, no walk)
+        return dag.jacobian(self.constraints, self.J.qd) if self.k else sp.zeros(0, self.J.n)
 
     @cached_property
     def jacobian_dependent(self) -> sp.Matrix:

@@ -10,8 +10,8 @@ the scene (``Scene.run``, ensembles and the discrete drivers call them).
 from __future__ import annotations
 
 import numpy as np
-import sympy as sp
 
+from ..algebra import dag
 from ..errors import IntegrationError
 from .methods import STATUS_TEXT
 from .methods._common import STOPPED
@@ -145,8 +145,9 @@ def jacobian_at(scene, t, y, p):
         vals.update({s: scene.params[s.name] for s in sys_.parameters})
         for i, nm in enumerate(scene.runtime_params):
             vals.update({s: p[i] for s in sys_.parameters if s.name == nm})
-        A = np.array(sys_.jacobian.xreplace({k: sp.Float(v) for k, v in vals.items()})
-                     .evalf(), dtype=float)
+        jac = sys_.jacobian
+        A = np.array([float(v) for v in dag.evaluate_numpy(list(jac), vals)],
+                     dtype=float).reshape(jac.shape)
     except (TypeError, ValueError):
         return None
     return A if np.all(np.isfinite(A)) else None

@@ -143,6 +143,8 @@ def resolve(scene, initial=None, params=None, project=False):
             if s in params:
                 P[:, j] = params[s]
     dep = {k: v for k, v in columns.items() if k in scene.dependent_velocities}
+    if scene.dependent_velocities:
+        _check_split(scene, Y0, P, dep, project)
     if dep:
         _check_dependent(scene, Y0, P, dep, project)
     if scene.system.holonomic:
@@ -166,6 +168,23 @@ def _check_holonomic(scene, Y0, P):
                 f"{list(scene.system.holonomic)} (g = {g.tolist()}); give configurations "
                 "with g = 0 (an ensemble does not complete them: build one Scene per start "
                 "with complete=True)")
+
+
+def _check_split(scene, Y0, P, given, project):
+    """Refuse runs whose initial point the split cannot hold (singular there, or past
+    the edge of its chart and off the constraints: ``Scene._dependent_velocity_split``),
+    checked for the runs where a singularity indicator comes near zero."""
+    t0 = scene.t_span[0]
+    for r in range(Y0.shape[0]):
+        if scene._regular_at(Y0[r], t0, P[r]):
+            continue
+        values = dict(zip(scene.state_names, Y0[r].tolist()))
+        prm = dict(zip(scene.runtime_params, P[r].tolist()))
+        required = scene._dependent_velocity_values(values, t0, prm)
+        values.update((k, float(np.broadcast_to(v, Y0.shape[:1])[r]))
+                      for k, v in given.items())
+        scene._dependent_velocity_split(values, required, t0, prm, f"initial of run {r}",
+                                        project)
 
 
 def _check_dependent(scene, Y0, P, given, project):

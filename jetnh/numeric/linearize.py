@@ -44,9 +44,21 @@ holonomic constraint with a kept coordinate.  Their rows (their drift, such as t
 position of a rolling body) do not feed back, so ``A`` is the Jacobian restricted to the
 kept states.
 
+The split at the point (``numeric.regular``): past the edge of its chart (the measure
+det(A_alpha)^2 / det(A A^T) below the atlas's edge) dependent velocities given with the
+point are checked against the constraints f = 0 themselves, and the point is linearized
+in the split of largest measure, as a run from it would go on there (its rows, states
+and ``at`` are those of ``system.with_split(...)``; the multipliers keep their values,
+renamed; principles whose motions depend on the split keep theirs).  Where the split is
+singular (one rounding unit in an input moves phi by more than 1e-9 relative:
+``regular.determined``) a point without its dependent velocities is a
+``ConstraintError`` naming the split, its measure and a regular one.
+
 Stability is spectral, and decided only at a steady motion (a relative equilibrium of
 the kept states: x' = 0 there).  The point is one when ``residual`` <= ``STEADY`` times
-the scale of the rates, max(1, |A| |x|) over the kept states; elsewhere the eigenvalues
+the scale of the rates, max(1, |A| |x|) over the kept states, and the rates are small
+in themselves, ``residual`` <= sqrt(``STEADY``) max(1, |x|) (a large |A|, as near a
+singular configuration, does not make a large residual steady); elsewhere the eigenvalues
 of A are still computed but say nothing about stability: the verdict is ``"not a steady
 motion"``, ``stable`` is None (``steady(unknowns)`` finds a steady motion nearby).  At a
 steady motion: ``unstable`` when an eigenvalue has a positive real part,
@@ -59,6 +71,7 @@ only to about the square root of the rounding unit).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 
 import numpy as np
@@ -69,15 +82,18 @@ from ..errors import (ArgumentError, ConstraintError, JetnhError, LinearizationE
                       PrincipleError)
 from ..mechanics import holonomic, principles
 from ..mechanics.system import System
-from . import arguments
+from . import arguments, regular
 from ..frozen import Frozen, FrozenDict
 
 #: eigenvalues of modulus below ZERO * max(1, |A|) count as zero
 ZERO = 1e-6
 #: real parts within REAL * max(1, |A|) of zero count as on the imaginary axis
 REAL = 1e-12
-#: a point is a steady motion when ``|x'| <= STEADY * max(1, |A| |x|)`` (kept states)
+#: a point is a steady motion when ``|x'| <= STEADY * max(1, |A| |x|)`` and
+#: ``|x'| <= sqrt(STEADY) * max(1, |x|)`` (kept states)
 STEADY = 1e-8
+#: the relative tolerance of given dependent velocities (and of f = 0 past the edge)
+CONSISTENT = 1e-9
 #: the verdict off a steady motion
 NOT_STEADY = "not a steady motion"
 
@@ -260,7 +276,10 @@ class Linearization(Frozen):
         self.limit = limit
         size = float(np.abs(y[list(keep)]).max()) if keep else 0.0
         #: whether the point is a steady motion: ``|x'| <= STEADY * max(1, |A| |x|)``
-        self.steady_motion = bool(self.residual <= STEADY * max(1.0, self._scale * size))
+        #: and ``|x'| <= sqrt(STEADY) * max(1, |x|)`` (module docstring)
+        self.steady_motion = bool(
+            self.residual <= STEADY * max(1.0, self._scale * size)
+            and self.residual <= math.sqrt(STEADY) * max(1.0, size))
 
     # ------------------------------------------------------------------ verdicts
     @property
@@ -783,6 +802,9 @@ def _evaluate(model: _Model, point: dict, values: dict, keep, t: float) -> Linea
                if set(missing) & set(lams) else "")
             + "; give them in at={...}")
     state = {nm: point.get(nm, 0.0) for nm in names}
+    other = _split(model, point, state, values, keep, t)
+    if other is not None:
+        return _evaluate(*other)
     y = np.array([state[nm] for nm in names], dtype=float)
     chart, G = _chart(model, y, values, t)
     rows = tuple(i for i in keep if i not in chart)
@@ -800,7 +822,7 @@ def _evaluate(model: _Model, point: dict, values: dict, keep, t: float) -> Linea
                 f"the constraints give no finite value for {nm} at this point: it is "
                 f"singular for the split {[s.name for s in model.system.dependent]}; "
                 "choose another operating point or another split (dependent=)")
-        if nm in point and abs(point[nm] - v) > 1e-9 * max(1.0, abs(v)):
+        if nm in point and abs(point[nm] - v) > CONSISTENT * max(1.0, abs(v)):
             raise ConstraintError(
                 f"the point is off the constraints: at gives {nm} = {point[nm]!r} but the "
                 f"constraints give {v!r}; omit it (dependent velocities follow from the "
@@ -810,6 +832,60 @@ def _evaluate(model: _Model, point: dict, values: dict, keep, t: float) -> Linea
         raise ConstraintError("the constraints are undefined at this point")
     A, rates, limit = _jacobian(ck, y, p, t, rows, E)
     return Linearization(model, at, values, rows, chart, E, t, y, p, A, rates, limit)
+
+
+def _split(model: _Model, point: dict, state: dict, values: dict, keep, t: float):
+    """None to linearize in the model's own split; ``(model, point, values, keep, t)``
+    of the split of largest measure where the own one is past the edge of its chart
+    (module docstring): the point's velocities are those given, on the constraints, or
+    the dependent ones from phi where the split determines them.  A ConstraintError for
+    a point off the constraints, or one without its dependent velocities where the split
+    is singular."""
+    sysm = model.system
+    dep = [v.name for v in model.dependent]
+    if not dep:
+        return None
+    given = all(nm in point for nm in dep)
+    qd = {v.name: state[v.name] for v in model.velocities}
+    found = regular.phi(sysm, t, state, qd, values)
+    phi = [found[nm] for nm in dep]
+    qd.update((nm, point[nm] if given else phi[a]) for a, nm in enumerate(dep))
+    A, f = regular.at_point(sysm, t, state, qd, values)
+    m = float(regular.measure(sysm, A))
+    if m >= regular.edge(sysm):
+        return None
+    ok, why, finite = regular.determined(sysm, t, state, qd, values, CONSISTENT)
+    if not given and not ok:
+        raise regular.singular(sysm, m, A, "linearize", why, finite)
+    if given and not regular.on_constraints(A, f, [qd[v.name] for v in sysm.J.qd],
+                                            CONSISTENT):
+        raise regular.off(sysm, f, "linearize")
+    from .atlas import split_invariant
+
+    own = [s.name for s in sysm.dependent]
+    split, _ = regular.best(sysm, A)
+    explicit = bool(model.lams) and principles.get(model.principle).form(model.form).explicit
+    if split == own:
+        return None
+    if not split_invariant(model.principle, model.convention) or explicit:
+        if not given or ok and all(
+                abs(point[nm] - v) <= CONSISTENT * max(1.0, abs(v)) for nm, v in zip(dep, phi)):
+            return None         # the own split still determines the point
+        why = ("the multipliers of the explicit form weigh the singular split"
+               if explicit else f"the {model.principle} motions in the "
+               f"{model.convention!r} convention depend on the split")
+        raise ConstraintError(
+            f"linearize: the point is on the constraints, but the split dependent={own} is "
+            f"past the edge of its chart here (measure {m:.3g}) and {why}: linearize the "
+            f"system built with dependent={split} (or another regular split)")
+    new = _model(sysm.with_split(split), model.principle, model.form, model.convention)
+    moved = {q.name: state[q.name] for q in model.coordinates}
+    moved.update(qd)
+    moved.update((b.name, state[a.name]) for a, b in zip(model.lams, new.lams))
+    n = len(model.coordinates)
+    keep = tuple(i for i in range(len(new.states))
+                 if (i >= n or i in keep) and i not in new.inert)
+    return new, moved, values, keep, t
 
 
 def _configuration(model: _Model, y, values: dict, t: float) -> dict:

@@ -33,7 +33,12 @@ the principles that have them (vakonomic, Hoelder, Suslov).  Initial values are 
 Symbol, by name or by sympy.physics.mechanics dynamicsymbol (``x(t)`` for x, ``x(t).diff()``
 for x_t); the dependent velocities follow from the constraints.  If given, they
 must agree with the constraints (else ``ConstraintError``), or ``project=True`` replaces
-them by the values the constraints require.
+them by the values the constraints require.  A point the split cannot hold is refused
+with the split, its measure and a regular split to build the scene in
+(``numeric.regular``): where the split is singular (the constraints do not determine the
+dependent velocities in the numbers given), or past the edge of its chart with dependent
+velocities off f = 0 or not given back by phi; ``run(y0=...)`` and ensembles check
+their initial states the same way.
 
 Holonomic constraints g(t, q) = 0 (``system.holonomic``): the initial configuration must
 satisfy them (else ``ConstraintError`` with the residual), or ``complete=True`` solves
@@ -56,7 +61,7 @@ from ..mechanics import holonomic, principles
 from ..mechanics.system import System
 from ..errors import ConstraintError, JetnhError
 from ..geometry.jet import sympy_object
-from . import arguments, solve
+from . import arguments, regular, solve
 from . import codegen
 from . import discrete
 from .kernels import jacobian_kernels, load as load_kernels, loader
@@ -215,6 +220,7 @@ class Scene(Frozen):
         if required is None:
             y = None
             required = self._dependent_velocity_values(given)
+            self._dependent_velocity_split(given, required, project=project)
         bad = []
         for name, value in required.items():
             if not math.isfinite(value):
@@ -289,6 +295,52 @@ class Scene(Frozen):
                 except (ZeroDivisionError, ValueError):
                     found.append(None)
         return {v.name: _real(x) for v, x in zip(vs, found)}
+
+    def _dependent_velocity_split(self, given, required, t0=None, params=None,
+                                  where="initial", project=False):
+        """Refuse a point the split cannot hold (``numeric.regular``): past the edge of
+        its chart, dependent velocities given with the point are checked against f = 0
+        itself (off it: a ConstraintError, unless ``project`` where the split still
+        determines them); where the split is singular, a point without them, or one on
+        f = 0 whose dependent velocities phi^alpha does not give back (the scene's state
+        holds only the independent ones), is a ConstraintError naming the split, its
+        measure and a regular one.  ``required``: phi^alpha at the point."""
+        sys_ = self.system
+        dep = self.dependent_velocities
+        if not dep:
+            return
+        complete = all(n in given for n in dep)
+        qd = {n: given[n] for n in self.velocities}
+        qd.update((n, given[n] if complete else required[n]) for n in dep)
+        values = {**self.params, **(params or {})}
+        A, f = regular.at_point(sys_, self.t_span[0] if t0 is None else t0, given, qd,
+                                values)
+        m = float(regular.measure(sys_, A))
+        if m >= regular.edge(sys_):
+            return
+        tol = self.consistency_tol
+        ok, why, finite = regular.determined(
+            sys_, self.t_span[0] if t0 is None else t0, given, qd, values, tol)
+        singular = not ok
+        if not complete:
+            if singular:
+                raise regular.singular(sys_, m, A, where, why, finite, give=False)
+            return
+        if not regular.on_constraints(A, f, [qd[v.name] for v in sys_.J.qd], tol):
+            if project and not singular:
+                return
+            raise regular.off(sys_, f, where)
+        if not singular and all(abs(given[n] - required[n]) <= tol * max(1.0, abs(required[n]))
+                                for n in dep):
+            return
+        split, mb = regular.best(sys_, A)
+        raise ConstraintError(
+            f"{where}: the point is on the constraints, but the split dependent="
+            f"{[s.name for s in sys_.dependent]} is {'singular' if singular else 'past the edge of its chart'} "
+            f"there (measure det(A_alpha)^2/det(A A^T) = {m:.3g}) and does not give back "
+            f"{', '.join(f'{n} = {given[n]!r}' for n in dep)} from the other velocities "
+            f"(a scene's state holds only the independent ones): build the scene for "
+            f"system.with_split({split}) (measure {mb:.3g} here), where the point is regular")
 
     def _dependent_velocity_floats(self, y, kern, p) -> dict[str, float] | None:
         """qdot^alpha = phi^alpha at the initial state ``y`` (run-time parameters
@@ -628,6 +680,7 @@ class Scene(Frozen):
                 y, _ = arguments.keyed_or_sequence(y0, self.state_names, self.y0, "y0",
                                                    "scene.state_names")
             self._check_holonomic(y, t0, p)
+            self._check_split(y, {}, t0, p)
             return y
         allowed = self.state_names + self.dependent_velocities
         for k in y0:
@@ -641,16 +694,48 @@ class Scene(Frozen):
         y = np.ascontiguousarray(y[:len(self.state_names)])
         self._check_holonomic(y, t0, p)
         dep = {nm: v for nm, v in given.items() if nm in self.dependent_velocities}
+        required = self._check_split(y, dep, t0, p)
         if dep:
-            vals = dict(zip(self.state_names, y.tolist()))
-            required = self._dependent_velocity_values(
-                vals, t0, dict(zip(self.runtime_params, p.tolist())))
             for nm, v in dep.items():
                 if abs(v - required[nm]) > self.consistency_tol * max(1.0, abs(required[nm])):
                     raise ConstraintError(
                         f"y0 gives {nm} = {v!r} but the constraints give {required[nm]!r}; "
                         "omit it (dependent velocities follow from the constraints)")
         return y
+
+    def _check_split(self, y, dep, t0, p) -> dict | None:
+        """Refuse a run's initial state that the split cannot hold
+        (``_dependent_velocity_split``; ``dep``: the dependent velocities given with it);
+        phi^alpha there (None where every singularity indicator is at least
+        ``FLOAT_MARGIN`` from zero and none is given: the split determines them)."""
+        if not self.dependent_velocities or (not dep and self._regular_at(y, t0, p)):
+            return None
+        vals = dict(zip(self.state_names, y.tolist()))
+        prm = dict(zip(self.runtime_params, p.tolist()))
+        required = self._dependent_velocity_values(vals, t0, prm)
+        self._dependent_velocity_split({**vals, **dep}, required, t0, prm, "y0")
+        return required
+
+    def _regular_at(self, y, t0, p) -> bool:
+        """Whether every singularity indicator of the kernels (among them det
+        df/dqdot^alpha and the denominators of phi) is finite and at least
+        ``FLOAT_MARGIN`` from zero at the state ``y``."""
+        found = self._memo.get("sing")
+        if found is None:       # (looked up once: a run's fixed cost)
+            kern = self.kernels
+            found = self._memo["sing"] = (getattr(kern, "sing", None),
+                                          len(kern.layout.indicators))
+        sing, n = found
+        if sing is None:
+            return False
+        if not n:
+            return True
+        g = np.empty(n)
+        sing(float(t0), y, p, g)
+        for x in g.tolist():
+            if not FLOAT_MARGIN <= abs(x) < math.inf:         # (False at a NaN)
+                return False
+        return True
 
     def _check_holonomic(self, y, t0, p):
         """Refuse a run's initial state off the holonomic constraints."""

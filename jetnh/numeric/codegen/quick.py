@@ -1,6 +1,7 @@
 """Quick compilation of huge kernels: a numba C callback compiled with LLVM's light
-optimisation (the ``-O1`` passes on the IR) and its fastest code generation (``-O0``: fast
-instruction selection and the local register allocator).
+optimisation (the ``-O1`` passes on the IR: on each function, then once on the module) and
+its fastest code generation (``-O0``: fast instruction selection and the local register
+allocator).
 
 Numba compiles every function with LLVM's ``-O3`` code generation, whose greedy register
 allocator takes most of a huge straight-line kernel's compile time, growing faster than
@@ -59,9 +60,15 @@ def _quick_cfunc_class():
             super()._customize_tm_options(options)
             options["opt"] = 0                  # code generation: -O0
 
-        def _pass_builder(self, **kwargs):
-            kwargs["opt"] = 1                   # IR passes: -O1
-            return super()._pass_builder(**kwargs)
+        def _function_pass_manager(self, **kwargs):
+            kwargs["opt"] = 1                   # IR passes: -O1 on each function, then
+            return super()._function_pass_manager(**kwargs)
+
+        def _module_pass_manager(self, **kwargs):
+            # once more on the module (what the first round exposes: negations folded
+            # into subtractions, then equal products), not twice (numba's "cheap" round)
+            kwargs["opt"] = 0 if kwargs.get("cost") == "cheap" else 1
+            return super()._module_pass_manager(**kwargs)
 
     class QuickContext(cpu.CPUContext):
         def init(self):

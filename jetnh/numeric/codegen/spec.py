@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
+from ...algebra import dag
 from ...frozen import FrozenDict
 from ...mechanics import principles
 from ..layout import CODEGEN_VERSION, Layout
@@ -77,16 +78,16 @@ def symbolic_key(system, principle, params, runtime_params=(), integrals=None, f
         "jetnh-codegen", CODEGEN_VERSION, _derivation_source_hash(), sp.__version__,
         numba.__version__,
         repr(tuple(s.name for s in J.q)), J.t.name,
-        sp.srepr(system.L),
-        repr(tuple(sp.srepr(f) for f in system.constraints)),
-        repr(tuple(sp.srepr(g) for g in system.holonomic)),
-        repr(tuple((q.name, sp.srepr(e)) for q, e in system.forces.items())),
-        sp.srepr(system.dissipation),
+        dag.fingerprint(system.L),
+        repr(tuple(dag.fingerprint(f) for f in system.constraints)),
+        repr(tuple(dag.fingerprint(g) for g in system.holonomic)),
+        repr(tuple((q.name, dag.fingerprint(e)) for q, e in system.forces.items())),
+        dag.fingerprint(system.dissipation),
         repr(tuple(s.name for s in system.dependent)), repr(system.branch),
         principle, repr(form), convention,
         repr(sorted((k, float(v).hex()) for k, v in params.items())),
         repr(tuple(runtime_params)),
-        repr(sorted((k, sp.srepr(v)) for k, v in (integrals or {}).items())),
+        repr(sorted((k, dag.fingerprint(v)) for k, v in (integrals or {}).items())),
         extra, f"quick above {quick_ops()}",
     ]
     for part in parts:
@@ -135,7 +136,7 @@ class KernelSpec:
             object.__setattr__(self, name, value)
         extra = self.variant
         if self.variant == "events":
-            extra = "events:" + repr([(i, sp.srepr(e)) for i, e in self.events])
+            extra = "events:" + repr([(i, dag.fingerprint(e)) for i, e in self.events])
         object.__setattr__(self, "key", symbolic_key(
             self.system, self.principle, self.params, runtime, self.integrals, self.form,
             self.convention, extra=extra))

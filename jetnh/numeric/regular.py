@@ -1,0 +1,183 @@
+"""Whether a split is regular at a given point, and whether the point is on the constraints.
+
+A split (the dependent velocities qdot^alpha) is a chart of the constraint manifold
+f(t, q, qdot) = 0; at a point its measure is m = det(A_alpha)^2 / det(A A^T), A =
+df/dqdot (``atlas.split_measure_of``).  A run switches split where m falls to the edge of
+the chart, eps = 1/(4N) over the N splits (``atlas``), and one that starts past the edge
+starts in the split of largest measure.  Two thresholds decide how a given point is taken:
+
+- past the edge (m < eps) the dependent velocities given with the point are checked
+  against f = 0 itself (``on_constraints``), not against phi^alpha = A_alpha^-1 (...),
+  whose conditioning is about 1/sqrt(m);
+- there, the split is singular where the constraints no longer determine the dependent
+  velocities in floats: a change of one rounding unit in a coordinate, an independent
+  velocity or a parameter moves phi^alpha by more than the consistency tolerance ``tol``
+  (relative, as max(1, |phi|)) -- ``determined``.  That is the conditioning of phi at
+  the point in the numbers given (near th = pi/2, cos th is known only to about 1e-16
+  absolute; near x = 0, x itself is known to 1e-16 relative, and y/x is fine).  A point
+  there without its dependent velocities is refused (``singular``): give them too, or
+  choose another split.
+"""
+
+from __future__ import annotations
+
+import math
+from itertools import combinations
+
+import numpy as np
+
+from ..algebra import dag
+from ..errors import ConstraintError
+
+#: the unit roundoff of float64
+ROUNDOFF = float(np.finfo(float).eps) / 2
+
+_EDGES: dict = {}
+
+
+def edge(system) -> float:
+    """The edge of every chart of ``system`` (``atlas``: 1/(4N), N the splits whose minor
+    is not identically zero); at most 1/4, so a measure >= 1/4 is never past it."""
+    found = _EDGES.get(system)
+    if found is None:
+        from .atlas import splits
+
+        if len(_EDGES) > 256:
+            _EDGES.pop(next(iter(_EDGES)))
+        found = _EDGES[system] = 1.0 / (4 * len(splits(system)))
+    return found
+
+
+def _point(system, t, coordinates: dict, velocities: dict, params: dict) -> dict:
+    J = system.J
+    point = {J.t: t}
+    point.update((q, coordinates[q.name]) for q in J.q)
+    point.update((v, velocities.get(v.name, np.nan)) for v in J.qd)
+    point.update((s, params[s.name]) for s in system.parameters)
+    return point
+
+
+def phi(system, t, coordinates: dict, velocities: dict, params: dict) -> dict:
+    """The dependent velocities phi^alpha at a point given by name (floats, on the
+    shared graph; NaN or infinite where phi is undefined)."""
+    vs = system.dependent_velocities
+    values = dag.evaluate_numpy([system.phi[v] for v in vs],
+                                _point(system, t, coordinates, velocities, params))
+    return {v.name: float(x) for v, x in zip(vs, values)}
+
+
+def determined(system, t, coordinates: dict, velocities: dict, params: dict, tol: float):
+    """``(ok, why, finite)``: whether phi^alpha at the point moves by at most ``tol`` max(1,
+    |phi|) when any one coordinate, independent velocity or parameter changes by one
+    rounding unit (``np.spacing``), all the changes evaluated at once on the graph; ``why``
+    names the input that moves it most, and by how much; ``finite``: phi^alpha is."""
+    inputs = ([(q.name, coordinates) for q in system.J.q]
+              + [(v.name, velocities) for v in system.independent_velocities]
+              + [(s.name, params) for s in system.parameters])
+    rows = len(inputs) + 1
+    columns = {"c": dict(coordinates), "v": dict(velocities), "p": dict(params)}
+    kinds = {id(coordinates): "c", id(velocities): "v", id(params): "p"}
+    for kind in columns.values():
+        for name, x in kind.items():
+            kind[name] = np.full(rows, float(x))
+    for i, (name, where) in enumerate(inputs):
+        col = columns[kinds[id(where)]][name]
+        col[i + 1] += np.spacing(col[i + 1])
+    vs = system.dependent_velocities
+    values = dag.evaluate_numpy([system.phi[v] for v in vs], _point(
+        system, t, columns["c"], columns["v"], columns["p"]))
+    worst, why = 0.0, ""
+    for v, x in zip(vs, values):
+        x = np.broadcast_to(np.asarray(x, dtype=float), (rows,))
+        with np.errstate(invalid="ignore"):
+            moved = np.abs(x[1:] - x[0]) / max(1.0, abs(x[0]))
+        moved = np.where(np.isfinite(moved), moved, np.inf)
+        if not math.isfinite(x[0]):
+            return False, f"{v.name} is {x[0]}", False
+        if moved.size and moved.max() > worst:
+            i = int(np.argmax(moved))
+            worst = float(moved.max())
+            why = (f"one rounding unit in {inputs[i][0]} moves {v.name} = {x[0]:.6g} by "
+                   f"{abs(x[i + 1] - x[0]):.3g}")
+    return worst <= tol, why, True
+
+
+def at_point(system, t, coordinates: dict, velocities: dict, params: dict):
+    """``(A, f)``: df/dqdot ([..., k, n]) and f ([..., k]) at the points given by name
+    (numbers, or arrays of one length for several points; a missing or NaN velocity
+    gives NaN), evaluated on the shared graph in floats."""
+    J = system.J
+    point = _point(system, t, coordinates, velocities, params)
+    k, n = system.k, J.n
+    values = dag.evaluate_numpy(list(system.jacobian) + list(system.constraints), point)
+    shape = np.broadcast_shapes(*(np.shape(v) for v in point.values()))
+    A = np.empty(shape + (k, n))
+    f = np.empty(shape + (k,))
+    for i in range(k * n):
+        A[..., i // n, i % n] = values[i]
+    for a in range(k):
+        f[..., a] = values[k * n + a]
+    return A, f
+
+
+def measure(system, A) -> np.ndarray:
+    """The measure of ``system``'s own split at df/dqdot ``A`` ([..., k, n]); 0 where
+    A is not finite or has rank < k."""
+    from .atlas import split_measure_of
+
+    with np.errstate(all="ignore"):
+        return split_measure_of(A, list(system.dep_index))
+
+
+def best(system, A) -> tuple[list[str], float]:
+    """The split of largest measure at one point (A: k x n) and its measure."""
+    from .atlas import split_measure_of
+
+    names = [q.name for q in system.J.q]
+    top, where = -1.0, ()
+    for cols in combinations(range(len(names)), system.k):
+        m = float(split_measure_of(A, list(cols)))
+        if m > top:
+            top, where = m, cols
+    return [names[c] for c in where], top
+
+
+def on_constraints(A, f, qd, tol: float) -> np.ndarray:
+    """Whether f = 0 to ``tol`` relative at the points (every velocity ``qd`` [..., n]
+    given): |f^a| <= tol (sum_s |A^a_s| max(1, |qdot^s|) + |b^a|), b = f - A qdot (the
+    part without velocities) -- the consistency test |qdot - phi| <= tol max(1, |phi|)
+    carried to f, so that it does not divide by a singular A_alpha."""
+    qd = np.asarray(qd, dtype=float)
+    terms = np.abs(A) * np.maximum(1.0, np.abs(qd))[..., None, :]
+    b = f - np.einsum("...as,...s->...a", A, qd)
+    scale = terms.sum(axis=-1) + np.abs(b)
+    with np.errstate(invalid="ignore"):
+        return np.all(np.abs(f) <= tol * scale, axis=-1) & np.all(np.isfinite(f), axis=-1)
+
+
+def singular(system, m: float, A, where: str, why: str, finite=True, give=True
+             ) -> ConstraintError:
+    """The error for a point without its dependent velocities where the split is
+    singular (``determined`` fails: ``why`` and ``finite`` from it): the split, its
+    measure and the fix (with ``give``: giving them too is one)."""
+    own = [s.name for s in system.dependent]
+    dep = ", ".join(v.name for v in system.dependent_velocities)
+    split, mb = best(system, A) if np.all(np.isfinite(A)) else (None, 0.0)
+    other = (f"choose dependent={split} (measure {mb:.3g} here)" if split and split != own
+             else "choose another split with dependent=[...]")
+    told = "do not determine" if finite else "give no finite value for"
+    return ConstraintError(
+        f"{where}: the split dependent={own} is singular at this configuration (its "
+        f"measure det(A_alpha)^2/det(A A^T), A = df/dqdot, is {m:.3g}; {why}): the "
+        f"constraints {told} {dep} there. "
+        + (f"Give {dep} too (every velocity, on the constraints), or {other}" if give
+           else f"{other[0].upper()}{other[1:]} (system.with_split), where they do"))
+
+
+def off(system, f, where: str) -> ConstraintError:
+    """The error for a point with every velocity given that is off f = 0."""
+    told = "; ".join(f"f{a + 1} = {e} is {v:.6g}"
+                     for a, (e, v) in enumerate(zip(system.constraints, np.ravel(f))))
+    return ConstraintError(
+        f"{where}: the point is off the constraints: {told} (should be 0); give velocities "
+        "that satisfy them")
