@@ -26,18 +26,26 @@ EDGE = 1e-2
 MAX_STEPS = 20_000
 
 
-def _start_row(n, m):
-    """The first row of a run with sensitivities but for its state: zeros, then the
-    initial sensitivities S0 = (I | 0) (n x m) flattened (``solve.augmented``'s), kept
-    per shape; a run's row is a copy with the state written in."""
-    found = _START.get((n, m))
+def _parts(plan):
+    """What every run of ``plan`` shares, kept per plan (the last 64; a plan is hashed
+    by identity): ``(n, m, the first row, the loop's arguments before the state, those
+    after p)``.  The first row of a run with sensitivities but for its state: zeros,
+    then the initial sensitivities S0 = (I | 0) (n x m) flattened
+    (``solve.augmented``'s); a run's row is a copy with the state written in."""
+    found = _PARTS.get(plan)
     if found is None:
-        found = _START[n, m] = np.concatenate((np.zeros(n), np.eye(n, m).ravel()))
-        found.setflags(write=False)
+        lay = plan.sens.layout
+        n, m = lay.n_state, lay.sensitivity_columns
+        row = np.concatenate((np.zeros(n), np.eye(n, m).ravel()))
+        row.setflags(write=False)
+        if len(_PARTS) >= 64:
+            _PARTS.clear()
+        found = _PARTS[plan] = (n, m, row, (*plan.prefix, plan.t0, plan.t1),
+                                tuple(plan.suffix))
     return found
 
 
-_START: dict = {}
+_PARTS: dict = {}
 
 
 class Shot:
@@ -54,17 +62,15 @@ class Shot:
         state ``y`` with the run-time parameters ``p``, or None where it does not reach
         the end of its span or ends in a non-finite state (``stops``, a dict: its status
         counted there)."""
-        lay = plan.sens.layout
         if plan.switch and not plan.ce.python_funcs[-1](plan.t0, y, p) >= 0.0:
             # past the edge of the scene's split at t0: the run starts in another
             return cls._across(scene, plan, y, p, stops)
-        n, m = lay.n_state, lay.sensitivity_columns
-        y0, y = y, _start_row(n, m).copy()
+        n, m, row, head, tail = _parts(plan)
+        y0, y = y, row.copy()
         y[:n] = y0
         halt = np.zeros(1, dtype=np.int64)
         tic = time.perf_counter()
-        out = interrupt.call(plan.entry, halt, plan.limit,
-                             (*plan.prefix, plan.t0, plan.t1, y, p, *plan.suffix, halt))
+        out = interrupt.call(plan.entry, halt, plan.limit, (*head, y, p, *tail, halt))
         wall = time.perf_counter() - tic
         status, n_out = out[0], int(out[3])
         if status == EVENT and plan.switch:
