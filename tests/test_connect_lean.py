@@ -1,8 +1,17 @@
 """The lean parts of connect's search, each against the route it stands in for: a
 shooting run read off its loop (``shooting.Shot``) against ``solve.run``'s Trajectory;
 the compiled Levenberg-Marquardt step (``levenberg.step``) against the same formula in
-numpy.
+numpy; the search's runs under one shared watch (``interrupt.shared``) still stopped by
+Ctrl-C.
 """
+import os
+import select
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -130,3 +139,62 @@ def test_a_bad_tolerance_is_named_at_once(bad, match):
     with pytest.raises(jn.JetnhError, match=match):
         jn.connect(get("heisenberg"), "vakonomic", O, {"x": 1.0, "y": 0.5, "z": 0.2},
                    (0.0, 1.0), **bad)
+
+
+CHILD = textwrap.dedent("""
+    import signal
+    # Ctrl-C as in a terminal (a background job's child inherits SIGINT ignored)
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    import jetnh as jn
+    from jetnh.models import get
+    from jetnh.numeric import interrupt
+    s = get("heisenberg")
+    O = dict(x=0.0, y=0.0, z=0.0)
+    near = dict(x=1.0, y=0.5, z=0.2)
+    kw = dict(rtol=1e-13, atol=1e-14, tol=1e-14)
+    jn.connect(s, "vakonomic", O, near, (0, 1), **kw)          # compiled first
+    print("ready", flush=True)
+    try:
+        # a wild guess: seconds of multiple shooting (thousands of runs of ~2 ms)
+        jn.connect(s, "vakonomic", O, dict(x=0.0, y=0.0, z=50.0), (0, 1),
+                   guess=[1e3, -1e3, 3e3], max_iter=10**4, **kw)
+        print("finished", flush=True)
+    except KeyboardInterrupt:
+        print("interrupted", len(interrupt._WATCHDOG.calls), interrupt._DEPTH[0],
+              flush=True)
+    c = jn.connect(s, "vakonomic", O, near, (0, 1), **kw)
+    print("again", c.residual < 1e-12, flush=True)
+""")
+
+
+def _line(child, seconds):
+    """The child's next line, or its stderr once it has been killed after ``seconds``
+    without one (the test fails; it never hangs)."""
+    ready, _, _ = select.select([child.stdout], [], [], seconds)
+    if ready:
+        return child.stdout.readline().decode()
+    child.kill()
+    return f"no line within {seconds} s; stderr: {child.stderr.read()[-2000:].decode()}"
+
+
+def test_ctrl_c_stops_a_search_whose_runs_share_a_watch(tmp_path):
+    """SIGINT a second into a long search (its runs under one ``interrupt.shared``
+    watch): a KeyboardInterrupt within seconds, no watch left registered, no SIGINT
+    held back, and the next connect runs as before."""
+    script = tmp_path / "child.py"
+    script.write_text(CHILD)
+    child = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, bufsize=0, env=dict(os.environ))
+    try:
+        line = _line(child, 900.0)               # (compiling under load: minutes)
+        assert line.split() == ["ready"], line
+        time.sleep(1.0)                          # inside the multiple shooting's runs
+        tic = time.perf_counter()
+        child.send_signal(signal.SIGINT)
+        line = _line(child, 30.0)
+        assert line.split() == ["interrupted", "0", "0"], line
+        assert time.perf_counter() - tic < 3.0
+        assert _line(child, 120.0).split() == ["again", "True"]
+        assert child.wait(timeout=30) == 0
+    finally:
+        child.kill()

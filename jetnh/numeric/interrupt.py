@@ -32,6 +32,7 @@ thread, so elsewhere only the timeout is watched.
 from __future__ import annotations
 
 import atexit
+import contextlib
 import itertools
 import os
 import select
@@ -248,3 +249,48 @@ def call(fn, halt: np.ndarray, timeout: float | None = None, args: tuple = ()):
                 frame = _CAUGHT[0]
                 _CAUGHT.clear()
                 _DELEGATE[0](_SIGINT, frame)
+
+
+@contextlib.contextmanager
+def shared(halt: np.ndarray):
+    """One watch of ``halt`` for many compiled calls in turn in this thread (the runs of
+    a shooting search), without a timeout: ``halt`` is registered with the watchdog and
+    the wakeup fd set once; yields ``run(fn, args)``, which resets ``halt`` and calls
+    ``fn(*args)`` with Ctrl-C handled as ``call`` handles it (held back during the call,
+    raised after it), at the cost of that bookkeeping alone.  Between the calls Ctrl-C
+    raises at once, as without a watch."""
+    if not ((_get_ident() == _MAIN and _getsignal(_SIGINT) is _on_sigint)
+            or _listening()):
+        def bare(fn, args):
+            halt[0] = 0
+            return fn(*args)
+        yield bare
+        return
+    wd = _WATCHDOG or _watchdog()
+    own = wd.own
+    old = _set_wakeup_fd(own, warn_on_full_buffer=False)
+    if old == own:
+        old = -1
+    key = None
+    try:
+        key = wd.register(halt, None, old)
+
+        def run(fn, args):
+            halt[0] = 0
+            if _getsignal(_SIGINT) is not _on_sigint:   # replaced since: a watch of its own
+                return call(fn, halt, None, args)
+            _DEPTH[0] += 1
+            try:
+                return fn(*args)
+            finally:
+                _DEPTH[0] -= 1
+                if _CAUGHT and not _DEPTH[0]:
+                    frame = _CAUGHT[0]
+                    _CAUGHT.clear()
+                    _DELEGATE[0](_SIGINT, frame)
+        yield run
+    finally:
+        if key is not None:
+            del wd.calls[key]
+        if old >= 0:                          # someone else's: theirs again
+            _set_wakeup_fd(old)

@@ -81,7 +81,7 @@ import time
 from ...errors import ArgumentError, ConnectError, JetnhError
 from ...mechanics import principles
 from ...mechanics.system import System
-from .. import arguments, methods
+from .. import arguments, interrupt, methods
 from ..scene import Scene
 from .connection import Connection
 from .problem import (MAX_TOL, VARIATIONAL, Momenta, Unknowns, _configuration,
@@ -245,17 +245,23 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     failed = None
     if timeout is not None:
         shooter.deadline = time.monotonic() + timeout
-    try:
-        for start in shooter.starts(u0, guess is None, q0, q1, t1 - t0):
-            try:
-                u, iterations, stitched, route = shooter.solve(start, tol, max_iter,
-                                                               max_continuation, segments)
-            except ConnectError as e:
-                failed = failed or e          # the first start's reasons are reported
-                continue
-            found = shooter.connection(u, iterations, tol, stitched, route)
-            return least_action(shooter, found, tol, max_iter, restarts)
-    except OutOfTime:
-        shooter.deadline = None
-        raise shooter.out_of_time(timeout) from None
+    halt = interrupt.flag()
+    # the runs share one watch for Ctrl-C (``interrupt.shared``: registered once)
+    with interrupt.shared(halt) as run:
+        shooter.watch = (run, halt)
+        try:
+            for start in shooter.starts(u0, guess is None, q0, q1, t1 - t0):
+                try:
+                    u, iterations, stitched, route = shooter.solve(
+                        start, tol, max_iter, max_continuation, segments)
+                except ConnectError as e:
+                    failed = failed or e      # the first start's reasons are reported
+                    continue
+                found = shooter.connection(u, iterations, tol, stitched, route)
+                return least_action(shooter, found, tol, max_iter, restarts)
+        except OutOfTime:
+            shooter.deadline = None
+            raise shooter.out_of_time(timeout) from None
+        finally:
+            shooter.watch = None
     raise failed

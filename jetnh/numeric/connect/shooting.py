@@ -57,20 +57,26 @@ class Shot:
     __slots__ = ("t", "y", "S", "_made", "_trajectory")
 
     @classmethod
-    def of(cls, scene, plan, y, p, stops=None):
+    def of(cls, scene, plan, y, p, stops=None, watch=None):
         """The run of ``plan`` (with sensitivities, a compiled explicit loop) from the
         state ``y`` with the run-time parameters ``p``, or None where it does not reach
         the end of its span or ends in a non-finite state (``stops``, a dict: its status
-        counted there)."""
+        counted there); ``watch``: ``(run, halt)`` of an ``interrupt.shared`` watch the
+        runs share (a plan without a timeout), else the run has a watch of its own."""
         if plan.switch and not plan.ce.python_funcs[-1](plan.t0, y, p) >= 0.0:
             # past the edge of the scene's split at t0: the run starts in another
             return cls._across(scene, plan, y, p, stops)
         n, m, row, head, tail = _parts(plan)
         y0, y = y, row.copy()
         y[:n] = y0
-        halt = np.zeros(1, dtype=np.int64)
-        tic = time.perf_counter()
-        out = interrupt.call(plan.entry, halt, plan.limit, (*head, y, p, *tail, halt))
+        if watch is not None and plan.limit is None:
+            run, halt = watch
+            tic = time.perf_counter()
+            out = run(plan.entry, (*head, y, p, *tail, halt))
+        else:
+            halt = np.zeros(1, dtype=np.int64)
+            tic = time.perf_counter()
+            out = interrupt.call(plan.entry, halt, plan.limit, (*head, y, p, *tail, halt))
         wall = time.perf_counter() - tic
         status, n_out = out[0], int(out[3])
         if status == EVENT and plan.switch:
@@ -152,6 +158,9 @@ class Shooter:
     constraints), or no other split is regular there."""
 
     deadline = None
+    #: ``(run, halt)`` of the ``interrupt.shared`` watch the runs share, or None (a watch
+    #: per run)
+    watch = None
 
     def __init__(self, scene, q0, q1, unknowns, fixed, rtol, atol, method, rcond):
         self.scene, self.unknowns, self.fixed = scene, unknowns, fixed
@@ -207,7 +216,7 @@ class Shooter:
         plan = self.plans.get((span, save))
         if plan is None:
             plan = self.plan(span, save)
-        shot = Shot.of(scene, plan, y, scene._p, self.stops)
+        shot = Shot.of(scene, plan, y, scene._p, self.stops, self.watch)
         last = self.stops.pop("y", None)
         if shot is None and last is not None and arguments.all_finite(last[1]):
             from .verdicts import split_measure
