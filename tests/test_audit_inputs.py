@@ -48,13 +48,20 @@ def test_no_verdict_off_a_steady_motion(straight):
 
 
 def test_steady_tolerance_is_relative_to_the_rates(straight):
-    """A residual well below STEADY times max(1, |A| |x|) counts as steady, one above
-    does not: at large speeds the rates' scale grows with the speed."""
+    """A residual below STEADY times max(1, |A| |x|) (the rates' scale grows with the
+    speed) and below sqrt(STEADY) max(1, |x|) counts as steady; one above either does
+    not: th_t = 1e-3 at x_t = 1e6 changes th_t by its own size in microseconds, far
+    beyond rounding, though within STEADY of |A| |x|."""
     fast = straight.replace(at={"x_t": 1e6})
     assert fast.steady_motion and fast.verdict == "marginal"
     scale = max(1.0, fast._scale * 1e6)
-    nudged = straight.replace(at={"x_t": 1e6, "th_t": 1e-3})   # residual ~ a th_t^2 + th_t
-    assert (nudged.residual > linmod.STEADY * scale) == (not nudged.steady_motion)
+    for th_t in (1e-3, 1e-9, 1e-12):
+        nudged = straight.replace(at={"x_t": 1e6, "th_t": th_t})  # ~ a th_t^2 + th_t x_t
+        steady = (nudged.residual <= linmod.STEADY * scale
+                  and nudged.residual <= np.sqrt(linmod.STEADY) * 1e6)
+        assert steady == nudged.steady_motion
+    assert not straight.replace(at={"x_t": 1e6, "th_t": 1e-3}).steady_motion
+    assert straight.replace(at={"x_t": 1e6, "th_t": 1e-12}).steady_motion
 
 
 def test_scan_marks_points_off_steady_motions(straight):
@@ -96,6 +103,8 @@ def test_bad_linearize_arguments_are_argument_errors(sleigh, straight):
         straight.along("x_t", [])
     with pytest.raises(ArgumentError, match="cannot solve for"):
         straight.steady(["x"])
+    with pytest.raises(ArgumentError, match="unknowns names no state to solve for"):
+        straight.steady([])
     with pytest.raises(ArgumentError, match="tol must be a positive"):
         straight.steady(["th_t"], tol=-1.0)
 

@@ -219,8 +219,9 @@ def test_model_files_and_the_command_line_take_aliases():
         modelfile.loads(text.replace('"holder"', '"hamilton"'))
     args = build_parser().parse_args(["derive", "rolling_disk", "-p", "lagrange-d'alembert"])
     assert args.principle == "chetaev"
-    help_text = build_parser()._subparsers._group_actions[0].choices["simulate"].format_help()
-    assert "nonholonomic" in help_text and "{chetaev,vakonomic,holder,suslov}" in help_text
+    help_text = " ".join(build_parser()._subparsers._group_actions[0].choices["simulate"]
+                         .format_help().split())
+    assert "nonholonomic" in help_text and "chetaev, vakonomic, holder or suslov" in help_text
 
 
 def test_a_scene_takes_an_alias_and_reports_the_canonical_name():

@@ -359,6 +359,11 @@ class Linearization(Frozen):
         tol = arguments.positive(tol, "tol")
         unknowns = [arguments.name_of(u, "unknowns") for u in (
             [unknowns] if isinstance(unknowns, (str, sp.Symbol)) else unknowns)]
+        if not unknowns:
+            raise ArgumentError("names no state to solve for: give the kept states whose "
+                                "values make x' vanish (e.g. the multipliers, or a "
+                                f"velocity), from {', '.join(self.state_names)}",
+                                argument="unknowns")
         model = self._model
         idx = []
         for u in unknowns:
