@@ -26,7 +26,9 @@ times) and ended after ``IDLE`` seconds with nothing to watch (it drops the byte
 signals that came while it was not running), so that runs interleaved with other work
 find it running.  A call costs a registration (a dict entry, without a lock: the lock
 only starts and ends the thread), not a thread hand-over.  Signals reach only the main
-thread, so elsewhere only the timeout is watched.
+thread, so elsewhere only the timeout is watched.  ``shared(halt)`` is one such watch
+for many compiled calls in turn (a shooting search's runs): registered and the wakeup fd
+set once, each call only resetting ``halt``.
 """
 
 from __future__ import annotations
