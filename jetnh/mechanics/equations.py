@@ -170,7 +170,7 @@ class Equations(Frozen):
 
         Returns
         -------
-        Accelerations
+        jetnh.mechanics.accelerations.Accelerations
             a read-only dict, Symbol (``x_tt``, ``lambda_x_t``, ...) -> sympy
             expression, whose repr keeps to the text budget.
         """
