@@ -857,7 +857,7 @@ def _split(model: _Model, point: dict, state: dict, values: dict, keep, t: float
     qd.update((nm, point[nm] if given else phi[a]) for a, nm in enumerate(dep))
     A, f = regular.at_point(sysm, t, state, qd, values)
     m = float(regular.measure(sysm, A))
-    if m >= regular.edge(sysm):
+    if not regular.past_edge(sysm, m):
         return None
     ok, why, finite = regular.determined(sysm, t, state, qd, values, CONSISTENT)
     if not given and not ok:

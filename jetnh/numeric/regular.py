@@ -37,15 +37,26 @@ _EDGES: dict = {}
 
 def edge(system) -> float:
     """The edge of every chart of ``system`` (``atlas``: 1/(4N), N the splits whose minor
-    is not identically zero); at most 1/4, so a measure >= 1/4 is never past it."""
+    is not identically zero); at most 1/4, so a measure >= 1/4 is never past it.  With
+    more than ``atlas.MAX_K`` constraints runs keep their split and N is taken as every
+    choice of k coordinates (telling the identically-zero minors apart would take a
+    rank test for each of them: 47 905 for the 64-trailer)."""
     found = _EDGES.get(system)
     if found is None:
-        from .atlas import splits
+        from .atlas import MAX_K, splits
 
         if len(_EDGES) > 256:
             _EDGES.pop(next(iter(_EDGES)))
-        found = _EDGES[system] = 1.0 / (4 * len(splits(system)))
+        count = (len(splits(system)) if system.k <= MAX_K
+                 else math.comb(system.J.n, system.k))
+        found = _EDGES[system] = 1.0 / (4 * count)
     return found
+
+
+def past_edge(system, m: float) -> bool:
+    """Whether the measure ``m`` of ``system``'s split lies past the edge of its chart
+    (without counting the splits where ``m`` >= 1/4, above every edge)."""
+    return m < 0.25 and m < edge(system)
 
 
 def _point(system, t, coordinates: dict, velocities: dict, params: dict) -> dict:

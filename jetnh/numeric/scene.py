@@ -316,7 +316,7 @@ class Scene(Frozen):
         A, f = regular.at_point(sys_, self.t_span[0] if t0 is None else t0, given, qd,
                                 values)
         m = float(regular.measure(sys_, A))
-        if m >= regular.edge(sys_):
+        if not regular.past_edge(sys_, m):
             return
         tol = self.consistency_tol
         ok, why, finite = regular.determined(
