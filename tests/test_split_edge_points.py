@@ -195,3 +195,22 @@ def test_near_the_edge_refused_or_equal_to_the_other_split(scenes, d, u, w, ever
     scale = max(1.0, max(abs(v) for v in full.values()))
     for name in ("X", "Y", "th", "X_t", "Y_t", "th_t"):
         assert abs(tr[name][-1] - tx[name][-1]) <= 1e-7 * scale, name
+
+
+def test_a_scene_of_many_constraints_counts_no_splits(monkeypatch):
+    """The check at the start point stays cheap where the atlas does not apply (more
+    than atlas.MAX_K constraints: runs keep their split): it never tests the rank of
+    every minor (C(n, k) of them, with mpmath: 26 s for the 12-trailer, unbounded for
+    the 64-trailer), and the edge it uses is 1/(4 C(n, k))."""
+    from jetnh.numeric import atlas, regular
+
+    def refuse(system):
+        raise AssertionError("atlas.splits called for a system the atlas does not take")
+
+    monkeypatch.setattr(atlas, "splits", refuse)
+    system = models.get("n_trailer", N=6)
+    assert system.k > atlas.MAX_K
+    sc = jn.Scene(system, "chetaev", initial=models.initial("n_trailer", N=6),
+                  t_span=(0.0, 0.1))
+    assert sc.run().success
+    assert regular.edge(system) == 1.0 / (4 * math.comb(system.J.n, system.k))
