@@ -128,6 +128,18 @@ def smallest_singular_value(A, W) -> float:
 
 
 @jit
+def _reflect(H, j, b, X, c):
+    """Column ``c`` of ``X`` times the Householder reflection I - b v v^T, v the rows j..
+    of column ``j`` of ``H`` (rows above j untouched), in place."""
+    dot = 0.0
+    for i in range(j, H.shape[0]):
+        dot += H[i, j] * X[i, c]
+    dot *= b
+    for i in range(j, H.shape[0]):
+        X[i, c] -= dot * H[i, j]
+
+
+@jit
 def qr(X, Q, R):
     """The thin QR decomposition of ``X`` (rows >= columns) by Householder reflections,
     with LAPACK's signs (R[j, j] = -sign(x_jj) |x_j|, x_jj itself where nothing is below
@@ -159,12 +171,7 @@ def qr(X, Q, R):
         beta[j] = 2.0 / vv
         R[j, j] = alpha
         for c in range(j + 1, cols):
-            dot = 0.0
-            for i in range(j, rows):
-                dot += H[i, j] * H[i, c]
-            dot *= beta[j]
-            for i in range(j, rows):
-                H[i, c] -= dot * H[i, j]
+            _reflect(H, j, beta[j], H, c)
             R[j, c] = H[j, c]
     # Q = H_0 ... H_{cols-1} applied to the first columns of the identity
     for i in range(rows):
@@ -174,12 +181,7 @@ def qr(X, Q, R):
         if beta[j] == 0.0:
             continue
         for c in range(cols):
-            dot = 0.0
-            for i in range(j, rows):
-                dot += H[i, j] * Q[i, c]
-            dot *= beta[j]
-            for i in range(j, rows):
-                Q[i, c] -= dot * H[i, j]
+            _reflect(H, j, beta[j], Q, c)
 
 
 @jit
