@@ -114,6 +114,10 @@ def has(expr, *what) -> bool:
     return any(isinstance(e, types) or e in objs for e in nodes(expr))
 
 
+#: the key in ``xreplace``'s ``canon`` of the nodes it built, by head and children
+_BUILT = object()
+
+
 def xreplace(expr, rule: dict, canon: dict | None = None, memo: dict | None = None):
     """``expr.xreplace(rule)``, rebuilding each distinct subexpression once; ``expr``
     may be a list, whose shared parts are then rebuilt once for all (a list returned).
@@ -123,12 +127,14 @@ def xreplace(expr, rule: dict, canon: dict | None = None, memo: dict | None = No
     sympy compares equal, non-identical objects by walking their trees -- exponentially
     long for nested solves -- whenever it meets them in a cache or a sum's terms.
     ``canon`` (object -> itself) carries the one objects over several calls (results of
-    one call equal to those of another are then the same object too).  ``memo`` (a dict,
-    filled here) carries the results themselves over several calls by the same rule
-    (or rules that agree on every symbol both reach): a subexpression met again is not
-    walked or rebuilt again."""
+    one call equal to those of another are then the same object too), and the node
+    built from each head and canonical children (distinct nodes that become equal are
+    built once).  ``memo`` (a dict, filled here) carries the results themselves over
+    several calls by the same rule (or rules that agree on every symbol both reach): a
+    subexpression met again is not walked or rebuilt again."""
     canon = {} if canon is None else canon
     memo = {} if memo is None else memo     # id(node) -> (node, result, rule reaches it)
+    built = canon.setdefault(_BUILT, {})    # (head, ids of canonical children) -> node
     roots = _roots(expr)
     stack = [(e, False) for e in reversed(roots)]
     while stack:
@@ -146,7 +152,12 @@ def xreplace(expr, rule: dict, canon: dict | None = None, memo: dict | None = No
             done = [memo[id(a)] for a in e.args]
             args = tuple(d[1] for d in done)
             if any(d[2] for d in done):
-                new, reached = e.func(*args), True
+                reached = True
+                key = (e.func, *map(id, args))      # children: canon's objects
+                new = built.get(key)
+                if new is None:
+                    new = e.func(*args)
+                    new = built[key] = canon.setdefault(new, new)
             elif all(a is b for a, b in zip(args, e.args)):
                 new = e
             elif isinstance(e, (sp.Add, sp.Mul)):   # equal children made one: no rewrite

@@ -17,8 +17,8 @@ from ...errors import PrincipleError
 from ...mechanics.accelerations import cached_parts
 from ..layout import CODEGEN_VERSION, JAC_SIGNATURE, SIGNATURE, Layout
 from .indicators import label, singular_indicators
-from .llvm import (Unsupported, derivative_program, program, sensitivity_jacobian_program,
-                   sensitivity_program)
+from .llvm import (Unsupported, derivative_program, program, program_text,
+                   sensitivity_jacobian_program, sensitivity_program)
 from .prepare import Preparer
 from .quick import decorator
 from .spec import KernelSource, KernelSpec
@@ -32,7 +32,7 @@ import math
 import numba
 import numpy as np
 
-from jetnh.numeric.codegen.llvm import straight_line
+from jetnh.numeric.codegen.llvm import program_of, straight_line
 from jetnh.numeric.codegen.quick import quick_cfunc
 
 # numba caches beside this file unless the loader says not to (jetnh.numeric.kernels.loader)
@@ -202,13 +202,20 @@ def _function(name, layout: Layout, phi_exprs, out_exprs, indices=None,
     else:
         if callback:                   # a huge kernel is compiled quickly (``quick``)
             lines[0] = decorator(len(ops))
-        return (f"_P_{name} = {ops!r}\n_B_{name} = straight_line(_P_{name})\n\n\n"
+        return (_program(name, ops) + "\n\n"
                 + "\n".join(lines) + f"\n    _B_{name}(t, y, p, out)\n")
     body = _loads(layout)
     for assignment in pre:             # in order: each may use the names before it
         body += em.emit([assignment])
     body += em.emit([(f"out[{slot}]", e) for slot, e in zip(slots, out_exprs)])
     return "\n".join(lines + ["    " + b for b in body]) + "\n"
+
+
+def _program(name, ops) -> str:
+    """``_P_<name>``, the straight-line program (as text: ``program_text``), and
+    ``_B_<name>``, its intrinsic."""
+    return (f"_P_{name} = program_of({program_text(ops)!r})\n"
+            f"_B_{name} = straight_line(_P_{name})\n")
 
 
 _CSE_MAX = 600          # distinct nodes up to which sympy.cse runs first (well under 0.3 s)
@@ -264,7 +271,7 @@ def _jacobian_function(layout: Layout, phi_exprs, rhs_exprs) -> str:
         pass
     else:
         lines[0] = decorator(len(ops), "_JAC_SIG")
-        return (f"_P_jac = {ops!r}\n_B_jac = straight_line(_P_jac)\n\n\n"
+        return (_program("jac", ops) + "\n\n"
                 + "\n".join(lines) + "\n    J[:, :] = 0.0\n    _B_jac(t, y, p, J)\n")
     body = _loads(layout)
     em, phi = _emitter(phi_exprs, rhs_exprs, inline=0)
@@ -296,8 +303,7 @@ def _sensitivity_functions(layout: Layout, phi_exprs, rhs_exprs) -> str:
         pass
     else:
         rhs[0], jac[0] = decorator(len(sens)), decorator(len(block), "_JAC_SIG")
-        return (f"_P_sens = {sens!r}\n_B_sens = straight_line(_P_sens)\n"
-                f"_P_jac = {block!r}\n_B_jac = straight_line(_P_jac)\n\n\n"
+        return (_program("sens", sens) + _program("jac", block) + "\n\n"
                 + "\n".join(rhs) + "\n    _B_sens(t, y, p, out)\n\n\n"
                 + "\n".join(jac) + "\n    J[:, :] = 0.0\n    _B_jac(t, y, p, J)\n")
     em, phi = _emitter(phi_exprs, rhs_exprs, inline=0)

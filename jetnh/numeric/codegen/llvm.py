@@ -8,6 +8,8 @@ the format of those modules (``layout.CODEGEN_VERSION``).
 
 from __future__ import annotations
 
+import json
+
 import sympy as sp
 
 from .text import MATH, Emitter
@@ -94,6 +96,19 @@ def program(em: Emitter, phi, outputs) -> tuple:
     for slot, e in outputs:
         add(("out", slot, node(e)))
     return tuple(ops)
+
+
+def program_text(ops: tuple) -> str:
+    """A straight-line program as compact JSON text (``program_of`` reads it back): a
+    generated module holds its programs as string literals, which Python compiles at once,
+    where a literal tuple of a huge kernel's instructions took seconds (every element a
+    constant of the code object).  Floats round-trip exactly (``repr``)."""
+    return json.dumps(ops, separators=(",", ":"))
+
+
+def program_of(text: str) -> tuple:
+    """The program ``program_text`` wrote: a tuple of instruction tuples."""
+    return tuple(tuple(op) for op in json.loads(text))
 
 
 def straight_line(ops: tuple):
