@@ -97,9 +97,11 @@ def generate(spec: KernelSpec) -> KernelSource:
     hol = system.holonomic
     pairs += [(g, f"the holonomic constraint {g}") for g in hol]
     aux_exprs = [prepare.rename[v] for v in dep_vel] + prepare.many(pairs)
-    indicators = singular_indicators(
+    numbered: dict = {}             # the indicators' substitution of the numbers alone:
+    indicators = singular_indicators(   # the prepared results of its parts are known
         system, [acc[J.jet(J.split(v)[0], 2)] for v in ind_vel] + [acc[r] for r in rates],
-        prepare.numbers)
+        prepare.numbers, numbered)
+    prepare.adopt(numbered)
     sing_exprs = prepare.many([(e, f"the singularity indicator {label(e)}")
                                for _, e in indicators])
     t1 = time.perf_counter()

@@ -13,7 +13,8 @@ from ...algebra import dag, singular
 
 
 
-def singular_indicators(system, accelerations, numbers) -> list[tuple[str, sp.Expr]]:
+def singular_indicators(system, accelerations, numbers,
+                        memo: dict | None = None) -> list[tuple[str, sp.Expr]]:
     """``(kind, expression)`` of each singularity indicator, in the user's symbols with the
     compiled parameters (``numbers``: name -> number) substituted:
 
@@ -27,6 +28,7 @@ def singular_indicators(system, accelerations, numbers) -> list[tuple[str, sp.Ex
 
     Numbers are dropped, products split into factors and repeats (up to sign) removed.
     No simplification: a quantity is an indicator as the derivation wrote it.
+    ``memo`` (a dict, filled here): the substitution's, ``dag.xreplace``'s ``memo``.
     """
     sub = {s: numbers[s.name] for s in system.parameters if s.name in numbers}
     found = []
@@ -41,7 +43,7 @@ def singular_indicators(system, accelerations, numbers) -> list[tuple[str, sp.Ex
     found += [("constraint", b) for b in singular.bases(sp.Tuple(*phi))]
     found += [("acceleration", b) for b in singular.bases(sp.Tuple(*accelerations))]
     # one substitution for all: equal parts stay one object (no tree comparisons below)
-    bases = dag.xreplace([b for _, b in found], sub)
+    bases = dag.xreplace([b for _, b in found], sub, memo=memo)
     return _distinct_factors((kind, b) for (kind, _), b in zip(found, bases))
 
 

@@ -52,6 +52,17 @@ class Preparer:
             return [self(e, what) for e, what in pairs]
         return out
 
+    def adopt(self, memo: dict):
+        """Take the results of ``dag.xreplace``'s ``memo`` of a substitution of the
+        compiled parameters alone (``numbers``) as known: what it made of a subexpression
+        this preparer has substituted is substituted to the same result (the renaming
+        applied after the numbers, as this preparer applies both at once)."""
+        mine = self.memo
+        for node, result, reached in list(memo.values()):
+            done = mine.get(id(node))
+            if reached and done is not None and done[2] and id(result) not in mine:
+                mine[id(result)] = (result, done[1], True)
+
     def _rule(self, e):
         """The substitution for the symbols of ``e``, the names without a value, and the
         undefined functions (one walk of the graph)."""
