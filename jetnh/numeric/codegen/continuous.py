@@ -32,7 +32,8 @@ import math
 import numba
 import numpy as np
 
-from jetnh.numeric.codegen.llvm import program_of, straight_line
+from jetnh.numeric.codegen.llvm import straight_line
+from jetnh.numeric.codegen.llvm import program_of
 from jetnh.numeric.codegen.quick import quick_cfunc
 
 # numba caches beside this file unless the loader says not to (jetnh.numeric.kernels.loader)
