@@ -428,3 +428,31 @@ def test_a_kernel_call_checks_every_array(affine_kernel, n_y, n_p, n_out, frozen
         direct(t, y.copy(), p.copy(), ref)
         assert np.array_equal(out, ref)
         assert np.allclose(out[:3], p[0] * y[:3] + p[1] + t, rtol=1e-15, atol=1e-15)
+
+
+@pytest.mark.parametrize("name, principle", [
+    ("n_trailer", "vakonomic"), ("n_trailer", "suslov"), ("rolling_disk", "holder"),
+    ("chaplygin_sleigh", "chetaev"), ("appell_hamel", "vakonomic")])
+def test_indicators_prepared_from_the_rhs_are_prepared_alike(name, principle):
+    """``Preparer.adopt``: the sing kernel's expressions prepared with what the rhs's
+    preparation already made (numbers substituted first, then renamed) are those a fresh
+    preparer makes of them (compared by structure, ``dag.fingerprint``)."""
+    from jetnh.algebra import dag
+    from jetnh.numeric.codegen.continuous import _rhs_parts
+    from jetnh.numeric.codegen.indicators import singular_indicators
+    from jetnh.numeric.codegen.prepare import Preparer
+
+    system = models.get(name)
+    spec = KernelSpec(system, principle, dict(system.defaults))
+    eom, acc, prepare, _, _ = _rhs_parts(spec)
+    J = system.J
+    wanted = ([acc[J.jet(J.split(v)[0], 2)] for v in system.independent_velocities]
+              + [acc[r] for r in eom.multiplier_rates])
+    numbered: dict = {}
+    indicators = singular_indicators(system, wanted, prepare.numbers, numbered)
+    adopted = len(prepare.memo)
+    prepare.adopt(numbered)
+    assert len(prepare.memo) > adopted                 # the substitution's parts are known
+    pairs = [(e, "indicator") for _, e in indicators]
+    fresh = Preparer(system, tuple(eom.multipliers), spec.params, spec.runtime_params)
+    assert dag.fingerprint(prepare.many(pairs)) == dag.fingerprint(fresh.many(pairs))

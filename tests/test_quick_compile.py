@@ -11,7 +11,7 @@ from jetnh import models
 from jetnh.errors import JetnhError
 from jetnh.numeric import Scene
 from jetnh.numeric.codegen import KernelSpec, quick
-from jetnh.numeric.codegen.llvm import straight_line
+from jetnh.numeric.codegen.llvm import program_of, program_text, straight_line
 from jetnh.numeric.methods._common import FunctionAddress
 
 SIG = "void(float64, float64[::1], float64[::1], float64[::1])"
@@ -158,3 +158,19 @@ def test_assembly_text_and_instruction_builder_agree_bit_for_bit(prog, y):
     ref = _call(make(builder, numba.cfunc), y, n_out + 1)
     for compiler in (numba.cfunc, quick.quick_cfunc):
         np.testing.assert_array_equal(_call(make(text, compiler), y, n_out + 1), ref)
+
+
+@settings(max_examples=25, deadline=None)
+@given(programs(), st.lists(st.sampled_from(
+    [-0.0, 0.0, 5e-324, -1.7976931348623157e308, 0.1, 1 / 3, float("inf")]), max_size=4))
+def test_programs_round_trip_through_their_text(prog, constants):
+    """A generated module holds its programs as text (``program_text``); ``program_of``
+    gives back the same instructions, every float bit for bit."""
+    import struct
+
+    ops = prog[0] + tuple(("c", x) for x in constants)
+    back = program_of(program_text(ops))
+    assert back == ops and all(type(a) is type(b) for p, q in zip(back, ops)
+                               for a, b in zip(p, q))
+    bits = [struct.pack("<d", op[1]) for op in back if op[0] == "c"]
+    assert bits == [struct.pack("<d", op[1]) for op in ops if op[0] == "c"]

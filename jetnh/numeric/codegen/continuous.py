@@ -98,8 +98,10 @@ def generate(spec: KernelSpec) -> KernelSource:
     hol = system.holonomic
     pairs += [(g, f"the holonomic constraint {g}") for g in hol]
     aux_exprs = [prepare.rename[v] for v in dep_vel] + prepare.many(pairs)
-    numbered: dict = {}             # the indicators' substitution of the numbers alone:
-    indicators = singular_indicators(   # the prepared results of its parts are known
+    # the indicators substitute the numbers alone (their labels keep the user's symbols):
+    # what that made of a subexpression the rhs has prepared is prepared already
+    numbered: dict = {}
+    indicators = singular_indicators(
         system, [acc[J.jet(J.split(v)[0], 2)] for v in ind_vel] + [acc[r] for r in rates],
         prepare.numbers, numbered)
     prepare.adopt(numbered)
