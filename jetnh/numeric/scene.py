@@ -600,8 +600,13 @@ class Scene(Frozen):
             plan = self._plan(rtol, atol, t_eval, method, save, events, t_span, timeout,
                               projection, backend, step, singular, newton, sensitivities,
                               sensitivity_error, keywords)
-        if y0 is None and params is None:       # the scene's own (the loop's own copy)
-            p = self._memo.get("_p")
+        if y0 is None and params is None:       # the scene's own
+            memo = self._memo
+            p = memo.get("_p")
+            if plan.direct:     # (the loop reads y0 into a copy of its own: never written)
+                y = memo.get("_y0")
+                return solve.run(self, plan, self._y0 if y is None else y,
+                                 self._p if p is None else p, own=True)
             return solve.run(self, plan, self.y0.copy(), self._p if p is None else p,
                              own=True)
         p = self._run_params(params)
@@ -645,6 +650,13 @@ class Scene(Frozen):
     def _p(self) -> np.ndarray:
         """``p``, made once: the run-time parameters the runs read (never written)."""
         return self.p
+
+    @memo
+    def _y0(self) -> np.ndarray:
+        """``y0`` as the writable array compiled loops take, made once: the initial state
+        of the direct runs (``solve.Plan.direct``), whose loops read it into a copy of
+        their own and never write it."""
+        return self.y0.copy()
 
     def _run_params(self, params) -> np.ndarray:
         """The run-time parameters of one run (``run(params=...)``), checked."""
