@@ -24,9 +24,13 @@ The watchdog is one daemon thread, started on demand (without waiting for it to 
 ``threading.Thread.start`` waits for a hand-over that costs a short run's time several
 times) and ended after ``IDLE`` seconds with nothing to watch (it drops the bytes of
 signals that came while it was not running), so that runs interleaved with other work
-find it running.  A call costs a registration (a dict entry, without a lock: the lock
-only starts and ends the thread), not a thread hand-over.  Signals reach only the main
-thread, so elsewhere only the timeout is watched.  ``shared(halt)`` is one such watch
+find it running.  A call costs a registration, not a thread hand-over: in the main
+thread without a timeout (most runs) its ``halt`` on a list the watchdog reads on
+SIGINT, else a dict entry (without a lock: the lock only starts and ends the thread),
+and the one ``set_wakeup_fd`` that confirms the wakeup fd (~1 us; the one floor of a
+short run's Python side here: CPython cannot read the wakeup fd without setting it, and
+someone else, an asyncio loop, may have set theirs since the last call).  Signals reach
+only the main thread, so elsewhere only the timeout is watched.  ``shared(halt)`` is one such watch
 for many compiled calls in turn (a shooting search's runs): registered and the wakeup fd
 set once, each call only resetting ``halt``.
 """
