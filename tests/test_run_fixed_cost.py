@@ -288,3 +288,18 @@ def test_sigint_is_heard_after_the_watchdog_ended(monkeypatch, sigint_handler):
     finally:
         monkeypatch.undo()
         wd.close()
+
+
+def test_a_call_in_another_thread_runs_unwatched_by_signals():
+    """Outside the main thread (where ``set_wakeup_fd`` raises) a call without a timeout
+    is the bare call: nothing on the main thread's watch."""
+    got = []
+
+    def work():
+        halt = interrupt.flag()
+        got.append((interrupt.call(lambda x: x + 1, halt, None, (1,)), list(interrupt._HALTS)))
+
+    thread = threading.Thread(target=work)
+    thread.start()
+    thread.join()
+    assert got == [(2, [])]

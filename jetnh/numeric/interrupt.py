@@ -29,10 +29,10 @@ thread without a timeout (most runs) its ``halt`` on a list the watchdog reads o
 SIGINT, else a dict entry (without a lock: the lock only starts and ends the thread),
 and the one ``set_wakeup_fd`` that confirms the wakeup fd (~1 us; the one floor of a
 short run's Python side here: CPython cannot read the wakeup fd without setting it, and
-someone else, an asyncio loop, may have set theirs since the last call).  Signals reach
-only the main thread, so elsewhere only the timeout is watched.  ``shared(halt)`` is one such watch
-for many compiled calls in turn (a shooting search's runs): registered and the wakeup fd
-set once, each call only resetting ``halt``.
+someone else, an asyncio loop, may have set theirs since the last call).  Signals
+reach only the main thread, so elsewhere only the timeout is watched.  ``shared(halt)``
+is one such watch for many compiled calls in turn (a shooting search's runs):
+registered and the wakeup fd set once, each call only resetting ``halt``.
 """
 
 from __future__ import annotations
@@ -188,7 +188,7 @@ def _forget():
         _WATCHDOG = None
     _DEPTH[0] = 0
     _CAUGHT.clear()
-    _HALTS.clear()
+    # (_HALTS kept: a child forked during a call pops its entry as the call unwinds)
 
 
 os.register_at_fork(after_in_child=_forget)
