@@ -197,7 +197,10 @@ class Trajectory(Frozen):
     give every series by name (``jetnh.numeric.export``; ``plot`` and ``plot_path`` draw
     smooth curves through the dense output); ``at(times)`` evaluates the run between its
     rows, as a DataFrame (``jetnh.numeric.dense``).  Immutable (``jetnh.frozen``); the
-    derived columns are computed on first access.
+    derived columns are computed on first access.  Picklable (results sent through
+    multiprocessing or dask): the data travel, read-only again when unpickled, and the
+    compiled kernels are loaded from the scene's cache on first use there (a run that
+    changed split is then not evaluated between its rows: its charts stayed behind).
     """
 
     #: the stop at a singular configuration: {"indicator", "kind", "index", "t", "value",
