@@ -32,7 +32,9 @@ fresh processes with empty numba and kernel caches, the trees alternating within
    their difference in evaluations).  And the parts of a run's Python side, each alone:
    the ``set_wakeup_fd`` that confirms the wakeup fd, a halt flag, ``interrupt.call`` of
    nothing, the Trajectory of the loop's result, ``solve.run`` (a run without
-   ``Scene.run``'s option handling), and the timing itself (in every figure).
+   ``Scene.run``'s option handling), the timing itself (in every figure), and the floor
+   of a run with its guarantees: a halt flag, the ``set_wakeup_fd`` confirming the wakeup
+   fd, the bare call and a Trajectory of its result, in a row.
    ``--fixed`` measures this alone (seconds), and 5.
 5. A run interleaved with other work (as the work-precision benchmark's panels run it):
    a dop853 run of isokinetic_particle (Chetaev, T = 2, rtol 1e-8, ``save="final"``) and
@@ -153,7 +155,16 @@ try:        # the parts of a run's Python side, each timed alone (the names of t
     own, p, y = interrupt._WATCHDOG.own, short._p, short.y0.copy()
     out = plan.entry(*plan.prefix, plan.t0, plan.t1, y, p, *plan.suffix, interrupt.flag())
     noop = lambda: None
+    from jetnh.numeric.trajectory import Trajectory
+
+    def floor(i):       # what no run can skip: a halt flag, the wakeup fd confirmed (its
+        halt = np.zeros(1, np.int64)        # set_wakeup_fd), the call, a Trajectory
+        _signal.set_wakeup_fd(own, warn_on_full_buffer=False)
+        got = plan.entry(*plan.prefix, plan.t0, plan.t1, y, p, *plan.suffix, halt)
+        return Trajectory._finished(short, (got[1], got[2], got[3]), p, "dop853", "",
+                                    (got[4], 0.0, {}), plan.kern, None)
     calls.update({
+        "part: the floor (halt flag, set_wakeup_fd, call, Trajectory)": floor,
         "part: set_wakeup_fd": lambda i: _signal.set_wakeup_fd(own, warn_on_full_buffer=False),
         "part: halt flag": lambda i: np.zeros(1, np.int64),
         "part: interrupt.call of nothing": lambda i: interrupt.call(noop, interrupt.flag()),
