@@ -221,9 +221,7 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
 
         newton = radau.newton_options(newton_tol, max_newton)
     kern = scene.kernels
-    # (an ensemble with sensitivities keeps its split)
-    switch = (split == "switch" and not (batch and sens is not None)
-              and atlas.applies(scene, events))
+    switch = split == "switch" and atlas.applies(scene, events)
     if switch:
         # the run goes on across its chart's edge: events per chart (numeric.atlas); an
         # ensemble, and a run with sensitivities (whose loop ``connect`` calls directly:
