@@ -121,3 +121,30 @@ def test_sensitivities_from_past_the_edge(knife):
         assert_run(ens, r, tr)
         same_bits(ens.sensitivities[r], tr.sensitivities)
     assert ens.switches[0][0]["t"] == 0.0
+
+
+def test_holonomic_pendulum_with_sensitivities_switches_as_single_runs():
+    """A holonomic constraint (rows moved onto g = 0) and many switches: the pendulum
+    x^2 + y^2 = l^2 whirling over the top changes split at every quarter turn."""
+    import math
+
+    import sympy as sp
+
+    J = jn.JetSpace("x y")
+    (x, y), (xt, yt) = J.q, J.qd
+    G, l = sp.symbols("G l", positive=True)
+    pend = jn.System(J, (xt**2 + yt**2) / 2 - G * y, [x**2 + y**2 - l**2])
+    init = {"x": math.sin(0.3), "y": -math.cos(0.3), "x_t": 7.0}
+    sc = jn.Scene(pend, "chetaev", params={"G": 9.81, "l": 1.0}, initial=init,
+                  t_span=(0, 2.0), runtime_params=["G"])
+    for kw in (dict(t_eval=np.linspace(0, 2, 5)), {}):
+        kw.update(sensitivities=True, rtol=1e-10, atol=1e-12)
+        ens = sc.ensemble(initial={"x_t": np.array([7.0, 7.5])}, **kw)
+        for r, v in enumerate([7.0, 7.5]):
+            tr = sc.replace(initial={**init, "x_t": v}).run(**kw)
+            assert len(tr.switches) >= 6
+            rows = slice(None) if "t_eval" in kw else slice(-1, None)
+            assert list(ens.switches[r]) == list(tr.switches)
+            assert ens.steps[r] == tr._info["steps"]
+            same_bits(ens.y[r], tr.y[rows])
+            same_bits(ens.sensitivities[r], tr.sensitivities[rows])
