@@ -36,6 +36,20 @@ from Python (``scene.run(save="final")`` against ``solve_ivp(t_eval=[T])``), bes
 several interleaved repetitions.  Summaries: the time each method needs to reach an
 error (the cheapest run at or below it), the ratios to jetnh's fastest adaptive method
 at equal error, and achieved error / requested rtol.
+
+The floor: what any implementation that makes jetnh's right-hand-side evaluations must
+pay, measured on each panel in the same run.  floor = n x e + c, where n is the fewest
+evaluations of a jetnh adaptive run that reaches the error, e the cost of one evaluation
+of the panel's compiled rhs in a bare compiled loop (``_common.rhs_driver``; best of
+several batches) and c the fixed cost of a call of the compiled dop853 loop (called
+directly on a one-step span, as ``overhead.py --fixed`` calls it: 5th percentile of
+single calls, less that call's own evaluations at e).  The fastest scipy method's time
+over the floor is the largest ratio such an implementation could reach; the step
+control, the stage sums and the checks of each step come on top.  Between the floor and
+jetnh's time: its compiled loop called directly with the run's arguments (best of several
+calls in a row, so with warm caches, where the runs are timed interleaved with scipy's),
+i.e. the run without its Python side and, where the split can change, without the chart
+bookkeeping (``numeric.atlas``).
 """
 
 from __future__ import annotations
