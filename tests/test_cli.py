@@ -193,8 +193,21 @@ def test_bench_workprecision_quick_and_report(tmp_path):
     assert exact["reference"]["tight_run_error"] < 1e-12
     for png in data["figures"]:
         assert (tmp_path / png).stat().st_size > 10_000
+    for p in data["panels"]:                 # the floor: n x e + c, n jetnh's fewest
+        f = p["floor"]
+        assert f["per_evaluation_s"] > 0 and f["bare_call_nfev"] >= 6 and f["by_target"]
+        for t, b in f["by_target"].items():
+            reached = [r["nfev"] for r in p["runs"] if r["method"] in ("jetnh dop853",
+                       "jetnh dopri5") and r["error"] is not None and r["error"] <= float(t)]
+            assert b["nfev"] == min(reached) and b["loop_nfev"] > 0
+            assert b["floor_s"] == b["nfev"] * f["per_evaluation_s"] + f["fixed_s"]
+            assert b["scipy_over_floor"] == b["scipy_s"] / b["floor_s"]
+    floor = data["summary"]["fastest_scipy_over_floor"]
+    assert floor and all(set(v) >= {"geomean", "below_goal", "scipy_over_loop"}
+                         for v in floor.values())
     clean(run("bench", "report", "--results", str(tmp_path), "--out", str(tmp_path / "B.md")))
-    assert "Work-precision" in (tmp_path / "B.md").read_text()
+    md = (tmp_path / "B.md").read_text()
+    assert "Work-precision" in md and "the most any implementation making jetnh's rhs" in md
 
 
 @pytest.mark.parametrize("args, code, words", [
