@@ -35,6 +35,12 @@ increment q_k+1 - q_k (so that far from the origin the velocity loses no digits)
   The scene chooses it for the whole run where ||M^-1|| exceeds 100 ||S^-1||, S = [[M,
   A^T], [A, 0]] at the initial node, and the loop falls back to it wherever the plain
   transform fails to converge.
+- Holonomic constraints g(t, q) = 0 enter as their derivative D g, imposed at the
+  midpoint like every constraint: g(q_k) stays exact where g is quadratic (the midpoint
+  rule integrates its linear gradient exactly), else it changes by O(h^3) a step.  The
+  nodes are not projected onto g = 0 (an orthogonal projection is not symmetric and
+  would cost the method its reversibility, HLW V.4); a run whose nodes leave g = 0
+  says how far (``numeric.drift``: a ``JetnhWarning``, ``holonomic_residual_max``).
 - Singular configurations: the singularity indicators of the constraints and the
   Lagrangian as written (``codegen.discrete_indicators``; not the split: the step never
   solves for the dependent velocities) are checked at every node; the run stops at the
