@@ -302,8 +302,8 @@ class Chart:
 def _det(M) -> float:
     """The determinant of a k x k matrix (rows of floats): by cofactors for k <= 3
     (``MAX_K``, the splits a run watches), else by LAPACK."""
-    if len(M) == 1:
-        return M[0][0]
+    if len(M) <= 1:
+        return M[0][0] if M else 1.0
     if len(M) == 2:
         return M[0][0] * M[1][1] - M[0][1] * M[1][0]
     if len(M) > 3:
@@ -386,8 +386,9 @@ class Atlas:
         self.charts: dict = {}
         #: each split as a chart that only maps states (``Chart.state``)
         self.maps = {s: Chart(home.system, s, self.explicit) for s in self.splits}
-        #: the columns of each split's minor of df/dqdot
-        self.columns = [m.dep.tolist() for m in self.maps.values()]
+        #: the columns of each split's minor of df/dqdot (in increasing order, as
+        #: ``regular.best`` takes them: the same split measured the same to the bit)
+        self.columns = [sorted(m.dep.tolist()) for m in self.maps.values()]
         self._events: dict = {}
 
     @property
