@@ -12,7 +12,8 @@ rounding level over any number of steps.  Three kinds of run do not, by design:
   chosen for: dla's symmetry (time reversibility, the source of its bounded energy
   error) and dvi's variational, symplectic structure (Hairer, Lubich & Wanner,
   *Geometric Numerical Integration* (2006), IV.4 and V.4: the standard projection is
-  neither symmetric nor symplectic).
+  neither symmetric nor symplectic).  dla's ``projection=True``, which gives up the
+  symmetry for its velocity projection already, moves its nodes onto g = 0 too.
 - scipy's BDF and LSODA are multistep methods: a projected value would contradict the
   history they carry (BDF's differences, LSODA's Nordsieck array), so their |g| grows
   with the global error.
