@@ -12,7 +12,7 @@ from ...errors import JetnhError
 from ...frozen import readonly
 from ..trajectory import Trajectory
 from .problem import VARIATIONAL
-from .verdicts import (_GAUSS_X, GRAMIAN_RCOND, _Samples, action, conjugate_times,
+from .verdicts import (GRAMIAN_RCOND, _Samples, action, conjugate_times,
                        gramian_ratio)
 
 
@@ -48,11 +48,7 @@ class Connection:
 
     @cached_property
     def _samples(self):
-        tr = self.trajectory
-        if isinstance(tr._segments, Stitched):
-            return _StitchedSamples(tr)
-        return _Samples(tr, self._run["rtol"], self._run["atol"], self._run["method"],
-                        tr.y[0])
+        return _Samples(self.trajectory)
 
     @cached_property
     def cost(self) -> float:
@@ -189,19 +185,3 @@ class Stitched:
                 out[idx, n:] = self._chain(S, self.chains[i], n).reshape(idx.size, -1)
         return out
 
-
-class _StitchedSamples(_Samples):
-    """``_Samples`` of a stitched motion: from its segments' dense output."""
-
-    def __init__(self, tr):
-        t = tr.t
-        a, b = t[:-1], t[1:]
-        self.half = 0.5 * (b - a)
-        self.gauss = ((0.5 * (a + b))[:, None] + self.half[:, None] * _GAUSS_X[None, :])
-        self.grid = np.linspace(t[0], t[-1], self.GRID + 1)
-        times = np.concatenate([self.gauss.ravel(), self.grid])
-        n, m = tr.layout.n_state, len(tr.sensitivity_columns)
-        Y = tr._segments.evaluate(tr, times, full=True)
-        k = self.gauss.size
-        self.gauss_y, self.grid_y = Y[:k, :n], Y[k:, :n]
-        self.grid_S = Y[k:, n:].reshape(-1, n, m)

@@ -6,11 +6,9 @@ from __future__ import annotations
 
 import functools
 import math
-from functools import cached_property
 
 import numpy as np
 
-from ...errors import ConnectError
 from ..atlas import split_measure_of
 from ..methods._common import jit
 from . import small
@@ -35,46 +33,26 @@ def _dense_states(tr, times, full=False):
 
 
 class _Samples:
-    """The states (and sensitivities) of a trajectory at the times its verdicts need --
+    """The states and sensitivities of a trajectory at the times its verdicts need --
     the 5 Gauss-Legendre nodes of every step (``gauss``) and ``GRID`` + 1 equal-spaced
-    times (``grid``) -- from one run with these times as ``t_eval`` (dense output: the
-    values ``Trajectory.at`` gives, without re-taking each step from Python).  The
-    sensitivities on the grid (``grid_S``, for the Jacobi determinant of
-    ``conjugate_times``) come with that run where the state has twice as many entries as
-    there are coordinates (as many unknowns as coordinates: vakonomic, Hoelder), else
-    from a run of their own when asked for."""
+    times (``grid``) -- from the trajectory's own dense output (``dense.evaluate``: its
+    steps re-taken, or each segment's of a stitched motion), never from a new run,
+    which on an unstable span can leave the motion found."""
 
     GRID = 400
 
-    def __init__(self, tr, rtol, atol, method, y0):
+    def __init__(self, tr):
         t = tr.t
         a, b = t[:-1], t[1:]
         self.half = 0.5 * (b - a)
         self.gauss = ((0.5 * (a + b))[:, None] + self.half[:, None] * _GAUSS_X[None, :])
         self.grid = np.linspace(t[0], t[-1], self.GRID + 1)
-        self._tr, self._run = tr, dict(rtol=rtol, atol=atol, method=method, y0=y0)
         times = np.concatenate([self.gauss.ravel(), self.grid])
-        order = np.argsort(times, kind="stable")
-        square = tr.layout.n_state == 2 * len(tr.layout.coordinates)
-        run = self._sample(times[order], square)
-        ys = np.empty_like(run.y)
-        ys[order] = run.y
+        n, m = tr.layout.n_state, len(tr.sensitivity_columns)
+        Y = _dense_states(tr, times, full=True)
         k = self.gauss.size
-        self.gauss_y, self.grid_y = ys[:k], ys[k:]
-        if square:
-            S = np.empty_like(run.sensitivities)
-            S[order] = run.sensitivities
-            self.grid_S = S[k:]
-
-    def _sample(self, times, sensitivities):
-        run = self._tr.scene.run(t_eval=times, sensitivities=sensitivities, **self._run)
-        if run.status != 0 or len(run.t) != times.size:
-            raise ConnectError(f"the motion found could not be sampled: {run.stop_reason}")
-        return run
-
-    @cached_property
-    def grid_S(self):
-        return self._sample(self.grid, True).sensitivities
+        self.gauss_y, self.grid_y = Y[:k, :n], Y[k:, :n]
+        self.grid_S = Y[k:, n:].reshape(-1, n, m)
 
 
 def action(tr, samples) -> float:
