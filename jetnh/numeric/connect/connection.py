@@ -48,7 +48,7 @@ class Connection:
 
     @cached_property
     def _samples(self):
-        return _Samples(self.trajectory)
+        return _Samples(self.trajectory, dict(self._run))
 
     @cached_property
     def cost(self) -> float:

@@ -38,13 +38,16 @@ def _dense_states(tr, times, full=False):
 class _Samples:
     """The states and sensitivities of a trajectory at the times its verdicts need --
     the 5 Gauss-Legendre nodes of every step (``gauss``) and ``GRID`` + 1 equal-spaced
-    times (``grid``) -- from the trajectory's own dense output (``dense.evaluate``: its
-    steps re-taken, or each segment's of a stitched motion), never from a new run,
-    which on an unstable span can leave the motion found."""
+    times (``grid``) -- on the trajectory's own motion: its dense output
+    (``dense.evaluate``: its steps re-taken, or each segment's of a stitched motion).
+    With ``run`` (the run's rtol, atol and method) first from one run with these times
+    as ``t_eval`` (the same steps without re-taking each from Python), kept only where
+    it ends on the trajectory's last state and sensitivities bit for bit: a run that
+    took other steps (on an unstable span it can leave the motion) is never used."""
 
     GRID = 400
 
-    def __init__(self, tr):
+    def __init__(self, tr, run=None):
         t = tr.t
         a, b = t[:-1], t[1:]
         self.half = 0.5 * (b - a)
@@ -52,10 +55,33 @@ class _Samples:
         self.grid = np.linspace(t[0], t[-1], self.GRID + 1)
         times = np.concatenate([self.gauss.ravel(), self.grid])
         n, m = tr.layout.n_state, len(tr.sensitivity_columns)
-        Y = _dense_states(tr, times, full=True)
+        Y = None if run is None or tr._segments is not None else _rerun(tr, times, run)
+        if Y is None:
+            Y = _dense_states(tr, times, full=True)
         k = self.gauss.size
         self.gauss_y, self.grid_y = Y[:k, :n], Y[k:, :n]
         self.grid_S = Y[k:, n:].reshape(-1, n, m)
+
+
+def _rerun(tr, times, run):
+    """The states and sensitivities (rows as ``dense.evaluate(full=True)``) of ``tr``
+    at ``times`` from a new run with these times as ``t_eval``, or None where that run
+    does not end on ``tr``'s last state and sensitivities bit for bit."""
+    from ...errors import JetnhError
+
+    order = np.argsort(times, kind="stable")
+    try:
+        got = tr.scene.run(t_eval=times[order], sensitivities=True, y0=tr.y[0], **run)
+    except JetnhError:
+        return None
+    if (got.status != 0 or len(got.t) != times.size or got.t[-1] != tr.t[-1]
+            or not np.array_equal(got.y[-1], tr.y[-1])
+            or not np.array_equal(got.sensitivities[-1], tr.sensitivities[-1])):
+        return None
+    Y = np.empty((times.size, got.y.shape[1] + got.sensitivities[0].size))
+    Y[order, :got.y.shape[1]] = got.y
+    Y[order, got.y.shape[1]:] = got.sensitivities.reshape(times.size, -1)
+    return Y
 
 
 def action(tr, samples) -> float:
@@ -487,7 +513,7 @@ def conjugate_times(tr, cols, samples, rcond=1e-9, rows=None):
         return None
 
     def fields(S):
-        return S[..., order, :][..., cols]
+        return S[..., cols][..., order, :]
 
     def measure(t, scale=None):
         times = np.atleast_1d(t)
