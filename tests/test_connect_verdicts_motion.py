@@ -122,3 +122,18 @@ def test_legendre_condition_of_heisenberg_geodesics(m):
         assert c.minimizer is False                     # a maximizer of the action
         assert "not a minimizer" in repr(c)
         assert abs(c.legendre + 1.0) < 1e-12
+
+
+def test_samples_are_the_motion_returned_whichever_way_they_are_taken():
+    """A run with t_eval is used only where it ends on the trajectory bit for bit (the
+    same steps): a run with another tolerance is refused, and the dense output (the
+    steps re-taken) gives the same bits."""
+    from jetnh.numeric.connect.verdicts import _rerun, _Samples
+
+    c = jn.connect(PARTICLE, "chetaev", O, END, (0.0, 12.0), params={"k": -1.0})
+    tr, run = c.trajectory, dict(c._run)
+    assert _rerun(tr, np.array([0.0, 12.0]), run) is not None
+    assert _rerun(tr, np.array([0.0, 12.0]), {**run, "rtol": 1e-6}) is None
+    fast, dense = _Samples(tr, run), _Samples(tr)
+    for name in ("gauss_y", "grid_y", "grid_S"):
+        assert np.array_equal(getattr(fast, name), getattr(dense, name))
