@@ -137,3 +137,21 @@ def test_samples_are_the_motion_returned_whichever_way_they_are_taken():
     fast, dense = _Samples(tr, run), _Samples(tr)
     for name in ("gauss_y", "grid_y", "grid_S"):
         assert np.array_equal(getattr(fast, name), getattr(dense, name))
+
+
+def test_suslov_singular_times_against_central_differences_of_plain_runs():
+    """Suslov's motions (other equations than Chetaev's): the singular times of the
+    endpoint map against central differences of plain runs (no sensitivities)."""
+    c = jn.connect(PARTICLE, "suslov", O, END, (0.0, 4.0), params={"k": 1.0})
+    sc, y0 = c.trajectory.scene, c.trajectory.y[0]
+    ts, h = np.linspace(0.5, 4.0, 351), 1e-6
+    cols = []
+    for name in ("x_t", "y_t"):
+        e = np.zeros_like(y0)
+        e[sc.state_names.index(name)] = h
+        r = [sc.run(y0=y0 + s * e, t_eval=ts, rtol=1e-12, atol=1e-13) for s in (1, -1)]
+        cols.append([(np.asarray(r[0][q]) - np.asarray(r[1][q])) / (2 * h) for q in "xy"])
+    det = cols[0][0] * cols[1][1] - cols[0][1] * cols[1][0]
+    i = np.nonzero(np.sign(det[1:]) != np.sign(det[:-1]))[0]
+    assert len(c.conjugate_times) == len(i) == 1
+    assert ts[i[0]] <= c.conjugate_times[0] <= ts[i[0] + 1]
