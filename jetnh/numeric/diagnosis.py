@@ -77,25 +77,32 @@ def singularity(scene, kern, idx, t, y, p, t0, y_init, tol, nonfinite=False,
     and a reason with the way out (``method``: the run's; an adaptive method that stops
     before the indicator reaches its threshold could not step closer)."""
     lay = kern.layout
-    expr, kind = lay.indicators[idx], lay.indicator_kinds[idx]
     g0 = np.empty(len(lay.indicators))
     g = np.empty(len(lay.indicators))
     kern.sing(t0, y_init, p, g0)
     kern.sing(float(t), np.ascontiguousarray(y), p, g)
+    with np.errstate(all="ignore"):
+        rel = g / g0
+    short = (np.isfinite(rel[idx]) and rel[idx] > 4 * tol and rel[idx] > 1e-12
+             and not nonfinite)             # the indicator has not reached its threshold
+    crawled = short and _adaptive(method)
+    if crawled:         # name the singular set the motion approaches: the smallest one
+        near = np.flatnonzero(np.isfinite(rel) & (rel > 0) & (rel < WATCH))
+        if near.size:
+            idx = int(near[np.argmin(rel[near])])
+    expr, kind = lay.indicators[idx], lay.indicator_kinds[idx]
     value, initial = float(g[idx]), float(g0[idx])
     if not np.isfinite(initial) or initial == 0.0:
         where = (f"the initial state (t = {t:.17g}) is singular: {expr} = {initial:.6g}")
-    elif (np.sign(value) == np.sign(initial) and abs(value) > 4 * tol * abs(initial)
-          and abs(value) > 1e-12 * abs(initial) and not nonfinite and _adaptive(method)):
-        where = (f"at t = {t:.17g}, {expr} = {value:.6g} is {value / initial:.3g} of its "
-                 f"initial value {initial:.6g}, above the threshold singular_tol = {tol:g}, "
-                 f"but {method} cannot step closer to its zero: its steps shrank faster "
-                 "than the distance to it (or the step's dense output was no longer "
-                 "finite), as where the equations in this form are a 0/0 that floating "
-                 "point cannot resolve; the run stops at the last regular point, and a "
-                 "looser rtol stops it sooner at the same place")
-    elif (np.sign(value) == np.sign(initial) and abs(value) > 4 * tol * abs(initial)
-          and abs(value) > 1e-12 * abs(initial) and not nonfinite):
+    elif crawled:
+        where = (f"at t = {t:.17g} the motion approaches the singular set {expr} = 0 "
+                 f"({expr} = {value:.6g} is {value / initial:.3g} of its initial value, "
+                 f"above the threshold singular_tol = {tol:g}), but {method} cannot step "
+                 "closer: its steps shrank faster than the distance to that set (or its "
+                 "dense output left the finite numbers), as where the equations in this "
+                 "form are a 0/0 that floating point cannot resolve; the run stops at the "
+                 "last regular point (a looser rtol stops it in fewer steps)")
+    elif short:
         where = (f"the fixed step after t = {t:.17g} jumps over a kink of the right-hand "
                  f"side next to a zero of {expr} = {value:.6g} (initially {initial:.6g}); "
                  "the run stops at the last regular point (an adaptive method such as "
