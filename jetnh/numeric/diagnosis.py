@@ -164,9 +164,9 @@ def stiff_reason(scene, kern, method, t, y, p, t0, y_init, tol) -> str:
     if an indicator is below ``WATCH`` of its initial size there."""
     reason = (f"the problem became stiff for {method} at t = {float(t):.17g}: its estimate "
               "of h |lambda| (Hairer's test) stayed beyond its stability bound, so its "
-              "steps are limited by stability, not by the tolerance, and it would grind "
-              "through max_steps. Run it with method='radau' (implicit, made for stiff "
-              "problems)")
+              "steps are limited by stability, not by the tolerance (an explicit method "
+              "needs ~|lambda| steps per unit of time here, whatever rtol). Run it with "
+              "method='radau' (implicit: its steps follow the solution's own time scale)")
     m = len(kern.layout.indicators)
     if not m:
         return reason + "."
