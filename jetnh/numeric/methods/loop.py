@@ -36,12 +36,15 @@ Every ``STIFF_EVERY``-th accepted step, and after every step once a test was pos
 it is compared with the method's bound (a point near the boundary of its stability
 region on the negative real axis: 3.25 for dopri5, 6.1 for dop853); ``STIFF_RUN``
 positive tests in a row (``STIFF_RESET`` negative ones clear the count) stop the run
-with status ``STIFF`` after the step: its steps are held by stability, not by the
-tolerance, as on a stiff problem or on a motion that runs into a singular set of the
-equations, and an explicit method would only grind through ``max_steps``.  The test
-reads values the step computed anyway and changes no step (the accepted steps are
-those of a run without it, bit for bit); it costs a counter a step and 2n products
-every ``STIFF_EVERY`` steps.
+with status ``STIFF`` after the step (as Hairer's codes do): its steps are held by
+stability, not by the tolerance, as on a stiff problem or on a motion that runs into a
+singular set of the equations, and an explicit method would grind on at ~|lambda| steps
+per unit of time, where radau follows the solution's own time scale.  The test reads
+values the step computed anyway and changes no step (the accepted steps are those of a
+run without it, bit for bit); it costs a counter a step and 2n products every
+``STIFF_EVERY`` steps.  A watched singularity indicator that crawls toward zero
+(``_events.sing_crawl``) for ``STIFF_RUN`` steps in a row stops the run as SINGULAR at
+the end of the step.
 """
 
 from __future__ import annotations
