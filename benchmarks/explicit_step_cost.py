@@ -10,7 +10,8 @@ of the method called through its entry (``loops.entry``: what ``scene.run(save="
 calls, without the run's fixed cost) on catalogue models (Chetaev) over t = 0..200 at
 rtol 1e-10 with ``max_step`` 0.005 (>= 40 000 steps a run), once watching nothing and once
 watching the scene's singularity indicators.  The figure per case is the best of
-``reps`` calls over the number of evaluations; with ``--vs`` the two trees' workers run
+``reps`` calls (CPU time of the process: on a loaded machine the wall time counts the
+waits for a core) over the number of evaluations; with ``--vs`` the two trees' workers run
 in turn, A B A B ..., and the ratio (this tree / the other) is the median over the
 rounds; the final states of the two trees must be equal bit for bit (the steps are the
 same).  Machine, date, load average, commit and command in the JSON
@@ -54,9 +55,9 @@ def worker(spec):
         res = loops.result(loop(*args))             # compile / warm
         best = np.inf
         for _ in range(spec["reps"]):
-            tic = time.perf_counter()
+            tic = time.process_time()
             loop(*args)
-            best = min(best, time.perf_counter() - tic)
+            best = min(best, time.process_time() - tic)
         nfev = int(res.stats[2])
         out[f"{name} {method} {'watched' if watched else 'plain'}"] = dict(
             ns_per_eval=best / nfev * 1e9, steps=int(res.stats[0]), status=int(res.status),
