@@ -2,8 +2,10 @@
 
 ``singularity`` turns the index of the indicator that stopped a run into its kind, values
 and a reason that names the way out (another split, ``singular='ignore'``, an adaptive
-method); ``stiff_reason`` explains a run that an explicit method found stiff (status
-``STIFF``); ``explain_nonfinite`` finds the indicator behind a NaN or infinity, and
+method); ``stiff_reason`` and ``small_step_reason`` explain a run that an explicit
+method found stiff (status ``STIFF``) and one whose step fell to the spacing of the
+floating-point numbers, naming the singular set the motion is near (``near_singular``);
+``explain_nonfinite`` finds the indicator behind a NaN or infinity, and
 ``raise_nonfinite`` raises the ``IntegrationError`` when none explains it.  Functions of
 the scene (``Scene.run``, ensembles and the discrete drivers call them).
 """
@@ -158,18 +160,41 @@ def _kind_and_hint(scene, expr, kind, t, y, p, t0, y_init):
     return kind, hint
 
 
-def stiff_reason(scene, kern, method, t, y, p, t0, y_init, tol) -> str:
+def stiff_reason(scene, kern, method, t, y, p, t0, y_init) -> str:
     """The stop reason of a run that an explicit method found stiff (status ``STIFF``,
     ``methods.loop``): where, why, the way out, and the singular set the motion is near
-    if an indicator is below ``WATCH`` of its initial size there."""
+    (``near_singular``)."""
     reason = (f"the problem became stiff for {method} at t = {float(t):.17g}: its estimate "
               "of h |lambda| (Hairer's test) stayed beyond its stability bound, so its "
               "steps are limited by stability, not by the tolerance (an explicit method "
               "needs ~|lambda| steps per unit of time here, whatever rtol). Run it with "
               "method='radau' (implicit: its steps follow the solution's own time scale)")
+    near = near_singular(scene, kern, t, y, p, t0, y_init)
+    if near is None:
+        return reason + "."
+    return reason + f"; {near[0]}, which may be what makes it stiff. {near[1]}."
+
+
+def small_step_reason(scene, kern, method, t, y, p, t0, y_init) -> str:
+    """The stop reason of a run whose step fell below the spacing of the floating-point
+    numbers (status ``TOO_SMALL_STEP``), with the singular set the motion is near."""
+    reason = (f"{method}: the step size fell below the spacing of floating-point numbers "
+              f"at t = {float(t):.17g}")
+    near = near_singular(scene, kern, t, y, p, t0, y_init)
+    if near is None:
+        return (reason + ": the solution may blow up there, or the problem is too stiff "
+                "for this tolerance; try a looser rtol, or method='radau'")
+    return (reason + f"; {near[0]}, which {method} cannot approach at this tolerance (a "
+            f"looser rtol stops it sooner). {near[1]}.")
+
+
+def near_singular(scene, kern, t, y, p, t0, y_init):
+    """``(where, hint)``: the singularity indicator smallest relative to its initial
+    size at (t, y) if it is below ``WATCH`` of it (the singular set the motion is near,
+    and what it means: ``_kind_and_hint``), else None."""
     m = len(kern.layout.indicators)
     if not m:
-        return reason + "."
+        return None
     g0 = np.empty(m)
     g = np.empty(m)
     kern.sing(float(t0), np.ascontiguousarray(y_init), p, g0)
@@ -178,14 +203,13 @@ def stiff_reason(scene, kern, method, t, y, p, t0, y_init, tol) -> str:
         rel = g / g0
     near = np.flatnonzero(np.isfinite(rel) & (rel < WATCH))
     if not near.size:
-        return reason + "."
+        return None
     i = int(near[np.argmin(rel[near])])
     expr = kern.layout.indicators[i]
     _, hint = _kind_and_hint(scene, expr, kern.layout.indicator_kinds[i], t, y, p, t0,
                              y_init)
-    return (reason + f"; the motion is near the zero set of {expr} (here {rel[i]:.3g} of "
-            "its initial value), where the equations are singular, which may be what "
-            f"makes it stiff. {hint}.")
+    return (f"the motion is near the singular set {expr} = 0 (here {expr} is {rel[i]:.3g} "
+            "of its initial value), where the equations are singular"), hint
 
 
 def _switching(scene) -> str:
