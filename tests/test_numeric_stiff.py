@@ -3,14 +3,15 @@
 * Hairer's stiffness test (``methods.loop``): a heavily damped oscillator x'' = -c x' - x
   (eigenvalues ~ -c and -1/c) is stiff for c = 1e6; dop853 and dopri5 would take ~10^6
   steps over t = 0..10 and now stop with status STIFF after a bounded number of them,
-  with the rows of a run cut at that step count bit for bit; radau finishes it.
+  with the rows of a run cut a step before bit for bit; radau finishes it.
 * The estimate of h |lambda| is |h lambda| exactly on y' = lambda y (hypothesis).
 * Crawling toward a singular set (``methods._events.sing_crawl``): Suslov's equations in
   the paper's convention for a sleigh in centre-of-mass coordinates with dependent=[Y]
   run into cos(th) = 0, where the split is singular and the run cannot change split; at
   rtol 1e-12 dop853 took 647 315 steps and stopped with a NaN state, blaming "the
   constraints themselves"; now it stops within a few thousand steps at a finite state,
-  naming the singular set and the regular split, also with sensitivities.
+  naming the singular set and the regular split, also with sensitivities; radau, whose
+  step collapses there, says so.
 """
 
 import math
@@ -124,3 +125,11 @@ def test_a_regular_approach_is_not_a_crawl():
         tr = scene.run(method=method, rtol=1e-12, atol=1e-14, split="fixed")
         assert tr.status == Status.SINGULAR
         assert abs(math.cos(tr["phi"][-1])) <= 1.01e-10 and "fell to" in tr.stop_reason
+
+
+def test_radau_near_the_singular_split_says_where_its_step_collapsed(suslov_sleigh):
+    tr = suslov_sleigh.run(method="radau", rtol=1e-12, atol=1e-13)
+    assert tr.status == Status.TOO_SMALL_STEP and 1.3 < tr.t[-1] < 1.321
+    r = tr.stop_reason
+    assert "fell below the spacing" in r and "near the singular set cos(th) = 0" in r
+    assert "dependent=['X'] is regular" in r and "cannot change split" in r
