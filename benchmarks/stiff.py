@@ -11,9 +11,9 @@ m a V / (I + m a^2) (V the speed the sleigh ends with), so a -> 0 makes it stiff
 side (scipy's through ``method="scipy-<M>"``) to T = 5 at rtol = 1e-4 .. 1e-10 (atol =
 1e-3 rtol; dop853 stops with status STIFF where Hairer's stiffness test fires, and such
 runs count in no speed-up); the error is the largest deviation of theta, theta_t and the
-forward speed at T from the closed form (the catalogue's docstring). "Speed-up at equal error": scipy's
-time interpolated (log-log, over its tolerances) at radau's error, divided by radau's
-time.
+forward speed at T from the closed form (the catalogue's docstring). "Speed-up at equal
+error": scipy's time interpolated (log-log, over its tolerances) at radau's error, divided
+by radau's time.
 
 (The first run, the fixed cost and the cost per evaluation of a run, before and after
 the one compiled loop of the explicit methods: ``benchmarks/overhead.py``.)

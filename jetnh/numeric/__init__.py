@@ -34,5 +34,5 @@ from .trajectory import Diagnostics, Trajectory
 
 __all__ = ["Scene", "Trajectory", "Diagnostics", "Event", "Ensemble", "run_ensemble",
            "Status", "STATUS_TEXT", "FINISHED", "MAX_STEPS", "TOO_SMALL_STEP", "NONFINITE",
-           "NOT_CONVERGED", "EVENT", "SINGULAR", "STOPPED", "STIFF", "StepControl", "Singular",
-           "Newton"]
+           "NOT_CONVERGED", "EVENT", "SINGULAR", "STOPPED", "STIFF", "StepControl",
+           "Singular", "Newton"]

@@ -10,11 +10,12 @@
   scipy's ``DOP853``, so both take the same steps.
 - Dense output of order 7 (``contd8``), three extra evaluations in a step that needs it
   (output at ``t_eval``, or locating an event or a singularity: ``_events``).
-- Stiffness: Hairer's test (``loop``): h |lambda| estimated from the last stage and f(t + h, y_new)
-  every 1000th step (every step after a positive test); beyond 6.1 in 15 tests in a row,
-  the run stops with status ``STIFF``: its steps are limited by stability, not accuracy
-  (a stiff problem, or a motion running into a singular set of its equations); radau
-  solves stiff problems.  The test changes no accepted step.
+- Stiffness: Hairer's test (``loop``): h |lambda| estimated from the last stage and
+  f(t + h, y_new) every 1000th step (every step after a positive test); beyond 6.1
+  in 15 tests in a row, the run stops with status ``STIFF``: its steps are limited
+  by stability, not accuracy (a stiff problem, or a motion running into a singular
+  set of its equations); radau solves stiff problems.  The test changes no
+  accepted step.
 
 References: E. Hairer, S. P. Norsett, G. Wanner, *Solving Ordinary Differential
 Equations I*, 2nd ed., Springer 1993, sections II.5 (the method), II.6 (dense output),
