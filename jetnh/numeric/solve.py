@@ -25,7 +25,8 @@ from ..errors import ArgumentError, JetnhError
 from . import arguments, atlas, diagnosis, discrete, interrupt, loops, methods, scipy_backend
 from .methods import STATUS_TEXT, Solver
 from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, FINISHED, NONFINITE,
-                              SINGULAR, STOPPED, entry_point)
+                              SINGULAR, STIFF, STOPPED, TOO_SMALL_STEP,
+                              entry_point)
 from .events import split_records
 from .kernels import sensitivity_kernels
 from .methods.loop import Control, Result, Watch
@@ -85,6 +86,7 @@ class Plan:
     suffix: tuple = ()
     callbacks: tuple = ()           # what the addresses in prefix point into, kept alive
     direct: bool = False            # a run is one call of ``entry`` (``run``)
+    head: tuple = ()                # ``(*prefix, t0, t1)`` of a direct plan
 
 
 def _unused(method, **given):
@@ -220,9 +222,7 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
 
         newton = radau.newton_options(newton_tol, max_newton)
     kern = scene.kernels
-    # (an ensemble with sensitivities keeps its split)
-    switch = (split == "switch" and not (batch and sens is not None)
-              and atlas.applies(scene, events))
+    switch = split == "switch" and atlas.applies(scene, events)
     if switch:
         # the run goes on across its chart's edge: events per chart (numeric.atlas); an
         # ensemble, and a run with sensitivities (whose loop ``connect`` calls directly:
@@ -242,7 +242,7 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
                 te=te, mode=mode, newton=newton, switch=switch, dense=dense,
                 dense_ends=ends, entry=entry,
                 prefix=prefix, suffix=suffix, callbacks=callbacks,
-                direct=sens is None and not switch and not batch)
+                direct=sens is None and not switch and not batch, head=(*prefix, t0, t1))
 
 
 def planned(scene, key, make) -> Plan:
@@ -308,16 +308,21 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
     """The trajectory of ``plan`` from the state ``y`` (checked, its own array) with the
     run-time parameters ``p``; ``own``: these are the scene's own initial values."""
     if plan.direct:             # one call of the compiled loop, first: most runs are
-        halt = np.zeros(1, dtype=np.int64)
+        halt = np.zeros(1, np.int64)
         tic = _clock()
-        out = interrupt.call(plan.entry, halt, plan.limit,
-                             (*plan.prefix, plan.t0, plan.t1, y, p, *plan.suffix, halt))
+        out = interrupt.call(plan.entry, halt, plan.limit, (*plan.head, y, p, *plan.suffix,
+                                                            halt))
         wall = _clock() - tic
         if plan.ctl.n_hol:          # rows of the dense output onto g = 0
             loops.on_constraints(plan.kern, plan.ctl, plan.mode, None, out, p, plan.t0)
         dense = plan.dense_ends
+        status = out[0]
         if dense is not None:    # stopped inside a step or not
-            dense = dense[out[0] in (EVENT, SINGULAR)]
+            dense = dense[status == EVENT or status == SINGULAR]
+        if status == FINISHED and len(out) == 6:        # most runs: at once
+            return Trajectory._finished(scene, (out[1], out[2], out[3]), p, plan.method.name,
+                                        _FINISHED_TEXT, (out[4], wall, scene.projected),
+                                        plan.kern, dense)
         return trajectory(scene, plan.method.name, out, wall, plan.kern, plan.ce, p,
                           plan.t0, y, plan.singular_tol, plan.checked, plan.limit, dense)
     m = plan.method
@@ -416,8 +421,13 @@ def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, 
         reason = singularity["reason"]
     elif status == SINGULAR:
         singularity = diagnosis.singularity(scene, kern, int(sing_index), t_last, y_last, p,
-                                            t0, y_init, singular_tol)
+                                            t0, y_init, singular_tol, method=method)
         reason = singularity["reason"]
+    elif status == STIFF:
+        reason = diagnosis.stiff_reason(scene, kern, method, t_last, y_last, p, t0, y_init)
+    elif status == TOO_SMALL_STEP:
+        reason = diagnosis.small_step_reason(scene, kern, method, t_last, y_last, p, t0,
+                                             y_init)
     elif status == EVENT:
         k = int(ev_i[n_ev - 1])
         reason = f"terminal event {ce.names[k]!r} at t = {float(ev_t[n_ev - 1]):.17g}"
