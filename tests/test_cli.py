@@ -793,3 +793,9 @@ def test_a_run_stopped_by_its_budget_says_what_its_last_row_is(capsys, monkeypat
         data["initial"]["phi"] + data["initial"]["phi_t"] * data["final_t"], rel=1e-9)
     code, out, err = inproc(capsys, *args, "--points", "0")
     assert "final:      x = " in out and "stopped:    at t = " in out
+
+
+def test_a_model_option_given_twice_is_refused(capsys):
+    code, out, err = inproc(capsys, "derive", "n_trailer:N=2,N=3", "-q")
+    assert code == 2 and out == ""
+    assert "model option N is given twice in 'n_trailer:N=2,N=3'" in err
