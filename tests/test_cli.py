@@ -675,3 +675,127 @@ def test_method_default_is_the_models(capsys):
     for command in ("simulate", "sweep"):
         code, out, _ = inproc(capsys, command, "--help")
         assert "(default: the model's, else dop853)" in " ".join(out.split()), command
+
+
+# ------------------------------------------------- arguments dropped or checked late
+@pytest.mark.parametrize("option", ["--from", "--to", "--guess", "--set"])
+def test_connect_refuses_a_name_given_twice(capsys, option):
+    """A NAME=VALUE list (the one parser of --from, --to, --guess, --set, --init, --at)
+    refuses a name given twice, in one item or in two, rather than keeping the last."""
+    base = {"--from": "x=0,y=0", "--to": "x=1,y=0.5,z=0.2"}
+    twice = {"--from": "x=0,x=0.5", "--to": "x=1,x=2", "--guess": "x_t=1,x_t=2",
+             "--set": "m=1,m=2"}
+    args = ["connect", "heisenberg", "-q", "--t-end", "1"]
+    for opt in ("--from", "--to"):
+        if opt != option:
+            args += [opt, base[opt]]
+    code, out, err = inproc(capsys, *args, option, twice[option])
+    assert code == 2 and out == ""
+    name = twice[option].split("=")[0]
+    assert f"{option} gives {name} twice; give each name once" in err
+
+
+def test_a_name_given_twice_in_two_items_is_refused():
+    from jetnh.cli.running import assignments
+    from jetnh.cli.usage import UsageError
+
+    assert assignments(["a=1,b=2", "c=3"], "--set") == {"a": 1.0, "b": 2.0, "c": 3.0}
+    with pytest.raises(UsageError, match="--init gives a twice"):
+        assignments(["a=1", "b=2,a=1"], "--init")
+
+
+def test_connect_notes_the_start_coordinates_from_the_model(capsys):
+    """--from x=0,y=0 on heisenberg: z comes from the model's initial values, and the
+    output says so (text and json), apart from those set to 0."""
+    args = ["connect", "heisenberg", "-q", "--from", "x=0,y=0", "--to", "x=1,y=0.5,z=0.2",
+            "--t-end", "1"]
+    code, out, err = inproc(capsys, *args)
+    assert code == 0, err
+    assert "(not given, the model's initial values: z)" in out
+    assert "set to 0" not in out
+    code, out, err = inproc(capsys, *args, "--format", "json")
+    data = json.loads(out)
+    assert data["model_start"] == ["z"] and data["zero_start"] == []
+    from jetnh import models
+    assert data["start"]["z"] == models.model("heisenberg").initial["z"]
+
+
+def test_simulate_refuses_an_unwritable_directory_before_the_run(capsys, monkeypatch,
+                                                                 tmp_path):
+    """A directory os.access calls writable (root, /proc) where no file can be made: the
+    check makes one, before the run; an error never names the temporary file."""
+    import tempfile
+
+    from jetnh import errors
+    from jetnh.cli import outputs
+
+    real = tempfile.mkstemp
+
+    def refuse(*a, dir=None, **kw):
+        if dir is not None and pathlib.Path(dir) == tmp_path:
+            raise PermissionError(13, "Permission denied", str(tmp_path / ".x.tmp"))
+        return real(*a, dir=dir, **kw)
+
+    monkeypatch.setattr(tempfile, "mkstemp", refuse)
+    target = tmp_path / "x.csv"
+    code, out, err = inproc(capsys, "simulate", "rolling_disk", "--t-end", "1",
+                            "--csv", str(target))
+    assert code == 1 and out == "" and "integrating" not in err
+    assert f"cannot write --csv {target}: the directory {tmp_path} is not writable" in err
+    with pytest.raises(errors.JetnhError) as exc:
+        outputs.write(target, lambda tmp: None)
+    assert str(target) in str(exc.value) and ".x.tmp" not in str(exc.value)
+    assert "partial" not in str(exc.value)
+
+
+def test_simulate_checks_the_path_names_before_the_run(capsys, tmp_path):
+    """--path q,r: both unknown names, before anything is compiled or run; --path
+    without --plot is refused (it would be dropped)."""
+    code, out, err = inproc(capsys, "simulate", "rolling_disk", "--t-end", "1", "--path",
+                            "q,r", "--plot", str(tmp_path / "p.png"))
+    assert code == 2 and out == ""
+    assert "--path: 'q', 'r' are not series of this run; choose from t, x, y," in err
+    assert "compiling" not in err and "integrating" not in err
+    assert not (tmp_path / "p.png").exists()
+    code, out, err = inproc(capsys, "simulate", "rolling_disk", "--t-end", "1", "--path",
+                            "x,r", "--plot", str(tmp_path / "p.png"))
+    assert code == 2 and "--path: 'r' is not a series" in err and "'x'" not in err
+    code, out, err = inproc(capsys, "simulate", "rolling_disk", "--t-end", "1", "--path",
+                            "x,y")
+    assert code == 2 and "give --plot PATH too" in err
+
+
+def test_a_run_stopped_by_its_budget_says_what_its_last_row_is(capsys, monkeypatch):
+    """A step budget stops the run long before t_end: with output points the last row is
+    the last output time passed (here the start), and the output says so rather than
+    calling it the final state; with --points 0 (every step) the final row is the state
+    where the run stopped, which differs from the initial one."""
+    from jetnh.numeric import Scene
+
+    run = Scene.run
+    monkeypatch.setattr(Scene, "run", lambda self, *a, **kw: run(self, *a, max_steps=300,
+                                                                 **kw))
+    args = ["simulate", "rolling_disk", "-q", "--t-end", "1e300"]
+    code, out, err = inproc(capsys, *args)
+    assert code == 1 and "final:" not in out
+    assert "last row:   t = 0: x = 0.1, y = -0.2" in out
+    assert "stopped:    after the last row, before the next output time: stopped " \
+           "after max_steps steps" in out
+    code, out, err = inproc(capsys, *args, "--format", "json")
+    data = json.loads(out)
+    assert data["final_t"] == 0.0 and data["final_is_last_state"] is False
+    code, out, err = inproc(capsys, *args, "--points", "0", "--format", "json")
+    data = json.loads(out)
+    assert data["final_is_last_state"] is True and data["diagnostics"]["steps"] == 300
+    assert data["final_t"] > 1 and data["final"]["phi"] != data["initial"]["phi"]
+    # rolling_disk: phi_t is constant, so phi(t) = phi0 + phi_t t at the stop
+    assert data["final"]["phi"] == pytest.approx(
+        data["initial"]["phi"] + data["initial"]["phi_t"] * data["final_t"], rel=1e-9)
+    code, out, err = inproc(capsys, *args, "--points", "0")
+    assert "final:      x = " in out and "stopped:    at t = " in out
+
+
+def test_a_model_option_given_twice_is_refused(capsys):
+    code, out, err = inproc(capsys, "derive", "n_trailer:N=2,N=3", "-q")
+    assert code == 2 and out == ""
+    assert "model option N is given twice in 'n_trailer:N=2,N=3'" in err

@@ -86,3 +86,14 @@ def test_holonomic_constraint(capsys, tmp_path):
                        [-np.sqrt(9.81), np.sqrt(9.81)], atol=1e-12)
     code, _, err = inproc(capsys, "linearize", str(path), "-q", "--at", "x=0.1,y=-1,x_t=0")
     assert code != 0 and "off the holonomic constraints" in err and "y = -0.99498" in err
+
+
+def test_a_second_param_is_refused_naming_both(capsys):
+    """A scan is along one name: a second --param is refused (naming both), never
+    dropped, before anything is derived."""
+    code, out, err = inproc(capsys, "linearize", "chaplygin_sleigh", "-q", "--at",
+                            "theta=0,x_t=1,theta_t=0", "--param", "x_t=0.5:2:4",
+                            "--param", "theta=0:1:3")
+    assert code == 2 and out == ""
+    assert "--param scans one name" in err
+    assert "'x_t=0.5:2:4'" in err and "'theta=0:1:3'" in err

@@ -44,6 +44,9 @@ def _catalogue_options(text: str, model: str) -> dict:
         if not sep:
             raise UsageError(f"model options are KEY=VALUE, got {item!r} in {model!r} "
                              "(e.g. n_trailer:N=4)")
+        if k.strip() in opts:
+            raise UsageError(f"model option {k.strip()} is given twice in {model!r}; give "
+                             "each option once")
         try:
             opts[k.strip()] = int(v)
         except ValueError:

@@ -39,7 +39,7 @@ def check(path, kinds, what: str) -> Path:
     parent = p.resolve().parent
     if not parent.is_dir():
         raise JetnhError(f"cannot write {what} {p}: the directory {parent} does not exist")
-    if not os.access(parent, os.W_OK | os.X_OK):
+    if not os.access(parent, os.W_OK | os.X_OK) or not _takes_files(parent, p.name):
         raise JetnhError(f"cannot write {what} {p}: the directory {parent} is not writable")
     suffix = p.suffix.lower()
     allowed = _figure_formats() if kinds == FIGURE else kinds
@@ -55,23 +55,38 @@ def check(path, kinds, what: str) -> Path:
     return p
 
 
-def write(path, fill) -> None:
-    """``fill(tmp)`` writes the content to the path ``tmp``; then it replaces ``path``."""
-    p = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=p.resolve().parent, prefix=f".{p.name}.",
-                               suffix=f".partial{p.suffix}")
-    os.close(fd)
+def _takes_files(parent: Path, name: str) -> bool:
+    """Whether a file can be made in ``parent`` (a temporary one, removed at once): what
+    ``os.access`` does not tell for root, or in a file system such as /proc."""
     try:
+        fd, tmp = tempfile.mkstemp(dir=parent, prefix=f".{name}.", suffix=".check")
+    except OSError:
+        return False
+    os.close(fd)
+    os.unlink(tmp)
+    return True
+
+
+def write(path, fill) -> None:
+    """``fill(tmp)`` writes the content to the path ``tmp``; then it replaces ``path``.
+    An error names ``path``, never the temporary file."""
+    p = Path(path)
+    tmp = None
+    try:
+        fd, tmp = tempfile.mkstemp(dir=p.resolve().parent, prefix=f".{p.name}.",
+                                   suffix=f".partial{p.suffix}")
+        os.close(fd)
         fill(tmp)
         with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
         os.replace(tmp, p)
     except BaseException as exc:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
+        if tmp is not None:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
         if isinstance(exc, OSError):
-            raise JetnhError(f"cannot write {p}: {exc.strerror or exc}; the previous file, "
-                             "if any, is unchanged") from None
+            raise JetnhError(f"cannot write {p}: {exc.strerror or type(exc).__name__}; the "
+                             "previous file, if any, is unchanged") from None
         raise

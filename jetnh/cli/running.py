@@ -9,13 +9,15 @@ from .usage import UsageError
 
 def assignments(items, what) -> dict:
     """``NAME=VALUE`` items of a repeatable option (each may be comma-separated) as
-    numbers by name."""
+    numbers by name; a name given twice is refused (which value was meant?)."""
     out = {}
     for item in items or ():
         for part in filter(None, (p.strip() for p in item.split(","))):
             k, sep, v = part.partition("=")
             if not sep or not k.strip():
                 raise UsageError(f"{what} takes NAME=VALUE, got {part!r}")
+            if k.strip() in out:
+                raise UsageError(f"{what} gives {k.strip()} twice; give each name once")
             try:
                 out[k.strip()] = float(v)
             except ValueError:

@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
-from ...errors import JetnhError
+from .. import outputs
 from ..declared import declared
 from ..loading import load_model, with_split
 from ..parser import (EPILOG_MODEL, PRINCIPLES, canonical_principle, model_args,
@@ -93,6 +92,7 @@ def run(args, progress) -> int:
     coords = [q.name for q in system.J.q]
     given = assignments(args.start, "--from")
     zeros = [c for c in coords if c not in given and c not in loaded.initial]
+    from_model = [c for c in coords if c not in given and c in loaded.initial]
     start = {c: float(loaded.initial.get(c, 0.0)) for c in coords}
     start.update(given)
     t0 = args.t_start if args.t_start is not None else float(sim.get("t_start", 0.0))
@@ -100,9 +100,8 @@ def run(args, progress) -> int:
     if t1 is None:
         raise UsageError("give --t-end (the model file has no [simulation] t_end)")
     guess = assignments(args.guess, "--guess") or None
-    if args.plot and not Path(args.plot).resolve().parent.is_dir():
-        raise JetnhError(f"cannot write {args.plot}: the directory "
-                         f"{Path(args.plot).resolve().parent} does not exist")
+    if args.plot:
+        outputs.check(args.plot, outputs.FIGURE, "--plot")
     kw = {"rtol": args.rtol} if args.rtol is not None else {}
     if args.atol is not None:
         kw["atol"] = args.atol
@@ -130,11 +129,15 @@ def run(args, progress) -> int:
     if args.format == "json":
         rows = [_record(x) for x in found]
         print(json.dumps({"model": loaded.label, "start": start, "zero_start": zeros,
+                          "model_start": from_model,
                           "end": end, "t_span": [t0, float(t1)], **rows[0],
                           **({"compared": rows[1]} if len(rows) > 1 else {})}, indent=2))
     else:
         print(f"{system.name or loaded.label}: t in [{t0:g}, {float(t1):g}]")
         print("from:      " + ", ".join(f"{k} = {v:.10g}" for k, v in start.items()))
+        if from_model:
+            print(f"           (not given, the model's initial values: "
+                  f"{', '.join(from_model)})")
         if zeros:
             print(f"           (not given, set to 0: {', '.join(zeros)})")
         for x in found:

@@ -38,14 +38,26 @@ def add_parser(sub):
                         "equations do not use)")
     s.add_argument("--steady", metavar="NAME,...",
                    help="states to solve for so that the point is a steady motion")
-    s.add_argument("--param", metavar="NAME=A:B:N",
+    s.add_argument("--param", action="append", metavar="NAME=A:B:N",
                    help="scan NAME (a parameter or a state) over N evenly spaced values "
-                        "from A to B (N >= 2)")
+                        "from A to B (N >= 2); one scan: give it once")
     s.add_argument("--plot", metavar="PATH", help="with --param: save the stability "
                                                   "diagram (png, pdf, svg)")
     s.add_argument("--format", choices=("text", "json"), default="text",
                    help="text (default) or json")
     s.set_defaults(func=run)
+
+
+def _scan(items):
+    """The one scan of ``--param`` (None without it): a scan is along one name, so a
+    second --param is refused rather than dropped."""
+    if not items:
+        return None
+    if len(items) > 1:
+        raise UsageError("--param scans one name, got " + " and ".join(
+            repr(i) for i in items) + ": give --param once, and the other names a value "
+            "with --at or --set")
+    return _scan_spec(items[0])
 
 
 def _scan_spec(text: str):
@@ -68,7 +80,7 @@ def run(args, progress) -> int:
     opts = settings(args, model)
     principle = opts.principle
     params = assignments(args.set, "--set")
-    scan = _scan_spec(args.param) if args.param else None
+    scan = _scan(args.param)
     if args.plot and not scan:
         raise UsageError("--plot draws the stability diagram of a scan: give --param too")
     if args.plot:

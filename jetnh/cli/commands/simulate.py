@@ -85,6 +85,8 @@ def run(args, progress) -> int:
         progress.note(f"jetnh: the integral {k!r} uses multipliers, which the {principle} "
                       "state does not have; skipped")
 
+    if args.path is not None and not args.plot:
+        raise UsageError("--path chooses a panel of the plot: give --plot PATH too")
     path_names = _path_names(args.path, system)
     for out, kinds, what in ((args.csv, outputs.TEXT, "--csv"),
                              (args.plot, outputs.FIGURE, "--plot")):
@@ -99,6 +101,8 @@ def run(args, progress) -> int:
                .replace("pass complete=True", "pass --complete")
                .replace(" (complete=[...] names other coordinates)", ""))
         raise type(exc)(msg) from None
+    if path_names:
+        _check_series(path_names, scene)
     with progress.step(f"deriving and compiling the {principle} kernels "
                        "(cached for later runs)"):
         scene.compile()
@@ -112,10 +116,15 @@ def run(args, progress) -> int:
                          **kw)
     d = traj.diagnostics
     final = traj.final
+    t_final = float(traj.t[-1]) if len(traj) else t0
+    # rows at output times only (t_eval): a run stopped early went on past its last row,
+    # to a state the trajectory does not keep
+    last_state = traj.success or "t_eval" not in kw
     if args.format == "json":
         print(json.dumps({"model": model.label, "principle": principle,
                           "params": scene.params, "initial": scene.initial,
-                          "final": final, "diagnostics": d.as_dict(),
+                          "final": final, "final_t": t_final, "final_is_last_state":
+                          last_state, "diagnostics": d.as_dict(),
                           "zero_initial": zeros}, indent=2, default=float))
     else:
         print(f"{system.name or model.label}: {principle}, t in [{t0:g}, {t1:g}]")
@@ -127,7 +136,16 @@ def run(args, progress) -> int:
         if scene.projected:
             print("projected:  " + ", ".join(f"{k}: {g:g} -> {v:.10g}"
                                              for k, (g, v) in scene.projected.items()))
-        print("final:      " + ", ".join(f"{k} = {v:.10g}" for k, v in final.items()))
+        values = ", ".join(f"{k} = {v:.10g}" for k, v in final.items())
+        if last_state:
+            print("final:      " + values)
+            if not traj.success:
+                print(f"stopped:    at t = {t_final:.10g}: {traj.stop_reason}")
+        else:
+            print(f"last row:   t = {t_final:.10g}: " + values)
+            print(f"stopped:    after the last row, before the next output time: "
+                  f"{traj.stop_reason}; the state it stopped at is not kept with --points "
+                  f"(--points 0 keeps every step, the last one too)")
         print(d)
     if args.csv:
         outputs.write(args.csv, lambda tmp: _write_csv(traj, tmp))
@@ -169,6 +187,21 @@ def _path_names(text, system) -> tuple | None:
         raise UsageError(f"--path takes two series names separated by a comma (e.g. "
                          f"--path x,y), not {text!r}")
     return tuple(names)
+
+
+def _check_series(names, scene):
+    """The ``--path`` names, before the run: each must be a series of its trajectory
+    (time, a coordinate, a velocity, a multiplier, a first integral, the energy or a
+    constraint residual); every unknown one is named."""
+    system = scene.system
+    known = (["t"] + [q.name for q in system.J.q] + [v.name for v in system.J.qd]
+             + list(scene.multipliers) + list(scene.integrals) + ["energy"]
+             + [f"residual[{a}]" for a in range(system.k)])
+    unknown = [n for n in names if n not in known]
+    if unknown:
+        raise UsageError(f"--path: {', '.join(map(repr, unknown))} "
+                         + ("is not a series" if len(unknown) == 1 else "are not series")
+                         + f" of this run; choose from {', '.join(known)}")
 
 
 def _plot(traj, system, path, title, path_names=None, form=None):
