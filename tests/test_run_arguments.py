@@ -362,3 +362,16 @@ def test_a_watch_whose_thread_cannot_start_leaves_nothing_behind(monkeypatch):
     finally:
         signal.set_wakeup_fd(before)       # not this test's watchdog's socket
         monkeypatch.undo()
+
+
+def test_a_run_stopped_by_its_budget_says_where(disk):
+    """With t_eval a run the step budget stops keeps only the rows before the stop (here
+    the one at t = 0): its reason gives the time it reached, the one save='final' ends
+    at (the stop was only 'stopped after max_steps steps', and final the initial
+    state)."""
+    far = disk.replace(t_span=(0.0, 1e300))
+    tr = far.run(t_eval=np.linspace(0.0, 1e300, 11), max_steps=50)
+    end = far.run(save="final", max_steps=50)
+    assert tr.status == end.status == 1 and list(tr.t) == [0.0] and end.t[-1] > 0
+    assert tr.stop_reason == end.stop_reason == (
+        f"stopped after max_steps steps, at t = {end.t[-1]:.10g}")

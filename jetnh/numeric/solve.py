@@ -433,8 +433,8 @@ def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, 
         reason = f"terminal event {ce.names[k]!r} at t = {float(ev_t[n_ev - 1]):.17g}"
     elif status == STOPPED:
         reason = diagnosis.timeout_reason(timeout, t_last)
-    else:
-        reason = STATUS_TEXT[status]
+    else:       # where it stopped: with t_eval, after the last row
+        reason = f"{STATUS_TEXT[status]}, at t = {t_last:.10g}"
     if ce is not None:
         k = len(ce) if n_events is None else n_events
         t_events, y_events = split_records(k, ev_t[:n_ev], ev_i[:n_ev], ev_y[:n_ev])

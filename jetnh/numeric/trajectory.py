@@ -378,7 +378,9 @@ class Trajectory(Frozen):
 
     @property
     def final(self) -> dict[str, float]:
-        """The last value of every coordinate, velocity, multiplier and integral."""
+        """The last row's value of every coordinate, velocity, multiplier and integral.
+        With ``t_eval``, a run that stopped early (``status`` not a success) may have
+        stopped after its last row: its ``stop_reason`` says at which time."""
         return {name: float(self[name][-1]) for name in self.names} if len(self) else {}
 
     def as_dict(self) -> dict[str, np.ndarray]:
