@@ -64,6 +64,7 @@ from ..geometry.jet import sympy_object
 from . import arguments, regular, solve
 from . import codegen
 from . import discrete
+from .ensemble import run_ensemble
 from .kernels import jacobian_kernels, load as load_kernels, loader
 from ..frozen import Frozen, FrozenDict, memo
 from .options import options
@@ -496,8 +497,6 @@ class Scene(Frozen):
         """Many runs in one call: ``jetnh.numeric.ensemble.run_ensemble(self, initial,
         params, **options)`` (arrays [n_runs, n_times, n_states] and per-run
         diagnostics; parallel over the cores)."""
-        from .ensemble import run_ensemble
-
         return run_ensemble(self, initial, params, **options)
 
     def compile(self) -> "Scene":
