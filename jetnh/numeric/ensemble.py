@@ -262,6 +262,25 @@ class Ensemble(Frozen):
             #: then the runtime parameters
             sensitivity_columns=() if sensitivities is None else tuple(sensitivities[0]))
 
+    # ------------------------------------------------------------------ pickling
+    def __getstate__(self):
+        """The data of the runs (their arrays as they are, the aux rows of runs that
+        changed split computed now: their pieces hold other charts' compiled code);
+        the scene by its kernels' key (``Scene._portable``), which loads them again
+        where they are evaluated."""
+        d = Frozen.__getstate__(self)
+        if self._pieces:
+            d.update(aux=self.aux, _pieces={})
+        return d
+
+    def __setstate__(self, state):
+        """Read-only again: every array, as when run."""
+        self.__dict__.update(state)
+        readonly((state["_arrays"], state.get("aux"), state.get("aux_initial")))
+
+    def __copy__(self):
+        return self             # (immutable)
+
     @memo
     def t(self) -> np.ndarray:
         """[n_runs, n_times]"""

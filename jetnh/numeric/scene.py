@@ -462,11 +462,14 @@ class Scene(Frozen):
             memo["quick"] = own["quick"]
         d["_memo"] = memo      # (frozen from here: ``_initial`` sets nothing when it
         #                        neither projects nor completes)
-        ini, y0 = new._initial(initial, False, False, kern, p)
+        ini, y = new._initial(initial, False, False, kern, p)
         ini = FrozenDict(ini)
-        if y0 is None:
-            y0 = np.array([ini[n] for n in self.state_names], dtype=float)
-        y0.setflags(write=False)
+        if y is None:
+            y = np.array([ini[n] for n in self.state_names], dtype=float)
+        # (this copy's own state array: its direct runs' ``_y0``, y0 a read-only view)
+        memo["_y0"] = y
+        y0 = y.view()
+        y0.flags.writeable = False
         d.update(initial=ini, y0=y0)
         return new
 
