@@ -22,8 +22,9 @@ arrays (``Scene.ensemble`` calls it), so a later ``jetnh.sweep`` can hand it chu
   number for a compiled-in parameter builds a scene with that number compiled in.
 - Every run is the scene's compiled single-trajectory loop, unchanged, so each
   trajectory is bit-for-bit the one ``scene.run`` gives for the same input.
-- ``parallel``: "threads" (default: a Python thread pool of ``workers`` threads, each
-  running the compiled serial driver on chunks of runs with the GIL released), "prange"
+- ``parallel``: "threads" (default: ``workers`` threads, the calling one and those of
+  a pool kept between calls, each running the compiled serial driver on the next chunk
+  of runs with the GIL released), "prange"
   (numba threads in one compiled driver, each taking the next run until none is left:
   runs of uneven cost keep every thread busy), or "serial" (one compiled loop).
   ``workers`` defaults to the number of cores numba sees.  Measured in
@@ -35,7 +36,9 @@ arrays (``Scene.ensemble`` calls it), so a later ``jetnh.sweep`` can hand it chu
   n_states, n_columns]`` (columns ``ens.sensitivity_columns``: the initial states, then
   the runtime parameters), ``ens.sensitivity(of, to)`` one entry over runs and times;
   each run's bits are the single run's.
-- Every array an ensemble holds or hands out is read-only.
+- Every array an ensemble holds or hands out is read-only.  An ensemble pickles (its
+  arrays, its scene by its kernels' key: evaluated again in another process); of one
+  run it holds the single-run loop's rows as they came, no copies.
 - Output: ``t_eval`` points (runs that stop early are NaN after their stop), or
   ``save="final"`` (one row per run, its final state).  Every accepted step is not
   available (ragged); use ``scene.run`` for that.

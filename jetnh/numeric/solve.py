@@ -467,7 +467,7 @@ _DRIVERS: dict = {}
 
 
 #: idle thread pools of the ensembles (``_pool``): worker count -> pools, at most
-#: ``MAX_IDLE_POOLS`` in all (the oldest ended beyond)
+#: ``MAX_IDLE_POOLS`` in all (beyond, those of the count first kept are ended)
 _IDLE: dict = {}
 MAX_IDLE_POOLS = 4
 _POOL_LOCK = threading.Lock()
@@ -503,6 +503,7 @@ def _pool(workers):
 
 
 def _forget_pools():
+    """In a forked child: no pools (their threads stayed in the parent), a new lock."""
     _IDLE.clear()
     global _POOL_LOCK
     _POOL_LOCK = threading.Lock()
@@ -514,10 +515,11 @@ os.register_at_fork(after_in_child=_forget_pools)
 def batch(scene, plan, Y0, P, parallel="threads", workers=1):
     """The runs of ``plan`` from the rows of ``Y0`` with the rows of ``P`` (checked,
     C-contiguous) through the compiled ensemble driver of its method: ``parallel``
-    "threads" (``workers`` threads, this one and those of a pool kept between calls,
-    each running the serial driver on the next chunk of rows with the GIL released), "prange" (numba threads) or "serial".  Returns the
-    arrays ``(OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)`` (``_common.collect``)
-    and the wall-clock time."""
+    "threads" (``workers`` threads, this one and those of a pool kept between calls
+    (``_pool``), each running the serial driver on the next chunk of rows with the GIL
+    released), "prange" (numba threads) or "serial".  Returns the arrays ``(OUT_T,
+    OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)`` (``_common.collect``) and the wall-clock
+    time."""
     import numba
 
     n_runs, n = Y0.shape
