@@ -26,7 +26,8 @@ fresh processes with empty numba and kernel caches, the trees alternating within
    the compiled dop853 loop called directly (its entry point, the arguments made once),
    ``scene.run()``, ``scene.run(y0=...)``, ``scene.replace(initial=...).run()`` (a new
    initial state each call, as a shooting loop does) and an ensemble of one run, each
-   with one step (T = 1e-6, ``save="final"``); the ratios to the bare call.  Also the
+   with one step (T = 1e-6, ``save="final"``), and ensembles of eight such runs on two
+   threads and serially (a small ensemble's fixed cost); the ratios to the bare call.  Also the
    bare call of a run of three steps and its arithmetic: its rhs evaluations at the cost
    of one in a long run (T = 100: the difference of the long and the one-step call over
    their difference in evaluations).  And the parts of a run's Python side, each alone:
@@ -136,6 +137,7 @@ long = bare(100.0, ctl)
 nfev = {"3-step call": int(three(0)[4][2]), "long call": int(long(0)[4][2])}
 states = {n: short.initial[n] for n in short.state_names}
 inis = [dict(states, phi_t=states["phi_t"] + 1e-3 * k) for k in range(16)]
+y8 = np.repeat(y0[None, :], 8, axis=0)
 calls = {
     "bare call": bare(1e-6, ctl),
     "3-step call": three,
@@ -144,6 +146,9 @@ calls = {
     "replace(initial=...).run()": lambda i: short.replace(initial=inis[i % 16]).run(
         save="final"),
     "ensemble of one": lambda i: short.ensemble(y0[None, :], save="final"),
+    # eight runs: the fixed cost of a small ensemble, on two threads and serially
+    "ensemble of 8 (threads)": lambda i: short.ensemble(y8, save="final", workers=2),
+    "ensemble of 8 (serial)": lambda i: short.ensemble(y8, save="final", parallel="serial"),
 }
 nfev["bare call"] = int(calls["bare call"](0)[4][2])
 for f in calls.values():
@@ -325,7 +330,9 @@ def main(argv=None):
         f"compiled loop ({a['run()'] * 1e6:.3g} us against {a['bare call'] * 1e6:.3g} us); "
         f"run(y0=...) {a['run(y0=...)'] / a['bare call']:.2f}x, "
         f"replace(initial=...).run() {a['replace(initial=...).run()'] / a['bare call']:.2f}x,"
-        f" an ensemble of one {a['ensemble of one'] / a['bare call']:.2f}x")
+        f" an ensemble of one {a['ensemble of one'] / a['bare call']:.2f}x; an ensemble of 8"
+        f" {a['ensemble of 8 (threads)'] * 1e6:.3g} us on two threads, "
+        f"{a['ensemble of 8 (serial)'] * 1e6:.3g} us serially")
     print(fixed_summary)
     among = {name: interleaved(root, args.quick) for name, root in trees.items()}
     for name, c in among.items():

@@ -22,8 +22,9 @@ arrays (``Scene.ensemble`` calls it), so a later ``jetnh.sweep`` can hand it chu
   number for a compiled-in parameter builds a scene with that number compiled in.
 - Every run is the scene's compiled single-trajectory loop, unchanged, so each
   trajectory is bit-for-bit the one ``scene.run`` gives for the same input.
-- ``parallel``: "threads" (default: a Python thread pool of ``workers`` threads, each
-  running the compiled serial driver on chunks of runs with the GIL released), "prange"
+- ``parallel``: "threads" (default: ``workers`` threads, the calling one and those of
+  a pool kept between calls, each running the compiled serial driver on the next chunk
+  of runs with the GIL released), "prange"
   (numba threads in one compiled driver, each taking the next run until none is left:
   runs of uneven cost keep every thread busy), or "serial" (one compiled loop).
   ``workers`` defaults to the number of cores numba sees.  Measured in
@@ -35,7 +36,9 @@ arrays (``Scene.ensemble`` calls it), so a later ``jetnh.sweep`` can hand it chu
   n_states, n_columns]`` (columns ``ens.sensitivity_columns``: the initial states, then
   the runtime parameters), ``ens.sensitivity(of, to)`` one entry over runs and times;
   each run's bits are the single run's.
-- Every array an ensemble holds or hands out is read-only.
+- Every array an ensemble holds or hands out is read-only.  An ensemble pickles (its
+  arrays, its scene by its kernels' key: evaluated again in another process); of one
+  run it holds the single-run loop's rows as they came, no copies.
 - Output: ``t_eval`` points (runs that stop early are NaN after their stop), or
   ``save="final"`` (one row per run, its final state).  Every accepted step is not
   available (ragged); use ``scene.run`` for that.
@@ -52,10 +55,11 @@ import time
 import warnings
 from functools import cached_property
 
+import numba
 import numpy as np
 
 from ..errors import ConstraintError, IntegrationError, JetnhError, JetnhWarning
-from ..frozen import Frozen, memo, readonly
+from ..frozen import Frozen, FrozenDict, memo, readonly
 from ..mechanics import holonomic
 from . import arguments, atlas, diagnosis, interrupt, loops, solve
 from .events import as_events
@@ -64,6 +68,8 @@ from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, FINISHED, NONFINITE, S
 from .options import options
 
 PARALLEL = ("prange", "threads", "serial")
+_FLOAT64 = np.dtype(np.float64)
+_NO_SWITCHES = FrozenDict()
 
 
 def _name(key) -> str:
@@ -94,7 +100,8 @@ def _n_runs(columns: dict, n_from_array: int | None) -> int:
 def resolve(scene, initial=None, params=None, project=False):
     """The scene to run (with the varying parameters as run-time inputs), the initial
     states Y0 [n_runs, n_states] and the run-time parameters P [n_runs, n_p]."""
-    params = {_name(k): _column(v, f"params[{_name(k)!r}]") for k, v in (params or {}).items()}
+    params = ({_name(k): _column(v, f"params[{_name(k)!r}]") for k, v in params.items()}
+              if params else None)
     if params:
         unknown = sorted(set(params) - set(scene.params))
         if unknown:
@@ -123,9 +130,12 @@ def resolve(scene, initial=None, params=None, project=False):
             raise JetnhError(f"initial as an array must have shape [n_runs, "
                              f"{len(scene.state_names)}] (states {', '.join(scene.state_names)})"
                              f", got {np.shape(initial)}")
-        arr = arguments.real_array(arr, "initial", 2)
+        if arr.dtype is _FLOAT64 and arguments.all_finite(arr):
+            arr = arr.copy()        # (what ``real_array`` makes of it, sooner)
+        else:
+            arr = arguments.real_array(arr, "initial", 2)
         n_arr = arr.shape[0]
-    n_runs = (_n_runs({**columns, **params}, n_arr) if columns or params
+    n_runs = (_n_runs({**columns, **(params or {})}, n_arr) if columns or params
               else 1 if n_arr is None else n_arr)
     if arr is not None and n_runs == n_arr:
         Y0 = arr                    # (real_array's own copy)
@@ -136,13 +146,17 @@ def resolve(scene, initial=None, params=None, project=False):
         for j, s in enumerate(scene.state_names):
             if s in columns:
                 Y0[:, j] = columns[s]
-    P = np.empty((n_runs, len(scene.runtime_params)))
-    P[:] = scene._p
+    if n_runs == 1:
+        P = scene._p[None, :].copy()
+    else:
+        P = np.empty((n_runs, len(scene.runtime_params)))
+        P[:] = scene._p
     if params:
         for j, s in enumerate(scene.runtime_params):
             if s in params:
                 P[:, j] = params[s]
-    dep = {k: v for k, v in columns.items() if k in scene.dependent_velocities}
+    dep = ({k: v for k, v in columns.items() if k in scene.dependent_velocities}
+           if columns else columns)
     if scene.dependent_velocities:
         _check_split(scene, Y0, P, dep, project)
     if dep:
@@ -214,16 +228,29 @@ class Ensemble(Frozen):
                  event_names, wall_time, parallel, workers, save, singular_tol, *,
                  switching=False, switches=None, pieces=None, reasons=None,
                  sensitivities=None, layout=None):
-        # t and y read-only now, the other arrays on first read (the memos below):
-        # read-only views, the caller's arrays stay as given
-        t, y = t.view(), y.view()
-        t.flags.writeable = y.flags.writeable = False
-        # the attributes in one go (``Frozen._set`` without its walk over every value)
+        self._fill(scene, method, t, y, info, t_last, y_last, ev_n, ev_t, Y0, P,
+                   event_names, wall_time, parallel, workers, save, singular_tol,
+                   switching, switches, pieces, reasons, sensitivities, layout)
+
+    @classmethod
+    def _made(cls, *args) -> "Ensemble":
+        """``Ensemble(*args)`` (positionally, every argument) without the wrapper that
+        freezes it after ``__init__`` (``jetnh.frozen``): an ensemble of one is a
+        run's result."""
+        self = object.__new__(cls)
+        self._fill(*args)
+        self.__dict__["_memo"] = {}
+        return self
+
+    def _fill(self, scene, method, t, y, info, t_last, y_last, ev_n, ev_t, Y0, P,
+              event_names, wall_time, parallel, workers, save, singular_tol, switching,
+              switches, pieces, reasons, sensitivities, layout):
+        """The attributes in one go (``Frozen._set`` without its walk over every value);
+        the arrays on first read (the memos below): read-only views, the caller's
+        arrays stay as given (``info`` and ``t_last`` may be tuples: made arrays then)."""
         self.__dict__.update(
-            t=t,                # [n_runs, n_times]
-            y=y,                # [n_runs, n_times, n_states]
             _arrays=(info, t_last, y_last, ev_n, ev_t, Y0, P,
-                     None if sensitivities is None else sensitivities[1]),
+                     None if sensitivities is None else sensitivities[1], t, y),
             scene=scene, method=method,
             event_names=tuple(event_names), param_names=scene.runtime_params,
             wall_time=wall_time, parallel=parallel, workers=workers, save=save,
@@ -231,18 +258,48 @@ class Ensemble(Frozen):
             layout=scene.kernels.layout if layout is None else layout,
             #: runs that changed split (``numeric.atlas``): run -> [{"t", "from", "to"},
             #: ...]; ``switching``: whether the runs watched their chart's edge
-            switches=readonly(switches or {}), switching=switching,
-            _pieces=pieces or {}, _reasons=reasons or {},
+            switches=FrozenDict(readonly(switches)) if switches else _NO_SWITCHES,
+            switching=switching, _pieces=pieces or {}, _reasons=reasons or {},
             #: what ``sensitivities`` (``[n_runs, n_times, n_states, n_columns]``, with a
             #: run with ``sensitivities=True``) differentiate by: the initial states,
             #: then the runtime parameters
             sensitivity_columns=() if sensitivities is None else tuple(sensitivities[0]))
 
+    # ------------------------------------------------------------------ pickling
+    def __getstate__(self):
+        """The data of the runs (their arrays as they are, the aux rows of runs that
+        changed split computed now: their pieces hold other charts' compiled code);
+        the scene by its kernels' key (``Scene._portable``), which loads them again
+        where they are evaluated."""
+        d = Frozen.__getstate__(self)
+        if self._pieces:
+            d.update(aux=self.aux, _pieces={})
+        return d
+
+    def __setstate__(self, state):
+        """Read-only again: every array, as when run."""
+        self.__dict__.update(state)
+        readonly((state["_arrays"], state.get("aux"), state.get("aux_initial")))
+
+    def __copy__(self):
+        return self             # (immutable)
+
+    @memo
+    def t(self) -> np.ndarray:
+        """[n_runs, n_times]"""
+        return self._arrays[8].view()
+
+    @memo
+    def y(self) -> np.ndarray:
+        """[n_runs, n_times, n_states]"""
+        return self._arrays[9].view()
+
     @memo
     def _info(self) -> np.ndarray:
         """The runs' (status, steps, rejected, nfev, rows, indicator) as rows (one copy
         of the driver's columns)."""
-        return self._arrays[0].T.copy()
+        info = self._arrays[0]
+        return (np.array(info, dtype=np.int64) if type(info) is tuple else info).T.copy()
 
     @memo
     def status(self) -> np.ndarray:
@@ -270,7 +327,8 @@ class Ensemble(Frozen):
 
     @memo
     def t_final(self) -> np.ndarray:
-        return self._arrays[1].view()
+        t_last = self._arrays[1]
+        return np.array(t_last) if type(t_last) is tuple else t_last.view()
 
     @memo
     def y_final(self) -> np.ndarray:
@@ -305,7 +363,7 @@ class Ensemble(Frozen):
     # ------------------------------------------------------------------ shape and access
     @property
     def n_runs(self) -> int:
-        return self.y.shape[0]
+        return self._arrays[9].shape[0]
 
     def __len__(self):
         return self.n_runs
@@ -545,8 +603,6 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
                  timeout=None, sensitivities=False, sensitivity_error=True) -> Ensemble:
     """``run_ensemble`` of the runs ``resolve`` gave (``scene``, the rows of ``Y0`` and
     ``P``) with the run options ``opts`` (``numeric.options.Options``)."""
-    import numba
-
     if (events is None and t_eval is None and timeout is None and sensitivities is False
             and sensitivity_error is True and type(method) is str and type(save) is str):
         key = ("batch", scene.t_span, opts, method, save)     # the defaults, sooner
@@ -557,13 +613,14 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
     plan = solve.planned(scene, key, lambda: solve.plan(
         scene, method, opts=opts, t_eval=t_eval, save=save, events=events, timeout=timeout,
         sensitivities=sensitivities, sensitivity_error=sensitivity_error, batch=True))
-    method = plan.method.name
     workers = int(workers or numba.config.NUMBA_NUM_THREADS)
+    if Y0.shape[0] == 1:
+        one = _single(scene, plan, opts, t_eval, save, timeout)
+        if one is not None:         # an ensemble of one: a run
+            return _of_one(scene, one, Y0, P, on_error, parallel, workers, save)
+    method = plan.method.name
     sens = Y_A = None
-    one = None if Y0.shape[0] != 1 else _single(scene, plan, opts, t_eval, save, timeout)
-    if one is not None:         # an ensemble of one: a run
-        (OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T), wall = _one(one, Y0, P)
-    elif plan.sens is None:
+    if plan.sens is None:
         (OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T), wall = solve.batch(
             scene, plan, Y0, P, parallel, workers)
         _on_constraints(plan, P, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST)
@@ -646,47 +703,72 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
 
 def _single(scene, plan, opts, t_eval, save, timeout):
     """The plan of a single run (``Scene.run``) that gives an ensemble of one of the
-    ensemble's plan ``plan`` (kept with the plans, under ``plan`` itself), or None where
+    ensemble's plan ``plan`` (kept with the plans, under ``(plan,)``), or None where
     the ensemble's driver must run it: with events, sensitivities or a chart's edge to
     watch, an implicit or fixed-step method, or holonomic constraints (whose rows
     ``_on_constraints`` moves)."""
+    found = solve.planned(scene, (plan,), lambda: _single_plan(scene, plan, opts, t_eval,
+                                                               save, timeout))
+    return found or None
+
+
+def _single_plan(scene, plan, opts, t_eval, save, timeout):
+    """``_single``'s plan, made (False where there is none)."""
     m = plan.method
     if (plan.ce is not None or plan.sens is not None or plan.switch or not m.adaptive
             or m.solver is not Solver.EXPLICIT or plan.ctl.n_hol):
-        return None
-    return solve.planned(scene, plan, lambda: solve.plan(
-        scene, m, opts=opts, t_eval=t_eval, save=save, timeout=timeout))
+        return False
+    return solve.plan(scene, m, opts=opts, t_eval=t_eval, save=save, timeout=timeout)
 
 
-def _one(plan, Y0, P):
-    """The arrays of ``solve.batch`` for the one run of ``Y0``, ``P`` by the single-run
-    loop of ``plan`` (``_single``): what the ensemble's driver stores of its run
-    (``methods._common.collect``), the same steps; and the wall-clock time."""
+#: the event columns of an ensemble of one (``_of_one``: its plan watches no events)
+_NO_EV_N, _NO_EV_T = readonly((np.zeros((1, 0), dtype=np.int64), np.zeros((1, 0))))
+
+
+def _of_one(scene, plan, Y0, P, on_error, parallel, workers, save) -> Ensemble:
+    """The ensemble of the one run of ``Y0``, ``P`` by the single-run loop of ``plan``
+    (``_single``): what the ensemble's driver stores of its run
+    (``methods._common.collect``), the same steps.  Its arrays are views of the loop's
+    own (no copies); the loop never reports a success with a NaN or an infinity in its
+    rows or last state (``loop.finite_status``), as ``run_resolved`` makes sure of the
+    driver's runs."""
     halt = np.zeros(1, dtype=np.int64)
-    tic = time.perf_counter()
+    tic = _clock()
+    # (a direct plan's loop reads y0 into a copy of its own: the row itself)
     out = interrupt.call(plan.entry, halt, plan.limit,
-                         (*plan.prefix, plan.t0, plan.t1, Y0[0].copy(), P[0], *plan.suffix,
-                          halt))
-    wall = time.perf_counter() - tic
+                         (*plan.head, Y0[0], P[0], *plan.suffix, halt))
+    wall = _clock() - tic
     status, ts, ys, n_out, stats = out[:5]
-    # (a loop that watched nothing keeps its last time and state in row n_out)
-    t_last, y_last = (ts[n_out], ys[n_out]) if len(out) == 6 else (out[5], out[6])
     n = Y0.shape[1]
+    # (a loop that watched nothing keeps its last time and state in row n_out)
+    if len(out) == 6:
+        T_LAST, Y_LAST = ts[n_out:n_out + 1], ys[n_out:n_out + 1, :n]
+    else:
+        T_LAST, Y_LAST = (out[5],), out[6][None, :n]
     if plan.mode == ENDPOINTS:
         n_times, first, filled = 1, n_out - 1, 1 if n_out > 0 else 0
     else:
         n_times, first = plan.te.shape[0], 0
         filled = min(n_out, n_times)
-    OUT_T, OUT_Y = np.empty((1, n_times)), np.empty((1, n_times, n))
-    OUT_T[0, :filled] = ts[first:first + filled]
-    OUT_Y[0, :filled] = ys[first:first + filled, :n]
-    if filled < n_times:
-        OUT_T[0, filled:] = OUT_Y[0, filled:] = np.nan
-    INFO = np.array([[status, stats[0], stats[1], stats[2], n_out, out[-1]]],
-                    dtype=np.int64)
-    T_LAST, Y_LAST, EV_T = np.empty(1), np.empty((1, n)), np.empty((1, 1))
-    T_LAST[0], Y_LAST[0], EV_T[0, 0] = t_last, y_last[:n], np.nan
-    return (OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, np.zeros((1, 1), dtype=np.int64), EV_T), wall
+    if filled == n_times:
+        OUT_T, OUT_Y = ts[None, first:first + n_times], ys[None, first:first + n_times, :n]
+    else:
+        OUT_T, OUT_Y = np.full((1, n_times), np.nan), np.full((1, n_times, n), np.nan)
+        OUT_T[0, :filled] = ts[first:first + filled]
+        OUT_Y[0, :filled] = ys[first:first + filled, :n]
+    # (status, steps, rejected, nfev, rows, indicator): an array on first read
+    INFO = ((status, *stats, n_out, out[-1]),)
+    if status == NONFINITE:
+        INFO, T_LAST = np.array(INFO, dtype=np.int64), np.array(T_LAST, dtype=float)
+        _explain(scene, plan.method.name, plan.kern, plan.checked, plan.singular_tol,
+                 on_error, INFO, T_LAST, Y_LAST, P, Y0)
+    return Ensemble._made(scene, plan.method.name, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST,
+                          _NO_EV_N, _NO_EV_T, Y0, P, (), wall, parallel,
+                          workers if parallel != "serial" else 1, save, plan.singular_tol,
+                          False, None, None, None, None, plan.kern.layout)
+
+
+_clock = time.perf_counter
 
 
 def _on_constraints(plan, P, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST):

@@ -9,7 +9,8 @@ that neither imports the other's package for them.
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
+from functools import cached_property
 
 #: the format of generated kernel modules (the cache keeps each version apart)
 CODEGEN_VERSION = "13"
@@ -39,31 +40,35 @@ class Layout:
     holonomic: int = 0                         # aux ends with the m holonomic g_i
     sensitivity_columns: int = 0               # rhs carries S = dy/d(y0, p), n x this
 
-    @property
+    # the sizes and names below: made on first read, then plain attributes (a run reads
+    # them; the fields are frozen)
+    @cached_property
     def n_rhs(self) -> int:
         """The size of the state the ``rhs`` kernel integrates: the state, and with
         sensitivities the n x ``sensitivity_columns`` matrix S after it (row-major)."""
         return self.n_state * (1 + self.sensitivity_columns)
 
-    @property
+    @cached_property
     def states(self) -> tuple[str, ...]:
         return self.coordinates + self.velocities + self.multipliers
 
-    @property
+    @cached_property
     def n_state(self) -> int:
         return len(self.states)
 
-    @property
+    @cached_property
     def n_aux(self) -> int:
         return (2 * len(self.dependent_velocities) + 1 + len(self.integrals) + self.power
                 + self.holonomic)
 
-    @property
+    @cached_property
     def energy_index(self) -> int:
         return 2 * len(self.dependent_velocities)
 
     def to_json(self) -> str:
-        return json.dumps(self.__dict__, sort_keys=True)
+        """The fields (not what the properties above keep)."""
+        return json.dumps({f.name: getattr(self, f.name) for f in fields(self)},
+                          sort_keys=True)
 
     @classmethod
     def from_json(cls, text: str) -> "Layout":

@@ -64,6 +64,7 @@ from ..geometry.jet import sympy_object
 from . import arguments, regular, solve
 from . import codegen
 from . import discrete
+from .ensemble import run_ensemble
 from .kernels import jacobian_kernels, load as load_kernels, loader
 from ..frozen import Frozen, FrozenDict, memo
 from .options import options
@@ -461,11 +462,14 @@ class Scene(Frozen):
             memo["quick"] = own["quick"]
         d["_memo"] = memo      # (frozen from here: ``_initial`` sets nothing when it
         #                        neither projects nor completes)
-        ini, y0 = new._initial(initial, False, False, kern, p)
+        ini, y = new._initial(initial, False, False, kern, p)
         ini = FrozenDict(ini)
-        if y0 is None:
-            y0 = np.array([ini[n] for n in self.state_names], dtype=float)
-        y0.setflags(write=False)
+        if y is None:
+            y = np.array([ini[n] for n in self.state_names], dtype=float)
+        # (this copy's own state array: its direct runs' ``_y0``, y0 a read-only view)
+        memo["_y0"] = y
+        y0 = y.view()
+        y0.flags.writeable = False
         d.update(initial=ini, y0=y0)
         return new
 
@@ -496,8 +500,6 @@ class Scene(Frozen):
         """Many runs in one call: ``jetnh.numeric.ensemble.run_ensemble(self, initial,
         params, **options)`` (arrays [n_runs, n_times, n_states] and per-run
         diagnostics; parallel over the cores)."""
-        from .ensemble import run_ensemble
-
         return run_ensemble(self, initial, params, **options)
 
     def compile(self) -> "Scene":

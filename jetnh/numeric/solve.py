@@ -16,7 +16,11 @@
 
 from __future__ import annotations
 
+import contextlib
+import os
+import threading
 import time
+from concurrent import futures
 from dataclasses import dataclass
 
 import numpy as np
@@ -466,13 +470,60 @@ def _driver(method, prange):
 _DRIVERS: dict = {}
 
 
+#: idle thread pools of the ensembles (``_pool``): worker count -> pools, at most
+#: ``MAX_IDLE_POOLS`` in all (beyond, those of the count first kept are ended)
+_IDLE: dict = {}
+MAX_IDLE_POOLS = 4
+_POOL_LOCK = threading.Lock()
+
+
+@contextlib.contextmanager
+def _pool(workers):
+    """A pool of ``workers`` threads for one ``batch`` call alone: an idle one kept from
+    an earlier call (making one, with its threads, costs more than a small ensemble), or
+    a new one; back to the idle ones after a call that returned, ended (its threads
+    joined, as a pool of the call's own) after one that raised.  A child process
+    (``os.fork``) starts with none: the threads stay in the parent."""
+    with _POOL_LOCK:
+        idle = _IDLE.get(workers)
+        pool = idle.pop() if idle else None
+    if pool is None:
+        pool = futures.ThreadPoolExecutor(workers, thread_name_prefix="jetnh-ensemble")
+    try:
+        yield pool
+    except BaseException:
+        pool.shutdown(wait=True, cancel_futures=True)
+        raise
+    with _POOL_LOCK:
+        _IDLE.setdefault(workers, []).append(pool)
+        spare = []
+        while sum(map(len, _IDLE.values())) > MAX_IDLE_POOLS:
+            oldest = next(k for k, v in _IDLE.items() if v)
+            spare.append(_IDLE[oldest].pop(0))
+            if not _IDLE[oldest]:
+                del _IDLE[oldest]
+    for extra in spare:
+        extra.shutdown(wait=False)
+
+
+def _forget_pools():
+    """In a forked child: no pools (their threads stayed in the parent), a new lock."""
+    _IDLE.clear()
+    global _POOL_LOCK
+    _POOL_LOCK = threading.Lock()
+
+
+os.register_at_fork(after_in_child=_forget_pools)
+
+
 def batch(scene, plan, Y0, P, parallel="threads", workers=1):
     """The runs of ``plan`` from the rows of ``Y0`` with the rows of ``P`` (checked,
     C-contiguous) through the compiled ensemble driver of its method: ``parallel``
-    "threads" (a pool of ``workers`` threads, each running the serial driver on chunks
-    of rows with the GIL released), "prange" (numba threads) or "serial".  Returns the
-    arrays ``(OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)`` (``_common.collect``)
-    and the wall-clock time."""
+    "threads" (``workers`` threads, this one and those of a pool kept between calls
+    (``_pool``), each running the serial driver on the next chunk of rows with the GIL
+    released), "prange" (numba threads) or "serial".  Returns the arrays ``(OUT_T,
+    OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)`` (``_common.collect``) and the wall-clock
+    time."""
     import numba
 
     n_runs, n = Y0.shape
@@ -501,13 +552,30 @@ def batch(scene, plan, Y0, P, parallel="threads", workers=1):
                 block(0, n_runs)
             finally:
                 numba.set_num_threads(old)
-        else:
-            from concurrent.futures import ThreadPoolExecutor
-
+        else:       # this thread and workers - 1 of a pool, each taking the next chunk
             chunk = max(1, -(-n_runs // (4 * workers)))
             bounds = [(a, min(a + chunk, n_runs)) for a in range(0, n_runs, chunk)]
-            with ThreadPoolExecutor(workers) as pool:
-                list(pool.map(lambda ab: block(*ab), bounds))
+            chunks, failed = iter(bounds), []
+
+            def work():
+                for a, b in chunks:     # (next() of a list's iterator: one at a time)
+                    if failed:          # (as a pool's map cancels what has not begun)
+                        return
+                    try:
+                        block(a, b)
+                    except BaseException:
+                        failed.append(True)
+                        raise
+
+            with _pool(workers - 1) as pool:
+                helpers = [pool.submit(work) for _ in range(min(workers, len(bounds)) - 1)]
+                try:
+                    work()
+                finally:        # (a helper that has not begun: no chunk left, none due)
+                    futures.wait([f for f in helpers if not f.cancel()])
+                for f in helpers:
+                    if not f.cancelled():
+                        f.result()
 
     tic = time.perf_counter()
     if not prange and (parallel == "serial" or workers == 1 or n_runs == 1):
