@@ -287,9 +287,10 @@ class Shooter:
         got = self.endpoint(u)
         reaching = None
         if got is not None:
-            if self.regular(got):
+            usv = svd(got[1])               # one decomposition for both uses
+            if full_rank(usv[1]):
                 return u
-            newton = self.newton_point(u, got)
+            newton = self.newton_point(u, got, usv)
             if newton is not None and self.regular(self.endpoint(newton)):
                 return newton
             reaching = u
@@ -311,26 +312,23 @@ class Shooter:
         """Whether the ``endpoint`` ``got`` exists (the run reached t1) and its shooting
         Jacobian has full rank by a margin (smallest singular value above 1e-6 of the
         largest)."""
-        if got is None:
-            return False
-        s = singular_values(got[1])
-        return bool(s.size and s[0] > 0 and s[-1] > 1e-6 * s[0])
+        return got is not None and full_rank(singular_values(got[1]))
 
-    def newton_point(self, u, got):
+    def newton_point(self, u, got, usv=None):
         """``u`` plus the minimum-norm Gauss-Newton step of its endpoint ``got`` (the
         truncated SVD, at most the size of ``u`` and 1), or None where it does not
-        move."""
-        U, s, Vt = self.svd(got[1])
+        move; ``usv``: the SVD of its Jacobian where already made."""
+        U, s, Vt = self.truncated(svd(got[1]) if usv is None else usv)
         if not s.size:
             return None
         du = -(Vt.T @ ((U.T @ (got[0] - self.target)) / s))
         du /= max(1.0, math.sqrt(du.dot(du)) / max(1.0, math.sqrt(u.dot(u))))
         return u + du if du.any() else None
 
-    def svd(self, Jm):
-        """The singular value decomposition of the shooting Jacobian with its numerical
-        rank (relative cut-off ``rcond``)."""
-        U, s, Vt = svd(Jm)
+    def truncated(self, usv):
+        """The singular value decomposition ``usv`` of the shooting Jacobian cut to its
+        numerical rank (relative cut-off ``rcond``)."""
+        U, s, Vt = usv
         r = rank(s, self.rcond)
         return U[:, :r], s[:r], Vt[:r]
 
@@ -344,6 +342,12 @@ def svd(Jm):
 def singular_values(Jm):
     """The singular values of ``Jm``, largest first."""
     return thin_svd(Jm)[1]
+
+
+def full_rank(s) -> bool:
+    """Whether singular values ``s`` (largest first) are those of a matrix of full rank
+    by a margin: the smallest above 1e-6 of the largest."""
+    return bool(s.size and s[0] > 0 and s[-1] > 1e-6 * s[0])
 
 
 def rank(s, rcond) -> int:
