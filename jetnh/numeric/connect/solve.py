@@ -40,7 +40,7 @@ class Search(Shooter):
     closest = None
 
     def _endpoint(self, u):
-        shot = self.start(self.state(u), self.span)
+        shot = self.run(u)
         if shot is None:
             return None
         if self.momenta is None:
@@ -396,12 +396,15 @@ class Search(Shooter):
         if stitched is not None:
             tr = stitched
             q, Jm = self.end_conditions(tr.t[-1], tr.y[-1], tr.sensitivities[-1])
+            first = tr.t[:1], tr.y[:1]
         else:
             got = self.endpoint(u)
             if got is None:
                 raise ConnectError(f"the motion found stops before t1: "
                                    f"{scene.run(y0=self.state(u)).stop_reason}")
-            q, Jm, tr = got[0], got[1], got[2].trajectory
+            q, Jm, shot = got
+            first = shot.first_output()
+            tr = shot.trajectory
         # a few entries: as Python floats (the same IEEE operations as numpy's, without
         # an array call each)
         target = self.target.tolist()
@@ -410,13 +413,13 @@ class Search(Shooter):
         full = singular_values(Jm).tolist()
         # the dependent velocities at t0: the aux kernel on the first row alone
         aux = np.empty((1, tr.layout.n_aux))
-        tr._kernels.aux_rows(tr.t[:1], tr.y[:1], tr._p, aux)
+        tr._kernels.aux_rows(*first, tr._p, aux)
         dependent = scene.dependent_velocities
         best = Connection(
             trajectory=tr,
             initial=MappingProxyType(dict(zip(
                 scene.state_names + dependent,
-                tr.y[0].tolist() + aux[0, :len(dependent)].tolist()))),
+                first[1][0].tolist() + aux[0, :len(dependent)].tolist()))),
             residual=residual, principle=scene.principle, unknowns=self.unknowns,
             rank=sum(1 for s in full if s > self.rcond * full[0]) if full and full[0] > 0
             else 0, singular_values=tuple(full),
