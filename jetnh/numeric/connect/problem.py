@@ -26,6 +26,8 @@ _SCENES: dict = {}
 
 
 def _scene(system, principle, params, initial, t_span):
+    """The scene of the runs (kept, ``_SCENES``); ``initial``: its initial values, or a
+    function that makes them (called only where the scene is made)."""
     from ..scene import Scene
 
     try:
@@ -37,7 +39,8 @@ def _scene(system, principle, params, initial, t_span):
     hit = _SCENES.get(key)
     if hit is not None and hit[0] is system:
         return hit[1]
-    scene = Scene(system, principle, params=params, initial=initial, t_span=t_span)
+    scene = Scene(system, principle, params=params,
+                  initial=initial() if callable(initial) else initial, t_span=t_span)
     if key is not None:
         if len(_SCENES) >= 16:
             _SCENES.clear()

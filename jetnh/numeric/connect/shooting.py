@@ -17,7 +17,7 @@ from ...errors import JetnhError
 from .. import arguments, atlas, interrupt, solve
 from ..methods._common import EVENT, FINISHED
 from ..options import options
-from .small import all_finite, finite_vector, thin_svd
+from .small import all_finite, finite_vector, max_abs, thin_svd
 
 #: the measure of the scene's split (``verdicts.split_measure``) below which a run that
 #: stopped early stopped at the edge of its chart
@@ -386,11 +386,15 @@ def full_rank(s) -> bool:
 def rank(s, rcond) -> int:
     """The numerical rank of singular values ``s`` (largest first): those above
     ``rcond`` times the largest."""
-    values = s.tolist()
+    return rank_of(s.tolist(), rcond)
+
+
+def rank_of(values, rcond) -> int:
+    """``rank`` of singular values given as a list of floats."""
     if not values or not values[0] > 0:
         return 0
     cut = rcond * values[0]
-    return sum(1 for v in values if v > cut)
+    return len([v for v in values if v > cut])
 
 
 #: growth max |dy(t1)/dy(t0)| of the guess's run above which the default splits the span
@@ -406,8 +410,8 @@ def default_segments(shooter, u) -> int:
     got = shooter.endpoint(u)
     if got is None:
         return MAX_SEGMENTS
-    n = len(shooter.y0)
-    growth = float(abs(got[2].S[:, :n]).max())
+    # (a Shot's sensitivities are finite: ``Shot.of``)
+    growth = max_abs(got[2].S, len(shooter.y0))
     if not math.isfinite(growth):
         return MAX_SEGMENTS
     if growth <= GROWTH:

@@ -14,7 +14,8 @@ from .collocation import warm_start
 from .connection import Connection, Stitched
 from .levenberg import levenberg_marquardt
 from .problem import VARIATIONAL
-from .shooting import Segments, Shooter, default_segments, rank, singular_values
+from .shooting import (Segments, Shooter, default_segments, rank, rank_of,
+                       singular_values)
 
 #: Levenberg-Marquardt iterations per continuation step (at most ``max_iter``)
 STEP_ITER = 20
@@ -121,8 +122,9 @@ class Search(Shooter):
     @property
     def conditions(self) -> tuple:
         """The names of the end conditions: the named coordinates, then p_<free>."""
-        return self.end_names + tuple(f"p_{c}" for c in (
-            self.momenta.free if self.momenta is not None else ()))
+        if self.momenta is None:
+            return self.end_names
+        return self.end_names + tuple(f"p_{c}" for c in self.momenta.free)
 
     def newton(self, u, target, tol, max_iter, rows=None):
         """Levenberg-Marquardt (``levenberg_marquardt``) on the end conditions = target
@@ -421,13 +423,12 @@ class Search(Shooter):
                 scene.state_names + dependent,
                 first[1][0].tolist() + aux[0, :len(dependent)].tolist()))),
             residual=residual, principle=scene.principle, unknowns=self.unknowns,
-            rank=sum(1 for s in full if s > self.rcond * full[0]) if full and full[0] > 0
-            else 0, singular_values=tuple(full),
+            rank=rank_of(full, self.rcond), singular_values=tuple(full),
             iterations=iterations,
             _columns=tuple(self.cols), _rcond=self.rcond, _run=MappingProxyType(
                 {"rtol": self.rtol, "atol": self.atol, "method": self.method}),
             conditions=self.conditions, route=route)
-        if tol is not None and max(m / (1 + abs(b)) for m, b in zip(miss, target)) > tol:
+        if tol is not None and max([m / (1 + abs(b)) for m, b in zip(miss, target)]) > tol:
             raise ConnectError(
                 f"the {scene.principle} motion found ends {residual:.3g} away from end"
                 + self._reachability(u), best)
