@@ -103,15 +103,6 @@ class Shot:
         self._made, self._trajectory = (scene, plan, out, wall, first, p), None
         return self
 
-    def first_output(self):
-        """``(t[:1], y[:1])`` of the run's Trajectory (its first output row, the same
-        numbers), read off the loop's output where the Trajectory is not made yet."""
-        if self._trajectory is None and len(self._made) == 6:
-            out = self._made[2]
-            return out[1][:1], out[2][:1, :len(self.y)]
-        tr = self.trajectory
-        return tr.t[:1], tr.y[:1]
-
     @classmethod
     def _across(cls, scene, plan, y, p, stops, out=None):
         """``of`` for a run that reached the edge of the scene's split (its loop's
@@ -154,6 +145,22 @@ class Shot:
                 {**plan.dense, "partial_last": False},
                 n_events=len(plan.ce) - 1 if plan.switch else None, sens=plan.sens)
         return self._trajectory
+
+
+def first_values(motion) -> tuple[list, list]:
+    """``(state, aux)`` at t0 of ``motion`` (a ``Shot`` or a Trajectory), as lists: its
+    Trajectory's first row and the auxiliary values there (``Trajectory.aux``: the
+    dependent velocities first); a Shot's read off its loop's output (the same
+    numbers), its Trajectory not made."""
+    if isinstance(motion, Shot) and motion._trajectory is None and len(motion._made) == 6:
+        _, plan, out, _, _, p = motion._made
+        t, y, kern = out[1][:1], out[2][:1, :len(motion.y)], plan.kern
+    else:
+        tr = motion.trajectory if isinstance(motion, Shot) else motion
+        t, y, kern, p = tr.t[:1], tr.y[:1], tr._kernels, tr._p
+    aux = np.empty((1, kern.layout.n_aux))
+    kern.aux_rows(t, y, p, aux)
+    return y[0].tolist(), aux[0].tolist()
 
 
 class OutOfTime(Exception):
@@ -356,7 +363,7 @@ class Shooter:
         size = math.sqrt(du.dot(du)) / max(1.0, math.sqrt(u.dot(u)))
         if size > 1.0:
             du /= size
-        return u + du if du.any() else None
+        return u + du if np.count_nonzero(du) else None
 
     def truncated(self, usv):
         """The singular value decomposition ``usv`` of the shooting Jacobian cut to its

@@ -14,7 +14,7 @@ from .collocation import warm_start
 from .connection import Connection, Stitched
 from .levenberg import levenberg_marquardt
 from .problem import VARIATIONAL
-from .shooting import (Segments, Shooter, default_segments, rank, rank_of,
+from .shooting import (Segments, Shooter, default_segments, first_values, rank, rank_of,
                        singular_values)
 
 #: Levenberg-Marquardt iterations per continuation step (at most ``max_iter``)
@@ -396,17 +396,16 @@ class Search(Shooter):
     def connection(self, u, iterations, tol, stitched=None, route="") -> Connection:
         scene = self.scene
         if stitched is not None:
-            tr = stitched
-            q, Jm = self.end_conditions(tr.t[-1], tr.y[-1], tr.sensitivities[-1])
-            first = tr.t[:1], tr.y[:1]
+            motion = stitched
+            q, Jm = self.end_conditions(motion.t[-1], motion.y[-1],
+                                        motion.sensitivities[-1])
         else:
             got = self.endpoint(u)
             if got is None:
                 raise ConnectError(f"the motion found stops before t1: "
                                    f"{scene.run(y0=self.state(u)).stop_reason}")
-            q, Jm, shot = got
-            first = shot.first_output()
-            tr = shot.trajectory
+            # the run itself: its Trajectory is made when the Connection's is read
+            q, Jm, motion = got
         # a few entries: as Python floats (the same IEEE operations as numpy's, without
         # an array call each)
         target = self.target.tolist()
@@ -414,14 +413,12 @@ class Search(Shooter):
         residual = max(miss)
         full = singular_values(Jm).tolist()
         # the dependent velocities at t0: the aux kernel on the first row alone
-        aux = np.empty((1, tr.layout.n_aux))
-        tr._kernels.aux_rows(*first, tr._p, aux)
+        state, aux = first_values(motion)
         dependent = scene.dependent_velocities
         best = Connection(
-            trajectory=tr,
+            _motion=motion,
             initial=MappingProxyType(dict(zip(
-                scene.state_names + dependent,
-                first[1][0].tolist() + aux[0, :len(dependent)].tolist()))),
+                scene.state_names + dependent, state + aux[:len(dependent)]))),
             residual=residual, principle=scene.principle, unknowns=self.unknowns,
             rank=rank_of(full, self.rcond), singular_values=tuple(full),
             iterations=iterations,
