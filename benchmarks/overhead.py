@@ -29,7 +29,13 @@ fresh processes with empty numba and kernel caches, the trees alternating within
    with one step (T = 1e-6, ``save="final"``); the ratios to the bare call.  Also the
    bare call of a run of three steps and its arithmetic: its rhs evaluations at the cost
    of one in a long run (T = 100: the difference of the long and the one-step call over
-   their difference in evaluations).  ``--fixed`` measures this alone (seconds), and 5.
+   their difference in evaluations).  And the parts of a run's Python side, each alone:
+   the ``set_wakeup_fd`` that confirms the wakeup fd, a halt flag, ``interrupt.call`` of
+   nothing, the Trajectory of the loop's result, ``solve.run`` (a run without
+   ``Scene.run``'s option handling), the timing itself (in every figure), and the floor
+   of a run with its guarantees: a halt flag, the ``set_wakeup_fd`` confirming the wakeup
+   fd, the bare call and a Trajectory of its result, in a row.
+   ``--fixed`` measures this alone (seconds), and 5.
 5. A run interleaved with other work (as the work-precision benchmark's panels run it):
    a dop853 run of isokinetic_particle (Chetaev, T = 2, rtol 1e-8, ``save="final"``) and
    the bare call of its compiled loop, each hot (5th percentile of calls in a row), right
@@ -142,6 +148,33 @@ calls = {
 nfev["bare call"] = int(calls["bare call"](0)[4][2])
 for f in calls.values():
     f(0)
+try:        # the parts of a run's Python side, each timed alone (the names of this tree)
+    import _signal
+    from jetnh.numeric import solve
+    plan = short._memo["quick"][("dop853", "final", None, None)]
+    own, p, y = interrupt._WATCHDOG.own, short._p, short.y0.copy()
+    out = plan.entry(*plan.prefix, plan.t0, plan.t1, y, p, *plan.suffix, interrupt.flag())
+    noop = lambda: None
+    from jetnh.numeric.trajectory import Trajectory
+
+    def floor(i):       # what no run can skip: a halt flag, the wakeup fd confirmed (its
+        halt = np.zeros(1, np.int64)        # set_wakeup_fd), the call, a Trajectory
+        _signal.set_wakeup_fd(own, warn_on_full_buffer=False)
+        got = plan.entry(*plan.prefix, plan.t0, plan.t1, y, p, *plan.suffix, halt)
+        return Trajectory._finished(short, (got[1], got[2], got[3]), p, "dop853", "",
+                                    (got[4], 0.0, {}), plan.kern, None)
+    calls.update({
+        "part: the floor (halt flag, set_wakeup_fd, call, Trajectory)": floor,
+        "part: set_wakeup_fd": lambda i: _signal.set_wakeup_fd(own, warn_on_full_buffer=False),
+        "part: halt flag": lambda i: np.zeros(1, np.int64),
+        "part: interrupt.call of nothing": lambda i: interrupt.call(noop, interrupt.flag()),
+        "part: Trajectory": lambda i: solve.trajectory(short, "dop853", out, 0.0, plan.kern,
+                                                       None, p, 0.0, y, 1e-10, True),
+        "part: solve.run": lambda i: solve.run(short, plan, short.y0.copy(), p, True),
+        "part: the timing itself": lambda i: None,
+    })
+except (AttributeError, KeyError, ImportError, TypeError):
+    pass
 times = {k: [] for k in calls}
 times["long call"] = []
 order = np.random.default_rng(0)
@@ -278,8 +311,9 @@ def main(argv=None):
               "loop (rolling disk; one process per tree, calls interleaved, 5th "
               "percentile of single calls)",
         columns=["", *(f"{n} (us)" for n in trees), *(f"{n} / bare call" for n in trees)],
-        rows=[[k, *(f"{cost[n][k] * 1e6:.3g}" for n in trees),
-               *(f"{cost[n][k] / cost[n]['bare call']:.2f}" for n in trees)]
+        rows=[[k, *(f"{cost[n][k] * 1e6:.3g}" if k in cost[n] else "-" for n in trees),
+               *(f"{cost[n][k] / cost[n]['bare call']:.2f}" if k in cost[n] else "-"
+                 for n in trees)]
               for k in cost["after"]],
         note="trees (commits): " + ", ".join(f"{n} = {commit(p)}" for n, p in trees.items()))
     a = cost["after"]

@@ -218,6 +218,17 @@ def test_parameters_named_like_multipliers_are_refused(name):
         System(J, T + sp.Symbol(name) * xd, [F])
 
 
+@pytest.mark.parametrize("name", ["lambda_x", "nu_y", "eta_x"])
+def test_coordinates_named_like_multipliers_are_refused(name):
+    """A coordinate lambda_x beside x was refused later, as a jet space given
+    'lambda_x' twice, by the vakonomic equations' extended space."""
+    K = jn.JetSpace(f"x y {name}")
+    x_, y_, w = K.q
+    L = (K.qd[0]**2 + K.qd[1]**2 + K.qd[2]**2) / 2
+    with pytest.raises(JetSpaceError, match=f"the coordinate '{name}'.*rename the coordinate"):
+        System(K, L, [K.qd[0] - w * K.qd[1]], dependent=[x_])
+
+
 def test_non_symbol_parameters_and_unevaluated_derivatives_are_refused():
     with pytest.raises(JetSpaceError, match=r"not a Symbol.*Symbol\('m_1'\)"):
         System(J, sp.IndexedBase("m")[1] * T)

@@ -174,3 +174,132 @@ def test_a_replace_copy_of_a_switching_scene_shares_its_charts():
     # a run that stays in its chart is the copy's too
     short = moved.replace(t_span=(0.0, 0.1)).run(rtol=1e-8)
     assert not short.switches and short.scene.t_span == (0.0, 0.1)
+
+
+@pytest.fixture
+def sigint_handler():
+    """A SIGINT handler of the test's own (the handler ``interrupt._on_sigint`` stands
+    in front of) recording the state of the calls when it runs; the previous handler
+    and wakeup fd restored after the test."""
+    import signal
+
+    seen = []
+    before = signal.signal(signal.SIGINT, lambda signum, frame: seen.append(
+        (interrupt._DEPTH[0], list(interrupt._HALTS))))
+    fd = signal.set_wakeup_fd(-1)
+    signal.set_wakeup_fd(fd)
+    try:
+        yield seen
+    finally:
+        signal.signal(signal.SIGINT, before)
+        signal.set_wakeup_fd(fd)
+
+
+def _sigint_in(seconds):
+    """SIGINT to this process after ``seconds`` (from a timer thread)."""
+    import os
+    import signal
+
+    timer = threading.Timer(seconds, os.kill, (os.getpid(), signal.SIGINT))
+    timer.start()
+    return timer
+
+
+def test_sigint_stops_nested_calls_and_reaches_the_handler_once_after(sigint_handler):
+    """Ctrl-C during a call nested in another (a run inside an event callback): both
+    halts set within a second, the handler run once, after the outer call returned,
+    nothing left on the watch."""
+    interrupt.call(lambda: None, interrupt.flag())       # (the watch installed)
+    outer, inner = interrupt.flag(), interrupt.flag()
+
+    def outer_call():
+        got = interrupt.call(_spin, inner, None, (inner, 10.0))
+        return got, _spin(outer, 10.0)
+
+    timer = _sigint_in(0.3)
+    tic = time.monotonic()
+    got = interrupt.call(outer_call, outer)
+    timer.join()
+    assert got == (interrupt.INTERRUPT, interrupt.INTERRUPT)
+    assert time.monotonic() - tic < 3.0
+    assert sigint_handler == [(0, [])]              # once, after every call returned
+    assert interrupt._HALTS == [] and interrupt._DEPTH[0] == 0
+    # a second Ctrl-C, between calls, reaches the handler at once; the next call runs
+    import os
+    import signal
+
+    os.kill(os.getpid(), signal.SIGINT)
+    time.sleep(0.05)
+    assert len(sigint_handler) == 2
+    halt = interrupt.flag()
+    assert interrupt.call(_spin, halt, None, (halt, 0.2)) == 0
+
+
+def test_sigint_is_heard_while_asyncio_holds_the_wakeup_fd(sigint_handler):
+    """A wakeup fd of someone else's (an asyncio loop with a signal handler) receives
+    the signal's byte during a call, the call is stopped within a second, and the fd
+    is theirs again after it."""
+    import asyncio
+    import signal
+
+    interrupt.call(lambda: None, interrupt.flag())
+    loop = asyncio.new_event_loop()
+    try:
+        loop.add_signal_handler(signal.SIGUSR1, lambda: None)
+        theirs = signal.set_wakeup_fd(-1)
+        signal.set_wakeup_fd(theirs)
+        assert theirs not in (-1, interrupt._WATCHDOG.own)
+
+        async def run():
+            halt = interrupt.flag()
+            timer = _sigint_in(0.3)
+            tic = time.monotonic()
+            got = interrupt.call(_spin, halt, None, (halt, 10.0))
+            timer.join()
+            return got, time.monotonic() - tic
+
+        got, took = loop.run_until_complete(run())
+        assert got == interrupt.INTERRUPT and took < 3.0
+        assert len(sigint_handler) == 1
+        now = signal.set_wakeup_fd(-1)
+        signal.set_wakeup_fd(now)
+        assert now == theirs                        # restored after the call
+        loop.remove_signal_handler(signal.SIGUSR1)
+    finally:
+        loop.close()
+
+
+def test_sigint_is_heard_after_the_watchdog_ended(monkeypatch, sigint_handler):
+    """A call without a timeout made after the watchdog ended (idle) starts it again:
+    Ctrl-C during the call still stops it."""
+    wd = interrupt._Watchdog()
+    monkeypatch.setattr(interrupt, "_WATCHDOG", wd)
+    monkeypatch.setattr(interrupt, "IDLE", 0.005)
+    try:
+        for _ in range(3):
+            interrupt.call(lambda: None, interrupt.flag())
+            time.sleep(0.1)                         # the watchdog ends meanwhile
+            halt = interrupt.flag()
+            timer = _sigint_in(0.2)
+            got = interrupt.call(_spin, halt, None, (halt, 10.0))
+            timer.join()
+            assert got == interrupt.INTERRUPT
+        assert len(sigint_handler) == 3 and interrupt._HALTS == []
+    finally:
+        monkeypatch.undo()
+        wd.close()
+
+
+def test_a_call_in_another_thread_runs_unwatched_by_signals():
+    """Outside the main thread (where ``set_wakeup_fd`` raises) a call without a timeout
+    is the bare call: nothing on the main thread's watch."""
+    got = []
+
+    def work():
+        halt = interrupt.flag()
+        got.append((interrupt.call(lambda x: x + 1, halt, None, (1,)), list(interrupt._HALTS)))
+
+    thread = threading.Thread(target=work)
+    thread.start()
+    thread.join()
+    assert got == [(2, [])]

@@ -103,7 +103,8 @@ class System(Frozen):
     the compiled integrators stop (a singularity indicator); other non-smooth functions
     (Piecewise, Heaviside, Max, floor, re, ...) of t, q, qdot are refused.  A parameter
     named like a velocity (xdot, x_dot, dx, ...) is a constant, with a JetnhWarning;
-    parameters named like jetnh's multipliers (lambda_x, nu_x, eta_x) are refused.
+    coordinates and parameters named like jetnh's multipliers (lambda_x, nu_x, eta_x) are
+    refused.
     Strings are never parsed.  Every refusal is a JetnhError saying what to write instead.
 
     A System is a value: immutable (``FrozenError`` on assignment; ``forces`` and
@@ -232,13 +233,18 @@ class System(Frozen):
                 "c*J.qd[0]**2/2, or put a potential into the Lagrangian")
 
     def _check_names(self):
-        """Refuse parameters named like jetnh's own symbols; warn about parameters named
-        like velocities (they are constants, not the velocity)."""
+        """Refuse coordinates and parameters named like jetnh's own symbols; warn about
+        parameters named like velocities (they are constants, not the velocity)."""
         J = self.J
         reserved = {}
         for q in J.q:
             for prefix, what in NAMED.items():
                 reserved[f"{prefix}_{q.name}"] = f"{what} of {q.name}"
+        for q in J.q:
+            if q.name in reserved:
+                raise JetSpaceError(
+                    f"the coordinate {q.name!r} has the name jetnh gives to "
+                    f"{reserved[q.name]}; rename the coordinate")
         lookalike = inputs.velocity_lookalikes(J)
         for p in self.parameters:
             m = inputs.JET_TAIL.match(p.name)

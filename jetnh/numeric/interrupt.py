@@ -24,11 +24,15 @@ The watchdog is one daemon thread, started on demand (without waiting for it to 
 ``threading.Thread.start`` waits for a hand-over that costs a short run's time several
 times) and ended after ``IDLE`` seconds with nothing to watch (it drops the bytes of
 signals that came while it was not running), so that runs interleaved with other work
-find it running.  A call costs a registration (a dict entry, without a lock: the lock
-only starts and ends the thread), not a thread hand-over.  Signals reach only the main
-thread, so elsewhere only the timeout is watched.  ``shared(halt)`` is one such watch
-for many compiled calls in turn (a shooting search's runs): registered and the wakeup fd
-set once, each call only resetting ``halt``.
+find it running.  A call costs a registration, not a thread hand-over: in the main
+thread without a timeout (most runs) its ``halt`` on a list the watchdog reads on
+SIGINT, else a dict entry (without a lock: the lock only starts and ends the thread),
+and the one ``set_wakeup_fd`` that confirms the wakeup fd (~1 us; the one floor of a
+short run's Python side here: CPython cannot read the wakeup fd without setting it, and
+someone else, an asyncio loop, may have set theirs since the last call).  Signals
+reach only the main thread, so elsewhere only the timeout is watched.  ``shared(halt)``
+is one such watch for many compiled calls in turn (a shooting search's runs):
+registered and the wakeup fd set once, each call only resetting ``halt``.
 """
 
 from __future__ import annotations
@@ -81,17 +85,22 @@ class _Watchdog:
         key = next(self.ids)
         self.calls[key] = [halt, deadline, forward]
         if self.thread is None:
-            with self.lock:
-                if self.thread is None:
-                    _drain(self.signals)          # signals from before this watch
-                    try:
-                        self.thread = _thread.start_new_thread(self._loop, ())
-                    except BaseException:     # no thread (limits): no watch left behind
-                        del self.calls[key]
-                        raise
+            try:
+                self.start()
+            except BaseException:             # no thread (limits): no watch left behind
+                del self.calls[key]
+                raise
         if deadline is not None:
             self._poke()
         return key
+
+    def start(self):
+        """Start the thread unless it runs (a watch registered before this call is seen
+        by it: the thread ends only after finding nothing to watch, under the lock)."""
+        with self.lock:
+            if self.thread is None:
+                _drain(self.signals)          # signals from before this watch
+                self.thread = _thread.start_new_thread(self._loop, ())
 
     def _poke(self):
         try:
@@ -104,12 +113,12 @@ class _Watchdog:
         while True:
             # a snapshot (calls come and go without the lock)
             deadlines = [c[1] for c in list(self.calls.values()) if c[1] is not None]
-            if self.calls:
+            if self.calls or _HALTS:
                 idle_since = time.monotonic()
             elif time.monotonic() - idle_since > IDLE:
                 with self.lock:
                     self.thread = None
-                    if not self.calls:        # (a call registered from now on starts one)
+                    if not (self.calls or _HALTS):    # (a call from now on starts one)
                         return
                     self.thread = _thread.get_ident()     # one registered meanwhile
                 continue
@@ -125,6 +134,9 @@ class _Watchdog:
                 return
             now = time.monotonic()
             calls = list(self.calls.values())
+            if signal.SIGINT in got:
+                for halt in list(_HALTS):
+                    halt[0] = INTERRUPT
             for c in calls:
                 if signal.SIGINT in got:
                     c[0][0] = INTERRUPT
@@ -176,6 +188,7 @@ def _forget():
         _WATCHDOG = None
     _DEPTH[0] = 0
     _CAUGHT.clear()
+    # (_HALTS kept: a child forked during a call pops its entry as the call unwinds)
 
 
 os.register_at_fork(after_in_child=_forget)
@@ -190,6 +203,9 @@ _set_wakeup_fd = _signal.set_wakeup_fd
 _DELEGATE: list = [None]
 _DEPTH = [0]
 _CAUGHT: list = []
+#: the halt flags of the calls in progress in the main thread without a timeout (``call``'s
+#: common case; nested calls in the order they began): set by the watchdog on SIGINT
+_HALTS: list = []
 
 
 def _on_sigint(signum, frame):
@@ -219,7 +235,40 @@ def _listening() -> bool:
 def call(fn, halt: np.ndarray, timeout: float | None = None, args: tuple = ()):
     """``fn(*args)``, stoppable by Ctrl-C and by ``timeout`` through ``halt`` (see the
     module docstring)."""
-    # (_listening inlined where it is cheap: the main thread, _on_sigint in place)
+    wd = _WATCHDOG
+    if (timeout is None and wd is not None and _get_ident() == _MAIN
+            and _getsignal(_SIGINT) is _on_sigint):
+        # the common case (the main thread, _on_sigint in place, no timeout): ``halt``
+        # on the list the watchdog reads on SIGINT, the wakeup fd confirmed as its own
+        own = wd.own
+        old = _set_wakeup_fd(own, warn_on_full_buffer=False)
+        if old == own or old < 0:             # (no one else's: it stays the watchdog's)
+            _HALTS.append(halt)
+            _DEPTH[0] += 1
+            try:
+                if wd.thread is None:         # (ended after IDLE: sees _HALTS or starts)
+                    wd.start()
+                return fn(*args)
+            finally:
+                _HALTS.pop()
+                _DEPTH[0] -= 1
+                if _CAUGHT and not _DEPTH[0]:
+                    _deliver()
+        _set_wakeup_fd(old)                   # someone else's: the watch that forwards
+    return _call(fn, halt, timeout, args)
+
+
+def _deliver():
+    """The SIGINT held back during the compiled calls, to the handler ``_on_sigint``
+    stands in for."""
+    frame = _CAUGHT[0]
+    _CAUGHT.clear()
+    _DELEGATE[0](_SIGINT, frame)
+
+
+def _call(fn, halt, timeout, args):
+    """``call`` in general: any thread, a timeout, a wakeup fd of someone else's (which
+    receives every byte during the call and is restored after it)."""
     if not ((_get_ident() == _MAIN and _getsignal(_SIGINT) is _on_sigint)
             or _listening()):
         if timeout is None:
@@ -248,9 +297,7 @@ def call(fn, halt: np.ndarray, timeout: float | None = None, args: tuple = ()):
             if old >= 0:                      # someone else's: theirs again
                 _set_wakeup_fd(old)
             if _CAUGHT and not _DEPTH[0]:
-                frame = _CAUGHT[0]
-                _CAUGHT.clear()
-                _DELEGATE[0](_SIGINT, frame)
+                _deliver()
 
 
 @contextlib.contextmanager
@@ -287,9 +334,7 @@ def shared(halt: np.ndarray):
             finally:
                 _DEPTH[0] -= 1
                 if _CAUGHT and not _DEPTH[0]:
-                    frame = _CAUGHT[0]
-                    _CAUGHT.clear()
-                    _DELEGATE[0](_SIGINT, frame)
+                    _deliver()
         yield run
     finally:
         if key is not None:

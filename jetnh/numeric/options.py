@@ -126,12 +126,26 @@ class Options:
     singular: Singular
     newton: Newton
 
+    def __hash__(self):
+        """Computed once (an Options is part of the key of every plan it makes:
+        ``solve.planned``); not pickled, as string hashes differ between processes."""
+        h = self.__dict__.get("_hash")
+        if h is None:
+            h = hash((self.step, self.singular, self.newton))
+            object.__setattr__(self, "_hash", h)
+        return h
+
+    def __getstate__(self):
+        return {k: v for k, v in self.__dict__.items() if k != "_hash"}
+
 
 def options(step=None, singular="stop", newton=None, **keywords) -> Options:
     """The ``Options`` of the values ``step``, ``singular`` (a ``Singular`` or its
     action), ``newton`` and their keywords (``KEYWORDS``; None: not given).  Repeated
     calls with the same plain keywords return one value."""
     if step is None and newton is None and type(singular) is str:
+        if not keywords and singular == "stop":
+            return _PLAIN
         try:
             key = (singular, *((k, type(v), v) for k, v in sorted(keywords.items())))
             hit = _SEEN.get(key)
@@ -155,3 +169,5 @@ def options(step=None, singular="stop", newton=None, **keywords) -> Options:
 
 
 _SEEN: dict = {}
+#: the options of a run that gives none
+_PLAIN = Options(_DEFAULT[StepControl], _DEFAULT[Singular], _DEFAULT[Newton])

@@ -148,8 +148,9 @@ class Scene(Frozen):
         self.velocities = tuple(v.name for v in system.independent_velocities)
         self.dependent_velocities = tuple(v.name for v in system.dependent_velocities)
         self.state_names = self.coordinates + self.velocities + self.multipliers
-        #: the names an initial value may have
+        #: the names an initial value may have, the names of the states
         self._initial_names = frozenset(self.state_names + self.dependent_velocities)
+        self._state_set = frozenset(self.state_names)
         self.consistency_tol = arguments.positive(consistency_tol, "consistency_tol")
         self.projected: dict[str, tuple[float, float]] = {}
         #: coordinates moved onto the holonomic constraints: name -> (given, completed)
@@ -191,8 +192,15 @@ class Scene(Frozen):
         as an array where the kernels gave the dependent velocities (else None);
         ``kernels``: the scene's compiled kernels if they are loaded, ``p`` its run-time
         parameters (``_dependent_velocity_floats``)."""
-        given = {}
         allowed = self._initial_names
+        if (type(initial) is dict and initial.keys() <= allowed
+                and set(map(type, initial.values())) == _FLOAT
+                and math.isfinite(sum(initial.values()))):
+            # names and finite floats (a NaN or an infinity makes the sum not finite; an
+            # overflow of finite values takes the general route, which says which is not)
+            given, initial = dict(initial), {}
+        else:
+            given = {}
         for k, v in initial.items():
             name = k if type(k) is str else arguments.name_of(k, "an initial value")
             if name not in allowed:
@@ -204,8 +212,8 @@ class Scene(Frozen):
                 v, f"initial value of {name!r}")
             if not math.isfinite(v):
                 raise JetnhError(f"initial value of {name!r} is {v}")
-        missing = [n for n in self.state_names if n not in given]
-        if missing:
+        if len(given) < len(self.state_names) or not given.keys() >= self._state_set:
+            missing = [n for n in self.state_names if n not in given]
             raise JetnhError(
                 f"missing initial values: {', '.join(missing)}"
                 + ("" if not self.multipliers else
@@ -441,12 +449,16 @@ class Scene(Frozen):
         # floats, the initial values floats, y0 made read-only here)
         d.update(t_span=self.t_span if t_span is self.t_span else self._t_span(t_span),
                  projected={}, completed={})
-        kern = _loaded_kernels(self.key, self.cache) if "key" in self._memo else None
-        p = self._p
+        own = self._memo
+        key = own.get("key")
+        kern = None if key is None else _loaded_kernels(key, self.cache)
+        p = own.get("_p")
+        if p is None:
+            p = self._p
         memo = self._shared_memo()
-        for k in ("_p", "quick") if t_span is self.t_span else ("_p",):
-            if k in self._memo:     # (the quick plans: of this time span)
-                memo[k] = self._memo[k]
+        memo["_p"] = p
+        if t_span is self.t_span and "quick" in own:    # (the quick plans: of this span)
+            memo["quick"] = own["quick"]
         d["_memo"] = memo      # (frozen from here: ``_initial`` sets nothing when it
         #                        neither projects nor completes)
         ini, y0 = new._initial(initial, False, False, kern, p)
@@ -463,10 +475,16 @@ class Scene(Frozen):
         this scene, its copies and theirs fill one store (a copy made before this scene's
         first run plans nothing its siblings planned)."""
         memo = self._memo
+        hit = memo.get("shared")
+        if hit is not None and hit[0] == len(memo):    # (entries are only ever added)
+            return dict(hit[1])
         memo.setdefault("plans", {})
         memo.setdefault("events", {})
         memo.setdefault("atlases", [])
-        return {k: memo[k] for k in _SHARED if k in memo}
+        shared = {k: memo[k] for k in _SHARED if k in memo}
+        memo["shared"] = None
+        memo["shared"] = (len(memo), shared)
+        return dict(shared)
 
     def _kernel_identity(self) -> tuple:
         """What the compiled kernels of this scene are a function of."""
@@ -600,11 +618,18 @@ class Scene(Frozen):
             plan = self._plan(rtol, atol, t_eval, method, save, events, t_span, timeout,
                               projection, backend, step, singular, newton, sensitivities,
                               sensitivity_error, keywords)
-        if y0 is None and params is None:       # the scene's own (the loop's own copy)
-            p = self._memo.get("_p")
+        if y0 is None and params is None:       # the scene's own
+            memo = self._memo
+            p = memo.get("_p")
+            if plan.direct:     # (the loop reads y0 into a copy of its own: never written)
+                y = memo.get("_y0")
+                return solve.run(self, plan, self._y0 if y is None else y,
+                                 self._p if p is None else p, own=True)
             return solve.run(self, plan, self.y0.copy(), self._p if p is None else p,
                              own=True)
-        p = self._run_params(params)
+        p = self._memo.get("_p") if params is None else self._run_params(params)
+        if p is None:
+            p = self._p
         y = self._run_state(y0, plan.t0, p)
         return solve.run(self, plan, y, p, own=False)
 
@@ -646,6 +671,13 @@ class Scene(Frozen):
         """``p``, made once: the run-time parameters the runs read (never written)."""
         return self.p
 
+    @memo
+    def _y0(self) -> np.ndarray:
+        """``y0`` as the writable array compiled loops take, made once: the initial state
+        of the direct runs (``solve.Plan.direct``), whose loops read it into a copy of
+        their own and never write it."""
+        return self.y0.copy()
+
     def _run_params(self, params) -> np.ndarray:
         """The run-time parameters of one run (``run(params=...)``), checked."""
         if params is None:
@@ -679,8 +711,10 @@ class Scene(Frozen):
             else:
                 y, _ = arguments.keyed_or_sequence(y0, self.state_names, self.y0, "y0",
                                                    "scene.state_names")
-            self._check_holonomic(y, t0, p)
-            self._check_split(y, {}, t0, p)
+            if self.system.holonomic:
+                self._check_holonomic(y, t0, p)
+            if self.dependent_velocities:
+                self._check_split(y, {}, t0, p)
             return y
         allowed = self.state_names + self.dependent_velocities
         for k in y0:
@@ -800,6 +834,8 @@ class Scene(Frozen):
 #: atlas applies and the first atlas (whose charts the others share: ``atlas.atlas``)
 _SHARED = ("spec", "key", "plans", "events", "atlas_applies", "atlases")
 
+
+_FLOAT = {float}
 
 #: the least |indicator| at which the initial dependent velocities are taken from the
 #: compiled kernels (``Scene._dependent_velocity_floats``)

@@ -85,6 +85,7 @@ class Plan:
     suffix: tuple = ()
     callbacks: tuple = ()           # what the addresses in prefix point into, kept alive
     direct: bool = False            # a run is one call of ``entry`` (``run``)
+    head: tuple = ()                # ``(*prefix, t0, t1)`` of a direct plan
 
 
 def _unused(method, **given):
@@ -242,7 +243,7 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
                 te=te, mode=mode, newton=newton, switch=switch, dense=dense,
                 dense_ends=ends, entry=entry,
                 prefix=prefix, suffix=suffix, callbacks=callbacks,
-                direct=sens is None and not switch and not batch)
+                direct=sens is None and not switch and not batch, head=(*prefix, t0, t1))
 
 
 def planned(scene, key, make) -> Plan:
@@ -308,16 +309,21 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
     """The trajectory of ``plan`` from the state ``y`` (checked, its own array) with the
     run-time parameters ``p``; ``own``: these are the scene's own initial values."""
     if plan.direct:             # one call of the compiled loop, first: most runs are
-        halt = np.zeros(1, dtype=np.int64)
+        halt = np.zeros(1, np.int64)
         tic = _clock()
-        out = interrupt.call(plan.entry, halt, plan.limit,
-                             (*plan.prefix, plan.t0, plan.t1, y, p, *plan.suffix, halt))
+        out = interrupt.call(plan.entry, halt, plan.limit, (*plan.head, y, p, *plan.suffix,
+                                                            halt))
         wall = _clock() - tic
         if plan.ctl.n_hol:          # rows of the dense output onto g = 0
             loops.on_constraints(plan.kern, plan.ctl, plan.mode, None, out, p, plan.t0)
         dense = plan.dense_ends
+        status = out[0]
         if dense is not None:    # stopped inside a step or not
-            dense = dense[out[0] in (EVENT, SINGULAR)]
+            dense = dense[status == EVENT or status == SINGULAR]
+        if status == FINISHED and len(out) == 6:        # most runs: at once
+            return Trajectory._finished(scene, (out[1], out[2], out[3]), p, plan.method.name,
+                                        _FINISHED_TEXT, (out[4], wall, scene.projected),
+                                        plan.kern, dense)
         return trajectory(scene, plan.method.name, out, wall, plan.kern, plan.ce, p,
                           plan.t0, y, plan.singular_tol, plan.checked, plan.limit, dense)
     m = plan.method

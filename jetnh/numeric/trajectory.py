@@ -12,7 +12,7 @@ integration stopped (and the split switches of a run that changed split,
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 
 import numpy as np
 
@@ -72,10 +72,34 @@ class Diagnostics:
         for k, v in self.events.items():
             lines.append(f"  event {k}: {v} occurrence(s)")
         if self.switches:
-            lines.append(f"  {len(self.switches)} split switch(es), the first at t = "
-                         f"{self.switches[0]['t']:.6g} ({self.switches[0]['from']} -> "
-                         f"{self.switches[0]['to']})")
+            lines.append(f"  {_switches_text(self.switches)}")
         return "\n".join(lines)
+
+    def __repr__(self):
+        """Every field as the dataclass prints it, the split switches (one entry per
+        switch: any number) as their count, the first and the last."""
+        parts = [f"{f.name}={getattr(self, f.name)!r}" for f in fields(self)
+                 if f.name != "switches"]
+        if self.switches:
+            parts.append(f"switches=<{_switches_text(self.switches)}>")
+        else:
+            parts.append("switches=[]")
+        return f"Diagnostics({', '.join(parts)})"
+
+
+def _switch_text(s) -> str:
+    """One split switch: its time and the dependent coordinates before and after."""
+    return f"t = {s['t']:.6g} ({', '.join(s['from'])} -> {', '.join(s['to'])})"
+
+
+def _switches_text(switches) -> str:
+    """The split switches of a run in one bounded line: their count, the first and the
+    last."""
+    n = len(switches)
+    text = f"{n} split switch{'es' if n != 1 else ''}, the first at {_switch_text(switches[0])}"
+    if n > 1:
+        text += f", the last at {_switch_text(switches[-1])}"
+    return text
 
 
 def _read_only(a) -> np.ndarray:
@@ -111,6 +135,59 @@ def _output(a, n) -> np.ndarray:
     return a if a.shape[0] == n else a[:n]
 
 
+class _Unloaded:
+    """In an unpickled trajectory, the compiled kernels it was run with: their
+    ``layout`` at once, anything else from the kernels loaded on first use (from the
+    scene's disk cache, else generated: ``load`` names the scene's attribute, or
+    "sensitivities"; None where the trajectory's kernels are none of the scene's)."""
+
+    def __init__(self, scene, load, layout):
+        self.scene, self.load, self.layout, self._kernels = scene, load, layout, None
+
+    def __getstate__(self):
+        return {"scene": self.scene, "load": self.load, "layout": self.layout,
+                "_kernels": None}
+
+    def __getattr__(self, name):
+        if name.startswith("__") or name == "_kernels":
+            raise AttributeError(name)
+        if self._kernels is None:
+            if self.load is None:
+                raise JetnhError("this unpickled trajectory's compiled kernels are not "
+                                 "its scene's, so they cannot be loaded here; evaluate it "
+                                 "(traj.at, plots) before pickling it")
+            if self.load == "sensitivities":
+                from .kernels import sensitivity_kernels
+
+                self._kernels = sensitivity_kernels(self.scene)
+            else:
+                self._kernels = getattr(self.scene, self.load)
+        return getattr(self._kernels, name)
+
+    @classmethod
+    def of(cls, kernels, scene, method):
+        """The stand-in of ``kernels``, a trajectory's of ``scene`` run by ``method``."""
+        if isinstance(kernels, cls):
+            return kernels
+        load = {"dla": "dla_kernels", "dvi": "dvi_kernels"}.get(method, "kernels")
+        return cls(scene, load if getattr(scene, load) is kernels else None,
+                   kernels.layout)
+
+
+class _Charts:
+    """In an unpickled trajectory that changed split, its pieces (``atlas.Stitched``),
+    whose charts' compiled code stays with the process that ran it: its aux rows came
+    with it, evaluation between its rows is refused."""
+
+    def _refuse(self, *args, **kwargs):
+        raise JetnhError("this trajectory changed split and was unpickled: its charts' "
+                         "compiled code stayed with the process that ran it, so it is "
+                         "not evaluated between its rows here; call traj.at(...) before "
+                         "pickling it, or pass the times as t_eval= to the run")
+
+    aux = at = evaluate = _refuse
+
+
 class Trajectory(Frozen):
     """Output times ``t`` and states ``y`` (rows) of one run, with named access.
 
@@ -120,7 +197,10 @@ class Trajectory(Frozen):
     give every series by name (``jetnh.numeric.export``; ``plot`` and ``plot_path`` draw
     smooth curves through the dense output); ``at(times)`` evaluates the run between its
     rows, as a DataFrame (``jetnh.numeric.dense``).  Immutable (``jetnh.frozen``); the
-    derived columns are computed on first access.
+    derived columns are computed on first access.  Picklable (results sent through
+    multiprocessing or dask): the data travel, read-only again when unpickled, and the
+    compiled kernels are loaded from the scene's cache on first use there (a run that
+    changed split is then not evaluated between its rows: its charts stayed behind).
     """
 
     #: the stop at a singular configuration: {"indicator", "kind", "index", "t", "value",
@@ -203,6 +283,40 @@ class Trajectory(Frozen):
                 d["y_events"] = readonly(list(y_ev))
         if sensitivities is not None:
             d["_sens"] = (tuple(sensitivities[0]), _read_only(sensitivities[1]))
+
+    # ------------------------------------------------------------------ pickling
+    def __getstate__(self):
+        """The data of the run (the output rows alone, the aux rows computed now), its
+        compiled code replaced by what reloads it in another process (``_Unloaded``)
+        or refuses what needs it there (``_Charts``)."""
+        d = dict(self.__dict__)
+        t, y = self.t, self.y
+        d["_rows"] = (t, y, t.shape[0])
+        d["_memo"] = {} if self._own else {"aux": self.aux}
+        d["_kernels"] = _Unloaded.of(self._kernels, self.scene, self.method)
+        if self._segments is not None:
+            d["_segments"] = _Charts()
+        dense = d.get("_dense")
+        if dense is not None and "rhs" in dense and not isinstance(dense["rhs"], _Unloaded):
+            d["_dense"] = {**dense, "rhs": _Unloaded(self.scene, "sensitivities",
+                                                     dense["rhs"].layout)}
+        return d
+
+    def __setstate__(self, state):
+        """Read-only again: every public array (and the output rows), as when run."""
+        self.__dict__.update(state)
+        t, y, _ = state["_rows"]
+        readonly((t, y))
+        for name in ("t_events", "y_events", "switches", "_own", "_memo"):
+            if name in state:
+                readonly(state[name])
+        if "singularity" in state:
+            self.__dict__["singularity"] = FrozenDict(readonly(dict(state["singularity"])))
+        if "_sens" in state:
+            readonly(state["_sens"][1])
+
+    def __copy__(self):
+        return self             # (immutable)
 
     @memo
     def t(self) -> np.ndarray:
@@ -500,5 +614,7 @@ class Trajectory(Frozen):
 
     def __repr__(self):
         span = f"t in [{self.t[0]:.6g}, {self.t[-1]:.6g}]" if len(self) else "empty"
-        return (f"<Trajectory {self.method}: {len(self)} rows, {span}, "
+        n = len(self.switches)
+        switches = f", {n} split switch{'es' if n != 1 else ''}" if n else ""
+        return (f"<Trajectory {self.method}: {len(self)} rows, {span}{switches}, "
                 f"{self.stop_reason}>")
