@@ -14,6 +14,8 @@ The API (other scripts import it; keep it small and stable):
                                    interpreter: its last stdout line as JSON, or
                                    {"timeout": True, "seconds_lower_bound"} / {"error"}
     fmt_seconds(r)                 such a result as table text: seconds, ">T" or "error"
+    rhs_driver()                   ``drive(rhs, y, p, n)``: n calls of a compiled rhs in a
+                                   compiled loop (the cost of an evaluation, bare)
 
 Wall times are ``time.perf_counter`` differences; the machine is shared, so compare only
 figures measured in the same run and take the best of several repetitions.
@@ -151,3 +153,23 @@ def fmt_seconds(r) -> str:
     if r.get("timeout"):
         return f">{r['seconds_lower_bound']:.0f}"
     return "error" if "error" in r else f"{r['seconds']:.2f}"
+
+
+def rhs_driver():
+    """A compiled loop calling an rhs kernel n times (``drive(rhs, y, p, n)``), ``rhs`` a
+    C callback by address (``FunctionAddress``), as the integrators call it."""
+    import numba
+    import numpy as np
+
+    from jetnh.numeric.methods._common import RHS, entry_point, f8, i8
+
+    @numba.njit((RHS, f8[::1], f8[::1], i8))
+    def drive(rhs, y, p, n):
+        out = np.empty(y.shape[0])
+        acc = 0.0
+        for i in range(n):
+            y[0] += 1e-15                     # keep the compiler from hoisting the call
+            rhs(0.0, y, p, out)
+            acc += out[-1]
+        return acc
+    return entry_point(drive)

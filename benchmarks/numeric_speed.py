@@ -29,29 +29,12 @@ import numba
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from _common import best, best_of, parser, write
+from _common import best, best_of, parser, rhs_driver, write
 from workprecision import Case, researcher_rhs, scene_of
 
 CALL_CASES = (Case("rolling_disk", "chetaev", 10.0),
               Case("n_trailer", "vakonomic", 0.5, options={"N": 3}, multipliers=0.01))
 RUN_CASES = (Case("rolling_disk", "chetaev", 10.0), Case("rolling_disk", "vakonomic", 10.0))
-
-
-def rhs_driver():
-    """A compiled loop calling an rhs kernel n times (``drive(rhs, y, p, n)``), ``rhs`` a
-    C callback by address (``FunctionAddress``), as the integrators call it."""
-    from jetnh.numeric.methods._common import RHS, entry_point, f8, i8
-
-    @numba.njit((RHS, f8[::1], f8[::1], i8))
-    def drive(rhs, y, p, n):
-        out = np.empty(y.shape[0])
-        acc = 0.0
-        for i in range(n):
-            y[0] += 1e-15                     # keep the compiler from hoisting the call
-            rhs(0.0, y, p, out)
-            acc += out[-1]
-        return acc
-    return entry_point(drive)
 
 
 @numba.njit("void(float64, float64[::1], float64[::1], float64[::1])", error_model="numpy")

@@ -6,7 +6,8 @@ Re-run a benchmark (its JSON and PNG files land in benchmarks/results/), then th
 BENCHMARKS.md is generated, never edited by hand.  ``jetnh bench --all [--quick]`` runs
 every benchmark and then this.  Files this report knows render as their own section
 (workprecision, numeric_skip, numeric_speed, numeric_ensemble, forms_vs_galgebra,
-derive_ntrailer); every other results/*.json renders through the generic format below.
+derive_ntrailer); every other results/*.json renders through the generic format below
+(overhead_fixed also gives a row of the summary table).
 
 The generic format (stress_*.json, sweep_dask.json, anything new).  Write it with
 ``_common.write(name, data, out, quick)``, which adds benchmark, profile, date, command,
@@ -46,6 +47,9 @@ TITLES = {"workprecision": "Work-precision: error against run time",
           "numeric_ensemble": "Ensembles",
           "derive_ntrailer": "Derivation scaling: N-trailer against sympy.physics.mechanics",
           "forms_vs_galgebra": "Differential forms: jetnh.geometry.forms against galgebra"}
+#: files whose section is generic but which give a row of the summary table (a method
+#: of ``Report`` of the same name)
+SUMMARY_ONLY = ("overhead_fixed",)
 
 
 # ---------------------------------------------------------------------- formatting
@@ -193,6 +197,7 @@ class Report:
         out.append("**Time over jetnh's time at equal error**, geometric mean (min–max, "
                    "number of panels) over the system × principle panels:\n\n")
         out.append(table(["method"] + [f"error {t}" for t in targets], rows) + "\n")
+        out.append(self.wp_floor(d))
         rows = [[m, num(a["median"]), num(a["max"]), f"{a['over_1']}/{a['n']}",
                  f"{a['over_10']}/{a['n']}"] for m, a in s["achieved_over_requested"].items()]
         out.append("**Achieved error / requested rtol** (adaptive methods, every run whose "
@@ -213,6 +218,47 @@ class Report:
         self.wp_summary(d)
         return "".join(out)
 
+    @staticmethod
+    def wp_floor(d) -> str:
+        """The floor of each panel at error 1e-8 and, at every error, the panels where even
+        the floor is below the goal (a file without them: nothing)."""
+        s = d["summary"]
+        floor = s.get("fastest_scipy_over_floor")
+        if not floor:
+            return ""
+        t = str(s["targets"][2])
+        goal = s["goal"]
+        rows = []
+        for p in d["panels"]:
+            f = p["floor"]
+            b = f["by_target"].get(t)
+            if b:
+                rows.append([p["label"], b["nfev"], f"{f['per_evaluation_s'] * 1e9:.3g} ns",
+                             secs(f["fixed_s"]), secs(b["floor_s"]), secs(b["loop_s"]),
+                             secs(b["jetnh_s"]),
+                             f"{secs(b['scipy_s'])} ({b['scipy_method'].split()[-1]})",
+                             ratio(b["scipy_over_jetnh"]), ratio(b["scipy_over_loop"]),
+                             ratio(b["scipy_over_floor"])])
+        out = [f"**The floor at error {t}**: what any implementation making jetnh's rhs "
+               "evaluations must pay — evaluations (the fewest of a jetnh adaptive run at "
+               "this error) × one evaluation in a bare compiled loop + the fixed cost of the "
+               "bare compiled call; between it and jetnh's time, jetnh's compiled loop "
+               "called directly (the run without its Python side); all measured on each "
+               "panel in this run.  The fastest scipy method over the floor is the largest "
+               "ratio such an implementation could reach:\n\n",
+               table(["system / principle", "evaluations", "per evaluation", "fixed", "floor",
+                      "compiled loop", "jetnh", "fastest scipy", "scipy / jetnh",
+                      "scipy / loop", "scipy / floor"], rows),
+               f"\nPanels below {ratio(goal)} the fastest scipy method, at each error, even at "
+               "the floor; and with jetnh's compiled loop: "]
+        out.append("; ".join(f"error {k}: " + (", ".join(v["below_goal"]) or "none")
+                             + f" (scipy / floor {ratio(v['min'])}–{ratio(v['max'])}); "
+                             + (", ".join(v["loop_below_goal"]) or "none")
+                             + f" (scipy / loop {ratio(v['scipy_over_loop']['min'])}–"
+                             f"{ratio(v['scipy_over_loop']['max'])})"
+                             for k, v in floor.items()) + ".\n\n")
+        return "".join(out)
+
     def wp_summary(self, d):
         """The work-precision rows of the summary table and its limit of validity."""
         s = d["summary"]
@@ -226,6 +272,22 @@ class Report:
                 f"LSODA, Radau (geometric mean over {best[t]['n']} system × principle "
                 f"panels; {ratio(best[t]['min'])}–{ratio(best[t]['max'])}) at error {t}; "
                 f"{ratio(best[targets[0]]['geomean'])} at {targets[0]}", "workprecision"))
+        floor = s.get("fastest_scipy_over_floor", {}).get(t)
+        if floor:
+            below = floor["below_goal"]
+            self.summary.append((
+                "… the most any implementation making jetnh's rhs evaluations could reach "
+                "(the floor: evaluations × a bare evaluation + the bare call's fixed cost)",
+                f"{ratio(floor['geomean'])} ({ratio(floor['min'])}–{ratio(floor['max'])}) "
+                f"at error {t}; below {ratio(s['goal'])} on "
+                + (f"{len(below)} of {floor['n']} panels ({', '.join(below)})" if below
+                   else f"none of {floor['n']} panels")
+                + f"; jetnh takes {ratio(floor['jetnh_over_floor']['geomean'])} its floor "
+                f"({ratio(floor['jetnh_over_floor']['min'])}–"
+                f"{ratio(floor['jetnh_over_floor']['max'])}); fastest scipy over jetnh's "
+                f"compiled loop called directly {ratio(floor['scipy_over_loop']['geomean'])} "
+                f"({ratio(floor['scipy_over_loop']['min'])}–"
+                f"{ratio(floor['scipy_over_loop']['max'])})", "workprecision"))
         same = s["time_ratio_to_jetnh"].get("scipy DOP853 (jetnh rhs)", {}).get(t)
         if same:
             self.summary.append((
@@ -493,9 +555,24 @@ class Report:
         out.append(self.figures(d.get("figures")))
         return "".join(out) + "\n"
 
+    def overhead_fixed(self, d):
+        """The summary row of overhead_fixed.json (its section is generic)."""
+        a = d.get("fixed", {}).get("after")
+        if a:
+            bare = a["bare call"]
+            self.summary.append((
+                "Fixed cost of a short run (one dop853 step, rolling disk) against the bare "
+                "call of its compiled loop",
+                f"run() {secs(a['run()'])}, {ratio(a['run()'] / bare)} the bare call "
+                f"({secs(bare)}); run(y0=...) {ratio(a['run(y0=...)'] / bare)}, "
+                f"replace(initial=...).run() {ratio(a['replace(initial=...).run()'] / bare)}"
+                f", an ensemble of one {ratio(a['ensemble of one'] / bare)}", "overhead_fixed"))
+
     def generic(self, name, d) -> str:
         title = d.get("title") or doc_first_line(name) or name
         self.titles[name] = title
+        if name in SUMMARY_ONLY:
+            getattr(self, name)(d)
         out = [self.header(name, title)]
         summary = d.get("summary")
         if isinstance(summary, str):

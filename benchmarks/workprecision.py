@@ -36,11 +36,26 @@ from Python (``scene.run(save="final")`` against ``solve_ivp(t_eval=[T])``), bes
 several interleaved repetitions.  Summaries: the time each method needs to reach an
 error (the cheapest run at or below it), the ratios to jetnh's fastest adaptive method
 at equal error, and achieved error / requested rtol.
+
+The floor: what any implementation that makes jetnh's right-hand-side evaluations must
+pay, measured on each panel in the same run.  floor = n x e + c, where n is the fewest
+evaluations of a jetnh adaptive run that reaches the error, e the cost of one evaluation
+of the panel's compiled rhs in a bare compiled loop (``_common.rhs_driver``; best of
+several batches) and c the fixed cost of a call of the compiled dop853 loop (called
+directly on a one-step span, as ``overhead.py --fixed`` calls it: 5th percentile of
+single calls, less that call's own evaluations at e).  The fastest scipy method's time
+over the floor is the largest ratio such an implementation could reach; the step
+control, the stage sums and the checks of each step come on top.  Between the floor and
+jetnh's time: its compiled loop called directly with the run's arguments (best of several
+calls in a row, so with warm caches, where the runs are timed interleaved with scipy's),
+i.e. the run without its Python side and, where the split can change, without the chart
+bookkeeping (``numeric.atlas``).
 """
 
 from __future__ import annotations
 
 import math
+import time
 import warnings
 from dataclasses import dataclass, field
 
@@ -49,7 +64,7 @@ import numpy as np
 import sympy as sp
 from scipy.integrate import solve_ivp
 
-from _common import best_of, parser, write
+from _common import best, best_of, parser, rhs_driver, write
 
 import jetnh.models as models
 from jetnh.errors import JetnhError
@@ -59,6 +74,7 @@ from jetnh.numeric.codegen import multiplier_names
 SCIPY = ("RK45", "DOP853", "LSODA", "Radau")
 JETNH_ADAPTIVE = ("dop853", "dopri5")
 TARGETS = (1e-4, 1e-6, 1e-8, 1e-10)
+GOAL = 50.0             # the ratio to the fastest scipy method aimed at on every panel
 
 
 # ---------------------------------------------------------------------- exact solutions
@@ -227,7 +243,69 @@ def reference(case: Case, scene: Scene, f):
                "tight_run_error": error(tight, y), "tight_run_bound": bound}
 
 
-def panel(case: Case, tolerances, steps, reps, budget, give_up):
+def floor_costs(scene, drive, reps, calls) -> dict:
+    """The floor's costs on ``scene`` (module docstring): ``per_evaluation_s`` (e),
+    ``fixed_s`` (c) and the bare call it comes from (seconds, evaluations)."""
+    y, p = scene.y0.copy(), scene.p
+    n = 20_000
+    rhs = scene.kernels.rhs_fp
+    drive(rhs, y.copy(), p, 10)
+    per = best(lambda: drive(rhs, y.copy(), p, n), reps)[0] / n
+    t0 = scene.t_span[0]
+    short = scene.replace(t_span=(t0, t0 + 1e-6))
+    plan = short._quick_plan("dop853", "final", None, None)
+    halt = np.zeros(1, dtype=np.int64)
+    args = (*plan.prefix, plan.t0, plan.t1, short.y0.copy(), short.p, *plan.suffix, halt)
+    nfev = int(plan.entry(*args)[4][2])
+    times = []
+    for _ in range(calls):
+        tic = time.perf_counter()
+        plan.entry(*args)
+        times.append(time.perf_counter() - tic)
+    call = float(np.percentile(times, 5))
+    return dict(per_evaluation_s=per, fixed_s=call - nfev * per, bare_call_s=call,
+                bare_call_nfev=nfev)
+
+
+def floors(scene, runs, costs, reference_uncertainty, reps) -> dict:
+    """Per target error (those the reference resolves): the floor of jetnh's run
+    (module docstring), the compiled loop of jetnh's fastest run at that error called
+    directly (its entry, as ``floor_costs`` calls it: what the run costs without its
+    Python side), jetnh's time and the fastest scipy method's, and the ratios."""
+    out = {}
+    for t in TARGETS:
+        if reference_uncertainty > 0.1 * t:
+            continue
+        ours = [r for r in runs if r["method"] in (f"jetnh {m}" for m in JETNH_ADAPTIVE)
+                and r["error"] is not None and r["error"] <= t and r.get("nfev")]
+        theirs = [r for r in runs if r["method"] in (f"scipy {m}" for m in SCIPY)
+                  and r["error"] is not None and r["error"] <= t]
+        if not ours or not theirs:
+            continue
+        nfev = min(r["nfev"] for r in ours)
+        run = min(ours, key=lambda r: r["seconds"])
+        plan = scene._quick_plan(run["method"].split()[-1], "final", run["rtol"],
+                                 1e-3 * run["rtol"])
+        halt = np.zeros(1, dtype=np.int64)
+
+        def loop():
+            return plan.entry(*plan.prefix, plan.t0, plan.t1, scene.y0.copy(), scene.p,
+                              *plan.suffix, halt)
+        loop_s, res = best(loop, reps)
+        fastest = min(theirs, key=lambda r: r["seconds"])
+        floor = nfev * costs["per_evaluation_s"] + costs["fixed_s"]
+        out[str(t)] = dict(nfev=nfev, floor_s=floor, loop_s=loop_s,
+                           loop_nfev=int(res[4][2]), jetnh_s=run["seconds"],
+                           jetnh_nfev=run["nfev"], scipy_s=fastest["seconds"],
+                           scipy_method=fastest["method"],
+                           jetnh_over_floor=run["seconds"] / floor,
+                           scipy_over_jetnh=fastest["seconds"] / run["seconds"],
+                           scipy_over_loop=fastest["seconds"] / loop_s,
+                           scipy_over_floor=fastest["seconds"] / floor)
+    return out
+
+
+def panel(case: Case, tolerances, steps, reps, budget, give_up, drive, calls):
     """Every method's runs on one system x principle."""
     scene = scene_of(case).compile()
     f = researcher_rhs(scene)
@@ -308,12 +386,19 @@ def panel(case: Case, tolerances, steps, reps, budget, give_up):
         print(f"  {method}: " + "  ".join(f"n={r['n_steps']} {r['error'] or float('nan'):.0e}"
                                           for r in runs if r.get("n_steps")
                                           and r["method"] == f"jetnh {method}"), flush=True)
+    costs = floor_costs(scene, drive, reps, calls)
+    costs["by_target"] = floors(scene, runs, costs, ref_info["uncertainty"], reps)
+    print(f"  floor: {costs['per_evaluation_s'] * 1e9:.3g} ns an evaluation + "
+          f"{costs['fixed_s'] * 1e6:.3g} us; scipy / floor " + "  ".join(
+              f"{t}: {f['scipy_over_floor']:.3g}x" for t, f in costs["by_target"].items()),
+          flush=True)
     return dict(model=case.model, options=case.options, principle=case.principle,
                 label=case.label, t_end=T, states=list(scene.state_names),
                 initial=[float(v) for v in scene.y0], reference=ref_info, runs=runs,
                 time_to_error=time_to_error(runs),
                 orders={f"jetnh {m}": observed_order(runs, f"jetnh {m}",
-                                                     ref_info["uncertainty"]) for m in fixed})
+                                                     ref_info["uncertainty"]) for m in fixed},
+                floor=costs)
 
 
 # ---------------------------------------------------------------------- summaries
@@ -387,6 +472,18 @@ def summarize(panels) -> dict:
                     total += 1
                     agree += abs(e - f) <= 0.01 * max(e, f) or max(e, f) < floor
         same[f"{ours} ~ {theirs}"] = dict(agree=int(agree), runs=total)
+    floor = {}
+    for t in map(str, TARGETS):
+        by = {p["label"]: p["floor"]["by_target"][t] for p in panels
+              if t in p.get("floor", {}).get("by_target", {})}
+        if by:
+            floor[t] = dict(stats([f["scipy_over_floor"] for f in by.values()]),
+                            jetnh_over_floor=stats([f["jetnh_over_floor"] for f in by.values()]),
+                            scipy_over_loop=stats([f["scipy_over_loop"] for f in by.values()]),
+                            below_goal=[k for k, f in by.items()
+                                        if f["scipy_over_floor"] < GOAL],
+                            loop_below_goal=[k for k, f in by.items()
+                                             if f["scipy_over_loop"] < GOAL])
     return {"targets": list(TARGETS),
             "time_ratio_to_jetnh": {m: {t: stats(v) for t, v in d.items()}
                                     for m, d in ratios.items()},
@@ -394,12 +491,19 @@ def summarize(panels) -> dict:
             "fastest_scipy_method": fastest,
             "achieved_over_requested": achieved,
             "same_error_as_scipy": same,
+            "goal": GOAL,
+            "fastest_scipy_over_floor": floor,
             "note": "ratios: time a method needs to reach the target error over the time "
                     "of jetnh's fastest adaptive method (dop853 or dopri5) for the same "
                     "target, per panel (panels whose reference cannot resolve the target "
                     "are left out); achieved/requested: error / rtol over runs whose error "
                     "is resolved (> 10x the reference's uncertainty); same error as scipy: "
-                    "runs at equal rtol whose errors agree within 1 % (the same steps)"}
+                    "runs at equal rtol whose errors agree within 1 % (the same steps); "
+                    "the floor: rhs evaluations x the bare cost of one + the fixed cost of "
+                    "the bare compiled call (module docstring), fastest_scipy_over_floor "
+                    "the best ratio an implementation with jetnh's evaluations could reach "
+                    "and the panels where even that is below the goal; scipy_over_loop: "
+                    "the ratio of jetnh's compiled loop called directly (no Python side)"}
 
 
 # ---------------------------------------------------------------------- figures
@@ -495,21 +599,35 @@ def main(argv=None):
         tolerances = [10.0 ** -k for k in range(3, 13)]
         steps = [int(round(10 ** (k / 2))) for k in range(2, 11)]
         reps, budget, give_up = 5, 1.0, 2.0
+    calls = 200 if args.quick else 2000
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    panels = [panel(c, tolerances, steps, reps, budget, give_up) for c in cases(args.quick)]
+    drive = rhs_driver()
+    panels = [panel(c, tolerances, steps, reps, budget, give_up, drive, calls)
+              for c in cases(args.quick)]
     figures = plot(panels, args.out.with_suffix(""))
     summary = summarize(panels)
     for t, s in summary["best_scipy_over_jetnh"].items():
         if s:
             print(f"best scipy / jetnh at error {t}: geomean {s['geomean']:.1f}x "
                   f"(min {s['min']:.1f}x, max {s['max']:.1f}x, {s['n']} panels)")
+    for t, s in summary["fastest_scipy_over_floor"].items():
+        print(f"best scipy / floor at error {t}: geomean {s['geomean']:.1f}x (min "
+              f"{s['min']:.1f}x, max {s['max']:.1f}x); below {GOAL:g}x: "
+              f"{', '.join(s['below_goal']) or 'none'}; best scipy / compiled loop "
+              f"{s['scipy_over_loop']['geomean']:.1f}x (min {s['scipy_over_loop']['min']:.1f}x)"
+              f", below {GOAL:g}x: {', '.join(s['loop_below_goal']) or 'none'}")
     write("workprecision", dict(
         method=dict(tolerances=tolerances, atol="1e-3 rtol", fixed_steps=steps,
                     repetitions=reps, budget_s=budget, give_up_s=give_up,
                     error="max_i |y_i(T) - y_ref,i(T)| / max(|y_ref,i(T)|, 1) over every state",
                     timing="best of interleaved repetitions; scene.run(save='final') vs "
                            "solve_ivp(t_eval=[T]) on sympy.lambdify(cse=True, modules='math')",
-                    baseline="jetnh's fastest adaptive method (dop853 or dopri5) at equal error"),
+                    baseline="jetnh's fastest adaptive method (dop853 or dopri5) at equal error",
+                    floor="n x e + c: n the fewest rhs evaluations of a jetnh adaptive run "
+                          "at the error, e one evaluation in a bare compiled loop (best of "
+                          "batches of 20000), c the bare call of the compiled dop853 loop "
+                          f"on a one-step span (5th percentile of {calls} calls) less its "
+                          "own evaluations"),
         summary=summary, figures=figures, panels=panels), args.out, args.quick)
 
 

@@ -193,8 +193,21 @@ def test_bench_workprecision_quick_and_report(tmp_path):
     assert exact["reference"]["tight_run_error"] < 1e-12
     for png in data["figures"]:
         assert (tmp_path / png).stat().st_size > 10_000
+    for p in data["panels"]:                 # the floor: n x e + c, n jetnh's fewest
+        f = p["floor"]
+        assert f["per_evaluation_s"] > 0 and f["bare_call_nfev"] >= 6 and f["by_target"]
+        for t, b in f["by_target"].items():
+            reached = [r["nfev"] for r in p["runs"] if r["method"] in ("jetnh dop853",
+                       "jetnh dopri5") and r["error"] is not None and r["error"] <= float(t)]
+            assert b["nfev"] == min(reached) and b["loop_nfev"] > 0
+            assert b["floor_s"] == b["nfev"] * f["per_evaluation_s"] + f["fixed_s"]
+            assert b["scipy_over_floor"] == b["scipy_s"] / b["floor_s"]
+    floor = data["summary"]["fastest_scipy_over_floor"]
+    assert floor and all(set(v) >= {"geomean", "below_goal", "scipy_over_loop"}
+                         for v in floor.values())
     clean(run("bench", "report", "--results", str(tmp_path), "--out", str(tmp_path / "B.md")))
-    assert "Work-precision" in (tmp_path / "B.md").read_text()
+    md = (tmp_path / "B.md").read_text()
+    assert "Work-precision" in md and "the most any implementation making jetnh's rhs" in md
 
 
 @pytest.mark.parametrize("args, code, words", [
@@ -489,25 +502,73 @@ def test_simulate_plot_has_the_path_panel():
 
 
 def test_the_default_tolerances_are_step_controls(capsys, monkeypatch):
-    """Settings a model does not give fall back on StepControl's tolerances, which the
-    help shows (read when the help is printed)."""
+    """Settings a model does not give fall back on StepControl's tolerances (read when
+    a command runs), which the help shows (read from StepControl's source)."""
     import argparse
 
     from jetnh.cli.loading import load_model, settings
     from jetnh.numeric.options import StepControl
 
+    rtol, atol = StepControl.rtol, StepControl.atol
     monkeypatch.setattr(StepControl, "rtol", 2.5e-7)
     monkeypatch.setattr(StepControl, "atol", 3.5e-11)
     opts = settings(argparse.Namespace(), load_model("chaplygin_sleigh"))
     assert (opts.rtol, opts.atol, opts.points, opts.t_start) == (2.5e-7, 3.5e-11, 201, 0.0)
+    monkeypatch.undo()
     code, out, _ = inproc(capsys, "simulate", "--help")
     out = " ".join(out.split())
     assert code == 0 and "--rtol RTOL relative tolerance of the adaptive methods (default: " \
-                         "the model's, else 2.5e-07)" in out
+                         f"the model's, else {rtol:g})" in out
     assert "--atol ATOL absolute tolerance of the adaptive methods (default: the model's, " \
-           "else 3.5e-11)" in out
+           f"else {atol:g})" in out
     assert "(default: the model's, else 201; 0: every step)" in out
     assert "--t-start T0 start time (default: the model's, else 0)" in out
+
+
+def test_declared_defaults_are_the_imported_ones(monkeypatch, tmp_path):
+    """The help's defaults read from the numerics' source (``cli.declared``) are the
+    values a run imports: StepControl's fields, connect's keywords; a default the source
+    does not give as a literal (or a module without source) is imported."""
+    import inspect
+
+    from jetnh.cli import declared as module
+    from jetnh.numeric.connect import connect
+    from jetnh.numeric.options import StepControl
+
+    for name in ("rtol", "atol", "max_steps", "first_step"):
+        assert module.declared("options", "StepControl", name) == getattr(StepControl, name)
+    for name in ("tol", "rtol", "atol", "max_iter", "method", "segments"):
+        assert module.declared("connect", "connect", name) == \
+            inspect.signature(connect).parameters[name].default
+    (tmp_path / "options.py").write_text("class StepControl:\n    rtol: float = 2 * 1e-3\n")
+    monkeypatch.setattr(module, "NUMERIC", tmp_path)
+    assert module.declared("options", "StepControl", "rtol") == StepControl.rtol
+    assert module.declared("connect", "connect", "rtol") == \
+        inspect.signature(connect).parameters["rtol"].default
+
+
+def test_help_and_version_do_not_import_the_numerics():
+    """--help of jetnh and of every subcommand, and --version, print without importing
+    jetnh.numeric (numba, scipy): in a fresh interpreter, the modules loaded after."""
+    code = """if True:
+        import contextlib, io, json, sys
+        from jetnh.cli import main
+        from jetnh.cli.commands import COMMANDS
+        for args in [["--help"], ["--version"]] + [[c.__name__.rsplit(".", 1)[1], "--help"]
+                                                   for c in COMMANDS]:
+            with contextlib.redirect_stdout(io.StringIO()) as out:
+                try:
+                    main(args)
+                except SystemExit as exc:
+                    assert exc.code == 0, (args, exc.code)
+            assert out.getvalue(), args
+        print(json.dumps(sorted(m for m in sys.modules if m.startswith("jetnh.numeric")
+                                or m.split(".")[0] in ("numba", "scipy"))))
+    """
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert json.loads(r.stdout.splitlines()[-1]) == []
 
 
 def test_make_installs_with_an_unusable_cache(tmp_path):

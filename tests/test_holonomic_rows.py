@@ -17,6 +17,7 @@ ends the run in its chart (it was refused as an unresolvable span).
 
 import math
 
+import numba
 import numpy as np
 import pytest
 import sympy as sp
@@ -27,7 +28,9 @@ import jetnh as jn
 from jetnh.models import knife_edge
 from jetnh.modelfile import loads
 from jetnh.numeric import Event
+from jetnh.numeric.kernels.calls import Kernel
 from jetnh.numeric.methods import projection
+from jetnh.numeric.methods._common import RHS_SIGNATURE
 
 from holonomic_systems import FOURBAR, kane_fourbar, knife_slider
 from model_texts import PENDULUM_XY_STARTED
@@ -193,36 +196,46 @@ def test_rk4_values_between_steps_lie_on_g(pendulum):
 
 
 # ------------------------------------------------------------------ the projection itself
-def circle(t, y, p, out):          # g = x^2 + y^2 - r^2, r^2 = p0 + t/10
+@numba.cfunc(RHS_SIGNATURE)
+def _circle(t, y, p, out):         # g = x^2 + y^2 - r^2, r^2 = p0 + t/10
     out[0] = y[0]**2 + y[1]**2 - p[0] - t / 10
-    out[1], out[2] = 2 * y[0], 2 * y[1]
-
-
-def circle_rows(ts, ys, p, out):
-    for i in range(ts.shape[0]):
-        circle(ts[i], ys[i], p, out[i])
+    out[1] = 2 * y[0]
+    out[2] = 2 * y[1]
 
 
 def test_projection_onto_a_circle_is_radial_with_a_parameter_per_row():
     """On a circle g's gradient is radial, so every Gauss-Newton iterate stays on the
-    ray: the projection is (x, y) r / |(x, y)|.  ``onto`` (one row) is ``rows`` on it;
-    rows with a parameter row each, together, are each row alone."""
+    ray: the projection is (x, y) r / |(x, y)|.  Rows with a parameter row each,
+    together, are each row alone."""
+    circle = Kernel(_circle, (3, 1, 3))
     rng = np.random.default_rng(7)
     ys = rng.uniform(-2, 2, (9, 3))
     ts = np.linspace(0.0, 1.0, 9)
     P = rng.uniform(0.5, 2.0, (9, 1))
     P[3] = P[5] = P[0]
     together = ys.copy()
-    projection.rows(circle_rows, 1, 2, ts, together, P)
+    projection.rows(circle, 1, 2, ts, together, P)
     r = np.sqrt(P[:, 0] + ts / 10)
     radial = ys[:, :2] * (r / np.hypot(ys[:, 0], ys[:, 1]))[:, None]
     assert np.allclose(together[:, :2], radial, rtol=0, atol=1e-15)
     assert np.array_equal(together[:, 2], ys[:, 2])
     for i in range(9):
         alone = ys[i:i + 1].copy()
-        projection.rows(circle_rows, 1, 2, ts[i:i + 1], alone, P[i])
+        projection.rows(circle, 1, 2, ts[i:i + 1], alone, P[i])
         assert np.array_equal(alone[0], together[i])
-        assert np.array_equal(projection.onto(circle, 1, 2, ts[i], ys[i], P[i]), together[i])
+
+
+def test_rows_that_do_not_fit_the_kernel_are_refused():
+    circle = Kernel(_circle, (3, 1, 3))
+    ys, ts = np.zeros((2, 3)), np.zeros(2)
+    with pytest.raises(ValueError, match="do not fit"):
+        projection.rows(circle, 1, 2, ts, np.zeros((2, 2)), np.ones(1))     # short rows
+    with pytest.raises(ValueError, match="do not fit"):
+        projection.rows(circle, 1, 2, ts, ys, np.ones(0))                  # no parameter
+    with pytest.raises(ValueError, match="do not fit"):
+        projection.rows(circle, 1, 2, ts[:1], ys, np.ones(1))              # a time missing
+    with pytest.raises(TypeError, match="writable"):
+        projection.rows(circle, 1, 2, ts, np.zeros((3, 2)).T, np.ones(1))  # not C order
 
 
 # ------------------------------------------------------------------ a switch at the end
@@ -294,17 +307,26 @@ def test_rows_and_their_sensitivities_against_the_linear_closed_form(m, extra, n
     n_sens = n + n_p
     A, B, c = rng.normal(size=(m, nq)), rng.normal(size=(m, n_p)), rng.normal(size=m)
 
-    def hol_rows(ts, ys, p, out):
-        for i in range(ts.shape[0]):
-            out[i, :m] = A @ ys[i, :nq] - B @ p - c * ts[i]
-            out[i, m:m + m * nq] = A.ravel()
-            out[i, m + m * nq:] = -B.ravel()
+    Bt = -B.ravel()
+
+    @numba.cfunc(RHS_SIGNATURE)
+    def hol(t, y, p, out):
+        for i in range(m):
+            acc = -c[i] * t
+            for j in range(nq):
+                acc += A[i, j] * y[j]
+                out[m + i * nq + j] = A[i, j]
+            for k in range(n_p):
+                acc -= B[i, k] * p[k]
+                out[m + m * nq + i * n_p + k] = Bt[i * n_p + k]
+            out[i] = acc
 
     ts = rng.uniform(0, 1, n_rows)
     p = rng.normal(size=n_p)
     ys = rng.normal(size=(n_rows, n * (1 + n_sens)))
     got = ys.copy()
-    projection.rows(hol_rows, m, nq, ts, got, p, n_sens)
+    projection.rows(Kernel(hol, (n * (1 + n_sens), n_p, m * (1 + nq + n_p))), m, nq, ts, got,
+                    p, n_sens)
     pinv = np.linalg.pinv(A)
     g = ys[:, :nq] @ A.T - B @ p - ts[:, None] * c
     assert np.allclose(got[:, :nq], ys[:, :nq] - g @ pinv.T, rtol=0, atol=1e-12)

@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 
 from jetnh import JetSpace, System
 from jetnh.algebra import dag, linalg
+from jetnh.errors import JetnhError
 
 
 def rotation(n, i, j, th):
@@ -268,3 +269,50 @@ def test_mp_solve_agrees_with_mpmath(k, m, seed, triangular):
         X = linalg.mp_solve(A, B)
         assert (X.rows, X.cols) == (k, m)
         assert mpmath.mnorm(X - ref, 1) <= mpmath.mpf(10) ** -35 * (1 + mpmath.mnorm(ref, 1))
+
+
+def test_values_beyond_every_precision_are_not_taken_for_zeros():
+    """sin(1e100 x) has no correct digit at 50 or 80 digits: its two evaluations disagree
+    without the higher one shrinking, so it is not cancellation noise (once set to zero,
+    which gave the wrong rank); with no other point to use, a JetnhError says so."""
+    x = sp.Symbol("x")
+    with pytest.raises(JetnhError, match="cannot decide their generic rank"):
+        linalg.numeric_rank(sp.Matrix([[sp.sin(10**100 * x)]]))
+    assert linalg.numeric_rank(sp.Matrix([[sp.sin(x) - sp.sin(x) * (1 + 10**-60) + 1]])) == 1
+
+
+def test_nested_exponentials_are_refused_at_once_not_computed():
+    """exp(exp(exp(exp(exp(x))))) at x = 5 has a logarithm beyond 10**dps: mpmath would
+    run for hours (or raise MemoryError) computing it; evaluate raises OverflowError, so
+    rank sampling skips the point."""
+    x = sp.Symbol("x")
+    e = x
+    for _ in range(5):
+        e = sp.exp(e)
+    with pytest.raises(OverflowError):
+        dag.evaluate(e, {x: 5}, dps=50)
+    with pytest.raises(OverflowError):
+        dag.evaluate(sp.Integer(2) ** (10**100 * x), {x: 1}, dps=50)
+    assert linalg.numeric_rank(sp.Matrix([[e, 0], [0, x]])) == 2
+
+
+def test_a_tiny_model_with_nested_exponentials_derives_or_says_why_not():
+    """L = exp(exp(exp(exp(phi_t)))) + ... on a rolling constraint: its reduced Hessian has
+    rank 2.  With a fifth exp (values of size e**(5e78)) the rank cannot be decided at 80
+    digits: a JetnhError says so at once (was a bare MemoryError, then a false 'singular:
+    rank 1 < 2' from entries set to zero as noise)."""
+    import jetnh as jn
+    J = jn.JetSpace("x y phi psi")
+    x, y, phi, psi = J.q
+    xt, yt, pt, st = J.qd
+    f = pt
+    for levels in (4, 5):
+        f = sp.exp(f) if levels == 5 else sp.exp(sp.exp(sp.exp(sp.exp(pt))))
+        S = jn.System(J, f + xt**2 + yt**2 + st**2,
+                      [xt - sp.cos(psi) * pt, yt - sp.sin(psi) * pt], dependent=[x, y])
+        if levels == 4:
+            acc = S.equations("chetaev").accelerations()
+            assert set(acc) >= {J.qdd[2], J.qdd[3]}
+        else:
+            with pytest.raises(JetnhError, match="cannot decide their generic rank"):
+                S.equations("chetaev").accelerations()

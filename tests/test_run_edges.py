@@ -175,27 +175,33 @@ def test_all_finite_of_huge_values_warns_nothing():
         assert np.array_equal(arguments.real_array(big, "guess"), big)
 
 
-def test_projection_of_rows_leaves_singular_rows_and_matches_one_by_one():
-    """``projection.rows`` (all rows together) against ``projection.onto`` (one row):
-    the same states, and a row where G G^T is singular (the circle's centre) left as
-    it is."""
-    from jetnh.numeric.methods import projection
+def test_projection_of_rows_leaves_singular_rows_and_is_the_steps_projection():
+    """``projection.rows`` (the dense output's rows) against ``projection.project`` (the
+    projection of a step inside a compiled loop), row by row: the same states to the
+    bit, and a row where G G^T is singular (the circle's centre) left as it is."""
+    import numba
 
+    from jetnh.numeric.kernels.calls import Kernel
+    from jetnh.numeric.methods import projection
+    from jetnh.numeric.methods._common import RHS_SIGNATURE
+    from jetnh.numeric.methods.loop import Control
+
+    @numba.cfunc(RHS_SIGNATURE)
     def hol(t, y, p, out):              # g = x^2 + y^2 - 1 - t/10, G = (2x, 2y)
         out[0] = y[0]**2 + y[1]**2 - 1.0 - t / 10
-        out[1], out[2] = 2 * y[0], 2 * y[1]
-
-    def hol_rows(ts, ys, p, out):
-        for i in range(ts.shape[0]):
-            hol(ts[i], ys[i], p, out[i])
+        out[1] = 2 * y[0]
+        out[2] = 2 * y[1]
 
     rng = np.random.default_rng(3)
     ys = np.vstack([rng.uniform(-2, 2, (6, 3)), [[0.0, 0.0, 5.0]]])
     ts = np.linspace(0.0, 1.0, 7)
-    one = np.array([projection.onto(hol, 1, 2, t, y, np.zeros(0)) for t, y in zip(ts, ys)])
+    ctl = Control(1e-6, np.ones(3), 0.0, np.inf, 10, 0, 1, 2, 0)
+    one = ys.copy()
+    for t, y in zip(ts, one):
+        projection.project(hol, ctl, t, y, np.zeros(0), projection.workspace(1, 2, 0))
     together = ys.copy()
-    projection.rows(hol_rows, 1, 2, ts, together, np.zeros(0))
-    assert np.allclose(together, one, rtol=0, atol=1e-15)
+    projection.rows(Kernel(hol, (3, 0, 3)), 1, 2, ts, together, np.zeros(0))
+    assert np.array_equal(together, one)
     g = together[:6, 0]**2 + together[:6, 1]**2 - 1 - ts[:6] / 10
     assert np.max(np.abs(g)) < 1e-15
     assert np.array_equal(together[6], ys[6]) and np.array_equal(together[:, 2], ys[:, 2])

@@ -309,13 +309,27 @@ def _values(expr, leaf, add, mul, power, function):
     return out if isinstance(expr, (list, tuple)) else out[0]
 
 
+def _exponent_check(log_size, dps: int):
+    """OverflowError where a power or exponential would be e**log_size with |log_size|
+    beyond 10**dps: its value has no correct digit at ``dps`` digits, and mpmath would
+    take memory and time without bound to compute it (exp(exp(exp(exp(exp(1))))))."""
+    if abs(log_size) > mpmath.mpf(10) ** dps:
+        raise OverflowError(f"a value of size e**{mpmath.nstr(log_size, 3)} at {dps} digits")
+
+
 def evaluate(expr, point: dict, dps: int = 30) -> list:
     """The values (mpmath numbers, ``dps`` digits) of ``expr`` (a Basic or a list) at
     ``point`` (Symbol -> number), each distinct subexpression computed once (functions
     mpmath lacks by sympy's evalf).  Raises ArgumentError (a ValueError) for a symbol
-    without a value."""
+    without a value, OverflowError for a power or exponential beyond any number at
+    ``dps`` digits (``_exponent_check``)."""
     with mpmath.workdps(dps):
         prec = mpmath.mp.prec
+
+        def power(base, exp):
+            if base != 0 and exp != 0:
+                _exponent_check(mpmath.re(exp) * mpmath.log(abs(base)), dps)
+            return mpmath.power(base, exp)
         given = {s: mpmath.mpmathify(v) if not isinstance(v, sp.Basic)
                  else _number(sp.sympify(v, strict=True), prec) for s, v in point.items()}
 
@@ -327,10 +341,12 @@ def evaluate(expr, point: dict, dps: int = 30) -> list:
             return None
 
         def function(e, args):
+            if isinstance(e, sp.exp):
+                _exponent_check(mpmath.re(args[0]), dps)
             f = _SPECIAL.get(type(e).__name__) or getattr(mpmath, type(e).__name__, None)
             return f(*args) if f else _number(e.func(*map(to_sympy, args)).evalf(dps), prec)
 
-        return _values(expr, leaf, mpmath.fsum, mpmath.fprod, mpmath.power, function)
+        return _values(expr, leaf, mpmath.fsum, mpmath.fprod, power, function)
 
 
 #: (function class, number of arguments) -> its numpy function (``evaluate_numpy``):

@@ -23,7 +23,7 @@ import sympy as sp
 from sympy.matrices.utilities import dotprodsimp
 
 from . import dag
-from ..errors import ArgumentError
+from ..errors import ArgumentError, JetnhError
 
 _ADJUGATE_MAX = 3
 _CRAMER_MAX = 6           # larger systems: LU with pivots chosen by value
@@ -290,6 +290,7 @@ def _lu_solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
 # constraints 1e-12 f^1, f^2 have full rank, while f and 1e10 f, or (x' + y')^2, do not.
 _DPS = (50, 80)          # the two working precisions (decimal digits)
 _NOISE = 1e-12           # relative disagreement between them that marks an entry as noise
+_SHRUNK = 1e-3           # ... which is a zero's noise if it shrank at least this much
 _RANK_TOL = 1e-30        # singular values below this times the largest are zero
 _POINT_TRIES = 4         # attempts per wanted point (a point may leave the domain)
 EXACT_MAX = 4000        # distinct subexpressions up to which exact evaluation is tried
@@ -323,15 +324,31 @@ def real_value(v):
     return v if mpmath.isfinite(v) else None
 
 
+class _Unresolved(ArithmeticError):
+    """An entry that neither precision resolves: not confirmed, and not shrinking as a
+    zero's rounding noise does with more digits."""
+
+
 def _denoise(lo, hi):
     """``hi`` with the entries that ``lo`` (the same at lower precision) does not confirm
-    set to zero."""
+    set to zero: cancellation noise, which shrinks with the precision.  An unconfirmed
+    entry that does not shrink (a value beyond both precisions, e.g. exp(exp(exp(50))))
+    is ``_Unresolved``."""
     out = hi.copy()
     for i in range(hi.rows):
         for j in range(hi.cols):
             if abs(lo[i, j] - hi[i, j]) > _NOISE * abs(hi[i, j]):
+                if abs(hi[i, j]) > _SHRUNK * abs(lo[i, j]):
+                    raise _Unresolved(f"entry ({i}, {j}) is not resolved at {_DPS} digits")
                 out[i, j] = 0
     return out
+
+
+#: what an evaluation at a sample point may raise where the point is no good; of them,
+#: the values too large to hold (mpmath's exp(exp(exp(exp(exp(1))))) raises MemoryError at
+#: once, before anything is allocated)
+_OVERFLOW = (OverflowError, MemoryError)
+_NOT_A_NUMBER = (TypeError, ValueError, ZeroDivisionError, ArithmeticError)
 
 
 def _generic_samples(exprs, build, points: int, seed: int, complete=None, symbols=()):
@@ -339,7 +356,8 @@ def _generic_samples(exprs, build, points: int, seed: int, complete=None, symbol
     the values of ``exprs`` there -- exact (Rationals; ``build`` then returns a sympy
     Matrix) when they are rational, else an mpmath matrix built at both precisions and
     denoised.  A point where an entry is not a finite real number, or where ``build`` or
-    ``complete`` fails (ValueError, ZeroDivisionError), is skipped.  ``complete(values)``
+    ``complete`` fails (``_NOT_A_NUMBER``), is skipped; a JetnhError where no point gave numbers and
+    some overflowed or were not resolved (``_denoise``).  ``complete(values)``
     may overwrite values (e.g. put the point on a manifold): it gets Rationals (and
     raises ``Inexact`` when it cannot stay exact) or mpmath numbers, within
     ``mpmath.workdps`` of the precision.  ``symbols`` are drawn too."""
@@ -347,7 +365,7 @@ def _generic_samples(exprs, build, points: int, seed: int, complete=None, symbol
     syms = sorted(set(symbols) | dag.free_symbols(exprs), key=lambda s: s.name)
     rng = random.Random(seed)
     try_exact = dag.size(exprs, cap=EXACT_MAX + 1) <= EXACT_MAX
-    got = 0
+    got = unresolved = 0
     for _ in range(_POINT_TRIES * points):
         if got >= points:
             return
@@ -359,7 +377,10 @@ def _generic_samples(exprs, build, points: int, seed: int, complete=None, symbol
                 M = build(exact_values(exprs, vals))
             except Inexact:
                 try_exact = False           # irrational entries: numeric from now on
-            except (TypeError, ValueError, ZeroDivisionError, ArithmeticError):
+            except _OVERFLOW:
+                unresolved += 1
+                continue
+            except _NOT_A_NUMBER:
                 continue
             else:
                 got += 1
@@ -375,11 +396,21 @@ def _generic_samples(exprs, build, points: int, seed: int, complete=None, symbol
                     if any(v is None for v in values):
                         raise ValueError("not a finite real number")
                     mats.append(build(values))
-        except (TypeError, ValueError, ZeroDivisionError, ArithmeticError):
+            with mpmath.workdps(_DPS[-1]):
+                M = _denoise(*mats)
+        except _OVERFLOW + (_Unresolved,):
+            unresolved += 1
+            continue
+        except _NOT_A_NUMBER:
             continue
         got += 1
-        with mpmath.workdps(_DPS[-1]):
-            yield _denoise(*mats)
+        yield M
+    if got == 0 and unresolved:
+        raise JetnhError(
+            f"at {unresolved} of the {_POINT_TRIES * points} random points tried (values "
+            f"in [0.31, 1.37]) the expressions overflow or are not resolved at {_DPS[-1]} "
+            "digits, and no point gave numbers, so jetnh cannot decide their generic rank; "
+            "rescale the model (e.g. fewer nested exp)")
 
 
 def _equilibrate(M):

@@ -11,6 +11,7 @@ from pathlib import Path
 
 from ..errors import ModelFileError
 from ..modelfile import Model
+from .declared import declared
 from .usage import UsageError
 
 #: jetnh's defaults of the settings a model does not give, but the tolerances
@@ -25,6 +26,13 @@ def defaults() -> dict:
     from ..numeric.options import StepControl
 
     return {**_OWN, "rtol": StepControl.rtol, "atol": StepControl.atol}
+
+
+def help_default(name: str):
+    """``defaults()[name]`` as the help shows it, without importing the numerics (the
+    tolerances read from ``StepControl``'s source: ``declared``)."""
+    return _OWN[name] if name in _OWN else declared("options", "StepControl", name)
+
 
 _SPEC = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)(?::(.*))?$")
 

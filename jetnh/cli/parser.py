@@ -11,7 +11,7 @@ import textwrap
 from ..errors import PrincipleError
 from ..mechanics import principles
 from ..mechanics.principles import PRINCIPLES
-from .loading import defaults
+from .loading import help_default
 from .render import SCREEN_BUDGET
 from .usage import UsageError
 
@@ -57,8 +57,9 @@ def shown_default(action: argparse.Action, default) -> argparse.Action:
 
 
 def jetnh_default(name):
-    """The lookup of jetnh's default of the setting ``name`` (``loading.defaults``)."""
-    return lambda: defaults()[name]
+    """The lookup of jetnh's default of the setting ``name`` (``loading.defaults``, as
+    the help shows it: ``loading.help_default``)."""
+    return lambda: help_default(name)
 
 
 # ---------------------------------------------------------------------- value types

@@ -300,19 +300,34 @@ class Chart:
 
 
 def _det(M) -> float:
-    """The determinant of a k x k matrix, k <= 3 (``MAX_K``; rows of floats)."""
-    if len(M) == 1:
-        return M[0][0]
+    """The determinant of a k x k matrix (rows of floats): by cofactors for k <= 3
+    (``MAX_K``, the splits a run watches), else by LAPACK."""
+    if len(M) <= 1:
+        return M[0][0] if M else 1.0
     if len(M) == 2:
         return M[0][0] * M[1][1] - M[0][1] * M[1][0]
+    if len(M) > 3:
+        return float(np.linalg.det(np.array(M, dtype=float)))
     (a, b, c), (d, e, f), (g, h, i) = M
     return a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
+
+
+def measures_at(A, columns) -> list[float]:
+    """m_beta = det(A_beta)^2 / det(A A^T) of the split of each entry of ``columns`` (the
+    columns of its minor) at one point (A: k x n, floats); all 0 where A has rank < k
+    (no split is regular).  ``Atlas.measures`` (the charts of a run) and
+    ``regular.best`` (every choice of k coordinates) both take them from here."""
+    rows = np.asarray(A, dtype=float).tolist()
+    gram = _det([[sum(a * b for a, b in zip(r, s)) for s in rows] for r in rows])
+    if not gram > 0.0:
+        return [0.0] * len(columns)
+    return [_det([[r[c] for c in cols] for r in rows]) ** 2 / gram for cols in columns]
 
 
 def split_measure_of(A, columns) -> np.ndarray:
     """det(A_columns)^2 / det(A A^T), the measure of one split, for each k x n matrix of
     the stack ``A`` (``[..., k, n]``, in numpy); 0 where A has rank < k.  One point and
-    every split: ``Atlas.measures``."""
+    several splits: ``measures_at``."""
     gram = np.linalg.det(A @ np.swapaxes(A, -1, -2))
     minor = np.linalg.det(A[..., columns])
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -371,8 +386,9 @@ class Atlas:
         self.charts: dict = {}
         #: each split as a chart that only maps states (``Chart.state``)
         self.maps = {s: Chart(home.system, s, self.explicit) for s in self.splits}
-        #: the columns of each split's minor of df/dqdot
-        self.columns = [m.dep.tolist() for m in self.maps.values()]
+        #: the columns of each split's minor of df/dqdot (in increasing order, as
+        #: ``regular.best`` takes them: the same split measured the same to the bit)
+        self.columns = [sorted(m.dep.tolist()) for m in self.maps.values()]
         self._events: dict = {}
 
     @property
@@ -440,13 +456,8 @@ class Atlas:
     def measures(self, A) -> list[float]:
         """m_beta = det(A_beta)^2 / det(A A^T) of every split (in the order of
         ``splits``) at one point (A: k x n); all 0 where A has rank < k (no split is
-        regular)."""
-        rows = A.tolist()
-        gram = _det([[sum(a * b for a, b in zip(r, s)) for s in rows] for r in rows])
-        if not gram > 0.0:
-            return [0.0] * len(self.columns)
-        return [_det([[r[c] for c in cols] for r in rows]) ** 2 / gram
-                for cols in self.columns]
+        regular; ``measures_at``)."""
+        return measures_at(A, self.columns)
 
     def events(self, chart, user, edge: bool):
         """The compiled events of a run in ``chart``: the user's (rewritten in its
@@ -611,7 +622,10 @@ def _on_constraints(chart, t, y, p) -> np.ndarray:
     system = chart.scene.system
     if not system.holonomic:
         return np.ascontiguousarray(y, dtype=float)
-    return projection.onto(chart.kernels.hol, len(system.holonomic), system.J.n, t, y, p)
+    ys = np.array(y, dtype=float).reshape(1, -1)
+    projection.rows(chart.kernels.hol, len(system.holonomic), system.J.n, np.array([float(t)]),
+                    ys, p)
+    return ys[0]
 
 
 def switch(at, chart, t, y, p):

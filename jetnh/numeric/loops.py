@@ -15,7 +15,6 @@ import time
 import numpy as np
 
 from . import interrupt, methods
-from .kernels import calls
 from .methods import Solver, projection
 from .methods._common import AT_T_EVAL, EVENT, SINGULAR
 from .methods.loop import Result, Watch, features
@@ -105,9 +104,7 @@ def onto_constraints(kern, ts, ys, p, n_sens=0):
     or one per row; with ``n_sens`` sensitivity columns, ``kern`` the kernels of the
     augmented state, whose hol gives dg/dp too)."""
     lay = kern.layout
-    m, nq, n_p = lay.holonomic, len(lay.coordinates), np.shape(p)[-1]
-    hol_rows = calls.Rows(kern.hol_fp, (lay.n_state, n_p, m * (1 + nq + (n_p if n_sens else 0))))
-    projection.rows(hol_rows, m, nq, ts, ys, p, n_sens)
+    projection.rows(kern.hol, lay.holonomic, len(lay.coordinates), ts, ys, p, n_sens)
 
 
 def retake(traj, t0, t1, y, tau):

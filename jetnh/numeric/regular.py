@@ -141,16 +141,16 @@ def measure(system, A) -> np.ndarray:
 
 
 def best(system, A) -> tuple[list[str], float]:
-    """The split of largest measure at one point (A: k x n) and its measure."""
-    from .atlas import split_measure_of
+    """The split of largest measure at one point (A: k x n) among every choice of k
+    coordinates (the first where several tie) and its measure (``atlas.measures_at``,
+    as a run's atlas measures its charts)."""
+    from .atlas import measures_at
 
     names = [q.name for q in system.J.q]
-    top, where = -1.0, ()
-    for cols in combinations(range(len(names)), system.k):
-        m = float(split_measure_of(A, list(cols)))
-        if m > top:
-            top, where = m, cols
-    return [names[c] for c in where], top
+    choices = list(combinations(range(len(names)), system.k))
+    m = measures_at(A, choices)
+    i = max(range(len(m)), key=m.__getitem__)
+    return [names[c] for c in choices[i]], m[i]
 
 
 def on_constraints(A, f, qd, tol: float) -> np.ndarray:

@@ -1,5 +1,17 @@
 """scipy's ``solve_ivp`` on a scene's compiled right-hand side (``method="scipy-<M>"``):
 user events and the singularity indicators become scipy events.
+
+With holonomic constraints g(t, q) = 0 the one-step methods (RK23, RK45, DOP853, Radau)
+move every accepted step onto g = 0 as jetnh's own loops do (``methods.projection``: the
+same compiled iteration, through a subclass of scipy's solver whose step ends with it;
+the derivative at the step's end is evaluated again at the projected state, one more
+right-hand side per step), and the rows their dense output gives (``t_eval``, events, a
+terminal event's last row) are projected the same way: |g| stays at rounding level.
+BDF and LSODA are multistep methods whose history (BDF's differences, LSODA's Nordsieck
+array inside its Fortran state) a projected value would contradict: their steps are not
+projected, their rows drift off g = 0 by the global error, and the run says so
+(``drift.report``: a ``JetnhWarning`` with the figure; the diagnostics'
+``holonomic_residual_max``).
 """
 
 from __future__ import annotations
@@ -9,10 +21,13 @@ import time
 import numpy as np
 
 from ..errors import JetnhError
-from . import diagnosis
-from .methods import SCIPY_METHODS
+from . import diagnosis, drift
+from .methods import SCIPY_METHODS, projection
 from .methods._common import EVENT, SINGULAR
 from .trajectory import Trajectory
+
+#: scipy's methods whose steps are projected onto g = 0 (one-step methods)
+PROJECTED = ("RK23", "RK45", "DOP853", "Radau")
 
 
 def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_step,
@@ -74,11 +89,18 @@ def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_st
         kw["first_step"] = first_step
     if not np.all(np.isfinite(fun(t0, y_init))):
         diagnosis.raise_nonfinite(scene, f"scipy-{method}", t0, y_init, kern, p, t0, y_init)
+    onto = _onto(scene, sensitivities, p) if method in PROJECTED else None
     tic = time.perf_counter()
-    sol = solve_ivp(fun, (t0, t1), y_init, method=method, t_eval=t_eval, rtol=rtol,
-                    atol=atol, max_step=max_step, events=scipy_events or None, **kw)
+    sol = solve_ivp(fun, (t0, t1), y_init, method=method if onto is None else
+                    _projected(method, onto), t_eval=t_eval, rtol=rtol, atol=atol,
+                    max_step=max_step, events=scipy_events or None, **kw)
     wall = time.perf_counter() - tic
     ys = np.ascontiguousarray(sol.y.T)
+    if onto is not None:          # the dense output's rows (t_eval; a terminal event)
+        inner = np.flatnonzero(sol.t != t0) if t_eval is not None else (
+            [len(sol.t) - 1] if sol.status == 1 and sol.t[-1] != t0 else [])
+        for i in inner:
+            onto(sol.t[i], ys[i])
     if ys.size and not np.all(np.isfinite(ys)):
         bad = int(np.argmax(~np.all(np.isfinite(ys), axis=1)))
         i = max(bad - 1, 0)
@@ -99,14 +121,62 @@ def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_st
                                                 y_init, singular_tol)
             reason = singularity["reason"]
     if ce is not None:
+        y_ev = [np.array(sol.y_events[k], dtype=float).reshape(-1, n) for k in range(n_user)]
+        if onto is not None:
+            for k in range(n_user):
+                for t_e, y_e in zip(sol.t_events[k], y_ev[k]):
+                    onto(t_e, y_e)
         kw["events"] = (ce.names, [np.asarray(sol.t_events[k]) for k in range(n_user)],
-                        [np.asarray(sol.y_events[k]).reshape(-1, n)[:, :n_state]
-                         for k in range(n_user)])
+                        [y[:, :n_state] for y in y_ev])
     if sensitivities is not None:
         kw["sensitivities"] = (scene._sensitivity_columns(), ys[:, n_state:].reshape(
             ys.shape[0], n_state, sensitivities.layout.sensitivity_columns))
         ys = np.ascontiguousarray(ys[:, :n_state])
-    return Trajectory(scene, sol.t, ys, p, method=f"scipy-{method}", status=status,
+    traj = Trajectory(scene, sol.t, ys, p, method=f"scipy-{method}", status=status,
                       stop_reason=reason, steps=None, rejected=None, nfev=int(sol.nfev),
                       wall_time=wall, kernels=kern, projected=scene.projected,
                       singularity=singularity, **kw)
+    if onto is None and scene.system.holonomic:
+        drift.report(traj, f"scipy's {method} is a multistep method, whose steps are "
+                         "not projected onto g = 0")
+    return traj
+
+
+def _onto(scene, sensitivities, p):
+    """``onto(t, y)``: one state (augmented by its sensitivities with
+    ``sensitivities``) moved onto the holonomic constraints g = 0 in place, as a step of
+    jetnh's loops (``projection.rows``); None without holonomic constraints."""
+    m = len(scene.system.holonomic)
+    if not m:
+        return None
+    kern = scene.kernels if sensitivities is None else sensitivities
+    n_sens = 0 if sensitivities is None else sensitivities.layout.sensitivity_columns
+    nq, p = scene.system.J.n, np.ascontiguousarray(p, dtype=float)
+
+    def onto(t, y):
+        row = np.array(y, dtype=float).reshape(1, -1)
+        projection.rows(kern.hol, m, nq, np.array([float(t)]), row, p, n_sens)
+        y[:] = row[0]
+    return onto
+
+
+def _projected(method, onto):
+    """scipy's solver ``method`` (a one-step method) with every accepted step moved onto
+    g = 0 by ``onto``, and the derivative there evaluated again (the next step starts
+    from it)."""
+    import scipy.integrate
+
+    base = getattr(scipy.integrate, method)
+
+    class Projected(base):
+        def _step_impl(self):
+            ok, message = super()._step_impl()
+            if ok:
+                y = np.array(self.y, dtype=float)
+                onto(self.t, y)
+                self.y = y
+                self.f = self.fun(self.t, y)
+            return ok, message
+
+    Projected.__name__ = Projected.__qualname__ = f"Projected{method}"
+    return Projected

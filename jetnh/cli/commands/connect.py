@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 from ...errors import JetnhError
+from ..declared import declared
 from ..loading import load_model, with_split
 from ..parser import (EPILOG_MODEL, PRINCIPLES, canonical_principle, model_args,
                       principle_option, span_options, subcommand,
@@ -75,12 +76,8 @@ def add_parser(sub):
 
 
 def _connect_default(name):
-    """The default of ``jetnh.connect``'s keyword ``name``."""
-    import inspect
-
-    from ...numeric.connect import connect
-
-    return inspect.signature(connect).parameters[name].default
+    """The default of ``jetnh.connect``'s keyword ``name`` (read from its source)."""
+    return declared("connect", "connect", name)
 
 
 def run(args, progress) -> int:

@@ -22,7 +22,9 @@ increment q_k+1 - q_k (so that far from the origin the velocity loses no digits)
   solve in n + k unknowns.
 - Option ``project``: the node velocity of every step is projected onto the constraint
   set (nearest point in the kinetic metric, Gauss-Newton) and the momentum recomputed
-  from it, so that the nodes satisfy the constraints to the Newton tolerance.  The
+  from it, so that the nodes satisfy the constraints to the Newton tolerance; with
+  holonomic constraints g(t, q) = 0 the node's coordinates are moved onto g = 0 first
+  (``projection.onto``, the continuous methods' projection of a step).  The
   projection is not symmetric, so the method is no longer time-reversible; its order and
   long-run behaviour are measured in tests/test_numeric_discrete.py.
 - Node velocities (for output and diagnostics) by the inverse Legendre transform
@@ -35,6 +37,13 @@ increment q_k+1 - q_k (so that far from the origin the velocity loses no digits)
   The scene chooses it for the whole run where ||M^-1|| exceeds 100 ||S^-1||, S = [[M,
   A^T], [A, 0]] at the initial node, and the loop falls back to it wherever the plain
   transform fails to converge.
+- Holonomic constraints g(t, q) = 0 enter as their derivative D g, imposed at the
+  midpoint like every constraint: g(q_k) stays exact where g is quadratic (the midpoint
+  rule integrates its linear gradient exactly), else it changes by O(h^3) a step.
+  Without ``project`` the nodes are not projected onto g = 0 (an orthogonal projection
+  is not symmetric and would cost the method its reversibility, HLW V.4); a run whose
+  nodes leave g = 0 says how far (``numeric.drift``: a ``JetnhWarning``,
+  ``holonomic_residual_max``).
 - Singular configurations: the singularity indicators of the constraints and the
   Lagrangian as written (``codegen.discrete_indicators``; not the split: the step never
   solves for the dependent velocities) are checked at every node; the run stops at the
@@ -59,6 +68,7 @@ from ._common import (
     compiled, copy_into, f8, i8, jit, solve_linear, store)
 from ._events import node_events_start, node_terminal
 from .newton import solve_step
+from .projection import onto, workspace
 
 ORDER = 2
 
@@ -223,12 +233,14 @@ def store_node(nodal, ts, ys, n_out, t, q, v, p, n, nod, row):
     return store(ts, ys, n_out, t, row)
 
 
-def _solve(step_residual, momentum, legendre, nodal, constraint_jac, sing, uev, t0, t_end, q0,
-           v0, p, n_steps, k, tol, max_iter, mode, project, n_sing, sing_tol, n_int,
-           constrained, cols, ev_dir, ev_max, halt):
-    """``n_steps`` steps from (q0, v0); with ``project`` the node velocity of every step
-    is projected onto the constraints (``project_velocity``) and the momentum recomputed
-    from it before the next step.  Node velocities by the inverse Legendre transform, or
+def _solve(step_residual, momentum, legendre, nodal, constraint_jac, sing, uev, hol, t0,
+           t_end, q0, v0, p, n_steps, k, tol, max_iter, mode, project, n_hol, hol_state,
+           n_sing, sing_tol, n_int, constrained, cols, ev_dir, ev_max, halt):
+    """``n_steps`` steps from (q0, v0); with ``project`` the coordinates of every node
+    are moved onto the ``n_hol`` holonomic constraints (``projection.onto`` with the
+    continuous kernel ``hol`` on ``hol_state``, a state of the continuous scene whose
+    coordinates are the node's), then its velocity onto the constraints
+    (``project_velocity``) and the momentum recomputed from them before the next step.  Node velocities by the inverse Legendre transform, or
     (``constrained``, or where that fails) by ``constrained_legendre``.  The ``n_sing``
     node indicators (``sing``) are checked at every node: where one is not finite, changes
     sign or falls below ``sing_tol`` of its initial size, the run stops at the last regular
@@ -275,6 +287,7 @@ def _solve(step_residual, momentum, legendre, nodal, constraint_jac, sing, uev, 
     rhs_m = np.empty(m)
     sol_m = np.empty(m)
     stats = np.zeros(3, dtype=np.int64)
+    hw = workspace(n_hol, n, 0)
     cap = 2 if mode == ENDPOINTS else n_steps + 1
     ts = np.empty(cap)
     ys = np.empty((cap, width))
@@ -310,6 +323,12 @@ def _solve(step_residual, momentum, legendre, nodal, constraint_jac, sing, uev, 
             q[i] += z[i]
             pk[i] = pnew[i]
         t = t0 + (step + 1) * h
+        if project and n_hol > 0:
+            for i in range(n):
+                hol_state[i] = q[i]
+            onto(hol, n_hol, n, 0, t, hol_state, p, hw)
+            for i in range(n):
+                q[i] = hol_state[i]
         copy_into(v_try, v)
         if not constrained and _inverse_legendre(legendre, t, q, pk, v_try, p, work, M, rhs_n,
                                                  dv, tol, max_iter):
@@ -355,15 +374,15 @@ def _solve(step_residual, momentum, legendre, nodal, constraint_jac, sing, uev, 
     return status, ts, ys, n_out, stats, t, y, sing_index, t_old, y_prev
 
 
-ARGS = (STEP, MOMENTUM, LEGENDRE, NODAL, LEGENDRE, NODAL, RHS, f8, f8, f8[::1], f8[::1],
-        f8[::1], i8, i8, f8, i8, i8, numba.types.boolean, i8, f8, i8, numba.types.boolean,
-        i8[::1], i8[::1], i8[::1], i8[::1])
+ARGS = (STEP, MOMENTUM, LEGENDRE, NODAL, LEGENDRE, NODAL, RHS, RHS, f8, f8, f8[::1],
+        f8[::1], f8[::1], i8, i8, f8, i8, i8, numba.types.boolean, i8, f8[::1], i8, f8, i8,
+        numba.types.boolean, i8[::1], i8[::1], i8[::1], i8[::1])
 _inverse_legendre = jit(_inverse_legendre)
 
 
 def solver():
     """The compiled ``solve(step_residual, momentum, legendre, nodal, constraint_jac, sing,
-    uev, t0, t_end, q0, v0, p, n_steps, k, tol, max_iter, mode, project, n_sing, sing_tol,
-    n_int, constrained, cols, ev_dir, ev_max, halt)``; ``halt[0]`` nonzero stops before
+    uev, hol, t0, t_end, q0, v0, p, n_steps, k, tol, max_iter, mode, project, n_hol,
+    hol_state, n_sing, sing_tol, n_int, constrained, cols, ev_dir, ev_max, halt)``; ``halt[0]`` nonzero stops before
     the next step (STOPPED)."""
     return compiled(_solve, ARGS)

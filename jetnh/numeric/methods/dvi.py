@@ -28,6 +28,10 @@ optimal control.
   (pre)symplectic form of the extended system and, for autonomous L and f, shows no
   secular energy drift; the constraints hold exactly (to the Newton tolerance) at the
   midpoints, and to O(h^2) at the nodes.
+- Holonomic constraints g(t, q) = 0 enter as their derivative D g at the midpoints, as
+  in ``dla``: g(q_k) exact where g is quadratic, else O(h^3) a step.  The nodes are not
+  projected onto g = 0 (a projection is not symplectic, HLW IV.4 and VI): a run whose
+  nodes leave g = 0 says how far (``numeric.drift``).
 - Initial momentum from the continuous initial state: p_0 = dL/dqdot + lambda(0) df/dqdot.
 - Node values for output: q_k; the velocity (q_k+1 - q_k-1)/(2h) averaged from the two
   neighbouring midpoint velocities and lambda_k = (lambda_k-1/2 + lambda_k+1/2)/2 (both

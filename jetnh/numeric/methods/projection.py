@@ -16,8 +16,9 @@ velocities are no states but phi(t, q, qdot^mu), which solves D g = 0 exactly at
 state.  The step's dense output (``t_eval``, an event's state, a stop inside a step,
 ``Trajectory.at``, an ensemble's rows) is the method's interpolant between two projected
 states, on g = 0 only to the interpolant's error, so its rows are projected the same
-way (``rows``, the same iteration on many rows at once) before anything holds them.
-The iteration is deterministic: a run is reproducible bit for bit.
+way before anything holds them (``rows``: ``onto`` at each row, the step's own
+compiled iteration, so a row is moved exactly as a step ending there would be).  The
+iteration is deterministic: a run is reproducible bit for bit.
 
 A run with sensitivities (the state followed by ``S = dy/d(y0, p)``, ``n_sens`` columns a
 row, the runtime parameters' last) projects them with the state, by the derivative of
@@ -43,7 +44,7 @@ import math
 
 import numpy as np
 
-from ._common import jit, solve_linear
+from ._common import compiled, f8, function_at, i8, jit, solve_linear
 
 #: Gauss-Newton iterations per step (one or two suffice: the start is within the local
 #: error of g = 0)
@@ -54,12 +55,12 @@ _CONVERGED = 4.0 * 2.220446049250313e-16
 
 @jit
 def workspace(m, nq, n_sens):
-    """The arrays of ``project``: hol's output (with dg/dp where there are
-    sensitivities: ``n_sens`` columns, the parameters among them), G G^T, a right-hand
-    side and a solution of it."""
+    """The arrays of ``onto``: hol's output (with dg/dp where there are sensitivities:
+    ``n_sens`` columns, the parameters among them), G G^T, a right-hand side, a
+    solution of it and a correction of the coordinates."""
     m1 = max(m, 1)
     return (np.empty(m1 * (1 + nq + n_sens)), np.empty((m1, m1)), np.empty(m1),
-            np.empty(m1))
+            np.empty(m1), np.empty(max(nq, 1)))
 
 
 @jit
@@ -75,13 +76,19 @@ def _normal(w, m, nq, A):
 
 @jit
 def project(hol, ctl, t, y, p, ws):
-    """Move the coordinates y[:nq] onto g(t, q) = 0 (module docstring; ``ctl`` the run's
-    ``loop.Control``: ``n_hol`` constraints, ``n_coord`` coordinates, ``n_sens``
-    sensitivity columns); returns the number of ``hol`` evaluations.  Leaves y as it is
-    where G G^T is singular or a value is not finite (the position-level residual in
-    the diagnostics then shows it)."""
-    m, nq, n_sens = ctl.n_hol, ctl.n_coord, ctl.n_sens
-    w, A, b, x = ws
+    """``onto`` for a step of a compiled loop (``ctl`` the run's ``loop.Control``:
+    ``n_hol`` constraints, ``n_coord`` coordinates, ``n_sens`` sensitivity columns)."""
+    return onto(hol, ctl.n_hol, ctl.n_coord, ctl.n_sens, t, y, p, ws)
+
+
+@jit
+def onto(hol, m, nq, n_sens, t, y, p, ws):
+    """Move the coordinates y[:nq] onto the ``m`` constraints g(t, q) = 0 (module
+    docstring), and with ``n_sens`` > 0 the sensitivities stored after the state onto
+    the tangent of g = 0 there; returns the number of ``hol`` evaluations.  Leaves y
+    as the last complete iterate where G G^T is singular or a correction is not finite
+    (the position-level residual in the diagnostics then shows it)."""
+    w, A, b, x, d = ws
     calls = 0
     for _ in range(MAX_ITERATIONS):
         hol(t, y, p, w)
@@ -91,15 +98,17 @@ def project(hol, ctl, t, y, p, ws):
             b[i] = w[i]
         if not solve_linear(A, b, x):       # (G G^T) x = g
             return calls
+        for j in range(nq):
+            acc = 0.0
+            for i in range(m):
+                acc += w[m + i * nq + j] * x[i]
+            if not math.isfinite(acc):
+                return calls
+            d[j] = acc
         big = 0.0
         for j in range(nq):
-            d = 0.0
-            for i in range(m):
-                d += w[m + i * nq + j] * x[i]
-            if not math.isfinite(d):
-                return calls
-            y[j] -= d
-            big = max(big, abs(d) / max(1.0, abs(y[j])))
+            y[j] -= d[j]
+            big = max(big, abs(d[j]) / max(1.0, abs(y[j])))
         if big <= _CONVERGED:
             break
     if n_sens > 0:
@@ -134,106 +143,46 @@ def _sensitivities(w, m, nq, n_sens, n_p, y, A, b, x):
             y[n + j * n_sens + k] -= d
 
 
-def onto(hol, m, nq, t, y, p) -> np.ndarray:
-    """``rows`` of one state from Python (``hol`` the kernel's Python-callable form,
-    ``kernels.hol``): a copy of ``y`` with its coordinates y[:nq] on g(t, q) = 0 (``y``
-    itself where G G^T is singular or a value is not finite)."""
+def _rows(hol_at, m, nq, n_sens, ts, ys, P, which):
+    """``onto`` at every row ``ys[i]`` (time ``ts[i]``, parameters ``P[which[i]]``), in
+    place; ``hol_at`` the address of the kernel (``_common.function_at``)."""
+    hol = function_at(hol_at)
+    ws = workspace(m, nq, n_sens)
+    for i in range(ts.shape[0]):
+        onto(hol, m, nq, n_sens, ts[i], ys[i], P[which[i]], ws)
+
+
+_ROWS_ARGS = (i8, i8, i8, i8, f8[::1], f8[:, ::1], f8[:, ::1], i8[::1])
+
+
+def rows(hol, m, nq, ts, ys, p, n_sens=0):
+    """``onto`` of every row ``ys[i]`` (at ``ts[i]``) in place, by the compiled loop
+    over the rows: each row moved exactly as a step of a compiled loop ending at it
+    would be (the dense output's rows: ``t_eval``, events, a stop inside a step,
+    ``Trajectory.at``, an ensemble's rows).
+
+    ``hol``: the kernel as ``kernels.calls.Kernel`` (its address and the sizes it reads
+    and writes; with ``n_sens`` > 0 the kernel of the augmented state, which writes
+    dg/dp too); ``p``: the parameters, or one row of them per row of ``ys`` (an
+    ensemble's runs).  ``n_sens`` > 0: each row is the state followed by its
+    sensitivities (``n_sens`` columns, the parameters' last), moved onto the tangent
+    space of g = 0 at the projected point, ``G S_q + dg/dp = 0``."""
+    n_y, n_p, n_out = hol.sizes
     p = np.ascontiguousarray(p, dtype=float)
-    room = np.empty(m * (1 + nq + p.shape[0]))     # (a kernel with dg/dp writes them too)
-
-    def hol_rows(ts, ys, p, out):
-        hol(ts[0], ys[0], p, room)
-        out[0] = room[:out.shape[1]]
-
-    ys = np.array(y, dtype=float).reshape(1, -1)
-    rows(hol_rows, m, nq, np.array([float(t)]), ys, p)
-    return ys[0]
-
-
-def rows(hol_rows, m, nq, ts, ys, p, n_sens=0):
-    """The iteration of ``project`` on every row ``ys[i]`` (at ``ts[i]``) in place, the
-    rows together (``hol_rows(ts, ys, p, out)``: the kernel at every row,
-    ``kernels.calls.Rows``); each row's iterates depend on that row only, and a row
-    where G G^T is singular or a correction is not finite is left as it is.  The dense
-    output's rows (``t_eval``, events, a stop inside a step, ``Trajectory.at``) moved
-    onto g = 0 as the steps are.
-
-    ``p``: the parameters, or one row of them per row of ``ys`` (an ensemble's runs).
-    ``n_sens`` > 0: each row is the state followed by its sensitivities (``n_sens``
-    columns, the parameters' last; ``hol_rows`` the kernel with dg/dp), and they are
-    projected with it as ``project`` does (``_sensitivities``: onto the tangent space of
-    g = 0 at the projected point, ``G S_q + dg/dp = 0``)."""
-    p = np.ascontiguousarray(p, dtype=float)
-    n = ys.shape[1] // (1 + n_sens)
-    n_p = p.shape[-1] if n_sens else 0
-    at = _kernel_rows(hol_rows, p)
-    left = np.arange(ys.shape[0])
-    w = np.empty((ys.shape[0], m * (1 + nq + n_p)))
-    for _ in range(MAX_ITERATIONS):
-        if left.size == 0:
-            break
-        y = np.ascontiguousarray(ys[left, :n])
-        out = w[:left.size]
-        at(ts[left], y, left, out)
-        G = out[:, m:m + m * nq].reshape(-1, m, nq)
-        Gt = G.transpose(0, 2, 1)
-        x, ok = _solve(G @ Gt, out[:, :m, None])
-        d = (Gt @ x)[:, :, 0]
-        go = ok & np.isfinite(d).all(axis=1)
-        y[go, :nq] -= d[go]
-        ys[left[go], :n] = y[go]
-        big = np.max(np.abs(d) / np.maximum(1.0, np.abs(y[:, :nq])), axis=1)
-        left = left[go & (big > _CONVERGED)]
-    if n_sens and ys.shape[0]:
-        _tangent(at, m, nq, n_sens, n_p, ts, ys, w)
-
-
-def _tangent(at, m, nq, n_sens, n_p, ts, ys, w):
-    """``_sensitivities`` of every row: S_q <- S_q - G^+ (G S_q + dg/dp) at the rows'
-    (projected) states; rows where G G^T is singular keep theirs."""
-    n = ys.shape[1] // (1 + n_sens)
-    every = np.arange(ys.shape[0])
-    at(ts, np.ascontiguousarray(ys[:, :n]), every, w)
-    G = w[:, m:m + m * nq].reshape(-1, m, nq)
-    Gt = G.transpose(0, 2, 1)
-    S = ys[:, n:].reshape(-1, n, n_sens).copy()
-    b = G @ S[:, :nq, :]
-    if n_p:
-        b[:, :, n_sens - n_p:] += w[:, m + m * nq:].reshape(-1, m, n_p)
-    x, ok = _solve(G @ Gt, b)
-    S[:, :nq] -= Gt @ x
-    ys[ok, n:] = S[ok].reshape(int(ok.sum()), -1)
-
-
-def _solve(A, b):
-    """x with A[i] x[i] = b[i] for every row i, and whether row i was solvable (a row
-    whose A is singular gets NaN)."""
-    try:
-        return np.linalg.solve(A, b), np.ones(A.shape[0], dtype=bool)
-    except np.linalg.LinAlgError:
-        x, ok = np.full(b.shape, np.nan), np.zeros(A.shape[0], dtype=bool)
-        for i in range(A.shape[0]):
-            try:
-                x[i] = np.linalg.solve(A[i], b[i])
-                ok[i] = True
-            except np.linalg.LinAlgError:
-                pass
-        return x, ok
-
-
-def _kernel_rows(hol_rows, p):
-    """``at(ts, ys, which, out)``: ``hol_rows`` at the rows ``ys`` (rows ``which`` of the
-    caller's, in increasing order), with the parameters ``p`` or, where ``p`` has a row
-    per row, with each row's own: one call per run of equal rows (an ensemble's rows come
-    run by run)."""
-    if p.ndim == 2:
-        run = np.concatenate([[0], np.cumsum(np.any(p[1:] != p[:-1], axis=1))])
-        if run[-1] > 0:
-            def at(ts, ys, which, out):
-                cut = np.flatnonzero(np.diff(run[which])) + 1
-                for a, b in zip([0, *cut], [*cut, which.size]):
-                    hol_rows(np.ascontiguousarray(ts[a:b]), ys[a:b], p[which[a]],
-                             out[a:b])
-            return at
-        p = p[0] if p.shape[0] else np.zeros(p.shape[1])
-    return lambda ts, ys, which, out: hol_rows(np.ascontiguousarray(ts), ys, p, out)
+    if p.ndim == 1:
+        P, which = p[None, :], np.zeros(ys.shape[0], dtype=np.int64)
+    else:
+        P, which = p, np.arange(ys.shape[0], dtype=np.int64)
+    ts = np.ascontiguousarray(ts, dtype=float)
+    if not (isinstance(ys, np.ndarray) and ys.dtype == np.float64 and ys.ndim == 2
+            and ys.flags.c_contiguous and ys.flags.writeable):
+        raise TypeError("ys must be a writable C-contiguous float64 array of rows")
+    if (ts.shape != (ys.shape[0],) or P.shape[0] != (1 if p.ndim == 1 else ys.shape[0])
+            or ys.shape[1] < max(n_y, nq) or P.shape[1] < n_p
+            or max(m, 1) * (1 + nq + n_sens) < n_out
+            or n_sens and ys.shape[1] % (1 + n_sens)):
+        raise ValueError(f"the rows do not fit the kernel: ts {ts.shape}, ys {ys.shape}, "
+                         f"p {p.shape}, {m} constraints on {nq} coordinates, {n_sens} "
+                         f"sensitivity columns, kernel sizes {hol.sizes}")
+    if ys.shape[0]:
+        compiled(_rows, _ROWS_ARGS)(hol.address.address, m, nq, n_sens, ts, ys, P, which)
