@@ -51,16 +51,19 @@ def test_gramian_of_the_heisenberg_straight_line(T):
     assert abs(c.cost - T / 2) < 1e-10          # L = (x'^2 + y'^2) / 2 along x = t
 
 
-def test_samples_of_a_chetaev_answer_give_the_jacobi_fields_when_asked():
-    """The sample run of a Chetaev answer carries no sensitivities (its Jacobi
-    determinant is not square); asked for, they are those of the trajectory."""
+def test_samples_of_a_chetaev_answer_are_its_own_dense_output():
+    """The verdicts' samples of a Chetaev answer (whose Jacobi fields are not square)
+    are the trajectory's own states and sensitivities, not those of a new run."""
     zero = {"x": 0.0, "y": 0.0, "phi": 0.0, "psi": 0.0}
     c = jn.connect(get("rolling_disk"), "chetaev", zero, {"x": 0.5, "y": 0.3}, (0.0, 1.0))
     smp = c._samples
-    assert "grid_S" not in vars(smp)
+    tr = c.trajectory
     S = smp.grid_S
-    assert S.shape == (smp.GRID + 1,) + c.trajectory.sensitivities.shape[1:]
-    assert np.max(np.abs(S[-1] - c.trajectory.sensitivities[-1])) < 1e-9
+    assert S.shape == (smp.GRID + 1,) + tr.sensitivities.shape[1:]
+    assert np.array_equal(S[-1], tr.sensitivities[-1])
+    assert np.array_equal(smp.grid_y[-1], tr.y[-1])
+    assert np.array_equal(smp.grid_y, tr.at(smp.grid)[list(tr.scene.state_names)]
+                          .to_numpy())
     assert c.conjugate_times == ()
 
 

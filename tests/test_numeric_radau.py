@@ -11,7 +11,7 @@ import sympy as sp
 from jetnh.models import chaplygin_sleigh, damped_chaplygin_sleigh, nonholonomic_particle
 from jetnh.numeric import Event, Scene
 from jetnh.numeric.methods import radau
-from jetnh.numeric.methods._common import EVENT, FINISHED, MAX_STEPS
+from jetnh.numeric.methods._common import EVENT, FINISHED, MAX_STEPS, STIFF
 
 PART0 = dict(x=0.1, y=-0.5, z=0.2, x_t=1.0, y_t=0.3)
 T = 4.0
@@ -147,7 +147,8 @@ def sleigh_closed_form(m, I, a, v0, w0, t, gamma=0.0):
 def test_stiff_sleigh(damped):
     """Centre of mass near the blade: the turning rate decays at ~ m a V / (I + m a^2)
     (here ~2500); radau follows the closed form with steps on the time scale of the
-    slow motion, dop853 is held to its stability bound."""
+    slow motion, dop853 is held to its stability bound, which its stiffness test sees:
+    it stops with status STIFF."""
     m, I, a, v0, w0, T_end = 1.0, 1e-8, 1e-4, 0.5, 1.0, 5.0
     params = dict(m=m, I=I, a=a)
     gamma = 0.0
@@ -165,7 +166,7 @@ def test_stiff_sleigh(damped):
         tr["theta"][-1])
     assert abs(speed - v) < 1e-8
     ex = sc.run(method="dop853", rtol=1e-8, atol=1e-12, save="final")
-    assert abs(ex["theta"][-1] - th) < 1e-9
+    assert ex.status == STIFF and ex.t[-1] < T_end and "method='radau'" in ex.stop_reason
     loose = [sc.run(method=m, rtol=1e-6, atol=1e-10, save="final").diagnostics.steps
              for m in ("radau", "dop853")]
     assert loose[0] * 5 < loose[1], loose

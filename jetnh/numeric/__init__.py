@@ -27,12 +27,12 @@ on disk keyed by the symbolic input (``kernels``), and integrates in compiled lo
 
 from .ensemble import Ensemble, run_ensemble
 from .events import Event
-from .methods._common import EVENT, FINISHED, MAX_STEPS, NONFINITE, NOT_CONVERGED, SINGULAR, STATUS_TEXT, STOPPED, TOO_SMALL_STEP, Status
+from .methods._common import EVENT, FINISHED, MAX_STEPS, NONFINITE, NOT_CONVERGED, SINGULAR, STATUS_TEXT, STIFF, STOPPED, TOO_SMALL_STEP, Status
 from .options import Newton, Singular, StepControl
 from .scene import Scene
 from .trajectory import Diagnostics, Trajectory
 
 __all__ = ["Scene", "Trajectory", "Diagnostics", "Event", "Ensemble", "run_ensemble",
            "Status", "STATUS_TEXT", "FINISHED", "MAX_STEPS", "TOO_SMALL_STEP", "NONFINITE",
-           "NOT_CONVERGED", "EVENT", "SINGULAR", "STOPPED", "StepControl", "Singular",
-           "Newton"]
+           "NOT_CONVERGED", "EVENT", "SINGULAR", "STOPPED", "STIFF", "StepControl",
+           "Singular", "Newton"]

@@ -53,7 +53,7 @@ those of the other, so the switch time's dependence on y0 drops out and S goes a
 as S_beta = D_y S_alpha + (0 | D_p), D the derivative of the chart change at the switch
 point (``Chart.carry``; from the graph, compiled once per pair of charts).  The rows
 of other charts, S too, are mapped home the same way.  Ensembles with sensitivities
-keep their split.
+switch as their single runs do (``go_on`` with ``sens``).
 """
 
 from __future__ import annotations

@@ -2,7 +2,10 @@
 
 ``singularity`` turns the index of the indicator that stopped a run into its kind, values
 and a reason that names the way out (another split, ``singular='ignore'``, an adaptive
-method); ``explain_nonfinite`` finds the indicator behind a NaN or infinity, and
+method); ``stiff_reason`` and ``small_step_reason`` explain a run that an explicit
+method found stiff (status ``STIFF``) and one whose step fell to the spacing of the
+floating-point numbers, naming the singular set the motion is near (``near_singular``);
+``explain_nonfinite`` finds the indicator behind a NaN or infinity, and
 ``raise_nonfinite`` raises the ``IntegrationError`` when none explains it.  Functions of
 the scene (``Scene.run``, ensembles and the discrete drivers call them).
 """
@@ -15,6 +18,7 @@ from ..algebra import dag
 from ..errors import IntegrationError
 from .methods import STATUS_TEXT
 from .methods._common import STOPPED
+from .methods._events import WATCH
 
 
 def timeout_reason(timeout, t) -> str:
@@ -60,20 +64,47 @@ def explain_nonfinite(scene, kern, t, y, p, t0, y_init, tol) -> int:
     return -1
 
 
-def singularity(scene, kern, idx, t, y, p, t0, y_init, tol, nonfinite=False) -> dict:
+def _adaptive(method) -> bool:
+    from .methods import method as lookup
+
+    try:
+        return lookup(method).adaptive
+    except Exception:           # a name of a method this table does not hold
+        return False
+
+
+def singularity(scene, kern, idx, t, y, p, t0, y_init, tol, nonfinite=False,
+                method=None) -> dict:
     """What the stop at a singular configuration was: indicator, kind, time, value,
-    and a reason with the way out."""
+    and a reason with the way out (``method``: the run's; an adaptive method that stops
+    before the indicator reaches its threshold could not step closer)."""
     lay = kern.layout
-    expr, kind = lay.indicators[idx], lay.indicator_kinds[idx]
     g0 = np.empty(len(lay.indicators))
     g = np.empty(len(lay.indicators))
     kern.sing(t0, y_init, p, g0)
     kern.sing(float(t), np.ascontiguousarray(y), p, g)
+    with np.errstate(all="ignore"):
+        rel = g / g0
+    short = (np.isfinite(rel[idx]) and rel[idx] > 4 * tol and rel[idx] > 1e-12
+             and not nonfinite)             # the indicator has not reached its threshold
+    crawled = short and _adaptive(method)
+    if crawled:         # name the singular set the motion approaches: the smallest one
+        near = np.flatnonzero(np.isfinite(rel) & (rel > 0) & (rel < WATCH))
+        if near.size:
+            idx = int(near[np.argmin(rel[near])])
+    expr, kind = lay.indicators[idx], lay.indicator_kinds[idx]
     value, initial = float(g[idx]), float(g0[idx])
     if not np.isfinite(initial) or initial == 0.0:
         where = (f"the initial state (t = {t:.17g}) is singular: {expr} = {initial:.6g}")
-    elif (np.sign(value) == np.sign(initial) and abs(value) > 4 * tol * abs(initial)
-          and abs(value) > 1e-12 * abs(initial) and not nonfinite):
+    elif crawled:
+        where = (f"at t = {t:.17g} the motion approaches the singular set {expr} = 0 "
+                 f"({expr} = {value:.6g} is {value / initial:.3g} of its initial value, "
+                 f"above the threshold singular_tol = {tol:g}), but {method} cannot step "
+                 "closer: its steps shrank faster than the distance to that set (or its "
+                 "dense output left the finite numbers), as where the equations in this "
+                 "form are a 0/0 that floating point cannot resolve; the run stops at the "
+                 "last regular point (a looser rtol stops it in fewer steps)")
+    elif short:
         where = (f"the fixed step after t = {t:.17g} jumps over a kink of the right-hand "
                  f"side next to a zero of {expr} = {value:.6g} (initially {initial:.6g}); "
                  "the run stops at the last regular point (an adaptive method such as "
@@ -85,6 +116,16 @@ def singularity(scene, kern, idx, t, y, p, t0, y_init, tol, nonfinite=False) -> 
     else:
         where = (f"at t = {t:.17g}, {expr} fell to {value:.6g} (initially "
                  f"{initial:.6g}; the threshold is singular_tol = {tol:g} of that)")
+    kind, hint = _kind_and_hint(scene, expr, kind, t, y, p, t0, y_init)
+    reason = (f"singular configuration: {where}. {hint}. (If the singularity is removable "
+              "-- a 0/0 that cancels -- run with singular='ignore'.)")
+    return {"indicator": expr, "kind": kind, "index": idx, "t": float(t),
+            "value": value, "initial": initial, "reason": reason}
+
+
+def _kind_and_hint(scene, expr, kind, t, y, p, t0, y_init):
+    """The kind of the singularity of the indicator ``expr`` at (t, y) and what it means
+    (``singularity``)."""
     dep = [s.name for s in scene.system.dependent]
     ratio = (split_det_ratio(scene, t, y, p, t0, y_init)
              if kind != "split" and scene.system.k > 3 else None)
@@ -96,6 +137,8 @@ def singularity(scene, kern, idx, t, y, p, t0, y_init, tol, nonfinite=False) -> 
                 f"solved for the velocities of the dependent coordinates {dep} here. "
                 + (f"The split is singular, not necessarily the motion: use another split "
                    f"(here dependent={alt} is regular{_switching(scene)})" if alt else
+                   "df/dqdot could not be evaluated at this state, so no other split was "
+                   "tried" if jacobian_at(scene, t, y, p) is None else
                    "No other split was found regular here (df/dqdot may lose rank): the "
                    "constraints themselves are singular"))
     elif kind == "constraint":
@@ -114,10 +157,59 @@ def singularity(scene, kern, idx, t, y, p, t0, y_init, tol, nonfinite=False) -> 
                 "that vanishes where the matrix does not: a singularity of the "
                 "expressions, not of the motion. Order the constraints so that the solve "
                 "can pivot on constants, or pass it")
-    reason = (f"singular configuration: {where}. {hint}. (If the singularity is removable "
-              "-- a 0/0 that cancels -- run with singular='ignore'.)")
-    return {"indicator": expr, "kind": kind, "index": idx, "t": float(t),
-            "value": value, "initial": initial, "reason": reason}
+    return kind, hint
+
+
+def stiff_reason(scene, kern, method, t, y, p, t0, y_init) -> str:
+    """The stop reason of a run that an explicit method found stiff (status ``STIFF``,
+    ``methods.loop``): where, why, the way out, and the singular set the motion is near
+    (``near_singular``)."""
+    reason = (f"the problem became stiff for {method} at t = {float(t):.17g}: its estimate "
+              "of h |lambda| (Hairer's test) stayed beyond its stability bound, so its "
+              "steps are limited by stability, not by the tolerance (an explicit method "
+              "needs ~|lambda| steps per unit of time here, whatever rtol). Run it with "
+              "method='radau' (implicit: its steps follow the solution's own time scale)")
+    near = near_singular(scene, kern, t, y, p, t0, y_init)
+    if near is None:
+        return reason + "."
+    return reason + f"; {near[0]}, which may be what makes it stiff. {near[1]}."
+
+
+def small_step_reason(scene, kern, method, t, y, p, t0, y_init) -> str:
+    """The stop reason of a run whose step fell below the spacing of the floating-point
+    numbers (status ``TOO_SMALL_STEP``), with the singular set the motion is near."""
+    reason = (f"{method}: the step size fell below the spacing of floating-point numbers "
+              f"at t = {float(t):.17g}")
+    near = near_singular(scene, kern, t, y, p, t0, y_init)
+    if near is None:
+        return (reason + ": the solution may blow up there, or the problem is too stiff "
+                "for this tolerance; try a looser rtol, or method='radau'")
+    return (reason + f"; {near[0]}, which {method} cannot approach at this tolerance (a "
+            f"looser rtol stops it sooner). {near[1]}.")
+
+
+def near_singular(scene, kern, t, y, p, t0, y_init):
+    """``(where, hint)``: the singularity indicator smallest relative to its initial
+    size at (t, y) if it is below ``WATCH`` of it (the singular set the motion is near,
+    and what it means: ``_kind_and_hint``), else None."""
+    m = len(kern.layout.indicators)
+    if not m:
+        return None
+    g0 = np.empty(m)
+    g = np.empty(m)
+    kern.sing(float(t0), np.ascontiguousarray(y_init), p, g0)
+    kern.sing(float(t), np.ascontiguousarray(y), p, g)
+    with np.errstate(all="ignore"):
+        rel = g / g0
+    near = np.flatnonzero(np.isfinite(rel) & (rel < WATCH))
+    if not near.size:
+        return None
+    i = int(near[np.argmin(rel[near])])
+    expr = kern.layout.indicators[i]
+    _, hint = _kind_and_hint(scene, expr, kern.layout.indicator_kinds[i], t, y, p, t0,
+                             y_init)
+    return (f"the motion is near the singular set {expr} = 0 (here {expr} is {rel[i]:.3g} "
+            "of its initial value), where the equations are singular"), hint
 
 
 def _switching(scene) -> str:

@@ -559,7 +559,7 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
         sensitivities=sensitivities, sensitivity_error=sensitivity_error, batch=True))
     method = plan.method.name
     workers = int(workers or numba.config.NUMBA_NUM_THREADS)
-    sens = None
+    sens = Y_A = None
     one = None if Y0.shape[0] != 1 else _single(scene, plan, opts, t_eval, save, timeout)
     if one is not None:         # an ensemble of one: a run
         (OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T), wall = _one(one, Y0, P)
@@ -588,31 +588,45 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
         budget = ctl.max_steps
         h_fixed = (t1 - t0) / ctl.n_steps if ctl.n_steps > 0 else 0.0
         edge = ce.python_funcs[-1]
+        own, S_all = chart_atlas.own, None if sens is None else sens[1]
+        ends = []           # each piece's loop result: its last time and state
+
+        def build(*args, **kw):
+            ends.append(args[2])
+            return solve.trajectory(*args, **kw)
+
         for r in range(n_runs):         # runs past the edge at the start: run again
             if not edge(t0, Y0[r], P[r]) < 0.0:
                 continue
             chart, y, first = atlas.begin(chart_atlas, user, t0, Y0[r], P[r])
             if not first:
                 continue
+            if sens is not None:        # S(t0) in the chart the run starts in (atlas.run)
+                S0 = solve.augmented(plan.sens.layout, Y0[r:r + 1])[0, Y0.shape[1]:]
+                S0 = own.carry(chart, t0, Y0[r], S0.reshape(1, Y0.shape[1], -1), P[r])
+                y = np.concatenate((y, S0.ravel()))
             parts, sw = atlas.follow(chart_atlas, method, chart, t0, y, t1, P[r], user,
                                      np.zeros(n_user, np.int64), ctl, budget, te, mode,
                                      None, checked, singular_tol, plan.newton, limit,
-                                     solve.trajectory)
+                                     build, sens=sens is not None)
             INFO[r, 1:5] = 0
             EV_N[r], EV_T[r], OUT_T[r], OUT_Y[r] = 0, np.nan, np.nan, np.nan
-            pieces[r] = _taken_on(chart_atlas.own, r, parts, n_user, mode, P[r], OUT_T,
-                                  OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)
+            if S_all is not None:
+                S_all[r] = np.nan
+            pieces[r] = _taken_on(own, r, parts, ends[-1], n_user, mode, P[r], OUT_T, OUT_Y,
+                                  INFO, T_LAST, Y_LAST, EV_N, EV_T, S_all)
             reasons[r], switches[r] = parts[-1][1].stop_reason, first + sw
         for r in np.nonzero(EV_N[:, n_user] > 0)[0]:
             if INFO[r, 0] != EVENT or T_LAST[r] != EV_T[r, n_user]:
                 continue
+            y = (Y_LAST if Y_A is None else Y_A)[r].copy()
             parts, sw = atlas.go_on(chart_atlas, method, user, t1, P[r], float(T_LAST[r]),
-                                    Y_LAST[r].copy(), EV_N[r, :n_user].copy(), ctl,
+                                    y, EV_N[r, :n_user].copy(), ctl,
                                     budget - INFO[r, 1], te, mode, checked,
                                     singular_tol, plan.newton, limit, h_fixed,
-                                    solve.trajectory)
-            pieces[r] = _taken_on(chart_atlas.own, r, parts, n_user, mode, P[r], OUT_T, OUT_Y,
-                                  INFO, T_LAST, Y_LAST, EV_N, EV_T)
+                                    build, sens=sens is not None)
+            pieces[r] = _taken_on(own, r, parts, ends[-1], n_user, mode, P[r], OUT_T, OUT_Y,
+                                  INFO, T_LAST, Y_LAST, EV_N, EV_T, S_all)
             reasons[r], switches[r] = parts[-1][1].stop_reason, sw
         wall += time.perf_counter() - tic
     # never a success with a NaN or infinite state
@@ -704,10 +718,14 @@ def _on_constraints(plan, P, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST):
             OUT_Y[stop, 0] = rows
 
 
-def _taken_on(own, r, parts, n_user, mode, p, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
+def _taken_on(own, r, parts, end, n_user, mode, p, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N,
+              EV_T, S=None):
     """Run ``r`` of an ensemble taken on past its chart's edge (``atlas.go_on``): its
-    rows, counts and events filled in after the edge; returns the pieces of its rows that
-    other charts ran (``atlas.fill_aux``)."""
+    rows, counts and events filled in after the edge, with ``S`` (the ensemble's
+    sensitivities) its sensitivities in the scene's states (``Chart.carry``), as
+    ``atlas.stitch`` gives a single run's; its last time and state from ``end``, the
+    loop result of its last piece (which may have no rows at ``t_eval``); returns the
+    pieces of its rows that other charts ran (``atlas.fill_aux``)."""
     row = 0 if mode == ENDPOINTS else int(INFO[r, 4])
     pieces = []
     for chart, seg, _ in parts:
@@ -718,6 +736,10 @@ def _taken_on(own, r, parts, n_user, mode, p, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST
         if b > a:
             OUT_T[r, row:row + b - a] = seg.t[a:b]
             OUT_Y[r, row:row + b - a] = atlas.to_home(own, chart, seg.t[a:b], seg.y[a:b], p)
+            if S is not None:
+                Sc = seg.sensitivities[a:b]
+                S[r, row:row + b - a] = (Sc if chart is own else
+                                         chart.carry(own, seg.t[a:b], seg.y[a:b], Sc, p))
             pieces.append((row, row + b - a, chart, seg, a))
             row += b - a
         info = seg._info
@@ -735,8 +757,14 @@ def _taken_on(own, r, parts, n_user, mode, p, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST
     INFO[r, 0] = last.status
     INFO[r, 4] = row if mode != ENDPOINTS else 1
     INFO[r, 5] = -1
-    T_LAST[r] = last.t[-1]
-    Y_LAST[r] = atlas.to_home(own, last_chart, last.t[-1:], last.y[-1:], p)[0]
+    if len(last.t) and last.t[-1] == end.t:     # its last row: the last state
+        T_LAST[r] = last.t[-1]
+        Y_LAST[r] = atlas.to_home(own, last_chart, last.t[-1:], last.y[-1:], p)[0]
+    else:
+        n = len(last_chart.scene.state_names)
+        T_LAST[r] = end.t
+        Y_LAST[r] = atlas.to_home(own, last_chart, np.array([float(end.t)]),
+                                  np.asarray(end.y)[:n].reshape(1, n), p)[0]
     return pieces
 
 

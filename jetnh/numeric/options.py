@@ -25,7 +25,10 @@ from ..errors import ArgumentError
 class StepControl:
     """Step control: ``rtol``, ``atol`` (scalar or per state), ``first_step``,
     ``max_step`` (None: automatic, none), ``max_steps`` (budget), ``n_steps`` or ``h``
-    (fixed-step methods)."""
+    (fixed-step methods).  Besides the budget, dop853 and dopri5 stop a run their steps
+    cannot carry: with status STIFF where Hairer's stiffness test finds the steps held
+    by stability (use radau), and as a singular stop where the motion crawls toward a
+    singular set it cannot approach (``methods.loop``, ``methods._events``)."""
 
     rtol: float = 1e-9
     atol: object = 1e-12

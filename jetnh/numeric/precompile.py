@@ -11,13 +11,14 @@ its loop instead of compiling it; ``make`` runs it once after installing.
 ``t_eval`` that keeps every step (the most common run), ``final`` the same keeping only
 its end (``save="final"``; radau's plain loop serves it), ``t_eval`` with output at
 ``t_eval``, ``watch+t_eval`` with that and indicators or events watched, ``all`` with
-every part; the loops of dla and dvi; ``connect:step``, the compiled step of connect's
+every part; the loops of dla and dvi; ``projection:rows``, the projection of output
+rows onto holonomic constraints (``projection.rows``); ``connect:step``, the compiled step of connect's
 Levenberg-Marquardt search (``connect.levenberg``), ``connect:small`` its shooting's
 small-matrix SVD and finiteness check (``connect.small``) and ``connect:verdicts`` the
 compiled parts of its verdicts (``connect.verdicts``).  ``DEFAULT``, what ``make``
 compiles (about a minute of CPU), is the plain and the ``final`` loop of each continuous
-method, the default method's loops with ``t_eval`` (those of ``make run``), and
-connect's: the first run of each on a machine loads its loop.  Each loop compiles in a
+method, the default method's loops with ``t_eval`` (those of ``make run``), the rows'
+projection and connect's: the first run of each on a machine loads its loop.  Each loop compiles in a
 process of its own, as many at a time as there are cores.
 """
 
@@ -36,10 +37,12 @@ LOOPS = {f"{m}:{name}": (m, parts) for m in ("dop853", "dopri5", "rk4", "radau")
          for name, parts in PARTS.items()
          if not (m == "rk4" and "t_eval" in name or m == "radau" and name == "final")}
 LOOPS.update({"dla": ("dla", None), "dvi": ("dvi", None),
+              "projection:rows": ("projection", None),
               **{f"connect:{part}": ("connect", part)
                  for part in ("step", "small", "verdicts")}})
 DEFAULT = (*(n for n in LOOPS if n.endswith((":plain", ":final"))), "dop853:t_eval",
-           "dop853:watch+t_eval", "connect:step", "connect:small", "connect:verdicts")
+           "dop853:watch+t_eval", "projection:rows", "connect:step", "connect:small",
+           "connect:verdicts")
 
 
 def compile_loop(name: str) -> tuple[str, float, bool]:
@@ -55,6 +58,10 @@ def compile_loop(name: str) -> tuple[str, float, bool]:
         d = dla.solver()
     elif method == "dvi":
         d = dvi.solver()
+    elif method == "projection":
+        from .methods import _common, projection
+
+        d = _common.compiled(projection._rows, projection._ROWS_ARGS)
     elif method == "connect":
         from .connect import levenberg, small, verdicts
 

@@ -25,7 +25,8 @@ from ..errors import ArgumentError, JetnhError
 from . import arguments, atlas, diagnosis, discrete, interrupt, loops, methods, scipy_backend
 from .methods import STATUS_TEXT, Solver
 from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, FINISHED, NONFINITE,
-                              SINGULAR, STOPPED, entry_point)
+                              SINGULAR, STIFF, STOPPED, TOO_SMALL_STEP,
+                              entry_point)
 from .events import split_records
 from .kernels import sensitivity_kernels
 from .methods.loop import Control, Result, Watch
@@ -221,9 +222,7 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
 
         newton = radau.newton_options(newton_tol, max_newton)
     kern = scene.kernels
-    # (an ensemble with sensitivities keeps its split)
-    switch = (split == "switch" and not (batch and sens is not None)
-              and atlas.applies(scene, events))
+    switch = split == "switch" and atlas.applies(scene, events)
     if switch:
         # the run goes on across its chart's edge: events per chart (numeric.atlas); an
         # ensemble, and a run with sensitivities (whose loop ``connect`` calls directly:
@@ -422,8 +421,13 @@ def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, 
         reason = singularity["reason"]
     elif status == SINGULAR:
         singularity = diagnosis.singularity(scene, kern, int(sing_index), t_last, y_last, p,
-                                            t0, y_init, singular_tol)
+                                            t0, y_init, singular_tol, method=method)
         reason = singularity["reason"]
+    elif status == STIFF:
+        reason = diagnosis.stiff_reason(scene, kern, method, t_last, y_last, p, t0, y_init)
+    elif status == TOO_SMALL_STEP:
+        reason = diagnosis.small_step_reason(scene, kern, method, t_last, y_last, p, t0,
+                                             y_init)
     elif status == EVENT:
         k = int(ev_i[n_ev - 1])
         reason = f"terminal event {ce.names[k]!r} at t = {float(ev_t[n_ev - 1]):.17g}"

@@ -153,7 +153,9 @@ def run(args, progress) -> int:
 def _record(c) -> dict:
     return {"principle": c.principle, "initial": dict(c.initial), "cost": c.cost,
             "residual": c.residual, "normal": c.normal,
-            "conjugate_times": list(c.conjugate_times), "minimizer": c.minimizer,
+            "conjugate_times": (None if c.conjugate_times is None
+                                else list(c.conjugate_times)),
+            "minimizer": c.minimizer,
             "search": c.search, "rank": c.rank, "iterations": c.iterations}
 
 
@@ -163,11 +165,19 @@ def _print(c, end):
     print(f"cost:      {c.cost:.12g} (the action int L dt)")
     print(f"residual:  {c.residual:.3e} (max |q(t1) - end|)")
     print(f"normal:    {'yes' if c.normal else 'no: an abnormal extremal'}")
-    print("conjugate: " + (", ".join(f"t = {t:.10g}" for t in c.conjugate_times)
-                           or "none in (t0, t1]"))
+    times, variational = c.conjugate_times, c.legendre is not None
+    print("conjugate: " + ("not checked" if times is None else
+                           ", ".join(f"t = {t:.10g}" for t in times) or "none in (t0, t1]")
+          + ("" if variational else " (where the endpoint map to the named coordinates "
+             "is singular)"))
     if c.minimizer is False:
-        print("minimizer: no (a conjugate time inside the span; --restarts looks for a "
-              "cheaper motion)")
+        print("minimizer: no (" + ("Legendre's condition fails: L + lambda f is not "
+                                   "positive on the admissible velocities"
+                                   if c.legendre < 0 else "a conjugate time inside the "
+                                   "span; --restarts looks for a cheaper motion") + ")")
+    elif c.minimizer is None and variational:
+        print("minimizer: not checked (a singular Hessian of L + lambda f, or conjugate "
+              "times not checked)")
     if c.search:
         print(f"search:    {c.search}")
     if c.rank < len(c.unknowns) and c.rank < len(end):
@@ -198,7 +208,7 @@ def _plot(found, coords, path, title):
         for i, name in enumerate(coords):
             ax.plot(t, q[name], color=f"C{i}", ls=("-", "--")[k % 2],
                     label=f"{name} ({c.principle})")
-        for tc in c.conjugate_times:
+        for tc in c.conjugate_times or ():
             ax.axvline(tc, color="k", ls=":", lw=1)
     ax.set_xlabel("t")
     ax.set_ylabel("coordinates")

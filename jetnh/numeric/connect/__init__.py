@@ -62,7 +62,13 @@ Verdicts on the answer:
   unstable spans.  Past the first, the extremal is no longer a local minimizer of the
   action: ``minimizer`` is False, and ``restarts`` look for a cheaper extremal without
   a conjugate time inside the span (``solve.least_action``; ``Connection.search`` says
-  what they found).
+  what they found).  Chetaev and Suslov (no extremals of an action): the times where
+  the map from the unknowns to the named end coordinates (the two-point problem's
+  endpoint map) loses rank.  None where nothing could be checked.
+- ``legendre``, and in ``minimizer``: Legendre's condition, the Hessian of L + lambda f
+  in the velocities on the admissible ones positive along the motion; where it has a
+  negative direction the extremal is no minimizer.  The verdicts are read off the
+  returned trajectory's own dense output, never a new run.
 - ``normal``: False when the endpoint map of the constraint system (the kinematic
   control system qdot^mu = u^mu, qdot^alpha = phi^alpha(t, q, u)) loses rank along the
   path, i.e. its controllability Gramian ``W' = A W + W A^T + B B^T`` (A, B the partial

@@ -12,8 +12,8 @@ from ...errors import JetnhError
 from ...frozen import readonly
 from ..trajectory import Trajectory
 from .problem import VARIATIONAL
-from .verdicts import (_GAUSS_X, GRAMIAN_RCOND, _Samples, action, conjugate_times,
-                       gramian_ratio)
+from .verdicts import (GRAMIAN_RCOND, LEGENDRE_ZERO, _Samples, action,
+                       conjugate_times, gramian_ratio, legendre_margin)
 
 
 @dataclass(frozen=True)
@@ -55,11 +55,7 @@ class Connection:
 
     @cached_property
     def _samples(self):
-        tr = self.trajectory
-        if isinstance(tr._segments, Stitched):
-            return _StitchedSamples(tr)
-        return _Samples(tr, self._run["rtol"], self._run["atol"], self._run["method"],
-                        tr.y[0])
+        return _Samples(self.trajectory, dict(self._run))
 
     @cached_property
     def cost(self) -> float:
@@ -79,30 +75,69 @@ class Connection:
         return bool(self.gramian_ratio > GRAMIAN_RCOND)
 
     @cached_property
-    def conjugate_times(self) -> tuple:
-        """The times in (t0, t1] where dq/du loses rank (``conjugate_times``)."""
+    def conjugate_times(self):
+        """Where the map from the unknowns to the configuration loses rank in (t0, t1]
+        (``verdicts.conjugate_times``).  Vakonomic and Hoelder: the map to the whole
+        configuration, dq(t)/du (the Jacobi fields): the conjugate points of the
+        extremal.  Chetaev and Suslov, whose motions are no extremals of an action: the
+        map to the named end coordinates, the two-point problem's endpoint map -- where
+        it is singular, the end is a fold of the motions from the start (nearby ends
+        are reached twice or not at all).  None: not checked (fewer unknowns than
+        coordinates to measure)."""
+        rows = None
+        if self.principle not in VARIATIONAL:
+            names = self.trajectory.scene.state_names
+            rows = [names.index(c) for c in self.conditions]
         return conjugate_times(self.trajectory, list(self._columns), self._samples,
-                               self._rcond)
+                               self._rcond, rows)
+
+    @cached_property
+    def legendre(self):
+        """The strengthened Legendre condition along the motion
+        (``verdicts.legendre_margin``): the smallest eigenvalue of the Hessian of L +
+        lambda f in the velocities, restricted to the admissible ones (ker df/dqdot,
+        tangent to g = 0), over its largest magnitude, at the worst of the equal-spaced
+        times.  Positive: definite everywhere; negative: the action decreases along
+        some rapid variation (no minimizer); None for Chetaev and Suslov."""
+        if self.principle not in VARIATIONAL:
+            return None
+        return legendre_margin(self.trajectory, self._samples)
 
     @property
     def minimizer(self):
-        """Vakonomic and Hoelder: False where a conjugate time lies inside (t0, t1) --
-        the extremal is then no local minimizer of the action (Jacobi's necessary
-        condition); True where none does (necessary, not sufficient, for a minimum).
-        None for Chetaev and Suslov, whose motions are not extremals of the action."""
+        """Vakonomic and Hoelder: the necessary conditions of a local minimum of the
+        action.  False where Legendre's fails (``legendre`` negative: L + lambda f is
+        not positive semidefinite on the admissible velocities somewhere) or a conjugate
+        time lies inside (t0, t1) (Jacobi's); True where the strengthened Legendre
+        condition holds and no conjugate time lies inside (necessary, not sufficient,
+        for a minimum); None where neither verdict applies (a Hessian singular
+        somewhere, conjugate times not checked) and for Chetaev and Suslov, whose
+        motions are not extremals of the action."""
         if self.principle not in VARIATIONAL:
             return None
+        margin = self.legendre
+        if margin < -LEGENDRE_ZERO:
+            return False
+        times = self.conjugate_times
+        if times is None:
+            return None
         t0, t1 = float(self.trajectory.t[0]), float(self.trajectory.t[-1])
-        return not any(abs(t - t1) > 1e-9 * abs(t1 - t0) for t in self.conjugate_times)
+        if any(abs(t - t1) > 1e-9 * abs(t1 - t0) for t in times):
+            return False
+        return True if margin > LEGENDRE_ZERO else None
 
     def __repr__(self):
+        times = self.conjugate_times
+        minimizer = self.minimizer
         return (f"Connection({self.principle}: cost {self.cost:.12g}, residual "
                 f"{self.residual:.2e}, normal={self.normal}, conjugate_times="
-                f"{tuple(round(t, 10) for t in self.conjugate_times)}"
-                + ("" if self.minimizer is not False else " (not a minimizer)")
+                + ("None (not checked)" if times is None else
+                   f"{tuple(round(t, 10) for t in times)}")
+                + {False: " (not a minimizer)", True: "",
+                   None: "" if self.principle not in VARIATIONAL else
+                   " (minimizer not checked)"}[minimizer]
                 + ", initial="
                 f"{dict(self.initial)})")
-
 
 class Stitched:
     """The runs of multiple shooting's segments as one motion (``Trajectory._segments``):
@@ -196,19 +231,3 @@ class Stitched:
                 out[idx, n:] = self._chain(S, self.chains[i], n).reshape(idx.size, -1)
         return out
 
-
-class _StitchedSamples(_Samples):
-    """``_Samples`` of a stitched motion: from its segments' dense output."""
-
-    def __init__(self, tr):
-        t = tr.t
-        a, b = t[:-1], t[1:]
-        self.half = 0.5 * (b - a)
-        self.gauss = ((0.5 * (a + b))[:, None] + self.half[:, None] * _GAUSS_X[None, :])
-        self.grid = np.linspace(t[0], t[-1], self.GRID + 1)
-        times = np.concatenate([self.gauss.ravel(), self.grid])
-        n, m = tr.layout.n_state, len(tr.sensitivity_columns)
-        Y = tr._segments.evaluate(tr, times, full=True)
-        k = self.gauss.size
-        self.gauss_y, self.grid_y = Y[:k, :n], Y[k:, :n]
-        self.grid_S = Y[k:, n:].reshape(-1, n, m)

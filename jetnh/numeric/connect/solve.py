@@ -23,6 +23,10 @@ STEP_ITER = 20
 FIRST_SPAN = 0.125
 #: multiple shooting segments from the direct route's guess (``least_action``)
 DIRECT_SEGMENTS = 4
+#: growth max |dy(t1)/dy(t0)| of a single run above which multiple shooting's answer is
+#: not polished into one run (its own integration error, amplified so, leaves the
+#: motion: another run from the same start does not reach the end)
+POLISH_GROWTH = 1e10
 
 
 
@@ -334,8 +338,9 @@ class Search(Shooter):
         """Multiple shooting (``Segments``) from ``u0`` and the straight line, then
         single shooting from its ``u`` (at most ``STEP_ITER`` iterations: it starts at
         the answer up to the amplification of the matching error).  Where single
-        shooting cannot get there (sensitivities so large that the run's own error
-        exceeds the tolerance), the segments' answer is the motion: ``Stitched``.
+        shooting cannot get there, or gets there with a run whose growth exceeds
+        ``POLISH_GROWTH`` (its own error, so amplified, exceeds the tolerance), the
+        segments' answer is the motion: ``Stitched``.
         Returns ``(u, converged, iterations, stitched or None)``."""
         seg = _Segments(self, k)
         U0 = seg.guess(u0)
@@ -349,7 +354,7 @@ class Search(Shooter):
                                       min(max_iter, STEP_ITER))
         except ConnectError:
             ok, more = False, min(max_iter, STEP_ITER)
-        if ok:
+        if ok and abs(self.endpoint(u)[2].S[:, :len(self.y0)]).max() <= POLISH_GROWTH:
             return u, True, its + more, None
         stitched = Stitched.join(seg, U)
         return U[:seg.m], stitched is not None, its + more, stitched

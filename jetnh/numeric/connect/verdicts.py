@@ -6,11 +6,9 @@ from __future__ import annotations
 
 import functools
 import math
-from functools import cached_property
 
 import numpy as np
 
-from ...errors import ConnectError
 from ..atlas import split_measure_of
 from ..methods._common import jit
 from . import small
@@ -25,6 +23,9 @@ DET_ZERO = 1e-10
 #: ``conjugate_times`` refines them (a conjugate point where no sign changes)
 DIP = 0.05
 _GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(5)
+#: |eigenvalue| / largest |eigenvalue| of the reduced Hessian (``legendre_margin``) below
+#: which it counts as zero (no sign)
+LEGENDRE_ZERO = 1e-9
 
 
 def _dense_states(tr, times, full=False):
@@ -35,46 +36,52 @@ def _dense_states(tr, times, full=False):
 
 
 class _Samples:
-    """The states (and sensitivities) of a trajectory at the times its verdicts need --
+    """The states and sensitivities of a trajectory at the times its verdicts need --
     the 5 Gauss-Legendre nodes of every step (``gauss``) and ``GRID`` + 1 equal-spaced
-    times (``grid``) -- from one run with these times as ``t_eval`` (dense output: the
-    values ``Trajectory.at`` gives, without re-taking each step from Python).  The
-    sensitivities on the grid (``grid_S``, for the Jacobi determinant of
-    ``conjugate_times``) come with that run where the state has twice as many entries as
-    there are coordinates (as many unknowns as coordinates: vakonomic, Hoelder), else
-    from a run of their own when asked for."""
+    times (``grid``) -- on the trajectory's own motion: its dense output
+    (``dense.evaluate``: its steps re-taken, or each segment's of a stitched motion).
+    With ``run`` (the run's rtol, atol and method) first from one run with these times
+    as ``t_eval`` (the same steps without re-taking each from Python), kept only where
+    it ends on the trajectory's last state and sensitivities bit for bit: a run that
+    took other steps (on an unstable span it can leave the motion) is never used."""
 
     GRID = 400
 
-    def __init__(self, tr, rtol, atol, method, y0):
+    def __init__(self, tr, run=None):
         t = tr.t
         a, b = t[:-1], t[1:]
         self.half = 0.5 * (b - a)
         self.gauss = ((0.5 * (a + b))[:, None] + self.half[:, None] * _GAUSS_X[None, :])
         self.grid = np.linspace(t[0], t[-1], self.GRID + 1)
-        self._tr, self._run = tr, dict(rtol=rtol, atol=atol, method=method, y0=y0)
         times = np.concatenate([self.gauss.ravel(), self.grid])
-        order = np.argsort(times, kind="stable")
-        square = tr.layout.n_state == 2 * len(tr.layout.coordinates)
-        run = self._sample(times[order], square)
-        ys = np.empty_like(run.y)
-        ys[order] = run.y
+        n, m = tr.layout.n_state, len(tr.sensitivity_columns)
+        Y = None if run is None or tr._segments is not None else _rerun(tr, times, run)
+        if Y is None:
+            Y = _dense_states(tr, times, full=True)
         k = self.gauss.size
-        self.gauss_y, self.grid_y = ys[:k], ys[k:]
-        if square:
-            S = np.empty_like(run.sensitivities)
-            S[order] = run.sensitivities
-            self.grid_S = S[k:]
+        self.gauss_y, self.grid_y = Y[:k, :n], Y[k:, :n]
+        self.grid_S = Y[k:, n:].reshape(-1, n, m)
 
-    def _sample(self, times, sensitivities):
-        run = self._tr.scene.run(t_eval=times, sensitivities=sensitivities, **self._run)
-        if run.status != 0 or len(run.t) != times.size:
-            raise ConnectError(f"the motion found could not be sampled: {run.stop_reason}")
-        return run
 
-    @cached_property
-    def grid_S(self):
-        return self._sample(self.grid, True).sensitivities
+def _rerun(tr, times, run):
+    """The states and sensitivities (rows as ``dense.evaluate(full=True)``) of ``tr``
+    at ``times`` from a new run with these times as ``t_eval``, or None where that run
+    does not end on ``tr``'s last state and sensitivities bit for bit."""
+    from ...errors import JetnhError
+
+    order = np.argsort(times, kind="stable")
+    try:
+        got = tr.scene.run(t_eval=times[order], sensitivities=True, y0=tr.y[0], **run)
+    except JetnhError:
+        return None
+    if (got.status != 0 or len(got.t) != times.size or got.t[-1] != tr.t[-1]
+            or not np.array_equal(got.y[-1], tr.y[-1])
+            or not np.array_equal(got.sensitivities[-1], tr.sensitivities[-1])):
+        return None
+    Y = np.empty((times.size, got.y.shape[1] + got.sensitivities[0].size))
+    Y[order, :got.y.shape[1]] = got.y
+    Y[order, got.y.shape[1]:] = got.sensitivities.reshape(times.size, -1)
+    return Y
 
 
 def action(tr, samples) -> float:
@@ -128,6 +135,72 @@ def _block(scene, values, name, shape) -> np.ndarray:
 #: the measure det(A_alpha)^2 / det(A A^T) of the scene's split (``atlas``) below which,
 #: somewhere on the path, ``gramian_ratio`` linearizes without a split
 EDGE = 1e-2
+
+
+def _hessian(scene):
+    """``(states, velocities, H)``: the symbols of ``scene``'s state, the velocities and
+    the Hessian of L + lambda_a f^a (the integrand of the composite action) in them
+    (``dag.diff`` on the shared graph), made once per scene."""
+    found = scene._memo.get("legendre")
+    if found is None:
+        from ...algebra import dag
+        from ...mechanics import principles
+
+        system = scene.system
+        lam = principles.get(scene.principle).multiplier_symbols(system)
+        F = system.L + sum((a * f for a, f in zip(lam, system.constraints)), 0)
+        v = list(system.J.qd)
+        cache: dict = {}
+        first = [dag.diff(F, x, cache=cache) for x in v]
+        H = [dag.diff(first[i], v[j], cache=cache) for i in range(len(v))
+             for j in range(len(v))]
+        by_name = {s.name: s for s in (*system.J.q, *system.independent_velocities, *lam)}
+        states = [by_name[n] for n in scene.state_names]
+        found = scene._memo["legendre"] = (states, v, H)
+    return found
+
+
+def legendre_margin(tr, samples) -> float:
+    """The strengthened Legendre condition along ``tr``: at each of ``samples``'
+    equal-spaced times, the eigenvalues of B^T H B, H the Hessian of L + lambda_a f^a
+    in the velocities (``_hessian``) and B a basis of the admissible velocity variations
+    (ker df/dqdot, as in ``_linearized``; with holonomic constraints g = 0, also tangent
+    to g = 0).  Returns the smallest of them over the largest magnitude anywhere:
+    positive where B^T H B is positive definite all along (the action grows along
+    every rapid admissible variation), negative where it has a negative direction
+    somewhere (no local minimizer: Legendre's necessary condition fails), 0 where it
+    is singular or zero."""
+    from ...algebra import dag
+
+    scene = tr.scene
+    system = scene.system
+    states, v, H = _hessian(scene)
+    times, ys = samples.grid, samples.grid_y
+    point = {system.J.t: times,
+             **{s: scene.params[s.name] for s in system.parameters},
+             **{s: ys[:, i] for i, s in enumerate(states)}}
+    dependent = system.dependent_velocities
+    if dependent:
+        aux = np.empty((times.size, tr.layout.n_aux))
+        tr._kernels.aux_rows(np.ascontiguousarray(times), np.ascontiguousarray(ys),
+                             np.ascontiguousarray(tr._p, dtype=float), aux)
+        point.update({s: aux[:, i] for i, s in enumerate(dependent)})
+    n = len(v)
+    Hv = np.stack([np.broadcast_to(np.asarray(h, dtype=float), times.shape)
+                   for h in dag.evaluate_numpy(H, point)], axis=-1).reshape(-1, n, n)
+    B = _linearized(tr, times, ys)[1] if system.k else np.broadcast_to(
+        np.eye(n), (times.size, n, n))
+    if system.holonomic:       # the admissible variations tangent to g = 0 as well
+        h = len(system.holonomic)
+        G = _block(scene, _entries(scene, times, ys, tr._p), "g_q", (h, n))
+        B = B @ np.linalg.svd(G @ B)[2][:, h:, :].transpose(0, 2, 1)
+    B = np.linalg.qr(B)[0]     # orthonormal: eigenvalues on one scale all along
+    R = np.swapaxes(B, 1, 2) @ (0.5 * (Hv + np.swapaxes(Hv, 1, 2))) @ B
+    ev = np.linalg.eigvalsh(R)
+    top = float(np.abs(ev).max()) if ev.size else 0.0
+    if not np.isfinite(top):
+        return float("nan")
+    return float(ev[:, 0].min() / top) if top > 0 else 0.0
 
 
 def split_measure(scene, t, y) -> float:
@@ -424,18 +497,24 @@ def _compiled(name):
                                   nogil=True)
 
 
-def conjugate_times(tr, cols, samples, rcond=1e-9) -> tuple:
-    """The times in (t0, t1] where dq(t)/du (columns ``cols``, the unknowns' states)
-    loses rank, judged on the Jacobi fields scaled as a subspace and by columns
-    (``jacobi_measure``, each column by the largest length its configuration part
-    reaches on the equal-spaced times of ``samples``): the sign changes of the scaled
-    determinant (square case), located by Brent's method on the dense output; the local
-    minima of the smallest scaled singular value there (where the map has its rank on
-    both sides), refined on the dense output and kept where it falls to ``100 rcond``
-    (a conjugate point of even multiplicity -- the antipode of a great circle on a
-    3-sphere -- changes no sign); and t1 where that value is at most ``100 rcond``
-    there.  Not relative to the sensitivities' size: on a long unstable span they grow
-    by orders of magnitude while the map keeps its rank."""
+def conjugate_times(tr, cols, samples, rcond=1e-9, rows=None):
+    """The times in (t0, t1] where the map from the unknowns (columns ``cols`` of the
+    sensitivities: the unknowns' states) to the configuration loses rank: to the whole
+    configuration, dq(t)/du (the Jacobi fields: conjugate points of the extremal), or,
+    with ``rows`` (the state indices of the named end coordinates), to those coordinates
+    alone (where the two-point problem's endpoint map is singular).  Judged on the
+    fields scaled as a subspace and by columns (``jacobi_measure``, each column by the
+    largest length its measured part reaches on the equal-spaced times of
+    ``samples``): the sign changes of the scaled determinant (square case), located by
+    Brent's method on the dense output; the local minima of the smallest scaled
+    singular value there (where the map has its rank on both sides), refined on the
+    dense output and kept where it falls to ``100 rcond`` (a conjugate point of even
+    multiplicity -- the antipode of a great circle on a 3-sphere -- changes no sign);
+    and t1 where that value is at most ``100 rcond`` there.  Not relative to the
+    sensitivities' size: on a long unstable span they grow by orders of magnitude while
+    the map keeps its rank.  None where nothing can be checked: fewer unknowns than
+    dimensions of the whole configuration (without ``rows``), or no named
+    coordinate."""
     from scipy.optimize import brentq, minimize_scalar
 
     n = tr.layout.n_state
@@ -444,33 +523,49 @@ def conjugate_times(tr, cols, samples, rcond=1e-9) -> tuple:
     t0, t1 = float(tr.t[0]), float(tr.t[-1])
     span = abs(t1 - t0)
     found = []
-    # with holonomic constraints: measured on g = 0 (``tangent_frames``), of dimension
-    # nq - h
-    dim = nq - len(tr.scene.system.holonomic)
+    if rows is None:
+        # with holonomic constraints: measured on g = 0 (``tangent_frames``), of
+        # dimension nq - h
+        order, nq_measured = slice(None), nq
+        dim = nq - len(tr.scene.system.holonomic)
+        scan, at_t1 = len(cols) == dim, len(cols) >= dim
+        frames = functools.partial(tangent_frames, tr)
+    else:
+        # the named coordinates' rows first: they are what ``jacobi_measure`` measures
+        rows = list(rows)
+        order = rows + [i for i in range(n) if i not in rows]
+        nq_measured = dim = len(rows)
+        scan = at_t1 = dim > 0
+        frames = _no_frames
+    if not at_t1:
+        return None
+
+    def fields(S):
+        return S[..., cols][..., order, :]
 
     def measure(t, scale=None):
         times = np.atleast_1d(t)
         Y = _dense_states(tr, times, full=True)
-        X = Y[:, n:].reshape(-1, n, m)[:, :, cols]
-        return jacobi_measure(X, nq, scale, tangent_frames(tr, times, Y[:, :n]))
+        X = fields(Y[:, n:].reshape(-1, n, m))
+        return jacobi_measure(X, nq_measured, scale, frames(times, Y[:, :n]))
 
-    last = tr.sensitivities[-1][:, cols]
-    frames_t1 = tangent_frames(tr, tr.t[-1:], tr.y[-1:])
+    last = fields(tr.sensitivities[-1])
+    frames_t1 = frames(tr.t[-1:], tr.y[-1:])
     scale = None
-    if len(cols) == dim:
+    if scan:
         grid = samples.grid[1:]
-        X = samples.grid_S[1:][:, :, cols]
-        scale = np.maximum(np.linalg.norm(X[:, :nq, :], axis=-2).max(axis=0),
-                           np.linalg.norm(last[:nq], axis=0))[None, :]
-        d, least = jacobi_measure(X, nq, scale,
-                                  tangent_frames(tr, grid, samples.grid_y[1:]))
-        # |det| at rounding level: singular there (along a whole stretch when an
-        # unknown has no effect), no sign to follow
-        change = (np.sign(d[:-1]) != np.sign(d[1:])) & (
-            np.maximum(np.abs(d[:-1]), np.abs(d[1:])) >= DET_ZERO)
-        for i in np.nonzero(change)[0]:
-            found.append(float(brentq(lambda t: measure(t)[0][0], grid[i], grid[i + 1],
-                                      xtol=1e-14, rtol=1e-14)))
+        X = fields(samples.grid_S[1:])
+        scale = np.maximum(np.linalg.norm(X[:, :nq_measured, :], axis=-2).max(axis=0),
+                           np.linalg.norm(last[:nq_measured], axis=0))[None, :]
+        d, least = jacobi_measure(X, nq_measured, scale, frames(grid, samples.grid_y[1:]))
+        if d is not None:
+            # |det| at rounding level: singular there (along a whole stretch when an
+            # unknown has no effect), no sign to follow
+            change = (np.sign(d[:-1]) != np.sign(d[1:])) & (
+                np.maximum(np.abs(d[:-1]), np.abs(d[1:])) >= DET_ZERO)
+            for i in np.nonzero(change)[0]:
+                found.append(float(brentq(lambda t: measure(t)[0][0], grid[i],
+                                          grid[i + 1], xtol=1e-14, rtol=1e-14)))
         # isolated dips: where the map keeps its rank on both sides (not rank-deficient
         # along a stretch, where the measure is rounding noise)
         dips = np.nonzero((least[1:-1] < least[:-2]) & (least[1:-1] <= least[2:])
@@ -486,10 +581,13 @@ def conjugate_times(tr, cols, samples, rcond=1e-9) -> tuple:
             if low.fun <= 1e2 * rcond and all(abs(low.x - t) > 1e-9 * span
                                                for t in found):
                 found.append(float(low.x))
-    if len(cols) >= dim:
-        _, least_t1 = jacobi_measure(last, nq, scale,
-                                     None if frames_t1 is None else frames_t1[0])
-        if least_t1 <= 1e2 * rcond:
-            # a crossing found within rounding of t1 is t1 itself
-            found = [t for t in found if abs(t - t1) > 1e-9 * span] + [t1]
+    _, least_t1 = jacobi_measure(last, nq_measured, scale,
+                                 None if frames_t1 is None else frames_t1[0])
+    if least_t1 <= 1e2 * rcond:
+        # a crossing found within rounding of t1 is t1 itself
+        found = [t for t in found if abs(t - t1) > 1e-9 * span] + [t1]
     return tuple(sorted(found))
+
+
+def _no_frames(times, ys):
+    return None

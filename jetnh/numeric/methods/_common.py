@@ -10,7 +10,9 @@ infinite; ``NOT_CONVERGED`` (4) an implicit stage equation did not converge; ``E
 (5) a terminal user event occurred; ``SINGULAR`` (6) a singularity indicator crossed zero
 or fell below its threshold (see ``_events``); ``STOPPED`` (7) the caller asked the loop
 to stop (its ``stop`` flag, checked before every step: Ctrl-C or a wall-clock budget,
-see ``numeric.interrupt``).
+see ``numeric.interrupt``); ``STIFF`` (8) an explicit method found the problem stiff: its
+steps were bounded by its stability region, not by the tolerance (Hairer's test,
+``loop.stiff_ratio``), so going on would only grind through the step budget.
 """
 
 import enum
@@ -36,10 +38,11 @@ class Status(enum.IntEnum):
     EVENT = 5
     SINGULAR = 6
     STOPPED = 7
+    STIFF = 8
 
 
-FINISHED, MAX_STEPS, TOO_SMALL_STEP, NONFINITE, NOT_CONVERGED, EVENT, SINGULAR, STOPPED = (
-    int(s) for s in Status)
+(FINISHED, MAX_STEPS, TOO_SMALL_STEP, NONFINITE, NOT_CONVERGED, EVENT, SINGULAR, STOPPED,
+ STIFF) = (int(s) for s in Status)
 
 STATUS_TEXT = {
     FINISHED: "reached the end of the interval",
@@ -50,6 +53,7 @@ STATUS_TEXT = {
     EVENT: "a terminal event occurred",
     SINGULAR: "stopped at a singular configuration",
     STOPPED: "stopped at the wall-clock budget (timeout)",
+    STIFF: "the problem became stiff for the explicit method (use method='radau')",
 }
 
 #: the step-size controller of Hairer-Norsett-Wanner II.4 with scipy's constants

@@ -17,7 +17,19 @@ the reported state is the last regular one (the left end of the final bracket). 
 ends of every step are checked; an indicator that has fallen below ``WATCH`` (1 %) of its
 initial size is also searched *inside* each step (8 samples of the dense output, then a
 golden-section minimization), so that a zero it only touches -- xdot^2 + ydot^2 at a
-velocity reversal, which a fixed step jumps over -- is not missed.
+velocity reversal, which a fixed step jumps over -- is not missed.  If the dense output of
+the step is not finite down to its start, the stop state is the start of the step.
+
+*Crawling* (``sing_crawl``, adaptive loops): an indicator below ``WATCH`` that falls in a
+step by less than ``CRAWL`` of its value while the step is below ``CRAWL`` of the longest
+step since the watch began.  Approaching a zero at which the solution has a singularity
+of finite order, an adaptive method takes steps a fixed fraction (~ tol^(1/(p+1))) of
+the time left, so the relative fall per step stays bounded below; a fall per step that
+shrinks without bound means the step is held by something the approach does not
+explain -- typically the rounding of a 0/0 that the equations in this form cannot
+resolve (Suslov's equations at the singular set of their split) -- and the run would
+grind through its step budget without reaching the threshold.  ``loop`` stops such a
+run as a singular stop after a run of crawling steps.
 
 Dense output of every method in one form (``dense_eval``): with ``th1 = 1 - theta``::
 
@@ -36,6 +48,8 @@ from ._common import EVENT, SINGULAR, inline, jit  # noqa: F401
 EPS = np.finfo(np.float64).eps
 #: indicators below this fraction of their initial size are searched inside each step
 WATCH = 1e-2
+#: crawling (module docstring): a fall per step and a step ratio below this
+CRAWL = 1e-4
 GOLD = 0.3819660112501051
 
 
@@ -77,6 +91,23 @@ def sing_watch(n_sing, g_old, g_new, sig, gref):
         if sig[i] * g_old[i] < WATCH * gref[i] or sig[i] * g_new[i] < WATCH * gref[i]:
             return True
     return False
+
+
+@inline
+def sing_crawl(n_sing, g_old, g_new, sig, gref):
+    """``(watched, index)`` over a step: whether an indicator is below WATCH of its
+    initial size at its end, and the index of one that falls by less than CRAWL of its
+    value there (else -1)."""
+    watched = False
+    idx = -1
+    for i in range(n_sing):
+        a = sig[i] * g_old[i]
+        b = sig[i] * g_new[i]
+        if b < WATCH * gref[i]:
+            watched = True
+            if b < a and a - b < CRAWL * b:
+                idx = i
+    return watched, idx
 
 
 @jit
@@ -379,7 +410,11 @@ def locate(sing, uev, n_sing, si, theta_hi, t_old, h, y_old, F, p, gs, sig, eps,
         dense_eval((roots[a] - t_old) / h, y_old, F, ytmp)
         ev_t, ev_i, ev_y, n_ev = store_event(ev_t, ev_i, ev_y, n_ev, roots[a], which[a], ytmp)
     if stop != 0:
-        dense_eval((t_stop - t_old) / h, y_old, F, y_stop)
+        if t_stop == t_old:         # (F may not be finite: then 0 * F is not 0)
+            for j in range(y_old.shape[0]):
+                y_stop[j] = y_old[j]
+        else:
+            dense_eval((t_stop - t_old) / h, y_old, F, y_stop)
     return stop, t_stop, sing_index, ev_t, ev_i, ev_y, n_ev
 
 

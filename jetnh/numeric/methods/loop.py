@@ -27,6 +27,24 @@ plus ``D @ K`` rows (DOPRI5's ``contd5``; plain Hermite for RK4), ``DOP853`` Hai
 method fills itself (radau's collocation polynomial).  ``after_step`` and ``output`` are
 what every loop does after an accepted step, ``_common.start`` what it does first (radau's
 too).
+
+Stiffness (``stiff_bound`` > 0: dopri5, dop853): Hairer's test of DOPRI5 and DOP853
+(HNW II, IV.2; ``stiff_ratio``).  The method's last stage and ``f(t + h, y_new)`` are
+both taken at t + h, at two states a local error apart, so the ratio of their
+differences estimates h |lambda| for the dominant eigenvalue of the Jacobian there.
+Every ``STIFF_EVERY``-th accepted step, and after every step once a test was positive,
+it is compared with the method's bound (a point near the boundary of its stability
+region on the negative real axis: 3.25 for dopri5, 6.1 for dop853); ``STIFF_RUN``
+positive tests in a row (``STIFF_RESET`` negative ones clear the count) stop the run
+with status ``STIFF`` after the step (as Hairer's codes do): its steps are held by
+stability, not by the tolerance, as on a stiff problem or on a motion that runs into a
+singular set of the equations, and an explicit method would grind on at ~|lambda| steps
+per unit of time, where radau follows the solution's own time scale.  The test reads
+values the step computed anyway and changes no step (the accepted steps are those of a
+run without it, bit for bit); it costs a counter a step and 2n products every
+``STIFF_EVERY`` steps.  A watched singularity indicator that crawls toward zero
+(``_events.sing_crawl``) for ``STIFF_RUN`` steps in a row stops the run as SINGULAR at
+the end of the step.
 """
 
 from __future__ import annotations
@@ -41,18 +59,23 @@ import numpy as np
 
 from ._common import (
     AT_T_EVAL, ENDPOINTS, ENSEMBLE_OUT, EVENT, EVERY_STEP, FINISHED, MAX_FACTOR, MAX_STEPS,
-    MIN_FACTOR, NONFINITE, SAFETY, SINGULAR, STOPPED, TOO_SMALL_STEP, all_finite,
+    MIN_FACTOR, NONFINITE, SAFETY, SINGULAR, STIFF, STOPPED, TOO_SMALL_STEP, all_finite,
     collect, compiled, copy_into, f8, function_at, i8, inline, jit, min_step, start, store,
     take_next)
 from . import projection
 from .sums import DOP853, EMBEDDED, NONE, functions as sums  # noqa: F401 (the codes)
-from ._events import (any_user_active, dense_eval, hermite_defect, locate, most_watched,
-                      sing_dip, sing_init, sing_violated, sing_watch)
+from ._events import (CRAWL, any_user_active, dense_eval, hermite_defect, locate,
+                      most_watched, sing_crawl, sing_dip, sing_init, sing_violated,
+                      sing_watch)
 
 #: dense outputs (see the module docstring; the error estimators: ``sums``)
 HERMITE, GIVEN = 1, 3
 #: relative defect of a fixed step's Hermite interpolant that marks a kink (``solve``)
 KINK = 0.25
+#: the stiffness test (module docstring, as in Hairer's codes): every STIFF_EVERY-th
+#: accepted step (his NSTIFF default); STIFF_RUN positive tests in a row declare the
+#: problem stiff, STIFF_RESET negative ones in a row clear the count
+STIFF_EVERY, STIFF_RUN, STIFF_RESET = 1000, 15, 6
 
 #: what every solve returns
 Result = namedtuple("Result", "status ts ys n_out stats t y ev_t ev_i ev_y n_ev sing_index")
@@ -73,7 +96,9 @@ class ExplicitRK:
     """An explicit Runge-Kutta method as a value: nodes ``C``, stage matrix ``A`` (its rows
     past ``n_stages`` are the extra stages of the dense output), weights ``B / b_den``,
     error rows ``E`` (and ``E3``), dense-output rows ``D``; ``error`` and ``dense`` name
-    the estimator and the interpolant (module docstring)."""
+    the estimator and the interpolant (module docstring); ``stiff_bound`` > 0: the bound
+    of h |lambda| of the stiffness test (module docstring; the last stage must be at
+    C = 1)."""
 
     name: str
     order: int
@@ -87,6 +112,11 @@ class ExplicitRK:
     E3: np.ndarray = field(default_factory=lambda: np.zeros(1))
     D: np.ndarray = field(default_factory=lambda: np.zeros((0, 1)))
     b_den: float = 1.0
+    stiff_bound: float = 0.0
+
+    def __post_init__(self):
+        if self.stiff_bound > 0.0 and self.C[self.n_stages - 1] != 1.0:
+            raise ValueError(f"{self.name}: the stiffness test needs a last stage at C = 1")
 
     @property
     def n_stages(self) -> int:
@@ -153,6 +183,21 @@ def _stages(first, last, C, A, rhs, t, h, y, K, ytmp, p):
                 acc += A[s, r] * K[r, i]
             ytmp[i] = y[i] + h * acc
         rhs(t + C[s] * h, ytmp, p, K[s])
+
+
+@inline
+def stiff_ratio(h, y_new, y_last, f_new, f_last):
+    """Hairer's estimate of h |lambda|: ``|h| |f_new - f_last| / |y_new - y_last|`` with
+    ``f_last`` the last stage, taken at ``y_last`` and t + h, and ``f_new = f(t + h,
+    y_new)`` (0 where the two states are equal)."""
+    num = 0.0
+    den = 0.0
+    for i in range(y_new.shape[0]):
+        num += (f_new[i] - f_last[i]) ** 2
+        den += (y_new[i] - y_last[i]) ** 2
+    if den > 0.0:
+        return abs(h) * math.sqrt(num / den)
+    return 0.0
 
 
 @inline
@@ -391,6 +436,13 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
             return go, ts, ys, n_out, counts(stats), sing_index
     status = FINISHED
     step = 0
+    stiff_run = 0           # positive stiffness tests in a row (Hairer's IASTI) ...
+    calm_run = 0            # ... and negative ones since the last positive (NONSTI)
+    stiff = False
+    crawl_run = 0           # crawling steps in a row (``_events.sing_crawl``) ...
+    h_watch = 0.0           # ... and the longest step since an indicator is watched
+    if WATCH and ADAPTIVE:
+        g_prev = ws[0].copy()
     while (direction * (t_end - t) > 0.0) if ADAPTIVE else (step < n_steps):
         if ADAPTIVE and stats[0] >= max_steps:
             status = MAX_STEPS
@@ -441,6 +493,16 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
                 stats[1] += 1
             if status != FINISHED:
                 break
+            if STIFF_BOUND > 0.0 and (stiff_run > 0 or (stats[0] + 1) % STIFF_EVERY == 0):
+                # ytmp holds the last stage's state (``sums``), K[ns - 1] its slope
+                if stiff_ratio(h, y_new, ytmp, K[ns], K[ns - 1]) > STIFF_BOUND:
+                    calm_run = 0
+                    stiff_run += 1
+                    stiff = stiff_run >= STIFF_RUN
+                else:
+                    calm_run += 1
+                    if calm_run == STIFF_RESET:
+                        stiff_run = 0
         else:
             rhs(t, y, p, K[0])
             step_stages(rhs, t, h_fixed, y, K, ytmp, p)
@@ -466,6 +528,22 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
             stop, t_stop, sing_index, have_dense, ev_t, ev_i, ev_y, n_ev = after_step(
                 tab, not ADAPTIVE, rhs, sing, uev, p, t, h, t_new, y, y_new, K, F, ytmp, fmid,
                 y_stop, stats, watch, ws, sing_index, ev_t, ev_i, ev_y, n_ev)
+            if ADAPTIVE and stop == 0 and watch.n_sing > 0:
+                watched, crawling = sing_crawl(watch.n_sing, g_prev, ws[0], ws[3], ws[2])
+                copy_into(g_prev, ws[0])
+                if watched:
+                    h_watch = max(h_watch, abs(h))
+                    if crawling >= 0 and abs(h) < CRAWL * h_watch:
+                        crawl_run += 1
+                        if crawl_run >= STIFF_RUN:      # stop at the step's end
+                            stop = SINGULAR
+                            sing_index = crawling
+                            copy_into(y_stop, y_new)
+                    else:
+                        crawl_run = 0
+                else:
+                    h_watch = 0.0
+                    crawl_run = 0
         if WATCH or DENSE:
             if mode != ENDPOINTS:
                 ts, ys, n_out, j_eval = output(tab, not ADAPTIVE, rhs, p, t, h, t_new, y,
@@ -484,6 +562,9 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
         if ADAPTIVE:
             copy_into(y, y_new)
             copy_into(K[0], K[ns])
+            if stiff:
+                status = STIFF
+                break
         else:           # (swapped: cheaper on rk4; on dop853 it costs more than the copy)
             y, y_new = y_new, y
     if mode == ENDPOINTS:
@@ -498,7 +579,7 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
 
 #: the method a specialised loop runs, its sums and that loop (``_specialised``; unbound
 #: here)
-TAB = SHAPE = ADAPTIVE = WATCH = PROJECT = DENSE = STEPS = None
+TAB = SHAPE = ADAPTIVE = STIFF_BOUND = WATCH = PROJECT = DENSE = STEPS = None
 run = step_stages = new_state = step_error = None
 _SPECIALISED = {}
 CONTROL = numba.typeof(Control(1.0, np.zeros(1), 0.0, 1.0, 1, 0, 0, 0, 0))
@@ -541,6 +622,7 @@ def _specialised(method, parts=ALL):
         namespace["TAB"] = method.arrays
         namespace["SHAPE"] = tuple(int(k) for k in method.arrays[6])
         namespace["ADAPTIVE"] = method.adaptive
+        namespace["STIFF_BOUND"] = float(method.stiff_bound)
         (namespace["WATCH"], namespace["PROJECT"], namespace["DENSE"],
          namespace["STEPS"]) = parts
         helpers = sums(method)
