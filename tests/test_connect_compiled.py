@@ -6,7 +6,7 @@
 - ``verdicts.jacobi_measure`` (compiled over the rows) against its formula in numpy:
   QR of the fields, the subspace and column scalings, with and without frames.
 - ``verdicts._gramian_sum`` against the RK4 propagators multiplied by numpy and
-  Simpson's sum.
+  Simpson's sum; ``verdicts._least_split_measure`` against ``atlas.split_measure_of``.
 - The verdicts kernel (``codegen.verdicts``: L, df/dq, df/dqdot, dphi/dq, dphi/du) at
   states of a motion against the same derivatives evaluated on the expression graph
   (``dag.evaluate_numpy``).
@@ -77,6 +77,28 @@ def _jacobi_measure_numpy(X, nq, scale=None, frames=None):
         return None, s
     d_sub, d_col = np.linalg.det(Qq) * sign, np.linalg.det(M)
     return np.where(np.abs(d_sub) >= np.abs(d_col), d_sub, d_col), s
+
+
+@given(SEEDS, st.integers(1, 3), st.integers(0, 3), st.integers(1, 9), st.booleans())
+def test_least_split_measure_matches_atlas(seed, k, extra, rows, deficient):
+    """``verdicts._least_split_measure`` (compiled, ``small.det``) against the least of
+    ``atlas.split_measure_of`` (numpy's determinants), rank-deficient rows included;
+    and ``small.max_abs`` against numpy."""
+    from jetnh.numeric.atlas import split_measure_of
+
+    n = k + extra
+    rng = np.random.default_rng(seed)
+    F = rng.standard_normal((rows, k, n)) * 10.0 ** rng.integers(-2, 2, size=(rows, 1, n))
+    if deficient and k > 1:
+        F[rows // 2, -1] = 3.0 * F[rows // 2, 0]
+    cols = np.sort(rng.choice(n, size=k, replace=False)).astype(np.int64)
+    want = float(split_measure_of(F, list(cols)).min())
+    got = verdicts._compiled("edge")(F, cols)
+    assert abs(got - want) <= 1e-9 * max(1.0, want)
+    if deficient and k > 1:
+        assert got < 1e-12
+    M = F[0]
+    assert small.max_abs(M, n - extra) == float(np.abs(M[:, :n - extra]).max())
 
 
 @given(SEEDS, st.integers(1, 4), st.integers(1, 12), st.booleans(), st.booleans())

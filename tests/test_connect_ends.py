@@ -107,3 +107,37 @@ def _search(system, end):
     free = [c for c in DISK0 if c not in end]
     return Search(scene, DISK0, end, unknowns, {}, 1e-11, 1e-12, "dop853", 1e-9,
                   momenta=Momenta(scene, free))
+
+
+def test_transversality_derived_once_per_system_principle_and_free_set():
+    """``Momenta`` of one system, principle and free coordinates share one derivation
+    (the same tuples), equal to ``transversality`` derived afresh; another principle,
+    free set or system gets its own; a system that only shares a cached entry's id
+    (the id of a collected system reused) derives its own."""
+    from jetnh.numeric.connect import problem
+    from jetnh.numeric.connect.problem import Momenta, _scene
+
+    disk, heis = get("rolling_disk"), get("heisenberg")
+    unknowns = {"phi_t": 0.0, "psi_t": 0.0, "lambda_x": 0.0, "lambda_y": 0.0}
+    scenes = {p: _scene(disk, p, None, {**DISK0, **unknowns}, (0.0, 1.0))
+              for p in ("vakonomic", "holder")}
+    one, two = Momenta(scenes["vakonomic"], ["psi"]), Momenta(scenes["vakonomic"], ["psi"])
+    assert one.exprs is two.exprs and one.jacobian is two.jacobian
+    assert one.exprs == transversality(disk, "vakonomic", ["psi"])
+    both = Momenta(scenes["vakonomic"], ["phi", "psi"])
+    assert both.free == ("phi", "psi")
+    assert both.exprs == transversality(disk, "vakonomic", ["phi", "psi"])
+    holder = Momenta(scenes["holder"], ["phi", "psi"])
+    assert holder.exprs == transversality(disk, "holder", ["phi", "psi"])
+    assert holder.exprs is not both.exprs            # its own entry (equal for the disk)
+    # the values at a state: the same numbers from either Momenta
+    y = np.linspace(0.1, 0.8, len(scenes["vakonomic"].state_names))
+    assert all(np.array_equal(a, b) for a, b in zip(one(0.5, y), two(0.5, y)))
+    # a stale entry under the id of another system is not taken
+    hscene = _scene(heis, "vakonomic", None, {**O, "x_t": 0.0, "y_t": 0.0,
+                                              "lambda_z": 0.0}, (0.0, 1.0))
+    key = (id(heis), "vakonomic", ("z",), hscene.state_names)
+    problem._MOMENTA[key] = (disk, problem._MOMENTA[next(iter(problem._MOMENTA))][1])
+    (pz,) = Momenta(hscene, ["z"]).exprs
+    assert (pz - sp.Symbol("lambda_z")).expand() == 0
+    assert problem._MOMENTA[key][0] is heis

@@ -106,6 +106,20 @@ __all__ = ["connect", "Connection", "VARIATIONAL", "MAX_TOL", "STEP_ITER", "MAX_
            "conjugate_times", "gramian_ratio"]
 
 
+#: principle names as given -> canonical names (``principles.canonical``, a few
+#: microseconds a call), for the names seen
+_CANONICAL: dict = {}
+
+
+def _canonical(principle) -> str:
+    name = _CANONICAL.get(principle) if type(principle) is str else None
+    if name is None:
+        name = principles.canonical(principle)
+        if type(principle) is str and len(_CANONICAL) < 64:
+            _CANONICAL[principle] = name
+    return name
+
+
 def connect(system, principle, start, end, t_span, params=None, guess=None, *,
             tol=1e-9, rtol=1e-11, atol=1e-12, max_iter=100, max_continuation=64,
             rcond=1e-9, method="dop853", segments=None, restarts=0,
@@ -197,7 +211,7 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     """
     if not isinstance(system, System):
         raise JetnhError(f"connect needs a jetnh System, got {type(system).__name__}")
-    principle = principles.canonical(principle)
+    principle = _canonical(principle)
     t0, t1 = Scene._t_span(t_span)
     if t1 == t0:
         raise JetnhError(f"t_span {t_span!r} has zero length: no motion joins two "
@@ -241,8 +255,8 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     unknowns = shape.unknowns
     u0, fixed = _guess(guess, unknowns, shape.fixed, shape.bases, q0, q1, t1 - t0)
     # a scene at the start with placeholder unknowns (the runs replace them)
-    scene = _scene(system, principle, params, {**q0, **dict(zip(unknowns, u0)), **fixed},
-                   (t0, t1))
+    scene = _scene(system, principle, params,
+                   lambda: {**q0, **dict(zip(unknowns, u0)), **fixed}, (t0, t1))
     free = [c for c in coords if c not in q1] if principle in VARIATIONAL else []
     if free and system.holonomic:
         free = _holonomic_free(system, q1, free)

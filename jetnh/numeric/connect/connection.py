@@ -21,10 +21,11 @@ class Connection:
     """A motion of ``principle`` joining two configurations (``connect``).
 
     The verdicts ``cost``, ``normal``, ``gramian_ratio`` and ``conjugate_times`` are
-    computed on first access (one more run, sampled on the dense output) and then kept.
+    computed on first access (one more run, sampled on the dense output) and then kept;
+    so is the ``trajectory`` (made from the run that found the motion).
     """
 
-    trajectory: Trajectory           # from start at t0 to (near) end at t1
+    _motion: object                  # the Trajectory, or the run that makes it (a Shot)
     initial: MappingProxyType        # the full initial state found (name -> value)
     residual: float                  # max |q(t1) - end| over the named coordinates
     #                                  and |P_i(t1)| over the free ones
@@ -45,6 +46,12 @@ class Connection:
     #: what the least-action search (``connect(restarts=)``) tried and where it stopped;
     #: "" where it did not run
     search: str = ""
+
+    @cached_property
+    def trajectory(self) -> Trajectory:
+        """The motion from start at t0 to (near) end at t1."""
+        motion = self._motion
+        return motion if isinstance(motion, Trajectory) else motion.trajectory
 
     @cached_property
     def _samples(self):

@@ -119,11 +119,12 @@ def _fitted(got, n):
     """``(F, dF/du)`` as the compiled step reads them (float64 arrays), checked to
     fit ``n`` unknowns: it indexes them without bounds checks."""
     F, Jm = got[0], got[1]
-    if type(F) is not np.ndarray or F.dtype != _FLOAT:
+    # (a float64 array's dtype is numpy's one instance of it, as a rule: compared first)
+    if type(F) is not np.ndarray or (F.dtype is not _FLOAT and F.dtype != _FLOAT):
         F = np.asarray(F, dtype=float)
-    if type(Jm) is not np.ndarray or Jm.dtype != _FLOAT:
+    if type(Jm) is not np.ndarray or (Jm.dtype is not _FLOAT and Jm.dtype != _FLOAT):
         Jm = np.asarray(Jm, dtype=float)
-    if F.ndim != 1 or Jm.shape != (F.size, n):
+    if F.ndim != 1 or Jm.shape != (F.shape[0], n):
         raise ConnectError(f"internal: residuals of shape {F.shape} and a Jacobian of "
                            f"shape {Jm.shape} for {n} unknowns (please report this)")
     return F, Jm
@@ -151,7 +152,8 @@ def levenberg_marquardt(evaluate, u, scale, tol, max_iter, rcond, stuck=None):
     limit[:] = tol * np.asarray(scale, dtype=float)
     compiled = _step_entry()
     rcond = float(rcond)
-    d, du, mu, nu = np.ones(len(u)), np.empty(len(u)), -1.0, 2.0
+    # (d is written by the first step before it is read)
+    d, du, mu, nu = np.empty(len(u)), np.empty(len(u)), -1.0, 2.0
     for it in range(1, max_iter + 1):
         status, mu, s0, FF, predicted = compiled(F, Jm, d, u, limit, mu, rcond, it == 1,
                                                  du)

@@ -26,6 +26,8 @@ _SCENES: dict = {}
 
 
 def _scene(system, principle, params, initial, t_span):
+    """The scene of the runs (kept, ``_SCENES``); ``initial``: its initial values, or a
+    function that makes them (called only where the scene is made)."""
     from ..scene import Scene
 
     try:
@@ -37,7 +39,8 @@ def _scene(system, principle, params, initial, t_span):
     hit = _SCENES.get(key)
     if hit is not None and hit[0] is system:
         return hit[1]
-    scene = Scene(system, principle, params=params, initial=initial, t_span=t_span)
+    scene = Scene(system, principle, params=params,
+                  initial=initial() if callable(initial) else initial, t_span=t_span)
     if key is not None:
         if len(_SCENES) >= 16:
             _SCENES.clear()
@@ -263,23 +266,14 @@ class Momenta:
     """The transversality conditions (``transversality``; on a system with holonomic
     constraints, ``tangent_transversality``) of a scene as numbers: their values at a
     state and their derivatives by the state (from the graph).  ``free``: the
-    coordinates they belong to."""
+    coordinates they belong to.  The conditions and their derivatives are derived once
+    per system, principle and free coordinates (``_derived``)."""
 
     def __init__(self, scene, free):
         system = scene.system
-        if system.holonomic:
-            exprs, free = tangent_transversality(system, scene.principle, free)
-        else:
-            exprs = transversality(system, scene.principle, free)
-        names = scene.state_names
-        by_name = {s.name: s for s in (*system.J.q, *system.independent_velocities)}
-        from ...mechanics import principles
-        by_name.update({s.name: s for s in
-                        principles.get(scene.principle).multiplier_symbols(system)})
-        self.states = [by_name[n] for n in names]
-        self.free = tuple(free)
-        self.exprs = list(exprs)
-        self.jacobian = list(dag.jacobian(self.exprs, self.states))
+        self.states, self.free, self.exprs, self.jacobian = _derived(
+            system, scene.principle, tuple(free), scene.state_names)
+        self._all = [*self.exprs, *self.jacobian]
         self.t = system.J.t
         self.params = {s: scene.params[s.name] for s in system.parameters}
 
@@ -288,7 +282,39 @@ class Momenta:
         point = {self.t: float(t), **self.params,
                  **{s: float(v) for s, v in zip(self.states, y)}}
         k, n = len(self.exprs), len(self.states)
-        vals = dag.evaluate_numpy(self.exprs + self.jacobian, point)
+        vals = dag.evaluate_numpy(self._all, point)
         values = np.array([float(v) for v in vals[:k]])
         G = np.array([float(v) for v in vals[k:]]).reshape(k, n)
         return values, G
+
+
+#: (id(system), principle, free, state names) -> (system, what ``_derived`` returns):
+#: the derivation takes milliseconds, so repeated free-end problems on one system
+#: derive nothing
+_MOMENTA: dict = {}
+
+
+def _derived(system, principle, free, names) -> tuple:
+    """``(states, free, conditions, their derivatives by the states)`` of the
+    transversality conditions of ``free`` (a tuple of names) under ``principle``, in the
+    state of the scenes with ``names``: tuples, made once (for the last 16 keys) and
+    shared by every ``Momenta`` of the system."""
+    key = (id(system), principle, free, names)
+    hit = _MOMENTA.get(key)
+    if hit is not None and hit[0] is system:
+        return hit[1]
+    if system.holonomic:
+        exprs, free = tangent_transversality(system, principle, list(free))
+    else:
+        exprs = transversality(system, principle, list(free))
+    by_name = {s.name: s for s in (*system.J.q, *system.independent_velocities)}
+    from ...mechanics import principles
+    by_name.update({s.name: s for s in
+                    principles.get(principle).multiplier_symbols(system)})
+    states = tuple(by_name[n] for n in names)
+    exprs = tuple(exprs)
+    found = (states, tuple(free), exprs, tuple(dag.jacobian(list(exprs), list(states))))
+    if len(_MOMENTA) >= 16:
+        _MOMENTA.clear()
+    _MOMENTA[key] = (system, found)
+    return found

@@ -17,7 +17,7 @@ from ...errors import JetnhError
 from .. import arguments, atlas, interrupt, solve
 from ..methods._common import EVENT, FINISHED
 from ..options import options
-from .small import all_finite, thin_svd
+from .small import all_finite, finite_vector, max_abs, thin_svd
 
 #: the measure of the scene's split (``verdicts.split_measure``) below which a run that
 #: stopped early stopped at the edge of its chart
@@ -57,32 +57,36 @@ class Shot:
     __slots__ = ("t", "y", "S", "_made", "_trajectory")
 
     @classmethod
-    def of(cls, scene, plan, y, p, stops=None, watch=None):
+    def of(cls, scene, plan, y, p, stops=None, watch=None, first=None):
         """The run of ``plan`` (with sensitivities, a compiled explicit loop) from the
         state ``y`` with the run-time parameters ``p``, or None where it does not reach
         the end of its span or ends in a non-finite state (``stops``, a dict: its status
         counted there); ``watch``: ``(run, halt)`` of an ``interrupt.shared`` watch the
-        runs share (a plan without a timeout), else the run has a watch of its own."""
+        runs share (a plan without a timeout), else the run has a watch of its own;
+        ``first``: the loop's first row (``y``, then S0: ``Shooter.first_row``), where
+        the caller has made it (the run's own array)."""
         if plan.switch and not plan.ce.python_funcs[-1](plan.t0, y, p) >= 0.0:
             # past the edge of the scene's split at t0: the run starts in another
             return cls._across(scene, plan, y, p, stops)
-        n, m, row, head, tail = _parts(plan)
-        y0, y = y, row.copy()
-        y[:n] = y0
+        n, m, row, head, tail = _PARTS.get(plan) or _parts(plan)
+        if first is None:
+            first = row.copy()
+            first[:n] = y
         if watch is not None and plan.limit is None:
             run, halt = watch
             tic = time.perf_counter()
-            out = run(plan.entry, (*head, y, p, *tail, halt))
+            out = run(plan.entry, (*head, first, p, *tail, halt))
         else:
             halt = np.zeros(1, dtype=np.int64)
             tic = time.perf_counter()
-            out = interrupt.call(plan.entry, halt, plan.limit, (*head, y, p, *tail, halt))
+            out = interrupt.call(plan.entry, halt, plan.limit,
+                                 (*head, first, p, *tail, halt))
         wall = time.perf_counter() - tic
         status, n_out = out[0], int(out[3])
         if status == EVENT and plan.switch:
             # at the edge of the scene's split (connect's runs watch no other event): the
             # run taken across it as Scene.run does
-            return cls._across(scene, plan, y[:n], p, stops, out)
+            return cls._across(scene, plan, first[:n], p, stops, out)
         if status != FINISHED or n_out < 1:
             if stops is not None:
                 stops[int(status)] = stops.get(int(status), 0) + 1
@@ -92,11 +96,11 @@ class Shot:
         last = out[2][n_out - 1]
         S = last[n:]
         # the loop has checked the state (``loop.finite_status``), not its sensitivities
-        if not all_finite(S):
+        if not finite_vector(S):
             return None
         self = object.__new__(cls)
         self.t, self.y, self.S = float(out[1][n_out - 1]), last[:n], S.reshape(n, m)
-        self._made, self._trajectory = (scene, plan, out, wall, y, p), None
+        self._made, self._trajectory = (scene, plan, out, wall, first, p), None
         return self
 
     @classmethod
@@ -143,6 +147,22 @@ class Shot:
         return self._trajectory
 
 
+def first_values(motion) -> tuple[list, list]:
+    """``(state, aux)`` at t0 of ``motion`` (a ``Shot`` or a Trajectory), as lists: its
+    Trajectory's first row and the auxiliary values there (``Trajectory.aux``: the
+    dependent velocities first); a Shot's read off its loop's output (the same
+    numbers), its Trajectory not made."""
+    if isinstance(motion, Shot) and motion._trajectory is None and len(motion._made) == 6:
+        _, plan, out, _, _, p = motion._made
+        t, y, kern = out[1][:1], out[2][:1, :len(motion.y)], plan.kern
+    else:
+        tr = motion.trajectory if isinstance(motion, Shot) else motion
+        t, y, kern, p = tr.t[:1], tr.y[:1], tr._kernels, tr._p
+    aux = np.empty((1, kern.layout.n_aux))
+    kern.aux_rows(t, y, p, aux)
+    return y[0].tolist(), aux[0].tolist()
+
+
 class OutOfTime(Exception):
     """The wall-clock budget of ``connect(timeout=)`` has passed (raised by a run of the
     search, past every route's handling: not a ``JetnhError``)."""
@@ -174,6 +194,7 @@ class Shooter:
         self._block = None           # the entries of dq_named(t1)/du in S, flattened
         given = {**q0, **fixed}
         self.y0 = np.array([given.get(n, 0.0) for n in names])
+        self._first = None           # the loop's first row from y0 (``first_row``)
         self.rtol, self.atol, self.method, self.rcond = rtol, atol, method, rcond
         self.end_names = tuple(q1)
         self.seen: dict = {}
@@ -198,10 +219,11 @@ class Shooter:
                     opts=options(rtol=self.rtol, atol=self.atol, max_steps=MAX_STEPS)))
         return found
 
-    def start(self, y, span, save="steps"):
+    def start(self, y, span, save="steps", first=None):
         """The ``Shot`` of the plan of ``span`` from the state ``y`` (its own array), or
         None where it fails before the end of the span or ends in a non-finite
-        state."""
+        state; ``first``: the loop's first row, where made (``first_row``; ``y`` is then
+        its state)."""
         scene = self.scene
         if self.deadline is not None and time.monotonic() > self.deadline:
             raise OutOfTime
@@ -213,16 +235,15 @@ class Shooter:
                 scene._check_holonomic(y, span[0], scene._p)
             except JetnhError:
                 return None
-        plan = self.plans.get((span, save))
-        if plan is None:
-            plan = self.plan(span, save)
-        shot = Shot.of(scene, plan, y, scene._p, self.stops, self.watch)
-        last = self.stops.pop("y", None)
-        if shot is None and last is not None and arguments.all_finite(last[1]):
-            from .verdicts import split_measure
+        plan = self.plans.get((span, save)) or self.plan(span, save)
+        shot = Shot.of(scene, plan, y, scene._p, self.stops, self.watch, first)
+        if shot is None:
+            last = self.stops.pop("y", None)
+            if last is not None and arguments.all_finite(last[1]):
+                from .verdicts import split_measure
 
-            if split_measure(scene, last[0], last[1]) < EDGE:
-                self.stops["edge"] = self.stops.get("edge", 0) + 1
+                if split_measure(scene, last[0], last[1]) < EDGE:
+                    self.stops["edge"] = self.stops.get("edge", 0) + 1
         return shot
 
     def edge_note(self) -> str:
@@ -244,11 +265,26 @@ class Shooter:
         y[self._cols] = u
         return y
 
+    def first_row(self, u, plan) -> np.ndarray:
+        """The first row of a run of ``plan`` from the start with the unknowns ``u``:
+        the state (``state(u)``), then the initial sensitivities S0 (``_parts``; the
+        same for every plan of the scene), a fresh array."""
+        if self._first is None:
+            first = (_PARTS.get(plan) or _parts(plan))[2].copy()
+            first[:len(self.y0)] = self.y0
+            first.setflags(write=False)
+            self._first = first
+        first = self._first.copy()
+        first[self._cols] = u
+        return first
+
     def named(self, S) -> np.ndarray:
-        """dq_named/du, the block of the sensitivities ``S`` (n x columns)."""
+        """dq_named/du, the block of the sensitivities ``S`` (n x columns, C-ordered)."""
         if self._block is None:
-            self._block = (self._rows[:, None] * S.shape[1] + self._cols).ravel()
-        return S.reshape(-1)[self._block].reshape(len(self._rows), len(self._cols))
+            m = S.shape[1]
+            self._block = np.array([r * m + c for r in self.rows for c in self.cols],
+                                   dtype=np.intp)
+        return S.take(self._block).reshape(len(self.rows), len(self.cols))
 
     def endpoint(self, u):
         """``(q_named(t1), dq_named(t1)/du, its Shot)``, or None where the run fails
@@ -272,7 +308,9 @@ class Shooter:
         """The ``Shot`` from the start with the unknowns ``u`` (every step, with
         sensitivities), or None where it fails before t1 (or takes more than
         ``MAX_STEPS`` steps: a wild trial of the search must not take minutes)."""
-        return self.start(self.state(u), self.span)
+        span = self.span
+        first = self.first_row(u, self.plans.get((span, "steps")) or self.plan(span))
+        return self.start(first[:len(self.y0)], span, first=first)
 
     def regular_start(self, u0, q0, q1, T, n_velocities):
         """The default guess, moved off a point where the run stops before t1 (a speed
@@ -287,9 +325,10 @@ class Shooter:
         got = self.endpoint(u)
         reaching = None
         if got is not None:
-            if self.regular(got):
+            usv = svd(got[1])               # one decomposition for both uses
+            if full_rank(usv[1]):
                 return u
-            newton = self.newton_point(u, got)
+            newton = self.newton_point(u, got, usv)
             if newton is not None and self.regular(self.endpoint(newton)):
                 return newton
             reaching = u
@@ -311,28 +350,27 @@ class Shooter:
         """Whether the ``endpoint`` ``got`` exists (the run reached t1) and its shooting
         Jacobian has full rank by a margin (smallest singular value above 1e-6 of the
         largest)."""
-        if got is None:
-            return False
-        s = singular_values(got[1])
-        return bool(s.size and s[0] > 0 and s[-1] > 1e-6 * s[0])
+        return got is not None and full_rank(singular_values(got[1]))
 
-    def newton_point(self, u, got):
+    def newton_point(self, u, got, usv=None):
         """``u`` plus the minimum-norm Gauss-Newton step of its endpoint ``got`` (the
         truncated SVD, at most the size of ``u`` and 1), or None where it does not
-        move."""
-        U, s, Vt = self.svd(got[1])
+        move; ``usv``: the SVD of its Jacobian where already made."""
+        U, s, Vt = self.truncated(svd(got[1]) if usv is None else usv)
         if not s.size:
             return None
         du = -(Vt.T @ ((U.T @ (got[0] - self.target)) / s))
-        du /= max(1.0, math.sqrt(du.dot(du)) / max(1.0, math.sqrt(u.dot(u))))
-        return u + du if du.any() else None
+        size = math.sqrt(du.dot(du)) / max(1.0, math.sqrt(u.dot(u)))
+        if size > 1.0:
+            du /= size
+        return u + du if np.count_nonzero(du) else None
 
-    def svd(self, Jm):
-        """The singular value decomposition of the shooting Jacobian with its numerical
-        rank (relative cut-off ``rcond``)."""
-        U, s, Vt = svd(Jm)
+    def truncated(self, usv):
+        """The singular value decomposition ``usv`` of the shooting Jacobian cut to its
+        numerical rank (relative cut-off ``rcond``)."""
+        U, s, Vt = usv
         r = rank(s, self.rcond)
-        return U[:, :r], s[:r], Vt[:r]
+        return (U, s, Vt) if r == s.size else (U[:, :r], s[:r], Vt[:r])
 
 
 def svd(Jm):
@@ -346,10 +384,24 @@ def singular_values(Jm):
     return thin_svd(Jm)[1]
 
 
+def full_rank(s) -> bool:
+    """Whether singular values ``s`` (largest first) are those of a matrix of full rank
+    by a margin: the smallest above 1e-6 of the largest."""
+    return bool(s.size and s[0] > 0 and s[-1] > 1e-6 * s[0])
+
+
 def rank(s, rcond) -> int:
     """The numerical rank of singular values ``s`` (largest first): those above
     ``rcond`` times the largest."""
-    return int(np.count_nonzero(s > rcond * s[0])) if s.size and s[0] > 0 else 0
+    return rank_of(s.tolist(), rcond)
+
+
+def rank_of(values, rcond) -> int:
+    """``rank`` of singular values given as a list of floats."""
+    if not values or not values[0] > 0:
+        return 0
+    cut = rcond * values[0]
+    return len([v for v in values if v > cut])
 
 
 #: growth max |dy(t1)/dy(t0)| of the guess's run above which the default splits the span
@@ -365,8 +417,8 @@ def default_segments(shooter, u) -> int:
     got = shooter.endpoint(u)
     if got is None:
         return MAX_SEGMENTS
-    n = len(shooter.y0)
-    growth = float(abs(got[2].S[:, :n]).max())
+    # (a Shot's sensitivities are finite: ``Shot.of``)
+    growth = max_abs(got[2].S, len(shooter.y0))
     if not math.isfinite(growth):
         return MAX_SEGMENTS
     if growth <= GROWTH:

@@ -221,10 +221,19 @@ def _all_finite(a):
     return True
 
 
+def _max_abs(M, cols):
+    top = 0.0
+    for i in range(M.shape[0]):
+        for j in range(cols):
+            top = max(top, abs(M[i, j]))
+    return top
+
+
 @functools.cache
 def compiled_parts():
-    """``(svd, all_finite)``: ``_svd_into`` and ``_all_finite`` compiled (or loaded from
-    the signed store) on first use; ``precompile`` warms them as ``connect:small``."""
+    """``(svd, all_finite, max_abs)``: ``_svd_into``, ``_all_finite`` and ``_max_abs``
+    compiled (or loaded from the signed store) on first use; ``precompile`` warms them
+    as ``connect:small``."""
     from numba import types
 
     from ..kernels import loop_cache
@@ -238,7 +247,10 @@ def compiled_parts():
     finite = loop_cache.signed_njit(
         _all_finite, types.boolean(types.Array(types.float64, 1, "A", readonly=True)),
         stamp, error_model="numpy", nogil=True)
-    return svd_, finite
+    top = loop_cache.signed_njit(
+        _max_abs, types.float64(types.Array(types.float64, 2, "A", readonly=True),
+                                types.int64), stamp, error_model="numpy", nogil=True)
+    return svd_, finite, top
 
 
 @functools.cache
@@ -253,6 +265,22 @@ def all_finite(a) -> bool:
     if type(a) is not np.ndarray or a.dtype != _FLOAT or a.ndim != 1:
         a = np.asarray(a, dtype=float).reshape(-1)
     return _entries()[1](a)
+
+
+def finite_vector(a) -> bool:
+    """``all_finite`` of a float64 array of one dimension, unchecked: for the caller's
+    own arrays (a run's last row)."""
+    return _entries()[1](a)
+
+
+def max_abs(M, cols) -> float:
+    """The largest |M[i, j]| over the first ``cols`` columns of the float64 matrix ``M``
+    (finite entries: exactly ``np.abs(M[:, :cols]).max()``, 0 for none)."""
+    if type(M) is not np.ndarray or M.dtype != _FLOAT or M.ndim != 2:
+        M = np.asarray(M, dtype=float)
+        if M.ndim != 2:
+            raise ValueError(f"max_abs takes a matrix, got shape {M.shape}")
+    return _entries()[2](M, min(max(int(cols), 0), M.shape[1]))
 
 
 _FLOAT = np.dtype(float)

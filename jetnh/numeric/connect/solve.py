@@ -14,7 +14,8 @@ from .collocation import warm_start
 from .connection import Connection, Stitched
 from .levenberg import levenberg_marquardt
 from .problem import VARIATIONAL
-from .shooting import Segments, Shooter, default_segments, rank, singular_values
+from .shooting import (Segments, Shooter, default_segments, first_values, rank, rank_of,
+                       singular_values)
 
 #: Levenberg-Marquardt iterations per continuation step (at most ``max_iter``)
 STEP_ITER = 20
@@ -44,7 +45,7 @@ class Search(Shooter):
     closest = None
 
     def _endpoint(self, u):
-        shot = self.start(self.state(u), self.span)
+        shot = self.run(u)
         if shot is None:
             return None
         if self.momenta is None:
@@ -125,8 +126,9 @@ class Search(Shooter):
     @property
     def conditions(self) -> tuple:
         """The names of the end conditions: the named coordinates, then p_<free>."""
-        return self.end_names + tuple(f"p_{c}" for c in (
-            self.momenta.free if self.momenta is not None else ()))
+        if self.momenta is None:
+            return self.end_names
+        return self.end_names + tuple(f"p_{c}" for c in self.momenta.free)
 
     def newton(self, u, target, tol, max_iter, rows=None):
         """Levenberg-Marquardt (``levenberg_marquardt``) on the end conditions = target
@@ -399,14 +401,16 @@ class Search(Shooter):
     def connection(self, u, iterations, tol, stitched=None, route="") -> Connection:
         scene = self.scene
         if stitched is not None:
-            tr = stitched
-            q, Jm = self.end_conditions(tr.t[-1], tr.y[-1], tr.sensitivities[-1])
+            motion = stitched
+            q, Jm = self.end_conditions(motion.t[-1], motion.y[-1],
+                                        motion.sensitivities[-1])
         else:
             got = self.endpoint(u)
             if got is None:
                 raise ConnectError(f"the motion found stops before t1: "
                                    f"{scene.run(y0=self.state(u)).stop_reason}")
-            q, Jm, tr = got[0], got[1], got[2].trajectory
+            # the run itself: its Trajectory is made when the Connection's is read
+            q, Jm, motion = got
         # a few entries: as Python floats (the same IEEE operations as numpy's, without
         # an array call each)
         target = self.target.tolist()
@@ -414,22 +418,19 @@ class Search(Shooter):
         residual = max(miss)
         full = singular_values(Jm).tolist()
         # the dependent velocities at t0: the aux kernel on the first row alone
-        aux = np.empty((1, tr.layout.n_aux))
-        tr._kernels.aux_rows(tr.t[:1], tr.y[:1], tr._p, aux)
+        state, aux = first_values(motion)
         dependent = scene.dependent_velocities
         best = Connection(
-            trajectory=tr,
+            _motion=motion,
             initial=MappingProxyType(dict(zip(
-                scene.state_names + dependent,
-                tr.y[0].tolist() + aux[0, :len(dependent)].tolist()))),
+                scene.state_names + dependent, state + aux[:len(dependent)]))),
             residual=residual, principle=scene.principle, unknowns=self.unknowns,
-            rank=sum(1 for s in full if s > self.rcond * full[0]) if full and full[0] > 0
-            else 0, singular_values=tuple(full),
+            rank=rank_of(full, self.rcond), singular_values=tuple(full),
             iterations=iterations,
             _columns=tuple(self.cols), _rcond=self.rcond, _run=MappingProxyType(
                 {"rtol": self.rtol, "atol": self.atol, "method": self.method}),
             conditions=self.conditions, route=route)
-        if tol is not None and max(m / (1 + abs(b)) for m, b in zip(miss, target)) > tol:
+        if tol is not None and max([m / (1 + abs(b)) for m, b in zip(miss, target)]) > tol:
             raise ConnectError(
                 f"the {scene.principle} motion found ends {residual:.3g} away from end"
                 + self._reachability(u), best)
