@@ -2,12 +2,12 @@
 far their rows left them.
 
 jetnh's own loops (dop853, dopri5, rk4, radau) and scipy's one-step methods (RK23, RK45,
-DOP853, Radau) move every step onto g = 0 (``methods.projection``), so |g| stays at
+DOP853, Radau) move every step onto g = 0 (``methods.projection``), so ``|g|`` stays at
 rounding level over any number of steps.  Three kinds of run do not, by design:
 
 - dla and dvi keep g = 0 through their discrete constraint only, D g imposed at each
   step's midpoint, G((q_k + q_k+1)/2) (q_k+1 - q_k) = 0: exact where g is quadratic in
-  q (a Cartesian pendulum), else g changes by O(h^3) a step, and |g| wanders by O(h^2)
+  q (a Cartesian pendulum), else g changes by O(h^3) a step, and ``|g|`` wanders by O(h^2)
   over a run.  Projecting the nodes orthogonally would break what these integrators are
   chosen for: dla's symmetry (time reversibility, the source of its bounded energy
   error) and dvi's variational, symplectic structure (Hairer, Lubich & Wanner,
@@ -15,12 +15,12 @@ rounding level over any number of steps.  Three kinds of run do not, by design:
   neither symmetric nor symplectic).  dla's ``projection=True``, which gives up the
   symmetry for its velocity projection already, moves its nodes onto g = 0 too.
 - scipy's BDF and LSODA are multistep methods: a projected value would contradict the
-  history they carry (BDF's differences, LSODA's Nordsieck array), so their |g| grows
+  history they carry (BDF's differences, LSODA's Nordsieck array), so their ``|g|`` grows
   with the global error.
 
-After such a run ``report`` measures max |g_i| over its rows (the trajectory's
+After such a run ``report`` measures max ``|g_i|`` over its rows (the trajectory's
 ``holonomic_residual``, also ``diagnostics.holonomic_residual_max``) and, where it
-exceeds ``DRIFT`` max(1, max |q|) (rounding, not drift, lies below), warns with a
+exceeds ``DRIFT`` max(1, ``max |q|``) (rounding, not drift, lies below), warns with a
 ``JetnhWarning`` that names the figure, the time, why the method does not project and
 what does.
 """
