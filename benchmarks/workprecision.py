@@ -305,8 +305,9 @@ def floors(scene, runs, costs, reference_uncertainty, reps) -> dict:
     return out
 
 
-def panel(case: Case, tolerances, steps, reps, budget, give_up, drive, calls):
-    """Every method's runs on one system x principle."""
+def panel(case: Case, tolerances, steps, reps, budget, give_up, drive=None, calls=0):
+    """Every method's runs on one system x principle; with ``drive`` (``rhs_driver``) and
+    ``calls``, its floor too (``floor_costs``, ``floors``)."""
     scene = scene_of(case).compile()
     f = researcher_rhs(scene)
     T = case.t_end
@@ -386,19 +387,22 @@ def panel(case: Case, tolerances, steps, reps, budget, give_up, drive, calls):
         print(f"  {method}: " + "  ".join(f"n={r['n_steps']} {r['error'] or float('nan'):.0e}"
                                           for r in runs if r.get("n_steps")
                                           and r["method"] == f"jetnh {method}"), flush=True)
-    costs = floor_costs(scene, drive, reps, calls)
-    costs["by_target"] = floors(scene, runs, costs, ref_info["uncertainty"], reps)
-    print(f"  floor: {costs['per_evaluation_s'] * 1e9:.3g} ns an evaluation + "
-          f"{costs['fixed_s'] * 1e6:.3g} us; scipy / floor " + "  ".join(
-              f"{t}: {f['scipy_over_floor']:.3g}x" for t, f in costs["by_target"].items()),
-          flush=True)
+    floor = {}
+    if drive is not None:
+        costs = floor_costs(scene, drive, reps, calls)
+        costs["by_target"] = floors(scene, runs, costs, ref_info["uncertainty"], reps)
+        print(f"  floor: {costs['per_evaluation_s'] * 1e9:.3g} ns an evaluation + "
+              f"{costs['fixed_s'] * 1e6:.3g} us; scipy / floor " + "  ".join(
+                  f"{t}: {f['scipy_over_floor']:.3g}x" for t, f in costs["by_target"].items()),
+              flush=True)
+        floor = dict(floor=costs)
     return dict(model=case.model, options=case.options, principle=case.principle,
                 label=case.label, t_end=T, states=list(scene.state_names),
                 initial=[float(v) for v in scene.y0], reference=ref_info, runs=runs,
                 time_to_error=time_to_error(runs),
                 orders={f"jetnh {m}": observed_order(runs, f"jetnh {m}",
                                                      ref_info["uncertainty"]) for m in fixed},
-                floor=costs)
+                **floor)
 
 
 # ---------------------------------------------------------------------- summaries
