@@ -99,8 +99,9 @@ def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_st
     if onto is not None:          # the dense output's rows (t_eval; a terminal event)
         inner = np.flatnonzero(sol.t != t0) if t_eval is not None else (
             [len(sol.t) - 1] if sol.status == 1 and sol.t[-1] != t0 else [])
-        for i in inner:
-            onto(sol.t[i], ys[i])
+        rows = ys[inner]
+        onto(sol.t[inner], rows)
+        ys[inner] = rows
     if ys.size and not np.all(np.isfinite(ys)):
         bad = int(np.argmax(~np.all(np.isfinite(ys), axis=1)))
         i = max(bad - 1, 0)
@@ -124,8 +125,7 @@ def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_st
         y_ev = [np.array(sol.y_events[k], dtype=float).reshape(-1, n) for k in range(n_user)]
         if onto is not None:
             for k in range(n_user):
-                for t_e, y_e in zip(sol.t_events[k], y_ev[k]):
-                    onto(t_e, y_e)
+                onto(sol.t_events[k], y_ev[k])
         kw["events"] = (ce.names, [np.asarray(sol.t_events[k]) for k in range(n_user)],
                         [y[:, :n_state] for y in y_ev])
     if sensitivities is not None:
@@ -143,9 +143,10 @@ def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_st
 
 
 def _onto(scene, sensitivities, p):
-    """``onto(t, y)``: one state (augmented by its sensitivities with
-    ``sensitivities``) moved onto the holonomic constraints g = 0 in place, as a step of
-    jetnh's loops (``projection.rows``); None without holonomic constraints."""
+    """``onto(ts, ys)``: the rows ``ys`` (states at the times ``ts``, augmented by their
+    sensitivities with ``sensitivities``; C-contiguous, writable) moved onto the
+    holonomic constraints g = 0 in place, each as a step of jetnh's loops, in one call of
+    ``projection.rows``; None without holonomic constraints."""
     m = len(scene.system.holonomic)
     if not m:
         return None
@@ -153,10 +154,8 @@ def _onto(scene, sensitivities, p):
     n_sens = 0 if sensitivities is None else sensitivities.layout.sensitivity_columns
     nq, p = scene.system.J.n, np.ascontiguousarray(p, dtype=float)
 
-    def onto(t, y):
-        row = np.array(y, dtype=float).reshape(1, -1)
-        projection.rows(kern.hol, m, nq, np.array([float(t)]), row, p, n_sens)
-        y[:] = row[0]
+    def onto(ts, ys):
+        projection.rows(kern.hol, m, nq, np.asarray(ts, dtype=float), ys, p, n_sens)
     return onto
 
 
@@ -172,10 +171,10 @@ def _projected(method, onto):
         def _step_impl(self):
             ok, message = super()._step_impl()
             if ok:
-                y = np.array(self.y, dtype=float)
-                onto(self.t, y)
-                self.y = y
-                self.f = self.fun(self.t, y)
+                y = np.array(self.y, dtype=float).reshape(1, -1)
+                onto([self.t], y)
+                self.y = y[0]
+                self.f = self.fun(self.t, self.y)
             return ok, message
 
     Projected.__name__ = Projected.__qualname__ = f"Projected{method}"
