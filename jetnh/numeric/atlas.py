@@ -72,10 +72,10 @@ from ..mechanics import principles
 from .methods import projection
 from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, FINISHED, SINGULAR, STATUS_TEXT,
                               STOPPED)
-from . import arguments, interrupt, loops
+from . import arguments, interrupt, loops, methods
 from .events import Event, as_events
 from .kernels.calls import Kernel, Rows
-from .methods.loop import Watch
+from .methods.loop import Control, Watch, features
 from .trajectory import Trajectory
 
 #: the event name of a chart's edge (internal: the stitched run does not report it)
@@ -153,6 +153,10 @@ class Chart:
         self._kernels = self._jacobian = self._sens = None
         self._columns: dict = {}
         self._changes: dict = {}
+        #: where each velocity is in (independent velocities, dependent ones)
+        self._velocity_order = np.argsort(np.concatenate((self.ind, self.dep)))
+        self._watches: dict = {}
+        self._entries: dict = {}
 
     @property
     def kernels(self):
@@ -161,6 +165,46 @@ class Chart:
             self._n_aux = kernels.layout.n_aux      # before _kernels: another thread
             self._kernels = kernels                 # reading it finds _n_aux set
         return self._kernels
+
+    def watch(self, ce, checked, singular_tol, user_max, counts, edge) -> Watch:
+        """What the loop of a piece in this chart watches: the singularity indicators
+        (``checked``) and the events ``ce``, each user event with the terminal count left
+        to it (``user_max`` less ``counts``), then the edge's one (kept per events when
+        there are no user events: the same for every piece)."""
+        key = None if user_max else (id(ce), checked, float(singular_tol), edge)
+        found = self._watches.get(key) if key is not None else None
+        if found is not None and found[0] is ce:
+            return found[1]
+        left_max = np.array([m - c if m > 0 else 0 for m, c in zip(user_max, counts)]
+                            + [1] * edge, dtype=np.int64)
+        watch = Watch(len(self.kernels.layout.indicators) if checked else 0,
+                      float(singular_tol),
+                      ce.direction if ce is not None else loops.NO_EVENTS,
+                      left_max if ce is not None else loops.NO_EVENTS)
+        if key is not None:
+            self._watches[key] = (ce, watch)
+        return watch
+
+    def call(self, method, ce, watch, t0, t1, y, p, ctl, te, mode, newton, limit, sens):
+        """``loops.call`` of this chart's scene and kernels (``sens``: the kernels of its
+        state augmented by its sensitivities), the loop's entry and callbacks looked up
+        once per method, events and loop parts (``loops.entry``)."""
+        key = (method, id(ce), sens is not None, features(ctl, mode, watch))
+        found = self._entries.get(key)
+        if found is None or found[0] is not ce:
+            loop, prefix, suffix, callbacks = loops.entry(
+                self.scene, methods.method(method), self.kernels, ce, sens, ctl, te, mode,
+                watch, newton)
+            found = self._entries[key] = (ce, loop, prefix, len(suffix), callbacks)
+        _, loop, prefix, n_suffix, _ = found
+        # (the arguments after (t0, t1, y0, p) as ``loops.entry`` gives them)
+        suffix = (ctl, te, mode, watch) if n_suffix == 4 else (ctl, newton, te, mode, watch)
+        halt = np.zeros(1, dtype=np.int64)
+        tic = time.perf_counter()
+        out = interrupt.call(loop, halt, limit, (*prefix, t0, t1, y, p, *suffix, halt))
+        wall = time.perf_counter() - tic
+        loops.on_constraints(self.kernels, ctl, mode, sens, out, p, t0)
+        return loops.result(out), wall
 
     @property
     def jacobian_kernel(self):
@@ -253,10 +297,7 @@ class Chart:
         kern = self.kernels
         aux = np.empty(self._n_aux)
         kern.aux(t, y, p, aux)
-        qd = np.empty(n)
-        qd[self.ind] = y[n:2 * n - k]
-        qd[self.dep] = aux[:k]
-        return qd
+        return np.concatenate((y[n:2 * n - k], aux[:k])).take(self._velocity_order)
 
     def point(self, t, y, p):
         """``universal`` of one state ``y`` (C-contiguous floats) with df/dqdot:
@@ -319,6 +360,12 @@ def measures_at(A, columns) -> list[float]:
     (no split is regular).  ``Atlas.measures`` (the charts of a run) and
     ``regular.best`` (every choice of k coordinates) both take them from here."""
     rows = np.asarray(A, dtype=float).tolist()
+    if len(rows) == 1:          # one constraint: the same sums, without the matrices
+        r = rows[0]
+        gram = sum([a * a for a in r])
+        if not gram > 0.0:
+            return [0.0] * len(columns)
+        return [r[c] ** 2 / gram for c, in columns]
     gram = _det([[sum(a * b for a, b in zip(r, s)) for s in rows] for r in rows])
     if not gram > 0.0:
         return [0.0] * len(columns)
@@ -467,7 +514,7 @@ class Atlas:
         events and edge, so that repeated runs build nothing (the key holds the
         expressions themselves: hashed once by sympy, compared by identity first)."""
         key = (chart.split, edge, tuple((e.fun, e.direction, e.max_events, e.name)
-                                        for e in user))
+                                        for e in user) if user else ())
         found = self._events.get(key)
         if found is None:
             found = self._events[key] = (self._compile_events(chart, user, edge),)
@@ -613,27 +660,20 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
             seg_ctl, seg_te = ctl, te
         else:
             ce = at.events(chart, user, edge)
-            # the terminal counts left to each user event, then the edge's one
-            left_max = np.array([m - c if m > 0 else 0 for m, c in zip(user_max, counts)]
-                                + [1] * edge, dtype=np.int64)
-            watch = Watch(len(kern.layout.indicators) if checked else 0,
-                          float(singular_tol),
-                          ce.direction if ce is not None else loops.NO_EVENTS,
-                          left_max if ce is not None else loops.NO_EVENTS)
+            watch = chart.watch(ce, checked, singular_tol, user_max, counts, edge)
             seg_ctl, seg_te = ctl, te
             if parts or not first:
                 n_steps = (max(1, round(abs(t1 - t) / abs(h_fixed))) if ctl.n_steps > 0
                            else 0)
-                seg_ctl = ctl._replace(first_step=0.0, max_steps=max(steps_left, 0),
-                                       n_steps=n_steps)
+                seg_ctl = _onward(ctl, max(steps_left, 0), n_steps)
                 if mode == AT_T_EVAL:
                     seg_te = np.ascontiguousarray(te[direction * (te - t) > 0.0])
             left = None if limit is None else limit - (time.perf_counter() - tic)
             seg_dense = None if dense is None else dict(dense)
             if seg_dense is not None and sens:
                 seg_dense["rhs"] = ksens
-            out, wall = loops.call(scene, method, kern, ce, watch, t, t1, y, p, seg_ctl,
-                                   seg_te, mode, newton, left, ksens)
+            out, wall = chart.call(method, ce, watch, t, t1, y, p, seg_ctl, seg_te, mode,
+                                   newton, left, ksens)
             if seg_dense is not None:
                 seg_dense["partial_last"] = int(out.status) in (EVENT, SINGULAR)
         n_ev = int(out.n_ev)
@@ -662,6 +702,19 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
         switches.append({"t": t, "from": list(chart.split), "to": list(new.split)})
         chart = new
     return parts, switches
+
+
+def _onward(ctl, max_steps, n_steps):
+    """``ctl._replace(first_step=0.0, max_steps=max_steps, n_steps=n_steps)``: the step
+    control of a piece after the first (its first step chosen afresh), without the
+    keyword machinery."""
+    c = list(ctl)
+    c[_FIRST], c[_MAX_STEPS], c[_N_STEPS] = 0.0, max_steps, n_steps
+    return ctl._make(c)
+
+
+_FIRST, _MAX_STEPS, _N_STEPS = (Control._fields.index(f)
+                                for f in ("first_step", "max_steps", "n_steps"))
 
 
 def _at_end(t, t1) -> bool:
@@ -775,6 +828,9 @@ def stitch(home, at, method, p, parts, switches, user, mode, wall):
                               switches=tuple(switches))
 
 
+_MAKERS: dict = {}
+
+
 class _Piece:
     """A piece of a run that changed chart (``follow``): its loop's ``Result`` (``out``),
     its dense-output record (``dense``) and its Trajectory in its chart's scene
@@ -791,8 +847,12 @@ class _Piece:
 
     @classmethod
     def maker(cls, build):
-        """``build``, made lazy: the ``_Piece`` of its arguments."""
-        return lambda *args, **kw: cls(build, args, kw)
+        """``build``, made lazy: the ``_Piece`` of its arguments (made once per
+        ``build``)."""
+        found = _MAKERS.get(build)
+        if found is None:
+            found = _MAKERS[build] = lambda *args, **kw: cls(build, args, kw)
+        return found
 
     @property
     def traj(self) -> Trajectory:
@@ -814,8 +874,13 @@ def to_home(own, chart, t, Y, p) -> np.ndarray:
         q, qd, lam, A, _ = chart.universal(t, Y, p)
         return own.state(q, qd, lam, A)
     # the same numbers copied: every column of own's rows is a column of Y or of aux
-    aux = np.empty((Y.shape[0], chart.kernels.layout.n_aux))
-    chart.kernels.aux_rows(np.ascontiguousarray(t, dtype=float), Y, p, aux)
+    kern = chart.kernels
+    if Y.shape[0] == 1:     # one row (a run's end): the aux kernel itself, as aux_rows calls it
+        aux = np.empty(kern.layout.n_aux)
+        kern.aux(float(np.asarray(t).reshape(-1)[0]), Y[0], p, aux)
+        return np.concatenate((Y[0], aux)).take(chart.columns_of(own))[None]
+    aux = np.empty((Y.shape[0], kern.layout.n_aux))
+    kern.aux_rows(np.ascontiguousarray(t, dtype=float), Y, p, aux)
     return np.concatenate((Y, aux), axis=1).take(chart.columns_of(own), axis=1)
 
 
