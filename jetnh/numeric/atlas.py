@@ -147,14 +147,17 @@ class Chart:
         self.dep = np.array([names.index(c) for c in split], dtype=np.int64)
         self.ind = np.array([i for i in range(len(names)) if names[i] not in split],
                             dtype=np.int64)
+        self._independent = self.ind.tolist()
         self.explicit = explicit
         self.n, self.k = len(names), len(split)
         self.scene = scene
         self._kernels = self._jacobian = self._sens = None
         self._columns: dict = {}
         self._changes: dict = {}
-        #: where each velocity is in (independent velocities, dependent ones)
-        self._velocity_order = np.argsort(np.concatenate((self.ind, self.dep)))
+        #: where each velocity is in a state of this chart followed by its aux row
+        #: (the dependent velocities first there; counted from the end: set with the
+        #: kernels, which give the aux row's length)
+        self._velocity_at = None
         self._watches: dict = {}
         self._entries: dict = {}
 
@@ -162,8 +165,12 @@ class Chart:
     def kernels(self):
         if self._kernels is None:
             kernels = self.scene.kernels
+            n_aux = kernels.layout.n_aux
+            where = {int(j): self.n + i for i, j in enumerate(self.ind)}
+            where.update({int(j): i - n_aux for i, j in enumerate(self.dep)})
+            self._velocity_at = [where[j] for j in range(self.n)]
             self._n_aux = kernels.layout.n_aux      # before _kernels: another thread
-            self._kernels = kernels                 # reading it finds _n_aux set
+            self._kernels = kernels                 # reading it finds them set
         return self._kernels
 
     def watch(self, ce, checked, singular_tol, user_max, counts, edge) -> Watch:
@@ -293,11 +300,12 @@ class Chart:
     def velocities(self, t, y, p) -> np.ndarray:
         """Every velocity at one state ``y`` of this chart (the dependent ones from its
         aux kernel)."""
-        n, k = self.n, self.k
         kern = self.kernels
         aux = np.empty(self._n_aux)
         kern.aux(t, y, p, aux)
-        return np.concatenate((y[n:2 * n - k], aux[:k])).take(self._velocity_order)
+        # (a few numbers: copied through lists, cheaper than numpy's small-array calls)
+        row = y.tolist() + aux.tolist()
+        return np.array([row[i] for i in self._velocity_at])
 
     def point(self, t, y, p):
         """``universal`` of one state ``y`` (C-contiguous floats) with df/dqdot:
@@ -312,21 +320,21 @@ class Chart:
             lam = np.linalg.solve(A[:, self.dep].T[None], lam[None, :, None])[0, :, 0]
         return y[:n], qd, lam, A
 
-    def columns_of(self, other) -> np.ndarray:
+    def columns_of(self, other, as_list=False) -> np.ndarray:
         """Where the columns of ``other``'s state are in a row of this chart's state
         followed by its aux row, when the multipliers keep their values (not
         ``explicit``): coordinates, ``other``'s independent velocities (independent
-        velocities here or dependent ones, the first of aux), multipliers."""
+        velocities here or dependent ones, the first of aux), multipliers (``as_list``:
+        as a list)."""
         found = self._columns.get(other.split)
         if found is None:
             n, k = self.n, self.k
             n_y = len(self.scene.state_names)
             where = {int(j): n + i for i, j in enumerate(self.ind)}
             where.update({int(j): n_y + i for i, j in enumerate(self.dep)})
-            found = self._columns[other.split] = np.array(
-                [*range(n), *(where[int(j)] for j in other.ind), *range(2 * n - k, n_y)],
-                dtype=np.int64)
-        return found
+            cols = [*range(n), *(where[int(j)] for j in other.ind), *range(2 * n - k, n_y)]
+            found = self._columns[other.split] = (np.array(cols, dtype=np.int64), cols)
+        return found[as_list]
 
     def state(self, q, qd, lam, A) -> np.ndarray:
         """Rows of this chart's state from ``(q, qdot, lam, A)`` (``universal``)."""
@@ -338,7 +346,8 @@ class Chart:
         """``state`` of one point (``point``)."""
         if self.explicit and lam.shape[0]:
             return self.state(q[None], qd[None], lam[None], A[None])[0]
-        return np.concatenate((q, qd[self.ind], lam))
+        v = qd.tolist()
+        return np.array(q.tolist() + [v[i] for i in self._independent] + lam.tolist())
 
 
 def _det(M) -> float:
@@ -792,9 +801,9 @@ def stitch(home, at, method, p, parts, switches, user, mode, wall):
             a, b = (0, 1) if i == 0 else (b - 1, b) if i == len(parts) - 1 else (b, b)
         elif i > 0 and mode != AT_T_EVAL:
             a = 1                       # the switch row: the chart before stored it
-        t = out.ts[a:b]
+        t, Y = out.ts[a:b], out.ys[a:b, :len(chart.scene.state_names)]
         ts.append(t)
-        ys.append(to_home(own, chart, t, out.ys[a:b, :len(chart.scene.state_names)], p))
+        ys.append(Y if chart is own else to_home(own, chart, t, Y, p))
         if sens is not None:        # S of the scene's states: D S of each row
             S = seg.sensitivities[a:b]
             sens.append(S if chart is own else
@@ -820,7 +829,7 @@ def stitch(home, at, method, p, parts, switches, user, mode, wall):
     t = np.concatenate(ts)          # (new float64 C-contiguous arrays: taken as they are)
     return Trajectory._of_run(home, (t, np.concatenate(ys), t.shape[0]), p, method,
                               status, reason, ((steps, rejected, nfev), wall, home.projected),
-                              own.kernels, (tuple(e.name for e in user), t_ev, y_ev),
+                              own.kernels, (tuple([e.name for e in user]), t_ev, y_ev),
                               singularity, parts[0][1].dense,
                               None if sens is None else (home._sensitivity_columns(),
                                                          np.concatenate(sens)),
@@ -866,8 +875,10 @@ class _Piece:
 
 
 def to_home(own, chart, t, Y, p) -> np.ndarray:
-    """Rows of ``chart`` as rows of the home chart ``own``."""
-    Y = np.ascontiguousarray(np.atleast_2d(Y), dtype=float)
+    """Rows of ``chart`` (at the times ``t``, an array) as rows of the home chart
+    ``own``."""
+    Y = np.ascontiguousarray(Y if getattr(Y, "ndim", 0) == 2 else np.atleast_2d(Y),
+                             dtype=float)
     if chart is own or not Y.shape[0]:
         return Y.reshape(Y.shape[0], len(own.scene.state_names))
     if chart.explicit:
@@ -877,8 +888,9 @@ def to_home(own, chart, t, Y, p) -> np.ndarray:
     kern = chart.kernels
     if Y.shape[0] == 1:     # one row (a run's end): the aux kernel itself, as aux_rows calls it
         aux = np.empty(kern.layout.n_aux)
-        kern.aux(float(np.asarray(t).reshape(-1)[0]), Y[0], p, aux)
-        return np.concatenate((Y[0], aux)).take(chart.columns_of(own))[None]
+        kern.aux(float(t[0]), Y[0], p, aux)
+        row = Y[0].tolist() + aux.tolist()
+        return np.array([[row[i] for i in chart.columns_of(own, as_list=True)]])
     aux = np.empty((Y.shape[0], kern.layout.n_aux))
     kern.aux_rows(np.ascontiguousarray(t, dtype=float), Y, p, aux)
     return np.concatenate((Y, aux), axis=1).take(chart.columns_of(own), axis=1)
