@@ -771,14 +771,17 @@ def _target(at, chart, t, p, q, qd, lam, A):
     largest measure (at least twice the edge) whose constraints give back the
     velocities (the same branch), or None.  ``(q, qd, lam, A)``: ``Chart.point`` there."""
     m = at.measures(A)
+    want = qd.tolist()
     for i in sorted(range(len(m)), key=lambda i: -m[i]):
         split = at.splits[i]
         if split == chart.split or m[i] < 2 * at.eps:
             continue
         y = at.maps[split].state_at(q, qd, lam, A)
         new = at.chart(split, t, y)
-        if all(abs(a - b) <= 1e-8 * max(1.0, abs(b))
-               for a, b in zip(new.velocities(t, y, p).tolist(), qd.tolist())):
+        for a, b in zip(new.velocities(t, y, p).tolist(), want):
+            if not abs(a - b) <= 1e-8 * max(1.0, abs(b)):
+                break
+        else:
             return new, y
     return None
 
