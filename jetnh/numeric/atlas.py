@@ -320,7 +320,7 @@ class Chart:
             lam = np.linalg.solve(A[:, self.dep].T[None], lam[None, :, None])[0, :, 0]
         return y[:n], qd, lam, A
 
-    def columns_of(self, other, as_list=False) -> np.ndarray:
+    def columns_of(self, other, as_list=False) -> np.ndarray | list:
         """Where the columns of ``other``'s state are in a row of this chart's state
         followed by its aux row, when the multipliers keep their values (not
         ``explicit``): coordinates, ``other``'s independent velocities (independent
@@ -874,6 +874,8 @@ class _Piece:
         return self._traj
 
     def __getattr__(self, name):
+        if name in _Piece.__slots__:     # (unset: a copy made without __init__)
+            raise AttributeError(name)
         return getattr(self.traj, name)
 
 
