@@ -194,6 +194,12 @@ class Report:
             f"**{ratio(best[t]['geomean'])}** ({ratio(best[t]['min'])}–"
             f"{ratio(best[t]['max'])}, n={best[t]['n']})" if best.get(t) else "-"
             for t in targets])
+        cold = s.get("best_scipy_over_jetnh_cold")
+        if cold:
+            rows.append(["fastest scipy method, first calls of the rounds (cold caches)"] + [
+                f"{ratio(cold[t]['geomean'])} ({ratio(cold[t]['min'])}–"
+                f"{ratio(cold[t]['max'])}, n={cold[t]['n']})" if cold.get(t) else "-"
+                for t in targets])
         out.append("**Time over jetnh's time at equal error**, geometric mean (min–max, "
                    "number of panels) over the system × principle panels:\n\n")
         out.append(table(["method"] + [f"error {t}" for t in targets], rows) + "\n")
@@ -271,7 +277,11 @@ class Report:
                 f"{ratio(best[t]['geomean'])} faster than the fastest of RK45, DOP853, "
                 f"LSODA, Radau (geometric mean over {best[t]['n']} system × principle "
                 f"panels; {ratio(best[t]['min'])}–{ratio(best[t]['max'])}) at error {t}; "
-                f"{ratio(best[targets[0]]['geomean'])} at {targets[0]}", "workprecision"))
+                f"{ratio(best[targets[0]]['geomean'])} at {targets[0]}"
+                + (f"; first calls of the rounds, cold caches: "
+                   f"{ratio(s['best_scipy_over_jetnh_cold'][t]['geomean'])}"
+                   if (s.get("best_scipy_over_jetnh_cold") or {}).get(t) else ""),
+                "workprecision"))
         floor = s.get("fastest_scipy_over_floor", {}).get(t)
         if floor:
             below = floor["below_goal"]
