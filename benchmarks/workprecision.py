@@ -49,7 +49,9 @@ several batches) and c the fixed cost of a call of the compiled dop853 loop (cal
 directly on a one-step span, as ``overhead.py --fixed`` calls it: 5th percentile of
 single calls, less that call's own evaluations at e).  The fastest scipy method's time
 over the floor is the largest ratio such an implementation could reach; the step
-control, the stage sums and the checks of each step come on top.  Between the floor and
+control, the stage sums and the checks of each step come on top.  The run floor adds what
+a run from Python cannot skip while Ctrl-C stops it within a step (``numeric.interrupt``):
+a halt flag, one ``set_wakeup_fd`` and the Trajectory of the result (``python_floor``).  Between the floor and
 jetnh's time: its compiled loop called directly with the run's arguments (best of several
 calls in a row),
 i.e. the run without its Python side and, where the split can change, without the chart
@@ -268,7 +270,36 @@ def floor_costs(scene, drive, reps, calls) -> dict:
         times.append(time.perf_counter() - tic)
     call = float(np.percentile(times, 5))
     return dict(per_evaluation_s=per, fixed_s=call - nfev * per, bare_call_s=call,
-                bare_call_nfev=nfev)
+                bare_call_nfev=nfev, python_s=python_floor(short, plan, args, calls))
+
+
+def python_floor(short, plan, args, calls) -> float | None:
+    """What a run from Python adds to its compiled call and cannot skip while Ctrl-C
+    stops it within a step (``numeric.interrupt``): a fresh halt flag, the wakeup fd
+    confirmed (one ``set_wakeup_fd``) and the Trajectory of the call's result (5th
+    percentile of ``calls``; None where this tree lacks the parts)."""
+    try:
+        import _signal
+
+        from jetnh.numeric import interrupt
+        from jetnh.numeric.trajectory import Trajectory
+        own = interrupt._WATCHDOG.own
+        got = plan.entry(*args)
+
+        def parts():
+            np.zeros(1, np.int64)
+            _signal.set_wakeup_fd(own, warn_on_full_buffer=False)
+            return Trajectory._finished(short, (got[1], got[2], got[3]), short.p, "dop853",
+                                        "", (got[4], 0.0, {}), plan.kern, None)
+        parts()
+    except (AttributeError, ImportError, TypeError, ValueError):
+        return None
+    times = []
+    for _ in range(calls):
+        tic = time.perf_counter()
+        parts()
+        times.append(time.perf_counter() - tic)
+    return float(np.percentile(times, 5))
 
 
 def floors(scene, runs, costs, reference_uncertainty, reps) -> dict:
@@ -298,7 +329,11 @@ def floors(scene, runs, costs, reference_uncertainty, reps) -> dict:
         loop_s, res = best(loop, reps)
         fastest = min(theirs, key=lambda r: r["seconds"])
         floor = nfev * costs["per_evaluation_s"] + costs["fixed_s"]
+        run_floor = floor + costs["python_s"] if costs.get("python_s") else None
         out[str(t)] = dict(nfev=nfev, floor_s=floor, loop_s=loop_s,
+                           run_floor_s=run_floor,
+                           scipy_over_run_floor=(fastest["seconds"] / run_floor
+                                                 if run_floor else None),
                            loop_nfev=int(res[4][2]), jetnh_s=run["seconds"],
                            jetnh_nfev=run["nfev"], scipy_s=fastest["seconds"],
                            scipy_method=fastest["method"],
@@ -500,6 +535,11 @@ def summarize(panels) -> dict:
                             scipy_over_loop=stats([f["scipy_over_loop"] for f in by.values()]),
                             below_goal=[k for k, f in by.items()
                                         if f["scipy_over_floor"] < GOAL],
+                            run_floor=stats([f["scipy_over_run_floor"] for f in by.values()
+                                             if f.get("scipy_over_run_floor")]),
+                            run_floor_below_goal=[k for k, f in by.items()
+                                                  if f.get("scipy_over_run_floor")
+                                                  and f["scipy_over_run_floor"] < GOAL],
                             loop_below_goal=[k for k, f in by.items()
                                              if f["scipy_over_loop"] < GOAL])
     return {"targets": list(TARGETS),
