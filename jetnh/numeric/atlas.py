@@ -300,12 +300,16 @@ class Chart:
     def velocities(self, t, y, p) -> np.ndarray:
         """Every velocity at one state ``y`` of this chart (the dependent ones from its
         aux kernel)."""
+        return np.array(self.velocity_list(t, y, p))
+
+    def velocity_list(self, t, y, p) -> list:
+        """``velocities`` as a list (a few numbers: copied through lists, cheaper than
+        numpy's calls on small arrays)."""
         kern = self.kernels
         aux = np.empty(self._n_aux)
         kern.aux(t, y, p, aux)
-        # (a few numbers: copied through lists, cheaper than numpy's small-array calls)
         row = y.tolist() + aux.tolist()
-        return np.array([row[i] for i in self._velocity_at])
+        return [row[i] for i in self._velocity_at]
 
     def point(self, t, y, p):
         """``universal`` of one state ``y`` (C-contiguous floats) with df/dqdot:
@@ -772,13 +776,14 @@ def _target(at, chart, t, p, q, qd, lam, A):
     velocities (the same branch), or None.  ``(q, qd, lam, A)``: ``Chart.point`` there."""
     m = at.measures(A)
     want = qd.tolist()
-    for i in sorted(range(len(m)), key=lambda i: -m[i]):
+    # (two splits: the other is the one candidate, in any order)
+    for i in range(2) if len(m) == 2 else sorted(range(len(m)), key=lambda i: -m[i]):
         split = at.splits[i]
         if split == chart.split or m[i] < 2 * at.eps:
             continue
         y = at.maps[split].state_at(q, qd, lam, A)
         new = at.chart(split, t, y)
-        for a, b in zip(new.velocities(t, y, p).tolist(), want):
+        for a, b in zip(new.velocity_list(t, y, p), want):
             if not abs(a - b) <= 1e-8 * max(1.0, abs(b)):
                 break
         else:
@@ -895,7 +900,7 @@ def to_home(own, chart, t, Y, p) -> np.ndarray:
         aux = np.empty(kern.layout.n_aux)
         kern.aux(float(t[0]), Y[0], p, aux)
         row = Y[0].tolist() + aux.tolist()
-        return np.array([[row[i] for i in chart.columns_of(own, as_list=True)]])
+        return np.array([row[i] for i in chart.columns_of(own, as_list=True)])[None]
     aux = np.empty((Y.shape[0], kern.layout.n_aux))
     kern.aux_rows(np.ascontiguousarray(t, dtype=float), Y, p, aux)
     return np.concatenate((Y, aux), axis=1).take(chart.columns_of(own), axis=1)
