@@ -64,7 +64,7 @@ class Search(Shooter):
         """The ``ConnectError`` of a search stopped by ``connect(timeout=)``, with the
         closest motion its runs over the whole span reached."""
         best = None if self.closest is None else self._best(self.closest[1])
-        edge = self.edge_note()
+        edge = self.stops_note()
         return ConnectError(
             f"connect stopped at its timeout of {timeout:g} s after {self.runs} runs: "
             + ("no run reached t1, so there is no closest motion (ConnectError.best is "
@@ -213,7 +213,7 @@ class Search(Shooter):
                 return v, its, None, name + ("" if rows is None else " (on " + ", ".join(
                     self.conditions[r] for r in rows) + " first)")
             notes.append(f"{name} stopped at {where}")
-        edge = self.edge_note()
+        edge = self.stops_note()
         if edge:
             notes.append(edge)
         if closest is not None:
