@@ -126,6 +126,20 @@ class Connection:
             return False
         return True if margin > LEGENDRE_ZERO else None
 
+    @property
+    def _not_minimizer(self) -> str:
+        """Why ``minimizer`` is False, in words: Legendre's condition failing (it is
+        checked first) or the conjugate times inside the span; "" where it is not
+        False."""
+        if self.minimizer is not False:
+            return ""
+        if self.legendre < -LEGENDRE_ZERO:
+            return f"Legendre's condition fails (legendre = {self.legendre:.3g})"
+        t1 = float(self.trajectory.t[-1])
+        inside = [t for t in self.conjugate_times if t != t1]
+        return (("conjugate times" if len(inside) > 1 else "a conjugate time")
+                + " inside the span (t = " + ", ".join(f"{t:.6g}" for t in inside) + ")")
+
     def __repr__(self):
         times = self.conjugate_times
         minimizer = self.minimizer
