@@ -101,3 +101,45 @@ def test_the_scene_run_stops_where_the_shot_does(sleigh):
                       sensitivities=True)
     assert tr.status == Status.SINGULAR and "cannot step closer" in tr.stop_reason
     assert tr.t[-1] == pytest.approx(t, abs=1e-12)
+
+
+def test_a_shot_that_cannot_change_split_stops_at_its_edge(sleigh):
+    """The default shooter watches the edge of the split (Suslov's runs cannot change
+    split): the same run stops as a terminal event where cos(th)^2 = EDGE_STOP (1 +
+    a^2) (the measure det(A_Y)^2 / det(A A^T) with A = (-sin th, cos th, -a)), counted
+    as "edge", never as a crawl; connect's error then names the edge alone."""
+    from jetnh.numeric.connect.shooting import EDGE_STOP
+
+    sh = _shooter(sleigh, {"X": 1.0, "th": 2.5})
+    assert sh.run(np.array([0.8, 0.5])) is None
+    assert sh.stops == {Status.EVENT: 1, "edge": 1}
+    t, y, *_ = sh.last_stops[Status.EVENT]
+    th = y[sh.scene.state_names.index("th")]
+    a = SLEIGH_PARAMS["a"]
+    assert math.cos(th) ** 2 == pytest.approx(EDGE_STOP * (1 + a * a), rel=1e-8)
+    crawl = _shooter(sleigh, {"X": 1.0, "th": 2.5})
+    crawl.watch_edge = False
+    assert crawl.run(np.array([0.8, 0.5])) is None
+    assert t < crawl.last_stops["crawl"][0] - 1e-3           # before the crawl
+    with pytest.raises(ConnectError) as err:
+        jn.connect(sleigh, "suslov", SLEIGH_START, {"X": 1.0, "th": 2.5}, (0.0, 3.0),
+                   params=SLEIGH_PARAMS, timeout=60)
+    msg = str(err.value)
+    assert "runs stopped at the edge of the scene's split (dependent velocities Y_t" in msg
+    assert "crawled" not in msg and "stiff" not in msg
+
+
+def test_runs_that_change_split_watch_no_extra_edge():
+    """Chetaev's runs change split at their edge (the atlas): no event of the
+    shooter's own (the damped sleigh's plan is the atlas's)."""
+    import sys
+    from pathlib import Path
+
+    from jetnh.numeric.connect.shooting import edge_event
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from damped_sleigh import ORIGIN, PARAMS, damped_sleigh
+
+    scene = jn.Scene(damped_sleigh(), "chetaev", params=PARAMS, t_span=(0.0, 1.0),
+                     initial={**ORIGIN, "x_t": 0.2, "th_t": 2.5})
+    assert edge_event(scene) is None

@@ -25,6 +25,11 @@ from .small import all_finite, finite_vector, max_abs, thin_svd
 EDGE = 1e-2
 #: steps a shooting run may take (a run that needs more counts as failed)
 MAX_STEPS = 20_000
+#: the measure of the scene's split at which a shooting run that cannot change split
+#: stops (``edge_event``): its minor at 1 % of the Gram scale, where the loop would
+#: start watching an indicator for a crawl; below it the motions that cannot change
+#: split crawl toward the singular set (thousands of steps a run)
+EDGE_STOP = 1e-4
 
 
 def _parts(plan):
@@ -155,6 +160,33 @@ class Shot:
         return self._trajectory
 
 
+def edge_event(scene):
+    """``[Event]``: the edge of ``scene``'s split where its runs cannot change split
+    (``atlas.applies`` false), det(A_alpha)^2 - ``EDGE_STOP`` det(A A^T) falling through
+    0 (A = df/dqdot; the form of ``atlas.Atlas.edge``), terminal; None where the runs
+    change split at their edge, where the split's minor is constant, or where it has
+    more than ``atlas.MAX_K`` rows (a symbolic determinant too large to compile)."""
+    found = scene._memo.get("shooting_edge", scene)
+    if found is scene:
+        from ..events import Event
+
+        system = scene.system
+        found = None
+        if (0 < system.k <= atlas.MAX_K and not atlas.applies(scene, None)
+                and not all(e.is_number for e in system.jacobian_dependent)):
+            A = system.jacobian
+            Ad = system.jacobian_dependent
+            gram = A * A.T
+            if system.k == 1:
+                expr = Ad[0, 0]**2 - EDGE_STOP * gram[0, 0]
+            else:
+                expr = (Ad.det(method="berkowitz")**2
+                        - EDGE_STOP * gram.det(method="berkowitz"))
+            found = [Event(expr, terminal=True, direction=-1, name=atlas.EDGE)]
+        scene._memo["shooting_edge"] = found
+    return found
+
+
 def _crawled(plan, p, y0, t, y, index):
     """Where a run of ``plan`` from ``y0`` stopped as singular at ``(t, y)`` on the
     indicator ``index`` before it reached its threshold (``diagnosis.singularity``'s
@@ -241,17 +273,25 @@ class Shooter:
         self.last_stops: dict = {}
         self.runs = 0
 
+    #: whether runs that cannot change split stop at its edge (``edge_event``)
+    watch_edge = True
+
     def plan(self, span, save="steps"):
         """The driver's plan of a shooting run on ``span`` (with sensitivities; every
-        step or the ends), made once: each run then only calls the compiled loop."""
+        step or the ends), made once: each run then only calls the compiled loop.
+        Where the runs cannot change split (``atlas.applies``), the plan watches the
+        split's edge as a terminal event (``edge_event``, with ``watch_edge``): a run
+        stops there, counted as "edge", instead of crawling toward the singular set."""
         found = self.plans.get((span, save))
         if found is None:
+            edge = edge_event(self.scene) if self.watch_edge else None
             key = ("shooting", self.method, self.rtol, solve.hashable(self.atol), span,
-                   save, MAX_STEPS)
+                   save, MAX_STEPS, edge is not None)
             # kept on the scene too: repeated problems on one scene plan nothing
             found = self.plans[span, save] = solve.planned(
                 self.scene, key, lambda: solve.plan(
                     self.scene, self.method, t_span=span, save=save, sensitivities=True,
+                    events=edge,
                     opts=options(rtol=self.rtol, atol=self.atol, max_steps=MAX_STEPS)))
         return found
 
@@ -349,7 +389,7 @@ class Shooter:
         if not parts:
             return self.edge_note()
         edge = self.edge_note(of_them=True)
-        n = sum(v for key, v in stops.items() if type(key) is int and key != EVENT)
+        n = sum(v for key, v in stops.items() if type(key) is int)
         note = (f"{n} of the {self.runs} runs stopped before t1: " + "; ".join(parts))
         return note + (f"; {edge}" if edge else "")
 
