@@ -15,8 +15,7 @@ import numpy as np
 
 from ...errors import JetnhError
 from .. import arguments, atlas, interrupt, solve
-from ..methods import _common as status_codes
-from ..methods._common import EVENT, FINISHED, SINGULAR, STIFF
+from ..methods._common import EVENT, FINISHED, SINGULAR, STIFF, Status
 from ..options import options
 from .small import all_finite, finite_vector, max_abs, thin_svd
 
@@ -135,7 +134,7 @@ class Shot:
         if status != FINISHED or not arguments.all_finite(y_end) or not \
                 arguments.all_finite(S):
             if stops is not None:
-                stops[status] = stops.get(status, 0) + 1
+                stops[int(status)] = stops.get(int(status), 0) + 1
                 # (its indicators are those of the chart it stopped in: not named here)
                 stops["y"] = (int(status), t, np.array(y_end), -1)
             return None
@@ -327,6 +326,7 @@ class Shooter:
         ``_crawled``); the last stop of each kind kept for ``stops_note``."""
         stops = self.stops
         if not arguments.all_finite(y):
+            self.last_stops[status] = (t, y, y0, -1, plan)
             return
         kind = status
         if status == SINGULAR and index >= 0:
@@ -345,16 +345,17 @@ class Shooter:
         and on which singular set), then the edge of the split (``edge_note``); ""
         where none did."""
         stops, parts = self.stops, []
-        codes = status_codes
         crawl = stops.get("crawl", 0)
         k = stops.get(STIFF, 0)
         if k:
-            t, y, y0, _, plan = self.last_stops[STIFF]
-            near = _near(self.scene, plan, t, y, y0)
+            last, where = self.last_stops.get(STIFF), ""
+            if last is not None:
+                t, y, y0, _, plan = last
+                near = _near(self.scene, plan, t, y, y0) if arguments.all_finite(y) else ""
+                where = f"the last at t = {t:.10g}: " + (f"{near}; " if near else "")
             parts.append(
-                f"{k} stopped as stiff (the last at t = {t:.10g}: Hairer's test found "
-                f"{self.method}'s steps held by stability, not by rtol"
-                + (f"; {near}" if near else "") + "): connect integrates with explicit "
+                f"{k} stopped as stiff ({where}Hairer's test found {self.method}'s steps "
+                "held by stability, not by rtol): connect integrates with explicit "
                 "methods (dop853, dopri5), which cannot follow a stiff motion; run "
                 "scene.run(method='radau') to see it, and connect over a shorter span "
                 "or to an end reached before the motion turns stiff")
@@ -376,11 +377,11 @@ class Shooter:
                     f", on {last[4].kern.layout.indicators[last[3]]} = 0"
                     if last[3] >= 0 else "") + ")"
             parts.append(f"{k} reached a singular configuration{where}")
-        for code, what in ((codes.MAX_STEPS, f"took more than {MAX_STEPS} steps"),
-                           (codes.TOO_SMALL_STEP, "had their step fall below the spacing "
-                            "of the floats"),
-                           (codes.NONFINITE, "became NaN or infinite"),
-                           (codes.NOT_CONVERGED, "did not converge")):
+        for code, what in ((Status.MAX_STEPS, f"took more than {MAX_STEPS} steps"),
+                           (Status.TOO_SMALL_STEP, "had their step fall below the "
+                            "spacing of the floats"),
+                           (Status.NONFINITE, "became NaN or infinite"),
+                           (Status.NOT_CONVERGED, "did not converge")):
             k = stops.get(code, 0)
             if k:
                 last = self.last_stops.get(code)
