@@ -143,3 +143,21 @@ def test_runs_that_change_split_watch_no_extra_edge():
     scene = jn.Scene(damped_sleigh(), "chetaev", params=PARAMS, t_span=(0.0, 1.0),
                      initial={**ORIGIN, "x_t": 0.2, "th_t": 2.5})
     assert edge_event(scene) is None
+
+
+def test_a_motion_that_stays_off_the_edge_is_found_and_shows_no_edge(sleigh):
+    """An end the Suslov motion reaches before cos(th) = 0 (its own run from X_t =
+    0.8, th_t = 0.5 to T = 1): connect finds those velocities, and its trajectory
+    reports no event (the edge it watched is the shooter's, not the user's)."""
+    shape = Unknowns.of(sleigh, "suslov")
+    scene = _scene(sleigh, "suslov", SLEIGH_PARAMS,
+                   {**SLEIGH_START, **{u: 0.0 for u in shape.unknowns}, **shape.fixed},
+                   (0.0, 3.0))
+    run = scene.run(y0={**SLEIGH_START, "X_t": 0.8, "th_t": 0.5, **shape.fixed},
+                    t_span=(0.0, 1.0), rtol=1e-12, atol=1e-13)
+    assert run.status == Status.FINISHED
+    end = {"X": float(run["X"][-1]), "th": float(run["th"][-1])}
+    c = jn.connect(sleigh, "suslov", SLEIGH_START, end, (0.0, 1.0), params=SLEIGH_PARAMS)
+    assert abs(c.initial["X_t"] - 0.8) < 1e-8 and abs(c.initial["th_t"] - 0.5) < 1e-8
+    tr = c.trajectory
+    assert tr.status == Status.FINISHED and tr.event_names == () and tr.t_events == []

@@ -155,7 +155,7 @@ class Shot:
                 scene, plan.method.name, out, wall, plan.kern, plan.ce, p, plan.t0, y,
                 plan.singular_tol, plan.checked, plan.limit,
                 {**plan.dense, "partial_last": False},
-                n_events=len(plan.ce) - 1 if plan.switch else None, sens=plan.sens)
+                n_events=_events_shown(plan), sens=plan.sens)
         return self._trajectory
 
 
@@ -184,6 +184,13 @@ def edge_event(scene):
             found = [Event(expr, terminal=True, direction=-1, name=atlas.EDGE)]
         scene._memo["shooting_edge"] = found
     return found
+
+
+def _events_shown(plan):
+    """How many of ``plan``'s events a Trajectory of its run reports: all but the edge
+    of the split it watches last (the atlas's, or ``edge_event``'s); None: all."""
+    ce = plan.ce
+    return len(ce) - 1 if ce is not None and ce.names[-1] == atlas.EDGE else None
 
 
 def _crawled(plan, p, y0, t, y, index):
