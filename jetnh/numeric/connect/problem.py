@@ -308,9 +308,10 @@ class Momenta:
         return values, G
 
 
-#: the math module's functions a straight line calls by name (``straight_line``)
-_LINE_MATH = frozenset({"sin", "cos", "tan", "asin", "acos", "atan", "atan2", "sinh",
-                        "cosh", "tanh", "asinh", "acosh", "atanh", "exp", "log", "sqrt"})
+#: the math module's functions a straight line calls by name (``straight_line``),
+#: matched by sympy's own classes (a user's undefined function named "sin" is not sin)
+_LINE_MATH = ("sin", "cos", "tan", "asin", "acos", "atan", "atan2", "sinh", "cosh", "tanh",
+              "asinh", "acosh", "atanh", "exp", "log", "sqrt")
 
 
 def straight_line(exprs, t, states, params):
@@ -324,6 +325,7 @@ def straight_line(exprs, t, states, params):
     function names, never a name or string from the model -- and compiled once."""
     import sympy as sp
 
+    funcs = {getattr(sp, f): f for f in _LINE_MATH}
     index = {s: i for i, s in enumerate(states)}
     names: dict = {}
     lines = []
@@ -351,8 +353,8 @@ def straight_line(exprs, t, states, params):
                     else f"_pow({names[id(base)]}, {names[id(exp)]})")
         elif isinstance(e, sp.Abs):
             text = f"abs({names[id(e.args[0])]})"
-        elif isinstance(e, sp.Function) and type(e).__name__ in _LINE_MATH:
-            text = f"_m.{type(e).__name__}({', '.join(names[id(a)] for a in e.args)})"
+        elif type(e) in funcs:
+            text = f"_m.{funcs[type(e)]}({', '.join(names[id(a)] for a in e.args)})"
         else:
             return None
         names[id(e)] = f"v{len(lines)}"
