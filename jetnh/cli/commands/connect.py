@@ -158,7 +158,7 @@ def _record(c) -> dict:
             "residual": c.residual, "normal": c.normal,
             "conjugate_times": (None if c.conjugate_times is None
                                 else list(c.conjugate_times)),
-            "minimizer": c.minimizer,
+            "legendre": c.legendre, "minimizer": c.minimizer,
             "search": c.search, "rank": c.rank, "iterations": c.iterations}
 
 
@@ -173,6 +173,11 @@ def _print(c, end):
                            ", ".join(f"t = {t:.10g}" for t in times) or "none in (t0, t1]")
           + ("" if variational else " (where the endpoint map to the named coordinates "
              "is singular)"))
+    if variational:
+        print(f"legendre:  {c.legendre:.6g} (the Hessian of L + lambda f on the admissible "
+              "velocities: its smallest eigenvalue over its largest, at the worst time; "
+              + ("> 0: positive definite all along)" if c.legendre > 0 else
+                 "not positive definite somewhere)"))
     if c.minimizer is False:
         print("minimizer: no (" + ("Legendre's condition fails: L + lambda f is not "
                                    "positive on the admissible velocities"
@@ -197,13 +202,15 @@ def _distance(a, b, coords) -> float:
 
 
 def _plot(found, coords, path, title):
-    import matplotlib
+    """The coordinates of the motions ``found`` against t, written to ``path`` at once
+    or not at all (``outputs.write``)."""
+    from pathlib import Path
+
     import numpy as np
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(8, 4))
+    fig = Figure(figsize=(8, 4), layout="tight")
+    ax = fig.add_subplot()
     for k, c in enumerate(found):
         tr = c.trajectory
         t = np.linspace(tr.t[0], tr.t[-1], 400)
@@ -222,6 +229,4 @@ def _plot(found, coords, path, title):
                  + ("" if c.normal else ", abnormal")
                  + (f", conjugate at {', '.join(f'{x:.4g}' for x in c.conjugate_times)}"
                     if c.conjugate_times else ""))
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+    outputs.write(path, lambda tmp: fig.savefig(tmp, format=Path(path).suffix[1:]))
