@@ -80,6 +80,19 @@ def test_a_terminal_event_keeps_its_state(disk):
     assert cut.final == pytest.approx(last_row(every), rel=1e-14, abs=1e-14)
 
 
+@pytest.mark.parametrize("method", ["scipy-DOP853", "scipy-Radau"])
+def test_scipy_keeps_the_state_of_its_terminal_event(disk, method):
+    """scipy's solve_ivp with t_eval leaves the event out of its rows: final is the
+    event's state, the last row of the same run without t_eval."""
+    event = Event(sp.Symbol("phi") - 7.25, terminal=True, name="phi=7.25")
+    cut = disk.run(t_eval=np.linspace(0.0, 1e3, 101), events=event, method=method, **TOL)
+    every = disk.run(events=event, method=method, **TOL)
+    assert cut.status == every.status == 5 and cut.t[-1] < cut.t_final
+    assert cut.t_final == every.t[-1] == float(cut.events["phi=7.25"]["t"][-1])
+    assert cut.final == pytest.approx(last_row(every), rel=1e-14, abs=1e-14)
+    assert cut.final["phi"] == pytest.approx(7.25, abs=1e-10)
+
+
 def test_a_singular_stop_keeps_its_state(knife):
     """The knife edge keeping its split stops where cos(phi) falls to 0 (t = pi/6)."""
     te = np.linspace(0.0, 10.0, 11)
