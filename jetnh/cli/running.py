@@ -109,7 +109,7 @@ def step_options(args, method: str, t_span) -> dict:
 def stop_text(traj, args, when: bool = True) -> str:
     """Why ``traj`` stopped early; a stop by the step budget named by its option
     (--max-steps), its size and (``when``) the time it came at."""
-    from ..numeric.methods._common import MAX_STEPS
+    from ..numeric import MAX_STEPS
     from ..numeric.options import StepControl
 
     if traj.status != MAX_STEPS:

@@ -410,9 +410,11 @@ class Trajectory(Frozen):
     @property
     def t_final(self) -> float:
         """The time of ``final``: the last row's, or that of the state where a run with
-        ``t_eval`` stopped after its last row."""
+        ``t_eval`` stopped after its last row (NaN: no rows, no such state)."""
         stop = self._stop
-        return float(self.t[-1]) if stop is None else stop[0]
+        if stop is not None:
+            return stop[0]
+        return float(self.t[-1]) if len(self) else math.nan
 
     def _stopped(self, t, y) -> None:
         """Keep ``(t, y)``, the state where the run stopped (the compiled loop's last

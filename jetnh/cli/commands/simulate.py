@@ -117,7 +117,8 @@ def run(args, progress) -> int:
     # stop where the values overflowed: then final is the last row, before the stop)
     final = traj.final
     t_final = traj.t_final if len(traj) else t0
-    last_state = traj.singularity is None or traj.singularity["t"] == t_final
+    last_state = ("t_eval" not in kw or traj.singularity is None
+                  or traj.singularity["t"] == t_final)
     if args.format == "json":
         print(json.dumps({"model": model.label, "principle": principle,
                           "params": scene.params, "initial": scene.initial,
