@@ -163,6 +163,8 @@ def _record(c) -> dict:
 
 
 def _print(c, end):
+    from ...numeric.connect.verdicts import LEGENDRE_ZERO
+
     print(f"-- {c.principle}")
     print("initial:   " + ", ".join(f"{k} = {v:.10g}" for k, v in c.initial.items()))
     print(f"cost:      {c.cost:.12g} (the action int L dt)")
@@ -174,15 +176,18 @@ def _print(c, end):
           + ("" if variational else " (where the endpoint map to the named coordinates "
              "is singular)"))
     if variational:
+        sign = ("positive definite all along" if c.legendre > LEGENDRE_ZERO else
+                "not positive semidefinite somewhere" if c.legendre < -LEGENDRE_ZERO else
+                "singular somewhere: zero within its resolution")
         print(f"legendre:  {c.legendre:.6g} (the Hessian of L + lambda f on the admissible "
-              "velocities: its smallest eigenvalue over its largest, at the worst time; "
-              + ("> 0: positive definite all along)" if c.legendre > 0 else
-                 "not positive definite somewhere)"))
+              f"velocities, its smallest eigenvalue over its largest at the worst time: "
+              f"{sign})")
     if c.minimizer is False:
         print("minimizer: no (" + ("Legendre's condition fails: L + lambda f is not "
                                    "positive on the admissible velocities"
-                                   if c.legendre < 0 else "a conjugate time inside the "
-                                   "span; --restarts looks for a cheaper motion") + ")")
+                                   if c.legendre < -LEGENDRE_ZERO else "a conjugate time "
+                                   "inside the span; --restarts looks for a cheaper motion")
+              + ")")
     elif c.minimizer is None and variational:
         print("minimizer: not checked (a singular Hessian of L + lambda f, or conjugate "
               "times not checked)")
