@@ -794,9 +794,9 @@ def test_a_run_stopped_by_its_budget_prints_where_it_stopped(capsys):
     (("--max-steps", "0"), 2, "argument --max-steps: '0' is below 1"),
     (("--max-steps", str(2**60)), 1, "--max-steps must be a positive integer of at most"),
     (("--steps", "50"), 2, "--steps sets the steps of the fixed-step methods rk4, dla and "
-                           "dvi; dop853 chooses its own: give --points N for N output "
-                           "points, --max-steps N for a step budget, or --method rk4 "
-                           "--steps N for fixed steps"),
+                           "dvi; dop853 chooses its own: give "),
+    (("--steps", "50"), 2, ", --max-steps N for a step budget, or --method rk4 --steps N "
+                           "for fixed steps"),
     (("--method", "radau", "--steps", "50"), 2, "radau chooses its own"),
     (("--method", "rk4", "--max-steps", "500"), 2, "--max-steps 500 is below the 1000 "
                                                    "steps of rk4 (--steps, default 1000)"),
@@ -812,6 +812,9 @@ def test_step_options_are_checked_before_the_run(capsys, args, code, words):
         got, out, err = inproc(capsys, *command, "--t-end", "1", *args)
         assert got == code and words in err and out == "", (command, err)
         assert "compiling" not in err and "Traceback" not in err
+        if "--steps sets" in err:       # the command's own option of output times
+            assert ("--points N for N output points" if command[0] == "simulate" else
+                    "--times for output times") in err
 
 
 def test_max_steps_reaches_the_runs_of_simulate_and_sweep(capsys):
@@ -838,7 +841,8 @@ def test_help_shows_the_step_budget(capsys):
         out = " ".join(out.split())
         assert code == 0 and (f"--max-steps N step budget of a run: it stops after N steps "
                               f"and says where (default {StepControl.max_steps})") in out
-        assert "refused with the adaptive methods" in out
+        assert "refused with the adaptive methods, which choose their own steps " \
+               "(--max-steps bounds them)" in out
 
 
 def test_connect_reports_legendre_and_plots_atomically(capsys, tmp_path, monkeypatch):

@@ -213,8 +213,7 @@ def _run() -> argparse.ArgumentParser:
     run.add_argument("--steps", type=int, default=None, metavar="N",
                      help=f"steps of the fixed-step methods rk4, dla and dvi (default "
                           f"{FIXED_STEPS}); refused with the adaptive methods, which choose "
-                          "their own steps (--points sets their output points, --max-steps "
-                          "their budget)")
+                          "their own steps (--max-steps bounds them)")
     shown_default(run.add_argument(
         "--max-steps", type=positive_count, default=None, metavar="N",
         help="step budget of a run: it stops after N steps and says where (default "

@@ -77,11 +77,12 @@ def scene_names(system) -> set:
             | {p.name for p in system.parameters})
 
 
-def step_options(args, method: str, t_span) -> dict:
+def step_options(args, method: str, t_span, outputs: str) -> dict:
     """The step options of a run from --steps and --max-steps, checked before anything
     is derived: ``n_steps`` of a fixed-step method (--steps, default ``FIXED_STEPS``,
     within the budget), ``max_steps`` where --max-steps is given.  --steps with an
-    adaptive method is refused (its steps are its own)."""
+    adaptive method is refused (its steps are its own); the message names ``outputs``,
+    the command's option of output times."""
     from ..numeric import arguments
     from ..numeric.options import StepControl
     from .parser import FIXED_STEPS
@@ -92,9 +93,8 @@ def step_options(args, method: str, t_span) -> dict:
     if not method_of(method).fixed_step:
         if args.steps is not None:
             raise UsageError(f"--steps sets the steps of the fixed-step methods rk4, dla and "
-                             f"dvi; {method} chooses its own: give --points N for N output "
-                             "points, --max-steps N for a step budget, or --method rk4 "
-                             "--steps N for fixed steps")
+                             f"dvi; {method} chooses its own: give {outputs}, --max-steps N "
+                             "for a step budget, or --method rk4 --steps N for fixed steps")
         return kw
     steps = FIXED_STEPS if args.steps is None else args.steps
     budget = kw.get("max_steps", StepControl.max_steps)

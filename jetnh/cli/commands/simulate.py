@@ -72,7 +72,7 @@ def run(args, progress) -> int:
     # the run's options, checked before the kernels are derived and compiled
     arguments.tolerances(opts.rtol, opts.atol, 1)
     t0, t1 = arguments.time_span(opts.t_span)
-    kw = step_options(args, method, (t0, t1))
+    kw = step_options(args, method, (t0, t1), "--points N for N output points")
     params = assignments(args.set, "--set")
 
     # the initial state: the model's, then --init; missing states start at 0.  The model's

@@ -121,7 +121,7 @@ def run(args, progress) -> int:
     opts = settings(args, model)
     principle, method = opts.principle, opts.method
     t_span = opts.t_span
-    steps = step_options(args, method, t_span)
+    steps = step_options(args, method, t_span, "--times for output times")
     if times is not None and not method_of(method).dense:
         raise UsageError(f"--times needs dense output, which {method} does not have; use "
                          "--method dop853, dopri5, radau or scipy-<M>, or omit --times (final "
