@@ -186,14 +186,7 @@ class _Charts:
                          "not evaluated between its rows here; call traj.at(...) before "
                          "pickling it, or pass the times as t_eval= to the run")
 
-    aux = at = evaluate = _refuse
-
-
-class _Row:
-    """One state of a chart's run with its aux row, as ``atlas.fill_aux`` reads a piece."""
-
-    def __init__(self, t, y, aux):
-        self.t, self.y, self.aux = t, y, aux
+    aux = at = evaluate = stop = _refuse
 
 
 class Trajectory(Frozen):
@@ -428,25 +421,15 @@ class Trajectory(Frozen):
     def _stop(self):
         """``(t, state, aux row)`` where the run stopped, in this trajectory's layout, or
         None where that is its last row (``final``); a run that changed split takes it
-        from its last piece, mapped to the scene's chart (``atlas``)."""
-        if self._segments is None:
-            if self._last is None or self._own:     # (discrete methods: no t_eval)
-                return None
-            t, y = self._last
-            aux = np.empty((1, self.layout.n_aux))
-            self._kernels.aux_rows(np.array([t]), y[None, :], self._p, aux)
-            return t, y, aux[0]
-        from .atlas import fill_aux, to_home
-
-        own, (_, _, chart, seg, _, _) = self._segments.own, self._segments.pieces[-1]
-        stop = seg._stop
-        if stop is None:
+        from its last piece, mapped to the scene's chart (``atlas.Stitched.stop``)."""
+        if self._segments is not None:
+            return self._segments.stop(self._p)
+        if self._last is None or self._own:     # (discrete methods: no t_eval)
             return None
-        t, y, aux = stop
-        times, row = np.array([t]), y[None, :]
-        out = np.empty((1, self.layout.n_aux))
-        fill_aux(out, own, [(0, 1, chart, _Row(times, row, aux[None, :]), 0)], self._p)
-        return t, to_home(own, chart, times, row, self._p)[0], out[0]
+        t, y = self._last
+        aux = np.empty((1, self.layout.n_aux))
+        self._kernels.aux_rows(np.array([t]), y[None, :], self._p, aux)
+        return t, y, aux[0]
 
     def as_dict(self) -> dict[str, np.ndarray]:
         out = {"t": self.t}
