@@ -3,6 +3,8 @@ configuration, naming the parameters, not as a singular configuration (the indic
 have not moved).  Before: "cos(th) = 0.980067 (initially 0.980067) is about to vanish
 ... the determinant of df/dqdot^alpha vanishes" and "a denominator vanishes"."""
 
+import sys
+
 import numpy as np
 import pytest
 import sympy as sp
@@ -56,3 +58,46 @@ def test_nan_indicator_from_overflow_at_the_start(sleigh):
     assert "no denominator is shown to vanish" in reason and "m = 1e+300" in reason
     assert "A denominator (or a square-root argument)" not in reason
     assert "singular configuration" not in reason
+
+
+# ---------------------------------------------------------------------- energy overflow
+@pytest.fixture(scope="module")
+def exp_velocity():
+    """L = x_t^2/2 + exp(x_t): x_tt = 0 (x_t constant), E = x_t^2/2 + (x_t - 1) exp(x_t),
+    which is inf - inf = NaN at x_t = 1000 while the motion is exact."""
+    J = jn.JetSpace("x")
+    (x,), (xt,) = J.q, J.qd
+    return jn.Scene(jn.System(J, xt**2 / 2 + sp.exp(xt), []), "chetaev",
+                    initial={"x": 0.0, "x_t": 1.0}, t_span=(0, 1), cache=False)
+
+
+def test_an_energy_that_overflows_is_not_printed_as_a_drift(exp_velocity):
+    tr = exp_velocity.run(y0=np.array([0.0, 1000.0]))
+    d = tr.diagnostics
+    assert d.success and tr["x"][-1] == pytest.approx(1000.0, rel=1e-12)
+    assert np.isnan(d.energy_initial) and np.isnan(d.energy_drift)
+    text = str(d)
+    assert "energy not evaluated: it is nan at the start" in text
+    assert "drift nan" not in text and "relative nan" not in text
+    regular = str(exp_velocity.run().diagnostics)         # E = 1/2 at x_t = 1
+    assert "energy 0.5, drift" in regular and "not evaluated" not in regular
+
+
+def test_energy_text():
+    from jetnh.numeric.diagnosis import energy_text
+
+    assert energy_text(2.0, 1e-12, 5e-13) == "energy 2, drift 1.000e-12 (relative 5.000e-13)"
+    assert energy_text(2.0, np.nan, np.nan).startswith(
+        "energy 2, drift not evaluated: the energy became NaN or infinite on the way")
+    assert energy_text(np.inf, np.nan, np.nan).startswith(
+        "energy not evaluated: it is inf at the start")
+
+
+def test_a_sweep_keeps_nan_energy_drift_for_an_overflowing_energy(exp_velocity):
+    """The sweep's documented meaning: NaN energy_drift of a successful row is an energy
+    that could not be evaluated, the row's values stay valid."""
+    df = jn.sweep(exp_velocity, {"x_t": [1.0, 1000.0]})
+    assert df["success"].tolist() == [True, True]
+    assert df["x"].tolist() == pytest.approx([1.0, 1000.0], rel=1e-12)
+    assert df["energy_drift"][0] < 1e-12 and np.isnan(df["energy_drift"][1])
+    assert "is no drift: the energy could\n  not be evaluated" in sys.modules["jetnh.sweep"].__doc__

@@ -58,14 +58,16 @@ class Diagnostics:
         return asdict(self)
 
     def __str__(self):
+        from .diagnosis import energy_text
+
         lines = [f"{self.method}: {self.stop_reason} ({'success' if self.success else 'failure'})",
                  f"  steps {self.steps} (rejected {self.rejected}), rhs evaluations "
                  f"{self.rhs_evaluations}, {self.wall_time * 1e3:.3g} ms",
                  f"  constraint residual max {self.residual_max:.3e}"
                  + (f", holonomic (position level) {self.holonomic_residual_max:.3e}"
                     if self.holonomic_residual_max else ""),
-                 f"  energy {self.energy_initial:.12g}, drift {self.energy_drift:.3e} "
-                 f"(relative {self.energy_drift_relative:.3e})"
+                 "  " + energy_text(self.energy_initial, self.energy_drift,
+                                    self.energy_drift_relative)
                  + ("; not conserved: the generalized forces work (traj.power)"
                     if self.forced else "")]
         for k, v in self.integral_drift.items():
