@@ -101,3 +101,11 @@ def test_a_sweep_keeps_nan_energy_drift_for_an_overflowing_energy(exp_velocity):
     assert df["x"].tolist() == pytest.approx([1.0, 1000.0], rel=1e-12)
     assert df["energy_drift"][0] < 1e-12 and np.isnan(df["energy_drift"][1])
     assert "is no drift: the energy could\n  not be evaluated" in sys.modules["jetnh.sweep"].__doc__
+
+
+def test_linearize_at_a_degenerate_parameter_names_the_parameters(sleigh):
+    """m = 0 makes L degenerate (the Scene says so for the same values); linearize
+    named only the point and the split."""
+    with pytest.raises(jn.JetnhError, match="parameter values that make them degenerate"):
+        jn.linearize(sleigh.system, at={"x": 0.0, "th": 0.0, "x_t": 1.0, "th_t": 0.0},
+                     params={**PARAMS, "m": 0.0})
