@@ -101,7 +101,9 @@ def singularity(scene, kern, idx, t, y, p, t0, y_init, tol, nonfinite=False,
                 method=None) -> dict:
     """What the stop at a singular configuration was: indicator, kind, time, value,
     and a reason with the way out (``method``: the run's; an adaptive method that stops
-    before the indicator reaches its threshold could not step closer)."""
+    before the indicator reaches its threshold could not step closer).  An indicator
+    that is NaN or infinite at the start while the others are finite and nonzero is no
+    vanishing denominator: kind ``"nonfinite"``, an overflow (or a domain error)."""
     lay = kern.layout
     g0 = np.empty(len(lay.indicators))
     g = np.empty(len(lay.indicators))
@@ -123,8 +125,8 @@ def singularity(scene, kern, idx, t, y, p, t0, y_init, tol, nonfinite=False,
                   "infinity, not a zero; every other singularity indicator is finite and "
                   "nonzero there, so no denominator is shown to vanish: an intermediate "
                   "value overflowed (inf - inf, inf/inf) or left its domain. "
-                  + overflow_hint(scene, p) + ".")
-        return {"indicator": expr, "kind": "overflow", "index": idx, "t": float(t),
+                  + overflow_hint(far_parameters(scene, p)) + ".")
+        return {"indicator": expr, "kind": "nonfinite", "index": idx, "t": float(t),
                 "value": value, "initial": initial, "reason": reason}
     if not np.isfinite(initial) or initial == 0.0:
         where = (f"the initial state (t = {t:.17g}) is singular: {expr} = {initial:.6g}")
@@ -313,9 +315,9 @@ def regular_elsewhere(g0, idx) -> bool:
     return bool(np.all(np.isfinite(rest) & (rest != 0.0)))
 
 
-def overflow_hint(scene, p) -> str:
-    """What to do when the right-hand side overflows at a regular configuration: the
-    parameter values far from unit scale (beyond ``FAR_SCALE``), and nondimensionalising."""
+def far_parameters(scene, p) -> list[str]:
+    """``name = value`` of the parameters (compiled, and at run time ``p``) whose size is
+    beyond ``FAR_SCALE`` from 1."""
     values = dict(scene.params)
     if p is not None:
         values.update(zip(scene.runtime_params, np.asarray(p, dtype=float).tolist()))
@@ -327,11 +329,18 @@ def overflow_hint(scene, p) -> str:
             continue
         if a > FAR_SCALE or 0.0 < a < 1.0 / FAR_SCALE:
             far.append(f"{name} = {float(v):.6g}")
-    where = (f"parameter values far from unit scale ({', '.join(far)}), whose products "
-             "leave the floating-point range" if far else
-             "some values of the model are far from unit scale")
-    return (f"Likely cause: {where}; nondimensionalise the model (choose units in which "
-            "its parameters and states are of moderate size)")
+    return far
+
+
+def overflow_hint(far) -> str:
+    """What to do when values overflow at a regular configuration (``far``: the
+    parameters far from unit scale, ``far_parameters``)."""
+    units = ("nondimensionalise the model (choose units in which its parameters and "
+             "states are of moderate size)")
+    if far:
+        return (f"Likely cause: parameter values far from unit scale ({', '.join(far)}), "
+                f"whose products leave the floating-point range; {units}")
+    return f"If the model's values are far from unit scale, {units}"
 
 
 def raise_nonfinite(scene, method, t, y, kern=None, p=None, t0=None, y_init=None,
@@ -352,12 +361,13 @@ def raise_nonfinite(scene, method, t, y, kern=None, p=None, t0=None, y_init=None
             kern.rhs(float(t), np.ascontiguousarray(y, dtype=float), p, f)
         big = float(np.max(np.abs(f))) if f.size else 0.0
         regular = regular or not kern.layout.indicators
-        if regular and (not np.isfinite(big) or big > FAR_SCALE):
+        far = far_parameters(scene, p)
+        if regular and (big > FAR_SCALE or (not np.isfinite(big) and far)):
             size = (". The right-hand side there is "
                     + (f"{big:.3g} in size" if np.isfinite(big) else "not finite")
                     + " at a configuration where every singularity indicator is regular: "
                     "it overflowed (or produced inf - inf = NaN), no singular "
-                    "configuration. " + overflow_hint(scene, p))
+                    "configuration. " + overflow_hint(far))
     why = ("No singularity indicator explains it: the solution blows up, or an "
            "expression leaves its domain; check the model and the initial values, or "
            "integrate a shorter span" + size if kern is not None and checked else
