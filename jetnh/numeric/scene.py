@@ -67,7 +67,7 @@ from . import discrete
 from .ensemble import run_ensemble
 from .kernels import jacobian_kernels, load as load_kernels, loader
 from ..frozen import Frozen, FrozenDict, memo
-from .options import options
+from .options import options, typed
 from .trajectory import Trajectory
 
 
@@ -603,19 +603,26 @@ class Scene(Frozen):
             naming the time and the state instead.  Every argument is checked before it
             reaches compiled code (``numeric.arguments``).
         """
-        if (t_eval is None and events is None and t_span is None and timeout is None
-                and projection is False and backend is None and step is None
-                and singular == "stop" and newton is None and sensitivities is False
-                and sensitivity_error is True and not keywords and type(method) is str
-                and (save == "steps" or save == "final")
-                and (rtol is None or type(rtol) is float)
-                and (atol is None or type(atol) is float)):
-            # every option as its default but the method (a str), save and the
-            # tolerances (floats): this scene's plan of them, at once
-            quick = self._memo.get("quick")
-            plan = None if quick is None else quick.get((method, save, rtol, atol))
-            if plan is None:
-                plan = self._quick_plan(method, save, rtol, atol)
+        if (t_eval is None and events is None and timeout is None and projection is False
+                and backend is None and step is None and newton is None
+                and sensitivities is False and sensitivity_error is True
+                and type(singular) is str and (t_span is None or type(t_span) is tuple)):
+            # options that are numbers and strings (most runs, and every loop of runs):
+            # their plan kept in this scene's memo under them and the types of the
+            # numbers (``True == 1``, but a bool is refused where 1 is not), at once
+            try:
+                key = (method, save, rtol, atol, singular, type(rtol), type(atol))
+                if t_span is not None:      # (4 entries more; each keyword 3: no two
+                    a, b = t_span           # lists of options make keys of one length)
+                    key += (a, b, type(a), type(b))
+                if keywords:
+                    for k, v in keywords.items():
+                        key += (k, v, type(v))
+                plan = self._memo["quick"][key]
+            except (KeyError, TypeError, ValueError) as exc:
+                # not planned yet (a KeyError), or a key not hashable or no pair of times
+                plan = self._quick_plan(key if type(exc) is KeyError else None, rtol, atol, method, save, t_span, singular,
+                                        keywords)
         else:
             plan = self._plan(rtol, atol, t_eval, method, save, events, t_span, timeout,
                               projection, backend, step, singular, newton, sensitivities,
@@ -635,19 +642,16 @@ class Scene(Frozen):
         y = self._run_state(y0, plan.t0, p)
         return solve.run(self, plan, y, p, own=False)
 
-    def _quick_plan(self, method, save, rtol, atol) -> solve.Plan:
-        """The plan of a run with every option as its default but ``method`` (a str),
-        ``save`` and the tolerances (floats or None), under a short key (shared with
-        the scenes ``replace`` makes: ``solve.planned``) and kept in this scene's memo
-        under a shorter one (its time span is the scene's)."""
-        span = self.t_span
-        plan = solve.planned(self, ("common", method, save, rtol, atol, span),
-                             lambda: solve.plan(self, method, opts=options(rtol=rtol,
-                                                                           atol=atol),
-                                                t_span=span, save=save))
+    def _quick_plan(self, key, rtol, atol, method, save, t_span, singular, keywords
+                    ) -> solve.Plan:
+        """The plan of a run whose options are numbers and strings (``run``), kept in
+        this scene's memo under ``key`` (None: none), which the scenes ``replace``
+        makes with the same time span share."""
+        plan = self._plan(rtol, atol, None, method, save, None, t_span, None, False, None,
+                          None, singular, None, False, True, keywords)
         quick = self._memo.setdefault("quick", {})
-        if len(quick) < solve.MAX_PLANS:
-            quick[method, save, rtol, atol] = plan
+        if key is not None and len(quick) < solve.MAX_PLANS:
+            quick[key] = plan
         return plan
 
     def _plan(self, rtol, atol, t_eval, method, save, events, t_span, timeout, projection,
@@ -656,9 +660,10 @@ class Scene(Frozen):
         """The plan of a run with these options (``run``), kept under a key of every
         option (``solve.planned``)."""
         span = self.t_span if t_span is None else arguments.time_span(t_span)
-        key = (rtol, solve.hashable(atol), method, save, span, timeout, projection,
-               backend, step, singular, newton, sensitivities, sensitivity_error,
-               solve.hashable(events), solve.hashable(t_eval), *keywords.items())
+        key = (typed(rtol), typed(atol), method, save, span, timeout, projection, backend,
+               typed(step), typed(singular), typed(newton), sensitivities,
+               sensitivity_error, solve.hashable(events), solve.hashable(t_eval),
+               *((k, typed(v)) for k, v in keywords.items()))
         key = (key, tuple(map(type, key)))
         return solve.planned(self, key, lambda: solve.plan(
             self, method, opts=options(step, singular, newton, rtol=rtol, atol=atol,

@@ -269,10 +269,11 @@ def planned(scene, key, make) -> Plan:
 
 
 def hashable(value):
-    """``value`` as a part of a plan's key: a list as a tuple, an array as its bytes
-    (with dtype and shape), anything else as it is."""
-    if type(value) is list:
-        return tuple(value)
+    """``value`` as a part of a plan's key: a list or a tuple as a tuple of its entries
+    and their types (``True == 1``, but a run may refuse a bool where it takes 1), an
+    array as its bytes (with dtype and shape), anything else as it is."""
+    if type(value) is list or type(value) is tuple:
+        return tuple(map(hashable, value)), tuple(map(type, value))
     if isinstance(value, np.ndarray):
         return ("array", value.dtype.str, value.shape, value.tobytes())
     return value
