@@ -51,6 +51,7 @@ compiled explicit and Radau runs project every accepted step back onto g = 0
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Mapping
 import mpmath
 import numpy as np
@@ -152,6 +153,9 @@ class Scene(Frozen):
         #: the names an initial value may have, the names of the states
         self._initial_names = frozenset(self.state_names + self.dependent_velocities)
         self._state_set = frozenset(self.state_names)
+        #: the states' values of a dict of initial values, in order
+        self._states_of = (operator.itemgetter(*self.state_names)
+                           if len(self.state_names) > 1 else _OneState(*self.state_names))
         self.consistency_tol = arguments.positive(consistency_tol, "consistency_tol")
         self.projected: dict[str, tuple[float, float]] = {}
         #: coordinates moved onto the holonomic constraints: name -> (given, completed)
@@ -224,7 +228,7 @@ class Scene(Frozen):
         given = self._on_holonomic(given, complete)
         required = y = None
         if kernels is not None and given.keys().isdisjoint(self.dependent_velocities):
-            y = np.array([given[n] for n in self.state_names], dtype=float)
+            y = np.array(self._states_of(given), dtype=float)
             required = self._dependent_velocity_floats(y, kernels, p)
         if required is None:
             y = None
@@ -375,7 +379,7 @@ class Scene(Frozen):
         aux = np.empty(lay.n_aux)
         kern.aux(t0, y, p, aux)
         values = aux[:len(lay.dependent_velocities)].tolist()
-        if not all(map(math.isfinite, values)):
+        if not math.isfinite(sum(values)):      # (a NaN, an infinity or an overflow)
             return None
         return dict(zip(self.dependent_velocities, values))
 
@@ -465,11 +469,11 @@ class Scene(Frozen):
         ini, y = new._initial(initial, False, False, kern, p)
         ini = FrozenDict(ini)
         if y is None:
-            y = np.array([ini[n] for n in self.state_names], dtype=float)
+            y = np.array(self._states_of(ini), dtype=float)
         # (this copy's own state array: its direct runs' ``_y0``, y0 a read-only view)
         memo["_y0"] = y
         y0 = y.view()
-        y0.flags.writeable = False
+        y0.setflags(write=False)
         d.update(initial=ini, y0=y0)
         return new
 
@@ -627,20 +631,16 @@ class Scene(Frozen):
             plan = self._plan(rtol, atol, t_eval, method, save, events, t_span, timeout,
                               projection, backend, step, singular, newton, sensitivities,
                               sensitivity_error, keywords)
-        if y0 is None and params is None:       # the scene's own
-            memo = self._memo
-            p = memo.get("_p")
-            if plan.direct:     # (the loop reads y0 into a copy of its own: never written)
-                y = memo.get("_y0")
-                return solve.run(self, plan, self._y0 if y is None else y,
-                                 self._p if p is None else p, own=True)
-            return solve.run(self, plan, self.y0.copy(), self._p if p is None else p,
-                             own=True)
-        p = self._memo.get("_p") if params is None else self._run_params(params)
+        memo = self._memo
+        p = memo.get("_p") if params is None else self._run_params(params)
         if p is None:
             p = self._p
-        y = self._run_state(y0, plan.t0, p)
-        return solve.run(self, plan, y, p, own=False)
+        if y0 is None and params is None:       # the scene's own
+            if plan.direct:     # (the loop reads y0 into a copy of its own: never written)
+                y = memo.get("_y0")
+                return solve.run(self, plan, self._y0 if y is None else y, p, True)
+            return solve.run(self, plan, self.y0.copy(), p, True)
+        return solve.run(self, plan, self._run_state(y0, plan.t0, p), p, False)
 
     def _quick_plan(self, key, rtol, atol, method, save, t_span, singular, keywords
                     ) -> solve.Plan:
@@ -710,8 +710,8 @@ class Scene(Frozen):
         if y0 is None:
             return self.y0.copy()        # the compiled loop gets its own array
         if not isinstance(y0, dict):
-            if (type(y0) is np.ndarray and y0.shape == self.y0.shape
-                    and y0.dtype == np.float64 and math.isfinite(sum(y0.tolist()))):
+            if (type(y0) is np.ndarray and y0.dtype is _FLOAT64
+                    and y0.shape == self.y0.shape and math.isfinite(sum(y0.tolist()))):
                 # (a NaN or an infinity makes the sum of the floats not finite; an
                 # overflow of finite values takes the general route, which says so)
                 y = y0.copy()           # (what the general route makes of it, sooner)
@@ -843,10 +843,22 @@ _SHARED = ("spec", "key", "plans", "events", "atlas_applies", "atlases")
 
 
 _FLOAT = {float}
+#: the dtype of the arrays a run takes as they are (numpy's one instance of it)
+_FLOAT64 = np.dtype(np.float64)
 
 #: the least |indicator| at which the initial dependent velocities are taken from the
 #: compiled kernels (``Scene._dependent_velocity_floats``)
 FLOAT_MARGIN = 1e-6
+
+
+class _OneState:
+    """What ``operator.itemgetter`` of one name would be if it returned a tuple."""
+
+    def __init__(self, name):
+        self.name = name
+
+    def __call__(self, values) -> tuple:
+        return (values[self.name],)
 
 
 def _loaded_kernels(key, persistent):
