@@ -146,3 +146,42 @@ def test_an_ensemble_refuses_options_equal_to_planned_ones(disk):
     disk.ensemble(initial=initial, save="final", max_steps=1)
     with pytest.raises(JetnhError, match="max_steps"):
         disk.ensemble(initial=initial, save="final", max_steps=True)
+
+
+@pytest.mark.parametrize("options", [
+    dict(save="final"), dict(method="radau", rtol=1e-6), dict(method="dopri5"),
+    dict(method="scipy-RK45", rtol=1e-6, save="final"),
+    dict(method="rk4", h=0.01, save="final"), dict(t_eval=(0.0, 0.05)),
+    dict(singular="ignore", split="fixed", rtol=1e-7),
+])
+def test_a_loop_over_time_spans_runs_as_scenes_of_those_spans(disk, options):
+    """Runs on many spans (a plan of the same options taken over on another span where
+    only its ends depend on it: ``solve.on_span``) equal the runs of scenes built with
+    those spans, bit for bit; the fixed step of ``h`` and the points of ``t_eval`` are
+    those of each span."""
+    for T in (0.1, 0.15, 0.05, 0.15):
+        here = disk.run(t_span=(0.0, T), **options)
+        built = Scene(disk.system, "chetaev", initial=DISK0, t_span=(0.0, T),
+                      cache=False).run(**options)
+        same(here, built)
+        assert here.t[-1] == (T if "t_eval" not in options else 0.05)
+    if "rk4" in options.values():
+        assert disk.run(t_span=(0.0, 0.2), **options).diagnostics.steps == 20
+    with pytest.raises(JetnhError):
+        disk.run(t_span=(0.1, 0.1), **options)
+
+
+def test_a_new_time_span_is_not_planned_again(disk, monkeypatch):
+    """Options planned on one span are taken over on the next (no new ``solve.plan``);
+    options whose plan depends on the span (a fixed step ``h``) are planned anew."""
+    from jetnh.numeric import solve
+
+    made = []
+    plan = solve.plan
+    monkeypatch.setattr(solve, "plan", lambda *a, **k: made.append(1) or plan(*a, **k))
+    for T in (0.31, 0.32, 0.33):
+        disk.run(t_span=(0.0, T), rtol=1e-5, max_step=0.02)
+    assert len(made) == 1
+    for T in (0.31, 0.32):
+        disk.run(t_span=(0.0, T), method="rk4", h=0.01)
+    assert len(made) == 3

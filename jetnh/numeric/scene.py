@@ -658,14 +658,15 @@ class Scene(Frozen):
               backend, step, singular, newton, sensitivities, sensitivity_error,
               keywords) -> solve.Plan:
         """The plan of a run with these options (``run``), kept under a key of every
-        option (``solve.planned``)."""
+        option and the time span (``solve.planned``: a plan of the same options on
+        another span lends what does not depend on it)."""
         span = self.t_span if t_span is None else arguments.time_span(t_span)
-        key = (typed(rtol), typed(atol), method, save, span, timeout, projection, backend,
+        key = (typed(rtol), typed(atol), method, save, timeout, projection, backend,
                typed(step), typed(singular), typed(newton), sensitivities,
                sensitivity_error, solve.hashable(events), solve.hashable(t_eval),
                *((k, typed(v)) for k, v in keywords.items()))
         key = (key, tuple(map(type, key)))
-        return solve.planned(self, key, lambda: solve.plan(
+        return solve.planned(self, key, span=span, make=lambda: solve.plan(
             self, method, opts=options(step, singular, newton, rtol=rtol, atol=atol,
                                        **keywords),
             t_span=span, t_eval=t_eval, save=save, events=events, timeout=timeout,

@@ -55,7 +55,8 @@ class Plan:
     goes on across its chart's edge (``numeric.atlas``); the loop of a run with
     sensitivities then watches the edge as its last event (``ce``: it stops there).  The discrete methods read
     ``steps``, ``newton_tol``, ``max_newton``, ``projection``; scipy's ``first`` and
-    ``max_step``."""
+    ``max_step``.  ``spans``: nothing but ``t0``, ``t1`` and ``head`` depends on the
+    time span (an adaptive method without ``t_eval``: ``on_span``)."""
 
     method: methods.Method
     t0: float
@@ -91,6 +92,7 @@ class Plan:
     callbacks: tuple = ()           # what the addresses in prefix point into, kept alive
     direct: bool = False            # a run is one call of ``entry`` (``run``)
     head: tuple = ()                # ``(*prefix, t0, t1)`` of a direct plan
+    spans: bool = False
 
 
 def _unused(method, **given):
@@ -168,7 +170,7 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
                                           else max_step)
         te = None if t_eval is None else arguments.times(t_eval, t0, t1)
         return Plan(**common, rtol=rtol, atol=atol_v, ce=None, watch=none_watch, te=te,
-                    first=first, max_step=mx)
+                    first=first, max_step=mx, spans=te is None)
     if m.solver is Solver.DISCRETE:
         _unused(m.name, t_eval=t_eval, first_step=first_step, max_step=max_step)
         steps = arguments.fixed_steps(n_steps, h, t0, t1, m.name, budget)
@@ -246,26 +248,45 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
                 te=te, mode=mode, newton=newton, switch=switch, dense=dense,
                 dense_ends=ends, entry=entry,
                 prefix=prefix, suffix=suffix, callbacks=callbacks,
-                direct=sens is None and not switch and not batch, head=(*prefix, t0, t1))
+                direct=sens is None and not switch and not batch, head=(*prefix, t0, t1),
+                spans=m.adaptive and t_eval is None and not batch)
 
 
-def planned(scene, key, make) -> Plan:
+def planned(scene, key, make, span=None) -> Plan:
     """The plan of ``key`` kept on ``scene`` (``make()`` when there is none; an
     unhashable key plans afresh).  The key holds every input of the plan but the
-    kernels, the time span too: scenes with the same kernels share their plans
-    (``Scene.replace``)."""
+    kernels, and the time span, or it is ``span``: scenes with the same kernels share
+    their plans (``Scene.replace``).  With ``span``, a plan of ``key`` on another span
+    whose options do not depend on it (``Plan.spans``) is taken over on ``span``
+    (``on_span``): a loop over time spans (a shooting loop over the final time) plans
+    once."""
     store = scene._memo.get("plans")
     if store is None:
         store = scene._memo["plans"] = {}
+    full = key if span is None else (key, span)
     try:
-        found = store.get(key)
+        found = store.get(full)
     except TypeError:           # an array among the options
         return make()
     if found is None:
-        found = make()
+        other = None if span is None else store.get(("any span", key))
+        if other is not None:
+            found = on_span(other, *span)
+        else:
+            found = make()
+            if span is not None and found.spans and len(store) < MAX_PLANS:
+                store["any span", key] = found
         if len(store) < MAX_PLANS:
-            store[key] = found
+            store[full] = found
     return found
+
+
+def on_span(plan, t0, t1) -> Plan:
+    """``plan`` (whose options do not depend on its span: ``Plan.spans``) on the time
+    span ``(t0, t1)`` (checked: ``arguments.time_span``)."""
+    new = object.__new__(Plan)
+    new.__dict__.update(plan.__dict__, t0=t0, t1=t1, head=(*plan.prefix, t0, t1))
+    return new
 
 
 def hashable(value):
