@@ -176,6 +176,7 @@ def test_a_new_time_span_is_not_planned_again(disk, monkeypatch):
     options whose plan depends on the span (a fixed step ``h``) are planned anew."""
     from jetnh.numeric import solve
 
+    disk = Scene(disk.system, "chetaev", initial=DISK0, cache=False)    # (its own plans)
     made = []
     plan = solve.plan
     monkeypatch.setattr(solve, "plan", lambda *a, **k: made.append(1) or plan(*a, **k))

@@ -487,6 +487,7 @@ class Scene(Frozen):
         if hit is not None and hit[0] == len(memo):    # (entries are only ever added)
             return dict(hit[1])
         memo.setdefault("plans", {})
+        memo.setdefault("spans", {})
         memo.setdefault("events", {})
         memo.setdefault("atlases", [])
         shared = {k: memo[k] for k in _SHARED if k in memo}
@@ -838,9 +839,10 @@ class Scene(Frozen):
 
 
 #: what a scene with the same kernels (``Scene.replace``) takes over from the memo: the
-#: kernels' keys, the plans of runs (``solve.planned``), compiled events, whether an
-#: atlas applies and the first atlas (whose charts the others share: ``atlas.atlas``)
-_SHARED = ("spec", "key", "plans", "events", "atlas_applies", "atlases")
+#: kernels' keys, the plans of runs (``solve.planned``) and those taken over on other
+#: time spans, compiled events, whether an atlas applies and the first atlas (whose
+#: charts the others share: ``atlas.atlas``)
+_SHARED = ("spec", "key", "plans", "spans", "events", "atlas_applies", "atlases")
 
 
 _FLOAT = {float}

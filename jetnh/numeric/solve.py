@@ -257,25 +257,27 @@ def planned(scene, key, make, span=None) -> Plan:
     unhashable key plans afresh).  The key holds every input of the plan but the
     kernels, and the time span, or it is ``span``: scenes with the same kernels share
     their plans (``Scene.replace``).  With ``span``, a plan of ``key`` on another span
-    whose options do not depend on it (``Plan.spans``) is taken over on ``span``
-    (``on_span``): a loop over time spans (a shooting loop over the final time) plans
-    once."""
-    store = scene._memo.get("plans")
+    whose options do not depend on it (``Plan.spans``; kept apart, per key) is taken
+    over on ``span`` (``on_span``): a loop over time spans (a shooting loop over the
+    final time) plans once."""
+    memo = scene._memo
+    store = memo.get("plans")
     if store is None:
-        store = scene._memo["plans"] = {}
+        store = memo["plans"] = {}
     full = key if span is None else (key, span)
     try:
         found = store.get(full)
     except TypeError:           # an array among the options
         return make()
     if found is None:
-        other = None if span is None else store.get(("any span", key))
+        spans = None if span is None else memo.setdefault("spans", {})
+        other = None if spans is None else spans.get(key)
         if other is not None:
             found = on_span(other, *span)
         else:
             found = make()
-            if span is not None and found.spans and len(store) < MAX_PLANS:
-                store["any span", key] = found
+            if spans is not None and found.spans and len(spans) < MAX_PLANS:
+                spans[key] = found
         if len(store) < MAX_PLANS:
             store[full] = found
     return found
