@@ -186,3 +186,18 @@ def test_a_new_time_span_is_not_planned_again(disk, monkeypatch):
     for T in (0.31, 0.32):
         disk.run(t_span=(0.0, T), method="rk4", h=0.01)
     assert len(made) == 3
+
+
+def test_times_are_keyed_by_their_values(disk):
+    """An array of times finds the plan of equal times, not that of the same array
+    since changed; times as objects or integers run as their floats."""
+    te = np.linspace(0.0, 0.5, 6)
+    a = disk.run(t_eval=te)
+    same(a, disk.run(t_eval=te, step=StepControl()))
+    te[3] = 0.31                            # (the caller's array, changed in place)
+    b = disk.run(t_eval=te)
+    assert b.t[3] == 0.31 and a.t[3] == np.linspace(0.0, 0.5, 6)[3]
+    same(b, disk.run(t_eval=te.astype(object)))
+    same(disk.run(t_eval=np.array([0, 1]) / 2), disk.run(t_eval=np.array([0.0, 0.5])))
+    with pytest.raises(JetnhError):
+        disk.run(t_eval=np.array([0.0, 0.7]))

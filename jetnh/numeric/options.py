@@ -105,6 +105,8 @@ def typed(value):
         return (type(value), *map(typed, vars(value).values()))
     if hasattr(value, "__array__") and not isinstance(value, (int, float)):
         a = np.asarray(value)
+        if a.dtype.hasobject:           # (its bytes are addresses, which are reused)
+            return "objects", type(value), a.shape, tuple(map(typed, a.ravel().tolist()))
         return ("array", type(value), a.dtype.str, a.shape, a.tobytes())
     return value, type(value)
 

@@ -608,25 +608,32 @@ class Scene(Frozen):
             naming the time and the state instead.  Every argument is checked before it
             reaches compiled code (``numeric.arguments``).
         """
-        if (t_eval is None and events is None and timeout is None and projection is False
+        if (events is None and timeout is None and projection is False
                 and backend is None and step is None and newton is None
                 and sensitivities is False and sensitivity_error is True
-                and type(singular) is str and (t_span is None or type(t_span) is tuple)):
-            # options that are numbers and strings (most runs, and every loop of runs):
-            # their plan kept in this scene's memo under them and the types of the
-            # numbers (``True == 1``, but a bool is refused where 1 is not), at once
+                and type(singular) is str and (t_span is None or type(t_span) is tuple)
+                and (t_eval is None or (type(t_eval) is np.ndarray
+                                        and t_eval.dtype is _FLOAT64))):
+            # options that are numbers, strings and an array of times (most runs, and
+            # every loop of runs): their plan kept in this scene's memo under them and
+            # the types of the numbers (``True == 1``, but a bool is refused where 1 is
+            # not), at once.  (What follows the first seven entries of a key starts with
+            # a number, bytes or a name: a time span, times or a keyword.)
             try:
                 key = (method, save, rtol, atol, singular, type(rtol), type(atol))
-                if t_span is not None:      # (4 entries more; each keyword 3: no two
-                    a, b = t_span           # lists of options make keys of one length)
+                if t_span is not None:
+                    a, b = t_span
                     key += (a, b, type(a), type(b))
+                if t_eval is not None:
+                    key += (t_eval.tobytes(), t_eval.shape)
                 if keywords:
                     for k, v in keywords.items():
                         key += (k, v, type(v))
                 plan = self._memo["quick"][key]
             except (KeyError, TypeError, ValueError) as exc:
                 # not planned yet (a KeyError), or a key not hashable or no pair of times
-                plan = self._quick_plan(key if type(exc) is KeyError else None, rtol, atol, method, save, t_span, singular,
+                plan = self._quick_plan(key if type(exc) is KeyError else None, rtol,
+                                        atol, t_eval, method, save, t_span, singular,
                                         keywords)
         else:
             plan = self._plan(rtol, atol, t_eval, method, save, events, t_span, timeout,
@@ -643,13 +650,13 @@ class Scene(Frozen):
             return solve.run(self, plan, self.y0.copy(), p, True)
         return solve.run(self, plan, self._run_state(y0, plan.t0, p), p, False)
 
-    def _quick_plan(self, key, rtol, atol, method, save, t_span, singular, keywords
-                    ) -> solve.Plan:
-        """The plan of a run whose options are numbers and strings (``run``), kept in
-        this scene's memo under ``key`` (None: none), which the scenes ``replace``
-        makes with the same time span share."""
-        plan = self._plan(rtol, atol, None, method, save, None, t_span, None, False, None,
-                          None, singular, None, False, True, keywords)
+    def _quick_plan(self, key, rtol, atol, t_eval, method, save, t_span, singular,
+                    keywords) -> solve.Plan:
+        """The plan of a run whose options are numbers, strings and an array of times
+        (``run``), kept in this scene's memo under ``key`` (None: none), which the
+        scenes ``replace`` makes with the same time span share."""
+        plan = self._plan(rtol, atol, t_eval, method, save, None, t_span, None, False,
+                          None, None, singular, None, False, True, keywords)
         quick = self._memo.setdefault("quick", {})
         if key is not None and len(quick) < solve.MAX_PLANS:
             quick[key] = plan

@@ -294,10 +294,13 @@ def on_span(plan, t0, t1) -> Plan:
 def hashable(value):
     """``value`` as a part of a plan's key: a list or a tuple as a tuple of its entries
     and their types (``True == 1``, but a run may refuse a bool where it takes 1), an
-    array as its bytes (with dtype and shape), anything else as it is."""
+    array as its bytes (with dtype and shape; of objects, as a list), anything else as
+    it is."""
     if type(value) is list or type(value) is tuple:
         return tuple(map(hashable, value)), tuple(map(type, value))
     if isinstance(value, np.ndarray):
+        if value.dtype.hasobject:       # (its bytes are addresses, which are reused)
+            return "objects", value.shape, hashable(value.ravel().tolist())
         return ("array", value.dtype.str, value.shape, value.tobytes())
     return value
 
