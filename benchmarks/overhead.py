@@ -26,10 +26,12 @@ fresh processes with empty numba and kernel caches, the trees alternating within
    the compiled dop853 loop called directly (its entry point, the arguments made once),
    ``scene.run()``, ``scene.run`` with the keywords of a benchmark or a parameter loop
    (``method``, ``rtol``, ``atol``, ``save``; and those of the work-precision
-   benchmark: ``split``, ``singular``, ``t_span`` too), ``scene.run(y0=...)``, ``scene.replace(initial=...).run()`` (a new
-   initial state each call, as a shooting loop does) and an ensemble of one run, each
-   with one step (T = 1e-6, ``save="final"``), and ensembles of eight such runs on two
-   threads and serially (a small ensemble's fixed cost); the ratios to the bare call.  Also the
+   benchmark: ``split``, ``singular``, ``t_span`` too), ``scene.run(y0=...)``,
+   ``scene.run(t_eval=...)`` (five times), ``scene.run`` on a new time span each call
+   (a loop over the final time), ``scene.replace(initial=...).run()`` (a new initial
+   state each call, as a shooting loop does) and an ensemble of one run, each with one
+   step (T = 1e-6, ``save="final"``), and ensembles of eight such runs on two threads and
+   serially (a small ensemble's fixed cost); the ratios to the bare call.  Also the
    bare call of a run of three steps and its arithmetic: its rhs evaluations at the cost
    of one in a long run (T = 100: the difference of the long and the one-step call over
    their difference in evaluations).  And the parts of a run's Python side, each alone:
@@ -140,6 +142,7 @@ nfev = {"3-step call": int(three(0)[4][2]), "long call": int(long(0)[4][2])}
 states = {n: short.initial[n] for n in short.state_names}
 inis = [dict(states, phi_t=states["phi_t"] + 1e-3 * k) for k in range(16)]
 y8 = np.repeat(y0[None, :], 8, axis=0)
+te5 = np.linspace(0.0, 1e-6, 5)
 calls = {
     "bare call": bare(1e-6, ctl),
     "3-step call": three,
@@ -151,6 +154,10 @@ calls = {
         method="dop853", save="final", rtol=1e-9, atol=1e-12, split="fixed",
         singular="ignore", t_span=(0, 1e-6)),
     "run(y0=...)": lambda i: short.run(y0=y0, save="final"),
+    "run(t_eval=...)": lambda i: short.run(t_eval=te5),
+    # a loop over final times (each call a span of its own)
+    "run(t_span=...), a new span each call": lambda i: short.run(
+        t_span=(0.0, 1e-6 * (1.0 + i * 1e-4)), save="final"),
     "replace(initial=...).run()": lambda i: short.replace(initial=inis[i % 16]).run(
         save="final"),
     "ensemble of one": lambda i: short.ensemble(y0[None, :], save="final"),
@@ -342,6 +349,8 @@ def main(argv=None):
         f"(the work-precision benchmark's "
         f"{a['run(work-precision keywords)'] / a['bare call']:.2f}x), "
         f"run(y0=...) {a['run(y0=...)'] / a['bare call']:.2f}x, "
+        f"run(t_eval=...) {a['run(t_eval=...)'] / a['bare call']:.2f}x, on a new time span "
+        f"each call {a['run(t_span=...), a new span each call'] / a['bare call']:.2f}x, "
         f"replace(initial=...).run() {a['replace(initial=...).run()'] / a['bare call']:.2f}x,"
         f" an ensemble of one {a['ensemble of one'] / a['bare call']:.2f}x; an ensemble of 8"
         f" {a['ensemble of 8 (threads)'] * 1e6:.3g} us on two threads, "
