@@ -519,8 +519,8 @@ class Scene(Frozen):
     # ------------------------------------------------------------------ run
     def run(self, rtol=None, atol=None, t_eval=None, method="dop853", *, save="steps",
             events=None, t_span=None, y0=None, params=None, timeout=None, projection=False,
-            backend=None, step=None, singular="stop", newton=None, sensitivities=False,
-            sensitivity_error=True, **keywords) -> Trajectory:
+            backend=None, step=None, singular="stop", split=None, newton=None,
+            sensitivities=False, sensitivity_error=True, **keywords) -> Trajectory:
         """Integrate and return a ``Trajectory``.
 
         Parameters
@@ -617,10 +617,10 @@ class Scene(Frozen):
             # options that are numbers, strings and an array of times (most runs, and
             # every loop of runs): their plan kept in this scene's memo under them and
             # the types of the numbers (``True == 1``, but a bool is refused where 1 is
-            # not), at once.  (What follows the first seven entries of a key starts with
+            # not), at once.  (What follows the first eight entries of a key starts with
             # a number, bytes or a name: a time span, times or a keyword.)
             try:
-                key = (method, save, rtol, atol, singular, type(rtol), type(atol))
+                key = (method, save, rtol, atol, singular, split, type(rtol), type(atol))
                 if t_span is not None:
                     a, b = t_span
                     key += (a, b, type(a), type(b))
@@ -634,11 +634,11 @@ class Scene(Frozen):
                 # not planned yet (a KeyError), or a key not hashable or no pair of times
                 plan = self._quick_plan(key if type(exc) is KeyError else None, rtol,
                                         atol, t_eval, method, save, t_span, singular,
-                                        keywords)
+                                        split, keywords)
         else:
             plan = self._plan(rtol, atol, t_eval, method, save, events, t_span, timeout,
-                              projection, backend, step, singular, newton, sensitivities,
-                              sensitivity_error, keywords)
+                              projection, backend, step, singular, split, newton,
+                              sensitivities, sensitivity_error, keywords)
         memo = self._memo
         p = memo.get("_p") if params is None else self._run_params(params)
         if p is None:
@@ -650,33 +650,33 @@ class Scene(Frozen):
             return solve.run(self, plan, self.y0.copy(), p, True)
         return solve.run(self, plan, self._run_state(y0, plan.t0, p), p, False)
 
-    def _quick_plan(self, key, rtol, atol, t_eval, method, save, t_span, singular,
+    def _quick_plan(self, key, rtol, atol, t_eval, method, save, t_span, singular, split,
                     keywords) -> solve.Plan:
         """The plan of a run whose options are numbers, strings and an array of times
         (``run``), kept in this scene's memo under ``key`` (None: none), which the
         scenes ``replace`` makes with the same time span share."""
         plan = self._plan(rtol, atol, t_eval, method, save, None, t_span, None, False,
-                          None, None, singular, None, False, True, keywords)
+                          None, None, singular, split, None, False, True, keywords)
         quick = self._memo.setdefault("quick", {})
         if key is not None and len(quick) < solve.MAX_PLANS:
             quick[key] = plan
         return plan
 
     def _plan(self, rtol, atol, t_eval, method, save, events, t_span, timeout, projection,
-              backend, step, singular, newton, sensitivities, sensitivity_error,
+              backend, step, singular, split, newton, sensitivities, sensitivity_error,
               keywords) -> solve.Plan:
         """The plan of a run with these options (``run``), kept under a key of every
         option and the time span (``solve.planned``: a plan of the same options on
         another span lends what does not depend on it)."""
         span = self.t_span if t_span is None else arguments.time_span(t_span)
         key = (typed(rtol), typed(atol), method, save, timeout, projection, backend,
-               typed(step), typed(singular), typed(newton), sensitivities,
+               typed(step), typed(singular), split, typed(newton), sensitivities,
                sensitivity_error, solve.hashable(events), solve.hashable(t_eval),
                *((k, typed(v)) for k, v in keywords.items()))
         key = (key, tuple(map(type, key)))
         return solve.planned(self, key, span=span, make=lambda: solve.plan(
             self, method, opts=options(step, singular, newton, rtol=rtol, atol=atol,
-                                       **keywords),
+                                       split=split, **keywords),
             t_span=span, t_eval=t_eval, save=save, events=events, timeout=timeout,
             projection=projection, backend=backend, sensitivities=sensitivities,
             sensitivity_error=sensitivity_error))
