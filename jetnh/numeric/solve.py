@@ -339,7 +339,7 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
     """The trajectory of ``plan`` from the state ``y`` (checked, its own array) with the
     run-time parameters ``p``; ``own``: these are the scene's own initial values."""
     if plan.direct:             # one call of the compiled loop, first: most runs are
-        halt = np.zeros(1, np.int64)
+        halt = _HALT.copy()
         tic = _clock()
         out = interrupt.call(plan.entry, halt, plan.limit, (*plan.head, y, p, *plan.suffix,
                                                             halt))
@@ -348,12 +348,12 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
             loops.on_constraints(plan.kern, plan.ctl, plan.mode, None, out, p, plan.t0)
         dense = plan.dense_ends
         status = out[0]
-        if dense is not None:    # stopped inside a step or not
-            dense = dense[status == EVENT or status == SINGULAR]
         if status == FINISHED and len(out) == 6:        # most runs: at once
             return Trajectory._finished(scene, (out[1], out[2], out[3]), p, plan.method.name,
                                         _FINISHED_TEXT, (out[4], wall, scene.projected),
-                                        plan.kern, dense)
+                                        plan.kern, None if dense is None else dense[0])
+        if dense is not None:    # stopped inside a step or not
+            dense = dense[status == EVENT or status == SINGULAR]
         return trajectory(scene, plan.method.name, out, wall, plan.kern, plan.ce, p,
                           plan.t0, y, plan.singular_tol, plan.checked, plan.limit, dense)
     m = plan.method
@@ -379,7 +379,7 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
                          plan.te, plan.mode, None if dense is None else dict(dense),
                          plan.checked, plan.singular_tol, plan.newton, plan.limit,
                          trajectory, sens=plan.sens)
-    halt = np.zeros(1, dtype=np.int64)
+    halt = _HALT.copy()
     t0 = plan.t0
     tic = _clock()
     out = interrupt.call(plan.entry, halt, plan.limit,
@@ -396,6 +396,8 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
 
 _clock = time.perf_counter
 _FINISHED_TEXT = STATUS_TEXT[FINISHED]
+#: what a run's halt flag is made from (a copy: sooner than ``np.zeros``; never written)
+_HALT = np.zeros(1, dtype=np.int64)
 
 
 def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, checked,
