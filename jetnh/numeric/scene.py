@@ -632,9 +632,9 @@ class Scene(Frozen):
                 plan = self._memo["quick"][key]
             except (KeyError, TypeError, ValueError) as exc:
                 # not planned yet (a KeyError), or a key not hashable or no pair of times
-                plan = self._quick_plan(key if type(exc) is KeyError else None, rtol,
-                                        atol, t_eval, method, save, t_span, singular,
-                                        split, keywords)
+                plan = self._kept_plan(key if type(exc) is KeyError else None, rtol,
+                                       atol, t_eval, method, save, t_span, singular, split,
+                                       keywords)
         else:
             plan = self._plan(rtol, atol, t_eval, method, save, events, t_span, timeout,
                               projection, backend, step, singular, split, newton,
@@ -650,8 +650,14 @@ class Scene(Frozen):
             return solve.run(self, plan, self.y0.copy(), p, True)
         return solve.run(self, plan, self._run_state(y0, plan.t0, p), p, False)
 
-    def _quick_plan(self, key, rtol, atol, t_eval, method, save, t_span, singular, split,
-                    keywords) -> solve.Plan:
+    def _quick_plan(self, method, save, rtol, atol) -> solve.Plan:
+        """The plan of ``run(method=method, save=save, rtol=rtol, atol=atol)`` (whose
+        compiled loop the benchmarks call directly)."""
+        return self._plan(rtol, atol, None, method, save, None, None, None, False, None,
+                          None, "stop", None, None, False, True, {})
+
+    def _kept_plan(self, key, rtol, atol, t_eval, method, save, t_span, singular, split,
+                   keywords) -> solve.Plan:
         """The plan of a run whose options are numbers, strings and an array of times
         (``run``), kept in this scene's memo under ``key`` (None: none), which the
         scenes ``replace`` makes with the same time span share."""
