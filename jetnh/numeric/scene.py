@@ -660,10 +660,23 @@ class Scene(Frozen):
                    keywords) -> solve.Plan:
         """The plan of a run whose options are numbers, strings and an array of times
         (``run``), kept in this scene's memo under ``key`` (None: none), which the
-        scenes ``replace`` makes with the same time span share."""
-        plan = self._plan(rtol, atol, t_eval, method, save, None, t_span, None, False,
-                          None, None, singular, split, None, False, True, keywords)
-        quick = self._memo.setdefault("quick", {})
+        scenes ``replace`` makes with the same time span share; with a time span, a
+        plan of the same options on another span is taken over (``solve.on_span``),
+        kept under the key without the span (entries 8 to 11)."""
+        memo = self._memo
+        free = spans = None
+        if key is not None and t_span is not None:
+            free = key[:8] + key[12:]
+            spans = memo.setdefault("quick_spans", {})
+        other = None if free is None else spans.get(free)
+        if other is not None:
+            plan = solve.on_span(other, *arguments.time_span(t_span))
+        else:
+            plan = self._plan(rtol, atol, t_eval, method, save, None, t_span, None, False,
+                              None, None, singular, split, None, False, True, keywords)
+            if free is not None and plan.spans and len(spans) < solve.MAX_PLANS:
+                spans[free] = plan
+        quick = memo.setdefault("quick", {})
         if key is not None and len(quick) < solve.MAX_PLANS:
             quick[key] = plan
         return plan
