@@ -739,6 +739,23 @@ class Stitched:
         the scene's states, row-major (``dense.evaluate``'s ``full``)."""
         return _at(self, traj, times, full)
 
+    def stop(self, p):
+        """``(t, state, aux row)`` of the scene where the run stopped after its last row
+        (the last piece's stop, mapped to the scene's chart), or None
+        (``Trajectory.final``)."""
+        from types import SimpleNamespace
+
+        _, _, chart, seg, _, _ = self.pieces[-1]
+        stop = seg._stop
+        if stop is None:
+            return None
+        t, y, aux = stop
+        times, row = np.array([t]), y[None, :]
+        out = np.empty((1, self.own.kernels.layout.n_aux))
+        piece = SimpleNamespace(t=times, y=row, aux=aux[None, :])
+        fill_aux(out, self.own, [(0, 1, chart, piece, 0)], p)
+        return t, to_home(self.own, chart, times, row, p)[0], out[0]
+
 
 def fill_aux(out, own, pieces, p):
     """``out[lo:hi]``: the aux rows of the scene (dependent velocities of its split,

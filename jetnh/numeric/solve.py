@@ -444,9 +444,12 @@ def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, 
         t_events, y_events = split_records(k, ev_t[:n_ev], ev_i[:n_ev], ev_y[:n_ev])
         events = (ce.names[:k], t_events, y_events)
     # the loop's own float64, C-contiguous rows: taken as they are
-    return Trajectory._of_run(scene, (ts, ys, n_out), p, method, status, reason,
+    traj = Trajectory._of_run(scene, (ts, ys, n_out), p, method, status, reason,
                               (stats, wall, scene.projected), kern, events, singularity,
                               dense, sensitivities)
+    if status != FINISHED:      # where it stopped, for ``final`` (after its last row)
+        traj._stopped(t_last, y_last)
+    return traj
 
 
 # ---------------------------------------------------------------------- many runs

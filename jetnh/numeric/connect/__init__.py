@@ -171,11 +171,11 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     method : {"dop853", "dopri5"}, default "dop853"
         The integrator (explicit, with dense output).
     restarts : int, default 0
-        Vakonomic and Hoelder: where the answer has a conjugate time inside the span
-        (no minimizer of the action), this many restarts from around it
-        (``solve.least_action``); the cheapest extremal without a conjugate time
-        inside the span is returned, else the cheapest, with ``Connection.search``
-        saying what was tried.  0: the first answer as found.
+        Vakonomic and Hoelder: where the answer is no minimizer of the action
+        (Legendre's condition fails, or a conjugate time lies inside the span), this
+        many restarts from around it (``solve.least_action``); the cheapest minimizer
+        is returned, else the cheapest, with ``Connection.search`` saying what was
+        tried and which verdict failed.  0: the first answer as found.
     segments : int, optional
         Multiple shooting on this many equal segments of the span (the inner states
         are unknowns too, matched by their exact sensitivities; then single shooting

@@ -23,6 +23,12 @@ class Connection:
     The verdicts ``cost``, ``normal``, ``gramian_ratio`` and ``conjugate_times`` are
     computed on first access (one more run, sampled on the dense output) and then kept;
     so is the ``trajectory`` (made from the run that found the motion).
+
+    Picklable (``__getstate__``): the trajectory travels (its compiled kernels reloaded
+    from the scene's cache on first use in another process) with the verdicts computed
+    so far; the others are computed there on first access, except for a motion that
+    changed split or was stitched from segments, which is not evaluated between its
+    rows after unpickling: its verdicts are computed before it is pickled.
     """
 
     _motion: object                  # the Trajectory, or the run that makes it (a Shot)
@@ -141,6 +147,44 @@ class Connection:
         if any(abs(t - t1) > 1e-9 * abs(t1 - t0) for t in times):
             return False
         return True if margin > LEGENDRE_ZERO else None
+
+    @property
+    def _not_minimizer(self) -> str:
+        """Why ``minimizer`` is False, in words: Legendre's condition failing (it is
+        checked first) or the conjugate times inside the span; "" where it is not
+        False."""
+        if self.minimizer is not False:
+            return ""
+        if self.legendre < -LEGENDRE_ZERO:
+            return f"Legendre's condition fails (legendre = {self.legendre:.3g})"
+        t1 = float(self.trajectory.t[-1])
+        inside = [t for t in self.conjugate_times if t != t1]
+        return (("conjugate times" if len(inside) > 1 else "a conjugate time")
+                + " inside the span (t = " + ", ".join(f"{t:.6g}" for t in inside) + ")")
+
+    #: the verdicts kept in ``__dict__`` once computed (``cached_property``)
+    _VERDICTS = ("cost", "gramian_ratio", "conjugate_times", "legendre")
+
+    def __getstate__(self):
+        """The fields as plain data: the Trajectory for the run that made it (a
+        ``shooting.Shot`` holds the search's compiled loop), the mappings as dicts, the
+        verdicts computed so far (all of them where the trajectory cannot be evaluated
+        after unpickling: ``Trajectory._segments``), not the samples (rebuilt)."""
+        tr = self.trajectory
+        if tr._segments is not None:
+            for name in self._VERDICTS:
+                getattr(self, name)
+        state = {k: v for k, v in self.__dict__.items()
+                 if k not in ("trajectory", "_samples")}
+        state.update(_motion=tr, initial=dict(self.initial), _run=dict(self._run))
+        return state
+
+    def __setstate__(self, state):
+        """Frozen again: the mappings read-only (``MappingProxyType``)."""
+        state = dict(state)
+        state["initial"] = MappingProxyType(dict(state["initial"]))
+        state["_run"] = MappingProxyType(dict(state["_run"]))
+        self.__dict__.update(state)
 
     def __repr__(self):
         times = self.conjugate_times
