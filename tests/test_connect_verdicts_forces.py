@@ -49,7 +49,8 @@ def test_forced_heisenberg_is_no_minimizer_and_says_so(principle):
     assert "non-potential forces" in repr(sol) and "not checked" not in repr(sol)
     # cost: int L dt along the motion, by a second quadrature
     assert sol.cost == pytest.approx(_integral_of_L(sol), rel=1e-6)
-    geodesic = jn.connect(jn.System(J, L, HEIS, dependent=[z]), principle, O, END, (0.0, 1.0))
+    geodesic = jn.connect(jn.System(J, L, HEIS, dependent=[z]), principle, O, END,
+                          (0.0, 1.0))
     assert geodesic.not_extremal == "" and geodesic.minimizer is True
     assert geodesic.cost < sol.cost - 0.2           # 0.8068 against 1.0770
 
@@ -93,7 +94,8 @@ def test_random_forced_systems(case, data):
     Jr, Lr, constraints, dependent = case
     forces = data.draw(jst.forces(Jr))
     s = sp.Symbol("s")
-    S = jn.System(Jr, Lr, constraints, dependent, forces={q: s * e for q, e in forces.items()})
+    S = jn.System(Jr, Lr, constraints, dependent,
+                  forces={q: s * e for q, e in forces.items()})
     names = {q.name for q in forces}
 
     def reason(system, params):          # not_extremal reads the scene's system and params

@@ -3,7 +3,9 @@ no stability (damped Mathieu equation at parametric resonance: unstable, against
 multipliers from jetnh's own A(t) and from the closed-form equation), a point where x'
 vanishes for an instant is no steady motion (forced oscillator), a moving holonomic
 constraint, parameter values that remove t give the frozen verdict again, ``along``,
-``verdicts``, ``steady``; random systems with a modulated term."""
+``verdicts``, ``steady``, the CLI; random systems with a modulated term."""
+
+import json
 
 import numpy as np
 import pytest
@@ -123,7 +125,8 @@ def test_moving_holonomic_constraint():
     s = sp.Symbol("s")
     S = jn.System(J, (xt**2 + yt**2) / 2 - y**2 / 2, [x - s * sp.sin(w * J.t)],
                   dependent=[x])
-    lin = jn.linearize(S, at={"x": 0.0, "y": 0.0, "y_t": 0.0}, params={"s": 0.5, "w": 1.0})
+    lin = jn.linearize(S, at={"x": 0.0, "y": 0.0, "y_t": 0.0},
+                       params={"s": 0.5, "w": 1.0})
     assert lin.eliminated == ("x",)
     assert lin.time_dependent and not lin.steady_motion and lin.verdict == NOT_STEADY
     fixed = lin.replace(params={"s": 0.0})
@@ -134,11 +137,12 @@ def test_moving_holonomic_constraint():
 @settings(max_examples=4, deadline=None, suppress_health_check=list(HealthCheck))
 @given(jst.constrained_systems(min_n=2, max_n=3), st.integers(0, 2**16))
 def test_modulated_term_on_random_systems(case, seed):
-    """Random constrained systems (t set to 0) with a modulated term beta cos(w t) (q0 - k)^2 / 2
-    added to L (q0 an independent coordinate), linearized at q0 = k (where the term and
-    its force vanish): at beta = 0 A does not change with t and the verdict is the
-    frozen one; at beta != 0 x' is that of beta = 0, A(t) = A0 + cos(w t) B with B only
-    in the column of q0, and where B != 0 no stability is certified."""
+    """Random constrained systems (t set to 0) with a modulated term
+    beta cos(w t) (q0 - k)^2 / 2 added to L (q0 an independent coordinate), linearized
+    at q0 = k (where the term and its force vanish): at beta = 0 A does not change with
+    t and the verdict is the frozen one; at beta != 0 x' is that of beta = 0,
+    A(t) = A0 + cos(w t) B with B only in the column of q0, and where B != 0 no
+    stability is certified."""
     J, L, constraints, dependent = case
     frozen = {J.t: sp.Integer(0)}                     # an autonomous system to start from
     L, constraints = L.xreplace(frozen), [f.xreplace(frozen) for f in constraints]
@@ -176,3 +180,36 @@ def test_modulated_term_on_random_systems(case, seed):
         assert lin1.verdict == (TIME_DEPENDENT if lin1.steady_motion else NOT_STEADY)
     else:                                             # the constraints absorb the term
         assert not lin1.time_dependent and lin1.verdict == lin0.verdict
+
+
+MATHIEU_TOML = '''name = "damped Mathieu pair"
+coordinates = ["x", "y"]
+lagrangian = "(x_t**2 + y_t**2)/2 - (a + b*cos(w*t))*x**2/2 - y**2/2"
+constraints = []
+[parameters]
+a = 1.0
+b = 0.4
+w = 2.0
+c = 0.05
+[forces]
+x = "-c*x_t"
+y = "-c*y_t"
+'''
+
+
+def test_cli_inherits(capsys, tmp_path):
+    """``jetnh linearize`` of the model file: the verdict (text and JSON) and a scan in
+    b stable only at b = 0."""
+    from jetnh.cli import main
+
+    path = tmp_path / "mathieu.toml"
+    path.write_text(MATHIEU_TOML)
+    assert main(["linearize", str(path), "-q", "--at", "x=0,y=0,x_t=0,y_t=0"]) == 0
+    out = capsys.readouterr().out
+    assert f"verdict: {TIME_DEPENDENT}" in out
+    assert main(["linearize", str(path), "-q", "--at", "x=0,y=0,x_t=0,y_t=0",
+                 "--param", "b=0:0.4:3", "--format", "json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["verdict"] == TIME_DEPENDENT and data["steady_motion"] is True
+    assert data["scan"]["stable"] == [True, False, False]
+    assert data["scan"]["crossings"] == []

@@ -306,7 +306,8 @@ class Linearization(Frozen):
         #: True when A is the limit at a point where the kernel itself is undefined
         self.limit = limit
         size = float(np.abs(y[list(keep)]).max()) if keep else 0.0
-        bound = min(STEADY * max(1.0, self._scale * size), math.sqrt(STEADY) * max(1.0, size))
+        bound = min(STEADY * max(1.0, self._scale * size),
+                    math.sqrt(STEADY) * max(1.0, size))
         changes, steady = False, self.residual <= bound
         if model.has_time(keep):
             changes, steady = _in_time(self, bound)
@@ -629,8 +630,8 @@ class StabilityScan(Frozen):
     """Eigenvalues along one value: ``values``, ``eigenvalues`` (one row per value, each
     by decreasing real part), ``margins`` (``Linearization.margin``: NaN off a steady
     motion and where A changes with t), ``steady_motion`` and ``time_dependent``
-    (``Linearization``'s at each value), ``crossings`` (the values where the motion gains or loses stability, to 1e-13
-    relative), ``frame`` and ``plot``."""
+    (``Linearization``'s at each value), ``crossings`` (the values where the motion
+    gains or loses stability, to 1e-13 relative), ``frame`` and ``plot``."""
 
     def __init__(self, name, values, eigenvalues, margins, crossings, state_names,
                  steady_motion, time_dependent):
