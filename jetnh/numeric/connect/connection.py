@@ -66,7 +66,7 @@ class Connection:
     @cached_property
     def cost(self) -> float:
         """The action int L dt along the motion (``action``).  With non-potential forces
-        (``not_extremal``) only that integral: the motion does not make it stationary,
+        (``not_extremal``) only that integral: the motion need not make it stationary,
         and it is no least action."""
         return action(self.trajectory, self._samples)
 
@@ -109,17 +109,17 @@ class Connection:
         tangent to g = 0), over its largest magnitude, at the worst of the equal-spaced
         times.  Positive: definite everywhere; negative: the action decreases along
         some rapid variation (no minimizer); None for Chetaev and Suslov, and where the
-        motion is no extremal of the action (``not_extremal`` says why)."""
+        motion is in general no extremal of the action (``not_extremal`` says why)."""
         if self.principle not in VARIATIONAL or self.not_extremal:
             return None
         return legendre_margin(self.trajectory, self._samples)
 
     @cached_property
     def not_extremal(self) -> str:
-        """Vakonomic and Hoelder: why the motion is no extremal of the action int L dt
+        """Vakonomic and Hoelder: why the motion is in general no extremal of int L dt
         (``verdicts.not_extremal``: generalized forces or dissipation that do not
         vanish at these parameter values), so that ``legendre`` and ``minimizer`` are
-        None; "" where it is one, and for Chetaev and Suslov."""
+        None; "" without such forces, and for Chetaev and Suslov."""
         if self.principle not in VARIATIONAL:
             return ""
         return not_extremal(self.trajectory.scene)
@@ -195,7 +195,7 @@ class Connection:
                    f"{tuple(round(t, 10) for t in times)}")
                 + {False: " (not a minimizer)", True: "",
                    None: "" if self.principle not in VARIATIONAL else
-                   " (no extremal of the action: non-potential forces)"
+                   " (minimizer undecided: non-potential forces)"
                    if self.not_extremal else " (minimizer not checked)"}[minimizer]
                 + ", initial="
                 f"{dict(self.initial)})")

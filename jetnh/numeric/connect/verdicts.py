@@ -161,12 +161,13 @@ def _hessian(scene):
 
 
 def not_extremal(scene) -> str:
-    """Why the motions of ``scene`` are no extremals of the action int L dt, in words:
-    its generalized forces (``System.Q``: ``forces`` less the dissipation's gradient) do
-    not vanish identically at the scene's parameter values, so the first variation
-    int Q eta dt of the action along a motion does not vanish, and the action's second
-    variation (Legendre's and Jacobi's conditions) says nothing about it; "" where they
-    vanish (``zero.vanishes``)."""
+    """Why the motions of ``scene`` are in general no extremals of the action int L dt,
+    in words: its generalized forces (``System.Q``: ``forces`` less the dissipation's
+    gradient) do not vanish identically at the scene's parameter values, so the first
+    variation of the action along a motion is int Q eta dt (zero only where Q happens
+    to do no work on the admissible variations), and the action's second variation
+    (Legendre's and Jacobi's conditions) decides nothing; "" where they vanish
+    (``zero.vanishes``)."""
     from ...algebra import dag, zero
 
     system = scene.system
@@ -181,10 +182,10 @@ def not_extremal(scene) -> str:
     given = " and ".join(w for w, there in (("forces=", bool(system.forces)),
                                              ("dissipation=", system.dissipation != 0))
                          if there)
-    return (f"the motion is not an extremal of int L dt: the system has non-potential "
-            f"generalized forces on {', '.join(on)} ({given}), so the action's first "
-            "variation int Q eta dt does not vanish and its second variation (Legendre, "
-            "Jacobi) decides nothing")
+    return (f"the motion is no extremal of int L dt in general: the system has "
+            f"non-potential generalized forces on {', '.join(on)} ({given}), so the "
+            "action's first variation along it is int Q eta dt, and its second variation "
+            "(Legendre, Jacobi) decides nothing")
 
 
 def legendre_margin(tr, samples) -> float:
