@@ -55,6 +55,17 @@ def test_forced_heisenberg_is_no_minimizer_and_says_so(principle):
     assert geodesic.cost < sol.cost - 0.2           # 0.8068 against 1.0770
 
 
+def test_restarts_with_forces_say_why_they_did_not_search():
+    """``restarts=`` searches only where the first answer is no minimizer; with forces
+    the verdict is undecided, and ``search`` says so instead of staying empty."""
+    sol = jn.connect(_forced(), "vakonomic", O, END, (0.0, 1.0), params={"c": 2.0},
+                     restarts=2)
+    plain = jn.connect(_forced(), "vakonomic", O, END, (0.0, 1.0), params={"c": 2.0})
+    assert sol.cost == plain.cost and sol.minimizer is None
+    assert sol.search.startswith("no restarts: the minimizer verdict is undecided")
+    assert sol.not_extremal in sol.search
+
+
 def test_forces_that_vanish_at_the_parameters_certify_as_before():
     """c = 0: the forced system's motion is the geodesic, with its verdicts."""
     free = jn.connect(_forced(), "vakonomic", O, END, (0.0, 1.0), params={"c": 0.0})
