@@ -52,8 +52,8 @@ class Plan:
     (``numeric.dense``; None: no dense output), ``dense_ends`` it completed for a run
     whose last step is whole and for one stopped inside its last step (made once).  ``sens``: the kernels of the state
     augmented by its sensitivities, ``sens_tol`` their tolerances.  ``switch``: the run
-    goes on across its chart's edge (``numeric.atlas``); the loop of a run with
-    sensitivities then watches the edge as its last event (``ce``: it stops there).  The discrete methods read
+    goes on across its chart's edge (``numeric.atlas``); its loop then watches the
+    edge as its last event (``ce``: it stops there).  The discrete methods read
     ``steps``, ``newton_tol``, ``max_newton``, ``projection``; scipy's ``first`` and
     ``max_step``.  ``spans``: nothing but ``t0``, ``t1`` and ``head`` depends on the
     time span (an adaptive method without ``t_eval``: ``on_span``)."""
@@ -230,15 +230,12 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
     kern = scene.kernels
     switch = split == "switch" and atlas.applies(scene, events)
     if switch:
-        # the run goes on across its chart's edge: events per chart (numeric.atlas); an
-        # ensemble, and a run with sensitivities (whose loop ``connect`` calls directly:
-        # ``shooting.Shot``), watch the edge of the scene's own chart as their last event
-        ce = None
-        if batch or sens is not None:
-            at = atlas.atlas(scene)
-            from .events import as_events
+        # the run goes on across its chart's edge (numeric.atlas): its loop, in the
+        # scene's own chart, watches the edge as its last event (it stops there)
+        from .events import as_events
 
-            ce = at.events(at.own, as_events(events), True)
+        at = atlas.atlas(scene)
+        ce = at.events(at.own, as_events(events), True)
     else:
         ce = scene.compile_events(events)
     watch = _watch(scene, kern, ce, checked, singular_tol)
@@ -375,10 +372,7 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
                                 plan.limit, plan.ce)
     dense = plan.dense
     if plan.switch:
-        return atlas.run(scene, m.name, plan.events, plan.t0, plan.t1, y, p, plan.ctl,
-                         plan.te, plan.mode, None if dense is None else dict(dense),
-                         plan.checked, plan.singular_tol, plan.newton, plan.limit,
-                         trajectory, sens=plan.sens)
+        return atlas.run(scene, plan, y, p, trajectory)
     halt = _HALT.copy()
     t0 = plan.t0
     tic = _clock()
