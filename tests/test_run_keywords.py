@@ -201,3 +201,17 @@ def test_times_are_keyed_by_their_values(disk):
     same(disk.run(t_eval=np.array([0, 1]) / 2), disk.run(t_eval=np.array([0.0, 0.5])))
     with pytest.raises(JetnhError):
         disk.run(t_eval=np.array([0.0, 0.7]))
+
+
+def test_a_switching_run_on_new_spans_runs_as_scenes_of_those_spans():
+    """A run that changes split (``numeric.atlas``) taken over on other spans: the same
+    switches and rows as scenes built with those spans."""
+    from jetnh.models import knife_edge
+
+    ini = dict(x=0, y=0, phi=0, x_t=0.5, phi_t=3.0)
+    knife = Scene(knife_edge(), "chetaev", initial=ini, t_span=(0.0, 1.0))
+    for T in (2.0, 1.5, 2.0):
+        here = knife.run(t_span=(0.0, T), rtol=1e-8)
+        built = Scene(knife_edge(), "chetaev", initial=ini, t_span=(0.0, T)).run(rtol=1e-8)
+        assert len(here.switches) >= 1 and here.switches == built.switches
+        same(here, built)
