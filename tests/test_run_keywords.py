@@ -215,3 +215,20 @@ def test_a_switching_run_on_new_spans_runs_as_scenes_of_those_spans():
         built = Scene(knife_edge(), "chetaev", initial=ini, t_span=(0.0, T)).run(rtol=1e-8)
         assert len(here.switches) >= 1 and here.switches == built.switches
         same(here, built)
+
+
+def test_tolerances_per_state_as_a_list_are_planned_once(disk, monkeypatch):
+    """``atol`` as a list (one value per state) is a key too (typed entries): planned
+    once, refused with its bool entries."""
+    from jetnh.numeric import solve
+
+    made = []
+    plan = solve.plan
+    monkeypatch.setattr(solve, "plan", lambda *a, **k: made.append(1) or plan(*a, **k))
+    atol = [1e-10] * len(disk.state_names)
+    same(disk.run(atol=atol, rtol=1e-6), disk.run(atol=np.array(atol), rtol=1e-6))
+    disk.run(atol=atol, rtol=1e-6)
+    assert len(made) == 2                   # (the list and the array)
+    disk.run(atol=[1] * len(disk.state_names), rtol=1e-6)         # (an int is taken...)
+    with pytest.raises(JetnhError):
+        disk.run(atol=[True] * len(disk.state_names), rtol=1e-6)    # (...a bool not)

@@ -98,15 +98,19 @@ def fields_of(value) -> tuple:
 
 
 def typed(value):
-    """An option value (``StepControl``, ``Singular``, ``Newton``, or a number or string
-    of one) as a part of a key: each field with its type (``True == 1``, but a run
-    refuses a bool where it takes 1), an array as its bytes, dtype and shape."""
+    """An option value (``StepControl``, ``Singular``, ``Newton``, or a number, string,
+    sequence or array of one) as a part of a key: each field and entry with its type
+    (``True == 1``, but a run refuses a bool where it takes 1), an array as its bytes,
+    dtype and shape."""
     if isinstance(value, (StepControl, Singular, Newton)):
         return (type(value), *map(typed, vars(value).values()))
+    if type(value) is list or type(value) is tuple:
+        return tuple(map(typed, value)), type(value)
     if hasattr(value, "__array__") and not isinstance(value, (int, float)):
         a = np.asarray(value)
         if a.dtype.hasobject:           # (its bytes are addresses, which are reused)
-            return "objects", type(value), a.shape, tuple(map(typed, a.ravel().tolist()))
+            return ("objects", type(value), a.shape,
+                    tuple((v, type(v)) for v in a.ravel().tolist()))
         return ("array", type(value), a.dtype.str, a.shape, a.tobytes())
     return value, type(value)
 

@@ -629,7 +629,7 @@ class Scene(Frozen):
                 if keywords:
                     for k, v in keywords.items():
                         key += (k, v, type(v))
-                plan = self._memo["quick"][key]
+                plan = self._memo.get("quick", _NONE_KEPT)[key]
             except (KeyError, TypeError, ValueError) as exc:
                 # not planned yet (a KeyError), or a key not hashable or no pair of times
                 plan = self._kept_plan(key if type(exc) is KeyError else None, rtol,
@@ -872,6 +872,8 @@ _SHARED = ("spec", "key", "plans", "spans", "events", "atlas_applies", "atlases"
 
 
 _FLOAT = {float}
+#: the plans of a scene that kept none (``run``: its key is hashed all the same)
+_NONE_KEPT: dict = {}
 #: the dtype of the arrays a run takes as they are (numpy's one instance of it)
 _FLOAT64 = np.dtype(np.float64)
 
