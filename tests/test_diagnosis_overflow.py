@@ -84,7 +84,7 @@ def test_an_energy_that_overflows_is_not_printed_as_a_drift(exp_velocity):
 
 
 def test_energy_text():
-    from jetnh.numeric.diagnosis import energy_text
+    from jetnh.numeric.trajectory import _energy_text as energy_text
 
     assert energy_text(2.0, 1e-12, 5e-13) == "energy 2, drift 1.000e-12 (relative 5.000e-13)"
     assert energy_text(2.0, np.nan, np.nan).startswith(

@@ -35,19 +35,6 @@ PROBE_REACH = 1e3
 FAR_SCALE = 1e30
 
 
-def energy_text(initial, drift, relative) -> str:
-    """The energy line of a run's diagnostics: its initial value and drift, or that the
-    energy could not be evaluated (it overflows, or leaves the domain of an expression:
-    a NaN or an infinity there is no drift of the motion)."""
-    if not np.isfinite(initial):
-        return (f"energy not evaluated: it is {initial} at the start (an overflow, or an "
-                "expression outside its domain), so its drift is unknown")
-    if not np.isfinite(drift):
-        return (f"energy {initial:.12g}, drift not evaluated: the energy became NaN or "
-                "infinite on the way (an overflow, or an expression outside its domain)")
-    return f"energy {initial:.12g}, drift {drift:.3e} (relative {relative:.3e})"
-
-
 def explain_nonfinite(scene, kern, t, y, p, t0, y_init, tol) -> int:
     """Index of an indicator that explains a NaN/inf in the step after (t, y): small
     there (below max(tol, 1e-3) of its initial size), or violated along an Euler

@@ -58,16 +58,14 @@ class Diagnostics:
         return asdict(self)
 
     def __str__(self):
-        from .diagnosis import energy_text
-
         lines = [f"{self.method}: {self.stop_reason} ({'success' if self.success else 'failure'})",
                  f"  steps {self.steps} (rejected {self.rejected}), rhs evaluations "
                  f"{self.rhs_evaluations}, {self.wall_time * 1e3:.3g} ms",
                  f"  constraint residual max {self.residual_max:.3e}"
                  + (f", holonomic (position level) {self.holonomic_residual_max:.3e}"
                     if self.holonomic_residual_max else ""),
-                 "  " + energy_text(self.energy_initial, self.energy_drift,
-                                    self.energy_drift_relative)
+                 "  " + _energy_text(self.energy_initial, self.energy_drift,
+                                     self.energy_drift_relative)
                  + ("; not conserved: the generalized forces work (traj.power)"
                     if self.forced else "")]
         for k, v in self.integral_drift.items():
@@ -93,6 +91,19 @@ class Diagnostics:
 def _switch_text(s) -> str:
     """One split switch: its time and the dependent coordinates before and after."""
     return f"t = {s['t']:.6g} ({', '.join(s['from'])} -> {', '.join(s['to'])})"
+
+
+def _energy_text(initial, drift, relative) -> str:
+    """The energy line of a run's diagnostics: its initial value and drift, or that the
+    energy could not be evaluated (it overflows, or leaves the domain of an expression:
+    a NaN or an infinity there is no drift of the motion)."""
+    if not np.isfinite(initial):
+        return (f"energy not evaluated: it is {initial} at the start (an overflow, or an "
+                "expression outside its domain), so its drift is unknown")
+    if not np.isfinite(drift):
+        return (f"energy {initial:.12g}, drift not evaluated: the energy became NaN or "
+                "infinite on the way (an overflow, or an expression outside its domain)")
+    return f"energy {initial:.12g}, drift {drift:.3e} (relative {relative:.3e})"
 
 
 def _switches_text(switches) -> str:
