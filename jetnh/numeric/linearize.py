@@ -65,17 +65,19 @@ steady motion: ``unstable`` when an eigenvalue has a positive real part,
 ``asymptotically stable`` when every one has a negative real part, ``marginal`` when some
 lie on the imaginary axis (conservative systems, families of steady motions: the
 linearization does not decide).  Each eigenvalue is decided against its own error
-bound e_i = min(``REAL`` |B| kappa_i, ``ZERO`` |B|): B is A balanced (a diagonal
-similarity, ``scipy.linalg.matrix_balance``), |B| its Frobenius norm and kappa_i the
-eigenvalue's condition number 1/|y_i^H x_i| (unit left and right eigenvectors of B).
-A real part within e_i of zero counts as zero (on the imaginary axis), and so does an
-eigenvalue of modulus within e_i.  ``REAL`` allows for the rounding of A's entries and of
-the eigensolver; a defective or clustered zero eigenvalue (a family of steady motions,
-e.g. a Jordan block of the zero eigenvalue at a relative equilibrium) is split by that
-rounding into a small cluster about the square root of it wide whose condition numbers
-are large in proportion, so its bound covers it, and ``ZERO`` caps the bound of an
-eigenvalue computed exactly defective (kappa_i infinite).  A stiff mode elsewhere in A
-moves no other eigenvalue's bound by more than the norm of the balanced B.
+bound e_i: a real part within e_i of zero counts as zero (on the imaginary axis), and so
+does an eigenvalue of modulus within e_i.  With B = A balanced (a diagonal similarity,
+``scipy.linalg.matrix_balance``), delta = ``REAL`` |B| (Frobenius norm: the rounding of
+A's entries and of the eigensolver), kappa_i = 1/|y_i^H x_i| the eigenvalue's condition
+number (unit left and right eigenvectors of B) and s_i half its distance to the nearest
+other eigenvalue: e_i = min(delta kappa_i, max(delta, sqrt(2 delta kappa_i s_i)),
+``ZERO`` |B|).  The first is the first-order bound of a simple eigenvalue; the second
+that of a cluster split by rounding (a Jordan block perturbed by delta spreads to
+sqrt(delta nu), and kappa ~ nu/(2 s) there), which a defective zero eigenvalue of a
+family of steady motions is; ``ZERO`` = sqrt(``REAL``) caps the bound of an eigenvalue
+computed exactly defective (kappa_i infinite).  Balancing keeps a stiff mode elsewhere
+in A from widening any other eigenvalue's bound by more than |B|, the size of the
+balanced matrix (the square root of the stiffness ratio for a decoupled spring).
 """
 
 from __future__ import annotations
@@ -94,9 +96,10 @@ from ..mechanics.system import System
 from . import arguments, regular
 from ..frozen import Frozen, FrozenDict
 
-#: an eigenvalue's error bound: REAL * |B| * kappa_i (B: A balanced; module docstring)
+#: the relative rounding of A and its eigenvalues: delta = REAL * |B| (B: A balanced),
+#: an eigenvalue's error bound about delta * kappa_i (module docstring)
 REAL = 1e-12
-#: ... at most ZERO * |B| (an eigenvalue computed exactly defective)
+#: an eigenvalue's error bound is at most ZERO * |B| (sqrt(REAL): a Jordan block)
 ZERO = 1e-6
 #: a point is a steady motion when ``|x'| <= STEADY * max(1, |A| |x|)`` and
 #: ``|x'| <= sqrt(STEADY) * max(1, |x|)`` (kept states)
@@ -512,8 +515,8 @@ def _symbolic(model: _Model, keep, chart) -> sp.Matrix:
 
 
 def _spectrum(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The eigenvalues of A by decreasing real part, and each one's error bound
-    e_i = min(``REAL`` |B| kappa_i, ``ZERO`` |B|) (module docstring); read-only."""
+    """The eigenvalues of A by decreasing real part, and each one's error bound e_i
+    (module docstring); read-only."""
     from scipy.linalg import eig, matrix_balance
 
     if not A.size:
@@ -523,8 +526,13 @@ def _spectrum(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         ev, left, right = eig(B, left=True, right=True)
         with np.errstate(divide="ignore"):
             kappa = 1.0 / np.abs(np.sum(left.conj() * right, axis=0))
-        size = float(np.linalg.norm(B))
-        bounds = np.minimum(REAL * size * kappa, ZERO * size)
+        delta = REAL * float(np.linalg.norm(B))
+        gap = np.array([np.abs(np.delete(ev, i) - z).min(initial=np.inf) / 2
+                        for i, z in enumerate(ev)])
+        with np.errstate(invalid="ignore"):
+            second = np.where(gap > 0, np.sqrt(2 * delta * kappa * gap), np.inf)
+        bounds = np.minimum.reduce([delta * kappa, np.maximum(delta, second),
+                                    np.full(len(ev), ZERO / REAL * delta)])
         order = np.lexsort((ev.imag, -ev.real))
         ev, bounds = ev[order].astype(complex), bounds[order]
     ev.setflags(write=False)
