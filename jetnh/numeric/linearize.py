@@ -67,7 +67,7 @@ lie on the imaginary axis (conservative systems, families of steady motions: the
 linearization does not decide).  Each eigenvalue is decided against its own error
 bound e_i: a real part within e_i of zero counts as zero (on the imaginary axis), and so
 does an eigenvalue of modulus within e_i.  With B = A balanced (a diagonal similarity,
-``scipy.linalg.matrix_balance``), delta = ``REAL`` |B| (Frobenius norm: the rounding of
+LAPACK's ``gebal``), delta = ``REAL`` |B| (Frobenius norm: the rounding of
 A's entries and of the eigensolver), kappa_i = 1/|y_i^H x_i| the eigenvalue's condition
 number (unit left and right eigenvectors of B) and s_i half its distance to the nearest
 other eigenvalue: e_i = min(delta kappa_i, max(delta, sqrt(2 delta kappa_i s_i)),
@@ -75,9 +75,9 @@ other eigenvalue: e_i = min(delta kappa_i, max(delta, sqrt(2 delta kappa_i s_i))
 that of a cluster split by rounding (a Jordan block perturbed by delta spreads to
 sqrt(delta nu), and kappa ~ nu/(2 s) there), which a defective zero eigenvalue of a
 family of steady motions is; ``ZERO`` = sqrt(``REAL``) caps the bound of an eigenvalue
-computed exactly defective (kappa_i infinite).  Balancing keeps a stiff mode elsewhere
-in A from widening any other eigenvalue's bound by more than |B|, the size of the
-balanced matrix (the square root of the stiffness ratio for a decoupled spring).
+computed exactly defective (kappa_i infinite).  A stiff mode elsewhere in A (a spring
+of stiffness k: |A| ~ k) widens the other eigenvalues' bounds only through |B|, which
+balancing keeps near sqrt(k).
 """
 
 from __future__ import annotations
@@ -517,18 +517,19 @@ def _symbolic(model: _Model, keep, chart) -> sp.Matrix:
 def _spectrum(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The eigenvalues of A by decreasing real part, and each one's error bound e_i
     (module docstring); read-only."""
-    from scipy.linalg import eig, matrix_balance
+    from scipy.linalg import eig, get_lapack_funcs
 
     if not A.size:
         ev, bounds = np.zeros(0, complex), np.zeros(0)
     else:
-        B = matrix_balance(A)[0]
+        B = get_lapack_funcs("gebal", (A,))(A, scale=1, permute=1)[0]   # A balanced
         ev, left, right = eig(B, left=True, right=True)
         with np.errstate(divide="ignore"):
             kappa = 1.0 / np.abs(np.sum(left.conj() * right, axis=0))
         delta = REAL * float(np.linalg.norm(B))
-        gap = np.array([np.abs(np.delete(ev, i) - z).min(initial=np.inf) / 2
-                        for i, z in enumerate(ev)])
+        apart = np.abs(ev[:, None] - ev[None, :])
+        np.fill_diagonal(apart, np.inf)
+        gap = apart.min(axis=1) / 2
         with np.errstate(invalid="ignore"):
             second = np.where(gap > 0, np.sqrt(2 * delta * kappa * gap), np.inf)
         bounds = np.minimum.reduce([delta * kappa, np.maximum(delta, second),
