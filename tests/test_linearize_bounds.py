@@ -111,3 +111,15 @@ def test_clusters_of_zero_eigenvalues_stay_zero():
     sleigh = jn.linearize(models.get("chaplygin_sleigh"),
                           at={"theta": 0.3, "x_t": np.cos(0.3), "theta_t": 0.0})
     assert sleigh.verdict == "marginal" and sleigh.stable
+
+
+@pytest.mark.parametrize("k", [1.0, 1e6, 1e10])
+def test_crossings_beside_a_stiff_mode(k):
+    """The pair y'' + b y' + a y = 0 beside a damped spring of stiffness k: stable for
+    a, b > 0; along b (a complex pair crossing) and along a (a real eigenvalue through
+    0) the crossing is at 0 to 1e-12, as without the spring."""
+    lin = _pair(True).replace(params={"k": k, "d": 0.1 * np.sqrt(k), "a": 1.0, "b": 0.3})
+    for name in ("b", "a"):
+        scan = lin.along(name, np.linspace(-0.35, 0.45, 9))
+        assert len(scan.crossings) == 1 and abs(scan.crossings[0]) < 1e-12
+        assert list(scan.stable) == [v > 0 for v in scan.values]

@@ -549,8 +549,8 @@ def _margin(ev: np.ndarray, bounds: np.ndarray) -> float:
 
 def _crossing(move, a: float, b: float, lo: "Linearization", hi: "Linearization") -> float:
     """Where the margin changes sign in [a, b]; then, where the largest real part
-    crosses 0 transversally (well clear of its error bound on both sides), its own
-    root.  The eigenvalues zero at both ends (within their bounds: a family of steady
+    crosses 0 transversally (well clear of its error bound on both sides within 1e-6,
+    1e-4 or 1e-2 of the interval), its own root.  The eigenvalues zero at both ends (within their bounds: a family of steady
     motions) are left out of that largest real part, the others kept (a real eigenvalue
     passing through 0 is zero within its bound near its root)."""
     zeros = min(int(np.sum(np.abs(x.eigenvalues) <= x._bounds)) for x in (lo, hi))
@@ -569,10 +569,11 @@ def _crossing(move, a: float, b: float, lo: "Linearization", hi: "Linearization"
     if (margin(a) > 0) == (margin(b) > 0):
         return _root(lambda v: move(v).margin, a, b)
     r = _root(margin, a, b)
-    h = 1e-6 * (b - a)
-    (fl, tol, _), (fh, tol_h, _) = top(max(a, r - h)), top(min(b, r + h))
-    if min(abs(fl), abs(fh)) > 100 * max(tol, tol_h) and (fl > 0) != (fh > 0):
-        return _root(lambda v: top(v)[0], max(a, r - h), min(b, r + h))
+    for h in (1e-6 * (b - a), 1e-4 * (b - a), 1e-2 * (b - a)):
+        lo_, hi_ = max(a, r - h), min(b, r + h)
+        (fl, tol, _), (fh, tol_h, _) = top(lo_), top(hi_)
+        if min(abs(fl), abs(fh)) > 100 * max(tol, tol_h):
+            return _root(lambda v: top(v)[0], lo_, hi_) if (fl > 0) != (fh > 0) else r
     return r
 
 
