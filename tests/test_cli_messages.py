@@ -86,3 +86,22 @@ def test_connect_compare_keeps_the_first_motion(capsys, form):
         assert out.startswith(alone)            # the vakonomic answer, as alone
         assert out[len(alone):] == "-- chetaev\nnot connected (the error is on stderr)\n"
         assert "cost:      0.750298284" in out
+
+
+def test_json_is_strict_where_a_value_is_not_finite(tmp_path, capsys):
+    """An energy that overflows (inf - inf at x_t = 1000) is NaN in the diagnostics;
+    the JSON record carries it as null, so strict parsers (RFC 8259 has no NaN) read it,
+    and the finite values are unchanged."""
+    path = tmp_path / "expv.toml"
+    path.write_text('coordinates = ["x"]\nlagrangian = "x_t**2/2 + exp(x_t)"\n'
+                    'constraints = []\n[initial]\nx_t = 1000\n')
+    code, out, _ = inproc(capsys, "simulate", str(path), "--t-end", "1", "--format", "json")
+    assert code == 0
+
+    def refuse(name):
+        raise ValueError(f"{name} is not JSON")
+    record = json.loads(out, parse_constant=refuse)
+    assert record["diagnostics"]["energy_initial"] is None
+    assert record["diagnostics"]["energy_drift"] is None
+    assert record["final"]["x"] == pytest.approx(1000.0, rel=1e-12)
+    assert record["final"]["x_t"] == 1000.0

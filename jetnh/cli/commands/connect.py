@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import sys
 
 from ...errors import JetnhError
@@ -138,7 +137,7 @@ def run(args, progress) -> int:
         compared = ({"compared": rows[1]} if len(rows) > 1 else
                     {"compared": {"principle": args.compare, "error": failed}} if failed
                     else {})
-        print(json.dumps({"model": loaded.label, "start": start, "zero_start": zeros,
+        print(outputs.as_json({"model": loaded.label, "start": start, "zero_start": zeros,
                           "model_start": from_model,
                           "end": end, "t_span": [t0, float(t1)], **rows[0],
                           **compared}, indent=2))
