@@ -523,17 +523,17 @@ def _gramian_sum(A, B, h, W):
 
 
 def _least_chart_measure(F, cols):
-    """The least over the stack ``F`` (``[N, k, n]``) of |det F_cols| over the largest
-    |F_1 s(1) ... F_k s(k)| over the permutations s of the columns ``cols`` (0 where
-    F_cols is singular or the ratio is not finite): how near the split's block is to
-    singular, whatever the units of the constraints and of the coordinates (a diagonal
-    scaling of rows and columns scales the determinant and every product alike); 1 for a
-    triangular block.  The largest product by dynamic programming over the sets of
-    columns taken (compiled)."""
+    """How near the split's blocks F_cols of the stack ``F`` (``[N, k, n]``) come to
+    singular along it: the least |det F_cols| over the largest |F_1 s(1) ... F_k s(k)|
+    (s a permutation of the columns ``cols``) anywhere in the stack (0 where that is 0
+    or not finite).  A constant diagonal scaling of rows and columns (the units of the
+    constraints and of the coordinates) scales every determinant and every product
+    alike, so the measure has no units; 1 for a constant triangular block.  The largest
+    product by dynamic programming over the sets of columns taken (compiled)."""
     N, k, n = F.shape
     M = np.empty((k, k))
     best = np.empty(1 << k)
-    least = np.inf
+    least, top = np.inf, 0.0
     for i in range(N):
         for a in range(k):
             for b in range(k):
@@ -555,10 +555,10 @@ def _least_chart_measure(F, cols):
                     w = v * abs(M[row, b])
                     if w > best[mask | (1 << b)]:
                         best[mask | (1 << b)] = w
-        top = best[(1 << k) - 1]
-        v = abs(small.det(M)) / top if top > 0.0 else 0.0
-        least = min(least, v if math.isfinite(v) else 0.0)
-    return least
+        top = max(top, best[(1 << k) - 1])
+        least = min(least, abs(small.det(M)))
+    v = least / top if top > 0.0 else 0.0
+    return v if math.isfinite(v) else 0.0
 
 
 def compiled_parts():
