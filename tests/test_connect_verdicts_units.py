@@ -17,7 +17,9 @@
   form has the eigenvalues 1 +- |rho|, rho = -e x y / 4 / sqrt((1 + e y^2 / 4)
   (1 + e x^2 / 4)): ``legendre`` = min over the path of 1 - |rho| (closed form).
 - Martinet's abnormal segment (zdot = y^2 xdot / 2, y = 0) stays abnormal in any units,
-  and the end off it normal.
+  and the end off it normal.  (Its ends are also joined by normal extremals with y
+  small but not 0, which the search can return: normal, in any units, which a
+  threshold on the unscaled Gramian called abnormal when y was small in its units.)
 """
 
 from __future__ import annotations
@@ -164,8 +166,25 @@ def _martinet():
 def test_martinet_abnormal_segment_in_any_units(b, c):
     S = _martinet()
     seg = jn.connect(S, "vakonomic", O, {"x": 1.0, "y": 0.0, "z": 0.0}, (0.0, 1.0),
-                     params={"b": b, "c": c})
+                     params={"b": b, "c": c},
+                     guess={"x_t": 1.0, "y_t": 0.0, "lambda_z": 0.0})   # y = 0 itself
+    assert seg.trajectory["y"].max() == seg.trajectory["y"].min() == 0.0
     assert seg.residual < 1e-8 and not seg.normal and seg.gramian_ratio < 1e-9
+    ref = _martinet_off()
+    u = ref.initial                # the answer in units 1 (the search is not tested)
     off = jn.connect(S, "vakonomic", O, {"x": 1.0, "y": 0.0, "z": 0.05 * c}, (0.0, 1.0),
-                     params={"b": b, "c": c})
+                     params={"b": b, "c": c},
+                     guess={"x_t": u["x_t"], "y_t": b * u["y_t"], "lambda_z": u["lambda_z"]})
     assert off.normal and off.residual < 1e-9 * max(1.0, c)
+    assert off.gramian_ratio == pytest.approx(ref.gramian_ratio, rel=1e-6)
+
+
+_MARTINET: dict = {}
+
+
+def _martinet_off():
+    if "off" not in _MARTINET:
+        _MARTINET["off"] = jn.connect(_martinet(), "vakonomic", O,
+                                      {"x": 1.0, "y": 0.0, "z": 0.05}, (0.0, 1.0),
+                                      params={"b": 1.0, "c": 1.0})
+    return _MARTINET["off"]
