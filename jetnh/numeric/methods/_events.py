@@ -84,13 +84,43 @@ def sing_init(sing, n_sing, tol, t, y, p, g, sig, eps, gref):
     return -1
 
 
-@jit
+@inline
 def sing_watch(n_sing, g_old, g_new, sig, gref):
     """Whether some indicator is below WATCH of its initial size at either end."""
     for i in range(n_sing):
         if sig[i] * g_old[i] < WATCH * gref[i] or sig[i] * g_new[i] < WATCH * gref[i]:
             return True
     return False
+
+
+@inline
+def watch_end(sing, uev, n_sing, t_new, y_new, p, gs, gs_old, sig, eps, gref, gu_old,
+              gu_new, ev_dir):
+    """The watched quantities at the end (t_new, y_new) of an accepted step: the
+    indicators into ``gs``, the user event functions into ``gu_new``.  Returns ``(si,
+    more)``: the index of an indicator violated there (else -1), and whether the step
+    needs more than these values (``loop.after_step``): an indicator violated, or below
+    WATCH of its initial size at either end, or a user event active.  Most steps need
+    nothing more: then the loop only moves the end's values to the ``_old`` arrays."""
+    si = -1
+    more = False
+    if n_sing > 0:
+        si = sing_violated(sing, n_sing, t_new, y_new, p, gs, sig, eps)
+        more = si >= 0 or sing_watch(n_sing, gs_old, gs, sig, gref)
+    if ev_dir.shape[0] > 0:
+        uev(t_new, y_new, p, gu_new)
+        if any_user_active(gu_old, gu_new, ev_dir):
+            more = True
+    return si, more
+
+
+@inline
+def watch_next(n_sing, gs, gs_old, gu_old, gu_new):
+    """The end's values of the watched quantities become the next step's start's."""
+    for i in range(n_sing):
+        gs_old[i] = gs[i]
+    for i in range(gu_new.shape[0]):
+        gu_old[i] = gu_new[i]
 
 
 @inline
@@ -171,7 +201,7 @@ def sing_dip(sing, n_sing, t_old, h, y_old, F, p, g, sig, eps, gref, ytmp):
     return -1.0
 
 
-@jit
+@inline
 def sing_violated(sing, n_sing, t, y, p, g, sig, eps):
     """Index of the first indicator with ``sig g <= eps`` or not finite, else -1."""
     sing(t, y, p, g)
