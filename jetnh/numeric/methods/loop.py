@@ -65,8 +65,8 @@ from ._common import (
 from . import projection
 from .sums import DOP853, EMBEDDED, NONE, functions as sums  # noqa: F401 (the codes)
 from ._events import (CRAWL, any_user_active, dense_eval, hermite_defect, locate,
-                      most_watched, sing_crawl, sing_dip, sing_init, sing_watch, watch_end,
-                      watch_next)
+                      most_watched, crossed, near, sing_crawl, sing_dip, sing_init,
+                      sing_watch)
 
 #: dense outputs (see the module docstring; the error estimators: ``sums``)
 HERMITE, GIVEN = 1, 3
@@ -298,7 +298,8 @@ def after_step(tab, fixed, rhs, sing, uev, p, t, h, t_new, y, y_new, K, F, ytmp,
             stats[2] += 1
         stats[2] += _dense_rows(tab, rhs, t, h, y, y_new, K, F, ytmp, p)
         have_dense = True
-        theta_hi = sing_dip(sing, n_sing, t, h, y, F, p, gs_old, sig, eps, gref, ytmp)
+        theta_hi = sing_dip(sing, n_sing, t, h, y, F, p, gs_old, gs, sig, eps, gref,
+                            ytmp)
         if theta_hi > 0.0:
             si = 0
         elif fixed:
@@ -410,6 +411,7 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
         ev_t, ev_i, ev_y, n_ev = no_events(n)
         ws, sing_index = watch_start(sing, uev, watch, t, y, p)
         n_sing, ev_dir = watch.n_sing, watch.ev_dir
+        n_user = ev_dir.shape[0]
         gs, gs_old, gref, sig, eps, gu_old, gu_new = ws[:7]
         if sing_index >= 0:
             if ADAPTIVE:
@@ -518,8 +520,23 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
         t_stop = t_new
         have_dense = False
         if WATCH:
-            si, more = watch_end(sing, uev, n_sing, t_new, y_new, p, gs, gs_old, sig, eps,
-                                 gref, gu_old, gu_new, ev_dir)
+            # (written out here: a helper's array arguments cost a reference-count pair
+            # each a step, more than the indicators themselves: ``_events.watch_end``)
+            si = -1
+            more = False
+            if n_sing > 0:
+                sing(t_new, y_new, p, gs)
+                for i in range(n_sing):
+                    if si < 0 and not (sig[i] * gs[i] > eps[i]):      # also NaN
+                        si = i
+                    if near(sig[i], gs_old[i], gs[i], gref[i]):
+                        more = True
+                more = more or si >= 0
+            if n_user > 0:
+                uev(t_new, y_new, p, gu_new)
+                for i in range(n_user):
+                    if crossed(gu_old[i], gu_new[i], ev_dir[i]):
+                        more = True
             watched = False
             crawling = -1
             if more:
@@ -528,7 +545,10 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
                 stop, t_stop, sing_index, have_dense, ev_t, ev_i, ev_y, n_ev = after_step(
                     tab, not ADAPTIVE, rhs, sing, uev, p, t, h, t_new, y, y_new, K, F, ytmp,
                     fmid, y_stop, stats, watch, ws, si, sing_index, ev_t, ev_i, ev_y, n_ev)
-            watch_next(n_sing, gs, gs_old, gu_old, gu_new)
+            for i in range(n_sing):
+                gs_old[i] = gs[i]
+            for i in range(n_user):
+                gu_old[i] = gu_new[i]
             if ADAPTIVE and stop == 0 and n_sing > 0:
                 if watched:
                     h_watch = max(h_watch, abs(h))
