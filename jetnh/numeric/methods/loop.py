@@ -522,7 +522,7 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
         if WATCH:
             # (written out here: a helper's array arguments cost a reference-count pair
             # each a step, more than the indicators themselves: ``_events.watch_end``)
-            si = -1
+            si = np.int64(-1)   # (not the literal -1: after_step is compiled once)
             more = False
             if n_sing > 0:
                 sing(t_new, y_new, p, gs)
