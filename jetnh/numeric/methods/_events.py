@@ -133,7 +133,7 @@ def watch_end(sing, uev, n_sing, t_new, y_new, p, gs, gs_old, sig, eps, gref, gu
     needs more than these values (``loop.after_step``): an indicator violated, or below
     WATCH of its initial size at either end, or a user event active.  Most steps need
     nothing more: then the loop only moves the end's values to the ``_old`` arrays."""
-    si = -1
+    si = np.int64(-1)       # (not the literal -1: after_step is compiled once)
     more = False
     if n_sing > 0:
         si = sing_violated(sing, n_sing, t_new, y_new, p, gs, sig, eps)

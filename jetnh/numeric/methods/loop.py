@@ -284,7 +284,7 @@ def after_step(tab, fixed, rhs, sing, uev, p, t, h, t_new, y, y_new, K, F, ytmp,
     (``_events.locate``).  Returns ``(stop, t_stop, sing_index, have_dense, ev_t, ev_i,
     ev_y, n_ev)``: stop is 0 (go on), EVENT or SINGULAR, with the stop state in
     ``y_stop``; ``have_dense``: the rows F of the step's interpolant are filled.  The
-    end's values are moved to the next step's start by the caller (``watch_next``)."""
+    caller moves the end's values to the next step's start (``_events.watch_next``)."""
     n_sing, sing_tol, ev_dir, ev_max = watch
     gs, gs_old, gref, sig, eps, gu_old, gu_new, gtmp, counts, roots, which = ws
     ns = tab[6][0]
