@@ -16,7 +16,10 @@ the two runs of a panel alternately, warm, ``calls`` times each, and reports the
 percentile of the single calls' wall times (``perf_counter``) and of their CPU times
 (``thread_time``: on a loaded machine the wall time counts the waits for a core), and
 the same for the compiled loop called directly (``plan.entry``: the run without its
-Python side).  The figure per tree is the best over the rounds; ``watch`` = watched -
+Python side).  Besides, runs whose last steps are searched inside for a dip of an
+indicator (``_events.sing_dip``): Appell-Hamel's speed decays to a zero that
+x_t^2 + y_t^2 only touches; dop853, dopri5, rk4 (400 steps) and radau stop at its
+threshold (CPU time, 10th percentile; the stop times of both trees must be equal).  The figure per tree is the best over the rounds; ``watch`` = watched -
 ignored, the extra cost of the watch; both trees' runs must end on the same state bit
 for bit (the watch changes no step).  Machine, date, load average (also before and after
 each round), commit and command in the JSON (``_common.write``).
@@ -35,6 +38,35 @@ PANELS = ("nonholonomic_particle", "knife_edge", "chaplygin_sleigh", "isokinetic
           "n_trailer", "rolling_disk")
 QUICK = PANELS[:3]
 RUN = dict(method="dop853", save="final", rtol=1e-8, atol=1e-11, split="fixed")
+
+
+#: runs whose last steps are searched inside (``_events.sing_dip``): the Appell-Hamel
+#: speed decays to a zero it only touches; each method stops at its threshold
+SEARCHED = (("dop853", dict(rtol=1e-10, atol=1e-12)), ("dopri5", dict(rtol=1e-8, atol=1e-10)),
+            ("rk4", dict(n_steps=400)), ("radau", dict(rtol=1e-8, atol=1e-10)))
+
+
+def searched(calls):
+    """The Appell-Hamel runs of ``SEARCHED``: 10th percentile of their CPU times and the
+    stop."""
+    from jetnh.models import appell_hamel
+    from jetnh.numeric import Scene
+
+    scene = Scene(appell_hamel(), "chetaev", initial=dict(x=0, y=0, z=0, x_t=0.6, y_t=0.8),
+                  t_span=(0.0, 1.0))
+    out = {}
+    for method, kw in SEARCHED:
+        def run(method=method, kw=kw):
+            return scene.run(method=method, save="final", **kw)
+        traj = run()
+        cpu = []
+        for _ in range(calls):
+            c0 = time.thread_time()
+            run()
+            cpu.append(time.thread_time() - c0)
+        out[method] = {"cpu_us": float(np.percentile(cpu, 10)) * 1e6,
+                       "t_stop": float(traj.t[-1]), "status": int(traj.status)}
+    return out
 
 
 def worker(spec):
@@ -82,6 +114,7 @@ def worker(spec):
                 row[f"{label}_{name}_wall_us"] = float(np.percentile(wall[k], 10)) * 1e6
                 row[f"{label}_{name}_cpu_us"] = float(np.percentile(cpu[k], 10)) * 1e6
         out[case.model] = row
+    out["searched"] = searched(spec["calls"])
     print(json.dumps(out))
 
 
@@ -112,19 +145,24 @@ def main():
             raw[name].append(res)
             if "error" in res:
                 print(name, r, res["error"])
-            print(name, r, "load", f"{load0:.2f}", {m: round(v.get("run_watched_wall_us", -1), 1)
-                                                    for m, v in res.items()
-                                                    if isinstance(v, dict)}, flush=True)
+            print(name, r, "load", f"{load0:.2f}",
+                  {m: round(v.get("run_watched_wall_us", -1), 1) for m, v in res.items()
+                   if isinstance(v, dict) and m != "searched"}, flush=True)
     summary = {}
     for name, results in raw.items():
         good = [res for res in results if "error" not in res and "timeout" not in res]
         if not good:
             summary[name] = results[-1]
             continue
-        rows = {}
+        rows = {"searched": {m: dict(v, cpu_us=min(res["searched"][m]["cpu_us"]
+                                                   for res in good))
+                             for m, v in good[0]["searched"].items()}}
         for model in good[0]:
+            if model == "searched":
+                continue
             row = {k: min(res[model][k] for res in good)
                    for k in good[0][model] if k.endswith("_us")}
+            row["steps"] = good[0][model]["steps"]
             for kind in ("run", "loop"):
                 for clock in ("wall", "cpu"):
                     row[f"{kind}_watch_{clock}_us"] = (row[f"{kind}_watched_{clock}_us"]
@@ -134,7 +172,13 @@ def main():
             rows[model] = row
         summary[name] = rows
     if "vs" in summary and "error" not in summary["vs"] and "error" not in summary["this"]:
+        for method, row in summary["this"]["searched"].items():
+            before = summary["vs"]["searched"][method]
+            row["same_stop"] = row["t_stop"] == before["t_stop"]
+            row["ratio_cpu_us"] = row["cpu_us"] / before["cpu_us"]
         for model, row in summary["this"].items():
+            if model == "searched":
+                continue
             before = summary["vs"][model]
             row["bitwise_equal_to_vs"] = row["final"] == before["final"]
             for key in ("run_watched_wall_us", "run_watched_cpu_us", "loop_watched_cpu_us"):

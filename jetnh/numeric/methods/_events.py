@@ -22,8 +22,8 @@ compared with their thresholds and with ``WATCH`` of their initial sizes; the ex
 loop writes the same check out), and nothing more is done in a step where no
 indicator is violated or below WATCH at either end and no user event is active.  A step
 where an indicator is below ``WATCH`` (1 %) of its initial size at an end is also
-searched *inside* (``sing_dip``), so that a zero it only touches -- xdot^2 + ydot^2 at a velocity reversal,
-which a step jumps over -- is not missed.  The search works on the margin
+searched *inside* (``sing_dip``), so that a zero it only touches -- xdot^2 + ydot^2 at
+a velocity reversal, which a step jumps over -- is not missed.  The search works on the margin
 ``w(theta) = min_i (s_i g_i - eps_i) / |g_i(t0)|`` along the interpolant (w <= 0:
 violated): ``SAMPLES`` (8) equal parts of the step, their 7 inner points evaluated and the
 ends known; m = ``CURVE`` (4) times the largest |w''| that the samples' second
