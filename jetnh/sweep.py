@@ -459,7 +459,7 @@ def _run_points(scene, Y0, P, run, outputs) -> dict:
                     cols[label][i] = traj[name][j]
         d = traj.diagnostics
         diag["status"][i], diag["success"][i] = d.status, d.success
-        diag["stop_reason"][i], diag["t_final"][i] = d.stop_reason, traj.t[-1]
+        diag["stop_reason"][i], diag["t_final"][i] = d.stop_reason, traj.t_final
         diag["steps"][i], diag["rejected"][i] = d.steps or 0, d.rejected or 0
         diag["rhs_evaluations"][i] = d.rhs_evaluations
         diag["residual_max"][i], diag["energy_drift"][i] = d.residual_max, d.energy_drift

@@ -5,8 +5,9 @@ a directory, whose directory does not exist or cannot be written, whose suffix i
 format of ``kinds`` (``TABLE``, ``CSV``, ``TEXT`` or ``FIGURE``: matplotlib's formats)
 or whose format needs a library that is not installed (pyarrow for parquet, matplotlib
 for figures).  ``write(path, fill)`` calls ``fill(tmp)`` on a temporary file in the same
-directory, then renames it over ``path`` (``os.replace``): a failed write (a full disk)
-leaves the previous file as it was, removes the temporary one and names the path.
+directory, then renames it over ``path`` (``os.replace``) with the permissions of the
+file it replaces (else those of a new file): a failed write (a full disk) leaves the
+previous file as it was, removes the temporary one and names the path.
 """
 
 from __future__ import annotations
@@ -67,6 +68,18 @@ def _takes_files(parent: Path, name: str) -> bool:
     return True
 
 
+def _mode(path: Path) -> int:
+    """The permissions of the file written to ``path``: those of the file it replaces,
+    else what ``open`` would give a new file (0o666 less the umask; the temporary file
+    is made 0o600)."""
+    try:
+        return path.stat().st_mode & 0o7777
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask
+
+
 def write(path, fill) -> None:
     """``fill(tmp)`` writes the content to the path ``tmp``; then it replaces ``path``.
     An error names ``path``, never the temporary file."""
@@ -79,6 +92,7 @@ def write(path, fill) -> None:
         fill(tmp)
         with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
+        os.chmod(tmp, _mode(p))
         os.replace(tmp, p)
     except BaseException as exc:
         if tmp is not None:

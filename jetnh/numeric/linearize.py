@@ -67,6 +67,20 @@ lie on the imaginary axis (conservative systems, families of steady motions: the
 linearization does not decide).  Eigenvalues of modulus below ``ZERO`` times the size of
 A count as zero (a defective zero eigenvalue of a family of steady motions is computed
 only to about the square root of the rounding unit).
+
+Rows that depend on t (t in a kept row or a holonomic constraint with a derivative that
+does not vanish identically, e.g. a periodically forced or modulated system): the state
+is held and A and x' are evaluated again at the times ``t + TIMES`` (scaled by max(1,
+|t|)).  The point is a steady motion only when x' vanishes at every one of them (a
+point where x' vanishes at one instant only, as an equilibrium of a forced oscillator
+at a zero of its forcing, is none); ``time_dependent`` is True when A or x' differ
+between them.  At such a point A and its eigenvalues are those frozen at ``t``, and
+they do not decide stability (a damped Mathieu equation is unstable at parametric
+resonance with every frozen eigenvalue in the left half-plane): the verdict is
+``TIME_DEPENDENT``, ``stable`` and ``margin`` are None and NaN.  A time-periodic A needs
+Floquet's theory (the monodromy matrix over a period, from the variational equations
+of a run), which linearize does not compute.  Parameter values that remove the
+dependence on t (a modulation of amplitude 0) give the frozen verdict again.
 """
 
 from __future__ import annotations
@@ -96,6 +110,10 @@ STEADY = 1e-8
 CONSISTENT = 1e-9
 #: the verdict off a steady motion
 NOT_STEADY = "not a steady motion"
+#: the verdict at a steady motion of rows that depend on t
+TIME_DEPENDENT = "time-dependent: the frozen eigenvalues do not decide"
+#: the offsets from the point's t at which rows that contain t are evaluated again
+TIMES = (0.1234567, -0.5772157, 1.4142136, 2.7182818, 7.3890561, 31.415927, 271.82818)
 
 _MODELS: dict = {}
 
@@ -161,6 +179,17 @@ class _Model:
             e, q = self.rows[row], self.states[state]
             self._uses[key] = (q in dag.free_symbols(e)
                                and not zero.vanishes(dag.diff(e, q)))
+        return self._uses[key]
+
+    def has_time(self, rows) -> bool:
+        """Whether one of ``rows`` (state indices) or a holonomic constraint contains t
+        with a derivative that does not vanish identically (``zero.vanishes``)."""
+        key = ("t", tuple(rows))
+        if key not in self._uses:
+            t = self.system.J.t
+            exprs = [self.rows[i] for i in rows] + list(self.system.holonomic)
+            self._uses[key] = any(t in dag.free_symbols(e)
+                                  and not zero.vanishes(dag.diff(e, t)) for e in exprs)
         return self._uses[key]
 
     @_once
@@ -240,8 +269,10 @@ class Linearization(Frozen):
     ``at`` (every coordinate, velocity and multiplier at the point), ``params``,
     ``dropped`` (cyclic coordinate names left out), ``eliminated`` (coordinates that
     follow from the holonomic constraints), ``inert`` (holonomic multipliers left out),
-    ``steady_motion`` (whether ``residual`` is zero to ``STEADY``), ``verdict``,
-    ``stable`` (the last two only at a steady motion).
+    ``steady_motion`` (whether ``residual`` is zero to ``STEADY``, at every t for rows
+    that depend on t), ``time_dependent`` (whether A or x' at the point change with t),
+    ``verdict``, ``stable`` (the last two only at a steady motion whose A does not
+    change with t).
     """
 
     def __init__(self, model: _Model, at: dict, params: dict, keep: tuple, chart: tuple,
@@ -275,11 +306,18 @@ class Linearization(Frozen):
         #: True when A is the limit at a point where the kernel itself is undefined
         self.limit = limit
         size = float(np.abs(y[list(keep)]).max()) if keep else 0.0
+        bound = min(STEADY * max(1.0, self._scale * size),
+                    math.sqrt(STEADY) * max(1.0, size))
+        changes, steady = False, self.residual <= bound
+        if model.has_time(keep):
+            changes, steady = _in_time(self, bound)
+        #: whether A or x' at the point change with t (rows that depend on t; module
+        #: docstring): the frozen eigenvalues then decide nothing
+        self.time_dependent = changes
         #: whether the point is a steady motion: ``|x'| <= STEADY * max(1, |A| |x|)``
-        #: and ``|x'| <= sqrt(STEADY) * max(1, |x|)`` (module docstring)
-        self.steady_motion = bool(
-            self.residual <= STEADY * max(1.0, self._scale * size)
-            and self.residual <= math.sqrt(STEADY) * max(1.0, size))
+        #: and ``|x'| <= sqrt(STEADY) * max(1, |x|)``, at ``t`` and, for rows that
+        #: depend on t, at the times ``t + TIMES`` too (module docstring)
+        self.steady_motion = bool(steady)
 
     # ------------------------------------------------------------------ verdicts
     @property
@@ -290,27 +328,31 @@ class Linearization(Frozen):
     def margin(self) -> float:
         """The largest real part among the eigenvalues not counted as zero (``ZERO``),
         less ``REAL`` times the size of A: > 0 unstable, <= 0 not; NaN off a steady
-        motion."""
-        if not self.steady_motion:
+        motion and where A changes with t (``time_dependent``)."""
+        if not self.steady_motion or self.time_dependent:
             return float("nan")
         return _margin(self.eigenvalues, self._scale)
 
     @property
     def stable(self) -> bool | None:
         """No eigenvalue with a positive real part (spectral stability); None off a
-        steady motion, where the eigenvalues do not decide stability."""
-        if not self.steady_motion:
+        steady motion and where A changes with t, where the eigenvalues do not decide
+        stability."""
+        if not self.steady_motion or self.time_dependent:
             return None
         return self.margin <= 0
 
     @property
     def verdict(self) -> str:
         """``"unstable"``, ``"asymptotically stable"`` or ``"marginal"`` at a steady
-        motion, ``"not a steady motion"`` elsewhere (module docstring)."""
+        motion, ``"not a steady motion"`` elsewhere, ``TIME_DEPENDENT`` at a steady
+        motion whose A changes with t (module docstring)."""
         s = self._scale
         ev = self.eigenvalues
         if not self.steady_motion:
             return NOT_STEADY
+        if self.time_dependent:
+            return TIME_DEPENDENT
         if self.margin > 0:
             return "unstable"
         if ev.size and np.all(ev.real < -REAL * s) and np.all(np.abs(ev) > ZERO * s):
@@ -345,7 +387,8 @@ class Linearization(Frozen):
     def steady(self, unknowns, tol: float = 1e-10) -> "Linearization":
         """The linearization at a steady motion: the values of ``unknowns`` that make
         x' vanish, starting from this point's values (the others held).
-        ``LinearizationError`` when none is found near them.
+        ``LinearizationError`` when none is found near them, or, for equations that
+        depend on t, when x' vanishes at this t only.
 
         Parameters
         ----------
@@ -418,7 +461,14 @@ class Linearization(Frozen):
                 f"{dict(zip(unknowns, np.round(x, 12).tolist()))}); start from another "
                 "guess (replace(at=...)), solve for other values, or fix fewer of them")
         put(x)
-        return self.replace(at={model.names[i]: float(y[i]) for i in (*idx, *self._chart)})
+        found = self.replace(at={model.names[i]: float(y[i]) for i in (*idx, *self._chart)})
+        if found.time_dependent and not found.steady_motion:
+            raise LinearizationError(
+                f"x' vanishes at t = {t:g} with {', '.join(unknowns)} = "
+                f"{np.round(x, 12).tolist()}, but not at other times: the equations depend "
+                "on t, and a point where x' vanishes for an instant is no steady motion; "
+                "solve for other values, or hold those that keep x' = 0 at every t")
+        return found
 
     def along(self, name, values) -> "StabilityScan":
         """Eigenvalues along a parameter or an operating-point value (every other value
@@ -450,6 +500,7 @@ class Linearization(Frozen):
         ev = np.array([lin.eigenvalues for lin in lins])
         margins = np.array([lin.margin for lin in lins])
         steady = np.array([lin.steady_motion for lin in lins])
+        timed = np.array([lin.time_dependent for lin in lins])
         crossings = []
         for i in range(len(values) - 1):
             a, b = margins[i], margins[i + 1]
@@ -457,7 +508,7 @@ class Linearization(Frozen):
                 crossings.append(_crossing(move, float(values[i]), float(values[i + 1]),
                                             lins[i], lins[i + 1]))
         return StabilityScan(name, values, ev, margins, tuple(crossings), self.state_names,
-                             steady)
+                             steady, timed)
 
     def _on_g(self, at: dict, params: dict) -> dict:
         """The eliminated coordinates solved from g = 0 (Newton's method from their
@@ -506,6 +557,37 @@ def _symbolic(model: _Model, keep, chart) -> sp.Matrix:
     return model._symbolic[key]
 
 
+def _in_time(lin: Linearization, bound: float) -> tuple[bool, bool]:
+    """``(changes, steady)`` of a point whose rows contain t: whether A or x' differ at
+    the times ``t + TIMES`` (A by more than ``REAL`` times its size, x' by more than
+    ``bound``) and whether ``|x'| <= bound`` at t and at each of them.  The state is held;
+    with holonomic constraints it must stay on g = 0 and A is taken in the chart there.
+    A time where the point leaves g = 0 or the equations are undefined changes and is
+    not steady."""
+    model, keep, chart = lin._model, lin._keep, lin._chart
+    y, p, ck = lin._y, lin._p, lin._kernels
+    scale = max([1.0] + [abs(float(v)) for v in y[:len(model.coordinates)]])
+    changes, steady = False, lin.residual <= bound
+    for s in TIMES:
+        t = lin.t + s * max(1.0, abs(lin.t))
+        E = lin._E
+        if model.system.holonomic:
+            point = _configuration(model, y, dict(lin.params), t)
+            g = holonomic.residual(model.system, point)
+            if not np.all(np.abs(g) <= holonomic.TOLERANCE * scale):
+                return True, False
+            E = _embedding(model, keep, chart, holonomic.jacobian_at(model.system, point))
+        try:
+            A, rates, _ = _jacobian(ck, y, p, t, keep, E)
+        except LinearizationError:
+            return True, False
+        changes = changes or bool(
+            np.abs(A - lin.A).max(initial=0.0) > REAL * lin._scale
+            or np.linalg.norm(rates - lin.rates) > bound)
+        steady = steady and float(np.linalg.norm(rates)) <= bound
+    return changes, steady
+
+
 def _margin(ev: np.ndarray, scale: float) -> float:
     big = ev[np.abs(ev) > ZERO * scale]
     top = float(big.real.max()) if big.size else 0.0
@@ -547,31 +629,32 @@ def _root(f, a: float, b: float) -> float:
 class StabilityScan(Frozen):
     """Eigenvalues along one value: ``values``, ``eigenvalues`` (one row per value, each
     by decreasing real part), ``margins`` (``Linearization.margin``: NaN off a steady
-    motion), ``steady_motion`` (``Linearization.steady_motion`` at each value),
-    ``crossings`` (the values where the motion gains or loses stability, to 1e-13
-    relative), ``frame`` and ``plot``."""
+    motion and where A changes with t), ``steady_motion`` and ``time_dependent``
+    (``Linearization``'s at each value), ``crossings`` (the values where the motion
+    gains or loses stability, to 1e-13 relative), ``frame`` and ``plot``."""
 
     def __init__(self, name, values, eigenvalues, margins, crossings, state_names,
-                 steady_motion):
+                 steady_motion, time_dependent):
         self.name = name
-        for a in (values, eigenvalues, margins, steady_motion):
+        for a in (values, eigenvalues, margins, steady_motion, time_dependent):
             a.setflags(write=False)
         self.values, self.eigenvalues, self.margins = values, eigenvalues, margins
-        self.steady_motion = steady_motion
+        self.steady_motion, self.time_dependent = steady_motion, time_dependent
         self.crossings = crossings
         self.state_names = state_names
 
     @property
     def stable(self) -> np.ndarray:
         """True where the value gives a steady motion without an eigenvalue of positive
-        real part; False elsewhere, off steady motions too (see ``steady_motion``)."""
+        real part; False elsewhere, off steady motions and where A changes with t too
+        (undecided there: see ``steady_motion`` and ``time_dependent``)."""
         return self.margins <= 0
 
     @property
     def frame(self):
         """pandas DataFrame: one row per value, the value, ``re_i`` and ``im_i`` of each
-        eigenvalue (i = 1..k by decreasing real part), ``steady_motion`` and
-        ``stable``."""
+        eigenvalue (i = 1..k by decreasing real part), ``steady_motion``,
+        ``time_dependent`` and ``stable``."""
         import pandas as pd
 
         k = self.eigenvalues.shape[1] if self.eigenvalues.ndim == 2 else 0
@@ -581,6 +664,7 @@ class StabilityScan(Frozen):
         for i in range(k):
             data[f"im_{i + 1}"] = self.eigenvalues[:, i].imag
         data["steady_motion"] = self.steady_motion
+        data["time_dependent"] = self.time_dependent
         data["stable"] = self.stable
         return pd.DataFrame(data)
 
@@ -644,7 +728,8 @@ def linearize(system, principle="chetaev", at=None, params=None, drop="cyclic", 
         The coordinates left out of the state: the cyclic ones (no equation depends on
         them), a list of names, or None for none.
     t : float, default 0.0
-        The time of the point (for systems that depend on t).
+        The time of the point (for systems that depend on t: A and the eigenvalues are
+        those frozen at this t, and decide no stability; module docstring).
     form, convention : optional
         The equations' form and the multipliers' sign convention, as for ``Scene``.
 
@@ -671,7 +756,8 @@ def verdicts(system, at, params=None, principles_=None, drop="cyclic", solve_for
     """One operating point under several principles: a pandas DataFrame, one row per
     principle, with its residual, state size, largest real part, verdict and
     eigenvalues (a principle that fails has its error in the verdict column; one for
-    which the point is no steady motion has the verdict "not a steady motion").
+    which the point is no steady motion has the verdict "not a steady motion", one whose
+    A changes with t ``TIME_DEPENDENT``).
 
     Parameters
     ----------

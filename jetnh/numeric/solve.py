@@ -52,8 +52,8 @@ class Plan:
     (``numeric.dense``; None: no dense output), ``dense_ends`` it completed for a run
     whose last step is whole and for one stopped inside its last step (made once).  ``sens``: the kernels of the state
     augmented by its sensitivities, ``sens_tol`` their tolerances.  ``switch``: the run
-    goes on across its chart's edge (``numeric.atlas``); the loop of a run with
-    sensitivities then watches the edge as its last event (``ce``: it stops there).  The discrete methods read
+    goes on across its chart's edge (``numeric.atlas``); its loop then watches the
+    edge as its last event (``ce``: it stops there).  The discrete methods read
     ``steps``, ``newton_tol``, ``max_newton``, ``projection``; scipy's ``first`` and
     ``max_step``."""
 
@@ -228,15 +228,12 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
     kern = scene.kernels
     switch = split == "switch" and atlas.applies(scene, events)
     if switch:
-        # the run goes on across its chart's edge: events per chart (numeric.atlas); an
-        # ensemble, and a run with sensitivities (whose loop ``connect`` calls directly:
-        # ``shooting.Shot``), watch the edge of the scene's own chart as their last event
-        ce = None
-        if batch or sens is not None:
-            at = atlas.atlas(scene)
-            from .events import as_events
+        # the run goes on across its chart's edge (numeric.atlas): its loop, in the
+        # scene's own chart, watches the edge as its last event (it stops there)
+        from .events import as_events
 
-            ce = at.events(at.own, as_events(events), True)
+        at = atlas.atlas(scene)
+        ce = at.events(at.own, as_events(events), True)
     else:
         ce = scene.compile_events(events)
     watch = _watch(scene, kern, ce, checked, singular_tol)
@@ -348,10 +345,7 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
                                 plan.limit, plan.ce)
     dense = plan.dense
     if plan.switch:
-        return atlas.run(scene, m.name, plan.events, plan.t0, plan.t1, y, p, plan.ctl,
-                         plan.te, plan.mode, None if dense is None else dict(dense),
-                         plan.checked, plan.singular_tol, plan.newton, plan.limit,
-                         trajectory, sens=plan.sens)
+        return atlas.run(scene, plan, y, p, trajectory)
     halt = np.zeros(1, dtype=np.int64)
     t0 = plan.t0
     tic = _clock()
@@ -444,9 +438,12 @@ def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, 
         t_events, y_events = split_records(k, ev_t[:n_ev], ev_i[:n_ev], ev_y[:n_ev])
         events = (ce.names[:k], t_events, y_events)
     # the loop's own float64, C-contiguous rows: taken as they are
-    return Trajectory._of_run(scene, (ts, ys, n_out), p, method, status, reason,
+    traj = Trajectory._of_run(scene, (ts, ys, n_out), p, method, status, reason,
                               (stats, wall, scene.projected), kern, events, singularity,
                               dense, sensitivities)
+    if status != FINISHED:      # where it stopped, for ``final`` (after its last row)
+        traj._stopped(t_last, y_last)
+    return traj
 
 
 # ---------------------------------------------------------------------- many runs

@@ -158,11 +158,13 @@ def _record(c) -> dict:
             "residual": c.residual, "normal": c.normal,
             "conjugate_times": (None if c.conjugate_times is None
                                 else list(c.conjugate_times)),
-            "minimizer": c.minimizer,
+            "legendre": c.legendre, "minimizer": c.minimizer,
             "search": c.search, "rank": c.rank, "iterations": c.iterations}
 
 
 def _print(c, end):
+    from ...numeric.connect.verdicts import LEGENDRE_ZERO
+
     print(f"-- {c.principle}")
     print("initial:   " + ", ".join(f"{k} = {v:.10g}" for k, v in c.initial.items()))
     print(f"cost:      {c.cost:.12g} (the action int L dt)")
@@ -173,11 +175,19 @@ def _print(c, end):
                            ", ".join(f"t = {t:.10g}" for t in times) or "none in (t0, t1]")
           + ("" if variational else " (where the endpoint map to the named coordinates "
              "is singular)"))
+    if variational:
+        sign = ("positive definite all along" if c.legendre > LEGENDRE_ZERO else
+                "not positive semidefinite somewhere" if c.legendre < -LEGENDRE_ZERO else
+                "singular somewhere: zero within its resolution")
+        print(f"legendre:  {c.legendre:.6g} (the Hessian of L + lambda f on the admissible "
+              f"velocities, its smallest eigenvalue over its largest at the worst time: "
+              f"{sign})")
     if c.minimizer is False:
         print("minimizer: no (" + ("Legendre's condition fails: L + lambda f is not "
                                    "positive on the admissible velocities"
-                                   if c.legendre < 0 else "a conjugate time inside the "
-                                   "span; --restarts looks for a cheaper motion") + ")")
+                                   if c.legendre < -LEGENDRE_ZERO else "a conjugate time "
+                                   "inside the span; --restarts looks for a cheaper motion")
+              + ")")
     elif c.minimizer is None and variational:
         print("minimizer: not checked (a singular Hessian of L + lambda f, or conjugate "
               "times not checked)")
@@ -197,13 +207,15 @@ def _distance(a, b, coords) -> float:
 
 
 def _plot(found, coords, path, title):
-    import matplotlib
+    """The coordinates of the motions ``found`` against t, written to ``path`` at once
+    or not at all (``outputs.write``)."""
+    from pathlib import Path
+
     import numpy as np
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(8, 4))
+    fig = Figure(figsize=(8, 4), layout="tight")
+    ax = fig.add_subplot()
     for k, c in enumerate(found):
         tr = c.trajectory
         t = np.linspace(tr.t[0], tr.t[-1], 400)
@@ -222,6 +234,4 @@ def _plot(found, coords, path, title):
                  + ("" if c.normal else ", abnormal")
                  + (f", conjugate at {', '.join(f'{x:.4g}' for x in c.conjugate_times)}"
                     if c.conjugate_times else ""))
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+    outputs.write(path, lambda tmp: fig.savefig(tmp, format=Path(path).suffix[1:]))
