@@ -382,10 +382,12 @@ def test_discrete_terminal_event_stops_the_run(particle, method):
     terminal one (the m-th occurrence for terminal=m): the steps end there, and the rows,
     the event times and states are those of the run without the terminal flag, cut at
     the terminal event's time."""
-    sc = particle if method == "dla" else Scene(
-        particle.system, "vakonomic", initial=dict(PART0, lambda_z=0.1), t_span=(0.0, 6.0),
-        cache=False)
-    x, y = sc.system.J.q[:2]
+    J = particle.system.J
+    x, y = J.q[:2]
+    principle, initial = (("chetaev", PART0) if method == "dla" else
+                          ("vakonomic", dict(PART0, lambda_z=0.1)))
+    sc = Scene(particle.system, principle, initial=initial, t_span=(0.0, 6.0), cache=False,
+               integrals={"x_t^2": J.qd[0] ** 2})
     n = 600
     quiet = [Event(sp.sin(4 * x), name="wave"), Event(y + 0.25, name="low")]
     full = sc.run(method=method, n_steps=n, events=quiet)
@@ -405,3 +407,17 @@ def test_discrete_terminal_event_stops_the_run(particle, method):
             np.testing.assert_array_equal(tr.t_events[k], full.t_events[k][before])
             np.testing.assert_array_equal(tr.y_events[k], full.y_events[k][before])
         assert len(tr.t_events[0]) == stop + 1
+        # energy, constraint residual and integrals from their own columns (a terminal
+        # event's index once shadowed the number of constraints: the energy read the
+        # residual's column); the last row is the rows' linear interpolant at the stop
+        j = int(np.count_nonzero(keep))
+        theta = (t_stop - full.t[j - 1]) / (full.t[j] - full.t[j - 1])
+        for a, b in ((tr.energy, full.energy), (tr.residual, full.residual),
+                     (tr["x_t^2"], full["x_t^2"])):
+            assert a.shape == (len(tr.t),) + b.shape[1:]
+            np.testing.assert_array_equal(a[:-1], b[keep])
+            np.testing.assert_allclose(a[-1], b[j - 1] + theta * (b[j] - b[j - 1]),
+                                       rtol=1e-12, atol=1e-15)
+        assert abs(tr.energy[0] - 0.67) < 1e-12       # |v|^2 / 2, z_t = y x_t = -1/2
+        assert tr.diagnostics.energy_drift <= full.diagnostics.energy_drift
+        assert 0.0 < tr.diagnostics.residual_max <= full.diagnostics.residual_max

@@ -183,12 +183,12 @@ def trajectory(scene, method, kern, out, wall, p, t0, t1, n_steps, singular_tol,
     if ce is not None:
         records, stop = node_events(ce, ts, ys, p)
         if stop is not None:         # a terminal event: the rows end there
-            i, theta, k = stop
+            i, theta, which = stop
             rows = np.vstack([rows[:i + 1], rows[i] + theta * (rows[i + 1] - rows[i])])
             ys = np.vstack([ys[:i + 1], ys[i] + theta * (ys[i + 1] - ys[i])])
             ts = np.append(ts[:i + 1], records[-1][0])
             status, singularity = EVENT, None
-            reason = f"terminal event {ce.names[k]!r} at t = {float(ts[-1]):.17g}"
+            reason = f"terminal event {ce.names[which]!r} at t = {float(ts[-1]):.17g}"
         if save != "steps":
             keep = [0, len(ts) - 1] if len(ts) > 1 else [0]
             rows, ys, ts = rows[keep], ys[keep], ts[keep]
