@@ -421,3 +421,39 @@ def test_discrete_terminal_event_stops_the_run(particle, method):
         assert abs(tr.energy[0] - 0.67) < 1e-12       # |v|^2 / 2, z_t = y x_t = -1/2
         assert tr.diagnostics.energy_drift <= full.diagnostics.energy_drift
         assert 0.0 < tr.diagnostics.residual_max <= full.diagnostics.residual_max
+
+
+@pytest.fixture(scope="module")
+def oscillator():
+    J = jn.JetSpace("x")
+    (x,), (xd,) = J.q, J.qd
+    return Scene(System(J, xd**2 / 2 - x**2 / 2, []), "chetaev", initial=dict(x=1.0, x_t=0.0),
+                 t_span=(0.0, 10.0), cache=False)
+
+
+@pytest.mark.parametrize("method", ["rk4", "dla", "dvi", "dop853"])
+def test_a_root_on_a_node_counted_once(oscillator, method):
+    """t - 1 vanishes on the node t = 1 of a step h = 0.01: the step ending there finds
+    the root, the step starting there does not count it again (scipy's rule alone counts
+    it twice), so terminal=2 goes on to the second root; x = cos t - cos 1 (a root at t =
+    1, 2 pi - 1, 2 pi + 1, off the nodes) counted once each by every method."""
+    t = oscillator.system.J.t
+    x = oscillator.system.J.q[0]
+    sc = oscillator if method != "dvi" else oscillator.replace(principle="vakonomic")
+    kw = dict(n_steps=1000) if method in ("rk4", "dla", "dvi") else {}
+    tr = sc.run(method=method, events=[t - 1, t - 5, Event(t - 1, direction=1)], **kw)
+    assert tr.status == FINISHED
+    assert [len(te) for te in tr.t_events] == [1, 1, 1]
+    np.testing.assert_allclose(np.concatenate(tr.t_events), [1.0, 5.0, 1.0], rtol=0,
+                               atol=1e-14)
+    assert [ye.shape for ye in tr.y_events] == [(1, 2), (1, 2), (1, 2)]
+    assert abs(tr.y_events[0][0, 0] - np.cos(1.0)) < 1e-3
+    # terminal=2: the first root is t = 1 (once), the second t = 3 (a node as well)
+    tr = sc.run(method=method, events=[Event((t - 1) * (t - 3), terminal=2)], **kw)
+    assert tr.status == EVENT and abs(tr.t[-1] - 3.0) < 1e-14
+    np.testing.assert_allclose(tr.t_events[0], [1.0, 3.0], rtol=0, atol=1e-14)
+    # a root at the start of the run counts (the run's first step)
+    tr = sc.run(method=method, events=[t, x - np.cos(1.0)], **kw)
+    assert list(tr.t_events[0]) == [0.0]
+    np.testing.assert_allclose(tr.t_events[1], [1.0, 2 * np.pi - 1.0, 2 * np.pi + 1.0],
+                               rtol=0, atol=1e-3)

@@ -207,16 +207,20 @@ def trajectory(scene, method, kern, out, wall, p, t0, t1, n_steps, singular_tol,
                       projected=scene.projected, own=own, singularity=singularity, **kw)
 
 
-def _active(g_old, g_new, direction) -> bool:
-    """scipy's rule (as ``_events.user_active``): a crossing in the event's direction."""
+def _active(g_old, g_new, direction, first) -> bool:
+    """The rule of ``_events.crossed``: a crossing in the event's direction; an exact zero
+    at the start of a step other than the ``first`` is the root the previous step ended
+    on, not a new crossing."""
+    if g_old == 0.0 and not first:
+        return False
     up = g_old <= 0.0 <= g_new
     down = g_old >= 0.0 >= g_new
     return up if direction > 0 else down if direction < 0 else (up or down)
 
 
 def node_events(ce, ts, ys, p):
-    """User events of a discrete run, with scipy's semantics as the compiled loops have
-    them (``_events.locate``): each event function at every node; in a step where one
+    """User events of a discrete run, with the semantics the compiled loops have
+    (``_events.locate``: scipy's, a root on a node counted once): each event function at every node; in a step where one
     crosses zero its root by Brent's method (xtol = rtol = 4 eps) on the linear
     interpolant of the state between the nodes (second order, the order of dla and dvi);
     every active event counted, then the first terminal one (``max_events``-th
@@ -231,7 +235,7 @@ def node_events(ce, ts, ys, p):
     eps = 4 * np.finfo(float).eps
     for i in range(len(ts) - 1):
         active = [k for k in range(len(funcs)) if _active(G[i, k], G[i + 1, k],
-                                                          ce.direction[k])]
+                                                          ce.direction[k], i == 0)]
         if not active:
             continue
         t0, h, y0, dy = ts[i], ts[i + 1] - ts[i], ys[i], ys[i + 1] - ys[i]

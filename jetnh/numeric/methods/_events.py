@@ -2,9 +2,13 @@
 
 Two kinds of zero-finding run on the dense output of an accepted step:
 
-*User events* follow ``scipy.integrate.solve_ivp`` exactly: an event function g(t, y)
+*User events* follow ``scipy.integrate.solve_ivp``: an event function g(t, y)
 is active in a step when ``g_old <= 0 <= g_new`` (direction > 0), ``g_old >= 0 >= g_new``
-(direction < 0) or either (direction 0); its root is found by Brent's method
+(direction < 0) or either (direction 0) -- except that an exact zero at the start of a
+step other than a run's first (``g_old == 0``: a root on the node between two steps) is
+the root the previous step ended on, counted there once, not a new crossing (scipy counts
+such a root twice, at the end of one step and at the start of the next, so that
+``terminal=2`` stopped at it); its root is found by Brent's method
 (``brentq`` with ``xtol = rtol = 4 eps``, a port of scipy's ``brentq.c``) on
 ``g(t, dense(t))``; ``terminal = m > 0`` stops at the m-th occurrence (counts of all
 active events are raised first, then the roots sorted in the direction of integration).
@@ -126,13 +130,14 @@ def sing_watch(n_sing, g_old, g_new, sig, gref):
 
 @inline
 def watch_end(sing, uev, n_sing, t_new, y_new, p, gs, gs_old, sig, eps, gref, gu_old,
-              gu_new, ev_dir):
+              gu_new, ev_dir, first):
     """The watched quantities at the end (t_new, y_new) of an accepted step: the
     indicators into ``gs``, the user event functions into ``gu_new``.  Returns ``(si,
     more)``: the index of an indicator violated there (else -1), and whether the step
     needs more than these values (``loop.after_step``): an indicator violated, or below
     WATCH of its initial size at either end, or a user event active.  Most steps need
-    nothing more: then the loop only moves the end's values to the ``_old`` arrays."""
+    nothing more: then the loop only moves the end's values to the ``_old`` arrays.
+    ``first``: whether the step is the run's first (``crossed``)."""
     si = np.int64(-1)       # (not the literal -1: after_step is compiled once)
     more = False
     if n_sing > 0:
@@ -140,7 +145,7 @@ def watch_end(sing, uev, n_sing, t_new, y_new, p, gs, gs_old, sig, eps, gref, gu
         more = si >= 0 or sing_watch(n_sing, gs_old, gs, sig, gref)
     if ev_dir.shape[0] > 0:
         uev(t_new, y_new, p, gu_new)
-        if any_user_active(gu_old, gu_new, ev_dir):
+        if any_user_active(gu_old, gu_new, ev_dir, first):
             more = True
     return si, more
 
@@ -326,9 +331,13 @@ def most_watched(n_sing, g, sig, gref):
 
 
 @inline
-def crossed(g_old, g_new, direction):
+def crossed(g_old, g_new, direction, first):
     """Whether an event function went from g_old to g_new across zero in ``direction``
-    (> 0 up, < 0 down, 0 either; scipy's rule)."""
+    (> 0 up, < 0 down, 0 either; scipy's rule), in a run's ``first`` step or another: an
+    exact zero at the start of a step other than the first is the root the previous step
+    ended on (counted there), not a new crossing (module docstring)."""
+    if g_old == 0.0 and not first:
+        return False
     up = g_old <= 0.0 and g_new >= 0.0
     down = g_old >= 0.0 and g_new <= 0.0
     if direction > 0:
@@ -339,14 +348,14 @@ def crossed(g_old, g_new, direction):
 
 
 @jit
-def user_active(g_old, g_new, direction, i):
-    return crossed(g_old[i], g_new[i], direction[i])
+def user_active(g_old, g_new, direction, i, first):
+    return crossed(g_old[i], g_new[i], direction[i], first)
 
 
 @inline
-def any_user_active(g_old, g_new, direction):
+def any_user_active(g_old, g_new, direction, first):
     for i in range(direction.shape[0]):
-        if user_active(g_old, g_new, direction, i):
+        if user_active(g_old, g_new, direction, i, first):
             return True
     return False
 
@@ -465,9 +474,9 @@ def store_event(ev_t, ev_i, ev_y, n_ev, t, i, y):
 @inline
 def locate(sing, uev, n_sing, si, theta_hi, t_old, h, y_old, F, p, gs, sig, eps, gu_old,
            gu_new, ev_dir, ev_max, counts, ytmp, gtmp, roots, which, ev_t, ev_i, ev_y, n_ev,
-           y_stop):
+           y_stop, first):
     """Everything that happened in the step from t_old to t_old + h (si: index of an
-    indicator violated at theta_hi, or -1).
+    indicator violated at theta_hi, or -1; ``first``: whether it is the run's first).
 
     Records the user events (up to a stop), and returns
     ``(stop, t_stop, sing_index, ev_t, ev_i, ev_y, n_ev)``: stop is 0 (go on), EVENT or
@@ -485,7 +494,7 @@ def locate(sing, uev, n_sing, si, theta_hi, t_old, h, y_old, F, p, gs, sig, eps,
         t_sing = t_old + theta * h
     n_act = 0
     for i in range(ev_dir.shape[0]):
-        if user_active(gu_old, gu_new, ev_dir, i):
+        if user_active(gu_old, gu_new, ev_dir, i, first):
             roots[n_act] = brentq_event(uev, i, t_old, t_new, t_old, h, y_old, F, p, ytmp,
                                         gtmp)
             which[n_act] = i
@@ -561,9 +570,10 @@ def node_events_start(uev, t, row, cols, p, n_user):
 
 
 @jit
-def node_terminal(uev, t, row, cols, p, y, g_old, g_new, direction, max_events, counts):
-    """The user events from the previous node (``g_old``) to this one, with the rule of
-    ``user_active``: each crossing counted; True if a terminal event (its ``max_events``-th
+def node_terminal(uev, t, row, cols, p, y, g_old, g_new, direction, max_events, counts,
+                  first):
+    """The user events from the previous node (``g_old``) to this one (``first``: the
+    run's first step), with the rule of ``crossed``: each crossing counted; True if a terminal event (its ``max_events``-th
     crossing) occurred, so that the run ends at this node (the root between the two is
     located afterwards, ``numeric.discrete.node_events``).  ``g_old`` becomes this node's."""
     n_user = direction.shape[0]
@@ -572,7 +582,7 @@ def node_terminal(uev, t, row, cols, p, y, g_old, g_new, direction, max_events, 
     node_event_values(uev, t, row, cols, p, y, g_new)
     stop = False
     for i in range(n_user):
-        if user_active(g_old, g_new, direction, i):
+        if user_active(g_old, g_new, direction, i, first):
             counts[i] += 1
             if 0 < max_events[i] <= counts[i]:
                 stop = True

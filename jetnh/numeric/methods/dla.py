@@ -359,7 +359,7 @@ def _solve(step_residual, momentum, legendre, nodal, constraint_jac, sing, uev, 
         if mode != ENDPOINTS or step == n_steps - 1:
             ts, ys, n_out = store_node(nodal, ts, ys, n_out, t, q, v, p, n, nod, row)
         if node_terminal(uev, t, row, cols, p, ystate, gu_old, gu_new, ev_dir, ev_max,
-                         counts):
+                         counts, step == 0):
             status = EVENT
             break
     if mode == ENDPOINTS and status != FINISHED and stats[0] > 0:

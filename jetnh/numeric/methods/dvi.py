@@ -166,7 +166,7 @@ def _solve(step_residual, momentum, legendre, nodal, sing, uev, t0, t_end, q0, v
             if mode != ENDPOINTS or step == n_steps:
                 ts, ys, n_out = _store(nodal, ts, ys, n_out, t, ql, v, p, n, k, nod, row)
             if node_terminal(uev, t, row, cols, p, ystate, gu_old, gu_new, ev_dir, ev_max,
-                             counts):
+                             counts, step == 1):
                 status = EVENT
                 break
         if step == n_steps:

@@ -276,10 +276,11 @@ def finite_status(status, ys, n_out, y, n_sens):
 
 @jit
 def after_step(tab, fixed, rhs, sing, uev, p, t, h, t_new, y, y_new, K, F, ytmp, fmid, y_stop,
-               stats, watch, ws, si, sing_index, ev_t, ev_i, ev_y, n_ev):
+               stats, watch, ws, si, sing_index, ev_t, ev_i, ev_y, n_ev, first):
     """Singularity indicators and user events in the accepted step from (t, y) to
     (t_new, y_new) that ``_events.watch_end`` found needing more than their values at the
-    ends (``si``: the index of an indicator violated at the end, or -1): the search
+    ends (``si``: the index of an indicator violated at the end, or -1; ``first``: the
+    step is the run's first, ``_events.crossed``): the search
     inside the step (``_events.sing_dip``) and the location of stops and events
     (``_events.locate``).  Returns ``(stop, t_stop, sing_index, have_dense, ev_t, ev_i,
     ev_y, n_ev)``: stop is 0 (go on), EVENT or SINGULAR, with the stop state in
@@ -313,7 +314,7 @@ def after_step(tab, fixed, rhs, sing, uev, p, t, h, t_new, y, y_new, K, F, ytmp,
                 theta_hi = 1.0
         else:
             theta_hi = 1.0
-    if si >= 0 or any_user_active(gu_old, gu_new, ev_dir):
+    if si >= 0 or any_user_active(gu_old, gu_new, ev_dir, first):
         if not have_dense:
             if fixed:
                 rhs(t_new, y_new, p, K[ns])
@@ -323,7 +324,7 @@ def after_step(tab, fixed, rhs, sing, uev, p, t, h, t_new, y, y_new, K, F, ytmp,
         stop, t_stop, sing_index, ev_t, ev_i, ev_y, n_ev = locate(
             sing, uev, n_sing, si, theta_hi, t, h, y, F, p, gs, sig, eps, gu_old,
             gu_new, ev_dir, ev_max, counts, ytmp, gtmp, roots, which, ev_t, ev_i, ev_y,
-            n_ev, y_stop)
+            n_ev, y_stop, first)
     return stop, t_stop, sing_index, have_dense, ev_t, ev_i, ev_y, n_ev
 
 
@@ -535,7 +536,7 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
             if n_user > 0:
                 uev(t_new, y_new, p, gu_new)
                 for i in range(n_user):
-                    if crossed(gu_old[i], gu_new[i], ev_dir[i]):
+                    if crossed(gu_old[i], gu_new[i], ev_dir[i], step == 1):
                         more = True
             watched = False
             crawling = -1
@@ -544,7 +545,8 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
                     watched, crawling = sing_crawl(n_sing, gs_old, gs, sig, gref)
                 stop, t_stop, sing_index, have_dense, ev_t, ev_i, ev_y, n_ev = after_step(
                     tab, not ADAPTIVE, rhs, sing, uev, p, t, h, t_new, y, y_new, K, F, ytmp,
-                    fmid, y_stop, stats, watch, ws, si, sing_index, ev_t, ev_i, ev_y, n_ev)
+                    fmid, y_stop, stats, watch, ws, si, sing_index, ev_t, ev_i, ev_y, n_ev,
+                    step == 1)
             for i in range(n_sing):
                 gs_old[i] = gs[i]
             for i in range(n_user):

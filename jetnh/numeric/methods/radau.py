@@ -423,11 +423,12 @@ def _solve(rhs_at, jac_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, newto
         t_stop = t_new
         if WATCH:
             si, more = watch_end(sing, uev, n_sing, t_new, y_new, p, gs, gs_old, sig, eps,
-                                 gref, gu_old, gu_new, ev_dir)
+                                 gref, gu_old, gu_new, ev_dir, stats[0] == 1)
             if more:
                 stop, t_stop, sing_index, have_dense, ev_t, ev_i, ev_y, n_ev = after_step(
                     TAB, False, rhs, sing, uev, p, t, h, t_new, y, y_new, K, F, ytmp, fmid,
-                    y_stop, stats, watch, ws, si, sing_index, ev_t, ev_i, ev_y, n_ev)
+                    y_stop, stats, watch, ws, si, sing_index, ev_t, ev_i, ev_y, n_ev,
+                    stats[0] == 1)
             watch_next(n_sing, gs, gs_old, gu_old, gu_new)
         if WATCH or DENSE:
             ts, ys, n_out, j_eval = output(TAB, False, rhs, p, t, h, t_new, y, y_new, K, F,
