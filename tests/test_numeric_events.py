@@ -457,3 +457,8 @@ def test_a_root_on_a_node_counted_once(oscillator, method):
     assert list(tr.t_events[0]) == [0.0]
     np.testing.assert_allclose(tr.t_events[1], [1.0, 2 * np.pi - 1.0, 2 * np.pi + 1.0],
                                rtol=0, atol=1e-3)
+    if method == "rk4":         # an ensemble's runs: the same loop
+        ens = sc.ensemble(initial={"x": [1.0, 2.0]}, method=method, n_steps=1000,
+                          events=[t - 1, Event((t - 1) * (t - 3), terminal=2)])
+        np.testing.assert_array_equal(ens.event_counts, [[1, 2], [1, 2]])
+        np.testing.assert_array_equal(ens.status, [EVENT, EVENT])
