@@ -462,3 +462,26 @@ def test_a_root_on_a_node_counted_once(oscillator, method):
                           events=[t - 1, Event((t - 1) * (t - 3), terminal=2)])
         np.testing.assert_array_equal(ens.event_counts, [[1, 2], [1, 2]])
         np.testing.assert_array_equal(ens.status, [EVENT, EVENT])
+
+
+@pytest.mark.parametrize("method", ["dop853", "rk4", "dla"])
+def test_degenerate_events(oscillator, method):
+    """An event constant along a run is refused; one NaN at the initial state warns; one
+    that stays zero (x on a body at rest) is one root, at the start, whatever the method
+    (it was one per step: 27 with dop853, 1000 with rk4)."""
+    from jetnh.errors import JetnhWarning
+
+    J = oscillator.system.J
+    x = J.q[0]
+    kw = dict(n_steps=1000) if method in ("rk4", "dla") else {}
+    for const in (sp.Integer(0), x - x, sp.Integer(2)):
+        with pytest.raises(JetnhError, match="depends on neither t nor the state"):
+            oscillator.run(method=method, events=[J.t - 1, const], **kw)
+    with pytest.warns(JetnhWarning, match=r"'sqrt\(x - 2\)' are NaN or infinite at the "
+                                          r"initial state \(t = 0\)"):
+        tr = oscillator.run(method=method, events=[sp.sqrt(x - 2)], **kw)
+    assert tr.status == FINISHED and len(tr.t_events[0]) == 0
+    rest = oscillator.replace(initial=dict(x=0.0, x_t=0.0))
+    for ev in (x, Event(x, direction=1)):
+        tr = rest.run(method=method, events=[ev], **kw)
+        assert list(tr.t_events[0]) == [0.0]

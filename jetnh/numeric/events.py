@@ -30,6 +30,11 @@ inside the compiled loop (``methods._events``).  dla and dvi evaluate the events
 every node as they go and end the run at the node after a terminal one; the roots are
 then located on the linear interpolant between the nodes (``discrete.node_events``).
 
+An expression that depends on neither t nor the state is refused (constant along a run,
+it never crosses zero); an event that is NaN or infinite at the initial state gets a
+``JetnhWarning`` (it does not fire where it is not finite).  A function that stays
+exactly zero over an interval is one root, at its first zero (by the rule above).
+
 Resolution limit (as scipy's): an event is seen where its function changes sign between
 the ends of an accepted step; an even number of crossings inside one step (an event on
 ``sin(1000 t)`` with steps longer than its half period pi/1000) cancels out and is not
@@ -150,6 +155,36 @@ def _check_symbols(scene, expr, name):
             + (f" and the parameters {', '.join(sorted(scene.params))}" if scene.params else ""))
 
 
+def _check_varies(scene, expr, name):
+    """Refuse an expression free of t and of the state: constant along a run, it never
+    changes sign (identically zero, it would be a root at every node)."""
+    J = scene.system.J
+    moving = {J.t.name} | {s.name for s in J.q + J.qd} | set(scene.multipliers)
+    if not any(s.name in moving for s in expr.free_symbols):
+        raise JetnhError(
+            f"event {name!r} is {expr}, which depends on neither t nor the state: it is "
+            "constant along a run and never crosses zero (identically zero, it would be a "
+            "root everywhere); give an expression in t, the coordinates, the velocities or "
+            "the multipliers")
+
+
+def warn_not_finite(ce, t, y, p):
+    """A ``JetnhWarning`` for every event that is NaN or infinite at the start (t, y) of
+    a run with the parameters p: such a function has no sign there, and an event whose
+    value is never finite never fires."""
+    import warnings
+
+    from ..errors import JetnhWarning
+
+    with np.errstate(all="ignore"):
+        bad = [nm for nm, f in zip(ce.names, ce.python_funcs)
+               if not np.isfinite(f(t, y, p))]
+    if bad:
+        warnings.warn(f"the events {', '.join(map(repr, bad))} are NaN or infinite at the "
+                      f"initial state (t = {t:.17g}): they do not fire where they are not "
+                      "finite", JetnhWarning, stacklevel=3)
+
+
 def compile_events(scene, events: list[Event]) -> CompiledEvents:
     """One kernel computing every event of ``events`` (expressions compiled with the
     scene's conventions and cached on disk; callables compiled by numba)."""
@@ -162,6 +197,7 @@ def compile_events(scene, events: list[Event]) -> CompiledEvents:
     calls = [(i, e.fun) for i, e in enumerate(events) if not e.is_expression]
     for i, expr in exprs:
         _check_symbols(scene, expr, events[i].name)
+        _check_varies(scene, expr, events[i].name)
     kernel = None
     if exprs:
         spec = scene.spec.but(variant="events", events=tuple(exprs))

@@ -31,7 +31,7 @@ from .methods import STATUS_TEXT, Solver
 from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, FINISHED, NONFINITE,
                               SINGULAR, STIFF, STOPPED, TOO_SMALL_STEP,
                               entry_point)
-from .events import split_records
+from .events import split_records, warn_not_finite
 from .kernels import sensitivity_kernels
 from .methods.loop import Control, Result, Watch
 from .options import fields_of, options
@@ -335,6 +335,8 @@ def augmented(layout, y0) -> np.ndarray:
 def run(scene, plan, y, p, own=False) -> Trajectory:
     """The trajectory of ``plan`` from the state ``y`` (checked, its own array) with the
     run-time parameters ``p``; ``own``: these are the scene's own initial values."""
+    if plan.ce is not None:
+        warn_not_finite(plan.ce, plan.t0, y, p)
     if plan.direct:             # one call of the compiled loop, first: most runs are
         halt = _HALT.copy()
         tic = _clock()
