@@ -485,3 +485,15 @@ def test_degenerate_events(oscillator, method):
     for ev in (x, Event(x, direction=1)):
         tr = rest.run(method=method, events=[ev], **kw)
         assert list(tr.t_events[0]) == [0.0]
+
+
+def test_huge_states_are_named_in_the_stop(oscillator):
+    """x0 cos t from x0 = 1e150 / 1e200 stays finite, but squares of such states overflow
+    in the error norms: the stop says so, not that the solution blows up."""
+    tr = oscillator.replace(initial=dict(x=1e150, x_t=0.0)).run(method="radau")
+    assert tr.status != FINISHED
+    assert "1e+150 in size: beyond ~1e+145 the squares" in tr.stop_reason
+    assert "blow up" not in tr.stop_reason
+    with pytest.raises(IntegrationError, match=r"1e\+200 in size: beyond ~1e\+145 the "
+                                               r"squares .* rescale the states"):
+        oscillator.replace(initial=dict(x=1e200, x_t=0.0)).run(method="dop853")

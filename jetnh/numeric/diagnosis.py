@@ -33,6 +33,8 @@ def timeout_reason(timeout, t) -> str:
 PROBE_REACH = 1e3
 #: parameter values beyond this factor from 1 are named when the rhs overflows
 FAR_SCALE = 1e30
+#: states beyond this size overflow the squares in the step-size control's norms
+HUGE_STATE = 1e145
 
 
 def explain_nonfinite(scene, kern, t, y, p, t0, y_init, tol) -> int:
@@ -202,6 +204,8 @@ def small_step_reason(scene, kern, method, t, y, p, t0, y_init) -> str:
     reason = (f"{method}: the step size fell below the spacing of floating-point numbers "
               f"at t = {float(t):.17g}")
     near = near_singular(scene, kern, t, y, p, t0, y_init)
+    if near is None and huge_state(y):
+        return reason + ". " + huge_state(y)
     if near is None:
         return (reason + ": the solution may blow up there, or the problem is too stiff "
                 "for this tolerance; try a looser rtol, or method='radau'")
@@ -319,6 +323,19 @@ def far_parameters(scene, p) -> list[str]:
     return far
 
 
+def huge_state(y) -> str:
+    """What a state beyond ``HUGE_STATE`` does to a run (the squares of its components
+    overflow in the error norms, the motion need not blow up), or ''."""
+    with np.errstate(all="ignore"):
+        big = float(np.max(np.abs(y))) if np.size(y) else 0.0
+    if not (np.isfinite(big) and big > HUGE_STATE):
+        return ""
+    return (f"The state is {big:.3g} in size: beyond ~{HUGE_STATE:.0e} the squares in the "
+            "step-size control's norms overflow (the largest double is 1.8e308), whether "
+            "or not the motion blows up; rescale the states (choose units in which they "
+            "are of moderate size)")
+
+
 def overflow_hint(far) -> str:
     """What to do when values overflow at a regular configuration (``far``: the
     parameters far from unit scale, ``far_parameters``)."""
@@ -355,7 +372,8 @@ def raise_nonfinite(scene, method, t, y, kern=None, p=None, t0=None, y_init=None
                     + " at a configuration where every singularity indicator is regular: "
                     "it overflowed (or produced inf - inf = NaN), no singular "
                     "configuration. " + overflow_hint(far))
-    why = ("No singularity indicator explains it: the solution blows up, or an "
+    why = (huge_state(y) if huge_state(y) and kern is not None and checked else
+           "No singularity indicator explains it: the solution blows up, or an "
            "expression leaves its domain; check the model and the initial values, or "
            "integrate a shorter span" + size if kern is not None and checked else
            "The singularity checks were off (singular='ignore'); run with "
