@@ -51,6 +51,7 @@ arrays (``Scene.ensemble`` calls it), so a later ``jetnh.sweep`` can hand it chu
 
 from __future__ import annotations
 
+import math
 import time
 import warnings
 from functools import cached_property
@@ -70,6 +71,7 @@ from .options import options
 PARALLEL = ("prange", "threads", "serial")
 _FLOAT64 = np.dtype(np.float64)
 _NO_SWITCHES = FrozenDict()
+_NO_GIVEN = FrozenDict()        # (no dependent velocity given: ``resolve``)
 
 
 def _name(key) -> str:
@@ -100,6 +102,18 @@ def _n_runs(columns: dict, n_from_array: int | None) -> int:
 def resolve(scene, initial=None, params=None, project=False):
     """The scene to run (with the varying parameters as run-time inputs), the initial
     states Y0 [n_runs, n_states] and the run-time parameters P [n_runs, n_p]."""
+    if (params is None and type(initial) is np.ndarray and initial.dtype is _FLOAT64
+            and initial.shape == (1, len(scene.state_names))
+            and math.isfinite(sum(initial[0].tolist()))):
+        # one finite float64 row (an ensemble of one): its checks at once (a NaN or an
+        # infinity makes the sum not finite; an overflow of finite values takes the
+        # general route, which looks at each entry)
+        Y0, P = initial.copy(), scene._p[None, :].copy()
+        if scene.dependent_velocities:
+            _check_split(scene, Y0, P, _NO_GIVEN, project)
+        if scene.system.holonomic:
+            _check_holonomic(scene, Y0, P)
+        return scene, Y0, P
     params = ({_name(k): _column(v, f"params[{_name(k)!r}]") for k, v in params.items()}
               if params else None)
     if params:
@@ -610,14 +624,19 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
         key = ("batch", scene.t_span, opts, method, save, solve.hashable(events),
                solve.hashable(t_eval), timeout, sensitivities, sensitivity_error)
         key = (key, tuple(map(type, key)))
-    plan = solve.planned(scene, key, lambda: solve.plan(
-        scene, method, opts=opts, t_eval=t_eval, save=save, events=events, timeout=timeout,
-        sensitivities=sensitivities, sensitivity_error=sensitivity_error, batch=True))
+
+    def batch_plan():
+        return solve.planned(scene, key, lambda: solve.plan(
+            scene, method, opts=opts, t_eval=t_eval, save=save, events=events,
+            timeout=timeout, sensitivities=sensitivities,
+            sensitivity_error=sensitivity_error, batch=True))
     workers = int(workers or numba.config.NUMBA_NUM_THREADS)
-    if Y0.shape[0] == 1:
-        one = _single(scene, plan, opts, t_eval, save, timeout)
-        if one is not None:         # an ensemble of one: a run
+    if Y0.shape[0] == 1:            # an ensemble of one: a run, where it can be
+        one = solve.planned(scene, ("one", key), lambda: _single_plan(
+            scene, batch_plan(), opts, t_eval, save, timeout))
+        if one:
             return _of_one(scene, one, Y0, P, on_error, parallel, workers, save)
+    plan = batch_plan()
     method = plan.method.name
     sens = Y_A = None
     if plan.sens is None:
@@ -701,19 +720,12 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
                     reasons=reasons, sensitivities=sens, layout=plan.kern.layout)
 
 
-def _single(scene, plan, opts, t_eval, save, timeout):
-    """The plan of a single run (``Scene.run``) that gives an ensemble of one of the
-    ensemble's plan ``plan`` (kept with the plans, under ``(plan,)``), or None where
-    the ensemble's driver must run it: with events, sensitivities or a chart's edge to
-    watch, an implicit or fixed-step method, or holonomic constraints (whose rows
-    ``_on_constraints`` moves)."""
-    found = solve.planned(scene, (plan,), lambda: _single_plan(scene, plan, opts, t_eval,
-                                                               save, timeout))
-    return found or None
-
-
 def _single_plan(scene, plan, opts, t_eval, save, timeout):
-    """``_single``'s plan, made (False where there is none)."""
+    """The plan of a single run (``Scene.run``) that gives an ensemble of one of the
+    ensemble's plan ``plan`` (``run_resolved`` keeps it with the plans, under
+    ``("one", key)`` of ``plan``'s key), or False where the ensemble's driver must run
+    it: with events, sensitivities or a chart's edge to watch, an implicit or fixed-step
+    method, or holonomic constraints (whose rows ``_on_constraints`` moves)."""
     m = plan.method
     if (plan.ce is not None or plan.sens is not None or plan.switch or not m.adaptive
             or m.solver is not Solver.EXPLICIT or plan.ctl.n_hol):
@@ -727,12 +739,12 @@ _NO_EV_N, _NO_EV_T = readonly((np.zeros((1, 0), dtype=np.int64), np.zeros((1, 0)
 
 def _of_one(scene, plan, Y0, P, on_error, parallel, workers, save) -> Ensemble:
     """The ensemble of the one run of ``Y0``, ``P`` by the single-run loop of ``plan``
-    (``_single``): what the ensemble's driver stores of its run
+    (``_single_plan``): what the ensemble's driver stores of its run
     (``methods._common.collect``), the same steps.  Its arrays are views of the loop's
     own (no copies); the loop never reports a success with a NaN or an infinity in its
     rows or last state (``loop.finite_status``), as ``run_resolved`` makes sure of the
     driver's runs."""
-    halt = np.zeros(1, dtype=np.int64)
+    halt = solve._HALT.copy()
     tic = _clock()
     # (a direct plan's loop reads y0 into a copy of its own: the row itself)
     out = interrupt.call(plan.entry, halt, plan.limit,

@@ -364,21 +364,27 @@ class Scene(Frozen):
         ``FLOAT_MARGIN`` from zero and every value is finite: there, the 30-digit
         evaluation is finite too and the two differ by rounding only; elsewhere (a
         configuration near or at a singular one) the caller evaluates at 30 digits."""
-        lay = kern.layout
-        if lay.dependent_velocities != self.dependent_velocities:
+        route = self._memo.get("dv_route")
+        if route is None or route[0] is not kern:      # (looked up once per kernels)
+            lay = kern.layout
+            route = (kern, lay.dependent_velocities == self.dependent_velocities
+                     and (not lay.indicators or hasattr(kern, "sing")),
+                     getattr(kern, "sing", None), len(lay.indicators), kern.aux, lay.n_aux,
+                     len(lay.dependent_velocities))
+            self._memo["dv_route"] = route
+        _, applies, sing, n_ind, aux_of, n_aux, n_dep = route
+        if not applies:
             return None
         t0 = self.t_span[0]
-        if lay.indicators:
-            if not hasattr(kern, "sing"):
-                return None
-            g = np.empty(len(lay.indicators))
-            kern.sing(t0, y, p, g)
+        if n_ind:
+            g = np.empty(n_ind)
+            sing(t0, y, p, g)
             g = g.tolist()      # (a NaN or an infinity makes the sum not finite)
             if not (math.isfinite(sum(g)) and all(map(FLOAT_MARGIN.__le__, map(abs, g)))):
                 return None
-        aux = np.empty(lay.n_aux)
-        kern.aux(t0, y, p, aux)
-        values = aux[:len(lay.dependent_velocities)].tolist()
+        aux = np.empty(n_aux)
+        aux_of(t0, y, p, aux)
+        values = aux[:n_dep].tolist()
         if not math.isfinite(sum(values)):      # (a NaN, an infinity or an overflow)
             return None
         return dict(zip(self.dependent_velocities, values))
@@ -466,16 +472,40 @@ class Scene(Frozen):
             memo["quick"] = own["quick"]
         d["_memo"] = memo      # (frozen from here: ``_initial`` sets nothing when it
         #                        neither projects nor completes)
-        ini, y = new._initial(initial, False, False, kern, p)
+        got = None if kern is None else new._moved_states(initial, kern, p)
+        if got is None:
+            ini, y = new._initial(initial, False, False, kern, p)
+            if y is None:
+                y = np.array(self._states_of(ini), dtype=float)
+        else:
+            ini, y = got
         ini = FrozenDict(ini)
-        if y is None:
-            y = np.array(self._states_of(ini), dtype=float)
         # (this copy's own state array: its direct runs' ``_y0``, y0 a read-only view)
         memo["_y0"] = y
         y0 = y.view()
         y0.setflags(write=False)
         d.update(initial=ini, y0=y0)
         return new
+
+    def _moved_states(self, initial, kern, p):
+        """``_initial(initial, False, False, kern, p)`` of the most common initial values
+        at once: a dict of the states (no dependent velocity) as finite floats, no
+        holonomic constraint, the dependent velocities from the compiled kernels
+        (``_dependent_velocity_floats``); None where it does not apply (the general
+        route then checks them and names what is wrong)."""
+        if type(initial) is not dict or initial.keys() != self._state_set:
+            return None
+        states = self._states_of(initial)
+        if (set(map(type, states)) != _FLOAT or not math.isfinite(sum(states))
+                or self.system.holonomic):
+            return None
+        y = np.array(states)
+        required = self._dependent_velocity_floats(y, kern, p)
+        if required is None:
+            return None
+        out = dict(initial)
+        out.update(required)
+        return out, y
 
     def _shared_memo(self) -> dict:
         """What a scene with the same kernels takes over from this one's memo
@@ -868,7 +898,7 @@ class Scene(Frozen):
 #: kernels' keys, the plans of runs (``solve.planned``) and those taken over on other
 #: time spans, compiled events, whether an atlas applies and the first atlas (whose
 #: charts the others share: ``atlas.atlas``)
-_SHARED = ("spec", "key", "plans", "spans", "events", "atlas_applies", "atlases")
+_SHARED = ("spec", "key", "plans", "spans", "events", "atlas_applies", "atlases", "dv_route")
 
 
 _FLOAT = {float}
