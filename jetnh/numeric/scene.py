@@ -364,15 +364,7 @@ class Scene(Frozen):
         ``FLOAT_MARGIN`` from zero and every value is finite: there, the 30-digit
         evaluation is finite too and the two differ by rounding only; elsewhere (a
         configuration near or at a singular one) the caller evaluates at 30 digits."""
-        route = self._memo.get("dv_route")
-        if route is None or route[0] is not kern:      # (looked up once per kernels)
-            lay = kern.layout
-            route = (kern, lay.dependent_velocities == self.dependent_velocities
-                     and (not lay.indicators or hasattr(kern, "sing")),
-                     getattr(kern, "sing", None), len(lay.indicators), kern.aux, lay.n_aux,
-                     len(lay.dependent_velocities))
-            self._memo["dv_route"] = route
-        _, applies, sing, n_ind, aux_of, n_aux, n_dep = route
+        _, applies, sing, n_ind, aux_of, n_aux, n_dep = self._dv_route(kern)
         if not applies:
             return None
         t0 = self.t_span[0]
@@ -388,6 +380,21 @@ class Scene(Frozen):
         if not math.isfinite(sum(values)):      # (a NaN, an infinity or an overflow)
             return None
         return dict(zip(self.dependent_velocities, values))
+
+    def _dv_route(self, kern) -> tuple:
+        """What ``_dependent_velocity_floats`` calls of ``kern``: (kern, whether it
+        applies, the sing kernel, its size, the aux kernel, its size, the number of
+        dependent velocities), looked up once per kernels (memo ``dv_route``, shared by
+        the copies ``replace`` makes)."""
+        route = self._memo.get("dv_route")
+        if route is None or route[0] is not kern:
+            lay = kern.layout
+            route = (kern, lay.dependent_velocities == self.dependent_velocities
+                     and (not lay.indicators or hasattr(kern, "sing")),
+                     getattr(kern, "sing", None), len(lay.indicators), kern.aux, lay.n_aux,
+                     len(lay.dependent_velocities))
+            self._memo["dv_route"] = route
+        return route
 
     # ------------------------------------------------------------------ kernels
     @memo
@@ -461,15 +468,27 @@ class Scene(Frozen):
         d.update(t_span=self.t_span if t_span is self.t_span else self._t_span(t_span),
                  projected={}, completed={})
         own = self._memo
-        key = own.get("key")
-        kern = None if key is None else _loaded_kernels(key, self.cache)
-        p = own.get("_p")
-        if p is None:
-            p = self._p
-        memo = self._shared_memo()
-        memo["_p"] = p
-        if t_span is self.t_span and "quick" in own:    # (the quick plans: of this span)
-            memo["quick"] = own["quick"]
+        hit = own.get("moved")
+        if hit is None or hit[0] != len(own) or hit[1] is None:
+            # (what the copies take over, looked up again when this memo grew, or until
+            # the kernels are loaded)
+            key = own.get("key")
+            kern = None if key is None else _loaded_kernels(key, self.cache)
+            if kern is not None:
+                self._dv_route(kern)        # (this scene's, shared below)
+            p = own.get("_p")
+            if p is None:
+                p = self._p
+            shared = self._shared_memo()
+            shared["_p"] = p
+            if "quick" in own:
+                shared["quick"] = own["quick"]
+            own["moved"] = None
+            hit = own["moved"] = (len(own), kern, p, shared)
+        _, kern, p, memo = hit
+        memo = dict(memo)
+        if t_span is not self.t_span:       # (the quick plans: of this span)
+            memo.pop("quick", None)
         d["_memo"] = memo      # (frozen from here: ``_initial`` sets nothing when it
         #                        neither projects nor completes)
         got = None if kern is None else new._moved_states(initial, kern, p)
