@@ -72,6 +72,11 @@ PARALLEL = ("prange", "threads", "serial")
 _FLOAT64 = np.dtype(np.float64)
 _NO_SWITCHES = FrozenDict()
 _NO_GIVEN = FrozenDict()        # (no dependent velocity given: ``resolve``)
+#: the event columns of an ensemble of one (``_of_one``: its plan watches no events)
+_NO_EV_N, _NO_EV_T = readonly((np.zeros((1, 0), dtype=np.int64), np.zeros((1, 0))))
+#: what an ensemble of one run has of no events, switches or sensitivities (``_fill``)
+_ONE_RUN = dict(event_names=(), switches=_NO_SWITCHES, switching=False,
+                _pieces=_NO_SWITCHES, _reasons=_NO_SWITCHES, sensitivity_columns=())
 
 
 def _name(key) -> str:
@@ -247,13 +252,17 @@ class Ensemble(Frozen):
                    switching, switches, pieces, reasons, sensitivities, layout)
 
     @classmethod
-    def _made(cls, *args) -> "Ensemble":
-        """``Ensemble(*args)`` (positionally, every argument) without the wrapper that
-        freezes it after ``__init__`` (``jetnh.frozen``): an ensemble of one is a
-        run's result."""
+    def _of_run(cls, scene, method, t, y, info, t_last, y_last, Y0, P, wall_time, parallel,
+                workers, save, singular_tol, layout) -> "Ensemble":
+        """The ensemble of one run (``_of_one``: no events, sensitivities or changes of
+        split), its attributes in one go (as ``_fill`` sets them) without the wrapper
+        that freezes it after ``__init__`` (``jetnh.frozen``): a run's result."""
         self = object.__new__(cls)
-        self._fill(*args)
-        self.__dict__["_memo"] = {}
+        self.__dict__.update(
+            _ONE_RUN, _arrays=(info, t_last, y_last, _NO_EV_N, _NO_EV_T, Y0, P, None, t, y),
+            scene=scene, method=method, param_names=scene.runtime_params,
+            wall_time=wall_time, parallel=parallel, workers=workers, save=save,
+            _singular_tol=singular_tol, layout=layout, _memo={})
         return self
 
     def _fill(self, scene, method, t, y, info, t_last, y_last, ev_n, ev_t, Y0, P,
@@ -733,8 +742,6 @@ def _single_plan(scene, plan, opts, t_eval, save, timeout):
     return solve.plan(scene, m, opts=opts, t_eval=t_eval, save=save, timeout=timeout)
 
 
-#: the event columns of an ensemble of one (``_of_one``: its plan watches no events)
-_NO_EV_N, _NO_EV_T = readonly((np.zeros((1, 0), dtype=np.int64), np.zeros((1, 0))))
 
 
 def _of_one(scene, plan, Y0, P, on_error, parallel, workers, save) -> Ensemble:
@@ -774,10 +781,9 @@ def _of_one(scene, plan, Y0, P, on_error, parallel, workers, save) -> Ensemble:
         INFO, T_LAST = np.array(INFO, dtype=np.int64), np.array(T_LAST, dtype=float)
         _explain(scene, plan.method.name, plan.kern, plan.checked, plan.singular_tol,
                  on_error, INFO, T_LAST, Y_LAST, P, Y0)
-    return Ensemble._made(scene, plan.method.name, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST,
-                          _NO_EV_N, _NO_EV_T, Y0, P, (), wall, parallel,
-                          workers if parallel != "serial" else 1, save, plan.singular_tol,
-                          False, None, None, None, None, plan.kern.layout)
+    return Ensemble._of_run(scene, plan.method.name, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST,
+                            Y0, P, wall, parallel, workers if parallel != "serial" else 1,
+                            save, plan.singular_tol, plan.kern.layout)
 
 
 _clock = time.perf_counter
