@@ -72,6 +72,9 @@ PARALLEL = ("prange", "threads", "serial")
 _FLOAT64 = np.dtype(np.float64)
 _NO_SWITCHES = FrozenDict()
 _NO_GIVEN = FrozenDict()        # (no dependent velocity given: ``resolve``)
+#: the quick plans of a scene that kept none (``run_ensemble``: its key is hashed all the
+#: same)
+_NONE_KEPT: dict = {}
 #: the event columns of an ensemble of one (``_of_one``: its plan watches no events)
 _NO_EV_N, _NO_EV_T = readonly((np.zeros((1, 0), dtype=np.int64), np.zeros((1, 0))))
 #: what an ensemble of one run has of no events, switches or sensitivities (``_fill``)
@@ -107,18 +110,8 @@ def _n_runs(columns: dict, n_from_array: int | None) -> int:
 def resolve(scene, initial=None, params=None, project=False):
     """The scene to run (with the varying parameters as run-time inputs), the initial
     states Y0 [n_runs, n_states] and the run-time parameters P [n_runs, n_p]."""
-    if (params is None and type(initial) is np.ndarray and initial.dtype is _FLOAT64
-            and initial.shape == (1, len(scene.state_names))
-            and math.isfinite(sum(initial[0].tolist()))):
-        # one finite float64 row (an ensemble of one): its checks at once (a NaN or an
-        # infinity makes the sum not finite; an overflow of finite values takes the
-        # general route, which looks at each entry)
-        Y0, P = initial.copy(), scene._p[None, :].copy()
-        if scene.dependent_velocities:
-            _check_split(scene, Y0, P, _NO_GIVEN, project)
-        if scene.system.holonomic:
-            _check_holonomic(scene, Y0, P)
-        return scene, Y0, P
+    if params is None and _one_row(scene, initial):
+        return (scene, *_of_row(scene, initial, project))
     params = ({_name(k): _column(v, f"params[{_name(k)!r}]") for k, v in params.items()}
               if params else None)
     if params:
@@ -183,6 +176,25 @@ def resolve(scene, initial=None, params=None, project=False):
     if scene.system.holonomic:
         _check_holonomic(scene, Y0, P)
     return scene, Y0, P          # (C-contiguous: made so here)
+
+
+def _one_row(scene, initial) -> bool:
+    """Whether ``initial`` is one finite float64 row of states (an ensemble of one,
+    checked at once: ``_of_row``); a NaN or an infinity makes the sum not finite, an
+    overflow of finite values takes the general route, which looks at each entry."""
+    return (type(initial) is np.ndarray and initial.dtype is _FLOAT64
+            and initial.shape == (1, len(scene.state_names))
+            and math.isfinite(sum(initial[0].tolist())))
+
+
+def _of_row(scene, initial, project) -> tuple[np.ndarray, np.ndarray]:
+    """``resolve``'s Y0 and P of the one row ``initial`` (``_one_row``), checked."""
+    Y0, P = initial.copy(), scene._p[None, :].copy()
+    if scene.dependent_velocities:
+        _check_split(scene, Y0, P, _NO_GIVEN, project)
+    if scene.system.holonomic:
+        _check_holonomic(scene, Y0, P)
+    return Y0, P
 
 
 def _check_holonomic(scene, Y0, P):
@@ -609,12 +621,37 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
     ``sensitivities`` and ``sensitivity_error`` as there);
     ``max_steps`` and ``timeout`` are budgets of each run and of the whole ensemble;
     Ctrl-C stops every run within one step."""
+    quick = None
+    if (params is None and t_eval is None and events is None and timeout is None
+            and step is None and newton is None and sensitivities is False
+            and sensitivity_error is True and _one_row(scene, initial)):
+        # an ensemble of one row with options that are numbers and strings (a loop of
+        # such calls): the plan of its run kept in the scene's memo under them and their
+        # types (as ``Scene.run`` keeps its plans), at once
+        try:
+            quick = (method, save, singular, parallel, workers, on_error, type(method),
+                     type(save), type(singular), type(parallel), type(workers),
+                     type(on_error))
+            for k, v in keywords.items():
+                quick += (k, v, type(v))
+            one = scene._memo.get("quick_one", _NONE_KEPT)[quick]
+        except (KeyError, TypeError) as exc:     # not planned yet, or not hashable
+            quick = quick if type(exc) is KeyError else None
+        else:
+            Y0, P = _of_row(scene, initial, project)
+            return _of_one(scene, one, Y0, P, on_error, parallel,
+                           int(workers or numba.config.NUMBA_NUM_THREADS), save)
     opts = options(step, singular, newton, **keywords)
     if parallel not in PARALLEL:
         raise JetnhError(f"parallel must be one of {PARALLEL}, not {parallel!r}")
     if on_error not in ("raise", "record"):
         raise JetnhError(f"on_error must be 'raise' or 'record', not {on_error!r}")
     scene, Y0, P = resolve(scene, initial, params, project)
+    if quick is not None:
+        one = _one_plan(scene, opts, None, save, method, None, None, False, True)
+        kept = scene._memo.setdefault("quick_one", {})
+        if one and len(kept) < solve.MAX_PLANS:
+            kept[quick] = one
     return run_resolved(scene, Y0, P, opts, t_eval=t_eval, save=save, method=method,
                         events=events, parallel=parallel, workers=workers,
                         on_error=on_error, timeout=timeout, sensitivities=sensitivities,
@@ -626,26 +663,14 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
                  timeout=None, sensitivities=False, sensitivity_error=True) -> Ensemble:
     """``run_ensemble`` of the runs ``resolve`` gave (``scene``, the rows of ``Y0`` and
     ``P``) with the run options ``opts`` (``numeric.options.Options``)."""
-    if (events is None and t_eval is None and timeout is None and sensitivities is False
-            and sensitivity_error is True and type(method) is str and type(save) is str):
-        key = ("batch", scene.t_span, opts, method, save)     # the defaults, sooner
-    else:
-        key = ("batch", scene.t_span, opts, method, save, solve.hashable(events),
-               solve.hashable(t_eval), timeout, sensitivities, sensitivity_error)
-        key = (key, tuple(map(type, key)))
-
-    def batch_plan():
-        return solve.planned(scene, key, lambda: solve.plan(
-            scene, method, opts=opts, t_eval=t_eval, save=save, events=events,
-            timeout=timeout, sensitivities=sensitivities,
-            sensitivity_error=sensitivity_error, batch=True))
     workers = int(workers or numba.config.NUMBA_NUM_THREADS)
     if Y0.shape[0] == 1:            # an ensemble of one: a run, where it can be
-        one = solve.planned(scene, ("one", key), lambda: _single_plan(
-            scene, batch_plan(), opts, t_eval, save, timeout))
+        one = _one_plan(scene, opts, t_eval, save, method, events, timeout, sensitivities,
+                        sensitivity_error)
         if one:
             return _of_one(scene, one, Y0, P, on_error, parallel, workers, save)
-    plan = batch_plan()
+    plan = _batch_plan(scene, opts, t_eval, save, method, events, timeout, sensitivities,
+                       sensitivity_error)
     method = plan.method.name
     sens = Y_A = None
     if plan.sens is None:
@@ -729,12 +754,42 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
                     reasons=reasons, sensitivities=sens, layout=plan.kern.layout)
 
 
+def _batch_key(scene, opts, t_eval, save, method, events, timeout, sensitivities,
+               sensitivity_error) -> tuple:
+    """The key of an ensemble's plan among the scene's plans (``solve.planned``)."""
+    if (events is None and t_eval is None and timeout is None and sensitivities is False
+            and sensitivity_error is True and type(method) is str and type(save) is str):
+        return ("batch", scene.t_span, opts, method, save)     # the defaults, sooner
+    key = ("batch", scene.t_span, opts, method, save, solve.hashable(events),
+           solve.hashable(t_eval), timeout, sensitivities, sensitivity_error)
+    return (key, tuple(map(type, key)))
+
+
+def _batch_plan(scene, opts, t_eval, save, method, events, timeout, sensitivities,
+                sensitivity_error) -> solve.Plan:
+    """The plan of an ensemble's driver (``solve.plan(..., batch=True)``), kept."""
+    key = _batch_key(scene, opts, t_eval, save, method, events, timeout, sensitivities,
+                     sensitivity_error)
+    return solve.planned(scene, key, lambda: solve.plan(
+        scene, method, opts=opts, t_eval=t_eval, save=save, events=events, timeout=timeout,
+        sensitivities=sensitivities, sensitivity_error=sensitivity_error, batch=True))
+
+
+def _one_plan(scene, opts, *args):
+    """The plan of the single run that gives an ensemble of one (``_single_plan``) of
+    the ensemble's options (``_batch_plan``'s ``args``), kept with the plans under
+    ``("one", key)`` of the ensemble's key; False where there is none."""
+    key = ("one", _batch_key(scene, opts, *args))
+    t_eval, save, timeout = args[0], args[1], args[4]
+    return solve.planned(scene, key, lambda: _single_plan(
+        scene, _batch_plan(scene, opts, *args), opts, t_eval, save, timeout))
+
+
 def _single_plan(scene, plan, opts, t_eval, save, timeout):
     """The plan of a single run (``Scene.run``) that gives an ensemble of one of the
-    ensemble's plan ``plan`` (``run_resolved`` keeps it with the plans, under
-    ``("one", key)`` of ``plan``'s key), or False where the ensemble's driver must run
-    it: with events, sensitivities or a chart's edge to watch, an implicit or fixed-step
-    method, or holonomic constraints (whose rows ``_on_constraints`` moves)."""
+    ensemble's plan ``plan``, or False where the ensemble's driver must run it: with
+    events, sensitivities or a chart's edge to watch, an implicit or fixed-step method,
+    or holonomic constraints (whose rows ``_on_constraints`` moves)."""
     m = plan.method
     if (plan.ce is not None or plan.sens is not None or plan.switch or not m.adaptive
             or m.solver is not Solver.EXPLICIT or plan.ctl.n_hol):
