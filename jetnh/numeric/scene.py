@@ -364,7 +364,15 @@ class Scene(Frozen):
         ``FLOAT_MARGIN`` from zero and every value is finite: there, the 30-digit
         evaluation is finite too and the two differ by rounding only; elsewhere (a
         configuration near or at a singular one) the caller evaluates at 30 digits."""
-        _, applies, sing, n_ind, aux_of, n_aux, n_dep = self._dv_route(kern)
+        values = self._dependent_velocity_list(y, self._dv_route(kern), p)
+        if values is None:
+            return None
+        return dict(zip(self.dependent_velocities, values))
+
+    def _dependent_velocity_list(self, y, route, p) -> list[float] | None:
+        """``_dependent_velocity_floats`` by the kernels of ``route`` (``_dv_route``):
+        the values in the order of ``dependent_velocities``, or None."""
+        _, applies, sing, n_ind, aux_of, n_aux, n_dep = route
         if not applies:
             return None
         t0 = self.t_span[0]
@@ -376,10 +384,10 @@ class Scene(Frozen):
                 return None
         aux = np.empty(n_aux)
         aux_of(t0, y, p, aux)
-        values = aux[:n_dep].tolist()
+        values = aux.tolist()[:n_dep]
         if not math.isfinite(sum(values)):      # (a NaN, an infinity or an overflow)
             return None
-        return dict(zip(self.dependent_velocities, values))
+        return values
 
     def _dv_route(self, kern) -> tuple:
         """What ``_dependent_velocity_floats`` calls of ``kern``: (kern, whether it
@@ -427,7 +435,7 @@ class Scene(Frozen):
         """A scene equal to this one except for ``changes`` (constructor arguments:
         params, initial, t_span, runtime_params, integrals, ...).  The initial values
         are the states' (dependent velocities follow from the constraints again)."""
-        if changes.keys() <= {"initial", "t_span"}:
+        if changes.keys() <= _MOVED:
             initial = changes.get("initial", self.initial)
             return self._moved({n: self.initial[n] for n in self.state_names}
                                if initial is self.initial else {} if initial is None
@@ -474,8 +482,10 @@ class Scene(Frozen):
             # the kernels are loaded)
             key = own.get("key")
             kern = None if key is None else _loaded_kernels(key, self.cache)
-            if kern is not None:
-                self._dv_route(kern)        # (this scene's, shared below)
+            # (the route of the dependent velocities where the kernels are loaded and
+            # no holonomic constraint is to be checked: ``_moved_states``)
+            route = (None if kern is None or self.system.holonomic
+                     else self._dv_route(kern))       # (this scene's, shared below)
             p = own.get("_p")
             if p is None:
                 p = self._p
@@ -484,14 +494,14 @@ class Scene(Frozen):
             if "quick" in own:
                 shared["quick"] = own["quick"]
             own["moved"] = None
-            hit = own["moved"] = (len(own), kern, p, shared)
-        _, kern, p, memo = hit
+            hit = own["moved"] = (len(own), kern, p, shared, route)
+        _, kern, p, memo, route = hit
         memo = dict(memo)
         if t_span is not self.t_span:       # (the quick plans: of this span)
             memo.pop("quick", None)
         d["_memo"] = memo      # (frozen from here: ``_initial`` sets nothing when it
         #                        neither projects nor completes)
-        got = None if kern is None else new._moved_states(initial, kern, p)
+        got = None if route is None else new._moved_states(initial, route, p)
         if got is None:
             ini, y = new._initial(initial, False, False, kern, p)
             if y is None:
@@ -506,24 +516,24 @@ class Scene(Frozen):
         d.update(initial=ini, y0=y0)
         return new
 
-    def _moved_states(self, initial, kern, p):
+    def _moved_states(self, initial, route, p):
         """``_initial(initial, False, False, kern, p)`` of the most common initial values
-        at once: a dict of the states (no dependent velocity) as finite floats, no
-        holonomic constraint, the dependent velocities from the compiled kernels
-        (``_dependent_velocity_floats``); None where it does not apply (the general
-        route then checks them and names what is wrong)."""
+        at once: a dict of the states (no dependent velocity) as finite floats, the
+        dependent velocities from the compiled kernels of ``route`` (``_dv_route``;
+        ``_dependent_velocity_floats``), a scene without holonomic constraints; None
+        where it does not apply (the general route then checks them and names what is
+        wrong)."""
         if type(initial) is not dict or initial.keys() != self._state_set:
             return None
         states = self._states_of(initial)
-        if (set(map(type, states)) != _FLOAT or not math.isfinite(sum(states))
-                or self.system.holonomic):
+        if set(map(type, states)) != _FLOAT or not math.isfinite(sum(states)):
             return None
         y = np.array(states)
-        required = self._dependent_velocity_floats(y, kern, p)
-        if required is None:
+        values = self._dependent_velocity_list(y, route, p)
+        if values is None:
             return None
         out = dict(initial)
-        out.update(required)
+        out.update(zip(self.dependent_velocities, values))
         return out, y
 
     def _shared_memo(self) -> dict:
@@ -921,6 +931,8 @@ _SHARED = ("spec", "key", "plans", "spans", "events", "atlas_applies", "atlases"
 
 
 _FLOAT = {float}
+#: what ``replace`` changes in a copy of the scene (``_moved``)
+_MOVED = frozenset(("initial", "t_span"))
 #: the plans of a scene that kept none (``run``: its key is hashed all the same)
 _NONE_KEPT: dict = {}
 #: the dtype of the arrays a run takes as they are (numpy's one instance of it)
