@@ -190,7 +190,7 @@ def _one_row(scene, initial) -> bool:
 def _of_row(scene, initial, project) -> tuple[np.ndarray, np.ndarray]:
     """``resolve``'s Y0 and P of the one row ``initial`` (``_one_row``), checked."""
     Y0, P = initial.copy(), scene._p[None, :].copy()
-    if scene.dependent_velocities:
+    if scene.dependent_velocities and not scene._regular_at(Y0[0], scene.t_span[0], P[0]):
         _check_split(scene, Y0, P, _NO_GIVEN, project)
     if scene.system.holonomic:
         _check_holonomic(scene, Y0, P)
@@ -634,13 +634,12 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
                      type(on_error))
             for k, v in keywords.items():
                 quick += (k, v, type(v))
-            one = scene._memo.get("quick_one", _NONE_KEPT)[quick]
+            one, n_workers = scene._memo.get("quick_one", _NONE_KEPT)[quick]
         except (KeyError, TypeError) as exc:     # not planned yet, or not hashable
             quick = quick if type(exc) is KeyError else None
         else:
             Y0, P = _of_row(scene, initial, project)
-            return _of_one(scene, one, Y0, P, on_error, parallel,
-                           int(workers or numba.config.NUMBA_NUM_THREADS), save)
+            return _of_one(scene, one, Y0, P, on_error, parallel, n_workers, save)
     opts = options(step, singular, newton, **keywords)
     if parallel not in PARALLEL:
         raise JetnhError(f"parallel must be one of {PARALLEL}, not {parallel!r}")
@@ -651,7 +650,7 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
         one = _one_plan(scene, opts, None, save, method, None, None, False, True)
         kept = scene._memo.setdefault("quick_one", {})
         if one and len(kept) < solve.MAX_PLANS:
-            kept[quick] = one
+            kept[quick] = one, int(workers or numba.config.NUMBA_NUM_THREADS)
     return run_resolved(scene, Y0, P, opts, t_eval=t_eval, save=save, method=method,
                         events=events, parallel=parallel, workers=workers,
                         on_error=on_error, timeout=timeout, sensitivities=sensitivities,
