@@ -6,8 +6,9 @@ the constraints by the compiled ``aux`` kernel, on first access) or a user first
 integral.  ``traj.diagnostics`` reports the constraint residual, the energy and its
 drift, first integrals and their drift, steps, right-hand-side evaluations and why the
 integration stopped (and the split switches of a run that changed split,
-``numeric.atlas``).  With generalized forces the energy is not conserved:
-``traj.power`` is their power Q_s qdot^s, and the diagnostics say that the forces work.
+``numeric.atlas``).  Where the energy is not conserved by design (generalized forces,
+whose power Q_s qdot^s is ``traj.power``; an explicit t; Chetaev reactions that work:
+``mechanics.energy``), the diagnostics say why.
 """
 
 from __future__ import annotations
@@ -47,6 +48,9 @@ class Diagnostics:
     holonomic_residual_max: float = 0.0   # max |g_i| of the holonomic constraints
     completed: dict = field(default_factory=dict)     # see Scene.completed
     switches: list = field(default_factory=list)      # split changes: {"t", "from", "to"}
+    #: why the energy is not conserved by design (``mechanics.energy.changes``): its
+    #: drift is then the motion's, not the integration's error; () where it is conserved
+    energy_changes: tuple = ()
 
     def __post_init__(self):
         for name in ("integral_drift", "projected", "events", "singularity"):
@@ -66,8 +70,8 @@ class Diagnostics:
                     if self.holonomic_residual_max else ""),
                  "  " + _energy_text(self.energy_initial, self.energy_drift,
                                      self.energy_drift_relative)
-                 + ("; not conserved: the generalized forces work (traj.power)"
-                    if self.forced else "")]
+                 + ("; not conserved: " + "; ".join(self.energy_changes)
+                    if self.energy_changes else "")]
         for k, v in self.integral_drift.items():
             lines.append(f"  integral {k}: drift {v:.3e}")
         for k, v in self.events.items():
@@ -583,7 +587,8 @@ class Trajectory(Frozen):
             events={n: len(te) for n, te in zip(self.event_names, self.t_events)},
             singularity=self.singularity, forced=self.scene.system.forced,
             holonomic_residual_max=hmax, completed=dict(self.scene.completed),
-            switches=[dict(s) for s in self.switches])
+            switches=[dict(s) for s in self.switches],
+            energy_changes=self.scene.energy_changes)
 
     # ------------------------------------------------------------------ tables, figures
     def to_dataframe(self, diagnostics=True):
