@@ -394,6 +394,16 @@ class Ensemble(Frozen):
             return self.aux[:, :, 2 * k + 1 + lay.integrals.index(name)]
         raise JetnhError(f"{name!r} is not in this ensemble; it has {', '.join(self.names)}")
 
+    @memo
+    def _followers(self) -> frozenset:
+        """The coordinates that follow from the holonomic constraints at the first
+        run's start (``initial.followers``)."""
+        if not self.scene.system.holonomic or not len(self.initial):
+            return frozenset()
+        from .initial import followers
+
+        return followers(self.scene, self.scene.t_span[0], self.initial[0], self.params[0])
+
     def sensitivity(self, of, to) -> np.ndarray:
         """``d of(t) / d to`` over the runs and output times (``[n_runs, n_times]``,
         read-only): ``of`` a state, ``to`` an initial value of a state or a runtime
@@ -411,11 +421,10 @@ class Ensemble(Frozen):
             raise JetnhError(f"sensitivity to {b!r}: not an initial value of a state or a "
                              f"runtime parameter; choose one of "
                              f"{', '.join(self.sensitivity_columns)}")
-        if self.scene.system.holonomic and len(self.initial):
+        if self._followers:
             from .initial import check_column
 
-            check_column(self.scene, b, self.scene.t_span[0], self.initial[0],
-                         self.params[0])
+            check_column(self.scene, b, self._followers)
         return self.sensitivities[:, :, self.layout.states.index(a),
                                   self.sensitivity_columns.index(b)]
 

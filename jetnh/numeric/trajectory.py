@@ -473,11 +473,21 @@ class Trajectory(Frozen):
             raise JetnhError(f"sensitivity to {b!r}: not an initial value of a state or a "
                              f"runtime parameter; choose one of {', '.join(columns)} (a "
                              "compiled-in parameter needs runtime_params=[...] on the scene)")
-        if self.scene.system.holonomic and len(self.t):
+        if self._followers:
             from .initial import check_column
 
-            check_column(self.scene, b, self.t[0], self.y[0], self._p)
+            check_column(self.scene, b, self._followers)
         return S[:, states.index(a), columns.index(b)]
+
+    @memo
+    def _followers(self) -> frozenset:
+        """The coordinates that follow from the holonomic constraints at the first row
+        (``initial.followers``): no column of sensitivities of their own."""
+        if not self.scene.system.holonomic or not len(self.t):
+            return frozenset()
+        from .initial import followers
+
+        return followers(self.scene, self.t[0], self.y[0], self._p)
 
     @property
     def sensitivities(self) -> np.ndarray:
