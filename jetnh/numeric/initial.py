@@ -139,8 +139,9 @@ def check_column(scene, to, follow):
 
     if to in follow:
         free = [q.name for q in scene.system.J.q if q.name not in follow]
+        dep = [q.name for q in scene.system.J.q if q.name in follow]
         raise JetnhError(
-            f"sensitivity to {to!r}: on the holonomic constraints g = 0, "
-            f"{', '.join(sorted(follow))} follow(s) from {', '.join(free)} at the start "
+            f"sensitivity to {to!r}: on the holonomic constraints g = 0, {', '.join(dep)} "
+            f"follow{'s' if len(dep) == 1 else ''} from {', '.join(free)} at the start "
             f"(the split's chart), so {to!r} has no initial value of its own; "
-            f"differentiate by {', '.join(free)} (their columns move {to!r} along g = 0)")
+            f"differentiate by {', '.join(free)} (whose columns move {to!r} along g = 0)")
