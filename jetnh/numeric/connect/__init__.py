@@ -78,6 +78,11 @@ Verdicts on the answer:
   normal.
 - ``cost``: the action ``int L dt`` along the answer, by 5-point Gauss-Legendre on every
   step of the dense output.
+- ``not_extremal``: under non-potential forces or dissipation (nonzero at the parameter
+  values) a vakonomic or Hoelder motion is in general no extremal of ``int L dt`` (its
+  first variation is ``int Q eta dt``): ``legendre`` and ``minimizer`` are None and
+  this says why; ``cost`` is then only ``int L dt`` along the motion, and
+  ``conjugate_times`` the folds of the map to the configuration.
 """
 
 from __future__ import annotations

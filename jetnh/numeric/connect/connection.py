@@ -13,7 +13,7 @@ from ...frozen import readonly
 from ..trajectory import Trajectory
 from .problem import VARIATIONAL
 from .verdicts import (GRAMIAN_RCOND, LEGENDRE_ZERO, _Samples, action,
-                       conjugate_times, gramian_ratio, legendre_margin)
+                       conjugate_times, gramian_ratio, legendre_margin, not_extremal)
 
 
 @dataclass(frozen=True)
@@ -65,7 +65,9 @@ class Connection:
 
     @cached_property
     def cost(self) -> float:
-        """The action int L dt along the motion (``action``)."""
+        """The action int L dt along the motion (``action``).  With non-potential forces
+        (``not_extremal``) only that integral: the motion need not make it stationary,
+        and it is no least action."""
         return action(self.trajectory, self._samples)
 
     @cached_property
@@ -88,7 +90,9 @@ class Connection:
         extremal.  Chetaev and Suslov, whose motions are no extremals of an action: the
         map to the named end coordinates, the two-point problem's endpoint map -- where
         it is singular, the end is a fold of the motions from the start (nearby ends
-        are reached twice or not at all).  None: not checked (fewer unknowns than
+        are reached twice or not at all).  Vakonomic and Hoelder with non-potential
+        forces (``not_extremal``): the folds of the map to the configuration, no
+        conjugate points of an action.  None: not checked (fewer unknowns than
         coordinates to measure)."""
         rows = None
         if self.principle not in VARIATIONAL:
@@ -104,10 +108,21 @@ class Connection:
         lambda f in the velocities, restricted to the admissible ones (ker df/dqdot,
         tangent to g = 0), over its largest magnitude, at the worst of the equal-spaced
         times.  Positive: definite everywhere; negative: the action decreases along
-        some rapid variation (no minimizer); None for Chetaev and Suslov."""
-        if self.principle not in VARIATIONAL:
+        some rapid variation (no minimizer); None for Chetaev and Suslov, and where the
+        motion is in general no extremal of the action (``not_extremal`` says why)."""
+        if self.principle not in VARIATIONAL or self.not_extremal:
             return None
         return legendre_margin(self.trajectory, self._samples)
+
+    @cached_property
+    def not_extremal(self) -> str:
+        """Vakonomic and Hoelder: why the motion is in general no extremal of int L dt
+        (``verdicts.not_extremal``: generalized forces or dissipation that do not
+        vanish at these parameter values), so that ``legendre`` and ``minimizer`` are
+        None; "" without such forces, and for Chetaev and Suslov."""
+        if self.principle not in VARIATIONAL:
+            return ""
+        return not_extremal(self.trajectory.scene)
 
     @property
     def minimizer(self):
@@ -117,9 +132,10 @@ class Connection:
         time lies inside (t0, t1) (Jacobi's); True where the strengthened Legendre
         condition holds and no conjugate time lies inside (necessary, not sufficient,
         for a minimum); None where neither verdict applies (a Hessian singular
-        somewhere, conjugate times not checked) and for Chetaev and Suslov, whose
-        motions are not extremals of the action."""
-        if self.principle not in VARIATIONAL:
+        somewhere, conjugate times not checked), for Chetaev and Suslov, whose
+        motions are not extremals of the action, and under non-potential forces
+        (``not_extremal`` says why)."""
+        if self.principle not in VARIATIONAL or self.not_extremal:
             return None
         margin = self.legendre
         if margin < -LEGENDRE_ZERO:
@@ -179,7 +195,8 @@ class Connection:
                    f"{tuple(round(t, 10) for t in times)}")
                 + {False: " (not a minimizer)", True: "",
                    None: "" if self.principle not in VARIATIONAL else
-                   " (minimizer not checked)"}[minimizer]
+                   " (minimizer undecided: non-potential forces)"
+                   if self.not_extremal else " (minimizer not checked)"}[minimizer]
                 + ", initial="
                 f"{dict(self.initial)})")
 

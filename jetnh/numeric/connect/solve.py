@@ -515,6 +515,9 @@ def least_action(search, found, tol, max_iter, restarts):
     import dataclasses
 
     if not restarts or found.minimizer is not False:
+        if restarts and found.minimizer is None and found.not_extremal:
+            return dataclasses.replace(found, search=(
+                f"no restarts: the minimizer verdict is undecided ({found.not_extremal})"))
         return found
     u = np.array([found.initial[k] for k in found.unknowns])
     scale = np.maximum(np.abs(u), 1.0)
