@@ -468,7 +468,15 @@ class Trajectory(Frozen):
         """``d of(t) / d to`` over ``t`` (read-only): ``of`` a state (coordinate,
         independent velocity or multiplier), ``to`` an initial value of a state (at t0)
         or a runtime parameter, by Symbol or by name; from the variational equations
-        integrated with the run (``scene.run(sensitivities=True)``)."""
+        integrated with the run (``scene.run(sensitivities=True)``).
+
+        With holonomic constraints g = 0 the initial configuration varies along g = 0 in
+        the split's chart (``numeric.initial``): the coordinates that follow from g at
+        the start (the split's dependent ones where dg/dq over them is regular, as
+        ``linearize`` and ``complete=True`` take them) move with the independent
+        coordinate or runtime parameter differentiated by, ``dq^D/dq^I = -(dg/dq^D)^{-1}
+        dg/dq^I``, so ``dg/dq S + dg/dp = 0`` from t0 on; a sensitivity to one of those
+        coordinates is refused (a ``JetnhError`` naming the independent ones)."""
         if self._sens is None:
             raise JetnhError("this trajectory carries no sensitivities; run the scene with "
                              "sensitivities=True")
@@ -482,7 +490,21 @@ class Trajectory(Frozen):
             raise JetnhError(f"sensitivity to {b!r}: not an initial value of a state or a "
                              f"runtime parameter; choose one of {', '.join(columns)} (a "
                              "compiled-in parameter needs runtime_params=[...] on the scene)")
+        if self._followers:
+            from .initial import check_column
+
+            check_column(self.scene, b, self._followers)
         return S[:, states.index(a), columns.index(b)]
+
+    @memo
+    def _followers(self) -> frozenset:
+        """The coordinates that follow from the holonomic constraints at the first row
+        (``initial.followers``): no column of sensitivities of their own."""
+        if not self.scene.system.holonomic or not len(self.t):
+            return frozenset()
+        from .initial import followers
+
+        return followers(self.scene, self.t[0], self.y[0], self._p)
 
     @property
     def sensitivities(self) -> np.ndarray:

@@ -424,11 +424,11 @@ class Shooter:
 
     def first_row(self, u, plan) -> np.ndarray:
         """The first row of a run of ``plan`` from the start with the unknowns ``u``:
-        the state (``state(u)``), then the initial sensitivities S0 (``_parts``; the
-        same for every plan of the scene), a fresh array."""
+        the state (``state(u)``), then the initial sensitivities S0 (``solve.augmented``:
+        along g = 0 with holonomic constraints, as ``Scene.run`` starts; the unknowns
+        move no coordinate, so the same for every u), a fresh array."""
         if self._first is None:
-            first = (_PARTS.get(plan) or _parts(plan))[2].copy()
-            first[:len(self.y0)] = self.y0
+            first = solve.augmented(self.scene, plan, self.y0, self.scene._p)
             first.setflags(write=False)
             self._first = first
         first = self._first.copy()
