@@ -35,8 +35,11 @@ def _parts(plan):
     """What every run of ``plan`` shares, kept per plan (the last 64; a plan is hashed
     by identity): ``(n, m, the first row, the loop's arguments before the state, those
     after p)``.  The first row of a run with sensitivities but for its state: zeros,
-    then the initial sensitivities S0 = (I | 0) (n x m) flattened
-    (``solve.augmented``'s); a run's row is a copy with the state written in."""
+    then the initial sensitivities S0 = (I | 0) (n x m) flattened (the derivatives by
+    every state of an inner segment, the Newton Jacobian's columns, on the constraints
+    or off them; ``Shooter.first_row`` starts the search's first segment from
+    ``solve.augmented``'s S0 instead, along g = 0); a run's row is a copy with the
+    state written in."""
     found = _PARTS.get(plan)
     if found is None:
         lay = plan.sens.layout
