@@ -64,9 +64,20 @@ motion"``, ``stable`` is None (``steady(unknowns)`` finds a steady motion nearby
 steady motion: ``unstable`` when an eigenvalue has a positive real part,
 ``asymptotically stable`` when every one has a negative real part, ``marginal`` when some
 lie on the imaginary axis (conservative systems, families of steady motions: the
-linearization does not decide).  Eigenvalues of modulus below ``ZERO`` times the size of
-A count as zero (a defective zero eigenvalue of a family of steady motions is computed
-only to about the square root of the rounding unit).
+linearization does not decide).  Each eigenvalue is decided against its own error
+bound e_i: a real part within e_i of zero counts as zero (on the imaginary axis), and so
+does an eigenvalue of modulus within e_i.  With B = A balanced (a diagonal similarity,
+LAPACK's ``gebal``), delta = ``REAL`` |B| (Frobenius norm: the rounding of
+A's entries and of the eigensolver), kappa_i = 1/|y_i^H x_i| the eigenvalue's condition
+number (unit left and right eigenvectors of B) and s_i half its distance to the nearest
+other eigenvalue: e_i = min(delta kappa_i, max(delta, sqrt(2 delta kappa_i s_i)),
+``ZERO`` |B|).  The first is the first-order bound of a simple eigenvalue; the second
+that of a cluster split by rounding (a Jordan block perturbed by delta spreads to
+sqrt(delta nu), and kappa ~ nu/(2 s) there), which a defective zero eigenvalue of a
+family of steady motions is; ``ZERO`` = sqrt(``REAL``) caps the bound of an eigenvalue
+computed exactly defective (kappa_i infinite).  A stiff mode elsewhere in A (a spring
+of stiffness k: |A| ~ k) widens the other eigenvalues' bounds only through |B|, which
+balancing keeps near sqrt(k).
 
 Rows that depend on t (t in a kept row or a holonomic constraint with a derivative that
 does not vanish identically, e.g. a periodically forced or modulated system): the state
@@ -99,10 +110,11 @@ from ..mechanics.system import System
 from . import arguments, regular
 from ..frozen import Frozen, FrozenDict
 
-#: eigenvalues of modulus below ZERO * max(1, |A|) count as zero
-ZERO = 1e-6
-#: real parts within REAL * max(1, |A|) of zero count as on the imaginary axis
+#: the relative rounding of A and its eigenvalues: delta = REAL * |B| (B: A balanced),
+#: an eigenvalue's error bound about delta * kappa_i (module docstring)
 REAL = 1e-12
+#: an eigenvalue's error bound is at most ZERO * |B| (sqrt(REAL): a Jordan block)
+ZERO = 1e-6
 #: a point is a steady motion when ``|x'| <= STEADY * max(1, |A| |x|)`` and
 #: ``|x'| <= sqrt(STEADY) * max(1, |x|)`` (kept states)
 STEADY = 1e-8
@@ -299,9 +311,7 @@ class Linearization(Frozen):
         self.rates = rates
         rates.setflags(write=False)
         self.residual = float(np.linalg.norm(rates))
-        ev = np.linalg.eigvals(A) if A.size else np.zeros(0, complex)
-        ev = ev[np.lexsort((ev.imag, -ev.real))].astype(complex)
-        ev.setflags(write=False)
+        ev, self._bounds = _spectrum(A)
         self.eigenvalues = ev
         #: True when A is the limit at a point where the kernel itself is undefined
         self.limit = limit
@@ -326,12 +336,12 @@ class Linearization(Frozen):
 
     @property
     def margin(self) -> float:
-        """The largest real part among the eigenvalues not counted as zero (``ZERO``),
-        less ``REAL`` times the size of A: > 0 unstable, <= 0 not; NaN off a steady
-        motion and where A changes with t (``time_dependent``)."""
+        """The largest real part less its error bound, Re lambda_i - e_i (module
+        docstring): > 0 unstable, <= 0 not; NaN off a steady motion and where A changes
+        with t (``time_dependent``)."""
         if not self.steady_motion or self.time_dependent:
             return float("nan")
-        return _margin(self.eigenvalues, self._scale)
+        return _margin(self.eigenvalues, self._bounds)
 
     @property
     def stable(self) -> bool | None:
@@ -347,7 +357,6 @@ class Linearization(Frozen):
         """``"unstable"``, ``"asymptotically stable"`` or ``"marginal"`` at a steady
         motion, ``"not a steady motion"`` elsewhere, ``TIME_DEPENDENT`` at a steady
         motion whose A changes with t (module docstring)."""
-        s = self._scale
         ev = self.eigenvalues
         if not self.steady_motion:
             return NOT_STEADY
@@ -355,7 +364,7 @@ class Linearization(Frozen):
             return TIME_DEPENDENT
         if self.margin > 0:
             return "unstable"
-        if ev.size and np.all(ev.real < -REAL * s) and np.all(np.abs(ev) > ZERO * s):
+        if ev.size and np.all(ev.real < -self._bounds):
             return "asymptotically stable"
         return "marginal"
 
@@ -557,6 +566,39 @@ def _symbolic(model: _Model, keep, chart) -> sp.Matrix:
     return model._symbolic[key]
 
 
+def _spectrum(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The eigenvalues of A by decreasing real part, and each one's error bound e_i
+    (module docstring); read-only."""
+    from scipy.linalg import eig, get_lapack_funcs
+
+    if not A.size:
+        ev, bounds = np.zeros(0, complex), np.zeros(0)
+    else:
+        B = get_lapack_funcs("gebal", (A,))(A, scale=1, permute=1)[0]   # A balanced
+        ev, left, right = eig(B, left=True, right=True)
+        with np.errstate(divide="ignore"):
+            kappa = 1.0 / np.abs(np.sum(left.conj() * right, axis=0))
+        delta = REAL * float(np.linalg.norm(B))
+        apart = np.abs(ev[:, None] - ev[None, :])
+        np.fill_diagonal(apart, np.inf)
+        gap = apart.min(axis=1) / 2
+        with np.errstate(invalid="ignore"):
+            second = np.where(gap > 0, np.sqrt(2 * delta * kappa * gap), np.inf)
+        bounds = np.minimum.reduce([delta * kappa, np.maximum(delta, second),
+                                    np.full(len(ev), ZERO / REAL * delta)])
+        order = np.lexsort((ev.imag, -ev.real))
+        ev, bounds = ev[order].astype(complex), bounds[order]
+    ev.setflags(write=False)
+    bounds.setflags(write=False)
+    return ev, bounds
+
+
+def _margin(ev: np.ndarray, bounds: np.ndarray) -> float:
+    """max_i (Re lambda_i - e_i): > 0 when an eigenvalue lies right of the imaginary
+    axis by more than its error bound (0 without eigenvalues)."""
+    return float((ev.real - bounds).max()) if ev.size else 0.0
+
+
 def _in_time(lin: Linearization, bound: float) -> tuple[bool, bool]:
     """``(changes, steady)`` of a point whose rows contain t: whether A or x' differ at
     the times ``t + TIMES`` (A by more than ``REAL`` times its size, x' by more than
@@ -588,34 +630,34 @@ def _in_time(lin: Linearization, bound: float) -> tuple[bool, bool]:
     return changes, steady
 
 
-def _margin(ev: np.ndarray, scale: float) -> float:
-    big = ev[np.abs(ev) > ZERO * scale]
-    top = float(big.real.max()) if big.size else 0.0
-    return top - REAL * scale
-
-
 def _crossing(move, a: float, b: float, lo: "Linearization", hi: "Linearization") -> float:
-    """Where the margin changes sign in [a, b], counting as zero only the eigenvalues
-    zero at both ends (a real eigenvalue passing through 0 is smaller than ``ZERO`` near
-    its root, where ``margin`` no longer sees it); then, where the largest real part
-    crosses 0 transversally (well clear of ``REAL`` on both sides), its own root."""
-    zeros = min(int(np.sum(np.abs(x.eigenvalues) <= ZERO * x._scale)) for x in (lo, hi))
+    """Where the margin changes sign in [a, b]; then, where the largest real part
+    crosses 0 transversally (well clear of its error bound on both sides within 1e-6,
+    1e-4 or 1e-2 of the interval), its own root.  The eigenvalues zero at both ends
+    (within their bounds: a family of steady motions) are left out of that largest real
+    part, the others kept (a real eigenvalue passing through 0 is zero within its bound
+    near its root)."""
+    zeros = min(int(np.sum(np.abs(x.eigenvalues) <= x._bounds)) for x in (lo, hi))
 
     def top(v):
         lin = move(v)
-        rest = lin.eigenvalues[np.argsort(np.abs(lin.eigenvalues), kind="stable")[zeros:]]
-        return (float(rest.real.max()) if rest.size else 0.0), REAL * lin._scale
+        rest = np.argsort(np.abs(lin.eigenvalues), kind="stable")[zeros:]
+        if not rest.size:
+            return 0.0, 0.0, 0.0
+        k = rest[np.argmax(lin.eigenvalues.real[rest])]
+        slack = lin.eigenvalues.real[rest] - lin._bounds[rest]
+        return float(lin.eigenvalues.real[k]), float(lin._bounds[k]), float(slack.max())
 
     def margin(v):
-        x, tol = top(v)
-        return x - tol
+        return top(v)[2]
     if (margin(a) > 0) == (margin(b) > 0):
         return _root(lambda v: move(v).margin, a, b)
     r = _root(margin, a, b)
-    h = 1e-6 * (b - a)
-    (fl, tol), (fh, _) = top(max(a, r - h)), top(min(b, r + h))
-    if min(abs(fl), abs(fh)) > 100 * tol and (fl > 0) != (fh > 0):
-        return _root(lambda v: top(v)[0], max(a, r - h), min(b, r + h))
+    for h in (1e-6 * (b - a), 1e-4 * (b - a), 1e-2 * (b - a)):
+        lo_, hi_ = max(a, r - h), min(b, r + h)
+        (fl, tol, _), (fh, tol_h, _) = top(lo_), top(hi_)
+        if min(abs(fl), abs(fh)) > 100 * max(tol, tol_h):
+            return _root(lambda v: top(v)[0], lo_, hi_) if (fl > 0) != (fh > 0) else r
     return r
 
 
@@ -1060,6 +1102,7 @@ def _jacobian(ck, y, p, t, rows, E):
             np.abs(A2 - A1).max() > 1e-3 * max(1.0, np.abs(A).max())):
         raise LinearizationError(
             "the equations are undefined at this point (a singular configuration of "
-            "the principle's equations or of the split) and have no limit there; "
-            "choose another operating point or another split (dependent=)")
+            "the principle's equations or of the split, or parameter values that make "
+            "them degenerate, e.g. a mass of 0) and have no limit there; choose another "
+            "operating point, another split (dependent=) or other parameter values")
     return A, rates, True
