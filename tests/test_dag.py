@@ -267,3 +267,14 @@ def test_build_is_sympys_constructor(args, head):
     assert type(got) is type(want)
     assert got == want
     assert got.args == want.args
+
+
+def test_size_counts_equal_parts_once():
+    """Equal subexpressions held by distinct objects count once (the size does not depend
+    on how the graph was built); the cap stops the count."""
+    x, y = sp.symbols("x y")
+    a, b = x + y, sp.Add._from_args((x, y))
+    assert a is not b and a == b
+    e = sp.Mul._from_args((a, sp.Basic.__new__(sp.sin, b)))
+    assert len(dag.nodes(e)) == 6 and dag.size(e) == 5      # x, y, x + y, sin, the product
+    assert dag.size(e, cap=2) == 2

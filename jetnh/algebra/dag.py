@@ -83,8 +83,25 @@ def fingerprint(expr) -> str:
 
 
 def size(expr, cap: int | None = None) -> int:
-    """The number of distinct subexpression objects (counted up to ``cap``)."""
-    return len(nodes(expr, cap))
+    """The number of distinct subexpressions (counted up to ``cap``): equal ones count
+    once, however many objects hold them, so the count does not depend on how the graph
+    was built (sympy's constructor cache, ``build``)."""
+    number: dict = {}           # (head, children's numbers) or atom -> its number
+    of: dict = {}               # id(node) -> its number
+    stack = [(e, False) for e in reversed(_roots(expr))]
+    while stack:
+        e, expanded = stack.pop()
+        if id(e) in of:
+            continue
+        if not expanded and e.args:
+            stack.append((e, True))
+            stack.extend((a, False) for a in e.args if id(a) not in of)
+            continue
+        key = (type(e), e) if not e.args else (e.func, tuple(of[id(a)] for a in e.args))
+        of[id(e)] = number.setdefault(key, len(number))
+        if cap is not None and len(number) >= cap:
+            break
+    return len(number)
 
 
 def tree_size(expr, cap: int | None = None) -> int:
