@@ -67,6 +67,32 @@ def best_of(fs, reps: int, budget: float = math.inf):
     return list(zip(times, outs))
 
 
+def best_of_blocks(fs, reps: int, budget: float = math.inf, block: int = 3):
+    """Like ``best_of``, but each round calls each function ``block`` times in a row:
+    ``[(best of all calls, best of the first call of each block, last result), ...]``.
+    The first figure is a warm call (its code and data in the caches, as a loop of calls
+    of the same method has them, and as DiffEqDevTools' ``WorkPrecision`` times each
+    method: repeated runs in a row); the second a call right after the other functions'
+    (cold caches); the rounds stay interleaved against changes of the machine's load."""
+    warm = [math.inf] * len(fs)
+    cold = [math.inf] * len(fs)
+    spent = [0.0] * len(fs)
+    outs = [None] * len(fs)
+    for _ in range(reps):
+        for i, f in enumerate(fs):
+            for k in range(block):
+                if spent[i] >= budget:
+                    break
+                tic = time.perf_counter()
+                outs[i] = f()
+                dt = time.perf_counter() - tic
+                warm[i] = min(warm[i], dt)
+                if k == 0:
+                    cold[i] = min(cold[i], dt)
+                spent[i] += dt
+    return list(zip(warm, cold, outs))
+
+
 def best(f, reps: int, budget: float = math.inf):
     """``(best wall time, last result)`` of ``reps`` calls of ``f()`` (see ``best_of``)."""
     return best_of([f], reps, budget)[0]

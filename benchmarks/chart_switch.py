@@ -1,6 +1,7 @@
 """The cost of a run that changes chart (``jetnh.numeric.atlas``): the switching run
 against the same run kept in its split, and the switch alone, on this tree and on earlier
-ones; with ``--panels``, the work-precision panels of those runs.
+ones, and the cost of watching the edge in a run that never reaches it; with ``--panels``,
+the work-precision panels of those runs.
 
     .venv/bin/python benchmarks/chart_switch.py [--tree NAME=PATH ...] [--rounds 3]
                                                 [--panels] [--quick] [--out PATH]
@@ -9,7 +10,9 @@ ones; with ``--panels``, the work-precision panels of those runs.
 ``git worktree add /tmp/before 08f5e43``; this tree is "after").  Cases: the
 work-precision panels (``workprecision.py``) whose run crosses its split's edge once --
 chaplygin_sleigh under Chetaev and vakonomic dynamics (T = 2) and knife_edge vakonomic
-(T = 0.8) -- run with dopri5, rtol 1e-6, atol 1e-9, ``save="final"``.  Each tree measures
+(T = 0.8) -- run as the work-precision panels run at error 1e-8: dop853, rtol 1e-8, atol
+1e-11, ``save="final"``; and knife_edge Chetaev (T = 0.8), whose run watches its split's
+edge and ends before it (``WATCHED``: ``run`` and ``fixed`` only).  Each tree measures
 in a fresh process of its own (the trees alternating within each of ``--rounds``
 rounds; each figure the best over the rounds), the calls interleaved, each figure the
 10th percentile of single calls:
@@ -45,7 +48,9 @@ from _common import ROOT, parser, run_worker, write
 
 CASES = ("chaplygin_sleigh / chetaev", "chaplygin_sleigh / vakonomic",
          "knife_edge / vakonomic")
-RUN = dict(method="dopri5", save="final", rtol=1e-6, atol=1e-9)
+#: a run that watches its edge and never reaches it (no switch)
+WATCHED = ("knife_edge / chetaev",)
+RUN = dict(method="dop853", save="final", rtol=1e-8, atol=1e-11)
 REPLACE_EVERY = 20
 FIGURES = ("run", "fixed", "switch", "replace")
 
@@ -59,6 +64,16 @@ def costs(calls: int) -> dict:
 
     found = {c.label: c for c in cases(False)}
     timed, out = [], {}
+    for label in WATCHED:
+        scene = scene_of(found[label]).compile()
+        assert not scene.run(**RUN).switches, label
+        fs = {"run": lambda s=scene: s.run(**RUN),
+              "fixed": lambda s=scene: s.run(**RUN, split="fixed")}
+        for f in fs.values():
+            for _ in range(20):
+                f()
+        out[label] = {"switches": 0}
+        timed += [(label, name, f) for name, f in fs.items()]
     for label in CASES:
         scene = scene_of(found[label]).compile()
         tr = scene.run(**RUN)
@@ -152,25 +167,36 @@ def main(argv=None):
             got[name].append(res)
             print(f"round {r + 1}, {name}: " + ", ".join(
                 f"{c.split(' / ')[0][:8]}/{c.split(' / ')[1][:4]} run "
-                f"{v['run'] * 1e6:.0f} us, fixed {v['fixed'] * 1e6:.0f} us, switch "
-                f"{v['switch'] * 1e6:.1f} us, replace {v['replace'] * 1e6:.0f} us"
+                f"{v['run'] * 1e6:.1f} us, fixed {v['fixed'] * 1e6:.1f} us"
+                + (f", switch {v['switch'] * 1e6:.1f} us, replace {v['replace'] * 1e6:.0f} us"
+                   if "switch" in v else "")
                 for c, v in res["costs"].items()), flush=True)
     best = {name: {c: {k: min(r["costs"][c][k] for r in runs) for k in FIGURES}
                    for c in CASES} for name, runs in got.items()}
+    for name, runs in got.items():
+        for c in WATCHED:
+            best[name][c] = {k: min(r["costs"][c][k] for r in runs) for k in ("run", "fixed")}
     names = list(trees)
     rows = [[c, *(f"{best[n][c][k] * 1e6:.3g}" for n in names for k in FIGURES),
              *(f"{best[n][c]['run'] / best[n][c]['fixed']:.2f}" for n in names),
              *(f"{best[n][c]['replace'] / best[n][c]['run']:.2f}" for n in names)]
             for c in CASES]
+    trees_note = "trees (commits): " + ", ".join(f"{n} = {commit(p)}" for n, p in trees.items())
     tables = [dict(
         title="A run that changes chart once, against the same run kept in its split "
-              "(dopri5, rtol 1e-6, save='final'; us, 10th percentile of interleaved calls, "
-              "best of the rounds; one process per tree)",
+              "(dop853, rtol 1e-8, atol 1e-11, save='final'; us, 10th percentile of "
+              "interleaved calls, best of the rounds; one process per tree)",
         columns=["", *(f"{n} {k}" for n in names for k in FIGURES),
                  *(f"{n} run / fixed" for n in names),
                  *(f"{n} replace / run" for n in names)],
-        rows=rows, note="trees (commits): " + ", ".join(f"{n} = {commit(p)}"
-                                                       for n, p in trees.items()))]
+        rows=rows, note=trees_note),
+        dict(title="A run that watches its split's edge and ends before it, against the "
+                   "same run with split='fixed' (which watches nothing; us, as above)",
+             columns=["", *(f"{n} {k}" for n in names for k in ("run", "fixed")),
+                      *(f"{n} run - fixed" for n in names)],
+             rows=[[c, *(f"{best[n][c][k] * 1e6:.3g}" for n in names for k in ("run", "fixed")),
+                    *(f"{(best[n][c]['run'] - best[n][c]['fixed']) * 1e6:.2f}" for n in names)]
+                   for c in WATCHED], note=trees_note)]
     if args.panels:
         prow = []
         for c in CASES:
@@ -202,7 +228,11 @@ def main(argv=None):
                  f"kept in its split ({a[c]['run'] * 1e6:.0f} against "
                  f"{a[c]['fixed'] * 1e6:.0f} us), the switch alone "
                  f"{a[c]['switch'] * 1e6:.1f} us, a replace(initial=...) copy's run "
-                 f"{a[c]['replace'] / a[c]['run']:.2f}x the run" for c in CASES],
+                 f"{a[c]['replace'] / a[c]['run']:.2f}x the run" for c in CASES]
+                + [f"{c}: watching the edge without reaching it costs "
+                   f"{(a[c]['run'] - a[c]['fixed']) * 1e6:.1f} us over split='fixed' "
+                   f"({a[c]['run'] * 1e6:.1f} against {a[c]['fixed'] * 1e6:.1f} us)"
+                   for c in WATCHED],
         tables=tables, trees={n: commit(p) for n, p in trees.items()}, rounds=got),
         args.out, args.quick)
 

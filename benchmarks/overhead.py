@@ -24,10 +24,14 @@ fresh processes with empty numba and kernel caches, the trees alternating within
    interleaved in a random order each round (each figure the 5th percentile of single
    calls, so that the machine's load and the caches hit every one alike):
    the compiled dop853 loop called directly (its entry point, the arguments made once),
-   ``scene.run()``, ``scene.run(y0=...)``, ``scene.replace(initial=...).run()`` (a new
-   initial state each call, as a shooting loop does) and an ensemble of one run, each
-   with one step (T = 1e-6, ``save="final"``), and ensembles of eight such runs on two
-   threads and serially (a small ensemble's fixed cost); the ratios to the bare call.  Also the
+   ``scene.run()``, ``scene.run`` with the keywords of a benchmark or a parameter loop
+   (``method``, ``rtol``, ``atol``, ``save``; and those of the work-precision
+   benchmark: ``split``, ``singular``, ``t_span`` too), ``scene.run(y0=...)``,
+   ``scene.run(t_eval=...)`` (five times), ``scene.run`` on a new time span each call
+   (a loop over the final time), ``scene.replace(initial=...).run()`` (a new initial
+   state each call, as a shooting loop does) and an ensemble of one run, each with one
+   step (T = 1e-6, ``save="final"``), and ensembles of eight such runs on two threads and
+   serially (a small ensemble's fixed cost); the ratios to the bare call.  Also the
    bare call of a run of three steps and its arithmetic: its rhs evaluations at the cost
    of one in a long run (T = 100: the difference of the long and the one-step call over
    their difference in evaluations).  And the parts of a run's Python side, each alone:
@@ -138,11 +142,22 @@ nfev = {"3-step call": int(three(0)[4][2]), "long call": int(long(0)[4][2])}
 states = {n: short.initial[n] for n in short.state_names}
 inis = [dict(states, phi_t=states["phi_t"] + 1e-3 * k) for k in range(16)]
 y8 = np.repeat(y0[None, :], 8, axis=0)
+te5 = np.linspace(0.0, 1e-6, 5)
 calls = {
     "bare call": bare(1e-6, ctl),
     "3-step call": three,
     "run()": lambda i: short.run(save="final"),
+    # the keywords every benchmark and parameter loop gives (the bare call's tolerances)
+    "run(method=, rtol=, atol=, save=)": lambda i: short.run(
+        method="dop853", rtol=1e-9, atol=1e-12, save="final"),
+    "run(work-precision keywords)": lambda i: short.run(
+        method="dop853", save="final", rtol=1e-9, atol=1e-12, split="fixed",
+        singular="ignore", t_span=(0, 1e-6)),
     "run(y0=...)": lambda i: short.run(y0=y0, save="final"),
+    "run(t_eval=...)": lambda i: short.run(t_eval=te5),
+    # a loop over final times (each call a span of its own)
+    "run(t_span=...), a new span each call": lambda i: short.run(
+        t_span=(0.0, 1e-6 * (1.0 + i * 1e-4)), save="final"),
     "replace(initial=...).run()": lambda i: short.replace(initial=inis[i % 16]).run(
         save="final"),
     "ensemble of one": lambda i: short.ensemble(y0[None, :], save="final"),
@@ -156,7 +171,9 @@ for f in calls.values():
 try:        # the parts of a run's Python side, each timed alone (the names of this tree)
     import _signal
     from jetnh.numeric import solve
-    plan = short._memo["quick"][("dop853", "final", None, None)]
+    plan = next(v for v in short._memo["plans"].values() if v.save == "final"
+                and v.method.name == "dop853" and v.checked and v.t1 == 1e-6
+                and v.rtol == 1e-9 and v.entry is not None)
     own, p, y = interrupt._WATCHDOG.own, short._p, short.y0.copy()
     out = plan.entry(*plan.prefix, plan.t0, plan.t1, y, p, *plan.suffix, interrupt.flag())
     noop = lambda: None
@@ -178,7 +195,7 @@ try:        # the parts of a run's Python side, each timed alone (the names of t
         "part: solve.run": lambda i: solve.run(short, plan, short.y0.copy(), p, True),
         "part: the timing itself": lambda i: None,
     })
-except (AttributeError, KeyError, ImportError, TypeError):
+except (AttributeError, KeyError, ImportError, TypeError, StopIteration):
     pass
 times = {k: [] for k in calls}
 times["long call"] = []
@@ -328,7 +345,12 @@ def main(argv=None):
         f"arithmetic ({a['3-step arithmetic'] * 1e6:.2f} us); "
         f"a one-step dop853 run costs {a['run()'] / a['bare call']:.2f}x the bare call of its "
         f"compiled loop ({a['run()'] * 1e6:.3g} us against {a['bare call'] * 1e6:.3g} us); "
+        f"with keywords {a['run(method=, rtol=, atol=, save=)'] / a['bare call']:.2f}x "
+        f"(the work-precision benchmark's "
+        f"{a['run(work-precision keywords)'] / a['bare call']:.2f}x), "
         f"run(y0=...) {a['run(y0=...)'] / a['bare call']:.2f}x, "
+        f"run(t_eval=...) {a['run(t_eval=...)'] / a['bare call']:.2f}x, on a new time span "
+        f"each call {a['run(t_span=...), a new span each call'] / a['bare call']:.2f}x, "
         f"replace(initial=...).run() {a['replace(initial=...).run()'] / a['bare call']:.2f}x,"
         f" an ensemble of one {a['ensemble of one'] / a['bare call']:.2f}x; an ensemble of 8"
         f" {a['ensemble of 8 (threads)'] * 1e6:.3g} us on two threads, "

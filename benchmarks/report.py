@@ -194,6 +194,12 @@ class Report:
             f"**{ratio(best[t]['geomean'])}** ({ratio(best[t]['min'])}–"
             f"{ratio(best[t]['max'])}, n={best[t]['n']})" if best.get(t) else "-"
             for t in targets])
+        cold = s.get("best_scipy_over_jetnh_cold")
+        if cold:
+            rows.append(["fastest scipy method, first calls of the rounds (cold caches)"] + [
+                f"{ratio(cold[t]['geomean'])} ({ratio(cold[t]['min'])}–"
+                f"{ratio(cold[t]['max'])}, n={cold[t]['n']})" if cold.get(t) else "-"
+                for t in targets])
         out.append("**Time over jetnh's time at equal error**, geometric mean (min–max, "
                    "number of panels) over the system × principle panels:\n\n")
         out.append(table(["method"] + [f"error {t}" for t in targets], rows) + "\n")
@@ -238,17 +244,21 @@ class Report:
                              secs(b["jetnh_s"]),
                              f"{secs(b['scipy_s'])} ({b['scipy_method'].split()[-1]})",
                              ratio(b["scipy_over_jetnh"]), ratio(b["scipy_over_loop"]),
-                             ratio(b["scipy_over_floor"])])
+                             ratio(b["scipy_over_floor"]),
+                             ratio(b["scipy_over_run_floor"]) if b.get("scipy_over_run_floor")
+                             else "-"])
         out = [f"**The floor at error {t}**: what any implementation making jetnh's rhs "
                "evaluations must pay — evaluations (the fewest of a jetnh adaptive run at "
                "this error) × one evaluation in a bare compiled loop + the fixed cost of the "
                "bare compiled call; between it and jetnh's time, jetnh's compiled loop "
                "called directly (the run without its Python side); all measured on each "
                "panel in this run.  The fastest scipy method over the floor is the largest "
-               "ratio such an implementation could reach:\n\n",
+               "ratio such an implementation could reach; the run floor adds what a run "
+               "from Python cannot skip while Ctrl-C stops it within a step (a halt flag, "
+               "one `set_wakeup_fd`, the Trajectory):\n\n",
                table(["system / principle", "evaluations", "per evaluation", "fixed", "floor",
                       "compiled loop", "jetnh", "fastest scipy", "scipy / jetnh",
-                      "scipy / loop", "scipy / floor"], rows),
+                      "scipy / loop", "scipy / floor", "scipy / run floor"], rows),
                f"\nPanels below {ratio(goal)} the fastest scipy method, at each error, even at "
                "the floor; and with jetnh's compiled loop: "]
         out.append("; ".join(f"error {k}: " + (", ".join(v["below_goal"]) or "none")
@@ -256,6 +266,11 @@ class Report:
                              + (", ".join(v["loop_below_goal"]) or "none")
                              + f" (scipy / loop {ratio(v['scipy_over_loop']['min'])}–"
                              f"{ratio(v['scipy_over_loop']['max'])})"
+                             + ("; at the run floor: "
+                                + (", ".join(v["run_floor_below_goal"]) or "none")
+                                + f" (scipy / run floor {ratio(v['run_floor']['min'])}–"
+                                f"{ratio(v['run_floor']['max'])})" if v.get("run_floor")
+                                else "")
                              for k, v in floor.items()) + ".\n\n")
         return "".join(out)
 
@@ -271,7 +286,11 @@ class Report:
                 f"{ratio(best[t]['geomean'])} faster than the fastest of RK45, DOP853, "
                 f"LSODA, Radau (geometric mean over {best[t]['n']} system × principle "
                 f"panels; {ratio(best[t]['min'])}–{ratio(best[t]['max'])}) at error {t}; "
-                f"{ratio(best[targets[0]]['geomean'])} at {targets[0]}", "workprecision"))
+                f"{ratio(best[targets[0]]['geomean'])} at {targets[0]}"
+                + (f"; first calls of the rounds, cold caches: "
+                   f"{ratio(s['best_scipy_over_jetnh_cold'][t]['geomean'])}"
+                   if (s.get("best_scipy_over_jetnh_cold") or {}).get(t) else ""),
+                "workprecision"))
         floor = s.get("fastest_scipy_over_floor", {}).get(t)
         if floor:
             below = floor["below_goal"]
@@ -282,6 +301,12 @@ class Report:
                 f"at error {t}; below {ratio(s['goal'])} on "
                 + (f"{len(below)} of {floor['n']} panels ({', '.join(below)})" if below
                    else f"none of {floor['n']} panels")
+                + (f"; with a run's Python floor (Ctrl-C guarantee) below it on "
+                   + (f"{len(floor['run_floor_below_goal'])} ("
+                      f"{', '.join(floor['run_floor_below_goal'])}; scipy / run floor "
+                      f"{ratio(floor['run_floor']['min'])}–{ratio(floor['run_floor']['max'])})"
+                      if floor["run_floor_below_goal"] else "none")
+                   if floor.get("run_floor") else "")
                 + f"; jetnh takes {ratio(floor['jetnh_over_floor']['geomean'])} its floor "
                 f"({ratio(floor['jetnh_over_floor']['min'])}–"
                 f"{ratio(floor['jetnh_over_floor']['max'])}); fastest scipy over jetnh's "

@@ -32,8 +32,12 @@ RK45, DOP853, LSODA and Radau on the researcher's route -- the same equations (j
 derivation) through ``sympy.lambdify(cse=True, modules="math")``; and scipy's DOP853 on
 jetnh's compiled right-hand side (``Scene.run(method="scipy-DOP853")``), which separates
 the cost of the integrator loop from that of the right-hand side.  Every call is timed
-from Python (``scene.run(save="final")`` against ``solve_ivp(t_eval=[T])``), best of
-several interleaved repetitions.  Summaries: the time each method needs to reach an
+from Python (``scene.run(save="final")`` against ``solve_ivp(t_eval=[T])``): each
+method's figure is the best of several rounds, each round calling every method three
+times in a row (``_common.best_of_blocks``), so the figure is a warm call, as in a loop of
+runs and as DiffEqDevTools times each method, while the rounds stay interleaved against
+changes of the machine's load; the best first call of a round (right after the other
+methods' calls, with cold caches) is kept too, and its ratio is reported beside.  Summaries: the time each method needs to reach an
 error (the cheapest run at or below it), the ratios to jetnh's fastest adaptive method
 at equal error, and achieved error / requested rtol.
 
@@ -45,9 +49,11 @@ several batches) and c the fixed cost of a call of the compiled dop853 loop (cal
 directly on a one-step span, as ``overhead.py --fixed`` calls it: 5th percentile of
 single calls, less that call's own evaluations at e).  The fastest scipy method's time
 over the floor is the largest ratio such an implementation could reach; the step
-control, the stage sums and the checks of each step come on top.  Between the floor and
+control, the stage sums and the checks of each step come on top.  The run floor adds what
+a run from Python cannot skip while Ctrl-C stops it within a step (``numeric.interrupt``):
+a halt flag, one ``set_wakeup_fd`` and the Trajectory of the result (``python_floor``).  Between the floor and
 jetnh's time: its compiled loop called directly with the run's arguments (best of several
-calls in a row, so with warm caches, where the runs are timed interleaved with scipy's),
+calls in a row),
 i.e. the run without its Python side and, where the split can change, without the chart
 bookkeeping (``numeric.atlas``).
 """
@@ -64,7 +70,7 @@ import numpy as np
 import sympy as sp
 from scipy.integrate import solve_ivp
 
-from _common import best, best_of, parser, rhs_driver, write
+from _common import best, best_of_blocks, parser, rhs_driver, write
 
 import jetnh.models as models
 from jetnh.errors import JetnhError
@@ -264,7 +270,36 @@ def floor_costs(scene, drive, reps, calls) -> dict:
         times.append(time.perf_counter() - tic)
     call = float(np.percentile(times, 5))
     return dict(per_evaluation_s=per, fixed_s=call - nfev * per, bare_call_s=call,
-                bare_call_nfev=nfev)
+                bare_call_nfev=nfev, python_s=python_floor(short, plan, args, calls))
+
+
+def python_floor(short, plan, args, calls) -> float | None:
+    """What a run from Python adds to its compiled call and cannot skip while Ctrl-C
+    stops it within a step (``numeric.interrupt``): a fresh halt flag, the wakeup fd
+    confirmed (one ``set_wakeup_fd``) and the Trajectory of the call's result (5th
+    percentile of ``calls``; None where this tree lacks the parts)."""
+    try:
+        import _signal
+
+        from jetnh.numeric import interrupt
+        from jetnh.numeric.trajectory import Trajectory
+        own = interrupt._WATCHDOG.own
+        got = plan.entry(*args)
+
+        def parts():
+            np.zeros(1, np.int64)
+            _signal.set_wakeup_fd(own, warn_on_full_buffer=False)
+            return Trajectory._finished(short, (got[1], got[2], got[3]), short.p, "dop853",
+                                        "", (got[4], 0.0, {}), plan.kern, None)
+        parts()
+    except (AttributeError, ImportError, TypeError, ValueError):
+        return None
+    times = []
+    for _ in range(calls):
+        tic = time.perf_counter()
+        parts()
+        times.append(time.perf_counter() - tic)
+    return float(np.percentile(times, 5))
 
 
 def floors(scene, runs, costs, reference_uncertainty, reps) -> dict:
@@ -294,7 +329,11 @@ def floors(scene, runs, costs, reference_uncertainty, reps) -> dict:
         loop_s, res = best(loop, reps)
         fastest = min(theirs, key=lambda r: r["seconds"])
         floor = nfev * costs["per_evaluation_s"] + costs["fixed_s"]
+        run_floor = floor + costs["python_s"] if costs.get("python_s") else None
         out[str(t)] = dict(nfev=nfev, floor_s=floor, loop_s=loop_s,
+                           run_floor_s=run_floor,
+                           scipy_over_run_floor=(fastest["seconds"] / run_floor
+                                                 if run_floor else None),
                            loop_nfev=int(res[4][2]), jetnh_s=run["seconds"],
                            jetnh_nfev=run["nfev"], scipy_s=fastest["seconds"],
                            scipy_method=fastest["method"],
@@ -354,11 +393,12 @@ def panel(case: Case, tolerances, steps, reps, budget, give_up, drive=None, call
         named["scipy DOP853 (jetnh rhs)"] = jetnh("scipy-DOP853", singular="ignore", **kw)
         named.update({f"scipy {m}": scipy_(m, rtol) for m in SCIPY})
         named = {k: v for k, v in named.items() if k not in slow}
-        for (name, _), (t, res) in zip(named.items(), best_of(list(named.values()), reps,
-                                                               budget)):
+        for (name, _), (t, cold, res) in zip(named.items(), best_of_blocks(
+                list(named.values()), reps, budget)):
             y, nfev, note = outcome(res)
             e = error(y, ref) if y is not None else None
-            runs.append(dict(method=name, rtol=rtol, seconds=t, error=e, nfev=nfev,
+            runs.append(dict(method=name, rtol=rtol, seconds=t, seconds_cold=cold, error=e,
+                             nfev=nfev,
                              achieved_over_requested=e / rtol if e is not None else None,
                              **({"failed": note} if note else {})))
             if t > give_up:
@@ -371,15 +411,15 @@ def panel(case: Case, tolerances, steps, reps, budget, give_up, drive=None, call
         last = math.inf
         for n in steps:
             try:
-                t, res = best_of([jetnh(method, n_steps=n)], reps, budget)[0]
+                t, cold, res = best_of_blocks([jetnh(method, n_steps=n)], reps, budget)[0]
             except JetnhError as exc:                  # e.g. Newton does not converge
                 runs.append(dict(method=f"jetnh {method}", n_steps=n, seconds=None,
                                  error=None, failed=str(exc)[:120]))
                 continue
             y, nfev, note = outcome(res)
             e = error(y, ref) if y is not None else None
-            runs.append(dict(method=f"jetnh {method}", n_steps=n, seconds=t, error=e,
-                             nfev=nfev, **({"failed": note} if note else {})))
+            runs.append(dict(method=f"jetnh {method}", n_steps=n, seconds=t, seconds_cold=cold,
+                             error=e, nfev=nfev, **({"failed": note} if note else {})))
             converged = e is not None and n > steps[2] and (e < 1e-13 or e > 0.5 * last)
             if converged or t > give_up:               # at round-off, or too slow
                 break
@@ -400,21 +440,23 @@ def panel(case: Case, tolerances, steps, reps, budget, give_up, drive=None, call
                 label=case.label, t_end=T, states=list(scene.state_names),
                 initial=[float(v) for v in scene.y0], reference=ref_info, runs=runs,
                 time_to_error=time_to_error(runs),
+                time_to_error_cold=time_to_error(runs, "seconds_cold"),
                 orders={f"jetnh {m}": observed_order(runs, f"jetnh {m}",
                                                      ref_info["uncertainty"]) for m in fixed},
                 **floor)
 
 
 # ---------------------------------------------------------------------- summaries
-def time_to_error(runs) -> dict:
-    """method -> {target: seconds of the cheapest run with error <= target, or None}."""
+def time_to_error(runs, key="seconds") -> dict:
+    """method -> {target: seconds (``key``: warm ``seconds`` or ``seconds_cold``, see
+    ``_common.best_of_blocks``) of the cheapest run with error <= target, or None}."""
     out = {}
     for r in runs:
         d = out.setdefault(r["method"], {str(t): None for t in TARGETS})
         for t in TARGETS:
-            if r["error"] is not None and r["error"] <= t and r["seconds"] is not None:
+            if r["error"] is not None and r["error"] <= t and r.get(key) is not None:
                 k = str(t)
-                d[k] = r["seconds"] if d[k] is None else min(d[k], r["seconds"])
+                d[k] = r[key] if d[k] is None else min(d[k], r[key])
     return out
 
 
@@ -436,9 +478,11 @@ def summarize(panels) -> dict:
     methods = sorted({r["method"] for p in panels for r in p["runs"]})
     ratios = {m: {str(t): [] for t in TARGETS} for m in methods}
     best_scipy = {str(t): [] for t in TARGETS}
+    best_scipy_cold = {str(t): [] for t in TARGETS}
     fastest = {str(t): {} for t in TARGETS}
     for p in panels:
         tte = p["time_to_error"]
+        cold = p.get("time_to_error_cold")
         for t in map(str, TARGETS):
             base = [tte[m][t] for m in ("jetnh dop853", "jetnh dopri5") if tte[m][t]]
             if not base or p["reference"]["uncertainty"] > 0.1 * float(t):
@@ -451,6 +495,11 @@ def summarize(panels) -> dict:
                 m = min(sc, key=sc.get)
                 best_scipy[t].append(sc[m] / min(base))
                 fastest[t][m] = fastest[t].get(m, 0) + 1
+            if cold:
+                ours = [cold[m][t] for m in ("jetnh dop853", "jetnh dopri5") if cold[m][t]]
+                theirs = [cold[f"scipy {m}"][t] for m in SCIPY if cold[f"scipy {m}"][t]]
+                if ours and theirs:
+                    best_scipy_cold[t].append(min(theirs) / min(ours))
 
     def stats(v):
         return (dict(n=len(v), geomean=float(np.exp(np.mean(np.log(v)))), min=min(v),
@@ -486,12 +535,18 @@ def summarize(panels) -> dict:
                             scipy_over_loop=stats([f["scipy_over_loop"] for f in by.values()]),
                             below_goal=[k for k, f in by.items()
                                         if f["scipy_over_floor"] < GOAL],
+                            run_floor=stats([f["scipy_over_run_floor"] for f in by.values()
+                                             if f.get("scipy_over_run_floor")]),
+                            run_floor_below_goal=[k for k, f in by.items()
+                                                  if f.get("scipy_over_run_floor")
+                                                  and f["scipy_over_run_floor"] < GOAL],
                             loop_below_goal=[k for k, f in by.items()
                                              if f["scipy_over_loop"] < GOAL])
     return {"targets": list(TARGETS),
             "time_ratio_to_jetnh": {m: {t: stats(v) for t, v in d.items()}
                                     for m, d in ratios.items()},
             "best_scipy_over_jetnh": {t: stats(v) for t, v in best_scipy.items()},
+            "best_scipy_over_jetnh_cold": {t: stats(v) for t, v in best_scipy_cold.items()},
             "fastest_scipy_method": fastest,
             "achieved_over_requested": achieved,
             "same_error_as_scipy": same,
@@ -624,7 +679,7 @@ def main(argv=None):
         method=dict(tolerances=tolerances, atol="1e-3 rtol", fixed_steps=steps,
                     repetitions=reps, budget_s=budget, give_up_s=give_up,
                     error="max_i |y_i(T) - y_ref,i(T)| / max(|y_ref,i(T)|, 1) over every state",
-                    timing="best of interleaved repetitions; scene.run(save='final') vs "
+                    timing="best of interleaved rounds of 3 calls in a row (warm; cold: best first call of a round); scene.run(save='final') vs "
                            "solve_ivp(t_eval=[T]) on sympy.lambdify(cse=True, modules='math')",
                     baseline="jetnh's fastest adaptive method (dop853 or dopri5) at equal error",
                     floor="n x e + c: n the fewest rhs evaluations of a jetnh adaptive run "

@@ -1,5 +1,6 @@
 """The jetnh command end to end, in a subprocess."""
 
+import csv
 import io
 import json
 import re
@@ -765,34 +766,122 @@ def test_simulate_checks_the_path_names_before_the_run(capsys, tmp_path):
     assert code == 2 and "give --plot PATH too" in err
 
 
-def test_a_run_stopped_by_its_budget_says_what_its_last_row_is(capsys, monkeypatch):
-    """A step budget stops the run long before t_end: with output points the last row is
-    the last output time passed (here the start), and the output says so rather than
-    calling it the final state; with --points 0 (every step) the final row is the state
-    where the run stopped, which differs from the initial one."""
-    from jetnh.numeric import Scene
-
-    run = Scene.run
-    monkeypatch.setattr(Scene, "run", lambda self, *a, **kw: run(self, *a, max_steps=300,
-                                                                 **kw))
-    args = ["simulate", "rolling_disk", "-q", "--t-end", "1e300"]
+def test_a_run_stopped_by_its_budget_prints_where_it_stopped(capsys):
+    """--max-steps stops the run long before t_end, after its last output row: the final
+    state printed is the state where it stopped (the run keeps it), the same as with
+    --points 0 (every step: its last row); the stop names the budget's option."""
+    args = ["simulate", "rolling_disk", "-q", "--t-end", "1e300", "--max-steps", "300"]
     code, out, err = inproc(capsys, *args)
-    assert code == 1 and "final:" not in out
-    assert "last row:   t = 0: x = 0.1, y = -0.2" in out
-    assert "stopped:    after the last row, before the next output time: stopped " \
-           "after max_steps steps" in out
+    assert code == 1 and "final:      x = " in out and "last row" not in out
+    assert re.search(r"stopped:    at t = 258\.\d+: the step budget of 300 steps "
+                     r"\(--max-steps\) ran out; raise --max-steps to go further", out), out
+    assert re.search(r"jetnh: error: the integration stopped early: the step budget of 300 "
+                     r"steps \(--max-steps\) ran out at t = 258\.\d+;", err), err
+    code, out, err = inproc(capsys, *args, "--format", "json")
+    points = json.loads(out)
+    code, out, err = inproc(capsys, *args, "--points", "0", "--format", "json")
+    every = json.loads(out)
+    assert code == 1 and every["diagnostics"]["steps"] == points["diagnostics"]["steps"] == 300
+    for data in (points, every):
+        assert data["final_is_last_state"] is True and data["final_t"] > 250
+    assert points["final_t"] == every["final_t"] and points["final"] == every["final"]
+    # rolling_disk: phi_t is constant, so phi(t) = phi0 + phi_t t at the stop
+    assert points["final"]["phi"] == pytest.approx(
+        points["initial"]["phi"] + points["initial"]["phi_t"] * points["final_t"], rel=1e-9)
+
+
+@pytest.mark.parametrize("args, code, words", [
+    (("--max-steps", "0"), 2, "argument --max-steps: '0' is below 1"),
+    (("--max-steps", str(2**60)), 1, "--max-steps must be a positive integer of at most"),
+    (("--steps", "50"), 2, "--steps sets the steps of the fixed-step methods rk4, dla and "
+                           "dvi; dop853 chooses its own: give "),
+    (("--steps", "50"), 2, ", --max-steps N for a step budget, or --method rk4 --steps N "
+                           "for fixed steps"),
+    (("--method", "radau", "--steps", "50"), 2, "radau chooses its own"),
+    (("--method", "rk4", "--max-steps", "500"), 2, "--max-steps 500 is below the 1000 "
+                                                   "steps of rk4 (--steps, default 1000)"),
+    (("--method", "rk4", "--steps", "80", "--max-steps", "50"), 2,
+     "--max-steps 50 is below the 80 steps of rk4 (--steps 80)"),
+])
+def test_step_options_are_checked_before_the_run(capsys, args, code, words):
+    """--steps with an adaptive method would be ignored: refused, naming what to give
+    instead; --max-steps is checked (and against the fixed steps) before anything is
+    derived or compiled, in simulate and in sweep."""
+    for command in (["simulate", "rolling_disk"],
+                    ["sweep", "rolling_disk", "--grid", "R=1,2"]):
+        got, out, err = inproc(capsys, *command, "--t-end", "1", *args)
+        assert got == code and words in err and out == "", (command, err)
+        assert "compiling" not in err and "Traceback" not in err
+        if "--steps sets" in err:       # the command's own option of output times
+            assert ("--points N for N output points" if command[0] == "simulate" else
+                    "--times for output times") in err
+
+
+def test_max_steps_reaches_the_runs_of_simulate_and_sweep(capsys):
+    """The budget is passed through: rk4 with --steps 20 --max-steps 20 runs, and a sweep
+    whose points stop by their budget says so in each row."""
+    code, out, err = inproc(capsys, "simulate", "rolling_disk", "-q", "--t-end", "1",
+                            "--method", "rk4", "--steps", "20", "--max-steps", "20",
+                            "--format", "json")
+    assert code == 0 and json.loads(out)["diagnostics"]["steps"] == 20
+    code, out, err = inproc(capsys, "sweep", "rolling_disk", "-q", "--t-end", "1e300",
+                            "--grid", "R=1,2", "--max-steps", "50")
+    rows = list(csv.DictReader(io.StringIO(out)))
+    assert code == 0 and len(rows) == 2
+    for row in rows:
+        assert row["success"] == "False" and row["steps"] == "50"
+        assert "stopped after max_steps steps" in row["stop_reason"]
+
+
+def test_help_shows_the_step_budget(capsys):
+    from jetnh.numeric.options import StepControl
+
+    for command in ("simulate", "sweep"):
+        code, out, _ = inproc(capsys, command, "--help")
+        out = " ".join(out.split())
+        assert code == 0 and (f"--max-steps N step budget of a run: it stops after N steps "
+                              f"and says where (default {StepControl.max_steps})") in out
+        assert "refused with the adaptive methods, which choose their own steps " \
+               "(--max-steps bounds them)" in out
+
+
+def test_connect_reports_legendre_and_plots_atomically(capsys, tmp_path, monkeypatch):
+    """connect prints Legendre's margin (Heisenberg: 1 / (1 + max r^2), r^2 = x^2 + y^2 at
+    the end (1, 0.5): 4/9) and records it in JSON; --plot replaces its file whole or not
+    at all: a failure while writing leaves the previous file and no temporary one."""
+    from matplotlib.figure import Figure
+
+    target = tmp_path / "g.png"
+    args = ["connect", "heisenberg", "-q", "--from", "x=0,y=0,z=0", "--to",
+            "x=1,y=0.5,z=0.2", "--t-end", "1"]
     code, out, err = inproc(capsys, *args, "--format", "json")
     data = json.loads(out)
-    assert data["final_t"] == 0.0 and data["final_is_last_state"] is False
-    code, out, err = inproc(capsys, *args, "--points", "0", "--format", "json")
-    data = json.loads(out)
-    assert data["final_is_last_state"] is True and data["diagnostics"]["steps"] == 300
-    assert data["final_t"] > 1 and data["final"]["phi"] != data["initial"]["phi"]
-    # rolling_disk: phi_t is constant, so phi(t) = phi0 + phi_t t at the stop
-    assert data["final"]["phi"] == pytest.approx(
-        data["initial"]["phi"] + data["initial"]["phi_t"] * data["final_t"], rel=1e-9)
-    code, out, err = inproc(capsys, *args, "--points", "0")
-    assert "final:      x = " in out and "stopped:    at t = " in out
+    assert code == 0 and data["legendre"] == pytest.approx(4 / 9, rel=1e-6)
+    code, out, err = inproc(capsys, *args)
+    assert code == 0 and "legendre:  0.444444 (" in out
+    assert ": positive definite all along)" in out
+    chetaev = ["connect", "heisenberg", "-q", "-p", "chetaev", "--to", "x=1,y=0.5",
+               "--t-end", "1"]
+    code, out, err = inproc(capsys, *chetaev, "--format", "json")
+    assert code == 0 and json.loads(out)["legendre"] is None    # not an extremal
+    code, out, err = inproc(capsys, *chetaev)
+    assert code == 0 and "cost:" in out and "legendre" not in out
+    target.write_bytes(b"the previous plot")
+    real = Figure.savefig
+
+    def failing(self, fname, *a, **kw):
+        real(self, fname, *a, **kw)              # a partial file, then the disk is full
+        raise OSError(28, "No space left on device")
+    monkeypatch.setattr(Figure, "savefig", failing)
+    code, out, err = inproc(capsys, *args, "--plot", str(target))
+    assert code == 1 and f"cannot write {target}: No space left on device" in err
+    assert target.read_bytes() == b"the previous plot"
+    assert [p.name for p in tmp_path.iterdir()] == ["g.png"]
+    monkeypatch.undo()
+    target.chmod(0o640)
+    code, out, err = inproc(capsys, *args, "--plot", str(target))
+    assert code == 0 and target.read_bytes()[:4] == b"\x89PNG"
+    assert target.stat().st_mode & 0o777 == 0o640           # the replaced file's
 
 
 def test_a_model_option_given_twice_is_refused(capsys):

@@ -209,7 +209,11 @@ def test_restarts_leave_a_geodesic_past_its_conjugate_point():
     assert abs(first.cost - v**2 / 2) < 1e-9
     c = jn.connect(heis, "vakonomic", O, end, (0.0, 1.0), guess=guess, restarts=4)
     assert c.minimizer is True and c.conjugate_times == () and c.residual < 1e-9
-    assert "the cheapest without a conjugate time kept" in c.search
+    # the verdict that failed is named: Jacobi's (conjugate times), not Legendre's
+    assert c.search.startswith("4 restarts from the first answer, which is no "
+                               "minimizer: conjugate times inside the span (t = 0.6, ")
+    assert "Legendre's condition fails" not in c.search
+    assert "the cheapest minimizer kept" in c.search and " (conjugate)" in c.search
     assert "restart" in c.route
     xt, yt, lam = c.initial["x_t"], c.initial["y_t"], c.initial["lambda_z"]
     v2, w2 = math.hypot(xt, yt), 2 * lam

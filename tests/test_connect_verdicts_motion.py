@@ -124,6 +124,19 @@ def test_legendre_condition_of_heisenberg_geodesics(m):
         assert abs(c.legendre + 1.0) < 1e-12
 
 
+def test_restarts_name_legendre_where_it_fails():
+    """m = -1: every extremal is a maximizer (legendre = -1, no conjugate time); the
+    least-action search says Legendre's condition failed, not conjugate times."""
+    c = jn.connect(get("heisenberg"), "vakonomic", O, {"x": 1.0, "y": 0.5, "z": 0.2},
+                   (0.0, 1.0), params={"m": -1.0}, restarts=2)
+    assert c.minimizer is False and c.conjugate_times == ()
+    assert c.search.startswith("2 restarts from the first answer, which is no "
+                               "minimizer: Legendre's condition fails (legendre = -1)")
+    assert "conjugate" not in c.search and "(Legendre fails)" in c.search
+    assert "Legendre's condition fails on every one" in c.search
+    assert "more restarts" not in c.search          # more would not help
+
+
 def test_samples_are_the_motion_returned_whichever_way_they_are_taken():
     """A run with t_eval is used only where it ends on the trajectory bit for bit (the
     same steps): a run with another tolerance is refused, and the dense output (the

@@ -29,8 +29,8 @@ def defaults() -> dict:
 
 
 def help_default(name: str):
-    """``defaults()[name]`` as the help shows it, without importing the numerics (the
-    tolerances read from ``StepControl``'s source: ``declared``)."""
+    """``defaults()[name]`` (or ``StepControl``'s ``max_steps``) as the help shows it,
+    without importing the numerics (read from ``StepControl``'s source: ``declared``)."""
     return _OWN[name] if name in _OWN else declared("options", "StepControl", name)
 
 

@@ -5,12 +5,15 @@ a directory, whose directory does not exist or cannot be written, whose suffix i
 format of ``kinds`` (``TABLE``, ``CSV``, ``TEXT`` or ``FIGURE``: matplotlib's formats)
 or whose format needs a library that is not installed (pyarrow for parquet, matplotlib
 for figures).  ``write(path, fill)`` calls ``fill(tmp)`` on a temporary file in the same
-directory, then renames it over ``path`` (``os.replace``): a failed write (a full disk)
-leaves the previous file as it was, removes the temporary one and names the path.
+directory, then renames it over ``path`` (``os.replace``) with the permissions of the
+file it replaces (else those of a new file): a failed write (a full disk) leaves the
+previous file as it was, removes the temporary one and names the path.
 """
 
 from __future__ import annotations
 
+import json
+import math
 import os
 import tempfile
 from pathlib import Path
@@ -67,6 +70,18 @@ def _takes_files(parent: Path, name: str) -> bool:
     return True
 
 
+def _mode(path: Path) -> int:
+    """The permissions of the file written to ``path``: those of the file it replaces,
+    else what ``open`` would give a new file (0o666 less the umask; the temporary file
+    is made 0o600)."""
+    try:
+        return path.stat().st_mode & 0o7777
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask
+
+
 def write(path, fill) -> None:
     """``fill(tmp)`` writes the content to the path ``tmp``; then it replaces ``path``.
     An error names ``path``, never the temporary file."""
@@ -79,6 +94,7 @@ def write(path, fill) -> None:
         fill(tmp)
         with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
+        os.chmod(tmp, _mode(p))
         os.replace(tmp, p)
     except BaseException as exc:
         if tmp is not None:
@@ -90,3 +106,21 @@ def write(path, fill) -> None:
             raise JetnhError(f"cannot write {p}: {exc.strerror or type(exc).__name__}; the "
                              "previous file, if any, is unchanged") from None
         raise
+
+
+def as_json(data, **kw) -> str:
+    """``data`` as strict JSON (RFC 8259, which has no NaN or infinity): a float that is
+    not finite becomes null (a NaN energy that could not be evaluated, an undecided
+    margin); numpy numbers become Python ones."""
+    def clean(v):
+        if isinstance(v, dict):
+            return {k: clean(x) for k, x in v.items()}
+        if isinstance(v, (list, tuple)):
+            return [clean(x) for x in v]
+        if isinstance(v, float) and not math.isfinite(v):
+            return None
+        return v
+
+    def number(o):
+        return clean(float(o))
+    return json.dumps(clean(data), allow_nan=False, default=number, **kw)

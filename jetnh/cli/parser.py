@@ -19,6 +19,9 @@ EPILOG_MODEL = ("MODEL: a catalogue name (see `jetnh models`; scalable ones take
                 "e.g. n_trailer:N=4) or a model file (TOML, e.g. examples/rolling_disk.toml).")
 
 
+#: the steps of a fixed-step method without --steps
+FIXED_STEPS = 1000
+
 #: stands in an option's help for the default of its setting, looked up when the help is
 #: shown (``shown_default``)
 FALLBACK = "{default}"
@@ -47,7 +50,10 @@ class Formatter(argparse.HelpFormatter):
     def _get_help_string(self, action):
         text = super()._get_help_string(action)
         default = getattr(action, "default_shown", None)
-        return text.replace(FALLBACK, f"{default():g}") if default else text
+        if not default:
+            return text
+        value = default()
+        return text.replace(FALLBACK, str(value) if isinstance(value, int) else f"{value:g}")
 
 
 def shown_default(action: argparse.Action, default) -> argparse.Action:
@@ -204,8 +210,14 @@ def _run() -> argparse.ArgumentParser:
     span_options(run)
     tolerance_options(run, "the model's, else ", jetnh_default("rtol"),
                       jetnh_default("atol"))
-    run.add_argument("--steps", type=int, default=1000, metavar="N",
-                     help="steps of the fixed-step methods rk4, dla and dvi (default 1000)")
+    run.add_argument("--steps", type=int, default=None, metavar="N",
+                     help=f"steps of the fixed-step methods rk4, dla and dvi (default "
+                          f"{FIXED_STEPS}); refused with the adaptive methods, which choose "
+                          "their own steps (--max-steps bounds them)")
+    shown_default(run.add_argument(
+        "--max-steps", type=positive_count, default=None, metavar="N",
+        help="step budget of a run: it stops after N steps and says where (default "
+             + FALLBACK + ")"), lambda: help_default("max_steps"))
     return run
 
 
@@ -220,7 +232,8 @@ RUN = _run()
 #: the library's argument names (``JetnhError.argument``) -> the destination and the
 #: option of a command that sets them
 ARGUMENT_OPTIONS = {"n_steps": ("steps", "--steps"), "rtol": ("rtol", "--rtol"),
-                    "atol": ("atol", "--atol"), "timeout": ("timeout", "--timeout")}
+                    "atol": ("atol", "--atol"), "timeout": ("timeout", "--timeout"),
+                    "max_steps": ("max_steps", "--max-steps")}
 
 
 def option_name(args, argument: str | None) -> str | None:

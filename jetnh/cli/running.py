@@ -75,3 +75,47 @@ def scene_names(system) -> set:
     velocities and parameters."""
     return ({system.J.t.name} | {v.name for v in system.dependent_velocities}
             | {p.name for p in system.parameters})
+
+
+def step_options(args, method: str, t_span, outputs: str) -> dict:
+    """The step options of a run from --steps and --max-steps, checked before anything
+    is derived: ``n_steps`` of a fixed-step method (--steps, default ``FIXED_STEPS``,
+    within the budget), ``max_steps`` where --max-steps is given.  --steps with an
+    adaptive method is refused (its steps are its own); the message names ``outputs``,
+    the command's option of output times."""
+    from ..numeric import arguments
+    from ..numeric.options import StepControl
+    from .parser import FIXED_STEPS
+
+    kw = {}
+    if args.max_steps is not None:
+        kw["max_steps"] = arguments.count(args.max_steps, "max_steps")
+    if not method_of(method).fixed_step:
+        if args.steps is not None:
+            raise UsageError(f"--steps sets the steps of the fixed-step methods rk4, dla and "
+                             f"dvi; {method} chooses its own: give {outputs}, --max-steps N "
+                             "for a step budget, or --method rk4 --steps N for fixed steps")
+        return kw
+    steps = FIXED_STEPS if args.steps is None else args.steps
+    budget = kw.get("max_steps", StepControl.max_steps)
+    if steps > budget:
+        raise UsageError(f"--max-steps {budget} is below the {steps} steps of {method} "
+                         f"(--steps{'' if args.steps is not None else ', default'} {steps}); "
+                         "raise --max-steps or lower --steps")
+    kw["n_steps"] = arguments.fixed_steps(steps, None, *t_span, method, budget)
+    return kw
+
+
+def stop_text(traj, args, when: bool = True) -> str:
+    """Why ``traj`` stopped early; a stop by the step budget named by its option
+    (--max-steps), its size and (``when``) the time it came at."""
+    from ..numeric import MAX_STEPS
+    from ..numeric.options import StepControl
+
+    if traj.status != MAX_STEPS:
+        return traj.stop_reason
+    given = args.max_steps is not None
+    budget = args.max_steps if given else StepControl.max_steps
+    return (f"the step budget of {budget} steps (--max-steps{'' if given else ', default'}) "
+            f"ran out{f' at t = {traj.t_final:.10g}' if when else ''}; raise --max-steps "
+            "to go further")

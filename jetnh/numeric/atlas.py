@@ -70,11 +70,12 @@ from ..algebra import dag, linalg
 from ..errors import JetnhError
 from ..mechanics import principles
 from .methods import projection
-from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, SINGULAR, STOPPED
-from . import arguments, loops
+from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, FINISHED, SINGULAR, STATUS_TEXT,
+                              STOPPED)
+from . import arguments, interrupt, loops, methods
 from .events import Event, as_events
 from .kernels.calls import Kernel, Rows
-from .methods.loop import Watch
+from .methods.loop import Control, Watch, features
 from .trajectory import Trajectory
 
 #: the event name of a chart's edge (internal: the stitched run does not report it)
@@ -146,20 +147,71 @@ class Chart:
         self.dep = np.array([names.index(c) for c in split], dtype=np.int64)
         self.ind = np.array([i for i in range(len(names)) if names[i] not in split],
                             dtype=np.int64)
+        self._independent = self.ind.tolist()
         self.explicit = explicit
         self.n, self.k = len(names), len(split)
         self.scene = scene
         self._kernels = self._jacobian = self._sens = None
         self._columns: dict = {}
         self._changes: dict = {}
+        #: where each velocity is in a state of this chart followed by its aux row
+        #: (the dependent velocities first there; counted from the end: set with the
+        #: kernels, which give the aux row's length)
+        self._velocity_at = None
+        self._watches: dict = {}
+        self._entries: dict = {}
 
     @property
     def kernels(self):
         if self._kernels is None:
             kernels = self.scene.kernels
+            n_aux = kernels.layout.n_aux
+            where = {int(j): self.n + i for i, j in enumerate(self.ind)}
+            where.update({int(j): i - n_aux for i, j in enumerate(self.dep)})
+            self._velocity_at = [where[j] for j in range(self.n)]
             self._n_aux = kernels.layout.n_aux      # before _kernels: another thread
-            self._kernels = kernels                 # reading it finds _n_aux set
+            self._kernels = kernels                 # reading it finds them set
         return self._kernels
+
+    def watch(self, ce, checked, singular_tol, user_max, counts, edge) -> Watch:
+        """What the loop of a piece in this chart watches: the singularity indicators
+        (``checked``) and the events ``ce``, each user event with the terminal count left
+        to it (``user_max`` less ``counts``), then the edge's one (kept per events when
+        there are no user events: the same for every piece)."""
+        key = None if user_max else (id(ce), checked, float(singular_tol), edge)
+        found = self._watches.get(key) if key is not None else None
+        if found is not None and found[0] is ce:
+            return found[1]
+        left_max = np.array([m - c if m > 0 else 0 for m, c in zip(user_max, counts)]
+                            + [1] * edge, dtype=np.int64)
+        watch = Watch(len(self.kernels.layout.indicators) if checked else 0,
+                      float(singular_tol),
+                      ce.direction if ce is not None else loops.NO_EVENTS,
+                      left_max if ce is not None else loops.NO_EVENTS)
+        if key is not None:
+            self._watches[key] = (ce, watch)
+        return watch
+
+    def call(self, method, ce, watch, t0, t1, y, p, ctl, te, mode, newton, limit, sens):
+        """``loops.call`` of this chart's scene and kernels (``sens``: the kernels of its
+        state augmented by its sensitivities), the loop's entry and callbacks looked up
+        once per method, events and loop parts (``loops.entry``)."""
+        key = (method, id(ce), sens is not None, features(ctl, mode, watch))
+        found = self._entries.get(key)
+        if found is None or found[0] is not ce:
+            loop, prefix, suffix, callbacks = loops.entry(
+                self.scene, methods.method(method), self.kernels, ce, sens, ctl, te, mode,
+                watch, newton)
+            found = self._entries[key] = (ce, loop, prefix, len(suffix), callbacks)
+        _, loop, prefix, n_suffix, _ = found
+        # (the arguments after (t0, t1, y0, p) as ``loops.entry`` gives them)
+        suffix = (ctl, te, mode, watch) if n_suffix == 4 else (ctl, newton, te, mode, watch)
+        halt = np.zeros(1, dtype=np.int64)
+        tic = time.perf_counter()
+        out = interrupt.call(loop, halt, limit, (*prefix, t0, t1, y, p, *suffix, halt))
+        wall = time.perf_counter() - tic
+        loops.on_constraints(self.kernels, ctl, mode, sens, out, p, t0)
+        return loops.result(out), wall
 
     @property
     def jacobian_kernel(self):
@@ -248,14 +300,16 @@ class Chart:
     def velocities(self, t, y, p) -> np.ndarray:
         """Every velocity at one state ``y`` of this chart (the dependent ones from its
         aux kernel)."""
-        n, k = self.n, self.k
+        return np.array(self.velocity_list(t, y, p))
+
+    def velocity_list(self, t, y, p) -> list:
+        """``velocities`` as a list (a few numbers: copied through lists, cheaper than
+        numpy's calls on small arrays)."""
         kern = self.kernels
         aux = np.empty(self._n_aux)
         kern.aux(t, y, p, aux)
-        qd = np.empty(n)
-        qd[self.ind] = y[n:2 * n - k]
-        qd[self.dep] = aux[:k]
-        return qd
+        row = y.tolist() + aux.tolist()
+        return [row[i] for i in self._velocity_at]
 
     def point(self, t, y, p):
         """``universal`` of one state ``y`` (C-contiguous floats) with df/dqdot:
@@ -270,21 +324,21 @@ class Chart:
             lam = np.linalg.solve(A[:, self.dep].T[None], lam[None, :, None])[0, :, 0]
         return y[:n], qd, lam, A
 
-    def columns_of(self, other) -> np.ndarray:
+    def columns_of(self, other, as_list=False) -> np.ndarray | list:
         """Where the columns of ``other``'s state are in a row of this chart's state
         followed by its aux row, when the multipliers keep their values (not
         ``explicit``): coordinates, ``other``'s independent velocities (independent
-        velocities here or dependent ones, the first of aux), multipliers."""
+        velocities here or dependent ones, the first of aux), multipliers (``as_list``:
+        as a list)."""
         found = self._columns.get(other.split)
         if found is None:
             n, k = self.n, self.k
             n_y = len(self.scene.state_names)
             where = {int(j): n + i for i, j in enumerate(self.ind)}
             where.update({int(j): n_y + i for i, j in enumerate(self.dep)})
-            found = self._columns[other.split] = np.array(
-                [*range(n), *(where[int(j)] for j in other.ind), *range(2 * n - k, n_y)],
-                dtype=np.int64)
-        return found
+            cols = [*range(n), *(where[int(j)] for j in other.ind), *range(2 * n - k, n_y)]
+            found = self._columns[other.split] = (np.array(cols, dtype=np.int64), cols)
+        return found[as_list]
 
     def state(self, q, qd, lam, A) -> np.ndarray:
         """Rows of this chart's state from ``(q, qdot, lam, A)`` (``universal``)."""
@@ -296,7 +350,8 @@ class Chart:
         """``state`` of one point (``point``)."""
         if self.explicit and lam.shape[0]:
             return self.state(q[None], qd[None], lam[None], A[None])[0]
-        return np.concatenate((q, qd[self.ind], lam))
+        v = qd.tolist()
+        return np.array(q.tolist() + [v[i] for i in self._independent] + lam.tolist())
 
 
 def _det(M) -> float:
@@ -318,6 +373,12 @@ def measures_at(A, columns) -> list[float]:
     (no split is regular).  ``Atlas.measures`` (the charts of a run) and
     ``regular.best`` (every choice of k coordinates) both take them from here."""
     rows = np.asarray(A, dtype=float).tolist()
+    if len(rows) == 1:          # one constraint: the same sums, without the matrices
+        r = rows[0]
+        gram = sum([a * a for a in r])
+        if not gram > 0.0:
+            return [0.0] * len(columns)
+        return [r[c] ** 2 / gram for c, in columns]
     gram = _det([[sum(a * b for a, b in zip(r, s)) for s in rows] for r in rows])
     if not gram > 0.0:
         return [0.0] * len(columns)
@@ -390,6 +451,7 @@ class Atlas:
         #: ``regular.best`` takes them: the same split measured the same to the bit)
         self.columns = [sorted(m.dep.tolist()) for m in self.maps.values()]
         self._events: dict = {}
+        self._edges: dict = {}
 
     @property
     def own(self) -> Chart:
@@ -465,11 +527,21 @@ class Atlas:
         events and edge, so that repeated runs build nothing (the key holds the
         expressions themselves: hashed once by sympy, compared by identity first)."""
         key = (chart.split, edge, tuple((e.fun, e.direction, e.max_events, e.name)
-                                        for e in user))
+                                        for e in user) if user else ())
         found = self._events.get(key)
         if found is None:
             found = self._events[key] = (self._compile_events(chart, user, edge),)
         return found[0]
+
+    def edge_kernel(self, ce) -> Kernel:
+        """``kernel(t, y, p, out)``: the compiled events ``ce`` of a run in the scene's
+        own chart (``events``, its edge last) called from Python, made once."""
+        found = self._edges.get(id(ce))
+        if found is None or found[0] is not ce:
+            home = self.home
+            found = self._edges[id(ce)] = (ce, Kernel(ce.uev, (
+                len(home.state_names), len(home.runtime_params), len(ce))))
+        return found[1]
 
     def _compile_events(self, chart, user, edge):
         sys_ = chart.scene.system
@@ -482,39 +554,87 @@ class Atlas:
 
 
 # ---------------------------------------------------------------------- the driver
-def run(home, method, events, t0, t1, y0, p, ctl, te, mode, dense, checked, singular_tol,
-        newton, limit, build, sens=None):
-    """``Scene.run`` of a scene whose split has an edge (``applies``): the compiled loop
-    in one chart until the run ends or reaches the chart's edge, where it goes on in the
-    split of largest measure with the state mapped; one Trajectory of ``home``.
-    ``build``: the Trajectory of a piece from its loop's result (``solve.trajectory``).
-    ``sens``: the scene's kernels of a run with sensitivities (``y0`` then holds the
-    state and S(t0) after it): each chart runs with its own, S carried across every
-    switch (``Chart.carry``)."""
+def run(home, plan, y0, p, build):
+    """``Scene.run`` of a scene whose split has an edge (``applies``) by its ``plan``
+    (``solve.plan``): the plan's loop in the scene's own chart, watching the chart's
+    edge as its last event; a run that ends before the edge is that loop's Trajectory
+    as any run's, one that reaches it goes on in the split of largest measure with the
+    state mapped (``follow``): one Trajectory of ``home``.  ``build``: the Trajectory of
+    a piece from its loop's result (``solve.trajectory``).  A run with sensitivities
+    (``plan.sens``; ``y0`` holds the state and S(t0) after it) runs each chart with its
+    own kernels, S carried across every switch (``Chart.carry``)."""
     at = atlas(home)
-    user = as_events(events)
+    user = as_events(plan.events)
     tic = time.perf_counter()
+    sens, t0, t1, ctl = plan.sens, plan.t0, plan.t1, plan.ctl
+    method = plan.method.name
     n = len(home.state_names)
-    chart, y, first = begin(at, user, t0, y0[:n], p)
-    if sens is not None:
-        S = y0[n:].reshape(1, n, -1)
-        if first:           # past the edge at t0: S(t0) in the chart the run starts in
-            S = at.own.carry(chart, t0, y0[:n], S, p)
-        y = np.concatenate((y, S.ravel()))
-    parts, switches = follow(at, method, chart, t0, y, t1, p, user,
-                             np.zeros(len(user), np.int64), ctl, ctl.max_steps, te, mode,
-                             dense, checked, singular_tol, newton, limit, build,
-                             sens=sens is not None)
-    return stitch(home, at, method, p, parts, first + switches, user, mode,
+    start = (own_edge(at, plan.ce, t0, y0, p) < 0.0
+             and begin(at, user, t0, y0[:n], p, past=True))
+    if start and start[2]:          # past the edge at t0: the split of largest measure
+        chart, y, first = start
+        if sens is not None:        # S(t0) in the chart the run starts in
+            S = at.own.carry(chart, t0, y0[:n], y0[n:].reshape(1, n, -1), p)
+            y = np.concatenate((y, S.ravel()))
+        parts, switches = follow(at, method, chart, t0, y, t1, p, user,
+                                 np.zeros(len(user), np.int64), ctl, ctl.max_steps,
+                                 plan.te, plan.mode, plan.dense, plan.checked,
+                                 plan.singular_tol, plan.newton, plan.limit,
+                                 _Piece.maker(build), sens=sens is not None, tic=tic)
+        return stitch(home, at, method, p, parts, first + switches, user, plan.mode,
+                      time.perf_counter() - tic)
+    # the scene's own chart: the plan's loop, as a run that cannot switch calls it
+    halt = np.zeros(1, dtype=np.int64)
+    tic_loop = time.perf_counter()
+    out = interrupt.call(plan.entry, halt, plan.limit, (*plan.head, y0, p, *plan.suffix,
+                                                        halt))
+    wall = time.perf_counter() - tic_loop
+    loops.on_constraints(plan.kern, ctl, plan.mode, sens, out, p, t0)
+    status, n_ev = out[0], out[10]
+    dense = plan.dense_ends
+    if dense is not None:           # stopped inside a step or not
+        dense = dense[status == EVENT or status == SINGULAR]
+        if sens is not None:        # the run's own (``build`` adds its rows)
+            dense = dict(dense)
+    if not (status == EVENT and out[8][n_ev - 1] == len(user)):     # not at the edge
+        if status == FINISHED and not user and sens is None:        # most runs: at once
+            return Trajectory._finished(home, (out[1], out[2], out[3]), p, method,
+                                        _FINISHED_TEXT, (out[4], wall, home.projected),
+                                        plan.kern, dense)
+        # (a Result: its rows checked again where the projection moved them)
+        return build(home, method, loops.result(out) if ctl.n_hol else out, wall,
+                     plan.kern, plan.ce, p, t0, y0, plan.singular_tol, plan.checked,
+                     plan.limit, dense, n_events=len(user), sens=sens)
+    parts, switches = follow(at, method, at.own, t0, y0, t1, p, user,
+                             np.zeros(len(user), np.int64), ctl, ctl.max_steps, plan.te,
+                             plan.mode, plan.dense, plan.checked, plan.singular_tol,
+                             plan.newton, plan.limit, _Piece.maker(build),
+                             sens=sens is not None, tic=tic,
+                             ran=(loops.result(out), wall, plan.ce, plan.watch, dense))
+    return stitch(home, at, method, p, parts, switches, user, plan.mode,
                   time.perf_counter() - tic)
 
 
-def begin(at, user, t0, y0, p):
+_FINISHED_TEXT = STATUS_TEXT[FINISHED]
+
+
+def own_edge(at, ce, t, y, p) -> float:
+    """The edge indicator of the scene's own chart (the last of its compiled events
+    ``ce``, ``Atlas.events``) at the state ``y`` (its first entries) at ``t``: negative
+    past the edge."""
+    kernel = at.edge_kernel(ce)
+    out = np.empty(len(ce))
+    kernel(float(t), y, p, out)
+    return float(out[-1])
+
+
+def begin(at, user, t0, y0, p, past=False):
     """The chart a run from (t0, y0) (the scene's state) starts in: the scene's own,
     unless that is already past its edge there (then the split of largest measure);
-    ``(chart, state in it, [the switch at t0] or [])``."""
+    ``(chart, state in it, [the switch at t0] or [])``.  ``past``: the edge indicator is
+    known to be negative there (``own_edge``)."""
     own = at.own
-    if not at.events(own, user, True).python_funcs[-1](t0, y0, p) < 0.0:
+    if not past and not own_edge(at, at.events(own, user, True), t0, y0, p) < 0.0:
         return own, y0, []
     point = own.point(float(t0), np.ascontiguousarray(y0, dtype=float), p)
     if not at.measures(point[3])[0] < at.eps:
@@ -528,45 +648,47 @@ def begin(at, user, t0, y0, p):
 
 def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mode, dense, checked,
            singular_tol, newton, limit, build, first=True, h_fixed=None, edge=True,
-           sens=False):
+           sens=False, tic=None, ran=None):
     """Run from (t, y) in ``chart`` to ``t1``, changing chart at every edge; returns the
     pieces ``[(chart, trajectory of the chart's scene made by ``build``, what re-running
     it needs)]`` and the switches.  ``counts``: occurrences of the user events so far
     (terminal counts go on); ``first``: whether (t, y) starts the run (else the run goes
     on after a switch); ``edge``: whether to watch the chart's edge; ``sens``: ``y``
     holds the state and its sensitivities after it (each chart runs with its
-    ``sensitivity_kernels``, S carried across a switch by ``Chart.carry``)."""
+    ``sensitivity_kernels``, S carried across a switch by ``Chart.carry``); ``tic``: when
+    the run began (``limit`` counts from there); ``ran``: the first piece's loop already
+    called (``run``: the plan's call), ``(Result, wall time, events, watch, dense)``."""
     user_max = [e.max_events for e in user]
     parts, switches = [], []
     direction = 1.0 if t1 >= t else -1.0
     if h_fixed is None:
         h_fixed = (t1 - t) / ctl.n_steps if ctl.n_steps > 0 else 0.0
-    tic = time.perf_counter()
+    if tic is None:
+        tic = time.perf_counter()
     while True:
         scene, kern = chart.scene, chart.kernels
-        ce = at.events(chart, user, edge)
-        # the terminal counts left to each user event, then the edge's one
-        left_max = np.array([m - c if m > 0 else 0 for m, c in zip(user_max, counts)]
-                            + [1] * edge, dtype=np.int64)
-        watch = Watch(len(kern.layout.indicators) if checked else 0, float(singular_tol),
-                      ce.direction if ce is not None else loops.NO_EVENTS,
-                      left_max if ce is not None else loops.NO_EVENTS)
-        seg_ctl, seg_te = ctl, te
-        if parts or not first:
-            n_steps = (max(1, round(abs(t1 - t) / abs(h_fixed))) if ctl.n_steps > 0 else 0)
-            seg_ctl = ctl._replace(first_step=0.0, max_steps=max(steps_left, 0),
-                                   n_steps=n_steps)
-            if mode == AT_T_EVAL:
-                seg_te = np.ascontiguousarray(te[direction * (te - t) > 0.0])
-        left = None if limit is None else limit - (time.perf_counter() - tic)
-        seg_dense = None if dense is None else dict(dense)
         ksens = chart.sensitivity_kernels if sens else None
-        if seg_dense is not None and sens:
-            seg_dense["rhs"] = ksens
-        out, wall = loops.call(scene, method, kern, ce, watch, t, t1, y, p, seg_ctl, seg_te,
-                               mode, newton, left, ksens)
-        if seg_dense is not None:
-            seg_dense["partial_last"] = int(out.status) in (EVENT, SINGULAR)
+        if ran is not None:
+            (out, wall, ce, watch, seg_dense), ran = ran, None
+            seg_ctl, seg_te = ctl, te
+        else:
+            ce = at.events(chart, user, edge)
+            watch = chart.watch(ce, checked, singular_tol, user_max, counts, edge)
+            seg_ctl, seg_te = ctl, te
+            if parts or not first:
+                n_steps = (max(1, round(abs(t1 - t) / abs(h_fixed))) if ctl.n_steps > 0
+                           else 0)
+                seg_ctl = _onward(ctl, max(steps_left, 0), n_steps)
+                if mode == AT_T_EVAL:
+                    seg_te = np.ascontiguousarray(te[direction * (te - t) > 0.0])
+            left = None if limit is None else limit - (time.perf_counter() - tic)
+            seg_dense = None if dense is None else dict(dense)
+            if seg_dense is not None and sens:
+                seg_dense["rhs"] = ksens
+            out, wall = chart.call(method, ce, watch, t, t1, y, p, seg_ctl, seg_te, mode,
+                                   newton, left, ksens)
+            if seg_dense is not None:
+                seg_dense["partial_last"] = int(out.status) in (EVENT, SINGULAR)
         n_ev = int(out.n_ev)
         hit = (edge and int(out.status) == EVENT and n_ev > 0
                and int(out.ev_i[n_ev - 1]) == len(user))
@@ -575,8 +697,8 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
         else:
             seg = build(scene, method, out, wall, kern, ce, p, t, y, singular_tol, checked,
                         limit, seg_dense, n_events=len(user), sens=ksens)
-            for i in range(len(user)):
-                counts[i] += len(seg.t_events[i])
+        if user and n_ev:           # the occurrences of each user event
+            counts += np.bincount(out.ev_i[:n_ev], minlength=len(counts))[:len(counts)]
         parts.append((chart, seg, (t, y, t1, seg_ctl, watch, ce, ksens)))
         steps_left -= int(out.stats[0])
         if not hit:
@@ -593,6 +715,19 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
         switches.append({"t": t, "from": list(chart.split), "to": list(new.split)})
         chart = new
     return parts, switches
+
+
+def _onward(ctl, max_steps, n_steps):
+    """``ctl._replace(first_step=0.0, max_steps=max_steps, n_steps=n_steps)``: the step
+    control of a piece after the first (its first step chosen afresh), without the
+    keyword machinery."""
+    c = list(ctl)
+    c[_FIRST], c[_MAX_STEPS], c[_N_STEPS] = 0.0, max_steps, n_steps
+    return ctl._make(c)
+
+
+_FIRST, _MAX_STEPS, _N_STEPS = (Control._fields.index(f)
+                                for f in ("first_step", "max_steps", "n_steps"))
 
 
 def _at_end(t, t1) -> bool:
@@ -640,40 +775,47 @@ def _target(at, chart, t, p, q, qd, lam, A):
     largest measure (at least twice the edge) whose constraints give back the
     velocities (the same branch), or None.  ``(q, qd, lam, A)``: ``Chart.point`` there."""
     m = at.measures(A)
-    for i in sorted(range(len(m)), key=lambda i: -m[i]):
+    want = qd.tolist()
+    # (two splits: the other is the one candidate, in any order)
+    for i in range(2) if len(m) == 2 else sorted(range(len(m)), key=lambda i: -m[i]):
         split = at.splits[i]
         if split == chart.split or m[i] < 2 * at.eps:
             continue
         y = at.maps[split].state_at(q, qd, lam, A)
         new = at.chart(split, t, y)
-        if all(abs(a - b) <= 1e-8 * max(1.0, abs(b))
-               for a, b in zip(new.velocities(t, y, p).tolist(), qd.tolist())):
+        for a, b in zip(new.velocity_list(t, y, p), want):
+            if not abs(a - b) <= 1e-8 * max(1.0, abs(b)):
+                break
+        else:
             return new, y
     return None
 
 
 def stitch(home, at, method, p, parts, switches, user, mode, wall):
-    """One Trajectory of ``home`` from the runs in the charts ``parts``."""
+    """One Trajectory of ``home`` from the runs in the charts ``parts`` (``_Piece``: the
+    rows kept taken from each loop's result, the pieces' own Trajectories made only when
+    read: for user events, a stop other than the end, sensitivities, the aux rows and
+    the dense output)."""
     own = at.own
-    last = parts[-1][1]
     if len(parts) == 1 and not switches:
-        return parts[0][1]
+        return parts[0][1].traj
     ts, ys, pieces = [], [], []
-    sens = [] if last._sens is not None else None
+    sens = [] if parts[-1][2][6] is not None else None
     row = 0
     for i, (chart, seg, rerun) in enumerate(parts):
-        a, b = 0, len(seg.t)
+        out = seg.out
+        a, b = 0, int(out.n_out)
         if mode == ENDPOINTS and len(parts) > 1:       # the first row and the last
             a, b = (0, 1) if i == 0 else (b - 1, b) if i == len(parts) - 1 else (b, b)
         elif i > 0 and mode != AT_T_EVAL:
             a = 1                       # the switch row: the chart before stored it
-        Y = to_home(own, chart, seg.t[a:b], seg.y[a:b], p)
-        ts.append(seg.t[a:b])
-        ys.append(Y)
+        t, Y = out.ts[a:b], out.ys[a:b, :len(chart.scene.state_names)]
+        ts.append(t)
+        ys.append(Y if chart is own else to_home(own, chart, t, Y, p))
         if sens is not None:        # S of the scene's states: D S of each row
             S = seg.sensitivities[a:b]
             sens.append(S if chart is own else
-                        chart.carry(own, seg.t[a:b], seg.y[a:b], S, p))
+                        chart.carry(own, t, seg.y[a:b], S, p))
         pieces.append((row, row + b - a, chart, seg, a, rerun))
         row += b - a
     t_ev, y_ev = [], []
@@ -685,31 +827,82 @@ def stitch(home, at, method, p, parts, switches, user, mode, wall):
             for chart, seg, _ in parts]))
     steps = rejected = nfev = 0
     for _, seg, _ in parts:
-        c = seg._counts[0]            # (steps, rejected, nfev, ...)
+        c = seg.out.stats            # (steps, rejected, nfev, ...)
         steps, rejected, nfev = steps + c[0], rejected + c[1], nfev + c[2]
+    last = parts[-1][1]
+    if last.out.status == FINISHED and not parts[-1][2][3].n_hol:   # (rows not moved)
+        status, reason, singularity = FINISHED, _FINISHED_TEXT, None
+    else:
+        status, reason, singularity = last.status, last.stop_reason, last.singularity
     t = np.concatenate(ts)          # (new float64 C-contiguous arrays: taken as they are)
     return Trajectory._of_run(home, (t, np.concatenate(ys), t.shape[0]), p, method,
-                              last.status, last.stop_reason,
-                              ((steps, rejected, nfev), wall, home.projected),
-                              own.kernels, (tuple(e.name for e in user), t_ev, y_ev),
-                              last.singularity, parts[0][1]._dense,
+                              status, reason, ((steps, rejected, nfev), wall, home.projected),
+                              own.kernels, (tuple([e.name for e in user]), t_ev, y_ev),
+                              singularity, parts[0][1].dense,
                               None if sens is None else (home._sensitivity_columns(),
                                                          np.concatenate(sens)),
                               segments=Stitched(own, tuple(pieces)),
                               switches=tuple(switches))
 
 
+_MAKERS: dict = {}
+
+
+class _Piece:
+    """A piece of a run that changed chart (``follow``): its loop's ``Result`` (``out``),
+    its dense-output record (``dense``) and its Trajectory in its chart's scene
+    (``traj``), made by ``build`` (``solve.trajectory``) from the same arguments on first
+    use; its other attributes are its Trajectory's."""
+
+    __slots__ = ("out", "dense", "_make", "_traj")
+
+    def __init__(self, build, args, kw):
+        self.out, self.dense = args[2], args[12]
+        self._make, self._traj = (build, args, kw), None
+        if kw.get("sens") is not None:      # (its Trajectory completes the dense record)
+            self._traj = build(*args, **kw)
+
+    @classmethod
+    def maker(cls, build):
+        """``build``, made lazy: the ``_Piece`` of its arguments (made once per
+        ``build``)."""
+        found = _MAKERS.get(build)
+        if found is None:
+            found = _MAKERS[build] = lambda *args, **kw: cls(build, args, kw)
+        return found
+
+    @property
+    def traj(self) -> Trajectory:
+        if self._traj is None:
+            build, args, kw = self._make
+            self._traj = build(*args, **kw)
+        return self._traj
+
+    def __getattr__(self, name):
+        if name in _Piece.__slots__:     # (unset: a copy made without __init__)
+            raise AttributeError(name)
+        return getattr(self.traj, name)
+
+
 def to_home(own, chart, t, Y, p) -> np.ndarray:
-    """Rows of ``chart`` as rows of the home chart ``own``."""
-    Y = np.ascontiguousarray(np.atleast_2d(Y), dtype=float)
+    """Rows of ``chart`` (at the times ``t``, an array) as rows of the home chart
+    ``own``."""
+    Y = np.ascontiguousarray(Y if getattr(Y, "ndim", 0) == 2 else np.atleast_2d(Y),
+                             dtype=float)
     if chart is own or not Y.shape[0]:
         return Y.reshape(Y.shape[0], len(own.scene.state_names))
     if chart.explicit:
         q, qd, lam, A, _ = chart.universal(t, Y, p)
         return own.state(q, qd, lam, A)
     # the same numbers copied: every column of own's rows is a column of Y or of aux
-    aux = np.empty((Y.shape[0], chart.kernels.layout.n_aux))
-    chart.kernels.aux_rows(np.ascontiguousarray(t, dtype=float), Y, p, aux)
+    kern = chart.kernels
+    if Y.shape[0] == 1:     # one row (a run's end): the aux kernel itself, as aux_rows calls it
+        aux = np.empty(kern.layout.n_aux)
+        kern.aux(float(t[0]), Y[0], p, aux)
+        row = Y[0].tolist() + aux.tolist()
+        return np.array([row[i] for i in chart.columns_of(own, as_list=True)])[None]
+    aux = np.empty((Y.shape[0], kern.layout.n_aux))
+    kern.aux_rows(np.ascontiguousarray(t, dtype=float), Y, p, aux)
     return np.concatenate((Y, aux), axis=1).take(chart.columns_of(own), axis=1)
 
 
@@ -738,6 +931,23 @@ class Stitched:
         """``at``; with ``full`` (a run with sensitivities) each row followed by S of
         the scene's states, row-major (``dense.evaluate``'s ``full``)."""
         return _at(self, traj, times, full)
+
+    def stop(self, p):
+        """``(t, state, aux row)`` of the scene where the run stopped after its last row
+        (the last piece's stop, mapped to the scene's chart), or None
+        (``Trajectory.final``)."""
+        from types import SimpleNamespace
+
+        _, _, chart, seg, _, _ = self.pieces[-1]
+        stop = seg._stop
+        if stop is None:
+            return None
+        t, y, aux = stop
+        times, row = np.array([t]), y[None, :]
+        out = np.empty((1, self.own.kernels.layout.n_aux))
+        piece = SimpleNamespace(t=times, y=row, aux=aux[None, :])
+        fill_aux(out, self.own, [(0, 1, chart, piece, 0)], p)
+        return t, to_home(self.own, chart, times, row, p)[0], out[0]
 
 
 def fill_aux(out, own, pieces, p):
@@ -781,7 +991,7 @@ def _at(stitched, traj, times, full=False) -> np.ndarray:
         n_c = len(chart.scene.state_names)
         rows = np.empty((idx.size, n_c + n_c * m))
         if (~inner).any():
-            rows[~inner] = evaluate(seg, tau[idx[~inner]], full=full)
+            rows[~inner] = evaluate(getattr(seg, "traj", seg), tau[idx[~inner]], full=full)
         if inner.any():
             rows[inner] = _rerun(chart, seg, rerun, tau[idx[inner]], traj._p)[:, :rows.shape[1]]
         Y = np.ascontiguousarray(rows[:, :n_c])

@@ -64,9 +64,34 @@ motion"``, ``stable`` is None (``steady(unknowns)`` finds a steady motion nearby
 steady motion: ``unstable`` when an eigenvalue has a positive real part,
 ``asymptotically stable`` when every one has a negative real part, ``marginal`` when some
 lie on the imaginary axis (conservative systems, families of steady motions: the
-linearization does not decide).  Eigenvalues of modulus below ``ZERO`` times the size of
-A count as zero (a defective zero eigenvalue of a family of steady motions is computed
-only to about the square root of the rounding unit).
+linearization does not decide).  Each eigenvalue is decided against its own error
+bound e_i: a real part within e_i of zero counts as zero (on the imaginary axis), and so
+does an eigenvalue of modulus within e_i.  With B = A balanced (a diagonal similarity,
+LAPACK's ``gebal``), delta = ``REAL`` |B| (Frobenius norm: the rounding of
+A's entries and of the eigensolver), kappa_i = 1/|y_i^H x_i| the eigenvalue's condition
+number (unit left and right eigenvectors of B) and s_i half its distance to the nearest
+other eigenvalue: e_i = min(delta kappa_i, max(delta, sqrt(2 delta kappa_i s_i)),
+``ZERO`` |B|).  The first is the first-order bound of a simple eigenvalue; the second
+that of a cluster split by rounding (a Jordan block perturbed by delta spreads to
+sqrt(delta nu), and kappa ~ nu/(2 s) there), which a defective zero eigenvalue of a
+family of steady motions is; ``ZERO`` = sqrt(``REAL``) caps the bound of an eigenvalue
+computed exactly defective (kappa_i infinite).  A stiff mode elsewhere in A (a spring
+of stiffness k: |A| ~ k) widens the other eigenvalues' bounds only through |B|, which
+balancing keeps near sqrt(k).
+
+Rows that depend on t (t in a kept row or a holonomic constraint with a derivative that
+does not vanish identically, e.g. a periodically forced or modulated system): the state
+is held and A and x' are evaluated again at the times ``t + TIMES`` (scaled by max(1,
+|t|)).  The point is a steady motion only when x' vanishes at every one of them (a
+point where x' vanishes at one instant only, as an equilibrium of a forced oscillator
+at a zero of its forcing, is none); ``time_dependent`` is True when A or x' differ
+between them.  At such a point A and its eigenvalues are those frozen at ``t``, and
+they do not decide stability (a damped Mathieu equation is unstable at parametric
+resonance with every frozen eigenvalue in the left half-plane): the verdict is
+``TIME_DEPENDENT``, ``stable`` and ``margin`` are None and NaN.  A time-periodic A needs
+Floquet's theory (the monodromy matrix over a period, from the variational equations
+of a run), which linearize does not compute.  Parameter values that remove the
+dependence on t (a modulation of amplitude 0) give the frozen verdict again.
 """
 
 from __future__ import annotations
@@ -85,10 +110,11 @@ from ..mechanics.system import System
 from . import arguments, regular
 from ..frozen import Frozen, FrozenDict
 
-#: eigenvalues of modulus below ZERO * max(1, |A|) count as zero
-ZERO = 1e-6
-#: real parts within REAL * max(1, |A|) of zero count as on the imaginary axis
+#: the relative rounding of A and its eigenvalues: delta = REAL * |B| (B: A balanced),
+#: an eigenvalue's error bound about delta * kappa_i (module docstring)
 REAL = 1e-12
+#: an eigenvalue's error bound is at most ZERO * |B| (sqrt(REAL): a Jordan block)
+ZERO = 1e-6
 #: a point is a steady motion when ``|x'| <= STEADY * max(1, |A| |x|)`` and
 #: ``|x'| <= sqrt(STEADY) * max(1, |x|)`` (kept states)
 STEADY = 1e-8
@@ -96,6 +122,10 @@ STEADY = 1e-8
 CONSISTENT = 1e-9
 #: the verdict off a steady motion
 NOT_STEADY = "not a steady motion"
+#: the verdict at a steady motion of rows that depend on t
+TIME_DEPENDENT = "time-dependent: the frozen eigenvalues do not decide"
+#: the offsets from the point's t at which rows that contain t are evaluated again
+TIMES = (0.1234567, -0.5772157, 1.4142136, 2.7182818, 7.3890561, 31.415927, 271.82818)
 
 _MODELS: dict = {}
 
@@ -161,6 +191,17 @@ class _Model:
             e, q = self.rows[row], self.states[state]
             self._uses[key] = (q in dag.free_symbols(e)
                                and not zero.vanishes(dag.diff(e, q)))
+        return self._uses[key]
+
+    def has_time(self, rows) -> bool:
+        """Whether one of ``rows`` (state indices) or a holonomic constraint contains t
+        with a derivative that does not vanish identically (``zero.vanishes``)."""
+        key = ("t", tuple(rows))
+        if key not in self._uses:
+            t = self.system.J.t
+            exprs = [self.rows[i] for i in rows] + list(self.system.holonomic)
+            self._uses[key] = any(t in dag.free_symbols(e)
+                                  and not zero.vanishes(dag.diff(e, t)) for e in exprs)
         return self._uses[key]
 
     @_once
@@ -240,8 +281,10 @@ class Linearization(Frozen):
     ``at`` (every coordinate, velocity and multiplier at the point), ``params``,
     ``dropped`` (cyclic coordinate names left out), ``eliminated`` (coordinates that
     follow from the holonomic constraints), ``inert`` (holonomic multipliers left out),
-    ``steady_motion`` (whether ``residual`` is zero to ``STEADY``), ``verdict``,
-    ``stable`` (the last two only at a steady motion).
+    ``steady_motion`` (whether ``residual`` is zero to ``STEADY``, at every t for rows
+    that depend on t), ``time_dependent`` (whether A or x' at the point change with t),
+    ``verdict``, ``stable`` (the last two only at a steady motion whose A does not
+    change with t).
     """
 
     def __init__(self, model: _Model, at: dict, params: dict, keep: tuple, chart: tuple,
@@ -268,18 +311,23 @@ class Linearization(Frozen):
         self.rates = rates
         rates.setflags(write=False)
         self.residual = float(np.linalg.norm(rates))
-        ev = np.linalg.eigvals(A) if A.size else np.zeros(0, complex)
-        ev = ev[np.lexsort((ev.imag, -ev.real))].astype(complex)
-        ev.setflags(write=False)
+        ev, self._bounds = _spectrum(A)
         self.eigenvalues = ev
         #: True when A is the limit at a point where the kernel itself is undefined
         self.limit = limit
         size = float(np.abs(y[list(keep)]).max()) if keep else 0.0
+        bound = min(STEADY * max(1.0, self._scale * size),
+                    math.sqrt(STEADY) * max(1.0, size))
+        changes, steady = False, self.residual <= bound
+        if model.has_time(keep):
+            changes, steady = _in_time(self, bound)
+        #: whether A or x' at the point change with t (rows that depend on t; module
+        #: docstring): the frozen eigenvalues then decide nothing
+        self.time_dependent = changes
         #: whether the point is a steady motion: ``|x'| <= STEADY * max(1, |A| |x|)``
-        #: and ``|x'| <= sqrt(STEADY) * max(1, |x|)`` (module docstring)
-        self.steady_motion = bool(
-            self.residual <= STEADY * max(1.0, self._scale * size)
-            and self.residual <= math.sqrt(STEADY) * max(1.0, size))
+        #: and ``|x'| <= sqrt(STEADY) * max(1, |x|)``, at ``t`` and, for rows that
+        #: depend on t, at the times ``t + TIMES`` too (module docstring)
+        self.steady_motion = bool(steady)
 
     # ------------------------------------------------------------------ verdicts
     @property
@@ -288,32 +336,35 @@ class Linearization(Frozen):
 
     @property
     def margin(self) -> float:
-        """The largest real part among the eigenvalues not counted as zero (``ZERO``),
-        less ``REAL`` times the size of A: > 0 unstable, <= 0 not; NaN off a steady
-        motion."""
-        if not self.steady_motion:
+        """The largest real part less its error bound, Re lambda_i - e_i (module
+        docstring): > 0 unstable, <= 0 not; NaN off a steady motion and where A changes
+        with t (``time_dependent``)."""
+        if not self.steady_motion or self.time_dependent:
             return float("nan")
-        return _margin(self.eigenvalues, self._scale)
+        return _margin(self.eigenvalues, self._bounds)
 
     @property
     def stable(self) -> bool | None:
         """No eigenvalue with a positive real part (spectral stability); None off a
-        steady motion, where the eigenvalues do not decide stability."""
-        if not self.steady_motion:
+        steady motion and where A changes with t, where the eigenvalues do not decide
+        stability."""
+        if not self.steady_motion or self.time_dependent:
             return None
         return self.margin <= 0
 
     @property
     def verdict(self) -> str:
         """``"unstable"``, ``"asymptotically stable"`` or ``"marginal"`` at a steady
-        motion, ``"not a steady motion"`` elsewhere (module docstring)."""
-        s = self._scale
+        motion, ``"not a steady motion"`` elsewhere, ``TIME_DEPENDENT`` at a steady
+        motion whose A changes with t (module docstring)."""
         ev = self.eigenvalues
         if not self.steady_motion:
             return NOT_STEADY
+        if self.time_dependent:
+            return TIME_DEPENDENT
         if self.margin > 0:
             return "unstable"
-        if ev.size and np.all(ev.real < -REAL * s) and np.all(np.abs(ev) > ZERO * s):
+        if ev.size and np.all(ev.real < -self._bounds):
             return "asymptotically stable"
         return "marginal"
 
@@ -345,7 +396,8 @@ class Linearization(Frozen):
     def steady(self, unknowns, tol: float = 1e-10) -> "Linearization":
         """The linearization at a steady motion: the values of ``unknowns`` that make
         x' vanish, starting from this point's values (the others held).
-        ``LinearizationError`` when none is found near them.
+        ``LinearizationError`` when none is found near them, or, for equations that
+        depend on t, when x' vanishes at this t only.
 
         Parameters
         ----------
@@ -418,7 +470,14 @@ class Linearization(Frozen):
                 f"{dict(zip(unknowns, np.round(x, 12).tolist()))}); start from another "
                 "guess (replace(at=...)), solve for other values, or fix fewer of them")
         put(x)
-        return self.replace(at={model.names[i]: float(y[i]) for i in (*idx, *self._chart)})
+        found = self.replace(at={model.names[i]: float(y[i]) for i in (*idx, *self._chart)})
+        if found.time_dependent and not found.steady_motion:
+            raise LinearizationError(
+                f"x' vanishes at t = {t:g} with {', '.join(unknowns)} = "
+                f"{np.round(x, 12).tolist()}, but not at other times: the equations depend "
+                "on t, and a point where x' vanishes for an instant is no steady motion; "
+                "solve for other values, or hold those that keep x' = 0 at every t")
+        return found
 
     def along(self, name, values) -> "StabilityScan":
         """Eigenvalues along a parameter or an operating-point value (every other value
@@ -450,6 +509,7 @@ class Linearization(Frozen):
         ev = np.array([lin.eigenvalues for lin in lins])
         margins = np.array([lin.margin for lin in lins])
         steady = np.array([lin.steady_motion for lin in lins])
+        timed = np.array([lin.time_dependent for lin in lins])
         crossings = []
         for i in range(len(values) - 1):
             a, b = margins[i], margins[i + 1]
@@ -457,7 +517,7 @@ class Linearization(Frozen):
                 crossings.append(_crossing(move, float(values[i]), float(values[i + 1]),
                                             lins[i], lins[i + 1]))
         return StabilityScan(name, values, ev, margins, tuple(crossings), self.state_names,
-                             steady)
+                             steady, timed)
 
     def _on_g(self, at: dict, params: dict) -> dict:
         """The eliminated coordinates solved from g = 0 (Newton's method from their
@@ -506,34 +566,98 @@ def _symbolic(model: _Model, keep, chart) -> sp.Matrix:
     return model._symbolic[key]
 
 
-def _margin(ev: np.ndarray, scale: float) -> float:
-    big = ev[np.abs(ev) > ZERO * scale]
-    top = float(big.real.max()) if big.size else 0.0
-    return top - REAL * scale
+def _spectrum(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The eigenvalues of A by decreasing real part, and each one's error bound e_i
+    (module docstring); read-only."""
+    from scipy.linalg import eig, get_lapack_funcs
+
+    if not A.size:
+        ev, bounds = np.zeros(0, complex), np.zeros(0)
+    else:
+        B = get_lapack_funcs("gebal", (A,))(A, scale=1, permute=1)[0]   # A balanced
+        ev, left, right = eig(B, left=True, right=True)
+        with np.errstate(divide="ignore"):
+            kappa = 1.0 / np.abs(np.sum(left.conj() * right, axis=0))
+        delta = REAL * float(np.linalg.norm(B))
+        apart = np.abs(ev[:, None] - ev[None, :])
+        np.fill_diagonal(apart, np.inf)
+        gap = apart.min(axis=1) / 2
+        with np.errstate(invalid="ignore"):
+            second = np.where(gap > 0, np.sqrt(2 * delta * kappa * gap), np.inf)
+        bounds = np.minimum.reduce([delta * kappa, np.maximum(delta, second),
+                                    np.full(len(ev), ZERO / REAL * delta)])
+        order = np.lexsort((ev.imag, -ev.real))
+        ev, bounds = ev[order].astype(complex), bounds[order]
+    ev.setflags(write=False)
+    bounds.setflags(write=False)
+    return ev, bounds
+
+
+def _margin(ev: np.ndarray, bounds: np.ndarray) -> float:
+    """max_i (Re lambda_i - e_i): > 0 when an eigenvalue lies right of the imaginary
+    axis by more than its error bound (0 without eigenvalues)."""
+    return float((ev.real - bounds).max()) if ev.size else 0.0
+
+
+def _in_time(lin: Linearization, bound: float) -> tuple[bool, bool]:
+    """``(changes, steady)`` of a point whose rows contain t: whether A or x' differ at
+    the times ``t + TIMES`` (A by more than ``REAL`` times its size, x' by more than
+    ``bound``) and whether ``|x'| <= bound`` at t and at each of them.  The state is held;
+    with holonomic constraints it must stay on g = 0 and A is taken in the chart there.
+    A time where the point leaves g = 0 or the equations are undefined changes and is
+    not steady."""
+    model, keep, chart = lin._model, lin._keep, lin._chart
+    y, p, ck = lin._y, lin._p, lin._kernels
+    scale = max([1.0] + [abs(float(v)) for v in y[:len(model.coordinates)]])
+    changes, steady = False, lin.residual <= bound
+    for s in TIMES:
+        t = lin.t + s * max(1.0, abs(lin.t))
+        E = lin._E
+        if model.system.holonomic:
+            point = _configuration(model, y, dict(lin.params), t)
+            g = holonomic.residual(model.system, point)
+            if not np.all(np.abs(g) <= holonomic.TOLERANCE * scale):
+                return True, False
+            E = _embedding(model, keep, chart, holonomic.jacobian_at(model.system, point))
+        try:
+            A, rates, _ = _jacobian(ck, y, p, t, keep, E)
+        except LinearizationError:
+            return True, False
+        changes = changes or bool(
+            np.abs(A - lin.A).max(initial=0.0) > REAL * lin._scale
+            or np.linalg.norm(rates - lin.rates) > bound)
+        steady = steady and float(np.linalg.norm(rates)) <= bound
+    return changes, steady
 
 
 def _crossing(move, a: float, b: float, lo: "Linearization", hi: "Linearization") -> float:
-    """Where the margin changes sign in [a, b], counting as zero only the eigenvalues
-    zero at both ends (a real eigenvalue passing through 0 is smaller than ``ZERO`` near
-    its root, where ``margin`` no longer sees it); then, where the largest real part
-    crosses 0 transversally (well clear of ``REAL`` on both sides), its own root."""
-    zeros = min(int(np.sum(np.abs(x.eigenvalues) <= ZERO * x._scale)) for x in (lo, hi))
+    """Where the margin changes sign in [a, b]; then, where the largest real part
+    crosses 0 transversally (well clear of its error bound on both sides within 1e-6,
+    1e-4 or 1e-2 of the interval), its own root.  The eigenvalues zero at both ends
+    (within their bounds: a family of steady motions) are left out of that largest real
+    part, the others kept (a real eigenvalue passing through 0 is zero within its bound
+    near its root)."""
+    zeros = min(int(np.sum(np.abs(x.eigenvalues) <= x._bounds)) for x in (lo, hi))
 
     def top(v):
         lin = move(v)
-        rest = lin.eigenvalues[np.argsort(np.abs(lin.eigenvalues), kind="stable")[zeros:]]
-        return (float(rest.real.max()) if rest.size else 0.0), REAL * lin._scale
+        rest = np.argsort(np.abs(lin.eigenvalues), kind="stable")[zeros:]
+        if not rest.size:
+            return 0.0, 0.0, 0.0
+        k = rest[np.argmax(lin.eigenvalues.real[rest])]
+        slack = lin.eigenvalues.real[rest] - lin._bounds[rest]
+        return float(lin.eigenvalues.real[k]), float(lin._bounds[k]), float(slack.max())
 
     def margin(v):
-        x, tol = top(v)
-        return x - tol
+        return top(v)[2]
     if (margin(a) > 0) == (margin(b) > 0):
         return _root(lambda v: move(v).margin, a, b)
     r = _root(margin, a, b)
-    h = 1e-6 * (b - a)
-    (fl, tol), (fh, _) = top(max(a, r - h)), top(min(b, r + h))
-    if min(abs(fl), abs(fh)) > 100 * tol and (fl > 0) != (fh > 0):
-        return _root(lambda v: top(v)[0], max(a, r - h), min(b, r + h))
+    for h in (1e-6 * (b - a), 1e-4 * (b - a), 1e-2 * (b - a)):
+        lo_, hi_ = max(a, r - h), min(b, r + h)
+        (fl, tol, _), (fh, tol_h, _) = top(lo_), top(hi_)
+        if min(abs(fl), abs(fh)) > 100 * max(tol, tol_h):
+            return _root(lambda v: top(v)[0], lo_, hi_) if (fl > 0) != (fh > 0) else r
     return r
 
 
@@ -547,31 +671,32 @@ def _root(f, a: float, b: float) -> float:
 class StabilityScan(Frozen):
     """Eigenvalues along one value: ``values``, ``eigenvalues`` (one row per value, each
     by decreasing real part), ``margins`` (``Linearization.margin``: NaN off a steady
-    motion), ``steady_motion`` (``Linearization.steady_motion`` at each value),
-    ``crossings`` (the values where the motion gains or loses stability, to 1e-13
-    relative), ``frame`` and ``plot``."""
+    motion and where A changes with t), ``steady_motion`` and ``time_dependent``
+    (``Linearization``'s at each value), ``crossings`` (the values where the motion
+    gains or loses stability, to 1e-13 relative), ``frame`` and ``plot``."""
 
     def __init__(self, name, values, eigenvalues, margins, crossings, state_names,
-                 steady_motion):
+                 steady_motion, time_dependent):
         self.name = name
-        for a in (values, eigenvalues, margins, steady_motion):
+        for a in (values, eigenvalues, margins, steady_motion, time_dependent):
             a.setflags(write=False)
         self.values, self.eigenvalues, self.margins = values, eigenvalues, margins
-        self.steady_motion = steady_motion
+        self.steady_motion, self.time_dependent = steady_motion, time_dependent
         self.crossings = crossings
         self.state_names = state_names
 
     @property
     def stable(self) -> np.ndarray:
         """True where the value gives a steady motion without an eigenvalue of positive
-        real part; False elsewhere, off steady motions too (see ``steady_motion``)."""
+        real part; False elsewhere, off steady motions and where A changes with t too
+        (undecided there: see ``steady_motion`` and ``time_dependent``)."""
         return self.margins <= 0
 
     @property
     def frame(self):
         """pandas DataFrame: one row per value, the value, ``re_i`` and ``im_i`` of each
-        eigenvalue (i = 1..k by decreasing real part), ``steady_motion`` and
-        ``stable``."""
+        eigenvalue (i = 1..k by decreasing real part), ``steady_motion``,
+        ``time_dependent`` and ``stable``."""
         import pandas as pd
 
         k = self.eigenvalues.shape[1] if self.eigenvalues.ndim == 2 else 0
@@ -581,6 +706,7 @@ class StabilityScan(Frozen):
         for i in range(k):
             data[f"im_{i + 1}"] = self.eigenvalues[:, i].imag
         data["steady_motion"] = self.steady_motion
+        data["time_dependent"] = self.time_dependent
         data["stable"] = self.stable
         return pd.DataFrame(data)
 
@@ -644,7 +770,8 @@ def linearize(system, principle="chetaev", at=None, params=None, drop="cyclic", 
         The coordinates left out of the state: the cyclic ones (no equation depends on
         them), a list of names, or None for none.
     t : float, default 0.0
-        The time of the point (for systems that depend on t).
+        The time of the point (for systems that depend on t: A and the eigenvalues are
+        those frozen at this t, and decide no stability; module docstring).
     form, convention : optional
         The equations' form and the multipliers' sign convention, as for ``Scene``.
 
@@ -671,7 +798,8 @@ def verdicts(system, at, params=None, principles_=None, drop="cyclic", solve_for
     """One operating point under several principles: a pandas DataFrame, one row per
     principle, with its residual, state size, largest real part, verdict and
     eigenvalues (a principle that fails has its error in the verdict column; one for
-    which the point is no steady motion has the verdict "not a steady motion").
+    which the point is no steady motion has the verdict "not a steady motion", one whose
+    A changes with t ``TIME_DEPENDENT``).
 
     Parameters
     ----------
@@ -974,6 +1102,7 @@ def _jacobian(ck, y, p, t, rows, E):
             np.abs(A2 - A1).max() > 1e-3 * max(1.0, np.abs(A).max())):
         raise LinearizationError(
             "the equations are undefined at this point (a singular configuration of "
-            "the principle's equations or of the split) and have no limit there; "
-            "choose another operating point or another split (dependent=)")
+            "the principle's equations or of the split, or parameter values that make "
+            "them degenerate, e.g. a mass of 0) and have no limit there; choose another "
+            "operating point, another split (dependent=) or other parameter values")
     return A, rates, True

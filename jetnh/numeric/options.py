@@ -18,6 +18,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields, replace
 
+import numpy as np
+
 from ..errors import ArgumentError
 
 
@@ -95,6 +97,24 @@ def fields_of(value) -> tuple:
     return tuple(vars(value).values())
 
 
+def typed(value):
+    """An option value (``StepControl``, ``Singular``, ``Newton``, or a number, string,
+    sequence or array of one) as a part of a key: each field and entry with its type
+    (``True == 1``, but a run refuses a bool where it takes 1), an array as its bytes,
+    dtype and shape."""
+    if isinstance(value, (StepControl, Singular, Newton)):
+        return (type(value), *map(typed, vars(value).values()))
+    if type(value) is list or type(value) is tuple:
+        return tuple(map(typed, value)), type(value)
+    if hasattr(value, "__array__") and not isinstance(value, (int, float)):
+        a = np.asarray(value)
+        if a.dtype.hasobject:           # (its bytes are addresses, which are reused)
+            return ("objects", type(value), a.shape,
+                    tuple((v, type(v)) for v in a.ravel().tolist()))
+        return ("array", type(value), a.dtype.str, a.shape, a.tobytes())
+    return value, type(value)
+
+
 def _same(a, b) -> bool:
     try:
         return bool(a is b or a == b)
@@ -138,8 +158,20 @@ class Options:
             object.__setattr__(self, "_hash", h)
         return h
 
+    def __eq__(self, other):
+        """Equal fields of equal types (``typed``): options equal to a run's that the run
+        would refuse (``max_steps=True`` against 1) are not its options."""
+        return self is other or (type(other) is Options and self._typed() == other._typed())
+
+    def _typed(self) -> tuple:
+        found = self.__dict__.get("_key")
+        if found is None:
+            found = (typed(self.step), typed(self.singular), typed(self.newton))
+            object.__setattr__(self, "_key", found)
+        return found
+
     def __getstate__(self):
-        return {k: v for k, v in self.__dict__.items() if k != "_hash"}
+        return {k: v for k, v in self.__dict__.items() if k not in ("_hash", "_key")}
 
 
 def options(step=None, singular="stop", newton=None, **keywords) -> Options:

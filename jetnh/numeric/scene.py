@@ -51,6 +51,7 @@ compiled explicit and Radau runs project every accepted step back onto g = 0
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Mapping
 import mpmath
 import numpy as np
@@ -67,7 +68,7 @@ from . import discrete
 from .ensemble import run_ensemble
 from .kernels import jacobian_kernels, load as load_kernels, loader
 from ..frozen import Frozen, FrozenDict, memo
-from .options import options
+from .options import options, typed
 from .trajectory import Trajectory
 
 
@@ -152,6 +153,9 @@ class Scene(Frozen):
         #: the names an initial value may have, the names of the states
         self._initial_names = frozenset(self.state_names + self.dependent_velocities)
         self._state_set = frozenset(self.state_names)
+        #: the states' values of a dict of initial values, in order
+        self._states_of = (operator.itemgetter(*self.state_names)
+                           if len(self.state_names) > 1 else _OneState(*self.state_names))
         self.consistency_tol = arguments.positive(consistency_tol, "consistency_tol")
         self.projected: dict[str, tuple[float, float]] = {}
         #: coordinates moved onto the holonomic constraints: name -> (given, completed)
@@ -224,7 +228,7 @@ class Scene(Frozen):
         given = self._on_holonomic(given, complete)
         required = y = None
         if kernels is not None and given.keys().isdisjoint(self.dependent_velocities):
-            y = np.array([given[n] for n in self.state_names], dtype=float)
+            y = np.array(self._states_of(given), dtype=float)
             required = self._dependent_velocity_floats(y, kernels, p)
         if required is None:
             y = None
@@ -375,7 +379,7 @@ class Scene(Frozen):
         aux = np.empty(lay.n_aux)
         kern.aux(t0, y, p, aux)
         values = aux[:len(lay.dependent_velocities)].tolist()
-        if not all(map(math.isfinite, values)):
+        if not math.isfinite(sum(values)):      # (a NaN, an infinity or an overflow)
             return None
         return dict(zip(self.dependent_velocities, values))
 
@@ -465,11 +469,11 @@ class Scene(Frozen):
         ini, y = new._initial(initial, False, False, kern, p)
         ini = FrozenDict(ini)
         if y is None:
-            y = np.array([ini[n] for n in self.state_names], dtype=float)
+            y = np.array(self._states_of(ini), dtype=float)
         # (this copy's own state array: its direct runs' ``_y0``, y0 a read-only view)
         memo["_y0"] = y
         y0 = y.view()
-        y0.flags.writeable = False
+        y0.setflags(write=False)
         d.update(initial=ini, y0=y0)
         return new
 
@@ -483,6 +487,7 @@ class Scene(Frozen):
         if hit is not None and hit[0] == len(memo):    # (entries are only ever added)
             return dict(hit[1])
         memo.setdefault("plans", {})
+        memo.setdefault("spans", {})
         memo.setdefault("events", {})
         memo.setdefault("atlases", [])
         shared = {k: memo[k] for k in _SHARED if k in memo}
@@ -514,8 +519,8 @@ class Scene(Frozen):
     # ------------------------------------------------------------------ run
     def run(self, rtol=None, atol=None, t_eval=None, method="dop853", *, save="steps",
             events=None, t_span=None, y0=None, params=None, timeout=None, projection=False,
-            backend=None, step=None, singular="stop", newton=None, sensitivities=False,
-            sensitivity_error=True, **keywords) -> Trajectory:
+            backend=None, step=None, singular="stop", split=None, newton=None,
+            sensitivities=False, sensitivity_error=True, **keywords) -> Trajectory:
         """Integrate and return a ``Trajectory``.
 
         Parameters
@@ -603,66 +608,94 @@ class Scene(Frozen):
             naming the time and the state instead.  Every argument is checked before it
             reaches compiled code (``numeric.arguments``).
         """
-        if (t_eval is None and events is None and t_span is None and timeout is None
-                and projection is False and backend is None and step is None
-                and singular == "stop" and newton is None and sensitivities is False
-                and sensitivity_error is True and not keywords and type(method) is str
-                and (save == "steps" or save == "final")
-                and (rtol is None or type(rtol) is float)
-                and (atol is None or type(atol) is float)):
-            # every option as its default but the method (a str), save and the
-            # tolerances (floats): this scene's plan of them, at once
-            quick = self._memo.get("quick")
-            plan = None if quick is None else quick.get((method, save, rtol, atol))
-            if plan is None:
-                plan = self._quick_plan(method, save, rtol, atol)
+        if (events is None and timeout is None and projection is False
+                and backend is None and step is None and newton is None
+                and sensitivities is False and sensitivity_error is True
+                and type(singular) is str and (t_span is None or type(t_span) is tuple)
+                and (t_eval is None or (type(t_eval) is np.ndarray
+                                        and t_eval.dtype is _FLOAT64))):
+            # options that are numbers, strings and an array of times (most runs, and
+            # every loop of runs): their plan kept in this scene's memo under them and
+            # the types of the numbers (``True == 1``, but a bool is refused where 1 is
+            # not), at once.  (What follows the first eight entries of a key starts with
+            # a number, bytes or a name: a time span, times or a keyword.)
+            try:
+                key = (method, save, rtol, atol, singular, split, type(rtol), type(atol))
+                if t_span is not None:
+                    a, b = t_span
+                    key += (a, b, type(a), type(b))
+                if t_eval is not None:
+                    key += (t_eval.tobytes(), t_eval.shape)
+                if keywords:
+                    for k, v in keywords.items():
+                        key += (k, v, type(v))
+                plan = self._memo.get("quick", _NONE_KEPT)[key]
+            except (KeyError, TypeError, ValueError) as exc:
+                # not planned yet (a KeyError), or a key not hashable or no pair of times
+                plan = self._kept_plan(key if type(exc) is KeyError else None, rtol,
+                                       atol, t_eval, method, save, t_span, singular, split,
+                                       keywords)
         else:
             plan = self._plan(rtol, atol, t_eval, method, save, events, t_span, timeout,
-                              projection, backend, step, singular, newton, sensitivities,
-                              sensitivity_error, keywords)
-        if y0 is None and params is None:       # the scene's own
-            memo = self._memo
-            p = memo.get("_p")
-            if plan.direct:     # (the loop reads y0 into a copy of its own: never written)
-                y = memo.get("_y0")
-                return solve.run(self, plan, self._y0 if y is None else y,
-                                 self._p if p is None else p, own=True)
-            return solve.run(self, plan, self.y0.copy(), self._p if p is None else p,
-                             own=True)
-        p = self._memo.get("_p") if params is None else self._run_params(params)
+                              projection, backend, step, singular, split, newton,
+                              sensitivities, sensitivity_error, keywords)
+        memo = self._memo
+        p = memo.get("_p") if params is None else self._run_params(params)
         if p is None:
             p = self._p
-        y = self._run_state(y0, plan.t0, p)
-        return solve.run(self, plan, y, p, own=False)
+        if y0 is None and params is None:       # the scene's own
+            if plan.direct:     # (the loop reads y0 into a copy of its own: never written)
+                y = memo.get("_y0")
+                return solve.run(self, plan, self._y0 if y is None else y, p, True)
+            return solve.run(self, plan, self.y0.copy(), p, True)
+        return solve.run(self, plan, self._run_state(y0, plan.t0, p), p, False)
 
     def _quick_plan(self, method, save, rtol, atol) -> solve.Plan:
-        """The plan of a run with every option as its default but ``method`` (a str),
-        ``save`` and the tolerances (floats or None), under a short key (shared with
-        the scenes ``replace`` makes: ``solve.planned``) and kept in this scene's memo
-        under a shorter one (its time span is the scene's)."""
-        span = self.t_span
-        plan = solve.planned(self, ("common", method, save, rtol, atol, span),
-                             lambda: solve.plan(self, method, opts=options(rtol=rtol,
-                                                                           atol=atol),
-                                                t_span=span, save=save))
-        quick = self._memo.setdefault("quick", {})
-        if len(quick) < solve.MAX_PLANS:
-            quick[method, save, rtol, atol] = plan
+        """The plan of ``run(method=method, save=save, rtol=rtol, atol=atol)`` (whose
+        compiled loop the benchmarks call directly)."""
+        return self._plan(rtol, atol, None, method, save, None, None, None, False, None,
+                          None, "stop", None, None, False, True, {})
+
+    def _kept_plan(self, key, rtol, atol, t_eval, method, save, t_span, singular, split,
+                   keywords) -> solve.Plan:
+        """The plan of a run whose options are numbers, strings and an array of times
+        (``run``), kept in this scene's memo under ``key`` (None: none), which the
+        scenes ``replace`` makes with the same time span share; with a time span, a
+        plan of the same options on another span is taken over (``solve.on_span``),
+        kept under the key without the span (entries 8 to 11)."""
+        memo = self._memo
+        free = spans = None
+        if key is not None and t_span is not None:
+            free = key[:8] + key[12:]
+            spans = memo.setdefault("quick_spans", {})
+        other = None if free is None else spans.get(free)
+        if other is not None:
+            plan = solve.on_span(other, *arguments.time_span(t_span))
+        else:
+            plan = self._plan(rtol, atol, t_eval, method, save, None, t_span, None, False,
+                              None, None, singular, split, None, False, True, keywords)
+            if free is not None and plan.spans and len(spans) < solve.MAX_PLANS:
+                spans[free] = plan
+        quick = memo.setdefault("quick", {})
+        if key is not None and len(quick) < solve.MAX_PLANS:
+            quick[key] = plan
         return plan
 
     def _plan(self, rtol, atol, t_eval, method, save, events, t_span, timeout, projection,
-              backend, step, singular, newton, sensitivities, sensitivity_error,
+              backend, step, singular, split, newton, sensitivities, sensitivity_error,
               keywords) -> solve.Plan:
         """The plan of a run with these options (``run``), kept under a key of every
-        option (``solve.planned``)."""
+        option and the time span (``solve.planned``: a plan of the same options on
+        another span lends what does not depend on it)."""
         span = self.t_span if t_span is None else arguments.time_span(t_span)
-        key = (rtol, solve.hashable(atol), method, save, span, timeout, projection,
-               backend, step, singular, newton, sensitivities, sensitivity_error,
-               solve.hashable(events), solve.hashable(t_eval), *keywords.items())
+        key = (typed(rtol), typed(atol), method, save, timeout, projection, backend,
+               typed(step), typed(singular), split, typed(newton), sensitivities,
+               sensitivity_error, solve.hashable(events), solve.hashable(t_eval),
+               *((k, typed(v)) for k, v in keywords.items()))
         key = (key, tuple(map(type, key)))
-        return solve.planned(self, key, lambda: solve.plan(
+        return solve.planned(self, key, span=span, make=lambda: solve.plan(
             self, method, opts=options(step, singular, newton, rtol=rtol, atol=atol,
-                                       **keywords),
+                                       split=split, **keywords),
             t_span=span, t_eval=t_eval, save=save, events=events, timeout=timeout,
             projection=projection, backend=backend, sensitivities=sensitivities,
             sensitivity_error=sensitivity_error))
@@ -705,8 +738,8 @@ class Scene(Frozen):
         if y0 is None:
             return self.y0.copy()        # the compiled loop gets its own array
         if not isinstance(y0, dict):
-            if (type(y0) is np.ndarray and y0.shape == self.y0.shape
-                    and y0.dtype == np.float64 and math.isfinite(sum(y0.tolist()))):
+            if (type(y0) is np.ndarray and y0.dtype is _FLOAT64
+                    and y0.shape == self.y0.shape and math.isfinite(sum(y0.tolist()))):
                 # (a NaN or an infinity makes the sum of the floats not finite; an
                 # overflow of finite values takes the general route, which says so)
                 y = y0.copy()           # (what the general route makes of it, sooner)
@@ -832,16 +865,31 @@ class Scene(Frozen):
 
 
 #: what a scene with the same kernels (``Scene.replace``) takes over from the memo: the
-#: kernels' keys, the plans of runs (``solve.planned``), compiled events, whether an
-#: atlas applies and the first atlas (whose charts the others share: ``atlas.atlas``)
-_SHARED = ("spec", "key", "plans", "events", "atlas_applies", "atlases")
+#: kernels' keys, the plans of runs (``solve.planned``) and those taken over on other
+#: time spans, compiled events, whether an atlas applies and the first atlas (whose
+#: charts the others share: ``atlas.atlas``)
+_SHARED = ("spec", "key", "plans", "spans", "events", "atlas_applies", "atlases")
 
 
 _FLOAT = {float}
+#: the plans of a scene that kept none (``run``: its key is hashed all the same)
+_NONE_KEPT: dict = {}
+#: the dtype of the arrays a run takes as they are (numpy's one instance of it)
+_FLOAT64 = np.dtype(np.float64)
 
 #: the least |indicator| at which the initial dependent velocities are taken from the
 #: compiled kernels (``Scene._dependent_velocity_floats``)
 FLOAT_MARGIN = 1e-6
+
+
+class _OneState:
+    """What ``operator.itemgetter`` of one name would be if it returned a tuple."""
+
+    def __init__(self, name):
+        self.name = name
+
+    def __call__(self, values) -> tuple:
+        return (values[self.name],)
 
 
 def _loaded_kernels(key, persistent):

@@ -136,6 +136,11 @@ def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_st
                       stop_reason=reason, steps=None, rejected=None, nfev=int(sol.nfev),
                       wall_time=wall, kernels=kern, projected=scene.projected,
                       singularity=singularity, **kw)
+    if sol.status == 1 and t_eval is not None:     # the stop, after the last row: ``final``
+        y_stop = np.array(sol.y_events[k][-1], dtype=float)[None, :]
+        if onto is not None:
+            onto(np.array([t_hit]), y_stop)
+        traj._stopped(t_hit, y_stop[0, :n_state])
     if onto is None and scene.system.holonomic:
         drift.report(traj, f"scipy's {method} is a multistep method, whose steps are "
                          "not projected onto g = 0")

@@ -52,10 +52,11 @@ class Plan:
     (``numeric.dense``; None: no dense output), ``dense_ends`` it completed for a run
     whose last step is whole and for one stopped inside its last step (made once).  ``sens``: the kernels of the state
     augmented by its sensitivities, ``sens_tol`` their tolerances.  ``switch``: the run
-    goes on across its chart's edge (``numeric.atlas``); the loop of a run with
-    sensitivities then watches the edge as its last event (``ce``: it stops there).  The discrete methods read
+    goes on across its chart's edge (``numeric.atlas``); its loop then watches the
+    edge as its last event (``ce``: it stops there).  The discrete methods read
     ``steps``, ``newton_tol``, ``max_newton``, ``projection``; scipy's ``first`` and
-    ``max_step``."""
+    ``max_step``.  ``spans``: nothing but ``t0``, ``t1`` and ``head`` depends on the
+    time span (an adaptive method without ``t_eval``: ``on_span``)."""
 
     method: methods.Method
     t0: float
@@ -91,6 +92,7 @@ class Plan:
     callbacks: tuple = ()           # what the addresses in prefix point into, kept alive
     direct: bool = False            # a run is one call of ``entry`` (``run``)
     head: tuple = ()                # ``(*prefix, t0, t1)`` of a direct plan
+    spans: bool = False
 
 
 def _unused(method, **given):
@@ -168,7 +170,7 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
                                           else max_step)
         te = None if t_eval is None else arguments.times(t_eval, t0, t1)
         return Plan(**common, rtol=rtol, atol=atol_v, ce=None, watch=none_watch, te=te,
-                    first=first, max_step=mx)
+                    first=first, max_step=mx, spans=te is None)
     if m.solver is Solver.DISCRETE:
         _unused(m.name, t_eval=t_eval, first_step=first_step, max_step=max_step)
         steps = arguments.fixed_steps(n_steps, h, t0, t1, m.name, budget)
@@ -228,15 +230,12 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
     kern = scene.kernels
     switch = split == "switch" and atlas.applies(scene, events)
     if switch:
-        # the run goes on across its chart's edge: events per chart (numeric.atlas); an
-        # ensemble, and a run with sensitivities (whose loop ``connect`` calls directly:
-        # ``shooting.Shot``), watch the edge of the scene's own chart as their last event
-        ce = None
-        if batch or sens is not None:
-            at = atlas.atlas(scene)
-            from .events import as_events
+        # the run goes on across its chart's edge (numeric.atlas): its loop, in the
+        # scene's own chart, watches the edge as its last event (it stops there)
+        from .events import as_events
 
-            ce = at.events(at.own, as_events(events), True)
+        at = atlas.atlas(scene)
+        ce = at.events(at.own, as_events(events), True)
     else:
         ce = scene.compile_events(events)
     watch = _watch(scene, kern, ce, checked, singular_tol)
@@ -246,34 +245,59 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
                 te=te, mode=mode, newton=newton, switch=switch, dense=dense,
                 dense_ends=ends, entry=entry,
                 prefix=prefix, suffix=suffix, callbacks=callbacks,
-                direct=sens is None and not switch and not batch, head=(*prefix, t0, t1))
+                direct=sens is None and not switch and not batch, head=(*prefix, t0, t1),
+                spans=m.adaptive and t_eval is None and not batch)
 
 
-def planned(scene, key, make) -> Plan:
+def planned(scene, key, make, span=None) -> Plan:
     """The plan of ``key`` kept on ``scene`` (``make()`` when there is none; an
     unhashable key plans afresh).  The key holds every input of the plan but the
-    kernels, the time span too: scenes with the same kernels share their plans
-    (``Scene.replace``)."""
-    store = scene._memo.get("plans")
+    kernels, and the time span, or it is ``span``: scenes with the same kernels share
+    their plans (``Scene.replace``).  With ``span``, a plan of ``key`` on another span
+    whose options do not depend on it (``Plan.spans``; kept apart, per key) is taken
+    over on ``span`` (``on_span``): a loop over time spans (a shooting loop over the
+    final time) plans once."""
+    memo = scene._memo
+    store = memo.get("plans")
     if store is None:
-        store = scene._memo["plans"] = {}
+        store = memo["plans"] = {}
+    full = key if span is None else (key, span)
     try:
-        found = store.get(key)
+        found = store.get(full)
     except TypeError:           # an array among the options
         return make()
     if found is None:
-        found = make()
+        spans = None if span is None else memo.setdefault("spans", {})
+        other = None if spans is None else spans.get(key)
+        if other is not None:
+            found = on_span(other, *span)
+        else:
+            found = make()
+            if spans is not None and found.spans and len(spans) < MAX_PLANS:
+                spans[key] = found
         if len(store) < MAX_PLANS:
-            store[key] = found
+            store[full] = found
     return found
 
 
+def on_span(plan, t0, t1) -> Plan:
+    """``plan`` (whose options do not depend on its span: ``Plan.spans``) on the time
+    span ``(t0, t1)`` (checked: ``arguments.time_span``)."""
+    new = object.__new__(Plan)
+    new.__dict__.update(plan.__dict__, t0=t0, t1=t1, head=(*plan.prefix, t0, t1))
+    return new
+
+
 def hashable(value):
-    """``value`` as a part of a plan's key: a list as a tuple, an array as its bytes
-    (with dtype and shape), anything else as it is."""
-    if type(value) is list:
-        return tuple(value)
+    """``value`` as a part of a plan's key: a list or a tuple as a tuple of its entries
+    and their types (``True == 1``, but a run may refuse a bool where it takes 1), an
+    array as its bytes (with dtype and shape; of objects, as a list), anything else as
+    it is."""
+    if type(value) is list or type(value) is tuple:
+        return tuple(map(hashable, value)), tuple(map(type, value))
     if isinstance(value, np.ndarray):
+        if value.dtype.hasobject:       # (its bytes are addresses, which are reused)
+            return "objects", value.shape, hashable(value.ravel().tolist())
         return ("array", value.dtype.str, value.shape, value.tobytes())
     return value
 
@@ -312,7 +336,7 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
     """The trajectory of ``plan`` from the state ``y`` (checked, its own array) with the
     run-time parameters ``p``; ``own``: these are the scene's own initial values."""
     if plan.direct:             # one call of the compiled loop, first: most runs are
-        halt = np.zeros(1, np.int64)
+        halt = _HALT.copy()
         tic = _clock()
         out = interrupt.call(plan.entry, halt, plan.limit, (*plan.head, y, p, *plan.suffix,
                                                             halt))
@@ -321,12 +345,12 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
             loops.on_constraints(plan.kern, plan.ctl, plan.mode, None, out, p, plan.t0)
         dense = plan.dense_ends
         status = out[0]
-        if dense is not None:    # stopped inside a step or not
-            dense = dense[status == EVENT or status == SINGULAR]
         if status == FINISHED and len(out) == 6:        # most runs: at once
             return Trajectory._finished(scene, (out[1], out[2], out[3]), p, plan.method.name,
                                         _FINISHED_TEXT, (out[4], wall, scene.projected),
-                                        plan.kern, dense)
+                                        plan.kern, None if dense is None else dense[0])
+        if dense is not None:    # stopped inside a step or not
+            dense = dense[status == EVENT or status == SINGULAR]
         return trajectory(scene, plan.method.name, out, wall, plan.kern, plan.ce, p,
                           plan.t0, y, plan.singular_tol, plan.checked, plan.limit, dense)
     m = plan.method
@@ -348,11 +372,8 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
                                 plan.limit, plan.ce)
     dense = plan.dense
     if plan.switch:
-        return atlas.run(scene, m.name, plan.events, plan.t0, plan.t1, y, p, plan.ctl,
-                         plan.te, plan.mode, None if dense is None else dict(dense),
-                         plan.checked, plan.singular_tol, plan.newton, plan.limit,
-                         trajectory, sens=plan.sens)
-    halt = np.zeros(1, dtype=np.int64)
+        return atlas.run(scene, plan, y, p, trajectory)
+    halt = _HALT.copy()
     t0 = plan.t0
     tic = _clock()
     out = interrupt.call(plan.entry, halt, plan.limit,
@@ -369,6 +390,8 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
 
 _clock = time.perf_counter
 _FINISHED_TEXT = STATUS_TEXT[FINISHED]
+#: what a run's halt flag is made from (a copy: sooner than ``np.zeros``; never written)
+_HALT = np.zeros(1, dtype=np.int64)
 
 
 def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, checked,
@@ -444,9 +467,12 @@ def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, 
         t_events, y_events = split_records(k, ev_t[:n_ev], ev_i[:n_ev], ev_y[:n_ev])
         events = (ce.names[:k], t_events, y_events)
     # the loop's own float64, C-contiguous rows: taken as they are
-    return Trajectory._of_run(scene, (ts, ys, n_out), p, method, status, reason,
+    traj = Trajectory._of_run(scene, (ts, ys, n_out), p, method, status, reason,
                               (stats, wall, scene.projected), kern, events, singularity,
                               dense, sensitivities)
+    if status != FINISHED:      # where it stopped, for ``final`` (after its last row)
+        traj._stopped(t_last, y_last)
+    return traj
 
 
 # ---------------------------------------------------------------------- many runs

@@ -12,6 +12,7 @@ integration stopped (and the split switches of a run that changed split,
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass, field, fields
 
 import numpy as np
@@ -63,8 +64,8 @@ class Diagnostics:
                  f"  constraint residual max {self.residual_max:.3e}"
                  + (f", holonomic (position level) {self.holonomic_residual_max:.3e}"
                     if self.holonomic_residual_max else ""),
-                 f"  energy {self.energy_initial:.12g}, drift {self.energy_drift:.3e} "
-                 f"(relative {self.energy_drift_relative:.3e})"
+                 "  " + _energy_text(self.energy_initial, self.energy_drift,
+                                     self.energy_drift_relative)
                  + ("; not conserved: the generalized forces work (traj.power)"
                     if self.forced else "")]
         for k, v in self.integral_drift.items():
@@ -90,6 +91,19 @@ class Diagnostics:
 def _switch_text(s) -> str:
     """One split switch: its time and the dependent coordinates before and after."""
     return f"t = {s['t']:.6g} ({', '.join(s['from'])} -> {', '.join(s['to'])})"
+
+
+def _energy_text(initial, drift, relative) -> str:
+    """The energy line of a run's diagnostics: its initial value and drift, or that the
+    energy could not be evaluated (it overflows, or leaves the domain of an expression:
+    a NaN or an infinity there is no drift of the motion)."""
+    if not np.isfinite(initial):
+        return (f"energy not evaluated: it is {initial} at the start (an overflow, or an "
+                "expression outside its domain), so its drift is unknown")
+    if not np.isfinite(drift):
+        return (f"energy {initial:.12g}, drift not evaluated: the energy became NaN or "
+                "infinite on the way (an overflow, or an expression outside its domain)")
+    return f"energy {initial:.12g}, drift {drift:.3e} (relative {relative:.3e})"
 
 
 def _switches_text(switches) -> str:
@@ -185,7 +199,7 @@ class _Charts:
                          "not evaluated between its rows here; call traj.at(...) before "
                          "pickling it, or pass the times as t_eval= to the run")
 
-    aux = at = evaluate = _refuse
+    aux = at = evaluate = stop = _refuse
 
 
 class Trajectory(Frozen):
@@ -217,6 +231,9 @@ class Trajectory(Frozen):
     switches: tuple = ()
     #: a run with sensitivities: (column names, S [n_times, n_states, n_columns])
     _sens = None
+    #: a run stopped after its last row (``t_eval``): the time and state where it stopped
+    #: (``_stopped``; ``final``)
+    _last = None
     #: ``_dense``: what re-taking a step needs (tolerances, output mode; numeric.dense)
 
     def __init__(self, scene, t, y, p, *, method, status, stop_reason, steps, rejected,
@@ -293,6 +310,8 @@ class Trajectory(Frozen):
         t, y = self.t, self.y
         d["_rows"] = (t, y, t.shape[0])
         d["_memo"] = {} if self._own else {"aux": self.aux}
+        if self._segments is not None:      # (its last piece stays here)
+            d["_memo"]["_stop"] = self._stop
         d["_kernels"] = _Unloaded.of(self._kernels, self.scene, self.method)
         if self._segments is not None:
             d["_segments"] = _Charts()
@@ -378,10 +397,52 @@ class Trajectory(Frozen):
 
     @property
     def final(self) -> dict[str, float]:
-        """The last row's value of every coordinate, velocity, multiplier and integral.
-        With ``t_eval``, a run that stopped early (``status`` not a success) may have
-        stopped after its last row: its ``stop_reason`` says at which time."""
-        return {name: float(self[name][-1]) for name in self.names} if len(self) else {}
+        """Every coordinate, velocity, multiplier and integral where the run ended, at
+        ``t_final``: the last row, or, for a run with ``t_eval`` that stopped early (a
+        terminal event, a singular configuration, a step or time budget) after its last
+        row, the state where it stopped, which the run keeps (in the chart of the scene's
+        split for a run that changed split).  A stop whose state is not finite keeps
+        none: ``final`` is then the last row, and ``stop_reason`` says where it stopped.
+        A run that finished with ``t_eval`` ends at its last output time."""
+        stop = self._stop
+        if stop is None:
+            return {name: float(self[name][-1]) for name in self.names} if len(self) else {}
+        _, y, aux = stop
+        states, columns = _columns(self.layout)
+        out = {name: float(y[i]) for name, i in states.items()}
+        out.update((name, float(aux[i])) for name, i in columns.items())
+        return {name: out[name] for name in self.names}
+
+    @property
+    def t_final(self) -> float:
+        """The time of ``final``: the last row's, or that of the state where a run with
+        ``t_eval`` stopped after its last row (NaN: no rows, no such state)."""
+        stop = self._stop
+        if stop is not None:
+            return stop[0]
+        return float(self.t[-1]) if len(self) else math.nan
+
+    def _stopped(self, t, y) -> None:
+        """Keep ``(t, y)``, the state where the run stopped (the compiled loop's last
+        time and state), for ``final``; a state that is not finite is not kept."""
+        y = np.array(y, dtype=float)
+        if math.isfinite(t) and np.isfinite(y).all():
+            y.setflags(write=False)
+            self.__dict__["_last"] = (float(t), y)
+
+    @memo
+    def _stop(self):
+        """``(t, state, aux row)`` where the run stopped, in this trajectory's layout, or
+        None where that is its last row (``final``); a run that changed split takes it
+        from its last piece, mapped to the scene's chart (``atlas.Stitched.stop``)."""
+        if self._segments is not None:
+            return self._segments.stop(self._p)
+        if self._last is None or self._own:     # (discrete methods: no t_eval)
+            return None
+        t, y = self._last
+        aux = np.empty((1, self.layout.n_aux))
+        self._kernels.aux_rows(np.array([t]), y[None, :], self._p, aux)
+        return t, y, aux[0]
 
     def as_dict(self) -> dict[str, np.ndarray]:
         out = {"t": self.t}

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 
@@ -11,8 +10,8 @@ from ..loading import load_model, settings, with_split
 from .. import outputs
 from ..parser import (EPILOG_MODEL, FALLBACK, count, jetnh_default, model_args,
                       shown_default, subcommand)
-from ..running import (METHOD_HELP, assignments, initial_values, method_of,
-                       monitored_integrals)
+from ..running import (METHOD_HELP, assignments, initial_values, monitored_integrals,
+                       step_options, stop_text)
 from ..usage import UsageError
 
 
@@ -70,9 +69,9 @@ def run(args, progress) -> int:
     opts = settings(args, model)
     principle, method = opts.principle, opts.method
     # the run's options, checked before the kernels are derived and compiled
-    fixed_step = method_of(method).fixed_step
     arguments.tolerances(opts.rtol, opts.atol, 1)
     t0, t1 = arguments.time_span(opts.t_span)
+    kw = step_options(args, method, (t0, t1), "--points N for N output points")
     params = assignments(args.set, "--set")
 
     # the initial state: the model's, then --init; missing states start at 0.  The model's
@@ -106,26 +105,25 @@ def run(args, progress) -> int:
     with progress.step(f"deriving and compiling the {principle} kernels "
                        "(cached for later runs)"):
         scene.compile()
-    kw = {}
-    if fixed_step:
-        kw["n_steps"] = args.steps
-    elif opts.points >= 2:
+    if "n_steps" not in kw and opts.points >= 2:
         kw["t_eval"] = np.linspace(t0, t1, opts.points)
     with progress.step(f"integrating with {method} over [{t0:g}, {t1:g}]"):
         traj = scene.run(rtol=opts.rtol, atol=opts.atol, method=method, timeout=args.timeout,
                          **kw)
     d = traj.diagnostics
+    # where the run ended: with output times (t_eval) a run stopped early went on past
+    # its last row, to the state it keeps, unless that state is not finite (a singular
+    # stop where the values overflowed: then final is the last row, before the stop)
     final = traj.final
-    t_final = float(traj.t[-1]) if len(traj) else t0
-    # rows at output times only (t_eval): a run stopped early went on past its last row,
-    # to a state the trajectory does not keep
-    last_state = traj.success or "t_eval" not in kw
+    t_final = traj.t_final if len(traj) else t0
+    last_state = ("t_eval" not in kw or traj.singularity is None
+                  or traj.singularity["t"] == t_final)
     if args.format == "json":
-        print(json.dumps({"model": model.label, "principle": principle,
+        print(outputs.as_json({"model": model.label, "principle": principle,
                           "params": scene.params, "initial": scene.initial,
                           "final": final, "final_t": t_final, "final_is_last_state":
                           last_state, "diagnostics": d.as_dict(),
-                          "zero_initial": zeros}, indent=2, default=float))
+                          "zero_initial": zeros}, indent=2))
     else:
         print(f"{system.name or model.label}: {principle}, t in [{t0:g}, {t1:g}]")
         if scene.params:
@@ -140,12 +138,11 @@ def run(args, progress) -> int:
         if last_state:
             print("final:      " + values)
             if not traj.success:
-                print(f"stopped:    at t = {t_final:.10g}: {traj.stop_reason}")
+                print(f"stopped:    at t = {t_final:.10g}: {stop_text(traj, args, False)}")
         else:
             print(f"last row:   t = {t_final:.10g}: " + values)
-            print(f"stopped:    after the last row, before the next output time: "
-                  f"{traj.stop_reason}; the state it stopped at is not kept with --points "
-                  f"(--points 0 keeps every step, the last one too)")
+            print(f"stopped:    after the last row: {stop_text(traj, args)}; its state "
+                  "there is not finite")
         print(d)
     if args.csv:
         outputs.write(args.csv, lambda tmp: _write_csv(traj, tmp))
@@ -156,7 +153,7 @@ def run(args, progress) -> int:
                 traj, system, tmp, f"{system.name or model.label} ({principle})",
                 path_names, Path(args.plot).suffix[1:]))
     if not traj.success:
-        print(f"jetnh: error: the integration stopped early: {traj.stop_reason}",
+        print(f"jetnh: error: the integration stopped early: {stop_text(traj, args)}",
               file=sys.stderr)
         return 1
     return 0

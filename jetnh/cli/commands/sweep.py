@@ -10,7 +10,7 @@ from .. import outputs
 from ..parser import (EPILOG_MODEL, evenly_spaced, model_args, positive_count, seconds,
                       subcommand)
 from ..running import (METHOD_HELP, assignments, initial_values, method_of,
-                       monitored_integrals)
+                       monitored_integrals, step_options)
 from ..usage import UsageError
 
 
@@ -121,6 +121,7 @@ def run(args, progress) -> int:
     opts = settings(args, model)
     principle, method = opts.principle, opts.method
     t_span = opts.t_span
+    steps = step_options(args, method, t_span, "--times for output times")
     if times is not None and not method_of(method).dense:
         raise UsageError(f"--times needs dense output, which {method} does not have; use "
                          "--method dop853, dopri5, radau or scipy-<M>, or omit --times (final "
@@ -141,8 +142,7 @@ def run(args, progress) -> int:
                    outputs=args.outputs.split(",") if args.outputs else None,
                    chunk_size=args.chunk_size, progress=show, timeout=args.timeout,
                    connect_timeout=args.connect_timeout, method=method, rtol=opts.rtol,
-                   atol=opts.atol,
-                   **({"n_steps": args.steps} if method_of(method).fixed_step else {}))
+                   atol=opts.atol, **steps)
     finally:
         close()
     failed = int((~df["success"]).sum())

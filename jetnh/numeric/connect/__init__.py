@@ -78,6 +78,11 @@ Verdicts on the answer:
   normal.
 - ``cost``: the action ``int L dt`` along the answer, by 5-point Gauss-Legendre on every
   step of the dense output.
+- ``not_extremal``: under non-potential forces or dissipation (nonzero at the parameter
+  values) a vakonomic or Hoelder motion is in general no extremal of ``int L dt`` (its
+  first variation is ``int Q eta dt``): ``legendre`` and ``minimizer`` are None and
+  this says why; ``cost`` is then only ``int L dt`` along the motion, and
+  ``conjugate_times`` the folds of the map to the configuration.
 """
 
 from __future__ import annotations
@@ -171,11 +176,11 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
     method : {"dop853", "dopri5"}, default "dop853"
         The integrator (explicit, with dense output).
     restarts : int, default 0
-        Vakonomic and Hoelder: where the answer has a conjugate time inside the span
-        (no minimizer of the action), this many restarts from around it
-        (``solve.least_action``); the cheapest extremal without a conjugate time
-        inside the span is returned, else the cheapest, with ``Connection.search``
-        saying what was tried.  0: the first answer as found.
+        Vakonomic and Hoelder: where the answer is no minimizer of the action
+        (Legendre's condition fails, or a conjugate time lies inside the span), this
+        many restarts from around it (``solve.least_action``); the cheapest minimizer
+        is returned, else the cheapest, with ``Connection.search`` saying what was
+        tried and which verdict failed.  0: the first answer as found.
     segments : int, optional
         Multiple shooting on this many equal segments of the span (the inner states
         are unknowns too, matched by their exact sensitivities; then single shooting

@@ -13,7 +13,7 @@ from ...frozen import readonly
 from ..trajectory import Trajectory
 from .problem import VARIATIONAL
 from .verdicts import (GRAMIAN_RCOND, LEGENDRE_ZERO, _Samples, action,
-                       conjugate_times, gramian_ratio, legendre_margin)
+                       conjugate_times, gramian_ratio, legendre_margin, not_extremal)
 
 
 @dataclass(frozen=True)
@@ -23,6 +23,12 @@ class Connection:
     The verdicts ``cost``, ``normal``, ``gramian_ratio`` and ``conjugate_times`` are
     computed on first access (one more run, sampled on the dense output) and then kept;
     so is the ``trajectory`` (made from the run that found the motion).
+
+    Picklable (``__getstate__``): the trajectory travels (its compiled kernels reloaded
+    from the scene's cache on first use in another process) with the verdicts computed
+    so far; the others are computed there on first access, except for a motion that
+    changed split or was stitched from segments, which is not evaluated between its
+    rows after unpickling: its verdicts are computed before it is pickled.
     """
 
     _motion: object                  # the Trajectory, or the run that makes it (a Shot)
@@ -59,7 +65,9 @@ class Connection:
 
     @cached_property
     def cost(self) -> float:
-        """The action int L dt along the motion (``action``)."""
+        """The action int L dt along the motion (``action``).  With non-potential forces
+        (``not_extremal``) only that integral: the motion need not make it stationary,
+        and it is no least action."""
         return action(self.trajectory, self._samples)
 
     @cached_property
@@ -82,7 +90,9 @@ class Connection:
         extremal.  Chetaev and Suslov, whose motions are no extremals of an action: the
         map to the named end coordinates, the two-point problem's endpoint map -- where
         it is singular, the end is a fold of the motions from the start (nearby ends
-        are reached twice or not at all).  None: not checked (fewer unknowns than
+        are reached twice or not at all).  Vakonomic and Hoelder with non-potential
+        forces (``not_extremal``): the folds of the map to the configuration, no
+        conjugate points of an action.  None: not checked (fewer unknowns than
         coordinates to measure)."""
         rows = None
         if self.principle not in VARIATIONAL:
@@ -98,10 +108,21 @@ class Connection:
         lambda f in the velocities, restricted to the admissible ones (ker df/dqdot,
         tangent to g = 0), over its largest magnitude, at the worst of the equal-spaced
         times.  Positive: definite everywhere; negative: the action decreases along
-        some rapid variation (no minimizer); None for Chetaev and Suslov."""
-        if self.principle not in VARIATIONAL:
+        some rapid variation (no minimizer); None for Chetaev and Suslov, and where the
+        motion is in general no extremal of the action (``not_extremal`` says why)."""
+        if self.principle not in VARIATIONAL or self.not_extremal:
             return None
         return legendre_margin(self.trajectory, self._samples)
+
+    @cached_property
+    def not_extremal(self) -> str:
+        """Vakonomic and Hoelder: why the motion is in general no extremal of int L dt
+        (``verdicts.not_extremal``: generalized forces or dissipation that do not
+        vanish at these parameter values), so that ``legendre`` and ``minimizer`` are
+        None; "" without such forces, and for Chetaev and Suslov."""
+        if self.principle not in VARIATIONAL:
+            return ""
+        return not_extremal(self.trajectory.scene)
 
     @property
     def minimizer(self):
@@ -111,9 +132,10 @@ class Connection:
         time lies inside (t0, t1) (Jacobi's); True where the strengthened Legendre
         condition holds and no conjugate time lies inside (necessary, not sufficient,
         for a minimum); None where neither verdict applies (a Hessian singular
-        somewhere, conjugate times not checked) and for Chetaev and Suslov, whose
-        motions are not extremals of the action."""
-        if self.principle not in VARIATIONAL:
+        somewhere, conjugate times not checked), for Chetaev and Suslov, whose
+        motions are not extremals of the action, and under non-potential forces
+        (``not_extremal`` says why)."""
+        if self.principle not in VARIATIONAL or self.not_extremal:
             return None
         margin = self.legendre
         if margin < -LEGENDRE_ZERO:
@@ -126,6 +148,44 @@ class Connection:
             return False
         return True if margin > LEGENDRE_ZERO else None
 
+    @property
+    def _not_minimizer(self) -> str:
+        """Why ``minimizer`` is False, in words: Legendre's condition failing (it is
+        checked first) or the conjugate times inside the span; "" where it is not
+        False."""
+        if self.minimizer is not False:
+            return ""
+        if self.legendre < -LEGENDRE_ZERO:
+            return f"Legendre's condition fails (legendre = {self.legendre:.3g})"
+        t1 = float(self.trajectory.t[-1])
+        inside = [t for t in self.conjugate_times if t != t1]
+        return (("conjugate times" if len(inside) > 1 else "a conjugate time")
+                + " inside the span (t = " + ", ".join(f"{t:.6g}" for t in inside) + ")")
+
+    #: the verdicts kept in ``__dict__`` once computed (``cached_property``)
+    _VERDICTS = ("cost", "gramian_ratio", "conjugate_times", "legendre")
+
+    def __getstate__(self):
+        """The fields as plain data: the Trajectory for the run that made it (a
+        ``shooting.Shot`` holds the search's compiled loop), the mappings as dicts, the
+        verdicts computed so far (all of them where the trajectory cannot be evaluated
+        after unpickling: ``Trajectory._segments``), not the samples (rebuilt)."""
+        tr = self.trajectory
+        if tr._segments is not None:
+            for name in self._VERDICTS:
+                getattr(self, name)
+        state = {k: v for k, v in self.__dict__.items()
+                 if k not in ("trajectory", "_samples")}
+        state.update(_motion=tr, initial=dict(self.initial), _run=dict(self._run))
+        return state
+
+    def __setstate__(self, state):
+        """Frozen again: the mappings read-only (``MappingProxyType``)."""
+        state = dict(state)
+        state["initial"] = MappingProxyType(dict(state["initial"]))
+        state["_run"] = MappingProxyType(dict(state["_run"]))
+        self.__dict__.update(state)
+
     def __repr__(self):
         times = self.conjugate_times
         minimizer = self.minimizer
@@ -135,7 +195,8 @@ class Connection:
                    f"{tuple(round(t, 10) for t in times)}")
                 + {False: " (not a minimizer)", True: "",
                    None: "" if self.principle not in VARIATIONAL else
-                   " (minimizer not checked)"}[minimizer]
+                   " (minimizer undecided: non-potential forces)"
+                   if self.not_extremal else " (minimizer not checked)"}[minimizer]
                 + ", initial="
                 f"{dict(self.initial)})")
 

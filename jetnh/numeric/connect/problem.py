@@ -267,7 +267,11 @@ class Momenta:
     constraints, ``tangent_transversality``) of a scene as numbers: their values at a
     state and their derivatives by the state (from the graph).  ``free``: the
     coordinates they belong to.  The conditions and their derivatives are derived once
-    per system, principle and free coordinates (``_derived``)."""
+    per system, principle and free coordinates (``_derived``); their straight-line
+    evaluation is prepared once per Momenta (``straight_line``), the graph walked
+    (``walk``) only where it cannot be (a head without a float function) or where a
+    float operation raises (a division by zero, a logarithm of a negative number:
+    numpy's inf or nan then, as before)."""
 
     def __init__(self, scene, free):
         system = scene.system
@@ -276,16 +280,91 @@ class Momenta:
         self._all = [*self.exprs, *self.jacobian]
         self.t = system.J.t
         self.params = {s: scene.params[s.name] for s in system.parameters}
+        self._shape = (len(self.exprs), len(self.states))
+        self._line = straight_line(self._all, self.t, self.states, self.params)
 
     def __call__(self, t, y):
         """``(P_free(t, y), dP_free/dy)``."""
+        line = self._line
+        if line is not None:
+            try:
+                vals = np.array(line(float(t), y.tolist() if type(y) is np.ndarray
+                                     else [float(v) for v in y]))
+            except (ArithmeticError, ValueError):
+                return self.walk(t, y)
+            k, n = self._shape
+            return vals[:k], vals[k:].reshape(k, n)
+        return self.walk(t, y)
+
+    def walk(self, t, y):
+        """``__call__`` by a walk over the graph (``dag.evaluate_numpy``), numpy's
+        float rules (inf and nan where Python's raise)."""
         point = {self.t: float(t), **self.params,
                  **{s: float(v) for s, v in zip(self.states, y)}}
-        k, n = len(self.exprs), len(self.states)
+        k, n = self._shape
         vals = dag.evaluate_numpy(self._all, point)
         values = np.array([float(v) for v in vals[:k]])
         G = np.array([float(v) for v in vals[k:]]).reshape(k, n)
         return values, G
+
+
+#: the math module's functions a straight line calls by name (``straight_line``),
+#: matched by sympy's own classes (a user's undefined function named "sin" is not sin)
+_LINE_MATH = ("sin", "cos", "tan", "asin", "acos", "atan", "atan2", "sinh", "cosh", "tanh",
+              "asinh", "acosh", "atanh", "exp", "log", "sqrt")
+
+
+def straight_line(exprs, t, states, params):
+    """``f(t, y) -> [values of exprs]``: the shared graph of ``exprs`` as straight-line
+    Python on floats, each distinct node one assignment in dependency order (the order
+    and operations of ``dag.evaluate_numpy``: sums and products left to right), with
+    ``t`` the time, ``states`` the symbols of ``y``'s entries and ``params`` (Symbol ->
+    value) fixed; None where a node has no float counterpart (a symbol without a value,
+    a complex or infinite number, a head outside ``_LINE_MATH``).  The source is built
+    from the graph's structure alone -- indices, operators, float literals and those
+    function names, never a name or string from the model -- and compiled once."""
+    import sympy as sp
+
+    funcs = {getattr(sp, f): f for f in _LINE_MATH}
+    index = {s: i for i, s in enumerate(states)}
+    names: dict = {}
+    lines = []
+    for e in dag.nodes(list(exprs)):
+        if id(e) in names:
+            continue
+        if e in index:
+            text = f"y[{index[e]}]"
+        elif e == t:
+            text = "t"
+        elif e in params or e.is_Number or e.is_NumberSymbol:
+            value = float(params[e]) if e in params else None
+            if value is None:
+                if not (e.is_real and e.is_finite):
+                    return None
+                value = float(e)
+            if not math.isfinite(value):
+                return None
+            text = repr(value)
+        elif e.is_Add or e.is_Mul:
+            text = (" + " if e.is_Add else " * ").join(names[id(a)] for a in e.args)
+        elif e.is_Pow:
+            base, exp = e.args
+            text = (f"{names[id(base)]} ** {int(exp)}" if exp.is_Integer
+                    else f"_pow({names[id(base)]}, {names[id(exp)]})")
+        elif isinstance(e, sp.Abs):
+            text = f"abs({names[id(e.args[0])]})"
+        elif type(e) in funcs:
+            text = f"_m.{funcs[type(e)]}({', '.join(names[id(a)] for a in e.args)})"
+        else:
+            return None
+        names[id(e)] = f"v{len(lines)}"
+        lines.append(f"    v{len(lines)} = {text}")
+    body = "\n".join(lines) or "    pass"
+    out = ", ".join(names[id(e)] for e in exprs)
+    source = f"def line(t, y):\n{body}\n    return [{out}]\n"
+    scope = {"_m": math, "_pow": math.pow}
+    exec(compile(source, "<jetnh straight line>", "exec"), scope)
+    return scope["line"]
 
 
 #: (id(system), principle, free, state names) -> (system, what ``_derived`` returns):

@@ -15,7 +15,7 @@ import numpy as np
 
 from ...errors import JetnhError
 from .. import arguments, atlas, interrupt, solve
-from ..methods._common import EVENT, FINISHED
+from ..methods._common import EVENT, FINISHED, SINGULAR, STIFF, Status
 from ..options import options
 from .small import all_finite, finite_vector, max_abs, thin_svd
 
@@ -24,6 +24,11 @@ from .small import all_finite, finite_vector, max_abs, thin_svd
 EDGE = 1e-2
 #: steps a shooting run may take (a run that needs more counts as failed)
 MAX_STEPS = 20_000
+#: the measure of the scene's split at which a shooting run that cannot change split
+#: stops (``edge_event``): its minor at 1 % of the Gram scale, where the loop would
+#: start watching an indicator for a crawl; below it the motions that cannot change
+#: split crawl toward the singular set (thousands of steps a run)
+EDGE_STOP = 1e-4
 
 
 def _parts(plan):
@@ -90,8 +95,14 @@ class Shot:
         if status != FINISHED or n_out < 1:
             if stops is not None:
                 stops[int(status)] = stops.get(int(status), 0) + 1
-                stops["y"] = (float(out[1][n_out - 1]),
-                              np.array(out[2][n_out - 1][:n])) if n_out else None
+                # where it stopped (the loop's last state where it returns one, else its
+                # last row) and the indicator it stopped on (-1: none)
+                if len(out) == 12:
+                    stops["y"] = (int(status), float(out[5]), np.array(out[6][:n]),
+                                  int(out[-1]))
+                else:
+                    stops["y"] = (int(status), float(out[1][n_out - 1]),
+                                  np.array(out[2][n_out - 1][:n]), -1) if n_out else None
             return None
         last = out[2][n_out - 1]
         S = last[n:]
@@ -123,8 +134,9 @@ class Shot:
         if status != FINISHED or not arguments.all_finite(y_end) or not \
                 arguments.all_finite(S):
             if stops is not None:
-                stops[status] = stops.get(status, 0) + 1
-                stops["y"] = (t, np.array(y_end))
+                stops[int(status)] = stops.get(int(status), 0) + 1
+                # (its indicators are those of the chart it stopped in: not named here)
+                stops["y"] = (int(status), t, np.array(y_end), -1)
             return None
         self = object.__new__(cls)
         self.t, self.y, self.S = t, y_end, S
@@ -143,8 +155,68 @@ class Shot:
                 scene, plan.method.name, out, wall, plan.kern, plan.ce, p, plan.t0, y,
                 plan.singular_tol, plan.checked, plan.limit,
                 {**plan.dense, "partial_last": False},
-                n_events=len(plan.ce) - 1 if plan.switch else None, sens=plan.sens)
+                n_events=_events_shown(plan), sens=plan.sens)
         return self._trajectory
+
+
+def edge_event(scene):
+    """``[Event]``: the edge of ``scene``'s split where its runs cannot change split
+    (``atlas.applies`` false), det(A_alpha)^2 - ``EDGE_STOP`` det(A A^T) falling through
+    0 (A = df/dqdot; the form of ``atlas.Atlas.edge``), terminal; None where the runs
+    change split at their edge, where the split's minor is constant, or where it has
+    more than ``atlas.MAX_K`` rows (a symbolic determinant too large to compile)."""
+    found = scene._memo.get("shooting_edge", scene)
+    if found is scene:
+        from ..events import Event
+
+        system = scene.system
+        found = None
+        if (0 < system.k <= atlas.MAX_K and not atlas.applies(scene, None)
+                and not all(e.is_number for e in system.jacobian_dependent)):
+            A = system.jacobian
+            Ad = system.jacobian_dependent
+            gram = A * A.T
+            if system.k == 1:
+                expr = Ad[0, 0]**2 - EDGE_STOP * gram[0, 0]
+            else:
+                expr = (Ad.det(method="berkowitz")**2
+                        - EDGE_STOP * gram.det(method="berkowitz"))
+            found = [Event(expr, terminal=True, direction=-1, name=atlas.EDGE)]
+        scene._memo["shooting_edge"] = found
+    return found
+
+
+def _events_shown(plan):
+    """How many of ``plan``'s events a Trajectory of its run reports: all but the edge
+    of the split it watches last (the atlas's, or ``edge_event``'s); None: all."""
+    ce = plan.ce
+    return len(ce) - 1 if ce is not None and ce.names[-1] == atlas.EDGE else None
+
+
+def _crawled(plan, p, y0, t, y, index):
+    """Where a run of ``plan`` from ``y0`` stopped as singular at ``(t, y)`` on the
+    indicator ``index`` before it reached its threshold (``diagnosis.singularity``'s
+    test: the loop stopped it crawling toward the zero; ``p``: the run-time
+    parameters), the indicator's value there relative to its initial one; else None."""
+    kern = plan.kern
+    m = len(kern.layout.indicators)
+    g0, g = np.empty(m), np.empty(m)
+    kern.sing(float(plan.t0), np.ascontiguousarray(y0, dtype=float), p, g0)
+    kern.sing(float(t), np.ascontiguousarray(y, dtype=float), p, g)
+    with np.errstate(all="ignore"):
+        rel = float(g[index] / g0[index])
+    crawled = math.isfinite(rel) and rel > 4 * plan.singular_tol and rel > 1e-12
+    return rel if crawled else None
+
+
+def _near(scene, plan, t, y, y0) -> str:
+    """The singular set the state ``y`` at ``t`` of a run of ``plan`` from ``y0`` is
+    near (``diagnosis.near_singular``), or ""."""
+    from .. import diagnosis
+
+    near = diagnosis.near_singular(scene, plan.kern, t, np.ascontiguousarray(y),
+                                   scene._p, plan.t0, np.ascontiguousarray(y0, dtype=float))
+    return "" if near is None else near[0]
 
 
 def first_values(motion) -> tuple[list, list]:
@@ -203,19 +275,29 @@ class Shooter:
         self.plans: dict = {}            # (span, save) -> the driver's plan of the runs
         self.holonomic = bool(scene.system.holonomic)
         self.stops: dict = {}
+        #: the last run that stopped early, per cause (``_stopped``)
+        self.last_stops: dict = {}
         self.runs = 0
+
+    #: whether runs that cannot change split stop at its edge (``edge_event``)
+    watch_edge = True
 
     def plan(self, span, save="steps"):
         """The driver's plan of a shooting run on ``span`` (with sensitivities; every
-        step or the ends), made once: each run then only calls the compiled loop."""
+        step or the ends), made once: each run then only calls the compiled loop.
+        Where the runs cannot change split (``atlas.applies``), the plan watches the
+        split's edge as a terminal event (``edge_event``, with ``watch_edge``): a run
+        stops there, counted as "edge", instead of crawling toward the singular set."""
         found = self.plans.get((span, save))
         if found is None:
+            edge = edge_event(self.scene) if self.watch_edge else None
             key = ("shooting", self.method, self.rtol, solve.hashable(self.atol), span,
-                   save, MAX_STEPS)
+                   save, MAX_STEPS, edge is not None)
             # kept on the scene too: repeated problems on one scene plan nothing
             found = self.plans[span, save] = solve.planned(
                 self.scene, key, lambda: solve.plan(
                     self.scene, self.method, t_span=span, save=save, sensitivities=True,
+                    events=edge,
                     opts=options(rtol=self.rtol, atol=self.atol, max_steps=MAX_STEPS)))
         return found
 
@@ -239,21 +321,96 @@ class Shooter:
         shot = Shot.of(scene, plan, y, scene._p, self.stops, self.watch, first)
         if shot is None:
             last = self.stops.pop("y", None)
-            if last is not None and arguments.all_finite(last[1]):
-                from .verdicts import split_measure
-
-                if split_measure(scene, last[0], last[1]) < EDGE:
-                    self.stops["edge"] = self.stops.get("edge", 0) + 1
+            if last is not None:
+                self._stopped(plan, y, *last)
         return shot
 
-    def edge_note(self) -> str:
+    def _stopped(self, plan, y0, status, t, y, index):
+        """Count a run from ``y0`` that stopped early with ``status`` at ``(t, y)`` on
+        the singularity indicator ``index`` (-1: none): as "edge" where near the edge
+        of the scene's split, as "crawl" where a singular stop came before its
+        indicator reached the threshold (the loop found it crawling toward its zero:
+        ``_crawled``); the last stop of each kind kept for ``stops_note``."""
+        stops = self.stops
+        if not arguments.all_finite(y):
+            self.last_stops[status] = (t, y, y0, -1, plan)
+            return
+        kind = status
+        if status == SINGULAR and index >= 0:
+            rel = _crawled(plan, self.scene._p, y0, t, y, index)
+            if rel is not None:
+                stops["crawl"] = stops.get("crawl", 0) + 1
+                kind = "crawl"
+        self.last_stops[kind] = (t, y, y0, index, plan)
+        from .verdicts import split_measure
+
+        if split_measure(self.scene, t, y) < EDGE:
+            stops["edge"] = stops.get("edge", 0) + 1
+
+    def stops_note(self) -> str:
+        """Why runs stopped before t1, by cause (the last of each kind named: where,
+        and on which singular set), then the edge of the split (``edge_note``); ""
+        where none did."""
+        stops, parts = self.stops, []
+        crawl = stops.get("crawl", 0)
+        k = stops.get(STIFF, 0)
+        if k:
+            last, where = self.last_stops.get(STIFF), ""
+            if last is not None:
+                t, y, y0, _, plan = last
+                near = _near(self.scene, plan, t, y, y0) if arguments.all_finite(y) else ""
+                where = f"the last at t = {t:.10g}: " + (f"{near}; " if near else "")
+            parts.append(
+                f"{k} stopped as stiff ({where}Hairer's test found {self.method}'s steps "
+                "held by stability, not by rtol): connect integrates with explicit "
+                "methods (dop853, dopri5), which cannot follow a stiff motion; run "
+                "scene.run(method='radau') to see it, and connect over a shorter span "
+                "or to an end reached before the motion turns stiff")
+        if crawl:
+            t, y, y0, index, plan = self.last_stops["crawl"]
+            expr = plan.kern.layout.indicators[index]
+            rel = _crawled(plan, self.scene._p, y0, t, y, index)
+            parts.append(
+                f"{crawl} crawled toward the singular set {expr} = 0 and stopped there "
+                f"(the last at t = {t:.10g}, where {expr} is {rel:.3g} of its initial "
+                f"value): {self.method}'s steps shrank faster than the distance to it, as "
+                "where the equations are a 0/0 that floating point cannot resolve")
+        k = stops.get(SINGULAR, 0) - crawl
+        if k:
+            last = self.last_stops.get(SINGULAR)
+            where = ""
+            if last is not None:
+                where = f" (the last at t = {last[0]:.10g}" + (
+                    f", on {last[4].kern.layout.indicators[last[3]]} = 0"
+                    if last[3] >= 0 else "") + ")"
+            parts.append(f"{k} reached a singular configuration{where}")
+        for code, what in ((Status.MAX_STEPS, f"took more than {MAX_STEPS} steps"),
+                           (Status.TOO_SMALL_STEP, "had their step fall below the "
+                            "spacing of the floats"),
+                           (Status.NONFINITE, "became NaN or infinite"),
+                           (Status.NOT_CONVERGED, "did not converge")):
+            k = stops.get(code, 0)
+            if k:
+                last = self.last_stops.get(code)
+                parts.append(f"{k} {what}" + (
+                    "" if last is None else f" (the last at t = {last[0]:.10g})"))
+        if not parts:
+            return self.edge_note()
+        edge = self.edge_note(of_them=True)
+        n = sum(v for key, v in stops.items() if type(key) is int)
+        note = (f"{n} of the {self.runs} runs stopped before t1: " + "; ".join(parts))
+        return note + (f"; {edge}" if edge else "")
+
+    def edge_note(self, of_them=False) -> str:
         """Where runs stopped at the edge of the scene's split: what that means and the
-        fix ("" where none did)."""
+        fix ("" where none did); ``of_them``: counted "of them" (after a count of
+        the runs)."""
         k = self.stops.get("edge", 0)
         if not k:
             return ""
         dep = ", ".join(self.scene.dependent_velocities) or "none"
-        return (f"{k} of the {self.runs} runs stopped at the edge of the scene's split "
+        runs = "of them" if of_them else f"of the {self.runs} runs"
+        return (f"{k} {runs} stopped at the edge of the scene's split "
                 f"(dependent velocities {dep}: the constraints cannot be solved for them "
                 "there) and could not go on in another split (the motions of this "
                 "principle depend on the split, or no other split is regular there): "

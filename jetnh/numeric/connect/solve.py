@@ -64,7 +64,7 @@ class Search(Shooter):
         """The ``ConnectError`` of a search stopped by ``connect(timeout=)``, with the
         closest motion its runs over the whole span reached."""
         best = None if self.closest is None else self._best(self.closest[1])
-        edge = self.edge_note()
+        edge = self.stops_note()
         return ConnectError(
             f"connect stopped at its timeout of {timeout:g} s after {self.runs} runs: "
             + ("no run reached t1, so there is no closest motion (ConnectError.best is "
@@ -213,7 +213,7 @@ class Search(Shooter):
                 return v, its, None, name + ("" if rows is None else " (on " + ", ".join(
                     self.conditions[r] for r in rows) + " first)")
             notes.append(f"{name} stopped at {where}")
-        edge = self.edge_note()
+        edge = self.stops_note()
         if edge:
             notes.append(edge)
         if closest is not None:
@@ -501,20 +501,23 @@ class _Segments(Segments):
 def least_action(search, found, tol, max_iter, restarts):
     """The least-action answer among ``found`` (a ``Connection`` of a vakonomic or
     Hoelder problem) and the extremals reached from ``restarts`` restarts, where
-    ``found`` is no minimizer (a conjugate time inside the span: ``Connection.minimizer``
-    False).  The first restart starts from the direct route's guess
+    ``found`` is no minimizer (Legendre's condition fails or a conjugate time lies inside
+    the span: ``Connection.minimizer`` False).  The first restart starts from the direct route's guess
     (``direct.guess``: the action minimised over a family of admissible paths, where the
     problem allows it), solved by multiple shooting on ``DIRECT_SEGMENTS`` segments;
     restart k moves ``found``'s unknowns by a fixed pseudo-random direction (seeded by
     k) of growing size (a quarter, a half, one, two times each unknown's scale,
     max(|u_i|, 1)), then Newton with at most ``min(max_iter, STEP_ITER)`` iterations
     (no other route).  Each answer's ``iterations`` are those of its restart.  Kept:
-    the cheapest extremal without a conjugate time inside the span, else the cheapest.
+    the cheapest minimizer (``Connection.minimizer`` True), else the cheapest.
     Returns that ``Connection`` with ``search`` saying what was tried and where it
     stopped."""
     import dataclasses
 
     if not restarts or found.minimizer is not False:
+        if restarts and found.minimizer is None and found.not_extremal:
+            return dataclasses.replace(found, search=(
+                f"no restarts: the minimizer verdict is undecided ({found.not_extremal})"))
         return found
     u = np.array([found.initial[k] for k in found.unknowns])
     scale = np.maximum(np.abs(u), 1.0)
@@ -553,11 +556,29 @@ def least_action(search, found, tol, max_iter, restarts):
             continue
     minimizers = [c for c in answers if c.minimizer]
     best = min(minimizers or answers, key=lambda c: c.cost)
-    costs = ", ".join(f"{c.cost:.8g}{'' if c.minimizer else ' (conjugate)'}"
+
+    def verdict_of(c):
+        if c.minimizer:
+            return ""
+        why = c._not_minimizer
+        return (" (Legendre fails)" if why.startswith("Legendre") else " (conjugate)"
+                if why else " (not checked)")
+
+    costs = ", ".join(f"{c.cost:.8g}{verdict_of(c)}"
                       for c in sorted(answers, key=lambda c: c.cost))
-    verdict = ("the cheapest without a conjugate time kept" if minimizers else
-               "none without a conjugate time inside the span: the cheapest kept, not "
-               "a minimizer; try a guess near the least-action motion, or more restarts")
+    failed = {verdict_of(c) for c in answers} - {""}
+    if minimizers:
+        verdict = ("the cheapest minimizer kept (Legendre's condition holds and no "
+                   "conjugate time lies inside the span)")
+    elif failed == {" (Legendre fails)"}:
+        verdict = ("Legendre's condition fails on every one (L + lambda f is not "
+                   "positive definite on the admissible velocities somewhere along "
+                   "them: no minimizer of the action there): the cheapest kept, not a "
+                   "minimizer")
+    else:
+        verdict = ("none is a minimizer: the cheapest kept, not a minimizer; try a guess "
+                   "near the least-action motion, or more restarts")
     return dataclasses.replace(best, search=(
-        f"{restarts} restarts from the first answer, which has conjugate times inside "
-        f"the span{direct_note}; {len(answers)} extremals (costs {costs}); {verdict}"))
+        f"{restarts} restarts from the first answer, which is no minimizer: "
+        f"{found._not_minimizer}{direct_note}; {len(answers)} extremals (costs {costs}); "
+        f"{verdict}"))

@@ -160,6 +160,34 @@ def _hessian(scene):
     return found
 
 
+def not_extremal(scene) -> str:
+    """Why the motions of ``scene`` are in general no extremals of the action int L dt,
+    in words: its generalized forces (``System.Q``: ``forces`` less the dissipation's
+    gradient) do not vanish identically at the scene's parameter values, so the first
+    variation of the action along a motion is int Q eta dt (zero only where Q happens
+    to do no work on the admissible variations), and the action's second variation
+    (Legendre's and Jacobi's conditions) decides nothing; "" where they vanish
+    (``zero.vanishes``)."""
+    from ...algebra import dag, zero
+
+    system = scene.system
+    if not system.forced:
+        return ""
+    J = system.J
+    values = {s: scene.params[s.name] for s in system.parameters}
+    on = [q.name for q, e in zip(J.q, system.Q)
+          if e != 0 and not zero.vanishes(dag.xreplace(e, values) if values else e)]
+    if not on:
+        return ""
+    given = " and ".join(w for w, there in (("forces=", bool(system.forces)),
+                                             ("dissipation=", system.dissipation != 0))
+                         if there)
+    return (f"the motion is no extremal of int L dt in general: the system has "
+            f"non-potential generalized forces on {', '.join(on)} ({given}), so the "
+            "action's first variation along it is int Q eta dt, and its second variation "
+            "(Legendre, Jacobi) decides nothing")
+
+
 def legendre_margin(tr, samples) -> float:
     """The strengthened Legendre condition along ``tr``: at each of ``samples``'
     equal-spaced times, the eigenvalues of B^T H B, H the Hessian of L + lambda_a f^a
