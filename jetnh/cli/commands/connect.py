@@ -195,8 +195,8 @@ def _print(c, end):
                 "not positive semidefinite somewhere" if c.legendre < -LEGENDRE_ZERO else
                 "singular somewhere: zero within its resolution")
         print(f"legendre:  {c.legendre:.6g} (the Hessian of L + lambda f on the admissible "
-              f"velocities, its smallest eigenvalue over its largest at the worst time: "
-              f"{sign})")
+              f"velocities, in the independent ones scaled to a unit diagonal: its "
+              f"smallest eigenvalue at the worst time: {sign})")
     if c.minimizer is False:
         print("minimizer: no (" + ("Legendre's condition fails: L + lambda f is not "
                                    "positive on the admissible velocities"
