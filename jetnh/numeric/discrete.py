@@ -220,12 +220,13 @@ def _active(g_old, g_new, direction, first) -> bool:
 
 def node_events(ce, ts, ys, p):
     """User events of a discrete run, with the semantics the compiled loops have
-    (``_events.locate``: scipy's, a root on a node counted once): each event function at every node; in a step where one
-    crosses zero its root by Brent's method (xtol = rtol = 4 eps) on the linear
-    interpolant of the state between the nodes (second order, the order of dla and dvi);
-    every active event counted, then the first terminal one (``max_events``-th
-    occurrence) ends the run.  Returns ``(records, stop)``: records ``(t, index, state)``
-    in order, stop ``(node, theta, index)`` of the terminal event or None."""
+    (``_events.locate``: scipy's, a root on a node counted once): each event function at
+    every node; in a step where one crosses zero its root by Brent's method (xtol = rtol
+    = 4 eps) on the linear interpolant of the state between the nodes (second order, the
+    order of dla and dvi); every active event counted, then the first terminal one
+    (``max_events``-th occurrence) ends the run. Returns ``(records, stop)``: records
+    ``(t, index, state)`` in order, stop ``(node, theta, index)`` of the terminal event
+    or None."""
     from scipy.optimize import brentq
 
     funcs = ce.python_funcs

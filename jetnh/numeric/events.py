@@ -20,15 +20,16 @@ Semantics are scipy's (``solve_ivp(events=...)``): ``direction`` > 0 triggers on
 crossings from negative to positive, < 0 only from positive to negative, 0 on both;
 ``terminal`` True (or a positive integer m) stops the integration at the first (m-th)
 occurrence, at the located time; callables may carry ``terminal`` and ``direction`` as
-attributes.  One difference: a root exactly on a step's node (an event ``t - 1`` with
+attributes. One difference: a root exactly on a step's node (an event ``t - 1`` with
 fixed steps h = 0.01) ends one step and starts the next; scipy counts it in both, jetnh
 once (a zero at the start of a step other than the run's first is the root the previous
 step ended on), so ``terminal=2`` stops at the second root, not at that one twice (the
-``scipy-*`` methods keep scipy's count).  Roots are found by Brent's method (scipy's ``brentq``, xtol = rtol = 4 eps)
-on the dense output of DOP853 / DOPRI5 / radau (the cubic Hermite interpolant for RK4),
-inside the compiled loop (``methods._events``).  dla and dvi evaluate the events at
-every node as they go and end the run at the node after a terminal one; the roots are
-then located on the linear interpolant between the nodes (``discrete.node_events``).
+``scipy-*`` methods keep scipy's count). Roots are found by Brent's method (scipy's
+``brentq``, xtol = rtol = 4 eps) on the dense output of DOP853 / DOPRI5 / radau (the
+cubic Hermite interpolant for RK4), inside the compiled loop (``methods._events``). dla
+and dvi evaluate the events at every node as they go and end the run at the node after a
+terminal one; the roots are then located on the linear interpolant between the nodes
+(``discrete.node_events``).
 
 An expression that depends on neither t nor the state is refused (constant along a run,
 it never crosses zero); an event that is NaN or infinite at the initial state gets a

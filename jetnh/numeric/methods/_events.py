@@ -572,10 +572,11 @@ def node_events_start(uev, t, row, cols, p, n_user):
 @jit
 def node_terminal(uev, t, row, cols, p, y, g_old, g_new, direction, max_events, counts,
                   first):
-    """The user events from the previous node (``g_old``) to this one (``first``: the
-    run's first step), with the rule of ``crossed``: each crossing counted; True if a terminal event (its ``max_events``-th
-    crossing) occurred, so that the run ends at this node (the root between the two is
-    located afterwards, ``numeric.discrete.node_events``).  ``g_old`` becomes this node's."""
+    """The user events from the previous node (``g_old``) to this one (``first``: the run's
+    first step), with the rule of ``crossed``: each crossing counted; True if a terminal
+    event (its ``max_events``-th crossing) occurred, so that the run ends at this node
+    (the root between the two is located afterwards, ``numeric.discrete.node_events``).
+    ``g_old`` becomes this node's."""
     n_user = direction.shape[0]
     if n_user == 0:
         return False
