@@ -156,12 +156,18 @@ def _check_symbols(scene, expr, name):
             + (f" and the parameters {', '.join(sorted(scene.params))}" if scene.params else ""))
 
 
-def _check_varies(scene, expr, name):
-    """Refuse an expression free of t and of the state: constant along a run, it never
-    changes sign (identically zero, it would be a root at every node)."""
+def check_varying(scene, events):
+    """Refuse a user's event expression free of t and of the state (``run(events=...)``):
+    constant along a run, it never changes sign (identically zero, it would be a root at
+    every node)."""
     J = scene.system.J
     moving = {J.t.name} | {s.name for s in J.q + J.qd} | set(scene.multipliers)
-    if not any(s.name in moving for s in expr.free_symbols):
+    for e in as_events(events):
+        if not e.is_expression:
+            continue
+        expr, name = J.from_dynamic(e.fun), e.name
+        if any(s.name in moving for s in expr.free_symbols):
+            continue
         raise JetnhError(
             f"event {name!r} is {expr}, which depends on neither t nor the state: it is "
             "constant along a run and never crosses zero (identically zero, it would be a "
@@ -198,7 +204,6 @@ def compile_events(scene, events: list[Event]) -> CompiledEvents:
     calls = [(i, e.fun) for i, e in enumerate(events) if not e.is_expression]
     for i, expr in exprs:
         _check_symbols(scene, expr, events[i].name)
-        _check_varies(scene, expr, events[i].name)
     kernel = None
     if exprs:
         spec = scene.spec.but(variant="events", events=tuple(exprs))

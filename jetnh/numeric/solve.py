@@ -32,7 +32,7 @@ from .methods import STATUS_TEXT, Solver
 from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, FINISHED, NONFINITE,
                               SINGULAR, STIFF, STOPPED, TOO_SMALL_STEP,
                               entry_point)
-from .events import split_records, warn_not_finite
+from .events import check_varying, split_records, warn_not_finite
 from .kernels import sensitivity_kernels
 from .methods.loop import Control, Result, Watch
 from .options import fields_of, options
@@ -147,6 +147,8 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
             raise JetnhError("an ensemble stores t_eval points or save='final' (every step "
                              "differs per run); pass t_eval=... or save='final'")
     sens = None
+    if events is not None:
+        check_varying(scene, events)
     common = dict(method=m, t0=t0, t1=t1, save=save, events=events, checked=checked,
                   singular_tol=singular_tol, limit=limit)
     for flag, value in (("sensitivities", sensitivities),
