@@ -324,6 +324,15 @@ class Chart:
             lam = np.linalg.solve(A[:, self.dep].T[None], lam[None, :, None])[0, :, 0]
         return y[:n], qd, lam, A
 
+    def jacobian_rows(self, t, y, p) -> list:
+        """df/dqdot at one state ``y`` (C-contiguous floats) as k lists of n floats (the
+        numbers of ``point``'s A)."""
+        n = self.n
+        A = np.empty(self.k * n)
+        self.jacobian_kernel(t, y, p, A)
+        flat = A.tolist()
+        return [flat[i:i + n] for i in range(0, len(flat), n)]
+
     def columns_of(self, other, as_list=False) -> np.ndarray | list:
         """Where the columns of ``other``'s state are in a row of this chart's state
         followed by its aux row, when the multipliers keep their values (not
@@ -369,10 +378,10 @@ def _det(M) -> float:
 
 def measures_at(A, columns) -> list[float]:
     """m_beta = det(A_beta)^2 / det(A A^T) of the split of each entry of ``columns`` (the
-    columns of its minor) at one point (A: k x n, floats); all 0 where A has rank < k
+    columns of its minor) at one point (A: k x n floats, or k lists of them); all 0 where A has rank < k
     (no split is regular).  ``Atlas.measures`` (the charts of a run) and
     ``regular.best`` (every choice of k coordinates) both take them from here."""
-    rows = np.asarray(A, dtype=float).tolist()
+    rows = A if type(A) is list else np.asarray(A, dtype=float).tolist()
     if len(rows) == 1:          # one constraint: the same sums, without the matrices
         r = rows[0]
         gram = sum([a * a for a in r])
@@ -767,21 +776,35 @@ def switch(at, chart, t, y, p):
     """The chart to go on in at the edge of ``chart`` (reached at (t, y), moved onto the
     holonomic constraints) and the state there, or None (``_target``)."""
     t = float(t)
-    return _target(at, chart, t, p, *chart.point(t, _on_constraints(chart, t, y, p), p))
+    y = _on_constraints(chart, t, y, p)
+    if chart.explicit:              # (multipliers mapped by A: ``Chart.point``)
+        return _target(at, chart, t, p, *chart.point(t, y, p))
+    # the same numbers copied through lists (``point``, ``state_at``: a few numbers)
+    qd, n = chart.velocity_list(t, y, p), chart.n
+    head, lam = y[:n].tolist(), y[2 * n - chart.k:].tolist()
+    return _choose(at, chart, t, p, chart.jacobian_rows(t, y, p), qd,
+                   lambda to: np.array(head + [qd[i] for i in to._independent] + lam))
 
 
 def _target(at, chart, t, p, q, qd, lam, A):
-    """The chart to go on in at the edge of ``chart`` and the state there: the split of
-    largest measure (at least twice the edge) whose constraints give back the
-    velocities (the same branch), or None.  ``(q, qd, lam, A)``: ``Chart.point`` there."""
+    """The chart to go on in at the edge of ``chart`` and the state there (``_choose``).
+    ``(q, qd, lam, A)``: ``Chart.point`` there."""
+    return _choose(at, chart, t, p, A, qd.tolist(),
+                   lambda to: to.state_at(q, qd, lam, A))
+
+
+def _choose(at, chart, t, p, A, want, state_in):
+    """The split of largest measure (at least twice the edge) whose constraints give
+    back the velocities ``want`` (every velocity at the edge of ``chart``, a list: the
+    same branch) and the state there (``state_in(its map)``), or None.  ``A``: df/dqdot
+    there (k x n)."""
     m = at.measures(A)
-    want = qd.tolist()
     # (two splits: the other is the one candidate, in any order)
     for i in range(2) if len(m) == 2 else sorted(range(len(m)), key=lambda i: -m[i]):
         split = at.splits[i]
         if split == chart.split or m[i] < 2 * at.eps:
             continue
-        y = at.maps[split].state_at(q, qd, lam, A)
+        y = state_in(at.maps[split])
         new = at.chart(split, t, y)
         for a, b in zip(new.velocity_list(t, y, p), want):
             if not abs(a - b) <= 1e-8 * max(1.0, abs(b)):
@@ -799,23 +822,19 @@ def stitch(home, at, method, p, parts, switches, user, mode, wall):
     own = at.own
     if len(parts) == 1 and not switches:
         return parts[0][1].traj
-    ts, ys, pieces = [], [], []
+    pieces = []
     sens = [] if parts[-1][2][6] is not None else None
-    row = 0
+    row, last_part = 0, len(parts) - 1
     for i, (chart, seg, rerun) in enumerate(parts):
-        out = seg.out
-        a, b = 0, int(out.n_out)
-        if mode == ENDPOINTS and len(parts) > 1:       # the first row and the last
-            a, b = (0, 1) if i == 0 else (b - 1, b) if i == len(parts) - 1 else (b, b)
+        a, b = 0, int(seg.out.n_out)
+        if mode == ENDPOINTS and last_part:             # the first row and the last
+            a, b = (0, 1) if i == 0 else (b - 1, b) if i == last_part else (b, b)
         elif i > 0 and mode != AT_T_EVAL:
             a = 1                       # the switch row: the chart before stored it
-        t, Y = out.ts[a:b], out.ys[a:b, :len(chart.scene.state_names)]
-        ts.append(t)
-        ys.append(Y if chart is own else to_home(own, chart, t, Y, p))
         if sens is not None:        # S of the scene's states: D S of each row
             S = seg.sensitivities[a:b]
             sens.append(S if chart is own else
-                        chart.carry(own, t, seg.y[a:b], S, p))
+                        chart.carry(own, seg.out.ts[a:b], seg.y[a:b], S, p))
         pieces.append((row, row + b - a, chart, seg, a, rerun))
         row += b - a
     t_ev, y_ev = [], []
@@ -834,8 +853,8 @@ def stitch(home, at, method, p, parts, switches, user, mode, wall):
         status, reason, singularity = FINISHED, _FINISHED_TEXT, None
     else:
         status, reason, singularity = last.status, last.stop_reason, last.singularity
-    t = np.concatenate(ts)          # (new float64 C-contiguous arrays: taken as they are)
-    return Trajectory._of_run(home, (t, np.concatenate(ys), t.shape[0]), p, method,
+    # (the rows: made on first read, ``Stitched.rows``)
+    return Trajectory._of_run(home, None, p, method,
                               status, reason, ((steps, rejected, nfev), wall, home.projected),
                               own.kernels, (tuple([e.name for e in user]), t_ev, y_ev),
                               singularity, parts[0][1].dense,
@@ -914,6 +933,19 @@ class Stitched:
 
     def __init__(self, own, pieces):
         self.own, self.pieces = own, pieces
+
+    def rows(self, p):
+        """``(t, y, n)``: the trajectory's output rows, each piece's rows of its loop's
+        result (``_Piece.out``) mapped to the scene's chart (``to_home``)."""
+        own, ts, ys = self.own, [], []
+        for lo, hi, chart, seg, a, _ in self.pieces:
+            out = seg.out
+            t = out.ts[a:a + hi - lo]
+            Y = out.ys[a:a + hi - lo, :len(chart.scene.state_names)]
+            ts.append(t)
+            ys.append(Y if chart is own else to_home(own, chart, t, Y, p))
+        t = np.concatenate(ts)          # (new float64 C-contiguous arrays: taken as they are)
+        return t, np.concatenate(ys), t.shape[0]
 
     def aux(self, traj) -> np.ndarray:
         """The aux rows of the trajectory, each from its own chart's kernels."""
