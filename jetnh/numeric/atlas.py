@@ -75,13 +75,15 @@ from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, FINISHED, SINGULAR, S
 from . import arguments, interrupt, loops, methods
 from .events import Event, as_events
 from .kernels.calls import Kernel, Rows
-from .methods.loop import Control, Watch, features
+from .methods.loop import Control, Watch
 from .trajectory import Trajectory
 
 #: the event name of a chart's edge (internal: the stitched run does not report it)
 EDGE = "chart edge"
 #: the largest number of constraints whose splits are watched (symbolic determinants)
 MAX_K = 3
+#: what a loop's halt flag is made from (a copy: sooner than ``np.zeros``; never written)
+_HALT = np.zeros(1, dtype=np.int64)
 
 
 def split_invariant(principle, convention) -> bool:
@@ -196,7 +198,9 @@ class Chart:
         """``loops.call`` of this chart's scene and kernels (``sens``: the kernels of its
         state augmented by its sensitivities), the loop's entry and callbacks looked up
         once per method, events and loop parts (``loops.entry``)."""
-        key = (method, id(ce), sens is not None, features(ctl, mode, watch))
+        # (``features`` of the loop, given ``ce``: what ``mode``, the projection and the
+        # indicators add to it)
+        key = (method, id(ce), sens is not None, mode, ctl.n_hol > 0, watch.n_sing > 0)
         found = self._entries.get(key)
         if found is None or found[0] is not ce:
             loop, prefix, suffix, callbacks = loops.entry(
@@ -206,7 +210,7 @@ class Chart:
         _, loop, prefix, n_suffix, _ = found
         # (the arguments after (t0, t1, y0, p) as ``loops.entry`` gives them)
         suffix = (ctl, te, mode, watch) if n_suffix == 4 else (ctl, newton, te, mode, watch)
-        halt = np.zeros(1, dtype=np.int64)
+        halt = _HALT.copy()
         tic = time.perf_counter()
         out = interrupt.call(loop, halt, limit, (*prefix, t0, t1, y, p, *suffix, halt))
         wall = time.perf_counter() - tic
@@ -378,8 +382,8 @@ def _det(M) -> float:
 
 def measures_at(A, columns) -> list[float]:
     """m_beta = det(A_beta)^2 / det(A A^T) of the split of each entry of ``columns`` (the
-    columns of its minor) at one point (A: k x n floats, or k lists of them); all 0 where A has rank < k
-    (no split is regular).  ``Atlas.measures`` (the charts of a run) and
+    columns of its minor) at one point (A: k x n floats, or k lists of them); all 0
+    where A has rank < k (no split is regular).  ``Atlas.measures`` (the charts of a run) and
     ``regular.best`` (every choice of k coordinates) both take them from here."""
     rows = A if type(A) is list else np.asarray(A, dtype=float).tolist()
     if len(rows) == 1:          # one constraint: the same sums, without the matrices
@@ -542,14 +546,15 @@ class Atlas:
             found = self._events[key] = (self._compile_events(chart, user, edge),)
         return found[0]
 
-    def edge_kernel(self, ce) -> Kernel:
-        """``kernel(t, y, p, out)``: the compiled events ``ce`` of a run in the scene's
-        own chart (``events``, its edge last) called from Python, made once."""
+    def edge_kernel(self, ce) -> tuple[Kernel, int]:
+        """``(kernel(t, y, p, out), len(ce))``: the compiled events ``ce`` of a run in
+        the scene's own chart (``events``, its edge last) called from Python, made
+        once."""
         found = self._edges.get(id(ce))
         if found is None or found[0] is not ce:
             home = self.home
-            found = self._edges[id(ce)] = (ce, Kernel(ce.uev, (
-                len(home.state_names), len(home.runtime_params), len(ce))))
+            found = self._edges[id(ce)] = (ce, (Kernel(ce.uev, (
+                len(home.state_names), len(home.runtime_params), len(ce))), len(ce)))
         return found[1]
 
     def _compile_events(self, chart, user, edge):
@@ -593,7 +598,7 @@ def run(home, plan, y0, p, build):
         return stitch(home, at, method, p, parts, first + switches, user, plan.mode,
                       time.perf_counter() - tic)
     # the scene's own chart: the plan's loop, as a run that cannot switch calls it
-    halt = np.zeros(1, dtype=np.int64)
+    halt = _HALT.copy()
     tic_loop = time.perf_counter()
     out = interrupt.call(plan.entry, halt, plan.limit, (*plan.head, y0, p, *plan.suffix,
                                                         halt))
@@ -631,8 +636,8 @@ def own_edge(at, ce, t, y, p) -> float:
     """The edge indicator of the scene's own chart (the last of its compiled events
     ``ce``, ``Atlas.events``) at the state ``y`` (its first entries) at ``t``: negative
     past the edge."""
-    kernel = at.edge_kernel(ce)
-    out = np.empty(len(ce))
+    kernel, n = at.edge_kernel(ce)
+    out = np.empty(n)
     kernel(float(t), y, p, out)
     return float(out[-1])
 
