@@ -28,7 +28,10 @@ Columns, in this order:
 - the diagnostics over the output rows: ``status``, ``success``, ``stop_reason``,
   ``t_final``, ``steps``, ``rejected``, ``rhs_evaluations``, ``residual_max``
   (``max |f^a|``), ``energy_drift`` and ``drift[I]`` (``max |I - I(t0)|`` of each first
-  integral ``I`` of the scene), and ``events[E]``/``first[E]`` for user events.
+  integral ``I`` of the scene), and ``events[E]``/``first[E]`` for user events.  NaN in
+  ``energy_drift`` (or ``drift[I]``) of a successful row is no drift: the energy could
+  not be evaluated there (it overflows, or leaves the domain of an expression, at the
+  start); the row's other columns stay valid.
 
 A point that fails (a singular configuration, NaN, too many steps) keeps its row, with
 its ``status`` and ``stop_reason``; the sweep goes on.  Options (``rtol``, ``atol``,
@@ -223,7 +226,9 @@ def _numbers(value, what):
     complex values are refused (never parsed), as are non-finite values."""
     import numpy as np
 
-    _no_strings(list(value) if isinstance(value, (list, tuple)) else [value], what)
+    raw = list(value) if isinstance(value, (list, tuple)) else [value]
+    _no_strings(raw, what)
+    _no_booleans(raw, what)         # before numpy turns [True, 2.0] into [1.0, 2.0]
     try:
         a = np.asarray(value)
     except ValueError:                          # ragged nesting
@@ -234,7 +239,8 @@ def _numbers(value, what):
                             f"{a.shape}")
     items = a.reshape(-1).tolist() if a.dtype.kind in "OUSb" else []
     _no_strings(items, what)
-    if a.dtype.kind in "bc" or any(isinstance(v, (bool, complex)) for v in items):
+    _no_booleans(items, what)
+    if a.dtype.kind == "c" or any(isinstance(v, complex) for v in items):
         raise ArgumentError(f"{what} must be real numbers, got {value!r}")
     try:
         a = np.asarray(a, dtype=float).reshape(-1)
@@ -244,6 +250,15 @@ def _numbers(value, what):
         raise ArgumentError(f"{what} has non-finite values ({a[~np.isfinite(a)][0]}); give "
                             "finite numbers")
     return a
+
+
+def _no_booleans(items, what):
+    """Booleans refused as numbers, with the error of ``Scene`` and ``linearize``."""
+    import numpy as np
+
+    flags = [v for v in items if isinstance(v, (bool, np.bool_))]
+    if flags:
+        raise ArgumentError(f"{what} must be a number, got {bool(flags[0])!r}")
 
 
 def _no_strings(items, what):

@@ -846,9 +846,10 @@ def test_help_shows_the_step_budget(capsys):
 
 
 def test_connect_reports_legendre_and_plots_atomically(capsys, tmp_path, monkeypatch):
-    """connect prints Legendre's margin (Heisenberg: 1 / (1 + max r^2), r^2 = x^2 + y^2 at
-    the end (1, 0.5): 4/9) and records it in JSON; --plot replaces its file whole or not
-    at all: a failure while writing leaves the previous file and no temporary one."""
+    """connect prints Legendre's margin (Heisenberg: the Hessian of L on the independent
+    velocities xdot, ydot is the identity (L has no zdot), so 1) and records it in JSON;
+    --plot replaces its file whole or not at all: a failure while writing leaves the
+    previous file and no temporary one."""
     from matplotlib.figure import Figure
 
     target = tmp_path / "g.png"
@@ -856,9 +857,9 @@ def test_connect_reports_legendre_and_plots_atomically(capsys, tmp_path, monkeyp
             "x=1,y=0.5,z=0.2", "--t-end", "1"]
     code, out, err = inproc(capsys, *args, "--format", "json")
     data = json.loads(out)
-    assert code == 0 and data["legendre"] == pytest.approx(4 / 9, rel=1e-6)
+    assert code == 0 and data["legendre"] == pytest.approx(1.0, abs=1e-12)
     code, out, err = inproc(capsys, *args)
-    assert code == 0 and "legendre:  0.444444 (" in out
+    assert code == 0 and "legendre:  1 (" in out
     assert ": positive definite all along)" in out
     chetaev = ["connect", "heisenberg", "-q", "-p", "chetaev", "--to", "x=1,y=0.5",
                "--t-end", "1"]

@@ -6,13 +6,16 @@
 - ``verdicts.jacobi_measure`` (compiled over the rows) against its formula in numpy:
   QR of the fields, the subspace and column scalings, with and without frames.
 - ``verdicts._gramian_sum`` against the RK4 propagators multiplied by numpy and
-  Simpson's sum; ``verdicts._least_split_measure`` against ``atlas.split_measure_of``.
+  Simpson's sum; ``verdicts._least_chart_measure`` against the permutations
+  enumerated, unchanged by the units of rows and columns.
 - The verdicts kernel (``codegen.verdicts``: L, df/dq, df/dqdot, dphi/dq, dphi/du) at
   states of a motion against the same derivatives evaluated on the expression graph
   (``dag.evaluate_numpy``).
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 import pytest
@@ -79,22 +82,39 @@ def _jacobi_measure_numpy(X, nq, scale=None, frames=None):
     return np.where(np.abs(d_sub) >= np.abs(d_col), d_sub, d_col), s
 
 
-@given(SEEDS, st.integers(1, 3), st.integers(0, 3), st.integers(1, 9), st.booleans())
-def test_least_split_measure_matches_atlas(seed, k, extra, rows, deficient):
-    """``verdicts._least_split_measure`` (compiled, ``small.det``) against the least of
-    ``atlas.split_measure_of`` (numpy's determinants), rank-deficient rows included;
-    and ``small.max_abs`` against numpy."""
-    from jetnh.numeric.atlas import split_measure_of
+def _chart_measure_numpy(F, cols):
+    """``verdicts._least_chart_measure``'s formula: the least |det| over the largest
+    |product| over every permutation (enumerated by ``itertools``) and row."""
+    import itertools
 
+    B = F[:, :, cols]
+    k = B.shape[1]
+    top = max(np.prod(np.abs(B[:, np.arange(k), list(p)]), axis=1).max()
+              for p in itertools.permutations(range(k)))
+    return np.abs(np.linalg.det(B)).min() / top if top > 0 else 0.0
+
+
+@given(SEEDS, st.integers(1, 4), st.integers(0, 3), st.integers(1, 9), st.booleans())
+def test_least_chart_measure_matches_permutations_and_ignores_units(seed, k, extra, rows,
+                                                                     deficient):
+    """``verdicts._least_chart_measure`` (compiled: dynamic programming over column sets,
+    ``small.det``) against the permutations enumerated and numpy's determinants,
+    rank-deficient rows included; the same after scaling rows (the constraints' units)
+    and columns (the coordinates' units) by powers of ten up to 1e8; and
+    ``small.max_abs`` against numpy."""
     n = k + extra
     rng = np.random.default_rng(seed)
     F = rng.standard_normal((rows, k, n)) * 10.0 ** rng.integers(-2, 2, size=(rows, 1, n))
     if deficient and k > 1:
         F[rows // 2, -1] = 3.0 * F[rows // 2, 0]
     cols = np.sort(rng.choice(n, size=k, replace=False)).astype(np.int64)
-    want = float(split_measure_of(F, list(cols)).min())
+    want = float(_chart_measure_numpy(F, cols))
     got = verdicts._compiled("edge")(F, cols)
     assert abs(got - want) <= 1e-9 * max(1.0, want)
+    assert 0.0 <= got <= math.factorial(k)             # |det| <= k! times the largest term
+    scaled = (F * 10.0 ** rng.integers(-8, 9, size=(1, k, 1))
+              * 10.0 ** rng.integers(-8, 9, size=(1, 1, n)))
+    assert abs(verdicts._compiled("edge")(scaled, cols) - got) <= 1e-9 * max(1.0, got)
     if deficient and k > 1:
         assert got < 1e-12
     M = F[0]

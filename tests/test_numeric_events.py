@@ -4,6 +4,7 @@ NaN error paths.  Kernels are compiled once per module (fixtures)."""
 import numpy as np
 import pytest
 import sympy as sp
+from hypothesis import given, settings, strategies as st
 
 import jetnh as jn
 from jetnh.mechanics.system import System
@@ -60,6 +61,22 @@ def test_ah_stops_at_zero_horizontal_speed(ah_scene, method):
         assert words in traj.stop_reason, words
     assert traj.diagnostics.singularity is sing
     assert np.all(np.isfinite(traj.y))
+
+
+@settings(max_examples=10)
+@given(st.floats(0.05, 3.0), st.floats(0.0, 2 * np.pi), st.floats(1.01, 5.0))
+def test_ah_stop_wherever_the_reversal_falls(ah_scene, v0, angle, span):
+    """The speed's zero (a touch of x_t^2 + y_t^2) at random places of the steps (its
+    time and the run's span vary): every adaptive method stops at the threshold time."""
+    scene = ah_scene.replace(initial=dict(x=0, y=0, z=0, x_t=v0 * np.cos(angle),
+                                          y_t=v0 * np.sin(angle)))
+    t_star, t_hit = ah_times()
+    t_star, t_hit = t_star * v0, t_hit * v0
+    scene = scene.replace(t_span=(0.0, span * t_star))
+    for method, tol in (("dop853", 1e-10), ("dopri5", 1e-7), ("radau", 1e-8)):
+        traj = scene.run(method=method, rtol=tol, atol=tol * 1e-2, save="final")
+        assert traj.status == SINGULAR, (method, traj.stop_reason)
+        assert abs(traj.t[-1] - t_hit) < 1e-9, (method, traj.t[-1] - t_hit)
 
 
 def test_ah_fixed_step_stops_before_the_kink(ah_scene):

@@ -8,7 +8,7 @@ or the path of a model file (TOML; see ``jetnh.modelfile`` and ``examples/*.toml
 Exit codes: 0 ok, 1 model or numerical error, 2 usage, 3 the kernel cache cannot be
 used (by ``jetnh cache warm``: nothing warmed; runs still work), 130 interrupted.  Errors print
 a message on stderr, never a traceback (``--debug`` shows one for errors that are
-jetnh's own bugs).
+jetnh's own bugs); warnings print ``jetnh: warning: ...`` on stderr (none with -q).
 """
 
 from __future__ import annotations
@@ -16,8 +16,9 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import warnings
 
-from ..errors import JetnhError
+from ..errors import JetnhError, JetnhWarning
 from .commands import COMMANDS
 from .loading import load_model
 from .parser import Formatter, option_name
@@ -43,8 +44,8 @@ def build_parser() -> argparse.ArgumentParser:
                "  jetnh models chaplygin_sleigh --toml > sleigh.toml")
     p.add_argument("--version", action="version", version=f"jetnh {__version__}")
     p.add_argument("-q", "--quiet", action="store_true",
-                   help="only errors on stderr: no progress or other messages (also after "
-                        "COMMAND)")
+                   help="only errors on stderr: no progress, warnings or other messages "
+                        "(also after COMMAND)")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for command in COMMANDS:
         command.add_parser(sub)
@@ -59,6 +60,27 @@ def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     progress = Progress(quiet=getattr(args, "quiet", False))
+    with warnings.catch_warnings():
+        if progress.quiet:
+            warnings.simplefilter("ignore")
+        else:
+            warnings.showwarning = _shown(progress, warnings.showwarning)
+        return _run(args, progress)
+
+
+def _shown(progress, python):
+    """``warnings.showwarning`` for the command: a JetnhWarning as the command's own
+    message (``jetnh: warning: ...``, no file, line or source), others as Python's."""
+    def show(message, category, filename, lineno, file=None, line=None):
+        if issubclass(category, JetnhWarning):
+            progress.note(f"jetnh: warning: {message}")
+        else:
+            python(message, category, filename, lineno, file, line)
+    return show
+
+
+def _run(args, progress) -> int:
+    """The command, its errors as messages and exit codes."""
     try:
         return args.func(args, progress)
     except UsageError as exc:

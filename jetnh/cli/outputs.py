@@ -12,6 +12,8 @@ previous file as it was, removes the temporary one and names the path.
 
 from __future__ import annotations
 
+import json
+import math
 import os
 import tempfile
 from pathlib import Path
@@ -104,3 +106,21 @@ def write(path, fill) -> None:
             raise JetnhError(f"cannot write {p}: {exc.strerror or type(exc).__name__}; the "
                              "previous file, if any, is unchanged") from None
         raise
+
+
+def as_json(data, **kw) -> str:
+    """``data`` as strict JSON (RFC 8259, which has no NaN or infinity): a float that is
+    not finite becomes null (a NaN energy that could not be evaluated, an undecided
+    margin); numpy numbers become Python ones."""
+    def clean(v):
+        if isinstance(v, dict):
+            return {k: clean(x) for k, x in v.items()}
+        if isinstance(v, (list, tuple)):
+            return [clean(x) for x in v]
+        if isinstance(v, float) and not math.isfinite(v):
+            return None
+        return v
+
+    def number(o):
+        return clean(float(o))
+    return json.dumps(clean(data), allow_nan=False, default=number, **kw)

@@ -3,7 +3,6 @@ budget or in full to a file, with small expressions simplified for display."""
 
 from __future__ import annotations
 
-import json
 import time
 from pathlib import Path
 
@@ -45,7 +44,7 @@ def render(args, form, header: list, data: dict, J, keys=None) -> str:
         form = SharedForm([keys.get(r, r) if isinstance(r, str) else r for r in form.rows],
                           form.where)
         data.update(form.as_dict(budget))
-        return json.dumps(data, indent=2)
+        return outputs.as_json(data, indent=2)
     if args.format == "latex":
         return form.latex(J, budget, more)
     return "\n".join(header + [form.text(budget, more)])

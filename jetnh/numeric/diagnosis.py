@@ -29,10 +29,17 @@ def timeout_reason(timeout, t) -> str:
             "raise timeout (or max_steps) to go further")
 
 
+#: how far (times 1 + max |y|) the Euler probe of ``explain_nonfinite`` moves the state
+PROBE_REACH = 1e3
+#: parameter values beyond this factor from 1 are named when the rhs overflows
+FAR_SCALE = 1e30
+
+
 def explain_nonfinite(scene, kern, t, y, p, t0, y_init, tol) -> int:
     """Index of an indicator that explains a NaN/inf in the step after (t, y): small
     there (below max(tol, 1e-3) of its initial size), or violated along an Euler
-    probe of the step, else -1."""
+    probe of the step (moving the state by at most ``PROBE_REACH`` times its size),
+    else -1 (an overflow or a domain error at a regular configuration)."""
     lay = kern.layout
     m = len(lay.indicators)
     if not m:
@@ -49,13 +56,17 @@ def explain_nonfinite(scene, kern, t, y, p, t0, y_init, tol) -> int:
     f = np.empty_like(y)
     kern.rhs(t, y, p, f)
     if not np.all(np.isfinite(f)):
-        # no indicator is small here: blame the one nearest to vanishing only if one
-        # has moved at all (at the initial state nothing has)
+        # no indicator is small here: blame the one nearest to vanishing only if it
+        # is near its singular set (below WATCH of its initial size); with every
+        # denominator regular, a NaN or infinity is an overflow or a domain error
         i = int(np.argmin(rel))
-        return i if rel[i] < 1.0 else -1
+        return i if rel[i] < WATCH else -1
     span = abs(scene.t_span[1] - scene.t_span[0]) or 1.0
+    reach = PROBE_REACH * (1.0 + np.max(np.abs(y)))
     for s in np.geomspace(1e-12, 1.0, 25):
         for hh in (s * span, -s * span):
+            if not np.max(np.abs(hh * f)) <= reach:     # no step moves the state so far:
+                return -1                               # the rhs overflows (``overflow``)
             kern.sing(t + hh, y + hh * f, p, g)
             with np.errstate(all="ignore"):
                 viol = ~np.isfinite(g) | (np.sign(g) != np.sign(g0))
@@ -77,7 +88,9 @@ def singularity(scene, kern, idx, t, y, p, t0, y_init, tol, nonfinite=False,
                 method=None) -> dict:
     """What the stop at a singular configuration was: indicator, kind, time, value,
     and a reason with the way out (``method``: the run's; an adaptive method that stops
-    before the indicator reaches its threshold could not step closer)."""
+    before the indicator reaches its threshold could not step closer).  An indicator
+    that is NaN or infinite at the start while the others are finite and nonzero is no
+    vanishing denominator: kind ``"nonfinite"``, an overflow (or a domain error)."""
     lay = kern.layout
     g0 = np.empty(len(lay.indicators))
     g = np.empty(len(lay.indicators))
@@ -94,6 +107,14 @@ def singularity(scene, kern, idx, t, y, p, t0, y_init, tol, nonfinite=False,
             idx = int(near[np.argmin(rel[near])])
     expr, kind = lay.indicators[idx], lay.indicator_kinds[idx]
     value, initial = float(g[idx]), float(g0[idx])
+    if not np.isfinite(initial) and regular_elsewhere(g0, idx):
+        reason = (f"the initial state (t = {t:.17g}): {expr} = {initial:.6g}, a NaN or "
+                  "infinity, not a zero; every other singularity indicator is finite and "
+                  "nonzero there, so no denominator is shown to vanish: an intermediate "
+                  "value overflowed (inf - inf, inf/inf) or left its domain. "
+                  + overflow_hint(far_parameters(scene, p)) + ".")
+        return {"indicator": expr, "kind": "nonfinite", "index": idx, "t": float(t),
+                "value": value, "initial": initial, "reason": reason}
     if not np.isfinite(initial) or initial == 0.0:
         where = (f"the initial state (t = {t:.17g}) is singular: {expr} = {initial:.6g}")
     elif crawled:
@@ -275,18 +296,68 @@ def regular_split(scene, t, y, p):
     return choice
 
 
+def regular_elsewhere(g0, idx) -> bool:
+    """Whether every indicator but ``idx`` is finite and nonzero (``g0``: their values)."""
+    rest = np.delete(np.asarray(g0, dtype=float), idx)
+    return bool(np.all(np.isfinite(rest) & (rest != 0.0)))
+
+
+def far_parameters(scene, p) -> list[str]:
+    """``name = value`` of the parameters (compiled, and at run time ``p``) whose size is
+    beyond ``FAR_SCALE`` from 1."""
+    values = dict(scene.params)
+    if p is not None:
+        values.update(zip(scene.runtime_params, np.asarray(p, dtype=float).tolist()))
+    far = []
+    for name, v in sorted(values.items()):
+        try:
+            a = abs(float(v))
+        except (TypeError, ValueError):
+            continue
+        if a > FAR_SCALE or 0.0 < a < 1.0 / FAR_SCALE:
+            far.append(f"{name} = {float(v):.6g}")
+    return far
+
+
+def overflow_hint(far) -> str:
+    """What to do when values overflow at a regular configuration (``far``: the
+    parameters far from unit scale, ``far_parameters``)."""
+    units = ("nondimensionalise the model (choose units in which its parameters and "
+             "states are of moderate size)")
+    if far:
+        return (f"Likely cause: parameter values far from unit scale ({', '.join(far)}), "
+                f"whose products leave the floating-point range; {units}")
+    return f"If the model's values are far from unit scale, {units}"
+
+
 def raise_nonfinite(scene, method, t, y, kern=None, p=None, t0=None, y_init=None,
                     checked=True):
     state = ", ".join(f"{n} = {v:.17g}" for n, v in zip(scene.state_names, y))
     extra = ""
+    regular = False
     if kern is not None and kern.layout.indicators:
         g = np.empty(len(kern.layout.indicators))
         kern.sing(float(t), np.ascontiguousarray(y, dtype=float), p, g)
         extra = ("; singularity indicators there: "
                  + ", ".join(f"{e} = {v:.6g}" for e, v in zip(kern.layout.indicators, g)))
+        regular = bool(np.all(np.isfinite(g) & (g != 0.0)))
+    size = ""
+    if kern is not None and checked and p is not None and np.all(np.isfinite(y)):
+        f = np.empty(len(y))
+        with np.errstate(all="ignore"):
+            kern.rhs(float(t), np.ascontiguousarray(y, dtype=float), p, f)
+        big = float(np.max(np.abs(f))) if f.size else 0.0
+        regular = regular or not kern.layout.indicators
+        far = far_parameters(scene, p)
+        if regular and (big > FAR_SCALE or (not np.isfinite(big) and far)):
+            size = (". The right-hand side there is "
+                    + (f"{big:.3g} in size" if np.isfinite(big) else "not finite")
+                    + " at a configuration where every singularity indicator is regular: "
+                    "it overflowed (or produced inf - inf = NaN), no singular "
+                    "configuration. " + overflow_hint(far))
     why = ("No singularity indicator explains it: the solution blows up, or an "
            "expression leaves its domain; check the model and the initial values, or "
-           "integrate a shorter span" if kern is not None and checked else
+           "integrate a shorter span" + size if kern is not None and checked else
            "The singularity checks were off (singular='ignore'); run with "
            "singular='stop' to stop at singular configurations" if kern is not None else
            "The equations are singular there (a vanishing denominator of the dependent "

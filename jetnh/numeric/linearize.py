@@ -1102,6 +1102,7 @@ def _jacobian(ck, y, p, t, rows, E):
             np.abs(A2 - A1).max() > 1e-3 * max(1.0, np.abs(A).max())):
         raise LinearizationError(
             "the equations are undefined at this point (a singular configuration of "
-            "the principle's equations or of the split) and have no limit there; "
-            "choose another operating point or another split (dependent=)")
+            "the principle's equations or of the split, or parameter values that make "
+            "them degenerate, e.g. a mass of 0) and have no limit there; choose another "
+            "operating point, another split (dependent=) or other parameter values")
     return A, rates, True

@@ -64,8 +64,8 @@ class Diagnostics:
                  f"  constraint residual max {self.residual_max:.3e}"
                  + (f", holonomic (position level) {self.holonomic_residual_max:.3e}"
                     if self.holonomic_residual_max else ""),
-                 f"  energy {self.energy_initial:.12g}, drift {self.energy_drift:.3e} "
-                 f"(relative {self.energy_drift_relative:.3e})"
+                 "  " + _energy_text(self.energy_initial, self.energy_drift,
+                                     self.energy_drift_relative)
                  + ("; not conserved: the generalized forces work (traj.power)"
                     if self.forced else "")]
         for k, v in self.integral_drift.items():
@@ -91,6 +91,19 @@ class Diagnostics:
 def _switch_text(s) -> str:
     """One split switch: its time and the dependent coordinates before and after."""
     return f"t = {s['t']:.6g} ({', '.join(s['from'])} -> {', '.join(s['to'])})"
+
+
+def _energy_text(initial, drift, relative) -> str:
+    """The energy line of a run's diagnostics: its initial value and drift, or that the
+    energy could not be evaluated (it overflows, or leaves the domain of an expression:
+    a NaN or an infinity there is no drift of the motion)."""
+    if not np.isfinite(initial):
+        return (f"energy not evaluated: it is {initial} at the start (an overflow, or an "
+                "expression outside its domain), so its drift is unknown")
+    if not np.isfinite(drift):
+        return (f"energy {initial:.12g}, drift not evaluated: the energy became NaN or "
+                "infinite on the way (an overflow, or an expression outside its domain)")
+    return f"energy {initial:.12g}, drift {drift:.3e} (relative {relative:.3e})"
 
 
 def _switches_text(switches) -> str:

@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
-import json
+import sys
 
+from ...errors import JetnhError
 from .. import outputs
 from ..declared import declared
 from ..loading import load_model, with_split
@@ -52,7 +53,9 @@ def add_parser(sub):
                    help="also connect under PRINCIPLE to the configuration the first "
                         "motion reached (every coordinate, when PRINCIPLE's unknowns "
                         "allow it; else --to), and print the two side by side: cost, "
-                        "residual, verdicts, initial velocities and multipliers")
+                        "residual, verdicts, initial velocities and multipliers.  If "
+                        "PRINCIPLE cannot connect, the first motion is printed and "
+                        "PRINCIPLE's error goes to stderr (exit code 1)")
     s.add_argument("--segments", type=int, metavar="K",
                    help="multiple shooting on K segments of the span (default: chosen "
                         "from the growth of the guess's sensitivities; 1: single "
@@ -118,20 +121,26 @@ def run(args, progress) -> int:
                        "(kernels compiled once, then cached)"):
         c = connect(system, principle, start, end, (t0, float(t1)), params=params,
                     guess=guess, **kw)
-    found = [c]
+    found, failed = [c], None
     if args.compare:
         other = args.compare
         reached = {n: float(c.trajectory[n][-1]) for n in coords}
         full = other in VARIATIONAL
-        with progress.step(f"connecting under {other} to the configuration reached"):
-            found.append(connect(system, other, start, reached if full else end,
-                                 (t0, float(t1)), params=params, **kw))
+        try:
+            with progress.step(f"connecting under {other} to the configuration reached"):
+                found.append(connect(system, other, start, reached if full else end,
+                                     (t0, float(t1)), params=params, **kw))
+        except JetnhError as exc:       # the first motion stands: print it, then the error
+            failed = f"--compare {other}: {exc}"
     if args.format == "json":
         rows = [_record(x) for x in found]
-        print(json.dumps({"model": loaded.label, "start": start, "zero_start": zeros,
+        compared = ({"compared": rows[1]} if len(rows) > 1 else
+                    {"compared": {"principle": args.compare, "error": failed}} if failed
+                    else {})
+        print(outputs.as_json({"model": loaded.label, "start": start, "zero_start": zeros,
                           "model_start": from_model,
                           "end": end, "t_span": [t0, float(t1)], **rows[0],
-                          **({"compared": rows[1]} if len(rows) > 1 else {})}, indent=2))
+                          **compared}, indent=2))
     else:
         print(f"{system.name or loaded.label}: t in [{t0:g}, {float(t1):g}]")
         print("from:      " + ", ".join(f"{k} = {v:.10g}" for k, v in start.items()))
@@ -142,6 +151,8 @@ def run(args, progress) -> int:
             print(f"           (not given, set to 0: {', '.join(zeros)})")
         for x in found:
             _print(x, end)
+        if failed:
+            print(f"-- {args.compare}\nnot connected (the error is on stderr)")
         if len(found) > 1:
             a, b = found
             print(f"{b.principle} against {a.principle}: cost {b.cost:.12g} against "
@@ -150,6 +161,10 @@ def run(args, progress) -> int:
     if args.plot:
         with progress.step(f"plotting to {args.plot}"):
             _plot(found, coords, args.plot, system.name or loaded.label)
+    if failed:
+        sys.stdout.flush()
+        print(f"jetnh: error: {failed}", file=sys.stderr)
+        return 1
     return 0
 
 
@@ -180,8 +195,8 @@ def _print(c, end):
                 "not positive semidefinite somewhere" if c.legendre < -LEGENDRE_ZERO else
                 "singular somewhere: zero within its resolution")
         print(f"legendre:  {c.legendre:.6g} (the Hessian of L + lambda f on the admissible "
-              f"velocities, its smallest eigenvalue over its largest at the worst time: "
-              f"{sign})")
+              f"velocities, in the independent ones scaled to a unit diagonal: its "
+              f"smallest eigenvalue at the worst time: {sign})")
     if c.minimizer is False:
         print("minimizer: no (" + ("Legendre's condition fails: L + lambda f is not "
                                    "positive on the admissible velocities"

@@ -4,7 +4,6 @@ Re lambda = 0, a stability diagram)."""
 
 from __future__ import annotations
 
-import json
 
 from ..loading import load_model, settings, with_split
 from .. import outputs
@@ -112,7 +111,7 @@ def run(args, progress) -> int:
                            "values": result.values.tolist(),
                            "steady_motion": result.steady_motion.tolist(),
                            "stable": result.stable.tolist()}
-        print(json.dumps(out, indent=2))
+        print(outputs.as_json(out, indent=2))
     else:
         print(f"{system.name or model.label}: {principle}")
         if lin.params:

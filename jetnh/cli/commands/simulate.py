@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 
@@ -120,11 +119,11 @@ def run(args, progress) -> int:
     last_state = ("t_eval" not in kw or traj.singularity is None
                   or traj.singularity["t"] == t_final)
     if args.format == "json":
-        print(json.dumps({"model": model.label, "principle": principle,
+        print(outputs.as_json({"model": model.label, "principle": principle,
                           "params": scene.params, "initial": scene.initial,
                           "final": final, "final_t": t_final, "final_is_last_state":
                           last_state, "diagnostics": d.as_dict(),
-                          "zero_initial": zeros}, indent=2, default=float))
+                          "zero_initial": zeros}, indent=2))
     else:
         print(f"{system.name or model.label}: {principle}, t in [{t0:g}, {t1:g}]")
         if scene.params:

@@ -67,13 +67,16 @@ Verdicts on the answer:
   endpoint map) loses rank.  None where nothing could be checked.
 - ``legendre``, and in ``minimizer``: Legendre's condition, the Hessian of L + lambda f
   in the velocities on the admissible ones positive along the motion; where it has a
-  negative direction the extremal is no minimizer.  The verdicts are read off the
+  negative direction the extremal is no minimizer.  Measured in the independent
+  velocities and scaled to a unit diagonal, as the Gramian of ``normal``: neither
+  depends on the units of the coordinates.  The verdicts are read off the
   returned trajectory's own dense output, never a new run.
 - ``normal``: False when the endpoint map of the constraint system (the kinematic
   control system qdot^mu = u^mu, qdot^alpha = phi^alpha(t, q, u)) loses rank along the
   path, i.e. its controllability Gramian ``W' = A W + W A^T + B B^T`` (A, B the partial
   derivatives of the constraint system along the path, compiled from the derivation:
-  ``codegen.verdicts``) is singular: the path is then an abnormal extremal (the
+  ``codegen.verdicts``; the inputs weighted by L, the whole scaled to a unit diagonal)
+  is singular: the path is then an abnormal extremal (the
   multiplier rule holds with lambda_0 = 0), which a small residual does not make
   normal.
 - ``cost``: the action ``int L dt`` along the answer, by 5-point Gauss-Legendre on every

@@ -73,7 +73,8 @@ class Connection:
     @cached_property
     def gramian_ratio(self) -> float:
         """Smallest / largest eigenvalue of the constraint system's controllability
-        Gramian along the motion (``gramian_ratio``)."""
+        Gramian along the motion, scaled to a unit diagonal (``verdicts.gramian_ratio``):
+        in [0, 1], the same in any units of the coordinates."""
         return gramian_ratio(self.trajectory, self._samples)
 
     @property
@@ -106,8 +107,9 @@ class Connection:
         """The strengthened Legendre condition along the motion
         (``verdicts.legendre_margin``): the smallest eigenvalue of the Hessian of L +
         lambda f in the velocities, restricted to the admissible ones (ker df/dqdot,
-        tangent to g = 0), over its largest magnitude, at the worst of the equal-spaced
-        times.  Positive: definite everywhere; negative: the action decreases along
+        tangent to g = 0) and written in the independent velocities, scaled to a unit
+        diagonal (the same in any units), at the worst of the equal-spaced times.
+        Positive (at most 1): definite everywhere; negative: the action decreases along
         some rapid variation (no minimizer); None for Chetaev and Suslov, and where the
         motion is in general no extremal of the action (``not_extremal`` says why)."""
         if self.principle not in VARIATIONAL or self.not_extremal:

@@ -13,8 +13,8 @@ from ..atlas import split_measure_of
 from ..methods._common import jit
 from . import small
 
-#: smallest / largest eigenvalue of the controllability Gramian below which the path is
-#: abnormal
+#: smallest / largest eigenvalue of the controllability Gramian scaled to a unit
+#: diagonal (``gramian_ratio``) below which the path is abnormal
 GRAMIAN_RCOND = 1e-9
 #: |det| of the Jacobi fields' configuration rows, scaled both ways
 #: (``jacobi_measure``), below which it has no sign (rounding level)
@@ -23,8 +23,9 @@ DET_ZERO = 1e-10
 #: ``conjugate_times`` refines them (a conjugate point where no sign changes)
 DIP = 0.05
 _GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(5)
-#: |eigenvalue| / largest |eigenvalue| of the reduced Hessian (``legendre_margin``) below
-#: which it counts as zero (no sign)
+#: |eigenvalue| of the reduced Hessian scaled to a unit diagonal (``legendre_margin``)
+#: below which it counts as zero (no sign): far above the rounding error of the
+#: eigenvalues of a matrix with entries of order one
 LEGENDRE_ZERO = 1e-9
 
 
@@ -132,22 +133,28 @@ def _block(scene, values, name, shape) -> np.ndarray:
     return values[:, _kernel(scene)[1][name]].reshape(-1, *shape)
 
 
-#: the measure det(A_alpha)^2 / det(A A^T) of the scene's split (``atlas``) below which,
-#: somewhere on the path, ``gramian_ratio`` linearizes without a split
+#: the measure det(A_alpha)^2 / det(A A^T) of the scene's split (``atlas``) below which
+#: a shooting run counts as stopped near the edge of the split
 EDGE = 1e-2
+#: the unit-free measure of the scene's split (``_least_chart_measure``) below which,
+#: somewhere on the path, the verdicts linearize without a split
+CHART_EDGE = 1e-2
 
 
-def _hessian(scene):
+def _hessian(scene, multipliers=True):
     """``(states, velocities, H)``: the symbols of ``scene``'s state, the velocities and
-    the Hessian of L + lambda_a f^a (the integrand of the composite action) in them
+    the Hessian of L + lambda_a f^a (the integrand of the composite action; of L alone
+    without ``multipliers``, and None for the multipliers' states) in them
     (``dag.diff`` on the shared graph), made once per scene."""
-    found = scene._memo.get("legendre")
+    key = "legendre" if multipliers else "kinetic"
+    found = scene._memo.get(key)
     if found is None:
         from ...algebra import dag
         from ...mechanics import principles
 
         system = scene.system
-        lam = principles.get(scene.principle).multiplier_symbols(system)
+        lam = (principles.get(scene.principle).multiplier_symbols(system)
+               if multipliers else ())
         F = system.L + sum((a * f for a, f in zip(lam, system.constraints)), 0)
         v = list(system.J.qd)
         cache: dict = {}
@@ -155,8 +162,8 @@ def _hessian(scene):
         H = [dag.diff(first[i], v[j], cache=cache) for i in range(len(v))
              for j in range(len(v))]
         by_name = {s.name: s for s in (*system.J.q, *system.independent_velocities, *lam)}
-        states = [by_name[n] for n in scene.state_names]
-        found = scene._memo["legendre"] = (states, v, H)
+        states = [by_name.get(n) for n in scene.state_names]   # None: a multiplier
+        found = scene._memo[key] = (states, v, H)
     return found
 
 
@@ -188,25 +195,18 @@ def not_extremal(scene) -> str:
             "(Legendre, Jacobi) decides nothing")
 
 
-def legendre_margin(tr, samples) -> float:
-    """The strengthened Legendre condition along ``tr``: at each of ``samples``'
-    equal-spaced times, the eigenvalues of B^T H B, H the Hessian of L + lambda_a f^a
-    in the velocities (``_hessian``) and B a basis of the admissible velocity variations
-    (ker df/dqdot, as in ``_linearized``; with holonomic constraints g = 0, also tangent
-    to g = 0).  Returns the smallest of them over the largest magnitude anywhere:
-    positive where B^T H B is positive definite all along (the action grows along
-    every rapid admissible variation), negative where it has a negative direction
-    somewhere (no local minimizer: Legendre's necessary condition fails), 0 where it
-    is singular or zero."""
+def _reduced_hessian(tr, times, ys, B, multipliers=True):
+    """``B^T H B`` at the rows ``ys`` (states) at ``times``: H the Hessian of
+    ``_hessian`` (symmetrized), ``B`` (``[rows, n, m]``) = d qdot/du of ``_linearized``
+    or None (the identity, without constraints): ``[rows, m, m]``."""
     from ...algebra import dag
 
     scene = tr.scene
     system = scene.system
-    states, v, H = _hessian(scene)
-    times, ys = samples.grid, samples.grid_y
+    states, v, H = _hessian(scene, multipliers)
     point = {system.J.t: times,
              **{s: scene.params[s.name] for s in system.parameters},
-             **{s: ys[:, i] for i, s in enumerate(states)}}
+             **{s: ys[:, i] for i, s in enumerate(states) if s is not None}}
     dependent = system.dependent_velocities
     if dependent:
         aux = np.empty((times.size, tr.layout.n_aux))
@@ -216,19 +216,58 @@ def legendre_margin(tr, samples) -> float:
     n = len(v)
     Hv = np.stack([np.broadcast_to(np.asarray(h, dtype=float), times.shape)
                    for h in dag.evaluate_numpy(H, point)], axis=-1).reshape(-1, n, n)
-    B = _linearized(tr, times, ys)[1] if system.k else np.broadcast_to(
-        np.eye(n), (times.size, n, n))
-    if system.holonomic:       # the admissible variations tangent to g = 0 as well
-        h = len(system.holonomic)
-        G = _block(scene, _entries(scene, times, ys, tr._p), "g_q", (h, n))
-        B = B @ np.linalg.svd(G @ B)[2][:, h:, :].transpose(0, 2, 1)
-    B = np.linalg.qr(B)[0]     # orthonormal: eigenvalues on one scale all along
-    R = np.swapaxes(B, 1, 2) @ (0.5 * (Hv + np.swapaxes(Hv, 1, 2))) @ B
-    ev = np.linalg.eigvalsh(R)
-    top = float(np.abs(ev).max()) if ev.size else 0.0
-    if not np.isfinite(top):
+    Hv = 0.5 * (Hv + np.swapaxes(Hv, 1, 2))
+    return Hv if B is None else np.swapaxes(B, 1, 2) @ Hv @ B
+
+
+def legendre_margin(tr, samples) -> float:
+    """The strengthened Legendre condition along ``tr``: at each of ``samples``'
+    equal-spaced times, R = B^T H B, H the Hessian of L + lambda_a f^a in the
+    velocities (``_hessian``) and B = d qdot/du the admissible velocity variations in
+    the independent velocities u (``_linearized``: the scene's split, [I; dphi/du] up
+    to the order of the rows; an orthonormal basis of ker df/dqdot where the path comes
+    near the edge of that split).  With holonomic constraints g = 0 the constraints
+    hold D g, so B is tangent to g = 0 already.  R is scaled to a unit diagonal
+    (``unit_diagonal``), which removes the units of the independent velocities: a change
+    of any coordinate's unit scales B^T H B by a diagonal congruence and leaves the
+    scaled matrix as it is.  Returns the smallest eigenvalue of the scaled R anywhere:
+    in (0, 1] where R is positive definite all along (the action grows along every
+    rapid admissible variation; 1 where R is diagonal), negative where it has a
+    negative direction somewhere (no local minimizer: Legendre's necessary condition
+    fails; the most negative eigenvalue, -1 for a negative diagonal), 0 where it is
+    singular (up to ``LEGENDRE_ZERO``)."""
+    times, ys = samples.grid, samples.grid_y
+    B = _linearized(tr, times, ys)[1] if tr.scene.system.k else None
+    R = _reduced_hessian(tr, times, ys, B)
+    if R.shape[2] == 0:
+        return 0.0
+    if not np.all(np.isfinite(R)):
         return float("nan")
-    return float(ev[:, 0].min() / top) if top > 0 else 0.0
+    return float(np.linalg.eigvalsh(unit_diagonal(R))[:, 0].min())
+
+
+def unit_diagonal(R) -> np.ndarray:
+    """The symmetric matrices ``R`` (``[..., m, m]``) scaled to a unit diagonal in
+    magnitude, D^-1/2 R D^-1/2 with D_jj = |R_jj|: unchanged by any diagonal congruence
+    R -> S R S (a change of the units of the variables), and of the same inertia
+    (Sylvester).  Where R_jj = 0, D_jj = max_k R_jk^2 / |R_kk| over the k with R_kk != 0
+    (scaled the same way), else the largest |R_jk|, else 1 (a zero row)."""
+    R = np.asarray(R, dtype=float)
+    scale = 1.0 / np.sqrt(_diagonal_scale(R))
+    return R * scale[..., :, None] * scale[..., None, :]
+
+
+def _diagonal_scale(R) -> np.ndarray:
+    """The D of ``unit_diagonal`` (``[..., m]``): D -> S D S under R -> S R S."""
+    d = np.abs(np.diagonal(R, axis1=-2, axis2=-1)).copy()
+    zero = d == 0
+    if zero.any():
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = np.where(d[..., None, :] > 0, R**2 / d[..., None, :], 0.0)
+        d = np.where(zero, ratio.max(axis=-1), d)
+        d = np.where(d == 0, np.abs(R).max(axis=-1), d)
+        d = np.where(d == 0, 1.0, d)
+    return d
 
 
 def split_measure(scene, t, y) -> float:
@@ -253,10 +292,13 @@ def _coordinate_rows(system):
 def _linearized(tr, times, ys):
     """``(A, B)`` of the constraint system linearized along the rows ``ys``: in the
     scene's split (qdot^mu = u^mu, qdot^alpha = phi^alpha: A = d qdot/dq, B = d qdot/du)
-    where its measure stays above ``EDGE``; else without a split (near a chart edge
-    phi's derivatives blow up): from f_q dq + f_qdot dqdot = 0, A = -f_qdot^+ f_q and B
-    an orthonormal basis of ker f_qdot.  The two differ by a feedback and an input
-    transformation, which keep the rank of the Gramian.  All from the verdicts kernel
+    where its unit-free measure (``_least_chart_measure``) stays above ``CHART_EDGE``;
+    else without a split (near a chart edge phi's derivatives blow up): from f_q dq +
+    f_qdot dqdot = 0, A = -f_qdot^+ f_q and B an orthonormal basis of ker f_qdot.  The
+    two differ by a feedback and an input transformation, which keep the rank of the
+    Gramian and the inertia of the reduced Hessian.  A change of the coordinates' units
+    q -> S q turns the split's A into S A S^-1 and B into S B S_u^-1 (S_u: the
+    independent coordinates' part); the other not.  All from the verdicts kernel
     (``_entries``)."""
     scene = tr.scene
     system = scene.system
@@ -265,7 +307,7 @@ def _linearized(tr, times, ys):
     values = _entries(scene, times, ys, tr._p)
     Fq = _block(scene, values, "f_q", (k, n))
     Fv = _block(scene, values, "f_qdot", (k, n))
-    if _compiled("edge")(Fv, np.array(dep_rows, dtype=np.int64)) >= EDGE:
+    if _compiled("edge")(Fv, np.array(dep_rows, dtype=np.int64)) >= CHART_EDGE:
         A = np.zeros((times.size, n, n))
         B = np.zeros((times.size, n, m))
         B[:, input_rows, np.arange(m)] = 1.0
@@ -280,12 +322,20 @@ def gramian_ratio(tr, samples) -> float:
     """Smallest over largest eigenvalue of the controllability Gramian of the constraint
     system (qdot^mu = u^mu, qdot^alpha = phi^alpha(t, q, u)) linearized along ``tr``,
     ``W = int Phi(t1, s) B B^T Phi(t1, s)^T ds`` (``_linearized``: A = d qdot/dq, B =
-    d qdot/du from the verdicts kernel on the dense output, or without a split where the path
-    comes near the edge of the scene's; Phi(t1, s) the products of the RK4 propagators
-    of ``_Samples.GRID / 2`` equal steps from s to t1, the integral by Simpson's rule on
-    their nodes: ``_gramian_sum``, compiled).  With holonomic constraints g = 0 the motions stay on them, so W is
-    measured on the tangent space of g = 0 at q(t1) (``tangent_frames``), not in R^n.
-    Zero: the endpoint map loses rank along the path (an abnormal extremal)."""
+    d qdot/du from the verdicts kernel on the dense output, or without a split where the
+    path comes near the edge of the scene's; Phi(t1, s) the products of the RK4
+    propagators of ``_Samples.GRID / 2`` equal steps from s to t1, the integral by
+    Simpson's rule on their nodes: ``_gramian_sum``, compiled), scaled to a unit
+    diagonal (``unit_diagonal``; a coordinate that no variation moves, W_ii = 0, makes
+    it 0).  The inputs u are weighted by the Lagrangian: each column of B divided by
+    the square root of the path's mean of the diagonal of B^T (d^2 L / dqdot^2) B (in
+    the sense of ``unit_diagonal``).  So the ratio has no units: a change of the
+    coordinates' units q -> S q scales the weighted B by S (``_linearized``) and W by
+    S W S, which the unit diagonal removes.  With holonomic constraints g = 0 the motions
+    stay on them, so W is measured on g = 0 at q(t1), in the chart of all coordinates
+    but h of the split's dependent ones (``_manifold_chart``; a change of chart of
+    g = 0 keeps the rank).  Zero: the endpoint map loses rank along the path (an
+    abnormal extremal)."""
     system = tr.scene.system
     n = len(system.J.q)
     if not system.k:
@@ -294,14 +344,44 @@ def gramian_ratio(tr, samples) -> float:
     t0, t1 = float(tr.t[0]), float(tr.t[-1])
     times = samples.grid
     A, B = _linearized(tr, times, samples.grid_y)
+    # the inputs in the units L gives them: each column of B by the square root of the
+    # mean over the path of 1 / (the diagonal of B^T (d^2 L / dqdot^2) B)
+    K = _reduced_hessian(tr, times, samples.grid_y, B, multipliers=False)
+    if np.all(np.isfinite(K)):
+        B = B / np.sqrt(_diagonal_scale(K).mean(axis=0))
     h = (t1 - t0) / steps
     W = np.empty((n, n))
     _compiled("gramian")(np.ascontiguousarray(A), np.ascontiguousarray(B), h, W)
-    T1 = tangent_frames(tr, times[-1:], samples.grid_y[-1:])
-    if T1 is not None:           # the reachable directions: the tangent space of g = 0
-        W = T1[0].T @ W @ T1[0]
-    ev = np.linalg.eigvalsh(0.5 * (W + W.T))
+    if system.holonomic:         # the reachable directions: the tangent space of g = 0
+        keep = _manifold_chart(tr, times[-1], samples.grid_y[-1], np.diag(W))
+        W = W[np.ix_(keep, keep)]
+    if not np.all(np.isfinite(W)):
+        return float("nan")
+    if np.diag(W).min() <= 0:
+        return 0.0
+    ev = np.linalg.eigvalsh(unit_diagonal(0.5 * (W + W.T)))
     return float(max(ev[0], 0.0) / ev[-1]) if ev[-1] > 0 else 0.0
+
+
+def _manifold_chart(tr, t, y, w) -> list:
+    """The coordinates of a chart of g = 0 at the configuration of the state ``y``: all
+    but h of the split's dependent coordinates, those h where dg/dq on them, its
+    columns scaled by sqrt(``w``) (the Gramian's diagonal: unit-free), is best
+    conditioned (pivoted QR; all of them where the split's dependent coordinates are
+    h)."""
+    from scipy.linalg import qr
+
+    system = tr.scene.system
+    n, h = len(system.J.q), len(system.holonomic)
+    dep = _coordinate_rows(system)[0]
+    if len(dep) > h:
+        values = _entries(tr.scene, np.array([float(t)]), np.asarray(y)[None, :], tr._p)
+        G = _block(tr.scene, values, "g_q", (h, n))[0][:, dep]
+        scaled = G * np.sqrt(np.maximum(w[dep], 0.0))
+        if not np.any(scaled):
+            scaled = G
+        dep = [dep[j] for j in qr(scaled, pivoting=True, mode="r")[1][:h]]
+    return [i for i in range(n) if i not in dep]
 
 
 def tangent_frames(tr, times, ys):
@@ -470,27 +550,43 @@ def _gramian_sum(A, B, h, W):
                 W[a, b] += w * acc
 
 
-def _least_split_measure(F, cols):
-    """The least over the stack ``F`` (``[N, k, n]``) of det(F_cols)^2 / det(F F^T)
-    (``atlas.split_measure_of``; 0 where F has rank < k or the ratio is not finite), by
-    ``small.det`` (compiled: numpy's determinant of a stack of small matrices costs a
-    LAPACK call each)."""
+def _least_chart_measure(F, cols):
+    """How near the split's blocks F_cols of the stack ``F`` (``[N, k, n]``) come to
+    singular along it: the least |det F_cols| over the largest |F_1 s(1) ... F_k s(k)|
+    (s a permutation of the columns ``cols``) anywhere in the stack (0 where that is 0
+    or not finite).  A constant diagonal scaling of rows and columns (the units of the
+    constraints and of the coordinates) scales every determinant and every product
+    alike, so the measure has no units; 1 for a constant triangular block.  The largest
+    product by dynamic programming over the sets of columns taken (compiled)."""
     N, k, n = F.shape
-    G, M = np.empty((k, k)), np.empty((k, k))
-    least = np.inf
+    M = np.empty((k, k))
+    best = np.empty(1 << k)
+    least, top = np.inf, 0.0
     for i in range(N):
         for a in range(k):
             for b in range(k):
-                acc = 0.0
-                for c in range(n):
-                    acc += F[i, a, c] * F[i, b, c]
-                G[a, b] = acc
                 M[a, b] = F[i, a, cols[b]]
-        gram = small.det(G)
-        minor = small.det(M)
-        v = minor * minor / gram if gram > 0.0 else 0.0
-        least = min(least, v if math.isfinite(v) else 0.0)
-    return least
+        best[:] = 0.0
+        best[0] = 1.0
+        for mask in range(1 << k):
+            v = best[mask]
+            if v == 0.0:
+                continue
+            row = 0                       # the rows done: the columns taken
+            for b in range(k):
+                if mask & (1 << b):
+                    row += 1
+            if row == k:
+                continue
+            for b in range(k):
+                if not mask & (1 << b):
+                    w = v * abs(M[row, b])
+                    if w > best[mask | (1 << b)]:
+                        best[mask | (1 << b)] = w
+        top = max(top, best[(1 << k) - 1])
+        least = min(least, abs(small.det(M)))
+    v = least / top if top > 0.0 else 0.0
+    return v if math.isfinite(v) else 0.0
 
 
 def compiled_parts():
@@ -505,7 +601,7 @@ def compiled_parts():
 @functools.cache
 def _compiled(name):
     """The compiled ``_jacobi_rows`` ("measures"), ``_gramian_sum`` ("gramian") or
-    ``_least_split_measure`` ("edge"): compiled, or loaded from the signed store, on
+    ``_least_chart_measure`` ("edge"): compiled, or loaded from the signed store, on
     first use."""
     from numba import types
 
@@ -517,7 +613,7 @@ def _compiled(name):
         "measures": (_jacobi_rows, types.void(a3, types.int64, a1, types.boolean, a3,
                                               types.boolean, a1, a1)),
         "gramian": (_gramian_sum, types.void(a3, a3, types.float64, a2)),
-        "edge": (_least_split_measure, types.float64(
+        "edge": (_least_chart_measure, types.float64(
             types.Array(types.float64, 3, "A", readonly=True),
             types.Array(types.int64, 1, "C")))}[name]
     stamp = loop_cache.file_stamp(__file__) + loop_cache.file_stamp(small.__file__)

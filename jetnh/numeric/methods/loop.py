@@ -65,7 +65,7 @@ from ._common import (
 from . import projection
 from .sums import DOP853, EMBEDDED, NONE, functions as sums  # noqa: F401 (the codes)
 from ._events import (CRAWL, any_user_active, dense_eval, hermite_defect, locate,
-                      most_watched, sing_crawl, sing_dip, sing_init, sing_violated,
+                      most_watched, crossed, near, sing_crawl, sing_dip, sing_init,
                       sing_watch)
 
 #: dense outputs (see the module docstring; the error estimators: ``sums``)
@@ -202,12 +202,15 @@ def stiff_ratio(h, y_new, y_last, f_new, f_last):
 
 @inline
 def workspace(n_sing, n_user):
-    """The arrays of the singularity indicators and the user events (``after_step``)."""
-    m = max(n_sing, 1)
+    """The arrays of the singularity indicators and the user events (``after_step``),
+    rows of three allocations: ``(gs, gs_old, gref, sig, eps)`` of the indicators (their
+    values at the step's end and start, initial sizes, signs, thresholds), ``(gu_old,
+    gu_new, gtmp, roots)`` and ``(counts, which)`` of the user events."""
+    G = np.empty((5, max(n_sing, 1)))
     u = max(n_user, 1)
-    return (np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(u),
-            np.empty(u), np.empty(u), np.zeros(u, dtype=np.int64), np.empty(u),
-            np.empty(u, dtype=np.int64))
+    U = np.empty((4, u))
+    C = np.zeros((2, u), dtype=np.int64)
+    return G[0], G[1], G[2], G[3], G[4], U[0], U[1], U[2], C[0], U[3], C[1]
 
 
 @inline
@@ -273,63 +276,54 @@ def finite_status(status, ys, n_out, y, n_sens):
 
 @jit
 def after_step(tab, fixed, rhs, sing, uev, p, t, h, t_new, y, y_new, K, F, ytmp, fmid, y_stop,
-               stats, watch, ws, sing_index, ev_t, ev_i, ev_y, n_ev):
+               stats, watch, ws, si, sing_index, ev_t, ev_i, ev_y, n_ev):
     """Singularity indicators and user events in the accepted step from (t, y) to
-    (t_new, y_new) (``_events``).  Returns ``(stop, t_stop, sing_index, have_dense, ev_t,
-    ev_i, ev_y, n_ev)``: stop is 0 (go on), EVENT or SINGULAR, with the stop state in
-    ``y_stop``; ``have_dense``: the rows F of the step's interpolant are filled."""
+    (t_new, y_new) that ``_events.watch_end`` found needing more than their values at the
+    ends (``si``: the index of an indicator violated at the end, or -1): the search
+    inside the step (``_events.sing_dip``) and the location of stops and events
+    (``_events.locate``).  Returns ``(stop, t_stop, sing_index, have_dense, ev_t, ev_i,
+    ev_y, n_ev)``: stop is 0 (go on), EVENT or SINGULAR, with the stop state in
+    ``y_stop``; ``have_dense``: the rows F of the step's interpolant are filled.  The
+    caller moves the end's values to the next step's start (``_events.watch_next``)."""
     n_sing, sing_tol, ev_dir, ev_max = watch
     gs, gs_old, gref, sig, eps, gu_old, gu_new, gtmp, counts, roots, which = ws
     ns = tab[6][0]
-    n_user = ev_dir.shape[0]
     have_dense = False
     stop = 0
     t_stop = t_new
-    if n_sing > 0 or n_user > 0:
-        si = -1
-        theta_hi = 1.0
-        active = False
-        if n_sing > 0:
-            si = sing_violated(sing, n_sing, t_new, y_new, p, gs, sig, eps)
-            if si < 0 and sing_watch(n_sing, gs_old, gs, sig, gref):
-                if fixed:
-                    rhs(t_new, y_new, p, K[ns])
-                    stats[2] += 1
-                stats[2] += _dense_rows(tab, rhs, t, h, y, y_new, K, F, ytmp, p)
-                have_dense = True
-                theta_hi = sing_dip(sing, n_sing, t, h, y, F, p, gs_old, sig, eps, gref, ytmp)
-                if theta_hi > 0.0:
-                    si = 0
-                elif fixed:
-                    stats[2] += 1
-                    if hermite_defect(rhs, t, h, y, F, p, ytmp, fmid) > KINK:
-                        # the step straddles a kink next to a watched indicator: stop at
-                        # its start (theta_hi below the resolution of t)
-                        si = most_watched(n_sing, gs, sig, gref)
-                        theta_hi = 1e-300
-                    else:
-                        theta_hi = 1.0
-                else:
-                    theta_hi = 1.0
-            copy_into(gs_old, gs)
-            active = si >= 0
-        if n_user > 0:
-            uev(t_new, y_new, p, gu_new)
-            if any_user_active(gu_old, gu_new, ev_dir):
-                active = True
-        if active:
-            if not have_dense:
-                if fixed:
-                    rhs(t_new, y_new, p, K[ns])
-                    stats[2] += 1
-                stats[2] += _dense_rows(tab, rhs, t, h, y, y_new, K, F, ytmp, p)
-                have_dense = True
-            stop, t_stop, sing_index, ev_t, ev_i, ev_y, n_ev = locate(
-                sing, uev, n_sing, si, theta_hi, t, h, y, F, p, gs, sig, eps, gu_old,
-                gu_new, ev_dir, ev_max, counts, ytmp, gtmp, roots, which, ev_t, ev_i, ev_y,
-                n_ev, y_stop)
-        for i in range(n_user):
-            gu_old[i] = gu_new[i]
+    theta_hi = 1.0
+    if n_sing > 0 and si < 0 and sing_watch(n_sing, gs_old, gs, sig, gref):
+        if fixed:
+            rhs(t_new, y_new, p, K[ns])
+            stats[2] += 1
+        stats[2] += _dense_rows(tab, rhs, t, h, y, y_new, K, F, ytmp, p)
+        have_dense = True
+        theta_hi = sing_dip(sing, n_sing, t, h, y, F, p, gs_old, gs, sig, eps, gref,
+                            ytmp)
+        if theta_hi > 0.0:
+            si = 0
+        elif fixed:
+            stats[2] += 1
+            if hermite_defect(rhs, t, h, y, F, p, ytmp, fmid) > KINK:
+                # the step straddles a kink next to a watched indicator: stop at its
+                # start (theta_hi below the resolution of t)
+                si = most_watched(n_sing, gs, sig, gref)
+                theta_hi = 1e-300
+            else:
+                theta_hi = 1.0
+        else:
+            theta_hi = 1.0
+    if si >= 0 or any_user_active(gu_old, gu_new, ev_dir):
+        if not have_dense:
+            if fixed:
+                rhs(t_new, y_new, p, K[ns])
+                stats[2] += 1
+            stats[2] += _dense_rows(tab, rhs, t, h, y, y_new, K, F, ytmp, p)
+            have_dense = True
+        stop, t_stop, sing_index, ev_t, ev_i, ev_y, n_ev = locate(
+            sing, uev, n_sing, si, theta_hi, t, h, y, F, p, gs, sig, eps, gu_old,
+            gu_new, ev_dir, ev_max, counts, ytmp, gtmp, roots, which, ev_t, ev_i, ev_y,
+            n_ev, y_stop)
     return stop, t_stop, sing_index, have_dense, ev_t, ev_i, ev_y, n_ev
 
 
@@ -416,6 +410,9 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
     if WATCH:
         ev_t, ev_i, ev_y, n_ev = no_events(n)
         ws, sing_index = watch_start(sing, uev, watch, t, y, p)
+        n_sing, ev_dir = watch.n_sing, watch.ev_dir
+        n_user = ev_dir.shape[0]
+        gs, gs_old, gref, sig, eps, gu_old, gu_new = ws[:7]
         if sing_index >= 0:
             if ADAPTIVE:
                 ts, ys, n_out = store(ts, ys, n_out, t, y)
@@ -441,8 +438,6 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
     stiff = False
     crawl_run = 0           # crawling steps in a row (``_events.sing_crawl``) ...
     h_watch = 0.0           # ... and the longest step since an indicator is watched
-    if WATCH and ADAPTIVE:
-        g_prev = ws[0].copy()
     while (direction * (t_end - t) > 0.0) if ADAPTIVE else (step < n_steps):
         if ADAPTIVE and stats[0] >= max_steps:
             status = MAX_STEPS
@@ -525,12 +520,36 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
         t_stop = t_new
         have_dense = False
         if WATCH:
-            stop, t_stop, sing_index, have_dense, ev_t, ev_i, ev_y, n_ev = after_step(
-                tab, not ADAPTIVE, rhs, sing, uev, p, t, h, t_new, y, y_new, K, F, ytmp, fmid,
-                y_stop, stats, watch, ws, sing_index, ev_t, ev_i, ev_y, n_ev)
-            if ADAPTIVE and stop == 0 and watch.n_sing > 0:
-                watched, crawling = sing_crawl(watch.n_sing, g_prev, ws[0], ws[3], ws[2])
-                copy_into(g_prev, ws[0])
+            # (written out here: a helper's array arguments cost a reference-count pair
+            # each a step, more than the indicators themselves: ``_events.watch_end``)
+            si = np.int64(-1)   # (not the literal -1: after_step is compiled once)
+            more = False
+            if n_sing > 0:
+                sing(t_new, y_new, p, gs)
+                for i in range(n_sing):
+                    if si < 0 and not (sig[i] * gs[i] > eps[i]):      # also NaN
+                        si = i
+                    if near(sig[i], gs_old[i], gs[i], gref[i]):
+                        more = True
+                more = more or si >= 0
+            if n_user > 0:
+                uev(t_new, y_new, p, gu_new)
+                for i in range(n_user):
+                    if crossed(gu_old[i], gu_new[i], ev_dir[i]):
+                        more = True
+            watched = False
+            crawling = -1
+            if more:
+                if ADAPTIVE and n_sing > 0:
+                    watched, crawling = sing_crawl(n_sing, gs_old, gs, sig, gref)
+                stop, t_stop, sing_index, have_dense, ev_t, ev_i, ev_y, n_ev = after_step(
+                    tab, not ADAPTIVE, rhs, sing, uev, p, t, h, t_new, y, y_new, K, F, ytmp,
+                    fmid, y_stop, stats, watch, ws, si, sing_index, ev_t, ev_i, ev_y, n_ev)
+            for i in range(n_sing):
+                gs_old[i] = gs[i]
+            for i in range(n_user):
+                gu_old[i] = gu_new[i]
+            if ADAPTIVE and stop == 0 and n_sing > 0:
                 if watched:
                     h_watch = max(h_watch, abs(h))
                     if crawling >= 0 and abs(h) < CRAWL * h_watch:

@@ -40,7 +40,7 @@ from ._common import (
     ENDPOINTS, ENSEMBLE_OUT, EVERY_STEP, FINISHED, MAX_STEPS, NONFINITE,
     SINGULAR, STOPPED, TOO_SMALL_STEP, all_finite, callback_at, collect, compiled,
     copy_into, f8, function_at, i8, jit, min_step, start, store, take_next)
-from ._events import dense_eval
+from ._events import dense_eval, watch_end, watch_next
 from . import projection
 from .loop import (ALL, CONTROL, EMBEDDED, GIVEN, WATCHED, after_step, counts,
                    finite_status, no_events, output, outputs, watch_start)
@@ -308,6 +308,8 @@ def _solve(rhs_at, jac_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, newto
     sing_index = -1
     if WATCH:
         ws, sing_index = watch_start(sing, uev, watch, t, y, p)
+        n_sing, ev_dir = watch.n_sing, watch.ev_dir
+        gs, gs_old, gref, sig, eps, gu_old, gu_new = ws[:7]
         if sing_index >= 0:
             ts, ys, n_out = store(ts, ys, n_out, t, y)
             return (SINGULAR, ts, ys, n_out, counts(stats), t, y, ev_t, ev_i, ev_y, n_ev,
@@ -420,9 +422,13 @@ def _solve(rhs_at, jac_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, newto
         stop = 0
         t_stop = t_new
         if WATCH:
-            stop, t_stop, sing_index, have_dense, ev_t, ev_i, ev_y, n_ev = after_step(
-                TAB, False, rhs, sing, uev, p, t, h, t_new, y, y_new, K, F, ytmp, fmid,
-                y_stop, stats, watch, ws, sing_index, ev_t, ev_i, ev_y, n_ev)
+            si, more = watch_end(sing, uev, n_sing, t_new, y_new, p, gs, gs_old, sig, eps,
+                                 gref, gu_old, gu_new, ev_dir)
+            if more:
+                stop, t_stop, sing_index, have_dense, ev_t, ev_i, ev_y, n_ev = after_step(
+                    TAB, False, rhs, sing, uev, p, t, h, t_new, y, y_new, K, F, ytmp, fmid,
+                    y_stop, stats, watch, ws, si, sing_index, ev_t, ev_i, ev_y, n_ev)
+            watch_next(n_sing, gs, gs_old, gu_old, gu_new)
         if WATCH or DENSE:
             ts, ys, n_out, j_eval = output(TAB, False, rhs, p, t, h, t_new, y, y_new, K, F,
                                            ytmp, y_stop, stop, t_stop, True, stats, mode,

@@ -1,0 +1,199 @@
+"""What watching the singularity indicators costs a short run: ``scene.run`` with the
+indicators watched (the default) against the same run with ``singular="ignore"``, on the
+work-precision panels, this tree against another checkout.
+
+    .venv/bin/python benchmarks/watch_cost.py [--quick] [--vs PATH] [--rounds N] [--out PATH]
+
+(default output: benchmarks/results/watch_cost.json; ``--vs`` a git worktree of the
+baseline, e.g. ``git worktree add --detach /tmp/watch-before 299079e``).  Scenes:
+``workprecision.scene_of`` of its Chetaev cases (``--quick``: nonholonomic_particle,
+knife_edge, chaplygin_sleigh), run as the work-precision benchmark runs them:
+``scene.run(method="dop853", save="final", rtol=1e-8, atol=1e-11, split="fixed")``.
+
+Each measurement runs in a fresh interpreter (``--worker``) with ``PYTHONPATH`` set to its
+tree; the trees' workers run in turn, A B A B ... (``--rounds`` rounds).  A worker calls
+the two runs of a panel alternately, warm, ``calls`` times each, and reports the 10th
+percentile of the single calls' wall times (``perf_counter``) and of their CPU times
+(``thread_time``: on a loaded machine the wall time counts the waits for a core), and
+the same for the compiled loop called directly (``plan.entry``: the run without its
+Python side).  Besides, runs whose last steps are searched inside for a dip of an
+indicator (``_events.sing_dip``): Appell-Hamel's speed decays to a zero that
+x_t^2 + y_t^2 only touches; dop853, dopri5, rk4 (400 steps) and radau stop at its
+threshold (CPU time, 10th percentile; the stop times of both trees must be equal).  The figure per tree is the best over the rounds; ``watch`` = watched -
+ignored, the extra cost of the watch; both trees' runs must end on the same state bit
+for bit (the watch changes no step).  Machine, date, load average (also before and after
+each round), commit and command in the JSON (``_common.write``).
+"""
+
+import json
+import os
+import sys
+import time
+
+import numpy as np
+
+from _common import ROOT, parser, run_worker, write
+
+PANELS = ("nonholonomic_particle", "knife_edge", "chaplygin_sleigh", "isokinetic_particle",
+          "n_trailer", "rolling_disk")
+QUICK = PANELS[:3]
+RUN = dict(method="dop853", save="final", rtol=1e-8, atol=1e-11, split="fixed")
+
+
+#: runs whose last steps are searched inside (``_events.sing_dip``): the Appell-Hamel
+#: speed decays to a zero it only touches; each method stops at its threshold
+SEARCHED = (("dop853", dict(rtol=1e-10, atol=1e-12)), ("dopri5", dict(rtol=1e-8, atol=1e-10)),
+            ("rk4", dict(n_steps=400)), ("radau", dict(rtol=1e-8, atol=1e-10)))
+
+
+def searched(calls):
+    """The Appell-Hamel runs of ``SEARCHED``: 10th percentile of their CPU times and the
+    stop."""
+    from jetnh.models import appell_hamel
+    from jetnh.numeric import Scene
+
+    scene = Scene(appell_hamel(), "chetaev", initial=dict(x=0, y=0, z=0, x_t=0.6, y_t=0.8),
+                  t_span=(0.0, 1.0))
+    out = {}
+    for method, kw in SEARCHED:
+        def run(method=method, kw=kw):
+            return scene.run(method=method, save="final", **kw)
+        traj = run()
+        cpu = []
+        for _ in range(calls):
+            c0 = time.thread_time()
+            run()
+            cpu.append(time.thread_time() - c0)
+        out[method] = {"cpu_us": float(np.percentile(cpu, 10)) * 1e6,
+                       "t_stop": float(traj.t[-1]), "status": int(traj.status)}
+    return out
+
+
+def worker(spec):
+    from workprecision import cases, scene_of
+
+    from jetnh.numeric import solve
+    from jetnh.numeric.options import options
+
+    calls = spec["calls"]
+    out = {}
+    for case in cases(False):
+        if case.principle != "chetaev" or case.model not in spec["panels"]:
+            continue
+        scene = scene_of(case)
+        runs, loops = [], []
+        for singular in ("stop", "ignore"):
+            kw = dict(RUN, singular=singular)
+            runs.append(lambda kw=kw: scene.run(**kw))
+            plan = solve.plan(scene, "dop853", save="final", opts=options(
+                rtol=RUN["rtol"], atol=RUN["atol"], split="fixed", singular=singular))
+            y0 = np.ascontiguousarray(scene.y0, dtype=float)
+            p = np.ascontiguousarray(scene.p, dtype=float)
+            halt = np.zeros(1, dtype=np.int64)
+            loops.append(lambda plan=plan, y0=y0, p=p, halt=halt: plan.entry(
+                *plan.prefix, plan.t0, plan.t1, y0, p, *plan.suffix, halt))
+        trajs = [f() for f in runs]                         # compile / warm
+        for f in loops:
+            f()
+        row = {"steps": int(loops[0]()[4][0]),
+               "final": [float(v) for v in trajs[0].y[-1]],
+               "same_final": bool(np.array_equal(trajs[0].y[-1], trajs[1].y[-1]))}
+        for label, fs in (("run", runs), ("loop", loops)):
+            wall = [[], []]
+            cpu = [[], []]
+            for _ in range(calls):
+                for k, f in enumerate(fs):
+                    c0 = time.thread_time()
+                    w0 = time.perf_counter()
+                    f()
+                    w1 = time.perf_counter()
+                    c1 = time.thread_time()
+                    wall[k].append(w1 - w0)
+                    cpu[k].append(c1 - c0)
+            for k, name in enumerate(("watched", "ignored")):
+                row[f"{label}_{name}_wall_us"] = float(np.percentile(wall[k], 10)) * 1e6
+                row[f"{label}_{name}_cpu_us"] = float(np.percentile(cpu[k], 10)) * 1e6
+        out[case.model] = row
+    out["searched"] = searched(spec["calls"])
+    print(json.dumps(out))
+
+
+def main():
+    ap = parser(__doc__, "watch_cost")
+    ap.add_argument("--vs", help="an earlier tree to measure too (a git worktree)")
+    ap.add_argument("--rounds", type=int, default=None)
+    ap.add_argument("--worker", help=argparse_hidden())
+    args = ap.parse_args()
+    if args.worker:
+        worker(json.loads(args.worker))
+        return
+    panels = QUICK if args.quick else PANELS
+    rounds = args.rounds or (2 if args.quick else 5)
+    spec = {"panels": panels, "calls": 200 if args.quick else 400}
+    trees = {"this": str(ROOT)}
+    if args.vs:
+        trees["vs"] = os.path.abspath(args.vs)
+    raw = {k: [] for k in trees}
+    loads = []
+    for r in range(rounds):
+        for name, root in trees.items():
+            load0 = os.getloadavg()[0]
+            env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+                [root, str(ROOT / "benchmarks")]))
+            res = run_worker(__file__, spec, 1800, env=env)
+            loads.append([name, r, load0, os.getloadavg()[0]])
+            raw[name].append(res)
+            if "error" in res:
+                print(name, r, res["error"])
+            print(name, r, "load", f"{load0:.2f}",
+                  {m: round(v.get("run_watched_wall_us", -1), 1) for m, v in res.items()
+                   if isinstance(v, dict) and m != "searched"}, flush=True)
+    summary = {}
+    for name, results in raw.items():
+        good = [res for res in results if "error" not in res and "timeout" not in res]
+        if not good:
+            summary[name] = results[-1]
+            continue
+        rows = {"searched": {m: dict(v, cpu_us=min(res["searched"][m]["cpu_us"]
+                                                   for res in good))
+                             for m, v in good[0]["searched"].items()}}
+        for model in good[0]:
+            if model == "searched":
+                continue
+            row = {k: min(res[model][k] for res in good)
+                   for k in good[0][model] if k.endswith("_us")}
+            row["steps"] = good[0][model]["steps"]
+            for kind in ("run", "loop"):
+                for clock in ("wall", "cpu"):
+                    row[f"{kind}_watch_{clock}_us"] = (row[f"{kind}_watched_{clock}_us"]
+                                                       - row[f"{kind}_ignored_{clock}_us"])
+            row["same_final"] = all(res[model]["same_final"] for res in good)
+            row["final"] = good[0][model]["final"]
+            rows[model] = row
+        summary[name] = rows
+    if "vs" in summary and "error" not in summary["vs"] and "error" not in summary["this"]:
+        for method, row in summary["this"]["searched"].items():
+            before = summary["vs"]["searched"][method]
+            row["same_stop"] = row["t_stop"] == before["t_stop"]
+            row["ratio_cpu_us"] = row["cpu_us"] / before["cpu_us"]
+        for model, row in summary["this"].items():
+            if model == "searched":
+                continue
+            before = summary["vs"][model]
+            row["bitwise_equal_to_vs"] = row["final"] == before["final"]
+            for key in ("run_watched_wall_us", "run_watched_cpu_us", "loop_watched_cpu_us"):
+                row[f"ratio_{key}"] = row[key] / before[key]
+    print(json.dumps(summary, indent=1))
+    write("watch_cost", {"trees": trees, "spec": spec, "rounds": rounds, "loads": loads,
+                         "summary": summary, "raw": raw}, args.out, args.quick)
+
+
+def argparse_hidden():
+    import argparse
+
+    return argparse.SUPPRESS
+
+
+if __name__ == "__main__":
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    main()
