@@ -919,15 +919,23 @@ def to_home(own, chart, t, Y, p) -> np.ndarray:
         q, qd, lam, A, _ = chart.universal(t, Y, p)
         return own.state(q, qd, lam, A)
     # the same numbers copied: every column of own's rows is a column of Y or of aux
+    if Y.shape[0] == 1:     # one row (a run's end)
+        return np.array([_home_row(own, chart, float(t[0]), Y[0], p)])
     kern = chart.kernels
-    if Y.shape[0] == 1:     # one row (a run's end): the aux kernel itself, as aux_rows calls it
-        aux = np.empty(kern.layout.n_aux)
-        kern.aux(float(t[0]), Y[0], p, aux)
-        row = Y[0].tolist() + aux.tolist()
-        return np.array([row[i] for i in chart.columns_of(own, as_list=True)])[None]
     aux = np.empty((Y.shape[0], kern.layout.n_aux))
     kern.aux_rows(np.ascontiguousarray(t, dtype=float), Y, p, aux)
     return np.concatenate((Y, aux), axis=1).take(chart.columns_of(own), axis=1)
+
+
+def _home_row(own, chart, t, y, p) -> list:
+    """One state ``y`` (C-contiguous floats) of ``chart``, whose multipliers keep their
+    values, as a row of the home chart ``own``, a list: its columns copied from ``y``
+    and the aux row (the aux kernel itself, as ``aux_rows`` calls it)."""
+    kern = chart.kernels                # (sets ``_n_aux``)
+    aux = np.empty(chart._n_aux)
+    kern.aux(t, y, p, aux)
+    row = y.tolist() + aux.tolist()
+    return [row[i] for i in chart.columns_of(own, as_list=True)]
 
 
 # ---------------------------------------------------------------------- stitched views
@@ -943,6 +951,13 @@ class Stitched:
         """``(t, y, n)``: the trajectory's output rows, each piece's rows of its loop's
         result (``_Piece.out``) mapped to the scene's chart (``to_home``)."""
         own, ts, ys = self.own, [], []
+        if not own.explicit and all(hi - lo <= 1 for lo, hi, *_ in self.pieces):
+            for lo, hi, chart, seg, a, _ in self.pieces:     # (the ends: through lists)
+                if hi > lo:
+                    ts.append(float(seg.out.ts[a]))
+                    y = seg.out.ys[a, :len(chart.scene.state_names)]
+                    ys.append(y.tolist() if chart is own else _home_row(own, chart, ts[-1], y, p))
+            return np.array(ts), np.array(ys), len(ts)
         for lo, hi, chart, seg, a, _ in self.pieces:
             out = seg.out
             t = out.ts[a:a + hi - lo]
