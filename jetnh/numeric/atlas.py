@@ -821,9 +821,10 @@ def _choose(at, chart, t, p, A, want, state_in):
 
 def stitch(home, at, method, p, parts, switches, user, mode, wall):
     """One Trajectory of ``home`` from the runs in the charts ``parts`` (``_Piece``: the
-    rows kept taken from each loop's result, the pieces' own Trajectories made only when
-    read: for user events, a stop other than the end, sensitivities, the aux rows and
-    the dense output)."""
+    rows kept taken from each loop's result and mapped home when first read,
+    ``Stitched.rows``; the pieces' own Trajectories made only when read: for user
+    events, a stop other than the end, sensitivities, the aux rows and the dense
+    output)."""
     own = at.own
     if len(parts) == 1 and not switches:
         return parts[0][1].traj
