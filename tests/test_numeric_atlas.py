@@ -389,3 +389,22 @@ def test_a_state_at_the_edge_in_each_chart(knife, knife_run):
             q, qd, lam, A, _ = chart.universal(t, Y, p)
             assert np.array_equal(atlas.to_home(at.own, chart, t, Y, p),
                                   at.own.state(q, qd, lam, A))
+
+
+@pytest.mark.parametrize("method", ["dop853", "rk4"])
+def test_event_states_of_a_switching_run_are_rows(knife, method):
+    """``y_events[k]`` of a run that changed split has one row of states per occurrence,
+    as in a run that keeps its split (it was flattened to one long vector, so
+    ``y_events[k][1]`` read a coordinate of the first occurrence), equal to ``events``."""
+    t = knife.system.J.t
+    kw = dict(n_steps=3000) if method == "rk4" else TOL
+    tr = knife.run(method=method, events=[sp.sin(3 * t)], **kw)
+    assert len(tr.switches) >= 2
+    ye, te = tr.y_events[0], tr.t_events[0]
+    assert ye.shape == (te.shape[0], len(knife.state_names)) and te.shape[0] >= 5
+    for i, name in enumerate(knife.state_names):
+        assert np.array_equal(ye[:, i], tr.events["sin(3*t)"][name])
+    # each row is the state at its time: the trajectory's dense output there
+    at = tr.at(te[1:3])
+    for i, name in enumerate(knife.state_names):
+        assert ye[1:3, i] == pytest.approx(at[name], abs=1e-6)

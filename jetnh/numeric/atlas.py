@@ -848,7 +848,7 @@ def stitch(home, at, method, p, parts, switches, user, mode, wall):
         t_ev.append(np.concatenate([seg.t_events[i] for _, seg, _ in parts]))
         y_ev.append(np.concatenate([
             to_home(own, chart, seg.t_events[i], seg.y_events[i].reshape(
-                -1, len(chart.scene.state_names)), p).ravel()
+                -1, len(chart.scene.state_names)), p)
             for chart, seg, _ in parts]))
     steps = rejected = nfev = 0
     for _, seg, _ in parts:

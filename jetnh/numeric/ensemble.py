@@ -394,11 +394,22 @@ class Ensemble(Frozen):
             return self.aux[:, :, 2 * k + 1 + lay.integrals.index(name)]
         raise JetnhError(f"{name!r} is not in this ensemble; it has {', '.join(self.names)}")
 
+    @memo
+    def _followers(self) -> frozenset:
+        """The coordinates that follow from the holonomic constraints at the first
+        run's start (``initial.followers``)."""
+        if not self.scene.system.holonomic or not len(self.initial):
+            return frozenset()
+        from .initial import followers
+
+        return followers(self.scene, self.scene.t_span[0], self.initial[0], self.params[0])
+
     def sensitivity(self, of, to) -> np.ndarray:
         """``d of(t) / d to`` over the runs and output times (``[n_runs, n_times]``,
         read-only): ``of`` a state, ``to`` an initial value of a state or a runtime
-        parameter (``Trajectory.sensitivity``; an ensemble run with
-        ``sensitivities=True``)."""
+        parameter (``Trajectory.sensitivity``, along the holonomic constraints as
+        there: a coordinate that follows from them at the first run's start is refused;
+        an ensemble run with ``sensitivities=True``)."""
         if not self.sensitivity_columns:
             raise JetnhError("this ensemble carries no sensitivities; run it with "
                              "sensitivities=True")
@@ -410,6 +421,10 @@ class Ensemble(Frozen):
             raise JetnhError(f"sensitivity to {b!r}: not an initial value of a state or a "
                              f"runtime parameter; choose one of "
                              f"{', '.join(self.sensitivity_columns)}")
+        if self._followers:
+            from .initial import check_column
+
+            check_column(self.scene, b, self._followers)
         return self.sensitivities[:, :, self.layout.states.index(a),
                                   self.sensitivity_columns.index(b)]
 
@@ -626,7 +641,7 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
         _on_constraints(plan, P, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST)
     else:       # the state augmented by S = dy/d(y0, p): S apart, as in a single run
         (OUT_T, OUT_A, INFO, T_LAST, Y_A, EV_N, EV_T), wall = solve.batch(
-            scene, plan, solve.augmented(plan.sens.layout, Y0), P, parallel, workers)
+            scene, plan, solve.augmented(scene, plan, Y0, P), P, parallel, workers)
         _on_constraints(plan, P, OUT_T, OUT_A, INFO, T_LAST, Y_A)
         n = Y0.shape[1]
         OUT_Y, Y_LAST = np.ascontiguousarray(OUT_A[:, :, :n]), Y_A[:, :n].copy()
@@ -659,7 +674,7 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
             if not first:
                 continue
             if sens is not None:        # S(t0) in the chart the run starts in (atlas.run)
-                S0 = solve.augmented(plan.sens.layout, Y0[r:r + 1])[0, Y0.shape[1]:]
+                S0 = solve.augmented(scene, plan, Y0[r:r + 1], P[r])[0, Y0.shape[1]:]
                 S0 = own.carry(chart, t0, Y0[r], S0.reshape(1, Y0.shape[1], -1), P[r])
                 y = np.concatenate((y, S0.ravel()))
             parts, sw = atlas.follow(chart_atlas, method, chart, t0, y, t1, P[r], user,

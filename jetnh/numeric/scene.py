@@ -50,6 +50,7 @@ compiled explicit and Radau runs project every accepted step back onto g = 0
 
 from __future__ import annotations
 
+import functools
 import math
 import operator
 from collections.abc import Mapping
@@ -58,7 +59,7 @@ import numpy as np
 import sympy as sp
 
 from ..algebra import dag
-from ..mechanics import holonomic, principles
+from ..mechanics import energy, holonomic, principles
 from ..mechanics.system import System
 from ..errors import ConstraintError, JetnhError
 from ..geometry.jet import sympy_object
@@ -849,6 +850,13 @@ class Scene(Frozen):
         return dict(zip(kern.layout.indicators, g.tolist()))
 
     @property
+    def energy_changes(self) -> tuple[str, ...]:
+        """Why the energy of this scene's motions is not conserved by design
+        (``mechanics.energy.changes`` at these parameter values; () where it is):
+        the diagnostics' note on its drift."""
+        return _energy_changes(self.system, self.principle, tuple(self.params.items()))
+
+    @property
     def dla_kernels(self):
         """Kernels of the discrete Lagrange-d'Alembert step (``codegen.generate_dla``)."""
         return discrete.kernels(self, "chetaev")
@@ -862,6 +870,12 @@ class Scene(Frozen):
     def __repr__(self):
         return (f"Scene({self.principle}, states={list(self.state_names)}, "
                 f"t_span={self.t_span})")
+
+
+@functools.lru_cache(maxsize=64)
+def _energy_changes(system, principle, params) -> tuple[str, ...]:
+    """``mechanics.energy.changes`` (derived once per system, principle and values)."""
+    return energy.changes(system, principle, dict(params))
 
 
 #: what a scene with the same kernels (``Scene.replace``) takes over from the memo: the
