@@ -1070,9 +1070,10 @@ def _rerun(chart, seg, rerun, times, p) -> np.ndarray:
     out, _ = loops.call(chart.scene, seg.method, chart.kernels, ce, watch, t0, t1, y0, p,
                         ctl, te, AT_T_EVAL, None, None, sens)
     rows = np.empty((te.shape[0], out.ys.shape[1]))
-    if int(out.n_out) != te.shape[0] or int(out.status) == STOPPED:
+    first = 1 if ctl.n_steps > 0 else 0   # a fixed-step loop stores its start row too
+    if int(out.n_out) != first + te.shape[0] or int(out.status) == STOPPED:
         raise JetnhError("running the chart's loop again did not reach the times asked for")
-    rows[order] = out.ys[:te.shape[0]]
+    rows[order] = out.ys[first:first + te.shape[0]]
     return rows
 
 
