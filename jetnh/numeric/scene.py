@@ -565,7 +565,7 @@ class Scene(Frozen):
             (``numeric.options``), or those as keywords: the first and the largest
             adaptive step (automatic, none), the budget of steps (10^7; the fixed-step
             methods refuse more up front) and the fixed step of rk4, dla and dvi
-            (``n_steps`` or ``h``).
+            (``n_steps``, or ``h``: the step taken is span / ceil(span / h), at most h).
         singular : {"stop", "ignore"} or jetnh.numeric.options.Singular, default "stop"
             With ``singular_tol`` (or ``Singular(action, tol)``): "stop" ends the run at
             a singular configuration, where a singularity indicator of the scene
