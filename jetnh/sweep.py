@@ -106,7 +106,8 @@ def sweep(scene, grid, client=None, *, times=None, outputs=None, chunk_size=None
         None runs the grid here on all cores; a Client or a scheduler address runs it
         on a Dask cluster.
     times : array_like, optional
-        Output times: the outputs at each as ``x(t=2.5)``; default the final values.
+        Output times (any order; the columns follow the direction of integration): the
+        outputs at each as ``x(t=2.5)``; default the final values.
     outputs : list of str, optional
         The series to report; default every state, dependent velocity and first
         integral.
@@ -174,7 +175,13 @@ def sweep(scene, grid, client=None, *, times=None, outputs=None, chunk_size=None
     if times is not None:
         from .numeric import arguments
 
-        times = arguments.times(times, *scene.t_span)
+        t0, t1 = scene.t_span
+        times = arguments.real_array(times, "times")
+        if times.size and (times.min() < min(t0, t1) or times.max() > max(t0, t1)):
+            raise ArgumentError(f"times must lie within t_span = ({t0}, {t1}); they span "
+                                f"[{times.min()}, {times.max()}]")
+        # in any order: the columns are labelled; the runs take them as integrated
+        times = np.sort(times)[::1 if t1 >= t0 else -1]
         if times.size == 0:
             raise ArgumentError("times is empty; give output times, or omit it for the final "
                              "time")

@@ -70,3 +70,47 @@ def test_a_first_step_beyond_the_span_is_taken_as_the_span(method):
     tr = oscillator().run(method=method, first_step=100.0, rtol=1e-10, atol=1e-12)
     assert tr.status == 0
     assert tr["x"][-1] == pytest.approx(np.cos(10.0), abs=1e-7)
+
+
+def test_scipy_stops_at_a_charts_edge_and_says_why():
+    """knife edge: the split's chart ends at cos(phi) = 0, t = pi/2 (phi = t)."""
+    from jetnh import models
+
+    sc = jn.Scene(models.get("knife_edge"), "chetaev", initial=models.initial("knife_edge"),
+                  t_span=(0.0, 2.0))
+    own = sc.run(rtol=1e-10, atol=1e-12)
+    assert own.status == 0 and own.t_final == 2.0 and len(own.switches) == 1
+    tr = sc.run(method="scipy-DOP853", rtol=1e-10, atol=1e-12)
+    assert tr.status == jn.numeric.SINGULAR
+    assert tr.t_final == pytest.approx(np.pi / 2, abs=1e-6)
+    assert own.switches[0]["from"] == ["y"] and own.switches[0]["t"] < np.pi / 2
+    assert "scipy's methods do not change split" in tr.stop_reason
+    assert "dop853's, dopri5's, rk4's and radau's" in tr.stop_reason
+
+
+def test_messages_say_what_works():
+    sc = oscillator()
+    with pytest.raises(jn.JetnhError, match="radau's dense output .* is not kept"):
+        sc.run(method="radau").at([1.5])
+    rk4 = sc.run(method="rk4", n_steps=400)
+    assert rk4.at([1.5])["x"].iloc[0] == pytest.approx(np.cos(1.5), abs=1e-8)
+    with pytest.raises(jn.JetnhError, match=r"takes no t_eval: .*traj.at\(times\)"):
+        sc.run(method="rk4", n_steps=10, t_eval=[1.0])
+    with pytest.raises(jn.JetnhError, match=r"initial= takes every state, in Scene.replace"):
+        sc.replace(initial={"x": 2.0})
+    c = sp.Symbol("c")
+    stiff = jn.Scene(jn.System(J, XT**2 / 2 - X**2 / 2, forces={X: -c * XT}),
+                     params={c: 1e6}, initial={X: 1.0, XT: 0.0}, t_span=(0.0, 10.0))
+    with pytest.raises(jn.JetnhError, match=r"stability bound .*method='radau'"):
+        stiff.run(method="rk4", n_steps=1000)
+
+
+def test_a_sweeps_times_in_any_order():
+    sc = oscillator((10.0, 0.0))
+    df = jn.sweep(sc, {"x": [np.cos(10.0)]}, times=[2.5, 7.5], outputs=["x"],
+                  rtol=1e-10, atol=1e-12)
+    assert list(df.columns[1:3]) == ["x(t=7.5)", "x(t=2.5)"]
+    assert df["x(t=7.5)"][0] == pytest.approx(np.cos(7.5), abs=1e-8)
+    assert df["x(t=2.5)"][0] == pytest.approx(np.cos(2.5), abs=1e-8)
+    with pytest.raises(jn.JetnhError, match="times must lie within"):
+        jn.sweep(sc, {"x": [1.0]}, times=[11.0])

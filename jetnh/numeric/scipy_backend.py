@@ -131,6 +131,10 @@ def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_st
             singularity = diagnosis.singularity(scene, kern, k - n_user, t_hit, y_hit, p, t0,
                                                 y_init, singular_tol)
             reason = singularity["reason"]
+            if singularity["kind"] == "split":
+                reason += (" scipy's methods do not change split (split='switch' is "
+                           "dop853's, dopri5's, rk4's and radau's): this run stopped at "
+                           "its chart's edge, as any method does with split='fixed'.")
     if ce is not None:
         y_ev = [np.array(sol.y_events[k], dtype=float).reshape(-1, n) for k in range(n_user)]
         if onto is not None:
