@@ -235,3 +235,46 @@ def test_fingerprint_sees_assumptions_sharing_and_order():
         sp.cos(x) ** 2 * sp.cos(x) ** 2 + 1)
     assert dag.fingerprint([x, y]) != dag.fingerprint([y, x])
     assert dag.fingerprint([x - y]) != dag.fingerprint([y - x])
+
+
+_ATOMS = [sp.Integer(2), sp.Integer(-1), sp.Rational(1, 3), sp.Float(0.1), sp.Float(1.0),
+          sp.S.Zero, sp.S.One, sp.pi, sp.E, sp.I, sp.sqrt(2), sp.oo, sp.zoo]
+
+
+@st.composite
+def children(draw):
+    """Children for a sum or product: parts of random expressions, numbers, and their
+    sums, products, powers and exponentials (so terms and bases repeat now and then)."""
+    J = draw(jst.jet_spaces(min_n=1, max_n=3))
+    pool = [draw(jst.jet_expressions(J, order=1, max_depth=2)) for _ in range(3)]
+    pool += [a for e in pool for a in e.args] + list(J.q) + _ATOMS
+    pick = st.sampled_from(pool)
+    out = []
+    for kind in draw(st.lists(st.sampled_from("a+*^e-"), min_size=0, max_size=6)):
+        a, b = draw(pick), draw(pick)
+        out.append({"a": lambda: a, "+": lambda: a + b, "*": lambda: a * b,
+                    "^": lambda: a ** draw(st.sampled_from([2, -1, sp.Rational(1, 2), b])),
+                    "e": lambda: sp.exp(a), "-": lambda: -a}[kind]())
+    return out
+
+
+@given(children(), st.sampled_from([sp.Add, sp.Mul]))
+def test_build_is_sympys_constructor(args, head):
+    """``build`` makes the object sympy's constructor makes, children in the same order,
+    also where it leaves the work to sympy (numbers, repeated terms, nested sums ...)."""
+    want = head(*args)
+    got = dag.build(head, args)
+    assert type(got) is type(want)
+    assert got == want
+    assert got.args == want.args
+
+
+def test_size_counts_equal_parts_once():
+    """Equal subexpressions held by distinct objects count once (the size does not depend
+    on how the graph was built); the cap stops the count."""
+    x, y = sp.symbols("x y")
+    a, b = x + y, sp.Add._from_args((x, y))
+    assert a is not b and a == b
+    e = sp.Mul._from_args((a, sp.Basic.__new__(sp.sin, b)))
+    assert len(dag.nodes(e)) == 6 and dag.size(e) == 5      # x, y, x + y, sin, the product
+    assert dag.size(e, cap=2) == 2

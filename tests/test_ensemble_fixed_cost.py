@@ -170,3 +170,39 @@ def test_a_forked_child_runs_threaded_ensembles_of_its_own(disk):
         assert os.waitstatus_to_exitcode(status) == 0
     finally:
         os.close(r)
+
+
+@pytest.mark.parametrize("options", [
+    dict(), dict(method="dopri5", rtol=1e-6), dict(max_steps=4),
+])
+def test_a_row_of_states_again_takes_its_kept_plan_and_gives_the_same_bits(disk, options):
+    """An ensemble of one row of float64 states with the same options again (its run's
+    plan from the scene's memo at once) is row 0 of the two-row ensemble's driver, bit
+    for bit, each time; other options on the same row give their own run."""
+    row = disk.y0.copy()
+    row[4] = 0.9
+    two = disk.ensemble(np.array([row, row]), parallel="serial", **options)
+    for _ in range(3):
+        _rows_equal(disk.ensemble(row[None, :], **options), two)
+    other = disk.ensemble(row[None, :], rtol=1e-4, **{k: v for k, v in options.items()
+                                                      if k != "rtol"})
+    assert other.nfev[0] != two.nfev[0] or not np.array_equal(other.y, two.y[:1])
+
+
+def test_a_row_of_states_after_a_kept_plan_is_checked_as_the_first(disk):
+    """The kept plan of an ensemble of one skips no check: a row that is not finite, of
+    the wrong size or past the split's edge, and options that are not valid, are refused
+    as on the first call (the same error and message)."""
+    row = disk.y0[None, :].copy()
+    disk.ensemble(row)
+    disk.ensemble(row)
+    for bad in (np.array([[np.nan, *row[0, 1:]]]), row[:, :3], row.astype(np.float32) * np.inf):
+        with pytest.raises(jn.JetnhError) as again:
+            disk.ensemble(bad)
+        with pytest.raises(jn.JetnhError) as first:
+            disk.replace(t_span=(0.0, 0.25)).ensemble(bad)
+        assert str(again.value) == str(first.value)
+    for bad in (dict(parallel="fork"), dict(on_error="ignore"), dict(rtol=-1.0),
+                dict(save="some")):
+        with pytest.raises(jn.JetnhError):
+            disk.ensemble(row, **bad)

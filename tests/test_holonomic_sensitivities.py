@@ -4,11 +4,10 @@ by the derivative of the projection, so that ``traj.sensitivity`` is the derivat
 the projected run.
 
 Two routes: central differences of projected runs (in the initial values that g does not
-involve, along the constraint and across it for the coordinates it does, and in a runtime
-parameter),
+involve, along the constraint for the coordinates it does, and in a runtime parameter),
 and the property that the projected sensitivities of the coordinates lie in the tangent
-space of g = 0 (G S_q = 0 after the first step), which the unprojected variational
-equations violate (there G S_q stays G(q0) for the coordinates' columns).
+space of g = 0 (G S_q = 0 from the start: S(t0) varies the configuration along g = 0 in
+the split's chart, z following th; ``numeric.initial``).
 """
 
 from __future__ import annotations
@@ -16,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from jetnh.errors import JetnhError
 from jetnh.numeric import Scene
 
 from holonomic_systems import knife_slider
@@ -59,16 +59,11 @@ def test_projected_sensitivities_against_central_differences(scene, method):
     th = base["th"]
     up, down = ({**base, "th": th + s * h, "z": A * np.sin(th + s * h)} for s in (1, -1))
     fd = (final(up) - final(down)) / (2 * h)
-    check(fd, S[:, col["th"]] + A * np.cos(th) * S[:, col["z"]], "th along g = 0")
-    if method == "rk4":
-        # off g = 0 (z alone): the first step projects the start back, and S with it.
-        # Runs accept a start off g by 1e-9 at most, so the difference is over 1e-10:
-        # coarse, and only where the steps do not depend on the start (an adaptive
-        # run's steps move with it, by the global error over 1e-10)
-        e = 1e-10
-        fd = (final({**base, "z": base["z"] + e})
-              - final({**base, "z": base["z"] - e})) / (2 * e)
-        assert np.max(np.abs(fd - S[:, col["z"]])) < 1e-4, ("z", fd, S[:, col["z"]])
+    check(fd, S[:, col["th"]], "th along g = 0")
+    # z follows th on g = 0: no initial value of its own, its column zero and refused
+    assert not S[:, col["z"]].any()
+    with pytest.raises(JetnhError, match="differentiate by x, y, th"):
+        tr.sensitivity("x", "z")
     # the runtime parameter
     fd = (final(params={"k": 3.0 + h}) - final(params={"k": 3.0 - h})) / (2 * h)
     check(fd, S[:, col["k"]], "k")
@@ -76,16 +71,19 @@ def test_projected_sensitivities_against_central_differences(scene, method):
 
 @pytest.mark.parametrize("method", ["dop853", "rk4", "radau"])
 def test_projected_sensitivities_are_tangent(scene, method):
-    """G S_q = 0 at every output row after the first (G = dg/dq = (0, 0, -a cos th, 1)),
-    for every column, to roundoff; S(t0) is the identity."""
+    """G S_q = 0 at every output row (G = dg/dq = (0, 0, -a cos th, 1)), for every
+    column, to roundoff; S(t0) is the identity but for z's row (dz/dth = a cos th) and
+    column (zero)."""
     tr = scene.run(method=method, sensitivities=True, split="fixed", **KW[method])
     names = scene.state_names
     iq = [names.index(n) for n in ("x", "y", "th", "z")]
     S = tr.sensitivities
-    assert np.array_equal(S[0], np.eye(len(names), S.shape[2]))
+    want = np.eye(len(names), S.shape[2])
+    want[iq[3], iq[3]], want[iq[3], iq[2]] = 0.0, A * np.cos(tr["th"][0])
+    assert np.allclose(S[0], want, rtol=0.0, atol=1e-16)
     th = tr["th"]
     GS = -A * np.cos(th)[:, None] * S[:, iq[2], :] + S[:, iq[3], :]
-    assert np.max(np.abs(GS[1:])) < 1e-13 * max(1.0, np.max(np.abs(S)))
+    assert np.max(np.abs(GS)) < 1e-13 * max(1.0, np.max(np.abs(S)))
     # the state itself on g = 0 at every step
     assert np.max(np.abs(tr["z"] - A * np.sin(th))) < 1e-15
 
@@ -102,9 +100,9 @@ def scene_a():
 @pytest.mark.parametrize("method", ["dop853", "rk4"])
 def test_projected_sensitivities_in_a_parameter_of_g(scene_a, method):
     """dy/da where g = z - a sin th: central differences of projected runs, each from
-    its own start on g = 0 (z0 = a sin th0, so they measure S_a + sin(th0) S_z0), and
+    its own start on g = 0 (z0 = a sin th0, as S_a's start moves z: S_z0 is zero), and
     the derivative of g(q(t; a), a) = 0 along the run: G S_q,a = sin th at every row
-    after the first (without the projection's -G^+ dg/da term it is 0)."""
+    (without the chart's dz0/da = sin th0 and the projection's -G^+ dg/da it is 0)."""
     kw = KW[method]
     tr = scene_a.run(method=method, sensitivities=True, split="fixed", **kw)
     S = tr.sensitivities
@@ -124,5 +122,5 @@ def test_projected_sensitivities_in_a_parameter_of_g(scene_a, method):
     th = tr["th"]
     GS = -A * np.cos(th) * S[:, names.index("th"), col["a"]] + S[:, names.index("z"),
                                                                 col["a"]]
-    assert np.max(np.abs(GS[1:] - np.sin(th[1:]))) < 1e-13 * max(1.0, np.max(np.abs(S)))
+    assert np.max(np.abs(GS - np.sin(th))) < 1e-13 * max(1.0, np.max(np.abs(S)))
     assert np.max(np.abs(GS[1:])) > 0.1          # the term matters here

@@ -303,3 +303,44 @@ def test_a_call_in_another_thread_runs_unwatched_by_signals():
     thread.start()
     thread.join()
     assert got == [(2, [])]
+
+
+@given(st.floats(-3.0, 3.0), st.floats(-3.0, 3.0), st.floats(-3.0, 3.0))
+def test_replace_initial_of_float_states_equals_the_general_route(disk, phi, phi_t, psi_t):
+    """A copy's initial values from a dict of float states (the route at once) are those
+    of the general check with the same kernels (``Scene._initial``), bit for bit, and so
+    are its state array and its run."""
+    ini = {**DISK0, "phi": phi, "phi_t": phi_t, "psi_t": psi_t}
+    moved = disk.replace(initial=ini)
+    general, _ = moved._initial(ini, False, False, disk.kernels, disk._p)
+    assert dict(moved.initial) == general and list(moved.initial) == list(general)
+    assert np.array_equal(moved.y0, [general[n] for n in disk.state_names])
+    assert not moved.y0.flags.writeable
+    assert np.array_equal(moved.run(save="final").y, disk.run(y0=moved.y0, save="final").y)
+
+
+@pytest.mark.parametrize("bad, says", [
+    ({**DISK0, "phi_t": float("nan")}, "initial value of 'phi_t' is nan"),
+    ({**DISK0, "phi_t": float("inf")}, "initial value of 'phi_t' is inf"),
+    ({k: v for k, v in DISK0.items() if k != "psi"}, "missing initial values: psi"),
+    ({**DISK0, "theta": 1.0}, "'theta', which is not a state"),
+    ({**DISK0, "x_t": 5.0}, "inconsistent with the constraints"),
+    ({**DISK0, "phi_t": "1.0"}, "initial value of 'phi_t'"),
+    ([1.0] * 6, "initial must be a dict"),
+])
+def test_replace_refuses_bad_initial_values_itself(disk, bad, says):
+    """Bad initial values are refused by ``replace`` (not by the copy's run), with the
+    error a new Scene gives them, also after copies took the route at once."""
+    disk.replace(initial=dict(DISK0))
+    with pytest.raises(JetnhError, match=says):
+        disk.replace(initial=bad)
+    with pytest.raises(JetnhError, match=says):
+        Scene(disk.system, "chetaev", initial=bad, t_span=(0.0, 0.5))
+
+
+def test_replace_initial_takes_whole_numbers_as_the_general_route(disk):
+    """States given as ints or numpy floats take the general route: floats, the same
+    values."""
+    whole = disk.replace(initial={**DISK0, "phi_t": 1, "psi_t": np.float64(0.7)})
+    same = disk.replace(initial={**DISK0, "phi_t": 1.0})
+    assert type(whole.initial["phi_t"]) is float and dict(whole.initial) == dict(same.initial)

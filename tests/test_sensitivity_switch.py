@@ -160,7 +160,7 @@ def test_an_edge_stopped_run_stops_in_a_few_steps(scene):
     other chart in a few more."""
     plan = solve.plan(scene, sensitivities=True)
     assert plan.switch and plan.ce.names[-1] == atlas.EDGE
-    y = solve.augmented(plan.sens.layout, scene.y0)
+    y = solve.augmented(scene, plan, scene.y0, scene.p)
     halt = np.zeros(1, dtype=np.int64)
     out = loops.result(interrupt.call(
         plan.entry, halt, None, (*plan.prefix, plan.t0, plan.t1, y, scene.p, *plan.suffix,

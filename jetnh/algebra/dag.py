@@ -15,7 +15,10 @@ import hashlib
 
 import mpmath
 import sympy as sp
+from sympy.core.basic import _args_sortkey
 from sympy.core.function import ArgumentIndexError
+from sympy.core.parameters import global_parameters
+from sympy.functions.elementary.exponential import ExpBase
 
 from ..errors import ArgumentError, JetSpaceError
 
@@ -80,8 +83,25 @@ def fingerprint(expr) -> str:
 
 
 def size(expr, cap: int | None = None) -> int:
-    """The number of distinct subexpression objects (counted up to ``cap``)."""
-    return len(nodes(expr, cap))
+    """The number of distinct subexpressions (counted up to ``cap``): equal ones count
+    once, however many objects hold them, so the count does not depend on how the graph
+    was built (sympy's constructor cache, ``build``)."""
+    number: dict = {}           # (head, children's numbers) or atom -> its number
+    of: dict = {}               # id(node) -> its number
+    stack = [(e, False) for e in reversed(_roots(expr))]
+    while stack:
+        e, expanded = stack.pop()
+        if id(e) in of:
+            continue
+        if not expanded and e.args:
+            stack.append((e, True))
+            stack.extend((a, False) for a in e.args if id(a) not in of)
+            continue
+        key = (type(e), e) if not e.args else (e.func, tuple(of[id(a)] for a in e.args))
+        of[id(e)] = number.setdefault(key, len(number))
+        if cap is not None and len(number) >= cap:
+            break
+    return len(number)
 
 
 def tree_size(expr, cap: int | None = None) -> int:
@@ -112,6 +132,97 @@ def has(expr, *what) -> bool:
     types = tuple(w for w in what if isinstance(w, type))
     objs = {w for w in what if not isinstance(w, type)}
     return any(isinstance(e, types) or e in objs for e in nodes(expr))
+
+
+def build(head, args):
+    """``head(*args)`` (a sympy head and its children), with sums and products whose
+    children combine with nothing put together directly: sympy's ``flatten`` there only
+    sorts the children (``Basic.compare``) after checking every pair of them for terms
+    or powers to merge, which costs most of rebuilding a large graph (a substitution, a
+    conversion from symengine).  The result is the object sympy builds, arguments in the
+    same order; any child that could combine or expand (a number beyond one coefficient,
+    a nested sum or product, a repeated term or base, a power of a number, an
+    exponential, anything non-commutative or unusual) leaves it to sympy."""
+    if head is sp.Add:
+        kept = _add_terms(args)
+    elif head is sp.Mul:
+        kept = _mul_factors(args)
+    else:
+        kept = None
+    if kept is None or not global_parameters.evaluate:
+        return head(*args)
+    if len(kept) < 2:
+        return kept[0] if kept else head.identity
+    return head._exec_constructor_postprocessors(head._from_args(kept, True))
+
+
+def _add_terms(args):
+    """The children of ``Add(*args)`` when no two terms combine (``build``), else None."""
+    coeff, rest, terms = None, [], set()
+    for a in args:
+        if a is sp.S.Zero:
+            continue
+        if a.is_Number:
+            if coeff is not None or not a.is_finite or a.is_zero:
+                return None
+            coeff = a
+            continue
+        if not a.is_commutative:
+            return None
+        if a.is_Mul:
+            c, s = a.as_coeff_Mul()
+            if c is not sp.S.One and len(a.args) == 2 and not _plain(s):
+                return None
+        elif a.is_Symbol or a.is_NumberSymbol or isinstance(a, sp.Function) or (
+                a.is_Pow and not a.base.is_Number):
+            s = a
+        else:
+            return None
+        if s in terms:
+            return None
+        terms.add(s)
+        rest.append(a)
+    rest.sort(key=_args_sortkey)
+    return rest if coeff is None else [coeff, *rest]
+
+
+def _mul_factors(args):
+    """The children of ``Mul(*args)`` when no two factors combine (``build``), else
+    None."""
+    coeff, rest, bases = None, [], set()
+    for a in args:
+        if a is sp.S.One:
+            continue
+        if a.is_Number:
+            if coeff is not None or not a.is_finite or a.is_zero:
+                return None
+            coeff = a
+            continue
+        if not a.is_commutative:
+            return None
+        if a.is_Pow:
+            b = a.base
+            if b.is_Number:
+                return None
+        elif a.is_Symbol or a.is_NumberSymbol or a.is_Add or (
+                isinstance(a, sp.Function) and not isinstance(a, ExpBase)):
+            b = a
+        else:
+            return None
+        if b in bases:
+            return None
+        bases.add(b)
+        rest.append(a)
+    if coeff is not None and len(rest) == 1 and rest[0].is_Add:
+        return None                     # a number times a sum is distributed
+    rest.sort(key=_args_sortkey)
+    return rest if coeff is None else [coeff, *rest]
+
+
+def _plain(e) -> bool:
+    """``e`` is a symbol, a function or a power of something not a number."""
+    return e.is_Symbol or (e.is_Pow and not e.base.is_Number) or (
+        isinstance(e, sp.Function) and not isinstance(e, ExpBase))
 
 
 #: the key in ``xreplace``'s ``canon`` of the nodes it built, by head and children
@@ -156,7 +267,7 @@ def xreplace(expr, rule: dict, canon: dict | None = None, memo: dict | None = No
                 key = (e.func, *map(id, args))      # children: canon's objects
                 new = built.get(key)
                 if new is None:
-                    new = e.func(*args)
+                    new = build(e.func, args)
                     new = built[key] = canon.setdefault(new, new)
             elif all(a is b for a, b in zip(args, e.args)):
                 new = e

@@ -154,7 +154,7 @@ def _to_sympy(exprs, originals: dict) -> list:
                 if head is None:        # a function: symengine's conversion, one level
                     dummies = [se.Symbol(f"_{i}") for i in range(len(args))]
                     head = sp.sympify(e.func(*dummies), strict=True).func
-                done[e] = head(*[done[a] for a in args])
+                done[e] = dag.build(head, [done[a] for a in args])
     return [done[e] for e in exprs]
 
 

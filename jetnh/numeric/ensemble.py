@@ -51,6 +51,7 @@ arrays (``Scene.ensemble`` calls it), so a later ``jetnh.sweep`` can hand it chu
 
 from __future__ import annotations
 
+import math
 import time
 import warnings
 from functools import cached_property
@@ -70,6 +71,15 @@ from .options import options
 PARALLEL = ("prange", "threads", "serial")
 _FLOAT64 = np.dtype(np.float64)
 _NO_SWITCHES = FrozenDict()
+_NO_GIVEN = FrozenDict()        # (no dependent velocity given: ``resolve``)
+#: the quick plans of a scene that kept none (``run_ensemble``: its key is hashed all the
+#: same)
+_NONE_KEPT: dict = {}
+#: the event columns of an ensemble of one (``_of_one``: its plan watches no events)
+_NO_EV_N, _NO_EV_T = readonly((np.zeros((1, 0), dtype=np.int64), np.zeros((1, 0))))
+#: what an ensemble of one run has of no events, switches or sensitivities (``_fill``)
+_ONE_RUN = dict(event_names=(), switches=_NO_SWITCHES, switching=False,
+                _pieces=_NO_SWITCHES, _reasons=_NO_SWITCHES, sensitivity_columns=())
 
 
 def _name(key) -> str:
@@ -100,6 +110,8 @@ def _n_runs(columns: dict, n_from_array: int | None) -> int:
 def resolve(scene, initial=None, params=None, project=False):
     """The scene to run (with the varying parameters as run-time inputs), the initial
     states Y0 [n_runs, n_states] and the run-time parameters P [n_runs, n_p]."""
+    if params is None and _one_row(scene, initial):
+        return (scene, *_of_row(scene, initial, project))
     params = ({_name(k): _column(v, f"params[{_name(k)!r}]") for k, v in params.items()}
               if params else None)
     if params:
@@ -164,6 +176,25 @@ def resolve(scene, initial=None, params=None, project=False):
     if scene.system.holonomic:
         _check_holonomic(scene, Y0, P)
     return scene, Y0, P          # (C-contiguous: made so here)
+
+
+def _one_row(scene, initial) -> bool:
+    """Whether ``initial`` is one finite float64 row of states (an ensemble of one,
+    checked at once: ``_of_row``); a NaN or an infinity makes the sum not finite, an
+    overflow of finite values takes the general route, which looks at each entry."""
+    return (type(initial) is np.ndarray and initial.dtype is _FLOAT64
+            and initial.shape == (1, len(scene.state_names))
+            and math.isfinite(sum(initial[0].tolist())))
+
+
+def _of_row(scene, initial, project) -> tuple[np.ndarray, np.ndarray]:
+    """``resolve``'s Y0 and P of the one row ``initial`` (``_one_row``), checked."""
+    Y0, P = initial.copy(), scene._p[None, :].copy()
+    if scene.dependent_velocities and not scene._regular_at(Y0[0], scene.t_span[0], P[0]):
+        _check_split(scene, Y0, P, _NO_GIVEN, project)
+    if scene.system.holonomic:
+        _check_holonomic(scene, Y0, P)
+    return Y0, P
 
 
 def _check_holonomic(scene, Y0, P):
@@ -233,13 +264,17 @@ class Ensemble(Frozen):
                    switching, switches, pieces, reasons, sensitivities, layout)
 
     @classmethod
-    def _made(cls, *args) -> "Ensemble":
-        """``Ensemble(*args)`` (positionally, every argument) without the wrapper that
-        freezes it after ``__init__`` (``jetnh.frozen``): an ensemble of one is a
-        run's result."""
+    def _of_run(cls, scene, method, t, y, info, t_last, y_last, Y0, P, wall_time, parallel,
+                workers, save, singular_tol, layout) -> "Ensemble":
+        """The ensemble of one run (``_of_one``: no events, sensitivities or changes of
+        split), its attributes in one go (as ``_fill`` sets them) without the wrapper
+        that freezes it after ``__init__`` (``jetnh.frozen``): a run's result."""
         self = object.__new__(cls)
-        self._fill(*args)
-        self.__dict__["_memo"] = {}
+        self.__dict__.update(
+            _ONE_RUN, _arrays=(info, t_last, y_last, _NO_EV_N, _NO_EV_T, Y0, P, None, t, y),
+            scene=scene, method=method, param_names=scene.runtime_params,
+            wall_time=wall_time, parallel=parallel, workers=workers, save=save,
+            _singular_tol=singular_tol, layout=layout, _memo={})
         return self
 
     def _fill(self, scene, method, t, y, info, t_last, y_last, ev_n, ev_t, Y0, P,
@@ -394,11 +429,22 @@ class Ensemble(Frozen):
             return self.aux[:, :, 2 * k + 1 + lay.integrals.index(name)]
         raise JetnhError(f"{name!r} is not in this ensemble; it has {', '.join(self.names)}")
 
+    @memo
+    def _followers(self) -> frozenset:
+        """The coordinates that follow from the holonomic constraints at the first
+        run's start (``initial.followers``)."""
+        if not self.scene.system.holonomic or not len(self.initial):
+            return frozenset()
+        from .initial import followers
+
+        return followers(self.scene, self.scene.t_span[0], self.initial[0], self.params[0])
+
     def sensitivity(self, of, to) -> np.ndarray:
         """``d of(t) / d to`` over the runs and output times (``[n_runs, n_times]``,
         read-only): ``of`` a state, ``to`` an initial value of a state or a runtime
-        parameter (``Trajectory.sensitivity``; an ensemble run with
-        ``sensitivities=True``)."""
+        parameter (``Trajectory.sensitivity``, along the holonomic constraints as
+        there: a coordinate that follows from them at the first run's start is refused;
+        an ensemble run with ``sensitivities=True``)."""
         if not self.sensitivity_columns:
             raise JetnhError("this ensemble carries no sensitivities; run it with "
                              "sensitivities=True")
@@ -410,6 +456,10 @@ class Ensemble(Frozen):
             raise JetnhError(f"sensitivity to {b!r}: not an initial value of a state or a "
                              f"runtime parameter; choose one of "
                              f"{', '.join(self.sensitivity_columns)}")
+        if self._followers:
+            from .initial import check_column
+
+            check_column(self.scene, b, self._followers)
         return self.sensitivities[:, :, self.layout.states.index(a),
                                   self.sensitivity_columns.index(b)]
 
@@ -586,12 +636,36 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
     ``sensitivities`` and ``sensitivity_error`` as there);
     ``max_steps`` and ``timeout`` are budgets of each run and of the whole ensemble;
     Ctrl-C stops every run within one step."""
+    quick = None
+    if (params is None and t_eval is None and events is None and timeout is None
+            and step is None and newton is None and sensitivities is False
+            and sensitivity_error is True and _one_row(scene, initial)):
+        # an ensemble of one row with options that are numbers and strings (a loop of
+        # such calls): the plan of its run kept in the scene's memo under them and their
+        # types (as ``Scene.run`` keeps its plans), at once
+        try:
+            quick = (method, save, singular, parallel, workers, on_error, type(method),
+                     type(save), type(singular), type(parallel), type(workers),
+                     type(on_error))
+            for k, v in keywords.items():
+                quick += (k, v, type(v))
+            one, n_workers = scene._memo.get("quick_one", _NONE_KEPT)[quick]
+        except (KeyError, TypeError) as exc:     # not planned yet, or not hashable
+            quick = quick if type(exc) is KeyError else None
+        else:
+            Y0, P = _of_row(scene, initial, project)
+            return _of_one(scene, one, Y0, P, on_error, parallel, n_workers, save)
     opts = options(step, singular, newton, **keywords)
     if parallel not in PARALLEL:
         raise JetnhError(f"parallel must be one of {PARALLEL}, not {parallel!r}")
     if on_error not in ("raise", "record"):
         raise JetnhError(f"on_error must be 'raise' or 'record', not {on_error!r}")
     scene, Y0, P = resolve(scene, initial, params, project)
+    if quick is not None:
+        one = _one_plan(scene, opts, None, save, method, None, None, False, True)
+        kept = scene._memo.setdefault("quick_one", {})
+        if one and len(kept) < solve.MAX_PLANS:
+            kept[quick] = one, int(workers or numba.config.NUMBA_NUM_THREADS)
     return run_resolved(scene, Y0, P, opts, t_eval=t_eval, save=save, method=method,
                         events=events, parallel=parallel, workers=workers,
                         on_error=on_error, timeout=timeout, sensitivities=sensitivities,
@@ -603,21 +677,14 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
                  timeout=None, sensitivities=False, sensitivity_error=True) -> Ensemble:
     """``run_ensemble`` of the runs ``resolve`` gave (``scene``, the rows of ``Y0`` and
     ``P``) with the run options ``opts`` (``numeric.options.Options``)."""
-    if (events is None and t_eval is None and timeout is None and sensitivities is False
-            and sensitivity_error is True and type(method) is str and type(save) is str):
-        key = ("batch", scene.t_span, opts, method, save)     # the defaults, sooner
-    else:
-        key = ("batch", scene.t_span, opts, method, save, solve.hashable(events),
-               solve.hashable(t_eval), timeout, sensitivities, sensitivity_error)
-        key = (key, tuple(map(type, key)))
-    plan = solve.planned(scene, key, lambda: solve.plan(
-        scene, method, opts=opts, t_eval=t_eval, save=save, events=events, timeout=timeout,
-        sensitivities=sensitivities, sensitivity_error=sensitivity_error, batch=True))
     workers = int(workers or numba.config.NUMBA_NUM_THREADS)
-    if Y0.shape[0] == 1:
-        one = _single(scene, plan, opts, t_eval, save, timeout)
-        if one is not None:         # an ensemble of one: a run
+    if Y0.shape[0] == 1:            # an ensemble of one: a run, where it can be
+        one = _one_plan(scene, opts, t_eval, save, method, events, timeout, sensitivities,
+                        sensitivity_error)
+        if one:
             return _of_one(scene, one, Y0, P, on_error, parallel, workers, save)
+    plan = _batch_plan(scene, opts, t_eval, save, method, events, timeout, sensitivities,
+                       sensitivity_error)
     method = plan.method.name
     sens = Y_A = None
     if plan.sens is None:
@@ -626,7 +693,7 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
         _on_constraints(plan, P, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST)
     else:       # the state augmented by S = dy/d(y0, p): S apart, as in a single run
         (OUT_T, OUT_A, INFO, T_LAST, Y_A, EV_N, EV_T), wall = solve.batch(
-            scene, plan, solve.augmented(plan.sens.layout, Y0), P, parallel, workers)
+            scene, plan, solve.augmented(scene, plan, Y0, P), P, parallel, workers)
         _on_constraints(plan, P, OUT_T, OUT_A, INFO, T_LAST, Y_A)
         n = Y0.shape[1]
         OUT_Y, Y_LAST = np.ascontiguousarray(OUT_A[:, :, :n]), Y_A[:, :n].copy()
@@ -659,7 +726,7 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
             if not first:
                 continue
             if sens is not None:        # S(t0) in the chart the run starts in (atlas.run)
-                S0 = solve.augmented(plan.sens.layout, Y0[r:r + 1])[0, Y0.shape[1]:]
+                S0 = solve.augmented(scene, plan, Y0[r:r + 1], P[r])[0, Y0.shape[1]:]
                 S0 = own.carry(chart, t0, Y0[r], S0.reshape(1, Y0.shape[1], -1), P[r])
                 y = np.concatenate((y, S0.ravel()))
             parts, sw = atlas.follow(chart_atlas, method, chart, t0, y, t1, P[r], user,
@@ -701,19 +768,42 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
                     reasons=reasons, sensitivities=sens, layout=plan.kern.layout)
 
 
-def _single(scene, plan, opts, t_eval, save, timeout):
-    """The plan of a single run (``Scene.run``) that gives an ensemble of one of the
-    ensemble's plan ``plan`` (kept with the plans, under ``(plan,)``), or None where
-    the ensemble's driver must run it: with events, sensitivities or a chart's edge to
-    watch, an implicit or fixed-step method, or holonomic constraints (whose rows
-    ``_on_constraints`` moves)."""
-    found = solve.planned(scene, (plan,), lambda: _single_plan(scene, plan, opts, t_eval,
-                                                               save, timeout))
-    return found or None
+def _batch_key(scene, opts, t_eval, save, method, events, timeout, sensitivities,
+               sensitivity_error) -> tuple:
+    """The key of an ensemble's plan among the scene's plans (``solve.planned``)."""
+    if (events is None and t_eval is None and timeout is None and sensitivities is False
+            and sensitivity_error is True and type(method) is str and type(save) is str):
+        return ("batch", scene.t_span, opts, method, save)     # the defaults, sooner
+    key = ("batch", scene.t_span, opts, method, save, solve.hashable(events),
+           solve.hashable(t_eval), timeout, sensitivities, sensitivity_error)
+    return (key, tuple(map(type, key)))
+
+
+def _batch_plan(scene, opts, t_eval, save, method, events, timeout, sensitivities,
+                sensitivity_error) -> solve.Plan:
+    """The plan of an ensemble's driver (``solve.plan(..., batch=True)``), kept."""
+    key = _batch_key(scene, opts, t_eval, save, method, events, timeout, sensitivities,
+                     sensitivity_error)
+    return solve.planned(scene, key, lambda: solve.plan(
+        scene, method, opts=opts, t_eval=t_eval, save=save, events=events, timeout=timeout,
+        sensitivities=sensitivities, sensitivity_error=sensitivity_error, batch=True))
+
+
+def _one_plan(scene, opts, *args):
+    """The plan of the single run that gives an ensemble of one (``_single_plan``) of
+    the ensemble's options (``_batch_plan``'s ``args``), kept with the plans under
+    ``("one", key)`` of the ensemble's key; False where there is none."""
+    key = ("one", _batch_key(scene, opts, *args))
+    t_eval, save, timeout = args[0], args[1], args[4]
+    return solve.planned(scene, key, lambda: _single_plan(
+        scene, _batch_plan(scene, opts, *args), opts, t_eval, save, timeout))
 
 
 def _single_plan(scene, plan, opts, t_eval, save, timeout):
-    """``_single``'s plan, made (False where there is none)."""
+    """The plan of a single run (``Scene.run``) that gives an ensemble of one of the
+    ensemble's plan ``plan``, or False where the ensemble's driver must run it: with
+    events, sensitivities or a chart's edge to watch, an implicit or fixed-step method,
+    or holonomic constraints (whose rows ``_on_constraints`` moves)."""
     m = plan.method
     if (plan.ce is not None or plan.sens is not None or plan.switch or not m.adaptive
             or m.solver is not Solver.EXPLICIT or plan.ctl.n_hol):
@@ -721,18 +811,16 @@ def _single_plan(scene, plan, opts, t_eval, save, timeout):
     return solve.plan(scene, m, opts=opts, t_eval=t_eval, save=save, timeout=timeout)
 
 
-#: the event columns of an ensemble of one (``_of_one``: its plan watches no events)
-_NO_EV_N, _NO_EV_T = readonly((np.zeros((1, 0), dtype=np.int64), np.zeros((1, 0))))
 
 
 def _of_one(scene, plan, Y0, P, on_error, parallel, workers, save) -> Ensemble:
     """The ensemble of the one run of ``Y0``, ``P`` by the single-run loop of ``plan``
-    (``_single``): what the ensemble's driver stores of its run
+    (``_single_plan``): what the ensemble's driver stores of its run
     (``methods._common.collect``), the same steps.  Its arrays are views of the loop's
     own (no copies); the loop never reports a success with a NaN or an infinity in its
     rows or last state (``loop.finite_status``), as ``run_resolved`` makes sure of the
     driver's runs."""
-    halt = np.zeros(1, dtype=np.int64)
+    halt = solve._HALT.copy()
     tic = _clock()
     # (a direct plan's loop reads y0 into a copy of its own: the row itself)
     out = interrupt.call(plan.entry, halt, plan.limit,
@@ -762,10 +850,9 @@ def _of_one(scene, plan, Y0, P, on_error, parallel, workers, save) -> Ensemble:
         INFO, T_LAST = np.array(INFO, dtype=np.int64), np.array(T_LAST, dtype=float)
         _explain(scene, plan.method.name, plan.kern, plan.checked, plan.singular_tol,
                  on_error, INFO, T_LAST, Y_LAST, P, Y0)
-    return Ensemble._made(scene, plan.method.name, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST,
-                          _NO_EV_N, _NO_EV_T, Y0, P, (), wall, parallel,
-                          workers if parallel != "serial" else 1, save, plan.singular_tol,
-                          False, None, None, None, None, plan.kern.layout)
+    return Ensemble._of_run(scene, plan.method.name, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST,
+                            Y0, P, wall, parallel, workers if parallel != "serial" else 1,
+                            save, plan.singular_tol, plan.kern.layout)
 
 
 _clock = time.perf_counter

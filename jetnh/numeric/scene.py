@@ -50,6 +50,7 @@ compiled explicit and Radau runs project every accepted step back onto g = 0
 
 from __future__ import annotations
 
+import functools
 import math
 import operator
 from collections.abc import Mapping
@@ -58,7 +59,7 @@ import numpy as np
 import sympy as sp
 
 from ..algebra import dag
-from ..mechanics import holonomic, principles
+from ..mechanics import energy, holonomic, principles
 from ..mechanics.system import System
 from ..errors import ConstraintError, JetnhError
 from ..geometry.jet import sympy_object
@@ -365,24 +366,45 @@ class Scene(Frozen):
         ``FLOAT_MARGIN`` from zero and every value is finite: there, the 30-digit
         evaluation is finite too and the two differ by rounding only; elsewhere (a
         configuration near or at a singular one) the caller evaluates at 30 digits."""
-        lay = kern.layout
-        if lay.dependent_velocities != self.dependent_velocities:
+        values = self._dependent_velocity_list(y, self._dv_route(kern), p)
+        if values is None:
+            return None
+        return dict(zip(self.dependent_velocities, values))
+
+    def _dependent_velocity_list(self, y, route, p) -> list[float] | None:
+        """``_dependent_velocity_floats`` by the kernels of ``route`` (``_dv_route``):
+        the values in the order of ``dependent_velocities``, or None."""
+        _, applies, sing, n_ind, aux_of, n_aux, n_dep = route
+        if not applies:
             return None
         t0 = self.t_span[0]
-        if lay.indicators:
-            if not hasattr(kern, "sing"):
-                return None
-            g = np.empty(len(lay.indicators))
-            kern.sing(t0, y, p, g)
+        if n_ind:
+            g = np.empty(n_ind)
+            sing(t0, y, p, g)
             g = g.tolist()      # (a NaN or an infinity makes the sum not finite)
             if not (math.isfinite(sum(g)) and all(map(FLOAT_MARGIN.__le__, map(abs, g)))):
                 return None
-        aux = np.empty(lay.n_aux)
-        kern.aux(t0, y, p, aux)
-        values = aux[:len(lay.dependent_velocities)].tolist()
+        aux = np.empty(n_aux)
+        aux_of(t0, y, p, aux)
+        values = aux.tolist()[:n_dep]
         if not math.isfinite(sum(values)):      # (a NaN, an infinity or an overflow)
             return None
-        return dict(zip(self.dependent_velocities, values))
+        return values
+
+    def _dv_route(self, kern) -> tuple:
+        """What ``_dependent_velocity_floats`` calls of ``kern``: (kern, whether it
+        applies, the sing kernel, its size, the aux kernel, its size, the number of
+        dependent velocities), looked up once per kernels (memo ``dv_route``, shared by
+        the copies ``replace`` makes)."""
+        route = self._memo.get("dv_route")
+        if route is None or route[0] is not kern:
+            lay = kern.layout
+            route = (kern, lay.dependent_velocities == self.dependent_velocities
+                     and (not lay.indicators or hasattr(kern, "sing")),
+                     getattr(kern, "sing", None), len(lay.indicators), kern.aux, lay.n_aux,
+                     len(lay.dependent_velocities))
+            self._memo["dv_route"] = route
+        return route
 
     # ------------------------------------------------------------------ kernels
     @memo
@@ -417,7 +439,7 @@ class Scene(Frozen):
         the initial values as a whole: it needs a value for every state (``run(y0=...)``
         changes some and keeps the others); dependent velocities follow from the
         constraints again."""
-        if changes.keys() <= {"initial", "t_span"}:
+        if changes.keys() <= _MOVED:
             initial = changes.get("initial", self.initial)
             return self._moved({n: self.initial[n] for n in self.state_names}
                                if initial is self.initial else {} if initial is None
@@ -458,27 +480,65 @@ class Scene(Frozen):
         d.update(t_span=self.t_span if t_span is self.t_span else self._t_span(t_span),
                  projected={}, completed={})
         own = self._memo
-        key = own.get("key")
-        kern = None if key is None else _loaded_kernels(key, self.cache)
-        p = own.get("_p")
-        if p is None:
-            p = self._p
-        memo = self._shared_memo()
-        memo["_p"] = p
-        if t_span is self.t_span and "quick" in own:    # (the quick plans: of this span)
-            memo["quick"] = own["quick"]
+        hit = own.get("moved")
+        if hit is None or hit[0] != len(own) or hit[1] is None:
+            # (what the copies take over, looked up again when this memo grew, or until
+            # the kernels are loaded)
+            key = own.get("key")
+            kern = None if key is None else _loaded_kernels(key, self.cache)
+            # (the route of the dependent velocities where the kernels are loaded and
+            # no holonomic constraint is to be checked: ``_moved_states``)
+            route = (None if kern is None or self.system.holonomic
+                     else self._dv_route(kern))       # (this scene's, shared below)
+            p = own.get("_p")
+            if p is None:
+                p = self._p
+            shared = self._shared_memo()
+            shared["_p"] = p
+            if "quick" in own:
+                shared["quick"] = own["quick"]
+            own["moved"] = None
+            hit = own["moved"] = (len(own), kern, p, shared, route)
+        _, kern, p, memo, route = hit
+        memo = dict(memo)
+        if t_span is not self.t_span:       # (the quick plans: of this span)
+            memo.pop("quick", None)
         d["_memo"] = memo      # (frozen from here: ``_initial`` sets nothing when it
         #                        neither projects nor completes)
-        ini, y = new._initial(initial, False, False, kern, p)
+        got = None if route is None else new._moved_states(initial, route, p)
+        if got is None:
+            ini, y = new._initial(initial, False, False, kern, p)
+            if y is None:
+                y = np.array(self._states_of(ini), dtype=float)
+        else:
+            ini, y = got
         ini = FrozenDict(ini)
-        if y is None:
-            y = np.array(self._states_of(ini), dtype=float)
         # (this copy's own state array: its direct runs' ``_y0``, y0 a read-only view)
         memo["_y0"] = y
         y0 = y.view()
         y0.setflags(write=False)
         d.update(initial=ini, y0=y0)
         return new
+
+    def _moved_states(self, initial, route, p):
+        """``_initial(initial, False, False, kern, p)`` of the most common initial values
+        at once: a dict of the states (no dependent velocity) as finite floats, the
+        dependent velocities from the compiled kernels of ``route`` (``_dv_route``;
+        ``_dependent_velocity_floats``), a scene without holonomic constraints; None
+        where it does not apply (the general route then checks them and names what is
+        wrong)."""
+        if type(initial) is not dict or initial.keys() != self._state_set:
+            return None
+        states = self._states_of(initial)
+        if set(map(type, states)) != _FLOAT or not math.isfinite(sum(states)):
+            return None
+        y = np.array(states)
+        values = self._dependent_velocity_list(y, route, p)
+        if values is None:
+            return None
+        out = dict(initial)
+        out.update(zip(self.dependent_velocities, values))
+        return out, y
 
     def _shared_memo(self) -> dict:
         """What a scene with the same kernels takes over from this one's memo
@@ -853,6 +913,13 @@ class Scene(Frozen):
         return dict(zip(kern.layout.indicators, g.tolist()))
 
     @property
+    def energy_changes(self) -> tuple[str, ...]:
+        """Why the energy of this scene's motions is not conserved by design
+        (``mechanics.energy.changes`` at these parameter values; () where it is):
+        the diagnostics' note on its drift."""
+        return _energy_changes(self.system, self.principle, tuple(self.params.items()))
+
+    @property
     def dla_kernels(self):
         """Kernels of the discrete Lagrange-d'Alembert step (``codegen.generate_dla``)."""
         return discrete.kernels(self, "chetaev")
@@ -868,14 +935,22 @@ class Scene(Frozen):
                 f"t_span={self.t_span})")
 
 
+@functools.lru_cache(maxsize=64)
+def _energy_changes(system, principle, params) -> tuple[str, ...]:
+    """``mechanics.energy.changes`` (derived once per system, principle and values)."""
+    return energy.changes(system, principle, dict(params))
+
+
 #: what a scene with the same kernels (``Scene.replace``) takes over from the memo: the
 #: kernels' keys, the plans of runs (``solve.planned``) and those taken over on other
 #: time spans, compiled events, whether an atlas applies and the first atlas (whose
 #: charts the others share: ``atlas.atlas``)
-_SHARED = ("spec", "key", "plans", "spans", "events", "atlas_applies", "atlases")
+_SHARED = ("spec", "key", "plans", "spans", "events", "atlas_applies", "atlases", "dv_route")
 
 
 _FLOAT = {float}
+#: what ``replace`` changes in a copy of the scene (``_moved``)
+_MOVED = frozenset(("initial", "t_span"))
 #: the plans of a scene that kept none (``run``: its key is hashed all the same)
 _NONE_KEPT: dict = {}
 #: the dtype of the arrays a run takes as they are (numpy's one instance of it)

@@ -26,7 +26,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ArgumentError, JetnhError
-from . import arguments, atlas, diagnosis, discrete, interrupt, loops, methods, scipy_backend
+from . import (arguments, atlas, diagnosis, discrete, initial, interrupt, loops, methods,
+               scipy_backend)
 from .methods import STATUS_TEXT, Solver
 from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, FINISHED, NONFINITE,
                               SINGULAR, STIFF, STOPPED, TOO_SMALL_STEP,
@@ -323,12 +324,13 @@ def _augmented_tolerances(layout, rtol, atol, controlled):
     return rtol * r, np.ascontiguousarray(np.concatenate([atol * r, np.full(n * m, np.inf)]))
 
 
-def augmented(layout, y0) -> np.ndarray:
-    """The initial state of a run with sensitivities: ``(y0, S0 = (I | 0))`` flattened
-    (``y0`` one state or rows of states)."""
-    n, m = layout.n_state, layout.sensitivity_columns
+def augmented(scene, plan, y0, p) -> np.ndarray:
+    """The initial state of a run of ``plan`` with sensitivities: ``(y0, S0)`` flattened
+    (``y0`` one state or rows of states, ``p`` one row of parameters or one per row);
+    S0 = (I | 0), along the holonomic constraints in the split's chart
+    (``initial.sensitivities``)."""
     y0 = np.asarray(y0, dtype=float)
-    S0 = np.broadcast_to(np.eye(n, m).ravel(), y0.shape[:-1] + (n * m,))
+    S0 = initial.sensitivities(plan.sens, scene.system, plan.t0, y0, p)
     return np.ascontiguousarray(np.concatenate([y0, S0], axis=-1))
 
 
@@ -356,7 +358,7 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
                           plan.t0, y, plan.singular_tol, plan.checked, plan.limit, dense)
     m = plan.method
     if plan.sens is not None:
-        y = augmented(plan.sens.layout, y)
+        y = augmented(scene, plan, y, p)
     if m.solver is Solver.SCIPY:
         return scipy_backend.run(scene, m.scipy, plan.rtol, plan.atol, plan.te, plan.t0,
                                  plan.t1, y, p, plan.first or None, plan.max_step,

@@ -6,8 +6,9 @@ the constraints by the compiled ``aux`` kernel, on first access) or a user first
 integral.  ``traj.diagnostics`` reports the constraint residual, the energy and its
 drift, first integrals and their drift, steps, right-hand-side evaluations and why the
 integration stopped (and the split switches of a run that changed split,
-``numeric.atlas``).  With generalized forces the energy is not conserved:
-``traj.power`` is their power Q_s qdot^s, and the diagnostics say that the forces work.
+``numeric.atlas``).  Where the energy is not conserved by design (generalized forces,
+whose power Q_s qdot^s is ``traj.power``; an explicit t; Chetaev reactions that work:
+``mechanics.energy``), the diagnostics say why.
 """
 
 from __future__ import annotations
@@ -47,6 +48,9 @@ class Diagnostics:
     holonomic_residual_max: float = 0.0   # max |g_i| of the holonomic constraints
     completed: dict = field(default_factory=dict)     # see Scene.completed
     switches: list = field(default_factory=list)      # split changes: {"t", "from", "to"}
+    #: why the energy is not conserved by design (``mechanics.energy.changes``): its
+    #: drift is then the motion's, not the integration's error; () where it is conserved
+    energy_changes: tuple = ()
 
     def __post_init__(self):
         for name in ("integral_drift", "projected", "events", "singularity"):
@@ -66,8 +70,8 @@ class Diagnostics:
                     if self.holonomic_residual_max else ""),
                  "  " + _energy_text(self.energy_initial, self.energy_drift,
                                      self.energy_drift_relative)
-                 + ("; not conserved: the generalized forces work (traj.power)"
-                    if self.forced else "")]
+                 + ("; not conserved: " + "; ".join(self.energy_changes)
+                    if self.energy_changes else "")]
         for k, v in self.integral_drift.items():
             lines.append(f"  integral {k}: drift {v:.3e}")
         for k, v in self.events.items():
@@ -464,7 +468,15 @@ class Trajectory(Frozen):
         """``d of(t) / d to`` over ``t`` (read-only): ``of`` a state (coordinate,
         independent velocity or multiplier), ``to`` an initial value of a state (at t0)
         or a runtime parameter, by Symbol or by name; from the variational equations
-        integrated with the run (``scene.run(sensitivities=True)``)."""
+        integrated with the run (``scene.run(sensitivities=True)``).
+
+        With holonomic constraints g = 0 the initial configuration varies along g = 0 in
+        the split's chart (``numeric.initial``): the coordinates that follow from g at
+        the start (the split's dependent ones where dg/dq over them is regular, as
+        ``linearize`` and ``complete=True`` take them) move with the independent
+        coordinate or runtime parameter differentiated by, ``dq^D/dq^I = -(dg/dq^D)^{-1}
+        dg/dq^I``, so ``dg/dq S + dg/dp = 0`` from t0 on; a sensitivity to one of those
+        coordinates is refused (a ``JetnhError`` naming the independent ones)."""
         if self._sens is None:
             raise JetnhError("this trajectory carries no sensitivities; run the scene with "
                              "sensitivities=True")
@@ -478,7 +490,21 @@ class Trajectory(Frozen):
             raise JetnhError(f"sensitivity to {b!r}: not an initial value of a state or a "
                              f"runtime parameter; choose one of {', '.join(columns)} (a "
                              "compiled-in parameter needs runtime_params=[...] on the scene)")
+        if self._followers:
+            from .initial import check_column
+
+            check_column(self.scene, b, self._followers)
         return S[:, states.index(a), columns.index(b)]
+
+    @memo
+    def _followers(self) -> frozenset:
+        """The coordinates that follow from the holonomic constraints at the first row
+        (``initial.followers``): no column of sensitivities of their own."""
+        if not self.scene.system.holonomic or not len(self.t):
+            return frozenset()
+        from .initial import followers
+
+        return followers(self.scene, self.t[0], self.y[0], self._p)
 
     @property
     def sensitivities(self) -> np.ndarray:
@@ -583,7 +609,8 @@ class Trajectory(Frozen):
             events={n: len(te) for n, te in zip(self.event_names, self.t_events)},
             singularity=self.singularity, forced=self.scene.system.forced,
             holonomic_residual_max=hmax, completed=dict(self.scene.completed),
-            switches=[dict(s) for s in self.switches])
+            switches=[dict(s) for s in self.switches],
+            energy_changes=self.scene.energy_changes)
 
     # ------------------------------------------------------------------ tables, figures
     def to_dataframe(self, diagnostics=True):

@@ -35,8 +35,11 @@ def _parts(plan):
     """What every run of ``plan`` shares, kept per plan (the last 64; a plan is hashed
     by identity): ``(n, m, the first row, the loop's arguments before the state, those
     after p)``.  The first row of a run with sensitivities but for its state: zeros,
-    then the initial sensitivities S0 = (I | 0) (n x m) flattened
-    (``solve.augmented``'s); a run's row is a copy with the state written in."""
+    then the initial sensitivities S0 = (I | 0) (n x m) flattened (the derivatives by
+    every state of an inner segment, the Newton Jacobian's columns, on the constraints
+    or off them; ``Shooter.first_row`` starts the search's first segment from
+    ``solve.augmented``'s S0 instead, along g = 0); a run's row is a copy with the
+    state written in."""
     found = _PARTS.get(plan)
     if found is None:
         lay = plan.sens.layout
@@ -424,11 +427,11 @@ class Shooter:
 
     def first_row(self, u, plan) -> np.ndarray:
         """The first row of a run of ``plan`` from the start with the unknowns ``u``:
-        the state (``state(u)``), then the initial sensitivities S0 (``_parts``; the
-        same for every plan of the scene), a fresh array."""
+        the state (``state(u)``), then the initial sensitivities S0 (``solve.augmented``:
+        along g = 0 with holonomic constraints, as ``Scene.run`` starts; the unknowns
+        move no coordinate, so the same for every u), a fresh array."""
         if self._first is None:
-            first = (_PARTS.get(plan) or _parts(plan))[2].copy()
-            first[:len(self.y0)] = self.y0
+            first = solve.augmented(self.scene, plan, self.y0, self.scene._p)
             first.setflags(write=False)
             self._first = first
         first = self._first.copy()
