@@ -466,7 +466,8 @@ def _run_points(scene, Y0, P, run, outputs) -> dict:
     cols = {label: np.full(n, np.nan) for label, _ in labels}
     diag = {"status": np.zeros(n, dtype=np.int64), "success": np.zeros(n, dtype=bool),
             "stop_reason": np.empty(n, dtype=object), "t_final": np.full(n, np.nan),
-            "steps": np.zeros(n), "rejected": np.zeros(n), "rhs_evaluations": np.zeros(n, dtype=np.int64),
+            "steps": np.zeros(n), "rejected": np.zeros(n),
+            "rhs_evaluations": np.zeros(n, dtype=np.int64),
             "residual_max": np.full(n, np.nan), "energy_drift": np.full(n, np.nan)}
     drift = {f"drift[{name}]": np.full(n, np.nan) for name in lay.integrals}
     events = {}
