@@ -21,6 +21,8 @@ rounds; each figure the best over the rounds), the calls interleaved, each figur
 - ``fixed``: the same run with ``split="fixed"``: it keeps its split (the edge, measure
   1/8, is not singular), takes the same steps up to the edge and about as many after:
   the floor a switching run adds to;
+- ``read``: the switching run and its rows read (``.y``: a switching run maps its rows
+  to the scene's chart when they are first read);
 - ``switch``: ``atlas.switch`` alone at the state where the run reached the edge (the
   new chart, its state), what the run pays to change chart beyond running two pieces;
 - ``replace``: ``scene.replace(initial=...).run()``, the switching run of a copy of the
@@ -52,7 +54,7 @@ CASES = ("chaplygin_sleigh / chetaev", "chaplygin_sleigh / vakonomic",
 WATCHED = ("knife_edge / chetaev",)
 RUN = dict(method="dop853", save="final", rtol=1e-8, atol=1e-11)
 REPLACE_EVERY = 20
-FIGURES = ("run", "fixed", "switch", "replace")
+FIGURES = ("run", "fixed", "read", "switch", "replace")
 
 
 def costs(calls: int) -> dict:
@@ -83,6 +85,7 @@ def costs(calls: int) -> dict:
         ini = {n: scene.initial[n] for n in scene.state_names}
         fs = {"run": lambda s=scene: s.run(**RUN),
               "fixed": lambda s=scene: s.run(**RUN, split="fixed"),
+              "read": lambda s=scene: s.run(**RUN).y,
               "switch": lambda at=at, t=t, y=y, p=p: atlas.switch(at, at.own, t, y, p),
               "replace": lambda s=scene, ini=ini: s.replace(initial=ini).run(**RUN)}
         for f in fs.values():
@@ -168,7 +171,8 @@ def main(argv=None):
             print(f"round {r + 1}, {name}: " + ", ".join(
                 f"{c.split(' / ')[0][:8]}/{c.split(' / ')[1][:4]} run "
                 f"{v['run'] * 1e6:.1f} us, fixed {v['fixed'] * 1e6:.1f} us"
-                + (f", switch {v['switch'] * 1e6:.1f} us, replace {v['replace'] * 1e6:.0f} us"
+                + (f", read {v['read'] * 1e6:.1f} us, switch {v['switch'] * 1e6:.1f} us, "
+                   f"replace {v['replace'] * 1e6:.0f} us"
                    if "switch" in v else "")
                 for c, v in res["costs"].items()), flush=True)
     best = {name: {c: {k: min(r["costs"][c][k] for r in runs) for k in FIGURES}
@@ -226,7 +230,8 @@ def main(argv=None):
         title="A run that changes chart: against the same run kept in its split",
         summary=[f"{c}: the switching run costs {a[c]['run'] / a[c]['fixed']:.2f}x the run "
                  f"kept in its split ({a[c]['run'] * 1e6:.0f} against "
-                 f"{a[c]['fixed'] * 1e6:.0f} us), the switch alone "
+                 f"{a[c]['fixed'] * 1e6:.0f} us; {a[c]['read'] * 1e6:.0f} us with its rows "
+                 f"read), the switch alone "
                  f"{a[c]['switch'] * 1e6:.1f} us, a replace(initial=...) copy's run "
                  f"{a[c]['replace'] / a[c]['run']:.2f}x the run" for c in CASES]
                 + [f"{c}: watching the edge without reaching it costs "

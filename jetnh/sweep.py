@@ -31,7 +31,14 @@ Columns, in this order:
   integral ``I`` of the scene), and ``events[E]``/``first[E]`` for user events.  NaN in
   ``energy_drift`` (or ``drift[I]``) of a successful row is no drift: the energy could
   not be evaluated there (it overflows, or leaves the domain of an expression, at the
-  start); the row's other columns stay valid.
+  start); the row's other columns stay valid.  ``residual_max``, ``energy_drift`` and
+  ``drift[I]`` cover the rows a run stores, not every step: dop853, dopri5, rk4 and
+  radau store t0 and the final row (or the ``times``), so ``energy_drift`` is
+  ``|E(t_final) - E(t0)|`` there, which can be smaller than the same run's
+  ``Trajectory.diagnostics.energy_drift`` (the largest over its steps); dla, dvi and
+  ``scipy-<M>`` without ``times`` store every step.  ``steps`` and ``rejected`` are
+  integers, except with ``scipy-<M>``, whose counts scipy does not report
+  (``Diagnostics.steps`` None): NaN there, in a float column.
 
 A point that fails (a singular configuration, NaN, too many steps) keeps its row, with
 its ``status`` and ``stop_reason``; the sweep goes on.  Options (``rtol``, ``atol``,
@@ -99,7 +106,8 @@ def sweep(scene, grid, client=None, *, times=None, outputs=None, chunk_size=None
         None runs the grid here on all cores; a Client or a scheduler address runs it
         on a Dask cluster.
     times : array_like, optional
-        Output times: the outputs at each as ``x(t=2.5)``; default the final values.
+        Output times (any order; the columns follow the direction of integration): the
+        outputs at each as ``x(t=2.5)``; default the final values.
     outputs : list of str, optional
         The series to report; default every state, dependent velocity and first
         integral.
@@ -167,7 +175,13 @@ def sweep(scene, grid, client=None, *, times=None, outputs=None, chunk_size=None
     if times is not None:
         from .numeric import arguments
 
-        times = arguments.times(times, *scene.t_span)
+        t0, t1 = scene.t_span
+        times = arguments.real_array(times, "times")
+        if times.size and (times.min() < min(t0, t1) or times.max() > max(t0, t1)):
+            raise ArgumentError(f"times must lie within t_span = ({t0}, {t1}); they span "
+                                f"[{times.min()}, {times.max()}]")
+        # in any order: the columns are labelled; the runs take them as integrated
+        times = np.sort(times)[::1 if t1 >= t0 else -1]
         if times.size == 0:
             raise ArgumentError("times is empty; give output times, or omit it for the final "
                              "time")
@@ -452,7 +466,7 @@ def _run_points(scene, Y0, P, run, outputs) -> dict:
     cols = {label: np.full(n, np.nan) for label, _ in labels}
     diag = {"status": np.zeros(n, dtype=np.int64), "success": np.zeros(n, dtype=bool),
             "stop_reason": np.empty(n, dtype=object), "t_final": np.full(n, np.nan),
-            "steps": np.zeros(n, dtype=np.int64), "rejected": np.zeros(n, dtype=np.int64),
+            "steps": np.zeros(n), "rejected": np.zeros(n),
             "rhs_evaluations": np.zeros(n, dtype=np.int64),
             "residual_max": np.full(n, np.nan), "energy_drift": np.full(n, np.nan)}
     drift = {f"drift[{name}]": np.full(n, np.nan) for name in lay.integrals}
@@ -475,7 +489,8 @@ def _run_points(scene, Y0, P, run, outputs) -> dict:
         d = traj.diagnostics
         diag["status"][i], diag["success"][i] = d.status, d.success
         diag["stop_reason"][i], diag["t_final"][i] = d.stop_reason, traj.t_final
-        diag["steps"][i], diag["rejected"][i] = d.steps or 0, d.rejected or 0
+        for key, v in (("steps", d.steps), ("rejected", d.rejected)):
+            diag[key][i] = np.nan if v is None else v       # None: scipy's, unknown
         diag["rhs_evaluations"][i] = d.rhs_evaluations
         diag["residual_max"][i], diag["energy_drift"][i] = d.residual_max, d.energy_drift
         for name, v in d.integral_drift.items():
@@ -484,6 +499,9 @@ def _run_points(scene, Y0, P, run, outputs) -> dict:
             events.setdefault(f"events[{name}]", np.zeros(n, dtype=np.int64))[i] = len(te)
             events.setdefault(f"first[{name}]", np.full(n, np.nan))[i] = (
                 te[0] if len(te) else np.nan)
+    for key in ("steps", "rejected"):       # integers when every count is known
+        if not np.isnan(diag[key]).any():
+            diag[key] = diag[key].astype(np.int64)
     return {**cols, **diag, **drift, **events}
 
 

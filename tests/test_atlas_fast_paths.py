@@ -105,6 +105,48 @@ def test_switching_run_reads_its_pieces_lazily(sleigh):
     assert np.array_equal(full.y[-1], tr.y[-1]) and np.array_equal(full.aux[-1], tr.aux[-1])
 
 
+@pytest.mark.parametrize("save", ["final", "steps"])
+def test_switching_run_maps_its_rows_when_read(sleigh, save):
+    """A switching run's rows are mapped to the scene's chart on first read: until then
+    none are made; then each piece's rows of its loop result, mapped home, read-only,
+    and a pickled copy holds the same rows."""
+    import pickle
+
+    tr = sleigh.run(save=save, **RUN)
+    assert tr.__dict__["_rows"] is None
+    own, pieces = tr._segments.own, tr._segments.pieces
+    want_t, want_y = [], []
+    for lo, hi, chart, seg, a, _ in pieces:
+        t = seg.out.ts[a:a + hi - lo]
+        Y = np.ascontiguousarray(seg.out.ys[a:a + hi - lo])
+        want_t.append(t)
+        want_y.append(Y if chart is own else
+                      np.concatenate([atlas.to_home(own, chart, t[i:i + 1], Y[i:i + 1], tr._p)
+                                      for i in range(len(t))]))
+    assert np.array_equal(tr.y, np.concatenate(want_y))
+    assert np.array_equal(tr.t, np.concatenate(want_t)) and len(tr) == len(tr.t)
+    assert not tr.t.flags.writeable and not tr.y.flags.writeable
+    back = pickle.loads(pickle.dumps(tr))
+    assert np.array_equal(back.t, tr.t) and np.array_equal(back.y, tr.y)
+
+
+def test_switch_through_lists_equals_the_array_route(sleigh):
+    """``atlas.switch`` of a chart whose multipliers keep their values (the numbers
+    copied through lists) gives the state of ``Chart.point`` then ``_target``, bit for
+    bit, at every row of the first piece."""
+    tr = sleigh.run(**RUN)
+    at, own = atlas.atlas(sleigh), tr._segments.own
+    assert not own.explicit
+    seg = tr._segments.pieces[0][3]
+    for r in range(len(seg.t)):
+        t, y = float(seg.t[r]), np.ascontiguousarray(seg.y[r])
+        got = atlas.switch(at, own, t, y, tr._p)
+        want = atlas._target(at, own, t, tr._p, *own.point(t, y, tr._p))
+        assert (got is None) == (want is None)
+        if got is not None:
+            assert got[0] is want[0] and np.array_equal(got[1], want[1])
+
+
 def test_switching_runs_repeat_bit_for_bit_and_keep_their_entries(sleigh):
     a = sleigh.run(**RUN)
     new = a._segments.pieces[1][2]

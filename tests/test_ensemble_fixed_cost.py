@@ -206,3 +206,12 @@ def test_a_row_of_states_after_a_kept_plan_is_checked_as_the_first(disk):
                 dict(save="some")):
         with pytest.raises(jn.JetnhError):
             disk.ensemble(row, **bad)
+
+
+@pytest.mark.parametrize("workers", ["abc", 0, -1, True, 2.5])
+def test_workers_must_be_a_positive_integer(disk, workers):
+    """A bad ``workers`` is named (it was a bare ValueError from int(), and 0 or False
+    silently meant numba's count), on the kept-plan route of one row too."""
+    for rows in (disk.y0[None, :], np.repeat(disk.y0[None, :], 2, axis=0)):
+        with pytest.raises(jn.JetnhError, match="workers must be a positive integer"):
+            disk.ensemble(rows, workers=workers)

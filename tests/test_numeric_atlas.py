@@ -22,6 +22,7 @@ from scipy.integrate import solve_ivp
 
 import jetnh as jn
 from jetnh.algebra import dag
+from jetnh import models
 from jetnh.models import chaplygin_sleigh, knife_edge, radial_line
 from jetnh.numeric import Event, atlas
 
@@ -408,3 +409,23 @@ def test_event_states_of_a_switching_run_are_rows(knife, method):
     at = tr.at(te[1:3])
     for i, name in enumerate(knife.state_names):
         assert ye[1:3, i] == pytest.approx(at[name], abs=1e-6)
+
+
+@pytest.mark.parametrize("n_steps", [100, 2000])
+def test_rk4_at_inside_the_cut_step_before_a_switch(n_steps):
+    """``at`` in the last, cut step before a switch reruns the chart's loop with those
+    times; rk4's loop stores its start row in every mode, which the rerun took for a
+    missing time ("did not reach the times asked for").  Now the Hermite values there,
+    continuous with the times around them, against a tight dop853 run."""
+    sc = jn.Scene(chaplygin_sleigh(), "chetaev", initial=models.initial("chaplygin_sleigh"),
+                  t_span=(0.0, 5.0))
+    ref = sc.run(rtol=1e-13, atol=1e-14)
+    tr = sc.run(method="rk4", n_steps=n_steps)
+    (switch,) = tr.switches
+    cut = tr.t[tr.t < switch["t"]][-1]
+    times = np.array([0.5 * (cut + switch["t"]), switch["t"] - 1e-9 * switch["t"], 4.0])
+    assert cut < times[0] < times[1] < switch["t"]
+    got, want = tr.at(times), ref.at(times)
+    tol = 1e-11 if n_steps == 2000 else 1e-6
+    for name in sc.state_names:
+        assert np.asarray(got[name]) == pytest.approx(np.asarray(want[name]), abs=tol)

@@ -94,6 +94,9 @@ def test_rows_are_the_single_runs(disk):
         d = tr.diagnostics
         assert (df["steps"][r], df["rhs_evaluations"][r]) == (d.steps, d.rhs_evaluations)
         assert df["stop_reason"][r] == d.stop_reason and df["t_final"][r] == 5.0
+        # over the stored rows (t0 and the final one): |E(t_final) - E(t0)|
+        e = tr.energy
+        assert df["energy_drift"][r] == pytest.approx(abs(e[-1] - e[0]), rel=1e-9, abs=1e-15)
     # and the closed form x = x0 + R phidot/psidot (sin psi - sin psi0)
     x = 0.1 + df["R"] * df["phi_t(t0)"] / 0.7 * (np.sin(0.4 + 3.5) - np.sin(0.4))
     assert np.max(np.abs(df["x"] - x)) < 1e-8
@@ -234,6 +237,11 @@ def test_point_methods_are_the_single_runs(disk, method, options):
         assert df["residual_max"][r] == d.residual_max
         assert df["drift[p_psi]"][r] == d.integral_drift["p_psi"]
         assert df["stop_reason"][r] == d.stop_reason
+        if d.steps is None:     # scipy does not count its steps: unknown, not 0
+            assert np.isnan(df["steps"][r]) and np.isnan(df["rejected"][r])
+        else:
+            assert (df["steps"][r], df["rejected"][r]) == (d.steps, d.rejected)
+    assert df["steps"].dtype == (np.float64 if method.startswith("scipy") else np.int64)
     assert df["success"].all()
     # second order (dla, 200 steps) or 1e-10 (scipy) against dop853
     tol = 1e-3 if method == "dla" else 1e-7

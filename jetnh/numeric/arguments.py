@@ -229,14 +229,21 @@ def times(t_eval, t0, t1) -> np.ndarray:
 
 def fixed_steps(n_steps, h, t0, t1, what, max_steps) -> int:
     """The number of steps of a fixed-step method from ``n_steps`` or ``h`` over the
-    checked span ``(t0, t1)`` (``time_span``: of nonzero length)."""
+    checked span ``(t0, t1)`` (``time_span``: of nonzero length).
+
+    From ``h`` the step taken is ``span / ceil(span / h)``: the fewest equal steps none
+    longer than ``h`` (``h`` itself when it divides the span; a ratio within a relative
+    1e-9 of a whole number counts as that number, so ``h = span / n`` gives ``n``)."""
     if n_steps is not None and h is not None:
         raise ArgumentError(f"{what}: give n_steps= or h=, not both")
     if n_steps is None:
         if h is None:
             raise ArgumentError(f"{what} is a fixed-step method: give n_steps= or h=")
         hh = positive(h, "h")
-        steps = max(1.0, round(abs(t1 - t0) / hh))
+        ratio = abs(t1 - t0) / hh
+        nearest = round(ratio)
+        whole = abs(ratio - nearest) <= 1e-9 * ratio
+        steps = max(1.0, nearest if whole else math.ceil(ratio))
         if steps > max_steps:
             raise ArgumentError(
                 f"h = {hh:g} over t_span = ({t0}, {t1}) needs {steps:.3g} steps, beyond the "

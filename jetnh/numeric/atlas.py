@@ -75,13 +75,15 @@ from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, FINISHED, SINGULAR, S
 from . import arguments, interrupt, loops, methods
 from .events import Event, as_events
 from .kernels.calls import Kernel, Rows
-from .methods.loop import Control, Watch, features
+from .methods.loop import Control, Watch
 from .trajectory import Trajectory
 
 #: the event name of a chart's edge (internal: the stitched run does not report it)
 EDGE = "chart edge"
 #: the largest number of constraints whose splits are watched (symbolic determinants)
 MAX_K = 3
+#: what a loop's halt flag is made from (a copy: sooner than ``np.zeros``; never written)
+_HALT = np.zeros(1, dtype=np.int64)
 
 
 def split_invariant(principle, convention) -> bool:
@@ -196,7 +198,9 @@ class Chart:
         """``loops.call`` of this chart's scene and kernels (``sens``: the kernels of its
         state augmented by its sensitivities), the loop's entry and callbacks looked up
         once per method, events and loop parts (``loops.entry``)."""
-        key = (method, id(ce), sens is not None, features(ctl, mode, watch))
+        # (``features`` of the loop, given ``ce``: what ``mode``, the projection and the
+        # indicators add to it)
+        key = (method, id(ce), sens is not None, mode, ctl.n_hol > 0, watch.n_sing > 0)
         found = self._entries.get(key)
         if found is None or found[0] is not ce:
             loop, prefix, suffix, callbacks = loops.entry(
@@ -206,7 +210,7 @@ class Chart:
         _, loop, prefix, n_suffix, _ = found
         # (the arguments after (t0, t1, y0, p) as ``loops.entry`` gives them)
         suffix = (ctl, te, mode, watch) if n_suffix == 4 else (ctl, newton, te, mode, watch)
-        halt = np.zeros(1, dtype=np.int64)
+        halt = _HALT.copy()
         tic = time.perf_counter()
         out = interrupt.call(loop, halt, limit, (*prefix, t0, t1, y, p, *suffix, halt))
         wall = time.perf_counter() - tic
@@ -324,6 +328,15 @@ class Chart:
             lam = np.linalg.solve(A[:, self.dep].T[None], lam[None, :, None])[0, :, 0]
         return y[:n], qd, lam, A
 
+    def jacobian_rows(self, t, y, p) -> list:
+        """df/dqdot at one state ``y`` (C-contiguous floats) as k lists of n floats (the
+        numbers of ``point``'s A)."""
+        n = self.n
+        A = np.empty(self.k * n)
+        self.jacobian_kernel(t, y, p, A)
+        flat = A.tolist()
+        return [flat[i:i + n] for i in range(0, len(flat), n)]
+
     def columns_of(self, other, as_list=False) -> np.ndarray | list:
         """Where the columns of ``other``'s state are in a row of this chart's state
         followed by its aux row, when the multipliers keep their values (not
@@ -369,10 +382,10 @@ def _det(M) -> float:
 
 def measures_at(A, columns) -> list[float]:
     """m_beta = det(A_beta)^2 / det(A A^T) of the split of each entry of ``columns`` (the
-    columns of its minor) at one point (A: k x n, floats); all 0 where A has rank < k
-    (no split is regular).  ``Atlas.measures`` (the charts of a run) and
+    columns of its minor) at one point (A: k x n floats, or k lists of them); all 0
+    where A has rank < k (no split is regular).  ``Atlas.measures`` (the charts of a run) and
     ``regular.best`` (every choice of k coordinates) both take them from here."""
-    rows = np.asarray(A, dtype=float).tolist()
+    rows = A if type(A) is list else np.asarray(A, dtype=float).tolist()
     if len(rows) == 1:          # one constraint: the same sums, without the matrices
         r = rows[0]
         gram = sum([a * a for a in r])
@@ -533,14 +546,15 @@ class Atlas:
             found = self._events[key] = (self._compile_events(chart, user, edge),)
         return found[0]
 
-    def edge_kernel(self, ce) -> Kernel:
-        """``kernel(t, y, p, out)``: the compiled events ``ce`` of a run in the scene's
-        own chart (``events``, its edge last) called from Python, made once."""
+    def edge_kernel(self, ce) -> tuple[Kernel, int]:
+        """``(kernel(t, y, p, out), len(ce))``: the compiled events ``ce`` of a run in
+        the scene's own chart (``events``, its edge last) called from Python, made
+        once."""
         found = self._edges.get(id(ce))
         if found is None or found[0] is not ce:
             home = self.home
-            found = self._edges[id(ce)] = (ce, Kernel(ce.uev, (
-                len(home.state_names), len(home.runtime_params), len(ce))))
+            found = self._edges[id(ce)] = (ce, (Kernel(ce.uev, (
+                len(home.state_names), len(home.runtime_params), len(ce))), len(ce)))
         return found[1]
 
     def _compile_events(self, chart, user, edge):
@@ -584,7 +598,7 @@ def run(home, plan, y0, p, build):
         return stitch(home, at, method, p, parts, first + switches, user, plan.mode,
                       time.perf_counter() - tic)
     # the scene's own chart: the plan's loop, as a run that cannot switch calls it
-    halt = np.zeros(1, dtype=np.int64)
+    halt = _HALT.copy()
     tic_loop = time.perf_counter()
     out = interrupt.call(plan.entry, halt, plan.limit, (*plan.head, y0, p, *plan.suffix,
                                                         halt))
@@ -622,8 +636,8 @@ def own_edge(at, ce, t, y, p) -> float:
     """The edge indicator of the scene's own chart (the last of its compiled events
     ``ce``, ``Atlas.events``) at the state ``y`` (its first entries) at ``t``: negative
     past the edge."""
-    kernel = at.edge_kernel(ce)
-    out = np.empty(len(ce))
+    kernel, n = at.edge_kernel(ce)
+    out = np.empty(n)
     kernel(float(t), y, p, out)
     return float(out[-1])
 
@@ -767,21 +781,35 @@ def switch(at, chart, t, y, p):
     """The chart to go on in at the edge of ``chart`` (reached at (t, y), moved onto the
     holonomic constraints) and the state there, or None (``_target``)."""
     t = float(t)
-    return _target(at, chart, t, p, *chart.point(t, _on_constraints(chart, t, y, p), p))
+    y = _on_constraints(chart, t, y, p)
+    if chart.explicit:              # (multipliers mapped by A: ``Chart.point``)
+        return _target(at, chart, t, p, *chart.point(t, y, p))
+    # the same numbers copied through lists (``point``, ``state_at``: a few numbers)
+    qd, n = chart.velocity_list(t, y, p), chart.n
+    head, lam = y[:n].tolist(), y[2 * n - chart.k:].tolist()
+    return _choose(at, chart, t, p, chart.jacobian_rows(t, y, p), qd,
+                   lambda to: np.array(head + [qd[i] for i in to._independent] + lam))
 
 
 def _target(at, chart, t, p, q, qd, lam, A):
-    """The chart to go on in at the edge of ``chart`` and the state there: the split of
-    largest measure (at least twice the edge) whose constraints give back the
-    velocities (the same branch), or None.  ``(q, qd, lam, A)``: ``Chart.point`` there."""
+    """The chart to go on in at the edge of ``chart`` and the state there (``_choose``).
+    ``(q, qd, lam, A)``: ``Chart.point`` there."""
+    return _choose(at, chart, t, p, A, qd.tolist(),
+                   lambda to: to.state_at(q, qd, lam, A))
+
+
+def _choose(at, chart, t, p, A, want, state_in):
+    """The split of largest measure (at least twice the edge) whose constraints give
+    back the velocities ``want`` (every velocity at the edge of ``chart``, a list: the
+    same branch) and the state there (``state_in(its map)``), or None.  ``A``: df/dqdot
+    there (k x n)."""
     m = at.measures(A)
-    want = qd.tolist()
     # (two splits: the other is the one candidate, in any order)
     for i in range(2) if len(m) == 2 else sorted(range(len(m)), key=lambda i: -m[i]):
         split = at.splits[i]
         if split == chart.split or m[i] < 2 * at.eps:
             continue
-        y = at.maps[split].state_at(q, qd, lam, A)
+        y = state_in(at.maps[split])
         new = at.chart(split, t, y)
         for a, b in zip(new.velocity_list(t, y, p), want):
             if not abs(a - b) <= 1e-8 * max(1.0, abs(b)):
@@ -793,29 +821,26 @@ def _target(at, chart, t, p, q, qd, lam, A):
 
 def stitch(home, at, method, p, parts, switches, user, mode, wall):
     """One Trajectory of ``home`` from the runs in the charts ``parts`` (``_Piece``: the
-    rows kept taken from each loop's result, the pieces' own Trajectories made only when
-    read: for user events, a stop other than the end, sensitivities, the aux rows and
-    the dense output)."""
+    rows kept taken from each loop's result and mapped home when first read,
+    ``Stitched.rows``; the pieces' own Trajectories made only when read: for user
+    events, a stop other than the end, sensitivities, the aux rows and the dense
+    output)."""
     own = at.own
     if len(parts) == 1 and not switches:
         return parts[0][1].traj
-    ts, ys, pieces = [], [], []
+    pieces = []
     sens = [] if parts[-1][2][6] is not None else None
-    row = 0
+    row, last_part = 0, len(parts) - 1
     for i, (chart, seg, rerun) in enumerate(parts):
-        out = seg.out
-        a, b = 0, int(out.n_out)
-        if mode == ENDPOINTS and len(parts) > 1:       # the first row and the last
-            a, b = (0, 1) if i == 0 else (b - 1, b) if i == len(parts) - 1 else (b, b)
+        a, b = 0, int(seg.out.n_out)
+        if mode == ENDPOINTS and last_part:             # the first row and the last
+            a, b = (0, 1) if i == 0 else (b - 1, b) if i == last_part else (b, b)
         elif i > 0 and mode != AT_T_EVAL:
             a = 1                       # the switch row: the chart before stored it
-        t, Y = out.ts[a:b], out.ys[a:b, :len(chart.scene.state_names)]
-        ts.append(t)
-        ys.append(Y if chart is own else to_home(own, chart, t, Y, p))
         if sens is not None:        # S of the scene's states: D S of each row
             S = seg.sensitivities[a:b]
             sens.append(S if chart is own else
-                        chart.carry(own, t, seg.y[a:b], S, p))
+                        chart.carry(own, seg.out.ts[a:b], seg.y[a:b], S, p))
         pieces.append((row, row + b - a, chart, seg, a, rerun))
         row += b - a
     t_ev, y_ev = [], []
@@ -834,8 +859,8 @@ def stitch(home, at, method, p, parts, switches, user, mode, wall):
         status, reason, singularity = FINISHED, _FINISHED_TEXT, None
     else:
         status, reason, singularity = last.status, last.stop_reason, last.singularity
-    t = np.concatenate(ts)          # (new float64 C-contiguous arrays: taken as they are)
-    return Trajectory._of_run(home, (t, np.concatenate(ys), t.shape[0]), p, method,
+    # (the rows: made on first read, ``Stitched.rows``)
+    return Trajectory._of_run(home, None, p, method,
                               status, reason, ((steps, rejected, nfev), wall, home.projected),
                               own.kernels, (tuple([e.name for e in user]), t_ev, y_ev),
                               singularity, parts[0][1].dense,
@@ -895,15 +920,23 @@ def to_home(own, chart, t, Y, p) -> np.ndarray:
         q, qd, lam, A, _ = chart.universal(t, Y, p)
         return own.state(q, qd, lam, A)
     # the same numbers copied: every column of own's rows is a column of Y or of aux
+    if Y.shape[0] == 1:     # one row (a run's end)
+        return np.array([_home_row(own, chart, float(t[0]), Y[0], p)])
     kern = chart.kernels
-    if Y.shape[0] == 1:     # one row (a run's end): the aux kernel itself, as aux_rows calls it
-        aux = np.empty(kern.layout.n_aux)
-        kern.aux(float(t[0]), Y[0], p, aux)
-        row = Y[0].tolist() + aux.tolist()
-        return np.array([row[i] for i in chart.columns_of(own, as_list=True)])[None]
     aux = np.empty((Y.shape[0], kern.layout.n_aux))
     kern.aux_rows(np.ascontiguousarray(t, dtype=float), Y, p, aux)
     return np.concatenate((Y, aux), axis=1).take(chart.columns_of(own), axis=1)
+
+
+def _home_row(own, chart, t, y, p) -> list:
+    """One state ``y`` (C-contiguous floats) of ``chart``, whose multipliers keep their
+    values, as a row of the home chart ``own``, a list: its columns copied from ``y``
+    and the aux row (the aux kernel itself, as ``aux_rows`` calls it)."""
+    kern = chart.kernels                # (sets ``_n_aux``)
+    aux = np.empty(chart._n_aux)
+    kern.aux(t, y, p, aux)
+    row = y.tolist() + aux.tolist()
+    return [row[i] for i in chart.columns_of(own, as_list=True)]
 
 
 # ---------------------------------------------------------------------- stitched views
@@ -914,6 +947,26 @@ class Stitched:
 
     def __init__(self, own, pieces):
         self.own, self.pieces = own, pieces
+
+    def rows(self, p):
+        """``(t, y, n)``: the trajectory's output rows, each piece's rows of its loop's
+        result (``_Piece.out``) mapped to the scene's chart (``to_home``)."""
+        own, ts, ys = self.own, [], []
+        if not own.explicit and all(hi - lo <= 1 for lo, hi, *_ in self.pieces):
+            for lo, hi, chart, seg, a, _ in self.pieces:     # (the ends: through lists)
+                if hi > lo:
+                    ts.append(float(seg.out.ts[a]))
+                    y = seg.out.ys[a, :len(chart.scene.state_names)]
+                    ys.append(y.tolist() if chart is own else _home_row(own, chart, ts[-1], y, p))
+            return np.array(ts), np.array(ys), len(ts)
+        for lo, hi, chart, seg, a, _ in self.pieces:
+            out = seg.out
+            t = out.ts[a:a + hi - lo]
+            Y = out.ys[a:a + hi - lo, :len(chart.scene.state_names)]
+            ts.append(t)
+            ys.append(Y if chart is own else to_home(own, chart, t, Y, p))
+        t = np.concatenate(ts)          # (new float64 C-contiguous arrays: taken as they are)
+        return t, np.concatenate(ys), t.shape[0]
 
     def aux(self, traj) -> np.ndarray:
         """The aux rows of the trajectory, each from its own chart's kernels."""
@@ -1017,9 +1070,10 @@ def _rerun(chart, seg, rerun, times, p) -> np.ndarray:
     out, _ = loops.call(chart.scene, seg.method, chart.kernels, ce, watch, t0, t1, y0, p,
                         ctl, te, AT_T_EVAL, None, None, sens)
     rows = np.empty((te.shape[0], out.ys.shape[1]))
-    if int(out.n_out) != te.shape[0] or int(out.status) == STOPPED:
+    first = 1 if ctl.n_steps > 0 else 0   # a fixed-step loop stores its start row too
+    if int(out.n_out) != first + te.shape[0] or int(out.status) == STOPPED:
         raise JetnhError("running the chart's loop again did not reach the times asked for")
-    rows[order] = out.ys[:te.shape[0]]
+    rows[order] = out.ys[first:first + te.shape[0]]
     return rows
 
 

@@ -10,8 +10,10 @@
 - On a system with holonomic constraints g = 0 the values inside a step are moved onto
   g = 0 as the steps are (``methods.projection.rows``; the re-taken steps of dop853 and
   dopri5 do so in their loop, ``loops.on_constraints``), with their sensitivities.
-- dla, dvi and scipy's methods: no interpolant (the discrete integrators have none that
-  matches their nodes and multipliers) and an error that says what to do.
+- radau (its dense output, a step's collocation polynomial, depends on the Newton
+  iterations before the step and is not kept), dla, dvi and scipy's methods: no
+  interpolant (the discrete integrators have none that matches their nodes and
+  multipliers) and an error that says what to do.
 
 ``resampled`` gives the run at the rows and evenly between them (the smooth curves of
 ``Trajectory.plot``), or the rows alone where there is no dense output.
@@ -46,9 +48,12 @@ def _refusal(traj) -> str | None:
     """Why ``traj`` cannot be evaluated between its rows, or None."""
     d = traj._dense
     if d is None:
-        return (f"{traj.method} trajectories have no dense output to evaluate between rows; "
-                "run with method='dop853' or 'dopri5' (steps re-taken exactly) or 'rk4' "
-                "(cubic Hermite), or pass the times as t_eval= to the run")
+        what = ("radau's dense output (the collocation polynomial its t_eval and events "
+                "use) is not kept: a step cannot be re-taken apart from the Newton "
+                "iterations before it" if traj.method == "radau" else
+                f"{traj.method} trajectories have no dense output to evaluate between rows")
+        return (f"{what}; run with method='dop853' or 'dopri5' (steps re-taken exactly) or "
+                "'rk4' (cubic Hermite), or pass the times as t_eval= to the run")
     if d["mode"] != EVERY_STEP:
         return ("evaluation re-takes the steps of the run, so the trajectory must hold every "
                 "step: run with save='steps' and without t_eval (or pass these times as "

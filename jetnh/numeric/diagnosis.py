@@ -380,6 +380,10 @@ def raise_nonfinite(scene, method, t, y, kern=None, p=None, t0=None, y_init=None
            "singular='stop' to stop at singular configurations" if kern is not None else
            "The equations are singular there (a vanishing denominator of the dependent "
            "velocities or of the reduced mass matrix), or the solution blows up")
+    if method == "rk4":
+        why += (". A fixed step beyond rk4's stability bound (h |lambda| > 2.8 for an "
+                "eigenvalue lambda of the Jacobian: a stiff problem) blows up too: take a "
+                "smaller h (more n_steps) or method='radau'")
     raise IntegrationError(
         f"{method}: the right-hand side or the state became NaN or infinite in the step "
         f"from t = {t:.17g}; state there: {state}{extra}. {why}")

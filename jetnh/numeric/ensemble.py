@@ -52,6 +52,7 @@ arrays (``Scene.ensemble`` calls it), so a later ``jetnh.sweep`` can hand it chu
 from __future__ import annotations
 
 import math
+import numbers
 import time
 import warnings
 from functools import cached_property
@@ -665,11 +666,21 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
         one = _one_plan(scene, opts, None, save, method, None, None, False, True)
         kept = scene._memo.setdefault("quick_one", {})
         if one and len(kept) < solve.MAX_PLANS:
-            kept[quick] = one, int(workers or numba.config.NUMBA_NUM_THREADS)
+            kept[quick] = one, _workers(workers)
     return run_resolved(scene, Y0, P, opts, t_eval=t_eval, save=save, method=method,
                         events=events, parallel=parallel, workers=workers,
                         on_error=on_error, timeout=timeout, sensitivities=sensitivities,
                         sensitivity_error=sensitivity_error)
+
+
+def _workers(workers) -> int:
+    """The number of threads asked for: a positive integer, None for numba's count."""
+    if workers is None:
+        return int(numba.config.NUMBA_NUM_THREADS)
+    if isinstance(workers, bool) or not isinstance(workers, numbers.Integral) or workers < 1:
+        raise JetnhError(f"workers must be a positive integer (or None: numba's "
+                         f"{numba.config.NUMBA_NUM_THREADS} threads), not {workers!r}")
+    return int(workers)
 
 
 def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop853",
@@ -677,7 +688,7 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
                  timeout=None, sensitivities=False, sensitivity_error=True) -> Ensemble:
     """``run_ensemble`` of the runs ``resolve`` gave (``scene``, the rows of ``Y0`` and
     ``P``) with the run options ``opts`` (``numeric.options.Options``)."""
-    workers = int(workers or numba.config.NUMBA_NUM_THREADS)
+    workers = _workers(workers)
     if Y0.shape[0] == 1:            # an ensemble of one: a run, where it can be
         one = _one_plan(scene, opts, t_eval, save, method, events, timeout, sensitivities,
                         sensitivity_error)

@@ -225,7 +225,8 @@ class Scene(Frozen):
                 + ("" if not self.multipliers else
                    f" (the {self.principle} state includes the multipliers "
                    f"{', '.join(self.multipliers)})")
-                + "; give them in initial={...}")
+                + "; give them in initial={...} (initial= takes every state, in "
+                "Scene.replace too; run(y0=...) changes some and keeps the others)")
         given = self._on_holonomic(given, complete)
         required = y = None
         if kernels is not None and given.keys().isdisjoint(self.dependent_velocities):
@@ -434,8 +435,10 @@ class Scene(Frozen):
 
     def replace(self, **changes) -> "Scene":
         """A scene equal to this one except for ``changes`` (constructor arguments:
-        params, initial, t_span, runtime_params, integrals, ...).  The initial values
-        are the states' (dependent velocities follow from the constraints again)."""
+        params, initial, t_span, runtime_params, integrals, ...).  ``initial`` replaces
+        the initial values as a whole: it needs a value for every state (``run(y0=...)``
+        changes some and keeps the others); dependent velocities follow from the
+        constraints again."""
         if changes.keys() <= _MOVED:
             initial = changes.get("initial", self.initial)
             return self._moved({n: self.initial[n] for n in self.state_names}
@@ -598,7 +601,8 @@ class Scene(Frozen):
             vakonomic midpoint variational integrator, fixed step), or "scipy-<M>" for
             scipy's ``solve_ivp(method=M)`` on the same compiled right-hand side.
         save : {"steps", "final"}, default "steps"
-            Every step (or the points of ``t_eval``), or the two ends only.
+            Every step (or the points of ``t_eval``), or the two ends only; with
+            ``t_eval`` both keep the points of ``t_eval`` (the rows asked for).
         events : list, optional
             Sympy expressions, callables g(t, y) or ``Event`` (``jetnh.numeric.events``)
             with scipy's semantics, located on the dense output (dla and dvi: on the
@@ -625,7 +629,7 @@ class Scene(Frozen):
             (``numeric.options``), or those as keywords: the first and the largest
             adaptive step (automatic, none), the budget of steps (10^7; the fixed-step
             methods refuse more up front) and the fixed step of rk4, dla and dvi
-            (``n_steps`` or ``h``).
+            (``n_steps``, or ``h``: the step taken is span / ceil(span / h), at most h).
         singular : {"stop", "ignore"} or jetnh.numeric.options.Singular, default "stop"
             With ``singular_tol`` (or ``Singular(action, tol)``): "stop" ends the run at
             a singular configuration, where a singularity indicator of the scene
@@ -641,7 +645,7 @@ class Scene(Frozen):
             go on in another regular split (``numeric.atlas``: the switch located as an
             event, the state and multipliers mapped, one trajectory in the scene's
             states, ``traj.switches`` lists time, from and to); "fixed" keeps the
-            scene's split, which stops at its singular set.
+            scene's split, which stops at its singular set, as scipy's methods always do.
         newton : jetnh.numeric.options.Newton, optional
             ``Newton(tol, max_iter)`` or ``newton_tol``, ``max_newton``: the Newton
             iteration of radau (automatic, 7) and of dla and dvi (1e-13, 50).

@@ -85,27 +85,37 @@ def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_st
             gs.direction = -1
             scipy_events.append(gs)
     kw = {}
-    if first_step:
-        kw["first_step"] = first_step
+    if first_step:          # a first step beyond the span is the span (as dop853 takes it)
+        kw["first_step"] = min(first_step, abs(t1 - t0))
+    te_run, repeat = t_eval, None
+    if t_eval is not None:  # scipy refuses repeated times: each is asked for once
+        fresh = np.ones(t_eval.size, dtype=bool)
+        fresh[1:] = np.diff(t_eval) != 0
+        te_run, repeat = t_eval[fresh], np.cumsum(fresh) - 1
     if not np.all(np.isfinite(fun(t0, y_init))):
         diagnosis.raise_nonfinite(scene, f"scipy-{method}", t0, y_init, kern, p, t0, y_init)
     onto = _onto(scene, sensitivities, p) if method in PROJECTED else None
     tic = time.perf_counter()
     sol = solve_ivp(fun, (t0, t1), y_init, method=method if onto is None else
-                    _projected(method, onto), t_eval=t_eval, rtol=rtol, atol=atol,
+                    _projected(method, onto), t_eval=te_run, rtol=rtol, atol=atol,
                     max_step=max_step, events=scipy_events or None, **kw)
     wall = time.perf_counter() - tic
-    ys = np.ascontiguousarray(sol.y.T)
+    # no row (an empty t_eval, a stop before its first time): scipy leaves lists
+    ts = np.asarray(sol.t, dtype=float).reshape(-1)
+    ys = np.ascontiguousarray(np.asarray(sol.y, dtype=float).reshape(n, -1).T)
+    if repeat is not None:  # a repeated time: its row repeated
+        keep = repeat[repeat < ts.size]
+        ts, ys = ts[keep], np.ascontiguousarray(ys[keep])
     if onto is not None:          # the dense output's rows (t_eval; a terminal event)
-        inner = np.flatnonzero(sol.t != t0) if t_eval is not None else (
-            [len(sol.t) - 1] if sol.status == 1 and sol.t[-1] != t0 else [])
+        inner = np.flatnonzero(ts != t0) if t_eval is not None else (
+            [len(ts) - 1] if sol.status == 1 and ts[-1] != t0 else [])
         rows = ys[inner]
-        onto(sol.t[inner], rows)
+        onto(ts[inner], rows)
         ys[inner] = rows
     if ys.size and not np.all(np.isfinite(ys)):
         bad = int(np.argmax(~np.all(np.isfinite(ys), axis=1)))
         i = max(bad - 1, 0)
-        diagnosis.raise_nonfinite(scene, f"scipy-{method}", sol.t[i], ys[i], kern, p, t0,
+        diagnosis.raise_nonfinite(scene, f"scipy-{method}", ts[i], ys[i], kern, p, t0,
                                   y_init)
     status, reason, singularity = (0 if sol.status == 0 else 2), sol.message, None
     kw = {}
@@ -121,6 +131,10 @@ def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_st
             singularity = diagnosis.singularity(scene, kern, k - n_user, t_hit, y_hit, p, t0,
                                                 y_init, singular_tol)
             reason = singularity["reason"]
+            if singularity["kind"] == "split":
+                reason += (" scipy's methods do not change split (split='switch' is "
+                           "dop853's, dopri5's, rk4's and radau's): this run stopped at "
+                           "its chart's edge, as any method does with split='fixed'.")
     if ce is not None:
         y_ev = [np.array(sol.y_events[k], dtype=float).reshape(-1, n) for k in range(n_user)]
         if onto is not None:
@@ -132,7 +146,7 @@ def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_st
         kw["sensitivities"] = (scene._sensitivity_columns(), ys[:, n_state:].reshape(
             ys.shape[0], n_state, sensitivities.layout.sensitivity_columns))
         ys = np.ascontiguousarray(ys[:, :n_state])
-    traj = Trajectory(scene, sol.t, ys, p, method=f"scipy-{method}", status=status,
+    traj = Trajectory(scene, ts, ys, p, method=f"scipy-{method}", status=status,
                       stop_reason=reason, steps=None, rejected=None, nfev=int(sol.nfev),
                       wall_time=wall, kernels=kern, projected=scene.projected,
                       singularity=singularity, **kw)

@@ -259,10 +259,14 @@ class Trajectory(Frozen):
         and nobody else's: the arrays a compiled loop returned, of which the first ``n``
         rows are the output) and ``counts = ((steps, rejected, nfev), wall_time,
         projected)``, without converting them: a trajectory is made on every run
-        (``segments``, ``switches``: a run that changed split, ``numeric.atlas``)."""
+        (``segments``, ``switches``: a run that changed split, ``numeric.atlas``; its
+        ``rows`` None, made on first read, its switches a tuple of records without
+        arrays, taken as it is)."""
         self = object.__new__(cls)
         self._fill(scene, rows, p, method, status, stop_reason, counts, kernels, events,
-                   singularity, dense, sensitivities, None, segments, switches)
+                   singularity, dense, sensitivities, None, segments)
+        if switches:
+            self.__dict__["switches"] = switches
         self.__dict__["_memo"] = {}
         return self
 
@@ -344,12 +348,20 @@ class Trajectory(Frozen):
     @memo
     def t(self) -> np.ndarray:
         """The output times (read-only)."""
-        return _output(self._rows[0], self._rows[2])
+        rows = self._rows or self._stitched_rows()
+        return _output(rows[0], rows[2])
 
     @memo
     def y(self) -> np.ndarray:
         """The states at the output times, ``[n_times, n_states]`` (read-only)."""
-        return _output(self._rows[1], self._rows[2])
+        rows = self._rows or self._stitched_rows()
+        return _output(rows[1], rows[2])
+
+    def _stitched_rows(self):
+        """The output rows of a run that changed split (``_rows`` None until then),
+        mapped to the scene's chart on first read (``numeric.atlas.Stitched.rows``)."""
+        rows = self.__dict__["_rows"] = self._segments.rows(self._p)
+        return rows
 
     @memo
     def _info(self) -> dict:

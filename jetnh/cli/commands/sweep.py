@@ -22,7 +22,10 @@ def add_parser(sub):
                     "--grid axes) and write one row per point: the grid values (initial "
                     "values as NAME(t0)), the final values of the states (or their values "
                     "at --times as NAME(t=T)) and the diagnostics: status, stop_reason, "
-                    "steps, constraint residual, energy and first-integral drift.  A point "
+                    "steps (NaN for scipy-* methods, which do not count them), "
+                    "constraint residual, energy and first-integral drift over the rows a "
+                    "run stores (dop853, dopri5, rk4, radau: t0 and the final time or "
+                    "--times, not every step; dla, dvi, scipy-*: every step).  A point "
                     "that fails keeps its row with its stop_reason.  The other values "
                     "are as for `jetnh simulate`.  With --scheduler the points run as "
                     "chunks on a Dask cluster (the result is the same to the last bit).",
