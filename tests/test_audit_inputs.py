@@ -129,7 +129,7 @@ def scene(sleigh):
     ({"m": [1.0, "2"]}, "holds the string '2'"),
     ({"m": np.array(["1", "2"])}, "holds the string"),
     ([{"m": 1.0}, {"m": "2"}], "grid point 1 must be numbers: it holds the string '2'"),
-    ({"m": [True, False]}, "must be real numbers"),
+    ({"m": [True, False]}, "grid values of .m. must be a number, got True"),
     ({"m": [1.0, np.nan]}, "non-finite"),
     ({"m": []}, "empty"),
     ({"zeta": [1.0]}, "neither a parameter"),
