@@ -1074,8 +1074,13 @@ def _jacobian(ck, y, p, t, rows, E):
     """(A, x', limit): the kernels at the point, A = (rows of dx'/dx) E; where they are
     undefined (0/0), the limit along a random kept direction by symmetric differences and
     Richardson extrapolation, and an error if that does not settle."""
+    with np.errstate(invalid="ignore", over="ignore"):   # (NaN rows are checked here)
+        return _settled(ck, y, p, t, list(rows), E)
+
+
+def _settled(ck, y, p, t, rows, E):
+    """``_jacobian``'s work (under its error state)."""
     m = len(y)
-    rows = list(rows)
     Jm, f = np.empty((m, m)), np.empty(m)
     ck.jac(t, y, p, Jm)
     ck.rhs(t, y, p, f)
