@@ -269,6 +269,16 @@ def test_build_is_sympys_constructor(args, head):
     assert got.args == want.args
 
 
+@pytest.mark.parametrize("number", [2.0, 3, -0.5])
+def test_build_takes_python_numbers_as_sympy_does(number):
+    """A rule of Python floats in ``xreplace`` hands them to ``build``: sympy converts
+    them (it raised AttributeError on float.is_Number)."""
+    x, y = sp.symbols("x y")
+    for head in (sp.Add, sp.Mul):
+        assert dag.build(head, [x, number]) == head(x, number)
+    assert dag.xreplace(x * y + y, {x: number}) == (x * y + y).xreplace({x: number})
+
+
 def test_size_counts_equal_parts_once():
     """Equal subexpressions held by distinct objects count once (the size does not depend
     on how the graph was built); the cap stops the count."""

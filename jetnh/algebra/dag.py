@@ -142,7 +142,8 @@ def build(head, args):
     conversion from symengine).  The result is the object sympy builds, arguments in the
     same order; any child that could combine or expand (a number beyond one coefficient,
     a nested sum or product, a repeated term or base, a power of a number, an
-    exponential, anything non-commutative or unusual) leaves it to sympy."""
+    exponential, anything non-commutative or unusual, a Python number that sympy would
+    convert: ``xreplace`` with a rule of floats) leaves it to sympy."""
     if head is sp.Add:
         kept = _add_terms(args)
     elif head is sp.Mul:
@@ -162,6 +163,8 @@ def _add_terms(args):
     for a in args:
         if a is sp.S.Zero:
             continue
+        if not isinstance(a, sp.Basic):     # a Python number: sympy converts it
+            return None
         if a.is_Number:
             if coeff is not None or not a.is_finite or a.is_zero:
                 return None
@@ -193,6 +196,8 @@ def _mul_factors(args):
     for a in args:
         if a is sp.S.One:
             continue
+        if not isinstance(a, sp.Basic):     # a Python number: sympy converts it
+            return None
         if a.is_Number:
             if coeff is not None or not a.is_finite or a.is_zero:
                 return None
