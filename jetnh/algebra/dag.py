@@ -15,7 +15,7 @@ import hashlib
 
 import mpmath
 import sympy as sp
-from sympy.core.basic import _args_sortkey
+from sympy.core.basic import _args_sortkey, ordering_of_classes
 from sympy.core.function import ArgumentIndexError
 from sympy.core.parameters import global_parameters
 from sympy.functions.elementary.exponential import ExpBase
@@ -134,7 +134,7 @@ def has(expr, *what) -> bool:
     return any(isinstance(e, types) or e in objs for e in nodes(expr))
 
 
-def build(head, args):
+def build(head, args, keys: dict | None = None):
     """``head(*args)`` (a sympy head and its children), with sums and products whose
     children combine with nothing put together directly: sympy's ``flatten`` there only
     sorts the children (``Basic.compare``) after checking every pair of them for terms
@@ -143,7 +143,9 @@ def build(head, args):
     same order; any child that could combine or expand (a number beyond one coefficient,
     a nested sum or product, a repeated term or base, a power of a number, an
     exponential, anything non-commutative or unusual, a Python number that sympy would
-    convert: ``xreplace`` with a rule of floats) leaves it to sympy."""
+    convert: ``xreplace`` with a rule of floats) leaves it to sympy.  ``keys`` (a dict,
+    filled here) carries the children's sort keys (``_sort_key``) over the calls of one
+    rebuild; without it they are sorted by ``Basic.compare``."""
     if head is sp.Add:
         kept = _add_terms(args)
     elif head is sp.Mul:
@@ -152,13 +154,77 @@ def build(head, args):
         kept = None
     if kept is None or not global_parameters.evaluate:
         return head(*args)
-    if len(kept) < 2:
-        return kept[0] if kept else head.identity
-    return head._exec_constructor_postprocessors(head._from_args(kept, True))
+    coeff, rest = kept
+    if not rest:
+        return head.identity if coeff is None else coeff
+    if coeff is None and len(rest) == 1:
+        return rest[0]
+    _sort(rest, keys)
+    if coeff is not None:
+        rest.insert(0, coeff)
+    return head._exec_constructor_postprocessors(head._from_args(rest, True))
+
+
+def _sort(args: list, keys: dict | None):
+    """Sort ``args`` in place as sympy's constructors do (``Basic.compare``), by keys
+    that order as it does (``_sort_key``, remembered in ``keys``): compared as tuples,
+    children's keys shared, instead of a Python call per comparison at every level."""
+    if keys is not None and len(args) > 1:
+        found = [_sort_key(a, keys) for a in args]
+        if None not in found:
+            order = sorted(range(len(args)), key=found.__getitem__)
+            args[:] = [args[i] for i in order]
+            return
+    args.sort(key=_args_sortkey)
+
+
+#: class -> the part of ``_sort_key`` that orders classes as ``Basic.compare`` does
+_CLASS_KEYS: dict = {}
+
+
+def _class_key(cls) -> tuple:
+    key = _CLASS_KEYS.get(cls)
+    if key is None:
+        name = cls.__name__
+        unknown = len(ordering_of_classes) + 1
+        i = ordering_of_classes.index(name) if name in ordering_of_classes else unknown
+        key = _CLASS_KEYS[cls] = (i, name if i == unknown else "")
+    return key
+
+
+def _sort_key(expr, keys: dict):
+    """A tuple ordered among others as ``Basic.compare`` orders their expressions: the
+    class (``ordering_of_classes``, then the name), the length of the hashable content,
+    then its items (children by their keys); None for a node whose hashable content is
+    not its children or plain values (then ``Basic.compare`` sorts).  ``keys``:
+    id(node) -> (node, key), filled for every node below."""
+    got = keys.get(id(expr))
+    if got is not None:
+        return got[1]
+    stack = [(expr, False)]
+    while stack:
+        e, expanded = stack.pop()
+        if id(e) in keys:
+            continue
+        content = e._hashable_content()
+        if not expanded and e.args and content is e._args:
+            stack.append((e, True))
+            stack.extend((a, False) for a in content if id(a) not in keys)
+            continue
+        if content is e._args:
+            items = [keys[id(a)][1] for a in content]
+            key = None if None in items else (_class_key(type(e)), len(content), *items)
+        elif any(isinstance(x, (sp.Basic, frozenset)) for x in content):
+            key = None
+        else:
+            key = (_class_key(type(e)), len(content), *content)
+        keys[id(e)] = (e, key)
+    return keys[id(expr)][1]
 
 
 def _add_terms(args):
-    """The children of ``Add(*args)`` when no two terms combine (``build``), else None."""
+    """The number and the other children of ``Add(*args)`` (unsorted) when no two terms
+    combine (``build``), else None."""
     coeff, rest, terms = None, [], set()
     for a in args:
         if a is sp.S.Zero:
@@ -185,13 +251,12 @@ def _add_terms(args):
             return None
         terms.add(s)
         rest.append(a)
-    rest.sort(key=_args_sortkey)
-    return rest if coeff is None else [coeff, *rest]
+    return coeff, rest
 
 
 def _mul_factors(args):
-    """The children of ``Mul(*args)`` when no two factors combine (``build``), else
-    None."""
+    """The number and the other children of ``Mul(*args)`` (unsorted) when no two
+    factors combine (``build``), else None."""
     coeff, rest, bases = None, [], set()
     for a in args:
         if a is sp.S.One:
@@ -220,8 +285,7 @@ def _mul_factors(args):
         rest.append(a)
     if coeff is not None and len(rest) == 1 and rest[0].is_Add:
         return None                     # a number times a sum is distributed
-    rest.sort(key=_args_sortkey)
-    return rest if coeff is None else [coeff, *rest]
+    return coeff, rest
 
 
 def _plain(e) -> bool:
@@ -230,8 +294,9 @@ def _plain(e) -> bool:
         isinstance(e, sp.Function) and not isinstance(e, ExpBase))
 
 
-#: the key in ``xreplace``'s ``canon`` of the nodes it built, by head and children
-_BUILT = object()
+#: the keys in ``xreplace``'s ``canon`` of the nodes it built, by head and children, and
+#: of the sort keys of ``build``
+_BUILT, _KEYS = object(), object()
 
 
 def xreplace(expr, rule: dict, canon: dict | None = None, memo: dict | None = None):
@@ -251,6 +316,7 @@ def xreplace(expr, rule: dict, canon: dict | None = None, memo: dict | None = No
     canon = {} if canon is None else canon
     memo = {} if memo is None else memo     # id(node) -> (node, result, rule reaches it)
     built = canon.setdefault(_BUILT, {})    # (head, ids of canonical children) -> node
+    keys = canon.setdefault(_KEYS, {})
     roots = _roots(expr)
     stack = [(e, False) for e in reversed(roots)]
     while stack:
@@ -272,7 +338,7 @@ def xreplace(expr, rule: dict, canon: dict | None = None, memo: dict | None = No
                 key = (e.func, *map(id, args))      # children: canon's objects
                 new = built.get(key)
                 if new is None:
-                    new = build(e.func, args)
+                    new = build(e.func, args, keys)
                     new = built[key] = canon.setdefault(new, new)
             elif all(a is b for a, b in zip(args, e.args)):
                 new = e

@@ -135,6 +135,7 @@ def _to_sympy(exprs, originals: dict) -> list:
     (symengine's own conversion walks the tree) by the constructor symengine's would
     call; symbols become ``originals[name]`` (the user's, with their assumptions)."""
     done: dict = {}
+    keys: dict = {}                 # the sort keys of ``dag.build``
     for root in exprs:
         stack = [(root, False)]
         while stack:
@@ -154,7 +155,7 @@ def _to_sympy(exprs, originals: dict) -> list:
                 if head is None:        # a function: symengine's conversion, one level
                     dummies = [se.Symbol(f"_{i}") for i in range(len(args))]
                     head = sp.sympify(e.func(*dummies), strict=True).func
-                done[e] = dag.build(head, [done[a] for a in args])
+                done[e] = dag.build(head, [done[a] for a in args], keys)
     return [done[e] for e in exprs]
 
 
