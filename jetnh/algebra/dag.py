@@ -11,12 +11,15 @@ the graph once, remembering every node they have seen (by identity).
 
 from __future__ import annotations
 
+import contextlib
+import gc
 import hashlib
 
 import mpmath
 import sympy as sp
-from sympy.core.basic import _args_sortkey, ordering_of_classes
+from sympy.core.basic import _args_sortkey
 from sympy.core.function import ArgumentIndexError
+from sympy.core.mul import _keep_coeff
 from sympy.core.parameters import global_parameters
 from sympy.functions.elementary.exponential import ExpBase
 
@@ -34,6 +37,22 @@ def sympy_object(expr) -> sp.Basic:
         return sp.sympify(expr, strict=True)
     except (sp.SympifyError, TypeError) as exc:
         raise JetSpaceError(f"{expr!r} is not a sympy expression: {exc}") from None
+
+
+@contextlib.contextmanager
+def collector_paused():
+    """Python's cyclic garbage collector paused inside the block (as it was after):
+    building a graph of millions of sympy objects (acyclic: reference counting frees
+    them) otherwise sets off full collections that walk every live object, again and
+    again -- a fifth of a large derivation's time.  Cyclic garbage made inside is
+    collected after the block."""
+    was = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if was:
+            gc.enable()
 
 
 def _roots(expr) -> list:
@@ -134,7 +153,7 @@ def has(expr, *what) -> bool:
     return any(isinstance(e, types) or e in objs for e in nodes(expr))
 
 
-def build(head, args, keys: dict | None = None):
+def build(head, args):
     """``head(*args)`` (a sympy head and its children), with sums and products whose
     children combine with nothing put together directly: sympy's ``flatten`` there only
     sorts the children (``Basic.compare``) after checking every pair of them for terms
@@ -143,13 +162,20 @@ def build(head, args, keys: dict | None = None):
     same order; any child that could combine or expand (a number beyond one coefficient,
     a nested sum or product, a repeated term or base, a power of a number, an
     exponential, anything non-commutative or unusual, a Python number that sympy would
-    convert: ``xreplace`` with a rule of floats) leaves it to sympy.  ``keys`` (a dict,
-    filled here) carries the children's sort keys (``_sort_key``) over the calls of one
-    rebuild; without it they are sorted by ``Basic.compare``."""
+    convert: ``xreplace`` with a rule of floats) leaves it to sympy.  Likewise a rational
+    number times a sum, which sympy distributes (``_distributed``: the sum of the
+    products is built here), and a sum to a rational power, which sympy leaves as it is
+    after costly questions (``_plain_power``)."""
     if head is sp.Add:
         kept = _add_terms(args)
     elif head is sp.Mul:
         kept = _mul_factors(args)
+        if kept is None and global_parameters.evaluate:
+            terms = _distributed(args)
+            if terms is not None:
+                return build(sp.Add, terms)
+    elif head is sp.Pow and global_parameters.evaluate and _plain_power(*args):
+        return sp.Pow(*args, evaluate=False)
     else:
         kept = None
     if kept is None or not global_parameters.evaluate:
@@ -159,67 +185,10 @@ def build(head, args, keys: dict | None = None):
         return head.identity if coeff is None else coeff
     if coeff is None and len(rest) == 1:
         return rest[0]
-    _sort(rest, keys)
+    rest.sort(key=_args_sortkey)
     if coeff is not None:
         rest.insert(0, coeff)
     return head._exec_constructor_postprocessors(head._from_args(rest, True))
-
-
-def _sort(args: list, keys: dict | None):
-    """Sort ``args`` in place as sympy's constructors do (``Basic.compare``), by keys
-    that order as it does (``_sort_key``, remembered in ``keys``): compared as tuples,
-    children's keys shared, instead of a Python call per comparison at every level."""
-    if keys is not None and len(args) > 1:
-        found = [_sort_key(a, keys) for a in args]
-        if None not in found:
-            order = sorted(range(len(args)), key=found.__getitem__)
-            args[:] = [args[i] for i in order]
-            return
-    args.sort(key=_args_sortkey)
-
-
-#: class -> the part of ``_sort_key`` that orders classes as ``Basic.compare`` does
-_CLASS_KEYS: dict = {}
-
-
-def _class_key(cls) -> tuple:
-    key = _CLASS_KEYS.get(cls)
-    if key is None:
-        name = cls.__name__
-        unknown = len(ordering_of_classes) + 1
-        i = ordering_of_classes.index(name) if name in ordering_of_classes else unknown
-        key = _CLASS_KEYS[cls] = (i, name if i == unknown else "")
-    return key
-
-
-def _sort_key(expr, keys: dict):
-    """A tuple ordered among others as ``Basic.compare`` orders their expressions: the
-    class (``ordering_of_classes``, then the name), the length of the hashable content,
-    then its items (children by their keys); None for a node whose hashable content is
-    not its children or plain values (then ``Basic.compare`` sorts).  ``keys``:
-    id(node) -> (node, key), filled for every node below."""
-    got = keys.get(id(expr))
-    if got is not None:
-        return got[1]
-    stack = [(expr, False)]
-    while stack:
-        e, expanded = stack.pop()
-        if id(e) in keys:
-            continue
-        content = e._hashable_content()
-        if not expanded and e.args and content is e._args:
-            stack.append((e, True))
-            stack.extend((a, False) for a in content if id(a) not in keys)
-            continue
-        if content is e._args:
-            items = [keys[id(a)][1] for a in content]
-            key = None if None in items else (_class_key(type(e)), len(content), *items)
-        elif any(isinstance(x, (sp.Basic, frozenset)) for x in content):
-            key = None
-        else:
-            key = (_class_key(type(e)), len(content), *content)
-        keys[id(e)] = (e, key)
-    return keys[id(expr)][1]
 
 
 def _add_terms(args):
@@ -288,15 +257,45 @@ def _mul_factors(args):
     return coeff, rest
 
 
+def _distributed(args):
+    """The terms of ``Mul(*args)`` when sympy distributes a rational number over a sum
+    (``Mul.flatten``: two factors besides ones, a rational and a sum with coefficient
+    one), each the number times a term (``_keep_coeff``, as sympy), else None: the sum
+    of them is then built as any other (``build``), not by ``Add.flatten``."""
+    rest = [a for a in args if a is not sp.S.One]
+    if len(rest) != 2 or not all(isinstance(a, sp.Basic) for a in rest):
+        return None
+    a, b = rest
+    if b.is_Rational:
+        a, b = b, a
+    if not a.is_Rational or a.is_zero:
+        return None
+    r, b = b.as_coeff_Mul()
+    if r is not sp.S.One or not b.is_Add or not global_parameters.distribute or (
+            not b.is_commutative):
+        return None
+    return [_keep_coeff(a, t) for t in b.args]
+
+
+def _plain_power(base, exp) -> bool:
+    """Whether sympy leaves ``base**exp`` as it is (``Pow.__new__``): a sum not a
+    number to a rational power but 0 and 1, which ``Add._eval_power`` rewrites only for
+    two terms, one infinite, the other a multiple of I -- whose asking (``is_infinite``
+    of each term, an assumptions query through the whole term) is what costs: with no
+    I in the sum it is not asked."""
+    return (isinstance(base, sp.Add) and isinstance(exp, sp.Rational)
+            and exp is not sp.S.Zero and exp is not sp.S.One and not base.is_number
+            and (len(base.args) != 2 or not has(base, sp.I)))
+
+
 def _plain(e) -> bool:
     """``e`` is a symbol, a function or a power of something not a number."""
     return e.is_Symbol or (e.is_Pow and not e.base.is_Number) or (
         isinstance(e, sp.Function) and not isinstance(e, ExpBase))
 
 
-#: the keys in ``xreplace``'s ``canon`` of the nodes it built, by head and children, and
-#: of the sort keys of ``build``
-_BUILT, _KEYS = object(), object()
+#: the key in ``xreplace``'s ``canon`` of the nodes it built, by head and children
+_BUILT = object()
 
 
 def xreplace(expr, rule: dict, canon: dict | None = None, memo: dict | None = None):
@@ -316,7 +315,6 @@ def xreplace(expr, rule: dict, canon: dict | None = None, memo: dict | None = No
     canon = {} if canon is None else canon
     memo = {} if memo is None else memo     # id(node) -> (node, result, rule reaches it)
     built = canon.setdefault(_BUILT, {})    # (head, ids of canonical children) -> node
-    keys = canon.setdefault(_KEYS, {})
     roots = _roots(expr)
     stack = [(e, False) for e in reversed(roots)]
     while stack:
@@ -338,7 +336,7 @@ def xreplace(expr, rule: dict, canon: dict | None = None, memo: dict | None = No
                 key = (e.func, *map(id, args))      # children: canon's objects
                 new = built.get(key)
                 if new is None:
-                    new = build(e.func, args, keys)
+                    new = build(e.func, args)
                     new = built[key] = canon.setdefault(new, new)
             elif all(a is b for a, b in zip(args, e.args)):
                 new = e

@@ -135,7 +135,6 @@ def _to_sympy(exprs, originals: dict) -> list:
     (symengine's own conversion walks the tree) by the constructor symengine's would
     call; symbols become ``originals[name]`` (the user's, with their assumptions)."""
     done: dict = {}
-    keys: dict = {}                 # the sort keys of ``dag.build``
     for root in exprs:
         stack = [(root, False)]
         while stack:
@@ -155,7 +154,7 @@ def _to_sympy(exprs, originals: dict) -> list:
                 if head is None:        # a function: symengine's conversion, one level
                     dummies = [se.Symbol(f"_{i}") for i in range(len(args))]
                     head = sp.sympify(e.func(*dummies), strict=True).func
-                done[e] = dag.build(head, [done[a] for a in args], keys)
+                done[e] = dag.build(head, [done[a] for a in args])
     return [done[e] for e in exprs]
 
 
@@ -241,6 +240,7 @@ def _weighted(M: sp.Matrix, weights, parts) -> sp.Matrix:
                    if X is not None and w != 0 and X[i, j] != 0]))
 
 
+@dag.collector_paused()
 def solve(system, kappa: str = "none", explicit: bool = False, multipliers=(),
           rates=()) -> dict:
     """q''^s (and the ``rates`` of ``multipliers``) of the rows (*) on the constraints.
