@@ -194,7 +194,8 @@ def _forget():
         _WATCHDOG = None
     _DEPTH[0] = 0
     _CAUGHT.clear()
-    # (_HALTS kept: a child forked during a call pops its entry as the call unwinds)
+    # (_HALTS kept: a child forked during a call pops its entry as the call unwinds,
+    # SIGINT held back until then as in the parent)
 
 
 os.register_at_fork(after_in_child=_forget)
@@ -220,7 +221,8 @@ def set_wakeup_fd(fd, /, *, warn_on_full_buffer=True):
 
 signal.set_wakeup_fd = _signal.set_wakeup_fd = set_wakeup_fd
 #: the SIGINT handler ``_on_sigint`` stands in for, the compiled calls in progress in
-#: the main thread, and the frames of the signals they held back
+#: the main thread other than those on ``_HALTS``, and the frames of the signals they
+#: held back
 _DELEGATE: list = [None]
 _DEPTH = [0]
 _CAUGHT: list = []
@@ -232,7 +234,7 @@ _HALTS: list = []
 def _on_sigint(signum, frame):
     """The Python-level SIGINT handler: recorded during a compiled call (its handler
     runs once the call has returned), else the handler it stands in for."""
-    if _DEPTH[0]:
+    if _HALTS or _DEPTH[0]:
         _CAUGHT.append(frame)
     else:
         _DELEGATE[0](signum, frame)
@@ -264,15 +266,13 @@ def call(fn, halt: np.ndarray, timeout: float | None = None, args: tuple = ()):
         # the common case (the main thread, _on_sigint in place, no timeout, the wakeup
         # fd the watchdog's): ``halt`` on the list the watchdog reads on SIGINT
         _HALTS.append(halt)
-        _DEPTH[0] += 1
         try:
             if wd.thread is None:             # (ended after IDLE: sees _HALTS or starts)
                 wd.start()
             return fn(*args)
         finally:
             _HALTS.pop()
-            _DEPTH[0] -= 1
-            if _CAUGHT and not _DEPTH[0]:
+            if _CAUGHT and not (_HALTS or _DEPTH[0]):
                 _deliver()
     return _call(fn, halt, timeout, args)
 
@@ -331,7 +331,7 @@ def _call(fn, halt, timeout, args):
             if old >= 0:                      # someone else's: theirs again
                 _set_wakeup_fd(old)
                 _KNOWN[0] = None
-            if _CAUGHT and not _DEPTH[0]:
+            if _CAUGHT and not (_HALTS or _DEPTH[0]):
                 _deliver()
 
 
@@ -368,7 +368,7 @@ def shared(halt: np.ndarray):
                 return fn(*args)
             finally:
                 _DEPTH[0] -= 1
-                if _CAUGHT and not _DEPTH[0]:
+                if _CAUGHT and not (_HALTS or _DEPTH[0]):
                     _deliver()
         yield run
     finally:
