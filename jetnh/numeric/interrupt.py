@@ -279,17 +279,26 @@ def call(fn, halt: np.ndarray, timeout: float | None = None, args: tuple = ()):
 
 def _claim(wd) -> bool:
     """Whether the wakeup fd is (now) the socket of ``wd``: made so where no one else's
-    was set, and then known (``_KNOWN``) while ``set_wakeup_fd`` is the function in
-    place; someone else's left as it was."""
+    was set (``_take``); someone else's left as it was."""
+    old = _take(wd)
+    if old < 0:
+        return True
+    _set_wakeup_fd(old)
+    return False
+
+
+def _take(wd) -> int:
+    """Make the wakeup fd the socket of ``wd``: the fd it replaced where that was someone
+    else's (theirs again after the call), else -1, and the fd then known to be the
+    watchdog's (``_KNOWN``) while ``set_wakeup_fd`` is the function in place."""
     own = wd.own
     old = _set_wakeup_fd(own, warn_on_full_buffer=False)
     if old == own or old < 0:             # (no one else's: it stays the watchdog's)
         if signal.set_wakeup_fd is set_wakeup_fd is _signal.set_wakeup_fd:
             _KNOWN[0] = wd
-        return True
-    _set_wakeup_fd(old)
+        return -1
     _KNOWN[0] = None
-    return False
+    return old
 
 
 def _deliver():
@@ -314,10 +323,7 @@ def _call(fn, halt, timeout, args):
     wd = _WATCHDOG or _watchdog()
     old = -1
     if listen:
-        own = wd.own
-        old = _set_wakeup_fd(own, warn_on_full_buffer=False)
-        if old == own:
-            old = -1
+        old = _take(wd)
         _DEPTH[0] += 1
     key = None
     try:
@@ -330,7 +336,6 @@ def _call(fn, halt, timeout, args):
             _DEPTH[0] -= 1
             if old >= 0:                      # someone else's: theirs again
                 _set_wakeup_fd(old)
-                _KNOWN[0] = None
             if _CAUGHT and not (_HALTS or _DEPTH[0]):
                 _deliver()
 
@@ -351,10 +356,7 @@ def shared(halt: np.ndarray):
         yield bare
         return
     wd = _WATCHDOG or _watchdog()
-    own = wd.own
-    old = _set_wakeup_fd(own, warn_on_full_buffer=False)
-    if old == own:
-        old = -1
+    old = _take(wd)
     key = None
     try:
         key = wd.register(halt, None, old)
@@ -376,4 +378,3 @@ def shared(halt: np.ndarray):
             del wd.calls[key]
         if old >= 0:                          # someone else's: theirs again
             _set_wakeup_fd(old)
-            _KNOWN[0] = None
