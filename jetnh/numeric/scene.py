@@ -478,7 +478,7 @@ class Scene(Frozen):
         # (the attributes set directly, not by ``_set``: a time span is a tuple of
         # floats, the initial values floats, y0 made read-only here)
         d.update(t_span=self.t_span if t_span is self.t_span else self._t_span(t_span),
-                 projected={}, completed={})
+                 projected=_NOTHING, completed=_NOTHING)
         own = self._memo
         hit = own.get("moved")
         if hit is None or hit[0] != len(own) or hit[1] is None:
@@ -954,6 +954,8 @@ _SHARED = ("spec", "key", "plans", "spans", "events", "atlas_applies", "atlases"
 
 
 _FLOAT = {float}
+#: ``projected`` and ``completed`` of the copies ``replace`` makes (nothing moved)
+_NOTHING = FrozenDict()
 #: what ``replace`` changes in a copy of the scene (``_moved``)
 _MOVED = frozenset(("initial", "t_span"))
 #: the plans of a scene that kept none (``run``: its key is hashed all the same)
