@@ -472,13 +472,13 @@ class Scene(Frozen):
             raise JetnhError(f"initial must be a dict keyed by Symbol or name, got a "
                              f"{type(initial).__name__}")
         new = object.__new__(Scene)
-        d = new.__dict__
-        d.update(self.__dict__)
-        del d["_memo"]
         # (the attributes set directly, not by ``_set``: a time span is a tuple of
-        # floats, the initial values floats, y0 made read-only here)
-        d.update(t_span=self.t_span if t_span is self.t_span else self._t_span(t_span),
-                 projected=_NOTHING, completed=_NOTHING)
+        # floats, the initial values floats, y0 made read-only here; ``_memo`` the
+        # copy's own below, before anything reads it)
+        d = self.__dict__.copy()        # (a copy of the dict: sooner than filling one)
+        d["t_span"] = self.t_span if t_span is self.t_span else self._t_span(t_span)
+        d["projected"] = d["completed"] = _NOTHING
+        object.__setattr__(new, "__dict__", d)
         own = self._memo
         hit = own.get("moved")
         if hit is None or hit[0] != len(own) or hit[1] is None:
@@ -694,12 +694,12 @@ class Scene(Frozen):
                 if keywords:
                     for k, v in keywords.items():
                         key += (k, v, type(v))
-                plan = self._memo.get("quick", _NONE_KEPT)[key]
-            except (KeyError, TypeError, ValueError) as exc:
-                # not planned yet (a KeyError), or a key not hashable or no pair of times
-                plan = self._kept_plan(key if type(exc) is KeyError else None, rtol,
-                                       atol, t_eval, method, save, t_span, singular, split,
-                                       keywords)
+                plan = self._memo.get("quick", _NONE_KEPT).get(key)
+            except (TypeError, ValueError):     # a key not hashable, or no pair of times
+                plan = key = None
+            if plan is None:                    # not planned yet (under this key)
+                plan = self._kept_plan(key, rtol, atol, t_eval, method, save, t_span,
+                                       singular, split, keywords)
         else:
             plan = self._plan(rtol, atol, t_eval, method, save, events, t_span, timeout,
                               projection, backend, step, singular, split, newton,

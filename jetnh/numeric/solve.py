@@ -288,7 +288,9 @@ def on_span(plan, t0, t1) -> Plan:
     """``plan`` (whose options do not depend on its span: ``Plan.spans``) on the time
     span ``(t0, t1)`` (checked: ``arguments.time_span``)."""
     new = object.__new__(Plan)
-    new.__dict__.update(plan.__dict__, t0=t0, t1=t1, head=(*plan.prefix, t0, t1))
+    d = plan.__dict__.copy()            # (a copy of the dict: sooner than filling one)
+    d["t0"], d["t1"], d["head"] = t0, t1, (*plan.prefix, t0, t1)
+    object.__setattr__(new, "__dict__", d)
     return new
 
 
