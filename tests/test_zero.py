@@ -31,12 +31,44 @@ def test_on_the_constraint_manifold_and_on_a_branch():
 
 
 def test_floats_are_zero_up_to_their_rounding():
-    """Input with Floats is zero below ROUNDING times its terms (exact input is decided
-    exactly: the same residual with a Rational is not zero)."""
-    x = sp.Symbol("x")
+    """Input with Floats is zero below ROUNDING times the terms that cancel in it, or
+    below a double's rounding (exact input is decided exactly: the same residual with a
+    Rational is not zero)."""
+    x, y = sp.Symbol("x"), sp.Symbol("y")
     assert zero.vanishes(sp.Float(0.1) * 3 * x - sp.Float(0.3) * x + sp.Float(1e-17) * x)
+    assert zero.vanishes(sp.Float(0.3) * (sp.sin(x) ** 2 + sp.cos(x) ** 2) - sp.Float(0.3))
+    assert zero.vanishes(y * (sp.Float(0.7) * sp.sin(x) ** 2 + sp.Float(0.7) * sp.cos(x) ** 2
+                              - sp.Float(0.7)) ** 3)
     assert not zero.vanishes(sp.Float(1e-6) * x)
     assert not zero.vanishes(sp.Rational(1, 10**17) * x)
+
+
+def test_a_small_typed_coefficient_is_not_rounding():
+    """A Float the user typed is data: 1e-9*y, 1e-14 (a lone constant), a 1e-10 term
+    inside a function, are not zero."""
+    x, y = sp.Symbol("x"), sp.Symbol("y")
+    for c in (1e-9, 1e-10, 1e-14):
+        assert not zero.vanishes(sp.Float(c) * y)
+        assert not zero.vanishes(sp.Float(c))
+    assert not zero.vanishes(sp.sin(sp.Float(1e-10) * x * y))
+
+
+def test_compare_and_linearize_keep_a_tiny_float_coefficient():
+    """z_t = 1e-10 y x_t is not holonomic: vakonomic and Chetaev differ (as with a
+    Rational); y'' = 1e-9 y keeps y (unstable), not dropped as cyclic."""
+    import jetnh as jn
+
+    J = jn.JetSpace("x y z")
+    (x, y, z), (xt, yt, zt) = J.q, J.qd
+    s = jn.System(J, (xt**2 + yt**2 + zt**2) / 2, [zt - sp.Float(1e-10) * y * xt],
+                  dependent=[z])
+    assert not jn.compare(s, "vakonomic", "chetaev").identical
+    J2 = jn.JetSpace("x y")
+    (x, y), (xt, yt) = J2.q, J2.qd
+    s2 = jn.System(J2, (xt**2 + yt**2) / 2 - x**2 / 2 + sp.Float(1e-9) * y**2 / 2)
+    lin = jn.linearize(s2, at={"x": 0.0, "y": 0.0, "x_t": 0.0, "y_t": 0.0})
+    assert "y" in lin.state_names and lin.dropped == ()
+    assert lin.verdict == "unstable"
 
 
 def test_value_and_manifold_point():

@@ -9,7 +9,11 @@ at each point).  Each point is rational and evaluated at 30 and 60 digits: a
 value both precisions confirm is nonzero; one that shrinks with the precision is the
 rounding noise of an exact zero; between the two the point is evaluated exactly
 (rational expressions at rational points) or at 120 digits.  An expression with Floats
-(inexact input) is zero where its value is below ``ROUNDING`` times its terms.
+(inexact input) is zero where its value is below ``ROUNDING`` times the magnitude of the
+terms that cancel in it (every sum evaluated with its terms' absolute values), or below
+``DOUBLE_ROUNDING``: a coefficient typed into the input is data, not rounding, unless it
+is below the rounding of a double (1e-15; give smaller ones as a Rational or a
+parameter).
 
 ``decisions()`` collects, for the callers that report how they decided, how many
 expressions were decided this way.
@@ -31,6 +35,7 @@ POINTS = 4
 TREE_MAX = 400           # tree nodes above which the symbolic zero tests evaluate instead
 SIMPLIFY_MAX = 100       # ... and above which a numerically zero one is not simplified
 ROUNDING = 1e-9          # relative size under which a value with Floats in it is zero
+DOUBLE_ROUNDING = 1e-15  # absolute size under which it is zero (a few ulps of a double)
 _DEN = 100 * 2**16
 _CONFIRM = 1e-12         # relative agreement of two precisions that confirms a value
 _SHRINK = 1e-20          # a value that shrinks by this going to 60 digits is noise
@@ -206,16 +211,51 @@ def _zero_at(exprs, base, point, exact_point) -> bool:
 
 def _small_at(exprs, base, point) -> bool:
     """Floats in the input: zero up to their rounding, ``ROUNDING`` relative to the
-    size of the expression's terms (and at least 1)."""
-    terms = [list(sp.Add.make_args(e))[:50] for e in exprs]
-    vals = _values(exprs + [t for ts in terms for t in ts], base, point, 30)
-    at = len(exprs)
-    for v, ts in zip(vals, terms):
-        scale = max([1] + [abs(x) for x in vals[at:at + len(ts)]])
-        at += len(ts)
-        if abs(v) > ROUNDING * scale:
+    magnitude of the terms that cancel (``_magnitudes``), or below ``DOUBLE_ROUNDING``."""
+    with mpmath.workdps(30):
+        pt = point(base, 30) if point else {s: mpmath.mpf(v.p) / v.q
+                                             for s, v in base.items()}
+        pairs = _magnitudes(exprs, pt)
+    for v, m in pairs:
+        if not (mpmath.isfinite(v) and mpmath.isfinite(m)):
+            raise ZeroDivisionError("not finite here")
+        if abs(v) > ROUNDING * m + DOUBLE_ROUNDING:
             return False
     return True
+
+
+def _magnitudes(exprs, pt) -> list:
+    """(value, magnitude) of each of ``exprs`` at ``pt`` on the shared graph: the
+    magnitude is the value with every sum taken over its terms' magnitudes (a product
+    of magnitudes, a positive integer power of one), so what rounding can leave of a
+    cancellation is small relative to it, and a lone term is its own magnitude."""
+    prec = mpmath.mp.prec
+
+    def leaf(e):
+        if e in pt:
+            v = mpmath.mpmathify(pt[e])
+        elif e.is_Number or e.is_NumberSymbol or e is sp.I:
+            v = dag._number(e, prec)
+        else:
+            return None
+        return v, abs(v)
+
+    def add(args):
+        return mpmath.fsum(v for v, _ in args), mpmath.fsum(m for _, m in args)
+
+    def mul(args):
+        return mpmath.fprod(v for v, _ in args), mpmath.fprod(m for _, m in args)
+
+    def power(base, exp):
+        v = mpmath.power(base[0], exp[0])
+        whole = exp[0] == mpmath.nint(mpmath.re(exp[0])) and mpmath.re(exp[0]) > 0
+        return v, (mpmath.power(base[1], exp[0]) if whole else abs(v))
+
+    def function(e, args):
+        v = dag.evaluate(e.func(*[dag.to_sympy(a) for a, _ in args]), {}, dps=30)
+        return v, abs(v)
+
+    return dag._values(exprs, leaf, add, mul, power, function)
 
 
 def _zero_exactly(undecided, base, point, exact_point) -> bool:
