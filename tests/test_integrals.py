@@ -175,3 +175,26 @@ def test_dependent_coefficients_give_no_trivial_quantity():
                                     coefficients=[1, sp.sin(y)**2, sp.cos(y)**2])
     assert len(basis) == 1
     assert sp.simplify(basis[0] / yd).is_number
+
+
+def test_suslov_integrals_include_the_multipliers():
+    """The Suslov multipliers are states: lambda_alpha + p_alpha of the Chaplygin disk
+    (Zhao et al. (41a)) is among its Suslov integrals, and every one has D I = 0 (sympy's
+    subs route)."""
+    s = models.rolling_disk()
+    basis = jn.conserved_quantities(s, "suslov", degree=1)
+    lx, ly = s.equations("suslov").multipliers
+    import numpy as np
+
+    rng = random.Random(5)
+    cands = [s.on_constraints(lam + p) for lam, p in zip((lx, ly), s.p_dependent)]
+    exprs = [s.on_constraints(b) for b in basis] + cands
+    syms = sorted(set().union(*(e.free_symbols for e in exprs)), key=str)
+    rows = [[float(e.subs(pt)) for e in exprs] for pt in
+            ({x: rng.uniform(0.3, 1.4) for x in syms} for _ in range(3 * len(exprs)))]
+    M = np.array(rows)
+    r0 = np.linalg.matrix_rank(M[:, :len(basis)], tol=1e-9)
+    assert r0 == np.linalg.matrix_rank(M, tol=1e-9) == len(basis)      # in the span
+    assert any(b.has(lx) for b in basis) and any(b.has(ly) for b in basis)
+    for I in basis:
+        assert _DI_numeric(s, "suslov", I, points=4) < 1e-30

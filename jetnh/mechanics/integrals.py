@@ -3,7 +3,8 @@
 ``conserved_quantities(sysm, principle, degree, coefficients)`` returns a basis, modulo
 the constraints, of the functions I(t, q, qdot[, lambda]) = sum_j c_j g_j(t, q) m_j(qdot,
 lambda), m_j a monomial of degree <= ``degree`` in all the velocities (the dependent ones
-included) and, for the vakonomic and Hoelder principles, the multipliers, whose total
+included) and, for every principle whose multipliers are states (vakonomic, Hoelder,
+Suslov: their rates are integrated with the motion), the multipliers, whose total
 derivative vanishes on the equations on the constraint manifold
 (Olver 1993, section 4.3: first integrals as the kernel of the
 total derivative on the solution manifold).  The condition D I = 0 is linear in c and is
@@ -52,7 +53,9 @@ def check_arguments(sysm, principle, degree, what) -> Principle:
 def conserved_quantities(sysm, principle, degree=2, coefficients=None) -> list:
     """A basis, modulo the constraints, of the nontrivial first integrals of ``principle``
     polynomial of total degree <= ``degree`` in all the velocities (dependent ones
-    included) and, for the vakonomic and Hoelder principles, the multipliers.
+    included) and the multipliers of every principle whose multipliers are states
+    (vakonomic, Hoelder, Suslov), e.g. the Suslov integrals lambda_alpha + p_alpha of a
+    Chaplygin system (Zhao et al. 2008, (41a)).
 
     The search is complete in its space: an empty list means that no integral exists
     there.  None vanishes on the constraint manifold (checked exactly against the
@@ -90,7 +93,7 @@ def conserved_quantities(sysm, principle, degree=2, coefficients=None) -> list:
                  f"in {J.n} velocities")
     eom = sysm.equations(p)
     acc = eom.accelerations()                       # its errors propagate
-    lam = list(eom.multipliers) if p.multipliers_act else []
+    lam = list(eom.multipliers) if eom.multiplier_rates else []     # states
     rates = list(eom.multiplier_rates) if lam else []
     on = sysm.on_constraints
 
