@@ -198,3 +198,24 @@ def test_suslov_integrals_include_the_multipliers():
     assert any(b.has(lx) for b in basis) and any(b.has(ly) for b in basis)
     for I in basis:
         assert _DI_numeric(s, "suslov", I, points=4) < 1e-30
+
+
+def test_default_space_holds_the_coefficients_of_L():
+    """The spherical pendulum's energy and p_phi = sin(th)**2 ph_t have the coefficient
+    sin(th)**2 of L: the default search finds them (an empty answer claims none exists)."""
+    J = jn.JetSpace("th ph")
+    th, ph = J.q
+    thd, phd = J.qd
+    g = sp.Symbol("g")
+    s = jn.System(J, (thd**2 + sp.sin(th)**2 * phd**2) / 2 + g * sp.cos(th))
+    from jetnh.mechanics.integrals import functions_of_q
+
+    assert sp.sin(th)**2 in functions_of_q(s)
+    basis = jn.conserved_quantities(s, "chetaev", degree=1)
+    assert _in_span(phd * sp.sin(th)**2, basis, [thd, phd, sp.sin(th), sp.cos(th)])
+    for I in basis:
+        assert _DI_numeric(s, "chetaev", I, points=3) < 1e-30
+    J2 = jn.JetSpace("x y")
+    x = J2.q[0]
+    s2 = jn.System(J2, J2.qd[0]**2 / (2 * (1 + x**2)) + J2.qd[1]**2 / 2)
+    assert 1 / (x**2 + 1) in functions_of_q(s2)
