@@ -1,6 +1,8 @@
 """What watching the singularity indicators costs a short run: ``scene.run`` with the
 indicators watched (the default) against the same run with ``singular="ignore"``, on the
-work-precision panels, this tree against another checkout.
+work-precision panels, this tree against another checkout; and what watching the edge of
+the split's chart costs a run that never reaches it: the default run (``split="switch"``)
+against the watched run kept in its split.
 
     .venv/bin/python benchmarks/watch_cost.py [--quick] [--vs PATH] [--rounds N] [--out PATH]
 
@@ -8,19 +10,23 @@ work-precision panels, this tree against another checkout.
 baseline, e.g. ``git worktree add --detach /tmp/watch-before 299079e``).  Scenes:
 ``workprecision.scene_of`` of its Chetaev cases (``--quick``: nonholonomic_particle,
 knife_edge, chaplygin_sleigh), run as the work-precision benchmark runs them:
-``scene.run(method="dop853", save="final", rtol=1e-8, atol=1e-11, split="fixed")``.
+``scene.run(method="dop853", save="final", rtol=1e-8, atol=1e-11, split="fixed")``;
+``default``: the same without ``split`` (a scene whose split has an edge watches it as an
+event of its own, ``numeric.atlas``; measured on the panels whose run does not reach the
+edge: ``edge`` = default - watched).
 
 Each measurement runs in a fresh interpreter (``--worker``) with ``PYTHONPATH`` set to its
 tree; the trees' workers run in turn, A B A B ... (``--rounds`` rounds).  A worker calls
-the two runs of a panel alternately, warm, ``calls`` times each, and reports the 10th
+the runs of a panel in turn, warm, ``calls`` times each, and reports the 10th
 percentile of the single calls' wall times (``perf_counter``) and of their CPU times
 (``thread_time``: on a loaded machine the wall time counts the waits for a core), and
 the same for the compiled loop called directly (``plan.entry``: the run without its
 Python side).  Besides, runs whose last steps are searched inside for a dip of an
 indicator (``_events.sing_dip``): Appell-Hamel's speed decays to a zero that
 x_t^2 + y_t^2 only touches; dop853, dopri5, rk4 (400 steps) and radau stop at its
-threshold (CPU time, 10th percentile; the stop times of both trees must be equal).  The figure per tree is the best over the rounds; ``watch`` = watched -
-ignored, the extra cost of the watch; both trees' runs must end on the same state bit
+threshold (CPU time, 10th percentile; the stop times of both trees must be equal).
+The figure per tree is the best over the rounds; ``watch`` = watched - ignored, the
+extra cost of the watch; both trees' runs must end on the same state bit
 for bit (the watch changes no step).  Machine, date, load average (also before and after
 each round), commit and command in the JSON (``_common.write``).
 """
@@ -36,7 +42,7 @@ from _common import ROOT, parser, run_worker, write
 
 PANELS = ("nonholonomic_particle", "knife_edge", "chaplygin_sleigh", "isokinetic_particle",
           "n_trailer", "rolling_disk")
-QUICK = PANELS[:3]
+QUICK = ("nonholonomic_particle", "knife_edge", "isokinetic_particle")
 RUN = dict(method="dop853", save="final", rtol=1e-8, atol=1e-11, split="fixed")
 
 
@@ -98,9 +104,15 @@ def worker(spec):
         row = {"steps": int(loops[0]()[4][0]),
                "final": [float(v) for v in trajs[0].y[-1]],
                "same_final": bool(np.array_equal(trajs[0].y[-1], trajs[1].y[-1]))}
+        default = dict(RUN)
+        del default["split"]
+        tr = scene.run(**default)
+        if not tr.switches:         # the edge watched and not reached (or no edge)
+            runs.append(lambda kw=default: scene.run(**kw))
+            row["same_final"] &= bool(np.array_equal(trajs[0].y[-1], tr.y[-1]))
         for label, fs in (("run", runs), ("loop", loops)):
-            wall = [[], []]
-            cpu = [[], []]
+            wall = [[] for _ in fs]
+            cpu = [[] for _ in fs]
             for _ in range(calls):
                 for k, f in enumerate(fs):
                     c0 = time.thread_time()
@@ -110,7 +122,7 @@ def worker(spec):
                     c1 = time.thread_time()
                     wall[k].append(w1 - w0)
                     cpu[k].append(c1 - c0)
-            for k, name in enumerate(("watched", "ignored")):
+            for k, name in enumerate(("watched", "ignored", "default")[:len(fs)]):
                 row[f"{label}_{name}_wall_us"] = float(np.percentile(wall[k], 10)) * 1e6
                 row[f"{label}_{name}_cpu_us"] = float(np.percentile(cpu[k], 10)) * 1e6
         out[case.model] = row
@@ -167,6 +179,10 @@ def main():
                 for clock in ("wall", "cpu"):
                     row[f"{kind}_watch_{clock}_us"] = (row[f"{kind}_watched_{clock}_us"]
                                                        - row[f"{kind}_ignored_{clock}_us"])
+            if "run_default_wall_us" in row:
+                for clock in ("wall", "cpu"):
+                    row[f"run_edge_{clock}_us"] = (row[f"run_default_{clock}_us"]
+                                                   - row[f"run_watched_{clock}_us"])
             row["same_final"] = all(res[model]["same_final"] for res in good)
             row["final"] = good[0][model]["final"]
             rows[model] = row
@@ -181,11 +197,69 @@ def main():
                 continue
             before = summary["vs"][model]
             row["bitwise_equal_to_vs"] = row["final"] == before["final"]
-            for key in ("run_watched_wall_us", "run_watched_cpu_us", "loop_watched_cpu_us"):
-                row[f"ratio_{key}"] = row[key] / before[key]
+            for key in ("run_watched_wall_us", "run_watched_cpu_us", "loop_watched_cpu_us",
+                        "loop_watched_wall_us", "run_default_wall_us", "run_default_cpu_us"):
+                if key in row and key in before:
+                    row[f"ratio_{key}"] = row[key] / before[key]
     print(json.dumps(summary, indent=1))
-    write("watch_cost", {"trees": trees, "spec": spec, "rounds": rounds, "loads": loads,
-                         "summary": summary, "raw": raw}, args.out, args.quick)
+    tables, lines = tables_of(summary, loads)
+    for tab in tables:
+        print(tab["title"])
+        print(" | ".join(tab["columns"]))
+        for row in tab["rows"]:
+            print(" | ".join(row))
+    write("watch_cost", {"title": "What watching the singularity indicators and the chart's "
+                                  "edge costs a short run",
+                         "summary": lines, "tables": tables, "trees": trees, "spec": spec,
+                         "rounds": rounds, "loads": loads, "results": summary, "raw": raw},
+          args.out, args.quick)
+
+
+def tables_of(summary, loads):
+    """The tables and summary lines of the results (this tree, and ``vs`` where measured:
+    wall times, us, the best over the rounds of the 10th percentiles)."""
+    names = [n for n in ("this", "vs") if n in summary and "error" not in summary[n]]
+    this = summary["this"]
+    load = (f"load {min(x for r in loads for x in r[2:]):.1f}-"
+            f"{max(x for r in loads for x in r[2:]):.1f}")
+    keys = (("loop_watched_wall_us", "loop watched"), ("loop_ignored_wall_us", "loop ignored"),
+            ("run_watched_wall_us", "run watched"), ("run_ignored_wall_us", "run ignored"),
+            ("run_default_wall_us", "run default"))
+    rows, lines = [], []
+    for model, row in this.items():
+        if model == "searched":
+            continue
+        cells = [model]
+        for key, _ in keys:
+            for n in names:
+                v = summary[n][model].get(key)
+                cells.append(f"{v:.2f}" if v is not None else "-")
+            if len(names) == 2 and key in row and key in summary["vs"][model]:
+                cells.append(f"{row[key] / summary['vs'][model][key]:.2f}")
+            elif len(names) == 2:
+                cells.append("-")
+        rows.append(cells)
+        w = row["loop_watched_wall_us"] - row["loop_ignored_wall_us"]
+        text = (f"{model}: the watching loop costs {w:.2f} us over the loop that watches "
+                "nothing")
+        if len(names) == 2:
+            b = summary["vs"][model]
+            ratio = row["loop_watched_wall_us"] / b["loop_watched_wall_us"]
+            text += (f" ({b['loop_watched_wall_us'] - b['loop_ignored_wall_us']:.2f} us at "
+                     f"vs; the watching loop {ratio:.2f}x vs's)")
+        if "run_edge_wall_us" in row:
+            text += (f"; the default run, which watches its chart's edge, "
+                     f"{row['run_edge_wall_us']:.2f} us over the run kept in its split")
+            if len(names) == 2 and "run_edge_wall_us" in summary["vs"][model]:
+                text += f" ({summary['vs'][model]['run_edge_wall_us']:.2f} us at vs)"
+        lines.append(text + f" ({load})")
+    columns = ["panel"] + [f"{label} {n}" for _, label in keys
+                           for n in names + (["this/vs"] if len(names) == 2 else [])]
+    return [dict(title="A short run watched and not (dop853, rtol 1e-8, atol 1e-11, "
+                       "save='final'; us, wall, the best of the rounds' 10th percentiles; "
+                       "loop: the compiled call alone; default: split='switch', which "
+                       f"watches the chart's edge where the split has one; {load})",
+                 columns=columns, rows=rows)], lines
 
 
 def argparse_hidden():
