@@ -4,7 +4,8 @@ work-precision panels, this tree against another checkout; and what watching the
 the split's chart costs a run that never reaches it: the default run (``split="switch"``)
 against the watched run kept in its split.
 
-    .venv/bin/python benchmarks/watch_cost.py [--quick] [--vs PATH] [--rounds N] [--out PATH]
+    .venv/bin/python benchmarks/watch_cost.py [--quick] [--vs PATH] [--rounds N] [--panels]
+                                              [--out PATH]
 
 (default output: benchmarks/results/watch_cost.json; ``--vs`` a git worktree of the
 baseline, e.g. ``git worktree add --detach /tmp/watch-before 299079e``).  Scenes:
@@ -29,6 +30,11 @@ The figure per tree is the best over the rounds; ``watch`` = watched - ignored, 
 extra cost of the watch; both trees' runs must end on the same state bit
 for bit (the watch changes no step).  Machine, date, load average (also before and after
 each round), commit and command in the JSON (``_common.write``).
+
+With ``--panels`` each tree also runs ``workprecision.panel`` of ``PANEL_CASES`` (in its
+first round; the quick tolerances 1e-3, 1e-6, 1e-9 with ``--quick``, else 1e-3 ...
+1e-12): the time jetnh's fastest adaptive method and the fastest scipy method need to
+reach each error, and their ratio (the work-precision target: >= 50).
 """
 
 import json
@@ -44,6 +50,10 @@ PANELS = ("nonholonomic_particle", "knife_edge", "chaplygin_sleigh", "isokinetic
           "n_trailer", "rolling_disk")
 QUICK = ("nonholonomic_particle", "knife_edge", "isokinetic_particle")
 RUN = dict(method="dop853", save="final", rtol=1e-8, atol=1e-11, split="fixed")
+#: the work-precision panels of ``--panels``: a run that watches its chart's edge, and
+#: runs that watch indicators only
+PANEL_CASES = ("knife_edge / chetaev", "isokinetic_particle / chetaev",
+               "isokinetic_particle / vakonomic")
 
 
 #: runs whose last steps are searched inside (``_events.sing_dip``): the Appell-Hamel
@@ -127,13 +137,43 @@ def worker(spec):
                 row[f"{label}_{name}_cpu_us"] = float(np.percentile(cpu[k], 10)) * 1e6
         out[case.model] = row
     out["searched"] = searched(spec["calls"])
+    if spec.get("panels_wp"):
+        out["panels_wp"] = wp_panels(spec["quick"])
     print(json.dumps(out))
+
+
+def wp_panels(quick):
+    """case -> {error: {"jetnh", "scipy", "scipy_method"}} of ``workprecision.panel`` (as
+    ``chart_switch.panels``)."""
+    from workprecision import JETNH_ADAPTIVE, SCIPY, TARGETS, cases, panel
+
+    steps = [10, 100, 1000]             # the fixed-step methods (not reported here)
+    if quick:
+        tolerances, reps, budget, give_up = [1e-3, 1e-6, 1e-9], 2, 0.2, 0.5
+    else:
+        tolerances, reps, budget, give_up = [10.0 ** -k for k in range(3, 13)], 5, 1.0, 2.0
+    out = {}
+    for case in cases(False):
+        if case.label not in PANEL_CASES:
+            continue
+        tte = panel(case, tolerances, steps, reps, budget, give_up)["time_to_error"]
+        row = {}
+        for t in map(str, TARGETS):
+            ours = [tte[f"jetnh {m}"][t] for m in JETNH_ADAPTIVE if tte[f"jetnh {m}"][t]]
+            theirs = {m: tte[f"scipy {m}"][t] for m in SCIPY if tte[f"scipy {m}"][t]}
+            best = min(theirs, key=theirs.get) if theirs else None
+            row[t] = {"jetnh": min(ours) if ours else None,
+                      "scipy": theirs[best] if best else None, "scipy_method": best}
+        out[case.label] = row
+    return out
 
 
 def main():
     ap = parser(__doc__, "watch_cost")
     ap.add_argument("--vs", help="an earlier tree to measure too (a git worktree)")
     ap.add_argument("--rounds", type=int, default=None)
+    ap.add_argument("--panels", action="store_true",
+                    help="also the work-precision panels of PANEL_CASES")
     ap.add_argument("--worker", help=argparse_hidden())
     args = ap.parse_args()
     if args.worker:
@@ -141,7 +181,7 @@ def main():
         return
     panels = QUICK if args.quick else PANELS
     rounds = args.rounds or (2 if args.quick else 5)
-    spec = {"panels": panels, "calls": 200 if args.quick else 400}
+    spec = {"panels": panels, "calls": 200 if args.quick else 400, "quick": args.quick}
     trees = {"this": str(ROOT)}
     if args.vs:
         trees["vs"] = os.path.abspath(args.vs)
@@ -152,14 +192,16 @@ def main():
             load0 = os.getloadavg()[0]
             env = dict(os.environ, PYTHONPATH=os.pathsep.join(
                 [root, str(ROOT / "benchmarks")]))
-            res = run_worker(__file__, spec, 1800, env=env)
+            res = run_worker(__file__, dict(spec, panels_wp=args.panels and r == 0), 1800,
+                             env=env)
             loads.append([name, r, load0, os.getloadavg()[0]])
             raw[name].append(res)
             if "error" in res:
                 print(name, r, res["error"])
             print(name, r, "load", f"{load0:.2f}",
                   {m: round(v.get("run_watched_wall_us", -1), 1) for m, v in res.items()
-                   if isinstance(v, dict) and m != "searched"}, flush=True)
+                   if isinstance(v, dict) and m not in ("searched", "panels_wp")},
+                  flush=True)
     summary = {}
     for name, results in raw.items():
         good = [res for res in results if "error" not in res and "timeout" not in res]
@@ -170,7 +212,7 @@ def main():
                                                    for res in good))
                              for m, v in good[0]["searched"].items()}}
         for model in good[0]:
-            if model == "searched":
+            if model in ("searched", "panels_wp"):
                 continue
             row = {k: min(res[model][k] for res in good)
                    for k in good[0][model] if k.endswith("_us")}
@@ -193,7 +235,7 @@ def main():
             row["same_stop"] = row["t_stop"] == before["t_stop"]
             row["ratio_cpu_us"] = row["cpu_us"] / before["cpu_us"]
         for model, row in summary["this"].items():
-            if model == "searched":
+            if model in ("searched", "panels_wp"):
                 continue
             before = summary["vs"][model]
             row["bitwise_equal_to_vs"] = row["final"] == before["final"]
@@ -203,6 +245,9 @@ def main():
                     row[f"ratio_{key}"] = row[key] / before[key]
     print(json.dumps(summary, indent=1))
     tables, lines = tables_of(summary, loads)
+    if args.panels:
+        tables.append(panel_table({n: raw[n][0].get("panels_wp") for n in trees},
+                                  args.quick))
     for tab in tables:
         print(tab["title"])
         print(" | ".join(tab["columns"]))
@@ -213,6 +258,27 @@ def main():
                          "summary": lines, "tables": tables, "trees": trees, "spec": spec,
                          "rounds": rounds, "loads": loads, "results": summary, "raw": raw},
           args.out, args.quick)
+
+
+def panel_table(got, quick):
+    """The table of ``--panels`` (each tree's first round)."""
+    names = [n for n, g in got.items() if g]
+    rows = []
+    for c in PANEL_CASES:
+        for t in ("0.0001", "1e-06", "1e-08"):
+            cells = []
+            for n in names:
+                e = got[n][c][t]
+                ratio = (e["scipy"] / e["jetnh"]) if e["jetnh"] and e["scipy"] else None
+                cells += [f"{e['jetnh'] * 1e6:.3g}" if e["jetnh"] else "-",
+                          f"{ratio:.1f} ({e['scipy_method']})" if ratio else "-"]
+            rows.append([c, t, *cells])
+    return dict(title="Work-precision panels (workprecision.panel, "
+                      f"{'quick' if quick else 'full'} tolerances): jetnh's fastest adaptive "
+                      "method (us) to reach the error, and the fastest scipy method over it",
+                columns=["panel", "error", *(f"{n} {k}" for n in names
+                                             for k in ("jetnh (us)", "scipy / jetnh"))],
+                rows=rows, note="target: scipy / jetnh >= 50 on every panel")
 
 
 def tables_of(summary, loads):
@@ -227,7 +293,7 @@ def tables_of(summary, loads):
             ("run_default_wall_us", "run default"))
     rows, lines = [], []
     for model, row in this.items():
-        if model == "searched":
+        if model in ("searched", "panels_wp"):
             continue
         cells = [model]
         for key, _ in keys:
