@@ -88,7 +88,7 @@ def searched(calls):
 def worker(spec):
     from workprecision import cases, scene_of
 
-    from jetnh.numeric import solve
+    from jetnh.numeric import atlas, solve
     from jetnh.numeric.options import options
 
     calls = spec["calls"]
@@ -117,6 +117,7 @@ def worker(spec):
         default = dict(RUN)
         del default["split"]
         tr = scene.run(**default)
+        row["watches_edge"] = atlas.applies(scene, None)
         if not tr.switches:         # the edge watched and not reached (or no edge)
             runs.append(lambda kw=default: scene.run(**kw))
             row["same_final"] &= bool(np.array_equal(trajs[0].y[-1], tr.y[-1]))
@@ -217,6 +218,7 @@ def main():
             row = {k: min(res[model][k] for res in good)
                    for k in good[0][model] if k.endswith("_us")}
             row["steps"] = good[0][model]["steps"]
+            row["watches_edge"] = good[0][model].get("watches_edge")
             for kind in ("run", "loop"):
                 for clock in ("wall", "cpu"):
                     row[f"{kind}_watch_{clock}_us"] = (row[f"{kind}_watched_{clock}_us"]
@@ -313,7 +315,7 @@ def tables_of(summary, loads):
             ratio = row["loop_watched_wall_us"] / b["loop_watched_wall_us"]
             text += (f" ({b['loop_watched_wall_us'] - b['loop_ignored_wall_us']:.2f} us at "
                      f"vs; the watching loop {ratio:.2f}x vs's)")
-        if "run_edge_wall_us" in row:
+        if "run_edge_wall_us" in row and row.get("watches_edge"):
             text += (f"; the default run, which watches its chart's edge, "
                      f"{row['run_edge_wall_us']:.2f} us over the run kept in its split")
             if len(names) == 2 and "run_edge_wall_us" in summary["vs"][model]:
