@@ -72,7 +72,7 @@ from ..mechanics import principles
 from .methods import projection
 from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, FINISHED, SINGULAR, STATUS_TEXT,
                               STOPPED)
-from . import arguments, interrupt, loops, methods
+from . import arguments, chart_change, interrupt, loops, methods
 from .events import Event, as_events
 from .kernels.calls import Kernel, Rows
 from .methods.loop import Control, Watch
@@ -84,6 +84,8 @@ EDGE = "chart edge"
 MAX_K = 3
 #: what a loop's halt flag is made from (a copy: sooner than ``np.zeros``; never written)
 _HALT = np.zeros(1, dtype=np.int64)
+#: ``Atlas.change``: a chart it needs has no kernels yet
+MISSING = object()
 
 
 def split_invariant(principle, convention) -> bool:
@@ -465,6 +467,19 @@ class Atlas:
         self.columns = [sorted(m.dep.tolist()) for m in self.maps.values()]
         self._events: dict = {}
         self._edges: dict = {}
+        #: what the compiled change of chart reads (``chart_change``): the splits' index
+        #: maps, their kernels' addresses (filled as charts get their kernels:
+        #: ``_register``) and the kernels kept alive for them
+        self._index = {s: i for i, s in enumerate(self.splits)}
+        n, k = home.system.J.n, home.system.k
+        table = np.zeros((1 + len(self.splits), max(5, k + n)), dtype=np.int64)
+        table[0, :5] = (n, k, len(home.state_names), len(home.runtime_params),
+                        len(self.splits))
+        for i, (m, cols) in enumerate(zip(self.maps.values(), self.columns)):
+            table[1 + i, :k + n] = [*m.dep.tolist(), *cols, *m.ind.tolist()]
+        self._table = table
+        self._addr = np.zeros((3, len(self.splits)), dtype=np.int64)
+        self._alive: dict = {}
 
     @property
     def own(self) -> Chart:
@@ -527,6 +542,33 @@ class Atlas:
             return Ad[0, 0]**2 - sp.Float(self.eps) * gram[0, 0]
         return (Ad.det(method="berkowitz")**2
                 - sp.Float(self.eps) * gram.det(method="berkowitz"))
+
+    def change(self, chart, t, y, p):
+        """``switch`` at (t, y) of ``chart`` (a state moved onto the holonomic
+        constraints, C-contiguous floats) in one compiled call (``chart_change``): ``(new
+        chart, its state)``, None, or ``MISSING`` where a chart it needs has no kernels
+        here yet (``switch`` in Python then, which makes them)."""
+        out = np.empty(self._table[0, 2])
+        i = chart_change.change()(t, y, p, self._table, self._addr, self.eps,
+                                  self._index[chart.split], out)
+        if i >= 0:
+            return self.chart(self.splits[i], t, out), out
+        return None if i == -1 else MISSING
+
+    def register(self, *charts):
+        """Give the compiled change of chart the kernels of ``charts`` that are made
+        (their aux row's length before its address: a thread reading them meanwhile sees
+        the length first), kept alive with the atlas."""
+        for chart in charts:
+            i = self._index[chart.split]
+            kern, jac = chart._kernels, chart._jacobian
+            if kern is not None and not self._addr[1, i]:
+                self._alive[1, i] = kern
+                self._addr[2, i] = kern.layout.n_aux
+                self._addr[1, i] = kern.aux_fp.address
+            if jac is not None and not self._addr[0, i]:
+                self._alive[0, i] = jac
+                self._addr[0, i] = jac.address.address
 
     def measures(self, A) -> list[float]:
         """m_beta = det(A_beta)^2 / det(A A^T) of every split (in the order of
@@ -784,11 +826,17 @@ def switch(at, chart, t, y, p):
     y = _on_constraints(chart, t, y, p)
     if chart.explicit:              # (multipliers mapped by A: ``Chart.point``)
         return _target(at, chart, t, p, *chart.point(t, y, p))
-    # the same numbers copied through lists (``point``, ``state_at``: a few numbers)
+    found = at.change(chart, t, y, p)
+    if found is not MISSING:
+        return found
+    # the same numbers copied through lists (``point``, ``state_at``: a few numbers),
+    # the kernels made on the way given to the compiled change (``Atlas.register``)
     qd, n = chart.velocity_list(t, y, p), chart.n
     head, lam = y[:n].tolist(), y[2 * n - chart.k:].tolist()
-    return _choose(at, chart, t, p, chart.jacobian_rows(t, y, p), qd,
-                   lambda to: np.array(head + [qd[i] for i in to._independent] + lam))
+    found = _choose(at, chart, t, p, chart.jacobian_rows(t, y, p), qd,
+                    lambda to: np.array(head + [qd[i] for i in to._independent] + lam))
+    at.register(at.own, chart, *at.charts.values())
+    return found
 
 
 def _target(at, chart, t, p, q, qd, lam, A):
