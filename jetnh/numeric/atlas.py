@@ -86,6 +86,7 @@ MAX_K = 3
 _HALT = np.zeros(1, dtype=np.int64)
 #: ``Atlas.change``: a chart it needs has no kernels yet
 MISSING = object()
+_F8 = np.dtype(np.float64)
 
 
 class Cold(Exception):
@@ -562,6 +563,11 @@ class Atlas:
         constraints, C-contiguous floats) in one compiled call (``chart_change``): ``(new
         chart, its state)``, None, or ``MISSING`` where a chart it needs has no kernels
         here yet (``switch`` in Python then, which makes them)."""
+        if not (type(y) is np.ndarray and y.dtype is _F8 and y.ndim == 1
+                and y.flags.c_contiguous and type(p) is np.ndarray and p.dtype is _F8
+                and p.ndim == 1 and p.flags.c_contiguous):
+            raise JetnhError("a chart change takes a state and parameters as C-contiguous "
+                             "float64 vectors (np.ascontiguousarray(x, dtype=float))")
         out = np.empty(self._table[0, 2])
         i = chart_change.change()(t, y, p, self._table, self._addr, self.eps,
                                   self._index[chart.split], out)
