@@ -87,6 +87,8 @@ _HALT = np.zeros(1, dtype=np.int64)
 #: ``Atlas.change``: a chart it needs has no kernels yet
 MISSING = object()
 _F8 = np.dtype(np.float64)
+#: the compiled change of chart once loaded (``Atlas.register``)
+_CHANGE: list = []
 
 
 class Cold(Exception):
@@ -562,15 +564,18 @@ class Atlas:
         """``switch`` at (t, y) of ``chart`` (a state moved onto the holonomic
         constraints, C-contiguous floats) in one compiled call (``chart_change``): ``(new
         chart, its state)``, None, or ``MISSING`` where a chart it needs has no kernels
-        here yet (``switch`` in Python then, which makes them)."""
-        if not (type(y) is np.ndarray and y.dtype is _F8 and y.ndim == 1
-                and y.flags.c_contiguous and type(p) is np.ndarray and p.dtype is _F8
+        here yet, or before the compiled change is loaded (``switch`` in Python then,
+        which makes them: ``register``; nothing is compiled here)."""
+        cur = self._index[chart.split]
+        if not _CHANGE or not self._addr[0, cur]:
+            return MISSING
+        if not (type(y) is np.ndarray and y.dtype == _F8 and y.ndim == 1
+                and y.flags.c_contiguous and type(p) is np.ndarray and p.dtype == _F8
                 and p.ndim == 1 and p.flags.c_contiguous):
             raise JetnhError("a chart change takes a state and parameters as C-contiguous "
                              "float64 vectors (np.ascontiguousarray(x, dtype=float))")
         out = np.empty(self._table[0, 2])
-        i = chart_change.change()(t, y, p, self._table, self._addr, self.eps,
-                                  self._index[chart.split], out)
+        i = _CHANGE[0](t, y, p, self._table, self._addr, self.eps, cur, out)
         if i >= 0:
             return self.chart(self.splits[i], t, out), out
         return None if i == -1 else MISSING
@@ -583,7 +588,10 @@ class Atlas:
     def register(self, *charts):
         """Give the compiled change of chart the kernels of ``charts`` that are made
         (their aux row's length before its address: a thread reading them meanwhile sees
-        the length first), kept alive with the atlas."""
+        the length first), kept alive with the atlas; the compiled change loaded (or
+        compiled, on a machine's first use) here, where a switch makes what it needs."""
+        if not _CHANGE and not self.explicit:
+            _CHANGE.append(chart_change.change())
         for chart in charts:
             i = self._index[chart.split]
             kern, jac = chart._kernels, chart._jacobian

@@ -134,13 +134,19 @@ def _change(t, y, p, table, addr, eps, cur, out):
 
 
 @functools.cache
+def compiled():
+    """``_change`` compiled (or loaded from the signed store) on first use, for
+    ``SIGNATURE`` only (``jetnh cache warm`` compiles it ahead: ``atlas:change``)."""
+    return loop_cache.signed_njit(_change, SIGNATURE, loop_cache.file_stamp(__file__),
+                                  nogil=True, error_model="numpy")
+
+
+@functools.cache
 def change():
-    """``_change`` compiled (or loaded from the signed store) on first use: its
-    machine-code entry (``methods._common.entry_point``: no type dispatch, ~1.5 us a
-    call), which takes exactly the types of ``SIGNATURE`` (readable arrays; ``out``
-    writable): the caller checks what it is given (``atlas.Atlas.change``)."""
+    """The machine-code entry of ``compiled()`` (``methods._common.entry_point``: no
+    type dispatch, ~1.5 us a call), which takes exactly the types of ``SIGNATURE``
+    (readable arrays; ``out`` writable): the caller checks what it is given
+    (``atlas.Atlas.change``)."""
     from .methods._common import entry_point
 
-    return entry_point(loop_cache.signed_njit(_change, SIGNATURE,
-                                              loop_cache.file_stamp(__file__),
-                                              nogil=True, error_model="numpy"))
+    return entry_point(compiled())
