@@ -29,7 +29,11 @@ The switch costs microseconds, not a walk of the expressions: df/dqdot comes fro
 compiled kernel of each chart (its entries as an events kernel, cached on disk with the
 scene's kernels; ``Chart.point``), the measures from the k x k determinants on floats,
 the new state and the rows mapped home by index maps (the multipliers by A where they
-map).
+map).  Where the multipliers keep their values and the charts have their kernels, the
+whole change is one compiled call (``chart_change``, ``Atlas.change``), and a run whose
+charts, events and loops are made runs all its pieces inside one ``interrupt.call``
+(``Cold`` where one is not: the run goes on outside it, so that making a chart never
+holds back Ctrl-C).
 
 Suslov's equations in the paper's convention (29)-(31) are no chart change away from
 each other: the commutator term P_alpha c^alpha weighs the momenta of the dependent
@@ -954,7 +958,7 @@ def stitch(home, at, method, p, parts, switches, user, mode, wall):
     ends = mode == ENDPOINTS and last_part
     for i, (chart, seg, rerun) in enumerate(parts):
         out = seg.out
-        a, b = 0, out.n_out
+        a, b = 0, int(out.n_out)
         if ends:                            # the first row and the last
             a, b = (0, 1) if i == 0 else (b - 1, b) if i == last_part else (b, b)
         elif i > 0 and mode != AT_T_EVAL:
