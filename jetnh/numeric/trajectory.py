@@ -60,10 +60,9 @@ class Diagnostics:
     rows: int = 0
     saved: str = "steps"
     #: a run stopped at a singular configuration whose last row is its stop (next to the
-    #: singular set, where the dependent velocities are a near 0/0 evaluated at the
-    #: indicator's threshold):
-    #: that row, kept in the trajectory, is left out of the figures above and reported
-    #: here, {"t", "energy_drift", "residual_max"}; None otherwise
+    #: singular set, where the dependent velocities are a near 0/0): that row, kept in
+    #: the trajectory, is left out of the figures above and reported here, {"t",
+    #: "energy_drift", "residual_max"}; None otherwise
     stop_row: dict | None = None
 
     def __post_init__(self):
@@ -142,14 +141,14 @@ def _rows_text(d) -> str:
     if d.stop_row:
         s = d.stop_row
         stop = (f"leave out the last row, the singular stop at t = {s['t']:.10g} (next to "
-                f"the singular set its dependent velocities are a near 0/0): energy drift {s['energy_drift']:.3e}, "
-                f"constraint residual {s['residual_max']:.3e} at that row")
+                "the singular set its dependent velocities are a near 0/0): energy drift "
+                f"{s['energy_drift']:.3e}, constraint residual {s['residual_max']:.3e} there")
         text = f"{text}; they {stop}" if text else f"these figures {stop}"
     return text
 
 
 def _largest(a) -> float:
-    """The largest entry of ``a`` (0 for none; NaN where there is one)."""
+    """The largest entry of ``a`` (0 for none; NaN if one is)."""
     return float(np.max(a)) if a.size else 0.0
 
 
