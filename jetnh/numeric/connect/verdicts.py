@@ -213,12 +213,14 @@ def _hessian_values(tr, times, ys, multipliers=True) -> np.ndarray:
     from ...algebra import dag
 
     scene = tr.scene
-    system = scene.system
     key = "legendre_constant" if multipliers else "kinetic_constant"
+    constant = scene._memo.get(key, scene)
+    if constant is not None and constant is not scene:
+        return constant
+    system = scene.system
     states, v, H = _hessian(scene, multipliers)
     n = len(v)
     params = {s: scene.params[s.name] for s in system.parameters}
-    constant = scene._memo.get(key, scene)
     if constant is scene:        # (not decided yet)
         constant = None
         if dag.free_symbols(H) <= set(params):
@@ -226,8 +228,8 @@ def _hessian_values(tr, times, ys, multipliers=True) -> np.ndarray:
             constant = 0.5 * (Hc + Hc.T)
             constant.setflags(write=False)
         scene._memo[key] = constant
-    if constant is not None:
-        return constant
+        if constant is not None:
+            return constant
     point = {system.J.t: times, **params,
              **{s: ys[:, i] for i, s in enumerate(states) if s is not None}}
     dependent = system.dependent_velocities
@@ -376,11 +378,14 @@ def gramian_ratio(tr, samples) -> float:
     if system.holonomic:         # the reachable directions: the tangent space of g = 0
         keep = _manifold_chart(tr, times[-1], samples.grid_y[-1], np.diag(W))
         W = W[np.ix_(keep, keep)]
-    if not np.all(np.isfinite(W)):
+    if not np.isfinite(W).all():
         return float("nan")
-    if np.diag(W).min() <= 0:
+    if W.diagonal().min() <= 0:
         return 0.0
-    ev = np.linalg.eigvalsh(unit_diagonal(0.5 * (W + W.T)))
+    # ``unit_diagonal`` of the symmetrized W, whose diagonal is W's and positive here
+    R = 0.5 * (W + W.T)
+    scale = 1.0 / np.sqrt(R.diagonal())
+    ev = np.linalg.eigvalsh(R * scale[:, None] * scale[None, :])
     return float(max(ev[0], 0.0) / ev[-1]) if ev[-1] > 0 else 0.0
 
 
@@ -392,7 +397,7 @@ def _weighted_inputs(tr, times, ys, B) -> np.ndarray:
     diagonal entry is zero (the scale then reads its rows)."""
     H = _hessian_values(tr, times, ys, multipliers=False)
     out = np.empty_like(B)
-    got = _compiled("kinetic")(B, np.ascontiguousarray(H.reshape(-1, *H.shape[-2:])), out)
+    got = _compiled("kinetic")(B, H[None] if H.ndim == 2 else H, out)
     if got == 0:
         return out
     if got == 1:              # (a non-finite entry of B or H reaches every K_jj)
