@@ -658,7 +658,7 @@ def _least_chart_measure(F, cols):
                     if w > best[mask | (1 << b)]:
                         best[mask | (1 << b)] = w
         top = max(top, best[(1 << k) - 1])
-        least = min(least, abs(small.det(M)))
+        least = min(least, abs(small.det_into(M)))       # (M is filled anew each row)
     v = least / top if top > 0.0 else 0.0
     return v if math.isfinite(v) else 0.0
 
