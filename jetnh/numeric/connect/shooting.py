@@ -37,9 +37,9 @@ def _parts(plan):
     after p)``.  The first row of a run with sensitivities but for its state: zeros,
     then the initial sensitivities S0 = (I | 0) (n x m) flattened (the derivatives by
     every state of an inner segment, the Newton Jacobian's columns, on the constraints
-    or off them; ``Shooter.first_row`` starts the search's first segment from
-    ``solve.augmented``'s S0 instead, along g = 0); a run's row is a copy with the
-    state written in."""
+    or off them; with holonomic constraints ``Shooter.first_row`` starts the search's
+    first segment from ``solve.augmented``'s S0 instead, along g = 0); a run's row is a
+    copy with the state written in."""
     found = _PARTS.get(plan)
     if found is None:
         lay = plan.sens.layout
@@ -429,9 +429,15 @@ class Shooter:
         """The first row of a run of ``plan`` from the start with the unknowns ``u``:
         the state (``state(u)``), then the initial sensitivities S0 (``solve.augmented``:
         along g = 0 with holonomic constraints, as ``Scene.run`` starts; the unknowns
-        move no coordinate, so the same for every u), a fresh array."""
+        move no coordinate, so the same for every u), a fresh array.  Without holonomic
+        constraints S0 = (I | 0), the row ``_parts`` keeps for the plan (the same
+        numbers; numpy's calls in ``solve.augmented`` cost ~10 us a search)."""
         if self._first is None:
-            first = solve.augmented(self.scene, plan, self.y0, self.scene._p)
+            if self.holonomic:
+                first = solve.augmented(self.scene, plan, self.y0, self.scene._p)
+            else:
+                first = (_PARTS.get(plan) or _parts(plan))[2].copy()
+                first[:len(self.y0)] = self.y0
             first.setflags(write=False)
             self._first = first
         first = self._first.copy()
