@@ -74,7 +74,12 @@ class System(Frozen):
     dependent : Symbol, str or list, optional
         The split: the coordinates whose velocities the constraints determine (one per
         constraint; Symbols or names, in a list or one alone, or names in one string
-        ``"x y"``); chosen automatically when omitted.
+        ``"x y"``); chosen automatically when omitted.  ``dependent[a]`` is the
+        coordinate the a-th constraint is solved for, whose velocity it contains: the
+        given order is kept where it pairs so, otherwise the coordinates are reordered
+        to pair (``System.dependent`` is in the order of ``constraints``).  The
+        multiplier lambda_<dependent[a]> of every principle belongs to that pair: it
+        multiplies the a-th constraint, and qdot^a - phi^a in the explicit forms.
     branch : int, optional
         Selects a root (from 0) when the constraints are nonlinear in the dependent
         velocities and have several solutions for them; checked at construction.
@@ -151,7 +156,7 @@ class System(Frozen):
         self._check_names()
         self._branch = inputs.branch_arg(branch)
         self._check_velocities()
-        self.dependent = self._choose_split(dependent)
+        self.dependent = self._paired(self._choose_split(dependent))
         dep = set(self.dependent)
         self.independent = tuple(s for s in J.q if s not in dep)
         self._check_solvable()
@@ -347,6 +352,34 @@ class System(Frozen):
                 f"{len(dep)} dependent coordinates given for {self.k} constraints; give one "
                 "per constraint")
         return tuple(dep)
+
+    def _paired(self, dependent) -> tuple[sp.Symbol, ...]:
+        """``dependent`` reordered so that the a-th constraint contains the velocity of the
+        a-th coordinate (a matching on the nonzero entries of df/dqdot^alpha, the given
+        order kept where it pairs); as given when no such order exists (then the block
+        is singular and ``_check_solvable`` refuses the split)."""
+        k = len(dependent)
+        if k < 2:
+            return tuple(dependent)
+        A = self.jacobian
+        cols = [self.J.q.index(d) for d in dependent]
+        nonzero = [[A[i, c] != 0 for c in cols] for i in range(k)]
+        row_of = [j if nonzero[j][j] else None for j in range(k)]   # column -> its row
+
+        def augment(i, seen):
+            for j in range(k):
+                if nonzero[i][j] and j not in seen:
+                    seen.add(j)
+                    if row_of[j] is None or augment(row_of[j], seen):
+                        row_of[j] = i
+                        return True
+            return False
+
+        for i in range(k):
+            if i not in row_of and not augment(i, set()):
+                return tuple(dependent)
+        col_of = {i: j for j, i in enumerate(row_of)}
+        return tuple(dependent[col_of[i]] for i in range(k))
 
     def _auto_split(self) -> tuple[sp.Symbol, ...]:
         """Prefer coordinates, last first (the paper's alpha = m+1..n), whose velocity enters
