@@ -47,6 +47,23 @@ class Classification:
         return ", ".join(flags)
 
 
+class ExplicitForm(FrozenDict):
+    """``System.phi``: a read-only dict, dependent velocity -> phi^alpha, whose repr keeps
+    to the text budget (a large expression shows as its size and symbols)."""
+
+    __slots__ = ()
+
+    def __repr__(self):
+        from ..display import text, text_items
+
+        return "{" + text_items(f"{v}: {text(e)}" for v, e in self.items()) + "}"
+
+    __str__ = __repr__
+
+    def __reduce__(self):
+        return ExplicitForm, (dict(self),)
+
+
 #: the most solutions (Bezout's bound) of nonlinear constraints solved in closed form
 MAX_ROOTS = 2
 
@@ -483,7 +500,14 @@ class System(Frozen):
     # ------------------------------------------------------------------ explicit form
     @cached_property
     def phi(self) -> dict[sp.Symbol, sp.Expr]:
-        """The explicit form: dependent velocity qdot^alpha -> phi^alpha(t, q, qdot^mu)."""
+        """The explicit form: dependent velocity qdot^alpha -> phi^alpha(t, q, qdot^mu).
+
+        A read-only dict whose repr keeps to the text budget (``ExplicitForm``); the
+        values are shared graphs (``jetnh.algebra.dag``): print a large one with
+        ``jetnh.algebra.shared.shared_form([(None, e)]).text()``, not ``str``."""
+        return ExplicitForm(self._explicit_solution())
+
+    def _explicit_solution(self) -> dict:
         vel = self.dependent_velocities
         if not vel:
             if self._branch is not None:
@@ -629,7 +653,11 @@ class System(Frozen):
     # ------------------------------------------------------------------ L~, p, T
     @cached_property
     def L_tilde(self) -> sp.Expr:
-        """The embedded Lagrangian L~(t, q, qdot^mu) = L(t, q, qdot^mu, phi)."""
+        """The embedded Lagrangian L~(t, q, qdot^mu) = L(t, q, qdot^mu, phi).
+
+        A shared graph (``jetnh.algebra.dag``): for chains its printed tree is exponentially
+        long; print it with ``jetnh.algebra.shared.shared_form([(None, L_tilde)]).text()``
+        or ``jetnh.display.text`` (its size and symbols when large)."""
         return self.on_constraints(self.L)
 
     @cached_property
@@ -641,18 +669,26 @@ class System(Frozen):
         """T^alpha_mu = -[phi^alpha]_mu - dphi^alpha/dq^beta dphi^beta/dqdot^mu (text under (18)).
 
         Rows: dependent alpha; columns: independent mu.  With ``on_constraints`` the
-        dependent velocities are replaced by phi.
+        dependent velocities are replaced by phi.  The entries are shared graphs
+        (``jetnh.algebra.dag``), built in time linear in the shared size; for chains their
+        printed trees are exponentially long: print them with
+        ``jetnh.algebra.shared.shared_form([(None, e) for e in T]).text()``.
         """
-        J = self.J
+        J, Phi = self.J, self.Phi
         rows = []
         for a, va in enumerate(self.dependent_velocities):
             ph = self.phi[va]
             eul = J.euler(ph, wrt=self.independent)
-            rows.append([-eul[m] - sum((dag.diff(ph, qb) * self.Phi[b, m]
-                                        for b, qb in enumerate(self.dependent)), sp.S.Zero)
+            rows.append([-eul[m] - sp.Add(*[dag.diff(ph, qb) * Phi[b, m]
+                                            for b, qb in enumerate(self.dependent)])
                          for m in range(len(self.independent))])
         T = sp.Matrix(rows) if rows else sp.zeros(0, len(self.independent))
-        return T.applyfunc(self.on_constraints) if on_constraints else T
+        if not on_constraints or not self.phi:
+            return T
+        if any(dag.has(e, sp.Derivative) for e in T):
+            return T.applyfunc(self.on_constraints)
+        # every entry restricted in one walk of the shared graph (a tree walk is exponential)
+        return sp.Matrix(T.rows, T.cols, dag.xreplace(list(T), self.phi))
 
     # ------------------------------------------------------------------ classification
     def frobenius(self):
@@ -767,9 +803,16 @@ class System(Frozen):
         return system_latex(self)
 
     def __repr__(self):
-        extra = (f", forces={{{', '.join(f'{q.name}: {e}' for q, e in self.forces.items())}}}"
+        """Within the text budget: a large expression shows as its size and symbols, and
+        list entries past the budget are counted."""
+        from ..display import TEXT_BUDGET, text, text_items
+
+        share = TEXT_BUDGET // 5            # L, constraints, forces, dissipation, holonomic
+        extra = (f", forces={{{text_items((f'{q.name}: {text(e)}' for q, e in self.forces.items()), share)}}}"
                  if self.forces else "")
-        extra += f", dissipation={self.dissipation}" if self.dissipation != 0 else ""
-        extra += f", holonomic={list(self.holonomic)}" if self.holonomic else ""
-        return (f"System(L={self.L}, constraints={list(self.constraints)}, "
-                f"dependent={[s.name for s in self.dependent]}{extra})")
+        extra += f", dissipation={text(self.dissipation)}" if self.dissipation != 0 else ""
+        extra += (f", holonomic=[{text_items(map(text, self.holonomic), share)}]"
+                  if self.holonomic else "")
+        return (f"System(L={text(self.L)}, "
+                f"constraints=[{text_items(map(text, self.constraints), share)}], "
+                f"dependent=[{text_items((repr(s.name) for s in self.dependent), share)}]{extra})")
