@@ -492,10 +492,17 @@ class System(Frozen):
 
     @cached_property
     def is_affine(self) -> bool:
-        """Whether every constraint is affine in the velocities."""
+        """Whether every constraint is affine in the velocities: df/dqdot free of them.
+        A velocity under Abs or sign (kept as sqrt(u**2)) is only piecewise affine: not
+        affine (its B would be undefined at u = 0 and differ on either side)."""
         qd = set(self.J.qd)
-        return all(sp.expand(sp.diff(e, v)) == 0
-                   for e in self.jacobian for v in e.free_symbols & qd)
+
+        def non_smooth(e):
+            return any(isinstance(p, sp.Pow) and not p.exp.is_integer
+                       and dag.free_symbols(p.base) & qd for p in dag.nodes(e))
+
+        return all(not non_smooth(e) and all(sp.expand(sp.diff(e, v)) == 0 for v in vs)
+                   for e in self.jacobian for vs in [dag.free_symbols(e) & qd] if vs)
 
     # ------------------------------------------------------------------ explicit form
     @cached_property
@@ -641,8 +648,9 @@ class System(Frozen):
         """The affine form (33)-(34): B^alpha_rho with rho = 0 (time) then the independent mu."""
         if not self.is_affine:
             raise ConstraintError(
-                "the constraints are not affine in the velocities; B^alpha_rho exists only "
-                "for affine constraints (use phi / Phi for the general explicit form)")
+                "the constraints are not affine in the velocities (a velocity under Abs or "
+                "sign is only piecewise affine); B^alpha_rho exists only for affine "
+                "constraints (use phi / Phi for the general explicit form)")
         vel = self.independent_velocities
         cols = []
         for v, phi in ((v, self.phi[v]) for v in self.dependent_velocities):
