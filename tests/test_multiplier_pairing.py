@@ -97,3 +97,21 @@ def test_forms_agree_on_every_multiplier(data):
     am, ae = mult.accelerations(), expl.accelerations()
     for key in am:
         assert sp.expand(am[key] - ae[key]) == 0, key
+
+
+def test_scene_state_lambda_w_is_ws_multiplier():
+    """The audit's Scene: lambda_w + w_t is conserved (w's row), lambda_z + z_t too, and
+    the initial value keyed lambda_w goes to w's multiplier."""
+    import numpy as np
+
+    J, s = _audit_system(("z", "w"), dependent=["w", "z"])
+    x, y, z, w = J.q
+    xd, yd = J.qd[:2]
+    lw, lz = sp.Symbol("lambda_w"), sp.Symbol("lambda_z")
+    sc = jn.Scene(s, "vakonomic", initial={x: 0.1, y: 0.2, z: 0, w: 0, xd: 1.0, yd: 0.5,
+                                           lw: 0.3, lz: -0.2}, t_span=(0, 2))
+    tr = sc.run()
+    assert tr["lambda_w"][0] == 0.3 and tr["lambda_z"][0] == -0.2
+    assert np.ptp(tr["lambda_w"] + tr["w_t"]) < 1e-9
+    assert np.ptp(tr["lambda_z"] + tr["z_t"]) < 1e-9
+    assert np.ptp(tr["lambda_w"] + tr["z_t"]) > 1e-2

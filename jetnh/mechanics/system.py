@@ -96,7 +96,10 @@ class System(Frozen):
         given order is kept where it pairs so, otherwise the coordinates are reordered
         to pair (``System.dependent`` is in the order of ``constraints``).  The
         multiplier lambda_<dependent[a]> of every principle belongs to that pair: it
-        multiplies the a-th constraint, and qdot^a - phi^a in the explicit forms.
+        multiplies the a-th constraint, and qdot^a - phi^a in the explicit forms (the
+        same multiplier where df^a/dqdot^alpha is the identity, constraints solved for
+        their coordinates; otherwise the explicit forms' multipliers are
+        (df/dqdot^alpha)^T lambda on the constraints).
     branch : int, optional
         Selects a root (from 0) when the constraints are nonlinear in the dependent
         velocities and have several solutions for them; checked at construction.
