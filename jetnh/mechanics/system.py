@@ -690,8 +690,9 @@ class System(Frozen):
         for a, va in enumerate(self.dependent_velocities):
             ph = self.phi[va]
             eul = J.euler(ph, wrt=self.independent)
-            rows.append([-eul[m] - sp.Add(*[dag.diff(ph, qb) * Phi[b, m]
-                                            for b, qb in enumerate(self.dependent)])
+            cache: dict = {}                # d phi^alpha / d q^beta once per row
+            dq = [dag.diff(ph, qb, cache=cache) for qb in self.dependent]
+            rows.append([-eul[m] - sp.Add(*[d * Phi[b, m] for b, d in enumerate(dq) if d != 0])
                          for m in range(len(self.independent))])
         T = sp.Matrix(rows) if rows else sp.zeros(0, len(self.independent))
         if not on_constraints or not self.phi:
