@@ -64,6 +64,33 @@ class ExplicitForm(FrozenDict):
         return ExplicitForm, (dict(self),)
 
 
+def paired_columns(jacobian, cols) -> list[int]:
+    """The columns ``cols`` of df/dqdot (k x n) reordered so that the a-th constraint
+    contains the a-th column's velocity (a matching on the nonzero entries, the given
+    order kept where it pairs so); as given when no such order exists (then the block
+    is singular).  ``System.dependent`` is in this order."""
+    k = len(cols)
+    if k < 2:
+        return list(cols)
+    nonzero = [[jacobian[i, c] != 0 for c in cols] for i in range(k)]
+    row_of = [j if nonzero[j][j] else None for j in range(k)]      # column -> its row
+
+    def augment(i, seen):
+        for j in range(k):
+            if nonzero[i][j] and j not in seen:
+                seen.add(j)
+                if row_of[j] is None or augment(row_of[j], seen):
+                    row_of[j] = i
+                    return True
+        return False
+
+    for i in range(k):
+        if i not in row_of and not augment(i, set()):
+            return list(cols)
+    col_of = {i: j for j, i in enumerate(row_of)}
+    return [cols[col_of[i]] for i in range(k)]
+
+
 #: the most solutions (Bezout's bound) of nonlinear constraints solved in closed form
 MAX_ROOTS = 2
 
@@ -375,31 +402,9 @@ class System(Frozen):
 
     def _paired(self, dependent) -> tuple[sp.Symbol, ...]:
         """``dependent`` reordered so that the a-th constraint contains the velocity of the
-        a-th coordinate (a matching on the nonzero entries of df/dqdot^alpha, the given
-        order kept where it pairs); as given when no such order exists (then the block
-        is singular and ``_check_solvable`` refuses the split)."""
-        k = len(dependent)
-        if k < 2:
-            return tuple(dependent)
-        A = self.jacobian
-        cols = [self.J.q.index(d) for d in dependent]
-        nonzero = [[A[i, c] != 0 for c in cols] for i in range(k)]
-        row_of = [j if nonzero[j][j] else None for j in range(k)]   # column -> its row
-
-        def augment(i, seen):
-            for j in range(k):
-                if nonzero[i][j] and j not in seen:
-                    seen.add(j)
-                    if row_of[j] is None or augment(row_of[j], seen):
-                        row_of[j] = i
-                        return True
-            return False
-
-        for i in range(k):
-            if i not in row_of and not augment(i, set()):
-                return tuple(dependent)
-        col_of = {i: j for j, i in enumerate(row_of)}
-        return tuple(dependent[col_of[i]] for i in range(k))
+        a-th coordinate (``paired_columns``)."""
+        cols = paired_columns(self.jacobian, [self.J.q.index(d) for d in dependent])
+        return tuple(self.J.q[c] for c in cols)
 
     def _auto_split(self) -> tuple[sp.Symbol, ...]:
         """Prefer coordinates, last first (the paper's alpha = m+1..n), whose velocity enters
