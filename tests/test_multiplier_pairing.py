@@ -115,3 +115,16 @@ def test_scene_state_lambda_w_is_ws_multiplier():
     assert np.ptp(tr["lambda_w"] + tr["w_t"]) < 1e-9
     assert np.ptp(tr["lambda_z"] + tr["z_t"]) < 1e-9
     assert np.ptp(tr["lambda_w"] + tr["z_t"]) > 1e-2
+
+
+def test_atlas_splits_are_paired_and_distinct():
+    """Every split of the atlas once, in the order ``with_split`` pairs it (the chart
+    change maps multipliers by that order)."""
+    from jetnh.numeric.atlas import splits
+
+    J, s = _audit_system(("w", "z"), dependent=None)
+    out = splits(s)
+    assert out[0] == ("w", "z")
+    assert len({frozenset(x) for x in out}) == len(out)
+    for names in out:
+        assert tuple(q.name for q in s.with_split(list(names)).dependent) == names
