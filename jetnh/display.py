@@ -45,6 +45,26 @@ def _summary(expr) -> str:
     return f"expression of {dag.size(expr)} distinct parts in {shown or 'no symbols'}"
 
 
+def text(expr) -> str:
+    """``str(expr)``, or its summary when its printed tree would be large (counted on the
+    shared graph, never printed)."""
+    return str(expr) if tree_size(expr) <= TREE_CAP else f"<{_summary(expr)}>"
+
+
+def text_items(items, budget: int = TEXT_BUDGET) -> str:
+    """``items`` (strings) joined by ", " within ``budget`` characters; the ones past it
+    are counted."""
+    items = list(items)
+    out, used = [], 0
+    for i, item in enumerate(items):
+        if used + len(item) > budget:
+            out.append(f"... ({len(items) - i} more)")
+            break
+        out.append(item)
+        used += len(item) + 2
+    return ", ".join(out)
+
+
 def latex(expr, J=None) -> list[str]:
     """LaTeX of ``expr`` (dotted jets with ``J``) and ``\\text{<summary>}``, or only the
     summary when the expression is large: the forms to try, longest first."""

@@ -73,6 +73,7 @@ import sympy as sp
 from ..algebra import dag, linalg
 from ..errors import JetnhError
 from ..mechanics import principles
+from ..mechanics.system import paired_columns
 from .methods import projection
 from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, FINISHED, SINGULAR, STATUS_TEXT,
                               STOPPED)
@@ -116,8 +117,8 @@ def splits(system) -> list[tuple[str, ...]]:
     own = tuple(s.name for s in system.dependent)
     out = [own]
     for cols in combinations(range(J.n), k):
-        names = tuple(J.q[c].name for c in cols)
-        if names != own and linalg.numeric_rank(A[:, list(cols)]) == k:
+        names = tuple(J.q[c].name for c in paired_columns(A, cols))    # as with_split's
+        if set(names) != set(own) and linalg.numeric_rank(A[:, list(cols)]) == k:
             out.append(names)
     return out
 
