@@ -223,6 +223,8 @@ def comparison_latex(c) -> str:
 
 # ---------------------------------------------------------------------- runs
 def _trajectory_facts(traj) -> list[tuple[str, str]]:
+    from .numeric.trajectory import rows_text
+
     d = traj.diagnostics
     span = f"[{traj.t[0]:.6g}, {traj.t[-1]:.6g}]" if len(traj) else "empty"
     return [("principle", traj.scene.principle), ("rows", f"{len(traj)}, t in {span}"),
@@ -230,7 +232,8 @@ def _trajectory_facts(traj) -> list[tuple[str, str]]:
             ("stop reason", traj.stop_reason[:2000]),
             ("steps", f"{d.steps} (rejected {d.rejected}), {d.rhs_evaluations} rhs evaluations"),
             ("constraint residual max", f"{d.residual_max:.3e}"),
-            ("energy drift", f"{d.energy_drift:.3e} (relative {d.energy_drift_relative:.3e})")]
+            ("energy drift", f"{d.energy_drift:.3e} (relative {d.energy_drift_relative:.3e})"),
+            *((("figures", note),) if (note := rows_text(d)) else ())]
 
 
 def trajectory_html(traj) -> str:
