@@ -70,8 +70,8 @@ from ..algebra import dag, linalg
 from ..errors import JetnhError
 from ..mechanics import principles
 from .methods import projection
-from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, FINISHED, SINGULAR, STATUS_TEXT,
-                              STOPPED)
+from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, FINISHED, SINGULAR,
+                              STATUS_TEXT, STOPPED)
 from . import arguments, interrupt, loops, methods
 from .events import Event, as_events
 from .kernels.calls import Kernel, Rows
@@ -679,9 +679,11 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
         h_fixed = (t1 - t) / ctl.n_steps if ctl.n_steps > 0 else 0.0
     if tic is None:
         tic = time.perf_counter()
+    near = None             # (span, depth): the shorter steps of an approach to the edge
     while True:
         scene, kern = chart.scene, chart.kernels
         ksens = chart.sensitivity_kernels if sens else None
+        t_to = t1
         if ran is not None:
             (out, wall, ce, watch, seg_dense), ran = ran, None
             seg_ctl, seg_te = ctl, te
@@ -689,46 +691,144 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
             ce = at.events(chart, user, edge)
             watch = chart.watch(ce, checked, singular_tol, user_max, counts, edge)
             seg_ctl, seg_te = ctl, te
-            if parts or not first:
-                n_steps = (max(1, round(abs(t1 - t) / abs(h_fixed))) if ctl.n_steps > 0
-                           else 0)
-                seg_ctl = _onward(ctl, max(steps_left, 0), n_steps)
+            if parts or not first or near is not None:
+                seg_ctl = _onward(ctl, max(steps_left, 0), _n_steps(ctl, t, t1, h_fixed))
+                if near is not None:        # the part of the step that crossed the edge
+                    t_to, seg_ctl = _approach(seg_ctl, t, t1, h_fixed, near[0])
                 if mode == AT_T_EVAL:
                     seg_te = np.ascontiguousarray(te[direction * (te - t) > 0.0])
             left = None if limit is None else limit - (time.perf_counter() - tic)
             seg_dense = None if dense is None else dict(dense)
             if seg_dense is not None and sens:
                 seg_dense["rhs"] = ksens
-            out, wall = chart.call(method, ce, watch, t, t1, y, p, seg_ctl, seg_te, mode,
+            out, wall = chart.call(method, ce, watch, t, t_to, y, p, seg_ctl, seg_te, mode,
                                    newton, left, ksens)
             if seg_dense is not None:
                 seg_dense["partial_last"] = int(out.status) in (EVENT, SINGULAR)
         n_ev = int(out.n_ev)
-        hit = (edge and int(out.status) == EVENT and n_ev > 0
+        status = int(out.status)
+        hit = (edge and status == EVENT and n_ev > 0
                and int(out.ev_i[n_ev - 1]) == len(user))
+        back = None
+        depth = 0 if near is None else near[1] + 1
+        if ((hit or (edge and status == SINGULAR)) and depth <= _DEPTH
+                and not (limit is not None and time.perf_counter() - tic >= limit)):
+            # the step that reached the edge (or the singular set past it) is not kept:
+            # the piece ends at its start, where the chart is still regular
+            back = _step_start(chart, method, out, t, y, t_to, p, seg_ctl, mode, newton,
+                               ce, watch, ksens, direction)
+        if back is not None:
+            t_k, y_k, span = back
+            out = _cut(out, mode, t_k, y_k, len(user), direction)
+            if seg_dense is not None:
+                seg_dense["partial_last"] = False
+            hit = True
+        near = None
         if build is None:
             seg = out
         else:
             seg = build(scene, method, out, wall, kern, ce, p, t, y, singular_tol, checked,
                         limit, seg_dense, n_events=len(user), sens=ksens)
+        n_ev = int(out.n_ev)
         if user and n_ev:           # the occurrences of each user event
             counts += np.bincount(out.ev_i[:n_ev], minlength=len(counts))[:len(counts)]
-        parts.append((chart, seg, (t, y, t1, seg_ctl, watch, ce, ksens)))
+        if back is None or t_k != t or not parts:     # (not a piece of no steps)
+            parts.append((chart, seg, (t, y, t_to, seg_ctl, watch, ce, ksens)))
         steps_left -= int(out.stats[0])
         if not hit:
+            if t_to != t1 and int(out.status) == FINISHED:     # an approach's end
+                t, y = float(out.t), np.ascontiguousarray(out.y)
+                continue
             break
-        t = float(out.ev_t[n_ev - 1])
-        ys = np.ascontiguousarray(out.ev_y[n_ev - 1])
+        if back is not None:
+            t, ys = t_k, y_k
+        else:
+            t = float(out.ev_t[n_ev - 1])
+            ys = np.ascontiguousarray(out.ev_y[n_ev - 1])
         if limit is not None and time.perf_counter() - tic >= limit:
             break
         target = None if _at_end(t, t1) else _switched(at, chart, t, ys, p, sens)
-        if target is None:          # no better split here: go on without the edge
-            edge, y = False, ys
+        if target is None:
+            if back is not None:    # the chart is still good here: shorter steps to its edge
+                y, near = ys, (span, depth)
+                continue
+            edge, y = False, ys     # no better split here: go on without the edge
             continue
         new, y = target
         switches.append({"t": t, "from": list(chart.split), "to": list(new.split)})
         chart = new
     return parts, switches
+
+
+#: how many times a step that crossed a chart's edge is cut short (each time to an
+#: eighth, ``_approach``) before its located edge is taken as it is
+_DEPTH = 4
+#: the parts an approach cuts the step that crossed the edge into
+_PARTS = 8
+
+
+def _n_steps(ctl, t, t1, h_fixed) -> int:
+    """The fixed steps from ``t`` to ``t1``, none longer than ``h_fixed`` (0: adaptive)."""
+    if ctl.n_steps <= 0:
+        return 0
+    return max(1, math.ceil(abs(t1 - t) / abs(h_fixed) * (1.0 - 1e-12)))
+
+
+def _approach(ctl, t, t1, h_fixed, span):
+    """``(end, step control)`` of the run from ``t``, the start of a step that crossed
+    the chart's edge, over ``span`` (to where that step stopped; a fixed step: the whole
+    step) in ``_PARTS`` parts: equal fixed steps, or adaptive ones no longer than a part."""
+    if ctl.n_steps > 0:
+        span = math.copysign(abs(h_fixed), t1 - t)
+    end = t + span
+    if abs(end - t) >= abs(t1 - t):
+        end = t1
+    if ctl.n_steps > 0:
+        return end, _onward(ctl, ctl.max_steps, _PARTS)
+    c = list(ctl)
+    c[_MAX_STEP] = min(ctl.max_step, abs(span) / _PARTS)
+    return end, ctl._make(c)
+
+
+def _step_start(chart, method, out, t, y, t_to, p, ctl, mode, newton, ce, watch, sens,
+                direction):
+    """``(t_k, y_k, span)``: the start of the step in which the piece ``out`` (from
+    (t, y) to ``t_to``) stopped, the state there and the span from there to the stop.
+    The rows of every step are in ``out`` (mode EVERY_STEP) or in the same loop run
+    again (the same steps) keeping them."""
+    t_stop = float(out.t)
+    if mode != EVERY_STEP:
+        out, _ = chart.call(method, ce, watch, t, t_to, y, p, ctl, np.zeros(0), EVERY_STEP,
+                            newton, None, sens)
+    ts, n = out.ts, int(out.n_out)
+    k = n - 1
+    while k >= 0 and not direction * (t_stop - ts[k]) > 0.0:
+        k -= 1
+    if k <= 0:
+        return t, np.ascontiguousarray(y), t_stop - t
+    return float(ts[k]), np.ascontiguousarray(out.ys[k, :y.shape[0]]), t_stop - float(ts[k])
+
+
+def _cut(out, mode, t_k, y_k, n_user, direction):
+    """The loop's result ``out`` cut at ``t_k`` (the start of the step it stopped in,
+    state ``y_k``): a finished run to there, its output rows and user events after it
+    dropped (the next piece has them)."""
+    ts, ys, n = out.ts, out.ys, int(out.n_out)
+    keep = n
+    while keep > 0 and direction * (ts[keep - 1] - t_k) > 0.0:
+        keep -= 1
+    ts, ys = ts.copy(), ys.copy()
+    if mode == ENDPOINTS:       # (the first row and the last)
+        keep = min(keep, 1)
+    if mode != AT_T_EVAL and not (keep and ts[keep - 1] == t_k):
+        ts[keep], ys[keep, :y_k.shape[0]] = t_k, y_k
+        keep += 1
+    n_ev = int(out.n_ev)
+    m = 0
+    while m < n_ev and direction * (t_k - out.ev_t[m]) >= 0.0 and out.ev_i[m] < n_user:
+        m += 1
+    return out._replace(status=FINISHED, ts=ts, ys=ys, n_out=keep, t=t_k, y=y_k.copy(),
+                        n_ev=m, sing_index=-1)
 
 
 def _onward(ctl, max_steps, n_steps):
@@ -740,8 +840,8 @@ def _onward(ctl, max_steps, n_steps):
     return ctl._make(c)
 
 
-_FIRST, _MAX_STEPS, _N_STEPS = (Control._fields.index(f)
-                                for f in ("first_step", "max_steps", "n_steps"))
+_FIRST, _MAX_STEPS, _N_STEPS, _MAX_STEP = (Control._fields.index(f) for f in (
+    "first_step", "max_steps", "n_steps", "max_step"))
 
 
 def _at_end(t, t1) -> bool:
