@@ -610,7 +610,8 @@ def run(home, plan, y0, p, build):
         dense = dense[status == EVENT or status == SINGULAR]
         if sens is not None:        # the run's own (``build`` adds its rows)
             dense = dict(dense)
-    if not (status == EVENT and out[8][n_ev - 1] == len(user)):     # not at the edge
+    if not (status == EVENT and out[8][n_ev - 1] == len(user) or status == SINGULAR):
+        # (not at the edge, nor stopped past it: a singular stop may be the chart's)
         if status == FINISHED and not user and sens is None:        # most runs: at once
             return Trajectory._finished(home, (out[1], out[2], out[3]), p, method,
                                         _FINISHED_TEXT, (out[4], wall, home.projected),
