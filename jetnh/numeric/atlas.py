@@ -38,7 +38,7 @@ with callable events (functions of one split's state vector), systems with more 
 constraints, scipy's methods (``scipy-<M>``) and ``split="fixed"`` keep their split and
 stop at its edge as before (dla and dvi never solve for the dependent velocities, so no
 split's edge stops them).  The compiled methods dop853, dopri5, rk4 and radau switch;
-``Scene.run`` calls ``run``, ensembles and sweeps ``begin`` and ``go_on`` (the same
+``Scene.run`` calls ``run``, ensembles and sweeps ``begin`` and ``follow`` (the same
 continuation, so their runs equal single runs bit for bit).
 
 A switched run is one ``Trajectory`` of the scene: its rows are in the scene's state
@@ -53,7 +53,7 @@ those of the other, so the switch time's dependence on y0 drops out and S goes a
 as S_beta = D_y S_alpha + (0 | D_p), D the derivative of the chart change at the switch
 point (``Chart.carry``; from the graph, compiled once per pair of charts).  The rows
 of other charts, S too, are mapped home the same way.  Ensembles with sensitivities
-switch as their single runs do (``go_on`` with ``sens``).
+switch as their single runs do (``follow`` with ``sens``).
 """
 
 from __future__ import annotations
@@ -1178,40 +1178,22 @@ def _rerun(chart, seg, rerun, times, p) -> np.ndarray:
     return rows
 
 
-def go_on(at, method, user, t1, p, t, y, counts, ctl, steps_left, te, mode, checked,
-          singular_tol, newton, limit, h_fixed, build, sens=False):
-    """An ensemble's run that stopped at its chart's edge at (t, y) (the scene's own
-    chart), taken on as ``Scene.run`` does: ``(parts, switches)`` of ``follow``
-    (``sens``: ``y`` followed by its sensitivities)."""
-    own = at.own
-    target = None if _at_end(t, t1) else _switched(at, own, t, y, p, sens)
-    if target is None:
-        return follow(at, method, own, t, y, t1, p, user, counts, ctl, steps_left, te, mode,
-                      None, checked, singular_tol, newton, limit, build, first=False,
-                      h_fixed=h_fixed, edge=False, sens=sens)
-    chart, y_new = target
-    parts, switches = follow(at, method, chart, t, y_new, t1, p, user, counts, ctl,
-                             steps_left, te, mode, None, checked, singular_tol, newton,
-                             limit, build, first=False, h_fixed=h_fixed, sens=sens)
-    return parts, [{"t": t, "from": list(own.split), "to": list(chart.split)}] + switches
-
-
-def end_across(home, method, out, t0, t1, p, ctl, mode, checked, singular_tol, newton,
-               limit):
-    """The end of a run with sensitivities of ``home`` whose loop, from t0 in the scene's
-    own chart, stopped at the chart's edge (``out``, the loop's tuple): taken on chart by
-    chart as ``run`` takes it (the same pieces, bit for bit), each loop called without
-    making a Trajectory.  Returns ``(status, t, y, S)`` at its last state, y and S in
+def end_across(home, plan, out, y0, p):
+    """The end of a run with sensitivities of ``home`` by its ``plan`` from ``y0`` (the
+    state and S(t0) after it) whose loop, in the scene's own chart, stopped at the
+    chart's edge or singular (``out``, the loop's tuple): taken on chart by chart as
+    ``run`` takes it (the same pieces, bit for bit), each loop called without making a
+    Trajectory.  Returns ``(status, t, y, S)`` at its last state, y and S in
     ``home``'s states."""
     at = atlas(home)
     own = at.own
-    loops.on_constraints(own.kernels, ctl, mode, own.sensitivity_kernels, out, p, t0)
-    first = loops.result(out)
-    k = int(first.n_ev) - 1
-    parts, _ = go_on(at, method, (), t1, p, float(first.ev_t[k]), first.ev_y[k].copy(),
-                     loops.NO_EVENTS, ctl, ctl.max_steps - int(first.stats[0]),
-                     np.zeros(0), mode, checked, singular_tol, newton, limit,
-                     (t1 - t0) / ctl.n_steps if ctl.n_steps > 0 else 0.0, None, True)
+    ctl = plan.ctl
+    loops.on_constraints(own.kernels, ctl, plan.mode, own.sensitivity_kernels, out, p,
+                         plan.t0)
+    parts, _ = follow(at, plan.method.name, own, plan.t0, y0, plan.t1, p, (),
+                      loops.NO_EVENTS, ctl, ctl.max_steps, plan.te, plan.mode, None,
+                      plan.checked, plan.singular_tol, plan.newton, plan.limit, None,
+                      sens=True, ran=(loops.result(out), 0.0, plan.ce, plan.watch, None))
     chart, last, _ = parts[-1]
     t, n = float(last.t), len(chart.scene.state_names)
     y, S = last.y[:n].reshape(1, n), last.y[n:].reshape(1, n, -1)
