@@ -712,10 +712,11 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
                and int(out.ev_i[n_ev - 1]) == len(user))
         back = None
         depth = 0 if near is None else near[1] + 1
-        if ((hit or (edge and status == SINGULAR)) and depth <= _DEPTH
+        if (((hit and near is None) or (edge and status == SINGULAR)) and depth <= _DEPTH
                 and not (limit is not None and time.perf_counter() - tic >= limit)):
             # the step that reached the edge (or the singular set past it) is not kept:
-            # the piece ends at its start, where the chart is still regular
+            # the piece ends at its start, where the chart is still regular, and goes on
+            # to the edge in shorter steps (``_approach``: located there, as it is)
             back = _step_start(chart, method, out, t, y, t_to, p, seg_ctl, mode, newton,
                                ce, watch, ksens, direction)
         if back is not None:
@@ -723,7 +724,6 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
             out = _cut(out, mode, t_k, y_k, len(user), direction)
             if seg_dense is not None:
                 seg_dense["partial_last"] = False
-            hit = True
         near = None
         if build is None:
             seg = out
@@ -736,23 +736,20 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
         if back is None or t_k != t or not parts:     # (not a piece of no steps)
             parts.append((chart, seg, (t, y, t_to, seg_ctl, watch, ce, ksens)))
         steps_left -= int(out.stats[0])
-        if not hit:
+        if not hit and back is None:
             if t_to != t1 and int(out.status) == FINISHED:     # an approach's end
                 t, y = float(out.t), np.ascontiguousarray(out.y)
                 continue
             break
         if back is not None:
-            t, ys = t_k, y_k
-        else:
-            t = float(out.ev_t[n_ev - 1])
-            ys = np.ascontiguousarray(out.ev_y[n_ev - 1])
+            t, y, near = t_k, y_k, (span, depth)
+            continue
+        t = float(out.ev_t[n_ev - 1])
+        ys = np.ascontiguousarray(out.ev_y[n_ev - 1])
         if limit is not None and time.perf_counter() - tic >= limit:
             break
         target = None if _at_end(t, t1) else _switched(at, chart, t, ys, p, sens)
         if target is None:
-            if back is not None:    # the chart is still good here: shorter steps to its edge
-                y, near = ys, (span, depth)
-                continue
             edge, y = False, ys     # no better split here: go on without the edge
             continue
         new, y = target
@@ -777,11 +774,12 @@ def _n_steps(ctl, t, t1, h_fixed) -> int:
 
 def _approach(ctl, t, t1, h_fixed, span):
     """``(end, step control)`` of the run from ``t``, the start of a step that crossed
-    the chart's edge, over ``span`` (to where that step stopped; a fixed step: the whole
-    step) in ``_PARTS`` parts: equal fixed steps, or adaptive ones no longer than a part."""
+    the chart's edge, to that edge in steps of a ``_PARTS``-th of ``span`` (from ``t`` to
+    where that step stopped), over the whole step of a fixed-step run (equal steps) or
+    twice ``span`` (adaptive steps no longer than that)."""
     if ctl.n_steps > 0:
         span = math.copysign(abs(h_fixed), t1 - t)
-    end = t + span
+    end = t + (span if ctl.n_steps > 0 else 2.0 * span)     # (the edge located roughly)
     if abs(end - t) >= abs(t1 - t):
         end = t1
     if ctl.n_steps > 0:
