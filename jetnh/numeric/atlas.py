@@ -742,13 +742,20 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
                 continue
             break
         if back is not None:
-            t, y, near = t_k, y_k, (span, depth)
-            continue
-        t = float(out.ev_t[n_ev - 1])
-        ys = np.ascontiguousarray(out.ev_y[n_ev - 1])
-        if limit is not None and time.perf_counter() - tic >= limit:
-            break
-        target = None if _at_end(t, t1) else _switched(at, chart, t, ys, p, sens)
+            t, ys = t_k, y_k
+            # fixed steps: the switch on their grid where another split is regular
+            # enough (the step's start), else (and adaptive steps) at the edge
+            target = (None if ctl.n_steps <= 0 or _at_end(t, t1)
+                      else _switched(at, chart, t, ys, p, sens))
+            if target is None:
+                y, near = ys, (span, depth)
+                continue
+        else:
+            t = float(out.ev_t[n_ev - 1])
+            ys = np.ascontiguousarray(out.ev_y[n_ev - 1])
+            if limit is not None and time.perf_counter() - tic >= limit:
+                break
+            target = None if _at_end(t, t1) else _switched(at, chart, t, ys, p, sens)
         if target is None:
             edge, y = False, ys     # no better split here: go on without the edge
             continue
