@@ -10,9 +10,14 @@ unchanged when the constraints are recombined (f -> M f) and, by the Cauchy-Bine
 formula, summing to 1 over all splits; so among the N splits whose minor is not
 identically zero one has m >= 1/N wherever A has rank k.  A run watches the edge of its
 chart, m_alpha = eps with eps = 1/(4N), as a terminal event (``edge``: det(A_alpha)^2 -
-eps det(A A^T) crossing zero downwards) located on the dense output like any event.  There
-the run continues in the split of largest measure (>= 4 eps: hysteresis, no chattering),
-from the same point, with the state mapped exactly:
+eps det(A A^T) crossing zero downwards).  The step in which it is reached is not kept
+(its stages may have run on toward the chart's singular set, or past it: a step that
+jumps the whole band stops at the singular set, and is taken the same way): the run goes
+back to the step's start, where the chart is regular, and continues there in the split
+of largest measure if that is at least 2 eps (hysteresis, no chattering), else reaches
+the edge in steps of an eighth (``_approach``) and continues there.  Fixed steps so
+switch on their grid, each step no longer than h.  From the switch point the run goes on
+with the state mapped exactly:
 
 - coordinates unchanged; the velocities re-split (the dependent ones, computed from the
   constraints, become states and the states that are now dependent drop out);
@@ -743,10 +748,9 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
             break
         if back is not None:
             t, ys = t_k, y_k
-            # fixed steps: the switch on their grid where another split is regular
-            # enough (the step's start), else (and adaptive steps) at the edge
-            target = (None if ctl.n_steps <= 0 or _at_end(t, t1)
-                      else _switched(at, chart, t, ys, p, sens))
+            # the switch at the step's start where another split is regular enough
+            # (the measure at least twice the edge's), else at the edge
+            target = None if _at_end(t, t1) else _switched(at, chart, t, ys, p, sens)
             if target is None:
                 y, near = ys, (span, depth)
                 continue
