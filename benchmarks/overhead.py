@@ -39,7 +39,9 @@ fresh processes with empty numba and kernel caches, the trees alternating within
    nothing, the Trajectory of the loop's result, ``solve.run`` (a run without
    ``Scene.run``'s option handling), the timing itself (in every figure), and the floor
    of a run with its guarantees: a halt flag, the ``set_wakeup_fd`` confirming the wakeup
-   fd, the bare call and a Trajectory of its result, in a row.
+   fd, the bare call and a Trajectory of its result, in a row; and each tree's own
+   floor: the ``set_wakeup_fd`` only where its runs confirm the fd each time (trees that
+   know the fd is still the watchdog's skip it), the Trajectory its runs make.
    ``--fixed`` measures this alone (seconds), and 5.
 5. A run interleaved with other work (as the work-precision benchmark's panels run it):
    a dop853 run of isokinetic_particle (Chetaev, T = 2, rtol 1e-8, ``save="final"``) and
@@ -179,15 +181,35 @@ try:        # the parts of a run's Python side, each timed alone (the names of t
     noop = lambda: None
     from jetnh.numeric.trajectory import Trajectory
 
-    def floor(i):       # what no run can skip: a halt flag, the wakeup fd confirmed (its
+    confirm = _signal.set_wakeup_fd
+    confirm = getattr(confirm, "__wrapped__", confirm)      # (CPython's own)
+
+    def floor(i):       # what no run could skip: a halt flag, the wakeup fd confirmed (its
         halt = np.zeros(1, np.int64)        # set_wakeup_fd), the call, a Trajectory
-        _signal.set_wakeup_fd(own, warn_on_full_buffer=False)
+        confirm(own, warn_on_full_buffer=False)
         got = plan.entry(*plan.prefix, plan.t0, plan.t1, y, p, *plan.suffix, halt)
+        return Trajectory._finished(short, (got[1], got[2], got[3]), p, "dop853", "",
+                                    (got[4], 0.0, {}), plan.kern, None)
+
+    # this tree's floor: the wakeup fd confirmed only where a run confirms it (trees that
+    # know it is still the watchdog's do not), and the Trajectory its runs make
+    known = hasattr(interrupt, "_KNOWN")
+    lean = getattr(Trajectory, "_of_loop", None)
+
+    def tree_floor(i):
+        halt = np.zeros(1, np.int64)
+        if not known:
+            confirm(own, warn_on_full_buffer=False)
+        got = plan.entry(*plan.prefix, plan.t0, plan.t1, y, p, *plan.suffix, halt)
+        if lean is not None:
+            return lean(short, got, p, "dop853", "", 0.0, plan.kern, None)
         return Trajectory._finished(short, (got[1], got[2], got[3]), p, "dop853", "",
                                     (got[4], 0.0, {}), plan.kern, None)
     calls.update({
         "part: the floor (halt flag, set_wakeup_fd, call, Trajectory)": floor,
-        "part: set_wakeup_fd": lambda i: _signal.set_wakeup_fd(own, warn_on_full_buffer=False),
+        "part: this tree's floor (halt flag, set_wakeup_fd where a run confirms the "
+        "wakeup fd, call, its runs' Trajectory)": tree_floor,
+        "part: set_wakeup_fd": lambda i: confirm(own, warn_on_full_buffer=False),
         "part: halt flag": lambda i: np.zeros(1, np.int64),
         "part: interrupt.call of nothing": lambda i: interrupt.call(noop, interrupt.flag()),
         "part: Trajectory": lambda i: solve.trajectory(short, "dop853", out, 0.0, plan.kern,
@@ -273,6 +295,10 @@ def commit(root) -> str:
     return r.stdout.strip() or "?"
 
 
+FLOOR = ("part: this tree's floor (halt flag, set_wakeup_fd where a run confirms the "
+         "wakeup fd, call, its runs' Trajectory)")
+
+
 def fixed(root, reps) -> dict:
     """The fixed costs against the bare call (section 4) of one tree."""
     return fresh(root, FIXED.replace("REPS_FIXED", str(reps)), cold=False)
@@ -352,7 +378,10 @@ def main(argv=None):
         f"run(t_eval=...) {a['run(t_eval=...)'] / a['bare call']:.2f}x, on a new time span "
         f"each call {a['run(t_span=...), a new span each call'] / a['bare call']:.2f}x, "
         f"replace(initial=...).run() {a['replace(initial=...).run()'] / a['bare call']:.2f}x,"
-        f" an ensemble of one {a['ensemble of one'] / a['bare call']:.2f}x; an ensemble of 8"
+        f" an ensemble of one {a['ensemble of one'] / a['bare call']:.2f}x"
+        + (f"; the floor of a run on this tree {a[FLOOR] / a['bare call']:.2f}x" if FLOOR in a
+           else "")
+        + f"; an ensemble of 8"
         f" {a['ensemble of 8 (threads)'] * 1e6:.3g} us on two threads, "
         f"{a['ensemble of 8 (serial)'] * 1e6:.3g} us serially")
     print(fixed_summary)

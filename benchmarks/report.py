@@ -255,7 +255,7 @@ class Report:
                "panel in this run.  The fastest scipy method over the floor is the largest "
                "ratio such an implementation could reach; the run floor adds what a run "
                "from Python cannot skip while Ctrl-C stops it within a step (a halt flag, "
-               "one `set_wakeup_fd`, the Trajectory):\n\n",
+               "`set_wakeup_fd` where runs confirm the wakeup fd each time, the Trajectory):\n\n",
                table(["system / principle", "evaluations", "per evaluation", "fixed", "floor",
                       "compiled loop", "jetnh", "fastest scipy", "scipy / jetnh",
                       "scipy / loop", "scipy / floor", "scipy / run floor"], rows),

@@ -51,7 +51,8 @@ single calls, less that call's own evaluations at e).  The fastest scipy method'
 over the floor is the largest ratio such an implementation could reach; the step
 control, the stage sums and the checks of each step come on top.  The run floor adds what
 a run from Python cannot skip while Ctrl-C stops it within a step (``numeric.interrupt``):
-a halt flag, one ``set_wakeup_fd`` and the Trajectory of the result (``python_floor``).  Between the floor and
+a halt flag, one ``set_wakeup_fd`` where the tree's runs confirm the wakeup fd each time,
+and the Trajectory of the result (``python_floor``).  Between the floor and
 jetnh's time: its compiled loop called directly with the run's arguments (best of several
 calls in a row),
 i.e. the run without its Python side and, where the split can change, without the chart
@@ -276,19 +277,27 @@ def floor_costs(scene, drive, reps, calls) -> dict:
 def python_floor(short, plan, args, calls) -> float | None:
     """What a run from Python adds to its compiled call and cannot skip while Ctrl-C
     stops it within a step (``numeric.interrupt``): a fresh halt flag, the wakeup fd
-    confirmed (one ``set_wakeup_fd``) and the Trajectory of the call's result (5th
-    percentile of ``calls``; None where this tree lacks the parts)."""
+    confirmed where this tree's runs confirm it each time (one ``set_wakeup_fd``; a tree
+    that knows the fd is still the watchdog's skips it) and the Trajectory its runs make
+    of the call's result (5th percentile of ``calls``; None where this tree lacks the
+    parts)."""
     try:
         import _signal
 
         from jetnh.numeric import interrupt
         from jetnh.numeric.trajectory import Trajectory
         own = interrupt._WATCHDOG.own
+        confirm = getattr(_signal.set_wakeup_fd, "__wrapped__", _signal.set_wakeup_fd)
+        known = hasattr(interrupt, "_KNOWN")
+        lean = getattr(Trajectory, "_of_loop", None)
         got = plan.entry(*args)
 
         def parts():
             np.zeros(1, np.int64)
-            _signal.set_wakeup_fd(own, warn_on_full_buffer=False)
+            if not known:
+                confirm(own, warn_on_full_buffer=False)
+            if lean is not None:
+                return lean(short, got, short.p, "dop853", "", 0.0, plan.kern, None)
             return Trajectory._finished(short, (got[1], got[2], got[3]), short.p, "dop853",
                                         "", (got[4], 0.0, {}), plan.kern, None)
         parts()

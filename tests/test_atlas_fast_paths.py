@@ -4,8 +4,8 @@ A run that never reaches its edge is its plan's one loop call and equals the sam
 with split="fixed" (which watches nothing) bit for bit; a run that switches keeps the
 pieces' own Trajectories unmade until read, and they equal what the loop results give;
 the small-number arithmetic of a switch (one constraint's split measures, a chart's
-velocities, a row mapped home) gives the same numbers as the numpy and determinant
-routes it replaces.
+velocities, a row mapped home) and its compiled route give the same numbers as the
+numpy and determinant routes they replace; a warm switching run is one watched call.
 """
 
 import numpy as np
@@ -83,14 +83,12 @@ def test_run_past_the_edge_at_the_start(knife):
 def test_switching_run_reads_its_pieces_lazily(sleigh):
     tr = sleigh.run(save="final", **RUN)
     pieces = tr._segments.pieces
-    # to the start of the step that reached the edge, shorter steps to the edge, the
-    # rest in the other chart
-    assert len(pieces) == 3
+    assert len(pieces) == 2
     for _, _, _, seg, _, _ in pieces:
         assert isinstance(seg, atlas._Piece) and seg._traj is None
     # the rows kept come from the loop results: the first row of the first piece and the
     # last row of the last, mapped home
-    first, last = pieces[0][3], pieces[-1][3]
+    first, last = pieces[0][3], pieces[1][3]
     assert tr.t[0] == first.out.ts[0] and tr.t[-1] == last.out.ts[int(last.out.n_out) - 1]
     assert np.array_equal(tr.y[0], first.out.ys[0])
     steps = sum(int(seg.out.stats[0]) for _, _, _, seg, _, _ in pieces)
@@ -99,7 +97,7 @@ def test_switching_run_reads_its_pieces_lazily(sleigh):
     # makes it from the same loop result
     built = last.traj
     assert built is last.traj and np.array_equal(built.t, last.out.ts[:int(last.out.n_out)])
-    chart = pieces[-1][2]
+    chart = pieces[1][2]
     assert np.array_equal(tr.y[-1], atlas.to_home(tr._segments.own, chart, built.t[-1:],
                                                   built.y[-1:], tr._p)[0])
     # the stitched aux rows and a run with every step agree on the end
@@ -232,3 +230,96 @@ def test_solve_plans_the_edge_as_the_last_event(sleigh, knife):
         plan = solve.plan(scene, "dop853", save="final")
         assert plan.switch and plan.ce.names[-1] == atlas.EDGE
         assert list(plan.watch.ev_max) == [1]
+
+
+@pytest.mark.parametrize("model", ["rolling_disk", "n_trailer"])
+def test_compiled_change_equals_the_python_route(model):
+    """``Atlas.change`` (one compiled call: velocities, df/dqdot, the measures by
+    cofactors, the splits in order of measure, the new state and its check) gives the
+    chart and the state of the Python route (``Chart.point`` then ``_target``) bit for
+    bit, at random states of every chart of systems of two and three constraints with
+    three and four splits; ``MISSING`` before the charts have kernels."""
+    from jetnh import models
+
+    scene = jn.Scene(getattr(models, model)(), "chetaev", initial=models.initial(model),
+                     t_span=(0.0, 1.0))
+    at = atlas.Atlas(scene)
+    p = np.ascontiguousarray(scene.p, dtype=float)
+    n_y = len(scene.state_names)
+    rng = np.random.default_rng(7)
+    assert at.change(at.own, 0.0, rng.normal(size=n_y), p) is atlas.MISSING
+    charts = [at.chart(s, 0.0, rng.normal(size=n_y)) for s in at.splits]
+    for chart in charts:
+        chart.kernels, chart.jacobian_kernel
+    at.register(*charts)
+    assert at.made(charts[0]) and len(charts) > 2
+    found = 0
+    for chart in charts:
+        for _ in range(40):
+            t, y = float(rng.uniform(0.0, 1.0)), 2.0 * rng.normal(size=n_y)
+            got = at.change(chart, t, y, p)
+            want = atlas._target(at, chart, t, p, *chart.point(t, y, p))
+            assert (got is None) == (want is None)
+            if got is not None:
+                found += 1
+                assert got[0] is want[0] and np.array_equal(got[1], want[1])
+    assert found > 100
+
+
+def test_a_warm_switching_run_is_one_interrupt_call(monkeypatch):
+    """A switching run whose charts, events and loops are made runs all its pieces in
+    one ``interrupt.call``; the first run of a scene (its other chart made on the way,
+    outside that call) and a run with a timeout (one call a piece) give the same
+    trajectory bit for bit."""
+    from jetnh.numeric import interrupt
+
+    scene = jn.Scene(chaplygin_sleigh(), "chetaev",
+                     initial=dict(x=0, y=0, theta=0, x_t=0.2, theta_t=1.0),
+                     t_span=(0.0, 2.0))
+    calls = []
+    real = interrupt.call
+
+    def counted(*args, **kw):
+        calls.append(1)
+        return real(*args, **kw)
+
+    monkeypatch.setattr(interrupt, "call", counted)
+    first = scene.run(save="final", **RUN)
+    cold = len(calls)
+    calls.clear()
+    warm = scene.run(save="final", **RUN)
+    assert len(warm.switches) == 1 and len(calls) == 1 and cold > 1
+    timed = scene.run(save="final", timeout=60.0, **RUN)
+    for tr in (warm, timed):
+        _same(first, tr)
+        assert tr.switches == first.switches
+
+
+def test_ctrl_c_stops_a_switching_run_within_a_second():
+    """Ctrl-C during a long run that changes chart again and again (its pieces in one
+    ``interrupt.call``): every piece after it stops at once (the run ends, long before
+    its end), the SIGINT handler runs once, after it."""
+    import os
+    import signal
+    import threading
+    import time
+
+    scene = jn.Scene(knife_edge(), "chetaev",
+                     initial=dict(x=0, y=0, phi=0, x_t=0.5, phi_t=3.0), t_span=(0.0, 1e5))
+    scene.run(t_span=(0.0, 2.0), save="final", **RUN)        # (its charts made)
+    seen = []
+    before = signal.signal(signal.SIGINT, lambda signum, frame: seen.append(signum))
+    fd = signal.set_wakeup_fd(-1)
+    signal.set_wakeup_fd(fd)
+    try:
+        timer = threading.Timer(0.3, os.kill, (os.getpid(), signal.SIGINT))
+        timer.start()
+        tic = time.monotonic()
+        tr = scene.run(save="final", **RUN)
+        elapsed = time.monotonic() - tic
+        timer.join()
+    finally:
+        signal.signal(signal.SIGINT, before)
+        signal.set_wakeup_fd(fd)
+    assert elapsed < 3.0 and seen == [signal.SIGINT]     # (not at its end: ~100 s)
+    assert len(tr.switches) > 10 and tr.t[-1] < 1e5

@@ -344,3 +344,39 @@ def test_replace_initial_takes_whole_numbers_as_the_general_route(disk):
     whole = disk.replace(initial={**DISK0, "phi_t": 1, "psi_t": np.float64(0.7)})
     same = disk.replace(initial={**DISK0, "phi_t": 1.0})
     assert type(whole.initial["phi_t"]) is float and dict(whole.initial) == dict(same.initial)
+
+
+@pytest.mark.parametrize("save", ["final", "steps"])
+def test_a_finished_runs_trajectory_equals_the_general_routes(disk, save):
+    """The trajectory a finished run makes at once (the loop's result kept as it is) and
+    the one of the general route (a run watching an event that never fires, the same
+    steps) agree on every attribute read, stay immutable, and pickle alike."""
+    import pickle
+
+    from jetnh.errors import FrozenError
+
+    quick = disk.run(save=save)
+    x = disk.system.J.q[0]
+    general = disk.run(save=save, events=[x - 1e6])
+    assert "_loop" in quick.__dict__ and "_loop" not in general.__dict__
+    assert np.array_equal(quick.t, general.t) and np.array_equal(quick.y, general.y)
+    for name in ("status", "stop_reason", "success", "method", "names", "switches",
+                 "singularity", "final", "t_final"):
+        assert getattr(quick, name) == getattr(general, name), name
+    assert quick.t_events == [] and quick.y_events == []
+    assert [len(e) for e in general.t_events] == [0]
+    assert quick.t_events is quick.t_events
+    a, b = quick.diagnostics, general.diagnostics
+    for name in ("steps", "rejected", "rhs_evaluations", "residual_max", "energy_drift",
+                 "projected", "status", "success"):
+        assert getattr(a, name) == getattr(b, name), name
+    assert np.array_equal(quick["phi_t"], general["phi_t"])
+    if save == "steps":         # (evaluation between rows re-takes the steps)
+        assert np.array_equal(quick.at([0.25]).to_numpy(), general.at([0.25]).to_numpy())
+    with pytest.raises(FrozenError):
+        quick.status = 3
+    with pytest.raises(ValueError):
+        quick.y[0, 0] = 1.0
+    back = pickle.loads(pickle.dumps(quick))
+    assert "_loop" not in back.__dict__ and back.diagnostics.steps == a.steps
+    assert np.array_equal(back.y, quick.y) and back.t_events == []

@@ -52,6 +52,8 @@ def name_of(key, what) -> str:
 
 def real(value, what) -> float:
     """A real number as a float (NaN and infinities pass: see ``finite``)."""
+    if type(value) is float:            # (most: at once)
+        return value
     if isinstance(value, (bool, np.bool_)) or isinstance(value, (str, bytes)):
         raise ArgumentError(f"must be a number, got {value!r}", argument=what)
     if isinstance(value, (complex, np.complexfloating)) or (

@@ -34,7 +34,11 @@ The switch costs microseconds, not a walk of the expressions: df/dqdot comes fro
 compiled kernel of each chart (its entries as an events kernel, cached on disk with the
 scene's kernels; ``Chart.point``), the measures from the k x k determinants on floats,
 the new state and the rows mapped home by index maps (the multipliers by A where they
-map).
+map).  Where the multipliers keep their values and the charts have their kernels, the
+whole change is one compiled call (``chart_change``, ``Atlas.change``), and a run whose
+charts, events and loops are made runs all its pieces inside one ``interrupt.call``
+(``Cold`` where one is not: the run goes on outside it, so that making a chart never
+holds back Ctrl-C).
 
 Suslov's equations in the paper's convention (29)-(31) are no chart change away from
 each other: the commutator term P_alpha c^alpha weighs the momenta of the dependent
@@ -77,7 +81,7 @@ from ..mechanics import principles
 from .methods import projection
 from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, FINISHED, SINGULAR,
                               STATUS_TEXT, STOPPED)
-from . import arguments, interrupt, loops, methods
+from . import arguments, chart_change, interrupt, loops, methods
 from .events import Event, as_events
 from .kernels.calls import Kernel, Rows
 from .methods.loop import Control, Watch
@@ -89,6 +93,17 @@ EDGE = "chart edge"
 MAX_K = 3
 #: what a loop's halt flag is made from (a copy: sooner than ``np.zeros``; never written)
 _HALT = np.zeros(1, dtype=np.int64)
+#: ``Atlas.change``: a chart it needs has no kernels yet
+MISSING = object()
+_F8 = np.dtype(np.float64)
+#: the compiled change of chart once loaded (``Atlas.register``)
+_CHANGE: list = []
+
+
+class Cold(Exception):
+    """A piece of a run inside one ``interrupt.call`` around the whole run (``follow``'s
+    ``halt``) needs what is not made yet (a chart's scene, kernels, events or loop:
+    work that could hold back Ctrl-C): the run goes on outside it."""
 
 
 def split_invariant(principle, convention) -> bool:
@@ -199,15 +214,20 @@ class Chart:
             self._watches[key] = (ce, watch)
         return watch
 
-    def call(self, method, ce, watch, t0, t1, y, p, ctl, te, mode, newton, limit, sens):
+    def call(self, method, ce, watch, t0, t1, y, p, ctl, te, mode, newton, limit, sens,
+             halt=None):
         """``loops.call`` of this chart's scene and kernels (``sens``: the kernels of its
         state augmented by its sensitivities), the loop's entry and callbacks looked up
-        once per method, events and loop parts (``loops.entry``)."""
+        once per method, events and loop parts (``loops.entry``).  ``halt``: the flag of
+        an ``interrupt.call`` around this one (``follow``): the loop called with it
+        directly, or ``Cold`` raised if it is not looked up yet."""
         # (``features`` of the loop, given ``ce``: what ``mode``, the projection and the
         # indicators add to it)
         key = (method, id(ce), sens is not None, mode, ctl.n_hol > 0, watch.n_sing > 0)
         found = self._entries.get(key)
         if found is None or found[0] is not ce:
+            if halt is not None:
+                raise Cold
             loop, prefix, suffix, callbacks = loops.entry(
                 self.scene, methods.method(method), self.kernels, ce, sens, ctl, te, mode,
                 watch, newton)
@@ -215,9 +235,12 @@ class Chart:
         _, loop, prefix, n_suffix, _ = found
         # (the arguments after (t0, t1, y0, p) as ``loops.entry`` gives them)
         suffix = (ctl, te, mode, watch) if n_suffix == 4 else (ctl, newton, te, mode, watch)
-        halt = _HALT.copy()
         tic = time.perf_counter()
-        out = interrupt.call(loop, halt, limit, (*prefix, t0, t1, y, p, *suffix, halt))
+        if halt is not None:
+            out = loop(*prefix, t0, t1, y, p, *suffix, halt)
+        else:
+            halt = _HALT.copy()
+            out = interrupt.call(loop, halt, limit, (*prefix, t0, t1, y, p, *suffix, halt))
         wall = time.perf_counter() - tic
         loops.on_constraints(self.kernels, ctl, mode, sens, out, p, t0)
         return loops.result(out), wall
@@ -470,6 +493,19 @@ class Atlas:
         self.columns = [sorted(m.dep.tolist()) for m in self.maps.values()]
         self._events: dict = {}
         self._edges: dict = {}
+        #: what the compiled change of chart reads (``chart_change``): the splits' index
+        #: maps, their kernels' addresses (filled as charts get their kernels:
+        #: ``_register``) and the kernels kept alive for them
+        self._index = {s: i for i, s in enumerate(self.splits)}
+        n, k = home.system.J.n, home.system.k
+        table = np.zeros((1 + len(self.splits), max(5, k + n)), dtype=np.int64)
+        table[0, :5] = (n, k, len(home.state_names), len(home.runtime_params),
+                        len(self.splits))
+        for i, (m, cols) in enumerate(zip(self.maps.values(), self.columns)):
+            table[1 + i, :k + n] = [*m.dep.tolist(), *cols, *m.ind.tolist()]
+        self._table = table
+        self._addr = np.zeros((3, len(self.splits)), dtype=np.int64)
+        self._alive: dict = {}
 
     @property
     def own(self) -> Chart:
@@ -533,21 +569,67 @@ class Atlas:
         return (Ad.det(method="berkowitz")**2
                 - sp.Float(self.eps) * gram.det(method="berkowitz"))
 
+    def change(self, chart, t, y, p):
+        """``switch`` at (t, y) of ``chart`` (a state moved onto the holonomic
+        constraints, C-contiguous floats) in one compiled call (``chart_change``): ``(new
+        chart, its state)``, None, or ``MISSING`` where a chart it needs has no kernels
+        here yet, or before the compiled change is loaded (``switch`` in Python then,
+        which makes them: ``register``; nothing is compiled here)."""
+        cur = self._index[chart.split]
+        if not _CHANGE or not self._addr[0, cur]:
+            return MISSING
+        if not (type(y) is np.ndarray and y.dtype == _F8 and y.ndim == 1
+                and y.flags.c_contiguous and type(p) is np.ndarray and p.dtype == _F8
+                and p.ndim == 1 and p.flags.c_contiguous):
+            raise JetnhError("a chart change takes a state and parameters as C-contiguous "
+                             "float64 vectors (np.ascontiguousarray(x, dtype=float))")
+        out = np.empty(self._table[0, 2])
+        i = _CHANGE[0](t, y, p, self._table, self._addr, self.eps, cur, out)
+        if i >= 0:
+            return self.chart(self.splits[i], t, out), out
+        return None if i == -1 else MISSING
+
+    def made(self, chart) -> bool:
+        """Whether ``chart``'s df/dqdot and every chart's kernels are made (``register``):
+        a change of chart from ``chart`` makes nothing."""
+        return bool(self._addr[0, self._index[chart.split]]) and bool(self._addr[1].all())
+
+    def register(self, *charts):
+        """Give the compiled change of chart the kernels of ``charts`` that are made
+        (their aux row's length before its address: a thread reading them meanwhile sees
+        the length first), kept alive with the atlas; the compiled change loaded (or
+        compiled, on a machine's first use) here, where a switch makes what it needs."""
+        if not _CHANGE and not self.explicit:
+            _CHANGE.append(chart_change.change())
+        for chart in charts:
+            i = self._index[chart.split]
+            kern, jac = chart._kernels, chart._jacobian
+            if kern is not None and not self._addr[1, i]:
+                self._alive[1, i] = kern
+                self._addr[2, i] = kern.layout.n_aux
+                self._addr[1, i] = kern.aux_fp.address
+            if jac is not None and not self._addr[0, i]:
+                self._alive[0, i] = jac
+                self._addr[0, i] = jac.address.address
+
     def measures(self, A) -> list[float]:
         """m_beta = det(A_beta)^2 / det(A A^T) of every split (in the order of
         ``splits``) at one point (A: k x n); all 0 where A has rank < k (no split is
         regular; ``measures_at``)."""
         return measures_at(A, self.columns)
 
-    def events(self, chart, user, edge: bool):
+    def events(self, chart, user, edge: bool, made=False):
         """The compiled events of a run in ``chart``: the user's (rewritten in its
         multipliers) and, with ``edge``, its edge last; or None.  Kept per chart, user
         events and edge, so that repeated runs build nothing (the key holds the
-        expressions themselves: hashed once by sympy, compared by identity first)."""
+        expressions themselves: hashed once by sympy, compared by identity first).
+        ``made``: ``Cold`` raised where they are not made yet."""
         key = (chart.split, edge, tuple((e.fun, e.direction, e.max_events, e.name)
                                         for e in user) if user else ())
         found = self._events.get(key)
         if found is None:
+            if made:
+                raise Cold
             found = self._events[key] = (self._compile_events(chart, user, edge),)
         return found[0]
 
@@ -602,21 +684,15 @@ def run(home, plan, y0, p, build):
                                  _Piece.maker(build), sens=sens is not None, tic=tic)
         return stitch(home, at, method, p, parts, first + switches, user, plan.mode,
                       time.perf_counter() - tic)
-    # the scene's own chart: the plan's loop, as a run that cannot switch calls it
+    # the scene's own chart: the plan's loop, as a run that cannot switch calls it (and
+    # the pieces after it in the same ``interrupt.call``: ``_ahead``)
     halt = _HALT.copy()
-    tic_loop = time.perf_counter()
-    out = interrupt.call(plan.entry, halt, plan.limit, (*plan.head, y0, p, *plan.suffix,
-                                                        halt))
-    wall = time.perf_counter() - tic_loop
-    loops.on_constraints(plan.kern, ctl, plan.mode, sens, out, p, t0)
+    out, wall, dense, ahead = interrupt.call(_ahead, halt, plan.limit,
+                                             (at, plan, y0, p, user, build, halt, tic))
     status, n_ev = out[0], out[10]
-    dense = plan.dense_ends
-    if dense is not None:           # stopped inside a step or not
-        dense = dense[status == EVENT or status == SINGULAR]
-        if sens is not None:        # the run's own (``build`` adds its rows)
-            dense = dict(dense)
-    if not (status == EVENT and out[8][n_ev - 1] == len(user) or status == SINGULAR):
-        # (not at the edge, nor stopped past it: a singular stop may be the chart's)
+    if ahead is None and not (status == EVENT and out[8][n_ev - 1] == len(user)
+                              or status == SINGULAR):
+        # (not at the edge, nor stopped singular: perhaps past it, ``follow``)
         if status == FINISHED and not user and sens is None:        # most runs: at once
             return Trajectory._finished(home, (out[1], out[2], out[3]), p, method,
                                         _FINISHED_TEXT, (out[4], wall, home.projected),
@@ -625,17 +701,51 @@ def run(home, plan, y0, p, build):
         return build(home, method, loops.result(out) if ctl.n_hol else out, wall,
                      plan.kern, plan.ce, p, t0, y0, plan.singular_tol, plan.checked,
                      plan.limit, dense, n_events=len(user), sens=sens)
-    parts, switches = follow(at, method, at.own, t0, y0, t1, p, user,
-                             np.zeros(len(user), np.int64), ctl, ctl.max_steps, plan.te,
-                             plan.mode, plan.dense, plan.checked, plan.singular_tol,
-                             plan.newton, plan.limit, _Piece.maker(build),
-                             sens=sens is not None, tic=tic,
-                             ran=(loops.result(out), wall, plan.ce, plan.watch, dense))
+    parts, switches = ahead or _onward_from(at, plan, out, wall, dense, y0, p, user,
+                                            build, tic)
     return stitch(home, at, method, p, parts, switches, user, plan.mode,
                   time.perf_counter() - tic)
 
 
 _FINISHED_TEXT = STATUS_TEXT[FINISHED]
+
+
+def _ahead(at, plan, y0, p, user, build, halt, tic):
+    """``run``'s first piece inside its ``interrupt.call`` (``halt``): the plan's loop,
+    its rows onto the holonomic constraints and its dense record; a run without a time
+    budget or sensitivities that stopped at the edge goes on in the same call
+    (``follow`` with ``halt``: one watch for the whole run), unless a piece needs what is
+    not made yet (``Cold``: the run goes on outside).  Returns ``(the loop's tuple, its
+    wall time, its dense record, follow's (parts, switches) or None)``."""
+    tic_loop = time.perf_counter()
+    out = plan.entry(*plan.head, y0, p, *plan.suffix, halt)
+    wall = time.perf_counter() - tic_loop
+    sens = plan.sens
+    loops.on_constraints(plan.kern, plan.ctl, plan.mode, sens, out, p, plan.t0)
+    status, dense = out[0], plan.dense_ends
+    if dense is not None:           # stopped inside a step or not
+        dense = dense[status == EVENT or status == SINGULAR]
+        if sens is not None:        # the run's own (``build`` adds its rows)
+            dense = dict(dense)
+    if ((status == EVENT and out[8][out[10] - 1] == len(user) or status == SINGULAR)
+            and plan.limit is None and sens is None):
+        try:
+            return out, wall, dense, _onward_from(at, plan, out, wall, dense, y0, p, user,
+                                                  build, tic, halt)
+        except Cold:
+            pass
+    return out, wall, dense, None
+
+
+def _onward_from(at, plan, out, wall, dense, y0, p, user, build, tic, halt=None):
+    """``follow`` of ``run`` from its first piece (``out``, the loop's tuple, stopped
+    at the edge of the scene's own chart)."""
+    ctl = plan.ctl
+    return follow(at, plan.method.name, at.own, plan.t0, y0, plan.t1, p, user,
+                  np.zeros(len(user), np.int64), ctl, ctl.max_steps, plan.te, plan.mode,
+                  plan.dense, plan.checked, plan.singular_tol, plan.newton, plan.limit,
+                  _Piece.maker(build), sens=plan.sens is not None, tic=tic,
+                  ran=(loops.result(out), wall, plan.ce, plan.watch, dense), halt=halt)
 
 
 def own_edge(at, ce, t, y, p) -> float:
@@ -668,7 +778,7 @@ def begin(at, user, t0, y0, p, past=False):
 
 def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mode, dense, checked,
            singular_tol, newton, limit, build, first=True, h_fixed=None, edge=True,
-           sens=False, tic=None, ran=None):
+           sens=False, tic=None, ran=None, halt=None):
     """Run from (t, y) in ``chart`` to ``t1``, changing chart at every edge; returns the
     pieces ``[(chart, trajectory of the chart's scene made by ``build``, what re-running
     it needs)]`` and the switches.  ``counts``: occurrences of the user events so far
@@ -677,7 +787,10 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
     holds the state and its sensitivities after it (each chart runs with its
     ``sensitivity_kernels``, S carried across a switch by ``Chart.carry``); ``tic``: when
     the run began (``limit`` counts from there); ``ran``: the first piece's loop already
-    called (``run``: the plan's call), ``(Result, wall time, events, watch, dense)``."""
+    called (``run``: the plan's call), ``(Result, wall time, events, watch, dense)``;
+    ``halt``: the flag of an ``interrupt.call`` around this one (no ``limit``: ``run``'s
+    one watch of the whole run), each loop called with it, ``Cold`` raised where a piece
+    needs what is not made yet."""
     user_max = [e.max_events for e in user]
     parts, switches = [], []
     direction = 1.0 if t1 >= t else -1.0
@@ -694,7 +807,7 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
             (out, wall, ce, watch, seg_dense), ran = ran, None
             seg_ctl, seg_te = ctl, te
         else:
-            ce = at.events(chart, user, edge)
+            ce = at.events(chart, user, edge, halt is not None)
             watch = chart.watch(ce, checked, singular_tol, user_max, counts, edge)
             seg_ctl, seg_te = ctl, te
             if parts or not first or near is not None:
@@ -708,7 +821,7 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
             if seg_dense is not None and sens:
                 seg_dense["rhs"] = ksens
             out, wall = chart.call(method, ce, watch, t, t_to, y, p, seg_ctl, seg_te, mode,
-                                   newton, left, ksens)
+                                   newton, left, ksens, halt)
             if seg_dense is not None:
                 seg_dense["partial_last"] = int(out.status) in (EVENT, SINGULAR)
         n_ev = int(out.n_ev)
@@ -723,7 +836,7 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
             # the piece ends at its start, where the chart is still regular, and goes on
             # to the edge in shorter steps (``_approach``: located there, as it is)
             back = _step_start(chart, method, out, t, y, t_to, p, seg_ctl, mode, newton,
-                               ce, watch, ksens, direction)
+                               ce, watch, ksens, direction, halt)
         if back is not None:
             t_k, y_k, span = back
             out = _cut(out, mode, t_k, y_k, len(user), direction)
@@ -750,7 +863,8 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
             t, ys = t_k, y_k
             # the switch at the step's start where another split is regular enough
             # (the measure at least twice the edge's), else at the edge
-            target = None if _at_end(t, t1) else _switched(at, chart, t, ys, p, sens)
+            target = (None if _at_end(t, t1)
+                      else _switched(at, chart, t, ys, p, sens, halt is not None))
             if target is None:
                 y, near = ys, (span, depth)
                 continue
@@ -759,9 +873,10 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
             ys = np.ascontiguousarray(out.ev_y[n_ev - 1])
             if limit is not None and time.perf_counter() - tic >= limit:
                 break
-            target = None if _at_end(t, t1) else _switched(at, chart, t, ys, p, sens)
-        if target is None:
-            edge, y = False, ys     # no better split here: go on without the edge
+            target = (None if _at_end(t, t1)
+                      else _switched(at, chart, t, ys, p, sens, halt is not None))
+        if target is None:          # no better split here: go on without the edge
+            edge, y = False, ys
             continue
         new, y = target
         switches.append({"t": t, "from": list(chart.split), "to": list(new.split)})
@@ -801,7 +916,7 @@ def _approach(ctl, t, t1, h_fixed, span):
 
 
 def _step_start(chart, method, out, t, y, t_to, p, ctl, mode, newton, ce, watch, sens,
-                direction):
+                direction, halt):
     """``(t_k, y_k, span)``: the start of the step in which the piece ``out`` (from
     (t, y) to ``t_to``) stopped, the state there and the span from there to the stop.
     The rows of every step are in ``out`` (mode EVERY_STEP) or in the same loop run
@@ -809,7 +924,7 @@ def _step_start(chart, method, out, t, y, t_to, p, ctl, mode, newton, ce, watch,
     t_stop = float(out.t)
     if mode != EVERY_STEP:
         out, _ = chart.call(method, ce, watch, t, t_to, y, p, ctl, np.zeros(0), EVERY_STEP,
-                            newton, None, sens)
+                            newton, None, sens, halt)
     ts, n = out.ts, int(out.n_out)
     k = n - 1
     while k >= 0 and not direction * (t_stop - ts[k]) > 0.0:
@@ -862,12 +977,12 @@ def _at_end(t, t1) -> bool:
     return abs(t1 - t) < arguments.MIN_TIME_RESOLUTION * math.ulp(max(abs(t), abs(t1)))
 
 
-def _switched(at, chart, t, y, p, sens):
+def _switched(at, chart, t, y, p, sens, made=False):
     """``switch`` of a state ``y`` of ``chart``, with ``sens`` followed by its
     sensitivities, which go across in the new chart's coordinates (``Chart.carry``):
-    ``(new chart, its state)`` or None."""
+    ``(new chart, its state)`` or None.  ``made``: as ``switch``'s."""
     n = len(chart.scene.state_names)
-    target = switch(at, chart, t, y[:n], p)
+    target = switch(at, chart, t, y[:n], p, made)
     if target is None or not sens:
         return target
     new, y_new = target
@@ -887,18 +1002,29 @@ def _on_constraints(chart, t, y, p) -> np.ndarray:
     return ys[0]
 
 
-def switch(at, chart, t, y, p):
+def switch(at, chart, t, y, p, made=False):
     """The chart to go on in at the edge of ``chart`` (reached at (t, y), moved onto the
-    holonomic constraints) and the state there, or None (``_target``)."""
+    holonomic constraints) and the state there, or None (``_target``): in one compiled
+    call (``Atlas.change``) where the multipliers keep their values and every chart it
+    needs has its kernels, else in Python, which makes them (``made``: ``Cold`` raised
+    instead)."""
     t = float(t)
     y = _on_constraints(chart, t, y, p)
+    if not chart.explicit:
+        found = at.change(chart, t, y, p)
+        if found is not MISSING:
+            return found
+    if made and not at.made(chart):
+        raise Cold
     if chart.explicit:              # (multipliers mapped by A: ``Chart.point``)
-        return _target(at, chart, t, p, *chart.point(t, y, p))
-    # the same numbers copied through lists (``point``, ``state_at``: a few numbers)
-    qd, n = chart.velocity_list(t, y, p), chart.n
-    head, lam = y[:n].tolist(), y[2 * n - chart.k:].tolist()
-    return _choose(at, chart, t, p, chart.jacobian_rows(t, y, p), qd,
-                   lambda to: np.array(head + [qd[i] for i in to._independent] + lam))
+        found = _target(at, chart, t, p, *chart.point(t, y, p))
+    else:   # the same numbers copied through lists (``point``, ``state_at``: a few numbers)
+        qd, n = chart.velocity_list(t, y, p), chart.n
+        head, lam = y[:n].tolist(), y[2 * n - chart.k:].tolist()
+        found = _choose(at, chart, t, p, chart.jacobian_rows(t, y, p), qd,
+                        lambda to: np.array(head + [qd[i] for i in to._independent] + lam))
+    at.register(at.own, chart, *at.charts.values())     # (what was made on the way)
+    return found
 
 
 def _target(at, chart, t, p, q, qd, lam, A):
@@ -940,30 +1066,33 @@ def stitch(home, at, method, p, parts, switches, user, mode, wall):
         return parts[0][1].traj
     pieces = []
     sens = [] if parts[-1][2][6] is not None else None
-    row, last_part = 0, len(parts) - 1
+    row, last_part, steps, rejected, nfev = 0, len(parts) - 1, 0, 0, 0
+    ends = mode == ENDPOINTS and last_part
     for i, (chart, seg, rerun) in enumerate(parts):
-        a, b = 0, int(seg.out.n_out)
-        if mode == ENDPOINTS and last_part:             # the first row and the last
+        out = seg.out
+        a, b = 0, int(out.n_out)
+        if ends:                            # the first row and the last
             a, b = (0, 1) if i == 0 else (b - 1, b) if i == last_part else (b, b)
         elif i > 0 and mode != AT_T_EVAL:
             a = 1                       # the switch row: the chart before stored it
         if sens is not None:        # S of the scene's states: D S of each row
             S = seg.sensitivities[a:b]
             sens.append(S if chart is own else
-                        chart.carry(own, seg.out.ts[a:b], seg.y[a:b], S, p))
+                        chart.carry(own, out.ts[a:b], seg.y[a:b], S, p))
         pieces.append((row, row + b - a, chart, seg, a, rerun))
         row += b - a
-    t_ev, y_ev = [], []
-    for i in range(len(user)):
-        t_ev.append(np.concatenate([seg.t_events[i] for _, seg, _ in parts]))
-        y_ev.append(np.concatenate([
-            to_home(own, chart, seg.t_events[i], seg.y_events[i].reshape(
-                -1, len(chart.scene.state_names)), p)
-            for chart, seg, _ in parts]))
-    steps = rejected = nfev = 0
-    for _, seg, _ in parts:
-        c = seg.out.stats            # (steps, rejected, nfev, ...)
+        c = out.stats               # (steps, rejected, nfev: integers)
         steps, rejected, nfev = steps + c[0], rejected + c[1], nfev + c[2]
+    events = None
+    if user:
+        t_ev, y_ev = [], []
+        for i in range(len(user)):
+            t_ev.append(np.concatenate([seg.t_events[i] for _, seg, _ in parts]))
+            y_ev.append(np.concatenate([
+                to_home(own, chart, seg.t_events[i], seg.y_events[i].reshape(
+                    -1, len(chart.scene.state_names)), p)
+                for chart, seg, _ in parts]))
+        events = (tuple([e.name for e in user]), t_ev, y_ev)
     last = parts[-1][1]
     if last.out.status == FINISHED and not parts[-1][2][3].n_hol:   # (rows not moved)
         status, reason, singularity = FINISHED, _FINISHED_TEXT, None
@@ -972,8 +1101,7 @@ def stitch(home, at, method, p, parts, switches, user, mode, wall):
     # (the rows: made on first read, ``Stitched.rows``)
     return Trajectory._of_run(home, None, p, method,
                               status, reason, ((steps, rejected, nfev), wall, home.projected),
-                              own.kernels, (tuple([e.name for e in user]), t_ev, y_ev),
-                              singularity, parts[0][1].dense,
+                              own.kernels, events, singularity, parts[0][1].dense,
                               None if sens is None else (home._sensitivity_columns(),
                                                          np.concatenate(sens)),
                               segments=Stitched(own, tuple(pieces)),

@@ -14,9 +14,9 @@ watchdog thread sets the flag:
   Python would surface as a SystemError (or worse), so the Python-level SIGINT handler is
   ``_on_sigint``, installed once (again if it was replaced): during a compiled call it
   only records the signal, otherwise it calls the handler it stands in for.  The
-  watchdog's socket stays the wakeup fd between runs when no one else had set one (a
-  run then costs one ``set_wakeup_fd`` to confirm it); a previous wakeup fd (an asyncio
-  loop's, say) receives every byte during the call and is restored after it;
+  watchdog's socket stays the wakeup fd between runs when no one else had set one; a
+  previous wakeup fd (an asyncio loop's, say) receives every byte during the call and is
+  restored after it;
 - past ``timeout`` seconds: ``halt[0] = TIMEOUT``; the loop returns what it has, with
   status STOPPED.
 
@@ -26,19 +26,24 @@ times) and ended after ``IDLE`` seconds with nothing to watch (it drops the byte
 signals that came while it was not running), so that runs interleaved with other work
 find it running.  A call costs a registration, not a thread hand-over: in the main
 thread without a timeout (most runs) its ``halt`` on a list the watchdog reads on
-SIGINT, else a dict entry (without a lock: the lock only starts and ends the thread),
-and the one ``set_wakeup_fd`` that confirms the wakeup fd (~1 us; the one floor of a
-short run's Python side here: CPython cannot read the wakeup fd without setting it, and
-someone else, an asyncio loop, may have set theirs since the last call).  Signals
-reach only the main thread, so elsewhere only the timeout is watched.  ``shared(halt)``
-is one such watch for many compiled calls in turn (a shooting search's runs):
-registered and the wakeup fd set once, each call only resetting ``halt``.
+SIGINT, else a dict entry (without a lock: the lock only starts and ends the thread).
+Whether the wakeup fd is still the watchdog's socket is known without asking CPython
+(which can tell only by setting it: ``set_wakeup_fd`` checks the fd with two system
+calls, the largest part of a short run's Python side): ``signal.set_wakeup_fd`` (and
+``_signal``'s) is replaced by ``set_wakeup_fd``, the same function that also notes that
+the wakeup fd may have changed, so a call confirms the fd (one ``set_wakeup_fd``) only
+after someone else set one, after the watchdog changed, or where the function in place
+is not this one (replaced again since).  Signals reach only the main thread, so
+elsewhere only the timeout is watched.  ``shared(halt)`` is one such watch for many
+compiled calls in turn (a shooting search's runs): registered and the wakeup fd set
+once, each call only resetting ``halt``.
 """
 
 from __future__ import annotations
 
 import atexit
 import contextlib
+import functools
 import itertools
 import os
 import select
@@ -176,6 +181,7 @@ def _forget():
     """Close the watchdog's sockets (at exit; in a forked child, whose copy has no
     thread), giving up the wakeup fd first if it is theirs."""
     global _WATCHDOG
+    _KNOWN[0] = None
     if _WATCHDOG is not None:
         fd = _WATCHDOG.signal_w.fileno()
         try:
@@ -188,7 +194,8 @@ def _forget():
         _WATCHDOG = None
     _DEPTH[0] = 0
     _CAUGHT.clear()
-    # (_HALTS kept: a child forked during a call pops its entry as the call unwinds)
+    # (_HALTS kept: a child forked during a call pops its entry as the call unwinds,
+    # SIGINT held back until then as in the parent)
 
 
 os.register_at_fork(after_in_child=_forget)
@@ -197,9 +204,25 @@ _MAIN = threading.main_thread().ident
 _SIGINT = int(signal.SIGINT)
 _getsignal = _signal.getsignal       # (signal.getsignal: the same, as an enum, slower)
 _get_ident = threading.get_ident
-_set_wakeup_fd = _signal.set_wakeup_fd
+#: CPython's own (``set_wakeup_fd`` below stands in front of it)
+_set_wakeup_fd = getattr(_signal.set_wakeup_fd, "__wrapped__", _signal.set_wakeup_fd)
+#: the watchdog whose socket is known to be the wakeup fd: set where a call made it so
+#: (or found it so), None once anyone else may have set one (``set_wakeup_fd``)
+_KNOWN: list = [None]
+
+
+@functools.wraps(_set_wakeup_fd)
+def set_wakeup_fd(fd, /, *, warn_on_full_buffer=True):
+    # ``signal.set_wakeup_fd`` (CPython's, called as it is), noting that the wakeup fd may
+    # no longer be the watchdog's socket (module docstring)
+    _KNOWN[0] = None
+    return _set_wakeup_fd(fd, warn_on_full_buffer=warn_on_full_buffer)
+
+
+signal.set_wakeup_fd = _signal.set_wakeup_fd = set_wakeup_fd
 #: the SIGINT handler ``_on_sigint`` stands in for, the compiled calls in progress in
-#: the main thread, and the frames of the signals they held back
+#: the main thread other than those on ``_HALTS``, and the frames of the signals they
+#: held back
 _DELEGATE: list = [None]
 _DEPTH = [0]
 _CAUGHT: list = []
@@ -211,7 +234,7 @@ _HALTS: list = []
 def _on_sigint(signum, frame):
     """The Python-level SIGINT handler: recorded during a compiled call (its handler
     runs once the call has returned), else the handler it stands in for."""
-    if _DEPTH[0]:
+    if _HALTS or _DEPTH[0]:
         _CAUGHT.append(frame)
     else:
         _DELEGATE[0](signum, frame)
@@ -237,25 +260,45 @@ def call(fn, halt: np.ndarray, timeout: float | None = None, args: tuple = ()):
     module docstring)."""
     wd = _WATCHDOG
     if (timeout is None and wd is not None and _get_ident() == _MAIN
-            and _getsignal(_SIGINT) is _on_sigint):
-        # the common case (the main thread, _on_sigint in place, no timeout): ``halt``
-        # on the list the watchdog reads on SIGINT, the wakeup fd confirmed as its own
-        own = wd.own
-        old = _set_wakeup_fd(own, warn_on_full_buffer=False)
-        if old == own or old < 0:             # (no one else's: it stays the watchdog's)
-            _HALTS.append(halt)
-            _DEPTH[0] += 1
-            try:
-                if wd.thread is None:         # (ended after IDLE: sees _HALTS or starts)
-                    wd.start()
-                return fn(*args)
-            finally:
-                _HALTS.pop()
-                _DEPTH[0] -= 1
-                if _CAUGHT and not _DEPTH[0]:
-                    _deliver()
-        _set_wakeup_fd(old)                   # someone else's: the watch that forwards
+            and _getsignal(_SIGINT) is _on_sigint
+            and ((_KNOWN[0] is wd and signal.set_wakeup_fd is set_wakeup_fd
+                  and _signal.set_wakeup_fd is set_wakeup_fd) or _claim(wd))):
+        # the common case (the main thread, _on_sigint in place, no timeout, the wakeup
+        # fd the watchdog's): ``halt`` on the list the watchdog reads on SIGINT
+        _HALTS.append(halt)
+        try:
+            if wd.thread is None:             # (ended after IDLE: sees _HALTS or starts)
+                wd.start()
+            return fn(*args)
+        finally:
+            _HALTS.pop()
+            if _CAUGHT and not (_HALTS or _DEPTH[0]):
+                _deliver()
     return _call(fn, halt, timeout, args)
+
+
+def _claim(wd) -> bool:
+    """Whether the wakeup fd is (now) the socket of ``wd``: made so where no one else's
+    was set (``_take``); someone else's left as it was."""
+    old = _take(wd)
+    if old < 0:
+        return True
+    _set_wakeup_fd(old)
+    return False
+
+
+def _take(wd) -> int:
+    """Make the wakeup fd the socket of ``wd``: the fd it replaced where that was someone
+    else's (theirs again after the call), else -1, and the fd then known to be the
+    watchdog's (``_KNOWN``) while ``set_wakeup_fd`` is the function in place."""
+    own = wd.own
+    old = _set_wakeup_fd(own, warn_on_full_buffer=False)
+    if old == own or old < 0:             # (no one else's: it stays the watchdog's)
+        if signal.set_wakeup_fd is set_wakeup_fd is _signal.set_wakeup_fd:
+            _KNOWN[0] = wd
+        return -1
+    _KNOWN[0] = None
+    return old
 
 
 def _deliver():
@@ -280,10 +323,7 @@ def _call(fn, halt, timeout, args):
     wd = _WATCHDOG or _watchdog()
     old = -1
     if listen:
-        own = wd.own
-        old = _set_wakeup_fd(own, warn_on_full_buffer=False)
-        if old == own:
-            old = -1
+        old = _take(wd)
         _DEPTH[0] += 1
     key = None
     try:
@@ -296,7 +336,7 @@ def _call(fn, halt, timeout, args):
             _DEPTH[0] -= 1
             if old >= 0:                      # someone else's: theirs again
                 _set_wakeup_fd(old)
-            if _CAUGHT and not _DEPTH[0]:
+            if _CAUGHT and not (_HALTS or _DEPTH[0]):
                 _deliver()
 
 
@@ -316,10 +356,7 @@ def shared(halt: np.ndarray):
         yield bare
         return
     wd = _WATCHDOG or _watchdog()
-    own = wd.own
-    old = _set_wakeup_fd(own, warn_on_full_buffer=False)
-    if old == own:
-        old = -1
+    old = _take(wd)
     key = None
     try:
         key = wd.register(halt, None, old)
@@ -333,7 +370,7 @@ def shared(halt: np.ndarray):
                 return fn(*args)
             finally:
                 _DEPTH[0] -= 1
-                if _CAUGHT and not _DEPTH[0]:
+                if _CAUGHT and not (_HALTS or _DEPTH[0]):
                     _deliver()
         yield run
     finally:

@@ -14,11 +14,13 @@ its end (``save="final"``; radau's plain loop serves it), ``t_eval`` with output
 every part; the loops of dla and dvi; ``projection:rows``, the projection of output
 rows onto holonomic constraints (``projection.rows``); ``connect:step``, the compiled step of connect's
 Levenberg-Marquardt search (``connect.levenberg``), ``connect:small`` its shooting's
-small-matrix SVD and finiteness check (``connect.small``) and ``connect:verdicts`` the
-compiled parts of its verdicts (``connect.verdicts``).  ``DEFAULT``, what ``make``
+small-matrix SVD and finiteness check (``connect.small``), ``connect:verdicts`` the
+compiled parts of its verdicts (``connect.verdicts``) and ``atlas:change``, a run's
+change of chart at an edge (``chart_change``).  ``DEFAULT``, what ``make``
 compiles (about a minute of CPU), is the plain and the ``final`` loop of each continuous
 method, the default method's loops with ``t_eval`` (those of ``make run``), the rows'
-projection and connect's: the first run of each on a machine loads its loop.  Each loop compiles in a
+projection, connect's and the change of chart: the first run of each on a machine loads
+its loop.  Each loop compiles in a
 process of its own, as many at a time as there are cores.
 """
 
@@ -39,10 +41,11 @@ LOOPS = {f"{m}:{name}": (m, parts) for m in ("dop853", "dopri5", "rk4", "radau")
 LOOPS.update({"dla": ("dla", None), "dvi": ("dvi", None),
               "projection:rows": ("projection", None),
               **{f"connect:{part}": ("connect", part)
-                 for part in ("step", "small", "verdicts")}})
+                 for part in ("step", "small", "verdicts")},
+              "atlas:change": ("atlas", None)})
 DEFAULT = (*(n for n in LOOPS if n.endswith((":plain", ":final"))), "dop853:t_eval",
            "dop853:watch+t_eval", "projection:rows", "connect:step", "connect:small",
-           "connect:verdicts")
+           "connect:verdicts", "atlas:change")
 
 
 def compile_loop(name: str) -> tuple[str, float, bool]:
@@ -62,6 +65,10 @@ def compile_loop(name: str) -> tuple[str, float, bool]:
         from .methods import _common, projection
 
         d = _common.compiled(projection._rows, projection._ROWS_ARGS)
+    elif method == "atlas":
+        from . import chart_change
+
+        d = chart_change.compiled()
     elif method == "connect":
         from .connect import levenberg, small, verdicts
 

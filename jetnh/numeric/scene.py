@@ -472,13 +472,13 @@ class Scene(Frozen):
             raise JetnhError(f"initial must be a dict keyed by Symbol or name, got a "
                              f"{type(initial).__name__}")
         new = object.__new__(Scene)
-        d = new.__dict__
-        d.update(self.__dict__)
-        del d["_memo"]
         # (the attributes set directly, not by ``_set``: a time span is a tuple of
-        # floats, the initial values floats, y0 made read-only here)
-        d.update(t_span=self.t_span if t_span is self.t_span else self._t_span(t_span),
-                 projected={}, completed={})
+        # floats, the initial values floats, y0 made read-only here; ``_memo`` the
+        # copy's own below, before anything reads it)
+        d = self.__dict__.copy()        # (a copy of the dict: sooner than filling one)
+        d["t_span"] = self.t_span if t_span is self.t_span else self._t_span(t_span)
+        d["projected"] = d["completed"] = _NOTHING
+        object.__setattr__(new, "__dict__", d)
         own = self._memo
         hit = own.get("moved")
         if hit is None or hit[0] != len(own) or hit[1] is None:
@@ -510,23 +510,24 @@ class Scene(Frozen):
             ini, y = new._initial(initial, False, False, kern, p)
             if y is None:
                 y = np.array(self._states_of(ini), dtype=float)
+            ini = FrozenDict(ini)
         else:
             ini, y = got
-        ini = FrozenDict(ini)
         # (this copy's own state array: its direct runs' ``_y0``, y0 a read-only view)
         memo["_y0"] = y
         y0 = y.view()
         y0.setflags(write=False)
-        d.update(initial=ini, y0=y0)
+        d["initial"] = ini
+        d["y0"] = y0
         return new
 
     def _moved_states(self, initial, route, p):
         """``_initial(initial, False, False, kern, p)`` of the most common initial values
         at once: a dict of the states (no dependent velocity) as finite floats, the
         dependent velocities from the compiled kernels of ``route`` (``_dv_route``;
-        ``_dependent_velocity_floats``), a scene without holonomic constraints; None
-        where it does not apply (the general route then checks them and names what is
-        wrong)."""
+        ``_dependent_velocity_floats``), a scene without holonomic constraints: the
+        initial values (a ``FrozenDict``) and the state array; None where it does not
+        apply (the general route then checks them and names what is wrong)."""
         if type(initial) is not dict or initial.keys() != self._state_set:
             return None
         states = self._states_of(initial)
@@ -536,8 +537,8 @@ class Scene(Frozen):
         values = self._dependent_velocity_list(y, route, p)
         if values is None:
             return None
-        out = dict(initial)
-        out.update(zip(self.dependent_velocities, values))
+        out = FrozenDict(initial)
+        dict.update(out, zip(self.dependent_velocities, values))
         return out, y
 
     def _shared_memo(self) -> dict:
@@ -693,12 +694,12 @@ class Scene(Frozen):
                 if keywords:
                     for k, v in keywords.items():
                         key += (k, v, type(v))
-                plan = self._memo.get("quick", _NONE_KEPT)[key]
-            except (KeyError, TypeError, ValueError) as exc:
-                # not planned yet (a KeyError), or a key not hashable or no pair of times
-                plan = self._kept_plan(key if type(exc) is KeyError else None, rtol,
-                                       atol, t_eval, method, save, t_span, singular, split,
-                                       keywords)
+                plan = self._memo.get("quick", _NONE_KEPT).get(key)
+            except (TypeError, ValueError):     # a key not hashable, or no pair of times
+                plan = key = None
+            if plan is None:                    # not planned yet (under this key)
+                plan = self._kept_plan(key, rtol, atol, t_eval, method, save, t_span,
+                                       singular, split, keywords)
         else:
             plan = self._plan(rtol, atol, t_eval, method, save, events, t_span, timeout,
                               projection, backend, step, singular, split, newton,
@@ -801,15 +802,19 @@ class Scene(Frozen):
         """The initial state of one run (``run(y0=...)``), checked."""
         if y0 is None:
             return self.y0.copy()        # the compiled loop gets its own array
+        if (type(y0) is np.ndarray and y0.dtype is _FLOAT64 and y0.shape == self.y0.shape
+                and math.isfinite(sum(y0.tolist()))):
+            # (a NaN or an infinity makes the sum of the floats not finite; an overflow
+            # of finite values takes the general route, which says so)
+            y = y0.copy()               # (what the general route makes of it, sooner)
+            if self.system.holonomic:
+                self._check_holonomic(y, t0, p)
+            if self.dependent_velocities and not self._regular_at(y, t0, p):
+                self._check_split(y, {}, t0, p)
+            return y
         if not isinstance(y0, dict):
-            if (type(y0) is np.ndarray and y0.dtype is _FLOAT64
-                    and y0.shape == self.y0.shape and math.isfinite(sum(y0.tolist()))):
-                # (a NaN or an infinity makes the sum of the floats not finite; an
-                # overflow of finite values takes the general route, which says so)
-                y = y0.copy()           # (what the general route makes of it, sooner)
-            else:
-                y, _ = arguments.keyed_or_sequence(y0, self.state_names, self.y0, "y0",
-                                                   "scene.state_names")
+            y, _ = arguments.keyed_or_sequence(y0, self.state_names, self.y0, "y0",
+                                               "scene.state_names")
             if self.system.holonomic:
                 self._check_holonomic(y, t0, p)
             if self.dependent_velocities:
@@ -949,6 +954,8 @@ _SHARED = ("spec", "key", "plans", "spans", "events", "atlas_applies", "atlases"
 
 
 _FLOAT = {float}
+#: ``projected`` and ``completed`` of the copies ``replace`` makes (nothing moved)
+_NOTHING = FrozenDict()
 #: what ``replace`` changes in a copy of the scene (``_moved``)
 _MOVED = frozenset(("initial", "t_span"))
 #: the plans of a scene that kept none (``run``: its key is hashed all the same)

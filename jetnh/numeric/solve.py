@@ -288,7 +288,9 @@ def on_span(plan, t0, t1) -> Plan:
     """``plan`` (whose options do not depend on its span: ``Plan.spans``) on the time
     span ``(t0, t1)`` (checked: ``arguments.time_span``)."""
     new = object.__new__(Plan)
-    new.__dict__.update(plan.__dict__, t0=t0, t1=t1, head=(*plan.prefix, t0, t1))
+    d = plan.__dict__.copy()            # (a copy of the dict: sooner than filling one)
+    d["t0"], d["t1"], d["head"] = t0, t1, (*plan.prefix, t0, t1)
+    object.__setattr__(new, "__dict__", d)
     return new
 
 
@@ -353,9 +355,8 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
         dense = plan.dense_ends
         status = out[0]
         if status == FINISHED and len(out) == 6:        # most runs: at once
-            return Trajectory._finished(scene, (out[1], out[2], out[3]), p, plan.method.name,
-                                        _FINISHED_TEXT, (out[4], wall, scene.projected),
-                                        plan.kern, None if dense is None else dense[0])
+            return Trajectory._of_loop(scene, out, p, plan.method.name, _FINISHED_TEXT,
+                                       wall, plan.kern, None if dense is None else dense[0])
         if dense is not None:    # stopped inside a step or not
             dense = dense[status == EVENT or status == SINGULAR]
         return trajectory(scene, plan.method.name, out, wall, plan.kern, plan.ce, p,
@@ -408,9 +409,7 @@ def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, 
     of ``ce`` are reported; with ``sens`` (the kernels of a run with sensitivities) the
     state's columns, and the sensitivities apart."""
     if len(out) == 6 and out[0] == FINISHED and sens is None:    # most runs: at once
-        return Trajectory._finished(scene, (out[1], out[2], out[3]), p, method,
-                                    _FINISHED_TEXT, (out[4], wall, scene.projected), kern,
-                                    dense)
+        return Trajectory._of_loop(scene, out, p, method, _FINISHED_TEXT, wall, kern, dense)
     if len(out) == 6:      # a loop that watched nothing: no events
         status, ts, ys, n_out, stats, sing_index = out
         if status != FINISHED:      # its last time and state (row n_out), for diagnosis

@@ -146,6 +146,8 @@ def _columns(layout) -> tuple[dict, dict]:
 
 
 _COLUMNS: dict = {}
+_new = object.__new__
+_setattr = object.__setattr__
 
 
 def _output(a, n) -> np.ndarray:
@@ -206,6 +208,33 @@ class _Charts:
     aux = at = evaluate = stop = _refuse
 
 
+class _EventList:
+    """The empty list of a trajectory's ``t_events`` or ``y_events`` where it has no
+    events: made on first read (kept in its ``_memo``), not with every run."""
+
+    def __set_name__(self, owner, name):
+        self.name = name
+
+    def __get__(self, obj, cls=None):
+        if obj is None:
+            return self
+        found = obj._memo.get(self.name)
+        if found is None:
+            found = obj._memo[self.name] = []
+        return found
+
+
+class _OfLoop:
+    """An attribute of a trajectory made by ``_of_loop``, computed from its loop's result
+    when read (the other trajectories hold it in ``__dict__``, which takes precedence)."""
+
+    def __init__(self, fget):
+        self.fget = fget
+
+    def __get__(self, obj, cls=None):
+        return self if obj is None else self.fget(obj)
+
+
 class Trajectory(Frozen):
     """Output times ``t`` and states ``y`` (rows) of one run, with named access.
 
@@ -239,6 +268,16 @@ class Trajectory(Frozen):
     #: (``_stopped``; ``final``)
     _last = None
     #: ``_dense``: what re-taking a step needs (tolerances, output mode; numeric.dense)
+    _dense = None
+    status = 0
+    #: scipy's lists of event times and states (one per event), made on first read where
+    #: the run had no events
+    t_events = _EventList()
+    y_events = _EventList()
+    #: a trajectory of ``_of_loop``: the loop's result (status, ts, ys, n, stats, _) and
+    #: its wall-clock time, of which ``_rows`` and ``_counts`` are made when read
+    _rows = _OfLoop(lambda self: self._loop[1:4])
+    _counts = _OfLoop(lambda self: (self._loop[4], self._wall, self.scene.projected))
 
     def __init__(self, scene, t, y, p, *, method, status, stop_reason, steps, rejected,
                  nfev, wall_time, kernels, projected=None, own=None, events=None,
@@ -281,6 +320,20 @@ class Trajectory(Frozen):
                              _dense=dense, _counts=counts, _memo={})
         return self
 
+    @classmethod
+    def _of_loop(cls, scene, out, p, method, stop_reason, wall, kernels, dense
+                 ) -> "Trajectory":
+        """``_finished`` of the 6-tuple ``out`` a compiled loop returned (finished,
+        status 0) and the call's wall-clock time ``wall``: the tuple kept as it is
+        (``_rows``, ``_counts`` made of it when read), the other attributes their class
+        defaults, so that the most common run makes the fewest objects."""
+        self = _new(cls)
+        _setattr(self, "__dict__", {"scene": scene, "_loop": out, "_p": p,
+                                    "_kernels": kernels, "method": method,
+                                    "stop_reason": stop_reason, "_wall": wall,
+                                    "_dense": dense, "_memo": {}})
+        return self
+
     def _fill(self, scene, rows, p, method, status, stop_reason, counts, kernels, events,
               singularity, dense, sensitivities, own=None, segments=None, switches=()):
         """The attributes, each public array read-only (``Frozen._set``, without its walk
@@ -317,6 +370,9 @@ class Trajectory(Frozen):
         d = dict(self.__dict__)
         t, y = self.t, self.y
         d["_rows"] = (t, y, t.shape[0])
+        if d.pop("_loop", None) is not None:        # (its buffers may hold more rows)
+            d["_counts"] = self._counts
+            del d["_wall"]
         d["_memo"] = {} if self._own else {"aux": self.aux}
         if self._segments is not None:      # (its last piece stays here)
             d["_memo"]["_stop"] = self._stop

@@ -1,0 +1,163 @@
+"""A call knows whether the wakeup fd is still the watchdog's socket without setting it
+(``interrupt.set_wakeup_fd`` in place of ``signal.set_wakeup_fd`` notes every change):
+whoever sets a wakeup fd between runs, through ``signal`` or past it, a Ctrl-C during
+the next call still stops it within a second, reaches the SIGINT handler once after it,
+and leaves the other party's wakeup fd as it was."""
+
+import _signal
+import os
+import signal
+import socket
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from jetnh import models
+from jetnh.numeric import STOPPED, Scene, interrupt
+
+
+def _spin(halt, cap):
+    """Python stand-in for a compiled loop: returns when ``halt`` is set (its value) or
+    after ``cap`` seconds (0)."""
+    end = time.monotonic() + cap
+    while time.monotonic() < end:
+        if halt[0]:
+            return int(halt[0])
+    return 0
+
+
+def _stopped_by_sigint():
+    """A call (the watchdog's common route) that SIGINT, sent 0.2 s into it, must stop:
+    what it returned and how long it took."""
+    halt = interrupt.flag()
+    timer = threading.Timer(0.2, os.kill, (os.getpid(), signal.SIGINT))
+    timer.start()
+    tic = time.monotonic()
+    got = interrupt.call(_spin, halt, None, (halt, 10.0))
+    timer.join()
+    return got, time.monotonic() - tic
+
+
+def _wakeup_fd():
+    fd = interrupt._set_wakeup_fd(-1)    # (CPython's own: read without noting anything)
+    interrupt._set_wakeup_fd(fd, warn_on_full_buffer=False)
+    return fd
+
+
+@pytest.fixture
+def handler():
+    """A SIGINT handler of the test's own, recording each signal; the previous handler
+    and wakeup fd restored after the test."""
+    seen = []
+    before = signal.signal(signal.SIGINT, lambda signum, frame: seen.append(signum))
+    fd = signal.set_wakeup_fd(-1)
+    signal.set_wakeup_fd(fd)
+    try:
+        yield seen
+    finally:
+        signal.signal(signal.SIGINT, before)
+        signal.set_wakeup_fd(fd)
+
+
+@pytest.fixture
+def theirs():
+    """A wakeup socket of someone else's (an event loop's): (reader, its writer's fd)."""
+    r, w = socket.socketpair()
+    r.setblocking(False)
+    w.setblocking(False)
+    try:
+        yield r, w.fileno()
+    finally:
+        r.close()
+        w.close()
+
+
+def test_set_wakeup_fd_is_cpythons_in_front():
+    """``signal.set_wakeup_fd`` is the module's stand-in: it returns the previous fd and
+    refuses a non-main thread as CPython's does, and forgets the watchdog's fd."""
+    assert signal.set_wakeup_fd is interrupt.set_wakeup_fd is _signal.set_wakeup_fd
+    assert signal.set_wakeup_fd.__wrapped__ is interrupt._set_wakeup_fd
+    interrupt.call(lambda: None, interrupt.flag())
+    assert interrupt._KNOWN[0] is interrupt._WATCHDOG
+    fd = signal.set_wakeup_fd(-1)
+    assert interrupt._KNOWN[0] is None
+    assert fd == interrupt._WATCHDOG.own
+    assert signal.set_wakeup_fd(fd) == -1
+    errors = []
+
+    def elsewhere():
+        try:
+            signal.set_wakeup_fd(-1)
+        except ValueError as exc:
+            errors.append(exc)
+
+    thread = threading.Thread(target=elsewhere)
+    thread.start()
+    thread.join()
+    assert len(errors) == 1 and _wakeup_fd() == fd
+
+
+def test_a_wakeup_fd_set_between_runs_is_theirs_again_after_a_stopped_call(handler, theirs):
+    """After calls that found the fd the watchdog's (and no longer set it), someone sets
+    theirs through ``signal``: the next call hears Ctrl-C, their socket gets the byte,
+    their fd is in place after it; once they give it up the calls take it back."""
+    reader, fd = theirs
+    for _ in range(3):
+        interrupt.call(lambda: None, interrupt.flag())
+    assert interrupt._KNOWN[0] is interrupt._WATCHDOG
+    previous = signal.set_wakeup_fd(fd, warn_on_full_buffer=False)
+    assert previous == interrupt._WATCHDOG.own
+    got, took = _stopped_by_sigint()
+    assert got == interrupt.INTERRUPT and took < 3.0
+    assert handler == [signal.SIGINT]
+    assert _wakeup_fd() == fd
+    time.sleep(0.05)
+    assert signal.SIGINT in reader.recv(64)
+    signal.set_wakeup_fd(-1)
+    got, took = _stopped_by_sigint()
+    assert got == interrupt.INTERRUPT and took < 3.0 and handler == [signal.SIGINT] * 2
+    assert _wakeup_fd() == interrupt._WATCHDOG.own
+    assert interrupt._KNOWN[0] is interrupt._WATCHDOG
+
+
+def test_a_wakeup_fd_set_past_the_stand_in_is_found_where_it_was_replaced(
+        monkeypatch, handler, theirs):
+    """Where ``signal.set_wakeup_fd`` is no longer the stand-in (replaced since), every
+    call confirms the fd: a wakeup fd set past both (CPython's own function) is found,
+    Ctrl-C still stops the call and the fd is theirs after it."""
+    reader, fd = theirs
+    interrupt.call(lambda: None, interrupt.flag())
+    assert interrupt._KNOWN[0] is interrupt._WATCHDOG
+    monkeypatch.setattr(signal, "set_wakeup_fd", interrupt._set_wakeup_fd)
+    interrupt._set_wakeup_fd(fd, warn_on_full_buffer=False)   # unnoticed
+    got, took = _stopped_by_sigint()
+    assert got == interrupt.INTERRUPT and took < 3.0 and handler == [signal.SIGINT]
+    assert _wakeup_fd() == fd
+    monkeypatch.undo()
+    interrupt._set_wakeup_fd(-1)
+    interrupt._KNOWN[0] = None
+
+
+def test_ctrl_c_stops_a_long_run_and_restores_the_users_handler_and_fd(handler, theirs):
+    """A long compiled run with the user's own SIGINT handler and wakeup fd in place:
+    stopped within a second of Ctrl-C (status STOPPED, where it got to), the handler run
+    once after it, the fd theirs again, and the next short run unchanged bit for bit."""
+    reader, fd = theirs
+    disk = Scene(models.get("rolling_disk"), "chetaev", initial=models.initial("rolling_disk"),
+                 t_span=(0.0, 1e9), cache=False).compile()
+    short = disk.replace(t_span=(0.0, 1.0))
+    first = short.run(save="final")
+    signal.set_wakeup_fd(fd, warn_on_full_buffer=False)
+    timer = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT))
+    timer.start()
+    tic = time.monotonic()
+    traj = disk.run(save="final", max_step=1e-3, max_steps=10**12)
+    timer.join()
+    assert time.monotonic() - tic < 3.0
+    assert traj.status == STOPPED and 0.0 < traj.t[-1] < 1e9
+    assert handler == [signal.SIGINT] and _wakeup_fd() == fd
+    again = short.run(save="final")
+    assert np.array_equal(again.y, first.y) and np.array_equal(again.t, first.t)
+    assert handler == [signal.SIGINT] and _wakeup_fd() == fd
