@@ -165,6 +165,40 @@ def test_knife_edge_split_singular(knife_y, method):
     assert on.switches[0]["t"] < t_hit
 
 
+def test_start_check_reads_the_users_events_only(knife_y):
+    """A switching run watches its chart's edge as an event of its own: the check of the
+    events at the initial state (NaN or infinite: a warning) names the user's events
+    only, and a run that watches the edge alone checks nothing.  ``values`` (one call of
+    the compiled events) agrees with the events called one by one."""
+    import warnings
+
+    from jetnh.errors import JetnhWarning
+    from jetnh.numeric import atlas
+    from jetnh.numeric.events import warn_not_finite
+
+    J = knife_y.system.J
+    x = J.q[0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert knife_y.run().switches                   # the edge alone
+        assert knife_y.run(events=[x - 1]).switches
+    with pytest.warns(JetnhWarning, match=r"^the events 'sqrt\(x - 2\)' are NaN") as rec:
+        tr = knife_y.run(events=[sp.sqrt(x - 2), x - 1])
+    assert len(rec) == 1 and "chart edge" not in str(rec[0].message)
+    assert tr.switches and len(tr.t_events) == 2 and len(tr.t_events[0]) == 0
+    at = atlas.atlas(knife_y)
+    edge_only = at.events(at.own, [], True)
+    nan = np.full(len(knife_y.state_names), np.nan)
+    assert edge_only.user == () and np.isnan(edge_only.values(0.0, nan, knife_y.p)[0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        warn_not_finite(edge_only, 0.0, nan, knife_y.p)
+    ce = knife_y.compile_events([x - 1, sp.sqrt(x + 2), lambda t, y: y[2] * t])
+    y, p = knife_y.y0 + 0.25, np.ascontiguousarray(knife_y.p, dtype=float)
+    assert ce.values(0.5, y, p) == [f(0.5, y, p) for f in ce.python_funcs]
+    assert ce.values(0.5, y, p) == [-0.75, np.sqrt(2.25), 0.55 * 0.5]
+
+
 def test_knife_edge_other_split_passes(knife_y):
     """The motion is regular: with x dependent the run crosses theta = pi/2 and agrees
     with the closed form (the speed u along the blade is constant)."""

@@ -82,7 +82,7 @@ from .methods import projection
 from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, FINISHED, SINGULAR,
                               STATUS_TEXT, STOPPED)
 from . import arguments, chart_change, interrupt, loops, methods
-from .events import Event, as_events
+from .events import Event, OwnEvent, as_events
 from .kernels.calls import Kernel, Rows
 from .methods.loop import Control, Watch
 from .trajectory import Trajectory
@@ -650,7 +650,7 @@ class Atlas:
                for e, e2 in zip(user, self.rewrite({i: e.fun for i, e in enumerate(user)},
                                                    sys_).values())]
         if edge:
-            evs.append(Event(self.edge(chart), terminal=True, direction=-1, name=EDGE))
+            evs.append(OwnEvent(self.edge(chart), terminal=True, direction=-1, name=EDGE))
         return chart.scene.compile_events(evs) if evs else None
 
 

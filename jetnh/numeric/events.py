@@ -45,10 +45,13 @@ faster than the motion, pass ``max_step`` below the spacing of its roots.
 
 from __future__ import annotations
 
+import math
+import warnings
+
 import numpy as np
 import sympy as sp
 
-from ..errors import JetnhError
+from ..errors import JetnhError, JetnhWarning
 from ..frozen import Frozen
 from . import codegen
 from .kernels import load as load_kernels
@@ -102,6 +105,11 @@ class Event(Frozen):
                 f"direction={self.direction})")
 
 
+class OwnEvent(Event):
+    """An event a run watches for itself, not one of the user's (the edge of a split's
+    chart, ``numeric.atlas``): ``warn_not_finite`` does not look at it."""
+
+
 def as_events(events) -> list[Event]:
     """A list of ``Event`` from what ``run(events=...)`` accepts (one item or a list)."""
     if events is None:
@@ -128,7 +136,7 @@ def as_events(events) -> list[Event]:
 class CompiledEvents:
     """The compiled event function of one list of events (all of them in one kernel)."""
 
-    def __init__(self, events, uev, python_funcs):
+    def __init__(self, events, uev, python_funcs, sizes):
         self.events = events
         from .methods._common import FunctionAddress
 
@@ -137,9 +145,23 @@ class CompiledEvents:
         self.direction = np.array([e.direction for e in events], dtype=np.int64)
         self.max_events = np.array([e.max_events for e in events], dtype=np.int64)
         self.python_funcs = python_funcs        # per event: f(t, y, p) -> float (scipy)
+        self.sizes = sizes                      # (states, run-time parameters, events)
+        self.user = tuple(i for i, e in enumerate(events) if not isinstance(e, OwnEvent))
+        self._kernel = None
 
     def __len__(self):
         return len(self.events)
+
+    def values(self, t, y, p) -> list[float]:
+        """Every event's value at (t, y) with the parameters p, in one call of ``uev``
+        (``y`` and ``p`` C-contiguous float64 arrays of at least ``sizes`` entries)."""
+        if self._kernel is None:
+            from .kernels.calls import Kernel
+
+            self._kernel = Kernel(self.uev, self.sizes)
+        out = np.empty(len(self.events))
+        self._kernel(float(t), y, p, out)
+        return out.tolist()
 
 
 def _check_symbols(scene, expr, name):
@@ -176,16 +198,15 @@ def check_varying(scene, events):
 
 
 def warn_not_finite(ce, t, y, p):
-    """A ``JetnhWarning`` for every event that is NaN or infinite at the start (t, y) of
-    a run with the parameters p: such a function has no sign there, and an event whose
-    value is never finite never fires."""
-    import warnings
-
-    from ..errors import JetnhWarning
-
-    with np.errstate(all="ignore"):
-        bad = [nm for nm, f in zip(ce.names, ce.python_funcs)
-               if not np.isfinite(f(t, y, p))]
+    """A ``JetnhWarning`` for every user's event of ``ce`` that is NaN or infinite at the
+    start (t, y) of a run with the parameters p: such a function has no sign there, and
+    an event whose value is never finite never fires."""
+    if not ce.user:
+        return
+    values = ce.values(t, y, p)
+    if all(map(math.isfinite, values)):
+        return
+    bad = [ce.names[i] for i in ce.user if not math.isfinite(values[i])]
     if bad:
         warnings.warn(f"the events {', '.join(map(repr, bad))} are NaN or infinite at the "
                       f"initial state (t = {t:.17g}): they do not fire where they are not "
@@ -246,7 +267,8 @@ def compile_events(scene, events: list[Event]) -> CompiledEvents:
             python_funcs.append(_expr_caller(kernel.events, i, len(events)))
         else:
             python_funcs.append(lambda t, y, p, f=e.fun: float(f(t, y)))
-    return CompiledEvents(events, uev, python_funcs)
+    return CompiledEvents(events, uev, python_funcs,
+                          (len(scene.state_names), len(scene.runtime_params), len(events)))
 
 
 def _expr_caller(kernel, i, n):

@@ -245,6 +245,16 @@ def compiled(pyfunc, argtypes, parallel=False, namespace=None, tag=""):
     return _COMPILED[key]
 
 
+def apart(pyfunc, namespace, tag):
+    """``pyfunc`` over the globals ``namespace`` as a jit function of a name of its own
+    (``compiled``'s rule, ``tag``): a function that a compiled entry calls, compiled into
+    it (and kept on disk with it) as a function apart."""
+    func = rebound(pyfunc, namespace)
+    func.__qualname__ = "_".join(filter(None, (pyfunc.__qualname__, tag, sources_hash())))
+    func.__module__ = pyfunc.__module__
+    return numba.njit(error_model="numpy", nogil=True)(func)
+
+
 def rebound(pyfunc, namespace=None):
     """A copy of the Python function ``pyfunc`` whose globals are ``namespace`` (default:
     its own)."""

@@ -60,8 +60,8 @@ import numpy as np
 from ._common import (
     AT_T_EVAL, ENDPOINTS, ENSEMBLE_OUT, EVENT, EVERY_STEP, FINISHED, MAX_FACTOR, MAX_STEPS,
     MIN_FACTOR, NONFINITE, SAFETY, SINGULAR, STIFF, STOPPED, TOO_SMALL_STEP, all_finite,
-    collect, compiled, copy_into, f8, function_at, i8, inline, jit, min_step, start, store,
-    take_next)
+    apart, collect, compiled, copy_into, f8, function_at, i8, inline, jit, min_step, start,
+    store, take_next)
 from . import projection
 from .sums import DOP853, EMBEDDED, NONE, functions as sums  # noqa: F401 (the codes)
 from ._events import (CRAWL, any_user_active, dense_eval, hermite_defect, locate,
@@ -77,7 +77,7 @@ KINK = 0.25
 #: problem stiff, STIFF_RESET negative ones in a row clear the count
 STIFF_EVERY, STIFF_RUN, STIFF_RESET = 1000, 15, 6
 
-#: what every solve returns
+#: what every solve returns (``ev_t ev_i ev_y`` None where it watched no user events)
 Result = namedtuple("Result", "status ts ys n_out stats t y ev_t ev_i ev_y n_ev sing_index")
 #: the step control of one run: tolerances and limits (``n_steps`` > 0: fixed steps);
 #: ``n_hol`` > 0: project every accepted step onto the ``n_hol`` holonomic constraints of
@@ -203,14 +203,12 @@ def stiff_ratio(h, y_new, y_last, f_new, f_last):
 @inline
 def workspace(n_sing, n_user):
     """The arrays of the singularity indicators and the user events (``after_step``),
-    rows of three allocations: ``(gs, gs_old, gref, sig, eps)`` of the indicators (their
+    rows of two allocations: ``(gs, gs_old, gref, sig, eps)`` of the indicators (their
     values at the step's end and start, initial sizes, signs, thresholds), ``(gu_old,
     gu_new, gtmp, roots)`` and ``(counts, which)`` of the user events."""
-    G = np.empty((5, max(n_sing, 1)))
-    u = max(n_user, 1)
-    U = np.empty((4, u))
-    C = np.zeros((2, u), dtype=np.int64)
-    return G[0], G[1], G[2], G[3], G[4], U[0], U[1], U[2], C[0], U[3], C[1]
+    G = np.empty((9, max(n_sing, n_user, 1)))
+    C = np.zeros((2, max(n_user, 1)), dtype=np.int64)
+    return G[0], G[1], G[2], G[3], G[4], G[5], G[6], G[7], C[0], G[8], C[1]
 
 
 @inline
@@ -250,9 +248,22 @@ def counts(stats):
 
 
 @inline
-def no_events(n):
-    """Empty event records (time, index, state) and their count."""
-    return np.empty(0), np.empty(0, dtype=np.int64), np.empty((0, n)), np.int64(0)
+def no_events(rows, ev_dir):
+    """Empty event records (time, index, state) and their count: views of the loop's
+    rows ``rows`` (n columns) and of the events' directions ``ev_dir`` (no allocation;
+    ``_events.store_event`` allocates on the first record)."""
+    return rows[0, :0], ev_dir[:0], rows[:0], np.int64(0)
+
+
+@inline
+def watch_result(res, n_user):
+    """The tuple of a loop that watches (``_solve``'s, ``res``) as its entry returns it:
+    the event records None where the run watches no user events (``n_user`` 0): an
+    array returned to Python costs ~0.3 us to box, None nothing (``watching``)."""
+    if n_user > 0:
+        return res
+    status, ts, ys, n_out, stats, t, y, _, _, _, n_ev, sing_index = res
+    return status, ts, ys, n_out, stats, t, y, None, None, None, n_ev, sing_index
 
 
 @inline
@@ -369,8 +380,9 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
     the status (never a success with a NaN or an infinity in the rows or the last state:
     ``finite_status``), the output rows ``ts[:n_out]``, ``ys[:n_out]``, ``stats =
     (accepted, rejected, rhs evaluations)`` (``counts``), the last time and state, the
-    event records (time, index, state) and the index of the indicator that stopped the
-    run (-1 if none).  A loop that watches nothing (``WATCH`` false) records no events
+    event records (time, index, state; the loop's entry returns None for them where the
+    run watches no user events: ``watch_result``), their count and the index of the
+    indicator that stopped the run (-1 if none).  A loop that watches nothing (``WATCH`` false) records no events
     and returns ``(status, ts, ys, n_out, stats, sing_index)`` with the last time and
     state in row ``n_out`` of ``ts``, ``ys``: every array a compiled call returns is boxed
     at ~0.4 us, more than a short run's arithmetic.
@@ -392,14 +404,16 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
     max_step = ctl.max_step
     n = y0.shape[0]
     direction = 1.0 if t_end >= t0 else -1.0
-    K = np.empty((max(A.shape[0], ns + 1), n))
-    F = np.empty((3 + D.shape[0], n))
-    y = y0.copy()
-    y_new = np.empty(n)
-    ytmp = np.empty(n)
-    fmid = np.empty(n)
-    y_stop = np.empty(n)
-    scale = np.empty(n)
+    # the stages K, the interpolant's rows F and six states: rows of one allocation
+    n_k = max(A.shape[0], ns + 1)
+    n_f = 3 + D.shape[0]
+    rows = np.empty((n_k + n_f + 6, n))
+    K = rows[:n_k]
+    F = rows[n_k:n_k + n_f]
+    y, y_new, ytmp, fmid, y_stop, scale = (rows[n_k + n_f], rows[n_k + n_f + 1],
+                                           rows[n_k + n_f + 2], rows[n_k + n_f + 3],
+                                           rows[n_k + n_f + 4], rows[n_k + n_f + 5])
+    copy_into(y, y0)
     stats = np.zeros(3, dtype=np.int64)
     ts, ys, n_out, j_eval = outputs(n, mode, t_eval, 64 if ADAPTIVE else n_steps + 1)
     t = t0
@@ -409,16 +423,16 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
         ts, ys, n_out = store(ts, ys, n_out, t, y)
     sing_index = -1
     if WATCH:
-        ev_t, ev_i, ev_y, n_ev = no_events(n)
-        ws, sing_index = watch_start(sing, uev, watch, t, y, p)
         n_sing, ev_dir = watch.n_sing, watch.ev_dir
         n_user = ev_dir.shape[0]
+        ev_t, ev_i, ev_y, n_ev = no_events(F, ev_dir)
+        ws, sing_index = watch_start(sing, uev, watch, t, y, p)
         gs, gs_old, gref, sig, eps, gu_old, gu_new = ws[:7]
         if sing_index >= 0:
             if ADAPTIVE:
                 ts, ys, n_out = store(ts, ys, n_out, t, y)
             return (SINGULAR, ts, ys, n_out, counts(stats), t, y, ev_t, ev_i, ev_y,
-                          n_ev, sing_index)
+                    n_ev, sing_index)
     h_abs = 0.0
     h_fixed = (t_end - t0) / max(n_steps, 1)
     exponent = -1.0 / (error_order + 1)
@@ -598,10 +612,19 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
     return status, ts, ys, n_out, counts(stats), sing_index
 
 
+def _watching(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode, watch,
+              halt):
+    """The entry of a loop that watches: ``_solve`` (``body``, compiled apart) with its
+    tuple made ``watch_result``'s.  (Returned from ``_solve`` itself, the optional
+    records made numba's code for its steps slower: ~10 % a step.)"""
+    return watch_result(body(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval,
+                             mode, watch, halt), watch.ev_dir.shape[0])
+
+
 #: the method a specialised loop runs, its sums and that loop (``_specialised``; unbound
-#: here)
+#: here), and a watching loop's body
 TAB = SHAPE = ADAPTIVE = STIFF_BOUND = WATCH = PROJECT = DENSE = STEPS = None
-run = step_stages = new_state = step_error = None
+run = body = step_stages = new_state = step_error = None
 _SPECIALISED = {}
 CONTROL = numba.typeof(Control(1.0, np.zeros(1), 0.0, 1.0, 1, 0, 0, 0, 0))
 WATCHED = numba.typeof(Watch(0, 0.0, np.zeros(1, dtype=np.int64),
@@ -652,7 +675,11 @@ def _specialised(method, parts=ALL):
         namespace["step_error"] = helpers["error"]
         tag = method.name + ("" if parts == ALL else
                              "_" + "".join(c for c, f in zip("wpds", parts) if f))
-        namespace["run"] = compiled(_solve, ARGS, namespace=namespace, tag=tag)
+        if parts[0]:
+            namespace["body"] = apart(_solve, namespace, tag)
+            namespace["run"] = compiled(_watching, ARGS, namespace=namespace, tag=tag)
+        else:
+            namespace["run"] = compiled(_solve, ARGS, namespace=namespace, tag=tag)
         _SPECIALISED[key] = namespace
     return _SPECIALISED[key]
 

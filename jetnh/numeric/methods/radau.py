@@ -38,12 +38,12 @@ import numpy as np
 
 from ._common import (
     ENDPOINTS, ENSEMBLE_OUT, EVERY_STEP, FINISHED, MAX_STEPS, NONFINITE,
-    SINGULAR, STOPPED, TOO_SMALL_STEP, all_finite, callback_at, collect, compiled,
+    SINGULAR, STOPPED, TOO_SMALL_STEP, all_finite, apart, callback_at, collect, compiled,
     copy_into, f8, function_at, i8, jit, min_step, start, store, take_next)
 from ._events import dense_eval, watch_end, watch_next
 from . import projection
 from .loop import (ALL, CONTROL, EMBEDDED, GIVEN, WATCHED, after_step, counts,
-                   finite_status, no_events, output, outputs, watch_start)
+                   finite_status, no_events, output, outputs, watch_result, watch_start)
 
 ORDER = 5
 ERROR_ORDER = 3
@@ -304,7 +304,7 @@ def _solve(rhs_at, jac_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, newto
     stats = np.zeros(3, dtype=np.int64)
     ts, ys, n_out, j_eval = outputs(n, mode, t_eval, 64)
     t = t0
-    ev_t, ev_i, ev_y, n_ev = no_events(n)
+    ev_t, ev_i, ev_y, n_ev = no_events(F, watch.ev_dir)
     sing_index = -1
     if WATCH:
         ws, sing_index = watch_start(sing, uev, watch, t, y, p)
@@ -468,27 +468,36 @@ ARGS = (i8, i8, i8, i8, i8, f8, f8, f8[::1], f8[::1], CONTROL, NEWTON, f8[::1], 
         WATCHED, i8[::1])
 
 
-#: the parts of a specialised loop and the compiled loop in the namespace of the ensemble
-#: drivers (``_specialised``, ``ensemble_solver``; unbound here)
+def _entry(rhs_at, jac_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, newton, t_eval,
+           mode, watch, halt):
+    """The entry of the loop: ``_solve`` (``body``, compiled apart) with its tuple made
+    ``loop.watch_result``'s (as ``loop._watching``)."""
+    return watch_result(body(rhs_at, jac_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl,
+                             newton, t_eval, mode, watch, halt), watch.ev_dir.shape[0])
+
+
+#: the parts of a specialised loop, its body and the compiled loop in the namespace of
+#: the ensemble drivers (``_specialised``, ``ensemble_solver``; unbound here)
 WATCH = PROJECT = DENSE = None
-run = None
+run = body = None
 _SPECIALISED = {}
 
 
 def _specialised(parts=ALL):
     """The globals of this module with the parts of the loop a run needs bound (``WATCH,
     PROJECT, DENSE = parts[:3]``: ``loop.features``) and ``run`` to ``_solve`` compiled over
-    them: a run without events, indicators, projection and ``t_eval`` compiles none of
-    their code (``loop._specialised``).  The per-step store is in every radau loop (the
-    fourth part of ``loop.features`` is ignored): next to a step's linear algebra it
-    costs nothing, and without it a run that keeps only its end would need a loop of its
-    own."""
+    them (``_entry``): a run without events, indicators, projection and ``t_eval``
+    compiles none of their code (``loop._specialised``).  The per-step store is in every
+    radau loop (the fourth part of ``loop.features`` is ignored): next to a step's linear
+    algebra it costs nothing, and without it a run that keeps only its end would need a
+    loop of its own."""
     parts = tuple(bool(f) for f in parts[:3])
     if parts not in _SPECIALISED:
         namespace = dict(globals())
         namespace["WATCH"], namespace["PROJECT"], namespace["DENSE"] = parts
         tag = "" if parts == ALL[:3] else "_" + "".join(c for c, f in zip("wpd", parts) if f)
-        namespace["run"] = compiled(_solve, ARGS, namespace=namespace, tag=tag)
+        namespace["body"] = apart(_solve, namespace, tag)
+        namespace["run"] = compiled(_entry, ARGS, namespace=namespace, tag=tag)
         _SPECIALISED[parts] = namespace
     return _SPECIALISED[parts]
 
