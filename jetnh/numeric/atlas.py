@@ -922,11 +922,14 @@ def _step_start(chart, method, out, t, y, t_to, p, ctl, mode, newton, ce, watch,
                 direction, halt):
     """``(t_k, y_k, span)``: the start of the step in which the piece ``out`` (from
     (t, y) to ``t_to``) stopped, the state there and the span from there to the stop.
-    The rows of every step are in ``out`` (mode EVERY_STEP) or in the loop run again to
-    the stop, watching nothing, keeping them: the same steps (the last one cut at the
-    stop)."""
+    The rows of every step are in ``out`` (mode EVERY_STEP) or in the loop run again
+    keeping them: adaptive steps to the stop, watching nothing (the same steps, the last
+    one cut at the stop), fixed ones as they ran (their length is the span's share)."""
     t_stop = float(out.t)
-    if mode != EVERY_STEP:
+    if mode != EVERY_STEP and ctl.n_steps > 0:
+        out, _ = chart.call(method, ce, watch, t, t_to, y, p, ctl, _NO_TIMES, EVERY_STEP,
+                            newton, None, sens, halt)
+    elif mode != EVERY_STEP:
         out, _ = chart.call(method, None, _BARE, t, t_stop, y, p, ctl, _NO_TIMES,
                             EVERY_STEP, newton, None, sens, halt)
     ts, n = out.ts, int(out.n_out)
