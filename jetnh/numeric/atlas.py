@@ -889,8 +889,7 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
 _DEPTH = 4
 #: the parts an approach cuts the step that crossed the edge into
 _PARTS = 8
-#: what a loop run again to find the start of a step watches (nothing), its t_eval
-_BARE = Watch(0, 0.0, loops.NO_EVENTS, loops.NO_EVENTS)
+#: the t_eval of a loop run again to find the start of a step (none)
 _NO_TIMES = np.zeros(0)
 
 
@@ -922,16 +921,13 @@ def _step_start(chart, method, out, t, y, t_to, p, ctl, mode, newton, ce, watch,
                 direction, halt):
     """``(t_k, y_k, span)``: the start of the step in which the piece ``out`` (from
     (t, y) to ``t_to``) stopped, the state there and the span from there to the stop.
-    The rows of every step are in ``out`` (mode EVERY_STEP) or in the loop run again
-    keeping them: adaptive steps to the stop, watching nothing (the same steps, the last
-    one cut at the stop), fixed ones as they ran (their length is the span's share)."""
+    The rows of every step are in ``out`` (mode EVERY_STEP) or in the same loop run
+    again keeping them (the same steps, bit for bit: a run's rows do not depend on what
+    it keeps)."""
     t_stop = float(out.t)
-    if mode != EVERY_STEP and ctl.n_steps > 0:
+    if mode != EVERY_STEP:
         out, _ = chart.call(method, ce, watch, t, t_to, y, p, ctl, _NO_TIMES, EVERY_STEP,
                             newton, None, sens, halt)
-    elif mode != EVERY_STEP:
-        out, _ = chart.call(method, None, _BARE, t, t_stop, y, p, ctl, _NO_TIMES,
-                            EVERY_STEP, newton, None, sens, halt)
     ts, n = out.ts, int(out.n_out)
     k = n - 1
     while k >= 0 and not direction * (t_stop - ts[k]) > 0.0:
