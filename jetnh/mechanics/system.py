@@ -126,6 +126,7 @@ class System(Frozen):
     False
     """
 
+    @dag.collector_paused()
     def __init__(self, J: JetSpace, L, constraints=(), dependent=None, branch: int | None = None,
                  defaults=None, name: str = "", forces=None, dissipation=None, *,
                  check_branch: bool = True, speeds=None):
@@ -449,6 +450,7 @@ class System(Frozen):
 
     # ------------------------------------------------------------------ explicit form
     @cached_property
+    @dag.collector_paused()
     def phi(self) -> dict[sp.Symbol, sp.Expr]:
         """The explicit form: dependent velocity qdot^alpha -> phi^alpha(t, q, qdot^mu)."""
         vel = self.dependent_velocities
