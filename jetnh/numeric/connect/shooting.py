@@ -91,10 +91,10 @@ class Shot:
                                  (*head, first, p, *tail, halt))
         wall = time.perf_counter() - tic
         status, n_out = out[0], int(out[3])
-        if status == EVENT and plan.switch:
-            # at the edge of the scene's split (connect's runs watch no other event): the
-            # run taken across it as Scene.run does
-            return cls._across(scene, plan, first[:n], p, stops, out)
+        if (status == EVENT or status == SINGULAR) and plan.switch:
+            # at the edge of the scene's split (connect's runs watch no other event), or
+            # stopped singular past it: the run taken across it as Scene.run does
+            return cls._across(scene, plan, first[:n], p, stops, out, first)
         if status != FINISHED or n_out < 1:
             if stops is not None:
                 stops[int(status)] = stops.get(int(status), 0) + 1
@@ -118,9 +118,9 @@ class Shot:
         return self
 
     @classmethod
-    def _across(cls, scene, plan, y, p, stops, out=None):
+    def _across(cls, scene, plan, y, p, stops, out=None, first=None):
         """``of`` for a run that reached the edge of the scene's split (its loop's
-        tuple ``out``; None: the start is past it): taken on across it as
+        tuple ``out`` from ``first``, y then S0; None: the start is past it): taken on across it as
         ``solve.run`` takes it (``atlas.end_across``; its sensitivities carried across
         each switch, its end in the scene's states), or None.  Its Trajectory is
         ``solve.run``'s, made when asked for."""
@@ -131,9 +131,7 @@ class Shot:
             S = tr.sensitivities[-1] if status == FINISHED else None
         else:
             tr = None
-            status, t, y_end, S = atlas.end_across(
-                scene, plan.method.name, out, plan.t0, plan.t1, p, plan.ctl, plan.mode,
-                plan.checked, plan.singular_tol, plan.newton, plan.limit)
+            status, t, y_end, S = atlas.end_across(scene, plan, out, first, p)
         if status != FINISHED or not arguments.all_finite(y_end) or not \
                 arguments.all_finite(S):
             if stops is not None:
