@@ -921,11 +921,21 @@ def _approach(ctl, t, t1, h_fixed, span):
 def _step_start(chart, method, out, t, y, t_to, p, ctl, mode, newton, ce, watch, sens,
                 direction, halt):
     """``(t_k, y_k, span)``: the start of the step in which the piece ``out`` (from
-    (t, y) to ``t_to``) stopped, the state there and the span from there to the stop.
-    The rows of every step are in ``out`` (mode EVERY_STEP) or in the same loop run
-    again keeping them (the same steps, bit for bit: a run's rows do not depend on what
-    it keeps)."""
+    (t, y) to ``t_to``) stopped, the state there and the span from there to the stop:
+    the last output row of every step before the stop.  The loop gives that step's start
+    in row ``n_out`` (``loop._solve``); where the stop is at that start (a fixed step's
+    kink, an event there), the rows of every step are in ``out`` (mode EVERY_STEP) or in
+    the same loop run again keeping them (the same steps, bit for bit: a run's rows do
+    not depend on what it keeps)."""
     t_stop = float(out.t)
+    if int(out.stats[0]) == 0:          # (no step: stopped where it began)
+        return t, np.ascontiguousarray(y), t_stop - t
+    n = int(out.n_out)
+    t_s = float(out.ts[n])
+    if direction * (t_stop - t_s) > 0.0:
+        if t_s == t:
+            return t, np.ascontiguousarray(y), t_stop - t
+        return t_s, np.ascontiguousarray(out.ys[n, :y.shape[0]]), t_stop - t_s
     if mode != EVERY_STEP:
         out, _ = chart.call(method, ce, watch, t, t_to, y, p, ctl, _NO_TIMES, EVERY_STEP,
                             newton, None, sens, halt)

@@ -382,7 +382,8 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
     (accepted, rejected, rhs evaluations)`` (``counts``), the last time and state, the
     event records (time, index, state; the loop's entry returns None for them where the
     run watches no user events: ``watch_result``), their count and the index of the
-    indicator that stopped the run (-1 if none).  A loop that watches nothing (``WATCH`` false) records no events
+    indicator that stopped the run (-1 if none); a run that stopped in a step (EVENT,
+    SINGULAR) has that step's start in row ``n_out`` of ``ts``, ``ys`` (``atlas``).  A loop that watches nothing (``WATCH`` false) records no events
     and returns ``(status, ts, ys, n_out, stats, sing_index)`` with the last time and
     state in row ``n_out`` of ``ts``, ``ys``: every array a compiled call returns is boxed
     at ~0.4 us, more than a short run's arithmetic.
@@ -447,6 +448,7 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
             ts, ys, _ = store(ts, ys, n_out, t, y)
             return go, ts, ys, n_out, counts(stats), sing_index
     status = FINISHED
+    t_start = t
     step = 0
     stiff_run = 0           # positive stiffness tests in a row (Hairer's IASTI) ...
     calm_run = 0            # ... and negative ones since the last positive (NONSTI)
@@ -589,6 +591,8 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
             if mode == EVERY_STEP:
                 ts, ys, n_out = store(ts, ys, n_out, t_new, y_new)
         if stop != 0:
+            t_start = t             # the step's start: row n_out at the end (``_solve``)
+            copy_into(y_new, y)
             t = t_stop
             copy_into(y, y_stop)
             status = stop
@@ -606,6 +610,8 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
         ts, ys, n_out = store(ts, ys, n_out, t, y)
     status = finite_status(status, ys, n_out, y, ctl.n_sens)
     if WATCH:
+        if status == EVENT or status == SINGULAR:
+            ts, ys, _ = store(ts, ys, n_out, t_start, y_new)
         return (status, ts, ys, n_out, counts(stats), t, y, ev_t, ev_i, ev_y, n_ev,
                 sing_index)
     ts, ys, _ = store(ts, ys, n_out, t, y)       # the last time and state: row n_out

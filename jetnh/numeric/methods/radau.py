@@ -37,7 +37,7 @@ import numba
 import numpy as np
 
 from ._common import (
-    ENDPOINTS, ENSEMBLE_OUT, EVERY_STEP, FINISHED, MAX_STEPS, NONFINITE,
+    ENDPOINTS, ENSEMBLE_OUT, EVENT, EVERY_STEP, FINISHED, MAX_STEPS, NONFINITE,
     SINGULAR, STOPPED, TOO_SMALL_STEP, all_finite, apart, callback_at, collect, compiled,
     copy_into, f8, function_at, i8, jit, min_step, start, store, take_next)
 from ._events import dense_eval, watch_end, watch_next
@@ -328,6 +328,7 @@ def _solve(rhs_at, jac_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, newto
     err_acc = 1e-2
     first = True
     status = FINISHED
+    t_start = t
     while direction * (t_end - t) > 0.0:
         if stats[0] >= max_steps:
             status = MAX_STEPS
@@ -437,6 +438,8 @@ def _solve(rhs_at, jac_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, newto
         elif mode == EVERY_STEP:
             ts, ys, n_out = store(ts, ys, n_out, t_new, y_new)
         if stop != 0:
+            t_start = t             # the step's start: row n_out at the end (``loop``)
+            copy_into(y_new, y)
             t = t_stop
             copy_into(y, y_stop)
             status = stop
@@ -461,6 +464,8 @@ def _solve(rhs_at, jac_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, newto
     if mode == ENDPOINTS:
         ts, ys, n_out = store(ts, ys, n_out, t, y)
     status = finite_status(status, ys, n_out, y, ctl.n_sens)
+    if status == EVENT or status == SINGULAR:
+        ts, ys, _ = store(ts, ys, n_out, t_start, y_new)
     return (status, ts, ys, n_out, counts(stats), t, y, ev_t, ev_i, ev_y, n_ev, sing_index)
 
 
