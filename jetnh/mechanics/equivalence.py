@@ -244,8 +244,10 @@ def compare(system: System, first: str, second: str, convention: str = "paper") 
     Returns
     -------
     jetnh.mechanics.equivalence.Comparison
-        ``.equivalent``, the branch on which they agree, the differences of the
-        accelerations and the singular set, printed in one shared form.
+        ``.identical``, the branch on which they agree, the differences of the
+        accelerations and the singular set, printed in one shared form; for a principle
+        with free multipliers (Hoelder, "imposed") the choice of them at which its
+        accelerations are the other's (``free``, ``family``, ``choice``).
     """
     if not isinstance(system, System):
         raise ArgumentError(f"compare needs a jetnh System, not {type(system).__name__}")
