@@ -174,7 +174,7 @@ def _remainders(sysm, exprs, gens):
         return None
     gens = list(dict.fromkeys(gens))
     rels = [*sysm.holonomic, *sysm.constraints]
-    fracs = [sp.together(sp.sympify(e)) for e in exprs]
+    fracs = [sp.together(sp.sympify(e, strict=True)) for e in exprs]
     den = sp.lcm([sp.denom(f) for f in fracs]) if len(fracs) > 1 else sp.denom(fracs[0])
     nums = [sp.cancel(f * den) for f in fracs]
     polys = [*rels, den, *nums]
