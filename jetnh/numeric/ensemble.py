@@ -44,7 +44,9 @@ arrays (``Scene.ensemble`` calls it), so a later ``jetnh.sweep`` can hand it chu
   available (ragged); use ``scene.run`` for that.
 - Diagnostics per run: status and stop reason, steps, rejected steps, right-hand-side
   evaluations, final time, max constraint residual and energy drift over the output
-  rows (and against the initial state), event counts and first times.
+  rows (and against the initial state: with ``save="final"`` an end-point difference,
+  not the largest over the steps; a singular stop's row left out), event counts and
+  first times.
 - A run whose right-hand side becomes NaN/inf with no singularity to explain it raises
   ``IntegrationError`` naming the run (``on_error="record"`` keeps it as status 3).
 """
@@ -542,29 +544,43 @@ class Ensemble(Frozen):
     # ------------------------------------------------------------------ diagnostics
     @property
     def residual_max(self) -> np.ndarray:
-        """Max ``|f^a|`` over each run's output rows."""
+        """Max ``|f^a|`` over each run's output rows (``energy_drift`` says which)."""
         k = len(self.layout.dependent_velocities)
-        res = np.abs(self.aux[:, :, k:2 * k])
-        with np.errstate(all="ignore"):
-            return np.nanmax(res.reshape(self.n_runs, -1), axis=1) if k else np.zeros(self.n_runs)
+        if not k:
+            return np.zeros(self.n_runs)
+        return _largest(np.abs(self._regular(self.aux[:, :, k:2 * k])))
 
     @property
     def holonomic_residual_max(self) -> np.ndarray:
-        """Max ``|g_i|`` of the holonomic constraints over each run's output rows."""
+        """Max ``|g_i|`` of the holonomic constraints over each run's output rows
+        (``energy_drift`` says which)."""
         m = self.layout.holonomic
         if not m:
             return np.zeros(self.n_runs)
-        res = np.abs(self.aux[:, :, self.layout.n_aux - m:])
-        with np.errstate(all="ignore"):
-            return np.nanmax(res.reshape(self.n_runs, -1), axis=1)
+        return _largest(np.abs(self._regular(self.aux[:, :, self.layout.n_aux - m:])))
 
     @property
     def energy_drift(self) -> np.ndarray:
-        """Max ``|E - E(t0)|`` over each run's output rows."""
-        e = self.aux[:, :, self.layout.energy_index]
-        e0 = self.aux_initial[:, self.layout.energy_index]
-        with np.errstate(all="ignore"):
-            return np.nanmax(np.abs(e - e0[:, None]), axis=1)
+        """Max ``|E - E(t0)|`` over each run's output rows, not over its steps: with
+        ``save="final"`` the one row is the final state, so this is ``|E(t_final) -
+        E(t0)|``, an end-point difference that can be far below the largest drift the
+        run had on the way (``scene.run(save="steps")`` gives that); with ``t_eval``, at
+        those times.  A run stopped at a singular configuration leaves out the row of
+        its stop (next to the singular set its dependent velocities are a near 0/0): NaN
+        with ``save="final"``, whose one row that is."""
+        i = self.layout.energy_index
+        e = self._regular(self.aux[:, :, i:i + 1])
+        return _largest(np.abs(e - self.aux_initial[:, i, None, None]))
+
+    def _regular(self, a) -> np.ndarray:
+        """``a`` ([n_runs, n_times, columns] of the aux rows) with NaN in the row of each
+        run's singular stop, where it is one (``save="final"``: the run's one row)."""
+        stopped = (self.status == SINGULAR) & np.isfinite(self.t_final)
+        if not stopped.any():
+            return a
+        a = np.array(a)
+        a[stopped[:, None] & (self.t == self.t_final[:, None])] = np.nan
+        return a
 
     def stop_reason(self, r: int) -> str:
         if r in self._reasons:
@@ -624,6 +640,14 @@ class Ensemble(Frozen):
         return (f"<Ensemble {self.method}: {self.n_runs} runs x {self.y.shape[1]} rows, "
                 f"{ok} succeeded, {self.wall_time * 1e3:.3g} ms ({self.parallel}, "
                 f"{self.workers} workers)>")
+
+
+def _largest(a) -> np.ndarray:
+    """The largest entry of each run's rows of ``a`` ([n_runs, n_times, columns]) that
+    is not NaN (NaN for a run without one)."""
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)     # (a run without rows)
+        return np.nanmax(a.reshape(a.shape[0], -1), axis=1)
 
 
 def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
@@ -721,7 +745,6 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
         chart_atlas = atlas.atlas(scene)
         user = as_events(events)
         budget = ctl.max_steps
-        h_fixed = (t1 - t0) / ctl.n_steps if ctl.n_steps > 0 else 0.0
         edge = ce.python_funcs[-1]
         own, S_all = chart_atlas.own, None if sens is None else sens[1]
         ends = []           # each piece's loop result: its last time and state
@@ -730,15 +753,22 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
             ends.append(args[2])
             return solve.trajectory(*args, **kw)
 
-        for r in range(n_runs):         # runs past the edge at the start: run again
-            if not edge(t0, Y0[r], P[r]) < 0.0:
+        # runs past the edge at the start, and runs that reached it (or stopped singular,
+        # perhaps past it): run again as a single run goes on (``atlas.follow``: the
+        # step that reached the edge not kept)
+        on = (INFO[:, 0] == SINGULAR) | ((EV_N[:, n_user] > 0) & (INFO[:, 0] == EVENT)
+                                         & (T_LAST == EV_T[:, n_user]))
+        for r in range(n_runs):
+            if not on[r] and not edge(t0, Y0[r], P[r]) < 0.0:
                 continue
             chart, y, first = atlas.begin(chart_atlas, user, t0, Y0[r], P[r])
-            if not first:
+            if not first and not on[r]:
                 continue
             if sens is not None:        # S(t0) in the chart the run starts in (atlas.run)
                 S0 = solve.augmented(scene, plan, Y0[r:r + 1], P[r])[0, Y0.shape[1]:]
-                S0 = own.carry(chart, t0, Y0[r], S0.reshape(1, Y0.shape[1], -1), P[r])
+                S0 = S0.reshape(1, Y0.shape[1], -1)
+                if chart is not own:
+                    S0 = own.carry(chart, t0, Y0[r], S0, P[r])
                 y = np.concatenate((y, S0.ravel()))
             parts, sw = atlas.follow(chart_atlas, method, chart, t0, y, t1, P[r], user,
                                      np.zeros(n_user, np.int64), ctl, budget, te, mode,
@@ -751,18 +781,6 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
             pieces[r] = _taken_on(own, r, parts, ends[-1], n_user, mode, P[r], OUT_T, OUT_Y,
                                   INFO, T_LAST, Y_LAST, EV_N, EV_T, S_all)
             reasons[r], switches[r] = parts[-1][1].stop_reason, first + sw
-        for r in np.nonzero(EV_N[:, n_user] > 0)[0]:
-            if INFO[r, 0] != EVENT or T_LAST[r] != EV_T[r, n_user]:
-                continue
-            y = (Y_LAST if Y_A is None else Y_A)[r].copy()
-            parts, sw = atlas.go_on(chart_atlas, method, user, t1, P[r], float(T_LAST[r]),
-                                    y, EV_N[r, :n_user].copy(), ctl,
-                                    budget - INFO[r, 1], te, mode, checked,
-                                    singular_tol, plan.newton, limit, h_fixed,
-                                    build, sens=sens is not None)
-            pieces[r] = _taken_on(own, r, parts, ends[-1], n_user, mode, P[r], OUT_T, OUT_Y,
-                                  INFO, T_LAST, Y_LAST, EV_N, EV_T, S_all)
-            reasons[r], switches[r] = parts[-1][1].stop_reason, sw
         wall += time.perf_counter() - tic
     # never a success with a NaN or infinite state
     if not arguments.all_finite(OUT_Y, Y_LAST):
@@ -900,7 +918,7 @@ def _on_constraints(plan, P, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST):
 
 def _taken_on(own, r, parts, end, n_user, mode, p, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N,
               EV_T, S=None):
-    """Run ``r`` of an ensemble taken on past its chart's edge (``atlas.go_on``): its
+    """Run ``r`` of an ensemble taken on past its chart's edge (``atlas.follow``): its
     rows, counts and events filled in after the edge, with ``S`` (the ensemble's
     sensitivities) its sensitivities in the scene's states (``Chart.carry``), as
     ``atlas.stitch`` gives a single run's; its last time and state from ``end``, the
