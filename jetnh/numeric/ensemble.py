@@ -189,8 +189,9 @@ def _one_row(scene, initial) -> bool:
 
 
 def _of_row(scene, initial, project) -> tuple[np.ndarray, np.ndarray]:
-    """``resolve``'s Y0 and P of the one row ``initial`` (``_one_row``), checked."""
-    Y0, P = initial.copy(), scene._p[None, :].copy()
+    """``resolve``'s Y0 and P of the one row ``initial`` (``_one_row``), checked: Y0 a
+    copy of the caller's row, P a view of the scene's parameters (never written)."""
+    Y0, P = initial.copy(), scene._p[None, :]
     if scene.dependent_velocities and not scene._regular_at(Y0[0], scene.t_span[0], P[0]):
         _check_split(scene, Y0, P, _NO_GIVEN, project)
     if scene.system.holonomic:
@@ -252,6 +253,18 @@ def _check_dependent(scene, Y0, P, given, project):
                 "it (it follows from the constraints) or pass project=True")
 
 
+class _OfRun:
+    """The ``_arrays`` of an ensemble of one run (``Ensemble._of_run``), made of its run
+    (``_one_arrays``) on first read and kept in its ``__dict__`` (where the other
+    ensembles hold theirs from the start)."""
+
+    def __get__(self, obj, cls=None):
+        if obj is None:
+            return self
+        arrays = obj.__dict__["_arrays"] = _one_arrays(*obj.__dict__["_run"])
+        return arrays
+
+
 class Ensemble(Frozen):
     """The result of ``run_ensemble``: arrays over runs, with named access; immutable
     (``jetnh.frozen``; its arrays are read-only)."""
@@ -265,18 +278,26 @@ class Ensemble(Frozen):
                    switching, switches, pieces, reasons, sensitivities, layout)
 
     @classmethod
-    def _of_run(cls, scene, method, t, y, info, t_last, y_last, Y0, P, wall_time, parallel,
-                workers, save, singular_tol, layout) -> "Ensemble":
+    def _of_run(cls, scene, method, run, arrays, wall_time, parallel, workers, save,
+                singular_tol, layout) -> "Ensemble":
         """The ensemble of one run (``_of_one``: no events, sensitivities or changes of
         split), its attributes in one go (as ``_fill`` sets them) without the wrapper
-        that freezes it after ``__init__`` (``jetnh.frozen``): a run's result."""
+        that freezes it after ``__init__`` (``jetnh.frozen``): a run's result.  Its
+        ``_arrays`` as given, or (None) made of ``run`` (``_one_arrays``' arguments) on
+        first read."""
         self = object.__new__(cls)
         self.__dict__.update(
-            _ONE_RUN, _arrays=(info, t_last, y_last, _NO_EV_N, _NO_EV_T, Y0, P, None, t, y),
-            scene=scene, method=method, param_names=scene.runtime_params,
+            _ONE_RUN, scene=scene, method=method, param_names=scene.runtime_params,
             wall_time=wall_time, parallel=parallel, workers=workers, save=save,
             _singular_tol=singular_tol, layout=layout, _memo={})
+        if arrays is None:
+            self.__dict__["_run"] = run
+        else:
+            self.__dict__["_arrays"] = arrays
         return self
+
+    #: an ensemble of ``_of_run``: its arrays made of its run when first read
+    _arrays = _OfRun()
 
     def _fill(self, scene, method, t, y, info, t_last, y_last, ev_n, ev_t, Y0, P,
               event_names, wall_time, parallel, workers, save, singular_tol, switching,
@@ -307,7 +328,9 @@ class Ensemble(Frozen):
         changed split computed now: their pieces hold other charts' compiled code);
         the scene by its kernels' key (``Scene._portable``), which loads them again
         where they are evaluated."""
+        self._arrays            # (an ensemble of one run: made now, without the loop's)
         d = Frozen.__getstate__(self)
+        d.pop("_run", None)
         if self._pieces:
             d.update(aux=self.aux, _pieces={})
         return d
@@ -837,6 +860,24 @@ def _of_one(scene, plan, Y0, P, on_error, parallel, workers, save) -> Ensemble:
     out = interrupt.call(plan.entry, halt, plan.limit,
                          (*plan.head, Y0[0], P[0], *plan.suffix, halt))
     wall = _clock() - tic
+    endpoints = plan.mode == ENDPOINTS
+    run = (out, endpoints, 1 if endpoints else plan.te.shape[0], Y0, P)
+    arrays = None       # (made when read)
+    if out[0] == NONFINITE:
+        arrays = _one_arrays(*run)
+        INFO, T_LAST = np.array(arrays[0], dtype=np.int64), np.array(arrays[1], dtype=float)
+        _explain(scene, plan.method.name, plan.kern, plan.checked, plan.singular_tol,
+                 on_error, INFO, T_LAST, arrays[2], P, Y0)
+        arrays = (INFO, T_LAST, *arrays[2:])
+    return Ensemble._of_run(scene, plan.method.name, run, arrays, wall, parallel,
+                            workers if parallel != "serial" else 1, save, plan.singular_tol,
+                            plan.kern.layout)
+
+
+def _one_arrays(out, endpoints, n_times, Y0, P) -> tuple:
+    """An ensemble's ``_arrays`` of the one run of ``Y0``, ``P`` whose loop returned
+    ``out`` (``_of_one``; ``endpoints``: its first and last rows saved, else ``n_times``
+    rows at ``t_eval``): views of the loop's own arrays (no copies)."""
     status, ts, ys, n_out, stats = out[:5]
     n = Y0.shape[1]
     # (a loop that watched nothing keeps its last time and state in row n_out)
@@ -844,11 +885,10 @@ def _of_one(scene, plan, Y0, P, on_error, parallel, workers, save) -> Ensemble:
         T_LAST, Y_LAST = ts[n_out:n_out + 1], ys[n_out:n_out + 1, :n]
     else:
         T_LAST, Y_LAST = (out[5],), out[6][None, :n]
-    if plan.mode == ENDPOINTS:
-        n_times, first, filled = 1, n_out - 1, 1 if n_out > 0 else 0
+    if endpoints:
+        first, filled = n_out - 1, 1 if n_out > 0 else 0
     else:
-        n_times, first = plan.te.shape[0], 0
-        filled = min(n_out, n_times)
+        first, filled = 0, min(n_out, n_times)
     if filled == n_times:
         OUT_T, OUT_Y = ts[None, first:first + n_times], ys[None, first:first + n_times, :n]
     else:
@@ -857,13 +897,7 @@ def _of_one(scene, plan, Y0, P, on_error, parallel, workers, save) -> Ensemble:
         OUT_Y[0, :filled] = ys[first:first + filled, :n]
     # (status, steps, rejected, nfev, rows, indicator): an array on first read
     INFO = ((status, *stats, n_out, out[-1]),)
-    if status == NONFINITE:
-        INFO, T_LAST = np.array(INFO, dtype=np.int64), np.array(T_LAST, dtype=float)
-        _explain(scene, plan.method.name, plan.kern, plan.checked, plan.singular_tol,
-                 on_error, INFO, T_LAST, Y_LAST, P, Y0)
-    return Ensemble._of_run(scene, plan.method.name, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST,
-                            Y0, P, wall, parallel, workers if parallel != "serial" else 1,
-                            save, plan.singular_tol, plan.kern.layout)
+    return (INFO, T_LAST, Y_LAST, _NO_EV_N, _NO_EV_T, Y0, P, None, OUT_T, OUT_Y)
 
 
 _clock = time.perf_counter
