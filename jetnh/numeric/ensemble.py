@@ -70,6 +70,8 @@ from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, FINISHED, NONFINITE, S
 from .options import options
 
 PARALLEL = ("prange", "threads", "serial")
+_new = object.__new__
+_setattr = object.__setattr__
 _FLOAT64 = np.dtype(np.float64)
 _NO_SWITCHES = FrozenDict()
 _NO_GIVEN = FrozenDict()        # (no dependent velocity given: ``resolve``)
@@ -112,7 +114,8 @@ def resolve(scene, initial=None, params=None, project=False):
     """The scene to run (with the varying parameters as run-time inputs), the initial
     states Y0 [n_runs, n_states] and the run-time parameters P [n_runs, n_p]."""
     if params is None and _one_row(scene, initial):
-        return (scene, *_of_row(scene, initial, project))
+        y, p = _of_row(scene, initial, project)
+        return scene, y[None, :], p[None, :]
     params = ({_name(k): _column(v, f"params[{_name(k)!r}]") for k, v in params.items()}
               if params else None)
     if params:
@@ -189,14 +192,14 @@ def _one_row(scene, initial) -> bool:
 
 
 def _of_row(scene, initial, project) -> tuple[np.ndarray, np.ndarray]:
-    """``resolve``'s Y0 and P of the one row ``initial`` (``_one_row``), checked: Y0 a
-    copy of the caller's row, P a view of the scene's parameters (never written)."""
-    Y0, P = initial.copy(), scene._p[None, :]
-    if scene.dependent_velocities and not scene._regular_at(Y0[0], scene.t_span[0], P[0]):
-        _check_split(scene, Y0, P, _NO_GIVEN, project)
+    """The state and the parameters (1-d) of the one row ``initial`` (``_one_row``),
+    checked: a copy of the caller's row, the scene's parameters (never written)."""
+    y, p = initial[0].copy(), scene._p
+    if scene.dependent_velocities and not scene._regular_at(y, scene.t_span[0], p):
+        _check_split(scene, y[None, :], p[None, :], _NO_GIVEN, project)
     if scene.system.holonomic:
-        _check_holonomic(scene, Y0, P)
-    return Y0, P
+        _check_holonomic(scene, y[None, :], p[None, :])
+    return y, p
 
 
 def _check_holonomic(scene, Y0, P):
@@ -285,15 +288,13 @@ class Ensemble(Frozen):
         that freezes it after ``__init__`` (``jetnh.frozen``): a run's result.  Its
         ``_arrays`` as given, or (None) made of ``run`` (``_one_arrays``' arguments) on
         first read."""
-        self = object.__new__(cls)
-        self.__dict__.update(
-            _ONE_RUN, scene=scene, method=method, param_names=scene.runtime_params,
-            wall_time=wall_time, parallel=parallel, workers=workers, save=save,
-            _singular_tol=singular_tol, layout=layout, _memo={})
-        if arrays is None:
-            self.__dict__["_run"] = run
-        else:
-            self.__dict__["_arrays"] = arrays
+        self = _new(cls)
+        _setattr(self, "__dict__", {
+            **_ONE_RUN, "scene": scene, "method": method,
+            "param_names": scene.runtime_params, "wall_time": wall_time,
+            "parallel": parallel, "workers": workers, "save": save,
+            "_singular_tol": singular_tol, "layout": layout, "_memo": {},
+            "_run" if arrays is None else "_arrays": run if arrays is None else arrays})
         return self
 
     #: an ensemble of ``_of_run``: its arrays made of its run when first read
@@ -677,8 +678,8 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
         except (KeyError, TypeError) as exc:     # not planned yet, or not hashable
             quick = quick if type(exc) is KeyError else None
         else:
-            Y0, P = _of_row(scene, initial, project)
-            return _of_one(scene, one, Y0, P, on_error, parallel, n_workers, save)
+            y, p = _of_row(scene, initial, project)
+            return _of_one(scene, one, y, p, on_error, parallel, n_workers, save)
     opts = options(step, singular, newton, **keywords)
     if parallel not in PARALLEL:
         raise JetnhError(f"parallel must be one of {PARALLEL}, not {parallel!r}")
@@ -716,7 +717,7 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
         one = _one_plan(scene, opts, t_eval, save, method, events, timeout, sensitivities,
                         sensitivity_error)
         if one:
-            return _of_one(scene, one, Y0, P, on_error, parallel, workers, save)
+            return _of_one(scene, one, Y0[0], P[0], on_error, parallel, workers, save)
     plan = _batch_plan(scene, opts, t_eval, save, method, events, timeout, sensitivities,
                        sensitivity_error)
     method = plan.method.name
@@ -847,8 +848,9 @@ def _single_plan(scene, plan, opts, t_eval, save, timeout):
 
 
 
-def _of_one(scene, plan, Y0, P, on_error, parallel, workers, save) -> Ensemble:
-    """The ensemble of the one run of ``Y0``, ``P`` by the single-run loop of ``plan``
+def _of_one(scene, plan, y, p, on_error, parallel, workers, save) -> Ensemble:
+    """The ensemble of the one run of the state ``y`` and the parameters ``p`` (1-d, rows
+    of its Y0 and P) by the single-run loop of ``plan``
     (``_single_plan``): what the ensemble's driver stores of its run
     (``methods._common.collect``), the same steps.  Its arrays are views of the loop's
     own (no copies); the loop never reports a success with a NaN or an infinity in its
@@ -857,29 +859,30 @@ def _of_one(scene, plan, Y0, P, on_error, parallel, workers, save) -> Ensemble:
     halt = solve._HALT.copy()
     tic = _clock()
     # (a direct plan's loop reads y0 into a copy of its own: the row itself)
-    out = interrupt.call(plan.entry, halt, plan.limit,
-                         (*plan.head, Y0[0], P[0], *plan.suffix, halt))
+    out = interrupt.call(plan.entry, halt, plan.limit, (*plan.head, y, p, *plan.suffix,
+                                                        halt))
     wall = _clock() - tic
     endpoints = plan.mode == ENDPOINTS
-    run = (out, endpoints, 1 if endpoints else plan.te.shape[0], Y0, P)
+    run = (out, endpoints, 1 if endpoints else plan.te.shape[0], y, p)
     arrays = None       # (made when read)
     if out[0] == NONFINITE:
         arrays = _one_arrays(*run)
         INFO, T_LAST = np.array(arrays[0], dtype=np.int64), np.array(arrays[1], dtype=float)
         _explain(scene, plan.method.name, plan.kern, plan.checked, plan.singular_tol,
-                 on_error, INFO, T_LAST, arrays[2], P, Y0)
+                 on_error, INFO, T_LAST, arrays[2], arrays[6], arrays[5])
         arrays = (INFO, T_LAST, *arrays[2:])
     return Ensemble._of_run(scene, plan.method.name, run, arrays, wall, parallel,
                             workers if parallel != "serial" else 1, save, plan.singular_tol,
                             plan.kern.layout)
 
 
-def _one_arrays(out, endpoints, n_times, Y0, P) -> tuple:
-    """An ensemble's ``_arrays`` of the one run of ``Y0``, ``P`` whose loop returned
+def _one_arrays(out, endpoints, n_times, y, p) -> tuple:
+    """An ensemble's ``_arrays`` of the one run of ``y``, ``p`` whose loop returned
     ``out`` (``_of_one``; ``endpoints``: its first and last rows saved, else ``n_times``
-    rows at ``t_eval``): views of the loop's own arrays (no copies)."""
+    rows at ``t_eval``): views of the loop's own arrays and of ``y``, ``p`` (no
+    copies)."""
     status, ts, ys, n_out, stats = out[:5]
-    n = Y0.shape[1]
+    n = y.shape[0]
     # (a loop that watched nothing keeps its last time and state in row n_out)
     if len(out) == 6:
         T_LAST, Y_LAST = ts[n_out:n_out + 1], ys[n_out:n_out + 1, :n]
@@ -897,7 +900,8 @@ def _one_arrays(out, endpoints, n_times, Y0, P) -> tuple:
         OUT_Y[0, :filled] = ys[first:first + filled, :n]
     # (status, steps, rejected, nfev, rows, indicator): an array on first read
     INFO = ((status, *stats, n_out, out[-1]),)
-    return (INFO, T_LAST, Y_LAST, _NO_EV_N, _NO_EV_T, Y0, P, None, OUT_T, OUT_Y)
+    return (INFO, T_LAST, Y_LAST, _NO_EV_N, _NO_EV_T, y[None, :], p[None, :], None, OUT_T,
+            OUT_Y)
 
 
 _clock = time.perf_counter

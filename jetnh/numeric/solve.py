@@ -439,7 +439,7 @@ def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, 
         y_init = y_init[:n]
         if len(out) != 6 or status != FINISHED:
             y_last = y_last[:n]
-        if ev_y is not None:
+        if ce is not None and ev_y is not None:
             ev_y = ev_y[:, :n]
     if n_out != ts.shape[0]:
         ts, ys = ts[:n_out], ys[:n_out]
