@@ -36,7 +36,10 @@ Columns, in this order:
   radau store t0 and the final row (or the ``times``), so ``energy_drift`` is
   ``|E(t_final) - E(t0)|`` there, which can be smaller than the same run's
   ``Trajectory.diagnostics.energy_drift`` (the largest over its steps); dla, dvi and
-  ``scipy-<M>`` without ``times`` store every step.  ``steps`` and ``rejected`` are
+  ``scipy-<M>`` without ``times`` store every step.  A run stopped at a singular
+  configuration leaves out the row of its stop (next to the singular set its dependent
+  velocities are a near 0/0, as ``Diagnostics.stop_row`` reports): NaN in these
+  columns where that row is the one stored.  ``steps`` and ``rejected`` are
   integers, except with ``scipy-<M>``, whose counts scipy does not report
   (``Diagnostics.steps`` None): NaN there, in a float column.
 

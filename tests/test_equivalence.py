@@ -23,7 +23,36 @@ def test_disk_verdicts():
     assert compare(s, "chetaev", "suslov").identical
     assert compare(s, "vakonomic", "holder").identical
     c = compare(s, "vakonomic", "suslov")
-    assert not c.identical and c.on_branch_32
+    assert not c.identical and c.on_branch_32 and c.branch_invariant   # Chaplygin
+
+
+def _disk_with_spring():
+    J = JetSpace("x y phi psi")
+    x, y, phi, psi = J.q
+    xd, yd, phid, psid = J.qd
+    R, I1, I2, k = sp.symbols("R I1 I2 k")
+    L = (xd**2 + yd**2) / 2 + (I1 * phid**2 + I2 * psid**2) / 2 - k * x**2 / 2
+    return System(J, L, [xd - R * sp.cos(psi) * phid, yd - R * sp.sin(psi) * phid],
+                  dependent=[x, y])
+
+
+def test_branch_32_is_not_invariant_when_dLtilde_dqalpha_is_not_zero():
+    """A spring on the dependent x: the accelerations agree at states with lambda = -p,
+    but d/dt(lambda_x + p_x) = dL~/dx = -k x there, so the vakonomic motion leaves the
+    branch and the principles share no solution through it."""
+    s = _disk_with_spring()
+    c = compare(s, "vakonomic", "suslov")
+    assert c.on_branch_32 and c.branch_invariant is False
+    assert "leaves the branch" in str(c) and "no solutions" in str(c)
+    # two routes to the rate on the branch: jetnh's flow, and dL~/dq^alpha by hand
+    from jetnh.mechanics.equivalence import branch_32, branch_rates
+
+    v = s.equations("vakonomic")
+    sub = branch_32(s, v.multipliers, v.explicit)
+    rates = branch_rates(s, v)
+    hand = [sp.diff(s.L_tilde, q) for q in s.dependent]
+    assert agrees(s, [r - h for r, h in zip(rates, hand)], derived=sub)
+    assert not agrees(s, rates, derived=sub)
 
 
 def full_matrix(s, lams):

@@ -381,3 +381,25 @@ def test_constraint_forms_time_dependent_and_errors():
         constraint_forms(J, [ytt], [x])
     with pytest.raises(ConstraintError):
         constraint_forms(J, [yt, yt], [x])
+
+
+def test_is_integrable_decides_for_the_chosen_branch():
+    """ydot^2 = xdot^2 with branch ydot = xdot is y - x = const for this System; the union
+    of the branches (``frobenius()``) is not integrable; a non-affine branch is not."""
+    import warnings
+
+    from jetnh import JetSpace, System
+
+    J = JetSpace("x y z")
+    (x, y, z), (xd, yd, zd) = J.q, J.qd
+    L = (xd**2 + yd**2 + zd**2) / 2
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for branch in (0, 1):
+            s = System(J, L, [yd**2 - xd**2], dependent=[y], branch=branch)
+            assert s.is_integrable() and s.classify().integrable
+            assert not s.frobenius().integrable
+        s = System(J, L, [zd**2 - xd**2 - yd**2], dependent=[z], branch=1)
+        assert not s.is_integrable()
+        s = System(J, L, [(zd - y * xd) * (zd + y * xd)], dependent=[z], branch=0)
+        assert not s.is_integrable()

@@ -175,3 +175,47 @@ def test_dependent_coefficients_give_no_trivial_quantity():
                                     coefficients=[1, sp.sin(y)**2, sp.cos(y)**2])
     assert len(basis) == 1
     assert sp.simplify(basis[0] / yd).is_number
+
+
+def test_suslov_integrals_include_the_multipliers():
+    """The Suslov multipliers are states: lambda_alpha + p_alpha of the Chaplygin disk
+    (Zhao et al. (41a)) is among its Suslov integrals, and every one has D I = 0 (sympy's
+    subs route)."""
+    s = models.rolling_disk()
+    basis = jn.conserved_quantities(s, "suslov", degree=1)
+    lx, ly = s.equations("suslov").multipliers
+    import numpy as np
+
+    rng = random.Random(5)
+    cands = [s.on_constraints(lam + p) for lam, p in zip((lx, ly), s.p_dependent)]
+    exprs = [s.on_constraints(b) for b in basis] + cands
+    syms = sorted(set().union(*(e.free_symbols for e in exprs)), key=str)
+    rows = [[float(e.subs(pt)) for e in exprs] for pt in
+            ({x: rng.uniform(0.3, 1.4) for x in syms} for _ in range(3 * len(exprs)))]
+    M = np.array(rows)
+    r0 = np.linalg.matrix_rank(M[:, :len(basis)], tol=1e-9)
+    assert r0 == np.linalg.matrix_rank(M, tol=1e-9) == len(basis)      # in the span
+    assert any(b.has(lx) for b in basis) and any(b.has(ly) for b in basis)
+    for I in basis:
+        assert _DI_numeric(s, "suslov", I, points=4) < 1e-30
+
+
+def test_default_space_holds_the_coefficients_of_L():
+    """The spherical pendulum's energy and p_phi = sin(th)**2 ph_t have the coefficient
+    sin(th)**2 of L: the default search finds them (an empty answer claims none exists)."""
+    J = jn.JetSpace("th ph")
+    th, ph = J.q
+    thd, phd = J.qd
+    g = sp.Symbol("g")
+    s = jn.System(J, (thd**2 + sp.sin(th)**2 * phd**2) / 2 + g * sp.cos(th))
+    from jetnh.mechanics.integrals import functions_of_q
+
+    assert sp.sin(th)**2 in functions_of_q(s)
+    basis = jn.conserved_quantities(s, "chetaev", degree=1)
+    assert _in_span(phd * sp.sin(th)**2, basis, [thd, phd, sp.sin(th), sp.cos(th)])
+    for I in basis:
+        assert _DI_numeric(s, "chetaev", I, points=3) < 1e-30
+    J2 = jn.JetSpace("x y")
+    x = J2.q[0]
+    s2 = jn.System(J2, J2.qd[0]**2 / (2 * (1 + x**2)) + J2.qd[1]**2 / 2)
+    assert 1 / (x**2 + 1) in functions_of_q(s2)

@@ -57,6 +57,24 @@ def test_proofs_hold_and_simulations_pass(results):
             assert (results["_out"] / fig).stat().st_size > 1000
 
 
+def test_inferences_are_remarks_and_the_32_branch_needs_invariance(results):
+    """Prose steps are recorded as remarks (not machine-checked); the (32) proof checks
+    the rate of lambda + p on the branch; the claim shows a non-invariant witness."""
+    for p in results["proofs"]:
+        assert any(s["checked"] for s in p["steps"]), p["statement"]
+        for s in p["steps"]:
+            assert (s["holds"] is None) == (not s["checked"])
+            if s["step"].startswith(("so ", "hence ")):
+                assert not s["checked"], s["step"]
+    p32 = [p for p in results["proofs"] if p["statement"].startswith("(32)")]
+    assert p32 and all(p["steps"][1]["checked"] and p["steps"][1]["holds"] for p in p32)
+    claim = next(i for i in results["items"] if i["label"] == "(32): necessary and sufficient")
+    assert any("spring" in e and "branch invariant False" in e for e in claim["evidence"])
+    assert "dL~/dq^alpha" in claim["note"]
+    ex1 = next(i for i in results["items"] if i["label"] == "Example 1: equivalence for C = 0")
+    assert ex1["status"] == "verified" and "which the motion keeps" in ex1["note"]
+
+
 def test_report_shows_table_errata_and_figures(results):
     text = (results["_out"] / "report.md").read_text()
     assert "| (3) | equation | **erratum** |" in text

@@ -5,11 +5,17 @@ the symbolic tests do above their size budget, and how ``compare`` decides.
 
 A Schwartz-Zippel style test: a nonzero analytic expression vanishes at a random point
 with probability zero (also on a constraint manifold, the dependent velocities computed
-at each point).  Each point is rational and evaluated at 30 and 60 digits: a
-value both precisions confirm is nonzero; one that shrinks with the precision is the
+at each point).  Each point is rational, in [0.31, 1.37] (and with random signs too where
+the expressions hold a node that is not analytic across a sign change, such as Abs or
+sqrt(u**2): ``_one_signed``), and evaluated at 30 and 60 digits: a value both precisions
+confirm is nonzero; one that shrinks with the precision is the
 rounding noise of an exact zero; between the two the point is evaluated exactly
 (rational expressions at rational points) or at 120 digits.  An expression with Floats
-(inexact input) is zero where its value is below ``ROUNDING`` times its terms.
+(inexact input) is zero where its value is below ``ROUNDING`` times the magnitude of the
+terms that cancel in it (every sum evaluated with its terms' absolute values), or below
+``DOUBLE_ROUNDING``: a coefficient typed into the input is data, not rounding, unless it
+is below the rounding of a double (1e-15; give smaller ones as a Rational or a
+parameter).
 
 ``decisions()`` collects, for the callers that report how they decided, how many
 expressions were decided this way.
@@ -31,6 +37,7 @@ POINTS = 4
 TREE_MAX = 400           # tree nodes above which the symbolic zero tests evaluate instead
 SIMPLIFY_MAX = 100       # ... and above which a numerically zero one is not simplified
 ROUNDING = 1e-9          # relative size under which a value with Floats in it is zero
+DOUBLE_ROUNDING = 1e-15  # absolute size under which it is zero (a few ulps of a double)
 _DEN = 100 * 2**16
 _CONFIRM = 1e-12         # relative agreement of two precisions that confirms a value
 _SHRINK = 1e-20          # a value that shrinks by this going to 60 digits is noise
@@ -85,21 +92,56 @@ def vanishes(exprs, system=None, points: int = POINTS, seed: int = 0, *, derived
                   key=lambda s: s.name)
     inexact = bool(dag.atoms(exprs, sp.Float))
     rng = random.Random(seed)
-    got = 0
-    for _ in range(4 * points):
-        if got >= points:
-            return True
+
+    def at(signed):
         base = {s: sp.Rational(rng.randrange(31 * _DEN // 100, 137 * _DEN // 100), _DEN)
-                for s in syms}
+                * (rng.choice((-1, 1)) if signed else 1) for s in syms}
         try:
-            zero = (_small_at(exprs, base, point) if inexact
-                    else _zero_at(exprs, base, point, exact_point))
+            real = _real_point(point) if signed else point
+            if signed and any(isinstance(v, mpmath.mpc) and v.imag
+                              for v in _values(exprs, base, real, 30)):
+                return None         # not real here (a root of a negative number)
+            return (_small_at(exprs, base, real) if inexact
+                    else _zero_at(exprs, base, real, exact_point))
         except (ValueError, ZeroDivisionError, ArithmeticError):
-            continue                # off the domain (a root of a negative number, ...)
-        if not zero:
+            return None             # off the domain (a root of a negative number, ...)
+
+    for signed in (False, True) if _one_signed(exprs) else (False,):
+        got = 0
+        for _ in range(4 * points):
+            if got >= points:
+                break
+            zero = at(signed)
+            if zero is False:
+                return False
+            got += zero is True
+        if not signed and got < max(1, points // 2):
             return False
-        got += 1
-    return got >= max(1, points // 2)
+    return True
+
+
+def _one_signed(exprs) -> bool:
+    """Whether ``exprs`` hold a node that is not analytic where a symbol changes sign
+    (Abs, sign, sqrt(u**2), ...): then positive points alone cannot decide them, and
+    ``vanishes`` also draws points with random signs."""
+    for e in dag.nodes(exprs):
+        if isinstance(e, (sp.Abs, sp.sign, sp.Heaviside, sp.Piecewise, sp.Max, sp.Min)):
+            return True
+        if (e.is_Pow and not e.exp.is_integer and e.base.is_Pow
+                and e.base.exp.is_even):
+            return True
+    return False
+
+
+def _real_point(point):
+    """``point`` (or the plain one) refusing a point where a dependent value is not real."""
+    def real(base, dps):
+        pt = point(base, dps) if point else {s: mpmath.mpf(v.p) / v.q
+                                              for s, v in base.items()}
+        if any(isinstance(v, mpmath.mpc) for v in pt.values()):
+            raise ValueError("no real point here")
+        return pt
+    return real
 
 
 def on_constraints(system, values: dict) -> dict:
@@ -206,16 +248,57 @@ def _zero_at(exprs, base, point, exact_point) -> bool:
 
 def _small_at(exprs, base, point) -> bool:
     """Floats in the input: zero up to their rounding, ``ROUNDING`` relative to the
-    size of the expression's terms (and at least 1)."""
-    terms = [list(sp.Add.make_args(e))[:50] for e in exprs]
-    vals = _values(exprs + [t for ts in terms for t in ts], base, point, 30)
-    at = len(exprs)
-    for v, ts in zip(vals, terms):
-        scale = max([1] + [abs(x) for x in vals[at:at + len(ts)]])
-        at += len(ts)
-        if abs(v) > ROUNDING * scale:
+    magnitude of the terms that cancel (``_magnitudes``), or below ``DOUBLE_ROUNDING``."""
+    with mpmath.workdps(30):
+        pt = point(base, 30) if point else {s: mpmath.mpf(v.p) / v.q
+                                             for s, v in base.items()}
+        pairs = _magnitudes(exprs, pt)
+    for v, m in pairs:
+        if not (mpmath.isfinite(v) and mpmath.isfinite(m)):
+            raise ZeroDivisionError("not finite here")
+        if abs(v) > ROUNDING * m + DOUBLE_ROUNDING:
             return False
     return True
+
+
+def _magnitudes(exprs, pt) -> list:
+    """(value, magnitude) of each of ``exprs`` at ``pt`` on the shared graph: the
+    magnitude is the value with every sum taken over its terms' magnitudes (a product
+    of magnitudes, a positive integer power of one), so what rounding can leave of a
+    cancellation is small relative to it, and a lone term is its own magnitude."""
+    prec = mpmath.mp.prec
+
+    def leaf(e):
+        if e in pt:
+            v = mpmath.mpmathify(pt[e])
+        elif e.is_Number or e.is_NumberSymbol or e is sp.I:
+            v = dag._number(e, prec)
+        else:
+            return None
+        return v, abs(v)
+
+    def add(args):
+        return mpmath.fsum(v for v, _ in args), mpmath.fsum(m for _, m in args)
+
+    def mul(args):
+        return mpmath.fprod(v for v, _ in args), mpmath.fprod(m for _, m in args)
+
+    def power(base, exp):
+        if base[0] != 0 and exp[0] != 0:
+            dag._exponent_check(mpmath.re(exp[0]) * mpmath.log(abs(base[0])), 30)
+        v = mpmath.power(base[0], exp[0])
+        whole = exp[0] == mpmath.nint(mpmath.re(exp[0])) and mpmath.re(exp[0]) > 0
+        return v, (mpmath.power(base[1], exp[0]) if whole else abs(v))
+
+    def function(e, args):
+        f = dag._SPECIAL.get(type(e).__name__) or getattr(mpmath, type(e).__name__, None)
+        vals = [a for a, _ in args]
+        if isinstance(e, sp.exp):
+            dag._exponent_check(mpmath.re(vals[0]), 30)
+        v = f(*vals) if f else dag.evaluate(e.func(*map(dag.to_sympy, vals)), {}, dps=30)
+        return v, abs(v)
+
+    return dag._values(exprs, leaf, add, mul, power, function)
 
 
 def _zero_exactly(undecided, base, point, exact_point) -> bool:

@@ -7,8 +7,12 @@
   obstructions of the distribution (X_rho = d_rho + B^beta_rho d_beta, qdot^0 = 1); so
   T vanishes for all velocities exactly when the constraints are integrable, which is
   the content of the affine condition (39).
+- ``branch_rates``: d/dt(lambda_alpha + p_alpha) along the vakonomic flow; on the branch
+  (32) it is dL~/dq^alpha (no forces), so the branch is invariant, and the agreement of
+  the accelerations on it a common solution, only where that vanishes on the constraints
+  (Chaplygin systems, the paper's Example 1); elsewhere the flow leaves the branch.
 - ``compare``: decides for two principles whether their accelerations agree identically,
-  on the branch (32), or at given states.
+  on the branch (32) (and whether that branch is invariant), or at given states.
 
 Agreement of expressions is decided by evaluation at random states on the constraint
 manifold (with random multipliers and parameters), a Schwartz-Zippel style test: a
@@ -44,6 +48,23 @@ def branch_32(system: System, multipliers, explicit: bool = True) -> dict:
     return {lam: -e for lam, e in zip(multipliers, p)}
 
 
+def branch_rates(system: System, eqs) -> list:
+    """d/dt(g_alpha) along the solved equations ``eqs`` (with multipliers), where
+    g = lambda + p for explicit constraints and g = A_dep^T lambda + p as given, so that
+    g = 0 is the branch (32) (``branch_32``).  On the branch these rates are
+    dL~/dq^alpha for the vakonomic equations (20a) without forces: the branch is
+    invariant exactly where they vanish on the constraints."""
+    lams = eqs.multipliers
+    lam = sp.Matrix(lams)
+    if not eqs.explicit:
+        lam = system.jacobian_dependent.T * lam
+    g = [lam[a] + system.p_dependent[a] for a in range(system.k)]
+    acc = eqs.accelerations()
+    rates = [system.J.D(e) + sp.Add(*[sp.diff(e, m) * eqs.J.jet(m, 1) for m in lams])
+             for e in g]
+    return dag.xreplace(rates, dict(acc))
+
+
 def obstructions(system: System) -> dict:
     """K^alpha_{rho sigma} = X_rho B^alpha_sigma - X_sigma B^alpha_rho, keyed
     (x_rho, x_sigma, q_alpha) with rho < sigma over (t, q^mu); zeros included."""
@@ -77,6 +98,11 @@ class Comparison:
     ``singular``: expressions (on the constraints; multipliers may occur) where one of
     the two acceleration systems is singular or undefined (``singular_set``);
     ``identical`` and ``on_branch_32`` hold off the set where one of them vanishes.
+    ``on_branch_32``: the accelerations agree at every state on the branch
+    lambda_alpha = -p_alpha (32) (an instantaneous statement); ``branch_invariant``
+    (when that is True): whether the multiplier principle's flow keeps the branch
+    (``branch_rates`` vanish on it), so that its motions started there are motions of the
+    other principle.  When it is False, the motions share the instant, not the solution.
     """
 
     principles: tuple
@@ -84,6 +110,7 @@ class Comparison:
     on_branch_32: bool | None
     defects: dict = field(default_factory=dict)   # q'' difference (symbolic, unsimplified)
     singular: list = field(default_factory=list)
+    branch_invariant: bool | None = None
 
     def where(self) -> str:
         """The singular set as text, within budget ("" when empty)."""
@@ -97,14 +124,21 @@ class Comparison:
                "singular or undefined)") if self.singular else ""
         if self.identical:
             return f"{a} and {b} have the same accelerations at every state{off}"
+        if self.on_branch_32 and self.branch_invariant:
+            return (f"{a} and {b} agree on the branch lambda_alpha = -p_alpha (32), which the "
+                    f"motion keeps (common solutions from it), not in general"
+                    f"{',' if off else ''}{off}")
         if self.on_branch_32:
-            return (f"{a} and {b} agree on the branch lambda_alpha = -p_alpha (32), not in "
-                    f"general{',' if off else ''}{off}")
+            return (f"{a} and {b} have the same accelerations at states on the branch "
+                    f"lambda_alpha = -p_alpha (32), but the motion leaves the branch "
+                    f"(d/dt(lambda_alpha + p_alpha) != 0 on it), so they share no solutions "
+                    f"in general{',' if off else ''}{off}")
         return f"{a} and {b} do not share solutions in general{off}"
 
     def __repr__(self):
         return (f"Comparison({self.principles!r}, identical={self.identical}, "
-                f"on_branch_32={self.on_branch_32}, defects=<{len(self.defects)} expressions>, "
+                f"on_branch_32={self.on_branch_32}, branch_invariant={self.branch_invariant}, "
+                f"defects=<{len(self.defects)} expressions>, "
                 f"singular=<{len(self.singular)}{': ' + self.where() if self.singular else ''}>)")
 
     def _repr_html_(self):
@@ -210,11 +244,13 @@ def _compare(system, principles, eqs, accs, factors) -> Comparison:
     qdd = system.J.qdd
     defects = {q: a1[q] - a2[q] for q in qdd}
     same = agrees(system, list(defects.values()))
-    on_branch = None
+    on_branch = invariant = None
     owner = e1 if e1.multipliers else e2
     if not same and owner.multipliers:
         sub = branch_32(system, owner.multipliers, owner.explicit)
         on_branch = agrees(system, list(defects.values()), derived=sub)
+        if on_branch:
+            invariant = agrees(system, branch_rates(system, owner), derived=sub)
     sing = list(dict.fromkeys(factors))
     # the branches in the multipliers first, then those in the state, then parameters
     lams, jet = set(e1.multipliers + e2.multipliers), set(system.J.q + system.J.qd)
@@ -224,7 +260,7 @@ def _compare(system, principles, eqs, accs, factors) -> Comparison:
         syms = dag.free_symbols(f)
         return 0 if syms & lams else 1 if syms & jet else 2
     sing.sort(key=rank)
-    return Comparison(principles, same, on_branch, defects, sing)
+    return Comparison(principles, same, on_branch, defects, sing, invariant)
 
 
 def defect_along(system: System, first: str, second: str, samples, convention: str = "paper"):

@@ -3,7 +3,8 @@
 ``conserved_quantities(sysm, principle, degree, coefficients)`` returns a basis, modulo
 the constraints, of the functions I(t, q, qdot[, lambda]) = sum_j c_j g_j(t, q) m_j(qdot,
 lambda), m_j a monomial of degree <= ``degree`` in all the velocities (the dependent ones
-included) and, for the vakonomic and Hoelder principles, the multipliers, whose total
+included) and, for every principle whose multipliers are states (vakonomic, Hoelder,
+Suslov: their rates are integrated with the motion), the multipliers, whose total
 derivative vanishes on the equations on the constraint manifold
 (Olver 1993, section 4.3: first integrals as the kernel of the
 total derivative on the solution manifold).  The condition D I = 0 is linear in c and is
@@ -52,7 +53,9 @@ def check_arguments(sysm, principle, degree, what) -> Principle:
 def conserved_quantities(sysm, principle, degree=2, coefficients=None) -> list:
     """A basis, modulo the constraints, of the nontrivial first integrals of ``principle``
     polynomial of total degree <= ``degree`` in all the velocities (dependent ones
-    included) and, for the vakonomic and Hoelder principles, the multipliers.
+    included) and the multipliers of every principle whose multipliers are states
+    (vakonomic, Hoelder, Suslov), e.g. the Suslov integrals lambda_alpha + p_alpha of a
+    Chaplygin system (Zhao et al. 2008, (41a)).
 
     The search is complete in its space: an empty list means that no integral exists
     there.  None vanishes on the constraint manifold (checked exactly against the
@@ -90,7 +93,7 @@ def conserved_quantities(sysm, principle, degree=2, coefficients=None) -> list:
                  f"in {J.n} velocities")
     eom = sysm.equations(p)
     acc = eom.accelerations()                       # its errors propagate
-    lam = list(eom.multipliers) if p.multipliers_act else []
+    lam = list(eom.multipliers) if eom.multiplier_rates else []     # states
     rates = list(eom.multiplier_rates) if lam else []
     on = sysm.on_constraints
 
@@ -144,16 +147,43 @@ def check_budget(count, detail):
 
 def functions_of_q(sysm) -> tuple:
     """The non-polynomial functions of t and q that L, the constraints and the forces
-    contain (sin(theta), cos(theta), sqrt(x**2 + y**2), ...), sorted by their text."""
+    contain (sin(theta), cos(theta), sqrt(x**2 + y**2), ...), and the non-polynomial
+    coefficients of their velocity monomials (sin(theta)**2 of L = (... + sin(theta)**2
+    phi_t**2)/2, 1/(1 + x**2)), without their constant and parameter factors, so that the
+    energy and the momenta of L lie in the default search space; sorted by their text."""
     J = sysm.J
     base = {J.t, *J.q}
+    allowed = base | set(sysm.parameters)
+    exprs = [sysm.L, *sysm.constraints, *sysm.Q]
     found = set()
-    for e in dag.nodes([sysm.L, *sysm.constraints, *sysm.Q]):
+    for e in dag.nodes(exprs):
         fs = e.free_symbols
-        if fs & base and fs <= base | set(sysm.parameters) and (
+        if fs & base and fs <= allowed and (
                 isinstance(e, sp.Function) or (e.is_Pow and not e.exp.is_Integer)):
             found.add(e)
+    for e in exprs:
+        for c in _velocity_coefficients(e, J.qd):
+            c = c.as_independent(*base, as_Add=False)[1]
+            if (c.free_symbols & base and c.free_symbols <= allowed
+                    and not c.is_polynomial(*base)):
+                found.add(c)
     return tuple(sorted(found, key=str))
+
+
+def _velocity_coefficients(expr, velocities) -> list:
+    """The coefficients of ``expr`` as a polynomial in the velocities ([] when it is not
+    one or is too large to expand)."""
+    from ..algebra import zero
+
+    if zero.large(expr):
+        return []
+    try:
+        poly = sp.Poly(expr, *velocities)
+    except sp.PolynomialError:
+        return []
+    if any(not c.free_symbols.isdisjoint(velocities) for c in poly.coeffs()):
+        return []
+    return [sp.factor_terms(c) for c in poly.coeffs()]
 
 
 def coefficient_count(sysm, coefficients, degree) -> int:

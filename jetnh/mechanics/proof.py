@@ -6,7 +6,9 @@ sympy writes derivatives of undefined functions in several equivalent ways
 (``Derivative(L(.., phi(..)), phi(..))``, ``Subs(Derivative(L(.., _xi), _xi), _xi, ..)``);
 ``canonical`` rewrites each as a function named by the slots it differentiates
 (``L_4_6(args)`` = d^2 L / d slot4 d slot6), after which ``expand`` decides zero exactly.
-A ``Proof`` records the statement, the steps used and the verdict.
+A ``Proof`` records the statement, the steps used and the verdict: a step is checked
+(its residuals are exactly zero, or for ``refute`` not) or a remark (prose, an inference
+that is not machine-checked: ``holds`` None), and only checked steps decide the verdict.
 """
 
 from __future__ import annotations
@@ -51,7 +53,10 @@ def is_zero(expr) -> bool:
 
 @dataclass
 class Proof:
-    """A statement proven (or refuted) for a generic system of a given size."""
+    """A statement proven (or refuted) for a generic system of a given size.
+
+    ``steps``: (text, holds) with holds True/False for a checked step and None for a
+    remark; ``holds``: every checked step holds (remarks prove nothing)."""
 
     statement: str
     n: int
@@ -59,12 +64,21 @@ class Proof:
     steps: list = field(default_factory=list)
     holds: bool = True
 
-    def step(self, text: str, residuals=()) -> bool:
-        """Record a step; its residuals must all be exactly zero for it to hold."""
+    def step(self, text: str, residuals=()) -> bool | None:
+        """Record a step; its residuals must all be exactly zero for it to hold.  Without
+        residuals nothing is checked: the step is a remark (``remark``), holds None."""
+        residuals = list(residuals)
+        if not residuals:
+            return self.remark(text)
         ok = all(is_zero(r) for r in residuals)
         self.steps.append((text, ok))
         self.holds = self.holds and ok
         return ok
+
+    def remark(self, text: str) -> None:
+        """Record prose that is not machine-checked (an inference from the checked
+        steps, a reference): shown as such, never counted as proven."""
+        self.steps.append((text, None))
 
     def refute(self, text: str, residuals) -> bool:
         """Record that a (printed) statement is false: some residual is not zero."""
@@ -73,9 +87,16 @@ class Proof:
         self.holds = self.holds and refuted
         return refuted
 
+    @property
+    def checked(self) -> int:
+        """How many steps were machine-checked (the others are remarks)."""
+        return sum(ok is not None for _, ok in self.steps)
+
     def as_dict(self) -> dict:
-        return {"statement": self.statement, "n": self.n, "k": self.k, "holds": self.holds,
-                "steps": [{"step": s, "holds": ok} for s, ok in self.steps]}
+        return {"statement": self.statement, "n": self.n, "k": self.k,
+                "holds": self.holds if self.checked else None,
+                "steps": [{"step": s, "holds": ok, "checked": ok is not None}
+                          for s, ok in self.steps]}
 
 
 def generic_system(n: int, k: int, form: str = "explicit") -> System:

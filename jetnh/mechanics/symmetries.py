@@ -221,7 +221,10 @@ def noether_symmetries(sysm, principle, degree=1, coefficients=None) -> list:
     """The Noether point symmetries of ``principle`` (see the module docstring): a basis
     over the rational functions of the parameters, each a ``NoetherSymmetry`` whose
     identity (N) and conserved quantity are proved.  Symmetries whose quantity is a
-    constant are left out.
+    constant are left out.  For Suslov, F = L~ on the reduced motion: its quantities are
+    free of the multipliers, so integrals in the Suslov multipliers (lambda_alpha +
+    p_alpha of a Chaplygin system) are not Noether quantities here;
+    ``conserved_quantities`` finds them.
 
     Parameters
     ----------
@@ -345,7 +348,8 @@ def lie_symmetries(sysm, principle, degree=1, coefficients=None) -> list:
     """The Lie point symmetries of ``principle``'s motion whose components are spanned by
     ``coefficients`` (default: monomials of degree <= ``degree`` in t and q; for the
     vakonomic and Hoelder principles the multipliers' components also in lambda, so the
-    field is projectable on (t, q)): a basis over the rational
+    field is projectable on (t, q); for Suslov, whose coordinate motion is free of the
+    multipliers, the fields of that motion alone): a basis over the rational
     functions of the parameters, each a ``LieSymmetry`` whose determining equations are
     proved.  The determining equations are pr X(qdot^alpha - phi^alpha) = 0,
     pr X(qddot^mu - A^mu) = 0 (and pr X(lambdadot - R) = 0) on the solutions; requiring

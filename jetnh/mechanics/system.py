@@ -631,8 +631,18 @@ class System(Frozen):
         return frobenius_from_constraints(self.J, self.constraints, self.dependent)
 
     def is_integrable(self) -> bool:
-        """Whether the constraints are integrable (holonomic), by the Frobenius theorem."""
-        return bool(self.frobenius().integrable)
+        """Whether the constraints are integrable (holonomic), by the Frobenius theorem.
+
+        With a chosen ``branch`` (constraints with several solutions for the dependent
+        velocities) the answer is for that branch, qdot^alpha = phi^alpha, the constraints
+        this System integrates (ydot^2 = xdot^2, branch ydot = xdot: integrable);
+        ``frobenius()`` keeps the answer for the union of the branches."""
+        if self._branch is None or not self.k:
+            return bool(self.frobenius().integrable)
+        from ..geometry.frobenius import frobenius_from_constraints
+
+        return bool(frobenius_from_constraints(self.J, self.explicit_constraints,
+                                               self.dependent).integrable)
 
     @cached_property
     def mass_matrix(self) -> sp.Matrix:

@@ -44,7 +44,9 @@ arrays (``Scene.ensemble`` calls it), so a later ``jetnh.sweep`` can hand it chu
   available (ragged); use ``scene.run`` for that.
 - Diagnostics per run: status and stop reason, steps, rejected steps, right-hand-side
   evaluations, final time, max constraint residual and energy drift over the output
-  rows (and against the initial state), event counts and first times.
+  rows (and against the initial state: with ``save="final"`` an end-point difference,
+  not the largest over the steps; a singular stop's row left out), event counts and
+  first times.
 - A run whose right-hand side becomes NaN/inf with no singularity to explain it raises
   ``IntegrationError`` naming the run (``on_error="record"`` keeps it as status 3).
 """
@@ -566,29 +568,43 @@ class Ensemble(Frozen):
     # ------------------------------------------------------------------ diagnostics
     @property
     def residual_max(self) -> np.ndarray:
-        """Max ``|f^a|`` over each run's output rows."""
+        """Max ``|f^a|`` over each run's output rows (``energy_drift`` says which)."""
         k = len(self.layout.dependent_velocities)
-        res = np.abs(self.aux[:, :, k:2 * k])
-        with np.errstate(all="ignore"):
-            return np.nanmax(res.reshape(self.n_runs, -1), axis=1) if k else np.zeros(self.n_runs)
+        if not k:
+            return np.zeros(self.n_runs)
+        return _largest(np.abs(self._regular(self.aux[:, :, k:2 * k])))
 
     @property
     def holonomic_residual_max(self) -> np.ndarray:
-        """Max ``|g_i|`` of the holonomic constraints over each run's output rows."""
+        """Max ``|g_i|`` of the holonomic constraints over each run's output rows
+        (``energy_drift`` says which)."""
         m = self.layout.holonomic
         if not m:
             return np.zeros(self.n_runs)
-        res = np.abs(self.aux[:, :, self.layout.n_aux - m:])
-        with np.errstate(all="ignore"):
-            return np.nanmax(res.reshape(self.n_runs, -1), axis=1)
+        return _largest(np.abs(self._regular(self.aux[:, :, self.layout.n_aux - m:])))
 
     @property
     def energy_drift(self) -> np.ndarray:
-        """Max ``|E - E(t0)|`` over each run's output rows."""
-        e = self.aux[:, :, self.layout.energy_index]
-        e0 = self.aux_initial[:, self.layout.energy_index]
-        with np.errstate(all="ignore"):
-            return np.nanmax(np.abs(e - e0[:, None]), axis=1)
+        """Max ``|E - E(t0)|`` over each run's output rows, not over its steps: with
+        ``save="final"`` the one row is the final state, so this is ``|E(t_final) -
+        E(t0)|``, an end-point difference that can be far below the largest drift the
+        run had on the way (``scene.run(save="steps")`` gives that); with ``t_eval``, at
+        those times.  A run stopped at a singular configuration leaves out the row of
+        its stop (next to the singular set its dependent velocities are a near 0/0): NaN
+        with ``save="final"``, whose one row that is."""
+        i = self.layout.energy_index
+        e = self._regular(self.aux[:, :, i:i + 1])
+        return _largest(np.abs(e - self.aux_initial[:, i, None, None]))
+
+    def _regular(self, a) -> np.ndarray:
+        """``a`` ([n_runs, n_times, columns] of the aux rows) with NaN in the row of each
+        run's singular stop, where it is one (``save="final"``: the run's one row)."""
+        stopped = (self.status == SINGULAR) & np.isfinite(self.t_final)
+        if not stopped.any():
+            return a
+        a = np.array(a)
+        a[stopped[:, None] & (self.t == self.t_final[:, None])] = np.nan
+        return a
 
     def stop_reason(self, r: int) -> str:
         if r in self._reasons:
@@ -648,6 +664,14 @@ class Ensemble(Frozen):
         return (f"<Ensemble {self.method}: {self.n_runs} runs x {self.y.shape[1]} rows, "
                 f"{ok} succeeded, {self.wall_time * 1e3:.3g} ms ({self.parallel}, "
                 f"{self.workers} workers)>")
+
+
+def _largest(a) -> np.ndarray:
+    """The largest entry of each run's rows of ``a`` ([n_runs, n_times, columns]) that
+    is not NaN (NaN for a run without one)."""
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)     # (a run without rows)
+        return np.nanmax(a.reshape(a.shape[0], -1), axis=1)
 
 
 def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",

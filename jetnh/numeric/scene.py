@@ -603,7 +603,11 @@ class Scene(Frozen):
             scipy's ``solve_ivp(method=M)`` on the same compiled right-hand side.
         save : {"steps", "final"}, default "steps"
             Every step (or the points of ``t_eval``), or the two ends only; with
-            ``t_eval`` both keep the points of ``t_eval`` (the rows asked for).
+            ``t_eval`` both keep the points of ``t_eval`` (the rows asked for).  The
+            diagnostics' residual and energy drift are taken over the stored rows
+            (``Diagnostics.rows``, ``saved``): with "final" an end-point difference
+            ``|E(t_final) - E(t0)|``, which can be far below the largest drift on the
+            way.
         events : list, optional
             Sympy expressions, callables g(t, y) or ``Event`` (``jetnh.numeric.events``)
             with scipy's semantics, located on the dense output (dla and dvi: on the

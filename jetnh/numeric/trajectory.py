@@ -21,6 +21,7 @@ import numpy as np
 from ..errors import ArgumentError, JetnhError
 from ..geometry.jet import key_name
 from ..frozen import Frozen, FrozenDict, memo, readonly
+from .methods._common import AT_T_EVAL, ENDPOINTS, EVERY_STEP, SINGULAR
 
 
 @dataclass(frozen=True)
@@ -36,9 +37,9 @@ class Diagnostics:
     rejected: int | None
     rhs_evaluations: int
     wall_time: float
-    residual_max: float            # max |f^a| over the output rows
+    residual_max: float            # max |f^a| over the output rows (see ``rows``)
     energy_initial: float
-    energy_drift: float            # max |E - E(t0)|
+    energy_drift: float            # max |E - E(t0)| over the output rows (see ``rows``)
     energy_drift_relative: float   # energy_drift / max(|E(t0)|, tiny)
     integral_drift: dict = field(default_factory=dict)
     projected: dict = field(default_factory=dict)
@@ -51,9 +52,21 @@ class Diagnostics:
     #: why the energy is not conserved by design (``mechanics.energy.changes``): its
     #: drift is then the motion's, not the integration's error; () where it is conserved
     energy_changes: tuple = ()
+    #: how many output rows ``residual_max``, ``energy_drift``, ``integral_drift`` and
+    #: ``holonomic_residual_max`` were taken over, and which rows the run stored:
+    #: "steps" (every accepted step), "t_eval" (the output times, from the dense
+    #: output) or "final" (t0 and the end alone: the figures are then end-point
+    #: differences, which can be far below the largest error the run had on the way)
+    rows: int = 0
+    saved: str = "steps"
+    #: a run stopped at a singular configuration whose last row is its stop (next to the
+    #: singular set, where the dependent velocities are a near 0/0): that row, kept in
+    #: the trajectory, is left out of the figures above and reported here, {"t",
+    #: "energy_drift", "residual_max"}; None otherwise
+    stop_row: dict | None = None
 
     def __post_init__(self):
-        for name in ("integral_drift", "projected", "events", "singularity"):
+        for name in ("integral_drift", "projected", "events", "singularity", "stop_row"):
             value = getattr(self, name)
             if isinstance(value, dict) and not isinstance(value, FrozenDict):
                 object.__setattr__(self, name, FrozenDict(readonly(value)))
@@ -74,6 +87,9 @@ class Diagnostics:
                     if self.energy_changes else "")]
         for k, v in self.integral_drift.items():
             lines.append(f"  integral {k}: drift {v:.3e}")
+        rows = _rows_text(self)
+        if rows:
+            lines.append(f"  {rows}")
         for k, v in self.events.items():
             lines.append(f"  event {k}: {v} occurrence(s)")
         if self.switches:
@@ -108,6 +124,35 @@ def _energy_text(initial, drift, relative) -> str:
         return (f"energy {initial:.12g}, drift not evaluated: the energy became NaN or "
                 "infinite on the way (an overflow, or an expression outside its domain)")
     return f"energy {initial:.12g}, drift {drift:.3e} (relative {relative:.3e})"
+
+
+def _rows_text(d) -> str:
+    """Over which rows a run's residual, energy and integral figures were taken, where
+    that is not every step of the run ("" where it is)."""
+    n = f"{d.rows} row{'s' if d.rows != 1 else ''}"
+    if d.saved == "final":
+        steps = f" of its {d.steps} steps" if d.steps else ""
+        text = (f"these figures are over {n} (save='final'): differences between the ends, "
+                f"not the largest on the way{steps} (save='steps' gives that)")
+    elif d.saved == "t_eval":
+        text = f"these figures are over {n} (t_eval): at the output times, not at the steps"
+    else:
+        text = ""
+    if d.stop_row:
+        s = d.stop_row
+        stop = (f"leave out the last row, the singular stop at t = {s['t']:.10g} (next to "
+                "the singular set its dependent velocities are a near 0/0): energy drift "
+                f"{s['energy_drift']:.3e}, constraint residual {s['residual_max']:.3e} there")
+        text = f"{text}; they {stop}" if text else f"these figures {stop}"
+    return text
+
+
+def _largest(a) -> float:
+    """The largest entry of ``a`` (0 for none; NaN if one is)."""
+    return float(np.max(a)) if a.size else 0.0
+
+
+_SAVED = {EVERY_STEP: "steps", AT_T_EVAL: "t_eval", ENDPOINTS: "final"}
 
 
 def _switches_text(switches) -> str:
@@ -661,17 +706,29 @@ class Trajectory(Frozen):
 
     @memo
     def diagnostics(self) -> Diagnostics:
+        n = len(self)
+        # a run stopped at a singular configuration keeps as its last row its stop, next
+        # to the singular set, where the dependent velocities are a near 0/0: that row is
+        # left out of the figures and reported apart (``Diagnostics.stop_row``)
+        sing = self.singularity
+        cut = (self.status == SINGULAR and n > 1 and not self._own and sing is not None
+               and sing["t"] == float(self.t[-1]))
+        rows = slice(0, n - 1 if cut else n)
         res = self.residual
-        rmax = float(np.max(np.abs(res))) if res.size else 0.0
+        rmax = _largest(np.abs(res[rows]))
         hol = self.holonomic_residual
-        hmax = float(np.max(np.abs(hol))) if hol.size else 0.0
+        hmax = _largest(np.abs(hol[rows]))
         E = self.energy
         e0 = float(E[0]) if E.size else float("nan")
-        drift = float(np.max(np.abs(E - e0))) if E.size else 0.0
+        drift = _largest(np.abs(E[rows] - e0))
         idrift = {}
         for name in self.layout.integrals:
             col = self[name]
-            idrift[name] = float(np.max(np.abs(col - col[0]))) if col.size else 0.0
+            idrift[name] = _largest(np.abs(col[rows] - col[0])) if col.size else 0.0
+        stop_row = None
+        if cut:
+            stop_row = {"t": float(self.t[-1]), "energy_drift": float(abs(E[-1] - e0)),
+                        "residual_max": _largest(np.abs(res[-1]))}
         i = self._info
         return Diagnostics(
             method=self.method, status=self.status, stop_reason=self.stop_reason,
@@ -684,7 +741,21 @@ class Trajectory(Frozen):
             singularity=self.singularity, forced=self.scene.system.forced,
             holonomic_residual_max=hmax, completed=dict(self.scene.completed),
             switches=[dict(s) for s in self.switches],
-            energy_changes=self.scene.energy_changes)
+            energy_changes=self.scene.energy_changes,
+            rows=rows.stop, saved=self._saved(), stop_row=stop_row)
+
+    def _saved(self) -> str:
+        """Which rows the run stored: "steps" (every accepted step), "t_eval" (the
+        output times) or "final" (t0 and the end alone): the output mode of a run with
+        dense output; else told by the rows against the steps (a run that holds fewer
+        rows than its steps and two of them kept its ends)."""
+        d = self._dense
+        if d is not None:
+            return _SAVED[d["mode"]]
+        steps = self._info["steps"]
+        if steps is None or len(self) >= steps + 1:
+            return "steps"
+        return "final" if len(self) == 2 else "t_eval"
 
     # ------------------------------------------------------------------ tables, figures
     def to_dataframe(self, diagnostics=True):

@@ -210,7 +210,10 @@ def _c_32_iff(ctx):
     return Outcome(ERRATUM,
                    "Sufficient, not necessary: the equations differ by (p_alpha + lambda_alpha) T^alpha_mu "
                    "(proven in (32)), which vanishes for lambda = -p but also wherever T vanishes "
-                   "along the motion. Appell-Hamel: T^3_mu is proportional to xddot ydot - xdot "
+                   "along the motion; and lambda = -p gives common solutions only where the motion "
+                   "keeps it, dL~/dq^alpha = 0 on the constraints (d/dt(lambda + p) = "
+                   "dL~/dq^alpha on the branch, proven under (32)). Appell-Hamel: T^3_mu is "
+                   "proportional to xddot ydot - xdot "
                    "yddot, zero on the motion, and jetnh finds: " + str(c) + ". So the "
                    "vakonomic and Suslov motions coincide for every lambda_z except on the "
                    f"invariant branch {branch}, where the vakonomic acceleration system is "
@@ -218,9 +221,24 @@ def _c_32_iff(ctx):
                    f"{'yes' if ok else 'NO'}). Necessity holds only where T^alpha_mu has rank k "
                    "along the motion.",
                    r"(p_\alpha + \lambda_\alpha)T^\alpha_\mu = 0\ \text{(necessary and sufficient);}"
-                   r"\ \lambda_\alpha = -p_\alpha\ \text{is sufficient. Appell-Hamel: common "
+                   r"\ \lambda_\alpha = -p_\alpha\ \text{is sufficient where } \partial\tilde L/"
+                   r"\partial q^\alpha = 0\text{. Appell-Hamel: common "
                    r"solutions for every } \lambda_z \ne a m\sqrt{\dot x^2+\dot y^2}/b",
-                   [str(c), *checks])
+                   [str(c), *checks, *_branch_witness(ctx)])
+
+
+def _branch_witness(ctx) -> list:
+    """The branch (32) is invariant for the disk, and not once a spring -k x^2/2 acts on
+    its dependent x (dL~/dx = -k x): there vakonomic and Suslov agree at an instant only."""
+    s = ctx.disk
+    k = sp.Symbol("k")
+    x = s.dependent[0]
+    spring = System(s.J, s.L - k * x**2 / 2, list(s.constraints), dependent=list(s.dependent))
+    c = compare(spring, "vakonomic", "suslov")
+    return [f"disk: branch (32) invariant: "
+            f"{compare(s, 'vakonomic', 'suslov').branch_invariant}",
+            f"disk with a spring on x: same accelerations on the branch {c.on_branch_32}, "
+            f"branch invariant {c.branch_invariant}"]
 
 
 @claim("(32): Chaplygin systems satisfy it",
@@ -323,8 +341,9 @@ def _c_ex1_L(ctx):
        r"C_1 = C_2 = 0\ \Rightarrow\ \text{(41) and (42) are equivalent}")
 def _c_ex1_C0(ctx):
     c = compare(ctx.disk, "vakonomic", "suslov")
-    return Outcome(VERIFIED if c.on_branch_32 else ERRATUM,
-                   "C = 0 is the branch (32); jetnh: " + str(c) + ". The simulations show the "
+    return Outcome(VERIFIED if c.on_branch_32 and c.branch_invariant else ERRATUM,
+                   "C = 0 is the branch (32), invariant for the disk (dL~/dx = dL~/dy = 0); "
+                   "jetnh: " + str(c) + ". The simulations show the "
                    "paths part for C != 0 and coincide for C = 0.", evidence=[str(c)])
 
 

@@ -613,10 +613,21 @@ def _eq32(ctx):
                                       - sp.Add(*[(s.p_dependent[a] + lams[a]) * T[a, m]
                                                  for a in range(s.k)]), prolonged=True))
              for m in range(len(s.independent)))
-    return Outcome(VERIFIED if ok else ERRATUM,
+    # (20a) on the branch: d/dt(lambda_alpha + p_alpha) = dL~/dq^alpha
+    branch = {lams[a]: -s.p_dependent[a] for a in range(s.k)}
+    rate_ok = all(is_zero(s.on_constraints(
+        (v.J.jet(lams[a], 1) + s.J.D(s.p_dependent[a]) + v.expressions[a]).xreplace(branch)
+        - sp.diff(s.L_tilde, q), prolonged=True)) for a, q in enumerate(s.dependent))
+    return Outcome(VERIFIED if ok and rate_ok else ERRATUM,
                    "(20b) - (31b) = (p_alpha + lambda_alpha) T^alpha_mu exactly (generic L, phi), "
-                   "so lambda_alpha = -p_alpha makes them coincide: a sufficient condition. See the "
-                   "claim on 'necessary and sufficient'.", evidence=[f"(20b)-(31b) == (p+lambda)T: {ok}"])
+                   "so lambda_alpha = -p_alpha makes the accelerations coincide at an instant. "
+                   "For common solutions the branch must also be kept by the vakonomic motion: "
+                   "on it (20a) gives d/dt(lambda_alpha + p_alpha) = dL~/dq^alpha (checked, "
+                   "generic L, phi), so the paper's 'condition for common solutions' needs "
+                   "dL~/dq^alpha = 0 on the constraints as well (Chaplygin systems; the paper's "
+                   "Example 1 satisfies it). See the claims on (32).",
+                   evidence=[f"(20b)-(31b) == (p+lambda)T: {ok}",
+                             f"on lambda = -p, d/dt(lambda + p) == dL~/dq^alpha: {rate_ok}"])
 
 
 # ---------------------------------------------------------------------- section 4

@@ -3,7 +3,9 @@
 Each proof uses undefined functions L(t, q, qdot), f^a(t, q, qdot), phi^alpha(t, q, qdot^mu)
 or B^alpha_rho(t, q) (``jetnh.mechanics.proof.generic_system``), so it holds for every smooth system
 of that size, and records the steps it used.  Identities: (3), (6), (8), (10), (11), (13),
-(19), the passage (29) -> (30) -> (31), (32) and (39).
+(19), the passage (29) -> (30) -> (31), (32) with the rate of lambda + p on its branch, and
+(39).  Inferences drawn from the checked identities are recorded as remarks (not
+machine-checked).
 """
 
 from __future__ import annotations
@@ -73,7 +75,8 @@ def prove_11(n, k):
                                                     for f, x in zip(s.constraints, dfe)])
     p.step("Suslov (delta f = 0): f_qdot c_S = [f] eta",
            [sp.Add(*[s.jacobian[a, i] * su.c[i] for i in range(n)]) - dfe[a] for a in range(k)])
-    p.step("so delta_H f = 0 iff c_S = 0 iff [f] eta = 0, and with it delta_V = delta_H = delta_S")
+    p.remark("so delta_H f = 0 iff c_S = 0 iff [f] eta = 0, and with it delta_V = delta_H = "
+             "delta_S (f_qdot of full rank)")
     return p
 
 
@@ -133,12 +136,21 @@ def prove_32(n, k):
     su = derive(s, "suslov", "embedded")
     T = s.T(on_constraints=False)
     lams = v.multipliers
-    p = Proof("(32): (20b) - (31b) = (p_alpha + lambda_alpha) T^alpha_mu", n, k)
+    p = Proof("(32): (20b) - (31b) = (p_alpha + lambda_alpha) T^alpha_mu; on lambda = -p, "
+              "(20a) gives d/dt(lambda_alpha + p_alpha) = dL~/dq^alpha", n, k)
     p.step("difference of the embedded vakonomic and Suslov equations",
            [s.on_constraints(v.expressions[k + m] - su.expressions[k + m] - sp.Add(*[
                (s.p_dependent[a] + lams[a]) * T[a, m] for a in range(k)]), prolonged=True)
             for m in range(n - k)])
-    p.step("hence lambda_alpha = -p_alpha (32) is sufficient for common solutions")
+    branch = {lams[a]: -s.p_dependent[a] for a in range(k)}
+    p.step("(20a) on the branch lambda_alpha = -p_alpha: d/dt(lambda_alpha + p_alpha) = "
+           "dL~/dq^alpha",
+           [s.on_constraints((v.J.jet(lams[a], 1) + s.J.D(s.p_dependent[a]) + v.expressions[a])
+                             .xreplace(branch) - sp.diff(s.L_tilde, q), prolonged=True)
+            for a, q in enumerate(s.dependent)])
+    p.remark("hence lambda_alpha = -p_alpha (32) makes the accelerations agree at an instant; "
+             "it gives common solutions only where the branch is invariant, dL~/dq^alpha = 0 "
+             "on the constraints (Chaplygin systems)")
     return p
 
 
@@ -152,7 +164,7 @@ def prove_39(n, k):
     p.step("K equals the obstructions read off d omega ^ omega^1 ^ ... ^ omega^k (forms route)",
            [K[key] - val for key, val in fr.obstructions.items()]
            + [v for key, v in K.items() if key not in fr.obstructions])
-    p.step("so T = 0 for all velocities iff the distribution is involutive (Frobenius)")
+    p.remark("so T = 0 for all velocities iff the distribution is involutive (Frobenius)")
     return p
 
 

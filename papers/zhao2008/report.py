@@ -43,7 +43,10 @@ def write(results: dict, path: pathlib.Path) -> pathlib.Path:
         "coupling coefficient in (44a, b).",
         "- Overstatements: (32) is sufficient, not necessary (Appell-Hamel agrees for every "
         "multiplier off the invariant branch lambda_z = a m sqrt(xdot^2 + ydot^2) / b, where "
-        "its vakonomic acceleration system is singular and the motion not unique); Chaplygin systems satisfy (32) only on the branch C = 0; '[f] = 0 is "
+        "its vakonomic acceleration system is singular and the motion not unique), and "
+        "lambda = -p gives common solutions only where the motion keeps it, dL~/dq^alpha = 0 "
+        "on the constraints (so for Chaplygin systems, as Example 1; otherwise the equations "
+        "agree at an instant only); Chaplygin systems satisfy (32) only on the branch C = 0; '[f] = 0 is "
         "not sufficient for integrability' fails when [f] = 0 holds identically.",
         "- Index misprints only: (22)-(24), (28), (29) carry [L]_k where [L]_s or [L]_mu is meant.",
         "",
@@ -76,15 +79,20 @@ def write(results: dict, path: pathlib.Path) -> pathlib.Path:
     lines += ["", "## Symbolic proofs for generic systems", "",
               "Undefined functions L(t, q, qdot), f^a, phi^alpha, B^alpha_rho; exact zero tests "
               "after rewriting derivatives of undefined functions by slot "
-              "(`jetnh.mechanics.proof.canonical`).", "",
-              "| identity | (n, k) proven | steps |", "|---|---|---|"]
+              "(`jetnh.mechanics.proof.canonical`). The checked steps are exact identities; "
+              "the remarks are the inferences drawn from them, in prose, not machine-checked.",
+              "",
+              "| identity | (n, k) proven | checked steps | remarks (not machine-checked) |",
+              "|---|---|---|---|"]
     by_stmt: dict = {}
     for p in proofs:
         by_stmt.setdefault(p["statement"], []).append(p)
     for stmt, ps in by_stmt.items():
-        sizes = ", ".join(f"({p['n']},{p['k']})" + ("" if p["holds"] else " FAILS") for p in ps)
-        steps = "; ".join(s["step"] for s in ps[0]["steps"])
-        lines.append(f"| {_cell(stmt)} | {sizes} | {_cell(steps)} |")
+        sizes = ", ".join(f"({p['n']},{p['k']})" + ("" if p["holds"] else " FAILS")
+                          for p in ps)
+        checked = "; ".join(s["step"] for s in ps[0]["steps"] if s["holds"] is not None)
+        remarks = "; ".join(s["step"] for s in ps[0]["steps"] if s["holds"] is None)
+        lines.append(f"| {_cell(stmt)} | {sizes} | {_cell(checked)} | {_cell(remarks) or '-'} |")
     sims = results.get("simulations") or {}
     if sims:
         lines += ["", "## The examples, simulated", ""]

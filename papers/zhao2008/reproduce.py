@@ -128,7 +128,7 @@ def main(argv=None) -> int:
     print()
     print(f"{len(items)} items: " + ", ".join(f"{counts.get(k, 0)} {k}"
                                               for k in ("verified", "erratum", "not-checkable")))
-    print(f"proofs: {sum(p['holds'] for p in proofs)}/{len(proofs)} hold")
+    print(f"proofs: {sum(p['holds'] is True for p in proofs)}/{len(proofs)} hold")
     print("errata:")
     for it in items:
         if it["status"] == "erratum":
@@ -137,7 +137,7 @@ def main(argv=None) -> int:
     print(f"results: {out / 'results.json'}")
     print(f"this run: {facts['seconds']} s, {facts['date']}, {facts['machine']}, Python "
           f"{facts['python']}; timings in {out / 'run.json'} (untracked)")
-    ok = all(p["holds"] for p in proofs) and all(
+    ok = all(p["holds"] is True for p in proofs) and all(
         s.get("ok", True) for s in simulations.values())
     return 0 if ok else 1
 

@@ -142,7 +142,10 @@ def straight_line(ops: tuple):
                 name, text = ir_text(ops)
                 module = llvm.parse_assembly(text)
                 module.triple, module.data_layout = mod.triple, str(mod.data_layout)
-                context.active_code_library.add_llvm_module(module)
+                # linked as it is: the library's module passes optimise it (numba's
+                # add_llvm_module would first run the function passes on it, a second
+                # round of the same passes over the whole program)
+                context.active_code_library._final_module.link_in(module)
                 fn = cgutils.get_or_insert_function(
                     mod, ir.FunctionType(ir.VoidType(), [dbl] + [ptr["y"].type] * 3), name)
                 builder.call(fn, [args[0], ptr["y"], ptr["p"], ptr["o"]])

@@ -1,0 +1,238 @@
+"""Compilation of the N-trailer's kernels against their size: CPU seconds per kernel
+module against the straight-line instructions (the shared size: each distinct node of
+the kernels' graphs is one instruction), the fitted exponent, the cost of an rhs call,
+and the kernels' values -- optionally against another tree measured in the same run.
+
+    .venv/bin/python benchmarks/compile_scaling.py [--quick] [--ns 3,4,8,16,24,32,48,64]
+        [--principles vakonomic,chetaev] [--vs /path/to/other/tree] [--timeout 900]
+        [--out PATH]
+
+(default output: benchmarks/results/compile_scaling.json)
+
+Each (N, principle, tree) runs in a fresh interpreter (``PYTHONPATH`` the tree): the
+kernel source of ``models.get("n_trailer", N=N)`` is generated (not timed; numba warmed
+up on the N = 1 kernels first), then compiled from that source with numba's cache off,
+as the loader compiles a new entry; timed in CPU seconds (``compile_cpu``, and per
+kernel).  Then one rhs call from a compiled loop (``_common.rhs_driver``, best of
+batches: ``rhs_ns``), and rhs, aux and sing at five random states near the initial state
+(kept for comparing the trees bit for bit).  With ``--vs`` the other tree is measured
+right after each row of this one, at the same load; ``--quick``: N = 3, 4, 8.
+``exponent``: the least-squares slope of log compile CPU against log instructions over
+N >= 4.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import tempfile
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from _common import parser, rhs_driver, run_worker, write  # noqa: E402
+
+KERNELS = ("rhs", "aux", "sing")
+
+
+def _source(N: int, principle: str):
+    from jetnh import models
+    from jetnh.numeric import Scene, codegen
+    from jetnh.numeric.codegen import multiplier_names
+
+    system = models.get("n_trailer", N=N)
+    ini = dict(models.initial("n_trailer", N=N))
+    ini.update({m: 0.0 for m in multiplier_names(system, principle)})
+    sc = Scene(system, principle, initial=ini, t_span=(0.0, 1.0))
+    ks = codegen.generate(sc.spec)
+    return ks.source, list(sc.y0), ks.layout
+
+
+def _exec(source: str, name: str, spent: dict):
+    """The module of ``source`` compiled with numba's cache off; CPU seconds per kernel
+    into ``spent`` (the callback decorators timed)."""
+    import types
+
+    import numba
+
+    from jetnh.numeric.codegen import quick
+
+    def timed(make):
+        def decorator(*args, **kwargs):
+            wrap = make(*args, **kwargs)
+
+            def timed_wrap(func):
+                tic = time.process_time()
+                try:
+                    return wrap(func)
+                finally:
+                    spent[func.__name__] = time.process_time() - tic
+            return timed_wrap
+        return decorator
+
+    cfunc, qcfunc = numba.cfunc, quick.quick_cfunc
+    numba.cfunc, quick.quick_cfunc = timed(cfunc), timed(qcfunc)
+    try:
+        with tempfile.TemporaryDirectory(prefix="jetnh-scaling-") as tmp:
+            path = os.path.join(tmp, f"{name}.py")
+            with open(path, "w") as fh:
+                fh.write(source)
+            mod = types.ModuleType(name)
+            mod.__file__ = path
+            mod.JETNH_NUMBA_CACHE = False
+            sys.modules[name] = mod
+            exec(compile(source, path, "exec"), mod.__dict__)  # noqa: S102 - our own source
+            return mod
+    finally:
+        numba.cfunc, quick.quick_cfunc = cfunc, qcfunc
+
+
+def work(N: int, principle: str) -> dict:
+    import numpy as np
+
+    import jetnh
+    from jetnh.numeric.kernels.calls import Kernel
+    from jetnh.numeric.methods._common import FunctionAddress
+
+    warm, _, _ = _source(1, principle)
+    _exec(warm, "jetnh_scaling_warm", {})
+    tic = time.process_time()
+    source, y0, lay = _source(N, principle)
+    generate = time.process_time() - tic
+    spent: dict = {}
+    tic = time.process_time()
+    mod = _exec(source, "jetnh_scaling_kernels", spent)
+    compile_cpu = time.process_time() - tic
+    out = {"tree": os.path.dirname(os.path.dirname(os.path.abspath(jetnh.__file__))),
+           "generate_cpu": generate, "compile_cpu": compile_cpu, "chars": len(source)}
+    total = 0
+    for k in KERNELS:
+        ops = getattr(mod, f"_P_{k}", None)
+        out[f"{k}_ops"] = len(ops) if ops is not None else None
+        out[f"{k}_cpu"] = spent.get(f"{k}_c")
+        total += len(ops) if ops is not None else 0
+    out["ops"] = total
+    drive = rhs_driver()
+    y, p = np.array(y0, dtype=float), np.zeros(len(lay.runtime_params))
+    timing = y.copy()
+    reps = max(20, int(2e6 / max(total, 1)))
+    f = FunctionAddress(mod.rhs_c)
+    drive(f, timing, p, reps)
+    best = math.inf
+    for _ in range(7):
+        tic = time.perf_counter()
+        drive(f, timing, p, reps)
+        best = min(best, (time.perf_counter() - tic) / reps)
+    out["rhs_ns"] = 1e9 * best
+    rng = np.random.default_rng(0)
+    states = [y + 0.1 * rng.uniform(-1.0, 1.0, len(y)) for _ in range(5)]
+    values = {}
+    for k, n_out in (("rhs", len(y)), ("aux", lay.n_aux), ("sing", len(lay.indicators))):
+        kernel = Kernel(FunctionAddress(getattr(mod, f"{k}_c")), (len(y), len(p), n_out))
+        rows = []
+        for yy in states:
+            buf = np.zeros(n_out)
+            kernel(0.25, yy, p, buf)
+            rows.append(buf.tolist())
+        values[k] = rows
+    out["values"] = values
+    return out
+
+
+def fit(rows, key="compile_cpu") -> float | None:
+    """Least-squares slope of log key against log instructions (rows with N >= 4)."""
+    pts = [(math.log(r["ops"]), math.log(r[key])) for r in rows
+           if r.get(key) and r.get("ops") and r["N"] >= 4]
+    if len(pts) < 2:
+        return None
+    mx = sum(x for x, _ in pts) / len(pts)
+    my = sum(y for _, y in pts) / len(pts)
+    sxx = sum((x - mx) ** 2 for x, _ in pts)
+    return sum((x - mx) * (y - my) for x, y in pts) / sxx if sxx else None
+
+
+def _compare(a: dict, b: dict) -> dict:
+    """Largest relative difference of the kernels' values between two rows, and whether
+    they are equal bit for bit (NaN equal to NaN)."""
+    import numpy as np
+
+    worst, equal = 0.0, True
+    for k, rows in a.get("values", {}).items():
+        x, y = np.array(rows), np.array(b.get("values", {}).get(k, []))
+        if x.shape != y.shape:
+            return {"bitwise_equal": False, "max_rel_diff": None}
+        same = (x == y) | (np.isnan(x) & np.isnan(y))
+        equal &= bool(same.all())
+        d = np.abs(x - y)[~same]
+        if d.size:
+            worst = max(worst, float(np.max(d / np.maximum(np.abs(x[~same]), 1e-300))))
+    return {"bitwise_equal": equal, "max_rel_diff": worst}
+
+
+def main(argv=None) -> int:
+    ap = parser(__doc__, "compile_scaling")
+    ap.add_argument("--ns", default="3,4,8,16,24,32,48,64")
+    ap.add_argument("--principles", default="vakonomic,chetaev")
+    ap.add_argument("--vs", default=None, help="another tree, measured in the same run")
+    ap.add_argument("--timeout", type=float, default=900.0, help="per run (seconds)")
+    ap.add_argument("--worker", default=None, help=argparse.SUPPRESS)
+    args = ap.parse_args(argv)
+    if args.worker:
+        spec = json.loads(args.worker)
+        print(json.dumps(work(spec["N"], spec["principle"])))
+        return 0
+    here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    trees = [("this", here)] + ([("vs", os.path.abspath(args.vs))] if args.vs else [])
+    ns = [3, 4, 8] if args.quick else [int(n) for n in args.ns.split(",")]
+    rows = []
+    for N in ns:
+        for principle in args.principles.split(","):
+            pair = {}
+            for label, tree in trees:
+                load = os.getloadavg()[0]
+                env = dict(os.environ, PYTHONPATH=tree)
+                r = run_worker(__file__, {"N": N, "principle": principle}, args.timeout,
+                               env=env)
+                row = {"N": N, "principle": principle, "tree": label, "load": round(load, 1),
+                       **{k: v for k, v in r.items() if k != "tree"}}
+                pair[label] = row
+                rows.append(row)
+                print(json.dumps({k: v for k, v in row.items() if k != "values"}),
+                      flush=True)
+            if "vs" in pair and "values" in pair["this"] and "values" in pair["vs"]:
+                pair["this"].update(_compare(pair["vs"], pair["this"]))
+    for r in rows:
+        r.pop("values", None)
+    summary = []
+    for label, tree in trees:
+        mine = [r for r in rows if r["tree"] == label and "compile_cpu" in r]
+        for principle in args.principles.split(","):
+            sel = [r for r in mine if r["principle"] == principle]
+            e = fit(sel)
+            if e is not None:
+                summary.append(f"{label} ({tree}), {principle}: compile CPU ~ "
+                               f"instructions^{e:.2f} over N >= 4")
+        for r in mine:
+            line = (f"{label}: N = {r['N']} {r['principle']}: {r['ops']} instructions, "
+                    f"compile {r['compile_cpu']:.2f} CPU s, rhs call {r['rhs_ns']:.0f} ns "
+                    f"(load {r['load']})")
+            if "bitwise_equal" in r:
+                line += (f"; kernels' values against vs: bitwise equal "
+                         f"{r['bitwise_equal']}, largest relative difference "
+                         f"{r['max_rel_diff']:.1e}")
+            summary.append(line)
+    write("compile_scaling", {
+        "title": "Compilation of the N-trailer's kernels against their size (straight-line "
+                 "instructions), and the cost of an rhs call",
+        "summary": summary,
+        "columns": ["N", "principle", "tree", "load", "ops", "rhs_ops", "aux_ops",
+                    "sing_ops", "compile_cpu", "rhs_cpu", "aux_cpu", "sing_cpu", "rhs_ns",
+                    "bitwise_equal", "max_rel_diff"],
+        "rows": rows}, args.out, args.quick)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
