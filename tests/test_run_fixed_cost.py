@@ -369,7 +369,7 @@ def test_a_finished_runs_trajectory_equals_the_general_routes(disk, save):
     assert quick.t_events is quick.t_events
     a, b = quick.diagnostics, general.diagnostics
     for name in ("steps", "rejected", "rhs_evaluations", "residual_max", "energy_drift",
-                 "projected", "status", "success"):
+                 "projected", "status", "success", "rows", "saved", "stop_row"):
         assert getattr(a, name) == getattr(b, name), name
     assert np.array_equal(quick["phi_t"], general["phi_t"])
     if save == "steps":         # (evaluation between rows re-takes the steps)
@@ -429,7 +429,7 @@ def test_a_finished_watching_runs_trajectory_equals_the_general_routes(disk, sav
     assert quick.t_events is quick.t_events
     a, b = quick.diagnostics, general.diagnostics
     for name in ("steps", "rejected", "rhs_evaluations", "residual_max", "energy_drift",
-                 "projected", "status", "success"):
+                 "projected", "status", "success", "rows", "saved", "stop_row"):
         assert getattr(a, name) == getattr(b, name), name
     assert np.array_equal(quick["phi_t"], general["phi_t"])
     if save == "steps":
