@@ -45,6 +45,26 @@ def _summary(expr) -> str:
     return f"expression of {dag.size(expr)} distinct parts in {shown or 'no symbols'}"
 
 
+def text(expr) -> str:
+    """``str(expr)``, or its summary when its printed tree would be large (counted on the
+    shared graph, never printed)."""
+    return str(expr) if tree_size(expr) <= TREE_CAP else f"<{_summary(expr)}>"
+
+
+def text_items(items, budget: int = TEXT_BUDGET) -> str:
+    """``items`` (strings) joined by ", " within ``budget`` characters; the ones past it
+    are counted."""
+    items = list(items)
+    out, used = [], 0
+    for i, item in enumerate(items):
+        if used + len(item) > budget:
+            out.append(f"... ({len(items) - i} more)")
+            break
+        out.append(item)
+        used += len(item) + 2
+    return ", ".join(out)
+
+
 def latex(expr, J=None) -> list[str]:
     """LaTeX of ``expr`` (dotted jets with ``J``) and ``\\text{<summary>}``, or only the
     summary when the expression is large: the forms to try, longest first."""
@@ -203,6 +223,8 @@ def comparison_latex(c) -> str:
 
 # ---------------------------------------------------------------------- runs
 def _trajectory_facts(traj) -> list[tuple[str, str]]:
+    from .numeric.trajectory import rows_text
+
     d = traj.diagnostics
     span = f"[{traj.t[0]:.6g}, {traj.t[-1]:.6g}]" if len(traj) else "empty"
     return [("principle", traj.scene.principle), ("rows", f"{len(traj)}, t in {span}"),
@@ -210,7 +232,8 @@ def _trajectory_facts(traj) -> list[tuple[str, str]]:
             ("stop reason", traj.stop_reason[:2000]),
             ("steps", f"{d.steps} (rejected {d.rejected}), {d.rhs_evaluations} rhs evaluations"),
             ("constraint residual max", f"{d.residual_max:.3e}"),
-            ("energy drift", f"{d.energy_drift:.3e} (relative {d.energy_drift_relative:.3e})")]
+            ("energy drift", f"{d.energy_drift:.3e} (relative {d.energy_drift_relative:.3e})"),
+            *((("figures", note),) if (note := rows_text(d)) else ())]
 
 
 def trajectory_html(traj) -> str:

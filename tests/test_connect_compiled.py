@@ -198,3 +198,62 @@ def test_verdicts_kernel_matches_the_graph(model, principle, end):
                     for v in dag.evaluate_numpy(exprs, point)], axis=-1)
     assert values.shape[1] == ref.shape[1]          # no holonomic block here
     assert np.allclose(values, ref, rtol=1e-12, atol=1e-12)
+
+
+@given(SEEDS, st.integers(1, 5), st.integers(1, 3), st.booleans())
+def test_kinetic_weights_match_numpy(seed, n, m, per_row):
+    """``verdicts._kinetic_weights`` (compiled) against B / sqrt(the path's mean of
+    |diag(B^T H B)|) in numpy, one H for every row or one per row; a zero column of B
+    is code 2 (the caller reads the whole of K), a NaN in H code 1 (no weighting)."""
+    rng = np.random.default_rng(seed)
+    rows = 9
+    B = rng.standard_normal((rows, n, m)) * 10.0 ** rng.integers(-3, 3, size=m)
+    H = rng.standard_normal((rows if per_row else 1, n, n))
+    H = H + np.swapaxes(H, 1, 2)
+    out = np.empty_like(B)
+    assert verdicts._compiled("kinetic")(B, H, out) == 0
+    K = np.swapaxes(B, 1, 2) @ H @ B
+    ref = B / np.sqrt(np.abs(np.diagonal(K, axis1=1, axis2=2)).mean(axis=0))
+    assert np.allclose(out, ref, rtol=1e-11, atol=0.0)
+    zero = B.copy()
+    zero[:, :, -1] = 0.0
+    assert verdicts._compiled("kinetic")(zero, H, out) == 2
+    bad = H.copy()
+    bad[0, 0, -1] = np.nan
+    assert verdicts._compiled("kinetic")(B, bad, out) == 1
+
+
+@pytest.mark.parametrize("model, start, end, constant", [
+    ("heisenberg", {"x": 0.0, "y": 0.0, "z": 0.0}, {"x": 1.0, "y": 0.5, "z": 0.2}, True),
+    ("chaplygin_sleigh", {"x": 0.0, "y": 0.0, "theta": 0.0},
+     {"x": 0.5, "y": 0.1, "theta": 0.3}, False),       # mass matrix depends on theta
+])
+def test_hessian_values_and_input_weights_match_the_graph(model, start, end, constant):
+    """``verdicts._hessian_values`` (a Hessian of the parameters alone evaluated once
+    per scene) against ``dag.evaluate_numpy`` of the Hessian at every sample of the
+    motion, bit for bit; the Gramian's weighted inputs (``_weighted_inputs``, compiled)
+    against B / sqrt(``_diagonal_scale``(B^T H B)'s mean) in numpy."""
+    c = jn.connect(get(model), "vakonomic", start, end, (0.0, 1.0))
+    tr, samples = c.trajectory, c._samples
+    scene, times, ys = tr.scene, samples.grid, samples.grid_y
+    system = scene.system
+    aux = np.empty((times.size, tr.layout.n_aux))
+    tr._kernels.aux_rows(times, np.ascontiguousarray(ys), tr._p, aux)
+    for multipliers in (False, True):
+        states, v, H = verdicts._hessian(scene, multipliers)
+        point = {system.J.t: times, **{s: scene.params[s.name] for s in system.parameters},
+                 **{s: ys[:, i] for i, s in enumerate(states) if s is not None},
+                 **{s: aux[:, a] for a, s in enumerate(system.dependent_velocities)}}
+        n = len(v)
+        ref = np.stack([np.broadcast_to(np.asarray(h, dtype=float), times.shape)
+                        for h in dag.evaluate_numpy(H, point)], axis=-1).reshape(-1, n, n)
+        ref = 0.5 * (ref + np.swapaxes(ref, 1, 2))
+        got = verdicts._hessian_values(tr, times, ys, multipliers)
+        assert (got.ndim == 2) == constant      # (f linear in the velocities here)
+        assert np.array_equal(np.broadcast_to(got, ref.shape), ref)
+    A, B = verdicts._linearized(tr, times, ys)
+    H = verdicts._hessian_values(tr, times, ys, multipliers=False)
+    K = np.swapaxes(B, 1, 2) @ H @ B
+    ref = B / np.sqrt(verdicts._diagonal_scale(K).mean(axis=0))
+    got = verdicts._weighted_inputs(tr, times, ys, np.ascontiguousarray(B))
+    assert np.allclose(got, ref, rtol=1e-12, atol=0.0)

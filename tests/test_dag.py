@@ -269,6 +269,49 @@ def test_build_is_sympys_constructor(args, head):
     assert got.args == want.args
 
 
+_RATIONALS = [sp.Integer(2), sp.Integer(-1), sp.Rational(1, 2), sp.Rational(-3, 2), sp.S.Zero,
+              sp.S.One]
+
+
+@given(children(), st.sampled_from(_RATIONALS), st.booleans())
+def test_build_distributes_a_number_over_a_sum_as_sympy_does(args, number, one):
+    """A rational number times a sum is the sum of the products, built as sympy builds
+    it (``Mul.flatten`` distributes; ``build`` makes the same sum itself), ones among the
+    factors or not."""
+    total = sp.Add(*args)
+    factors = [number, sp.S.One, total] if one else [total, number]
+    want, got = sp.Mul(*factors), dag.build(sp.Mul, factors)
+    assert type(got) is type(want)
+    assert got == want
+    assert got.args == want.args
+
+
+@given(children(), st.sampled_from(_RATIONALS))
+def test_build_power_of_a_sum_is_sympys(args, exponent):
+    """A sum to a rational power is the object sympy makes, also a sum of two terms with
+    I or an infinity (which sympy may rewrite)."""
+    x = sp.Symbol("x")
+    for base in (sp.Add(*args), sp.oo + sp.I * x, sp.I * sp.oo + x, x + sp.I):
+        want, got = sp.Pow(base, exponent), dag.build(sp.Pow, [base, exponent])
+        assert type(got) is type(want)
+        assert got == want
+        assert got.args == want.args
+
+
+def test_collector_paused_restores_the_collector():
+    """The garbage collector is off inside ``collector_paused`` (nested too) and as it was
+    after, also after an error."""
+    import gc
+
+    assert gc.isenabled()
+    with pytest.raises(KeyError), dag.collector_paused():
+        with dag.collector_paused():
+            assert not gc.isenabled()
+        assert not gc.isenabled()
+        raise KeyError
+    assert gc.isenabled()
+
+
 @pytest.mark.parametrize("number", [2.0, 3, -0.5])
 def test_build_takes_python_numbers_as_sympy_does(number):
     """A rule of Python floats in ``xreplace`` hands them to ``build``: sympy converts

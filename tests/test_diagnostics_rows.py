@@ -53,6 +53,9 @@ def test_save_final_is_an_end_point_difference_and_says_so(knife):
     assert d.energy_drift > 100 * f.energy_drift       # 1.1e-7 against 6.9e-10
     assert "over 2 rows (save='final')" in str(f) and f"its {d.steps} steps" in str(f)
     assert "these figures" not in str(d)
+    html = final._repr_html_()       # the notebook view says it too
+    assert "over 2 rows (save=&#x27;final&#x27;)" in html
+    assert "these figures" not in steps._repr_html_()
     sampled = knife.run(t_eval=np.linspace(0, 30, 31)).diagnostics
     assert (sampled.saved, sampled.rows) == ("t_eval", 31)
     assert "over 31 rows (t_eval)" in str(sampled)

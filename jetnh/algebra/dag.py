@@ -11,12 +11,15 @@ the graph once, remembering every node they have seen (by identity).
 
 from __future__ import annotations
 
+import contextlib
+import gc
 import hashlib
 
 import mpmath
 import sympy as sp
 from sympy.core.basic import _args_sortkey
 from sympy.core.function import ArgumentIndexError
+from sympy.core.mul import _keep_coeff
 from sympy.core.parameters import global_parameters
 from sympy.functions.elementary.exponential import ExpBase
 
@@ -34,6 +37,22 @@ def sympy_object(expr) -> sp.Basic:
         return sp.sympify(expr, strict=True)
     except (sp.SympifyError, TypeError) as exc:
         raise JetSpaceError(f"{expr!r} is not a sympy expression: {exc}") from None
+
+
+@contextlib.contextmanager
+def collector_paused():
+    """Python's cyclic garbage collector paused inside the block (as it was after):
+    building a graph of millions of sympy objects (acyclic: reference counting frees
+    them) otherwise sets off full collections that walk every live object, again and
+    again -- a fifth of a large derivation's time.  Cyclic garbage made inside is
+    collected after the block."""
+    was = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if was:
+            gc.enable()
 
 
 def _roots(expr) -> list:
@@ -143,22 +162,38 @@ def build(head, args):
     same order; any child that could combine or expand (a number beyond one coefficient,
     a nested sum or product, a repeated term or base, a power of a number, an
     exponential, anything non-commutative or unusual, a Python number that sympy would
-    convert: ``xreplace`` with a rule of floats) leaves it to sympy."""
+    convert: ``xreplace`` with a rule of floats) leaves it to sympy.  Likewise a rational
+    number times a sum, which sympy distributes (``_distributed``: the sum of the
+    products is built here), and a sum to a rational power, which sympy leaves as it is
+    after costly questions (``_plain_power``)."""
     if head is sp.Add:
         kept = _add_terms(args)
     elif head is sp.Mul:
         kept = _mul_factors(args)
+        if kept is None and global_parameters.evaluate:
+            terms = _distributed(args)
+            if terms is not None:
+                return build(sp.Add, terms)
+    elif head is sp.Pow and global_parameters.evaluate and _plain_power(*args):
+        return sp.Pow(*args, evaluate=False)
     else:
         kept = None
     if kept is None or not global_parameters.evaluate:
         return head(*args)
-    if len(kept) < 2:
-        return kept[0] if kept else head.identity
-    return head._exec_constructor_postprocessors(head._from_args(kept, True))
+    coeff, rest = kept
+    if not rest:
+        return head.identity if coeff is None else coeff
+    if coeff is None and len(rest) == 1:
+        return rest[0]
+    rest.sort(key=_args_sortkey)
+    if coeff is not None:
+        rest.insert(0, coeff)
+    return head._exec_constructor_postprocessors(head._from_args(rest, True))
 
 
 def _add_terms(args):
-    """The children of ``Add(*args)`` when no two terms combine (``build``), else None."""
+    """The number and the other children of ``Add(*args)`` (unsorted) when no two terms
+    combine (``build``), else None."""
     coeff, rest, terms = None, [], set()
     for a in args:
         if a is sp.S.Zero:
@@ -185,13 +220,12 @@ def _add_terms(args):
             return None
         terms.add(s)
         rest.append(a)
-    rest.sort(key=_args_sortkey)
-    return rest if coeff is None else [coeff, *rest]
+    return coeff, rest
 
 
 def _mul_factors(args):
-    """The children of ``Mul(*args)`` when no two factors combine (``build``), else
-    None."""
+    """The number and the other children of ``Mul(*args)`` (unsorted) when no two
+    factors combine (``build``), else None."""
     coeff, rest, bases = None, [], set()
     for a in args:
         if a is sp.S.One:
@@ -220,8 +254,38 @@ def _mul_factors(args):
         rest.append(a)
     if coeff is not None and len(rest) == 1 and rest[0].is_Add:
         return None                     # a number times a sum is distributed
-    rest.sort(key=_args_sortkey)
-    return rest if coeff is None else [coeff, *rest]
+    return coeff, rest
+
+
+def _distributed(args):
+    """The terms of ``Mul(*args)`` when sympy distributes a rational number over a sum
+    (``Mul.flatten``: two factors besides ones, a rational and a sum with coefficient
+    one), each the number times a term (``_keep_coeff``, as sympy), else None: the sum
+    of them is then built as any other (``build``), not by ``Add.flatten``."""
+    rest = [a for a in args if a is not sp.S.One]
+    if len(rest) != 2 or not all(isinstance(a, sp.Basic) for a in rest):
+        return None
+    a, b = rest
+    if b.is_Rational:
+        a, b = b, a
+    if not a.is_Rational or a.is_zero:
+        return None
+    r, b = b.as_coeff_Mul()
+    if r is not sp.S.One or not b.is_Add or not global_parameters.distribute or (
+            not b.is_commutative):
+        return None
+    return [_keep_coeff(a, t) for t in b.args]
+
+
+def _plain_power(base, exp) -> bool:
+    """Whether sympy leaves ``base**exp`` as it is (``Pow.__new__``): a sum not a
+    number to a rational power but 0 and 1, which ``Add._eval_power`` rewrites only for
+    two terms, one infinite, the other a multiple of I -- whose asking (``is_infinite``
+    of each term, an assumptions query through the whole term) is what costs: with no
+    I in the sum it is not asked."""
+    return (isinstance(base, sp.Add) and isinstance(exp, sp.Rational)
+            and exp is not sp.S.Zero and exp is not sp.S.One and not base.is_number
+            and (len(base.args) != 2 or not has(base, sp.I)))
 
 
 def _plain(e) -> bool:

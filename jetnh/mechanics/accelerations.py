@@ -240,6 +240,7 @@ def _weighted(M: sp.Matrix, weights, parts) -> sp.Matrix:
                    if X is not None and w != 0 and X[i, j] != 0]))
 
 
+@dag.collector_paused()
 def solve(system, kappa: str = "none", explicit: bool = False, multipliers=(),
           rates=()) -> dict:
     """q''^s (and the ``rates`` of ``multipliers``) of the rows (*) on the constraints.

@@ -61,7 +61,9 @@ def named(prefix: str, coordinates) -> tuple[sp.Symbol, ...]:
 
 
 def multiplier_symbols(system, prefix: str = "lambda") -> tuple[sp.Symbol, ...]:
-    """One multiplier per constraint, named after its dependent coordinate: lambda_x, ..."""
+    """One multiplier per constraint, named after the dependent coordinate it is solved
+    for: lambda_<dependent[a]> multiplies the a-th constraint (``System.dependent`` is
+    paired with ``System.constraints``), and qdot^a - phi^a in the explicit forms."""
     return named(prefix, system.dependent)
 
 

@@ -47,6 +47,50 @@ class Classification:
         return ", ".join(flags)
 
 
+class ExplicitForm(FrozenDict):
+    """``System.phi``: a read-only dict, dependent velocity -> phi^alpha, whose repr keeps
+    to the text budget (a large expression shows as its size and symbols)."""
+
+    __slots__ = ()
+
+    def __repr__(self):
+        from ..display import text, text_items
+
+        return "{" + text_items(f"{v}: {text(e)}" for v, e in self.items()) + "}"
+
+    __str__ = __repr__
+
+    def __reduce__(self):
+        return ExplicitForm, (dict(self),)
+
+
+def paired_columns(jacobian, cols) -> list[int]:
+    """The columns ``cols`` of df/dqdot (k x n) reordered so that the a-th constraint
+    contains the a-th column's velocity (a matching on the nonzero entries, the given
+    order kept where it pairs so); as given when no such order exists (then the block
+    is singular).  ``System.dependent`` is in this order."""
+    k = len(cols)
+    if k < 2:
+        return list(cols)
+    nonzero = [[jacobian[i, c] != 0 for c in cols] for i in range(k)]
+    row_of = [j if nonzero[j][j] else None for j in range(k)]      # column -> its row
+
+    def augment(i, seen):
+        for j in range(k):
+            if nonzero[i][j] and j not in seen:
+                seen.add(j)
+                if row_of[j] is None or augment(row_of[j], seen):
+                    row_of[j] = i
+                    return True
+        return False
+
+    for i in range(k):
+        if i not in row_of and not augment(i, set()):
+            return list(cols)
+    col_of = {i: j for j, i in enumerate(row_of)}
+    return [cols[col_of[i]] for i in range(k)]
+
+
 #: the most solutions (Bezout's bound) of nonlinear constraints solved in closed form
 MAX_ROOTS = 2
 
@@ -74,7 +118,15 @@ class System(Frozen):
     dependent : Symbol, str or list, optional
         The split: the coordinates whose velocities the constraints determine (one per
         constraint; Symbols or names, in a list or one alone, or names in one string
-        ``"x y"``); chosen automatically when omitted.
+        ``"x y"``); chosen automatically when omitted.  ``dependent[a]`` is the
+        coordinate the a-th constraint is solved for, whose velocity it contains: the
+        given order is kept where it pairs so, otherwise the coordinates are reordered
+        to pair (``System.dependent`` is in the order of ``constraints``).  The
+        multiplier lambda_<dependent[a]> of every principle belongs to that pair: it
+        multiplies the a-th constraint, and qdot^a - phi^a in the explicit forms (the
+        same multiplier where df^a/dqdot^alpha is the identity, constraints solved for
+        their coordinates; otherwise the explicit forms' multipliers are
+        (df/dqdot^alpha)^T lambda on the constraints).
     branch : int, optional
         Selects a root (from 0) when the constraints are nonlinear in the dependent
         velocities and have several solutions for them; checked at construction.
@@ -126,6 +178,7 @@ class System(Frozen):
     False
     """
 
+    @dag.collector_paused()
     def __init__(self, J: JetSpace, L, constraints=(), dependent=None, branch: int | None = None,
                  defaults=None, name: str = "", forces=None, dissipation=None, *,
                  check_branch: bool = True, speeds=None):
@@ -151,7 +204,7 @@ class System(Frozen):
         self._check_names()
         self._branch = inputs.branch_arg(branch)
         self._check_velocities()
-        self.dependent = self._choose_split(dependent)
+        self.dependent = self._paired(self._choose_split(dependent))
         dep = set(self.dependent)
         self.independent = tuple(s for s in J.q if s not in dep)
         self._check_solvable()
@@ -348,6 +401,12 @@ class System(Frozen):
                 "per constraint")
         return tuple(dep)
 
+    def _paired(self, dependent) -> tuple[sp.Symbol, ...]:
+        """``dependent`` reordered so that the a-th constraint contains the velocity of the
+        a-th coordinate (``paired_columns``)."""
+        cols = paired_columns(self.jacobian, [self.J.q.index(d) for d in dependent])
+        return tuple(self.J.q[c] for c in cols)
+
     def _auto_split(self) -> tuple[sp.Symbol, ...]:
         """Prefer coordinates, last first (the paper's alpha = m+1..n), whose velocity enters
         some constraint linearly with a constant coefficient; keep the block invertible."""
@@ -442,15 +501,30 @@ class System(Frozen):
 
     @cached_property
     def is_affine(self) -> bool:
-        """Whether every constraint is affine in the velocities."""
+        """Whether every constraint is affine in the velocities: df/dqdot free of them.
+        A velocity under Abs or sign (kept as sqrt(u**2)) is only piecewise affine: not
+        affine (its B would be undefined at u = 0 and differ on either side)."""
         qd = set(self.J.qd)
-        return all(sp.expand(sp.diff(e, v)) == 0
-                   for e in self.jacobian for v in e.free_symbols & qd)
+
+        def non_smooth(e):
+            return any(isinstance(p, sp.Pow) and not p.exp.is_integer
+                       and dag.free_symbols(p.base) & qd for p in dag.nodes(e))
+
+        return all(not non_smooth(e) and all(sp.expand(sp.diff(e, v)) == 0 for v in vs)
+                   for e in self.jacobian for vs in [dag.free_symbols(e) & qd] if vs)
 
     # ------------------------------------------------------------------ explicit form
     @cached_property
+    @dag.collector_paused()
     def phi(self) -> dict[sp.Symbol, sp.Expr]:
-        """The explicit form: dependent velocity qdot^alpha -> phi^alpha(t, q, qdot^mu)."""
+        """The explicit form: dependent velocity qdot^alpha -> phi^alpha(t, q, qdot^mu).
+
+        A read-only dict whose repr keeps to the text budget (``ExplicitForm``); the
+        values are shared graphs (``jetnh.algebra.dag``): print a large one with
+        ``jetnh.algebra.shared.shared_form([(None, e)]).text()``, not ``str``."""
+        return ExplicitForm(self._explicit_solution())
+
+    def _explicit_solution(self) -> dict:
         vel = self.dependent_velocities
         if not vel:
             if self._branch is not None:
@@ -584,8 +658,9 @@ class System(Frozen):
         """The affine form (33)-(34): B^alpha_rho with rho = 0 (time) then the independent mu."""
         if not self.is_affine:
             raise ConstraintError(
-                "the constraints are not affine in the velocities; B^alpha_rho exists only "
-                "for affine constraints (use phi / Phi for the general explicit form)")
+                "the constraints are not affine in the velocities (a velocity under Abs or "
+                "sign is only piecewise affine); B^alpha_rho exists only for affine "
+                "constraints (use phi / Phi for the general explicit form)")
         vel = self.independent_velocities
         cols = []
         for v, phi in ((v, self.phi[v]) for v in self.dependent_velocities):
@@ -596,7 +671,11 @@ class System(Frozen):
     # ------------------------------------------------------------------ L~, p, T
     @cached_property
     def L_tilde(self) -> sp.Expr:
-        """The embedded Lagrangian L~(t, q, qdot^mu) = L(t, q, qdot^mu, phi)."""
+        """The embedded Lagrangian L~(t, q, qdot^mu) = L(t, q, qdot^mu, phi).
+
+        A shared graph (``jetnh.algebra.dag``): for chains its printed tree is exponentially
+        long; print it with ``jetnh.algebra.shared.shared_form([(None, L_tilde)]).text()``
+        or ``jetnh.display.text`` (its size and symbols when large)."""
         return self.on_constraints(self.L)
 
     @cached_property
@@ -608,18 +687,27 @@ class System(Frozen):
         """T^alpha_mu = -[phi^alpha]_mu - dphi^alpha/dq^beta dphi^beta/dqdot^mu (text under (18)).
 
         Rows: dependent alpha; columns: independent mu.  With ``on_constraints`` the
-        dependent velocities are replaced by phi.
+        dependent velocities are replaced by phi.  The entries are shared graphs
+        (``jetnh.algebra.dag``), built in time linear in the shared size; for chains their
+        printed trees are exponentially long: print them with
+        ``jetnh.algebra.shared.shared_form([(None, e) for e in T]).text()``.
         """
-        J = self.J
+        J, Phi = self.J, self.Phi
         rows = []
         for a, va in enumerate(self.dependent_velocities):
             ph = self.phi[va]
             eul = J.euler(ph, wrt=self.independent)
-            rows.append([-eul[m] - sum((dag.diff(ph, qb) * self.Phi[b, m]
-                                        for b, qb in enumerate(self.dependent)), sp.S.Zero)
+            cache: dict = {}                # d phi^alpha / d q^beta once per row
+            dq = [dag.diff(ph, qb, cache=cache) for qb in self.dependent]
+            rows.append([-eul[m] - sp.Add(*[d * Phi[b, m] for b, d in enumerate(dq) if d != 0])
                          for m in range(len(self.independent))])
         T = sp.Matrix(rows) if rows else sp.zeros(0, len(self.independent))
-        return T.applyfunc(self.on_constraints) if on_constraints else T
+        if not on_constraints or not self.phi:
+            return T
+        if any(dag.has(e, sp.Derivative) for e in T):
+            return T.applyfunc(self.on_constraints)
+        # every entry restricted in one walk of the shared graph (a tree walk is exponential)
+        return sp.Matrix(T.rows, T.cols, dag.xreplace(list(T), self.phi))
 
     # ------------------------------------------------------------------ classification
     def frobenius(self):
@@ -744,9 +832,16 @@ class System(Frozen):
         return system_latex(self)
 
     def __repr__(self):
-        extra = (f", forces={{{', '.join(f'{q.name}: {e}' for q, e in self.forces.items())}}}"
+        """Within the text budget: a large expression shows as its size and symbols, and
+        list entries past the budget are counted."""
+        from ..display import TEXT_BUDGET, text, text_items
+
+        share = TEXT_BUDGET // 5            # L, constraints, forces, dissipation, holonomic
+        extra = (f", forces={{{text_items((f'{q.name}: {text(e)}' for q, e in self.forces.items()), share)}}}"
                  if self.forces else "")
-        extra += f", dissipation={self.dissipation}" if self.dissipation != 0 else ""
-        extra += f", holonomic={list(self.holonomic)}" if self.holonomic else ""
-        return (f"System(L={self.L}, constraints={list(self.constraints)}, "
-                f"dependent={[s.name for s in self.dependent]}{extra})")
+        extra += f", dissipation={text(self.dissipation)}" if self.dissipation != 0 else ""
+        extra += (f", holonomic=[{text_items(map(text, self.holonomic), share)}]"
+                  if self.holonomic else "")
+        return (f"System(L={text(self.L)}, "
+                f"constraints=[{text_items(map(text, self.constraints), share)}], "
+                f"dependent=[{text_items((repr(s.name) for s in self.dependent), share)}]{extra})")

@@ -5,8 +5,8 @@ with its source, its closed-form solutions and its first integrals (each checked
 ``tests/test_models.py``).  ``model(name)`` is the ``Model`` (``jetnh.modelfile.Model``,
 the record model files give too): the System with a default initial state and time span
 (what ``jetnh simulate NAME`` uses); ``info(name)`` is the catalogue entry that builds
-it.  Scalable families take options, e.g. ``get("n_trailer", N=4)`` or, on the command
-line, ``n_trailer:N=4``.
+it.  Scalable families take options, e.g. ``get("n_trailer", N=4)`` or, as on the command
+line and in ``Model.name``, ``get("n_trailer:N=4")``.
 
 =======================  ==============================================================
 rolling_disk             vertical rolling disk (the paper's Example 1)
@@ -61,28 +61,68 @@ def _entry(name: str) -> ModelInfo:
     try:
         return INFO[name]
     except (KeyError, TypeError):
+        base = name.partition(":")[0] if isinstance(name, str) else None
+        hint = ""
+        if base in INFO and INFO[base].options:
+            key = next(iter(INFO[base].options))
+            hint = (f"; options are keyword arguments, get({base!r}, {key}=4), or "
+                    f"KEY=VALUE after the name, '{base}:{key}=4'")
         raise ModelFileError(
-            f"no model named {name!r} in the catalogue; known: {', '.join(sorted(CATALOGUE))}"
-        ) from None
+            f"no model named {name!r} in the catalogue{hint}; known: "
+            f"{', '.join(sorted(CATALOGUE))}") from None
+
+
+def _split(name, options: dict) -> tuple:
+    """``name:K=V,...`` (the spelling of the command line and of ``Model.name``) as the
+    catalogue name and its options (integers, read by int()), joined to ``options``."""
+    from ..errors import ModelFileError
+
+    if not (isinstance(name, str) and ":" in name):
+        return name, options
+    base, _, text = name.partition(":")
+    entry = _entry(base)
+    key = next(iter(entry.options), "N")
+    opts = {}
+    for item in filter(None, (s.strip() for s in text.split(","))):
+        k, sep, v = (t.strip() for t in item.partition("="))
+        if not sep:
+            raise ModelFileError(
+                f"model options are KEY=VALUE, got {item!r} in {name!r}: write "
+                f"'{base}:{key}={item}' or get({base!r}, {key}={item})")
+        if k in opts or k in options:
+            raise ModelFileError(f"model option {k} is given twice for {name!r}; give it once")
+        try:
+            opts[k] = int(v)
+        except ValueError:
+            raise ModelFileError(
+                f"model option {k} must be an integer, got {v!r} in {name!r}") from None
+    return base, {**opts, **options}
 
 
 def get(name: str, **options):
-    """The catalogue model ``name`` (a System with defaults); options such as N=4."""
+    """The catalogue model ``name`` (a System with defaults); options such as N=4, as
+    keywords or after the name (``"n_trailer:N=4"``)."""
+    name, options = _split(name, options)
     return _entry(name).system(**options)
 
 
 def model(name: str, **options) -> Model:
-    """The catalogue model ``name`` with its defaults (a ``Model``); options such as N=4."""
+    """The catalogue model ``name`` with its defaults (a ``Model``); options such as N=4,
+    as keywords or after the name (``"n_trailer:N=4"``, what ``Model.name`` holds)."""
+    name, options = _split(name, options)
     return _entry(name).model(**options)
 
 
 def info(name: str) -> ModelInfo:
-    """The catalogue entry: factory, options, default initial state and time span."""
+    """The catalogue entry: factory, options, default initial state and time span (options
+    after the name are checked, then left to the entry's ``model``/``system``)."""
+    name, options = _split(name, {})
     return _entry(name)
 
 
 def initial(name: str, **options) -> dict:
     """The default initial state of a catalogue model (names -> floats; others are 0)."""
+    name, options = _split(name, options)
     return _entry(name).initial(**options)
 
 

@@ -10,9 +10,14 @@ unchanged when the constraints are recombined (f -> M f) and, by the Cauchy-Bine
 formula, summing to 1 over all splits; so among the N splits whose minor is not
 identically zero one has m >= 1/N wherever A has rank k.  A run watches the edge of its
 chart, m_alpha = eps with eps = 1/(4N), as a terminal event (``edge``: det(A_alpha)^2 -
-eps det(A A^T) crossing zero downwards) located on the dense output like any event.  There
-the run continues in the split of largest measure (>= 4 eps: hysteresis, no chattering),
-from the same point, with the state mapped exactly:
+eps det(A A^T) crossing zero downwards).  The step in which it is reached is not kept
+(its stages may have run on toward the chart's singular set, or past it: a step that
+jumps the whole band stops at the singular set, and is taken the same way): the run goes
+back to the step's start, where the chart is regular, and continues there in the split
+of largest measure if that is at least 2 eps (hysteresis, no chattering), else reaches
+the edge in steps of an eighth (``_approach``) and continues there.  Fixed steps so
+switch on their grid, each step no longer than h.  From the switch point the run goes on
+with the state mapped exactly:
 
 - coordinates unchanged; the velocities re-split (the dependent ones, computed from the
   constraints, become states and the states that are now dependent drop out);
@@ -42,7 +47,7 @@ with callable events (functions of one split's state vector), systems with more 
 constraints, scipy's methods (``scipy-<M>``) and ``split="fixed"`` keep their split and
 stop at its edge as before (dla and dvi never solve for the dependent velocities, so no
 split's edge stops them).  The compiled methods dop853, dopri5, rk4 and radau switch;
-``Scene.run`` calls ``run``, ensembles and sweeps ``begin`` and ``go_on`` (the same
+``Scene.run`` calls ``run``, ensembles and sweeps ``begin`` and ``follow`` (the same
 continuation, so their runs equal single runs bit for bit).
 
 A switched run is one ``Trajectory`` of the scene: its rows are in the scene's state
@@ -57,7 +62,7 @@ those of the other, so the switch time's dependence on y0 drops out and S goes a
 as S_beta = D_y S_alpha + (0 | D_p), D the derivative of the chart change at the switch
 point (``Chart.carry``; from the graph, compiled once per pair of charts).  The rows
 of other charts, S too, are mapped home the same way.  Ensembles with sensitivities
-switch as their single runs do (``go_on`` with ``sens``).
+switch as their single runs do (``follow`` with ``sens``).
 """
 
 from __future__ import annotations
@@ -73,9 +78,10 @@ import sympy as sp
 from ..algebra import dag, linalg
 from ..errors import JetnhError
 from ..mechanics import principles
+from ..mechanics.system import paired_columns
 from .methods import projection
-from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, FINISHED, SINGULAR, STATUS_TEXT,
-                              STOPPED)
+from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, FINISHED, SINGULAR,
+                              STATUS_TEXT, STOPPED)
 from . import arguments, chart_change, interrupt, loops, methods
 from .events import Event, OwnEvent, as_events
 from .kernels.calls import Kernel, Rows
@@ -116,8 +122,8 @@ def splits(system) -> list[tuple[str, ...]]:
     own = tuple(s.name for s in system.dependent)
     out = [own]
     for cols in combinations(range(J.n), k):
-        names = tuple(J.q[c].name for c in cols)
-        if names != own and linalg.numeric_rank(A[:, list(cols)]) == k:
+        names = tuple(J.q[c].name for c in paired_columns(A, cols))    # as with_split's
+        if set(names) != set(own) and linalg.numeric_rank(A[:, list(cols)]) == k:
             out.append(names)
     return out
 
@@ -685,7 +691,9 @@ def run(home, plan, y0, p, build):
     out, wall, dense, ahead = interrupt.call(_ahead, halt, plan.limit,
                                              (at, plan, y0, p, user, build, halt, tic))
     status, n_ev = out[0], out[10]
-    if ahead is None and not (status == EVENT and out[8][n_ev - 1] == len(user)):
+    if ahead is None and not (status == EVENT and out[8][n_ev - 1] == len(user)
+                              or status == SINGULAR):
+        # (not at the edge, nor stopped singular: perhaps past it, ``follow``)
         if status == FINISHED and not user and sens is None:        # most runs: at once
             return Trajectory._finished(home, (out[1], out[2], out[3]), p, method,
                                         _FINISHED_TEXT, (out[4], wall, home.projected),
@@ -720,8 +728,8 @@ def _ahead(at, plan, y0, p, user, build, halt, tic):
         dense = dense[status == EVENT or status == SINGULAR]
         if sens is not None:        # the run's own (``build`` adds its rows)
             dense = dict(dense)
-    if (status == EVENT and plan.limit is None and sens is None
-            and out[8][out[10] - 1] == len(user)):
+    if ((status == EVENT and out[8][out[10] - 1] == len(user) or status == SINGULAR)
+            and plan.limit is None and sens is None):
         try:
             return out, wall, dense, _onward_from(at, plan, out, wall, dense, y0, p, user,
                                                   build, tic, halt)
@@ -791,9 +799,11 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
         h_fixed = (t1 - t) / ctl.n_steps if ctl.n_steps > 0 else 0.0
     if tic is None:
         tic = time.perf_counter()
+    near = None             # (span, depth): the shorter steps of an approach to the edge
     while True:
         scene, kern = chart.scene, chart.kernels
         ksens = chart.sensitivity_kernels if sens else None
+        t_to = t1
         if ran is not None:
             (out, wall, ce, watch, seg_dense), ran = ran, None
             seg_ctl, seg_te = ctl, te
@@ -801,40 +811,71 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
             ce = at.events(chart, user, edge, halt is not None)
             watch = chart.watch(ce, checked, singular_tol, user_max, counts, edge)
             seg_ctl, seg_te = ctl, te
-            if parts or not first:
-                n_steps = (max(1, round(abs(t1 - t) / abs(h_fixed))) if ctl.n_steps > 0
-                           else 0)
-                seg_ctl = _onward(ctl, max(steps_left, 0), n_steps)
+            if parts or not first or near is not None:
+                seg_ctl = _onward(ctl, max(steps_left, 0), _n_steps(ctl, t, t1, h_fixed))
+                if near is not None:        # the part of the step that crossed the edge
+                    t_to, seg_ctl = _approach(seg_ctl, t, t1, h_fixed, near[0])
                 if mode == AT_T_EVAL:
                     seg_te = np.ascontiguousarray(te[direction * (te - t) > 0.0])
             left = None if limit is None else limit - (time.perf_counter() - tic)
             seg_dense = None if dense is None else dict(dense)
             if seg_dense is not None and sens:
                 seg_dense["rhs"] = ksens
-            out, wall = chart.call(method, ce, watch, t, t1, y, p, seg_ctl, seg_te, mode,
+            out, wall = chart.call(method, ce, watch, t, t_to, y, p, seg_ctl, seg_te, mode,
                                    newton, left, ksens, halt)
             if seg_dense is not None:
                 seg_dense["partial_last"] = int(out.status) in (EVENT, SINGULAR)
         n_ev = int(out.n_ev)
-        hit = (edge and int(out.status) == EVENT and n_ev > 0
+        status = int(out.status)
+        hit = (edge and status == EVENT and n_ev > 0
                and int(out.ev_i[n_ev - 1]) == len(user))
+        back = None
+        depth = 0 if near is None else near[1] + 1
+        if (((hit and near is None) or (edge and status == SINGULAR)) and depth <= _DEPTH
+                and not (limit is not None and time.perf_counter() - tic >= limit)):
+            # the step that reached the edge (or the singular set past it) is not kept:
+            # the piece ends at its start, where the chart is still regular, and goes on
+            # to the edge in shorter steps (``_approach``: located there, as it is)
+            back = _step_start(chart, method, out, t, y, t_to, p, seg_ctl, mode, newton,
+                               ce, watch, ksens, direction, halt)
+        if back is not None:
+            t_k, y_k, span = back
+            out = _cut(out, mode, t_k, y_k, len(user), direction)
+            if seg_dense is not None:
+                seg_dense["partial_last"] = False
+        near = None
         if build is None:
             seg = out
         else:
             seg = build(scene, method, out, wall, kern, ce, p, t, y, singular_tol, checked,
                         limit, seg_dense, n_events=len(user), sens=ksens)
+        n_ev = int(out.n_ev)
         if user and n_ev:           # the occurrences of each user event
             counts += np.bincount(out.ev_i[:n_ev], minlength=len(counts))[:len(counts)]
-        parts.append((chart, seg, (t, y, t1, seg_ctl, watch, ce, ksens)))
+        if back is None or t_k != t or not parts:     # (not a piece of no steps)
+            parts.append((chart, seg, (t, y, t_to, seg_ctl, watch, ce, ksens)))
         steps_left -= int(out.stats[0])
-        if not hit:
+        if not hit and back is None:
+            if t_to != t1 and int(out.status) == FINISHED:     # an approach's end
+                t, y = float(out.t), np.ascontiguousarray(out.y)
+                continue
             break
-        t = float(out.ev_t[n_ev - 1])
-        ys = np.ascontiguousarray(out.ev_y[n_ev - 1])
-        if limit is not None and time.perf_counter() - tic >= limit:
-            break
-        target = (None if _at_end(t, t1)
-                  else _switched(at, chart, t, ys, p, sens, halt is not None))
+        if back is not None:
+            t, ys = t_k, y_k
+            # the switch at the step's start where another split is regular enough
+            # (the measure at least twice the edge's), else at the edge
+            target = (None if _at_end(t, t1)
+                      else _switched(at, chart, t, ys, p, sens, halt is not None))
+            if target is None:
+                y, near = ys, (span, depth)
+                continue
+        else:
+            t = float(out.ev_t[n_ev - 1])
+            ys = np.ascontiguousarray(out.ev_y[n_ev - 1])
+            if limit is not None and time.perf_counter() - tic >= limit:
+                break
+            target = (None if _at_end(t, t1)
+                      else _switched(at, chart, t, ys, p, sens, halt is not None))
         if target is None:          # no better split here: go on without the edge
             edge, y = False, ys
             continue
@@ -842,6 +883,81 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
         switches.append({"t": t, "from": list(chart.split), "to": list(new.split)})
         chart = new
     return parts, switches
+
+
+#: how many times a step that crossed a chart's edge is cut short (each time to an
+#: eighth, ``_approach``) before its located edge is taken as it is
+_DEPTH = 4
+#: the parts an approach cuts the step that crossed the edge into
+_PARTS = 8
+#: the t_eval of a loop run again to find the start of a step (none)
+_NO_TIMES = np.zeros(0)
+
+
+def _n_steps(ctl, t, t1, h_fixed) -> int:
+    """The fixed steps from ``t`` to ``t1``, none longer than ``h_fixed`` (0: adaptive)."""
+    if ctl.n_steps <= 0:
+        return 0
+    return max(1, math.ceil(abs(t1 - t) / abs(h_fixed) * (1.0 - 1e-12)))
+
+
+def _approach(ctl, t, t1, h_fixed, span):
+    """``(end, step control)`` of the run from ``t``, the start of a step that crossed
+    the chart's edge, to that edge in steps of a ``_PARTS``-th of ``span`` (from ``t`` to
+    where that step stopped), over the whole step of a fixed-step run (equal steps) or
+    twice ``span`` (adaptive steps no longer than that)."""
+    if ctl.n_steps > 0:
+        span = math.copysign(abs(h_fixed), t1 - t)
+    end = t + (span if ctl.n_steps > 0 else 2.0 * span)     # (the edge located roughly)
+    if abs(end - t) >= abs(t1 - t):
+        end = t1
+    if ctl.n_steps > 0:
+        return end, _onward(ctl, ctl.max_steps, _PARTS)
+    c = list(ctl)
+    c[_MAX_STEP] = min(ctl.max_step, abs(span) / _PARTS)
+    return end, ctl._make(c)
+
+
+def _step_start(chart, method, out, t, y, t_to, p, ctl, mode, newton, ce, watch, sens,
+                direction, halt):
+    """``(t_k, y_k, span)``: the start of the step in which the piece ``out`` (from
+    (t, y) to ``t_to``) stopped, the state there and the span from there to the stop.
+    The rows of every step are in ``out`` (mode EVERY_STEP) or in the same loop run
+    again keeping them (the same steps, bit for bit: a run's rows do not depend on what
+    it keeps)."""
+    t_stop = float(out.t)
+    if mode != EVERY_STEP:
+        out, _ = chart.call(method, ce, watch, t, t_to, y, p, ctl, _NO_TIMES, EVERY_STEP,
+                            newton, None, sens, halt)
+    ts, n = out.ts, int(out.n_out)
+    k = n - 1
+    while k >= 0 and not direction * (t_stop - ts[k]) > 0.0:
+        k -= 1
+    if k <= 0:
+        return t, np.ascontiguousarray(y), t_stop - t
+    return float(ts[k]), np.ascontiguousarray(out.ys[k, :y.shape[0]]), t_stop - float(ts[k])
+
+
+def _cut(out, mode, t_k, y_k, n_user, direction):
+    """The loop's result ``out`` cut at ``t_k`` (the start of the step it stopped in,
+    state ``y_k``): a finished run to there, its output rows and user events after it
+    dropped (the next piece has them)."""
+    ts, ys, n = out.ts, out.ys, int(out.n_out)
+    keep = n
+    while keep > 0 and direction * (ts[keep - 1] - t_k) > 0.0:
+        keep -= 1
+    ts, ys = ts.copy(), ys.copy()
+    if mode == ENDPOINTS:       # (the first row and the last)
+        keep = min(keep, 1)
+    if mode != AT_T_EVAL and not (keep and ts[keep - 1] == t_k):
+        ts[keep], ys[keep, :y_k.shape[0]] = t_k, y_k
+        keep += 1
+    n_ev = int(out.n_ev)
+    m = 0
+    while m < n_ev and direction * (t_k - out.ev_t[m]) >= 0.0 and out.ev_i[m] < n_user:
+        m += 1
+    return out._replace(status=FINISHED, ts=ts, ys=ys, n_out=keep, t=t_k, y=y_k.copy(),
+                        n_ev=m, sing_index=-1)
 
 
 def _onward(ctl, max_steps, n_steps):
@@ -853,8 +969,8 @@ def _onward(ctl, max_steps, n_steps):
     return ctl._make(c)
 
 
-_FIRST, _MAX_STEPS, _N_STEPS = (Control._fields.index(f)
-                                for f in ("first_step", "max_steps", "n_steps"))
+_FIRST, _MAX_STEPS, _N_STEPS, _MAX_STEP = (Control._fields.index(f) for f in (
+    "first_step", "max_steps", "n_steps", "max_step"))
 
 
 def _at_end(t, t1) -> bool:
@@ -1203,40 +1319,22 @@ def _rerun(chart, seg, rerun, times, p) -> np.ndarray:
     return rows
 
 
-def go_on(at, method, user, t1, p, t, y, counts, ctl, steps_left, te, mode, checked,
-          singular_tol, newton, limit, h_fixed, build, sens=False):
-    """An ensemble's run that stopped at its chart's edge at (t, y) (the scene's own
-    chart), taken on as ``Scene.run`` does: ``(parts, switches)`` of ``follow``
-    (``sens``: ``y`` followed by its sensitivities)."""
-    own = at.own
-    target = None if _at_end(t, t1) else _switched(at, own, t, y, p, sens)
-    if target is None:
-        return follow(at, method, own, t, y, t1, p, user, counts, ctl, steps_left, te, mode,
-                      None, checked, singular_tol, newton, limit, build, first=False,
-                      h_fixed=h_fixed, edge=False, sens=sens)
-    chart, y_new = target
-    parts, switches = follow(at, method, chart, t, y_new, t1, p, user, counts, ctl,
-                             steps_left, te, mode, None, checked, singular_tol, newton,
-                             limit, build, first=False, h_fixed=h_fixed, sens=sens)
-    return parts, [{"t": t, "from": list(own.split), "to": list(chart.split)}] + switches
-
-
-def end_across(home, method, out, t0, t1, p, ctl, mode, checked, singular_tol, newton,
-               limit):
-    """The end of a run with sensitivities of ``home`` whose loop, from t0 in the scene's
-    own chart, stopped at the chart's edge (``out``, the loop's tuple): taken on chart by
-    chart as ``run`` takes it (the same pieces, bit for bit), each loop called without
-    making a Trajectory.  Returns ``(status, t, y, S)`` at its last state, y and S in
+def end_across(home, plan, out, y0, p):
+    """The end of a run with sensitivities of ``home`` by its ``plan`` from ``y0`` (the
+    state and S(t0) after it) whose loop, in the scene's own chart, stopped at the
+    chart's edge or singular (``out``, the loop's tuple): taken on chart by chart as
+    ``run`` takes it (the same pieces, bit for bit), each loop called without making a
+    Trajectory.  Returns ``(status, t, y, S)`` at its last state, y and S in
     ``home``'s states."""
     at = atlas(home)
     own = at.own
-    loops.on_constraints(own.kernels, ctl, mode, own.sensitivity_kernels, out, p, t0)
-    first = loops.result(out)
-    k = int(first.n_ev) - 1
-    parts, _ = go_on(at, method, (), t1, p, float(first.ev_t[k]), first.ev_y[k].copy(),
-                     loops.NO_EVENTS, ctl, ctl.max_steps - int(first.stats[0]),
-                     np.zeros(0), mode, checked, singular_tol, newton, limit,
-                     (t1 - t0) / ctl.n_steps if ctl.n_steps > 0 else 0.0, None, True)
+    ctl = plan.ctl
+    loops.on_constraints(own.kernels, ctl, plan.mode, own.sensitivity_kernels, out, p,
+                         plan.t0)
+    parts, _ = follow(at, plan.method.name, own, plan.t0, y0, plan.t1, p, (),
+                      loops.NO_EVENTS, ctl, ctl.max_steps, plan.te, plan.mode, None,
+                      plan.checked, plan.singular_tol, plan.newton, plan.limit, None,
+                      sens=True, ran=(loops.result(out), 0.0, plan.ce, plan.watch, None))
     chart, last, _ = parts[-1]
     t, n = float(last.t), len(chart.scene.state_names)
     y, S = last.y[:n].reshape(1, n), last.y[n:].reshape(1, n, -1)

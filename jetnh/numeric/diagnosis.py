@@ -295,7 +295,7 @@ def regular_split(scene, t, y, p):
         if d > best:
             best, choice = d, [J.q[c].name for c in cols]
     norm = max(np.prod(np.linalg.norm(A, axis=1)), 1e-300)
-    if choice is None or best < 1e-3 * norm or choice == [s.name for s in sys_.dependent]:
+    if choice is None or best < 1e-3 * norm or set(choice) == {s.name for s in sys_.dependent}:
         return None
     return choice
 

@@ -769,7 +769,6 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
         chart_atlas = atlas.atlas(scene)
         user = as_events(events)
         budget = ctl.max_steps
-        h_fixed = (t1 - t0) / ctl.n_steps if ctl.n_steps > 0 else 0.0
         edge = ce.python_funcs[-1]
         own, S_all = chart_atlas.own, None if sens is None else sens[1]
         ends = []           # each piece's loop result: its last time and state
@@ -778,15 +777,22 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
             ends.append(args[2])
             return solve.trajectory(*args, **kw)
 
-        for r in range(n_runs):         # runs past the edge at the start: run again
-            if not edge(t0, Y0[r], P[r]) < 0.0:
+        # runs past the edge at the start, and runs that reached it (or stopped singular,
+        # perhaps past it): run again as a single run goes on (``atlas.follow``: the
+        # step that reached the edge not kept)
+        on = (INFO[:, 0] == SINGULAR) | ((EV_N[:, n_user] > 0) & (INFO[:, 0] == EVENT)
+                                         & (T_LAST == EV_T[:, n_user]))
+        for r in range(n_runs):
+            if not on[r] and not edge(t0, Y0[r], P[r]) < 0.0:
                 continue
             chart, y, first = atlas.begin(chart_atlas, user, t0, Y0[r], P[r])
-            if not first:
+            if not first and not on[r]:
                 continue
             if sens is not None:        # S(t0) in the chart the run starts in (atlas.run)
                 S0 = solve.augmented(scene, plan, Y0[r:r + 1], P[r])[0, Y0.shape[1]:]
-                S0 = own.carry(chart, t0, Y0[r], S0.reshape(1, Y0.shape[1], -1), P[r])
+                S0 = S0.reshape(1, Y0.shape[1], -1)
+                if chart is not own:
+                    S0 = own.carry(chart, t0, Y0[r], S0, P[r])
                 y = np.concatenate((y, S0.ravel()))
             parts, sw = atlas.follow(chart_atlas, method, chart, t0, y, t1, P[r], user,
                                      np.zeros(n_user, np.int64), ctl, budget, te, mode,
@@ -799,18 +805,6 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
             pieces[r] = _taken_on(own, r, parts, ends[-1], n_user, mode, P[r], OUT_T, OUT_Y,
                                   INFO, T_LAST, Y_LAST, EV_N, EV_T, S_all)
             reasons[r], switches[r] = parts[-1][1].stop_reason, first + sw
-        for r in np.nonzero(EV_N[:, n_user] > 0)[0]:
-            if INFO[r, 0] != EVENT or T_LAST[r] != EV_T[r, n_user]:
-                continue
-            y = (Y_LAST if Y_A is None else Y_A)[r].copy()
-            parts, sw = atlas.go_on(chart_atlas, method, user, t1, P[r], float(T_LAST[r]),
-                                    y, EV_N[r, :n_user].copy(), ctl,
-                                    budget - INFO[r, 1], te, mode, checked,
-                                    singular_tol, plan.newton, limit, h_fixed,
-                                    build, sens=sens is not None)
-            pieces[r] = _taken_on(own, r, parts, ends[-1], n_user, mode, P[r], OUT_T, OUT_Y,
-                                  INFO, T_LAST, Y_LAST, EV_N, EV_T, S_all)
-            reasons[r], switches[r] = parts[-1][1].stop_reason, sw
         wall += time.perf_counter() - tic
     # never a success with a NaN or infinite state
     if not arguments.all_finite(OUT_Y, Y_LAST):
@@ -962,7 +956,7 @@ def _on_constraints(plan, P, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST):
 
 def _taken_on(own, r, parts, end, n_user, mode, p, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N,
               EV_T, S=None):
-    """Run ``r`` of an ensemble taken on past its chart's edge (``atlas.go_on``): its
+    """Run ``r`` of an ensemble taken on past its chart's edge (``atlas.follow``): its
     rows, counts and events filled in after the edge, with ``S`` (the ensemble's
     sensitivities) its sensitivities in the scene's states (``Chart.carry``), as
     ``atlas.stitch`` gives a single run's; its last time and state from ``end``, the

@@ -21,6 +21,7 @@ through the equations themselves.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -80,6 +81,15 @@ def _chosen(G, system):
     return dep, ok
 
 
+@functools.lru_cache(maxsize=64)
+def _identity(n, cols) -> np.ndarray:
+    """(I | 0) (n x ``cols``) flattened row-major, read-only: made once per shape (numpy's
+    ``eye`` and ``broadcast_to`` cost microseconds a run)."""
+    flat = np.eye(n, cols).ravel()
+    flat.setflags(write=False)
+    return flat
+
+
 def sensitivities(sens, system, t0, y0, p) -> np.ndarray:
     """S(t0) (module docstring) flattened row-major, for the state ``y0`` (one state or
     rows of states) with the parameters ``p`` (one row, or one per row of ``y0``);
@@ -88,10 +98,11 @@ def sensitivities(sens, system, t0, y0, p) -> np.ndarray:
     lay = sens.layout
     n, cols = lay.n_state, lay.sensitivity_columns
     y0 = np.asarray(y0, dtype=float)
-    eye = np.eye(n, cols)
     m = len(system.holonomic)
     if not m:
-        return np.broadcast_to(eye.ravel(), y0.shape[:-1] + (n * cols,))
+        flat = _identity(n, cols)
+        return flat if y0.ndim == 1 else np.broadcast_to(flat, y0.shape[:-1] + flat.shape)
+    eye = np.eye(n, cols)
     rows = y0.reshape(-1, y0.shape[-1])
     nq = len(system.J.q)
     G, dgdp = _evaluate(sens.hol, m, nq, t0, rows, p)

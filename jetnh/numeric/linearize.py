@@ -998,7 +998,7 @@ def _split(model: _Model, point: dict, state: dict, values: dict, keep, t: float
     own = [s.name for s in sysm.dependent]
     split, _ = regular.best(sysm, A)
     explicit = bool(model.lams) and principles.get(model.principle).form(model.form).explicit
-    if split == own:
+    if set(split) == set(own):
         return None
     if not split_invariant(model.principle, model.convention) or explicit:
         if not given or ok and all(

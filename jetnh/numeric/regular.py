@@ -174,7 +174,7 @@ def singular(system, m: float, A, where: str, why: str, finite=True, give=True
     own = [s.name for s in system.dependent]
     dep = ", ".join(v.name for v in system.dependent_velocities)
     split, mb = best(system, A) if np.all(np.isfinite(A)) else (None, 0.0)
-    other = (f"choose dependent={split} (measure {mb:.3g} here)" if split and split != own
+    other = (f"choose dependent={split} (measure {mb:.3g} here)" if split and set(split) != set(own)
              else "choose another split with dependent=[...]")
     told = "do not determine" if finite else "give no finite value for"
     return ConstraintError(

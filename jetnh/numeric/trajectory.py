@@ -87,7 +87,7 @@ class Diagnostics:
                     if self.energy_changes else "")]
         for k, v in self.integral_drift.items():
             lines.append(f"  integral {k}: drift {v:.3e}")
-        rows = _rows_text(self)
+        rows = rows_text(self)
         if rows:
             lines.append(f"  {rows}")
         for k, v in self.events.items():
@@ -126,7 +126,7 @@ def _energy_text(initial, drift, relative) -> str:
     return f"energy {initial:.12g}, drift {drift:.3e} (relative {relative:.3e})"
 
 
-def _rows_text(d) -> str:
+def rows_text(d) -> str:
     """Over which rows a run's residual, energy and integral figures were taken, where
     that is not every step of the run ("" where it is)."""
     n = f"{d.rows} row{'s' if d.rows != 1 else ''}"

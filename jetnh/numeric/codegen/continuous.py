@@ -46,6 +46,7 @@ _JAC_SIG = "{jac_sig}"
 '''
 
 
+@dag.collector_paused()
 def generate(spec: KernelSpec) -> KernelSource:
     """Derive the equations of ``spec.principle`` and write the kernels' source.
 

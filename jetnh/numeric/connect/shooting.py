@@ -37,9 +37,9 @@ def _parts(plan):
     after p)``.  The first row of a run with sensitivities but for its state: zeros,
     then the initial sensitivities S0 = (I | 0) (n x m) flattened (the derivatives by
     every state of an inner segment, the Newton Jacobian's columns, on the constraints
-    or off them; ``Shooter.first_row`` starts the search's first segment from
-    ``solve.augmented``'s S0 instead, along g = 0); a run's row is a copy with the
-    state written in."""
+    or off them; with holonomic constraints ``Shooter.first_row`` starts the search's
+    first segment from ``solve.augmented``'s S0 instead, along g = 0); a run's row is a
+    copy with the state written in."""
     found = _PARTS.get(plan)
     if found is None:
         lay = plan.sens.layout
@@ -91,10 +91,10 @@ class Shot:
                                  (*head, first, p, *tail, halt))
         wall = time.perf_counter() - tic
         status, n_out = out[0], int(out[3])
-        if status == EVENT and plan.switch:
-            # at the edge of the scene's split (connect's runs watch no other event): the
-            # run taken across it as Scene.run does
-            return cls._across(scene, plan, first[:n], p, stops, out)
+        if (status == EVENT or status == SINGULAR) and plan.switch:
+            # at the edge of the scene's split (connect's runs watch no other event), or
+            # stopped singular past it: the run taken across it as Scene.run does
+            return cls._across(scene, plan, first[:n], p, stops, out, first)
         if status != FINISHED or n_out < 1:
             if stops is not None:
                 stops[int(status)] = stops.get(int(status), 0) + 1
@@ -118,9 +118,9 @@ class Shot:
         return self
 
     @classmethod
-    def _across(cls, scene, plan, y, p, stops, out=None):
+    def _across(cls, scene, plan, y, p, stops, out=None, first=None):
         """``of`` for a run that reached the edge of the scene's split (its loop's
-        tuple ``out``; None: the start is past it): taken on across it as
+        tuple ``out`` from ``first``, y then S0; None: the start is past it): taken on across it as
         ``solve.run`` takes it (``atlas.end_across``; its sensitivities carried across
         each switch, its end in the scene's states), or None.  Its Trajectory is
         ``solve.run``'s, made when asked for."""
@@ -131,9 +131,7 @@ class Shot:
             S = tr.sensitivities[-1] if status == FINISHED else None
         else:
             tr = None
-            status, t, y_end, S = atlas.end_across(
-                scene, plan.method.name, out, plan.t0, plan.t1, p, plan.ctl, plan.mode,
-                plan.checked, plan.singular_tol, plan.newton, plan.limit)
+            status, t, y_end, S = atlas.end_across(scene, plan, out, first, p)
         if status != FINISHED or not arguments.all_finite(y_end) or not \
                 arguments.all_finite(S):
             if stops is not None:
@@ -429,9 +427,15 @@ class Shooter:
         """The first row of a run of ``plan`` from the start with the unknowns ``u``:
         the state (``state(u)``), then the initial sensitivities S0 (``solve.augmented``:
         along g = 0 with holonomic constraints, as ``Scene.run`` starts; the unknowns
-        move no coordinate, so the same for every u), a fresh array."""
+        move no coordinate, so the same for every u), a fresh array.  Without holonomic
+        constraints S0 = (I | 0), the row ``_parts`` keeps for the plan (the same
+        numbers; numpy's calls in ``solve.augmented`` cost ~10 us a search)."""
         if self._first is None:
-            first = solve.augmented(self.scene, plan, self.y0, self.scene._p)
+            if self.holonomic:
+                first = solve.augmented(self.scene, plan, self.y0, self.scene._p)
+            else:
+                first = (_PARTS.get(plan) or _parts(plan))[2].copy()
+                first[:len(self.y0)] = self.y0
             first.setflags(write=False)
             self._first = first
         first = self._first.copy()

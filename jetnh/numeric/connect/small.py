@@ -188,8 +188,14 @@ def qr(X, Q, R):
 def det(A) -> float:
     """The determinant of the square matrix ``A`` (Gaussian elimination with partial
     pivoting, as LAPACK's getrf)."""
-    n = A.shape[0]
-    M = A.copy()
+    return det_into(A.copy())
+
+
+@jit
+def det_into(M) -> float:
+    """``det`` of the square matrix ``M``, overwriting it with its elimination (a
+    caller's loop over many matrices allocates nothing)."""
+    n = M.shape[0]
     out = 1.0
     for j in range(n):
         piv = j

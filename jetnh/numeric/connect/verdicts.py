@@ -197,15 +197,40 @@ def not_extremal(scene) -> str:
 
 def _reduced_hessian(tr, times, ys, B, multipliers=True):
     """``B^T H B`` at the rows ``ys`` (states) at ``times``: H the Hessian of
-    ``_hessian`` (symmetrized), ``B`` (``[rows, n, m]``) = d qdot/du of ``_linearized``
-    or None (the identity, without constraints): ``[rows, m, m]``."""
+    ``_hessian`` (symmetrized; ``_hessian_values``), ``B`` (``[rows, n, m]``) = d qdot/du
+    of ``_linearized`` or None (the identity, without constraints): ``[rows, m, m]``."""
+    Hv = _hessian_values(tr, times, ys, multipliers)
+    if B is not None:
+        return np.swapaxes(B, 1, 2) @ Hv @ B
+    return np.broadcast_to(Hv, (times.size, *Hv.shape[-2:])) if Hv.ndim == 2 else Hv
+
+
+def _hessian_values(tr, times, ys, multipliers=True) -> np.ndarray:
+    """The Hessian H of ``_hessian``, symmetrized, at the rows ``ys`` (states) at
+    ``times`` (``dag.evaluate_numpy`` on the shared graph): ``[rows, n, n]``; where H
+    depends on the parameters alone (a constant mass matrix: the common case), the one
+    ``[n, n]`` matrix, evaluated once per scene."""
     from ...algebra import dag
 
     scene = tr.scene
+    key = "legendre_constant" if multipliers else "kinetic_constant"
+    constant = scene._memo.get(key, scene)
+    if constant is not None and constant is not scene:
+        return constant
     system = scene.system
     states, v, H = _hessian(scene, multipliers)
-    point = {system.J.t: times,
-             **{s: scene.params[s.name] for s in system.parameters},
+    n = len(v)
+    params = {s: scene.params[s.name] for s in system.parameters}
+    if constant is scene:        # (not decided yet)
+        constant = None
+        if dag.free_symbols(H) <= set(params):
+            Hc = np.array([float(h) for h in dag.evaluate_numpy(H, params)]).reshape(n, n)
+            constant = 0.5 * (Hc + Hc.T)
+            constant.setflags(write=False)
+        scene._memo[key] = constant
+        if constant is not None:
+            return constant
+    point = {system.J.t: times, **params,
              **{s: ys[:, i] for i, s in enumerate(states) if s is not None}}
     dependent = system.dependent_velocities
     if dependent:
@@ -213,11 +238,11 @@ def _reduced_hessian(tr, times, ys, B, multipliers=True):
         tr._kernels.aux_rows(np.ascontiguousarray(times), np.ascontiguousarray(ys),
                              np.ascontiguousarray(tr._p, dtype=float), aux)
         point.update({s: aux[:, i] for i, s in enumerate(dependent)})
-    n = len(v)
-    Hv = np.stack([np.broadcast_to(np.asarray(h, dtype=float), times.shape)
-                   for h in dag.evaluate_numpy(H, point)], axis=-1).reshape(-1, n, n)
-    Hv = 0.5 * (Hv + np.swapaxes(Hv, 1, 2))
-    return Hv if B is None else np.swapaxes(B, 1, 2) @ Hv @ B
+    Hv = np.empty((times.size, n * n))
+    for i, h in enumerate(dag.evaluate_numpy(H, point)):
+        Hv[:, i] = h
+    Hv = Hv.reshape(-1, n, n)
+    return 0.5 * (Hv + np.swapaxes(Hv, 1, 2))
 
 
 def legendre_margin(tr, samples) -> float:
@@ -346,21 +371,70 @@ def gramian_ratio(tr, samples) -> float:
     A, B = _linearized(tr, times, samples.grid_y)
     # the inputs in the units L gives them: each column of B by the square root of the
     # mean over the path of 1 / (the diagonal of B^T (d^2 L / dqdot^2) B)
-    K = _reduced_hessian(tr, times, samples.grid_y, B, multipliers=False)
-    if np.all(np.isfinite(K)):
-        B = B / np.sqrt(_diagonal_scale(K).mean(axis=0))
+    B = _weighted_inputs(tr, times, samples.grid_y, np.ascontiguousarray(B))
     h = (t1 - t0) / steps
     W = np.empty((n, n))
-    _compiled("gramian")(np.ascontiguousarray(A), np.ascontiguousarray(B), h, W)
+    _compiled("gramian")(np.ascontiguousarray(A), B, h, W)
     if system.holonomic:         # the reachable directions: the tangent space of g = 0
         keep = _manifold_chart(tr, times[-1], samples.grid_y[-1], np.diag(W))
         W = W[np.ix_(keep, keep)]
-    if not np.all(np.isfinite(W)):
+    if not np.isfinite(W).all():
         return float("nan")
-    if np.diag(W).min() <= 0:
+    if W.diagonal().min() <= 0:
         return 0.0
-    ev = np.linalg.eigvalsh(unit_diagonal(0.5 * (W + W.T)))
+    # ``unit_diagonal`` of the symmetrized W, whose diagonal is W's and positive here
+    R = 0.5 * (W + W.T)
+    scale = 1.0 / np.sqrt(R.diagonal())
+    ev = np.linalg.eigvalsh(R * scale[:, None] * scale[None, :])
     return float(max(ev[0], 0.0) / ev[-1]) if ev[-1] > 0 else 0.0
+
+
+def _weighted_inputs(tr, times, ys, B) -> np.ndarray:
+    """``B`` (``[rows, n, m]``, C-ordered) with each column divided by the square root
+    of the path's mean of the diagonal scale (``_diagonal_scale``) of K = B^T (d^2 L /
+    dqdot^2) B at the rows ``ys`` at ``times``; ``B`` itself where K is not finite.  In
+    one compiled pass over the rows (``_kinetic_weights``); the whole of K only where a
+    diagonal entry is zero (the scale then reads its rows)."""
+    H = _hessian_values(tr, times, ys, multipliers=False)
+    out = np.empty_like(B)
+    got = _compiled("kinetic")(B, H[None] if H.ndim == 2 else H, out)
+    if got == 0:
+        return out
+    if got == 1:              # (a non-finite entry of B or H reaches every K_jj)
+        return B
+    K = np.swapaxes(B, 1, 2) @ H @ B
+    return B / np.sqrt(_diagonal_scale(K).mean(axis=0)) if np.all(np.isfinite(K)) else B
+
+
+def _kinetic_weights(B, H, out):
+    """``out`` = ``B`` with column j divided by the square root of the mean over the
+    rows r of |K_jj(r)|, K(r) = ``B[r]^T H[r] B[r]`` (``H[0]`` for every r where ``H``
+    has one matrix), and 0; 1 (``out`` not written) where a K_jj is not finite, 2 where
+    one is zero (compiled)."""
+    N, n, m = B.shape
+    one = H.shape[0] == 1
+    mean = np.zeros(m)
+    for r in range(N):
+        Hr = H[0] if one else H[r]
+        for j in range(m):
+            acc = 0.0
+            for b in range(n):
+                t = 0.0
+                for a in range(n):
+                    t += B[r, a, j] * Hr[a, b]
+                acc += t * B[r, b, j]
+            if not math.isfinite(acc):
+                return 1
+            if acc == 0.0:
+                return 2
+            mean[j] += abs(acc)
+    for j in range(m):
+        mean[j] = math.sqrt(mean[j] / N)
+    for r in range(N):
+        for a in range(n):
+            for j in range(m):
+                out[r, a, j] = B[r, a, j] / mean[j]
+    return 0
 
 
 def _manifold_chart(tr, t, y, w) -> list:
@@ -584,7 +658,7 @@ def _least_chart_measure(F, cols):
                     if w > best[mask | (1 << b)]:
                         best[mask | (1 << b)] = w
         top = max(top, best[(1 << k) - 1])
-        least = min(least, abs(small.det(M)))
+        least = min(least, abs(small.det_into(M)))       # (M is filled anew each row)
     v = least / top if top > 0.0 else 0.0
     return v if math.isfinite(v) else 0.0
 
@@ -594,15 +668,16 @@ def compiled_parts():
     ``connect:verdicts``); returns the first, whose cache record ``precompile`` reads."""
     first = _compiled("measures")
     _compiled("gramian")
+    _compiled("kinetic")
     _compiled("edge")
     return first
 
 
 @functools.cache
 def _compiled(name):
-    """The compiled ``_jacobi_rows`` ("measures"), ``_gramian_sum`` ("gramian") or
-    ``_least_chart_measure`` ("edge"): compiled, or loaded from the signed store, on
-    first use."""
+    """The compiled ``_jacobi_rows`` ("measures"), ``_gramian_sum`` ("gramian"),
+    ``_kinetic_weights`` ("kinetic") or ``_least_chart_measure`` ("edge"): compiled,
+    or loaded from the signed store, on first use."""
     from numba import types
 
     from ..kernels import loop_cache
@@ -613,6 +688,8 @@ def _compiled(name):
         "measures": (_jacobi_rows, types.void(a3, types.int64, a1, types.boolean, a3,
                                               types.boolean, a1, a1)),
         "gramian": (_gramian_sum, types.void(a3, a3, types.float64, a2)),
+        "kinetic": (_kinetic_weights, types.int64(
+            a3, types.Array(types.float64, 3, "C", readonly=True), a3)),
         "edge": (_least_chart_measure, types.float64(
             types.Array(types.float64, 3, "A", readonly=True),
             types.Array(types.int64, 1, "C")))}[name]
