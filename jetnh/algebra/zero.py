@@ -122,12 +122,10 @@ def vanishes(exprs, system=None, points: int = POINTS, seed: int = 0, *, derived
 
 def _sign(s, rng) -> int:
     """A random sign for symbol ``s`` within its assumptions (a symbol declared positive
-    or nonnegative stays positive, one declared negative or nonpositive negative)."""
-    if s.is_nonnegative:
-        return 1
-    if s.is_nonpositive:
-        return -1
-    return rng.choice((-1, 1))
+    or nonnegative stays positive, one declared negative or nonpositive negative; drawn
+    for every symbol, so the points stay those of the same seed)."""
+    sign = rng.choice((-1, 1))
+    return 1 if s.is_nonnegative else -1 if s.is_nonpositive else sign
 
 
 def _one_signed(exprs) -> bool:
