@@ -12,7 +12,13 @@
   the accelerations on it a common solution, only where that vanishes on the constraints
   (Chaplygin systems, the paper's Example 1); elsewhere the flow leaves the branch.
 - ``compare``: decides for two principles whether their accelerations agree identically,
-  on the branch (32) (and whether that branch is invariant), or at given states.
+  on the branch (32) (and whether that branch is invariant), or at given states.  A
+  principle whose multipliers are left free (Hoelder in the "imposed" convention:
+  P^T([L] + lambda [f]) = 0 with no equation for lambda) has a family of motions, one
+  for each function lambda(t); ``compare`` then says for which choice of lambda (zero,
+  or the other principle's multiplier) the family's accelerations are the other's, so
+  that the other's motions are members of the family (Chetaev's at lambda = 0, the
+  vakonomic ones with lambda following the vakonomic equation), not conversely.
 
 Agreement of expressions is decided by evaluation at random states on the constraint
 manifold (with random multipliers and parameters), a Schwartz-Zippel style test: a
@@ -103,6 +109,13 @@ class Comparison:
     (when that is True): whether the multiplier principle's flow keeps the branch
     (``branch_rates`` vanish on it), so that its motions started there are motions of the
     other principle.  When it is False, the motions share the instant, not the solution.
+    ``free``: the multipliers one principle (``family``) leaves free, with no equation
+    (Hoelder, "imposed"): its motions are a family with free functions lambda(t), and
+    ``identical`` is False whenever they enter its accelerations.  ``choice``: the values
+    of them ({} when ``free`` is empty; None when no tried choice works) at which the
+    family's accelerations are the other principle's at every state (0 for Chetaev's,
+    the other's multiplier, which then follows the other's equation, for vakonomic's): the
+    other principle's motions are the family's motions for that choice.
     """
 
     principles: tuple
@@ -111,6 +124,9 @@ class Comparison:
     defects: dict = field(default_factory=dict)   # q'' difference (symbolic, unsimplified)
     singular: list = field(default_factory=list)
     branch_invariant: bool | None = None
+    free: tuple = ()
+    family: str | None = None
+    choice: dict | None = field(default_factory=dict)
 
     def where(self) -> str:
         """The singular set as text, within budget ("" when empty)."""
@@ -122,6 +138,8 @@ class Comparison:
         a, b = self.principles
         off = (f" off the singular set {self.where()} (there an acceleration system is "
                "singular or undefined)") if self.singular else ""
+        if self.free:
+            return self._family_text(a if self.family == b else b, off)
         if self.identical:
             return f"{a} and {b} have the same accelerations at every state{off}"
         if self.on_branch_32 and self.branch_invariant:
@@ -135,9 +153,28 @@ class Comparison:
                     f"in general{',' if off else ''}{off}")
         return f"{a} and {b} do not share solutions in general{off}"
 
+    def _family_text(self, other, off):
+        fam, names = self.family, ", ".join(map(str, self.free))
+        head = (f"{fam} leaves {names} free (no equation for {'them' if len(self.free) > 1 else 'it'}),"
+                f" so its motions are a family, one for each {names}(t);")
+        if self.choice is None:
+            return (f"{head} no choice tried ({names} = 0, or {other}'s multipliers) gives "
+                    f"{other}'s accelerations at every state, so they share solutions only "
+                    f"where some {names}(t) is chosen along them{',' if off else ''}{off}")
+        at = ", ".join(f"{k} = 0" if v == 0 else f"{k} = {other}'s multiplier {v}"
+                       for k, v in self.choice.items())
+        follow = "" if all(v == 0 for v in self.choice.values()) else \
+            f" (which then follows {other}'s equation)"
+        return (f"{head} at {at}{follow} its accelerations are {other}'s at every state, so "
+                f"every {other} motion is a {fam} motion (that choice), not conversely"
+                f"{',' if off else ''}{off}")
+
     def __repr__(self):
+        fam = (f"free={self.free!r}, family={self.family!r}, choice={self.choice!r}, "
+               if self.free else "")
         return (f"Comparison({self.principles!r}, identical={self.identical}, "
                 f"on_branch_32={self.on_branch_32}, branch_invariant={self.branch_invariant}, "
+                f"{fam}"
                 f"defects=<{len(self.defects)} expressions>, "
                 f"singular=<{len(self.singular)}{': ' + self.where() if self.singular else ''}>)")
 
@@ -207,8 +244,10 @@ def compare(system: System, first: str, second: str, convention: str = "paper") 
     Returns
     -------
     jetnh.mechanics.equivalence.Comparison
-        ``.equivalent``, the branch on which they agree, the differences of the
-        accelerations and the singular set, printed in one shared form.
+        ``.identical``, the branch on which they agree, the differences of the
+        accelerations and the singular set, printed in one shared form; for a principle
+        with free multipliers (Hoelder, "imposed") the choice of them at which its
+        accelerations are the other's (``free``, ``family``, ``choice``).
     """
     if not isinstance(system, System):
         raise ArgumentError(f"compare needs a jetnh System, not {type(system).__name__}")
@@ -243,6 +282,15 @@ def _compare(system, principles, eqs, accs, factors) -> Comparison:
     (e1, e2), (a1, a2) = eqs, accs
     qdd = system.J.qdd
     defects = {q: a1[q] - a2[q] for q in qdd}
+    fam = 0 if e1.arbitrary else 1 if e2.arbitrary else None
+    free = eqs[fam].arbitrary if fam is not None else ()
+    if free and not set(free) & dag.free_symbols(list(accs[fam].values())):
+        free = ()                                 # they do not enter the motion
+    if free:
+        choice = _free_choice(system, eqs[fam], eqs[1 - fam], defects)
+        sing = list(dict.fromkeys(factors))
+        return Comparison(principles, False, None, defects, sing, None, tuple(free),
+                          principles[fam], choice)
     same = agrees(system, list(defects.values()))
     on_branch = invariant = None
     owner = e1 if e1.multipliers else e2
@@ -261,6 +309,21 @@ def _compare(system, principles, eqs, accs, factors) -> Comparison:
         return 0 if syms & lams else 1 if syms & jet else 2
     sing.sort(key=rank)
     return Comparison(principles, same, on_branch, defects, sing, invariant)
+
+
+def _free_choice(system, fam, other, defects):
+    """The values of ``fam``'s free multipliers at which ``defects`` vanish at every
+    state: the other principle's multipliers (same form of the constraints), else zero;
+    None if neither."""
+    free = fam.arbitrary
+    tries = []
+    if len(other.multipliers) == len(free) and other.explicit == fam.explicit:
+        tries.append(dict(zip(free, other.multipliers)))
+    tries.append({m: sp.S.Zero for m in free})
+    for sub in tries:
+        if agrees(system, dag.xreplace(list(defects.values()), sub)):
+            return sub
+    return None
 
 
 def defect_along(system: System, first: str, second: str, samples, convention: str = "paper"):

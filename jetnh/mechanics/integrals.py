@@ -129,7 +129,65 @@ def conserved_quantities(sysm, principle, degree=2, coefficients=None) -> list:
                              "sampled rank test; please report")
         _check(sysm, I, acc, problem, U)
         out.append(I)
+    return [out[j] for j in nontrivial(sysm, out, [J.t, *J.q, *J.qd, *lam])]
+
+
+# ---------------------------------------------------------------------- triviality
+def nontrivial(sysm, exprs, gens) -> list:
+    """The indices of a maximal subfamily of ``exprs`` (in order) none of whose nonzero
+    combinations is constant on the constrained motions, i.e. lies in the constants plus
+    the ideal of the holonomic constraints g(t, q) and the velocity constraints (D g among
+    them): x**2 + y**2 of a pendulum on x**2 + y**2 - 1 = 0 is the constant 1 there.
+    Decided by the remainders of the numerators (over a common denominator) on a
+    Groebner basis in ``gens``, whose linear relations are those of the ideal.  Without
+    holonomic constraints, or when they, the constraints or ``exprs`` are not polynomial
+    (rational) in ``gens``, every index is kept (the velocity constraints alone are
+    already worked modulo by the searches)."""
+    rems = _remainders(sysm, exprs, gens)
+    if rems is None:
+        return list(range(len(exprs)))
+    monos = sorted({m for r in rems for m in r.monoms()})
+    rows = [[r.coeff_monomial(m) for m in monos] for r in rems]
+    kept, out = [rows[0]], []               # rows[0]: the constants (the denominator)
+    rank = sp.Matrix(kept).rank()
+    for j, row in enumerate(rows[1:]):
+        r = sp.Matrix(kept + [row]).rank()
+        if r > rank:
+            kept.append(row)
+            rank = r
+            out.append(j)
     return out
+
+
+def vanishes_on_motions(sysm, exprs, gens) -> bool:
+    """Whether every one of ``exprs`` lies in the ideal of the holonomic and velocity
+    constraints (``nontrivial``), so vanishes on every constrained motion; False when
+    that cannot be decided (no holonomic constraint, or not polynomial)."""
+    rems = _remainders(sysm, exprs, gens)
+    return rems is not None and all(r.is_zero for r in rems[1:])
+
+
+def _remainders(sysm, exprs, gens):
+    """[denominator, numerators of ``exprs`` over it] reduced on a Groebner basis of the
+    holonomic and velocity constraints in ``gens`` (Polys), or None (see ``nontrivial``)."""
+    if not sysm.holonomic or not exprs:
+        return None
+    gens = list(dict.fromkeys(gens))
+    rels = [*sysm.holonomic, *sysm.constraints]
+    fracs = [sp.together(sp.sympify(e, strict=True)) for e in exprs]
+    den = sp.lcm([sp.denom(f) for f in fracs]) if len(fracs) > 1 else sp.denom(fracs[0])
+    nums = [sp.cancel(f * den) for f in fracs]
+    polys = [*rels, den, *nums]
+    extra = set().union(*(dag.free_symbols(e) for e in polys)) - set(gens)
+    try:
+        if any(not e.is_polynomial(*gens) for e in polys):
+            return None
+        domain = sp.QQ.frac_field(*sorted(extra, key=str)) if extra else sp.QQ
+        basis = sp.groebner(rels, *gens, order="grevlex", domain=domain)
+        return [sp.Poly(basis.reduce(e)[1], *gens, domain=domain) for e in [den, *nums]]
+    except (sp.PolynomialError, sp.polys.polyerrors.CoercionFailed,
+            sp.polys.polyerrors.DomainError):
+        return None
 
 
 # ---------------------------------------------------------------------- the ansatz

@@ -56,7 +56,8 @@ from ..algebra.ansatz import exponents, monomial
 from ..errors import ArgumentError, JetnhError
 from ..geometry.fields import prolong
 from .integrals import (Sampler, check_arguments, check_budget, coefficient_count,
-                        coefficient_functions, prove_conserved)
+                        coefficient_functions, nontrivial, prove_conserved,
+                        vanishes_on_motions)
 
 _WIDTH = 72             # characters of each expression in a repr
 
@@ -281,12 +282,18 @@ def noether_symmetries(sysm, principle, degree=1, coefficients=None) -> list:
 
 
 def _prove_noether(S, sampler, xi0, xi, G):
-    """The NoetherSymmetry, after proving (N) and D I = 0; None if I is a constant."""
+    """The NoetherSymmetry, after proving (N) and D I = 0; None if it is trivial: I a
+    constant, or (with holonomic constraints) the generator vanishing on them or I
+    constant on the motions (``integrals.nontrivial``)."""
     sysm = S.sysm
     for e in S.terms(xi0, xi, G):
         _vanishes(e, sampler, "the Noether identity")
     I = S.quantity(xi0, xi, G)
     if not (sp.expand(I).free_symbols - set(sysm.parameters)):
+        return None
+    gens = [sysm.J.t, *sysm.J.q, *sysm.J.qd, *S.lams]
+    if sysm.holonomic and (vanishes_on_motions(sysm, [xi0, *xi], gens)
+                           or not nontrivial(sysm, [I], gens)):
         return None
     prove_conserved(sysm, S.eom.J, I, S.acc, sampler, S.U)
     if dag.size(I, 2000) < 2000:
