@@ -74,6 +74,11 @@ class Diagnostics:
     def as_dict(self) -> dict:
         return asdict(self)
 
+    def rows_note(self) -> str:
+        """Over which rows the figures were taken, where that is not every step of the
+        run ("" where it is): the printed summary's and the notebook view's line."""
+        return _rows_text(self)
+
     def __str__(self):
         lines = [f"{self.method}: {self.stop_reason} ({'success' if self.success else 'failure'})",
                  f"  steps {self.steps} (rejected {self.rejected}), rhs evaluations "
@@ -87,7 +92,7 @@ class Diagnostics:
                     if self.energy_changes else "")]
         for k, v in self.integral_drift.items():
             lines.append(f"  integral {k}: drift {v:.3e}")
-        rows = rows_text(self)
+        rows = self.rows_note()
         if rows:
             lines.append(f"  {rows}")
         for k, v in self.events.items():
@@ -126,7 +131,7 @@ def _energy_text(initial, drift, relative) -> str:
     return f"energy {initial:.12g}, drift {drift:.3e} (relative {relative:.3e})"
 
 
-def rows_text(d) -> str:
+def _rows_text(d) -> str:
     """Over which rows a run's residual, energy and integral figures were taken, where
     that is not every step of the run ("" where it is)."""
     n = f"{d.rows} row{'s' if d.rows != 1 else ''}"
