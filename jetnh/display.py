@@ -223,8 +223,6 @@ def comparison_latex(c) -> str:
 
 # ---------------------------------------------------------------------- runs
 def _trajectory_facts(traj) -> list[tuple[str, str]]:
-    from .numeric.trajectory import rows_text
-
     d = traj.diagnostics
     span = f"[{traj.t[0]:.6g}, {traj.t[-1]:.6g}]" if len(traj) else "empty"
     return [("principle", traj.scene.principle), ("rows", f"{len(traj)}, t in {span}"),
@@ -233,7 +231,7 @@ def _trajectory_facts(traj) -> list[tuple[str, str]]:
             ("steps", f"{d.steps} (rejected {d.rejected}), {d.rhs_evaluations} rhs evaluations"),
             ("constraint residual max", f"{d.residual_max:.3e}"),
             ("energy drift", f"{d.energy_drift:.3e} (relative {d.energy_drift_relative:.3e})"),
-            *((("figures", note),) if (note := rows_text(d)) else ())]
+            *((("figures", note),) if (note := d.rows_note()) else ())]
 
 
 def trajectory_html(traj) -> str:

@@ -161,3 +161,121 @@ def test_ctrl_c_stops_a_long_run_and_restores_the_users_handler_and_fd(handler, 
     again = short.run(save="final")
     assert np.array_equal(again.y, first.y) and np.array_equal(again.t, first.t)
     assert handler == [signal.SIGINT] and _wakeup_fd() == fd
+
+
+EARLY = """
+import os, signal, socket, sys, threading, time
+from signal import set_wakeup_fd as early      # bound before jetnh (as uvloop does)
+from jetnh.numeric import interrupt
+
+def spin(halt, cap):
+    end = time.monotonic() + cap
+    while time.monotonic() < end:
+        if halt[0]:
+            return int(halt[0])
+    return 0
+
+seen = []
+signal.signal(signal.SIGINT, lambda signum, frame: seen.append(signum))
+interrupt.call(spin, interrupt.flag(), None, (interrupt.flag(), 0.0))   # confirmed
+assert interrupt._KNOWN[0] is interrupt._WATCHDOG
+r, w = socket.socketpair()
+r.setblocking(False)
+w.setblocking(False)
+time.sleep(interrupt.CONFIRM + 0.05)
+early(w.fileno(), warn_on_full_buffer=False)   # unseen by the stand-in
+assert interrupt._KNOWN[0] is interrupt._WATCHDOG
+halt = interrupt.flag()
+threading.Timer(0.2, os.kill, (os.getpid(), signal.SIGINT)).start()
+tic = time.monotonic()
+got = interrupt.call(spin, halt, None, (halt, 10.0))
+print(got, time.monotonic() - tic, seen, early(-1) == w.fileno(), flush=True)
+"""
+
+FORKED = """
+import os, signal, threading, time
+from jetnh.numeric import interrupt
+
+halt = interrupt.flag()
+interrupt.call(lambda: None, halt)
+interrupt.call(lambda: None, interrupt.flag())     # the common route
+result = {}
+
+def forker():
+    time.sleep(0.2)
+    pid = os.fork()
+    if pid == 0:
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(2.0)
+            os._exit(3)                                 # SIGINT held back for ever
+        except KeyboardInterrupt:
+            ok = (not interrupt._HALTS and interrupt._MAIN == threading.get_ident()
+                  and interrupt.call(lambda: 7, interrupt.flag()) == 7)
+            os._exit(0 if ok else 4)
+    result["child"] = os.waitstatus_to_exitcode(os.waitpid(pid, 0)[1])
+
+thread = threading.Thread(target=forker)
+thread.start()
+
+def wait():
+    end = time.monotonic() + 5.0
+    while time.monotonic() < end and "child" not in result and halt[0] == 0:
+        time.sleep(0.01)
+
+interrupt.call(wait, halt)
+thread.join()
+print(result["child"], flush=True)
+"""
+
+
+def _child(code):
+    """What a child Python running ``code`` printed (its last line)."""
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, timeout=300,
+                         env=dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path)))
+    assert out.returncode == 0, out.stderr.decode()[-2000:]
+    return out.stdout.decode().split("\n")[-2]
+
+
+def test_a_wakeup_fd_set_by_a_reference_bound_before_jetnh_is_found_within_confirm():
+    """A wakeup fd set between runs through CPython's function bound before ``import
+    jetnh`` (which the stand-in cannot see), more than ``CONFIRM`` after the last
+    confirmation: Ctrl-C still stops the next long call within a second, the handler
+    runs once after it, and the fd is theirs again."""
+    got, took, seen, theirs = _child(EARLY).split(" ", 3)
+    assert int(got) == interrupt.INTERRUPT and float(took) < 1.0
+    assert seen == f"[{int(signal.SIGINT)}]" and theirs == "True"
+
+
+def test_a_loop_of_short_calls_confirms_the_fd_at_most_once_per_window(monkeypatch):
+    """Short calls back to back (a clock stepping 10 ms per call): CPython's
+    ``set_wakeup_fd`` is asked once per ``CONFIRM`` window, not per call."""
+    real, now, asked = interrupt._set_wakeup_fd, [1000.0], []
+
+    def counted(fd, /, *, warn_on_full_buffer=True):
+        asked.append(fd)
+        return real(fd, warn_on_full_buffer=warn_on_full_buffer)
+
+    def clock():
+        now[0] += 0.01
+        return now[0]
+
+    interrupt.call(lambda: None, interrupt.flag())
+    monkeypatch.setattr(interrupt, "_set_wakeup_fd", counted)
+    monkeypatch.setattr(interrupt, "_monotonic", clock)
+    interrupt._KNOWN[0] = None
+    for _ in range(100):
+        interrupt.call(lambda: None, interrupt.flag())
+    # ~1 s of fake time (one clock read per call, plus one per confirmation)
+    assert 1 + int(0.9 / interrupt.CONFIRM) <= len(asked) <= 2 + int(1.1 / interrupt.CONFIRM)
+    assert set(asked) == {interrupt._WATCHDOG.own}
+
+
+def test_a_child_forked_by_another_thread_during_a_call_gets_ctrl_c():
+    """A thread forks while the main thread is inside a call: the child (whose main
+    thread is the forking one, the call absent) raises KeyboardInterrupt on SIGINT and
+    runs calls of its own."""
+    assert _child(FORKED) == "0"

@@ -456,3 +456,42 @@ def test_indicators_prepared_from_the_rhs_are_prepared_alike(name, principle):
     pairs = [(e, "indicator") for _, e in indicators]
     fresh = Preparer(system, tuple(eom.multipliers), spec.params, spec.runtime_params)
     assert dag.fingerprint(prepare.many(pairs)) == dag.fingerprint(fresh.many(pairs))
+
+
+def test_a_parsed_program_links_with_or_without_numbas_private_final_module(monkeypatch):
+    """A program above the quick threshold is parsed as LLVM text and linked through
+    numba's private ``_final_module`` (present in the numba installed: a release without
+    it is seen here); where a library has none it goes through ``add_llvm_module``, and
+    both compute the program (y0 * y1 + sin(p0), and t)."""
+    import math
+
+    import numba
+
+    from jetnh.numeric.codegen import llvm
+
+    monkeypatch.setenv("JETNH_QUICK_OPS", "0")
+    ops = (("y", 0), ("y", 1), ("p", 0), ("mul", 0, 1), ("fn", "sin", 2), ("add", 3, 4),
+           ("out", 0, 5), ("t",), ("out", 1, 7))
+    real, libraries = llvm._link, []
+
+    class Bare:                       # a code library without _final_module
+        def __init__(self, library):
+            self.add_llvm_module = library.add_llvm_module
+
+    def recorded(library, module, bare):
+        libraries.append(library)
+        real(Bare(library) if bare else library, module)
+
+    y, p = np.array([2.0, 3.0]), np.array([0.5])
+    for bare in (False, True):
+        monkeypatch.setattr(llvm, "_link", lambda lib, mod, b=bare: recorded(lib, mod, b))
+        body = llvm.straight_line(ops)
+
+        @numba.njit
+        def kernel(t, y, p, out):
+            body(t, y, p, out)
+
+        out = np.zeros(2)
+        kernel(1.25, y, p, out)
+        assert out.tolist() == [6.0 + math.sin(0.5), 1.25]
+    assert len(libraries) == 2 and hasattr(libraries[0], "_final_module")

@@ -349,15 +349,16 @@ def test_replace_initial_takes_whole_numbers_as_the_general_route(disk):
 @pytest.mark.parametrize("save", ["final", "steps"])
 def test_a_finished_runs_trajectory_equals_the_general_routes(disk, save):
     """The trajectory a finished run makes at once (the loop's result kept as it is) and
-    the one of the general route (a run watching an event that never fires, the same
-    steps) agree on every attribute read, stay immutable, and pickle alike."""
+    the one of the general route (of a run watching an event that never fires, the same
+    steps: ``general_route``) agree on every attribute read, stay immutable, and pickle
+    alike."""
     import pickle
 
     from jetnh.errors import FrozenError
 
     quick = disk.run(save=save)
     x = disk.system.J.q[0]
-    general = disk.run(save=save, events=[x - 1e6])
+    general = general_route(disk.run(save=save, events=[x - 1e6]), [x - 1e6])
     assert "_loop" in quick.__dict__ and "_loop" not in general.__dict__
     assert np.array_equal(quick.t, general.t) and np.array_equal(quick.y, general.y)
     for name in ("status", "stop_reason", "success", "method", "names", "switches",
@@ -368,7 +369,7 @@ def test_a_finished_runs_trajectory_equals_the_general_routes(disk, save):
     assert quick.t_events is quick.t_events
     a, b = quick.diagnostics, general.diagnostics
     for name in ("steps", "rejected", "rhs_evaluations", "residual_max", "energy_drift",
-                 "projected", "status", "success"):
+                 "projected", "status", "success", "rows", "saved", "stop_row"):
         assert getattr(a, name) == getattr(b, name), name
     assert np.array_equal(quick["phi_t"], general["phi_t"])
     if save == "steps":         # (evaluation between rows re-takes the steps)
@@ -380,3 +381,99 @@ def test_a_finished_runs_trajectory_equals_the_general_routes(disk, save):
     back = pickle.loads(pickle.dumps(quick))
     assert "_loop" not in back.__dict__ and back.diagnostics.steps == a.steps
     assert np.array_equal(back.y, quick.y) and back.t_events == []
+
+
+def general_route(traj, events):
+    """The Trajectory the general route (``solve.trajectory`` past its quick path) makes
+    of the loop's result that ``traj`` (a quick one, a watching run's) keeps, with its
+    event records as the arrays of no record (what the loop returned for them before it
+    returned None)."""
+    from jetnh.numeric import solve
+
+    out = traj.__dict__["_loop"]
+    assert len(out) == 12 and out[7] is None and out[10] == 0
+    n = out[2].shape[1]
+    records = (np.empty(0), np.empty(0, dtype=np.int64), np.empty((0, n)))
+    scene = traj.scene
+    ce = scene.compile_events(events)
+    return solve.trajectory(scene, traj.method, (*out[:7], *records, *out[10:]),
+                            traj._wall, traj._kernels, ce, traj._p, scene.t_span[0],
+                            scene.y0, 1e-10, True, None, traj._dense)
+
+
+@pytest.mark.parametrize("save", ["final", "steps"])
+@pytest.mark.parametrize("n_events", [1, 2])
+def test_a_finished_watching_runs_trajectory_equals_the_general_routes(disk, save, n_events):
+    """A run watching events that never fire (its loop returns None for the records) is
+    made at once (the loop's 12 entries kept as they are) and agrees with the general
+    route's trajectory of the same result on every attribute read, its empty event lists
+    included (one read-only array per event); immutable; pickled alike."""
+    import pickle
+
+    from jetnh.errors import FrozenError
+
+    x, y = disk.system.J.q[:2]
+    events = [x - 1e6, y + 1e6][:n_events]
+    quick = disk.run(save=save, events=events)
+    general = general_route(quick, events)
+    assert "_loop" in quick.__dict__ and "_loop" not in general.__dict__
+    assert np.array_equal(quick.t, general.t) and np.array_equal(quick.y, general.y)
+    for name in ("status", "stop_reason", "success", "method", "names", "switches",
+                 "singularity", "final", "t_final", "event_names"):
+        assert getattr(quick, name) == getattr(general, name), name
+    assert len(quick.event_names) == n_events
+    for a, b in ((quick.t_events, general.t_events), (quick.y_events, general.y_events)):
+        assert len(a) == len(b) == n_events
+        for u, v in zip(a, b):
+            assert u.shape == v.shape and u.dtype == v.dtype and not u.flags.writeable
+    assert quick.t_events is quick.t_events
+    a, b = quick.diagnostics, general.diagnostics
+    for name in ("steps", "rejected", "rhs_evaluations", "residual_max", "energy_drift",
+                 "projected", "status", "success", "rows", "saved", "stop_row"):
+        assert getattr(a, name) == getattr(b, name), name
+    assert np.array_equal(quick["phi_t"], general["phi_t"])
+    if save == "steps":
+        assert np.array_equal(quick.at([0.25]).to_numpy(), general.at([0.25]).to_numpy())
+    with pytest.raises(FrozenError):
+        quick.event_names = ()
+    with pytest.raises(ValueError):
+        quick.y_events[0][:] = 1.0
+    back = pickle.loads(pickle.dumps(quick))
+    assert "_loop" not in back.__dict__ and back.diagnostics.steps == a.steps
+    assert back.event_names == quick.event_names and np.array_equal(back.y, quick.y)
+    assert [e.shape for e in back.y_events] == [e.shape for e in quick.y_events]
+
+
+def test_a_watching_run_whose_event_fires_keeps_its_records(disk):
+    """An event that fires (non-terminal, then terminal) is recorded as before: the
+    loop's records, the general route."""
+    x = disk.system.J.q[0]
+    x1 = float(disk.run(save="final").y[-1, 0])
+    mid = 0.5 * (DISK0["x"] + x1)
+    fired = disk.run(save="final", events=[x - mid])
+    assert "_loop" not in fired.__dict__ and len(fired.t_events[0]) == 1
+    assert abs(fired.y_events[0][0, 0] - mid) < 1e-9
+
+
+def test_an_ensemble_of_one_is_immutable_and_pickles_as_made(disk):
+    """An ensemble of one row (its arrays made when first read): the caller's row copied,
+    the parameters the scene's (never written, read-only through the ensemble), every
+    array read-only; pickled before any read, the same arrays, without the loop's."""
+    import pickle
+
+    row = disk.y0[None, :].copy()
+    ens = disk.ensemble(initial=row, save="final")
+    assert "_arrays" not in ens.__dict__            # (made when read)
+    back = pickle.loads(pickle.dumps(ens))
+    assert "_run" not in back.__dict__
+    row[0, 0] = 99.0
+    assert ens.initial[0, 0] == disk.y0[0]
+    p = disk._p.copy()
+    for name in ("t", "y", "status", "steps", "t_final", "y_final", "initial", "params",
+                 "event_counts"):
+        a, b = getattr(ens, name), getattr(back, name)
+        assert np.array_equal(a, b, equal_nan=True) and not a.flags.writeable, name
+    with pytest.raises(ValueError):
+        ens.params[...] = 2.0
+    assert np.array_equal(disk._p, p)
+    assert np.array_equal(ens.y[0, -1], disk.run(save="final").y[-1])

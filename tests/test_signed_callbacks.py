@@ -224,3 +224,20 @@ def test_kernels_compile_uncached_where_numba_would_cache_unchecked(tmp_path, mo
     assert mod.CACHED is False
     for package in ("jetnh_probe_good", "jetnh_probe_blocked", "jetnh_probe_env"):
         loader._forget(package)
+
+
+def test_the_chart_change_is_stamped_with_the_calling_convention_it_compiles_in(monkeypatch):
+    """``chart_change.compiled`` inlines ``kernels.calls._call_at``: its signed-store
+    stamp changes with ``calls.py`` as with its own file (stale machine code calling the
+    kernels the old way is never loaded)."""
+    from jetnh.numeric import chart_change
+
+    stamps = {chart_change.__file__: "own", calls.__file__: "abi"}
+    seen = []
+    monkeypatch.setattr(loop_cache, "file_stamp", lambda path: stamps.get(path, "other"))
+    monkeypatch.setattr(loop_cache, "signed_njit",
+                        lambda fn, signature, stamp, **options: seen.append(stamp))
+    chart_change.compiled.__wrapped__()
+    stamps[calls.__file__] = "abi2"
+    chart_change.compiled.__wrapped__()
+    assert seen == ["ownabi", "ownabi2"]

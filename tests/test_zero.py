@@ -27,6 +27,20 @@ def test_expressions_not_analytic_across_a_sign_change_are_tested_at_both_signs(
     assert zero.vanishes(sp.sign(x) * sp.Abs(x) - x)
 
 
+def test_signed_points_keep_each_symbols_declared_sign():
+    """The points of both signs respect the assumptions: |m x + m| = m |x + 1| for m
+    positive (not for m of any sign), |n| = -n for n nonpositive, |p| = p for p
+    nonnegative; x of any sign still taken both ways."""
+    x = sp.Symbol("x", real=True)
+    m, p = sp.Symbol("m", positive=True), sp.Symbol("p", nonnegative=True)
+    n, k = sp.Symbol("n", negative=True), sp.Symbol("k", nonpositive=True)
+    assert zero.vanishes([sp.Abs(m * x + m) - m * sp.Abs(x + 1)])
+    assert zero.vanishes([sp.Abs(n) + n, sp.Abs(k) + k, sp.Abs(p) - p, sp.sign(m) - 1])
+    mu = sp.Symbol("mu", real=True)
+    assert not zero.vanishes([sp.Abs(mu * x + mu) - mu * sp.Abs(x + 1)])
+    assert not zero.vanishes([sp.Abs(m * x) - m * x])
+
+
 def test_compare_sees_a_difference_at_negative_coordinates():
     """z_t = (|x| - x) y_t is free for x > 0 and the nonholonomic particle for x < 0:
     Chetaev and Suslov differ there (jetnh's own accelerations at x = -0.6 differ)."""

@@ -95,7 +95,7 @@ def vanishes(exprs, system=None, points: int = POINTS, seed: int = 0, *, derived
 
     def at(signed):
         base = {s: sp.Rational(rng.randrange(31 * _DEN // 100, 137 * _DEN // 100), _DEN)
-                * (rng.choice((-1, 1)) if signed else 1) for s in syms}
+                * (_sign(s, rng) if signed else 1) for s in syms}
         try:
             real = _real_point(point) if signed else point
             if signed and any(isinstance(v, mpmath.mpc) and v.imag
@@ -118,6 +118,14 @@ def vanishes(exprs, system=None, points: int = POINTS, seed: int = 0, *, derived
         if not signed and got < max(1, points // 2):
             return False
     return True
+
+
+def _sign(s, rng) -> int:
+    """A random sign for symbol ``s`` within its assumptions (a symbol declared positive
+    or nonnegative stays positive, one declared negative or nonpositive negative; drawn
+    for every symbol, so the points stay those of the same seed)."""
+    sign = rng.choice((-1, 1))
+    return 1 if s.is_nonnegative else -1 if s.is_nonpositive else sign
 
 
 def _one_signed(exprs) -> bool:

@@ -56,13 +56,14 @@ class Proof:
     """A statement proven (or refuted) for a generic system of a given size.
 
     ``steps``: (text, holds) with holds True/False for a checked step and None for a
-    remark; ``holds``: every checked step holds (remarks prove nothing)."""
+    remark; ``holds``: every checked step holds, None while no step is checked (remarks
+    prove nothing)."""
 
     statement: str
     n: int
     k: int
     steps: list = field(default_factory=list)
-    holds: bool = True
+    holds: bool | None = None
 
     def step(self, text: str, residuals=()) -> bool | None:
         """Record a step; its residuals must all be exactly zero for it to hold.  Without
@@ -72,7 +73,7 @@ class Proof:
             return self.remark(text)
         ok = all(is_zero(r) for r in residuals)
         self.steps.append((text, ok))
-        self.holds = self.holds and ok
+        self.holds = ok if self.holds is None else self.holds and ok
         return ok
 
     def remark(self, text: str) -> None:
@@ -84,7 +85,7 @@ class Proof:
         """Record that a (printed) statement is false: some residual is not zero."""
         refuted = not all(is_zero(r) for r in residuals)
         self.steps.append((text, refuted))
-        self.holds = self.holds and refuted
+        self.holds = refuted if self.holds is None else self.holds and refuted
         return refuted
 
     @property
@@ -94,7 +95,7 @@ class Proof:
 
     def as_dict(self) -> dict:
         return {"statement": self.statement, "n": self.n, "k": self.k,
-                "holds": self.holds if self.checked else None,
+                "holds": self.holds,
                 "steps": [{"step": s, "holds": ok, "checked": ok is not None}
                           for s, ok in self.steps]}
 

@@ -29,7 +29,7 @@ import numba
 import numpy as np
 from numba import types
 
-from .kernels import loop_cache
+from .kernels import calls, loop_cache
 from .kernels.calls import _call_at
 
 _f8, _i8 = types.float64, types.int64
@@ -136,9 +136,12 @@ def _change(t, y, p, table, addr, eps, cur, out):
 @functools.cache
 def compiled():
     """``_change`` compiled (or loaded from the signed store) on first use, for
-    ``SIGNATURE`` only (``jetnh cache warm`` compiles it ahead: ``atlas:change``)."""
-    return loop_cache.signed_njit(_change, SIGNATURE, loop_cache.file_stamp(__file__),
-                                  nogil=True, error_model="numpy")
+    ``SIGNATURE`` only (``jetnh cache warm`` compiles it ahead: ``atlas:change``),
+    stamped with this file and ``kernels.calls`` (the kernels' calling convention,
+    compiled into it)."""
+    stamp = loop_cache.file_stamp(__file__) + loop_cache.file_stamp(calls.__file__)
+    return loop_cache.signed_njit(_change, SIGNATURE, stamp, nogil=True,
+                                  error_model="numpy")
 
 
 @functools.cache

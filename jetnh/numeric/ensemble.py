@@ -72,6 +72,8 @@ from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, FINISHED, NONFINITE, S
 from .options import options
 
 PARALLEL = ("prange", "threads", "serial")
+_new = object.__new__
+_setattr = object.__setattr__
 _FLOAT64 = np.dtype(np.float64)
 _NO_SWITCHES = FrozenDict()
 _NO_GIVEN = FrozenDict()        # (no dependent velocity given: ``resolve``)
@@ -114,7 +116,8 @@ def resolve(scene, initial=None, params=None, project=False):
     """The scene to run (with the varying parameters as run-time inputs), the initial
     states Y0 [n_runs, n_states] and the run-time parameters P [n_runs, n_p]."""
     if params is None and _one_row(scene, initial):
-        return (scene, *_of_row(scene, initial, project))
+        y, p = _of_row(scene, initial, project)
+        return scene, y[None, :], p[None, :]
     params = ({_name(k): _column(v, f"params[{_name(k)!r}]") for k, v in params.items()}
               if params else None)
     if params:
@@ -191,13 +194,14 @@ def _one_row(scene, initial) -> bool:
 
 
 def _of_row(scene, initial, project) -> tuple[np.ndarray, np.ndarray]:
-    """``resolve``'s Y0 and P of the one row ``initial`` (``_one_row``), checked."""
-    Y0, P = initial.copy(), scene._p[None, :].copy()
-    if scene.dependent_velocities and not scene._regular_at(Y0[0], scene.t_span[0], P[0]):
-        _check_split(scene, Y0, P, _NO_GIVEN, project)
+    """The state and the parameters (1-d) of the one row ``initial`` (``_one_row``),
+    checked: a copy of the caller's row, the scene's parameters (never written)."""
+    y, p = initial[0].copy(), scene._p
+    if scene.dependent_velocities and not scene._regular_at(y, scene.t_span[0], p):
+        _check_split(scene, y[None, :], p[None, :], _NO_GIVEN, project)
     if scene.system.holonomic:
-        _check_holonomic(scene, Y0, P)
-    return Y0, P
+        _check_holonomic(scene, y[None, :], p[None, :])
+    return y, p
 
 
 def _check_holonomic(scene, Y0, P):
@@ -254,6 +258,18 @@ def _check_dependent(scene, Y0, P, given, project):
                 "it (it follows from the constraints) or pass project=True")
 
 
+class _OfRun:
+    """The ``_arrays`` of an ensemble of one run (``Ensemble._of_run``), made of its run
+    (``_one_arrays``) on first read and kept in its ``__dict__`` (where the other
+    ensembles hold theirs from the start)."""
+
+    def __get__(self, obj, cls=None):
+        if obj is None:
+            return self
+        arrays = obj.__dict__["_arrays"] = _one_arrays(*obj.__dict__["_run"])
+        return arrays
+
+
 class Ensemble(Frozen):
     """The result of ``run_ensemble``: arrays over runs, with named access; immutable
     (``jetnh.frozen``; its arrays are read-only)."""
@@ -267,18 +283,24 @@ class Ensemble(Frozen):
                    switching, switches, pieces, reasons, sensitivities, layout)
 
     @classmethod
-    def _of_run(cls, scene, method, t, y, info, t_last, y_last, Y0, P, wall_time, parallel,
-                workers, save, singular_tol, layout) -> "Ensemble":
+    def _of_run(cls, scene, method, run, arrays, wall_time, parallel, workers, save,
+                singular_tol, layout) -> "Ensemble":
         """The ensemble of one run (``_of_one``: no events, sensitivities or changes of
         split), its attributes in one go (as ``_fill`` sets them) without the wrapper
-        that freezes it after ``__init__`` (``jetnh.frozen``): a run's result."""
-        self = object.__new__(cls)
-        self.__dict__.update(
-            _ONE_RUN, _arrays=(info, t_last, y_last, _NO_EV_N, _NO_EV_T, Y0, P, None, t, y),
-            scene=scene, method=method, param_names=scene.runtime_params,
-            wall_time=wall_time, parallel=parallel, workers=workers, save=save,
-            _singular_tol=singular_tol, layout=layout, _memo={})
+        that freezes it after ``__init__`` (``jetnh.frozen``): a run's result.  Its
+        ``_arrays`` as given, or (None) made of ``run`` (``_one_arrays``' arguments) on
+        first read."""
+        self = _new(cls)
+        _setattr(self, "__dict__", {
+            **_ONE_RUN, "scene": scene, "method": method,
+            "param_names": scene.runtime_params, "wall_time": wall_time,
+            "parallel": parallel, "workers": workers, "save": save,
+            "_singular_tol": singular_tol, "layout": layout, "_memo": {},
+            "_run" if arrays is None else "_arrays": run if arrays is None else arrays})
         return self
+
+    #: an ensemble of ``_of_run``: its arrays made of its run when first read
+    _arrays = _OfRun()
 
     def _fill(self, scene, method, t, y, info, t_last, y_last, ev_n, ev_t, Y0, P,
               event_names, wall_time, parallel, workers, save, singular_tol, switching,
@@ -309,7 +331,9 @@ class Ensemble(Frozen):
         changed split computed now: their pieces hold other charts' compiled code);
         the scene by its kernels' key (``Scene._portable``), which loads them again
         where they are evaluated."""
+        self._arrays            # (an ensemble of one run: made now, without the loop's)
         d = Frozen.__getstate__(self)
+        d.pop("_run", None)
         if self._pieces:
             d.update(aux=self.aux, _pieces={})
         return d
@@ -678,8 +702,8 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
         except (KeyError, TypeError) as exc:     # not planned yet, or not hashable
             quick = quick if type(exc) is KeyError else None
         else:
-            Y0, P = _of_row(scene, initial, project)
-            return _of_one(scene, one, Y0, P, on_error, parallel, n_workers, save)
+            y, p = _of_row(scene, initial, project)
+            return _of_one(scene, one, y, p, on_error, parallel, n_workers, save)
     opts = options(step, singular, newton, **keywords)
     if parallel not in PARALLEL:
         raise JetnhError(f"parallel must be one of {PARALLEL}, not {parallel!r}")
@@ -717,7 +741,7 @@ def run_resolved(scene, Y0, P, opts, *, t_eval=None, save="final", method="dop85
         one = _one_plan(scene, opts, t_eval, save, method, events, timeout, sensitivities,
                         sensitivity_error)
         if one:
-            return _of_one(scene, one, Y0, P, on_error, parallel, workers, save)
+            return _of_one(scene, one, Y0[0], P[0], on_error, parallel, workers, save)
     plan = _batch_plan(scene, opts, t_eval, save, method, events, timeout, sensitivities,
                        sensitivity_error)
     method = plan.method.name
@@ -842,8 +866,9 @@ def _single_plan(scene, plan, opts, t_eval, save, timeout):
 
 
 
-def _of_one(scene, plan, Y0, P, on_error, parallel, workers, save) -> Ensemble:
-    """The ensemble of the one run of ``Y0``, ``P`` by the single-run loop of ``plan``
+def _of_one(scene, plan, y, p, on_error, parallel, workers, save) -> Ensemble:
+    """The ensemble of the one run of the state ``y`` and the parameters ``p`` (1-d, rows
+    of its Y0 and P) by the single-run loop of ``plan``
     (``_single_plan``): what the ensemble's driver stores of its run
     (``methods._common.collect``), the same steps.  Its arrays are views of the loop's
     own (no copies); the loop never reports a success with a NaN or an infinity in its
@@ -852,21 +877,39 @@ def _of_one(scene, plan, Y0, P, on_error, parallel, workers, save) -> Ensemble:
     halt = solve._HALT.copy()
     tic = _clock()
     # (a direct plan's loop reads y0 into a copy of its own: the row itself)
-    out = interrupt.call(plan.entry, halt, plan.limit,
-                         (*plan.head, Y0[0], P[0], *plan.suffix, halt))
+    out = interrupt.call(plan.entry, halt, plan.limit, (*plan.head, y, p, *plan.suffix,
+                                                        halt))
     wall = _clock() - tic
+    endpoints = plan.mode == ENDPOINTS
+    run = (out, endpoints, 1 if endpoints else plan.te.shape[0], y, p)
+    arrays = None       # (made when read)
+    if out[0] == NONFINITE:
+        arrays = _one_arrays(*run)
+        INFO, T_LAST = np.array(arrays[0], dtype=np.int64), np.array(arrays[1], dtype=float)
+        _explain(scene, plan.method.name, plan.kern, plan.checked, plan.singular_tol,
+                 on_error, INFO, T_LAST, arrays[2], arrays[6], arrays[5])
+        arrays = (INFO, T_LAST, *arrays[2:])
+    return Ensemble._of_run(scene, plan.method.name, run, arrays, wall, parallel,
+                            workers if parallel != "serial" else 1, save, plan.singular_tol,
+                            plan.kern.layout)
+
+
+def _one_arrays(out, endpoints, n_times, y, p) -> tuple:
+    """An ensemble's ``_arrays`` of the one run of ``y``, ``p`` whose loop returned
+    ``out`` (``_of_one``; ``endpoints``: its first and last rows saved, else ``n_times``
+    rows at ``t_eval``): views of the loop's own arrays and of ``y``, ``p`` (no
+    copies)."""
     status, ts, ys, n_out, stats = out[:5]
-    n = Y0.shape[1]
+    n = y.shape[0]
     # (a loop that watched nothing keeps its last time and state in row n_out)
     if len(out) == 6:
         T_LAST, Y_LAST = ts[n_out:n_out + 1], ys[n_out:n_out + 1, :n]
     else:
         T_LAST, Y_LAST = (out[5],), out[6][None, :n]
-    if plan.mode == ENDPOINTS:
-        n_times, first, filled = 1, n_out - 1, 1 if n_out > 0 else 0
+    if endpoints:
+        first, filled = n_out - 1, 1 if n_out > 0 else 0
     else:
-        n_times, first = plan.te.shape[0], 0
-        filled = min(n_out, n_times)
+        first, filled = 0, min(n_out, n_times)
     if filled == n_times:
         OUT_T, OUT_Y = ts[None, first:first + n_times], ys[None, first:first + n_times, :n]
     else:
@@ -875,13 +918,8 @@ def _of_one(scene, plan, Y0, P, on_error, parallel, workers, save) -> Ensemble:
         OUT_Y[0, :filled] = ys[first:first + filled, :n]
     # (status, steps, rejected, nfev, rows, indicator): an array on first read
     INFO = ((status, *stats, n_out, out[-1]),)
-    if status == NONFINITE:
-        INFO, T_LAST = np.array(INFO, dtype=np.int64), np.array(T_LAST, dtype=float)
-        _explain(scene, plan.method.name, plan.kern, plan.checked, plan.singular_tol,
-                 on_error, INFO, T_LAST, Y_LAST, P, Y0)
-    return Ensemble._of_run(scene, plan.method.name, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST,
-                            Y0, P, wall, parallel, workers if parallel != "serial" else 1,
-                            save, plan.singular_tol, plan.kern.layout)
+    return (INFO, T_LAST, Y_LAST, _NO_EV_N, _NO_EV_T, y[None, :], p[None, :], None, OUT_T,
+            OUT_Y)
 
 
 _clock = time.perf_counter

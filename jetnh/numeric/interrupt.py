@@ -33,7 +33,14 @@ calls, the largest part of a short run's Python side): ``signal.set_wakeup_fd`` 
 ``_signal``'s) is replaced by ``set_wakeup_fd``, the same function that also notes that
 the wakeup fd may have changed, so a call confirms the fd (one ``set_wakeup_fd``) only
 after someone else set one, after the watchdog changed, or where the function in place
-is not this one (replaced again since).  Signals reach only the main thread, so
+is not this one (replaced again since), and at the latest ``CONFIRM`` seconds after the
+last confirmation: a setter this replacement cannot see (a reference to CPython's
+function bound before ``import jetnh``, as uvloop binds one at its import; the C API;
+an extension calling it directly) leaves Ctrl-C unheard for at most that window, while
+a tight loop of short runs still pays the two system calls at most once per window.
+So ``import jetnh`` replaces ``signal.set_wakeup_fd`` and ``_signal.set_wakeup_fd``
+process-wide with a wrapper that calls CPython's own, unchanged, and only notes the
+change.  Signals reach only the main thread, so
 elsewhere only the timeout is watched.  ``shared(halt)`` is one such watch for many
 compiled calls in turn (a shooting search's runs): registered and the wakeup fd set
 once, each call only resetting ``halt``.
@@ -59,6 +66,10 @@ import numpy as np
 INTERRUPT, TIMEOUT = 1, 2
 #: seconds the watchdog waits with nothing to watch before it ends
 IDLE = 60.0
+#: seconds after which a call confirms the wakeup fd again even though no one was seen
+#: setting it (setters that bypass ``set_wakeup_fd``, module docstring): the longest
+#: Ctrl-C can go unheard after such a setter, one confirmation per window in a loop
+CONFIRM = 0.25
 
 
 def flag() -> np.ndarray:
@@ -180,7 +191,7 @@ def _watchdog() -> _Watchdog:
 def _forget():
     """Close the watchdog's sockets (at exit; in a forked child, whose copy has no
     thread), giving up the wakeup fd first if it is theirs."""
-    global _WATCHDOG
+    global _WATCHDOG, _MAIN
     _KNOWN[0] = None
     if _WATCHDOG is not None:
         fd = _WATCHDOG.signal_w.fileno()
@@ -194,8 +205,13 @@ def _forget():
         _WATCHDOG = None
     _DEPTH[0] = 0
     _CAUGHT.clear()
-    # (_HALTS kept: a child forked during a call pops its entry as the call unwinds,
-    # SIGINT held back until then as in the parent)
+    if _get_ident() != _MAIN:
+        # forked by another thread (the main thread's calls do not exist here) or at
+        # exit off the main thread: nothing will pop _HALTS; this thread is now the main
+        _HALTS.clear()
+        _MAIN = threading.main_thread().ident
+    # (else _HALTS kept: a child forked during a call in the main thread pops its entry
+    # as the call unwinds, SIGINT held back until then as in the parent)
 
 
 os.register_at_fork(after_in_child=_forget)
@@ -209,6 +225,9 @@ _set_wakeup_fd = getattr(_signal.set_wakeup_fd, "__wrapped__", _signal.set_wakeu
 #: the watchdog whose socket is known to be the wakeup fd: set where a call made it so
 #: (or found it so), None once anyone else may have set one (``set_wakeup_fd``)
 _KNOWN: list = [None]
+#: when ``_KNOWN`` was last confirmed (``time.monotonic``)
+_KNOWN_AT: list = [0.0]
+_monotonic = time.monotonic
 
 
 @functools.wraps(_set_wakeup_fd)
@@ -262,7 +281,8 @@ def call(fn, halt: np.ndarray, timeout: float | None = None, args: tuple = ()):
     if (timeout is None and wd is not None and _get_ident() == _MAIN
             and _getsignal(_SIGINT) is _on_sigint
             and ((_KNOWN[0] is wd and signal.set_wakeup_fd is set_wakeup_fd
-                  and _signal.set_wakeup_fd is set_wakeup_fd) or _claim(wd))):
+                  and _signal.set_wakeup_fd is set_wakeup_fd
+                  and _monotonic() - _KNOWN_AT[0] < CONFIRM) or _claim(wd))):
         # the common case (the main thread, _on_sigint in place, no timeout, the wakeup
         # fd the watchdog's): ``halt`` on the list the watchdog reads on SIGINT
         _HALTS.append(halt)
@@ -271,7 +291,8 @@ def call(fn, halt: np.ndarray, timeout: float | None = None, args: tuple = ()):
                 wd.start()
             return fn(*args)
         finally:
-            _HALTS.pop()
+            if _HALTS:                        # (cleared in a child forked by a thread)
+                _HALTS.pop()
             if _CAUGHT and not (_HALTS or _DEPTH[0]):
                 _deliver()
     return _call(fn, halt, timeout, args)
@@ -296,6 +317,7 @@ def _take(wd) -> int:
     if old == own or old < 0:             # (no one else's: it stays the watchdog's)
         if signal.set_wakeup_fd is set_wakeup_fd is _signal.set_wakeup_fd:
             _KNOWN[0] = wd
+            _KNOWN_AT[0] = _monotonic()
         return -1
     _KNOWN[0] = None
     return old

@@ -354,9 +354,11 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
             loops.on_constraints(plan.kern, plan.ctl, plan.mode, None, out, p, plan.t0)
         dense = plan.dense_ends
         status = out[0]
-        if status == FINISHED and len(out) == 6:        # most runs: at once
+        if status == FINISHED and (len(out) == 6 or out[7] is None):   # most runs: at once
+            ce = plan.ce
             return Trajectory._of_loop(scene, out, p, plan.method.name, _FINISHED_TEXT,
-                                       wall, plan.kern, None if dense is None else dense[0])
+                                       wall, plan.kern, None if dense is None else dense[0],
+                                       () if ce is None else ce.names)
         if dense is not None:    # stopped inside a step or not
             dense = dense[status == EVENT or status == SINGULAR]
         return trajectory(scene, plan.method.name, out, wall, plan.kern, plan.ce, p,
@@ -408,8 +410,11 @@ def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, 
     (``loop._solve``), or an error; with ``n_events``, only the first ``n_events`` events
     of ``ce`` are reported; with ``sens`` (the kernels of a run with sensitivities) the
     state's columns, and the sensitivities apart."""
-    if len(out) == 6 and out[0] == FINISHED and sens is None:    # most runs: at once
-        return Trajectory._of_loop(scene, out, p, method, _FINISHED_TEXT, wall, kern, dense)
+    if (out[0] == FINISHED and sens is None and (len(out) == 6 or out[7] is None)
+            and not isinstance(out, Result)):       # most runs: at once
+        names = () if ce is None else ce.names[:n_events]
+        return Trajectory._of_loop(scene, out, p, method, _FINISHED_TEXT, wall, kern, dense,
+                                   names)
     if len(out) == 6:      # a loop that watched nothing: no events
         status, ts, ys, n_out, stats, sing_index = out
         if status != FINISHED:      # its last time and state (row n_out), for diagnosis
@@ -434,7 +439,7 @@ def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, 
         y_init = y_init[:n]
         if len(out) != 6 or status != FINISHED:
             y_last = y_last[:n]
-        if ce is not None:
+        if ce is not None and ev_y is not None:
             ev_y = ev_y[:, :n]
     if n_out != ts.shape[0]:
         ts, ys = ts[:n_out], ys[:n_out]
@@ -470,7 +475,11 @@ def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, 
         reason = f"{STATUS_TEXT[status]}, at t = {t_last:.10g}"
     if ce is not None:
         k = len(ce) if n_events is None else n_events
-        t_events, y_events = split_records(k, ev_t[:n_ev], ev_i[:n_ev], ev_y[:n_ev])
+        if ev_t is None:        # (none recorded: the loop returned no records)
+            t_events = [np.empty(0) for _ in range(k)]
+            y_events = [np.empty((0, ys.shape[1])) for _ in range(k)]
+        else:
+            t_events, y_events = split_records(k, ev_t[:n_ev], ev_i[:n_ev], ev_y[:n_ev])
         events = (ce.names[:k], t_events, y_events)
     # the loop's own float64, C-contiguous rows: taken as they are
     traj = Trajectory._of_run(scene, (ts, ys, n_out), p, method, status, reason,

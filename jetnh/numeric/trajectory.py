@@ -74,6 +74,11 @@ class Diagnostics:
     def as_dict(self) -> dict:
         return asdict(self)
 
+    def rows_note(self) -> str:
+        """Over which rows the figures were taken, where that is not every step of the
+        run ("" where it is): the printed summary's and the notebook view's line."""
+        return _rows_text(self)
+
     def __str__(self):
         lines = [f"{self.method}: {self.stop_reason} ({'success' if self.success else 'failure'})",
                  f"  steps {self.steps} (rejected {self.rejected}), rhs evaluations "
@@ -87,7 +92,7 @@ class Diagnostics:
                     if self.energy_changes else "")]
         for k, v in self.integral_drift.items():
             lines.append(f"  integral {k}: drift {v:.3e}")
-        rows = rows_text(self)
+        rows = self.rows_note()
         if rows:
             lines.append(f"  {rows}")
         for k, v in self.events.items():
@@ -126,7 +131,7 @@ def _energy_text(initial, drift, relative) -> str:
     return f"energy {initial:.12g}, drift {drift:.3e} (relative {relative:.3e})"
 
 
-def rows_text(d) -> str:
+def _rows_text(d) -> str:
     """Over which rows a run's residual, energy and integral figures were taken, where
     that is not every step of the run ("" where it is)."""
     n = f"{d.rows} row{'s' if d.rows != 1 else ''}"
@@ -254,8 +259,9 @@ class _Charts:
 
 
 class _EventList:
-    """The empty list of a trajectory's ``t_events`` or ``y_events`` where it has no
-    events: made on first read (kept in its ``_memo``), not with every run."""
+    """A trajectory's ``t_events`` or ``y_events`` where it recorded no event: one empty
+    array (read-only) per event it watched (``event_names``; none: an empty list), made
+    on first read (kept in its ``_memo``), not with every run."""
 
     def __set_name__(self, owner, name):
         self.name = name
@@ -265,7 +271,9 @@ class _EventList:
             return self
         found = obj._memo.get(self.name)
         if found is None:
-            found = obj._memo[self.name] = []
+            k = len(obj.event_names)
+            shape = (0,) if self.name == "t_events" else (0, obj._rows[1].shape[1])
+            found = obj._memo[self.name] = readonly([np.empty(shape) for _ in range(k)])
         return found
 
 
@@ -319,7 +327,7 @@ class Trajectory(Frozen):
     #: the run had no events
     t_events = _EventList()
     y_events = _EventList()
-    #: a trajectory of ``_of_loop``: the loop's result (status, ts, ys, n, stats, _) and
+    #: a trajectory of ``_of_loop``: the loop's result (status, ts, ys, n, stats, ...) and
     #: its wall-clock time, of which ``_rows`` and ``_counts`` are made when read
     _rows = _OfLoop(lambda self: self._loop[1:4])
     _counts = _OfLoop(lambda self: (self._loop[4], self._wall, self.scene.projected))
@@ -366,17 +374,20 @@ class Trajectory(Frozen):
         return self
 
     @classmethod
-    def _of_loop(cls, scene, out, p, method, stop_reason, wall, kernels, dense
-                 ) -> "Trajectory":
-        """``_finished`` of the 6-tuple ``out`` a compiled loop returned (finished,
-        status 0) and the call's wall-clock time ``wall``: the tuple kept as it is
-        (``_rows``, ``_counts`` made of it when read), the other attributes their class
-        defaults, so that the most common run makes the fewest objects."""
+    def _of_loop(cls, scene, out, p, method, stop_reason, wall, kernels, dense,
+                 event_names=()) -> "Trajectory":
+        """``_finished`` of the tuple ``out`` a compiled loop returned (finished, status
+        0: the 6-tuple of a loop that watched nothing, or the 12 entries of one that
+        watched and recorded no event) and the call's wall-clock time ``wall``: the tuple
+        kept as it is (``_rows``, ``_counts`` made of it when read), the other attributes
+        their class defaults, so that the most common run makes the fewest objects;
+        ``event_names``: the events it watched (a tuple), each with no occurrence."""
         self = _new(cls)
-        _setattr(self, "__dict__", {"scene": scene, "_loop": out, "_p": p,
-                                    "_kernels": kernels, "method": method,
-                                    "stop_reason": stop_reason, "_wall": wall,
-                                    "_dense": dense, "_memo": {}})
+        d = {"scene": scene, "_loop": out, "_p": p, "_kernels": kernels, "method": method,
+             "stop_reason": stop_reason, "_wall": wall, "_dense": dense, "_memo": {}}
+        if event_names:
+            d["event_names"] = event_names
+        _setattr(self, "__dict__", d)
         return self
 
     def _fill(self, scene, rows, p, method, status, stop_reason, counts, kernels, events,

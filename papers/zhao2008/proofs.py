@@ -182,6 +182,7 @@ def run(max_n: int = 4, log=print) -> list[dict]:
                 d = p.as_dict()
                 d["seconds"] = round(time.perf_counter() - t0, 2)
                 out.append(d)
-                log(f"  n={n} k={k} {'holds ' if p.holds else 'FAILS '} {p.statement[:60]}"
+                verdict = {True: "holds ", False: "FAILS "}.get(p.holds, "remarks only ")
+                log(f"  n={n} k={k} {verdict}{p.statement[:60]}"
                     f" ({d['seconds']} s)")
     return out

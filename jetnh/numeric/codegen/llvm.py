@@ -142,10 +142,7 @@ def straight_line(ops: tuple):
                 name, text = ir_text(ops)
                 module = llvm.parse_assembly(text)
                 module.triple, module.data_layout = mod.triple, str(mod.data_layout)
-                # linked as it is: the library's module passes optimise it (numba's
-                # add_llvm_module would first run the function passes on it, a second
-                # round of the same passes over the whole program)
-                context.active_code_library._final_module.link_in(module)
+                _link(context.active_code_library, module)
                 fn = cgutils.get_or_insert_function(
                     mod, ir.FunctionType(ir.VoidType(), [dbl] + [ptr["y"].type] * 3), name)
                 builder.call(fn, [args[0], ptr["y"], ptr["p"], ptr["o"]])
@@ -198,6 +195,19 @@ def straight_line(ops: tuple):
         return types.void(t, y, p, out), codegen
 
     return body
+
+
+def _link(library, module):
+    """Link the parsed ``module`` into numba's code ``library`` as it is: the library's
+    module passes optimise it (numba's ``add_llvm_module`` would first run the function
+    passes on it, a second round of the same passes over the whole program).  That goes
+    through numba's private ``_final_module``; where a numba release has none, through
+    ``add_llvm_module`` (slower to compile, the same code)."""
+    final = getattr(library, "_final_module", None)
+    if final is None:
+        library.add_llvm_module(module)
+    else:
+        final.link_in(module)
 
 
 def ir_text(ops: tuple) -> tuple[str, str]:

@@ -77,7 +77,7 @@ KINK = 0.25
 #: problem stiff, STIFF_RESET negative ones in a row clear the count
 STIFF_EVERY, STIFF_RUN, STIFF_RESET = 1000, 15, 6
 
-#: what every solve returns (``ev_t ev_i ev_y`` None where it watched no user events)
+#: what every solve returns (``ev_t ev_i ev_y`` None where it recorded no event)
 Result = namedtuple("Result", "status ts ys n_out stats t y ev_t ev_i ev_y n_ev sing_index")
 #: the step control of one run: tolerances and limits (``n_steps`` > 0: fixed steps);
 #: ``n_hol`` > 0: project every accepted step onto the ``n_hol`` holonomic constraints of
@@ -258,9 +258,10 @@ def no_events(rows, ev_dir):
 @inline
 def watch_result(res, n_user):
     """The tuple of a loop that watches (``_solve``'s, ``res``) as its entry returns it:
-    the event records None where the run watches no user events (``n_user`` 0): an
-    array returned to Python costs ~0.3 us to box, None nothing (``watching``)."""
-    if n_user > 0:
+    the event records None where the run recorded no event (it watches no user events,
+    ``n_user`` 0, or none occurred): an array returned to Python costs ~0.3 us to box,
+    None nothing (``watching``)."""
+    if n_user > 0 and res[10] > 0:
         return res
     status, ts, ys, n_out, stats, t, y, _, _, _, n_ev, sing_index = res
     return status, ts, ys, n_out, stats, t, y, None, None, None, n_ev, sing_index
@@ -381,9 +382,10 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
     ``finite_status``), the output rows ``ts[:n_out]``, ``ys[:n_out]``, ``stats =
     (accepted, rejected, rhs evaluations)`` (``counts``), the last time and state, the
     event records (time, index, state; the loop's entry returns None for them where the
-    run watches no user events: ``watch_result``), their count and the index of the
+    run recorded none: ``watch_result``), their count and the index of the
     indicator that stopped the run (-1 if none); a run that stopped in a step (EVENT,
-    SINGULAR) has that step's start in row ``n_out`` of ``ts``, ``ys`` (``atlas``).  A loop that watches nothing (``WATCH`` false) records no events
+    SINGULAR) has that step's start in row ``n_out`` of ``ts``, ``ys`` (``atlas``).  A
+    loop that watches nothing (``WATCH`` false) records no events
     and returns ``(status, ts, ys, n_out, stats, sing_index)`` with the last time and
     state in row ``n_out`` of ``ts``, ``ys``: every array a compiled call returns is boxed
     at ~0.4 us, more than a short run's arithmetic.
