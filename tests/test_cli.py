@@ -469,7 +469,8 @@ def test_compare_large_model_bounded(capsys):
     assert code == 0 and len(out) <= 30_000
     assert "T and the forms on L~" in out and "chetaev accelerations" in out
     assert "vakonomic and holder have the same accelerations" in out
-    assert "vakonomic and suslov agree on the branch" in out
+    assert ("vakonomic and suslov have the same accelerations at states on the branch" in out
+            and "the motion leaves the branch" in out)      # (dL~/dq^alpha != 0 here)
     code, out, _ = inproc(capsys, "compare", "rolling_disk", "--format", "json", "-q")
     data = json.loads(out)
     assert "T^x_phi" in data["the constraint manifold and the embedded Lagrangian"]

@@ -79,7 +79,8 @@ def test_set_wakeup_fd_is_cpythons_in_front():
     refuses a non-main thread as CPython's does, and forgets the watchdog's fd."""
     assert signal.set_wakeup_fd is interrupt.set_wakeup_fd is _signal.set_wakeup_fd
     assert signal.set_wakeup_fd.__wrapped__ is interrupt._set_wakeup_fd
-    interrupt.call(lambda: None, interrupt.flag())
+    prior = signal.set_wakeup_fd(-1)    # (a fd an earlier test in this process left in
+    interrupt.call(lambda: None, interrupt.flag())  # place: the call would forward to it)
     assert interrupt._KNOWN[0] is interrupt._WATCHDOG
     fd = signal.set_wakeup_fd(-1)
     assert interrupt._KNOWN[0] is None
@@ -97,6 +98,8 @@ def test_set_wakeup_fd_is_cpythons_in_front():
     thread.start()
     thread.join()
     assert len(errors) == 1 and _wakeup_fd() == fd
+    if prior not in (-1, fd):
+        signal.set_wakeup_fd(prior)
 
 
 def test_a_wakeup_fd_set_between_runs_is_theirs_again_after_a_stopped_call(handler, theirs):
