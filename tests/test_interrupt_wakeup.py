@@ -46,6 +46,18 @@ def _wakeup_fd():
     return fd
 
 
+@pytest.fixture(autouse=True)
+def listening():
+    """Python's own SIGINT handler during each test: a process started in the
+    background by a shell without job control inherits SIGINT ignored, and a call then
+    (rightly) listens for none."""
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, before)
+
+
 @pytest.fixture
 def handler():
     """A SIGINT handler of the test's own, recording each signal; the previous handler
@@ -198,6 +210,8 @@ print(got, time.monotonic() - tic, seen, early(-1) == w.fileno(), flush=True)
 FORKED = """
 import os, signal, threading, time
 from jetnh.numeric import interrupt
+
+signal.signal(signal.SIGINT, signal.default_int_handler)   # (not SIG_IGN, inherited)
 
 halt = interrupt.flag()
 interrupt.call(lambda: None, halt)
