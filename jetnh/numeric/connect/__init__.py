@@ -165,8 +165,11 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
         Default: the straight-line velocities and zero multipliers, moved off runs
         that stop before t1 or start rank-deficient.
     tol : float, default 1e-9
-        The largest accepted endpoint error (max norm, relative to 1 + |end|); below
-        ``MAX_TOL`` (1e-3): a looser miss is no connection.
+        The largest accepted endpoint error (max norm), relative to each named
+        coordinate's displacement |end - start|, at least the largest displacement of
+        the named coordinates (``shooting.end_scale``: free of units and origin;
+        ``Connection.relative_residual`` is the answer's), and to 1 for the momenta of
+        free coordinates; below ``MAX_TOL`` (1e-3): a looser miss is no connection.
     rtol, atol : float, default 1e-11, 1e-12
         The integration's tolerances.
     max_iter : int, default 100
@@ -233,7 +236,7 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
                          f"not {method!r}")
     tol = arguments.positive(tol, "tol")
     if tol >= MAX_TOL:
-        raise ArgumentError(f"tol={tol!r} accepts an end missed by {tol:g} (1 + |end|): "
+        raise ArgumentError(f"tol={tol!r} accepts an end missed by {tol:g} of its displacement: "
                             f"no connection; give tol < {MAX_TOL:g} (default 1e-9)",
                             argument="tol")
     max_iter = arguments.count(max_iter, "max_iter", limit=10_000)

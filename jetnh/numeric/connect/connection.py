@@ -52,6 +52,9 @@ class Connection:
     #: what the least-action search (``connect(restarts=)``) tried and where it stopped;
     #: "" where it did not run
     search: str = ""
+    #: the largest miss of an end condition relative to its scale (the displacement
+    #: start -> end, ``shooting.end_scale``): what ``tol`` bounds
+    relative_residual: float = 0.0
 
     @cached_property
     def trajectory(self) -> Trajectory:

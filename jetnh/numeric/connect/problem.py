@@ -14,7 +14,7 @@ from ...algebra import dag
 
 #: the principles whose multipliers are unknowns of the two-point problem
 VARIATIONAL = ("vakonomic", "holder")
-#: ``tol`` must be below this: an end missed by more (relative to 1 + |end|) is no
+#: ``tol`` must be below this: an end missed by more (relative to its displacement) is no
 #: connection
 MAX_TOL = 1e-3
 

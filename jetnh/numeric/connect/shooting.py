@@ -241,6 +241,28 @@ class OutOfTime(Exception):
     search, past every route's handling: not a ``JetnhError``)."""
 
 
+#: the rounding of a coordinate's value, in units of its size: a miss below this many
+#: ulps of max(|start|, |end|) is below the resolution of the doubles themselves
+ROUNDING = 16.0 * np.finfo(float).eps
+
+
+def end_scale(start, end) -> np.ndarray:
+    """The scale of each named end coordinate's miss, free of the units and of the
+    origin of the coordinates: its own displacement |end - start|, at least the largest
+    displacement of the named coordinates (a coordinate the motion leaves and returns
+    to); where none moves (a loop), the configuration's size max |start|, and 1 only
+    where that is 0 too; plus the rounding of the values (``ROUNDING`` max(|start|,
+    |end|)), the resolution of the doubles that hold them."""
+    start, end = np.asarray(start, dtype=float), np.asarray(end, dtype=float)
+    move = np.abs(end - start)
+    size = float(move.max()) if move.size else 0.0
+    if size == 0.0:
+        size = float(np.abs(start).max()) if start.size else 0.0
+    if size == 0.0:
+        size = 1.0
+    return np.maximum(move, size) + ROUNDING * np.maximum(np.abs(start), np.abs(end))
+
+
 class Shooter:
     """Runs of one scene from the start with the unknowns ``u``: the endpoint residual
     and its Jacobian from the sensitivities.  ``deadline`` (``time.monotonic()``, or
@@ -260,6 +282,9 @@ class Shooter:
         names = scene.state_names
         self.rows = [names.index(c) for c in q1]
         self.target = np.array(list(q1.values()))
+        #: each end condition's scale: the accepted miss is ``tol`` times it
+        #: (``end_scale``)
+        self.scale = end_scale([q0[c] for c in q1], list(q1.values()))
         self.cols = [names.index(u) for u in unknowns]
         # as index arrays (a list is converted on every use)
         self._rows = np.array(self.rows, dtype=np.intp)
@@ -652,5 +677,7 @@ class Segments:
         return F, Jm
 
     def scale(self, U, target):
-        """1 + |value| of each condition's quantity (the inner states, the end)."""
-        return np.concatenate([1.0 + np.abs(U[self.m:]), 1.0 + np.abs(target)])
+        """Each condition's scale: 1 + |value| of the inner states, the shooter's
+        ``scale`` of the end conditions (``end_scale``; single shooting polishes the
+        answer, or the stitched motion is checked against it)."""
+        return np.concatenate([1.0 + np.abs(U[self.m:]), self.shooter.scale])

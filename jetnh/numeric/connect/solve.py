@@ -40,6 +40,8 @@ class Search(Shooter):
         self.momenta = momenta
         if momenta is not None:
             self.target = np.concatenate([self.target, np.zeros(len(momenta.free))])
+            # the momenta's transversality conditions: as before, relative to 1
+            self.scale = np.concatenate([self.scale, np.ones(len(momenta.free))])
 
     #: (scaled miss, u) of the run over the whole span that came nearest the end
     closest = None
@@ -55,7 +57,7 @@ class Search(Shooter):
         # the closest miss is read only by ``out_of_time``: kept under a timeout alone
         if self.deadline is not None and self.span == self.scene.t_span \
                 and len(got[0]) == len(self.target):
-            miss = float(np.max(np.abs(got[0] - self.target) / (1.0 + np.abs(self.target))))
+            miss = float(np.max(np.abs(got[0] - self.target) / self.scale))
             if self.closest is None or miss < self.closest[0]:
                 self.closest = (miss, np.array(u, dtype=float))
         return got
@@ -139,14 +141,14 @@ class Search(Shooter):
             def evaluate(v):
                 got = endpoint(v)
                 return None if got is None else (got[0] - target, got[1])
-            scale = 1.0 + np.abs(target)
+            scale = self.scale
         else:
             pick = list(rows)
 
             def evaluate(v):
                 got = endpoint(v)
                 return None if got is None else ((got[0] - target)[pick], got[1][pick])
-            scale = (1.0 + np.abs(target))[pick]
+            scale = self.scale[pick]
 
         def stuck(v, F, Jm):
             if self.least_squares_point(F, Jm):
@@ -250,7 +252,7 @@ class Search(Shooter):
             return (ind + rest)[:len(self.unknowns)]
         from scipy.linalg import qr
 
-        Jm = got[1] / (1.0 + np.abs(self.target))[:, None]
+        Jm = got[1] / self.scale[:, None]
         norms = np.linalg.norm(Jm, axis=0)
         Jm = Jm / np.where(norms > 0, norms, 1.0)
         r = rank(singular_values(Jm), self.rcond)
@@ -416,6 +418,8 @@ class Search(Shooter):
         target = self.target.tolist()
         miss = [abs(a - b) for a, b in zip(q.tolist(), target)]
         residual = max(miss)
+        # the miss relative to each condition's own scale (``shooting.end_scale``)
+        relative = max([a / b for a, b in zip(miss, self.scale.tolist())])
         full = singular_values(Jm).tolist()
         # the dependent velocities at t0: the aux kernel on the first row alone
         state, aux = first_values(motion)
@@ -429,10 +433,11 @@ class Search(Shooter):
             iterations=iterations,
             _columns=tuple(self.cols), _rcond=self.rcond, _run=MappingProxyType(
                 {"rtol": self.rtol, "atol": self.atol, "method": self.method}),
-            conditions=self.conditions, route=route)
-        if tol is not None and max([m / (1 + abs(b)) for m, b in zip(miss, target)]) > tol:
+            conditions=self.conditions, route=route, relative_residual=relative)
+        if tol is not None and relative > tol:
             raise ConnectError(
-                f"the {scene.principle} motion found ends {residual:.3g} away from end"
+                f"the {scene.principle} motion found ends {residual:.3g} away from end "
+                f"({relative:.3g} of the displacement start -> end)"
                 + self._reachability(u), best)
         return best
 
