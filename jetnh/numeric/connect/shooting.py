@@ -263,6 +263,12 @@ def end_scale(start, end) -> np.ndarray:
     return np.maximum(move, size) + ROUNDING * np.maximum(np.abs(start), np.abs(end))
 
 
+def _speed(q0, q1, T) -> float:
+    """The straight line's speed scale: the largest displacement start -> end of the
+    named coordinates over T (``end_scale``'s fallbacks where none moves)."""
+    return float(end_scale([q0[c] for c in q1], [q1[c] for c in q1]).max()) / abs(T)
+
+
 class Shooter:
     """Runs of one scene from the start with the unknowns ``u``: the endpoint residual
     and its Jacobian from the sensitivities.  ``deadline`` (``time.monotonic()``, or
@@ -521,7 +527,7 @@ class Shooter:
             if newton is not None and self.regular(self.endpoint(newton)):
                 return newton
             reaching = u
-        scale = max([abs(q1[c] - q0[c]) for c in q1] + [1.0]) / abs(T)
+        scale = _speed(q0, q1, T)
         pattern = 0.5 * (-0.6) ** np.arange(len(u0))
         speed = np.ones(len(u0))
         for k in range(1, 12):
