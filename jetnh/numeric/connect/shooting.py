@@ -246,13 +246,19 @@ class OutOfTime(Exception):
 ROUNDING = 16.0 * np.finfo(float).eps
 
 
+#: a named coordinate's end is met relative to its own displacement, at least this
+#: fraction of the largest one (a coordinate that ends where it started, or nearly)
+SMALLEST_MOVE = 1e-6
+
+
 def end_scale(start, end) -> np.ndarray:
     """The scale of each named end coordinate's miss, free of the units and of the
-    origin of the coordinates: its own displacement |end - start|, at least the largest
-    displacement of the named coordinates (a coordinate the motion leaves and returns
-    to); where none moves (a loop), the configuration's size max |start|, and 1 only
-    where that is 0 too; plus the rounding of the values (``ROUNDING`` max(|start|,
-    |end|)), the resolution of the doubles that hold them."""
+    origin of the coordinates: its own displacement |end - start|, at least
+    ``SMALLEST_MOVE`` times the largest displacement of the named coordinates (a
+    coordinate the motion leaves and returns to); where none moves (a loop), the
+    configuration's size max |start|, and 1 only where that is 0 too; plus the rounding
+    of the values (``ROUNDING`` max(|start|, |end|)), the resolution of the doubles
+    that hold them."""
     start, end = np.asarray(start, dtype=float), np.asarray(end, dtype=float)
     move = np.abs(end - start)
     size = float(move.max()) if move.size else 0.0
@@ -260,7 +266,7 @@ def end_scale(start, end) -> np.ndarray:
         size = float(np.abs(start).max()) if start.size else 0.0
     if size == 0.0:
         size = 1.0
-    return np.maximum(move, size) + ROUNDING * np.maximum(np.abs(start), np.abs(end))
+    return np.maximum(move, SMALLEST_MOVE * size) + ROUNDING * np.maximum(np.abs(start), np.abs(end))
 
 
 def _speed(q0, q1, T) -> float:

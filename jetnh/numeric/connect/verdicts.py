@@ -12,7 +12,7 @@ import numpy as np
 from ..atlas import split_measure_of
 from ..methods._common import jit
 from . import small
-from .shooting import end_scale
+from .shooting import SMALLEST_MOVE, end_scale
 
 #: smallest / largest eigenvalue of the controllability Gramian scaled to a unit
 #: diagonal (``gramian_ratio``) below which the path is abnormal
@@ -414,9 +414,12 @@ def gramian_ratios(tr, samples) -> tuple:
 
 def _displacements(start, end) -> np.ndarray:
     """Each coordinate's displacement |end - start|; where it is 0, the largest
-    (``shooting.end_scale``'s, with its fallbacks where none moves)."""
+    (``shooting.end_scale``'s fallbacks where none moves)."""
     move = np.abs(np.asarray(end, dtype=float) - np.asarray(start, dtype=float))
-    return np.where(move > 0, move, end_scale(start, end))
+    largest = float(move.max()) if move.size else 0.0
+    if largest == 0.0:          # no coordinate moves: end_scale's fallbacks
+        largest = float(end_scale(start, end).max()) / SMALLEST_MOVE
+    return np.where(move > 0, move, largest)
 
 
 def _weighted_inputs(tr, times, ys, B) -> np.ndarray:
