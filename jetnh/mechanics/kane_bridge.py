@@ -6,8 +6,10 @@ works in q and qdot, so the speeds are solved from them, u = U(t, q, qdot), and 
 expression of the model is read with u replaced by U:
 
 - L = T - V: T the kinetic energies of the bodies and particles; V the potential of the
-  point loads that have one (a force constant in the inertial frame on a point located
-  from a point at rest: V = -F . r), checked against their generalized forces;
+  loads that have one (a force constant in the inertial frame on a point located
+  from a point at rest: V = -F . r; a load whose generalized forces are free of t and
+  qdot with a symmetric Jacobian, such as a spring F = -k r: integrated), checked
+  against their generalized forces;
 - every other load gives generalized forces Q_s = sum F . dv/dqdot^s (v the velocity of
   the point, or the angular velocity of the frame, in the inertial frame);
 - velocity constraints (linear in u) become constraints in qdot; configuration
@@ -329,6 +331,8 @@ def lagrangian_and_forces(reader: _Reader):
         q_load = [sum((F[i] * dag.diff(v[i], qd) for i in range(3)), sp.S.Zero)
                   for qd in J.qd]
         pot = _potential(reader, where, F, q_load) if isinstance(where, Point) else None
+        if pot is None:
+            pot = _conservative(J, q_load)
         if pot is not None:
             V += pot
         else:
@@ -351,6 +355,30 @@ def _potential(reader: _Reader, point, F, Q):
         return None
     r = _check_point(reader, point, "the point of a load")
     V = -sum((F[i] * r[i] for i in range(3)), sp.S.Zero)
+    minus_dV = [-dag.diff(V, q) for q in J.q]
+    return V if _agree(minus_dV, Q, _random_points(J, minus_dV + list(Q))) else None
+
+
+def _conservative(J: JetSpace, Q):
+    """V with -dV/dq = ``Q`` where the generalized forces ``Q`` of a load are
+    conservative: free of t and qdot, with a symmetric Jacobian (dQ_i/dq_j = dQ_j/dq_i,
+    at random configurations), and integrable coordinate by coordinate (V = -int Q_1
+    dq_1, then -int (Q_2 + dV/dq_2) dq_2, ...: a spring F = -k r on a point, a torsion
+    spring on a frame), checked; else None."""
+    own = {J.t, *J.qd}
+    if not any(e != 0 for e in Q) or any(dag.free_symbols(e) & own for e in Q):
+        return None
+    n = len(J.q)
+    rows = [dag.diff(Q[i], J.q[j]) for i in range(n) for j in range(i + 1, n)]
+    cols = [dag.diff(Q[j], J.q[i]) for i in range(n) for j in range(i + 1, n)]
+    if rows and not _agree(rows, cols, _random_points(J, rows + cols)):
+        return None
+    V = sp.S.Zero
+    for q, e in zip(J.q, Q):
+        part = sp.integrate(sp.expand(-e - dag.diff(V, q)), q)
+        if part.has(sp.Integral):
+            return None
+        V += part
     minus_dV = [-dag.diff(V, q) for q in J.q]
     return V if _agree(minus_dV, Q, _random_points(J, minus_dV + list(Q))) else None
 
