@@ -77,7 +77,8 @@ class Connection:
 
     @cached_property
     def _gramian_ratios(self) -> tuple:
-        return gramian_ratios(self.trajectory, self._samples)
+        return gramian_ratios(self.trajectory, self._samples,
+                              max(self._tol, self.relative_residual))
 
     @property
     def gramian_ratio(self) -> float:

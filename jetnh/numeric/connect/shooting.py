@@ -247,15 +247,16 @@ ROUNDING = 16.0 * np.finfo(float).eps
 
 
 #: a named coordinate's end is met relative to its own displacement, at least this
-#: fraction of the largest one (a coordinate that ends where it started, or nearly)
-SMALLEST_MOVE = 1e-6
+#: fraction of the largest one; one that ends where it started, relative to the
+#: largest (it leaves and returns: the integration resolves it relative to the path)
+SMALLEST_MOVE = 1e-3
 
 
 def end_scale(start, end) -> np.ndarray:
     """The scale of each named end coordinate's miss, free of the units and of the
     origin of the coordinates: its own displacement |end - start|, at least
-    ``SMALLEST_MOVE`` times the largest displacement of the named coordinates (a
-    coordinate the motion leaves and returns to); where none moves (a loop), the
+    ``SMALLEST_MOVE`` times the largest displacement of the named coordinates, or the
+    largest where it ends where it started; where none moves (a loop), the
     configuration's size max |start|, and 1 only where that is 0 too; plus the rounding
     of the values (``ROUNDING`` max(|start|, |end|)), the resolution of the doubles
     that hold them."""
@@ -266,7 +267,8 @@ def end_scale(start, end) -> np.ndarray:
         size = float(np.abs(start).max()) if start.size else 0.0
     if size == 0.0:
         size = 1.0
-    return np.maximum(move, SMALLEST_MOVE * size) + ROUNDING * np.maximum(np.abs(start), np.abs(end))
+    own = np.where(move > 0, np.maximum(move, SMALLEST_MOVE * size), size)
+    return own + ROUNDING * np.maximum(np.abs(start), np.abs(end))
 
 
 def _speed(q0, q1, T) -> float:

@@ -12,7 +12,7 @@ import numpy as np
 from ..atlas import split_measure_of
 from ..methods._common import jit
 from . import small
-from .shooting import SMALLEST_MOVE, end_scale
+from .shooting import end_scale
 
 #: smallest / largest eigenvalue of the controllability Gramian scaled to a unit
 #: diagonal (``gramian_ratio``) below which the path is abnormal
@@ -369,10 +369,10 @@ def gramian_ratio(tr, samples) -> float:
     return gramian_ratios(tr, samples)[0]
 
 
-def gramian_ratios(tr, samples) -> tuple:
+def gramian_ratios(tr, samples, miss=0.0) -> tuple:
     """``(gramian_ratio, the same ratio of the Gramian in the units of the end
     tolerance)``: the second scales each coordinate by its displacement along the
-    path, one that ends where it started by the largest displacement
+    path, the largest for one that returns up to the relative ``miss`` the end admits
     (``_displacements``), not to a unit diagonal.  A path that the
     tolerance cannot tell from an abnormal one (the end conditions depend on the
     distance d to it quadratically, so a miss tol admits d ~ sqrt(tol), and the
@@ -402,7 +402,7 @@ def gramian_ratios(tr, samples) -> tuple:
         return 0.0, 0.0
     R = 0.5 * (W + W.T)
     ys = samples.grid_y
-    ends = _displacements(ys[0, keep], ys[-1, keep])
+    ends = _displacements(ys[0, keep], ys[-1, keep], miss)
     ratios = []
     # ``unit_diagonal`` of the symmetrized W, whose diagonal is W's and positive here;
     # then in the end tolerance's units
@@ -412,14 +412,13 @@ def gramian_ratios(tr, samples) -> tuple:
     return tuple(ratios)
 
 
-def _displacements(start, end) -> np.ndarray:
-    """Each coordinate's displacement |end - start|; where it is 0, the largest
-    (``shooting.end_scale``'s fallbacks where none moves)."""
+def _displacements(start, end, miss) -> np.ndarray:
+    """Each coordinate's displacement |end - start|; the largest (with
+    ``shooting.end_scale``'s fallbacks where none moves) for one that ends where it
+    started up to ten times the relative ``miss`` the end admits."""
     move = np.abs(np.asarray(end, dtype=float) - np.asarray(start, dtype=float))
-    largest = float(move.max()) if move.size else 0.0
-    if largest == 0.0:          # no coordinate moves: end_scale's fallbacks
-        largest = float(end_scale(start, end).max()) / SMALLEST_MOVE
-    return np.where(move > 0, move, largest)
+    largest = end_scale(start, end).max()
+    return np.where(move > 10.0 * miss * largest, move, largest)
 
 
 def _weighted_inputs(tr, times, ys, B) -> np.ndarray:
