@@ -11,6 +11,8 @@ from __future__ import annotations
 import ast
 import math
 import random
+import re
+import sys
 
 import sympy as sp
 
@@ -125,6 +127,29 @@ def real_somewhere(exprs, symbols) -> bool:
     return False
 
 
+#: the numbers of the language: digits, with a decimal point and an exponent or not
+_LITERAL = re.compile(r"(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+
+
+def literal(text, value, fail, form=True) -> None:
+    """Refuse (``fail(what)``) a number ``text`` (read as ``value``) written outside the
+    language (with ``form``: hexadecimal, binary, octal, digits grouped by "_"), or one
+    whose nonzero digits fall below double precision's normal range (read as 0 or a
+    subnormal: the term would vanish or lose digits)."""
+    if text is None:
+        return
+    if form and not _LITERAL.fullmatch(text):
+        fail("numbers are integers and decimals (digits, a decimal point, an exponent "
+             "e.g. 1.5e-3); write this one so:")
+    digits = text.lower().split("e")[0]
+    if isinstance(value, float) and abs(value) < sys.float_info.min \
+            and any(c in "123456789" for c in digits):
+        read = "0" if value == 0 else f"{value!r}, digits lost"
+        fail(f"the number is below double precision's normal range (about "
+             f"{sys.float_info.min:.3g}) and would be read as {read}; rescale the units "
+             "(write the model in other units of length, time or mass):")
+
+
 class _Parser:
     """Builds one sympy expression from one syntax tree (the language: ``jetnh.modelfile``).
 
@@ -189,6 +214,9 @@ class _Parser:
         v = node.value
         if isinstance(v, bool) or v is None or v is Ellipsis:
             self.fail(node, f"the constant {v!r} is not a number:")
+        if isinstance(v, (int, float)):
+            literal(ast.get_source_segment(self.text, node), v,
+                    lambda what: self.fail(node, what))
         if isinstance(v, int):
             if abs(v).bit_length() > 3.33 * limits.MAX_INT_DIGITS:
                 self.fail(node, f"integers of more than {limits.MAX_INT_DIGITS} digits are "

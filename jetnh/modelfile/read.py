@@ -16,9 +16,22 @@ from pathlib import Path
 
 from ..errors import ModelFileError
 from . import limits
+from .expression import literal
 from .model import Model
 from .schema import from_dict
 from .text import position, shorten
+
+
+def _toml_float(text: str, source: str) -> float:
+    """A TOML float, refused where its nonzero digits fall below double precision's
+    normal range (``expression.literal``)."""
+    value = float(text.replace("_", ""))
+
+    def fail(what):
+        raise ModelFileError(f"{source}: {what} {text!r}")
+
+    literal(text, value, fail, form=False)
+    return value
 
 
 def loads(text: str, source: str = "<string>") -> Model:
@@ -39,7 +52,9 @@ def loads(text: str, source: str = "<string>") -> Model:
     if text.startswith("\ufeff"):                    # a UTF-8 byte-order mark
         text = text[1:]
     try:
-        data = tomllib.loads(text)
+        data = tomllib.loads(text, parse_float=lambda t: _toml_float(t, source))
+    except ModelFileError:
+        raise
     except tomllib.TOMLDecodeError as exc:
         raise ModelFileError(f"{source}: not valid TOML: {exc}; see the format in "
                              "jetnh.modelfile's documentation") from None
