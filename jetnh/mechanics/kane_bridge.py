@@ -361,12 +361,15 @@ def _potential(reader: _Reader, point, F, Q):
 
 def _conservative(J: JetSpace, Q):
     """V with -dV/dq = ``Q`` where the generalized forces ``Q`` of a load are
-    conservative: free of t and qdot, with a symmetric Jacobian (dQ_i/dq_j = dQ_j/dq_i,
+    conservative: depending on q, free of t and qdot, with a symmetric Jacobian (dQ_i/dq_j = dQ_j/dq_i,
     at random configurations), and integrable coordinate by coordinate (V = -int Q_1
     dq_1, then -int (Q_2 + dV/dq_2) dq_2, ...: a spring F = -k r on a point, a torsion
     spring on a frame), checked; else None."""
-    own = {J.t, *J.qd}
-    if not any(e != 0 for e in Q) or any(dag.free_symbols(e) & own for e in Q):
+    own, q = {J.t, *J.qd}, set(J.q)
+    # (constant generalized forces stay forces: a constant torque on a joint angle
+    # does work 2 pi tau a turn, V = -tau theta is no function of the configuration)
+    if not any(dag.free_symbols(e) & q for e in Q) or any(
+            dag.free_symbols(e) & own for e in Q):
         return None
     n = len(J.q)
     rows = [dag.diff(Q[i], J.q[j]) for i in range(n) for j in range(i + 1, n)]

@@ -184,6 +184,17 @@ class _Parser:
         at = f" at line {line}, column {col + 1}" if line is not None else ""
         raise ModelFileError(f"{self.where}: {what}{quote}{at}")
 
+    _lines = None
+
+    def segment(self, node):
+        """The source text of a one-line ``node`` (``ast.get_source_segment`` splits the
+        whole text at every call)."""
+        if node.lineno != node.end_lineno:
+            return ast.get_source_segment(self.text, node)
+        if self._lines is None:
+            self._lines = [line.encode() for line in self.text.splitlines(keepends=True)]
+        return self._lines[node.lineno - 1][node.col_offset:node.end_col_offset].decode()
+
     # ------------------------------------------------------------------ building
     def build(self, node, depth=0):
         if depth > limits.MAX_DEPTH:
@@ -215,8 +226,7 @@ class _Parser:
         if isinstance(v, bool) or v is None or v is Ellipsis:
             self.fail(node, f"the constant {v!r} is not a number:")
         if isinstance(v, (int, float)):
-            literal(ast.get_source_segment(self.text, node), v,
-                    lambda what: self.fail(node, what))
+            literal(self.segment(node), v, lambda what: self.fail(node, what))
         if isinstance(v, int):
             if abs(v).bit_length() > 3.33 * limits.MAX_INT_DIGITS:
                 self.fail(node, f"integers of more than {limits.MAX_INT_DIGITS} digits are "

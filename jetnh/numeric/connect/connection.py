@@ -12,8 +12,8 @@ from ...errors import JetnhError
 from ...frozen import readonly
 from ..trajectory import Trajectory
 from .problem import VARIATIONAL
-from .verdicts import (GRAMIAN_RCOND, LEGENDRE_ZERO, NEAR_ABNORMAL, _Samples, action,
-                       conjugate_times, gramian_ratios, legendre_margin, not_extremal)
+from .verdicts import (GRAMIAN_RCOND, LEGENDRE_ZERO, _Samples, action,
+                       conjugate_times, gramian_ratio, legendre_margin, not_extremal)
 
 
 @dataclass(frozen=True)
@@ -52,11 +52,9 @@ class Connection:
     #: what the least-action search (``connect(restarts=)``) tried and where it stopped;
     #: "" where it did not run
     search: str = ""
-    #: the largest miss of an end condition relative to its scale (the displacement
+    #: the largest miss of an end condition relative to its scale (its displacement
     #: start -> end, ``shooting.end_scale``): what ``tol`` bounds
     relative_residual: float = 0.0
-    #: the end tolerance the motion was accepted at (``connect(tol=)``; 0: none)
-    _tol: float = field(default=0.0, repr=False, compare=False)
 
     @cached_property
     def trajectory(self) -> Trajectory:
@@ -76,45 +74,17 @@ class Connection:
         return action(self.trajectory, self._samples)
 
     @cached_property
-    def _gramian_ratios(self) -> tuple:
-        return gramian_ratios(self.trajectory, self._samples,
-                              max(self._tol, self.relative_residual))
-
-    @property
     def gramian_ratio(self) -> float:
         """Smallest / largest eigenvalue of the constraint system's controllability
         Gramian along the motion, scaled to a unit diagonal (``verdicts.gramian_ratio``):
         in [0, 1], the same in any units of the coordinates."""
-        return self._gramian_ratios[0]
+        return gramian_ratio(self.trajectory, self._samples)
 
     @property
-    def normal(self):
+    def normal(self) -> bool:
         """False: an abnormal extremal (the constraint system's endpoint map loses rank
-        along the motion: ``gramian_ratio`` below ``GRAMIAN_RCOND``).  None: undecided,
-        the motion is within the end tolerance of an abnormal one (the Gramian in the
-        tolerance's units, ``verdicts.gramian_ratios``, has its smallest eigenvalue
-        below ``NEAR_ABNORMAL`` times the tolerance ``tol`` it was accepted at, or its
-        relative miss: a path d from an abnormal one misses the end by O(d^2) and has
-        that eigenvalue O(d^2)); ``normality`` says which.  True: normal."""
-        if not self.gramian_ratio > GRAMIAN_RCOND:
-            return False
-        if self._gramian_ratios[1] <= NEAR_ABNORMAL * max(self._tol,
-                                                           self.relative_residual):
-            return None
-        return True
-
-    @property
-    def normality(self) -> str:
-        """The ``normal`` verdict in words: "normal", "abnormal" or "near-abnormal,
-        undecided" with the Gramian's ratio in the end tolerance's units."""
-        verdict = self.normal
-        if verdict is None:
-            return (f"near-abnormal, undecided: the controllability Gramian in the end "
-                    f"tolerance's units has eigenvalue ratio {self._gramian_ratios[1]:.3g}"
-                    f", within what the tolerance {max(self._tol, self.relative_residual):.3g}"
-                    " admits of an abnormal motion (O(d^2) at a distance d, which the end "
-                    "misses by O(d^2)); try a guess on the abnormal motion or a smaller tol")
-        return "normal" if verdict else "abnormal"
+        along the motion: ``gramian_ratio`` below ``GRAMIAN_RCOND``)."""
+        return bool(self.gramian_ratio > GRAMIAN_RCOND)
 
     @cached_property
     def conjugate_times(self):
@@ -198,7 +168,7 @@ class Connection:
                 + " inside the span (t = " + ", ".join(f"{t:.6g}" for t in inside) + ")")
 
     #: the verdicts kept in ``__dict__`` once computed (``cached_property``)
-    _VERDICTS = ("cost", "_gramian_ratios", "conjugate_times", "legendre")
+    _VERDICTS = ("cost", "gramian_ratio", "conjugate_times", "legendre")
 
     def __getstate__(self):
         """The fields as plain data: the Trajectory for the run that made it (a

@@ -433,8 +433,7 @@ class Search(Shooter):
             iterations=iterations,
             _columns=tuple(self.cols), _rcond=self.rcond, _run=MappingProxyType(
                 {"rtol": self.rtol, "atol": self.atol, "method": self.method}),
-            conditions=self.conditions, route=route, relative_residual=relative,
-            _tol=0.0 if tol is None else float(tol))
+            conditions=self.conditions, route=route, relative_residual=relative)
         if tol is not None and relative > tol:
             raise ConnectError(
                 f"the {scene.principle} motion found ends {residual:.3g} away from end "

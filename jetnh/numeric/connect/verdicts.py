@@ -12,15 +12,10 @@ import numpy as np
 from ..atlas import split_measure_of
 from ..methods._common import jit
 from . import small
-from .shooting import end_scale
 
 #: smallest / largest eigenvalue of the controllability Gramian scaled to a unit
 #: diagonal (``gramian_ratio``) below which the path is abnormal
 GRAMIAN_RCOND = 1e-9
-#: a motion whose Gramian in the end tolerance's units (``gramian_ratios``) has its
-#: eigenvalue ratio below this many times the tolerance is within the tolerance of an
-#: abnormal motion: ``Connection.normal`` is None (undecided)
-NEAR_ABNORMAL = 100.0
 #: |det| of the Jacobi fields' configuration rows, scaled both ways
 #: (``jacobi_measure``), below which it has no sign (rounding level)
 DET_ZERO = 1e-10
@@ -366,22 +361,10 @@ def gramian_ratio(tr, samples) -> float:
     but h of the split's dependent ones (``_manifold_chart``; a change of chart of
     g = 0 keeps the rank).  Zero: the endpoint map loses rank along the path (an
     abnormal extremal)."""
-    return gramian_ratios(tr, samples)[0]
-
-
-def gramian_ratios(tr, samples, miss=0.0) -> tuple:
-    """``(gramian_ratio, the same ratio of the Gramian in the units of the end
-    tolerance)``: the second scales each coordinate by its displacement along the
-    path, the largest for one that returns up to the relative ``miss`` the end admits
-    (``_displacements``), not to a unit diagonal.  A path that the
-    tolerance cannot tell from an abnormal one (the end conditions depend on the
-    distance d to it quadratically, so a miss tol admits d ~ sqrt(tol), and the
-    Gramian's smallest eigenvalue is O(d^2)) has the second below tol although the
-    first, which the unit diagonal blows up, is O(1)."""
     system = tr.scene.system
     n = len(system.J.q)
     if not system.k:
-        return 1.0, 1.0
+        return 1.0
     steps = samples.GRID // 2
     t0, t1 = float(tr.t[0]), float(tr.t[-1])
     times = samples.grid
@@ -392,33 +375,18 @@ def gramian_ratios(tr, samples, miss=0.0) -> tuple:
     h = (t1 - t0) / steps
     W = np.empty((n, n))
     _compiled("gramian")(np.ascontiguousarray(A), B, h, W)
-    keep = list(range(n))
     if system.holonomic:         # the reachable directions: the tangent space of g = 0
         keep = _manifold_chart(tr, times[-1], samples.grid_y[-1], np.diag(W))
         W = W[np.ix_(keep, keep)]
     if not np.isfinite(W).all():
-        return float("nan"), float("nan")
+        return float("nan")
     if W.diagonal().min() <= 0:
-        return 0.0, 0.0
+        return 0.0
+    # ``unit_diagonal`` of the symmetrized W, whose diagonal is W's and positive here
     R = 0.5 * (W + W.T)
-    ys = samples.grid_y
-    ends = _displacements(ys[0, keep], ys[-1, keep], miss)
-    ratios = []
-    # ``unit_diagonal`` of the symmetrized W, whose diagonal is W's and positive here;
-    # then in the end tolerance's units
-    for scale in (1.0 / np.sqrt(R.diagonal()), 1.0 / ends):
-        ev = np.linalg.eigvalsh(R * scale[:, None] * scale[None, :])
-        ratios.append(float(max(ev[0], 0.0) / ev[-1]) if ev[-1] > 0 else 0.0)
-    return tuple(ratios)
-
-
-def _displacements(start, end, miss) -> np.ndarray:
-    """Each coordinate's displacement |end - start|; the largest (with
-    ``shooting.end_scale``'s fallbacks where none moves) for one that ends where it
-    started up to ten times the relative ``miss`` the end admits."""
-    move = np.abs(np.asarray(end, dtype=float) - np.asarray(start, dtype=float))
-    largest = end_scale(start, end).max()
-    return np.where(move > 10.0 * miss * largest, move, largest)
+    scale = 1.0 / np.sqrt(R.diagonal())
+    ev = np.linalg.eigvalsh(R * scale[:, None] * scale[None, :])
+    return float(max(ev[0], 0.0) / ev[-1]) if ev[-1] > 0 else 0.0
 
 
 def _weighted_inputs(tr, times, ys, B) -> np.ndarray:
