@@ -14,7 +14,7 @@ from .collocation import warm_start
 from .connection import Connection, Stitched
 from .levenberg import levenberg_marquardt
 from .problem import VARIATIONAL
-from .shooting import (Segments, Shooter, _speed, default_segments, first_values, rank, rank_of,
+from .shooting import (Segments, Shooter, default_segments, first_values, rank, rank_of,
                        singular_values)
 
 #: Levenberg-Marquardt iterations per continuation step (at most ``max_iter``)
@@ -122,7 +122,7 @@ class Search(Shooter):
         by the first step of ``regular_start``'s pattern (the velocities' scale times
         0.5 (-0.6)^i, rolled once), a start on another side of a fold of the endpoint
         map than its Gauss-Newton point."""
-        scale = _speed(q0, q1, T)
+        scale = max([abs(q1[c] - q0[c]) for c in q1] + [1.0]) / abs(T)
         return u0 + scale * np.roll(0.5 * (-0.6) ** np.arange(len(u0)), 1)
 
     @property
