@@ -20,8 +20,8 @@ wall and CPU seconds (the CPU seconds are what a loaded machine does not inflate
   sum.  CPU seconds: ``scene_cpu``, ``kernels_cpu``, ``generate_cpu`` (derivation and
   source), ``compile_cpu``, ``run_cpu``, ``cpu`` (total).
 - per kernel (rhs, aux, sing): its straight-line instructions and how it was compiled
-  (``quick``: LLVM -O1 passes and -O0 code generation, above
-  ``jetnh.numeric.codegen.quick.QUICK_OPS`` instructions; ``full``: numba's -O3).
+  (``quick``: LLVM -O1 passes and -O0 code generation, above the threshold of its kind,
+  ``jetnh.numeric.codegen.quick.quick_ops``; ``full``: numba's -O3).
 
 For N in ``--baseline-ns`` the same kernel source is compiled twice more in the same
 process, numba's cache off: as generated (``compile_again_cpu``) and with every kernel at
