@@ -47,7 +47,7 @@ def _times(times, lo, hi) -> np.ndarray:
 def _refusal(traj) -> str | None:
     """Why ``traj`` cannot be evaluated between its rows, or None."""
     d = traj._dense
-    if d is None:
+    if d is None or traj.method == "radau":
         what = ("radau's dense output (the collocation polynomial its t_eval and events "
                 "use) is not kept: a step cannot be re-taken apart from the Newton "
                 "iterations before it" if traj.method == "radau" else
@@ -136,7 +136,7 @@ def sampled(traj, t, y):
     derived columns from the same kernels); no steps, no events, no dense output."""
     return type(traj)(traj.scene, t, y, traj._p, method=traj.method, status=traj.status,
                       stop_reason=traj.stop_reason, steps=None, rejected=None, nfev=0,
-                      wall_time=0.0, kernels=traj._kernels)
+                      wall_time=0.0, kernels=traj._kernels, saved="t_eval")
 
 
 def _groups(k):

@@ -149,7 +149,8 @@ def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_st
     traj = Trajectory(scene, ts, ys, p, method=f"scipy-{method}", status=status,
                       stop_reason=reason, steps=None, rejected=None, nfev=int(sol.nfev),
                       wall_time=wall, kernels=kern, projected=scene.projected,
-                      singularity=singularity, **kw)
+                      singularity=singularity, saved="steps" if t_eval is None else "t_eval",
+                      **kw)
     if sol.status == 1 and t_eval is not None:     # the stop, after the last row: ``final``
         y_stop = np.array(sol.y_events[k][-1], dtype=float)[None, :]
         if onto is not None:

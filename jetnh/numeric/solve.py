@@ -218,10 +218,8 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
         ctl = ctl._replace(n_sens=sens.layout.sensitivity_columns)
     if batch:
         mode = AT_T_EVAL if t_eval is not None else ENDPOINTS
-    # radau's steps depend on the steps before (Newton's starting values, the Jacobian
-    # kept): no re-taking of one step (numeric.dense)
     dense = ends = None
-    if m.solver is not Solver.IMPLICIT and not batch:
+    if not batch:
         dense = {"rtol": rtol, "atol": atol_v, "mode": mode, "ctl": ctl}
         if sens is not None:
             dense["rhs"] = sens
