@@ -798,7 +798,7 @@ class Trajectory(Frozen):
             Mark the stored rows (the accepted steps) with dots.
         smooth : bool, default True
             Draw the curves through the method's dense output between the rows (dop853,
-            dopri5, rk4); the rows alone where there is none.
+            dopri5, radau, rk4); the rows alone where there is none.
         """
         from .export import plot
 
@@ -820,7 +820,8 @@ class Trajectory(Frozen):
         """The states at ``times`` inside the span, from the method's dense output.
 
         dop853, dopri5: the covering step re-taken, bit for bit what ``t_eval`` gives;
-        rk4: cubic Hermite.  Needs every step stored (no ``t_eval``, ``save="steps"``).
+        radau: the step's collocation polynomial, what ``t_eval`` gives to the run's
+        ``newton_tol``; rk4: cubic Hermite.  Needs every step stored (no ``t_eval``, ``save="steps"``).
         A run that changed split is evaluated in the chart that ran at each time.
 
         Parameters
