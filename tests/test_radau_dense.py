@@ -29,12 +29,11 @@ def knife():
 
 @pytest.fixture(scope="module")
 def pendulum():
+    """The Cartesian pendulum of unit length (g = 9.81): x^2 + y^2 = 1 held."""
     J = jn.JetSpace("x y")
-    x, y = J.q
-    xt, yt = J.qd
-    G, l = sp.symbols("G l", positive=True)
-    system = jn.System(J, (xt**2 + yt**2) / 2 - G * y, [x**2 + y**2 - l**2])
-    return jn.Scene(system, params={"l": 1.0, "G": 9.81},
+    (x, y), (xt, yt) = J.q, J.qd
+    L = (xt**2 + yt**2) / 2 - sp.Rational(981, 100) * y
+    return jn.Scene(jn.System(J, L, [x**2 + y**2 - 1]),
                     initial={"x": 0.6, "y": -0.8, "x_t": 1.0}, t_span=(0, 0.5))
 
 
