@@ -299,13 +299,18 @@ def _unique(keys) -> list[str]:
 
 def _points(grid):
     """Names and the values [n_points, n_names] of every grid point."""
-    import itertools
-
     import numpy as np
     import pandas as pd
 
-    if isinstance(grid, pd.DataFrame):
-        grid = grid.to_dict("records")
+    if isinstance(grid, pd.DataFrame):      # its columns checked as columns
+        names = _unique(grid.columns)
+        if not names or not len(grid):
+            raise ArgumentError(f"the grid has no {'points' if names else 'columns'}; give a "
+                                "DataFrame with a column for each parameter or initial "
+                                "value and a row for each point")
+        return names, np.stack([_numbers(grid.iloc[:, j].to_numpy(),
+                                         f"grid values of {name!r}")
+                                for j, name in enumerate(names)], axis=1)
     if isinstance(grid, Mapping):
         names = _unique(grid)
         if not names:
@@ -317,7 +322,9 @@ def _points(grid):
             if a.size == 0:
                 raise ArgumentError(f"grid values of {name!r} are empty; give at least one")
             axes.append(a)
-        return names, np.array(list(itertools.product(*axes)), dtype=float)
+        # the Cartesian product, the last axis varying fastest
+        return names, np.stack([g.reshape(-1) for g in np.meshgrid(*axes, indexing="ij")],
+                               axis=1)
     if isinstance(grid, (list, tuple)):
         if not grid:
             raise ArgumentError("the grid has no points; give a list of points such as "

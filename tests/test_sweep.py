@@ -162,6 +162,12 @@ def test_failing_points_keep_their_rows(failing):
     ({"R": np.array([False, True])}, {}, "grid values of 'R' must be a number, got False"),
     ({"R": np.True_}, {}, "grid values of 'R' must be a number, got True"),
     ([{"R": 1.0}, {"R": True}], {}, "grid point 1 must be a number, got True"),
+    (pd.DataFrame({"R": [1.0, 2.0], "phi_t": [True, False]}), {},
+     "grid values of 'phi_t' must be a number, got True"),
+    (pd.DataFrame({"R": ["1.0"]}), {}, "strings are never parsed"),
+    (pd.DataFrame({"R": [1.0, np.inf]}), {}, "non-finite"),
+    (pd.DataFrame({"R": []}), {}, "the grid has no points"),
+    (pd.DataFrame(index=range(3)), {}, "the grid has no columns"),
     ({"R": [[1.0, 2.0]]}, {}, "1-d sequence"),
     ({sp.Symbol("R"): [1.0], "R": [2.0]}, {}, "gives R twice"),
     ({"x_t": [1.0]}, {}, "a dependent velocity"),
@@ -334,9 +340,9 @@ def test_killed_worker_loses_no_rows(disk, client):
     killed = {}
 
     def kill_a_busy_worker(done, total):
-        if killed:
-            return
         busy = [w for w, keys in client.processing().items() if keys]
+        if killed or not busy:          # (none busy between two chunks: the next report)
+            return
         pid = client.run(os.getpid, workers=busy[:1])[busy[0]]
         os.kill(pid, signal.SIGKILL)
         killed.update(pid=pid, done=done, total=total)

@@ -625,7 +625,15 @@ class Ensemble(Frozen):
 
     @property
     def stop_reasons(self) -> list[str]:
-        return [self.stop_reason(r) for r in range(self.n_runs)]
+        """``stop_reason`` of every run (the status's text looked up once per run, the
+        runs that stopped singular, at an event or past a chart's edge worded one by
+        one)."""
+        status = self.status
+        out = [STATUS_TEXT[s] for s in status.tolist()]
+        for r in {*self._reasons, *np.flatnonzero((status == SINGULAR)
+                                                  | (status == EVENT)).tolist()}:
+            out[r] = self.stop_reason(r)
+        return out
 
     def diagnostics(self) -> dict[str, np.ndarray]:
         """Per-run diagnostics as arrays (for tables)."""
