@@ -240,8 +240,10 @@ def test_point_methods_are_the_single_runs(disk, method, options):
                       **options)
         assert [df[n][r] for n in names] == [tr.final[n] for n in names]    # to the bit
         d = tr.diagnostics
-        assert df["residual_max"][r] == d.residual_max
-        assert df["drift[p_psi]"][r] == d.integral_drift["p_psi"]
+        # over the output row (the final one), against the start, whatever rows it stored
+        assert df["residual_max"][r] == np.max(np.abs(tr.residual[-1]))
+        assert df["drift[p_psi]"][r] == abs(tr["p_psi"][-1] - tr["p_psi"][0])
+        assert df["energy_drift"][r] == abs(tr.energy[-1] - tr.energy[0])
         assert df["stop_reason"][r] == d.stop_reason
         if d.steps is None:     # scipy does not count its steps: unknown, not 0
             assert np.isnan(df["steps"][r]) and np.isnan(df["rejected"][r])
@@ -252,6 +254,31 @@ def test_point_methods_are_the_single_runs(disk, method, options):
     # second order (dla, 200 steps) or 1e-10 (scipy) against dop853
     tol = 1e-3 if method == "dla" else 1e-7
     assert np.max(np.abs(df[["x", "y"]].to_numpy() - ref[["x", "y"]].to_numpy())) < tol
+
+
+def test_energy_drift_has_one_definition_on_every_route():
+    """energy_drift over the output rows against E(t0) whether the point ran as a compiled
+    ensemble (dop853) or as Scene.run (scipy-DOP853, which stores every step): an
+    end-point difference without times, the largest over the times with them (t0 not
+    among them), each against the rows of single runs."""
+    J = jn.JetSpace("x y z")
+    x, y, _ = J.q
+    xd, yd, zd = J.qd
+    L = (xd**2 + yd**2 + zd**2) / 2 - (x**2 + y**2) / 2
+    sc = Scene(jn.System(J, L, [zd - y * xd], dependent=[J.q[2]]), "chetaev",
+               initial=dict(x=0.3, y=0.8, z=0.0, x_t=0.5, y_t=-0.2), t_span=(0.0, 20.0))
+    opts, times = dict(rtol=1e-4, atol=1e-6), [1.0, 2.5, 20.0]
+    steps = sc.run(method="scipy-DOP853", **opts)
+    e0 = steps.energy[0]
+    for method in ("dop853", "scipy-DOP853"):
+        end = sc.run(method=method, save="final", **opts).energy[-1]
+        at = sc.run(method=method, t_eval=times, **opts).energy
+        df = jn.sweep(sc, {"x_t": [0.5]}, method=method, **opts)
+        assert df["energy_drift"][0] == abs(end - e0)
+        df = jn.sweep(sc, {"x_t": [0.5]}, method=method, times=times, **opts)
+        assert df["energy_drift"][0] == np.max(np.abs(at - e0))
+    # (the largest over scipy's steps is another figure: the single run's own)
+    assert steps.diagnostics.energy_drift > abs(steps.energy[-1] - e0)
 
 
 def test_point_methods_times_and_their_limits(disk):

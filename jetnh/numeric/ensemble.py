@@ -596,6 +596,15 @@ class Ensemble(Frozen):
         e = self._regular(self.aux[:, :, i:i + 1])
         return _largest(np.abs(e - self.aux_initial[:, i, None, None]))
 
+    @property
+    def integral_drift(self) -> dict[str, np.ndarray]:
+        """First integral name -> max ``|I - I(t0)|`` over each run's output rows, the
+        rows of ``energy_drift`` (a singular stop's left out)."""
+        start = self.layout.energy_index + 1
+        return {name: _largest(np.abs(self._regular(self.aux[:, :, start + j:start + j + 1])
+                                      - self.aux_initial[:, start + j, None, None]))
+                for j, name in enumerate(self.layout.integrals)}
+
     def _regular(self, a) -> np.ndarray:
         """``a`` ([n_runs, n_times, columns] of the aux rows) with NaN in the row of each
         run's singular stop, where it is one (``save="final"``: the run's one row)."""
@@ -645,6 +654,7 @@ class Ensemble(Frozen):
         if self.switching:
             out["switches"] = np.array([len(self.switches.get(r, ()))
                                         for r in range(self.n_runs)])
+        out.update((f"drift[{name}]", v) for name, v in self.integral_drift.items())
         for k, name in enumerate(self.event_names):
             out[f"events[{name}]"] = self.event_counts[:, k]
             out[f"first[{name}]"] = self.event_first[:, k]
