@@ -484,8 +484,13 @@ def _run_points(scene, Y0, P, run, outputs) -> dict:
         params = P[i] if len(scene.runtime_params) else None
         try:
             traj = scene.run(y0=Y0[i], params=params, t_eval=times, **opts)
-        except IntegrationError as exc:
+        except IntegrationError as exc:     # its counts up to the stop, where known
             diag["status"][i], diag["stop_reason"][i] = NONFINITE, str(exc)
+            stop = exc.stop or {}
+            diag["t_final"][i] = stop.get("t", np.nan)
+            for key in ("steps", "rejected"):       # None: not known (scipy's), NaN
+                diag[key][i] = np.nan if stop.get(key) is None else stop[key]
+            diag["rhs_evaluations"][i] = stop.get("rhs_evaluations") or 0
             continue
         for label, where in labels:
             if where is None:

@@ -150,6 +150,23 @@ def test_failing_points_keep_their_rows(failing):
     assert np.isnan(df["x"][1]) and df["x"][0] == pytest.approx(2.0, rel=1e-12)
 
 
+def test_failed_point_methods_report_their_steps(failing):
+    """A dla or scipy point that fails keeps the counts of the run up to its stop: dla's
+    steps are those of the same steps run to just before the failing one."""
+    _, blow = failing
+    df = jn.sweep(blow, {"c": [0.0, 3.0]}, method="dla", n_steps=200)
+    assert list(df["status"]) == [FINISHED, NONFINITE]
+    steps, t_stop = int(df["steps"][1]), df["t_final"][1]
+    assert 0 < steps < 200 and t_stop == pytest.approx(steps / 200, rel=1e-12)
+    before = blow.replace(params={"c": 3.0}, t_span=(0.0, t_stop)).run(method="dla",
+                                                                        n_steps=steps)
+    assert before.success and before.diagnostics.steps == steps
+    assert df["rhs_evaluations"][1] > before.diagnostics.rhs_evaluations
+    df = jn.sweep(blow, {"c": [800.0]}, method="scipy-RK45")
+    assert df["status"][0] == NONFINITE and np.isnan(df["steps"][0])   # scipy: not counted
+    assert df["t_final"][0] == 0.0 and df["rhs_evaluations"][0] == 1
+
+
 @pytest.mark.parametrize("grid, options, words", [
     ({"Q": [1.0]}, {}, "neither a parameter (R, I1, I2) nor a state"),
     ({}, {}, "the grid is empty"),

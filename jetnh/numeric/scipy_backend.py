@@ -93,7 +93,9 @@ def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_st
         fresh[1:] = np.diff(t_eval) != 0
         te_run, repeat = t_eval[fresh], np.cumsum(fresh) - 1
     if not np.all(np.isfinite(fun(t0, y_init))):
-        diagnosis.raise_nonfinite(scene, f"scipy-{method}", t0, y_init, kern, p, t0, y_init)
+        diagnosis.raise_nonfinite(scene, f"scipy-{method}", t0, y_init, kern, p, t0, y_init,
+                                  stop=dict(t=float(t0), steps=None, rejected=None,
+                                            rhs_evaluations=1))
     onto = _onto(scene, sensitivities, p) if method in PROJECTED else None
     tic = time.perf_counter()
     sol = solve_ivp(fun, (t0, t1), y_init, method=method if onto is None else
@@ -116,7 +118,9 @@ def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_st
         bad = int(np.argmax(~np.all(np.isfinite(ys), axis=1)))
         i = max(bad - 1, 0)
         diagnosis.raise_nonfinite(scene, f"scipy-{method}", ts[i], ys[i], kern, p, t0,
-                                  y_init)
+                                  y_init, stop=dict(t=float(ts[i]), steps=None,
+                                                    rejected=None,
+                                                    rhs_evaluations=int(sol.nfev)))
     status, reason, singularity = (0 if sol.status == 0 else 2), sol.message, None
     kw = {}
     if sol.status == 1:
