@@ -83,8 +83,15 @@ def single_per_eval(sc, kw, reps):
     return cpu / tr.diagnostics.rhs_evaluations
 
 
+#: seconds of rest before each timed call: numba's OpenMP threads spin on after a
+#: ``prange`` region (~4 ms of a core here), which would count against, and compete
+#: with, whichever mode comes next (jn.sweep, measured after prange)
+SETTLE = 0.05
+
+
 def _timed(f):
-    """``(wall seconds, CPU seconds of the process, f())``."""
+    """``(wall seconds, CPU seconds of the process, f())``, after ``SETTLE``."""
+    time.sleep(SETTLE)
     tic, cpu = time.perf_counter(), time.process_time()
     out = f()
     return time.perf_counter() - tic, time.process_time() - cpu, out
