@@ -402,6 +402,35 @@ def general_route(traj, events):
 
 
 @pytest.mark.parametrize("save", ["final", "steps"])
+@pytest.mark.parametrize("method", ["dop853", "radau"])
+def test_a_finished_watching_loop_keeps_its_last_state_in_row_n_out(disk, method, save):
+    """A watching loop (an event that never fires) that finished returns None for its last
+    state (no array to box) and has it in row n_out, as a loop that watches nothing does:
+    bit for bit its last output row and the end of the same run unwatched (the watch
+    changes no step); ``loops.result`` reads it there; an ensemble of the run ends on it
+    too."""
+    from jetnh.numeric import loops, solve
+
+    halt = np.zeros(1, dtype=np.int64)
+    got = {}
+    for events in ([disk.system.J.q[0] - 1e6], None):
+        plan = solve.plan(disk, method, save=save, events=events)
+        got[events is None] = plan.entry(*plan.head, disk.y0.copy(), disk.p, *plan.suffix,
+                                         halt)
+    out, bare = got[False], got[True]
+    assert len(out) == 12 and out[0] == 0 and out[6] is None
+    assert len(bare) == 6 or bare[6] is None        # (radau's loop always returns 12)
+    n = out[3]
+    assert n == bare[3] and out[1][n] == out[1][n - 1] == bare[1][n] == out[5]
+    assert out[2][n].tobytes() == out[2][n - 1].tobytes() == bare[2][n].tobytes()
+    res = loops.result(out)
+    assert res.t == out[5] and res.y.tobytes() == out[2][n].tobytes()
+    for rows in (1, 2):     # (one row: the loop's own call; two: the compiled driver)
+        ens = disk.ensemble(np.stack([disk.y0] * rows), method=method)
+        assert ens.y[:, -1].tobytes() == np.stack([out[2][n]] * rows).tobytes()
+
+
+@pytest.mark.parametrize("save", ["final", "steps"])
 @pytest.mark.parametrize("n_events", [1, 2])
 def test_a_finished_watching_runs_trajectory_equals_the_general_routes(disk, save, n_events):
     """A run watching events that never fire (its loop returns None for the records) is

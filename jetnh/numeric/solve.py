@@ -452,7 +452,7 @@ def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, 
             n_out, n, sens.layout.sensitivity_columns))
         ys, n_out = np.ascontiguousarray(ys[:, :n]), ys.shape[0]
         y_init = y_init[:n]
-        if len(out) != 6 or status != FINISHED:
+        if (len(out) != 6 or status != FINISHED) and y_last is not None:
             y_last = y_last[:n]
         if ce is not None and ev_y is not None:
             ev_y = ev_y[:, :n]
