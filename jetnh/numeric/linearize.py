@@ -121,8 +121,9 @@ ZERO = 1e-6
 STEADY = 1e-8
 #: the relative rounding of the point allowed in a rate at a steady motion (above)
 ROUNDING = 1e-12
-#: the steps (relative to the state's size) at which the limit at a 0/0 is sought
-STEPS = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8)
+#: the steps (relative to the state's size, or 1 at the zero state) tried in turn for
+#: the limit at a 0/0: the first where the extrapolation settles
+STEPS = (1e-1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8)
 #: the directions of approach along which that limit must agree
 DIRECTIONS = 3
 #: the relative tolerance of given dependent velocities (and of f = 0 past the edge)
@@ -1139,39 +1140,45 @@ def _balanced(A: np.ndarray) -> np.ndarray:
     return get_lapack_funcs("gebal", (A,))(A, scale=1, permute=0)[3]
 
 
-def _agree(A1, A2, r1, r2, b) -> bool:
-    """Whether (A1, r1) and (A2, r2) are the same to 1e-3 relative: the matrices in
-    A's balanced units (``_balanced``), the rates row by row (within the bound ``b``)."""
+def _difference(A1, A2, r1, r2, b) -> float:
+    """How far (A1, r1) and (A2, r2) are apart, relative: the matrices in A's balanced
+    units (``_balanced``: Frobenius norms), the rates row by row beyond ``b`` (their
+    rounding); infinite where one is not finite."""
     if not (np.all(np.isfinite(A1)) and np.all(np.isfinite(A2))
             and np.all(np.isfinite(r1)) and np.all(np.isfinite(r2))):
-        return False
+        return np.inf
     D = _balanced((A1 + A2) / 2)
     dA = np.linalg.norm((A1 - A2) * D[None, :] / D[:, None])
     size = np.linalg.norm((A1 + A2) * D[None, :] / D[:, None]) / 2
-    return bool(dA <= 1e-3 * size
-                and np.all(np.abs(r1 - r2) <= 1e-3 * (np.abs(r1) + np.abs(r2)) + b))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        dr = np.where(np.abs(r1 - r2) <= b, 0.0,
+                      np.abs(r1 - r2) / (np.abs(r1) + np.abs(r2)))
+    return float(max(dA / size if size > 0 else (0.0 if dA == 0 else np.inf),
+                     dr.max(initial=0.0)))
 
 
 def _settled(model, ck, y, p, values, t, rows, E):
     """``_jacobian``'s work (under its error state).  At a 0/0 the limit is taken along
-    ``DIRECTIONS`` random kept directions by symmetric differences at steps ``STEPS``
-    times the state's size (the first step whose Richardson extrapolation settles, to
-    1e-3 in A's balanced units); it is accepted only when every direction gives the same
-    limit (a value that depends on the direction of approach, as at the pole of polar
-    coordinates or Euler angles, is none)."""
+    ``DIRECTIONS`` random kept directions by symmetric differences and Richardson
+    extrapolation, at the largest step of ``STEPS`` (times the state's size) where the
+    differences from h and h/2 agree to 1e-3 (in A's balanced units: smaller steps
+    lose digits to cancellation, down to a false agreement of zeros); it is accepted only when every direction gives the same limit there (a value that
+    depends on the direction of approach, as at the pole of polar coordinates or Euler
+    angles, is none)."""
     m = len(y)
     Jm, f = np.empty((m, m)), np.empty(m)
 
     def at(z):
         ck.jac(t, z, p, Jm)
         ck.rhs(t, z, p, f)
-        sizes = model.sizes_at(rows, z, values, t)
-        bound = STEADY * sizes + ROUNDING * (np.abs(Jm[rows]) @ np.abs(z))
-        return Jm[rows] @ E, f[rows].copy(), bound
+        return Jm[rows] @ E, f[rows].copy(), ROUNDING * (np.abs(Jm[rows]) @ np.abs(z))
 
-    A, rates, bound = at(y)
+    def bound(z, rounding):
+        return STEADY * model.sizes_at(rows, z, values, t) + rounding
+
+    A, rates, rounding = at(y)
     if np.all(np.isfinite(A)) and np.all(np.isfinite(rates)):
-        return A, rates, False, bound
+        return A, rates, False, bound(y, rounding)
     rng = np.random.default_rng(0)
     dirs = []
     for _ in range(DIRECTIONS):
@@ -1181,18 +1188,19 @@ def _settled(model, ck, y, p, values, t, rows, E):
 
     def mean(d, h):
         (A1, r1, b1), (A2, r2, b2) = at(y + h * scale * d), at(y - h * scale * d)
-        return (A1 + A2) / 2, (r1 + r2) / 2, (b1 + b2) / 2
+        return (A1 + A2) / 2, (r1 + r2) / 2, np.maximum(b1, b2)
 
     def limit(d, h):
-        (A1, r1, b1), (A2, r2, b2) = mean(d, h), mean(d, h / 2)
-        ok = _agree(A1, A2, r1, r2, b2)
-        return (4 * A2 - A1) / 3, (4 * r2 - r1) / 3, b2, ok
+        (A1, r1, _), (A2, r2, b2) = mean(d, h), mean(d, h / 2)
+        return (4 * A2 - A1) / 3, (4 * r2 - r1) / 3, b2, _difference(A1, A2, r1, r2, b2)
 
+    best, h_best = None, None
     for h in STEPS:
         found = [limit(d, h) for d in dirs]
-        if all(ok for *_, ok in found):
+        if max(f[3] for f in found) <= 1e-3:
+            best, h_best = found, h
             break
-    else:
+    if best is None:
         raise LinearizationError(
             "the equations are undefined at this point (0/0: a singular point of the "
             "coordinates, where the mass matrix of the reduced equations is singular, as "
@@ -1202,9 +1210,9 @@ def _settled(model, ck, y, p, values, t, rows, E):
             f"with steps {STEPS[0]:g}..{STEPS[-1]:g} times the state's size {scale:.3g}; "
             "linearize in other coordinates, or choose another operating point, another "
             "split (dependent=) or other parameter values")
-    A, rates, bound, _ = found[0]
-    for A2, r2, b2, _ in found[1:]:
-        if not _agree(A, A2, rates, r2, np.maximum(bound, b2)):
+    A, rates, b, _ = best[0]
+    for A2, r2, b2, _ in best[1:]:
+        if _difference(A, A2, rates, r2, np.maximum(b, b2)) > 1e-3:
             raise LinearizationError(
                 "the equations are undefined at this point (0/0) and their limit depends "
                 "on the direction of approach: a singular point of the coordinates (the "
@@ -1212,4 +1220,5 @@ def _settled(model, ck, y, p, values, t, rows, E):
                 "of polar coordinates or of Euler angles), where A does not describe the "
                 "motions nearby; linearize in other coordinates (Cartesian ones, or "
                 "angles whose pole is elsewhere), or at a point off the singularity")
-    return A, rates, True, bound
+    z = y + h_best / 2 * scale * dirs[0]
+    return A, rates, True, np.maximum(b, bound(z, 0.0))
