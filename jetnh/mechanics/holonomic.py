@@ -124,23 +124,24 @@ def _size_exprs(system) -> list:
     return _SIZES[key]
 
 
-def sizes(system, point) -> tuple[np.ndarray, np.ndarray]:
+def sizes(system, point, G=None) -> tuple[np.ndarray, np.ndarray]:
     """``(terms, rounding)`` per constraint at ``point``: the size of the terms that make
-    up g_i (``magnitude``) and sum_s |dg_i/dq^s| |q^s| + |dg_i/dt| |t|."""
+    up g_i (``magnitude``) and sum_s |dg_i/dq^s| |q^s| + |dg_i/dt| |t| (``G``: dg/dq
+    there, if known)."""
     point = _symbols(system, point)
     m, J = len(system.holonomic), system.J
     vals = _floats(_size_exprs(system), point)
-    G = jacobian_at(system, point)
+    G = jacobian_at(system, point) if G is None else G
     q = np.array([abs(float(point.get(s, 0.0))) for s in J.q])
     t = abs(float(point.get(J.t, 0.0)))
     return vals[:m], np.abs(G) @ q + np.abs(vals[m:]) * t
 
 
-def bound(system, point, tol: float = TOLERANCE) -> np.ndarray:
+def bound(system, point, tol: float = TOLERANCE, G=None) -> np.ndarray:
     """The largest |g_i| accepted as "on g = 0" at ``point``: ``tol`` times the size of
     g_i's terms plus ``ROUNDING`` times the rounding of the point through g_i
-    (``sizes``)."""
-    terms, rounding = sizes(system, point)
+    (``sizes``; ``G``: dg/dq there, if known)."""
+    terms, rounding = sizes(system, point, G)
     return tol * terms + ROUNDING * rounding
 
 
@@ -203,9 +204,10 @@ def completion_coordinates(system, point, coordinates=None) -> tuple:
 
 def check(system, point, complete=False, tol: float = TOLERANCE):
     """``(point, changed)``: ``point`` if g = 0 holds there (``|g_i| <= bound(system,
-    point, tol)``: relative to the constraint's own scale, whatever the units), else with the coordinates of ``completion_coordinates`` solved
-    by Newton's method when ``complete`` (True, or the coordinates), else a
-    ``ConstraintError`` with the residual and the fix.  ``changed``: name -> (given,
+    point, tol)``: relative to the constraint's own scale, whatever the units), else
+    with the coordinates of ``completion_coordinates`` solved by Newton's method when
+    ``complete`` (True, or the coordinates), else a ``ConstraintError`` with the
+    residual and the fix.  ``changed``: name -> (given,
     completed) of the coordinates moved."""
     if not system.holonomic:
         return point, {}
@@ -217,7 +219,7 @@ def check(system, point, complete=False, tol: float = TOLERANCE):
             f"the holonomic constraints are not real at the initial configuration "
             f"({_describe(system, g)}); give a configuration where they are defined")
     G = jacobian_at(system, point)
-    if np.all(np.abs(g) <= bound(system, point, tol)):
+    if np.all(np.abs(g) <= bound(system, point, tol, G)):
         if not np.all(np.isfinite(G)) or np.linalg.matrix_rank(G) < len(g):
             raise _rank_error(system, G, "at the initial configuration")
         return point, {}
@@ -238,7 +240,7 @@ def check(system, point, complete=False, tol: float = TOLERANCE):
         G = jacobian_at(system, new)
         if not (np.all(np.isfinite(g)) and np.all(np.isfinite(G))):
             break
-        done = bool(np.all(np.abs(g) <= bound(system, new, CONVERGED)))
+        done = bool(np.all(np.abs(g) <= bound(system, new, CONVERGED, G)))
         if done and polished:
             changed = {c.name: (float(point[c]), float(new[c])) for c in coords}
             return new, changed

@@ -21,8 +21,8 @@ problem.  ``Linearization.symbolic()`` is the same matrix in the
 user's symbols, by ``dag.jacobian`` on the graph (never flattened).
 
 Holonomic constraints g(t, q) = 0 (``system.holonomic``): the operating point must lie
-on g = 0 (else a ``ConstraintError`` with the residual and values that would put it
-there), and the coordinates are perturbed within g = 0.  The coordinates q^D of
+on g = 0, judged against the size of g's terms there (``holonomic.bound``; else a
+``ConstraintError`` with the residual and values that would put it there), and the coordinates are perturbed within g = 0.  The coordinates q^D of
 ``holonomic.completion_coordinates`` (the split's dependent ones where g can be solved
 for them) are eliminated (``Linearization.eliminated``): near the point they follow
 from the others q^I by g = 0, dq^D = T dq^I with T = -(dg/dq^D)^-1 dg/dq^I, and are no
@@ -55,12 +55,18 @@ singular (one rounding unit in an input moves phi by more than 1e-9 relative:
 ``ConstraintError`` naming the split, its measure and a regular one.
 
 Stability is spectral, and decided only at a steady motion (a relative equilibrium of
-the kept states: x' = 0 there).  The point is one when ``residual`` <= ``STEADY`` times
-the scale of the rates, max(1, |A| |x|) over the kept states, and the rates are small
-in themselves, ``residual`` <= sqrt(``STEADY``) max(1, |x|) (a large |A|, as near a
-singular configuration, does not make a large residual steady); elsewhere the eigenvalues
-of A are still computed but say nothing about stability: the verdict is ``"not a steady
-motion"``, ``stable`` is None (``steady(unknowns)`` finds a steady motion nearby).  At a
+the kept states: x' = 0 there).  The point is one when every kept rate x'_i is zero to
+the precision of its own terms: |x'_i| <= ``STEADY`` times the size of the terms that
+make it up at the point (``holonomic.magnitude`` of its row: k |x| + k |c| for
+-k (x - c)) plus ``ROUNDING`` times the rounding of the point through it, sum_j
+|dx'_i/dx_j| |x_j| (sin th at the rounded pi).  The test involves no number 1 and no
+|x| of another state: the same point in other units, or with a coordinate counted from
+another origin, gets the same verdict (a pendulum 0.005 rad off its equilibrium is none
+beside a cart 1000 km along its track, and so is a point of th'' = -G sin th off
+th = k pi with G in any unit of time).  Elsewhere the eigenvalues of A are still
+computed but say nothing about stability: the verdict is ``"not a steady motion"``,
+``stable`` is None (``steady(unknowns)`` finds a steady motion nearby, to its ``tol``
+relative to the same scales).  At a
 steady motion: ``unstable`` when an eigenvalue has a positive real part,
 ``asymptotically stable`` when every one has a negative real part, ``marginal`` when some
 lie on the imaginary axis (conservative systems, families of steady motions: the
@@ -304,8 +310,8 @@ class Linearization(Frozen):
     ``at`` (every coordinate, velocity and multiplier at the point), ``params``,
     ``dropped`` (cyclic coordinate names left out), ``eliminated`` (coordinates that
     follow from the holonomic constraints), ``inert`` (holonomic multipliers left out),
-    ``steady_motion`` (whether ``residual`` is zero to ``STEADY``, at every t for rows
-    that depend on t), ``time_dependent`` (whether A or x' at the point change with t),
+    ``steady_motion`` (whether every kept rate is zero to ``STEADY`` of its terms, at
+    every t for rows that depend on t), ``time_dependent`` (whether A or x' at the point change with t),
     ``verdict``, ``stable`` (the last two only at a steady motion whose A does not
     change with t).
     """
