@@ -69,6 +69,14 @@ def test_off_the_circle_is_refused_in_every_unit_of_length(e, frac):
     assert done[S.J.q[1]] == pytest.approx(-lv, rel=1e-14)
 
 
+def test_connect_refuses_a_start_off_the_circle_in_micrometres():
+    """connect's start (``on_manifold``) is checked the same way: a 10 um pendulum started
+    at a tenth of its length is refused."""
+    with pytest.raises(jn.ConstraintError, match="off the holonomic constraints"):
+        jn.connect(_cartesian(), "chetaev", {"x": 0.0, "y": -1e-6}, {"x": 3e-6}, (0, 1e-3),
+                   params={"G": 9.81, "l": 1e-5})
+
+
 def test_on_g_is_judged_against_the_terms_not_the_origin():
     """A pivot far from the origin: the terms of g are those of the circle, so a point a
     tenth of the length off is refused; a zero of sin q at the rounded pi is on g = 0
