@@ -999,7 +999,7 @@ def _evaluate(model: _Model, point: dict, values: dict, keep, t: float,
                 f"singular for the split {[s.name for s in model.system.dependent]}; "
                 "choose another operating point or another split (dependent=)")
         if nm in point and abs(point[nm] - v) > CONSISTENT * _size(
-                model, coordinate[nm], ck, y, p, values, t, v):
+                model, coordinate[nm], ck, y, p, values, t, v, abs(point[nm] - v)):
             raise ConstraintError(
                 f"the point is off the constraints: at gives {nm} = {point[nm]!r} but the "
                 f"constraints give {v!r}; omit it (dependent velocities follow from the "
@@ -1013,14 +1013,18 @@ def _evaluate(model: _Model, point: dict, values: dict, keep, t: float,
     return Linearization(model, at, values, rows, chart, E, t, y, p, A, rates, limit, bound)
 
 
-def _size(model: _Model, i: int, ck, y, p, values: dict, t: float, v: float) -> float:
+def _size(model: _Model, i: int, ck, y, p, values: dict, t: float, v: float,
+          miss: float) -> float:
     """The scale against which a given dependent velocity is compared with the value
     ``v`` the constraints give (row ``i``, the rate of its coordinate): the size of the
-    terms of phi there and the rounding of the point through it, never the number 1."""
+    terms of phi there and the rounding of the point through it, never the number 1
+    (the terms only where ``miss`` exceeds the others)."""
     m = len(y)
     Jm = np.empty((m, m))
     ck.jac(t, y, p, Jm)
     rounding = float(np.abs(Jm[i]) @ np.abs(y))
+    if miss <= CONSISTENT * max(abs(v), rounding if math.isfinite(rounding) else 0.0):
+        return max(abs(v), rounding)
     terms = float(model.sizes_at([i], y, values, t)[0])
     return max(abs(v), terms if math.isfinite(terms) else 0.0,
                rounding if math.isfinite(rounding) else 0.0)
@@ -1179,12 +1183,14 @@ def _settled(model, ck, y, p, values, t, rows, E):
         ck.rhs(t, z, p, f)
         return Jm[rows] @ E, f[rows].copy(), ROUNDING * (np.abs(Jm[rows]) @ np.abs(z))
 
-    def bound(z, rounding):
+    def bound(z, rounding, rates=None):     # the sizes only where rounding does not do
+        if rates is not None and np.all(np.abs(rates) <= rounding):
+            return rounding
         return STEADY * model.sizes_at(rows, z, values, t) + rounding
 
     A, rates, rounding = at(y)
     if np.all(np.isfinite(A)) and np.all(np.isfinite(rates)):
-        return A, rates, False, bound(y, rounding)
+        return A, rates, False, bound(y, rounding, rates)
     rng = np.random.default_rng(0)
     dirs = []
     for _ in range(DIRECTIONS):
