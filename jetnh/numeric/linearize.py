@@ -502,7 +502,7 @@ class Linearization(Frozen):
                               if n not in unknowns)
             raise LinearizationError(
                 f"no steady motion found by solving for {', '.join(unknowns)} with "
-                f"{given} held (|x'| = {size:.3g} of its scale at the best point, "
+                f"{given} held (the largest rate is {size:.3g} of its scale at the best point, "
                 f"{dict(zip(unknowns, np.round(x, 12).tolist()))}); start from another "
                 "guess (replace(at=...)), solve for other values, or fix fewer of them")
         put(x)
