@@ -909,7 +909,7 @@ def _one_arrays(out, endpoints, n_times, y, p) -> tuple:
     status, ts, ys, n_out, stats = out[:5]
     n = y.shape[0]
     # (a loop that watched nothing keeps its last time and state in row n_out)
-    if len(out) == 6:
+    if len(out) == 6 or out[6] is None:     # (or a watching loop that finished)
         T_LAST, Y_LAST = ts[n_out:n_out + 1], ys[n_out:n_out + 1, :n]
     else:
         T_LAST, Y_LAST = (out[5],), out[6][None, :n]
