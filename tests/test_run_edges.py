@@ -175,6 +175,20 @@ def test_all_finite_of_huge_values_warns_nothing():
         assert np.array_equal(arguments.real_array(big, "guess"), big)
 
 
+@pytest.mark.parametrize("n", [10, 300, 3000, 5000, 40000])
+def test_all_finite_at_every_size_route(n):
+    """Each size route of ``all_finite`` (Python sum, dot product, entrywise) finds the one
+    bad entry wherever it is, and passes huge finite values."""
+    a = np.full(n, 1e200)
+    assert arguments.all_finite(a) and arguments.all_finite(a[: n // 2], a[n // 2:])
+    for bad in (np.nan, np.inf, -np.inf):
+        for i in (0, n // 2, n - 1):
+            b = a.copy()
+            b[i] = bad
+            assert not arguments.all_finite(b)
+            assert not arguments.all_finite(a, b)
+
+
 def test_projection_of_rows_leaves_singular_rows_and_is_the_steps_projection():
     """``projection.rows`` (the dense output's rows) against ``projection.project`` (the
     projection of a step inside a compiled loop), row by row: the same states to the

@@ -138,16 +138,19 @@ def test_past_the_edge_linearized_in_the_best_split():
 
 
 def test_a_large_residual_is_no_steady_motion():
-    """x'' = -K x + K + 1 at x = 1 (K = 1e9): x'' = 1, however large |A| is."""
+    """x'' = -K x + K + 1 at x = 1 (K = 1e6): x'' = 1 is 5e-7 of the terms K x, K + 1
+    that make it up, far above their rounding: no steady motion, however large |A| is;
+    at x = 1 + 1/K it is zero to rounding (K = 1e6 and 1e9)."""
     Jx = jn.JetSpace("x")
     x, = Jx.q
     K = sp.Symbol("K", positive=True)
     s = jn.System(Jx, Jx.qd[0]**2 / 2 - K * x**2 / 2 + (K + 1) * x)
-    lin = jn.linearize(s, at={"x": 1.0, "x_t": 0.0}, params={"K": 1e9})
+    lin = jn.linearize(s, at={"x": 1.0, "x_t": 0.0}, params={"K": 1e6})
     assert lin.residual == pytest.approx(1.0, rel=1e-6)
     assert not lin.steady_motion and lin.verdict == "not a steady motion"
-    rest = jn.linearize(s, at={"x": 1.0 + 1e-9, "x_t": 0.0}, params={"K": 1e9})
-    assert rest.steady_motion                                # x'' = 0 to rounding
+    for k in (1e6, 1e9):
+        rest = jn.linearize(s, at={"x": 1.0 + 1 / k, "x_t": 0.0}, params={"K": k})
+        assert rest.steady_motion                            # x'' = 0 to rounding
 
 
 # ---------------------------------------------------------------------- near the edge

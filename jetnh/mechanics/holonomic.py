@@ -7,6 +7,10 @@ is what the numerics need to put and keep a configuration on g = 0:
 
 - ``residual(system, point)``: the values g_i at a point (t, q, parameters);
 - ``jacobian(system)``: dg_i/dq^s (m x n, sympy) and ``jacobian_at`` its numbers;
+- ``bound(system, point)``: the largest |g_i| accepted as "on g = 0" there, relative to
+  the constraint's own scale at the point (``sizes``: the size of the terms that make up
+  g_i, and the rounding of the coordinates and t through dg_i), never to the number 1:
+  the same configuration in other units gets the same verdict;
 - ``check(system, point, complete)``: refuse a configuration off g = 0 (with the residual
   and the fix), or complete it by Newton's method in chosen coordinates
   (``completion_coordinates``: by default the split's dependent coordinates that make
@@ -26,8 +30,14 @@ import sympy as sp
 from ..algebra import dag
 from ..errors import ConstraintError
 
-#: the largest ``|g_i|`` accepted as "on g = 0", relative to max(1, scale of the coordinates)
+#: the largest ``|g_i|`` accepted as "on g = 0", relative to the size of g_i's terms at
+#: the point (``sizes``)
 TOLERANCE = 1e-9
+#: ... and relative to the rounding of the point through g_i: sum_s |dg_i/dq^s| |q^s|
+#: + |dg_i/dt| |t| (a zero of sin q at q = pi, whose terms are themselves rounding)
+ROUNDING = 1e-14
+#: the |g_i| a completion converges to, relative to the same sizes
+CONVERGED = 1e-15
 #: Newton iterations of a completion
 MAX_ITERATIONS = 50
 
@@ -69,6 +79,70 @@ def jacobian_at(system, point) -> np.ndarray:
     """dg_i/dq^s at ``point`` (an m x n array)."""
     m, n = len(system.holonomic), system.J.n
     return _floats(list(jacobian(system)), _symbols(system, point)).reshape(m, n)
+
+
+def magnitude(expr, memo: dict | None = None):
+    """The size of the terms that make up ``expr`` (a nonnegative expression): the sum
+    of the terms' absolute values for a sum, through products and positive constant
+    powers factor by factor, ``Abs`` of any other node (a function, a division).  A
+    residual small against it is zero to that relative precision, whatever the units;
+    a sum inside a term counts by its value (a difference of large numbers that
+    cancels to a small factor does not make the term large)."""
+    memo = {} if memo is None else memo
+    for e in dag.nodes(expr):
+        if e in memo:
+            continue
+        if e.is_Add:
+            memo[e] = sp.Add(*[sp.Abs(a, evaluate=False) for a in e.args],
+                             evaluate=False)
+        elif e.is_Mul:
+            memo[e] = sp.Mul(*[_factor(a, memo) for a in e.args], evaluate=False)
+        elif e.is_Pow and e.exp.is_Number and e.exp > 0:
+            memo[e] = sp.Pow(_factor(e.base, memo), e.exp, evaluate=False)
+        else:
+            memo[e] = sp.Abs(e, evaluate=False)
+    return memo[expr]
+
+
+def _factor(e, memo):
+    """A factor's size in ``magnitude``: its value's for a sum, its own otherwise."""
+    return sp.Abs(e, evaluate=False) if e.is_Add else memo[e]
+
+
+_SIZES: dict = {}
+
+
+def _size_exprs(system) -> list:
+    """The sizes of the constraints' terms (``magnitude``) and dg_i/dt (cached)."""
+    key = tuple(system.holonomic)
+    if key not in _SIZES:
+        if len(_SIZES) > 256:
+            _SIZES.clear()
+        memo: dict = {}
+        _SIZES[key] = ([magnitude(g, memo) for g in system.holonomic]
+                       + [dag.diff(g, system.J.t) for g in system.holonomic])
+    return _SIZES[key]
+
+
+def sizes(system, point, G=None) -> tuple[np.ndarray, np.ndarray]:
+    """``(terms, rounding)`` per constraint at ``point``: the size of the terms that make
+    up g_i (``magnitude``) and sum_s |dg_i/dq^s| |q^s| + |dg_i/dt| |t| (``G``: dg/dq
+    there, if known)."""
+    point = _symbols(system, point)
+    m, J = len(system.holonomic), system.J
+    vals = _floats(_size_exprs(system), point)
+    G = jacobian_at(system, point) if G is None else G
+    q = np.array([abs(float(point.get(s, 0.0))) for s in J.q])
+    t = abs(float(point.get(J.t, 0.0)))
+    return vals[:m], np.abs(G) @ q + np.abs(vals[m:]) * t
+
+
+def bound(system, point, tol: float = TOLERANCE, G=None) -> np.ndarray:
+    """The largest |g_i| accepted as "on g = 0" at ``point``: ``tol`` times the size of
+    g_i's terms plus ``ROUNDING`` times the rounding of the point through g_i
+    (``sizes``; ``G``: dg/dq there, if known)."""
+    terms, rounding = sizes(system, point, G)
+    return tol * terms + ROUNDING * rounding
 
 
 def _describe(system, g) -> str:
@@ -129,23 +203,23 @@ def completion_coordinates(system, point, coordinates=None) -> tuple:
 
 
 def check(system, point, complete=False, tol: float = TOLERANCE):
-    """``(point, changed)``: ``point`` if g = 0 holds there (``|g_i| <= tol * max(1,
-    max |q^s|)``), else with the coordinates of ``completion_coordinates`` solved
-    by Newton's method when ``complete`` (True, or the coordinates), else a
-    ``ConstraintError`` with the residual and the fix.  ``changed``: name -> (given,
+    """``(point, changed)``: ``point`` if g = 0 holds there (``|g_i| <= bound(system,
+    point, tol)``: relative to the constraint's own scale, whatever the units), else
+    with the coordinates of ``completion_coordinates`` solved by Newton's method when
+    ``complete`` (True, or the coordinates), else a ``ConstraintError`` with the
+    residual and the fix.  ``changed``: name -> (given,
     completed) of the coordinates moved."""
     if not system.holonomic:
         return point, {}
     J = system.J
     point = _symbols(system, point)
-    scale = max([1.0] + [abs(float(point[q])) for q in J.q if q in point])
     g = residual(system, point)
     if not np.all(np.isfinite(g)):
         raise ConstraintError(
             f"the holonomic constraints are not real at the initial configuration "
             f"({_describe(system, g)}); give a configuration where they are defined")
     G = jacobian_at(system, point)
-    if np.all(np.abs(g) <= tol * scale):
+    if np.all(np.abs(g) <= bound(system, point, tol, G)):
         if not np.all(np.isfinite(G)) or np.linalg.matrix_rank(G) < len(g):
             raise _rank_error(system, G, "at the initial configuration")
         return point, {}
@@ -166,7 +240,7 @@ def check(system, point, complete=False, tol: float = TOLERANCE):
         G = jacobian_at(system, new)
         if not (np.all(np.isfinite(g)) and np.all(np.isfinite(G))):
             break
-        done = bool(np.all(np.abs(g) <= 1e-13 * scale))
+        done = bool(np.all(np.abs(g) <= bound(system, new, CONVERGED, G)))
         if done and polished:
             changed = {c.name: (float(point[c]), float(new[c])) for c in coords}
             return new, changed

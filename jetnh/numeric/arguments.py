@@ -102,19 +102,22 @@ def count(value, what, limit=MAX_STEPS_LIMIT) -> int:
 def all_finite(a: np.ndarray, b: np.ndarray | None = None) -> bool:
     """Whether every entry of the float arrays ``a`` (and ``b``) is finite: a finite sum
     says so cheaply (of the entries as Python floats for a few, which never warns; else of
-    squares); where it is not (a NaN, an infinity or an overflow), each entry is looked
-    at."""
-    if a.size + (0 if b is None else b.size) <= _FEW:
+    squares, up to ``_DOT`` entries); where it is not (a NaN, an infinity or an overflow),
+    and for large arrays, each entry is looked at."""
+    size = a.size + (0 if b is None else b.size)
+    if size <= _FEW:
         total = sum(a.reshape(-1).tolist())
         if b is not None:
             total += sum(b.reshape(-1).tolist())
-    else:
+    elif size <= _DOT:
         flat = a.reshape(-1)
         with np.errstate(over="ignore", invalid="ignore"):   # an overflow: looked at below
             total = flat.dot(flat)
             if b is not None:
                 flat = b.reshape(-1)
                 total += flat.dot(flat)
+    else:
+        total = math.nan
     return math.isfinite(total) or bool(
         np.isfinite(a).all() and (b is None or np.isfinite(b).all()))
 
@@ -122,6 +125,9 @@ def all_finite(a: np.ndarray, b: np.ndarray | None = None) -> bool:
 #: up to this many entries ``all_finite`` sums Python floats (no ``np.errstate``, which
 #: costs more than the sum)
 _FEW = 256
+#: up to this many a dot product: above it BLAS may hand the product to its threads, which
+#: on a busy machine wait for a core (milliseconds where ``isfinite`` takes microseconds)
+_DOT = 4096
 
 
 def real_array(value, what, ndim=1) -> np.ndarray:

@@ -21,8 +21,8 @@ problem.  ``Linearization.symbolic()`` is the same matrix in the
 user's symbols, by ``dag.jacobian`` on the graph (never flattened).
 
 Holonomic constraints g(t, q) = 0 (``system.holonomic``): the operating point must lie
-on g = 0 (else a ``ConstraintError`` with the residual and values that would put it
-there), and the coordinates are perturbed within g = 0.  The coordinates q^D of
+on g = 0, judged against the size of g's terms there (``holonomic.bound``; else a
+``ConstraintError`` with the residual and values that would put it there), and the coordinates are perturbed within g = 0.  The coordinates q^D of
 ``holonomic.completion_coordinates`` (the split's dependent ones where g can be solved
 for them) are eliminated (``Linearization.eliminated``): near the point they follow
 from the others q^I by g = 0, dq^D = T dq^I with T = -(dg/dq^D)^-1 dg/dq^I, and are no
@@ -55,12 +55,18 @@ singular (one rounding unit in an input moves phi by more than 1e-9 relative:
 ``ConstraintError`` naming the split, its measure and a regular one.
 
 Stability is spectral, and decided only at a steady motion (a relative equilibrium of
-the kept states: x' = 0 there).  The point is one when ``residual`` <= ``STEADY`` times
-the scale of the rates, max(1, |A| |x|) over the kept states, and the rates are small
-in themselves, ``residual`` <= sqrt(``STEADY``) max(1, |x|) (a large |A|, as near a
-singular configuration, does not make a large residual steady); elsewhere the eigenvalues
-of A are still computed but say nothing about stability: the verdict is ``"not a steady
-motion"``, ``stable`` is None (``steady(unknowns)`` finds a steady motion nearby).  At a
+the kept states: x' = 0 there).  The point is one when every kept rate x'_i is zero to
+the precision of its own terms: |x'_i| <= ``STEADY`` times the size of the terms that
+make it up at the point (``holonomic.magnitude`` of its row: k |x| + k |c| for
+-k (x - c)) plus ``ROUNDING`` times the rounding of the point through it, sum_j
+|dx'_i/dx_j| |x_j| (sin th at the rounded pi).  The test involves no number 1 and no
+|x| of another state: the same point in other units, or with a coordinate counted from
+another origin, gets the same verdict (a pendulum 0.005 rad off its equilibrium is none
+beside a cart 1000 km along its track, and so is a point of th'' = -G sin th off
+th = k pi with G in any unit of time).  Elsewhere the eigenvalues of A are still
+computed but say nothing about stability: the verdict is ``"not a steady motion"``,
+``stable`` is None (``steady(unknowns)`` finds a steady motion nearby, to its ``tol``
+relative to the same scales).  At a
 steady motion: ``unstable`` when an eigenvalue has a positive real part,
 ``asymptotically stable`` when every one has a negative real part, ``marginal`` when some
 lie on the imaginary axis (conservative systems, families of steady motions: the
@@ -115,9 +121,17 @@ from ..frozen import Frozen, FrozenDict
 REAL = 1e-12
 #: an eigenvalue's error bound is at most ZERO * |B| (sqrt(REAL): a Jordan block)
 ZERO = 1e-6
-#: a point is a steady motion when ``|x'| <= STEADY * max(1, |A| |x|)`` and
-#: ``|x'| <= sqrt(STEADY) * max(1, |x|)`` (kept states)
+#: a point is a steady motion when every kept rate is at most ``STEADY`` times the size
+#: of the terms that make it up there (``_Model.sizes``), plus ``ROUNDING`` times the
+#: rounding of the point through it, sum_j |dx'_i/dx_j| |x_j|
 STEADY = 1e-8
+#: the relative rounding of the point allowed in a rate at a steady motion (above)
+ROUNDING = 1e-12
+#: the steps (relative to the state's size, or 1 at the zero state) tried in turn for
+#: the limit at a 0/0: the first where the extrapolation settles
+STEPS = (1e-1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8)
+#: the directions of approach along which that limit must agree
+DIRECTIONS = 3
 #: the relative tolerance of given dependent velocities (and of f = 0 past the edge)
 CONSISTENT = 1e-9
 #: the verdict off a steady motion
@@ -182,6 +196,21 @@ class _Model:
         rows += [acc[J.jet(J.split(v)[0], 2)] for v in self.velocities]
         rows += [acc[r] for r in self._eom.multiplier_rates]
         return dag.xreplace(rows, phi) if phi else rows
+
+    @_once
+    def sizes(self) -> list:
+        """The size of the terms that make up each row (``holonomic.magnitude``): what
+        the rounding of those terms leaves of a rate that vanishes."""
+        memo: dict = {}
+        return [holonomic.magnitude(e, memo) for e in self.rows]
+
+    def sizes_at(self, rows, y, values: dict, t: float) -> np.ndarray:
+        """``sizes`` of ``rows`` (state indices) at state ``y``, ``values`` and ``t``."""
+        point = {s: float(v) for s, v in zip(self.states, y)}
+        point.update((s, values[s.name]) for s in self.system.parameters)
+        point[self.system.J.t] = t
+        out = dag.evaluate_numpy([self.sizes[i] for i in rows], point)
+        return np.array([float(v) for v in out], dtype=float)
 
     def uses(self, row: int, state: int) -> bool:
         """Whether row ``row`` depends on state ``state``: the symbol is in it and its
@@ -281,15 +310,15 @@ class Linearization(Frozen):
     ``at`` (every coordinate, velocity and multiplier at the point), ``params``,
     ``dropped`` (cyclic coordinate names left out), ``eliminated`` (coordinates that
     follow from the holonomic constraints), ``inert`` (holonomic multipliers left out),
-    ``steady_motion`` (whether ``residual`` is zero to ``STEADY``, at every t for rows
-    that depend on t), ``time_dependent`` (whether A or x' at the point change with t),
+    ``steady_motion`` (whether every kept rate is zero to ``STEADY`` of its terms, at
+    every t for rows that depend on t), ``time_dependent`` (whether A or x' at the point change with t),
     ``verdict``, ``stable`` (the last two only at a steady motion whose A does not
     change with t).
     """
 
     def __init__(self, model: _Model, at: dict, params: dict, keep: tuple, chart: tuple,
                  E: np.ndarray, t: float, y: np.ndarray, p: np.ndarray, A: np.ndarray,
-                 rates: np.ndarray, limit: bool):
+                 rates: np.ndarray, limit: bool, bound: np.ndarray):
         self._model = model
         self.system = model.system
         self.principle = model.principle
@@ -315,18 +344,16 @@ class Linearization(Frozen):
         self.eigenvalues = ev
         #: True when A is the limit at a point where the kernel itself is undefined
         self.limit = limit
-        size = float(np.abs(y[list(keep)]).max()) if keep else 0.0
-        bound = min(STEADY * max(1.0, self._scale * size),
-                    math.sqrt(STEADY) * max(1.0, size))
-        changes, steady = False, self.residual <= bound
+        changes, steady = False, bool(np.all(np.abs(rates) <= bound))
         if model.has_time(keep):
             changes, steady = _in_time(self, bound)
         #: whether A or x' at the point change with t (rows that depend on t; module
         #: docstring): the frozen eigenvalues then decide nothing
         self.time_dependent = changes
-        #: whether the point is a steady motion: ``|x'| <= STEADY * max(1, |A| |x|)``
-        #: and ``|x'| <= sqrt(STEADY) * max(1, |x|)``, at ``t`` and, for rows that
-        #: depend on t, at the times ``t + TIMES`` too (module docstring)
+        #: whether the point is a steady motion: every kept rate within ``STEADY`` of the
+        #: size of its terms (plus the rounding of the point, ``ROUNDING``), at ``t``
+        #: and, for rows that depend on t, at the times ``t + TIMES`` too (module
+        #: docstring)
         self.steady_motion = bool(steady)
 
     # ------------------------------------------------------------------ verdicts
@@ -404,7 +431,10 @@ class Linearization(Frozen):
         unknowns : str or list of str
             Names of kept states (e.g. the multipliers) to solve for.
         tol : float, default 1e-10
-            The accepted ``|x'|``, relative to ``max(1, |x'|)`` at this point.
+            The accepted size of each rate, relative to the size of its terms and the
+            rounding of this point through it (the scale of ``steady_motion``'s test;
+            where a rate has neither, the smallest other one's).  The result counts as a
+            steady motion to that accuracy.
         """
         from scipy.optimize import least_squares
 
@@ -438,39 +468,48 @@ class Linearization(Frozen):
                 for nm, v in self._on_g({model.names[i]: y[i] for i in idx}, {}).items():
                     y[model.names.index(nm)] = v
 
+        ck.jac(t, y, p, Jm)
+        weight = (model.sizes_at(keep, y, dict(self.params), t)
+                  + np.abs(Jm[keep]) @ np.abs(y))
+        weight[~np.isfinite(weight)] = 0.0
+        weight[weight == 0] = weight[weight > 0].min(initial=1.0)
+
         def residual(u):
             put(u)
             ck.rhs(t, y, p, f)
-            return f[keep].copy()
+            return f[keep] / weight
 
         def jacobian(u):
             put(u)
             ck.jac(t, y, p, Jm)
             if not moves:
-                return Jm[np.ix_(keep, idx)].copy()
+                return Jm[np.ix_(keep, idx)] / weight[:, None]
             G = holonomic.jacobian_at(self.system, _configuration(
                 model, y, dict(self.params), t))
-            return (Jm[keep] @ _embedding(model, self._keep, self._chart, G))[:, cols]
+            return (Jm[keep] @ _embedding(model, self._keep, self._chart, G))[:, cols] \
+                / weight[:, None]
 
         u0 = self._y[idx]
-        start = float(np.linalg.norm(self.rates))
         try:
             sol = least_squares(residual, u0, jac=jacobian, method="trf", xtol=1e-15,
                                 ftol=1e-15, gtol=1e-15, max_nfev=200)
             x, bad = sol.x, not np.all(np.isfinite(sol.fun))
         except ValueError:       # a non-finite residual at the start
             x, bad = u0, True
-        size = float(np.linalg.norm(residual(x))) if not bad else float("nan")
-        if bad or not size <= tol * max(1.0, start):
+        size = float(np.abs(residual(x)).max()) if not bad else float("nan")
+        if bad or not size <= tol:
             given = ", ".join(f"{n} = {self.at[n]:.6g}" for n in self.state_names
                               if n not in unknowns)
             raise LinearizationError(
                 f"no steady motion found by solving for {', '.join(unknowns)} with "
-                f"{given} held (|x'| = {size:.3g} at the best point, "
+                f"{given} held (the largest rate is {size:.3g} of its scale at the best point, "
                 f"{dict(zip(unknowns, np.round(x, 12).tolist()))}); start from another "
                 "guess (replace(at=...)), solve for other values, or fix fewer of them")
         put(x)
-        found = self.replace(at={model.names[i]: float(y[i]) for i in (*idx, *self._chart)})
+        point = {k: v for k, v in self.at.items()
+                 if k not in {d.name for d in model.dependent}}
+        point.update((model.names[i], float(y[i])) for i in (*idx, *self._chart))
+        found = _evaluate(model, point, dict(self.params), self._keep, t, tol * weight)
         if found.time_dependent and not found.steady_motion:
             raise LinearizationError(
                 f"x' vanishes at t = {t:g} with {', '.join(unknowns)} = "
@@ -599,34 +638,34 @@ def _margin(ev: np.ndarray, bounds: np.ndarray) -> float:
     return float((ev.real - bounds).max()) if ev.size else 0.0
 
 
-def _in_time(lin: Linearization, bound: float) -> tuple[bool, bool]:
+def _in_time(lin: Linearization, bound: np.ndarray) -> tuple[bool, bool]:
     """``(changes, steady)`` of a point whose rows contain t: whether A or x' differ at
-    the times ``t + TIMES`` (A by more than ``REAL`` times its size, x' by more than
-    ``bound``) and whether ``|x'| <= bound`` at t and at each of them.  The state is held;
+    the times ``t + TIMES`` (A by more than ``REAL`` times its size, a rate by more than
+    its ``bound``) and whether every rate is within its bound at t and at each of them.  The state is held;
     with holonomic constraints it must stay on g = 0 and A is taken in the chart there.
     A time where the point leaves g = 0 or the equations are undefined changes and is
     not steady."""
     model, keep, chart = lin._model, lin._keep, lin._chart
     y, p, ck = lin._y, lin._p, lin._kernels
-    scale = max([1.0] + [abs(float(v)) for v in y[:len(model.coordinates)]])
-    changes, steady = False, lin.residual <= bound
+    changes, steady = False, bool(np.all(np.abs(lin.rates) <= bound))
+    model_values = dict(lin.params)
     for s in TIMES:
         t = lin.t + s * max(1.0, abs(lin.t))
         E = lin._E
         if model.system.holonomic:
             point = _configuration(model, y, dict(lin.params), t)
             g = holonomic.residual(model.system, point)
-            if not np.all(np.abs(g) <= holonomic.TOLERANCE * scale):
+            if not np.all(np.abs(g) <= holonomic.bound(model.system, point)):
                 return True, False
             E = _embedding(model, keep, chart, holonomic.jacobian_at(model.system, point))
         try:
-            A, rates, _ = _jacobian(ck, y, p, t, keep, E)
+            A, rates, _, here = _jacobian(model, ck, y, p, model_values, t, keep, E)
         except LinearizationError:
             return True, False
         changes = changes or bool(
             np.abs(A - lin.A).max(initial=0.0) > REAL * lin._scale
-            or np.linalg.norm(rates - lin.rates) > bound)
-        steady = steady and float(np.linalg.norm(rates)) <= bound
+            or np.any(np.abs(rates - lin.rates) > np.maximum(bound, here)))
+        steady = steady and bool(np.all(np.abs(rates) <= here))
     return changes, steady
 
 
@@ -911,8 +950,10 @@ def _kept(model: _Model, drop) -> tuple[int, ...]:
                  if not (i < n and i in gone) and i not in model.inert)
 
 
-def _evaluate(model: _Model, point: dict, values: dict, keep, t: float) -> Linearization:
-    """The Linearization at one point (checked) with the compiled kernels."""
+def _evaluate(model: _Model, point: dict, values: dict, keep, t: float,
+              floor=None) -> Linearization:
+    """The Linearization at one point (checked) with the compiled kernels; ``floor``:
+    rates accepted as zero in the steady test besides its own bound (``steady``'s)."""
     names = model.names
     dep = [v.name for v in model.dependent]
     allowed = set(names) | set(dep)
@@ -925,8 +966,8 @@ def _evaluate(model: _Model, point: dict, values: dict, keep, t: float) -> Linea
     n = len(model.coordinates)
     on_g = {q.name for q in model.coordinates
             if any(q in dag.free_symbols(g) for g in model.system.holonomic)}
-    missing = [nm for i, nm in enumerate(names)
-               if nm not in point and (i >= n or i in keep or nm in on_g)]
+    missing = [nm for i, nm in enumerate(names) if nm not in point and i not in model.inert
+               and (i >= n or i in keep or nm in on_g)]
     if missing:
         lams = [s.name for s in model.lams]
         raise ArgumentError(
@@ -948,6 +989,8 @@ def _evaluate(model: _Model, point: dict, values: dict, keep, t: float) -> Linea
     ck.aux(t, y, p, aux)
     at = dict(state)
     k = len(dep)
+    coordinate = {v.name: model.coordinates.index(q) for v, q in zip(
+        model.dependent, (model.system.J.split(v)[0] for v in model.dependent))}
     for a, nm in enumerate(dep):
         v = float(aux[a])
         if not np.isfinite(v):
@@ -955,7 +998,8 @@ def _evaluate(model: _Model, point: dict, values: dict, keep, t: float) -> Linea
                 f"the constraints give no finite value for {nm} at this point: it is "
                 f"singular for the split {[s.name for s in model.system.dependent]}; "
                 "choose another operating point or another split (dependent=)")
-        if nm in point and abs(point[nm] - v) > CONSISTENT * max(1.0, abs(v)):
+        if nm in point and abs(point[nm] - v) > CONSISTENT * _size(
+                model, coordinate[nm], ck, y, p, values, t, v, abs(point[nm] - v)):
             raise ConstraintError(
                 f"the point is off the constraints: at gives {nm} = {point[nm]!r} but the "
                 f"constraints give {v!r}; omit it (dependent velocities follow from the "
@@ -963,8 +1007,27 @@ def _evaluate(model: _Model, point: dict, values: dict, keep, t: float) -> Linea
         at[nm] = v
     if k and not np.all(np.isfinite(aux[k:2 * k])):
         raise ConstraintError("the constraints are undefined at this point")
-    A, rates, limit = _jacobian(ck, y, p, t, rows, E)
-    return Linearization(model, at, values, rows, chart, E, t, y, p, A, rates, limit)
+    A, rates, limit, bound = _jacobian(model, ck, y, p, values, t, rows, E)
+    if floor is not None and len(floor) == len(bound):
+        bound = np.maximum(bound, floor)
+    return Linearization(model, at, values, rows, chart, E, t, y, p, A, rates, limit, bound)
+
+
+def _size(model: _Model, i: int, ck, y, p, values: dict, t: float, v: float,
+          miss: float) -> float:
+    """The scale against which a given dependent velocity is compared with the value
+    ``v`` the constraints give (row ``i``, the rate of its coordinate): the size of the
+    terms of phi there and the rounding of the point through it, never the number 1
+    (the terms only where ``miss`` exceeds the others)."""
+    m = len(y)
+    Jm = np.empty((m, m))
+    ck.jac(t, y, p, Jm)
+    rounding = float(np.abs(Jm[i]) @ np.abs(y))
+    if miss <= CONSISTENT * max(abs(v), rounding if math.isfinite(rounding) else 0.0):
+        return max(abs(v), rounding)
+    terms = float(model.sizes_at([i], y, values, t)[0])
+    return max(abs(v), terms if math.isfinite(terms) else 0.0,
+               rounding if math.isfinite(rounding) else 0.0)
 
 
 def _split(model: _Model, point: dict, state: dict, values: dict, keep, t: float):
@@ -1038,13 +1101,12 @@ def _chart(model: _Model, y, values: dict, t: float):
         return (), None
     point = _configuration(model, y, values, t)
     g = holonomic.residual(sysm, point)
-    scale = max([1.0] + [abs(float(v)) for v in y[:len(model.coordinates)]])
-    if not np.all(np.isfinite(g)) or np.any(np.abs(g) > holonomic.TOLERANCE * scale):
+    if not np.all(np.isfinite(g)) or np.any(np.abs(g) > holonomic.bound(sysm, point)):
         told = "; ".join(f"g{i + 1} = {e} is {v:.6g}"
                          for i, (e, v) in enumerate(zip(sysm.holonomic, g)))
         try:
             _, moved = holonomic.check(sysm, point, complete=True)
-            fix = (", e.g. " + ", ".join(f"{nm} = {new:.12g}" for nm, (_, new) in
+            fix = (", e.g. " + ", ".join(f"{nm} = {new!r}" for nm, (_, new) in
                                          moved.items()) + " with the others held")
         except ConstraintError:
             fix = ""
@@ -1070,44 +1132,105 @@ def _embedding(model: _Model, rows, chart, G) -> np.ndarray:
     return E
 
 
-def _jacobian(ck, y, p, t, rows, E):
-    """(A, x', limit): the kernels at the point, A = (rows of dx'/dx) E; where they are
-    undefined (0/0), the limit along a random kept direction by symmetric differences and
-    Richardson extrapolation, and an error if that does not settle."""
+def _jacobian(model: _Model, ck, y, p, values: dict, t, rows, E):
+    """(A, x', limit, bound): the kernels at the point, A = (rows of dx'/dx) E, and
+    the largest rate of each kept row at a steady motion (``STEADY``, ``ROUNDING``);
+    where they are undefined (0/0), the limit by ``_settled``, or an error."""
     with np.errstate(invalid="ignore", over="ignore"):   # (NaN rows are checked here)
-        return _settled(ck, y, p, t, list(rows), E)
+        return _settled(model, ck, y, p, values, t, list(rows), E)
 
 
-def _settled(ck, y, p, t, rows, E):
-    """``_jacobian``'s work (under its error state)."""
+def _balanced(A: np.ndarray) -> np.ndarray:
+    """The diagonal D of A's balancing (LAPACK's ``gebal``, no permutation): differences
+    of A are measured as D^-1 (A1 - A2) D, whatever the units of the states."""
+    from scipy.linalg import get_lapack_funcs
+
+    if not A.size or not np.all(np.isfinite(A)):
+        return np.ones(A.shape[0])
+    return get_lapack_funcs("gebal", (A,))(A, scale=1, permute=0)[3]
+
+
+def _difference(A1, A2, r1, r2, b) -> float:
+    """How far (A1, r1) and (A2, r2) are apart, relative: the matrices in A's balanced
+    units (``_balanced``: Frobenius norms), the rates row by row beyond ``b`` (their
+    rounding); infinite where one is not finite."""
+    if not (np.all(np.isfinite(A1)) and np.all(np.isfinite(A2))
+            and np.all(np.isfinite(r1)) and np.all(np.isfinite(r2))):
+        return np.inf
+    D = _balanced((A1 + A2) / 2)
+    dA = np.linalg.norm((A1 - A2) * D[None, :] / D[:, None])
+    size = np.linalg.norm((A1 + A2) * D[None, :] / D[:, None]) / 2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        dr = np.where(np.abs(r1 - r2) <= b, 0.0,
+                      np.abs(r1 - r2) / (np.abs(r1) + np.abs(r2)))
+    return float(max(dA / size if size > 0 else (0.0 if dA == 0 else np.inf),
+                     dr.max(initial=0.0)))
+
+
+def _settled(model, ck, y, p, values, t, rows, E):
+    """``_jacobian``'s work (under its error state).  At a 0/0 the limit is taken along
+    ``DIRECTIONS`` random kept directions by symmetric differences and Richardson
+    extrapolation, at the largest step of ``STEPS`` (times the state's size) where the
+    differences from h and h/2 agree to 1e-3 (in A's balanced units: smaller steps
+    lose digits to cancellation, down to a false agreement of zeros); it is accepted only when every direction gives the same limit there (a value that
+    depends on the direction of approach, as at the pole of polar coordinates or Euler
+    angles, is none)."""
     m = len(y)
     Jm, f = np.empty((m, m)), np.empty(m)
-    ck.jac(t, y, p, Jm)
-    ck.rhs(t, y, p, f)
-    A, rates = Jm[rows] @ E, f[rows].copy()
+
+    def at(z):
+        ck.jac(t, z, p, Jm)
+        ck.rhs(t, z, p, f)
+        return Jm[rows] @ E, f[rows].copy(), ROUNDING * (np.abs(Jm[rows]) @ np.abs(z))
+
+    def bound(z, rounding, rates=None):     # the sizes only where rounding does not do
+        if rates is not None and np.all(np.abs(rates) <= rounding):
+            return rounding
+        return STEADY * model.sizes_at(rows, z, values, t) + rounding
+
+    A, rates, rounding = at(y)
     if np.all(np.isfinite(A)) and np.all(np.isfinite(rates)):
-        return A, rates, False
+        return A, rates, False, bound(y, rounding, rates)
     rng = np.random.default_rng(0)
-    d = E @ rng.standard_normal(E.shape[1])
-    d /= np.linalg.norm(d)
-    scale = max(1.0, float(np.abs(y).max()))
+    dirs = []
+    for _ in range(DIRECTIONS):
+        d = E @ rng.standard_normal(E.shape[1])
+        dirs.append(d / np.linalg.norm(d))
+    scale = float(np.abs(y).max()) or 1.0
 
-    def mean(h):
-        Js, fs = [], []
-        for s in (h, -h):
-            ck.jac(t, y + s * scale * d, p, Jm)
-            ck.rhs(t, y + s * scale * d, p, f)
-            Js.append(Jm[rows] @ E)
-            fs.append(f[rows].copy())
-        return (Js[0] + Js[1]) / 2, (fs[0] + fs[1]) / 2
+    def mean(d, h):
+        (A1, r1, b1), (A2, r2, b2) = at(y + h * scale * d), at(y - h * scale * d)
+        return (A1 + A2) / 2, (r1 + r2) / 2, np.maximum(b1, b2)
 
-    (A1, r1), (A2, r2) = mean(1e-3), mean(5e-4)
-    A, rates = (4 * A2 - A1) / 3, (4 * r2 - r1) / 3
-    if not (np.all(np.isfinite(A)) and np.all(np.isfinite(rates))) or (
-            np.abs(A2 - A1).max() > 1e-3 * max(1.0, np.abs(A).max())):
+    def limit(d, h):
+        (A1, r1, _), (A2, r2, b2) = mean(d, h), mean(d, h / 2)
+        return (4 * A2 - A1) / 3, (4 * r2 - r1) / 3, b2, _difference(A1, A2, r1, r2, b2)
+
+    best, h_best = None, None
+    for h in STEPS:
+        found = [limit(d, h) for d in dirs]
+        if max(f[3] for f in found) <= 1e-3:
+            best, h_best = found, h
+            break
+    if best is None:
         raise LinearizationError(
-            "the equations are undefined at this point (a singular configuration of "
-            "the principle's equations or of the split, or parameter values that make "
-            "them degenerate, e.g. a mass of 0) and have no limit there; choose another "
-            "operating point, another split (dependent=) or other parameter values")
-    return A, rates, True
+            "the equations are undefined at this point (0/0: a singular point of the "
+            "coordinates, where the mass matrix of the reduced equations is singular, as "
+            "at the pole of polar coordinates or of Euler angles; a singular configuration "
+            "of the principle's equations or of the split; or parameter values that make "
+            "them degenerate, e.g. a mass of 0), and no limit could be established there "
+            f"with steps {STEPS[0]:g}..{STEPS[-1]:g} times the state's size {scale:.3g}; "
+            "linearize in other coordinates, or choose another operating point, another "
+            "split (dependent=) or other parameter values")
+    A, rates, b, _ = best[0]
+    for A2, r2, b2, _ in best[1:]:
+        if _difference(A, A2, rates, r2, np.maximum(b, b2)) > 1e-3:
+            raise LinearizationError(
+                "the equations are undefined at this point (0/0) and their limit depends "
+                "on the direction of approach: a singular point of the coordinates (the "
+                "mass matrix of the reduced equations is singular there, as at the pole "
+                "of polar coordinates or of Euler angles), where A does not describe the "
+                "motions nearby; linearize in other coordinates (Cartesian ones, or "
+                "angles whose pole is elsewhere), or at a point off the singularity")
+    z = y + h_best / 2 * scale * dirs[0]
+    return A, rates, True, np.maximum(b, bound(z, 0.0))
