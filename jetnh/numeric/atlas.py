@@ -510,6 +510,8 @@ class Atlas:
         self._alive: dict = {}
         #: what ``chart_driver`` takes, per method, output mode and watch (``_drive_inputs``)
         self._drives: dict = {}
+        #: whether the last run of each of those reached an edge (``run``)
+        self._reaches: dict = {}
 
     @property
     def own(self) -> Chart:
@@ -674,8 +676,11 @@ def run(home, plan, y0, p, build):
     sens, t0, t1, ctl = plan.sens, plan.t0, plan.t1, plan.ctl
     method = plan.method.name
     n = len(home.state_names)
-    if sens is None and plan.limit is None and not user:
-        driven = _driven(home, at, plan, y0, p, build, tic)
+    key = (method, plan.mode, plan.checked, plan.singular_tol)
+    if sens is None and plan.limit is None and not user and at._reaches.get(key):
+        # (runs of a plan whose last run reached the edge: a run that does not is
+        # cheaper as one loop call, below)
+        driven = _driven(home, at, plan, y0, p, build, tic, key)
         if driven is not None:
             return driven
     start = (own_edge(at, plan.ce, t0, y0, p) < 0.0
@@ -711,6 +716,7 @@ def run(home, plan, y0, p, build):
                      plan.limit, dense, n_events=len(user), sens=sens)
     parts, switches = ahead or _onward_from(at, plan, out, wall, dense, y0, p, user,
                                             build, tic)
+    at._reaches[key] = True
     return stitch(home, at, method, p, parts, switches, user, plan.mode,
                   time.perf_counter() - tic)
 
@@ -756,14 +762,14 @@ def _onward_from(at, plan, out, wall, dense, y0, p, user, build, tic, halt=None)
                   ran=(loops.result(out), wall, plan.ce, plan.watch, dense), halt=halt)
 
 
-def _driven(home, at, plan, y0, p, build, tic):
+def _driven(home, at, plan, y0, p, build, tic, key):
     """``run`` of a run without user events, sensitivities or time budget in one
     compiled call (``chart_driver``: every piece, step start, cut and change of chart),
     where its method, charts and multipliers allow: the Trajectory that ``run``'s pieces
     would make (its pieces made when first read, ``_Recorded``), or None (the run is
     ``run``'s: not for the driver, a chart not made yet, or a last piece that did not
     finish)."""
-    got = _drive_inputs(at, plan)
+    got = _drive_inputs(at, plan, key)
     if got is None:
         return None
     entry, addr, n_sing, edge_dir, edge_max = got
@@ -782,6 +788,7 @@ def _driven(home, at, plan, y0, p, build, tic):
     if dense is not None:
         dense = dense[int(I[0, chart_driver.C_PARTIAL])]
     if n_p == 1 and not n_sw and not last[chart_driver.C_CUT]:      # never at the edge
+        at._reaches[key] = False
         return Trajectory._finished(home, (TS, YS, int(last[chart_driver.C_ROWS])), p,
                                     method, _FINISHED_TEXT,
                                     (tuple(counts), wall, home.projected), plan.kern, dense)
@@ -797,14 +804,13 @@ def _driven(home, at, plan, y0, p, build, tic):
                               switches=switches)
 
 
-def _drive_inputs(at, plan):
+def _drive_inputs(at, plan, key):
     """What ``chart_driver.drive`` takes for ``plan`` beyond the run's own arguments:
     ``(entry, addresses, indicators per chart, the edge's direction and count)``, or
     None where the run is not for it (an implicit method, multipliers mapped by A,
     holonomic constraints, events other than the edge).  The addresses of each chart
     whose kernels and edge are made (rows of zeros elsewhere: the driver hands the run
     back there), kept until another chart is made."""
-    key = (plan.method.name, plan.mode, plan.checked, plan.singular_tol)
     found = at._drives.get(key)
     made = (len(at.charts), len(at._events))
     if found is not None and found[0] == made:
