@@ -767,8 +767,7 @@ def _driven(home, at, plan, y0, p, build, tic, key):
     compiled call (``chart_driver``: every piece, step start, cut and change of chart),
     where its method, charts and multipliers allow: the Trajectory that ``run``'s pieces
     would make (its pieces made when first read, ``_Recorded``), or None (the run is
-    ``run``'s: not for the driver, a chart not made yet, or a last piece that did not
-    finish)."""
+    ``run``'s: not for the driver, or a chart not made yet)."""
     got = _drive_inputs(at, plan, key)
     if got is None:
         return None
@@ -776,32 +775,41 @@ def _driven(home, at, plan, y0, p, build, tic, key):
     halt = _HALT.copy()
     code, n_p, n_sw, I, F, TS, YS = interrupt.call(entry, halt, None, (
         addr, n_sing, plan.t0, plan.t1, y0, p, plan.ctl, plan.te, plan.mode,
-        float(plan.singular_tol), edge_dir, edge_max, loops.NO_EVENTS, halt, at._table, at._addr,
-        at.eps, 0))
+        float(plan.singular_tol), edge_dir, edge_max, loops.NO_EVENTS, halt, at._table,
+        at._addr, at.eps, 0))
     wall = time.perf_counter() - tic
-    last = I[n_p - 1] if n_p else None
-    if code or last[chart_driver.C_STATUS] != FINISHED:
-        return None             # (``run`` makes it, and the reasons of its stop)
-    method = plan.method.name
+    if code:
+        return None
+    last, method = I[n_p - 1], plan.method.name
+    if n_p == 1 and not n_sw and not last[chart_driver.C_CUT]:
+        at._reaches[key] = False
+    if last[chart_driver.C_STATUS] != FINISHED:     # (the reasons of its stop: ``stitch``)
+        parts = _recorded_parts(at, plan, p, build, wall, (n_p, I, F, TS, YS))
+        return stitch(home, at, method, p, parts, _switches(at, n_sw, I, F), (),
+                      plan.mode, wall)
     counts = I[:n_p, chart_driver.C_STEPS:chart_driver.C_NFEV + 1].sum(axis=0).tolist()
     dense = plan.dense_ends
     if dense is not None:
         dense = dense[int(I[0, chart_driver.C_PARTIAL])]
     if n_p == 1 and not n_sw and not last[chart_driver.C_CUT]:      # never at the edge
-        at._reaches[key] = False
         return Trajectory._finished(home, (TS, YS, int(last[chart_driver.C_ROWS])), p,
                                     method, _FINISHED_TEXT,
                                     (tuple(counts), wall, home.projected), plan.kern, dense)
-    splits = at.splits
-    switches = tuple({"t": float(F[j, chart_driver.SW_T]),
-                      "from": list(splits[I[j, chart_driver.SW_FROM]]),
-                      "to": list(splits[I[j, chart_driver.SW_TO]])} for j in range(n_sw))
+    switches = tuple(_switches(at, n_sw, I, F))
     return Trajectory._of_run(home, None, p, method, FINISHED, _FINISHED_TEXT,
                               (tuple(counts), wall, home.projected), at.own.kernels, None,
                               None, dense, None,
                               segments=_Recorded(at, plan, p, build, wall,
                                                  (n_p, I, F, TS, YS)),
                               switches=switches)
+
+
+def _switches(at, n_sw, I, F) -> list:
+    """The switches ``{"t", "from", "to"}`` of a run that ``chart_driver`` recorded."""
+    splits = at.splits
+    return [{"t": float(F[j, chart_driver.SW_T]),
+             "from": list(splits[I[j, chart_driver.SW_FROM]]),
+             "to": list(splits[I[j, chart_driver.SW_TO]])} for j in range(n_sw)]
 
 
 def _drive_inputs(at, plan, key):
