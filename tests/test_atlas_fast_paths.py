@@ -158,9 +158,8 @@ def test_switching_runs_repeat_bit_for_bit_and_keep_their_entries(sleigh):
     assert new._entries.keys() == entries.keys()       # looked up once
     c = sleigh.run(method="dopri5", **RUN)          # (follow: its loop looked up)
     assert len(new._entries) == len(entries) + 1 and c.switches
-    d = sleigh.run(method="dopri5", **RUN)          # (chart_driver: none looked up)
+    d = sleigh.run(method="dopri5", **RUN)          # (follow or chart_driver: the same)
     assert len(new._entries) == len(entries) + 1 and d.switches == c.switches
-    assert isinstance(d._segments, atlas._Recorded)
 
 
 def test_switching_run_with_a_timeout_equals_one_without(sleigh):

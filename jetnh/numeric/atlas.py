@@ -816,7 +816,8 @@ def _drive_inputs(at, plan, key):
     """What ``chart_driver.drive`` takes for ``plan`` beyond the run's own arguments:
     ``(entry, addresses, indicators per chart, the edge's direction and count)``, or
     None where the run is not for it (an implicit method, multipliers mapped by A,
-    holonomic constraints, events other than the edge).  The addresses of each chart
+    holonomic constraints, events other than the edge) or its driver is not compiled
+    (``chart_driver.drive``).  The addresses of each chart
     whose kernels and edge are made (rows of zeros elsewhere: the driver hands the run
     back there), kept until another chart is made."""
     found = at._drives.get(key)
@@ -841,8 +842,10 @@ def _drive_inputs(at, plan, key):
             addr[i] = (kern.rhs_fp.address, kern.sing_fp.address, edge[0].uev.address,
                        kern.hol_or_none.address)
             n_sing[i] = len(kern.layout.indicators) if plan.checked else 0
-        inputs = (chart_driver.drive(plan.method.name, parts), addr, n_sing,
-                  np.array([-1], dtype=np.int64), np.array([1], dtype=np.int64))
+        entry = chart_driver.drive(plan.method.name, parts)
+        if entry is not None:       # (else not compiled yet: ``precompile``)
+            inputs = (entry, addr, n_sing, np.array([-1], dtype=np.int64),
+                      np.array([1], dtype=np.int64))
     at._drives[key] = (made, inputs)
     return inputs
 

@@ -289,13 +289,15 @@ ARGS = (_C2, i8[::1], f8, f8, f8[::1], f8[::1], loop.CONTROL, f8[::1], i8, f8, i
 
 
 @functools.cache
-def compiled(method_name: str, parts: tuple):
+def compiled(method_name: str, parts: tuple, load_only: bool = False):
     """``_drive`` over the loop of ``method_name`` with ``parts`` (``loop.features``;
     watching) compiled for ``ARGS`` (or loaded from the signed store), stamped with the
-    loop's sources, this file, ``chart_change`` and ``kernels.calls``."""
+    loop's sources, this file, ``chart_change`` and ``kernels.calls``; with
+    ``load_only``, None where the store does not hold it (compiling it takes CPU
+    seconds: ``jetnh cache warm``, ``precompile``, does it ahead)."""
     from .methods import METHODS
 
-    method = METHODS[method_name]
+    method = METHODS[method_name].tableau
     namespace = dict(globals())
     namespace["body"] = loop._specialised(method, parts)["body"]
     tag = method.name + "_" + "".join(c for c, f in zip("wpds", parts) if f)
@@ -307,14 +309,22 @@ def compiled(method_name: str, parts: tuple):
     func.__module__ = _drive.__module__
     dispatcher = numba.njit(error_model="numpy", nogil=True)(func)
     dispatcher._cache = loop_cache.cache_for(func, stamp)
+    if load_only and dispatcher._cache.load_overload(ARGS, dispatcher.targetctx) is None:
+        return None
     dispatcher.compile(ARGS)
     dispatcher.disable_compile()
+    _MADE[method_name, parts] = dispatcher
     return dispatcher
 
 
-@functools.cache
 def drive(method_name: str, parts: tuple):
     """The machine-code entry of ``compiled(method_name, parts)``
-    (``_common.entry_point``): the caller passes exactly ``ARGS``' types, checked
-    (``atlas``)."""
-    return _common.entry_point(compiled(method_name, parts))
+    (``_common.entry_point``), or None where it is not compiled yet (in this process or
+    the store: a run goes on piece by piece then, ``atlas.follow``); the caller passes
+    exactly ``ARGS``' types, checked (``atlas``)."""
+    d = _MADE.get((method_name, parts)) or compiled(method_name, parts, True)
+    return None if d is None else _common.entry_point(d)
+
+
+#: the drivers compiled or loaded in this process
+_MADE: dict = {}
