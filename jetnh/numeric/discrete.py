@@ -170,7 +170,9 @@ def trajectory(scene, method, kern, out, wall, p, t0, t1, n_steps, singular_tol,
             raise IntegrationError(
                 f"{name}: {what} in the step from t = {t_last:.17g} "
                 f"(h = {(t1 - t0) / n_steps:.3g}); take a smaller step, or the discrete "
-                "constraint has no nearby solution there")
+                "constraint has no nearby solution there",
+                stop=dict(t=float(t_last), steps=int(stats[0]), rejected=0,
+                          rhs_evaluations=int(stats[1])))
         status = SINGULAR
     rows = rows[:n_out]
     ind = [J.q.index(s) for s in scene.system.independent]
@@ -204,7 +206,8 @@ def trajectory(scene, method, kern, out, wall, p, t0, t1, n_steps, singular_tol,
     return Trajectory(scene, ts, np.ascontiguousarray(ys), p, method=method, status=status,
                       stop_reason=reason, steps=int(stats[0]), rejected=0,
                       nfev=int(stats[1]), wall_time=wall, kernels=kern,
-                      projected=scene.projected, own=own, singularity=singularity, **kw)
+                      projected=scene.projected, own=own, singularity=singularity,
+                      saved="steps" if save == "steps" else "final", **kw)
 
 
 def _active(g_old, g_new, direction, first) -> bool:
