@@ -16,7 +16,15 @@ jumps the whole band stops at the singular set, and is taken the same way): the 
 back to the step's start, where the chart is regular, and continues there in the split
 of largest measure if that is at least 2 eps (hysteresis, no chattering), else reaches
 the edge in steps of an eighth (``_approach``) and continues there.  Fixed steps so
-switch on their grid, each step no longer than h.  From the switch point the run goes on
+switch on their grid, each step no longer than h.  Near its singular set a chart's
+right-hand side has a pole (phi^alpha = A_alpha^-1 (...)), and a step whose length is
+comparable to its distance from the pole has a local error that the embedded estimate
+misses (dop853 accepted the last step before each edge at 100 times its usual error):
+so an adaptive step of a switching run is no longer than ``NEAR`` times the time in
+which the chart's singularity indicators would reach zero (``loop.near_zero``), and a
+fixed step one of whose stages is past the edge (its end may look regular all the same)
+stops the run at its start, where it switches as above (``loop.past_edge``; both set by
+``Control.edge``).  From the switch point the run goes on
 with the state mapped exactly:
 
 - coordinates unchanged; the velocities re-split (the dependent ones, computed from the
@@ -92,6 +100,11 @@ from .trajectory import Trajectory
 EDGE = "chart edge"
 #: the largest number of constraints whose splits are watched (symbolic determinants)
 MAX_K = 3
+#: an adaptive step of a run that changes chart is no longer than NEAR times the time in
+#: which its chart's singularity indicators would reach zero (``loop.near_zero``): the
+#: end of every step at least 3 step lengths from the singular set, where the local
+#: error of dop853 and dopri5 is in proportion to their estimate again
+NEAR = 0.25
 #: what a loop's halt flag is made from (a copy: sooner than ``np.zeros``; never written)
 _HALT = np.zeros(1, dtype=np.int64)
 #: ``Atlas.change``: a chart it needs has no kernels yet

@@ -218,6 +218,9 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
         ctl = ctl._replace(n_sens=sens.layout.sensitivity_columns)
     if batch:
         mode = AT_T_EVAL if t_eval is not None else ENDPOINTS
+    switch = split == "switch" and atlas.applies(scene, events)
+    if switch:          # (steps near a chart's singular set: ``atlas.NEAR``)
+        ctl = ctl._replace(edge=atlas.NEAR)
     # radau's steps depend on the steps before (Newton's starting values, the Jacobian
     # kept): no re-taking of one step (numeric.dense)
     dense = ends = None
@@ -232,7 +235,6 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
 
         newton = radau.newton_options(newton_tol, max_newton)
     kern = scene.kernels
-    switch = split == "switch" and atlas.applies(scene, events)
     if switch:
         # the run goes on across its chart's edge (numeric.atlas): its loop, in the
         # scene's own chart, watches the edge as its last event (it stops there)
