@@ -20,11 +20,12 @@ switch on their grid, each step no longer than h.  Near its singular set a chart
 right-hand side has a pole (phi^alpha = A_alpha^-1 (...)), and a step whose length is
 comparable to its distance from the pole has a local error that the embedded estimate
 misses (dop853 accepted the last step before each edge at 100 times its usual error):
-so an adaptive step of a switching run is no longer than ``NEAR`` times the time in
-which the chart's singularity indicators would reach zero (``loop.near_zero``), and a
-fixed step one of whose stages is past the edge (its end may look regular all the same)
-stops the run at its start, where it switches as above (``loop.past_edge``; both set by
-``Control.edge``).  From the switch point the run goes on
+so an adaptive step of a switching run after its first switch is no longer than
+``NEAR`` times the time in which the chart's singularity indicators would reach zero
+(``loop.near_zero``; the first piece takes the steps of a run that keeps its split, bit
+for bit, the same run up to the edge), and a fixed step one of whose stages is past the
+edge (its end may look regular all the same) stops the run at its start, where it
+switches as above (``loop.past_edge``; both set by ``Control.edge``).  From the switch point the run goes on
 with the state mapped exactly:
 
 - coordinates unchanged; the velocities re-split (the dependent ones, computed from the
@@ -984,16 +985,17 @@ def _cut(out, mode, t_k, y_k, n_user, direction):
 
 
 def _onward(ctl, max_steps, n_steps):
-    """``ctl._replace(first_step=0.0, max_steps=max_steps, n_steps=n_steps)``: the step
-    control of a piece after the first (its first step chosen afresh), without the
+    """``ctl._replace(first_step=0.0, max_steps=max_steps, n_steps=n_steps,
+    edge=NEAR)``: the step control of a piece after the first (its first step chosen
+    afresh, its steps near the chart's singular set shorter: ``NEAR``), without the
     keyword machinery."""
     c = list(ctl)
-    c[_FIRST], c[_MAX_STEPS], c[_N_STEPS] = 0.0, max_steps, n_steps
+    c[_FIRST], c[_MAX_STEPS], c[_N_STEPS], c[_EDGE] = 0.0, max_steps, n_steps, NEAR
     return ctl._make(c)
 
 
-_FIRST, _MAX_STEPS, _N_STEPS, _MAX_STEP = (Control._fields.index(f) for f in (
-    "first_step", "max_steps", "n_steps", "max_step"))
+_FIRST, _MAX_STEPS, _N_STEPS, _MAX_STEP, _EDGE = (Control._fields.index(f) for f in (
+    "first_step", "max_steps", "n_steps", "max_step", "edge"))
 
 
 def _at_end(t, t1) -> bool:

@@ -219,7 +219,7 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
     if batch:
         mode = AT_T_EVAL if t_eval is not None else ENDPOINTS
     switch = split == "switch" and atlas.applies(scene, events)
-    if switch:          # (steps near a chart's singular set: ``atlas.NEAR``)
+    if switch and not m.adaptive:       # (a stage past the edge: ``atlas.NEAR``)
         ctl = ctl._replace(edge=atlas.NEAR)
     # radau's steps depend on the steps before (Newton's starting values, the Jacobian
     # kept): no re-taking of one step (numeric.dense)

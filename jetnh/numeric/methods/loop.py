@@ -83,8 +83,9 @@ Result = namedtuple("Result", "status ts ys n_out stats t y ev_t ev_i ev_y n_ev 
 #: ``n_hol`` > 0: project every accepted step onto the ``n_hol`` holonomic constraints of
 #: the first ``n_coord`` states (``projection``); ``n_sens`` > 0: the state is followed by
 #: its sensitivities, ``n_sens`` columns a row, projected with it; ``edge`` > 0: the run
-#: watches its chart's edge as its last event (``numeric.atlas``; ``near_zero``,
-#: ``past_edge``)
+#: watches its chart's edge as its last event (``numeric.atlas``): a fixed step with a
+#: stage past it stops at its start (``past_edge``), an adaptive step is no longer than
+#: ``edge`` times the time to the singular set (``near_zero``)
 Control = namedtuple("Control",
                      "rtol atol first_step max_step max_steps n_steps n_hol n_coord n_sens "
                      "edge", defaults=(0, 0, 0, 0.0))
