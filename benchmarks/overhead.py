@@ -31,7 +31,8 @@ fresh processes with empty numba and kernel caches, the trees alternating within
    (a loop over the final time), ``scene.replace(initial=...).run()`` (a new initial
    state each call, as a shooting loop does) and an ensemble of one run, each with one
    step (T = 1e-6, ``save="final"``), and ensembles of eight such runs on two threads and
-   serially (a small ensemble's fixed cost); the ratios to the bare call.  Also the
+   serially (a small ensemble's fixed cost); the ratios to the bare call.  Also the bare
+   call of ``run(t_eval=...)``'s own loop (which evaluates the dense output there) and the
    bare call of a run of three steps and its arithmetic: its rhs evaluations at the cost
    of one in a long run (T = 100: the difference of the long and the one-step call over
    their difference in evaluations).  And the parts of a run's Python side, each alone:
@@ -47,7 +48,11 @@ fresh processes with empty numba and kernel caches, the trees alternating within
    a dop853 run of isokinetic_particle (Chetaev, T = 2, rtol 1e-8, ``save="final"``) and
    the bare call of its compiled loop, each hot (5th percentile of calls in a row), right
    after a scipy RK45 run of the same problem (median) and after a pause of 1.2 s
-   (median): what caches that other work emptied cost a single call.
+   (median), asleep or busy-waiting: what caches that other work emptied cost a single
+   call.  A control (``sum(range(300))``, no part of a run) shows what any Python code
+   pays; the page faults during the calls after a pause are counted, and the run after
+   a pause is timed again without the wakeup fd's confirmation after
+   ``interrupt.CONFIRM`` seconds.
 """
 
 import json
@@ -170,6 +175,13 @@ calls = {
 nfev["bare call"] = int(calls["bare call"](0)[4][2])
 for f in calls.values():
     f(0)
+try:        # the bare call of run(t_eval=...)'s own loop (its dense output at the times)
+    timed_plan = next(v for k, v in short._memo["quick"].items()
+                      if v.te is not None and len(v.te) == 5 and v.direct)
+    calls["bare call of run(t_eval=...)'s loop"] = lambda i, pl=timed_plan: pl.entry(
+        *pl.head, y0, short.p, *pl.suffix, interrupt.flag())
+except (AttributeError, KeyError, StopIteration):
+    pass
 try:        # the parts of a run's Python side, each timed alone (the names of this tree)
     import _signal
     from jetnh.numeric import solve
@@ -238,7 +250,7 @@ print(json.dumps(out))
 
 
 COLD = r"""
-import json, time
+import json, resource, time
 import numpy as np
 import jetnh.models as models
 from jetnh.numeric import Scene, interrupt
@@ -261,17 +273,41 @@ def timed(f):
     tic = time.perf_counter(); f(); return time.perf_counter() - tic
 
 
-out = {}
-for name, f in (("run", run), ("bare call", bare)):
+def python():       # a control: Python work that is none of a run's
+    return sum(range(300))
+
+
+def busy(seconds):  # a pause that keeps the process on the CPU (unless preempted)
+    end = time.perf_counter() + seconds
+    while time.perf_counter() < end:
+        pass
+
+
+out, faults = {}, 0
+for name, f in (("run", run), ("bare call", bare), ("Python control", python)):
     out[name + ", hot"] = float(np.percentile([timed(f) for _ in range(REPS_HOT)], 5))
     after = []
     for _ in range(REPS_OTHER):
         other(); after.append(timed(f))
     out[name + ", after a scipy run"] = float(np.median(after))
+    paused, busied = [], []
+    for _ in range(REPS_PAUSE):
+        time.sleep(1.2)
+        r0 = resource.getrusage(resource.RUSAGE_SELF)
+        paused.append(timed(f))
+        r1 = resource.getrusage(resource.RUSAGE_SELF)
+        faults += r1.ru_minflt + r1.ru_majflt - r0.ru_minflt - r0.ru_majflt
+        busy(1.2); busied.append(timed(f))
+    out[name + ", after a pause"] = float(np.median(paused))
+    out[name + ", after a busy pause"] = float(np.median(busied))
+# what the pause is not: the wakeup fd confirmed again (after CONFIRM seconds)
+if hasattr(interrupt, "CONFIRM"):
+    interrupt.CONFIRM = float("inf")
     paused = []
     for _ in range(REPS_PAUSE):
-        time.sleep(1.2); paused.append(timed(f))
-    out[name + ", after a pause"] = float(np.median(paused))
+        time.sleep(1.2); paused.append(timed(run))
+    out["run, after a pause, the wakeup fd not confirmed again"] = float(np.median(paused))
+out["page faults during the calls after a pause (count)"] = faults
 print(json.dumps(out))
 """
 
@@ -297,6 +333,9 @@ def commit(root) -> str:
 
 FLOOR = ("part: this tree's floor (halt flag, set_wakeup_fd where a run confirms the "
          "wakeup fd, call, its runs' Trajectory)")
+
+
+TEVAL = "bare call of run(t_eval=...)'s loop"
 
 
 def fixed(root, reps) -> dict:
@@ -375,7 +414,10 @@ def main(argv=None):
         f"(the work-precision benchmark's "
         f"{a['run(work-precision keywords)'] / a['bare call']:.2f}x), "
         f"run(y0=...) {a['run(y0=...)'] / a['bare call']:.2f}x, "
-        f"run(t_eval=...) {a['run(t_eval=...)'] / a['bare call']:.2f}x, on a new time span "
+        f"run(t_eval=...) {a['run(t_eval=...)'] / a['bare call']:.2f}x"
+        + (f" ({a['run(t_eval=...)'] / a[TEVAL]:.2f}x the bare call of its own loop)"
+           if TEVAL in a else "")
+        + f", on a new time span "
         f"each call {a['run(t_span=...), a new span each call'] / a['bare call']:.2f}x, "
         f"replace(initial=...).run() {a['replace(initial=...).run()'] / a['bare call']:.2f}x,"
         f" an ensemble of one {a['ensemble of one'] / a['bare call']:.2f}x"
@@ -386,14 +428,17 @@ def main(argv=None):
         f"{a['ensemble of 8 (serial)'] * 1e6:.3g} us serially")
     print(fixed_summary)
     among = {name: interleaved(root, args.quick) for name, root in trees.items()}
+    def shown(k, v):        # (microseconds, or a count)
+        return f"{v:.0f}" if k.endswith("(count)") else f"{v * 1e6:.3g}"
     for name, c in among.items():
-        print(f"{name}: " + ", ".join(f"{k} {v * 1e6:.1f} us" for k, v in c.items()),
-              flush=True)
+        print(f"{name}: " + ", ".join(f"{k} {shown(k, v)}" for k, v in c.items()), flush=True)
     cold_table = dict(
         title="A dop853 run of isokinetic_particle (rtol 1e-8) among other work: hot, right "
-              "after a scipy run, after a pause of 1.2 s (one process per tree)",
+              "after a scipy run, after a pause of 1.2 s asleep or busy (one process per "
+              "tree; a Python control)",
         columns=["", *(f"{n} (us)" for n in trees)],
-        rows=[[k, *(f"{among[n][k] * 1e6:.3g}" for n in trees)] for k in among["after"]],
+        rows=[[k, *(shown(k, among[n][k]) if k in among[n] else "-" for n in trees)]
+              for k in among["after"]],
         note="trees (commits): " + ", ".join(f"{n} = {commit(p)}" for n, p in trees.items()))
     c = among["after"]
     cold_summary = (

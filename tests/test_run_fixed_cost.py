@@ -402,6 +402,35 @@ def general_route(traj, events):
 
 
 @pytest.mark.parametrize("save", ["final", "steps"])
+@pytest.mark.parametrize("method", ["dop853", "radau"])
+def test_a_finished_watching_loop_keeps_its_last_state_in_row_n_out(disk, method, save):
+    """A watching loop (an event that never fires) that finished returns None for its last
+    state (no array to box) and has it in row n_out, as a loop that watches nothing does:
+    bit for bit its last output row and the end of the same run unwatched (the watch
+    changes no step); ``loops.result`` reads it there; an ensemble of the run ends on it
+    too."""
+    from jetnh.numeric import loops, solve
+
+    halt = np.zeros(1, dtype=np.int64)
+    got = {}
+    for events in ([disk.system.J.q[0] - 1e6], None):
+        plan = solve.plan(disk, method, save=save, events=events)
+        got[events is None] = plan.entry(*plan.head, disk.y0.copy(), disk.p, *plan.suffix,
+                                         halt)
+    out, bare = got[False], got[True]
+    assert len(out) == 12 and out[0] == 0 and out[6] is None
+    assert len(bare) == 6 or bare[6] is None        # (radau's loop always returns 12)
+    n = out[3]
+    assert n == bare[3] and out[1][n] == out[1][n - 1] == bare[1][n] == out[5]
+    assert out[2][n].tobytes() == out[2][n - 1].tobytes() == bare[2][n].tobytes()
+    res = loops.result(out)
+    assert res.t == out[5] and res.y.tobytes() == out[2][n].tobytes()
+    for rows in (1, 2):     # (one row: the loop's own call; two: the compiled driver)
+        ens = disk.ensemble(np.stack([disk.y0] * rows), method=method)
+        assert ens.y[:, -1].tobytes() == np.stack([out[2][n]] * rows).tobytes()
+
+
+@pytest.mark.parametrize("save", ["final", "steps"])
 @pytest.mark.parametrize("n_events", [1, 2])
 def test_a_finished_watching_runs_trajectory_equals_the_general_routes(disk, save, n_events):
     """A run watching events that never fire (its loop returns None for the records) is
@@ -477,3 +506,53 @@ def test_an_ensemble_of_one_is_immutable_and_pickles_as_made(disk):
         ens.params[...] = 2.0
     assert np.array_equal(disk._p, p)
     assert np.array_equal(ens.y[0, -1], disk.run(save="final").y[-1])
+
+
+def test_a_loop_over_new_spans_runs_them_and_keeps_the_stores_bounded(disk):
+    """Runs on ever new spans (each on the plan of another span of the same options, no
+    plan made for it) equal runs of scenes built with those spans, ``y0`` checked and
+    run from the span's own start; past ``MAX_PLANS`` options the stores drop their
+    oldest entries, so options planned after such a loop are kept all the same."""
+    from jetnh.numeric import solve
+
+    scene = disk.replace(t_span=(0.0, 0.4))
+    y = disk.y0.copy()
+    y[4] += 0.01
+    for k in range(solve.MAX_PLANS + 6):
+        T = 0.01 + 1e-3 * k
+        if k % 13 == 0:
+            a = scene.run(t_span=(0.0, T), save="final", rtol=1e-7)
+            b = Scene(disk.system, "chetaev", initial=DISK0, t_span=(0.0, T),
+                      cache=False).run(save="final", rtol=1e-7)
+            assert a.t.tobytes() == b.t.tobytes() and a.y.tobytes() == b.y.tobytes()
+            c = scene.run(t_span=(0.1, 0.1 + T), y0=y, save="final", rtol=1e-7)
+            d = disk.replace(initial=dict(zip(disk.state_names, y.tolist())),
+                             t_span=(0.1, 0.1 + T)).run(save="final", rtol=1e-7)
+            assert c.t.tobytes() == d.t.tobytes() and c.y.tobytes() == d.y.tobytes()
+            assert c.t[0] == 0.1 and c.t[-1] == 0.1 + T
+        scene.run(t_eval=np.linspace(0.0, T, 3))      # (a new array of times each)
+    memo = scene._memo
+    assert all(len(memo[s]) <= solve.MAX_PLANS for s in ("quick", "quick_spans", "plans"))
+    scene.run(save="final", rtol=1e-6)
+    key = next(reversed(memo["quick"]))
+    assert memo["quick"][key] is not None and 1e-6 in key
+    for bad in ((0.0, 0.0), (0.0, np.inf), (np.nan, 1.0), (1e20, 1e20 + 1e5)):
+        with pytest.raises(JetnhError):
+            scene.run(t_span=bad, save="final", rtol=1e-7)
+
+
+@given(st.floats(allow_nan=True, allow_infinity=True, width=64),
+       st.floats(allow_nan=True, allow_infinity=True, width=64))
+def test_time_span_accepts_exactly_the_resolvable_spans(t0, t1):
+    """``arguments.time_span`` against its rule written out: both ends finite, a finite
+    length of at least ``MIN_TIME_RESOLUTION`` units in the last place of the larger."""
+    import math
+
+    ok = (math.isfinite(t0) and math.isfinite(t1) and math.isfinite(t1 - t0)
+          and abs(t1 - t0) >= arguments.MIN_TIME_RESOLUTION * math.ulp(max(abs(t0), abs(t1)))
+          and t0 != t1)
+    if ok:
+        assert arguments.time_span((t0, t1)) == (t0, t1)
+    else:
+        with pytest.raises(JetnhError):
+            arguments.time_span((t0, t1))

@@ -191,6 +191,9 @@ def time_span(t_span) -> tuple[float, float]:
     except (TypeError, ValueError):
         raise ArgumentError(f"t_span must be a pair (t0, t1), got {t_span!r}") from None
     t0, t1 = real(t0, "t_span[0]"), real(t1, "t_span[1]")
+    length = abs(t1 - t0)
+    if MIN_TIME_RESOLUTION * math.ulp(max(abs(t0), abs(t1))) <= length < math.inf:
+        return t0, t1           # (most: at once; a NaN, an infinity, a zero length fail)
     if not (math.isfinite(t0) and math.isfinite(t1)):
         raise ArgumentError(f"t_span must be finite, got {t_span!r}")
     if t0 == t1:
@@ -198,7 +201,6 @@ def time_span(t_span) -> tuple[float, float]:
             f"t_span = ({t0!r}, {t1!r}) has zero length: there is nothing to integrate; give "
             "t1 != t0 (if t1 was written as t0 plus a small length, it rounded to t0 in "
             "floating point: shift the time origin, e.g. t_span=(0, length))")
-    length = abs(t1 - t0)
     ulp = math.ulp(max(abs(t0), abs(t1)))
     if not math.isfinite(length) or length < MIN_TIME_RESOLUTION * ulp:
         raise ArgumentError(

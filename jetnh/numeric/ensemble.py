@@ -115,8 +115,9 @@ def _n_runs(columns: dict, n_from_array: int | None) -> int:
 def resolve(scene, initial=None, params=None, project=False):
     """The scene to run (with the varying parameters as run-time inputs), the initial
     states Y0 [n_runs, n_states] and the run-time parameters P [n_runs, n_p]."""
-    if params is None and _one_row(scene, initial):
-        y, p = _of_row(scene, initial, project)
+    row = None if params is not None else _one_row(scene, initial)
+    if row is not None:
+        y, p = _of_row(scene, row, project)
         return scene, y[None, :], p[None, :]
     params = ({_name(k): _column(v, f"params[{_name(k)!r}]") for k, v in params.items()}
               if params else None)
@@ -184,19 +185,23 @@ def resolve(scene, initial=None, params=None, project=False):
     return scene, Y0, P          # (C-contiguous: made so here)
 
 
-def _one_row(scene, initial) -> bool:
-    """Whether ``initial`` is one finite float64 row of states (an ensemble of one,
-    checked at once: ``_of_row``); a NaN or an infinity makes the sum not finite, an
-    overflow of finite values takes the general route, which looks at each entry."""
-    return (type(initial) is np.ndarray and initial.dtype is _FLOAT64
-            and initial.shape == (1, len(scene.state_names))
-            and math.isfinite(sum(initial[0].tolist())))
+def _one_row(scene, initial) -> np.ndarray | None:
+    """The row of ``initial`` where it is one finite float64 row of states (an ensemble
+    of one, checked at once: ``_of_row``), else None; a NaN or an infinity makes the sum
+    not finite, an overflow of finite values takes the general route, which looks at
+    each entry."""
+    if (type(initial) is np.ndarray and initial.dtype is _FLOAT64
+            and initial.shape == (1, len(scene.state_names))):
+        row = initial[0]
+        if math.isfinite(sum(row.tolist())):
+            return row
+    return None
 
 
-def _of_row(scene, initial, project) -> tuple[np.ndarray, np.ndarray]:
-    """The state and the parameters (1-d) of the one row ``initial`` (``_one_row``),
+def _of_row(scene, row, project) -> tuple[np.ndarray, np.ndarray]:
+    """The state and the parameters (1-d) of the one row ``row`` (``_one_row``),
     checked: a copy of the caller's row, the scene's parameters (never written)."""
-    y, p = initial[0].copy(), scene._p
+    y, p = row.copy(), scene._p
     if scene.dependent_velocities and not scene._regular_at(y, scene.t_span[0], p):
         _check_split(scene, y[None, :], p[None, :], _NO_GIVEN, project)
     if scene.system.holonomic:
@@ -688,22 +693,24 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
     quick = None
     if (params is None and t_eval is None and events is None and timeout is None
             and step is None and newton is None and sensitivities is False
-            and sensitivity_error is True and _one_row(scene, initial)):
-        # an ensemble of one row with options that are numbers and strings (a loop of
-        # such calls): the plan of its run kept in the scene's memo under them and their
-        # types (as ``Scene.run`` keeps its plans), at once
-        try:
-            quick = (method, save, singular, parallel, workers, on_error, type(method),
-                     type(save), type(singular), type(parallel), type(workers),
-                     type(on_error))
-            for k, v in keywords.items():
-                quick += (k, v, type(v))
-            one, n_workers = scene._memo.get("quick_one", _NONE_KEPT)[quick]
-        except (KeyError, TypeError) as exc:     # not planned yet, or not hashable
-            quick = quick if type(exc) is KeyError else None
-        else:
-            y, p = _of_row(scene, initial, project)
-            return _of_one(scene, one, y, p, on_error, parallel, n_workers, save)
+            and sensitivity_error is True):
+        row = _one_row(scene, initial)
+        if row is not None:
+            # an ensemble of one row with options that are numbers and strings (a loop
+            # of such calls): the plan of its run kept in the scene's memo under them
+            # and the type of ``workers`` and of the keywords' numbers (``True == 1``,
+            # but a bool is refused where 1 is not), as ``Scene.run`` keeps its plans,
+            # at once
+            try:
+                quick = (method, save, singular, parallel, workers, on_error, type(workers))
+                for k, v in keywords.items():
+                    quick += (k, v, type(v))
+                one, n_workers = scene._memo.get("quick_one", _NONE_KEPT)[quick]
+            except (KeyError, TypeError) as exc:     # not planned yet, or not hashable
+                quick = quick if type(exc) is KeyError else None
+            else:
+                y, p = _of_row(scene, row, project)
+                return _of_one(scene, one, y, p, on_error, parallel, n_workers, save)
     opts = options(step, singular, newton, **keywords)
     if parallel not in PARALLEL:
         raise JetnhError(f"parallel must be one of {PARALLEL}, not {parallel!r}")
@@ -713,8 +720,8 @@ def run_ensemble(scene, initial=None, params=None, *, t_eval=None, save="final",
     if quick is not None:
         one = _one_plan(scene, opts, None, save, method, None, None, False, True)
         kept = scene._memo.setdefault("quick_one", {})
-        if one and len(kept) < solve.MAX_PLANS:
-            kept[quick] = one, _workers(workers)
+        if one:
+            solve.keep(kept, quick, (one, _workers(workers)))
     return run_resolved(scene, Y0, P, opts, t_eval=t_eval, save=save, method=method,
                         events=events, parallel=parallel, workers=workers,
                         on_error=on_error, timeout=timeout, sensitivities=sensitivities,
@@ -902,7 +909,7 @@ def _one_arrays(out, endpoints, n_times, y, p) -> tuple:
     status, ts, ys, n_out, stats = out[:5]
     n = y.shape[0]
     # (a loop that watched nothing keeps its last time and state in row n_out)
-    if len(out) == 6:
+    if len(out) == 6 or out[6] is None:     # (or a watching loop that finished)
         T_LAST, Y_LAST = ts[n_out:n_out + 1], ys[n_out:n_out + 1, :n]
     else:
         T_LAST, Y_LAST = (out[5],), out[6][None, :n]

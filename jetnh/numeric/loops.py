@@ -47,7 +47,10 @@ def result(out) -> Result:
     no event records and its last time and state as row ``n_out`` of its output:
     ``loop._solve``)."""
     if len(out) == len(Result._fields):
-        return Result._make(out)
+        if out[6] is not None:
+            return Result._make(out)
+        # a loop that watched and finished: its last time and state in row n_out
+        return Result._make(out)._replace(y=out[2][out[3]])
     status, ts, ys, n_out, stats, sing_index = out
     return Result(status, ts, ys, n_out, stats, float(ts[n_out]), ys[n_out], np.empty(0),
                   np.empty(0, dtype=np.int64), np.empty((0, ys.shape[1])), 0, sing_index)

@@ -471,14 +471,6 @@ class Scene(Frozen):
         if type(initial) is not dict and not isinstance(initial, Mapping):
             raise JetnhError(f"initial must be a dict keyed by Symbol or name, got a "
                              f"{type(initial).__name__}")
-        new = object.__new__(Scene)
-        # (the attributes set directly, not by ``_set``: a time span is a tuple of
-        # floats, the initial values floats, y0 made read-only here; ``_memo`` the
-        # copy's own below, before anything reads it)
-        d = self.__dict__.copy()        # (a copy of the dict: sooner than filling one)
-        d["t_span"] = self.t_span if t_span is self.t_span else self._t_span(t_span)
-        d["projected"] = d["completed"] = _NOTHING
-        object.__setattr__(new, "__dict__", d)
         own = self._memo
         hit = own.get("moved")
         if hit is None or hit[0] != len(own) or hit[1] is None:
@@ -487,7 +479,7 @@ class Scene(Frozen):
             key = own.get("key")
             kern = None if key is None else _loaded_kernels(key, self.cache)
             # (the route of the dependent velocities where the kernels are loaded and
-            # no holonomic constraint is to be checked: ``_moved_states``)
+            # no holonomic constraint is to be checked)
             route = (None if kern is None or self.system.holonomic
                      else self._dv_route(kern))       # (this scene's, shared below)
             p = own.get("_p")
@@ -500,19 +492,38 @@ class Scene(Frozen):
             own["moved"] = None
             hit = own["moved"] = (len(own), kern, p, shared, route)
         _, kern, p, memo, route = hit
-        memo = dict(memo)
-        if t_span is not self.t_span:       # (the quick plans: of this span)
-            memo.pop("quick", None)
+        # (the attributes set directly, not by ``_set``: a time span is a tuple of
+        # floats, the initial values floats, y0 made read-only here; ``_memo`` the
+        # copy's own, before anything reads it)
+        d = self.__dict__.copy()        # (a copy of the dict: sooner than filling one)
+        memo = memo.copy()
+        if t_span is not self.t_span:
+            d["t_span"] = self._t_span(t_span)
+            memo.pop("quick", None)     # (the quick plans: of this span)
+        d["projected"] = d["completed"] = _NOTHING
         d["_memo"] = memo      # (frozen from here: ``_initial`` sets nothing when it
         #                        neither projects nor completes)
-        got = None if route is None else new._moved_states(initial, route, p)
-        if got is None:
+        new = object.__new__(Scene)
+        object.__setattr__(new, "__dict__", d)
+        # the most common initial values at once (``_initial(initial, False, False, kern,
+        # p)`` of them): a dict of the states (no dependent velocity) as finite floats,
+        # the dependent velocities from the compiled kernels of ``route`` (``_dv_route``;
+        # ``_dependent_velocity_floats``), a scene without holonomic constraints; else
+        # (None) the general route checks them and names what is wrong
+        values = None
+        if route is not None and type(initial) is dict and initial.keys() == self._state_set:
+            states = self._states_of(initial)
+            if set(map(type, states)) == _FLOAT and math.isfinite(sum(states)):
+                y = np.array(states)
+                values = new._dependent_velocity_list(y, route, p)
+        if values is None:
             ini, y = new._initial(initial, False, False, kern, p)
             if y is None:
                 y = np.array(self._states_of(ini), dtype=float)
             ini = FrozenDict(ini)
         else:
-            ini, y = got
+            ini = FrozenDict(initial)
+            dict.update(ini, zip(self.dependent_velocities, values))
         # (this copy's own state array: its direct runs' ``_y0``, y0 a read-only view)
         memo["_y0"] = y
         y0 = y.view()
@@ -520,26 +531,6 @@ class Scene(Frozen):
         d["initial"] = ini
         d["y0"] = y0
         return new
-
-    def _moved_states(self, initial, route, p):
-        """``_initial(initial, False, False, kern, p)`` of the most common initial values
-        at once: a dict of the states (no dependent velocity) as finite floats, the
-        dependent velocities from the compiled kernels of ``route`` (``_dv_route``;
-        ``_dependent_velocity_floats``), a scene without holonomic constraints: the
-        initial values (a ``FrozenDict``) and the state array; None where it does not
-        apply (the general route then checks them and names what is wrong)."""
-        if type(initial) is not dict or initial.keys() != self._state_set:
-            return None
-        states = self._states_of(initial)
-        if set(map(type, states)) != _FLOAT or not math.isfinite(sum(states)):
-            return None
-        y = np.array(states)
-        values = self._dependent_velocity_list(y, route, p)
-        if values is None:
-            return None
-        out = FrozenDict(initial)
-        dict.update(out, zip(self.dependent_velocities, values))
-        return out, y
 
     def _shared_memo(self) -> dict:
         """What a scene with the same kernels takes over from this one's memo
@@ -565,11 +556,11 @@ class Scene(Frozen):
                 self.runtime_params, self.integrals,
                 {k: v for k, v in self.params.items() if k not in self.runtime_params})
 
-    def ensemble(self, initial=None, params=None, **options):
-        """Many runs in one call: ``jetnh.numeric.ensemble.run_ensemble(self, initial,
-        params, **options)`` (arrays [n_runs, n_times, n_states] and per-run
-        diagnostics; parallel over the cores)."""
-        return run_ensemble(self, initial, params, **options)
+    #: ``scene.ensemble(initial, params, **options)``: many runs in one call,
+    #: ``jetnh.numeric.ensemble.run_ensemble(scene, initial, params, **options)`` itself
+    #: (arrays [n_runs, n_times, n_states] and per-run diagnostics; parallel over the
+    #: cores)
+    ensemble = run_ensemble
 
     def compile(self) -> "Scene":
         """Build (or load) the kernels now rather than at the first run."""
@@ -687,24 +678,26 @@ class Scene(Frozen):
             # every loop of runs): their plan kept in this scene's memo under them and
             # the types of the numbers (``True == 1``, but a bool is refused where 1 is
             # not), at once.  (What follows the first eight entries of a key starts with
-            # a number, bytes or a name: a time span, times or a keyword.)
+            # bytes, a name or a number: times, a keyword, the time span, which is last.)
+            span = None
             try:
                 key = (method, save, rtol, atol, singular, split, type(rtol), type(atol))
-                if t_span is not None:
-                    a, b = t_span
-                    key += (a, b, type(a), type(b))
                 if t_eval is not None:
                     key += (t_eval.tobytes(), t_eval.shape)
                 if keywords:
                     for k, v in keywords.items():
                         key += (k, v, type(v))
+                if t_span is not None:
+                    a, b = t_span
+                    key += (a, b, type(a), type(b))
                 plan = self._memo.get("quick", _NONE_KEPT).get(key)
             except (TypeError, ValueError):     # a key not hashable, or no pair of times
                 plan = key = None
             if plan is None:                    # not planned yet (under this key)
-                plan = self._kept_plan(key, rtol, atol, t_eval, method, save, t_span,
-                                       singular, split, keywords)
+                plan, span = self._kept_plan(key, rtol, atol, t_eval, method, save, t_span,
+                                             singular, split, keywords)
         else:
+            span = None
             plan = self._plan(rtol, atol, t_eval, method, save, events, t_span, timeout,
                               projection, backend, step, singular, split, newton,
                               sensitivities, sensitivity_error, keywords)
@@ -715,9 +708,10 @@ class Scene(Frozen):
         if y0 is None and params is None:       # the scene's own
             if plan.direct:     # (the loop reads y0 into a copy of its own: never written)
                 y = memo.get("_y0")
-                return solve.run(self, plan, self._y0 if y is None else y, p, True)
+                return solve.run(self, plan, self._y0 if y is None else y, p, True, span)
             return solve.run(self, plan, self.y0.copy(), p, True)
-        return solve.run(self, plan, self._run_state(y0, plan.t0, p), p, False)
+        return solve.run(self, plan, self._run_state(
+            y0, plan.t0 if span is None else span[0], p), p, False, span)
 
     def _quick_plan(self, method, save, rtol, atol) -> solve.Plan:
         """The plan of ``run(method=method, save=save, rtol=rtol, atol=atol)`` (whose
@@ -726,29 +720,33 @@ class Scene(Frozen):
                           None, "stop", None, None, False, True, {})
 
     def _kept_plan(self, key, rtol, atol, t_eval, method, save, t_span, singular, split,
-                   keywords) -> solve.Plan:
+                   keywords) -> tuple[solve.Plan, tuple[float, float] | None]:
         """The plan of a run whose options are numbers, strings and an array of times
         (``run``), kept in this scene's memo under ``key`` (None: none), which the
-        scenes ``replace`` makes with the same time span share; with a time span, a
-        plan of the same options on another span is taken over (``solve.on_span``),
-        kept under the key without the span (entries 8 to 11)."""
+        scenes ``replace`` makes with the same time span share, and None; or, with a
+        time span, a plan of the same options on another span (kept under the key
+        without the span, its last four entries) and the span ``(t0, t1)`` (checked) to
+        run it on (``solve.run``), where the plan is direct, else that plan taken over
+        on the span (``solve.on_span``): a loop over time spans plans once and makes
+        no plan a run."""
         memo = self._memo
         free = spans = None
         if key is not None and t_span is not None:
-            free = key[:8] + key[12:]
+            free = key[:-4]
             spans = memo.setdefault("quick_spans", {})
-        other = None if free is None else spans.get(free)
-        if other is not None:
-            plan = solve.on_span(other, *arguments.time_span(t_span))
-        else:
-            plan = self._plan(rtol, atol, t_eval, method, save, None, t_span, None, False,
-                              None, None, singular, split, None, False, True, keywords)
-            if free is not None and plan.spans and len(spans) < solve.MAX_PLANS:
-                spans[free] = plan
-        quick = memo.setdefault("quick", {})
-        if key is not None and len(quick) < solve.MAX_PLANS:
-            quick[key] = plan
-        return plan
+            other = spans.get(free)
+            if other is not None:
+                span = arguments.time_span(t_span)
+                if other.direct:
+                    return other, span
+                return solve.on_span(other, *span), None
+        plan = self._plan(rtol, atol, t_eval, method, save, None, t_span, None, False,
+                          None, None, singular, split, None, False, True, keywords)
+        if free is not None and plan.spans:
+            solve.keep(spans, free, plan)
+        if key is not None:
+            solve.keep(memo.setdefault("quick", {}), key, plan)
+        return plan, None
 
     def _plan(self, rtol, atol, t_eval, method, save, events, t_span, timeout, projection,
               backend, step, singular, split, newton, sensitivities, sensitivity_error,

@@ -38,7 +38,7 @@ from .methods.loop import Control, Result, Watch
 from .options import fields_of, options
 from .trajectory import Trajectory
 
-#: plans kept per scene (beyond: planned afresh each run)
+#: plans kept per scene and store (beyond: the oldest dropped, ``keep``)
 MAX_PLANS = 64
 _NONE = np.zeros(0, dtype=np.int64)
 
@@ -279,11 +279,22 @@ def planned(scene, key, make, span=None) -> Plan:
             found = on_span(other, *span)
         else:
             found = make()
-            if spans is not None and found.spans and len(spans) < MAX_PLANS:
-                spans[key] = found
-        if len(store) < MAX_PLANS:
-            store[full] = found
+            if spans is not None and found.spans:
+                keep(spans, key, found)
+        keep(store, full, found)
     return found
+
+
+def keep(store: dict, key, plan):
+    """``store[key] = plan``, the oldest entry dropped where ``store`` holds
+    ``MAX_PLANS``: a loop of ever new options (spans, times) keeps a bounded store and
+    leaves room for the options planned after it."""
+    if len(store) >= MAX_PLANS:
+        try:
+            del store[next(iter(store))]
+        except (KeyError, RuntimeError, StopIteration):   # (another thread's run took it)
+            pass
+    store[key] = plan
 
 
 def on_span(plan, t0, t1) -> Plan:
@@ -341,19 +352,23 @@ def augmented(scene, plan, y0, p) -> np.ndarray:
 
 
 # ---------------------------------------------------------------------- one run
-def run(scene, plan, y, p, own=False) -> Trajectory:
+def run(scene, plan, y, p, own=False, span=None) -> Trajectory:
     """The trajectory of ``plan`` from the state ``y`` (checked, its own array) with the
-    run-time parameters ``p``; ``own``: these are the scene's own initial values."""
+    run-time parameters ``p``; ``own``: these are the scene's own initial values;
+    ``span``: the time span ``(t0, t1)`` (checked) to run a direct plan on
+    (``Plan.spans``) instead of its own, as ``on_span(plan, *span)`` would."""
+    if span is not None and not plan.direct:
+        plan = on_span(plan, *span)
     if plan.ce is not None:
-        warn_not_finite(plan.ce, plan.t0, y, p)
+        warn_not_finite(plan.ce, plan.t0 if span is None else span[0], y, p)
     if plan.direct:             # one call of the compiled loop, first: most runs are
         halt = _HALT.copy()
+        head = plan.head if span is None else (*plan.prefix, *span)
         tic = _clock()
-        out = interrupt.call(plan.entry, halt, plan.limit, (*plan.head, y, p, *plan.suffix,
-                                                            halt))
+        out = interrupt.call(plan.entry, halt, plan.limit, (*head, y, p, *plan.suffix, halt))
         wall = _clock() - tic
         if plan.ctl.n_hol:          # rows of the dense output onto g = 0
-            loops.on_constraints(plan.kern, plan.ctl, plan.mode, None, out, p, plan.t0)
+            loops.on_constraints(plan.kern, plan.ctl, plan.mode, None, out, p, head[-2])
         dense = plan.dense_ends
         status = out[0]
         if status == FINISHED and (len(out) == 6 or out[7] is None):   # most runs: at once
@@ -364,7 +379,7 @@ def run(scene, plan, y, p, own=False) -> Trajectory:
         if dense is not None:    # stopped inside a step or not
             dense = dense[status == EVENT or status == SINGULAR]
         return trajectory(scene, plan.method.name, out, wall, plan.kern, plan.ce, p,
-                          plan.t0, y, plan.singular_tol, plan.checked, plan.limit, dense)
+                          head[-2], y, plan.singular_tol, plan.checked, plan.limit, dense)
     m = plan.method
     if plan.sens is not None:
         y = augmented(scene, plan, y, p)
@@ -439,7 +454,7 @@ def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, 
             n_out, n, sens.layout.sensitivity_columns))
         ys, n_out = np.ascontiguousarray(ys[:, :n]), ys.shape[0]
         y_init = y_init[:n]
-        if len(out) != 6 or status != FINISHED:
+        if (len(out) != 6 or status != FINISHED) and y_last is not None:
             y_last = y_last[:n]
         if ce is not None and ev_y is not None:
             ev_y = ev_y[:, :n]

@@ -350,8 +350,12 @@ def collect(r, res, mode, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T):
     INFO[r, 4] = n_out
     INFO[r, 5] = sing_index
     T_LAST[r] = t
-    for j in range(n):
-        Y_LAST[r, j] = y[j]
+    if y is None:           # a watching loop that finished: its last state in row n_out
+        for j in range(n):
+            Y_LAST[r, j] = ys[n_out, j]
+    else:
+        for j in range(n):
+            Y_LAST[r, j] = y[j]
     for a in range(n_ev):
         k = ev_i[a]
         if EV_N[r, k] == 0:

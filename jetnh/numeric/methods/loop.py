@@ -77,7 +77,8 @@ KINK = 0.25
 #: problem stiff, STIFF_RESET negative ones in a row clear the count
 STIFF_EVERY, STIFF_RUN, STIFF_RESET = 1000, 15, 6
 
-#: what every solve returns (``ev_t ev_i ev_y`` None where it recorded no event)
+#: what every solve returns (``ev_t ev_i ev_y`` None where it recorded no event, ``y``
+#: None where it then finished: its last time and state in row ``n_out``)
 Result = namedtuple("Result", "status ts ys n_out stats t y ev_t ev_i ev_y n_ev sing_index")
 #: the step control of one run: tolerances and limits (``n_steps`` > 0: fixed steps);
 #: ``n_hol`` > 0: project every accepted step onto the ``n_hol`` holonomic constraints of
@@ -263,11 +264,16 @@ def no_events(rows, ev_dir):
 def watch_result(res, n_user):
     """The tuple of a loop that watches (``_solve``'s, ``res``) as its entry returns it:
     the event records None where the run recorded no event (it watches no user events,
-    ``n_user`` 0, or none occurred): an array returned to Python costs ~0.3 us to box,
-    None nothing (``watching``)."""
+    ``n_user`` 0, or none occurred), and so is the last state where such a run finished
+    (FINISHED): its last time and state are then row ``n_out`` of ``ts``, ``ys``, as in a
+    loop that watches nothing.  An array returned to Python costs ~0.3 us to box, None
+    nothing (``watching``)."""
     if n_user > 0 and res[10] > 0:
         return res
     status, ts, ys, n_out, stats, t, y, _, _, _, n_ev, sing_index = res
+    if status == FINISHED:
+        ts, ys, _ = store(ts, ys, n_out, t, y)
+        return status, ts, ys, n_out, stats, t, None, None, None, None, n_ev, sing_index
     return status, ts, ys, n_out, stats, t, y, None, None, None, n_ev, sing_index
 
 
@@ -434,7 +440,8 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
     ``finite_status``), the output rows ``ts[:n_out]``, ``ys[:n_out]``, ``stats =
     (accepted, rejected, rhs evaluations)`` (``counts``), the last time and state, the
     event records (time, index, state; the loop's entry returns None for them where the
-    run recorded none: ``watch_result``), their count and the index of the
+    run recorded none, and None for the last state where such a run finished, its last
+    time and state then in row ``n_out``: ``watch_result``), their count and the index of the
     indicator that stopped the run (-1 if none); a run that stopped in a step (EVENT,
     SINGULAR) has that step's start in row ``n_out`` of ``ts``, ``ys`` (``atlas``).  A
     loop that watches nothing (``WATCH`` false) records no events
