@@ -16,7 +16,16 @@ jumps the whole band stops at the singular set, and is taken the same way): the 
 back to the step's start, where the chart is regular, and continues there in the split
 of largest measure if that is at least 2 eps (hysteresis, no chattering), else reaches
 the edge in steps of an eighth (``_approach``) and continues there.  Fixed steps so
-switch on their grid, each step no longer than h.  From the switch point the run goes on
+switch on their grid, each step no longer than h.  Near its singular set a chart's
+right-hand side has a pole (phi^alpha = A_alpha^-1 (...)), and a step whose length is
+comparable to its distance from the pole has a local error that the embedded estimate
+misses (dop853 accepted the last step before each edge at 100 times its usual error):
+so an adaptive step of a switching run after its first switch is no longer than
+``NEAR`` times the time in which the chart's singularity indicators would reach zero
+(``loop.near_zero``; the first piece takes the steps of a run that keeps its split, bit
+for bit, the same run up to the edge), and a fixed step one of whose stages is past the
+edge (its end may look regular all the same) stops the run at its start, where it
+switches as above (``loop.past_edge``; both set by ``Control.edge``).  From the switch point the run goes on
 with the state mapped exactly:
 
 - coordinates unchanged; the velocities re-split (the dependent ones, computed from the
@@ -93,6 +102,11 @@ from .trajectory import Trajectory
 EDGE = "chart edge"
 #: the largest number of constraints whose splits are watched (symbolic determinants)
 MAX_K = 3
+#: an adaptive step of a run that changes chart is no longer than NEAR times the time in
+#: which its chart's singularity indicators would reach zero (``loop.near_zero``): the
+#: end of every step at least 3 step lengths from the singular set, where the local
+#: error of dop853 and dopri5 is in proportion to their estimate again
+NEAR = chart_driver.NEAR
 #: what a loop's halt flag is made from (a copy: sooner than ``np.zeros``; never written)
 _HALT = np.zeros(1, dtype=np.int64)
 #: ``Atlas.change``: a chart it needs has no kernels yet
@@ -1116,16 +1130,17 @@ def _cut(out, mode, t_k, y_k, n_user, direction):
 
 
 def _onward(ctl, max_steps, n_steps):
-    """``ctl._replace(first_step=0.0, max_steps=max_steps, n_steps=n_steps)``: the step
-    control of a piece after the first (its first step chosen afresh), without the
+    """``ctl._replace(first_step=0.0, max_steps=max_steps, n_steps=n_steps,
+    edge=NEAR)``: the step control of a piece after the first (its first step chosen
+    afresh, its steps near the chart's singular set shorter: ``NEAR``), without the
     keyword machinery."""
     c = list(ctl)
-    c[_FIRST], c[_MAX_STEPS], c[_N_STEPS] = 0.0, max_steps, n_steps
+    c[_FIRST], c[_MAX_STEPS], c[_N_STEPS], c[_EDGE] = 0.0, max_steps, n_steps, NEAR
     return ctl._make(c)
 
 
-_FIRST, _MAX_STEPS, _N_STEPS, _MAX_STEP = (Control._fields.index(f) for f in (
-    "first_step", "max_steps", "n_steps", "max_step"))
+_FIRST, _MAX_STEPS, _N_STEPS, _MAX_STEP, _EDGE = (Control._fields.index(f) for f in (
+    "first_step", "max_steps", "n_steps", "max_step", "edge"))
 
 
 def _at_end(t, t1) -> bool:

@@ -49,8 +49,9 @@ DONE, HANDED_BACK = 0, 1
 #: the columns of a piece's floats (``F``), its three states after them
 (C_T, C_TTO, C_TEND, C_EVT, C_MAXSTEP, SW_T) = range(6)
 N_I, N_F = 18, 6
-#: as ``atlas``: cuts of a step that crossed the edge, parts of an approach
-DEPTH, PARTS = 4, 8
+#: as ``atlas``: cuts of a step that crossed the edge, parts of an approach, the step
+#: bound of a piece after the first (``atlas.NEAR``)
+DEPTH, PARTS, NEAR = 4, 8, 0.25
 
 _change = numba.njit(error_model="numpy", nogil=True)(chart_change._change)
 
@@ -125,7 +126,7 @@ def _drive(addr, n_sing, t0, t1, y0, p, ctl, t_eval, mode, sing_tol, edge_dir, e
             if ctl.n_steps > 0:
                 n_steps = max(1, math.ceil(abs(t1 - t) / abs(h_fixed) * (1.0 - 1e-12)))
             seg_ctl = Control(ctl.rtol, ctl.atol, 0.0, ctl.max_step, max(steps_left, 0),
-                              n_steps, ctl.n_hol, ctl.n_coord, ctl.n_sens)
+                              n_steps, ctl.n_hol, ctl.n_coord, ctl.n_sens, NEAR)
             if near:                    # (``atlas._approach``)
                 span = near_span
                 if ctl.n_steps > 0:
@@ -136,12 +137,12 @@ def _drive(addr, n_sing, t0, t1, y0, p, ctl, t_eval, mode, sing_tol, edge_dir, e
                 if ctl.n_steps > 0:
                     seg_ctl = Control(ctl.rtol, ctl.atol, 0.0, ctl.max_step,
                                       seg_ctl.max_steps, PARTS, ctl.n_hol, ctl.n_coord,
-                                      ctl.n_sens)
+                                      ctl.n_sens, NEAR)
                 else:
                     seg_ctl = Control(ctl.rtol, ctl.atol, 0.0,
                                       min(ctl.max_step, abs(span) / PARTS),
                                       seg_ctl.max_steps, seg_ctl.n_steps, ctl.n_hol,
-                                      ctl.n_coord, ctl.n_sens)
+                                      ctl.n_coord, ctl.n_sens, NEAR)
             if mode == AT_T_EVAL:
                 j = 0
                 while j < t_eval.shape[0] and not direction * (t_eval[j] - t) > 0.0:
