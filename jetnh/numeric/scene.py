@@ -376,22 +376,22 @@ class Scene(Frozen):
         """``_dependent_velocity_floats`` by the kernels of ``route`` (``_dv_route``) in
         one compiled call (``kernels.initial``, which also finds ``y`` finite): the
         values in the order of ``dependent_velocities``, or None."""
-        _, floats, head, n_aux, n_dep = route
+        _, floats, n_aux, n_dep = route
         if floats is None:
             return None
         aux = np.empty(n_aux)
-        if not floats(*head, self.t_span[0], y, p, aux):
+        if not floats(self.t_span[0], y, p, aux):
             return None
         return aux.tolist()[:n_dep]
 
     def _dv_route(self, kern) -> tuple:
         """What ``_dependent_velocity_floats`` calls of ``kern``: (kern, the compiled
-        check ``kernels.initial.floats()``, or None where it does not apply, its first
-        arguments (the sing kernel's address and packed sizes, 0 and 0 without
-        indicators, the aux kernel's, the numbers of indicators and dependent
-        velocities, ``FLOAT_MARGIN``), the size of aux, the number of dependent
-        velocities), looked up once per kernels (memo ``dv_route``, shared by the copies
-        ``replace`` makes)."""
+        check ``kernels.initial.floats()`` with its first arguments (the sing kernel's
+        address and packed sizes, 0 and 0 without indicators, the aux kernel's, the
+        numbers of indicators and dependent velocities, ``FLOAT_MARGIN``), or None where
+        it does not apply, the size of aux, the number of dependent velocities), looked
+        up once per kernels (memo ``dv_route``, shared by the copies ``replace``
+        makes)."""
         route = self._memo.get("dv_route")
         if route is None or route[0] is not kern:
             lay = kern.layout
@@ -399,9 +399,10 @@ class Scene(Frozen):
             n_ind, n_dep = len(lay.indicators), len(lay.dependent_velocities)
             applies = (lay.dependent_velocities == self.dependent_velocities
                        and (not n_ind or sing is not None))
-            route = (kern, initial_floats() if applies else None,
-                     (*((0, 0) if sing is None else sing.args), *kern.aux.args, n_ind,
-                      n_dep, FLOAT_MARGIN), lay.n_aux, n_dep)
+            route = (kern, functools.partial(
+                initial_floats(), *((0, 0) if sing is None else sing.args),
+                *kern.aux.args, n_ind, n_dep, FLOAT_MARGIN) if applies else None,
+                lay.n_aux, n_dep)
             self._memo["dv_route"] = route
         return route
 
@@ -477,31 +478,30 @@ class Scene(Frozen):
             # (what the copies take over, looked up again when this memo grew, or until
             # the kernels are loaded)
             hit = self._moving()
-        _, kern, p, memo, route = hit
+        _, kern, p, memo, route, d = hit
         # (the attributes set directly, not by ``_set``: a time span is a tuple of
         # floats, the initial values floats; ``_memo`` the copy's own, before anything
         # reads it)
-        d = self.__dict__.copy()        # (a copy of the dict: sooner than filling one)
-        memo = memo.copy()
+        d = d.copy()        # (a copy of a dict: sooner than filling one)
+        d["_memo"] = memo = memo.copy()     # (frozen from here: ``_initial`` sets nothing
+        #                                     when it neither projects nor completes)
         if t_span is not self.t_span:
             d["t_span"] = t_span = self._t_span(t_span)
             memo.pop("quick", None)     # (the quick plans: of this span)
-        d["projected"] = d["completed"] = _NOTHING
-        d["_memo"] = memo      # (frozen from here: ``_initial`` sets nothing when it
-        #                        neither projects nor completes)
         new = _new(Scene)
         _setattr(new, "__dict__", d)
-        if route is not None and type(initial) is dict and initial.keys() == self._state_set:
-            floats = route[1]
-            states = self._states_of(initial)
-            if floats is not None and _FLOAT.issuperset(map(type, states)):
+        if (route is not None and type(initial) is dict and route[1] is not None
+                and len(initial) == len(self.state_names)):
+            try:        # (every state, so nothing else: as many keys as states)
+                states = self._states_of(initial)
+            except KeyError:
+                states = ()
+            if states and _FLOAT.issuperset(map(type, states)):
                 y = np.array(states)
-                aux = np.empty(route[3])
-                if floats(*route[2], t_span[0], y, p, aux):
+                aux = np.empty(route[2])
+                if route[1](t_span[0], y, p, aux):
                     memo["_y0"] = y
                     memo["_given"] = (FrozenDict(initial), aux)
-                    d.pop("initial", None)
-                    d.pop("y0", None)
                     return new
         if type(initial) is not dict and not isinstance(initial, Mapping):
             raise JetnhError(f"initial must be a dict keyed by Symbol or name, got a "
@@ -521,7 +521,7 @@ class Scene(Frozen):
         """What the copies ``_moved`` makes take over from this scene, kept in its memo
         (``moved``): (the memo's size, the kernels if loaded, ``_p``, the shared memo,
         ``_dv_route`` where the kernels are loaded and no holonomic constraint is to be
-        checked)."""
+        checked, the attributes of a copy but ``initial``, ``y0`` and ``_memo``)."""
         own = self._memo
         key = own.get("key")
         kern = None if key is None else _loaded_kernels(key, self.cache)
@@ -534,8 +534,11 @@ class Scene(Frozen):
         shared["_p"] = p
         if "quick" in own:
             shared["quick"] = own["quick"]
+        attributes = {k: v for k, v in self.__dict__.items()
+                      if k not in ("initial", "y0", "_memo")}
+        attributes["projected"] = attributes["completed"] = _NOTHING
         own["moved"] = None
-        hit = own["moved"] = (len(own), kern, p, shared, route)
+        hit = own["moved"] = (len(own), kern, p, shared, route, attributes)
         return hit
 
     @made
