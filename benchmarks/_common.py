@@ -16,6 +16,13 @@ The API (other scripts import it; keep it small and stable):
     fmt_seconds(r)                 such a result as table text: seconds, ">T" or "error"
     rhs_driver()                   ``drive(rhs, y, p, n)``: n calls of a compiled rhs in a
                                    compiled loop (the cost of an evaluation, bare)
+    call_ns(cfunc, y, p, n_out, reps)
+                                   nanoseconds per call of a kernel callback (``t, y, p,
+                                   out``) from a compiled loop, best of rounds
+    n_trailer_source(N, principle) the N-trailer's kernel source (``codegen.KernelSource``)
+                                   and initial state, as ``Scene`` generates them
+    exec_kernels(source, name)     a kernel module compiled from its source, numba's
+                                   cache off, as the loader compiles a new entry
 
 Wall times are ``time.perf_counter`` differences; the machine is shared, so compare only
 figures measured in the same run and take the best of several repetitions.
@@ -199,3 +206,76 @@ def rhs_driver():
             acc += out[-1]
         return acc
     return entry_point(drive)
+
+
+def n_trailer_source(N: int, principle: str):
+    """``(KernelSource, y0)`` of ``models.get("n_trailer", N=N)`` under ``principle``:
+    the steadily turning rig, multipliers 0, t in [0, 1]."""
+    from jetnh import models
+    from jetnh.numeric import Scene, codegen
+    from jetnh.numeric.codegen import multiplier_names
+
+    system = models.get("n_trailer", N=N)
+    ini = dict(models.initial("n_trailer", N=N))
+    ini.update({m: 0.0 for m in multiplier_names(system, principle)})
+    sc = Scene(system, principle, initial=ini, t_span=(0.0, 1.0))
+    return codegen.generate(sc.spec), list(sc.y0)
+
+
+def exec_kernels(source: str, name: str):
+    """The module of a generated kernel ``source`` compiled (as ``name``, from a file in a
+    temporary directory) with numba's cache off, as the loader compiles a new entry."""
+    import tempfile
+    import types
+
+    with tempfile.TemporaryDirectory(prefix="jetnh-bench-") as tmp:
+        path = os.path.join(tmp, f"{name}.py")
+        with open(path, "w") as fh:
+            fh.write(source)
+        mod = types.ModuleType(name)
+        mod.__file__ = path
+        mod.JETNH_NUMBA_CACHE = False
+        sys.modules[name] = mod
+        exec(compile(source, path, "exec"), mod.__dict__)  # noqa: S102 - our own source
+        return mod
+
+
+def call_ns(cfunc, y, p, n_out: int, reps: int, rounds: int = 7) -> float:
+    """Nanoseconds per call of the kernel callback ``cfunc`` (``(t, y, p, out)``, ``out``
+    of ``n_out``) from a compiled loop, as the integrators call it: best of ``rounds``
+    rounds of ``reps`` calls."""
+    import numpy as np
+
+    from jetnh.numeric.methods._common import FunctionAddress
+
+    loop = _call_loop()
+    f = FunctionAddress(cfunc)
+    y, p, out = np.array(y, dtype=float), np.array(p, dtype=float), np.zeros(n_out)
+    loop(f, y, p, out, 2)
+    best = math.inf
+    for _ in range(rounds):
+        tic = time.perf_counter()
+        loop(f, y, p, out, reps)
+        best = min(best, (time.perf_counter() - tic) / reps)
+    return 1e9 * best
+
+
+def _call_loop():
+    import numba
+
+    from jetnh.numeric.methods._common import RHS, entry_point
+
+    global _LOOP
+    if _LOOP is None:
+        f8 = numba.types.float64
+
+        @numba.njit(numba.types.void(RHS, f8[::1], f8[::1], f8[::1], numba.types.int64))
+        def loop(f, y, p, out, n):
+            for _ in range(n):
+                y[0] += 1e-15                 # keep the compiler from hoisting the call
+                f(0.25, y, p, out)
+        _LOOP = entry_point(loop)
+    return _LOOP
+
+
+_LOOP = None

@@ -13,12 +13,13 @@ Each (N, principle, tree) runs in a fresh interpreter (``PYTHONPATH`` the tree):
 kernel source of ``models.get("n_trailer", N=N)`` is generated (not timed; numba warmed
 up on the N = 1 kernels first), then compiled from that source with numba's cache off,
 as the loader compiles a new entry; timed in CPU seconds (``compile_cpu``, and per
-kernel).  Then one rhs call from a compiled loop (``_common.rhs_driver``, best of
-batches: ``rhs_ns``), and rhs, aux and sing at five random states near the initial state
-(kept for comparing the trees bit for bit).  With ``--vs`` the other tree is measured
-right after each row of this one, at the same load; ``--quick``: N = 3, 4, 8.
+kernel: ``rhs_cpu``, ...; ``rhs_route``: "quick" or "full", numba's -O3).  Then one call
+of each kernel from a compiled loop (best of rounds: ``rhs_ns``, ``aux_ns``,
+``sing_ns``), and rhs, aux and sing at five random states near the initial state (kept
+for comparing the trees bit for bit).  With ``--vs`` the other tree is measured right
+after each row of this one, at the same load; ``--quick``: N = 3, 4, 8.
 ``exponent``: the least-squares slope of log compile CPU against log instructions over
-N >= 4.
+N >= 4, for the module and for each kernel kind.
 """
 
 from __future__ import annotations
@@ -27,34 +28,20 @@ import argparse
 import json
 import math
 import os
+import re
 import sys
-import tempfile
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from _common import parser, rhs_driver, run_worker, write  # noqa: E402
+from _common import (call_ns, exec_kernels, n_trailer_source, parser,  # noqa: E402
+                     run_worker, write)
 
 KERNELS = ("rhs", "aux", "sing")
-
-
-def _source(N: int, principle: str):
-    from jetnh import models
-    from jetnh.numeric import Scene, codegen
-    from jetnh.numeric.codegen import multiplier_names
-
-    system = models.get("n_trailer", N=N)
-    ini = dict(models.initial("n_trailer", N=N))
-    ini.update({m: 0.0 for m in multiplier_names(system, principle)})
-    sc = Scene(system, principle, initial=ini, t_span=(0.0, 1.0))
-    ks = codegen.generate(sc.spec)
-    return ks.source, list(sc.y0), ks.layout
 
 
 def _exec(source: str, name: str, spent: dict):
     """The module of ``source`` compiled with numba's cache off; CPU seconds per kernel
     into ``spent`` (the callback decorators timed)."""
-    import types
-
     import numba
 
     from jetnh.numeric.codegen import quick
@@ -75,16 +62,7 @@ def _exec(source: str, name: str, spent: dict):
     cfunc, qcfunc = numba.cfunc, quick.quick_cfunc
     numba.cfunc, quick.quick_cfunc = timed(cfunc), timed(qcfunc)
     try:
-        with tempfile.TemporaryDirectory(prefix="jetnh-scaling-") as tmp:
-            path = os.path.join(tmp, f"{name}.py")
-            with open(path, "w") as fh:
-                fh.write(source)
-            mod = types.ModuleType(name)
-            mod.__file__ = path
-            mod.JETNH_NUMBA_CACHE = False
-            sys.modules[name] = mod
-            exec(compile(source, path, "exec"), mod.__dict__)  # noqa: S102 - our own source
-            return mod
+        return exec_kernels(source, name)
     finally:
         numba.cfunc, quick.quick_cfunc = cfunc, qcfunc
 
@@ -96,44 +74,39 @@ def work(N: int, principle: str) -> dict:
     from jetnh.numeric.kernels.calls import Kernel
     from jetnh.numeric.methods._common import FunctionAddress
 
-    warm, _, _ = _source(1, principle)
-    _exec(warm, "jetnh_scaling_warm", {})
+    warm, _ = n_trailer_source(1, principle)
+    _exec(warm.source, "jetnh_scaling_warm", {})
     tic = time.process_time()
-    source, y0, lay = _source(N, principle)
+    ks, y0 = n_trailer_source(N, principle)
     generate = time.process_time() - tic
+    source, lay = ks.source, ks.layout
     spent: dict = {}
     tic = time.process_time()
     mod = _exec(source, "jetnh_scaling_kernels", spent)
     compile_cpu = time.process_time() - tic
     out = {"tree": os.path.dirname(os.path.dirname(os.path.abspath(jetnh.__file__))),
            "generate_cpu": generate, "compile_cpu": compile_cpu, "chars": len(source)}
+    y, p = np.array(y0, dtype=float), np.zeros(len(lay.runtime_params))
+    sizes = {"rhs": len(y), "aux": lay.n_aux, "sing": len(lay.indicators)}
     total = 0
     for k in KERNELS:
         ops = getattr(mod, f"_P_{k}", None)
         out[f"{k}_ops"] = len(ops) if ops is not None else None
         out[f"{k}_cpu"] = spent.get(f"{k}_c")
+        out[f"{k}_route"] = ("quick" if re.search(rf"@quick_cfunc\([^)]*\)\ndef {k}_c\(",
+                                                  source) else "full")
         total += len(ops) if ops is not None else 0
+        reps = max(20, int(2e6 / max(len(ops) if ops is not None else 1, 1)))
+        out[f"{k}_ns"] = call_ns(getattr(mod, f"{k}_c"), y, p, sizes[k], reps)
     out["ops"] = total
-    drive = rhs_driver()
-    y, p = np.array(y0, dtype=float), np.zeros(len(lay.runtime_params))
-    timing = y.copy()
-    reps = max(20, int(2e6 / max(total, 1)))
-    f = FunctionAddress(mod.rhs_c)
-    drive(f, timing, p, reps)
-    best = math.inf
-    for _ in range(7):
-        tic = time.perf_counter()
-        drive(f, timing, p, reps)
-        best = min(best, (time.perf_counter() - tic) / reps)
-    out["rhs_ns"] = 1e9 * best
     rng = np.random.default_rng(0)
     states = [y + 0.1 * rng.uniform(-1.0, 1.0, len(y)) for _ in range(5)]
     values = {}
-    for k, n_out in (("rhs", len(y)), ("aux", lay.n_aux), ("sing", len(lay.indicators))):
-        kernel = Kernel(FunctionAddress(getattr(mod, f"{k}_c")), (len(y), len(p), n_out))
+    for k in KERNELS:
+        kernel = Kernel(FunctionAddress(getattr(mod, f"{k}_c")), (len(y), len(p), sizes[k]))
         rows = []
         for yy in states:
-            buf = np.zeros(n_out)
+            buf = np.zeros(sizes[k])
             kernel(0.25, yy, p, buf)
             rows.append(buf.tolist())
         values[k] = rows
@@ -141,10 +114,10 @@ def work(N: int, principle: str) -> dict:
     return out
 
 
-def fit(rows, key="compile_cpu") -> float | None:
-    """Least-squares slope of log key against log instructions (rows with N >= 4)."""
-    pts = [(math.log(r["ops"]), math.log(r[key])) for r in rows
-           if r.get(key) and r.get("ops") and r["N"] >= 4]
+def fit(rows, key="compile_cpu", ops="ops") -> float | None:
+    """Least-squares slope of log ``key`` against log ``ops`` (rows with N >= 4)."""
+    pts = [(math.log(r[ops]), math.log(r[key])) for r in rows
+           if r.get(key) and r.get(ops) and r["N"] >= 4]
     if len(pts) < 2:
         return None
     mx = sum(x for x, _ in pts) / len(pts)
@@ -212,23 +185,28 @@ def main(argv=None) -> int:
             sel = [r for r in mine if r["principle"] == principle]
             e = fit(sel)
             if e is not None:
+                kinds = ", ".join(f"{k} ^{fit(sel, f'{k}_cpu', f'{k}_ops'):.2f}"
+                                  for k in KERNELS)
                 summary.append(f"{label} ({tree}), {principle}: compile CPU ~ "
-                               f"instructions^{e:.2f} over N >= 4")
+                               f"instructions^{e:.2f} over N >= 4 (per kernel: {kinds})")
         for r in mine:
+            kinds = "; ".join(f"{k} {r[f'{k}_ops']} {r[f'{k}_route']} {r[f'{k}_cpu']:.2f} s "
+                              f"{r[f'{k}_ns']:.0f} ns" for k in KERNELS)
             line = (f"{label}: N = {r['N']} {r['principle']}: {r['ops']} instructions, "
-                    f"compile {r['compile_cpu']:.2f} CPU s, rhs call {r['rhs_ns']:.0f} ns "
-                    f"(load {r['load']})")
+                    f"compile {r['compile_cpu']:.2f} CPU s ({kinds}) (load {r['load']})")
             if "bitwise_equal" in r:
                 line += (f"; kernels' values against vs: bitwise equal "
                          f"{r['bitwise_equal']}, largest relative difference "
                          f"{r['max_rel_diff']:.1e}")
             summary.append(line)
+    print("\n".join(summary))
     write("compile_scaling", {
         "title": "Compilation of the N-trailer's kernels against their size (straight-line "
                  "instructions), and the cost of an rhs call",
         "summary": summary,
         "columns": ["N", "principle", "tree", "load", "ops", "rhs_ops", "aux_ops",
-                    "sing_ops", "compile_cpu", "rhs_cpu", "aux_cpu", "sing_cpu", "rhs_ns",
+                    "sing_ops", "compile_cpu", "rhs_cpu", "aux_cpu", "sing_cpu", "rhs_route",
+                    "aux_route", "sing_route", "rhs_ns", "aux_ns", "sing_ns",
                     "bitwise_equal", "max_rel_diff"],
         "rows": rows}, args.out, args.quick)
     return 0

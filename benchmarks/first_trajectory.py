@@ -20,8 +20,8 @@ wall and CPU seconds (the CPU seconds are what a loaded machine does not inflate
   sum.  CPU seconds: ``scene_cpu``, ``kernels_cpu``, ``generate_cpu`` (derivation and
   source), ``compile_cpu``, ``run_cpu``, ``cpu`` (total).
 - per kernel (rhs, aux, sing): its straight-line instructions and how it was compiled
-  (``quick``: LLVM -O1 passes and -O0 code generation, above
-  ``jetnh.numeric.codegen.quick.QUICK_OPS`` instructions; ``full``: numba's -O3).
+  (``quick``: LLVM -O1 passes and -O0 code generation, above the threshold of its kind,
+  ``jetnh.numeric.codegen.quick.quick_ops``; ``full``: numba's -O3).
 
 For N in ``--baseline-ns`` the same kernel source is compiled twice more in the same
 process, numba's cache off: as generated (``compile_again_cpu``) and with every kernel at
@@ -42,7 +42,7 @@ import tempfile
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from _common import parser, run_worker, write  # noqa: E402
+from _common import call_ns, exec_kernels, parser, run_worker, write  # noqa: E402
 
 PRINCIPLES = ("chetaev", "vakonomic", "holder", "suslov")
 KERNELS = ("rhs", "aux", "sing")
@@ -59,49 +59,17 @@ def _since(start) -> tuple[float, float]:
 
 def _rhs_ns(cfunc, y0, reps_hint: int) -> float:
     """Nanoseconds per call of ``cfunc`` (an rhs callback) from a compiled loop."""
-    import numba
-    import numpy as np
-
-    from jetnh.numeric.methods._common import RHS, FunctionAddress, entry_point
-
-    f8 = numba.types.float64
-
-    @numba.njit(numba.types.void(RHS, f8[::1], f8[::1], f8[::1], numba.types.int64))
-    def _loop(f, y, p, out, n):
-        for _ in range(n):
-            f(0.25, y, p, out)
-
-    loop = entry_point(_loop)
-    f = FunctionAddress(cfunc)
-    y, p, out = np.array(y0, dtype=float), np.zeros(0), np.zeros(len(y0))
-    loop(f, y, p, out, 2)
-    best = float("inf")
-    for _ in range(5):
-        tic = time.perf_counter()
-        loop(f, y, p, out, reps_hint)
-        best = min(best, (time.perf_counter() - tic) / reps_hint)
-    return 1e9 * best
+    return call_ns(cfunc, y0, [], len(y0), reps_hint, rounds=5)
 
 
 def _compile(source: str, full: bool) -> tuple[float, object]:
     """CPU seconds to compile ``source`` again (numba's cache off), as generated or
     (``full``) with every kernel at numba's -O3, and the module."""
-    import types
-
     if full:
         source = re.sub(r"@quick_cfunc\(", "@numba.cfunc(", source)
-    name = "jetnh_bench_kernels_" + ("full" if full else "quick")
-    with tempfile.TemporaryDirectory(prefix="jetnh-again-") as tmp:
-        path = os.path.join(tmp, f"{name}.py")
-        with open(path, "w") as fh:
-            fh.write(source)
-        mod = types.ModuleType(name)
-        mod.__file__ = path
-        mod.JETNH_NUMBA_CACHE = False
-        sys.modules[name] = mod
-        tic = time.process_time()
-        exec(compile(source, path, "exec"), mod.__dict__)  # noqa: S102 - our own source
-        return time.process_time() - tic, mod
+    tic = time.process_time()
+    mod = exec_kernels(source, "jetnh_bench_kernels_" + ("full" if full else "quick"))
+    return time.process_time() - tic, mod
 
 
 def _cpu_spent(module, name: str) -> list:

@@ -14,30 +14,9 @@ import time
 import numpy as np
 import pytest
 
+from _interrupt_helpers import recording_sigint, sigint_in, stopped_by_sigint
 from jetnh import models
 from jetnh.numeric import STOPPED, Scene, interrupt
-
-
-def _spin(halt, cap):
-    """Python stand-in for a compiled loop: returns when ``halt`` is set (its value) or
-    after ``cap`` seconds (0)."""
-    end = time.monotonic() + cap
-    while time.monotonic() < end:
-        if halt[0]:
-            return int(halt[0])
-    return 0
-
-
-def _stopped_by_sigint():
-    """A call (the watchdog's common route) that SIGINT, sent 0.2 s into it, must stop:
-    what it returned and how long it took."""
-    halt = interrupt.flag()
-    timer = threading.Timer(0.2, os.kill, (os.getpid(), signal.SIGINT))
-    timer.start()
-    tic = time.monotonic()
-    got = interrupt.call(_spin, halt, None, (halt, 10.0))
-    timer.join()
-    return got, time.monotonic() - tic
 
 
 def _wakeup_fd():
@@ -62,15 +41,8 @@ def listening():
 def handler():
     """A SIGINT handler of the test's own, recording each signal; the previous handler
     and wakeup fd restored after the test."""
-    seen = []
-    before = signal.signal(signal.SIGINT, lambda signum, frame: seen.append(signum))
-    fd = signal.set_wakeup_fd(-1)
-    signal.set_wakeup_fd(fd)
-    try:
+    with recording_sigint(lambda signum: signum) as seen:
         yield seen
-    finally:
-        signal.signal(signal.SIGINT, before)
-        signal.set_wakeup_fd(fd)
 
 
 @pytest.fixture
@@ -124,14 +96,14 @@ def test_a_wakeup_fd_set_between_runs_is_theirs_again_after_a_stopped_call(handl
     assert interrupt._KNOWN[0] is interrupt._WATCHDOG
     previous = signal.set_wakeup_fd(fd, warn_on_full_buffer=False)
     assert previous == interrupt._WATCHDOG.own
-    got, took = _stopped_by_sigint()
+    got, took = stopped_by_sigint()
     assert got == interrupt.INTERRUPT and took < 3.0
     assert handler == [signal.SIGINT]
     assert _wakeup_fd() == fd
     time.sleep(0.05)
     assert signal.SIGINT in reader.recv(64)
     signal.set_wakeup_fd(-1)
-    got, took = _stopped_by_sigint()
+    got, took = stopped_by_sigint()
     assert got == interrupt.INTERRUPT and took < 3.0 and handler == [signal.SIGINT] * 2
     assert _wakeup_fd() == interrupt._WATCHDOG.own
     assert interrupt._KNOWN[0] is interrupt._WATCHDOG
@@ -147,7 +119,7 @@ def test_a_wakeup_fd_set_past_the_stand_in_is_found_where_it_was_replaced(
     assert interrupt._KNOWN[0] is interrupt._WATCHDOG
     monkeypatch.setattr(signal, "set_wakeup_fd", interrupt._set_wakeup_fd)
     interrupt._set_wakeup_fd(fd, warn_on_full_buffer=False)   # unnoticed
-    got, took = _stopped_by_sigint()
+    got, took = stopped_by_sigint()
     assert got == interrupt.INTERRUPT and took < 3.0 and handler == [signal.SIGINT]
     assert _wakeup_fd() == fd
     monkeypatch.undo()
@@ -165,8 +137,7 @@ def test_ctrl_c_stops_a_long_run_and_restores_the_users_handler_and_fd(handler, 
     short = disk.replace(t_span=(0.0, 1.0))
     first = short.run(save="final")
     signal.set_wakeup_fd(fd, warn_on_full_buffer=False)
-    timer = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT))
-    timer.start()
+    timer = sigint_in(0.5)
     tic = time.monotonic()
     traj = disk.run(save="final", max_step=1e-3, max_steps=10**12)
     timer.join()

@@ -1,5 +1,5 @@
-"""Quick compilation of huge kernels (``jetnh.numeric.codegen.quick``): chosen by size,
-part of the kernel cache key, and the same arithmetic as numba's -O3 route (bit-for-bit
+"""Quick compilation of huge kernels (``jetnh.numeric.codegen.quick``): chosen by size and
+kind, part of the kernel cache key, and the same arithmetic as numba's -O3 route (bit-for-bit
 equal outputs, two compilations of one program compared)."""
 
 import numpy as np
@@ -45,6 +45,56 @@ def test_the_threshold_picks_the_decorator(monkeypatch):
     monkeypatch.setenv("JETNH_QUICK_OPS", "10")
     assert quick.decorator(11) == "@quick_cfunc(_SIG, **_CB)"
     assert quick.decorator(10) == "@numba.cfunc(_SIG, **_CB)"
+
+
+def test_kernels_called_less_often_are_compiled_quickly_from_smaller_sizes(monkeypatch):
+    """rhs (every stage) at QUICK_OPS, jac at a quarter of it, the kernels called once a
+    step or less (aux, sing, hol, events, verdicts) at an eighth; JETNH_QUICK_OPS moves
+    them together."""
+    monkeypatch.delenv("JETNH_QUICK_OPS", raising=False)
+    for kind, threshold in (("rhs", 8000), ("jac", 2000), ("aux", 1000), ("sing", 1000),
+                            ("hol", 1000), ("events", 1000), ("verdicts", 1000)):
+        assert quick.quick_ops(kind) == threshold
+        assert quick.decorator(threshold, kind=kind) == "@numba.cfunc(_SIG, **_CB)"
+        assert quick.decorator(threshold + 1, kind=kind) == "@quick_cfunc(_SIG, **_CB)"
+    assert quick.decorator(2000, "_JAC_SIG") == "@numba.cfunc(_JAC_SIG, **_CB)"
+    assert quick.decorator(2001, "_JAC_SIG") == "@quick_cfunc(_JAC_SIG, **_CB)"
+    monkeypatch.setenv("JETNH_QUICK_OPS", "800")
+    assert [quick.quick_ops(k) for k in ("rhs", "jac", "sing")] == [800, 200, 100]
+
+
+def test_the_catalogue_keeps_o3_where_the_n_trailer_keeps_it(monkeypatch, tmp_path):
+    """The N-trailer at N = 8 (Suslov: the largest aux) keeps numba's -O3 for rhs, aux and
+    sing; at N = 16 aux and sing (once a step) are compiled quickly, the rhs is not."""
+    from jetnh.numeric.codegen import generate, multiplier_names
+
+    monkeypatch.delenv("JETNH_QUICK_OPS", raising=False)
+    for N, principle, quick_ones in ((8, "suslov", set()), (16, "chetaev", {"aux", "sing"})):
+        system = models.get("n_trailer", N=N)
+        initial = {**models.initial("n_trailer", N=N),
+                   **{m: 0.0 for m in multiplier_names(system, principle)}}
+        src = generate(Scene(system, principle, initial=initial).spec).source
+        routes = {k: src.count(f"@quick_cfunc(_SIG, **_CB)\ndef {k}_c(") == 1
+                  for k in ("rhs", "aux", "sing")}
+        assert {k for k, q in routes.items() if q} == quick_ones, (N, routes)
+
+
+def test_a_quick_callback_is_built_from_assembly_text_below_the_rhs_threshold(monkeypatch):
+    """The intrinsic follows the route of the callback compiling it: LLVM assembly text
+    (``ir_text``) under ``quick_cfunc`` whatever the size, instructions built one by one
+    under numba's -O3 below the rhs threshold; the same bits."""
+    from jetnh.numeric.codegen import llvm
+
+    monkeypatch.delenv("JETNH_QUICK_OPS", raising=False)
+    texts = []
+    real = llvm.ir_text
+    monkeypatch.setattr(llvm, "ir_text", lambda ops: texts.append(len(ops)) or real(ops))
+    ops = (("y", 0), ("y", 1), ("mul", 0, 1), ("fn", "cos", 2), ("out", 0, 3),
+           ("t",), ("add", 5, 0), ("out", 1, 6))
+    full, fast = _callbacks(ops)
+    assert texts == [len(ops)]                # once: the quick callback's
+    y = np.array([0.7, -1.3, 0.2])
+    np.testing.assert_array_equal(_call(full, y, 2), _call(fast, y, 2))
 
 
 def test_a_bad_threshold_names_the_variable(monkeypatch):

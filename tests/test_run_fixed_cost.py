@@ -11,6 +11,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from _interrupt_helpers import recording_sigint, sigint_in, spin, stopped_by_sigint
 from jetnh import models
 from jetnh.errors import JetnhError
 from jetnh.numeric import STOPPED, Scene, arguments, interrupt
@@ -84,16 +85,6 @@ def test_run_y0_refuses_a_state_that_is_not_finite(disk):
             disk.run(y0=y)
 
 
-def _spin(halt, cap):
-    """Python stand-in for a compiled loop: returns when ``halt`` is set (its value) or
-    after ``cap`` seconds (0)."""
-    end = time.monotonic() + cap
-    while time.monotonic() < end:
-        if halt[0]:
-            return int(halt[0])
-    return 0
-
-
 def test_every_call_is_watched_while_the_watchdog_comes_and_goes(monkeypatch):
     """With the watchdog ending after 5 ms idle, calls made just as it ends, from two
     threads at once, are each stopped by their timeout (no watch lost between the
@@ -108,7 +99,7 @@ def test_every_call_is_watched_while_the_watchdog_comes_and_goes(monkeypatch):
         for _ in range(15):
             time.sleep(float(rng.uniform(0.0, 0.012)))      # around the idle end
             halt = interrupt.flag()
-            stopped.append(interrupt.call(_spin, halt, 0.02, (halt, 5.0)))
+            stopped.append(interrupt.call(spin, halt, 0.02, (halt, 5.0)))
 
     try:
         threads = [threading.Thread(target=calls, args=(s,)) for s in range(2)]
@@ -181,28 +172,9 @@ def sigint_handler():
     """A SIGINT handler of the test's own (the handler ``interrupt._on_sigint`` stands
     in front of) recording the state of the calls when it runs; the previous handler
     and wakeup fd restored after the test."""
-    import signal
-
-    seen = []
-    before = signal.signal(signal.SIGINT, lambda signum, frame: seen.append(
-        (interrupt._DEPTH[0], list(interrupt._HALTS))))
-    fd = signal.set_wakeup_fd(-1)
-    signal.set_wakeup_fd(fd)
-    try:
+    with recording_sigint(lambda signum: (interrupt._DEPTH[0],
+                                          list(interrupt._HALTS))) as seen:
         yield seen
-    finally:
-        signal.signal(signal.SIGINT, before)
-        signal.set_wakeup_fd(fd)
-
-
-def _sigint_in(seconds):
-    """SIGINT to this process after ``seconds`` (from a timer thread)."""
-    import os
-    import signal
-
-    timer = threading.Timer(seconds, os.kill, (os.getpid(), signal.SIGINT))
-    timer.start()
-    return timer
 
 
 def test_sigint_stops_nested_calls_and_reaches_the_handler_once_after(sigint_handler):
@@ -213,10 +185,10 @@ def test_sigint_stops_nested_calls_and_reaches_the_handler_once_after(sigint_han
     outer, inner = interrupt.flag(), interrupt.flag()
 
     def outer_call():
-        got = interrupt.call(_spin, inner, None, (inner, 10.0))
-        return got, _spin(outer, 10.0)
+        got = interrupt.call(spin, inner, None, (inner, 10.0))
+        return got, spin(outer, 10.0)
 
-    timer = _sigint_in(0.3)
+    timer = sigint_in(0.3)
     tic = time.monotonic()
     got = interrupt.call(outer_call, outer)
     timer.join()
@@ -232,7 +204,7 @@ def test_sigint_stops_nested_calls_and_reaches_the_handler_once_after(sigint_han
     time.sleep(0.05)
     assert len(sigint_handler) == 2
     halt = interrupt.flag()
-    assert interrupt.call(_spin, halt, None, (halt, 0.2)) == 0
+    assert interrupt.call(spin, halt, None, (halt, 0.2)) == 0
 
 
 def test_sigint_is_heard_while_asyncio_holds_the_wakeup_fd(sigint_handler):
@@ -251,12 +223,7 @@ def test_sigint_is_heard_while_asyncio_holds_the_wakeup_fd(sigint_handler):
         assert theirs not in (-1, interrupt._WATCHDOG.own)
 
         async def run():
-            halt = interrupt.flag()
-            timer = _sigint_in(0.3)
-            tic = time.monotonic()
-            got = interrupt.call(_spin, halt, None, (halt, 10.0))
-            timer.join()
-            return got, time.monotonic() - tic
+            return stopped_by_sigint(0.3)
 
         got, took = loop.run_until_complete(run())
         assert got == interrupt.INTERRUPT and took < 3.0
@@ -279,10 +246,7 @@ def test_sigint_is_heard_after_the_watchdog_ended(monkeypatch, sigint_handler):
         for _ in range(3):
             interrupt.call(lambda: None, interrupt.flag())
             time.sleep(0.1)                         # the watchdog ends meanwhile
-            halt = interrupt.flag()
-            timer = _sigint_in(0.2)
-            got = interrupt.call(_spin, halt, None, (halt, 10.0))
-            timer.join()
+            got, _ = stopped_by_sigint()
             assert got == interrupt.INTERRUPT
         assert len(sigint_handler) == 3 and interrupt._HALTS == []
     finally:
@@ -352,35 +316,19 @@ def test_a_finished_runs_trajectory_equals_the_general_routes(disk, save):
     the one of the general route (of a run watching an event that never fires, the same
     steps: ``general_route``) agree on every attribute read, stay immutable, and pickle
     alike."""
-    import pickle
-
     from jetnh.errors import FrozenError
 
     quick = disk.run(save=save)
     x = disk.system.J.q[0]
     general = general_route(disk.run(save=save, events=[x - 1e6]), [x - 1e6])
-    assert "_loop" in quick.__dict__ and "_loop" not in general.__dict__
-    assert np.array_equal(quick.t, general.t) and np.array_equal(quick.y, general.y)
-    for name in ("status", "stop_reason", "success", "method", "names", "switches",
-                 "singularity", "final", "t_final"):
-        assert getattr(quick, name) == getattr(general, name), name
+    back = _agree(quick, general, save)
     assert quick.t_events == [] and quick.y_events == []
     assert [len(e) for e in general.t_events] == [0]
-    assert quick.t_events is quick.t_events
-    a, b = quick.diagnostics, general.diagnostics
-    for name in ("steps", "rejected", "rhs_evaluations", "residual_max", "energy_drift",
-                 "projected", "status", "success", "rows", "saved", "stop_row"):
-        assert getattr(a, name) == getattr(b, name), name
-    assert np.array_equal(quick["phi_t"], general["phi_t"])
-    if save == "steps":         # (evaluation between rows re-takes the steps)
-        assert np.array_equal(quick.at([0.25]).to_numpy(), general.at([0.25]).to_numpy())
     with pytest.raises(FrozenError):
         quick.status = 3
     with pytest.raises(ValueError):
         quick.y[0, 0] = 1.0
-    back = pickle.loads(pickle.dumps(quick))
-    assert "_loop" not in back.__dict__ and back.diagnostics.steps == a.steps
-    assert np.array_equal(back.y, quick.y) and back.t_events == []
+    assert back.t_events == []
 
 
 def general_route(traj, events):
@@ -399,6 +347,32 @@ def general_route(traj, events):
     return solve.trajectory(scene, traj.method, (*out[:7], *records, *out[10:]),
                             traj._wall, traj._kernels, ce, traj._p, scene.t_span[0],
                             scene.y0, 1e-10, True, None, traj._dense)
+
+
+def _agree(quick, general, save):
+    """Check that the trajectory ``quick`` made at once and ``general`` (its general
+    route's) agree on their rows, attributes, diagnostics and values between rows (with
+    ``save="steps"``), and that ``quick`` pickles without its loop's tuple; returns the
+    unpickled copy."""
+    import pickle
+
+    assert "_loop" in quick.__dict__ and "_loop" not in general.__dict__
+    assert np.array_equal(quick.t, general.t) and np.array_equal(quick.y, general.y)
+    for name in ("status", "stop_reason", "success", "method", "names", "switches",
+                 "singularity", "final", "t_final"):
+        assert getattr(quick, name) == getattr(general, name), name
+    assert quick.t_events is quick.t_events
+    a, b = quick.diagnostics, general.diagnostics
+    for name in ("steps", "rejected", "rhs_evaluations", "residual_max", "energy_drift",
+                 "projected", "status", "success", "rows", "saved", "stop_row"):
+        assert getattr(a, name) == getattr(b, name), name
+    assert np.array_equal(quick["phi_t"], general["phi_t"])
+    if save == "steps":         # (evaluation between rows re-takes the steps)
+        assert np.array_equal(quick.at([0.25]).to_numpy(), general.at([0.25]).to_numpy())
+    back = pickle.loads(pickle.dumps(quick))
+    assert "_loop" not in back.__dict__ and back.diagnostics.steps == a.steps
+    assert back.event_names == quick.event_names and np.array_equal(back.y, quick.y)
+    return back
 
 
 @pytest.mark.parametrize("save", ["final", "steps"])
@@ -437,39 +411,22 @@ def test_a_finished_watching_runs_trajectory_equals_the_general_routes(disk, sav
     made at once (the loop's 12 entries kept as they are) and agrees with the general
     route's trajectory of the same result on every attribute read, its empty event lists
     included (one read-only array per event); immutable; pickled alike."""
-    import pickle
-
     from jetnh.errors import FrozenError
 
     x, y = disk.system.J.q[:2]
     events = [x - 1e6, y + 1e6][:n_events]
     quick = disk.run(save=save, events=events)
     general = general_route(quick, events)
-    assert "_loop" in quick.__dict__ and "_loop" not in general.__dict__
-    assert np.array_equal(quick.t, general.t) and np.array_equal(quick.y, general.y)
-    for name in ("status", "stop_reason", "success", "method", "names", "switches",
-                 "singularity", "final", "t_final", "event_names"):
-        assert getattr(quick, name) == getattr(general, name), name
-    assert len(quick.event_names) == n_events
+    back = _agree(quick, general, save)
+    assert quick.event_names == general.event_names and len(quick.event_names) == n_events
     for a, b in ((quick.t_events, general.t_events), (quick.y_events, general.y_events)):
         assert len(a) == len(b) == n_events
         for u, v in zip(a, b):
             assert u.shape == v.shape and u.dtype == v.dtype and not u.flags.writeable
-    assert quick.t_events is quick.t_events
-    a, b = quick.diagnostics, general.diagnostics
-    for name in ("steps", "rejected", "rhs_evaluations", "residual_max", "energy_drift",
-                 "projected", "status", "success", "rows", "saved", "stop_row"):
-        assert getattr(a, name) == getattr(b, name), name
-    assert np.array_equal(quick["phi_t"], general["phi_t"])
-    if save == "steps":
-        assert np.array_equal(quick.at([0.25]).to_numpy(), general.at([0.25]).to_numpy())
     with pytest.raises(FrozenError):
         quick.event_names = ()
     with pytest.raises(ValueError):
         quick.y_events[0][:] = 1.0
-    back = pickle.loads(pickle.dumps(quick))
-    assert "_loop" not in back.__dict__ and back.diagnostics.steps == a.steps
-    assert back.event_names == quick.event_names and np.array_equal(back.y, quick.y)
     assert [e.shape for e in back.y_events] == [e.shape for e in quick.y_events]
 
 

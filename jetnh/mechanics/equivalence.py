@@ -38,6 +38,7 @@ from ..algebra import dag, linalg, singular, zero
 from . import principles
 from .system import System
 from ..errors import ArgumentError, PrincipleError
+from ..frozen import FrozenDict
 from ..geometry.frobenius import bracket_components
 
 _POINTS = 4
@@ -127,6 +128,13 @@ class Comparison:
     free: tuple = ()
     family: str | None = None
     choice: dict | None = field(default_factory=dict)
+
+    def __post_init__(self):
+        """Its mappings read-only (``FrozenDict``), as every result's."""
+        for name in ("defects", "choice"):
+            value = getattr(self, name)
+            if isinstance(value, dict) and not isinstance(value, FrozenDict):
+                object.__setattr__(self, name, FrozenDict(value))
 
     def where(self) -> str:
         """The singular set as text, within budget ("" when empty)."""

@@ -10,10 +10,13 @@
 - On a system with holonomic constraints g = 0 the values inside a step are moved onto
   g = 0 as the steps are (``methods.projection.rows``; the re-taken steps of dop853 and
   dopri5 do so in their loop, ``loops.on_constraints``), with their sensitivities.
-- radau (its dense output, a step's collocation polynomial, depends on the Newton
-  iterations before the step and is not kept), dla, dvi and scipy's methods: no
-  interpolant (the discrete integrators have none that matches their nodes and
-  multipliers) and an error that says what to do.
+- radau: the collocation polynomial of each step, the one its ``t_eval`` and events
+  use, from the step's start (t_k, y_k) and size h_k (``radau.collocation``: the stage
+  equations solved to rounding level, where the run stopped Newton at its
+  ``newton_tol``; the run's own polynomial agrees to that tolerance, not to the bit);
+  each step's end is checked against the run's next row.
+- dla, dvi and scipy's methods: no interpolant (the discrete integrators have none that
+  matches their nodes and multipliers) and an error that says what to do.
 
 ``resampled`` gives the run at the rows and evenly between them (the smooth curves of
 ``Trajectory.plot``), or the rows alone where there is no dense output.
@@ -48,12 +51,10 @@ def _refusal(traj) -> str | None:
     """Why ``traj`` cannot be evaluated between its rows, or None."""
     d = traj._dense
     if d is None:
-        what = ("radau's dense output (the collocation polynomial its t_eval and events "
-                "use) is not kept: a step cannot be re-taken apart from the Newton "
-                "iterations before it" if traj.method == "radau" else
-                f"{traj.method} trajectories have no dense output to evaluate between rows")
-        return (f"{what}; run with method='dop853' or 'dopri5' (steps re-taken exactly) or "
-                "'rk4' (cubic Hermite), or pass the times as t_eval= to the run")
+        return (f"{traj.method} trajectories have no dense output to evaluate between rows; "
+                "run with method='dop853' or 'dopri5' (steps re-taken exactly), 'radau' "
+                "(its collocation polynomials) or 'rk4' (cubic Hermite), or pass the "
+                "times as t_eval= to the run")
     if d["mode"] != EVERY_STEP:
         return ("evaluation re-takes the steps of the run, so the trajectory must hold every "
                 "step: run with save='steps' and without t_eval (or pass these times as "
@@ -97,7 +98,8 @@ def evaluate(traj, times, full=False) -> np.ndarray:
         keep = ~ends
     else:
         keep = np.ones(tau.shape[0], dtype=bool)
-    step = _hermite_steps if method(traj.method).fixed_step else _retaken_steps
+    step = (_hermite_steps if method(traj.method).fixed_step else
+            _collocation_steps if traj.method == "radau" else _retaken_steps)
     idx = np.nonzero(keep)[0]
     if idx.size:
         order = idx[np.lexsort((sgn * tau[idx], k[idx]))]
@@ -136,7 +138,7 @@ def sampled(traj, t, y):
     derived columns from the same kernels); no steps, no events, no dense output."""
     return type(traj)(traj.scene, t, y, traj._p, method=traj.method, status=traj.status,
                       stop_reason=traj.stop_reason, steps=None, rejected=None, nfev=0,
-                      wall_time=0.0, kernels=traj._kernels)
+                      wall_time=0.0, kernels=traj._kernels, saved="t_eval")
 
 
 def _groups(k):
@@ -162,6 +164,53 @@ def _retaken_steps(traj, k, tau) -> np.ndarray:
                 f"{int(status)}, {int(stats[1])} rejected); the trajectory's arrays were "
                 "changed after the run?")
         out[a:b] = ys[:b - a]
+    return out
+
+
+def _collocation_steps(traj, k, tau) -> np.ndarray:
+    """radau: the collocation polynomial of step k[i] at tau (sorted by step, then time;
+    ``radau.collocation``), its end checked against the run's next row (within the run's
+    tolerance, after the move onto g = 0 that the run made), the values inside a step
+    moved onto g = 0 as the run's ``t_eval`` rows are; at a step's ends its rows."""
+    from .methods._events import dense_eval
+    from .methods.radau import collocation
+
+    d = traj._dense
+    sens = d.get("rhs")
+    kern = traj._kernels if sens is None else sens
+    jac = traj.scene.jacobian if sens is None else sens.jac
+    t, y, p = traj.t, d.get("y", traj.y), np.ascontiguousarray(traj._p, dtype=float)
+    n = y.shape[1]
+    hol = traj._kernels.layout.holonomic
+    n_sens = n // traj._kernels.layout.n_state - 1
+    out = np.empty((tau.shape[0], n))
+    for j, a, b in _groups(k):
+        t0, t1 = float(t[j]), float(t[j + 1])
+        h = t1 - t0
+        y0 = np.array(y[j])
+        F = collocation(kern.rhs, jac, t0, h, y0, p)
+        end = np.empty((1, n))
+        if F is not None:
+            dense_eval(1.0, y0, F, end[0])
+            if hol:
+                onto_constraints(kern, np.array([t1]), end, p, n_sens)
+            scale = d["atol"] + d["rtol"] * np.maximum(np.abs(y0), np.abs(y[j + 1]))
+        if F is None or not np.sqrt(np.mean(((end[0] - y[j + 1]) / scale) ** 2)) <= 1.0:
+            raise IntegrationError(
+                f"solving the collocation equations of the step from t = {t0!r} to {t1!r} "
+                "again did not reproduce it (no convergence, or an end off the run's next "
+                "row by more than its tolerance); the trajectory's arrays were changed "
+                "after the run?")
+        rows = out[a:b]
+        for i, theta in enumerate((tau[a:b] - t0) / h):
+            dense_eval(float(theta), y0, F, rows[i])
+        start, stop = tau[a:b] == t0, tau[a:b] == t1
+        rows[start], rows[stop] = y[j], y[j + 1]
+        inner = np.flatnonzero(~start & ~stop)
+        if hol and inner.size:
+            moved = np.ascontiguousarray(rows[inner])
+            onto_constraints(kern, tau[a:b][inner], moved, p, n_sens)
+            rows[inner] = moved
     return out
 
 

@@ -204,7 +204,8 @@ def trajectory(scene, method, kern, out, wall, p, t0, t1, n_steps, singular_tol,
     return Trajectory(scene, ts, np.ascontiguousarray(ys), p, method=method, status=status,
                       stop_reason=reason, steps=int(stats[0]), rejected=0,
                       nfev=int(stats[1]), wall_time=wall, kernels=kern,
-                      projected=scene.projected, own=own, singularity=singularity, **kw)
+                      projected=scene.projected, own=own, singularity=singularity,
+                      saved="steps" if save == "steps" else "final", **kw)
 
 
 def _active(g_old, g_new, direction, first) -> bool:

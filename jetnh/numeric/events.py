@@ -24,7 +24,7 @@ attributes. One difference: a root exactly on a step's node (an event ``t - 1`` 
 fixed steps h = 0.01) ends one step and starts the next; scipy counts it in both, jetnh
 once (a zero at the start of a step other than the run's first is the root the previous
 step ended on), so ``terminal=2`` stops at the second root, not at that one twice (the
-``scipy-*`` methods keep scipy's count). Roots are found by Brent's method (scipy's
+``scipy-*`` methods too). Roots are found by Brent's method (scipy's
 ``brentq``, xtol = rtol = 4 eps) on the dense output of DOP853 / DOPRI5 / radau (the
 cubic Hermite interpolant for RK4), inside the compiled loop (``methods._events``). dla
 and dvi evaluate the events at every node as they go and end the run at the node after a

@@ -13,7 +13,7 @@ from dataclasses import dataclass, fields
 from functools import cached_property
 
 #: the format of generated kernel modules (the cache keeps each version apart)
-CODEGEN_VERSION = "13"
+CODEGEN_VERSION = "14"
 
 #: the numba signature of the kernels ``rhs``, ``aux``, ``sing``, ``hol``, ``events``
 #: (t, y, p, out)

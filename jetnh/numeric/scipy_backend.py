@@ -1,5 +1,9 @@
 """scipy's ``solve_ivp`` on a scene's compiled right-hand side (``method="scipy-<M>"``):
-user events and the singularity indicators become scipy events.
+user events and the singularity indicators become scipy events, a root on a step's end
+counted once and an event not finite at the start said, as the compiled methods do.  A
+right-hand side that becomes NaN or infinite stops the run as theirs: a singular stop
+where an indicator explains it, else an ``IntegrationError`` (also where Radau's or
+BDF's Jacobian of finite differences met it).
 
 With holonomic constraints g(t, q) = 0 the one-step methods (RK23, RK45, DOP853, Radau)
 move every accepted step onto g = 0 as jetnh's own loops do (``methods.projection``: the
@@ -16,18 +20,25 @@ projected, their rows drift off g = 0 by the global error, and the run says so
 
 from __future__ import annotations
 
+import math
 import time
 
 import numpy as np
 
 from ..errors import JetnhError
 from . import diagnosis, drift
+from .events import warn_not_finite
 from .methods import SCIPY_METHODS, projection
 from .methods._common import EVENT, SINGULAR
 from .trajectory import Trajectory
 
 #: scipy's methods whose steps are projected onto g = 0 (one-step methods)
 PROJECTED = ("RK23", "RK45", "DOP853", "Radau")
+#: what a user's event that is exactly 0 after t0 gives scipy: a positive value, so that
+#: a root on a step's end is a crossing of that step or of the next, never of both
+#: (scipy takes g_old <= 0 <= g_new, which a 0 at the node meets twice): one root, as
+#: the compiled methods count it (``methods._events``)
+_POSITIVE_ZERO = np.finfo(float).tiny
 
 
 def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_step,
@@ -46,17 +57,24 @@ def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_st
     n = y_init.shape[0]
     n_state = kern.layout.n_state
 
+    failed = []         # the last (t, y) where the right-hand side was not finite
+
     def fun(t, y):
         out = np.empty(n)
-        rhs(float(t), np.ascontiguousarray(y, dtype=float), p, out)
+        y = np.ascontiguousarray(y, dtype=float)
+        rhs(float(t), y, p, out)
+        if not math.isfinite(out.sum()):
+            failed[:] = [(float(t), y.copy())]
         return out
 
     ce = scene.compile_events(events)
     scipy_events = []
     if ce is not None:
+        warn_not_finite(ce, t0, y_init[:n_state], p)
         for f, ev in zip(ce.python_funcs, ce.events):
             def g(t, y, f=f):
-                return f(t, y, p)
+                v = f(t, y, p)
+                return _POSITIVE_ZERO if v == 0.0 and t != t0 else v
             g.terminal = ev.max_events if ev.max_events > 0 else False
             g.direction = ev.direction
             scipy_events.append(g)
@@ -96,9 +114,15 @@ def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_st
         diagnosis.raise_nonfinite(scene, f"scipy-{method}", t0, y_init, kern, p, t0, y_init)
     onto = _onto(scene, sensitivities, p) if method in PROJECTED else None
     tic = time.perf_counter()
-    sol = solve_ivp(fun, (t0, t1), y_init, method=method if onto is None else
-                    _projected(method, onto), t_eval=te_run, rtol=rtol, atol=atol,
-                    max_step=max_step, events=scipy_events or None, **kw)
+    try:
+        sol = solve_ivp(fun, (t0, t1), y_init, method=method if onto is None else
+                        _projected(method, onto), t_eval=te_run, rtol=rtol, atol=atol,
+                        max_step=max_step, events=scipy_events or None, **kw)
+    except (ValueError, np.linalg.LinAlgError):
+        if not failed:
+            raise
+        # (Radau, BDF: a Jacobian of finite differences taken across a NaN)
+        diagnosis.raise_nonfinite(scene, f"scipy-{method}", *failed[0], kern, p, t0, y_init)
     wall = time.perf_counter() - tic
     # no row (an empty t_eval, a stop before its first time): scipy leaves lists
     ts = np.asarray(sol.t, dtype=float).reshape(-1)
@@ -112,14 +136,24 @@ def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_st
         rows = ys[inner]
         onto(ts[inner], rows)
         ys[inner] = rows
-    if ys.size and not np.all(np.isfinite(ys)):
-        bad = int(np.argmax(~np.all(np.isfinite(ys), axis=1)))
-        i = max(bad - 1, 0)
-        diagnosis.raise_nonfinite(scene, f"scipy-{method}", ts[i], ys[i], kern, p, t0,
-                                  y_init)
     status, reason, singularity = (0 if sol.status == 0 else 2), sol.message, None
+    nonfinite = bool(ys.size) and not np.all(np.isfinite(ys))
+    if nonfinite:
+        # as the compiled methods: a singular stop at the last finite row where an
+        # indicator explains it, else an error
+        first = int(np.argmax(~np.all(np.isfinite(ys), axis=1)))
+        i = max(first - 1, 0)
+        idx = (diagnosis.explain_nonfinite(scene, kern, ts[i], ys[i], p, t0, y_init,
+                                           singular_tol) if m and first else -1)
+        if idx < 0:
+            diagnosis.raise_nonfinite(scene, f"scipy-{method}", ts[i], ys[i], kern, p, t0,
+                                      y_init)
+        ts, ys = ts[:first], np.ascontiguousarray(ys[:first])
+        singularity = diagnosis.singularity(scene, kern, idx, ts[i], ys[i], p, t0, y_init,
+                                            singular_tol, nonfinite=True)
+        status, reason = SINGULAR, singularity["reason"]
     kw = {}
-    if sol.status == 1:
+    if sol.status == 1 and not nonfinite:
         hit = [(sol.t_events[k][-1], k) for k in range(len(scipy_events))
                if len(sol.t_events[k]) and getattr(scipy_events[k], "terminal", False)]
         t_hit, k = min(hit, key=lambda x: x[0] * (1 if t1 >= t0 else -1))
@@ -149,8 +183,10 @@ def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_st
     traj = Trajectory(scene, ts, ys, p, method=f"scipy-{method}", status=status,
                       stop_reason=reason, steps=None, rejected=None, nfev=int(sol.nfev),
                       wall_time=wall, kernels=kern, projected=scene.projected,
-                      singularity=singularity, **kw)
-    if sol.status == 1 and t_eval is not None:     # the stop, after the last row: ``final``
+                      singularity=singularity, saved="steps" if t_eval is None else "t_eval",
+                      **kw)
+    if sol.status == 1 and t_eval is not None and not nonfinite:
+        # the stop of an event, after the last row: ``final``
         y_stop = np.array(sol.y_events[k][-1], dtype=float)[None, :]
         if onto is not None:
             onto(np.array([t_hit]), y_stop)

@@ -204,9 +204,13 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
         ctl = Control(rtol, atol_v, first, mx, budget, 0, n_hol, n_coord)
     else:
         if t_eval is not None and not batch:
-            raise JetnhError(f"{m.name} is a fixed-step method and takes no t_eval: run it "
-                             "with n_steps or h and read traj.at(times) (its cubic Hermite "
-                             "interpolant), or use dop853 with t_eval")
+            raise JetnhError(f"{m.name} is a fixed-step method and takes no t_eval: its "
+                             "compiled loop writes a row at every step (or the ends), not at "
+                             "given times, in single runs and ensembles alike. Run it with "
+                             "n_steps or h and read traj.at(times) (its cubic Hermite "
+                             "interpolant, error O(h^4)), choose n_steps so that the times "
+                             "are steps (t0 + k (t1 - t0) / n_steps), or use dop853, dopri5 "
+                             "or radau with t_eval")
         _unused(m.name, first_step=first_step, max_step=max_step)
         steps = arguments.fixed_steps(n_steps, h, t0, t1, m.name, budget)
         if not batch:
@@ -218,10 +222,8 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
         ctl = ctl._replace(n_sens=sens.layout.sensitivity_columns)
     if batch:
         mode = AT_T_EVAL if t_eval is not None else ENDPOINTS
-    # radau's steps depend on the steps before (Newton's starting values, the Jacobian
-    # kept): no re-taking of one step (numeric.dense)
     dense = ends = None
-    if m.solver is not Solver.IMPLICIT and not batch:
+    if not batch:
         dense = {"rtol": rtol, "atol": atol_v, "mode": mode, "ctl": ctl}
         if sens is not None:
             dense["rhs"] = sens

@@ -322,6 +322,9 @@ class Trajectory(Frozen):
     _last = None
     #: ``_dense``: what re-taking a step needs (tolerances, output mode; numeric.dense)
     _dense = None
+    #: which rows a run without ``_dense`` stored (scipy's methods, dla, dvi, rows
+    #: sampled from another run): "steps", "t_eval" or "final" (``Diagnostics.saved``)
+    _saved_rows = "steps"
     status = 0
     #: scipy's lists of event times and states (one per event), made on first read where
     #: the run had no events
@@ -335,13 +338,18 @@ class Trajectory(Frozen):
     def __init__(self, scene, t, y, p, *, method, status, stop_reason, steps, rejected,
                  nfev, wall_time, kernels, projected=None, own=None, events=None,
                  singularity=None, dense=None, segments=None, switches=(),
-                 sensitivities=None):
+                 sensitivities=None, saved="steps"):
         t, y = np.ascontiguousarray(t, dtype=float), np.ascontiguousarray(y, dtype=float)
         t.setflags(write=False)         # (now: the caller's arrays may be these)
         y.setflags(write=False)
         self._fill(scene, (t, y, t.shape[0]), p, method, status, stop_reason,
                    ((steps, rejected, nfev), wall_time, projected), kernels, events,
                    singularity, dense, sensitivities, own, segments, switches)
+        if saved != "steps":
+            if saved not in _SAVED.values():
+                raise ArgumentError(f"saved must be one of {tuple(_SAVED.values())}, "
+                                    f"not {saved!r}")
+            self.__dict__["_saved_rows"] = saved
 
     @classmethod
     def _of_run(cls, scene, rows, p, method, status, stop_reason, counts, kernels, events,
@@ -751,16 +759,11 @@ class Trajectory(Frozen):
 
     def _saved(self) -> str:
         """Which rows the run stored: "steps" (every accepted step), "t_eval" (the
-        output times) or "final" (t0 and the end alone): the output mode of a run with
-        dense output; else told by the rows against the steps (a run that holds fewer
-        rows than its steps and two of them kept its ends)."""
+        output times) or "final" (t0 and the end alone), as the run was made: the
+        output mode of its dense output, or what a run without one said
+        (``saved=``)."""
         d = self._dense
-        if d is not None:
-            return _SAVED[d["mode"]]
-        steps = self._info["steps"]
-        if steps is None or len(self) >= steps + 1:
-            return "steps"
-        return "final" if len(self) == 2 else "t_eval"
+        return self._saved_rows if d is None else _SAVED[d["mode"]]
 
     # ------------------------------------------------------------------ tables, figures
     def to_dataframe(self, diagnostics=True):
@@ -795,7 +798,7 @@ class Trajectory(Frozen):
             Mark the stored rows (the accepted steps) with dots.
         smooth : bool, default True
             Draw the curves through the method's dense output between the rows (dop853,
-            dopri5, rk4); the rows alone where there is none.
+            dopri5, radau, rk4); the rows alone where there is none.
         """
         from .export import plot
 
@@ -817,7 +820,8 @@ class Trajectory(Frozen):
         """The states at ``times`` inside the span, from the method's dense output.
 
         dop853, dopri5: the covering step re-taken, bit for bit what ``t_eval`` gives;
-        rk4: cubic Hermite.  Needs every step stored (no ``t_eval``, ``save="steps"``).
+        radau: the step's collocation polynomial, what ``t_eval`` gives to the run's
+        ``newton_tol``; rk4: cubic Hermite.  Needs every step stored (no ``t_eval``, ``save="steps"``).
         A run that changed split is evaluated in the chart that ran at each time.
 
         Parameters

@@ -207,7 +207,7 @@ def _function(name, layout: Layout, phi_exprs, out_exprs, indices=None,
         pass
     else:
         if callback:                   # a huge kernel is compiled quickly (``quick``)
-            lines[0] = decorator(len(ops))
+            lines[0] = decorator(len(ops), kind=name)
         return (_program(name, ops) + "\n\n"
                 + "\n".join(lines) + f"\n    _B_{name}(t, y, p, out)\n")
     body = _loads(layout)

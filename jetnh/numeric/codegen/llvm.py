@@ -115,10 +115,11 @@ def straight_line(ops: tuple):
     """A numba intrinsic ``body(t, y, p, out)`` that emits ``ops`` (``program``) as LLVM
     instructions: numba types one call instead of every operation (its type inference
     costs about a millisecond per operation), and LLVM compiles the block.  A program
-    above the quick threshold (``quick.quick_ops``) is written as LLVM assembly text and
-    parsed by LLVM (``ir_text``: the same instructions in the same order, a function the
-    intrinsic calls), skipping llvmlite's instruction objects and their printing, most of
-    the compile time left at ``-O0``."""
+    compiled quickly (``quick.quick_cfunc``), or above the ``rhs`` threshold
+    (``quick.quick_ops``), is written as LLVM assembly text and parsed by LLVM
+    (``ir_text``: the same instructions in the same order, a function the intrinsic
+    calls), skipping llvmlite's instruction objects and their printing, most of the
+    compile time left at ``-O0``."""
     from llvmlite import ir
     from numba import types
     from numba.core import cgutils
@@ -128,7 +129,7 @@ def straight_line(ops: tuple):
 
     dbl = ir.DoubleType()
     i64 = ir.IntType(64)
-    as_text = len(ops) > quick_ops()
+    above = len(ops) > quick_ops()
 
     @intrinsic
     def body(typingctx, t, y, p, out):
@@ -136,7 +137,7 @@ def straight_line(ops: tuple):
             mod = builder.module
             ptr = {name: context.make_array(ty)(context, builder, v).data
                    for name, ty, v in zip("ypo", signature.args[1:], args[1:])}
-            if as_text:
+            if above or getattr(context, "jetnh_quick", False):
                 import llvmlite.binding as llvm
 
                 name, text = ir_text(ops)

@@ -10,10 +10,20 @@ at 23 049 (about s^1.5), against 0.3 s and 0.8 s quick (linear), for a kernel ab
 slower per call.  Both are the same arithmetic in the same order: no pass reassociates
 floating-point operations (no fast-math), so the results are bit-for-bit equal.
 
-A kernel is compiled quickly when its straight-line program has more than ``QUICK_OPS``
-instructions (``decorator``); the kernels at or below it keep numba's ``-O3`` and their
-per-call cost.  ``JETNH_QUICK_OPS`` (an integer) moves the threshold; it is part of the
-kernel cache key (``quick_ops``), and the choice is written in the kernel's source.  Numba
+A kernel is compiled quickly when its straight-line program has more instructions than the
+threshold of its kind (``quick_ops``, ``decorator``), chosen by how often it is called:
+``rhs`` at every stage of a step (``QUICK_OPS``); ``aux``, ``sing``, ``hol``, the user
+events and connect's verdicts once a step or less (``QUICK_OPS // 8``); ``jac`` once a step
+at most, and then beside an LU factorisation (``QUICK_OPS // 4``).  The -O3 route costs
+four to six times the quick route's compile time per instruction at any size (its greedy
+register allocation also grows faster than the kernel above ~6 000 instructions) and
+saves about 0.3 ns per instruction and call, so it pays after some 10^5 calls whatever the
+size: a kernel called once a step needs about ten times the steps an ``rhs`` needs.
+Every catalogue model, and the N-trailer up to N = 8, keeps numba's ``-O3`` for ``rhs``,
+``aux`` and ``sing`` (``jac`` too in the catalogue's defaults).  ``JETNH_QUICK_OPS`` (an
+integer) moves the ``rhs`` threshold and the others with it; it is part of the kernel
+cache key (``quick_ops``), the ratios part of the format of generated modules
+(``layout.CODEGEN_VERSION``), and the choice is written in the kernel's source.  Numba
 caches a quick callback like any other: its object code, in the kernel entry, under the
 entry's manifest.
 """
@@ -26,26 +36,39 @@ from functools import cached_property
 
 from ...errors import JetnhError
 
-#: kernels with more straight-line instructions than this are compiled quickly
+#: ``rhs`` kernels (called at every stage) with more straight-line instructions than this
+#: are compiled quickly; kernels called once a step or less at lower thresholds
+#: (``quick_ops``)
 QUICK_OPS = 8000
 
+#: threshold of a kind, as a divisor of the ``rhs`` threshold: ``jac``, and the rest
+#: (``aux``, ``sing``, ``hol``, ``events``, ``verdicts``: once a step or less)
+_DIVISOR = {"rhs": 1, "jac": 4}
+_ONCE_A_STEP = 8
 
-def quick_ops() -> int:
-    """The threshold in force: ``JETNH_QUICK_OPS`` if set, else ``QUICK_OPS``."""
+
+def quick_ops(kind: str = "rhs") -> int:
+    """The threshold in force for kernels of ``kind``: ``JETNH_QUICK_OPS`` (else
+    ``QUICK_OPS``) divided by the kind's divisor (1 for ``rhs``, 4 for ``jac``, 8 for
+    kernels called once a step or less)."""
     value = os.environ.get("JETNH_QUICK_OPS", "").strip()
     if not value:
-        return QUICK_OPS
-    try:
-        return max(0, int(value))
-    except ValueError:
-        raise JetnhError(f"JETNH_QUICK_OPS={value!r} is not an integer; set it to the number "
-                         "of instructions above which kernels are compiled quickly, or "
-                         "unset it for the default") from None
+        threshold = QUICK_OPS
+    else:
+        try:
+            threshold = max(0, int(value))
+        except ValueError:
+            raise JetnhError(f"JETNH_QUICK_OPS={value!r} is not an integer; set it to the "
+                             "number of instructions above which rhs kernels are compiled "
+                             "quickly, or unset it for the default") from None
+    return threshold // _DIVISOR.get(kind, _ONCE_A_STEP)
 
 
-def decorator(n_ops: int, sig: str = "_SIG") -> str:
-    """The decorator line of a callback whose program has ``n_ops`` instructions."""
-    name = "quick_cfunc" if n_ops > quick_ops() else "numba.cfunc"
+def decorator(n_ops: int, sig: str = "_SIG", kind: str | None = None) -> str:
+    """The decorator line of a callback of ``kind`` whose program has ``n_ops``
+    instructions (``kind`` by default "jac" for ``_JAC_SIG``, else "rhs")."""
+    kind = kind or ("jac" if sig == "_JAC_SIG" else "rhs")
+    name = "quick_cfunc" if n_ops > quick_ops(kind) else "numba.cfunc"
     return f"@{name}({sig}, **_CB)"
 
 
@@ -71,6 +94,8 @@ def _quick_cfunc_class():
             return super()._module_pass_manager(**kwargs)
 
     class QuickContext(cpu.CPUContext):
+        jetnh_quick = True                      # read by ``llvm.straight_line``
+
         def init(self):
             super().init()
             self._internal_codegen = QuickCodegen("jetnh.quick")

@@ -22,7 +22,8 @@
   after an accepted step, h kept when the change is within [1, 1.2] (LU reused).
 - Dense output: the collocation polynomial through y, y + Z1, y + Z2, y_new (cubic, no
   evaluation), in the rows of ``_events.dense_eval``: ``t_eval``, events and singular
-  stops as the explicit methods (``loop.after_step``, ``loop.output``).
+  stops as the explicit methods (``loop.after_step``, ``loop.output``); after the run
+  ``collocation`` gives it again from a step's start and size (``Trajectory.at``).
 
 Reference: E. Hairer, G. Wanner, *Solving Ordinary Differential Equations II*, 2nd ed.,
 Springer 1996, section IV.8 (and IV.5 for the collocation form).
@@ -258,6 +259,48 @@ def _dense(y, Z, F):
         F[0, i] = Z[2, i]
         F[2, i] = (g1 - g2) / (c1 - c2)
         F[1, i] = g1 - c1 * F[2, i]
+
+
+def collocation(rhs, jac, t, h, y, p, max_iter=20) -> np.ndarray | None:
+    """The rows F (``_dense``) of the collocation polynomial of the step from (t, y) of
+    size h: the stage equations ``Z = h (A x I) F(y + Z)`` solved by full Newton (the
+    Jacobian ``jac(t, y, p, J)`` at every stage, one 3n x 3n system an iteration) from
+    Z = 0 until the update is at rounding level; None if it does not converge.  The
+    run's own polynomial is this one to its Newton tolerance (``newton_tol``): a step
+    is a function of (t, y, h) up to that tolerance, not of the Newton iterations
+    before it (``numeric.dense``)."""
+    n = y.shape[0]
+    Z = np.zeros((3, n))
+    f = np.empty((3, n))
+    Js = np.empty((3, n, n))
+    U = np.empty(n)
+    M = np.empty((3 * n, 3 * n))
+    last = np.inf
+    for _ in range(max_iter):
+        for j in range(3):
+            U[:] = y + Z[j]
+            rhs(t + C[j] * h, U, p, f[j])
+            jac(t + C[j] * h, U, p, Js[j])
+        r = Z - h * (A @ f)
+        for i in range(3):
+            for j in range(3):
+                M[i * n:(i + 1) * n, j * n:(j + 1) * n] = -h * A[i, j] * Js[j]
+        M[np.diag_indices(3 * n)] += 1.0
+        try:
+            dZ = np.linalg.solve(M, r.ravel()).reshape(3, n)
+        except np.linalg.LinAlgError:
+            return None
+        if not np.all(np.isfinite(dZ)):
+            return None
+        Z -= dZ
+        size = float(np.max(np.abs(dZ) / (np.abs(Z) + np.abs(y) + 1e-300)))
+        # at rounding level, or no longer shrinking there (the rounding of f)
+        if size <= 1e-14 or (size <= 1e-10 and size > 0.5 * last):
+            F = np.empty((3, n))
+            _dense(y, Z, F)
+            return F
+        last = size
+    return None
 
 
 def _solve(rhs_at, jac_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, newton, t_eval,
