@@ -444,6 +444,18 @@ class Scene(Frozen):
             return self._moved({n: self.initial[n] for n in self.state_names}
                                if initial is _KEEP else {} if initial is None else initial,
                                changes.get("t_span", self.t_span))
+        if (changes.keys() <= _RETUNED and self.runtime_params
+                and isinstance(changes["params"], (Mapping, type(None)))):
+            params = self._params(changes["params"] or {})
+            runtime = self.runtime_params
+            if ({k: v for k, v in params.items() if k not in runtime}
+                    == {k: v for k, v in self.params.items() if k not in runtime}):
+                # only run-time parameters changed: the same kernels (``_moved``)
+                initial = changes.get("initial", _KEEP)
+                return self._moved({n: self.initial[n] for n in self.state_names}
+                                   if initial is _KEEP else {} if initial is None
+                                   else initial, changes.get("t_span", self.t_span),
+                                   FrozenDict(params))
         args = dict(system=self.system, principle=self.principle, params=self.params,
                     initial={n: self.initial[n] for n in self.state_names},
                     t_span=self.t_span, form=self.form, convention=self.convention,
@@ -461,9 +473,10 @@ class Scene(Frozen):
             new._memo.update(self._shared_memo())
         return new
 
-    def _moved(self, initial, t_span) -> "Scene":
-        """``replace(initial=..., t_span=...)``: this scene with other initial values and
-        time span, its other attributes (checked once) and its memo's shared values
+    def _moved(self, initial, t_span, params=None) -> "Scene":
+        """``replace(initial=..., t_span=...)``, and ``params`` (checked) where only
+        run-time parameters change: this scene with other initial values, time span and
+        run-time parameter values, its other attributes (checked once) and its memo's shared values
         (``_SHARED``, and ``_p``) taken over rather than made anew.  The most common
         initial values (a dict of every state, no dependent velocity, as floats, on a
         scene without holonomic constraints whose kernels are loaded) are checked and
@@ -488,6 +501,9 @@ class Scene(Frozen):
         if t_span is not self.t_span:
             d["t_span"] = t_span = self._t_span(t_span)
             memo.pop("quick", None)     # (the quick plans: of this span)
+        if params is not None:
+            d["params"] = params
+            memo["_p"] = p = np.array([params[n] for n in self.runtime_params], dtype=float)
         new = _new(Scene)
         _setattr(new, "__dict__", d)
         if (route is not None and type(initial) is dict and route[1] is not None
@@ -995,6 +1011,8 @@ _new, _setattr = object.__new__, object.__setattr__
 _NOTHING = FrozenDict()
 #: what ``replace`` changes in a copy of the scene (``_moved``)
 _MOVED = frozenset(("initial", "t_span"))
+#: and with run-time parameter values (``params``, the others unchanged)
+_RETUNED = frozenset(("params", "initial", "t_span"))
 #: the plans of a scene that kept none (``run``: its key is hashed all the same)
 _NONE_KEPT: dict = {}
 #: the dtype of the arrays a run takes as they are (numpy's one instance of it)
