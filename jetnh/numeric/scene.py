@@ -171,11 +171,15 @@ class Scene(Frozen):
         return arguments.time_span(t_span)
 
     def _params(self, params) -> dict[str, float]:
-        needed = {s.name for s in self.system.parameters}
-        J = self.system.J
-        known = {s.name for s in J.q + J.qd} | {J.t.name} | set(self.multipliers)
-        for expr in self.integrals.values():
-            needed |= {s.name for s in expr.free_symbols if s.name not in known}
+        needed = self.__dict__.get("_param_names")
+        if needed is None:      # (in ``__init__``: found once)
+            needed = {s.name for s in self.system.parameters}
+            J = self.system.J
+            known = {s.name for s in J.q + J.qd} | {J.t.name} | set(self.multipliers)
+            for expr in self.integrals.values():
+                needed |= {s.name for s in expr.free_symbols if s.name not in known}
+            #: the names of the parameters (of the system and of the integrals)
+            self._param_names = needed = frozenset(needed)
         out = {}
         given = {**{s.name: v for s, v in self.system.defaults.items()}, **dict(params)}
         for k, v in given.items():
@@ -185,7 +189,7 @@ class Scene(Frozen):
                     f"params has {name!r}, which is not a parameter of this system; its "
                     f"parameters are {sorted(needed) or 'none'}")
             out[name] = arguments.real(v, f"parameter {name!r}")
-            if not np.isfinite(out[name]):
+            if not math.isfinite(out[name]):
                 raise JetnhError(f"parameter {name!r} is {out[name]}; give a finite value")
         missing = sorted(needed - set(out))
         if missing:
