@@ -480,15 +480,15 @@ class Scene(Frozen):
     def _moved(self, initial, t_span, params=None) -> "Scene":
         """``replace(initial=..., t_span=...)``, and ``params`` (checked) where only
         run-time parameters change: this scene with other initial values, time span and
-        run-time parameter values, its other attributes (checked once) and its memo's shared values
-        (``_SHARED``, and ``_p``) taken over rather than made anew.  The most common
-        initial values (a dict of every state, no dependent velocity, as floats, on a
-        scene without holonomic constraints whose kernels are loaded) are checked and
-        their dependent velocities found in one compiled call (``_dv_route``; as
-        ``_initial`` would: the same floats, else None and the general route, which names
-        what is wrong), the state array kept as it is (the direct runs' ``_y0``) and
-        ``initial`` and ``y0`` made from it when read (``_made_initial``, ``_made_y0``);
-        others by ``_initial``."""
+        run-time parameter values, its other attributes (checked once) and its memo's
+        shared values (``_SHARED``, and ``_p``) taken over rather than made anew
+        (``_moving``).  The most common initial values (a dict of every state, no
+        dependent velocity, as floats, on a scene without holonomic constraints whose
+        kernels are loaded) are checked and their dependent velocities found in one
+        compiled call (``_dv_route``: the floats ``_initial`` finds, else the general
+        route, which names what is wrong), the state array kept as it is (the direct
+        runs' ``_y0``) and ``initial`` and ``y0`` made of them when first read
+        (``frozen.made``); other initial values by ``_initial``."""
         own = self._memo
         hit = own.get("moved")
         if hit is None or hit[0] != len(own) or hit[1] is None:

@@ -1,14 +1,15 @@
 """An initial state's floats checked and its dependent velocities, in one compiled call.
 
-``floats()(sing, sing_sizes, aux, aux_sizes, n_ind, n_dep, margin, t, y, p, out)`` does what ``Scene`` did in Python with two
-kernel calls (``calls.Kernel``) and the checks around them: whether the state ``y`` is
-finite, every singularity indicator of the ``sing`` kernel finite and at least ``margin``
-from zero, and the first ``n_dep`` outputs of the ``aux`` kernel (phi^alpha) finite; each
-"finite" as Python's ``math.isfinite(sum(values))`` decides it (plain left-to-right
-double sums: a NaN, an infinity or an overflow of the sum fails), so that the answer is
-the one the Python checks gave.  The kernels are called through the trampolines'
-intrinsic (``calls._call_at``) after the same size checks (``calls._fits``); compiled
-once for all scenes into the signed store (``loop_cache``).
+``floats()(sing, sing_sizes, aux, aux_sizes, n_ind, n_dep, margin, t, y, p, out)`` is
+the check ``Scene.replace`` makes of the most common initial values, in one call instead
+of two kernel calls (``calls.Kernel``) and the Python around them: whether the state ``y``
+is finite, every singularity indicator of the ``sing`` kernel finite and at least
+``margin`` from zero, and the first ``n_dep`` outputs of the ``aux`` kernel (phi^alpha)
+finite; each "finite" as Python's ``math.isfinite(sum(values))`` decides it (plain
+left-to-right double sums: a NaN, an infinity or an overflow of the sum fails).  The
+kernels are called through the trampolines' intrinsic (``calls._call_at``) after the same
+size checks (``calls._fits``); compiled once for all scenes into the signed store
+(``loop_cache``).
 """
 
 from __future__ import annotations
