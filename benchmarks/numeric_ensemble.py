@@ -25,6 +25,12 @@ evaluations over those of the costlier half.  The drivers hand out runs one by o
 instead (``prange``: each thread takes the next run; the thread pool: the next chunk), so
 their bound is set by the largest run (``largest_run_share``).  Both come from the
 evaluation counts, not the clock, so they hold on a loaded machine too.
+
+"Serial Python" of ``jn.sweep`` (``sweep_python_cpu_s``): its CPU time beyond that of the
+thread-pool ensemble it runs (the grid, the columns, the DataFrame: work on one thread,
+outside the compiled driver); ``two_core_bound``: the speed-up over serial that leaves
+on two idle cores (Amdahl, the driver's work split evenly).  CPU times again, so this
+holds under load too.
 """
 
 import time
@@ -77,8 +83,15 @@ def single_per_eval(sc, kw, reps):
     return cpu / tr.diagnostics.rhs_evaluations
 
 
+#: seconds of rest before each timed call: numba's OpenMP threads spin on after a
+#: ``prange`` region (~4 ms of a core here), which would count against, and compete
+#: with, whichever mode comes next (jn.sweep, measured after prange)
+SETTLE = 0.05
+
+
 def _timed(f):
-    """``(wall seconds, CPU seconds of the process, f())``."""
+    """``(wall seconds, CPU seconds of the process, f())``, after ``SETTLE``."""
+    time.sleep(SETTLE)
     tic, cpu = time.perf_counter(), time.process_time()
     out = f()
     return time.perf_counter() - tic, time.process_time() - cpu, out
@@ -130,9 +143,12 @@ def measure(make, n_runs_list, reps, loop_max):
                                    per_eval_vs_single_run=cpu[m] / nfev / single,
                                    bitwise_equal_to_serial=bool(np.array_equal(e.y, ref.y)))
         t, df = best_sweep
+        extra = max(cpu_sweep - cpu["threads x2"], 0.0)
         row["modes"]["jn.sweep (threads)"] = dict(
             wall_s=t, rhs_per_s=nfev / t, speedup_vs_serial=best["serial"][0] / t,
             per_eval_vs_single_run=cpu_sweep / nfev / single,
+            sweep_python_cpu_s=extra,
+            two_core_bound=1.0 / (extra / cpu["serial"] + (1 - extra / cpu["serial"]) / 2),
             bitwise_equal_to_serial=bool(np.array_equal(
                 df[list(sc.state_names)].to_numpy(), ref.y[:, -1])))
         if n_runs <= loop_max:
@@ -158,6 +174,8 @@ def measure(make, n_runs_list, reps, loop_max):
                   f"{d['rhs_per_s'] / 1e6:7.2f} M rhs/s  x{d['speedup_vs_serial']:.2f}  "
                   + (f"per eval / single run {d['per_eval_vs_single_run']:.2f}  "
                      if "per_eval_vs_single_run" in d else "")
+                  + (f"serial Python {d['sweep_python_cpu_s'] * 1e3:.2f} ms "
+                     f"(bound x{d['two_core_bound']:.2f})  " if "two_core_bound" in d else "")
                   + f"bitwise {d['bitwise_equal_to_serial']}")
     return dict(problem=name, rows=rows)
 

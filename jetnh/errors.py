@@ -48,7 +48,13 @@ class ArgumentError(JetnhError, ValueError):
 
 
 class IntegrationError(JetnhError, RuntimeError):
-    """A numerical integration that cannot go on."""
+    """A numerical integration that cannot go on.  ``stop``: where the run stopped and
+    what it had done by then, where known (a dict with ``t``, ``steps``, ``rejected``,
+    ``rhs_evaluations``; a count None when the method does not keep it), else None."""
+
+    def __init__(self, message: str = "", *, argument: str | None = None, stop=None):
+        super().__init__(message, argument=argument)
+        self.stop = stop
 
 
 class ConnectError(JetnhError, RuntimeError):

@@ -31,12 +31,14 @@ Columns, in this order:
   integral ``I`` of the scene), and ``events[E]``/``first[E]`` for user events.  NaN in
   ``energy_drift`` (or ``drift[I]``) of a successful row is no drift: the energy could
   not be evaluated there (it overflows, or leaves the domain of an expression, at the
-  start); the row's other columns stay valid.  ``residual_max``, ``energy_drift`` and
-  ``drift[I]`` cover the rows a run stores, not every step: dop853, dopri5, rk4 and
-  radau store t0 and the final row (or the ``times``), so ``energy_drift`` is
-  ``|E(t_final) - E(t0)|`` there, which can be smaller than the same run's
-  ``Trajectory.diagnostics.energy_drift`` (the largest over its steps); dla, dvi and
-  ``scipy-<M>`` without ``times`` store every step.  A run stopped at a singular
+  start); the row's other columns stay valid.  ``residual_max``, ``energy_drift``,
+  ``drift[I]`` (and ``holonomic_residual_max`` with holonomic constraints) have one
+  definition whatever the method: they are taken over a point's output rows, its final
+  row or its rows at ``times``, against E and I at its initial state, never over its
+  steps; so without ``times`` ``energy_drift`` is ``|E(t_final) - E(t0)|``, which can be
+  smaller than the same run's ``Trajectory.diagnostics.energy_drift`` (the largest over
+  the rows it stored).  dla and dvi give their own discrete energy, residual and
+  velocities there, as their trajectories do.  A run stopped at a singular
   configuration leaves out the row of its stop (next to the singular set its dependent
   velocities are a near 0/0, as ``Diagnostics.stop_row`` reports): NaN in these
   columns where that row is the one stored.  ``steps`` and ``rejected`` are
@@ -299,13 +301,18 @@ def _unique(keys) -> list[str]:
 
 def _points(grid):
     """Names and the values [n_points, n_names] of every grid point."""
-    import itertools
-
     import numpy as np
     import pandas as pd
 
-    if isinstance(grid, pd.DataFrame):
-        grid = grid.to_dict("records")
+    if isinstance(grid, pd.DataFrame):      # its columns checked as columns
+        names = _unique(grid.columns)
+        if not names or not len(grid):
+            raise ArgumentError(f"the grid has no {'points' if names else 'columns'}; give a "
+                                "DataFrame with a column for each parameter or initial "
+                                "value and a row for each point")
+        return names, np.stack([_numbers(grid.iloc[:, j].to_numpy(),
+                                         f"grid values of {name!r}")
+                                for j, name in enumerate(names)], axis=1)
     if isinstance(grid, Mapping):
         names = _unique(grid)
         if not names:
@@ -317,7 +324,9 @@ def _points(grid):
             if a.size == 0:
                 raise ArgumentError(f"grid values of {name!r} are empty; give at least one")
             axes.append(a)
-        return names, np.array(list(itertools.product(*axes)), dtype=float)
+        # the Cartesian product, the last axis varying fastest
+        return names, np.stack([g.reshape(-1) for g in np.meshgrid(*axes, indexing="ij")],
+                               axis=1)
     if isinstance(grid, (list, tuple)):
         if not grid:
             raise ArgumentError("the grid has no points; give a list of points such as "
@@ -441,11 +450,6 @@ def _run_chunk(scene, Y0, P, run, outputs, parallel) -> dict:
     cols["t_final"] = diag.pop("t_final")
     events = {k: diag.pop(k) for k in list(diag) if k.startswith(("events[", "first["))}
     cols.update(diag)
-    lay = ens.layout
-    start = lay.energy_index + 1
-    for i, name in enumerate(lay.integrals):
-        cols[f"drift[{name}]"] = np.fmax.reduce(
-            np.abs(ens[name] - ens.aux_initial[:, start + i, None]), axis=1)
     cols.update(events)
     return cols
 
@@ -472,14 +476,21 @@ def _run_points(scene, Y0, P, run, outputs) -> dict:
             "steps": np.zeros(n), "rejected": np.zeros(n),
             "rhs_evaluations": np.zeros(n, dtype=np.int64),
             "residual_max": np.full(n, np.nan), "energy_drift": np.full(n, np.nan)}
+    if lay.holonomic:
+        diag["holonomic_residual_max"] = np.full(n, np.nan)
     drift = {f"drift[{name}]": np.full(n, np.nan) for name in lay.integrals}
     events = {}
     for i in range(n):
         params = P[i] if len(scene.runtime_params) else None
         try:
             traj = scene.run(y0=Y0[i], params=params, t_eval=times, **opts)
-        except IntegrationError as exc:
+        except IntegrationError as exc:     # its counts up to the stop, where known
             diag["status"][i], diag["stop_reason"][i] = NONFINITE, str(exc)
+            stop = exc.stop or {}
+            diag["t_final"][i] = stop.get("t", np.nan)
+            for key in ("steps", "rejected"):       # None: not known (scipy's), NaN
+                diag[key][i] = np.nan if stop.get(key) is None else stop[key]
+            diag["rhs_evaluations"][i] = stop.get("rhs_evaluations") or 0
             continue
         for label, where in labels:
             if where is None:
@@ -495,9 +506,9 @@ def _run_points(scene, Y0, P, run, outputs) -> dict:
         for key, v in (("steps", d.steps), ("rejected", d.rejected)):
             diag[key][i] = np.nan if v is None else v       # None: scipy's, unknown
         diag["rhs_evaluations"][i] = d.rhs_evaluations
-        diag["residual_max"][i], diag["energy_drift"][i] = d.residual_max, d.energy_drift
-        for name, v in d.integral_drift.items():
-            drift[f"drift[{name}]"][i] = v
+        figures = _figures(scene, traj, times, Y0[i], P[i])
+        for key in figures:
+            (diag if key in diag else drift)[key][i] = figures[key]
         for name, te in zip(traj.event_names, traj.t_events):
             events.setdefault(f"events[{name}]", np.zeros(n, dtype=np.int64))[i] = len(te)
             events.setdefault(f"first[{name}]", np.full(n, np.nan))[i] = (
@@ -506,6 +517,45 @@ def _run_points(scene, Y0, P, run, outputs) -> dict:
         if not np.isnan(diag[key]).any():
             diag[key] = diag[key].astype(np.int64)
     return {**cols, **diag, **drift, **events}
+
+
+def _figures(scene, traj, times, y0, p) -> dict:
+    """``residual_max``, ``energy_drift``, ``drift[I]`` (and ``holonomic_residual_max``)
+    of a point's run ``traj`` as the compiled ensemble gives them
+    (``Ensemble.diagnostics``), whatever rows the method stored: over its output rows
+    (its final row, or its rows at ``times``), a singular stop's row left out, against E
+    and I at the initial state ``y0`` (the run's first row when that is t0)."""
+    import numpy as np
+
+    from .numeric.methods._common import SINGULAR
+
+    lay = scene.kernels.layout
+    keep = (np.arange(len(traj))[-1:] if times is None else
+            np.flatnonzero(np.isin(traj.t, times)))
+    if traj.status == SINGULAR:
+        keep = keep[traj.t[keep] != traj.t_final]
+    e = lay.energy_index
+    if len(traj) and traj.t[0] == scene.t_span[0]:
+        start = {"energy": traj.energy[0], **{name: traj[name][0] for name in lay.integrals}}
+    else:               # (rows at times after t0 alone: E and I at y0 by the kernels)
+        aux0 = np.empty(lay.n_aux)
+        scene.kernels.aux(scene.t_span[0], y0.copy(), p.copy(), aux0)
+        start = {"energy": aux0[e], **{name: aux0[e + 1 + j]
+                                       for j, name in enumerate(lay.integrals)}}
+
+    def largest(a):
+        """The largest entry that is not NaN (NaN for none, as the ensemble's)."""
+        a = np.asarray(a)[~np.isnan(a)]
+        return float(a.max()) if a.size else np.nan
+
+    out = {"residual_max": (largest(np.abs(traj.residual[keep]))
+                            if lay.dependent_velocities else 0.0),
+           "energy_drift": largest(np.abs(traj.energy[keep] - start["energy"]))}
+    if lay.holonomic:
+        out["holonomic_residual_max"] = largest(np.abs(traj.holonomic_residual[keep]))
+    for name in lay.integrals:
+        out[f"drift[{name}]"] = largest(np.abs(traj[name][keep] - start[name]))
+    return out
 
 
 class CompiledScene:

@@ -144,6 +144,7 @@ def test_ensemble_singular_stops_per_run():
         assert abs(ens.t_final[r] - t_hit) < 1e-9
         assert "x_t**2 + y_t**2" in ens.stop_reason(r)
     assert ens.stop_reason(3) == "reached the end of the interval"
+    assert ens.stop_reasons == [ens.stop_reason(r) for r in range(4)]
 
 
 def test_ensemble_events(disk):
@@ -162,6 +163,7 @@ def test_ensemble_events(disk):
             if len(tr.t_events[k]):
                 assert ens.event_first[r, k] == tr.t_events[k][0]
     assert (ens.status == EVENT).any()
+    assert ens.stop_reasons == [ens.stop_reason(r) for r in range(N)]
 
 
 def test_nonfinite_runs():

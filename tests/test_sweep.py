@@ -150,6 +150,23 @@ def test_failing_points_keep_their_rows(failing):
     assert np.isnan(df["x"][1]) and df["x"][0] == pytest.approx(2.0, rel=1e-12)
 
 
+def test_failed_point_methods_report_their_steps(failing):
+    """A dla or scipy point that fails keeps the counts of the run up to its stop: dla's
+    steps are those of the same steps run to just before the failing one."""
+    _, blow = failing
+    df = jn.sweep(blow, {"c": [0.0, 3.0]}, method="dla", n_steps=200)
+    assert list(df["status"]) == [FINISHED, NONFINITE]
+    steps, t_stop = int(df["steps"][1]), df["t_final"][1]
+    assert 0 < steps < 200 and t_stop == pytest.approx(steps / 200, rel=1e-12)
+    before = blow.replace(params={"c": 3.0}, t_span=(0.0, t_stop)).run(method="dla",
+                                                                        n_steps=steps)
+    assert before.success and before.diagnostics.steps == steps
+    assert df["rhs_evaluations"][1] > before.diagnostics.rhs_evaluations
+    df = jn.sweep(blow, {"c": [800.0]}, method="scipy-RK45")
+    assert df["status"][0] == NONFINITE and np.isnan(df["steps"][0])   # scipy: not counted
+    assert df["t_final"][0] == 0.0 and df["rhs_evaluations"][0] == 1
+
+
 @pytest.mark.parametrize("grid, options, words", [
     ({"Q": [1.0]}, {}, "neither a parameter (R, I1, I2) nor a state"),
     ({}, {}, "the grid is empty"),
@@ -162,6 +179,12 @@ def test_failing_points_keep_their_rows(failing):
     ({"R": np.array([False, True])}, {}, "grid values of 'R' must be a number, got False"),
     ({"R": np.True_}, {}, "grid values of 'R' must be a number, got True"),
     ([{"R": 1.0}, {"R": True}], {}, "grid point 1 must be a number, got True"),
+    (pd.DataFrame({"R": [1.0, 2.0], "phi_t": [True, False]}), {},
+     "grid values of 'phi_t' must be a number, got True"),
+    (pd.DataFrame({"R": ["1.0"]}), {}, "strings are never parsed"),
+    (pd.DataFrame({"R": [1.0, np.inf]}), {}, "non-finite"),
+    (pd.DataFrame({"R": []}), {}, "the grid has no points"),
+    (pd.DataFrame(index=range(3)), {}, "the grid has no columns"),
     ({"R": [[1.0, 2.0]]}, {}, "1-d sequence"),
     ({sp.Symbol("R"): [1.0], "R": [2.0]}, {}, "gives R twice"),
     ({"x_t": [1.0]}, {}, "a dependent velocity"),
@@ -234,8 +257,10 @@ def test_point_methods_are_the_single_runs(disk, method, options):
                       **options)
         assert [df[n][r] for n in names] == [tr.final[n] for n in names]    # to the bit
         d = tr.diagnostics
-        assert df["residual_max"][r] == d.residual_max
-        assert df["drift[p_psi]"][r] == d.integral_drift["p_psi"]
+        # over the output row (the final one), against the start, whatever rows it stored
+        assert df["residual_max"][r] == np.max(np.abs(tr.residual[-1]))
+        assert df["drift[p_psi]"][r] == abs(tr["p_psi"][-1] - tr["p_psi"][0])
+        assert df["energy_drift"][r] == abs(tr.energy[-1] - tr.energy[0])
         assert df["stop_reason"][r] == d.stop_reason
         if d.steps is None:     # scipy does not count its steps: unknown, not 0
             assert np.isnan(df["steps"][r]) and np.isnan(df["rejected"][r])
@@ -246,6 +271,31 @@ def test_point_methods_are_the_single_runs(disk, method, options):
     # second order (dla, 200 steps) or 1e-10 (scipy) against dop853
     tol = 1e-3 if method == "dla" else 1e-7
     assert np.max(np.abs(df[["x", "y"]].to_numpy() - ref[["x", "y"]].to_numpy())) < tol
+
+
+def test_energy_drift_has_one_definition_on_every_route():
+    """energy_drift over the output rows against E(t0) whether the point ran as a compiled
+    ensemble (dop853) or as Scene.run (scipy-DOP853, which stores every step): an
+    end-point difference without times, the largest over the times with them (t0 not
+    among them), each against the rows of single runs."""
+    J = jn.JetSpace("x y z")
+    x, y, _ = J.q
+    xd, yd, zd = J.qd
+    L = (xd**2 + yd**2 + zd**2) / 2 - (x**2 + y**2) / 2
+    sc = Scene(jn.System(J, L, [zd - y * xd], dependent=[J.q[2]]), "chetaev",
+               initial=dict(x=0.3, y=0.8, z=0.0, x_t=0.5, y_t=-0.2), t_span=(0.0, 20.0))
+    opts, times = dict(rtol=1e-4, atol=1e-6), [1.0, 2.5, 20.0]
+    steps = sc.run(method="scipy-DOP853", **opts)
+    e0 = steps.energy[0]
+    for method in ("dop853", "scipy-DOP853"):
+        end = sc.run(method=method, save="final", **opts).energy[-1]
+        at = sc.run(method=method, t_eval=times, **opts).energy
+        df = jn.sweep(sc, {"x_t": [0.5]}, method=method, **opts)
+        assert df["energy_drift"][0] == abs(end - e0)
+        df = jn.sweep(sc, {"x_t": [0.5]}, method=method, times=times, **opts)
+        assert df["energy_drift"][0] == np.max(np.abs(at - e0))
+    # (the largest over scipy's steps is another figure: the single run's own)
+    assert steps.diagnostics.energy_drift > abs(steps.energy[-1] - e0)
 
 
 def test_point_methods_times_and_their_limits(disk):
@@ -334,9 +384,9 @@ def test_killed_worker_loses_no_rows(disk, client):
     killed = {}
 
     def kill_a_busy_worker(done, total):
-        if killed:
-            return
         busy = [w for w, keys in client.processing().items() if keys]
+        if killed or not busy:          # (none busy between two chunks: the next report)
+            return
         pid = client.run(os.getpid, workers=busy[:1])[busy[0]]
         os.kill(pid, signal.SIGKILL)
         killed.update(pid=pid, done=done, total=total)

@@ -348,7 +348,7 @@ def overflow_hint(far) -> str:
 
 
 def raise_nonfinite(scene, method, t, y, kern=None, p=None, t0=None, y_init=None,
-                    checked=True):
+                    checked=True, stop=None):
     state = ", ".join(f"{n} = {v:.17g}" for n, v in zip(scene.state_names, y))
     extra = ""
     regular = False
@@ -386,4 +386,4 @@ def raise_nonfinite(scene, method, t, y, kern=None, p=None, t0=None, y_init=None
                 "smaller h (more n_steps) or method='radau'")
     raise IntegrationError(
         f"{method}: the right-hand side or the state became NaN or infinite in the step "
-        f"from t = {t:.17g}; state there: {state}{extra}. {why}")
+        f"from t = {t:.17g}; state there: {state}{extra}. {why}", stop=stop)

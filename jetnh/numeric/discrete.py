@@ -170,7 +170,9 @@ def trajectory(scene, method, kern, out, wall, p, t0, t1, n_steps, singular_tol,
             raise IntegrationError(
                 f"{name}: {what} in the step from t = {t_last:.17g} "
                 f"(h = {(t1 - t0) / n_steps:.3g}); take a smaller step, or the discrete "
-                "constraint has no nearby solution there")
+                "constraint has no nearby solution there",
+                stop=dict(t=float(t_last), steps=int(stats[0]), rejected=0,
+                          rhs_evaluations=int(stats[1])))
         status = SINGULAR
     rows = rows[:n_out]
     ind = [J.q.index(s) for s in scene.system.independent]

@@ -601,6 +601,15 @@ class Ensemble(Frozen):
         e = self._regular(self.aux[:, :, i:i + 1])
         return _largest(np.abs(e - self.aux_initial[:, i, None, None]))
 
+    @property
+    def integral_drift(self) -> dict[str, np.ndarray]:
+        """First integral name -> max ``|I - I(t0)|`` over each run's output rows, the
+        rows of ``energy_drift`` (a singular stop's left out)."""
+        start = self.layout.energy_index + 1
+        return {name: _largest(np.abs(self._regular(self.aux[:, :, start + j:start + j + 1])
+                                      - self.aux_initial[:, start + j, None, None]))
+                for j, name in enumerate(self.layout.integrals)}
+
     def _regular(self, a) -> np.ndarray:
         """``a`` ([n_runs, n_times, columns] of the aux rows) with NaN in the row of each
         run's singular stop, where it is one (``save="final"``: the run's one row)."""
@@ -630,7 +639,15 @@ class Ensemble(Frozen):
 
     @property
     def stop_reasons(self) -> list[str]:
-        return [self.stop_reason(r) for r in range(self.n_runs)]
+        """``stop_reason`` of every run (the status's text looked up once per run, the
+        runs that stopped singular, at an event or past a chart's edge worded one by
+        one)."""
+        status = self.status
+        out = [STATUS_TEXT[s] for s in status.tolist()]
+        for r in {*self._reasons, *np.flatnonzero((status == SINGULAR)
+                                                  | (status == EVENT)).tolist()}:
+            out[r] = self.stop_reason(r)
+        return out
 
     def diagnostics(self) -> dict[str, np.ndarray]:
         """Per-run diagnostics as arrays (for tables)."""
@@ -642,6 +659,7 @@ class Ensemble(Frozen):
         if self.switching:
             out["switches"] = np.array([len(self.switches.get(r, ()))
                                         for r in range(self.n_runs)])
+        out.update((f"drift[{name}]", v) for name, v in self.integral_drift.items())
         for k, name in enumerate(self.event_names):
             out[f"events[{name}]"] = self.event_counts[:, k]
             out[f"first[{name}]"] = self.event_first[:, k]

@@ -111,7 +111,9 @@ def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_st
         fresh[1:] = np.diff(t_eval) != 0
         te_run, repeat = t_eval[fresh], np.cumsum(fresh) - 1
     if not np.all(np.isfinite(fun(t0, y_init))):
-        diagnosis.raise_nonfinite(scene, f"scipy-{method}", t0, y_init, kern, p, t0, y_init)
+        diagnosis.raise_nonfinite(scene, f"scipy-{method}", t0, y_init, kern, p, t0, y_init,
+                                  stop=dict(t=float(t0), steps=None, rejected=None,
+                                            rhs_evaluations=1))
     onto = _onto(scene, sensitivities, p) if method in PROJECTED else None
     tic = time.perf_counter()
     try:
@@ -147,7 +149,9 @@ def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_st
                                            singular_tol) if m and first else -1)
         if idx < 0:
             diagnosis.raise_nonfinite(scene, f"scipy-{method}", ts[i], ys[i], kern, p, t0,
-                                      y_init)
+                                      y_init, stop=dict(t=float(ts[i]), steps=None,
+                                                        rejected=None,
+                                                        rhs_evaluations=int(sol.nfev)))
         ts, ys = ts[:first], np.ascontiguousarray(ys[:first])
         singularity = diagnosis.singularity(scene, kern, idx, ts[i], ys[i], p, t0, y_init,
                                             singular_tol, nonfinite=True)
