@@ -17,7 +17,9 @@ in a fresh process of its own (the trees alternating within each of ``--rounds``
 rounds; each figure the best over the rounds), the calls interleaved, each figure the
 10th percentile of single calls:
 
-- ``run``: the switching run (``scene.run``);
+- ``run``: the switching run (``scene.run``; where the tree has ``chart_driver``, its
+  driver compiled ahead, as ``jetnh cache warm`` does, and the run repeated, so that
+  it is one compiled call);
 - ``fixed``: the same run with ``split="fixed"``: it keeps its split (the edge, measure
   1/8, is not singular), takes the same steps up to the edge and about as many after:
   the floor a switching run adds to;
@@ -64,6 +66,14 @@ def costs(calls: int) -> dict:
 
     from jetnh.numeric import atlas
 
+    try:            # (a tree whose switching runs are one compiled call: compiled ahead,
+        from jetnh.numeric import precompile    # as ``jetnh cache warm`` does)
+
+        for name in ("atlas:dop853:final",):
+            if name in precompile.LOOPS:
+                precompile.compile_loop(name)
+    except ImportError:
+        pass
     found = {c.label: c for c in cases(False)}
     timed, out = [], {}
     for label in WATCHED:

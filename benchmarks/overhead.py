@@ -29,7 +29,8 @@ fresh processes with empty numba and kernel caches, the trees alternating within
    benchmark: ``split``, ``singular``, ``t_span`` too), ``scene.run(y0=...)``,
    ``scene.run(t_eval=...)`` (five times), ``scene.run`` on a new time span each call
    (a loop over the final time), ``scene.replace(initial=...).run()`` (a new initial
-   state each call, as a shooting loop does) and an ensemble of one run, each with one
+   state each call, as a shooting loop does), ``scene.replace(params=...).run()`` of a
+   run-time parameter beside ``scene.run(params=...)`` and an ensemble of one run, each with one
    step (T = 1e-6, ``save="final"``), and ensembles of eight such runs on two threads and
    serially (a small ensemble's fixed cost); the ratios to the bare call.  Also the bare
    call of ``run(t_eval=...)``'s own loop (which evaluates the dense output there) and the
@@ -149,6 +150,9 @@ nfev = {"3-step call": int(three(0)[4][2]), "long call": int(long(0)[4][2])}
 states = {n: short.initial[n] for n in short.state_names}
 inis = [dict(states, phi_t=states["phi_t"] + 1e-3 * k) for k in range(16)]
 y8 = np.repeat(y0[None, :], 8, axis=0)
+tuned = Scene(short.system, "chetaev", initial=states, t_span=short.t_span,
+              runtime_params=["R"]).compile()
+prms = [dict(tuned.params, R=tuned.params["R"] * (1.0 + 1e-3 * k)) for k in range(16)]
 te5 = np.linspace(0.0, 1e-6, 5)
 calls = {
     "bare call": bare(1e-6, ctl),
@@ -167,6 +171,10 @@ calls = {
         t_span=(0.0, 1e-6 * (1.0 + i * 1e-4)), save="final"),
     "replace(initial=...).run()": lambda i: short.replace(initial=inis[i % 16]).run(
         save="final"),
+    # a loop over a run-time parameter: a copy of the scene, and run(params=) beside it
+    "replace(params=...).run()": lambda i: tuned.replace(params=prms[i % 16]).run(
+        save="final"),
+    "run(params=...)": lambda i: tuned.run(params={"R": prms[i % 16]["R"]}, save="final"),
     "ensemble of one": lambda i: short.ensemble(y0[None, :], save="final"),
     # eight runs: the fixed cost of a small ensemble, on two threads and serially
     "ensemble of 8 (threads)": lambda i: short.ensemble(y8, save="final", workers=2),
@@ -419,7 +427,10 @@ def main(argv=None):
            if TEVAL in a else "")
         + f", on a new time span "
         f"each call {a['run(t_span=...), a new span each call'] / a['bare call']:.2f}x, "
-        f"replace(initial=...).run() {a['replace(initial=...).run()'] / a['bare call']:.2f}x,"
+        f"replace(initial=...).run() {a['replace(initial=...).run()'] / a['bare call']:.2f}x "
+        f"({a['replace(initial=...).run()'] / a['run(y0=...)']:.2f}x run(y0=...)),"
+        + (f" replace(params=...).run() {a['replace(params=...).run()'] / a['run(params=...)']:.2f}x"
+           f" run(params=...)," if "run(params=...)" in a else "") +
         f" an ensemble of one {a['ensemble of one'] / a['bare call']:.2f}x"
         + (f"; the floor of a run on this tree {a[FLOOR] / a['bare call']:.2f}x" if FLOOR in a
            else "")

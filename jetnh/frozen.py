@@ -104,6 +104,26 @@ class memo:
         obj._refuse(self.name)
 
 
+class made:
+    """An attribute that an object holds in its ``__dict__`` or, where it does not (a
+    copy made without it), made on first read and kept in its ``_memo`` (a non-data
+    descriptor: the ``__dict__`` is read first)."""
+
+    def __init__(self, fget):
+        self.fget = fget
+        self.name = fget.__name__
+        self.__doc__ = fget.__doc__
+
+    def __get__(self, obj, cls=None):
+        if obj is None:
+            return self
+        store = obj._memo
+        found = store.get(self.name)
+        if found is None:
+            found = store[self.name] = self.fget(obj)
+        return found
+
+
 class FrozenDict(dict):
     """A dict that refuses writes (``FrozenError``); reads, copies (``dict(d)``), JSON and
     pickling work as for a dict."""

@@ -156,8 +156,10 @@ def test_switching_runs_repeat_bit_for_bit_and_keep_their_entries(sleigh):
         assert np.array_equal(a.t, b.t) and np.array_equal(a.y, b.y)
         assert a.switches == b.switches
     assert new._entries.keys() == entries.keys()       # looked up once
-    c = sleigh.run(method="dopri5", **RUN)
+    c = sleigh.run(method="dopri5", **RUN)          # (follow: its loop looked up)
     assert len(new._entries) == len(entries) + 1 and c.switches
+    d = sleigh.run(method="dopri5", **RUN)          # (follow or chart_driver: the same)
+    assert len(new._entries) == len(entries) + 1 and d.switches == c.switches
 
 
 def test_switching_run_with_a_timeout_equals_one_without(sleigh):

@@ -11,6 +11,7 @@ run handled and an ensemble did not:
 """
 
 import numpy as np
+import sympy as sp
 import pytest
 
 import jetnh as jn
@@ -148,3 +149,24 @@ def test_holonomic_pendulum_with_sensitivities_switches_as_single_runs():
             assert ens.steps[r] == tr._info["steps"]
             same_bits(ens.y[r], tr.y[rows])
             same_bits(ens.sensitivities[r], tr.sensitivities[rows])
+
+
+@pytest.mark.parametrize("length", [1.0, 1e-5, 1e5])
+def test_ensemble_refuses_a_start_off_the_holonomic_constraint_in_any_unit(length):
+    """An ensemble judges g = 0 as a single run does, relative to g's own terms: a start
+    off the hyperbola x y = l^2 by half is refused in every unit of length (it was accepted
+    below l ~ 3e-5, where |g| fell under an absolute 1e-9), and starts on it are run."""
+    J = jn.JetSpace("x y")
+    x, y = J.q
+    xt, yt = J.qd
+    G, l = sp.symbols("G l")
+    S = jn.System(J, (xt**2 + yt**2) / 2 - G * y, [x * y - l**2], dependent=[y])
+    sc = jn.Scene(S, "chetaev", params={G: 9.81, l: length},
+                  initial={"x": length, "y": length, "x_t": 0.0}, t_span=(0, 1e-3))
+    Y = np.tile(sc.y0, (3, 1))
+    i, j = sc.state_names.index("x"), sc.state_names.index("y")
+    Y[2, i], Y[2, j] = 2 * length, 0.5 * length          # on it
+    assert len(sc.ensemble(Y)) == 3
+    Y[1, j] = 0.5 * length                              # x y = l^2 / 2
+    with pytest.raises(jn.ConstraintError, match="run 1: the initial configuration is off"):
+        sc.ensemble(Y)

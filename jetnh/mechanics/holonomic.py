@@ -145,6 +145,23 @@ def bound(system, point, tol: float = TOLERANCE, G=None) -> np.ndarray:
     return tol * terms + ROUNDING * rounding
 
 
+def bound_rows(system, point, tol: float = TOLERANCE) -> np.ndarray:
+    """``bound`` at many points at once (an m x k array): ``point`` maps t, the
+    coordinates and the parameters (Symbols or names) to numbers or arrays of k values;
+    in double precision (numpy), where ``bound`` evaluates each point at 30 digits."""
+    point = _symbols(system, point)
+    m, J = len(system.holonomic), system.J
+    with np.errstate(all="ignore"):
+        vals = dag.evaluate_numpy(_size_exprs(system) + list(jacobian(system)), point)
+    vals = np.array(np.broadcast_arrays(*vals), dtype=float)
+    terms, dgdt, G = vals[:m], vals[m:2 * m], vals[2 * m:].reshape(m, J.n, -1)
+    q = np.abs(np.array(np.broadcast_arrays(*[np.asarray(point.get(s, 0.0), dtype=float)
+                                              for s in J.q]), dtype=float))
+    t = np.abs(np.asarray(point.get(J.t, 0.0), dtype=float))
+    rounding = np.einsum("ink,nk->ik", np.abs(G), np.broadcast_to(q, (J.n, G.shape[2])))
+    return tol * np.abs(terms) + ROUNDING * (rounding + np.abs(dgdt) * t)
+
+
 def _describe(system, g) -> str:
     return "; ".join(f"g{i + 1} = {e} is {v:.6g}" for i, (e, v) in
                      enumerate(zip(system.holonomic, g)))

@@ -16,7 +16,16 @@ jumps the whole band stops at the singular set, and is taken the same way): the 
 back to the step's start, where the chart is regular, and continues there in the split
 of largest measure if that is at least 2 eps (hysteresis, no chattering), else reaches
 the edge in steps of an eighth (``_approach``) and continues there.  Fixed steps so
-switch on their grid, each step no longer than h.  From the switch point the run goes on
+switch on their grid, each step no longer than h.  Near its singular set a chart's
+right-hand side has a pole (phi^alpha = A_alpha^-1 (...)), and a step whose length is
+comparable to its distance from the pole has a local error that the embedded estimate
+misses (dop853 accepted the last step before each edge at 100 times its usual error):
+so an adaptive step of a switching run after its first switch is no longer than
+``NEAR`` times the time in which the chart's singularity indicators would reach zero
+(``loop.near_zero``; the first piece takes the steps of a run that keeps its split, bit
+for bit, the same run up to the edge), and a fixed step one of whose stages is past the
+edge (its end may look regular all the same) stops the run at its start, where it
+switches as above (``loop.past_edge``; both set by ``Control.edge``).  From the switch point the run goes on
 with the state mapped exactly:
 
 - coordinates unchanged; the velocities re-split (the dependent ones, computed from the
@@ -82,16 +91,22 @@ from ..mechanics.system import paired_columns
 from .methods import projection
 from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, FINISHED, SINGULAR,
                               STATUS_TEXT, STOPPED)
-from . import arguments, chart_change, interrupt, loops, methods
+from . import arguments, chart_change, chart_driver, interrupt, loops, methods
 from .events import Event, OwnEvent, as_events
 from .kernels.calls import Kernel, Rows
-from .methods.loop import Control, Watch
+from .methods.loop import Control, Result, Watch
+from .methods.loop import features as loop_features
 from .trajectory import Trajectory
 
 #: the event name of a chart's edge (internal: the stitched run does not report it)
 EDGE = "chart edge"
 #: the largest number of constraints whose splits are watched (symbolic determinants)
 MAX_K = 3
+#: an adaptive step of a run that changes chart is no longer than NEAR times the time in
+#: which its chart's singularity indicators would reach zero (``loop.near_zero``): the
+#: end of every step at least 3 step lengths from the singular set, where the local
+#: error of dop853 and dopri5 is in proportion to their estimate again
+NEAR = chart_driver.NEAR
 #: what a loop's halt flag is made from (a copy: sooner than ``np.zeros``; never written)
 _HALT = np.zeros(1, dtype=np.int64)
 #: ``Atlas.change``: a chart it needs has no kernels yet
@@ -507,6 +522,10 @@ class Atlas:
         self._table = table
         self._addr = np.zeros((3, len(self.splits)), dtype=np.int64)
         self._alive: dict = {}
+        #: what ``chart_driver`` takes, per method, output mode and watch (``_drive_inputs``)
+        self._drives: dict = {}
+        #: whether the last run of each of those reached an edge (``run``)
+        self._reaches: dict = {}
 
     @property
     def own(self) -> Chart:
@@ -671,6 +690,13 @@ def run(home, plan, y0, p, build):
     sens, t0, t1, ctl = plan.sens, plan.t0, plan.t1, plan.ctl
     method = plan.method.name
     n = len(home.state_names)
+    key = (method, plan.mode, plan.checked, plan.singular_tol)
+    if sens is None and plan.limit is None and not user and at._reaches.get(key):
+        # (runs of a plan whose last run reached the edge: a run that does not is
+        # cheaper as one loop call, below)
+        driven = _driven(home, at, plan, y0, p, build, tic, key)
+        if driven is not None:
+            return driven
     start = (own_edge(at, plan.ce, t0, y0, p) < 0.0
              and begin(at, user, t0, y0[:n], p, past=True))
     if start and start[2]:          # past the edge at t0: the split of largest measure
@@ -704,6 +730,7 @@ def run(home, plan, y0, p, build):
                      plan.limit, dense, n_events=len(user), sens=sens)
     parts, switches = ahead or _onward_from(at, plan, out, wall, dense, y0, p, user,
                                             build, tic)
+    at._reaches[key] = True
     return stitch(home, at, method, p, parts, switches, user, plan.mode,
                   time.perf_counter() - tic)
 
@@ -747,6 +774,138 @@ def _onward_from(at, plan, out, wall, dense, y0, p, user, build, tic, halt=None)
                   plan.dense, plan.checked, plan.singular_tol, plan.newton, plan.limit,
                   _Piece.maker(build), sens=plan.sens is not None, tic=tic,
                   ran=(loops.result(out), wall, plan.ce, plan.watch, dense), halt=halt)
+
+
+def _driven(home, at, plan, y0, p, build, tic, key):
+    """``run`` of a run without user events, sensitivities or time budget in one
+    compiled call (``chart_driver``: every piece, step start, cut and change of chart),
+    where its method, charts and multipliers allow: the Trajectory that ``run``'s pieces
+    would make (its pieces made when first read, ``_Recorded``), or None (the run is
+    ``run``'s: not for the driver, or a chart not made yet)."""
+    got = _drive_inputs(at, plan, key)
+    if got is None:
+        return None
+    entry, addr, n_sing, edge_dir, edge_max = got
+    halt = _HALT.copy()
+    code, n_p, n_sw, I, F, TS, YS = interrupt.call(entry, halt, None, (
+        addr, n_sing, plan.t0, plan.t1, y0, p, plan.ctl, plan.te, plan.mode,
+        float(plan.singular_tol), edge_dir, edge_max, loops.NO_EVENTS, halt, at._table,
+        at._addr, at.eps, 0))
+    wall = time.perf_counter() - tic
+    if code:
+        return None
+    last, method = I[n_p - 1], plan.method.name
+    if n_p == 1 and not n_sw and not last[chart_driver.C_CUT]:
+        at._reaches[key] = False
+    if last[chart_driver.C_STATUS] != FINISHED:     # (the reasons of its stop: ``stitch``)
+        parts = _recorded_parts(at, plan, p, build, wall, (n_p, I, F, TS, YS))
+        return stitch(home, at, method, p, parts, _switches(at, n_sw, I, F), (),
+                      plan.mode, wall)
+    counts = I[:n_p, chart_driver.C_STEPS:chart_driver.C_NFEV + 1].sum(axis=0).tolist()
+    dense = plan.dense_ends
+    if dense is not None:
+        dense = dense[int(I[0, chart_driver.C_PARTIAL])]
+    if n_p == 1 and not n_sw and not last[chart_driver.C_CUT]:      # never at the edge
+        return Trajectory._finished(home, (TS, YS, int(last[chart_driver.C_ROWS])), p,
+                                    method, _FINISHED_TEXT,
+                                    (tuple(counts), wall, home.projected), plan.kern, dense)
+    switches = tuple(_switches(at, n_sw, I, F))
+    return Trajectory._of_run(home, None, p, method, FINISHED, _FINISHED_TEXT,
+                              (tuple(counts), wall, home.projected), at.own.kernels, None,
+                              None, dense, None,
+                              segments=_Recorded(at, plan, p, build, wall,
+                                                 (n_p, I, F, TS, YS)),
+                              switches=switches)
+
+
+def _switches(at, n_sw, I, F) -> list:
+    """The switches ``{"t", "from", "to"}`` of a run that ``chart_driver`` recorded."""
+    splits = at.splits
+    return [{"t": float(F[j, chart_driver.SW_T]),
+             "from": list(splits[I[j, chart_driver.SW_FROM]]),
+             "to": list(splits[I[j, chart_driver.SW_TO]])} for j in range(n_sw)]
+
+
+def _drive_inputs(at, plan, key):
+    """What ``chart_driver.drive`` takes for ``plan`` beyond the run's own arguments:
+    ``(entry, addresses, indicators per chart, the edge's direction and count)``, or
+    None where the run is not for it (an implicit method, multipliers mapped by A,
+    holonomic constraints, events other than the edge) or its driver is not compiled
+    (``chart_driver.drive``).  The addresses of each chart
+    whose kernels and edge are made (rows of zeros elsewhere: the driver hands the run
+    back there), kept until another chart is made."""
+    found = at._drives.get(key)
+    made = (len(at.charts), len(at._events))
+    if found is not None and found[0] == made:
+        return found[1]
+    inputs = None
+    ce, watch = plan.ce, plan.watch
+    if (plan.method.solver is methods.Solver.EXPLICIT and not at.explicit
+            and not plan.ctl.n_hol and ce is not None and len(ce) == 1
+            and watch.ev_max.tolist() == [1] and watch.ev_dir.tolist() == [-1]):
+        parts = loop_features(plan.ctl, plan.mode, watch)
+        N = len(at.splits)
+        addr = np.zeros((N, 4), dtype=np.int64)
+        n_sing = np.zeros(N, dtype=np.int64)
+        for i, split in enumerate(at.splits):
+            chart = at.own if i == 0 else at.charts.get(split)
+            edge = at._events.get((split, True, ()))
+            if chart is None or edge is None or edge[0] is None:
+                continue
+            kern = chart.kernels        # (of a chart's scene: made with it)
+            addr[i] = (kern.rhs_fp.address, kern.sing_fp.address, edge[0].uev.address,
+                       kern.hol_or_none.address)
+            n_sing[i] = len(kern.layout.indicators) if plan.checked else 0
+        entry = chart_driver.drive(plan.method.name, parts)
+        if entry is not None:       # (else not compiled yet: ``precompile``)
+            inputs = (entry, addr, n_sing, np.array([-1], dtype=np.int64),
+                      np.array([1], dtype=np.int64))
+    at._drives[key] = (made, inputs)
+    return inputs
+
+
+def _recorded_parts(at, plan, p, build, wall, record):
+    """``follow``'s parts ``[(chart, piece, what re-running it needs)]`` of the run
+    ``chart_driver`` recorded (``record``: its pieces and rows)."""
+    from . import chart_driver as cd
+
+    n_p, I, F, TS, YS = record
+    n = len(at.home.state_names)
+    ctl, make = plan.ctl, _Piece.maker(build)
+    parts = []
+    for k in range(n_p):
+        i, f = I[k], F[k]
+        split = at.splits[i[cd.C_SPLIT]]
+        chart = at.chart(split, f[cd.C_T], None)
+        edge = bool(i[cd.C_EDGE])
+        ce = at.events(chart, (), edge)
+        if i[cd.C_FIRST]:
+            seg_ctl, watch = ctl, plan.watch
+            dense = plan.dense_ends
+            dense = None if dense is None else dense[int(i[cd.C_PARTIAL])]
+        else:
+            c = list(ctl)
+            c[_FIRST], c[_MAX_STEPS], c[_N_STEPS], c[_MAX_STEP] = (
+                0.0, int(i[cd.C_MAXSTEPS]), int(i[cd.C_NSTEPS]), float(f[cd.C_MAXSTEP]))
+            seg_ctl = ctl._make(c)
+            watch = chart.watch(ce, plan.checked, plan.singular_tol, [], (), edge)
+            dense = (None if plan.dense is None else
+                     {**plan.dense, "partial_last": bool(i[cd.C_PARTIAL])})
+        a, rows, n_ev = int(i[cd.C_ROW0]), int(i[cd.C_ROWS]), int(i[cd.C_NEV])
+        y_start = f[cd.N_F:cd.N_F + n]
+        out = Result(int(i[cd.C_STATUS]), TS[a:a + rows], YS[a:a + rows], rows,
+                     tuple(int(c) for c in i[cd.C_STEPS:cd.C_NFEV + 1]),
+                     float(f[cd.C_TEND]), f[cd.N_F + n:cd.N_F + 2 * n],
+                     f[cd.C_EVT:cd.C_EVT + n_ev], i[cd.C_EVI:cd.C_EVI + n_ev],
+                     f[None, cd.N_F + 2 * n:cd.N_F + 3 * n][:n_ev], n_ev,
+                     int(i[cd.C_SING]))
+        t = float(f[cd.C_T])
+        seg = make(chart.scene, plan.method.name, out, wall if k == 0 else 0.0,
+                   chart.kernels, ce, p, t, y_start, plan.singular_tol, plan.checked,
+                   None, dense, n_events=0, sens=None)
+        parts.append((chart, seg, (t, y_start, float(f[cd.C_TTO]), seg_ctl, watch, ce,
+                                   None)))
+    return parts
 
 
 def own_edge(at, ce, t, y, p) -> float:
@@ -841,8 +1000,8 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
         if back is not None:
             t_k, y_k, span = back
             out = _cut(out, mode, t_k, y_k, len(user), direction)
-            if seg_dense is not None:
-                seg_dense["partial_last"] = False
+            if seg_dense is not None:       # (a copy: the plan's are shared)
+                seg_dense = {**seg_dense, "partial_last": False}
         near = None
         if build is None:
             seg = out
@@ -971,16 +1130,17 @@ def _cut(out, mode, t_k, y_k, n_user, direction):
 
 
 def _onward(ctl, max_steps, n_steps):
-    """``ctl._replace(first_step=0.0, max_steps=max_steps, n_steps=n_steps)``: the step
-    control of a piece after the first (its first step chosen afresh), without the
+    """``ctl._replace(first_step=0.0, max_steps=max_steps, n_steps=n_steps,
+    edge=NEAR)``: the step control of a piece after the first (its first step chosen
+    afresh, its steps near the chart's singular set shorter: ``NEAR``), without the
     keyword machinery."""
     c = list(ctl)
-    c[_FIRST], c[_MAX_STEPS], c[_N_STEPS] = 0.0, max_steps, n_steps
+    c[_FIRST], c[_MAX_STEPS], c[_N_STEPS], c[_EDGE] = 0.0, max_steps, n_steps, NEAR
     return ctl._make(c)
 
 
-_FIRST, _MAX_STEPS, _N_STEPS, _MAX_STEP = (Control._fields.index(f) for f in (
-    "first_step", "max_steps", "n_steps", "max_step"))
+_FIRST, _MAX_STEPS, _N_STEPS, _MAX_STEP, _EDGE = (Control._fields.index(f) for f in (
+    "first_step", "max_steps", "n_steps", "max_step", "edge"))
 
 
 def _at_end(t, t1) -> bool:
@@ -1078,25 +1238,7 @@ def stitch(home, at, method, p, parts, switches, user, mode, wall):
     own = at.own
     if len(parts) == 1 and not switches:
         return parts[0][1].traj
-    pieces = []
-    sens = [] if parts[-1][2][6] is not None else None
-    row, last_part, steps, rejected, nfev = 0, len(parts) - 1, 0, 0, 0
-    ends = mode == ENDPOINTS and last_part
-    for i, (chart, seg, rerun) in enumerate(parts):
-        out = seg.out
-        a, b = 0, int(out.n_out)
-        if ends:                            # the first row and the last
-            a, b = (0, 1) if i == 0 else (b - 1, b) if i == last_part else (b, b)
-        elif i > 0 and mode != AT_T_EVAL:
-            a = 1                       # the switch row: the chart before stored it
-        if sens is not None:        # S of the scene's states: D S of each row
-            S = seg.sensitivities[a:b]
-            sens.append(S if chart is own else
-                        chart.carry(own, out.ts[a:b], seg.y[a:b], S, p))
-        pieces.append((row, row + b - a, chart, seg, a, rerun))
-        row += b - a
-        c = out.stats               # (steps, rejected, nfev: integers)
-        steps, rejected, nfev = steps + c[0], rejected + c[1], nfev + c[2]
+    pieces, (steps, rejected, nfev), sens = _layout(own, parts, mode, p)
     events = None
     if user:
         t_ev, y_ev = [], []
@@ -1120,6 +1262,33 @@ def stitch(home, at, method, p, parts, switches, user, mode, wall):
                                                          np.concatenate(sens)),
                               segments=Stitched(own, tuple(pieces)),
                               switches=tuple(switches))
+
+
+def _layout(own, parts, mode, p):
+    """``(pieces, (steps, rejected, evaluations), S or None)`` of ``stitch``: the rows
+    ``lo:hi`` of the trajectory that each part gives from its rows ``a:`` (``Stitched``),
+    the counts over the parts, and the sensitivities of a run with them, carried to the
+    scene's chart."""
+    pieces = []
+    sens = [] if parts[-1][2][6] is not None else None
+    row, last_part, steps, rejected, nfev = 0, len(parts) - 1, 0, 0, 0
+    ends = mode == ENDPOINTS and last_part
+    for i, (chart, seg, rerun) in enumerate(parts):
+        out = seg.out
+        a, b = 0, int(out.n_out)
+        if ends:                            # the first row and the last
+            a, b = (0, 1) if i == 0 else (b - 1, b) if i == last_part else (b, b)
+        elif i > 0 and mode != AT_T_EVAL:
+            a = 1                       # the switch row: the chart before stored it
+        if sens is not None:        # S of the scene's states: D S of each row
+            S = seg.sensitivities[a:b]
+            sens.append(S if chart is own else
+                        chart.carry(own, out.ts[a:b], seg.y[a:b], S, p))
+        pieces.append((row, row + b - a, chart, seg, a, rerun))
+        row += b - a
+        c = out.stats               # (steps, rejected, nfev: integers)
+        steps, rejected, nfev = steps + c[0], rejected + c[1], nfev + c[2]
+    return pieces, (steps, rejected, nfev), sens
 
 
 _MAKERS: dict = {}
@@ -1253,6 +1422,24 @@ class Stitched:
         piece = SimpleNamespace(t=times, y=row, aux=aux[None, :])
         fill_aux(out, self.own, [(0, 1, chart, piece, 0)], p)
         return t, to_home(self.own, chart, times, row, p)[0], out[0]
+
+
+class _Recorded(Stitched):
+    """``Stitched`` of a run made by ``chart_driver`` (``_driven``): its pieces, as
+    ``follow`` makes them, made from the driver's record when first read."""
+
+    def __init__(self, at, plan, p, build, wall, record):
+        self.own = at.own
+        self._made = (at, plan, p, build, wall, record)
+
+    @property
+    def pieces(self):
+        made = self.__dict__.get("_pieces")
+        if made is None:
+            parts = _recorded_parts(*self._made)
+            made = self.__dict__["_pieces"] = tuple(
+                _layout(self.own, parts, self._made[1].mode, self._made[2])[0])
+        return made
 
 
 def fill_aux(out, own, pieces, p):

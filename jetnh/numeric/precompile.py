@@ -15,11 +15,13 @@ every part; the loops of dla and dvi; ``projection:rows``, the projection of out
 rows onto holonomic constraints (``projection.rows``); ``connect:step``, the compiled step of connect's
 Levenberg-Marquardt search (``connect.levenberg``), ``connect:small`` its shooting's
 small-matrix SVD and finiteness check (``connect.small``), ``connect:verdicts`` the
-compiled parts of its verdicts (``connect.verdicts``) and ``atlas:change``, a run's
-change of chart at an edge (``chart_change``).  ``DEFAULT``, what ``make``
+compiled parts of its verdicts (``connect.verdicts``), ``atlas:change``, a run's
+change of chart at an edge (``chart_change``), and ``atlas:<method>:<parts>``, a
+switching run's pieces in one call (``chart_driver``, over the watching loop).  ``DEFAULT``, what ``make``
 compiles (about a minute of CPU), is the plain and the ``final`` loop of each continuous
 method, the default method's loops with ``t_eval`` (those of ``make run``), the rows'
-projection, connect's and the change of chart: the first run of each on a machine loads
+projection, connect's, the change of chart and dop853's switching runs: the first run of each
+on a machine loads
 its loop.  Each loop compiles in a
 process of its own, as many at a time as there are cores.
 """
@@ -42,10 +44,13 @@ LOOPS.update({"dla": ("dla", None), "dvi": ("dvi", None),
               "projection:rows": ("projection", None),
               **{f"connect:{part}": ("connect", part)
                  for part in ("step", "small", "verdicts")},
-              "atlas:change": ("atlas", None)})
+              "atlas:change": ("atlas", None),
+              **{f"atlas:{m}:{name}": ("switching", (m, (True, False) + PARTS[name][2:]))
+                 for m in ("dop853", "dopri5", "rk4")
+                 for name in ("plain", "final", "t_eval") if not (m == "rk4" and name == "t_eval")}})
 DEFAULT = (*(n for n in LOOPS if n.endswith((":plain", ":final"))), "dop853:t_eval",
            "dop853:watch+t_eval", "projection:rows", "connect:step", "connect:small",
-           "connect:verdicts", "atlas:change")
+           "connect:verdicts", "atlas:change", "atlas:dop853:plain", "atlas:dop853:final")
 
 
 def compile_loop(name: str) -> tuple[str, float, bool]:
@@ -69,6 +74,10 @@ def compile_loop(name: str) -> tuple[str, float, bool]:
         from . import chart_change
 
         d = chart_change.compiled()
+    elif method == "switching":
+        from . import chart_driver
+
+        d = chart_driver.compiled(*parts)
     elif method == "connect":
         from .connect import levenberg, small, verdicts
 

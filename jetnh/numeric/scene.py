@@ -68,7 +68,8 @@ from . import codegen
 from . import discrete
 from .ensemble import run_ensemble
 from .kernels import jacobian_kernels, load as load_kernels, loader
-from ..frozen import Frozen, FrozenDict, memo
+from .kernels.initial import floats as initial_floats
+from ..frozen import Frozen, FrozenDict, made, memo
 from .options import options, typed
 from .trajectory import Trajectory
 
@@ -170,11 +171,15 @@ class Scene(Frozen):
         return arguments.time_span(t_span)
 
     def _params(self, params) -> dict[str, float]:
-        needed = {s.name for s in self.system.parameters}
-        J = self.system.J
-        known = {s.name for s in J.q + J.qd} | {J.t.name} | set(self.multipliers)
-        for expr in self.integrals.values():
-            needed |= {s.name for s in expr.free_symbols if s.name not in known}
+        needed = self.__dict__.get("_param_names")
+        if needed is None:      # (in ``__init__``: found once)
+            needed = {s.name for s in self.system.parameters}
+            J = self.system.J
+            known = {s.name for s in J.q + J.qd} | {J.t.name} | set(self.multipliers)
+            for expr in self.integrals.values():
+                needed |= {s.name for s in expr.free_symbols if s.name not in known}
+            #: the names of the parameters (of the system and of the integrals)
+            self._param_names = needed = frozenset(needed)
         out = {}
         given = {**{s.name: v for s, v in self.system.defaults.items()}, **dict(params)}
         for k, v in given.items():
@@ -184,7 +189,7 @@ class Scene(Frozen):
                     f"params has {name!r}, which is not a parameter of this system; its "
                     f"parameters are {sorted(needed) or 'none'}")
             out[name] = arguments.real(v, f"parameter {name!r}")
-            if not np.isfinite(out[name]):
+            if not math.isfinite(out[name]):
                 raise JetnhError(f"parameter {name!r} is {out[name]}; give a finite value")
         missing = sorted(needed - set(out))
         if missing:
@@ -372,37 +377,36 @@ class Scene(Frozen):
         return dict(zip(self.dependent_velocities, values))
 
     def _dependent_velocity_list(self, y, route, p) -> list[float] | None:
-        """``_dependent_velocity_floats`` by the kernels of ``route`` (``_dv_route``):
-        the values in the order of ``dependent_velocities``, or None."""
-        _, applies, sing, n_ind, aux_of, n_aux, n_dep = route
-        if not applies:
+        """``_dependent_velocity_floats`` by the kernels of ``route`` (``_dv_route``) in
+        one compiled call (``kernels.initial``, which also finds ``y`` finite): the
+        values in the order of ``dependent_velocities``, or None."""
+        _, floats, n_aux, n_dep = route
+        if floats is None:
             return None
-        t0 = self.t_span[0]
-        if n_ind:
-            g = np.empty(n_ind)
-            sing(t0, y, p, g)
-            g = g.tolist()      # (a NaN or an infinity makes the sum not finite)
-            if not (math.isfinite(sum(g)) and all(map(FLOAT_MARGIN.__le__, map(abs, g)))):
-                return None
         aux = np.empty(n_aux)
-        aux_of(t0, y, p, aux)
-        values = aux.tolist()[:n_dep]
-        if not math.isfinite(sum(values)):      # (a NaN, an infinity or an overflow)
+        if not floats(self.t_span[0], y, p, aux):
             return None
-        return values
+        return aux.tolist()[:n_dep]
 
     def _dv_route(self, kern) -> tuple:
-        """What ``_dependent_velocity_floats`` calls of ``kern``: (kern, whether it
-        applies, the sing kernel, its size, the aux kernel, its size, the number of
-        dependent velocities), looked up once per kernels (memo ``dv_route``, shared by
-        the copies ``replace`` makes)."""
+        """What ``_dependent_velocity_floats`` calls of ``kern``: (kern, the compiled
+        check ``kernels.initial.floats()`` with its first arguments (the sing kernel's
+        address and packed sizes, 0 and 0 without indicators, the aux kernel's, the
+        numbers of indicators and dependent velocities, ``FLOAT_MARGIN``), or None where
+        it does not apply, the size of aux, the number of dependent velocities), looked
+        up once per kernels (memo ``dv_route``, shared by the copies ``replace``
+        makes)."""
         route = self._memo.get("dv_route")
         if route is None or route[0] is not kern:
             lay = kern.layout
-            route = (kern, lay.dependent_velocities == self.dependent_velocities
-                     and (not lay.indicators or hasattr(kern, "sing")),
-                     getattr(kern, "sing", None), len(lay.indicators), kern.aux, lay.n_aux,
-                     len(lay.dependent_velocities))
+            sing = getattr(kern, "sing", None)
+            n_ind, n_dep = len(lay.indicators), len(lay.dependent_velocities)
+            applies = (lay.dependent_velocities == self.dependent_velocities
+                       and (not n_ind or sing is not None))
+            route = (kern, functools.partial(
+                initial_floats(), *((0, 0) if sing is None else sing.args),
+                *kern.aux.args, n_ind, n_dep, FLOAT_MARGIN) if applies else None,
+                lay.n_aux, n_dep)
             self._memo["dv_route"] = route
         return route
 
@@ -440,11 +444,22 @@ class Scene(Frozen):
         changes some and keeps the others); dependent velocities follow from the
         constraints again."""
         if changes.keys() <= _MOVED:
-            initial = changes.get("initial", self.initial)
+            initial = changes.get("initial", _KEEP)
             return self._moved({n: self.initial[n] for n in self.state_names}
-                               if initial is self.initial else {} if initial is None
-                               else initial,
+                               if initial is _KEEP else {} if initial is None else initial,
                                changes.get("t_span", self.t_span))
+        if (changes.keys() <= _RETUNED and self.runtime_params
+                and isinstance(changes["params"], (Mapping, type(None)))):
+            params = self._params(changes["params"] or {})
+            runtime = self.runtime_params
+            if ({k: v for k, v in params.items() if k not in runtime}
+                    == {k: v for k, v in self.params.items() if k not in runtime}):
+                # only run-time parameters changed: the same kernels (``_moved``)
+                initial = changes.get("initial", _KEEP)
+                return self._moved({n: self.initial[n] for n in self.state_names}
+                                   if initial is _KEEP else {} if initial is None
+                                   else initial, changes.get("t_span", self.t_span),
+                                   FrozenDict(params))
         args = dict(system=self.system, principle=self.principle, params=self.params,
                     initial={n: self.initial[n] for n in self.state_names},
                     t_span=self.t_span, form=self.form, convention=self.convention,
@@ -462,75 +477,112 @@ class Scene(Frozen):
             new._memo.update(self._shared_memo())
         return new
 
-    def _moved(self, initial, t_span) -> "Scene":
-        """``replace(initial=..., t_span=...)``: this scene with other initial values and
-        time span, its other attributes (checked once) and its memo's shared values
-        (``_SHARED``, and ``_p``) taken over rather than made anew; the dependent
-        velocities by the compiled kernels where they are loaded and apply
-        (``_dependent_velocity_floats``)."""
-        if type(initial) is not dict and not isinstance(initial, Mapping):
-            raise JetnhError(f"initial must be a dict keyed by Symbol or name, got a "
-                             f"{type(initial).__name__}")
+    def _moved(self, initial, t_span, params=None) -> "Scene":
+        """``replace(initial=..., t_span=...)``, and ``params`` (checked) where only
+        run-time parameters change: this scene with other initial values, time span and
+        run-time parameter values, its other attributes (checked once) and its memo's
+        shared values (``_SHARED``, and ``_p``) taken over rather than made anew
+        (``_moving``).  The most common initial values (a dict of every state, no
+        dependent velocity, as floats, on a scene without holonomic constraints whose
+        kernels are loaded) are checked and their dependent velocities found in one
+        compiled call (``_dv_route``: the floats ``_initial`` finds, else the general
+        route, which names what is wrong), the state array kept as it is (the direct
+        runs' ``_y0``) and ``initial`` and ``y0`` made of them when first read
+        (``frozen.made``); other initial values by ``_initial``."""
         own = self._memo
         hit = own.get("moved")
         if hit is None or hit[0] != len(own) or hit[1] is None:
             # (what the copies take over, looked up again when this memo grew, or until
             # the kernels are loaded)
-            key = own.get("key")
-            kern = None if key is None else _loaded_kernels(key, self.cache)
-            # (the route of the dependent velocities where the kernels are loaded and
-            # no holonomic constraint is to be checked)
-            route = (None if kern is None or self.system.holonomic
-                     else self._dv_route(kern))       # (this scene's, shared below)
-            p = own.get("_p")
-            if p is None:
-                p = self._p
-            shared = self._shared_memo()
-            shared["_p"] = p
-            if "quick" in own:
-                shared["quick"] = own["quick"]
-            own["moved"] = None
-            hit = own["moved"] = (len(own), kern, p, shared, route)
-        _, kern, p, memo, route = hit
+            hit = self._moving()
+        _, kern, p, memo, route, d = hit
         # (the attributes set directly, not by ``_set``: a time span is a tuple of
-        # floats, the initial values floats, y0 made read-only here; ``_memo`` the
-        # copy's own, before anything reads it)
-        d = self.__dict__.copy()        # (a copy of the dict: sooner than filling one)
-        memo = memo.copy()
+        # floats, the initial values floats; ``_memo`` the copy's own, before anything
+        # reads it)
+        d = d.copy()        # (a copy of a dict: sooner than filling one)
+        d["_memo"] = memo = memo.copy()     # (frozen from here: ``_initial`` sets nothing
+        #                                     when it neither projects nor completes)
         if t_span is not self.t_span:
-            d["t_span"] = self._t_span(t_span)
+            d["t_span"] = t_span = self._t_span(t_span)
             memo.pop("quick", None)     # (the quick plans: of this span)
-        d["projected"] = d["completed"] = _NOTHING
-        d["_memo"] = memo      # (frozen from here: ``_initial`` sets nothing when it
-        #                        neither projects nor completes)
-        new = object.__new__(Scene)
-        object.__setattr__(new, "__dict__", d)
-        # the most common initial values at once (``_initial(initial, False, False, kern,
-        # p)`` of them): a dict of the states (no dependent velocity) as finite floats,
-        # the dependent velocities from the compiled kernels of ``route`` (``_dv_route``;
-        # ``_dependent_velocity_floats``), a scene without holonomic constraints; else
-        # (None) the general route checks them and names what is wrong
-        values = None
-        if route is not None and type(initial) is dict and initial.keys() == self._state_set:
-            states = self._states_of(initial)
-            if set(map(type, states)) == _FLOAT and math.isfinite(sum(states)):
+        if params is not None:
+            d["params"] = params
+            memo["_p"] = p = np.array([params[n] for n in self.runtime_params], dtype=float)
+        new = _new(Scene)
+        _setattr(new, "__dict__", d)
+        if (route is not None and type(initial) is dict and route[1] is not None
+                and len(initial) == len(self.state_names)):
+            try:        # (every state, so nothing else: as many keys as states)
+                states = self._states_of(initial)
+            except KeyError:
+                states = ()
+            if states and _FLOAT.issuperset(map(type, states)):
                 y = np.array(states)
-                values = new._dependent_velocity_list(y, route, p)
-        if values is None:
-            ini, y = new._initial(initial, False, False, kern, p)
-            if y is None:
-                y = np.array(self._states_of(ini), dtype=float)
-            ini = FrozenDict(ini)
-        else:
-            ini = FrozenDict(initial)
-            dict.update(ini, zip(self.dependent_velocities, values))
+                aux = np.empty(route[2])
+                if route[1](t_span[0], y, p, aux):
+                    memo["_y0"] = y
+                    memo["_given"] = (FrozenDict(initial), aux)
+                    return new
+        if type(initial) is not dict and not isinstance(initial, Mapping):
+            raise JetnhError(f"initial must be a dict keyed by Symbol or name, got a "
+                             f"{type(initial).__name__}")
+        ini, y = new._initial(initial, False, False, kern, p)
+        if y is None:
+            y = np.array(self._states_of(ini), dtype=float)
         # (this copy's own state array: its direct runs' ``_y0``, y0 a read-only view)
         memo["_y0"] = y
         y0 = y.view()
         y0.setflags(write=False)
-        d["initial"] = ini
+        d["initial"] = FrozenDict(ini)
         d["y0"] = y0
         return new
+
+    def _moving(self) -> tuple:
+        """What the copies ``_moved`` makes take over from this scene, kept in its memo
+        (``moved``): (the memo's size, the kernels if loaded, ``_p``, the shared memo,
+        ``_dv_route`` where the kernels are loaded and no holonomic constraint is to be
+        checked, the attributes of a copy but ``initial``, ``y0`` and ``_memo``)."""
+        own = self._memo
+        key = own.get("key")
+        kern = None if key is None else _loaded_kernels(key, self.cache)
+        route = (None if kern is None or self.system.holonomic
+                 else self._dv_route(kern))       # (this scene's, shared below)
+        p = own.get("_p")
+        if p is None:
+            p = self._p
+        shared = self._shared_memo()
+        shared["_p"] = p
+        if "quick" in own:
+            shared["quick"] = own["quick"]
+        attributes = {k: v for k, v in self.__dict__.items()
+                      if k not in ("initial", "y0", "_memo")}
+        attributes["projected"] = attributes["completed"] = _NOTHING
+        own["moved"] = None
+        hit = own["moved"] = (len(own), kern, p, shared, route, attributes)
+        return hit
+
+    @made
+    def initial(self) -> FrozenDict:
+        """The initial values of a copy ``_moved`` made (the scenes ``Scene(...)`` makes
+        hold theirs in ``__dict__``): the states given and the dependent velocities the
+        kernels gave, made when first read."""
+        given, aux = self._memo["_given"]
+        dict.update(given, zip(self.dependent_velocities, aux.tolist()))
+        return given
+
+    @made
+    def y0(self) -> np.ndarray:
+        """The initial state of a copy ``_moved`` made, a read-only view of its ``_y0``
+        (the scenes ``Scene(...)`` makes hold theirs in ``__dict__``)."""
+        y0 = self._memo["_y0"].view()
+        y0.setflags(write=False)
+        return y0
+
+    def __getstate__(self):
+        state = super().__getstate__()
+        if "y0" not in state:           # (a copy ``_moved`` made: its values made now)
+            state["initial"], state["y0"] = self.initial, self.y0
+        return state
 
     def _shared_memo(self) -> dict:
         """What a scene with the same kernels takes over from this one's memo
@@ -955,11 +1007,16 @@ def _energy_changes(system, principle, params) -> tuple[str, ...]:
 _SHARED = ("spec", "key", "plans", "spans", "events", "atlas_applies", "atlases", "dv_route")
 
 
-_FLOAT = {float}
+_FLOAT = frozenset((float,))
+#: ``replace`` without ``initial`` (the scene's own kept)
+_KEEP = object()
+_new, _setattr = object.__new__, object.__setattr__
 #: ``projected`` and ``completed`` of the copies ``replace`` makes (nothing moved)
 _NOTHING = FrozenDict()
 #: what ``replace`` changes in a copy of the scene (``_moved``)
 _MOVED = frozenset(("initial", "t_span"))
+#: and with run-time parameter values (``params``, the others unchanged)
+_RETUNED = frozenset(("params", "initial", "t_span"))
 #: the plans of a scene that kept none (``run``: its key is hashed all the same)
 _NONE_KEPT: dict = {}
 #: the dtype of the arrays a run takes as they are (numpy's one instance of it)

@@ -222,6 +222,9 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
         ctl = ctl._replace(n_sens=sens.layout.sensitivity_columns)
     if batch:
         mode = AT_T_EVAL if t_eval is not None else ENDPOINTS
+    switch = split == "switch" and atlas.applies(scene, events)
+    if switch and not m.adaptive:       # (a stage past the edge: ``atlas.NEAR``)
+        ctl = ctl._replace(edge=atlas.NEAR)
     dense = ends = None
     if not batch:
         dense = {"rtol": rtol, "atol": atol_v, "mode": mode, "ctl": ctl}
@@ -234,7 +237,6 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
 
         newton = radau.newton_options(newton_tol, max_newton)
     kern = scene.kernels
-    switch = split == "switch" and atlas.applies(scene, events)
     if switch:
         # the run goes on across its chart's edge (numeric.atlas): its loop, in the
         # scene's own chart, watches the edge as its last event (it stops there)

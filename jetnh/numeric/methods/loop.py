@@ -83,10 +83,13 @@ Result = namedtuple("Result", "status ts ys n_out stats t y ev_t ev_i ev_y n_ev 
 #: the step control of one run: tolerances and limits (``n_steps`` > 0: fixed steps);
 #: ``n_hol`` > 0: project every accepted step onto the ``n_hol`` holonomic constraints of
 #: the first ``n_coord`` states (``projection``); ``n_sens`` > 0: the state is followed by
-#: its sensitivities, ``n_sens`` columns a row, projected with it
+#: its sensitivities, ``n_sens`` columns a row, projected with it; ``edge`` > 0: the run
+#: watches its chart's edge as its last event (``numeric.atlas``): a fixed step with a
+#: stage past it stops at its start (``past_edge``), an adaptive step is no longer than
+#: ``edge`` times the time to the singular set (``near_zero``)
 Control = namedtuple("Control",
-                     "rtol atol first_step max_step max_steps n_steps n_hol n_coord n_sens",
-                     defaults=(0, 0, 0))
+                     "rtol atol first_step max_step max_steps n_steps n_hol n_coord n_sens "
+                     "edge", defaults=(0, 0, 0, 0.0))
 #: what to watch: singularity indicators (``n_sing`` of them, threshold ``sing_tol``)
 #: and user events (direction, terminal count)
 Watch = namedtuple("Watch", "n_sing sing_tol ev_dir ev_max")
@@ -206,10 +209,11 @@ def workspace(n_sing, n_user):
     """The arrays of the singularity indicators and the user events (``after_step``),
     rows of two allocations: ``(gs, gs_old, gref, sig, eps)`` of the indicators (their
     values at the step's end and start, initial sizes, signs, thresholds), ``(gu_old,
-    gu_new, gtmp, roots)`` and ``(counts, which)`` of the user events."""
-    G = np.empty((9, max(n_sing, n_user, 1)))
+    gu_new, gtmp, roots)`` and ``(counts, which)`` of the user events, then the rates at
+    which the indicators approach zero (``near_zero``)."""
+    G = np.empty((10, max(n_sing, n_user, 1)))
     C = np.zeros((2, max(n_user, 1)), dtype=np.int64)
-    return G[0], G[1], G[2], G[3], G[4], G[5], G[6], G[7], C[0], G[8], C[1]
+    return G[0], G[1], G[2], G[3], G[4], G[5], G[6], G[7], C[0], G[8], C[1], G[9]
 
 
 @inline
@@ -305,7 +309,7 @@ def after_step(tab, fixed, rhs, sing, uev, p, t, h, t_new, y, y_new, K, F, ytmp,
     ``y_stop``; ``have_dense``: the rows F of the step's interpolant are filled.  The
     caller moves the end's values to the next step's start (``_events.watch_next``)."""
     n_sing, sing_tol, ev_dir, ev_max = watch
-    gs, gs_old, gref, sig, eps, gu_old, gu_new, gtmp, counts, roots, which = ws
+    gs, gs_old, gref, sig, eps, gu_old, gu_new, gtmp, counts, roots, which = ws[:11]
     ns = tab[6][0]
     have_dense = False
     stop = 0
@@ -344,6 +348,54 @@ def after_step(tab, fixed, rhs, sing, uev, p, t, h, t_new, y, y_new, K, F, ytmp,
             gu_new, ev_dir, ev_max, counts, ytmp, gtmp, roots, which, ev_t, ev_i, ev_y,
             n_ev, y_stop, first)
     return stop, t_stop, sing_index, have_dense, ev_t, ev_i, ev_y, n_ev
+
+
+@inline
+def near_zero(n_sing, g_old, g_new, sig, h_abs, h_prev, rate):
+    """The time in which the singularity indicators would reach zero from the end of a
+    step of length ``h_abs`` (values g_old, g_new; inf: none does): how far the step's
+    end is from the singular set, in time.  Each indicator moves toward zero at the mean
+    rate over the step (kept in ``rate`` for the next), accelerating as from the mean
+    rate of the step before (of length ``h_prev``; 0: none): a quadratic in time, right
+    also where an indicator just turned toward zero (sin theta at its top).  In a run
+    that changes chart (``Control.edge``) the next adaptive step is no longer than
+    ``edge`` times it: near its singular set a chart's right-hand side has a pole
+    (phi^alpha = A_alpha^-1 (...)), and a step whose length is comparable to its
+    distance from the pole has a local error that the embedded estimate, an expansion
+    in h, misses (dop853 accepts it at 100 times its usual error)."""
+    out = np.inf
+    for i in range(n_sing):
+        b = sig[i] * g_new[i]
+        r = (sig[i] * g_old[i] - b) / h_abs
+        a = 0.0
+        if h_prev > 0.0:
+            a = max(0.0, (r - rate[i]) * 2.0 / (h_abs + h_prev))
+        rate[i] = r
+        v = r + 0.5 * a * h_abs             # the rate at the end
+        if b > 0.0:
+            if v > 0.0:
+                out = min(out, 2.0 * b / (v + math.sqrt(v * v + 2.0 * a * b)))
+            elif a > 0.0:
+                out = min(out, (math.sqrt(v * v + 2.0 * a * b) - v) / a)
+    return out
+
+
+@inline
+def past_edge(uev, n_user, C, A, ns, t, h, y, K, p, ytmp, g):
+    """Whether a stage state y + h sum_r A[s, r] K[r] of a fixed step (s = 1 .. ns - 1)
+    is past the chart's edge, the last of the ``n_user`` events (negative there, or not
+    finite): a stage that ran into the band around the chart's singular set, where the
+    step's end, even where it is regular, is not to be trusted (``Control.edge``)."""
+    for s in range(1, ns):
+        for i in range(y.shape[0]):
+            acc = 0.0
+            for r in range(s):
+                acc += A[s, r] * K[r, i]
+            ytmp[i] = y[i] + h * acc
+        uev(t + C[s] * h, ytmp, p, g)
+        if not g[n_user - 1] > 0.0:
+            return True
+    return False
 
 
 @jit
@@ -437,13 +489,16 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
         n_user = ev_dir.shape[0]
         ev_t, ev_i, ev_y, n_ev = no_events(F, ev_dir)
         ws, sing_index = watch_start(sing, uev, watch, t, y, p)
-        gs, gs_old, gref, sig, eps, gu_old, gu_new = ws[:7]
+        gs, gs_old, gref, sig, eps, gu_old, gu_new, gtmp = ws[:8]
+        rate = ws[11]
         if sing_index >= 0:
             if ADAPTIVE:
                 ts, ys, n_out = store(ts, ys, n_out, t, y)
             return (SINGULAR, ts, ys, n_out, counts(stats), t, y, ev_t, ev_i, ev_y,
                     n_ev, sing_index)
     h_abs = 0.0
+    g_edge = np.nan         # the edge's value at the last step's start (``Control.edge``)
+    h_prev = 0.0            # the length of the step before (``near_zero``)
     h_fixed = (t_end - t0) / max(n_steps, 1)
     exponent = -1.0 / (error_order + 1)
     if ADAPTIVE:
@@ -471,6 +526,7 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
         if halt[0] != 0:
             status = STOPPED
             break
+        finite = True
         if ADAPTIVE:
             hmin = min_step(t, direction)
             if h_abs > max_step:
@@ -529,7 +585,8 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
             step_stages(rhs, t, h_fixed, y, K, ytmp, p)
             new_state(h_fixed, y, K, y_new)
             stats[2] += ns
-            if not all_finite(y_new):
+            finite = all_finite(y_new)
+            if not finite and not (WATCH and ctl.edge > 0.0):
                 status = NONFINITE
                 break
             t_new = t0 + (step + 1) * h_fixed
@@ -563,6 +620,28 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
                 for i in range(n_user):
                     if crossed(gu_old[i], gu_new[i], ev_dir[i], step == 1):
                         more = True
+            if not ADAPTIVE and ctl.edge > 0.0:
+                # a fixed step that starts within two steps of the edge at the rate of
+                # the step before, or whose edge value moved by half of it, or whose end
+                # is not finite, may have had a stage past the edge (its end may look
+                # regular all the same): then it stops at its start (a moment after it:
+                # the start is the last state kept, ``atlas``)
+                e = n_user - 1
+                if n_sing > 0 and e >= 0:
+                    g0 = gu_old[e]
+                    calm = (finite and abs(gu_new[e] - g0) <= 0.5 * abs(g0)
+                            and g0 >= 2.0 * (g_edge - g0))
+                    g_edge = g0
+                    if not calm and past_edge(uev, n_user, tab[0], A, ns, t, h, y, K, p,
+                                              ytmp, gtmp):
+                        more = False
+                        stop = SINGULAR
+                        t_stop = np.nextafter(t, t + direction)
+                        sing_index = most_watched(n_sing, gs_old, sig, gref)
+                        copy_into(y_stop, y)
+                if stop == 0 and not finite:
+                    status = NONFINITE
+                    break
             watched = False
             crawling = -1
             if more:
@@ -572,6 +651,10 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
                     tab, not ADAPTIVE, rhs, sing, uev, p, t, h, t_new, y, y_new, K, F, ytmp,
                     fmid, y_stop, stats, watch, ws, si, sing_index, ev_t, ev_i, ev_y, n_ev,
                     step == 1)
+            if ADAPTIVE and ctl.edge > 0.0 and stop == 0:
+                h_abs = min(h_abs, ctl.edge * near_zero(n_sing, gs_old, gs, sig, abs(h),
+                                                        h_prev, rate))
+                h_prev = abs(h)
             for i in range(n_sing):
                 gs_old[i] = gs[i]
             for i in range(n_user):
