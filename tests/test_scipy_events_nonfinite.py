@@ -69,3 +69,28 @@ def test_a_root_at_the_start_counts_as_the_compiled_methods_count_it(method):
     T = J.t
     tr = OSC.run(method=method, events=[T, jn.Event(T, direction=1), jn.Event(-T, direction=-1)])
     assert [list(e) for e in tr.t_events] == [[0.0]] * 3
+
+
+@pytest.fixture(scope="module")
+def root_well():
+    """x'' = 1/sqrt(x): the right-hand side is not finite past x = 0, which the run
+    reaches from x = 1 at rest... (L = x_t^2/2 - 2 sqrt(x))."""
+    J = jn.JetSpace("x")
+    (x,), (xt,) = J.q, J.qd
+    return jn.Scene(jn.System(J, xt**2 / 2 - 2 * sp.sqrt(x)), initial={"x": 1.0, "x_t": 0.0},
+                    t_span=(0, 3))
+
+
+def test_a_failed_scipy_bdf_run_reports_where_it_stopped(root_well):
+    """BDF's finite-difference Jacobian taken across the NaN: the error carries the stop
+    (its time and the evaluations made), as every other failed run's does."""
+    with pytest.raises(jn.IntegrationError) as info:
+        root_well.run(method="scipy-BDF", singular="ignore")
+    stop = info.value.stop
+    assert stop is not None and 0 < stop["t"] < 3 and stop["rhs_evaluations"] > 10
+
+
+def test_a_scipy_run_singular_at_its_start_says_which_rows_it_saved(root_well):
+    tr = root_well.run(method="scipy-RK45", t_eval=[1.0, 2.0], y0=[0.0, 0.0])
+    assert tr.status != 0 and tr.diagnostics.saved == "t_eval"
+    assert root_well.run(method="scipy-RK45", y0=[0.0, 0.0]).diagnostics.saved == "steps"

@@ -91,8 +91,9 @@ def evaluate(traj, times, full=False) -> np.ndarray:
         if bad.any():
             raise JetnhError(
                 f"the run stopped inside its last step ({traj.stop_reason[:120]}), so "
-                f"[{t[-2]!r}, {t[-1]!r}] is not a whole step and cannot be re-taken; times "
-                f"there (e.g. {tau[bad][0]!r}) are not available, only its end t = {t[-1]!r}")
+                f"[{t[-2]!r}, {t[-1]!r}] is not a whole step and cannot be re-taken or "
+                f"re-solved; times there (e.g. {tau[bad][0]!r}) are not available, only its "
+                f"end t = {t[-1]!r}")
         ends = (k == last)
         out[ends] = rows[-1]
         keep = ~ends
@@ -167,11 +168,18 @@ def _retaken_steps(traj, k, tau) -> np.ndarray:
     return out
 
 
+#: how far (in the run's tolerances, RMS) a re-solved radau step may end from the run's
+#: next row: the run stops Newton at newton_tol, which can leave a few tolerances on a
+#: stiff step; a changed array is off by far more
+_REPRODUCED = 10.0
+
+
 def _collocation_steps(traj, k, tau) -> np.ndarray:
     """radau: the collocation polynomial of step k[i] at tau (sorted by step, then time;
-    ``radau.collocation``), its end checked against the run's next row (within the run's
-    tolerance, after the move onto g = 0 that the run made), the values inside a step
-    moved onto g = 0 as the run's ``t_eval`` rows are; at a step's ends its rows."""
+    ``radau.collocation``), its end checked against the run's next row (within
+    ``_REPRODUCED`` times the run's tolerance, after the move onto g = 0 that the run
+    made), the values inside a step moved onto g = 0 as the run's ``t_eval`` rows are; at
+    a step's ends its rows."""
     from .methods._events import dense_eval
     from .methods.radau import collocation
 
@@ -195,12 +203,16 @@ def _collocation_steps(traj, k, tau) -> np.ndarray:
             if hol:
                 onto_constraints(kern, np.array([t1]), end, p, n_sens)
             scale = d["atol"] + d["rtol"] * np.maximum(np.abs(y0), np.abs(y[j + 1]))
-        if F is None or not np.sqrt(np.mean(((end[0] - y[j + 1]) / scale) ** 2)) <= 1.0:
+        off = np.sqrt(np.mean(((end[0] - y[j + 1]) / scale) ** 2)) if F is not None else None
+        if off is None or not off <= _REPRODUCED:
+            found = ("no convergence" if off is None else
+                     f"an end off the run's next row by {off:.3g} times its tolerance")
             raise IntegrationError(
                 f"solving the collocation equations of the step from t = {t0!r} to {t1!r} "
-                "again did not reproduce it (no convergence, or an end off the run's next "
-                "row by more than its tolerance); the trajectory's arrays were changed "
-                "after the run?")
+                f"again did not reproduce it ({found}): the run stopped its Newton "
+                "iterations at newton_tol, which on a stiff step can leave a few "
+                "tolerances (run again with a smaller newton_tol, e.g. 1e-10), or the "
+                "trajectory's arrays were changed after the run")
         rows = out[a:b]
         for i, theta in enumerate((tau[a:b] - t0) / h):
             dense_eval(float(theta), y0, F, rows[i])

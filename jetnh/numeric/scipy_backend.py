@@ -59,7 +59,10 @@ def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_st
 
     failed = []         # the last (t, y) where the right-hand side was not finite
 
+    calls = [0]         # right-hand-side evaluations (for a failed run's stop counts)
+
     def fun(t, y):
+        calls[0] += 1
         out = np.empty(n)
         y = np.ascontiguousarray(y, dtype=float)
         rhs(float(t), y, p, out)
@@ -91,7 +94,8 @@ def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_st
             return Trajectory(scene, [t0], [y_init[:n_state]], p, method=f"scipy-{method}",
                               status=SINGULAR, stop_reason=info["reason"], steps=0,
                               rejected=0, nfev=0, wall_time=0.0, kernels=kern,
-                              projected=scene.projected, singularity=info)
+                              projected=scene.projected, singularity=info,
+                              saved="steps" if t_eval is None else "t_eval")
         sig, thr = np.sign(g0), singular_tol * np.abs(g0)
         work = np.empty(m)
         for i in range(m):
@@ -124,7 +128,9 @@ def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_st
         if not failed:
             raise
         # (Radau, BDF: a Jacobian of finite differences taken across a NaN)
-        diagnosis.raise_nonfinite(scene, f"scipy-{method}", *failed[0], kern, p, t0, y_init)
+        diagnosis.raise_nonfinite(scene, f"scipy-{method}", *failed[0], kern, p, t0, y_init,
+                                  stop=dict(t=failed[0][0], steps=None, rejected=None,
+                                            rhs_evaluations=calls[0]))
     wall = time.perf_counter() - tic
     # no row (an empty t_eval, a stop before its first time): scipy leaves lists
     ts = np.asarray(sol.t, dtype=float).reshape(-1)

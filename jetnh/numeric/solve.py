@@ -49,9 +49,10 @@ class Plan:
 
     ``entry(*prefix, t0, t1, y0, p, *suffix, halt)`` is the call of the loop of the
     compiled methods (``loop.solver`` or radau's); ``ctl``, ``te``, ``mode``, ``watch``,
-    ``newton`` are among its arguments.  ``dense``: what re-taking a step needs
-    (``numeric.dense``; None: no dense output), ``dense_ends`` it completed for a run
-    whose last step is whole and for one stopped inside its last step (made once).  ``sens``: the kernels of the state
+    ``newton`` are among its arguments.  ``dense``: what re-taking a step (radau:
+    re-solving its collocation equations) needs (``numeric.dense``; None: no dense
+    output), ``dense_ends`` it completed for a run whose last step is whole and for one
+    stopped inside its last step (made once).  ``sens``: the kernels of the state
     augmented by its sensitivities, ``sens_tol`` their tolerances.  ``switch``: the run
     goes on across its chart's edge (``numeric.atlas``); its loop then watches the
     edge as its last event (``ce``: it stops there).  The discrete methods read

@@ -320,7 +320,8 @@ class Trajectory(Frozen):
     #: a run stopped after its last row (``t_eval``): the time and state where it stopped
     #: (``_stopped``; ``final``)
     _last = None
-    #: ``_dense``: what re-taking a step needs (tolerances, output mode; numeric.dense)
+    #: ``_dense``: what re-taking a step (radau: re-solving it) needs (tolerances, output
+    #: mode; numeric.dense)
     _dense = None
     #: which rows a run without ``_dense`` stored (scipy's methods, dla, dvi, rows
     #: sampled from another run): "steps", "t_eval" or "final" (``Diagnostics.saved``)
@@ -821,7 +822,8 @@ class Trajectory(Frozen):
 
         dop853, dopri5: the covering step re-taken, bit for bit what ``t_eval`` gives;
         radau: the step's collocation polynomial, what ``t_eval`` gives to the run's
-        ``newton_tol``; rk4: cubic Hermite.  Needs every step stored (no ``t_eval``, ``save="steps"``).
+        ``newton_tol``; rk4: cubic Hermite.  Needs every step stored (no ``t_eval``,
+        ``save="steps"``).
         A run that changed split is evaluated in the chart that ran at each time.
 
         Parameters

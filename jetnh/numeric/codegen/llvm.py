@@ -129,7 +129,7 @@ def straight_line(ops: tuple):
 
     dbl = ir.DoubleType()
     i64 = ir.IntType(64)
-    above = len(ops) > quick_ops()
+    above_rhs_threshold = len(ops) > quick_ops()
 
     @intrinsic
     def body(typingctx, t, y, p, out):
@@ -137,7 +137,7 @@ def straight_line(ops: tuple):
             mod = builder.module
             ptr = {name: context.make_array(ty)(context, builder, v).data
                    for name, ty, v in zip("ypo", signature.args[1:], args[1:])}
-            if above or getattr(context, "jetnh_quick", False):
+            if above_rhs_threshold or getattr(context, "jetnh_quick", False):
                 import llvmlite.binding as llvm
 
                 name, text = ir_text(ops)
