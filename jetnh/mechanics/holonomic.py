@@ -7,7 +7,7 @@ is what the numerics need to put and keep a configuration on g = 0:
 
 - ``residual(system, point)``: the values g_i at a point (t, q, parameters);
 - ``jacobian(system)``: dg_i/dq^s (m x n, sympy) and ``jacobian_at`` its numbers;
-- ``bound(system, point)``: the largest |g_i| accepted as "on g = 0" there, relative to
+- ``bound(system, point)``: the largest ``|g_i|`` accepted as "on g = 0" there, relative to
   the constraint's own scale at the point (``sizes``: the size of the terms that make up
   g_i, and the rounding of the coordinates and t through dg_i), never to the number 1:
   the same configuration in other units gets the same verdict;
@@ -33,10 +33,11 @@ from ..errors import ConstraintError
 #: the largest ``|g_i|`` accepted as "on g = 0", relative to the size of g_i's terms at
 #: the point (``sizes``)
 TOLERANCE = 1e-9
-#: ... and relative to the rounding of the point through g_i: sum_s |dg_i/dq^s| |q^s|
-#: + |dg_i/dt| |t| (a zero of sin q at q = pi, whose terms are themselves rounding)
+#: ... and relative to the rounding of the point through g_i,
+#: ``sum_s |dg_i/dq^s| |q^s| + |dg_i/dt| |t|`` (a zero of sin q at q = pi, whose terms
+#: are themselves rounding)
 ROUNDING = 1e-14
-#: the |g_i| a completion converges to, relative to the same sizes
+#: the ``|g_i|`` a completion converges to, relative to the same sizes
 CONVERGED = 1e-15
 #: Newton iterations of a completion
 MAX_ITERATIONS = 50
@@ -126,8 +127,8 @@ def _size_exprs(system) -> list:
 
 def sizes(system, point, G=None) -> tuple[np.ndarray, np.ndarray]:
     """``(terms, rounding)`` per constraint at ``point``: the size of the terms that make
-    up g_i (``magnitude``) and sum_s |dg_i/dq^s| |q^s| + |dg_i/dt| |t| (``G``: dg/dq
-    there, if known)."""
+    up g_i (``magnitude``) and ``sum_s |dg_i/dq^s| |q^s| + |dg_i/dt| |t|`` (``G``:
+    dg/dq there, if known)."""
     point = _symbols(system, point)
     m, J = len(system.holonomic), system.J
     vals = _floats(_size_exprs(system), point)
@@ -138,7 +139,7 @@ def sizes(system, point, G=None) -> tuple[np.ndarray, np.ndarray]:
 
 
 def bound(system, point, tol: float = TOLERANCE, G=None) -> np.ndarray:
-    """The largest |g_i| accepted as "on g = 0" at ``point``: ``tol`` times the size of
+    """The largest ``|g_i|`` accepted as "on g = 0" at ``point``: ``tol`` times the size of
     g_i's terms plus ``ROUNDING`` times the rounding of the point through g_i
     (``sizes``; ``G``: dg/dq there, if known)."""
     terms, rounding = sizes(system, point, G)
