@@ -36,7 +36,7 @@ import numpy as np
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
-from ..algebra import dag, linalg
+from ..algebra import dag, linalg, singular
 from ..errors import JetnhError, JetSpaceError
 from ..geometry.jet import JetSpace, key_name
 
@@ -361,15 +361,19 @@ def _potential(reader: _Reader, point, F, Q):
 
 def _conservative(J: JetSpace, Q):
     """V with -dV/dq = ``Q`` where the generalized forces ``Q`` of a load are
-    conservative: depending on q, free of t and qdot, with a symmetric Jacobian (dQ_i/dq_j = dQ_j/dq_i,
-    at random configurations), and integrable coordinate by coordinate (V = -int Q_1
-    dq_1, then -int (Q_2 + dV/dq_2) dq_2, ...: a spring F = -k r on a point, a torsion
-    spring on a frame), checked; else None."""
+    conservative: depending on q, free of t and qdot, with a symmetric Jacobian
+    (dQ_i/dq_j = dQ_j/dq_i, at random configurations), integrable coordinate by
+    coordinate (V = -int Q_1 dq_1, then -int (Q_2 + dV/dq_2) dq_2, ...: a spring F = -k r
+    on a point, a torsion spring on a frame) and ``_stands_for`` Q; else None: the load
+    stays a generalized force, which is always right.
+
+    A coordinate whose force is a nonzero constant keeps the load a force: a constant
+    torque on a joint angle does work 2 pi tau a turn, and V = -tau theta is no function
+    of the configuration."""
     own, q = {J.t, *J.qd}, set(J.q)
-    # (constant generalized forces stay forces: a constant torque on a joint angle
-    # does work 2 pi tau a turn, V = -tau theta is no function of the configuration)
-    if not any(dag.free_symbols(e) & q for e in Q) or any(
-            dag.free_symbols(e) & own for e in Q):
+    free = [dag.free_symbols(e) for e in Q]
+    if (not any(f & q for f in free) or any(f & own for f in free)
+            or any(e != 0 and not f & q for e, f in zip(Q, free))):
         return None
     n = len(J.q)
     rows = [dag.diff(Q[i], J.q[j]) for i in range(n) for j in range(i + 1, n)]
@@ -377,13 +381,40 @@ def _conservative(J: JetSpace, Q):
     if rows and not _agree(rows, cols, _random_points(J, rows + cols)):
         return None
     V = sp.S.Zero
-    for q, e in zip(J.q, Q):
-        part = sp.integrate(sp.expand(-e - dag.diff(V, q)), q)
+    for qi, e in zip(J.q, Q):
+        try:
+            part = sp.integrate(sp.expand(-e - dag.diff(V, qi)), qi)
+        except Exception:  # sympy gave up: the load stays a force, as without integrating
+            return None
         if part.has(sp.Integral):
             return None
         V += part
-    minus_dV = [-dag.diff(V, q) for q in J.q]
-    return V if _agree(minus_dV, Q, _random_points(J, minus_dV + list(Q))) else None
+    return V if _stands_for(J, V, Q) else None
+
+
+#: functions defined, finite and smooth on the whole real line: a V may contain them
+#: where its load does not (V = -k cos q for Q = -k sin q)
+_ENTIRE = (sp.exp, sp.sin, sp.cos, sp.sinh, sp.cosh)
+
+
+def _stands_for(J: JetSpace, V, Q) -> bool:
+    """Whether L = T - V gives the equations of Q, wherever Q is defined: V is real
+    (no imaginary unit: the vortex Q = k (-y, x) / |r|^2 integrates to complex logs, it
+    has no potential on the punctured plane) and one expression (no Piecewise: q^a);
+    V has no function Q does not have, but entire ones (log q from k/q is undefined at
+    q < 0, log(tanh q + 1) from tanh q is not at q = -25 in floating point); V and its
+    -dV/dq are singular nowhere Q is not (``singular.bases``: no new denominator, root
+    or log argument); and -dV/dq is Q, term by term once expanded."""
+    if V.has(sp.I) or V.has(sp.Piecewise):
+        return False
+    heads = {type(f) for e in Q for f in dag.atoms(e, sp.Function)}
+    if any(not isinstance(f, (*heads, *_ENTIRE)) for f in V.atoms(sp.Function)):
+        return False
+    minus_dV = [-dag.diff(V, qi) for qi in J.q]
+    allowed = {b for e in Q for b in singular.bases(e)}
+    if any(b not in allowed for e in (V, *minus_dV) for b in singular.bases(e)):
+        return False
+    return all(sp.expand(a - e) == 0 for a, e in zip(minus_dV, Q))
 
 
 def constraints(reader: _Reader) -> list:
