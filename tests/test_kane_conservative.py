@@ -220,3 +220,12 @@ def test_constant_generalized_force_guard_is_per_coordinate():
     assert kane_bridge._conservative(J, [sp.S.Zero, tau]) is None
     assert kane_bridge._conservative(J, [-k * (r - l), tau]) is None
     assert kane_bridge._conservative(J, [-k * (r - l), sp.S.Zero]) is not None
+
+
+def test_piecewise_load_is_refused_by_the_system_not_by_the_integration():
+    """A Piecewise load is not tried as a potential (its Jacobian has no value at random
+    points: a raw ValueError before); the System refuses it, naming the fix."""
+    k = sp.Symbol("k")
+    with pytest.raises(jn.errors.JetnhError, match="Piecewise"):
+        _particle(lambda N, O, P, q1, q2, u1, u2: sp.Piecewise((-k * q1 * q2**2, q1 > 0),
+                                                              (0, True)) * N.x - k * q2 * N.y)

@@ -8,8 +8,9 @@ expression of the model is read with u replaced by U:
 - L = T - V: T the kinetic energies of the bodies and particles; V the potential of the
   loads that have one (a force constant in the inertial frame on a point located
   from a point at rest: V = -F . r; a load whose generalized forces are free of t and
-  qdot with a symmetric Jacobian, such as a spring F = -k r: integrated), checked
-  against their generalized forces;
+  qdot with a symmetric Jacobian, such as a spring F = -k r: integrated, and kept only
+  where V stands for the load wherever it is defined), checked against their
+  generalized forces;
 - every other load gives generalized forces Q_s = sum F . dv/dqdot^s (v the velocity of
   the point, or the angular velocity of the frame, in the inertial frame);
 - velocity constraints (linear in u) become constraints in qdot; configuration
@@ -373,7 +374,8 @@ def _conservative(J: JetSpace, Q):
     own, q = {J.t, *J.qd}, set(J.q)
     free = [dag.free_symbols(e) for e in Q]
     if (not any(f & q for f in free) or any(f & own for f in free)
-            or any(e != 0 and not f & q for e, f in zip(Q, free))):
+            or any(e != 0 and not f & q for e, f in zip(Q, free))
+            or any(dag.has(e, sp.Piecewise) for e in Q)):   # not evaluated at random points
         return None
     n = len(J.q)
     rows = [dag.diff(Q[i], J.q[j]) for i in range(n) for j in range(i + 1, n)]
