@@ -401,13 +401,13 @@ _ENTIRE = (sp.exp, sp.sin, sp.cos, sp.sinh, sp.cosh)
 
 def _stands_for(J: JetSpace, V, Q) -> bool:
     """Whether L = T - V gives the equations of Q, wherever Q is defined: V is real
-    (no imaginary unit: the vortex Q = k (-y, x) / |r|^2 integrates to complex logs, it
-    has no potential on the punctured plane) and one expression (no Piecewise: q^a);
-    V has no function Q does not have, but entire ones (log q from k/q is undefined at
-    q < 0, log(tanh q + 1) from tanh q is not at q = -25 in floating point); V and its
+    (no imaginary unit: the vortex Q = k (-y, x) / ``|r|^2`` integrates to complex
+    logs, it has no potential on the punctured plane); V has no function Q does not
+    have, but entire ones (a Piecewise from q^a; log q from k/q is undefined at q < 0,
+    log(tanh q + 1) from tanh q is log 0 at q = -25 in floating point); V and its
     -dV/dq are singular nowhere Q is not (``singular.bases``: no new denominator, root
     or log argument); and -dV/dq is Q, term by term once expanded."""
-    if V.has(sp.I) or V.has(sp.Piecewise):
+    if V.has(sp.I):
         return False
     heads = {type(f) for e in Q for f in dag.atoms(e, sp.Function)}
     if any(not isinstance(f, (*heads, *_ENTIRE)) for f in V.atoms(sp.Function)):
