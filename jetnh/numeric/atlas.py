@@ -718,7 +718,8 @@ def run(home, plan, y0, p, build):
             status, dense = out[0], plan.dense_ends
             if status == FINISHED:
                 return Trajectory._of_loop(home, out, p, plan.method.name, _FINISHED_TEXT,
-                                           wall, plan.kern, None if dense is None else dense[0])
+                                           wall, plan.kern,
+                                           None if dense is None else dense[0])
             if dense is not None:       # stopped inside a step or not
                 dense = dense[status == EVENT or status == SINGULAR]
             ahead = None
