@@ -661,8 +661,8 @@ def plot(panels, out_stem):
 def main(argv=None):
     ap = parser(__doc__, "workprecision")
     ap.add_argument("--panels", nargs="+", metavar="LABEL",
-                    help="only these panels, by label (e.g. 'knife_edge / chetaev'), or "
-                         "by system or principle alone")
+                    help="only these panels (of every system, also with --quick), by "
+                         "label (e.g. 'knife_edge / chetaev'), or by system or principle")
     args = ap.parse_args(argv)
     if args.quick:
         tolerances, steps, reps, budget, give_up = [1e-3, 1e-6, 1e-9], [10, 100, 1000], 2, 0.2, 0.5
@@ -673,7 +673,7 @@ def main(argv=None):
     calls = 200 if args.quick else 2000
     args.out.parent.mkdir(parents=True, exist_ok=True)
     drive = rhs_driver()
-    chosen = [c for c in cases(args.quick) if not args.panels
+    chosen = [c for c in cases(args.quick and not args.panels) if not args.panels
               or {c.label, c.model, c.principle} & set(args.panels)]
     panels = [panel(c, tolerances, steps, reps, budget, give_up, drive, calls)
               for c in chosen]
