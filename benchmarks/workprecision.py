@@ -2,7 +2,7 @@
 against scipy's ``solve_ivp`` on the same equations, for six catalogue systems under
 Chetaev and vakonomic dynamics.
 
-    .venv/bin/python benchmarks/workprecision.py [--quick] [--out PATH]
+    .venv/bin/python benchmarks/workprecision.py [--quick] [--out PATH] [--panels LABEL ...]
 
 (default output: benchmarks/results/workprecision.json and, next to it,
 workprecision_chetaev.png, workprecision_vakonomic.png, workprecision_tolerance.png).
@@ -660,6 +660,9 @@ def plot(panels, out_stem):
 
 def main(argv=None):
     ap = parser(__doc__, "workprecision")
+    ap.add_argument("--panels", nargs="+", metavar="LABEL",
+                    help="only these panels (of every system, also with --quick), by "
+                         "label (e.g. 'knife_edge / chetaev'), or by system or principle")
     args = ap.parse_args(argv)
     if args.quick:
         tolerances, steps, reps, budget, give_up = [1e-3, 1e-6, 1e-9], [10, 100, 1000], 2, 0.2, 0.5
@@ -670,8 +673,10 @@ def main(argv=None):
     calls = 200 if args.quick else 2000
     args.out.parent.mkdir(parents=True, exist_ok=True)
     drive = rhs_driver()
+    chosen = [c for c in cases(args.quick and not args.panels) if not args.panels
+              or {c.label, c.model, c.principle} & set(args.panels)]
     panels = [panel(c, tolerances, steps, reps, budget, give_up, drive, calls)
-              for c in cases(args.quick)]
+              for c in chosen]
     figures = plot(panels, args.out.with_suffix(""))
     summary = summarize(panels)
     for t, s in summary["best_scipy_over_jetnh"].items():

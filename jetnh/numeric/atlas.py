@@ -90,7 +90,7 @@ from ..mechanics import principles
 from ..mechanics.system import paired_columns
 from .methods import projection
 from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, FINISHED, SINGULAR,
-                              STATUS_TEXT, STOPPED)
+                              STATUS_TEXT, STOPPED, entry_point)
 from . import arguments, chart_change, chart_driver, interrupt, loops, methods
 from .events import Event, OwnEvent, as_events
 from .kernels.calls import Kernel, Rows
@@ -657,11 +657,20 @@ class Atlas:
         """``(kernel(t, y, p, out), len(ce))``: the compiled events ``ce`` of a run in
         the scene's own chart (``events``, its edge last) called from Python, made
         once."""
+        return self.edge_call(ce)[:2]
+
+    def edge_call(self, ce) -> tuple:
+        """``(kernel, len(ce), entry, address, sizes)``: ``edge_kernel`` and the
+        machine-code entry of its trampoline with the trampoline's first arguments
+        (``_common.entry_point``: ``entry(address, sizes, t, y, p, out)`` skips numba's
+        type dispatch; its caller passes exactly the declared types), made once."""
         found = self._edges.get(id(ce))
         if found is None or found[0] is not ce:
             home = self.home
-            found = self._edges[id(ce)] = (ce, (Kernel(ce.uev, (
-                len(home.state_names), len(home.runtime_params), len(ce))), len(ce)))
+            kernel = Kernel(ce.uev, (len(home.state_names), len(home.runtime_params),
+                                     len(ce)))
+            found = self._edges[id(ce)] = (ce, (kernel, len(ce),
+                                                entry_point(kernel.func), *kernel.args))
         return found[1]
 
     def _compile_events(self, chart, user, edge):
@@ -685,15 +694,47 @@ def run(home, plan, y0, p, build):
     (``plan.sens``; ``y0`` holds the state and S(t0) after it) runs each chart with its
     own kernels, S carried across every switch (``Chart.carry``)."""
     at = atlas(home)
-    user = as_events(plan.events)
     tic = time.perf_counter()
+    quick = (plan.events is None and plan.sens is None and plan.limit is None
+             and not plan.ctl.n_hol)
+    if quick:
+        # (most runs: no user events, sensitivities, time budget or holonomic constraints)
+        key = (plan.method.name, plan.mode, plan.checked, plan.singular_tol)
+        if at._reaches.get(key):
+            # (runs of a plan whose last run reached the edge: the whole run in one
+            # compiled call; a run that does not is cheaper as one loop call, below)
+            driven = _driven(home, at, plan, y0, p, build, tic, key)
+            if driven is not None:
+                return driven
+        if not _edge_at(at, plan.ce, plan.t0, y0, p) < 0.0:
+            # the plan's loop called as a run that cannot switch calls it: a run that
+            # finishes is its Trajectory at once; one that reaches the edge goes on in
+            # a second call (``_made_onward``)
+            halt = _HALT.copy()
+            tic_loop = time.perf_counter()
+            out = interrupt.call(plan.entry, halt, None,
+                                 (*plan.head, y0, p, *plan.suffix, halt))
+            wall = time.perf_counter() - tic_loop
+            status, dense = out[0], plan.dense_ends
+            if status == FINISHED:
+                return Trajectory._of_loop(home, out, p, plan.method.name, _FINISHED_TEXT,
+                                           wall, plan.kern,
+                                           None if dense is None else dense[0])
+            if dense is not None:       # stopped inside a step or not
+                dense = dense[status == EVENT or status == SINGULAR]
+            ahead = None
+            if status == EVENT or status == SINGULAR:       # (the edge: its one event)
+                ahead = interrupt.call(_made_onward, halt, None,
+                                       (at, plan, out, wall, dense, y0, p, build, tic, halt))
+            return _on_from(home, at, plan, y0, p, (), build, tic, key, out, wall, dense,
+                            ahead)
+    user = as_events(plan.events)
     sens, t0, t1, ctl = plan.sens, plan.t0, plan.t1, plan.ctl
     method = plan.method.name
     n = len(home.state_names)
     key = (method, plan.mode, plan.checked, plan.singular_tol)
-    if sens is None and plan.limit is None and not user and at._reaches.get(key):
-        # (runs of a plan whose last run reached the edge: a run that does not is
-        # cheaper as one loop call, below)
+    if (not quick and sens is None and plan.limit is None and not user
+            and at._reaches.get(key)):
         driven = _driven(home, at, plan, y0, p, build, tic, key)
         if driven is not None:
             return driven
@@ -716,18 +757,26 @@ def run(home, plan, y0, p, build):
     halt = _HALT.copy()
     out, wall, dense, ahead = interrupt.call(_ahead, halt, plan.limit,
                                              (at, plan, y0, p, user, build, halt, tic))
-    status, n_ev = out[0], out[10]
+    return _on_from(home, at, plan, y0, p, user, build, tic, key, out, wall, dense, ahead)
+
+
+def _on_from(home, at, plan, y0, p, user, build, tic, key, out, wall, dense, ahead):
+    """``run`` after the first piece's loop (``out``, the loop's tuple; ``ahead``: the
+    pieces after it made in the same ``interrupt.call``, or None): a run that did not
+    stop at the edge (nor singular) is that loop's Trajectory; one that did goes on
+    (``follow``) and is stitched."""
+    status, n_ev, method = out[0], out[10], plan.method.name
     if ahead is None and not (status == EVENT and out[8][n_ev - 1] == len(user)
                               or status == SINGULAR):
         # (not at the edge, nor stopped singular: perhaps past it, ``follow``)
-        if status == FINISHED and not user and sens is None:        # most runs: at once
+        if status == FINISHED and not user and plan.sens is None:   # most runs: at once
             return Trajectory._finished(home, (out[1], out[2], out[3]), p, method,
                                         _FINISHED_TEXT, (out[4], wall, home.projected),
                                         plan.kern, dense)
         # (a Result: its rows checked again where the projection moved them)
-        return build(home, method, loops.result(out) if ctl.n_hol else out, wall,
-                     plan.kern, plan.ce, p, t0, y0, plan.singular_tol, plan.checked,
-                     plan.limit, dense, n_events=len(user), sens=sens)
+        return build(home, method, loops.result(out) if plan.ctl.n_hol else out, wall,
+                     plan.kern, plan.ce, p, plan.t0, y0, plan.singular_tol, plan.checked,
+                     plan.limit, dense, n_events=len(user), sens=plan.sens)
     parts, switches = ahead or _onward_from(at, plan, out, wall, dense, y0, p, user,
                                             build, tic)
     at._reaches[key] = True
@@ -776,6 +825,16 @@ def _onward_from(at, plan, out, wall, dense, y0, p, user, build, tic, halt=None)
                   ran=(loops.result(out), wall, plan.ce, plan.watch, dense), halt=halt)
 
 
+def _made_onward(at, plan, out, wall, dense, y0, p, build, tic, halt):
+    """``_onward_from`` of a run without user events inside an ``interrupt.call``
+    (``halt``), or None where a piece needs what is not made yet (``Cold``: the run goes
+    on outside)."""
+    try:
+        return _onward_from(at, plan, out, wall, dense, y0, p, (), build, tic, halt)
+    except Cold:
+        return None
+
+
 def _driven(home, at, plan, y0, p, build, tic, key):
     """``run`` of a run without user events, sensitivities or time budget in one
     compiled call (``chart_driver``: every piece, step start, cut and change of chart),
@@ -794,36 +853,42 @@ def _driven(home, at, plan, y0, p, build, tic, key):
     wall = time.perf_counter() - tic
     if code:
         return None
-    last, method = I[n_p - 1], plan.method.name
-    if n_p == 1 and not n_sw and not last[chart_driver.C_CUT]:
+    # (the record's rows as lists: a few numbers each, read faster than numpy's)
+    cd, method = chart_driver, plan.method.name
+    rows = I[:max(n_p, n_sw)].tolist()
+    last = rows[n_p - 1]
+    once = n_p == 1 and not n_sw and not last[cd.C_CUT]    # (never at the edge)
+    if once:
         at._reaches[key] = False
-    if last[chart_driver.C_STATUS] != FINISHED:     # (the reasons of its stop: ``stitch``)
+    if last[cd.C_STATUS] != FINISHED:       # (the reasons of its stop: ``stitch``)
         parts = _recorded_parts(at, plan, p, build, wall, (n_p, I, F, TS, YS))
-        return stitch(home, at, method, p, parts, _switches(at, n_sw, I, F), (),
+        return stitch(home, at, method, p, parts, _switches(at, n_sw, rows, F), (),
                       plan.mode, wall)
-    counts = I[:n_p, chart_driver.C_STEPS:chart_driver.C_NFEV + 1].sum(axis=0).tolist()
+    steps = rejected = nfev = 0
+    for row in rows[:n_p]:
+        steps += row[cd.C_STEPS]
+        rejected += row[cd.C_REJECTED]
+        nfev += row[cd.C_NFEV]
+    counts = ((steps, rejected, nfev), wall, home.projected)
     dense = plan.dense_ends
     if dense is not None:
-        dense = dense[int(I[0, chart_driver.C_PARTIAL])]
-    if n_p == 1 and not n_sw and not last[chart_driver.C_CUT]:      # never at the edge
-        return Trajectory._finished(home, (TS, YS, int(last[chart_driver.C_ROWS])), p,
-                                    method, _FINISHED_TEXT,
-                                    (tuple(counts), wall, home.projected), plan.kern, dense)
-    switches = tuple(_switches(at, n_sw, I, F))
-    return Trajectory._of_run(home, None, p, method, FINISHED, _FINISHED_TEXT,
-                              (tuple(counts), wall, home.projected), at.own.kernels, None,
-                              None, dense, None,
-                              segments=_Recorded(at, plan, p, build, wall,
+        dense = dense[rows[0][cd.C_PARTIAL]]
+    if once:
+        return Trajectory._finished(home, (TS, YS, last[cd.C_ROWS]), p, method,
+                                    _FINISHED_TEXT, counts, plan.kern, dense)
+    return Trajectory._switched(home, p, method, _FINISHED_TEXT, counts, at.own.kernels,
+                                dense, _Recorded(at, plan, p, build, wall,
                                                  (n_p, I, F, TS, YS)),
-                              switches=switches)
+                                tuple(_switches(at, n_sw, rows, F)))
 
 
-def _switches(at, n_sw, I, F) -> list:
-    """The switches ``{"t", "from", "to"}`` of a run that ``chart_driver`` recorded."""
-    splits = at.splits
-    return [{"t": float(F[j, chart_driver.SW_T]),
-             "from": list(splits[I[j, chart_driver.SW_FROM]]),
-             "to": list(splits[I[j, chart_driver.SW_TO]])} for j in range(n_sw)]
+def _switches(at, n_sw, rows, F) -> list:
+    """The switches ``{"t", "from", "to"}`` of a run that ``chart_driver`` recorded
+    (``rows``: the first rows of its integers ``I`` as lists)."""
+    splits, cd = at.splits, chart_driver
+    return [{"t": t, "from": list(splits[rows[j][cd.SW_FROM]]),
+             "to": list(splits[rows[j][cd.SW_TO]])}
+            for j, t in enumerate(F[:n_sw, cd.SW_T].tolist())]
 
 
 def _drive_inputs(at, plan, key):
@@ -916,6 +981,16 @@ def own_edge(at, ce, t, y, p) -> float:
     out = np.empty(n)
     kernel(float(t), y, p, out)
     return float(out[-1])
+
+
+def _edge_at(at, ce, t, y, p) -> float:
+    """``own_edge`` of a run's own arrays (``y``, ``p``: C-contiguous float64 vectors,
+    ``t`` a float, as ``chart_driver.drive`` takes them): its kernel's trampoline called
+    at its machine-code entry (``Atlas.edge_call``), without numba's type dispatch."""
+    _, n, entry, address, sizes = at.edge_call(ce)
+    out = np.empty(n)
+    entry(address, sizes, t, y, p, out)
+    return out[n - 1]
 
 
 def begin(at, user, t0, y0, p, past=False):

@@ -758,7 +758,8 @@ class Scene(Frozen):
         if p is None:
             p = self._p
         if y0 is None and params is None:       # the scene's own
-            if plan.direct:     # (the loop reads y0 into a copy of its own: never written)
+            if plan.direct or plan.switch:  # (the loops read y0 into copies of their
+                #                                 own, the atlas never writes it)
                 y = memo.get("_y0")
                 return solve.run(self, plan, self._y0 if y is None else y, p, True, span)
             return solve.run(self, plan, self.y0.copy(), p, True)

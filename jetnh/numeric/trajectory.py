@@ -383,6 +383,19 @@ class Trajectory(Frozen):
         return self
 
     @classmethod
+    def _switched(cls, scene, p, method, stop_reason, counts, kernels, dense, segments,
+                  switches) -> "Trajectory":
+        """``_of_run`` of a run that changed split and finished (status 0) without
+        events or sensitivities, in one step: its rows made from ``segments`` when first
+        read (``numeric.atlas``), ``switches`` a tuple of records without arrays."""
+        self = object.__new__(cls)
+        self.__dict__.update(scene=scene, _rows=None, _p=p, _kernels=kernels, method=method,
+                             status=0, stop_reason=stop_reason, t_events=[], y_events=[],
+                             _dense=dense, _counts=counts, _segments=segments,
+                             switches=switches, _memo={})
+        return self
+
+    @classmethod
     def _of_loop(cls, scene, out, p, method, stop_reason, wall, kernels, dense,
                  event_names=()) -> "Trajectory":
         """``_finished`` of the tuple ``out`` a compiled loop returned (finished, status
