@@ -97,7 +97,10 @@ resonance with every frozen eigenvalue in the left half-plane): the verdict is
 ``TIME_DEPENDENT``, ``stable`` and ``margin`` are None and NaN.  A time-periodic A needs
 Floquet's theory (the monodromy matrix over a period, from the variational equations
 of a run), which linearize does not compute.  Parameter values that remove the
-dependence on t (a modulation of amplitude 0) give the frozen verdict again.
+dependence on t (a modulation of amplitude 0) give the frozen verdict again.  Rows
+that contain t but do not depend on it (the derivative vanishes identically, as in
+e^(g t) L0, whose rows carry exp(g t) exp(-g t)) are evaluated at t = 0: the same
+values at every t, without the overflow of those factors at g t ~ 710.
 """
 
 from __future__ import annotations
@@ -232,6 +235,14 @@ class _Model:
             self._uses[key] = any(t in dag.free_symbols(e)
                                   and not zero.vanishes(dag.diff(e, t)) for e in exprs)
         return self._uses[key]
+
+    def frozen_time(self, rows, t: float) -> float:
+        """The time at which ``rows`` (state indices) are evaluated at the point's ``t``:
+        ``t`` itself, or 0 where they and the holonomic constraints do not depend on t
+        (``has_time``).  Their values are then the same at every t, but a factor that
+        cancels only on paper, such as exp(g t) exp(-g t) (a time-dependent Lagrangian
+        e^(g t) L0), overflows the compiled rows at g t ~ 710; at t = 0 it is 1."""
+        return t if self.has_time(rows) else 0.0
 
     @_once
     def tied(self) -> dict:
@@ -457,7 +468,7 @@ class Linearization(Frozen):
         ck = self._kernels
         keep = list(self._keep)
         cols = [keep.index(i) for i in idx]
-        y, p, t = self._y.copy(), self._p, self.t
+        y, p, t = self._y.copy(), self._p, model.frozen_time(self._keep, self.t)
         f = np.empty(len(model.names))
         Jm = np.empty((len(model.names), len(model.names)))
         moves = self._chart and any(i < len(model.coordinates) for i in idx)
@@ -509,10 +520,10 @@ class Linearization(Frozen):
         point = {k: v for k, v in self.at.items()
                  if k not in {d.name for d in model.dependent}}
         point.update((model.names[i], float(y[i])) for i in (*idx, *self._chart))
-        found = _evaluate(model, point, dict(self.params), self._keep, t, tol * weight)
+        found = _evaluate(model, point, dict(self.params), self._keep, self.t, tol * weight)
         if found.time_dependent and not found.steady_motion:
             raise LinearizationError(
-                f"x' vanishes at t = {t:g} with {', '.join(unknowns)} = "
+                f"x' vanishes at t = {self.t:g} with {', '.join(unknowns)} = "
                 f"{np.round(x, 12).tolist()}, but not at other times: the equations depend "
                 "on t, and a point where x' vanishes for an instant is no steady motion; "
                 "solve for other values, or hold those that keep x' = 0 at every t")
@@ -577,7 +588,9 @@ class Linearization(Frozen):
         kept rows on the shared graph (evaluate it with ``dag.evaluate``).  With
         holonomic constraints it holds every coordinate, the eliminated ones too (give
         them their values on g = 0): the columns of the kept coordinates carry the
-        eliminated ones' motion -(dg/dq^D)^-1 dg/dq^I."""
+        eliminated ones' motion -(dg/dq^D)^-1 dg/dq^I.  Rows that do not depend on t
+        (identically) hold no t: it is set to 0 in them, which cancels factors such as
+        exp(g t) exp(-g t)."""
         return _symbolic(self._model, self._keep, self._chart)
 
     @property
@@ -593,6 +606,8 @@ def _symbolic(model: _Model, keep, chart) -> sp.Matrix:
     key = (keep, chart)
     if key not in model._symbolic:
         rows = [model.rows[i] for i in keep]
+        if not model.has_time(keep):        # t = 0 cancels exp(g t) exp(-g t)
+            rows = dag.xreplace(rows, {model.system.J.t: sp.Integer(0)})
         A = dag.jacobian(rows, [model.states[i] for i in keep])
         if chart:
             G = holonomic.jacobian(model.system)
@@ -986,11 +1001,12 @@ def _evaluate(model: _Model, point: dict, values: dict, keep, t: float,
     ck = model.kernels(values, state, t)
     p = np.array([values[nm] for nm in model.params], dtype=float)
     aux = np.empty(ck.layout.n_aux)
-    ck.aux(t, y, p, aux)
-    at = dict(state)
     k = len(dep)
     coordinate = {v.name: model.coordinates.index(q) for v, q in zip(
         model.dependent, (model.system.J.split(v)[0] for v in model.dependent))}
+    ta = model.frozen_time(tuple(coordinate.values()), t)    # phi's time
+    ck.aux(ta, y, p, aux)
+    at = dict(state)
     for a, nm in enumerate(dep):
         v = float(aux[a])
         if not np.isfinite(v):
@@ -999,7 +1015,7 @@ def _evaluate(model: _Model, point: dict, values: dict, keep, t: float,
                 f"singular for the split {[s.name for s in model.system.dependent]}; "
                 "choose another operating point or another split (dependent=)")
         if nm in point and abs(point[nm] - v) > CONSISTENT * _size(
-                model, coordinate[nm], ck, y, p, values, t, v, abs(point[nm] - v)):
+                model, coordinate[nm], ck, y, p, values, ta, v, abs(point[nm] - v)):
             raise ConstraintError(
                 f"the point is off the constraints: at gives {nm} = {point[nm]!r} but the "
                 f"constraints give {v!r}; omit it (dependent velocities follow from the "
@@ -1007,7 +1023,8 @@ def _evaluate(model: _Model, point: dict, values: dict, keep, t: float,
         at[nm] = v
     if k and not np.all(np.isfinite(aux[k:2 * k])):
         raise ConstraintError("the constraints are undefined at this point")
-    A, rates, limit, bound = _jacobian(model, ck, y, p, values, t, rows, E)
+    A, rates, limit, bound = _jacobian(model, ck, y, p, values,
+                                       model.frozen_time(rows, t), rows, E)
     if floor is not None and len(floor) == len(bound):
         bound = np.maximum(bound, floor)
     return Linearization(model, at, values, rows, chart, E, t, y, p, A, rates, limit, bound)
@@ -1218,7 +1235,8 @@ def _settled(model, ck, y, p, values, t, rows, E):
             "coordinates, where the mass matrix of the reduced equations is singular, as "
             "at the pole of polar coordinates or of Euler angles; a singular configuration "
             "of the principle's equations or of the split; or parameter values that make "
-            "them degenerate, e.g. a mass of 0), and no limit could be established there "
+            "them degenerate, e.g. a mass of 0; or values beyond double precision, such as "
+            "exp(g t) at large g t), and no limit could be established there "
             f"with steps {STEPS[0]:g}..{STEPS[-1]:g} times the state's size {scale:.3g}; "
             "linearize in other coordinates, or choose another operating point, another "
             "split (dependent=) or other parameter values")
