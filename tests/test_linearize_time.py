@@ -186,6 +186,32 @@ def test_exp_factors_that_cancel_with_a_constraint():
         assert lin.verdict == lin0.verdict == verdict
 
 
+def _modulated_drag():
+    """x'' = -c (1 + b cos(w t)) x': at rest a steady motion whose A = -c (1 + b cos w t)
+    changes with t (x is cyclic: the state is x_t alone, A a rate)."""
+    J = jn.JetSpace("x")
+    (x,), (xt,) = J.q, J.qd
+    return jn.System(J, xt**2 / 2, forces={x: -c * (1 + b * sp.cos(w * J.t)) * xt})
+
+
+@pytest.mark.parametrize("unit", [1e-6, 1e-3, 1.0, 1e3])
+@pytest.mark.parametrize("t", [0.0, 1e4])
+def test_time_dependence_in_every_unit_of_time(unit, t):
+    """The same motion with time in units of ``unit`` seconds (rates times unit): A
+    changes with t in every unit (``time_dependent``; the frozen verdict, asymptotically
+    stable, decides nothing), at t = 0 and at 1e4 s.  It was judged against max(1, |A|)
+    with offsets in units of max(1, |t|): at t = 1e4 s in milliseconds (A = -1e-6 per
+    ms, changes of 1e-13 below an absolute 1e-12) and at t = 0 in microseconds the
+    verdict was the frozen one."""
+    P = {"c": 1e-3 * unit, "b": 1e-7, "w": 2.0 * unit}
+    lin = jn.linearize(_modulated_drag(), at={"x_t": 0.0}, params=P, t=t / unit)
+    assert lin.state_names == ("x_t",) and lin.steady_motion
+    assert lin.eigenvalues[0].real == pytest.approx(-1e-3 * unit * (1 + 1e-7 * np.cos(2 * t)),
+                                                    rel=1e-15)
+    assert lin.time_dependent and lin.verdict == TIME_DEPENDENT
+    assert not lin.replace(params={"b": 0.0}).time_dependent
+
+
 @settings(max_examples=4, deadline=None, suppress_health_check=list(HealthCheck))
 @given(jst.constrained_systems(min_n=2, max_n=3), st.integers(0, 2**16))
 def test_modulated_term_on_random_systems(case, seed):

@@ -87,8 +87,8 @@ balancing keeps near sqrt(k).
 
 Rows that depend on t (t in a kept row or a holonomic constraint with a derivative that
 does not vanish identically, e.g. a periodically forced or modulated system): the state
-is held and A and x' are evaluated again at the times ``t + TIMES`` (scaled by max(1,
-|t|)).  The point is a steady motion only when x' vanishes at every one of them (a
+is held and A and x' are evaluated again at the times ``t + TIMES`` (scaled by the
+larger of |t| and A's time scale, 1/|B|).  The point is a steady motion only when x' vanishes at every one of them (a
 point where x' vanishes at one instant only, as an equilibrium of a forced oscillator
 at a zero of its forcing, is none); ``time_dependent`` is True when A or x' differ
 between them.  At such a point A and its eigenvalues are those frozen at ``t``, and
@@ -141,7 +141,8 @@ CONSISTENT = 1e-9
 NOT_STEADY = "not a steady motion"
 #: the verdict at a steady motion of rows that depend on t
 TIME_DEPENDENT = "time-dependent: the frozen eigenvalues do not decide"
-#: the offsets from the point's t at which rows that contain t are evaluated again
+#: the offsets from the point's t at which rows that contain t are evaluated again, in
+#: units of the larger of |t| and A's time scale (``_in_time``)
 TIMES = (0.1234567, -0.5772157, 1.4142136, 2.7182818, 7.3890561, 31.415927, 271.82818)
 
 _MODELS: dict = {}
@@ -368,10 +369,6 @@ class Linearization(Frozen):
         self.steady_motion = bool(steady)
 
     # ------------------------------------------------------------------ verdicts
-    @property
-    def _scale(self) -> float:
-        return max(1.0, float(np.abs(self.A).max()) if self.A.size else 1.0)
-
     @property
     def margin(self) -> float:
         """The largest real part less its error bound, Re lambda_i - e_i (module
@@ -655,8 +652,11 @@ def _margin(ev: np.ndarray, bounds: np.ndarray) -> float:
 
 def _in_time(lin: Linearization, bound: np.ndarray) -> tuple[bool, bool]:
     """``(changes, steady)`` of a point whose rows contain t: whether A or x' differ at
-    the times ``t + TIMES`` (A by more than ``REAL`` times its size, a rate by more than
-    its ``bound``) and whether every rate is within its bound at t and at each of them.  The state is held;
+    the times ``t + TIMES`` times the larger of ``|t|`` and A's time scale 1/|B| (B: A
+    balanced, Frobenius norm; 1 where A is 0) (A by more than ``REAL`` of its size in
+    balanced units, ``_difference``; a rate by more than its ``bound``) and whether
+    every rate is within its bound at t and at each of them: no number 1 in another
+    unit of time.  The state is held;
     with holonomic constraints it must stay on g = 0 and A is taken in the chart there.
     A time where the point leaves g = 0 or the equations are undefined changes and is
     not steady."""
@@ -664,8 +664,12 @@ def _in_time(lin: Linearization, bound: np.ndarray) -> tuple[bool, bool]:
     y, p, ck = lin._y, lin._p, lin._kernels
     changes, steady = False, bool(np.all(np.abs(lin.rates) <= bound))
     model_values = dict(lin.params)
+    D = _balanced(lin.A)
+    size = float(np.linalg.norm(lin.A * D[None, :] / D[:, None])) if lin.A.size else 0.0
+    span = max(abs(lin.t), 1.0 / size if 0 < size < np.inf else 0.0) or 1.0
+    same = np.zeros(len(lin.rates))
     for s in TIMES:
-        t = lin.t + s * max(1.0, abs(lin.t))
+        t = lin.t + s * span
         E = lin._E
         if model.system.holonomic:
             point = _configuration(model, y, dict(lin.params), t)
@@ -678,7 +682,7 @@ def _in_time(lin: Linearization, bound: np.ndarray) -> tuple[bool, bool]:
         except LinearizationError:
             return True, False
         changes = changes or bool(
-            np.abs(A - lin.A).max(initial=0.0) > REAL * lin._scale
+            _difference(A, lin.A, same, same, same) > REAL
             or np.any(np.abs(rates - lin.rates) > np.maximum(bound, here)))
         steady = steady and bool(np.all(np.abs(rates) <= here))
     return changes, steady
