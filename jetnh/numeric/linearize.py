@@ -85,6 +85,14 @@ computed exactly defective (kappa_i infinite).  A stiff mode elsewhere in A (a s
 of stiffness k: |A| ~ k) widens the other eigenvalues' bounds only through |B|, which
 balancing keeps near sqrt(k).
 
+The reduced mass matrix at the point, Psi^T H Psi (H = d^2 L/dqdot^2, Psi =
+dqdot/dqdot^mu on the constraints), is what every principle's accelerations divide by.
+Its condition number scaled to a unit diagonal (``Linearization.conditioning``: the
+same in every unit of every coordinate) above ``CONDITION`` = ``STEADY``/eps means the
+rounding it amplifies may exceed what the steady test and the eigenvalue bounds assume:
+linearize warns (``JetnhWarning``), naming the fix (coordinates in which it is regular
+there).  Not at a 0/0 limit, where it is singular by construction.
+
 Rows that depend on t (t in a kept row or a holonomic constraint with a derivative that
 does not vanish identically, e.g. a periodically forced or modulated system): the state
 is held and A and x' are evaluated again at the times ``t + TIMES`` (scaled by the
@@ -106,14 +114,15 @@ values at every t, without the overflow of those factors at g t ~ 710.
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping
 
 import numpy as np
 import sympy as sp
 
 from ..algebra import dag, linalg, zero
-from ..errors import (ArgumentError, ConstraintError, JetnhError, LinearizationError,
-                      PrincipleError)
+from ..errors import (ArgumentError, ConstraintError, JetnhError, JetnhWarning,
+                      LinearizationError, PrincipleError)
 from ..mechanics import holonomic, principles
 from ..mechanics.system import System
 from . import arguments, regular
@@ -135,6 +144,11 @@ ROUNDING = 1e-12
 STEPS = (1e-1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8)
 #: the directions of approach along which that limit must agree
 DIRECTIONS = 3
+#: the rounding unit of a double
+EPS = float(np.finfo(float).eps)
+#: the scaled condition number of the reduced mass matrix above which linearize warns
+#: (a JetnhWarning): the rounding it amplifies, cond * eps, exceeds ``STEADY``
+CONDITION = STEADY / EPS
 #: the relative tolerance of given dependent velocities (and of f = 0 past the edge)
 CONSISTENT = 1e-9
 #: the verdict off a steady motion
@@ -187,6 +201,7 @@ class _Model:
         self._kernels = None
         self._uses: dict = {}           # (row, state) -> bool
         self._symbolic: dict = {}       # (kept states, chart) -> sympy Matrix
+        self._programs: dict = {}       # (what, rows) -> _Program
 
     @_once
     def rows(self) -> list:
@@ -210,11 +225,48 @@ class _Model:
 
     def sizes_at(self, rows, y, values: dict, t: float) -> np.ndarray:
         """``sizes`` of ``rows`` (state indices) at state ``y``, ``values`` and ``t``."""
+        key = ("sizes", tuple(rows))
+        if key not in self._programs:
+            self._programs[key] = _Program([self.sizes[i] for i in rows])
+        return self._programs[key](self._point(y, values, t))
+
+    @_once
+    def mass(self) -> "_Program":
+        """The parts of the reduced mass matrix Psi^T H Psi: H = d^2 L/dqdot^2 and
+        Psi = dqdot/dqdot^mu (a unit row for an independent velocity, d phi/dqdot^mu for
+        a dependent one), the dependent velocities replaced by phi."""
+        sysm = self.system
+        exprs = list(sysm.mass_matrix) + list(sysm.Phi)
+        phi = {v: sysm.phi[v] for v in self.dependent}
+        return _Program(dag.xreplace(exprs, phi) if phi else exprs)
+
+    def conditioning(self, y, values: dict, t: float) -> float:
+        """The condition number (2-norm) of the reduced mass matrix at state ``y``
+        scaled to a unit diagonal, D^-1/2 M D^-1/2 (D its diagonal): the same in every
+        unit of every coordinate, and within a factor of its dimension of the smallest
+        under any diagonal scaling (van der Sluis); infinite where it is singular."""
+        n, m = len(self.coordinates), len(self.velocities)
+        vals = self.mass(self._point(y, values, t))
+        H, Phi = vals[:n * n].reshape(n, n), vals[n * n:].reshape(-1, m)
+        qd = self.system.J.qd
+        Psi = np.zeros((n, m))
+        for s, v in enumerate(qd):
+            if v in self.velocities:
+                Psi[s, self.velocities.index(v)] = 1.0
+            else:
+                Psi[s] = Phi[self.dependent.index(v)]
+        M = Psi.T @ H @ Psi
+        d = np.sqrt(np.abs(np.diag(M)))
+        if not (np.all(np.isfinite(M)) and np.all(d > 0)):
+            return np.inf
+        return float(np.linalg.cond(M / d[:, None] / d[None, :]))
+
+    def _point(self, y, values: dict, t: float) -> dict:
+        """The state ``y``, the parameters and ``t`` keyed by Symbol."""
         point = {s: float(v) for s, v in zip(self.states, y)}
         point.update((s, values[s.name]) for s in self.system.parameters)
         point[self.system.J.t] = t
-        out = dag.evaluate_numpy([self.sizes[i] for i in rows], point)
-        return np.array([float(v) for v in out], dtype=float)
+        return point
 
     def uses(self, row: int, state: int) -> bool:
         """Whether row ``row`` depends on state ``state``: the symbol is in it and its
@@ -298,6 +350,60 @@ class _Model:
         return self._kernels
 
 
+class _Program:
+    """Expressions on the shared graph as one straight-line Python function of numpy
+    scalars, one line per distinct node, children first: ``dag.evaluate_numpy``'s
+    operations in its order (a sum from 0 left to right, products left to right, numpy
+    powers and the same numpy heads), so the same numbers bit for bit, without walking
+    the graph at each call.  Called with a point (Symbol -> number), it returns the
+    values as a float array; nodes it cannot write (none of the four kinds) leave the
+    work to ``dag.evaluate_numpy``."""
+
+    def __init__(self, exprs):
+        self.exprs = [sp.sympify(e, strict=True) for e in exprs]
+        try:
+            self.symbols, self.function = self._compile()
+        except (TypeError, ValueError, KeyError, NameError, SyntaxError):
+            self.symbols, self.function = None, None
+
+    def _compile(self):
+        order = dag.nodes(self.exprs)
+        symbols = [e for e in order if isinstance(e, sp.Symbol)]
+        env, name, lines = {"power": np.power}, {}, []
+        for k, e in enumerate(order):
+            v = name[id(e)] = f"n{k}"
+            args = [name[id(a)] for a in e.args]
+            if isinstance(e, sp.Symbol):
+                name[id(e)] = f"s{symbols.index(e)}"
+            elif e.is_Number or e.is_NumberSymbol:
+                env[v] = np.float64(float(e))
+            elif e.is_Add:
+                lines.append(f"{v} = 0 + {' + '.join(args)}")
+            elif e.is_Mul:
+                lines.append(f"{v} = {' * '.join(args)}")
+            elif e.is_Pow:
+                lines.append(f"{v} = power({args[0]}, {args[1]})")
+            elif isinstance(e, sp.Function):
+                xs = sp.symbols(f"a:{len(args)}", cls=sp.Dummy)
+                env[f"h{k}"] = sp.lambdify(xs, e.func(*xs), "numpy")
+                lines.append(f"{v} = h{k}({', '.join(args)})")
+            else:
+                raise ValueError(f"cannot write {e!r}")
+        out = ", ".join(name[id(e)] for e in self.exprs)
+        source = (f"def f({', '.join(f's{i}' for i in range(len(symbols)))}):\n"
+                  + "".join(f"    {line}\n" for line in lines) + f"    return [{out}]\n")
+        exec(compile(source, "<linearize sizes>", "exec"), env)
+        return symbols, env["f"]
+
+    def __call__(self, point: dict) -> np.ndarray:
+        if self.function is None or any(s not in point for s in self.symbols):
+            out = dag.evaluate_numpy(self.exprs, point)
+        else:
+            with np.errstate(all="ignore"):
+                out = self.function(*[np.float64(point[s]) for s in self.symbols])
+        return np.array([float(v) for v in out], dtype=float)
+
+
 _KEEP_MODELS = 64         # systems whose derived model and kernels stay in memory
 
 
@@ -325,13 +431,17 @@ class Linearization(Frozen):
     ``steady_motion`` (whether every kept rate is zero to ``STEADY`` of its terms, at
     every t for rows that depend on t), ``time_dependent`` (whether A or x' at the point change with t),
     ``verdict``, ``stable`` (the last two only at a steady motion whose A does not
-    change with t).
+    change with t), ``conditioning`` (of the reduced mass matrix at the point, scaled
+    to a unit diagonal; linearize warns above ``CONDITION``).
     """
 
     def __init__(self, model: _Model, at: dict, params: dict, keep: tuple, chart: tuple,
                  E: np.ndarray, t: float, y: np.ndarray, p: np.ndarray, A: np.ndarray,
-                 rates: np.ndarray, limit: bool, bound: np.ndarray):
+                 rates: np.ndarray, limit: bool, bound: np.ndarray, conditioning: float):
         self._model = model
+        #: the condition number of the reduced mass matrix at the point, scaled to a
+        #: unit diagonal (``_Model.conditioning``): above ``CONDITION`` linearize warns
+        self.conditioning = conditioning
         self.system = model.system
         self.principle = model.principle
         self.t = t
@@ -1027,11 +1137,21 @@ def _evaluate(model: _Model, point: dict, values: dict, keep, t: float,
         at[nm] = v
     if k and not np.all(np.isfinite(aux[k:2 * k])):
         raise ConstraintError("the constraints are undefined at this point")
-    A, rates, limit, bound = _jacobian(model, ck, y, p, values,
-                                       model.frozen_time(rows, t), rows, E)
+    te = model.frozen_time(rows, t)
+    A, rates, limit, bound = _jacobian(model, ck, y, p, values, te, rows, E)
     if floor is not None and len(floor) == len(bound):
         bound = np.maximum(bound, floor)
-    return Linearization(model, at, values, rows, chart, E, t, y, p, A, rates, limit, bound)
+    cond = model.conditioning(y, values, te)
+    if not limit and not cond <= CONDITION:
+        warnings.warn(
+            f"linearize: the reduced mass matrix is nearly singular at this point "
+            f"(condition number {cond:.3g} scaled to a unit diagonal, above "
+            f"{CONDITION:.3g} = {STEADY:g}/eps): A and the rates may carry relative errors "
+            f"of about {cond * EPS:.2g}, beyond what the verdict assumes; linearize in "
+            "coordinates in which the mass matrix is regular here, or away from this "
+            "configuration or these parameter values", JetnhWarning, stacklevel=3)
+    return Linearization(model, at, values, rows, chart, E, t, y, p, A, rates, limit, bound,
+                         cond)
 
 
 def _size(model: _Model, i: int, ck, y, p, values: dict, t: float, v: float,
