@@ -247,19 +247,22 @@ class _Model:
         under any diagonal scaling (van der Sluis); infinite where it is singular."""
         n, m = len(self.coordinates), len(self.velocities)
         vals = self.mass(self._point(y, values, t))
-        H, Phi = vals[:n * n].reshape(n, n), vals[n * n:].reshape(-1, m)
-        qd = self.system.J.qd
-        Psi = np.zeros((n, m))
-        for s, v in enumerate(qd):
-            if v in self.velocities:
-                Psi[s, self.velocities.index(v)] = 1.0
-            else:
-                Psi[s] = Phi[self.dependent.index(v)]
+        H = vals[:n * n].reshape(n, n)
+        Psi = np.vstack([np.eye(m), vals[n * n:].reshape(-1, m)])[self.psi_rows]
         M = Psi.T @ H @ Psi
         d = np.sqrt(np.abs(np.diag(M)))
         if not (np.all(np.isfinite(M)) and np.all(d > 0)):
             return np.inf
-        return float(np.linalg.cond(M / d[:, None] / d[None, :]))
+        ev = np.abs(np.linalg.eigvalsh(M / d[:, None] / d[None, :]))   # symmetric
+        return float(ev.max() / ev.min()) if ev.min() > 0 else np.inf
+
+    @_once
+    def psi_rows(self) -> list:
+        """Row s of Psi (``conditioning``): the unit row of qdot^s when independent, else
+        m + its row in dphi/dqdot^mu."""
+        m = len(self.velocities)
+        return [self.velocities.index(v) if v in self.velocities
+                else m + self.dependent.index(v) for v in self.system.J.qd]
 
     def _point(self, y, values: dict, t: float) -> dict:
         """The state ``y``, the parameters and ``t`` keyed by Symbol."""
