@@ -96,8 +96,8 @@ there).  Not at a 0/0 limit, where it is singular by construction.
 Rows that depend on t (t in a kept row or a holonomic constraint with a derivative that
 does not vanish identically, e.g. a periodically forced or modulated system): the state
 is held and A and x' are evaluated again at the times ``t + TIMES`` (scaled by the
-larger of |t| and A's time scale, 1/|B|).  The point is a steady motion only when x' vanishes at every one of them (a
-point where x' vanishes at one instant only, as an equilibrium of a forced oscillator
+larger of |t| and A's time scale, 1/|B|).  The point is a steady motion only when x'
+vanishes at every one of them (a point where x' vanishes at one instant only, as an equilibrium of a forced oscillator
 at a zero of its forcing, is none); ``time_dependent`` is True when A or x' differ
 between them.  At such a point A and its eigenvalues are those frozen at ``t``, and
 they do not decide stability (a damped Mathieu equation is unstable at parametric
