@@ -248,12 +248,16 @@ class _Model:
         n, m = len(self.coordinates), len(self.velocities)
         vals = self.mass(self._point(y, values, t))
         H = vals[:n * n].reshape(n, n)
-        Psi = np.vstack([np.eye(m), vals[n * n:].reshape(-1, m)])[self.psi_rows]
-        M = Psi.T @ H @ Psi
-        d = np.sqrt(np.abs(np.diag(M)))
-        if not (np.all(np.isfinite(M)) and np.all(d > 0)):
+        if m < n:
+            Psi = np.vstack([np.eye(m), vals[n * n:].reshape(-1, m)])[self.psi_rows]
+            H = Psi.T @ H @ Psi
+        d = np.sqrt(np.abs(np.diag(H)))
+        if not (np.all(np.isfinite(H)) and np.all(d > 0)):
             return np.inf
-        ev = np.abs(np.linalg.eigvalsh(M / d[:, None] / d[None, :]))   # symmetric
+        if m <= 2:              # eigenvalues 1 +- |c| of [[1, c], [c, 1]]
+            c = abs(float(H[0, -1] / (d[0] * d[-1]))) if m == 2 else 0.0
+            return (1 + c) / (1 - c) if c < 1 else np.inf
+        ev = np.abs(np.linalg.eigvalsh(H / d[:, None] / d[None, :]))   # symmetric
         return float(ev.max() / ev.min()) if ev.min() > 0 else np.inf
 
     @_once
