@@ -134,6 +134,85 @@ def test_moving_holonomic_constraint():
 
 
 # ---------------------------------------------------------------------- random systems
+def _caldirola_kanai():
+    """L = exp(g t) (m q_t^2/2 - k q^2/2): q'' = -g q' - k q / m, its rows with the
+    factor exp(g t) exp(-g t), which overflows at g t ~ 710."""
+    J = jn.JetSpace("q")
+    (q,), (qt,) = J.q, J.qd
+    g, m, k = sp.symbols("gamma m k")
+    return jn.System(J, sp.exp(g * J.t) * (m * qt**2 / 2 - k * q**2 / 2))
+
+
+def test_exp_factors_that_cancel_at_large_t():
+    """L8: the damped oscillator of Caldirola and Kanai has rows that do not depend on t
+    (exp(g t) exp(-g t) cancels), so its linearization is the same at every t: at
+    g t = 1e3 (was a LinearizationError blaming the coordinates) as at 0, bit for bit,
+    with the closed-form eigenvalues -g/2 +- i sqrt(k/m - g^2/4), and no t in
+    ``symbolic()``; off the origin no steady motion, and ``steady`` finds q = 0."""
+    S, P = _caldirola_kanai(), {"gamma": 0.1, "m": 2.0, "k": 3.0}
+    at = {"q": 0.0, "q_t": 0.0}
+    want = -0.05 + 1j * np.sqrt(1.5 - 0.0025) * np.array([-1, 1])
+    ref = jn.linearize(S, at=at, params=P)
+    for t in (1e2, 7.1e3, 1e4):
+        lin = jn.linearize(S, at=at, params=P, t=t)
+        assert not lin.time_dependent and lin.verdict == "asymptotically stable"
+        np.testing.assert_array_equal(lin.A, ref.A)
+        np.testing.assert_allclose(lin.eigenvalues, want, rtol=1e-14)
+        off = lin.replace(at={"q": 1e-3})
+        assert off.verdict == NOT_STEADY and off.rates[1] == pytest.approx(-1.5e-3)
+        assert off.steady(["q"]).at["q"] == pytest.approx(0.0, abs=1e-15)
+    g, m, k = sp.symbols("gamma m k")
+    assert ref.symbolic() == sp.Matrix([[0, 1], [-k / m, -g]])
+
+
+def test_exp_factors_that_cancel_with_a_constraint():
+    """A knife edge with L = exp(g t) L0 under Chetaev's principle is L0 with the forces
+    -g dL0/dq_t (a second route, no exp in it): the same A, rates and verdict at
+    g t = 900 as that system's, under which the overflow used to stop it."""
+    J = jn.JetSpace("x y th")
+    (x, y, th), (xt, yt, tht) = J.q, J.qd
+    g, m, I, k = sp.symbols("gamma m I k")
+    L0 = m * (xt**2 + yt**2) / 2 + I * tht**2 / 2 - k * th**2 / 2
+    f = [sp.sin(th) * xt - sp.cos(th) * yt]
+    S = jn.System(J, sp.exp(g * J.t) * L0, f, [y])
+    S0 = jn.System(J, L0, f, [y], forces={q: -g * sp.diff(L0, v) for q, v in zip(J.q, J.qd)})
+    P = {"gamma": 0.3, "m": 2.0, "I": 0.5, "k": 1.0}
+    rest, running = ({"x": 0, "y": 0, "th": 0.0, "x_t": 0.0, "th_t": 0},
+                     {"x": 0, "y": 0, "th": 0.1, "x_t": 1.0, "th_t": 0})
+    for at, verdict in ((rest, "asymptotically stable"), (running, NOT_STEADY)):
+        lin, lin0 = jn.linearize(S, at=at, params=P, t=3e3), jn.linearize(S0, at=at, params=P)
+        assert lin.state_names == lin0.state_names == ("th", "x_t", "th_t")
+        np.testing.assert_allclose(lin.A, lin0.A, rtol=1e-14, atol=1e-15)
+        np.testing.assert_allclose(lin.rates, lin0.rates, rtol=1e-14, atol=1e-15)
+        assert lin.verdict == lin0.verdict == verdict
+
+
+def _modulated_drag():
+    """x'' = -c (1 + b cos(w t)) x': at rest a steady motion whose A = -c (1 + b cos w t)
+    changes with t (x is cyclic: the state is x_t alone, A a rate)."""
+    J = jn.JetSpace("x")
+    (x,), (xt,) = J.q, J.qd
+    return jn.System(J, xt**2 / 2, forces={x: -c * (1 + b * sp.cos(w * J.t)) * xt})
+
+
+@pytest.mark.parametrize("unit", [1e-6, 1e-3, 1.0, 1e3])
+@pytest.mark.parametrize("t", [0.0, 1e4])
+def test_time_dependence_in_every_unit_of_time(unit, t):
+    """The same motion with time in units of ``unit`` seconds (rates times unit): A
+    changes with t in every unit (``time_dependent``; the frozen verdict, asymptotically
+    stable, decides nothing), at t = 0 and at 1e4 s.  It was judged against max(1, |A|)
+    with offsets in units of max(1, |t|): at t = 1e4 s in milliseconds (A = -1e-6 per
+    ms, changes of 1e-13 below an absolute 1e-12) and at t = 0 in microseconds the
+    verdict was the frozen one."""
+    P = {"c": 1e-3 * unit, "b": 1e-7, "w": 2.0 * unit}
+    lin = jn.linearize(_modulated_drag(), at={"x_t": 0.0}, params=P, t=t / unit)
+    assert lin.state_names == ("x_t",) and lin.steady_motion
+    assert lin.eigenvalues[0].real == pytest.approx(-1e-3 * unit * (1 + 1e-7 * np.cos(2 * t)),
+                                                    rel=1e-15)
+    assert lin.time_dependent and lin.verdict == TIME_DEPENDENT
+    assert not lin.replace(params={"b": 0.0}).time_dependent
+
+
 @settings(max_examples=4, deadline=None, suppress_health_check=list(HealthCheck))
 @given(jst.constrained_systems(min_n=2, max_n=3), st.integers(0, 2**16))
 def test_modulated_term_on_random_systems(case, seed):

@@ -8,6 +8,7 @@ x'' = -k (x - c) (- G), V = G sin(x/a)/(x/a) at its removable 0/0 (+-sqrt(G/3)/a
 the refusals at the poles of polar coordinates and Euler angles, where the limit of the
 equations depends on the direction of approach."""
 
+import warnings
 from functools import lru_cache
 
 import numpy as np
@@ -197,7 +198,8 @@ def test_pole_of_polar_coordinates_is_refused():
 def test_heavy_top_at_and_near_its_pole():
     """The heavy top in Euler angles: at theta = 0 (the pole) refused, naming the
     coordinates; at theta = 1e-6 with phi_t = 0 no steady motion (theta'' = Mgl theta /
-    I1 there), below and above Maievskii's speed."""
+    I1 there), below and above Maievskii's speed, with a warning: the mass matrix is
+    nearly singular beside the pole (scaled condition ~ 1/theta^2)."""
     J = jn.JetSpace("theta phi psi")
     (th, ph, ps), (tht, pht, pst) = J.q, J.qd
     I1, I3, Mgl = sp.symbols("I1 I3 Mgl")
@@ -208,8 +210,9 @@ def test_heavy_top_at_and_near_its_pole():
         at = {"theta": 0.0, "phi": 0, "psi": 0, "theta_t": 0, "phi_t": 0, "psi_t": W}
         with pytest.raises(jn.LinearizationError, match="other coordinates"):
             jn.linearize(S, at=at, params=P)
-        lin = jn.linearize(S, at={**at, "theta": 1e-6}, params=P)
-        assert lin.verdict == "not a steady motion"
+        with pytest.warns(jn.errors.JetnhWarning, match="mass matrix is nearly singular"):
+            lin = jn.linearize(S, at={**at, "theta": 1e-6}, params=P)
+        assert lin.verdict == "not a steady motion" and lin.conditioning > 1e11
 
 
 # ------------------------------------------------------------------ inputs
@@ -237,3 +240,55 @@ def test_inconsistent_dependent_velocity_is_refused_in_small_units(R):
         jn.linearize(S, at={**at, "x_t": 5 * R}, params={"R": R}, drop=None)
     lin = jn.linearize(S, at={**at, "x_t": R}, params={"R": R}, drop=None)
     assert lin.at["x_t"] == pytest.approx(R, rel=1e-12)
+
+
+# ------------------------------------------------------------------ mass-matrix conditioning
+@lru_cache(maxsize=None)
+def _coupled():
+    """Two unit oscillators with kinetic energy (x_t^2 + 2 (1 - e) s x_t y_t + s^2 y_t^2)/2
+    (y in units of s): M = [[1, (1 - e) s], [(1 - e) s, s^2]], frequencies^2 k/e and
+    k/(2 - e); the mass matrix scaled to a unit diagonal has condition (2 - e)/e."""
+    J = jn.JetSpace("x y")
+    (x, y), (xt, yt) = J.q, J.qd
+    e, k, s = sp.symbols("epsilon k s")
+    return jn.System(J, (xt**2 + 2 * (1 - e) * s * xt * yt + s**2 * yt**2) / 2
+                     - k * (x**2 + s**2 * y**2) / 2)
+
+
+@pytest.mark.parametrize("e", [0.5, 1e-6, 1e-9, 1e-12])
+@pytest.mark.parametrize("s", [1e-3, 1.0, 1e6])
+def test_nearly_singular_mass_matrix_warns_in_every_unit(e, s):
+    """A nearly singular mass matrix: ``conditioning`` is (2 - e)/e in every unit of y,
+    linearize warns (a JetnhWarning naming the fix) exactly when it exceeds
+    ``CONDITION`` = 1e-8/eps, and the eigenvalues, +-i sqrt(k/e) and +-i
+    sqrt(k/(2 - e)), are within their rounding cond * eps of the closed form."""
+    from jetnh.errors import JetnhWarning
+    from jetnh.numeric.linearize import CONDITION
+
+    cond = (2 - e) / e
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        lin = jn.linearize(_coupled(), at={"x": 0, "y": 0, "x_t": 0, "y_t": 0},
+                           params={"epsilon": e, "k": 1.0, "s": s})
+    assert lin.conditioning == pytest.approx(cond, rel=1e-4)
+    ours = [w for w in caught if issubclass(w.category, JetnhWarning)]
+    assert len(ours) == (cond > CONDITION)
+    if ours:
+        assert "mass matrix is nearly singular" in str(ours[0].message)
+        assert "coordinates in which the mass matrix is regular" in str(ours[0].message)
+    want = np.sort(np.sqrt([1 / e, 1 / (2 - e)]))
+    got = np.sort(np.abs(lin.eigenvalues.imag))[::2]
+    np.testing.assert_allclose(got, want, rtol=max(1e-12, 100 * cond * np.finfo(float).eps))
+
+
+def test_small_inertia_is_no_ill_conditioning():
+    """The knife edge with an inertia 1e-12 of its mass: the reduced mass matrix
+    diag(m, I) is badly scaled, not ill-conditioned: conditioning 1 and no warning (a
+    2-norm condition number would be 1e12, a unit of length away from 1)."""
+    S = models.knife_edge()
+    at = {"x": 0, "y": 0, "phi": 0.3, "x_t": 1.0, "phi_t": 0.0}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for inertia in (0.5, 1e-12):
+            lin = jn.linearize(S, at=at, params={"I": inertia})
+            assert lin.conditioning == pytest.approx(1.0, abs=1e-12)

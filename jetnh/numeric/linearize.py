@@ -85,11 +85,19 @@ computed exactly defective (kappa_i infinite).  A stiff mode elsewhere in A (a s
 of stiffness k: |A| ~ k) widens the other eigenvalues' bounds only through |B|, which
 balancing keeps near sqrt(k).
 
+The reduced mass matrix at the point, Psi^T H Psi (H = d^2 L/dqdot^2, Psi =
+dqdot/dqdot^mu on the constraints), is what every principle's accelerations divide by.
+Its condition number scaled to a unit diagonal (``Linearization.conditioning``: the
+same in every unit of every coordinate) above ``CONDITION`` = ``STEADY``/eps means the
+rounding it amplifies may exceed what the steady test and the eigenvalue bounds assume:
+linearize warns (``JetnhWarning``), naming the fix (coordinates in which it is regular
+there).  Not at a 0/0 limit, where it is singular by construction.
+
 Rows that depend on t (t in a kept row or a holonomic constraint with a derivative that
 does not vanish identically, e.g. a periodically forced or modulated system): the state
-is held and A and x' are evaluated again at the times ``t + TIMES`` (scaled by max(1,
-|t|)).  The point is a steady motion only when x' vanishes at every one of them (a
-point where x' vanishes at one instant only, as an equilibrium of a forced oscillator
+is held and A and x' are evaluated again at the times ``t + TIMES`` (scaled by the
+larger of |t| and A's time scale, 1/|B|).  The point is a steady motion only when x'
+vanishes at every one of them (a point where x' vanishes at one instant only, as an equilibrium of a forced oscillator
 at a zero of its forcing, is none); ``time_dependent`` is True when A or x' differ
 between them.  At such a point A and its eigenvalues are those frozen at ``t``, and
 they do not decide stability (a damped Mathieu equation is unstable at parametric
@@ -97,20 +105,24 @@ resonance with every frozen eigenvalue in the left half-plane): the verdict is
 ``TIME_DEPENDENT``, ``stable`` and ``margin`` are None and NaN.  A time-periodic A needs
 Floquet's theory (the monodromy matrix over a period, from the variational equations
 of a run), which linearize does not compute.  Parameter values that remove the
-dependence on t (a modulation of amplitude 0) give the frozen verdict again.
+dependence on t (a modulation of amplitude 0) give the frozen verdict again.  Rows
+that contain t but do not depend on it (the derivative vanishes identically, as in
+e^(g t) L0, whose rows carry exp(g t) exp(-g t)) are evaluated at t = 0: the same
+values at every t, without the overflow of those factors at g t ~ 710.
 """
 
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping
 
 import numpy as np
 import sympy as sp
 
 from ..algebra import dag, linalg, zero
-from ..errors import (ArgumentError, ConstraintError, JetnhError, LinearizationError,
-                      PrincipleError)
+from ..errors import (ArgumentError, ConstraintError, JetnhError, JetnhWarning,
+                      LinearizationError, PrincipleError)
 from ..mechanics import holonomic, principles
 from ..mechanics.system import System
 from . import arguments, regular
@@ -132,13 +144,19 @@ ROUNDING = 1e-12
 STEPS = (1e-1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8)
 #: the directions of approach along which that limit must agree
 DIRECTIONS = 3
+#: the rounding unit of a double
+EPS = float(np.finfo(float).eps)
+#: the scaled condition number of the reduced mass matrix above which linearize warns
+#: (a JetnhWarning): the rounding it amplifies, cond * eps, exceeds ``STEADY``
+CONDITION = STEADY / EPS
 #: the relative tolerance of given dependent velocities (and of f = 0 past the edge)
 CONSISTENT = 1e-9
 #: the verdict off a steady motion
 NOT_STEADY = "not a steady motion"
 #: the verdict at a steady motion of rows that depend on t
 TIME_DEPENDENT = "time-dependent: the frozen eigenvalues do not decide"
-#: the offsets from the point's t at which rows that contain t are evaluated again
+#: the offsets from the point's t at which rows that contain t are evaluated again, in
+#: units of the larger of |t| and A's time scale (``_in_time``)
 TIMES = (0.1234567, -0.5772157, 1.4142136, 2.7182818, 7.3890561, 31.415927, 271.82818)
 
 _MODELS: dict = {}
@@ -183,6 +201,7 @@ class _Model:
         self._kernels = None
         self._uses: dict = {}           # (row, state) -> bool
         self._symbolic: dict = {}       # (kept states, chart) -> sympy Matrix
+        self._programs: dict = {}       # (what, rows) -> _Program
 
     @_once
     def rows(self) -> list:
@@ -206,11 +225,55 @@ class _Model:
 
     def sizes_at(self, rows, y, values: dict, t: float) -> np.ndarray:
         """``sizes`` of ``rows`` (state indices) at state ``y``, ``values`` and ``t``."""
+        key = ("sizes", tuple(rows))
+        if key not in self._programs:
+            self._programs[key] = _Program([self.sizes[i] for i in rows])
+        return self._programs[key](self._point(y, values, t))
+
+    @_once
+    def mass(self) -> "_Program":
+        """The parts of the reduced mass matrix Psi^T H Psi: H = d^2 L/dqdot^2 and
+        Psi = dqdot/dqdot^mu (a unit row for an independent velocity, d phi/dqdot^mu for
+        a dependent one), the dependent velocities replaced by phi."""
+        sysm = self.system
+        exprs = list(sysm.mass_matrix) + list(sysm.Phi)
+        phi = {v: sysm.phi[v] for v in self.dependent}
+        return _Program(dag.xreplace(exprs, phi) if phi else exprs)
+
+    def conditioning(self, y, values: dict, t: float) -> float:
+        """The condition number (2-norm) of the reduced mass matrix at state ``y``
+        scaled to a unit diagonal, D^-1/2 M D^-1/2 (D its diagonal): the same in every
+        unit of every coordinate, and within a factor of its dimension of the smallest
+        under any diagonal scaling (van der Sluis); infinite where it is singular."""
+        n, m = len(self.coordinates), len(self.velocities)
+        vals = self.mass(self._point(y, values, t))
+        H = vals[:n * n].reshape(n, n)
+        if m < n:
+            Psi = np.vstack([np.eye(m), vals[n * n:].reshape(-1, m)])[self.psi_rows]
+            H = Psi.T @ H @ Psi
+        d = np.sqrt(np.abs(np.diag(H)))
+        if not (np.all(np.isfinite(H)) and np.all(d > 0)):
+            return np.inf
+        if m <= 2:              # eigenvalues 1 +- |c| of [[1, c], [c, 1]]
+            c = abs(float(H[0, -1] / (d[0] * d[-1]))) if m == 2 else 0.0
+            return (1 + c) / (1 - c) if c < 1 else np.inf
+        ev = np.abs(np.linalg.eigvalsh(H / d[:, None] / d[None, :]))   # symmetric
+        return float(ev.max() / ev.min()) if ev.min() > 0 else np.inf
+
+    @_once
+    def psi_rows(self) -> list:
+        """Row s of Psi (``conditioning``): the unit row of qdot^s when independent, else
+        m + its row in dphi/dqdot^mu."""
+        m = len(self.velocities)
+        return [self.velocities.index(v) if v in self.velocities
+                else m + self.dependent.index(v) for v in self.system.J.qd]
+
+    def _point(self, y, values: dict, t: float) -> dict:
+        """The state ``y``, the parameters and ``t`` keyed by Symbol."""
         point = {s: float(v) for s, v in zip(self.states, y)}
         point.update((s, values[s.name]) for s in self.system.parameters)
         point[self.system.J.t] = t
-        out = dag.evaluate_numpy([self.sizes[i] for i in rows], point)
-        return np.array([float(v) for v in out], dtype=float)
+        return point
 
     def uses(self, row: int, state: int) -> bool:
         """Whether row ``row`` depends on state ``state``: the symbol is in it and its
@@ -232,6 +295,14 @@ class _Model:
             self._uses[key] = any(t in dag.free_symbols(e)
                                   and not zero.vanishes(dag.diff(e, t)) for e in exprs)
         return self._uses[key]
+
+    def frozen_time(self, rows, t: float) -> float:
+        """The time at which ``rows`` (state indices) are evaluated at the point's ``t``:
+        ``t`` itself, or 0 where they and the holonomic constraints do not depend on t
+        (``has_time``).  Their values are then the same at every t, but a factor that
+        cancels only on paper, such as exp(g t) exp(-g t) (a time-dependent Lagrangian
+        e^(g t) L0), overflows the compiled rows at g t ~ 710; at t = 0 it is 1."""
+        return t if self.has_time(rows) else 0.0
 
     @_once
     def tied(self) -> dict:
@@ -286,6 +357,60 @@ class _Model:
         return self._kernels
 
 
+class _Program:
+    """Expressions on the shared graph as one straight-line Python function of numpy
+    scalars, one line per distinct node, children first: ``dag.evaluate_numpy``'s
+    operations in its order (a sum from 0 left to right, products left to right, numpy
+    powers and the same numpy heads), so the same numbers bit for bit, without walking
+    the graph at each call.  Called with a point (Symbol -> number), it returns the
+    values as a float array; nodes it cannot write (none of the four kinds) leave the
+    work to ``dag.evaluate_numpy``."""
+
+    def __init__(self, exprs):
+        self.exprs = [sp.sympify(e, strict=True) for e in exprs]
+        try:
+            self.symbols, self.function = self._compile()
+        except (TypeError, ValueError, KeyError, NameError, SyntaxError):
+            self.symbols, self.function = None, None
+
+    def _compile(self):
+        order = dag.nodes(self.exprs)
+        symbols = [e for e in order if isinstance(e, sp.Symbol)]
+        env, name, lines = {"power": np.power}, {}, []
+        for k, e in enumerate(order):
+            v = name[id(e)] = f"n{k}"
+            args = [name[id(a)] for a in e.args]
+            if isinstance(e, sp.Symbol):
+                name[id(e)] = f"s{symbols.index(e)}"
+            elif e.is_Number or e.is_NumberSymbol:
+                env[v] = np.float64(float(e))
+            elif e.is_Add:
+                lines.append(f"{v} = 0 + {' + '.join(args)}")
+            elif e.is_Mul:
+                lines.append(f"{v} = {' * '.join(args)}")
+            elif e.is_Pow:
+                lines.append(f"{v} = power({args[0]}, {args[1]})")
+            elif isinstance(e, sp.Function):
+                xs = sp.symbols(f"a:{len(args)}", cls=sp.Dummy)
+                env[f"h{k}"] = sp.lambdify(xs, e.func(*xs), "numpy")
+                lines.append(f"{v} = h{k}({', '.join(args)})")
+            else:
+                raise ValueError(f"cannot write {e!r}")
+        out = ", ".join(name[id(e)] for e in self.exprs)
+        source = (f"def f({', '.join(f's{i}' for i in range(len(symbols)))}):\n"
+                  + "".join(f"    {line}\n" for line in lines) + f"    return [{out}]\n")
+        exec(compile(source, "<linearize sizes>", "exec"), env)
+        return symbols, env["f"]
+
+    def __call__(self, point: dict) -> np.ndarray:
+        if self.function is None or any(s not in point for s in self.symbols):
+            out = dag.evaluate_numpy(self.exprs, point)
+        else:
+            with np.errstate(all="ignore"):
+                out = self.function(*[np.float64(point[s]) for s in self.symbols])
+        return np.array([float(v) for v in out], dtype=float)
+
+
 _KEEP_MODELS = 64         # systems whose derived model and kernels stay in memory
 
 
@@ -313,13 +438,17 @@ class Linearization(Frozen):
     ``steady_motion`` (whether every kept rate is zero to ``STEADY`` of its terms, at
     every t for rows that depend on t), ``time_dependent`` (whether A or x' at the point change with t),
     ``verdict``, ``stable`` (the last two only at a steady motion whose A does not
-    change with t).
+    change with t), ``conditioning`` (of the reduced mass matrix at the point, scaled
+    to a unit diagonal; linearize warns above ``CONDITION``).
     """
 
     def __init__(self, model: _Model, at: dict, params: dict, keep: tuple, chart: tuple,
                  E: np.ndarray, t: float, y: np.ndarray, p: np.ndarray, A: np.ndarray,
-                 rates: np.ndarray, limit: bool, bound: np.ndarray):
+                 rates: np.ndarray, limit: bool, bound: np.ndarray, conditioning: float):
         self._model = model
+        #: the condition number of the reduced mass matrix at the point, scaled to a
+        #: unit diagonal (``_Model.conditioning``): above ``CONDITION`` linearize warns
+        self.conditioning = conditioning
         self.system = model.system
         self.principle = model.principle
         self.t = t
@@ -357,10 +486,6 @@ class Linearization(Frozen):
         self.steady_motion = bool(steady)
 
     # ------------------------------------------------------------------ verdicts
-    @property
-    def _scale(self) -> float:
-        return max(1.0, float(np.abs(self.A).max()) if self.A.size else 1.0)
-
     @property
     def margin(self) -> float:
         """The largest real part less its error bound, Re lambda_i - e_i (module
@@ -457,7 +582,7 @@ class Linearization(Frozen):
         ck = self._kernels
         keep = list(self._keep)
         cols = [keep.index(i) for i in idx]
-        y, p, t = self._y.copy(), self._p, self.t
+        y, p, t = self._y.copy(), self._p, model.frozen_time(self._keep, self.t)
         f = np.empty(len(model.names))
         Jm = np.empty((len(model.names), len(model.names)))
         moves = self._chart and any(i < len(model.coordinates) for i in idx)
@@ -509,10 +634,10 @@ class Linearization(Frozen):
         point = {k: v for k, v in self.at.items()
                  if k not in {d.name for d in model.dependent}}
         point.update((model.names[i], float(y[i])) for i in (*idx, *self._chart))
-        found = _evaluate(model, point, dict(self.params), self._keep, t, tol * weight)
+        found = _evaluate(model, point, dict(self.params), self._keep, self.t, tol * weight)
         if found.time_dependent and not found.steady_motion:
             raise LinearizationError(
-                f"x' vanishes at t = {t:g} with {', '.join(unknowns)} = "
+                f"x' vanishes at t = {self.t:g} with {', '.join(unknowns)} = "
                 f"{np.round(x, 12).tolist()}, but not at other times: the equations depend "
                 "on t, and a point where x' vanishes for an instant is no steady motion; "
                 "solve for other values, or hold those that keep x' = 0 at every t")
@@ -577,7 +702,9 @@ class Linearization(Frozen):
         kept rows on the shared graph (evaluate it with ``dag.evaluate``).  With
         holonomic constraints it holds every coordinate, the eliminated ones too (give
         them their values on g = 0): the columns of the kept coordinates carry the
-        eliminated ones' motion -(dg/dq^D)^-1 dg/dq^I."""
+        eliminated ones' motion -(dg/dq^D)^-1 dg/dq^I.  Rows that do not depend on t
+        (identically) hold no t: it is set to 0 in them, which cancels factors such as
+        exp(g t) exp(-g t)."""
         return _symbolic(self._model, self._keep, self._chart)
 
     @property
@@ -593,6 +720,8 @@ def _symbolic(model: _Model, keep, chart) -> sp.Matrix:
     key = (keep, chart)
     if key not in model._symbolic:
         rows = [model.rows[i] for i in keep]
+        if not model.has_time(keep):        # t = 0 cancels exp(g t) exp(-g t)
+            rows = dag.xreplace(rows, {model.system.J.t: sp.Integer(0)})
         A = dag.jacobian(rows, [model.states[i] for i in keep])
         if chart:
             G = holonomic.jacobian(model.system)
@@ -640,8 +769,11 @@ def _margin(ev: np.ndarray, bounds: np.ndarray) -> float:
 
 def _in_time(lin: Linearization, bound: np.ndarray) -> tuple[bool, bool]:
     """``(changes, steady)`` of a point whose rows contain t: whether A or x' differ at
-    the times ``t + TIMES`` (A by more than ``REAL`` times its size, a rate by more than
-    its ``bound``) and whether every rate is within its bound at t and at each of them.  The state is held;
+    the times ``t + TIMES`` times the larger of ``|t|`` and A's time scale 1/|B| (B: A
+    balanced, Frobenius norm; 1 where A is 0) (A by more than ``REAL`` of its size in
+    balanced units, ``_difference``; a rate by more than its ``bound``) and whether
+    every rate is within its bound at t and at each of them: no number 1 in another
+    unit of time.  The state is held;
     with holonomic constraints it must stay on g = 0 and A is taken in the chart there.
     A time where the point leaves g = 0 or the equations are undefined changes and is
     not steady."""
@@ -649,8 +781,12 @@ def _in_time(lin: Linearization, bound: np.ndarray) -> tuple[bool, bool]:
     y, p, ck = lin._y, lin._p, lin._kernels
     changes, steady = False, bool(np.all(np.abs(lin.rates) <= bound))
     model_values = dict(lin.params)
+    D = _balanced(lin.A)
+    size = float(np.linalg.norm(lin.A * D[None, :] / D[:, None])) if lin.A.size else 0.0
+    span = max(abs(lin.t), 1.0 / size if 0 < size < np.inf else 0.0) or 1.0
+    same = np.zeros(len(lin.rates))
     for s in TIMES:
-        t = lin.t + s * max(1.0, abs(lin.t))
+        t = lin.t + s * span
         E = lin._E
         if model.system.holonomic:
             point = _configuration(model, y, dict(lin.params), t)
@@ -663,7 +799,7 @@ def _in_time(lin: Linearization, bound: np.ndarray) -> tuple[bool, bool]:
         except LinearizationError:
             return True, False
         changes = changes or bool(
-            np.abs(A - lin.A).max(initial=0.0) > REAL * lin._scale
+            _difference(A, lin.A, same, same, same) > REAL
             or np.any(np.abs(rates - lin.rates) > np.maximum(bound, here)))
         steady = steady and bool(np.all(np.abs(rates) <= here))
     return changes, steady
@@ -986,11 +1122,12 @@ def _evaluate(model: _Model, point: dict, values: dict, keep, t: float,
     ck = model.kernels(values, state, t)
     p = np.array([values[nm] for nm in model.params], dtype=float)
     aux = np.empty(ck.layout.n_aux)
-    ck.aux(t, y, p, aux)
-    at = dict(state)
     k = len(dep)
     coordinate = {v.name: model.coordinates.index(q) for v, q in zip(
         model.dependent, (model.system.J.split(v)[0] for v in model.dependent))}
+    ta = model.frozen_time(tuple(coordinate.values()), t)    # phi's time
+    ck.aux(ta, y, p, aux)
+    at = dict(state)
     for a, nm in enumerate(dep):
         v = float(aux[a])
         if not np.isfinite(v):
@@ -999,7 +1136,7 @@ def _evaluate(model: _Model, point: dict, values: dict, keep, t: float,
                 f"singular for the split {[s.name for s in model.system.dependent]}; "
                 "choose another operating point or another split (dependent=)")
         if nm in point and abs(point[nm] - v) > CONSISTENT * _size(
-                model, coordinate[nm], ck, y, p, values, t, v, abs(point[nm] - v)):
+                model, coordinate[nm], ck, y, p, values, ta, v, abs(point[nm] - v)):
             raise ConstraintError(
                 f"the point is off the constraints: at gives {nm} = {point[nm]!r} but the "
                 f"constraints give {v!r}; omit it (dependent velocities follow from the "
@@ -1007,10 +1144,21 @@ def _evaluate(model: _Model, point: dict, values: dict, keep, t: float,
         at[nm] = v
     if k and not np.all(np.isfinite(aux[k:2 * k])):
         raise ConstraintError("the constraints are undefined at this point")
-    A, rates, limit, bound = _jacobian(model, ck, y, p, values, t, rows, E)
+    te = model.frozen_time(rows, t)
+    A, rates, limit, bound = _jacobian(model, ck, y, p, values, te, rows, E)
     if floor is not None and len(floor) == len(bound):
         bound = np.maximum(bound, floor)
-    return Linearization(model, at, values, rows, chart, E, t, y, p, A, rates, limit, bound)
+    cond = model.conditioning(y, values, te)
+    if not limit and not cond <= CONDITION:
+        warnings.warn(
+            f"linearize: the reduced mass matrix is nearly singular at this point "
+            f"(condition number {cond:.3g} scaled to a unit diagonal, above "
+            f"{CONDITION:.3g} = {STEADY:g}/eps): A and the rates may carry relative errors "
+            f"of about {cond * EPS:.2g}, beyond what the verdict assumes; linearize in "
+            "coordinates in which the mass matrix is regular here, or away from this "
+            "configuration or these parameter values", JetnhWarning, stacklevel=3)
+    return Linearization(model, at, values, rows, chart, E, t, y, p, A, rates, limit, bound,
+                         cond)
 
 
 def _size(model: _Model, i: int, ck, y, p, values: dict, t: float, v: float,
@@ -1218,7 +1366,8 @@ def _settled(model, ck, y, p, values, t, rows, E):
             "coordinates, where the mass matrix of the reduced equations is singular, as "
             "at the pole of polar coordinates or of Euler angles; a singular configuration "
             "of the principle's equations or of the split; or parameter values that make "
-            "them degenerate, e.g. a mass of 0), and no limit could be established there "
+            "them degenerate, e.g. a mass of 0; or values beyond double precision, such as "
+            "exp(g t) at large g t), and no limit could be established there "
             f"with steps {STEPS[0]:g}..{STEPS[-1]:g} times the state's size {scale:.3g}; "
             "linearize in other coordinates, or choose another operating point, another "
             "split (dependent=) or other parameter values")
