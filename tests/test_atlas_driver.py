@@ -63,6 +63,29 @@ def test_driver_equals_follow(scenes, name, kw, monkeypatch):
         [(lo, hi, c.split, a) for lo, hi, c, _, a, _ in wanted]
 
 
+@pytest.mark.parametrize("name", ["sleigh", "knife"])
+def test_at_inside_a_cut_last_step(scenes, name, monkeypatch):
+    """``at()`` inside the last step of a piece cut at the edge re-runs that piece with
+    the step control it ran with (its step bound near the singular set too): the driver's
+    record and follow's give the same states, where a loose tolerance makes the steps
+    long enough for the bound to matter."""
+    kw = dict(method="dop853", rtol=1e-4, atol=1e-7)
+    scene = {"sleigh": lambda: jn.Scene(
+                 chaplygin_sleigh(), "vakonomic", t_span=(0.0, 4.0), initial=dict(
+                     x=0, y=0, theta=0, x_t=0.2, theta_t=7.0, lambda_y=0.1)),
+             "knife": lambda: scenes["knife"].replace(t_span=(0.0, 4.0))}[name]()
+    want = _by_follow(scene, kw, monkeypatch)
+    scene.run(**kw)
+    got = scene.run(**kw)
+    assert isinstance(got._segments, atlas._Recorded)
+    tau = [np.linspace(seg.t[-2], seg.t[-1], 7)[1:-1]
+           for lo, hi, c, seg, a, rr in got._segments.pieces
+           if seg._dense["partial_last"] and len(seg.t) > 1 and hi < len(got.t)]
+    assert tau
+    tau = np.concatenate(tau)
+    assert np.array_equal(got.at(tau), want.at(tau))
+
+
 def test_a_run_that_never_reaches_the_edge(scenes):
     """After a run that switched, a run of the same plan that ends before the edge is
     the driver's one piece, equal to the loop's own run."""

@@ -116,3 +116,27 @@ def test_cartesian_pendulum_accuracy_follows_rtol():
         th = np.unwrap(np.arctan2(tr["x"], -tr["y"]))
         errors.append(np.abs(th - ref.sol(tr.t)[0]).max())
     assert errors[1] < 2e-4 and errors[1] < errors[0] / 20
+
+
+@pytest.mark.parametrize("offset", [-100.0, 100.0])
+def test_fixed_steps_without_the_edge_do_not_read_a_user_event_as_it(offset):
+    """A fixed-step piece that goes on without watching the chart's edge (no better split
+    there) has no stage check against it: its last event is the user's, whose sign says
+    nothing of the chart (a user event x - 100, negative all along, once stopped such a
+    piece "singular" at its first step)."""
+    import sympy as sp
+
+    from jetnh.numeric import atlas
+    from jetnh.numeric.events import as_events
+
+    scene = jn.Scene(models.knife_edge(), "chetaev", t_span=(0.0, 1.0),
+                     initial=dict(x=0, y=0, phi=0, x_t=0.5, phi_t=0.3))
+    user = as_events([jn.Event(sp.Symbol("x") + offset, direction=1)])
+    plan = scene._plan(None, None, None, "rk4", "steps", user, None, None, False, None,
+                       None, "stop", None, None, False, True, {"n_steps": 20})
+    at = atlas.atlas(scene)
+    parts, _ = atlas.follow(at, "rk4", at.own, 0.0, scene.y0.copy(), 1.0, scene._p, user,
+                            np.zeros(1, np.int64), plan.ctl, 10**6, plan.te, plan.mode,
+                            None, True, 1e-8, None, None, None, first=False, edge=False)
+    out = parts[-1][1]
+    assert int(out.status) == 0 and float(out.t) == 1.0 and int(out.stats[0]) == 20

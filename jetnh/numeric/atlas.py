@@ -949,9 +949,8 @@ def _recorded_parts(at, plan, p, build, wall, record):
             dense = plan.dense_ends
             dense = None if dense is None else dense[int(i[cd.C_PARTIAL])]
         else:
-            c = list(ctl)
-            c[_FIRST], c[_MAX_STEPS], c[_N_STEPS], c[_MAX_STEP] = (
-                0.0, int(i[cd.C_MAXSTEPS]), int(i[cd.C_NSTEPS]), float(f[cd.C_MAXSTEP]))
+            c = list(_onward(ctl, int(i[cd.C_MAXSTEPS]), int(i[cd.C_NSTEPS]), edge))
+            c[_MAX_STEP] = float(f[cd.C_MAXSTEP])
             seg_ctl = ctl._make(c)
             watch = chart.watch(ce, plan.checked, plan.singular_tol, [], (), edge)
             dense = (None if plan.dense is None else
@@ -1046,7 +1045,8 @@ def follow(at, method, chart, t, y, t1, p, user, counts, ctl, steps_left, te, mo
             watch = chart.watch(ce, checked, singular_tol, user_max, counts, edge)
             seg_ctl, seg_te = ctl, te
             if parts or not first or near is not None:
-                seg_ctl = _onward(ctl, max(steps_left, 0), _n_steps(ctl, t, t1, h_fixed))
+                seg_ctl = _onward(ctl, max(steps_left, 0), _n_steps(ctl, t, t1, h_fixed),
+                                  edge)
                 if near is not None:        # the part of the step that crossed the edge
                     t_to, seg_ctl = _approach(seg_ctl, t, t1, h_fixed, near[0])
                 if mode == AT_T_EVAL:
@@ -1204,13 +1204,16 @@ def _cut(out, mode, t_k, y_k, n_user, direction):
                         n_ev=m, sing_index=-1)
 
 
-def _onward(ctl, max_steps, n_steps):
+def _onward(ctl, max_steps, n_steps, edge=True):
     """``ctl._replace(first_step=0.0, max_steps=max_steps, n_steps=n_steps,
     edge=NEAR)``: the step control of a piece after the first (its first step chosen
     afresh, its steps near the chart's singular set shorter: ``NEAR``), without the
-    keyword machinery."""
+    keyword machinery.  A fixed-step piece that does not watch the chart's edge
+    (``edge`` false) gets ``edge=0``: its stage check would read its last user event
+    as the edge."""
     c = list(ctl)
-    c[_FIRST], c[_MAX_STEPS], c[_N_STEPS], c[_EDGE] = 0.0, max_steps, n_steps, NEAR
+    c[_FIRST], c[_MAX_STEPS], c[_N_STEPS] = 0.0, max_steps, n_steps
+    c[_EDGE] = NEAR if edge or n_steps == 0 else 0.0
     return ctl._make(c)
 
 
