@@ -263,7 +263,8 @@ def _projected(method, onto):
 def _final(solver):
     """``(class, made)``: scipy's solver ``solver`` (a name or a class) as a subclass that
     keeps where it is and the first accepted step whose end is not finite (with the
-    state before it), and the list its instance is put in; ``rows`` makes from them the
+    state before it; scipy's solvers make ``self.y`` anew every step, LSODA a copy of its
+    work array), and the list its instance is put in; ``rows`` makes from them the
     rows of a ``save="final"`` run: t0, then the last state (the state of a terminal
     event where the run ended in one), or the last finite state and the first state that
     is not (the run's singular stop or error is then that of every step's rows)."""
@@ -279,10 +280,10 @@ def _final(solver):
             made.append(self)
 
         def _step_impl(self):
-            t, y = self.t, np.array(self.y, dtype=float)
+            t, y = self.t, self.y       # (every step makes self.y anew: no copy)
             ok, message = super()._step_impl()
-            if ok and self.not_finite is None and not np.all(np.isfinite(self.y)):
-                self.not_finite = (t, y, self.t, np.array(self.y, dtype=float))
+            if ok and self.not_finite is None and not math.isfinite(self.y.sum()):
+                self.not_finite = (t, y, self.t, self.y)
             return ok, message
 
         def rows(self, t0, y0, sol, forward):
