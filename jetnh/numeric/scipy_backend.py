@@ -16,6 +16,12 @@ array inside its Fortran state) a projected value would contradict: their steps 
 projected, their rows drift off g = 0 by the global error, and the run says so
 (``drift.report``: a ``JetnhWarning`` with the figure; the diagnostics'
 ``holonomic_residual_max``).
+
+``save="final"`` (no ``t_eval``) keeps t0 and the last state alone, as the compiled
+methods do: ``solve_ivp`` runs with an empty ``t_eval`` (no row stored, no dense output
+made but for events) through a subclass of its solver that keeps the state where it is
+(``_final``); the rows are those of the run that keeps every step, its first and its
+last, bit for bit (a terminal event's state is the one ``solve_ivp`` records for it).
 """
 
 from __future__ import annotations
@@ -42,16 +48,20 @@ _POSITIVE_ZERO = np.finfo(float).tiny
 
 
 def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_step,
-        events=None, singular="stop", singular_tol=1e-10, sensitivities=None) -> Trajectory:
+        events=None, singular="stop", singular_tol=1e-10, sensitivities=None,
+        save="steps") -> Trajectory:
     """scipy's ``solve_ivp`` on the compiled right-hand side; user events and the
     singularity indicators become scipy events (the indicators terminal, direction -1,
     on ``s_i g_i - singular_tol |g_i(t0)|``).  ``sensitivities``: the kernels of the
     state augmented by its sensitivities (``kernels.sensitivity_kernels``; ``y_init``
-    and the tolerances augmented too)."""
+    and the tolerances augmented too).  ``save``: "steps" or "final" (without
+    ``t_eval``: t0 and the end alone, module docstring)."""
     from scipy.integrate import solve_ivp
 
     if method not in SCIPY_METHODS:
         raise JetnhError(f"unknown scipy method {method!r}; choose one of {SCIPY_METHODS}")
+    final = save == "final" and t_eval is None
+    saved = "t_eval" if t_eval is not None else save
     kern = scene.kernels
     rhs = kern.rhs if sensitivities is None else sensitivities.rhs
     n = y_init.shape[0]
@@ -95,7 +105,7 @@ def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_st
                               status=SINGULAR, stop_reason=info["reason"], steps=0,
                               rejected=0, nfev=0, wall_time=0.0, kernels=kern,
                               projected=scene.projected, singularity=info,
-                              saved="steps" if t_eval is None else "t_eval")
+                              saved=saved)
         sig, thr = np.sign(g0), singular_tol * np.abs(g0)
         work = np.empty(m)
         for i in range(m):
@@ -119,11 +129,14 @@ def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_st
                                   stop=dict(t=float(t0), steps=None, rejected=None,
                                             rhs_evaluations=1))
     onto = _onto(scene, sensitivities, p) if method in PROJECTED else None
+    solver = method if onto is None else _projected(method, onto)
+    if final:
+        solver, made = _final(solver)
+        te_run = np.zeros(0)
     tic = time.perf_counter()
     try:
-        sol = solve_ivp(fun, (t0, t1), y_init, method=method if onto is None else
-                        _projected(method, onto), t_eval=te_run, rtol=rtol, atol=atol,
-                        max_step=max_step, events=scipy_events or None, **kw)
+        sol = solve_ivp(fun, (t0, t1), y_init, method=solver, t_eval=te_run, rtol=rtol,
+                        atol=atol, max_step=max_step, events=scipy_events or None, **kw)
     except (ValueError, np.linalg.LinAlgError):
         if not failed:
             raise
@@ -135,6 +148,8 @@ def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_st
     # no row (an empty t_eval, a stop before its first time): scipy leaves lists
     ts = np.asarray(sol.t, dtype=float).reshape(-1)
     ys = np.ascontiguousarray(np.asarray(sol.y, dtype=float).reshape(n, -1).T)
+    if final:
+        ts, ys = made[0].rows(t0, y_init, sol, t1 >= t0)
     if repeat is not None:  # a repeated time: its row repeated
         keep = repeat[repeat < ts.size]
         ts, ys = ts[keep], np.ascontiguousarray(ys[keep])
@@ -193,8 +208,7 @@ def run(scene, method, rtol, atol, t_eval, t0, t1, y_init, p, first_step, max_st
     traj = Trajectory(scene, ts, ys, p, method=f"scipy-{method}", status=status,
                       stop_reason=reason, steps=None, rejected=None, nfev=int(sol.nfev),
                       wall_time=wall, kernels=kern, projected=scene.projected,
-                      singularity=singularity, saved="steps" if t_eval is None else "t_eval",
-                      **kw)
+                      singularity=singularity, saved=saved, **kw)
     if sol.status == 1 and t_eval is not None and not nonfinite:
         # the stop of an event, after the last row: ``final``
         y_stop = np.array(sol.y_events[k][-1], dtype=float)[None, :]
@@ -244,3 +258,49 @@ def _projected(method, onto):
 
     Projected.__name__ = Projected.__qualname__ = f"Projected{method}"
     return Projected
+
+
+def _final(solver):
+    """``(class, made)``: scipy's solver ``solver`` (a name or a class) as a subclass that
+    keeps where it is and the first accepted step whose end is not finite (with the
+    state before it; scipy's solvers make ``self.y`` anew every step, LSODA a copy of its
+    work array), and the list its instance is put in; ``rows`` makes from them the
+    rows of a ``save="final"`` run: t0, then the last state (the state of a terminal
+    event where the run ended in one), or the last finite state and the first state that
+    is not (the run's singular stop or error is then that of every step's rows)."""
+    import scipy.integrate
+
+    base = getattr(scipy.integrate, solver) if isinstance(solver, str) else solver
+    made = []
+
+    class Final(base):
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs)
+            self.not_finite = None
+            made.append(self)
+
+        def _step_impl(self):
+            t, y = self.t, self.y       # (every step makes self.y anew: no copy)
+            ok, message = super()._step_impl()
+            if ok and self.not_finite is None and not math.isfinite(self.y.sum()):
+                self.not_finite = (t, y, self.t, self.y)
+            return ok, message
+
+        def rows(self, t0, y0, sol, forward):
+            if self.not_finite is not None:
+                t, y, t_bad, y_bad = self.not_finite
+                ts, ys = ([t0, t, t_bad], [y0, y, y_bad]) if t != t0 else (
+                    [t0, t_bad], [y0, y_bad])
+            elif sol.status == 1:       # the state solve_ivp records at the last root
+                last = [(te[-1], k) for k, te in enumerate(sol.t_events) if len(te)]
+                t, k = (max if forward else min)(last)
+                ts, ys = [t0, t], [y0, sol.y_events[k][-1]]
+            elif self.t != t0:
+                ts, ys = [t0, self.t], [y0, self.y]
+            else:
+                ts, ys = [t0], [y0]
+            return (np.array(ts, dtype=float),
+                    np.ascontiguousarray(np.array(ys, dtype=float).reshape(len(ts), -1)))
+
+    Final.__name__ = Final.__qualname__ = f"Final{base.__name__}"
+    return Final, made

@@ -390,7 +390,8 @@ def run(scene, plan, y, p, own=False, span=None) -> Trajectory:
         return scipy_backend.run(scene, m.scipy, plan.rtol, plan.atol, plan.te, plan.t0,
                                  plan.t1, y, p, plan.first or None, plan.max_step,
                                  plan.events, "stop" if plan.checked else "ignore",
-                                 plan.singular_tol, sensitivities=plan.sens)
+                                 plan.singular_tol, sensitivities=plan.sens,
+                                 save=plan.save)
     if m.solver is Solver.DISCRETE:
         sing = plan.singular_tol if plan.checked else None
         if not m.projection:
