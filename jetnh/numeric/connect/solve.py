@@ -433,7 +433,8 @@ class Search(Shooter):
             iterations=iterations,
             _columns=tuple(self.cols), _rcond=self.rcond, _run=MappingProxyType(
                 {"rtol": self.rtol, "atol": self.atol, "method": self.method}),
-            conditions=self.conditions, route=route, relative_residual=relative)
+            conditions=self.conditions, route=route, relative_residual=relative,
+            _end=tuple(target[:len(self.rows)]))
         if tol is not None and relative > tol:
             raise ConnectError(
                 f"the {scene.principle} motion found ends {residual:.3g} away from end "
