@@ -130,6 +130,13 @@ def _fitted(got, n):
     return F, Jm
 
 
+def _scaled(got, n, inv):
+    """``_fitted`` ``(F, dF/du)`` with each condition divided by its scale (``inv``:
+    1 / scale)."""
+    F, Jm = _fitted(got, n)
+    return F * inv, Jm * inv[:, None]
+
+
 def levenberg_marquardt(evaluate, u, scale, tol, max_iter, rcond, stuck=None):
     """Levenberg-Marquardt on F(u) = 0 (``evaluate(u)`` is ``(F, dF/du)``, or None
     where the runs fail), in unknowns scaled by the largest
@@ -140,16 +147,19 @@ def levenberg_marquardt(evaluate, u, scale, tol, max_iter, rcond, stuck=None):
     (mu -> 0: the minimum-norm Gauss-Newton step, quadratic convergence near a
     solution; mu large: a short step down the gradient), mu adapted by the ratio of
     the actual to the predicted decrease (Nielsen's rule), a failed run counted as no
-    decrease; ``stuck(u, F, J)`` is told of every rejected step.  Converged: max
+    decrease; ``stuck(u, F, J)`` is told of every rejected step.  Each condition is
+    measured in its own ``scale`` (F and its row of J divided by it: conditions in
+    different units weigh alike in |F|^2, whatever the units).  Converged: max
     |F| / ``scale`` <= ``tol``.  Returns ``(u, converged, iterations)``."""
     got = evaluate(u)
     if got is None:
         return u, False, 0
     u = np.ascontiguousarray(u, dtype=float)
-    F, Jm = _fitted(got, u.size)
-    # converged: |F| <= limit, entrywise
+    inv = 1.0 / np.asarray(scale, dtype=float)
+    F, Jm = _scaled(got, u.size, inv)
+    # converged: |F| / scale <= tol, entrywise
     limit = np.empty(F.shape)
-    limit[:] = tol * np.asarray(scale, dtype=float)
+    limit[:] = tol
     compiled = _step_entry()
     rcond = float(rcond)
     # (d is written by the first step before it is read)
@@ -165,10 +175,10 @@ def levenberg_marquardt(evaluate, u, scale, tol, max_iter, rcond, stuck=None):
         trial = evaluate(v)
         rho = -1.0
         if trial is not None and predicted > 0:
-            F_new = trial[0]
+            F_new = np.asarray(trial[0], dtype=float) * inv
             rho = (FF - F_new.dot(F_new)) / predicted
         if rho > 0:
-            u, (F, Jm) = v, _fitted(trial, u.size)
+            u, (F, Jm) = v, _scaled(trial, u.size, inv)
             mu *= max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
             nu = 2.0
         else:

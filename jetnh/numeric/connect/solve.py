@@ -35,13 +35,16 @@ class Search(Shooter):
     coordinates and, with ``momenta`` (``problem.Momenta``), the transversality
     conditions P_i(t1; u) = 0 of the free ones."""
 
-    def __init__(self, *args, momenta=None):
-        super().__init__(*args)
+    def __init__(self, scene, q0, q1, *args, momenta=None):
+        super().__init__(scene, q0, q1, *args)
         self.momenta = momenta
         if momenta is not None:
             self.target = np.concatenate([self.target, np.zeros(len(momenta.free))])
-            # the momenta's transversality conditions: as before, relative to 1
-            self.scale = np.concatenate([self.scale, np.ones(len(momenta.free))])
+            # the momenta's transversality conditions: relative to the problem's own
+            # momentum in each free coordinate (``problem.Momenta.scale``)
+            t0, t1 = scene.t_span
+            self.scale = np.concatenate([self.scale,
+                                         momenta.scale(q0, q1, t0, t1 - t0)])
 
     #: (scaled miss, u) of the run over the whole span that came nearest the end
     closest = None
