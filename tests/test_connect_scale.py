@@ -50,7 +50,10 @@ def test_pendulum_origin_free(turns):
 @pytest.mark.parametrize("s", [1.0, 1e-9])
 def test_unreachable_end_refused_in_any_units(s):
     """z_t = y x_t / s, every length scaled by s: (s, 0, 0.3 s) is off the Chetaev
-    motions' reach in T = 1 in every unit (before: returned as connected at s = 1e-9)."""
+    motions' reach in T = 1 in every unit (before: returned as connected at s = 1e-9).
+    The least-squares answer weighs each end coordinate's miss by its scale
+    (``end_scale``: x and y by s, z by its displacement 0.3 s), so its largest miss is
+    0.411 s in every unit (0.239 s unweighted, as before the search weighed them)."""
     J = jn.JetSpace("x y z")
     x, y, z = J.q
     xt, yt, zt = J.qd
@@ -59,7 +62,7 @@ def test_unreachable_end_refused_in_any_units(s):
     with pytest.raises(ConnectError, match="do not reach end") as e:
         jn.connect(S, "chetaev", {"x": 0, "y": 0, "z": 0},
                    {"x": s, "y": 0.0, "z": 0.3 * s}, (0, 1), params={k: s})
-    assert e.value.best.residual == pytest.approx(0.239 * s, rel=0.01)
+    assert e.value.best.residual == pytest.approx(0.4108 * s, rel=0.01)
 
 
 def test_heisenberg_normal_in_small_units():

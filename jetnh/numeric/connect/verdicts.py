@@ -374,7 +374,7 @@ class _Gramian:
     weights ``w`` (B = d qdot/du / w), the kept coordinates ``keep`` (a chart of g = 0;
     all without holonomic constraints) and the RK4 step ``h``."""
 
-    __slots__ = ("W", "A", "B", "w", "keep", "h")
+    __slots__ = ("W", "Wfull", "A", "B", "w", "keep", "h")
 
 
 def gramian(tr, samples):
@@ -416,6 +416,7 @@ def gramian(tr, samples):
         found.w = np.where(np.isfinite(w) & (w > 0), w, 1.0)
         W = np.empty((n, n))
         _compiled("gramian")(found.A, Bw, found.h, W)
+        found.Wfull = W
         found.keep = list(range(n))
         if system.holonomic:     # the reachable directions: the tangent space of g = 0
             found.keep = _manifold_chart(tr, times[-1], samples.grid_y[-1], np.diag(W))
@@ -462,16 +463,16 @@ def gramian_change(tr, samples, rows, miss) -> float:
     inputs = _coordinate_rows(system)[1]
     velocities = [names.index(v.name) for v in system.independent_velocities]
     A, B = g.A, g.B
-    # the full Gramian on the named rows (its unit diagonal for the pseudo-inverse)
-    Wfull = np.empty((n, n))
-    _compiled("gramian")(A, B, g.h, Wfull)
-    Wn = 0.5 * (Wfull + Wfull.T)[np.ix_(named, named)]
+    # the full Gramian on the named rows, scaled to a unit diagonal, pseudo-inverted by
+    # its eigenvalues (relative cut-off 1e-12)
+    Wn = 0.5 * (g.Wfull + g.Wfull.T)[np.ix_(named, named)]
     d = np.sqrt(np.abs(Wn.diagonal()))
     if not np.isfinite(Wn).all() or not np.all(d > 0):
         return 0.0
+    ev, V = np.linalg.eigh(Wn / d[:, None] / d[None, :])
+    keep = np.abs(ev) > 1e-12 * np.abs(ev).max()
     c = np.zeros(n)
-    c[named] = (np.linalg.pinv(Wn / d[:, None] / d[None, :], rcond=1e-12, hermitian=True)
-                @ (miss / d)) / d
+    c[named] = (V[:, keep] @ ((V[:, keep].T @ (miss / d)) / ev[keep])) / d
     N = A.shape[0]
     dq, v = np.empty((N, n)), np.empty((N, B.shape[2]))
     _compiled("correction")(A, B, c, g.h / 2.0, dq, v)
