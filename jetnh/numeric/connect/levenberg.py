@@ -131,13 +131,14 @@ def _fitted(got, n):
 
 
 def _scaled(got, n, inv):
-    """``_fitted`` ``(F, dF/du)`` with each condition divided by its scale (``inv``:
-    1 / scale)."""
+    """``_fitted`` ``(F, dF/du)`` with each condition multiplied by its weight
+    (``inv``)."""
     F, Jm = _fitted(got, n)
     return F * inv, Jm * inv[:, None]
 
 
-def levenberg_marquardt(evaluate, u, scale, tol, max_iter, rcond, stuck=None):
+def levenberg_marquardt(evaluate, u, scale, tol, max_iter, rcond, stuck=None,
+                        weight=None):
     """Levenberg-Marquardt on F(u) = 0 (``evaluate(u)`` is ``(F, dF/du)``, or None
     where the runs fail), in unknowns scaled by the largest
     column norms of the Jacobian seen so far (More's scaling: the multipliers'
@@ -147,19 +148,20 @@ def levenberg_marquardt(evaluate, u, scale, tol, max_iter, rcond, stuck=None):
     (mu -> 0: the minimum-norm Gauss-Newton step, quadratic convergence near a
     solution; mu large: a short step down the gradient), mu adapted by the ratio of
     the actual to the predicted decrease (Nielsen's rule), a failed run counted as no
-    decrease; ``stuck(u, F, J)`` is told of every rejected step.  Each condition is
-    measured in its own ``scale`` (F and its row of J divided by it: conditions in
-    different units weigh alike in |F|^2, whatever the units).  Converged: max
-    |F| / ``scale`` <= ``tol``.  Returns ``(u, converged, iterations)``."""
+    decrease; ``stuck(u, F, J)`` is told of every rejected step.  ``weight``: each
+    condition's weight in |F|^2 (F and its row of J multiplied by it; default 1).
+    Converged: max |F| / ``scale`` <= ``tol``.  Returns ``(u, converged,
+    iterations)``."""
     got = evaluate(u)
     if got is None:
         return u, False, 0
     u = np.ascontiguousarray(u, dtype=float)
-    inv = 1.0 / np.asarray(scale, dtype=float)
+    scale = np.asarray(scale, dtype=float)
+    inv = np.ones(scale.shape) if weight is None else np.asarray(weight, dtype=float)
     F, Jm = _scaled(got, u.size, inv)
-    # converged: |F| / scale <= tol, entrywise
+    # converged: |F| <= limit (tol times the scale, weighted alike), entrywise
     limit = np.empty(F.shape)
-    limit[:] = tol
+    limit[:] = tol * scale * inv
     compiled = _step_entry()
     rcond = float(rcond)
     # (d is written by the first step before it is read)
