@@ -132,9 +132,9 @@ def _fitted(got, n):
 
 def _scaled(got, n, inv):
     """``_fitted`` ``(F, dF/du)`` with each condition multiplied by its weight
-    (``inv``)."""
+    (``inv``; None: as they are)."""
     F, Jm = _fitted(got, n)
-    return F * inv, Jm * inv[:, None]
+    return (F, Jm) if inv is None else (F * inv, Jm * inv[:, None])
 
 
 def levenberg_marquardt(evaluate, u, scale, tol, max_iter, rcond, stuck=None,
@@ -156,12 +156,11 @@ def levenberg_marquardt(evaluate, u, scale, tol, max_iter, rcond, stuck=None,
     if got is None:
         return u, False, 0
     u = np.ascontiguousarray(u, dtype=float)
-    scale = np.asarray(scale, dtype=float)
-    inv = np.ones(scale.shape) if weight is None else np.asarray(weight, dtype=float)
+    inv = None if weight is None else np.asarray(weight, dtype=float)
     F, Jm = _scaled(got, u.size, inv)
     # converged: |F| <= limit (tol times the scale, weighted alike), entrywise
     limit = np.empty(F.shape)
-    limit[:] = tol * scale * inv
+    limit[:] = tol * np.asarray(scale, dtype=float) * (1.0 if inv is None else inv)
     compiled = _step_entry()
     rcond = float(rcond)
     # (d is written by the first step before it is read)
@@ -177,7 +176,7 @@ def levenberg_marquardt(evaluate, u, scale, tol, max_iter, rcond, stuck=None,
         trial = evaluate(v)
         rho = -1.0
         if trial is not None and predicted > 0:
-            F_new = np.asarray(trial[0], dtype=float) * inv
+            F_new = trial[0] if inv is None else np.asarray(trial[0], dtype=float) * inv
             rho = (FF - F_new.dot(F_new)) / predicted
         if rho > 0:
             u, (F, Jm) = v, _scaled(trial, u.size, inv)

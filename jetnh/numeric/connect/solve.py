@@ -41,7 +41,6 @@ class Search(Shooter):
     def __init__(self, scene, q0, q1, *args, momenta=None):
         super().__init__(scene, q0, q1, *args)
         self.momenta = momenta
-        self.weight = np.ones(len(self.scale))
         if momenta is not None:
             self.target = np.concatenate([self.target, np.zeros(len(momenta.free))])
             # the momenta's transversality conditions: relative to the problem's own
@@ -53,13 +52,16 @@ class Search(Shooter):
             # it neither drowns in nor swamps |F|^2 (a weight near 1 changes the
             # search's path for nothing: a disk's free heading was missed at 1.7)
             ratio = self.scale.max() / momentum
-            self.weight = np.concatenate([np.ones(len(self.scale)), np.where(
-                (ratio > FAR) | (ratio < 1.0 / FAR), ratio, 1.0)])
+            far = (ratio > FAR) | (ratio < 1.0 / FAR)
+            if far.any():
+                self.weight = np.concatenate([np.ones(len(self.scale)),
+                                              np.where(far, ratio, 1.0)])
             self.scale = np.concatenate([self.scale, momentum])
 
     #: (scaled miss, u) of the run over the whole span that came nearest the end
     closest = None
-    #: each end condition's weight in the search's |F|^2 (``levenberg_marquardt``)
+    #: each end condition's weight in the search's |F|^2 (``levenberg_marquardt``;
+    #: None: 1 each)
     weight = None
 
     def _endpoint(self, u):
@@ -170,7 +172,7 @@ class Search(Shooter):
             if self.least_squares_point(F, Jm):
                 raise self.unreachable(v)
 
-        weight = self.weight if rows is None else self.weight[pick]
+        weight = self.weight if rows is None or self.weight is None else self.weight[pick]
         return levenberg_marquardt(evaluate, u, scale, tol, max_iter, self.rcond, stuck,
                                    weight)
 
