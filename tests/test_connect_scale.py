@@ -78,3 +78,38 @@ def test_heisenberg_normal_in_small_units():
         assert c.normal is True
         got.append(c.initial["lambda_z"])
     assert got[1] == pytest.approx(got[0], rel=1e-6)
+
+
+def _free_oscillator():
+    J = jn.JetSpace("x y")
+    (x, y), (xt, yt) = J.q, J.qd
+    k = sp.Symbol("k")
+    return jn.System(J, k * (xt**2 + yt**2) / 2 - k * y**2 / 2)
+
+
+_FREE = _free_oscillator()
+
+
+@pytest.mark.parametrize("k", [1.0, 1e-12, 1e12])
+def test_transversality_in_any_units_of_the_lagrangian(k):
+    """y'' = -y from y = 0.5 with y(1) free: its momentum k y_t vanishes at t1, so
+    y_t(0) = 0.5 tan 1 whatever the unit k of L (before, relative to 1: for k = 1e-12
+    the straight-line guess y_t = 0 was accepted untouched, 100 % off; for k = 1e12 no
+    answer).  The momentum's scale is the problem's own (``Momenta.scale``), and the
+    search weighs a momentum far from the coordinates' scale by the ratio."""
+    c = jn.connect(_FREE, "vakonomic", {"x": 0.0, "y": 0.5}, {"x": 1.0}, (0.0, 1.0),
+                   params={"k": k})
+    assert c.conditions == ("x", "p_y")
+    assert c.initial["y_t"] == pytest.approx(0.5 * math.tan(1.0), rel=1e-9)
+    assert c.relative_residual <= 1e-9
+
+
+@pytest.mark.parametrize("a", [1.0, 1e-6, 1e6])
+def test_transversality_in_any_units_of_the_free_coordinate(a):
+    """The same with y measured in units 1/a (Y = a y, L = k (x_t^2 + Y_t^2 / a^2) / 2
+    - k Y^2 / (2 a^2)): the momentum of Y is 1/a that of y."""
+    J = jn.JetSpace("x y")
+    (x, y), (xt, yt) = J.q, J.qd
+    S = jn.System(J, (xt**2 + yt**2 / a**2) / 2 - y**2 / (2 * a**2))
+    c = jn.connect(S, "vakonomic", {"x": 0.0, "y": 0.5 * a}, {"x": 1.0}, (0.0, 1.0))
+    assert c.initial["y_t"] == pytest.approx(0.5 * a * math.tan(1.0), rel=1e-9)

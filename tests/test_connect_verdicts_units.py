@@ -17,9 +17,11 @@
   form has the eigenvalues 1 +- |rho|, rho = -e x y / 4 / sqrt((1 + e y^2 / 4)
   (1 + e x^2 / 4)): ``legendre`` = min over the path of 1 - |rho| (closed form).
 - Martinet's abnormal segment (zdot = y^2 xdot / 2, y = 0) stays abnormal in any units,
-  and the end off it normal.  (Its ends are also joined by normal extremals with y
-  small but not 0, which the search can return: normal, in any units, which a
-  threshold on the unscaled Gramian called abnormal when y was small in its units.)
+  and the end off it normal.  Its ends are also met, within the tolerance, by normal
+  extremals y = A sin(pi t) whose end z = A^2 / 4 is the miss (the default guess
+  returns one): within their miss of the abnormal segment, so not normal, in any units
+  of x, y and z (``gramian_change`` the same number, whatever A the units' tolerance
+  leaves); before, normal (the unit-free Gramian ratio is 0.1 at every A > 0).
 """
 
 from __future__ import annotations
@@ -188,3 +190,51 @@ def _martinet_off():
                                       {"x": 1.0, "y": 0.0, "z": 0.05}, (0.0, 1.0),
                                       params={"b": 1.0, "c": 1.0})
     return _MARTINET["off"]
+
+
+def _martinet3():
+    a, b, c = sp.symbols("a b c")
+    J = jn.JetSpace("x y z")
+    (x, y, z), (xd, yd, zd) = J.q, J.qd
+    return jn.System(J, (xd**2 / a**2 + yd**2 / b**2) / 2,
+                     [zd / c - (y / b)**2 * xd / a / 2], dependent=[z])
+
+
+MARTINET3 = _martinet3()
+UNITS = [(1.0, 1.0, 1.0), (1e-6, 1.0, 1.0), (1e6, 1.0, 1.0), (1.0, 1e-6, 1.0),
+         (1.0, 1e6, 1.0), (1.0, 1.0, 1e-6), (1.0, 1.0, 1e6)]
+
+
+def _martinet3_in(a, b, c, z1, guess=None):
+    return jn.connect(MARTINET3, "vakonomic", O, {"x": a, "y": 0.0, "z": z1 * c},
+                      (0.0, 1.0), params={"a": a, "b": b, "c": c}, guess=guess)
+
+
+def _martinet3_references():
+    if "near" not in _MARTINET:
+        _MARTINET["near"] = _martinet3_in(1.0, 1.0, 1.0, 0.0)       # the default guess
+        _MARTINET["off3"] = _martinet3_in(1.0, 1.0, 1.0, 0.05)
+    return _MARTINET["near"], _MARTINET["off3"]
+
+
+@pytest.mark.parametrize("a, b, c", UNITS)
+def test_martinet_near_abnormal_in_any_units(a, b, c):
+    """x, y and z each in units 1e-6 and 1e6: the answer beside the abnormal segment
+    (from the default guess's answer in units 1, which the search moves on where the
+    units' end tolerance is tighter: another A) is not normal, its ``gramian_change``
+    the same; the end off the segment is normal, with a change at the relative miss."""
+    near, off = _martinet3_references()
+    assert near.normal is False and 0.3 < near.gramian_change < 1.0
+    assert near.gramian_ratio > 1e-2                   # the path's own: no units either
+    u = near.initial
+    got = _martinet3_in(a, b, c, 0.0, {"x_t": a * u["x_t"], "y_t": b * u["y_t"],
+                                       "lambda_z": u["lambda_z"]})
+    assert got.relative_residual <= 1e-9
+    assert 0.0 < abs(got.trajectory["y"]).max() / b < 1e-3
+    assert got.normal is False
+    assert got.gramian_change == pytest.approx(near.gramian_change, rel=0.05)
+    v = off.initial
+    far = _martinet3_in(a, b, c, 0.05, {"x_t": a * v["x_t"], "y_t": b * v["y_t"],
+                                        "lambda_z": v["lambda_z"]})
+    assert far.normal is True and far.gramian_change < 1e-6
+    assert far.gramian_ratio == pytest.approx(off.gramian_ratio, rel=1e-6)

@@ -78,7 +78,11 @@ Verdicts on the answer:
   ``codegen.verdicts``; the inputs weighted by L, the whole scaled to a unit diagonal)
   is singular: the path is then an abnormal extremal (the
   multiplier rule holds with lambda_0 = 0), which a small residual does not make
-  normal.
+  normal.  Also False where the path is within its end miss of an abnormal one: the
+  Gramian's gain changes by more than ``NEAR_ABNORMAL`` (10 %) along the
+  minimum-energy correction of the miss (``gramian_change``: a Kantorovich number of
+  order one, where the unit-free ratio of a path beside the abnormal one is of order
+  one too); unchanged by the units of the coordinates.
 - ``cost``: the action ``int L dt`` along the answer, by 5-point Gauss-Legendre on every
   step of the dense output.
 - ``not_extremal``: under non-potential forces or dissipation (nonzero at the parameter
@@ -102,7 +106,8 @@ from .problem import (MAX_TOL, VARIATIONAL, Momenta, Unknowns, _configuration,
                       _guess, _holonomic_free, _scene, on_manifold)
 from .solve import STEP_ITER, Search, least_action
 from .shooting import GROWTH, MAX_SEGMENTS, MAX_STEPS, OutOfTime
-from .verdicts import GRAMIAN_RCOND, action, conjugate_times, gramian_ratio
+from .verdicts import (GRAMIAN_RCOND, NEAR_ABNORMAL, action, conjugate_times,
+                       gramian_change, gramian_ratio)
 
 #: the most segments ``connect(segments=)`` takes: a Newton step of multiple shooting
 #: solves for every segment's state at once (dense: 64 segments of a 6-state system
@@ -110,8 +115,8 @@ from .verdicts import GRAMIAN_RCOND, action, conjugate_times, gramian_ratio
 MAX_SEGMENTS_GIVEN = 64
 
 __all__ = ["connect", "Connection", "VARIATIONAL", "MAX_TOL", "STEP_ITER", "MAX_STEPS",
-           "GROWTH", "MAX_SEGMENTS", "MAX_SEGMENTS_GIVEN", "GRAMIAN_RCOND", "action",
-           "conjugate_times", "gramian_ratio"]
+           "GROWTH", "MAX_SEGMENTS", "MAX_SEGMENTS_GIVEN", "GRAMIAN_RCOND",
+           "NEAR_ABNORMAL", "action", "conjugate_times", "gramian_change", "gramian_ratio"]
 
 
 #: principle names as given -> canonical names (``principles.canonical``, a few

@@ -12,8 +12,9 @@ from ...errors import JetnhError
 from ...frozen import readonly
 from ..trajectory import Trajectory
 from .problem import VARIATIONAL
-from .verdicts import (GRAMIAN_RCOND, LEGENDRE_ZERO, _Samples, action,
-                       conjugate_times, gramian_ratio, legendre_margin, not_extremal)
+from .verdicts import (GRAMIAN_RCOND, LEGENDRE_ZERO, NEAR_ABNORMAL, _Samples, action,
+                       conjugate_times, gramian_change, gramian_ratio, legendre_margin,
+                       not_extremal)
 
 
 @dataclass(frozen=True)
@@ -55,6 +56,8 @@ class Connection:
     #: the largest miss of an end condition relative to its scale (its displacement
     #: start -> end, ``shooting.end_scale``): what ``tol`` bounds
     relative_residual: float = 0.0
+    #: the named end coordinates' values (the first of ``conditions``)
+    _end: tuple = field(default=(), repr=False, compare=False)
 
     @cached_property
     def trajectory(self) -> Trajectory:
@@ -80,11 +83,28 @@ class Connection:
         in [0, 1], the same in any units of the coordinates."""
         return gramian_ratio(self.trajectory, self._samples)
 
+    @cached_property
+    def gramian_change(self) -> float:
+        """The largest relative change of the constraint system's endpoint map's gain
+        in any direction along the correction of the motion's end miss
+        (``verdicts.gramian_change``): of the order of the relative miss for a normal
+        motion, of order one where the miss lies in the second-order region of a fold
+        of that map -- a path the end tolerance admits beside an abnormal one; the
+        same in any units of the coordinates."""
+        tr = self.trajectory
+        names = tr.scene.state_names
+        rows = [names.index(c) for c in self.conditions[:len(self._end)]]
+        miss = tr.y[-1][rows] - np.array(self._end, dtype=float)
+        return gramian_change(tr, self._samples, rows, miss)
+
     @property
     def normal(self) -> bool:
         """False: an abnormal extremal (the constraint system's endpoint map loses rank
-        along the motion: ``gramian_ratio`` below ``GRAMIAN_RCOND``)."""
-        return bool(self.gramian_ratio > GRAMIAN_RCOND)
+        along the motion: ``gramian_ratio`` below ``GRAMIAN_RCOND``), or a motion that
+        the end tolerance admits beside one (the map's gain changes by more than
+        ``NEAR_ABNORMAL`` along the correction of the end miss: ``gramian_change``)."""
+        return bool(self.gramian_ratio > GRAMIAN_RCOND
+                    and self.gramian_change <= NEAR_ABNORMAL)
 
     @cached_property
     def conjugate_times(self):
@@ -168,7 +188,7 @@ class Connection:
                 + " inside the span (t = " + ", ".join(f"{t:.6g}" for t in inside) + ")")
 
     #: the verdicts kept in ``__dict__`` once computed (``cached_property``)
-    _VERDICTS = ("cost", "gramian_ratio", "conjugate_times", "legendre")
+    _VERDICTS = ("cost", "gramian_ratio", "gramian_change", "conjugate_times", "legendre")
 
     def __getstate__(self):
         """The fields as plain data: the Trajectory for the run that made it (a

@@ -130,7 +130,15 @@ def _fitted(got, n):
     return F, Jm
 
 
-def levenberg_marquardt(evaluate, u, scale, tol, max_iter, rcond, stuck=None):
+def _scaled(got, n, inv):
+    """``_fitted`` ``(F, dF/du)`` with each condition multiplied by its weight
+    (``inv``; None: as they are)."""
+    F, Jm = _fitted(got, n)
+    return (F, Jm) if inv is None else (F * inv, Jm * inv[:, None])
+
+
+def levenberg_marquardt(evaluate, u, scale, tol, max_iter, rcond, stuck=None,
+                        weight=None):
     """Levenberg-Marquardt on F(u) = 0 (``evaluate(u)`` is ``(F, dF/du)``, or None
     where the runs fail), in unknowns scaled by the largest
     column norms of the Jacobian seen so far (More's scaling: the multipliers'
@@ -140,16 +148,19 @@ def levenberg_marquardt(evaluate, u, scale, tol, max_iter, rcond, stuck=None):
     (mu -> 0: the minimum-norm Gauss-Newton step, quadratic convergence near a
     solution; mu large: a short step down the gradient), mu adapted by the ratio of
     the actual to the predicted decrease (Nielsen's rule), a failed run counted as no
-    decrease; ``stuck(u, F, J)`` is told of every rejected step.  Converged: max
-    |F| / ``scale`` <= ``tol``.  Returns ``(u, converged, iterations)``."""
+    decrease; ``stuck(u, F, J)`` is told of every rejected step.  ``weight``: each
+    condition's weight in |F|^2 (F and its row of J multiplied by it; default 1).
+    Converged: max |F| / ``scale`` <= ``tol``.  Returns ``(u, converged,
+    iterations)``."""
     got = evaluate(u)
     if got is None:
         return u, False, 0
     u = np.ascontiguousarray(u, dtype=float)
-    F, Jm = _fitted(got, u.size)
-    # converged: |F| <= limit, entrywise
+    inv = None if weight is None else np.asarray(weight, dtype=float)
+    F, Jm = _scaled(got, u.size, inv)
+    # converged: |F| <= limit (tol times the scale, weighted alike), entrywise
     limit = np.empty(F.shape)
-    limit[:] = tol * np.asarray(scale, dtype=float)
+    limit[:] = tol * np.asarray(scale, dtype=float) * (1.0 if inv is None else inv)
     compiled = _step_entry()
     rcond = float(rcond)
     # (d is written by the first step before it is read)
@@ -165,10 +176,10 @@ def levenberg_marquardt(evaluate, u, scale, tol, max_iter, rcond, stuck=None):
         trial = evaluate(v)
         rho = -1.0
         if trial is not None and predicted > 0:
-            F_new = trial[0]
+            F_new = trial[0] if inv is None else np.asarray(trial[0], dtype=float) * inv
             rho = (FF - F_new.dot(F_new)) / predicted
         if rho > 0:
-            u, (F, Jm) = v, _fitted(trial, u.size)
+            u, (F, Jm) = v, _scaled(trial, u.size, inv)
             mu *= max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
             nu = 2.0
         else:

@@ -282,6 +282,43 @@ class Momenta:
         self.params = {s: scene.params[s.name] for s in system.parameters}
         self._shape = (len(self.exprs), len(self.states))
         self._line = straight_line(self._all, self.t, self.states, self.params)
+        self._scene = scene
+
+    def scale(self, q0, q1, t0, T) -> np.ndarray:
+        """Each transversality condition's scale, free of the units of the coordinates
+        and of L: the momentum of the problem's own motion in the free coordinate's
+        units, ``sqrt(D_ii) |v|_H`` -- H = d^2 L / dqdot^2 at the start (``verdicts``'
+        kinetic Hessian), D its diagonal scale (``verdicts.unit_diagonal``), v the
+        straight line's velocities (the named coordinates' displacements over T, 0 for
+        the others), |v|_H = sqrt(|v^T H v|).  A change of a coordinate's unit q -> a q
+        scales P_i and sqrt(D_ii) alike by 1 / a, and of L's by k both by k.  1 (as
+        before) where L has no velocity term in a free coordinate, or where nothing
+        moves: no scale of the problem's own."""
+        from .verdicts import _diagonal_scale, _hessian
+
+        scene = self._scene
+        system = scene.system
+        J = system.J
+        _, v, H = _hessian(scene, multipliers=False)
+        n = len(v)
+        speed = {qd: (q1[q.name] - q0[q.name]) / T if q.name in q1 else 0.0
+                 for q, qd in zip(J.q, J.qd)}
+        point = {J.t: t0, **self.params, **{q: q0[q.name] for q in J.q}, **speed}
+        try:
+            with np.errstate(all="ignore"):
+                Hm = np.array([float(h) for h in dag.evaluate_numpy(H, point)]).reshape(n, n)
+        except (TypeError, ValueError, KeyError):
+            return np.ones(len(self.free))
+        Hm = 0.5 * (Hm + Hm.T)
+        vel = np.array([speed[qd] for qd in J.qd])
+        energy = math.sqrt(abs(float(vel @ Hm @ vel)))
+        rows = np.abs(Hm).max(axis=1)
+        names = [q.name for q in J.q]
+        if not (math.isfinite(energy) and energy > 0 and np.all(np.isfinite(Hm))):
+            return np.ones(len(self.free))
+        D = _diagonal_scale(Hm)
+        return np.array([math.sqrt(D[names.index(c)]) * energy
+                         if rows[names.index(c)] > 0 else 1.0 for c in self.free])
 
     def __call__(self, t, y):
         """``(P_free(t, y), dP_free/dy)``."""

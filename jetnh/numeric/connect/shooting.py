@@ -259,16 +259,19 @@ def end_scale(start, end) -> np.ndarray:
     largest where it ends where it started; where none moves (a loop), the
     configuration's size max |start|, and 1 only where that is 0 too; plus the rounding
     of the values (``ROUNDING`` max(|start|, |end|)), the resolution of the doubles
-    that hold them."""
-    start, end = np.asarray(start, dtype=float), np.asarray(end, dtype=float)
-    move = np.abs(end - start)
-    size = float(move.max()) if move.size else 0.0
+    that hold them.  (On Python floats: a few entries, where numpy's calls cost ~10 us a
+    connect.)"""
+    start = [float(v) for v in start]
+    end = [float(v) for v in end]
+    move = [abs(b - a) for a, b in zip(start, end)]
+    size = max(move, default=0.0)
     if size == 0.0:
-        size = float(np.abs(start).max()) if start.size else 0.0
+        size = max(map(abs, start), default=0.0)
     if size == 0.0:
         size = 1.0
-    own = np.where(move > 0, np.maximum(move, SMALLEST_MOVE * size), size)
-    return own + ROUNDING * np.maximum(np.abs(start), np.abs(end))
+    return np.array([(max(d, SMALLEST_MOVE * size) if d > 0 else size)
+                     + ROUNDING * max(abs(a), abs(b))
+                     for d, a, b in zip(move, start, end)], dtype=float)
 
 
 def _speed(q0, q1, T) -> float:

@@ -27,6 +27,9 @@ DIRECT_SEGMENTS = 4
 #: not polished into one run (its own integration error, amplified so, leaves the
 #: motion: another run from the same start does not reach the end)
 POLISH_GROWTH = 1e10
+#: the ratio of the coordinates' largest end scale to a transversality condition's past
+#: which the search weighs that condition by it (``Search``)
+FAR = 1e3
 
 
 
@@ -35,16 +38,31 @@ class Search(Shooter):
     coordinates and, with ``momenta`` (``problem.Momenta``), the transversality
     conditions P_i(t1; u) = 0 of the free ones."""
 
-    def __init__(self, *args, momenta=None):
-        super().__init__(*args)
+    def __init__(self, scene, q0, q1, *args, momenta=None):
+        super().__init__(scene, q0, q1, *args)
         self.momenta = momenta
         if momenta is not None:
             self.target = np.concatenate([self.target, np.zeros(len(momenta.free))])
-            # the momenta's transversality conditions: as before, relative to 1
-            self.scale = np.concatenate([self.scale, np.ones(len(momenta.free))])
+            # the momenta's transversality conditions: relative to the problem's own
+            # momentum in each free coordinate (``problem.Momenta.scale``)
+            t0, t1 = scene.t_span
+            momentum = momenta.scale(q0, q1, t0, t1 - t0)
+            # the search weighs the misses as they are, but a momentum whose scale is
+            # more than ``FAR`` from the coordinates' largest by that ratio, so that
+            # it neither drowns in nor swamps |F|^2 (a weight near 1 changes the
+            # search's path for nothing: a disk's free heading was missed at 1.7)
+            ratio = self.scale.max() / momentum
+            far = (ratio > FAR) | (ratio < 1.0 / FAR)
+            if far.any():
+                self.weight = np.concatenate([np.ones(len(self.scale)),
+                                              np.where(far, ratio, 1.0)])
+            self.scale = np.concatenate([self.scale, momentum])
 
     #: (scaled miss, u) of the run over the whole span that came nearest the end
     closest = None
+    #: each end condition's weight in the search's |F|^2 (``levenberg_marquardt``;
+    #: None: 1 each)
+    weight = None
 
     def _endpoint(self, u):
         shot = self.run(u)
@@ -154,7 +172,9 @@ class Search(Shooter):
             if self.least_squares_point(F, Jm):
                 raise self.unreachable(v)
 
-        return levenberg_marquardt(evaluate, u, scale, tol, max_iter, self.rcond, stuck)
+        weight = self.weight if rows is None or self.weight is None else self.weight[pick]
+        return levenberg_marquardt(evaluate, u, scale, tol, max_iter, self.rcond, stuck,
+                                   weight)
 
     def solve(self, u0, tol, max_iter, max_continuation, segments=None):
         """The routes in turn, each from what the last left: multiple shooting on
@@ -433,7 +453,8 @@ class Search(Shooter):
             iterations=iterations,
             _columns=tuple(self.cols), _rcond=self.rcond, _run=MappingProxyType(
                 {"rtol": self.rtol, "atol": self.atol, "method": self.method}),
-            conditions=self.conditions, route=route, relative_residual=relative)
+            conditions=self.conditions, route=route, relative_residual=relative,
+            _end=tuple(target[:len(self.rows)]))
         if tol is not None and relative > tol:
             raise ConnectError(
                 f"the {scene.principle} motion found ends {residual:.3g} away from end "

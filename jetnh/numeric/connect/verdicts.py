@@ -1,6 +1,6 @@
 """Verdicts on a motion found: its action (``action``), whether it is an abnormal
-extremal (``gramian_ratio``) and where its Jacobi fields lose rank
-(``conjugate_times``)."""
+extremal or within its end miss of one (``gramian_ratio``, ``gramian_change``) and
+where its Jacobi fields lose rank (``conjugate_times``)."""
 
 from __future__ import annotations
 
@@ -346,38 +346,17 @@ def _linearized(tr, times, ys):
 def gramian_ratio(tr, samples) -> float:
     """Smallest over largest eigenvalue of the controllability Gramian of the constraint
     system (qdot^mu = u^mu, qdot^alpha = phi^alpha(t, q, u)) linearized along ``tr``,
-    ``W = int Phi(t1, s) B B^T Phi(t1, s)^T ds`` (``_linearized``: A = d qdot/dq, B =
-    d qdot/du from the verdicts kernel on the dense output, or without a split where the
-    path comes near the edge of the scene's; Phi(t1, s) the products of the RK4
-    propagators of ``_Samples.GRID / 2`` equal steps from s to t1, the integral by
-    Simpson's rule on their nodes: ``_gramian_sum``, compiled), scaled to a unit
+    ``W = int Phi(t1, s) B B^T Phi(t1, s)^T ds`` (``gramian``), scaled to a unit
     diagonal (``unit_diagonal``; a coordinate that no variation moves, W_ii = 0, makes
-    it 0).  The inputs u are weighted by the Lagrangian: each column of B divided by
-    the square root of the path's mean of the diagonal of B^T (d^2 L / dqdot^2) B (in
-    the sense of ``unit_diagonal``).  So the ratio has no units: a change of the
-    coordinates' units q -> S q scales the weighted B by S (``_linearized``) and W by
-    S W S, which the unit diagonal removes.  With holonomic constraints g = 0 the motions
-    stay on them, so W is measured on g = 0 at q(t1), in the chart of all coordinates
-    but h of the split's dependent ones (``_manifold_chart``; a change of chart of
-    g = 0 keeps the rank).  Zero: the endpoint map loses rank along the path (an
-    abnormal extremal)."""
-    system = tr.scene.system
-    n = len(system.J.q)
-    if not system.k:
+    it 0).  So the ratio has no units: a change of the coordinates' units q -> S q
+    scales W by S W S, which the unit diagonal removes.  Zero: the endpoint map loses
+    rank along the path (an abnormal extremal).  It is the path's own: a path within
+    its end miss of an abnormal one can have a ratio of order one (``gramian_change``
+    sees that)."""
+    g = gramian(tr, samples)
+    if g is None:
         return 1.0
-    steps = samples.GRID // 2
-    t0, t1 = float(tr.t[0]), float(tr.t[-1])
-    times = samples.grid
-    A, B = _linearized(tr, times, samples.grid_y)
-    # the inputs in the units L gives them: each column of B by the square root of the
-    # mean over the path of 1 / (the diagonal of B^T (d^2 L / dqdot^2) B)
-    B = _weighted_inputs(tr, times, samples.grid_y, np.ascontiguousarray(B))
-    h = (t1 - t0) / steps
-    W = np.empty((n, n))
-    _compiled("gramian")(np.ascontiguousarray(A), B, h, W)
-    if system.holonomic:         # the reachable directions: the tangent space of g = 0
-        keep = _manifold_chart(tr, times[-1], samples.grid_y[-1], np.diag(W))
-        W = W[np.ix_(keep, keep)]
+    W = g.W
     if not np.isfinite(W).all():
         return float("nan")
     if W.diagonal().min() <= 0:
@@ -387,6 +366,188 @@ def gramian_ratio(tr, samples) -> float:
     scale = 1.0 / np.sqrt(R.diagonal())
     ev = np.linalg.eigvalsh(R * scale[:, None] * scale[None, :])
     return float(max(ev[0], 0.0) / ev[-1]) if ev[-1] > 0 else 0.0
+
+
+class _Gramian:
+    """The controllability Gramian ``W`` of a path (``gramian``) and what made it: the
+    linearization ``A`` and the weighted inputs ``B`` on the samples' grid, the inputs'
+    weights ``w`` (B = d qdot/du / w), the kept coordinates ``keep`` (a chart of g = 0;
+    all without holonomic constraints) and the RK4 step ``h``."""
+
+    __slots__ = ("W", "Wfull", "A", "B", "w", "keep", "h")
+
+
+def gramian(tr, samples):
+    """The controllability Gramian of the constraint system linearized along ``tr``
+    (``_Gramian``; None without constraints), made once per samples:
+    ``W = int Phi(t1, s) B B^T Phi(t1, s)^T ds`` (``_linearized``: A = d qdot/dq, B =
+    d qdot/du from the verdicts kernel on the dense output, or without a split where
+    the path comes near the edge of the scene's; Phi(t1, s) the products of the RK4
+    propagators of ``_Samples.GRID / 2`` equal steps from s to t1, the integral by
+    Simpson's rule on their nodes: ``_gramian_sum``, compiled).  The inputs u are
+    weighted by the Lagrangian: each column of B divided by the square root of the
+    path's mean of the diagonal of B^T (d^2 L / dqdot^2) B (in the sense of
+    ``unit_diagonal``), so a change of the coordinates' units q -> S q scales the
+    weighted B by S (``_linearized``) and W by S W S.  With holonomic constraints
+    g = 0 the motions stay on them, so W is kept on g = 0 at q(t1), in the chart of
+    all coordinates but h of the split's dependent ones (``_manifold_chart``; a
+    change of chart of g = 0 keeps the rank)."""
+    found = getattr(samples, "_gramian", samples)
+    if found is not samples:
+        return found
+    system = tr.scene.system
+    found = None
+    if system.k:
+        n = len(system.J.q)
+        steps = samples.GRID // 2
+        t0, t1 = float(tr.t[0]), float(tr.t[-1])
+        times = samples.grid
+        A, B = _linearized(tr, times, samples.grid_y)
+        B = np.ascontiguousarray(B)
+        # the inputs in the units L gives them: each column of B by the square root of
+        # the mean over the path of 1 / (the diagonal of B^T (d^2 L / dqdot^2) B)
+        Bw = _weighted_inputs(tr, times, samples.grid_y, B)
+        found = _Gramian()
+        found.h = (t1 - t0) / steps
+        found.A, found.B = np.ascontiguousarray(A), Bw
+        norms = np.sqrt(np.einsum("raj,raj->j", Bw, Bw))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            w = np.sqrt(np.einsum("raj,raj->j", B, B)) / norms
+        found.w = np.where(np.isfinite(w) & (w > 0), w, 1.0)
+        W = np.empty((n, n))
+        _compiled("gramian")(found.A, Bw, found.h, W)
+        found.Wfull = W
+        found.keep = list(range(n))
+        if system.holonomic:     # the reachable directions: the tangent space of g = 0
+            found.keep = _manifold_chart(tr, times[-1], samples.grid_y[-1], np.diag(W))
+            W = W[np.ix_(found.keep, found.keep)]
+        found.W = W
+    samples._gramian = found
+    return found
+
+
+#: the largest relative change of the Gramian's gain in any direction (``gramian_change``)
+#: along the correction of the end miss for which the path still counts as normal: past
+#: it, the miss reaches the second-order region of a fold of the endpoint map (a
+#: Kantorovich number of order one), where the path cannot be told from an abnormal one
+NEAR_ABNORMAL = 0.1
+
+
+def gramian_change(tr, samples, rows, miss) -> float:
+    """How much the controllability Gramian (``gramian``) changes along the correction
+    of the end miss: ``miss`` (q(t1) - end on the coordinates ``rows``, state indices
+    of the named end coordinates) undone at first order by the minimum-energy input
+    ``v(s) = -B^T Phi(t1, s)^T P^T (P W P^T)^+ miss`` (P the named rows; its response
+    ``dq`` and ``v`` by Heun's method on the samples' grid: ``_correction``, compiled),
+    the Gramian ``W'`` evaluated again on the corrected path (the same input weights),
+    and the result the largest ``|sqrt(mu) - 1|`` over the generalized eigenvalues mu
+    of (W', W): the relative change of the endpoint map's gain in its most changed
+    direction.  Unchanged by any change of the coordinates' units (both Gramians are
+    congruent alike) and of the unknowns' (the correction is the miss's, whatever the
+    unknowns).  Small (of the order of the relative miss) for a normal answer; of
+    order one where the miss lies within the second-order region of a fold of the
+    endpoint map, as for a path the end tolerance admits beside an abnormal one
+    (Martinet: y = A sin(pi t) whose end z = A^2 / 4 is the miss, the correction
+    halving A, the Gramian's z-row with it).  0 without constraints, without a miss,
+    or where the Gramian is singular already (``gramian_ratio`` 0); inf where the
+    corrected path's Gramian is not finite."""
+    g = gramian(tr, samples)
+    miss = np.asarray(miss, dtype=float)
+    if g is None or not miss.size or not np.any(miss):
+        return 0.0
+    system = tr.scene.system
+    names = tr.scene.state_names
+    n = len(system.J.q)
+    coords = [names.index(q.name) for q in system.J.q]
+    named = [coords.index(r) for r in rows]
+    inputs = _coordinate_rows(system)[1]
+    velocities = [names.index(v.name) for v in system.independent_velocities]
+    A, B = g.A, g.B
+    # the full Gramian on the named rows, scaled to a unit diagonal, pseudo-inverted by
+    # its eigenvalues (relative cut-off 1e-12)
+    Wn = 0.5 * (g.Wfull + g.Wfull.T)[np.ix_(named, named)]
+    d = np.sqrt(np.abs(Wn.diagonal()))
+    if not np.isfinite(Wn).all() or not np.all(d > 0):
+        return 0.0
+    ev, V = np.linalg.eigh(Wn / d[:, None] / d[None, :])
+    keep = np.abs(ev) > 1e-12 * np.abs(ev).max()
+    c = np.zeros(n)
+    c[named] = (V[:, keep] @ ((V[:, keep].T @ (miss / d)) / ev[keep])) / d
+    N = A.shape[0]
+    dq, v = np.empty((N, n)), np.empty((N, B.shape[2]))
+    _compiled("correction")(A, B, c, g.h / 2.0, dq, v)
+    ys = samples.grid_y.copy()
+    ys[:, coords] += dq
+    # the inputs' change in the state's independent velocities: (B v) on their rows
+    ys[:, velocities] += np.einsum("raj,rj->ra", B[:, inputs, :], v)
+    A2, B2 = _linearized(tr, samples.grid, ys)
+    B2 = np.ascontiguousarray(B2 / g.w[None, None, :])
+    W2 = np.empty((n, n))
+    _compiled("gramian")(np.ascontiguousarray(A2), B2, g.h, W2)
+    W = g.W
+    W2 = W2[np.ix_(g.keep, g.keep)]
+    if not np.isfinite(W).all() or W.diagonal().min() <= 0:
+        return 0.0
+    if not np.isfinite(W2).all():
+        return math.inf
+    s = 1.0 / np.sqrt(W.diagonal())
+    R = 0.5 * (W + W.T) * s[:, None] * s[None, :]
+    R2 = 0.5 * (W2 + W2.T) * s[:, None] * s[None, :]
+    try:
+        L = np.linalg.cholesky(R)
+    except np.linalg.LinAlgError:
+        return 0.0                       # singular already: ``gramian_ratio`` 0
+    Li = np.linalg.inv(L)
+    mu = np.linalg.eigvalsh(Li @ R2 @ Li.T)
+    return float(np.max(np.abs(np.sqrt(np.maximum(mu, 0.0)) - 1.0)))
+
+
+def _correction(A, B, c, dt, dq, v):
+    """The minimum-energy input ``v`` ([N, m]) that moves the end of dq' = A dq + B v
+    by ``-W c`` (W the Gramian of ``A`` and ``B`` on N equal steps ``dt``), v(s) =
+    -B(s)^T lam(s) with lam' = -A^T lam, lam(t1) = ``c``, and its response ``dq``
+    ([N, n]) from dq(t0) = 0: both by Heun's method on the rows (compiled)."""
+    N, n, m = B.shape
+    lam, f, g, pred = c.copy(), np.empty(n), np.empty(n), np.empty(n)
+    for i in range(N - 1, -1, -1):
+        for j in range(m):
+            acc = 0.0
+            for a in range(n):
+                acc += B[i, a, j] * lam[a]
+            v[i, j] = -acc
+        if i == 0:
+            break
+        for a in range(n):          # backwards in time: lam(t - dt) = lam + dt A^T lam
+            acc = 0.0
+            for b in range(n):
+                acc += A[i, b, a] * lam[b]
+            f[a] = acc
+            pred[a] = lam[a] + dt * acc
+        for a in range(n):
+            acc = 0.0
+            for b in range(n):
+                acc += A[i - 1, b, a] * pred[b]
+            g[a] = acc
+        for a in range(n):
+            lam[a] += 0.5 * dt * (f[a] + g[a])
+    for a in range(n):
+        dq[0, a] = 0.0
+    for i in range(N - 1):
+        for a in range(n):
+            acc = 0.0
+            for b in range(n):
+                acc += A[i, a, b] * dq[i, b]
+            for j in range(m):
+                acc += B[i, a, j] * v[i, j]
+            f[a] = acc
+            pred[a] = dq[i, a] + dt * acc
+        for a in range(n):
+            acc = 0.0
+            for b in range(n):
+                acc += A[i + 1, a, b] * pred[b]
+            for j in range(m):
+                acc += B[i + 1, a, j] * v[i + 1, j]
+            dq[i + 1, a] = dq[i, a] + 0.5 * dt * (f[a] + acc)
 
 
 def _weighted_inputs(tr, times, ys, B) -> np.ndarray:
@@ -670,12 +831,14 @@ def compiled_parts():
     _compiled("gramian")
     _compiled("kinetic")
     _compiled("edge")
+    _compiled("correction")
     return first
 
 
 @functools.cache
 def _compiled(name):
     """The compiled ``_jacobi_rows`` ("measures"), ``_gramian_sum`` ("gramian"),
+    ``_correction`` ("correction"),
     ``_kinetic_weights`` ("kinetic") or ``_least_chart_measure`` ("edge"): compiled,
     or loaded from the signed store, on first use."""
     from numba import types
@@ -688,6 +851,7 @@ def _compiled(name):
         "measures": (_jacobi_rows, types.void(a3, types.int64, a1, types.boolean, a3,
                                               types.boolean, a1, a1)),
         "gramian": (_gramian_sum, types.void(a3, a3, types.float64, a2)),
+        "correction": (_correction, types.void(a3, a3, a1, types.float64, a2, a2)),
         "kinetic": (_kinetic_weights, types.int64(
             a3, types.Array(types.float64, 3, "C", readonly=True), a3)),
         "edge": (_least_chart_measure, types.float64(
