@@ -129,3 +129,17 @@ def test_ensemble_and_sweep_leave_the_stop_row_out(pendulum):
     table = jn.sweep(pendulum, {"x_t": [8.0, 1.0]}, **opts)
     assert np.isnan(table["energy_drift"].iloc[0])
     assert table["energy_drift"].iloc[1] == pytest.approx(ens.energy_drift[1], abs=1e-14)
+
+
+def test_energy_zero_at_the_start_has_no_relative_drift():
+    """A run whose energy is 0 at its start (a body released at rest where its potential
+    is counted from) has no scale for a relative drift: NaN, said in words, never
+    drift / 1e-300."""
+    J = jn.JetSpace("q")
+    (q,), (q_t,) = J.q, J.qd
+    scene = jn.Scene(jn.System(J, q_t**2 / 2 - sp.Rational(3, 7) * q),
+                     initial={"q": 0.0, "q_t": 0.0}, t_span=(0, 3))
+    d = scene.run(method="rk4", n_steps=7).diagnostics
+    assert d.energy_initial == 0.0 and d.energy_drift > 0.0
+    assert np.isnan(d.energy_drift_relative)
+    assert "relative: undefined" in str(d) and "e+2" not in str(d)

@@ -40,7 +40,7 @@ class Diagnostics:
     residual_max: float            # max |f^a| over the output rows (see ``rows``)
     energy_initial: float
     energy_drift: float            # max |E - E(t0)| over the output rows (see ``rows``)
-    energy_drift_relative: float   # energy_drift / max(|E(t0)|, tiny)
+    energy_drift_relative: float   # energy_drift / |E(t0)|; NaN where E(t0) = 0 and it moved
     integral_drift: dict = field(default_factory=dict)
     projected: dict = field(default_factory=dict)
     events: dict = field(default_factory=dict)        # event name -> occurrences
@@ -128,7 +128,19 @@ def _energy_text(initial, drift, relative) -> str:
     if not np.isfinite(drift):
         return (f"energy {initial:.12g}, drift not evaluated: the energy became NaN or "
                 "infinite on the way (an overflow, or an expression outside its domain)")
+    if initial == 0.0 and drift > 0.0:
+        return (f"energy 0, drift {drift:.3e} (relative: undefined, the energy is 0 at the "
+                "start; compare the drift with the energy's terms)")
     return f"energy {initial:.12g}, drift {drift:.3e} (relative {relative:.3e})"
+
+
+def _relative(drift, initial) -> float:
+    """The energy drift relative to the initial energy: NaN where that is 0 and the
+    energy moved (no scale to compare with: a number such as drift / 1e-300 would read
+    as an enormous drift)."""
+    if initial == 0.0:
+        return 0.0 if drift == 0.0 else float("nan")
+    return drift / abs(initial)
 
 
 def _rows_text(d) -> str:
@@ -762,7 +774,7 @@ class Trajectory(Frozen):
             success=self.success, steps=i["steps"], rejected=i["rejected"],
             rhs_evaluations=i["nfev"], wall_time=i["wall_time"], residual_max=rmax,
             energy_initial=e0, energy_drift=drift,
-            energy_drift_relative=drift / max(abs(e0), 1e-300) if E.size else 0.0,
+            energy_drift_relative=_relative(drift, e0) if E.size else 0.0,
             integral_drift=idrift, projected=i["projected"],
             events={n: len(te) for n, te in zip(self.event_names, self.t_events)},
             singularity=self.singularity, forced=self.scene.system.forced,
