@@ -833,8 +833,7 @@ def ensemble_solver(method, parallel=True, edge=False):
     callbacks' addresses first) of the method ``method``: numba threads taking the runs
     one by one (``parallel``) or one loop (for a Python thread pool).  ``edge``: for runs
     with ``Control.edge`` > 0 (fixed steps that watch their chart's edge); the others'
-    driver is without that code (``_specialised``; it cost the serial driver ~35 % a
-    step on the vakonomic rolling disk, though never run)."""
+    driver is without that code (``_specialised``), which they never run."""
     namespace = _specialised(method, ALL, edge)
     tag = method.name + ("" if edge else "_noedge")
     return compiled(_ensemble_parallel if parallel else _ensemble_serial, ENSEMBLE_ARGS,
