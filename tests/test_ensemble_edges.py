@@ -170,3 +170,22 @@ def test_ensemble_refuses_a_start_off_the_holonomic_constraint_in_any_unit(lengt
     Y[1, j] = 0.5 * length                              # x y = l^2 / 2
     with pytest.raises(jn.ConstraintError, match="run 1: the initial configuration is off"):
         sc.ensemble(Y)
+
+
+def test_rk4_stage_check_in_the_ensemble_driver():
+    """A fixed-step ensemble that changes chart runs the loop's stage check against the
+    edge (``Control.edge``, ``loop.past_edge``) in its compiled driver, as a single run
+    does (the adaptive ensembles' driver is compiled without that code): the rotating
+    Cartesian pendulum with rk4 n = 600 has steps whose stages cross the edge band (the
+    run blew up without the check), its runs are the single runs bit for bit."""
+    from holonomic_systems import pendulum_xy
+
+    sc = jn.Scene(pendulum_xy(), params={"l": 1.0, "G": 9.81},
+                  initial={"x": 0.0, "y": -1.0, "x_t": 8.0}, t_span=(0, 50.0))
+    ens = sc.ensemble({"x_t": [8.0, 7.5]}, method="rk4", n_steps=600, save="final")
+    for r, v in enumerate((8.0, 7.5)):
+        tr = sc.replace(initial={"x": 0.0, "y": -1.0, "x_t": v}).run(
+            method="rk4", n_steps=600)
+        assert tr.success and ens.status[r] == tr.status
+        assert list(ens.switches[r]) == list(tr.switches) and len(tr.switches) > 100
+        same_bits(ens.y[r, 0], tr.y[-1])

@@ -114,8 +114,8 @@ def test_a_failing_chunk_ends_its_pool_and_the_next_call_gets_another(disk, monk
     real = solve._driver
     begun = []
 
-    def failing(method, prange):
-        drive = real(method, prange)
+    def failing(method, prange, *specialised):
+        drive = real(method, prange, *specialised)
 
         def wrapped(*args):
             begun.append(args[-1].shape[0])     # (rows in this chunk: the last array)

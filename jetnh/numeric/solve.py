@@ -512,10 +512,12 @@ def trajectory(scene, method, out, wall, kern, ce, p, t0, y_init, singular_tol, 
 
 
 # ---------------------------------------------------------------------- many runs
-def _driver(method, prange):
+def _driver(method, prange, edge=False):
     """The entry of the compiled ensemble driver of ``method`` (numba threads over the
-    runs with ``prange``, else one loop), kept."""
-    found = _DRIVERS.get((method.name, prange))
+    runs with ``prange``, else one loop; ``edge``: for runs with ``Control.edge`` > 0,
+    ``loop.ensemble_solver``), kept."""
+    edge = edge and method.solver is not Solver.IMPLICIT        # (radau has no edge code)
+    found = _DRIVERS.get((method.name, prange, edge))
     if found is None:
         if method.solver is Solver.IMPLICIT:
             from .methods import radau
@@ -524,8 +526,8 @@ def _driver(method, prange):
         else:
             from .methods import loop
 
-            found = entry_point(loop.ensemble_solver(method.tableau, parallel=prange))
-        _DRIVERS[method.name, prange] = found
+            found = entry_point(loop.ensemble_solver(method.tableau, prange, edge))
+        _DRIVERS[method.name, prange, edge] = found
     return found
 
 
@@ -597,7 +599,7 @@ def batch(scene, plan, Y0, P, parallel="threads", workers=1):
            np.full((n_runs, max(n_ev, 1)), np.nan))
     halt = np.zeros(1, dtype=np.int64)
     prange = parallel == "prange"
-    drive = _driver(plan.method, prange)
+    drive = _driver(plan.method, prange, plan.ctl.edge > 0.0)
     head, tail = plan.prefix + (plan.t0, plan.t1), plan.suffix + (halt,)
 
     def block(a, b):

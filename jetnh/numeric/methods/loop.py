@@ -586,7 +586,7 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
             new_state(h_fixed, y, K, y_new)
             stats[2] += ns
             finite = all_finite(y_new)
-            if not finite and not (WATCH and ctl.edge > 0.0):
+            if not finite and not (EDGE and ctl.edge > 0.0):
                 status = NONFINITE
                 break
             t_new = t0 + (step + 1) * h_fixed
@@ -620,7 +620,7 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
                 for i in range(n_user):
                     if crossed(gu_old[i], gu_new[i], ev_dir[i], step == 1):
                         more = True
-            if not ADAPTIVE and ctl.edge > 0.0:
+            if EDGE and not ADAPTIVE and ctl.edge > 0.0:
                 # a fixed step that starts within two steps of the edge at the rate of
                 # the step before, or whose edge value moved by half of it, or whose end
                 # is not finite, may have had a stage past the edge (its end may look
@@ -651,7 +651,7 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
                     tab, not ADAPTIVE, rhs, sing, uev, p, t, h, t_new, y, y_new, K, F, ytmp,
                     fmid, y_stop, stats, watch, ws, si, sing_index, ev_t, ev_i, ev_y, n_ev,
                     step == 1)
-            if ADAPTIVE and ctl.edge > 0.0 and stop == 0:
+            if EDGE and ADAPTIVE and ctl.edge > 0.0 and stop == 0:
                 h_abs = min(h_abs, ctl.edge * near_zero(n_sing, gs_old, gs, sig, abs(h),
                                                         h_prev, rate))
                 h_prev = abs(h)
@@ -721,7 +721,7 @@ def _watching(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mo
 
 #: the method a specialised loop runs, its sums and that loop (``_specialised``; unbound
 #: here), and a watching loop's body
-TAB = SHAPE = ADAPTIVE = STIFF_BOUND = WATCH = PROJECT = DENSE = STEPS = None
+TAB = SHAPE = ADAPTIVE = STIFF_BOUND = WATCH = PROJECT = DENSE = STEPS = EDGE = None
 run = body = step_stages = new_state = step_error = None
 _SPECIALISED = {}
 CONTROL = numba.typeof(Control(1.0, np.zeros(1), 0.0, 1.0, 1, 0, 0, 0, 0))
@@ -744,21 +744,24 @@ def features(ctl, mode, watch) -> tuple[bool, bool, bool, bool]:
             mode == AT_T_EVAL, mode == EVERY_STEP)
 
 
-def _specialised(method, parts=ALL):
+def _specialised(method, parts=ALL, edge=True):
     """The globals of this module with ``TAB`` bound to ``method.arrays``, the step's sums
     to the method's (``sums.functions``: its nonzero coefficients as literals), the parts
-    of the loop a run needs (``WATCH, PROJECT, DENSE, STEPS = parts``: ``features``) and
+    of the loop a run needs (``WATCH, PROJECT, DENSE, STEPS = parts``: ``features``),
+    ``EDGE`` (a watching loop's code for the runs with ``Control.edge`` > 0; ``edge``
+    false: a loop for runs that never have it, as most ensembles: ``ensemble_solver``) and
     ``run`` to ``_solve`` compiled over them: each method's loop is compiled with its
     tableau (stage counts, coefficients) known, as the hand-written loops were, at the
     per-evaluation cost of theirs, and without the parts the run does not use (numba
     prunes the branches on these constants before typing them: a run without events,
     indicators, projection and ``t_eval`` compiles none of ``_events``, one that keeps
     only its end no per-step store).  Each loop has a name of its own (``compiled``:
-    ``_solve_<method>_<parts>_<sources hash>``, the parts as the letters ``wpds``): numba
-    links compiled functions by their mangled names, so two loops of one name could
-    resolve to one another's machine code."""
+    ``_solve_<method>_<parts>_<sources hash>``, the parts as the letters ``wpds``, and
+    ``_noedge`` after them without ``EDGE``): numba links compiled functions by their
+    mangled names, so two loops of one name could resolve to one another's machine code."""
     parts = tuple(bool(f) for f in parts)
-    key = (method.name, parts)
+    edge = bool(edge) and parts[0]          # (the edge is watched: nothing without WATCH)
+    key = (method.name, parts, edge)
     if key not in _SPECIALISED:
         namespace = dict(globals())
         namespace["TAB"] = method.arrays
@@ -767,12 +770,14 @@ def _specialised(method, parts=ALL):
         namespace["STIFF_BOUND"] = float(method.stiff_bound)
         (namespace["WATCH"], namespace["PROJECT"], namespace["DENSE"],
          namespace["STEPS"]) = parts
+        namespace["EDGE"] = edge
         helpers = sums(method)
         namespace["step_stages"] = helpers["stages"]
         namespace["new_state"] = helpers["new_state"]
         namespace["step_error"] = helpers["error"]
-        tag = method.name + ("" if parts == ALL else
-                             "_" + "".join(c for c, f in zip("wpds", parts) if f))
+        tag = (method.name + ("" if parts == ALL else
+                              "_" + "".join(c for c, f in zip("wpds", parts) if f))
+               + ("_noedge" if parts[0] and not edge else ""))
         if parts[0]:
             namespace["body"] = apart(_solve, namespace, tag)
             namespace["run"] = compiled(_watching, ARGS, namespace=namespace, tag=tag)
@@ -822,13 +827,17 @@ def _ensemble_serial(rhs_at, sing_at, uev_at, hol_at, t0, t_end, Y0, P, ctl, t_e
 ENSEMBLE_ARGS = ARGS[:6] + (f8[:, ::1], f8[:, ::1]) + ARGS[8:] + ENSEMBLE_OUT
 
 
-def ensemble_solver(method, parallel=True):
+def ensemble_solver(method, parallel=True, edge=False):
     """The compiled ensemble driver ``drive(rhs_at, sing_at, uev_at, hol_at, t0, t_end, Y0, P,
     ctl, t_eval, mode, watch, halt, OUT_T, OUT_Y, INFO, T_LAST, Y_LAST, EV_N, EV_T)`` (the
     callbacks' addresses first) of the method ``method``: numba threads taking the runs
-    one by one (``parallel``) or one loop (for a Python thread pool)."""
+    one by one (``parallel``) or one loop (for a Python thread pool).  ``edge``: for runs
+    with ``Control.edge`` > 0 (fixed steps that watch their chart's edge); the others'
+    driver is without that code (``_specialised``), which they never run."""
+    namespace = _specialised(method, ALL, edge)
+    tag = method.name + ("" if edge else "_noedge")
     return compiled(_ensemble_parallel if parallel else _ensemble_serial, ENSEMBLE_ARGS,
-                    parallel=parallel, namespace=_specialised(method), tag=method.name)
+                    parallel=parallel, namespace=namespace, tag=tag)
 
 
 def watch_of(kern, compiled_events, singular: bool, singular_tol: float) -> Watch:
