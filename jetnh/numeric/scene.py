@@ -147,6 +147,8 @@ class Scene(Frozen):
         for name in self.runtime_params:
             if name not in self.params:
                 raise JetnhError(f"runtime parameter {name!r} needs a value in params=")
+        #: the values of the parameters compiled into the kernels, of a dict of all
+        self._compiled_of = _getter([n for n in self.params if n not in self.runtime_params])
         J = system.J
         self.coordinates = tuple(s.name for s in J.q)
         self.velocities = tuple(v.name for v in system.independent_velocities)
@@ -156,8 +158,7 @@ class Scene(Frozen):
         self._initial_names = frozenset(self.state_names + self.dependent_velocities)
         self._state_set = frozenset(self.state_names)
         #: the states' values of a dict of initial values, in order
-        self._states_of = (operator.itemgetter(*self.state_names)
-                           if len(self.state_names) > 1 else _OneState(*self.state_names))
+        self._states_of = _getter(self.state_names)
         self.consistency_tol = arguments.positive(consistency_tol, "consistency_tol")
         self.projected: dict[str, tuple[float, float]] = {}
         #: coordinates moved onto the holonomic constraints: name -> (given, completed)
@@ -180,6 +181,21 @@ class Scene(Frozen):
                 needed |= {s.name for s in expr.free_symbols if s.name not in known}
             #: the names of the parameters (of the system and of the integrals)
             self._param_names = needed = frozenset(needed)
+            #: the system's defaults by name where every one is a finite float of a
+            #: parameter (else None): what a dict of finite floats keyed by name adds to
+            self._param_defaults = defaults = {
+                s.name: v for s, v in self.system.defaults.items()}
+            if not (defaults.keys() <= needed and _FLOAT.issuperset(map(type, defaults.values()))
+                    and math.isfinite(sum(defaults.values()))):
+                self._param_defaults = None
+        elif (type(params) is dict and self._param_defaults is not None
+              and params.keys() <= needed and _FLOAT.issuperset(map(type, params.values()))
+              and math.isfinite(sum(params.values()))):
+            # (after ``__init__``, a dict of finite floats keyed by name: what the general
+            # route makes of it, at once, where it gives every parameter)
+            out = {**self._param_defaults, **params}
+            if len(out) == len(needed):
+                return out
         out = {}
         given = {**{s.name: v for s, v in self.system.defaults.items()}, **dict(params)}
         for k, v in given.items():
@@ -445,21 +461,16 @@ class Scene(Frozen):
         constraints again."""
         if changes.keys() <= _MOVED:
             initial = changes.get("initial", _KEEP)
-            return self._moved({n: self.initial[n] for n in self.state_names}
-                               if initial is _KEEP else {} if initial is None else initial,
+            return self._moved({} if initial is None else initial,
                                changes.get("t_span", self.t_span))
         if (changes.keys() <= _RETUNED and self.runtime_params
                 and isinstance(changes["params"], (Mapping, type(None)))):
             params = self._params(changes["params"] or {})
-            runtime = self.runtime_params
-            if ({k: v for k, v in params.items() if k not in runtime}
-                    == {k: v for k, v in self.params.items() if k not in runtime}):
+            if self._compiled_of(params) == self._compiled_of(self.params):
                 # only run-time parameters changed: the same kernels (``_moved``)
                 initial = changes.get("initial", _KEEP)
-                return self._moved({n: self.initial[n] for n in self.state_names}
-                                   if initial is _KEEP else {} if initial is None
-                                   else initial, changes.get("t_span", self.t_span),
-                                   FrozenDict(params))
+                return self._moved({} if initial is None else initial,
+                                   changes.get("t_span", self.t_span), FrozenDict(params))
         args = dict(system=self.system, principle=self.principle, params=self.params,
                     initial={n: self.initial[n] for n in self.state_names},
                     t_span=self.t_span, form=self.form, convention=self.convention,
@@ -478,52 +489,69 @@ class Scene(Frozen):
         return new
 
     def _moved(self, initial, t_span, params=None) -> "Scene":
-        """``replace(initial=..., t_span=...)``, and ``params`` (checked) where only
-        run-time parameters change: this scene with other initial values, time span and
-        run-time parameter values, its other attributes (checked once) and its memo's
-        shared values (``_SHARED``, and ``_p``) taken over rather than made anew
-        (``_moving``).  The most common initial values (a dict of every state, no
-        dependent velocity, as floats, on a scene without holonomic constraints whose
-        kernels are loaded) are checked and their dependent velocities found in one
-        compiled call (``_dv_route``: the floats ``_initial`` finds, else the general
-        route, which names what is wrong), the state array kept as it is (the direct
-        runs' ``_y0``) and ``initial`` and ``y0`` made of them when first read
-        (``frozen.made``); other initial values by ``_initial``."""
+        """``replace(initial=..., t_span=...)`` (``initial`` ``_KEEP``: this scene's),
+        and ``params`` (checked) where only run-time parameters change: this scene with
+        other initial values, time span and run-time parameter values, its other
+        attributes (checked once) and its memo's shared values (``_SHARED``, and ``_p``)
+        taken over rather than made anew (``_moving``).  The most common initial values
+        (a dict of every state, no dependent velocity, as floats, or this scene's own
+        states, on a scene without holonomic constraints whose kernels are loaded) are
+        checked and their dependent velocities found in one compiled call
+        (``_dv_route``: the floats ``_initial`` finds, else the general route, which
+        names what is wrong), the state array kept as it is (the direct runs' ``_y0``;
+        this scene's own shared, as no run writes it) and ``initial`` and ``y0`` made
+        of them when first read (``frozen.made``); other initial values by
+        ``_initial``."""
         own = self._memo
         hit = own.get("moved")
         if hit is None or hit[0] != len(own) or hit[1] is None:
             # (what the copies take over, looked up again when this memo grew, or until
             # the kernels are loaded)
             hit = self._moving()
-        _, kern, p, memo, route, d = hit
+        _, kern, p, shared, check, n_aux, d = hit
+        if t_span is not self.t_span:
+            t_span = self._t_span(t_span)
+        if params is not None:
+            p = np.array([params[n] for n in self.runtime_params], dtype=float)
+        given = y = None
+        if check is not None:       # the route at once, where it applies
+            if initial is _KEEP:
+                y = own.get("_y0")
+                if y is None:
+                    y = self._y0
+            elif type(initial) is dict and len(initial) == len(self.state_names):
+                try:        # (every state, so nothing else: as many keys as states)
+                    states = self._states_of(initial)
+                except KeyError:
+                    states = ()
+                if states and _FLOAT.issuperset(map(type, states)):
+                    y = np.array(states)
+                    given = FrozenDict(initial)
+            if y is not None:
+                aux = np.empty(n_aux)
+                if not check(t_span[0], y, p, aux):
+                    y = None
         # (the attributes set directly, not by ``_set``: a time span is a tuple of
         # floats, the initial values floats; ``_memo`` the copy's own, before anything
         # reads it)
         d = d.copy()        # (a copy of a dict: sooner than filling one)
-        d["_memo"] = memo = memo.copy()     # (frozen from here: ``_initial`` sets nothing
+        d["_memo"] = memo = shared.copy()   # (frozen from here: ``_initial`` sets nothing
         #                                     when it neither projects nor completes)
         if t_span is not self.t_span:
-            d["t_span"] = t_span = self._t_span(t_span)
+            d["t_span"] = t_span
             memo.pop("quick", None)     # (the quick plans: of this span)
         if params is not None:
             d["params"] = params
-            memo["_p"] = p = np.array([params[n] for n in self.runtime_params], dtype=float)
+            memo["_p"] = p
         new = _new(Scene)
         _setattr(new, "__dict__", d)
-        if (route is not None and type(initial) is dict and route[1] is not None
-                and len(initial) == len(self.state_names)):
-            try:        # (every state, so nothing else: as many keys as states)
-                states = self._states_of(initial)
-            except KeyError:
-                states = ()
-            if states and _FLOAT.issuperset(map(type, states)):
-                y = np.array(states)
-                aux = np.empty(route[2])
-                if route[1](t_span[0], y, p, aux):
-                    memo["_y0"] = y
-                    memo["_given"] = (FrozenDict(initial), aux)
-                    return new
-        if type(initial) is not dict and not isinstance(initial, Mapping):
+        if y is not None:
+            memo["_y0"] = y
+            memo["_given"] = (given, aux)
+            return new
+        if initial is _KEEP:
+            initial = {n: self.initial[n] for n in self.state_names}
+        elif type(initial) is not dict and not isinstance(initial, Mapping):
             raise JetnhError(f"initial must be a dict keyed by Symbol or name, got a "
                              f"{type(initial).__name__}")
         ini, y = new._initial(initial, False, False, kern, p)
@@ -539,34 +567,40 @@ class Scene(Frozen):
 
     def _moving(self) -> tuple:
         """What the copies ``_moved`` makes take over from this scene, kept in its memo
-        (``moved``): (the memo's size, the kernels if loaded, ``_p``, the shared memo,
-        ``_dv_route`` where the kernels are loaded and no holonomic constraint is to be
-        checked, the attributes of a copy but ``initial``, ``y0`` and ``_memo``)."""
+        (``moved``): (the memo's size, the kernels if loaded, ``_p``, the shared memo
+        with the quick plans of this span, the compiled check of ``_dv_route`` and the
+        size of its output where the kernels are loaded and no holonomic constraint is
+        to be checked (else None and 0), the attributes of a copy but ``initial``,
+        ``y0`` and ``_memo``)."""
         own = self._memo
         key = own.get("key")
         kern = None if key is None else _loaded_kernels(key, self.cache)
-        route = (None if kern is None or self.system.holonomic
-                 else self._dv_route(kern))       # (this scene's, shared below)
+        route = (None, None, 0) if kern is None or self.system.holonomic else \
+            self._dv_route(kern)        # (this scene's, shared below)
         p = own.get("_p")
         if p is None:
             p = self._p
         shared = self._shared_memo()
         shared["_p"] = p
-        if "quick" in own:
-            shared["quick"] = own["quick"]
+        # (one store of quick plans for this scene and the copies on its span: a loop of
+        # ``replace(initial=...).run()`` plans once though this scene never ran)
+        shared["quick"] = own.setdefault("quick", {})
         attributes = {k: v for k, v in self.__dict__.items()
                       if k not in ("initial", "y0", "_memo")}
         attributes["projected"] = attributes["completed"] = _NOTHING
         own["moved"] = None
-        hit = own["moved"] = (len(own), kern, p, shared, route, attributes)
+        hit = own["moved"] = (len(own), kern, p, shared, route[1], route[2], attributes)
         return hit
 
     @made
     def initial(self) -> FrozenDict:
         """The initial values of a copy ``_moved`` made (the scenes ``Scene(...)`` makes
-        hold theirs in ``__dict__``): the states given and the dependent velocities the
-        kernels gave, made when first read."""
+        hold theirs in ``__dict__``): the states given (or the scene's, in the order of
+        ``state_names``) and the dependent velocities the kernels gave, made when first
+        read."""
         given, aux = self._memo["_given"]
+        if given is None:
+            given = FrozenDict(zip(self.state_names, self._memo["_y0"].tolist()))
         dict.update(given, zip(self.dependent_velocities, aux.tolist()))
         return given
 
@@ -595,6 +629,7 @@ class Scene(Frozen):
             return dict(hit[1])
         memo.setdefault("plans", {})
         memo.setdefault("spans", {})
+        memo.setdefault("quick_spans", {})
         memo.setdefault("events", {})
         memo.setdefault("atlases", [])
         shared = {k: memo[k] for k in _SHARED if k in memo}
@@ -1002,9 +1037,11 @@ def _energy_changes(system, principle, params) -> tuple[str, ...]:
 
 #: what a scene with the same kernels (``Scene.replace``) takes over from the memo: the
 #: kernels' keys, the plans of runs (``solve.planned``) and those taken over on other
-#: time spans, compiled events, whether an atlas applies and the first atlas (whose
-#: charts the others share: ``atlas.atlas``)
-_SHARED = ("spec", "key", "plans", "spans", "events", "atlas_applies", "atlases", "dv_route")
+#: time spans, the quick plans of runs on a span of their own (``Scene._kept_plan``),
+#: compiled events, whether an atlas applies and the first atlas (whose charts the
+#: others share: ``atlas.atlas``)
+_SHARED = ("spec", "key", "plans", "spans", "quick_spans", "events", "atlas_applies",
+           "atlases", "dv_route")
 
 
 _FLOAT = frozenset((float,))
@@ -1027,14 +1064,20 @@ _FLOAT64 = np.dtype(np.float64)
 FLOAT_MARGIN = 1e-6
 
 
-class _OneState:
-    """What ``operator.itemgetter`` of one name would be if it returned a tuple."""
+def _getter(names):
+    """The values of ``names`` in a dict, as a tuple (``operator.itemgetter``, which
+    returns one value, not a tuple, for one name, and takes no zero names)."""
+    return operator.itemgetter(*names) if len(names) > 1 else _Few(tuple(names))
 
-    def __init__(self, name):
-        self.name = name
+
+class _Few:
+    """``_getter`` of fewer than two names."""
+
+    def __init__(self, names):
+        self.names = names
 
     def __call__(self, values) -> tuple:
-        return (values[self.name],)
+        return tuple(values[n] for n in self.names)
 
 
 def _loaded_kernels(key, persistent):
