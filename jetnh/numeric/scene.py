@@ -68,10 +68,13 @@ from . import codegen
 from . import discrete
 from .ensemble import run_ensemble
 from .kernels import jacobian_kernels, load as load_kernels, loader
-from .kernels.initial import floats as initial_floats
+from .kernels import initial as initial_check
 from ..frozen import Frozen, FrozenDict, made, memo
 from .options import options, typed
 from .trajectory import Trajectory
+
+#: an argument ``Scene.replace`` was not given (the scene's own kept)
+_KEEP = object()
 
 
 class Scene(Frozen):
@@ -396,21 +399,21 @@ class Scene(Frozen):
         """``_dependent_velocity_floats`` by the kernels of ``route`` (``_dv_route``) in
         one compiled call (``kernels.initial``, which also finds ``y`` finite): the
         values in the order of ``dependent_velocities``, or None."""
-        _, floats, n_aux, n_dep = route
+        _, floats, addresses, n_aux, n_dep, _ = route
         if floats is None:
             return None
         aux = np.empty(n_aux)
-        if not floats(self.t_span[0], y, p, aux):
+        if not floats(addresses, self.t_span[0], y, p, aux):
             return None
         return aux.tolist()[:n_dep]
 
     def _dv_route(self, kern) -> tuple:
         """What ``_dependent_velocity_floats`` calls of ``kern``: (kern, the compiled
-        check ``kernels.initial.floats()`` with its first arguments (the sing kernel's
-        address and packed sizes, 0 and 0 without indicators, the aux kernel's, the
-        numbers of indicators and dependent velocities, ``FLOAT_MARGIN``), or None where
-        it does not apply, the size of aux, the number of dependent velocities), looked
-        up once per kernels (memo ``dv_route``, shared by the copies ``replace``
+        check ``kernels.initial.floats()``, or None where it does not apply, its first
+        argument (``kernels.initial.route_of``), the size of aux, the number of dependent
+        velocities, an array of that size for the checks that keep no value
+        (``_moved``: the check holds the GIL, so no other thread writes it meanwhile)),
+        looked up once per kernels (memo ``dv_route``, shared by the copies ``replace``
         makes)."""
         route = self._memo.get("dv_route")
         if route is None or route[0] is not kern:
@@ -419,10 +422,9 @@ class Scene(Frozen):
             n_ind, n_dep = len(lay.indicators), len(lay.dependent_velocities)
             applies = (lay.dependent_velocities == self.dependent_velocities
                        and (not n_ind or sing is not None))
-            route = (kern, functools.partial(
-                initial_floats(), *((0, 0) if sing is None else sing.args),
-                *kern.aux.args, n_ind, n_dep, FLOAT_MARGIN) if applies else None,
-                lay.n_aux, n_dep)
+            route = (kern, initial_check.floats() if applies else None,
+                     initial_check.route_of(sing, kern.aux, n_ind, n_dep), lay.n_aux, n_dep,
+                     np.empty(lay.n_aux))
             self._memo["dv_route"] = route
         return route
 
@@ -453,24 +455,24 @@ class Scene(Frozen):
         uses; ``jacobian.address`` is its C callback for compiled code."""
         return jacobian_kernels(self).jac
 
-    def replace(self, **changes) -> "Scene":
-        """A scene equal to this one except for ``changes`` (constructor arguments:
-        params, initial, t_span, runtime_params, integrals, ...).  ``initial`` replaces
-        the initial values as a whole: it needs a value for every state (``run(y0=...)``
-        changes some and keeps the others); dependent velocities follow from the
-        constraints again."""
-        if changes.keys() <= _MOVED:
-            initial = changes.get("initial", _KEEP)
-            return self._moved({} if initial is None else initial,
-                               changes.get("t_span", self.t_span))
-        if (changes.keys() <= _RETUNED and self.runtime_params
-                and isinstance(changes["params"], (Mapping, type(None)))):
-            params = self._params(changes["params"] or {})
-            if self._compiled_of(params) == self._compiled_of(self.params):
-                # only run-time parameters changed: the same kernels (``_moved``)
-                initial = changes.get("initial", _KEEP)
-                return self._moved({} if initial is None else initial,
-                                   changes.get("t_span", self.t_span), FrozenDict(params))
+    def replace(self, *, initial=_KEEP, t_span=_KEEP, params=_KEEP, **changes) -> "Scene":
+        """A scene equal to this one except for the arguments given (constructor
+        arguments: params, initial, t_span, runtime_params, integrals, ...).  ``initial``
+        replaces the initial values as a whole: it needs a value for every state
+        (``run(y0=...)`` changes some and keeps the others); dependent velocities follow
+        from the constraints again."""
+        if not changes:         # (named: no dict of them to make and read)
+            span = self.t_span if t_span is _KEEP else t_span
+            if params is _KEEP:
+                return self._moved({} if initial is None else initial, span)
+            if self.runtime_params and isinstance(params, (Mapping, type(None))):
+                numbers = self._params(params or {})
+                if self._compiled_of(numbers) == self._compiled_of(self.params):
+                    # only run-time parameters changed: the same kernels (``_moved``)
+                    return self._moved({} if initial is None else initial, span,
+                                       FrozenDict(numbers))
+        changes.update((k, v) for k, v in (("initial", initial), ("t_span", t_span),
+                                           ("params", params)) if v is not _KEEP)
         args = dict(system=self.system, principle=self.principle, params=self.params,
                     initial={n: self.initial[n] for n in self.state_names},
                     t_span=self.t_span, form=self.form, convention=self.convention,
@@ -496,25 +498,25 @@ class Scene(Frozen):
         taken over rather than made anew (``_moving``).  The most common initial values
         (a dict of every state, no dependent velocity, as floats, or this scene's own
         states, on a scene without holonomic constraints whose kernels are loaded) are
-        checked and their dependent velocities found in one compiled call
-        (``_dv_route``: the floats ``_initial`` finds, else the general route, which
-        names what is wrong), the state array kept as it is (the direct runs' ``_y0``;
-        this scene's own shared, as no run writes it) and ``initial`` and ``y0`` made
-        of them when first read (``frozen.made``); other initial values by
-        ``_initial``."""
+        checked in one compiled call (``_dv_route``: where ``_initial`` would take the
+        floats it finds, else the general route, which names what is wrong), the state
+        array kept as it is (the direct runs' ``_y0``; this scene's own shared, as no run
+        writes it) and ``initial`` (its dependent velocities found again by the same
+        call) and ``y0`` made of them when first read (``frozen.made``); other initial
+        values by ``_initial``."""
         own = self._memo
         hit = own.get("moved")
         if hit is None or hit[0] != len(own) or hit[1] is None:
             # (what the copies take over, looked up again when this memo grew, or until
             # the kernels are loaded)
             hit = self._moving()
-        _, kern, p, shared, check, n_aux, d = hit
+        _, kern, p, shared, route, attributes = hit
         if t_span is not self.t_span:
             t_span = self._t_span(t_span)
         if params is not None:
             p = np.array([params[n] for n in self.runtime_params], dtype=float)
         given = y = None
-        if check is not None:       # the route at once, where it applies
+        if route is not None:       # the route at once, where it applies
             if initial is _KEEP:
                 y = own.get("_y0")
                 if y is None:
@@ -527,14 +529,14 @@ class Scene(Frozen):
                 if states and _FLOAT.issuperset(map(type, states)):
                     y = np.array(states)
                     given = FrozenDict(initial)
-            if y is not None:
-                aux = np.empty(n_aux)
-                if not check(t_span[0], y, p, aux):
-                    y = None
+            if y is not None and not route[1](route[2], t_span[0], y, p, route[5]):
+                y = None
         # (the attributes set directly, not by ``_set``: a time span is a tuple of
         # floats, the initial values floats; ``_memo`` the copy's own, before anything
         # reads it)
-        d = d.copy()        # (a copy of a dict: sooner than filling one)
+        new = _new(Scene)
+        d = new.__dict__
+        d.update(attributes)    # (sooner than filling a dict)
         d["_memo"] = memo = shared.copy()   # (frozen from here: ``_initial`` sets nothing
         #                                     when it neither projects nor completes)
         if t_span is not self.t_span:
@@ -543,11 +545,9 @@ class Scene(Frozen):
         if params is not None:
             d["params"] = params
             memo["_p"] = p
-        new = _new(Scene)
-        _setattr(new, "__dict__", d)
         if y is not None:
             memo["_y0"] = y
-            memo["_given"] = (given, aux)
+            memo["_given"] = (given, route)
             return new
         if initial is _KEEP:
             initial = {n: self.initial[n] for n in self.state_names}
@@ -568,15 +568,16 @@ class Scene(Frozen):
     def _moving(self) -> tuple:
         """What the copies ``_moved`` makes take over from this scene, kept in its memo
         (``moved``): (the memo's size, the kernels if loaded, ``_p``, the shared memo
-        with the quick plans of this span, the compiled check of ``_dv_route`` and the
-        size of its output where the kernels are loaded and no holonomic constraint is
-        to be checked (else None and 0), the attributes of a copy but ``initial``,
-        ``y0`` and ``_memo``)."""
+        with the quick plans of this span, ``_dv_route`` where the kernels are loaded,
+        its check applies and no holonomic constraint is to be checked (else None), the
+        attributes of a copy but ``initial``, ``y0`` and ``_memo``)."""
         own = self._memo
         key = own.get("key")
         kern = None if key is None else _loaded_kernels(key, self.cache)
-        route = (None, None, 0) if kern is None or self.system.holonomic else \
-            self._dv_route(kern)        # (this scene's, shared below)
+        route = (None if kern is None or self.system.holonomic
+                 else self._dv_route(kern))       # (this scene's, shared below)
+        if route is not None and route[1] is None:
+            route = None
         p = own.get("_p")
         if p is None:
             p = self._p
@@ -589,7 +590,7 @@ class Scene(Frozen):
                       if k not in ("initial", "y0", "_memo")}
         attributes["projected"] = attributes["completed"] = _NOTHING
         own["moved"] = None
-        hit = own["moved"] = (len(own), kern, p, shared, route[1], route[2], attributes)
+        hit = own["moved"] = (len(own), kern, p, shared, route, attributes)
         return hit
 
     @made
@@ -598,10 +599,13 @@ class Scene(Frozen):
         hold theirs in ``__dict__``): the states given (or the scene's, in the order of
         ``state_names``) and the dependent velocities the kernels gave, made when first
         read."""
-        given, aux = self._memo["_given"]
+        memo = self._memo
+        given, route = memo["_given"]
         if given is None:
-            given = FrozenDict(zip(self.state_names, self._memo["_y0"].tolist()))
-        dict.update(given, zip(self.dependent_velocities, aux.tolist()))
+            given = FrozenDict(zip(self.state_names, memo["_y0"].tolist()))
+        # (phi^alpha again, as the check found them: the same call)
+        dict.update(given, zip(self.dependent_velocities, self._dependent_velocity_list(
+            memo["_y0"], route, memo["_p"])))
         return given
 
     @made
@@ -1045,15 +1049,9 @@ _SHARED = ("spec", "key", "plans", "spans", "quick_spans", "events", "atlas_appl
 
 
 _FLOAT = frozenset((float,))
-#: ``replace`` without ``initial`` (the scene's own kept)
-_KEEP = object()
-_new, _setattr = object.__new__, object.__setattr__
+_new = object.__new__
 #: ``projected`` and ``completed`` of the copies ``replace`` makes (nothing moved)
 _NOTHING = FrozenDict()
-#: what ``replace`` changes in a copy of the scene (``_moved``)
-_MOVED = frozenset(("initial", "t_span"))
-#: and with run-time parameter values (``params``, the others unchanged)
-_RETUNED = frozenset(("params", "initial", "t_span"))
 #: the plans of a scene that kept none (``run``: its key is hashed all the same)
 _NONE_KEPT: dict = {}
 #: the dtype of the arrays a run takes as they are (numpy's one instance of it)
@@ -1061,7 +1059,7 @@ _FLOAT64 = np.dtype(np.float64)
 
 #: the least |indicator| at which the initial dependent velocities are taken from the
 #: compiled kernels (``Scene._dependent_velocity_floats``)
-FLOAT_MARGIN = 1e-6
+FLOAT_MARGIN = initial_check.MARGIN
 
 
 def _getter(names):
