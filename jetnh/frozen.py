@@ -9,7 +9,7 @@ which takes writable arrays, and are never handed out.
 or deleting an attribute raises ``FrozenError``.  Values computed on first use (compiled
 kernels and events, derived columns) go to the object's private ``_memo`` through
 ``memo`` (like ``functools.cached_property``, but the instance's ``__dict__`` is never
-written after construction).
+written after construction), or ``made`` where some objects hold the value already.
 """
 
 from __future__ import annotations
@@ -82,8 +82,11 @@ class Frozen:
         object.__delattr__(self, name)
 
 
-class memo:
-    """A property computed on first use and kept in the object's ``_memo``."""
+class made:
+    """A value made on first read and kept in the object's ``_memo`` (read-only where it
+    is public).  Alone, a non-data descriptor: an attribute the object holds in its
+    ``__dict__`` is read first (a ``Scene`` built by ``Scene(...)`` holds ``initial``; the
+    copies ``Scene.replace`` makes do not, and make it when it is read)."""
 
     def __init__(self, fget):
         self.fget = fget
@@ -100,28 +103,13 @@ class memo:
             store[self.name] = value if self.name.startswith("_") else readonly(value)
         return store[self.name]
 
+
+class memo(made):
+    """A property computed on first use and kept in the object's ``_memo`` (``made``, but
+    a data descriptor: never held in ``__dict__``, and setting it raises ``FrozenError``)."""
+
     def __set__(self, obj, value):
         obj._refuse(self.name)
-
-
-class made:
-    """An attribute that an object holds in its ``__dict__`` or, where it does not (a
-    copy made without it), made on first read and kept in its ``_memo`` (a non-data
-    descriptor: the ``__dict__`` is read first)."""
-
-    def __init__(self, fget):
-        self.fget = fget
-        self.name = fget.__name__
-        self.__doc__ = fget.__doc__
-
-    def __get__(self, obj, cls=None):
-        if obj is None:
-            return self
-        store = obj._memo
-        found = store.get(self.name)
-        if found is None:
-            found = store[self.name] = self.fget(obj)
-        return found
 
 
 class FrozenDict(dict):

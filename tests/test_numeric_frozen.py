@@ -122,3 +122,33 @@ def test_frozen_subclasses_copies_and_pickles():
         assert q._memo is not p._memo
         with pytest.raises(FrozenError):
             q.x = 0.0
+
+
+def test_made_reads_the_dict_first_and_memo_refuses_assignment():
+    """``made`` and ``memo`` are one descriptor: a value the object holds in its
+    ``__dict__`` is read first (``made``), else made once, kept and handed out
+    read-only; ``memo`` cannot be set."""
+    import numpy as np
+
+    from jetnh.errors import FrozenError
+    from jetnh.frozen import Frozen, made, memo
+
+    class Thing(Frozen):
+        def __init__(self, held=None):
+            if held is not None:
+                self.value = held
+
+        @made
+        def value(self):
+            return np.arange(3.0)
+
+        @memo
+        def other(self):
+            return [1]
+
+    made_now = Thing()
+    assert made_now.value is made_now.value and not made_now.value.flags.writeable
+    assert Thing(np.zeros(2)).value.tolist() == [0.0, 0.0]
+    with pytest.raises(FrozenError):
+        made_now.other = [2]
+    assert made_now.other == [1]

@@ -110,3 +110,43 @@ def test_replace_of_a_compiled_parameter_builds_other_kernels(disk):
                 {**disk.params, "Q": 1.0}):
         with pytest.raises(JetnhError):
             disk.replace(params=bad)
+
+
+def test_copies_of_a_scene_that_never_ran_share_one_store_of_quick_plans():
+    """A loop of ``replace(initial=...).run()`` on a scene that never ran plans once: the
+    copies fill and read the scene's store of quick plans, and a copy on another span
+    keeps its own."""
+    scene = Scene(models.get("rolling_disk"), "chetaev", initial=DISK0, t_span=(0.0, 0.2),
+                  cache=False).compile()
+    first = scene.replace(initial={**DISK0, "phi_t": 1.1})
+    first.run(save="final")
+    second = scene.replace(initial={**DISK0, "phi_t": 1.2})
+    assert second._memo["quick"] is first._memo["quick"] is scene._memo["quick"]
+    assert len(scene._memo["quick"]) == 1
+    second.run(save="final")
+    assert len(scene._memo["quick"]) == 1
+    assert "quick" not in scene.replace(t_span=(0.0, 0.1))._memo
+
+
+def test_replace_params_by_name_equals_by_symbol_and_takes_the_defaults(disk):
+    """A dict of floats keyed by name (checked at once) gives the params of the general
+    route (keyed by Symbol, or by name with a whole number), in the same order; the
+    parameters it omits keep the system's defaults; a bool is refused."""
+    R = next(s for s in disk.system.parameters if s.name == "R")
+    by_name = disk.replace(params={"R": 1.5})
+    assert list(by_name.params.items()) == list(disk.replace(params={R: 1.5}).params.items())
+    assert dict(by_name.params) == {**dict(disk.params), "R": 1.5}
+    assert disk.replace(params={"R": 2}).params == disk.replace(params={"R": 2.0}).params
+    assert by_name.initial == built(disk, params={**disk.params, "R": 1.5}).initial
+    with pytest.raises(JetnhError):
+        disk.replace(params={"R": True})
+
+
+def test_replace_of_nothing_keeps_the_state_and_checks_it_again(disk):
+    """``replace()`` and ``replace(t_span=...)`` keep the scene's states (in the order of
+    ``state_names``, the dependent velocities after them) and run as the scene does."""
+    same = disk.replace()
+    assert list(same.initial) == list(disk.state_names) + list(disk.dependent_velocities)
+    assert same.initial == disk.initial and same.y0.tolist() == disk.y0.tolist()
+    assert np.array_equal(same.run(save="final").y, disk.run(save="final").y)
+    assert disk.replace(t_span=(0.0, 0.1)).initial == disk.initial

@@ -68,10 +68,13 @@ from . import codegen
 from . import discrete
 from .ensemble import run_ensemble
 from .kernels import jacobian_kernels, load as load_kernels, loader
-from .kernels.initial import floats as initial_floats
+from .kernels import initial as initial_check
 from ..frozen import Frozen, FrozenDict, made, memo
 from .options import options, typed
 from .trajectory import Trajectory
+
+#: an argument ``Scene.replace`` was not given (the scene's own kept)
+_KEEP = object()
 
 
 class Scene(Frozen):
@@ -147,6 +150,8 @@ class Scene(Frozen):
         for name in self.runtime_params:
             if name not in self.params:
                 raise JetnhError(f"runtime parameter {name!r} needs a value in params=")
+        #: the values of the parameters compiled into the kernels, of a dict of all
+        self._compiled_of = _getter([n for n in self.params if n not in self.runtime_params])
         J = system.J
         self.coordinates = tuple(s.name for s in J.q)
         self.velocities = tuple(v.name for v in system.independent_velocities)
@@ -156,8 +161,7 @@ class Scene(Frozen):
         self._initial_names = frozenset(self.state_names + self.dependent_velocities)
         self._state_set = frozenset(self.state_names)
         #: the states' values of a dict of initial values, in order
-        self._states_of = (operator.itemgetter(*self.state_names)
-                           if len(self.state_names) > 1 else _OneState(*self.state_names))
+        self._states_of = _getter(self.state_names)
         self.consistency_tol = arguments.positive(consistency_tol, "consistency_tol")
         self.projected: dict[str, tuple[float, float]] = {}
         #: coordinates moved onto the holonomic constraints: name -> (given, completed)
@@ -180,6 +184,21 @@ class Scene(Frozen):
                 needed |= {s.name for s in expr.free_symbols if s.name not in known}
             #: the names of the parameters (of the system and of the integrals)
             self._param_names = needed = frozenset(needed)
+            #: the system's defaults by name where every one is a finite float of a
+            #: parameter (else None): what a dict of finite floats keyed by name adds to
+            self._param_defaults = defaults = {
+                s.name: v for s, v in self.system.defaults.items()}
+            if not (defaults.keys() <= needed and _FLOAT.issuperset(map(type, defaults.values()))
+                    and math.isfinite(sum(defaults.values()))):
+                self._param_defaults = None
+        elif (type(params) is dict and self._param_defaults is not None
+              and params.keys() <= needed and _FLOAT.issuperset(map(type, params.values()))
+              and math.isfinite(sum(params.values()))):
+            # (after ``__init__``, a dict of finite floats keyed by name: what the general
+            # route makes of it, at once, where it gives every parameter)
+            out = {**self._param_defaults, **params}
+            if len(out) == len(needed):
+                return out
         out = {}
         given = {**{s.name: v for s, v in self.system.defaults.items()}, **dict(params)}
         for k, v in given.items():
@@ -380,21 +399,21 @@ class Scene(Frozen):
         """``_dependent_velocity_floats`` by the kernels of ``route`` (``_dv_route``) in
         one compiled call (``kernels.initial``, which also finds ``y`` finite): the
         values in the order of ``dependent_velocities``, or None."""
-        _, floats, n_aux, n_dep = route
+        _, floats, addresses, n_aux, n_dep, _ = route
         if floats is None:
             return None
         aux = np.empty(n_aux)
-        if not floats(self.t_span[0], y, p, aux):
+        if not floats(addresses, self.t_span[0], y, p, aux):
             return None
         return aux.tolist()[:n_dep]
 
     def _dv_route(self, kern) -> tuple:
         """What ``_dependent_velocity_floats`` calls of ``kern``: (kern, the compiled
-        check ``kernels.initial.floats()`` with its first arguments (the sing kernel's
-        address and packed sizes, 0 and 0 without indicators, the aux kernel's, the
-        numbers of indicators and dependent velocities, ``FLOAT_MARGIN``), or None where
-        it does not apply, the size of aux, the number of dependent velocities), looked
-        up once per kernels (memo ``dv_route``, shared by the copies ``replace``
+        check ``kernels.initial.floats()``, or None where it does not apply, its first
+        argument (``kernels.initial.route_of``), the size of aux, the number of dependent
+        velocities, an array of that size for the checks that keep no value
+        (``_moved``: the check holds the GIL, so no other thread writes it meanwhile)),
+        looked up once per kernels (memo ``dv_route``, shared by the copies ``replace``
         makes)."""
         route = self._memo.get("dv_route")
         if route is None or route[0] is not kern:
@@ -403,10 +422,9 @@ class Scene(Frozen):
             n_ind, n_dep = len(lay.indicators), len(lay.dependent_velocities)
             applies = (lay.dependent_velocities == self.dependent_velocities
                        and (not n_ind or sing is not None))
-            route = (kern, functools.partial(
-                initial_floats(), *((0, 0) if sing is None else sing.args),
-                *kern.aux.args, n_ind, n_dep, FLOAT_MARGIN) if applies else None,
-                lay.n_aux, n_dep)
+            route = (kern, initial_check.floats() if applies else None,
+                     initial_check.route_of(sing, kern.aux, n_ind, n_dep), lay.n_aux, n_dep,
+                     np.empty(lay.n_aux))
             self._memo["dv_route"] = route
         return route
 
@@ -437,29 +455,24 @@ class Scene(Frozen):
         uses; ``jacobian.address`` is its C callback for compiled code."""
         return jacobian_kernels(self).jac
 
-    def replace(self, **changes) -> "Scene":
-        """A scene equal to this one except for ``changes`` (constructor arguments:
-        params, initial, t_span, runtime_params, integrals, ...).  ``initial`` replaces
-        the initial values as a whole: it needs a value for every state (``run(y0=...)``
-        changes some and keeps the others); dependent velocities follow from the
-        constraints again."""
-        if changes.keys() <= _MOVED:
-            initial = changes.get("initial", _KEEP)
-            return self._moved({n: self.initial[n] for n in self.state_names}
-                               if initial is _KEEP else {} if initial is None else initial,
-                               changes.get("t_span", self.t_span))
-        if (changes.keys() <= _RETUNED and self.runtime_params
-                and isinstance(changes["params"], (Mapping, type(None)))):
-            params = self._params(changes["params"] or {})
-            runtime = self.runtime_params
-            if ({k: v for k, v in params.items() if k not in runtime}
-                    == {k: v for k, v in self.params.items() if k not in runtime}):
-                # only run-time parameters changed: the same kernels (``_moved``)
-                initial = changes.get("initial", _KEEP)
-                return self._moved({n: self.initial[n] for n in self.state_names}
-                                   if initial is _KEEP else {} if initial is None
-                                   else initial, changes.get("t_span", self.t_span),
-                                   FrozenDict(params))
+    def replace(self, *, initial=_KEEP, t_span=_KEEP, params=_KEEP, **changes) -> "Scene":
+        """A scene equal to this one except for the arguments given (constructor
+        arguments: params, initial, t_span, runtime_params, integrals, ...).  ``initial``
+        replaces the initial values as a whole: it needs a value for every state
+        (``run(y0=...)`` changes some and keeps the others); dependent velocities follow
+        from the constraints again."""
+        if not changes:         # (named: no dict of them to make and read)
+            span = self.t_span if t_span is _KEEP else t_span
+            if params is _KEEP:
+                return self._moved({} if initial is None else initial, span)
+            if self.runtime_params and isinstance(params, (Mapping, type(None))):
+                numbers = self._params(params or {})
+                if self._compiled_of(numbers) == self._compiled_of(self.params):
+                    # only run-time parameters changed: the same kernels (``_moved``)
+                    return self._moved({} if initial is None else initial, span,
+                                       FrozenDict(numbers))
+        changes.update((k, v) for k, v in (("initial", initial), ("t_span", t_span),
+                                           ("params", params)) if v is not _KEEP)
         args = dict(system=self.system, principle=self.principle, params=self.params,
                     initial={n: self.initial[n] for n in self.state_names},
                     t_span=self.t_span, form=self.form, convention=self.convention,
@@ -478,52 +491,67 @@ class Scene(Frozen):
         return new
 
     def _moved(self, initial, t_span, params=None) -> "Scene":
-        """``replace(initial=..., t_span=...)``, and ``params`` (checked) where only
-        run-time parameters change: this scene with other initial values, time span and
-        run-time parameter values, its other attributes (checked once) and its memo's
-        shared values (``_SHARED``, and ``_p``) taken over rather than made anew
-        (``_moving``).  The most common initial values (a dict of every state, no
-        dependent velocity, as floats, on a scene without holonomic constraints whose
-        kernels are loaded) are checked and their dependent velocities found in one
-        compiled call (``_dv_route``: the floats ``_initial`` finds, else the general
-        route, which names what is wrong), the state array kept as it is (the direct
-        runs' ``_y0``) and ``initial`` and ``y0`` made of them when first read
-        (``frozen.made``); other initial values by ``_initial``."""
+        """``replace(initial=..., t_span=...)`` (``initial`` ``_KEEP``: this scene's),
+        and ``params`` (checked) where only run-time parameters change: this scene with
+        other initial values, time span and run-time parameter values, its other
+        attributes (checked once) and its memo's shared values (``_SHARED``, and ``_p``)
+        taken over rather than made anew (``_moving``).  The most common initial values
+        (a dict of every state, no dependent velocity, as floats, or this scene's own
+        states, on a scene without holonomic constraints whose kernels are loaded) are
+        checked in one compiled call (``_dv_route``: where ``_initial`` would take the
+        floats it finds, else the general route, which names what is wrong), the state
+        array kept as it is (the direct runs' ``_y0``; this scene's own shared, as no run
+        writes it) and ``initial`` (its dependent velocities found again by the same
+        call) and ``y0`` made of them when first read (``frozen.made``); other initial
+        values by ``_initial``."""
         own = self._memo
         hit = own.get("moved")
         if hit is None or hit[0] != len(own) or hit[1] is None:
             # (what the copies take over, looked up again when this memo grew, or until
             # the kernels are loaded)
             hit = self._moving()
-        _, kern, p, memo, route, d = hit
+        _, kern, p, shared, route, attributes = hit
+        if t_span is not self.t_span:
+            t_span = self._t_span(t_span)
+        if params is not None:
+            p = np.array([params[n] for n in self.runtime_params], dtype=float)
+        given = y = None
+        if route is not None:       # the route at once, where it applies
+            if initial is _KEEP:
+                y = own.get("_y0")
+                if y is None:
+                    y = self._y0
+            elif type(initial) is dict and len(initial) == len(self.state_names):
+                try:        # (every state, so nothing else: as many keys as states)
+                    states = self._states_of(initial)
+                except KeyError:
+                    states = ()
+                if states and _FLOAT.issuperset(map(type, states)):
+                    y = np.array(states)
+                    given = FrozenDict(initial)
+            if y is not None and not route[1](route[2], t_span[0], y, p, route[5]):
+                y = None
         # (the attributes set directly, not by ``_set``: a time span is a tuple of
         # floats, the initial values floats; ``_memo`` the copy's own, before anything
         # reads it)
-        d = d.copy()        # (a copy of a dict: sooner than filling one)
-        d["_memo"] = memo = memo.copy()     # (frozen from here: ``_initial`` sets nothing
+        new = _new(Scene)
+        d = new.__dict__
+        d.update(attributes)    # (sooner than filling a dict)
+        d["_memo"] = memo = shared.copy()   # (frozen from here: ``_initial`` sets nothing
         #                                     when it neither projects nor completes)
         if t_span is not self.t_span:
-            d["t_span"] = t_span = self._t_span(t_span)
+            d["t_span"] = t_span
             memo.pop("quick", None)     # (the quick plans: of this span)
         if params is not None:
             d["params"] = params
-            memo["_p"] = p = np.array([params[n] for n in self.runtime_params], dtype=float)
-        new = _new(Scene)
-        _setattr(new, "__dict__", d)
-        if (route is not None and type(initial) is dict and route[1] is not None
-                and len(initial) == len(self.state_names)):
-            try:        # (every state, so nothing else: as many keys as states)
-                states = self._states_of(initial)
-            except KeyError:
-                states = ()
-            if states and _FLOAT.issuperset(map(type, states)):
-                y = np.array(states)
-                aux = np.empty(route[2])
-                if route[1](t_span[0], y, p, aux):
-                    memo["_y0"] = y
-                    memo["_given"] = (FrozenDict(initial), aux)
-                    return new
-        if type(initial) is not dict and not isinstance(initial, Mapping):
+            memo["_p"] = p
+        if y is not None:
+            memo["_y0"] = y
+            memo["_given"] = (given, route)
+            return new
+        if initial is _KEEP:
+            initial = {n: self.initial[n] for n in self.state_names}
+        elif type(initial) is not dict and not isinstance(initial, Mapping):
             raise JetnhError(f"initial must be a dict keyed by Symbol or name, got a "
                              f"{type(initial).__name__}")
         ini, y = new._initial(initial, False, False, kern, p)
@@ -539,21 +567,25 @@ class Scene(Frozen):
 
     def _moving(self) -> tuple:
         """What the copies ``_moved`` makes take over from this scene, kept in its memo
-        (``moved``): (the memo's size, the kernels if loaded, ``_p``, the shared memo,
-        ``_dv_route`` where the kernels are loaded and no holonomic constraint is to be
-        checked, the attributes of a copy but ``initial``, ``y0`` and ``_memo``)."""
+        (``moved``): (the memo's size, the kernels if loaded, ``_p``, the shared memo
+        with the quick plans of this span, ``_dv_route`` where the kernels are loaded,
+        its check applies and no holonomic constraint is to be checked (else None), the
+        attributes of a copy but ``initial``, ``y0`` and ``_memo``)."""
         own = self._memo
         key = own.get("key")
         kern = None if key is None else _loaded_kernels(key, self.cache)
         route = (None if kern is None or self.system.holonomic
                  else self._dv_route(kern))       # (this scene's, shared below)
+        if route is not None and route[1] is None:
+            route = None
         p = own.get("_p")
         if p is None:
             p = self._p
         shared = self._shared_memo()
         shared["_p"] = p
-        if "quick" in own:
-            shared["quick"] = own["quick"]
+        # (one store of quick plans for this scene and the copies on its span: a loop of
+        # ``replace(initial=...).run()`` plans once though this scene never ran)
+        shared["quick"] = own.setdefault("quick", {})
         attributes = {k: v for k, v in self.__dict__.items()
                       if k not in ("initial", "y0", "_memo")}
         attributes["projected"] = attributes["completed"] = _NOTHING
@@ -564,10 +596,16 @@ class Scene(Frozen):
     @made
     def initial(self) -> FrozenDict:
         """The initial values of a copy ``_moved`` made (the scenes ``Scene(...)`` makes
-        hold theirs in ``__dict__``): the states given and the dependent velocities the
-        kernels gave, made when first read."""
-        given, aux = self._memo["_given"]
-        dict.update(given, zip(self.dependent_velocities, aux.tolist()))
+        hold theirs in ``__dict__``): the states given (or the scene's, in the order of
+        ``state_names``) and the dependent velocities the kernels gave, made when first
+        read."""
+        memo = self._memo
+        given, route = memo["_given"]
+        if given is None:
+            given = FrozenDict(zip(self.state_names, memo["_y0"].tolist()))
+        # (phi^alpha again, as the check found them: the same call)
+        dict.update(given, zip(self.dependent_velocities, self._dependent_velocity_list(
+            memo["_y0"], route, memo["_p"])))
         return given
 
     @made
@@ -595,6 +633,7 @@ class Scene(Frozen):
             return dict(hit[1])
         memo.setdefault("plans", {})
         memo.setdefault("spans", {})
+        memo.setdefault("quick_spans", {})
         memo.setdefault("events", {})
         memo.setdefault("atlases", [])
         shared = {k: memo[k] for k in _SHARED if k in memo}
@@ -1003,21 +1042,17 @@ def _energy_changes(system, principle, params) -> tuple[str, ...]:
 
 #: what a scene with the same kernels (``Scene.replace``) takes over from the memo: the
 #: kernels' keys, the plans of runs (``solve.planned``) and those taken over on other
-#: time spans, compiled events, whether an atlas applies and the first atlas (whose
-#: charts the others share: ``atlas.atlas``)
-_SHARED = ("spec", "key", "plans", "spans", "events", "atlas_applies", "atlases", "dv_route")
+#: time spans, the quick plans of runs on a span of their own (``Scene._kept_plan``),
+#: compiled events, whether an atlas applies and the first atlas (whose charts the
+#: others share: ``atlas.atlas``)
+_SHARED = ("spec", "key", "plans", "spans", "quick_spans", "events", "atlas_applies",
+           "atlases", "dv_route")
 
 
 _FLOAT = frozenset((float,))
-#: ``replace`` without ``initial`` (the scene's own kept)
-_KEEP = object()
-_new, _setattr = object.__new__, object.__setattr__
+_new = object.__new__
 #: ``projected`` and ``completed`` of the copies ``replace`` makes (nothing moved)
 _NOTHING = FrozenDict()
-#: what ``replace`` changes in a copy of the scene (``_moved``)
-_MOVED = frozenset(("initial", "t_span"))
-#: and with run-time parameter values (``params``, the others unchanged)
-_RETUNED = frozenset(("params", "initial", "t_span"))
 #: the plans of a scene that kept none (``run``: its key is hashed all the same)
 _NONE_KEPT: dict = {}
 #: the dtype of the arrays a run takes as they are (numpy's one instance of it)
@@ -1025,17 +1060,23 @@ _FLOAT64 = np.dtype(np.float64)
 
 #: the least |indicator| at which the initial dependent velocities are taken from the
 #: compiled kernels (``Scene._dependent_velocity_floats``)
-FLOAT_MARGIN = 1e-6
+FLOAT_MARGIN = initial_check.MARGIN
 
 
-class _OneState:
-    """What ``operator.itemgetter`` of one name would be if it returned a tuple."""
+def _getter(names):
+    """The values of ``names`` in a dict, as a tuple (``operator.itemgetter``, which
+    returns one value, not a tuple, for one name, and takes no zero names)."""
+    return operator.itemgetter(*names) if len(names) > 1 else _Few(tuple(names))
 
-    def __init__(self, name):
-        self.name = name
+
+class _Few:
+    """``_getter`` of fewer than two names."""
+
+    def __init__(self, names):
+        self.names = names
 
     def __call__(self, values) -> tuple:
-        return (values[self.name],)
+        return tuple(values[n] for n in self.names)
 
 
 def _loaded_kernels(key, persistent):
