@@ -292,3 +292,24 @@ def test_small_inertia_is_no_ill_conditioning():
         for inertia in (0.5, 1e-12):
             lin = jn.linearize(S, at=at, params={"I": inertia})
             assert lin.conditioning == pytest.approx(1.0, abs=1e-12)
+
+
+@pytest.mark.parametrize("av", [1e-3, 1.0, 1e3])
+def test_removable_limit_beside_an_offset_cyclic_coordinate(av):
+    """The sinc beside a free coordinate y kept at 0, 1e-3, 1, 1e5, 1e8 (in no equation):
+    the limit +-sqrt(G/3)/a and "unstable" at every y.  The steps were one scalar, the
+    largest |y|: at y = 1e-3, a = 1e3 every digit was lost and zeros agreed ("marginal"),
+    at large y no step settled (refused)."""
+    J = jn.JetSpace("x y")
+    (x, y), (xt, yt) = J.q, J.qd
+    G, a = sp.symbols("G a")
+    if "Sy" not in _SINC:
+        _SINC["Sy"] = jn.System(J, xt**2 / 2 + yt**2 / 2 - G * sp.sin(x / a) / (x / a))
+    want = np.sqrt(1 / 3) / av
+    for yv in (0.0, 1e-3, 1.0, 1e5, 1e8):
+        lin = jn.linearize(_SINC["Sy"], at={"x": 0.0, "y": yv, "x_t": 0.0, "y_t": 0.0},
+                           params={"G": 1.0, "a": av}, drop=None)
+        assert lin.limit and lin.verdict == "unstable", yv
+        re = np.sort(lin.eigenvalues.real)
+        np.testing.assert_allclose(re[[0, -1]], [-want, want], rtol=1e-6)
+        np.testing.assert_allclose(re[1:-1], 0.0, atol=1e-9 * want)
