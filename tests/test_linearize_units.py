@@ -313,3 +313,21 @@ def test_removable_limit_beside_an_offset_cyclic_coordinate(av):
         re = np.sort(lin.eigenvalues.real)
         np.testing.assert_allclose(re[[0, -1]], [-want, want], rtol=1e-6)
         np.testing.assert_allclose(re[1:-1], 0.0, atol=1e-9 * want)
+
+
+def test_removable_limit_beside_a_well_conditioned_entry():
+    """The sinc coupled to z by z x (x'' gets + z, z'' = x): the 0/0 entry dx''/dx is
+    judged on its own, not beside the entry 1 of dx''/dz in its row (that row settled
+    on the lost value 2.6e-10 / (3 a^2) at a = 1e-3, z = 0, when rows were judged whole)."""
+    J = jn.JetSpace("x z")
+    (x, z), (xt, zt) = J.q, J.qd
+    G, a = sp.symbols("G a")
+    S = jn.System(J, xt**2 / 2 + zt**2 / 2 - G * sp.sin(x / a) / (x / a) + z * x)
+    for av in (1e-3, 1.0, 1e3):
+        for zv in (0.0, 1e-3, 1e6):
+            lin = jn.linearize(S, at={"x": 0.0, "z": zv, "x_t": 0.0, "z_t": 0.0},
+                               params={"G": 1.0, "a": av}, drop=None)
+            i, j = lin.state_names.index("x_t"), lin.state_names.index("x")
+            assert lin.limit
+            assert lin.A[i, j] == pytest.approx(1 / (3 * av**2), rel=1e-6), (av, zv)
+            assert lin.A[i, lin.state_names.index("z")] == pytest.approx(1.0, rel=1e-9)

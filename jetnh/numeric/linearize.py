@@ -142,8 +142,8 @@ ROUNDING = 1e-12
 #: the steps (relative to each state's own size) tried in turn for the limit at a 0/0:
 #: the first where the extrapolation settles
 STEPS = (1e-1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8)
-#: the steps (in the state's own units) of states at 0 that share no row with a nonzero
-#: state, where nothing at the point gives a scale: a wide sweep, largest first
+#: the steps (in the state's own units) of states at 0, where nothing at the point gives
+#: a scale: a wide sweep, largest first
 SWEEP = tuple(10.0 ** k for k in range(8, -17, -1))
 #: a step at a 0/0 is refused where a row that is 0/0 at the point keeps less than this
 #: fraction of the size of its terms (``_Model.sizes``) at every point stepped to: its
@@ -1327,8 +1327,8 @@ def _settled(model, ck, y, p, values, t, rows, E):
     ``DIRECTIONS`` random kept directions by symmetric differences and Richardson
     extrapolation, at the largest step where the differences from h and h/2 agree to
     1e-3 (in A's balanced units).  Each kept state is stepped by its own scale
-    (``_scales``): ``STEPS`` times its size, or ``SWEEP`` at 0 where no nonzero state
-    shares a row with it; never a state the kept rows do not depend on.  A step where a
+    (``_scales``): ``STEPS`` times its size, or ``SWEEP`` at 0; never a state the kept
+    rows do not depend on.  A step where a
     row that is 0/0 at the point has lost its digits to cancellation (below ``DIGITS``
     of its terms) is refused: values that agree there are zeros, no limit.  The limit is
     accepted only when every direction gives the same one at that step (a value that
@@ -1350,8 +1350,9 @@ def _settled(model, ck, y, p, values, t, rows, E):
     A, rates, rounding = at(y)
     if np.all(np.isfinite(A)) and np.all(np.isfinite(rates)):
         return A, rates, False, bound(y, rounding, rates)
+    undefined = ~np.isfinite(A)
     singular = [c for c in range(len(rows))
-                if not (np.all(np.isfinite(A[c])) and np.isfinite(rates[c]))]
+                if undefined[c].any() or not np.isfinite(rates[c])]
     sized, free = _scales(model, y, rows, E)
     rng = np.random.default_rng(0)
     dirs = []
@@ -1378,7 +1379,7 @@ def _settled(model, ck, y, p, values, t, rows, E):
         half = (h[0] / 2, h[1] / 2)
         (A1, r1, _), (A2, r2, b2) = mean(d, h), mean(d, half)
         return (4 * A2 - A1) / 3, (4 * r2 - r1) / 3, b2, max(
-            _difference(A1, A2, r1, r2, b2), _rows(A1, A2, singular))
+            _difference(A1, A2, r1, r2, b2), _entries(A1, A2, undefined))
 
     best, h_best, lost = None, None, False
     for h in steps:
@@ -1419,26 +1420,25 @@ def _settled(model, ck, y, p, values, t, rows, E):
     return A, rates, True, np.maximum(b, bound(z, 0.0))
 
 
-def _rows(A1, A2, rows) -> float:
-    """How far ``rows`` of A1 and A2 are apart, each relative to its own size (in A's
-    balanced units; a difference within eps of A counts as none): a small row is not
-    judged against the others' sizes."""
+def _entries(A1, A2, where) -> float:
+    """How far the entries ``where`` (a mask) of A1 and A2 are apart, each relative to
+    its own size (in A's balanced units; a difference within eps of A counts as none):
+    an entry that is 0/0 at the point is not judged against the sizes of the others."""
     if not (np.all(np.isfinite(A1)) and np.all(np.isfinite(A2))):
         return np.inf
     D = _balanced((A1 + A2) / 2)
-    B1, B2 = (A1 * D[None, :] / D[:, None])[rows], (A2 * D[None, :] / D[:, None])[rows]
-    floor = EPS * np.linalg.norm((A1 + A2) * D[None, :] / D[:, None]) / 2
-    d = np.linalg.norm(B1 - B2, axis=1)
-    size = (np.linalg.norm(B1, axis=1) + np.linalg.norm(B2, axis=1)) / 2
+    B1, B2 = A1 * D[None, :] / D[:, None], A2 * D[None, :] / D[:, None]
+    floor = EPS * np.linalg.norm(B1 + B2) / 2
+    d, size = np.abs(B1 - B2)[where], (np.abs(B1) + np.abs(B2))[where] / 2
     return float(np.max(np.where(d <= floor, 0.0, d / np.maximum(size, floor)),
                         initial=0.0))
 
 
 def _scales(model, y, rows, E):
-    """``(sized, free)`` over the kept states (E's columns): ``|y|`` of a state the kept
-    rows depend on, or at 0 the largest ``|y|`` of the nonzero states that share such a
-    row with it (relative steps); ``free`` 1 for a state at 0 that shares none (absolute
-    steps, swept); 0 in both for a state no kept row depends on (never stepped)."""
+    """``(sized, free)`` over the kept states (E's columns): ``|y|`` of a nonzero state
+    the kept rows depend on (relative steps); ``free`` 1 for one at 0 (absolute steps,
+    swept: no other state's value is its scale); 0 in both for a state no kept row
+    depends on (never stepped)."""
     kept = list(rows)                       # E's columns
     uses = {j: [i for i in rows if model.uses(i, j)] for j in kept}
     sized, free = np.zeros(len(kept)), np.zeros(len(kept))
@@ -1448,9 +1448,5 @@ def _scales(model, y, rows, E):
         if y[j] != 0:
             sized[c] = abs(y[j])
             continue
-        near = [abs(y[k]) for k in kept if y[k] != 0 and set(uses[k]) & set(uses[j])]
-        if near:
-            sized[c] = max(near)
-        else:
-            free[c] = 1.0
+        free[c] = 1.0
     return sized, free
