@@ -331,3 +331,18 @@ def test_removable_limit_beside_a_well_conditioned_entry():
             assert lin.limit
             assert lin.A[i, j] == pytest.approx(1 / (3 * av**2), rel=1e-6), (av, zv)
             assert lin.A[i, lin.state_names.index("z")] == pytest.approx(1.0, rel=1e-9)
+
+
+def test_removable_limit_away_from_the_origin():
+    """The sinc of (x - c)/a at x = c: the 0/0 is at c, whose size is no scale of the
+    steps.  At a = 1e3, c = 1e-3 or 1 the steps h |x| lost every digit and zeros agreed
+    ("marginal", eigenvalue 0); now +-sqrt(G/3)/a, "unstable"."""
+    J = jn.JetSpace("x")
+    (x,), (xt,) = J.q, J.qd
+    G, a, c = sp.symbols("G a c")
+    S = jn.System(J, xt**2 / 2 - G * sp.sin((x - c) / a) / ((x - c) / a))
+    for av, cv in ((1e3, 1e-3), (1e3, 1.0), (1e3, 1e4), (1.0, 1e-3), (1e-3, 1e3)):
+        lin = jn.linearize(S, at={"x": cv, "x_t": 0.0}, params={"G": 1.0, "a": av, "c": cv})
+        assert lin.limit and lin.verdict == "unstable", (av, cv)
+        want = np.sqrt(1 / 3) / av
+        np.testing.assert_allclose(np.sort(lin.eigenvalues.real), [-want, want], rtol=1e-6)

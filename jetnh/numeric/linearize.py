@@ -147,8 +147,9 @@ STEPS = (1e-1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8)
 SWEEP = tuple(10.0 ** k for k in range(8, -17, -1))
 #: a step at a 0/0 is refused where a row that is 0/0 at the point keeps less than this
 #: fraction of the size of its terms (``_Model.sizes``) at every point stepped to: its
-#: digits are lost to cancellation, and values that agree there are no limit
-DIGITS = 1e-8
+#: rounding, eps over that fraction, exceeds the 1e-3 agreement asked of the limit, and
+#: values that agree there (zeros) are no limit
+DIGITS = 1e3 * float(np.finfo(float).eps)
 #: the directions of approach along which that limit must agree
 DIRECTIONS = 3
 #: the rounding unit of a double
@@ -1327,8 +1328,9 @@ def _settled(model, ck, y, p, values, t, rows, E):
     ``DIRECTIONS`` random kept directions by symmetric differences and Richardson
     extrapolation, at the largest step where the differences from h and h/2 agree to
     1e-3 (in A's balanced units).  Each kept state is stepped by its own scale
-    (``_scales``): ``STEPS`` times its size, or ``SWEEP`` at 0; never a state the kept
-    rows do not depend on.  A step where a
+    (``_scales``): ``STEPS`` times its size, or ``SWEEP`` at 0; where that settles
+    nowhere, every state on ``SWEEP`` (a 0/0 away from the origin, whose scale is no
+    state's size); never a state the kept rows do not depend on.  A step where a
     row that is 0/0 at the point has lost its digits to cancellation (below ``DIGITS``
     of its terms) is refused: values that agree there are zeros, no limit.  The limit is
     accepted only when every direction gives the same one at that step (a value that
@@ -1359,11 +1361,12 @@ def _settled(model, ck, y, p, values, t, rows, E):
     for _ in range(DIRECTIONS):
         r = rng.standard_normal(E.shape[1])
         dirs.append(r / np.linalg.norm(r))
-    steps = ([(min(h, STEPS[0]), h) for h in SWEEP] if free.any()
-             else [(h, 0.0) for h in STEPS])
+    scales = [(sized, free)]
+    if sized.any():                         # then every state it steps on the sweep
+        scales.append((0 * sized, np.sign(sized + free)))
 
     def step(d, h):                         # the step along d: states on their scales
-        return E @ (d * (h[0] * sized + h[1] * free))
+        return E @ (d * (h[0] * scales[0][0] + h[1] * scales[0][1]))
 
     def kept(z):                            # the largest fraction of its terms a 0/0 row keeps
         _, r, _ = at(z)
@@ -1372,8 +1375,11 @@ def _settled(model, ck, y, p, values, t, rows, E):
             return np.where(terms > 0, np.abs(r[singular]) / terms, np.inf)
 
     def mean(d, h):
-        (A1, r1, b1), (A2, r2, b2) = at(y + step(d, h)), at(y - step(d, h))
-        return (A1 + A2) / 2, (r1 + r2) / 2, np.maximum(b1, b2)
+        z1, z2 = y + step(d, h), y - step(d, h)
+        (A1, r1, b1), (A2, r2, b2) = at(z1), at(z2)
+        terms = DIGITS * np.maximum(model.sizes_at(rows, z1, values, t),
+                                    model.sizes_at(rows, z2, values, t))
+        return (A1 + A2) / 2, (r1 + r2) / 2, np.maximum(np.maximum(b1, b2), terms)
 
     def limit(d, h):
         half = (h[0] / 2, h[1] / 2)
@@ -1382,16 +1388,21 @@ def _settled(model, ck, y, p, values, t, rows, E):
             _difference(A1, A2, r1, r2, b2), _entries(A1, A2, undefined))
 
     best, h_best, lost = None, None, False
-    for h in steps:
-        found = [limit(d, h) for d in dirs]
-        if max(f[3] for f in found) <= 1e-3:
-            digits = np.max([kept(y + s * step(d, (h[0] / 2, h[1] / 2)))
-                             for d in dirs for s in (1, -1)], axis=0)
-            if np.all(digits > DIGITS):
-                best, h_best = found, h
-            else:
-                lost = True
-            break
+    while best is None and scales:
+        steps = ([(min(h, STEPS[0]), h) for h in SWEEP] if scales[0][1].any()
+                 else [(h, 0.0) for h in STEPS])
+        for h in steps:
+            found = [limit(d, h) for d in dirs]
+            if max(f[3] for f in found) <= 1e-3:
+                digits = np.max([kept(y + s * step(d, (h[0] / 2, h[1] / 2)))
+                                 for d in dirs for s in (1, -1)], axis=0)
+                if np.all(digits > DIGITS):
+                    best, h_best = found, h
+                else:
+                    lost = True
+                break
+        if best is None:
+            scales.pop(0)
     if best is None:
         raise LinearizationError(
             "the equations are undefined at this point (0/0: a singular point of the "
@@ -1403,7 +1414,8 @@ def _settled(model, ck, y, p, values, t, rows, E):
             + ("(the steps where the values settle lose every digit of the 0/0 rows to "
                "cancellation) " if lost else "")
             + "with steps of each state's size times "
-            f"{STEPS[0]:g}..{STEPS[-1]:g} (or {SWEEP[0]:g}..{SWEEP[-1]:g} where it is 0); "
+            f"{STEPS[0]:g}..{STEPS[-1]:g}, then of {SWEEP[0]:g}..{SWEEP[-1]:g} in its "
+            "own units; "
             "linearize in other coordinates, or choose another operating point, another "
             "split (dependent=) or other parameter values")
     A, rates, b, _ = best[0]
@@ -1438,15 +1450,10 @@ def _scales(model, y, rows, E):
     """``(sized, free)`` over the kept states (E's columns): ``|y|`` of a nonzero state
     the kept rows depend on (relative steps); ``free`` 1 for one at 0 (absolute steps,
     swept: no other state's value is its scale); 0 in both for a state no kept row
-    depends on (never stepped)."""
-    kept = list(rows)                       # E's columns
-    uses = {j: [i for i in rows if model.uses(i, j)] for j in kept}
-    sized, free = np.zeros(len(kept)), np.zeros(len(kept))
-    for c, j in enumerate(kept):
-        if not uses[j]:
-            continue
-        if y[j] != 0:
-            sized[c] = abs(y[j])
-            continue
-        free[c] = 1.0
+    depends on, itself or through the coordinates that follow it on g = 0 (never
+    stepped)."""
+    sized, free = np.zeros(len(rows)), np.zeros(len(rows))
+    for c, j in enumerate(rows):
+        if any(model.uses(i, k) for k in np.flatnonzero(E[:, c]) for i in rows):
+            sized[c], free[c] = abs(y[j]), float(y[j] == 0)
     return sized, free
