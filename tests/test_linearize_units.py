@@ -292,3 +292,57 @@ def test_small_inertia_is_no_ill_conditioning():
         for inertia in (0.5, 1e-12):
             lin = jn.linearize(S, at=at, params={"I": inertia})
             assert lin.conditioning == pytest.approx(1.0, abs=1e-12)
+
+
+@pytest.mark.parametrize("av", [1e-3, 1.0, 1e3])
+def test_removable_limit_beside_an_offset_cyclic_coordinate(av):
+    """The sinc beside a free coordinate y kept at 0, 1e-3, 1, 1e5, 1e8 (in no equation):
+    the limit +-sqrt(G/3)/a and "unstable" at every y.  The steps were one scalar, the
+    largest |y|: at y = 1e-3, a = 1e3 every digit was lost and zeros agreed ("marginal"),
+    at large y no step settled (refused)."""
+    J = jn.JetSpace("x y")
+    (x, y), (xt, yt) = J.q, J.qd
+    G, a = sp.symbols("G a")
+    if "Sy" not in _SINC:
+        _SINC["Sy"] = jn.System(J, xt**2 / 2 + yt**2 / 2 - G * sp.sin(x / a) / (x / a))
+    want = np.sqrt(1 / 3) / av
+    for yv in (0.0, 1e-3, 1.0, 1e5, 1e8):
+        lin = jn.linearize(_SINC["Sy"], at={"x": 0.0, "y": yv, "x_t": 0.0, "y_t": 0.0},
+                           params={"G": 1.0, "a": av}, drop=None)
+        assert lin.limit and lin.verdict == "unstable", yv
+        re = np.sort(lin.eigenvalues.real)
+        np.testing.assert_allclose(re[[0, -1]], [-want, want], rtol=1e-6)
+        np.testing.assert_allclose(re[1:-1], 0.0, atol=1e-9 * want)
+
+
+def test_removable_limit_beside_a_well_conditioned_entry():
+    """The sinc coupled to z by z x (x'' gets + z, z'' = x): the 0/0 entry dx''/dx is
+    judged on its own, not beside the entry 1 of dx''/dz in its row (that row settled
+    on the lost value 2.6e-10 / (3 a^2) at a = 1e-3, z = 0, when rows were judged whole)."""
+    J = jn.JetSpace("x z")
+    (x, z), (xt, zt) = J.q, J.qd
+    G, a = sp.symbols("G a")
+    S = jn.System(J, xt**2 / 2 + zt**2 / 2 - G * sp.sin(x / a) / (x / a) + z * x)
+    for av in (1e-3, 1.0, 1e3):
+        for zv in (0.0, 1e-3, 1e6):
+            lin = jn.linearize(S, at={"x": 0.0, "z": zv, "x_t": 0.0, "z_t": 0.0},
+                               params={"G": 1.0, "a": av}, drop=None)
+            i, j = lin.state_names.index("x_t"), lin.state_names.index("x")
+            assert lin.limit
+            assert lin.A[i, j] == pytest.approx(1 / (3 * av**2), rel=1e-6), (av, zv)
+            assert lin.A[i, lin.state_names.index("z")] == pytest.approx(1.0, rel=1e-9)
+
+
+def test_removable_limit_away_from_the_origin():
+    """The sinc of (x - c)/a at x = c: the 0/0 is at c, whose size is no scale of the
+    steps.  At a = 1e3, c = 1e-3 or 1 the steps h |x| lost every digit and zeros agreed
+    ("marginal", eigenvalue 0); now +-sqrt(G/3)/a, "unstable"."""
+    J = jn.JetSpace("x")
+    (x,), (xt,) = J.q, J.qd
+    G, a, c = sp.symbols("G a c")
+    S = jn.System(J, xt**2 / 2 - G * sp.sin((x - c) / a) / ((x - c) / a))
+    for av, cv in ((1e3, 1e-3), (1e3, 1.0), (1e3, 1e4), (1.0, 1e-3), (1e-3, 1e3)):
+        lin = jn.linearize(S, at={"x": cv, "x_t": 0.0}, params={"G": 1.0, "a": av, "c": cv})
+        assert lin.limit and lin.verdict == "unstable", (av, cv)
+        want = np.sqrt(1 / 3) / av
+        np.testing.assert_allclose(np.sort(lin.eigenvalues.real), [-want, want], rtol=1e-6)

@@ -139,9 +139,17 @@ ZERO = 1e-6
 STEADY = 1e-8
 #: the relative rounding of the point allowed in a rate at a steady motion (above)
 ROUNDING = 1e-12
-#: the steps (relative to the state's size, or 1 at the zero state) tried in turn for
-#: the limit at a 0/0: the first where the extrapolation settles
+#: the steps (relative to each state's own size) tried in turn for the limit at a 0/0:
+#: the first where the extrapolation settles
 STEPS = (1e-1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8)
+#: the steps (in the state's own units) of states at 0, where nothing at the point gives
+#: a scale: a wide sweep, largest first
+SWEEP = tuple(10.0 ** k for k in range(8, -17, -1))
+#: a step at a 0/0 is refused where a row that is 0/0 at the point keeps less than this
+#: fraction of the size of its terms (``_Model.sizes``) at every point stepped to: its
+#: rounding, eps over that fraction, exceeds the 1e-3 agreement asked of the limit, and
+#: values that agree there (zeros) are no limit
+DIGITS = 1e3 * float(np.finfo(float).eps)
 #: the directions of approach along which that limit must agree
 DIRECTIONS = 3
 #: the rounding unit of a double
@@ -1318,9 +1326,14 @@ def _difference(A1, A2, r1, r2, b) -> float:
 def _settled(model, ck, y, p, values, t, rows, E):
     """``_jacobian``'s work (under its error state).  At a 0/0 the limit is taken along
     ``DIRECTIONS`` random kept directions by symmetric differences and Richardson
-    extrapolation, at the largest step of ``STEPS`` (times the state's size) where the
-    differences from h and h/2 agree to 1e-3 (in A's balanced units: smaller steps
-    lose digits to cancellation, down to a false agreement of zeros); it is accepted only when every direction gives the same limit there (a value that
+    extrapolation, at the largest step where the differences from h and h/2 agree to
+    1e-3 (in A's balanced units).  Each kept state is stepped by its own scale
+    (``_scales``): ``STEPS`` times its size, or ``SWEEP`` at 0; where that settles
+    nowhere, every state on ``SWEEP`` (a 0/0 away from the origin, whose scale is no
+    state's size); never a state the kept rows do not depend on.  A step where a
+    row that is 0/0 at the point has lost its digits to cancellation (below ``DIGITS``
+    of its terms) is refused: values that agree there are zeros, no limit.  The limit is
+    accepted only when every direction gives the same one at that step (a value that
     depends on the direction of approach, as at the pole of polar coordinates or Euler
     angles, is none)."""
     m = len(y)
@@ -1339,27 +1352,57 @@ def _settled(model, ck, y, p, values, t, rows, E):
     A, rates, rounding = at(y)
     if np.all(np.isfinite(A)) and np.all(np.isfinite(rates)):
         return A, rates, False, bound(y, rounding, rates)
+    undefined = ~np.isfinite(A)
+    singular = [c for c in range(len(rows))
+                if undefined[c].any() or not np.isfinite(rates[c])]
+    sized, free = _scales(model, y, rows, E)
     rng = np.random.default_rng(0)
     dirs = []
     for _ in range(DIRECTIONS):
-        d = E @ rng.standard_normal(E.shape[1])
-        dirs.append(d / np.linalg.norm(d))
-    scale = float(np.abs(y).max()) or 1.0
+        r = rng.standard_normal(E.shape[1])
+        dirs.append(r / np.linalg.norm(r))
+    scales = [(sized, free)]
+    if sized.any():                         # then every state it steps on the sweep
+        scales.append((0 * sized, np.sign(sized + free)))
+
+    def step(d, h):                         # the step along d: states on their scales
+        return E @ (d * (h[0] * scales[0][0] + h[1] * scales[0][1]))
+
+    def kept(z):                            # the largest fraction of its terms a 0/0 row keeps
+        _, r, _ = at(z)
+        terms = model.sizes_at([rows[c] for c in singular], z, values, t)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(terms > 0, np.abs(r[singular]) / terms, np.inf)
 
     def mean(d, h):
-        (A1, r1, b1), (A2, r2, b2) = at(y + h * scale * d), at(y - h * scale * d)
-        return (A1 + A2) / 2, (r1 + r2) / 2, np.maximum(b1, b2)
+        z1, z2 = y + step(d, h), y - step(d, h)
+        (A1, r1, b1), (A2, r2, b2) = at(z1), at(z2)
+        terms = DIGITS * np.maximum(model.sizes_at(rows, z1, values, t),
+                                    model.sizes_at(rows, z2, values, t))
+        return (A1 + A2) / 2, (r1 + r2) / 2, np.maximum(np.maximum(b1, b2), terms)
 
     def limit(d, h):
-        (A1, r1, _), (A2, r2, b2) = mean(d, h), mean(d, h / 2)
-        return (4 * A2 - A1) / 3, (4 * r2 - r1) / 3, b2, _difference(A1, A2, r1, r2, b2)
+        half = (h[0] / 2, h[1] / 2)
+        (A1, r1, _), (A2, r2, b2) = mean(d, h), mean(d, half)
+        return (4 * A2 - A1) / 3, (4 * r2 - r1) / 3, b2, max(
+            _difference(A1, A2, r1, r2, b2), _entries(A1, A2, undefined))
 
-    best, h_best = None, None
-    for h in STEPS:
-        found = [limit(d, h) for d in dirs]
-        if max(f[3] for f in found) <= 1e-3:
-            best, h_best = found, h
-            break
+    best, h_best, lost = None, None, False
+    while best is None and scales:
+        steps = ([(min(h, STEPS[0]), h) for h in SWEEP] if scales[0][1].any()
+                 else [(h, 0.0) for h in STEPS])
+        for h in steps:
+            found = [limit(d, h) for d in dirs]
+            if max(f[3] for f in found) <= 1e-3:
+                digits = np.max([kept(y + s * step(d, (h[0] / 2, h[1] / 2)))
+                                 for d in dirs for s in (1, -1)], axis=0)
+                if np.all(digits > DIGITS):
+                    best, h_best = found, h
+                else:
+                    lost = True
+                break
+        if best is None:
+            scales.pop(0)
     if best is None:
         raise LinearizationError(
             "the equations are undefined at this point (0/0: a singular point of the "
@@ -1368,7 +1411,11 @@ def _settled(model, ck, y, p, values, t, rows, E):
             "of the principle's equations or of the split; or parameter values that make "
             "them degenerate, e.g. a mass of 0; or values beyond double precision, such as "
             "exp(g t) at large g t), and no limit could be established there "
-            f"with steps {STEPS[0]:g}..{STEPS[-1]:g} times the state's size {scale:.3g}; "
+            + ("(the steps where the values settle lose every digit of the 0/0 rows to "
+               "cancellation) " if lost else "")
+            + "with steps of each state's size times "
+            f"{STEPS[0]:g}..{STEPS[-1]:g}, then of {SWEEP[0]:g}..{SWEEP[-1]:g} in its "
+            "own units; "
             "linearize in other coordinates, or choose another operating point, another "
             "split (dependent=) or other parameter values")
     A, rates, b, _ = best[0]
@@ -1381,5 +1428,32 @@ def _settled(model, ck, y, p, values, t, rows, E):
                 "of polar coordinates or of Euler angles), where A does not describe the "
                 "motions nearby; linearize in other coordinates (Cartesian ones, or "
                 "angles whose pole is elsewhere), or at a point off the singularity")
-    z = y + h_best / 2 * scale * dirs[0]
+    z = y + step(dirs[0], (h_best[0] / 2, h_best[1] / 2))
     return A, rates, True, np.maximum(b, bound(z, 0.0))
+
+
+def _entries(A1, A2, where) -> float:
+    """How far the entries ``where`` (a mask) of A1 and A2 are apart, each relative to
+    its own size (in A's balanced units; a difference within eps of A counts as none):
+    an entry that is 0/0 at the point is not judged against the sizes of the others."""
+    if not (np.all(np.isfinite(A1)) and np.all(np.isfinite(A2))):
+        return np.inf
+    D = _balanced((A1 + A2) / 2)
+    B1, B2 = A1 * D[None, :] / D[:, None], A2 * D[None, :] / D[:, None]
+    floor = EPS * np.linalg.norm(B1 + B2) / 2
+    d, size = np.abs(B1 - B2)[where], (np.abs(B1) + np.abs(B2))[where] / 2
+    return float(np.max(np.where(d <= floor, 0.0, d / np.maximum(size, floor)),
+                        initial=0.0))
+
+
+def _scales(model, y, rows, E):
+    """``(sized, free)`` over the kept states (E's columns): ``|y|`` of a nonzero state
+    the kept rows depend on (relative steps); ``free`` 1 for one at 0 (absolute steps,
+    swept: no other state's value is its scale); 0 in both for a state no kept row
+    depends on, itself or through the coordinates that follow it on g = 0 (never
+    stepped)."""
+    sized, free = np.zeros(len(rows)), np.zeros(len(rows))
+    for c, j in enumerate(rows):
+        if any(model.uses(i, k) for k in np.flatnonzero(E[:, c]) for i in rows):
+            sized[c], free[c] = abs(y[j]), float(y[j] == 0)
+    return sized, free
