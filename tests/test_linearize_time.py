@@ -165,6 +165,19 @@ def test_exp_factors_that_cancel_at_large_t():
     assert ref.symbolic() == sp.Matrix([[0, 1], [-k / m, -g]])
 
 
+@pytest.mark.parametrize("t", [1.0, 3.0])
+def test_a_switch_in_t_is_evaluated_at_the_point_s_t(t):
+    """x'' = -k(t) x with k switching from 1 to 4 at t = 2 (sign(t - 2), which jetnh
+    rewrites smoothly: its derivative in t vanishes on each side of the kink): the rows
+    are not the same at every t, so they are evaluated at t, not at t = 0."""
+    J = jn.JetSpace("x")
+    (x,), (xt,) = J.q, J.qd
+    k = 1 + 3 * (1 + sp.sign(J.t - 2)) / 2
+    lin = jn.linearize(jn.System(J, xt**2 / 2 - k * x**2 / 2), "chetaev",
+                       at={"x": 0.0, "x_t": 0.0}, t=t)
+    assert np.array_equal(lin.A, [[0.0, 1.0], [-float(k.subs(J.t, t)), 0.0]])
+
+
 def test_exp_factors_that_cancel_with_a_constraint():
     """A knife edge with L = exp(g t) L0 under Chetaev's principle is L0 with the forces
     -g dL0/dq_t (a second route, no exp in it): the same A, rates and verdict at

@@ -304,13 +304,31 @@ class _Model:
                                   and not zero.vanishes(dag.diff(e, t)) for e in exprs)
         return self._uses[key]
 
+    def free_of_time(self, rows) -> bool:
+        """Whether ``rows`` (state indices) and the holonomic constraints have the same
+        values at every t: no derivative in t (``has_time``) and no kink in t either (an
+        Abs or sign of t, rewritten sqrt(u**2) or u/sqrt(u**2), has a vanishing
+        derivative on each side of its kink but other values on the other side)."""
+        if self.has_time(rows):
+            return False
+        key = ("kink", tuple(rows))
+        if key not in self._uses:
+            t = self.system.J.t
+            exprs = [self.rows[i] for i in rows] + list(self.system.holonomic)
+            self._uses[key] = any(
+                isinstance(e, sp.Pow) and not e.exp.is_integer
+                and isinstance(e.base, sp.Pow) and e.base.exp == 2
+                and t in dag.free_symbols(e.base.base)
+                for x in exprs for e in dag.nodes(x))
+        return not self._uses[key]
+
     def frozen_time(self, rows, t: float) -> float:
         """The time at which ``rows`` (state indices) are evaluated at the point's ``t``:
-        ``t`` itself, or 0 where they and the holonomic constraints do not depend on t
-        (``has_time``).  Their values are then the same at every t, but a factor that
-        cancels only on paper, such as exp(g t) exp(-g t) (a time-dependent Lagrangian
-        e^(g t) L0), overflows the compiled rows at g t ~ 710; at t = 0 it is 1."""
-        return t if self.has_time(rows) else 0.0
+        ``t`` itself, or 0 where they are the same at every t (``free_of_time``): a
+        factor that cancels only on paper, such as exp(g t) exp(-g t) (a time-dependent
+        Lagrangian e^(g t) L0), overflows the compiled rows at g t ~ 710; at t = 0 it
+        is 1."""
+        return 0.0 if self.free_of_time(rows) else t
 
     @_once
     def tied(self) -> dict:
@@ -482,7 +500,7 @@ class Linearization(Frozen):
         #: True when A is the limit at a point where the kernel itself is undefined
         self.limit = limit
         changes, steady = False, bool(np.all(np.abs(rates) <= bound))
-        if model.has_time(keep):
+        if not model.free_of_time(keep):
             changes, steady = _in_time(self, bound)
         #: whether A or x' at the point change with t (rows that depend on t; module
         #: docstring): the frozen eigenvalues then decide nothing
@@ -728,7 +746,7 @@ def _symbolic(model: _Model, keep, chart) -> sp.Matrix:
     key = (keep, chart)
     if key not in model._symbolic:
         rows = [model.rows[i] for i in keep]
-        if not model.has_time(keep):        # t = 0 cancels exp(g t) exp(-g t)
+        if model.free_of_time(keep):        # t = 0 cancels exp(g t) exp(-g t)
             rows = dag.xreplace(rows, {model.system.J.t: sp.Integer(0)})
         A = dag.jacobian(rows, [model.states[i] for i in keep])
         if chart:

@@ -44,8 +44,7 @@ from ._common import (
 from ._events import dense_eval, watch_end, watch_next
 from . import projection
 from .loop import (ALL, CONTROL, EMBEDDED, GIVEN, WATCHED, after_step, counts,
-                   finite_status, near_zero, no_events, output, outputs, watch_result,
-                   watch_start)
+                   finite_status, no_events, output, outputs, watch_result, watch_start)
 
 ORDER = 5
 ERROR_ORDER = 3
@@ -354,7 +353,6 @@ def _solve(rhs_at, jac_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, newto
         ws, sing_index = watch_start(sing, uev, watch, t, y, p)
         n_sing, ev_dir = watch.n_sing, watch.ev_dir
         gs, gs_old, gref, sig, eps, gu_old, gu_new = ws[:7]
-        g_rate = ws[11]          # (``loop.near_zero``)
         if sing_index >= 0:
             ts, ys, n_out = store(ts, ys, n_out, t, y)
             return (SINGULAR, ts, ys, n_out, counts(stats), t, y, ev_t, ev_i, ev_y, n_ev,
@@ -467,7 +465,6 @@ def _solve(rhs_at, jac_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, newto
             break
         stop = 0
         t_stop = t_new
-        h_edge = np.inf
         if WATCH:
             si, more = watch_end(sing, uev, n_sing, t_new, y_new, p, gs, gs_old, sig, eps,
                                  gref, gu_old, gu_new, ev_dir, stats[0] == 1)
@@ -476,9 +473,6 @@ def _solve(rhs_at, jac_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, newto
                     TAB, False, rhs, sing, uev, p, t, h, t_new, y, y_new, K, F, ytmp, fmid,
                     y_stop, stats, watch, ws, si, sing_index, ev_t, ev_i, ev_y, n_ev,
                     stats[0] == 1)
-            if ctl.edge > 0.0 and stop == 0:
-                h_edge = ctl.edge * near_zero(n_sing, gs_old, gs, sig, h_abs, abs(h_prev),
-                                              g_rate)
             watch_next(n_sing, gs, gs_old, gu_old, gu_new)
         if WATCH or DENSE:
             ts, ys, n_out, j_eval = output(TAB, False, rhs, p, t, h, t_new, y, y_new, K, F,
@@ -509,7 +503,7 @@ def _solve(rhs_at, jac_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, newto
             h_lu = 0.0
         else:
             jac_fresh = False
-        h_abs = min(h_new_abs, h_edge)
+        h_abs = h_new_abs
     if mode == ENDPOINTS:
         ts, ys, n_out = store(ts, ys, n_out, t, y)
     status = finite_status(status, ys, n_out, y, ctl.n_sens)
