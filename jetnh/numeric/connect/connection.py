@@ -53,8 +53,8 @@ class Connection:
     #: what the least-action search (``connect(restarts=)``) tried and where it stopped;
     #: "" where it did not run
     search: str = ""
-    #: the largest miss of an end condition relative to its own scale (the larger of
-    #: its displacement start -> end and its excursion along the motion,
+    #: the largest miss of an end condition relative to its scale (its displacement
+    #: start -> end, or its excursion along the motion where it returns to its start,
     #: ``shooting.own_scale``): what ``tol`` bounds
     relative_residual: float = 0.0
     #: the named end coordinates' values (the first of ``conditions``)

@@ -275,14 +275,16 @@ def end_scale(start, end) -> np.ndarray:
 
 
 def own_scale(start, end, excursion) -> list:
-    """What ``connect``'s ``tol`` is relative to: each named end coordinate's miss in
-    its own units, never another's -- the larger of its displacement |end - start| and
-    its ``excursion`` along the motion found (max over t of |q(t) - q(t0)|: the scale
-    of a coordinate that returns to its start), plus the rounding of its values
-    (``ROUNDING`` max(|start|, |end|)); 0 only where it is 0 and never moves (its miss
-    is then 0 too)."""
-    return [max(abs(b - a), e) + ROUNDING * max(abs(a), abs(b))
-            for a, b, e in zip(map(float, start), map(float, end), excursion)]
+    """What ``connect``'s ``tol`` is relative to: ``end_scale`` for a named coordinate
+    that moves, but for one that returns to its start its own ``excursion`` along the
+    motion found (max over t of |q(t) - q(t0)|, in its own units, never another
+    coordinate's displacement), plus the rounding of its values (``ROUNDING``
+    max(|start|, |end|)); 0 only where it is 0 and never moves (its miss is then 0
+    too).  (Still in another's units: the ``SMALLEST_MOVE`` floor of one that moves.)"""
+    start, end = [float(v) for v in start], [float(v) for v in end]
+    scale = end_scale(start, end).tolist()
+    return [s if b != a else e + ROUNDING * abs(a)
+            for s, a, b, e in zip(scale, start, end, excursion)]
 
 
 def excursion(motion, rows) -> list:

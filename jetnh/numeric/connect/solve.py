@@ -189,9 +189,14 @@ class Search(Shooter):
             if relative_miss(np.abs(got[0] - target).tolist(), own.tolist()) <= tol:
                 break
             scale = np.where(own > 0, np.minimum(own, self.scale), self.scale)
-            u, ok, more = levenberg_marquardt(evaluate, u, scale, tol, max_iter - its,
+            v, ok, more = levenberg_marquardt(evaluate, u, scale, tol, max_iter - its,
                                               self.rcond, stuck, weight)
             its += more
+            if not ok:
+                # no nearer: the answer met on the search's scale, for ``connection``
+                # to judge (it refuses a miss beyond ``tol`` of the own scale)
+                return u, True, its
+            u = v
         return u, ok, its
 
     def solve(self, u0, tol, max_iter, max_continuation, segments=None):
