@@ -9,6 +9,7 @@ from hypothesis import given, settings, strategies as st
 
 import jetnh as jn
 from jetnh.errors import ConnectError
+from jetnh.models import knife_edge
 
 
 def _oscillator():
@@ -113,3 +114,40 @@ def test_transversality_in_any_units_of_the_free_coordinate(a):
     S = jn.System(J, (xt**2 + yt**2 / a**2) / 2 - y**2 / (2 * a**2))
     c = jn.connect(S, "vakonomic", {"x": 0.0, "y": 0.5 * a}, {"x": 1.0}, (0.0, 1.0))
     assert c.initial["y_t"] == pytest.approx(0.5 * a * math.tan(1.0), rel=1e-9)
+
+
+@pytest.mark.parametrize("f", [1.0, 1e6, 1e9])
+def test_returning_angle_judged_in_radians(f):
+    """The knife edge from (0, 0, 0) to (L, L/2, 0) in T = 1 is off the Chetaev
+    motions' reach (two unknowns, three end conditions): refused with lengths in m,
+    um and nm alike (before: accepted in um and nm with phi ending 0.93 rad from 0,
+    its miss scaled by the displacement of x, y in their units)."""
+    with pytest.raises(ConnectError, match="reach") as e:
+        jn.connect(knife_edge(), "chetaev", {"x": 0.0, "y": 0.0, "phi": 0.0},
+                   {"x": f, "y": 0.5 * f, "phi": 0.0}, (0.0, 1.0), tol=1e-5)
+    assert e.value.best.relative_residual > 0.1
+    assert abs(e.value.best.trajectory["phi"][-1]) > 0.1
+
+
+def _length_and_angle():
+    J = jn.JetSpace("x th")
+    (x, th), (xt, tht) = J.q, J.qd
+    f = sp.Symbol("f")
+    return jn.System(J, (xt**2 - x**2) / (2 * f**2) + (tht**2 - th**2) / 2)
+
+
+_LA = _length_and_angle()
+
+
+@pytest.mark.parametrize("f", [1.0, 1e6, 1e9])
+def test_returning_angle_connected_in_any_units(f):
+    """Two oscillators, x a length in units 1 / f, th an angle that returns to its
+    start 0.3 in T = 2: th_t(0) = 0.3 (1 - cos 2) / sin 2 and x_t(0) = f / sin 2, the
+    same relative residual in every unit (th judged on its own excursion)."""
+    c = jn.connect(_LA, "vakonomic", {"x": 0.0, "th": 0.3}, {"x": f, "th": 0.3},
+                   (0.0, 2.0), params={"f": f}, atol=1e-12)
+    assert c.initial["th_t"] == pytest.approx(0.3 * (1 - math.cos(2)) / math.sin(2),
+                                              rel=1e-8)
+    assert c.initial["x_t"] == pytest.approx(f / math.sin(2.0), rel=1e-8)
+    assert c.trajectory["th"][-1] == pytest.approx(0.3, abs=1e-9)
+    assert c.relative_residual <= 1e-9

@@ -171,10 +171,12 @@ def connect(system, principle, start, end, t_span, params=None, guess=None, *,
         that stop before t1 or start rank-deficient.
     tol : float, default 1e-9
         The largest accepted endpoint error (max norm), relative to each named
-        coordinate's displacement |end - start|, at least the largest displacement of
-        the named coordinates (``shooting.end_scale``: free of units and origin;
-        ``Connection.relative_residual`` is the answer's), and to 1 for the momenta of
-        free coordinates; below ``MAX_TOL`` (1e-3): a looser miss is no connection.
+        coordinate's scale (``shooting.own_scale``; ``Connection.relative_residual``
+        is the answer's): its displacement |end - start|, at least ``SMALLEST_MOVE``
+        (1e-3) times the largest displacement of the named coordinates; for one that
+        returns to its start, its own excursion max |q(t) - q(t0)| along the motion
+        found (in its own units); and the problem's momentum for the momenta of free
+        coordinates.  Below ``MAX_TOL`` (1e-3): a looser miss is no connection.
     rtol, atol : float, default 1e-11, 1e-12
         The integration's tolerances.
     max_iter : int, default 100

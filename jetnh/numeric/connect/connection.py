@@ -54,7 +54,8 @@ class Connection:
     #: "" where it did not run
     search: str = ""
     #: the largest miss of an end condition relative to its scale (its displacement
-    #: start -> end, ``shooting.end_scale``): what ``tol`` bounds
+    #: start -> end, or its excursion along the motion where it returns to its start,
+    #: ``shooting.own_scale``): what ``tol`` bounds
     relative_residual: float = 0.0
     #: the named end coordinates' values (the first of ``conditions``)
     _end: tuple = field(default=(), repr=False, compare=False)

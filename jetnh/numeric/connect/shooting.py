@@ -253,14 +253,14 @@ SMALLEST_MOVE = 1e-3
 
 
 def end_scale(start, end) -> np.ndarray:
-    """The scale of each named end coordinate's miss, free of the units and of the
-    origin of the coordinates: its own displacement |end - start|, at least
-    ``SMALLEST_MOVE`` times the largest displacement of the named coordinates, or the
-    largest where it ends where it started; where none moves (a loop), the
-    configuration's size max |start|, and 1 only where that is 0 too; plus the rounding
-    of the values (``ROUNDING`` max(|start|, |end|)), the resolution of the doubles
-    that hold them.  (On Python floats: a few entries, where numpy's calls cost ~10 us a
-    connect.)"""
+    """The search's scale of each named end coordinate's miss (its weighting and its
+    first stopping test; not what ``tol`` is checked against, ``own_scale``): its own
+    displacement |end - start|, at least ``SMALLEST_MOVE`` times the largest
+    displacement of the named coordinates, or the largest where it ends where it
+    started; where none moves (a loop), the configuration's size max |start|, and 1
+    only where that is 0 too; plus the rounding of the values (``ROUNDING``
+    max(|start|, |end|)), the resolution of the doubles that hold them.  (On Python
+    floats: a few entries, where numpy's calls cost ~10 us a connect.)"""
     start = [float(v) for v in start]
     end = [float(v) for v in end]
     move = [abs(b - a) for a, b in zip(start, end)]
@@ -272,6 +272,39 @@ def end_scale(start, end) -> np.ndarray:
     return np.array([(max(d, SMALLEST_MOVE * size) if d > 0 else size)
                      + ROUNDING * max(abs(a), abs(b))
                      for d, a, b in zip(move, start, end)], dtype=float)
+
+
+def own_scale(start, end, excursion) -> list:
+    """What ``connect``'s ``tol`` is relative to: ``end_scale`` for a named coordinate
+    that moves, but for one that returns to its start its own ``excursion`` along the
+    motion found (max over t of |q(t) - q(t0)|, in its own units, never another
+    coordinate's displacement), plus the rounding of its values (``ROUNDING``
+    max(|start|, |end|)); 0 only where it is 0 and never moves (its miss is then 0
+    too).  (Still in another's units: the ``SMALLEST_MOVE`` floor of one that moves.)"""
+    start, end = [float(v) for v in start], [float(v) for v in end]
+    scale = end_scale(start, end).tolist()
+    return [s if b != a else e + ROUNDING * abs(a)
+            for s, a, b, e in zip(scale, start, end, excursion)]
+
+
+def excursion(motion, rows) -> list:
+    """max over t of |y_r(t) - y_r(t0)| along ``motion`` (a ``Shot`` or a Trajectory)
+    for each state row r of ``rows``, over its steps (a Shot's read off its loop's
+    output, its Trajectory not made)."""
+    if isinstance(motion, Shot) and motion._trajectory is None and len(motion._made) == 6:
+        out = motion._made[2]
+        y = out[2][:int(out[3])]
+    else:
+        y = (motion.trajectory if isinstance(motion, Shot) else motion).y
+    y = np.asarray(y)[:, rows]
+    return np.max(np.abs(y - y[0]), axis=0).tolist()
+
+
+def relative_miss(miss, scale) -> float:
+    """max miss / scale over the conditions (a 0 miss of a 0 scale is 0, any other
+    miss of it infinite)."""
+    return max([a / b if b > 0 else (0.0 if a == 0 else np.inf)
+                for a, b in zip(miss, scale)], default=0.0)
 
 
 def _speed(q0, q1, T) -> float:
@@ -302,6 +335,7 @@ class Shooter:
         #: each end condition's scale: the accepted miss is ``tol`` times it
         #: (``end_scale``)
         self.scale = end_scale([q0[c] for c in q1], list(q1.values()))
+        self.start_named = [q0[c] for c in q1]
         self.cols = [names.index(u) for u in unknowns]
         # as index arrays (a list is converted on every use)
         self._rows = np.array(self.rows, dtype=np.intp)
@@ -324,6 +358,13 @@ class Shooter:
 
     #: whether runs that cannot change split stop at its edge (``edge_event``)
     watch_edge = True
+
+    def own_scale(self, motion) -> list:
+        """Each end condition's scale that ``tol`` is checked against, along ``motion``
+        (the named coordinates' ``own_scale``; the momenta's as ``scale``)."""
+        n = len(self.rows)
+        return own_scale(self.start_named, self.target[:n].tolist(),
+                         excursion(motion, self.rows)) + self.scale[n:].tolist()
 
     def plan(self, span, save="steps"):
         """The driver's plan of a shooting run on ``span`` (with sensitivities; every

@@ -15,7 +15,7 @@ from .connection import Connection, Stitched
 from .levenberg import levenberg_marquardt
 from .problem import VARIATIONAL
 from .shooting import (Segments, Shooter, default_segments, first_values, rank, rank_of,
-                       singular_values)
+                       relative_miss, singular_values)
 
 #: Levenberg-Marquardt iterations per continuation step (at most ``max_iter``)
 STEP_ITER = 20
@@ -30,6 +30,8 @@ POLISH_GROWTH = 1e10
 #: the ratio of the coordinates' largest end scale to a transversality condition's past
 #: which the search weighs that condition by it (``Search``)
 FAR = 1e3
+#: the searches on to a tighter scale after one met ``end_scale`` (``Search.newton``)
+OWN_ROUNDS = 3
 
 
 
@@ -173,8 +175,29 @@ class Search(Shooter):
                 raise self.unreachable(v)
 
         weight = self.weight if rows is None or self.weight is None else self.weight[pick]
-        return levenberg_marquardt(evaluate, u, scale, tol, max_iter, self.rcond, stuck,
-                                   weight)
+        u, ok, its = levenberg_marquardt(evaluate, u, scale, tol, max_iter, self.rcond,
+                                         stuck, weight)
+        # met on the search's scale (``end_scale``, which may measure a coordinate
+        # that returns to its start by another's displacement): on to what ``tol``
+        # is checked against (``own_scale``) where that is tighter
+        for _ in range(OWN_ROUNDS):
+            if not ok or rows is not None or target is not self.target \
+                    or self.span != self.scene.t_span:
+                break
+            got = endpoint(u)
+            own = np.array(self.own_scale(got[2]))
+            if relative_miss(np.abs(got[0] - target).tolist(), own.tolist()) <= tol:
+                break
+            scale = np.where(own > 0, np.minimum(own, self.scale), self.scale)
+            v, ok, more = levenberg_marquardt(evaluate, u, scale, tol, max_iter - its,
+                                              self.rcond, stuck, weight)
+            its += more
+            if not ok:
+                # no nearer: the answer met on the search's scale, for ``connection``
+                # to judge (it refuses a miss beyond ``tol`` of the own scale)
+                return u, True, its
+            u = v
+        return u, ok, its
 
     def solve(self, u0, tol, max_iter, max_continuation, segments=None):
         """The routes in turn, each from what the last left: multiple shooting on
@@ -438,8 +461,9 @@ class Search(Shooter):
         target = self.target.tolist()
         miss = [abs(a - b) for a, b in zip(q.tolist(), target)]
         residual = max(miss)
-        # the miss relative to each condition's own scale (``shooting.end_scale``)
-        relative = max([a / b for a, b in zip(miss, self.scale.tolist())])
+        # the miss relative to each condition's own scale, in its own units
+        # (``shooting.own_scale``: never another coordinate's displacement)
+        relative = relative_miss(miss, self.own_scale(motion))
         full = singular_values(Jm).tolist()
         # the dependent velocities at t0: the aux kernel on the first row alone
         state, aux = first_values(motion)
@@ -458,7 +482,8 @@ class Search(Shooter):
         if tol is not None and relative > tol:
             raise ConnectError(
                 f"the {scene.principle} motion found ends {residual:.3g} away from end "
-                f"({relative:.3g} of the displacement start -> end)"
+                f"({relative:.3g} of its own scale, the displacement start -> end "
+                f"or the excursion along the motion)"
                 + self._reachability(u), best)
         return best
 
