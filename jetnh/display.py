@@ -230,9 +230,7 @@ def _trajectory_facts(traj) -> list[tuple[str, str]]:
             ("stop reason", traj.stop_reason[:2000]),
             ("steps", f"{d.steps} (rejected {d.rejected}), {d.rhs_evaluations} rhs evaluations"),
             ("constraint residual max", f"{d.residual_max:.3e}"),
-            ("energy drift", f"{d.energy_drift:.3e} (relative: undefined, the energy is 0 "
-             "at the start)" if d.energy_initial == 0.0 and d.energy_drift > 0.0 else
-             f"{d.energy_drift:.3e} (relative {d.energy_drift_relative:.3e})"),
+            ("energy drift", d.drift_text()),
             *((("figures", note),) if (note := d.rows_note()) else ())]
 
 

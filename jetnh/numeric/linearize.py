@@ -299,10 +299,14 @@ class _Model:
         key = ("t", tuple(rows))
         if key not in self._uses:
             t = self.system.J.t
-            exprs = [self.rows[i] for i in rows] + list(self.system.holonomic)
             self._uses[key] = any(t in dag.free_symbols(e)
-                                  and not zero.vanishes(dag.diff(e, t)) for e in exprs)
+                                  and not zero.vanishes(dag.diff(e, t))
+                                  for e in self._with_holonomic(rows))
         return self._uses[key]
+
+    def _with_holonomic(self, rows) -> list:
+        """The expressions of ``rows`` (state indices) and the holonomic constraints."""
+        return [self.rows[i] for i in rows] + list(self.system.holonomic)
 
     def free_of_time(self, rows) -> bool:
         """Whether ``rows`` (state indices) and the holonomic constraints have the same
@@ -314,12 +318,11 @@ class _Model:
         key = ("kink", tuple(rows))
         if key not in self._uses:
             t = self.system.J.t
-            exprs = [self.rows[i] for i in rows] + list(self.system.holonomic)
             self._uses[key] = any(
                 isinstance(e, sp.Pow) and not e.exp.is_integer
                 and isinstance(e.base, sp.Pow) and e.base.exp == 2
                 and t in dag.free_symbols(e.base.base)
-                for x in exprs for e in dag.nodes(x))
+                for x in self._with_holonomic(rows) for e in dag.nodes(x))
         return not self._uses[key]
 
     def frozen_time(self, rows, t: float) -> float:

@@ -74,6 +74,11 @@ class Diagnostics:
     def as_dict(self) -> dict:
         return asdict(self)
 
+    def drift_text(self) -> str:
+        """The energy drift with its relative value, or why that has none (an energy 0
+        at the start): one wording for the printed diagnostics and the notebook view."""
+        return _drift_text(self.energy_initial, self.energy_drift, self.energy_drift_relative)
+
     def rows_note(self) -> str:
         """Over which rows the figures were taken, where that is not every step of the
         run ("" where it is): the printed summary's and the notebook view's line."""
@@ -128,10 +133,13 @@ def _energy_text(initial, drift, relative) -> str:
     if not np.isfinite(drift):
         return (f"energy {initial:.12g}, drift not evaluated: the energy became NaN or "
                 "infinite on the way (an overflow, or an expression outside its domain)")
+    return f"energy {initial:.12g}, drift {_drift_text(initial, drift, relative)}"
+
+
+def _drift_text(initial, drift, relative) -> str:
     if initial == 0.0 and drift > 0.0:
-        return (f"energy 0, drift {drift:.3e} (relative: undefined, the energy is 0 at the "
-                "start; compare the drift with the energy's terms)")
-    return f"energy {initial:.12g}, drift {drift:.3e} (relative {relative:.3e})"
+        return f"{drift:.3e} (relative: undefined, the energy is 0 at the start)"
+    return f"{drift:.3e} (relative {relative:.3e})"
 
 
 def _relative(drift, initial) -> float:
