@@ -56,16 +56,21 @@ singular (one rounding unit in an input moves phi by more than 1e-9 relative:
 
 Stability is spectral, and decided only at a steady motion (a relative equilibrium of
 the kept states: x' = 0 there).  The point is one when every kept rate x'_i is zero to
-the precision of its own terms: |x'_i| <= ``STEADY`` times the size of the terms that
-make it up at the point (``holonomic.magnitude`` of its row: k |x| + k |c| for
--k (x - c)) plus ``ROUNDING`` times the rounding of the point through it, sum_j
-|dx'_i/dx_j| |x_j| (sin th at the rounded pi).  The test involves no number 1 and no
-|x| of another state: the same point in other units, or with a coordinate counted from
-another origin, gets the same verdict (a pendulum 0.005 rad off its equilibrium is none
-beside a cart 1000 km along its track, and so is a point of th'' = -G sin th off
-th = k pi with G in any unit of time).  Elsewhere the eigenvalues of A are still
-computed but say nothing about stability: the verdict is ``"not a steady motion"``,
-``stable`` is None (``steady(unknowns)`` finds a steady motion nearby, to its ``tol``
+the rounding of its inputs: |x'_i| <= ``ROUNDING`` times sum_j |dx'_i/dz_j| |z_j| over
+the states, the parameters and t (the rounding of the point through the row: sin th at
+the rounded pi, or sin a with a parameter a = pi; by the Jacobian kernel and central
+differences, ``_inputs``), plus ``ROUNDING`` times the size of the terms that make up
+the row there (``holonomic.magnitude``: the rounding of its evaluation).  The first is
+a value of the row, not of how it is written: -k (x - c) and -k x + k c get the same
+one (k |x| + k |c| + |x - c| |k|), so a point 0.005 off the equilibrium at c = 1e6 is
+none in either form; the second differs between forms only within it.  Neither
+involves the number 1 or the |x| of another state: the same point in other units, or
+with a coordinate counted from another origin, gets the same verdict (a pendulum 0.005
+rad off its equilibrium is none beside a cart 1000 km along its track, and so is a
+point of th'' = -G sin th off th = k pi with G in any unit of time).  Elsewhere the
+eigenvalues of A are still computed but say nothing about stability: the verdict is
+``"not a steady motion"``, ``stable`` is None (``steady(unknowns)`` finds a steady
+motion nearby, to its ``tol``
 relative to the same scales).  At a
 steady motion: ``unstable`` when an eigenvalue has a positive real part,
 ``asymptotically stable`` when every one has a negative real part, ``marginal`` when some
@@ -88,10 +93,11 @@ balancing keeps near sqrt(k).
 The reduced mass matrix at the point, Psi^T H Psi (H = d^2 L/dqdot^2, Psi =
 dqdot/dqdot^mu on the constraints), is what every principle's accelerations divide by.
 Its condition number scaled to a unit diagonal (``Linearization.conditioning``: the
-same in every unit of every coordinate) above ``CONDITION`` = ``STEADY``/eps means the
-rounding it amplifies may exceed what the steady test and the eigenvalue bounds assume:
-linearize warns (``JetnhWarning``), naming the fix (coordinates in which it is regular
-there).  Not at a 0/0 limit, where it is singular by construction.
+same in every unit of every coordinate; |lambda|max/|lambda|min, so an indefinite
+kinetic energy is judged by its eigenvalues' moduli) above ``CONDITION`` = 1e-8/eps
+means the rounding it amplifies may exceed what the steady test and the eigenvalue
+bounds assume: linearize warns (``JetnhWarning``), naming the fix (coordinates in which
+it is regular there).  Not at a 0/0 limit, where it is singular by construction.
 
 Rows that depend on t (t in a kept row or a holonomic constraint with a derivative that
 does not vanish identically, e.g. a periodically forced or modulated system): the state
@@ -108,7 +114,10 @@ of a run), which linearize does not compute.  Parameter values that remove the
 dependence on t (a modulation of amplitude 0) give the frozen verdict again.  Rows
 that contain t but do not depend on it (the derivative vanishes identically, as in
 e^(g t) L0, whose rows carry exp(g t) exp(-g t)) are evaluated at t = 0: the same
-values at every t, without the overflow of those factors at g t ~ 710.
+values at every t, without the overflow of those factors at g t ~ 710.  Rows that carry
+such factors and depend on t otherwise are evaluated at t: where an exponential in them
+overflows (argument beyond ``OVERFLOW``) at the point, a ``LinearizationError`` names it;
+at the later times of the test above, those times are left out.
 """
 
 from __future__ import annotations
@@ -133,11 +142,10 @@ from ..frozen import Frozen, FrozenDict
 REAL = 1e-12
 #: an eigenvalue's error bound is at most ZERO * |B| (sqrt(REAL): a Jordan block)
 ZERO = 1e-6
-#: a point is a steady motion when every kept rate is at most ``STEADY`` times the size
-#: of the terms that make it up there (``_Model.sizes``), plus ``ROUNDING`` times the
-#: rounding of the point through it, sum_j |dx'_i/dx_j| |x_j|
-STEADY = 1e-8
-#: the relative rounding of the point allowed in a rate at a steady motion (above)
+#: a point is a steady motion when every kept rate is at most ``ROUNDING`` times the
+#: rounding of its inputs through it, sum_j |dx'_i/dx_j| |x_j| over the states, the
+#: parameters and t (``_inputs``), plus the size of the terms that make it up there
+#: (``_Model.sizes``, the rounding of their evaluation): 4500 eps of each
 ROUNDING = 1e-12
 #: the steps (relative to each state's own size) tried in turn for the limit at a 0/0:
 #: the first where the extrapolation settles
@@ -155,10 +163,13 @@ DIRECTIONS = 3
 #: the rounding unit of a double
 EPS = float(np.finfo(float).eps)
 #: the scaled condition number of the reduced mass matrix above which linearize warns
-#: (a JetnhWarning): the rounding it amplifies, cond * eps, exceeds ``STEADY``
-CONDITION = STEADY / EPS
+#: (a JetnhWarning): the rounding it amplifies, cond * eps, exceeds 1e-8, 1e4 times
+#: ``ROUNDING``, and may exceed the steady test's and the eigenvalue bounds' allowance
+CONDITION = 1e-8 / EPS
 #: the relative tolerance of given dependent velocities (and of f = 0 past the edge)
 CONSISTENT = 1e-9
+#: the largest argument of exp whose value is a double (log of the largest double)
+OVERFLOW = float(np.log(np.finfo(float).max))
 #: the verdict off a steady motion
 NOT_STEADY = "not a steady motion"
 #: the verdict at a steady motion of rows that depend on t
@@ -238,6 +249,26 @@ class _Model:
             self._programs[key] = _Program([self.sizes[i] for i in rows])
         return self._programs[key](self._point(y, values, t))
 
+    def overflow(self, rows, y, values: dict, t: float) -> str | None:
+        """Where an exponential in ``rows`` (state indices) overflows a double at state
+        ``y``, ``values`` and ``t`` (exp, sinh or cosh of an argument beyond
+        ``OVERFLOW``): a description of the first one, else None."""
+        key = ("overflow", tuple(rows))
+        if key not in self._programs:
+            heads = (sp.exp, sp.sinh, sp.cosh)
+            nodes = [e for e in dag.nodes([self.rows[i] for i in rows])
+                     if isinstance(e, heads)]
+            self._programs[key] = (nodes, _Program([e.args[0] for e in nodes]))
+        nodes, program = self._programs[key]
+        if not nodes:
+            return None
+        with np.errstate(all="ignore"):
+            args = program(self._point(y, values, t))
+        for e, a in zip(nodes, args):
+            if abs(a) > OVERFLOW and (a > 0 or not isinstance(e, sp.exp)):
+                return f"{e} is {e.func.__name__}({a:.6g})"
+        return None
+
     @_once
     def mass(self) -> "_Program":
         """The parts of the reduced mass matrix Psi^T H Psi: H = d^2 L/dqdot^2 and
@@ -249,23 +280,38 @@ class _Model:
         return _Program(dag.xreplace(exprs, phi) if phi else exprs)
 
     def conditioning(self, y, values: dict, t: float) -> float:
-        """The condition number (2-norm) of the reduced mass matrix at state ``y``
-        scaled to a unit diagonal, D^-1/2 M D^-1/2 (D its diagonal): the same in every
-        unit of every coordinate, and within a factor of its dimension of the smallest
-        under any diagonal scaling (van der Sluis); infinite where it is singular."""
+        """The condition number (2-norm, ``|lambda|max / |lambda|min``) of the reduced
+        mass matrix at state ``y`` scaled to a unit diagonal, D^-1/2 M D^-1/2 (D its
+        diagonal, absolute values: an indefinite kinetic energy has negative entries; a
+        zero entry D_ii is replaced by max_j M_ij^2 / D_jj, of the same unit, or, where
+        all of a block's are zero, one by max_j |M_ij|): the same in every unit of every
+        coordinate where the diagonal is nonzero, and within a factor of its dimension of
+        the smallest under any diagonal scaling (van der Sluis); infinite where it is
+        singular."""
         n, m = len(self.coordinates), len(self.velocities)
         vals = self.mass(self._point(y, values, t))
         H = vals[:n * n].reshape(n, n)
         if m < n:
             Psi = np.vstack([np.eye(m), vals[n * n:].reshape(-1, m)])[self.psi_rows]
             H = Psi.T @ H @ Psi
-        d = np.sqrt(np.abs(np.diag(H)))
-        if not (np.all(np.isfinite(H)) and np.all(d > 0)):
+        if not np.all(np.isfinite(H)):
             return np.inf
-        if m <= 2:              # eigenvalues 1 +- |c| of [[1, c], [c, 1]]
-            c = abs(float(H[0, -1] / (d[0] * d[-1]))) if m == 2 else 0.0
-            return (1 + c) / (1 - c) if c < 1 else np.inf
-        ev = np.abs(np.linalg.eigvalsh(H / d[:, None] / d[None, :]))   # symmetric
+        d = np.sqrt(np.abs(np.diag(H)))
+        while not np.all(d > 0):    # a zero diagonal entry: max_j |H_ij| / d_j
+            near = (np.abs(H) / np.where(d > 0, d, np.inf)[None, :]).max(axis=1)
+            if np.any(near[d == 0] > 0):
+                d = np.where(d > 0, d, near)
+                continue
+            rows = np.flatnonzero((d == 0) & np.any(H != 0, axis=1))
+            if not rows.size:   # a zero row: singular
+                return np.inf
+            d[rows[0]] = np.sqrt(np.abs(H[rows[0]]).max())  # no diagonal to scale by
+        S = H / d[:, None] / d[None, :]
+        if m <= 2:              # eigenvalues mean +- r of [[a, c], [c, b]], any signs
+            mean, r = (S[0, 0] + S[-1, -1]) / 2, math.hypot(
+                (S[0, 0] - S[-1, -1]) / 2, S[0, -1] if m == 2 else 0.0)
+            return (abs(mean) + r) / abs(abs(mean) - r) if abs(mean) != r else np.inf
+        ev = np.abs(np.linalg.eigvalsh(S))   # symmetric, definite or not
         return float(ev.max() / ev.min()) if ev.min() > 0 else np.inf
 
     @_once
@@ -464,8 +510,8 @@ class Linearization(Frozen):
     ``at`` (every coordinate, velocity and multiplier at the point), ``params``,
     ``dropped`` (cyclic coordinate names left out), ``eliminated`` (coordinates that
     follow from the holonomic constraints), ``inert`` (holonomic multipliers left out),
-    ``steady_motion`` (whether every kept rate is zero to ``STEADY`` of its terms, at
-    every t for rows that depend on t), ``time_dependent`` (whether A or x' at the point change with t),
+    ``steady_motion`` (whether every kept rate is zero to the rounding of its inputs
+    and terms, ``ROUNDING``, at every t for rows that depend on t), ``time_dependent`` (whether A or x' at the point change with t),
     ``verdict``, ``stable`` (the last two only at a steady motion whose A does not
     change with t), ``conditioning`` (of the reduced mass matrix at the point, scaled
     to a unit diagonal; linearize warns above ``CONDITION``).
@@ -508,8 +554,8 @@ class Linearization(Frozen):
         #: whether A or x' at the point change with t (rows that depend on t; module
         #: docstring): the frozen eigenvalues then decide nothing
         self.time_dependent = changes
-        #: whether the point is a steady motion: every kept rate within ``STEADY`` of the
-        #: size of its terms (plus the rounding of the point, ``ROUNDING``), at ``t``
+        #: whether the point is a steady motion: every kept rate within ``ROUNDING`` of
+        #: the rounding of its inputs and of the size of its terms, at ``t``
         #: and, for rows that depend on t, at the times ``t + TIMES`` too (module
         #: docstring)
         self.steady_motion = bool(steady)
@@ -586,7 +632,8 @@ class Linearization(Frozen):
             Names of kept states (e.g. the multipliers) to solve for.
         tol : float, default 1e-10
             The accepted size of each rate, relative to the size of its terms and the
-            rounding of this point through it (the scale of ``steady_motion``'s test;
+            rounding of this point's states, parameters and t through it (the scale of
+            ``steady_motion``'s test;
             where a rate has neither, the smallest other one's).  The result counts as a
             steady motion to that accuracy.
         """
@@ -624,7 +671,7 @@ class Linearization(Frozen):
 
         ck.jac(t, y, p, Jm)
         weight = (model.sizes_at(keep, y, dict(self.params), t)
-                  + np.abs(Jm[keep]) @ np.abs(y))
+                  + np.abs(Jm[keep]) @ np.abs(y) + _inputs(ck, t, y, p, keep))
         weight[~np.isfinite(weight)] = 0.0
         weight[weight == 0] = weight[weight > 0].min(initial=1.0)
 
@@ -643,11 +690,15 @@ class Linearization(Frozen):
             return (Jm[keep] @ _embedding(model, self._keep, self._chart, G))[:, cols] \
                 / weight[:, None]
 
-        u0 = self._y[idx]
-        try:
-            sol = least_squares(residual, u0, jac=jacobian, method="trf", xtol=1e-15,
-                                ftol=1e-15, gtol=1e-15, max_nfev=200)
-            x, bad = sol.x, not np.all(np.isfinite(sol.fun))
+        u0 = self._y[idx].copy()
+        with np.errstate(all="ignore"):     # the unknowns in units of unit columns
+            unit = np.linalg.norm(jacobian(u0), axis=0)
+        unit[~(np.isfinite(unit) & (unit > 0))] = 1.0
+        try:                    # (the gradient test gtol is then relative to the rates)
+            sol = least_squares(lambda w: residual(w / unit), u0 * unit,
+                                jac=lambda w: jacobian(w / unit) / unit, method="trf",
+                                xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=200)
+            x, bad = sol.x / unit, not np.all(np.isfinite(sol.fun))
         except ValueError:       # a non-finite residual at the start
             x, bad = u0, True
         size = float(np.abs(residual(x)).max()) if not bad else float("nan")
@@ -805,7 +856,9 @@ def _in_time(lin: Linearization, bound: np.ndarray) -> tuple[bool, bool]:
     unit of time.  The state is held;
     with holonomic constraints it must stay on g = 0 and A is taken in the chart there.
     A time where the point leaves g = 0 or the equations are undefined changes and is
-    not steady."""
+    not steady; one where an exponential overflows (``_Model.overflow``: exp(g t) of
+    rows that cancel it on paper) is left out, and fewer than two left is a
+    LinearizationError."""
     model, keep, chart = lin._model, lin._keep, lin._chart
     y, p, ck = lin._y, lin._p, lin._kernels
     changes, steady = False, bool(np.all(np.abs(lin.rates) <= bound))
@@ -814,8 +867,12 @@ def _in_time(lin: Linearization, bound: np.ndarray) -> tuple[bool, bool]:
     size = float(np.linalg.norm(lin.A * D[None, :] / D[:, None])) if lin.A.size else 0.0
     span = max(abs(lin.t), 1.0 / size if 0 < size < np.inf else 0.0) or 1.0
     same = np.zeros(len(lin.rates))
+    over = []
     for s in TIMES:
         t = lin.t + s * span
+        if model.overflow(keep, y, model_values, t) is not None:
+            over.append(t)
+            continue
         E = lin._E
         if model.system.holonomic:
             point = _configuration(model, y, dict(lin.params), t)
@@ -831,6 +888,13 @@ def _in_time(lin: Linearization, bound: np.ndarray) -> tuple[bool, bool]:
             _difference(A, lin.A, same, same, same) > REAL
             or np.any(np.abs(rates - lin.rates) > np.maximum(bound, here)))
         steady = steady and bool(np.all(np.abs(rates) <= here))
+    if len(TIMES) - len(over) < 2:
+        raise LinearizationError(
+            f"the equations overflow at the times t = {', '.join(f'{v:.6g}' for v in over)} "
+            f"that decide whether the point is a steady motion at every t "
+            f"({model.overflow(keep, y, model_values, over[0])}): factors such as "
+            "exp(g t) exp(-g t) do not cancel in the compiled equations; linearize at "
+            "another t, or with the factor cancelled in the equations")
     return changes, steady
 
 
@@ -1182,7 +1246,7 @@ def _evaluate(model: _Model, point: dict, values: dict, keep, t: float,
         warnings.warn(
             f"linearize: the reduced mass matrix is nearly singular at this point "
             f"(condition number {cond:.3g} scaled to a unit diagonal, above "
-            f"{CONDITION:.3g} = {STEADY:g}/eps): A and the rates may carry relative errors "
+            f"{CONDITION:.3g} = 1e-8/eps): A and the rates may carry relative errors "
             f"of about {cond * EPS:.2g}, beyond what the verdict assumes; linearize in "
             "coordinates in which the mass matrix is regular here, or away from this "
             "configuration or these parameter values", JetnhWarning, stacklevel=3)
@@ -1230,8 +1294,8 @@ def _split(model: _Model, point: dict, state: dict, values: dict, keep, t: float
     ok, why, finite = regular.determined(sysm, t, state, qd, values, CONSISTENT)
     if not given and not ok:
         raise regular.singular(sysm, m, A, "linearize", why, finite)
-    if given and not regular.on_constraints(A, f, [qd[v.name] for v in sysm.J.qd],
-                                            CONSISTENT):
+    if given and not _on_constraints(A, f, [qd[v.name] for v in sysm.J.qd],
+                                     _f_rounding(model, t, state, qd, values)):
         raise regular.off(sysm, f, "linearize")
     from .atlas import split_invariant
 
@@ -1241,8 +1305,7 @@ def _split(model: _Model, point: dict, state: dict, values: dict, keep, t: float
     if set(split) == set(own):
         return None
     if not split_invariant(model.principle, model.convention) or explicit:
-        if not given or ok and all(
-                abs(point[nm] - v) <= CONSISTENT * max(1.0, abs(v)) for nm, v in zip(dep, phi)):
+        if not given or ok and _agree(model, state, values, t, point, phi):
             return None         # the own split still determines the point
         why = ("the multipliers of the explicit form weigh the singular split"
                if explicit else f"the {model.principle} motions in the "
@@ -1259,6 +1322,60 @@ def _split(model: _Model, point: dict, state: dict, values: dict, keep, t: float
     keep = tuple(i for i in range(len(new.states))
                  if (i >= n or i in keep) and i not in new.inert)
     return new, moved, values, keep, t
+
+
+def _on_constraints(A, f, qd, rounding) -> bool:
+    """Whether f = 0 at the given velocities ``qd`` to ``CONSISTENT`` of its terms plus
+    ``ROUNDING`` of the ``rounding`` of the other inputs through it (``_f_rounding``):
+    |f^a| <= CONSISTENT (sum_s |A^a_s qdot^s| + |b^a|) + ROUNDING rounding^a,
+    b = f - A qdot (the part without velocities), which divides by no singular A_alpha
+    (``regular.on_constraints`` without its number 1: the same in every unit)."""
+    qd = np.asarray(qd, dtype=float)
+    scale = np.abs(A) @ np.abs(qd) + np.abs(f - A @ qd)
+    return bool(np.all(np.isfinite(f))
+                and np.all(np.abs(f) <= CONSISTENT * scale + ROUNDING * rounding))
+
+
+def _f_rounding(model: _Model, t: float, state: dict, qd: dict, values: dict):
+    """sum_j |df^a/dz_j| |z_j| over the coordinates, the parameters and t, by central
+    differences (relative step ``NUDGE``) at one evaluation of the points stepped
+    (``regular.at_point`` on arrays): the rounding of the configuration through f, as
+    Y_t cos(th) at the rounded pi/2 (0 where undefined)."""
+    coords = {q.name: float(state[q.name]) for q in model.coordinates}
+    inputs = [(d, nm) for d, nm in [(coords, nm) for nm in coords]
+              + [(values, nm) for nm in values] if d[nm] != 0.0]
+    ts = [t] if t != 0.0 else []
+    k = 2 * (len(inputs) + len(ts))
+    if not k:
+        return 0.0
+    step = np.tile([1 + NUDGE, 1 - NUDGE], k // 2)
+    arrays = ({nm: np.full(k, v) for nm, v in coords.items()},
+              {nm: np.full(k, float(v)) for nm, v in values.items()})
+    for j, (d, nm) in enumerate(inputs):
+        arrays[d is values][nm][2 * j:2 * j + 2] *= step[:2]
+    tt = np.full(k, float(t))
+    if ts:
+        tt[-2:] *= step[:2]
+    _, f = regular.at_point(model.system, tt, arrays[0], {n: np.full(k, v) for n, v in
+                                                         qd.items()}, arrays[1])
+    out = np.abs(f[0::2] - f[1::2]).sum(axis=0) / (2 * NUDGE)
+    return np.where(np.isfinite(out), out, 0.0)
+
+
+def _agree(model: _Model, state: dict, values: dict, t: float, point: dict, phi) -> bool:
+    """Whether the given dependent velocities of ``point`` are the values ``phi`` of the
+    own split to ``CONSISTENT`` of ``_size`` (their terms and the rounding of the
+    point through them: no number 1), as ``_evaluate`` judges them."""
+    y = np.array([state[nm] for nm in model.names], dtype=float)
+    p = np.array([values[nm] for nm in model.params], dtype=float)
+    ck = model.kernels(values, state, t)
+    rows = [model.coordinates.index(model.system.J.split(v)[0]) for v in model.dependent]
+    ta = model.frozen_time(tuple(rows), t)      # phi's time, as in _evaluate
+    for v, i, want in zip(model.dependent, rows, phi):
+        miss = abs(point[v.name] - want)
+        if not miss <= CONSISTENT * _size(model, i, ck, y, p, values, ta, want, miss):
+            return False
+    return True
 
 
 def _configuration(model: _Model, y, values: dict, t: float) -> dict:
@@ -1311,7 +1428,7 @@ def _embedding(model: _Model, rows, chart, G) -> np.ndarray:
 
 def _jacobian(model: _Model, ck, y, p, values: dict, t, rows, E):
     """(A, x', limit, bound): the kernels at the point, A = (rows of dx'/dx) E, and
-    the largest rate of each kept row at a steady motion (``STEADY``, ``ROUNDING``);
+    the largest rate of each kept row at a steady motion (``ROUNDING``);
     where they are undefined (0/0), the limit by ``_settled``, or an error."""
     with np.errstate(invalid="ignore", over="ignore"):   # (NaN rows are checked here)
         return _settled(model, ck, y, p, values, t, list(rows), E)
@@ -1365,14 +1482,29 @@ def _settled(model, ck, y, p, values, t, rows, E):
         ck.rhs(t, z, p, f)
         return Jm[rows] @ E, f[rows].copy(), ROUNDING * (np.abs(Jm[rows]) @ np.abs(z))
 
-    def bound(z, rounding, rates=None):     # the sizes only where rounding does not do
-        if rates is not None and np.all(np.abs(rates) <= rounding):
-            return rounding
-        return STEADY * model.sizes_at(rows, z, values, t) + rounding
+    def bound(z, rounding, rates=None):     # each part only where the others do not do
+        b = rounding
+        for part in (lambda: _inputs(ck, t, z, p, rows),
+                     lambda: model.sizes_at(rows, z, values, t)):
+            if rates is not None and np.all(np.abs(rates) <= b):
+                break
+            more = part()
+            b = b + ROUNDING * np.where(np.isfinite(more), more, 0.0)
+        return b
 
     A, rates, rounding = at(y)
     if np.all(np.isfinite(A)) and np.all(np.isfinite(rates)):
         return A, rates, False, bound(y, rounding, rates)
+    over = model.overflow(rows, y, values, t)
+    if over is not None:
+        raise LinearizationError(
+            f"the equations overflow at this point (t = {t:g}): {over}, beyond double "
+            "precision; factors that cancel on paper, such as exp(g t) exp(-g t) of a "
+            "Lagrangian e^(g t) L0 whose other terms depend on t too, do not cancel in "
+            "the compiled equations: linearize at an earlier t, in a unit of time or "
+            "with parameter values that keep the argument below "
+            f"{OVERFLOW:.6g}, or with the factor cancelled in the equations (e^(g t) "
+            "L0 is L0 with the forces -g dL0/dq_t)")
     undefined = ~np.isfinite(A)
     singular = [c for c in range(len(rows))
                 if undefined[c].any() or not np.isfinite(rates[c])]
@@ -1450,7 +1582,33 @@ def _settled(model, ck, y, p, values, t, rows, E):
                 "motions nearby; linearize in other coordinates (Cartesian ones, or "
                 "angles whose pole is elsewhere), or at a point off the singularity")
     z = y + step(dirs[0], (h_best[0] / 2, h_best[1] / 2))
-    return A, rates, True, np.maximum(b, bound(z, 0.0))
+    return A, rates, True, np.maximum(b, bound(z, at(z)[2]))
+
+
+#: the relative step of a parameter or of t in ``_inputs``' differences
+NUDGE = 2.0 ** -20
+
+
+def _inputs(ck, t: float, y, p, rows) -> np.ndarray:
+    """sum_k |dx'_i/dp_k| |p_k| + |dx'_i/dt| |t| of each row ``i`` of ``rows`` at state
+    ``y``: the rounding of the parameters and of t through the rates, by central
+    differences (relative step ``NUDGE``: the error, NUDGE^2 of the value and
+    eps/NUDGE of the terms, is far below what the steady test needs of it); a value of
+    the rows and their derivatives, not of their form (0 where they are undefined)."""
+    m = len(y)
+    f1, f2, out = np.empty(m), np.empty(m), np.zeros(len(rows))
+    for k in np.flatnonzero(p):
+        q = p.copy()
+        q[k] = p[k] * (1 + NUDGE)
+        ck.rhs(t, y, q, f1)
+        q[k] = p[k] * (1 - NUDGE)
+        ck.rhs(t, y, q, f2)
+        out += np.abs(f1[rows] - f2[rows]) / (2 * NUDGE)
+    if t != 0.0:
+        ck.rhs(t * (1 + NUDGE), y, p, f1)
+        ck.rhs(t * (1 - NUDGE), y, p, f2)
+        out += np.abs(f1[rows] - f2[rows]) / (2 * NUDGE)
+    return np.where(np.isfinite(out), out, 0.0)
 
 
 def _entries(A1, A2, where) -> float:
