@@ -1294,8 +1294,8 @@ def _split(model: _Model, point: dict, state: dict, values: dict, keep, t: float
     ok, why, finite = regular.determined(sysm, t, state, qd, values, CONSISTENT)
     if not given and not ok:
         raise regular.singular(sysm, m, A, "linearize", why, finite)
-    if given and not _on_constraints(A, f, [qd[v.name] for v in sysm.J.qd],
-                                     _f_rounding(model, t, state, qd, values)):
+    if given and not regular.on_constraints(A, f, [qd[v.name] for v in sysm.J.qd],
+                                            CONSISTENT):
         raise regular.off(sysm, f, "linearize")
     from .atlas import split_invariant
 
@@ -1322,44 +1322,6 @@ def _split(model: _Model, point: dict, state: dict, values: dict, keep, t: float
     keep = tuple(i for i in range(len(new.states))
                  if (i >= n or i in keep) and i not in new.inert)
     return new, moved, values, keep, t
-
-
-def _on_constraints(A, f, qd, rounding) -> bool:
-    """Whether f = 0 at the given velocities ``qd`` to ``CONSISTENT`` of its terms plus
-    ``ROUNDING`` of the ``rounding`` of the other inputs through it (``_f_rounding``):
-    |f^a| <= CONSISTENT (sum_s |A^a_s qdot^s| + |b^a|) + ROUNDING rounding^a,
-    b = f - A qdot (the part without velocities), which divides by no singular A_alpha
-    (``regular.on_constraints`` without its number 1: the same in every unit)."""
-    qd = np.asarray(qd, dtype=float)
-    scale = np.abs(A) @ np.abs(qd) + np.abs(f - A @ qd)
-    return bool(np.all(np.isfinite(f))
-                and np.all(np.abs(f) <= CONSISTENT * scale + ROUNDING * rounding))
-
-
-def _f_rounding(model: _Model, t: float, state: dict, qd: dict, values: dict):
-    """sum_j |df^a/dz_j| |z_j| over the coordinates, the parameters and t, by central
-    differences (relative step ``NUDGE``) at one evaluation of the points stepped
-    (``regular.at_point`` on arrays): the rounding of the configuration through f, as
-    Y_t cos(th) at the rounded pi/2 (0 where undefined)."""
-    coords = {q.name: float(state[q.name]) for q in model.coordinates}
-    inputs = [(d, nm) for d, nm in [(coords, nm) for nm in coords]
-              + [(values, nm) for nm in values] if d[nm] != 0.0]
-    ts = [t] if t != 0.0 else []
-    k = 2 * (len(inputs) + len(ts))
-    if not k:
-        return 0.0
-    step = np.tile([1 + NUDGE, 1 - NUDGE], k // 2)
-    arrays = ({nm: np.full(k, v) for nm, v in coords.items()},
-              {nm: np.full(k, float(v)) for nm, v in values.items()})
-    for j, (d, nm) in enumerate(inputs):
-        arrays[d is values][nm][2 * j:2 * j + 2] *= step[:2]
-    tt = np.full(k, float(t))
-    if ts:
-        tt[-2:] *= step[:2]
-    _, f = regular.at_point(model.system, tt, arrays[0], {n: np.full(k, v) for n, v in
-                                                         qd.items()}, arrays[1])
-    out = np.abs(f[0::2] - f[1::2]).sum(axis=0) / (2 * NUDGE)
-    return np.where(np.isfinite(out), out, 0.0)
 
 
 def _agree(model: _Model, state: dict, values: dict, t: float, point: dict, phi) -> bool:
