@@ -266,3 +266,17 @@ def test_piecewise_load_is_refused_by_the_system_not_by_the_integration():
     with pytest.raises(jn.errors.JetnhError, match="Piecewise"):
         _particle(lambda N, O, P, q1, q2, u1, u2: sp.Piecewise((-k * q1 * q2**2, q1 > 0),
                                                               (0, True)) * N.x - k * q2 * N.y)
+
+
+def test_checks_at_random_points_do_not_pass_on_nan():
+    """A NaN compares unequal to nothing (``abs(nan - y) > tol`` is False): the checks
+    at random points answer as told where a value is not finite (the kinematic and
+    potential checks: they do not agree; the periodicity of a load: it may be periodic,
+    which only asks more of V)."""
+    from jetnh.mechanics import kane_bridge
+
+    x, y = sp.symbols("x y")
+    nan_there = [sp.log(x) - sp.log(y)]          # -inf + inf at x = y = 0
+    assert not kane_bridge._agree(nan_there, [0], [{x: 0.0, y: 0.0}])
+    assert kane_bridge._agree(nan_there, [0], [{x: 0.0, y: 0.0}], nonfinite=True)
+    assert kane_bridge._agree(nan_there, [0], [{x: 2.0, y: 2.0}])

@@ -41,6 +41,7 @@ import time
 import warnings
 from dataclasses import dataclass
 
+import mpmath
 import numpy as np
 import sympy as sp
 from sympy.core.function import AppliedUndef
@@ -241,9 +242,13 @@ def _random_points(J: JetSpace, exprs, n=CHECK_POINTS, seed=7):
     return out
 
 
-def _agree(a, b, points) -> bool:
+def _agree(a, b, points, nonfinite=False) -> bool:
+    """Whether ``a`` and ``b`` agree at ``points`` (``CHECK_TOL`` relative); at a point
+    where a value is NaN or infinite, ``nonfinite`` is the answer."""
     for p in points:
         va, vb = dag.evaluate(list(a), p), dag.evaluate(list(b), p)
+        if not all(mpmath.isfinite(v) for v in (*va, *vb)):
+            return nonfinite
         scale = max([1] + [abs(v) for v in vb])
         if any(abs(x - y) > CHECK_TOL * scale for x, y in zip(va, vb)):
             return False
@@ -536,7 +541,7 @@ def _periodic_at_random(J: JetSpace, Q, q) -> bool:
     more of V)."""
     shifted = [e.xreplace({q: q + 2 * sp.pi}) for e in Q]
     try:
-        return _agree(shifted, Q, _random_points(J, list(Q)))
+        return _agree(shifted, Q, _random_points(J, list(Q)), nonfinite=True)
     except Exception:  # no value to compare (a domain error): asks more of V, never less
         return True
 
