@@ -634,3 +634,21 @@ def test_an_actuators_loads_are_judged_together():
     assert not s.forces
     assert sp.expand(s.L.xreplace(dict.fromkeys(s.J.qd, 0)) + c * Q2**2 / 2) == 0
     assert agreement(s, ms, {c: 2.0, m: 1.3}) < RTOL
+
+
+def test_kinematic_equations_not_linear_are_refused_as_such():
+    """x' = u^3 (a mechanics System reads its kdes raw): refused naming linearity, not
+    as an unknown function of time u(t)."""
+    x, u = dynamicsymbols("x u")
+    N = ReferenceFrame("N")
+    O = Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", x * N.x)
+    P.set_vel(N, x.diff() * N.x)
+    ms = MechanicsSystem(N, O)
+    ms.add_coordinates(x)
+    ms.add_speeds(u)
+    ms.add_kdes(x.diff() - u**3)
+    ms.add_bodies(Particle("P", P, m))
+    with pytest.raises(JetnhError, match="not linear in the speeds"):
+        jn.from_mechanics(ms)

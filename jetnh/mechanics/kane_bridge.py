@@ -184,6 +184,10 @@ class _Reader:
         kd = sp.Matrix(model.kdes).xreplace(dict.fromkeys(model.u_aux, 0))
         k_u, k_qd = kd.jacobian(model.u), kd.jacobian(qd)
         f_k = kd.xreplace({**dict.fromkeys(model.u, 0), **dict.fromkeys(qd, 0)})
+        if any(M.has(*model.u, *qd) for M in (k_u, k_qd, f_k)):
+            raise JetnhError("the kinematic differential equations are not linear in the "
+                             "speeds and the velocities; write them linear (as KanesMethod "
+                             "requires), e.g. q' - u = 0")
         if _singular(k_u) or _singular(k_qd):
             raise JetnhError(
                 "the kinematic differential equations do not determine the speeds from the "
