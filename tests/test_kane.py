@@ -652,3 +652,33 @@ def test_kinematic_equations_not_linear_are_refused_as_such():
     ms.add_bodies(Particle("P", P, m))
     with pytest.raises(JetnhError, match="not linear in the speeds"):
         jn.from_mechanics(ms)
+
+
+def test_contact_forces_of_auxiliary_speeds_do_no_work():
+    """KanesMethod's auxiliary speeds: contact forces f(t) (unknowns, functions of time)
+    on a point moved only by them, and a normal force on a particle sliding along N.x,
+    do no work in the equations; the import reads them as Kane does (before: refused
+    as specified inputs).  Route 2: Kane."""
+    x, ux, ua, ub = dynamicsymbols("x u_x u_a u_b")
+    f1, f2 = dynamicsymbols("f1 f2")
+    N = ReferenceFrame("N")
+    O = Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", x * N.x)
+    P.set_vel(N, ux * N.x + ua * N.y)
+    C = O.locatenew("C", 0 * N.x)
+    C.set_vel(N, ub * N.x)
+    km = KanesMethod(N, [x], [ux], kd_eqs=[x.diff() - ux], u_auxiliary=[ua, ub])
+    km.kanes_equations([Particle("P", P, m)],
+                       [(P, -c * x * N.x + f1 * N.y), (C, f2 * N.x), (P, -m * g * N.y)])
+    s = jn.from_mechanics(km)
+    X, X_t = s.J.q[0], s.J.qd[0]
+    assert not s.forces and sp.expand(s.L - (m * X_t**2 / 2 - c * X**2 / 2)) == 0
+    assert agreement(s, km, {m: 1.2, c: 0.4, g: 9.81}) < RTOL
+    # a specified input along a direction the point moves is still refused
+    Q = O.locatenew("Q", x * N.x)
+    Q.set_vel(N, ux * N.x)
+    km = KanesMethod(N, [x], [ux], kd_eqs=[x.diff() - ux])
+    km.kanes_equations([Particle("Q", Q, m)], [(Q, f1 * N.x)])
+    with pytest.raises(JetSpaceError, match="load on the point Q.*substitute specified"):
+        jn.from_mechanics(km)

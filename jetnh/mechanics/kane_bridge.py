@@ -15,7 +15,9 @@ expression of the model is read with u replaced by U:
   (a torque tau on an angle has no potential: V = -tau theta; a torsion spring's
   k theta^2 / 2 stands for it);
 - every other load gives generalized forces Q_s = sum F . dv/dqdot^s (v the velocity of
-  the point, or the angular velocity of the frame, in the inertial frame);
+  the point, or the angular velocity of the frame, in the inertial frame; the loads of
+  one actuator are judged together; a component of F along which no velocity moves the
+  point does no work and is not read, as KanesMethod with auxiliary speeds);
 - velocity constraints (linear in u) become constraints in qdot; configuration
   constraints g(t, q) = 0 stay holonomic (``System.holonomic``: a Scene checks or
   completes the initial configuration and keeps runs on g = 0), and the velocity
@@ -363,12 +365,15 @@ def lagrangian_and_forces(reader: _Reader):
                 raise JetnhError(f"a load acts on {where!r}; loads act on a Point or a "
                                  "ReferenceFrame")
             v = reader.vector(vel, f"the velocity of {names[-1]}")
-            F = reader.vector(vec, f"the load on {names[-1]}")
-            q_load = [a + sum((F[i] * dag.diff(v[i], qd) for i in range(3)), sp.S.Zero)
-                      for a, qd in zip(q_load, J.qd)]
+            partial = [[dag.diff(c, qd) for c in v] for qd in J.qd]
+            F, whole = _components(reader, vec, partial, f"the load on {names[-1]}")
+            q_load = [a + sum((f * p for f, p in zip(F, row)), sp.S.Zero)
+                      for a, row in zip(q_load, partial)]
+        if all(e == 0 for e in q_load):
+            continue
         what = " and ".join(names)
         pot = (_potential(reader, where, F, q_load)
-               if len(group) == 1 and isinstance(where, Point) else None)
+               if len(group) == 1 and isinstance(where, Point) and whole else None)
         if pot is None:
             pot = _within(POTENTIAL_SECONDS, _conservative, J, q_load)
             if pot is _OUT_OF_TIME:
@@ -385,6 +390,23 @@ def lagrangian_and_forces(reader: _Reader):
         else:
             Q = [a + b for a, b in zip(Q, q_load)]
     return T - V, {q: e for q, e in zip(J.q, Q) if e != 0}
+
+
+def _components(reader: _Reader, vec, partial, what):
+    """The inertial components of a load, as jet expressions, and whether all of them
+    are: a component along which no velocity moves the point (every partial velocity's
+    is 0) does no work and may hold what jet expressions cannot (a contact force f(t) on
+    a point moved by auxiliary speeds only, as KanesMethod reads it): it is 0 then."""
+    out, whole = [], True
+    for i, c in enumerate(vec.to_matrix(reader.model.frame)):
+        try:
+            out.append(reader.jet(c, what))
+        except JetSpaceError:
+            if any(row[i] != 0 for row in partial):
+                raise
+            out.append(sp.S.Zero)
+            whole = False
+    return out, whole
 
 
 def _is_particle(b) -> bool:
