@@ -465,24 +465,29 @@ class _OutOfTime(BaseException):
 
 
 _OUT_OF_TIME = object()
-#: how often ``_within`` looks at the clock, seconds
+#: how often ``_within`` looks at the clock, and raises again once the time is up, seconds
 _POLL = 0.02
 
 
-def _raise_in(thread: int, exc) -> None:
-    """Raise ``exc`` in the thread ``thread`` at its next bytecode; ``None`` cancels an
-    exception set there and not yet raised."""
-    f = ctypes.pythonapi["PyThreadState_SetAsyncExc"]    # a new prototype, not shared
+def _async_raise():
+    """``PyThreadState_SetAsyncExc`` as a prototype of our own (the shared one is left
+    as it is): ``f(thread, id(exc))`` raises ``exc`` in ``thread`` at its next bytecode,
+    ``f(thread, None)`` cancels one set there and not yet raised."""
+    f = ctypes.pythonapi["PyThreadState_SetAsyncExc"]
     f.argtypes = (ctypes.c_ulong, ctypes.c_void_p)
-    f(thread, None if exc is None else id(exc))
+    return f
 
 
 def _within(seconds, fn, *args):
     """``fn(*args)``, or ``_OUT_OF_TIME`` once it has run ``seconds`` of CPU time (of
-    this thread; wall time where there is no thread clock): a watcher thread raises
-    ``_OutOfTime`` in this thread once (``PyThreadState_SetAsyncExc``; Ctrl-C is
-    unaffected).  sympy's global switches (evaluate, distribute) are restored after an
-    interruption."""
+    this thread; wall time where there is no thread clock).
+
+    A watcher thread raises ``_OutOfTime`` in this thread, again every ``_POLL`` seconds
+    (one raised in a finalizer is ignored by Python), until this thread takes ``lock``:
+    that is one C call, after which the watcher raises nothing; an exception it set just
+    before is raised at that call's end or cancelled by the next C call.  sympy's global
+    switches (evaluate, distribute) are restored after an interruption; a Ctrl-C that
+    met the interruption goes on."""
     from sympy.core.parameters import global_parameters as gp
 
     me = threading.get_ident()
@@ -492,30 +497,33 @@ def _within(seconds, fn, *args):
     except (AttributeError, OSError):
         now = time.monotonic
     end = now() + seconds
-    lock, stop, fired = threading.Lock(), threading.Event(), []
+    lock, stop, cancel = threading.Lock(), threading.Event(), _async_raise()
 
     def watch():
+        fire = _async_raise()
         while not stop.wait(_POLL):
             if now() >= end:
-                with lock:
-                    if not stop.is_set():
-                        fired.append(True)
-                        _raise_in(me, _OutOfTime)
-                return
+                if not lock.acquire(blocking=False):
+                    return
+                try:
+                    fire(me, id(_OutOfTime))
+                finally:
+                    lock.release()
 
     switches = (gp.evaluate, gp.distribute, gp.exp_is_pow)
-    watcher = threading.Thread(target=watch, name="jetnh-potential-budget", daemon=True)
-    watcher.start()
+    threading.Thread(target=watch, name="jetnh-potential-budget", daemon=True).start()
     try:
         try:
             return fn(*args)
         finally:
-            with lock:      # after this the watcher raises nothing
-                stop.set()
-                if fired:   # raised at most once: cancel it if it is still pending
-                    _raise_in(me, None)
-    except _OutOfTime:
+            lock.acquire()      # held from here on: the watcher raises nothing more
+            cancel(me, None)
+            stop.set()
+    except _OutOfTime as exc:
+        stop.set()
         gp.evaluate, gp.distribute, gp.exp_is_pow = switches
+        if isinstance(exc.__context__, KeyboardInterrupt):
+            raise exc.__context__ from None
         return _OUT_OF_TIME
 
 
