@@ -240,7 +240,10 @@ def test_a_potential_is_periodic_wherever_the_load_is():
 def test_an_integral_sympy_cannot_do_quickly_leaves_a_force_and_a_warning(monkeypatch):
     """sympy's integrate of this load runs for minutes (more than 5 on the 2026-11-28
     host): the search for its potential is cut at POTENTIAL_SECONDS, the load stays a
-    force, a JetnhWarning says so, and sympy's global switches are as before."""
+    force, a JetnhWarning says so, and sympy's global switches and the cyclic garbage
+    collector are as before."""
+    import gc
+
     from sympy.core.parameters import global_parameters as gp
 
     from jetnh.mechanics import kane_bridge
@@ -253,7 +256,7 @@ def test_an_integral_sympy_cannot_do_quickly_leaves_a_force_and_a_warning(monkey
     (q,), (qt,) = S.J.q, S.J.qd
     assert sp.expand(S.forces[q] - load(q)) == 0
     assert sp.expand(S.L - sp.Symbol("m") * qt**2 / 2) == 0
-    assert (gp.evaluate, gp.distribute, gp.exp_is_pow) == switches
+    assert (gp.evaluate, gp.distribute, gp.exp_is_pow) == switches and gc.isenabled()
     # the thread goes on as before: a quick integral within the budget
     x = sp.Symbol("x")
     assert kane_bridge._within(5.0, sp.integrate, sp.sin(x), x) == -sp.cos(x)

@@ -37,6 +37,7 @@ point has no velocity.
 from __future__ import annotations
 
 import ctypes
+import gc
 import random
 import threading
 import time
@@ -483,7 +484,8 @@ def _within(seconds, fn, *args):
     this thread; wall time where there is no thread clock).
 
     A watcher thread raises ``_OutOfTime`` in this thread, again every ``_POLL`` seconds
-    (one raised in a finalizer is ignored by Python), until this thread takes ``lock``:
+    (one raised in a finalizer or a weakref callback is ignored by Python; the cyclic
+    collector, which runs most of them, is off meanwhile), until this thread takes ``lock``:
     that is one C call, after which the watcher raises nothing; an exception it set just
     before is raised at that call's end or cancelled by the next C call.  sympy's global
     switches (evaluate, distribute) are restored after an interruption; a Ctrl-C that
@@ -511,6 +513,8 @@ def _within(seconds, fn, *args):
                     lock.release()
 
     switches = (gp.evaluate, gp.distribute, gp.exp_is_pow)
+    collecting = gc.isenabled()
+    gc.disable()    # no collection, so no finalizer or gc callback to take the exception
     threading.Thread(target=watch, name="jetnh-potential-budget", daemon=True).start()
     try:
         try:
@@ -519,8 +523,12 @@ def _within(seconds, fn, *args):
             lock.acquire()      # held from here on: the watcher raises nothing more
             cancel(me, None)
             stop.set()
-    except _OutOfTime as exc:
+            if collecting:
+                gc.enable()
+    except _OutOfTime as exc:   # (raised in the finally at the latest: finish it)
         stop.set()
+        if collecting:
+            gc.enable()
         gp.evaluate, gp.distribute, gp.exp_is_pow = switches
         if isinstance(exc.__context__, KeyboardInterrupt):
             raise exc.__context__ from None
