@@ -17,15 +17,16 @@ import mpmath
 import numpy as np
 import pytest
 import sympy as sp
-from hypothesis import given, settings, strategies as st
+from hypothesis import Phase, given, settings, strategies as st
 from sympy.physics.mechanics import (KanesMethod, Particle, PinJoint, PlanarJoint, Point,
-                                     PrismaticJoint, ReferenceFrame, RigidBody, dot,
-                                     dynamicsymbols, inertia)
+                                     PrismaticJoint, ReferenceFrame, RigidBody,
+                                     TorqueActuator, dot, dynamicsymbols, inertia)
 from sympy.physics.mechanics import System as MechanicsSystem
 
 import jetnh as jn
 from jetnh.algebra import dag
 from jetnh.errors import JetnhError, JetSpaceError
+from jetnh.mechanics.energy import changes
 
 PREC = 30
 RTOL = 1e-20
@@ -301,6 +302,106 @@ def test_random_rotation_parametrised_speeds(kind, order, entries, seed):
                      seed=seed) < RTOL
 
 
+# ---------------------------------------------------------------------- loads: V or forces
+# The terms of a load on a particle in polar coordinates (r, th), as (name, force in the
+# inertial frame, its potential written by hand or None); each term has its own parameter.
+def _polar_terms(N, P, r_, th_, e_r, e_th):
+    k = sp.symbols("k_0:7", positive=True)
+    return [
+        ("spring", -k[0] * (r_ - ell) * e_r, k[0] * (r_ - ell) ** 2 / 2),
+        ("gravity", -k[1] * N.y, k[1] * r_ * sp.sin(th_)),
+        ("pendulum", -k[2] * sp.sin(th_) / r_ * e_th, -k[2] * sp.cos(th_)),
+        ("torsion", -k[3] * th_ / r_ * e_th, k[3] * th_**2 / 2),
+        ("torque", k[4] / r_ * e_th, -k[4] * th_),
+        ("damper", -k[5] * P.vel(N), None),
+        ("curl", k[6] * r_ * e_th, None),
+    ]
+
+
+def _polar_particle(loads):
+    """A particle in polar coordinates under ``loads`` (lists of term names); the
+    KanesMethod, its System and the terms."""
+    r_, th_, ur, uth = dynamicsymbols("r th u_r u_th")
+    N = ReferenceFrame("N")
+    O = Point("O")
+    O.set_vel(N, 0)
+    e_r, e_th = sp.cos(th_) * N.x + sp.sin(th_) * N.y, -sp.sin(th_) * N.x + sp.cos(th_) * N.y
+    P = O.locatenew("P", r_ * e_r)
+    P.set_vel(N, ur * e_r + r_ * uth * e_th)
+    terms = {name: (F, V) for name, F, V in _polar_terms(N, P, r_, th_, e_r, e_th)}
+    km = KanesMethod(N, q_ind=[r_, th_], u_ind=[ur, uth],
+                     kd_eqs=[r_.diff() - ur, th_.diff() - uth])
+    km.kanes_equations([Particle("P", P, m)],
+                       [(P, sum((terms[n][0] for n in load), 0 * N.x)) for load in loads])
+    return km, jn.from_mechanics(km), terms
+
+
+def _is_potential(load) -> bool:
+    """The rule: a load becomes V when V stands for its forces (no damper, no curl) and is
+    a function of the configuration wherever its forces are: a torque on th does work
+    2 pi tau a turn unless a torsion spring already makes the forces no function of the
+    angle."""
+    return (not {"damper", "curl"} & set(load)
+            and not ("torque" in load and "torsion" not in load))
+
+
+def _vanish(exprs, seed) -> bool:
+    """Whether ``exprs`` vanish at three random points, in 30 digits (L is not
+    trig-simplified: sin^2 + cos^2 stays)."""
+    rnd = random.Random(seed)
+    free = set().union(*(sp.sympify(e).free_symbols for e in exprs))
+    for _ in range(3):
+        point = {s: sp.Float(rnd.uniform(0.5, 1.5), PREC) for s in free}
+        if any(abs(complex(v)) > 1e-24 for v in dag.evaluate(list(exprs), point, PREC)):
+            return False
+    return True
+
+
+_TERM_NAMES = ["spring", "gravity", "pendulum", "torsion", "torque", "damper", "curl"]
+
+
+@settings(max_examples=8, deadline=None, phases=[Phase.explicit, Phase.generate])
+@given(st.lists(st.lists(st.sampled_from(_TERM_NAMES), min_size=1, max_size=4, unique=True),
+                min_size=1, max_size=3),
+       st.integers(0, 2**16))
+def test_random_loads_become_potentials_by_one_rule(loads, seed):
+    """Random sums of conservative and non-conservative loads: the equations equal
+    KanesMethod's (route 2), L = T - V with V the hand-written potentials of exactly the
+    loads the rule names (up to a constant), the other loads' generalized forces in
+    ``forces`` (route 3: the sum of all of them, by hand, is -dV/dq + forces), and the
+    energy is conserved exactly when every load is a potential."""
+    km, S, terms = _polar_particle(loads)
+    J = S.J
+    (R, TH), (R_t, TH_t) = J.q, J.qd
+    dyn = dict(zip(dynamicsymbols("r th"), J.q))
+    as_jet = lambda e: sp.sympify(e).xreplace(dyn)    # noqa: E731
+    V_hand = sum((as_jet(terms[n][1]) for load in loads if _is_potential(load)
+                  for n in load), sp.S.Zero)
+    T = m * (R_t**2 + R**2 * TH_t**2) / 2
+    V = T - S.L
+    assert _vanish([sp.diff(V - V_hand, q) for q in J.q], seed)
+    # every load's generalized forces, by hand: F . dr/dq (the damper: -c qdot . dr/dq)
+    pos = sp.Matrix([R * sp.cos(TH), R * sp.sin(TH), 0])
+    vel = pos.jacobian(J.q) * sp.Matrix(J.qd)
+    N = km._inertial
+    total = [sp.S.Zero, sp.S.Zero]
+    for load in loads:
+        for n in load:
+            F = terms[n][0]
+            Fv = (sp.Matrix([as_jet(c) for c in F.to_matrix(N)]) if n != "damper"
+                  else -sp.Symbol("k_5", positive=True) * vel)
+            total = [a + (Fv.T * pos.diff(q))[0] for a, q in zip(total, J.q)]
+    got = [-sp.diff(V, q) + S.forces.get(q, 0) for q in J.q]
+    assert _vanish([a - b for a, b in zip(got, total)], seed)
+    params = {ell: 1.1, m: 0.9, **{sp.Symbol(f"k_{i}", positive=True): 0.3 + 0.2 * i
+                                   for i in range(7)}}
+    rnd = random.Random(seed)
+    assert agreement(S, km, params, points=2, seed=seed,
+                     sample_q=lambda _: [rnd.uniform(0.5, 1.5), rnd.uniform(-3, 3)]) < RTOL
+    reasons = changes(S, "chetaev", {p.name: v for p, v in params.items()})
+    assert bool(reasons) == (not all(_is_potential(load) for load in loads))
+
+
 # ---------------------------------------------------------------------- speeds on runs
 def test_speeds_read_along_a_run(cart):
     ms, s = cart
@@ -407,3 +508,177 @@ def test_speeds_survive_another_split(disc):
     _, s = disc
     other = s.with_split(["x", "q3"])
     assert other.speeds is s.speeds and other.dependent != s.dependent
+
+
+# ---------------------------------------------------------------------- read end to end
+def test_inertia_about_the_pivot_agrees_with_kane():
+    """A RigidBody whose inertia is given about a point other than its mass centre (the
+    pivot): T holds the central inertia plus m |r|^2 (route 2: Kane)."""
+    th, w = dynamicsymbols("th w")
+    N = ReferenceFrame("N")
+    B = N.orientnew("B", "Axis", [th, N.z])
+    B.set_ang_vel(N, w * N.z)
+    O = Point("O")
+    O.set_vel(N, 0)
+    G = O.locatenew("G", ell * B.x)
+    G.v2pt_theory(O, N, B)
+    km = KanesMethod(N, [th], [w], kd_eqs=[th.diff() - w])
+    km.kanes_equations([RigidBody("b", G, B, m, (inertia(B, 0, 0, m * ell**2 + a), O))],
+                       [(G, -m * g * N.y)])
+    s = jn.from_mechanics(km)
+    TH, TH_t = s.J.q[0], s.J.qd[0]
+    assert sp.expand(s.L - ((m * ell**2 + a) * TH_t**2 / 2 - m * g * ell * sp.sin(TH))) == 0
+    assert agreement(s, km, {m: 1.2, g: 9.81, ell: 0.7, a: 0.3}) < RTOL
+
+
+def _on_circle_with(velocity_constraint):
+    x, y = dynamicsymbols("x y")
+    ux, uy = dynamicsymbols("u_x u_y")
+    N = ReferenceFrame("N")
+    O = Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", x * N.x + y * N.y)
+    P.set_vel(N, ux * N.x + uy * N.y)
+    km = KanesMethod(N, [x], [ux], kd_eqs=[x.diff() - ux, y.diff() - uy], q_dependent=[y],
+                     configuration_constraints=[x**2 + y**2 - ell**2], u_dependent=[uy],
+                     velocity_constraints=[velocity_constraint(x, y, ux, uy)])
+    km.kanes_equations([Particle("P", P, m)], [(P, -m * g * N.y)])
+    return km
+
+
+def test_a_velocity_constraint_that_is_not_the_derivative_of_the_configuration_is_refused():
+    """x u_x + y u_y + c = 0 with x^2 + y^2 = l^2: the velocity constraint has the
+    direction of D g but not its value; leaving it out (as a restatement of D g) would
+    give motions on the circle where Kane's leave it."""
+    with pytest.raises(JetnhError, match="velocity constraint 1.*not.*configuration"):
+        jn.from_mechanics(_on_circle_with(lambda x, y, ux, uy: x * ux + y * uy + c))
+    # the restatement, scaled, is left out
+    s = jn.from_mechanics(_on_circle_with(lambda x, y, ux, uy: 3 * (x * ux + y * uy)))
+    assert len(s.constraints) == 1 and len(s.holonomic) == 1
+
+
+def test_a_rigid_body_of_the_deprecated_body_class_is_checked_as_rigid():
+    """sympy's Body is a RigidBody and a Particle; a rigid one's angular velocity is
+    checked against its orientation as a RigidBody's is."""
+    import warnings
+
+    th, w = dynamicsymbols("th w")
+    N = ReferenceFrame("N")
+    B = N.orientnew("B", "Axis", [th, N.z])
+    B.set_ang_vel(N, 2 * w * N.z)          # not the orientation's
+    O = Point("O")
+    O.set_vel(N, 0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        from sympy.physics.mechanics import Body
+        body = Body("b", O, m, B, inertia(B, 1, 1, 1))
+    km = KanesMethod(N, [th], [w], kd_eqs=[th.diff() - w])
+    km.kanes_equations([body], [])
+    with pytest.raises(JetnhError, match="angular velocity of B.*orientation"):
+        jn.from_mechanics(km)
+
+
+def test_a_frame_without_an_orientation_is_refused_with_the_fix():
+    th, w = dynamicsymbols("th w")
+    N = ReferenceFrame("N")
+    B = ReferenceFrame("B")
+    B.set_ang_vel(N, w * N.z)
+    O = Point("O")
+    O.set_vel(N, 0)
+    # (kanes_equations fails on it too; the import reads bodies given to KanesMethod)
+    km = KanesMethod(N, [th], [w], kd_eqs=[th.diff() - w],
+                     bodies=[RigidBody("b", O, B, m, (inertia(B, 1, 1, 1), O))])
+    with pytest.raises(JetnhError, match="orientation of B.*orient"):
+        jn.from_mechanics(km)
+
+
+def test_a_body_potential_energy_in_a_kanes_method_is_refused():
+    """KanesMethod does not read a body's potential_energy: refused as for a mechanics
+    System (before: dropped without a word)."""
+    x, ux = dynamicsymbols("x u_x")
+    N = ReferenceFrame("N")
+    O = Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", x * N.x)
+    P.set_vel(N, ux * N.x)
+    pa = Particle("P", P, m)
+    pa.potential_energy = c * x**2 / 2
+    km = KanesMethod(N, [x], [ux], kd_eqs=[x.diff() - ux])
+    km.kanes_equations([pa], [])
+    with pytest.raises(JetnhError, match="potential_energy.*load"):
+        jn.from_mechanics(km)
+
+
+def test_an_actuators_loads_are_judged_together():
+    """A torsion spring between two frames (TorqueActuator: a torque on one, its reaction
+    on the other) is conservative only as a whole: V = k q2^2 / 2 (before: each load
+    alone has no symmetric Jacobian, two generalized forces); route 2: Kane."""
+    q1, q2 = dynamicsymbols("q1 q2")
+    w1, w2 = dynamicsymbols("w1 w2")
+    N = ReferenceFrame("N")
+    O = Point("O")
+    O.set_vel(N, 0)
+    A = N.orientnew("A", "Axis", [q1, N.z])
+    A.set_ang_vel(N, w1 * N.z)
+    B = A.orientnew("B", "Axis", [q2, A.z])
+    B.set_ang_vel(A, w2 * A.z)
+    ms = MechanicsSystem(N, O)
+    ms.add_coordinates(q1, q2)
+    ms.add_speeds(w1, w2)
+    ms.add_kdes(q1.diff() - w1, q2.diff() - w2)
+    ms.add_bodies(RigidBody("a", O, A, m, (inertia(A, 1, 1, 1), O)),
+                  RigidBody("b", O, B, m, (inertia(B, 1, 1, 2), O)))
+    ms.add_actuators(TorqueActuator(-c * q2, N.z, B, A))
+    s = jn.from_mechanics(ms)
+    Q1, Q2 = s.J.q
+    assert not s.forces
+    assert sp.expand(s.L.xreplace(dict.fromkeys(s.J.qd, 0)) + c * Q2**2 / 2) == 0
+    assert agreement(s, ms, {c: 2.0, m: 1.3}) < RTOL
+
+
+def test_kinematic_equations_not_linear_are_refused_as_such():
+    """x' = u^3 (a mechanics System reads its kdes raw): refused naming linearity, not
+    as an unknown function of time u(t)."""
+    x, u = dynamicsymbols("x u")
+    N = ReferenceFrame("N")
+    O = Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", x * N.x)
+    P.set_vel(N, x.diff() * N.x)
+    ms = MechanicsSystem(N, O)
+    ms.add_coordinates(x)
+    ms.add_speeds(u)
+    ms.add_kdes(x.diff() - u**3)
+    ms.add_bodies(Particle("P", P, m))
+    with pytest.raises(JetnhError, match="not linear in the speeds"):
+        jn.from_mechanics(ms)
+
+
+def test_contact_forces_of_auxiliary_speeds_do_no_work():
+    """KanesMethod's auxiliary speeds: contact forces f(t) (unknowns, functions of time)
+    on a point moved only by them, and a normal force on a particle sliding along N.x,
+    do no work in the equations; the import reads them as Kane does (before: refused
+    as specified inputs).  Route 2: Kane."""
+    x, ux, ua, ub = dynamicsymbols("x u_x u_a u_b")
+    f1, f2 = dynamicsymbols("f1 f2")
+    N = ReferenceFrame("N")
+    O = Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", x * N.x)
+    P.set_vel(N, ux * N.x + ua * N.y)
+    C = O.locatenew("C", 0 * N.x)
+    C.set_vel(N, ub * N.x)
+    km = KanesMethod(N, [x], [ux], kd_eqs=[x.diff() - ux], u_auxiliary=[ua, ub])
+    km.kanes_equations([Particle("P", P, m)],
+                       [(P, -c * x * N.x + f1 * N.y), (C, f2 * N.x), (P, -m * g * N.y)])
+    s = jn.from_mechanics(km)
+    X, X_t = s.J.q[0], s.J.qd[0]
+    assert not s.forces and sp.expand(s.L - (m * X_t**2 / 2 - c * X**2 / 2)) == 0
+    assert agreement(s, km, {m: 1.2, c: 0.4, g: 9.81}) < RTOL
+    # a specified input along a direction the point moves is still refused
+    Q = O.locatenew("Q", x * N.x)
+    Q.set_vel(N, ux * N.x)
+    km = KanesMethod(N, [x], [ux], kd_eqs=[x.diff() - ux])
+    km.kanes_equations([Particle("Q", Q, m)], [(Q, f1 * N.x)])
+    with pytest.raises(JetSpaceError, match="load on the point Q.*substitute specified"):
+        jn.from_mechanics(km)

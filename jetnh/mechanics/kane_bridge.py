@@ -6,17 +6,23 @@ works in q and qdot, so the speeds are solved from them, u = U(t, q, qdot), and 
 expression of the model is read with u replaced by U:
 
 - L = T - V: T the kinetic energies of the bodies and particles; V the potential of the
-  loads that have one (a force constant in the inertial frame on a point located
-  from a point at rest: V = -F . r; a load whose generalized forces are free of t and
-  qdot with a symmetric Jacobian, such as a spring F = -k r: integrated, and kept only
-  where V stands for the load wherever it is defined), checked against their
-  generalized forces;
+  loads that have one, a function of the configuration, checked against their
+  generalized forces: a force constant in the inertial frame on a point located from a
+  point at rest, V = -F . r; a load whose generalized forces are free of t and qdot
+  with a symmetric Jacobian, such as a spring F = -k r, integrated (within
+  ``POTENTIAL_SECONDS``; past it a JetnhWarning) and kept only where V stands for the
+  load wherever it is defined and is 2 pi-periodic in every coordinate the load is
+  (a torque tau on an angle has no potential: V = -tau theta; a torsion spring's
+  k theta^2 / 2 stands for it);
 - every other load gives generalized forces Q_s = sum F . dv/dqdot^s (v the velocity of
-  the point, or the angular velocity of the frame, in the inertial frame);
+  the point, or the angular velocity of the frame, in the inertial frame; the loads of
+  one actuator are judged together; a component of F along which no velocity moves the
+  point does no work and is not read, as KanesMethod with auxiliary speeds);
 - velocity constraints (linear in u) become constraints in qdot; configuration
   constraints g(t, q) = 0 stay holonomic (``System.holonomic``: a Scene checks or
   completes the initial configuration and keeps runs on g = 0), and the velocity
-  constraints that only restate D g are left out;
+  constraints that only restate D g are left out (one that has its velocities but
+  another term is refused);
 - ``Speeds`` keeps the map both ways, u = U(t, q, qdot) and qdot = V(t, q, u).
 
 The model's kinematics must hold for every qdot, not only on the constraints: each body's
@@ -30,21 +36,30 @@ point has no velocity.
 
 from __future__ import annotations
 
+import ctypes
+import gc
 import random
+import threading
+import time
+import warnings
 from dataclasses import dataclass
 
+import mpmath
 import numpy as np
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
-from ..algebra import dag, linalg, singular
-from ..errors import JetnhError, JetSpaceError
+from ..algebra import dag, linalg, singular, zero
+from ..errors import JetnhError, JetnhWarning, JetSpaceError
 from ..geometry.jet import JetSpace, key_name
 
 #: relative agreement asked of the kinematic and potential checks at random states
 CHECK_TOL = 1e-12
 #: random states per check
 CHECK_POINTS = 2
+#: CPU seconds (of the importing thread; wall seconds where the platform has no thread
+#: clock) that finding the potential of one load may take
+POTENTIAL_SECONDS = 5.0
 
 
 @dataclass(frozen=True)
@@ -98,34 +113,40 @@ class _Kane:
     u_aux: tuple
     kdes: tuple
     bodies: tuple
-    loads: tuple
+    loads: tuple              # groups of (Point or frame, Vector): a load, an actuator's
     holonomic: tuple          # g(t, q) = 0
     velocity: tuple           # velocity constraints, linear in u (or qdot)
     restates_holonomic: bool  # whether ``velocity`` contains D g too (KanesMethod's contract)
     fixed_point: object       # a point at rest in ``frame``, or None: searched
 
 
+def _unread_potential_energy(bodies, method: str):
+    """Refuse a body's potential_energy, which KanesMethod does not read."""
+    for b in bodies:
+        if getattr(b, "potential_energy", 0) != 0:
+            raise JetnhError(
+                f"the body {b.name} has a potential_energy, which KanesMethod ({method}) does "
+                "not read; give the force as a load (e.g. System.apply_uniform_gravity), or "
+                "form the equations with LagrangesMethod (a mechanics System: "
+                "system.form_eoms(LagrangesMethod)) to import those")
+
+
 def read_kanes_method(km) -> _Kane:
     if km.bodies is None:
         raise JetnhError("the KanesMethod has no bodies yet; pass bodies= (and forcelist=) "
                          "to KanesMethod or call km.kanes_equations(bodies, loads) first")
+    _unread_potential_energy(km.bodies, "the model's")
     vel = (sp.Matrix(km._k_nh) * km.u + sp.Matrix(km._f_nh)) if len(km._k_nh) else []
     return _Kane(km._inertial, tuple(km.q), tuple(km.u), tuple(km._uaux),
                  tuple(km._k_kqdot_implicit * km.q.diff(_t()) + km._k_ku_implicit * km.u
                        + km._f_k_implicit) if len(km._k_ku_implicit) else (),
-                 tuple(km.bodies), tuple(km.loads or ()), tuple(km._f_h), tuple(vel), True,
-                 None)
+                 tuple(km.bodies), tuple((ld,) for ld in km.loads or ()), tuple(km._f_h),
+                 tuple(vel), True, None)
 
 
 def read_mechanics_system(ms) -> _Kane:
-    for b in ms.bodies:
-        if getattr(b, "potential_energy", 0) != 0:
-            raise JetnhError(
-                f"the body {b.name} has a potential_energy, which KanesMethod (the System's "
-                "default) does not read; give the force as a load (e.g. "
-                "System.apply_uniform_gravity), or form the System's equations with "
-                "LagrangesMethod first (system.form_eoms(LagrangesMethod)) to import those")
-    loads = tuple(ms.loads) + tuple(ld for act in ms.actuators for ld in act.to_loads())
+    _unread_potential_energy(ms.bodies, "the System's default")
+    loads = tuple((ld,) for ld in ms.loads) + tuple(tuple(act.to_loads()) for act in ms.actuators)
     explicit = ms._vel_constrs is not None
     return _Kane(ms.frame, tuple(ms.q), tuple(ms.u), tuple(ms.u_aux), tuple(ms.kdes),
                  tuple(ms.bodies), loads, tuple(ms.holonomic_constraints),
@@ -166,6 +187,10 @@ class _Reader:
         kd = sp.Matrix(model.kdes).xreplace(dict.fromkeys(model.u_aux, 0))
         k_u, k_qd = kd.jacobian(model.u), kd.jacobian(qd)
         f_k = kd.xreplace({**dict.fromkeys(model.u, 0), **dict.fromkeys(qd, 0)})
+        if any(M.has(*model.u, *qd) for M in (k_u, k_qd, f_k)):
+            raise JetnhError("the kinematic differential equations are not linear in the "
+                             "speeds and the velocities; write them linear (as KanesMethod "
+                             "requires), e.g. q' - u = 0")
         if _singular(k_u) or _singular(k_qd):
             raise JetnhError(
                 "the kinematic differential equations do not determine the speeds from the "
@@ -224,9 +249,13 @@ def _random_points(J: JetSpace, exprs, n=CHECK_POINTS, seed=7):
     return out
 
 
-def _agree(a, b, points) -> bool:
+def _agree(a, b, points, nonfinite=False) -> bool:
+    """Whether ``a`` and ``b`` agree at ``points`` (``CHECK_TOL`` relative); at a point
+    where a value is NaN or infinite, ``nonfinite`` is the answer."""
     for p in points:
         va, vb = dag.evaluate(list(a), p), dag.evaluate(list(b), p)
+        if not all(mpmath.isfinite(v) for v in (*va, *vb)):
+            return nonfinite
         scale = max([1] + [abs(v) for v in vb])
         if any(abs(x - y) > CHECK_TOL * scale for x, y in zip(va, vb)):
             return False
@@ -286,7 +315,13 @@ def _check_point(reader: _Reader, point, what):
 def _check_frame(reader: _Reader, frame, what):
     """The angular velocity of ``frame`` is the one of its orientation (W = C' C^T)."""
     J, N = reader.J, reader.model.frame
-    C = sp.Matrix(frame.dcm(N)).applyfunc(lambda e: reader.jet(e, f"the orientation of {what}"))
+    try:
+        dcm = frame.dcm(N)
+    except ValueError:
+        raise JetnhError(f"the orientation of {frame.name} ({what}) in {N.name} is not known, so "
+                         "its angular velocity cannot be checked; orient it from "
+                         f"{N.name} (orient_axis, orientnew, a joint)") from None
+    C = sp.Matrix(dcm).applyfunc(lambda e: reader.jet(e, f"the orientation of {what}"))
     Cd = C.applyfunc(J.D)
     W = Cd * C.T
     w = [W[1, 2], W[2, 0], W[0, 1]]
@@ -313,27 +348,44 @@ def lagrangian_and_forces(reader: _Reader):
         T += reader.jet(b.kinetic_energy(N), f"the kinetic energy of {b.name}")
     V = sp.S.Zero
     Q = [sp.S.Zero] * J.n
-    for load in reader.model.loads:
-        where, vec = load[0], load[1]
-        if isinstance(where, Point):
-            try:
-                vel = where.vel(N)
-            except ValueError:
-                raise JetnhError(f"a load acts on the point {where.name}, whose velocity in "
-                                 f"{N.name} is not known; set it (set_vel, v2pt_theory)") from None
-            what = f"the point {where.name}"
-        elif isinstance(where, ReferenceFrame):
-            vel, what = where.ang_vel_in(N), f"the frame {where.name}"
-        else:
-            raise JetnhError(f"a load acts on {where!r}; loads act on a Point or a "
-                             "ReferenceFrame")
-        v = reader.vector(vel, f"the velocity of {what}")
-        F = reader.vector(vec, f"the load on {what}")
-        q_load = [sum((F[i] * dag.diff(v[i], qd) for i in range(3)), sp.S.Zero)
-                  for qd in J.qd]
-        pot = _potential(reader, where, F, q_load) if isinstance(where, Point) else None
+    for group in reader.model.loads:     # an actuator's loads are judged together
+        q_load, names = [sp.S.Zero] * J.n, []
+        for where, vec in (load[:2] for load in group):
+            if isinstance(where, Point):
+                try:
+                    vel = where.vel(N)
+                except ValueError:
+                    raise JetnhError(f"a load acts on the point {where.name}, whose velocity "
+                                     f"in {N.name} is not known; set it (set_vel, "
+                                     "v2pt_theory)") from None
+                names.append(f"the point {where.name}")
+            elif isinstance(where, ReferenceFrame):
+                vel = where.ang_vel_in(N)
+                names.append(f"the frame {where.name}")
+            else:
+                raise JetnhError(f"a load acts on {where!r}; loads act on a Point or a "
+                                 "ReferenceFrame")
+            v = reader.vector(vel, f"the velocity of {names[-1]}")
+            partial = [[dag.diff(c, qd) for c in v] for qd in J.qd]
+            F, whole = _components(reader, vec, partial, f"the load on {names[-1]}")
+            q_load = [a + sum((f * p for f, p in zip(F, row)), sp.S.Zero)
+                      for a, row in zip(q_load, partial)]
+        if all(e == 0 for e in q_load):
+            continue
+        what = " and ".join(names)
+        pot = (_potential(reader, where, F, q_load)
+               if len(group) == 1 and isinstance(where, Point) and whole else None)
         if pot is None:
-            pot = _conservative(J, q_load)
+            pot = _within(POTENTIAL_SECONDS, _conservative, J, q_load)
+            if pot is _OUT_OF_TIME:
+                warnings.warn(
+                    f"the load on {what}: its potential was not found within "
+                    f"{POTENTIAL_SECONDS:g} s (sympy's integration), so it stays a "
+                    "generalized force: the equations are the same, but the energy and "
+                    "connect's cost leave it out; to wait longer, raise "
+                    "jetnh.mechanics.kane_bridge.POTENTIAL_SECONDS", JetnhWarning,
+                    stacklevel=2)
+                pot = None
         if pot is not None:
             V += pot
         else:
@@ -341,10 +393,29 @@ def lagrangian_and_forces(reader: _Reader):
     return T - V, {q: e for q, e in zip(J.q, Q) if e != 0}
 
 
-def _is_particle(b) -> bool:
-    from sympy.physics.mechanics import Particle
+def _components(reader: _Reader, vec, partial, what):
+    """The inertial components of a load, as jet expressions, and whether all of them
+    are: a component along which no velocity moves the point (every partial velocity's
+    is 0) does no work and may hold what jet expressions cannot (a contact force f(t) on
+    a point moved by auxiliary speeds only, as KanesMethod reads it): it is 0 then."""
+    out, whole = [], True
+    for i, c in enumerate(vec.to_matrix(reader.model.frame)):
+        try:
+            out.append(reader.jet(c, what))
+        except JetSpaceError:
+            if any(row[i] != 0 for row in partial):
+                raise
+            out.append(sp.S.Zero)
+            whole = False
+    return out, whole
 
-    return isinstance(b, Particle)
+
+def _is_particle(b) -> bool:
+    """Whether ``b`` has no frame to check (sympy's Body is a RigidBody and a Particle:
+    ``is_rigidbody`` tells)."""
+    from sympy.physics.mechanics import RigidBody
+
+    return not isinstance(b, RigidBody) or not getattr(b, "is_rigidbody", True)
 
 
 def _potential(reader: _Reader, point, F, Q):
@@ -366,15 +437,10 @@ def _conservative(J: JetSpace, Q):
     (dQ_i/dq_j = dQ_j/dq_i, at random configurations), integrable coordinate by
     coordinate (V = -int Q_1 dq_1, then -int (Q_2 + dV/dq_2) dq_2, ...: a spring F = -k r
     on a point, a torsion spring on a frame) and ``_stands_for`` Q; else None: the load
-    stays a generalized force, which is always right.
-
-    A coordinate whose force is a nonzero constant keeps the load a force: a constant
-    torque on a joint angle does work 2 pi tau a turn, and V = -tau theta is no function
-    of the configuration."""
+    stays a generalized force, which is always right."""
     own, q = {J.t, *J.qd}, set(J.q)
     free = [dag.free_symbols(e) for e in Q]
     if (not any(f & q for f in free) or any(f & own for f in free)
-            or any(e != 0 and not f & q for e, f in zip(Q, free))
             or any(dag.has(e, sp.Piecewise) for e in Q)):   # not evaluated at random points
         return None
     n = len(J.q)
@@ -394,19 +460,102 @@ def _conservative(J: JetSpace, Q):
     return V if _stands_for(J, V, Q) else None
 
 
+class _OutOfTime(BaseException):
+    """Raised in the thread of ``_within`` when its time is up (a BaseException, so that
+    sympy's ``except Exception`` does not swallow it)."""
+
+
+_OUT_OF_TIME = object()
+#: how often ``_within`` looks at the clock, and raises again once the time is up, seconds
+_POLL = 0.02
+
+
+def _async_raise():
+    """``PyThreadState_SetAsyncExc`` as a prototype of our own (the shared one is left
+    as it is): ``f(thread, id(exc))`` raises ``exc`` in ``thread`` at its next bytecode,
+    ``f(thread, None)`` cancels one set there and not yet raised."""
+    f = ctypes.pythonapi["PyThreadState_SetAsyncExc"]
+    f.argtypes = (ctypes.c_ulong, ctypes.c_void_p)
+    return f
+
+
+def _within(seconds, fn, *args):
+    """``fn(*args)``, or ``_OUT_OF_TIME`` once it has run ``seconds`` of CPU time (of
+    this thread; wall time where there is no thread clock).
+
+    A watcher thread raises ``_OutOfTime`` in this thread, again every ``_POLL`` seconds
+    (one raised in a finalizer or a weakref callback is ignored by Python; the cyclic
+    collector, which runs most of them, is off meanwhile), until this thread takes ``lock``:
+    that is one C call, after which the watcher raises nothing; an exception it set just
+    before is raised at that call's end or cancelled by the next C call.  sympy's global
+    switches (evaluate, distribute) are restored after an interruption; a Ctrl-C that
+    met the interruption goes on."""
+    from sympy.core.parameters import global_parameters as gp
+
+    me = threading.get_ident()
+    try:
+        clock = time.pthread_getcpuclockid(me)
+        now = lambda: time.clock_gettime(clock)   # noqa: E731
+    except (AttributeError, OSError):
+        now = time.monotonic
+    end = now() + seconds
+    lock, stop, cancel = threading.Lock(), threading.Event(), _async_raise()
+
+    def watch():
+        fire = _async_raise()
+        while not stop.wait(_POLL):
+            if now() >= end:
+                if not lock.acquire(blocking=False):
+                    return
+                try:
+                    fire(me, id(_OutOfTime))
+                finally:
+                    lock.release()
+
+    switches = (gp.evaluate, gp.distribute, gp.exp_is_pow)
+    collecting = gc.isenabled()
+    gc.disable()    # no collection, so no finalizer or gc callback to take the exception
+    threading.Thread(target=watch, name="jetnh-potential-budget", daemon=True).start()
+    try:
+        try:
+            return fn(*args)
+        finally:
+            lock.acquire()      # held from here on: the watcher raises nothing more
+            cancel(me, None)
+            stop.set()
+            if collecting:
+                gc.enable()
+    except _OutOfTime as exc:   # (raised in the finally at the latest: finish it)
+        stop.set()
+        if collecting:
+            gc.enable()
+        gp.evaluate, gp.distribute, gp.exp_is_pow = switches
+        if isinstance(exc.__context__, KeyboardInterrupt):
+            raise exc.__context__ from None
+        return _OUT_OF_TIME
+
+
 #: functions defined, finite and smooth on the whole real line: a V may contain them
 #: where its load does not (V = -k cos q for Q = -k sin q)
 _ENTIRE = (sp.exp, sp.sin, sp.cos, sp.sinh, sp.cosh)
 
 
 def _stands_for(J: JetSpace, V, Q) -> bool:
-    """Whether L = T - V gives the equations of Q, wherever Q is defined: V is real
-    (no imaginary unit: the vortex Q = k (-y, x) / ``|r|^2`` integrates to complex
-    logs, it has no potential on the punctured plane); V has no function Q does not
-    have, but entire ones (a Piecewise from q^a; log q from k/q is undefined at q < 0,
-    log(tanh q + 1) from tanh q is log 0 at q = -25 in floating point); V and its
-    -dV/dq are singular nowhere Q is not (``singular.bases``: no new denominator, root
-    or log argument); and -dV/dq is Q, term by term once expanded."""
+    """Whether L = T - V gives the equations of Q, wherever Q is defined, and V is a
+    function of the configuration wherever Q is:
+
+    - V is real (no imaginary unit: the vortex Q = k (-y, x) / ``|r|^2`` integrates to
+      complex logs, it has no potential on the punctured plane);
+    - V has no function Q does not have, but entire ones (a Piecewise from q^a; log q
+      from k/q is undefined at q < 0, log(tanh q + 1) from tanh q is log 0 at q = -25
+      in floating point);
+    - V and its -dV/dq are singular nowhere Q is not (``singular.bases``: no new
+      denominator, root or log argument);
+    - -dV/dq is Q (``_zero``);
+    - V is 2 pi-periodic in every coordinate Q is 2 pi-periodic in (at random states):
+      such a coordinate may be an angle, on which a torque tau (or tau - k sin q) does
+      work 2 pi tau a turn and V = -tau q is no function of the configuration; a torsion
+      spring -k q is no function of an angle either, and V = k q^2 / 2 stands for it."""
     if V.has(sp.I):
         return False
     heads = {type(f) for e in Q for f in dag.atoms(e, sp.Function)}
@@ -416,7 +565,27 @@ def _stands_for(J: JetSpace, V, Q) -> bool:
     allowed = {b for e in Q for b in singular.bases(e)}
     if any(b not in allowed for e in (V, *minus_dV) for b in singular.bases(e)):
         return False
-    return all(sp.expand(a - e) == 0 for a, e in zip(minus_dV, Q))
+    if not _zero([a - e for a, e in zip(minus_dV, Q)]):
+        return False
+    return all(_zero([V.xreplace({qi: qi + 2 * sp.pi}) - V])
+               for qi in J.q if _periodic_at_random(J, Q, qi))
+
+
+def _zero(exprs) -> bool:
+    """Whether ``exprs`` vanish: expanded, else by evaluation (``zero.vanishes``: the
+    forms sympy integrates to keep sin^2 + cos^2 where the load has 1)."""
+    return all(sp.expand(e) == 0 for e in exprs) or zero.vanishes(exprs)
+
+
+def _periodic_at_random(J: JetSpace, Q, q) -> bool:
+    """Whether ``Q`` is 2 pi-periodic in ``q`` at random states: True unless shown
+    otherwise (a value that cannot be compared counts as periodic, which only asks
+    more of V)."""
+    shifted = [e.xreplace({q: q + 2 * sp.pi}) for e in Q]
+    try:
+        return _agree(shifted, Q, _random_points(J, list(Q)), nonfinite=True)
+    except Exception:  # no value to compare (a domain error): asks more of V, never less
+        return True
 
 
 def constraints(reader: _Reader) -> list:
@@ -443,20 +612,34 @@ def holonomic(g: list) -> list:
 
 def _complement(J: JetSpace, vel: list, hol: list) -> list:
     """The velocity constraints that, with D g, span what all of them span (chosen at a
-    random state, in the given order)."""
+    random state, in the given order); each one left out must be a combination of D g
+    and those kept, its term free of the velocities included (else it is no restatement
+    of D g, and leaving it out would change the motion)."""
     point = _random_points(J, vel + hol, n=1, seed=11)[0]
-    rows = [[float(x) for x in dag.evaluate([dag.diff(g, q) for q in J.q], point)]
-            for g in hol]
-    rank = np.linalg.matrix_rank(np.array(rows)) if rows else 0
-    if rank < len(hol):
+    rank = np.linalg.matrix_rank
+
+    def row(e):     # [de/dqdot, e at qdot = 0] at the point (e is linear in qdot)
+        parts = [dag.diff(e, qd) for qd in J.qd] + [dag.xreplace(e, dict.fromkeys(J.qd, 0))]
+        return [float(x) for x in dag.evaluate(parts, point)]
+
+    rows = [row(J.D(g)) for g in hol]
+    if rows and rank(np.array(rows)[:, :-1]) < len(hol):
         raise JetnhError("the configuration constraints are dependent (their Jacobian is "
                          "rank-deficient at a random configuration); give independent ones")
     kept = []
-    for f in vel:
-        row = [float(x) for x in dag.evaluate([dag.diff(f, qd) for qd in J.qd], point)]
-        if np.linalg.matrix_rank(np.array(rows + [row])) > len(rows):
-            rows.append(row)
+    for a, f in enumerate(vel):
+        new = row(f)
+        if rank(np.array(rows + [new])[:, :-1]) > len(rows):
+            rows.append(new)
             kept.append(f)
+        elif rank(np.array(rows + [new])) > len(rows):
+            raise JetnhError(
+                f"velocity constraint {a + 1} has the velocities of a combination of the "
+                "differentiated configuration constraints (and the velocity constraints "
+                "before it) but another term free of them: it is not the time derivative "
+                "of the configuration constraints, and Kane's motions would leave them; "
+                "give D g as the velocity constraint, or the configuration constraint "
+                "as it really is")
     if len(kept) != len(vel) - len(hol):
         raise JetnhError(
             f"of the {len(vel)} velocity constraints, {len(kept)} are independent of the "
