@@ -5,7 +5,7 @@ right-hand side has a pole past it); the projection onto the holonomic constrain
 pulled that end back onto the circle, where its edge value could look calm, so the
 stages were never checked (``loop.past_edge``) and the garbage went on: the rotating
 Cartesian pendulum at n = 300 ended NONFINITE, at v0 = 12, n = 200 it stopped "singular"
-with rows 1e150 off the circle.  Coarse runs like these are far from the motion (rk4's
+with rows up to 3e299 off the circle.  Coarse runs like these are far from the motion (rk4's
 own error at 1.3 rad a step); what is asserted is that they are runs of the method:
 finite, on the circle, through every switch to the end, energy on the trend of the
 neighbouring runs that never met the fault.
