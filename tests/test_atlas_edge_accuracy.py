@@ -58,15 +58,18 @@ def test_dop853_pendulum_in_proportion(pendulum, angle):
 def test_rk4_stages_past_the_edge_switch(pendulum, angle):
     """rk4 with n = 600 or 800 took steps whose stages crossed the whole edge band
     and ended regular (garbage: no edge crossed), and blew up (NONFINITE).  Now such
-    a step stops at its start and the run switches there: it finishes, its error on
-    the h^4 trend of the finer runs (which never hit this)."""
+    a step stops at its start and the run switches there.  Runs that coarse lose turns
+    by rk4's own error (n = 600: 178 switches of 203, n = 1200: 202); n = 1275 and 1650
+    keep every turn and still have steps with a stage past the edge (without the stage
+    check they end elsewhere; n = 1025 blew up): each run keeps all 203 switches, its
+    error on the h^4 trend of the runs with twice the steps."""
     err = {}
-    for n in (600, 800, 1200):
+    for n in (1275, 1650, 2550, 3300):
         tr = pendulum.run(method="rk4", n_steps=n)
-        assert tr.success and tr.t[-1] == T
+        assert tr.success and tr.t[-1] == T and len(tr.switches) == 203
         err[n] = _errors(tr, angle)[0]
-    assert 4 < err[600] / err[1200] < 64          # (2^4 = 16)
-    assert 1.5 < err[800] / err[1200] < 20        # (1.5^4 = 5.1)
+    assert 8 < err[1275] / err[2550] < 64          # (2^4 = 16)
+    assert 8 < err[1650] / err[3300] < 64
 
 
 def test_dopri5_sleigh_loose_tolerance():

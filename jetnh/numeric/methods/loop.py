@@ -498,6 +498,7 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
                     n_ev, sing_index)
     h_abs = 0.0
     g_edge = np.nan         # the edge's value at the last step's start (``Control.edge``)
+    g_end = np.nan          # ... and at a fixed step's end before its projection
     h_prev = 0.0            # the length of the step before (``near_zero``)
     h_fixed = (t_end - t0) / max(n_steps, 1)
     exponent = -1.0 / (error_order + 1)
@@ -591,6 +592,12 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
                 break
             t_new = t0 + (step + 1) * h_fixed
             h = t_new - t
+            if EDGE and PROJECT and ctl.edge > 0.0 and ctl.n_hol > 0 and n_user > 0:
+                # the edge at the end as the stages left it: the projection would pull
+                # a garbage end (a stage past the edge) back onto g = 0, where it may
+                # look calm (``past_edge`` below)
+                uev(t_new, y_new, p, gtmp)
+                g_end = gtmp[n_user - 1]
         if PROJECT:
             if ctl.n_hol > 0:
                 projection.project(hol, ctl, t_new, y_new, p, hw)
@@ -631,6 +638,8 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
                     g0 = gu_old[e]
                     calm = (finite and abs(gu_new[e] - g0) <= 0.5 * abs(g0)
                             and g0 >= 2.0 * (g_edge - g0))
+                    if PROJECT and ctl.n_hol > 0:       # (and before the projection)
+                        calm = calm and abs(g_end - g0) <= 0.5 * abs(g0)
                     g_edge = g0
                     if not calm and past_edge(uev, n_user, tab[0], A, ns, t, h, y, K, p,
                                               ytmp, gtmp):
