@@ -467,7 +467,8 @@ class Scene(Frozen):
             span = self.t_span if t_span is _KEEP else t_span
             if params is _KEEP:
                 return self._moved({} if initial is None else initial, span)
-            if self.runtime_params and isinstance(params, (Mapping, type(None))):
+            if self.runtime_params and (type(params) is dict  # (before the ABC's test)
+                                        or isinstance(params, (Mapping, type(None)))):
                 numbers = self._params(params or {})
                 if self._compiled_of(numbers) == self._compiled_of(self.params):
                     # only run-time parameters changed: the same kernels (``_moved``)
