@@ -221,10 +221,10 @@ def _check_holonomic(scene, Y0, P):
     system = scene.system
     m, nq = len(system.holonomic), system.J.n
     t0 = scene.t_span[0]
-    out = np.empty((Y0.shape[0], m * (1 + nq)))
+    out = np.empty((Y0.shape[0], kern.hol.sizes[2]))
     for r in range(Y0.shape[0]):
         kern.hol(t0, Y0[r], P[r], out[r])
-    g, G = out[:, :m], out[:, m:].reshape(-1, m, nq)
+    g, G = out[:, :m], out[:, m:m + m * nq].reshape(-1, m, nq)
     if np.any(g):
         point = dict(zip(scene.state_names, Y0.T))
         point.update(zip(scene.runtime_params, P.T))
