@@ -26,7 +26,8 @@ fresh processes with empty numba and kernel caches, the trees alternating within
    the compiled dop853 loop called directly (its entry point, the arguments made once),
    ``scene.run()``, ``scene.run`` with the keywords of a benchmark or a parameter loop
    (``method``, ``rtol``, ``atol``, ``save``; and those of the work-precision
-   benchmark: ``split``, ``singular``, ``t_span`` too), ``scene.run(y0=...)``,
+   benchmark: ``split``, ``singular``, ``t_span`` too), ``scene.run(y0=...)`` (the same
+   array each call, and a new state each call: the states of the ``replace`` row below),
    ``scene.run(t_eval=...)`` (five times), ``scene.run`` on a new time span each call
    (a loop over the final time), ``scene.replace(initial=...).run()`` (a new initial
    state each call, as a shooting loop does), ``scene.replace(params=...).run()`` of a
@@ -149,6 +150,7 @@ long = bare(100.0, ctl)
 nfev = {"3-step call": int(three(0)[4][2]), "long call": int(long(0)[4][2])}
 states = {n: short.initial[n] for n in short.state_names}
 inis = [dict(states, phi_t=states["phi_t"] + 1e-3 * k) for k in range(16)]
+y0s = [np.array([ini[n] for n in short.state_names]) for ini in inis]     # (the same states)
 y8 = np.repeat(y0[None, :], 8, axis=0)
 tuned = Scene(short.system, "chetaev", initial=states, t_span=short.t_span,
               runtime_params=["R"]).compile()
@@ -165,6 +167,8 @@ calls = {
         method="dop853", save="final", rtol=1e-9, atol=1e-12, split="fixed",
         singular="ignore", t_span=(0, 1e-6)),
     "run(y0=...)": lambda i: short.run(y0=y0, save="final"),
+    # replace(initial=...)'s new states as arrays: what a shooting loop's run(y0=) gets
+    "run(y0=...), a new state each call": lambda i: short.run(y0=y0s[i % 16], save="final"),
     "run(t_eval=...)": lambda i: short.run(t_eval=te5),
     # a loop over final times (each call a span of its own)
     "run(t_span=...), a new span each call": lambda i: short.run(
@@ -344,6 +348,7 @@ FLOOR = ("part: this tree's floor (halt flag, set_wakeup_fd where a run confirms
 
 
 TEVAL = "bare call of run(t_eval=...)'s loop"
+NEW_Y0 = "run(y0=...), a new state each call"
 
 
 def fixed(root, reps) -> dict:
@@ -428,7 +433,8 @@ def main(argv=None):
         + f", on a new time span "
         f"each call {a['run(t_span=...), a new span each call'] / a['bare call']:.2f}x, "
         f"replace(initial=...).run() {a['replace(initial=...).run()'] / a['bare call']:.2f}x "
-        f"({a['replace(initial=...).run()'] / a['run(y0=...)']:.2f}x run(y0=...)),"
+        f"({a['replace(initial=...).run()'] / a[NEW_Y0]:.2f}x run(y0=...) on a new state each "
+        f"call, which costs {a[NEW_Y0] / a['bare call']:.2f}x),"
         + (f" replace(params=...).run() {a['replace(params=...).run()'] / a['run(params=...)']:.2f}x"
            f" run(params=...)," if "run(params=...)" in a else "") +
         f" an ensemble of one {a['ensemble of one'] / a['bare call']:.2f}x"

@@ -176,12 +176,12 @@ def resolve(scene, initial=None, params=None, project=False):
                 P[:, j] = params[s]
     dep = ({k: v for k, v in columns.items() if k in scene.dependent_velocities}
            if columns else columns)
+    if scene.system.holonomic:     # (first, as a single run: ``Scene._run_state``)
+        _check_holonomic(scene, Y0, P)
     if scene.dependent_velocities:
         _check_split(scene, Y0, P, dep, project)
     if dep:
         _check_dependent(scene, Y0, P, dep, project)
-    if scene.system.holonomic:
-        _check_holonomic(scene, Y0, P)
     return scene, Y0, P          # (C-contiguous: made so here)
 
 
@@ -202,10 +202,10 @@ def _of_row(scene, row, project) -> tuple[np.ndarray, np.ndarray]:
     """The state and the parameters (1-d) of the one row ``row`` (``_one_row``),
     checked: a copy of the caller's row, the scene's parameters (never written)."""
     y, p = row.copy(), scene._p
-    if scene.dependent_velocities and not scene._regular_at(y, scene.t_span[0], p):
-        _check_split(scene, y[None, :], p[None, :], _NO_GIVEN, project)
     if scene.system.holonomic:
         _check_holonomic(scene, y[None, :], p[None, :])
+    if scene.dependent_velocities and not scene._regular_at(y, scene.t_span[0], p):
+        _check_split(scene, y[None, :], p[None, :], _NO_GIVEN, project)
     return y, p
 
 
@@ -213,27 +213,39 @@ def _check_holonomic(scene, Y0, P):
     """Refuse runs whose initial configuration is off the holonomic constraints g = 0,
     each g_i judged against its own scale at the run's point (``holonomic.bound_rows``:
     the size of its terms, never an absolute number, so the verdict is the same in every
-    unit of length); g from the compiled kernel, the bounds of all runs in one pass."""
+    unit of length), or where dg/dq has not full rank (no smooth configuration manifold
+    there), as a single run refuses them (``holonomic.check``, which judges a run whose
+    compiled dg/dq is of lower rank again at 30 digits and words the refusal); g and dg/dq
+    from the compiled kernel ``hol``, the bounds and ranks of all runs in one pass each."""
     kern = scene.kernels
-    lay = kern.layout
+    system = scene.system
+    m, nq = len(system.holonomic), system.J.n
     t0 = scene.t_span[0]
-    g = np.empty((Y0.shape[0], lay.n_aux))
+    out = np.empty((Y0.shape[0], kern.hol.sizes[2]))
     for r in range(Y0.shape[0]):
-        kern.aux(t0, Y0[r], P[r], g[r])
-    g = g[:, lay.n_aux - lay.holonomic:]
-    if not np.any(g):
-        return
-    point = dict(zip(scene.state_names, Y0.T))
-    point.update(zip(scene.runtime_params, P.T))
-    point = scene._holonomic_point(point, t0, point)
-    ok = np.abs(g.T) <= holonomic.bound_rows(scene.system, point)
-    if not ok.all():
-        r = int(np.argmin(ok.all(axis=0)))
-        raise ConstraintError(
-            f"run {r}: the initial configuration is off the holonomic constraints "
-            f"{list(scene.system.holonomic)} (g = {g[r].tolist()}); give configurations "
-            "with g = 0 (an ensemble does not complete them: build one Scene per start "
-            "with complete=True)")
+        kern.hol(t0, Y0[r], P[r], out[r])
+    g, G = out[:, :m], out[:, m:m + m * nq].reshape(-1, m, nq)
+    if np.any(g):
+        point = dict(zip(scene.state_names, Y0.T))
+        point.update(zip(scene.runtime_params, P.T))
+        point = scene._holonomic_point(point, t0, point)
+        ok = np.abs(g.T) <= holonomic.bound_rows(system, point)
+        if not ok.all():
+            r = int(np.argmin(ok.all(axis=0)))
+            raise ConstraintError(
+                f"run {r}: the initial configuration is off the holonomic constraints "
+                f"{list(system.holonomic)} (g = {g[r].tolist()}); give configurations "
+                "with g = 0 (an ensemble does not complete them: build one Scene per start "
+                "with complete=True)")
+    full = np.isfinite(G).all(axis=(1, 2))
+    full[full] = np.linalg.matrix_rank(G[full]) == m
+    for r in np.flatnonzero(~full).tolist():
+        values = dict(zip(scene.state_names, Y0[r].tolist()))
+        params = dict(zip(scene.runtime_params, P[r].tolist()))
+        try:
+            holonomic.check(system, scene._holonomic_point(values, t0, params))
+        except ConstraintError as exc:
+            raise ConstraintError(f"run {r}: {exc}") from None
 
 
 def _check_split(scene, Y0, P, given, project):

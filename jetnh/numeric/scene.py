@@ -150,6 +150,8 @@ class Scene(Frozen):
         for name in self.runtime_params:
             if name not in self.params:
                 raise JetnhError(f"runtime parameter {name!r} needs a value in params=")
+        #: the position of each run-time parameter in ``p``
+        self._runtime_index = {n: i for i, n in enumerate(self.runtime_params)}
         #: the values of the parameters compiled into the kernels, of a dict of all
         self._compiled_of = _getter([n for n in self.params if n not in self.runtime_params])
         J = system.J
@@ -465,7 +467,8 @@ class Scene(Frozen):
             span = self.t_span if t_span is _KEEP else t_span
             if params is _KEEP:
                 return self._moved({} if initial is None else initial, span)
-            if self.runtime_params and isinstance(params, (Mapping, type(None))):
+            if self.runtime_params and (type(params) is dict  # (before the ABC's test)
+                                        or isinstance(params, (Mapping, type(None)))):
                 numbers = self._params(params or {})
                 if self._compiled_of(numbers) == self._compiled_of(self.params):
                     # only run-time parameters changed: the same kernels (``_moved``)
@@ -796,12 +799,13 @@ class Scene(Frozen):
         p = memo.get("_p") if params is None else self._run_params(params)
         if p is None:
             p = self._p
-        if y0 is None and params is None:       # the scene's own
+        if y0 is None:      # the scene's own (``own``: and its parameters' values)
             if plan.direct or plan.switch:  # (the loops read y0 into copies of their
                 #                                 own, the atlas never writes it)
                 y = memo.get("_y0")
-                return solve.run(self, plan, self._y0 if y is None else y, p, True, span)
-            return solve.run(self, plan, self.y0.copy(), p, True)
+                return solve.run(self, plan, self._y0 if y is None else y, p,
+                                 params is None, span)
+            return solve.run(self, plan, self.y0.copy(), p, params is None, span)
         return solve.run(self, plan, self._run_state(
             y0, plan.t0 if span is None else span[0], p), p, False, span)
 
@@ -876,6 +880,17 @@ class Scene(Frozen):
         """The run-time parameters of one run (``run(params=...)``), checked."""
         if params is None:
             return self._p
+        index = self._runtime_index
+        if (type(params) is dict and params.keys() <= index.keys()
+                and _FLOAT.issuperset(map(type, params.values()))
+                and math.isfinite(sum(params.values()))):
+            # (run-time parameters by name as finite floats: what the general route makes
+            # of them, at once; a NaN or an infinity makes the sum not finite, an overflow
+            # of finite values takes the general route, which looks at each)
+            p = self._p.copy()
+            for name, value in params.items():
+                p[index[name]] = value
+            return p
         if isinstance(params, dict):
             for k in params:
                 name = arguments.name_of(k, "params")

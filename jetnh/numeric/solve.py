@@ -95,6 +95,7 @@ class Plan:
     direct: bool = False            # a run is one call of ``entry`` (``run``)
     head: tuple = ()                # ``(*prefix, t0, t1)`` of a direct plan
     spans: bool = False
+    made: dict | None = None        # a direct plan's finished runs' ``Trajectory._made``
 
 
 def _unused(method, **given):
@@ -250,12 +251,16 @@ def plan(scene, method="dop853", *, opts=None, t_span=None, t_eval=None, save="s
     watch = _watch(scene, kern, ce, checked, singular_tol)
     entry, prefix, suffix, callbacks = loops.entry(scene, m, kern, ce, sens, ctl, te, mode,
                                                     watch, newton)
+    direct = sens is None and not switch and not batch
+    made = None if not direct else Trajectory._made(
+        kern, m.name, _FINISHED_TEXT, None if ends is None else ends[0],
+        () if ce is None else ce.names)
     return Plan(**common, rtol=rtol, atol=atol_v, ce=ce, watch=watch, kern=kern, ctl=ctl,
                 te=te, mode=mode, newton=newton, switch=switch, dense=dense,
                 dense_ends=ends, entry=entry,
                 prefix=prefix, suffix=suffix, callbacks=callbacks,
-                direct=sens is None and not switch and not batch, head=(*prefix, t0, t1),
-                spans=m.adaptive and t_eval is None and not batch)
+                direct=direct, head=(*prefix, t0, t1),
+                spans=m.adaptive and t_eval is None and not batch, made=made)
 
 
 def planned(scene, key, make, span=None) -> Plan:
@@ -372,13 +377,10 @@ def run(scene, plan, y, p, own=False, span=None) -> Trajectory:
         wall = _clock() - tic
         if plan.ctl.n_hol:          # rows of the dense output onto g = 0
             loops.on_constraints(plan.kern, plan.ctl, plan.mode, None, out, p, head[-2])
-        dense = plan.dense_ends
         status = out[0]
         if status == FINISHED and (len(out) == 6 or out[7] is None):   # most runs: at once
-            ce = plan.ce
-            return Trajectory._of_loop(scene, out, p, plan.method.name, _FINISHED_TEXT,
-                                       wall, plan.kern, None if dense is None else dense[0],
-                                       () if ce is None else ce.names)
+            return Trajectory._of_made(plan.made, scene, out, p, wall)
+        dense = plan.dense_ends
         if dense is not None:    # stopped inside a step or not
             dense = dense[status == EVENT or status == SINGULAR]
         return trajectory(scene, plan.method.name, out, wall, plan.kern, plan.ce, p,
