@@ -105,3 +105,27 @@ def test_budget_counts_every_piece(scenes, monkeypatch):
     got = scene.run(**kw)
     got = scene.run(**kw)
     assert got.status == want.status and np.array_equal(got.y, want.y)
+
+
+def test_the_record_holds_its_pieces(scenes):
+    """The driver's record: the summary it returns (counts over the pieces, the switch
+    times) is that of its rows ``I`` and ``F``, and ``B`` holds ``F``, ``TS``, ``YS`` one
+    after the other (``chart_driver.unpacked``), the rows' first time and the run's
+    last state among them."""
+    from jetnh.numeric import chart_driver as cd
+
+    scene = scenes["sleigh"]
+    kw = dict(method="dop853", save="final", rtol=1e-8, atol=1e-11)
+    scene.run(**kw)
+    tr = scene.run(**kw)
+    n_p, n_sw, n_rows, I, B = tr._segments._made[-1]
+    n = len(scene.state_names)
+    F, TS, YS = cd.unpacked((n_p, n_sw, n_rows, I, B), n)
+    assert n_p >= 2 and n_sw == len(tr.switches) >= 1
+    assert tr._counts[0] == tuple(I[:n_p, cd.C_STEPS:cd.C_NFEV + 1].sum(axis=0).tolist())
+    assert [s["t"] for s in tr.switches] == F[:n_sw, cd.SW_T].tolist()
+    assert I[:n_p, cd.C_ROWS].sum() == n_rows == TS.shape[0] == YS.shape[0]
+    assert B.shape[0] == F.size + TS.size + YS.size and F.shape == (max(n_p, n_sw),
+                                                                    cd.N_F + 3 * n)
+    assert TS[0] == scene.t_span[0] and TS[-1] == tr.t[-1] == scene.t_span[1]
+    assert np.array_equal(F[n_p - 1, cd.N_F + n:cd.N_F + 2 * n], YS[-1])

@@ -846,49 +846,49 @@ def _driven(home, at, plan, y0, p, build, tic, key):
         return None
     entry, addr, n_sing, edge_dir, edge_max = got
     halt = _HALT.copy()
-    code, n_p, n_sw, I, F, TS, YS = interrupt.call(entry, halt, None, (
+    (code, n_p, n_sw, n_rows, status, steps, rejected, nfev, partial, once, I,
+     B) = interrupt.call(entry, halt, None, (
         addr, n_sing, plan.t0, plan.t1, y0, p, plan.ctl, plan.te, plan.mode,
         float(plan.singular_tol), edge_dir, edge_max, loops.NO_EVENTS, halt, at._table,
         at._addr, at.eps, 0))
     wall = time.perf_counter() - tic
     if code:
         return None
-    # (the record's rows as lists: a few numbers each, read faster than numpy's)
-    cd, method = chart_driver, plan.method.name
-    rows = I[:max(n_p, n_sw)].tolist()
-    last = rows[n_p - 1]
-    once = n_p == 1 and not n_sw and not last[cd.C_CUT]    # (never at the edge)
-    if once:
+    method, record = plan.method.name, (n_p, n_sw, n_rows, I, B)
+    if once:                                # (never at the edge)
         at._reaches[key] = False
-    if last[cd.C_STATUS] != FINISHED:       # (the reasons of its stop: ``stitch``)
-        parts = _recorded_parts(at, plan, p, build, wall, (n_p, I, F, TS, YS))
-        return stitch(home, at, method, p, parts, _switches(at, n_sw, rows, F), (),
-                      plan.mode, wall)
-    steps = rejected = nfev = 0
-    for row in rows[:n_p]:
-        steps += row[cd.C_STEPS]
-        rejected += row[cd.C_REJECTED]
-        nfev += row[cd.C_NFEV]
+    if status != FINISHED:                  # (the reasons of its stop: ``stitch``)
+        parts = _recorded_parts(at, plan, p, build, wall, record)
+        return stitch(home, at, method, p, parts, _switches(at, record), (), plan.mode,
+                      wall)
     counts = ((steps, rejected, nfev), wall, home.projected)
     dense = plan.dense_ends
     if dense is not None:
-        dense = dense[rows[0][cd.C_PARTIAL]]
+        dense = dense[partial]
     if once:
-        return Trajectory._finished(home, (TS, YS, last[cd.C_ROWS]), p, method,
-                                    _FINISHED_TEXT, counts, plan.kern, dense)
+        _, TS, YS = chart_driver.unpacked(record, len(home.state_names))
+        return Trajectory._finished(home, (TS, YS, n_rows), p, method, _FINISHED_TEXT,
+                                    counts, plan.kern, dense)
     return Trajectory._switched(home, p, method, _FINISHED_TEXT, counts, at.own.kernels,
-                                dense, _Recorded(at, plan, p, build, wall,
-                                                 (n_p, I, F, TS, YS)),
-                                tuple(_switches(at, n_sw, rows, F)))
+                                dense, _Recorded(at, plan, p, build, wall, record),
+                                _switches(at, record))
 
 
-def _switches(at, n_sw, rows, F) -> list:
+def _switches(at, record) -> tuple:
     """The switches ``{"t", "from", "to"}`` of a run that ``chart_driver`` recorded
-    (``rows``: the first rows of its integers ``I`` as lists)."""
-    splits, cd = at.splits, chart_driver
-    return [{"t": t, "from": list(splits[rows[j][cd.SW_FROM]]),
-             "to": list(splits[rows[j][cd.SW_TO]])}
-            for j, t in enumerate(F[:n_sw, cd.SW_T].tolist())]
+    (``record``: ``(pieces, switches, rows, I, B)``; switch ``j``'s time is ``F[j, SW_T]``,
+    at ``B[j * width + SW_T]``; a loop of ``item`` reads: the fastest for a few)."""
+    splits, n_sw, I, B = at.splits, record[1], record[3], record[4]
+    width = _N_F + 3 * len(at.home.state_names)
+    out = []
+    for j in range(n_sw):
+        out.append({"t": B.item(j * width + _SW_T), "from": [*splits[I.item(j, _SW_FROM)]],
+                    "to": [*splits[I.item(j, _SW_TO)]]})
+    return tuple(out)
+
+
+_N_F, _SW_T, _SW_FROM, _SW_TO = (chart_driver.N_F, chart_driver.SW_T, chart_driver.SW_FROM,
+                                 chart_driver.SW_TO)
 
 
 def _drive_inputs(at, plan, key):
@@ -931,11 +931,13 @@ def _drive_inputs(at, plan, key):
 
 def _recorded_parts(at, plan, p, build, wall, record):
     """``follow``'s parts ``[(chart, piece, what re-running it needs)]`` of the run
-    ``chart_driver`` recorded (``record``: its pieces and rows)."""
+    ``chart_driver`` recorded (``record``: ``(pieces, switches, rows, I, B)``,
+    ``chart_driver.unpacked``)."""
     from . import chart_driver as cd
 
-    n_p, I, F, TS, YS = record
     n = len(at.home.state_names)
+    n_p, I = record[0], record[3]
+    F, TS, YS = cd.unpacked(record, n)
     ctl, make = plan.ctl, _Piece.maker(build)
     parts = []
     for k in range(n_p):

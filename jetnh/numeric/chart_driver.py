@@ -17,7 +17,13 @@ do -- a chart without kernels or events yet, a step start that needs the loop ru
 a piece that would watch nothing -- it hands the run back (``HANDED_BACK``) and the run
 is made by ``follow`` from its start.
 
-The record (``drive``'s return): ``(code, pieces, switches, I, F, TS, YS)``; piece ``k``
+The record (``drive``'s return, ``_record``): ``(code, pieces, switches, rows, status,
+steps, rejected, evaluations, partial, once, I, B)`` -- the last piece's status, the
+counts summed over the pieces, whether the first piece's last step was partial and
+whether the run was one piece that never reached the edge (what the run's Trajectory
+needs at once), the integers ``I`` and one float array ``B`` holding ``F``, ``TS`` and
+``YS`` one after the other (``F`` with a row per piece or switch, whichever are more;
+every array a compiled call returns costs ~0.4 us to box); piece ``k``
 has ``I[k] = (split, status, rows, steps, rejected, evaluations, events, singular index,
 first row in TS/YS, max_steps, n_steps, partial last step, watched the edge, last event,
 the plan's own control, cut at its last step's start)`` and ``F[k] = (t start, t end asked, t reached, event time,
@@ -81,6 +87,48 @@ def _rows(TS, YS, m, n_new):
     return TS2, YS2
 
 
+@numba.njit(error_model="numpy", nogil=True)
+def _record(code, n_p, n_sw, n_rows, I, F, TS, YS):
+    """``_drive``'s return (the module docstring): the summary of its pieces, ``I``, and
+    ``F[:max(n_p, n_sw)]``, ``TS[:n_rows]``, ``YS[:n_rows]`` copied into one array."""
+    m = max(n_p, n_sw)
+    w, n = F.shape[1], YS.shape[1]
+    B = np.empty(m * w + n_rows * (1 + n))
+    k = 0
+    for r in range(m):
+        for c in range(w):
+            B[k] = F[r, c]
+            k += 1
+    for r in range(n_rows):
+        B[k] = TS[r]
+        k += 1
+    for r in range(n_rows):
+        for c in range(n):
+            B[k] = YS[r, c]
+            k += 1
+    status = steps = rejected = nfev = 0
+    for r in range(n_p):
+        steps += I[r, C_STEPS]
+        rejected += I[r, C_REJECTED]
+        nfev += I[r, C_NFEV]
+    if n_p > 0:
+        status = I[n_p - 1, C_STATUS]
+    partial = n_p > 0 and I[0, C_PARTIAL] != 0
+    once = n_p == 1 and n_sw == 0 and I[0, C_CUT] == 0
+    return code, n_p, n_sw, n_rows, status, steps, rejected, nfev, partial, once, I, B
+
+
+def unpacked(record, n):
+    """``(F, TS, YS)`` of a record ``(pieces, switches, rows, I, B)`` of ``drive`` of
+    ``n`` states: views of ``B``."""
+    n_p, n_sw, n_rows, _, B = record
+    m = max(n_p, n_sw)
+    w = N_F + 3 * n
+    a = m * w
+    return (B[:a].reshape(m, w), B[a:a + n_rows], B[a + n_rows:a + n_rows * (1 + n)]
+            .reshape(n_rows, n))
+
+
 def _drive(addr, n_sing, t0, t1, y0, p, ctl, t_eval, mode, sing_tol, edge_dir, edge_max,
            no_events, halt, table, caddr, eps, cur):
     n = y0.shape[0]
@@ -96,11 +144,11 @@ def _drive(addr, n_sing, t0, t1, y0, p, ctl, t_eval, mode, sing_tol, edge_dir, e
     YS = np.empty((8, n))
     # the edge of the chart the run starts in, at its start (``atlas.own_edge``)
     if addr[cur, 0] == 0 or addr[cur, 2] == 0:
-        return HANDED_BACK, 0, 0, I, F, TS, YS
+        return _record(HANDED_BACK, 0, 0, 0, I, F, TS, YS)
     g = np.empty(1)
     _common.function_at(addr[cur, 2])(t0, y0, p, g)
     if g[0] < 0.0:
-        return HANDED_BACK, 0, 0, I, F, TS, YS
+        return _record(HANDED_BACK, 0, 0, 0, I, F, TS, YS)
     direction = 1.0 if t1 >= t0 else -1.0
     h_fixed = (t1 - t0) / ctl.n_steps if ctl.n_steps > 0 else 0.0
     y = y0.copy()
@@ -149,7 +197,7 @@ def _drive(addr, n_sing, t0, t1, y0, p, ctl, t_eval, mode, sing_tol, edge_dir, e
                     j += 1
                 seg_te = t_eval[j:]
         if addr[chart, 0] == 0 or addr[chart, 2] == 0 or (not edge and n_sing[chart] == 0):
-            return HANDED_BACK, n_p, n_sw, I, F, TS, YS
+            return _record(HANDED_BACK, n_p, n_sw, n_rows, I, F, TS, YS)
         if edge:
             watch = Watch(n_sing[chart], sing_tol, edge_dir, edge_max)
             uev = addr[chart, 2]
@@ -182,7 +230,7 @@ def _drive(addr, n_sing, t0, t1, y0, p, ctl, t_eval, mode, sing_tol, edge_dir, e
                     if src <= 0:
                         src = -1
                 else:                   # (the loop run again: ``follow``)
-                    return HANDED_BACK, n_p, n_sw, I, F, TS, YS
+                    return _record(HANDED_BACK, n_p, n_sw, n_rows, I, F, TS, YS)
             if src < 0:
                 t_k = t
                 for i in range(n):
@@ -265,7 +313,7 @@ def _drive(addr, n_sing, t0, t1, y0, p, ctl, t_eval, mode, sing_tol, edge_dir, e
         else:
             target = _change(t, y, p, table, caddr, eps, chart, new)
             if target <= -2:
-                return HANDED_BACK, n_p, n_sw, I, F, TS, YS
+                return _record(HANDED_BACK, n_p, n_sw, n_rows, I, F, TS, YS)
         if target < 0:
             if back:                    # approach the edge (``atlas._approach``)
                 near, near_span, near_depth = True, span, depth
@@ -273,7 +321,7 @@ def _drive(addr, n_sing, t0, t1, y0, p, ctl, t_eval, mode, sing_tol, edge_dir, e
                 edge = False
             continue
         if addr[target, 0] == 0:
-            return HANDED_BACK, n_p, n_sw, I, F, TS, YS
+            return _record(HANDED_BACK, n_p, n_sw, n_rows, I, F, TS, YS)
         I, F = _room(I, F, n_sw)
         F[n_sw, SW_T] = t
         I[n_sw, SW_FROM], I[n_sw, SW_TO] = chart, target
@@ -281,7 +329,7 @@ def _drive(addr, n_sing, t0, t1, y0, p, ctl, t_eval, mode, sing_tol, edge_dir, e
         chart = target
         for i in range(n):
             y[i] = new[i]
-    return DONE, n_p, n_sw, I, F, TS, YS
+    return _record(DONE, n_p, n_sw, n_rows, I, F, TS, YS)
 
 
 _C1, _C2 = f8[::1], numba.types.Array(i8, 2, "C")
