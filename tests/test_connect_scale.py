@@ -3,6 +3,7 @@ units and the origin of the coordinates)."""
 
 import math
 
+import numpy as np
 import pytest
 import sympy as sp
 from hypothesis import given, settings, strategies as st
@@ -151,3 +152,76 @@ def test_returning_angle_connected_in_any_units(f):
     assert c.initial["x_t"] == pytest.approx(f / math.sin(2.0), rel=1e-8)
     assert c.trajectory["th"][-1] == pytest.approx(0.3, abs=1e-9)
     assert c.relative_residual <= 1e-9
+
+
+def _heisenberg_in_units():
+    """Heisenberg in X = a x, Y = b y, Z = c z, its constraint times k (the multiplier
+    in units 1 / k): the same motions in every unit."""
+    a, b, c, k = sp.symbols("a b c k")
+    J = jn.JetSpace("x y z")
+    (x, y, z), (xd, yd, zd) = J.q, J.qd
+    return jn.System(J, (xd**2 / a**2 + yd**2 / b**2) / 2,
+                     [k * (zd / c - (x / a * yd / b - y / b * xd / a) / 2)],
+                     dependent=[z])
+
+
+_HU = _heisenberg_in_units()
+_UNITS = st.sampled_from([1e-6, 1e-3, 1.0, 1e3, 1e6])
+
+
+@settings(deadline=None, max_examples=6)
+@given(_UNITS, st.sampled_from([1e-8, 1.0, 1e8]))
+def test_regular_start_judged_free_of_units(f, k):
+    """The straight line to (1, 0.5, 0.2) with the coordinates in units 1 / f and the
+    multiplier in units 1 / k: its shooting Jacobian has the same unit-free singular
+    values (rows over their displacement, columns over their norm), so the guess is
+    kept in every unit (before: judged on the raw Jacobian, where a multiplier in units
+    1e8 makes its column 1e-8 of the others', and the guess was moved off)."""
+    from jetnh.numeric.connect.problem import _scene
+    from jetnh.numeric.connect.shooting import singular_values
+    from jetnh.numeric.connect.solve import Search
+
+    got = []
+    for a, kk in ((1.0, 1.0), (f, k)):
+        q0 = {"x": 0.0, "y": 0.0, "z": 0.0}
+        q1 = {"x": a, "y": 0.5 * a, "z": 0.2 * a}
+        line = {"x_t": q1["x"], "y_t": q1["y"], "lambda_z": 0.0}
+        scene = _scene(_HU, "vakonomic", {"a": a, "b": a, "c": a, "k": kk},
+                       lambda: {**q0, **line}, (0.0, 1.0))
+        atol = [1e-12 * (1.0 / kk if n.startswith("lambda") else a)
+                for n in scene.state_names]                 # in each state's units
+        search = Search(scene, q0, q1, tuple(line), {}, 1e-11, atol, "dop853", 1e-9)
+        u0 = np.array(list(line.values()))
+        end = search.endpoint(u0)
+        got.append(singular_values(search.unit_free(end[1])))
+        assert search.regular(end)
+        assert np.array_equal(search.regular_start(u0, q0, q1, 1.0, 2), u0)
+    assert got[1] == pytest.approx(got[0], rel=1e-6)
+
+
+@settings(deadline=None, max_examples=8)
+@given(_UNITS, _UNITS, st.sampled_from([1e-8, 1.0, 1e8]), st.floats(-50.0, 50.0))
+def test_matching_scales_follow_the_units(f, g, k, off):
+    """Multiple shooting's matching conditions are met relative to each state's own
+    size along the nodes, free of its unit and of the coordinates' origin: x, y in
+    units 1 / f, z in 1 / g, the multiplier in 1 / k and the whole start moved by
+    ``off`` (in units 1) scale each state's scale by its unit (before: 1 + |Y|, an
+    absolute 1e-9 on states of size 1e-6, and the origin's |Y| on a coordinate)."""
+    from jetnh.numeric.connect.problem import _scene
+    from jetnh.numeric.connect.solve import Search, _Segments
+
+    got = []
+    for a, c, kk, o in ((1.0, 1.0, 1.0, 0.0), (f, g, k, off)):
+        q0 = {"x": o * a, "y": o * a, "z": o * c}
+        q1 = {"x": (o + 1.0) * a, "y": (o + 0.5) * a, "z": (o + 0.2) * c}
+        u = {"x_t": 0.8 * a, "y_t": -0.3 * a, "lambda_z": 0.7 / kk}
+        scene = _scene(_HU, "vakonomic", {"a": a, "b": a, "c": c, "k": kk},
+                       lambda: {**q0, **u}, (0.0, 1.0))
+        search = Search(scene, q0, q1, tuple(u), {}, 1e-11, 1e-12, "dop853", 1e-9)
+        seg = _Segments(search, 4, 1e-9)
+        unit = np.array([{"x": a, "y": a, "z": c}.get(n, a if n.endswith("_t") else 1 / kk)
+                         for n in scene.state_names])
+        inner = seg.scale(seg.guess(np.array(list(u.values()))))[:3 * len(unit)]
+        got.append(inner.reshape(3, -1) / unit)
+    # (the rounding of the moved origin's values aside: 16 ulps of |Y| / tol)
+    assert got[1] == pytest.approx(got[0], rel=1e-9, abs=1e-4 * (1.0 + abs(off)))

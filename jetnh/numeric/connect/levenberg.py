@@ -150,8 +150,9 @@ def levenberg_marquardt(evaluate, u, scale, tol, max_iter, rcond, stuck=None,
     the actual to the predicted decrease (Nielsen's rule), a failed run counted as no
     decrease; ``stuck(u, F, J)`` is told of every rejected step.  ``weight``: each
     condition's weight in |F|^2 (F and its row of J multiplied by it; default 1).
-    Converged: max |F| / ``scale`` <= ``tol``.  Returns ``(u, converged,
-    iterations)``."""
+    Converged: max |F| / ``scale`` <= ``tol``; ``scale`` may be a function of the
+    unknowns (``scale(u)``, read again at every accepted step).  Returns ``(u,
+    converged, iterations)``."""
     got = evaluate(u)
     if got is None:
         return u, False, 0
@@ -160,7 +161,11 @@ def levenberg_marquardt(evaluate, u, scale, tol, max_iter, rcond, stuck=None,
     F, Jm = _scaled(got, u.size, inv)
     # converged: |F| <= limit (tol times the scale, weighted alike), entrywise
     limit = np.empty(F.shape)
-    limit[:] = tol * np.asarray(scale, dtype=float) * (1.0 if inv is None else inv)
+    moving = scale if callable(scale) else None
+
+    def bound(scale):
+        limit[:] = tol * np.asarray(scale, dtype=float) * (1.0 if inv is None else inv)
+    bound(scale if moving is None else moving(u))
     compiled = _step_entry()
     rcond = float(rcond)
     # (d is written by the first step before it is read)
@@ -180,6 +185,8 @@ def levenberg_marquardt(evaluate, u, scale, tol, max_iter, rcond, stuck=None,
             rho = (FF - F_new.dot(F_new)) / predicted
         if rho > 0:
             u, (F, Jm) = v, _scaled(trial, u.size, inv)
+            if moving is not None:
+                bound(moving(u))
             mu *= max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
             nu = 2.0
         else:

@@ -336,6 +336,9 @@ class Shooter:
         #: (``end_scale``)
         self.scale = end_scale([q0[c] for c in q1], list(q1.values()))
         self.start_named = [q0[c] for c in q1]
+        #: whether a named coordinate ends where it started (its ``own_scale`` is then
+        #: its excursion along the motion; else every own scale is ``scale``'s)
+        self.returns = any(float(q0[c]) == float(v) for c, v in q1.items())
         self.cols = [names.index(u) for u in unknowns]
         # as index arrays (a list is converted on every use)
         self._rows = np.array(self.rows, dtype=np.intp)
@@ -361,7 +364,10 @@ class Shooter:
 
     def own_scale(self, motion) -> list:
         """Each end condition's scale that ``tol`` is checked against, along ``motion``
-        (the named coordinates' ``own_scale``; the momenta's as ``scale``)."""
+        (the named coordinates' ``own_scale``; the momenta's as ``scale``): ``scale``
+        itself where none returns to its start (the same numbers, no excursion read)."""
+        if not self.returns:
+            return self.scale.tolist()
         n = len(self.rows)
         return own_scale(self.start_named, self.target[:n].tolist(),
                          excursion(motion, self.rows)) + self.scale[n:].tolist()
@@ -562,7 +568,8 @@ class Shooter:
     def regular_start(self, u0, q0, q1, T, n_velocities):
         """The default guess, moved off a point where the run stops before t1 (a speed
         that falls to a singular zero) or where the shooting Jacobian is rank-deficient
-        (zero velocities, a straight line along an abnormal direction): first to the
+        in any units (``regular``: zero velocities, a straight line along an abnormal
+        direction): first to the
         minimum-norm Gauss-Newton point of its run's sensitivities (``newton_point``:
         the motion the guess's linearisation says reaches the end), then by a fixed
         pattern of the size of the straight-line velocities, with the velocities
@@ -572,10 +579,9 @@ class Shooter:
         got = self.endpoint(u)
         reaching = None
         if got is not None:
-            usv = svd(got[1])               # one decomposition for both uses
-            if full_rank(usv[1]):
+            if self.regular(got):
                 return u
-            newton = self.newton_point(u, got, usv)
+            newton = self.newton_point(u, got)
             if newton is not None and self.regular(self.endpoint(newton)):
                 return newton
             reaching = u
@@ -592,12 +598,20 @@ class Shooter:
                 reaching = u if reaching is None else reaching
         return u0 if reaching is None else reaching
 
-    @staticmethod
-    def regular(got) -> bool:
+    def regular(self, got) -> bool:
         """Whether the ``endpoint`` ``got`` exists (the run reached t1) and its shooting
-        Jacobian has full rank by a margin (smallest singular value above 1e-6 of the
-        largest)."""
-        return got is not None and full_rank(singular_values(got[1]))
+        Jacobian, free of units (``unit_free``), has full rank by a margin (smallest
+        singular value above 1e-6 of the largest)."""
+        return got is not None and full_rank(singular_values(self.unit_free(got[1])))
+
+    def unit_free(self, Jm) -> np.ndarray:
+        """The shooting Jacobian ``Jm`` free of the units of the conditions and of the
+        unknowns: each condition's row over its scale (``scale``: a named coordinate's
+        over its displacement, one that returns to its start over the largest), then
+        each column over its norm."""
+        A = Jm / self.scale[:, None]
+        norms = np.sqrt((A * A).sum(axis=0))
+        return A / np.where(norms > 0, norms, 1.0)
 
     def newton_point(self, u, got, usv=None):
         """``u`` plus the minimum-norm Gauss-Newton step of its endpoint ``got`` (the
@@ -680,12 +694,15 @@ class Segments:
     end ``q_named(t1; Y_{k-1}) = end``.  The Jacobian is block bidiagonal: the segments'
     state transition matrices (their exact sensitivities) and -I."""
 
-    def __init__(self, shooter, k):
-        self.shooter, self.k = shooter, int(k)
+    def __init__(self, shooter, k, tol):
+        self.shooter, self.k, self.tol = shooter, int(k), tol
         t0, t1 = shooter.scene.t_span
         self.nodes = np.linspace(t0, t1, self.k + 1)
         self.n = len(shooter.y0)
         self.m = len(shooter.cols)
+        coordinates = {q.name for q in shooter.scene.system.J.q}
+        #: which states are coordinates (their origin is free: ``scale``)
+        self.coordinate = np.array([s in coordinates for s in shooter.scene.state_names])
 
     def guess(self, u):
         """``u`` and the inner states on the line from the start to the named end (the
@@ -734,8 +751,21 @@ class Segments:
                 Jm[r, cols[0]] = S[sh.rows][:, cols[1]]
         return F, Jm
 
-    def scale(self, U, target):
-        """Each condition's scale: 1 + |value| of the inner states, the shooter's
-        ``scale`` of the end conditions (``end_scale``; single shooting polishes the
-        answer, or the stitched motion is checked against it)."""
-        return np.concatenate([1.0 + np.abs(U[self.m:]), self.shooter.scale])
+    def scale(self, U):
+        """Each condition's scale at the unknowns ``U``, free of the units and the
+        origin of every state: a matching condition's is its state's own size along
+        the nodes (the start, the inner states and, for a named coordinate, its end),
+        a coordinate's its excursion from the start there (``excursion``'s, on the
+        nodes), any other state's (velocities, multipliers) its largest magnitude
+        there, with the rounding of the values (``ROUNDING`` max |Y| / ``tol``: a miss
+        below the doubles' resolution is met); the end conditions' the shooter's
+        ``scale`` (``end_scale``; single shooting polishes the answer, or the stitched
+        motion is checked against it)."""
+        sh = self.shooter
+        Y = np.vstack(self.split(U))
+        size = np.abs(Y).max(axis=0)
+        reach = np.abs(Y - Y[0]).max(axis=0)
+        named = np.abs(sh.target[:len(sh.rows)] - Y[0, sh.rows])
+        reach[sh.rows] = np.maximum(reach[sh.rows], named)
+        own = np.where(self.coordinate, reach, size) + ROUNDING * size / self.tol
+        return np.concatenate([np.tile(own, self.k - 1), sh.scale])

@@ -27,8 +27,9 @@ DIRECT_SEGMENTS = 4
 #: not polished into one run (its own integration error, amplified so, leaves the
 #: motion: another run from the same start does not reach the end)
 POLISH_GROWTH = 1e10
-#: the ratio of the coordinates' largest end scale to a transversality condition's past
-#: which the search weighs that condition by it (``Search``)
+#: the ratio of the coordinates' largest end scale to a condition's (a coordinate's, a
+#: transversality condition's) past which the search weighs that condition by it
+#: (``Search``)
 FAR = 1e3
 #: the searches on to a tighter scale after one met ``end_scale`` (``Search.newton``)
 OWN_ROUNDS = 3
@@ -43,22 +44,23 @@ class Search(Shooter):
     def __init__(self, scene, q0, q1, *args, momenta=None):
         super().__init__(scene, q0, q1, *args)
         self.momenta = momenta
+        scale = self.scale
         if momenta is not None:
             self.target = np.concatenate([self.target, np.zeros(len(momenta.free))])
             # the momenta's transversality conditions: relative to the problem's own
             # momentum in each free coordinate (``problem.Momenta.scale``)
             t0, t1 = scene.t_span
-            momentum = momenta.scale(q0, q1, t0, t1 - t0)
-            # the search weighs the misses as they are, but a momentum whose scale is
-            # more than ``FAR`` from the coordinates' largest by that ratio, so that
-            # it neither drowns in nor swamps |F|^2 (a weight near 1 changes the
-            # search's path for nothing: a disk's free heading was missed at 1.7)
-            ratio = self.scale.max() / momentum
-            far = (ratio > FAR) | (ratio < 1.0 / FAR)
-            if far.any():
-                self.weight = np.concatenate([np.ones(len(self.scale)),
-                                              np.where(far, ratio, 1.0)])
-            self.scale = np.concatenate([self.scale, momentum])
+            scale = np.concatenate([scale, momenta.scale(q0, q1, t0, t1 - t0)])
+        # the search weighs the misses as they are, but a condition whose scale is
+        # more than ``FAR`` from the coordinates' largest by that ratio (a coordinate
+        # in other units, or a momentum), so that it neither drowns in nor swamps
+        # |F|^2, nor falls below ``rcond`` in the Jacobian (a weight near 1 changes
+        # the search's path for nothing: a disk's free heading was missed at 1.7)
+        ratio = self.scale.max() / scale
+        far = (ratio > FAR) | (ratio < 1.0 / FAR)
+        if far.any():
+            self.weight = np.where(far, ratio, 1.0)
+        self.scale = scale
 
     #: (scaled miss, u) of the run over the whole span that came nearest the end
     closest = None
@@ -179,8 +181,9 @@ class Search(Shooter):
                                          stuck, weight)
         # met on the search's scale (``end_scale``, which may measure a coordinate
         # that returns to its start by another's displacement): on to what ``tol``
-        # is checked against (``own_scale``) where that is tighter
-        for _ in range(OWN_ROUNDS):
+        # is checked against (``own_scale``) where that is tighter (only where one
+        # returns: else the two are the same)
+        for _ in range(OWN_ROUNDS if self.returns else 0):
             if not ok or rows is not None or target is not self.target \
                     or self.span != self.scene.t_span:
                 break
@@ -295,9 +298,7 @@ class Search(Shooter):
             return (ind + rest)[:len(self.unknowns)]
         from scipy.linalg import qr
 
-        Jm = got[1] / self.scale[:, None]
-        norms = np.linalg.norm(Jm, axis=0)
-        Jm = Jm / np.where(norms > 0, norms, 1.0)
+        Jm = self.unit_free(got[1])
         r = rank(singular_values(Jm), self.rcond)
         if r >= n_cond:
             return None
@@ -387,11 +388,10 @@ class Search(Shooter):
         ``POLISH_GROWTH`` (its own error, so amplified, exceeds the tolerance), the
         segments' answer is the motion: ``Stitched``.
         Returns ``(u, converged, iterations, stitched or None)``."""
-        seg = _Segments(self, k)
+        seg = _Segments(self, k, tol)
         U0 = seg.guess(u0)
         U, ok, its = levenberg_marquardt(lambda U: seg.evaluate(U, self.target), U0,
-                                         seg.scale(U0, self.target), tol, max_iter,
-                                         self.rcond)
+                                         seg.scale, tol, max_iter, self.rcond)
         if not ok:
             return u0, False, its, None
         try:
