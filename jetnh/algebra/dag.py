@@ -18,7 +18,7 @@ import hashlib
 
 import mpmath
 import sympy as sp
-from sympy.core.basic import Basic, _cmp_name
+from sympy.core.basic import Basic, _cmp_name, _get_postprocessors
 from sympy.core.function import ArgumentIndexError
 from sympy.core.mul import _keep_coeff
 from sympy.core.parameters import global_parameters
@@ -189,7 +189,32 @@ def build(head, args):
     rest.sort(key=_SORT_KEY)
     if coeff is not None:
         rest.insert(0, coeff)
-    return head._exec_constructor_postprocessors(head._from_args(rest, True))
+    obj = head._from_args(rest, True)
+    return head._exec_constructor_postprocessors(obj) if _postprocessed(head, rest) else obj
+
+
+#: (head, type of a child) -> whether sympy has constructor postprocessors for them
+#: (``_postprocessed``), and the registry's size they were looked up at
+_POST: dict = {}
+_POST_AT = [-1]
+
+
+def _postprocessed(head, args) -> bool:
+    """Whether sympy's constructor would run a postprocessor on ``head(*args)`` (some
+    child's type registers one for ``head``): looked up once per (head, type), not
+    through sympy's cache for every child of every node."""
+    registry = Basic._constructor_postprocessor_mapping
+    if _POST_AT[0] != len(registry):
+        _POST.clear()
+        _POST_AT[0] = len(registry)
+    for a in args:
+        key = (head, type(a))
+        found = _POST.get(key)
+        if found is None:
+            found = _POST[key] = bool(_get_postprocessors(head.__name__, type(a)))
+        if found:
+            return True
+    return False
 
 
 #: (class, class) -> the order of their names in ``Basic.compare`` (``_compare``)
