@@ -24,6 +24,32 @@ def expressions(draw):
     return J, F
 
 
+@given(expressions(), st.data())
+def test_shared_conversions_give_the_same_parts_as_one_objects(case, data):
+    """Parts converted with one memo (``cached_parts``: a system's Lagrangian and
+    constraints) are those converted apart; equal parts of two calls are one object."""
+    J, F = case
+    G = data.draw(jst.jet_expressions(J, order=1))
+    memo: dict = {}
+    for H in (F, G, F + G):
+        shared, apart = euler_parts(J, H, converted=memo), euler_parts(J, H)
+        assert shared.p == apart.p and shared.H == apart.H and shared.r == apart.r
+        assert shared.v == apart.v
+    again = euler_parts(J, F, converted=memo)
+    assert all(a is b for a, b in zip(again.p, euler_parts(J, F, converted=memo).p))
+
+
+def test_shared_conversions_keep_each_calls_symbols():
+    """A symbol of the same name with other assumptions is not taken from the memo."""
+    J = JetSpace("x")
+    xd = J.qd[0]
+    memo: dict = {}
+    positive, plain = sp.Symbol("m", positive=True), sp.Symbol("m")
+    assert euler_parts(J, positive * xd**2 / 2, converted=memo).p[0].has(positive)
+    p = euler_parts(J, plain * xd**2 / 2, converted=memo).p[0]
+    assert p.has(plain) and not p.has(positive)
+
+
 @given(expressions())
 def test_parts_reassemble_the_euler_operator_and_the_total_derivative(case):
     J, F = case

@@ -331,3 +331,40 @@ def test_size_counts_equal_parts_once():
     e = sp.Mul._from_args((a, sp.Basic.__new__(sp.sin, b)))
     assert len(dag.nodes(e)) == 6 and dag.size(e) == 5      # x, y, x + y, sin, the product
     assert dag.size(e, cap=2) == 2
+
+
+@given(children(), children())
+def test_compare_is_sympys_order(left, right):
+    """``_compare`` answers as ``Basic.compare`` for every pair (sums, products, powers,
+    functions, numbers; a FiniteSet inside keeps its own order), so ``build`` sorts as
+    sympy's constructor does."""
+    pool = left + right + [sp.Tuple(*left[:2], sp.FiniteSet(*right[:2]))]
+    for a in pool:
+        for b in pool:
+            assert dag._compare(a, b) == sp.Basic.compare(a, b)
+
+
+class _Once(sp.Symbol):
+    """A symbol whose products keep one of its kind (a constructor postprocessor)."""
+
+
+def _keep_one(expr):
+    kept = [a for a in expr.args if isinstance(a, _Once)]
+    return sp.Mul._from_args([a for a in expr.args if not isinstance(a, _Once)] + kept[:1])
+
+
+def test_build_runs_sympys_constructor_postprocessors():
+    """A postprocessor a child's class registers (after ``build`` has met the head) is
+    run by ``build`` as by sympy's constructor, and no longer once unregistered."""
+    x, y = sp.symbols("x y")
+    assert dag.build(sp.Mul, [x, y]) == x * y
+    a, b = _Once("a"), _Once("b")
+    sp.Basic._constructor_postprocessor_mapping[_Once] = {"Mul": [_keep_one]}
+    try:
+        want = sp.Mul(x, a, b)
+        got = dag.build(sp.Mul, [x, a, b])
+        assert len(want.args) == 2 and got == want and got.args == want.args
+    finally:
+        del sp.Basic._constructor_postprocessor_mapping[_Once]
+    sp.core.cache.clear_cache()          # sympy's lookup of them is cached too
+    assert dag.build(sp.Mul, [x, a, b]).args == sp.Mul(x, a, b).args == (x, a, b)

@@ -12,12 +12,13 @@ the graph once, remembering every node they have seen (by identity).
 from __future__ import annotations
 
 import contextlib
+import functools
 import gc
 import hashlib
 
 import mpmath
 import sympy as sp
-from sympy.core.basic import _args_sortkey
+from sympy.core.basic import Basic, _cmp_name, _get_postprocessors
 from sympy.core.function import ArgumentIndexError
 from sympy.core.mul import _keep_coeff
 from sympy.core.parameters import global_parameters
@@ -185,10 +186,77 @@ def build(head, args):
         return head.identity if coeff is None else coeff
     if coeff is None and len(rest) == 1:
         return rest[0]
-    rest.sort(key=_args_sortkey)
+    rest.sort(key=_SORT_KEY)
     if coeff is not None:
         rest.insert(0, coeff)
-    return head._exec_constructor_postprocessors(head._from_args(rest, True))
+    obj = head._from_args(rest, True)
+    return head._exec_constructor_postprocessors(obj) if _postprocessed(head, rest) else obj
+
+
+#: (head, type of a child) -> whether sympy has constructor postprocessors for them
+#: (``_postprocessed``), and the registry's size they were looked up at
+_POST: dict = {}
+_POST_AT = [-1]
+
+
+def _postprocessed(head, args) -> bool:
+    """Whether sympy's constructor would run a postprocessor on ``head(*args)`` (some
+    child's type registers one for ``head``): looked up once per (head, type), not
+    through sympy's cache for every child of every node."""
+    registry = Basic._constructor_postprocessor_mapping
+    if _POST_AT[0] != len(registry):
+        _POST.clear()
+        _POST_AT[0] = len(registry)
+    for a in args:
+        key = (head, type(a))
+        found = _POST.get(key)
+        if found is None:
+            found = _POST[key] = bool(_get_postprocessors(head.__name__, type(a)))
+        if found:
+            return True
+    return False
+
+
+#: (class, class) -> the order of their names in ``Basic.compare`` (``_compare``)
+_CLASS_ORDER: dict = {}
+#: class -> whether it keeps ``Basic.compare`` (``_compare``)
+_PLAIN: dict = {}
+
+
+def _compare(a, b) -> int:
+    """``Basic.compare(a, b)``, sympy's canonical order of a sum's terms and a product's
+    factors, the same answer for every pair: the order of two classes is looked up
+    (not found by name in sympy's list each time), the contents compared in a loop."""
+    if a is b:
+        return 0
+    ta, tb = type(a), type(b)
+    if ta is not tb:
+        c = _CLASS_ORDER.get((ta, tb))
+        if c is None:
+            c = _CLASS_ORDER[ta, tb] = _cmp_name(ta, tb)
+        if c:
+            return c
+    st, ot = a._hashable_content(), b._hashable_content()
+    if len(st) != len(ot):
+        return 1 if len(st) > len(ot) else -1
+    for x, y in zip(st, ot):
+        if x is y:
+            continue
+        if isinstance(x, Basic):
+            plain = _PLAIN.get(type(x))
+            if plain is None:
+                plain = _PLAIN[type(x)] = type(x).compare is Basic.compare
+            c = _compare(x, y) if plain else x.compare(y)     # FiniteSet: its own
+        elif isinstance(x, frozenset):
+            c = Basic(*x).compare(Basic(*y) if isinstance(y, frozenset) else y)
+        else:
+            c = (x > y) - (x < y)
+        if c:
+            return c
+    return 0
+
+
+_SORT_KEY = functools.cmp_to_key(_compare)
 
 
 def _add_terms(args):

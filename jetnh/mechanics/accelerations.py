@@ -55,6 +55,8 @@ KAPPA = ("none", "multipliers", "momenta")
 #: id(system) -> (weak reference, {(F, hessian): parts}): by identity, never by equality
 #: (equal systems built apart must not share nodes: comparing them walks trees)
 _PARTS: dict = {}
+#: the key, in a system's entry of ``_PARTS``, of the conversions its parts share
+_CONVERTED = object()
 
 
 class Accelerations(FrozenDict):
@@ -98,14 +100,17 @@ class EulerParts(NamedTuple):
     v: sp.Expr                   # dF/dt + dF/dq^s qdot^s
 
 
-def euler_parts(J, F, hessian: bool = True, rest: bool = True) -> EulerParts:
+def euler_parts(J, F, hessian: bool = True, rest: bool = True,
+                converted: dict | None = None) -> EulerParts:
     """The parts of [F] and D F for first-order F (``EulerParts``; without ``rest``, r
     is not computed: the principles whose multipliers do not weigh [f] need only p, v).
 
     The derivatives are taken by symengine (tens of times faster than sympy's diff on
     a long chain's Lagrangian) and returned as sympy expressions in the original
     symbols, each distinct subexpression converted once (``_to_sympy``); expressions of
-    undefined functions (``jetnh.mechanics.proof``) stay with sympy.
+    undefined functions (``jetnh.mechanics.proof``) stay with sympy.  ``converted`` (a
+    dict, filled here) carries the conversions over several calls (the parts of one
+    system's Lagrangian and constraints share subexpressions: converted once, one object).
     """
     n = J.n
     if F.has(AppliedUndef, sp.Derivative, sp.Subs):
@@ -121,7 +126,7 @@ def euler_parts(J, F, hessian: bool = True, rest: bool = True) -> EulerParts:
                 flat += [e for row in x for e in (row if isinstance(row, list) else [row])]
             elif x is not None:
                 flat.append(x)
-        out = iter(_to_sympy(flat, originals))
+        out = iter(_to_sympy(flat, originals, converted))
         p = [next(out) for _ in range(n)]
         H = [[next(out) for _ in range(n)] for _ in range(n)] if hessian else None
         r = [next(out) for _ in range(n)] if rest else None
@@ -130,11 +135,17 @@ def euler_parts(J, F, hessian: bool = True, rest: bool = True) -> EulerParts:
                       None if r is None else sp.Matrix(r), v)
 
 
-def _to_sympy(exprs, originals: dict) -> list:
+def _to_sympy(exprs, originals: dict, memo: dict | None = None) -> list:
     """symengine expressions as sympy ones, each distinct subexpression converted once
     (symengine's own conversion walks the tree) by the constructor symengine's would
-    call; symbols become ``originals[name]`` (the user's, with their assumptions)."""
-    done: dict = {}
+    call; symbols become ``originals[name]`` (the user's, with their assumptions).
+    ``memo`` (a dict, filled here) carries the conversions over calls whose symbols
+    agree (a call with another Symbol of a name converted before starts afresh)."""
+    memo = {} if memo is None else memo
+    done, names = memo.setdefault("nodes", {}), memo.setdefault("names", {})
+    if any(names.get(k, v) is not v for k, v in originals.items()):
+        done, names = {}, {}
+    names.update(originals)
     for root in exprs:
         stack = [(root, False)]
         while stack:
@@ -226,7 +237,8 @@ def cached_parts(system, F, hessian=True, rest=False) -> EulerParts:
     cache = entry[1]
     found = cache.get((F, hessian))
     if found is None or (rest and found.r is None):
-        cache[F, hessian] = found = euler_parts(system.J, F, hessian, rest)
+        cache[F, hessian] = found = euler_parts(system.J, F, hessian, rest,
+                                                cache.setdefault(_CONVERTED, {}))
     return found
 
 
