@@ -83,6 +83,21 @@ def test_a_parameter_at_a_rounded_zero_of_its_row():
         assert off.verdict == NOT_STEADY
 
 
+def test_a_parameter_at_the_edge_of_its_domain_keeps_the_others_rounding():
+    """x'' = -x + G sin(a) - sqrt(1 - e) x at x = 0, a = pi rounded: e = 1 (e (1 + NUDGE)
+    makes sqrt(1 - e) undefined) leaves a's rounding in the allowance, so x = 0 is
+    steady at e = 1 as at e = 0.5 (was "not a steady motion": one undefined difference
+    zeroed the whole row)."""
+    J = jn.JetSpace("x")
+    (x,), (xt,) = J.q, J.qd
+    G, a, e = sp.symbols("G a e")
+    S = jn.System(J, xt**2 / 2 - x**2 / 2 + G * sp.sin(a) * x - sp.sqrt(1 - e) * x**2 / 2)
+    for ev in (0.5, 1.0):
+        P = {"G": 1.0, "a": np.pi, "e": ev}
+        assert jn.linearize(S, at={"x": 0.0, "x_t": 0.0}, params=P).verdict == "marginal"
+        assert jn.linearize(S, at={"x": 1e-9, "x_t": 0.0}, params=P).verdict == NOT_STEADY
+
+
 # ---------------------------------------------------------------------- exp(g t) and t
 @lru_cache(maxsize=None)
 def _modulated():

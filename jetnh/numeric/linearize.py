@@ -1556,21 +1556,28 @@ def _inputs(ck, t: float, y, p, rows) -> np.ndarray:
     ``y``: the rounding of the parameters and of t through the rates, by central
     differences (relative step ``NUDGE``: the error, NUDGE^2 of the value and
     eps/NUDGE of the terms, is far below what the steady test needs of it); a value of
-    the rows and their derivatives, not of their form (0 where they are undefined)."""
+    the rows and their derivatives, not of their form (a term is 0 where its own
+    difference is undefined: the others keep their share)."""
     m = len(y)
     f1, f2, out = np.empty(m), np.empty(m), np.zeros(len(rows))
+
+    def add():
+        with np.errstate(invalid="ignore", over="ignore"):
+            d = np.abs(f1[rows] - f2[rows]) / (2 * NUDGE)
+        out[:] += np.where(np.isfinite(d), d, 0.0)
+
     for k in np.flatnonzero(p):
         q = p.copy()
         q[k] = p[k] * (1 + NUDGE)
         ck.rhs(t, y, q, f1)
         q[k] = p[k] * (1 - NUDGE)
         ck.rhs(t, y, q, f2)
-        out += np.abs(f1[rows] - f2[rows]) / (2 * NUDGE)
+        add()
     if t != 0.0:
         ck.rhs(t * (1 + NUDGE), y, p, f1)
         ck.rhs(t * (1 - NUDGE), y, p, f2)
-        out += np.abs(f1[rows] - f2[rows]) / (2 * NUDGE)
-    return np.where(np.isfinite(out), out, 0.0)
+        add()
+    return out
 
 
 def _entries(A1, A2, where) -> float:
