@@ -1305,8 +1305,8 @@ def _split(model: _Model, point: dict, state: dict, values: dict, keep, t: float
     if set(split) == set(own):
         return None
     if not split_invariant(model.principle, model.convention) or explicit:
-        if not given or ok and _agree(model, state, values, t, point, phi):
-            return None         # the own split still determines the point
+        if not given or ok:     # the own split still determines the point: _evaluate
+            return None         # judges given velocities against it
         why = ("the multipliers of the explicit form weigh the singular split"
                if explicit else f"the {model.principle} motions in the "
                f"{model.convention!r} convention depend on the split")
@@ -1322,22 +1322,6 @@ def _split(model: _Model, point: dict, state: dict, values: dict, keep, t: float
     keep = tuple(i for i in range(len(new.states))
                  if (i >= n or i in keep) and i not in new.inert)
     return new, moved, values, keep, t
-
-
-def _agree(model: _Model, state: dict, values: dict, t: float, point: dict, phi) -> bool:
-    """Whether the given dependent velocities of ``point`` are the values ``phi`` of the
-    own split to ``CONSISTENT`` of ``_size`` (their terms and the rounding of the
-    point through them: no number 1), as ``_evaluate`` judges them."""
-    y = np.array([state[nm] for nm in model.names], dtype=float)
-    p = np.array([values[nm] for nm in model.params], dtype=float)
-    ck = model.kernels(values, state, t)
-    rows = [model.coordinates.index(model.system.J.split(v)[0]) for v in model.dependent]
-    ta = model.frozen_time(tuple(rows), t)      # phi's time, as in _evaluate
-    for v, i, want in zip(model.dependent, rows, phi):
-        miss = abs(point[v.name] - want)
-        if not miss <= CONSISTENT * _size(model, i, ck, y, p, values, ta, want, miss):
-            return False
-    return True
 
 
 def _configuration(model: _Model, y, values: dict, t: float) -> dict:
