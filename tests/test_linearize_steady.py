@@ -135,6 +135,38 @@ def test_rows_that_overflow_at_the_point_are_refused_by_name(t):
     assert "singular point of the coordinates" not in str(err.value)
 
 
+@pytest.mark.parametrize("gv, gt", [(10.0, 625.0), (1e-4, 630.0)])
+def test_products_that_overflow_before_exp_are_left_out(gv, gt):
+    """b = 0, x = 0 at g t = 625..630 is asymptotically stable (eigenvalues of
+    [[0, 1], [-1, -g]]) where enough later times of the test stay finite."""
+    lin = jn.linearize(_modulated(), at={"x": 0.0, "x_t": 0.0},
+                       params={"g": gv, "b": 0.0}, t=gt / gv)
+    assert lin.verdict == "asymptotically stable"
+    want = np.linalg.eigvals(np.array([[0, 1], [-1.0, -gv]]))
+    np.testing.assert_allclose(np.sort(lin.eigenvalues.real), np.sort(want.real), rtol=1e-9)
+
+
+@pytest.mark.parametrize("gv, gt, bv", [(1e6, 620.0, 0.0), (10.0, 630.0, 0.1)])
+def test_products_that_overflow_at_later_times_are_left_out_by_name(gv, gt, bv):
+    """Later times where a product such as g exp(g t) in the Jacobian overflows though
+    exp(g t) is a double (g = 1e6 at g t = 696.5; g = 10 at t = 70.78, exp(707.8)) are
+    left out, not counted as "not a steady motion" (the verdict was that); with one
+    time left the error names the overflow."""
+    with pytest.raises(LinearizationError, match=r"overflow at the times.*exp\(g\*t\)"):
+        jn.linearize(_modulated(), at={"x": 0.0, "x_t": 0.0},
+                     params={"g": gv, "b": bv}, t=gt / gv)
+
+
+@pytest.mark.parametrize("gv, gt", [(10.0, 707.8), (1e6, 700.0)])
+def test_products_that_overflow_at_the_point_are_named(gv, gt):
+    """Where a product such as g exp(g t) overflows at the point itself (exp(g t) a
+    double), the error names the overflow, not a 0/0 of the coordinates."""
+    with pytest.raises(LinearizationError, match=r"overflow.*exp\(g\*t\)") as err:
+        jn.linearize(_modulated(), at={"x": 0.0, "x_t": 0.0},
+                     params={"g": gv, "b": 0.1}, t=gt / gv)
+    assert "singular point of the coordinates" not in str(err.value)
+
+
 # ---------------------------------------------------------------------- units of _split
 @pytest.mark.parametrize("unit", [1e-12, 1e-6, 1.0, 1e6])
 def test_given_dependent_velocities_are_judged_in_every_unit(unit):

@@ -115,9 +115,12 @@ dependence on t (a modulation of amplitude 0) give the frozen verdict again.  Ro
 that contain t but do not depend on it (the derivative vanishes identically, as in
 e^(g t) L0, whose rows carry exp(g t) exp(-g t)) are evaluated at t = 0: the same
 values at every t, without the overflow of those factors at g t ~ 710.  Rows that carry
-such factors and depend on t otherwise are evaluated at t: where an exponential in them
-overflows (argument beyond ``OVERFLOW``) at the point, a ``LinearizationError`` names it;
-at the later times of the test above, those times are left out.
+such factors and depend on t otherwise are evaluated at t: where they are not finite
+and an exponential in them is large (beyond ``LARGE``, half of ``OVERFLOW``: a product
+such as g exp(g t) overflows before exp(g t) does) at the point, a
+``LinearizationError`` names the overflow; at the later times of the test above (there
+also where an exponent has grown by more than ``GROWTH`` since the point), those times
+are left out.
 """
 
 from __future__ import annotations
@@ -170,6 +173,12 @@ CONDITION = 1e-8 / EPS
 CONSISTENT = 1e-9
 #: the largest argument of exp whose value is a double (log of the largest double)
 OVERFLOW = float(np.log(np.finfo(float).max))
+#: an exponent past which a non-finite value of the rows is taken for the overflow of a
+#: product (g exp(g t) overflows below ``OVERFLOW``), not for a 0/0
+LARGE = OVERFLOW / 2
+#: the growth of an exponent beyond its value at the point past which a non-finite value
+#: at a later time of ``_in_time`` is taken for an overflow: ln(1/eps)
+GROWTH = float(-np.log(np.finfo(float).eps))
 #: the verdict off a steady motion
 NOT_STEADY = "not a steady motion"
 #: the verdict at a steady motion of rows that depend on t
@@ -249,10 +258,19 @@ class _Model:
             self._programs[key] = _Program([self.sizes[i] for i in rows])
         return self._programs[key](self._point(y, values, t))
 
-    def overflow(self, rows, y, values: dict, t: float) -> str | None:
-        """Where an exponential in ``rows`` (state indices) overflows a double at state
-        ``y``, ``values`` and ``t`` (exp, sinh or cosh of an argument beyond
-        ``OVERFLOW``): a description of the first one, else None."""
+    def overflow(self, rows, y, values: dict, t: float, beyond: float = OVERFLOW
+                 ) -> str | None:
+        """Where an exponential in ``rows`` (state indices) grows beyond ``beyond`` at
+        state ``y``, ``values`` and ``t`` (exp of an argument, sinh or cosh of its
+        magnitude; ``OVERFLOW``: the value itself overflows a double): a description of
+        the largest, else None."""
+        top, what = self.growth(rows, y, values, t)
+        return what if top > beyond else None
+
+    def growth(self, rows, y, values: dict, t: float) -> tuple[float, str | None]:
+        """The largest exponent of an exponential in ``rows`` at state ``y``, ``values``
+        and ``t`` (exp's argument, sinh's or cosh's magnitude) and its description;
+        ``(-inf, None)`` where the rows have none."""
         key = ("overflow", tuple(rows))
         if key not in self._programs:
             heads = (sp.exp, sp.sinh, sp.cosh)
@@ -261,13 +279,12 @@ class _Model:
             self._programs[key] = (nodes, _Program([e.args[0] for e in nodes]))
         nodes, program = self._programs[key]
         if not nodes:
-            return None
+            return -np.inf, None
         with np.errstate(all="ignore"):
             args = program(self._point(y, values, t))
-        for e, a in zip(nodes, args):
-            if abs(a) > OVERFLOW and (a > 0 or not isinstance(e, sp.exp)):
-                return f"{e} is {e.func.__name__}({a:.6g})"
-        return None
+        grow = [a if isinstance(e, sp.exp) else abs(a) for e, a in zip(nodes, args)]
+        i = int(np.nanargmax(grow)) if not np.all(np.isnan(grow)) else 0
+        return float(grow[i]), f"{nodes[i]} is {nodes[i].func.__name__}({args[i]:.6g})"
 
     @_once
     def mass(self) -> "_Program":
@@ -857,8 +874,9 @@ def _in_time(lin: Linearization, bound: np.ndarray) -> tuple[bool, bool]:
     with holonomic constraints it must stay on g = 0 and A is taken in the chart there.
     A time where the point leaves g = 0 or the equations are undefined changes and is
     not steady; one where an exponential overflows (``_Model.overflow``: exp(g t) of
-    rows that cancel it on paper) is left out, and fewer than two left is a
-    LinearizationError."""
+    rows that cancel it on paper), or where the rows are undefined and an exponent is
+    beyond ``LARGE`` or has grown by ``GROWTH`` since t (a product such as g exp(g t)
+    overflowed), is left out, and fewer than two left is a LinearizationError."""
     model, keep, chart = lin._model, lin._keep, lin._chart
     y, p, ck = lin._y, lin._p, lin._kernels
     changes, steady = False, bool(np.all(np.abs(lin.rates) <= bound))
@@ -867,7 +885,7 @@ def _in_time(lin: Linearization, bound: np.ndarray) -> tuple[bool, bool]:
     size = float(np.linalg.norm(lin.A * D[None, :] / D[:, None])) if lin.A.size else 0.0
     span = max(abs(lin.t), 1.0 / size if 0 < size < np.inf else 0.0) or 1.0
     same = np.zeros(len(lin.rates))
-    over = []
+    over, top = [], model.growth(keep, y, model_values, lin.t)[0]
     for s in TIMES:
         t = lin.t + s * span
         if model.overflow(keep, y, model_values, t) is not None:
@@ -883,6 +901,9 @@ def _in_time(lin: Linearization, bound: np.ndarray) -> tuple[bool, bool]:
         try:
             A, rates, _, here = _jacobian(model, ck, y, p, model_values, t, keep, E)
         except LinearizationError:
+            if model.growth(keep, y, model_values, t)[0] > min(LARGE, top + GROWTH):
+                over.append(t)              # a product such as g exp(g t) overflowed
+                continue
             return True, False
         changes = changes or bool(
             _difference(A, lin.A, same, same, same) > REAL
@@ -892,7 +913,7 @@ def _in_time(lin: Linearization, bound: np.ndarray) -> tuple[bool, bool]:
         raise LinearizationError(
             f"the equations overflow at the times t = {', '.join(f'{v:.6g}' for v in over)} "
             f"that decide whether the point is a steady motion at every t "
-            f"({model.overflow(keep, y, model_values, over[0])}): factors such as "
+            f"({model.growth(keep, y, model_values, over[0])[1]}): factors such as "
             "exp(g t) exp(-g t) do not cancel in the compiled equations; linearize at "
             "another t, or with the factor cancelled in the equations")
     return changes, steady
@@ -1441,11 +1462,11 @@ def _settled(model, ck, y, p, values, t, rows, E):
     A, rates, rounding = at(y)
     if np.all(np.isfinite(A)) and np.all(np.isfinite(rates)):
         return A, rates, False, bound(y, rounding, rates)
-    over = model.overflow(rows, y, values, t)
+    over = model.overflow(rows, y, values, t, LARGE)
     if over is not None:
         raise LinearizationError(
-            f"the equations overflow at this point (t = {t:g}): {over}, beyond double "
-            "precision; factors that cancel on paper, such as exp(g t) exp(-g t) of a "
+            f"the equations overflow at this point (t = {t:g}): {over}, which (or "
+            "its products in the equations) is beyond double precision; factors that cancel on paper, such as exp(g t) exp(-g t) of a "
             "Lagrangian e^(g t) L0 whose other terms depend on t too, do not cancel in "
             "the compiled equations: linearize at an earlier t, in a unit of time or "
             "with parameter values that keep the argument below "
