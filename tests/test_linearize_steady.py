@@ -167,6 +167,20 @@ def test_products_that_overflow_at_the_point_are_named(gv, gt):
     assert "singular point of the coordinates" not in str(err.value)
 
 
+def test_the_overflow_advice_fits_its_argument():
+    """exp of a state (exp(x) at x = 800) is told to change the state, not t; exp(g t)
+    with g < 0 at t = -100 is told a t of smaller |argument|, not an earlier t."""
+    J = jn.JetSpace("x")
+    (x,), (xt,) = J.q, J.qd
+    with pytest.raises(LinearizationError, match=r"exp\(x\) is exp\(800\)") as err:
+        jn.linearize(jn.System(J, xt**2 / 2 - sp.exp(x)), at={"x": 800.0, "x_t": 0.0})
+    assert "e^(g t)" not in str(err.value) and "earlier" not in str(err.value)
+    with pytest.raises(LinearizationError, match=r"smaller \|argument\|") as err:
+        jn.linearize(_modulated(), at={"x": 0.0, "x_t": 0.0},
+                     params={"g": -10.0, "b": 0.1}, t=-100.0)
+    assert "earlier" not in str(err.value)
+
+
 # ---------------------------------------------------------------------- units of _split
 @pytest.mark.parametrize("unit", [1e-12, 1e-6, 1.0, 1e6])
 def test_given_dependent_velocities_are_judged_in_every_unit(unit):

@@ -264,13 +264,14 @@ class _Model:
         state ``y``, ``values`` and ``t`` (exp of an argument, sinh or cosh of its
         magnitude; ``OVERFLOW``: the value itself overflows a double): a description of
         the largest, else None."""
-        top, what = self.growth(rows, y, values, t)
-        return what if top > beyond else None
+        top, node, arg = self.growth(rows, y, values, t)
+        return f"{node} is {node.func.__name__}({arg:.6g})" if top > beyond else None
 
-    def growth(self, rows, y, values: dict, t: float) -> tuple[float, str | None]:
-        """The largest exponent of an exponential in ``rows`` at state ``y``, ``values``
-        and ``t`` (exp's argument, sinh's or cosh's magnitude) and its description;
-        ``(-inf, None)`` where the rows have none."""
+    def growth(self, rows, y, values: dict, t: float) -> tuple:
+        """``(exponent, node, argument)``: the largest exponent of an exponential in
+        ``rows`` at state ``y``, ``values`` and ``t`` (exp's argument, sinh's or cosh's
+        magnitude), its expression and its argument; ``(-inf, None, nan)`` where the
+        rows have none."""
         key = ("overflow", tuple(rows))
         if key not in self._programs:
             heads = (sp.exp, sp.sinh, sp.cosh)
@@ -279,12 +280,12 @@ class _Model:
             self._programs[key] = (nodes, _Program([e.args[0] for e in nodes]))
         nodes, program = self._programs[key]
         if not nodes:
-            return -np.inf, None
+            return -np.inf, None, np.nan
         with np.errstate(all="ignore"):
             args = program(self._point(y, values, t))
         grow = [a if isinstance(e, sp.exp) else abs(a) for e, a in zip(nodes, args)]
         i = int(np.nanargmax(grow)) if not np.all(np.isnan(grow)) else 0
-        return float(grow[i]), f"{nodes[i]} is {nodes[i].func.__name__}({args[i]:.6g})"
+        return float(grow[i]), nodes[i], float(args[i])
 
     @_once
     def mass(self) -> "_Program":
@@ -913,7 +914,7 @@ def _in_time(lin: Linearization, bound: np.ndarray) -> tuple[bool, bool]:
         raise LinearizationError(
             f"the equations overflow at the times t = {', '.join(f'{v:.6g}' for v in over)} "
             f"that decide whether the point is a steady motion at every t "
-            f"({model.growth(keep, y, model_values, over[0])[1]}): factors such as "
+            f"({model.overflow(keep, y, model_values, over[0], -np.inf)}): factors such as "
             "exp(g t) exp(-g t) do not cancel in the compiled equations; linearize at "
             "another t, or with the factor cancelled in the equations")
     return changes, steady
@@ -1464,14 +1465,18 @@ def _settled(model, ck, y, p, values, t, rows, E):
         return A, rates, False, bound(y, rounding, rates)
     over = model.overflow(rows, y, values, t, LARGE)
     if over is not None:
+        in_t = model.system.J.t in model.growth(rows, y, values, t)[1].free_symbols
         raise LinearizationError(
-            f"the equations overflow at this point (t = {t:g}): {over}, which (or "
-            "its products in the equations) is beyond double precision; factors that cancel on paper, such as exp(g t) exp(-g t) of a "
-            "Lagrangian e^(g t) L0 whose other terms depend on t too, do not cancel in "
-            "the compiled equations: linearize at an earlier t, in a unit of time or "
-            "with parameter values that keep the argument below "
-            f"{OVERFLOW:.6g}, or with the factor cancelled in the equations (e^(g t) "
-            "L0 is L0 with the forces -g dL0/dq_t)")
+            f"the equations overflow at this point (t = {t:g}): {over}, which (or its "
+            "products in the equations) is beyond double precision; "
+            + ("factors that cancel on paper, such as exp(g t) exp(-g t) of a "
+               "Lagrangian e^(g t) L0 whose other terms depend on t too, do not cancel in "
+               "the compiled equations: linearize at a t of smaller |argument|, in a unit "
+               "of time or with parameter values that keep it well below "
+               f"{OVERFLOW:.6g}, or with the factor cancelled in the equations (e^(g t) "
+               "L0 is L0 with the forces -g dL0/dq_t)" if in_t else
+               "linearize at states or parameter values that keep the argument well "
+               f"below {OVERFLOW:.6g}, or in other units or coordinates"))
     undefined = ~np.isfinite(A)
     singular = [c for c in range(len(rows))
                 if undefined[c].any() or not np.isfinite(rates[c])]
