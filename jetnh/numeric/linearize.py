@@ -176,6 +176,8 @@ OVERFLOW = float(np.log(np.finfo(float).max))
 #: an exponent past which a non-finite value of the rows is taken for the overflow of a
 #: product (g exp(g t) overflows below ``OVERFLOW``), not for a 0/0
 LARGE = OVERFLOW / 2
+#: the relative step of a parameter or of t in ``_inputs``' differences
+NUDGE = 2.0 ** -20
 #: the growth of an exponent beyond its value at the point past which a non-finite value
 #: at a later time of ``_in_time`` is taken for an overflow: ln(1/eps)
 GROWTH = float(-np.log(np.finfo(float).eps))
@@ -303,9 +305,9 @@ class _Model:
         diagonal, absolute values: an indefinite kinetic energy has negative entries; a
         zero entry D_ii is replaced by max_j M_ij^2 / D_jj, of the same unit, or, where
         all of a block's are zero, one by max_j |M_ij|): the same in every unit of every
-        coordinate where the diagonal is nonzero, and within a factor of its dimension of
-        the smallest under any diagonal scaling (van der Sluis); infinite where it is
-        singular."""
+        coordinate where the diagonal is nonzero, and for a definite M within a factor
+        of its dimension of the smallest under any diagonal scaling (van der Sluis);
+        infinite where it is singular."""
         n, m = len(self.coordinates), len(self.velocities)
         vals = self.mass(self._point(y, values, t))
         H = vals[:n * n].reshape(n, n)
@@ -1555,10 +1557,6 @@ def _settled(model, ck, y, p, values, t, rows, E):
                 "angles whose pole is elsewhere), or at a point off the singularity")
     z = y + step(dirs[0], (h_best[0] / 2, h_best[1] / 2))
     return A, rates, True, np.maximum(b, bound(z, at(z)[2]))
-
-
-#: the relative step of a parameter or of t in ``_inputs``' differences
-NUDGE = 2.0 ** -20
 
 
 def _inputs(ck, t: float, y, p, rows) -> np.ndarray:
