@@ -115,9 +115,12 @@ dependence on t (a modulation of amplitude 0) give the frozen verdict again.  Ro
 that contain t but do not depend on it (the derivative vanishes identically, as in
 e^(g t) L0, whose rows carry exp(g t) exp(-g t)) are evaluated at t = 0: the same
 values at every t, without the overflow of those factors at g t ~ 710.  Rows that carry
-such factors and depend on t otherwise are evaluated at t: where an exponential in them
-overflows (argument beyond ``OVERFLOW``) at the point, a ``LinearizationError`` names it;
-at the later times of the test above, those times are left out.
+such factors and depend on t otherwise are evaluated at t: where they are not finite
+and an exponential in them is large (beyond ``LARGE``, half of ``OVERFLOW``: a product
+such as g exp(g t) overflows before exp(g t) does) at the point, a
+``LinearizationError`` names the overflow; at the later times of the test above (there
+also where an exponent has grown by more than ``GROWTH`` since the point), those times
+are left out.
 """
 
 from __future__ import annotations
@@ -170,6 +173,14 @@ CONDITION = 1e-8 / EPS
 CONSISTENT = 1e-9
 #: the largest argument of exp whose value is a double (log of the largest double)
 OVERFLOW = float(np.log(np.finfo(float).max))
+#: an exponent past which a non-finite value of the rows is taken for the overflow of a
+#: product (g exp(g t) overflows below ``OVERFLOW``), not for a 0/0
+LARGE = OVERFLOW / 2
+#: the relative step of a parameter or of t in ``_inputs``' differences
+NUDGE = 2.0 ** -20
+#: the growth of an exponent beyond its value at the point past which a non-finite value
+#: at a later time of ``_in_time`` is taken for an overflow: ln(1/eps)
+GROWTH = float(-np.log(np.finfo(float).eps))
 #: the verdict off a steady motion
 NOT_STEADY = "not a steady motion"
 #: the verdict at a steady motion of rows that depend on t
@@ -249,10 +260,20 @@ class _Model:
             self._programs[key] = _Program([self.sizes[i] for i in rows])
         return self._programs[key](self._point(y, values, t))
 
-    def overflow(self, rows, y, values: dict, t: float) -> str | None:
-        """Where an exponential in ``rows`` (state indices) overflows a double at state
-        ``y``, ``values`` and ``t`` (exp, sinh or cosh of an argument beyond
-        ``OVERFLOW``): a description of the first one, else None."""
+    def overflow(self, rows, y, values: dict, t: float, beyond: float = OVERFLOW
+                 ) -> str | None:
+        """Where an exponential in ``rows`` (state indices) grows beyond ``beyond`` at
+        state ``y``, ``values`` and ``t`` (exp of an argument, sinh or cosh of its
+        magnitude; ``OVERFLOW``: the value itself overflows a double): a description of
+        the largest, else None."""
+        top, node, arg = self.growth(rows, y, values, t)
+        return f"{node} is {node.func.__name__}({arg:.6g})" if top > beyond else None
+
+    def growth(self, rows, y, values: dict, t: float) -> tuple:
+        """``(exponent, node, argument)``: the largest exponent of an exponential in
+        ``rows`` at state ``y``, ``values`` and ``t`` (exp's argument, sinh's or cosh's
+        magnitude), its expression and its argument; ``(-inf, None, nan)`` where the
+        rows have none."""
         key = ("overflow", tuple(rows))
         if key not in self._programs:
             heads = (sp.exp, sp.sinh, sp.cosh)
@@ -261,13 +282,12 @@ class _Model:
             self._programs[key] = (nodes, _Program([e.args[0] for e in nodes]))
         nodes, program = self._programs[key]
         if not nodes:
-            return None
+            return -np.inf, None, np.nan
         with np.errstate(all="ignore"):
             args = program(self._point(y, values, t))
-        for e, a in zip(nodes, args):
-            if abs(a) > OVERFLOW and (a > 0 or not isinstance(e, sp.exp)):
-                return f"{e} is {e.func.__name__}({a:.6g})"
-        return None
+        grow = [a if isinstance(e, sp.exp) else abs(a) for e, a in zip(nodes, args)]
+        i = int(np.nanargmax(grow)) if not np.all(np.isnan(grow)) else 0
+        return float(grow[i]), nodes[i], float(args[i])
 
     @_once
     def mass(self) -> "_Program":
@@ -285,9 +305,9 @@ class _Model:
         diagonal, absolute values: an indefinite kinetic energy has negative entries; a
         zero entry D_ii is replaced by max_j M_ij^2 / D_jj, of the same unit, or, where
         all of a block's are zero, one by max_j |M_ij|): the same in every unit of every
-        coordinate where the diagonal is nonzero, and within a factor of its dimension of
-        the smallest under any diagonal scaling (van der Sluis); infinite where it is
-        singular."""
+        coordinate where the diagonal is nonzero, and for a definite M within a factor
+        of its dimension of the smallest under any diagonal scaling (van der Sluis);
+        infinite where it is singular."""
         n, m = len(self.coordinates), len(self.velocities)
         vals = self.mass(self._point(y, values, t))
         H = vals[:n * n].reshape(n, n)
@@ -857,8 +877,9 @@ def _in_time(lin: Linearization, bound: np.ndarray) -> tuple[bool, bool]:
     with holonomic constraints it must stay on g = 0 and A is taken in the chart there.
     A time where the point leaves g = 0 or the equations are undefined changes and is
     not steady; one where an exponential overflows (``_Model.overflow``: exp(g t) of
-    rows that cancel it on paper) is left out, and fewer than two left is a
-    LinearizationError."""
+    rows that cancel it on paper), or where the rows are undefined and an exponent is
+    beyond ``LARGE`` or has grown by ``GROWTH`` since t (a product such as g exp(g t)
+    overflowed), is left out, and fewer than two left is a LinearizationError."""
     model, keep, chart = lin._model, lin._keep, lin._chart
     y, p, ck = lin._y, lin._p, lin._kernels
     changes, steady = False, bool(np.all(np.abs(lin.rates) <= bound))
@@ -867,7 +888,7 @@ def _in_time(lin: Linearization, bound: np.ndarray) -> tuple[bool, bool]:
     size = float(np.linalg.norm(lin.A * D[None, :] / D[:, None])) if lin.A.size else 0.0
     span = max(abs(lin.t), 1.0 / size if 0 < size < np.inf else 0.0) or 1.0
     same = np.zeros(len(lin.rates))
-    over = []
+    over, top = [], model.growth(keep, y, model_values, lin.t)[0]
     for s in TIMES:
         t = lin.t + s * span
         if model.overflow(keep, y, model_values, t) is not None:
@@ -883,6 +904,9 @@ def _in_time(lin: Linearization, bound: np.ndarray) -> tuple[bool, bool]:
         try:
             A, rates, _, here = _jacobian(model, ck, y, p, model_values, t, keep, E)
         except LinearizationError:
+            if model.growth(keep, y, model_values, t)[0] > min(LARGE, top + GROWTH):
+                over.append(t)              # a product such as g exp(g t) overflowed
+                continue
             return True, False
         changes = changes or bool(
             _difference(A, lin.A, same, same, same) > REAL
@@ -892,7 +916,7 @@ def _in_time(lin: Linearization, bound: np.ndarray) -> tuple[bool, bool]:
         raise LinearizationError(
             f"the equations overflow at the times t = {', '.join(f'{v:.6g}' for v in over)} "
             f"that decide whether the point is a steady motion at every t "
-            f"({model.overflow(keep, y, model_values, over[0])}): factors such as "
+            f"({model.overflow(keep, y, model_values, over[0], -np.inf)}): factors such as "
             "exp(g t) exp(-g t) do not cancel in the compiled equations; linearize at "
             "another t, or with the factor cancelled in the equations")
     return changes, steady
@@ -1305,8 +1329,8 @@ def _split(model: _Model, point: dict, state: dict, values: dict, keep, t: float
     if set(split) == set(own):
         return None
     if not split_invariant(model.principle, model.convention) or explicit:
-        if not given or ok and _agree(model, state, values, t, point, phi):
-            return None         # the own split still determines the point
+        if not given or ok:     # the own split still determines the point: _evaluate
+            return None         # judges given velocities against it
         why = ("the multipliers of the explicit form weigh the singular split"
                if explicit else f"the {model.principle} motions in the "
                f"{model.convention!r} convention depend on the split")
@@ -1322,22 +1346,6 @@ def _split(model: _Model, point: dict, state: dict, values: dict, keep, t: float
     keep = tuple(i for i in range(len(new.states))
                  if (i >= n or i in keep) and i not in new.inert)
     return new, moved, values, keep, t
-
-
-def _agree(model: _Model, state: dict, values: dict, t: float, point: dict, phi) -> bool:
-    """Whether the given dependent velocities of ``point`` are the values ``phi`` of the
-    own split to ``CONSISTENT`` of ``_size`` (their terms and the rounding of the
-    point through them: no number 1), as ``_evaluate`` judges them."""
-    y = np.array([state[nm] for nm in model.names], dtype=float)
-    p = np.array([values[nm] for nm in model.params], dtype=float)
-    ck = model.kernels(values, state, t)
-    rows = [model.coordinates.index(model.system.J.split(v)[0]) for v in model.dependent]
-    ta = model.frozen_time(tuple(rows), t)      # phi's time, as in _evaluate
-    for v, i, want in zip(model.dependent, rows, phi):
-        miss = abs(point[v.name] - want)
-        if not miss <= CONSISTENT * _size(model, i, ck, y, p, values, ta, want, miss):
-            return False
-    return True
 
 
 def _configuration(model: _Model, y, values: dict, t: float) -> dict:
@@ -1457,16 +1465,20 @@ def _settled(model, ck, y, p, values, t, rows, E):
     A, rates, rounding = at(y)
     if np.all(np.isfinite(A)) and np.all(np.isfinite(rates)):
         return A, rates, False, bound(y, rounding, rates)
-    over = model.overflow(rows, y, values, t)
+    over = model.overflow(rows, y, values, t, LARGE)
     if over is not None:
+        in_t = model.system.J.t in model.growth(rows, y, values, t)[1].free_symbols
         raise LinearizationError(
-            f"the equations overflow at this point (t = {t:g}): {over}, beyond double "
-            "precision; factors that cancel on paper, such as exp(g t) exp(-g t) of a "
-            "Lagrangian e^(g t) L0 whose other terms depend on t too, do not cancel in "
-            "the compiled equations: linearize at an earlier t, in a unit of time or "
-            "with parameter values that keep the argument below "
-            f"{OVERFLOW:.6g}, or with the factor cancelled in the equations (e^(g t) "
-            "L0 is L0 with the forces -g dL0/dq_t)")
+            f"the equations overflow at this point (t = {t:g}): {over}, which (or its "
+            "products in the equations) is beyond double precision; "
+            + ("factors that cancel on paper, such as exp(g t) exp(-g t) of a "
+               "Lagrangian e^(g t) L0 whose other terms depend on t too, do not cancel in "
+               "the compiled equations: linearize at a t of smaller |argument|, in a unit "
+               "of time or with parameter values that keep it well below "
+               f"{OVERFLOW:.6g}, or with the factor cancelled in the equations (e^(g t) "
+               "L0 is L0 with the forces -g dL0/dq_t)" if in_t else
+               "linearize at states or parameter values that keep the argument well "
+               f"below {OVERFLOW:.6g}, or in other units or coordinates"))
     undefined = ~np.isfinite(A)
     singular = [c for c in range(len(rows))
                 if undefined[c].any() or not np.isfinite(rates[c])]
@@ -1547,30 +1559,33 @@ def _settled(model, ck, y, p, values, t, rows, E):
     return A, rates, True, np.maximum(b, bound(z, at(z)[2]))
 
 
-#: the relative step of a parameter or of t in ``_inputs``' differences
-NUDGE = 2.0 ** -20
-
-
 def _inputs(ck, t: float, y, p, rows) -> np.ndarray:
     """sum_k |dx'_i/dp_k| |p_k| + |dx'_i/dt| |t| of each row ``i`` of ``rows`` at state
     ``y``: the rounding of the parameters and of t through the rates, by central
     differences (relative step ``NUDGE``: the error, NUDGE^2 of the value and
     eps/NUDGE of the terms, is far below what the steady test needs of it); a value of
-    the rows and their derivatives, not of their form (0 where they are undefined)."""
+    the rows and their derivatives, not of their form (a term is 0 where its own
+    difference is undefined: the others keep their share)."""
     m = len(y)
     f1, f2, out = np.empty(m), np.empty(m), np.zeros(len(rows))
+
+    def add():
+        with np.errstate(invalid="ignore", over="ignore"):
+            d = np.abs(f1[rows] - f2[rows]) / (2 * NUDGE)
+        out[:] += np.where(np.isfinite(d), d, 0.0)
+
     for k in np.flatnonzero(p):
         q = p.copy()
         q[k] = p[k] * (1 + NUDGE)
         ck.rhs(t, y, q, f1)
         q[k] = p[k] * (1 - NUDGE)
         ck.rhs(t, y, q, f2)
-        out += np.abs(f1[rows] - f2[rows]) / (2 * NUDGE)
+        add()
     if t != 0.0:
         ck.rhs(t * (1 + NUDGE), y, p, f1)
         ck.rhs(t * (1 - NUDGE), y, p, f2)
-        out += np.abs(f1[rows] - f2[rows]) / (2 * NUDGE)
-    return np.where(np.isfinite(out), out, 0.0)
+        add()
+    return out
 
 
 def _entries(A1, A2, where) -> float:
