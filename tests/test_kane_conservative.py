@@ -237,31 +237,6 @@ def test_a_potential_is_periodic_wherever_the_load_is():
         assert got is not None and all(sp.expand(sp.diff(got - V, q)) == 0 for q in J.q), Q
 
 
-def test_an_integral_sympy_cannot_do_quickly_leaves_a_force_and_a_warning(monkeypatch):
-    """sympy's integrate of this load runs for minutes (more than 5 on the 2026-11-28
-    host): the search for its potential is cut at POTENTIAL_SECONDS, the load stays a
-    force, a JetnhWarning says so, and sympy's global switches and the cyclic garbage
-    collector are as before."""
-    import gc
-
-    from sympy.core.parameters import global_parameters as gp
-
-    from jetnh.mechanics import kane_bridge
-
-    monkeypatch.setattr(kane_bridge, "POTENTIAL_SECONDS", 0.5)
-    switches = (gp.evaluate, gp.distribute, gp.exp_is_pow)
-    load = lambda q: -_k * sp.exp(-q**2) * sp.cos(q) ** 3 * q**5 / (2 + sp.sin(q))  # noqa: E731
-    with pytest.warns(jn.errors.JetnhWarning, match="not found within 0.5 s.*force"):
-        S = _line(load)
-    (q,), (qt,) = S.J.q, S.J.qd
-    assert sp.expand(S.forces[q] - load(q)) == 0
-    assert sp.expand(S.L - sp.Symbol("m") * qt**2 / 2) == 0
-    assert (gp.evaluate, gp.distribute, gp.exp_is_pow) == switches and gc.isenabled()
-    # the thread goes on as before: a quick integral within the budget
-    x = sp.Symbol("x")
-    assert kane_bridge._within(5.0, sp.integrate, sp.sin(x), x) == -sp.cos(x)
-
-
 def test_piecewise_load_is_refused_by_the_system_not_by_the_integration():
     """A Piecewise load is not tried as a potential (its Jacobian has no value at random
     points: a raw ValueError before); the System refuses it, naming the fix."""

@@ -9,9 +9,9 @@ expression of the model is read with u replaced by U:
   loads that have one, a function of the configuration, checked against their
   generalized forces: a force constant in the inertial frame on a point located from a
   point at rest, V = -F . r; a load whose generalized forces are free of t and qdot
-  with a symmetric Jacobian, such as a spring F = -k r, integrated (within
-  ``POTENTIAL_SECONDS``; past it a JetnhWarning) and kept only where V stands for the
-  load wherever it is defined and is 2 pi-periodic in every coordinate the load is
+  with a symmetric Jacobian, such as a spring F = -k r, integrated (sympy's integrate,
+  without a time bound) and kept only where V stands for the load wherever it is
+  defined and is 2 pi-periodic in every coordinate the load is
   (a torque tau on an angle has no potential: V = -tau theta; a torsion spring's
   k theta^2 / 2 stands for it);
 - every other load gives generalized forces Q_s = sum F . dv/dqdot^s (v the velocity of
@@ -36,12 +36,7 @@ point has no velocity.
 
 from __future__ import annotations
 
-import ctypes
-import gc
 import random
-import threading
-import time
-import warnings
 from dataclasses import dataclass
 
 import mpmath
@@ -50,16 +45,13 @@ import sympy as sp
 from sympy.core.function import AppliedUndef
 
 from ..algebra import dag, linalg, singular, zero
-from ..errors import JetnhError, JetnhWarning, JetSpaceError
+from ..errors import JetnhError, JetSpaceError
 from ..geometry.jet import JetSpace, key_name
 
 #: relative agreement asked of the kinematic and potential checks at random states
 CHECK_TOL = 1e-12
 #: random states per check
 CHECK_POINTS = 2
-#: CPU seconds (of the importing thread; wall seconds where the platform has no thread
-#: clock) that finding the potential of one load may take
-POTENTIAL_SECONDS = 5.0
 
 
 @dataclass(frozen=True)
@@ -376,16 +368,7 @@ def lagrangian_and_forces(reader: _Reader):
         pot = (_potential(reader, where, F, q_load)
                if len(group) == 1 and isinstance(where, Point) and whole else None)
         if pot is None:
-            pot = _within(POTENTIAL_SECONDS, _conservative, J, q_load)
-            if pot is _OUT_OF_TIME:
-                warnings.warn(
-                    f"the load on {what}: its potential was not found within "
-                    f"{POTENTIAL_SECONDS:g} s (sympy's integration), so it stays a "
-                    "generalized force: the equations are the same, but the energy and "
-                    "connect's cost leave it out; to wait longer, raise "
-                    "jetnh.mechanics.kane_bridge.POTENTIAL_SECONDS", JetnhWarning,
-                    stacklevel=2)
-                pot = None
+            pot = _conservative(J, q_load)
         if pot is not None:
             V += pot
         else:
@@ -458,81 +441,6 @@ def _conservative(J: JetSpace, Q):
             return None
         V += part
     return V if _stands_for(J, V, Q) else None
-
-
-class _OutOfTime(BaseException):
-    """Raised in the thread of ``_within`` when its time is up (a BaseException, so that
-    sympy's ``except Exception`` does not swallow it)."""
-
-
-_OUT_OF_TIME = object()
-#: how often ``_within`` looks at the clock, and raises again once the time is up, seconds
-_POLL = 0.02
-
-
-def _async_raise():
-    """``PyThreadState_SetAsyncExc`` as a prototype of our own (the shared one is left
-    as it is): ``f(thread, id(exc))`` raises ``exc`` in ``thread`` at its next bytecode,
-    ``f(thread, None)`` cancels one set there and not yet raised."""
-    f = ctypes.pythonapi["PyThreadState_SetAsyncExc"]
-    f.argtypes = (ctypes.c_ulong, ctypes.c_void_p)
-    return f
-
-
-def _within(seconds, fn, *args):
-    """``fn(*args)``, or ``_OUT_OF_TIME`` once it has run ``seconds`` of CPU time (of
-    this thread; wall time where there is no thread clock).
-
-    A watcher thread raises ``_OutOfTime`` in this thread, again every ``_POLL`` seconds
-    (one raised in a finalizer or a weakref callback is ignored by Python; the cyclic
-    collector, which runs most of them, is off meanwhile), until this thread takes ``lock``:
-    that is one C call, after which the watcher raises nothing; an exception it set just
-    before is raised at that call's end or cancelled by the next C call.  sympy's global
-    switches (evaluate, distribute) are restored after an interruption; a Ctrl-C that
-    met the interruption goes on."""
-    from sympy.core.parameters import global_parameters as gp
-
-    me = threading.get_ident()
-    try:
-        clock = time.pthread_getcpuclockid(me)
-        now = lambda: time.clock_gettime(clock)   # noqa: E731
-    except (AttributeError, OSError):
-        now = time.monotonic
-    end = now() + seconds
-    lock, stop, cancel = threading.Lock(), threading.Event(), _async_raise()
-
-    def watch():
-        fire = _async_raise()
-        while not stop.wait(_POLL):
-            if now() >= end:
-                if not lock.acquire(blocking=False):
-                    return
-                try:
-                    fire(me, id(_OutOfTime))
-                finally:
-                    lock.release()
-
-    switches = (gp.evaluate, gp.distribute, gp.exp_is_pow)
-    collecting = gc.isenabled()
-    gc.disable()    # no collection, so no finalizer or gc callback to take the exception
-    threading.Thread(target=watch, name="jetnh-potential-budget", daemon=True).start()
-    try:
-        try:
-            return fn(*args)
-        finally:
-            lock.acquire()      # held from here on: the watcher raises nothing more
-            cancel(me, None)
-            stop.set()
-            if collecting:
-                gc.enable()
-    except _OutOfTime as exc:   # (raised in the finally at the latest: finish it)
-        stop.set()
-        if collecting:
-            gc.enable()
-        gp.evaluate, gp.distribute, gp.exp_is_pow = switches
-        if isinstance(exc.__context__, KeyboardInterrupt):
-            raise exc.__context__ from None
-        return _OUT_OF_TIME
 
 
 #: functions defined, finite and smooth on the whole real line: a V may contain them
