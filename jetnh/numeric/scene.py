@@ -800,6 +800,8 @@ class Scene(Frozen):
         if p is None:
             p = self._p
         if y0 is None:      # the scene's own (``own``: and its parameters' values)
+            if params is not None:          # (its start checked at these values)
+                self._own_start_at(plan.t0 if span is None else span[0], p)
             if plan.direct or plan.switch:  # (the loops read y0 into copies of their
                 #                                 own, the atlas never writes it)
                 y = memo.get("_y0")
@@ -949,6 +951,15 @@ class Scene(Frozen):
                         f"y0 gives {nm} = {v!r} but the constraints give {required[nm]!r}; "
                         "omit it (dependent velocities follow from the constraints)")
         return y
+
+    def _own_start_at(self, t0, p):
+        """Refuse a run from the scene's own initial state at other run-time parameter
+        values ``p`` (``run(params=...)``) where that state is off the holonomic
+        constraints there, or the split cannot hold it (as ``run(y0=...)`` does)."""
+        if self.system.holonomic:
+            self._check_holonomic(self._y0, t0, p)
+        if self.dependent_velocities and not self._regular_at(self._y0, t0, p):
+            self._check_split(self._y0, {}, t0, p)
 
     def _check_split(self, y, dep, t0, p) -> dict | None:
         """Refuse a run's initial state that the split cannot hold
