@@ -225,3 +225,25 @@ def test_matching_scales_follow_the_units(f, g, k, off):
         got.append(inner.reshape(3, -1) / unit)
     # (the rounding of the moved origin's values aside: 16 ulps of |Y| / tol)
     assert got[1] == pytest.approx(got[0], rel=1e-9, abs=1e-4 * (1.0 + abs(off)))
+
+
+def test_a_state_zero_at_every_node_has_a_scale():
+    """A state that is 0 at every node of multiple shooting (here the multiplier of a
+    start with lambda = 0, which the guess keeps at the inner nodes) has no size of its own:
+    its matching conditions get the rounding of the largest state as their scale, never
+    0 (a scale of 0 asked for a miss of exactly 0: a ConnectError on a solvable
+    problem)."""
+    from jetnh.numeric.connect.problem import _scene
+    from jetnh.numeric.connect.solve import Search, _Segments
+
+    q0, q1 = {"x": 0.0, "y": 0.0, "z": 0.0}, {"x": 1.0, "y": 0.5, "z": 0.2}
+    u = {"x_t": 0.8, "y_t": -0.3, "lambda_z": 0.0}
+    scene = _scene(_HU, "vakonomic", {"a": 1.0, "b": 1.0, "c": 1.0, "k": 1.0},
+                   lambda: {**q0, **u}, (0.0, 1.0))
+    search = Search(scene, q0, q1, tuple(u), {}, 1e-11, 1e-12, "dop853", 1e-9)
+    seg = _Segments(search, 4, 1e-9)
+    U = seg.guess(np.array(list(u.values())))
+    column = scene.state_names.index("lambda_z")
+    assert all(Y[column] == 0.0 for Y in seg.split(U))
+    scales = seg.scale(U)
+    assert np.all(scales > 0.0) and np.all(np.isfinite(scales))

@@ -768,4 +768,9 @@ class Segments:
         named = np.abs(sh.target[:len(sh.rows)] - Y[0, sh.rows])
         reach[sh.rows] = np.maximum(reach[sh.rows], named)
         own = np.where(self.coordinate, reach, size) + ROUNDING * size / self.tol
+        # (a state that is 0 at every node has no size of its own: its misses are met at
+        # the rounding of the largest state (at 1 where every state is 0), never at
+        # a scale of 0, which no miss can meet)
+        floor = ROUNDING * size.max() / self.tol or 1.0
+        own = np.where(own > 0.0, own, floor)
         return np.concatenate([np.tile(own, self.k - 1), sh.scale])
