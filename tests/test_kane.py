@@ -145,9 +145,9 @@ def planar_sleigh():
     return ms
 
 
-def particle_on_circle():
-    """A mechanics System with a configuration constraint: a particle on a circle of
-    radius ell in gravity, coordinates x (independent), y (dependent)."""
+def _plane_point():
+    """A point P at (x, y) in the plane of N moving with speeds (u_x, u_y) from a point O
+    at rest: (x, y, u_x, u_y, N, O, P)."""
     x, y = dynamicsymbols("x y")
     ux, uy = dynamicsymbols("u_x u_y")
     N = ReferenceFrame("N")
@@ -155,6 +155,13 @@ def particle_on_circle():
     O.set_vel(N, 0)
     P = O.locatenew("P", x * N.x + y * N.y)
     P.set_vel(N, ux * N.x + uy * N.y)
+    return x, y, ux, uy, N, O, P
+
+
+def particle_on_circle():
+    """A mechanics System with a configuration constraint: a particle on a circle of
+    radius ell in gravity, coordinates x (independent), y (dependent)."""
+    x, y, ux, uy, N, O, P = _plane_point()
     ms = MechanicsSystem(N, O)
     ms.add_coordinates(x)
     ms.add_coordinates(y, independent=False)
@@ -235,17 +242,7 @@ def test_configuration_constraints_agree_on_the_circle():
 
 def test_kanes_method_velocity_constraints_that_restate_the_configuration_constraint():
     """A KanesMethod's velocity constraints include D g; jetnh keeps D g once."""
-    x, y = dynamicsymbols("x y")
-    ux, uy = dynamicsymbols("u_x u_y")
-    N = ReferenceFrame("N")
-    O = Point("O")
-    O.set_vel(N, 0)
-    P = O.locatenew("P", x * N.x + y * N.y)
-    P.set_vel(N, ux * N.x + uy * N.y)
-    km = KanesMethod(N, [x], [ux], kd_eqs=[x.diff() - ux, y.diff() - uy], q_dependent=[y],
-                     configuration_constraints=[x**2 + y**2 - ell**2], u_dependent=[uy],
-                     velocity_constraints=[x * ux + y * uy])
-    km.kanes_equations([Particle("P", P, m)], [(P, -m * g * N.y)])
+    km = _on_circle_with(lambda x, y, ux, uy: x * ux + y * uy)
     s = jn.from_mechanics(km)
     X, Y = s.J.q
     assert s.holonomic == (X**2 + Y**2 - ell**2,)
@@ -438,13 +435,7 @@ def test_refusals_name_the_fix():
     with pytest.raises(JetSpaceError, match="load on the point P.*substitute specified inputs"):
         jn.from_mechanics(km)
     # a contact point set at rest: the rolling constraint built into the kinematics
-    q, u = dynamicsymbols("q u")
-    A = N.orientnew("A", "Axis", [q, N.z])
-    A.set_ang_vel(N, u * N.z)
-    C = Point("C")
-    C.set_vel(N, 0)
-    D = C.locatenew("D", r * A.x)
-    D.v2pt_theory(C, N, A)
+    q, u, A, C, D = _pivoted(N, "q u", r)
     km = KanesMethod(N, [q], [u], kd_eqs=[q.diff() - u])
     km.kanes_equations([Particle("D", D, m)], [])
     jn.from_mechanics(km)      # a point at rest that is a true pivot is fine
@@ -511,17 +502,24 @@ def test_speeds_survive_another_split(disc):
 
 
 # ---------------------------------------------------------------------- read end to end
+def _pivoted(N, names, length):
+    """A frame turned about N.z by the angle q at the rate u (``names``: "q u"), a point at
+    rest and a point ``length`` from it along the frame's x: (q, u, frame, pivot, point)."""
+    q, u = dynamicsymbols(names)
+    A = N.orientnew("A", "Axis", [q, N.z])
+    A.set_ang_vel(N, u * N.z)
+    C = Point("C")
+    C.set_vel(N, 0)
+    D = C.locatenew("D", length * A.x)
+    D.v2pt_theory(C, N, A)
+    return q, u, A, C, D
+
+
 def test_inertia_about_the_pivot_agrees_with_kane():
     """A RigidBody whose inertia is given about a point other than its mass centre (the
     pivot): T holds the central inertia plus m |r|^2 (route 2: Kane)."""
-    th, w = dynamicsymbols("th w")
     N = ReferenceFrame("N")
-    B = N.orientnew("B", "Axis", [th, N.z])
-    B.set_ang_vel(N, w * N.z)
-    O = Point("O")
-    O.set_vel(N, 0)
-    G = O.locatenew("G", ell * B.x)
-    G.v2pt_theory(O, N, B)
+    th, w, B, O, G = _pivoted(N, "th w", ell)
     km = KanesMethod(N, [th], [w], kd_eqs=[th.diff() - w])
     km.kanes_equations([RigidBody("b", G, B, m, (inertia(B, 0, 0, m * ell**2 + a), O))],
                        [(G, -m * g * N.y)])
@@ -532,13 +530,7 @@ def test_inertia_about_the_pivot_agrees_with_kane():
 
 
 def _on_circle_with(velocity_constraint):
-    x, y = dynamicsymbols("x y")
-    ux, uy = dynamicsymbols("u_x u_y")
-    N = ReferenceFrame("N")
-    O = Point("O")
-    O.set_vel(N, 0)
-    P = O.locatenew("P", x * N.x + y * N.y)
-    P.set_vel(N, ux * N.x + uy * N.y)
+    x, y, ux, uy, N, O, P = _plane_point()
     km = KanesMethod(N, [x], [ux], kd_eqs=[x.diff() - ux, y.diff() - uy], q_dependent=[y],
                      configuration_constraints=[x**2 + y**2 - ell**2], u_dependent=[uy],
                      velocity_constraints=[velocity_constraint(x, y, ux, uy)])
