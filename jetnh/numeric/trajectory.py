@@ -424,13 +424,8 @@ class Trajectory(Frozen):
         kept as it is (``_rows``, ``_counts`` made of it when read), the other attributes
         their class defaults, so that the most common run makes the fewest objects;
         ``event_names``: the events it watched (a tuple), each with no occurrence."""
-        self = _new(cls)
-        d = {"scene": scene, "_loop": out, "_p": p, "_kernels": kernels, "method": method,
-             "stop_reason": stop_reason, "_wall": wall, "_dense": dense, "_memo": {}}
-        if event_names:
-            d["event_names"] = event_names
-        _setattr(self, "__dict__", d)
-        return self
+        return cls._of_made(cls._made(kernels, method, stop_reason, dense, event_names),
+                            scene, out, p, wall)
 
     @staticmethod
     def _made(kernels, method, stop_reason, dense, event_names=()) -> dict:
