@@ -9,11 +9,14 @@ expression of the model is read with u replaced by U:
   loads that have one, a function of the configuration, checked against their
   generalized forces: a force constant in the inertial frame on a point located from a
   point at rest, V = -F . r; a load whose generalized forces are free of t and qdot
-  with a symmetric Jacobian, such as a spring F = -k r, integrated (sympy's integrate,
-  without a time bound) and kept only where V stands for the load wherever it is
-  defined and is 2 pi-periodic in every coordinate the load is
-  (a torque tau on an angle has no potential: V = -tau theta; a torsion spring's
-  k theta^2 / 2 stands for it);
+  with a symmetric Jacobian, such as a spring F = -k r: the potential a spring actuator
+  states (``LinearSpring``, ``DuffingSpring``: k (L - l)^2 / 2 of its pathway's length
+  L), else integrated (sympy's integrate, in a forked child process within
+  ``POTENTIAL_SECONDS`` of CPU time: past it the load stays a generalized force, with a
+  JetnhWarning; in process and without a bound where there is no ``os.fork``), and kept
+  only where V stands for the load wherever it is defined and is 2 pi-periodic in every
+  coordinate the load is (a torque tau on an angle has no potential: V = -tau theta; a
+  torsion spring's k theta^2 / 2 stands for it);
 - every other load gives generalized forces Q_s = sum F . dv/dqdot^s (v the velocity of
   the point, or the angular velocity of the frame, in the inertial frame; the loads of
   one actuator are judged together; a component of F along which no velocity moves the
@@ -36,7 +39,16 @@ point has no velocity.
 
 from __future__ import annotations
 
+import contextlib
+import math
+import os
+import pickle
 import random
+import select
+import signal
+import threading
+import time
+import warnings
 from dataclasses import dataclass
 
 import mpmath
@@ -45,13 +57,16 @@ import sympy as sp
 from sympy.core.function import AppliedUndef
 
 from ..algebra import dag, linalg, singular, zero
-from ..errors import JetnhError, JetSpaceError
+from ..errors import JetnhError, JetnhWarning, JetSpaceError
 from ..geometry.jet import JetSpace, key_name
 
 #: relative agreement asked of the kinematic and potential checks at random states
 CHECK_TOL = 1e-12
 #: random states per check
 CHECK_POINTS = 2
+#: CPU seconds that integrating one load into its potential may take (in a child
+#: process, which is given three times that and a second of wall time: it shares the CPUs)
+POTENTIAL_SECONDS = 5.0
 
 
 @dataclass(frozen=True)
@@ -106,6 +121,7 @@ class _Kane:
     kdes: tuple
     bodies: tuple
     loads: tuple              # groups of (Point or frame, Vector): a load, an actuator's
+    springs: tuple            # per group, the potential its actuator states, or None
     holonomic: tuple          # g(t, q) = 0
     velocity: tuple           # velocity constraints, linear in u (or qdot)
     restates_holonomic: bool  # whether ``velocity`` contains D g too (KanesMethod's contract)
@@ -129,21 +145,41 @@ def read_kanes_method(km) -> _Kane:
                          "to KanesMethod or call km.kanes_equations(bodies, loads) first")
     _unread_potential_energy(km.bodies, "the model's")
     vel = (sp.Matrix(km._k_nh) * km.u + sp.Matrix(km._f_nh)) if len(km._k_nh) else []
+    loads = tuple((ld,) for ld in km.loads or ())
     return _Kane(km._inertial, tuple(km.q), tuple(km.u), tuple(km._uaux),
                  tuple(km._k_kqdot_implicit * km.q.diff(_t()) + km._k_ku_implicit * km.u
                        + km._f_k_implicit) if len(km._k_ku_implicit) else (),
-                 tuple(km.bodies), tuple((ld,) for ld in km.loads or ()), tuple(km._f_h),
+                 tuple(km.bodies), loads, (None,) * len(loads), tuple(km._f_h),
                  tuple(vel), True, None)
 
 
 def read_mechanics_system(ms) -> _Kane:
     _unread_potential_energy(ms.bodies, "the System's default")
     loads = tuple((ld,) for ld in ms.loads) + tuple(tuple(act.to_loads()) for act in ms.actuators)
+    springs = (None,) * len(ms.loads) + tuple(_spring(act) for act in ms.actuators)
     explicit = ms._vel_constrs is not None
     return _Kane(ms.frame, tuple(ms.q), tuple(ms.u), tuple(ms.u_aux), tuple(ms.kdes),
-                 tuple(ms.bodies), loads, tuple(ms.holonomic_constraints),
+                 tuple(ms.bodies), loads, springs, tuple(ms.holonomic_constraints),
                  tuple(ms.velocity_constraints if explicit else ms.nonholonomic_constraints),
                  explicit, ms.fixed_point)
+
+
+def _spring(actuator):
+    """The potential a spring actuator states, from its pathway's length L and rest
+    length l (x = L - l): a ``LinearSpring`` k x^2 / 2, a ``DuffingSpring`` (sympy 1.13)
+    a x^2 / 2 + b x^4 / 4; None for any other actuator (or a length sympy cannot give)."""
+    from sympy.physics import mechanics as me
+
+    duffing = getattr(me, "DuffingSpring", ())
+    if not isinstance(actuator, (me.LinearSpring, duffing)):
+        return None
+    try:
+        x = actuator.pathway.length - actuator.equilibrium_length
+    except Exception:  # a pathway whose length sympy cannot state: integrated instead
+        return None
+    if isinstance(actuator, me.LinearSpring):
+        return actuator.stiffness * x**2 / 2
+    return actuator.linear_stiffness * x**2 / 2 + actuator.nonlinear_stiffness * x**4 / 4
 
 
 def _t():
@@ -340,7 +376,8 @@ def lagrangian_and_forces(reader: _Reader):
         T += reader.jet(b.kinetic_energy(N), f"the kinetic energy of {b.name}")
     V = sp.S.Zero
     Q = [sp.S.Zero] * J.n
-    for group in reader.model.loads:     # an actuator's loads are judged together
+    for group, spring in zip(reader.model.loads, reader.model.springs):
+        # an actuator's loads are judged together
         q_load, names = [sp.S.Zero] * J.n, []
         for where, vec in (load[:2] for load in group):
             if isinstance(where, Point):
@@ -367,8 +404,10 @@ def lagrangian_and_forces(reader: _Reader):
         what = " and ".join(names)
         pot = (_potential(reader, where, F, q_load)
                if len(group) == 1 and isinstance(where, Point) and whole else None)
+        if pot is None and spring is not None:
+            pot = _stated(reader, spring, q_load)
         if pot is None:
-            pot = _conservative(J, q_load)
+            pot = _conservative(J, q_load, what)
         if pot is not None:
             V += pot
         else:
@@ -414,23 +453,50 @@ def _potential(reader: _Reader, point, F, Q):
     return V if _agree(minus_dV, Q, _random_points(J, minus_dV + list(Q))) else None
 
 
-def _conservative(J: JetSpace, Q):
-    """V with -dV/dq = ``Q`` where the generalized forces ``Q`` of a load are
-    conservative: depending on q, free of t and qdot, with a symmetric Jacobian
-    (dQ_i/dq_j = dQ_j/dq_i, at random configurations), integrable coordinate by
-    coordinate (V = -int Q_1 dq_1, then -int (Q_2 + dV/dq_2) dq_2, ...: a spring F = -k r
-    on a point, a torsion spring on a frame) and ``_stands_for`` Q; else None: the load
-    stays a generalized force, which is always right."""
+def _gradient_like(J: JetSpace, Q) -> bool:
+    """Whether generalized forces ``Q`` may be -dV/dq: they depend on q and are free of t
+    and qdot (and of Piecewise, which is not evaluated at random points)."""
     own, q = {J.t, *J.qd}, set(J.q)
     free = [dag.free_symbols(e) for e in Q]
-    if (not any(f & q for f in free) or any(f & own for f in free)
-            or any(dag.has(e, sp.Piecewise) for e in Q)):   # not evaluated at random points
+    return (any(f & q for f in free) and not any(f & own for f in free)
+            and not any(dag.has(e, sp.Piecewise) for e in Q))
+
+
+def _stated(reader: _Reader, V, Q):
+    """The potential ``V`` an actuator states (in dynamicsymbols), as a jet expression,
+    where its load's generalized forces ``Q`` may be a gradient and it ``_stands_for``
+    them; else None."""
+    J = reader.J
+    if not _gradient_like(J, Q):
+        return None
+    try:
+        V = reader.jet(V, "the spring's potential")
+    except JetSpaceError:
+        return None
+    return V if _stands_for(J, V, Q) else None
+
+
+def _conservative(J: JetSpace, Q, what="the load"):
+    """V with -dV/dq = ``Q`` where the generalized forces ``Q`` of a load (on ``what``)
+    are conservative: ``_gradient_like``, with a symmetric Jacobian (dQ_i/dq_j =
+    dQ_j/dq_i, at random configurations), ``_integrated`` within ``POTENTIAL_SECONDS``
+    (``_bounded``) and ``_stands_for`` Q (checked here: the child process is not trusted
+    either); else None: the load stays a generalized force, which is always right."""
+    if not _gradient_like(J, Q):
         return None
     n = len(J.q)
     rows = [dag.diff(Q[i], J.q[j]) for i in range(n) for j in range(i + 1, n)]
     cols = [dag.diff(Q[j], J.q[i]) for i in range(n) for j in range(i + 1, n)]
     if rows and not _agree(rows, cols, _random_points(J, rows + cols)):
         return None
+    V = _bounded(what, _integrated, J, Q)
+    return V if V is not None and _stands_for(J, V, Q) else None
+
+
+def _integrated(J: JetSpace, Q):
+    """V = -int Q_1 dq_1, then -int (Q_2 + dV/dq_2) dq_2, ... (a spring F = -k r on a
+    point, a torsion spring on a frame), or None where sympy gives up or leaves an
+    integral."""
     V = sp.S.Zero
     for qi, e in zip(J.q, Q):
         try:
@@ -440,7 +506,142 @@ def _conservative(J: JetSpace, Q):
         if part.has(sp.Integral):
             return None
         V += part
-    return V if _stands_for(J, V, Q) else None
+    return V
+
+
+# ------------------------------------------------------------------ the time bound
+#: seconds between two looks at Ctrl-C while a child process works
+_POLL = 0.05
+
+
+def _bounded(what, fn, *args):
+    """``fn(*args)`` (picklable) computed in a forked child process within
+    ``POTENTIAL_SECONDS`` of CPU time, three times that and a second of wall time (a
+    child may wait forever on a lock another thread held at the fork); None, with a
+    JetnhWarning naming the load (``what``), once the child ends or is ended without a
+    result.  Where there is no ``os.fork`` (Windows), ``fn(*args)`` in process, without
+    a bound.  Ctrl-C ends the child and raises KeyboardInterrupt here (within
+    ``_POLL``); the child is always reaped and the pipe closed."""
+    if not hasattr(os, "fork"):
+        return fn(*args)
+    seconds = POTENTIAL_SECONDS
+    done, value, why = _in_child(seconds, 3 * seconds + 1, fn, args)
+    if not done:
+        warnings.warn(
+            f"the load on {what}: its potential was not found within {seconds:g} s of CPU "
+            f"time (sympy's integration, in a child process: {why}), so it stays a "
+            "generalized force: the equations are the same, but the energy and connect's "
+            "cost leave it out; to wait longer, raise "
+            "jetnh.mechanics.kane_bridge.POTENTIAL_SECONDS", JetnhWarning, stacklevel=2)
+        return None
+    return value
+
+
+def _in_child(cpu, wall, fn, args):
+    """``(True, fn(*args), "")`` from a forked child given ``cpu`` seconds of CPU time
+    and ``wall`` seconds in all, else ``(False, None, why)``.  SIGINT is only recorded
+    meanwhile (``_sigint_recorded``), so that no KeyboardInterrupt lands between the fork
+    and the bookkeeping of the child or in its cleanup; the wait looks at it every
+    ``_POLL`` seconds."""
+    with _sigint_recorded() as sigint:
+        r, w = os.pipe()
+        pid, chunks, why = None, [], ""
+        try:
+            with warnings.catch_warnings():   # Python 3.12: fork with threads alive; the
+                warnings.filterwarnings(      # child runs sympy only, and wall bounds it
+                    "ignore", ".*multi-threaded.*fork", DeprecationWarning)
+                try:
+                    pid = os.fork()
+                except OSError as exc:
+                    return False, None, f"no child process: {exc}"
+            if pid == 0:
+                _child(w, cpu, fn, args)      # does not return
+            os.close(w)
+            w = None
+            poll, end = select.poll(), time.monotonic() + wall
+            poll.register(r, select.POLLIN)
+            while not sigint:
+                left = end - time.monotonic()
+                if left <= 0:
+                    why = f"out of wall time ({wall:g} s)"
+                    break
+                if poll.poll(1000 * min(left, _POLL)):
+                    chunk = os.read(r, 1 << 16)
+                    if not chunk:
+                        break
+                    chunks.append(chunk)
+        finally:
+            for fd in (r, w):
+                if fd is not None:
+                    os.close(fd)
+            status = _ended(pid) if pid else None
+        if sigint or why:
+            return False, None, why
+        try:
+            return True, pickle.loads(b"".join(chunks)), ""
+        except Exception:  # nothing or a part sent: the child ended before the end
+            code = None if status is None else os.waitstatus_to_exitcode(status)
+            cpu_out = {-signal.SIGPROF, -signal.SIGXCPU, -signal.SIGKILL}
+            return False, None, ("out of CPU time" if code in cpu_out
+                                 else f"it ended with exit status {code}")
+
+
+def _child(w, cpu, fn, args):
+    """In the child: Ctrl-C and the CPU limits kill it (SIGPROF after ``cpu`` seconds,
+    RLIMIT_CPU a second later, no core file); ``fn(*args)`` pickled into ``w``; exit."""
+    import resource
+
+    code = 1
+    try:
+        for sig in (signal.SIGINT, signal.SIGPROF, signal.SIGXCPU):
+            signal.signal(sig, signal.SIG_DFL)
+        signal.set_wakeup_fd(-1)
+        resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
+        limit = math.ceil(cpu) + 1
+        hard = resource.getrlimit(resource.RLIMIT_CPU)[1]
+        if hard != resource.RLIM_INFINITY:
+            limit = min(limit, hard)
+        resource.setrlimit(resource.RLIMIT_CPU, (limit, limit))
+        signal.setitimer(signal.ITIMER_PROF, cpu)
+        data = pickle.dumps(fn(*args), protocol=pickle.HIGHEST_PROTOCOL)
+        with open(w, "wb") as f:
+            f.write(data)
+        code = 0
+    finally:
+        os._exit(code)
+
+
+def _ended(pid):
+    """The wait status of the child ``pid``, killed first (it has sent all it will or is
+    out of time: SIGKILL ends it however it is stuck) and reaped; None where someone
+    else reaped it (a SIGCHLD handler of the program's)."""
+    with contextlib.suppress(ProcessLookupError):
+        os.kill(pid, signal.SIGKILL)
+    try:
+        return os.waitpid(pid, 0)[1]
+    except ChildProcessError:
+        return None
+
+
+@contextlib.contextmanager
+def _sigint_recorded():
+    """Inside, SIGINT only records itself in the list yielded; after, the handler in
+    place before is called with it (Python's raises KeyboardInterrupt).  Only the main
+    thread is changed: signals are handled only there, and a handler that is not a
+    Python function (ignored, default, set in C) raises nothing anyway."""
+    got = []
+    old = (signal.getsignal(signal.SIGINT)
+           if threading.current_thread() is threading.main_thread() else None)
+    if not callable(old):
+        yield got
+        return
+    signal.signal(signal.SIGINT, lambda signum, frame: got.append((signum, frame)))
+    try:
+        yield got
+    finally:
+        signal.signal(signal.SIGINT, old)
+        if got:
+            old(*got[0])
 
 
 #: functions defined, finite and smooth on the whole real line: a V may contain them
