@@ -674,3 +674,78 @@ def test_contact_forces_of_auxiliary_speeds_do_no_work():
     km.kanes_equations([Particle("Q", Q, m)], [(Q, f1 * N.x)])
     with pytest.raises(JetSpaceError, match="load on the point Q.*substitute specified"):
         jn.from_mechanics(km)
+
+
+def _spring_on_plane(spring, anchor_of_t=None):
+    """A particle in the plane (x, y) and ``spring(A, P)``: its actuator between an anchor
+    A (at rest at O, or at ``anchor_of_t`` N.x) and the particle P."""
+    from sympy.physics.mechanics import LinearPathway
+
+    x, y, ux, uy = dynamicsymbols("x y u_x u_y")
+    N = ReferenceFrame("N")
+    O = Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", x * N.x + y * N.y)
+    P.set_vel(N, ux * N.x + uy * N.y)
+    A = O
+    if anchor_of_t is not None:
+        A = O.locatenew("A", anchor_of_t * N.x)
+        A.set_vel(N, anchor_of_t.diff(dynamicsymbols._t) * N.x)
+    ms = MechanicsSystem(N, O)
+    ms.add_coordinates(x, y)
+    ms.add_speeds(ux, uy)
+    ms.add_kdes(x.diff() - ux, y.diff() - uy)
+    ms.add_bodies(Particle("P", P, m))
+    ms.add_actuators(spring(LinearPathway(A, P)))
+    return ms
+
+
+def test_a_springs_potential_is_taken_from_its_actuator(monkeypatch):
+    """A LinearSpring states V = k (L - l)^2 / 2 of its pathway's length: taken without
+    integrating (route 1: it equals the integrated V up to a constant; route 2: Kane)."""
+    from sympy.physics.mechanics import LinearSpring
+
+    from jetnh.mechanics import kane_bridge
+
+    ms = _spring_on_plane(lambda path: LinearSpring(c, path, ell))
+    integrated = []
+    monkeypatch.setattr(kane_bridge, "_bounded", lambda *a: integrated.append(a))
+    s = jn.from_mechanics(ms)
+    X, Y = s.J.q
+    V = -s.L.xreplace(dict.fromkeys(s.J.qd, 0))
+    assert not s.forces and not integrated
+    assert sp.expand(V - c * (sp.sqrt(X**2 + Y**2) - ell) ** 2 / 2) == 0
+    assert agreement(s, ms, {c: 2.0, ell: 0.7, m: 1.3}) < RTOL
+    monkeypatch.undo()
+    monkeypatch.setattr(kane_bridge, "_spring", lambda actuator: None)
+    by_integral = jn.from_mechanics(_spring_on_plane(lambda path: LinearSpring(c, path, ell)))
+    assert not by_integral.forces
+    W = -by_integral.L.xreplace(dict.fromkeys(s.J.qd, 0))
+    assert W != V and all(sp.expand(sp.diff(V - W, q)) == 0 for q in s.J.q)
+
+
+def test_a_duffing_springs_potential_is_taken_from_its_actuator():
+    """DuffingSpring (a x + b x^3, x = L - l): V = a x^2 / 2 + b x^4 / 4; route 2: Kane."""
+    import sympy.physics.mechanics as me
+
+    if not hasattr(me, "DuffingSpring"):
+        pytest.skip("sympy < 1.13 has no DuffingSpring")
+    ms = _spring_on_plane(lambda path: me.DuffingSpring(c, a, path, ell))
+    s = jn.from_mechanics(ms)
+    X, Y = s.J.q
+    x = sp.sqrt(X**2 + Y**2) - ell
+    assert not s.forces
+    assert sp.expand(s.L.xreplace(dict.fromkeys(s.J.qd, 0)) + c * x**2 / 2 + a * x**4 / 4) == 0
+    assert agreement(s, ms, {c: 2.0, a: 0.3, ell: 0.7, m: 1.3}) < RTOL
+
+
+def test_a_spring_on_an_anchor_in_prescribed_motion_stays_a_force():
+    """The spring's load depends on t (its anchor moves as sin t): no V(q) stands for it,
+    so the actuator's potential is not taken and the load stays a force; route 2: Kane."""
+    from sympy.physics.mechanics import LinearSpring
+
+    t = dynamicsymbols._t
+    ms = _spring_on_plane(lambda path: LinearSpring(c, path, ell), anchor_of_t=sp.sin(t))
+    s = jn.from_mechanics(ms)
+    assert set(map(str, s.forces)) == {"x", "y"}
+    assert agreement(s, ms, {c: 2.0, ell: 0.7, m: 1.3}) < RTOL
