@@ -10,8 +10,8 @@ expression of the model is read with u replaced by U:
   generalized forces: a force constant in the inertial frame on a point located from a
   point at rest, V = -F . r; a load whose generalized forces are free of t and qdot
   with a symmetric Jacobian, such as a spring F = -k r: the potential a spring actuator
-  states (``LinearSpring``, ``DuffingSpring``: k (L - l)^2 / 2 of its pathway's length
-  L), else integrated (sympy's integrate, in a forked child process within
+  states (a ``LinearSpring``'s k (L - l)^2 / 2 of its pathway's length L, a
+  ``DuffingSpring``'s), else integrated (sympy's integrate, in a forked child process within
   ``POTENTIAL_SECONDS`` of CPU time: past it the load stays a generalized force, with a
   JetnhWarning; in process and without a bound where there is no ``os.fork``), and kept
   only where V stands for the load wherever it is defined and is 2 pi-periodic in every
@@ -64,8 +64,10 @@ from ..geometry.jet import JetSpace, key_name
 CHECK_TOL = 1e-12
 #: random states per check
 CHECK_POINTS = 2
-#: CPU seconds that integrating one load into its potential may take (in a child
-#: process, which is given three times that and a second of wall time: it shares the CPUs)
+#: CPU seconds that sympy may take to integrate one load into its potential, in a forked
+#: child process (given three times that and a second of wall time: it shares the CPUs,
+#: and may wait on a lock another thread held at the fork); past it the load stays a
+#: generalized force
 POTENTIAL_SECONDS = 5.0
 
 
@@ -407,7 +409,7 @@ def lagrangian_and_forces(reader: _Reader):
         if pot is None and spring is not None:
             pot = _stated(reader, spring, q_load)
         if pot is None:
-            pot = _conservative(J, q_load, what)
+            pot = _conservative(J, q_load, f"the load on {what}")
         if pot is not None:
             V += pot
         else:
@@ -476,8 +478,8 @@ def _stated(reader: _Reader, V, Q):
     return V if _stands_for(J, V, Q) else None
 
 
-def _conservative(J: JetSpace, Q, what="the load"):
-    """V with -dV/dq = ``Q`` where the generalized forces ``Q`` of a load (on ``what``)
+def _conservative(J: JetSpace, Q, what="a load"):
+    """V with -dV/dq = ``Q`` where the generalized forces ``Q`` of ``what`` (a load)
     are conservative: ``_gradient_like``, with a symmetric Jacobian (dQ_i/dq_j =
     dQ_j/dq_i, at random configurations), ``_integrated`` within ``POTENTIAL_SECONDS``
     (``_bounded``) and ``_stands_for`` Q (checked here: the child process is not trusted
@@ -528,7 +530,7 @@ def _bounded(what, fn, *args):
     done, value, why = _in_child(seconds, 3 * seconds + 1, fn, args)
     if not done:
         warnings.warn(
-            f"the load on {what}: its potential was not found within {seconds:g} s of CPU "
+            f"{what}: its potential was not found within {seconds:g} s of CPU "
             f"time (sympy's integration, in a child process: {why}), so it stays a "
             "generalized force: the equations are the same, but the energy and connect's "
             "cost leave it out; to wait longer, raise "
@@ -602,7 +604,7 @@ def _child(w, cpu, fn, args):
         if hard != resource.RLIM_INFINITY:
             limit = min(limit, hard)
         resource.setrlimit(resource.RLIMIT_CPU, (limit, limit))
-        signal.setitimer(signal.ITIMER_PROF, cpu)
+        signal.setitimer(signal.ITIMER_PROF, max(cpu, 1e-3))     # (0 would disarm it)
         data = pickle.dumps(fn(*args), protocol=pickle.HIGHEST_PROTOCOL)
         with open(w, "wb") as f:
             f.write(data)
@@ -612,13 +614,16 @@ def _child(w, cpu, fn, args):
 
 
 def _ended(pid):
-    """The wait status of the child ``pid``, killed first (it has sent all it will or is
-    out of time: SIGKILL ends it however it is stuck) and reaped; None where someone
-    else reaped it (a SIGCHLD handler of the program's)."""
-    with contextlib.suppress(ProcessLookupError):
-        os.kill(pid, signal.SIGKILL)
+    """The wait status of the child ``pid``, reaped, killed first if it has not ended (it
+    has sent all it will or is out of time: SIGKILL ends it however it is stuck); None
+    where someone else reaped it (a SIGCHLD handler of the program's: then the pid is
+    not signalled, it may be another process's by now)."""
     try:
-        return os.waitpid(pid, 0)[1]
+        done, status = os.waitpid(pid, os.WNOHANG)
+        if not done:
+            os.kill(pid, signal.SIGKILL)
+            status = os.waitpid(pid, 0)[1]
+        return status
     except ChildProcessError:
         return None
 
