@@ -40,11 +40,16 @@ def _line(force):
     return jn.from_mechanics(km)
 
 
+def _fds():
+    return set(os.listdir("/proc/self/fd")) if os.path.isdir("/proc/self/fd") else set()
+
+
 @pytest.fixture
 def forks(monkeypatch):
     """The pids of the children forked meanwhile (``os.fork`` wrapped); checked reaped
-    after the test: waitpid finds no such child (a zombie would be found)."""
-    pids, fork = [], os.fork
+    after the test (waitpid finds no such child: a zombie would be found), and the
+    pipes closed (the open fds are those before, where /proc tells)."""
+    pids, fork, fds = [], os.fork, _fds()
 
     def recorded():
         pid = fork()
@@ -57,6 +62,7 @@ def forks(monkeypatch):
     for pid in pids:
         with pytest.raises(ChildProcessError):
             os.waitpid(pid, os.WNOHANG)
+    assert _fds() == fds
 
 
 def _children_cpu():
@@ -160,3 +166,37 @@ def test_without_fork_the_integration_runs_in_process(monkeypatch):
     monkeypatch.delattr(os, "fork")
     J = jn.JetSpace("q")
     assert kane_bridge._conservative(J, [-_k * J.q[0]]) == _k * J.q[0] ** 2 / 2
+
+
+@pytest.mark.parametrize("call", ["fork", "read", "close", "waitpid"])
+def test_ctrl_c_at_any_step_of_the_child_leaves_none_behind(monkeypatch, forks, call):
+    """SIGINT right after each system call of the parent's side (after ``fork`` a
+    KeyboardInterrupt would come before the pid is kept): the child is reaped all the
+    same, KeyboardInterrupt is raised, and the handler is the one before."""
+    if threading.current_thread() is not threading.main_thread():
+        pytest.skip("signals reach the main thread only")
+    handler, real, fired = signal.getsignal(signal.SIGINT), getattr(os, call), []
+
+    def then_interrupt(*args):
+        out = real(*args)
+        if forks and not fired:
+            fired.append(call)
+            os.kill(os.getpid(), signal.SIGINT)
+        return out
+
+    monkeypatch.setattr(os, call, then_interrupt)
+    J = jn.JetSpace("q")
+    with pytest.raises(KeyboardInterrupt):
+        kane_bridge._conservative(J, [-_k * J.q[0]])
+    assert fired == [call] and len(forks) == 1
+    assert signal.getsignal(signal.SIGINT) is handler
+
+
+def test_a_thread_other_than_the_main_one_searches_as_well(forks):
+    """Off the main thread (no SIGINT handler to change) the child does the same."""
+    J, got = jn.JetSpace("q"), []
+    worker = threading.Thread(target=lambda: got.append(
+        kane_bridge._conservative(J, [-_k * J.q[0]])))
+    worker.start()
+    worker.join()
+    assert got == [_k * J.q[0] ** 2 / 2] and len(forks) == 1
