@@ -749,3 +749,50 @@ def test_a_spring_on_an_anchor_in_prescribed_motion_stays_a_force():
     s = jn.from_mechanics(ms)
     assert set(map(str, s.forces)) == {"x", "y"}
     assert agreement(s, ms, {c: 2.0, ell: 0.7, m: 1.3}) < RTOL
+
+
+def _chain_on_a_line(spring):
+    """Two particles on a line (q1, q2) and ``spring(P1, P2)``: its actuator between
+    them (the textbook two-mass chain)."""
+    from sympy.physics.mechanics import LinearPathway
+
+    q1, q2, u1, u2 = dynamicsymbols("q1 q2 u1 u2")
+    N = ReferenceFrame("N")
+    O = Point("O")
+    O.set_vel(N, 0)
+    P1 = O.locatenew("P1", q1 * N.x)
+    P1.set_vel(N, u1 * N.x)
+    P2 = O.locatenew("P2", q2 * N.x)
+    P2.set_vel(N, u2 * N.x)
+    ms = MechanicsSystem(N, O)
+    ms.add_coordinates(q1, q2)
+    ms.add_speeds(u1, u2)
+    ms.add_kdes(q1.diff() - u1, q2.diff() - u2)
+    ms.add_bodies(Particle("P1", P1, m), Particle("P2", P2, M))
+    ms.add_actuators(spring(LinearPathway(P1, P2)))
+    return ms
+
+
+@pytest.mark.parametrize("kind", ["linear", "duffing"])
+def test_a_spring_on_a_line_takes_its_actuators_potential(monkeypatch, kind):
+    """On a line the pathway's length is sqrt(w^2) (w = q2 - q1), whose derivative has
+    1 / w^2 where the load has sqrt(w^2): the same zeros, so the actuator's V is taken
+    (no integration, which gives no V here); route 2: Kane."""
+    import sympy.physics.mechanics as me
+
+    from jetnh.mechanics import kane_bridge
+
+    if kind == "duffing" and not hasattr(me, "DuffingSpring"):
+        pytest.skip("sympy < 1.13 has no DuffingSpring")
+    spring = ((lambda path: me.LinearSpring(c, path, ell)) if kind == "linear"
+              else (lambda path: me.DuffingSpring(c, a, path, ell)))
+    integrated = []
+    monkeypatch.setattr(kane_bridge, "_bounded", lambda *args: integrated.append(args))
+    ms = _chain_on_a_line(spring)
+    s = jn.from_mechanics(ms)
+    Q1, Q2 = s.J.q
+    x = sp.sqrt((Q2 - Q1) ** 2) - ell
+    V = c * x**2 / 2 + (a * x**4 / 4 if kind == "duffing" else 0)
+    assert not s.forces and not integrated
+    assert sp.expand(s.L.xreplace(dict.fromkeys(s.J.qd, 0)) + V) == 0
+    assert agreement(s, ms, {c: 2.0, a: 0.3, ell: 0.7, m: 1.3, M: 0.8}) < RTOL

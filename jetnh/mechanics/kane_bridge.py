@@ -13,7 +13,8 @@ expression of the model is read with u replaced by U:
   states (a ``LinearSpring``'s k (L - l)^2 / 2 of its pathway's length L, a
   ``DuffingSpring``'s), else integrated (sympy's integrate, in a forked child process within
   ``POTENTIAL_SECONDS`` of CPU time: past it the load stays a generalized force, with a
-  JetnhWarning; in process and without a bound where there is no ``os.fork``), and kept
+  JetnhWarning; in process and without a bound where there is no ``os.fork`` or it is
+  refused), and kept
   only where V stands for the load wherever it is defined and is 2 pi-periodic in every
   coordinate the load is (a torque tau on an angle has no potential: V = -tau theta; a
   torsion spring's k theta^2 / 2 stands for it);
@@ -40,12 +41,14 @@ point has no velocity.
 from __future__ import annotations
 
 import contextlib
+import gc
 import math
 import os
 import pickle
 import random
 import select
 import signal
+import sys
 import threading
 import time
 import warnings
@@ -67,7 +70,7 @@ CHECK_POINTS = 2
 #: CPU seconds that sympy may take to integrate one load into its potential, in a forked
 #: child process (given three times that and a second of wall time: it shares the CPUs,
 #: and may wait on a lock another thread held at the fork); past it the load stays a
-#: generalized force
+#: generalized force; ``math.inf``: no bound
 POTENTIAL_SECONDS = 5.0
 
 
@@ -512,141 +515,238 @@ def _integrated(J: JetSpace, Q):
 
 
 # ------------------------------------------------------------------ the time bound
-#: seconds between two looks at Ctrl-C while a child process works
+#: seconds between two looks at Ctrl-C and at the child while it works
 _POLL = 0.05
 
 
 def _bounded(what, fn, *args):
     """``fn(*args)`` (picklable) computed in a forked child process within
-    ``POTENTIAL_SECONDS`` of CPU time, three times that and a second of wall time (a
-    child may wait forever on a lock another thread held at the fork); None, with a
-    JetnhWarning naming the load (``what``), once the child ends or is ended without a
-    result.  Where there is no ``os.fork`` (Windows), ``fn(*args)`` in process, without
-    a bound.  Ctrl-C ends the child and raises KeyboardInterrupt here (within
-    ``_POLL``); the child is always reaped and the pipe closed."""
+    ``POTENTIAL_SECONDS`` of CPU time (``math.inf``: no bound), three times that and a
+    second of wall time (a child may wait forever on a lock another thread held at the
+    fork); None, with a JetnhWarning naming the load (``what``) and why, once the child
+    ends or is ended without a result (the advice to raise the budget only where the
+    budget ended it).  Where there is no ``os.fork`` (Windows) or the fork is refused (no
+    memory, a process limit), ``fn(*args)`` in process, without a bound.  Ctrl-C calls
+    the SIGINT handler within ``_POLL`` (its KeyboardInterrupt ends the child); the child
+    is always reaped and the pipe closed."""
+    seconds = POTENTIAL_SECONDS
+    if isinstance(seconds, bool) or not isinstance(seconds, (int, float)) or not seconds >= 0:
+        raise JetnhError(f"jetnh.mechanics.kane_bridge.POTENTIAL_SECONDS is {seconds!r}; set "
+                         "it to a number of seconds >= 0 (math.inf: no bound)")
     if not hasattr(os, "fork"):
         return fn(*args)
-    seconds = POTENTIAL_SECONDS
-    done, value, why = _in_child(seconds, 3 * seconds + 1, fn, args)
-    if not done:
-        warnings.warn(
-            f"{what}: its potential was not found within {seconds:g} s of CPU "
-            f"time (sympy's integration, in a child process: {why}), so it stays a "
-            "generalized force: the equations are the same, but the energy and connect's "
-            "cost leave it out; to wait longer, raise "
-            "jetnh.mechanics.kane_bridge.POTENTIAL_SECONDS", JetnhWarning, stacklevel=2)
-        return None
-    return value
+    how, out = _in_child(seconds, 3 * seconds + 1, fn, args)
+    if how == "value":
+        return out
+    if how == "no fork":
+        return fn(*args)
+    lost = ("so it stays a generalized force: the equations are the same, but the energy "
+            "and connect's cost leave it out")
+    if how == "time":
+        text = (f"{what}: its potential was not found within {seconds:g} s of CPU time "
+                f"(sympy's integration, in a child process: {out}), {lost}; to wait longer, "
+                "raise jetnh.mechanics.kane_bridge.POTENTIAL_SECONDS")
+    else:
+        text = (f"{what}: its potential was not found (sympy's integration, in a child "
+                f"process: {out}), {lost}")
+    warnings.warn(text, JetnhWarning, stacklevel=_outside_jetnh())
+    return None
+
+
+def _outside_jetnh() -> int:
+    """The ``stacklevel`` that points a warning of the caller at the first caller outside
+    jetnh (the user's ``from_mechanics``)."""
+    level, frame = 1, sys._getframe(1)
+    while (frame.f_back is not None
+           and frame.f_globals.get("__name__", "").partition(".")[0] == "jetnh"):
+        level, frame = level + 1, frame.f_back
+    return level
 
 
 def _in_child(cpu, wall, fn, args):
-    """``(True, fn(*args), "")`` from a forked child given ``cpu`` seconds of CPU time
-    and ``wall`` seconds in all, else ``(False, None, why)``.  SIGINT is only recorded
-    meanwhile (``_sigint_recorded``), so that no KeyboardInterrupt lands between the fork
-    and the bookkeeping of the child or in its cleanup; the wait looks at it every
-    ``_POLL`` seconds."""
+    """``("value", fn(*args))`` from a forked child given ``cpu`` seconds of CPU time and
+    ``wall`` seconds in all, else ``(how, why)``: how "time" (out of CPU or wall time),
+    "failed" (the child's error, a signal, an exit status) or "no fork" (none started).
+    SIGINT is only recorded meanwhile (``_sigint_recorded``), so that no
+    KeyboardInterrupt lands between the fork and the bookkeeping of the child or in its
+    cleanup; the wait calls the handler (every ``_POLL`` seconds) and ends at the child's
+    exit as well as at the end of the pipe (a process forked meanwhile elsewhere holds the
+    pipe open until it exits)."""
     with _sigint_recorded() as sigint:
-        r, w = os.pipe()
-        pid, chunks, why = None, [], ""
         try:
-            with warnings.catch_warnings():   # Python 3.12: fork with threads alive; the
-                warnings.filterwarnings(      # child runs sympy only, and wall bounds it
-                    "ignore", ".*multi-threaded.*fork", DeprecationWarning)
-                try:
-                    pid = os.fork()
-                except OSError as exc:
-                    return False, None, f"no child process: {exc}"
-            if pid == 0:
-                _child(w, cpu, fn, args)      # does not return
+            r, w = os.pipe()
+        except OSError as exc:
+            return "no fork", str(exc)
+        pid = ended = late = None
+        chunks = []
+        try:
+            child = _forked(w, cpu, fn, args)
+            if isinstance(child, OSError):
+                return "no fork", str(child)
+            pid = child
             os.close(w)
             w = None
             poll, end = select.poll(), time.monotonic() + wall
             poll.register(r, select.POLLIN)
-            while not sigint:
+            while True:
+                sigint()            # the handler in place before, if Ctrl-C was pressed
                 left = end - time.monotonic()
                 if left <= 0:
-                    why = f"out of wall time ({wall:g} s)"
+                    late = f"out of wall time ({wall:g} s)"
                     break
                 if poll.poll(1000 * min(left, _POLL)):
                     chunk = os.read(r, 1 << 16)
                     if not chunk:
                         break
                     chunks.append(chunk)
+                else:
+                    ended = _ended(pid, kill=False)
+                    if ended is not False:      # it has exited: what it sent is here
+                        pid = None
+                        chunks.append(_rest(r))
+                        break
         finally:
             for fd in (r, w):
                 if fd is not None:
                     os.close(fd)
-            status = _ended(pid) if pid else None
-        if sigint or why:
-            return False, None, why
+            if pid:
+                ended = _ended(pid)
+        if late:
+            return "time", late
         try:
-            return True, pickle.loads(b"".join(chunks)), ""
-        except Exception:  # nothing or a part sent: the child ended before the end
-            code = None if status is None else os.waitstatus_to_exitcode(status)
-            cpu_out = {-signal.SIGPROF, -signal.SIGXCPU, -signal.SIGKILL}
-            return False, None, ("out of CPU time" if code in cpu_out
-                                 else f"it ended with exit status {code}")
+            ok, out = pickle.loads(b"".join(chunks))
+        except Exception:  # nothing or a part sent: a signal ended the child, or an exit
+            return _why_ended(ended, cpu)
+        return ("value", out) if ok else ("failed", f"it failed: {out}")
 
 
-def _child(w, cpu, fn, args):
-    """In the child: Ctrl-C and the CPU limits kill it (SIGPROF after ``cpu`` seconds,
-    RLIMIT_CPU a second later, no core file); ``fn(*args)`` pickled into ``w``; exit."""
+def _forked(w, cpu, fn, args):
+    """A child process computing ``fn(*args)`` into the pipe ``w`` (``_child``): its pid,
+    or the OSError that refused it.  Every signal is blocked across the fork, so none
+    reaches the child before ``_child`` has set every handler back to the default action;
+    whatever is raised in the child, it exits here (nothing of the caller's runs there)."""
+    parent = os.getpid()
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, signal.valid_signals())
+    try:
+        return os.fork()
+    except OSError as exc:
+        return exc
+    finally:
+        if os.getpid() != parent:
+            try:
+                _child(w, cpu, fn, args, mask)
+            finally:
+                os._exit(1)
+        signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+
+
+def _child(w, cpu, fn, args, mask):
+    """In the child: the garbage collector kept off the parent's objects (``gc.freeze``:
+    their finalizers are the parent's to run); every Python signal handler, SIGPROF's
+    and SIGXCPU's, back to the default action, before the signals are unblocked (but
+    those ``mask`` blocked in the parent); where ``cpu`` is finite, the CPU limits
+    (SIGPROF after ``cpu`` seconds, RLIMIT_CPU a second later); no core file;
+    ``(True, fn(*args))``, or ``(False, the error)``, pickled into ``w``; exit."""
+    gc.freeze()
     import resource
 
-    code = 1
-    try:
-        for sig in (signal.SIGINT, signal.SIGPROF, signal.SIGXCPU):
-            signal.signal(sig, signal.SIG_DFL)
-        signal.set_wakeup_fd(-1)
-        resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
+    for sig in signal.valid_signals():
+        if sig in (signal.SIGPROF, signal.SIGXCPU) or callable(signal.getsignal(sig)):
+            with contextlib.suppress(OSError, ValueError):
+                signal.signal(sig, signal.SIG_DFL)
+    signal.set_wakeup_fd(-1)
+    resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
+    if math.isfinite(cpu):
         limit = math.ceil(cpu) + 1
         hard = resource.getrlimit(resource.RLIMIT_CPU)[1]
         if hard != resource.RLIM_INFINITY:
             limit = min(limit, hard)
         resource.setrlimit(resource.RLIMIT_CPU, (limit, limit))
         signal.setitimer(signal.ITIMER_PROF, max(cpu, 1e-3))     # (0 would disarm it)
-        data = pickle.dumps(fn(*args), protocol=pickle.HIGHEST_PROTOCOL)
-        with open(w, "wb") as f:
-            f.write(data)
-        code = 0
-    finally:
-        os._exit(code)
-
-
-def _ended(pid):
-    """The wait status of the child ``pid``, reaped, killed first if it has not ended (it
-    has sent all it will or is out of time: SIGKILL ends it however it is stuck); None
-    where someone else reaped it (a SIGCHLD handler of the program's: then the pid is
-    not signalled, it may be another process's by now)."""
+    signal.pthread_sigmask(signal.SIG_SETMASK, mask - {signal.SIGPROF, signal.SIGXCPU})
     try:
-        done, status = os.waitpid(pid, os.WNOHANG)
-        if not done:
+        out = (True, fn(*args))
+        data = pickle.dumps(out, protocol=pickle.HIGHEST_PROTOCOL)
+    except Exception as exc:    # sent back, named in the warning
+        data = pickle.dumps((False, f"{type(exc).__name__}: {exc}"[:300]))
+    with open(w, "wb") as f:
+        f.write(data)
+    os._exit(0)
+
+
+def _rest(fd) -> bytes:
+    """What is left in the pipe ``fd``, read without waiting."""
+    os.set_blocking(fd, False)
+    out = []
+    with contextlib.suppress(BlockingIOError):
+        while chunk := os.read(fd, 1 << 16):
+            out.append(chunk)
+    return b"".join(out)
+
+
+def _ended(pid, kill=True):
+    """The child ``pid`` reaped: ``os.wait4``'s (pid, wait status, resource usage); if it
+    has not ended, it is killed first (it has sent all it will or is out of time: SIGKILL
+    ends it however it is stuck), or with ``kill`` false, False is returned; None where
+    someone else reaped it (a SIGCHLD handler of the program's: then the pid is not
+    signalled, it may be another process's by now)."""
+    try:
+        ended = os.wait4(pid, os.WNOHANG)
+        if not ended[0]:
+            if not kill:
+                return False
             os.kill(pid, signal.SIGKILL)
-            status = os.waitpid(pid, 0)[1]
-        return status
+            ended = os.wait4(pid, 0)
+        return ended
     except ChildProcessError:
         return None
 
 
+def _why_ended(ended, cpu):
+    """``(how, why)`` for a child that sent no result, from ``_ended``: out of CPU time
+    only where a signal ended it once its CPU time had reached ``cpu`` (not the OOM
+    killer, a crash or another's signal)."""
+    if not ended:
+        return "failed", "it was reaped elsewhere (a SIGCHLD handler) before it sent a result"
+    _, status, use = ended
+    code = os.waitstatus_to_exitcode(status)
+    if code >= 0:
+        return "failed", f"it ended with exit status {code}"
+    if use.ru_utime + use.ru_stime >= cpu:
+        return "time", "out of CPU time"
+    try:
+        name = signal.Signals(-code).name
+    except ValueError:
+        name = str(-code)
+    return "failed", f"it was killed by signal {name}"
+
+
 @contextlib.contextmanager
 def _sigint_recorded():
-    """Inside, SIGINT only records itself in the list yielded; after, the handler in
-    place before is called with it (Python's raises KeyboardInterrupt).  Only the main
-    thread is changed: signals are handled only there, and a handler that is not a
-    Python function (ignored, default, set in C) raises nothing anyway."""
+    """Inside, SIGINT only records itself; the function yielded calls the handler in
+    place before with the signal recorded, if any (Python's raises KeyboardInterrupt,
+    another may return: the work then goes on), as the exit does after putting it back.
+    Only the main thread's handler is changed: signals are handled only there, and a
+    handler that is not a Python function (ignored, default, set in C) is left alone."""
     got = []
     old = (signal.getsignal(signal.SIGINT)
            if threading.current_thread() is threading.main_thread() else None)
+
+    def deliver():
+        if got:
+            args = got[-1]
+            got.clear()
+            old(*args)
+
     if not callable(old):
-        yield got
+        yield deliver
         return
     signal.signal(signal.SIGINT, lambda signum, frame: got.append((signum, frame)))
     try:
-        yield got
+        yield deliver
     finally:
         signal.signal(signal.SIGINT, old)
-        if got:
-            old(*got[0])
+        deliver()
 
 
 #: functions defined, finite and smooth on the whole real line: a V may contain them
@@ -663,8 +763,7 @@ def _stands_for(J: JetSpace, V, Q) -> bool:
     - V has no function Q does not have, but entire ones (a Piecewise from q^a; log q
       from k/q is undefined at q < 0, log(tanh q + 1) from tanh q is log 0 at q = -25
       in floating point);
-    - V and its -dV/dq are singular nowhere Q is not (``singular.bases``: no new
-      denominator, root or log argument);
+    - V and its -dV/dq are singular nowhere Q is not (``_new_singularities``);
     - -dV/dq is Q (``_zero``);
     - V is 2 pi-periodic in every coordinate Q is 2 pi-periodic in (at random states):
       such a coordinate may be an angle, on which a torque tau (or tau - k sin q) does
@@ -676,13 +775,34 @@ def _stands_for(J: JetSpace, V, Q) -> bool:
     if any(not isinstance(f, (*heads, *_ENTIRE)) for f in V.atoms(sp.Function)):
         return False
     minus_dV = [-dag.diff(V, qi) for qi in J.q]
-    allowed = {b for e in Q for b in singular.bases(e)}
-    if any(b not in allowed for e in (V, *minus_dV) for b in singular.bases(e)):
+    if _new_singularities(Q, (V, *minus_dV)):
         return False
     if not _zero([a - e for a, e in zip(minus_dV, Q)]):
         return False
     return all(_zero([V.xreplace({qi: qi + 2 * sp.pi}) - V])
                for qi in J.q if _periodic_at_random(J, Q, qi))
+
+
+def _new_singularities(Q, exprs) -> bool:
+    """Whether ``exprs`` may be singular or undefined where ``Q`` is not: a base
+    (``singular.bases``) Q does not have, but a denominator whose factors
+    (``singular.factors``: no powers, no sign) are all factors of Q's bases, which
+    vanishes only where one of them does (the derivative of sqrt(w^2) is
+    w sqrt(w^2) / w^2, with 1 / w^2 where Q has sqrt(w^2)); a root's or a log's
+    argument is compared as it is (sqrt(w) is undefined where sqrt(w^2) is not)."""
+    allowed = {b for e in Q for b in singular.bases(e)}
+    zeros = {f for b in allowed for f in singular.factors(b)}
+    for e in exprs:
+        over = {p: p.base ** -p.exp for p in dag.atoms(e, sp.Pow)
+                if p.exp.is_Integer and p.exp.is_negative}
+        # the other bases: those of e with its denominators made numerators (one within
+        # another's base stays: compared as it is, which only asks more)
+        if any(b not in allowed for b in singular.bases(dag.xreplace(e, over))):
+            return True
+        if any(b.base not in allowed and not set(singular.factors(b.base)) <= zeros
+               for b in over):
+            return True
+    return False
 
 
 def _zero(exprs) -> bool:
