@@ -43,6 +43,7 @@ from __future__ import annotations
 import contextlib
 import gc
 import math
+import numbers
 import os
 import pickle
 import random
@@ -530,7 +531,7 @@ def _bounded(what, fn, *args):
     the SIGINT handler within ``_POLL`` (its KeyboardInterrupt ends the child); the child
     is always reaped and the pipe closed."""
     seconds = POTENTIAL_SECONDS
-    if isinstance(seconds, bool) or not isinstance(seconds, (int, float)) or not seconds >= 0:
+    if isinstance(seconds, bool) or not isinstance(seconds, numbers.Real) or not seconds >= 0:
         raise JetnhError(f"jetnh.mechanics.kane_bridge.POTENTIAL_SECONDS is {seconds!r}; set "
                          "it to a number of seconds >= 0 (math.inf: no bound)")
     if not hasattr(os, "fork"):
