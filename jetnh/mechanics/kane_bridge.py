@@ -576,14 +576,14 @@ def _in_child(cpu, wall, fn, args):
     with _sigint_recorded() as sigint:
         try:
             r, w = os.pipe()
-        except OSError as exc:
-            return "no fork", str(exc)
+        except OSError:
+            return "no fork", None
         pid = ended = late = None
         chunks = []
         try:
             child = _forked(w, cpu, fn, args)
             if isinstance(child, OSError):
-                return "no fork", str(child)
+                return "no fork", None
             pid = child
             os.close(w)
             w = None
@@ -800,8 +800,8 @@ def _new_singularities(Q, exprs) -> bool:
         # another's base stays: compared as it is, which only asks more)
         if any(b not in allowed for b in singular.bases(dag.xreplace(e, over))):
             return True
-        if any(b.base not in allowed and not set(singular.factors(b.base)) <= zeros
-               for b in over):
+        if any(p.base not in allowed and not set(singular.factors(p.base)) <= zeros
+               for p in over):
             return True
     return False
 
