@@ -316,3 +316,19 @@ def test_a_tiny_model_with_nested_exponentials_derives_or_says_why_not():
         else:
             with pytest.raises(JetnhError, match="cannot decide their generic rank"):
                 S.equations("chetaev").accelerations()
+
+
+def test_matrix_arithmetic_is_sympys():
+    """``add``, ``sub``, ``neg``, ``scaled`` and ``matmul`` give sympy's matrices entry
+    for entry (the same children in the same order), zero entries and cancelling ones
+    included."""
+    x, y, z = sp.symbols("x y z")
+    A = sp.Matrix([[x + y, 0, 2 * x], [sp.sin(z), -x * y, 1], [0, x, y - 1]])
+    B = sp.Matrix([[x - y, 3, -2 * x], [0, x * y, sp.Rational(1, 2)], [z + 1, 0, y]])
+    with sp.matrices.utilities.dotprodsimp(False):
+        pairs = [(linalg.add(A, B), A + B), (linalg.sub(A, B), A - B), (linalg.neg(A), -A),
+                 (linalg.scaled(A, 1 / (x + z)), A / (x + z)), (linalg.matmul(A, B), A * B)]
+    for got, want in pairs:
+        assert got.shape == want.shape
+        for g, w in zip(got, want):
+            assert type(g) is type(w) and g == w and g.args == w.args

@@ -121,9 +121,40 @@ def _cramer_solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
 
 def matmul(A: sp.Matrix, B: sp.Matrix) -> sp.Matrix:
     """A B with each entry one Add of its non-zero products (sympy's product adds term by
-    term, re-flattening the partial sums, and cancels unless dotprodsimp is off)."""
-    return sp.Matrix(A.rows, B.cols, lambda i, j: sp.Add(*[
-        A[i, m] * B[m, j] for m in range(A.cols) if A[i, m] != 0 and B[m, j] != 0]))
+    term, re-flattening the partial sums, and cancels unless dotprodsimp is off); sums
+    and products built by ``dag.build``."""
+    return sp.Matrix(A.rows, B.cols, lambda i, j: dag.build(sp.Add, [
+        dag.mul(A[i, m], B[m, j]) for m in range(A.cols) if A[i, m] != 0 and B[m, j] != 0]))
+
+
+def add(A: sp.Matrix, B: sp.Matrix) -> sp.Matrix:
+    """A + B, entry by entry as sympy's matrix sum (a zero entry adds nothing), the sums
+    built by ``dag.build``."""
+    return _entrywise(A, B, lambda a, b: dag.build(sp.Add, [a, b]))
+
+
+def sub(A: sp.Matrix, B: sp.Matrix) -> sp.Matrix:
+    """A - B as sympy's A + (-B) (B's entries times -1), built as ``add``."""
+    return _entrywise(A, neg(B), lambda a, b: dag.build(sp.Add, [a, b]))
+
+
+def neg(A: sp.Matrix) -> sp.Matrix:
+    """-A as sympy's (each entry times -1)."""
+    return scaled(A, sp.S.NegativeOne)
+
+
+def scaled(A: sp.Matrix, c) -> sp.Matrix:
+    """A c as sympy's (each non-zero entry times c), the products built by ``dag.mul``."""
+    return sp.Matrix(A.rows, A.cols, lambda i, j: dag.mul(A[i, j], c) if A[i, j] != 0
+                     else A[i, j])
+
+
+def _entrywise(A, B, op) -> sp.Matrix:
+    if A.shape != B.shape:
+        raise sp.ShapeError(f"Matrix size mismatch: {A.shape} + {B.shape}.")
+    return sp.Matrix(A.rows, A.cols, lambda i, j: (
+        op(A[i, j], B[i, j]) if A[i, j] != 0 and B[i, j] != 0 else A[i, j] if B[i, j] == 0
+        else B[i, j]))
 
 
 def embed(Phi: sp.Matrix, ind, dep) -> sp.Matrix:
@@ -251,18 +282,18 @@ def _lu_solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
                     N[best], N[col] = N[col], N[best]
             for j, terms in enumerate(pending[col]):
                 if terms:
-                    B[col, j] = sp.Add(B[col, j], *terms)
+                    B[col, j] = dag.build(sp.Add, [B[col, j], *terms])
             piv = A[col, col]
             _divides(piv)
             for r in range(col + 1, k):
                 if A[r, col] != 0:
-                    fac = A[r, col] / piv
+                    fac = dag.div(A[r, col], piv)
                     for j in range(col, k):                 # zero entries stay untouched
                         if A[col, j] != 0:
-                            A[r, j] = A[r, j] - fac * A[col, j]
+                            A[r, j] = dag.sub(A[r, j], dag.mul(fac, A[col, j]))
                     for j in range(B.cols):
                         if B[col, j] != 0:
-                            pending[r][j].append(-(fac * B[col, j]))
+                            pending[r][j].append(-dag.mul(fac, B[col, j]))
                 for N in Ns:         # zero multipliers and entries change nothing: skipped
                     top, row = N[col], N[r]
                     if top[col] != 0 and row[col] != 0:
@@ -272,8 +303,8 @@ def _lu_solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
                                 row[j] -= nf * top[j]
     X = sp.zeros(k, B.cols)
     for r in range(k - 1, -1, -1):
-        acc = B[r, :] - matmul(A[r, r + 1:], X[r + 1:, :])
-        X[r, :] = acc / A[r, r]
+        acc = sub(B[r, :], matmul(A[r, r + 1:], X[r + 1:, :]))
+        X[r, :] = scaled(acc, sp.S.One / A[r, r])    # sympy's matrix / scalar
     return X
 
 
