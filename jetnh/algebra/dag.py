@@ -331,10 +331,16 @@ def _add_terms(args):
             if a.is_Add:
                 nested.extend(a.args)
                 continue
-            if a.is_Mul:
-                c, s = a.as_coeff_Mul()
-                if c is not sp.S.One and len(a.args) == 2 and not _plain(s):
-                    return None
+            if a.is_Mul:         # the term without its number (``as_coeff_Mul``), as
+                fs = a.args      # its factors: no product is built to be compared
+                if not fs[0].is_Number:
+                    s = fs
+                elif len(fs) > 2:
+                    s = fs[1:]
+                else:
+                    s = fs[1]
+                    if fs[0] is not sp.S.One and not _plain(s):
+                        return None
             elif a.is_Symbol or a.is_NumberSymbol or isinstance(a, sp.Function) or (
                     a.is_Pow and not a.base.is_Number):
                 s = a
