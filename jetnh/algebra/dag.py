@@ -151,7 +151,16 @@ def has(expr, *what) -> bool:
     """``expr.has(*what)`` for types and objects (no patterns), on the graph."""
     types = tuple(w for w in what if isinstance(w, type))
     objs = {w for w in what if not isinstance(w, type)}
-    return any(isinstance(e, types) or e in objs for e in nodes(expr))
+    seen, stack = set(), _roots(expr)      # stops at the first one found
+    while stack:
+        e = stack.pop()
+        if id(e) in seen:
+            continue
+        if isinstance(e, types) or e in objs:
+            return True
+        seen.add(id(e))
+        stack.extend(a for a in e.args if id(a) not in seen)
+    return False
 
 
 def build(head, args):
