@@ -368,3 +368,62 @@ def test_build_runs_sympys_constructor_postprocessors():
         del sp.Basic._constructor_postprocessor_mapping[_Once]
     sp.core.cache.clear_cache()          # sympy's lookup of them is cached too
     assert dag.build(sp.Mul, [x, a, b]).args == sp.Mul(x, a, b).args == (x, a, b)
+
+
+@st.composite
+def nested_children(draw):
+    """Children that are themselves sums and products (with rational and float
+    coefficients, repeated terms now and then), as matrix products and solves make them."""
+    x, y, z = sp.symbols("x y z")
+    atoms = [x, y, z, sp.sin(x), sp.cos(y), x**2, 1 / z, sp.pi, sp.Rational(1, 2), sp.Integer(-3),
+             sp.Float(0.25), sp.Integer(2)]
+    pick = st.sampled_from(atoms)
+
+    def part():
+        head = draw(st.sampled_from([sp.Add, sp.Mul, None]))
+        if head is None:
+            return draw(pick)
+        return head(*draw(st.lists(pick, min_size=2, max_size=4)))
+    return [part() for _ in range(draw(st.integers(0, 5)))]
+
+
+@given(nested_children(), st.sampled_from([sp.Add, sp.Mul]))
+def test_build_takes_nested_sums_and_products_apart_as_sympy(args, head):
+    """Sums of sums and products of products: ``build`` (taking the children apart
+    itself where nothing combines) makes sympy's object, children in the same order."""
+    want, got = head(*args), dag.build(head, args)
+    assert type(got) is type(want)
+    assert got == want
+    assert got.args == want.args
+
+
+@given(nested_children(), nested_children())
+def test_arithmetic_is_sympys_operators(left, right):
+    """``mul``, ``add``, ``sub`` and ``div`` make the objects of sympy's ``*``, ``+``, ``-``
+    and ``/`` (the same children in the same order), numbers among the operands too."""
+    for a in left + [sp.S.One, sp.S.Zero]:
+        for b in right + [sp.S.One, sp.Integer(-1), sp.Rational(2, 3)]:
+            for got, want in ((dag.mul(a, b), a * b), (dag.add(a, b), a + b),
+                              (dag.sub(a, b), a - b), (dag.div(a, b), a / b)):
+                assert type(got) is type(want)
+                assert got == want
+                assert got.args == want.args
+
+
+def test_build_takes_apart_what_sympy_would_and_leaves_it_the_rest():
+    """The rules taken one by one: nested products and sums are taken apart directly,
+    their rational numbers combined; a rational beside a number times a sum (sympy's
+    two-argument rule), a repeated base, a float beside a rational are left to sympy."""
+    x, y, z = sp.symbols("x y z")
+    assert dag._mul_factors((x, -2 * y * z)) is not None
+    assert dag._mul_factors((-x, -2 * y * z))[0] == 2
+    assert dag._mul_factors((sp.Integer(3), sp.Mul(2, x + y, evaluate=False))) is None
+    assert dag._mul_factors((sp.Integer(3), 2 * x * y)) is not None
+    assert dag._mul_factors((x, 2 * x * y)) is None
+    assert dag._mul_factors((sp.Float(0.5) * x, 2 * y)) is None
+    assert dag._add_terms((x + 1, y - 1)) == (None, [x, y])
+    assert dag._add_terms((x + y, 2 * x)) is None
+    for head, args in ((sp.Mul, (sp.Integer(3), sp.Mul(2, x + y, evaluate=False))),
+                       (sp.Mul, (-x, -y)), (sp.Add, (x + 1, y - 1)),
+                       (sp.Add, (x + y, 2 * z + sp.Float(0.5)))):
+        assert dag.build(head, args).args == head(*args).args

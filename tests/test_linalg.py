@@ -316,3 +316,82 @@ def test_a_tiny_model_with_nested_exponentials_derives_or_says_why_not():
         else:
             with pytest.raises(JetnhError, match="cannot decide their generic rank"):
                 S.equations("chetaev").accelerations()
+
+
+def test_matrix_arithmetic_is_sympys():
+    """``add``, ``sub``, ``neg``, ``scaled`` and ``matmul`` give sympy's matrices entry
+    for entry (the same children in the same order), zero entries and cancelling ones
+    included."""
+    x, y, z = sp.symbols("x y z")
+    A = sp.Matrix([[x + y, 0, 2 * x], [sp.sin(z), -x * y, 1], [0, x, y - 1]])
+    B = sp.Matrix([[x - y, 3, -2 * x], [0, x * y, sp.Rational(1, 2)], [z + 1, 0, y]])
+    with sp.matrices.utilities.dotprodsimp(False):
+        pairs = [(linalg.add(A, B), A + B), (linalg.sub(A, B), A - B), (linalg.neg(A), -A),
+                 (linalg.scaled(A, 1 / (x + z)), A / (x + z)), (linalg.matmul(A, B), A * B)]
+    for got, want in pairs:
+        assert got.shape == want.shape
+        for g, w in zip(got, want):
+            assert type(g) is type(w) and g == w and g.args == w.args
+
+
+def _matrix_lu(M, rhs):
+    """The LU solve written with sympy's matrix operations (as it was): the reference
+    ``_lu_solve``'s expressions must equal, node for node."""
+    A, B, k = M.copy().as_mutable(), rhs.copy().as_mutable(), M.rows
+    pending = [[[] for _ in range(B.cols)] for _ in range(k)]
+    Ns = [[[N[i, j] for j in range(k)] for i in range(k)] for N in linalg._pivot_values(A)]
+    with mpmath.workdps(linalg._PIVOT_DPS):
+        scales = [max(abs(x) for row in N for x in row) for N in Ns]
+        for col in range(k):
+            best = linalg._choose(A.tolist(), Ns, col, scales)
+            if best != col:
+                A.row_swap(best, col)
+                B.row_swap(best, col)
+                pending[best], pending[col] = pending[col], pending[best]
+                for N in Ns:
+                    N[best], N[col] = N[col], N[best]
+            for j, terms in enumerate(pending[col]):
+                if terms:
+                    B[col, j] = sp.Add(B[col, j], *terms)
+            for r in range(col + 1, k):
+                if A[r, col] != 0:
+                    fac = A[r, col] / A[col, col]
+                    for j in range(col, k):
+                        if A[col, j] != 0:
+                            A[r, j] = A[r, j] - fac * A[col, j]
+                    for j in range(B.cols):
+                        if B[col, j] != 0:
+                            pending[r][j].append(-(fac * B[col, j]))
+                for N in Ns:
+                    top, row = N[col], N[r]
+                    if top[col] != 0 and row[col] != 0:
+                        nf = row[col] / top[col]
+                        for j in range(col, k):
+                            if top[j] != 0:
+                                row[j] -= nf * top[j]
+    X = sp.zeros(k, B.cols)
+    for r in range(k - 1, -1, -1):
+        X[r, :] = (B[r, :] - A[r, r + 1:] * X[r + 1:, :]) / A[r, r]
+    return X
+
+
+@settings(max_examples=8, deadline=None)
+@given(st.integers(7, 9), st.integers(0, 10**6), st.booleans())
+def test_lu_builds_the_expressions_sympys_matrices_build(k, seed, sparse):
+    """``_lu_solve`` (lists of rows, sums and products by ``dag.build``) makes the
+    expressions of the same elimination written with sympy's matrix operations, node
+    for node: dense and triangular-ish random trigonometric matrices."""
+    rng = random.Random(seed)
+    x, y = sp.symbols("x y")
+
+    def entry(i, j):
+        if sparse and j > i + 1:
+            return sp.S.Zero
+        return rng.randint(-2, 2) + rng.choice([sp.sin, sp.cos])(rng.randint(1, 3) * x - y)
+    M = sp.Matrix(k, k, entry)
+    rhs = sp.Matrix(k, 2, lambda i, j: rng.randint(-2, 2) * x + sp.cos(j * y))
+    with sp.matrices.utilities.dotprodsimp(False):
+        want = _matrix_lu(M, rhs)
+    got = linalg._lu_solve(M, rhs)
+    for g, w in zip(got, want):
+        assert type(g) is type(w) and g == w and g.args == w.args

@@ -151,7 +151,16 @@ def has(expr, *what) -> bool:
     """``expr.has(*what)`` for types and objects (no patterns), on the graph."""
     types = tuple(w for w in what if isinstance(w, type))
     objs = {w for w in what if not isinstance(w, type)}
-    return any(isinstance(e, types) or e in objs for e in nodes(expr))
+    seen, stack = set(), _roots(expr)      # stops at the first one found
+    while stack:
+        e = stack.pop()
+        if id(e) in seen:
+            continue
+        if isinstance(e, types) or e in objs:
+            return True
+        seen.add(id(e))
+        stack.extend(a for a in e.args if id(a) not in seen)
+    return False
 
 
 def build(head, args):
@@ -159,28 +168,37 @@ def build(head, args):
     children combine with nothing put together directly: sympy's ``flatten`` there only
     sorts the children (``Basic.compare``) after checking every pair of them for terms
     or powers to merge, which costs most of rebuilding a large graph (a substitution, a
-    conversion from symengine).  The result is the object sympy builds, arguments in the
-    same order; any child that could combine or expand (a number beyond one coefficient,
-    a nested sum or product, a repeated term or base, a power of a number, an
+    conversion from symengine, a matrix product).  The result is the object sympy
+    builds, arguments in the same order; a nested sum or product is taken apart as
+    sympy's ``flatten`` does, and any child that could combine or expand (a number
+    beyond rational coefficients, a repeated term or base, a power of a number, an
     exponential, anything non-commutative or unusual, a Python number that sympy would
     convert: ``xreplace`` with a rule of floats) leaves it to sympy.  Likewise a rational
     number times a sum, which sympy distributes (``_distributed``: the sum of the
     products is built here), and a sum to a rational power, which sympy leaves as it is
     after costly questions (``_plain_power``)."""
+    out = _direct(head, args)
+    return head(*args) if out is None else out
+
+
+def _direct(head, args):
+    """``build(head, args)`` where it does not leave the work to sympy, else None."""
+    if not global_parameters.evaluate:
+        return None
     if head is sp.Add:
         kept = _add_terms(args)
     elif head is sp.Mul:
         kept = _mul_factors(args)
-        if kept is None and global_parameters.evaluate:
+        if kept is None:
             terms = _distributed(args)
             if terms is not None:
                 return build(sp.Add, terms)
-    elif head is sp.Pow and global_parameters.evaluate and _plain_power(*args):
+    elif head is sp.Pow and _plain_power(*args):
         return sp.Pow(*args, evaluate=False)
     else:
-        kept = None
-    if kept is None or not global_parameters.evaluate:
-        return head(*args)
+        return None
+    if kept is None:
+        return None
     coeff, rest = kept
     if not rest:
         return head.identity if coeff is None else coeff
@@ -191,6 +209,43 @@ def build(head, args):
         rest.insert(0, coeff)
     obj = head._from_args(rest, True)
     return head._exec_constructor_postprocessors(obj) if _postprocessed(head, rest) else obj
+
+
+def mul(a, b):
+    """``a * b`` for sympy expressions: the object sympy's operator makes (``build``
+    where it applies)."""
+    if not (a.is_Number and b.is_Number):
+        out = _direct(sp.Mul, (a, b))
+        if out is not None:
+            return out
+    return a * b
+
+
+def add(a, b):
+    """``a + b`` for sympy expressions (as ``mul``)."""
+    if not (a.is_Number and b.is_Number):
+        out = _direct(sp.Add, (a, b))
+        if out is not None:
+            return out
+    return a + b
+
+
+def sub(a, b):
+    """``a - b`` for sympy expressions, i.e. ``a + (-b)`` (as ``mul``)."""
+    if not (a.is_Number and b.is_Number):
+        out = _direct(sp.Add, (a, -b))
+        if out is not None:
+            return out
+    return a - b
+
+
+def div(a, b):
+    """``a / b`` for sympy expressions, i.e. ``a * b**-1`` (as ``mul``)."""
+    if not a.is_Number:
+        out = _direct(sp.Mul, (a, sp.Pow(b, sp.S.NegativeOne)))
+        if out is not None:
+            return out
+    return a / b
 
 
 #: (head, type of a child) -> whether sympy has constructor postprocessors for them
@@ -261,68 +316,111 @@ _SORT_KEY = functools.cmp_to_key(_compare)
 
 def _add_terms(args):
     """The number and the other children of ``Add(*args)`` (unsorted) when no two terms
-    combine (``build``), else None."""
-    coeff, rest, terms = None, [], set()
-    for a in args:
-        if a is sp.S.Zero:
-            continue
-        if not isinstance(a, sp.Basic):     # a Python number: sympy converts it
-            return None
-        if a.is_Number:
-            if coeff is not None or not a.is_finite or a.is_zero:
+    combine (``build``), else None.  A nested sum's terms come after the other children,
+    as in ``Add.flatten``; rational numbers are added up."""
+    coeff, rest, terms, nested = None, [], set(), []
+    for seq in (args, nested):
+        for a in seq:
+            if a is sp.S.Zero:
+                continue
+            if not isinstance(a, sp.Basic):     # a Python number: sympy converts it
                 return None
-            coeff = a
-            continue
-        if not a.is_commutative:
-            return None
-        if a.is_Mul:
-            c, s = a.as_coeff_Mul()
-            if c is not sp.S.One and len(a.args) == 2 and not _plain(s):
+            if a.is_Number:
+                if not a.is_finite or a.is_zero:
+                    return None
+                if coeff is None:
+                    coeff = a
+                elif coeff.is_Rational and a.is_Rational:
+                    coeff += a
+                else:
+                    return None
+                continue
+            if not a.is_commutative:
                 return None
-        elif a.is_Symbol or a.is_NumberSymbol or isinstance(a, sp.Function) or (
-                a.is_Pow and not a.base.is_Number):
-            s = a
-        else:
-            return None
-        if s in terms:
-            return None
-        terms.add(s)
-        rest.append(a)
-    return coeff, rest
+            if a.is_Add:
+                nested.extend(a.args)
+                continue
+            if a.is_Mul:         # the term without its number (``as_coeff_Mul``), as
+                fs = a.args      # its factors: no product is built to be compared
+                if not fs[0].is_Number:
+                    s = fs
+                elif len(fs) > 2:
+                    s = fs[1:]
+                else:
+                    s = fs[1]
+                    if fs[0] is not sp.S.One and not _plain(s):
+                        return None
+            elif a.is_Symbol or a.is_NumberSymbol or isinstance(a, sp.Function) or (
+                    a.is_Pow and not a.base.is_Number):
+                s = a
+            else:
+                return None
+            if s in terms:
+                return None
+            terms.add(s)
+            rest.append(a)
+    return (None if coeff is not None and coeff.is_zero else coeff), rest
 
 
 def _mul_factors(args):
     """The number and the other children of ``Mul(*args)`` (unsorted) when no two
-    factors combine (``build``), else None."""
-    coeff, rest, bases = None, [], set()
-    for a in args:
-        if a is sp.S.One:
-            continue
-        if not isinstance(a, sp.Basic):     # a Python number: sympy converts it
-            return None
-        if a.is_Number:
-            if coeff is not None or not a.is_finite or a.is_zero:
+    factors combine (``build``), else None.  A nested product's factors come after the
+    other children, as in ``Mul.flatten`` (not beside a lone rational number, sympy's
+    two-argument rule); rational numbers are multiplied."""
+    coeff, rest, bases, nested = None, [], set(), []
+    for seq in (args, nested):
+        for a in seq:
+            if a is sp.S.One:
+                continue
+            if not isinstance(a, sp.Basic):     # a Python number: sympy converts it
                 return None
-            coeff = a
-            continue
-        if not a.is_commutative:
-            return None
-        if a.is_Pow:
-            b = a.base
-            if b.is_Number:
+            if a.is_Number:
+                if not a.is_finite or a.is_zero:
+                    return None
+                if coeff is None:
+                    coeff = a
+                elif coeff.is_Rational and a.is_Rational:
+                    coeff *= a
+                else:
+                    return None
+                continue
+            if not a.is_commutative:
                 return None
-        elif a.is_Symbol or a.is_NumberSymbol or a.is_Add or (
-                isinstance(a, sp.Function) and not isinstance(a, ExpBase)):
-            b = a
-        else:
-            return None
-        if b in bases:
-            return None
-        bases.add(b)
-        rest.append(a)
+            if a.is_Pow:
+                b = a.base
+                if b.is_Number:
+                    return None
+            elif a.is_Mul:
+                if not nested and _two_rational(args):
+                    return None
+                nested.extend(a.args)
+                continue
+            elif a.is_Symbol or a.is_NumberSymbol or a.is_Add or (
+                    isinstance(a, sp.Function) and not isinstance(a, ExpBase)):
+                b = a
+            else:
+                return None
+            if b in bases:
+                return None
+            bases.add(b)
+            rest.append(a)
+    if coeff is sp.S.One:
+        coeff = None
     if coeff is not None and len(rest) == 1 and rest[0].is_Add:
         return None                     # a number times a sum is distributed
     return coeff, rest
+
+
+def _two_rational(args) -> bool:
+    """Whether ``Mul.flatten``'s rule for two children (ones aside) applies: a rational
+    number and a number times a sum, which it leaves unevaluated."""
+    rest = [a for a in args if a is not sp.S.One]
+    if len(rest) != 2 or not all(isinstance(a, sp.Basic) for a in rest):
+        return False
+    a, b = rest
+    if b.is_Rational:
+        a, b = b, a
+    return a.is_Rational and b.as_coeff_Mul()[1].is_Add
 
 
 def _distributed(args):
@@ -508,15 +606,15 @@ def _rule(e, x, cache):
     if all(d is sp.S.Zero for d in ds):
         return sp.S.Zero
     if isinstance(e, sp.Add):
-        return sp.Add(*[d for d in ds if d is not sp.S.Zero])
+        return build(sp.Add, [d for d in ds if d is not sp.S.Zero])
     if isinstance(e, sp.Mul):
         args = list(e.args)
-        return sp.Add(*[sp.Mul(*args[:i], d, *args[i + 1:])
-                        for i, d in enumerate(ds) if d is not sp.S.Zero])
+        return build(sp.Add, [build(sp.Mul, [*args[:i], d, *args[i + 1:]])
+                              for i, d in enumerate(ds) if d is not sp.S.Zero])
     if isinstance(e, sp.Pow):         # a zero part is left out (0 * log(b) would ask
         (b, p), (db, dp) = e.args, ds  # whether log(b) is finite, walking b's tree)
-        return e * sp.Add(*([dp * sp.log(b)] if dp is not sp.S.Zero else []),
-                          *([db * p / b] if db is not sp.S.Zero else []))
+        return mul(e, build(sp.Add, [*([mul(dp, sp.log(b))] if dp is not sp.S.Zero else []),
+                                     *([div(mul(db, p), b)] if db is not sp.S.Zero else [])]))
     if isinstance(e, sp.Function) and type(e)._eval_derivative is sp.Function._eval_derivative:
         out = []
         for i, d in enumerate(ds, 1):
@@ -526,8 +624,8 @@ def _rule(e, x, cache):
                 df = e.fdiff(i)
             except ArgumentIndexError:
                 df = sp.Function.fdiff(e, i)
-            out.append(df * d)
-        return sp.Add(*out)
+            out.append(mul(df, d))
+        return build(sp.Add, out)
     return sp.diff(e, x)
 
 

@@ -121,9 +121,40 @@ def _cramer_solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
 
 def matmul(A: sp.Matrix, B: sp.Matrix) -> sp.Matrix:
     """A B with each entry one Add of its non-zero products (sympy's product adds term by
-    term, re-flattening the partial sums, and cancels unless dotprodsimp is off)."""
-    return sp.Matrix(A.rows, B.cols, lambda i, j: sp.Add(*[
-        A[i, m] * B[m, j] for m in range(A.cols) if A[i, m] != 0 and B[m, j] != 0]))
+    term, re-flattening the partial sums, and cancels unless dotprodsimp is off); sums
+    and products built by ``dag.build``."""
+    return sp.Matrix(A.rows, B.cols, lambda i, j: dag.build(sp.Add, [
+        dag.mul(A[i, m], B[m, j]) for m in range(A.cols) if A[i, m] != 0 and B[m, j] != 0]))
+
+
+def add(A: sp.Matrix, B: sp.Matrix) -> sp.Matrix:
+    """A + B, entry by entry as sympy's matrix sum (a zero entry adds nothing), the sums
+    built by ``dag.build``."""
+    return _entrywise(A, B, lambda a, b: dag.build(sp.Add, [a, b]))
+
+
+def sub(A: sp.Matrix, B: sp.Matrix) -> sp.Matrix:
+    """A - B as sympy's A + (-B) (B's entries times -1), built as ``add``."""
+    return _entrywise(A, neg(B), lambda a, b: dag.build(sp.Add, [a, b]))
+
+
+def neg(A: sp.Matrix) -> sp.Matrix:
+    """-A as sympy's (each entry times -1)."""
+    return scaled(A, sp.S.NegativeOne)
+
+
+def scaled(A: sp.Matrix, c) -> sp.Matrix:
+    """A c as sympy's (each non-zero entry times c), the products built by ``dag.mul``."""
+    return sp.Matrix(A.rows, A.cols, lambda i, j: dag.mul(A[i, j], c) if A[i, j] != 0
+                     else A[i, j])
+
+
+def _entrywise(A, B, op) -> sp.Matrix:
+    if A.shape != B.shape:
+        raise sp.ShapeError(f"Matrix size mismatch: {A.shape} + {B.shape}.")
+    return sp.Matrix(A.rows, A.cols, lambda i, j: (
+        op(A[i, j], B[i, j]) if A[i, j] != 0 and B[i, j] != 0 else A[i, j] if B[i, j] == 0
+        else B[i, j]))
 
 
 def embed(Phi: sp.Matrix, ind, dep) -> sp.Matrix:
@@ -194,16 +225,17 @@ def _pivot_values(M: sp.Matrix) -> list:
 
 
 def _choose(A, Ns, col, scales):
-    """The pivot row for column ``col``, by value at the random points (``Ns``, eliminated
-    alongside): each candidate's smallest size relative to the column's largest over the
-    points.  Among the candidates not far smaller than the best (``_PIVOT_SPARSE``), the
-    row with the fewest nonzero entries left (Markowitz: the least fill-in, so a sparse,
-    e.g. triangular, block keeps a solve of size O(k^2), not O(k^3)); then a nonzero
-    constant, then near ties by the cheapest form.  Entries zero at a point are never
-    chosen while another is not; without values, by form alone."""
-    rows = [r for r in range(col, A.rows) if A[r, col] != 0]
+    """The pivot row for column ``col`` of ``A`` (a list of rows), by value at the random
+    points (``Ns``, eliminated alongside): each candidate's smallest size relative to the
+    column's largest over the points.  Among the candidates not far smaller than the best
+    (``_PIVOT_SPARSE``), the row with the fewest nonzero entries left (Markowitz: the
+    least fill-in, so a sparse, e.g. triangular, block keeps a solve of size O(k^2), not
+    O(k^3)); then a nonzero constant, then near ties by the cheapest form.  Entries zero
+    at a point are never chosen while another is not; without values, by form alone."""
+    k = len(A)
+    rows = [r for r in range(col, k) if A[r][col] != 0]
     if not Ns or not rows:
-        return min(range(col, A.rows), key=lambda r: _pivot_cost(A[r, col]))
+        return min(range(col, k), key=lambda r: _pivot_cost(A[r][col]))
     score = {r: mpmath.inf for r in rows}
     for N, scale in zip(Ns, scales):
         top = max(abs(N[r][col]) for r in rows)
@@ -212,69 +244,85 @@ def _choose(A, Ns, col, scales):
             score[r] = min(score[r], v / top if v > _PIVOT_ZERO * scale else 0)
     best = max(score.values())
     if best == 0:                            # zero at a point: fall back to the form
-        return min(rows, key=lambda r: _pivot_cost(A[r, col]))
-    fill = {r: sum(1 for j in range(col + 1, A.cols) if A[r, j] != 0) for r in rows}
+        return min(rows, key=lambda r: _pivot_cost(A[r][col]))
+    fill = {r: sum(1 for e in A[r][col + 1:] if e != 0) for r in rows}
     least = min(fill[r] for r in rows if score[r] >= _PIVOT_SPARSE * best)
     rows = [r for r in rows if fill[r] == least and score[r] >= _PIVOT_SPARSE * best]
-    consts = [r for r in rows if A[r, col].is_number and score[r] >= _PIVOT_CONSTANT]
+    consts = [r for r in rows if A[r][col].is_number and score[r] >= _PIVOT_CONSTANT]
     if consts:
         return max(consts, key=lambda r: score[r])
     best = max(score[r] for r in rows)
     near = [r for r in rows if score[r] >= _PIVOT_TIE * best]
-    return min(near, key=lambda r: (_pivot_cost(A[r, col]), -score[r]))
+    return min(near, key=lambda r: (_pivot_cost(A[r][col]), -score[r]))
 
 
 def _lu_solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
     """Gaussian elimination with row pivots chosen by value (``_choose``): the matrix is
     evaluated at random points (``completing`` puts them on a manifold) and eliminated
     numerically alongside, so that a pivot is never an entry that vanishes identically
-    (or one that is merely short), and constants are kept as pivots where they serve."""
-    A = M.copy().as_mutable()
-    B = rhs.copy().as_mutable()
-    k = A.rows
+    (or one that is merely short), and constants are kept as pivots where they serve.
+    The entries are held as lists of rows (a sympy matrix's indexing cost as much as the
+    arithmetic); each is the expression sympy's matrix operations make."""
+    k, m = M.rows, rhs.cols
+    A = [[M[i, j] for j in range(k)] for i in range(k)]
+    B = [[rhs[i, j] for j in range(m)] for i in range(k)]
     # the terms subtracted from B's entries, added up once when the row is the pivot's
     # (subtracting them one by one re-flattens every partial sum: cubic in k)
-    pending = [[[] for _ in range(B.cols)] for _ in range(k)]
+    pending = [[[] for _ in range(m)] for _ in range(k)]
     # the values as lists of rows (mpmath's matrix indexing was most of the elimination)
-    Ns = [[[N[i, j] for j in range(k)] for i in range(k)] for N in _pivot_values(A)]
+    Ns = [[[N[i, j] for j in range(k)] for i in range(k)] for N in _pivot_values(M)]
     with mpmath.workdps(_PIVOT_DPS):
         scales = [max(abs(x) for row in N for x in row) for N in Ns]
         for col in range(k):
             best = _choose(A, Ns, col, scales)
-            if A[best, col] == 0:
+            if A[best][col] == 0:
                 raise ZeroDivisionError("singular matrix")
             if best != col:
-                A.row_swap(best, col)
-                B.row_swap(best, col)
-                pending[best], pending[col] = pending[col], pending[best]
-                for N in Ns:
-                    N[best], N[col] = N[col], N[best]
+                for rows in (A, B, pending, *Ns):
+                    rows[best], rows[col] = rows[col], rows[best]
+            top, tb = A[col], B[col]
             for j, terms in enumerate(pending[col]):
                 if terms:
-                    B[col, j] = sp.Add(B[col, j], *terms)
-            piv = A[col, col]
+                    tb[j] = dag.build(sp.Add, [tb[j], *terms])
+            piv = top[col]
             _divides(piv)
             for r in range(col + 1, k):
-                if A[r, col] != 0:
-                    fac = A[r, col] / piv
+                row = A[r]
+                if row[col] != 0:
+                    fac = dag.div(row[col], piv)
                     for j in range(col, k):                 # zero entries stay untouched
-                        if A[col, j] != 0:
-                            A[r, j] = A[r, j] - fac * A[col, j]
-                    for j in range(B.cols):
-                        if B[col, j] != 0:
-                            pending[r][j].append(-(fac * B[col, j]))
+                        if top[j] != 0:
+                            row[j] = dag.sub(row[j], dag.mul(fac, top[j]))
+                    for j in range(m):
+                        if tb[j] != 0:
+                            pending[r][j].append(-dag.mul(fac, tb[j]))
                 for N in Ns:         # zero multipliers and entries change nothing: skipped
-                    top, row = N[col], N[r]
-                    if top[col] != 0 and row[col] != 0:
-                        nf = row[col] / top[col]
+                    ntop, nrow = N[col], N[r]
+                    if ntop[col] and nrow[col]:       # mpmath numbers: nonzero
+                        nf = nrow[col] / ntop[col]
                         for j in range(col, k):
-                            if top[j] != 0:
-                                row[j] -= nf * top[j]
-    X = sp.zeros(k, B.cols)
-    for r in range(k - 1, -1, -1):
-        acc = B[r, :] - matmul(A[r, r + 1:], X[r + 1:, :])
-        X[r, :] = acc / A[r, r]
-    return X
+                            if ntop[j]:
+                                nrow[j] -= nf * ntop[j]
+    X = [None] * k
+    for r in range(k - 1, -1, -1):          # B[r] - A[r, r+1:] X[r+1:], then / A[r, r]
+        inv = sp.S.One / A[r][r]            # as sympy's matrices: times 1/A[r, r]
+        X[r] = [_times(_minus(B[r][c], dag.build(sp.Add, [
+            dag.mul(A[r][j], X[j][c]) for j in range(r + 1, k)
+            if A[r][j] != 0 and X[j][c] != 0])), inv) for c in range(m)]
+    return sp.Matrix(X) if k else sp.zeros(0, m)
+
+
+def _minus(a, b):
+    """Entry of sympy's matrix a - b (a + (-1) b, zero entries added to nothing)."""
+    if b == 0:
+        return a
+    b = dag.mul(b, sp.S.NegativeOne)
+    return b if a == 0 else dag.build(sp.Add, [a, b])
+
+
+def _times(a, c):
+    """Entry of sympy's matrix a c (a zero entry stays zero)."""
+    return a if a == 0 else dag.mul(a, c)
 
 
 # ------------------------------------------------------------------ generic rank

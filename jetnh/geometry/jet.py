@@ -293,8 +293,9 @@ class JetSpace:
                 continue
             info = self.split(s)
             if info is not None:
-                terms.append(dag.diff(expr, s, cache=cache) * self.jet(info[0], info[1] + 1))
-        return sp.Add(*terms)
+                terms.append(dag.mul(dag.diff(expr, s, cache=cache),
+                                     self.jet(info[0], info[1] + 1)))
+        return dag.build(sp.Add, terms)
 
     def Dk(self, expr, k: int) -> sp.Expr:
         """The k-th total derivative."""

@@ -247,9 +247,9 @@ def _weighted(M: sp.Matrix, weights, parts) -> sp.Matrix:
     (adding the matrices one by one re-flattens every partial sum: quadratic in the
     number of constraints); zero products left out (sympy's w * 0 asks whether w is
     finite, walking its tree)."""
-    return sp.Matrix(M.rows, M.cols, lambda i, j: sp.Add(
-        M[i, j], *[w * X[i, j] for w, X in zip(weights, parts)
-                   if X is not None and w != 0 and X[i, j] != 0]))
+    return sp.Matrix(M.rows, M.cols, lambda i, j: dag.build(sp.Add, [
+        M[i, j], *[dag.mul(w, X[i, j]) for w, X in zip(weights, parts)
+                   if X is not None and w != 0 and X[i, j] != 0]]))
 
 
 @dag.collector_paused()
@@ -292,7 +292,7 @@ def _solve(system, kappa, explicit, multipliers, rates):
     elif kappa == "multipliers":
         kap = list(linalg.solve(A_dep.T, sp.Matrix(multipliers))) if transform else list(multipliers)
     elif kappa == "momenta":
-        kap = list(-linalg.solve(A_dep.T, sp.Matrix([p[i] for i in dep])))
+        kap = list(linalg.neg(linalg.solve(A_dep.T, sp.Matrix([p[i] for i in dep]))))
     else:
         raise ValueError(f"kappa must be one of {KAPPA}, not {kappa!r}")
     H1, r1 = H, r
@@ -319,7 +319,7 @@ def _solve(system, kappa, explicit, multipliers, rates):
             "accelerations. Check the kinetic energy (it must be positive on the admissible "
             "velocities), or use another principle")
 
-    X = linalg.solve(A_dep, -(A[:, ind].row_join(b))) if k else sp.zeros(0, n + 1)
+    X = linalg.solve(A_dep, linalg.neg(A[:, ind].row_join(b))) if k else sp.zeros(0, n + 1)
     Phi, w = X[:, :n - k], X[:, n - k]
     P = linalg.embed(Phi, ind, dep)   # q'' = P u + w_full
     w_full = sp.zeros(n, 1)
@@ -327,16 +327,16 @@ def _solve(system, kappa, explicit, multipliers, rates):
         w_full[i] = w[a]
     HP = linalg.matmul(H1, P)
     K = linalg.matmul(P.T, HP)
-    rhs = linalg.matmul(P.T, r1 - linalg.matmul(H1, w_full))
+    rhs = linalg.matmul(P.T, linalg.sub(r1, linalg.matmul(H1, w_full)))
     u = linalg.solve(K, rhs)
-    q2 = linalg.matmul(P, u) + w_full
+    q2 = linalg.add(linalg.matmul(P, u), w_full)
     acc = {qdd[s]: q2[s] for s in range(n)}
     if rates:
-        R = (r1 - linalg.matmul(H1, q2)).extract(dep, [0])
+        R = linalg.sub(r1, linalg.matmul(H1, q2)).extract(dep, [0])
         if transform:
             graph: dict = {}          # the entries' shared parts differentiated once
             DA = A_dep.applyfunc(lambda e: J.D(e, graph))
-            mu = R + linalg.matmul(DA.T, sp.Matrix(kap))
+            mu = linalg.add(R, linalg.matmul(DA.T, sp.Matrix(kap)))
         else:
             mu = linalg.solve(A_dep.T, R)
         acc.update({rate: mu[a] for a, rate in enumerate(rates)})

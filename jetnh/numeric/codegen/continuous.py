@@ -106,8 +106,9 @@ def generate(spec: KernelSpec) -> KernelSource:
         system, [acc[J.jet(J.split(v)[0], 2)] for v in ind_vel] + [acc[r] for r in rates],
         prepare.numbers, numbered)
     prepare.adopt(numbered)
-    sing_exprs = prepare.many([(e, f"the singularity indicator {label(e)}")
-                               for _, e in indicators])
+    labels = [label(e) for _, e in indicators]      # each walks its indicator: once
+    sing_exprs = prepare.many([(e, f"the singularity indicator {text}")
+                               for (_, e), text in zip(indicators, labels)])
     t1 = time.perf_counter()
 
     layout = Layout(
@@ -119,7 +120,7 @@ def generate(spec: KernelSpec) -> KernelSource:
         integrals=tuple(integrals),
         runtime_params=runtime_params,
         coordinate_velocities=tuple(v.name for v in J.qd),
-        indicators=tuple(label(e) for _, e in indicators),
+        indicators=tuple(labels),
         indicator_kinds=tuple(kind for kind, _ in indicators),
         power=system.forced,
         holonomic=len(hol),
@@ -246,8 +247,8 @@ def _small_cse(pre, out_exprs):
 
 def _used_phi(phi_exprs, out_exprs) -> list:
     """``[(v<a>, phi^a)]`` when the outputs use the dependent velocities, else []."""
-    used = dag.free_symbols(list(out_exprs)) if out_exprs else set()
-    if phi_exprs and any(s.name.startswith("v") for s in used):
+    if phi_exprs and out_exprs and dag.has(
+            list(out_exprs), *[sp.Symbol(f"v{a}") for a in range(len(phi_exprs))]):
         return [(f"v{a}", e) for a, e in enumerate(phi_exprs)]
     return []
 
