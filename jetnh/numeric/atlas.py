@@ -94,7 +94,7 @@ from .methods._common import (AT_T_EVAL, ENDPOINTS, EVENT, EVERY_STEP, FINISHED,
 from . import arguments, chart_change, chart_driver, interrupt, loops, methods
 from .events import Event, OwnEvent, as_events
 from .kernels.calls import Kernel, Rows
-from .methods.loop import Control, Result, Watch
+from .methods.loop import PAST_EDGE, Control, Result, Watch
 from .methods.loop import features as loop_features
 from .trajectory import Trajectory
 
@@ -109,6 +109,8 @@ MAX_K = 3
 NEAR = chart_driver.NEAR
 #: what a loop's halt flag is made from (a copy: sooner than ``np.zeros``; never written)
 _HALT = np.zeros(1, dtype=np.int64)
+#: the plans an atlas keeps their marked loop arguments for (``_marked``)
+MAX_MARKED = 64
 #: ``Atlas.change``: a chart it needs has no kernels yet
 MISSING = object()
 _F8 = np.dtype(np.float64)
@@ -526,6 +528,9 @@ class Atlas:
         self._drives: dict = {}
         #: whether the last run of each of those reached an edge (``run``)
         self._reaches: dict = {}
+        #: the loop's arguments after ``p`` that test the edge at a run's start, per
+        #: plan (``_marked``)
+        self._marked: dict = {}
 
     @property
     def own(self) -> Chart:
@@ -706,28 +711,32 @@ def run(home, plan, y0, p, build):
             driven = _driven(home, at, plan, y0, p, build, tic, key)
             if driven is not None:
                 return driven
-        if not _edge_at(at, plan.ce, plan.t0, y0, p) < 0.0:
+        marked = _marked(at, plan)
+        if marked is not None or not _edge_at(at, plan.ce, plan.t0, y0, p) < 0.0:
             # the plan's loop called as a run that cannot switch calls it: a run that
             # finishes is its Trajectory at once; one that reaches the edge goes on in
-            # a second call (``_made_onward``)
+            # a second call (``_made_onward``); one that starts past it (``marked``:
+            # the loop tests that, ``PAST_EDGE``; else ``_edge_at``) goes on below
             halt = _HALT.copy()
             tic_loop = time.perf_counter()
             out = interrupt.call(plan.entry, halt, None,
-                                 (*plan.head, y0, p, *plan.suffix, halt))
+                                 (*plan.head, y0, p, *(marked or plan.suffix), halt))
             wall = time.perf_counter() - tic_loop
             status, dense = out[0], plan.dense_ends
             if status == FINISHED:
                 return Trajectory._of_loop(home, out, p, plan.method.name, _FINISHED_TEXT,
                                            wall, plan.kern,
                                            None if dense is None else dense[0])
-            if dense is not None:       # stopped inside a step or not
-                dense = dense[status == EVENT or status == SINGULAR]
-            ahead = None
-            if status == EVENT or status == SINGULAR:       # (the edge: its one event)
-                ahead = interrupt.call(_made_onward, halt, None,
-                                       (at, plan, out, wall, dense, y0, p, build, tic, halt))
-            return _on_from(home, at, plan, y0, p, (), build, tic, key, out, wall, dense,
-                            ahead)
+            if not (status == SINGULAR and out[11] == PAST_EDGE):
+                if dense is not None:       # stopped inside a step or not
+                    dense = dense[status == EVENT or status == SINGULAR]
+                ahead = None
+                if status == EVENT or status == SINGULAR:       # (the edge: its one event)
+                    ahead = interrupt.call(_made_onward, halt, None,
+                                           (at, plan, out, wall, dense, y0, p, build, tic,
+                                            halt))
+                return _on_from(home, at, plan, y0, p, (), build, tic, key, out, wall,
+                                dense, ahead)
     user = as_events(plan.events)
     sens, t0, t1, ctl = plan.sens, plan.t0, plan.t1, plan.ctl
     method = plan.method.name
@@ -982,6 +991,23 @@ def own_edge(at, ce, t, y, p) -> float:
     out = np.empty(n)
     kernel(float(t), y, p, out)
     return float(out[-1])
+
+
+def _marked(at, plan):
+    """``plan.suffix`` with ``Control.edge = -1`` (made once per plan): its loop returns
+    at once (``PAST_EDGE``) where a run of ``run``'s quick route starts past the edge;
+    None where the loop has no such test (radau; the fixed steps, whose ``edge`` is
+    ``NEAR``: ``_edge_at`` tests it)."""
+    suffix = plan.suffix
+    found = at._marked.get(id(suffix))
+    if found is None or found[0] is not suffix:
+        marked = None
+        if plan.method.solver is methods.Solver.EXPLICIT and plan.ctl.edge == 0.0:
+            marked = (suffix[0]._replace(edge=-1.0), *suffix[1:])
+        if len(at._marked) >= MAX_MARKED:     # (plans are dropped: ``solve.keep``)
+            at._marked.clear()
+        found = at._marked[id(suffix)] = (suffix, marked)
+    return found[1]
 
 
 def _edge_at(at, ce, t, y, p) -> float:

@@ -86,13 +86,17 @@ Result = namedtuple("Result", "status ts ys n_out stats t y ev_t ev_i ev_y n_ev 
 #: its sensitivities, ``n_sens`` columns a row, projected with it; ``edge`` > 0: the run
 #: watches its chart's edge as its last event (``numeric.atlas``): a fixed step with a
 #: stage past it stops at its start (``past_edge``), an adaptive step is no longer than
-#: ``edge`` times the time to the singular set (``near_zero``)
+#: ``edge`` times the time to the singular set (``near_zero``); ``edge`` < 0 (an adaptive
+#: run of ``atlas.run``'s quick route): a run that starts past that edge returns at once
+#: as SINGULAR with ``sing_index`` ``PAST_EDGE``, else it runs as with ``edge`` = 0
 Control = namedtuple("Control",
                      "rtol atol first_step max_step max_steps n_steps n_hol n_coord n_sens "
                      "edge", defaults=(0, 0, 0, 0.0))
 #: what to watch: singularity indicators (``n_sing`` of them, threshold ``sing_tol``)
 #: and user events (direction, terminal count)
 Watch = namedtuple("Watch", "n_sing sing_tol ev_dir ev_max")
+#: the ``sing_index`` of a run that started past its chart's edge (``Control.edge`` < 0)
+PAST_EDGE = -2
 
 
 @dataclass(frozen=True)
@@ -491,6 +495,13 @@ def _solve(rhs_at, sing_at, uev_at, hol_at, t0, t_end, y0, p, ctl, t_eval, mode,
         ws, sing_index = watch_start(sing, uev, watch, t, y, p)
         gs, gs_old, gref, sig, eps, gu_old, gu_new, gtmp = ws[:8]
         rate = ws[11]
+        if EDGE and ctl.edge < 0.0 and n_user > 0:
+            # (the edge, the last event, at the start: negative, not NaN, is past it)
+            if sing_index >= 0:
+                uev(t, y, p, gu_old)
+            if gu_old[n_user - 1] < 0.0:
+                return (SINGULAR, ts, ys, n_out, counts(stats), t, y, ev_t, ev_i, ev_y,
+                        n_ev, PAST_EDGE)
         if sing_index >= 0:
             if ADAPTIVE:
                 ts, ys, n_out = store(ts, ys, n_out, t, y)
