@@ -12,11 +12,20 @@ starts in the split of largest measure.  Two thresholds decide how a given point
 - there, the split is singular where the constraints no longer determine the dependent
   velocities in floats: a change of one rounding unit in a coordinate, an independent
   velocity or a parameter moves phi^alpha by more than the consistency tolerance ``tol``
-  (relative, as max(1, |phi|)) -- ``determined``.  That is the conditioning of phi at
+  relative to the size of its terms (``sizes``) -- ``determined``.  That is the conditioning of phi at
   the point in the numbers given (near th = pi/2, cos th is known only to about 1e-16
   absolute; near x = 0, x itself is known to 1e-16 relative, and y/x is fine).  A point
   there without its dependent velocities is refused (``singular``): give them too, or
   choose another split.
+
+Every test of given velocities against the constraints is relative to the size of the
+terms that make the value tested, never to the number 1, so that its verdict is the
+same in every unit of length and of time (``agree``, ``on_constraints``, ``determined``):
+phi^alpha = -A_alpha^-1 (sum_s A_s qdot^s + b), s the independent velocities, b = f - A
+qdot the part of f without velocities; its terms are the columns of that sum, carried
+each through A_alpha^-1 (for affine constraints phi = Phi qdot + phi0: Phi_s qdot^s and
+phi0).  Below the smallest normal float nothing is a size: a point at rest requires the
+constraints' value itself.
 """
 
 from __future__ import annotations
@@ -31,6 +40,8 @@ from ..errors import ConstraintError
 
 #: the unit roundoff of float64
 ROUNDOFF = float(np.finfo(float).eps) / 2
+#: the smallest normal float64: the floor of every size (module docstring)
+TINY = float(np.finfo(float).tiny)
 
 _EDGES: dict = {}
 
@@ -78,10 +89,11 @@ def phi(system, t, coordinates: dict, velocities: dict, params: dict) -> dict:
 
 
 def determined(system, t, coordinates: dict, velocities: dict, params: dict, tol: float):
-    """``(ok, why, finite)``: whether phi^alpha at the point moves by at most ``tol`` max(1,
-    |phi|) when any one coordinate, independent velocity or parameter changes by one
-    rounding unit (``np.spacing``), all the changes evaluated at once on the graph; ``why``
-    names the input that moves it most, and by how much; ``finite``: phi^alpha is."""
+    """``(ok, why, finite)``: whether phi^alpha at the point moves by at most ``tol`` times
+    the size of its terms (``sizes``, at ``velocities``) when any one coordinate,
+    independent velocity or parameter changes by one rounding unit (``np.spacing``), all
+    the changes evaluated at once on the graph; ``why`` names the input that moves it
+    most, and by how much; ``finite``: phi^alpha is."""
     inputs = ([(q.name, coordinates) for q in system.J.q]
               + [(v.name, velocities) for v in system.independent_velocities]
               + [(s.name, params) for s in system.parameters])
@@ -97,11 +109,13 @@ def determined(system, t, coordinates: dict, velocities: dict, params: dict, tol
     vs = system.dependent_velocities
     values = dag.evaluate_numpy([system.phi[v] for v in vs], _point(
         system, t, columns["c"], columns["v"], columns["p"]))
+    A, f = at_point(system, t, coordinates, velocities, params)
+    size = sizes(system, A, f, [velocities.get(v.name, np.nan) for v in system.J.qd])
     worst, why = 0.0, ""
-    for v, x in zip(vs, values):
+    for v, x, s in zip(vs, values, size):
         x = np.broadcast_to(np.asarray(x, dtype=float), (rows,))
-        with np.errstate(invalid="ignore"):
-            moved = np.abs(x[1:] - x[0]) / max(1.0, abs(x[0]))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            moved = np.abs(x[1:] - x[0]) / max(s, TINY)
         moved = np.where(np.isfinite(moved), moved, np.inf)
         if not math.isfinite(x[0]):
             return False, f"{v.name} is {x[0]}", False
@@ -153,15 +167,69 @@ def best(system, A) -> tuple[list[str], float]:
     return [names[c] for c in choices[i]], m[i]
 
 
+def sizes(system, A, f, qd) -> np.ndarray:
+    """The size of the terms that make each phi^alpha ([..., k]) at the points where
+    df/dqdot is ``A`` ([..., k, n]), f is ``f`` ([..., k]) and the velocities are ``qd``
+    ([..., n]): sum_j |(A_alpha^-1 C)^alpha_j|, the columns of C being A_s qdot^s for each
+    independent velocity s and b = f - A qdot (module docstring); for affine constraints
+    sum_s |Phi_s qdot^s| + |phi0|, else the terms of f's linearization at the point.  NaN
+    where A_alpha is singular or a value is not finite."""
+    dep, ind = list(system.dep_index), list(system.ind_index)
+    qd = np.asarray(qd, dtype=float)
+    with np.errstate(all="ignore"):
+        b = f - np.einsum("...as,...s->...a", A, qd)
+        C = np.concatenate([A[..., ind] * qd[..., None, ind], b[..., None]], axis=-1)
+        Aa = A[..., dep]
+        try:
+            M = np.linalg.solve(Aa, C)
+        except np.linalg.LinAlgError:           # one singular: each on its own
+            flat, rows = Aa.reshape(-1, *Aa.shape[-2:]), C.reshape(-1, *C.shape[-2:])
+            M = np.array([_solved(a, c) for a, c in zip(flat, rows)]).reshape(C.shape)
+        return np.abs(M).sum(axis=-1)
+
+
+def _solved(a, c) -> np.ndarray:
+    try:
+        return np.linalg.solve(a, c)
+    except np.linalg.LinAlgError:
+        return np.full(c.shape, np.nan)
+
+
+def agree(system, t, point: dict, given: dict, required: dict, params: dict,
+          tol: float) -> dict:
+    """Whether each given dependent velocity (``given``: name -> number or array, for
+    several points) agrees with the constraints' value ``required[name]`` at ``point``
+    (the coordinates and the independent velocities by name): |given - required| <= tol
+    S, S the size of the terms that make it (``sizes``, at least ``TINY``), so that the
+    verdict is the same in every unit (name -> bool, or bool array).  The terms are
+    evaluated only where |given - required| > tol |required| (S >= |required|)."""
+    out = {}
+    with np.errstate(invalid="ignore"):
+        for name, g in given.items():
+            out[name] = np.abs(g - required[name]) <= tol * np.abs(required[name])
+    if all(np.all(ok) for ok in out.values()):
+        return out
+    qd = {**point, **required}
+    A, f = at_point(system, t, point, qd, params)
+    size = sizes(system, A, f, np.stack(np.broadcast_arrays(
+        *[qd.get(v.name, np.nan) for v in system.J.qd]), axis=-1))
+    with np.errstate(invalid="ignore"):
+        for a, v in enumerate(system.dependent_velocities):
+            if v.name in out:
+                out[v.name] = out[v.name] | (np.abs(given[v.name] - required[v.name])
+                                             <= tol * np.maximum(size[..., a], TINY))
+    return out
+
+
 def on_constraints(A, f, qd, tol: float) -> np.ndarray:
     """Whether f = 0 to ``tol`` relative at the points (every velocity ``qd`` [..., n]
-    given): |f^a| <= tol (sum_s |A^a_s| max(1, |qdot^s|) + |b^a|), b = f - A qdot (the
-    part without velocities) -- the consistency test |qdot - phi| <= tol max(1, |phi|)
+    given): |f^a| <= tol (sum_s |A^a_s qdot^s| + |b^a|), b = f - A qdot (the part
+    without velocities; the sum at least ``TINY``) -- the consistency test ``agree``
     carried to f, so that it does not divide by a singular A_alpha."""
     qd = np.asarray(qd, dtype=float)
-    terms = np.abs(A) * np.maximum(1.0, np.abs(qd))[..., None, :]
+    terms = np.abs(A * qd[..., None, :])
     b = f - np.einsum("...as,...s->...a", A, qd)
-    scale = terms.sum(axis=-1) + np.abs(b)
+    scale = np.maximum(terms.sum(axis=-1) + np.abs(b), TINY)
     with np.errstate(invalid="ignore"):
         return np.all(np.abs(f) <= tol * scale, axis=-1) & np.all(np.isfinite(f), axis=-1)
 
