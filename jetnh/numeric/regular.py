@@ -79,6 +79,49 @@ def _point(system, t, coordinates: dict, velocities: dict, params: dict) -> dict
     return point
 
 
+def _nudged(point: dict, inputs) -> dict:
+    """``point`` (Symbol -> number or array) with a leading axis of len(``inputs``) + 1
+    rows: row 0 the point, row i + 1 with ``inputs[i]`` moved by one rounding unit
+    (``np.spacing``)."""
+    rows = len(inputs) + 1
+    shape = np.broadcast_shapes(*(np.shape(v) for v in point.values()))
+    out = {s: np.array(np.broadcast_to(np.asarray(v, dtype=float), (rows,) + shape))
+           for s, v in point.items()}
+    for i, s in enumerate(inputs):
+        out[s][i + 1] += np.spacing(out[s][i + 1])
+    return out
+
+
+def _rounding(point: dict, system) -> dict:
+    """``_nudged`` in t, every coordinate and every parameter: the rounding of a point
+    whose velocities are known (``agree``, ``on_constraints``)."""
+    return _nudged(point, [system.J.t, *system.J.q, *system.parameters])
+
+
+def _spread(rows) -> np.ndarray:
+    """sum_i |row i + 1 - row 0| / 2 over the rows of ``_nudged``: how far the value
+    may move when each input is known to half a rounding unit (a float stands for the
+    numbers that round to it); a non-finite change counts as none."""
+    with np.errstate(invalid="ignore"):
+        moved = np.abs(rows[1:] - rows[0])
+    return 0.5 * np.where(np.isfinite(moved), moved, 0.0).sum(axis=0)
+
+
+def _phis(system, point: dict) -> np.ndarray:
+    """phi^alpha ([..., k]) at ``point`` (Symbol -> number or array) in floats."""
+    shape = np.broadcast_shapes(*(np.shape(v) for v in point.values()))
+    values = dag.evaluate_numpy([system.phi[v] for v in system.dependent_velocities],
+                                point)
+    return np.stack([np.broadcast_to(np.asarray(x, dtype=float), shape) for x in values],
+                    axis=-1)
+
+
+def _velocities(system, point: dict) -> np.ndarray:
+    """Every velocity ([..., n]) at ``point`` (Symbol -> number or array)."""
+    return np.stack(np.broadcast_arrays(*[np.asarray(point[v], dtype=float)
+                                          for v in system.J.qd]), axis=-1)
+
+
 def phi(system, t, coordinates: dict, velocities: dict, params: dict) -> dict:
     """The dependent velocities phi^alpha at a point given by name (floats, on the
     shared graph; NaN or infinite where phi is undefined)."""
@@ -89,41 +132,32 @@ def phi(system, t, coordinates: dict, velocities: dict, params: dict) -> dict:
 
 
 def determined(system, t, coordinates: dict, velocities: dict, params: dict, tol: float):
-    """``(ok, why, finite)``: whether phi^alpha at the point moves by at most ``tol`` times
-    the size of its terms (``sizes``, at ``velocities``) when any one coordinate,
-    independent velocity or parameter changes by one rounding unit (``np.spacing``), all
-    the changes evaluated at once on the graph; ``why`` names the input that moves it
-    most, and by how much; ``finite``: phi^alpha is."""
-    inputs = ([(q.name, coordinates) for q in system.J.q]
-              + [(v.name, velocities) for v in system.independent_velocities]
-              + [(s.name, params) for s in system.parameters])
-    rows = len(inputs) + 1
-    columns = {"c": dict(coordinates), "v": dict(velocities), "p": dict(params)}
-    kinds = {id(coordinates): "c", id(velocities): "v", id(params): "p"}
-    for kind in columns.values():
-        for name, x in kind.items():
-            kind[name] = np.full(rows, float(x))
-    for i, (name, where) in enumerate(inputs):
-        col = columns[kinds[id(where)]][name]
-        col[i + 1] += np.spacing(col[i + 1])
-    vs = system.dependent_velocities
-    values = dag.evaluate_numpy([system.phi[v] for v in vs], _point(
-        system, t, columns["c"], columns["v"], columns["p"]))
-    A, f = at_point(system, t, coordinates, velocities, params)
-    size = sizes(system, A, f, [velocities.get(v.name, np.nan) for v in system.J.qd])
+    """``(ok, why, finite)``: whether the terms that make phi^alpha at the point
+    (``terms``, at ``velocities``) move by at most ``tol`` of their size when any one
+    coordinate, independent velocity or parameter changes by one rounding unit
+    (``np.spacing``), all the changes evaluated at once on the graph; ``why`` names the
+    input that moves them most, and by how much; ``finite``: phi^alpha is.  (The terms,
+    not phi alone: where they cancel, phi = 0 may stay 0 while A_alpha, known to less
+    than its size, changes sign.)"""
+    inputs = [*system.J.q, *system.independent_velocities, *system.parameters]
+    point = _nudged(_point(system, t, coordinates, velocities, params), inputs)
+    x = _phis(system, point)
+    A, f = _at(system, point)
+    M = terms(system, A, f, _velocities(system, point))
     worst, why = 0.0, ""
-    for v, x, s in zip(vs, values, size):
-        x = np.broadcast_to(np.asarray(x, dtype=float), (rows,))
-        with np.errstate(invalid="ignore", divide="ignore"):
-            moved = np.abs(x[1:] - x[0]) / max(s, TINY)
+    for a, v in enumerate(system.dependent_velocities):
+        if not math.isfinite(x[0, a]):
+            return False, f"{v.name} is {x[0, a]}", False
+        size = float(np.abs(M[0, a]).sum())
+        with np.errstate(invalid="ignore"):
+            moved = np.abs(M[1:, a] - M[0, a]).sum(axis=-1) / max(size, TINY)
         moved = np.where(np.isfinite(moved), moved, np.inf)
-        if not math.isfinite(x[0]):
-            return False, f"{v.name} is {x[0]}", False
         if moved.size and moved.max() > worst:
             i = int(np.argmax(moved))
             worst = float(moved.max())
-            why = (f"one rounding unit in {inputs[i][0]} moves {v.name} = {x[0]:.6g} by "
-                   f"{abs(x[i + 1] - x[0]):.3g}")
+            why = (f"one rounding unit in {inputs[i].name} moves {v.name} = {x[0, a]:.6g} "
+                   f"by {abs(x[i + 1, a] - x[0, a]):.3g} and the terms that make it (of "
+                   f"size {size:.3g}) by {worst * max(size, TINY):.3g}")
     return worst <= tol, why, True
 
 
@@ -131,9 +165,12 @@ def at_point(system, t, coordinates: dict, velocities: dict, params: dict):
     """``(A, f)``: df/dqdot ([..., k, n]) and f ([..., k]) at the points given by name
     (numbers, or arrays of one length for several points; a missing or NaN velocity
     gives NaN), evaluated on the shared graph in floats."""
-    J = system.J
-    point = _point(system, t, coordinates, velocities, params)
-    k, n = system.k, J.n
+    return _at(system, _point(system, t, coordinates, velocities, params))
+
+
+def _at(system, point: dict):
+    """``at_point`` at ``point`` (Symbol -> number or array)."""
+    k, n = system.k, system.J.n
     values = dag.evaluate_numpy(list(system.jacobian) + list(system.constraints), point)
     shape = np.broadcast_shapes(*(np.shape(v) for v in point.values()))
     A = np.empty(shape + (k, n))
@@ -167,13 +204,13 @@ def best(system, A) -> tuple[list[str], float]:
     return [names[c] for c in choices[i]], m[i]
 
 
-def sizes(system, A, f, qd) -> np.ndarray:
-    """The size of the terms that make each phi^alpha ([..., k]) at the points where
-    df/dqdot is ``A`` ([..., k, n]), f is ``f`` ([..., k]) and the velocities are ``qd``
-    ([..., n]): sum_j |(A_alpha^-1 C)^alpha_j|, the columns of C being A_s qdot^s for each
-    independent velocity s and b = f - A qdot (module docstring); for affine constraints
-    sum_s |Phi_s qdot^s| + |phi0|, else the terms of f's linearization at the point.  NaN
-    where A_alpha is singular or a value is not finite."""
+def terms(system, A, f, qd) -> np.ndarray:
+    """The terms that make each phi^alpha ([..., k, n - k + 1]; phi^alpha is minus
+    their sum) at the points where df/dqdot is ``A`` ([..., k, n]), f is ``f`` ([..., k])
+    and the velocities are ``qd`` ([..., n]): A_alpha^-1 C, the columns of C being A_s
+    qdot^s for each independent velocity s and b = f - A qdot (module docstring); for
+    affine constraints Phi_s qdot^s and phi0, else the terms of f's linearization at the
+    point.  NaN where A_alpha is singular or a value is not finite."""
     dep, ind = list(system.dep_index), list(system.ind_index)
     qd = np.asarray(qd, dtype=float)
     with np.errstate(all="ignore"):
@@ -181,11 +218,16 @@ def sizes(system, A, f, qd) -> np.ndarray:
         C = np.concatenate([A[..., ind] * qd[..., None, ind], b[..., None]], axis=-1)
         Aa = A[..., dep]
         try:
-            M = np.linalg.solve(Aa, C)
+            return np.linalg.solve(Aa, C)
         except np.linalg.LinAlgError:           # one singular: each on its own
             flat, rows = Aa.reshape(-1, *Aa.shape[-2:]), C.reshape(-1, *C.shape[-2:])
-            M = np.array([_solved(a, c) for a, c in zip(flat, rows)]).reshape(C.shape)
-        return np.abs(M).sum(axis=-1)
+            return np.array([_solved(a, c) for a, c in zip(flat, rows)]).reshape(C.shape)
+
+
+def sizes(system, A, f, qd) -> np.ndarray:
+    """The size of the terms that make each phi^alpha ([..., k]): sum_j |``terms``_j|
+    (for affine constraints sum_s |Phi_s qdot^s| + |phi0|); NaN where they are."""
+    return np.abs(terms(system, A, f, qd)).sum(axis=-1)
 
 
 def _solved(a, c) -> np.ndarray:
@@ -200,8 +242,10 @@ def agree(system, t, point: dict, given: dict, required: dict, params: dict,
     """Whether each given dependent velocity (``given``: name -> number or array, for
     several points) agrees with the constraints' value ``required[name]`` at ``point``
     (the coordinates and the independent velocities by name): |given - required| <= tol
-    S, S the size of the terms that make it (``sizes``, at least ``TINY``), so that the
-    verdict is the same in every unit (name -> bool, or bool array).  The terms are
+    S + R, S the size of the terms that make it (``sizes``, at least ``TINY``), R the
+    rounding of the point through phi (``_spread`` of ``_rounding``: how far half a
+    rounding unit in t, each coordinate and each parameter moves it), so that the
+    verdict is the same in every unit (name -> bool, or bool array).  S and R are
     evaluated only where |given - required| > tol |required| (S >= |required|)."""
     out = {}
     with np.errstate(invalid="ignore"):
@@ -209,29 +253,35 @@ def agree(system, t, point: dict, given: dict, required: dict, params: dict,
             out[name] = np.abs(g - required[name]) <= tol * np.abs(required[name])
     if all(np.all(ok) for ok in out.values()):
         return out
-    qd = {**point, **required}
-    A, f = at_point(system, t, point, qd, params)
-    size = sizes(system, A, f, np.stack(np.broadcast_arrays(
-        *[qd.get(v.name, np.nan) for v in system.J.qd]), axis=-1))
+    at = _point(system, t, point, {**point, **required}, params)
+    rows = _rounding(at, system)
+    A, f = _at(system, at)
+    size = np.maximum(sizes(system, A, f, _velocities(system, at)), TINY)
+    bound = tol * size + _spread(_phis(system, rows))
     with np.errstate(invalid="ignore"):
         for a, v in enumerate(system.dependent_velocities):
             if v.name in out:
                 out[v.name] = out[v.name] | (np.abs(given[v.name] - required[v.name])
-                                             <= tol * np.maximum(size[..., a], TINY))
+                                             <= bound[..., a])
     return out
 
 
-def on_constraints(A, f, qd, tol: float) -> np.ndarray:
-    """Whether f = 0 to ``tol`` relative at the points (every velocity ``qd`` [..., n]
-    given): |f^a| <= tol (sum_s |A^a_s qdot^s| + |b^a|), b = f - A qdot (the part
-    without velocities; the sum at least ``TINY``) -- the consistency test ``agree``
-    carried to f, so that it does not divide by a singular A_alpha."""
-    qd = np.asarray(qd, dtype=float)
-    terms = np.abs(A * qd[..., None, :])
-    b = f - np.einsum("...as,...s->...a", A, qd)
-    scale = np.maximum(terms.sum(axis=-1) + np.abs(b), TINY)
+def on_constraints(system, t, coordinates: dict, velocities: dict, params: dict,
+                   tol: float) -> np.ndarray:
+    """Whether f = 0 to ``tol`` relative at the points given by name (every velocity
+    given): |f^a| <= tol (sum_s |A^a_s qdot^s| + |b^a|) + R^a, b = f - A qdot (the part
+    without velocities; the sum at least ``TINY``), R the rounding of the point through
+    f (``_spread`` of ``_rounding``) -- the consistency test ``agree`` carried to f, so that it does not
+    divide by a singular A_alpha (at cos th = 6e-17, the rounding of th = pi/2, f = cos
+    th Y_t is all rounding)."""
+    at = _point(system, t, coordinates, velocities, params)
+    A, f = _at(system, _rounding(at, system))
+    qd = _velocities(system, at)
+    b = f[0] - np.einsum("...as,...s->...a", A[0], qd)
+    scale = np.maximum(np.abs(A[0] * qd[..., None, :]).sum(axis=-1) + np.abs(b), TINY)
     with np.errstate(invalid="ignore"):
-        return np.all(np.abs(f) <= tol * scale, axis=-1) & np.all(np.isfinite(f), axis=-1)
+        return (np.all(np.abs(f[0]) <= tol * scale + _spread(f), axis=-1)
+                & np.all(np.isfinite(f[0]), axis=-1))
 
 
 def singular(system, m: float, A, where: str, why: str, finite=True, give=True

@@ -380,7 +380,8 @@ class Scene(Frozen):
             if singular:
                 raise regular.singular(sys_, m, A, where, why, finite, give=False)
             return
-        if not regular.on_constraints(A, f, [qd[v.name] for v in sys_.J.qd], tol):
+        if not regular.on_constraints(sys_, self.t_span[0] if t0 is None else t0, given, qd,
+                                      values, tol):
             if project and not singular:
                 return
             raise regular.off(sys_, f, where)
