@@ -15,7 +15,7 @@ import math
 import numpy as np
 import pytest
 import sympy as sp
-from hypothesis import given, strategies as st
+from hypothesis import given, settings, strategies as st
 
 import jetnh as jn
 from jetnh import models
@@ -182,6 +182,7 @@ def compiled():
     return jn.Scene(S, params=prm, initial=ini, runtime_params=RUNTIME, t_span=(0.0, 1e-9))
 
 
+@settings(max_examples=10)      # (each first run in a chart compiles it)
 @given(points(moving=True), scales, offs)
 def test_run_y0_and_ensembles_in_every_unit(compiled, p, scaled, off):
     """run(y0=...) and an ensemble's columns (every scale a run) take the point on the

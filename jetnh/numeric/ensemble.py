@@ -268,7 +268,10 @@ def _check_split(scene, Y0, P, given, project):
 def _check_dependent(scene, Y0, P, given, project):
     """Refuse runs whose given dependent velocities (``given``: name -> a number or one
     per run) disagree with the constraints' values (the compiled kernel ``aux``), each
-    judged against the size of the terms that make it (``regular.agree``)."""
+    judged against the size of the terms that make it (``regular.agree``); with
+    ``project`` none is refused (they follow from the constraints)."""
+    if project:
+        return
     kern = scene.kernels
     aux = np.empty((Y0.shape[0], kern.layout.n_aux))
     for r in range(Y0.shape[0]):
@@ -283,7 +286,7 @@ def _check_dependent(scene, Y0, P, given, project):
     for name, g in dep.items():
         req = required[name]
         bad = np.nonzero(~ok[name])[0]
-        if bad.size and not project:
+        if bad.size:
             r = int(bad[0])
             raise ConstraintError(
                 f"initial {name} inconsistent with the constraints in {bad.size} run(s), "
