@@ -11,12 +11,12 @@ starts in the split of largest measure.  Two thresholds decide how a given point
   whose conditioning is about 1/sqrt(m);
 - there, the split is singular where the constraints no longer determine the dependent
   velocities in floats: a change of one rounding unit in a coordinate, an independent
-  velocity or a parameter moves phi^alpha by more than the consistency tolerance ``tol``
-  relative to the size of its terms (``sizes``) -- ``determined``.  That is the conditioning of phi at
-  the point in the numbers given (near th = pi/2, cos th is known only to about 1e-16
-  absolute; near x = 0, x itself is known to 1e-16 relative, and y/x is fine).  A point
-  there without its dependent velocities is refused (``singular``): give them too, or
-  choose another split.
+  velocity or a parameter moves the terms that make phi^alpha (``terms``) by more than
+  the consistency tolerance ``tol`` of their size -- ``determined``.  That is the
+  conditioning of phi at the point in the numbers given (near th = pi/2, cos th is
+  known only to about 1e-16 absolute; near x = 0, x itself is known to 1e-16 relative,
+  and y/x is fine).  A point there without its dependent velocities is refused
+  (``singular``): give them too, or choose another split.
 
 Every test of given velocities against the constraints is relative to the size of the
 terms that make the value tested, never to the number 1, so that its verdict is the
@@ -271,9 +271,9 @@ def on_constraints(system, t, coordinates: dict, velocities: dict, params: dict,
     """Whether f = 0 to ``tol`` relative at the points given by name (every velocity
     given): |f^a| <= tol (sum_s |A^a_s qdot^s| + |b^a|) + R^a, b = f - A qdot (the part
     without velocities; the sum at least ``TINY``), R the rounding of the point through
-    f (``_spread`` of ``_rounding``) -- the consistency test ``agree`` carried to f, so that it does not
-    divide by a singular A_alpha (at cos th = 6e-17, the rounding of th = pi/2, f = cos
-    th Y_t is all rounding)."""
+    f (``_spread`` of ``_rounding``) -- the consistency test ``agree`` carried to f, so
+    that it does not divide by a singular A_alpha (at cos th = 6e-17, the rounding of th
+    = pi/2, f = cos th Y_t is all rounding)."""
     at = _point(system, t, coordinates, velocities, params)
     A, f = _at(system, _rounding(at, system))
     qd = _velocities(system, at)

@@ -107,9 +107,9 @@ class Scene(Frozen):
     consistency_tol : float, default 1e-9
         The relative tolerance of that check: a given dependent velocity may differ from
         the constraints' value by this fraction of the size of the terms that make that
-        value (for affine constraints qdot^alpha = Phi qdot + phi0: sum_s |Phi_s qdot^s|
-        + |phi0|), never of an absolute number, so that the verdict is the same in every
-        unit of length and time.
+        value (for affine constraints ``qdot^alpha = Phi qdot + phi0``: ``sum_s |Phi_s
+        qdot^s| + |phi0|``), never of an absolute number, so that the verdict is the same
+        in every unit of length and time.
     complete : bool or list, default False
         Solve the holonomic constraints for these coordinates (True: chosen
         automatically) of an initial configuration off g = 0 (else it is refused).
