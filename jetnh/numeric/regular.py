@@ -247,11 +247,9 @@ def agree(system, t, point: dict, given: dict, required: dict, params: dict,
     rounding unit in t, each coordinate and each parameter moves it), so that the
     verdict is the same in every unit (name -> bool, or bool array).  S and R are
     evaluated only where |given - required| > tol |required| (S >= |required|)."""
-    out = {}
-    with np.errstate(invalid="ignore"):
-        for name, g in given.items():
-            out[name] = np.abs(g - required[name]) <= tol * np.abs(required[name])
-    if all(np.all(ok) for ok in out.values()):
+    out = {name: abs(g - required[name]) <= tol * abs(required[name])
+           for name, g in given.items()}
+    if all(ok if type(ok) is bool else ok.all() for ok in out.values()):
         return out
     at = _point(system, t, point, {**point, **required}, params)
     rows = _rounding(at, system)
