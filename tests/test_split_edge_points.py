@@ -56,8 +56,9 @@ def test_a_off_the_constraints_without_Y_t_is_refused():
         jn.linearize(S, at={**EDGE, "X_t": 0.0, "th_t": 1.0}, params=P)
     assert "Give Y_t too" in str(err.value) and "3.23e-33" in str(err.value)
     assert "one rounding unit in th moves Y_t" in str(err.value)
-    # given with Y_t it is off the constraints: refused, whatever Y_t
-    for yt in (0.0, 6.5e15):
+    # given with Y_t it is off the constraints: refused (Y_t = 6.5e15 would be on them
+    # within half a rounding unit of th: cos th = 0.4 / Y_t = 6.15e-17)
+    for yt in (0.0, -6.5e15):
         with pytest.raises(ConstraintError, match="off the constraints"):
             jn.linearize(S, at={**EDGE, "X_t": 0.0, "th_t": 1.0, "Y_t": yt}, params=P)
 

@@ -65,7 +65,7 @@ import numpy as np
 from ..errors import ConstraintError, IntegrationError, JetnhError, JetnhWarning
 from ..frozen import Frozen, FrozenDict, memo, readonly
 from ..mechanics import holonomic
-from . import arguments, atlas, diagnosis, interrupt, loops, solve
+from . import arguments, atlas, diagnosis, interrupt, loops, regular, solve
 from .events import as_events
 from .methods import STATUS_TEXT, Solver
 from .methods._common import AT_T_EVAL, ENDPOINTS, EVENT, FINISHED, NONFINITE, SINGULAR
@@ -266,17 +266,27 @@ def _check_split(scene, Y0, P, given, project):
 
 
 def _check_dependent(scene, Y0, P, given, project):
+    """Refuse runs whose given dependent velocities (``given``: name -> a number or one
+    per run) disagree with the constraints' values (the compiled kernel ``aux``), each
+    judged against the size of the terms that make it (``regular.agree``); with
+    ``project`` none is refused (they follow from the constraints)."""
+    if project:
+        return
     kern = scene.kernels
     aux = np.empty((Y0.shape[0], kern.layout.n_aux))
     for r in range(Y0.shape[0]):
         kern.aux(scene.t_span[0], Y0[r], P[r], aux[r])
-    for a, name in enumerate(scene.dependent_velocities):
-        if name not in given:
-            continue
-        req = aux[:, a]
-        g = np.broadcast_to(given[name], req.shape)
-        bad = np.nonzero(np.abs(g - req) > scene.consistency_tol * np.maximum(1.0, np.abs(req)))[0]
-        if bad.size and not project:
+    required = {name: aux[:, a] for a, name in enumerate(scene.dependent_velocities)}
+    dep = {name: np.broadcast_to(given[name], Y0.shape[:1])
+           for name in scene.dependent_velocities if name in given}
+    point = dict(zip(scene.state_names, Y0.T))
+    ok = regular.agree(scene.system, scene.t_span[0], point, dep, required,
+                       {**scene.params, **dict(zip(scene.runtime_params, P.T))},
+                       scene.consistency_tol)
+    for name, g in dep.items():
+        req = required[name]
+        bad = np.nonzero(~ok[name])[0]
+        if bad.size:
             r = int(bad[0])
             raise ConstraintError(
                 f"initial {name} inconsistent with the constraints in {bad.size} run(s), "

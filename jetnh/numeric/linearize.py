@@ -1318,8 +1318,7 @@ def _split(model: _Model, point: dict, state: dict, values: dict, keep, t: float
     ok, why, finite = regular.determined(sysm, t, state, qd, values, CONSISTENT)
     if not given and not ok:
         raise regular.singular(sysm, m, A, "linearize", why, finite)
-    if given and not regular.on_constraints(A, f, [qd[v.name] for v in sysm.J.qd],
-                                            CONSISTENT):
+    if given and not regular.on_constraints(sysm, t, state, qd, values, CONSISTENT):
         raise regular.off(sysm, f, "linearize")
     from .atlas import split_invariant
 

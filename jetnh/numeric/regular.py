@@ -11,12 +11,21 @@ starts in the split of largest measure.  Two thresholds decide how a given point
   whose conditioning is about 1/sqrt(m);
 - there, the split is singular where the constraints no longer determine the dependent
   velocities in floats: a change of one rounding unit in a coordinate, an independent
-  velocity or a parameter moves phi^alpha by more than the consistency tolerance ``tol``
-  (relative, as max(1, |phi|)) -- ``determined``.  That is the conditioning of phi at
-  the point in the numbers given (near th = pi/2, cos th is known only to about 1e-16
-  absolute; near x = 0, x itself is known to 1e-16 relative, and y/x is fine).  A point
-  there without its dependent velocities is refused (``singular``): give them too, or
-  choose another split.
+  velocity or a parameter moves the terms that make phi^alpha (``terms``) by more than
+  the consistency tolerance ``tol`` of their size -- ``determined``.  That is the
+  conditioning of phi at the point in the numbers given (near th = pi/2, cos th is
+  known only to about 1e-16 absolute; near x = 0, x itself is known to 1e-16 relative,
+  and y/x is fine).  A point there without its dependent velocities is refused
+  (``singular``): give them too, or choose another split.
+
+Every test of given velocities against the constraints is relative to the size of the
+terms that make the value tested, never to the number 1, so that its verdict is the
+same in every unit of length and of time (``agree``, ``on_constraints``, ``determined``):
+phi^alpha = -A_alpha^-1 (sum_s A_s qdot^s + b), s the independent velocities, b = f - A
+qdot the part of f without velocities; its terms are the columns of that sum, carried
+each through A_alpha^-1 (for affine constraints phi = Phi qdot + phi0: Phi_s qdot^s and
+phi0).  Below the smallest normal float nothing is a size: a point at rest requires the
+constraints' value itself.
 """
 
 from __future__ import annotations
@@ -31,6 +40,8 @@ from ..errors import ConstraintError
 
 #: the unit roundoff of float64
 ROUNDOFF = float(np.finfo(float).eps) / 2
+#: the smallest normal float64: the floor of every size (module docstring)
+TINY = float(np.finfo(float).tiny)
 
 _EDGES: dict = {}
 
@@ -68,6 +79,49 @@ def _point(system, t, coordinates: dict, velocities: dict, params: dict) -> dict
     return point
 
 
+def _nudged(point: dict, inputs) -> dict:
+    """``point`` (Symbol -> number or array) with a leading axis of len(``inputs``) + 1
+    rows: row 0 the point, row i + 1 with ``inputs[i]`` moved by one rounding unit
+    (``np.spacing``)."""
+    rows = len(inputs) + 1
+    shape = np.broadcast_shapes(*(np.shape(v) for v in point.values()))
+    out = {s: np.array(np.broadcast_to(np.asarray(v, dtype=float), (rows,) + shape))
+           for s, v in point.items()}
+    for i, s in enumerate(inputs):
+        out[s][i + 1] += np.spacing(out[s][i + 1])
+    return out
+
+
+def _rounding(point: dict, system) -> dict:
+    """``_nudged`` in t, every coordinate and every parameter: the rounding of a point
+    whose velocities are known (``agree``, ``on_constraints``)."""
+    return _nudged(point, [system.J.t, *system.J.q, *system.parameters])
+
+
+def _spread(rows) -> np.ndarray:
+    """sum_i |row i + 1 - row 0| / 2 over the rows of ``_nudged``: how far the value
+    may move when each input is known to half a rounding unit (a float stands for the
+    numbers that round to it); a non-finite change counts as none."""
+    with np.errstate(invalid="ignore"):
+        moved = np.abs(rows[1:] - rows[0])
+    return 0.5 * np.where(np.isfinite(moved), moved, 0.0).sum(axis=0)
+
+
+def _phis(system, point: dict) -> np.ndarray:
+    """phi^alpha ([..., k]) at ``point`` (Symbol -> number or array) in floats."""
+    shape = np.broadcast_shapes(*(np.shape(v) for v in point.values()))
+    values = dag.evaluate_numpy([system.phi[v] for v in system.dependent_velocities],
+                                point)
+    return np.stack([np.broadcast_to(np.asarray(x, dtype=float), shape) for x in values],
+                    axis=-1)
+
+
+def _velocities(system, point: dict) -> np.ndarray:
+    """Every velocity ([..., n]) at ``point`` (Symbol -> number or array)."""
+    return np.stack(np.broadcast_arrays(*[np.asarray(point[v], dtype=float)
+                                          for v in system.J.qd]), axis=-1)
+
+
 def phi(system, t, coordinates: dict, velocities: dict, params: dict) -> dict:
     """The dependent velocities phi^alpha at a point given by name (floats, on the
     shared graph; NaN or infinite where phi is undefined)."""
@@ -78,38 +132,32 @@ def phi(system, t, coordinates: dict, velocities: dict, params: dict) -> dict:
 
 
 def determined(system, t, coordinates: dict, velocities: dict, params: dict, tol: float):
-    """``(ok, why, finite)``: whether phi^alpha at the point moves by at most ``tol`` max(1,
-    |phi|) when any one coordinate, independent velocity or parameter changes by one
-    rounding unit (``np.spacing``), all the changes evaluated at once on the graph; ``why``
-    names the input that moves it most, and by how much; ``finite``: phi^alpha is."""
-    inputs = ([(q.name, coordinates) for q in system.J.q]
-              + [(v.name, velocities) for v in system.independent_velocities]
-              + [(s.name, params) for s in system.parameters])
-    rows = len(inputs) + 1
-    columns = {"c": dict(coordinates), "v": dict(velocities), "p": dict(params)}
-    kinds = {id(coordinates): "c", id(velocities): "v", id(params): "p"}
-    for kind in columns.values():
-        for name, x in kind.items():
-            kind[name] = np.full(rows, float(x))
-    for i, (name, where) in enumerate(inputs):
-        col = columns[kinds[id(where)]][name]
-        col[i + 1] += np.spacing(col[i + 1])
-    vs = system.dependent_velocities
-    values = dag.evaluate_numpy([system.phi[v] for v in vs], _point(
-        system, t, columns["c"], columns["v"], columns["p"]))
+    """``(ok, why, finite)``: whether the terms that make phi^alpha at the point
+    (``terms``, at ``velocities``) move by at most ``tol`` of their size when any one
+    coordinate, independent velocity or parameter changes by one rounding unit
+    (``np.spacing``), all the changes evaluated at once on the graph; ``why`` names the
+    input that moves them most, and by how much; ``finite``: phi^alpha is.  (The terms,
+    not phi alone: where they cancel, phi = 0 may stay 0 while A_alpha, known to less
+    than its size, changes sign.)"""
+    inputs = [*system.J.q, *system.independent_velocities, *system.parameters]
+    point = _nudged(_point(system, t, coordinates, velocities, params), inputs)
+    x = _phis(system, point)
+    A, f = _at(system, point)
+    M = terms(system, A, f, _velocities(system, point))
     worst, why = 0.0, ""
-    for v, x in zip(vs, values):
-        x = np.broadcast_to(np.asarray(x, dtype=float), (rows,))
+    for a, v in enumerate(system.dependent_velocities):
+        if not math.isfinite(x[0, a]):
+            return False, f"{v.name} is {x[0, a]}", False
+        size = float(np.abs(M[0, a]).sum())
         with np.errstate(invalid="ignore"):
-            moved = np.abs(x[1:] - x[0]) / max(1.0, abs(x[0]))
+            moved = np.abs(M[1:, a] - M[0, a]).sum(axis=-1) / max(size, TINY)
         moved = np.where(np.isfinite(moved), moved, np.inf)
-        if not math.isfinite(x[0]):
-            return False, f"{v.name} is {x[0]}", False
         if moved.size and moved.max() > worst:
             i = int(np.argmax(moved))
             worst = float(moved.max())
-            why = (f"one rounding unit in {inputs[i][0]} moves {v.name} = {x[0]:.6g} by "
-                   f"{abs(x[i + 1] - x[0]):.3g}")
+            why = (f"one rounding unit in {inputs[i].name} moves {v.name} = {x[0, a]:.6g} "
+                   f"by {abs(x[i + 1, a] - x[0, a]):.3g} and the terms that make it (of "
+                   f"size {size:.3g}) by {worst * max(size, TINY):.3g}")
     return worst <= tol, why, True
 
 
@@ -117,9 +165,12 @@ def at_point(system, t, coordinates: dict, velocities: dict, params: dict):
     """``(A, f)``: df/dqdot ([..., k, n]) and f ([..., k]) at the points given by name
     (numbers, or arrays of one length for several points; a missing or NaN velocity
     gives NaN), evaluated on the shared graph in floats."""
-    J = system.J
-    point = _point(system, t, coordinates, velocities, params)
-    k, n = system.k, J.n
+    return _at(system, _point(system, t, coordinates, velocities, params))
+
+
+def _at(system, point: dict):
+    """``at_point`` at ``point`` (Symbol -> number or array)."""
+    k, n = system.k, system.J.n
     values = dag.evaluate_numpy(list(system.jacobian) + list(system.constraints), point)
     shape = np.broadcast_shapes(*(np.shape(v) for v in point.values()))
     A = np.empty(shape + (k, n))
@@ -153,17 +204,82 @@ def best(system, A) -> tuple[list[str], float]:
     return [names[c] for c in choices[i]], m[i]
 
 
-def on_constraints(A, f, qd, tol: float) -> np.ndarray:
-    """Whether f = 0 to ``tol`` relative at the points (every velocity ``qd`` [..., n]
-    given): |f^a| <= tol (sum_s |A^a_s| max(1, |qdot^s|) + |b^a|), b = f - A qdot (the
-    part without velocities) -- the consistency test |qdot - phi| <= tol max(1, |phi|)
-    carried to f, so that it does not divide by a singular A_alpha."""
+def terms(system, A, f, qd) -> np.ndarray:
+    """The terms that make each phi^alpha ([..., k, n - k + 1]; phi^alpha is minus
+    their sum) at the points where df/dqdot is ``A`` ([..., k, n]), f is ``f`` ([..., k])
+    and the velocities are ``qd`` ([..., n]): A_alpha^-1 C, the columns of C being A_s
+    qdot^s for each independent velocity s and b = f - A qdot (module docstring); for
+    affine constraints Phi_s qdot^s and phi0, else the terms of f's linearization at the
+    point.  NaN where A_alpha is singular or a value is not finite."""
+    dep, ind = list(system.dep_index), list(system.ind_index)
     qd = np.asarray(qd, dtype=float)
-    terms = np.abs(A) * np.maximum(1.0, np.abs(qd))[..., None, :]
-    b = f - np.einsum("...as,...s->...a", A, qd)
-    scale = terms.sum(axis=-1) + np.abs(b)
+    with np.errstate(all="ignore"):
+        b = f - np.einsum("...as,...s->...a", A, qd)
+        C = np.concatenate([A[..., ind] * qd[..., None, ind], b[..., None]], axis=-1)
+        Aa = A[..., dep]
+        try:
+            return np.linalg.solve(Aa, C)
+        except np.linalg.LinAlgError:           # one singular: each on its own
+            flat, rows = Aa.reshape(-1, *Aa.shape[-2:]), C.reshape(-1, *C.shape[-2:])
+            return np.array([_solved(a, c) for a, c in zip(flat, rows)]).reshape(C.shape)
+
+
+def sizes(system, A, f, qd) -> np.ndarray:
+    """The size of the terms that make each phi^alpha ([..., k]): sum_j |``terms``_j|
+    (for affine constraints sum_s |Phi_s qdot^s| + |phi0|); NaN where they are."""
+    return np.abs(terms(system, A, f, qd)).sum(axis=-1)
+
+
+def _solved(a, c) -> np.ndarray:
+    try:
+        return np.linalg.solve(a, c)
+    except np.linalg.LinAlgError:
+        return np.full(c.shape, np.nan)
+
+
+def agree(system, t, point: dict, given: dict, required: dict, params: dict,
+          tol: float) -> dict:
+    """Whether each given dependent velocity (``given``: name -> number or array, for
+    several points) agrees with the constraints' value ``required[name]`` at ``point``
+    (the coordinates and the independent velocities by name): |given - required| <= tol
+    S + R, S the size of the terms that make it (``sizes``, at least ``TINY``), R the
+    rounding of the point through phi (``_spread`` of ``_rounding``: how far half a
+    rounding unit in t, each coordinate and each parameter moves it), so that the
+    verdict is the same in every unit (name -> bool, or bool array).  S and R are
+    evaluated only where |given - required| > tol |required| (S >= |required|)."""
+    out = {name: abs(g - required[name]) <= tol * abs(required[name])
+           for name, g in given.items()}
+    if all(ok if type(ok) is bool else ok.all() for ok in out.values()):
+        return out
+    at = _point(system, t, point, {**point, **required}, params)
+    rows = _rounding(at, system)
+    A, f = _at(system, at)
+    size = np.maximum(sizes(system, A, f, _velocities(system, at)), TINY)
+    bound = tol * size + _spread(_phis(system, rows))
     with np.errstate(invalid="ignore"):
-        return np.all(np.abs(f) <= tol * scale, axis=-1) & np.all(np.isfinite(f), axis=-1)
+        for a, v in enumerate(system.dependent_velocities):
+            if v.name in out:
+                out[v.name] = out[v.name] | (np.abs(given[v.name] - required[v.name])
+                                             <= bound[..., a])
+    return out
+
+
+def on_constraints(system, t, coordinates: dict, velocities: dict, params: dict,
+                   tol: float) -> np.ndarray:
+    """Whether f = 0 to ``tol`` relative at the points given by name (every velocity
+    given): |f^a| <= tol (sum_s |A^a_s qdot^s| + |b^a|) + R^a, b = f - A qdot (the part
+    without velocities; the sum at least ``TINY``), R the rounding of the point through
+    f (``_spread`` of ``_rounding``) -- the consistency test ``agree`` carried to f, so
+    that it does not divide by a singular A_alpha (at cos th = 6e-17, the rounding of th
+    = pi/2, f = cos th Y_t is all rounding)."""
+    at = _point(system, t, coordinates, velocities, params)
+    A, f = _at(system, _rounding(at, system))
+    qd = _velocities(system, at)
+    b = f[0] - np.einsum("...as,...s->...a", A[0], qd)
+    scale = np.maximum(np.abs(A[0] * qd[..., None, :]).sum(axis=-1) + np.abs(b), TINY)
+    with np.errstate(invalid="ignore"):
+        return (np.all(np.abs(f[0]) <= tol * scale + _spread(f), axis=-1)
+                & np.all(np.isfinite(f[0]), axis=-1))
 
 
 def singular(system, m: float, A, where: str, why: str, finite=True, give=True

@@ -105,7 +105,11 @@ class Scene(Frozen):
     project : bool, default False
         Replace inconsistent dependent velocities by the values the constraints require.
     consistency_tol : float, default 1e-9
-        The relative tolerance of that check.
+        The relative tolerance of that check: a given dependent velocity may differ from
+        the constraints' value by this fraction of the size of the terms that make that
+        value (for affine constraints ``qdot^alpha = Phi qdot + phi0``: ``sum_s |Phi_s
+        qdot^s| + |phi0|``), never of an absolute number, so that the verdict is the same
+        in every unit of length and time.
     complete : bool or list, default False
         Solve the holonomic constraints for these coordinates (True: chosen
         automatically) of an initial configuration off g = 0 (else it is refused).
@@ -262,17 +266,15 @@ class Scene(Frozen):
             y = None
             required = self._dependent_velocity_values(given)
             self._dependent_velocity_split(given, required, project=project)
-        bad = []
         for name, value in required.items():
             if not math.isfinite(value):
                 raise ConstraintError(
                     f"the constraints give no finite value for {name} at the initial state "
                     f"({value}): the initial configuration is singular for the split "
                     f"{[s.name for s in self.system.dependent]}")
-            if name in given:
-                g = given[name]
-                if abs(g - value) > self.consistency_tol * max(1.0, abs(value)):
-                    bad.append((name, g, value))
+        ok = self._agree(given, required)
+        bad = [(name, given[name], value) for name, value in required.items()
+               if not ok.get(name, True)]
         if bad:
             listing = "; ".join(f"{n} = {g!r} but the constraints give {v!r}"
                                 for n, g, v in bad)
@@ -337,6 +339,17 @@ class Scene(Frozen):
                     found.append(None)
         return {v.name: _real(x) for v, x in zip(vs, found)}
 
+    def _agree(self, values, required, t0=None, params=None) -> dict[str, bool]:
+        """Whether each dependent velocity given in ``values`` (the point, by name)
+        agrees with its value in ``required`` (at ``t0``, ``params`` overriding the
+        scene's): ``regular.agree``, relative to the size of the terms that make it."""
+        given = {n: values[n] for n in self.dependent_velocities if n in values}
+        if not given:
+            return {}
+        return regular.agree(self.system, self.t_span[0] if t0 is None else t0, values,
+                             given, required, {**self.params, **(params or {})},
+                             self.consistency_tol)
+
     def _dependent_velocity_split(self, given, required, t0=None, params=None,
                                   where="initial", project=False):
         """Refuse a point the split cannot hold (``numeric.regular``): past the edge of
@@ -367,12 +380,12 @@ class Scene(Frozen):
             if singular:
                 raise regular.singular(sys_, m, A, where, why, finite, give=False)
             return
-        if not regular.on_constraints(A, f, [qd[v.name] for v in sys_.J.qd], tol):
+        if not regular.on_constraints(sys_, self.t_span[0] if t0 is None else t0, given, qd,
+                                      values, tol):
             if project and not singular:
                 return
             raise regular.off(sys_, f, where)
-        if not singular and all(abs(given[n] - required[n]) <= tol * max(1.0, abs(required[n]))
-                                for n in dep):
+        if not singular and all(self._agree(given, required, t0, params).values()):
             return
         split, mb = regular.best(sys_, A)
         raise ConstraintError(
@@ -945,8 +958,10 @@ class Scene(Frozen):
         dep = {nm: v for nm, v in given.items() if nm in self.dependent_velocities}
         required = self._check_split(y, dep, t0, p)
         if dep:
+            ok = self._agree({**dict(zip(self.state_names, y.tolist())), **dep}, required,
+                             t0, dict(zip(self.runtime_params, p.tolist())))
             for nm, v in dep.items():
-                if abs(v - required[nm]) > self.consistency_tol * max(1.0, abs(required[nm])):
+                if not ok[nm]:
                     raise ConstraintError(
                         f"y0 gives {nm} = {v!r} but the constraints give {required[nm]!r}; "
                         "omit it (dependent velocities follow from the constraints)")
