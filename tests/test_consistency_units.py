@@ -214,3 +214,12 @@ def test_linearize_in_every_unit(p, k, off):
             ini, prm = _point(p, scale, bad)
             ok = verdict(lambda: jn.linearize(S, at=ini, params=prm))
             assert ok == (bad == 0.0), (p, scale, bad)
+
+
+def test_at_rest_a_large_factor_is_no_rounding():
+    """x_t = 0 exactly at x = 1e-160 (y_t = (y / x) x_t): the split is determined there
+    (y_t = 0), however large y / x; an input exactly 0 has no rounding unit to move it."""
+    own = models.get("radial_line")
+    sc = jn.Scene(own, "chetaev", initial=dict(x=0.3, y=0.3, x_t=0.5), t_span=(0, 1))
+    run = sc.replace(initial=dict(x=1e-160, y=1.0, x_t=0.0)).run()
+    assert run.status == 0 and np.all(np.isfinite(run.y))

@@ -395,3 +395,18 @@ def test_lu_builds_the_expressions_sympys_matrices_build(k, seed, sparse):
     got = linalg._lu_solve(M, rhs)
     for g, w in zip(got, want):
         assert type(g) is type(w) and g == w and g.args == w.args
+
+
+def test_float_zero_entries_are_sympy_zeros():
+    """A Float 0.0 (not == 0 in sympy) is no pivot and adds as sympy's matrices add it:
+    a singular matrix of Float zeros is refused, not solved into NaN; 0.0 + 2 is 2.0."""
+    zero = sp.Float(0.0)
+    with pytest.raises(ZeroDivisionError):
+        linalg._lu_solve(sp.Matrix([[zero, 1], [zero, 2]]), sp.Matrix([1, 2]))
+    x = sp.Symbol("x")
+    M = sp.Matrix([[zero, 1], [1, x]])
+    assert linalg._lu_solve(M, sp.Matrix([1, 2])) == sp.Matrix([2 - x, 1])
+    for op, ref in ((linalg.add, sp.Matrix.__add__), (linalg.sub, sp.Matrix.__sub__)):
+        got = op(sp.Matrix([[zero, x]]), sp.Matrix([[2, zero]]))
+        want = ref(sp.Matrix([[zero, x]]), sp.Matrix([[2, zero]]))
+        assert got == want and [type(e) for e in got] == [type(e) for e in want]

@@ -130,12 +130,12 @@ def matmul(A: sp.Matrix, B: sp.Matrix) -> sp.Matrix:
 def add(A: sp.Matrix, B: sp.Matrix) -> sp.Matrix:
     """A + B, entry by entry as sympy's matrix sum (a zero entry adds nothing), the sums
     built by ``dag.build``."""
-    return _entrywise(A, B, lambda a, b: dag.build(sp.Add, [a, b]))
+    return _entrywise(A, B, _sum2)
 
 
 def sub(A: sp.Matrix, B: sp.Matrix) -> sp.Matrix:
     """A - B as sympy's A + (-B) (B's entries times -1), built as ``add``."""
-    return _entrywise(A, neg(B), lambda a, b: dag.build(sp.Add, [a, b]))
+    return _entrywise(A, neg(B), _sum2)
 
 
 def neg(A: sp.Matrix) -> sp.Matrix:
@@ -264,8 +264,8 @@ def _lu_solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
     The entries are held as lists of rows (a sympy matrix's indexing cost as much as the
     arithmetic); each is the expression sympy's matrix operations make."""
     k, m = M.rows, rhs.cols
-    A = [[M[i, j] for j in range(k)] for i in range(k)]
-    B = [[rhs[i, j] for j in range(m)] for i in range(k)]
+    A = [[_zero_exact(M[i, j]) for j in range(k)] for i in range(k)]
+    B = [[_zero_exact(rhs[i, j]) for j in range(m)] for i in range(k)]
     # the terms subtracted from B's entries, added up once when the row is the pivot's
     # (subtracting them one by one re-flattens every partial sum: cubic in k)
     pending = [[[] for _ in range(m)] for _ in range(k)]
@@ -312,12 +312,24 @@ def _lu_solve(M: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
     return sp.Matrix(X) if k else sp.zeros(0, m)
 
 
+def _zero_exact(e):
+    """``e``, a numeric zero (a Float 0.0, which sympy does not count as == 0) as sympy's
+    zero: a matrix's row swaps make it so, and the pivot test asks for it."""
+    return sp.S.Zero if e.is_Number and e.is_zero else e
+
+
+def _sum2(a, b):
+    """``a + b`` of two entries as sympy's matrix sum makes it: two numbers by the
+    operator (``Add(0.0, 2)`` is 2, ``0.0 + 2`` is 2.0), else ``dag.build``."""
+    return a + b if a.is_Number and b.is_Number else dag.build(sp.Add, [a, b])
+
+
 def _minus(a, b):
     """Entry of sympy's matrix a - b (a + (-1) b, zero entries added to nothing)."""
     if b == 0:
         return a
     b = dag.mul(b, sp.S.NegativeOne)
-    return b if a == 0 else dag.build(sp.Add, [a, b])
+    return b if a == 0 else _sum2(a, b)
 
 
 def _times(a, c):

@@ -138,9 +138,13 @@ def determined(system, t, coordinates: dict, velocities: dict, params: dict, tol
     (``np.spacing``), all the changes evaluated at once on the graph; ``why`` names the
     input that moves them most, and by how much; ``finite``: phi^alpha is.  (The terms,
     not phi alone: where they cancel, phi = 0 may stay 0 while A_alpha, known to less
-    than its size, changes sign.)"""
+    than its size, changes sign.)  An input that is exactly 0 is taken as exact: its
+    rounding unit, the smallest subnormal, is no relative error (at rest, x_t = 0, phi
+    is its velocity-free part however large the factor of x_t)."""
     inputs = [*system.J.q, *system.independent_velocities, *system.parameters]
-    point = _nudged(_point(system, t, coordinates, velocities, params), inputs)
+    given = _point(system, t, coordinates, velocities, params)
+    exact = np.array([bool(np.all(np.asarray(given[s]) == 0.0)) for s in inputs])
+    point = _nudged(given, inputs)
     x = _phis(system, point)
     A, f = _at(system, point)
     M = terms(system, A, f, _velocities(system, point))
@@ -151,7 +155,7 @@ def determined(system, t, coordinates: dict, velocities: dict, params: dict, tol
         size = float(np.abs(M[0, a]).sum())
         with np.errstate(invalid="ignore"):
             moved = np.abs(M[1:, a] - M[0, a]).sum(axis=-1) / max(size, TINY)
-        moved = np.where(np.isfinite(moved), moved, np.inf)
+        moved = np.where(exact, 0.0, np.where(np.isfinite(moved), moved, np.inf))
         if moved.size and moved.max() > worst:
             i = int(np.argmax(moved))
             worst = float(moved.max())
