@@ -223,3 +223,18 @@ def test_at_rest_a_large_factor_is_no_rounding():
     sc = jn.Scene(own, "chetaev", initial=dict(x=0.3, y=0.3, x_t=0.5), t_span=(0, 1))
     run = sc.replace(initial=dict(x=1e-160, y=1.0, x_t=0.0)).run()
     assert run.status == 0 and np.all(np.isfinite(run.y))
+
+
+@pytest.mark.parametrize("phi", [math.pi / 2, math.pi / 2 - 1e-7])
+def test_knife_edge_at_rest_across_the_heading_edge(phi):
+    """The knife edge with x_t = 0 at (or 1e-7 from) the heading pi/2, where
+    y_t = tan(phi) x_t has a factor ~1e16 (~1e7): at rest, or spinning in place, y_t = 0
+    is determined and consistent (an exact 0 has no rounding unit); x_t = 1e-300 there
+    is not determined by the floats of the heading."""
+    ke = models.get("knife_edge")
+    rest = {"x": 0.0, "y": 0.0, "phi": phi, "x_t": 0.0, "phi_t": 0.0}
+    for start in (rest, {**rest, "y_t": 0.0}, {**rest, "phi_t": 1.0}):
+        sc = jn.Scene(ke, "chetaev", initial=start, t_span=(0.0, 0.1))
+        assert sc.run().status == 0
+    with pytest.raises(ConstraintError):
+        jn.Scene(ke, "chetaev", initial={**rest, "x_t": 1e-300}, t_span=(0.0, 0.1))

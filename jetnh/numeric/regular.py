@@ -153,7 +153,7 @@ def determined(system, t, coordinates: dict, velocities: dict, params: dict, tol
         if not math.isfinite(x[0, a]):
             return False, f"{v.name} is {x[0, a]}", False
         size = float(np.abs(M[0, a]).sum())
-        with np.errstate(invalid="ignore"):
+        with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
             moved = np.abs(M[1:, a] - M[0, a]).sum(axis=-1) / max(size, TINY)
         moved = np.where(exact, 0.0, np.where(np.isfinite(moved), moved, np.inf))
         if moved.size and moved.max() > worst:

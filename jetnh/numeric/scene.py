@@ -109,7 +109,9 @@ class Scene(Frozen):
         the constraints' value by this fraction of the size of the terms that make that
         value (for affine constraints ``qdot^alpha = Phi qdot + phi0``: ``sum_s |Phi_s
         qdot^s| + |phi0|``), never of an absolute number, so that the verdict is the same
-        in every unit of length and time.
+        in every unit of length and time; beyond it, by how far the value moves within
+        the rounding of t, the coordinates and the parameters (a float stands for every
+        number that rounds to it).
     complete : bool or list, default False
         Solve the holonomic constraints for these coordinates (True: chosen
         automatically) of an initial configuration off g = 0 (else it is refused).
