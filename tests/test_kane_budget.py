@@ -17,6 +17,7 @@ import jetnh as jn
 from jetnh.mechanics import kane_bridge
 
 me = pytest.importorskip("sympy.physics.mechanics")
+from test_kane_conservative import _line  # noqa: E402  (a particle on a line under a load)
 pytestmark = pytest.mark.skipif(not hasattr(os, "fork"), reason="no os.fork")
 
 _k = sp.Symbol("k")
@@ -25,19 +26,6 @@ _k = sp.Symbol("k")
 def _hostile(q):
     """A load whose integral sympy does not finish within 300 s (kaneguard, 2026-11-28)."""
     return -_k * sp.exp(-q**2) * sp.cos(q) ** 3 * q**5 / (2 + sp.sin(q))
-
-
-def _line(force):
-    """A particle on a line under the load ``force(q1)``."""
-    q1, u1 = me.dynamicsymbols("q1 u1")
-    N = me.ReferenceFrame("N")
-    O = me.Point("O")
-    O.set_vel(N, 0)
-    P = O.locatenew("P", q1 * N.x)
-    P.set_vel(N, u1 * N.x)
-    km = me.KanesMethod(N, q_ind=[q1], u_ind=[u1], kd_eqs=[q1.diff() - u1])
-    km.kanes_equations([me.Particle("pa", P, sp.Symbol("m"))], [(P, force(q1) * N.x)])
-    return jn.from_mechanics(km)
 
 
 def _fds():
@@ -85,7 +73,8 @@ def test_an_integral_past_the_cpu_budget_leaves_a_force_and_a_warning(monkeypatc
     with pytest.warns(jn.errors.JetnhWarning, match="the point P: its potential was not "
                       r"found within 0.3 s of CPU time .*out of .* time.*force") as record:
         S = _line(_hostile)
-    assert record[0].filename == __file__       # the user's call, not jetnh's
+    # the user's call (``_line``'s from_mechanics), not jetnh's
+    assert record[0].filename == _line.__code__.co_filename
     assert len(forks) == 1
     assert _children_cpu() - before < 0.3 + 0.5
     _stays_a_force(S, _hostile)
