@@ -32,6 +32,15 @@ def _fds():
     return set(os.listdir("/proc/self/fd")) if os.path.isdir("/proc/self/fd") else set()
 
 
+@pytest.fixture(autouse=True)
+def python_sigint():
+    """Python's own SIGINT handler during each test (a pytest-xdist worker ignores
+    SIGINT: the import leaves a handler that is not a Python function alone)."""
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, before)
+
+
 @pytest.fixture
 def forks(monkeypatch):
     """The pids of the children forked meanwhile (``os.fork`` wrapped); checked reaped

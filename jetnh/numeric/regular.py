@@ -138,9 +138,10 @@ def determined(system, t, coordinates: dict, velocities: dict, params: dict, tol
     (``np.spacing``), all the changes evaluated at once on the graph; ``why`` names the
     input that moves them most, and by how much; ``finite``: phi^alpha is.  (The terms,
     not phi alone: where they cancel, phi = 0 may stay 0 while A_alpha, known to less
-    than its size, changes sign.)  An input that is exactly 0 is taken as exact: its
-    rounding unit, the smallest subnormal, is no relative error (at rest, x_t = 0, phi
-    is its velocity-free part however large the factor of x_t)."""
+    than its size, changes sign; where the terms are not finite, as where f is not
+    affine in qdot and A = 0, phi itself.)  An input that is exactly 0 is taken as
+    exact: its rounding unit, the smallest subnormal, is no relative error (at rest,
+    x_t = 0, phi is its velocity-free part however large the factor of x_t)."""
     inputs = [*system.J.q, *system.independent_velocities, *system.parameters]
     given = _point(system, t, coordinates, velocities, params)
     exact = np.array([bool(np.all(np.asarray(given[s]) == 0.0)) for s in inputs])
@@ -153,15 +154,20 @@ def determined(system, t, coordinates: dict, velocities: dict, params: dict, tol
         if not math.isfinite(x[0, a]):
             return False, f"{v.name} is {x[0, a]}", False
         size = float(np.abs(M[0, a]).sum())
+        made = "the terms that make it"
         with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
-            moved = np.abs(M[1:, a] - M[0, a]).sum(axis=-1) / max(size, TINY)
+            if math.isfinite(size):
+                moved = np.abs(M[1:, a] - M[0, a]).sum(axis=-1) / max(size, TINY)
+            else:   # no finite terms (A = 0 where f is not affine in qdot): phi itself
+                size, made = abs(x[0, a]), "it"
+                moved = np.abs(x[1:, a] - x[0, a]) / max(size, TINY)
         moved = np.where(exact, 0.0, np.where(np.isfinite(moved), moved, np.inf))
         if moved.size and moved.max() > worst:
             i = int(np.argmax(moved))
             worst = float(moved.max())
             why = (f"one rounding unit in {inputs[i].name} moves {v.name} = {x[0, a]:.6g} "
-                   f"by {abs(x[i + 1, a] - x[0, a]):.3g} and the terms that make it (of "
-                   f"size {size:.3g}) by {worst * max(size, TINY):.3g}")
+                   f"by {abs(x[i + 1, a] - x[0, a]):.3g} and {made} (of size {size:.3g}) "
+                   f"by {worst * max(size, TINY):.3g}")
     return worst <= tol, why, True
 
 
