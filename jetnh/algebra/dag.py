@@ -15,6 +15,7 @@ import contextlib
 import functools
 import gc
 import hashlib
+import operator
 
 import mpmath
 import sympy as sp
@@ -314,6 +315,17 @@ def _compare(a, b) -> int:
 _SORT_KEY = functools.cmp_to_key(_compare)
 
 
+def _combined(coeff, a, op):
+    """The number ``coeff op a`` of ``_add_terms`` / ``_mul_factors`` (``a`` alone where
+    ``coeff`` is None): two rational numbers combined; None where sympy must combine them
+    (a float, an infinity, a zero ``a``)."""
+    if not a.is_finite or a.is_zero:
+        return None
+    if coeff is None:
+        return a
+    return op(coeff, a) if coeff.is_Rational and a.is_Rational else None
+
+
 def _add_terms(args):
     """The number and the other children of ``Add(*args)`` (unsorted) when no two terms
     combine (``build``), else None.  A nested sum's terms come after the other children,
@@ -326,13 +338,8 @@ def _add_terms(args):
             if not isinstance(a, sp.Basic):     # a Python number: sympy converts it
                 return None
             if a.is_Number:
-                if not a.is_finite or a.is_zero:
-                    return None
+                coeff = _combined(coeff, a, operator.add)
                 if coeff is None:
-                    coeff = a
-                elif coeff.is_Rational and a.is_Rational:
-                    coeff += a
-                else:
                     return None
                 continue
             if not a.is_commutative:
@@ -375,13 +382,8 @@ def _mul_factors(args):
             if not isinstance(a, sp.Basic):     # a Python number: sympy converts it
                 return None
             if a.is_Number:
-                if not a.is_finite or a.is_zero:
-                    return None
+                coeff = _combined(coeff, a, operator.mul)
                 if coeff is None:
-                    coeff = a
-                elif coeff.is_Rational and a.is_Rational:
-                    coeff *= a
-                else:
                     return None
                 continue
             if not a.is_commutative:
